@@ -1,0 +1,108 @@
+//! Encode and decode of `px.Ina238` and `uavcan.equipment.power.BatteryInfo` through the
+//! flat leaf representation, plus leaf access in encoded data.
+
+#[path = "../crates/px4params-core/tests/common/mod.rs"]
+mod common;
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use px4params_core::codec::{decode, encode, DecodeOptions, EncodeOptions};
+use px4params_core::compile::OwnedLayout;
+use px4params_core::leaf::{get_leaf, set_leaf, Target};
+use px4params_core::value::{LeafSink, LeafSource};
+use px4params_core::{NodeId, Scalar};
+use std::hint::black_box;
+
+fn battery_leaves() -> Vec<Scalar> {
+    let mut leaves: Vec<Scalar> = [300.5, 16.8, -12.25, 201.0, 55.5, 99.0, 0.0]
+        .into_iter()
+        .map(Scalar::Float)
+        .collect();
+    leaves.extend([3, 97, 80, 2, 1, 123_456].map(Scalar::Uint));
+    let name = b"PX4 smart battery 6S";
+    leaves.push(Scalar::Uint(name.len() as u64));
+    leaves.extend(name.iter().map(|&b| Scalar::Uint(b.into())));
+    leaves
+}
+
+fn ina238_leaves() -> Vec<Scalar> {
+    let mut v: Vec<Scalar> = [0, 0, 0, 1, 0x45, 200].map(Scalar::Uint).to_vec();
+    v.push(Scalar::Float(0.0003));
+    v
+}
+
+fn bench_type(
+    c: &mut Criterion,
+    name: &str,
+    build: fn(&mut OwnedLayout) -> NodeId,
+    leaves: Vec<Scalar>,
+) {
+    let mut owned = OwnedLayout::default();
+    let root = build(&mut owned);
+    let layout = owned.as_layout();
+    let mut out = vec![0u8; layout.max_bytes(root)];
+    let n = encode(
+        &layout,
+        root,
+        &mut LeafSource::new(&leaves),
+        &mut out,
+        EncodeOptions::default(),
+    )
+    .unwrap();
+    let bytes = out[..n].to_vec();
+    c.bench_function(&format!("{name}/encode"), |b| {
+        b.iter(|| {
+            let mut src = LeafSource::new(black_box(&leaves));
+            encode(&layout, root, &mut src, &mut out, EncodeOptions::default()).unwrap()
+        })
+    });
+    let mut storage = [Scalar::Uint(0); 64];
+    c.bench_function(&format!("{name}/decode"), |b| {
+        b.iter(|| {
+            let mut sink = LeafSink::new(&mut storage);
+            decode(
+                &layout,
+                root,
+                black_box(&bytes[..]),
+                &mut sink,
+                DecodeOptions::default(),
+            )
+            .unwrap()
+        })
+    });
+    let k = leaves.len() / 2;
+    c.bench_function(&format!("{name}/get_leaf"), |b| {
+        b.iter(|| {
+            get_leaf(
+                &layout,
+                root,
+                black_box(&bytes[..]),
+                Target::Index(black_box(k)),
+                true,
+            )
+            .unwrap()
+        })
+    });
+    let value = leaves[k];
+    c.bench_function(&format!("{name}/set_leaf"), |b| {
+        b.iter(|| {
+            set_leaf(
+                &layout,
+                root,
+                black_box(&bytes[..]),
+                Target::Index(k),
+                value,
+                &mut out,
+                EncodeOptions::default(),
+            )
+            .unwrap()
+        })
+    });
+}
+
+fn codec(c: &mut Criterion) {
+    bench_type(c, "px.Ina238", common::ina238, ina238_leaves());
+    bench_type(c, "BatteryInfo", common::battery_info, battery_leaves());
+}
+
+criterion_group!(benches, codec);
+criterion_main!(benches);

@@ -1,0 +1,619 @@
+//! Encoding and decoding whole values with the DroneCAN rules, driven by a [`Layout`].
+//!
+//! Values come from a [`Source`] and go to a [`Sink`], so the same walk serves Python objects
+//! in the binding, flat leaf lists in firmware and anything else, without allocating.
+
+use crate::bits::{zero_bits, BitRead};
+use crate::error::{Error, ErrorKind, Path, Step};
+use crate::layout::{Field, Kind, Layout, NodeId, Role};
+use crate::scalar::{self, Scalar};
+
+/// Nesting deeper than this is refused (DSDL cannot express recursion; a corrupt static
+/// layout could).
+pub const MAX_DEPTH: usize = 64;
+
+/// Options for encoding.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct EncodeOptions {
+    /// Tail array optimization (on for classic CAN and for parameter storage, off for CAN FD).
+    pub tao: bool,
+    /// Clamp out-of-range values of `saturated` fields instead of refusing them.
+    pub saturate: bool,
+    /// Write `p_version` fields as given (re-encoding stored data of another version) instead
+    /// of refusing any value but the type's version.
+    pub keep_versions: bool,
+}
+
+impl Default for EncodeOptions {
+    fn default() -> Self {
+        Self {
+            tao: true,
+            saturate: false,
+            keep_versions: false,
+        }
+    }
+}
+
+/// Options for decoding.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct DecodeOptions {
+    /// Tail array optimization (see [`EncodeOptions::tao`]).
+    pub tao: bool,
+    /// Accept whole bytes after the value (CAN FD frames are padded to their DLC).
+    pub allow_trailing: bool,
+}
+
+impl Default for DecodeOptions {
+    fn default() -> Self {
+        Self {
+            tao: true,
+            allow_trailing: false,
+        }
+    }
+}
+
+/// What kind of leaf a position holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LeafKind {
+    /// A primitive field: one of [`Kind::Uint`], [`Kind::Int`], [`Kind::Float`], [`Kind::Bool`].
+    Scalar(Kind),
+    /// A union's tag.
+    Tag {
+        /// Tag width in bits.
+        bits: u8,
+        /// The union node.
+        union: NodeId,
+    },
+    /// A dynamic array's length (encoded in `bits` bits; 0 when tail-array optimized).
+    Len {
+        /// Prefix width in bits, 0 under tail array optimization.
+        bits: u8,
+        /// The array node.
+        array: NodeId,
+    },
+}
+
+/// The length of an array as the decoder announces it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ArrayLen {
+    /// A static array of this length (its length is not a leaf).
+    Fixed(usize),
+    /// A dynamic array whose length prefix says this.
+    Prefixed(usize),
+    /// A tail-optimized dynamic array: its length is known when it ends.
+    Tail,
+}
+
+/// Where the decoder is when it hands a leaf to a [`Sink`].
+#[derive(Clone, Copy, Debug)]
+pub struct At<'a> {
+    /// Field path of the leaf.
+    pub path: &'a Path,
+    /// Bit offset of the leaf in the data.
+    pub bit_offset: usize,
+    /// What the leaf is.
+    pub kind: LeafKind,
+}
+
+/// Supplies a value to the encoder, which asks for it in serialization order.
+pub trait Source {
+    /// The source's own error (e.g. "expected a dict, got str").
+    type Error;
+    /// The primitive at the current position; `kind` is the field's type.
+    fn scalar(&mut self, kind: Kind) -> Result<Scalar, Self::Error>;
+    /// The current position must hold a struct.
+    fn begin_struct(&mut self) -> Result<(), Self::Error>;
+    /// Moves to field `name` of the current struct; `Ok(false)` when the input lacks it.
+    fn field(&mut self, name: &str) -> Result<bool, Self::Error>;
+    /// Leaves the field entered by a successful [`Source::field`].
+    fn end_field(&mut self);
+    /// Ends the struct; `used` fields were taken from the input (so others are unknown).
+    fn end_struct(&mut self, used: usize) -> Result<(), Self::Error>;
+    /// The current position must hold a union: returns the index of the selected variant among
+    /// `variants` and moves into it.
+    fn begin_union(&mut self, layout: &Layout<'_>, variants: &[Field]) -> Result<u32, Self::Error>;
+    /// Leaves the union.
+    fn end_union(&mut self);
+    /// The current position must hold an array: returns its length. `fixed` is the declared
+    /// length of a static array, `None` for a dynamic one.
+    fn begin_array(&mut self, fixed: Option<u32>) -> Result<usize, Self::Error>;
+    /// Moves to element `index` of the current array.
+    fn element(&mut self, index: usize) -> Result<(), Self::Error>;
+    /// Leaves the element.
+    fn end_element(&mut self);
+    /// Leaves the array.
+    fn end_array(&mut self);
+}
+
+/// Receives a decoded value, in serialization order.
+pub trait Sink {
+    /// The sink's own error.
+    type Error;
+    /// A primitive field's value.
+    fn scalar(&mut self, value: Scalar, at: At<'_>) -> Result<(), Self::Error>;
+    /// A struct begins; `field` announces each member before its value.
+    fn begin_struct(&mut self, fields: usize) -> Result<(), Self::Error>;
+    /// The next value is field `name` of the current struct.
+    fn field(&mut self, name: &str) -> Result<(), Self::Error>;
+    /// The struct ends.
+    fn end_struct(&mut self) -> Result<(), Self::Error>;
+    /// A union begins with variant `name` (tag `tag`) selected; its value follows.
+    fn begin_union(&mut self, tag: u32, name: &str, at: At<'_>) -> Result<(), Self::Error>;
+    /// The union ends.
+    fn end_union(&mut self) -> Result<(), Self::Error>;
+    /// An array begins.
+    fn begin_array(&mut self, len: ArrayLen, at: At<'_>) -> Result<(), Self::Error>;
+    /// The array ends with `len` elements.
+    fn end_array(&mut self, len: usize) -> Result<(), Self::Error>;
+}
+
+/// Encodes the value of type `root` from `source` into `out`; returns the length in bytes.
+///
+/// `out` needs [`Layout::max_bytes`] bytes at most; only the bytes returned are written.
+pub fn encode<S: Source>(
+    layout: &Layout<'_>,
+    root: NodeId,
+    source: &mut S,
+    out: &mut [u8],
+    options: EncodeOptions,
+) -> Result<usize, Error<S::Error>> {
+    let mut enc = Encoder {
+        layout,
+        out,
+        pos: 0,
+        path: Path::default(),
+        source,
+        saturate: options.saturate,
+        keep_versions: options.keep_versions,
+        depth: 0,
+    };
+    enc.node(root, options.tao)?;
+    let end = enc.pos;
+    let bytes = end.div_ceil(8);
+    zero_bits(enc.out, end, bytes * 8 - end);
+    Ok(bytes)
+}
+
+/// Decodes a value of type `root` from `data` into `sink`; returns the bits used.
+pub fn decode<R: BitRead + ?Sized, K: Sink>(
+    layout: &Layout<'_>,
+    root: NodeId,
+    data: &R,
+    sink: &mut K,
+    options: DecodeOptions,
+) -> Result<usize, Error<K::Error>> {
+    let mut dec = Decoder {
+        layout,
+        data,
+        pos: 0,
+        path: Path::default(),
+        sink,
+        depth: 0,
+    };
+    dec.node(root, options.tao)?;
+    let used = dec.pos.div_ceil(8);
+    let len = data.bit_len() / 8;
+    if !options.allow_trailing && len > used {
+        return Err(Error {
+            kind: ErrorKind::TrailingBytes { used, len },
+            bit_offset: dec.pos,
+            path: Path::default(),
+        });
+    }
+    Ok(dec.pos)
+}
+
+/// Whether a dynamic array with element `elem` drops its length prefix when it is last.
+#[inline]
+pub(crate) fn tail_optimized(layout: &Layout<'_>, elem: NodeId, tao: bool) -> bool {
+    tao && layout.node(elem).min_bits >= 8
+}
+
+struct Encoder<'l, 'o, S: Source> {
+    layout: &'l Layout<'l>,
+    out: &'o mut [u8],
+    pos: usize,
+    path: Path,
+    source: &'o mut S,
+    saturate: bool,
+    keep_versions: bool,
+    depth: usize,
+}
+
+impl<S: Source> Encoder<'_, '_, S> {
+    fn fail(&self, kind: ErrorKind<S::Error>) -> Error<S::Error> {
+        Error {
+            kind,
+            bit_offset: self.pos,
+            path: self.path,
+        }
+    }
+
+    fn write(&mut self, raw: u64, bits: u32) -> Result<(), Error<S::Error>> {
+        if self.pos + bits as usize > self.out.len() * 8 {
+            return Err(self.fail(ErrorKind::BufferTooSmall {
+                needed: (self.pos + bits as usize).div_ceil(8),
+            }));
+        }
+        crate::bits::write_bits(self.out, self.pos, scalar::to_stream(raw, bits), bits);
+        self.pos += bits as usize;
+        Ok(())
+    }
+
+    fn scalar(&mut self, kind: Kind, value: Scalar) -> Result<(), Error<S::Error>> {
+        let raw =
+            scalar_raw(kind, value, self.saturate).map_err(|e| self.fail(ErrorKind::Scalar(e)))?;
+        self.write(raw, scalar_bits(kind))
+    }
+
+    fn value<T>(&self, r: Result<T, S::Error>) -> Result<T, Error<S::Error>> {
+        r.map_err(|e| self.fail(ErrorKind::Value(e)))
+    }
+
+    fn node(&mut self, id: NodeId, tao: bool) -> Result<(), Error<S::Error>> {
+        self.depth += 1;
+        if self.depth > MAX_DEPTH {
+            return Err(self.fail(ErrorKind::TooDeep));
+        }
+        let layout = self.layout;
+        match layout.node(id).kind {
+            kind @ (Kind::Uint { .. } | Kind::Int { .. } | Kind::Float { .. } | Kind::Bool) => {
+                let v = self.source.scalar(kind);
+                let v = self.value(v)?;
+                self.scalar(kind, v)?;
+            }
+            Kind::Void { bits } => self.write(0, bits.into())?,
+            Kind::Struct { first, count } => {
+                let r = self.source.begin_struct();
+                self.value(r)?;
+                let mut used = 0;
+                for i in 0..count {
+                    let index = first + i;
+                    let field = layout.fields[index as usize];
+                    let last = tao && i + 1 == count;
+                    if field.role == Role::Padding {
+                        self.node(field.node, last)?;
+                        continue;
+                    }
+                    self.path.push(Step::Field(index));
+                    let present = self.source.field(layout.name(&field));
+                    if self.value(present)? {
+                        used += 1;
+                        if let (Role::Version(version), false) = (field.role, self.keep_versions) {
+                            let kind = layout.node(field.node).kind;
+                            let given = self.source.scalar(kind);
+                            let given = self.value(given)?;
+                            if !same_integer(given, version) {
+                                return Err(self.fail(ErrorKind::VersionMismatch {
+                                    given,
+                                    expected: version,
+                                }));
+                            }
+                            self.scalar(kind, Scalar::Uint(version.into()))?;
+                        } else {
+                            self.node(field.node, last)?;
+                        }
+                        self.source.end_field();
+                    } else if let Role::Version(version) = field.role {
+                        self.scalar(layout.node(field.node).kind, Scalar::Uint(version.into()))?;
+                    } else {
+                        return Err(self.fail(ErrorKind::MissingField));
+                    }
+                    self.path.pop();
+                }
+                let r = self.source.end_struct(used);
+                self.value(r)?;
+            }
+            Kind::Union {
+                first,
+                count,
+                tag_bits,
+            } => {
+                let variants = layout.members(id);
+                let tag = self.source.begin_union(layout, variants);
+                let tag = self.value(tag)?;
+                if tag >= count {
+                    return Err(self.fail(ErrorKind::BadUnionTag {
+                        tag: tag.into(),
+                        variants: count,
+                    }));
+                }
+                self.write(tag.into(), tag_bits.into())?;
+                self.path.push(Step::Field(first + tag));
+                self.node(variants[tag as usize].node, tao)?;
+                self.path.pop();
+                self.source.end_union();
+            }
+            Kind::Array { elem, len } => {
+                let n = self.source.begin_array(Some(len));
+                let n = self.value(n)?;
+                if n != len as usize {
+                    return Err(self.fail(ErrorKind::WrongArrayLength {
+                        len: n as u64,
+                        expected: len,
+                    }));
+                }
+                self.elements(elem, n, tao)?;
+            }
+            Kind::DynArray {
+                elem,
+                max,
+                len_bits,
+            } => {
+                let n = self.source.begin_array(None);
+                let n = self.value(n)?;
+                if n > max as usize {
+                    return Err(self.fail(ErrorKind::ArrayTooLong { len: n as u64, max }));
+                }
+                if tail_optimized(layout, elem, tao) {
+                    self.elements(elem, n, false)?;
+                } else {
+                    self.write(n as u64, len_bits.into())?;
+                    self.elements(elem, n, tao)?;
+                }
+            }
+        }
+        self.depth -= 1;
+        Ok(())
+    }
+
+    fn elements(&mut self, elem: NodeId, n: usize, tao: bool) -> Result<(), Error<S::Error>> {
+        for i in 0..n {
+            self.path.push(Step::Index(i as u32));
+            let r = self.source.element(i);
+            self.value(r)?;
+            self.node(elem, tao && i + 1 == n)?;
+            self.source.end_element();
+            self.path.pop();
+        }
+        self.source.end_array();
+        Ok(())
+    }
+}
+
+fn same_integer(given: Scalar, version: u32) -> bool {
+    match given {
+        Scalar::Uint(v) => v == u64::from(version),
+        Scalar::Int(v) => v == i64::from(version),
+        _ => false,
+    }
+}
+
+struct Decoder<'l, 'd, R: BitRead + ?Sized, K: Sink> {
+    layout: &'l Layout<'l>,
+    data: &'d R,
+    pos: usize,
+    path: Path,
+    sink: &'d mut K,
+    depth: usize,
+}
+
+impl<R: BitRead + ?Sized, K: Sink> Decoder<'_, '_, R, K> {
+    fn fail(&self, kind: ErrorKind<K::Error>) -> Error<K::Error> {
+        Error {
+            kind,
+            bit_offset: self.pos,
+            path: self.path,
+        }
+    }
+
+    fn read(&mut self, bits: u32) -> Result<u64, Error<K::Error>> {
+        let available = self.data.bit_len();
+        if self.pos + bits as usize > available {
+            return Err(self.fail(ErrorKind::Truncated {
+                needed_bits: self.pos + bits as usize,
+                available_bits: available,
+            }));
+        }
+        let stream = self.data.read_bits(self.pos, bits);
+        self.pos += bits as usize;
+        Ok(scalar::from_stream(stream, bits))
+    }
+
+    fn sunk<T>(&self, r: Result<T, K::Error>) -> Result<T, Error<K::Error>> {
+        r.map_err(|e| self.fail(ErrorKind::Value(e)))
+    }
+
+    fn node(&mut self, id: NodeId, tao: bool) -> Result<(), Error<K::Error>> {
+        self.depth += 1;
+        if self.depth > MAX_DEPTH {
+            return Err(self.fail(ErrorKind::TooDeep));
+        }
+        let layout = self.layout;
+        let at_pos = self.pos;
+        match layout.node(id).kind {
+            kind @ (Kind::Uint { .. } | Kind::Int { .. } | Kind::Float { .. } | Kind::Bool) => {
+                let value = self.scalar(kind)?;
+                let at = At {
+                    path: &self.path,
+                    bit_offset: at_pos,
+                    kind: LeafKind::Scalar(kind),
+                };
+                let r = self.sink.scalar(value, at);
+                self.sunk(r)?;
+            }
+            Kind::Void { bits } => {
+                self.read(bits.into())?;
+            }
+            Kind::Struct { first, count } => {
+                let r = self.sink.begin_struct(count as usize);
+                self.sunk(r)?;
+                for i in 0..count {
+                    let index = first + i;
+                    let field = layout.fields[index as usize];
+                    let last = tao && i + 1 == count;
+                    if field.role == Role::Padding {
+                        self.node(field.node, last)?;
+                        continue;
+                    }
+                    let r = self.sink.field(layout.name(&field));
+                    self.sunk(r)?;
+                    self.path.push(Step::Field(index));
+                    self.node(field.node, last)?;
+                    self.path.pop();
+                }
+                let r = self.sink.end_struct();
+                self.sunk(r)?;
+            }
+            Kind::Union {
+                first,
+                count,
+                tag_bits,
+            } => {
+                let tag = self.read(tag_bits.into())?;
+                if tag >= u64::from(count) {
+                    self.pos = at_pos;
+                    return Err(self.fail(ErrorKind::BadUnionTag {
+                        tag,
+                        variants: count,
+                    }));
+                }
+                let variant = layout.fields[(first + tag as u32) as usize];
+                let at = At {
+                    path: &self.path,
+                    bit_offset: at_pos,
+                    kind: LeafKind::Tag {
+                        bits: tag_bits,
+                        union: id,
+                    },
+                };
+                let r = self.sink.begin_union(tag as u32, layout.name(&variant), at);
+                self.sunk(r)?;
+                self.path.push(Step::Field(first + tag as u32));
+                self.node(variant.node, tao)?;
+                self.path.pop();
+                let r = self.sink.end_union();
+                self.sunk(r)?;
+            }
+            Kind::Array { elem, len } => {
+                let at = At {
+                    path: &self.path,
+                    bit_offset: at_pos,
+                    kind: LeafKind::Len { bits: 0, array: id },
+                };
+                let r = self.sink.begin_array(ArrayLen::Fixed(len as usize), at);
+                self.sunk(r)?;
+                for i in 0..len {
+                    self.path.push(Step::Index(i));
+                    self.node(elem, tao && i + 1 == len)?;
+                    self.path.pop();
+                }
+                let r = self.sink.end_array(len as usize);
+                self.sunk(r)?;
+            }
+            Kind::DynArray {
+                elem,
+                max,
+                len_bits,
+            } => {
+                if tail_optimized(layout, elem, tao) {
+                    let at = At {
+                        path: &self.path,
+                        bit_offset: at_pos,
+                        kind: LeafKind::Len { bits: 0, array: id },
+                    };
+                    let r = self.sink.begin_array(ArrayLen::Tail, at);
+                    self.sunk(r)?;
+                    // The array takes every remaining whole byte.
+                    let mut n = 0usize;
+                    while self.data.bit_len().saturating_sub(self.pos) >= 8 {
+                        if n == max as usize {
+                            return Err(self.fail(ErrorKind::ArrayTooLong {
+                                len: n as u64 + 1,
+                                max,
+                            }));
+                        }
+                        self.path.push(Step::Index(n as u32));
+                        self.node(elem, false)?;
+                        self.path.pop();
+                        n += 1;
+                    }
+                    let r = self.sink.end_array(n);
+                    self.sunk(r)?;
+                } else {
+                    let n = self.read(len_bits.into())?;
+                    if n > u64::from(max) {
+                        self.pos = at_pos;
+                        return Err(self.fail(ErrorKind::ArrayTooLong { len: n, max }));
+                    }
+                    let at = At {
+                        path: &self.path,
+                        bit_offset: at_pos,
+                        kind: LeafKind::Len {
+                            bits: len_bits,
+                            array: id,
+                        },
+                    };
+                    let r = self.sink.begin_array(ArrayLen::Prefixed(n as usize), at);
+                    self.sunk(r)?;
+                    for i in 0..n as u32 {
+                        self.path.push(Step::Index(i));
+                        self.node(elem, tao && u64::from(i) + 1 == n)?;
+                        self.path.pop();
+                    }
+                    let r = self.sink.end_array(n as usize);
+                    self.sunk(r)?;
+                }
+            }
+        }
+        self.depth -= 1;
+        Ok(())
+    }
+
+    fn scalar(&mut self, kind: Kind) -> Result<Scalar, Error<K::Error>> {
+        Ok(match kind {
+            Kind::Uint { bits, .. } => Scalar::Uint(self.read(bits.into())?),
+            Kind::Int { bits, .. } => {
+                Scalar::Int(scalar::sign_extend(self.read(bits.into())?, bits.into()))
+            }
+            Kind::Float { bits, .. } => {
+                Scalar::Float(scalar::float_from_raw(self.read(bits.into())?, bits.into()))
+            }
+            Kind::Bool => Scalar::Bool(self.read(1)? != 0),
+            _ => unreachable!("scalar() is only called for primitive kinds"),
+        })
+    }
+}
+
+/// Reads a scalar leaf's value at `bit_offset` (no bounds check beyond the data's).
+pub(crate) fn read_scalar<R: BitRead + ?Sized>(data: &R, bit_offset: usize, kind: Kind) -> Scalar {
+    let read = |bits: u8| scalar::from_stream(data.read_bits(bit_offset, bits.into()), bits.into());
+    match kind {
+        Kind::Uint { bits, .. } => Scalar::Uint(read(bits)),
+        Kind::Int { bits, .. } => Scalar::Int(scalar::sign_extend(read(bits), bits.into())),
+        Kind::Float { bits, .. } => Scalar::Float(scalar::float_from_raw(read(bits), bits.into())),
+        Kind::Bool => Scalar::Bool(read(1) != 0),
+        _ => Scalar::Uint(0),
+    }
+}
+
+/// The bit width of a scalar kind.
+pub(crate) fn scalar_bits(kind: Kind) -> u32 {
+    match kind {
+        Kind::Uint { bits, .. } | Kind::Int { bits, .. } | Kind::Float { bits, .. } => bits.into(),
+        Kind::Bool => 1,
+        Kind::Void { bits } => bits.into(),
+        _ => 0,
+    }
+}
+
+/// Raw bits of `value` for a scalar kind, honouring the cast mode.
+pub(crate) fn scalar_raw(
+    kind: Kind,
+    value: Scalar,
+    saturate: bool,
+) -> Result<u64, scalar::ScalarError> {
+    match kind {
+        Kind::Uint { bits, cast } => scalar::uint_raw(value, bits.into(), cast, saturate),
+        Kind::Int { bits, cast } => scalar::int_raw(value, bits.into(), cast, saturate),
+        Kind::Float { bits, cast } => scalar::float_raw(value, bits.into(), cast, saturate),
+        _ => match value {
+            Scalar::Bool(b) => Ok(u64::from(b)),
+            Scalar::Uint(v @ (0 | 1)) => Ok(v),
+            Scalar::Int(v @ (0 | 1)) => Ok(v as u64),
+            _ => Err(scalar::ScalarError::WrongKind {
+                expected: "a boolean",
+            }),
+        },
+    }
+}

@@ -1,0 +1,248 @@
+//! Building a [`Layout`] at run time (feature `alloc`).
+
+use alloc::string::String;
+use alloc::vec::Vec;
+
+use crate::layout::{array_len_bits, union_tag_bits, Field, Kind, Layout, Node, NodeId, Role};
+use crate::scalar::Cast;
+
+/// Why a type could not be compiled.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BuildError {
+    /// An integer or void bit length outside its allowed range.
+    BadBitLength {
+        /// The length given.
+        bits: u32,
+    },
+    /// A float that is not 16, 32 or 64 bits wide.
+    BadFloatLength {
+        /// The length given.
+        bits: u32,
+    },
+    /// A union needs at least two variants.
+    UnionTooSmall,
+    /// A dynamic array needs a maximum of at least one element.
+    EmptyArray,
+    /// A node index that does not exist (yet).
+    UnknownNode(NodeId),
+    /// A union variant that is padding.
+    VoidVariant,
+}
+
+/// An owned, compiled schema; [`OwnedLayout::as_layout`] borrows it for the codec.
+#[derive(Clone, Debug, Default)]
+pub struct OwnedLayout {
+    nodes: Vec<Node>,
+    fields: Vec<Field>,
+    names: String,
+}
+
+impl OwnedLayout {
+    /// The layout, borrowed.
+    pub fn as_layout(&self) -> Layout<'_> {
+        Layout {
+            nodes: &self.nodes,
+            fields: &self.fields,
+            names: &self.names,
+        }
+    }
+
+    /// Adds a node for `uintN`.
+    pub fn uint(&mut self, bits: u32, cast: Cast) -> Result<NodeId, BuildError> {
+        check_bits(bits, 1, 64)?;
+        Ok(self.scalar(
+            Kind::Uint {
+                bits: bits as u8,
+                cast,
+            },
+            bits,
+        ))
+    }
+
+    /// Adds a node for `intN`.
+    pub fn int(&mut self, bits: u32, cast: Cast) -> Result<NodeId, BuildError> {
+        check_bits(bits, 2, 64)?;
+        Ok(self.scalar(
+            Kind::Int {
+                bits: bits as u8,
+                cast,
+            },
+            bits,
+        ))
+    }
+
+    /// Adds a node for `float16`, `float32` or `float64`.
+    pub fn float(&mut self, bits: u32, cast: Cast) -> Result<NodeId, BuildError> {
+        if !matches!(bits, 16 | 32 | 64) {
+            return Err(BuildError::BadFloatLength { bits });
+        }
+        Ok(self.scalar(
+            Kind::Float {
+                bits: bits as u8,
+                cast,
+            },
+            bits,
+        ))
+    }
+
+    /// Adds a node for `bool`.
+    pub fn boolean(&mut self) -> NodeId {
+        self.scalar(Kind::Bool, 1)
+    }
+
+    /// Adds a node for `voidN`.
+    pub fn void(&mut self, bits: u32) -> Result<NodeId, BuildError> {
+        check_bits(bits, 1, 64)?;
+        Ok(self.push(Node {
+            kind: Kind::Void { bits: bits as u8 },
+            min_bits: u64::from(bits),
+            max_bits: u64::from(bits),
+            fixed_leaves: Some(0),
+        }))
+    }
+
+    /// Adds a node for `T[len]`.
+    pub fn array(&mut self, elem: NodeId, len: u32) -> Result<NodeId, BuildError> {
+        let e = *self.get(elem)?;
+        Ok(self.push(Node {
+            kind: Kind::Array { elem, len },
+            min_bits: e.min_bits * u64::from(len),
+            max_bits: e.max_bits * u64::from(len),
+            fixed_leaves: e.fixed_leaves.and_then(|l| l.checked_mul(len)),
+        }))
+    }
+
+    /// Adds a node for `T[<=max]`.
+    pub fn dyn_array(&mut self, elem: NodeId, max: u32) -> Result<NodeId, BuildError> {
+        if max == 0 {
+            return Err(BuildError::EmptyArray);
+        }
+        let e = *self.get(elem)?;
+        let len_bits = array_len_bits(max);
+        Ok(self.push(Node {
+            kind: Kind::DynArray {
+                elem,
+                max,
+                len_bits,
+            },
+            min_bits: u64::from(len_bits),
+            max_bits: u64::from(len_bits) + e.max_bits * u64::from(max),
+            fixed_leaves: None,
+        }))
+    }
+
+    /// Adds a structure with these `(name, node, role)` fields, in order.
+    pub fn structure(&mut self, fields: &[(&str, NodeId, Role)]) -> Result<NodeId, BuildError> {
+        let first = self.fields.len() as u32;
+        let (mut min_bits, mut max_bits, mut leaves) = (0u64, 0u64, Some(0u32));
+        for &(name, node, role) in fields {
+            let n = *self.get(node)?;
+            min_bits += n.min_bits;
+            max_bits += n.max_bits;
+            leaves = match (leaves, n.fixed_leaves) {
+                (Some(a), Some(b)) => a.checked_add(b),
+                _ => None,
+            };
+            self.add_field(name, node, role);
+        }
+        Ok(self.push(Node {
+            kind: Kind::Struct {
+                first,
+                count: fields.len() as u32,
+            },
+            min_bits,
+            max_bits,
+            fixed_leaves: leaves,
+        }))
+    }
+
+    /// Adds a union with these `(name, node)` variants, in tag order.
+    pub fn union(&mut self, variants: &[(&str, NodeId)]) -> Result<NodeId, BuildError> {
+        if variants.len() < 2 {
+            return Err(BuildError::UnionTooSmall);
+        }
+        let first = self.fields.len() as u32;
+        let tag_bits = union_tag_bits(variants.len() as u32);
+        let (mut min_bits, mut max_bits) = (u64::MAX, 0u64);
+        for &(name, node) in variants {
+            let n = *self.get(node)?;
+            if matches!(n.kind, Kind::Void { .. }) {
+                return Err(BuildError::VoidVariant);
+            }
+            min_bits = min_bits.min(n.min_bits);
+            max_bits = max_bits.max(n.max_bits);
+            self.add_field(name, node, Role::Data);
+        }
+        Ok(self.push(Node {
+            kind: Kind::Union {
+                first,
+                count: variants.len() as u32,
+                tag_bits,
+            },
+            min_bits: u64::from(tag_bits) + min_bits,
+            max_bits: u64::from(tag_bits) + max_bits,
+            fixed_leaves: None,
+        }))
+    }
+
+    fn scalar(&mut self, kind: Kind, bits: u32) -> NodeId {
+        // Scalars are interned: a schema of hundreds of types has a handful of distinct ones.
+        if let Some(i) = self.nodes.iter().position(|n| n.kind == kind) {
+            return i as NodeId;
+        }
+        self.push(Node {
+            kind,
+            min_bits: u64::from(bits),
+            max_bits: u64::from(bits),
+            fixed_leaves: Some(1),
+        })
+    }
+
+    fn get(&self, id: NodeId) -> Result<&Node, BuildError> {
+        self.nodes
+            .get(id as usize)
+            .ok_or(BuildError::UnknownNode(id))
+    }
+
+    fn push(&mut self, node: Node) -> NodeId {
+        self.nodes.push(node);
+        (self.nodes.len() - 1) as NodeId
+    }
+
+    fn add_field(&mut self, name: &str, node: NodeId, role: Role) {
+        let name_start = self.names.len() as u32;
+        self.names.push_str(name);
+        self.fields.push(Field {
+            name_start,
+            name_len: name.len() as u32,
+            node,
+            role,
+        });
+    }
+}
+
+fn check_bits(bits: u32, min: u32, max: u32) -> Result<(), BuildError> {
+    if (min..=max).contains(&bits) {
+        Ok(())
+    } else {
+        Err(BuildError::BadBitLength { bits })
+    }
+}
+
+impl core::fmt::Display for BuildError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::BadBitLength { bits } => write!(f, "bit length {bits} is out of range"),
+            Self::BadFloatLength { bits } => {
+                write!(
+                    f,
+                    "float{bits} does not exist (expected float16, float32 or float64)"
+                )
+            }
+            Self::UnionTooSmall => f.write_str("a union needs at least two variants"),
+            Self::EmptyArray => f.write_str("a dynamic array needs a maximum of at least 1"),
+            Self::UnknownNode(id) => write!(f, "node {id} does not exist"),
+            Self::VoidVariant => f.write_str("a union variant cannot be padding"),
+        }
+    }
+}

@@ -1,0 +1,280 @@
+//! Codec errors: what went wrong, at which bit, along which field path. No allocation.
+
+use core::fmt;
+
+use crate::layout::Layout;
+use crate::scalar::{Scalar, ScalarError};
+
+/// Deepest field path an error remembers; deeper positions are cut (shown as `...`).
+pub const MAX_PATH_DEPTH: usize = 12;
+
+/// One step of a field path.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Step {
+    /// A struct field or union variant: its index in [`Layout::fields`].
+    Field(u32),
+    /// An array element.
+    Index(u32),
+}
+
+const INDEX_FLAG: u32 = 1 << 31;
+
+/// The position of a value inside a type, e.g. `bus.i2c.address` or `cells[3]`.
+///
+/// Steps are packed in 32 bits each (the top bit tells an array index from a field) so that
+/// errors stay small enough to return by value.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct Path {
+    steps: [u32; MAX_PATH_DEPTH],
+    depth: u32,
+}
+
+impl Path {
+    /// Appends a step (remembered only within [`MAX_PATH_DEPTH`]).
+    #[inline]
+    pub fn push(&mut self, step: Step) {
+        if (self.depth as usize) < MAX_PATH_DEPTH {
+            self.steps[self.depth as usize] = match step {
+                Step::Field(f) => f & !INDEX_FLAG,
+                Step::Index(i) => (i & !INDEX_FLAG) | INDEX_FLAG,
+            };
+        }
+        self.depth += 1;
+    }
+
+    /// Removes the last step.
+    #[inline]
+    pub fn pop(&mut self) {
+        self.depth = self.depth.saturating_sub(1);
+    }
+
+    /// The remembered steps.
+    pub fn steps(&self) -> impl Iterator<Item = Step> + '_ {
+        self.steps[..(self.depth as usize).min(MAX_PATH_DEPTH)]
+            .iter()
+            .map(|&s| {
+                if s & INDEX_FLAG != 0 {
+                    Step::Index(s & !INDEX_FLAG)
+                } else {
+                    Step::Field(s)
+                }
+            })
+    }
+
+    /// Whether the path is empty (the value itself).
+    pub fn is_empty(&self) -> bool {
+        self.depth == 0
+    }
+
+    /// Formats the path with field names from `layout`.
+    pub fn display<'a>(&'a self, layout: &'a Layout<'a>) -> impl fmt::Display + 'a {
+        PathDisplay { path: self, layout }
+    }
+}
+
+struct PathDisplay<'a> {
+    path: &'a Path,
+    layout: &'a Layout<'a>,
+}
+
+impl fmt::Display for PathDisplay<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        for (i, step) in self.path.steps().enumerate() {
+            match step {
+                Step::Field(field) => {
+                    if i > 0 {
+                        f.write_str(".")?;
+                    }
+                    let name = self
+                        .layout
+                        .fields
+                        .get(field as usize)
+                        .map_or("?", |fl| self.layout.name(fl));
+                    f.write_str(name)?;
+                }
+                Step::Index(index) => write!(f, "[{index}]")?,
+            }
+        }
+        if self.path.depth as usize > MAX_PATH_DEPTH {
+            f.write_str("...")?;
+        }
+        Ok(())
+    }
+}
+
+/// What went wrong. `E` is the error type of the value source or sink (the Python binding's
+/// carries the offending Python type's name; pure Rust uses [`Infallible`](core::convert::Infallible)
+/// or [`crate::value::LeafError`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ErrorKind<E> {
+    /// The data ends before the value does.
+    Truncated {
+        /// Bits the value needs at least.
+        needed_bits: usize,
+        /// Bits there are.
+        available_bits: usize,
+    },
+    /// Whole bytes remain after the value.
+    TrailingBytes {
+        /// Length of the value in bytes.
+        used: usize,
+        /// Length of the data in bytes.
+        len: usize,
+    },
+    /// A union tag that selects no variant.
+    BadUnionTag {
+        /// The tag read.
+        tag: u64,
+        /// Number of variants.
+        variants: u32,
+    },
+    /// An array longer than its maximum (read from data or given as input).
+    ArrayTooLong {
+        /// The length found.
+        len: u64,
+        /// The maximum.
+        max: u32,
+    },
+    /// A static array given with the wrong number of elements.
+    WrongArrayLength {
+        /// The length given.
+        len: u64,
+        /// The declared length.
+        expected: u32,
+    },
+    /// The output buffer is smaller than the encoded value.
+    BufferTooSmall {
+        /// Bytes needed.
+        needed: usize,
+    },
+    /// A scalar that does not fit its field.
+    Scalar(ScalarError),
+    /// A required field is missing from the input.
+    MissingField,
+    /// `p_version` given with another value than the type's version.
+    VersionMismatch {
+        /// The value given.
+        given: Scalar,
+        /// The type's version.
+        expected: u32,
+    },
+    /// No leaf with this index.
+    NoSuchLeaf {
+        /// The index asked for.
+        index: usize,
+        /// Number of leaves of the value.
+        count: usize,
+    },
+    /// No field with this name, or a path that does not parse.
+    NoSuchPath,
+    /// The path names a union variant other than the selected one.
+    VariantNotSelected,
+    /// The path ends at a struct, union or array instead of a leaf.
+    NotALeaf,
+    /// The layout nests deeper than the codec follows (a malformed layout).
+    TooDeep,
+    /// The value source or sink failed.
+    Value(E),
+}
+
+/// A codec error: what, where in the data, and where in the type.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Error<E> {
+    /// What went wrong.
+    pub kind: ErrorKind<E>,
+    /// Bit offset in the encoded data where it went wrong.
+    pub bit_offset: usize,
+    /// Field path where it went wrong.
+    pub path: Path,
+}
+
+impl<E: fmt::Display> Error<E> {
+    /// Formats the error as one line, with field names from `layout`.
+    pub fn display<'a>(&'a self, layout: &'a Layout<'a>) -> impl fmt::Display + 'a {
+        ErrorDisplay {
+            error: self,
+            layout,
+        }
+    }
+}
+
+struct ErrorDisplay<'a, E> {
+    error: &'a Error<E>,
+    layout: &'a Layout<'a>,
+}
+
+impl<E: fmt::Display> fmt::Display for ErrorDisplay<'_, E> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if !self.error.path.is_empty() {
+            write!(f, "{}: ", self.error.path.display(self.layout))?;
+        }
+        self.error.kind.fmt(f)
+    }
+}
+
+fn fmt_scalar(f: &mut fmt::Formatter<'_>, s: &Scalar) -> fmt::Result {
+    match s {
+        Scalar::Uint(v) => write!(f, "{v}"),
+        Scalar::Int(v) => write!(f, "{v}"),
+        Scalar::Float(v) => write!(f, "{v}"),
+        Scalar::Bool(v) => write!(f, "{v}"),
+    }
+}
+
+impl<E: fmt::Display> fmt::Display for ErrorKind<E> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Truncated {
+                needed_bits,
+                available_bits,
+            } => write!(
+                f,
+                "data is truncated: needs at least {needed_bits} bits, has {available_bits}"
+            ),
+            Self::TrailingBytes { used, len } => write!(
+                f,
+                "data is too long: the value ends after {used} bytes, the data has {len}"
+            ),
+            Self::BadUnionTag { tag, variants } => write!(
+                f,
+                "union tag {tag} selects no variant (expected 0..{})",
+                variants.saturating_sub(1)
+            ),
+            Self::ArrayTooLong { len, max } => {
+                write!(f, "array has {len} elements, at most {max} allowed")
+            }
+            Self::WrongArrayLength { len, expected } => {
+                write!(f, "array has {len} elements, expected exactly {expected}")
+            }
+            Self::BufferTooSmall { needed } => {
+                write!(f, "output buffer too small: {needed} bytes needed")
+            }
+            Self::Scalar(ScalarError::OutOfRange { value, min, max }) => {
+                f.write_str("value ")?;
+                fmt_scalar(f, value)?;
+                f.write_str(" is out of range (expected ")?;
+                fmt_scalar(f, min)?;
+                f.write_str(" to ")?;
+                fmt_scalar(f, max)?;
+                f.write_str(")")
+            }
+            Self::Scalar(ScalarError::WrongKind { expected }) => write!(f, "expected {expected}"),
+            Self::MissingField => f.write_str("missing field"),
+            Self::VersionMismatch { given, expected } => {
+                f.write_str("p_version is set automatically; got ")?;
+                fmt_scalar(f, given)?;
+                write!(f, ", the type's version is {expected}")
+            }
+            Self::NoSuchLeaf { index, count } => write!(
+                f,
+                "no leaf [{index}] (the value has {count} leaves: [0]..[{}])",
+                count.saturating_sub(1)
+            ),
+            Self::NoSuchPath => f.write_str("no such field"),
+            Self::VariantNotSelected => f.write_str("this union variant is not the selected one"),
+            Self::NotALeaf => f.write_str("not a leaf (a struct, union or array)"),
+            Self::TooDeep => f.write_str("type nests too deeply"),
+            Self::Value(e) => e.fmt(f),
+        }
+    }
+}

@@ -1,0 +1,202 @@
+//! Compiled schemas: a flat table of nodes with their bit lengths precomputed.
+//!
+//! A layout is plain data borrowed as slices, so firmware can keep one in `static` tables and
+//! a host can build one at run time (feature `alloc`, [`crate::build`]). Nodes refer to each
+//! other by index; a nested type used in many places is one shared node.
+
+use crate::scalar::Cast;
+
+/// Index of a node in [`Layout::nodes`].
+pub type NodeId = u32;
+
+/// What a node is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kind {
+    /// `uintN`, `1 <= N <= 64`.
+    Uint {
+        /// Bit length.
+        bits: u8,
+        /// Cast mode.
+        cast: Cast,
+    },
+    /// `intN`, `2 <= N <= 64`.
+    Int {
+        /// Bit length.
+        bits: u8,
+        /// Cast mode.
+        cast: Cast,
+    },
+    /// `float16`, `float32` or `float64`.
+    Float {
+        /// Bit length.
+        bits: u8,
+        /// Cast mode.
+        cast: Cast,
+    },
+    /// `bool`: one bit.
+    Bool,
+    /// `voidN`: N zero bits, no value.
+    Void {
+        /// Bit length.
+        bits: u8,
+    },
+    /// A structure: `count` fields starting at `first` in [`Layout::fields`].
+    Struct {
+        /// First field.
+        first: u32,
+        /// Number of fields.
+        count: u32,
+    },
+    /// A union: a tag of `tag_bits` bits, then the selected one of `count` variants.
+    Union {
+        /// First variant in [`Layout::fields`].
+        first: u32,
+        /// Number of variants.
+        count: u32,
+        /// Width of the tag: `ceil(log2(count))`.
+        tag_bits: u8,
+    },
+    /// `T[N]`.
+    Array {
+        /// Element node.
+        elem: NodeId,
+        /// Number of elements.
+        len: u32,
+    },
+    /// `T[<=N]`: a length prefix of `len_bits` bits (unless tail-array optimized), then elements.
+    DynArray {
+        /// Element node.
+        elem: NodeId,
+        /// Maximum number of elements.
+        max: u32,
+        /// Width of the length prefix: `ceil(log2(max + 1))`.
+        len_bits: u8,
+    },
+}
+
+/// A node with its precomputed sizes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Node {
+    /// What the node is.
+    pub kind: Kind,
+    /// Smallest encoded length in bits (without tail array optimization).
+    pub min_bits: u64,
+    /// Largest encoded length in bits (without tail array optimization).
+    pub max_bits: u64,
+    /// For nodes without unions or dynamic arrays inside: the number of leaves. Such a node
+    /// always encodes to exactly `min_bits` bits, so it can be skipped without reading it.
+    pub fixed_leaves: Option<u32>,
+}
+
+/// What a field of a struct (or a union variant) is for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Role {
+    /// An ordinary field.
+    Data,
+    /// A `voidN` field: padding, no value.
+    Padding,
+    /// The `p_version` field: written with this value when the input leaves it out.
+    Version(u32),
+}
+
+/// A named member of a struct or union.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Field {
+    /// Start of the name in [`Layout::names`].
+    pub name_start: u32,
+    /// Length of the name in bytes.
+    pub name_len: u32,
+    /// The field's type.
+    pub node: NodeId,
+    /// What the field is for.
+    pub role: Role,
+}
+
+/// A compiled schema, borrowed.
+#[derive(Clone, Copy, Debug)]
+pub struct Layout<'a> {
+    /// All nodes.
+    pub nodes: &'a [Node],
+    /// All struct fields and union variants, each struct's or union's contiguous.
+    pub fields: &'a [Field],
+    /// All field names, concatenated.
+    pub names: &'a str,
+}
+
+impl<'a> Layout<'a> {
+    /// The node with this index.
+    #[inline]
+    pub fn node(&self, id: NodeId) -> &'a Node {
+        &self.nodes[id as usize]
+    }
+
+    /// A field's name.
+    #[inline]
+    pub fn name(&self, field: &Field) -> &'a str {
+        let start = field.name_start as usize;
+        self.names
+            .get(start..start + field.name_len as usize)
+            .unwrap_or("?")
+    }
+
+    /// The fields of a struct or the variants of a union (empty for other nodes).
+    #[inline]
+    pub fn members(&self, id: NodeId) -> &'a [Field] {
+        match self.node(id).kind {
+            Kind::Struct { first, count } | Kind::Union { first, count, .. } => {
+                &self.fields[first as usize..(first + count) as usize]
+            }
+            _ => &[],
+        }
+    }
+
+    /// The position in [`Layout::fields`] of a member of `id` found by name.
+    pub fn member_index(&self, id: NodeId, name: &str) -> Option<u32> {
+        let first = match self.node(id).kind {
+            Kind::Struct { first, .. } | Kind::Union { first, .. } => first,
+            _ => return None,
+        };
+        self.members(id)
+            .iter()
+            .position(|f| self.name(f) == name)
+            .map(|i| first + i as u32)
+    }
+
+    /// Largest encoded length of `id` in bytes.
+    pub fn max_bytes(&self, id: NodeId) -> usize {
+        self.node(id).max_bits.div_ceil(8) as usize
+    }
+}
+
+/// Width of a union tag for `count` variants: `ceil(log2(count))`.
+pub const fn union_tag_bits(count: u32) -> u8 {
+    if count <= 1 {
+        0
+    } else {
+        (32 - (count - 1).leading_zeros()) as u8
+    }
+}
+
+/// Width of a dynamic array's length prefix: `ceil(log2(max + 1))`.
+pub const fn array_len_bits(max: u32) -> u8 {
+    (32 - max.leading_zeros()) as u8
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn prefix_widths_follow_the_spec() {
+        assert_eq!(union_tag_bits(2), 1);
+        assert_eq!(union_tag_bits(3), 2);
+        assert_eq!(union_tag_bits(6), 3);
+        assert_eq!(union_tag_bits(8), 3);
+        assert_eq!(union_tag_bits(9), 4);
+        assert_eq!(array_len_bits(1), 1);
+        assert_eq!(array_len_bits(7), 3);
+        assert_eq!(array_len_bits(8), 4);
+        assert_eq!(array_len_bits(31), 5);
+        assert_eq!(array_len_bits(255), 8);
+    }
+}

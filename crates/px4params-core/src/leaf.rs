@@ -1,0 +1,880 @@
+//! Leaf access directly in encoded data: find leaf `[k]` or a leaf by path, read it, write it,
+//! without decoding the rest of the value.
+//!
+//! Leaves are numbered in serialization order over the value as it is (following the selected
+//! union variant): every primitive field (`p_version` included), every union tag, and every
+//! dynamic array's length. Padding and static array lengths are not leaves.
+
+use core::convert::Infallible;
+
+use crate::bits::{copy_bits, BitRead};
+use crate::codec::{read_scalar, scalar_bits, scalar_raw, tail_optimized, LeafKind, MAX_DEPTH};
+use crate::error::{Error, ErrorKind, Path, Step};
+use crate::layout::{Kind, Layout, NodeId, Role};
+use crate::scalar::{self, Scalar};
+
+/// Which leaf to access.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Target<'p> {
+    /// Leaf `[k]`.
+    Index(usize),
+    /// A dotted path such as `bus.i2c.address` or `cells[3]`; `_tag` names a union's tag
+    /// (`bus._tag`) and `_len` a dynamic array's length (`cells._len`).
+    Path(&'p str),
+}
+
+/// A located leaf.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Leaf {
+    /// Its number `[k]`.
+    pub index: usize,
+    /// Where its bits start.
+    pub bit_offset: usize,
+    /// What it is.
+    pub kind: LeafKind,
+    /// Its field path.
+    pub path: Path,
+}
+
+/// Codec errors of leaf access (no value source or sink involved).
+pub type LeafAccessError = Error<Infallible>;
+
+/// Finds a leaf in `data`, a value of type `root`.
+pub fn locate<R: BitRead + ?Sized>(
+    layout: &Layout<'_>,
+    root: NodeId,
+    data: &R,
+    target: Target<'_>,
+    tao: bool,
+) -> Result<Leaf, LeafAccessError> {
+    let mut walk = Walk {
+        layout,
+        data,
+        pos: 0,
+        path: Path::default(),
+        leaves: 0,
+        depth: 0,
+    };
+    let found = match target {
+        Target::Index(k) => {
+            let mut k = k;
+            walk.by_index(root, tao, &mut k)?
+        }
+        Target::Path(path) => {
+            let mut tokens = Tokens { rest: path };
+            Some(walk.by_path(root, tao, &mut tokens)?)
+        }
+    };
+    match found {
+        Some(leaf) => {
+            let bits = leaf_bits(&leaf);
+            if leaf.bit_offset + bits as usize > data.bit_len() {
+                return Err(Error {
+                    kind: ErrorKind::Truncated {
+                        needed_bits: leaf.bit_offset + bits as usize,
+                        available_bits: data.bit_len(),
+                    },
+                    bit_offset: leaf.bit_offset,
+                    path: leaf.path,
+                });
+            }
+            Ok(leaf)
+        }
+        None => Err(Error {
+            kind: ErrorKind::NoSuchLeaf {
+                index: match target {
+                    Target::Index(k) => k,
+                    Target::Path(_) => 0,
+                },
+                count: walk.leaves,
+            },
+            bit_offset: walk.pos,
+            path: Path::default(),
+        }),
+    }
+}
+
+/// Reads a located leaf's value. A tag or length reads as [`Scalar::Uint`].
+pub fn read_leaf<R: BitRead + ?Sized>(
+    layout: &Layout<'_>,
+    data: &R,
+    leaf: &Leaf,
+    tao: bool,
+) -> Result<Scalar, LeafAccessError> {
+    Ok(match leaf.kind {
+        LeafKind::Scalar(kind) => read_scalar(data, leaf.bit_offset, kind),
+        LeafKind::Tag { bits, .. } => Scalar::Uint(read_uint(data, leaf.bit_offset, bits.into())),
+        LeafKind::Len { bits: 0, array } => {
+            // Tail-optimized: count the elements up to the end of the data.
+            let mut walk = Walk {
+                layout,
+                data,
+                pos: leaf.bit_offset,
+                path: leaf.path,
+                leaves: 0,
+                depth: 0,
+            };
+            let Kind::DynArray { elem, .. } = layout.node(array).kind else {
+                return Ok(Scalar::Uint(0));
+            };
+            Scalar::Uint(walk.tail_count(elem, tao)? as u64)
+        }
+        LeafKind::Len { bits, .. } => Scalar::Uint(read_uint(data, leaf.bit_offset, bits.into())),
+    })
+}
+
+/// Reads leaf `target` of `data`.
+pub fn get_leaf<R: BitRead + ?Sized>(
+    layout: &Layout<'_>,
+    root: NodeId,
+    data: &R,
+    target: Target<'_>,
+    tao: bool,
+) -> Result<(Leaf, Scalar), LeafAccessError> {
+    let leaf = locate(layout, root, data, target, tao)?;
+    let value = read_leaf(layout, data, &leaf, tao)?;
+    Ok((leaf, value))
+}
+
+/// Writes `value` to leaf `target`, producing the new encoding in `out`; returns its length.
+///
+/// A primitive leaf is overwritten in place. Changing a union tag selects that variant with
+/// its default value; changing an array length drops elements at the end or appends default
+/// ones. `out` must hold the new value ([`Layout::max_bytes`] always suffices).
+pub fn set_leaf<R: BitRead + ?Sized>(
+    layout: &Layout<'_>,
+    root: NodeId,
+    data: &R,
+    target: Target<'_>,
+    value: Scalar,
+    out: &mut [u8],
+    options: crate::codec::EncodeOptions,
+) -> Result<usize, LeafAccessError> {
+    let leaf = locate(layout, root, data, target, options.tao)?;
+    if let LeafKind::Scalar(kind) = leaf.kind {
+        let raw = scalar_raw(kind, value, options.saturate).map_err(|e| Error {
+            kind: ErrorKind::Scalar(e),
+            bit_offset: leaf.bit_offset,
+            path: leaf.path,
+        })?;
+        let len = data.bit_len() / 8;
+        if out.len() < len {
+            return Err(Error {
+                kind: ErrorKind::BufferTooSmall { needed: len },
+                bit_offset: 0,
+                path: Path::default(),
+            });
+        }
+        copy_bits(data, 0, out, 0, len * 8);
+        let bits = scalar_bits(kind);
+        crate::bits::write_bits(out, leaf.bit_offset, scalar::to_stream(raw, bits), bits);
+        return Ok(len);
+    }
+    let mut t = Transcoder {
+        layout,
+        old: Some(data),
+        rpos: 0,
+        out,
+        wpos: 0,
+        leaves: 0,
+        edit: Some((leaf.index, value)),
+        path: Path::default(),
+        depth: 0,
+    };
+    t.node(root, options.tao, options.tao, true)?;
+    Ok(t.finish())
+}
+
+/// Writes the default encoding of `root` into `out`: zeros, `p_version` set to the type's
+/// version, the first union variant, empty dynamic arrays. Returns the length in bytes.
+pub fn encode_default(
+    layout: &Layout<'_>,
+    root: NodeId,
+    out: &mut [u8],
+    tao: bool,
+) -> Result<usize, LeafAccessError> {
+    let mut t: Transcoder<'_, '_, [u8]> = Transcoder {
+        layout,
+        old: None,
+        rpos: 0,
+        out,
+        wpos: 0,
+        leaves: 0,
+        edit: None,
+        path: Path::default(),
+        depth: 0,
+    };
+    t.node(root, tao, tao, false)?;
+    Ok(t.finish())
+}
+
+fn read_uint<R: BitRead + ?Sized>(data: &R, offset: usize, bits: u32) -> u64 {
+    scalar::from_stream(data.read_bits(offset, bits), bits)
+}
+
+fn leaf_bits(leaf: &Leaf) -> u32 {
+    match leaf.kind {
+        LeafKind::Scalar(kind) => scalar_bits(kind),
+        LeafKind::Tag { bits, .. } | LeafKind::Len { bits, .. } => bits.into(),
+    }
+}
+
+/// One step of a textual path.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Token<'p> {
+    Name(&'p str),
+    Index(u32),
+}
+
+struct Tokens<'p> {
+    rest: &'p str,
+}
+
+impl<'p> Tokens<'p> {
+    /// The next step; `Err` when the path does not parse.
+    fn next(&mut self) -> Result<Option<Token<'p>>, ()> {
+        let s = self.rest.strip_prefix('.').unwrap_or(self.rest);
+        if s.is_empty() {
+            return Ok(None);
+        }
+        if let Some(after) = s.strip_prefix('[') {
+            let close = after.find(']').ok_or(())?;
+            let index = after[..close].trim().parse::<u32>().map_err(|_| ())?;
+            self.rest = &after[close + 1..];
+            return Ok(Some(Token::Index(index)));
+        }
+        let end = s.find(['.', '[']).unwrap_or(s.len());
+        if end == 0 {
+            return Err(());
+        }
+        self.rest = &s[end..];
+        Ok(Some(Token::Name(&s[..end])))
+    }
+}
+
+/// Walks encoded data without producing values, counting leaves.
+struct Walk<'l, 'd, R: BitRead + ?Sized> {
+    layout: &'l Layout<'l>,
+    data: &'d R,
+    pos: usize,
+    path: Path,
+    leaves: usize,
+    depth: usize,
+}
+
+impl<R: BitRead + ?Sized> Walk<'_, '_, R> {
+    fn fail(&self, kind: ErrorKind<Infallible>) -> LeafAccessError {
+        Error {
+            kind,
+            bit_offset: self.pos,
+            path: self.path,
+        }
+    }
+
+    fn read(&mut self, bits: u32) -> Result<u64, LeafAccessError> {
+        if bits == 0 {
+            return Ok(0);
+        }
+        let available = self.data.bit_len();
+        if self.pos + bits as usize > available {
+            return Err(self.fail(ErrorKind::Truncated {
+                needed_bits: self.pos + bits as usize,
+                available_bits: available,
+            }));
+        }
+        let v = read_uint(self.data, self.pos, bits);
+        self.pos += bits as usize;
+        Ok(v)
+    }
+
+    fn enter(&mut self) -> Result<(), LeafAccessError> {
+        self.depth += 1;
+        if self.depth > MAX_DEPTH {
+            return Err(self.fail(ErrorKind::TooDeep));
+        }
+        Ok(())
+    }
+
+    fn tag(&mut self, count: u32, tag_bits: u8) -> Result<u32, LeafAccessError> {
+        let at = self.pos;
+        let tag = self.read(tag_bits.into())?;
+        if tag >= u64::from(count) {
+            self.pos = at;
+            return Err(self.fail(ErrorKind::BadUnionTag {
+                tag,
+                variants: count,
+            }));
+        }
+        Ok(tag as u32)
+    }
+
+    fn prefixed_len(&mut self, max: u32, len_bits: u8) -> Result<u32, LeafAccessError> {
+        let at = self.pos;
+        let n = self.read(len_bits.into())?;
+        if n > u64::from(max) {
+            self.pos = at;
+            return Err(self.fail(ErrorKind::ArrayTooLong { len: n, max }));
+        }
+        Ok(n as u32)
+    }
+
+    /// Number of elements of a tail-optimized array starting here (position restored).
+    fn tail_count(&mut self, elem: NodeId, _tao: bool) -> Result<usize, LeafAccessError> {
+        let (start, leaves) = (self.pos, self.leaves);
+        let mut n = 0;
+        while self.data.bit_len().saturating_sub(self.pos) >= 8 {
+            self.skip(elem, false)?;
+            n += 1;
+        }
+        (self.pos, self.leaves) = (start, leaves);
+        Ok(n)
+    }
+
+    /// Skips a value, counting its leaves.
+    fn skip(&mut self, id: NodeId, tao: bool) -> Result<(), LeafAccessError> {
+        let layout = self.layout;
+        let node = layout.node(id);
+        if let Some(n) = node.fixed_leaves {
+            self.pos += node.min_bits as usize;
+            self.leaves += n as usize;
+            return Ok(());
+        }
+        self.enter()?;
+        match node.kind {
+            Kind::Struct { count, .. } => {
+                for (i, f) in layout.members(id).iter().enumerate() {
+                    self.skip(f.node, tao && i + 1 == count as usize)?;
+                }
+            }
+            Kind::Union {
+                first,
+                count,
+                tag_bits,
+            } => {
+                let tag = self.tag(count, tag_bits)?;
+                self.leaves += 1;
+                self.skip(layout.fields[(first + tag) as usize].node, tao)?;
+            }
+            Kind::Array { elem, len } => {
+                for i in 0..len {
+                    self.skip(elem, tao && i + 1 == len)?;
+                }
+            }
+            Kind::DynArray {
+                elem,
+                max,
+                len_bits,
+            } => {
+                self.leaves += 1;
+                if tail_optimized(layout, elem, tao) {
+                    let mut n = 0;
+                    while self.data.bit_len().saturating_sub(self.pos) >= 8 {
+                        if n == max {
+                            return Err(self.fail(ErrorKind::ArrayTooLong {
+                                len: u64::from(n) + 1,
+                                max,
+                            }));
+                        }
+                        self.skip(elem, false)?;
+                        n += 1;
+                    }
+                } else {
+                    let n = self.prefixed_len(max, len_bits)?;
+                    for i in 0..n {
+                        self.skip(elem, tao && i + 1 == n)?;
+                    }
+                }
+            }
+            // Scalars and padding have fixed leaves and were handled above.
+            _ => {}
+        }
+        self.depth -= 1;
+        Ok(())
+    }
+
+    fn found(&self, kind: LeafKind) -> Leaf {
+        Leaf {
+            index: self.leaves,
+            bit_offset: self.pos,
+            kind,
+            path: self.path,
+        }
+    }
+
+    /// Looks for leaf `*k` (counted from here) inside node `id`.
+    fn by_index(
+        &mut self,
+        id: NodeId,
+        tao: bool,
+        k: &mut usize,
+    ) -> Result<Option<Leaf>, LeafAccessError> {
+        let layout = self.layout;
+        let node = layout.node(id);
+        if let Some(n) = node.fixed_leaves {
+            if *k >= n as usize {
+                *k -= n as usize;
+                self.pos += node.min_bits as usize;
+                self.leaves += n as usize;
+                return Ok(None);
+            }
+        }
+        self.enter()?;
+        let found = match node.kind {
+            kind @ (Kind::Uint { .. } | Kind::Int { .. } | Kind::Float { .. } | Kind::Bool) => {
+                // fixed_leaves is 1 and *k < 1.
+                Some(self.found(LeafKind::Scalar(kind)))
+            }
+            Kind::Void { .. } => None,
+            Kind::Struct { first, count } => {
+                let mut found = None;
+                for i in 0..count {
+                    let field = layout.fields[(first + i) as usize];
+                    self.path.push(Step::Field(first + i));
+                    found = self.by_index(field.node, tao && i + 1 == count, k)?;
+                    if found.is_some() {
+                        break;
+                    }
+                    self.path.pop();
+                }
+                found
+            }
+            Kind::Union {
+                first,
+                count,
+                tag_bits,
+            } => {
+                if *k == 0 {
+                    Some(self.found(LeafKind::Tag {
+                        bits: tag_bits,
+                        union: id,
+                    }))
+                } else {
+                    *k -= 1;
+                    self.leaves += 1;
+                    let tag = self.tag(count, tag_bits)?;
+                    self.path.push(Step::Field(first + tag));
+                    let found =
+                        self.by_index(layout.fields[(first + tag) as usize].node, tao, k)?;
+                    if found.is_none() {
+                        self.path.pop();
+                    }
+                    found
+                }
+            }
+            Kind::Array { elem, len } => {
+                let mut found = None;
+                for i in 0..len {
+                    self.path.push(Step::Index(i));
+                    found = self.by_index(elem, tao && i + 1 == len, k)?;
+                    if found.is_some() {
+                        break;
+                    }
+                    self.path.pop();
+                }
+                found
+            }
+            Kind::DynArray {
+                elem,
+                max,
+                len_bits,
+            } => {
+                let tail = tail_optimized(layout, elem, tao);
+                if *k == 0 {
+                    let bits = if tail { 0 } else { len_bits };
+                    Some(self.found(LeafKind::Len { bits, array: id }))
+                } else {
+                    *k -= 1;
+                    self.leaves += 1;
+                    let n = if tail {
+                        self.tail_count(elem, tao)? as u32
+                    } else {
+                        self.prefixed_len(max, len_bits)?
+                    };
+                    if n > max {
+                        return Err(self.fail(ErrorKind::ArrayTooLong { len: n.into(), max }));
+                    }
+                    let mut found = None;
+                    for i in 0..n {
+                        self.path.push(Step::Index(i));
+                        found = self.by_index(elem, !tail && tao && i + 1 == n, k)?;
+                        if found.is_some() {
+                            break;
+                        }
+                        self.path.pop();
+                    }
+                    found
+                }
+            }
+        };
+        self.depth -= 1;
+        Ok(found)
+    }
+
+    fn next_token<'p>(
+        &self,
+        tokens: &mut Tokens<'p>,
+    ) -> Result<Option<Token<'p>>, LeafAccessError> {
+        tokens.next().map_err(|()| self.fail(ErrorKind::NoSuchPath))
+    }
+
+    /// Follows a textual path inside node `id`.
+    fn by_path(
+        &mut self,
+        id: NodeId,
+        tao: bool,
+        tokens: &mut Tokens<'_>,
+    ) -> Result<Leaf, LeafAccessError> {
+        self.enter()?;
+        let layout = self.layout;
+        let token = self.next_token(tokens)?;
+        let leaf = match (layout.node(id).kind, token) {
+            (
+                kind @ (Kind::Uint { .. } | Kind::Int { .. } | Kind::Float { .. } | Kind::Bool),
+                None,
+            ) => self.found(LeafKind::Scalar(kind)),
+            (
+                Kind::Struct { .. }
+                | Kind::Union { .. }
+                | Kind::Array { .. }
+                | Kind::DynArray { .. },
+                None,
+            ) => return Err(self.fail(ErrorKind::NotALeaf)),
+            (Kind::Struct { first, count }, Some(Token::Name(name))) => {
+                let Some(index) = layout.member_index(id, name) else {
+                    return Err(self.fail(ErrorKind::NoSuchPath));
+                };
+                if layout.fields[index as usize].role == Role::Padding {
+                    return Err(self.fail(ErrorKind::NoSuchPath));
+                }
+                for i in first..index {
+                    self.skip(layout.fields[i as usize].node, false)?;
+                }
+                self.path.push(Step::Field(index));
+                let last = tao && index + 1 == first + count;
+                self.by_path(layout.fields[index as usize].node, last, tokens)?
+            }
+            (
+                Kind::Union {
+                    first,
+                    count,
+                    tag_bits,
+                },
+                Some(Token::Name(name)),
+            ) => {
+                if name == "_tag" {
+                    if self.next_token(tokens)?.is_some() {
+                        return Err(self.fail(ErrorKind::NoSuchPath));
+                    }
+                    self.found(LeafKind::Tag {
+                        bits: tag_bits,
+                        union: id,
+                    })
+                } else {
+                    let Some(index) = layout.member_index(id, name) else {
+                        return Err(self.fail(ErrorKind::NoSuchPath));
+                    };
+                    self.leaves += 1;
+                    let tag = self.tag(count, tag_bits)?;
+                    self.path.push(Step::Field(index));
+                    if index != first + tag {
+                        return Err(self.fail(ErrorKind::VariantNotSelected));
+                    }
+                    self.by_path(layout.fields[index as usize].node, tao, tokens)?
+                }
+            }
+            (Kind::Array { elem, len }, Some(Token::Index(i))) => {
+                if i >= len {
+                    return Err(self.fail(ErrorKind::NoSuchPath));
+                }
+                for _ in 0..i {
+                    self.skip(elem, false)?;
+                }
+                self.path.push(Step::Index(i));
+                self.by_path(elem, tao && i + 1 == len, tokens)?
+            }
+            (
+                Kind::DynArray {
+                    elem,
+                    max,
+                    len_bits,
+                },
+                Some(token),
+            ) => {
+                let tail = tail_optimized(layout, elem, tao);
+                if token == Token::Name("_len") {
+                    if self.next_token(tokens)?.is_some() {
+                        return Err(self.fail(ErrorKind::NoSuchPath));
+                    }
+                    let bits = if tail { 0 } else { len_bits };
+                    return Ok(self.found(LeafKind::Len { bits, array: id }));
+                }
+                let Token::Index(i) = token else {
+                    return Err(self.fail(ErrorKind::NoSuchPath));
+                };
+                self.leaves += 1;
+                let n = if tail {
+                    self.tail_count(elem, tao)? as u32
+                } else {
+                    self.prefixed_len(max, len_bits)?
+                };
+                if i >= n {
+                    return Err(self.fail(ErrorKind::NoSuchPath));
+                }
+                for _ in 0..i {
+                    self.skip(elem, false)?;
+                }
+                self.path.push(Step::Index(i));
+                self.by_path(elem, !tail && tao && i + 1 == n, tokens)?
+            }
+            _ => return Err(self.fail(ErrorKind::NoSuchPath)),
+        };
+        self.depth -= 1;
+        Ok(leaf)
+    }
+}
+
+/// Re-encodes a value while reading it, optionally replacing one leaf; with no old data it
+/// writes the default value.
+struct Transcoder<'l, 'o, R: BitRead + ?Sized> {
+    layout: &'l Layout<'l>,
+    old: Option<&'o R>,
+    rpos: usize,
+    out: &'o mut [u8],
+    wpos: usize,
+    leaves: usize,
+    edit: Option<(usize, Scalar)>,
+    path: Path,
+    depth: usize,
+}
+
+impl<R: BitRead + ?Sized> Transcoder<'_, '_, R> {
+    fn fail(&self, kind: ErrorKind<Infallible>) -> LeafAccessError {
+        Error {
+            kind,
+            bit_offset: self.rpos,
+            path: self.path,
+        }
+    }
+
+    fn finish(self) -> usize {
+        let bytes = self.wpos.div_ceil(8);
+        crate::bits::zero_bits(self.out, self.wpos, bytes * 8 - self.wpos);
+        bytes
+    }
+
+    fn write(&mut self, raw: u64, bits: u32) -> Result<(), LeafAccessError> {
+        if bits == 0 {
+            return Ok(());
+        }
+        if self.wpos + bits as usize > self.out.len() * 8 {
+            return Err(self.fail(ErrorKind::BufferTooSmall {
+                needed: (self.wpos + bits as usize).div_ceil(8),
+            }));
+        }
+        crate::bits::write_bits(self.out, self.wpos, scalar::to_stream(raw, bits), bits);
+        self.wpos += bits as usize;
+        Ok(())
+    }
+
+    fn read(&mut self, bits: u32) -> Result<u64, LeafAccessError> {
+        let Some(old) = self.old else { return Ok(0) };
+        if bits == 0 {
+            return Ok(0);
+        }
+        if self.rpos + bits as usize > old.bit_len() {
+            return Err(self.fail(ErrorKind::Truncated {
+                needed_bits: self.rpos + bits as usize,
+                available_bits: old.bit_len(),
+            }));
+        }
+        let v = read_uint(old, self.rpos, bits);
+        self.rpos += bits as usize;
+        Ok(v)
+    }
+
+    /// The replacement for the leaf being read now, if it is the edited one.
+    fn edited(&mut self) -> Option<Scalar> {
+        let k = self.leaves;
+        self.leaves += 1;
+        match self.edit {
+            Some((index, value)) if index == k => Some(value),
+            _ => None,
+        }
+    }
+
+    fn new_count(&self, value: Scalar, limit: u32) -> Result<u32, LeafAccessError> {
+        match value {
+            Scalar::Uint(v) if v < u64::from(limit) => Ok(v as u32),
+            Scalar::Int(v) if v >= 0 && (v as u64) < u64::from(limit) => Ok(v as u32),
+            _ => Err(
+                self.fail(ErrorKind::Scalar(scalar::ScalarError::OutOfRange {
+                    value,
+                    min: Scalar::Uint(0),
+                    max: Scalar::Uint(u64::from(limit) - 1),
+                })),
+            ),
+        }
+    }
+
+    /// Skips an old value that is being dropped.
+    fn skip_old(&mut self, id: NodeId, tao: bool) -> Result<(), LeafAccessError> {
+        let Some(old) = self.old else { return Ok(()) };
+        let mut walk = Walk {
+            layout: self.layout,
+            data: old,
+            pos: self.rpos,
+            path: self.path,
+            leaves: 0,
+            depth: self.depth,
+        };
+        walk.skip(id, tao)?;
+        self.rpos = walk.pos;
+        Ok(())
+    }
+
+    /// `rtao`/`wtao`: the tail-array flag on the read and on the write side (they differ when
+    /// an enclosing array's length changes). `reading`: false writes the default value.
+    fn node(
+        &mut self,
+        id: NodeId,
+        rtao: bool,
+        wtao: bool,
+        reading: bool,
+    ) -> Result<(), LeafAccessError> {
+        self.depth += 1;
+        if self.depth > MAX_DEPTH {
+            return Err(self.fail(ErrorKind::TooDeep));
+        }
+        let layout = self.layout;
+        match layout.node(id).kind {
+            kind @ (Kind::Uint { .. } | Kind::Int { .. } | Kind::Float { .. } | Kind::Bool) => {
+                let bits = scalar_bits(kind);
+                let raw = if reading {
+                    let raw = self.read(bits)?;
+                    match self.edited() {
+                        Some(v) => scalar_raw(kind, v, false)
+                            .map_err(|e| self.fail(ErrorKind::Scalar(e)))?,
+                        None => raw,
+                    }
+                } else {
+                    0
+                };
+                self.write(raw, bits)?;
+            }
+            Kind::Void { bits } => {
+                if reading {
+                    self.read(bits.into())?;
+                }
+                self.write(0, bits.into())?;
+            }
+            Kind::Struct { first, count } => {
+                for i in 0..count {
+                    let field = layout.fields[(first + i) as usize];
+                    let last = i + 1 == count;
+                    self.path.push(Step::Field(first + i));
+                    match field.role {
+                        Role::Version(v) if !reading => {
+                            self.write(v.into(), scalar_bits(layout.node(field.node).kind))?
+                        }
+                        _ => self.node(field.node, rtao && last, wtao && last, reading)?,
+                    }
+                    self.path.pop();
+                }
+            }
+            Kind::Union {
+                first,
+                count,
+                tag_bits,
+            } => {
+                let (old_tag, new_tag) = if reading {
+                    let old = self.read(tag_bits.into())?;
+                    if old >= u64::from(count) {
+                        return Err(self.fail(ErrorKind::BadUnionTag {
+                            tag: old,
+                            variants: count,
+                        }));
+                    }
+                    let new = match self.edited() {
+                        Some(v) => self.new_count(v, count)?,
+                        None => old as u32,
+                    };
+                    (old as u32, new)
+                } else {
+                    (0, 0)
+                };
+                self.write(new_tag.into(), tag_bits.into())?;
+                let variant = |t: u32| layout.fields[(first + t) as usize].node;
+                self.path.push(Step::Field(first + new_tag));
+                if reading && old_tag != new_tag {
+                    self.skip_old(variant(old_tag), rtao)?;
+                    self.node(variant(new_tag), rtao, wtao, false)?;
+                } else {
+                    self.node(variant(new_tag), rtao, wtao, reading)?;
+                }
+                self.path.pop();
+            }
+            Kind::Array { elem, len } => {
+                for i in 0..len {
+                    let last = i + 1 == len;
+                    self.path.push(Step::Index(i));
+                    self.node(elem, rtao && last, wtao && last, reading)?;
+                    self.path.pop();
+                }
+            }
+            Kind::DynArray {
+                elem,
+                max,
+                len_bits,
+            } => {
+                let rtail = tail_optimized(layout, elem, rtao);
+                let wtail = tail_optimized(layout, elem, wtao);
+                let (old_n, new_n) = if reading {
+                    let old_n = if rtail {
+                        let old = self.old.expect("reading implies old data");
+                        let mut walk = Walk {
+                            layout,
+                            data: old,
+                            pos: self.rpos,
+                            path: self.path,
+                            leaves: 0,
+                            depth: self.depth,
+                        };
+                        let n = walk.tail_count(elem, rtao)?;
+                        if n > max as usize {
+                            return Err(self.fail(ErrorKind::ArrayTooLong { len: n as u64, max }));
+                        }
+                        n as u32
+                    } else {
+                        let n = self.read(len_bits.into())?;
+                        if n > u64::from(max) {
+                            return Err(self.fail(ErrorKind::ArrayTooLong { len: n, max }));
+                        }
+                        n as u32
+                    };
+                    let new_n = match self.edited() {
+                        Some(v) => self.new_count(v, max + 1)?,
+                        None => old_n,
+                    };
+                    (old_n, new_n)
+                } else {
+                    (0, 0)
+                };
+                if !wtail {
+                    self.write(new_n.into(), len_bits.into())?;
+                }
+                for i in 0..new_n {
+                    let r = !rtail && rtao && i + 1 == old_n;
+                    let w = !wtail && wtao && i + 1 == new_n;
+                    self.path.push(Step::Index(i));
+                    self.node(elem, r, w, reading && i < old_n)?;
+                    self.path.pop();
+                }
+                for i in new_n..old_n {
+                    self.skip_old(elem, !rtail && rtao && i + 1 == old_n)?;
+                }
+            }
+        }
+        self.depth -= 1;
+        Ok(())
+    }
+}

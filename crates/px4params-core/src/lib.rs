@@ -1,0 +1,29 @@
+//! The core of px4params: DroneCAN (UAVCAN v0) bit-packed serialization driven by compiled
+//! layouts, leaf access in encoded data, and flat leaf values.
+//!
+//! `no_std` and allocation-free; the `alloc` feature adds [`compile::OwnedLayout`] to build
+//! layouts at run time. Firmware can instead keep a [`layout::Layout`] in static tables.
+#![no_std]
+#![deny(missing_docs)]
+#![forbid(unsafe_code)]
+
+#[cfg(feature = "alloc")]
+extern crate alloc;
+#[cfg(test)]
+extern crate std;
+
+pub mod bits;
+pub mod codec;
+#[cfg(feature = "alloc")]
+pub mod compile;
+pub mod error;
+pub mod layout;
+pub mod leaf;
+pub mod scalar;
+pub mod value;
+
+pub use codec::{decode, encode, DecodeOptions, EncodeOptions};
+pub use error::{Error, ErrorKind, Path};
+pub use layout::{Kind, Layout, NodeId};
+pub use leaf::{get_leaf, locate, set_leaf, Target};
+pub use scalar::{Cast, Scalar};

@@ -1,0 +1,417 @@
+//! The codec against the DroneCAN rules: golden vector, the talk's INA238, leaf access,
+//! and properties over random data.
+
+mod common;
+
+use proptest::prelude::*;
+use px4params_core::codec::{decode, encode, DecodeOptions, EncodeOptions};
+use px4params_core::compile::OwnedLayout;
+use px4params_core::leaf::{encode_default, get_leaf, set_leaf, Target};
+use px4params_core::value::{LeafSink, LeafSource};
+use px4params_core::{ErrorKind, NodeId, Scalar};
+
+fn enc(l: &OwnedLayout, root: NodeId, leaves: &[Scalar], tao: bool) -> Vec<u8> {
+    let mut out = vec![0u8; l.as_layout().max_bytes(root) + 1];
+    let n = encode(
+        &l.as_layout(),
+        root,
+        &mut LeafSource::new(leaves),
+        &mut out,
+        EncodeOptions {
+            tao,
+            saturate: false,
+            keep_versions: true,
+        },
+    )
+    .unwrap_or_else(|e| panic!("{}", e.display(&l.as_layout())));
+    out.truncate(n);
+    out
+}
+
+fn dec(l: &OwnedLayout, root: NodeId, data: &[u8], tao: bool) -> Result<Vec<Scalar>, String> {
+    let mut storage = [Scalar::Uint(0); 256];
+    let mut sink = LeafSink::new(&mut storage);
+    let layout = l.as_layout();
+    decode(
+        &layout,
+        root,
+        data,
+        &mut sink,
+        DecodeOptions {
+            tao,
+            allow_trailing: false,
+        },
+    )
+    .map_err(|e| e.display(&layout).to_string())?;
+    Ok(sink.leaves().to_vec())
+}
+
+/// Decodes the value at the start of `data` (random data is mostly longer than a value).
+fn dec_prefix(l: &OwnedLayout, root: NodeId, data: &[u8], tao: bool) -> Option<Vec<u8>> {
+    let mut storage = [Scalar::Uint(0); 256];
+    let mut sink = LeafSink::new(&mut storage);
+    let opts = DecodeOptions {
+        tao,
+        allow_trailing: true,
+    };
+    let bits = decode(&l.as_layout(), root, data, &mut sink, opts).ok()?;
+    Some(data[..bits.div_ceil(8)].to_vec())
+}
+
+/// Leaves compared with NaN equal to NaN.
+fn same(a: &[Scalar], b: &[Scalar]) -> bool {
+    a.len() == b.len()
+        && a.iter().zip(b).all(|(x, y)| match (x, y) {
+            (Scalar::Float(x), Scalar::Float(y)) => x == y || (x.is_nan() && y.is_nan()),
+            _ => x == y,
+        })
+}
+
+#[test]
+fn golden_vector_is_da_ef_7c_00() {
+    let mut l = OwnedLayout::default();
+    let root = common::golden(&mut l);
+    let leaves = [
+        Scalar::Uint(0xBEDA),
+        Scalar::Int(-1),
+        Scalar::Int(-5),
+        Scalar::Int(-1),
+        Scalar::Uint(0x88),
+    ];
+    assert_eq!(enc(&l, root, &leaves, true), [0xDA, 0xEF, 0x7C, 0x00]);
+    // Decoding gives the truncated values back.
+    let back = dec(&l, root, &[0xDA, 0xEF, 0x7C, 0x00], true).unwrap();
+    assert_eq!(
+        back,
+        [
+            Scalar::Uint(0xEDA),
+            Scalar::Int(-1),
+            Scalar::Int(-5),
+            Scalar::Int(-1),
+            Scalar::Uint(0x8)
+        ]
+    );
+}
+
+fn talk_ina238() -> [Scalar; 7] {
+    [
+        Scalar::Uint(0),
+        Scalar::Uint(0),
+        Scalar::Uint(0),
+        Scalar::Uint(1),
+        Scalar::Uint(0x45),
+        Scalar::Uint(200),
+        Scalar::Float(0.0003),
+    ]
+}
+
+#[test]
+fn talk_ina238_example_bytes_and_leaves() {
+    let mut l = OwnedLayout::default();
+    let root = common::ina238(&mut l);
+    let bytes = enc(&l, root, &talk_ina238(), true);
+    // 0000 000 0000 0001 1000101 | 200 as uint10 (C8, then 00) | float16 0x0CEA (EA, then 0C)
+    assert_eq!(bytes, [0x00, 0x03, 0x17, 0x20, 0xEA, 0x0C]);
+    let layout = l.as_layout();
+    let (leaf, v) = get_leaf(&layout, root, &bytes[..], Target::Index(4), true).unwrap();
+    assert_eq!(v, Scalar::Uint(69));
+    assert_eq!(leaf.path.display(&layout).to_string(), "bus.i2c.address");
+    let (leaf, v) = get_leaf(
+        &layout,
+        root,
+        &bytes[..],
+        Target::Path("bus.i2c.address"),
+        true,
+    )
+    .unwrap();
+    assert_eq!((leaf.index, v), (4, Scalar::Uint(69)));
+    let (_, shunt) = get_leaf(&layout, root, &bytes[..], Target::Index(6), true).unwrap();
+    assert_eq!(
+        shunt,
+        Scalar::Float(f64::from(px4params_core::scalar::f32_from_f16(0x0CEA)))
+    );
+    let (leaf, tag) = get_leaf(&layout, root, &bytes[..], Target::Path("bus._tag"), true).unwrap();
+    assert_eq!((leaf.index, tag), (1, Scalar::Uint(0)));
+}
+
+#[test]
+fn set_leaf_in_place_and_structural() {
+    let mut l = OwnedLayout::default();
+    let root = common::ina238(&mut l);
+    let layout = l.as_layout();
+    let bytes = enc(&l, root, &talk_ina238(), true);
+    let mut out = [0u8; 16];
+    let opts = EncodeOptions::default();
+    let n = set_leaf(
+        &layout,
+        root,
+        &bytes[..],
+        Target::Index(4),
+        Scalar::Uint(0x46),
+        &mut out,
+        opts,
+    )
+    .unwrap();
+    let leaves = dec(&l, root, &out[..n], true).unwrap();
+    assert_eq!(leaves[4], Scalar::Uint(0x46));
+    assert_eq!(leaves[5], Scalar::Uint(200));
+    // Out of range for uint7.
+    let err = set_leaf(
+        &layout,
+        root,
+        &bytes[..],
+        Target::Index(4),
+        Scalar::Uint(200),
+        &mut out,
+        opts,
+    )
+    .unwrap_err();
+    assert_eq!(
+        err.display(&layout).to_string(),
+        "bus.i2c.address: value 200 is out of range (expected 0 to 127)"
+    );
+    // Select the spi variant: its default value appears and the fields after the union survive.
+    let n = set_leaf(
+        &layout,
+        root,
+        &bytes[..],
+        Target::Path("bus._tag"),
+        Scalar::Uint(1),
+        &mut out,
+        opts,
+    )
+    .unwrap();
+    let leaves = dec(&l, root, &out[..n], true).unwrap();
+    assert_eq!(
+        leaves[1..5],
+        [
+            Scalar::Uint(1),
+            Scalar::Uint(0),
+            Scalar::Uint(0),
+            Scalar::Uint(0)
+        ]
+    );
+    assert_eq!(leaves[5], Scalar::Uint(200));
+    let err = get_leaf(
+        &layout,
+        root,
+        &out[..n],
+        Target::Path("bus.i2c.address"),
+        true,
+    )
+    .unwrap_err();
+    assert_eq!(
+        err.display(&layout).to_string(),
+        "bus.i2c: this union variant is not the selected one"
+    );
+    let err = set_leaf(
+        &layout,
+        root,
+        &bytes[..],
+        Target::Index(1),
+        Scalar::Uint(5),
+        &mut out,
+        opts,
+    )
+    .unwrap_err();
+    assert!(matches!(err.kind, ErrorKind::Scalar(_)), "{err:?}");
+}
+
+#[test]
+fn leaf_errors_name_the_problem() {
+    let mut l = OwnedLayout::default();
+    let root = common::ina238(&mut l);
+    let layout = l.as_layout();
+    let bytes = enc(&l, root, &talk_ina238(), true);
+    let msg = |t| {
+        get_leaf(&layout, root, &bytes[..], t, true)
+            .unwrap_err()
+            .display(&layout)
+            .to_string()
+    };
+    assert_eq!(
+        msg(Target::Index(7)),
+        "no leaf [7] (the value has 7 leaves: [0]..[6])"
+    );
+    assert_eq!(msg(Target::Path("bus.i2c.nope")), "bus.i2c: no such field");
+    assert_eq!(
+        msg(Target::Path("bus")),
+        "bus: not a leaf (a struct, union or array)"
+    );
+    assert_eq!(msg(Target::Path("current.x")), "current: no such field");
+    assert_eq!(msg(Target::Path("bus..")), "bus: no such field");
+    let short = get_leaf(&layout, root, &bytes[..3], Target::Index(6), true).unwrap_err();
+    assert_eq!(
+        short.display(&layout).to_string(),
+        "shunt: data is truncated: needs at least 48 bits, has 24"
+    );
+}
+
+#[test]
+fn decode_errors_carry_offset_and_path() {
+    let mut l = OwnedLayout::default();
+    let root = common::ina238(&mut l);
+    // Tag 7 does not exist (5 variants).
+    let err = dec(&l, root, &[0x0E, 0, 0, 0, 0, 0], true).unwrap_err();
+    assert_eq!(
+        err,
+        "union tag 7 selects no variant (expected 0..4)".replace("union", "bus: union")
+    );
+    assert_eq!(
+        dec(&l, root, &[0; 5], true).unwrap_err(),
+        "shunt: data is truncated: needs at least 48 bits, has 40"
+    );
+    assert_eq!(
+        dec(&l, root, &[0; 7], true).unwrap_err(),
+        "data is too long: the value ends after 6 bytes, the data has 7"
+    );
+}
+
+#[test]
+fn missing_and_version_fields() {
+    let mut l = OwnedLayout::default();
+    let root = common::ina238(&mut l);
+    let layout = l.as_layout();
+    let mut out = [0u8; 16];
+    // A wrong p_version is refused.
+    let mut leaves = talk_ina238();
+    leaves[0] = Scalar::Uint(3);
+    let err = encode(
+        &layout,
+        root,
+        &mut LeafSource::new(&leaves),
+        &mut out,
+        EncodeOptions::default(),
+    )
+    .unwrap_err();
+    assert_eq!(
+        err.display(&layout).to_string(),
+        "p_version: p_version is set automatically; got 3, the type's version is 0"
+    );
+    // The default value: zeros, first variant.
+    let n = encode_default(&layout, root, &mut out, true).unwrap();
+    assert_eq!(&out[..n], &[0u8; 6]);
+    // Too few leaves.
+    let err = encode(
+        &layout,
+        root,
+        &mut LeafSource::new(&talk_ina238()[..3]),
+        &mut out,
+        EncodeOptions::default(),
+    )
+    .unwrap_err();
+    assert_eq!(
+        err.display(&layout).to_string(),
+        "bus.i2c.bus_id: the leaf list ends before the value"
+    );
+    // Buffer too small.
+    let err = encode(
+        &layout,
+        root,
+        &mut LeafSource::new(&talk_ina238()),
+        &mut out[..2],
+        EncodeOptions::default(),
+    )
+    .unwrap_err();
+    assert!(matches!(err.kind, ErrorKind::BufferTooSmall { .. }));
+}
+
+#[test]
+fn battery_info_tail_array() {
+    let mut l = OwnedLayout::default();
+    let root = common::battery_info(&mut l);
+    let mut leaves: Vec<Scalar> = (0..7).map(|i| Scalar::Float(f64::from(i) * 1.5)).collect();
+    leaves.extend([
+        Scalar::Uint(3),
+        Scalar::Uint(90),
+        Scalar::Uint(80),
+        Scalar::Uint(2),
+        Scalar::Uint(1),
+        Scalar::Uint(77),
+    ]);
+    leaves.push(Scalar::Uint(3));
+    leaves.extend(b"abc".iter().map(|&b| Scalar::Uint(b.into())));
+    let with_tao = enc(&l, root, &leaves, true);
+    let without = enc(&l, root, &leaves, false);
+    // 7*16 + 11 + 3*7 + 8 + 32 = 184 bits = 23 bytes, then the name: 3 bytes, or 5 bits + 24.
+    assert_eq!(with_tao.len(), 26);
+    assert_eq!(without.len(), 27);
+    assert_eq!(&with_tao[23..], b"abc");
+    assert!(same(&dec(&l, root, &with_tao, true).unwrap(), &leaves));
+    assert!(same(&dec(&l, root, &without, false).unwrap(), &leaves));
+}
+
+fn layouts() -> Vec<(OwnedLayout, NodeId)> {
+    let builders: [fn(&mut OwnedLayout) -> NodeId; 4] = [
+        common::ina238,
+        common::battery_info,
+        common::golden,
+        common::kitchen_sink,
+    ];
+    builders
+        .iter()
+        .map(|b| {
+            let mut l = OwnedLayout::default();
+            let r = b(&mut l);
+            (l, r)
+        })
+        .collect()
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(400))]
+
+    /// Random bytes never panic; whatever decodes re-encodes to a canonical fixpoint.
+    #[test]
+    fn random_bytes_decode_or_fail_cleanly(data in proptest::collection::vec(any::<u8>(), 0..64), tao in any::<bool>()) {
+        for (l, root) in layouts() {
+            let layout = l.as_layout();
+            let prefix = dec_prefix(&l, root, &data, tao).unwrap_or_default();
+            if let Ok(leaves) = dec(&l, root, &prefix, tao) {
+                let canonical = enc(&l, root, &leaves, tao);
+                let again = dec(&l, root, &canonical, tao).unwrap();
+                prop_assert!(same(&leaves, &again));
+                prop_assert_eq!(enc(&l, root, &again, tao), canonical.clone());
+                // Every leaf reads the same through leaf access.
+                for (k, v) in leaves.iter().enumerate() {
+                    let (leaf, got) = get_leaf(&layout, root, &canonical[..], Target::Index(k), tao).unwrap();
+                    prop_assert_eq!(leaf.index, k);
+                    prop_assert!(same(&[got], &[*v]), "leaf {} {:?} != {:?}", k, got, v);
+                    let path = leaf.path.display(&layout).to_string();
+                    if !path.is_empty() && !matches!(leaf.kind, px4params_core::codec::LeafKind::Len { .. } | px4params_core::codec::LeafKind::Tag { .. }) {
+                        let (by_path, _) = get_leaf(&layout, root, &canonical[..], Target::Path(&path), tao).unwrap();
+                        prop_assert_eq!(by_path.index, k, "path {}", path);
+                    }
+                }
+            }
+            // Leaf access on arbitrary data fails cleanly too.
+            for k in 0..12 {
+                let _ = get_leaf(&layout, root, &data[..], Target::Index(k), tao);
+                let mut out = vec![0u8; layout.max_bytes(root) + 8];
+                let _ = set_leaf(&layout, root, &data[..], Target::Index(k), Scalar::Uint(1), &mut out, EncodeOptions { tao, saturate: true, keep_versions: true });
+            }
+        }
+    }
+
+    /// Setting leaf k changes exactly that leaf (scalars) or re-shapes after it (tags, lengths).
+    #[test]
+    fn set_leaf_changes_only_what_it_should(data in proptest::collection::vec(any::<u8>(), 0..64), k in 0usize..40, new in 0u64..4, tao in any::<bool>()) {
+        for (l, root) in layouts() {
+            let layout = l.as_layout();
+            let prefix = dec_prefix(&l, root, &data, tao).unwrap_or_default();
+            let Ok(leaves) = dec(&l, root, &prefix, tao) else { continue };
+            if k >= leaves.len() { continue; }
+            let canonical = enc(&l, root, &leaves, tao);
+            let mut out = vec![0u8; layout.max_bytes(root) + 8];
+            let value = match leaves[k] { Scalar::Float(_) => Scalar::Float(new as f64), Scalar::Bool(_) => Scalar::Bool(new % 2 == 1), Scalar::Int(_) => Scalar::Int(new as i64 - 1), Scalar::Uint(_) => Scalar::Uint(new) };
+            match set_leaf(&layout, root, &canonical[..], Target::Index(k), value, &mut out, EncodeOptions { tao, saturate: false, keep_versions: true }) {
+                Ok(n) => {
+                    let after = dec(&l, root, &out[..n], tao).unwrap();
+                    prop_assert!(same(&after[..k], &leaves[..k]));
+                    prop_assert!(same(&after[k..=k], &[value]));
+                }
+                Err(e) => prop_assert!(matches!(e.kind, ErrorKind::Scalar(_)), "{:?}", e),
+            }
+        }
+    }
+}

@@ -1,0 +1,139 @@
+//! Layouts for the tests and benchmarks, built by hand as the Python loader would build them.
+#![allow(dead_code)]
+
+use px4params_core::compile::OwnedLayout;
+use px4params_core::layout::{NodeId, Role};
+use px4params_core::Cast::{Saturated, Truncated};
+
+/// The talk's INA238 type (`px.Ina238.1.0`) and its `Bus` union.
+pub fn ina238(l: &mut OwnedLayout) -> NodeId {
+    let u4 = l.uint(4, Saturated).unwrap();
+    let u7 = l.uint(7, Saturated).unwrap();
+    let u8_ = l.uint(8, Saturated).unwrap();
+    let u10 = l.uint(10, Saturated).unwrap();
+    let f16 = l.float(16, Saturated).unwrap();
+    let i2c = l
+        .structure(&[
+            ("p_version", u4, Role::Version(0)),
+            ("bus_id", u4, Role::Data),
+            ("address", u7, Role::Data),
+        ])
+        .unwrap();
+    let spi = l
+        .structure(&[
+            ("p_version", u4, Role::Version(0)),
+            ("bus_id", u4, Role::Data),
+            ("device", u8_, Role::Data),
+        ])
+        .unwrap();
+    let serial = l
+        .structure(&[
+            ("p_version", u4, Role::Version(0)),
+            ("port", u8_, Role::Data),
+        ])
+        .unwrap();
+    let bus = l
+        .union(&[
+            ("i2c", i2c),
+            ("spi", spi),
+            ("serial", serial),
+            ("sim", serial),
+            ("dronecan", serial),
+        ])
+        .unwrap();
+    l.structure(&[
+        ("p_version", u4, Role::Version(0)),
+        ("bus", bus, Role::Data),
+        ("current", u10, Role::Data),
+        ("shunt", f16, Role::Data),
+    ])
+    .unwrap()
+}
+
+/// `uavcan.equipment.power.BatteryInfo`.
+pub fn battery_info(l: &mut OwnedLayout) -> NodeId {
+    let f16 = l.float(16, Saturated).unwrap();
+    let u11 = l.uint(11, Saturated).unwrap();
+    let u7 = l.uint(7, Saturated).unwrap();
+    let u8_ = l.uint(8, Saturated).unwrap();
+    let u32_ = l.uint(32, Saturated).unwrap();
+    let name = l.dyn_array(u8_, 31).unwrap();
+    let mut fields = vec![];
+    for n in [
+        "temperature",
+        "voltage",
+        "current",
+        "average_power_10sec",
+        "remaining_capacity_wh",
+        "full_charge_capacity_wh",
+        "hours_to_full_charge",
+    ] {
+        fields.push((n, f16, Role::Data));
+    }
+    fields.extend([
+        ("status_flags", u11, Role::Data),
+        ("state_of_health_pct", u7, Role::Data),
+        ("state_of_charge_pct", u7, Role::Data),
+        ("state_of_charge_pct_stdev", u7, Role::Data),
+        ("battery_id", u8_, Role::Data),
+        ("model_instance_id", u32_, Role::Data),
+        ("model_name", name, Role::Data),
+    ]);
+    l.structure(&fields).unwrap()
+}
+
+/// The golden vector's fields: uint12, int3, int4, int2, uint4 (the first and last truncated).
+pub fn golden(l: &mut OwnedLayout) -> NodeId {
+    let a = l.uint(12, Truncated).unwrap();
+    let b = l.int(3, Saturated).unwrap();
+    let c = l.int(4, Saturated).unwrap();
+    let d = l.int(2, Saturated).unwrap();
+    let e = l.uint(4, Truncated).unwrap();
+    l.structure(&[
+        ("a", a, Role::Data),
+        ("b", b, Role::Data),
+        ("c", c, Role::Data),
+        ("d", d, Role::Data),
+        ("e", e, Role::Data),
+    ])
+    .unwrap()
+}
+
+/// A type exercising everything: nested unions, static and dynamic arrays, void, bool,
+/// every float, signed values and a tail array of structs.
+pub fn kitchen_sink(l: &mut OwnedLayout) -> NodeId {
+    let b = l.boolean();
+    let i5 = l.int(5, Saturated).unwrap();
+    let u3 = l.uint(3, Truncated).unwrap();
+    let i64_ = l.int(64, Saturated).unwrap();
+    let u64_ = l.uint(64, Saturated).unwrap();
+    let f16 = l.float(16, Saturated).unwrap();
+    let f32_ = l.float(32, Truncated).unwrap();
+    let f64_ = l.float(64, Saturated).unwrap();
+    let v3 = l.void(3).unwrap();
+    let pair = l
+        .structure(&[("x", i5, Role::Data), ("flag", b, Role::Data)])
+        .unwrap();
+    let small = l.dyn_array(u3, 5).unwrap();
+    let choice = l
+        .union(&[("pair", pair), ("small", small), ("wide", f64_)])
+        .unwrap();
+    let elem = l
+        .structure(&[
+            ("a", u64_, Role::Data),
+            ("b", f16, Role::Data),
+            ("pad", v3, Role::Padding),
+        ])
+        .unwrap();
+    let fixed = l.array(f32_, 3).unwrap();
+    let tail = l.dyn_array(elem, 4).unwrap();
+    l.structure(&[
+        ("flag", b, Role::Data),
+        ("gap", v3, Role::Padding),
+        ("choice", choice, Role::Data),
+        ("fixed", fixed, Role::Data),
+        ("big", i64_, Role::Data),
+        ("tail", tail, Role::Data),
+    ])
+    .unwrap()
+}

@@ -1,0 +1,77 @@
+"""Exceptions raised by px4params.
+
+The names and attributes here are a stable interface: the native extension imports these classes
+(rather than defining its own) so that Python callers can catch one hierarchy.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+
+__all__ = [
+    "CodecError",
+    "DecodeError",
+    "DsdlError",
+    "EncodeError",
+    "Px4ParamsError",
+    "ValueShapeError",
+]
+
+
+class Px4ParamsError(Exception):
+    """Base class of every error px4params raises on purpose."""
+
+
+class DsdlError(Px4ParamsError):
+    """A DSDL definition or its metadata is invalid, or could not be read.
+
+    Attributes:
+        file: path of the offending file (or root folder), if known.
+        line: 1-based line number in ``file``, if known.
+        message: the description without the location prefix.
+
+    ``str()`` is a single line in compiler style: ``file:line: message``.
+    """
+
+    def __init__(
+        self,
+        message: str,
+        file: str | os.PathLike[str] | None = None,
+        line: int | None = None,
+    ) -> None:
+        # Pass every argument to Exception so that pickling/copying rebuilds the same error.
+        super().__init__(message, file, line)
+        self.message = message
+        self.file: str | None = os.fspath(file) if file is not None else None
+        self.line = line
+
+    def __str__(self) -> str:
+        # Parser messages may span lines; the contract is one line per error.
+        text = re.sub(r"\s*\n\s*", " ", self.message).strip()
+        if self.file is not None and self.line is not None:
+            return f"{self.file}:{self.line}: {text}"
+        if self.file is not None:
+            return f"{self.file}: {text}"
+        return text
+
+
+class CodecError(Px4ParamsError):
+    """A value could not be serialised or deserialised with the DroneCAN rules.
+
+    Attributes (set by whoever raises it):
+        path: where in the value the problem is, e.g. ``"bus.i2c.address"`` or ``"[4]"``.
+        bit_offset: bit position in the serialised data, or None when not applicable.
+    """
+
+
+class EncodeError(CodecError):
+    """A value could not be encoded (out of range, wrong type, too long, ...)."""
+
+
+class DecodeError(CodecError):
+    """Bytes could not be decoded into a value (truncated, invalid union tag, ...)."""
+
+
+class ValueShapeError(EncodeError):
+    """A value does not have the shape of its type (missing or unknown fields, wrong nesting)."""
