@@ -14,6 +14,7 @@ __all__ = [
     "DecodeError",
     "DsdlError",
     "EncodeError",
+    "LeafError",
     "Px4ParamsError",
     "ValueShapeError",
 ]
@@ -75,3 +76,7 @@ class DecodeError(CodecError):
 
 class ValueShapeError(EncodeError):
     """A value does not have the shape of its type (missing or unknown fields, wrong nesting)."""
+
+
+class LeafError(CodecError, LookupError):
+    """No leaf at that ``[k]`` index or path, or the path runs through an unselected variant."""

@@ -107,8 +107,14 @@ pub trait Source {
     fn field(&mut self, name: &str) -> Result<bool, Self::Error>;
     /// Leaves the field entered by a successful [`Source::field`].
     fn end_field(&mut self);
-    /// Ends the struct; `used` fields were taken from the input (so others are unknown).
-    fn end_struct(&mut self, used: usize) -> Result<(), Self::Error>;
+    /// Ends the struct whose members are `fields`; `used` of them were present in the input,
+    /// so any further input field is unknown.
+    fn end_struct(
+        &mut self,
+        layout: &Layout<'_>,
+        fields: &[Field],
+        used: usize,
+    ) -> Result<(), Self::Error>;
     /// The current position must hold a union: returns the index of the selected variant among
     /// `variants` and moves into it.
     fn begin_union(&mut self, layout: &Layout<'_>, variants: &[Field]) -> Result<u32, Self::Error>;
@@ -133,12 +139,19 @@ pub trait Sink {
     fn scalar(&mut self, value: Scalar, at: At<'_>) -> Result<(), Self::Error>;
     /// A struct begins; `field` announces each member before its value.
     fn begin_struct(&mut self, fields: usize) -> Result<(), Self::Error>;
-    /// The next value is field `name` of the current struct.
-    fn field(&mut self, name: &str) -> Result<(), Self::Error>;
+    /// The next value is field `name` (at `index` in [`Layout::fields`]) of the current struct.
+    fn field(&mut self, index: u32, name: &str) -> Result<(), Self::Error>;
     /// The struct ends.
     fn end_struct(&mut self) -> Result<(), Self::Error>;
-    /// A union begins with variant `name` (tag `tag`) selected; its value follows.
-    fn begin_union(&mut self, tag: u32, name: &str, at: At<'_>) -> Result<(), Self::Error>;
+    /// A union begins with variant `name` (tag `tag`, at `index` in [`Layout::fields`])
+    /// selected; its value follows.
+    fn begin_union(
+        &mut self,
+        tag: u32,
+        index: u32,
+        name: &str,
+        at: At<'_>,
+    ) -> Result<(), Self::Error>;
     /// The union ends.
     fn end_union(&mut self) -> Result<(), Self::Error>;
     /// An array begins.
@@ -301,7 +314,7 @@ impl<S: Source> Encoder<'_, '_, S> {
                     }
                     self.path.pop();
                 }
-                let r = self.source.end_struct(used);
+                let r = self.source.end_struct(layout, layout.members(id), used);
                 self.value(r)?;
             }
             Kind::Union {
@@ -446,7 +459,7 @@ impl<R: BitRead + ?Sized, K: Sink> Decoder<'_, '_, R, K> {
                         self.node(field.node, last)?;
                         continue;
                     }
-                    let r = self.sink.field(layout.name(&field));
+                    let r = self.sink.field(index, layout.name(&field));
                     self.sunk(r)?;
                     self.path.push(Step::Field(index));
                     self.node(field.node, last)?;
@@ -477,7 +490,12 @@ impl<R: BitRead + ?Sized, K: Sink> Decoder<'_, '_, R, K> {
                         union: id,
                     },
                 };
-                let r = self.sink.begin_union(tag as u32, layout.name(&variant), at);
+                let r = self.sink.begin_union(
+                    tag as u32,
+                    first + tag as u32,
+                    layout.name(&variant),
+                    at,
+                );
                 self.sunk(r)?;
                 self.path.push(Step::Field(first + tag as u32));
                 self.node(variant.node, tao)?;

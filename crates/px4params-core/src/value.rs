@@ -74,7 +74,7 @@ impl Source for LeafSource<'_> {
         Ok(true)
     }
     fn end_field(&mut self) {}
-    fn end_struct(&mut self, _used: usize) -> Result<(), LeafError> {
+    fn end_struct(&mut self, _: &Layout<'_>, _: &[Field], _used: usize) -> Result<(), LeafError> {
         Ok(())
     }
     fn begin_union(&mut self, _layout: &Layout<'_>, _variants: &[Field]) -> Result<u32, LeafError> {
@@ -136,13 +136,13 @@ impl Sink for LeafSink<'_> {
     fn begin_struct(&mut self, _fields: usize) -> Result<(), LeafError> {
         Ok(())
     }
-    fn field(&mut self, _name: &str) -> Result<(), LeafError> {
+    fn field(&mut self, _index: u32, _name: &str) -> Result<(), LeafError> {
         Ok(())
     }
     fn end_struct(&mut self) -> Result<(), LeafError> {
         Ok(())
     }
-    fn begin_union(&mut self, tag: u32, _name: &str, _at: At<'_>) -> Result<(), LeafError> {
+    fn begin_union(&mut self, tag: u32, _: u32, _: &str, _: At<'_>) -> Result<(), LeafError> {
         self.push(Scalar::Uint(tag.into()))
     }
     fn end_union(&mut self) -> Result<(), LeafError> {

@@ -1,1 +1,404 @@
+//! `px4params._native`: the Rust core, compiled once per schema, as frozen Python objects.
+//!
+//! Core errors become the exception classes of `px4params.errors` here, and only here.
 
+mod compile;
+mod values;
+
+use std::collections::HashMap;
+use std::sync::Arc;
+
+use px4params_core::codec::{decode, encode, DecodeOptions, EncodeOptions, LeafKind};
+use px4params_core::compile::OwnedLayout;
+use px4params_core::error::{Error, ErrorKind};
+use px4params_core::layout::{Layout, NodeId};
+use px4params_core::leaf::{encode_default, get_leaf, locate, set_leaf, Target};
+use px4params_core::Scalar;
+use pyo3::exceptions::{PyKeyError, PyTypeError};
+use pyo3::prelude::*;
+use pyo3::types::{PyBytes, PyDict, PyList, PyString, PyTuple};
+
+use values::{kind_name, scalar_to_py, LeafRows, PySink, PySource, ValueError};
+
+pyo3::import_exception!(px4params.errors, EncodeError);
+pyo3::import_exception!(px4params.errors, DecodeError);
+pyo3::import_exception!(px4params.errors, ValueShapeError);
+pyo3::import_exception!(px4params.errors, LeafError);
+
+/// Which operation failed, to pick the exception class.
+#[derive(Clone, Copy, PartialEq)]
+enum Op {
+    Encode,
+    Decode,
+    Leaf,
+}
+
+/// The one place where core errors become Python exceptions.
+fn to_py_err<E: std::fmt::Display>(
+    py: Python<'_>,
+    type_name: &str,
+    layout: &Layout<'_>,
+    err: Error<E>,
+    op: Op,
+    value_error: impl FnOnce(E) -> Result<(), PyErr>,
+) -> PyErr {
+    let path = err.path.display(layout).to_string();
+    let kind = err.kind;
+    let mut text = match &kind {
+        ErrorKind::Value(e) => e.to_string(),
+        k => k.to_string(),
+    };
+    if !path.is_empty() {
+        text = format!("{path}: {text}");
+    }
+    let data_fault = matches!(
+        kind,
+        ErrorKind::Truncated { .. }
+            | ErrorKind::TrailingBytes { .. }
+            | ErrorKind::BadUnionTag { .. }
+            | ErrorKind::TooDeep
+    ) || (op == Op::Decode && matches!(kind, ErrorKind::ArrayTooLong { .. }));
+    if data_fault {
+        text = format!("{text} (at bit {})", err.bit_offset);
+    }
+    let message = format!("{type_name}: {text}");
+    let exc = match kind {
+        ErrorKind::Value(e) => {
+            if let Err(py_err) = value_error(e) {
+                return py_err;
+            }
+            ValueShapeError::new_err(message)
+        }
+        _ if data_fault => DecodeError::new_err(message),
+        ErrorKind::MissingField | ErrorKind::WrongArrayLength { .. } => {
+            ValueShapeError::new_err(message)
+        }
+        ErrorKind::NoSuchLeaf { .. }
+        | ErrorKind::NoSuchPath
+        | ErrorKind::NotALeaf
+        | ErrorKind::VariantNotSelected => LeafError::new_err(message),
+        _ => EncodeError::new_err(message),
+    };
+    let value = exc.value(py);
+    let _ = value.setattr("path", path);
+    let _ = value.setattr(
+        "bit_offset",
+        if op == Op::Encode { None } else { Some(err.bit_offset) },
+    );
+    exc
+}
+
+/// Routes a Python-side value error: exceptions raised by Python code propagate unchanged,
+/// range errors become `EncodeError`, shape errors `ValueShapeError` (the default).
+fn route_value_error(type_name: &str, path: &str) -> impl FnOnce(ValueError) -> Result<(), PyErr> {
+    let prefix = if path.is_empty() {
+        format!("{type_name}: ")
+    } else {
+        format!("{type_name}: {path}: ")
+    };
+    move |e| match e {
+        ValueError::Py(err) => Err(err),
+        ValueError::Range(m) => Err(EncodeError::new_err(format!("{prefix}{m}"))),
+        ValueError::Shape(_) => Ok(()),
+    }
+}
+
+struct Compiled {
+    layout: OwnedLayout,
+    roots: HashMap<String, NodeId>,
+    /// Every field name as an interned Python string, by field index (decoding builds dicts).
+    names: Vec<Py<PyString>>,
+}
+
+/// A schema compiled into one flat layout; hands out [`DataType`]s by key.
+#[pyclass(frozen, module = "px4params._native")]
+struct Schema {
+    compiled: Arc<Compiled>,
+}
+
+#[pymethods]
+impl Schema {
+    /// Compiles the model's `types` dict (see `px4params.dsdl_loader`).
+    #[new]
+    fn new(py: Python<'_>, types: &Bound<'_, PyDict>) -> PyResult<Self> {
+        let (layout, roots) = compile::compile_model(types)?;
+        let view = layout.as_layout();
+        let names = view
+            .fields
+            .iter()
+            .map(|f| PyString::intern(py, view.name(f)).unbind())
+            .collect();
+        Ok(Self {
+            compiled: Arc::new(Compiled {
+                layout,
+                roots,
+                names,
+            }),
+        })
+    }
+
+    /// Keys of all compiled types, sorted.
+    fn keys(&self) -> Vec<String> {
+        let mut keys: Vec<String> = self.compiled.roots.keys().cloned().collect();
+        keys.sort();
+        keys
+    }
+
+    /// The compiled type with this exact key.
+    fn get(&self, key: &str) -> PyResult<DataType> {
+        let root = *self
+            .compiled
+            .roots
+            .get(key)
+            .ok_or_else(|| PyKeyError::new_err(key.to_owned()))?;
+        Ok(DataType {
+            compiled: Arc::clone(&self.compiled),
+            root,
+            name: key.to_owned(),
+        })
+    }
+
+    /// Number of nodes in the compiled layout (shared nested types count once).
+    #[getter]
+    fn node_count(&self) -> usize {
+        self.compiled.layout.as_layout().nodes.len()
+    }
+}
+
+/// One compiled type: encode, decode and leaf access with the DroneCAN rules.
+#[pyclass(frozen, module = "px4params._native")]
+struct DataType {
+    compiled: Arc<Compiled>,
+    root: NodeId,
+    #[pyo3(get)]
+    name: String,
+}
+
+fn target_of<'a>(target: &'a Bound<'_, PyAny>) -> PyResult<Target<'a>> {
+    if let Ok(k) = target.extract::<usize>() {
+        return Ok(Target::Index(k));
+    }
+    if let Ok(s) = target.cast::<PyString>() {
+        // A borrowed &str lives as long as the Python string, which outlives the call.
+        return Ok(Target::Path(s.to_str()?));
+    }
+    Err(PyTypeError::new_err(format!(
+        "a leaf is named by its index [k] (int >= 0) or a path (str), got {}",
+        target.get_type().name()?
+    )))
+}
+
+impl DataType {
+    fn layout(&self) -> Layout<'_> {
+        self.compiled.layout.as_layout()
+    }
+
+    fn err<E: std::fmt::Display>(
+        &self,
+        py: Python<'_>,
+        err: Error<E>,
+        op: Op,
+        value_error: impl FnOnce(E) -> Result<(), PyErr>,
+    ) -> PyErr {
+        to_py_err(py, &self.name, &self.layout(), err, op, value_error)
+    }
+
+    fn leaf_err(&self, py: Python<'_>, err: Error<std::convert::Infallible>, op: Op) -> PyErr {
+        self.err(py, err, op, |e| match e {})
+    }
+}
+
+#[pymethods]
+impl DataType {
+    /// Encodes a value (dict) to bytes.
+    #[pyo3(signature = (value, *, tao = true, saturate = false))]
+    fn encode<'py>(
+        &self,
+        py: Python<'py>,
+        value: Bound<'py, PyAny>,
+        tao: bool,
+        saturate: bool,
+    ) -> PyResult<Bound<'py, PyBytes>> {
+        let layout = self.layout();
+        let mut buf = [0u8; 256];
+        let mut heap;
+        let out: &mut [u8] = if layout.max_bytes(self.root) <= buf.len() {
+            &mut buf
+        } else {
+            heap = vec![0u8; layout.max_bytes(self.root)];
+            &mut heap
+        };
+        let mut source = PySource::new(value, saturate);
+        let options = EncodeOptions {
+            tao,
+            saturate,
+            keep_versions: false,
+        };
+        match encode(&layout, self.root, &mut source, out, options) {
+            Ok(n) => Ok(PyBytes::new(py, &out[..n])),
+            Err(e) => {
+                let path = e.path.display(&layout).to_string();
+                Err(self.err(py, e, Op::Encode, route_value_error(&self.name, &path)))
+            }
+        }
+    }
+
+    /// Decodes bytes to a value (dict).
+    #[pyo3(signature = (data, *, tao = true, allow_trailing = false))]
+    fn decode<'py>(
+        &self,
+        py: Python<'py>,
+        data: &[u8],
+        tao: bool,
+        allow_trailing: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let layout = self.layout();
+        let mut sink = PySink::new(py, &self.compiled.names);
+        let options = DecodeOptions {
+            tao,
+            allow_trailing,
+        };
+        match decode(&layout, self.root, data, &mut sink, options) {
+            Ok(_) => Ok(sink.into_value().expect("a decoded value")),
+            Err(e) => {
+                let path = e.path.display(&layout).to_string();
+                Err(self.err(py, e, Op::Decode, route_value_error(&self.name, &path)))
+            }
+        }
+    }
+
+    /// Every leaf of an encoded value as `(index, path, type, value)`.
+    #[pyo3(signature = (data, *, tao = true))]
+    fn leaves<'py>(&self, py: Python<'py>, data: &[u8], tao: bool) -> PyResult<Bound<'py, PyList>> {
+        let layout = self.layout();
+        let mut rows = LeafRows::new(&layout);
+        let options = DecodeOptions {
+            tao,
+            allow_trailing: false,
+        };
+        decode(&layout, self.root, data, &mut rows, options)
+            .map_err(|e| self.leaf_err(py, e, Op::Decode))?;
+        let list = PyList::empty(py);
+        for row in rows.rows {
+            let value = scalar_to_py(py, row.value)?;
+            let item = (row.index, row.path, row.type_name, value).into_pyobject(py)?;
+            list.append(item)?;
+        }
+        Ok(list)
+    }
+
+    /// Reads one leaf (`[k]` index or path) of an encoded value: `(index, path, type, value)`.
+    #[pyo3(signature = (data, target, *, tao = true))]
+    fn get_leaf<'py>(
+        &self,
+        py: Python<'py>,
+        data: &[u8],
+        target: &Bound<'py, PyAny>,
+        tao: bool,
+    ) -> PyResult<Bound<'py, PyTuple>> {
+        let layout = self.layout();
+        let t = target_of(target)?;
+        let (leaf, value) = get_leaf(&layout, self.root, data, t, tao)
+            .map_err(|e| self.leaf_err(py, e, Op::Leaf))?;
+        let (path, type_name) = describe(&layout, &leaf);
+        (leaf.index, path, type_name, scalar_to_py(py, value)?).into_pyobject(py)
+    }
+
+    /// Writes one leaf; returns the new encoding. Changing a union tag selects that variant
+    /// with its default value; changing an array length truncates or appends defaults.
+    #[pyo3(signature = (data, target, value, *, tao = true, saturate = false))]
+    fn set_leaf<'py>(
+        &self,
+        py: Python<'py>,
+        data: &[u8],
+        target: &Bound<'py, PyAny>,
+        value: Bound<'py, PyAny>,
+        tao: bool,
+        saturate: bool,
+    ) -> PyResult<Bound<'py, PyBytes>> {
+        let layout = self.layout();
+        let t = target_of(target)?;
+        let leaf = locate(&layout, self.root, data, t, tao)
+            .map_err(|e| self.leaf_err(py, e, Op::Leaf))?;
+        let (path, _) = describe(&layout, &leaf);
+        let kind = match leaf.kind {
+            LeafKind::Scalar(kind) => kind,
+            // Tags and lengths are unsigned counts.
+            LeafKind::Tag { .. } | LeafKind::Len { .. } => px4params_core::Kind::Uint {
+                bits: 32,
+                cast: px4params_core::Cast::Saturated,
+            },
+        };
+        let mut source = PySource::new(value, saturate);
+        let scalar: Scalar = {
+            use px4params_core::codec::Source;
+            source.scalar(kind).map_err(|e| match e {
+                ValueError::Py(err) => err,
+                ValueError::Range(m) => EncodeError::new_err(format!("{}: {path}: {m}", self.name)),
+                ValueError::Shape(m) => {
+                    ValueShapeError::new_err(format!("{}: {path}: {m}", self.name))
+                }
+            })?
+        };
+        let mut out = vec![0u8; layout.max_bytes(self.root).max(data.len())];
+        let options = EncodeOptions {
+            tao,
+            saturate,
+            keep_versions: true,
+        };
+        let n = set_leaf(&layout, self.root, data, Target::Index(leaf.index), scalar, &mut out, options)
+            .map_err(|e| self.leaf_err(py, e, Op::Encode))?;
+        Ok(PyBytes::new(py, &out[..n]))
+    }
+
+    /// The default encoding: zeros, `p_version` filled in, first union variants, empty arrays.
+    #[pyo3(signature = (*, tao = true))]
+    fn default<'py>(&self, py: Python<'py>, tao: bool) -> PyResult<Bound<'py, PyBytes>> {
+        let layout = self.layout();
+        let mut out = vec![0u8; layout.max_bytes(self.root)];
+        let n = encode_default(&layout, self.root, &mut out, tao)
+            .map_err(|e| self.leaf_err(py, e, Op::Encode))?;
+        Ok(PyBytes::new(py, &out[..n]))
+    }
+
+    /// Smallest encoded length in bits (without tail array optimization).
+    #[getter]
+    fn min_bits(&self) -> u64 {
+        self.layout().node(self.root).min_bits
+    }
+
+    /// Largest encoded length in bits (without tail array optimization).
+    #[getter]
+    fn max_bits(&self) -> u64 {
+        self.layout().node(self.root).max_bits
+    }
+
+    fn __repr__(&self) -> String {
+        format!("<DataType {}>", self.name)
+    }
+}
+
+/// A leaf's path (with `_tag`/`_len` for tags and lengths) and type name.
+fn describe(layout: &Layout<'_>, leaf: &px4params_core::leaf::Leaf) -> (String, String) {
+    let mut path = leaf.path.display(layout).to_string();
+    let (suffix, type_name) = match leaf.kind {
+        LeafKind::Scalar(kind) => ("", kind_name(kind)),
+        LeafKind::Tag { bits, .. } => ("_tag", format!("uint{bits}")),
+        LeafKind::Len { bits: 0, .. } => ("_len", "tail".to_owned()),
+        LeafKind::Len { bits, .. } => ("_len", format!("uint{bits}")),
+    };
+    if !suffix.is_empty() {
+        if !path.is_empty() {
+            path.push('.');
+        }
+        path.push_str(suffix);
+    }
+    (path, type_name)
+}
+
+#[pymodule]
+fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<Schema>()?;
+    m.add_class::<DataType>()?;
+    Ok(())
+}

@@ -1,0 +1,140 @@
+//! Compiling the schema model (the dicts `px4params.dsdl_loader` produces) into one layout.
+
+use std::collections::HashMap;
+
+use px4params_core::compile::OwnedLayout;
+use px4params_core::layout::{NodeId, Role};
+use px4params_core::Cast;
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+
+/// Compiles every type of `types` (key → type dict); returns the layout and each key's root.
+pub fn compile_model(types: &Bound<'_, PyDict>) -> PyResult<(OwnedLayout, HashMap<String, NodeId>)> {
+    let mut c = Compiler {
+        types,
+        layout: OwnedLayout::default(),
+        roots: HashMap::new(),
+        in_progress: Vec::new(),
+    };
+    for key in types.keys() {
+        let key: String = key.extract()?;
+        c.composite(&key)?;
+    }
+    Ok((c.layout, c.roots))
+}
+
+struct Compiler<'a, 'py> {
+    types: &'a Bound<'py, PyDict>,
+    layout: OwnedLayout,
+    roots: HashMap<String, NodeId>,
+    in_progress: Vec<String>,
+}
+
+fn item<'py>(d: &Bound<'py, PyDict>, key: &str, what: &str) -> PyResult<Bound<'py, PyAny>> {
+    d.get_item(key)?
+        .ok_or_else(|| PyValueError::new_err(format!("schema model: {what} has no '{key}'")))
+}
+
+fn build_err(what: &str, e: impl std::fmt::Display) -> PyErr {
+    PyValueError::new_err(format!("schema model: {what}: {e}"))
+}
+
+impl Compiler<'_, '_> {
+    fn composite(&mut self, key: &str) -> PyResult<NodeId> {
+        if let Some(&id) = self.roots.get(key) {
+            return Ok(id);
+        }
+        if self.in_progress.iter().any(|k| k == key) {
+            return Err(PyValueError::new_err(format!(
+                "schema model: type {key} contains itself"
+            )));
+        }
+        let def = self
+            .types
+            .get_item(key)?
+            .ok_or_else(|| PyValueError::new_err(format!("schema model: unknown type {key}")))?;
+        let def = def.cast_into::<PyDict>()?;
+        self.in_progress.push(key.to_owned());
+        let kind: String = item(&def, "kind", key)?.extract()?;
+        // p_version holds the minor version: one major version is one parameter type.
+        let version: Option<u32> = match def.get_item("version")? {
+            Some(v) if !v.is_none() => Some(v.get_item(1)?.extract()?),
+            _ => None,
+        };
+        let dialect: String = match def.get_item("dialect")? {
+            Some(d) => d.extract()?,
+            None => "dsdl".into(),
+        };
+        let fields = item(&def, "fields", key)?.cast_into::<PyList>()?;
+        let mut members: Vec<(String, NodeId, Role)> = Vec::with_capacity(fields.len());
+        for f in fields.iter() {
+            let f = f.cast_into::<PyDict>()?;
+            let name: String = item(&f, "name", key)?.extract()?;
+            let ty = item(&f, "type", key)?.cast_into::<PyDict>()?;
+            let what = format!("{key}.{name}");
+            let node = self.ty(&ty, &what)?;
+            let is_void = ty.get_item("kind")?.is_some_and(|k| k.eq("void").unwrap_or(false));
+            let role = if is_void {
+                Role::Padding
+            } else if name == "p_version" && dialect == "dsdl" {
+                Role::Version(version.unwrap_or(0))
+            } else {
+                Role::Data
+            };
+            members.push((name, node, role));
+        }
+        let id = if kind == "union" {
+            let variants: Vec<(&str, NodeId)> =
+                members.iter().map(|(n, id, _)| (n.as_str(), *id)).collect();
+            self.layout.union(&variants).map_err(|e| build_err(key, e))?
+        } else {
+            let fields: Vec<(&str, NodeId, Role)> =
+                members.iter().map(|(n, id, r)| (n.as_str(), *id, *r)).collect();
+            self.layout.structure(&fields).map_err(|e| build_err(key, e))?
+        };
+        self.in_progress.pop();
+        self.roots.insert(key.to_owned(), id);
+        Ok(id)
+    }
+
+    fn ty(&mut self, ty: &Bound<'_, PyDict>, what: &str) -> PyResult<NodeId> {
+        let kind: String = item(ty, "kind", what)?.extract()?;
+        let bits = || -> PyResult<u32> { item(ty, "bits", what)?.extract() };
+        let cast = || -> PyResult<Cast> {
+            match ty.get_item("cast")? {
+                Some(c) if c.eq("truncated")? => Ok(Cast::Truncated),
+                _ => Ok(Cast::Saturated),
+            }
+        };
+        let l = &mut self.layout;
+        let built = match kind.as_str() {
+            "uint" => l.uint(bits()?, cast()?),
+            "int" => l.int(bits()?, cast()?),
+            "float" => l.float(bits()?, cast()?),
+            "bool" => Ok(l.boolean()),
+            "void" => l.void(bits()?),
+            "array" | "dynarray" => {
+                let elem = item(ty, "elem", what)?.cast_into::<PyDict>()?;
+                let elem = self.ty(&elem, what)?;
+                if kind == "array" {
+                    let len: u32 = item(ty, "len", what)?.extract()?;
+                    self.layout.array(elem, len)
+                } else {
+                    let max: u32 = item(ty, "max", what)?.extract()?;
+                    self.layout.dyn_array(elem, max)
+                }
+            }
+            "ref" => {
+                let name: String = item(ty, "name", what)?.extract()?;
+                return self.composite(&name);
+            }
+            other => {
+                return Err(PyValueError::new_err(format!(
+                    "schema model: {what}: unknown type kind '{other}'"
+                )))
+            }
+        };
+        built.map_err(|e| build_err(what, e))
+    }
+}

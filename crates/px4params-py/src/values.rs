@@ -1,0 +1,522 @@
+//! Python objects as codec values: dicts for structs, one-key dicts for unions, sequences for
+//! arrays (bytes and str too), int/float/bool for primitives, "nan"/"inf"/"-inf" for floats.
+
+use std::fmt;
+
+use px4params_core::codec::{ArrayLen, At, LeafKind, Sink, Source};
+use px4params_core::layout::{Field, Kind, Layout};
+use px4params_core::Scalar;
+use pyo3::prelude::*;
+use pyo3::types::{
+    PyBool, PyByteArray, PyBytes, PyDict, PyFloat, PyInt, PyList, PySequence, PyString, PyTuple,
+};
+
+/// Why a Python value does not fit: a message for the user, or an exception from Python code.
+pub enum ValueError {
+    /// The value has the wrong shape or kind (becomes `ValueShapeError`).
+    Shape(String),
+    /// A number outside its field (becomes `EncodeError`).
+    Range(String),
+    /// Python raised while we looked at the value.
+    Py(PyErr),
+}
+
+impl fmt::Display for ValueError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Shape(m) | Self::Range(m) => f.write_str(m),
+            Self::Py(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+impl From<PyErr> for ValueError {
+    fn from(e: PyErr) -> Self {
+        Self::Py(e)
+    }
+}
+
+fn type_name(obj: &Bound<'_, PyAny>) -> String {
+    obj.get_type()
+        .name()
+        .map(|n| n.to_string())
+        .unwrap_or_else(|_| "?".into())
+}
+
+fn shape(expected: &str, obj: &Bound<'_, PyAny>) -> ValueError {
+    ValueError::Shape(format!("expected {expected}, got {}", type_name(obj)))
+}
+
+enum Frame<'py> {
+    Obj(Bound<'py, PyAny>),
+    Bytes(Vec<u8>),
+}
+
+/// Reads a Python value for the encoder.
+pub struct PySource<'py> {
+    py: Python<'py>,
+    stack: Vec<Frame<'py>>,
+    saturate: bool,
+}
+
+impl<'py> PySource<'py> {
+    pub fn new(value: Bound<'py, PyAny>, saturate: bool) -> Self {
+        Self {
+            py: value.py(),
+            stack: vec![Frame::Obj(value)],
+            saturate,
+        }
+    }
+
+    fn current(&self) -> &Bound<'py, PyAny> {
+        match self.stack.last() {
+            Some(Frame::Obj(o)) => o,
+            // Bytes frames only ever sit under their element's Obj frame.
+            _ => unreachable!("a value is always on top of the stack"),
+        }
+    }
+
+    fn integer(&self, obj: &Bound<'py, PyAny>, kind: Kind) -> Result<Scalar, ValueError> {
+        if obj.is_instance_of::<PyBool>() || !obj.is_instance_of::<PyInt>() {
+            return Err(shape("an integer", obj));
+        }
+        if let Ok(v) = obj.extract::<i64>() {
+            return Ok(Scalar::Int(v));
+        }
+        if let Ok(v) = obj.extract::<u64>() {
+            return Ok(Scalar::Uint(v));
+        }
+        // Beyond 64 bits: clamp when saturating, else report the value as given.
+        let negative = obj.lt(0)?;
+        if self.saturate {
+            return Ok(if negative {
+                Scalar::Int(i64::MIN)
+            } else {
+                Scalar::Uint(u64::MAX)
+            });
+        }
+        let (min, max) = match kind {
+            Kind::Int { bits, .. } => {
+                let max = (1i128 << (bits - 1)) - 1;
+                (format!("{}", -max - 1), format!("{max}"))
+            }
+            Kind::Uint { bits, .. } => ("0".into(), format!("{}", (1u128 << bits) - 1)),
+            _ => ("?".into(), "?".into()),
+        };
+        Err(ValueError::Range(format!(
+            "value {} is out of range (expected {min} to {max})",
+            obj.str()?
+        )))
+    }
+}
+
+fn float_of(obj: &Bound<'_, PyAny>) -> Result<f64, ValueError> {
+    if obj.is_instance_of::<PyBool>() {
+        return Err(shape("a number", obj));
+    }
+    if obj.is_instance_of::<PyFloat>() || obj.is_instance_of::<PyInt>() {
+        return Ok(obj.extract::<f64>()?);
+    }
+    if let Ok(s) = obj.cast::<PyString>() {
+        return match s.to_str()?.trim().to_ascii_lowercase().as_str() {
+            "nan" => Ok(f64::NAN),
+            "inf" | "+inf" | "infinity" => Ok(f64::INFINITY),
+            "-inf" | "-infinity" => Ok(f64::NEG_INFINITY),
+            other => Err(ValueError::Shape(format!(
+                "expected a number (or \"nan\", \"inf\", \"-inf\"), got '{other}'"
+            ))),
+        };
+    }
+    Err(shape("a number", obj))
+}
+
+impl<'py> Source for PySource<'py> {
+    type Error = ValueError;
+
+    fn scalar(&mut self, kind: Kind) -> Result<Scalar, ValueError> {
+        let obj = self.current().clone();
+        match kind {
+            Kind::Uint { .. } | Kind::Int { .. } => self.integer(&obj, kind),
+            Kind::Float { .. } => Ok(Scalar::Float(float_of(&obj)?)),
+            _ => {
+                if let Ok(b) = obj.cast::<PyBool>() {
+                    Ok(Scalar::Bool(b.is_true()))
+                } else if obj.is_instance_of::<PyInt>() {
+                    match obj.extract::<i64>() {
+                        Ok(v @ (0 | 1)) => Ok(Scalar::Bool(v == 1)),
+                        _ => Err(ValueError::Range(format!(
+                            "value {} is out of range (expected a boolean: true, false, 0 or 1)",
+                            obj.str()?
+                        ))),
+                    }
+                } else {
+                    Err(shape("a boolean", &obj))
+                }
+            }
+        }
+    }
+
+    fn begin_struct(&mut self) -> Result<(), ValueError> {
+        let obj = self.current();
+        if obj.is_instance_of::<PyDict>() {
+            Ok(())
+        } else {
+            Err(shape("a dict (struct)", obj))
+        }
+    }
+
+    fn field(&mut self, name: &str) -> Result<bool, ValueError> {
+        let dict = self.current().cast::<PyDict>().map_err(PyErr::from)?;
+        match dict.get_item(name)? {
+            Some(v) => {
+                self.stack.push(Frame::Obj(v));
+                Ok(true)
+            }
+            None => Ok(false),
+        }
+    }
+
+    fn end_field(&mut self) {
+        self.stack.pop();
+    }
+
+    fn end_struct(&mut self, layout: &Layout<'_>, fields: &[Field], used: usize) -> Result<(), ValueError> {
+        let dict = self.current().cast::<PyDict>().map_err(PyErr::from)?;
+        if dict.len() == used {
+            return Ok(());
+        }
+        let names: Vec<&str> = fields
+            .iter()
+            .map(|f| layout.name(f))
+            .filter(|n| !n.is_empty())
+            .collect();
+        for key in dict.keys() {
+            let known = key
+                .cast::<PyString>()
+                .ok()
+                .and_then(|k| k.to_str().ok().map(|k| names.contains(&k)))
+                .unwrap_or(false);
+            if !known {
+                return Err(ValueError::Shape(format!(
+                    "unknown field {} (expected: {})",
+                    key.repr()?,
+                    names.join(", ")
+                )));
+            }
+        }
+        Ok(())
+    }
+
+    fn begin_union(&mut self, layout: &Layout<'_>, variants: &[Field]) -> Result<u32, ValueError> {
+        let names = || variants.iter().map(|f| layout.name(f)).collect::<Vec<_>>().join(", ");
+        let obj = self.current();
+        let Ok(dict) = obj.cast::<PyDict>() else {
+            return Err(ValueError::Shape(format!(
+                "expected a dict with one key, the union variant ({}), got {}",
+                names(),
+                type_name(obj)
+            )));
+        };
+        if dict.len() != 1 {
+            return Err(ValueError::Shape(format!(
+                "a union takes exactly one variant ({}), got {} keys",
+                names(),
+                dict.len()
+            )));
+        }
+        let (key, value) = dict.iter().next().expect("one item");
+        let key_str = key.cast::<PyString>().ok().and_then(|k| k.to_str().ok().map(str::to_owned));
+        let Some(index) = key_str
+            .as_deref()
+            .and_then(|k| variants.iter().position(|f| layout.name(f) == k))
+        else {
+            return Err(ValueError::Shape(format!(
+                "unknown union variant {} (expected one of: {})",
+                key.repr()?,
+                names()
+            )));
+        };
+        self.stack.push(Frame::Obj(value));
+        Ok(index as u32)
+    }
+
+    fn end_union(&mut self) {
+        self.stack.pop();
+    }
+
+    fn begin_array(&mut self, _fixed: Option<u32>) -> Result<usize, ValueError> {
+        let obj = self.current().clone();
+        if let Ok(b) = obj.cast::<PyBytes>() {
+            let bytes = b.as_bytes().to_vec();
+            let n = bytes.len();
+            self.stack.push(Frame::Bytes(bytes));
+            return Ok(n);
+        }
+        if let Ok(b) = obj.cast::<PyByteArray>() {
+            let bytes = b.to_vec();
+            let n = bytes.len();
+            self.stack.push(Frame::Bytes(bytes));
+            return Ok(n);
+        }
+        if let Ok(s) = obj.cast::<PyString>() {
+            let bytes = s.to_str()?.as_bytes().to_vec();
+            let n = bytes.len();
+            self.stack.push(Frame::Bytes(bytes));
+            return Ok(n);
+        }
+        if obj.is_instance_of::<PyList>() || obj.is_instance_of::<PyTuple>() {
+            let n = obj.len()?;
+            self.stack.push(Frame::Obj(obj));
+            return Ok(n);
+        }
+        if obj.is_instance_of::<PyDict>() {
+            return Err(shape("a list (array)", &obj));
+        }
+        match obj.cast::<PySequence>() {
+            Ok(seq) => {
+                let n = seq.len()?;
+                self.stack.push(Frame::Obj(obj));
+                Ok(n)
+            }
+            Err(_) => Err(shape("a list (array)", &obj)),
+        }
+    }
+
+    fn element(&mut self, index: usize) -> Result<(), ValueError> {
+        let item = match self.stack.last() {
+            Some(Frame::Bytes(b)) => PyInt::new(self.py, b[index]).into_any(),
+            Some(Frame::Obj(o)) => {
+                if let Ok(list) = o.cast::<PyList>() {
+                    list.get_item(index)?
+                } else {
+                    o.get_item(index)?
+                }
+            }
+            None => unreachable!("an array frame is on the stack"),
+        };
+        self.stack.push(Frame::Obj(item));
+        Ok(())
+    }
+
+    fn end_element(&mut self) {
+        self.stack.pop();
+    }
+
+    fn end_array(&mut self) {
+        self.stack.pop();
+    }
+}
+
+enum Container<'py> {
+    Dict(Bound<'py, PyDict>, Option<Bound<'py, PyString>>),
+    List(Bound<'py, PyList>),
+}
+
+/// Builds Python objects from a decoded value.
+pub struct PySink<'py, 'n> {
+    py: Python<'py>,
+    names: &'n [Py<PyString>],
+    stack: Vec<Container<'py>>,
+    root: Option<Bound<'py, PyAny>>,
+}
+
+impl<'py, 'n> PySink<'py, 'n> {
+    /// `names` holds every field name of the layout as a Python string, by field index.
+    pub fn new(py: Python<'py>, names: &'n [Py<PyString>]) -> Self {
+        Self {
+            py,
+            names,
+            stack: Vec::with_capacity(8),
+            root: None,
+        }
+    }
+
+    pub fn into_value(self) -> Option<Bound<'py, PyAny>> {
+        self.root
+    }
+
+    fn put(&mut self, value: Bound<'py, PyAny>) -> PyResult<()> {
+        match self.stack.last_mut() {
+            None => {
+                self.root = Some(value);
+                Ok(())
+            }
+            Some(Container::Dict(d, key)) => {
+                let key = key.take().expect("a field name precedes each value");
+                d.set_item(key, value)
+            }
+            Some(Container::List(l)) => l.append(value),
+        }
+    }
+
+    fn name(&self, index: u32) -> Bound<'py, PyString> {
+        self.names[index as usize].bind(self.py).clone()
+    }
+}
+
+/// A scalar as a Python object.
+pub fn scalar_to_py<'py>(py: Python<'py>, value: Scalar) -> PyResult<Bound<'py, PyAny>> {
+    Ok(match value {
+        Scalar::Uint(v) => v.into_pyobject(py)?.into_any(),
+        Scalar::Int(v) => v.into_pyobject(py)?.into_any(),
+        Scalar::Float(v) => v.into_pyobject(py)?.into_any(),
+        Scalar::Bool(v) => PyBool::new(py, v).to_owned().into_any(),
+    })
+}
+
+impl<'py> Sink for PySink<'py, '_> {
+    type Error = ValueError;
+
+    fn scalar(&mut self, value: Scalar, _at: At<'_>) -> Result<(), ValueError> {
+        let obj = scalar_to_py(self.py, value)?;
+        Ok(self.put(obj)?)
+    }
+
+    fn begin_struct(&mut self, _fields: usize) -> Result<(), ValueError> {
+        self.stack.push(Container::Dict(PyDict::new(self.py), None));
+        Ok(())
+    }
+
+    fn field(&mut self, index: u32, _name: &str) -> Result<(), ValueError> {
+        let name = self.name(index);
+        if let Some(Container::Dict(_, key)) = self.stack.last_mut() {
+            *key = Some(name);
+        }
+        Ok(())
+    }
+
+    fn end_struct(&mut self) -> Result<(), ValueError> {
+        if let Some(Container::Dict(d, _)) = self.stack.pop() {
+            self.put(d.into_any())?;
+        }
+        Ok(())
+    }
+
+    fn begin_union(&mut self, _tag: u32, index: u32, _name: &str, _at: At<'_>) -> Result<(), ValueError> {
+        let name = self.name(index);
+        self.stack.push(Container::Dict(PyDict::new(self.py), Some(name)));
+        Ok(())
+    }
+
+    fn end_union(&mut self) -> Result<(), ValueError> {
+        self.end_struct()
+    }
+
+    fn begin_array(&mut self, _len: ArrayLen, _at: At<'_>) -> Result<(), ValueError> {
+        self.stack.push(Container::List(PyList::empty(self.py)));
+        Ok(())
+    }
+
+    fn end_array(&mut self, _len: usize) -> Result<(), ValueError> {
+        if let Some(Container::List(l)) = self.stack.pop() {
+            self.put(l.into_any())?;
+        }
+        Ok(())
+    }
+}
+
+/// One leaf of a decoded value, for listings.
+pub struct LeafRow {
+    pub index: usize,
+    pub path: String,
+    pub type_name: String,
+    pub value: Scalar,
+}
+
+/// Collects every leaf with its path and type.
+pub struct LeafRows<'l> {
+    pub layout: &'l Layout<'l>,
+    pub rows: Vec<LeafRow>,
+    depth: usize,
+    // A tail-optimized array is the last thing in a value: one pending length row suffices.
+    tail: Option<(usize, usize)>,
+}
+
+impl<'l> LeafRows<'l> {
+    pub fn new(layout: &'l Layout<'l>) -> Self {
+        Self {
+            layout,
+            rows: Vec::new(),
+            depth: 0,
+            tail: None,
+        }
+    }
+
+    fn push(&mut self, at: &At<'_>, suffix: &str, type_name: String, value: Scalar) {
+        let mut path = at.path.display(self.layout).to_string();
+        if !suffix.is_empty() {
+            if !path.is_empty() {
+                path.push('.');
+            }
+            path.push_str(suffix);
+        }
+        self.rows.push(LeafRow {
+            index: self.rows.len(),
+            path,
+            type_name,
+            value,
+        });
+    }
+}
+
+/// The DSDL spelling of a scalar kind.
+pub fn kind_name(kind: Kind) -> String {
+    match kind {
+        Kind::Uint { bits, .. } => format!("uint{bits}"),
+        Kind::Int { bits, .. } => format!("int{bits}"),
+        Kind::Float { bits, .. } => format!("float{bits}"),
+        Kind::Bool => "bool".into(),
+        Kind::Void { bits } => format!("void{bits}"),
+        _ => "composite".into(),
+    }
+}
+
+impl Sink for LeafRows<'_> {
+    type Error = std::convert::Infallible;
+
+    fn scalar(&mut self, value: Scalar, at: At<'_>) -> Result<(), Self::Error> {
+        let LeafKind::Scalar(kind) = at.kind else { return Ok(()) };
+        self.push(&at, "", kind_name(kind), value);
+        Ok(())
+    }
+    fn begin_struct(&mut self, _: usize) -> Result<(), Self::Error> {
+        Ok(())
+    }
+    fn field(&mut self, _: u32, _: &str) -> Result<(), Self::Error> {
+        Ok(())
+    }
+    fn end_struct(&mut self) -> Result<(), Self::Error> {
+        Ok(())
+    }
+    fn begin_union(&mut self, tag: u32, _: u32, _: &str, at: At<'_>) -> Result<(), Self::Error> {
+        let LeafKind::Tag { bits, .. } = at.kind else { return Ok(()) };
+        self.push(&at, "_tag", format!("uint{bits}"), Scalar::Uint(tag.into()));
+        Ok(())
+    }
+    fn end_union(&mut self) -> Result<(), Self::Error> {
+        Ok(())
+    }
+    fn begin_array(&mut self, len: ArrayLen, at: At<'_>) -> Result<(), Self::Error> {
+        self.depth += 1;
+        let LeafKind::Len { bits, .. } = at.kind else { return Ok(()) };
+        match len {
+            ArrayLen::Fixed(_) => {}
+            ArrayLen::Prefixed(n) => self.push(&at, "_len", format!("uint{bits}"), Scalar::Uint(n as u64)),
+            ArrayLen::Tail => {
+                self.tail = Some((self.rows.len(), self.depth));
+                self.push(&at, "_len", "tail".into(), Scalar::Uint(0));
+            }
+        }
+        Ok(())
+    }
+    fn end_array(&mut self, len: usize) -> Result<(), Self::Error> {
+        if let Some((row, depth)) = self.tail {
+            if depth == self.depth {
+                self.rows[row].value = Scalar::Uint(len as u64);
+                self.tail = None;
+            }
+        }
+        self.depth -= 1;
+        Ok(())
+    }
+}

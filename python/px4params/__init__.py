@@ -1,0 +1,35 @@
+"""px4params: structured, instanced PX4 parameters stored with the DroneCAN serialization rules.
+
+>>> import px4params
+>>> schema = px4params.load_schema()
+>>> ina = schema["px.Ina238"]
+>>> data = ina.encode({"bus": {"i2c": {"bus_id": 1, "address": 0x45}}, "current": 200, "shunt": 0.0003})
+>>> ina.get_leaf(data, 4).value
+69
+"""
+
+from .errors import (
+    CodecError,
+    DecodeError,
+    DsdlError,
+    EncodeError,
+    LeafError,
+    Px4ParamsError,
+    ValueShapeError,
+)
+from .schema import DataType, Leaf, Schema, load_schema, to_json_value
+
+__all__ = [
+    "CodecError",
+    "DataType",
+    "DecodeError",
+    "DsdlError",
+    "EncodeError",
+    "Leaf",
+    "LeafError",
+    "Px4ParamsError",
+    "Schema",
+    "ValueShapeError",
+    "load_schema",
+    "to_json_value",
+]

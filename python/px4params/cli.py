@@ -1,0 +1,266 @@
+"""The ``px4params`` command line.
+
+Exit codes: 0 ok, 1 failed, 2 usage. Every error is one line on stderr, never a traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Callable, Sequence
+from typing import Any, TextIO
+
+from .errors import Px4ParamsError
+from .schema import DataType, Schema, load_schema, to_json_value
+
+EXIT_OK, EXIT_FAILED, EXIT_USAGE = 0, 1, 2
+
+
+class CliError(Exception):
+    """A failure to report as one line and exit 1."""
+
+
+def parse_hex(text: str) -> bytes:
+    """Bytes from hex such as ``daef7c00``, ``DA EF 7C 00`` or ``0xdaef7c00``."""
+    cleaned = "".join(text.split()).removeprefix("0x").removeprefix("0X")
+    try:
+        return bytes.fromhex(cleaned)
+    except ValueError:
+        raise CliError(f"not hex bytes: {text.strip()!r} (expected e.g. 'daef7c00')") from None
+
+
+def parse_json(text: str) -> Any:
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as e:
+        raise CliError(f"not JSON: {e.msg} at column {e.colno} in {text.strip()!r}") from None
+
+
+def dump_json(value: Any) -> str:
+    return json.dumps(to_json_value(value), separators=(", ", ": "))
+
+
+def find_type(schema: Schema, name: str) -> DataType:
+    try:
+        return schema[name]
+    except KeyError:
+        hint = schema.suggest(name)
+        extra = f" (did you mean: {', '.join(hint)}?)" if hint else " (see 'px4params types')"
+        raise CliError(f"unknown type '{name}'{extra}") from None
+
+
+def _schema(args: argparse.Namespace) -> Schema:
+    return load_schema(args.dsdl or ())
+
+
+def _each_item(
+    item: str, stdin: TextIO, out: TextIO, convert: Callable[[str], str]
+) -> int:
+    """Converts one item, or each line of stdin when ``item`` is ``-`` (batch use)."""
+    if item != "-":
+        print(convert(item), file=out)
+        return EXIT_OK
+    status = EXIT_OK
+    for number, line in enumerate(stdin, start=1):
+        if not line.strip():
+            continue
+        try:
+            print(convert(line), file=out)
+        except (CliError, Px4ParamsError) as e:
+            print(f"px4params: <stdin>:{number}: {e}", file=sys.stderr)
+            status = EXIT_FAILED
+    return status
+
+
+def cmd_types(args: argparse.Namespace) -> int:
+    schema = _schema(args)
+    rows = []
+    for key in schema:
+        t = schema[key]
+        tags = t.doc.get("tags", {})
+        rows.append(
+            {
+                "key": key,
+                "name": t.name,
+                "version": list(t.version) if t.version else None,
+                "kind": t.definition["kind"],
+                "dialect": t.definition.get("dialect"),
+                "min_bits": t.min_bits,
+                "max_bits": t.max_bits,
+                "max_instances": tags.get("max_instances"),
+                "short": t.doc.get("short", ""),
+            }
+        )
+    if args.json:
+        print(json.dumps(rows, indent=2))
+        return EXIT_OK
+    width = max(len(r["key"]) for r in rows)
+    for r in rows:
+        bits = f"{r['min_bits']}..{r['max_bits']}" if r["min_bits"] != r["max_bits"] else str(r["min_bits"])
+        print(f"{r['key']:<{width}}  {r['kind']:<6} {bits:>12} bits  {r['short']}".rstrip())
+    return EXIT_OK
+
+
+def cmd_encode(args: argparse.Namespace) -> int:
+    t = find_type(_schema(args), args.type)
+
+    def convert(text: str) -> str:
+        return t.encode(parse_json(text), tao=not args.no_tao, saturate=args.saturate).hex()
+
+    return _each_item(args.value, sys.stdin, sys.stdout, convert)
+
+
+def cmd_decode(args: argparse.Namespace) -> int:
+    t = find_type(_schema(args), args.type)
+
+    def convert(text: str) -> str:
+        return dump_json(t.decode(parse_hex(text), tao=not args.no_tao))
+
+    return _each_item(args.hex, sys.stdin, sys.stdout, convert)
+
+
+#: The talk's airframe lines for INA238#0, as a value.
+TALK_INA238 = {"bus": {"i2c": {"bus_id": 1, "address": 0x45}}, "current": 200, "shunt": 0.0003}
+
+
+def cmd_demo(args: argparse.Namespace) -> int:
+    schema = _schema(args)
+    t = schema["px.Ina238"]
+    print(f"{t.key}: {t.doc.get('short', '')}")
+    print("value (the talk's airframe lines):")
+    for line in (
+        "param add INA238#0",
+        "param set-default INA238#0[3] 1",
+        "param set-default INA238#0[4] 0x45",
+        "param set-default INA238#0[5] 200",
+        "param set-default INA238#0[6] 0.0003",
+    ):
+        print(f"  {line}")
+    data = t.encode(TALK_INA238)
+    print(f"encoded ({len(data)} bytes, DroneCAN bit packing): {data.hex(' ')}")
+    print("leaves:")
+    for leaf in t.leaves(data):
+        value = leaf.value
+        shown = f"{value:.7g}" if isinstance(value, float) else str(value)
+        if leaf.path.endswith("._tag"):
+            union = leaf.path.removesuffix("._tag")
+            variant = next(iter(_at_path(t.decode(data), union)))
+            shown += f" ({variant})"
+        elif isinstance(value, int) and not isinstance(value, bool) and leaf.path.endswith("address"):
+            shown += f" ({value:#04x})"
+        print(f"  [{leaf.index}] {leaf.path:<20} {leaf.type:<8} {shown}")
+    print(f"decoded back: {dump_json(t.decode(data))}")
+    golden = schema_golden_vector()
+    print(f"golden vector (0xBEDA:uint12, -1:int3, -5:int4, -1:int2, 0x88:uint4): {golden.hex(' ')}")
+    return EXIT_OK
+
+
+def _at_path(value: Any, path: str) -> Any:
+    for part in path.split("."):
+        value = value[part]
+    return value
+
+
+def schema_golden_vector() -> bytes:
+    """The DroneCAN reference vector, encoded through a throwaway schema of its five fields."""
+    from .schema import Schema as _Schema
+
+    def scalar(kind: str, bits: int, cast: str) -> dict[str, Any]:
+        return {"kind": kind, "bits": bits, "cast": cast}
+
+    fields = [
+        ("a", scalar("uint", 12, "truncated")),
+        ("b", scalar("int", 3, "saturated")),
+        ("c", scalar("int", 4, "saturated")),
+        ("d", scalar("int", 2, "saturated")),
+        ("e", scalar("uint", 4, "truncated")),
+    ]
+    model = {
+        "format": 1,
+        "types": {
+            "golden.Vector": {
+                "name": "golden.Vector",
+                "version": None,
+                "kind": "struct",
+                "dialect": "uavcan",
+                "fields": [{"name": n, "type": ty} for n, ty in fields],
+            }
+        },
+    }
+    t = _Schema(model)["golden.Vector"]
+    return t.encode({"a": 0xBEDA, "b": -1, "c": -5, "d": -1, "e": 0x88})
+
+
+def build_parser() -> argparse.ArgumentParser:
+    common = argparse.ArgumentParser(add_help=False)
+    common.add_argument(
+        "--dsdl",
+        action="append",
+        metavar="DIR",
+        help="extra DSDL root namespace folder (repeatable; also $PX4PARAMS_DSDL_PATH)",
+    )
+    parser = argparse.ArgumentParser(
+        prog="px4params",
+        description="Structured, instanced PX4 parameters with DroneCAN serialization.",
+    )
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    p = sub.add_parser(
+        "types",
+        parents=[common],
+        help="list the loaded types",
+        description="List every loaded type (bundled px types, DroneCAN standard types, --dsdl).",
+        epilog="example: px4params types --json",
+    )
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.set_defaults(func=cmd_types)
+
+    for name, func, arg, what, example in (
+        ("encode", cmd_encode, "value", "a JSON value", "px4params encode px.Ina238 "
+         "'{\"bus\": {\"i2c\": {\"bus_id\": 1, \"address\": 69}}, \"current\": 200, \"shunt\": 0.0003}'"),
+        ("decode", cmd_decode, "hex", "hex bytes", "px4params decode px.Ina238 000317 20ea0c"),
+    ):
+        p = sub.add_parser(
+            name,
+            parents=[common],
+            help=f"{name} a value of TYPE",
+            description=f"{name.capitalize()} {what} of TYPE; '-' reads one per line from stdin.",
+            epilog=f"example: {example}",
+        )
+        p.add_argument("type", metavar="TYPE", help="type name, e.g. px.Ina238 or uavcan.protocol.NodeStatus")
+        p.add_argument(arg, metavar=arg.upper(), help=f"{what}, or - for one per line on stdin")
+        p.add_argument("--no-tao", action="store_true", help="no tail array optimization (CAN FD)")
+        if name == "encode":
+            p.add_argument(
+                "--saturate",
+                action="store_true",
+                help="clamp out-of-range numbers per the fields' cast modes instead of refusing them",
+            )
+        p.set_defaults(func=func)
+
+    p = sub.add_parser(
+        "demo",
+        parents=[common],
+        help="encode the talk's INA238 example and show its leaves",
+        description="Encode the talk's INA238#0 example, print its leaves [0]..[6] and bytes, "
+        "decode it back.",
+        epilog="example: px4params demo",
+    )
+    p.set_defaults(func=cmd_demo)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args))
+    except (CliError, Px4ParamsError) as e:
+        print(f"px4params: error: {e}", file=sys.stderr)
+        return EXIT_FAILED
+    except BrokenPipeError:
+        return EXIT_FAILED
+    except KeyboardInterrupt:
+        return 130
+
