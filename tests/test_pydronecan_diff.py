@@ -2,12 +2,11 @@
 
 from __future__ import annotations
 
+import px4params
 import pytest
+from dronecan_oracle import bundled_keys, fill, new_value, pack, same, to_plain, unpack
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-
-import px4params
-from dronecan_oracle import bundled_keys, fill, new_value, pack, same, to_plain, unpack
 from strategies import value_strategy
 
 SCHEMA = px4params.load_schema(use_env=False)
@@ -46,7 +45,9 @@ def test_saturation_matches_pydronecan(bits: int, signed: bool, value: int) -> N
                 "version": None,
                 "kind": "struct",
                 "dialect": "uavcan",
-                "fields": [{"name": "x", "type": {"kind": kind, "bits": bits, "cast": "saturated"}}],
+                "fields": [
+                    {"name": "x", "type": {"kind": kind, "bits": bits, "cast": "saturated"}}
+                ],
             }
         }
     }

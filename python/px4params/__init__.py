@@ -3,7 +3,8 @@
 >>> import px4params
 >>> schema = px4params.load_schema()
 >>> ina = schema["px.Ina238"]
->>> data = ina.encode({"bus": {"i2c": {"bus_id": 1, "address": 0x45}}, "current": 200, "shunt": 0.0003})
+>>> value = {"bus": {"i2c": {"bus_id": 1, "address": 0x45}}, "current": 200, "shunt": 0.0003}
+>>> data = ina.encode(value)
 >>> ina.get_leaf(data, 4).value
 69
 """

@@ -54,9 +54,7 @@ def _schema(args: argparse.Namespace) -> Schema:
     return load_schema(args.dsdl or ())
 
 
-def _each_item(
-    item: str, stdin: TextIO, out: TextIO, convert: Callable[[str], str]
-) -> int:
+def _each_item(item: str, stdin: TextIO, out: TextIO, convert: Callable[[str], str]) -> int:
     """Converts one item, or each line of stdin when ``item`` is ``-`` (batch use)."""
     if item != "-":
         print(convert(item), file=out)
@@ -97,7 +95,11 @@ def cmd_types(args: argparse.Namespace) -> int:
         return EXIT_OK
     width = max(len(r["key"]) for r in rows)
     for r in rows:
-        bits = f"{r['min_bits']}..{r['max_bits']}" if r["min_bits"] != r["max_bits"] else str(r["min_bits"])
+        bits = (
+            f"{r['min_bits']}..{r['max_bits']}"
+            if r["min_bits"] != r["max_bits"]
+            else str(r["min_bits"])
+        )
         print(f"{r['key']:<{width}}  {r['kind']:<6} {bits:>12} bits  {r['short']}".rstrip())
     return EXIT_OK
 
@@ -147,12 +149,16 @@ def cmd_demo(args: argparse.Namespace) -> int:
             union = leaf.path.removesuffix("._tag")
             variant = next(iter(_at_path(t.decode(data), union)))
             shown += f" ({variant})"
-        elif isinstance(value, int) and not isinstance(value, bool) and leaf.path.endswith("address"):
+        elif (
+            isinstance(value, int) and not isinstance(value, bool) and leaf.path.endswith("address")
+        ):
             shown += f" ({value:#04x})"
         print(f"  [{leaf.index}] {leaf.path:<20} {leaf.type:<8} {shown}")
     print(f"decoded back: {dump_json(t.decode(data))}")
     golden = schema_golden_vector()
-    print(f"golden vector (0xBEDA:uint12, -1:int3, -5:int4, -1:int2, 0x88:uint4): {golden.hex(' ')}")
+    print(
+        f"golden vector (0xBEDA:uint12, -1:int3, -5:int4, -1:int2, 0x88:uint4): {golden.hex(' ')}"
+    )
     return EXIT_OK
 
 
@@ -217,8 +223,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_types)
 
     for name, func, arg, what, example in (
-        ("encode", cmd_encode, "value", "a JSON value", "px4params encode px.Ina238 "
-         "'{\"bus\": {\"i2c\": {\"bus_id\": 1, \"address\": 69}}, \"current\": 200, \"shunt\": 0.0003}'"),
+        (
+            "encode",
+            cmd_encode,
+            "value",
+            "a JSON value",
+            "px4params encode px.Ina238 "
+            '\'{"bus": {"i2c": {"bus_id": 1, "address": 69}}, "current": 200, "shunt": 0.0003}\'',
+        ),
         ("decode", cmd_decode, "hex", "hex bytes", "px4params decode px.Ina238 000317 20ea0c"),
     ):
         p = sub.add_parser(
@@ -228,14 +240,16 @@ def build_parser() -> argparse.ArgumentParser:
             description=f"{name.capitalize()} {what} of TYPE; '-' reads one per line from stdin.",
             epilog=f"example: {example}",
         )
-        p.add_argument("type", metavar="TYPE", help="type name, e.g. px.Ina238 or uavcan.protocol.NodeStatus")
+        p.add_argument(
+            "type", metavar="TYPE", help="type name, e.g. px.Ina238 or uavcan.protocol.NodeStatus"
+        )
         p.add_argument(arg, metavar=arg.upper(), help=f"{what}, or - for one per line on stdin")
         p.add_argument("--no-tao", action="store_true", help="no tail array optimization (CAN FD)")
         if name == "encode":
             p.add_argument(
                 "--saturate",
                 action="store_true",
-                help="clamp out-of-range numbers per the fields' cast modes instead of refusing them",
+                help="clamp out-of-range numbers per the fields' cast modes (default: refuse)",
             )
         p.set_defaults(func=func)
 
@@ -263,4 +277,3 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_FAILED
     except KeyboardInterrupt:
         return 130
-

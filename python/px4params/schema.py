@@ -75,12 +75,16 @@ class DataType:
         """Largest encoded length in bytes."""
         return (self._native.max_bits + 7) // 8
 
-    def encode(self, value: Mapping[str, Any], *, tao: bool = True, saturate: bool = False) -> bytes:
+    def encode(
+        self, value: Mapping[str, Any], *, tao: bool = True, saturate: bool = False
+    ) -> bytes:
         """Encodes ``value``. Out-of-range numbers are refused unless ``saturate`` is set,
         which applies the fields' cast modes (clamping ``saturated`` fields)."""
         return self._native.encode(value, tao=tao, saturate=saturate)
 
-    def decode(self, data: bytes, *, tao: bool = True, allow_trailing: bool = False) -> dict[str, Any]:
+    def decode(
+        self, data: bytes, *, tao: bool = True, allow_trailing: bool = False
+    ) -> dict[str, Any]:
         """Decodes ``data``; whole bytes after the value are refused unless ``allow_trailing``."""
         return self._native.decode(bytes(data), tao=tao, allow_trailing=allow_trailing)
 
