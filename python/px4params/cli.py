@@ -31,10 +31,13 @@ def parse_hex(text: str) -> bytes:
 
 
 def parse_json(text: str) -> Any:
+    text = text.strip()  # a stdin line's newline would move an end-of-input error to "column 1"
     try:
         return json.loads(text)
     except json.JSONDecodeError as e:
         raise CliError(f"not JSON: {e.msg} at column {e.colno} in {text.strip()!r}") from None
+    except (ValueError, RecursionError) as e:  # e.g. a 5000-digit number, 100000 nested [
+        raise CliError(f"not JSON: {e}") from None
 
 
 def dump_json(value: Any) -> str:
@@ -65,7 +68,7 @@ def _each_item(item: str, stdin: TextIO, out: TextIO, convert: Callable[[str], s
             continue
         try:
             print(convert(line), file=out)
-        except (CliError, Px4ParamsError) as e:
+        except (CliError, Px4ParamsError, UnicodeError) as e:
             print(f"px4params: <stdin>:{number}: {e}", file=sys.stderr)
             status = EXIT_FAILED
     return status
@@ -270,7 +273,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         return int(args.func(args))
-    except (CliError, Px4ParamsError) as e:
+    except (CliError, Px4ParamsError, UnicodeError) as e:
         print(f"px4params: error: {e}", file=sys.stderr)
         return EXIT_FAILED
     except BrokenPipeError:

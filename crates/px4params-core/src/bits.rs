@@ -71,6 +71,19 @@ pub fn read_bits(data: &[u8], offset: usize, n: u32) -> u64 {
 #[inline]
 pub fn write_bits(out: &mut [u8], offset: usize, value: u64, n: u32) {
     debug_assert!((1..=64).contains(&n));
+    let first = offset / 8;
+    let shift = (offset % 8) as u32;
+    // Fast path: read-modify-write one 64-bit window holding all the bits.
+    if shift + n <= 64 && first + 8 <= out.len() {
+        let mut window = [0u8; 8];
+        window.copy_from_slice(&out[first..first + 8]);
+        let word = u64::from_be_bytes(window);
+        let place = 64 - shift - n;
+        let field = mask(n) << place;
+        let word = (word & !field) | ((value & mask(n)) << place);
+        out[first..first + 8].copy_from_slice(&word.to_be_bytes());
+        return;
+    }
     let mut remaining = n;
     let mut pos = offset;
     while remaining > 0 {

@@ -103,8 +103,9 @@ pub trait Source {
     fn scalar(&mut self, kind: Kind) -> Result<Scalar, Self::Error>;
     /// The current position must hold a struct.
     fn begin_struct(&mut self) -> Result<(), Self::Error>;
-    /// Moves to field `name` of the current struct; `Ok(false)` when the input lacks it.
-    fn field(&mut self, name: &str) -> Result<bool, Self::Error>;
+    /// Moves to field `name` (at `index` in [`Layout::fields`]) of the current struct;
+    /// `Ok(false)` when the input lacks it.
+    fn field(&mut self, index: u32, name: &str) -> Result<bool, Self::Error>;
     /// Leaves the field entered by a successful [`Source::field`].
     fn end_field(&mut self);
     /// Ends the struct whose members are `fields`; `used` of them were present in the input,
@@ -242,6 +243,7 @@ impl<S: Source> Encoder<'_, '_, S> {
         }
     }
 
+    #[inline]
     fn write(&mut self, raw: u64, bits: u32) -> Result<(), Error<S::Error>> {
         if self.pos + bits as usize > self.out.len() * 8 {
             return Err(self.fail(ErrorKind::BufferTooSmall {
@@ -253,6 +255,7 @@ impl<S: Source> Encoder<'_, '_, S> {
         Ok(())
     }
 
+    #[inline]
     fn scalar(&mut self, kind: Kind, value: Scalar) -> Result<(), Error<S::Error>> {
         let raw =
             scalar_raw(kind, value, self.saturate).map_err(|e| self.fail(ErrorKind::Scalar(e)))?;
@@ -289,10 +292,18 @@ impl<S: Source> Encoder<'_, '_, S> {
                         continue;
                     }
                     self.path.push(Step::Field(index));
-                    let present = self.source.field(layout.name(&field));
+                    let present = self.source.field(index, layout.name(&field));
                     if self.value(present)? {
                         used += 1;
-                        if let (Role::Version(version), false) = (field.role, self.keep_versions) {
+                        let kind = layout.node(field.node).kind;
+                        if field.role == Role::Data && is_scalar(kind) {
+                            // Primitive fields are the common case: no recursion.
+                            let v = self.source.scalar(kind);
+                            let v = self.value(v)?;
+                            self.scalar(kind, v)?;
+                        } else if let (Role::Version(version), false) =
+                            (field.role, self.keep_versions)
+                        {
                             let kind = layout.node(field.node).kind;
                             let given = self.source.scalar(kind);
                             let given = self.value(given)?;
@@ -371,6 +382,22 @@ impl<S: Source> Encoder<'_, '_, S> {
     }
 
     fn elements(&mut self, elem: NodeId, n: usize, tao: bool) -> Result<(), Error<S::Error>> {
+        let kind = self.layout.node(elem).kind;
+        if is_scalar(kind) {
+            // Arrays of primitives (strings, covariances) skip the per-element recursion.
+            for i in 0..n {
+                self.path.push(Step::Index(i as u32));
+                let r = self.source.element(i);
+                self.value(r)?;
+                let v = self.source.scalar(kind);
+                let v = self.value(v)?;
+                self.scalar(kind, v)?;
+                self.source.end_element();
+                self.path.pop();
+            }
+            self.source.end_array();
+            return Ok(());
+        }
         for i in 0..n {
             self.path.push(Step::Index(i as u32));
             let r = self.source.element(i);
@@ -382,6 +409,14 @@ impl<S: Source> Encoder<'_, '_, S> {
         self.source.end_array();
         Ok(())
     }
+}
+
+#[inline]
+fn is_scalar(kind: Kind) -> bool {
+    matches!(
+        kind,
+        Kind::Uint { .. } | Kind::Int { .. } | Kind::Float { .. } | Kind::Bool
+    )
 }
 
 fn same_integer(given: Scalar, version: u32) -> bool {
@@ -616,6 +651,7 @@ pub(crate) fn scalar_bits(kind: Kind) -> u32 {
 }
 
 /// Raw bits of `value` for a scalar kind, honouring the cast mode.
+#[inline]
 pub(crate) fn scalar_raw(
     kind: Kind,
     value: Scalar,

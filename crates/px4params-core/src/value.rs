@@ -70,7 +70,7 @@ impl Source for LeafSource<'_> {
     fn begin_struct(&mut self) -> Result<(), LeafError> {
         Ok(())
     }
-    fn field(&mut self, _name: &str) -> Result<bool, LeafError> {
+    fn field(&mut self, _index: u32, _name: &str) -> Result<bool, LeafError> {
         Ok(true)
     }
     fn end_field(&mut self) {}

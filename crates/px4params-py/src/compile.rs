@@ -10,7 +10,9 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
 /// Compiles every type of `types` (key → type dict); returns the layout and each key's root.
-pub fn compile_model(types: &Bound<'_, PyDict>) -> PyResult<(OwnedLayout, HashMap<String, NodeId>)> {
+pub fn compile_model(
+    types: &Bound<'_, PyDict>,
+) -> PyResult<(OwnedLayout, HashMap<String, NodeId>)> {
     let mut c = Compiler {
         types,
         layout: OwnedLayout::default(),
@@ -74,7 +76,9 @@ impl Compiler<'_, '_> {
             let ty = item(&f, "type", key)?.cast_into::<PyDict>()?;
             let what = format!("{key}.{name}");
             let node = self.ty(&ty, &what)?;
-            let is_void = ty.get_item("kind")?.is_some_and(|k| k.eq("void").unwrap_or(false));
+            let is_void = ty
+                .get_item("kind")?
+                .is_some_and(|k| k.eq("void").unwrap_or(false));
             let role = if is_void {
                 Role::Padding
             } else if name == "p_version" && dialect == "dsdl" {
@@ -87,11 +91,17 @@ impl Compiler<'_, '_> {
         let id = if kind == "union" {
             let variants: Vec<(&str, NodeId)> =
                 members.iter().map(|(n, id, _)| (n.as_str(), *id)).collect();
-            self.layout.union(&variants).map_err(|e| build_err(key, e))?
+            self.layout
+                .union(&variants)
+                .map_err(|e| build_err(key, e))?
         } else {
-            let fields: Vec<(&str, NodeId, Role)> =
-                members.iter().map(|(n, id, r)| (n.as_str(), *id, *r)).collect();
-            self.layout.structure(&fields).map_err(|e| build_err(key, e))?
+            let fields: Vec<(&str, NodeId, Role)> = members
+                .iter()
+                .map(|(n, id, r)| (n.as_str(), *id, *r))
+                .collect();
+            self.layout
+                .structure(&fields)
+                .map_err(|e| build_err(key, e))?
         };
         self.in_progress.pop();
         self.roots.insert(key.to_owned(), id);

@@ -83,7 +83,11 @@ fn to_py_err<E: std::fmt::Display>(
     let _ = value.setattr("path", path);
     let _ = value.setattr(
         "bit_offset",
-        if op == Op::Encode { None } else { Some(err.bit_offset) },
+        if op == Op::Encode {
+            None
+        } else {
+            Some(err.bit_offset)
+        },
     );
     exc
 }
@@ -228,7 +232,7 @@ impl DataType {
             heap = vec![0u8; layout.max_bytes(self.root)];
             &mut heap
         };
-        let mut source = PySource::new(value, saturate);
+        let mut source = PySource::new(value, &self.compiled.names, saturate);
         let options = EncodeOptions {
             tao,
             saturate,
@@ -318,8 +322,8 @@ impl DataType {
     ) -> PyResult<Bound<'py, PyBytes>> {
         let layout = self.layout();
         let t = target_of(target)?;
-        let leaf = locate(&layout, self.root, data, t, tao)
-            .map_err(|e| self.leaf_err(py, e, Op::Leaf))?;
+        let leaf =
+            locate(&layout, self.root, data, t, tao).map_err(|e| self.leaf_err(py, e, Op::Leaf))?;
         let (path, _) = describe(&layout, &leaf);
         let kind = match leaf.kind {
             LeafKind::Scalar(kind) => kind,
@@ -329,7 +333,7 @@ impl DataType {
                 cast: px4params_core::Cast::Saturated,
             },
         };
-        let mut source = PySource::new(value, saturate);
+        let mut source = PySource::new(value, &self.compiled.names, saturate);
         let scalar: Scalar = {
             use px4params_core::codec::Source;
             source.scalar(kind).map_err(|e| match e {
@@ -346,8 +350,16 @@ impl DataType {
             saturate,
             keep_versions: true,
         };
-        let n = set_leaf(&layout, self.root, data, Target::Index(leaf.index), scalar, &mut out, options)
-            .map_err(|e| self.leaf_err(py, e, Op::Encode))?;
+        let n = set_leaf(
+            &layout,
+            self.root,
+            data,
+            Target::Index(leaf.index),
+            scalar,
+            &mut out,
+            options,
+        )
+        .map_err(|e| self.leaf_err(py, e, Op::Encode))?;
         Ok(PyBytes::new(py, &out[..n]))
     }
 

@@ -53,16 +53,20 @@ enum Frame<'py> {
 }
 
 /// Reads a Python value for the encoder.
-pub struct PySource<'py> {
+pub struct PySource<'py, 'n> {
     py: Python<'py>,
+    names: &'n [Py<PyString>],
     stack: Vec<Frame<'py>>,
     saturate: bool,
 }
 
-impl<'py> PySource<'py> {
-    pub fn new(value: Bound<'py, PyAny>, saturate: bool) -> Self {
+impl<'py, 'n> PySource<'py, 'n> {
+    /// `names` holds every field name of the layout as a Python string, by field index, so
+    /// that dict look-ups use interned keys with cached hashes.
+    pub fn new(value: Bound<'py, PyAny>, names: &'n [Py<PyString>], saturate: bool) -> Self {
         Self {
             py: value.py(),
+            names,
             stack: vec![Frame::Obj(value)],
             saturate,
         }
@@ -130,7 +134,7 @@ fn float_of(obj: &Bound<'_, PyAny>) -> Result<f64, ValueError> {
     Err(shape("a number", obj))
 }
 
-impl<'py> Source for PySource<'py> {
+impl<'py> Source for PySource<'py, '_> {
     type Error = ValueError;
 
     fn scalar(&mut self, kind: Kind) -> Result<Scalar, ValueError> {
@@ -165,9 +169,9 @@ impl<'py> Source for PySource<'py> {
         }
     }
 
-    fn field(&mut self, name: &str) -> Result<bool, ValueError> {
+    fn field(&mut self, index: u32, _name: &str) -> Result<bool, ValueError> {
         let dict = self.current().cast::<PyDict>().map_err(PyErr::from)?;
-        match dict.get_item(name)? {
+        match dict.get_item(self.names[index as usize].bind(self.py))? {
             Some(v) => {
                 self.stack.push(Frame::Obj(v));
                 Ok(true)
@@ -180,7 +184,12 @@ impl<'py> Source for PySource<'py> {
         self.stack.pop();
     }
 
-    fn end_struct(&mut self, layout: &Layout<'_>, fields: &[Field], used: usize) -> Result<(), ValueError> {
+    fn end_struct(
+        &mut self,
+        layout: &Layout<'_>,
+        fields: &[Field],
+        used: usize,
+    ) -> Result<(), ValueError> {
         let dict = self.current().cast::<PyDict>().map_err(PyErr::from)?;
         if dict.len() == used {
             return Ok(());
@@ -208,7 +217,13 @@ impl<'py> Source for PySource<'py> {
     }
 
     fn begin_union(&mut self, layout: &Layout<'_>, variants: &[Field]) -> Result<u32, ValueError> {
-        let names = || variants.iter().map(|f| layout.name(f)).collect::<Vec<_>>().join(", ");
+        let names = || {
+            variants
+                .iter()
+                .map(|f| layout.name(f))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
         let obj = self.current();
         let Ok(dict) = obj.cast::<PyDict>() else {
             return Err(ValueError::Shape(format!(
@@ -225,7 +240,10 @@ impl<'py> Source for PySource<'py> {
             )));
         }
         let (key, value) = dict.iter().next().expect("one item");
-        let key_str = key.cast::<PyString>().ok().and_then(|k| k.to_str().ok().map(str::to_owned));
+        let key_str = key
+            .cast::<PyString>()
+            .ok()
+            .and_then(|k| k.to_str().ok().map(str::to_owned));
         let Some(index) = key_str
             .as_deref()
             .and_then(|k| variants.iter().position(|f| layout.name(f) == k))
@@ -392,9 +410,16 @@ impl<'py> Sink for PySink<'py, '_> {
         Ok(())
     }
 
-    fn begin_union(&mut self, _tag: u32, index: u32, _name: &str, _at: At<'_>) -> Result<(), ValueError> {
+    fn begin_union(
+        &mut self,
+        _tag: u32,
+        index: u32,
+        _name: &str,
+        _at: At<'_>,
+    ) -> Result<(), ValueError> {
         let name = self.name(index);
-        self.stack.push(Container::Dict(PyDict::new(self.py), Some(name)));
+        self.stack
+            .push(Container::Dict(PyDict::new(self.py), Some(name)));
         Ok(())
     }
 
@@ -475,7 +500,9 @@ impl Sink for LeafRows<'_> {
     type Error = std::convert::Infallible;
 
     fn scalar(&mut self, value: Scalar, at: At<'_>) -> Result<(), Self::Error> {
-        let LeafKind::Scalar(kind) = at.kind else { return Ok(()) };
+        let LeafKind::Scalar(kind) = at.kind else {
+            return Ok(());
+        };
         self.push(&at, "", kind_name(kind), value);
         Ok(())
     }
@@ -489,7 +516,9 @@ impl Sink for LeafRows<'_> {
         Ok(())
     }
     fn begin_union(&mut self, tag: u32, _: u32, _: &str, at: At<'_>) -> Result<(), Self::Error> {
-        let LeafKind::Tag { bits, .. } = at.kind else { return Ok(()) };
+        let LeafKind::Tag { bits, .. } = at.kind else {
+            return Ok(());
+        };
         self.push(&at, "_tag", format!("uint{bits}"), Scalar::Uint(tag.into()));
         Ok(())
     }
@@ -498,10 +527,14 @@ impl Sink for LeafRows<'_> {
     }
     fn begin_array(&mut self, len: ArrayLen, at: At<'_>) -> Result<(), Self::Error> {
         self.depth += 1;
-        let LeafKind::Len { bits, .. } = at.kind else { return Ok(()) };
+        let LeafKind::Len { bits, .. } = at.kind else {
+            return Ok(());
+        };
         match len {
             ArrayLen::Fixed(_) => {}
-            ArrayLen::Prefixed(n) => self.push(&at, "_len", format!("uint{bits}"), Scalar::Uint(n as u64)),
+            ArrayLen::Prefixed(n) => {
+                self.push(&at, "_len", format!("uint{bits}"), Scalar::Uint(n as u64))
+            }
             ArrayLen::Tail => {
                 self.tail = Some((self.rows.len(), self.depth));
                 self.push(&at, "_len", "tail".into(), Scalar::Uint(0));
