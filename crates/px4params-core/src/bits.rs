@@ -100,6 +100,78 @@ pub fn write_bits(out: &mut [u8], offset: usize, value: u64, n: u32) {
     }
 }
 
+/// Writes bits one after another into a byte buffer, keeping the unfinished bits in a register
+/// so that each write costs a shift and an or, plus a store per whole byte.
+#[derive(Debug)]
+pub struct BitWriter<'o> {
+    out: &'o mut [u8],
+    /// Bytes completed in `out`.
+    bytes: usize,
+    /// Pending bits, right-aligned; fewer than 8 between writes.
+    acc: u64,
+    pending: u32,
+}
+
+impl<'o> BitWriter<'o> {
+    /// A writer at the start of `out`.
+    pub fn new(out: &'o mut [u8]) -> Self {
+        Self {
+            out,
+            bytes: 0,
+            acc: 0,
+            pending: 0,
+        }
+    }
+
+    /// Bits written so far.
+    #[inline]
+    pub fn bit_pos(&self) -> usize {
+        self.bytes * 8 + self.pending as usize
+    }
+
+    /// Appends the low `n` bits (`1..=64`) of a big-endian stream value; `Err(needed_bytes)`
+    /// when `out` is too small.
+    #[inline(always)]
+    pub fn write(&mut self, value: u64, n: u32) -> Result<(), usize> {
+        debug_assert!((1..=64).contains(&n));
+        let value = value & mask(n);
+        if n > 56 {
+            // Keep the accumulator within 64 bits: split very wide values.
+            self.push(value >> 32, n - 32)?;
+            return self.push(value & mask(32), 32);
+        }
+        self.push(value, n)
+    }
+
+    /// Appends `n <= 56` bits (more would overflow the accumulator's 7 pending bits).
+    #[inline(always)]
+    fn push(&mut self, value: u64, n: u32) -> Result<(), usize> {
+        self.acc = (self.acc << n) | value;
+        self.pending += n;
+        while self.pending >= 8 {
+            self.pending -= 8;
+            let byte = (self.acc >> self.pending) as u8;
+            match self.out.get_mut(self.bytes) {
+                Some(slot) => *slot = byte,
+                None => return Err(self.bytes + 1),
+            }
+            self.bytes += 1;
+        }
+        // pending < 8 here: keep only those bits (no branch needed for the mask).
+        self.acc &= (1u64 << self.pending) - 1;
+        Ok(())
+    }
+
+    /// Pads the last byte with zeros; returns the length in bytes.
+    pub fn finish(mut self) -> Result<usize, usize> {
+        if self.pending > 0 {
+            let pad = 8 - self.pending;
+            self.write(0, pad)?;
+        }
+        Ok(self.bytes)
+    }
+}
+
 /// Copies `n` bits from `src` at `src_offset` to `dst` at `dst_offset`.
 pub fn copy_bits<R: BitRead + ?Sized>(
     src: &R,
@@ -153,6 +225,27 @@ mod tests {
         write_bits(&mut buf, 0, 0b1, 1);
         write_bits(&mut buf, 7, 0b11, 2);
         assert_eq!(buf, [0b1000_0001, 0b1000_0000]);
+    }
+
+    #[test]
+    fn bit_writer_matches_write_bits() {
+        let widths = [3u32, 12, 1, 64, 7, 33, 8, 57, 2];
+        let mut expected = [0u8; 32];
+        let mut buf = [0xAAu8; 32];
+        let mut w = BitWriter::new(&mut buf);
+        let mut pos = 0;
+        for (i, &n) in widths.iter().enumerate() {
+            let v = 0x9E37_79B9_7F4A_7C15u64.rotate_left(i as u32 * 7) & mask(n);
+            write_bits(&mut expected, pos, v, n);
+            w.write(v, n).unwrap();
+            pos += n as usize;
+        }
+        let len = w.finish().unwrap();
+        assert_eq!(len, pos.div_ceil(8));
+        assert_eq!(buf[..len], expected[..len]);
+        let mut small = [0u8; 2];
+        let mut w = BitWriter::new(&mut small);
+        assert_eq!(w.write(0x00FF_FFFF, 24), Err(3));
     }
 
     #[test]

@@ -3,7 +3,7 @@
 //! Values come from a [`Source`] and go to a [`Sink`], so the same walk serves Python objects
 //! in the binding, flat leaf lists in firmware and anything else, without allocating.
 
-use crate::bits::{zero_bits, BitRead};
+use crate::bits::{BitRead, BitWriter};
 use crate::error::{Error, ErrorKind, Path, Step};
 use crate::layout::{Field, Kind, Layout, NodeId, Role};
 use crate::scalar::{self, Scalar};
@@ -173,8 +173,7 @@ pub fn encode<S: Source>(
 ) -> Result<usize, Error<S::Error>> {
     let mut enc = Encoder {
         layout,
-        out,
-        pos: 0,
+        out: BitWriter::new(out),
         path: Path::default(),
         source,
         saturate: options.saturate,
@@ -182,10 +181,12 @@ pub fn encode<S: Source>(
         depth: 0,
     };
     enc.node(root, options.tao)?;
-    let end = enc.pos;
-    let bytes = end.div_ceil(8);
-    zero_bits(enc.out, end, bytes * 8 - end);
-    Ok(bytes)
+    let pos = enc.out.bit_pos();
+    enc.out.finish().map_err(|needed| Error {
+        kind: ErrorKind::BufferTooSmall { needed },
+        bit_offset: pos,
+        path: Path::default(),
+    })
 }
 
 /// Decodes a value of type `root` from `data` into `sink`; returns the bits used.
@@ -225,8 +226,7 @@ pub(crate) fn tail_optimized(layout: &Layout<'_>, elem: NodeId, tao: bool) -> bo
 
 struct Encoder<'l, 'o, S: Source> {
     layout: &'l Layout<'l>,
-    out: &'o mut [u8],
-    pos: usize,
+    out: BitWriter<'o>,
     path: Path,
     source: &'o mut S,
     saturate: bool,
@@ -238,25 +238,26 @@ impl<S: Source> Encoder<'_, '_, S> {
     fn fail(&self, kind: ErrorKind<S::Error>) -> Error<S::Error> {
         Error {
             kind,
-            bit_offset: self.pos,
+            bit_offset: self.out.bit_pos(),
             path: self.path,
         }
     }
 
-    #[inline]
+    #[inline(always)]
     fn write(&mut self, raw: u64, bits: u32) -> Result<(), Error<S::Error>> {
-        if self.pos + bits as usize > self.out.len() * 8 {
-            return Err(self.fail(ErrorKind::BufferTooSmall {
-                needed: (self.pos + bits as usize).div_ceil(8),
-            }));
-        }
-        crate::bits::write_bits(self.out, self.pos, scalar::to_stream(raw, bits), bits);
-        self.pos += bits as usize;
-        Ok(())
+        self.out
+            .write(scalar::to_stream(raw, bits), bits)
+            .map_err(|needed| self.fail(ErrorKind::BufferTooSmall { needed }))
     }
 
-    #[inline]
+    #[inline(always)]
     fn scalar(&mut self, kind: Kind, value: Scalar) -> Result<(), Error<S::Error>> {
+        // Fast path: an in-range unsigned integer needs no cast.
+        if let (Kind::Uint { bits, .. }, Scalar::Uint(v)) = (kind, value) {
+            if v <= crate::bits::mask(bits.into()) {
+                return self.write(v, bits.into());
+            }
+        }
         let raw =
             scalar_raw(kind, value, self.saturate).map_err(|e| self.fail(ErrorKind::Scalar(e)))?;
         self.write(raw, scalar_bits(kind))
@@ -445,6 +446,7 @@ impl<R: BitRead + ?Sized, K: Sink> Decoder<'_, '_, R, K> {
         }
     }
 
+    #[inline]
     fn read(&mut self, bits: u32) -> Result<u64, Error<K::Error>> {
         let available = self.data.bit_len();
         if self.pos + bits as usize > available {
@@ -471,14 +473,7 @@ impl<R: BitRead + ?Sized, K: Sink> Decoder<'_, '_, R, K> {
         let at_pos = self.pos;
         match layout.node(id).kind {
             kind @ (Kind::Uint { .. } | Kind::Int { .. } | Kind::Float { .. } | Kind::Bool) => {
-                let value = self.scalar(kind)?;
-                let at = At {
-                    path: &self.path,
-                    bit_offset: at_pos,
-                    kind: LeafKind::Scalar(kind),
-                };
-                let r = self.sink.scalar(value, at);
-                self.sunk(r)?;
+                self.leaf(kind)?;
             }
             Kind::Void { bits } => {
                 self.read(bits.into())?;
@@ -497,7 +492,13 @@ impl<R: BitRead + ?Sized, K: Sink> Decoder<'_, '_, R, K> {
                     let r = self.sink.field(index, layout.name(&field));
                     self.sunk(r)?;
                     self.path.push(Step::Field(index));
-                    self.node(field.node, last)?;
+                    let kind = layout.node(field.node).kind;
+                    if is_scalar(kind) {
+                        // Primitive fields are the common case: no recursion.
+                        self.leaf(kind)?;
+                    } else {
+                        self.node(field.node, last)?;
+                    }
                     self.path.pop();
                 }
                 let r = self.sink.end_struct();
@@ -577,7 +578,12 @@ impl<R: BitRead + ?Sized, K: Sink> Decoder<'_, '_, R, K> {
                             }));
                         }
                         self.path.push(Step::Index(n as u32));
-                        self.node(elem, false)?;
+                        let elem_kind = layout.node(elem).kind;
+                        if is_scalar(elem_kind) {
+                            self.leaf(elem_kind)?;
+                        } else {
+                            self.node(elem, false)?;
+                        }
                         self.path.pop();
                         n += 1;
                     }
@@ -599,9 +605,14 @@ impl<R: BitRead + ?Sized, K: Sink> Decoder<'_, '_, R, K> {
                     };
                     let r = self.sink.begin_array(ArrayLen::Prefixed(n as usize), at);
                     self.sunk(r)?;
+                    let elem_kind = layout.node(elem).kind;
                     for i in 0..n as u32 {
                         self.path.push(Step::Index(i));
-                        self.node(elem, tao && u64::from(i) + 1 == n)?;
+                        if is_scalar(elem_kind) {
+                            self.leaf(elem_kind)?;
+                        } else {
+                            self.node(elem, tao && u64::from(i) + 1 == n)?;
+                        }
                         self.path.pop();
                     }
                     let r = self.sink.end_array(n as usize);
@@ -613,6 +624,21 @@ impl<R: BitRead + ?Sized, K: Sink> Decoder<'_, '_, R, K> {
         Ok(())
     }
 
+    /// Reads a primitive and hands it to the sink.
+    #[inline]
+    fn leaf(&mut self, kind: Kind) -> Result<(), Error<K::Error>> {
+        let at_pos = self.pos;
+        let value = self.scalar(kind)?;
+        let at = At {
+            path: &self.path,
+            bit_offset: at_pos,
+            kind: LeafKind::Scalar(kind),
+        };
+        let r = self.sink.scalar(value, at);
+        self.sunk(r)
+    }
+
+    #[inline]
     fn scalar(&mut self, kind: Kind) -> Result<Scalar, Error<K::Error>> {
         Ok(match kind {
             Kind::Uint { bits, .. } => Scalar::Uint(self.read(bits.into())?),

@@ -46,6 +46,7 @@ pub const FLOAT16_MAX: f64 = 65504.0;
 
 /// Converts a float to IEEE 754 binary16 bits as libuavcan, libcanard and pydronecan do:
 /// round to nearest with ties away from zero, overflow to infinity, NaN as `0x7FFF`.
+#[inline]
 pub fn f16_from_f32(value: f32) -> u16 {
     const F32_INF: u32 = 255 << 23;
     const F16_INF: u32 = 31 << 23;
@@ -71,6 +72,7 @@ pub fn f16_from_f32(value: f32) -> u16 {
 }
 
 /// Converts IEEE 754 binary16 bits to a float, exactly.
+#[inline]
 pub fn f32_from_f16(half: u16) -> f32 {
     let magic = f32::from_bits((254 - 15) << 23);
     let was_inf_nan = f32::from_bits((127 + 16) << 23);
@@ -117,6 +119,7 @@ pub fn from_stream(stream: u64, bits: u32) -> u64 {
 }
 
 /// Encodes an unsigned integer field of `bits` bits to raw bits.
+#[inline]
 pub fn uint_raw(value: Scalar, bits: u32, cast: Cast, saturate: bool) -> Result<u64, ScalarError> {
     let max = crate::bits::mask(bits);
     let range = || ScalarError::OutOfRange {
@@ -145,6 +148,7 @@ pub fn uint_raw(value: Scalar, bits: u32, cast: Cast, saturate: bool) -> Result<
 }
 
 /// Encodes a signed integer field of `bits` bits to raw (two's complement) bits.
+#[inline]
 pub fn int_raw(value: Scalar, bits: u32, cast: Cast, saturate: bool) -> Result<u64, ScalarError> {
     let max = (crate::bits::mask(bits) >> 1) as i64;
     let min = -max - 1;
@@ -174,6 +178,7 @@ pub fn int_raw(value: Scalar, bits: u32, cast: Cast, saturate: bool) -> Result<u
 }
 
 /// Encodes a float field of 16, 32 or 64 bits to raw bits.
+#[inline]
 pub fn float_raw(value: Scalar, bits: u32, cast: Cast, saturate: bool) -> Result<u64, ScalarError> {
     let v = match value {
         Scalar::Float(v) => v,

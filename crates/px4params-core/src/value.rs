@@ -46,6 +46,7 @@ impl<'a> LeafSource<'a> {
         self.next
     }
 
+    #[inline]
     fn take(&mut self) -> Result<Scalar, LeafError> {
         let v = *self.leaves.get(self.next).ok_or(LeafError::Exhausted)?;
         self.next += 1;
@@ -64,6 +65,7 @@ impl<'a> LeafSource<'a> {
 impl Source for LeafSource<'_> {
     type Error = LeafError;
 
+    #[inline]
     fn scalar(&mut self, _kind: Kind) -> Result<Scalar, LeafError> {
         self.take()
     }
@@ -120,6 +122,7 @@ impl<'a> LeafSink<'a> {
         &self.leaves[..self.len]
     }
 
+    #[inline]
     fn push(&mut self, v: Scalar) -> Result<(), LeafError> {
         *self.leaves.get_mut(self.len).ok_or(LeafError::Full)? = v;
         self.len += 1;
@@ -130,6 +133,7 @@ impl<'a> LeafSink<'a> {
 impl Sink for LeafSink<'_> {
     type Error = LeafError;
 
+    #[inline]
     fn scalar(&mut self, value: Scalar, _at: At<'_>) -> Result<(), LeafError> {
         self.push(value)
     }

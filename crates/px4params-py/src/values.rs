@@ -277,7 +277,13 @@ impl<'py> Source for PySource<'py, '_> {
             return Ok(n);
         }
         if let Ok(s) = obj.cast::<PyString>() {
-            let bytes = s.to_str()?.as_bytes().to_vec();
+            // A str that is not valid Unicode (lone surrogates) cannot become UTF-8 bytes.
+            let text = s.to_str().map_err(|_| {
+                ValueError::Shape(
+                    "expected a str encodable as UTF-8 (it has lone surrogates)".into(),
+                )
+            })?;
+            let bytes = text.as_bytes().to_vec();
             let n = bytes.len();
             self.stack.push(Frame::Bytes(bytes));
             return Ok(n);
