@@ -14,6 +14,12 @@ pub trait BitRead {
     ///
     /// The caller guarantees `offset + n <= self.bit_len()`.
     fn read_bits(&self, offset: usize, n: u32) -> u64;
+
+    /// The data as one contiguous slice, when it is one (lets byte strings be copied).
+    #[inline]
+    fn contiguous(&self) -> Option<&[u8]> {
+        None
+    }
 }
 
 impl BitRead for [u8] {
@@ -22,36 +28,45 @@ impl BitRead for [u8] {
         self.len() * 8
     }
 
-    #[inline]
+    #[inline(always)]
     fn read_bits(&self, offset: usize, n: u32) -> u64 {
         read_bits(self, offset, n)
+    }
+
+    #[inline]
+    fn contiguous(&self) -> Option<&[u8]> {
+        Some(self)
     }
 }
 
 /// Mask of the low `n` bits, `n <= 64`.
-#[inline]
+#[inline(always)]
 pub const fn mask(n: u32) -> u64 {
-    if n >= 64 {
-        u64::MAX
-    } else {
-        (1u64 << n) - 1
-    }
+    // Branch-free: this runs several times per encoded field.
+    ((1u128 << (n & 127)) - 1) as u64
 }
 
 /// Reads `n` bits (`1..=64`) at bit `offset` from `data` as a big-endian stream value.
 ///
 /// # Panics
 /// If the bits lie outside `data` (callers check the length first).
-#[inline]
+#[inline(always)]
 pub fn read_bits(data: &[u8], offset: usize, n: u32) -> u64 {
     debug_assert!((1..=64).contains(&n));
     let first = offset / 8;
     let shift = (offset % 8) as u32;
     let last = (offset + n as usize - 1) / 8;
-    // Fast path: the bits (plus the leading skipped bits) fit a 64-bit window.
-    if shift + n <= 64 && first + 8 <= data.len() {
+    // Fast path: the bits (plus the leading skipped bits) fit a 64-bit window; near the end
+    // of the data the window is zero-filled.
+    if shift + n <= 64 {
         let mut window = [0u8; 8];
-        window.copy_from_slice(&data[first..first + 8]);
+        if let Some(bytes) = data.get(first..first + 8) {
+            window.copy_from_slice(bytes);
+        } else {
+            for (w, &b) in window.iter_mut().zip(&data[first..]) {
+                *w = b;
+            }
+        }
         let word = u64::from_be_bytes(window);
         return (word << shift) >> (64 - n);
     }
@@ -100,14 +115,15 @@ pub fn write_bits(out: &mut [u8], offset: usize, value: u64, n: u32) {
     }
 }
 
-/// Writes bits one after another into a byte buffer, keeping the unfinished bits in a register
-/// so that each write costs a shift and an or, plus a store per whole byte.
+/// Writes bits one after another into a byte buffer. Unfinished bits wait in a 64-bit register
+/// and go out 32 at a time, so a field costs a shift and an or, and fields do not wait on
+/// each other's byte stores.
 #[derive(Debug)]
 pub struct BitWriter<'o> {
     out: &'o mut [u8],
     /// Bytes completed in `out`.
     bytes: usize,
-    /// Pending bits, right-aligned; fewer than 8 between writes.
+    /// Pending bits, right-aligned; fewer than 32 between writes.
     acc: u64,
     pending: u32,
 }
@@ -133,43 +149,128 @@ impl<'o> BitWriter<'o> {
     /// when `out` is too small.
     #[inline(always)]
     pub fn write(&mut self, value: u64, n: u32) -> Result<(), usize> {
-        debug_assert!((1..=64).contains(&n));
         let value = value & mask(n);
-        if n > 56 {
-            // Keep the accumulator within 64 bits: split very wide values.
-            self.push(value >> 32, n - 32)?;
-            return self.push(value & mask(32), 32);
+        match self.write_run(1, |_| Ok::<_, ()>((value, n))) {
+            Ok(()) => Ok(()),
+            Err(Err(needed)) => Err(needed),
+            Err(Ok(())) => Ok(()),
         }
-        self.push(value, n)
     }
 
-    /// Appends `n <= 56` bits (more would overflow the accumulator's 7 pending bits).
+    /// Appends `count` values produced by `next(i)` as `(stream value, bit length)` (the value
+    /// must fit its length, as [`crate::scalar::to_stream`] makes it), keeping the writer's
+    /// state in registers for the whole run. Stops at the first error of `next` (`Err(Ok(e))`)
+    /// or when `out` is full (`Err(Err(needed_bytes))`), with the values before it written.
     #[inline(always)]
-    fn push(&mut self, value: u64, n: u32) -> Result<(), usize> {
-        self.acc = (self.acc << n) | value;
-        self.pending += n;
+    pub fn write_run<E>(
+        &mut self,
+        count: usize,
+        mut next: impl FnMut(usize) -> Result<(u64, u32), E>,
+    ) -> Result<(), Result<E, usize>> {
+        let (mut acc, mut pending, mut bytes) = (self.acc, self.pending, self.bytes);
+        let out = &mut *self.out;
+        let mut result = Ok(());
+        for i in 0..count {
+            let (value, n) = match next(i) {
+                Ok(v) => v,
+                Err(e) => {
+                    result = Err(Ok(e));
+                    break;
+                }
+            };
+            debug_assert!(n <= 64 && value & !mask(n) == 0);
+            let stored = if n > 32 {
+                // Over 32 bits: two halves, so that pending (< 32) + n stays within 64.
+                put(out, &mut acc, &mut pending, &mut bytes, value >> 32, n - 32).and_then(|()| {
+                    put(
+                        out,
+                        &mut acc,
+                        &mut pending,
+                        &mut bytes,
+                        value & mask(32),
+                        32,
+                    )
+                })
+            } else {
+                put(out, &mut acc, &mut pending, &mut bytes, value, n)
+            };
+            if let Err(needed) = stored {
+                result = Err(Err(needed));
+                break;
+            }
+        }
+        (self.acc, self.pending, self.bytes) = (acc, pending, bytes);
+        result
+    }
+
+    /// Stores the pending whole bytes; `Err(needed_bytes)` when `out` is too small.
+    fn flush_bytes(&mut self) -> Result<(), usize> {
         while self.pending >= 8 {
             self.pending -= 8;
-            let byte = (self.acc >> self.pending) as u8;
             match self.out.get_mut(self.bytes) {
-                Some(slot) => *slot = byte,
+                Some(slot) => *slot = (self.acc >> self.pending) as u8,
                 None => return Err(self.bytes + 1),
             }
             self.bytes += 1;
         }
-        // pending < 8 here: keep only those bits (no branch needed for the mask).
-        self.acc &= (1u64 << self.pending) - 1;
+        self.acc &= mask(self.pending);
         Ok(())
+    }
+
+    /// When the writer stands on a byte boundary with `n` bytes of room: those bytes, to be
+    /// filled by the caller (the writer moves past them).
+    #[inline]
+    pub fn aligned_bytes(&mut self, n: usize) -> Option<&mut [u8]> {
+        if self.pending % 8 != 0 {
+            return None;
+        }
+        self.flush_bytes().ok()?;
+        let start = self.bytes;
+        let bytes = self.out.get_mut(start..start + n)?;
+        self.bytes += n;
+        Some(bytes)
     }
 
     /// Pads the last byte with zeros; returns the length in bytes.
     pub fn finish(mut self) -> Result<usize, usize> {
-        if self.pending > 0 {
-            let pad = 8 - self.pending;
-            self.write(0, pad)?;
-        }
+        let pad = (8 - self.pending % 8) % 8;
+        self.acc <<= pad;
+        self.pending += pad;
+        self.flush_bytes()?;
         Ok(self.bytes)
     }
+}
+
+/// Appends `n <= 32` bits to an accumulator holding fewer than 32, storing 32 at a time.
+#[inline(always)]
+fn put(
+    out: &mut [u8],
+    acc: &mut u64,
+    pending: &mut u32,
+    bytes: &mut usize,
+    value: u64,
+    n: u32,
+) -> Result<(), usize> {
+    *acc = (*acc << n) | value;
+    *pending += n;
+    if *pending >= 32 {
+        *pending -= 32;
+        let word = ((*acc >> *pending) as u32).to_be_bytes();
+        match out.get_mut(*bytes..*bytes + 4) {
+            Some(slot) => slot.copy_from_slice(&word),
+            None => {
+                // Near the end of a short buffer: store what fits, report the rest.
+                let room = out.len().saturating_sub(*bytes);
+                if let Some(slot) = out.get_mut(*bytes..) {
+                    slot.copy_from_slice(&word[..room]);
+                }
+                return Err(*bytes + 4);
+            }
+        }
+        *bytes += 4;
+        *acc &= mask(*pending);
+    }
+    Ok(())
 }
 
 /// Copies `n` bits from `src` at `src_offset` to `dst` at `dst_offset`.
@@ -245,7 +346,11 @@ mod tests {
         assert_eq!(buf[..len], expected[..len]);
         let mut small = [0u8; 2];
         let mut w = BitWriter::new(&mut small);
-        assert_eq!(w.write(0x00FF_FFFF, 24), Err(3));
+        w.write(0x00FF_FFFF, 24).unwrap();
+        assert_eq!(w.finish(), Err(3));
+        let mut small = [0u8; 2];
+        let mut w = BitWriter::new(&mut small);
+        assert_eq!(w.write(0x00FF_FFFF_FFFF, 40), Err(4));
     }
 
     #[test]

@@ -5,7 +5,7 @@
 
 use crate::bits::{BitRead, BitWriter};
 use crate::error::{Error, ErrorKind, Path, Step};
-use crate::layout::{Field, Kind, Layout, NodeId, Role};
+use crate::layout::{Field, FlatItem, Kind, Layout, NodeId, Role, Segment, Span};
 use crate::scalar::{self, Scalar};
 
 /// Nesting deeper than this is refused (DSDL cannot express recursion; a corrupt static
@@ -99,6 +99,14 @@ pub struct At<'a> {
 pub trait Source {
     /// The source's own error (e.g. "expected a dict, got str").
     type Error;
+    /// Whether the source is a flat leaf list that supports [`Source::leaf_run`]: the encoder
+    /// then skips the struct calls and takes fixed-shape runs of leaves at once.
+    const FLAT: bool = false;
+    /// The next `n` leaves, for flat sources; `None` for others.
+    #[inline]
+    fn leaf_run(&mut self, _n: usize) -> Option<Result<&[Scalar], Self::Error>> {
+        None
+    }
     /// The primitive at the current position; `kind` is the field's type.
     fn scalar(&mut self, kind: Kind) -> Result<Scalar, Self::Error>;
     /// The current position must hold a struct.
@@ -136,6 +144,14 @@ pub trait Source {
 pub trait Sink {
     /// The sink's own error.
     type Error;
+    /// Whether the sink is a flat leaf list that supports [`Sink::leaf_slots`]: the decoder
+    /// then skips the struct calls and fills fixed-shape runs of leaves at once.
+    const FLAT: bool = false;
+    /// Room for the next `n` leaves, for flat sinks; `None` for others.
+    #[inline]
+    fn leaf_slots(&mut self, _n: usize) -> Option<Result<&mut [Scalar], Self::Error>> {
+        None
+    }
     /// A primitive field's value.
     fn scalar(&mut self, value: Scalar, at: At<'_>) -> Result<(), Self::Error>;
     /// A struct begins; `field` announces each member before its value.
@@ -179,8 +195,11 @@ pub fn encode<S: Source>(
         saturate: options.saturate,
         keep_versions: options.keep_versions,
         depth: 0,
+        error: None,
     };
-    enc.node(root, options.tao)?;
+    if enc.node(root, options.tao).is_err() {
+        return Err(stopped(enc.error));
+    }
     let pos = enc.out.bit_pos();
     enc.out.finish().map_err(|needed| Error {
         kind: ErrorKind::BufferTooSmall { needed },
@@ -204,8 +223,11 @@ pub fn decode<R: BitRead + ?Sized, K: Sink>(
         path: Path::default(),
         sink,
         depth: 0,
+        error: None,
     };
-    dec.node(root, options.tao)?;
+    if dec.node(root, options.tao).is_err() {
+        return Err(stopped(dec.error));
+    }
     let used = dec.pos.div_ceil(8);
     let len = data.bit_len() / 8;
     if !options.allow_trailing && len > used {
@@ -216,6 +238,21 @@ pub fn decode<R: BitRead + ?Sized, K: Sink>(
         });
     }
     Ok(dec.pos)
+}
+
+/// Internal failure marker: the error itself waits in the walker's slot, so that results stay
+/// small enough to travel in registers through the recursion.
+pub(crate) struct Stop(());
+
+/// The error a walker stored when it stopped.
+#[cold]
+fn stopped<E>(slot: Option<Error<E>>) -> Error<E> {
+    // Every Stop is made by a walker's `fail`, which fills the slot first.
+    slot.unwrap_or(Error {
+        kind: ErrorKind::TooDeep,
+        bit_offset: 0,
+        path: Path::default(),
+    })
 }
 
 /// Whether a dynamic array with element `elem` drops its length prefix when it is last.
@@ -232,26 +269,29 @@ struct Encoder<'l, 'o, S: Source> {
     saturate: bool,
     keep_versions: bool,
     depth: usize,
+    error: Option<Error<S::Error>>,
 }
 
 impl<S: Source> Encoder<'_, '_, S> {
-    fn fail(&self, kind: ErrorKind<S::Error>) -> Error<S::Error> {
-        Error {
+    #[cold]
+    fn fail(&mut self, kind: ErrorKind<S::Error>) -> Stop {
+        self.error = Some(Error {
             kind,
             bit_offset: self.out.bit_pos(),
             path: self.path,
-        }
+        });
+        Stop(())
     }
 
     #[inline(always)]
-    fn write(&mut self, raw: u64, bits: u32) -> Result<(), Error<S::Error>> {
+    fn write(&mut self, raw: u64, bits: u32) -> Result<(), Stop> {
         self.out
             .write(scalar::to_stream(raw, bits), bits)
             .map_err(|needed| self.fail(ErrorKind::BufferTooSmall { needed }))
     }
 
     #[inline(always)]
-    fn scalar(&mut self, kind: Kind, value: Scalar) -> Result<(), Error<S::Error>> {
+    fn scalar(&mut self, kind: Kind, value: Scalar) -> Result<(), Stop> {
         // Fast path: an in-range unsigned integer needs no cast.
         if let (Kind::Uint { bits, .. }, Scalar::Uint(v)) = (kind, value) {
             if v <= crate::bits::mask(bits.into()) {
@@ -263,11 +303,15 @@ impl<S: Source> Encoder<'_, '_, S> {
         self.write(raw, scalar_bits(kind))
     }
 
-    fn value<T>(&self, r: Result<T, S::Error>) -> Result<T, Error<S::Error>> {
-        r.map_err(|e| self.fail(ErrorKind::Value(e)))
+    #[inline(always)]
+    fn value<T>(&mut self, r: Result<T, S::Error>) -> Result<T, Stop> {
+        match r {
+            Ok(v) => Ok(v),
+            Err(e) => Err(self.fail(ErrorKind::Value(e))),
+        }
     }
 
-    fn node(&mut self, id: NodeId, tao: bool) -> Result<(), Error<S::Error>> {
+    fn node(&mut self, id: NodeId, tao: bool) -> Result<(), Stop> {
         self.depth += 1;
         if self.depth > MAX_DEPTH {
             return Err(self.fail(ErrorKind::TooDeep));
@@ -281,53 +325,18 @@ impl<S: Source> Encoder<'_, '_, S> {
             }
             Kind::Void { bits } => self.write(0, bits.into())?,
             Kind::Struct { first, count } => {
-                let r = self.source.begin_struct();
-                self.value(r)?;
-                let mut used = 0;
-                for i in 0..count {
-                    let index = first + i;
-                    let field = layout.fields[index as usize];
-                    let last = tao && i + 1 == count;
-                    if field.role == Role::Padding {
-                        self.node(field.node, last)?;
-                        continue;
+                if S::FLAT {
+                    self.flat_struct(id, first, count, tao)?;
+                } else {
+                    let r = self.source.begin_struct();
+                    self.value(r)?;
+                    let mut used = 0;
+                    for i in 0..count {
+                        used += self.field(first + i, tao && i + 1 == count)?;
                     }
-                    self.path.push(Step::Field(index));
-                    let present = self.source.field(index, layout.name(&field));
-                    if self.value(present)? {
-                        used += 1;
-                        let kind = layout.node(field.node).kind;
-                        if field.role == Role::Data && is_scalar(kind) {
-                            // Primitive fields are the common case: no recursion.
-                            let v = self.source.scalar(kind);
-                            let v = self.value(v)?;
-                            self.scalar(kind, v)?;
-                        } else if let (Role::Version(version), false) =
-                            (field.role, self.keep_versions)
-                        {
-                            let kind = layout.node(field.node).kind;
-                            let given = self.source.scalar(kind);
-                            let given = self.value(given)?;
-                            if !same_integer(given, version) {
-                                return Err(self.fail(ErrorKind::VersionMismatch {
-                                    given,
-                                    expected: version,
-                                }));
-                            }
-                            self.scalar(kind, Scalar::Uint(version.into()))?;
-                        } else {
-                            self.node(field.node, last)?;
-                        }
-                        self.source.end_field();
-                    } else if let Role::Version(version) = field.role {
-                        self.scalar(layout.node(field.node).kind, Scalar::Uint(version.into()))?;
-                    } else {
-                        return Err(self.fail(ErrorKind::MissingField));
-                    }
-                    self.path.pop();
+                    let r = self.source.end_struct(layout, layout.members(id), used);
+                    self.value(r)?;
                 }
-                let r = self.source.end_struct(layout, layout.members(id), used);
-                self.value(r)?;
             }
             Kind::Union {
                 first,
@@ -382,8 +391,108 @@ impl<S: Source> Encoder<'_, '_, S> {
         Ok(())
     }
 
-    fn elements(&mut self, elem: NodeId, n: usize, tao: bool) -> Result<(), Error<S::Error>> {
+    /// Encodes field `index`; returns 1 when the input had it (0 for padding and filled-in
+    /// versions), so that the struct can tell unknown input fields.
+    fn field(&mut self, index: u32, last: bool) -> Result<usize, Stop> {
+        let layout = self.layout;
+        let field = layout.fields[index as usize];
+        if field.role == Role::Padding {
+            self.node(field.node, last)?;
+            return Ok(0);
+        }
+        self.path.push(Step::Field(index));
+        let present = self.source.field(index, layout.name(&field));
+        let used = if self.value(present)? {
+            let kind = layout.node(field.node).kind;
+            if field.role == Role::Data && is_scalar(kind) {
+                // Primitive fields are the common case: no recursion.
+                let v = self.source.scalar(kind);
+                let v = self.value(v)?;
+                self.scalar(kind, v)?;
+            } else if let (Role::Version(version), false) = (field.role, self.keep_versions) {
+                let given = self.source.scalar(kind);
+                let given = self.value(given)?;
+                if !same_integer(given, version) {
+                    return Err(self.fail(ErrorKind::VersionMismatch {
+                        given,
+                        expected: version,
+                    }));
+                }
+                self.scalar(kind, Scalar::Uint(version.into()))?;
+            } else {
+                self.node(field.node, last)?;
+            }
+            self.source.end_field();
+            1
+        } else if let Role::Version(version) = field.role {
+            self.scalar(layout.node(field.node).kind, Scalar::Uint(version.into()))?;
+            0
+        } else {
+            return Err(self.fail(ErrorKind::MissingField));
+        };
+        self.path.pop();
+        Ok(used)
+    }
+
+    /// A struct from a flat source: fixed-shape runs of fields in one tight loop each.
+    fn flat_struct(&mut self, id: NodeId, first: u32, count: u32, tao: bool) -> Result<(), Stop> {
+        let layout = self.layout;
+        for segment in layout.node(id).segments.of(layout.segments) {
+            match *segment {
+                Segment::Flat {
+                    fields,
+                    items,
+                    leaves,
+                    ..
+                } => {
+                    let saturate = self.saturate;
+                    let keep = self.keep_versions;
+                    let outcome = match self.source.leaf_run(leaves as usize) {
+                        Some(Ok(run)) => {
+                            encode_items(&mut self.out, items.of(layout.flat), run, saturate, keep)
+                        }
+                        Some(Err(e)) => return Err(self.fail(ErrorKind::Value(e))),
+                        None => {
+                            for i in fields.first..fields.first + fields.count {
+                                self.field(i, tao && i + 1 == first + count)?;
+                            }
+                            continue;
+                        }
+                    };
+                    if let Err((leaf, kind)) = outcome {
+                        push_flat_path(layout, fields, leaf, &mut self.path);
+                        return Err(self.fail(kind.into_kind()));
+                    }
+                }
+                Segment::Field(i) => {
+                    self.field(i, tao && i + 1 == first + count)?;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn elements(&mut self, elem: NodeId, n: usize, tao: bool) -> Result<(), Stop> {
         let kind = self.layout.node(elem).kind;
+        if S::FLAT && is_scalar(kind) {
+            let saturate = self.saturate;
+            let outcome = match self.source.leaf_run(n) {
+                Some(Ok(run)) => Some(encode_scalars(&mut self.out, kind, run, saturate)),
+                Some(Err(e)) => return Err(self.fail(ErrorKind::Value(e))),
+                None => None,
+            };
+            match outcome {
+                Some(Ok(())) => {
+                    self.source.end_array();
+                    return Ok(());
+                }
+                Some(Err((i, fail))) => {
+                    self.path.push(Step::Index(i as u32));
+                    return Err(self.fail(fail.into_kind()));
+                }
+                None => {}
+            }
+        }
         if is_scalar(kind) {
             // Arrays of primitives (strings, covariances) skip the per-element recursion.
             for i in 0..n {
@@ -412,6 +521,149 @@ impl<S: Source> Encoder<'_, '_, S> {
     }
 }
 
+/// Why a flat run could not be encoded, without the source's error type.
+#[derive(Clone, Copy)]
+enum FlatFail {
+    Scalar(scalar::ScalarError),
+    Version { given: Scalar, expected: u32 },
+    Buffer(usize),
+}
+
+impl FlatFail {
+    fn into_kind<E>(self) -> ErrorKind<E> {
+        match self {
+            Self::Scalar(e) => ErrorKind::Scalar(e),
+            Self::Version { given, expected } => ErrorKind::VersionMismatch { given, expected },
+            Self::Buffer(needed) => ErrorKind::BufferTooSmall { needed },
+        }
+    }
+}
+
+/// Encodes the flat items of a fixed-shape run from its leaves; on failure, the number of the
+/// leaf within the run.
+#[inline]
+fn encode_items(
+    out: &mut BitWriter<'_>,
+    items: &[FlatItem],
+    run: &[Scalar],
+    saturate: bool,
+    keep_versions: bool,
+) -> Result<(), (u32, FlatFail)> {
+    let mut j = 0usize;
+    let mut items = items.iter();
+    let mut leaves = run.iter().copied();
+    let written = out.write_run(items.len(), |_| {
+        let Some(&item) = items.next() else {
+            return Ok((0, 0));
+        };
+        let (raw, bits) = match item {
+            FlatItem::Pad(bits) => return Ok((0, u32::from(bits))),
+            FlatItem::Leaf(kind) => {
+                let v = leaves.next().unwrap_or(Scalar::Uint(0));
+                (
+                    fast_raw(kind, v, saturate).map_err(FlatFail::Scalar)?,
+                    scalar_bits(kind),
+                )
+            }
+            FlatItem::Version(kind, version) => {
+                let v = leaves.next().unwrap_or(Scalar::Uint(0));
+                let raw = if keep_versions {
+                    fast_raw(kind, v, saturate).map_err(FlatFail::Scalar)?
+                } else if same_integer(v, version) {
+                    u64::from(version)
+                } else {
+                    return Err(FlatFail::Version {
+                        given: v,
+                        expected: version,
+                    });
+                };
+                (raw, scalar_bits(kind))
+            }
+        };
+        j += 1;
+        Ok((scalar::to_stream(raw, bits), bits))
+    });
+    written.map_err(|e| (j as u32, e.unwrap_or_else(FlatFail::Buffer)))
+}
+
+/// Encodes an array of primitives from its leaves.
+#[inline]
+fn encode_scalars(
+    out: &mut BitWriter<'_>,
+    kind: Kind,
+    run: &[Scalar],
+    saturate: bool,
+) -> Result<(), (usize, FlatFail)> {
+    let bits = scalar_bits(kind);
+    if let Kind::Uint { bits: 8, .. } = kind {
+        // Byte strings on a byte boundary (e.g. a tail-optimized name) are plain bytes.
+        let in_range = run
+            .iter()
+            .all(|v| matches!(v, Scalar::Uint(b) if *b <= 0xFF));
+        if in_range {
+            if let Some(bytes) = out.aligned_bytes(run.len()) {
+                for (byte, v) in bytes.iter_mut().zip(run) {
+                    if let Scalar::Uint(b) = v {
+                        *byte = *b as u8;
+                    }
+                }
+                return Ok(());
+            }
+        }
+    }
+    let mut at = 0;
+    let written = out.write_run(run.len(), |i| {
+        at = i;
+        let raw = fast_raw(kind, run[i], saturate).map_err(FlatFail::Scalar)?;
+        Ok((scalar::to_stream(raw, bits), bits))
+    });
+    written.map_err(|e| (at, e.unwrap_or_else(FlatFail::Buffer)))
+}
+
+/// [`scalar_raw`] with the in-range unsigned case first.
+#[inline(always)]
+fn fast_raw(kind: Kind, value: Scalar, saturate: bool) -> Result<u64, scalar::ScalarError> {
+    match (kind, value) {
+        (Kind::Uint { bits, .. }, Scalar::Uint(v)) if v <= crate::bits::mask(bits.into()) => Ok(v),
+        // In range (NaN compares false and takes the general path, as do infinities).
+        (Kind::Float { bits: 16, .. }, Scalar::Float(v)) if v.abs() <= scalar::FLOAT16_MAX => {
+            Ok(u64::from(scalar::f16_from_f32(v as f32)))
+        }
+        (Kind::Float { bits: 32, .. }, Scalar::Float(v)) if v.abs() <= f64::from(f32::MAX) => {
+            Ok(u64::from((v as f32).to_bits()))
+        }
+        _ => scalar_raw(kind, value, saturate),
+    }
+}
+
+/// Extends `path` to leaf `leaf` of a run of fixed-shape `fields`.
+#[cold]
+fn push_flat_path(layout: &Layout<'_>, fields: Span, leaf: u32, path: &mut Path) {
+    let mut j = leaf;
+    for index in fields.first..fields.first + fields.count {
+        let node = layout.fields[index as usize].node;
+        let n = layout.node(node).fixed_leaves.unwrap_or(0);
+        if j < n {
+            path.push(Step::Field(index));
+            push_fixed_path(layout, node, j, path);
+            return;
+        }
+        j -= n;
+    }
+}
+
+fn push_fixed_path(layout: &Layout<'_>, id: NodeId, leaf: u32, path: &mut Path) {
+    match layout.node(id).kind {
+        Kind::Struct { first, count } => push_flat_path(layout, Span { first, count }, leaf, path),
+        Kind::Array { elem, .. } => {
+            let n = layout.node(elem).fixed_leaves.unwrap_or(1).max(1);
+            path.push(Step::Index(leaf / n));
+            push_fixed_path(layout, elem, leaf % n, path);
+        }
+        _ => {}
+    }
+}
+
 #[inline]
 fn is_scalar(kind: Kind) -> bool {
     matches!(
@@ -435,19 +687,22 @@ struct Decoder<'l, 'd, R: BitRead + ?Sized, K: Sink> {
     path: Path,
     sink: &'d mut K,
     depth: usize,
+    error: Option<Error<K::Error>>,
 }
 
 impl<R: BitRead + ?Sized, K: Sink> Decoder<'_, '_, R, K> {
-    fn fail(&self, kind: ErrorKind<K::Error>) -> Error<K::Error> {
-        Error {
+    #[cold]
+    fn fail(&mut self, kind: ErrorKind<K::Error>) -> Stop {
+        self.error = Some(Error {
             kind,
             bit_offset: self.pos,
             path: self.path,
-        }
+        });
+        Stop(())
     }
 
     #[inline]
-    fn read(&mut self, bits: u32) -> Result<u64, Error<K::Error>> {
+    fn read(&mut self, bits: u32) -> Result<u64, Stop> {
         let available = self.data.bit_len();
         if self.pos + bits as usize > available {
             return Err(self.fail(ErrorKind::Truncated {
@@ -460,11 +715,15 @@ impl<R: BitRead + ?Sized, K: Sink> Decoder<'_, '_, R, K> {
         Ok(scalar::from_stream(stream, bits))
     }
 
-    fn sunk<T>(&self, r: Result<T, K::Error>) -> Result<T, Error<K::Error>> {
-        r.map_err(|e| self.fail(ErrorKind::Value(e)))
+    #[inline(always)]
+    fn sunk<T>(&mut self, r: Result<T, K::Error>) -> Result<T, Stop> {
+        match r {
+            Ok(v) => Ok(v),
+            Err(e) => Err(self.fail(ErrorKind::Value(e))),
+        }
     }
 
-    fn node(&mut self, id: NodeId, tao: bool) -> Result<(), Error<K::Error>> {
+    fn node(&mut self, id: NodeId, tao: bool) -> Result<(), Stop> {
         self.depth += 1;
         if self.depth > MAX_DEPTH {
             return Err(self.fail(ErrorKind::TooDeep));
@@ -479,30 +738,17 @@ impl<R: BitRead + ?Sized, K: Sink> Decoder<'_, '_, R, K> {
                 self.read(bits.into())?;
             }
             Kind::Struct { first, count } => {
-                let r = self.sink.begin_struct(count as usize);
-                self.sunk(r)?;
-                for i in 0..count {
-                    let index = first + i;
-                    let field = layout.fields[index as usize];
-                    let last = tao && i + 1 == count;
-                    if field.role == Role::Padding {
-                        self.node(field.node, last)?;
-                        continue;
-                    }
-                    let r = self.sink.field(index, layout.name(&field));
+                if K::FLAT {
+                    self.flat_struct(id, first, count, tao)?;
+                } else {
+                    let r = self.sink.begin_struct(count as usize);
                     self.sunk(r)?;
-                    self.path.push(Step::Field(index));
-                    let kind = layout.node(field.node).kind;
-                    if is_scalar(kind) {
-                        // Primitive fields are the common case: no recursion.
-                        self.leaf(kind)?;
-                    } else {
-                        self.node(field.node, last)?;
+                    for i in 0..count {
+                        self.field(first + i, tao && i + 1 == count)?;
                     }
-                    self.path.pop();
+                    let r = self.sink.end_struct();
+                    self.sunk(r)?;
                 }
-                let r = self.sink.end_struct();
-                self.sunk(r)?;
             }
             Kind::Union {
                 first,
@@ -570,6 +816,16 @@ impl<R: BitRead + ?Sized, K: Sink> Decoder<'_, '_, R, K> {
                     self.sunk(r)?;
                     // The array takes every remaining whole byte.
                     let mut n = 0usize;
+                    let elem_kind = layout.node(elem).kind;
+                    if is_scalar(elem_kind) {
+                        // Primitive elements of 8+ bits: their count is known up front.
+                        let bits = scalar_bits(elem_kind) as usize;
+                        let count = (self.data.bit_len().saturating_sub(self.pos) / 8 * 8) / bits;
+                        let whole = self.data.bit_len().saturating_sub(self.pos) >= 8;
+                        if whole && count <= max as usize && self.flat_elements(elem_kind, count)? {
+                            n = count;
+                        }
+                    }
                     while self.data.bit_len().saturating_sub(self.pos) >= 8 {
                         if n == max as usize {
                             return Err(self.fail(ErrorKind::ArrayTooLong {
@@ -606,7 +862,8 @@ impl<R: BitRead + ?Sized, K: Sink> Decoder<'_, '_, R, K> {
                     let r = self.sink.begin_array(ArrayLen::Prefixed(n as usize), at);
                     self.sunk(r)?;
                     let elem_kind = layout.node(elem).kind;
-                    for i in 0..n as u32 {
+                    let done = is_scalar(elem_kind) && self.flat_elements(elem_kind, n as usize)?;
+                    for i in (if done { n as u32 } else { 0 })..n as u32 {
                         self.path.push(Step::Index(i));
                         if is_scalar(elem_kind) {
                             self.leaf(elem_kind)?;
@@ -624,9 +881,103 @@ impl<R: BitRead + ?Sized, K: Sink> Decoder<'_, '_, R, K> {
         Ok(())
     }
 
+    fn field(&mut self, index: u32, last: bool) -> Result<(), Stop> {
+        let layout = self.layout;
+        let field = layout.fields[index as usize];
+        if field.role == Role::Padding {
+            return self.node(field.node, last);
+        }
+        let r = self.sink.field(index, layout.name(&field));
+        self.sunk(r)?;
+        self.path.push(Step::Field(index));
+        let kind = layout.node(field.node).kind;
+        if is_scalar(kind) {
+            // Primitive fields are the common case: no recursion.
+            self.leaf(kind)?;
+        } else {
+            self.node(field.node, last)?;
+        }
+        self.path.pop();
+        Ok(())
+    }
+
+    /// A struct into a flat sink: fixed-shape runs of fields in one tight loop each.
+    fn flat_struct(&mut self, id: NodeId, first: u32, count: u32, tao: bool) -> Result<(), Stop> {
+        let layout = self.layout;
+        for segment in layout.node(id).segments.of(layout.segments) {
+            match *segment {
+                Segment::Flat {
+                    fields,
+                    items,
+                    leaves,
+                    bits,
+                } => {
+                    // Enough data for the whole run means no read inside it can fail; if
+                    // not, the field-by-field walk finds where exactly it ends.
+                    let fits = self.pos + bits as usize <= self.data.bit_len();
+                    let data = self.data;
+                    let pos = self.pos;
+                    let slots = if fits {
+                        self.sink.leaf_slots(leaves as usize)
+                    } else {
+                        None
+                    };
+                    match slots {
+                        Some(Ok(slots)) => {
+                            self.pos = decode_items(data, pos, items.of(layout.flat), slots);
+                        }
+                        Some(Err(e)) => return Err(self.fail(ErrorKind::Value(e))),
+                        None => {
+                            for i in fields.first..fields.first + fields.count {
+                                self.field(i, tao && i + 1 == first + count)?;
+                            }
+                        }
+                    }
+                }
+                Segment::Field(i) => self.field(i, tao && i + 1 == first + count)?,
+            }
+        }
+        Ok(())
+    }
+
+    /// Decodes `n` primitive elements of `kind` into a flat sink when there is one.
+    /// Returns false when the sink is not flat or the data is too short (walk instead).
+    fn flat_elements(&mut self, kind: Kind, n: usize) -> Result<bool, Stop> {
+        let bits = scalar_bits(kind) as usize;
+        if !K::FLAT || self.pos + bits * n > self.data.bit_len() {
+            return Ok(false);
+        }
+        let data = self.data;
+        let pos = self.pos;
+        match self.sink.leaf_slots(n) {
+            Some(Ok(slots)) => {
+                let aligned = match (kind, data.contiguous()) {
+                    (Kind::Uint { bits: 8, .. }, Some(bytes)) if pos % 8 == 0 => {
+                        bytes.get(pos / 8..pos / 8 + n)
+                    }
+                    _ => None,
+                };
+                if let Some(bytes) = aligned {
+                    // Byte strings on a byte boundary: plain bytes.
+                    for (slot, &b) in slots.iter_mut().zip(bytes) {
+                        *slot = Scalar::Uint(b.into());
+                    }
+                } else {
+                    for (i, slot) in slots.iter_mut().enumerate() {
+                        *slot = read_scalar(data, pos + i * bits, kind);
+                    }
+                }
+                self.pos = pos + bits * n;
+                Ok(true)
+            }
+            Some(Err(e)) => Err(self.fail(ErrorKind::Value(e))),
+            None => Ok(false),
+        }
+    }
+
     /// Reads a primitive and hands it to the sink.
     #[inline]
-    fn leaf(&mut self, kind: Kind) -> Result<(), Error<K::Error>> {
+    fn leaf(&mut self, kind: Kind) -> Result<(), Stop> {
         let at_pos = self.pos;
         let value = self.scalar(kind)?;
         let at = At {
@@ -639,7 +990,7 @@ impl<R: BitRead + ?Sized, K: Sink> Decoder<'_, '_, R, K> {
     }
 
     #[inline]
-    fn scalar(&mut self, kind: Kind) -> Result<Scalar, Error<K::Error>> {
+    fn scalar(&mut self, kind: Kind) -> Result<Scalar, Stop> {
         Ok(match kind {
             Kind::Uint { bits, .. } => Scalar::Uint(self.read(bits.into())?),
             Kind::Int { bits, .. } => {
@@ -654,7 +1005,31 @@ impl<R: BitRead + ?Sized, K: Sink> Decoder<'_, '_, R, K> {
     }
 }
 
+/// Decodes the flat items of a fixed-shape run at `pos` into `slots`; returns the end.
+#[inline]
+fn decode_items<R: BitRead + ?Sized>(
+    data: &R,
+    mut pos: usize,
+    items: &[FlatItem],
+    slots: &mut [Scalar],
+) -> usize {
+    let mut slots = slots.iter_mut();
+    for item in items {
+        match *item {
+            FlatItem::Pad(bits) => pos += usize::from(bits),
+            FlatItem::Leaf(kind) | FlatItem::Version(kind, _) => {
+                if let Some(slot) = slots.next() {
+                    *slot = read_scalar(data, pos, kind);
+                }
+                pos += scalar_bits(kind) as usize;
+            }
+        }
+    }
+    pos
+}
+
 /// Reads a scalar leaf's value at `bit_offset` (no bounds check beyond the data's).
+#[inline(always)]
 pub(crate) fn read_scalar<R: BitRead + ?Sized>(data: &R, bit_offset: usize, kind: Kind) -> Scalar {
     let read = |bits: u8| scalar::from_stream(data.read_bits(bit_offset, bits.into()), bits.into());
     match kind {
@@ -667,6 +1042,7 @@ pub(crate) fn read_scalar<R: BitRead + ?Sized>(data: &R, bit_offset: usize, kind
 }
 
 /// The bit width of a scalar kind.
+#[inline(always)]
 pub(crate) fn scalar_bits(kind: Kind) -> u32 {
     match kind {
         Kind::Uint { bits, .. } | Kind::Int { bits, .. } | Kind::Float { bits, .. } => bits.into(),

@@ -3,7 +3,10 @@
 use alloc::string::String;
 use alloc::vec::Vec;
 
-use crate::layout::{array_len_bits, union_tag_bits, Field, Kind, Layout, Node, NodeId, Role};
+use crate::layout::{
+    array_len_bits, union_tag_bits, Field, FlatItem, Kind, Layout, Node, NodeId, Role, Segment,
+    Span,
+};
 use crate::scalar::Cast;
 
 /// Why a type could not be compiled.
@@ -35,6 +38,8 @@ pub struct OwnedLayout {
     nodes: Vec<Node>,
     fields: Vec<Field>,
     names: String,
+    segments: Vec<Segment>,
+    flat: Vec<FlatItem>,
 }
 
 impl OwnedLayout {
@@ -44,6 +49,8 @@ impl OwnedLayout {
             nodes: &self.nodes,
             fields: &self.fields,
             names: &self.names,
+            segments: &self.segments,
+            flat: &self.flat,
         }
     }
 
@@ -98,6 +105,7 @@ impl OwnedLayout {
             min_bits: u64::from(bits),
             max_bits: u64::from(bits),
             fixed_leaves: Some(0),
+            segments: Span::default(),
         }))
     }
 
@@ -109,6 +117,7 @@ impl OwnedLayout {
             min_bits: e.min_bits * u64::from(len),
             max_bits: e.max_bits * u64::from(len),
             fixed_leaves: e.fixed_leaves.and_then(|l| l.checked_mul(len)),
+            segments: Span::default(),
         }))
     }
 
@@ -128,6 +137,7 @@ impl OwnedLayout {
             min_bits: u64::from(len_bits),
             max_bits: u64::from(len_bits) + e.max_bits * u64::from(max),
             fixed_leaves: None,
+            segments: Span::default(),
         }))
     }
 
@@ -145,6 +155,7 @@ impl OwnedLayout {
             };
             self.add_field(name, node, role);
         }
+        let segments = self.segment(first, fields.len() as u32);
         Ok(self.push(Node {
             kind: Kind::Struct {
                 first,
@@ -153,6 +164,7 @@ impl OwnedLayout {
             min_bits,
             max_bits,
             fixed_leaves: leaves,
+            segments,
         }))
     }
 
@@ -182,6 +194,7 @@ impl OwnedLayout {
             min_bits: u64::from(tag_bits) + min_bits,
             max_bits: u64::from(tag_bits) + max_bits,
             fixed_leaves: None,
+            segments: Span::default(),
         }))
     }
 
@@ -195,7 +208,82 @@ impl OwnedLayout {
             min_bits: u64::from(bits),
             max_bits: u64::from(bits),
             fixed_leaves: Some(1),
+            segments: Span::default(),
         })
+    }
+
+    /// Splits the struct's fields `first..first + count` into runs of fixed-shape fields
+    /// (flattened) and single fields holding unions or dynamic arrays.
+    fn segment(&mut self, first: u32, count: u32) -> Span {
+        let start = self.segments.len() as u32;
+        let mut i = first;
+        while i < first + count {
+            let field = self.fields[i as usize];
+            if self.nodes[field.node as usize].fixed_leaves.is_none() {
+                self.segments.push(Segment::Field(i));
+                i += 1;
+                continue;
+            }
+            let run_first = i;
+            let items_first = self.flat.len() as u32;
+            let (mut leaves, mut bits) = (0u32, 0u64);
+            while i < first + count {
+                let f = self.fields[i as usize];
+                let node = self.nodes[f.node as usize];
+                let Some(n) = node.fixed_leaves else { break };
+                leaves += n;
+                bits += node.min_bits;
+                match f.role {
+                    Role::Version(v) => self.flat.push(FlatItem::Version(node.kind, v)),
+                    _ => self.flatten(f.node),
+                }
+                i += 1;
+            }
+            self.segments.push(Segment::Flat {
+                fields: Span {
+                    first: run_first,
+                    count: i - run_first,
+                },
+                items: Span {
+                    first: items_first,
+                    count: self.flat.len() as u32 - items_first,
+                },
+                leaves,
+                bits: u32::try_from(bits).unwrap_or(u32::MAX),
+            });
+        }
+        Span {
+            first: start,
+            count: self.segments.len() as u32 - start,
+        }
+    }
+
+    /// Appends the flat items of a fixed-shape node.
+    fn flatten(&mut self, id: NodeId) {
+        let node = self.nodes[id as usize];
+        match node.kind {
+            Kind::Void { bits } => self.flat.push(FlatItem::Pad(bits)),
+            Kind::Struct { first, count } => {
+                for i in first..first + count {
+                    let f = self.fields[i as usize];
+                    match f.role {
+                        Role::Version(v) => {
+                            let kind = self.nodes[f.node as usize].kind;
+                            self.flat.push(FlatItem::Version(kind, v));
+                        }
+                        _ => self.flatten(f.node),
+                    }
+                }
+            }
+            Kind::Array { elem, len } => {
+                for _ in 0..len {
+                    self.flatten(elem);
+                }
+            }
+            // Unions and dynamic arrays are never fixed-shape.
+            Kind::Union { .. } | Kind::DynArray { .. } => {}
+            kind => self.flat.push(FlatItem::Leaf(kind)),
+        }
     }
 
     fn get(&self, id: NodeId) -> Result<&Node, BuildError> {

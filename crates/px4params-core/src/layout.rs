@@ -74,6 +74,54 @@ pub enum Kind {
     },
 }
 
+/// A range of entries in one of the layout's tables.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct Span {
+    /// First entry.
+    pub first: u32,
+    /// Number of entries.
+    pub count: u32,
+}
+
+impl Span {
+    /// The entries of `table` in this span (empty when out of bounds).
+    #[inline]
+    pub fn of<T>(self, table: &[T]) -> &[T] {
+        table
+            .get(self.first as usize..(self.first + self.count) as usize)
+            .unwrap_or(&[])
+    }
+}
+
+/// One primitive position of a flattened fixed-shape value.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FlatItem {
+    /// A primitive leaf (one of the scalar kinds).
+    Leaf(Kind),
+    /// A `p_version` leaf and the type's version.
+    Version(Kind, u32),
+    /// Padding bits.
+    Pad(u8),
+}
+
+/// A piece of a struct, for walking flat leaf lists quickly.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Segment {
+    /// Consecutive fixed-shape fields, flattened to primitive items.
+    Flat {
+        /// The fields, in [`Layout::fields`].
+        fields: Span,
+        /// Their items, in [`Layout::flat`].
+        items: Span,
+        /// Number of leaves (items that are not padding).
+        leaves: u32,
+        /// Total bit length.
+        bits: u32,
+    },
+    /// A field containing a union or a dynamic array: its index in [`Layout::fields`].
+    Field(u32),
+}
+
 /// A node with its precomputed sizes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Node {
@@ -86,6 +134,8 @@ pub struct Node {
     /// For nodes without unions or dynamic arrays inside: the number of leaves. Such a node
     /// always encodes to exactly `min_bits` bits, so it can be skipped without reading it.
     pub fixed_leaves: Option<u32>,
+    /// For structs: the struct split into [`Segment`]s (in [`Layout::segments`]).
+    pub segments: Span,
 }
 
 /// What a field of a struct (or a union variant) is for.
@@ -121,6 +171,10 @@ pub struct Layout<'a> {
     pub fields: &'a [Field],
     /// All field names, concatenated.
     pub names: &'a str,
+    /// Struct segments, each struct's contiguous.
+    pub segments: &'a [Segment],
+    /// Flattened items of fixed-shape runs.
+    pub flat: &'a [FlatItem],
 }
 
 impl<'a> Layout<'a> {

@@ -85,7 +85,7 @@ pub fn f32_from_f16(half: u16) -> f32 {
 
 /// Puts a value's bytes in DroneCAN stream order: the whole low bytes first, then the top
 /// `bits % 8` bits, as one big-endian stream value of `bits` bits.
-#[inline]
+#[inline(always)]
 pub fn to_stream(value: u64, bits: u32) -> u64 {
     let whole = bits / 8;
     let rest = bits % 8;
@@ -102,7 +102,7 @@ pub fn to_stream(value: u64, bits: u32) -> u64 {
 }
 
 /// Inverse of [`to_stream`].
-#[inline]
+#[inline(always)]
 pub fn from_stream(stream: u64, bits: u32) -> u64 {
     let whole = bits / 8;
     let rest = bits % 8;

@@ -64,6 +64,16 @@ impl<'a> LeafSource<'a> {
 
 impl Source for LeafSource<'_> {
     type Error = LeafError;
+    const FLAT: bool = true;
+
+    #[inline]
+    fn leaf_run(&mut self, n: usize) -> Option<Result<&[Scalar], LeafError>> {
+        let run = self.leaves.get(self.next..self.next + n);
+        if run.is_some() {
+            self.next += n;
+        }
+        Some(run.ok_or(LeafError::Exhausted))
+    }
 
     #[inline]
     fn scalar(&mut self, _kind: Kind) -> Result<Scalar, LeafError> {
@@ -132,6 +142,19 @@ impl<'a> LeafSink<'a> {
 
 impl Sink for LeafSink<'_> {
     type Error = LeafError;
+    const FLAT: bool = true;
+
+    #[inline]
+    fn leaf_slots(&mut self, n: usize) -> Option<Result<&mut [Scalar], LeafError>> {
+        let start = self.len;
+        match self.leaves.get_mut(start..start + n) {
+            Some(slots) => {
+                self.len += n;
+                Some(Ok(slots))
+            }
+            None => Some(Err(LeafError::Full)),
+        }
+    }
 
     #[inline]
     fn scalar(&mut self, value: Scalar, _at: At<'_>) -> Result<(), LeafError> {
