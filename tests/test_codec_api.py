@@ -312,3 +312,16 @@ def test_lookup(schema: px4params.Schema) -> None:
     assert schema.suggest("px.Ina23") == ["px.Ina238", "px.Ina228", "px.Ina226"] or schema.suggest(
         "px.Ina23"
     )
+
+
+def test_errors_carry_their_position(schema: px4params.Schema) -> None:
+    t = schema["px.Ina238"]
+    with pytest.raises(px4params.EncodeError) as info:
+        t.encode({**TALK_INA238, "bus": {"i2c": {"bus_id": 1, "address": 300}}})
+    assert (info.value.path, info.value.bit_offset) == ("bus.i2c.address", None)
+    with pytest.raises(px4params.ValueShapeError) as shape:
+        t.encode({**TALK_INA238, "current": "x"})
+    assert shape.value.path == "current"
+    with pytest.raises(px4params.EncodeError) as leaf:
+        t.set_leaf(t.encode(TALK_INA238), "current", 5000)
+    assert leaf.value.path == "current"

@@ -33,14 +33,44 @@ enum Op {
     Leaf,
 }
 
-/// The one place where core errors become Python exceptions.
-fn to_py_err<E: std::fmt::Display>(
+/// Which exception a value problem raises.
+enum Class {
+    /// Wrong shape or kind: `ValueShapeError`.
+    Shape,
+    /// A number outside its field: `EncodeError`.
+    Range,
+}
+
+/// How a value source's or sink's own error becomes an exception.
+trait ValueErrorClass: std::fmt::Display {
+    /// The class, or the exception Python code raised (propagated unchanged).
+    fn class(self) -> Result<Class, PyErr>;
+}
+
+impl ValueErrorClass for ValueError {
+    fn class(self) -> Result<Class, PyErr> {
+        match self {
+            ValueError::Shape(_) => Ok(Class::Shape),
+            ValueError::Range(_) => Ok(Class::Range),
+            ValueError::Py(e) => Err(e),
+        }
+    }
+}
+
+impl ValueErrorClass for std::convert::Infallible {
+    fn class(self) -> Result<Class, PyErr> {
+        match self {}
+    }
+}
+
+/// The one place where core errors become Python exceptions: one-line messages
+/// `TYPE: PATH: what (at bit N)`, with `path` and `bit_offset` attributes.
+fn to_py_err<E: ValueErrorClass>(
     py: Python<'_>,
     type_name: &str,
     layout: &Layout<'_>,
     err: Error<E>,
     op: Op,
-    value_error: impl FnOnce(E) -> Result<(), PyErr>,
 ) -> PyErr {
     let path = err.path.display(layout).to_string();
     let kind = err.kind;
@@ -63,12 +93,10 @@ fn to_py_err<E: std::fmt::Display>(
     }
     let message = format!("{type_name}: {text}");
     let exc = match kind {
-        ErrorKind::Value(e) => {
-            if let Err(py_err) = value_error(e) {
-                return py_err;
-            }
-            ValueShapeError::new_err(message)
-        }
+        ErrorKind::Value(e) => match e.class() {
+            Ok(class) => class_err(class, message),
+            Err(raised) => return raised,
+        },
         _ if data_fault => DecodeError::new_err(message),
         ErrorKind::MissingField | ErrorKind::WrongArrayLength { .. } => {
             ValueShapeError::new_err(message)
@@ -79,31 +107,34 @@ fn to_py_err<E: std::fmt::Display>(
         | ErrorKind::VariantNotSelected => LeafError::new_err(message),
         _ => EncodeError::new_err(message),
     };
-    let value = exc.value(py);
-    let _ = value.setattr("path", path);
-    let _ = value.setattr(
-        "bit_offset",
-        if op == Op::Encode {
-            None
-        } else {
-            Some(err.bit_offset)
-        },
-    );
+    set_position(py, &exc, path, (op != Op::Encode).then_some(err.bit_offset));
     exc
 }
 
-/// Routes a Python-side value error: exceptions raised by Python code propagate unchanged,
-/// range errors become `EncodeError`, shape errors `ValueShapeError` (the default).
-fn route_value_error(type_name: &str, path: &str) -> impl FnOnce(ValueError) -> Result<(), PyErr> {
-    let prefix = if path.is_empty() {
-        format!("{type_name}: ")
-    } else {
-        format!("{type_name}: {path}: ")
-    };
-    move |e| match e {
-        ValueError::Py(err) => Err(err),
-        ValueError::Range(m) => Err(EncodeError::new_err(format!("{prefix}{m}"))),
-        ValueError::Shape(_) => Ok(()),
+fn class_err(class: Class, message: String) -> PyErr {
+    match class {
+        Class::Shape => ValueShapeError::new_err(message),
+        Class::Range => EncodeError::new_err(message),
+    }
+}
+
+fn set_position(py: Python<'_>, exc: &PyErr, path: String, bit_offset: Option<usize>) {
+    let value = exc.value(py);
+    let _ = value.setattr("path", path);
+    let _ = value.setattr("bit_offset", bit_offset);
+}
+
+/// A value problem outside a codec walk (a leaf value given to `set_leaf`), classed as
+/// [`to_py_err`] classes it.
+fn value_error_to_py(py: Python<'_>, type_name: &str, path: &str, error: ValueError) -> PyErr {
+    let message = format!("{type_name}: {path}: {error}");
+    match error.class() {
+        Ok(class) => {
+            let exc = class_err(class, message);
+            set_position(py, &exc, path.to_owned(), None);
+            exc
+        }
+        Err(raised) => raised,
     }
 }
 
@@ -197,18 +228,8 @@ impl DataType {
         self.compiled.layout.as_layout()
     }
 
-    fn err<E: std::fmt::Display>(
-        &self,
-        py: Python<'_>,
-        err: Error<E>,
-        op: Op,
-        value_error: impl FnOnce(E) -> Result<(), PyErr>,
-    ) -> PyErr {
-        to_py_err(py, &self.name, &self.layout(), err, op, value_error)
-    }
-
-    fn leaf_err(&self, py: Python<'_>, err: Error<std::convert::Infallible>, op: Op) -> PyErr {
-        self.err(py, err, op, |e| match e {})
+    fn err<E: ValueErrorClass>(&self, py: Python<'_>, err: Error<E>, op: Op) -> PyErr {
+        to_py_err(py, &self.name, &self.layout(), err, op)
     }
 }
 
@@ -240,10 +261,7 @@ impl DataType {
         };
         match encode(&layout, self.root, &mut source, out, options) {
             Ok(n) => Ok(PyBytes::new(py, &out[..n])),
-            Err(e) => {
-                let path = e.path.display(&layout).to_string();
-                Err(self.err(py, e, Op::Encode, route_value_error(&self.name, &path)))
-            }
+            Err(e) => Err(self.err(py, e, Op::Encode)),
         }
     }
 
@@ -264,10 +282,7 @@ impl DataType {
         };
         match decode(&layout, self.root, data, &mut sink, options) {
             Ok(_) => Ok(sink.into_value().expect("a decoded value")),
-            Err(e) => {
-                let path = e.path.display(&layout).to_string();
-                Err(self.err(py, e, Op::Decode, route_value_error(&self.name, &path)))
-            }
+            Err(e) => Err(self.err(py, e, Op::Decode)),
         }
     }
 
@@ -281,7 +296,7 @@ impl DataType {
             allow_trailing: false,
         };
         decode(&layout, self.root, data, &mut rows, options)
-            .map_err(|e| self.leaf_err(py, e, Op::Decode))?;
+            .map_err(|e| self.err(py, e, Op::Decode))?;
         let list = PyList::empty(py);
         for row in rows.rows {
             let value = scalar_to_py(py, row.value)?;
@@ -302,8 +317,8 @@ impl DataType {
     ) -> PyResult<Bound<'py, PyTuple>> {
         let layout = self.layout();
         let t = target_of(target)?;
-        let (leaf, value) = get_leaf(&layout, self.root, data, t, tao)
-            .map_err(|e| self.leaf_err(py, e, Op::Leaf))?;
+        let (leaf, value) =
+            get_leaf(&layout, self.root, data, t, tao).map_err(|e| self.err(py, e, Op::Leaf))?;
         let (path, type_name) = describe(&layout, &leaf);
         (leaf.index, path, type_name, scalar_to_py(py, value)?).into_pyobject(py)
     }
@@ -323,7 +338,7 @@ impl DataType {
         let layout = self.layout();
         let t = target_of(target)?;
         let leaf =
-            locate(&layout, self.root, data, t, tao).map_err(|e| self.leaf_err(py, e, Op::Leaf))?;
+            locate(&layout, self.root, data, t, tao).map_err(|e| self.err(py, e, Op::Leaf))?;
         let (path, _) = describe(&layout, &leaf);
         let kind = match leaf.kind {
             LeafKind::Scalar(kind) => kind,
@@ -336,13 +351,9 @@ impl DataType {
         let mut source = PySource::new(value, &self.compiled.names, saturate);
         let scalar: Scalar = {
             use px4params_core::codec::Source;
-            source.scalar(kind).map_err(|e| match e {
-                ValueError::Py(err) => err,
-                ValueError::Range(m) => EncodeError::new_err(format!("{}: {path}: {m}", self.name)),
-                ValueError::Shape(m) => {
-                    ValueShapeError::new_err(format!("{}: {path}: {m}", self.name))
-                }
-            })?
+            source
+                .scalar(kind)
+                .map_err(|e| value_error_to_py(py, &self.name, &path, e))?
         };
         let mut out = vec![0u8; layout.max_bytes(self.root).max(data.len())];
         let options = EncodeOptions {
@@ -359,7 +370,7 @@ impl DataType {
             &mut out,
             options,
         )
-        .map_err(|e| self.leaf_err(py, e, Op::Encode))?;
+        .map_err(|e| self.err(py, e, Op::Encode))?;
         Ok(PyBytes::new(py, &out[..n]))
     }
 
@@ -369,7 +380,7 @@ impl DataType {
         let layout = self.layout();
         let mut out = vec![0u8; layout.max_bytes(self.root)];
         let n = encode_default(&layout, self.root, &mut out, tao)
-            .map_err(|e| self.leaf_err(py, e, Op::Encode))?;
+            .map_err(|e| self.err(py, e, Op::Encode))?;
         Ok(PyBytes::new(py, &out[..n]))
     }
 
