@@ -99,10 +99,53 @@ fn bench_type(
     });
 }
 
+/// BatteryInfo decoded from the 7-byte payload pieces of its CAN frames, without joining them.
+fn descatter(c: &mut Criterion) {
+    use px4params_core::scatter::{FramePayloads, Scattered};
+    use px4params_core::transfer::{frames, receive};
+    let mut owned = OwnedLayout::default();
+    let root = common::battery_info(&mut owned);
+    let layout = owned.as_layout();
+    let leaves = battery_leaves();
+    let mut out = vec![0u8; layout.max_bytes(root)];
+    let n = encode(
+        &layout,
+        root,
+        &mut LeafSource::new(&leaves),
+        &mut out,
+        EncodeOptions::default(),
+    )
+    .unwrap();
+    let seed = 0xBEEF;
+    let frame_data: Vec<Vec<u8>> = frames(&out[..n], seed, 3, false)
+        .map(|f| f.as_bytes().to_vec())
+        .collect();
+    let refs: Vec<&[u8]> = frame_data.iter().map(Vec::as_slice).collect();
+    let received = receive(&refs, seed).unwrap();
+    let mut storage = [Scalar::Uint(0); 64];
+    c.bench_function("BatteryInfo/decode_frames", |b| {
+        b.iter(|| {
+            let payload = FramePayloads::new(black_box(&refs));
+            let data = Scattered::new(&payload);
+            let mut sink = LeafSink::new(&mut storage);
+            decode(&layout, root, &data, &mut sink, DecodeOptions::default()).unwrap()
+        })
+    });
+    c.bench_function("BatteryInfo/receive_and_decode_frames", |b| {
+        b.iter(|| {
+            let r = receive(black_box(&refs), seed).unwrap();
+            let data = Scattered::new(&r.payload);
+            let mut sink = LeafSink::new(&mut storage);
+            decode(&layout, root, &data, &mut sink, DecodeOptions::default()).unwrap()
+        })
+    });
+    let _ = received;
+}
+
 fn codec(c: &mut Criterion) {
     bench_type(c, "px.Ina238", common::ina238, ina238_leaves());
     bench_type(c, "BatteryInfo", common::battery_info, battery_leaves());
 }
 
-criterion_group!(benches, codec);
+criterion_group!(benches, codec, descatter);
 criterion_main!(benches);

@@ -15,10 +15,17 @@ pub trait BitRead {
     /// The caller guarantees `offset + n <= self.bit_len()`.
     fn read_bits(&self, offset: usize, n: u32) -> u64;
 
-    /// The data as one contiguous slice, when it is one (lets byte strings be copied).
+    /// Copies whole bytes starting at byte `byte` into `out`, if the stream has them all
+    /// (lets byte strings on a byte boundary be read byte by byte without bit shifting).
     #[inline]
-    fn contiguous(&self) -> Option<&[u8]> {
-        None
+    fn read_bytes(&self, byte: usize, out: &mut [u8]) -> bool {
+        if (byte + out.len()) * 8 > self.bit_len() {
+            return false;
+        }
+        for (i, slot) in out.iter_mut().enumerate() {
+            *slot = self.read_bits((byte + i) * 8, 8) as u8;
+        }
+        true
     }
 }
 
@@ -34,8 +41,14 @@ impl BitRead for [u8] {
     }
 
     #[inline]
-    fn contiguous(&self) -> Option<&[u8]> {
-        Some(self)
+    fn read_bytes(&self, byte: usize, out: &mut [u8]) -> bool {
+        match self.get(byte..byte + out.len()) {
+            Some(bytes) => {
+                out.copy_from_slice(bytes);
+                true
+            }
+            None => false,
+        }
     }
 }
 
@@ -59,15 +72,18 @@ pub fn read_bits(data: &[u8], offset: usize, n: u32) -> u64 {
     // Fast path: the bits (plus the leading skipped bits) fit a 64-bit window; near the end
     // of the data the window is zero-filled.
     if shift + n <= 64 {
-        let mut window = [0u8; 8];
-        if let Some(bytes) = data.get(first..first + 8) {
+        let word = if let Some(bytes) = data.get(first..first + 8) {
+            let mut window = [0u8; 8];
             window.copy_from_slice(bytes);
+            u64::from_be_bytes(window)
         } else {
-            for (w, &b) in window.iter_mut().zip(&data[first..]) {
-                *w = b;
+            // Near the end of the data (or of a short piece): only the bytes needed.
+            let mut word = 0u64;
+            for (k, &b) in data[first..=last].iter().enumerate() {
+                word |= u64::from(b) << (56 - 8 * k);
             }
-        }
-        let word = u64::from_be_bytes(window);
+            word
+        };
         return (word << shift) >> (64 - n);
     }
     let mut acc: u128 = 0;

@@ -951,16 +951,15 @@ impl<R: BitRead + ?Sized, K: Sink> Decoder<'_, '_, R, K> {
         let pos = self.pos;
         match self.sink.leaf_slots(n) {
             Some(Ok(slots)) => {
-                let aligned = match (kind, data.contiguous()) {
-                    (Kind::Uint { bits: 8, .. }, Some(bytes)) if pos % 8 == 0 => {
-                        bytes.get(pos / 8..pos / 8 + n)
-                    }
-                    _ => None,
-                };
-                if let Some(bytes) = aligned {
-                    // Byte strings on a byte boundary: plain bytes.
-                    for (slot, &b) in slots.iter_mut().zip(bytes) {
-                        *slot = Scalar::Uint(b.into());
+                if matches!(kind, Kind::Uint { bits: 8, .. }) && pos % 8 == 0 {
+                    // Byte strings on a byte boundary: plain bytes, a chunk at a time.
+                    let mut chunk = [0u8; 32];
+                    for (i, group) in slots.chunks_mut(chunk.len()).enumerate() {
+                        let bytes = &mut chunk[..group.len()];
+                        data.read_bytes(pos / 8 + i * 32, bytes);
+                        for (slot, &b) in group.iter_mut().zip(bytes.iter()) {
+                            *slot = Scalar::Uint(b.into());
+                        }
                     }
                 } else {
                     for (i, slot) in slots.iter_mut().enumerate() {
@@ -1005,7 +1004,8 @@ impl<R: BitRead + ?Sized, K: Sink> Decoder<'_, '_, R, K> {
     }
 }
 
-/// Decodes the flat items of a fixed-shape run at `pos` into `slots`; returns the end.
+/// Decodes the flat items of a fixed-shape run at `pos` into `slots`; returns the end. The
+/// caller has checked that the data holds the whole run.
 #[inline]
 fn decode_items<R: BitRead + ?Sized>(
     data: &R,
@@ -1028,17 +1028,29 @@ fn decode_items<R: BitRead + ?Sized>(
     pos
 }
 
+/// A scalar from its raw bits.
+#[inline(always)]
+fn scalar_of(kind: Kind, raw: u64) -> Scalar {
+    match kind {
+        Kind::Uint { .. } => Scalar::Uint(raw),
+        Kind::Int { bits, .. } => Scalar::Int(scalar::sign_extend(raw, bits.into())),
+        Kind::Float { bits, .. } => Scalar::Float(scalar::float_from_raw(raw, bits.into())),
+        Kind::Bool => Scalar::Bool(raw != 0),
+        _ => Scalar::Uint(0),
+    }
+}
+
 /// Reads a scalar leaf's value at `bit_offset` (no bounds check beyond the data's).
 #[inline(always)]
 pub(crate) fn read_scalar<R: BitRead + ?Sized>(data: &R, bit_offset: usize, kind: Kind) -> Scalar {
-    let read = |bits: u8| scalar::from_stream(data.read_bits(bit_offset, bits.into()), bits.into());
-    match kind {
-        Kind::Uint { bits, .. } => Scalar::Uint(read(bits)),
-        Kind::Int { bits, .. } => Scalar::Int(scalar::sign_extend(read(bits), bits.into())),
-        Kind::Float { bits, .. } => Scalar::Float(scalar::float_from_raw(read(bits), bits.into())),
-        Kind::Bool => Scalar::Bool(read(1) != 0),
-        _ => Scalar::Uint(0),
+    let bits = scalar_bits(kind);
+    if bits == 0 {
+        return Scalar::Uint(0);
     }
+    scalar_of(
+        kind,
+        scalar::from_stream(data.read_bits(bit_offset, bits), bits),
+    )
 }
 
 /// The bit width of a scalar kind.

@@ -1,5 +1,6 @@
 //! The core of px4params: DroneCAN (UAVCAN v0) bit-packed serialization driven by compiled
-//! layouts, leaf access in encoded data, and flat leaf values.
+//! layouts, leaf access in encoded data, flat leaf values, descattering (decoding from
+//! payloads in pieces), data type signatures and CAN transfers.
 //!
 //! `no_std` and allocation-free; the `alloc` feature adds [`compile::OwnedLayout`] to build
 //! layouts at run time. Firmware can instead keep a [`layout::Layout`] in static tables.
@@ -16,10 +17,13 @@ pub mod bits;
 pub mod codec;
 #[cfg(feature = "alloc")]
 pub mod compile;
+pub mod crc;
 pub mod error;
 pub mod layout;
 pub mod leaf;
 pub mod scalar;
+pub mod scatter;
+pub mod transfer;
 pub mod value;
 
 pub use codec::{decode, encode, DecodeOptions, EncodeOptions};

@@ -493,3 +493,47 @@ proptest! {
         }
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(300))]
+
+    /// Decoding and leaf access from a payload in random pieces equal the flat results.
+    #[test]
+    fn scattered_equals_flat(data in proptest::collection::vec(any::<u8>(), 0..64), cuts in proptest::collection::vec(0usize..64, 0..12), tao in any::<bool>()) {
+        use px4params_core::scatter::Scattered;
+        for (l, root) in layouts() {
+            let layout = l.as_layout();
+            let prefix = dec_prefix(&l, root, &data, tao).unwrap_or(data.clone());
+            let mut cuts: Vec<usize> = cuts.iter().map(|c| c % (prefix.len() + 1)).collect();
+            cuts.sort_unstable();
+            let mut pieces: Vec<&[u8]> = Vec::new();
+            let mut at = 0;
+            for c in cuts.iter().chain([&prefix.len()]) {
+                pieces.push(&prefix[at..*c]);
+                at = *c;
+            }
+            let scattered = Scattered::new(&pieces[..]);
+            let mut a = [Scalar::Uint(0); 256];
+            let mut b = [Scalar::Uint(0); 256];
+            let mut flat_sink = LeafSink::new(&mut a);
+            let mut scat_sink = LeafSink::new(&mut b);
+            let opts = DecodeOptions { tao, allow_trailing: false };
+            let flat = decode(&layout, root, &prefix[..], &mut flat_sink, opts);
+            let scat = decode(&layout, root, &scattered, &mut scat_sink, opts);
+            match (flat, scat) {
+                (Ok(x), Ok(y)) => {
+                    prop_assert_eq!(x, y);
+                    prop_assert!(same(flat_sink.leaves(), scat_sink.leaves()));
+                    for k in 0..flat_sink.leaves().len() {
+                        let f = get_leaf(&layout, root, &prefix[..], Target::Index(k), tao).unwrap();
+                        let s = get_leaf(&layout, root, &scattered, Target::Index(k), tao).unwrap();
+                        prop_assert_eq!(f.0.bit_offset, s.0.bit_offset);
+                        prop_assert!(same(&[f.1], &[s.1]));
+                    }
+                }
+                (Err(x), Err(y)) => prop_assert_eq!(x, y),
+                (x, y) => prop_assert!(false, "flat {:?} vs scattered {:?}", x, y),
+            }
+        }
+    }
+}

@@ -1,0 +1,342 @@
+//! DroneCAN transfers over classic CAN and CAN FD: splitting a payload into frames, and
+//! checking received frames so their payload can be decoded in place ([`crate::scatter`]).
+//!
+//! Each frame ends with a tail byte: start of transfer (`0x80`), end of transfer (`0x40`),
+//! toggle (`0x20`, clear in the first frame, alternating) and the 5-bit transfer ID. A payload
+//! longer than one frame is preceded by its CRC-16-CCITT-FALSE (little-endian), seeded with
+//! [`crate::crc::transfer_crc_seed`].
+
+use core::fmt;
+
+use crate::crc::crc16;
+use crate::scatter::{FramePayloads, Pieces};
+
+const START: u8 = 0x80;
+const END: u8 = 0x40;
+const TOGGLE: u8 = 0x20;
+
+/// Largest frame: 8 bytes on classic CAN, 64 on CAN FD.
+pub const fn frame_max(canfd: bool) -> usize {
+    if canfd {
+        64
+    } else {
+        8
+    }
+}
+
+/// The CAN FD data lengths a frame can have (DLC granularity).
+fn fd_length(len: usize) -> usize {
+    match len {
+        0..=8 => len,
+        9..=12 => 12,
+        13..=16 => 16,
+        17..=20 => 20,
+        21..=24 => 24,
+        25..=32 => 32,
+        33..=48 => 48,
+        _ => 64,
+    }
+}
+
+/// One frame's data, tail byte included.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Frame {
+    data: [u8; 64],
+    len: u8,
+}
+
+impl Frame {
+    /// The frame's bytes.
+    pub fn as_bytes(&self) -> &[u8] {
+        &self.data[..usize::from(self.len)]
+    }
+}
+
+/// The frames of one transfer, produced one at a time (no allocation).
+#[derive(Clone, Debug)]
+pub struct Frames<'a> {
+    payload: &'a [u8],
+    /// Zero bytes appended for CAN FD length granularity.
+    pad: usize,
+    crc: Option<[u8; 2]>,
+    /// Position in the stream `crc ++ payload ++ padding`.
+    pos: usize,
+    index: usize,
+    transfer_id: u8,
+    max: usize,
+}
+
+/// Splits `payload` into the frames of a transfer. `crc_seed` is the data type's
+/// [`crate::crc::transfer_crc_seed`]; `transfer_id` is taken modulo 32.
+pub fn frames(payload: &[u8], crc_seed: u16, transfer_id: u8, canfd: bool) -> Frames<'_> {
+    let max = frame_max(canfd);
+    let mut pad = 0;
+    if canfd && payload.len() > 7 {
+        // As libuavcan/pydronecan: pad so the last frame has a valid CAN FD length.
+        let mut total = payload.len() + 1;
+        if total > max {
+            total += 2;
+        }
+        let rest = total % (max - 1);
+        pad = fd_length(rest) - rest;
+    }
+    let crc = (payload.len() + pad > max - 1).then(|| {
+        let crc = crc16(crc16(crc_seed, payload), &[0u8; 64][..pad]);
+        crc.to_le_bytes()
+    });
+    Frames {
+        payload,
+        pad,
+        crc,
+        pos: 0,
+        index: 0,
+        transfer_id: transfer_id & 0x1F,
+        max,
+    }
+}
+
+impl Frames<'_> {
+    fn stream_len(&self) -> usize {
+        self.crc.map_or(0, |c| c.len()) + self.payload.len() + self.pad
+    }
+
+    fn stream_byte(&self, i: usize) -> u8 {
+        let head = self.crc.map_or(0, |c| c.len());
+        match self.crc {
+            Some(crc) if i < head => crc[i],
+            _ => self.payload.get(i - head).copied().unwrap_or(0),
+        }
+    }
+}
+
+impl Iterator for Frames<'_> {
+    type Item = Frame;
+
+    fn next(&mut self) -> Option<Frame> {
+        let total = self.stream_len();
+        if self.pos >= total && (self.index > 0 || total > 0) {
+            return None;
+        }
+        let take = (total - self.pos).min(self.max - 1);
+        let mut data = [0u8; 64];
+        for (i, slot) in data[..take].iter_mut().enumerate() {
+            *slot = self.stream_byte(self.pos + i);
+        }
+        self.pos += take;
+        let mut tail = self.transfer_id;
+        if self.index == 0 {
+            tail |= START;
+        }
+        if self.pos >= total {
+            tail |= END;
+        }
+        if self.index % 2 == 1 {
+            tail |= TOGGLE;
+        }
+        data[take] = tail;
+        self.index += 1;
+        Some(Frame {
+            data,
+            len: (take + 1) as u8,
+        })
+    }
+}
+
+/// Why received frames do not form a transfer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TransferError {
+    /// No frames at all.
+    Empty,
+    /// A frame without even a tail byte.
+    EmptyFrame {
+        /// Frame number.
+        frame: usize,
+    },
+    /// A frame with another transfer ID than the first.
+    TransferId {
+        /// Frame number.
+        frame: usize,
+        /// Its transfer ID.
+        got: u8,
+        /// The first frame's.
+        expected: u8,
+    },
+    /// The first frame lacks the start bit.
+    NoStart,
+    /// A later frame has the start bit: a repeated first frame or a new transfer.
+    UnexpectedStart {
+        /// Frame number.
+        frame: usize,
+    },
+    /// The last frame lacks the end bit: frames are missing at the end.
+    NoEnd,
+    /// A frame before the last has the end bit.
+    UnexpectedEnd {
+        /// Frame number.
+        frame: usize,
+    },
+    /// The toggle bit does not alternate: a frame is missing, repeated or out of order.
+    Toggle {
+        /// Frame number.
+        frame: usize,
+    },
+    /// A multi-frame transfer too short to hold its CRC.
+    TooShort,
+    /// The transfer CRC does not match the payload.
+    Crc {
+        /// The CRC in the first frame.
+        got: u16,
+        /// The CRC of the payload received.
+        computed: u16,
+    },
+}
+
+impl fmt::Display for TransferError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Self::Empty => f.write_str("no frames"),
+            Self::EmptyFrame { frame } => write!(f, "frame {frame} is empty (no tail byte)"),
+            Self::TransferId {
+                frame,
+                got,
+                expected,
+            } => write!(
+                f,
+                "frame {frame} has transfer ID {got}, the transfer's is {expected}"
+            ),
+            Self::NoStart => f.write_str("the first frame has no start-of-transfer bit"),
+            Self::UnexpectedStart { frame } => write!(
+                f,
+                "frame {frame} has the start-of-transfer bit (repeated or new transfer)"
+            ),
+            Self::NoEnd => f.write_str("the last frame has no end-of-transfer bit (frames missing)"),
+            Self::UnexpectedEnd { frame } => {
+                write!(f, "frame {frame} has the end-of-transfer bit before the last frame")
+            }
+            Self::Toggle { frame } => write!(
+                f,
+                "frame {frame} has the wrong toggle bit (a frame is missing, repeated or out of order)"
+            ),
+            Self::TooShort => f.write_str("multi-frame transfer too short to hold its CRC"),
+            Self::Crc { got, computed } => write!(
+                f,
+                "transfer CRC mismatch: frames say {got:#06x}, payload gives {computed:#06x}"
+            ),
+        }
+    }
+}
+
+/// A checked transfer: its ID and its payload pieces (decode them with
+/// [`crate::scatter::Scattered`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Received<'f, 'a> {
+    /// The transfer ID.
+    pub transfer_id: u8,
+    /// The payload, in pieces.
+    pub payload: FramePayloads<'f, 'a>,
+}
+
+/// Checks the frames of one transfer: tail bits, transfer ID, toggle, and the CRC of a
+/// multi-frame transfer (computed over the pieces, without copying them).
+pub fn receive<'f, 'a>(
+    frames: &'f [&'a [u8]],
+    crc_seed: u16,
+) -> Result<Received<'f, 'a>, TransferError> {
+    let first = frames.first().ok_or(TransferError::Empty)?;
+    let tail_of = |i: usize, f: &[u8]| {
+        f.last()
+            .copied()
+            .ok_or(TransferError::EmptyFrame { frame: i })
+    };
+    let expected = tail_of(0, first)? & 0x1F;
+    let last = frames.len() - 1;
+    for (i, frame) in frames.iter().enumerate() {
+        let tail = tail_of(i, frame)?;
+        if tail & 0x1F != expected {
+            return Err(TransferError::TransferId {
+                frame: i,
+                got: tail & 0x1F,
+                expected,
+            });
+        }
+        match (i, tail & START != 0) {
+            (0, false) => return Err(TransferError::NoStart),
+            (i, true) if i > 0 => return Err(TransferError::UnexpectedStart { frame: i }),
+            _ => {}
+        }
+        match (i == last, tail & END != 0) {
+            (true, false) => return Err(TransferError::NoEnd),
+            (false, true) => return Err(TransferError::UnexpectedEnd { frame: i }),
+            _ => {}
+        }
+        if (tail & TOGGLE != 0) != (i % 2 == 1) {
+            return Err(TransferError::Toggle { frame: i });
+        }
+    }
+    let payload = FramePayloads::new(frames);
+    if frames.len() > 1 {
+        if first.len() < 3 {
+            return Err(TransferError::TooShort);
+        }
+        let got = u16::from_le_bytes([first[0], first[1]]);
+        let computed = (0..payload.count()).fold(crc_seed, |crc, i| crc16(crc, payload.piece(i)));
+        if got != computed {
+            return Err(TransferError::Crc { got, computed });
+        }
+    }
+    Ok(Received {
+        transfer_id: expected,
+        payload,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::vec::Vec;
+
+    fn split(payload: &[u8], canfd: bool) -> Vec<Vec<u8>> {
+        frames(payload, 0x1234, 5, canfd)
+            .map(|f| f.as_bytes().to_vec())
+            .collect()
+    }
+
+    #[test]
+    fn single_and_multi_frame() {
+        assert_eq!(split(&[1, 2, 3], false), [[1, 2, 3, 0xC5]]);
+        assert_eq!(split(&[], false), [[0xC5]]);
+        let f = split(&[1, 2, 3, 4, 5, 6, 7, 8], false);
+        assert_eq!(f.len(), 2);
+        assert_eq!(f[0][7], 0x85);
+        assert_eq!(f[1], [6, 7, 8, 0x65]);
+        let crc = crc16(0x1234, &[1, 2, 3, 4, 5, 6, 7, 8]);
+        assert_eq!(f[0][..2], crc.to_le_bytes());
+    }
+
+    #[test]
+    fn receive_checks_everything() {
+        let payload: Vec<u8> = (0..40).collect();
+        let f = split(&payload, false);
+        let refs: Vec<&[u8]> = f.iter().map(Vec::as_slice).collect();
+        let r = receive(&refs, 0x1234).unwrap();
+        assert_eq!(r.transfer_id, 5);
+        let joined: Vec<u8> = (0..r.payload.count())
+            .flat_map(|i| r.payload.piece(i).to_vec())
+            .collect();
+        assert_eq!(joined, payload);
+        let mut swapped = refs.clone();
+        swapped.swap(1, 2);
+        assert_eq!(
+            receive(&swapped, 0x1234).unwrap_err(),
+            TransferError::Toggle { frame: 1 }
+        );
+        assert_eq!(
+            receive(&refs[..3], 0x1234).unwrap_err(),
+            TransferError::NoEnd
+        );
+        assert!(matches!(
+            receive(&refs, 0x4321).unwrap_err(),
+            TransferError::Crc { .. }
+        ));
+    }
+}
