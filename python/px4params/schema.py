@@ -4,11 +4,12 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Iterator, Mapping, MutableMapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 from . import _native
+from . import signature as _signature
 from .dsdl_loader import load_model
 
 __all__ = ["DSDL_PATH_ENV", "DataType", "Leaf", "Schema", "load_schema", "to_json_value"]
@@ -39,10 +40,20 @@ class DataType:
     take ``bytes`` or ``str``), floats may be given as ``"nan"``, ``"inf"``, ``"-inf"``.
     """
 
-    def __init__(self, key: str, definition: Mapping[str, Any], native: _native.DataType) -> None:
+    def __init__(
+        self,
+        key: str,
+        definition: Mapping[str, Any],
+        native: _native.DataType,
+        types: Mapping[str, Mapping[str, Any]] | None = None,
+        signatures: MutableMapping[str, int] | None = None,
+    ) -> None:
         self.key = key
         self.definition = definition
         self._native = native
+        # Every type of the schema (for nested types' signatures) and the schema's memo of them.
+        self._types = types if types is not None else {key: definition}
+        self._signatures = signatures if signatures is not None else {}
 
     @property
     def name(self) -> str:
@@ -59,6 +70,19 @@ class DataType:
     def doc(self) -> Mapping[str, Any]:
         """Parsed doc-comment metadata: ``short``, ``long`` and ``tags``."""
         return self.definition.get("doc") or {}
+
+    @property
+    def signature(self) -> int:
+        """The DroneCAN data type signature (64 bits): CRC-64-WE of the normalized definition,
+        extended with the nested types' signatures; a service's for both of its halves. It seeds
+        the CRC of multi-frame transfers (see :mod:`px4params.signature`)."""
+        return _signature.data_type_signature(self._types, self.key, memo=self._signatures)
+
+    @property
+    def dtid(self) -> int | None:
+        """Default data type ID (DroneCAN) or fixed port ID (pydsdl), or None."""
+        dtid = self.definition.get("dtid")
+        return int(dtid) if dtid is not None else None
 
     @property
     def min_bits(self) -> int:
@@ -87,6 +111,15 @@ class DataType:
     ) -> dict[str, Any]:
         """Decodes ``data``; whole bytes after the value are refused unless ``allow_trailing``."""
         return self._native.decode(bytes(data), tao=tao, allow_trailing=allow_trailing)
+
+    def decode_fragments(
+        self, fragments: Sequence[bytes], *, tao: bool = True, allow_trailing: bool = False
+    ) -> dict[str, Any]:
+        """Decodes a value whose bytes arrive in pieces (e.g. CAN frame payloads), reading
+        across the pieces without joining them."""
+        return self._native.decode_fragments(
+            [bytes(f) for f in fragments], tao=tao, allow_trailing=allow_trailing
+        )
 
     def default(self, *, tao: bool = True) -> bytes:
         """The encoding of the zero value (``p_version`` filled, first variants, empty arrays)."""
@@ -141,6 +174,7 @@ class Schema(Mapping[str, DataType]):
                     newest[name] = (rank, key)
         self._newest = {name: key for name, (_, key) in newest.items()}
         self._cache: dict[str, DataType] = {}
+        self._signatures: dict[str, int] = {}
 
     def resolve(self, name: str) -> str:
         """The key of ``name`` (a key, or a versionless name meaning its newest version)."""
@@ -154,7 +188,13 @@ class Schema(Mapping[str, DataType]):
         key = self.resolve(name)
         cached = self._cache.get(key)
         if cached is None:
-            cached = DataType(key, self._definitions[key], self._native.get(key))
+            cached = DataType(
+                key,
+                self._definitions[key],
+                self._native.get(key),
+                self._definitions,
+                self._signatures,
+            )
             self._cache[key] = cached
         return cached
 

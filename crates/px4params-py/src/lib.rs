@@ -3,6 +3,7 @@
 //! Core errors become the exception classes of `px4params.errors` here, and only here.
 
 mod compile;
+mod transfer;
 mod values;
 
 use std::collections::HashMap;
@@ -286,6 +287,29 @@ impl DataType {
         }
     }
 
+    /// Decodes a value whose bytes arrive in pieces, reading across them without joining them.
+    #[pyo3(signature = (fragments, *, tao = true, allow_trailing = false))]
+    fn decode_fragments<'py>(
+        &self,
+        py: Python<'py>,
+        fragments: Vec<Vec<u8>>,
+        tao: bool,
+        allow_trailing: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let layout = self.layout();
+        let pieces: Vec<&[u8]> = fragments.iter().map(Vec::as_slice).collect();
+        let data = px4params_core::scatter::Scattered::new(&pieces[..]);
+        let mut sink = PySink::new(py, &self.compiled.names);
+        let options = DecodeOptions {
+            tao,
+            allow_trailing,
+        };
+        match decode(&layout, self.root, &data, &mut sink, options) {
+            Ok(_) => Ok(sink.into_value().expect("a decoded value")),
+            Err(e) => Err(self.err(py, e, Op::Decode)),
+        }
+    }
+
     /// Every leaf of an encoded value as `(index, path, type, value)`.
     #[pyo3(signature = (data, *, tao = true))]
     fn leaves<'py>(&self, py: Python<'py>, data: &[u8], tao: bool) -> PyResult<Bound<'py, PyList>> {
@@ -423,5 +447,10 @@ fn describe(layout: &Layout<'_>, leaf: &px4params_core::leaf::Leaf) -> (String, 
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Schema>()?;
     m.add_class::<DataType>()?;
+    m.add_function(wrap_pyfunction!(transfer::dsdl_signature, m)?)?;
+    m.add_function(wrap_pyfunction!(transfer::data_type_signature, m)?)?;
+    m.add_function(wrap_pyfunction!(transfer::transfer_crc_seed, m)?)?;
+    m.add_function(wrap_pyfunction!(transfer::can_frames, m)?)?;
+    m.add_function(wrap_pyfunction!(transfer::reassemble, m)?)?;
     Ok(())
 }
