@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
-import pytest
-from hypothesis import HealthCheck, given, settings
-from hypothesis import strategies as st
+import itertools
 
 import px4params
+import pytest
 from dronecan_oracle import same
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 from strategies import value_strategy
 
 SCHEMA = px4params.load_schema(use_env=False)
@@ -16,8 +17,7 @@ KEYS = sorted(SCHEMA.model["types"])
 
 def _pieces(data: bytes, cuts: list[int]) -> list[bytes]:
     points = sorted({c % (len(data) + 1) for c in cuts})
-    edges = [0, *points, len(data)]
-    return [data[a:b] for a, b in zip(edges, edges[1:], strict=False)]
+    return [data[a:b] for a, b in itertools.pairwise([0, *points, len(data)])]
 
 
 @pytest.mark.parametrize("key", KEYS)
