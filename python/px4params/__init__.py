@@ -16,6 +16,7 @@ from .errors import (
     EncodeError,
     LeafError,
     Px4ParamsError,
+    TransferError,
     ValueShapeError,
 )
 from .schema import DataType, Leaf, Schema, load_schema, to_json_value
@@ -30,6 +31,7 @@ __all__ = [
     "LeafError",
     "Px4ParamsError",
     "Schema",
+    "TransferError",
     "ValueShapeError",
     "load_schema",
     "to_json_value",

@@ -125,6 +125,44 @@ def cmd_decode(args: argparse.Namespace) -> int:
     return _each_item(args.hex, sys.stdin, sys.stdout, convert)
 
 
+def cmd_frames(args: argparse.Namespace) -> int:
+    from . import transfer
+
+    t = find_type(_schema(args), args.type)
+    half = transfer.service_half(t)
+    if half is None and args.dest_node is not None:
+        raise CliError(f"{t.key} is a message; --dest-node is for service requests/responses")
+    if half is not None and args.dest_node is None:
+        raise CliError(f"{t.key} is a service {half}; give --dest-node N (1..127)")
+    if args.source_node == 0:
+        raise CliError("anonymous transfers (source node 0) are not supported; give 1..127")
+    dtid = args.dtid if args.dtid is not None else t.dtid
+    if dtid is None:
+        raise CliError(f"{t.key} has no default data type ID; give --dtid N")
+    text = sys.stdin.read() if args.value == "-" else args.value
+    try:
+        out = transfer.frames(
+            t,
+            parse_json(text),
+            source_node=args.source_node,
+            transfer_id=args.transfer_id,
+            priority=args.priority,
+            dest_node=args.dest_node,
+            dtid=dtid,
+            canfd=args.canfd,
+            saturate=args.saturate,
+        )
+    except ValueError as e:  # numbers out of range (EncodeError is not a ValueError)
+        raise CliError(str(e)) from None
+    if args.json:
+        rows = [{"can_id": f.can_id, "data": f.data.hex()} for f in out]
+        print(json.dumps(rows, indent=2))
+    else:
+        for f in out:
+            print(f"{f.can_id:08x} {f.data.hex()}")
+    return EXIT_OK
+
+
 #: The talk's airframe lines for INA238#0, as a value.
 TALK_INA238 = {"bus": {"i2c": {"bus_id": 1, "address": 0x45}}, "current": 200, "shunt": 0.0003}
 
@@ -255,6 +293,50 @@ def build_parser() -> argparse.ArgumentParser:
                 help="clamp out-of-range numbers per the fields' cast modes (default: refuse)",
             )
         p.set_defaults(func=func)
+
+    p = sub.add_parser(
+        "frames",
+        parents=[common],
+        help="split a value of TYPE into DroneCAN CAN frames",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        description="""\
+Encode a JSON value of TYPE and print the CAN frames of one DroneCAN transfer
+of it, one per line: the 29-bit CAN ID and the frame data (tail byte
+included), both in hex. A multi-frame transfer starts with its CRC; on CAN FD
+the payload has no tail array optimization and is padded to a valid frame
+length. For a service half (TYPE ending in .Request or .Response) give
+--dest-node.""",
+        epilog="""\
+example:
+  px4params frames uavcan.protocol.NodeStatus --source-node 10 --transfer-id 3 \\
+    '{"uptime_sec": 5, "health": 0, "mode": 0, "sub_mode": 0, "vendor_specific_status_code": 0}'
+  1f01550a 05000000000000c3""",
+    )
+    p.add_argument(
+        "type", metavar="TYPE", help="type name, e.g. uavcan.equipment.power.BatteryInfo"
+    )
+    p.add_argument("value", metavar="JSON", help="the value as JSON, or - to read it from stdin")
+    p.add_argument(
+        "--transfer-id", type=int, default=0, metavar="N", help="transfer ID 0..31 (default 0)"
+    )
+    p.add_argument(
+        "--source-node", type=int, default=1, metavar="N", help="source node ID 1..127 (default 1)"
+    )
+    p.add_argument(
+        "--dest-node", type=int, metavar="N", help="destination node ID 1..127 (services only)"
+    )
+    p.add_argument(
+        "--priority", type=int, default=31, metavar="N", help="priority 0..31 (default 31, lowest)"
+    )
+    p.add_argument("--dtid", type=int, metavar="N", help="data type ID (default: the type's own)")
+    p.add_argument("--canfd", action="store_true", help="CAN FD frames (up to 64 bytes)")
+    p.add_argument(
+        "--saturate",
+        action="store_true",
+        help="clamp out-of-range numbers per the fields' cast modes (default: refuse)",
+    )
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.set_defaults(func=cmd_frames)
 
     p = sub.add_parser(
         "demo",

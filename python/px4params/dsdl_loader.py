@@ -51,7 +51,9 @@ if TYPE_CHECKING:
 
 __all__ = ["MODEL_FORMAT", "default_cache_dir", "load_model"]
 
-MODEL_FORMAT = 1
+#: Bumped whenever the model's shape changes, so that older caches are rebuilt.
+#: 2: type entries carry ``service`` and ``signature_override`` (data type signatures).
+MODEL_FORMAT = 2
 
 #: Each subfolder is a root namespace shipped with the package (today: ``px``).
 BUNDLED_DSDL_DIR = Path(__file__).parent / "dsdl"
@@ -362,6 +364,9 @@ class _ModelBuilder:
                     "dtid": t.fixed_port_id,
                     "doc": _type_doc(header, file),
                     "fields": fields,
+                    # Both halves of a service share one data type signature: the service's.
+                    "service": t.full_name if isinstance(t, pydsdl.ServiceType) else None,
+                    "signature_override": None,
                 },
             )
 
@@ -417,6 +422,10 @@ class _ModelBuilder:
                     # pydronecan files use free-form comments, not our @tags: text only.
                     "doc": {"short": short, "long": long, "tags": {}},
                     "fields": fields,
+                    "service": t.full_name if t.kind == t.KIND_SERVICE else None,
+                    # OVERRIDE_SIGNATURE 0x...: replaces the DSDL signature (not the nested
+                    # types' extension of it); pydronecan's parser keeps it on the type.
+                    "signature_override": getattr(t, "override_signature", None),
                 },
             )
 
@@ -586,6 +595,9 @@ def _pydsdl_field_type(dt: pydsdl.SerializableType, file: str, line: int | None)
 def _dronecan_field_type(dt: Any) -> TypeSpec:
     if dt.category == dt.CATEGORY_PRIMITIVE:
         if dt.kind == dt.KIND_BOOLEAN:
+            # The cast mode of a bool changes nothing but its signature; kept only if unusual.
+            if dt.cast_mode == dt.CAST_MODE_TRUNCATED:
+                return {"kind": "bool", "cast": "truncated"}
             return {"kind": "bool"}
         kind = {dt.KIND_UNSIGNED_INT: "uint", dt.KIND_SIGNED_INT: "int", dt.KIND_FLOAT: "float"}[
             dt.kind

@@ -16,6 +16,7 @@ __all__ = [
     "EncodeError",
     "LeafError",
     "Px4ParamsError",
+    "TransferError",
     "ValueShapeError",
 ]
 
@@ -80,3 +81,11 @@ class ValueShapeError(EncodeError):
 
 class LeafError(CodecError, LookupError):
     """No leaf at that ``[k]`` index or path, or the path runs through an unselected variant."""
+
+
+class TransferError(Px4ParamsError):
+    """CAN frames do not form one valid DroneCAN transfer (wrong toggle or tail bits, mixed
+    transfer IDs, missing first or last frame, repeated or reordered frames, CRC mismatch).
+
+    ``str()`` is a single line.
+    """
