@@ -292,14 +292,8 @@ impl<S: Source> Encoder<'_, '_, S> {
 
     #[inline(always)]
     fn scalar(&mut self, kind: Kind, value: Scalar) -> Result<(), Stop> {
-        // Fast path: an in-range unsigned integer needs no cast.
-        if let (Kind::Uint { bits, .. }, Scalar::Uint(v)) = (kind, value) {
-            if v <= crate::bits::mask(bits.into()) {
-                return self.write(v, bits.into());
-            }
-        }
         let raw =
-            scalar_raw(kind, value, self.saturate).map_err(|e| self.fail(ErrorKind::Scalar(e)))?;
+            fast_raw(kind, value, self.saturate).map_err(|e| self.fail(ErrorKind::Scalar(e)))?;
         self.write(raw, scalar_bits(kind))
     }
 
