@@ -12,10 +12,14 @@ import re
 __all__ = [
     "CodecError",
     "DecodeError",
+    "DeviceIdError",
     "DsdlError",
     "EncodeError",
+    "InstanceError",
     "LeafError",
     "Px4ParamsError",
+    "StoreError",
+    "StoreFileError",
     "TransferError",
     "ValueShapeError",
 ]
@@ -88,4 +92,39 @@ class TransferError(Px4ParamsError):
     transfer IDs, missing first or last frame, repeated or reordered frames, CRC mismatch).
 
     ``str()`` is a single line.
+    """
+
+
+class StoreError(Px4ParamsError):
+    """A store operation was refused; the store is left exactly as it was."""
+
+
+class InstanceError(StoreError, LookupError):
+    """An unknown parameter, an instance number at or above ``max_instances``, an instance that
+    does not exist or exists already, or no free instance left."""
+
+
+class StoreFileError(StoreError):
+    """A store file cannot be used: not ours, another format version or schema, truncated, or
+    corrupted (a CRC mismatch). Nothing of it was applied.
+
+    Attributes:
+        file: the file's path.
+        offset: byte offset of the problem in the file, when known.
+    """
+
+    def __init__(self, message: str, file: str | os.PathLike[str], offset: int | None = None):
+        super().__init__(message, file, offset)
+        self.message = message
+        self.file = os.fspath(file)
+        self.offset = offset
+
+    def __str__(self) -> str:
+        where = f" (at byte {self.offset})" if self.offset is not None else ""
+        return f"{self.file}: {self.message}{where}"
+
+
+class DeviceIdError(Px4ParamsError):
+    """A PX4 device ID, one of its parts, a devtype table or a flight log could not be used
+    (out of range, unknown name, unreadable file, ...). ``str()`` is a single line.
     """

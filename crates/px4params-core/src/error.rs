@@ -61,6 +61,14 @@ impl Path {
             })
     }
 
+    /// The last step, if remembered.
+    pub fn last(&self) -> Option<Step> {
+        if self.depth == 0 || self.depth as usize > MAX_PATH_DEPTH {
+            return None;
+        }
+        self.steps().last()
+    }
+
     /// Whether the path is empty (the value itself).
     pub fn is_empty(&self) -> bool {
         self.depth == 0
@@ -175,6 +183,39 @@ pub enum ErrorKind<E> {
     TooDeep,
     /// The value source or sink failed.
     Value(E),
+}
+
+impl<E> ErrorKind<E> {
+    /// The same error with the value source's or sink's error turned into another kind.
+    pub fn map_value<F>(self, f: impl FnOnce(E) -> ErrorKind<F>) -> ErrorKind<F> {
+        match self {
+            Self::Truncated {
+                needed_bits,
+                available_bits,
+            } => ErrorKind::Truncated {
+                needed_bits,
+                available_bits,
+            },
+            Self::TrailingBytes { used, len } => ErrorKind::TrailingBytes { used, len },
+            Self::BadUnionTag { tag, variants } => ErrorKind::BadUnionTag { tag, variants },
+            Self::ArrayTooLong { len, max } => ErrorKind::ArrayTooLong { len, max },
+            Self::WrongArrayLength { len, expected } => {
+                ErrorKind::WrongArrayLength { len, expected }
+            }
+            Self::BufferTooSmall { needed } => ErrorKind::BufferTooSmall { needed },
+            Self::Scalar(s) => ErrorKind::Scalar(s),
+            Self::MissingField => ErrorKind::MissingField,
+            Self::VersionMismatch { given, expected } => {
+                ErrorKind::VersionMismatch { given, expected }
+            }
+            Self::NoSuchLeaf { index, count } => ErrorKind::NoSuchLeaf { index, count },
+            Self::NoSuchPath => ErrorKind::NoSuchPath,
+            Self::VariantNotSelected => ErrorKind::VariantNotSelected,
+            Self::NotALeaf => ErrorKind::NotALeaf,
+            Self::TooDeep => ErrorKind::TooDeep,
+            Self::Value(e) => f(e),
+        }
+    }
 }
 
 /// A codec error: what, where in the data, and where in the type.

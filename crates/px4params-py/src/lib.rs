@@ -3,6 +3,7 @@
 //! Core errors become the exception classes of `px4params.errors` here, and only here.
 
 mod compile;
+mod store;
 mod transfer;
 mod values;
 
@@ -28,7 +29,7 @@ pyo3::import_exception!(px4params.errors, LeafError);
 
 /// Which operation failed, to pick the exception class.
 #[derive(Clone, Copy, PartialEq)]
-enum Op {
+pub(crate) enum Op {
     Encode,
     Decode,
     Leaf,
@@ -43,7 +44,7 @@ enum Class {
 }
 
 /// How a value source's or sink's own error becomes an exception.
-trait ValueErrorClass: std::fmt::Display {
+pub(crate) trait ValueErrorClass: std::fmt::Display {
     /// The class, or the exception Python code raised (propagated unchanged).
     fn class(self) -> Result<Class, PyErr>;
 }
@@ -66,7 +67,7 @@ impl ValueErrorClass for std::convert::Infallible {
 
 /// The one place where core errors become Python exceptions: one-line messages
 /// `TYPE: PATH: what (at bit N)`, with `path` and `bit_offset` attributes.
-fn to_py_err<E: ValueErrorClass>(
+pub(crate) fn to_py_err<E: ValueErrorClass>(
     py: Python<'_>,
     type_name: &str,
     layout: &Layout<'_>,
@@ -139,16 +140,18 @@ fn value_error_to_py(py: Python<'_>, type_name: &str, path: &str, error: ValueEr
     }
 }
 
-struct Compiled {
+pub(crate) struct Compiled {
     layout: OwnedLayout,
     roots: HashMap<String, NodeId>,
+    /// `int32` and `float32` nodes: classic PX4 parameters are stored as values of these.
+    classic_roots: [NodeId; 2],
     /// Every field name as an interned Python string, by field index (decoding builds dicts).
     names: Vec<Py<PyString>>,
 }
 
 /// A schema compiled into one flat layout; hands out [`DataType`]s by key.
 #[pyclass(frozen, module = "px4params._native")]
-struct Schema {
+pub(crate) struct Schema {
     compiled: Arc<Compiled>,
 }
 
@@ -157,7 +160,12 @@ impl Schema {
     /// Compiles the model's `types` dict (see `px4params.dsdl_loader`).
     #[new]
     fn new(py: Python<'_>, types: &Bound<'_, PyDict>) -> PyResult<Self> {
-        let (layout, roots) = compile::compile_model(types)?;
+        let (mut layout, roots) = compile::compile_model(types)?;
+        let saturated = px4params_core::Cast::Saturated;
+        let classic_roots = [
+            layout.int(32, saturated).expect("int32 is valid"),
+            layout.float(32, saturated).expect("float32 is valid"),
+        ];
         let view = layout.as_layout();
         let names = view
             .fields
@@ -168,6 +176,7 @@ impl Schema {
             compiled: Arc::new(Compiled {
                 layout,
                 roots,
+                classic_roots,
                 names,
             }),
         })
@@ -210,7 +219,7 @@ struct DataType {
     name: String,
 }
 
-fn target_of<'a>(target: &'a Bound<'_, PyAny>) -> PyResult<Target<'a>> {
+pub(crate) fn target_of<'a>(target: &'a Bound<'_, PyAny>) -> PyResult<Target<'a>> {
     if let Ok(k) = target.extract::<usize>() {
         return Ok(Target::Index(k));
     }
@@ -363,22 +372,7 @@ impl DataType {
         let t = target_of(target)?;
         let leaf =
             locate(&layout, self.root, data, t, tao).map_err(|e| self.err(py, e, Op::Leaf))?;
-        let (path, _) = describe(&layout, &leaf);
-        let kind = match leaf.kind {
-            LeafKind::Scalar(kind) => kind,
-            // Tags and lengths are unsigned counts.
-            LeafKind::Tag { .. } | LeafKind::Len { .. } => px4params_core::Kind::Uint {
-                bits: 32,
-                cast: px4params_core::Cast::Saturated,
-            },
-        };
-        let mut source = PySource::new(value, &self.compiled.names, saturate);
-        let scalar: Scalar = {
-            use px4params_core::codec::Source;
-            source
-                .scalar(kind)
-                .map_err(|e| value_error_to_py(py, &self.name, &path, e))?
-        };
+        let scalar = leaf_value(py, &self.compiled, &self.name, &leaf, value, saturate)?;
         let mut out = vec![0u8; layout.max_bytes(self.root).max(data.len())];
         let options = EncodeOptions {
             tao,
@@ -425,8 +419,33 @@ impl DataType {
     }
 }
 
+/// A Python value given for a located leaf, as the leaf's kind of scalar.
+pub(crate) fn leaf_value(
+    py: Python<'_>,
+    compiled: &Compiled,
+    type_name: &str,
+    leaf: &px4params_core::leaf::Leaf,
+    value: Bound<'_, PyAny>,
+    saturate: bool,
+) -> PyResult<Scalar> {
+    let kind = match leaf.kind {
+        LeafKind::Scalar(kind) => kind,
+        // Tags and lengths are unsigned counts.
+        LeafKind::Tag { .. } | LeafKind::Len { .. } => px4params_core::Kind::Uint {
+            bits: 32,
+            cast: px4params_core::Cast::Saturated,
+        },
+    };
+    let mut source = PySource::new(value, &compiled.names, saturate);
+    use px4params_core::codec::Source;
+    source.scalar(kind).map_err(|e| {
+        let (path, _) = describe(&compiled.layout.as_layout(), leaf);
+        value_error_to_py(py, type_name, &path, e)
+    })
+}
+
 /// A leaf's path (with `_tag`/`_len` for tags and lengths) and type name.
-fn describe(layout: &Layout<'_>, leaf: &px4params_core::leaf::Leaf) -> (String, String) {
+pub(crate) fn describe(layout: &Layout<'_>, leaf: &px4params_core::leaf::Leaf) -> (String, String) {
     let mut path = leaf.path.display(layout).to_string();
     let (suffix, type_name) = match leaf.kind {
         LeafKind::Scalar(kind) => ("", kind_name(kind)),
@@ -447,6 +466,7 @@ fn describe(layout: &Layout<'_>, leaf: &px4params_core::leaf::Leaf) -> (String, 
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Schema>()?;
     m.add_class::<DataType>()?;
+    m.add_class::<store::Store>()?;
     m.add_function(wrap_pyfunction!(transfer::dsdl_signature, m)?)?;
     m.add_function(wrap_pyfunction!(transfer::data_type_signature, m)?)?;
     m.add_function(wrap_pyfunction!(transfer::transfer_crc_seed, m)?)?;

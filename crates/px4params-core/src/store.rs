@@ -1,0 +1,812 @@
+//! The instance parameter store: every parameter's instances in memory reserved up front.
+//!
+//! A parameter is a type (its root node) with `instances` numbered slots (`INA238#0` ..
+//! `INA238#3`), or a single shared slot that always exists. Each slot keeps its current value
+//! and its default, encoded with the DroneCAN rules without tail array optimization (so that a
+//! stored value delimits itself), plus its state: present, used, unsaved.
+//!
+//! [`plan`] lays the parameters out and says how much memory they need; [`Store::new`] takes
+//! that memory from the caller (slices in firmware, arrays, or `Vec`s on a host) and never
+//! allocates. Every operation is all-or-nothing: it checks everything before it writes, and
+//! whole-value writes are staged in a scratch area before they are committed.
+//!
+//! Bytes per parameter: its type's default, then for each instance its value and its default,
+//! each `slot_bytes` long (the type's largest encoding). One scratch area of the largest
+//! `slot_bytes` follows all parameters.
+
+// Errors are returned by value: the core never allocates, so they cannot be boxed.
+#![allow(clippy::result_large_err)]
+
+use core::convert::Infallible;
+use core::fmt;
+
+use crate::bits::write_bits;
+use crate::codec::{self, ArrayLen, At, EncodeOptions, LeafKind, Sink, Source};
+use crate::error::{Error, ErrorKind, Path, Step};
+use crate::layout::{Layout, NodeId, Role};
+use crate::leaf::{self, Leaf, Target};
+use crate::scalar::{self, Scalar};
+
+/// Stored values never use tail array optimization: each one delimits itself.
+const STORED: EncodeOptions = EncodeOptions {
+    tao: false,
+    saturate: false,
+    keep_versions: false,
+};
+
+/// One parameter's place in the store.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ParamDef {
+    /// The parameter's type.
+    pub root: NodeId,
+    /// Number of instance slots (1 for a shared parameter).
+    pub instances: u16,
+    /// A single value that always exists and has no instance number.
+    pub shared: bool,
+    /// First slot (the type default's), set by [`plan`].
+    pub first_slot: u32,
+    /// First byte of the parameter's memory, set by [`plan`].
+    pub first_byte: u32,
+    /// Bytes per stored value: the type's largest encoding, set by [`plan`].
+    pub slot_bytes: u32,
+}
+
+impl ParamDef {
+    /// An instanced parameter with `max_instances` slots.
+    pub const fn instanced(root: NodeId, max_instances: u16) -> Self {
+        Self {
+            root,
+            instances: max_instances,
+            shared: false,
+            first_slot: 0,
+            first_byte: 0,
+            slot_bytes: 0,
+        }
+    }
+
+    /// A shared parameter: one value, always present.
+    pub const fn shared(root: NodeId) -> Self {
+        Self {
+            root,
+            instances: 1,
+            shared: true,
+            first_slot: 0,
+            first_byte: 0,
+            slot_bytes: 0,
+        }
+    }
+
+    fn bytes(&self) -> usize {
+        (1 + 2 * self.instances as usize) * self.slot_bytes as usize
+    }
+}
+
+/// Memory a store needs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Capacity {
+    /// Number of [`Slot`]s.
+    pub slots: usize,
+    /// Number of bytes for values and defaults, scratch area included.
+    pub bytes: usize,
+}
+
+/// Lays out `defs` one after the other and returns the memory they need.
+pub fn plan(layout: &Layout<'_>, defs: &mut [ParamDef]) -> Result<Capacity> {
+    let (mut slots, mut bytes, mut scratch) = (0usize, 0usize, 0usize);
+    for (index, def) in defs.iter_mut().enumerate() {
+        let node = layout
+            .nodes
+            .get(def.root as usize)
+            .ok_or(StoreError::NoSuchParam {
+                param: index as u32,
+            })?;
+        let slot_bytes = node.max_bits.div_ceil(8) as usize;
+        if slot_bytes > u16::MAX as usize
+            || def.instances == 0
+            || (def.shared && def.instances != 1)
+        {
+            return Err(StoreError::Unsupported {
+                param: index as u32,
+            });
+        }
+        def.first_slot = slots as u32;
+        def.first_byte = bytes as u32;
+        def.slot_bytes = slot_bytes as u32;
+        slots += 1 + def.instances as usize;
+        bytes += def.bytes();
+        scratch = scratch.max(slot_bytes);
+    }
+    Ok(Capacity {
+        slots,
+        bytes: bytes + scratch,
+    })
+}
+
+const PRESENT: u8 = 1;
+const USED: u8 = 2;
+const UNSAVED: u8 = 4;
+
+/// The state of one instance (or of a parameter's type default).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct Slot {
+    value_len: u16,
+    default_len: u16,
+    flags: u8,
+}
+
+impl Slot {
+    /// The instance exists.
+    pub fn present(&self) -> bool {
+        self.flags & PRESENT != 0
+    }
+    /// A driver has read it.
+    pub fn used(&self) -> bool {
+        self.flags & USED != 0
+    }
+    /// Changed (or removed) since the last save.
+    pub fn unsaved(&self) -> bool {
+        self.flags & UNSAVED != 0
+    }
+}
+
+/// Which of an instance's two values an operation works on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Which {
+    /// The current value.
+    Value,
+    /// The default value (`param set-default`).
+    Default,
+}
+
+/// A store operation's error. `E` is the value source's error for whole-value writes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum StoreError<E = Infallible> {
+    /// No parameter with this index.
+    NoSuchParam {
+        /// The index asked for.
+        param: u32,
+    },
+    /// A parameter the store cannot hold (a value over 65535 bytes, or no slot).
+    Unsupported {
+        /// Its index.
+        param: u32,
+    },
+    /// An instance number at or above `max_instances`.
+    InstanceOutOfRange {
+        /// The number asked for.
+        instance: u32,
+        /// The parameter's `max_instances`.
+        max_instances: u16,
+    },
+    /// The instance does not exist.
+    NotPresent {
+        /// Its number.
+        instance: u16,
+    },
+    /// The instance exists already.
+    AlreadyPresent {
+        /// Its number.
+        instance: u16,
+    },
+    /// Every instance slot is taken.
+    Full {
+        /// The parameter's `max_instances`.
+        max_instances: u16,
+    },
+    /// A shared parameter has no instances to add or remove.
+    Shared,
+    /// `p_version` fields are written by the store, never by the user.
+    VersionLeaf {
+        /// The leaf's path.
+        path: Path,
+    },
+    /// The memory given does not match the parameters' [`plan`].
+    Memory {
+        /// What the plan needs.
+        needed: Capacity,
+    },
+    /// The value or leaf was refused by the codec.
+    Codec(Error<E>),
+}
+
+impl<E> From<Error<E>> for StoreError<E> {
+    fn from(e: Error<E>) -> Self {
+        Self::Codec(e)
+    }
+}
+
+impl StoreError {
+    /// The same error for a caller whose value source has error type `E`.
+    pub fn widen<E>(self) -> StoreError<E> {
+        match self {
+            Self::NoSuchParam { param } => StoreError::NoSuchParam { param },
+            Self::Unsupported { param } => StoreError::Unsupported { param },
+            Self::InstanceOutOfRange {
+                instance,
+                max_instances,
+            } => StoreError::InstanceOutOfRange {
+                instance,
+                max_instances,
+            },
+            Self::NotPresent { instance } => StoreError::NotPresent { instance },
+            Self::AlreadyPresent { instance } => StoreError::AlreadyPresent { instance },
+            Self::Full { max_instances } => StoreError::Full { max_instances },
+            Self::Shared => StoreError::Shared,
+            Self::VersionLeaf { path } => StoreError::VersionLeaf { path },
+            Self::Memory { needed } => StoreError::Memory { needed },
+            Self::Codec(e) => StoreError::Codec(Error {
+                kind: e.kind.map_value(|never| match never {}),
+                bit_offset: e.bit_offset,
+                path: e.path,
+            }),
+        }
+    }
+}
+
+impl<E: fmt::Display> StoreError<E> {
+    /// Formats the error as one line (without the instance's name, which the caller knows),
+    /// with field names from `layout`.
+    pub fn display<'a>(&'a self, layout: &'a Layout<'a>) -> impl fmt::Display + 'a {
+        StoreErrorDisplay {
+            error: self,
+            layout,
+        }
+    }
+}
+
+struct StoreErrorDisplay<'a, E> {
+    error: &'a StoreError<E>,
+    layout: &'a Layout<'a>,
+}
+
+impl<E: fmt::Display> fmt::Display for StoreErrorDisplay<'_, E> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.error {
+            StoreError::NoSuchParam { param } => write!(f, "no parameter #{param}"),
+            StoreError::Unsupported { param } => write!(
+                f,
+                "parameter #{param} cannot be stored (no slot, or a value over 65535 bytes)"
+            ),
+            StoreError::InstanceOutOfRange {
+                instance,
+                max_instances,
+            } => write!(
+                f,
+                "instance {instance} is out of range (max_instances is {max_instances}: \
+                 instances 0..{})",
+                max_instances.saturating_sub(1)
+            ),
+            StoreError::NotPresent { .. } => {
+                f.write_str("instance does not exist (add it first: param add)")
+            }
+            StoreError::AlreadyPresent { .. } => f.write_str("instance exists already"),
+            StoreError::Full { max_instances } => write!(
+                f,
+                "all {max_instances} instances are in use (max_instances is {max_instances})"
+            ),
+            StoreError::Shared => {
+                f.write_str("a shared parameter has no instances to add or remove")
+            }
+            StoreError::VersionLeaf { path } => write!(
+                f,
+                "{} is set automatically to the type's version and cannot be written",
+                path.display(self.layout)
+            ),
+            StoreError::Memory { needed } => write!(
+                f,
+                "store memory does not match its plan ({} slots and {} bytes needed)",
+                needed.slots, needed.bytes
+            ),
+            StoreError::Codec(e) => e.display(self.layout).fmt(f),
+        }
+    }
+}
+
+/// The store, over caller-provided memory: definitions `D`, slots `S` and bytes `B` (slices,
+/// arrays or vectors). The layout is passed to each operation that needs it.
+#[derive(Clone, Debug)]
+pub struct Store<D, S, B> {
+    defs: D,
+    slots: S,
+    bytes: B,
+    scratch: usize,
+}
+
+type Result<T, E = Infallible> = core::result::Result<T, StoreError<E>>;
+
+impl<D, S, B> Store<D, S, B>
+where
+    D: AsRef<[ParamDef]>,
+    S: AsRef<[Slot]> + AsMut<[Slot]>,
+    B: AsRef<[u8]> + AsMut<[u8]>,
+{
+    /// A store over `defs` (laid out by [`plan`]) with every instance absent, shared
+    /// parameters present, and each type's default the zero value ([`leaf::encode_default`]).
+    pub fn new(layout: &Layout<'_>, defs: D, slots: S, bytes: B) -> Result<Self> {
+        let (needed, scratch) = check_plan(layout, defs.as_ref())?;
+        if slots.as_ref().len() < needed.slots || bytes.as_ref().len() < needed.bytes {
+            return Err(StoreError::Memory { needed });
+        }
+        let mut store = Self {
+            defs,
+            slots,
+            bytes,
+            scratch: needed.bytes - scratch,
+        };
+        store.slots.as_mut().fill(Slot::default());
+        for param in 0..store.defs.as_ref().len() {
+            let def = store.defs.as_ref()[param];
+            let start = def.first_byte as usize;
+            let region = &mut store.bytes.as_mut()[start..start + def.slot_bytes as usize];
+            let len = leaf::encode_default(layout, def.root, region, false)?;
+            store.slots.as_mut()[def.first_slot as usize].default_len = len as u16;
+            if def.shared {
+                store.fill_instance(&def, 0);
+                store.slots.as_mut()[def.first_slot as usize + 1].flags = PRESENT;
+            }
+        }
+        Ok(store)
+    }
+
+    /// The parameters.
+    pub fn defs(&self) -> &[ParamDef] {
+        self.defs.as_ref()
+    }
+
+    /// Parameter `param`'s definition.
+    pub fn def(&self, param: u32) -> Result<ParamDef> {
+        self.defs
+            .as_ref()
+            .get(param as usize)
+            .copied()
+            .ok_or(StoreError::NoSuchParam { param })
+    }
+
+    /// Sets parameter `param`'s type default (the value new instances start from), e.g. from
+    /// the type's `@default` metadata. `data` is checked like [`Store::set_encoded`]. A shared
+    /// parameter's default changes with it, and so does its value unless it was changed.
+    pub fn set_type_default(&mut self, layout: &Layout<'_>, param: u32, data: &[u8]) -> Result<()> {
+        let def = self.def(param)?;
+        check_encoded(layout, def.root, data)?;
+        let start = def.first_byte as usize;
+        self.bytes.as_mut()[start..start + data.len()].copy_from_slice(data);
+        self.slots.as_mut()[def.first_slot as usize].default_len = data.len() as u16;
+        if def.shared {
+            self.stage(data);
+            self.commit(&def, 0, Which::Default, data.len());
+        }
+        Ok(())
+    }
+
+    /// The type default of parameter `param`.
+    pub fn type_default(&self, param: u32) -> Result<&[u8]> {
+        let def = self.def(param)?;
+        let len = self.slots.as_ref()[def.first_slot as usize].default_len as usize;
+        let start = def.first_byte as usize;
+        Ok(&self.bytes.as_ref()[start..start + len])
+    }
+
+    /// The state of an instance.
+    pub fn slot(&self, param: u32, instance: u16) -> Result<Slot> {
+        let def = self.def(param)?;
+        let index = slot_index(&def, instance)?;
+        Ok(self.slots.as_ref()[index])
+    }
+
+    /// The numbers of the instances that exist, in order.
+    pub fn instances(&self, param: u32) -> Result<impl Iterator<Item = u16> + '_> {
+        let def = self.def(param)?;
+        let first = def.first_slot as usize + 1;
+        let slots = &self.slots.as_ref()[first..first + def.instances as usize];
+        Ok((0..def.instances).filter(move |&i| slots[i as usize].present()))
+    }
+
+    /// Adds instance `instance`, or the lowest free one when `None`; returns its number. It
+    /// starts with the type default as value and default.
+    pub fn add(&mut self, param: u32, instance: Option<u16>) -> Result<u16> {
+        let def = self.def(param)?;
+        if def.shared {
+            return Err(StoreError::Shared);
+        }
+        let instance = match instance {
+            Some(i) => {
+                if self.slots.as_ref()[slot_index(&def, i)?].present() {
+                    return Err(StoreError::AlreadyPresent { instance: i });
+                }
+                i
+            }
+            None => self.instances_free(&def).ok_or(StoreError::Full {
+                max_instances: def.instances,
+            })?,
+        };
+        self.fill_instance(&def, instance);
+        self.slots.as_mut()[def.first_slot as usize + 1 + instance as usize].flags =
+            PRESENT | UNSAVED;
+        Ok(instance)
+    }
+
+    /// Removes an instance; the others keep their numbers.
+    pub fn remove(&mut self, param: u32, instance: u16) -> Result<()> {
+        let def = self.def(param)?;
+        if def.shared {
+            return Err(StoreError::Shared);
+        }
+        let index = self.present_slot(&def, instance)?;
+        self.slots.as_mut()[index] = Slot {
+            flags: UNSAVED,
+            ..Slot::default()
+        };
+        Ok(())
+    }
+
+    /// The encoded value or default of an instance.
+    pub fn get(&self, param: u32, instance: u16, which: Which) -> Result<&[u8]> {
+        let def = self.def(param)?;
+        let index = self.present_slot(&def, instance)?;
+        Ok(self.region(&def, index, which))
+    }
+
+    /// Whether an instance's value differs from its default.
+    pub fn changed(&self, param: u32, instance: u16) -> Result<bool> {
+        Ok(
+            self.get(param, instance, Which::Value)?
+                != self.get(param, instance, Which::Default)?,
+        )
+    }
+
+    /// Reads a leaf of an instance's value or default.
+    pub fn get_leaf(
+        &self,
+        layout: &Layout<'_>,
+        param: u32,
+        instance: u16,
+        which: Which,
+        target: Target<'_>,
+    ) -> Result<(Leaf, Scalar)> {
+        let def = self.def(param)?;
+        let data = self.get(param, instance, which)?;
+        Ok(leaf::get_leaf(layout, def.root, data, target, false)?)
+    }
+
+    /// Writes a leaf of an instance's value or default. A primitive leaf is written in place;
+    /// a union tag or array length re-encodes the value (see [`leaf::set_leaf`]). Writing a
+    /// default also writes the value when the value was equal to the old default, as PX4's
+    /// `param set-default` does.
+    #[allow(clippy::too_many_arguments)] // one call names one leaf of one instance: all needed
+    pub fn set_leaf(
+        &mut self,
+        layout: &Layout<'_>,
+        param: u32,
+        instance: u16,
+        which: Which,
+        target: Target<'_>,
+        value: Scalar,
+        saturate: bool,
+    ) -> Result<()> {
+        let def = self.def(param)?;
+        let index = self.present_slot(&def, instance)?;
+        let data = self.region(&def, index, which);
+        let found = leaf::locate(layout, def.root, data, target, false)?;
+        if is_version(layout, &found.path) {
+            return Err(StoreError::VersionLeaf { path: found.path });
+        }
+        if let LeafKind::Scalar(kind) = found.kind {
+            let raw = codec::scalar_raw(kind, value, saturate).map_err(|e| Error {
+                kind: ErrorKind::Scalar(e),
+                bit_offset: found.bit_offset,
+                path: found.path,
+            })?;
+            let follows = which == Which::Default && self.values_equal(&def, index);
+            let bits = codec::scalar_bits(kind);
+            let stream = scalar::to_stream(raw, bits);
+            let mut targets = [Some(which), None];
+            if follows {
+                targets[1] = Some(Which::Value);
+            }
+            for w in targets.into_iter().flatten() {
+                let (start, _) = self.span(&def, index, w);
+                let bytes = self.bytes.as_mut();
+                write_bits(&mut bytes[start..], found.bit_offset, stream, bits);
+            }
+            self.slots.as_mut()[index].flags |= UNSAVED;
+            return Ok(());
+        }
+        let (scratch, end) = (self.scratch, self.bytes.as_ref().len());
+        let (head, tail) = self.bytes.as_mut().split_at_mut(scratch);
+        let (start, len) = span_of(&def, self.slots.as_ref()[index], index, which);
+        let options = EncodeOptions { saturate, ..STORED };
+        let new_len = leaf::set_leaf(
+            layout,
+            def.root,
+            &head[start..start + len],
+            target,
+            value,
+            &mut tail[..end - scratch],
+            options,
+        )?;
+        self.commit(&def, instance, which, new_len);
+        Ok(())
+    }
+
+    /// Writes a whole value or default from `source` (which may leave out `p_version` fields:
+    /// they are filled in; given, they must equal the type's version).
+    pub fn set_from<Src: Source>(
+        &mut self,
+        layout: &Layout<'_>,
+        param: u32,
+        instance: u16,
+        which: Which,
+        source: &mut Src,
+        saturate: bool,
+    ) -> Result<(), Src::Error> {
+        let def = self.def(param).map_err(StoreError::widen)?;
+        self.present_slot(&def, instance)
+            .map_err(StoreError::widen)?;
+        let options = EncodeOptions { saturate, ..STORED };
+        let scratch = self.scratch;
+        let out = &mut self.bytes.as_mut()[scratch..scratch + def.slot_bytes as usize];
+        let len = codec::encode(layout, def.root, source, out, options)?;
+        self.commit(&def, instance, which, len);
+        Ok(())
+    }
+
+    /// Writes a whole encoded value or default (without tail array optimization), after
+    /// checking that it decodes completely and that its `p_version` fields hold the version.
+    pub fn set_encoded(
+        &mut self,
+        layout: &Layout<'_>,
+        param: u32,
+        instance: u16,
+        which: Which,
+        data: &[u8],
+    ) -> Result<()> {
+        let def = self.def(param)?;
+        self.present_slot(&def, instance)?;
+        check_encoded(layout, def.root, data)?;
+        self.stage(data);
+        self.commit(&def, instance, which, data.len());
+        Ok(())
+    }
+
+    /// Sets an instance's value back to its default.
+    pub fn reset(&mut self, param: u32, instance: u16) -> Result<()> {
+        let def = self.def(param)?;
+        let index = self.present_slot(&def, instance)?;
+        let (from, len) = self.span(&def, index, Which::Default);
+        let (to, _) = self.span(&def, index, Which::Value);
+        self.bytes.as_mut().copy_within(from..from + len, to);
+        let slot = &mut self.slots.as_mut()[index];
+        slot.value_len = len as u16;
+        slot.flags |= UNSAVED;
+        Ok(())
+    }
+
+    /// Marks an instance as read by a driver (PX4's "used").
+    pub fn mark_used(&mut self, param: u32, instance: u16) -> Result<()> {
+        let def = self.def(param)?;
+        let index = self.present_slot(&def, instance)?;
+        self.slots.as_mut()[index].flags |= USED;
+        Ok(())
+    }
+
+    /// Marks everything as saved.
+    pub fn mark_saved(&mut self) {
+        for slot in self.slots.as_mut() {
+            slot.flags &= !UNSAVED;
+        }
+    }
+
+    fn instances_free(&self, def: &ParamDef) -> Option<u16> {
+        let first = def.first_slot as usize + 1;
+        let slots = &self.slots.as_ref()[first..first + def.instances as usize];
+        slots.iter().position(|s| !s.present()).map(|i| i as u16)
+    }
+
+    fn present_slot(&self, def: &ParamDef, instance: u16) -> Result<usize> {
+        let index = slot_index(def, instance)?;
+        if !self.slots.as_ref()[index].present() {
+            return Err(StoreError::NotPresent { instance });
+        }
+        Ok(index)
+    }
+
+    fn span(&self, def: &ParamDef, index: usize, which: Which) -> (usize, usize) {
+        span_of(def, self.slots.as_ref()[index], index, which)
+    }
+
+    fn region(&self, def: &ParamDef, index: usize, which: Which) -> &[u8] {
+        let (start, len) = self.span(def, index, which);
+        &self.bytes.as_ref()[start..start + len]
+    }
+
+    fn values_equal(&self, def: &ParamDef, index: usize) -> bool {
+        self.region(def, index, Which::Value) == self.region(def, index, Which::Default)
+    }
+
+    /// Copies the type default into an instance's value and default.
+    fn fill_instance(&mut self, def: &ParamDef, instance: u16) {
+        let len = self.slots.as_ref()[def.first_slot as usize].default_len;
+        let index = def.first_slot as usize + 1 + instance as usize;
+        let from = def.first_byte as usize;
+        let value = from + (1 + 2 * instance as usize) * def.slot_bytes as usize;
+        let bytes = self.bytes.as_mut();
+        bytes.copy_within(from..from + len as usize, value);
+        bytes.copy_within(from..from + len as usize, value + def.slot_bytes as usize);
+        let slot = &mut self.slots.as_mut()[index];
+        slot.value_len = len;
+        slot.default_len = len;
+    }
+
+    fn stage(&mut self, data: &[u8]) {
+        let scratch = self.scratch;
+        self.bytes.as_mut()[scratch..scratch + data.len()].copy_from_slice(data);
+    }
+
+    /// Moves the staged `len` bytes into an instance's value or default (and into its value
+    /// too when a default is written and the value was equal to the old default).
+    fn commit(&mut self, def: &ParamDef, instance: u16, which: Which, len: usize) {
+        let index = def.first_slot as usize + 1 + instance as usize;
+        let follows = which == Which::Default && self.values_equal(def, index);
+        let scratch = self.scratch;
+        for w in [Some(which), follows.then_some(Which::Value)]
+            .into_iter()
+            .flatten()
+        {
+            let (to, _) = self.span(def, index, w);
+            self.bytes.as_mut().copy_within(scratch..scratch + len, to);
+            let slot = &mut self.slots.as_mut()[index];
+            match w {
+                Which::Value => slot.value_len = len as u16,
+                Which::Default => slot.default_len = len as u16,
+            }
+        }
+        self.slots.as_mut()[index].flags |= UNSAVED;
+    }
+}
+
+fn span_of(def: &ParamDef, slot: Slot, index: usize, which: Which) -> (usize, usize) {
+    let instance = index - def.first_slot as usize - 1;
+    let value = def.first_byte as usize + (1 + 2 * instance) * def.slot_bytes as usize;
+    match which {
+        Which::Value => (value, slot.value_len as usize),
+        Which::Default => (value + def.slot_bytes as usize, slot.default_len as usize),
+    }
+}
+
+fn slot_index(def: &ParamDef, instance: u16) -> Result<usize> {
+    if instance >= def.instances {
+        return Err(StoreError::InstanceOutOfRange {
+            instance: instance.into(),
+            max_instances: def.instances,
+        });
+    }
+    Ok(def.first_slot as usize + 1 + instance as usize)
+}
+
+/// Checks that `defs` are laid out as [`plan`] lays them out; returns the memory they need and
+/// the size of the scratch area at its end.
+fn check_plan(layout: &Layout<'_>, defs: &[ParamDef]) -> Result<(Capacity, usize)> {
+    let (mut slots, mut bytes, mut scratch) = (0usize, 0usize, 0usize);
+    for (index, def) in defs.iter().enumerate() {
+        let node = layout
+            .nodes
+            .get(def.root as usize)
+            .ok_or(StoreError::NoSuchParam {
+                param: index as u32,
+            })?;
+        let slot_bytes = node.max_bits.div_ceil(8) as usize;
+        let planned = def.first_slot as usize == slots
+            && def.first_byte as usize == bytes
+            && def.slot_bytes as usize == slot_bytes
+            && def.instances > 0
+            && (!def.shared || def.instances == 1)
+            && slot_bytes <= u16::MAX as usize;
+        if !planned {
+            return Err(StoreError::Unsupported {
+                param: index as u32,
+            });
+        }
+        slots += 1 + def.instances as usize;
+        bytes += def.bytes();
+        scratch = scratch.max(slot_bytes);
+    }
+    let needed = Capacity {
+        slots,
+        bytes: bytes + scratch,
+    };
+    Ok((needed, scratch))
+}
+
+fn is_version(layout: &Layout<'_>, path: &Path) -> bool {
+    match path.last() {
+        Some(Step::Field(f)) => matches!(
+            layout.fields.get(f as usize).map(|f| f.role),
+            Some(Role::Version(_))
+        ),
+        _ => false,
+    }
+}
+
+/// Checks that `data` is exactly one stored value of `root` whose `p_version` fields hold the
+/// version.
+fn check_encoded(layout: &Layout<'_>, root: NodeId, data: &[u8]) -> Result<()> {
+    let mut sink = VersionCheck { layout };
+    let options = codec::DecodeOptions {
+        tao: false,
+        allow_trailing: false,
+    };
+    codec::decode(layout, root, data, &mut sink, options).map_err(|e| {
+        StoreError::Codec(Error {
+            kind: e.kind.map_value(|v| ErrorKind::VersionMismatch {
+                given: v.given,
+                expected: v.expected,
+            }),
+            bit_offset: e.bit_offset,
+            path: e.path,
+        })
+    })?;
+    Ok(())
+}
+
+/// A stored `p_version` that differs from the type's version.
+#[derive(Clone, Copy, Debug)]
+struct WrongVersion {
+    given: Scalar,
+    expected: u32,
+}
+
+/// A sink that keeps nothing and refuses `p_version` fields that differ from the version.
+struct VersionCheck<'l, 'a> {
+    layout: &'l Layout<'a>,
+}
+
+impl Sink for VersionCheck<'_, '_> {
+    type Error = WrongVersion;
+
+    fn scalar(&mut self, value: Scalar, at: At<'_>) -> core::result::Result<(), WrongVersion> {
+        if let Some(Step::Field(f)) = at.path.last() {
+            if let Some(Role::Version(expected)) =
+                self.layout.fields.get(f as usize).map(|f| f.role)
+            {
+                if value != Scalar::Uint(expected.into()) {
+                    return Err(WrongVersion {
+                        given: value,
+                        expected,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+    fn begin_struct(&mut self, _fields: usize) -> core::result::Result<(), WrongVersion> {
+        Ok(())
+    }
+    fn field(&mut self, _index: u32, _name: &str) -> core::result::Result<(), WrongVersion> {
+        Ok(())
+    }
+    fn end_struct(&mut self) -> core::result::Result<(), WrongVersion> {
+        Ok(())
+    }
+    fn begin_union(
+        &mut self,
+        _tag: u32,
+        _index: u32,
+        _name: &str,
+        _at: At<'_>,
+    ) -> core::result::Result<(), WrongVersion> {
+        Ok(())
+    }
+    fn end_union(&mut self) -> core::result::Result<(), WrongVersion> {
+        Ok(())
+    }
+    fn begin_array(
+        &mut self,
+        _len: ArrayLen,
+        _at: At<'_>,
+    ) -> core::result::Result<(), WrongVersion> {
+        Ok(())
+    }
+    fn end_array(&mut self, _len: usize) -> core::result::Result<(), WrongVersion> {
+        Ok(())
+    }
+}
