@@ -28,9 +28,9 @@ GOLDEN_VALUE = '{"a":48858,"b":-1,"c":-5,"d":-1,"e":136}'
 GOLDEN_HEX = "daef7c00"
 
 INA = '{"bus":{"i2c":{"bus_id":1,"address":69}},"current":200,"shunt":0.0003}'
-INA_HEX = "00031720ea0c"
+INA_HEX = "10031720ea0c"
 INA_LEAVES = [
-    ("p_version", "uint4", "0"),
+    ("p_version", "uint4", "1"),
     ("bus._tag", "uint3", "0 (i2c)"),
     ("bus.i2c.p_version", "uint4", "0"),
     ("bus.i2c.bus_id", "uint4", "1"),
@@ -267,7 +267,7 @@ def test_dsdl_option_and_env_var_combine(
     code, out, _ = main_out(argv, capsys)
     keys = {row["key"] for row in json.loads(out)}
     assert code == 0
-    assert {"golden.Vector", "extra.Thing", "px.Ina238.1.0"} <= keys
+    assert {"golden.Vector", "extra.Thing", "px.Ina238.1.1"} <= keys
 
 
 def test_dsdl_relative_path(run: Cli, dsdl_dirs: Mapping[str, Path]) -> None:
@@ -285,15 +285,15 @@ def test_encode_ina238(run: Cli) -> None:
 
 
 def test_encode_by_full_key_and_with_explicit_p_version(capsys: pytest.CaptureFixture[str]) -> None:
-    value = json.loads(INA) | {"p_version": 0}
-    argv = ["encode", "px.Ina238.1.0", json.dumps(value)]
+    value = json.loads(INA) | {"p_version": 1}
+    argv = ["encode", "px.Ina238.1.1", json.dumps(value)]
     assert main_out(argv, capsys) == (0, INA_HEX + "\n", "")
 
 
 def test_decode_ina238_fills_p_version(run: Cli) -> None:
     [line] = ok_lines(run("decode", "px.Ina238", INA_HEX))
     value = json.loads(line)
-    assert value["p_version"] == 0
+    assert value["p_version"] == 1
     assert value["bus"] == {"i2c": {"p_version": 0, "bus_id": 1, "address": 69}}
     assert value["current"] == 200
     assert value["shunt"] == pytest.approx(0.0003, rel=1e-3)
@@ -301,7 +301,7 @@ def test_decode_ina238_fills_p_version(run: Cli) -> None:
 
 
 @pytest.mark.parametrize(
-    "text", ["00 03 17 20 ea 0c", "0x00031720ea0c", "0X00031720EA0C", "  0x0003 1720\tEA0C  "]
+    "text", ["10 03 17 20 ea 0c", "0x10031720ea0c", "0X10031720EA0C", "  0x1003 1720\tEA0C  "]
 )
 def test_decode_accepts_spaces_case_and_0x_prefix(
     text: str, capsys: pytest.CaptureFixture[str]
@@ -312,7 +312,7 @@ def test_decode_accepts_spaces_case_and_0x_prefix(
 
 
 def test_decode_spaced_hex_in_subprocess(run: Cli) -> None:
-    [line] = ok_lines(run("decode", "px.Ina238", "0x00 03 17 20 ea 0c"))
+    [line] = ok_lines(run("decode", "px.Ina238", "0x10 03 17 20 ea 0c"))
     assert json.loads(line)["bus"]["i2c"]["address"] == 69
 
 
@@ -352,12 +352,12 @@ def test_no_tao_on_ina238_changes_nothing(capsys: pytest.CaptureFixture[str]) ->
 @pytest.mark.parametrize(
     ("spelled", "hex_text", "shown"),
     [
-        ('"nan"', "00031720ff7f", "nan"),
-        ("NaN", "00031720ff7f", "nan"),
-        ('"inf"', "00031720007c", "inf"),
-        ("Infinity", "00031720007c", "inf"),
-        ('"-inf"', "0003172000fc", "-inf"),
-        ("-Infinity", "0003172000fc", "-inf"),
+        ('"nan"', "10031720ff7f", "nan"),
+        ("NaN", "10031720ff7f", "nan"),
+        ('"inf"', "10031720007c", "inf"),
+        ("Infinity", "10031720007c", "inf"),
+        ('"-inf"', "1003172000fc", "-inf"),
+        ("-Infinity", "1003172000fc", "-inf"),
     ],
 )
 def test_non_finite_floats(
@@ -372,7 +372,7 @@ def test_non_finite_floats(
 
 
 def test_non_finite_decode_output_is_strict_json(run: Cli) -> None:
-    [line] = ok_lines(run("decode", "px.Ina238", "00031720ff7f"))
+    [line] = ok_lines(run("decode", "px.Ina238", "10031720ff7f"))
 
     def refuse(token: str) -> None:
         raise AssertionError(f"non-standard JSON constant {token}")
@@ -397,8 +397,8 @@ def test_saturate_clamps_instead_of_refusing(
         run("encode", "px.Ina238", too_big),
         "current: value 5000 is out of range (expected 0 to 1023)",
     )
-    assert ok_lines(run("encode", "px.Ina238", too_big, "--saturate")) == ["000317ffea0c"]
-    code, out, _ = main_out(["decode", "px.Ina238", "000317ffea0c"], capsys)
+    assert ok_lines(run("encode", "px.Ina238", too_big, "--saturate")) == ["100317ffea0c"]
+    code, out, _ = main_out(["decode", "px.Ina238", "100317ffea0c"], capsys)
     assert code == 0 and json.loads(out)["current"] == 1023
 
     code, out, _ = main_out(["encode", "px.Ina238", ina(current=-1), "--saturate"], capsys)
@@ -431,11 +431,11 @@ def test_saturate_clamps_instead_of_refusing(
 def test_batch_encode(run: Cli) -> None:
     lines = [INA, ina(current=1), "", ina(shunt="nan")]
     proc = run("encode", "px.Ina238", "-", input="\n".join(lines) + "\n")
-    assert ok_lines(proc) == [INA_HEX, "00031404ea0c", "00031720ff7f"]
+    assert ok_lines(proc) == [INA_HEX, "10031404ea0c", "10031720ff7f"]
 
 
 def test_batch_decode(run: Cli) -> None:
-    proc = run("decode", "px.Ina238", "-", input=f"{INA_HEX}\r\n0x00 03 17 20 ff 7f\n\n")
+    proc = run("decode", "px.Ina238", "-", input=f"{INA_HEX}\r\n0x10 03 17 20 ff 7f\n\n")
     out = [json.loads(line) for line in ok_lines(proc)]
     assert [v["current"] for v in out] == [200, 200]
     assert out[1]["shunt"] == "nan"
@@ -445,11 +445,11 @@ def test_batch_encode_reports_bad_lines_and_goes_on(run: Cli) -> None:
     lines = [INA, "{bad", "", ina(current=None), ina(current=2), "[1"]
     proc = run("encode", "px.Ina238", "-", input="\n".join(lines) + "\n")
     assert proc.returncode == 1
-    assert proc.stdout.splitlines() == [INA_HEX, "00031408ea0c"]
+    assert proc.stdout.splitlines() == [INA_HEX, "10031408ea0c"]
     assert proc.stderr.splitlines() == [
         "px4params: <stdin>:2: not JSON: Expecting property name enclosed in double quotes "
         "at column 2 in '{bad'",
-        "px4params: <stdin>:4: px.Ina238.1.0: current: missing field",
+        "px4params: <stdin>:4: px.Ina238.1.1: current: missing field",
         "px4params: <stdin>:6: not JSON: Expecting ',' delimiter at column 3 in '[1'",
     ]
 
@@ -474,7 +474,7 @@ def test_batch_in_process(stdin: Callable[[str], None], capsys: pytest.CaptureFi
     assert code == 1
     assert json.loads(out.splitlines()[0])["current"] == 200
     assert len(out.splitlines()) == 1
-    assert err.startswith("px4params: <stdin>:2: px.Ina238.1.0: current: data is truncated")
+    assert err.startswith("px4params: <stdin>:2: px.Ina238.1.1: current: data is truncated")
     assert len(err.splitlines()) == 1
 
 
@@ -508,7 +508,7 @@ def test_types_text(run: Cli) -> None:
     assert len(by_key) == len(lines) > 20
     schema = load_schema(use_env=False)
     for key, text in (
-        ("px.Ina238.1.0", "INA238 power monitor"),
+        ("px.Ina238.1.1", "INA238 power monitor"),
         (BATTERY, "Single battery info."),
     ):
         t = schema[key]
@@ -523,9 +523,9 @@ def test_types_text(run: Cli) -> None:
 def test_types_json(run: Cli) -> None:
     rows = json.loads("\n".join(ok_lines(run("types", "--json"))))
     by_key = {row["key"]: row for row in rows}
-    ina238, info = by_key["px.Ina238.1.0"], by_key[BATTERY]
+    ina238, info = by_key["px.Ina238.1.1"], by_key[BATTERY]
     assert ina238["name"] == "px.Ina238"
-    assert ina238["version"] == [1, 0]
+    assert ina238["version"] == [1, 1]
     assert (ina238["kind"], ina238["dialect"]) == ("struct", "dsdl")
     assert ina238["max_instances"] == 4
     assert ina238["short"] == "INA238 power monitor"
@@ -557,7 +557,7 @@ def test_types_with_dsdl_lists_the_extra_type(
 
 
 def check_demo(out: str) -> None:
-    assert "00 03 17 20 ea 0c" in out
+    assert "10 03 17 20 ea 0c" in out
     assert "da ef 7c 00" in out
     leaves = [line.split(None, 3) for line in out.splitlines() if re.match(r"\s+\[\d+\] ", line)]
     assert leaves == [
@@ -621,7 +621,7 @@ ERRORS: list[tuple[str, list[str], list[str]]] = [
     (
         "unknown-type-version",
         ["encode", "px.Ina238.9.9", INA],
-        ["unknown type 'px.Ina238.9.9' (did you mean: ", "px.Ina238.1.0"],
+        ["unknown type 'px.Ina238.9.9' (did you mean: ", "px.Ina238.1.1"],
     ),
     (
         "invalid-json",
@@ -644,7 +644,7 @@ ERRORS: list[tuple[str, list[str], list[str]]] = [
     (
         "out-of-range-nested",
         ["encode", "px.Ina238", INA.replace("69", "200")],
-        ["px.Ina238.1.0: bus.i2c.address: value 200 is out of range (expected 0 to 127)"],
+        ["px.Ina238.1.1: bus.i2c.address: value 200 is out of range (expected 0 to 127)"],
     ),
     (
         "out-of-range-negative",
@@ -738,8 +738,8 @@ ERRORS: list[tuple[str, list[str], list[str]]] = [
     ),
     (
         "truncated",
-        ["decode", "px.Ina238", "000317"],
-        ["px.Ina238.1.0: current: data is truncated: needs at least 32 bits, has 24"],
+        ["decode", "px.Ina238", "100317"],
+        ["px.Ina238.1.1: current: data is truncated: needs at least 32 bits, has 24"],
     ),
     ("empty-data", ["decode", "px.Ina238", ""], ["p_version: data is truncated"]),
     (
@@ -841,10 +841,10 @@ def test_dsdl_error_in_process(
 
 
 def test_error_in_process(capsys: pytest.CaptureFixture[str]) -> None:
-    code, out, err = main_out(["decode", "px.Ina238", "00031720ea0c00"], capsys)
+    code, out, err = main_out(["decode", "px.Ina238", "10031720ea0c00"], capsys)
     assert (code, out) == (1, "")
     assert err == (
-        "px4params: error: px.Ina238.1.0: data is too long: "
+        "px4params: error: px.Ina238.1.1: data is too long: "
         "the value ends after 6 bytes, the data has 7 (at bit 48)\n"
     )
 

@@ -27,7 +27,7 @@ def test_golden_vector() -> None:
 def test_talk_ina238(schema: px4params.Schema) -> None:
     t = schema["px.Ina238"]
     data = t.encode(TALK_INA238)
-    assert data.hex() == "00031720ea0c"
+    assert data.hex() == "10031720ea0c"
     leaves = t.leaves(data)
     assert [(leaf.index, leaf.path, leaf.type) for leaf in leaves] == [
         (0, "p_version", "uint4"),
@@ -38,7 +38,7 @@ def test_talk_ina238(schema: px4params.Schema) -> None:
         (5, "current", "uint10"),
         (6, "shunt", "float16"),
     ]
-    assert [leaf.value for leaf in leaves[:6]] == [0, 0, 0, 1, 0x45, 200]
+    assert [leaf.value for leaf in leaves[:6]] == [1, 0, 0, 1, 0x45, 200]
     assert leaves[6].value == pytest.approx(0.0003, rel=1e-3)
     assert t.get_leaf(data, "bus.i2c.address").value == 69
     assert t.get_leaf(data, 4) == leaves[4]
@@ -53,7 +53,7 @@ def test_set_leaf(schema: px4params.Schema) -> None:
     assert list(spi["bus"]) == ["spi"] and spi["current"] == 200
     with pytest.raises(
         px4params.EncodeError,
-        match=r"^px\.Ina238\.1\.0: bus\.i2c\.address: value 128 is out of range "
+        match=r"^px\.Ina238\.1\.1: bus\.i2c\.address: value 128 is out of range "
         r"\(expected 0 to 127\)$",
     ):
         t.set_leaf(data, 4, 128)
@@ -115,32 +115,32 @@ INA_ERRORS = [
         "not a dict",
         [1, 2],
         px4params.ValueShapeError,
-        r"^px\.Ina238\.1\.0: expected a dict \(struct\), got list$",
+        r"^px\.Ina238\.1\.1: expected a dict \(struct\), got list$",
     ),
     (
         "unknown field",
         {**TALK_INA238, "volts": 1},
         px4params.ValueShapeError,
-        r"^px\.Ina238\.1\.0: unknown field 'volts' \(expected: p_version, bus, current, shunt\)$",
+        r"^px\.Ina238\.1\.1: unknown field 'volts' \(expected: p_version, bus, current, shunt\)$",
     ),
     (
         "missing field",
         {"bus": TALK_INA238["bus"], "current": 1},
         px4params.ValueShapeError,
-        r"^px\.Ina238\.1\.0: shunt: missing field$",
+        r"^px\.Ina238\.1\.1: shunt: missing field$",
     ),
     (
         "union two keys",
         {**TALK_INA238, "bus": {"i2c": {}, "spi": {}}},
         px4params.ValueShapeError,
-        r"^px\.Ina238\.1\.0: bus: a union takes exactly one variant "
+        r"^px\.Ina238\.1\.1: bus: a union takes exactly one variant "
         r"\(i2c, spi, serial, dronecan, sim, mavlink\), got 2 keys$",
     ),
     (
         "union unknown variant",
         {**TALK_INA238, "bus": {"usb": {}}},
         px4params.ValueShapeError,
-        r"^px\.Ina238\.1\.0: bus: unknown union variant 'usb' "
+        r"^px\.Ina238\.1\.1: bus: unknown union variant 'usb' "
         r"\(expected one of: i2c, spi, serial, dronecan, sim, mavlink\)$",
     ),
     (
@@ -153,7 +153,7 @@ INA_ERRORS = [
         "string for int",
         {**TALK_INA238, "current": "200"},
         px4params.ValueShapeError,
-        r"^px\.Ina238\.1\.0: current: expected an integer, got str$",
+        r"^px\.Ina238\.1\.1: current: expected an integer, got str$",
     ),
     (
         "bool for int",
@@ -171,7 +171,7 @@ INA_ERRORS = [
         "int out of range",
         {**TALK_INA238, "current": 1024},
         px4params.EncodeError,
-        r"^px\.Ina238\.1\.0: current: value 1024 is out of range \(expected 0 to 1023\)$",
+        r"^px\.Ina238\.1\.1: current: value 1024 is out of range \(expected 0 to 1023\)$",
     ),
     (
         "negative uint",
@@ -201,7 +201,7 @@ INA_ERRORS = [
         "wrong p_version",
         {**TALK_INA238, "p_version": 3},
         px4params.EncodeError,
-        r"p_version: p_version is set automatically; got 3, the type's version is 0$",
+        r"p_version: p_version is set automatically; got 3, the type's version is 1$",
     ),
     (
         "nested missing",
@@ -264,7 +264,7 @@ def test_decode_errors(schema: px4params.Schema) -> None:
     t = schema["px.Ina238"]
     with pytest.raises(
         px4params.DecodeError,
-        match=r"^px\.Ina238\.1\.0: shunt: data is truncated: needs at least 48 bits, "
+        match=r"^px\.Ina238\.1\.1: shunt: data is truncated: needs at least 48 bits, "
         r"has 40 \(at bit 32\)$",
     ) as info:
         t.decode(bytes(5))
@@ -305,7 +305,7 @@ def test_saturate_is_explicit(schema: px4params.Schema) -> None:
 
 
 def test_lookup(schema: px4params.Schema) -> None:
-    assert schema.resolve("px.Ina238") == "px.Ina238.1.0"
+    assert schema.resolve("px.Ina238") == "px.Ina238.1.1"
     assert "uavcan.protocol.NodeStatus" in schema
     with pytest.raises(KeyError):
         schema["px.Nope"]

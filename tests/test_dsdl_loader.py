@@ -117,13 +117,13 @@ def test_leaves_fit_in_32_bits(px_model: dict[str, Any]) -> None:
 
 
 def test_ina238_model(px_model: dict[str, Any]) -> None:
-    spec = px_model["types"]["px.Ina238.1.0"]
+    spec = px_model["types"]["px.Ina238.1.1"]
     assert spec["name"] == "px.Ina238"
-    assert spec["version"] == [1, 0]
+    assert spec["version"] == [1, 1]
     assert spec["kind"] == "struct"
     assert spec["dtid"] is None
     assert spec["line"] == 1
-    assert spec["file"].endswith(os.path.join("px", "Ina238.1.0.dsdl"))
+    assert spec["file"].endswith(os.path.join("px", "Ina238.1.1.dsdl"))
     assert Path(spec["file"]).is_absolute()
     assert [(f["name"], f["type"]) for f in spec["fields"]] == [
         ("p_version", {"kind": "uint", "bits": 4, "cast": "saturated"}),
@@ -136,7 +136,7 @@ def test_ina238_model(px_model: dict[str, Any]) -> None:
 
 def test_ina238_flattened_leaves(px_model: dict[str, Any]) -> None:
     # The talk's seven leaves: [0] p_version ... [6] shunt.
-    assert leaves(px_model, "px.Ina238.1.0") == [
+    assert leaves(px_model, "px.Ina238.1.1") == [
         ("p_version", "uint4"),
         ("bus.tag", "uint3"),
         ("bus.i2c.p_version", "uint4"),
@@ -171,7 +171,7 @@ def test_i2c_matches_talk(px_model: dict[str, Any]) -> None:
 
 
 def test_ina_metadata(px_model: dict[str, Any]) -> None:
-    spec = px_model["types"]["px.Ina238.1.0"]
+    spec = px_model["types"]["px.Ina238.1.1"]
     assert spec["doc"]["short"] == "INA238 power monitor"
     assert "ina238" in spec["doc"]["long"]
     assert spec["doc"]["tags"] == {"group": "Sensors", "max_instances": 4, "reboot_required": True}
@@ -566,7 +566,7 @@ def test_unwritable_cache_dir_still_loads(tmp_path: Path) -> None:
     blocker = tmp_path / "file"
     blocker.write_text("not a folder", encoding="utf-8")
     model = load_model(include_dronecan=False, cache_dir=blocker / "cache")
-    assert "px.Ina238.1.0" in model["types"]
+    assert "px.Ina238.1.1" in model["types"]
 
 
 def _run_python(code: str, cache_dir: Path) -> str:

@@ -193,12 +193,12 @@ def test_datatype_signature_property(schema: px4params.Schema) -> None:
 
 
 def test_px_normalized_text(types: dict[str, Any]) -> None:
-    assert normalized_definition(types, "px.Ina238.1.0") == INA238_TEXT
+    assert normalized_definition(types, "px.Ina238.1.1") == INA238_TEXT
     assert normalized_definition(types, "px.Bus.1.0") == BUS_TEXT
 
 
 def test_px_signatures_pinned_and_independent(types: dict[str, Any], px_keys: list[str]) -> None:
-    assert data_type_signature(types, "px.Ina238.1.0") == INA238_SIGNATURE
+    assert data_type_signature(types, "px.Ina238.1.1") == INA238_SIGNATURE
     for key in px_keys:
         assert data_type_signature(types, key) == independent_signature(types, key), key
 
@@ -217,8 +217,8 @@ def test_px_layout_change_changes_signature(types: dict[str, Any]) -> None:
     address["type"]["bits"] = 8
     assert data_type_signature(changed, "px.I2c.1.0") != data_type_signature(types, "px.I2c.1.0")
     # ... and, through the nested signature, every type holding an I2c.
-    assert data_type_signature(changed, "px.Ina238.1.0") != INA238_SIGNATURE
-    assert normalized_definition(changed, "px.Ina238.1.0") == INA238_TEXT
+    assert data_type_signature(changed, "px.Ina238.1.1") != INA238_SIGNATURE
+    assert normalized_definition(changed, "px.Ina238.1.1") == INA238_TEXT
 
 
 def test_px_types_have_no_service_or_override(types: dict[str, Any], px_keys: list[str]) -> None:

@@ -155,7 +155,7 @@ class DataType:
 class Schema(Mapping[str, DataType]):
     """Every loaded type, compiled once into one layout.
 
-    Look types up by key (``"px.Ina238.1.0"``, ``"uavcan.protocol.GetNodeInfo.Request"``) or by
+    Look types up by key (``"px.Ina238.1.1"``, ``"uavcan.protocol.GetNodeInfo.Request"``) or by
     name without version (``"px.Ina238"``: the newest version).
     """
 
