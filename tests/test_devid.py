@@ -1,0 +1,547 @@
+"""Tests for PX4 device IDs: python/px4params/devid.py and ``px4params devid``.
+
+Data from other projects (today's devtype table as TSV, a real flight log) is not in this
+repository: it is found through $PX4PARAMS_SHARED_DATA, by default the ``shared/data`` folder
+beside the repository, and the tests that need it are skipped when it is absent.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import struct
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from px4params import cli, devid
+from px4params.errors import DeviceIdError, Px4ParamsError
+
+SHARED_ENV = "PX4PARAMS_SHARED_DATA"
+SHARED_DATA = Path(os.environ.get(SHARED_ENV) or Path(__file__).parents[2] / "shared" / "data")
+CURRENT_TSV = SHARED_DATA / "px4_devtypes_current.tsv"
+SAMPLE_LOG = SHARED_DATA / "sample_log_small.ulg"
+
+# The driver guide's three magnetometers: (id, guide's bit groups, devtype, bus type, bus, address)
+GUIDE = [
+    (73225, "00000001 00011110 00001 001", "HMC5883", "I2C", 1, 0x1E),
+    (66826, "00000001 00000101 00001 010", "HMC5883", "SPI", 1, 5),
+    (263178, "00000100 00000100 00001 010", "MPU9250", "SPI", 1, 4),
+]
+
+# A drv_sensor.h in the header's own style (tabs or spaces, lower- or upper-case hex, comments,
+# a code used twice, unrelated defines), written for these tests.
+HEADER = """\
+#ifndef _DRV_SENSOR_H
+#define _DRV_SENSOR_H
+#include <stdint.h>
+
+#define DRV_MAG_DEVTYPE_HMC5883  0x01
+#define DRV_MAG_DEVTYPE_AK09916  0x09
+#define DRV_DIFF_PRESS_DEVTYPE_SIM\t0x15
+#define DRV_ACC_DEVTYPE_BMI088          0x6a
+#define DRV_GYR_DEVTYPE_BMI088          0x66 // gyro half of the same chip
+#define DRV_INS_DEVTYPE_ONE 0xE9
+#define DRV_LED_DEVTYPE_TWO 0xe9
+#define DRV_DEVTYPE_UNUSED\t\t0xff
+#define SENSOR_COUNT 4
+
+#endif /* _DRV_SENSOR_H */
+"""
+
+
+def needs(path: Path) -> Path:
+    if not path.is_file():
+        pytest.skip(f"{path.name} not found in {path.parent} (set ${SHARED_ENV} to its folder)")
+    return path
+
+
+@pytest.fixture(autouse=True)
+def no_table_env(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The caller's own $PX4PARAMS_DEVTYPES must not change what these tests see."""
+    monkeypatch.delenv(devid.DEVTYPES_ENV, raising=False)
+
+
+@pytest.fixture
+def current(monkeypatch: pytest.MonkeyPatch) -> Path:
+    """Point the current table at the shared TSV, for the library and the CLI alike."""
+    path = needs(CURRENT_TSV)
+    monkeypatch.setenv(devid.DEVTYPES_ENV, str(path))
+    return path
+
+
+@pytest.fixture
+def no_table(monkeypatch: pytest.MonkeyPatch) -> None:
+    """No current table anywhere: no variable, nothing at the fallback places."""
+    monkeypatch.setattr(devid, "_fallback_tables", list)
+
+
+def run_cli(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
+    code = cli.main(["devid", *argv])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def assert_one_line_error(err: str, *fragments: str) -> None:
+    assert err.count("\n") == 1 and err.startswith("px4params: error: "), err
+    assert "Traceback" not in err
+    for fragment in fragments:
+        assert fragment in err, (fragment, err)
+
+
+# --- the driver guide's examples, legacy table ---------------------------------------------------
+
+
+@pytest.mark.parametrize(("value", "bits", "chip", "bus_type", "bus", "address"), GUIDE)
+def test_guide_examples_legacy(
+    value: int, bits: str, chip: str, bus_type: str, bus: int, address: int
+) -> None:
+    # The guide writes the ID as devtype, address, bus (5 bits) and bus type (3 bits).
+    b = f"{value:024b}"
+    assert f"{b[:8]} {b[8:16]} {b[16:21]} {b[21:]}" == bits
+    d = devid.decode(value, "legacy")
+    assert (d.devtype_name, d.bus_type_name, d.bus, d.address) == (chip, bus_type, bus, address)
+    assert d.devtype_kind == "MAG" and d.table == "legacy" and not d.no_device
+    where = f"address 0x{address:02X}" if bus_type == "I2C" else f"device {address}"
+    assert d.describe() == f"{chip} (MAG), {bus_type} bus {bus}, {where}"
+
+
+def test_guide_examples_cli(capsys: pytest.CaptureFixture[str], no_table: None) -> None:
+    # The legacy table is built in: it works with no current table anywhere.
+    code, out, err = run_cli(capsys, "--table", "legacy", "73225", "66826", "0x4040A")
+    assert (code, err) == (0, "")
+    assert out.splitlines() == [
+        "73225 (0x011E09): HMC5883 (MAG), I2C bus 1, address 0x1E",
+        "66826 (0x01050A): HMC5883 (MAG), SPI bus 1, device 5",
+        "263178 (0x04040A): MPU9250 (MAG), SPI bus 1, device 4",
+    ]
+    code, out, _ = run_cli(capsys, "--table", "legacy", "--json", *(str(g[0]) for g in GUIDE))
+    rows = json.loads(out)
+    assert code == 0
+    assert [(r["devtype_name"], r["bus_type_name"], r["address"]) for r in rows] == [
+        (g[2], g[3], g[5]) for g in GUIDE
+    ]
+
+
+def test_legacy_table_contents() -> None:
+    table = devid.legacy_table()
+    assert len(table) == 16
+    assert table.name_of(0x04) == "MPU9250" and table.kind_of(0x04) == "MAG"
+    assert table.name_of(0x11) == "LSM303D" and table.kind_of(0x11) == "ACC"
+    assert table.name_of(0x32) == "LL40LS" and table.name_of(0x05) is None
+
+
+# --- the current table ---------------------------------------------------------------------------
+
+
+def test_current_table_from_tsv(current: Path) -> None:
+    table = devid.load_table("current")
+    assert table.label == "current" and Path(table.source) == current
+    assert len(table) == 177 and len(list(table)) == 178  # 0xE9 is defined twice
+    assert table.name_of(0x04) == "AK8963"  # the guide's MPU9250 code, reused
+    assert table.name_of(0xE9) == "ILABS/RGBLED_AW2023" and table.kind_of(0xE9) == "INS/LED"
+    ak = table.lookup(0x09)[0]
+    assert (ak.name, ak.kind, ak.macro) == ("AK09916", "MAG", "DRV_MAG_DEVTYPE_AK09916")
+    assert devid.decode(0xE90000, table).describe().startswith("ILABS/RGBLED_AW2023 (INS/LED)")
+
+
+def test_current_table_fallback_beside_repo(monkeypatch: pytest.MonkeyPatch) -> None:
+    needs(CURRENT_TSV)
+    monkeypatch.setattr(devid, "_fallback_tables", lambda: [Path("/nonexistent.tsv"), CURRENT_TSV])
+    assert devid.find_current_table() == CURRENT_TSV.resolve()
+
+
+def test_drv_sensor_header(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    header = tmp_path / "drv_sensor.h"
+    header.write_text(HEADER)
+    table = devid.load_table("current", header)
+    assert [(e.code, e.qualified) for e in table] == [
+        (0x01, "MAG_HMC5883"),
+        (0x09, "MAG_AK09916"),
+        (0x15, "DIFF_PRESS_SIM"),
+        (0x66, "GYR_BMI088"),
+        (0x6A, "ACC_BMI088"),
+        (0xE9, "INS_ONE"),
+        (0xE9, "LED_TWO"),
+        (0xFF, "UNUSED"),
+    ]
+    assert table.name_of(0xE9) == "ONE/TWO" and table.kind_of(0xFF) is None
+    # The same file through the environment variable, and through the CLI's --devtypes.
+    monkeypatch.setenv(devid.DEVTYPES_ENV, str(header))
+    assert devid.decode(592905).devtype_name == "AK09916"
+    assert cli.main(["devid", "--devtypes", str(header), "--list", "--json"]) == 0
+
+
+def test_tsv_variants(tmp_path: Path) -> None:
+    # No header row, decimal codes, a comment, a blank line, a plain name, a repeated row.
+    tsv = tmp_path / "t.tsv"
+    tsv.write_text(
+        "# mine\n9\tDRV_MAG_DEVTYPE_AK09916\n\n0x40\tmy chip\n9\tDRV_MAG_DEVTYPE_AK09916\n"
+    )
+    table = devid.load_table("current", tsv)
+    assert [(e.code, e.name, e.kind) for e in table] == [
+        (9, "AK09916", "MAG"),
+        (64, "MY CHIP", None),
+    ]
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("code\tname\n0x01\n", "t.tsv:2: expected 'code<TAB>name'"),
+        ("0x01\tA\tB\n", "t.tsv:1: expected 'code<TAB>name'"),
+        ("0x01\t \n", "t.tsv:1: expected 'code<TAB>name'"),
+        ("one\tA\n", "t.tsv:1: devtype code 'one' is not a number"),
+        ("0x100\tA\n", "t.tsv:1: devtype code 0x100 is out of range 0..255"),
+        ("code\tname\n", "t.tsv: no devtypes found"),
+        ("#define DRV_MAG_DEVTYPE_X FOO\n", "t.tsv:1: devtype code 'FOO' is not a number"),
+    ],
+)
+def test_bad_table_files(tmp_path: Path, text: str, message: str) -> None:
+    tsv = tmp_path / "t.tsv"
+    tsv.write_text(text)
+    with pytest.raises(DeviceIdError) as e:
+        devid.load_table("current", tsv)
+    assert message in str(e.value) and "\n" not in str(e.value)
+
+
+def test_missing_current_table(no_table: None, capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(DeviceIdError) as e:
+        devid.load_table("current")
+    message = str(e.value)
+    for hint in ("no current devtype table", "--devtypes FILE", "PX4PARAMS_DEVTYPES", "legacy"):
+        assert hint in message
+    code, out, err = run_cli(capsys, "592905")
+    assert (code, out) == (1, "")
+    assert_one_line_error(err, "no current devtype table", "--devtypes FILE")
+
+
+def test_missing_table_file(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    missing = tmp_path / "nope.tsv"
+    code, _, err = run_cli(capsys, "--devtypes", str(missing), "1")
+    assert code == 1
+    assert_one_line_error(err, f"devtypes file not found: {missing}")
+    monkeypatch.setenv(devid.DEVTYPES_ENV, str(missing))
+    with pytest.raises(DeviceIdError, match=r"\$PX4PARAMS_DEVTYPES not found: .*nope\.tsv"):
+        devid.load_table("current")
+
+
+def test_unknown_table(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(DeviceIdError, match=r"unknown devtype table 'newest' \(expected one of: "):
+        devid.load_table("newest")
+    with pytest.raises(DeviceIdError, match="unknown devtype table 'newest'"):
+        devid.decode(1, "newest")
+    # On the command line the choice is checked by argparse: a usage error.
+    with pytest.raises(SystemExit) as e:
+        cli.main(["devid", "--table", "newest", "1"])
+    out, err = capsys.readouterr()
+    assert (e.value.code, out) == (2, "")
+    assert "invalid choice: 'newest'" in err.splitlines()[-1] and "Traceback" not in err
+
+
+# --- decoding and encoding -----------------------------------------------------------------------
+
+
+def test_decode_fields_and_no_device() -> None:
+    d = devid.decode(592905, None)
+    assert (d.bus_type, d.bus_type_name, d.bus, d.address, d.devtype) == (1, "I2C", 1, 0x0C, 9)
+    assert d.devtype_name is None and d.table is None and int(d) == 592905 and d.hex == "0x090C09"
+    assert d.describe() == "devtype 0x09, I2C bus 1, address 0x0C"
+    zero = devid.decode(0, "legacy")
+    assert zero.no_device and zero.describe() == "no device" and zero.as_dict()["no_device"]
+    # Bus type 7 has no name; UAVCAN's address byte is the node ID.
+    assert devid.decode(0x050107, "legacy").describe() == (
+        "devtype 0x05 (not in the legacy table), bus type 7, bus 0, address 0x01"
+    )
+    assert devid.decode(0x887D03, None).describe().endswith("UAVCAN bus 0, node 125")
+    with pytest.raises(DeviceIdError):  # a DeviceIdError is a Px4ParamsError
+        devid.decode(True, None)  # type: ignore[arg-type]
+    assert issubclass(DeviceIdError, Px4ParamsError)
+
+
+def test_encode_forms(current: Path) -> None:
+    expected = 592905
+    for dt in ("AK09916", "ak09916", "0x09", 9, "9", "MAG_AK09916", "DRV_MAG_DEVTYPE_AK09916"):
+        assert devid.encode("i2c", 1, "0x0c", dt) == expected, dt
+    assert devid.encode(1, "1", 12, 9) == expected
+    assert devid.encode("SPI", 1, 5, "HMC5883", "legacy") == 66826
+    assert devid.encode("spi", 1, 4, "mag_mpu9250", devid.legacy_table()) == 263178
+    assert devid.encode("sim", 0, 0, 0) == 4 and devid.encode("dronecan", 0, 0, 0) == 3
+    assert devid.encode("MAVLink", 0, 0, 0) == 6 and devid.encode("7", 0, 0, 0) == 7
+
+
+def test_encode_cli(current: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    args = ["--encode", "--bus-type", "i2c", "--bus", "1", "--address", "0x0c", "--devtype"]
+    code, out, err = run_cli(capsys, *args, "AK09916")
+    assert (code, out, err) == (
+        0,
+        "592905 (0x090C09): AK09916 (MAG), I2C bus 1, address 0x0C\n",
+        "",
+    )
+    code, out, _ = run_cli(capsys, *args, "0x09", "--json")
+    row = json.loads(out)
+    assert code == 0 and row["id"] == 592905 and row["hex"] == "0x090C09"
+    assert (row["devtype_name"], row["bus_type_name"], row["address"]) == ("AK09916", "I2C", 12)
+
+
+@pytest.mark.parametrize(
+    ("parts", "message"),
+    [
+        (("i2c", 32, 0, 0), "bus 32 is out of range 0..31"),
+        (("i2c", -1, 0, 0), "bus -1 is out of range 0..31"),
+        (("i2c", 1, "0x100", 0), "address 0x100 is out of range 0..255, 0x00..0xFF"),
+        (("i2c", 1, 0, 256), "devtype 256 is out of range 0..255, 0x00..0xFF"),
+        ((8, 1, 0, 0), "bus type 8 is out of range 0..7"),
+        (("usb", 1, 0, 0), "unknown bus type 'usb' (expected one of: unknown, i2c, spi"),
+        (("i2c", "one", 0, 0), "bus 'one' is not a number (expected 0..31)"),
+        (("i2c", 1.0, 0, 0), "bus must be an int, not float"),
+        (("i2c", 1, 0, "HMC5833"), "unknown devtype 'HMC5833' in the legacy table (did you mean"),
+        (("i2c", 1, 0, "QQQ"), "unknown devtype 'QQQ' in the legacy table (give a code 0..255"),
+        (("i2c", 1, 0, "MPU9250"), "devtype 'MPU9250' is ambiguous in the legacy table: give one"),
+    ],
+)
+def test_encode_errors(parts: tuple[object, ...], message: str) -> None:
+    with pytest.raises(DeviceIdError) as e:
+        devid.encode(*parts, table="legacy")  # type: ignore[arg-type]
+    assert message in str(e.value) and "\n" not in str(e.value)
+
+
+def test_unknown_devtype_name_current(current: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(DeviceIdError, match=r"did you mean AK09916"):
+        devid.encode("i2c", 1, 0x0C, "AK9916")
+    with pytest.raises(DeviceIdError, match=r"'sim' is ambiguous .* IMU_SIM \(0x14\)"):
+        devid.encode("i2c", 1, 0x0C, "sim")
+    args = ["--encode", "--bus-type", "i2c", "--bus", "1", "--address", "12", "--devtype", "NOPE"]
+    code, out, err = run_cli(capsys, *args)
+    assert (code, out) == (1, "")
+    assert_one_line_error(err, "unknown devtype 'NOPE' in the current table")
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("abc", "not a device ID: 'abc' (expected decimal or 0x hex, 0..16777215)"),
+        ("1.5", "not a device ID: '1.5'"),
+        ("0x", "not a device ID: '0x'"),
+        ("", "not a device ID: ''"),
+        ("16777216", "device ID 16777216 does not fit in 24 bits (expected 0..16777215"),
+        ("0x1000000", "device ID 16777216 does not fit in 24 bits"),
+        ("-1", "device ID -1 does not fit in 24 bits"),
+    ],
+)
+def test_bad_ids(text: str, message: str, capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(DeviceIdError) as e:
+        devid.parse_device_id(text)
+    assert message in str(e.value)
+    # One bad ID fails the whole command before anything is printed.
+    code, out, err = run_cli(capsys, "--table", "legacy", "73225", text)
+    assert (code, out) == (1, "")
+    assert_one_line_error(err, message)
+
+
+def test_id_spellings() -> None:
+    # The guide prints parameters as floats ("CAL_MAG0_ID = 73225.0").
+    for text in ("73225", "0x11e09", "0X011E09", " 73225 ", "73225.0", "+73225"):
+        assert devid.parse_device_id(text) == 73225, text
+    with pytest.raises(DeviceIdError, match="does not fit in 24 bits"):
+        devid.decode(1 << 24, None)
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    bus_type=st.integers(0, 7),
+    bus=st.integers(0, 31),
+    address=st.integers(0, 255),
+    devtype=st.integers(0, 255),
+)
+def test_encode_decode_round_trip(bus_type: int, bus: int, address: int, devtype: int) -> None:
+    value = devid.encode(bus_type, bus, address, devtype)
+    assert 0 <= value <= devid.MAX_DEVICE_ID
+    d = devid.decode(value, "legacy")
+    assert (d.bus_type, d.bus, d.address, d.devtype) == (bus_type, bus, address, devtype)
+    assert d.bus_type_name == devid.BUS_TYPES.get(bus_type)
+    assert d.devtype_name == devid.legacy_table().name_of(devtype)
+    # The same parts given as text (as the CLI passes them) build the same ID.
+    assert devid.encode(str(bus_type), hex(bus), str(address), hex(devtype)) == value
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.integers(0, devid.MAX_DEVICE_ID))
+def test_decode_encode_round_trip(value: int) -> None:
+    d = devid.decode(value, None)
+    assert devid.encode(d.bus_type, d.bus, d.address, d.devtype) == value
+    assert devid.parse_device_id(str(value)) == devid.parse_device_id(d.hex) == value
+
+
+def test_every_unique_legacy_name_encodes_to_its_code() -> None:
+    table = devid.legacy_table()
+    for entry in table:
+        assert table.resolve(entry.qualified) == entry.code
+        assert table.resolve(entry.macro.lower()) == entry.code
+
+
+# --- flight logs ---------------------------------------------------------------------------------
+
+
+def test_sample_log(current: Path) -> None:
+    entries = {(e.param, e.timestamp_us): e for e in devid.decode_log(needs(SAMPLE_LOG))}
+    mag1 = entries["CAL_MAG1_ID", None]
+    assert mag1.value == 592905 and mag1.device is not None and mag1.problem is None
+    d = mag1.device
+    assert (d.devtype_name, d.bus_type_name, d.bus, d.address) == ("AK09916", "I2C", 1, 0x0C)
+    for empty in ("CAL_MAG2_ID", "CAL_MAG3_ID"):
+        device = entries[empty, None].device
+        assert device is not None and device.no_device and device.describe() == "no device"
+    names = {param for param, _ in entries}
+    assert {f"CAL_{s}{i}_ID" for s in ("ACC", "GYRO") for i in range(3)} <= names
+    assert all(name.startswith("CAL_") for name in names)
+    assert "CAL_MAG_SIDES" not in names and "CAL_ACC0_XOFF" not in names
+
+
+def test_sample_log_cli(current: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    log = str(needs(SAMPLE_LOG))
+    code, out, err = run_cli(capsys, "--log", log)
+    assert (code, err) == (0, "")
+    lines = {line.split()[0]: line for line in out.splitlines()}
+    assert lines["CAL_MAG1_ID"].endswith("592905 0x090C09  AK09916 (MAG), I2C bus 1, address 0x0C")
+    assert lines["CAL_MAG2_ID"].endswith("no device")
+    code, out, _ = run_cli(capsys, "--log", log, "--json")
+    doc = json.loads(out)
+    assert code == 0 and doc["file"] == log and doc["table"] == "current"
+    rows = {r["param"]: r for r in doc["parameters"]}
+    assert rows["CAL_MAG1_ID"]["device"]["devtype_name"] == "AK09916"
+    assert rows["CAL_MAG2_ID"]["device"]["no_device"] is True
+
+
+def ulog_message(kind: bytes, payload: bytes) -> bytes:
+    return struct.pack("<HB", len(payload), kind[0]) + payload
+
+
+def ulog_param(name: str, value: int | float) -> bytes:
+    if isinstance(value, float):
+        ctype, packed = "float", struct.pack("<f", value)
+    else:
+        ctype, packed = "int32_t", struct.pack("<i", value)
+    key = f"{ctype} {name}".encode()
+    return ulog_message(b"P", bytes([len(key)]) + key + packed)
+
+
+def write_ulog(path: Path, initial: dict[str, int | float], changed: dict[str, int]) -> Path:
+    """A minimal ULog: header, flag bits, parameters, a log line, then changed parameters."""
+    data = b"ULog\x01\x12\x35\x01" + struct.pack("<Q", 2_500_000)
+    data += ulog_message(b"B", bytes(16) + bytes(24))
+    data += b"".join(ulog_param(k, v) for k, v in initial.items())
+    data += ulog_message(b"L", b"6" + struct.pack("<Q", 2_500_000) + b"armed")  # data section
+    data += b"".join(ulog_param(k, v) for k, v in changed.items())
+    path.write_bytes(data)
+    return path
+
+
+def test_crafted_log(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    log = write_ulog(
+        tmp_path / "crafted.ulg",
+        {"CAL_MAG0_ID": 73225, "CAL_ACC0_ID": 66826.0, "CAL_GYRO0_ID": -1, "SYS_ID": 3},
+        {"CAL_MAG0_ID": 263178},
+    )
+    entries = devid.decode_log(log, "legacy")
+    summary = [
+        (e.param, e.value, e.device.devtype_name if e.device else e.problem, e.timestamp_us)
+        for e in entries
+    ]
+    assert summary == [
+        ("CAL_ACC0_ID", 66826, "HMC5883", None),  # an old float parameter still decodes
+        ("CAL_GYRO0_ID", -1, "-1 is not a 24-bit device ID", None),
+        ("CAL_MAG0_ID", 73225, "HMC5883", None),
+        ("CAL_MAG0_ID", 263178, "MPU9250", 2_500_000),
+    ]
+    code, out, err = run_cli(capsys, "--table", "legacy", "--log", str(log))
+    assert (code, err) == (0, "")
+    assert "invalid: -1 is not a 24-bit device ID" in out and "@2.500s" in out
+
+
+def test_log_errors(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    missing = tmp_path / "missing.ulg"
+    not_ulog = tmp_path / "notes.ulg"
+    not_ulog.write_text("these are not flight data\n")
+    empty = write_ulog(tmp_path / "empty.ulg", {"SYS_ID": 1}, {})
+    cases = [
+        (missing, f"log file not found: {missing}"),
+        (not_ulog, f"{not_ulog}: not a ULog file ("),
+        (tmp_path, f"cannot read log file {tmp_path}: "),
+        (empty, f"{empty}: no CAL_*_ID parameters in this log"),
+    ]
+    for path, message in cases:
+        if path != empty:
+            with pytest.raises(DeviceIdError) as e:
+                devid.decode_log(path, "legacy")
+            assert message in str(e.value)
+        code, out, err = run_cli(capsys, "--table", "legacy", "--log", str(path))
+        assert (code, out) == (1, "")
+        assert_one_line_error(err, message)
+    assert devid.decode_log(empty, "legacy") == []
+
+
+# --- the command line ----------------------------------------------------------------------------
+
+
+def test_list(capsys: pytest.CaptureFixture[str]) -> None:
+    code, out, _ = run_cli(capsys, "--list", "--table", "legacy")
+    assert code == 0 and out.splitlines()[0].split() == ["0x01", "MAG", "HMC5883"]
+    code, out, _ = run_cli(capsys, "--list", "--table", "legacy", "--json")
+    rows = json.loads(out)
+    assert rows[3] == {
+        "code": 4,
+        "name": "MPU9250",
+        "kind": "MAG",
+        "macro": "DRV_MAG_DEVTYPE_MPU9250",
+    }
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        ([], "give device IDs, or one of --encode, --log FILE, --list"),
+        (["1", "--list"], "give device IDs, or one of"),
+        (["--encode", "--bus", "1"], "--encode needs --bus-type, --address, --devtype"),
+        (["--bus", "1", "5"], "go with --encode"),
+        (["--devtypes", "x.tsv", "--table", "legacy", "1"], "does not go with --table legacy"),
+    ],
+)
+def test_usage_errors(argv: list[str], message: str, capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit) as e:
+        cli.main(["devid", *argv])
+    err = capsys.readouterr().err
+    assert e.value.code == 2 and message in err.splitlines()[-1] and "Traceback" not in err
+
+
+def test_help_has_an_example(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit) as e:
+        cli.main(["devid", "--help"])
+    out = capsys.readouterr().out
+    assert e.value.code == 0
+    assert "px4params devid --table legacy 73225" in out and "--encode --bus-type i2c" in out
+
+
+def test_subprocess_contract(tmp_path: Path) -> None:
+    """The installed command: exit codes, one stderr line, no traceback, JSON on stdout."""
+    env = {**os.environ, devid.DEVTYPES_ENV: str(tmp_path / "absent.tsv")}
+
+    def run(*argv: str) -> subprocess.CompletedProcess[str]:
+        command = [sys.executable, "-m", "px4params", "devid", *argv]
+        return subprocess.run(command, capture_output=True, text=True, env=env, check=False)
+
+    ok = run("--table", "legacy", "--json", "73225")
+    assert ok.returncode == 0 and json.loads(ok.stdout)[0]["devtype_name"] == "HMC5883"
+    for argv, message in (
+        (("--table", "legacy", "0x1000000"), "does not fit in 24 bits"),
+        (("592905",), "$PX4PARAMS_DEVTYPES not found"),
+        (("--table", "legacy", "--log", str(tmp_path / "x.ulg")), "log file not found"),
+    ):
+        bad = run(*argv)
+        assert bad.returncode == 1 and bad.stdout == ""
+        assert_one_line_error(bad.stderr, message)
