@@ -14,12 +14,16 @@ from .errors import (
     DecodeError,
     DsdlError,
     EncodeError,
+    InstanceError,
     LeafError,
     Px4ParamsError,
+    StoreError,
+    StoreFileError,
     TransferError,
     ValueShapeError,
 )
 from .schema import DataType, Leaf, Schema, load_schema, to_json_value
+from .store import InstanceView, Store
 
 __all__ = [
     "CodecError",
@@ -27,10 +31,15 @@ __all__ = [
     "DecodeError",
     "DsdlError",
     "EncodeError",
+    "InstanceError",
+    "InstanceView",
     "Leaf",
     "LeafError",
     "Px4ParamsError",
     "Schema",
+    "Store",
+    "StoreError",
+    "StoreFileError",
     "TransferError",
     "ValueShapeError",
     "load_schema",

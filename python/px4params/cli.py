@@ -272,7 +272,7 @@ def build_parser() -> argparse.ArgumentParser:
             "px4params encode px.Ina238 "
             '\'{"bus": {"i2c": {"bus_id": 1, "address": 69}}, "current": 200, "shunt": 0.0003}\'',
         ),
-        ("decode", cmd_decode, "hex", "hex bytes", "px4params decode px.Ina238 000317 20ea0c"),
+        ("decode", cmd_decode, "hex", "hex bytes", "px4params decode px.Ina238 100317 20ea0c"),
     ):
         p = sub.add_parser(
             name,

@@ -121,8 +121,8 @@ def _default_of(schema: Schema, type_spec: Mapping[str, Any], given: Any) -> Any
             if f["name"] != "p_version"
         }
     if kind == "array":
-        return [_default_of(schema, type_spec["element"], None) for _ in range(type_spec["len"])]
-    if kind == "dyn_array":
+        return [_default_of(schema, type_spec["elem"], None) for _ in range(type_spec["len"])]
+    if kind == "dynarray":
         return []
     if given is not None:
         return given

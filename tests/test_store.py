@@ -1,0 +1,477 @@
+"""The parameter store: instances, defaults, classic parameters, all-or-nothing changes."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import px4params
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from hypothesis.stateful import RuleBasedStateMachine, invariant, precondition, rule
+from px4params.classic import ClassicParam, ClassicParamsError
+from px4params.errors import (
+    EncodeError,
+    InstanceError,
+    LeafError,
+    StoreError,
+    ValueShapeError,
+)
+from px4params.params import metadata_default, parameter_specs
+from px4params.storefile import encode_file
+
+CLASSIC = [
+    ClassicParam("SYS_AUTOSTART", "Int32", 0),
+    ClassicParam("BAT1_CAPACITY", "Float", -1.0),
+    ClassicParam("SENS_EXT_I2C_PRB", "Int32", 1),
+]
+SHARED_DATA = Path(
+    os.environ.get("PX4PARAMS_SHARED_DATA", Path(__file__).parents[2] / "shared" / "data")
+)
+
+
+@pytest.fixture
+def store(schema: px4params.Schema) -> px4params.Store:
+    return px4params.Store(schema, classic=CLASSIC)
+
+
+def talk_lines(store: px4params.Store) -> None:
+    store.add("INA238#0")
+    store.set_default("INA238#0[3]", 1)
+    store.set_default("INA238#0[4]", 0x45)
+    store.set_default("INA238#0[5]", 200)
+    store.set_default("INA238#0[6]", 0.0003)
+
+
+def test_parameter_set(store: px4params.Store) -> None:
+    assert store.parameters[:5] == ["AK09916", "BMM350", "INA226", "INA228", "INA238"]
+    assert store.parameters[-3:] == ["SYS_AUTOSTART", "BAT1_CAPACITY", "SENS_EXT_I2C_PRB"]
+    assert store.spec("INA238").max_instances == 4
+    assert store.spec("INA238").data_type.key == "px.Ina238.1.1"
+
+
+def test_talk_airframe_lines(store: px4params.Store) -> None:
+    talk_lines(store)
+    value = store.get("INA238#0")
+    assert value["bus"] == {"i2c": {"p_version": 0, "bus_id": 1, "address": 0x45}}
+    assert value["current"] == 200
+    assert value["shunt"] == pytest.approx(0.0003, rel=1e-3)
+    assert store.get("INA238#0", default=True) == value  # set-default moved the value along
+    assert not store.changed("INA238#0")
+    assert [leaf.value for leaf in store.leaves("INA238#0")][:6] == [1, 0, 0, 1, 69, 200]
+    assert store.encoded("INA238#0").hex() == "10031720ea0c"
+
+
+def test_new_instance_starts_from_metadata_defaults(store: px4params.Store) -> None:
+    assert store.add("INA238") == "INA238#0"
+    value = store.get("INA238#0")
+    assert value["bus"]["i2c"]["address"] == 0x45
+    assert value["current"] == 327
+    assert value["shunt"] == pytest.approx(0.0003, rel=1e-3)
+
+
+def test_pythonic_access(store: px4params.Store) -> None:
+    store.add("INA238#2")
+    view = store["INA238#2"]
+    view[4] = 0x46
+    assert view.bus.i2c.address == 0x46
+    view.current = 10
+    assert view["current"] == 10 and view[5] == 10
+    view.bus.i2c.bus_id = 3
+    assert store.get("INA238#2.bus.i2c.bus_id") == 3
+    assert view.name == "INA238#2"
+    assert store.changed() == ["INA238#2"]
+
+
+def test_instances_are_stable(store: px4params.Store) -> None:
+    assert [store.add("INA238") for _ in range(3)] == ["INA238#0", "INA238#1", "INA238#2"]
+    store.set("INA238#2.current", 7)
+    store.remove("INA238#1")
+    assert store.instances("INA238") == ["INA238#0", "INA238#2"]
+    assert store.get("INA238#2.current") == 7
+    assert store.add("INA238") == "INA238#1"  # the lowest free number
+    assert store.add("INA238") == "INA238#3"
+    assert "INA238#3" in store and "INA238#9" not in store
+
+
+def test_set_default_does_not_move_a_changed_value(store: px4params.Store) -> None:
+    store.add("INA238#0")
+    store.set("INA238#0.current", 100)
+    store.set_default("INA238#0.current", 200)
+    assert store.get("INA238#0.current") == 100
+    assert store.get("INA238#0.current", default=True) == 200
+    store.reset("INA238#0")
+    assert store.get("INA238#0.current") == 200
+
+
+def test_whole_value_and_union_switch(store: px4params.Store) -> None:
+    store.add("INA238#0")
+    store.set(
+        "INA238#0",
+        {
+            "bus": {"spi": {"bus_id": 2, "chip_select": 1, "max_frequency": 8000, "mode": 3}},
+            "current": 5,
+            "shunt": 0.001,
+        },
+    )
+    assert list(store.get("INA238#0")["bus"]) == ["spi"]
+    store.set("INA238#0.bus._tag", 0)  # back to I2C with its default
+    assert list(store.get("INA238#0")["bus"]) == ["i2c"]
+
+
+def test_classic_parameters(store: px4params.Store) -> None:
+    assert store.get("SYS_AUTOSTART") == 0
+    store.set("SYS_AUTOSTART", 4001)
+    store.set("BAT1_CAPACITY", 5000.5)
+    assert store.get("SYS_AUTOSTART") == 4001
+    assert store.get("BAT1_CAPACITY") == 5000.5
+    assert set(store.changed()) == {"SYS_AUTOSTART", "BAT1_CAPACITY"}
+    store.reset_all()
+    assert store.changed() == []
+
+
+@pytest.mark.skipif(
+    not (SHARED_DATA / "px4_parameters.json").exists(),
+    reason=f"real PX4 parameters.json not found in {SHARED_DATA}",
+)
+def test_real_parameters_json(schema: px4params.Schema) -> None:
+    store = px4params.Store(schema, classic=SHARED_DATA / "px4_parameters.json")
+    assert len(store.parameters) == 1909 + len(parameter_specs(schema))
+    assert store.get("SENS_EXT_I2C_PRB") == 1
+    store.set("MPC_XY_VEL_MAX", 8.5)
+    assert store.get("MPC_XY_VEL_MAX") == 8.5
+
+
+BAD = [
+    (
+        "add",
+        ("INA238#4",),
+        InstanceError,
+        "INA238#4: instance 4 is out of range (max_instances is 4: instances 0..3)",
+    ),
+    ("add", ("INA238#0",), InstanceError, "INA238#0: instance exists already"),
+    ("add", ("NOPE#0",), InstanceError, "unknown parameter 'NOPE'"),
+    ("add", ("INA283#0",), InstanceError, "unknown parameter 'INA283' (did you mean: INA238"),
+    (
+        "add",
+        ("SYS_AUTOSTART",),
+        InstanceError,
+        "SYS_AUTOSTART: a shared parameter has no instances to add",
+    ),
+    ("add", ("INA238#0[4]",), InstanceError, "add takes an instance, not a leaf: INA238#0[4]"),
+    (
+        "remove",
+        ("INA238#1",),
+        InstanceError,
+        "INA238#1: instance does not exist (add it first: param add)",
+    ),
+    ("get", ("INA238",), InstanceError, "INA238 has instances: name one, e.g. INA238#0"),
+    (
+        "get",
+        ("SYS_AUTOSTART#0",),
+        InstanceError,
+        "SYS_AUTOSTART is not instanced: write SYS_AUTOSTART, not SYS_AUTOSTART#0",
+    ),
+    (
+        "get",
+        ("INA238#0[9]",),
+        LeafError,
+        "INA238#0: no leaf [9] (the value has 7 leaves: [0]..[6])",
+    ),
+    ("get", ("INA238#0.bus.i2c.nope",), LeafError, "INA238#0: bus.i2c: no such field"),
+    ("get", ("INA238#0 x",), InstanceError, "'INA238#0 x' is not a parameter name"),
+    (
+        "set",
+        ("INA238#0[0]", 1),
+        StoreError,
+        "INA238#0: p_version is set automatically to the type's version and cannot be written",
+    ),
+    (
+        "set",
+        ("INA238#0.bus.i2c.p_version", 0),
+        StoreError,
+        "INA238#0: bus.i2c.p_version is set automatically",
+    ),
+    (
+        "set",
+        ("INA238#0[4]", 200),
+        EncodeError,
+        "INA238#0: bus.i2c.address: value 200 is out of range (expected 0 to 127)",
+    ),
+    (
+        "set",
+        ("INA238#0[4]", "0x45"),
+        ValueShapeError,
+        "INA238#0: bus.i2c.address: expected an integer, got str",
+    ),
+    ("set", ("INA238#0[6]", True), ValueShapeError, "INA238#0: shunt: expected a number, got bool"),
+    (
+        "set",
+        ("INA238#0.bus.spi.cs", 1),
+        LeafError,
+        "INA238#0: bus.spi: this union variant is not the selected one",
+    ),
+    ("set", ("INA238#0", {"current": 1}), ValueShapeError, "INA238#0: bus: missing field"),
+    (
+        "set",
+        (
+            "INA238#0",
+            {"bus": {"i2c": {"bus_id": 1, "address": 1}}, "current": 1, "shunt": 1.0, "x": 1},
+        ),
+        ValueShapeError,
+        "unknown field",
+    ),
+    (
+        "set",
+        (
+            "INA238#0",
+            {
+                "p_version": 0,
+                "bus": {"i2c": {"bus_id": 1, "address": 1}},
+                "current": 1,
+                "shunt": 1.0,
+            },
+        ),
+        EncodeError,
+        "p_version is set automatically; got 0, the type's version is 1",
+    ),
+    (
+        "set",
+        ("SYS_AUTOSTART", 1.5),
+        ClassicParamsError,
+        "SYS_AUTOSTART: expected an integer, got 1.5",
+    ),
+    (
+        "set",
+        ("SYS_AUTOSTART", 2**31),
+        ClassicParamsError,
+        "SYS_AUTOSTART: value 2147483648 is out of range (expected -2147483648 to 2147483647)",
+    ),
+    (
+        "set",
+        ("BAT1_CAPACITY", "x"),
+        ClassicParamsError,
+        "BAT1_CAPACITY: expected a number, got 'x'",
+    ),
+    (
+        "set",
+        ("BAT1_CAPACITY[0]", 1),
+        InstanceError,
+        "BAT1_CAPACITY is a classic parameter: it has no leaves",
+    ),
+    ("set_default", ("INA238#3.current", 2000), EncodeError, "INA238#3: instance does not exist"),
+    (
+        "set_default",
+        ("INA238#0.current", 2000),
+        EncodeError,
+        "INA238#0: current: value 2000 is out of range (expected 0 to 1023)",
+    ),
+    ("reset", ("INA238#2",), InstanceError, "INA238#2: instance does not exist"),
+    (
+        "leaves",
+        ("SYS_AUTOSTART",),
+        InstanceError,
+        "SYS_AUTOSTART is a classic parameter: it has no leaves",
+    ),
+]
+
+
+@pytest.mark.parametrize(("method", "args", "exc", "message"), BAD, ids=[b[3][:40] for b in BAD])
+def test_refused_changes_leave_the_store_as_it_was(
+    store: px4params.Store, method: str, args: tuple, exc: type, message: str
+) -> None:
+    talk_lines(store)
+    store.set("SYS_AUTOSTART", 4001)
+    before = encode_file(store)
+    with pytest.raises((exc, InstanceError)) as info:
+        getattr(store, method)(*args)
+    assert message in str(info.value)
+    assert "\n" not in str(info.value)
+    assert encode_file(store) == before
+
+
+def test_full(store: px4params.Store) -> None:
+    for _ in range(4):
+        store.add("INA238")
+    with pytest.raises(
+        InstanceError, match=r"^INA238: all 4 instances are in use \(max_instances is 4\)$"
+    ):
+        store.add("INA238")
+
+
+def test_transaction_is_all_or_nothing(store: px4params.Store) -> None:
+    before = encode_file(store)
+    with pytest.raises(EncodeError), store.transaction():
+        store.add("INA238#0")
+        store.set("INA238#0.current", 5)
+        store.set("INA238#0.current", 5000)
+    assert encode_file(store) == before
+    assert store.instances("INA238") == []
+
+
+def test_memory_is_reserved_up_front(store: px4params.Store) -> None:
+    slots, size = store.capacity
+    ina = store.spec("INA238")
+    assert ina is not None
+    # Each parameter: a type default plus a value and a default per instance.
+    assert slots == sum(1 + (s.max_instances or 1) for s in store.specs) + 2 * len(CLASSIC)
+    assert size >= 9 * ina.data_type.max_bytes
+
+
+# -- property test: the store against a simple model ---------------------------------------------
+
+KINDS = ("uint", "int", "float", "bool")
+
+
+class StoreMachine(RuleBasedStateMachine):
+    """Random operations on the store and on a model (a dict of encoded value and default per
+    instance, changed with the codec's pure functions); after each step they agree, refused
+    operations change nothing, and save + load reproduces the store exactly."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.schema = SCHEMA
+        self.store = px4params.Store(self.schema, classic=CLASSIC)
+        self.model: dict[str, tuple[bytes, bytes]] = {}
+        self.classic = bytes(4)
+        self.types = {s.name: s for s in self.store.specs}
+        self.defaults = {
+            s.name: s.data_type.encode(metadata_default(self.schema, s.data_type.key), tao=False)
+            for s in self.store.specs
+        }
+
+    def names(self) -> list[str]:
+        return sorted(self.model)
+
+    @rule(
+        param=st.sampled_from(["INA238", "AK09916", "RM3100", "BMM350"]), number=st.integers(0, 5)
+    )
+    def add(self, param: str, number: int) -> None:
+        name = f"{param}#{number}"
+        before = encode_file(self.store)
+        if number >= 4 or name in self.model:
+            with pytest.raises(InstanceError):
+                self.store.add(name)
+            assert encode_file(self.store) == before
+            return
+        assert self.store.add(name) == name
+        self.model[name] = (self.defaults[param], self.defaults[param])
+
+    @precondition(lambda self: self.model)
+    @rule(data=st.data())
+    def remove(self, data: st.DataObject) -> None:
+        name = data.draw(st.sampled_from(self.names()))
+        self.store.remove(name)
+        del self.model[name]
+
+    @precondition(lambda self: self.model)
+    @rule(data=st.data(), default=st.booleans())
+    def set_leaf(self, data: st.DataObject, default: bool) -> None:
+        name = data.draw(st.sampled_from(self.names()))
+        value, dflt = self.model[name]
+        data_type = self.types[name.split("#")[0]].data_type
+        leaves = data_type.leaves(dflt if default else value, tao=False)
+        leaf = data.draw(st.sampled_from(leaves))
+        new = data.draw(_leaf_value(leaf.type))
+        before = encode_file(self.store)
+        try:
+            self.store._write(f"{name}[{leaf.index}]", new, default=default, saturate=False)
+        except px4params.Px4ParamsError:
+            assert encode_file(self.store) == before
+            target = dflt if default else value
+            assert leaf.path.endswith("p_version") or _refused(data_type, target, leaf.index, new)
+            return
+        assert not leaf.path.endswith("p_version")
+        if default:
+            new_default = data_type.set_leaf(dflt, leaf.index, new, tao=False)
+            self.model[name] = (new_default if value == dflt else value, new_default)
+        else:
+            self.model[name] = (data_type.set_leaf(value, leaf.index, new, tao=False), dflt)
+
+    @precondition(lambda self: self.model)
+    @rule(data=st.data())
+    def reset(self, data: st.DataObject) -> None:
+        name = data.draw(st.sampled_from(self.names()))
+        self.store.reset(name)
+        self.model[name] = (self.model[name][1], self.model[name][1])
+
+    @rule(value=st.integers(-(2**31), 2**31 - 1))
+    def set_classic(self, value: int) -> None:
+        self.store.set("SYS_AUTOSTART", value)
+        self.classic = value.to_bytes(4, "little", signed=True)
+
+    @invariant()
+    def agrees_with_model(self) -> None:
+        assert self.store.encoded("SYS_AUTOSTART") == self.classic
+        for name, (value, default) in self.model.items():
+            assert self.store.encoded(name) == value
+            assert self.store.encoded(name, default=True) == default
+        structured = [n for n in self.store.names() if "#" in n]
+        assert structured == sorted(self.model, key=_order(self.store))
+
+    @invariant()
+    def save_and_load_reproduce_it(self) -> None:
+        data = encode_file(self.store)
+        path = TMP / "machine.store"
+        self.store.save(path)
+        again = px4params.Store.load(path, self.schema, classic=CLASSIC)
+        assert encode_file(again) == data
+        for name in self.store.names():
+            assert again.encoded(name) == self.store.encoded(name)
+            assert again.encoded(name, default=True) == self.store.encoded(name, default=True)
+
+
+def _refused(data_type: px4params.DataType, data: bytes, index: int, new: object) -> bool:
+    try:
+        data_type.set_leaf(data, index, new, tao=False)
+    except px4params.Px4ParamsError:
+        return True
+    return False
+
+
+def _order(store: px4params.Store):
+    index = {p: i for i, p in enumerate(store.parameters)}
+
+    def key(name: str) -> tuple[int, int]:
+        param, _, number = name.partition("#")
+        return index[param], int(number or 0)
+
+    return key
+
+
+def _leaf_value(type_name: str) -> st.SearchStrategy[object]:
+    if type_name == "bool":
+        return st.booleans()
+    if type_name.startswith("float"):
+        return st.floats(-70000, 70000, width=32) | st.just(float("nan"))
+    bits = int("".join(c for c in type_name if c.isdigit()) or 8)
+    if type_name.startswith("int"):
+        return st.integers(-(1 << (bits - 1)) - 2, (1 << (bits - 1)) + 1)
+    return st.integers(-1, (1 << bits) + 1)
+
+
+SCHEMA = px4params.load_schema(use_env=False)
+TMP = Path(os.environ.get("PYTEST_TMP", "/tmp")) / f"px4params-store-machine-{os.getpid()}"
+TMP.mkdir(parents=True, exist_ok=True)
+
+TestStoreMachine = StoreMachine.TestCase
+TestStoreMachine.settings = settings(
+    max_examples=60,
+    stateful_step_count=25,
+    deadline=None,
+    suppress_health_check=[HealthCheck.too_slow],
+)
+
+
+@given(value=st.data())
+@settings(max_examples=40, deadline=None)
+def test_whole_values_round_trip(value: st.DataObject) -> None:
+    from strategies import value_strategy
+
+    store = px4params.Store(SCHEMA)
+    spec = value.draw(st.sampled_from(store.specs))
+    v = value.draw(value_strategy(SCHEMA.model["types"], spec.data_type.key, infinities=False))
+    name = store.add(spec.name)
+    store.set(name, v)
+    assert store.encoded(name) == spec.data_type.encode(v, tao=False)
