@@ -15,6 +15,7 @@ new one over ``FILE``: a crash at any moment leaves the old or the new file inta
 from __future__ import annotations
 
 import binascii
+import json
 import os
 import struct
 import tempfile
@@ -393,7 +394,7 @@ def _carry(
     if definition["kind"] == "union":
         (variant,) = old
         if variant not in fields:
-            dropped.append(prefix + variant)
+            dropped.append(f"{prefix}{variant}={_shown(old[variant])}")
             return new
         base = new.get(variant)
         if base is None:
@@ -411,9 +412,14 @@ def _carry(
                 store, fields[k], v, new.get(k), f"{prefix}{k}.", kept, dropped, added
             )
         else:
-            dropped.append(prefix + k)
+            dropped.append(f"{prefix}{k}={_shown(v)}")
     added.extend(prefix + k for k in fields if k not in old and k != "p_version")
     return merged
+
+
+def _shown(value: Any) -> str:
+    """A dropped value, as the report shows it (JSON, so that it can be typed back in)."""
+    return json.dumps(value, separators=(",", ":"))
 
 
 def _varint(n: int) -> bytes:

@@ -1,0 +1,273 @@
+"""The store file: atomic saves, complete checks before anything is applied, translation."""
+
+from __future__ import annotations
+
+import os
+import random
+import signal
+import struct
+import subprocess
+import sys
+import time
+import zlib
+from pathlib import Path
+
+import px4params
+import pytest
+from px4params.classic import ClassicParam
+from px4params.errors import StoreFileError
+from px4params.storefile import (
+    HAS_DEFAULT,
+    HAS_VALUE,
+    HEADER,
+    KIND_STRUCTURED,
+    MAGIC,
+    _crc16,
+    _varint,
+    encode_file,
+    fingerprint,
+)
+
+CLASSIC = [ClassicParam("SYS_AUTOSTART", "Int32", 0), ClassicParam("BAT1_CAPACITY", "Float", -1.0)]
+
+
+@pytest.fixture
+def store(schema: px4params.Schema) -> px4params.Store:
+    return px4params.Store(schema, classic=CLASSIC)
+
+
+def realistic(store: px4params.Store) -> px4params.Store:
+    """The talk's INA238, a second one on SPI, an external compass, classic values."""
+    store.add("INA238#0")
+    store.set_default("INA238#0[3]", 1)
+    store.set_default("INA238#0[4]", 0x45)
+    store.set_default("INA238#0[5]", 200)
+    store.set_default("INA238#0[6]", 0.0003)
+    store.add("INA238#2")
+    store.set("INA238#2.bus._tag", 1)
+    store.set("INA238#2.bus.spi.bus_id", 2)
+    store.add("AK09916#0")
+    store.set("AK09916#0.bus.i2c.bus_id", 1)
+    store.set("SYS_AUTOSTART", 4001)
+    store.set_default("BAT1_CAPACITY", 5000.0)
+    return store
+
+
+def test_save_load_round_trip(store: px4params.Store, tmp_path: Path) -> None:
+    realistic(store)
+    path = tmp_path / "params.store"
+    size = store.save(path)
+    assert size == path.stat().st_size
+    again = px4params.Store.load(path, store.schema, classic=CLASSIC)
+    assert list(again.names()) == list(store.names())
+    for name in store.names():
+        assert again.get(name) == store.get(name)
+        assert again.get(name, default=True) == store.get(name, default=True)
+    assert again.state("INA238#0") == (False, False)  # loaded = saved
+
+
+def test_only_what_differs_is_written(store: px4params.Store, tmp_path: Path) -> None:
+    empty = encode_file(store)
+    assert len(empty) == HEADER.size + 4  # header and trailer, no record
+    store.add("INA238#1")  # presence is configuration: one record without payloads
+    one = encode_file(store)
+    assert len(one) == len(empty) + 5  # kind, parameter, instance, CRC-16
+
+
+def test_save_keeps_a_backup(store: px4params.Store, tmp_path: Path) -> None:
+    path = tmp_path / "params.store"
+    store.save(path)
+    first = path.read_bytes()
+    store.add("INA238#0")
+    store.save(path)
+    assert Path(str(path) + ".bak").read_bytes() == first
+    assert path.read_bytes() != first
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["params.store", "params.store.bak"]
+
+
+def test_load_resets_import_merges(store: px4params.Store, tmp_path: Path) -> None:
+    path = tmp_path / "params.store"
+    store.add("INA238#0")
+    store.save(path)
+    store.remove("INA238#0")
+    store.add("INA238#3")
+    store.import_from(path)
+    assert store.instances("INA238") == ["INA238#0", "INA238#3"]
+    store.load_from(path)
+    assert store.instances("INA238") == ["INA238#0"]
+
+
+def test_every_single_bit_flip_is_detected(store: px4params.Store, tmp_path: Path) -> None:
+    realistic(store)
+    path = tmp_path / "params.store"
+    store.save(path)
+    good = path.read_bytes()
+    target = px4params.Store(store.schema, classic=CLASSIC)
+    target.add("RM3100#1")
+    before = encode_file(target)
+    for bit in range(len(good) * 8):
+        bad = bytearray(good)
+        bad[bit // 8] ^= 0x80 >> (bit % 8)
+        path.write_bytes(bad)
+        with pytest.raises(StoreFileError) as info:
+            target.load_from(path)
+        assert "\n" not in str(info.value)
+        assert encode_file(target) == before, f"bit {bit} changed the store"
+
+
+def test_truncated_files_are_refused(store: px4params.Store, tmp_path: Path) -> None:
+    realistic(store)
+    path = tmp_path / "params.store"
+    store.save(path)
+    good = path.read_bytes()
+    for length in range(len(good)):
+        path.write_bytes(good[:length])
+        with pytest.raises(StoreFileError):
+            store.import_from(path)
+
+
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        (b"", "not a px4params store file (no PX4P header) (at byte 0)"),
+        (b"BSON\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00", "not a px4params store file"),
+        (b"PX4P\x02\x00\x00\x00\x00\x00", "store file format version 2 (this px4params reads 1)"),
+        (b"PX4P\x01\x00\x00\x00\x00\x00", "file is truncated (no trailer)"),
+    ],
+)
+def test_foreign_files(
+    store: px4params.Store, tmp_path: Path, content: bytes, message: str
+) -> None:
+    path = tmp_path / "x.store"
+    path.write_bytes(content)
+    with pytest.raises(StoreFileError) as info:
+        store.load_from(path)
+    assert str(info.value).startswith(f"{path}: ")
+    assert message in str(info.value)
+
+
+def test_file_of_another_schema(store: px4params.Store, tmp_path: Path) -> None:
+    body = HEADER.pack(MAGIC, 1, 0, 0x12345678)
+    path = tmp_path / "other.store"
+    path.write_bytes(body + struct.pack("<I", zlib.crc32(body)))
+    with pytest.raises(StoreFileError, match=r"written for another schema \(fingerprint "):
+        store.load_from(path)
+
+
+def test_missing_file(store: px4params.Store, tmp_path: Path) -> None:
+    with pytest.raises(StoreFileError, match=r"nope.store: cannot read: No such file"):
+        store.load_from(tmp_path / "nope.store")
+
+
+def test_unwritable_folder(store: px4params.Store, tmp_path: Path) -> None:
+    with pytest.raises(StoreFileError, match=r"cannot write: No such file or directory"):
+        store.save(tmp_path / "no" / "such" / "dir.store")
+
+
+def test_a_record_that_cannot_be_applied(store: px4params.Store, tmp_path: Path) -> None:
+    # Well-formed and CRC-correct, but instance 7 of a parameter with 4 slots.
+    path = tmp_path / "bad.store"
+    index = store.parameters.index("INA238")
+    write_records(path, store, [bytes([KIND_STRUCTURED]) + _varint(index) + _varint(7)])
+    with pytest.raises(StoreFileError) as info:
+        store.load_from(path)
+    assert "record cannot be applied: INA238#7: instance 7 is out of range" in str(info.value)
+    assert store.instances("INA238") == []
+
+
+def write_records(path: Path, store: px4params.Store, records: list[bytes]) -> None:
+    body = bytearray(HEADER.pack(MAGIC, 1, 0, fingerprint(store.specs)))
+    for r in records:
+        body += r + struct.pack("<H", _crc16(r))
+    body += struct.pack("<I", zlib.crc32(body))
+    path.write_bytes(bytes(body))
+
+
+def test_translation_from_an_older_version(store: px4params.Store, tmp_path: Path) -> None:
+    """A value stored by px.Ina238.1.0 (shunt in micro-ohms) loads as 1.1: bus and current are
+    carried over by name, the new float `shunt` takes its default, `shunt_uohm` is reported."""
+    old = store.schema["px.Ina238.1.0"]
+    value = {"bus": {"i2c": {"bus_id": 2, "address": 0x41}}, "current": 150, "shunt_uohm": 500}
+    payload = old.encode(value, tao=False)
+    index = store.parameters.index("INA238")
+    record = bytes([KIND_STRUCTURED | HAS_VALUE]) + _varint(index) + _varint(1)
+    record += _varint(len(payload)) + payload
+    path = tmp_path / "old.store"
+    write_records(path, store, [record])
+    report = store.load_from(path)
+    now = store.get("INA238#1")
+    assert now["p_version"] == 1
+    assert now["bus"]["i2c"] == {"p_version": 0, "bus_id": 2, "address": 0x41}
+    assert now["current"] == 150
+    assert now["shunt"] == pytest.approx(0.0003, rel=1e-3)  # its default
+    assert report == [
+        "INA238#1: translated px.Ina238.1.0 -> px.Ina238.1.1: kept bus.i2c.bus_id, "
+        "bus.i2c.address, current; new, from defaults: shunt; dropped: shunt_uohm=500"
+    ]
+    # Saved again, it is written in the new version.
+    store.save(path)
+    assert px4params.Store.load(path, store.schema, classic=CLASSIC).get("INA238#1") == now
+
+
+def test_translation_needs_the_old_type(store: px4params.Store, tmp_path: Path) -> None:
+    payload = bytearray(
+        store.schema["px.Ina238"].encode(
+            {"bus": {"i2c": {"bus_id": 1, "address": 1}}, "current": 1, "shunt": 1.0}, tao=False
+        )
+    )
+    payload[0] = (payload[0] & 0x0F) | 0x70  # p_version 7: no px.Ina238.1.7
+    index = store.parameters.index("INA238")
+    record = bytes([KIND_STRUCTURED | HAS_DEFAULT]) + _varint(index) + _varint(0)
+    record += _varint(len(payload)) + bytes(payload)
+    path = tmp_path / "future.store"
+    write_records(path, store, [record])
+    with pytest.raises(
+        StoreFileError,
+        match=r"INA238#0 was stored by px\.Ina238\.1\.7, which this schema does not have",
+    ):
+        store.load_from(path)
+
+
+SAVER = """
+import sys, px4params
+from px4params.classic import ClassicParam
+schema = px4params.load_schema(use_env=False)
+store = px4params.Store(schema)
+store.add("INA238#0")
+print("ready", flush=True)
+n = 0
+while True:
+    n = (n + 1) % 1000
+    store.set("INA238#0.current", n)
+    store.save(sys.argv[1])
+"""
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="uses SIGKILL")
+def test_killing_a_saving_process_never_loses_the_file(
+    schema: px4params.Schema, tmp_path: Path
+) -> None:
+    """A process saves again and again; it is killed at random moments, 40 times. Every time,
+    the file (and its backup) is intact: one complete save or the other, never a mix."""
+    path = tmp_path / "params.store"
+    rng = random.Random(1234)
+    seen_values: set[int] = set()
+    env = dict(os.environ)
+    for _ in range(40):
+        proc = subprocess.Popen(
+            [sys.executable, "-c", SAVER, str(path)], stdout=subprocess.PIPE, env=env
+        )
+        assert proc.stdout is not None
+        assert proc.stdout.readline().strip() == b"ready"
+        time.sleep(rng.uniform(0.0, 0.05))
+        proc.send_signal(signal.SIGKILL)
+        proc.wait()
+        for candidate in (path, Path(str(path) + ".bak")):
+            if candidate.exists():
+                loaded = px4params.Store.load(candidate, schema)
+                seen_values.add(loaded.get("INA238#0.current"))
+        assert path.exists() or not Path(str(path) + ".bak").exists()
+        leftovers = [p.name for p in tmp_path.iterdir() if p.name.startswith(".")]
+        for name in leftovers:  # a temporary file of an interrupted save: never the store
+            (tmp_path / name).unlink()
+    assert len(seen_values) > 1  # the kills really landed at different moments
