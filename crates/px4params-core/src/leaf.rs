@@ -10,7 +10,7 @@ use core::convert::Infallible;
 use crate::bits::{copy_bits, BitRead};
 use crate::codec::{read_scalar, scalar_bits, scalar_raw, tail_optimized, LeafKind, MAX_DEPTH};
 use crate::error::{Error, ErrorKind, Path, Step};
-use crate::layout::{Kind, Layout, NodeId, Role};
+use crate::layout::{FlatItem, Kind, Layout, NodeId, Role, Segment, Span};
 use crate::scalar::{self, Scalar};
 
 /// Which leaf to access.
@@ -206,6 +206,207 @@ pub fn encode_default(
     };
     t.node(root, tao, tao, false)?;
     Ok(t.finish())
+}
+
+/// Where leaf `[k]` of a value encoded without tail array optimization is, found by
+/// [`seek`]: cheaper than [`locate`] because it keeps no field path.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Position {
+    /// Where its bits start.
+    pub bit_offset: usize,
+    /// What it is.
+    pub kind: LeafKind,
+    /// The leaf is a `p_version` field.
+    pub version: bool,
+}
+
+impl Position {
+    /// Reads the leaf's value (a tag or length as [`Scalar::Uint`]).
+    pub fn read<R: BitRead + ?Sized>(&self, data: &R) -> Scalar {
+        match self.kind {
+            LeafKind::Scalar(kind) => read_scalar(data, self.bit_offset, kind),
+            LeafKind::Tag { bits, .. } | LeafKind::Len { bits, .. } => {
+                Scalar::Uint(read_uint(data, self.bit_offset, bits.into()))
+            }
+        }
+    }
+}
+
+/// Finds leaf `[k]` of `data`, a value of type `root` encoded without tail array optimization
+/// (as the store keeps values). `None` when there is no such leaf or the data is malformed:
+/// [`locate`] then says why.
+pub fn seek<R: BitRead + ?Sized>(
+    layout: &Layout<'_>,
+    root: NodeId,
+    data: &R,
+    k: usize,
+) -> Option<Position> {
+    let mut seek = Seek {
+        layout,
+        data,
+        pos: 0,
+        k,
+        depth: 0,
+    };
+    let found = seek.node(root, None).ok()??;
+    let bits = match found.kind {
+        LeafKind::Scalar(kind) => scalar_bits(kind),
+        LeafKind::Tag { bits, .. } | LeafKind::Len { bits, .. } => bits.into(),
+    };
+    (found.bit_offset + bits as usize <= data.bit_len()).then_some(found)
+}
+
+struct Seek<'l, 'a, 'd, R: ?Sized> {
+    layout: &'l Layout<'a>,
+    data: &'d R,
+    pos: usize,
+    k: usize,
+    depth: usize,
+}
+
+impl<R: BitRead + ?Sized> Seek<'_, '_, '_, R> {
+    /// `Err` gives up (malformed data), `Ok(None)` means not inside this node.
+    fn node(&mut self, id: NodeId, field: Option<u32>) -> Result<Option<Position>, ()> {
+        let layout = self.layout;
+        let node = layout.node(id);
+        if let Some(n) = node.fixed_leaves {
+            if self.k >= n as usize {
+                self.k -= n as usize;
+                self.pos += node.min_bits as usize;
+                return Ok(None);
+            }
+        }
+        self.depth += 1;
+        if self.depth > MAX_DEPTH {
+            return Err(());
+        }
+        let version = field
+            .and_then(|f| layout.fields.get(f as usize))
+            .is_some_and(|f| matches!(f.role, Role::Version(_)));
+        let here = |kind| Position {
+            bit_offset: self.pos,
+            kind,
+            version: version && matches!(kind, LeafKind::Scalar(_)),
+        };
+        let found = match node.kind {
+            kind @ (Kind::Uint { .. } | Kind::Int { .. } | Kind::Float { .. } | Kind::Bool) => {
+                Some(here(LeafKind::Scalar(kind)))
+            }
+            Kind::Void { .. } => None,
+            Kind::Struct { .. } => self.segments(node.segments)?,
+            Kind::Union {
+                first,
+                count,
+                tag_bits,
+            } => {
+                if self.k == 0 {
+                    Some(here(LeafKind::Tag {
+                        bits: tag_bits,
+                        union: id,
+                    }))
+                } else {
+                    self.k -= 1;
+                    let tag = self.count(tag_bits, count - 1)?;
+                    let variant = first + tag;
+                    self.node(layout.fields[variant as usize].node, Some(variant))?
+                }
+            }
+            Kind::Array { elem, len } => self.elements(elem, len, field)?,
+            Kind::DynArray {
+                elem,
+                max,
+                len_bits,
+            } => {
+                if self.k == 0 {
+                    Some(here(LeafKind::Len {
+                        bits: len_bits,
+                        array: id,
+                    }))
+                } else {
+                    self.k -= 1;
+                    let n = self.count(len_bits, max)?;
+                    self.elements(elem, n, field)?
+                }
+            }
+        };
+        self.depth -= 1;
+        Ok(found)
+    }
+
+    /// Looks through a struct's segments, skipping whole fixed-shape runs by their counts.
+    fn segments(&mut self, segments: Span) -> Result<Option<Position>, ()> {
+        let layout = self.layout;
+        for segment in segments.of(layout.segments) {
+            match *segment {
+                Segment::Flat {
+                    items,
+                    leaves,
+                    bits,
+                    ..
+                } => {
+                    if self.k >= leaves as usize {
+                        self.k -= leaves as usize;
+                        self.pos += bits as usize;
+                        continue;
+                    }
+                    for item in items.of(layout.flat) {
+                        let (kind, version) = match *item {
+                            FlatItem::Pad(bits) => {
+                                self.pos += usize::from(bits);
+                                continue;
+                            }
+                            FlatItem::Leaf(kind) => (kind, false),
+                            FlatItem::Version(kind, _) => (kind, true),
+                        };
+                        if self.k == 0 {
+                            return Ok(Some(Position {
+                                bit_offset: self.pos,
+                                kind: LeafKind::Scalar(kind),
+                                version,
+                            }));
+                        }
+                        self.k -= 1;
+                        self.pos += scalar_bits(kind) as usize;
+                    }
+                    return Err(()); // the counts and the items disagree: a malformed layout
+                }
+                Segment::Field(f) => {
+                    let found = self.node(layout.fields[f as usize].node, Some(f))?;
+                    if found.is_some() {
+                        return Ok(found);
+                    }
+                }
+            }
+        }
+        Ok(None)
+    }
+
+    fn elements(
+        &mut self,
+        elem: NodeId,
+        n: u32,
+        field: Option<u32>,
+    ) -> Result<Option<Position>, ()> {
+        for _ in 0..n {
+            if let Some(found) = self.node(elem, field)? {
+                return Ok(Some(found));
+            }
+        }
+        Ok(None)
+    }
+
+    /// Reads a union tag or array length of `bits` bits that must not exceed `max`.
+    fn count(&mut self, bits: u8, max: u32) -> Result<u32, ()> {
+        if self.pos + bits as usize > self.data.bit_len() {
+            return Err(());
+        }
+        let n = read_uint(self.data, self.pos, bits.into());
+        if n > u64::from(max) {
+            return Err(());
+        }
+        self.pos += bits as usize;
+        Ok(n as u32)
+    }
 }
 
 fn read_uint<R: BitRead + ?Sized>(data: &R, offset: usize, bits: u32) -> u64 {

@@ -24,7 +24,7 @@ use crate::bits::write_bits;
 use crate::codec::{self, ArrayLen, At, EncodeOptions, LeafKind, Sink, Source};
 use crate::error::{Error, ErrorKind, Path, Step};
 use crate::layout::{Layout, NodeId, Role};
-use crate::leaf::{self, Leaf, Target};
+use crate::leaf::{self, Leaf, Position, Target};
 use crate::scalar::{self, Scalar};
 
 /// Stored values never use tail array optimization: each one delimits itself.
@@ -468,6 +468,26 @@ where
         Ok(leaf::get_leaf(layout, def.root, data, target, false)?)
     }
 
+    /// Reads leaf `[k]` of an instance's value or default: the fast path for drivers (no field
+    /// path is kept; errors are worked out by [`Store::get_leaf`]).
+    pub fn read(
+        &self,
+        layout: &Layout<'_>,
+        param: u32,
+        instance: u16,
+        which: Which,
+        k: usize,
+    ) -> Result<Scalar> {
+        let def = self.def(param)?;
+        let data = self.get(param, instance, which)?;
+        match leaf::seek(layout, def.root, data, k) {
+            Some(found) => Ok(found.read(data)),
+            None => self
+                .get_leaf(layout, param, instance, which, Target::Index(k))
+                .map(|(_, value)| value),
+        }
+    }
+
     /// Writes a leaf of an instance's value or default. A primitive leaf is written in place;
     /// a union tag or array length re-encodes the value (see [`leaf::set_leaf`]). Writing a
     /// default also writes the value when the value was equal to the old default, as PX4's
@@ -486,16 +506,50 @@ where
         let def = self.def(param)?;
         let index = self.present_slot(&def, instance)?;
         let data = self.region(&def, index, which);
-        let found = leaf::locate(layout, def.root, data, target, false)?;
-        if is_version(layout, &found.path) {
-            return Err(StoreError::VersionLeaf { path: found.path });
-        }
-        if let LeafKind::Scalar(kind) = found.kind {
-            let raw = codec::scalar_raw(kind, value, saturate).map_err(|e| Error {
-                kind: ErrorKind::Scalar(e),
-                bit_offset: found.bit_offset,
-                path: found.path,
-            })?;
+        let fast = match target {
+            Target::Index(k) => leaf::seek(layout, def.root, data, k)
+                .filter(|p| matches!(p.kind, LeafKind::Scalar(_)) && !p.version),
+            Target::Path(_) => None,
+        };
+        let (bit_offset, kind) = match fast {
+            Some(Position {
+                bit_offset,
+                kind: LeafKind::Scalar(kind),
+                ..
+            }) => (bit_offset, Some(kind)),
+            _ => {
+                let found = leaf::locate(layout, def.root, data, target, false)?;
+                if is_version(layout, &found.path) {
+                    return Err(StoreError::VersionLeaf { path: found.path });
+                }
+                match found.kind {
+                    LeafKind::Scalar(kind) => {
+                        // Convert here, where the path for the error is known.
+                        codec::scalar_raw(kind, value, saturate).map_err(|e| Error {
+                            kind: ErrorKind::Scalar(e),
+                            bit_offset: found.bit_offset,
+                            path: found.path,
+                        })?;
+                        (found.bit_offset, Some(kind))
+                    }
+                    _ => (found.bit_offset, None),
+                }
+            }
+        };
+        if let Some(kind) = kind {
+            let raw = match codec::scalar_raw(kind, value, saturate) {
+                Ok(raw) => raw,
+                // Only the fast path gets here: find the field path for the error.
+                Err(e) => {
+                    let data = self.region(&def, index, which);
+                    let found = leaf::locate(layout, def.root, data, target, false)?;
+                    return Err(StoreError::Codec(Error {
+                        kind: ErrorKind::Scalar(e),
+                        bit_offset,
+                        path: found.path,
+                    }));
+                }
+            };
             let follows = which == Which::Default && self.values_equal(&def, index);
             let bits = codec::scalar_bits(kind);
             let stream = scalar::to_stream(raw, bits);
@@ -506,7 +560,7 @@ where
             for w in targets.into_iter().flatten() {
                 let (start, _) = self.span(&def, index, w);
                 let bytes = self.bytes.as_mut();
-                write_bits(&mut bytes[start..], found.bit_offset, stream, bits);
+                write_bits(&mut bytes[start..], bit_offset, stream, bits);
             }
             self.slots.as_mut()[index].flags |= UNSAVED;
             return Ok(());
