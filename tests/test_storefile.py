@@ -271,3 +271,22 @@ def test_killing_a_saving_process_never_loses_the_file(
         for name in leftovers:  # a temporary file of an interrupted save: never the store
             (tmp_path / name).unlink()
     assert len(seen_values) > 1  # the kills really landed at different moments
+
+
+def test_classic_values_of_unknown_parameters_are_kept(
+    schema: px4params.Schema, tmp_path: Path
+) -> None:
+    """A store opened with fewer classic parameters keeps the others' records and saves them
+    back unchanged."""
+    full = px4params.Store(schema, classic=CLASSIC)
+    full.set("BAT1_CAPACITY", 4200.0)
+    path = tmp_path / "params.store"
+    full.save(path)
+    fewer = px4params.Store(schema, classic=CLASSIC[:1])
+    report = fewer.load_from(path)
+    assert report == ["BAT1_CAPACITY: not a classic parameter of this store; kept unchanged"]
+    fewer.set("SYS_AUTOSTART", 4001)
+    fewer.save(path)
+    again = px4params.Store.load(path, schema, classic=CLASSIC)
+    assert again.get("BAT1_CAPACITY") == 4200.0
+    assert again.get("SYS_AUTOSTART") == 4001

@@ -18,6 +18,7 @@ from typing import Any
 from .errors import Px4ParamsError
 
 __all__ = [
+    "BUNDLED_CLASSIC",
     "CLASSIC_ENV",
     "ClassicParam",
     "ClassicParamsError",
@@ -27,6 +28,9 @@ __all__ = [
 
 #: Environment variable naming the ``parameters.json`` whose classic parameters the store holds.
 CLASSIC_ENV = "PX4PARAMS_PARAMETERS_JSON"
+#: The classic parameters used when none are named: the few that airframes next to a device
+#: manifest and the migration from today's configuration need (``data/classic_parameters.json``).
+BUNDLED_CLASSIC = os.path.join(os.path.dirname(__file__), "data", "classic_parameters.json")
 
 INT32_MIN, INT32_MAX = -(2**31), 2**31 - 1
 _TYPES = ("Int32", "Float")

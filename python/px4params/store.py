@@ -126,6 +126,8 @@ class Store:
             self._native.set_type_default(p.index, self._type_default(p))
         self._native.mark_saved()
         self._initial = self._native.copy()
+        #: Classic records of a loaded file whose parameters this store lacks, kept to be saved.
+        self._foreign: dict[str, bytes] = {}
 
     def _type_default(self, p: _Param) -> bytes:
         if p.classic is not None:

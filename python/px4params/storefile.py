@@ -62,6 +62,8 @@ def encode_file(store: Store) -> bytes:
             record = _record(store, p, instance)
             if record is not None:
                 out += record + struct.pack("<H", _crc16(record))
+    for record in store._foreign.values():  # classic values of parameters this store lacks
+        out += record + struct.pack("<H", _crc16(record))
     out += TRAILER.pack(zlib.crc32(out))
     return bytes(out)
 
@@ -163,6 +165,8 @@ class Record:
     instance: int
     default: bytes | None
     value: bytes | None
+    #: The record's bytes without its CRC.
+    raw: bytes = b""
 
 
 def read_file(path: str | os.PathLike[str], fp: int) -> list[Record]:
@@ -266,7 +270,8 @@ class _Reader:
                 payloads.append(None)
         if self.pos + 2 > self.end:
             raise self.fail("it runs past the end of the file")
-        return Record(self.start, kind, key, instance, payloads[0], payloads[1])
+        raw = self.data[self.start : self.pos]
+        return Record(self.start, kind, key, instance, payloads[0], payloads[1], raw)
 
 
 # -- applying -----------------------------------------------------------------------------------
@@ -279,25 +284,35 @@ def apply_file(store: Store, path: str | os.PathLike[str], *, merge: bool) -> li
     records = read_file(where, fingerprint(store.specs))
     work = store._native.copy() if merge else store._initial.copy()
     report: list[str] = []
+    foreign = dict(store._foreign) if merge else {}
     by_index = {p.index: p for p in store._order if p.spec is not None}
     for record in records:
         try:
-            _apply(store, work, record, by_index, report)
+            _apply(store, work, record, by_index, report, foreign)
         except Px4ParamsError as e:
             raise StoreFileError(f"record cannot be applied: {e}", where, record.offset) from None
     work.mark_saved()
     store._native.restore(work)
+    store._foreign = foreign
     return report
 
 
 def _apply(
-    store: Store, work: Any, record: Record, by_index: Mapping[int, _Param], report: list[str]
+    store: Store,
+    work: Any,
+    record: Record,
+    by_index: Mapping[int, _Param],
+    report: list[str],
+    foreign: dict[str, bytes],
 ) -> None:
     if record.kind == KIND_CLASSIC:
         assert isinstance(record.key, str)
         p = store._params.get(record.key)
         if p is None or p.classic is None:
-            report.append(f"{record.key}: not a classic parameter of this store; dropped")
+            # Kept as it is and written back by the next save: nothing is lost because this
+            # store was opened with another set of classic parameters.
+            foreign[record.key] = record.raw
+            report.append(f"{record.key}: not a classic parameter of this store; kept unchanged")
             return
         for payload, default in ((record.default, True), (record.value, False)):
             if payload is not None:
