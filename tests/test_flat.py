@@ -1,0 +1,303 @@
+"""Destructured (flat) parameters: letters over the type, live leaves, round trips, refusals."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import px4params
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from px4params import flat
+from px4params.classic import ClassicParam
+from px4params.errors import InstanceError, LeafError, Px4ParamsError
+from strategies import value_strategy
+
+BUNDLED_PX = [key for key in px4params.load_schema(use_env=False) if key.startswith("px.")]
+
+# A type with every leaf kind the bundled ones lack: static and dynamic arrays (of structs and
+# unions), bool, int32, uint32, float32, a top-level union.
+EXTRA_DSDL = {
+    "Inner.1.0.dsdl": "uint4 p_version\nbool flag\nint7 y\n@sealed\n",
+    "Choice.1.0.dsdl": "@union\nuint8 a\nfloat32 b\nint3[2] c\n@sealed\n",
+    "Arrays.1.0.dsdl": (
+        "# Arrays\n# @max_instances 2\n\n"
+        "uint4 p_version\nInner.1.0[2] pair\nuint8[<=3] dyn\nInner.1.0[<=2] items\n"
+        "Choice.1.0[<=2] choices\nChoice.1.0 choice\nuint32 big\nint32 neg\nfloat32 f\n@sealed\n"
+    ),
+}
+
+
+def dsdl_root(tmp: Path, files: dict[str, str], namespace: str = "tst") -> Path:
+    root = tmp / namespace
+    root.mkdir(parents=True, exist_ok=True)
+    for name, text in files.items():
+        (root / name).write_text(text)
+    return root
+
+
+@pytest.fixture(scope="module")
+def extra_schema(tmp_path_factory: pytest.TempPathFactory) -> px4params.Schema:
+    tmp = tmp_path_factory.mktemp("flat")
+    root = dsdl_root(tmp, EXTRA_DSDL)
+    return px4params.load_schema([root], use_env=False, cache_dir=tmp / "cache")
+
+
+@pytest.fixture
+def store(schema: px4params.Schema) -> px4params.Store:
+    return px4params.Store(schema, classic=[ClassicParam("SYS_AUTOSTART", "Int32", 0)])
+
+
+def test_letters() -> None:
+    assert [flat.letters(n) for n in (0, 1, 25, 26, 27, 51, 52, 701, 702)] == [
+        "A", "B", "Z", "AA", "AB", "AZ", "BA", "ZZ", "AAA",
+    ]  # fmt: skip
+    with pytest.raises(ValueError):
+        flat.letters(-1)
+
+
+def test_talk_names(store: px4params.Store) -> None:
+    """SPEC: INA238#1.bus_type -> INA238_1A, .i2c.bus_id -> INA238_1B, .i2c.address -> 1C."""
+    store.add("INA238#1")
+    table = {row.name: row for row in flat.flat_table(store)}
+    assert list(table) == ["INA238_1A", "INA238_1B", "INA238_1C", "INA238_1P", "INA238_1Q"]
+    assert [table[n].path for n in table] == [
+        "bus._tag", "bus.i2c.bus_id", "bus.i2c.address", "current", "shunt",
+    ]  # fmt: skip
+    assert [table[n].leaf for n in table] == [f"INA238#1[{k}]" for k in (1, 3, 4, 5, 6)]
+    assert flat.resolve_flat(store, "INA238_1C") == "INA238#1[4]"
+    assert flat.resolve_flat(store, "ina238_1c") == "INA238#1[4]"  # PX4 names are upper case
+    assert table["INA238_1C"].mav_type == "int32"
+    assert table["INA238_1Q"].mav_type == "float32"
+    assert table["INA238_1Q"].value == store.get("INA238#1.shunt")  # float16 exactly
+
+
+def test_letters_do_not_move_when_the_variant_changes(store: px4params.Store) -> None:
+    store.add("INA238#1")
+    flat.set_flat(store, "INA238_1C", 0x46)
+    assert store.get("INA238#1.bus.i2c.address") == 0x46
+    flat.set_flat(store, "INA238_1A", 1)  # select SPI: its leaves appear, I2C's go
+    names = [row.name for row in flat.flat_table(store)]
+    assert names == [f"INA238_1{x}" for x in "ADEFGPQ"]
+    assert flat.resolve_flat(store, "INA238_1E") == "INA238#1[4]"  # spi.chip_select is [4] now
+    assert flat.resolve_flat(store, "INA238_1P") == "INA238#1[7]"  # current: [k] moved, P not
+    with pytest.raises(LeafError, match=r"^INA238_1C \(INA238#1.bus.i2c.address\) is not live: "
+                       r"bus._tag selects variant 1, not 0 \(set INA238_1A to 0\)$"):  # fmt: skip
+        flat.resolve_flat(store, "INA238_1C")
+    flat.set_flat(store, "INA238_1A", 0)
+    names = [row.name for row in flat.flat_table(store)]
+    assert names == [f"INA238_1{x}" for x in "ABCPQ"]
+
+
+def test_every_bundled_letter_map_is_listed(schema: px4params.Schema) -> None:
+    lay = flat.layout(schema["px.Ina238"])
+    assert "".join(s.letter for s in lay) == "ABCDEFGHIJKLMNOPQ"
+    assert lay.slot("A").role == "union_tag" and (lay.slot("A").min, lay.slot("A").max) == (0, 5)
+    assert lay.slot("D").requires == (("bus._tag", "==", 1),)
+    assert lay.slot_for_path("shunt").type == "float16"
+    assert lay.slot("Z") is None and len(lay) == 17
+
+
+def test_values_as_carried(extra_schema: px4params.Schema) -> None:
+    store = px4params.Store(extra_schema)
+    store.add("ARRAYS#0")
+    store.set("ARRAYS#0.big", 0xFFFFFFFF)
+    store.set("ARRAYS#0.pair[1].flag", True)
+    rows = {row.path: row for row in flat.flat_table(store)}
+    assert rows["big"].value == -1  # uint32 travels as its bit pattern
+    assert rows["pair[1].flag"].value == 1 and rows["pair[1].flag"].type == "bool"
+    flat.set_flat(store, rows["big"].name, -2)
+    assert store.get("ARRAYS#0.big") == 0xFFFFFFFE
+    flat.set_flat(store, rows["big"].name, 7.0)  # an integral float is an integer
+    assert store.get("ARRAYS#0.big") == 7
+    # dynamic array: the length is a leaf, elements are live below it
+    length = rows["dyn._len"].name
+    assert "dyn[0]" not in rows
+    flat.set_flat(store, length, 2)
+    rows = {row.path: row for row in flat.flat_table(store)}
+    assert "dyn[1]" in rows and "dyn[2]" not in rows
+    hidden = flat.flat_map(store).layout_of("ARRAYS").slot_for_path("dyn[2]")
+    name = f"ARRAYS_0{hidden.letter}"
+    with pytest.raises(LeafError, match=rf"^{name} \(ARRAYS#0.dyn\[2\]\) is not live: "
+                       rf"dyn._len is 2 \(set {length} above 2\)$"):  # fmt: skip
+        flat.get_flat(store, name)
+
+
+def test_refused_flat_values(store: px4params.Store) -> None:
+    store.add("IST8310#0")
+    rows = {row.path: row.name for row in flat.flat_table(store)}
+    internal = rows["internal"]
+    with pytest.raises(flat.FlatError, match=rf"^{internal} \(IST8310#0.internal\): value 2 is "
+                       r"not a boolean \(expected 0 or 1\)$"):  # fmt: skip
+        flat.set_flat(store, internal, 2)
+    with pytest.raises(flat.FlatError, match=r"expected an integer, got 1.5$"):
+        flat.set_flat(store, rows["bus.i2c.address"], 1.5)
+    store.add("INA238#0")
+    with pytest.raises(flat.FlatError, match=r"^INA238_0Q \(INA238#0.shunt\): expected a number, "
+                       r"got 'x'$"):  # fmt: skip
+        flat.set_flat(store, "INA238_0Q", "x")
+    with pytest.raises(px4params.EncodeError, match=r"value 200 is out of range"):
+        flat.set_flat(store, rows["bus.i2c.address"], 200)
+    assert store.get("IST8310#0.bus.i2c.address") == 0x0E  # refused: unchanged
+    with pytest.raises(InstanceError, match=r"^'SYS_AUTOSTART' is not a destructured parameter"):
+        flat.resolve_flat(store, "SYS_AUTOSTART")
+    with pytest.raises(InstanceError, match=r"^IST8310_1B belongs to IST8310#1, which does not "
+                       r"exist \(add it first: param add IST8310#1\)$"):  # fmt: skip
+        flat.resolve_flat(store, "IST8310_1B")
+
+
+def test_default_writes(store: px4params.Store) -> None:
+    store.add("INA238#0")
+    flat.set_flat(store, "INA238_0P", 200, default=True)
+    assert store.get("INA238#0.current", default=True) == 200
+    assert not store.changed("INA238#0")
+
+
+# -- round trips ------------------------------------------------------------------------------
+
+
+def _round_trip(data_type: px4params.DataType, value: dict) -> None:
+    data = data_type.encode(value, tao=False)
+    letters = flat.to_flat(data_type, data)
+    back = flat.from_flat(data_type, letters)
+    assert data_type.encode(back, tao=False) == data
+    # every leaf but p_version is offered, and under the letter of its path
+    lay = flat.layout(data_type)
+    paths = [leaf.path for leaf in data_type.leaves(data, tao=False)]
+    offered = [p for p in paths if not p.endswith("p_version")]
+    assert [lay.slot(x).path for x in letters] == offered
+
+
+@pytest.mark.parametrize("key", BUNDLED_PX)
+def test_round_trip_bundled(schema: px4params.Schema, key: str) -> None:
+    """structured -> flat -> structured is identical for random values of every bundled type."""
+    data_type = schema[key]
+
+    @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+    @given(value_strategy(schema.model["types"], key))
+    def check(value: dict) -> None:
+        _round_trip(data_type, value)
+
+    check()
+
+
+def test_round_trip_arrays_and_unions(extra_schema: px4params.Schema) -> None:
+    data_type = extra_schema["tst.Arrays"]
+
+    @settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+    @given(value_strategy(extra_schema.model["types"], "tst.Arrays.1.0"))
+    def check(value: dict) -> None:
+        _round_trip(data_type, value)
+
+    check()
+    top = extra_schema["tst.Choice"]
+    assert flat.to_flat(top, {"c": [1, -2]}) == {"A": 2, "D": 1, "E": -2}
+    assert flat.from_flat(top, {"A": 1, "C": 2.5}) == {"b": 2.5}
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(data=st.data())
+def test_round_trip_through_the_store(schema: px4params.Schema, data: st.DataObject) -> None:
+    """Flat values written one by one in letter order rebuild the instance exactly."""
+    source = px4params.Store(schema)
+    target = px4params.Store(schema)
+    for spec in source.specs:
+        instance = f"{spec.name}#1"
+        key = spec.data_type.key
+        source.add(instance)
+        target.add(instance)
+        source.set(instance, data.draw(value_strategy(schema.model["types"], key)))
+    for row in flat.flat_table(source):
+        flat.set_flat(target, row.name, row.value)
+    for spec in source.specs:
+        assert target.encoded(f"{spec.name}#1") == source.encoded(f"{spec.name}#1")
+
+
+def test_from_flat_refusals(schema: px4params.Schema) -> None:
+    ina = schema["px.Ina238"]
+    good = flat.to_flat(ina, {"bus": {"i2c": {"bus_id": 1, "address": 69}}, "current": 2,
+                              "shunt": 0.5})  # fmt: skip
+    assert good == {"A": 0, "B": 1, "C": 69, "P": 2, "Q": 0.5}
+    with pytest.raises(flat.FlatError, match=r"^px.Ina238.1.1: letter C \(bus.i2c.address\) "
+                       r"is missing$"):  # fmt: skip
+        flat.from_flat(ina, {k: v for k, v in good.items() if k != "C"})
+    with pytest.raises(flat.FlatError, match=r"^px.Ina238.1.1: letters not live in this value: "
+                       r"D \(bus.spi.bus_id\), ZZ \(no such letter\)$"):  # fmt: skip
+        flat.from_flat(ina, {**good, "D": 1, "ZZ": 0})
+    with pytest.raises(flat.FlatError, match=r"^px.Ina238.1.1: bus._tag: no variant 7 "
+                       r"\(expected 0 to 5\)$"):  # fmt: skip
+        flat.from_flat(ina, {**good, "A": 7})
+    with pytest.raises(flat.FlatError, match=r"^px.Ina238.1.1: letter P \(current\): expected "
+                       r"an integer, got 2.5$"):  # fmt: skip
+        flat.from_flat(ina, {**good, "P": 2.5})
+
+
+def test_from_flat_refuses_a_long_array(extra_schema: px4params.Schema) -> None:
+    arrays = extra_schema["tst.Arrays"]
+    letters = flat.to_flat(arrays, {"pair": [{"flag": False, "y": 0}] * 2, "dyn": [], "items": [],
+                                    "choices": [], "choice": {"a": 1}, "big": 0, "neg": 0,
+                                    "f": 0.0})  # fmt: skip
+    length = flat.layout(arrays).slot_for_path("dyn._len").letter
+    with pytest.raises(flat.FlatError, match=r"dyn._len: length 4 is out of range \(expected 0 "
+                       r"to 3\)$"):  # fmt: skip
+        flat.from_flat(arrays, {**letters, length: 4})
+
+
+# -- refused at load --------------------------------------------------------------------------
+
+
+def _store_with(tmp_path: Path, files: dict[str, str], **kwargs: object) -> px4params.Store:
+    root = dsdl_root(tmp_path, files, "bad")
+    schema = px4params.load_schema([root], use_env=False, cache_dir=tmp_path / "cache")
+    return px4params.Store(schema, **kwargs)  # type: ignore[arg-type]
+
+
+def test_wide_leaf_refused(tmp_path: Path) -> None:
+    store = _store_with(tmp_path, {"Wide.1.0.dsdl": "# W\n# @max_instances 2\n\nuint4 p_version\n"
+                                   "float64 x\n@sealed\n"})  # fmt: skip
+    with pytest.raises(flat.FlatError, match=r"^bad.Wide.1.0: leaf x is float64: destructured "
+                       r"parameters carry at most 32 bits \(MAVLink\), so this type cannot be "
+                       r"a parameter$"):  # fmt: skip
+        flat.flat_map(store)
+
+
+def test_long_name_refused(tmp_path: Path) -> None:
+    files = {"Long.1.0.dsdl": "# L\n# @param LONGNAME_PARAM\n# @max_instances 12\n\n"
+             "uint4 p_version\nuint8 x\n@sealed\n"}  # fmt: skip
+    with pytest.raises(flat.FlatError, match=r"^LONGNAME_PARAM: destructured name "
+                       r"LONGNAME_PARAM_0A has 17 characters \(at most 16\): bad.Long.1.0 has 1 "
+                       r"flat leaves; shorten the parameter name or the type$"):  # fmt: skip
+        flat.flat_map(_store_with(tmp_path, files))
+
+
+def test_clash_with_classic_refused(tmp_path: Path) -> None:
+    files = {"Foo.1.0.dsdl": "# F\n# @max_instances 2\n\nuint4 p_version\nuint8 x\n@sealed\n"}
+    store = _store_with(tmp_path, files, classic=[ClassicParam("FOO_1A", "Int32", 0)])
+    with pytest.raises(flat.FlatError, match=r"^FOO: destructured name FOO_1A \(FOO#1.x\) is "
+                       r"the name of a classic parameter$"):  # fmt: skip
+        flat.flat_map(store)
+
+
+def test_clash_with_structured_refused(tmp_path: Path) -> None:
+    files = {
+        "Foo.1.0.dsdl": "# F\n# @max_instances 2\n\nuint4 p_version\nuint8 x\n@sealed\n",
+        "Bar.1.0.dsdl": "# B\n# @param FOO_0A\n\nuint4 p_version\nuint8 y\n@sealed\n",
+    }
+    with pytest.raises(flat.FlatError, match=r"^FOO: destructured name FOO_0A \(FOO#0.x\) is "
+                       r"the name of a structured parameter$"):  # fmt: skip
+        flat.flat_map(_store_with(tmp_path, files))
+
+
+def test_shared_parameter_names(tmp_path: Path) -> None:
+    files = {"Foo.1.0.dsdl": "# F\n# @param FOO_SHARED\n\nuint4 p_version\nbool on\nint8 t\n"
+             "@sealed\n"}  # fmt: skip
+    store = _store_with(tmp_path, files)
+    rows = flat.flat_table(store)  # a shared parameter always exists, without a number
+    assert [r.name for r in rows] == ["FOO_SHARED_A", "FOO_SHARED_B"]
+    assert flat.resolve_flat(store, "FOO_SHARED_B") == "FOO_SHARED[2]"
+    flat.set_flat(store, "FOO_SHARED_A", 1)
+    assert store.get("FOO_SHARED.on") is True
+
+
+def test_errors_are_px4params_errors() -> None:
+    assert issubclass(flat.FlatError, Px4ParamsError)
