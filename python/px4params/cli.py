@@ -11,6 +11,8 @@ import sys
 from collections.abc import Callable, Sequence
 from typing import Any, TextIO
 
+from .airframe import add_run_parser
+from .cli_param import add_param_parser
 from .errors import Px4ParamsError
 from .schema import DataType, Schema, load_schema, to_json_value
 
@@ -349,6 +351,8 @@ example:
     p.set_defaults(func=cmd_demo)
 
     add_devid_parser(sub)
+    add_param_parser(sub)
+    add_run_parser(sub)
     return parser
 
 

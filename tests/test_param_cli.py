@@ -1,0 +1,422 @@
+"""`px4params param ...` and `px4params run`: every verb, and bad input with its message."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from px4params import cli
+
+TALK = """\
+param add INA238#0
+param set-default INA238#0[3] 1
+param set-default INA238#0[4] 0x45
+param set-default INA238#0[5] 200
+param set-default INA238#0[6] 0.0003
+"""
+
+
+@pytest.fixture
+def store(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+    path = tmp_path / "vehicle.store"
+    monkeypatch.setenv("PX4PARAMS_STORE", str(path))
+    monkeypatch.delenv("PX4PARAMS_PARAMETERS_JSON", raising=False)
+    return path
+
+
+def run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
+    code = cli.main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def param(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
+    return run(capsys, "param", *argv)
+
+
+def airframe(tmp_path: Path, text: str, name: str = "test.airframe") -> str:
+    path = tmp_path / name
+    path.write_text(text)
+    return str(path)
+
+
+def talk(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
+    assert run(capsys, "run", airframe(tmp_path, TALK, "talk.airframe"))[0] == 0
+
+
+def test_the_talks_five_lines(
+    store: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    talk(capsys, tmp_path)
+    code, out, _ = param(capsys, "show")
+    assert code == 0
+    lines = out.splitlines()
+    assert lines[0] == "Symbols: x = used, + = saved, * = unsaved"
+    assert lines[1] == (
+        "    INA238#0 [-1,4] : {bus: {i2c: {bus_id: 1, address: 69}}, current: 200, shunt: 0.0003}"
+    )
+    code, out, _ = param(capsys, "show", "-l", "INA238#0")
+    assert code == 0
+    rows = [line.split() for line in out.splitlines()]
+    assert rows == [
+        ["[0]", "p_version", "uint4", "1", "1"],
+        ["[1]", "bus._tag", "uint3", "0", "0"],
+        ["[2]", "bus.i2c.p_version", "uint4", "0", "0"],
+        ["[3]", "bus.i2c.bus_id", "uint4", "1", "1"],
+        ["[4]", "bus.i2c.address", "uint7", "69", "69"],
+        ["[5]", "current", "uint10", "200", "200", "A"],
+        ["[6]", "shunt", "float16", "0.0003", "0.0003", "Ohm"],
+    ]
+
+
+def test_set_changes_and_marks_unsaved_then_saved(
+    store: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    talk(capsys, tmp_path)
+    assert param(capsys, "set", "INA238#0.bus.i2c.address", "0x46")[0] == 0
+    _, out, _ = param(capsys, "show", "-c")
+    assert "  + INA238#0 [-1,4] : {bus: {i2c: {bus_id: 1, address: 70}}" in out
+    _, out, _ = param(capsys, "show", "--json", "INA*")
+    [row] = json.loads(out)
+    assert row["value"]["bus"]["i2c"]["address"] == 70
+    assert row["default"]["bus"]["i2c"]["address"] == 69
+    assert row["changed"] and row["saved"]
+
+
+def test_add_rm_instances_find_status(store: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert param(capsys, "add", "INA238", "INA238") == (0, "INA238#0\nINA238#1\n", "")
+    assert param(capsys, "add", "AK09916#2")[0] == 0
+    assert param(capsys, "rm", "INA238#0")[0] == 0
+    assert param(capsys, "instances", "INA238") == (0, "INA238#1\n", "")
+    assert param(capsys, "instances", "INA238", "--json") == (0, '["INA238#1"]\n', "")
+    assert param(capsys, "find", "INA238#1") == (0, "Found param INA238 at index 4\n", "")
+    _, out, _ = param(capsys, "status", "--json")
+    status = json.loads(out)
+    assert status["instances"] == 2 and status["store"] == str(store)
+    _, out, _ = param(capsys, "status")
+    assert "instances: 2 (AK09916#2, INA238#1)" in out
+
+
+def test_whole_values_as_json(store: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    param(capsys, "add", "INA238#0")
+    value = (
+        '{"bus": {"spi": {"bus_id": 1, "chip_select": 2, "max_frequency": 8000, "mode": 0}}, '
+        '"current": 10, "shunt": 0.001}'
+    )
+    assert param(capsys, "set", "INA238#0", value)[0] == 0
+    assert param(capsys, "show", "-q", "INA238#0.bus.spi.chip_select") == (0, "2\n", "")
+    assert param(capsys, "compare", "INA238#0", value)[0] == 0
+
+
+def test_classic_parameters(store: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert param(capsys, "set", "SYS_AUTOSTART", "4001")[0] == 0
+    assert param(capsys, "set", "BAT1_CAPACITY", "5000.5", "fail")[0] == 0
+    assert param(capsys, "show", "-q", "SYS_AUTOSTART") == (0, "4001\n", "")
+    assert param(capsys, "compare", "SYS_AUTOSTART", "1", "4001")[0] == 0
+    assert param(capsys, "compare", "SYS_AUTOSTART", "1")[0] == 1
+    assert param(capsys, "greater", "BAT1_CAPACITY", "5000")[0] == 0
+    assert param(capsys, "greater", "BAT1_CAPACITY", "6000")[0] == 1
+    _, out, _ = param(capsys, "show", "-a", "BAT1_*")
+    assert "  + BAT1_CAPACITY [-1,16] : 5000.5" in out
+    assert "    BAT1_N_CELLS [-1,15] : 0" in out
+    assert param(capsys, "reset", "BAT1_*")[0] == 0
+    assert param(capsys, "show", "-q", "BAT1_CAPACITY") == (0, "-1\n", "")
+    assert param(capsys, "reset_all", "SYS_AUTOSTART")[0] == 0
+    assert param(capsys, "show", "-q", "SYS_AUTOSTART") == (0, "4001\n", "")
+
+
+def test_compare_floats_as_stored(
+    store: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    talk(capsys, tmp_path)
+    assert param(capsys, "compare", "INA238#0[6]", "0.0003")[0] == 0  # float16 of 0.0003
+    assert param(capsys, "compare", "INA238#0.current", "0xc8")[0] == 0
+    assert param(capsys, "greater", "INA238#0.current", "199")[0] == 0
+    assert param(capsys, "compare", "-s", "NOPE#0", "1") == (1, "", "")
+
+
+def test_save_load_import(store: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    talk(capsys, tmp_path)
+    backup = tmp_path / "backup.store"
+    code, out, _ = param(capsys, "save", str(backup))
+    assert code == 0 and out.startswith(f"saved {backup} (")
+    param(capsys, "rm", "INA238#0")
+    param(capsys, "add", "INA226#1")
+    assert param(capsys, "import", str(backup))[0] == 0
+    assert param(capsys, "instances", "INA238")[1] == "INA238#0\n"
+    assert param(capsys, "instances", "INA226")[1] == "INA226#1\n"
+    assert param(capsys, "load", str(backup))[0] == 0
+    assert param(capsys, "instances", "INA226")[1] == ""
+    assert param(capsys, "touch", "INA238#0")[0] == 0
+
+
+def test_run_if_then_else_and_variables(
+    store: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    text = """\
+# a startup script
+set ADDR 0x45
+
+param add INA238#0
+if param compare INA238#0.bus.i2c.address 0x45
+then
+  echo already at the default address
+else
+  param set INA238#0.bus.i2c.address ${ADDR}
+  if param greater INA238#0.current 100
+  then
+    param set INA238#0.current 100
+  fi
+fi
+param set SYS_AUTOSTART 4001
+"""
+    code, out, err = run(capsys, "run", airframe(tmp_path, text))
+    assert (code, err) == (0, "")
+    assert out == "INA238#0\nalready at the default address\n"
+    assert param(capsys, "show", "-q", "INA238#0.current")[1] == "327\n"
+
+
+def test_run_is_all_or_nothing(
+    store: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    param(capsys, "add", "INA226#0")
+    before = store.read_bytes()
+    text = (
+        "param add INA238#0\nparam set INA238#0[4] 0x45\nparam set INA238#0[4] 300\n"
+        "param add RM3100#0\n"
+    )
+    path = airframe(tmp_path, text)
+    code, _, err = run(capsys, "run", path)
+    assert code == 1
+    assert err == (
+        f"px4params: {path}:3: INA238#0: bus.i2c.address: value 300 is out of range "
+        "(expected 0 to 127)\n"
+    )
+    assert store.read_bytes() == before
+    code, _, err = run(capsys, "run", path, "--keep-going")
+    assert code == 1
+    assert param(capsys, "instances", "RM3100")[1] == "RM3100#0\n"  # what succeeded is kept
+    assert param(capsys, "show", "-q", "INA238#0[4]")[1] == "69\n"
+
+
+BAD_PARAM = [
+    (
+        ["add", "INA238#4"],
+        "INA238#4: instance 4 is out of range (max_instances is 4: instances 0..3)",
+    ),
+    (["add", "NOPE"], "unknown parameter 'NOPE'"),
+    (["add", "INA283"], "unknown parameter 'INA283' (did you mean: INA238"),
+    (["add", "SYS_AUTOSTART"], "SYS_AUTOSTART: a shared parameter has no instances to add"),
+    (["add", "INA238#0[4]"], "add takes an instance, not a leaf: INA238#0[4]"),
+    (["add", "INA238#x"], "'INA238#x' is not a parameter name"),
+    (["rm", "INA238#3"], "INA238#3: instance does not exist (add it first: param add)"),
+    (["rm", "SYS_AUTOSTART"], "SYS_AUTOSTART: a shared parameter has no instances to remove"),
+    (["set", "INA238#3[4]", "1"], "INA238#3: instance does not exist"),
+    (
+        ["set", "INA238#0[4]", "0x4G"],
+        "INA238#0[4]: '0x4G' is not an integer (expected decimal or 0x hex, e.g. 69 or 0x45)",
+    ),
+    (["set", "INA238#0[4]", "69.5"], "INA238#0[4]: '69.5' is not an integer"),
+    (["set", "INA238#0[4]", ""], "INA238#0[4]: '' is not an integer"),
+    (
+        ["set", "INA238#0[4]", "200"],
+        "INA238#0: bus.i2c.address: value 200 is out of range (expected 0 to 127)",
+    ),
+    (
+        ["set", "INA238#0[4]", "-1"],
+        "INA238#0: bus.i2c.address: value -1 is out of range (expected 0 to 127)",
+    ),
+    (
+        ["set", "INA238#0[6]", "abc"],
+        "INA238#0[6]: 'abc' is not a number (expected e.g. 0.0003, 2e-4 or 5)",
+    ),
+    (
+        ["set", "INA238#0[6]", "1e9"],
+        "INA238#0: shunt: value 1000000000 is out of range (expected -65504 to 65504)",
+    ),
+    (
+        ["set", "INA238#0[0]", "1"],
+        "INA238#0: p_version is set automatically to the type's version and cannot be written",
+    ),
+    (["set", "INA238#0[9]", "1"], "INA238#0: no leaf [9] (the value has 7 leaves: [0]..[6])"),
+    (
+        ["set", "INA238#0.bus.spi.bus_id", "1"],
+        "INA238#0: bus.spi: this union variant is not the selected one",
+    ),
+    (["set", "INA238#0.bus", "1"], "INA238#0: bus: not a leaf (a struct, union or array)"),
+    (["set", "INA238#0.nope", "1"], "INA238#0: no such field"),
+    (["set", "INA238#0.bus._tag", "7"], "INA238#0: bus: value 7 is out of range (expected 0 to 5)"),
+    (
+        ["set", "INA238#0", "{bad"],
+        "INA238#0: a whole value is JSON (Expecting property name enclosed in double quotes",
+    ),
+    (["set", "INA238#0", '{"current": 1}'], "INA238#0: bus: missing field"),
+    (["set", "INA238#0", "[1]"], "INA238#0: expected a dict (struct), got list"),
+    (["set", "INA238#0", "1", "now"], "unexpected 'now' after the value (only 'fail' may follow)"),
+    (["set", "SYS_AUTOSTART", "40.5"], "SYS_AUTOSTART: '40.5' is not an integer"),
+    (
+        ["set", "SYS_AUTOSTART", "99999999999"],
+        "SYS_AUTOSTART: value 99999999999 is out of range (expected -2147483648 to 2147483647)",
+    ),
+    (["set", "BAT1_CAPACITY", "lots"], "BAT1_CAPACITY: 'lots' is not a number"),
+    (["set", "BAT1_CAPACITY", "1e40"], "BAT1_CAPACITY: value 1e+40 does not fit a float32"),
+    (
+        ["set", "SYS_AUTOSTART#1", "1"],
+        "SYS_AUTOSTART is not instanced: write SYS_AUTOSTART, not SYS_AUTOSTART#1",
+    ),
+    (["set", "INA238", "1"], "INA238 has instances: name one, e.g. INA238#0"),
+    (
+        ["set-default", "INA238#0[5]", "2000"],
+        "INA238#0: current: value 2000 is out of range (expected 0 to 1023)",
+    ),
+    (["set-default", "NOPE", "1"], "unknown parameter 'NOPE'"),
+    (["compare", "NOPE", "1"], "unknown parameter 'NOPE'"),
+    (["compare", "INA238#0[4]", "x"], "INA238#0[4]: 'x' is not an integer"),
+    (["greater", "INA238#0", "{}"], "INA238#0: greater compares numbers, not whole values"),
+    (["show", "-l", "INA238#3"], "INA238#3: instance does not exist"),
+    (["show", "-l"], "show -l takes one instance, e.g. show -l INA238#0"),
+    (["show", "-q", "INA*"], "show -q takes one exact name"),
+    (["show", "-l", "SYS_AUTOSTART"], "SYS_AUTOSTART is a classic parameter: it has no leaves"),
+    (["reset", "INA238#2"], "INA238#2: instance does not exist"),
+    (["instances", "NOPE"], "unknown parameter 'NOPE'"),
+    (["find", "NOPE"], "unknown parameter 'NOPE'"),
+    (
+        ["load", "/nonexistent/x.store"],
+        "/nonexistent/x.store: cannot read: No such file or directory",
+    ),
+    (["import", "/nonexistent/x.store"], "/nonexistent/x.store: cannot read"),
+    (
+        ["save", "/nonexistent/dir/x.store"],
+        "/nonexistent/dir/x.store: cannot write: No such file or directory",
+    ),
+]
+
+
+@pytest.mark.parametrize(("argv", "message"), BAD_PARAM, ids=[" ".join(a) for a, _ in BAD_PARAM])
+def test_bad_input(
+    store: Path, capsys: pytest.CaptureFixture[str], argv: list[str], message: str
+) -> None:
+    param(capsys, "add", "INA238#0")
+    before = store.read_bytes()
+    code, _, err = param(capsys, *argv)
+    assert code == 1
+    assert err.startswith("px4params: error: ")
+    assert message in err, err
+    assert err.count("\n") == 1
+    assert store.read_bytes() == before
+
+
+def test_a_file_that_is_not_a_store(store: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    store.write_bytes(b"garbage that is not ours")
+    code, _, err = param(capsys, "show")
+    assert code == 1
+    assert (
+        err
+        == f"px4params: error: {store}: not a px4params store file (no PX4P header) (at byte 0)\n"
+    )
+    assert store.read_bytes() == b"garbage that is not ours"
+
+
+BAD_RUN = [
+    ("param set-default INA238#0[4] 0x45\n", 1, "INA238#0: instance does not exist"),
+    (
+        "param add INA238#0\nparam frobnicate\n",
+        2,
+        "param: argument VERB: invalid choice: 'frobnicate'",
+    ),
+    ("param add\n", 1, "param: the following arguments are required: NAME"),
+    (
+        "ina238 -X -b 1 start\n",
+        1,
+        "unknown command 'ina238' (airframe files run param, set, echo and if/then/else/fi)",
+    ),
+    ("set X\n", 1, "set takes a variable name and one value: set VAR value"),
+    ("param set SYS_AUTOSTART $NOPE\n", 1, "$NOPE is not set (set NOPE value)"),
+    ("if param compare SYS_AUTOSTART 0\nparam add INA238#0\n", 2, "expected 'then' after 'if'"),
+    ("then\n", 1, "'then' without 'if'"),
+    ("fi\n", 1, "'fi' without 'if'"),
+    (
+        "if param compare SYS_AUTOSTART 0\nthen\nelse\nelse\nfi\n",
+        4,
+        "'else' must follow 'then' once",
+    ),
+    ("if param compare SYS_AUTOSTART 0\nthen\n", 1, "'if' without 'fi'"),
+    (
+        "if param set SYS_AUTOSTART 1\nthen\nfi\n",
+        1,
+        "'if' takes a 'param compare' or 'param greater' command",
+    ),
+    ("param set SYS_AUTOSTART 'unterminated\n", 1, "No closing quotation"),
+    ("then extra\n", 1, "'then' stands alone on its line"),
+]
+
+
+@pytest.mark.parametrize(("text", "line", "message"), BAD_RUN, ids=[m for _, _, m in BAD_RUN])
+def test_bad_airframe_lines(
+    store: Path,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    text: str,
+    line: int,
+    message: str,
+) -> None:
+    path = airframe(tmp_path, text)
+    code, _, err = run(capsys, "run", path)
+    assert code == 1
+    assert err.startswith(f"px4params: {path}:{line}: "), err
+    assert message in err
+    assert err.count("\n") == 1
+    assert not store.exists()
+
+
+def test_run_missing_file(store: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    code, _, err = run(capsys, "run", "/nonexistent.airframe")
+    assert (code, err) == (
+        1,
+        "px4params: error: /nonexistent.airframe: cannot read: No such file or directory\n",
+    )
+
+
+def test_usage_errors_exit_2() -> None:
+    proc = subprocess.run(
+        [sys.executable, "-m", "px4params", "param", "set", "INA238#0[4]"],
+        capture_output=True,
+        text=True,
+    )
+    assert proc.returncode == 2
+    assert "the following arguments are required: value" in proc.stderr
+    assert "Traceback" not in proc.stderr
+
+
+def test_every_verb_has_help_with_an_example() -> None:
+    from px4params.cli_param import VERBS
+
+    cli.build_parser()
+    assert set(VERBS) >= {
+        "add",
+        "rm",
+        "set",
+        "set-default",
+        "show",
+        "reset",
+        "reset_all",
+        "compare",
+        "greater",
+        "save",
+        "load",
+        "import",
+        "status",
+        "find",
+        "instances",
+    }
+    for verb in VERBS:
+        proc = subprocess.run(
+            [sys.executable, "-m", "px4params", "param", verb, "--help"],
+            capture_output=True,
+            text=True,
+        )
+        assert proc.returncode == 0
+        assert "example:\n  px4params param " in proc.stdout
