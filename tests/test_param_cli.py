@@ -420,3 +420,16 @@ def test_every_verb_has_help_with_an_example() -> None:
         )
         assert proc.returncode == 0
         assert "example:\n  px4params param " in proc.stdout
+
+
+def test_destructured_names_set_the_same_leaf(
+    store: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    talk(capsys, tmp_path)
+    assert param(capsys, "set", "INA238_0C", "0x46")[0] == 0
+    assert param(capsys, "show", "-q", "INA238#0[4]") == (0, "70\n", "")
+    code, out, _ = param(capsys, "flat", "--json", "INA238_0*")
+    rows = {row["name"]: row for row in json.loads(out)}
+    assert rows["INA238_0C"]["leaf"] == "INA238#0[4]"
+    assert rows["INA238_0C"]["value"] == 70
+    assert code == 0

@@ -230,10 +230,24 @@ def verb_rm(s: Session, a: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _write(s: Session, name: str, text: str, *, default: bool) -> None:
-    from . import flat
+def leaf_name(store: Store, name: str) -> str:
+    """``name``, or for a destructured flat name (``INA238_1C``) the leaf it stands for
+    (``INA238#1[4]``), so that both spellings set the same leaf."""
+    try:
+        if Key.parse(name).param in store.parameters:
+            return name
+    except InstanceError:
+        pass
+    from .flat import resolve_flat
 
-    name = flat.resolve(s.store, name) if hasattr(flat, "resolve") else name
+    try:
+        return resolve_flat(store, name)
+    except Px4ParamsError:
+        return name  # not a flat name either: the store's own error names the problem
+
+
+def _write(s: Session, name: str, text: str, *, default: bool) -> None:
+    name = leaf_name(s.store, name)
     value = parse_value(s.store, name, text)
     if default:
         s.store.set_default(name, value)
@@ -504,6 +518,22 @@ def verb_find(s: Session, a: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def verb_flat(s: Session, a: argparse.Namespace) -> int:
+    from .flat import flat_table
+
+    table = [p for p in flat_table(s.store) if _matches(p.name, a.filters)]
+    if a.json:
+        print(json.dumps([p.as_dict() for p in table]), file=s.out)
+        return EXIT_OK
+    for p in table:
+        shown = short_float(p.value, "float32") if isinstance(p.value, float) else str(p.value)
+        print(
+            f"{p.name:<16} {p.leaf:<14} {p.instance}.{p.path:<24} {p.mav_type:<6} {shown}",
+            file=s.out,
+        )
+    return EXIT_OK
+
+
 def verb_instances(s: Session, a: argparse.Namespace) -> int:
     names = s.store.instances(a.param)
     if a.json:
@@ -633,6 +663,15 @@ def add_verbs(sub: Any) -> None:
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p = _verb(sub, "find", verb_find, "show a parameter's index", "px4params param find INA238")
     p.add_argument("name")
+    p = _verb(
+        sub,
+        "flat",
+        verb_flat,
+        "the destructured flat parameters (MAVLink names) of every instance",
+        "px4params param flat INA238_0*",
+    )
+    p.add_argument("filters", nargs="*", metavar="FILTER", help="names, a trailing * matches")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
     p = _verb(
         sub,
         "instances",
