@@ -433,3 +433,87 @@ def test_destructured_names_set_the_same_leaf(
     assert rows["INA238_0C"]["leaf"] == "INA238#0[4]"
     assert rows["INA238_0C"]["value"] == 70
     assert code == 0
+
+
+@pytest.mark.parametrize("suffix", [".params", ".json"])
+def test_export_and_import_other_formats(
+    store: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], suffix: str
+) -> None:
+    talk(capsys, tmp_path)
+    param(capsys, "add", "INA238#2")
+    param(capsys, "set", "INA238#2.bus._tag", "1")
+    param(capsys, "set", "INA238#2.bus.spi.chip_select", "3")
+    param(capsys, "set", "BAT1_CAPACITY", "5000")
+    exported = tmp_path / f"vehicle{suffix}"
+    code, out, _ = param(capsys, "export", str(exported))
+    assert code == 0 and out.startswith(f"wrote {exported} (")
+    if suffix == ".params":
+        lines = exported.read_text().splitlines()
+        assert "1\t1\tINA238_0C\t69\t6" in lines
+        assert "1\t1\tBAT1_CAPACITY\t5000.000000000000000000\t9" in lines
+    other = tmp_path / "other.store"
+    assert param(capsys, "--store", str(other), "import", str(exported))[0] == 0
+    for name in ("INA238#0", "INA238#2"):
+        assert param(capsys, "--store", str(other), "show", "-q", name) == param(
+            capsys, "show", "-q", name
+        )
+    assert param(capsys, "--store", str(other), "show", "-q", "BAT1_CAPACITY")[1] == "5000\n"
+
+
+BAD_FILES = [
+    ("x.params", "1\t1\tSYS_AUTOSTART\t4001\n", "x.params:1: expected 5 TAB-separated columns"),
+    ("x.params", "1\t1\tSYS_AUTOSTART\t4001\t7\n", "x.params:1: SYS_AUTOSTART: type '7' is not 6"),
+    (
+        "x.params",
+        "1\t1\tSYS_AUTOSTART\tmany\t6\n",
+        "x.params:1: SYS_AUTOSTART: value 'many' is not",
+    ),
+    (
+        "x.params",
+        "#\n1\t1\tINA238_0C\t300\t6\n",
+        "x.params:2: INA238#0: bus.i2c.address: value 300",
+    ),
+    ("x.json", "{", "x.json:1: not JSON: Expecting property name"),
+    ("x.json", '{"format": "other"}', 'not a px4params JSON export (no "format": "px4params")'),
+    ("x.json", '{"format": "px4params", "version": 2}', "JSON export version 2 (expected 1)"),
+    (
+        "x.json",
+        '{"format": "px4params", "version": 1, "instances": {"INA238#9": {}}}',
+        "x.json: instances: INA238#9: instance 9 is out of range",
+    ),
+    (
+        "x.json",
+        '{"format": "px4params", "version": 1, "classic": {"SYS_AUTOSTART": "x"}}',
+        "x.json: classic: SYS_AUTOSTART: expected an integer, got 'x'",
+    ),
+]
+
+
+@pytest.mark.parametrize(("name", "text", "message"), BAD_FILES, ids=[m for *_, m in BAD_FILES])
+def test_bad_parameter_files(
+    store: Path,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    name: str,
+    text: str,
+    message: str,
+) -> None:
+    param(capsys, "add", "INA238#1")
+    before = store.read_bytes()
+    path = tmp_path / name
+    path.write_text(text)
+    code, _, err = param(capsys, "import", str(path))
+    assert code == 1
+    assert message in err, err
+    assert err.count("\n") == 1
+    assert store.read_bytes() == before
+
+
+def test_unknown_names_in_params_files_are_reported(
+    store: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = tmp_path / "x.params"
+    path.write_text("1\t1\tMPC_XY_VEL_MAX\t8.5\t9\n1\t1\tSYS_AUTOSTART\t4001\t6\n")
+    code, out, _ = param(capsys, "import", str(path))
+    assert code == 0
+    assert out == f"{path}:1: MPC_XY_VEL_MAX: not a parameter of this store; skipped\n"

@@ -145,6 +145,8 @@ def short_float(value: float, kind: str) -> str:
     for digits in range(1, 18):
         text = f"{value:.{digits}g}"
         if struct.pack(code, float(text)) == target:
+            if "e" in text and 1e-4 <= abs(value) < 1e16:  # 5000, not 5e+03
+                text = f"{float(text):f}".rstrip("0").rstrip(".")
             return text
     return repr(value)
 
@@ -462,8 +464,13 @@ def verb_save(s: Session, a: argparse.Namespace) -> int:
 
 
 def _load(s: Session, a: argparse.Namespace, merge: bool) -> int:
+    from . import paramfile
+
     source = a.file or s.path
-    report = s.store.import_from(source) if merge else s.store.load_from(source)
+    if paramfile.kind_of(source):
+        report = paramfile.read(s.store, source, reset=not merge)
+    else:
+        report = s.store.import_from(source) if merge else s.store.load_from(source)
     for line in report:
         print(line, file=s.out)
     if a.file:  # loading the store's own file changes nothing to save
@@ -477,6 +484,14 @@ def verb_load(s: Session, a: argparse.Namespace) -> int:
 
 def verb_import(s: Session, a: argparse.Namespace) -> int:
     return _load(s, a, merge=True)
+
+
+def verb_export(s: Session, a: argparse.Namespace) -> int:
+    from . import paramfile
+
+    size = paramfile.write(s.store, a.file)
+    print(f"wrote {a.file} ({size} bytes)", file=s.out)
+    return EXIT_OK
 
 
 def verb_status(s: Session, a: argparse.Namespace) -> int:
@@ -652,11 +667,19 @@ def add_verbs(sub: Any) -> None:
     p.add_argument("names", nargs="+", metavar="NAME")
     for name, func, summary in (
         ("save", verb_save, "save the store (to FILE)"),
-        ("load", verb_load, "reset, then load FILE (default: the store file)"),
-        ("import", verb_import, "merge FILE into the store"),
+        ("load", verb_load, "reset, then load FILE (a store, QGC .params or .json file)"),
+        ("import", verb_import, "merge FILE (a store, QGC .params or .json file)"),
     ):
         p = _verb(sub, name, func, summary, f"px4params param {name} backup.store")
         p.add_argument("file", nargs="?", metavar="FILE")
+    p = _verb(
+        sub,
+        "export",
+        verb_export,
+        "write a QGC .params file (instances destructured) or a .json export",
+        "px4params param export vehicle.params",
+    )
+    p.add_argument("file", metavar="FILE")
     p = _verb(
         sub, "status", verb_status, "show the store file and its use", "px4params param status"
     )

@@ -312,6 +312,11 @@ class Store:
         for name in list(self.names()):
             self.reset(name)
 
+    def reset_to_initial(self) -> None:
+        """Back to a new store: no instance, every value its default."""
+        self._native.restore(self._initial)
+        self._foreign = {}
+
     def changed(self, name: str | None = None) -> Any:
         """Whether ``name`` differs from its default; without a name, every name that does."""
         if name is not None:
