@@ -517,3 +517,25 @@ def test_unknown_names_in_params_files_are_reported(
     code, out, _ = param(capsys, "import", str(path))
     assert code == 0
     assert out == f"{path}:1: MPC_XY_VEL_MAX: not a parameter of this store; skipped\n"
+
+
+def test_shell_completion(store: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    param(capsys, "add", "INA238#1")
+    code, out, _ = run(capsys, "completion", "names")
+    names = out.splitlines()
+    assert code == 0
+    assert {"INA238", "INA238#0", "INA238#3", "SYS_AUTOSTART"} <= set(names)
+    assert "INA238#1.bus.i2c.address" in names
+    code, script, _ = run(capsys, "completion", "bash")
+    assert code == 0 and "complete -F _px4params px4params" in script
+    bash = subprocess.run(
+        [
+            "bash",
+            "-c",
+            script + "COMP_WORDS=(px4params param set-d); COMP_CWORD=2; _px4params; "
+            'echo "${COMPREPLY[@]}"',
+        ],
+        capture_output=True,
+        text=True,
+    )
+    assert bash.stdout.split() == ["set-default"]

@@ -13,6 +13,7 @@ from typing import Any, TextIO
 
 from .airframe import add_run_parser
 from .cli_param import add_param_parser
+from .completion import add_completion_parser
 from .errors import Px4ParamsError
 from .schema import DataType, Schema, load_schema, to_json_value
 
@@ -353,6 +354,7 @@ example:
     add_devid_parser(sub)
     add_param_parser(sub)
     add_run_parser(sub)
+    add_completion_parser(sub)
     return parser
 
 
