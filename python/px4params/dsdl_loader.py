@@ -29,7 +29,6 @@ from __future__ import annotations
 import contextlib
 import functools
 import hashlib
-import importlib.metadata
 import importlib.util
 import json
 import logging
@@ -182,10 +181,16 @@ def _dronecan_package_dir() -> Path:
 
 
 def _dist_version(name: str) -> str:
-    try:
-        return importlib.metadata.version(name)
-    except importlib.metadata.PackageNotFoundError:
+    """Identifies the installed package by its module file's path, size and time: a new
+    install changes them. (Cheaper than importlib.metadata, which costs every CLI call ~30 ms.)"""
+    spec = importlib.util.find_spec(name)
+    if spec is None or spec.origin is None:
         return "not-installed"
+    try:
+        st = os.stat(spec.origin)
+    except OSError:
+        return "not-installed"
+    return f"{spec.origin}:{st.st_size}:{st.st_mtime_ns}"
 
 
 @functools.cache
