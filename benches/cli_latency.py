@@ -36,13 +36,13 @@ def main() -> int:
         cli = [sys.executable, "-m", "px4params"]
         for line in ("param add INA238#0", "param set-default INA238#0[4] 0x45"):
             subprocess.run(cli + line.split(), env=env, check=True, stdout=subprocess.DEVNULL)
-        timed(cli + ["param", "show"], env, 2)  # warm the model cache and the OS caches
+        timed([*cli, "param", "show"], env, 2)  # warm the model cache and the OS caches
         rows = [
             ("python -c pass (baseline)", timed([sys.executable, "-c", "pass"], env, args.runs)),
-            ("px4params param show", timed(cli + ["param", "show"], env, args.runs)),
+            ("px4params param show", timed([*cli, "param", "show"], env, args.runs)),
             (
                 "px4params param show -l INA238#0",
-                timed(cli + ["param", "show", "-l", "INA238#0"], env, args.runs),
+                timed([*cli, "param", "show", "-l", "INA238#0"], env, args.runs),
             ),
         ]
     base = statistics.median(rows[0][1])
