@@ -21,6 +21,7 @@ pub mod crc;
 pub mod error;
 pub mod layout;
 pub mod leaf;
+pub mod pages;
 pub mod scalar;
 pub mod scatter;
 pub mod store;

@@ -205,6 +205,11 @@ pub enum StoreError<E = Infallible> {
         /// What the plan needs.
         needed: Capacity,
     },
+    /// The pages (or their index) cannot hold the values ([`crate::pages`]).
+    PagesFull {
+        /// Bytes needed at least (0: the pages are not all of one non-zero size).
+        needed: usize,
+    },
     /// The value or leaf was refused by the codec.
     Codec(Error<E>),
 }
@@ -234,6 +239,7 @@ impl StoreError {
             Self::Shared => StoreError::Shared,
             Self::VersionLeaf { path } => StoreError::VersionLeaf { path },
             Self::Memory { needed } => StoreError::Memory { needed },
+            Self::PagesFull { needed } => StoreError::PagesFull { needed },
             Self::Codec(e) => StoreError::Codec(Error {
                 kind: e.kind.map_value(|never| match never {}),
                 bit_offset: e.bit_offset,
@@ -297,6 +303,15 @@ impl<E: fmt::Display> fmt::Display for StoreErrorDisplay<'_, E> {
                 "store memory does not match its plan ({} slots and {} bytes needed)",
                 needed.slots, needed.bytes
             ),
+            StoreError::PagesFull { needed: 0 } => {
+                f.write_str("pages must all have one size, greater than 0")
+            }
+            StoreError::PagesFull { needed } => {
+                write!(
+                    f,
+                    "the pages or their index are too small ({needed} bytes needed)"
+                )
+            }
             StoreError::Codec(e) => e.display(self.layout).fmt(f),
         }
     }

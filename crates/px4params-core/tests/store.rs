@@ -458,3 +458,57 @@ proptest! {
         }
     }
 }
+
+// -- values in fixed-size pages, read in place ------------------------------------------------
+
+proptest! {
+    #[test]
+    fn values_read_from_pages_equal_the_store(page in 1usize..24, currents in proptest::collection::vec(0u64..1024, 1..4)) {
+        use px4params_core::pages::{read_paged_leaf, write_pages, PagedValue};
+        use px4params_core::scatter::Scattered;
+
+        let mut f = fixture();
+        let layout = f.layout.as_layout();
+        for (i, &c) in currents.iter().enumerate() {
+            f.store.add(INA, Some(i as u16)).unwrap();
+            f.store
+                .set_leaf(&layout, INA, i as u16, Which::Value, Target::Path("current"), Scalar::Uint(c), false)
+                .unwrap();
+        }
+        f.store
+            .set_leaf(&layout, BATTERY, 0, Which::Value, Target::Path("voltage"), Scalar::Float(12.5), false)
+            .unwrap();
+        let mut memory = vec![0u8; page * 64];
+        let mut pages: Vec<&mut [u8]> = memory.chunks_mut(page).collect();
+        let mut index = [PagedValue::default(); 16];
+        let n = write_pages(&f.store, Which::Value, &mut pages, &mut index).unwrap();
+        prop_assert_eq!(n, currents.len() + 2); // the instances, the battery and the classic value
+        let pages: Vec<&[u8]> = memory.chunks(page).collect();
+        for value in &index[..n] {
+            let def = f.store.def(value.param).unwrap();
+            let stored = f.store.get(value.param, value.instance, Which::Value).unwrap();
+            let pieces = value.pieces(&pages);
+            let scattered = Scattered::new(&pieces);
+            prop_assert_eq!(scattered.len(), stored.len());
+            for k in 0..8 {
+                let paged = read_paged_leaf(&layout, &def, &pages, value, k);
+                let direct = f.store.read(&layout, value.param, value.instance, Which::Value, k);
+                prop_assert_eq!(paged, direct);
+            }
+        }
+    }
+}
+
+#[test]
+fn pages_that_are_too_small_are_refused() {
+    use px4params_core::pages::{write_pages, PagedValue};
+
+    let mut f = fixture();
+    f.store.add(INA, None).unwrap();
+    let mut memory = [0u8; 8];
+    let mut pages: Vec<&mut [u8]> = memory.chunks_mut(4).collect();
+    let mut index = [PagedValue::default(); 4];
+    let e = write_pages(&f.store, Which::Value, &mut pages, &mut index).unwrap_err();
+    assert!(matches!(e, StoreError::PagesFull { .. }));
+    assert!(message(&f, &e).starts_with("the pages or their index are too small ("));
+}

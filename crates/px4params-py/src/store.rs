@@ -77,7 +77,9 @@ impl Store {
                 let name = self.instance_name(param, None);
                 InstanceError::new_err(format!("{name}: {}", plain(err, &layout)))
             }
-            CoreError::Memory { .. } | CoreError::Unsupported { .. } => {
+            CoreError::Memory { .. }
+            | CoreError::Unsupported { .. }
+            | CoreError::PagesFull { .. } => {
                 StoreError::new_err(format!("{name}: {}", plain(err, &layout)))
             }
             _ => InstanceError::new_err(format!("{name}: {}", plain(err, &layout))),
@@ -103,6 +105,7 @@ fn plain<E>(err: CoreError<E>, layout: &Layout<'_>) -> String {
         CoreError::Shared => CoreError::Shared,
         CoreError::VersionLeaf { path } => CoreError::VersionLeaf { path },
         CoreError::Memory { needed } => CoreError::Memory { needed },
+        CoreError::PagesFull { needed } => CoreError::PagesFull { needed },
         CoreError::Codec(_) => return "codec error".to_owned(),
     };
     let text = bare.display(layout).to_string();
