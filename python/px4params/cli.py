@@ -426,6 +426,9 @@ example:
     add_param_parser(sub)
     add_run_parser(sub)
     add_completion_parser(sub)
+    from .cli_mavlink import add_parser as add_mavlink_parser  # here: it imports this module
+
+    add_mavlink_parser(sub)
     return parser
 
 
