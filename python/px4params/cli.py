@@ -429,6 +429,9 @@ example:
     from .cli_mavlink import add_parser as add_mavlink_parser  # here: it imports this module
 
     add_mavlink_parser(sub)
+    from .cli_autostart import add_autostart_parser  # here: it imports this module
+
+    add_autostart_parser(sub)
     return parser
 
 

@@ -1,0 +1,587 @@
+"""The simulated bench: bench files, booting the manifest with faults, health, the commander's
+arming check, --legacy, the event log and the timeline picture.
+
+The scenarios of issue 6 run through the command line (exit code and the lines a user sees);
+the simulation's properties (determinism for a seed, published device IDs, the commander's
+consistency) are checked with hypothesis through the Python API.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from px4params import Store, cli, devid
+from px4params.autostart import configured, load_manifest
+from px4params.bench import (
+    Bench,
+    BenchBus,
+    BenchDevice,
+    BenchFileError,
+    load_bench,
+    parse_bench,
+    run,
+)
+from px4params.drivers import DEFAULT_DRIVERS, load_drivers
+from px4params.params import parameter_specs
+from px4params.timeline import render_svg
+
+REPO = Path(__file__).resolve().parents[1]
+AIRFRAME = REPO / "examples" / "two_batteries.airframe"
+BENCH = REPO / "examples" / "two_batteries.bench.toml"
+
+DEVICES = """
+[[device]]
+chip = "INA238"
+bus = "i2c"
+bus_id = 1
+address = 0x45
+
+[[device]]
+chip = "INA238"
+bus = "i2c"
+bus_id = 2
+address = 0x45
+{second}
+
+[[device]]
+chip = "AK09916"
+bus = "i2c"
+bus_id = 1
+address = 0x0C
+{mag}
+"""
+
+
+def bench_text(second: str = "", mag: str = "", extra: str = "") -> str:
+    return extra + DEVICES.format(second=second, mag=mag)
+
+
+@pytest.fixture(scope="module")
+def drivers(schema):
+    return load_drivers(DEFAULT_DRIVERS, parameter_specs(schema))
+
+
+@pytest.fixture(scope="module")
+def manifest(drivers):
+    return configured(load_manifest(None, AIRFRAME), drivers)
+
+
+def boot(tmp_path: Path, capsys, text: str, *args: str) -> tuple[int, str]:
+    path = tmp_path / "bench.toml"
+    path.write_text(text)
+    status = cli.main(
+        ["autostart", "run", "--airframe", str(AIRFRAME), "--bench", str(path), *args]
+    )
+    captured = capsys.readouterr()
+    assert captured.err == ""
+    return status, captured.out
+
+
+def refused_lines(out: str) -> list[str]:
+    lines = out.splitlines()
+    start = next(n for n, line in enumerate(lines) if line.startswith("commander: arming refused"))
+    return [line.strip() for line in lines[start + 1 :] if line.startswith("  ")]
+
+
+# -- the scenarios ------------------------------------------------------------------------------
+
+
+def test_everything_present_may_arm(capsys):
+    status = cli.main(["autostart", "run", "--airframe", str(AIRFRAME), "--bench", str(BENCH)])
+    out = capsys.readouterr().out
+    assert status == 0
+    assert "commander: may arm (all 3 configured devices nominal)" in out
+    assert "device id 0xD44509" in out and "device id 0x090C09" in out
+
+
+def test_ina238_1_absent_is_refused_with_one_clear_line(tmp_path, capsys):
+    status, out = boot(tmp_path, capsys, bench_text(second="absent = true"))
+    assert status == 1
+    assert "commander: arming refused (1 of 3 devices not nominal):" in out
+    (line,) = refused_lines(out)
+    assert re.fullmatch(
+        r"ina238 INA238#1 on I2C bus 2 address 0x45: critical: not found: no ACK "
+        r"\(\d+ probe attempts, still retrying\)",
+        line,
+    ), line
+
+
+def test_missing_from_the_bench_is_the_same_as_absent(tmp_path, capsys, drivers, manifest):
+    text = bench_text().replace("bus_id = 2\naddress = 0x45", "bus_id = 3\naddress = 0x45")
+    status, out = boot(tmp_path, capsys, text)
+    assert status == 1
+    assert refused_lines(out)[0].startswith("ina238 INA238#1 on I2C bus 2 address 0x45: critical")
+
+
+def test_bus_at_30_percent_errors_starts_after_retries_with_warning(tmp_path, capsys):
+    noisy = '[[bus]]\nkind = "i2c"\nbus_id = 1\nerror_rate = 0.3\n'
+    status, out = boot(tmp_path, capsys, bench_text(extra=noisy), "--json")
+    result = json.loads(out)
+    assert status == 1 and result["may_arm"] is False
+    by = {i["instance"]: i for i in result["instances"]}
+    for name in ("INA238#0", "AK09916#0"):  # both on bus 1
+        inst = by[name]
+        assert inst["started_at"] is not None, name
+        assert inst["health"] == "warning", name
+        assert inst["perf"]["bad_transfers"] > 0
+        assert re.fullmatch(r"\d+% bad transfers in the last 2 s \(\d+ of \d+\)", inst["reason"])
+    assert by["INA238#0"]["perf"]["probe_attempts"] > 1  # it took retries to start
+    assert by["INA238#0"]["started_at"] > 0
+    assert by["INA238#1"]["health"] == "nominal"  # bus 2 is clean
+    assert result["failures"] == [
+        f"ina238 INA238#0 on I2C bus 1 address 0x45: warning: {by['INA238#0']['reason']}",
+        f"ak09916 AK09916#0 on I2C bus 1 address 0x0C: warning: {by['AK09916#0']['reason']}",
+    ]
+
+
+def test_noisy_bus_always_starts_eventually(drivers, manifest):
+    # Keep running: whatever the seed, 30% errors never keep a driver from starting.
+    bench = parse_bench(
+        bench_text(extra='[[bus]]\nkind = "i2c"\nbus_id = 1\nerror_rate = 0.3\n'), "b", drivers
+    )
+    retried = 0
+    for seed in range(20):
+        result = run(bench, drivers, manifest, duration=5, seed=seed)
+        assert all(i.started_at is not None for i in result.instances), seed
+        ina = next(i for i in result.instances if i.name == "INA238#0")
+        retried += ina.probe_attempts > 1
+        assert ina.health == "warning"
+    assert retried >= 10  # a probe is three transfers: at 30% errors most first attempts fail
+
+
+def test_absent_with_legacy_boots_with_the_device_silently_missing(tmp_path, capsys):
+    status, out = boot(tmp_path, capsys, bench_text(second="absent = true"), "--legacy")
+    assert status == 0
+    assert "commander: may arm (it knows only the 2 drivers that started)" in out
+    assert "silently missing (configured in the manifest, never started, no message):" in out
+    assert "  ina238 INA238#1 on I2C bus 2 address 0x45: never started, nobody was told" in out
+    assert "ina238@i2c1" in out and "ak09916@i2c1" in out
+    assert "arming refused" not in out
+
+
+def test_legacy_misses_a_slow_device_the_manifest_waits_for(tmp_path, capsys):
+    slow = bench_text(mag="power_up = 2.5")
+    status, out = boot(tmp_path, capsys, slow, "--json")
+    assert status == 0
+    mag = next(i for i in json.loads(out)["instances"] if i["instance"] == "AK09916#0")
+    assert mag["started_at"] >= 2.5 and mag["health"] == "nominal"
+    status, out = boot(tmp_path, capsys, slow, "--legacy")
+    assert status == 0
+    assert "ak09916 AK09916#0 on I2C bus 1 address 0x0C: never started, nobody was told" in out
+    assert "'ak09916 -X -q start' on I2C bus 1 at 0x0C: no ACK after 3 probes" in out
+
+
+def test_device_that_dies_is_lost_and_reset(tmp_path, capsys):
+    status, out = boot(tmp_path, capsys, bench_text(second="dies_after = 4"), "--json")
+    result = json.loads(out)
+    assert status == 1
+    inst = next(i for i in result["instances"] if i["instance"] == "INA238#1")
+    assert inst["started_at"] == 0.0
+    assert inst["perf"]["resets"] == 1
+    assert inst["health"] == "critical"
+    assert inst["reason"].startswith("lost: reset at 4.90 s after 10 bad transfers in a row;")
+    levels = [level for _, level, _ in inst["timeline"]]
+    assert levels[:2] == ["critical", "nominal"] and levels[-1] == "critical"
+    assert [what for _, what in inst["marks"]] == ["start", "reset"]
+
+
+def test_wrong_chip_id(tmp_path, capsys):
+    status, out = boot(tmp_path, capsys, bench_text(mag="chip_id = 0x0A"))
+    assert status == 1
+    (line,) = refused_lines(out)
+    assert line.startswith(
+        "ak09916 AK09916#0 on I2C bus 1 address 0x0C: critical: not found: wrong chip id 0xA "
+        "in register 0x01 (expected 0x9) ("
+    )
+
+
+def test_flaky_device(drivers, manifest):
+    bench = parse_bench(bench_text(mag="error_rate = 0.5"), "b", drivers)
+    result = run(bench, drivers, manifest, duration=5, seed=1)
+    mag = next(i for i in result.instances if i.name == "AK09916#0")
+    assert mag.health in ("warning", "critical")
+    assert 0.3 < mag.bad_transfers / mag.transfers < 0.7
+    assert result.may_arm is False
+
+
+def test_unstartable_instance_is_refused(tmp_path, capsys, schema, drivers):
+    s = load_manifest(None, AIRFRAME)
+    s.set("INA238#1.bus.i2c.bus_id", 0)
+    path = tmp_path / "v.store"
+    s.save(path)
+    status = cli.main(["autostart", "run", "--store", str(path), "--bench", str(BENCH)])
+    out = capsys.readouterr().out
+    assert status == 1
+    assert refused_lines(out) == [
+        "ina238 INA238#1 on I2C bus 0 address 0x45: critical: not started: i2c bus_id is 0 "
+        "(unset; buses are numbered from 1)"
+    ]
+
+
+def test_instance_without_a_driver_is_refused(tmp_path, drivers, schema):
+    s = Store(schema)
+    s.add("INA238#0")
+    s.set("INA238#0.bus.i2c.bus_id", 1)
+    only_mags = load_drivers(DEFAULT_DRIVERS)
+    text = DEFAULT_DRIVERS.read_text().replace(
+        "autostart = true\norder = 30", "autostart = false\norder = 30"
+    )
+    custom = tmp_path / "d.toml"
+    custom.write_text(text)
+    mine = load_drivers(custom, parameter_specs(schema))
+    assert not mine["ina238"].autostart and only_mags["ina238"].autostart
+    result = run(load_bench(BENCH, mine), mine, configured(s, mine), duration=1)
+    assert result.failures == [
+        "ina238 INA238#0 on I2C bus 1 address 0x45: critical: not started: driver ina238 "
+        "does not autostart"
+    ]
+
+
+def test_legacy_without_a_manifest(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.delenv("PX4PARAMS_STORE", raising=False)
+    status = cli.main(["autostart", "run", "--bench", str(BENCH), "--legacy"])
+    out = capsys.readouterr().out
+    assert status == 0
+    assert "(no manifest to compare with: give --store or --airframe)" in out
+    # Without --legacy there is nothing to boot.
+    assert cli.main(["autostart", "run", "--bench", str(BENCH)]) == 1
+    assert "no store file px4params.store" in capsys.readouterr().err
+
+
+# -- seeing it: events, perf counters, the timeline --------------------------------------------
+
+
+def test_event_log_with_perf_counters(tmp_path, capsys):
+    events = tmp_path / "run.jsonl"
+    status, out = boot(
+        tmp_path,
+        capsys,
+        bench_text(second="dies_after = 3"),
+        "--events",
+        str(events),
+        "--duration",
+        "6",
+    )
+    assert status == 1
+    assert "wrote " in out and str(events) in out
+    records = [json.loads(line) for line in events.read_text().splitlines()]
+    times = [r["t"] for r in records]
+    assert times == sorted(times)
+    assert records[0]["event"] == "boot" and records[-1]["event"] == "verdict"
+    kinds = {r["event"] for r in records}
+    assert {"auto", "register", "probe", "started", "health", "perf", "reset", "arming"} <= kinds
+    perf = [r for r in records if r["event"] == "perf"]
+    assert len(perf) == 3 * 6  # each instance, every second
+    assert {"transfers", "bad_transfers", "resets"} <= set(perf[0])
+    last = {r["instance"]: r for r in perf}
+    assert last["INA238#1"]["resets"] == 1 and last["INA238#0"]["bad_transfers"] == 0
+    # Counters only grow.
+    for name in last:
+        seq = [r["transfers"] for r in perf if r["instance"] == name]
+        assert seq == sorted(seq)
+    started = next(r for r in records if r["event"] == "started" and r["instance"] == "INA238#0")
+    assert started["device_id"] == 0xD44509 and started["device_id_hex"] == "0xD44509"
+
+
+def test_timeline_svg(tmp_path, capsys):
+    picture = tmp_path / "run.svg"
+    status, out = boot(
+        tmp_path, capsys, bench_text(second="absent = true"), "--timeline", str(picture)
+    )
+    assert status == 1 and f"wrote health timeline to {picture}" in out
+    root = ET.fromstring(picture.read_text())
+    ns = "{http://www.w3.org/2000/svg}"
+    assert root.tag == f"{ns}svg"
+    texts = " ".join("".join(t.itertext()) for t in root.iter(f"{ns}text"))
+    assert "arming refused" in texts and "INA238#1" in texts and "simulated time (s)" in texts
+    tips = ["".join(t.itertext()) for t in root.iter(f"{ns}title")]
+    assert any("critical: not found: no ACK" in tip for tip in tips)
+
+
+def test_timeline_of_a_legacy_run_shows_the_missing(drivers, manifest):
+    bench = parse_bench(bench_text(second="absent = true"), "b", drivers)
+    result = run(bench, drivers, manifest, duration=3, legacy=True)
+    svg = render_svg(result)
+    ET.fromstring(svg)
+    assert "INA238#1 (ina238)" in svg and "stroke-dasharray" in svg
+    assert "may arm" in svg
+
+
+def test_json_result(tmp_path, capsys):
+    status, out = boot(tmp_path, capsys, bench_text(), "--json", "--seed", "7")
+    result = json.loads(out)
+    assert status == 0
+    assert result["mode"] == "manifest" and result["seed"] == 7 and result["may_arm"] is True
+    assert [i["instance"] for i in result["instances"]] == ["INA238#0", "INA238#1", "AK09916#0"]
+    assert result["instances"][0]["device_id_hex"] == "0xD44509"
+
+
+@pytest.mark.parametrize("duration", ["0", "-1", "nan", "100000"])
+def test_bad_duration(duration, capsys):
+    args = ["autostart", "run", "--airframe", str(AIRFRAME), "--bench", str(BENCH)]
+    assert cli.main([*args, "--duration", duration]) == 1
+    assert capsys.readouterr().err == (
+        "px4params: error: --duration must be more than 0 and at most 86400 seconds\n"
+    )
+
+
+def test_bench_is_required(capsys):
+    with pytest.raises(SystemExit) as e:
+        cli.main(["autostart", "run", "--airframe", str(AIRFRAME)])
+    assert e.value.code == 2
+    assert "--bench" in capsys.readouterr().err
+
+
+# -- bench files: every error, by message -----------------------------------------------------
+
+
+def bench_error(text: str, drivers) -> str:
+    with pytest.raises(BenchFileError) as e:
+        parse_bench(text, "bench.toml", drivers)
+    message = str(e.value)
+    assert "\n" not in message and message.startswith("bench.toml: ")
+    return message
+
+
+AT = "bench.toml: device #1 (INA238 on I2C bus 1 address 0x45): "
+ONE = '[[device]]\nchip = "INA238"\nbus = "i2c"\nbus_id = 1\naddress = 0x45\n'
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("[[device]\n", "bench.toml: not TOML: "),
+        ("[hardware]\nx = 1\n", "bench.toml: unknown top-level key 'hardware' (expected: bench,"),
+        ("[[devices]]\nchip = 1\n", "bench.toml: unknown top-level key 'devices' (did you mean"),
+        ('[bench]\nnme = "x"\n', "bench.toml: [bench]: unknown key 'nme' (did you mean 'name'?)"),
+        ("[bench]\nname = 3\n", "bench.toml: [bench]: name must be a string, not 3"),
+        ("bench = 3\n", "bench.toml: [bench] must be a table"),
+        ("device = 3\n", "bench.toml: 'device' must be [[device]] tables"),
+        (
+            ONE.replace("address = 0x45", "address = 0x45\nadress = 1"),
+            "bench.toml: device #1 (INA238): unknown key 'adress' (did you mean 'address'?)",
+        ),
+        (
+            ONE.replace("0x45", "200"),
+            "bench.toml: device #1 (INA238): I2C address 200 (0xC8) is out of range 0..127 "
+            "(0x00..0x7F)",
+        ),
+        (
+            ONE.replace("i2c", "spi").replace("0x45", "32"),
+            "bench.toml: device #1 (INA238): SPI chip select 32 (0x20) is out of range 0..31",
+        ),
+        (
+            ONE.replace("0x45", '"0x45"'),
+            "bench.toml: device #1 (INA238): address must be an integer (e.g. 0x45), not '0x45'",
+        ),
+        (
+            ONE.replace('"INA238"', '"INA239"'),
+            "bench.toml: device #1 (INA239): unknown chip 'INA239' (no declared driver drives "
+            "it; did you mean INA238?)",
+        ),
+        (
+            ONE.replace('"INA238"', '"XYZ"'),
+            "bench.toml: device #1 (XYZ): unknown chip 'XYZ' (no declared driver drives it; "
+            "known: AK09916, BMM350,",
+        ),
+        (ONE.replace("bus_id = 1\n", ""), "bench.toml: device #1 (INA238): missing key 'bus_id'"),
+        (
+            ONE.replace('chip = "INA238"\n', ""),
+            "bench.toml: device #1: missing key 'chip'",
+        ),
+        (
+            ONE.replace('bus = "i2c"', 'bus = "can"'),
+            "bench.toml: device #1 (INA238): bus 'can' is not a simulated bus kind (expected i2c "
+            "or spi)",
+        ),
+        (
+            ONE.replace('bus = "i2c"', 'bus = "serial"'),
+            "bench.toml: device #1 (INA238): bus 'serial' is not a simulated bus kind (not "
+            "simulated) (expected i2c or spi)",
+        ),
+        (
+            ONE.replace("bus_id = 1", "bus_id = 16"),
+            "bench.toml: device #1 (INA238): bus_id must be an integer 1..15, not 16",
+        ),
+        (
+            ONE + "error_rate = 1.5\n",
+            AT + "error_rate must be a number from 0 to 1",
+        ),
+        (
+            ONE + "dies_after = -2\n",
+            AT + "dies_after must be a number of seconds >= 0, not -2",
+        ),
+        (
+            ONE + "power_up = inf\n",
+            AT + "power_up must be a number of seconds >= 0, not inf",
+        ),
+        (
+            ONE + "chip_id = -1\n",
+            AT + "chip_id must be an integer 0..0xFFFF, not -1",
+        ),
+        (
+            ONE + 'absent = "yes"\n',
+            AT + "absent must be true or",
+        ),
+        (
+            ONE + ONE.replace("INA238", "INA228"),
+            "bench.toml: device #2 (INA228): I2C bus 1 address 0x45 already has a INA238",
+        ),
+        ('[[bus]]\nkind = "i2c"\n', "bench.toml: bus #1: missing key 'bus_id'"),
+        ("[[bus]]\nbus_id = 1\n", "bench.toml: bus #1: missing key 'kind'"),
+        (
+            '[[bus]]\nkind = "i2c"\nbus_id = 1\nnoise = 0.1\n',
+            "bench.toml: bus #1: unknown key 'noise' (expected: kind, bus_id, error_rate)",
+        ),
+        (
+            '[[bus]]\nkind = "i2c"\nbus_id = 1\nerror_rate = "30%"\n',
+            "bench.toml: bus #1: error_rate must be a number from 0 to 1",
+        ),
+        (
+            '[[bus]]\nkind = "i2c"\nbus_id = 1\n[[bus]]\nkind = "i2c"\nbus_id = 1\n',
+            "bench.toml: bus #2: i2c bus 1 is declared twice",
+        ),
+    ],
+)
+def test_bench_file_errors(text, message, drivers):
+    assert bench_error(text, drivers).startswith(message)
+
+
+def test_bench_file_not_found(tmp_path, capsys, drivers):
+    with pytest.raises(BenchFileError, match=r"nope\.toml: no such bench file$"):
+        load_bench(tmp_path / "nope.toml", drivers)
+    status = cli.main(
+        ["autostart", "run", "--airframe", str(AIRFRAME), "--bench", str(tmp_path / "n.toml")]
+    )
+    assert status == 1
+    assert (
+        capsys.readouterr().err == f"px4params: error: {tmp_path / 'n.toml'}: no such bench file\n"
+    )
+
+
+def test_bench_error_through_the_cli(tmp_path, capsys):
+    path = tmp_path / "b.toml"
+    path.write_text(ONE.replace("0x45", "200"))
+    args = ["autostart", "run", "--airframe", str(AIRFRAME), "--bench", str(path)]
+    assert cli.main(args) == 1
+    err = capsys.readouterr().err
+    assert err.startswith(f"px4params: error: {path}: device #1 (INA238): I2C address 200")
+    assert err.count("\n") == 1 and "Traceback" not in err
+
+
+def test_the_example_benches_load(drivers):
+    for path in sorted((REPO / "examples").glob("*.bench.toml")):
+        bench = load_bench(path, drivers)
+        assert bench.devices, path
+
+
+# -- properties -----------------------------------------------------------------------------------
+
+_LOCATIONS = [("INA238", "i2c", 1, 0x45), ("INA238", "i2c", 2, 0x45), ("AK09916", "i2c", 1, 0x0C)]
+
+faults = st.fixed_dictionaries(
+    {
+        "absent": st.booleans(),
+        "chip_id": st.one_of(st.none(), st.sampled_from([0x09, 0x0A, 0x238, 0x2260])),
+        "error_rate": st.sampled_from([0.0, 0.0, 0.02, 0.3, 0.9]),
+        "dies_after": st.one_of(st.none(), st.floats(0, 4, allow_nan=False)),
+        "power_up": st.one_of(st.just(0.0), st.floats(0, 4, allow_nan=False)),
+    }
+)
+benches = st.builds(
+    lambda present, fault_list, bus_rates: Bench(
+        "generated",
+        "generated",
+        {("i2c", b): BenchBus("i2c", b, r) for b, r in zip((1, 2), bus_rates, strict=True)},
+        {
+            (kind, bus, address): BenchDevice(chip, kind, bus, address, **f)
+            for (chip, kind, bus, address), here, f in zip(
+                _LOCATIONS, present, fault_list, strict=True
+            )
+            if here
+        },
+    ),
+    st.lists(st.booleans(), min_size=3, max_size=3),
+    st.lists(faults, min_size=3, max_size=3),
+    st.lists(st.sampled_from([0.0, 0.1, 0.3]), min_size=2, max_size=2),
+)
+
+
+@settings(
+    max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+@given(bench=benches, seed=st.integers(0, 2**32), legacy=st.booleans())
+def test_a_run_is_determined_by_its_seed(bench, seed, legacy, drivers, manifest):
+    one = run(bench, drivers, manifest, duration=3, seed=seed, legacy=legacy, record_events=True)
+    two = run(bench, drivers, manifest, duration=3, seed=seed, legacy=legacy, record_events=True)
+    assert one.as_dict() == two.as_dict()
+    assert one.events == two.events
+
+
+@settings(
+    max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+@given(bench=benches, seed=st.integers(0, 1000))
+def test_the_commander_refuses_exactly_the_devices_not_nominal(bench, seed, drivers, manifest):
+    result = run(bench, drivers, manifest, duration=3, seed=seed)
+    bad = [i for i in result.instances if i.health != "nominal"]
+    assert result.may_arm == (not bad)
+    assert result.failures == [i.failure_line() for i in bad]
+    for i, line in zip(bad, result.failures, strict=True):
+        assert line.startswith(
+            f"{i.driver} {i.name} on I2C bus {i.bus_id} address 0x{i.address:02X}: "
+        )
+        assert line.endswith(f": {i.health}: {i.reason}") and i.reason
+    # An absent device, or one answering the wrong chip id, never starts.
+    for i in result.instances:
+        device = bench.devices.get((i.kind, i.bus_id, i.address))
+        if (
+            device is None
+            or device.absent
+            or device.chip_id not in (None, drivers[i.driver].chip_id)
+        ):
+            assert i.started_at is None and i.health == "critical"
+        # Health is a function of what happened: transfers add up.
+        assert 0 <= i.bad_transfers <= i.transfers
+
+
+@settings(
+    max_examples=30, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+@given(
+    places=st.lists(
+        st.tuples(
+            st.sampled_from(["INA238", "AK09916", "BMM350", "RM3100"]),
+            st.integers(1, 15),
+            st.integers(0x03, 0x77),
+        ),
+        min_size=1,
+        max_size=4,
+        unique_by=lambda p: p[1:],
+    )
+)
+def test_published_device_ids_round_trip(places, schema, drivers):
+    s = Store(schema)
+    devices = {}
+    for chip, bus_id, address in places:
+        name = s.add(chip)
+        s.set(f"{name}.bus.i2c.bus_id", bus_id)
+        s.set(f"{name}.bus.i2c.address", address)
+        devices[("i2c", bus_id, address)] = BenchDevice(chip, "i2c", bus_id, address)
+    manifest = configured(s, drivers)
+    result = run(Bench("b", "b", {}, devices), drivers, manifest, duration=0.5)
+    assert result.may_arm
+    table = devid.load_table("current")
+    for inst, c in zip(result.instances, manifest, strict=True):
+        assert inst.device_id == c.device_id
+        decoded = devid.decode(inst.device_id, table)
+        assert (decoded.bus_type_name, decoded.bus, decoded.address) == ("I2C", c.bus_id, c.address)
+        assert decoded.devtype == drivers[inst.driver].devtype
+        assert decoded.devtype_name == c.driver.chip
