@@ -128,21 +128,6 @@ class BenchDevice:
     def location(self) -> str:
         return describe_location(self.kind, self.bus_id, self.address)
 
-    def faults(self) -> list[str]:
-        """The device's faults in words (empty for a healthy device)."""
-        out = []
-        if self.absent:
-            out.append("absent")
-        if self.chip_id is not None:
-            out.append(f"answers chip id 0x{self.chip_id:X}")
-        if self.error_rate:
-            out.append(f"{self.error_rate:.0%} errors")
-        if self.dies_after is not None:
-            out.append(f"dies after {self.dies_after:g} s")
-        if self.power_up:
-            out.append(f"powers up after {self.power_up:g} s")
-        return out
-
 
 @dataclass(frozen=True)
 class Bench:
