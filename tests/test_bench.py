@@ -585,3 +585,18 @@ def test_published_device_ids_round_trip(places, schema, drivers):
         assert (decoded.bus_type_name, decoded.bus, decoded.address) == ("I2C", c.bus_id, c.address)
         assert decoded.devtype == drivers[inst.driver].devtype
         assert decoded.devtype_name == c.driver.chip
+
+
+def test_spi_device(schema, drivers):
+    s = Store(schema)
+    s.add("LIS3MDL#0")
+    value = s.get("LIS3MDL#0")
+    value["bus"] = {"spi": {"bus_id": 1, "chip_select": 3, "max_frequency": 0, "mode": 3}}
+    s.set("LIS3MDL#0", value)
+    text = '[[device]]\nchip = "LIS3MDL"\nbus = "spi"\nbus_id = 1\naddress = 3\n'
+    result = run(parse_bench(text, "b", drivers), drivers, configured(s, drivers), duration=1)
+    (inst,) = result.instances
+    assert result.may_arm and inst.location == "SPI bus 1 chip select 3"
+    assert devid.decode(inst.device_id, "current").describe() == (
+        "LIS3MDL (MAG), SPI bus 1, device 3"
+    )
