@@ -9,7 +9,7 @@ import threading
 from typing import Any
 
 from .cli import EXIT_OK, CliError
-from .schema import load_schema
+from .store import default_store_path
 
 __all__ = ["add_parser", "parse_udp"]
 
@@ -31,18 +31,15 @@ def _id(text: str) -> int:
 
 
 def cmd_serve(args: argparse.Namespace) -> int:
+    from .cli_param import open_session
     from .flat import flat_map
     from .mavlink_server import MavlinkParamServer
-    from .store import Store, default_store_path
 
-    path = args.store or default_store_path()
-    schema = load_schema(args.dsdl or ())
-    if os.path.exists(path):
-        store = Store.load(path, schema, classic=args.parameters_json)
-        where = path
-    else:
-        store = Store(schema, classic=args.parameters_json)
-        where = f"{path}, new: written on the first accepted change"
+    # The same store, classic parameters and types as `px4params param` uses.
+    existed = os.path.exists(args.store or default_store_path())
+    session = open_session(args.store, args.classic, args.dsdl or ())
+    store, path = session.store, session.path
+    where = path if existed else f"{path}, new: written on the first accepted change"
     flat_count = len(flat_map(store).table())  # also refuses types that cannot be destructured
 
     def classic_int(name: str, fallback: int) -> int:
@@ -95,6 +92,8 @@ def cmd_serve(args: argparse.Namespace) -> int:
 
 def add_parser(sub: Any) -> None:
     """Registers ``px4params mavlink``."""
+    from .cli_param import store_options
+
     p = sub.add_parser(
         "mavlink",
         help="serve the store's parameters over MAVLink (UDP)",
@@ -128,16 +127,6 @@ examples:
         help="address to listen on (port 0: any free port, printed at start)",
     )
     s.add_argument(
-        "--store",
-        metavar="FILE",
-        help="store file to serve and save to (default: $PX4PARAMS_STORE, else px4params.store)",
-    )
-    s.add_argument(
-        "--parameters-json",
-        metavar="FILE",
-        help="classic parameters (default: $PX4PARAMS_PARAMETERS_JSON, else none)",
-    )
-    s.add_argument(
         "--gcs",
         type=parse_udp,
         action="append",
@@ -148,10 +137,5 @@ examples:
     s.add_argument(
         "--compid", type=_id, metavar="N", help="component ID (default: MAV_COMP_ID, else 1)"
     )
-    s.add_argument(
-        "--dsdl",
-        action="append",
-        metavar="DIR",
-        help="extra DSDL root namespace folder (repeatable; also $PX4PARAMS_DSDL_PATH)",
-    )
+    store_options(s)  # --store, --classic, --dsdl as for `px4params param`
     s.set_defaults(func=cmd_serve)
