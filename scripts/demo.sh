@@ -1,6 +1,30 @@
 #!/usr/bin/env bash
-# Sets up px4params and runs the demo: the talk's INA238 example encoded, its leaves, decoded.
+# Sets up px4params and runs the demo on the bundled DSDL and the example airframe: the talk's
+# INA238 encoded and decoded, the airframe run into a store, its parameters shown, the autostart
+# plan, and the vehicle booted on a simulated bench with and without a missing device.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
-px4params demo
+
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+export PX4PARAMS_STORE="$work/vehicle.store"
+
+step() { printf '\n== %s\n$ %s\n' "$1" "${*:2}"; "${@:2}"; }
+
+step "the talk's INA238, encoded with the DroneCAN rules" px4params demo
+step "run the example airframe (the talk's five lines and more)" \
+    px4params run examples/two_batteries.airframe
+step "the store" px4params param show
+step "the leaves of INA238#0" px4params param show -l INA238#0
+step "the destructured MAVLink names" px4params param flat
+step "the startup script and the plan" px4params autostart plan
+step "boot on a bench where everything is present: may arm" \
+    px4params autostart run --bench examples/two_batteries.bench.toml --duration 10
+echo
+echo "== boot on a bench with faults: arming refused, one line per device"
+echo "\$ px4params autostart run --bench examples/two_batteries_faults.bench.toml --duration 10"
+if px4params autostart run --bench examples/two_batteries_faults.bench.toml --duration 10; then
+    echo "(unexpected: the faulty bench may arm)"; exit 1
+fi
+echo "(exit status 1: the vehicle may not arm)"
