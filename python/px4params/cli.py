@@ -427,8 +427,10 @@ example:
     add_run_parser(sub)
     add_completion_parser(sub)
     from .cli_mavlink import add_parser as add_mavlink_parser  # here: it imports this module
+    from .cli_migrate import add_parser as add_migrate_parser
 
     add_mavlink_parser(sub)
+    add_migrate_parser(sub)
     from .cli_autostart import add_autostart_parser  # here: it imports this module
 
     add_autostart_parser(sub)

@@ -1,0 +1,560 @@
+"""Migration from today's PX4 configuration to a device manifest.
+
+Input: a QGC ``.params`` file or a ULog flight log (its parameters, read with pyulog). Output: a
+proposed airframe file of ``param add`` / ``param set-default`` lines (what ``px4params run``
+and, per the talk, PX4 itself run) and a report of where each line came from and of everything
+that could not be carried over. Nothing is dropped silently.
+
+What is carried over:
+
+* **Enabled drivers** (``SENS_EN_<DRIVER>`` not 0) whose parameter type is bundled become an
+  instance on the driver's default bus: I2C bus 1 (board scripts start them as
+  ``<driver> -X -b 1 ...``) at the type's default address; their legacy settings
+  (``INA238_CURRENT``, ``INA238_SHUNT``, ...) fill the fields of the same meaning, rounded and
+  clamped to the field, with a note when the value changes. Legacy settings without a field
+  (``INA226_CONFIG``, ...) are listed as not carried over.
+* **Sensors found** (the ``CAL_<SENSOR><n>_ID`` device IDs, decoded with :mod:`.devid`): an I2C
+  device whose chip has a bundled type (``AK09916`` on I2C bus 1 at 0x0C) becomes an instance
+  on that bus and address, with ``CAL_MAG<n>_ROT`` as its rotation. Today such external devices
+  are found by probing (``SENS_EXT_I2C_PRB``); in the manifest they are stated.
+
+What is reported, not carried: internal sensors (SPI, started by the board's startup script),
+DroneCAN and other buses, chips without a bundled type, enabled drivers without one, and the
+probing switch the manifest replaces. Every other parameter (calibration, tuning, ...) stays a
+classic parameter: the count is reported.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import math
+import os
+import re
+import struct
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from . import devid
+from .errors import Px4ParamsError
+from .schema import Schema
+
+__all__ = [
+    "LEGACY_DRIVERS",
+    "LegacyDriver",
+    "MigrationError",
+    "OldConfig",
+    "Proposal",
+    "ProposedInstance",
+    "migrate",
+    "read_config",
+]
+
+ULOG_MAGIC = b"ULog\x01\x12\x35"
+#: MAV_PARAM_TYPE codes of float parameters in QGC files (REAL32, REAL64).
+_FLOAT_TYPES = {9, 10}
+#: The I2C bus board scripts start external drivers on (``-X -b 1``).
+DEFAULT_I2C_BUS = 1
+_CAL_ID = re.compile(r"CAL_(?P<sensor>[A-Z]+?)(?P<n>\d+)_ID")
+
+
+class MigrationError(Px4ParamsError):
+    """The configuration cannot be read (missing, not a ``.params`` file or ULog, malformed)."""
+
+
+@dataclass(frozen=True)
+class LegacyDriver:
+    """A driver started today by ``SENS_EN_<name>``, and its legacy settings."""
+
+    #: The structured parameter (``INA238``).
+    param: str
+    #: Legacy parameter -> field path (``INA238_CURRENT`` -> ``current``).
+    settings: Mapping[str, str]
+    #: What ``-t``-like options of today's start line the type has no field for.
+    unmapped_options: str = ""
+
+
+LEGACY_DRIVERS: dict[str, LegacyDriver] = {
+    name: LegacyDriver(
+        name,
+        {f"{name}_CURRENT": "current", f"{name}_SHUNT": "shunt"},
+        "battery index (-t 1)",
+    )
+    for name in ("INA226", "INA228", "INA238")
+}
+
+
+@dataclass
+class OldConfig:
+    """Today's parameters: name -> value (int or float), from ``source``."""
+
+    source: str
+    kind: str  # "ULog" or "QGC .params"
+    params: dict[str, int | float]
+    #: Where the values came from, e.g. hardware and firmware of a log.
+    details: list[str] = field(default_factory=list)
+    #: Lines of the input that were not used (e.g. other components of a .params file).
+    skipped: list[str] = field(default_factory=list)
+
+
+def read_config(path: str | os.PathLike[str]) -> OldConfig:
+    """Reads a ULog's parameters (their last values in the log) or a QGC ``.params`` file."""
+    where = os.fspath(path)
+    try:
+        with open(where, "rb") as f:
+            head = f.read(len(ULOG_MAGIC))
+    except OSError as e:
+        raise MigrationError(f"{where}: cannot read: {e.strerror}") from None
+    if head == ULOG_MAGIC:
+        return _read_ulog(where)
+    return _read_params(where)
+
+
+def _read_ulog(where: str) -> OldConfig:
+    from pyulog import ULog  # only ULog input needs it
+
+    try:
+        with contextlib.redirect_stdout(io.StringIO()):  # pyulog prints warnings
+            log = ULog(where, message_name_filter_list=[])
+    except Exception as e:  # pyulog signals bad data with assorted exceptions
+        raise MigrationError(f"{where}: not a readable ULog file ({e})") from None
+    params: dict[str, int | float] = dict(log.initial_parameters)
+    changed = []
+    for _, name, value in log.changed_parameters:
+        params[name] = value
+        changed.append(name)
+    if not params:
+        raise MigrationError(f"{where}: the log has no parameters")
+    info = log.msg_info_dict
+    details = [f"{key} {info[key]}" for key in ("ver_hw", "ver_sw_branch", "ver_sw") if key in info]
+    if changed:
+        details.append(f"last values of {len(set(changed))} parameters changed during the log")
+    return OldConfig(where, "ULog", params, details)
+
+
+def _read_params(where: str) -> OldConfig:
+    try:
+        text = Path(where).read_text(encoding="utf-8")
+    except UnicodeDecodeError:
+        raise MigrationError(f"{where}: neither a ULog file nor a QGC .params text file") from None
+    rows: list[tuple[int, int, str, int | float]] = []
+    for number, line in enumerate(text.splitlines(), start=1):
+        if not line.strip() or line.lstrip().startswith("#"):
+            continue
+        parts = line.split("\t") if "\t" in line else line.split()
+        if len(parts) != 5:
+            raise MigrationError(
+                f"{where}:{number}: expected 5 TAB-separated fields (vehicle-id component-id "
+                f"name value type), got {len(parts)}"
+            )
+        vehicle, component, name, value, kind = (p.strip() for p in parts)
+        try:
+            ids = (int(vehicle), int(component), int(kind))
+            number_value: int | float = float(value) if ids[2] in _FLOAT_TYPES else _int_text(value)
+        except ValueError:
+            raise MigrationError(
+                f"{where}:{number}: {line.strip()!r}: ids and type must be integers and the "
+                "value a number of that type"
+            ) from None
+        rows.append((ids[0], ids[1], name, number_value))
+    if not rows:
+        raise MigrationError(f"{where}: no parameters (not a QGC .params file?)")
+    # The autopilot is component 1; other components (gimbals, ...) are not the vehicle's.
+    components = sorted({c for _, c, _, _ in rows})
+    chosen = 1 if 1 in components else components[0]
+    params = {name: value for _, c, name, value in rows if c == chosen}
+    skipped = [
+        f"component {c}: {sum(1 for r in rows if r[1] == c)} parameters (not the autopilot's)"
+        for c in components
+        if c != chosen
+    ]
+    return OldConfig(where, "QGC .params", params, [f"component {chosen}"], skipped)
+
+
+def _int_text(text: str) -> int:
+    value = float(text)
+    if not value.is_integer():
+        raise ValueError(text)
+    return int(value)
+
+
+# -- the proposal -----------------------------------------------------------------------------
+
+
+@dataclass
+class ProposedInstance:
+    """One instance of the manifest, its values and why it is proposed."""
+
+    name: str
+    #: Where it comes from, e.g. ``CAL_MAG1_ID 592905: AK09916 (MAG), I2C bus 1, address 0x0C``.
+    origin: str
+    #: Field path -> value, in the order to set them.
+    values: dict[str, Any]
+    notes: list[str] = field(default_factory=list)
+    #: Filled in by :func:`migrate`: path -> ``[k]`` index.
+    indices: dict[str, int] = field(default_factory=dict)
+
+
+@dataclass
+class Proposal:
+    """What :func:`migrate` proposes: the instances and the report."""
+
+    config: OldConfig
+    table: str
+    instances: list[ProposedInstance] = field(default_factory=list)
+    #: Sensors found (device IDs) that are not part of the manifest, one line each.
+    not_in_manifest: list[str] = field(default_factory=list)
+    #: Parameters whose job the manifest takes over.
+    replaced: list[str] = field(default_factory=list)
+    #: ``SENS_EN_*`` parameters that are 0: no driver to carry over.
+    disabled: list[str] = field(default_factory=list)
+    #: What could not be carried over, one line each, never dropped silently.
+    not_carried: list[str] = field(default_factory=list)
+    #: Parameters that were used to build the proposal.
+    used: set[str] = field(default_factory=set)
+
+    @property
+    def unchanged(self) -> int:
+        """Parameters left as they are (classic parameters, not part of the manifest)."""
+        return len(set(self.config.params) - self.used)
+
+    def airframe(self) -> str:
+        """The airframe file: ``param add`` / ``param set-default`` lines with comments."""
+        lines = [
+            f"# Device manifest migrated by px4params from {Path(self.config.source).name} "
+            f"({self.config.kind})",
+            "# Review before use: see the migration report.",
+        ]
+        if not self.instances:
+            lines.append("# No device could be carried over.")
+        for inst in self.instances:
+            lines += ["", f"# {inst.name}: {inst.origin}", f"param add {inst.name}"]
+            for path, value in inst.values.items():
+                lines.append(f"# [{inst.indices[path]}] {path}")
+                lines.append(
+                    f"param set-default {inst.name}[{inst.indices[path]}] {_text(path, value)}"
+                )
+        return "\n".join(lines) + "\n"
+
+    def report(self) -> str:
+        c = self.config
+        out = [f"Migration of {c.source} ({c.kind}, {len(c.params)} parameters)"]
+        out += [f"  {d}" for d in c.details]
+        out.append(f"  device IDs decoded with the {self.table} devtype table")
+
+        def section(title: str, rows: list[str]) -> None:
+            out.append("")
+            out.append(f"{title}:" if rows else f"{title}: none")
+            out.extend(f"  {r}" for r in rows)
+
+        rows = []
+        for inst in self.instances:
+            rows.append(f"{inst.name}: {inst.origin}")
+            shown = ", ".join(f"{p} = {_text(p, v)}" for p, v in inst.values.items())
+            rows.append(f"  {shown}")
+            rows.extend(f"  note: {n}" for n in inst.notes)
+        section("Instances proposed", rows)
+        section("Sensors found but not in the manifest", self.not_in_manifest)
+        section("Replaced by the manifest", self.replaced)
+        if self.disabled:
+            out.append(f"  not enabled, nothing to carry over: {', '.join(self.disabled)}")
+        section("Not carried over", self.not_carried + [f"{s}" for s in c.skipped])
+        out.append("")
+        out.append(
+            f"Unchanged: {self.unchanged} other parameters stay classic parameters "
+            "(calibration, tuning, ...); the manifest does not replace them."
+        )
+        return "\n".join(out) + "\n"
+
+    def as_dict(self) -> dict[str, Any]:
+        return {
+            "source": self.config.source,
+            "kind": self.config.kind,
+            "parameters": len(self.config.params),
+            "table": self.table,
+            "instances": [
+                {
+                    "name": i.name,
+                    "origin": i.origin,
+                    "values": {p: _json(v) for p, v in i.values.items()},
+                    "indices": i.indices,
+                    "notes": i.notes,
+                }
+                for i in self.instances
+            ],
+            "not_in_manifest": self.not_in_manifest,
+            "replaced": self.replaced,
+            "disabled": self.disabled,
+            "not_carried": self.not_carried + self.config.skipped,
+            "unchanged": self.unchanged,
+            "airframe": self.airframe(),
+        }
+
+
+def _text(path: str, value: Any) -> str:
+    if isinstance(value, bool):
+        return "1" if value else "0"
+    if isinstance(value, float):
+        return f"{value:.9g}"
+    if path.endswith("address"):
+        return f"0x{value:02X}"
+    return str(value)
+
+
+def _json(value: Any) -> Any:
+    return value if not isinstance(value, float) or math.isfinite(value) else str(value)
+
+
+# -- building it ------------------------------------------------------------------------------
+
+
+class _Builder:
+    def __init__(self, config: OldConfig, schema: Schema, table: devid.DevtypeTable) -> None:
+        from .store import Store
+
+        self.config = config
+        self.params = config.params
+        self.store = Store(schema, classic=[])  # scratch: checks every value and gives [k]
+        self.specs = {s.name: s for s in self.store.specs}
+        self.table = table
+        self.proposal = Proposal(config, table.label)
+
+    def use(self, *names: str) -> None:
+        self.proposal.used.update(n for n in names if n in self.params)
+
+    def add(self, param: str, bus: int, address: int, origin: str) -> ProposedInstance:
+        """The instance of ``param`` on I2C ``bus`` at ``address``: a new one, or the one
+        proposed already for the same device (found twice, e.g. enabled and calibrated)."""
+        for inst in self.proposal.instances:
+            if inst.name.partition("#")[0] == param and (
+                inst.values["bus.i2c.bus_id"],
+                inst.values["bus.i2c.address"],
+            ) == (bus, address):
+                inst.notes.append(f"also {origin}")
+                return inst
+        instance = self.store.add(param)
+        values: dict[str, Any] = {}
+        if self.store.get(f"{instance}.bus._tag") != 0:
+            values["bus._tag"] = 0  # I2C
+        values["bus.i2c.bus_id"] = bus
+        values["bus.i2c.address"] = address
+        for path, value in values.items():  # the tag first: it resets the variant
+            self.store.set_default(f"{instance}.{path}", value)
+        inst = ProposedInstance(instance, origin, values)
+        self.proposal.instances.append(inst)
+        return inst
+
+    def field_value(self, inst: ProposedInstance, path: str, legacy: str, value: Any) -> bool:
+        """Carries ``legacy = value`` into field ``path``; False (and a not-carried line) when
+        the field cannot hold it. A float setting (a physical quantity: current, shunt) is
+        rounded and clamped to the field's range, with a note; an integer setting (an
+        enumeration such as a rotation) out of range is not carried."""
+        param = inst.name.partition("#")[0]
+        leaf = self.store.leaf(f"{inst.name}.{path}")
+        tags = _field_tags(self.specs[param].data_type, path)
+        lo, hi = tags.get("min"), tags.get("max")
+        fitted: Any = value
+        if isinstance(value, float):
+            if leaf.type.startswith(("uint", "int")):
+                fitted = math.floor(value + 0.5) if math.isfinite(value) else value
+            if lo is not None and fitted < lo:
+                fitted = type(fitted)(lo)
+            if hi is not None and fitted > hi:
+                fitted = type(fitted)(hi)
+        elif (lo is not None and value < lo) or (hi is not None and value > hi):
+            self.proposal.not_carried.append(
+                f"{legacy} = {_shown(value)}: {inst.name}.{path} must be {lo}..{hi}"
+            )
+            return False
+        try:
+            self.store.set_default(f"{inst.name}.{path}", fitted)
+        except (Px4ParamsError, OverflowError, ValueError) as e:
+            self.proposal.not_carried.append(f"{legacy} = {_shown(value)}: {e}")
+            return False
+        stored = self.store.get(f"{inst.name}.{path}")
+        inst.values[path] = stored
+        if _differs(value, stored):
+            unit = f" {tags['unit']}" if "unit" in tags else ""
+            limits = f", {lo}..{hi}" if lo is not None or hi is not None else ""
+            inst.notes.append(
+                f"{legacy} = {_shown(value)}{unit} becomes {path} = {_shown(stored)}{unit} "
+                f"({leaf.type}{limits})"
+            )
+        return True
+
+    def run(self) -> Proposal:
+        self.enabled_drivers()
+        self.devices()
+        self.probing()
+        for inst in self.proposal.instances:
+            leaves = {leaf.path: leaf.index for leaf in self.store.leaves(inst.name)}
+            inst.indices = {path: leaves[path] for path in inst.values}
+        return self.proposal
+
+    def enabled_drivers(self) -> None:
+        for name in sorted(n for n in self.params if n.startswith("SENS_EN_")):
+            driver = name.removeprefix("SENS_EN_")
+            value = self.params[name]
+            self.use(name)
+            if not value:
+                self.proposal.disabled.append(name)
+                continue
+            spec = self.specs.get(driver)
+            if spec is None or spec.shared:
+                self.proposal.not_carried.append(
+                    f"{name} = {_shown(value)}: no bundled parameter type {driver}; the driver "
+                    "stays enabled by this classic parameter, outside the manifest"
+                )
+                continue
+            address = _default_address(self.store, spec.name)
+            inst = self.add(
+                spec.name,
+                DEFAULT_I2C_BUS,
+                address,
+                f"{name} = {_shown(value)}: started today on I2C bus {DEFAULT_I2C_BUS} at the "
+                f"driver's default address 0x{address:02X}",
+            )
+            legacy = LEGACY_DRIVERS.get(spec.name)
+            mapped = dict(legacy.settings) if legacy else {}
+            for old, path in mapped.items():
+                if old in self.params:
+                    self.use(old)
+                    self.field_value(inst, path, old, self.params[old])
+            for old in sorted(self.params):
+                if old.startswith(f"{spec.name}_") and old not in mapped:
+                    self.use(old)
+                    self.proposal.not_carried.append(
+                        f"{old} = {_shown(self.params[old])}: {spec.name} has no field for it"
+                    )
+            if legacy and legacy.unmapped_options:
+                inst.notes.append(
+                    f"today's start line also sets the {legacy.unmapped_options}: "
+                    f"{spec.name} has no field for it"
+                )
+
+    def devices(self) -> None:
+        found: dict[int, list[str]] = {}
+        for name in sorted(self.params):
+            m = _CAL_ID.fullmatch(name)
+            value = self.params[name]
+            if not m:
+                continue
+            self.use(name)
+            if isinstance(value, float) and value.is_integer():
+                value = int(value)
+            if not isinstance(value, int) or not 0 <= value <= devid.MAX_DEVICE_ID:
+                self.proposal.not_carried.append(f"{name} = {_shown(value)}: not a device ID")
+                continue
+            if value:
+                found.setdefault(value, []).append(name)
+        # CAL_<SENSOR>_PRIME selects one of the devices above: used, nothing of its own.
+        self.use(*(n for n in self.params if re.fullmatch(r"CAL_[A-Z]+_PRIME", n)))
+        for value, names in found.items():
+            self.device(value, names)
+
+    def device(self, value: int, names: list[str]) -> None:
+        dev = devid.decode(value, self.table)
+        where = f"{', '.join(names)} = {value}: {dev.describe()}"
+        disabled = [
+            f"{en} = 0"
+            for n in names
+            if (en := n.removesuffix("_ID") + "_EN") in self.params and not self.params[en]
+        ]
+        self.use(*(n.removesuffix("_ID") + "_EN" for n in names))
+        off = f" (disabled: {', '.join(disabled)})" if disabled else ""
+        chips = (dev.devtype_name or "").split("/")
+        spec = next((self.specs[c] for c in chips if c in self.specs), None)
+        if dev.bus_type != 1:  # not I2C
+            what = {
+                2: "internal SPI sensor: started by the board's startup script, not by the "
+                "manifest",
+                3: "DroneCAN sensor: found on the CAN bus, not by the manifest",
+            }.get(dev.bus_type, "not an I2C device: not part of the manifest")
+            self.proposal.not_in_manifest.append(f"{where}{off}: {what}")
+            return
+        if spec is None:
+            chip = dev.devtype_name or f"devtype 0x{dev.devtype:02X}"
+            self.proposal.not_carried.append(
+                f"{where}{off}: no bundled parameter type for {chip}; today it is found by "
+                "probing, in the manifest it needs a type"
+            )
+            return
+        inst = self.add(spec.name, dev.bus, dev.address, where)
+        if disabled:
+            inst.notes.append(f"{', '.join(disabled)}: the sensor was disabled for use")
+        sensor = _CAL_ID.fullmatch(names[0])
+        assert sensor is not None
+        rotation = f"CAL_{sensor['sensor']}{sensor['n']}_ROT"
+        if rotation in self.params:
+            self.use(rotation)
+            has_field = any(leaf.path == "rotation" for leaf in self.store.leaves(inst.name))
+            value_rot = self.params[rotation]
+            if not has_field:
+                self.proposal.not_carried.append(
+                    f"{rotation} = {_shown(value_rot)}: {spec.name} has no rotation field"
+                )
+            elif value_rot == -1:
+                inst.notes.append(f"{rotation} = -1 (internal, board rotation): rotation left 0")
+            else:
+                self.field_value(inst, "rotation", rotation, value_rot)
+
+    def probing(self) -> None:
+        name = "SENS_EXT_I2C_PRB"
+        if name not in self.params:
+            return
+        self.use(name)
+        value = self.params[name]
+        if value:
+            found = [i.name for i in self.proposal.instances]
+            self.proposal.replaced.append(
+                f"{name} = {_shown(value)}: external I2C devices were found by probing; the "
+                f"manifest states them ({', '.join(found) or 'none found'}) and a missing one "
+                "fails the arming check instead of being skipped silently"
+            )
+        else:
+            self.proposal.replaced.append(
+                f"{name} = 0: probing was off; the manifest starts the devices it lists"
+            )
+
+
+def _default_address(store: Any, param: str) -> int:
+    from .params import metadata_default
+
+    spec = store.spec(param)
+    value = metadata_default(store.schema, spec.data_type.key)
+    bus = value.get("bus", {})
+    return int(bus.get("i2c", {}).get("address", 0))
+
+
+def _field_tags(data_type: Any, path: str) -> dict[str, Any]:
+    """The ``@min``/``@max``/``@unit`` tags of a top-level field."""
+    for f in data_type.definition["fields"]:
+        if f["name"] == path:
+            return dict((f.get("doc") or {}).get("tags") or {})
+    return {}
+
+
+def _differs(old: Any, new: Any) -> bool:
+    if isinstance(old, float) or isinstance(new, float):
+        return struct.pack("<f", float(old)) != struct.pack("<f", float(new))
+    return bool(old != new)
+
+
+def _shown(value: Any) -> str:
+    if isinstance(value, float):
+        return f"{value:.9g}"
+    return str(value)
+
+
+def migrate(
+    config: OldConfig,
+    schema: Schema | None = None,
+    table: devid.DevtypeTable | str = "current",
+) -> Proposal:
+    """Proposes a manifest for ``config`` (see the module doc)."""
+    from .schema import load_schema
+
+    names = devid.load_table(table) if isinstance(table, str) else table
+    return _Builder(config, schema or load_schema(include_dronecan=False), names).run()

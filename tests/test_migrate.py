@@ -1,0 +1,377 @@
+"""Migration of today's configuration (QGC .params, ULog) into a device manifest."""
+
+from __future__ import annotations
+
+import json
+import os
+import struct
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from px4params import devid, migrate
+from px4params.cli import build_parser
+
+SHARED_DATA = Path(
+    os.environ.get("PX4PARAMS_SHARED_DATA", Path(__file__).parents[2] / "shared" / "data")
+)
+SAMPLE_LOG = SHARED_DATA / "sample_log_small.ulg"
+CURRENT_TSV = SHARED_DATA / "px4_devtypes_current.tsv"
+
+# A small devtype table of our own, so that the .params tests need no shared data.
+DEVTYPES = "code\tname\n0x01\tDRV_MAG_DEVTYPE_HMC5883\n0x09\tDRV_MAG_DEVTYPE_AK09916\n"
+AK09916_I2C1 = devid.encode("i2c", 1, 0x0C, 0x09)  # 592905, as in the sample log
+HMC5883_I2C1 = devid.encode("i2c", 1, 0x1E, 0x01)  # 73225, the driver guide's example
+UAVCAN_BARO = devid.encode("uavcan", 0, 125, 0x40)
+SIM_MAG = devid.encode("simulation", 0, 1, 0x09)
+UNKNOWN_I2C = devid.encode("i2c", 2, 0x30, 0x77)
+
+
+def params_file(path: Path, rows: list[tuple[str, object, int]], extra: str = "") -> Path:
+    lines = ["# Onboard parameters for Vehicle 1", "#", "# Vehicle-Id Component-Id Name Value Type"]
+    for name, value, kind in rows:
+        text = f"{value:.18f}" if kind == 9 else str(value)
+        lines.append(f"1\t1\t{name}\t{text}\t{kind}")
+    path.write_text("\n".join(lines) + "\n" + extra)
+    return path
+
+
+ROWS: list[tuple[str, object, int]] = [
+    ("SENS_EN_INA238", 1, 6),
+    ("INA238_CURRENT", 327.68, 9),  # the driver's default: the type holds whole amperes
+    ("INA238_SHUNT", 0.0003, 9),  # float16 holds 0.000299931
+    ("INA238_CONFIG", 3, 6),  # no field for it
+    ("SENS_EN_INA226", 0, 6),
+    ("SENS_EN_LL40LS", 1, 6),  # no bundled type
+    ("SENS_EXT_I2C_PRB", 1, 6),
+    ("CAL_MAG0_ID", AK09916_I2C1, 6),
+    ("CAL_MAG0_ROT", 2, 6),
+    ("CAL_MAG0_EN", 1, 6),
+    ("CAL_MAG1_ID", HMC5883_I2C1, 6),
+    ("CAL_MAG2_ID", 1 << 25, 6),
+    ("CAL_BARO0_ID", UAVCAN_BARO, 6),
+    ("CAL_MAG3_ID", SIM_MAG, 6),
+    ("CAL_ACC1_ID", UNKNOWN_I2C, 6),
+    ("CAL_MAG_PRIME", AK09916_I2C1, 6),
+    ("MC_ROLL_P", 6.5, 9),
+]
+
+
+@pytest.fixture
+def devtypes(tmp_path: Path) -> devid.DevtypeTable:
+    path = tmp_path / "devtypes.tsv"
+    path.write_text(DEVTYPES)
+    return devid.load_table("current", path)
+
+
+def run_airframe(airframe: Path, store: Path, tmp_path: Path) -> subprocess.CompletedProcess[str]:
+    env = {k: v for k, v in os.environ.items() if k not in ("PX4PARAMS_STORE",)}
+    env.setdefault("PX4PARAMS_CACHE_DIR", str(tmp_path / "cache"))
+    return subprocess.run(
+        [sys.executable, "-m", "px4params", "run", str(airframe), "--store", str(store)],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=120,
+    )
+
+
+def load_store(store: Path, monkeypatch: pytest.MonkeyPatch):
+    from px4params.cli_param import open_session
+
+    return open_session(str(store), os.environ.get("PX4PARAMS_PARAMETERS_JSON")).store
+
+
+def apply_airframe(text: str, store) -> None:
+    """The airframe through the Store API (used when `px4params run` is not there)."""
+    for line in text.splitlines():
+        if not line.strip() or line.startswith("#"):
+            continue
+        words = line.split()
+        assert words[:2] in (["param", "add"], ["param", "set-default"]), line
+        if words[1] == "add":
+            store.add(words[2])
+        else:
+            value = words[3]
+            number = float(value) if "." in value or "e" in value else int(value, 0)
+            store.set_default(words[2], number)
+
+
+def has_run_command() -> bool:
+    return "run" in build_parser()._subparsers._group_actions[0].choices  # type: ignore[union-attr]
+
+
+# -- the sample log ---------------------------------------------------------------------------
+
+
+@pytest.fixture
+def sample_log() -> Path:
+    if not SAMPLE_LOG.exists() or not CURRENT_TSV.exists():
+        pytest.skip(f"shared data not found in {SHARED_DATA} (set PX4PARAMS_SHARED_DATA)")
+    return SAMPLE_LOG
+
+
+def test_sample_log(sample_log: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The issue's must-show: the external AK09916 on I2C bus 1 at 0x0C becomes an instance,
+    and the airframe is accepted by `px4params run`."""
+    config = migrate.read_config(sample_log)
+    assert config.kind == "ULog" and len(config.params) == 980
+    assert "ver_hw CUBEPILOT_CUBEORANGE" in config.details
+    proposal = migrate.migrate(config, table=devid.load_table("current", CURRENT_TSV))
+    assert [i.name for i in proposal.instances] == ["AK09916#0"]
+    ak = proposal.instances[0]
+    assert ak.values == {"bus.i2c.bus_id": 1, "bus.i2c.address": 0x0C, "rotation": 0}
+    assert ak.origin == "CAL_MAG1_ID = 592905: AK09916 (MAG), I2C bus 1, address 0x0C"
+    assert proposal.airframe() == (
+        "# Device manifest migrated by px4params from sample_log_small.ulg (ULog)\n"
+        "# Review before use: see the migration report.\n"
+        "\n"
+        "# AK09916#0: CAL_MAG1_ID = 592905: AK09916 (MAG), I2C bus 1, address 0x0C\n"
+        "param add AK09916#0\n"
+        "# [3] bus.i2c.bus_id\n"
+        "param set-default AK09916#0[3] 1\n"
+        "# [4] bus.i2c.address\n"
+        "param set-default AK09916#0[4] 0x0C\n"
+        "# [5] rotation\n"
+        "param set-default AK09916#0[5] 0\n"
+    )
+    report = proposal.report()
+    internal = ": internal SPI sensor: started by the board's startup script, not by the manifest"
+    assert proposal.not_in_manifest == [
+        "CAL_ACC0_ID, CAL_GYRO0_ID = 2424842: ICM20649 (IMU), SPI bus 1, device 0" + internal,
+        "CAL_ACC1_ID, CAL_GYRO1_ID = 3670050: ICM20602 (IMU), SPI bus 4, device 0" + internal,
+        "CAL_ACC2_ID, CAL_GYRO2_ID = 2621474: ICM20948 (IMU), SPI bus 4, device 0" + internal,
+        "CAL_MAG0_ID = 589858: AK09916 (MAG), SPI bus 4, device 0 (disabled: CAL_MAG0_EN = 0)"
+        + internal,
+    ]
+    assert proposal.replaced[0].startswith("SENS_EXT_I2C_PRB = 1: external I2C devices were found")
+    assert "SENS_EN_PX4FLOW" in proposal.disabled
+    assert proposal.not_carried == []
+    assert f"Unchanged: {proposal.unchanged} other parameters stay classic" in report
+    assert proposal.unchanged == 980 - len(proposal.used) and proposal.unchanged > 900
+
+    airframe = tmp_path / "vehicle.airframe"
+    airframe.write_text(proposal.airframe())
+    if has_run_command():
+        store_file = tmp_path / "vehicle.store"
+        result = run_airframe(airframe, store_file, tmp_path)
+        assert result.returncode == 0, result.stderr
+        store = load_store(store_file, monkeypatch)
+    else:  # pragma: no cover - `px4params run` not there yet
+        import px4params
+
+        store = px4params.Store()
+        apply_airframe(proposal.airframe(), store)
+    assert store.instances("AK09916") == ["AK09916#0"]
+    assert store.get("AK09916#0")["bus"] == {"i2c": {"p_version": 0, "bus_id": 1, "address": 12}}
+    assert store.get("AK09916#0", default=True) == store.get("AK09916#0")  # set as defaults
+
+
+def test_sample_log_cli(sample_log: Path, tmp_path: Path) -> None:
+    out = tmp_path / "v.airframe"
+    r = cli("migrate", str(sample_log), "-o", str(out), "--devtypes", str(CURRENT_TSV))
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.startswith(f"Migration of {sample_log} (ULog, 980 parameters)\n")
+    assert r.stdout.endswith(f"\nwrote {out}: 1 instances\n")
+    assert "param add AK09916#0\n" in out.read_text()
+
+
+# -- a .params file ---------------------------------------------------------------------------
+
+
+def test_params_file(
+    tmp_path: Path, devtypes: devid.DevtypeTable, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    path = params_file(tmp_path / "vehicle.params", ROWS, "1\t100\tGMB_MODE\t2\t6\n")
+    config = migrate.read_config(path)
+    assert config.kind == "QGC .params" and config.params["INA238_SHUNT"] == pytest.approx(0.0003)
+    assert config.skipped == ["component 100: 1 parameters (not the autopilot's)"]
+    proposal = migrate.migrate(config, table=devtypes)
+    ina, ak = proposal.instances
+    assert ina.name == "INA238#0" and ak.name == "AK09916#0"
+    assert ina.origin == (
+        "SENS_EN_INA238 = 1: started today on I2C bus 1 at the driver's default address 0x45"
+    )
+    assert ina.values["current"] == 327 and ina.values["shunt"] == pytest.approx(0.0003, rel=1e-3)
+    assert ina.notes == [
+        "INA238_CURRENT = 327.68 A becomes current = 327 A (uint10, 1..327)",
+        "INA238_SHUNT = 0.0003 Ohm becomes shunt = 0.000299930573 Ohm (float16, 1e-05..0.1)",
+        "today's start line also sets the battery index (-t 1): INA238 has no field for it",
+    ]
+    assert ak.values == {"bus.i2c.bus_id": 1, "bus.i2c.address": 0x0C, "rotation": 2}
+    assert proposal.not_carried == [
+        "INA238_CONFIG = 3: INA238 has no field for it",
+        "SENS_EN_LL40LS = 1: no bundled parameter type LL40LS; the driver stays enabled by this "
+        "classic parameter, outside the manifest",
+        "CAL_MAG2_ID = 33554432: not a device ID",
+        f"CAL_ACC1_ID = {UNKNOWN_I2C}: devtype 0x77 (not in the current table), I2C bus 2, "
+        "address 0x30: no bundled parameter type for devtype 0x77; today it is found by probing, "
+        "in the manifest it needs a type",
+        f"CAL_MAG1_ID = {HMC5883_I2C1}: HMC5883 (MAG), I2C bus 1, address 0x1E: no bundled "
+        "parameter type for HMC5883; today it is found by probing, in the manifest it needs a "
+        "type",
+    ]
+    assert proposal.not_in_manifest == [
+        f"CAL_BARO0_ID = {UAVCAN_BARO}: devtype 0x40 (not in the current table), UAVCAN bus 0, "
+        "node 125: DroneCAN sensor: found on the CAN bus, not by the manifest",
+        f"CAL_MAG3_ID = {SIM_MAG}: AK09916 (MAG), simulation bus 0, address 0x01: not an I2C "
+        "device: not part of the manifest",
+    ]
+    assert proposal.disabled == ["SENS_EN_INA226"]
+    assert proposal.unchanged == 1  # MC_ROLL_P
+    report = proposal.report()
+    assert "  component 100: 1 parameters (not the autopilot's)\n" in report
+    assert "Unchanged: 1 other parameters stay classic parameters" in report
+    assert "  not enabled, nothing to carry over: SENS_EN_INA226\n" in report
+    data = proposal.as_dict()
+    assert json.loads(json.dumps(data))["instances"][0]["indices"] == {
+        "bus.i2c.bus_id": 3, "bus.i2c.address": 4, "current": 5, "shunt": 6,
+    }  # fmt: skip
+
+    airframe = tmp_path / "vehicle.airframe"
+    airframe.write_text(proposal.airframe())
+    assert "param set-default INA238#0[6] 0.000299930573\n" in airframe.read_text()
+    store_file = tmp_path / "vehicle.store"
+    result = run_airframe(airframe, store_file, tmp_path)
+    assert result.returncode == 0, result.stderr
+    store = load_store(store_file, monkeypatch)
+    assert store.get("INA238#0.current") == 327
+    assert store.get("INA238#0.bus.i2c.address") == 0x45
+    assert store.get("AK09916#0.rotation") == 2
+
+
+def test_clamping_rotation_and_twice_found(tmp_path: Path, devtypes: devid.DevtypeTable) -> None:
+    extra = tmp_path / "tst"
+    extra.mkdir()
+    (extra / "Hmc5883.1.0.dsdl").write_text(
+        "# HMC5883\n# @max_instances 2\n\nuint4 p_version\npx.Bus.1.0 bus\n# Bus\n"
+        "# @default i2c.address 0x1E\n\nuint3 gain\n@sealed\n"
+    )
+    import px4params
+
+    schema = px4params.load_schema([extra], use_env=False, include_dronecan=False,
+                                   cache_dir=tmp_path / "cache")  # fmt: skip
+    rows: list[tuple[str, object, int]] = [
+        ("SENS_EN_INA226", 1, 6),
+        ("INA226_CURRENT", 500.0, 9),
+        ("SENS_EN_HMC5883", 1, 6),  # enabled and calibrated: one instance
+        ("CAL_MAG0_ID", HMC5883_I2C1, 6),
+        ("CAL_MAG0_ROT", 3, 6),
+        ("CAL_MAG1_ID", AK09916_I2C1, 6),
+        ("CAL_MAG1_ROT", 100, 6),
+        ("CAL_MAG2_ID", devid.encode("i2c", 2, 0x0C, 0x09), 6),
+        ("CAL_MAG2_ROT", -1, 6),
+    ]
+    proposal = migrate.migrate(migrate.read_config(params_file(tmp_path / "p", rows)), schema,
+                               devtypes)  # fmt: skip
+    names = [i.name for i in proposal.instances]
+    assert names == ["HMC5883#0", "INA226#0", "AK09916#0", "AK09916#1"]
+    hmc, ina, ak0, ak1 = proposal.instances
+    assert hmc.notes == [f"also CAL_MAG0_ID = {HMC5883_I2C1}: HMC5883 (MAG), I2C bus 1, "
+                         "address 0x1E"]  # fmt: skip
+    assert ina.values["current"] == 200
+    assert ina.notes[0] == "INA226_CURRENT = 500 A becomes current = 200 A (uint10, 1..200)"
+    assert "rotation" not in ak0.values
+    assert ak1.notes == ["CAL_MAG2_ROT = -1 (internal, board rotation): rotation left 0"]
+    assert proposal.not_carried == [
+        "CAL_MAG0_ROT = 3: HMC5883 has no rotation field",
+        "CAL_MAG1_ROT = 100: AK09916#0.rotation must be 0..40",
+    ]
+
+
+def test_empty_and_disabled(tmp_path: Path, devtypes: devid.DevtypeTable) -> None:
+    rows: list[tuple[str, object, int]] = [("SENS_EXT_I2C_PRB", 0, 6), ("MC_ROLL_P", 6.5, 9)]
+    proposal = migrate.migrate(migrate.read_config(params_file(tmp_path / "p", rows)),
+                               table=devtypes)  # fmt: skip
+    assert proposal.instances == []
+    assert "# No device could be carried over.\n" in proposal.airframe()
+    assert proposal.replaced == [
+        "SENS_EXT_I2C_PRB = 0: probing was off; the manifest starts the devices it lists"
+    ]
+    report = proposal.report()
+    assert "Instances proposed: none\n" in report and "Not carried over: none\n" in report
+
+
+# -- errors -----------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        (None, "{path}: cannot read: No such file or directory"),
+        (b"\xff\xfe\x00binary", "{path}: neither a ULog file nor a QGC .params text file"),
+        (b"# only comments\n\n", "{path}: no parameters (not a QGC .params file?)"),
+        (
+            b"# x\n1\t1\tSYS_AUTOSTART\t4001\n",
+            "{path}:2: expected 5 TAB-separated fields (vehicle-id component-id name value type), "
+            "got 4",
+        ),
+        (
+            b"1\t1\tSYS_AUTOSTART\t40.5\t6\n",
+            "{path}:1: '1\\t1\\tSYS_AUTOSTART\\t40.5\\t6': ids and type must be integers and the "
+            "value a number of that type",
+        ),
+        (b"ULog\x01\x12\x35\x01" + struct.pack("<Q", 0), "{path}: the log has no parameters"),
+        (
+            b"ULog\x01\x12\x35\x01" + struct.pack("<Q", 0) + b"\xff" * 5 + b"\x00garbage",
+            "{path}: not a readable ULog file ([Errno 22] Invalid argument)",
+        ),
+    ],
+)
+def test_read_errors(tmp_path: Path, content: bytes | None, message: str) -> None:
+    path = tmp_path / "config"
+    if content is not None:
+        path.write_bytes(content)
+    with pytest.raises(migrate.MigrationError) as caught:
+        migrate.read_config(path)
+    assert str(caught.value) == message.format(path=path)
+
+
+def cli(*args: str, env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "px4params", *args],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=120,
+    )
+
+
+def test_cli(tmp_path: Path) -> None:
+    tsv = tmp_path / "devtypes.tsv"
+    tsv.write_text(DEVTYPES)
+    path = params_file(tmp_path / "vehicle.params", ROWS)
+    r = cli("migrate", str(path), "--devtypes", str(tsv))  # airframe out, report beside it
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.startswith("# Device manifest migrated by px4params from vehicle.params")
+    assert r.stderr.startswith(f"Migration of {path} (QGC .params, 17 parameters)\n")
+    r = cli("migrate", str(path), "--devtypes", str(tsv), "--json")
+    assert r.returncode == 0, r.stderr
+    document = json.loads(r.stdout)
+    assert [i["name"] for i in document["instances"]] == ["INA238#0", "AK09916#0"]
+    assert document["airframe"].startswith("# Device manifest")
+
+    r = cli("migrate", str(path), "--table", "legacy", "--devtypes", str(tsv))
+    assert r.returncode == 2
+    assert r.stderr.splitlines()[-1] == (
+        "px4params migrate: error: --devtypes is the current table's source; it does not go "
+        "with --table legacy"
+    )
+    r = cli("migrate", str(path), "--devtypes", str(tsv), "-o", str(tmp_path / "no" / "x"))
+    assert r.returncode == 1
+    assert r.stderr == f"px4params: error: {tmp_path / 'no' / 'x'}: cannot write: No such file " \
+        "or directory\n"  # fmt: skip
+    r = cli("migrate", str(tmp_path / "missing.params"), "--devtypes", str(tsv))
+    assert r.returncode == 1
+    assert r.stderr == (
+        f"px4params: error: {tmp_path / 'missing.params'}: cannot read: No such file or directory\n"
+    )
+    r = cli("migrate", str(path), "--devtypes", str(tmp_path / "nope.tsv"))
+    assert r.returncode == 1 and r.stderr.startswith("px4params: error: ")
+    assert r.stderr.count("\n") == 1 and "nope.tsv" in r.stderr
+    r = cli("migrate", str(path), "--table", "legacy", "-o", str(tmp_path / "legacy.airframe"))
+    assert r.returncode == 0, r.stderr  # legacy table: no AK09916 code, so no instance from it
+    assert "param add AK09916" not in (tmp_path / "legacy.airframe").read_text()
+    r = cli("migrate", "--help")
+    assert r.returncode == 0 and "examples:" in r.stdout
