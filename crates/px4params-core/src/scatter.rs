@@ -73,18 +73,32 @@ struct Cursor<'p> {
 
 impl<'p> Cursor<'p> {
     fn at(index: usize, start: usize, bytes: &'p [u8]) -> Self {
-        let word = (bytes.len() <= 8).then(|| {
-            bytes
-                .iter()
-                .enumerate()
-                .fold(0u64, |w, (k, &b)| w | u64::from(b) << (56 - 8 * k))
-        });
+        let word = (bytes.len() <= 8).then(|| word_of(bytes));
         Self {
             index,
             start,
             bytes,
             word,
         }
+    }
+}
+
+/// Up to 8 bytes as a big-endian word, zero-filled at the end: two overlapping 4-byte loads
+/// for the usual 4..8-byte pieces (CAN frame payloads), a byte loop below that.
+#[inline]
+fn word_of(bytes: &[u8]) -> u64 {
+    let len = bytes.len();
+    match (bytes.get(..4), bytes.get(len.saturating_sub(4)..)) {
+        (Some(head), Some(tail)) if len >= 4 => {
+            let hi = u64::from(u32::from_be_bytes([head[0], head[1], head[2], head[3]]));
+            let lo = u64::from(u32::from_be_bytes([tail[0], tail[1], tail[2], tail[3]]));
+            // The loads overlap for len < 8; the overlapping bytes are equal, so OR is exact.
+            (hi << 32) | (lo << (8 * (8 - len)))
+        }
+        _ => bytes
+            .iter()
+            .enumerate()
+            .fold(0u64, |w, (k, &b)| w | u64::from(b) << (56 - 8 * k)),
     }
 }
 
@@ -167,11 +181,38 @@ impl<'p, P: Pieces + ?Sized> Scattered<'p, P> {
                 None => read_bits(c.bytes, local, n),
             };
         }
-        // Across pieces: at most 9 bytes, gathered into a window.
-        let mut window = [0u8; 9];
-        let len = last - first + 1;
-        self.gather(first, &mut window[..len]);
-        read_bits(&window[..len], offset % 8, n)
+        self.read_across(c, offset, n)
+    }
+
+    /// Reads bits that start in `c`'s piece and end in a later one (at most 9 bytes), then
+    /// leaves the cursor on the piece where they end: a decoder reads on from there.
+    fn read_across(&self, c: Cursor<'p>, offset: usize, n: u32) -> u64 {
+        let first = offset / 8;
+        let need = (offset + n as usize - 1) / 8 - first + 1;
+        let (mut acc, mut got) = (0u128, 0usize);
+        let (mut i, mut start, mut piece) = (c.index, c.start, c.bytes);
+        let mut skip = first - start;
+        let count = self.pieces.count();
+        loop {
+            for &b in piece.get(skip..).unwrap_or(&[]) {
+                if got == need {
+                    break;
+                }
+                acc = (acc << 8) | u128::from(b);
+                got += 1;
+            }
+            if got == need || i + 1 >= count {
+                break;
+            }
+            start += piece.len();
+            i += 1;
+            piece = self.pieces.piece(i);
+            skip = 0;
+        }
+        self.cursor.set(Cursor::at(i, start, piece));
+        // `acc` holds `got` bytes (all of them: the caller checked the length).
+        let bits = 8 * got as u32;
+        ((acc << (128 - bits) << (offset % 8)) >> (128 - n)) as u64
     }
 
     /// Copies stream bytes from `byte` into `window` (as many as there are).
