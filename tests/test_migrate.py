@@ -20,7 +20,10 @@ SAMPLE_LOG = SHARED_DATA / "sample_log_small.ulg"
 CURRENT_TSV = SHARED_DATA / "px4_devtypes_current.tsv"
 
 # A small devtype table of our own, so that the .params tests need no shared data.
-DEVTYPES = "code\tname\n0x01\tDRV_MAG_DEVTYPE_HMC5883\n0x09\tDRV_MAG_DEVTYPE_AK09916\n"
+DEVTYPES = (
+    "code\tname\n0x01\tDRV_MAG_DEVTYPE_HMC5883\n0x09\tDRV_MAG_DEVTYPE_AK09916\n"
+    "0x0A\tDRV_MAG_DEVTYPE_LIS2MDL\n"
+)
 AK09916_I2C1 = devid.encode("i2c", 1, 0x0C, 0x09)  # 592905, as in the sample log
 HMC5883_I2C1 = devid.encode("i2c", 1, 0x1E, 0x01)  # 73225, the driver guide's example
 UAVCAN_BARO = devid.encode("uavcan", 0, 125, 0x40)
@@ -248,6 +251,10 @@ def test_clamping_rotation_and_twice_found(tmp_path: Path, devtypes: devid.Devty
         "# HMC5883\n# @max_instances 2\n\nuint4 p_version\npx.Bus.1.0 bus\n# Bus\n"
         "# @default i2c.address 0x1E\n\nuint3 gain\n@sealed\n"
     )
+    (extra / "Lis2mdl.1.0.dsdl").write_text(  # a rotation field without @min/@max
+        "# LIS2MDL\n# @max_instances 1\n\nuint4 p_version\npx.Bus.1.0 bus\nuint2 rotation\n"
+        "@sealed\n"
+    )
     import px4params
 
     schema = px4params.load_schema([extra], use_env=False, include_dronecan=False,
@@ -262,12 +269,14 @@ def test_clamping_rotation_and_twice_found(tmp_path: Path, devtypes: devid.Devty
         ("CAL_MAG1_ROT", 100, 6),
         ("CAL_MAG2_ID", devid.encode("i2c", 2, 0x0C, 0x09), 6),
         ("CAL_MAG2_ROT", -1, 6),
+        ("CAL_MAG3_ID", devid.encode("i2c", 1, 0x1E, 0x0A), 6),
+        ("CAL_MAG3_ROT", 5, 6),
     ]
     proposal = migrate.migrate(migrate.read_config(params_file(tmp_path / "p", rows)), schema,
                                devtypes)  # fmt: skip
     names = [i.name for i in proposal.instances]
-    assert names == ["HMC5883#0", "INA226#0", "AK09916#0", "AK09916#1"]
-    hmc, ina, ak0, ak1 = proposal.instances
+    assert names == ["HMC5883#0", "INA226#0", "AK09916#0", "AK09916#1", "LIS2MDL#0"]
+    hmc, ina, ak0, ak1, _ = proposal.instances
     assert hmc.notes == [f"also CAL_MAG0_ID = {HMC5883_I2C1}: HMC5883 (MAG), I2C bus 1, "
                          "address 0x1E"]  # fmt: skip
     assert ina.values["current"] == 200
@@ -277,6 +286,7 @@ def test_clamping_rotation_and_twice_found(tmp_path: Path, devtypes: devid.Devty
     assert proposal.not_carried == [
         "CAL_MAG0_ROT = 3: HMC5883 has no rotation field",
         "CAL_MAG1_ROT = 100: AK09916#0.rotation must be 0..40",
+        "CAL_MAG3_ROT = 5: LIS2MDL#0: rotation: value 5 is out of range (expected 0 to 3)",
     ]
 
 
