@@ -126,6 +126,11 @@ class Store:
             self._native.set_type_default(p.index, self._type_default(p))
         self._native.mark_saved()
         self._initial = self._native.copy()
+        # The destructured (MAVLink) names must be valid for every type: checked once, here,
+        # so that a type with a leaf over 32 bits or a clashing name is refused at load.
+        from .flat import flat_map
+
+        flat_map(self)
         #: Classic records of a loaded file whose parameters this store lacks, kept to be saved.
         self._foreign: dict[str, bytes] = {}
 
