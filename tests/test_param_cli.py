@@ -461,7 +461,12 @@ def test_export_and_import_other_formats(
 
 
 BAD_FILES = [
-    ("x.params", "1\t1\tSYS_AUTOSTART\t4001\n", "x.params:1: expected 5 TAB-separated columns"),
+    (
+        "x.params",
+        "1\t1\tSYS_AUTOSTART\t4001\n",
+        "x.params:1: expected 5 TAB-separated columns "
+        "(vehicle-id, component-id, name, value, type), got 4",
+    ),
     ("x.params", "1\t1\tSYS_AUTOSTART\t4001\t7\n", "x.params:1: SYS_AUTOSTART: type '7' is not 6"),
     (
         "x.params",
@@ -539,3 +544,112 @@ def test_shell_completion(store: Path, capsys: pytest.CaptureFixture[str]) -> No
         text=True,
     )
     assert bash.stdout.split() == ["set-default"]
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["add", "INA238#70000"], "INA238#70000: instance 70000 is out of range"),
+        (["set", "INA238#0[99999999999]", "1"], "INA238#0[99999999999]: no leaf [99999999999]"),
+        (["show", "INA238#0.current"], "show lists instances and parameters; for the leaf"),
+        (["touch", "INA238#0[4]"], "touch takes an instance or parameter, not a leaf"),
+    ],
+)
+def test_more_bad_names(
+    store: Path, capsys: pytest.CaptureFixture[str], argv: list[str], message: str
+) -> None:
+    param(capsys, "add", "INA238#0")
+    code, _, err = param(capsys, *argv)
+    assert code == 1
+    assert message in err
+    assert err.count("\n") == 1 and "Traceback" not in err
+
+
+def test_import_of_a_store_merges_existing_instances(
+    store: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    param(capsys, "add", "INA238#0")
+    param(capsys, "set", "INA238#0.current", "100")
+    backup = tmp_path / "backup.store"
+    param(capsys, "save", str(backup))
+    param(capsys, "set", "INA238#0.current", "50")
+    assert param(capsys, "import", str(backup))[0] == 0
+    assert param(capsys, "import")[0] == 0  # the store's own file, instances and all
+    assert param(capsys, "show", "-q", "INA238#0.current")[1] == "100\n"
+
+
+def test_a_failing_run_writes_no_file(
+    store: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    copy, export = tmp_path / "copy.store", tmp_path / "x.params"
+    text = (
+        f"param add INA238#0\nparam save\nparam save {copy}\nparam export {export}\n"
+        "param set INA238#0[4] 300\n"
+    )
+    assert run(capsys, "run", airframe(tmp_path, text))[0] == 1
+    assert not store.exists() and not copy.exists() and not export.exists()
+    good = text.replace("300", "70")
+    assert run(capsys, "run", airframe(tmp_path, good))[0] == 0
+    assert store.exists() and copy.exists() and export.exists()
+    assert "1\t1\tINA238_0C\t70\t6" in export.read_text()
+
+
+def test_reset_of_one_leaf(store: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    param(capsys, "add", "INA238#0")
+    param(capsys, "set", "INA238#0.current", "300")
+    param(capsys, "set", "INA238#0[4]", "0x46")
+    assert param(capsys, "reset", "INA238#0[4]")[0] == 0
+    assert param(capsys, "show", "-q", "INA238#0[4]")[1] == "69\n"
+    assert param(capsys, "show", "-q", "INA238#0.current")[1] == "300\n"
+
+
+def test_reset_all_keeps_what_is_excluded(store: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    param(capsys, "add", "INA238#0")
+    param(capsys, "add", "AK09916#0")
+    param(capsys, "set", "INA238#0.current", "300")
+    param(capsys, "set", "AK09916#0.rotation", "2")
+    param(capsys, "set", "SYS_AUTOSTART", "4001")
+    assert param(capsys, "reset_all", "ina238", "sys_autostart")[0] == 0
+    assert param(capsys, "show", "-q", "INA238#0.current")[1] == "300\n"
+    assert param(capsys, "show", "-q", "SYS_AUTOSTART")[1] == "4001\n"
+    assert param(capsys, "show", "-q", "AK09916#0.rotation")[1] == "0\n"
+
+
+def test_flat_names_work_in_every_verb(
+    store: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    talk(capsys, tmp_path)
+    assert param(capsys, "compare", "INA238_0C", "69")[0] == 0
+    assert param(capsys, "greater", "INA238_0P", "199")[0] == 0
+    assert param(capsys, "show", "-q", "INA238_0C") == (0, "69\n", "")
+    param(capsys, "set", "INA238_0C", "70")
+    assert param(capsys, "reset", "INA238_0C")[0] == 0
+    assert param(capsys, "show", "-q", "INA238#0[4]")[1] == "69\n"
+
+
+def test_a_damaged_store_points_to_its_backup(
+    store: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    param(capsys, "add", "INA238#0")
+    param(capsys, "add", "INA238#1")  # the first save is now the backup
+    data = bytearray(store.read_bytes())
+    data[-1] ^= 1
+    store.write_bytes(bytes(data))
+    code, _, err = param(capsys, "show")
+    assert code == 1
+    assert f"the previous save is in {store}.bak: px4params param load {store}.bak" in err
+    assert param(capsys, "load", f"{store}.bak")[0] == 0  # the way back
+    assert param(capsys, "instances", "INA238")[1] == "INA238#0\n"
+
+
+def test_saved_files_are_readable_by_others(
+    store: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import os
+
+    old = os.umask(0o022)
+    try:
+        param(capsys, "add", "INA238#0")
+    finally:
+        os.umask(old)
+    assert store.stat().st_mode & 0o777 == 0o644

@@ -475,3 +475,10 @@ def test_whole_values_round_trip(value: st.DataObject) -> None:
     name = store.add(spec.name)
     store.set(name, v)
     assert store.encoded(name) == spec.data_type.encode(v, tao=False)
+
+
+def test_restore_takes_only_a_copy_of_the_same_store(schema: px4params.Schema) -> None:
+    one, other = px4params.Store(schema), px4params.Store(schema, classic=CLASSIC)
+    with pytest.raises(ValueError, match=r"^restore takes a copy of this store"):
+        one._native.restore(other._native)
+    one._native.restore(one._native.copy())

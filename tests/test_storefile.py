@@ -290,3 +290,32 @@ def test_classic_values_of_unknown_parameters_are_kept(
     again = px4params.Store.load(path, schema, classic=CLASSIC)
     assert again.get("BAT1_CAPACITY") == 4200.0
     assert again.get("SYS_AUTOSTART") == 4001
+
+
+def test_a_refused_load_keeps_unknown_classic_records(
+    schema: px4params.Schema, tmp_path: Path
+) -> None:
+    full = px4params.Store(schema, classic=CLASSIC)
+    full.set("BAT1_CAPACITY", 4200.0)
+    good = tmp_path / "good.store"
+    full.save(good)
+    fewer = px4params.Store(schema, classic=CLASSIC[:1])
+    fewer.load_from(good)
+    bad = tmp_path / "bad.params"
+    bad.write_text("1\t1\tSYS_AUTOSTART\tx\t6\n")
+    from px4params import paramfile
+
+    with pytest.raises(paramfile.ParamFileError):
+        paramfile.read(fewer, str(bad), reset=True)
+    fewer.save(good)
+    assert px4params.Store.load(good, schema, classic=CLASSIC).get("BAT1_CAPACITY") == 4200.0
+
+
+def test_records_with_impossible_instance_numbers(store: px4params.Store, tmp_path: Path) -> None:
+    path = tmp_path / "x.store"
+    index = store.parameters.index("INA238")
+    write_records(path, store, [bytes([KIND_STRUCTURED]) + _varint(index) + _varint(70000)])
+    with pytest.raises(
+        StoreFileError, match=r"record is malformed: instance 70000 is out of range"
+    ):
+        store.load_from(path)

@@ -99,7 +99,7 @@ def run_file(path: str, session: Session, *, keep_going: bool, err: TextIO) -> R
         print(f"px4params: {message}", file=err)
         if not keep_going:
             return result
-    if session.changed and (not result.errors or keep_going):
+    if (session.changed or session.deferred) and (not result.errors or keep_going):
         session.save()
     return result
 
@@ -199,8 +199,9 @@ def _expand(text: str, variables: dict[str, str]) -> str:
 def cmd_run(args: argparse.Namespace) -> int:
     import sys
 
-    session = cli_param.open_session(args.store, args.classic, args.dsdl or ())
-    result = run_file(args.file, session, keep_going=args.keep_going, err=sys.stderr)
+    with cli_param.store_lock(args.store or cli_param.default_store_path()):
+        session = cli_param.open_session(args.store, args.classic, args.dsdl or ())
+        result = run_file(args.file, session, keep_going=args.keep_going, err=sys.stderr)
     return cli_param.EXIT_FAILED if result.errors else cli_param.EXIT_OK
 
 

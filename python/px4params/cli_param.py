@@ -8,6 +8,7 @@ refused change saves nothing and leaves the file as it was.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import fnmatch
 import json
 import math
@@ -15,12 +16,12 @@ import os
 import re
 import struct
 import sys
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 from typing import Any, TextIO
 
 from .classic import BUNDLED_CLASSIC, CLASSIC_ENV
-from .errors import InstanceError, Px4ParamsError
+from .errors import InstanceError, Px4ParamsError, StoreFileError
 from .schema import Leaf, load_schema, to_json_value
 from .store import Key, Store, default_store_path
 
@@ -44,6 +45,8 @@ class Session:
     #: Save after each changing verb (off while an airframe file runs: it saves once).
     autosave: bool = True
     changed: bool = False
+    #: Writes to other files asked for during a batch, done when the batch succeeds.
+    deferred: list[Callable[[], None]] = field(default_factory=list)
 
     def done(self) -> None:
         """Records a change; saves it unless a batch is running."""
@@ -51,9 +54,20 @@ class Session:
         if self.autosave:
             self.save()
 
+    def write_later(self, write: Callable[[], None]) -> None:
+        """Writes a file now, or when the batch succeeds: a failed airframe file leaves no
+        file behind that it wrote half-way."""
+        if self.autosave:
+            write()
+        else:
+            self.deferred.append(write)
+
     def save(self) -> None:
         self.store.save(self.path)
         self.changed = False
+        for write in self.deferred:
+            write()
+        self.deferred.clear()
 
 
 def open_session(
@@ -61,17 +75,31 @@ def open_session(
     classic: str | None,
     dsdl: Iterable[str] = (),
     out: TextIO | None = None,
+    *,
+    start_empty_if_unreadable: bool = False,
 ) -> Session:
     """The store in ``store_path`` (default file when None); a new, empty one when the file
-    does not exist yet."""
+    does not exist yet (or, with ``start_empty_if_unreadable``, cannot be used: for ``param
+    load FILE``, the way back from a damaged store)."""
     path = store_path or default_store_path()
     # Parameters are px types: DroneCAN's standard messages are not needed (and slow to load).
     schema = load_schema(list(dsdl), include_dronecan=False)
     source = classic or os.environ.get(CLASSIC_ENV) or BUNDLED_CLASSIC
+    store = Store(schema, classic=source)
     if os.path.exists(path):
-        store = Store.load(path, schema, classic=source)
-    else:
-        store = Store(schema, classic=source)
+        try:
+            store.load_from(path)
+        except StoreFileError as e:
+            if start_empty_if_unreadable:
+                store.reset_to_initial()
+            else:
+                backup = path + ".bak"
+                hint = (
+                    f"; the previous save is in {backup}: px4params param load {backup}"
+                    if os.path.exists(backup)
+                    else ""
+                )
+                raise StoreFileError(f"{e.message}{hint}", e.file, e.offset) from None
     return Session(store, path, out or sys.stdout)
 
 
@@ -277,6 +305,7 @@ def verb_set_default(s: Session, a: argparse.Namespace) -> int:
 
 
 def _compare(s: Session, a: argparse.Namespace, greater: bool) -> int:
+    a.name = leaf_name(s.store, a.name)
     try:
         current = s.store.get(a.name)
     except InstanceError:
@@ -333,13 +362,16 @@ def verb_show(s: Session, a: argparse.Namespace) -> int:
     if a.quiet:
         if len(a.filters) != 1 or "*" in a.filters[0]:
             raise ParamError("show -q takes one exact name")
-        print(
-            shown_value(store, a.filters[0])
-            if "[" not in a.filters[0] and "." not in a.filters[0]
-            else shown_leaf(store.leaf(a.filters[0])),
-            file=s.out,
-        )
+        name = leaf_name(store, a.filters[0])
+        leafless = Key.parse(name).leaf is None
+        print(shown_value(store, name) if leafless else shown_leaf(store.leaf(name)), file=s.out)
         return EXIT_OK
+    for f in a.filters:
+        if "[" in f or "." in f:
+            raise ParamError(
+                f"show lists instances and parameters; for the leaf {f} use show -q {f}, "
+                "for all leaves show -l INSTANCE"
+            )
     rows = []
     used_index = 0
     position = {p: i for i, p in enumerate(store.parameters)}
@@ -423,13 +455,19 @@ def _show_leaves(s: Session, a: argparse.Namespace) -> int:
 
 
 def _expand(store: Store, patterns: list[str]) -> list[str]:
+    """Names matching ``patterns``: a trailing ``*`` matches, a parameter name stands for all
+    its instances, and destructured flat names for their leaves."""
     names = list(store.names())
     found: list[str] = []
     for p in patterns:
+        upper = p.upper()
         if "*" in p:
-            found += [n for n in names if fnmatch.fnmatchcase(n.upper(), p.upper())]
+            found += [n for n in names if fnmatch.fnmatchcase(n, upper)]
+        elif upper in store.parameters and store.spec(upper) is not None and "#" not in upper:
+            spec = store.spec(upper)
+            found += store.instances(upper) if spec is not None and not spec.shared else [upper]
         else:
-            found.append(p)
+            found.append(leaf_name(store, p))
     return found
 
 
@@ -442,7 +480,8 @@ def verb_reset(s: Session, a: argparse.Namespace) -> int:
 
 
 def verb_reset_all(s: Session, a: argparse.Namespace) -> int:
-    keep = set(_expand(s.store, a.excludes))
+    keep = {Key.parse(n).param if "#" not in n else n for n in _expand(s.store, a.excludes)}
+    keep = {n.upper() for n in keep}
     with s.store.transaction():
         for name in list(s.store.names()):
             if name not in keep:
@@ -452,14 +491,24 @@ def verb_reset_all(s: Session, a: argparse.Namespace) -> int:
 
 
 def verb_touch(s: Session, a: argparse.Namespace) -> int:
-    for name in a.names:
+    for name in _expand(s.store, a.names):
         s.store.mark_used(name)
     return EXIT_OK
 
 
 def verb_save(s: Session, a: argparse.Namespace) -> int:
-    size = s.store.save(a.file or s.path)
-    print(f"saved {a.file or s.path} ({size} bytes)", file=s.out)
+    if not a.file or os.path.abspath(a.file) == os.path.abspath(s.path):
+        s.done()  # the store's own file: now, or when the airframe file has succeeded
+        if s.autosave:
+            print(f"saved {s.path}", file=s.out)
+        return EXIT_OK
+    file = a.file
+
+    def write() -> None:
+        size = s.store.save(file)
+        print(f"saved {file} ({size} bytes)", file=s.out)
+
+    s.write_later(write)
     return EXIT_OK
 
 
@@ -489,8 +538,15 @@ def verb_import(s: Session, a: argparse.Namespace) -> int:
 def verb_export(s: Session, a: argparse.Namespace) -> int:
     from . import paramfile
 
-    size = paramfile.write(s.store, a.file)
-    print(f"wrote {a.file} ({size} bytes)", file=s.out)
+    if paramfile.kind_of(a.file) is None:
+        raise ParamError(f"{a.file}: export writes .params (QGC) or .json files")
+    file = a.file
+
+    def write() -> None:
+        size = paramfile.write(s.store, file)
+        print(f"wrote {file} ({size} bytes)", file=s.out)
+
+    s.write_later(write)
     return EXIT_OK
 
 
@@ -727,8 +783,31 @@ def store_options(p: argparse.ArgumentParser) -> None:
 
 
 def cmd_param(args: argparse.Namespace) -> int:
-    session = open_session(args.store, args.classic, args.dsdl or ())
-    return int(args.verb(session, args))
+    recovering = args.verb is verb_load and args.file is not None
+    with store_lock(args.store or default_store_path()):
+        session = open_session(
+            args.store, args.classic, args.dsdl or (), start_empty_if_unreadable=recovering
+        )
+        return int(args.verb(session, args))
+
+
+@contextlib.contextmanager
+def store_lock(path: str) -> Iterator[None]:
+    """Holds ``FILE.lock`` while a command reads, changes and saves the store, so that two
+    commands at once do not lose one's change (POSIX advisory lock; elsewhere, no lock)."""
+    try:
+        import fcntl
+    except ImportError:  # not POSIX
+        yield
+        return
+    try:
+        handle = open(path + ".lock", "a")  # noqa: SIM115 - held for the whole block
+    except OSError:
+        yield  # a read-only folder: reading still works, saving will report the problem
+        return
+    with handle:
+        fcntl.flock(handle.fileno(), fcntl.LOCK_EX)
+        yield
 
 
 def add_param_parser(sub: Any) -> None:

@@ -145,7 +145,7 @@ def _read_qgc(store: Store, path: str, text: str) -> list[str]:
         if len(parts) != 5:
             raise ParamFileError(
                 f"{where}: expected 5 TAB-separated columns "
-                "(vehicle-id, component-id, name, value, type), got {len(parts)}"
+                f"(vehicle-id, component-id, name, value, type), got {len(parts)}"
             )
         _, _, name, value_text, type_text = parts
         if type_text not in (str(MAV_PARAM_TYPE_INT32), str(MAV_PARAM_TYPE_REAL32)):

@@ -43,6 +43,12 @@ _KEY = re.compile(
 )
 
 
+#: Instance numbers are 16-bit in the core (``max_instances`` is far below).
+MAX_INSTANCE = 0xFFFF
+#: Leaf numbers beyond this name no leaf of any storable value.
+MAX_LEAF = 1 << 31
+
+
 def default_store_path() -> str:
     """``$PX4PARAMS_STORE``, or ``px4params.store`` in the current directory."""
     return os.environ.get(STORE_ENV) or DEFAULT_STORE
@@ -65,9 +71,13 @@ class Key:
                 "NAME#N.path, e.g. INA238#0.bus.i2c.address)"
             )
         instance = match["instance"]
+        if instance is not None and int(instance) > MAX_INSTANCE:
+            raise InstanceError(f"{text}: instance {int(instance)} is out of range")
         leaf: int | str | None = None
         if match["index"] is not None:
             leaf = int(match["index"])
+            if leaf > MAX_LEAF:
+                raise InstanceError(f"{text}: no leaf [{leaf}]")
         elif match["path"] is not None:
             leaf = match["path"]
         return cls(match["name"].upper(), int(instance) if instance else None, leaf)
@@ -236,8 +246,7 @@ class Store:
         p, instance, key = self._resolve(name)
         if key.leaf is not None:
             raise InstanceError(f"store[...] takes an instance; use store.get('{name}')")
-        self._native.slot(p.index, instance)  # range check
-        if not self._native.slot(p.index, instance)[0]:
+        if not self._native.slot(p.index, instance)[0]:  # also checks the range
             raise InstanceError(
                 f"{self._instance_name(p, instance)}: instance does not exist "
                 "(add it first: param add)"
@@ -272,9 +281,16 @@ class Store:
         data = self._native.get(p.index, instance, default=default)
         return p.spec.data_type.leaves(data, tao=False)
 
+    def _whole(self, name: str, what: str) -> tuple[_Param, int]:
+        """An instance or parameter named without a leaf (``what`` says who asks)."""
+        p, instance, key = self._resolve(name)
+        if key.leaf is not None:
+            raise InstanceError(f"{what} takes an instance or parameter, not a leaf: {name}")
+        return p, instance
+
     def encoded(self, name: str, *, default: bool = False) -> bytes:
         """An instance's stored bytes (DroneCAN rules, no tail array optimization)."""
-        p, instance, _ = self._resolve(name)
+        p, instance = self._whole(name, "encoded")
         return self._native.get(p.index, instance, default=default)
 
     def set(self, name: str, value: Any, *, saturate: bool = False) -> None:
@@ -308,9 +324,16 @@ class Store:
         self._native.set_encoded(p.index, instance, bytes(data), default=default)
 
     def reset(self, name: str) -> None:
-        """Sets a value back to its default."""
-        p, instance, _ = self._resolve(name)
-        self._native.reset(p.index, instance)
+        """Sets a value, or one leaf (``INA238#0[4]``), back to its default."""
+        p, instance, key = self._resolve(name)
+        if key.leaf is None:
+            self._native.reset(p.index, instance)
+            return
+        try:
+            default = self.leaf(name, default=True)
+        except LeafError as e:
+            raise LeafError(f"{e} (in the default value, which has another shape)") from None
+        self.set(name, default.value)
 
     def reset_all(self) -> None:
         """Sets every value back to its default (instances stay)."""
@@ -325,19 +348,19 @@ class Store:
     def changed(self, name: str | None = None) -> Any:
         """Whether ``name`` differs from its default; without a name, every name that does."""
         if name is not None:
-            p, instance, _ = self._resolve(name)
+            p, instance = self._whole(name, "changed")
             return self._native.changed(p.index, instance)
         return [n for n in self.names() if self.changed(n)]
 
     def state(self, name: str) -> tuple[bool, bool]:
         """``(used, unsaved)`` of an instance or parameter."""
-        p, instance, _ = self._resolve(name)
+        p, instance = self._whole(name, "state")
         _, used, unsaved = self._native.slot(p.index, instance)
         return used, unsaved
 
     def mark_used(self, name: str) -> None:
         """Marks an instance as read by a driver (PX4's ``x`` in ``param show``)."""
-        p, instance, _ = self._resolve(name)
+        p, instance = self._whole(name, "touch")
         self._native.mark_used(p.index, instance)
 
     @property
@@ -350,11 +373,12 @@ class Store:
     @contextlib.contextmanager
     def transaction(self) -> Iterator[Store]:
         """Applies every change in the block, or none if it raises."""
-        backup = self._native.copy()
+        backup, foreign = self._native.copy(), dict(self._foreign)
         try:
             yield self
         except BaseException:
             self._native.restore(backup)
+            self._foreign = foreign
             raise
 
     # -- files --------------------------------------------------------------------------------

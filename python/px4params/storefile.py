@@ -24,7 +24,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from .errors import Px4ParamsError, StoreFileError
+from .errors import Px4ParamsError, StoreError, StoreFileError
 from .params import ParamSpec, _default_of
 from .schema import DataType
 
@@ -104,6 +104,9 @@ def save(store: Store, path: str | os.PathLike[str]) -> int:
         raise StoreFileError(f"cannot write: {e.strerror}", target) from None
     try:
         with os.fdopen(fd, "wb") as f:
+            # mkstemp makes the file private; give it the mode a new file gets (or the old
+            # file's), so that other users and tools can read the store as before.
+            os.fchmod(f.fileno(), _mode_for(target))
             f.write(data)
             f.flush()
             os.fsync(f.fileno())
@@ -116,6 +119,15 @@ def save(store: Store, path: str | os.PathLike[str]) -> int:
             os.unlink(tmp)
         raise StoreFileError(f"cannot write: {e.strerror}", target) from None
     return len(data)
+
+
+def _mode_for(target: str) -> int:
+    try:
+        return os.stat(target).st_mode & 0o777
+    except OSError:
+        umask = os.umask(0)
+        os.umask(umask)
+        return 0o666 & ~umask
 
 
 def _keep_backup(target: str) -> None:
@@ -259,6 +271,8 @@ class _Reader:
             sizes = (4, 4)
         elif kind == KIND_STRUCTURED:
             key, instance = self.varint(), self.varint()
+            if instance > 0xFFFF:
+                raise self.fail(f"instance {instance} is out of range")
             sizes = (-1, -1)
         else:
             raise self.fail(f"unknown record kind {kind}")
@@ -321,8 +335,8 @@ def _apply(
     assert isinstance(record.key, int)
     p = by_index.get(record.key)
     if p is None or p.spec is None:
-        raise StoreFileError(f"no parameter #{record.key}", "", None)
-    if not p.shared:
+        raise StoreError(f"no parameter #{record.key}")
+    if not p.shared and not work.slot(p.index, record.instance)[0]:  # import may merge
         work.add(p.index, record.instance)
     name = store._instance_name(p, record.instance)
     data_type = p.spec.data_type
@@ -364,9 +378,7 @@ def _current(
         return payload
     old_key = f"{data_type.name}.{version[0]}.{written}"
     if old_key not in store.schema:
-        raise StoreFileError(
-            f"{name} was stored by {old_key}, which this schema does not have", "", None
-        )
+        raise StoreError(f"{name} was stored by {old_key}, which this schema does not have")
     old = store.schema[old_key].decode(payload, tao=False)
     target = data_type.decode(base, tao=False)
     kept: list[str] = []
@@ -377,7 +389,7 @@ def _current(
     try:
         data = data_type.encode(merged, tao=False)
     except Px4ParamsError as e:
-        raise StoreFileError(f"{name}: cannot translate from {old_key}: {e}", "", None) from None
+        raise StoreError(f"{name}: cannot translate from {old_key}: {e}") from None
     line = f"{name}: translated {old_key} -> {data_type.key}: kept {', '.join(kept) or 'nothing'}"
     if new:
         line += f"; new, from defaults: {', '.join(new)}"

@@ -73,9 +73,8 @@ impl Pieces for PagePieces<'_, '_> {
 }
 
 /// Writes the values (or defaults) of every existing instance of `store` back to back over
-/// `pages` (all of one size), recording each in `index`. Returns the number of values written;
-/// [`StoreError::PagesFull`] when the pages or the index are too small (then nothing useful is
-/// in them).
+/// `pages` (all of one size), recording each in `index`. Returns the number of values written.
+/// Nothing is written when they do not fit ([`StoreError::PagesFull`]).
 pub fn write_pages<D, S, B>(
     store: &Store<D, S, B>,
     which: Which,
@@ -88,39 +87,46 @@ where
     B: AsRef<[u8]> + AsMut<[u8]>,
 {
     let size = pages.first().map_or(0, |p| p.len());
-    let capacity = size * pages.len();
-    if pages.iter().any(|p| p.len() != size) || size == 0 {
-        return Err(StoreError::PagesFull { needed: 0 });
+    if size == 0 || pages.iter().any(|p| p.len() != size) {
+        return Err(StoreError::UnequalPages);
     }
-    let (mut at, mut count) = (0usize, 0usize);
-    for (param, def) in store.defs().iter().enumerate() {
-        for instance in 0..def.instances {
-            let Ok(data) = store.get(param as u32, instance, which) else {
-                continue; // an absent instance
-            };
-            if at + data.len() > capacity || count == index.len() {
-                return Err(StoreError::PagesFull {
-                    needed: at + data.len(),
-                });
-            }
-            for (k, &byte) in data.iter().enumerate() {
-                let pos = at + k;
-                pages[pos / size][pos % size] = byte;
-            }
-            index[count] = PagedValue {
-                param: param as u32,
-                instance,
-                start: at as u32,
-                len: data.len() as u32,
-            };
-            at += data.len();
-            count += 1;
+    let values = || {
+        store
+            .defs()
+            .iter()
+            .enumerate()
+            .flat_map(move |(param, def)| {
+                (0..def.instances).filter_map(move |instance| {
+                    let data = store.get(param as u32, instance, which).ok()?; // absent: skipped
+                    Some((param as u32, instance, data))
+                })
+            })
+    };
+    let (needed, count) = values().fold((0, 0), |(b, n), (_, _, data)| (b + data.len(), n + 1));
+    if needed > size * pages.len() || count > index.len() {
+        return Err(StoreError::PagesFull {
+            needed,
+            values: count,
+        });
+    }
+    let mut at = 0usize;
+    for (slot, (param, instance, data)) in index.iter_mut().zip(values()) {
+        for (k, &byte) in data.iter().enumerate() {
+            let pos = at + k;
+            pages[pos / size][pos % size] = byte;
         }
+        *slot = PagedValue {
+            param,
+            instance,
+            start: at as u32,
+            len: data.len() as u32,
+        };
+        at += data.len();
     }
     Ok(count)
 }
 
-/// Reads leaf `[k]` of a value kept in pages, in place.
+/// Reads leaf `[k]` of a value kept in pages (all of one size), in place.
 pub fn read_paged_leaf(
     layout: &Layout<'_>,
     def: &ParamDef,
@@ -128,6 +134,10 @@ pub fn read_paged_leaf(
     value: &PagedValue,
     k: usize,
 ) -> Result<Scalar, StoreError> {
+    let size = pages.first().map_or(0, |p| p.len());
+    if size == 0 || pages.iter().any(|p| p.len() != size) {
+        return Err(StoreError::UnequalPages);
+    }
     let pieces = value.pieces(pages);
     let data = Scattered::new(&pieces);
     match leaf::seek(layout, def.root, &data, k) {

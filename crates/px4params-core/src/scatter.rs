@@ -210,7 +210,10 @@ impl<'p, P: Pieces + ?Sized> Scattered<'p, P> {
             skip = 0;
         }
         self.cursor.set(Cursor::at(i, start, piece));
-        // `acc` holds `got` bytes (all of them: the caller checked the length).
+        // `acc` holds `got` bytes: all of them, as callers read within the length.
+        if got == 0 {
+            return 0;
+        }
         let bits = 8 * got as u32;
         ((acc << (128 - bits) << (offset % 8)) >> (128 - n)) as u64
     }

@@ -92,34 +92,57 @@ pub struct Capacity {
 
 /// Lays out `defs` one after the other and returns the memory they need.
 pub fn plan(layout: &Layout<'_>, defs: &mut [ParamDef]) -> Result<Capacity> {
-    let (mut slots, mut bytes, mut scratch) = (0usize, 0usize, 0usize);
+    let mut totals = Totals::default();
     for (index, def) in defs.iter_mut().enumerate() {
+        *def = totals.place(layout, index, def)?;
+    }
+    Ok(totals.capacity())
+}
+
+/// Running totals while parameters are laid out one after the other.
+#[derive(Default)]
+struct Totals {
+    slots: usize,
+    bytes: usize,
+    scratch: usize,
+}
+
+impl Totals {
+    /// Where `def` (parameter `index`) goes next; adds it to the totals.
+    fn place(&mut self, layout: &Layout<'_>, index: usize, def: &ParamDef) -> Result<ParamDef> {
+        let param = index as u32;
         let node = layout
             .nodes
             .get(def.root as usize)
-            .ok_or(StoreError::NoSuchParam {
-                param: index as u32,
-            })?;
+            .ok_or(StoreError::NoSuchParam { param })?;
         let slot_bytes = node.max_bits.div_ceil(8) as usize;
         if slot_bytes > u16::MAX as usize
             || def.instances == 0
             || (def.shared && def.instances != 1)
         {
-            return Err(StoreError::Unsupported {
-                param: index as u32,
-            });
+            return Err(StoreError::Unsupported { param });
         }
-        def.first_slot = slots as u32;
-        def.first_byte = bytes as u32;
-        def.slot_bytes = slot_bytes as u32;
-        slots += 1 + def.instances as usize;
-        bytes += def.bytes();
-        scratch = scratch.max(slot_bytes);
+        let placed = ParamDef {
+            first_slot: self.slots as u32,
+            first_byte: self.bytes as u32,
+            slot_bytes: slot_bytes as u32,
+            ..*def
+        };
+        self.slots += 1 + def.instances as usize;
+        self.bytes += placed.bytes();
+        if self.bytes > u32::MAX as usize {
+            return Err(StoreError::Unsupported { param });
+        }
+        self.scratch = self.scratch.max(slot_bytes);
+        Ok(placed)
     }
-    Ok(Capacity {
-        slots,
-        bytes: bytes + scratch,
-    })
+
+    fn capacity(&self) -> Capacity {
+        Capacity {
+            slots: self.slots,
+            bytes: self.bytes + self.scratch,
+        }
+    }
 }
 
 const PRESENT: u8 = 1;
@@ -171,6 +194,11 @@ pub enum StoreError<E = Infallible> {
         /// Its index.
         param: u32,
     },
+    /// A parameter definition not laid out as [`plan`] lays it out.
+    NotPlanned {
+        /// Its index.
+        param: u32,
+    },
     /// An instance number at or above `max_instances`.
     InstanceOutOfRange {
         /// The number asked for.
@@ -205,11 +233,15 @@ pub enum StoreError<E = Infallible> {
         /// What the plan needs.
         needed: Capacity,
     },
-    /// The pages (or their index) cannot hold the values ([`crate::pages`]).
+    /// The pages or their index cannot hold the values ([`crate::pages`]).
     PagesFull {
-        /// Bytes needed at least (0: the pages are not all of one non-zero size).
+        /// Bytes the values need.
         needed: usize,
+        /// Number of values.
+        values: usize,
     },
+    /// Pages of different sizes, or of size 0 ([`crate::pages`]).
+    UnequalPages,
     /// The value or leaf was refused by the codec.
     Codec(Error<E>),
 }
@@ -226,6 +258,7 @@ impl StoreError {
         match self {
             Self::NoSuchParam { param } => StoreError::NoSuchParam { param },
             Self::Unsupported { param } => StoreError::Unsupported { param },
+            Self::NotPlanned { param } => StoreError::NotPlanned { param },
             Self::InstanceOutOfRange {
                 instance,
                 max_instances,
@@ -239,7 +272,8 @@ impl StoreError {
             Self::Shared => StoreError::Shared,
             Self::VersionLeaf { path } => StoreError::VersionLeaf { path },
             Self::Memory { needed } => StoreError::Memory { needed },
-            Self::PagesFull { needed } => StoreError::PagesFull { needed },
+            Self::PagesFull { needed, values } => StoreError::PagesFull { needed, values },
+            Self::UnequalPages => StoreError::UnequalPages,
             Self::Codec(e) => StoreError::Codec(Error {
                 kind: e.kind.map_value(|never| match never {}),
                 bit_offset: e.bit_offset,
@@ -269,6 +303,10 @@ impl<E: fmt::Display> fmt::Display for StoreErrorDisplay<'_, E> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self.error {
             StoreError::NoSuchParam { param } => write!(f, "no parameter #{param}"),
+            StoreError::NotPlanned { param } => write!(
+                f,
+                "parameter #{param} is not laid out as plan() lays it out"
+            ),
             StoreError::Unsupported { param } => write!(
                 f,
                 "parameter #{param} cannot be stored (no slot, or a value over 65535 bytes)"
@@ -303,15 +341,11 @@ impl<E: fmt::Display> fmt::Display for StoreErrorDisplay<'_, E> {
                 "store memory does not match its plan ({} slots and {} bytes needed)",
                 needed.slots, needed.bytes
             ),
-            StoreError::PagesFull { needed: 0 } => {
-                f.write_str("pages must all have one size, greater than 0")
-            }
-            StoreError::PagesFull { needed } => {
-                write!(
-                    f,
-                    "the pages or their index are too small ({needed} bytes needed)"
-                )
-            }
+            StoreError::UnequalPages => f.write_str("pages must all have one size, greater than 0"),
+            StoreError::PagesFull { needed, values } => write!(
+                f,
+                "the pages or their index are too small ({values} values of {needed} bytes)"
+            ),
             StoreError::Codec(e) => e.display(self.layout).fmt(f),
         }
     }
@@ -755,35 +789,15 @@ fn slot_index(def: &ParamDef, instance: u16) -> Result<usize> {
 /// Checks that `defs` are laid out as [`plan`] lays them out; returns the memory they need and
 /// the size of the scratch area at its end.
 fn check_plan(layout: &Layout<'_>, defs: &[ParamDef]) -> Result<(Capacity, usize)> {
-    let (mut slots, mut bytes, mut scratch) = (0usize, 0usize, 0usize);
+    let mut totals = Totals::default();
     for (index, def) in defs.iter().enumerate() {
-        let node = layout
-            .nodes
-            .get(def.root as usize)
-            .ok_or(StoreError::NoSuchParam {
-                param: index as u32,
-            })?;
-        let slot_bytes = node.max_bits.div_ceil(8) as usize;
-        let planned = def.first_slot as usize == slots
-            && def.first_byte as usize == bytes
-            && def.slot_bytes as usize == slot_bytes
-            && def.instances > 0
-            && (!def.shared || def.instances == 1)
-            && slot_bytes <= u16::MAX as usize;
-        if !planned {
-            return Err(StoreError::Unsupported {
+        if totals.place(layout, index, def)? != *def {
+            return Err(StoreError::NotPlanned {
                 param: index as u32,
             });
         }
-        slots += 1 + def.instances as usize;
-        bytes += def.bytes();
-        scratch = scratch.max(slot_bytes);
     }
-    let needed = Capacity {
-        slots,
-        bytes: bytes + scratch,
-    };
-    Ok((needed, scratch))
+    Ok((totals.capacity(), totals.scratch))
 }
 
 fn is_version(layout: &Layout<'_>, path: &Path) -> bool {

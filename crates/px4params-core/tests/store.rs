@@ -298,7 +298,7 @@ fn memory_that_does_not_match_the_plan_is_refused() {
     );
     defs[0].first_byte = 3;
     let moved = Store::new(&view, defs, vec![Slot::default(); 9], vec![0u8; 999]);
-    assert_eq!(moved.unwrap_err(), StoreError::Unsupported { param: 0 });
+    assert_eq!(moved.unwrap_err(), StoreError::NotPlanned { param: 0 });
 }
 
 // -- random operation sequences against a model ----------------------------------------------
@@ -510,5 +510,8 @@ fn pages_that_are_too_small_are_refused() {
     let mut index = [PagedValue::default(); 4];
     let e = write_pages(&f.store, Which::Value, &mut pages, &mut index).unwrap_err();
     assert!(matches!(e, StoreError::PagesFull { .. }));
-    assert!(message(&f, &e).starts_with("the pages or their index are too small ("));
+    assert_eq!(
+        message(&f, &e),
+        "the pages or their index are too small (3 values of 34 bytes)"
+    );
 }

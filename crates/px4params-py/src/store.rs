@@ -75,41 +75,17 @@ impl Store {
             }
             CoreError::Full { .. } => {
                 let name = self.instance_name(param, None);
-                InstanceError::new_err(format!("{name}: {}", plain(err, &layout)))
+                InstanceError::new_err(format!("{name}: {}", err.display(&layout)))
             }
             CoreError::Memory { .. }
             | CoreError::Unsupported { .. }
-            | CoreError::PagesFull { .. } => {
-                StoreError::new_err(format!("{name}: {}", plain(err, &layout)))
+            | CoreError::PagesFull { .. }
+            | CoreError::UnequalPages => {
+                StoreError::new_err(format!("{name}: {}", err.display(&layout)))
             }
-            _ => InstanceError::new_err(format!("{name}: {}", plain(err, &layout))),
+            _ => InstanceError::new_err(format!("{name}: {}", err.display(&layout))),
         }
     }
-}
-
-/// A store error without a codec error inside, formatted.
-fn plain<E>(err: CoreError<E>, layout: &Layout<'_>) -> String {
-    let bare: CoreError = match err {
-        CoreError::NoSuchParam { param } => CoreError::NoSuchParam { param },
-        CoreError::Unsupported { param } => CoreError::Unsupported { param },
-        CoreError::InstanceOutOfRange {
-            instance,
-            max_instances,
-        } => CoreError::InstanceOutOfRange {
-            instance,
-            max_instances,
-        },
-        CoreError::NotPresent { instance } => CoreError::NotPresent { instance },
-        CoreError::AlreadyPresent { instance } => CoreError::AlreadyPresent { instance },
-        CoreError::Full { max_instances } => CoreError::Full { max_instances },
-        CoreError::Shared => CoreError::Shared,
-        CoreError::VersionLeaf { path } => CoreError::VersionLeaf { path },
-        CoreError::Memory { needed } => CoreError::Memory { needed },
-        CoreError::PagesFull { needed } => CoreError::PagesFull { needed },
-        CoreError::Codec(_) => return "codec error".to_owned(),
-    };
-    let text = bare.display(layout).to_string();
-    text
 }
 
 #[pymethods]
@@ -175,9 +151,19 @@ impl Store {
         }
     }
 
-    /// Takes over the whole state of `other` (a copy of this store).
-    fn restore(&mut self, other: PyRef<'_, Store>) {
+    /// Takes over the whole state of `other`, a copy of this store (same schema and
+    /// parameters); any other store is refused.
+    fn restore(&mut self, other: PyRef<'_, Store>) -> PyResult<()> {
+        if !Arc::ptr_eq(&self.compiled, &other.compiled)
+            || self.names != other.names
+            || self.inner.defs() != other.inner.defs()
+        {
+            return Err(PyValueError::new_err(
+                "restore takes a copy of this store (same schema and parameters)",
+            ));
+        }
         self.inner = other.inner.clone();
+        Ok(())
     }
 
     /// Sets the type default of parameter `param` (encoded without tail array optimization).
