@@ -7,6 +7,11 @@
 /// A read-only bit stream. Implemented for contiguous bytes here; the trait lets the same
 /// decoders read payloads that lie in several pieces (descattering).
 pub trait BitRead {
+    /// Reads the stream from one position on (see [`BitRead::reader`]).
+    type Reader<'r>: BitReader + Copy
+    where
+        Self: 'r;
+
     /// Total number of bits available.
     fn bit_len(&self) -> usize;
 
@@ -15,21 +20,64 @@ pub trait BitRead {
     /// The caller guarantees `offset + n <= self.bit_len()`.
     fn read_bits(&self, offset: usize, n: u32) -> u64;
 
-    /// Copies whole bytes starting at byte `byte` into `out`, if the stream has them all
-    /// (lets byte strings on a byte boundary be read byte by byte without bit shifting).
+    /// A reader of the bits from `offset` on, one field after another: what a decoder uses,
+    /// as it reads forwards. It gives the same bits as [`BitRead::read_bits`].
+    fn reader(&self, offset: usize) -> Self::Reader<'_>;
+}
+
+/// Reads a [`BitRead`] forwards from a position; made by [`BitRead::reader`]. The caller
+/// checks against [`BitRead::bit_len`] that the bits it reads exist.
+pub trait BitReader {
+    /// The next `n` bits (`1..=64`) as a big-endian stream value.
+    fn read(&mut self, n: u32) -> u64;
+
+    /// The next `out.len()` bytes, the reader standing on a byte boundary (byte strings are
+    /// copied, not shifted bit by bit).
+    fn read_bytes(&mut self, out: &mut [u8]);
+
+    /// Skips `n` bits.
+    fn skip(&mut self, n: usize);
+
+    /// The bit offset of the next read.
+    fn position(&self) -> usize;
+}
+
+/// [`BitReader`] over contiguous bytes: a position.
+#[derive(Clone, Copy, Debug)]
+pub struct SliceReader<'d> {
+    data: &'d [u8],
+    pos: usize,
+}
+
+impl BitReader for SliceReader<'_> {
+    #[inline(always)]
+    fn read(&mut self, n: u32) -> u64 {
+        let value = read_bits(self.data, self.pos, n);
+        self.pos += n as usize;
+        value
+    }
+
     #[inline]
-    fn read_bytes(&self, byte: usize, out: &mut [u8]) -> bool {
-        if (byte + out.len()) * 8 > self.bit_len() {
-            return false;
-        }
-        for (i, slot) in out.iter_mut().enumerate() {
-            *slot = self.read_bits((byte + i) * 8, 8) as u8;
-        }
-        true
+    fn read_bytes(&mut self, out: &mut [u8]) {
+        let start = self.pos / 8;
+        out.copy_from_slice(&self.data[start..start + out.len()]);
+        self.pos += 8 * out.len();
+    }
+
+    #[inline(always)]
+    fn skip(&mut self, n: usize) {
+        self.pos += n;
+    }
+
+    #[inline(always)]
+    fn position(&self) -> usize {
+        self.pos
     }
 }
 
 impl BitRead for [u8] {
+    type Reader<'r> = SliceReader<'r>;
+
     #[inline]
     fn bit_len(&self) -> usize {
         self.len() * 8
@@ -40,14 +88,11 @@ impl BitRead for [u8] {
         read_bits(self, offset, n)
     }
 
-    #[inline]
-    fn read_bytes(&self, byte: usize, out: &mut [u8]) -> bool {
-        match self.get(byte..byte + out.len()) {
-            Some(bytes) => {
-                out.copy_from_slice(bytes);
-                true
-            }
-            None => false,
+    #[inline(always)]
+    fn reader(&self, offset: usize) -> SliceReader<'_> {
+        SliceReader {
+            data: self,
+            pos: offset,
         }
     }
 }

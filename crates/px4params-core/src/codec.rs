@@ -3,7 +3,7 @@
 //! Values come from a [`Source`] and go to a [`Sink`], so the same walk serves Python objects
 //! in the binding, flat leaf lists in firmware and anything else, without allocating.
 
-use crate::bits::{BitRead, BitWriter};
+use crate::bits::{BitRead, BitReader, BitWriter};
 use crate::error::{Error, ErrorKind, Path, Step};
 use crate::layout::{Field, FlatItem, Kind, Layout, NodeId, Role, Segment, Span};
 use crate::scalar::{self, Scalar};
@@ -216,10 +216,10 @@ pub fn decode<R: BitRead + ?Sized, K: Sink>(
     sink: &mut K,
     options: DecodeOptions,
 ) -> Result<usize, Error<K::Error>> {
-    let mut dec = Decoder {
+    let mut dec: Decoder<'_, '_, R, K> = Decoder {
         layout,
-        data,
-        pos: 0,
+        reader: data.reader(0),
+        bit_len: data.bit_len(),
         path: Path::default(),
         sink,
         depth: 0,
@@ -228,16 +228,17 @@ pub fn decode<R: BitRead + ?Sized, K: Sink>(
     if dec.node(root, options.tao).is_err() {
         return Err(stopped(dec.error));
     }
-    let used = dec.pos.div_ceil(8);
+    let end = dec.pos();
+    let used = end.div_ceil(8);
     let len = data.bit_len() / 8;
     if !options.allow_trailing && len > used {
         return Err(Error {
             kind: ErrorKind::TrailingBytes { used, len },
-            bit_offset: dec.pos,
+            bit_offset: end,
             path: Path::default(),
         });
     }
-    Ok(dec.pos)
+    Ok(end)
 }
 
 /// Internal failure marker: the error itself waits in the walker's slot, so that results stay
@@ -674,22 +675,42 @@ fn same_integer(given: Scalar, version: u32) -> bool {
     }
 }
 
-struct Decoder<'l, 'd, R: BitRead + ?Sized, K: Sink> {
+struct Decoder<'l, 'd, R: BitRead + ?Sized + 'd, K: Sink> {
     layout: &'l Layout<'l>,
-    data: &'d R,
-    pos: usize,
+    /// Where the decoder stands: it reads forwards only.
+    reader: R::Reader<'d>,
+    bit_len: usize,
     path: Path,
     sink: &'d mut K,
     depth: usize,
     error: Option<Error<K::Error>>,
 }
 
-impl<R: BitRead + ?Sized, K: Sink> Decoder<'_, '_, R, K> {
+impl<'d, R: BitRead + ?Sized + 'd, K: Sink> Decoder<'_, 'd, R, K> {
+    /// The bit offset of the next read.
+    #[inline(always)]
+    fn pos(&self) -> usize {
+        self.reader.position()
+    }
+
+    /// Bits left to read.
+    #[inline(always)]
+    fn remaining(&self) -> usize {
+        self.bit_len.saturating_sub(self.pos())
+    }
+
     #[cold]
     fn fail(&mut self, kind: ErrorKind<K::Error>) -> Stop {
+        let at = self.pos();
+        self.fail_at(at, kind)
+    }
+
+    /// Fails pointing at `bit_offset` (the start of what was found wrong).
+    #[cold]
+    fn fail_at(&mut self, bit_offset: usize, kind: ErrorKind<K::Error>) -> Stop {
         self.error = Some(Error {
             kind,
-            bit_offset: self.pos,
+            bit_offset,
             path: self.path,
         });
         Stop(())
@@ -697,15 +718,14 @@ impl<R: BitRead + ?Sized, K: Sink> Decoder<'_, '_, R, K> {
 
     #[inline]
     fn read(&mut self, bits: u32) -> Result<u64, Stop> {
-        let available = self.data.bit_len();
-        if self.pos + bits as usize > available {
+        let needed = self.pos() + bits as usize;
+        if needed > self.bit_len {
             return Err(self.fail(ErrorKind::Truncated {
-                needed_bits: self.pos + bits as usize,
-                available_bits: available,
+                needed_bits: needed,
+                available_bits: self.bit_len,
             }));
         }
-        let stream = self.data.read_bits(self.pos, bits);
-        self.pos += bits as usize;
+        let stream = self.reader.read(bits);
         Ok(scalar::from_stream(stream, bits))
     }
 
@@ -723,7 +743,7 @@ impl<R: BitRead + ?Sized, K: Sink> Decoder<'_, '_, R, K> {
             return Err(self.fail(ErrorKind::TooDeep));
         }
         let layout = self.layout;
-        let at_pos = self.pos;
+        let at_pos = self.pos();
         match layout.node(id).kind {
             kind @ (Kind::Uint { .. } | Kind::Int { .. } | Kind::Float { .. } | Kind::Bool) => {
                 self.leaf(kind)?;
@@ -751,11 +771,13 @@ impl<R: BitRead + ?Sized, K: Sink> Decoder<'_, '_, R, K> {
             } => {
                 let tag = self.read(tag_bits.into())?;
                 if tag >= u64::from(count) {
-                    self.pos = at_pos;
-                    return Err(self.fail(ErrorKind::BadUnionTag {
-                        tag,
-                        variants: count,
-                    }));
+                    return Err(self.fail_at(
+                        at_pos,
+                        ErrorKind::BadUnionTag {
+                            tag,
+                            variants: count,
+                        },
+                    ));
                 }
                 let variant = layout.fields[(first + tag as u32) as usize];
                 let at = At {
@@ -814,13 +836,13 @@ impl<R: BitRead + ?Sized, K: Sink> Decoder<'_, '_, R, K> {
                     if is_scalar(elem_kind) {
                         // Primitive elements of 8+ bits: their count is known up front.
                         let bits = scalar_bits(elem_kind) as usize;
-                        let count = (self.data.bit_len().saturating_sub(self.pos) / 8 * 8) / bits;
-                        let whole = self.data.bit_len().saturating_sub(self.pos) >= 8;
+                        let count = (self.remaining() / 8 * 8) / bits;
+                        let whole = self.remaining() >= 8;
                         if whole && count <= max as usize && self.flat_elements(elem_kind, count)? {
                             n = count;
                         }
                     }
-                    while self.data.bit_len().saturating_sub(self.pos) >= 8 {
+                    while self.remaining() >= 8 {
                         if n == max as usize {
                             return Err(self.fail(ErrorKind::ArrayTooLong {
                                 len: n as u64 + 1,
@@ -842,8 +864,7 @@ impl<R: BitRead + ?Sized, K: Sink> Decoder<'_, '_, R, K> {
                 } else {
                     let n = self.read(len_bits.into())?;
                     if n > u64::from(max) {
-                        self.pos = at_pos;
-                        return Err(self.fail(ErrorKind::ArrayTooLong { len: n, max }));
+                        return Err(self.fail_at(at_pos, ErrorKind::ArrayTooLong { len: n, max }));
                     }
                     let at = At {
                         path: &self.path,
@@ -908,9 +929,7 @@ impl<R: BitRead + ?Sized, K: Sink> Decoder<'_, '_, R, K> {
                 } => {
                     // Enough data for the whole run means no read inside it can fail; if
                     // not, the field-by-field walk finds where exactly it ends.
-                    let fits = self.pos + bits as usize <= self.data.bit_len();
-                    let data = self.data;
-                    let pos = self.pos;
+                    let fits = bits as usize <= self.remaining();
                     let slots = if fits {
                         self.sink.leaf_slots(leaves as usize)
                     } else {
@@ -918,7 +937,10 @@ impl<R: BitRead + ?Sized, K: Sink> Decoder<'_, '_, R, K> {
                     };
                     match slots {
                         Some(Ok(slots)) => {
-                            self.pos = decode_items(data, pos, items.of(layout.flat), slots);
+                            // A local copy of the reader stays in registers for the run.
+                            let mut reader = self.reader;
+                            decode_items(&mut reader, items.of(layout.flat), slots);
+                            self.reader = reader;
                         }
                         Some(Err(e)) => return Err(self.fail(ErrorKind::Value(e))),
                         None => {
@@ -937,30 +959,29 @@ impl<R: BitRead + ?Sized, K: Sink> Decoder<'_, '_, R, K> {
     /// Decodes `n` primitive elements of `kind` into a flat sink when there is one.
     /// Returns false when the sink is not flat or the data is too short (walk instead).
     fn flat_elements(&mut self, kind: Kind, n: usize) -> Result<bool, Stop> {
-        let bits = scalar_bits(kind) as usize;
-        if !K::FLAT || self.pos + bits * n > self.data.bit_len() {
+        let bits = scalar_bits(kind);
+        if !K::FLAT || bits as usize * n > self.remaining() {
             return Ok(false);
         }
-        let data = self.data;
-        let pos = self.pos;
+        let mut reader = self.reader;
         match self.sink.leaf_slots(n) {
             Some(Ok(slots)) => {
-                if matches!(kind, Kind::Uint { bits: 8, .. }) && pos % 8 == 0 {
+                if matches!(kind, Kind::Uint { bits: 8, .. }) && reader.position() % 8 == 0 {
                     // Byte strings on a byte boundary: plain bytes, a chunk at a time.
                     let mut chunk = [0u8; 32];
-                    for (i, group) in slots.chunks_mut(chunk.len()).enumerate() {
+                    for group in slots.chunks_mut(chunk.len()) {
                         let bytes = &mut chunk[..group.len()];
-                        data.read_bytes(pos / 8 + i * 32, bytes);
+                        reader.read_bytes(bytes);
                         for (slot, &b) in group.iter_mut().zip(bytes.iter()) {
                             *slot = Scalar::Uint(b.into());
                         }
                     }
                 } else {
-                    for (i, slot) in slots.iter_mut().enumerate() {
-                        *slot = read_scalar(data, pos + i * bits, kind);
+                    for slot in slots.iter_mut() {
+                        *slot = scalar_of(kind, scalar::from_stream(reader.read(bits), bits));
                     }
                 }
-                self.pos = pos + bits * n;
+                self.reader = reader;
                 Ok(true)
             }
             Some(Err(e)) => Err(self.fail(ErrorKind::Value(e))),
@@ -971,7 +992,7 @@ impl<R: BitRead + ?Sized, K: Sink> Decoder<'_, '_, R, K> {
     /// Reads a primitive and hands it to the sink.
     #[inline]
     fn leaf(&mut self, kind: Kind) -> Result<(), Stop> {
-        let at_pos = self.pos;
+        let at_pos = self.pos();
         let value = self.scalar(kind)?;
         let at = At {
             path: &self.path,
@@ -998,28 +1019,23 @@ impl<R: BitRead + ?Sized, K: Sink> Decoder<'_, '_, R, K> {
     }
 }
 
-/// Decodes the flat items of a fixed-shape run at `pos` into `slots`; returns the end. The
-/// caller has checked that the data holds the whole run.
+/// Decodes the flat items of a fixed-shape run into `slots`. The caller has checked that the
+/// data holds the whole run.
 #[inline]
-fn decode_items<R: BitRead + ?Sized>(
-    data: &R,
-    mut pos: usize,
-    items: &[FlatItem],
-    slots: &mut [Scalar],
-) -> usize {
+fn decode_items<B: BitReader>(reader: &mut B, items: &[FlatItem], slots: &mut [Scalar]) {
     let mut slots = slots.iter_mut();
     for item in items {
         match *item {
-            FlatItem::Pad(bits) => pos += usize::from(bits),
+            FlatItem::Pad(bits) => reader.skip(usize::from(bits)),
             FlatItem::Leaf(kind) | FlatItem::Version(kind, _) => {
+                let bits = scalar_bits(kind);
+                let raw = if bits == 0 { 0 } else { reader.read(bits) };
                 if let Some(slot) = slots.next() {
-                    *slot = read_scalar(data, pos, kind);
+                    *slot = scalar_of(kind, scalar::from_stream(raw, bits));
                 }
-                pos += scalar_bits(kind) as usize;
             }
         }
     }
-    pos
 }
 
 /// A scalar from its raw bits.

@@ -2,19 +2,133 @@
 //! blocks and tail; CAN frame payloads; storage pages) without copying them together.
 //!
 //! [`Scattered`] implements [`BitRead`], so every decoder and leaf accessor reads from it as
-//! from a flat buffer. It remembers the last piece it read from, so that the sequential reads
-//! of a decoder cost a comparison each.
+//! from a flat buffer, and nothing is gathered into one:
+//! - decoders read forwards through a [`ScatteredReader`], which keeps the next bits of the
+//!   stream in a register and takes the next piece's bytes (one load for a CAN frame) when
+//!   they run out; byte strings are moved from the pieces a word at a time;
+//! - reads at any offset (leaf access) go through a window of up to 16 bytes that moves with
+//!   them.
+//!
+//! A piece gives its bytes up to 8 at a time ([`Pieces::chunk`]); fields span pieces freely.
+//!
+//! ```
+//! use px4params_core::bits::{BitRead, BitReader};
+//! use px4params_core::scatter::Scattered;
+//! use px4params_core::transfer::{frames, receive};
+//!
+//! let payload: Vec<u8> = (0..20).collect();
+//! let sent: Vec<Vec<u8>> = frames(&payload, 0x1234, 5, false)
+//!     .map(|f| f.as_bytes().to_vec())
+//!     .collect();
+//! let sent: Vec<&[u8]> = sent.iter().map(Vec::as_slice).collect();
+//! let received = receive(&sent, 0x1234).unwrap();
+//! let stream = Scattered::new(&received.payload);
+//! assert_eq!(stream.len(), 20);
+//! // Bytes 4..8 lie in the first and second frames.
+//! let mut reader = stream.reader(4 * 8);
+//! assert_eq!(reader.read(32), 0x0405_0607);
+//! assert_eq!(stream.read_bits(8 * 19, 8), 19);
+//! ```
 
 use core::cell::Cell;
 
-use crate::bits::{read_bits, BitRead};
+use crate::bits::{BitRead, BitReader};
+
+/// Up to 8 bytes of a piece, as [`Pieces::chunk`] gives them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Chunk {
+    /// The bytes as a big-endian word, left-aligned and zero-filled.
+    pub word: u64,
+    /// How many bytes (`0..=8`).
+    pub len: usize,
+    /// Bytes of the piece after these.
+    pub left: usize,
+}
+
+impl Chunk {
+    /// The first (up to) 8 bytes of `bytes`.
+    #[inline(always)]
+    pub fn of(bytes: &[u8]) -> Self {
+        match bytes.first_chunk::<8>() {
+            Some(eight) => Self {
+                word: u64::from_be_bytes(*eight),
+                len: 8,
+                left: bytes.len() - 8,
+            },
+            None => Self {
+                word: word_of(bytes),
+                len: bytes.len(),
+                left: 0,
+            },
+        }
+    }
+}
 
 /// A sequence of byte pieces, in order.
 pub trait Pieces {
     /// Number of pieces.
     fn count(&self) -> usize;
+
     /// Piece `i` (`i < count()`).
     fn piece(&self, i: usize) -> &[u8];
+
+    /// Total length of the pieces in bytes (override when known without visiting them).
+    fn total_len(&self) -> usize {
+        (0..self.count()).map(|i| self.piece(i).len()).sum()
+    }
+
+    /// Up to 8 bytes of piece `i` from its byte `skip` (`skip` at most its length): how the
+    /// readers take bytes (override when a word loads more cheaply).
+    #[inline]
+    fn chunk(&self, i: usize, skip: usize) -> Chunk {
+        Chunk::of(self.piece(i).get(skip..).unwrap_or(&[]))
+    }
+
+    /// Fills `out` with the bytes from piece `at.index`, byte `at.skip`, on, and returns
+    /// where they end. Where the pieces end first, the rest of `out` is unspecified. Override
+    /// to move short pieces a word at a time.
+    fn copy_out(&self, mut at: At, out: &mut [u8]) -> At {
+        let mut done = 0;
+        while done < out.len() && at.index < self.count() {
+            let rest = self.piece(at.index).get(at.skip..).unwrap_or(&[]);
+            let n = rest.len().min(out.len() - done);
+            out[done..done + n].copy_from_slice(&rest[..n]);
+            done += n;
+            at.step(n, n == rest.len());
+        }
+        at
+    }
+}
+
+/// A place in [`Pieces`]: piece `index`, from its byte `skip`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct At {
+    /// The piece.
+    pub index: usize,
+    /// Bytes of it already passed.
+    pub skip: usize,
+}
+
+impl At {
+    /// Moves on by `n` bytes of the current piece, to the next piece if they were its last.
+    #[inline(always)]
+    pub fn step(&mut self, n: usize, last: bool) {
+        if last {
+            self.index += 1;
+            self.skip = 0;
+        } else {
+            self.skip += n;
+        }
+    }
+
+    /// Moves past `chunk`, just taken from here; returns the length of the piece it ended.
+    #[inline(always)]
+    fn pass(&mut self, chunk: &Chunk) -> Option<usize> {
+        let ended = chunk.left == 0;
+        let length = self.skip + chunk.len;
+        self.step(chunk.len, ended);
+        ended.then_some(length)
+    }
 }
 
 impl Pieces for [&[u8]] {
@@ -22,6 +136,7 @@ impl Pieces for [&[u8]] {
     fn count(&self) -> usize {
         self.len()
     }
+
     #[inline]
     fn piece(&self, i: usize) -> &[u8] {
         self[i]
@@ -40,6 +155,22 @@ impl<'f, 'a> FramePayloads<'f, 'a> {
     pub fn new(frames: &'f [&'a [u8]]) -> Self {
         Self { frames }
     }
+
+    /// Bytes before frame `i`'s payload: the transfer CRC in the first of several frames.
+    #[inline(always)]
+    fn head(&self, i: usize) -> usize {
+        if i == 0 && self.frames.len() > 1 {
+            2
+        } else {
+            0
+        }
+    }
+
+    /// [`Pieces::chunk`] of a frame other than a full classic one (the last, or CAN FD).
+    #[inline(never)]
+    fn other_chunk(&self, i: usize, skip: usize) -> Chunk {
+        Chunk::of(self.piece(i).get(skip..).unwrap_or(&[]))
+    }
 }
 
 impl Pieces for FramePayloads<'_, '_> {
@@ -47,45 +178,96 @@ impl Pieces for FramePayloads<'_, '_> {
     fn count(&self) -> usize {
         self.frames.len()
     }
+
     #[inline]
     fn piece(&self, i: usize) -> &[u8] {
         let frame = self.frames[i];
         let body = &frame[..frame.len().saturating_sub(1)];
-        if i == 0 && self.frames.len() > 1 {
-            body.get(2..).unwrap_or(&[])
-        } else {
-            body
+        body.get(self.head(i)..).unwrap_or(&[])
+    }
+
+    #[inline]
+    fn total_len(&self) -> usize {
+        let bodies: usize = self.frames.iter().map(|f| f.len().saturating_sub(1)).sum();
+        let crc = match self.frames {
+            [first, _, ..] => first.len().saturating_sub(1).min(2),
+            _ => 0,
+        };
+        bodies - crc
+    }
+
+    #[inline(always)]
+    fn chunk(&self, i: usize, skip: usize) -> Chunk {
+        let frame = self.frames[i];
+        if let Ok(eight) = <[u8; 8]>::try_from(frame) {
+            // A full classic CAN frame: one load; the tail byte and what is skipped are
+            // shifted out.
+            let from = (self.head(i) + skip).min(7);
+            let word = ((u64::from_be_bytes(eight) >> 8) << (8 * from as u32)) << 8;
+            return Chunk {
+                word,
+                len: 7 - from,
+                left: 0,
+            };
         }
+        self.other_chunk(i, skip)
+    }
+
+    fn copy_out(&self, mut at: At, out: &mut [u8]) -> At {
+        let mut done = 0;
+        while done < out.len() && at.index < self.frames.len() {
+            if at.skip == 0 && at.index > 0 {
+                // Whole classic frames after the first: the 7 payload bytes and the tail byte
+                // in one 8-byte move; the tail byte is overwritten by the next.
+                while let (Some(frame), Some(dst)) =
+                    (self.frames.get(at.index), out.get_mut(done..done + 8))
+                {
+                    let Ok(eight) = <&[u8; 8]>::try_from(*frame) else {
+                        break;
+                    };
+                    dst.copy_from_slice(eight);
+                    done += 7;
+                    at.index += 1;
+                }
+                if at.index >= self.frames.len() {
+                    break;
+                }
+            }
+            // The rest of the first frame, a short or CAN FD frame, or the last few bytes.
+            let frame = self.frames[at.index];
+            let from = self.head(at.index) + at.skip;
+            let payload = frame.len().saturating_sub(1).saturating_sub(from);
+            let n = payload.min(out.len() - done);
+            copy_few(&mut out[done..done + n], &frame[from..from + n]);
+            done += n;
+            at.step(n, n == payload);
+        }
+        at
     }
 }
 
-/// The piece read last.
-#[derive(Clone, Copy, Debug)]
-struct Cursor<'p> {
-    index: usize,
-    /// Stream byte offset where the piece starts.
-    start: usize,
-    bytes: &'p [u8],
-    /// A piece of at most 8 bytes (a CAN frame's payload) as one big-endian word, zero-filled:
-    /// reads inside it are a shift.
-    word: Option<u64>,
-}
-
-impl<'p> Cursor<'p> {
-    fn at(index: usize, start: usize, bytes: &'p [u8]) -> Self {
-        let word = (bytes.len() <= 8).then(|| word_of(bytes));
-        Self {
-            index,
-            start,
-            bytes,
-            word,
+/// `dst.copy_from_slice(src)`, without a call for up to 8 bytes (a short last frame).
+#[inline(always)]
+fn copy_few(dst: &mut [u8], src: &[u8]) {
+    let n = src.len();
+    match (src.get(..4), src.get(n.saturating_sub(4)..)) {
+        (Some(head), Some(tail)) if n <= 8 && dst.len() == n => {
+            // Two 4-byte moves, overlapping for fewer than 8 bytes.
+            dst[..4].copy_from_slice(head);
+            dst[n - 4..].copy_from_slice(tail);
         }
+        _ if n < 4 && dst.len() == n => {
+            for (d, &s) in dst.iter_mut().zip(src) {
+                *d = s;
+            }
+        }
+        _ => dst.copy_from_slice(src),
     }
 }
 
 /// Up to 8 bytes as a big-endian word, zero-filled at the end: two overlapping 4-byte loads
-/// for the usual 4..8-byte pieces (CAN frame payloads), a byte loop below that.
-#[inline]
+/// for 4..8 bytes, a byte loop below that.
+#[inline(always)]
 fn word_of(bytes: &[u8]) -> u64 {
     let len = bytes.len();
     match (bytes.get(..4), bytes.get(len.saturating_sub(4)..)) {
@@ -102,27 +284,109 @@ fn word_of(bytes: &[u8]) -> u64 {
     }
 }
 
+/// Where stream byte `byte` lies (in the last piece if beyond), walking from `from`, a place
+/// whose piece starts at stream byte `start`; returns the place and its piece's start.
+fn seek<P: Pieces + ?Sized>(pieces: &P, from: At, start: usize, byte: usize) -> (At, usize) {
+    if byte == start + from.skip {
+        return (from, start);
+    }
+    let (mut index, mut start) = (from.index, start);
+    while byte < start && index > 0 {
+        index -= 1;
+        start -= pieces.piece(index).len();
+    }
+    let count = pieces.count();
+    while index + 1 < count {
+        let end = start + pieces.piece(index).len();
+        if byte < end {
+            break;
+        }
+        (index, start) = (index + 1, end);
+    }
+    let skip = byte.saturating_sub(start);
+    (At { index, skip }, start)
+}
+
+/// The window of [`BitRead::read_bits`]: stream bytes from bit `start_bit` (a byte boundary),
+/// left-aligned in `word` (zero after the `held` ones), and where the stream goes on after
+/// them (`next`, in a piece that starts at stream byte `next_start`). Once filled, it holds at
+/// least [`REFILLED`] bytes or all there are, so its top 64 bits are the stream's.
+#[derive(Clone, Copy, Debug)]
+struct Window {
+    start_bit: usize,
+    held: usize,
+    word: u128,
+    next: At,
+    next_start: usize,
+}
+
+/// Bytes a filled window holds unless the stream ends first: enough for any read of up to 64
+/// bits that starts in its first byte.
+const REFILLED: usize = 9;
+
+impl Window {
+    /// Nothing yet, and so far out that every read misses it.
+    const EMPTY: Self = Self {
+        start_bit: usize::MAX / 2 + 1,
+        held: 0,
+        word: 0,
+        next: At { index: 0, skip: 0 },
+        next_start: 0,
+    };
+
+    /// `n` bits at `offset`, if they are among the top 64.
+    #[inline(always)]
+    fn read(&self, offset: usize, n: u32) -> Option<u64> {
+        // Offsets behind the window wrap around to huge ones.
+        let local = offset.wrapping_sub(self.start_bit);
+        (local <= (64 - n) as usize).then(|| (((self.word >> 64) as u64) << local) >> (64 - n))
+    }
+
+    /// Moves the window to the byte holding bit `offset` and reads `n` bits there. Keeps the
+    /// bytes it holds from that byte on and appends from the pieces after them.
+    fn refill_read<P: Pieces + ?Sized>(&mut self, pieces: &P, offset: usize, n: u32) -> u64 {
+        let byte = offset / 8;
+        let drop = byte.wrapping_sub(self.start_bit / 8);
+        if drop <= self.held {
+            self.word = self.word.checked_shl(8 * drop as u32).unwrap_or(0);
+            self.held -= drop;
+        } else {
+            (self.next, self.next_start) = seek(pieces, self.next, self.next_start, byte);
+            self.word = 0;
+            self.held = 0;
+        }
+        self.start_bit = byte * 8;
+        while self.held < REFILLED && self.next.index < pieces.count() {
+            let chunk = pieces.chunk(self.next.index, self.next.skip);
+            self.word |= (u128::from(chunk.word) << 64) >> (8 * self.held);
+            self.held += chunk.len;
+            if let Some(length) = self.next.pass(&chunk) {
+                self.next_start += length;
+            }
+        }
+        // Up to 71 bits from the top: the window holds 9 bytes or all there are.
+        ((self.word << (offset % 8)) >> (128 - n)) as u64
+    }
+}
+
 /// A bit stream over scattered pieces.
+///
+/// Decoders read it forwards through a [`ScatteredReader`]; reads at any offset
+/// ([`BitRead::read_bits`], for leaf access) go through a window of the bytes last read.
 #[derive(Debug)]
 pub struct Scattered<'p, P: Pieces + ?Sized> {
     pieces: &'p P,
     bytes: usize,
-    cursor: Cell<Cursor<'p>>,
+    window: Cell<Window>,
 }
 
 impl<'p, P: Pieces + ?Sized> Scattered<'p, P> {
     /// A stream over `pieces`.
     pub fn new(pieces: &'p P) -> Self {
-        let bytes = (0..pieces.count()).map(|i| pieces.piece(i).len()).sum();
-        let first: &'p [u8] = if pieces.count() > 0 {
-            pieces.piece(0)
-        } else {
-            &[]
-        };
         Self {
             pieces,
-            bytes,
-            cursor: Cell::new(Cursor::at(0, 0, first)),
+            bytes: pieces.total_len(),
+            window: Cell::new(Window::EMPTY),
         }
     }
 
@@ -136,109 +400,21 @@ impl<'p, P: Pieces + ?Sized> Scattered<'p, P> {
         self.bytes == 0
     }
 
-    /// The piece holding stream byte `byte`.
-    #[inline]
-    fn find(&self, byte: usize) -> Cursor<'p> {
-        let c = self.cursor.get();
-        if byte >= c.start && byte < c.start + c.bytes.len() {
-            return c;
-        }
-        let (mut i, mut start, mut piece) = if byte < c.start {
-            (0, 0, self.first())
-        } else {
-            (c.index, c.start, c.bytes)
-        };
-        let count = self.pieces.count();
-        while byte >= start + piece.len() && i + 1 < count {
-            start += piece.len();
-            i += 1;
-            piece = self.pieces.piece(i);
-        }
-        let c = Cursor::at(i, start, piece);
-        self.cursor.set(c);
-        c
-    }
-
-    fn first(&self) -> &'p [u8] {
-        if self.pieces.count() > 0 {
-            self.pieces.piece(0)
-        } else {
-            &[]
-        }
-    }
-
-    /// [`BitRead::read_bits`] outside the current piece: move to the right one, or gather the
-    /// bits from two or more.
     #[inline(never)]
-    fn read_bits_elsewhere(&self, offset: usize, n: u32) -> u64 {
-        let first = offset / 8;
-        let last = (offset + n as usize - 1) / 8;
-        let c = self.find(first);
-        if last < c.start + c.bytes.len() {
-            let local = offset - c.start * 8;
-            return match c.word {
-                Some(word) => (word << local) >> (64 - n),
-                None => read_bits(c.bytes, local, n),
-            };
-        }
-        self.read_across(c, offset, n)
-    }
-
-    /// Reads bits that start in `c`'s piece and end in a later one (at most 9 bytes), then
-    /// leaves the cursor on the piece where they end: a decoder reads on from there.
-    fn read_across(&self, c: Cursor<'p>, offset: usize, n: u32) -> u64 {
-        let first = offset / 8;
-        let need = (offset + n as usize - 1) / 8 - first + 1;
-        let (mut acc, mut got) = (0u128, 0usize);
-        let (mut i, mut start, mut piece) = (c.index, c.start, c.bytes);
-        let mut skip = first - start;
-        let count = self.pieces.count();
-        loop {
-            for &b in piece.get(skip..).unwrap_or(&[]) {
-                if got == need {
-                    break;
-                }
-                acc = (acc << 8) | u128::from(b);
-                got += 1;
-            }
-            if got == need || i + 1 >= count {
-                break;
-            }
-            start += piece.len();
-            i += 1;
-            piece = self.pieces.piece(i);
-            skip = 0;
-        }
-        self.cursor.set(Cursor::at(i, start, piece));
-        // `acc` holds `got` bytes: all of them, as callers read within the length.
-        if got == 0 {
-            return 0;
-        }
-        let bits = 8 * got as u32;
-        ((acc << (128 - bits) << (offset % 8)) >> (128 - n)) as u64
-    }
-
-    /// Copies stream bytes from `byte` into `window` (as many as there are).
-    fn gather(&self, byte: usize, window: &mut [u8]) {
-        let c = self.find(byte);
-        let (mut i, start) = (c.index, c.start);
-        let mut skip = byte - start;
-        let mut filled = 0;
-        while filled < window.len() && i < self.pieces.count() {
-            let piece = self.pieces.piece(i);
-            let take = (piece.len() - skip.min(piece.len())).min(window.len() - filled);
-            // Short copies: a byte loop beats a memcpy call here.
-            for (w, &b) in window[filled..filled + take].iter_mut().zip(&piece[skip..]) {
-                *w = b;
-            }
-            filled += take;
-            skip = 0;
-            i += 1;
-        }
+    fn read_bits_refilled(&self, offset: usize, n: u32) -> u64 {
+        let mut w = self.window.get();
+        let value = w.refill_read(self.pieces, offset, n);
+        self.window.set(w);
+        value
     }
 }
 
-impl<P: Pieces + ?Sized> BitRead for Scattered<'_, P> {
+impl<'p, P: Pieces + ?Sized> BitRead for Scattered<'p, P> {
+    type Reader<'r>
+        = ScatteredReader<'r, P>
+    where
+        Self: 'r;
+
     #[inline]
     fn bit_len(&self) -> usize {
         self.bytes * 8
@@ -246,32 +422,134 @@ impl<P: Pieces + ?Sized> BitRead for Scattered<'_, P> {
 
     #[inline(always)]
     fn read_bits(&self, offset: usize, n: u32) -> u64 {
-        let first = offset / 8;
-        let last = (offset + n as usize - 1) / 8;
-        let c = self.cursor.get();
-        if first >= c.start && last < c.start + c.bytes.len() {
-            // Within the current piece: read it in place.
-            let local = offset - c.start * 8;
-            if let Some(word) = c.word {
-                return (word << local) >> (64 - n);
-            }
-            return read_bits(c.bytes, local, n);
+        match self.window.get().read(offset, n) {
+            Some(value) => value,
+            None => self.read_bits_refilled(offset, n),
         }
-        self.read_bits_elsewhere(offset, n)
     }
 
-    fn read_bytes(&self, byte: usize, out: &mut [u8]) -> bool {
-        if byte + out.len() > self.bytes {
-            return false;
+    #[inline]
+    fn reader(&self, offset: usize) -> ScatteredReader<'_, P> {
+        let w = self.window.get();
+        let (next, _) = seek(self.pieces, w.next, w.next_start, offset / 8);
+        let mut reader = ScatteredReader {
+            pieces: self.pieces,
+            bits: 0,
+            held: 0,
+            next,
+            pos: offset / 8 * 8,
+        };
+        if offset % 8 != 0 {
+            reader.read((offset % 8) as u32);
         }
-        self.gather(byte, out);
-        true
+        reader
+    }
+}
+
+/// [`BitReader`] over scattered pieces: the next bits wait in a register, topped up from the
+/// next piece as they run out (once per CAN frame), so reading a field costs a shift.
+#[derive(Debug)]
+pub struct ScatteredReader<'p, P: Pieces + ?Sized> {
+    pieces: &'p P,
+    /// The next `held` bits of the stream, left-aligned (the bits after them are garbage).
+    bits: u64,
+    held: u32,
+    /// Where the bytes after those start.
+    next: At,
+    pos: usize,
+}
+
+impl<P: Pieces + ?Sized> Clone for ScatteredReader<'_, P> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+
+impl<P: Pieces + ?Sized> Copy for ScatteredReader<'_, P> {}
+
+impl<P: Pieces + ?Sized> ScatteredReader<'_, P> {
+    /// Reads `n` bits when fewer are held: those, then the rest from the next pieces.
+    #[inline(always)]
+    fn read_topped_up(&mut self, n: u32) -> u64 {
+        // `held < n <= 64`: the shift that could reach 64 is made in two steps.
+        let mut value = (self.bits >> 1) >> (63 - self.held);
+        let mut missing = n - self.held;
+        while self.next.index < self.pieces.count() {
+            let chunk = self.pieces.chunk(self.next.index, self.next.skip);
+            self.next.pass(&chunk);
+            let got = 8 * chunk.len as u32;
+            if got >= missing {
+                // `missing` is 64 only when `value` is 0 and nothing is left held.
+                value = value.wrapping_shl(missing) | (chunk.word >> (64 - missing));
+                self.bits = chunk.word.wrapping_shl(missing);
+                self.held = got - missing;
+                return value;
+            }
+            if got > 0 {
+                value = (value << got) | (chunk.word >> (64 - got));
+                missing -= got;
+            }
+        }
+        // Past the end (callers do not read there): zeros.
+        self.held = 0;
+        (value << (missing - 1)) << 1
+    }
+}
+
+impl<P: Pieces + ?Sized> BitReader for ScatteredReader<'_, P> {
+    #[inline(always)]
+    fn read(&mut self, n: u32) -> u64 {
+        self.pos += n as usize;
+        if n <= self.held {
+            let value = self.bits >> (64 - n);
+            // A shift by 64 leaves `bits` as they were; none are held then.
+            self.bits = self.bits.wrapping_shl(n);
+            self.held -= n;
+            return value;
+        }
+        self.read_topped_up(n)
+    }
+
+    fn read_bytes(&mut self, out: &mut [u8]) {
+        self.pos += 8 * out.len();
+        // On a byte boundary the held bits are whole bytes (at most 7): those first, then the
+        // pieces. Bytes written past the end of a step are rewritten by the next one.
+        let done = (self.held as usize / 8).min(out.len());
+        match out.get_mut(..8) {
+            Some(room) => room.copy_from_slice(&self.bits.to_be_bytes()),
+            None => {
+                for (slot, b) in out[..done].iter_mut().zip(self.bits.to_be_bytes()) {
+                    *slot = b;
+                }
+            }
+        }
+        self.bits = self.bits.wrapping_shl(8 * done as u32);
+        self.held -= 8 * done as u32;
+        if done < out.len() {
+            self.next = self.pieces.copy_out(self.next, &mut out[done..]);
+        }
+    }
+
+    #[inline]
+    fn skip(&mut self, mut n: usize) {
+        while n > 0 {
+            let step = n.min(64);
+            self.read(step as u32);
+            n -= step;
+        }
+    }
+
+    #[inline(always)]
+    fn position(&self) -> usize {
+        self.pos
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::bits::read_bits;
+    extern crate std;
 
     #[test]
     fn reads_across_pieces_like_the_flat_bytes() {
@@ -289,6 +567,67 @@ mod tests {
                 );
             }
         }
+    }
+
+    #[test]
+    fn frame_chunks_are_their_payload_bytes() {
+        let full: [u8; 8] = [0xAA, 0xBB, 1, 2, 3, 4, 5, 0x80];
+        let next: [u8; 8] = [6, 7, 8, 9, 10, 11, 12, 0x20];
+        let fd: [u8; 12] = [13, 14, 15, 16, 17, 18, 19, 20, 21, 22, 23, 0x00];
+        let short: [u8; 4] = [24, 25, 26, 0x60];
+        let runs: [&[&[u8]]; 5] = [
+            &[&full, &next, &fd, &short],
+            &[&full],
+            &[&short],
+            &[&[0xAA, 0xBB, 0x80], &[0x40]],
+            &[&[0x80], &next, &[0x60]],
+        ];
+        for frames in runs {
+            let p = FramePayloads::new(frames);
+            let pieces: usize = (0..p.count()).map(|i| p.piece(i).len()).sum();
+            assert_eq!(p.total_len(), pieces);
+            for i in 0..p.count() {
+                for skip in 0..=p.piece(i).len() {
+                    let expected = Chunk::of(&p.piece(i)[skip..]);
+                    assert_eq!(p.chunk(i, skip), expected, "frame {i} from {skip}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn frame_payloads_copy_out_their_payload_bytes() {
+        let full: [u8; 8] = [0xAA, 0xBB, 1, 2, 3, 4, 5, 0x80];
+        let next: [u8; 8] = [6, 7, 8, 9, 10, 11, 12, 0x20];
+        let fd: [u8; 12] = [13, 14, 15, 16, 17, 18, 19, 20, 21, 22, 23, 0x00];
+        let short: [u8; 4] = [24, 25, 26, 0x60];
+        let frames: [&[u8]; 5] = [&full, &next, &fd, &[0x20], &short];
+        let p = FramePayloads::new(&frames);
+        let joined: std::vec::Vec<u8> = (0..p.count()).flat_map(|i| p.piece(i).to_vec()).collect();
+        assert_eq!(joined.len(), p.total_len());
+        let mut starts = std::vec::Vec::new();
+        for i in 0..p.count() {
+            for skip in 0..=p.piece(i).len() {
+                starts.push((At { index: i, skip }, starts_at(&p, i) + skip));
+            }
+        }
+        for (at, byte) in starts {
+            for len in 0..=joined.len() - byte {
+                let mut out = [0xEEu8; 40];
+                let end = p.copy_out(at, &mut out[..len]);
+                assert_eq!(
+                    out[..len],
+                    joined[byte..byte + len],
+                    "from {at:?}, {len} bytes"
+                );
+                // It ends where the bytes after the copied ones are.
+                assert_eq!(starts_at(&p, end.index) + end.skip, byte + len);
+            }
+        }
+    }
+
+    fn starts_at<P: Pieces + ?Sized>(p: &P, i: usize) -> usize {
+        (0..i).map(|k| p.piece(k).len()).sum()
     }
 
     #[test]
