@@ -537,3 +537,122 @@ proptest! {
         }
     }
 }
+
+/// One step of a reader: `n` bits, or `n` whole bytes where the reader stands on a byte
+/// boundary, or a read at any offset from the stream itself in between.
+#[derive(Clone, Debug)]
+enum Step {
+    Bits(u32),
+    Bytes(usize),
+    At(usize, u32),
+}
+
+fn step() -> impl Strategy<Value = Step> {
+    prop_oneof![
+        (1u32..=64).prop_map(Step::Bits),
+        (0usize..20).prop_map(Step::Bytes),
+        (0usize..1024, 1u32..=64).prop_map(|(at, n)| Step::At(at, n)),
+    ]
+}
+
+fn cut<'d>(data: &'d [u8], cuts: &[usize]) -> Vec<&'d [u8]> {
+    let mut cuts: Vec<usize> = cuts.iter().map(|c| c % (data.len() + 1)).collect();
+    cuts.sort_unstable();
+    let mut pieces = Vec::new();
+    let mut at = 0;
+    for c in cuts.iter().chain([&data.len()]) {
+        pieces.push(&data[at..*c]);
+        at = *c;
+    }
+    pieces
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(500))]
+
+    /// A reader over pieces gives the same bits, bytes and positions as one over the joined
+    /// bytes, from any start and after reads at other offsets.
+    #[test]
+    fn scattered_reader_equals_slice_reader(
+        data in proptest::collection::vec(any::<u8>(), 0..80),
+        cuts in proptest::collection::vec(0usize..80, 0..16),
+        start in 0usize..640,
+        steps in proptest::collection::vec(step(), 0..40),
+    ) {
+        use px4params_core::bits::{BitRead, BitReader};
+        use px4params_core::scatter::Scattered;
+        let pieces = cut(&data, &cuts);
+        let scattered = Scattered::new(&pieces[..]);
+        let bits = data.len() * 8;
+        let start = start % (bits + 1);
+        let mut flat = data[..].reader(start);
+        let mut scat = scattered.reader(start);
+        for step in steps {
+            match step {
+                Step::Bits(n) if flat.position() + n as usize <= bits => {
+                    prop_assert_eq!(scat.read(n), flat.read(n));
+                }
+                Step::Bytes(n) if flat.position() % 8 == 0 && flat.position() + 8 * n <= bits => {
+                    let (mut a, mut b) = (vec![0u8; n], vec![0xEEu8; n]);
+                    flat.read_bytes(&mut a);
+                    scat.read_bytes(&mut b);
+                    prop_assert_eq!(a, b);
+                }
+                Step::At(at, n) if bits >= n as usize => {
+                    let at = at % (bits - n as usize + 1);
+                    prop_assert_eq!(scattered.read_bits(at, n), data[..].read_bits(at, n));
+                    // A new reader starts from where the stream's window is now.
+                    let pos = flat.position();
+                    scat = scattered.reader(pos);
+                }
+                _ => {}
+            }
+            prop_assert_eq!(scat.position(), flat.position());
+        }
+    }
+
+    /// Values decoded straight from the payloads of their CAN frames (classic and FD) equal
+    /// values decoded from the joined payload; so do errors and leaves.
+    #[test]
+    fn frame_payloads_decode_like_flat(
+        data in proptest::collection::vec(any::<u8>(), 0..120),
+        canfd in any::<bool>(),
+        tao in any::<bool>(),
+    ) {
+        use px4params_core::scatter::Scattered;
+        use px4params_core::transfer::{frames, receive};
+        for (l, root) in layouts() {
+            let layout = l.as_layout();
+            let payload = dec_prefix(&l, root, &data, tao).unwrap_or(data.clone());
+            let sent: Vec<Vec<u8>> =
+                frames(&payload, 0xBEEF, 7, canfd).map(|f| f.as_bytes().to_vec()).collect();
+            let refs: Vec<&[u8]> = sent.iter().map(Vec::as_slice).collect();
+            let received = receive(&refs, 0xBEEF).unwrap();
+            let scattered = Scattered::new(&received.payload);
+            // CAN FD pads the last frame to its length code: those zeros count as trailing.
+            let opts = DecodeOptions { tao, allow_trailing: canfd };
+            let mut a = [Scalar::Uint(0); 256];
+            let mut b = [Scalar::Uint(0); 256];
+            let mut flat_sink = LeafSink::new(&mut a);
+            let mut scat_sink = LeafSink::new(&mut b);
+            let mut padded = payload.clone();
+            padded.resize(scattered.len(), 0);
+            let flat = decode(&layout, root, &padded[..], &mut flat_sink, opts);
+            let scat = decode(&layout, root, &scattered, &mut scat_sink, opts);
+            match (flat, scat) {
+                (Ok(x), Ok(y)) => {
+                    prop_assert_eq!(x, y);
+                    prop_assert!(same(flat_sink.leaves(), scat_sink.leaves()));
+                    for k in (0..flat_sink.leaves().len()).rev() {
+                        let f = get_leaf(&layout, root, &padded[..], Target::Index(k), tao).unwrap();
+                        let s = get_leaf(&layout, root, &scattered, Target::Index(k), tao).unwrap();
+                        prop_assert_eq!(f.0.bit_offset, s.0.bit_offset);
+                        prop_assert!(same(&[f.1], &[s.1]));
+                    }
+                }
+                (Err(x), Err(y)) => prop_assert_eq!(x, y),
+                (x, y) => prop_assert!(false, "flat {:?} vs frames {:?}", x, y),
+            }
+        }
+    }
+}
