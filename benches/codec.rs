@@ -99,7 +99,9 @@ fn bench_type(
     });
 }
 
-/// BatteryInfo decoded from the 7-byte payload pieces of its CAN frames, without joining them.
+/// BatteryInfo decoded from the 7-byte payload pieces of its CAN frames, without joining them,
+/// against the same value decoded from a flat buffer: measured side by side, so that the ratio
+/// the issue asks for (frames within 1.3x of flat) comes from one stretch of the run.
 fn descatter(c: &mut Criterion) {
     use px4params_core::scatter::{FramePayloads, Scattered};
     use px4params_core::transfer::{frames, receive};
@@ -116,14 +118,28 @@ fn descatter(c: &mut Criterion) {
         EncodeOptions::default(),
     )
     .unwrap();
+    let flat = out[..n].to_vec();
     let seed = 0xBEEF;
-    let frame_data: Vec<Vec<u8>> = frames(&out[..n], seed, 3, false)
+    let frame_data: Vec<Vec<u8>> = frames(&flat, seed, 3, false)
         .map(|f| f.as_bytes().to_vec())
         .collect();
     let refs: Vec<&[u8]> = frame_data.iter().map(Vec::as_slice).collect();
-    let received = receive(&refs, seed).unwrap();
     let mut storage = [Scalar::Uint(0); 64];
-    c.bench_function("BatteryInfo/decode_frames", |b| {
+    let mut group = c.benchmark_group("BatteryInfo descatter");
+    group.bench_function("flat (baseline)", |b| {
+        b.iter(|| {
+            let mut sink = LeafSink::new(&mut storage);
+            decode(
+                &layout,
+                root,
+                black_box(&flat[..]),
+                &mut sink,
+                DecodeOptions::default(),
+            )
+            .unwrap()
+        })
+    });
+    group.bench_function("frames", |b| {
         b.iter(|| {
             let payload = FramePayloads::new(black_box(&refs));
             let data = Scattered::new(&payload);
@@ -131,7 +147,7 @@ fn descatter(c: &mut Criterion) {
             decode(&layout, root, &data, &mut sink, DecodeOptions::default()).unwrap()
         })
     });
-    c.bench_function("BatteryInfo/receive_and_decode_frames", |b| {
+    group.bench_function("frames checked and decoded", |b| {
         b.iter(|| {
             let r = receive(black_box(&refs), seed).unwrap();
             let data = Scattered::new(&r.payload);
@@ -139,7 +155,7 @@ fn descatter(c: &mut Criterion) {
             decode(&layout, root, &data, &mut sink, DecodeOptions::default()).unwrap()
         })
     });
-    let _ = received;
+    group.finish();
 }
 
 fn codec(c: &mut Criterion) {
