@@ -960,7 +960,7 @@ impl<'d, R: BitRead + ?Sized + 'd, K: Sink> Decoder<'_, 'd, R, K> {
     /// Returns false when the sink is not flat or the data is too short (walk instead).
     fn flat_elements(&mut self, kind: Kind, n: usize) -> Result<bool, Stop> {
         let bits = scalar_bits(kind);
-        if !K::FLAT || bits as usize * n > self.remaining() {
+        if !K::FLAT || (bits as usize).saturating_mul(n) > self.remaining() {
             return Ok(false);
         }
         let mut reader = self.reader;

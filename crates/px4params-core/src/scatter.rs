@@ -34,7 +34,8 @@ use core::cell::Cell;
 
 use crate::bits::{BitRead, BitReader};
 
-/// Up to 8 bytes of a piece, as [`Pieces::chunk`] gives them.
+/// Up to 8 bytes of a piece, as [`Pieces::chunk`] gives them. `len` is 0 only where the piece
+/// has no bytes left (`left` is 0 then), and the word is zero after the `len` bytes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Chunk {
     /// The bytes as a big-endian word, left-aligned and zero-filled.
@@ -78,16 +79,17 @@ pub trait Pieces {
     }
 
     /// Up to 8 bytes of piece `i` from its byte `skip` (`skip` at most its length): how the
-    /// readers take bytes (override when a word loads more cheaply).
+    /// readers take bytes. Override when a word loads more cheaply; the result must be what
+    /// [`Chunk::of`] gives for the piece's bytes from `skip` on.
     #[inline]
     fn chunk(&self, i: usize, skip: usize) -> Chunk {
-        Chunk::of(self.piece(i).get(skip..).unwrap_or(&[]))
+        chunk_of_piece(self, i, skip)
     }
 
     /// Fills `out` with the bytes from piece `at.index`, byte `at.skip`, on, and returns
     /// where they end. Where the pieces end first, the rest of `out` is unspecified. Override
     /// to move short pieces a word at a time.
-    fn copy_out(&self, mut at: At, out: &mut [u8]) -> At {
+    fn copy_out(&self, mut at: Place, out: &mut [u8]) -> Place {
         let mut done = 0;
         while done < out.len() && at.index < self.count() {
             let rest = self.piece(at.index).get(at.skip..).unwrap_or(&[]);
@@ -100,16 +102,22 @@ pub trait Pieces {
     }
 }
 
-/// A place in [`Pieces`]: piece `index`, from its byte `skip`.
+/// [`Pieces::chunk`] from [`Pieces::piece`].
+#[inline(always)]
+fn chunk_of_piece<P: Pieces + ?Sized>(pieces: &P, i: usize, skip: usize) -> Chunk {
+    Chunk::of(pieces.piece(i).get(skip..).unwrap_or(&[]))
+}
+
+/// A place in [`Pieces`]: piece `index`, from its byte `skip` (at most the piece's length).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub struct At {
+pub struct Place {
     /// The piece.
     pub index: usize,
     /// Bytes of it already passed.
     pub skip: usize,
 }
 
-impl At {
+impl Place {
     /// Moves on by `n` bytes of the current piece, to the next piece if they were its last.
     #[inline(always)]
     pub fn step(&mut self, n: usize, last: bool) {
@@ -166,10 +174,11 @@ impl<'f, 'a> FramePayloads<'f, 'a> {
         }
     }
 
-    /// [`Pieces::chunk`] of a frame other than a full classic one (the last, or CAN FD).
+    /// [`Pieces::chunk`] of a frame other than a full 8-byte one: the last frame, a CAN FD
+    /// frame, or a malformed short one (kept out of line: it is rare).
     #[inline(never)]
-    fn other_chunk(&self, i: usize, skip: usize) -> Chunk {
-        Chunk::of(self.piece(i).get(skip..).unwrap_or(&[]))
+    fn odd_chunk(&self, i: usize, skip: usize) -> Chunk {
+        chunk_of_piece(self, i, skip)
     }
 }
 
@@ -189,10 +198,10 @@ impl Pieces for FramePayloads<'_, '_> {
     #[inline]
     fn total_len(&self) -> usize {
         let bodies: usize = self.frames.iter().map(|f| f.len().saturating_sub(1)).sum();
-        let crc = match self.frames {
-            [first, _, ..] => first.len().saturating_sub(1).min(2),
-            _ => 0,
-        };
+        let crc = self
+            .frames
+            .first()
+            .map_or(0, |first| first.len().saturating_sub(1).min(self.head(0)));
         bodies - crc
     }
 
@@ -210,10 +219,10 @@ impl Pieces for FramePayloads<'_, '_> {
                 left: 0,
             };
         }
-        self.other_chunk(i, skip)
+        self.odd_chunk(i, skip)
     }
 
-    fn copy_out(&self, mut at: At, out: &mut [u8]) -> At {
+    fn copy_out(&self, mut at: Place, out: &mut [u8]) -> Place {
         let mut done = 0;
         while done < out.len() && at.index < self.frames.len() {
             if at.skip == 0 && at.index > 0 {
@@ -234,13 +243,11 @@ impl Pieces for FramePayloads<'_, '_> {
                 }
             }
             // The rest of the first frame, a short or CAN FD frame, or the last few bytes.
-            let frame = self.frames[at.index];
-            let from = self.head(at.index) + at.skip;
-            let payload = frame.len().saturating_sub(1).saturating_sub(from);
-            let n = payload.min(out.len() - done);
-            copy_few(&mut out[done..done + n], &frame[from..from + n]);
+            let rest = self.piece(at.index).get(at.skip..).unwrap_or(&[]);
+            let n = rest.len().min(out.len() - done);
+            copy_few(&mut out[done..done + n], &rest[..n]);
             done += n;
-            at.step(n, n == payload);
+            at.step(n, n == rest.len());
         }
         at
     }
@@ -286,7 +293,7 @@ fn word_of(bytes: &[u8]) -> u64 {
 
 /// Where stream byte `byte` lies (in the last piece if beyond), walking from `from`, a place
 /// whose piece starts at stream byte `start`; returns the place and its piece's start.
-fn seek<P: Pieces + ?Sized>(pieces: &P, from: At, start: usize, byte: usize) -> (At, usize) {
+fn seek<P: Pieces + ?Sized>(pieces: &P, from: Place, start: usize, byte: usize) -> (Place, usize) {
     if byte == start + from.skip {
         return (from, start);
     }
@@ -303,8 +310,14 @@ fn seek<P: Pieces + ?Sized>(pieces: &P, from: At, start: usize, byte: usize) -> 
         }
         (index, start) = (index + 1, end);
     }
-    let skip = byte.saturating_sub(start);
-    (At { index, skip }, start)
+    // Past the end: the end of the last piece.
+    let length = if count > 0 {
+        pieces.piece(index).len()
+    } else {
+        0
+    };
+    let skip = byte.saturating_sub(start).min(length);
+    (Place { index, skip }, start)
 }
 
 /// The window of [`BitRead::read_bits`]: stream bytes from bit `start_bit` (a byte boundary),
@@ -316,7 +329,7 @@ struct Window {
     start_bit: usize,
     held: usize,
     word: u128,
-    next: At,
+    next: Place,
     next_start: usize,
 }
 
@@ -325,21 +338,22 @@ struct Window {
 const REFILLED: usize = 9;
 
 impl Window {
-    /// Nothing yet, and so far out that every read misses it.
+    /// Nothing yet: every read misses it (it holds no bytes).
     const EMPTY: Self = Self {
-        start_bit: usize::MAX / 2 + 1,
+        start_bit: 0,
         held: 0,
         word: 0,
-        next: At { index: 0, skip: 0 },
+        next: Place { index: 0, skip: 0 },
         next_start: 0,
     };
 
-    /// `n` bits at `offset`, if they are among the top 64.
+    /// `n` bits at `offset`, if they are among the top 64 of a filled window.
     #[inline(always)]
     fn read(&self, offset: usize, n: u32) -> Option<u64> {
         // Offsets behind the window wrap around to huge ones.
         let local = offset.wrapping_sub(self.start_bit);
-        (local <= (64 - n) as usize).then(|| (((self.word >> 64) as u64) << local) >> (64 - n))
+        (local <= (64 - n) as usize && self.held > 0)
+            .then(|| (((self.word >> 64) as u64) << local) >> (64 - n))
     }
 
     /// Moves the window to the byte holding bit `offset` and reads `n` bits there. Keeps the
@@ -347,7 +361,7 @@ impl Window {
     fn refill_read<P: Pieces + ?Sized>(&mut self, pieces: &P, offset: usize, n: u32) -> u64 {
         let byte = offset / 8;
         let drop = byte.wrapping_sub(self.start_bit / 8);
-        if drop <= self.held {
+        if self.held > 0 && drop <= self.held {
             self.word = self.word.checked_shl(8 * drop as u32).unwrap_or(0);
             self.held -= drop;
         } else {
@@ -455,7 +469,8 @@ pub struct ScatteredReader<'p, P: Pieces + ?Sized> {
     bits: u64,
     held: u32,
     /// Where the bytes after those start.
-    next: At,
+    next: Place,
+    /// The bit offset of the next read.
     pos: usize,
 }
 
@@ -608,7 +623,7 @@ mod tests {
         let mut starts = std::vec::Vec::new();
         for i in 0..p.count() {
             for skip in 0..=p.piece(i).len() {
-                starts.push((At { index: i, skip }, starts_at(&p, i) + skip));
+                starts.push((Place { index: i, skip }, starts_at(&p, i) + skip));
             }
         }
         for (at, byte) in starts {
@@ -628,6 +643,18 @@ mod tests {
 
     fn starts_at<P: Pieces + ?Sized>(p: &P, i: usize) -> usize {
         (0..i).map(|k| p.piece(k).len()).sum()
+    }
+
+    #[test]
+    fn a_read_past_the_end_does_not_disturb_later_reads() {
+        let bytes: [u8; 12] = core::array::from_fn(|i| i as u8);
+        let pieces: [&[u8]; 12] = core::array::from_fn(|i| &bytes[i..=i]);
+        let s = Scattered::new(&pieces[..]);
+        // Out of contract (callers check the length first), but no panic and no lasting harm.
+        s.read_bits(160, 8);
+        assert_eq!(s.read_bits(0, 8), 0);
+        assert_eq!(s.read_bits(80, 8), 10);
+        assert_eq!(s.read_bits(8, 16), 0x0102);
     }
 
     #[test]

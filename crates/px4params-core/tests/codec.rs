@@ -555,6 +555,11 @@ fn step() -> impl Strategy<Value = Step> {
     ]
 }
 
+/// A reader's start: often 0 or a byte boundary, where byte strings are read.
+fn start() -> impl Strategy<Value = usize> {
+    prop_oneof![Just(0usize), (0usize..80).prop_map(|b| b * 8), 0usize..640]
+}
+
 fn cut<'d>(data: &'d [u8], cuts: &[usize]) -> Vec<&'d [u8]> {
     let mut cuts: Vec<usize> = cuts.iter().map(|c| c % (data.len() + 1)).collect();
     cuts.sort_unstable();
@@ -567,48 +572,93 @@ fn cut<'d>(data: &'d [u8], cuts: &[usize]) -> Vec<&'d [u8]> {
     pieces
 }
 
+/// Runs `steps` on a reader over `pieces` and on one over `flat` (the pieces joined): the same
+/// bits, bytes and positions, from any start and after reads at other offsets.
+fn readers_agree<P: px4params_core::scatter::Pieces + ?Sized>(
+    pieces: &P,
+    flat: &[u8],
+    start: usize,
+    steps: &[Step],
+) -> Result<(), TestCaseError> {
+    use px4params_core::bits::{BitRead, BitReader};
+    use px4params_core::scatter::Scattered;
+    let scattered = Scattered::new(pieces);
+    prop_assert_eq!(scattered.len(), flat.len());
+    let bits = flat.len() * 8;
+    let start = start % (bits + 1);
+    let mut slice = flat.reader(start);
+    let mut scat = scattered.reader(start);
+    for step in steps {
+        match *step {
+            Step::Bits(n) if slice.position() + n as usize <= bits => {
+                prop_assert_eq!(scat.read(n), slice.read(n));
+            }
+            Step::Bytes(n) if slice.position() % 8 == 0 && slice.position() + 8 * n <= bits => {
+                let (mut a, mut b) = (vec![0u8; n], vec![0xEEu8; n]);
+                slice.read_bytes(&mut a);
+                scat.read_bytes(&mut b);
+                prop_assert_eq!(a, b);
+            }
+            Step::At(at, n) if bits >= n as usize => {
+                let at = at % (bits - n as usize + 1);
+                prop_assert_eq!(scattered.read_bits(at, n), flat.read_bits(at, n));
+                // A new reader starts from where the stream's window is now.
+                scat = scattered.reader(slice.position());
+            }
+            _ => {}
+        }
+        prop_assert_eq!(scat.position(), slice.position());
+    }
+    Ok(())
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(500))]
 
-    /// A reader over pieces gives the same bits, bytes and positions as one over the joined
-    /// bytes, from any start and after reads at other offsets.
+    /// Readers over slices cut anywhere (empty pieces included) read like the joined bytes.
     #[test]
     fn scattered_reader_equals_slice_reader(
         data in proptest::collection::vec(any::<u8>(), 0..80),
         cuts in proptest::collection::vec(0usize..80, 0..16),
-        start in 0usize..640,
+        start in start(),
         steps in proptest::collection::vec(step(), 0..40),
     ) {
-        use px4params_core::bits::{BitRead, BitReader};
-        use px4params_core::scatter::Scattered;
         let pieces = cut(&data, &cuts);
-        let scattered = Scattered::new(&pieces[..]);
-        let bits = data.len() * 8;
-        let start = start % (bits + 1);
-        let mut flat = data[..].reader(start);
-        let mut scat = scattered.reader(start);
-        for step in steps {
-            match step {
-                Step::Bits(n) if flat.position() + n as usize <= bits => {
-                    prop_assert_eq!(scat.read(n), flat.read(n));
-                }
-                Step::Bytes(n) if flat.position() % 8 == 0 && flat.position() + 8 * n <= bits => {
-                    let (mut a, mut b) = (vec![0u8; n], vec![0xEEu8; n]);
-                    flat.read_bytes(&mut a);
-                    scat.read_bytes(&mut b);
-                    prop_assert_eq!(a, b);
-                }
-                Step::At(at, n) if bits >= n as usize => {
-                    let at = at % (bits - n as usize + 1);
-                    prop_assert_eq!(scattered.read_bits(at, n), data[..].read_bits(at, n));
-                    // A new reader starts from where the stream's window is now.
-                    let pos = flat.position();
-                    scat = scattered.reader(pos);
-                }
-                _ => {}
-            }
-            prop_assert_eq!(scat.position(), flat.position());
-        }
+        readers_agree(&pieces[..], &data, start, &steps)?;
+    }
+
+    /// So do readers over any list of CAN frames (classic, FD, malformed short ones), whose
+    /// word-at-a-time paths must agree with their payload pieces.
+    #[test]
+    fn frame_payload_readers_equal_slice_reader(
+        frames in proptest::collection::vec(proptest::collection::vec(any::<u8>(), 0..20), 0..8),
+        start in start(),
+        steps in proptest::collection::vec(step(), 0..40),
+    ) {
+        use px4params_core::scatter::{FramePayloads, Pieces};
+        let refs: Vec<&[u8]> = frames.iter().map(Vec::as_slice).collect();
+        let payloads = FramePayloads::new(&refs);
+        let flat: Vec<u8> = (0..payloads.count()).flat_map(|i| payloads.piece(i).to_vec()).collect();
+        readers_agree(&payloads, &flat, start, &steps)?;
+    }
+
+    /// And readers over a value stored across fixed-size pages.
+    #[test]
+    fn paged_value_readers_equal_slice_reader(
+        memory in proptest::collection::vec(any::<u8>(), 1..120),
+        page in 1usize..24,
+        from in 0usize..120,
+        len in 0usize..120,
+        start in start(),
+        steps in proptest::collection::vec(step(), 0..40),
+    ) {
+        use px4params_core::pages::PagedValue;
+        let from = from % memory.len();
+        let len = len % (memory.len() - from + 1);
+        let pages: Vec<&[u8]> = memory.chunks(page).collect();
+        let value = PagedValue { param: 0, instance: 0, start: from as u32, len: len as u32 };
+        let pieces = value.pieces(&pages);
+        readers_agree(&pieces, &memory[from..from + len], start, &steps)?;
     }
 
     /// Values decoded straight from the payloads of their CAN frames (classic and FD) equal
