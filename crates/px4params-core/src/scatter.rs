@@ -310,8 +310,8 @@ fn seek<P: Pieces + ?Sized>(pieces: &P, from: Place, start: usize, byte: usize) 
         }
         (index, start) = (index + 1, end);
     }
-    // Past the end: the end of the last piece.
-    let length = if count > 0 {
+    // Past the end: the end of the last piece (or of none, where `from` was already there).
+    let length = if index < count {
         pieces.piece(index).len()
     } else {
         0
@@ -650,8 +650,11 @@ mod tests {
         let bytes: [u8; 12] = core::array::from_fn(|i| i as u8);
         let pieces: [&[u8]; 12] = core::array::from_fn(|i| &bytes[i..=i]);
         let s = Scattered::new(&pieces[..]);
-        // Out of contract (callers check the length first), but no panic and no lasting harm.
+        // Out of contract (callers check the length first), but no panic and no lasting harm,
+        // also when the window has just taken the last piece.
+        assert_eq!(s.read_bits(88, 8), 11);
         s.read_bits(160, 8);
+        s.read_bits(96, 8);
         assert_eq!(s.read_bits(0, 8), 0);
         assert_eq!(s.read_bits(80, 8), 10);
         assert_eq!(s.read_bits(8, 16), 0x0102);
