@@ -494,6 +494,39 @@ proptest! {
     }
 }
 
+/// Decoding `scattered` gives what decoding `flat` (the same bytes, joined) gives: the same
+/// result, error or leaves; and every leaf read in place (last to first, so that the reads
+/// jump backwards too) has the same offset and value.
+fn decodes_like_flat<P: px4params_core::scatter::Pieces + ?Sized>(
+    layout: &px4params_core::layout::Layout<'_>,
+    root: NodeId,
+    flat: &[u8],
+    scattered: &px4params_core::scatter::Scattered<'_, P>,
+    opts: DecodeOptions,
+) -> Result<(), TestCaseError> {
+    let mut a = [Scalar::Uint(0); 256];
+    let mut b = [Scalar::Uint(0); 256];
+    let mut flat_sink = LeafSink::new(&mut a);
+    let mut scat_sink = LeafSink::new(&mut b);
+    let from_flat = decode(layout, root, flat, &mut flat_sink, opts);
+    let from_pieces = decode(layout, root, scattered, &mut scat_sink, opts);
+    match (from_flat, from_pieces) {
+        (Ok(x), Ok(y)) => {
+            prop_assert_eq!(x, y);
+            prop_assert!(same(flat_sink.leaves(), scat_sink.leaves()));
+            for k in (0..flat_sink.leaves().len()).rev() {
+                let f = get_leaf(layout, root, flat, Target::Index(k), opts.tao).unwrap();
+                let s = get_leaf(layout, root, scattered, Target::Index(k), opts.tao).unwrap();
+                prop_assert_eq!(f.0.bit_offset, s.0.bit_offset);
+                prop_assert!(same(&[f.1], &[s.1]));
+            }
+        }
+        (Err(x), Err(y)) => prop_assert_eq!(x, y),
+        (x, y) => prop_assert!(false, "flat {:?} vs pieces {:?}", x, y),
+    }
+    Ok(())
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(300))]
 
@@ -513,27 +546,8 @@ proptest! {
                 at = *c;
             }
             let scattered = Scattered::new(&pieces[..]);
-            let mut a = [Scalar::Uint(0); 256];
-            let mut b = [Scalar::Uint(0); 256];
-            let mut flat_sink = LeafSink::new(&mut a);
-            let mut scat_sink = LeafSink::new(&mut b);
             let opts = DecodeOptions { tao, allow_trailing: false };
-            let flat = decode(&layout, root, &prefix[..], &mut flat_sink, opts);
-            let scat = decode(&layout, root, &scattered, &mut scat_sink, opts);
-            match (flat, scat) {
-                (Ok(x), Ok(y)) => {
-                    prop_assert_eq!(x, y);
-                    prop_assert!(same(flat_sink.leaves(), scat_sink.leaves()));
-                    for k in 0..flat_sink.leaves().len() {
-                        let f = get_leaf(&layout, root, &prefix[..], Target::Index(k), tao).unwrap();
-                        let s = get_leaf(&layout, root, &scattered, Target::Index(k), tao).unwrap();
-                        prop_assert_eq!(f.0.bit_offset, s.0.bit_offset);
-                        prop_assert!(same(&[f.1], &[s.1]));
-                    }
-                }
-                (Err(x), Err(y)) => prop_assert_eq!(x, y),
-                (x, y) => prop_assert!(false, "flat {:?} vs scattered {:?}", x, y),
-            }
+            decodes_like_flat(&layout, root, &prefix, &scattered, opts)?;
         }
     }
 }
@@ -681,28 +695,9 @@ proptest! {
             let scattered = Scattered::new(&received.payload);
             // CAN FD pads the last frame to its length code: those zeros count as trailing.
             let opts = DecodeOptions { tao, allow_trailing: canfd };
-            let mut a = [Scalar::Uint(0); 256];
-            let mut b = [Scalar::Uint(0); 256];
-            let mut flat_sink = LeafSink::new(&mut a);
-            let mut scat_sink = LeafSink::new(&mut b);
             let mut padded = payload.clone();
             padded.resize(scattered.len(), 0);
-            let flat = decode(&layout, root, &padded[..], &mut flat_sink, opts);
-            let scat = decode(&layout, root, &scattered, &mut scat_sink, opts);
-            match (flat, scat) {
-                (Ok(x), Ok(y)) => {
-                    prop_assert_eq!(x, y);
-                    prop_assert!(same(flat_sink.leaves(), scat_sink.leaves()));
-                    for k in (0..flat_sink.leaves().len()).rev() {
-                        let f = get_leaf(&layout, root, &padded[..], Target::Index(k), tao).unwrap();
-                        let s = get_leaf(&layout, root, &scattered, Target::Index(k), tao).unwrap();
-                        prop_assert_eq!(f.0.bit_offset, s.0.bit_offset);
-                        prop_assert!(same(&[f.1], &[s.1]));
-                    }
-                }
-                (Err(x), Err(y)) => prop_assert_eq!(x, y),
-                (x, y) => prop_assert!(false, "flat {:?} vs frames {:?}", x, y),
-            }
+            decodes_like_flat(&layout, root, &padded, &scattered, opts)?;
         }
     }
 }
