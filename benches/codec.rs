@@ -7,6 +7,7 @@ mod common;
 use criterion::{criterion_group, criterion_main, Criterion};
 use px4params_core::codec::{decode, encode, DecodeOptions, EncodeOptions};
 use px4params_core::compile::OwnedLayout;
+use px4params_core::layout::Layout;
 use px4params_core::leaf::{get_leaf, set_leaf, Target};
 use px4params_core::value::{LeafSink, LeafSource};
 use px4params_core::{NodeId, Scalar};
@@ -30,6 +31,21 @@ fn ina238_leaves() -> Vec<Scalar> {
     v
 }
 
+/// The encoding of `leaves`.
+fn encoded(layout: &Layout<'_>, root: NodeId, leaves: &[Scalar]) -> Vec<u8> {
+    let mut out = vec![0u8; layout.max_bytes(root)];
+    let n = encode(
+        layout,
+        root,
+        &mut LeafSource::new(leaves),
+        &mut out,
+        EncodeOptions::default(),
+    )
+    .unwrap();
+    out.truncate(n);
+    out
+}
+
 fn bench_type(
     c: &mut Criterion,
     name: &str,
@@ -39,16 +55,8 @@ fn bench_type(
     let mut owned = OwnedLayout::default();
     let root = build(&mut owned);
     let layout = owned.as_layout();
+    let bytes = encoded(&layout, root, &leaves);
     let mut out = vec![0u8; layout.max_bytes(root)];
-    let n = encode(
-        &layout,
-        root,
-        &mut LeafSource::new(&leaves),
-        &mut out,
-        EncodeOptions::default(),
-    )
-    .unwrap();
-    let bytes = out[..n].to_vec();
     c.bench_function(&format!("{name}/encode"), |b| {
         b.iter(|| {
             let mut src = LeafSource::new(black_box(&leaves));
@@ -108,17 +116,7 @@ fn descatter(c: &mut Criterion) {
     let mut owned = OwnedLayout::default();
     let root = common::battery_info(&mut owned);
     let layout = owned.as_layout();
-    let leaves = battery_leaves();
-    let mut out = vec![0u8; layout.max_bytes(root)];
-    let n = encode(
-        &layout,
-        root,
-        &mut LeafSource::new(&leaves),
-        &mut out,
-        EncodeOptions::default(),
-    )
-    .unwrap();
-    let flat = out[..n].to_vec();
+    let flat = encoded(&layout, root, &battery_leaves());
     let seed = 0xBEEF;
     let frame_data: Vec<Vec<u8>> = frames(&flat, seed, 3, false)
         .map(|f| f.as_bytes().to_vec())

@@ -584,18 +584,24 @@ mod tests {
         }
     }
 
+    /// A full first frame (transfer CRC, 5 payload bytes), a full one, a CAN FD one, a short
+    /// last one; each ends with its tail byte.
+    const FRAMES: [&[u8]; 4] = [
+        &[0xAA, 0xBB, 1, 2, 3, 4, 5, 0x80],
+        &[6, 7, 8, 9, 10, 11, 12, 0x20],
+        &[13, 14, 15, 16, 17, 18, 19, 20, 21, 22, 23, 0x00],
+        &[24, 25, 26, 0x60],
+    ];
+
     #[test]
     fn frame_chunks_are_their_payload_bytes() {
-        let full: [u8; 8] = [0xAA, 0xBB, 1, 2, 3, 4, 5, 0x80];
-        let next: [u8; 8] = [6, 7, 8, 9, 10, 11, 12, 0x20];
-        let fd: [u8; 12] = [13, 14, 15, 16, 17, 18, 19, 20, 21, 22, 23, 0x00];
-        let short: [u8; 4] = [24, 25, 26, 0x60];
+        let [full, next, fd, short] = FRAMES;
         let runs: [&[&[u8]]; 5] = [
-            &[&full, &next, &fd, &short],
-            &[&full],
-            &[&short],
+            &[full, next, fd, short],
+            &[full],
+            &[short],
             &[&[0xAA, 0xBB, 0x80], &[0x40]],
-            &[&[0x80], &next, &[0x60]],
+            &[&[0x80], next, &[0x60]],
         ];
         for frames in runs {
             let p = FramePayloads::new(frames);
@@ -612,11 +618,8 @@ mod tests {
 
     #[test]
     fn frame_payloads_copy_out_their_payload_bytes() {
-        let full: [u8; 8] = [0xAA, 0xBB, 1, 2, 3, 4, 5, 0x80];
-        let next: [u8; 8] = [6, 7, 8, 9, 10, 11, 12, 0x20];
-        let fd: [u8; 12] = [13, 14, 15, 16, 17, 18, 19, 20, 21, 22, 23, 0x00];
-        let short: [u8; 4] = [24, 25, 26, 0x60];
-        let frames: [&[u8]; 5] = [&full, &next, &fd, &[0x20], &short];
+        let [full, next, fd, short] = FRAMES;
+        let frames: [&[u8]; 5] = [full, next, fd, &[0x20], short];
         let p = FramePayloads::new(&frames);
         let joined: std::vec::Vec<u8> = (0..p.count()).flat_map(|i| p.piece(i).to_vec()).collect();
         assert_eq!(joined.len(), p.total_len());
