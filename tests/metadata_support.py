@@ -4,7 +4,6 @@ out-of-range numbers, and a C harness that drives the generated header's functio
 from __future__ import annotations
 
 import math
-import os
 import shutil
 import subprocess
 from collections.abc import Mapping
@@ -14,6 +13,7 @@ from typing import Any
 import pytest
 from hypothesis import strategies as st
 from px4params.cheader import c_member_name
+from shared_data import PARAMETERS_JSON, shared_file
 
 #: A parameter type with every field kind our DSDL has: truncated and signed integers, bool,
 #: static and dynamic arrays (of scalars and of structs), a union with primitive, array and
@@ -83,17 +83,8 @@ def write_tst(base: Path) -> Path:
     return root
 
 
-def shared_data() -> Path:
-    """The project's shared data folder ($PX4PARAMS_SHARED_DATA, else ../shared/data)."""
-    default = Path(__file__).resolve().parents[2] / "shared" / "data"
-    return Path(os.environ.get("PX4PARAMS_SHARED_DATA", default))
-
-
 def real_parameters_json() -> Path:
-    path = shared_data() / "px4_parameters.json"
-    if not path.is_file():
-        pytest.skip(f"{path} is absent (set PX4PARAMS_SHARED_DATA to the shared data folder)")
-    return path
+    return shared_file(PARAMETERS_JSON)
 
 
 def require_compilers() -> tuple[str, str]:

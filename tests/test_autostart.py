@@ -20,6 +20,7 @@ from px4params.drivers import (
     parse_drivers,
 )
 from px4params.params import parameter_specs
+from shared_data import current_devtypes
 
 REPO = Path(__file__).resolve().parents[1]
 AIRFRAME = REPO / "examples" / "two_batteries.airframe"
@@ -68,7 +69,7 @@ def test_every_bundled_parameter_has_a_driver(drivers, specs):
 
 def test_devtypes_are_todays_drv_sensor_codes(drivers):
     # Each chip's devtype must be its DRV_<KIND>_DEVTYPE_<CHIP> in today's drv_sensor.h.
-    table = devid.load_table("current")
+    table = current_devtypes()
     for d in drivers:
         names = [r.name for r in table.lookup(d.devtype)]
         assert d.chip in names, f"{d.name}: 0x{d.devtype:02X} is {names} in the current table"

@@ -30,6 +30,7 @@ from px4params.bench import (
 from px4params.drivers import DEFAULT_DRIVERS, load_drivers
 from px4params.params import parameter_specs
 from px4params.timeline import render_svg
+from shared_data import current_devtypes
 
 REPO = Path(__file__).resolve().parents[1]
 AIRFRAME = REPO / "examples" / "two_batteries.airframe"
@@ -578,7 +579,7 @@ def test_published_device_ids_round_trip(places, schema, drivers):
     manifest = configured(s, drivers)
     result = run(Bench("b", "b", {}, devices), drivers, manifest, duration=0.5)
     assert result.may_arm
-    table = devid.load_table("current")
+    table = current_devtypes()
     for inst, c in zip(result.instances, manifest, strict=True):
         assert inst.device_id == c.device_id
         decoded = devid.decode(inst.device_id, table)
@@ -597,6 +598,6 @@ def test_spi_device(schema, drivers):
     result = run(parse_bench(text, "b", drivers), drivers, configured(s, drivers), duration=1)
     (inst,) = result.instances
     assert result.may_arm and inst.location == "SPI bus 1 chip select 3"
-    assert devid.decode(inst.device_id, "current").describe() == (
+    assert devid.decode(inst.device_id, current_devtypes()).describe() == (
         "LIS3MDL (MAG), SPI bus 1, device 3"
     )

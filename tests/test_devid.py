@@ -15,15 +15,14 @@ import sys
 from pathlib import Path
 
 import pytest
+import shared_data
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from px4params import cli, devid
 from px4params.errors import DeviceIdError, Px4ParamsError
+from shared_data import SHARED_DATA, shared_file
 
-SHARED_ENV = "PX4PARAMS_SHARED_DATA"
-SHARED_DATA = Path(os.environ.get(SHARED_ENV) or Path(__file__).parents[2] / "shared" / "data")
-CURRENT_TSV = SHARED_DATA / "px4_devtypes_current.tsv"
-SAMPLE_LOG = SHARED_DATA / "sample_log_small.ulg"
+CURRENT_TSV = SHARED_DATA / shared_data.CURRENT_TSV
 
 # The driver guide's three magnetometers: (id, guide's bit groups, devtype, bus type, bus, address)
 GUIDE = [
@@ -53,12 +52,6 @@ HEADER = """\
 """
 
 
-def needs(path: Path) -> Path:
-    if not path.is_file():
-        pytest.skip(f"{path.name} not found in {path.parent} (set ${SHARED_ENV} to its folder)")
-    return path
-
-
 @pytest.fixture(autouse=True)
 def no_table_env(monkeypatch: pytest.MonkeyPatch) -> None:
     """The caller's own $PX4PARAMS_DEVTYPES must not change what these tests see."""
@@ -68,7 +61,7 @@ def no_table_env(monkeypatch: pytest.MonkeyPatch) -> None:
 @pytest.fixture
 def current(monkeypatch: pytest.MonkeyPatch) -> Path:
     """Point the current table at the shared TSV, for the library and the CLI alike."""
-    path = needs(CURRENT_TSV)
+    path = shared_file(shared_data.CURRENT_TSV)
     monkeypatch.setenv(devid.DEVTYPES_ENV, str(path))
     return path
 
@@ -149,7 +142,7 @@ def test_current_table_from_tsv(current: Path) -> None:
 
 
 def test_current_table_fallback_beside_repo(monkeypatch: pytest.MonkeyPatch) -> None:
-    needs(CURRENT_TSV)
+    shared_file(shared_data.CURRENT_TSV)
     monkeypatch.setattr(devid, "_fallback_tables", lambda: [Path("/nonexistent.tsv"), CURRENT_TSV])
     assert devid.find_current_table() == CURRENT_TSV.resolve()
 
@@ -389,7 +382,8 @@ def test_every_unique_legacy_name_encodes_to_its_code() -> None:
 
 
 def test_sample_log(current: Path) -> None:
-    entries = {(e.param, e.timestamp_us): e for e in devid.decode_log(needs(SAMPLE_LOG))}
+    log = shared_file(shared_data.SAMPLE_LOG)
+    entries = {(e.param, e.timestamp_us): e for e in devid.decode_log(log)}
     mag1 = entries["CAL_MAG1_ID", None]
     assert mag1.value == 592905 and mag1.device is not None and mag1.problem is None
     d = mag1.device
@@ -404,7 +398,7 @@ def test_sample_log(current: Path) -> None:
 
 
 def test_sample_log_cli(current: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    log = str(needs(SAMPLE_LOG))
+    log = str(shared_file(shared_data.SAMPLE_LOG))
     code, out, err = run_cli(capsys, "--log", log)
     assert (code, err) == (0, "")
     lines = {line.split()[0]: line for line in out.splitlines()}

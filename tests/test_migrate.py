@@ -10,14 +10,12 @@ import sys
 from pathlib import Path
 
 import pytest
+import shared_data
 from px4params import devid, migrate
 from px4params.cli import build_parser
+from shared_data import SHARED_DATA, shared_file
 
-SHARED_DATA = Path(
-    os.environ.get("PX4PARAMS_SHARED_DATA", Path(__file__).parents[2] / "shared" / "data")
-)
-SAMPLE_LOG = SHARED_DATA / "sample_log_small.ulg"
-CURRENT_TSV = SHARED_DATA / "px4_devtypes_current.tsv"
+CURRENT_TSV = SHARED_DATA / shared_data.CURRENT_TSV
 
 # A small devtype table of our own, so that the .params tests need no shared data.
 DEVTYPES = (
@@ -110,9 +108,8 @@ def has_run_command() -> bool:
 
 @pytest.fixture
 def sample_log() -> Path:
-    if not SAMPLE_LOG.exists() or not CURRENT_TSV.exists():
-        pytest.skip(f"shared data not found in {SHARED_DATA} (set PX4PARAMS_SHARED_DATA)")
-    return SAMPLE_LOG
+    shared_file(shared_data.CURRENT_TSV)
+    return shared_file(shared_data.SAMPLE_LOG)
 
 
 def test_sample_log(sample_log: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:

@@ -20,15 +20,13 @@ from px4params.errors import (
 )
 from px4params.params import metadata_default, parameter_specs
 from px4params.storefile import encode_file
+from shared_data import PARAMETERS_JSON, shared_file
 
 CLASSIC = [
     ClassicParam("SYS_AUTOSTART", "Int32", 0),
     ClassicParam("BAT1_CAPACITY", "Float", -1.0),
     ClassicParam("SENS_EXT_I2C_PRB", "Int32", 1),
 ]
-SHARED_DATA = Path(
-    os.environ.get("PX4PARAMS_SHARED_DATA", Path(__file__).parents[2] / "shared" / "data")
-)
 
 
 @pytest.fixture
@@ -131,12 +129,8 @@ def test_classic_parameters(store: px4params.Store) -> None:
     assert store.changed() == []
 
 
-@pytest.mark.skipif(
-    not (SHARED_DATA / "px4_parameters.json").exists(),
-    reason=f"real PX4 parameters.json not found in {SHARED_DATA}",
-)
 def test_real_parameters_json(schema: px4params.Schema) -> None:
-    store = px4params.Store(schema, classic=SHARED_DATA / "px4_parameters.json")
+    store = px4params.Store(schema, classic=shared_file(PARAMETERS_JSON))
     assert len(store.parameters) == 1909 + len(parameter_specs(schema))
     assert store.get("SENS_EXT_I2C_PRB") == 1
     store.set("MPC_XY_VEL_MAX", 8.5)
