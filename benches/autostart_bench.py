@@ -24,10 +24,10 @@ import time
 from pathlib import Path
 
 from px4params import Store, load_schema
-from px4params.autostart import configured
-from px4params.bench import parse_bench, run
-from px4params.drivers import DEFAULT_DRIVERS, parse_drivers
-from px4params.timeline import render_svg
+from px4params.vehicle.autostart import configured
+from px4params.vehicle.drivers import DEFAULT_DRIVERS, parse_drivers
+from px4params.vehicle.simbench import parse_bench, run
+from px4params.vehicle.timeline import render_svg
 
 INSTANCES = 64
 DURATION = 60.0

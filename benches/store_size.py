@@ -15,7 +15,7 @@ import string
 import sys
 
 import px4params
-from px4params.storefile import encode_file
+from px4params.store.file import encode_file
 
 SLOT_BYTES = 6  # the core's per-instance state: two u16 lengths and a u8 of flags, padded
 

@@ -1,7 +1,23 @@
 #!/usr/bin/env bash
-# Installs everything px4params needs on a fresh machine of this kind (Rust toolchain and
-# CPython 3.11 present): the package itself (built by maturin) with its test dependencies.
+# Sets up px4params in the checkout's own virtual environment, .venv (never the system
+# interpreter): the Python dependencies, then the Rust extension built by maturin and the
+# package installed editable. Run it again after pulling: only what changed is rebuilt.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-python3 -m pip install --quiet --disable-pip-version-check --root-user-action=ignore \
-    -e ".[test]"
+
+python=${PYTHON:-python3}
+if [ ! -x .venv/bin/python ]; then
+    echo "== creating .venv with $("$python" --version)"
+    "$python" -m venv .venv
+fi
+export VIRTUAL_ENV="$PWD/.venv"
+
+echo "== Python dependencies into .venv (pip)"
+.venv/bin/python -m pip install --quiet --disable-pip-version-check "maturin>=1.5,<2"
+
+if [ -e target/release/.fingerprint ]; then
+    echo "== building the Rust extension (maturin, release; incremental, usually seconds)"
+else
+    echo "== building the Rust extension (maturin, release): the first build takes about 2 minutes on 2 cores"
+fi
+.venv/bin/maturin develop --release --extras test

@@ -12,7 +12,7 @@ from typing import Any
 
 import pytest
 from hypothesis import strategies as st
-from px4params.cheader import c_member_name
+from px4params.gcs.cheader import c_member_name
 from shared_data import PARAMETERS_JSON, shared_file
 
 #: A parameter type with every field kind our DSDL has: truncated and signed integers, bool,

@@ -8,7 +8,7 @@ import os
 from pathlib import Path
 
 import pytest
-from px4params import devid
+from px4params.vehicle import devid
 
 SHARED_ENV = "PX4PARAMS_SHARED_DATA"
 SHARED_DATA = Path(

@@ -16,9 +16,13 @@ from pathlib import Path
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from px4params import Store, cli, devid
-from px4params.autostart import configured, load_manifest
-from px4params.bench import (
+from px4params import Store
+from px4params.cli.main import main
+from px4params.store.spec import parameter_specs
+from px4params.vehicle import devid
+from px4params.vehicle.autostart import configured, load_manifest
+from px4params.vehicle.drivers import DEFAULT_DRIVERS, load_drivers
+from px4params.vehicle.simbench import (
     Bench,
     BenchBus,
     BenchDevice,
@@ -27,9 +31,7 @@ from px4params.bench import (
     parse_bench,
     run,
 )
-from px4params.drivers import DEFAULT_DRIVERS, load_drivers
-from px4params.params import parameter_specs
-from px4params.timeline import render_svg
+from px4params.vehicle.timeline import render_svg
 from shared_data import current_devtypes
 
 REPO = Path(__file__).resolve().parents[1]
@@ -76,9 +78,7 @@ def manifest(drivers):
 def boot(tmp_path: Path, capsys, text: str, *args: str) -> tuple[int, str]:
     path = tmp_path / "bench.toml"
     path.write_text(text)
-    status = cli.main(
-        ["autostart", "run", "--airframe", str(AIRFRAME), "--bench", str(path), *args]
-    )
+    status = main(["autostart", "run", "--airframe", str(AIRFRAME), "--bench", str(path), *args])
     captured = capsys.readouterr()
     assert captured.err == ""
     return status, captured.out
@@ -94,7 +94,7 @@ def refused_lines(out: str) -> list[str]:
 
 
 def test_everything_present_may_arm(capsys):
-    status = cli.main(["autostart", "run", "--airframe", str(AIRFRAME), "--bench", str(BENCH)])
+    status = main(["autostart", "run", "--airframe", str(AIRFRAME), "--bench", str(BENCH)])
     out = capsys.readouterr().out
     assert status == 0
     assert "commander: may arm (all 3 configured devices nominal)" in out
@@ -216,7 +216,7 @@ def test_unstartable_instance_is_refused(tmp_path, capsys, schema, drivers):
     s.set("INA238#1.bus.i2c.bus_id", 0)
     path = tmp_path / "v.store"
     s.save(path)
-    status = cli.main(["autostart", "run", "--store", str(path), "--bench", str(BENCH)])
+    status = main(["autostart", "run", "--store", str(path), "--bench", str(BENCH)])
     out = capsys.readouterr().out
     assert status == 1
     assert refused_lines(out) == [
@@ -247,12 +247,12 @@ def test_instance_without_a_driver_is_refused(tmp_path, drivers, schema):
 def test_legacy_without_a_manifest(tmp_path, capsys, monkeypatch):
     monkeypatch.chdir(tmp_path)
     monkeypatch.delenv("PX4PARAMS_STORE", raising=False)
-    status = cli.main(["autostart", "run", "--bench", str(BENCH), "--legacy"])
+    status = main(["autostart", "run", "--bench", str(BENCH), "--legacy"])
     out = capsys.readouterr().out
     assert status == 0
     assert "(no manifest to compare with: give --store or --airframe)" in out
     # Without --legacy there is nothing to boot.
-    assert cli.main(["autostart", "run", "--bench", str(BENCH)]) == 1
+    assert main(["autostart", "run", "--bench", str(BENCH)]) == 1
     assert "no store file px4params.store" in capsys.readouterr().err
 
 
@@ -327,7 +327,7 @@ def test_json_result(tmp_path, capsys):
 @pytest.mark.parametrize("duration", ["0", "-1", "nan", "100000"])
 def test_bad_duration(duration, capsys):
     args = ["autostart", "run", "--airframe", str(AIRFRAME), "--bench", str(BENCH)]
-    assert cli.main([*args, "--duration", duration]) == 1
+    assert main([*args, "--duration", duration]) == 1
     assert capsys.readouterr().err == (
         "px4params: error: --duration must be more than 0 and at most 86400 seconds\n"
     )
@@ -335,7 +335,7 @@ def test_bad_duration(duration, capsys):
 
 def test_bench_is_required(capsys):
     with pytest.raises(SystemExit) as e:
-        cli.main(["autostart", "run", "--airframe", str(AIRFRAME)])
+        main(["autostart", "run", "--airframe", str(AIRFRAME)])
     assert e.value.code == 2
     assert "--bench" in capsys.readouterr().err
 
@@ -458,7 +458,7 @@ def test_bench_file_errors(text, message, drivers):
 def test_bench_file_not_found(tmp_path, capsys, drivers):
     with pytest.raises(BenchFileError, match=r"nope\.toml: no such bench file$"):
         load_bench(tmp_path / "nope.toml", drivers)
-    status = cli.main(
+    status = main(
         ["autostart", "run", "--airframe", str(AIRFRAME), "--bench", str(tmp_path / "n.toml")]
     )
     assert status == 1
@@ -471,7 +471,7 @@ def test_bench_error_through_the_cli(tmp_path, capsys):
     path = tmp_path / "b.toml"
     path.write_text(ONE.replace("0x45", "200"))
     args = ["autostart", "run", "--airframe", str(AIRFRAME), "--bench", str(path)]
-    assert cli.main(args) == 1
+    assert main(args) == 1
     err = capsys.readouterr().err
     assert err.startswith(f"px4params: error: {path}: device #1 (INA238): I2C address 200")
     assert err.count("\n") == 1 and "Traceback" not in err

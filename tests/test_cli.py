@@ -18,7 +18,8 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from px4params import cli, load_schema
+from px4params import load_schema
+from px4params.cli.main import main
 
 CACHE_ENV = "PX4PARAMS_CACHE_DIR"
 DSDL_PATH_ENV = "PX4PARAMS_DSDL_PATH"
@@ -124,7 +125,7 @@ def base_env(cache_dir: Path) -> dict[str, str]:
 
 @pytest.fixture(autouse=True)
 def _in_process_env(cache_dir: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    # For cli.main(): the shared cache, and no extra roots from the caller's environment.
+    # For main(): the shared cache, and no extra roots from the caller's environment.
     monkeypatch.setenv(CACHE_ENV, str(cache_dir))
     monkeypatch.delenv(DSDL_PATH_ENV, raising=False)
 
@@ -198,7 +199,7 @@ def usage_error(proc: subprocess.CompletedProcess[str], fragment: str) -> None:
 
 
 def main_out(argv: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str, str]:
-    code = cli.main(argv)
+    code = main(argv)
     captured = capsys.readouterr()
     return code, captured.out, captured.err
 
@@ -872,7 +873,7 @@ def test_usage_error(run: Cli, argv: list[str], fragment: str) -> None:
 
 def test_usage_error_in_process(capsys: pytest.CaptureFixture[str]) -> None:
     with pytest.raises(SystemExit) as exit_info:
-        cli.main(["encode", "px.Ina238"])
+        main(["encode", "px.Ina238"])
     assert exit_info.value.code == 2
     captured = capsys.readouterr()
     assert captured.out == ""

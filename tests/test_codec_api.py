@@ -10,7 +10,7 @@ import pytest
 from dronecan_oracle import same
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from px4params.cli import TALK_INA238, schema_golden_vector
+from px4params.cli.commands.codec import TALK_INA238, schema_golden_vector
 from strategies import value_strategy
 
 BUNDLED = sorted(

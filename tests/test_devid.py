@@ -18,8 +18,9 @@ import pytest
 import shared_data
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from px4params import cli, devid
+from px4params.cli.main import main
 from px4params.errors import DeviceIdError, Px4ParamsError
+from px4params.vehicle import devid
 from shared_data import SHARED_DATA, shared_file
 
 CURRENT_TSV = SHARED_DATA / shared_data.CURRENT_TSV
@@ -73,7 +74,7 @@ def no_table(monkeypatch: pytest.MonkeyPatch) -> None:
 
 
 def run_cli(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
-    code = cli.main(["devid", *argv])
+    code = main(["devid", *argv])
     out, err = capsys.readouterr()
     return code, out, err
 
@@ -165,7 +166,7 @@ def test_drv_sensor_header(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> N
     # The same file through the environment variable, and through the CLI's --devtypes.
     monkeypatch.setenv(devid.DEVTYPES_ENV, str(header))
     assert devid.decode(592905).devtype_name == "AK09916"
-    assert cli.main(["devid", "--devtypes", str(header), "--list", "--json"]) == 0
+    assert main(["devid", "--devtypes", str(header), "--list", "--json"]) == 0
 
 
 def test_tsv_variants(tmp_path: Path) -> None:
@@ -231,7 +232,7 @@ def test_unknown_table(capsys: pytest.CaptureFixture[str]) -> None:
         devid.decode(1, "newest")
     # On the command line the choice is checked by argparse: a usage error.
     with pytest.raises(SystemExit) as e:
-        cli.main(["devid", "--table", "newest", "1"])
+        main(["devid", "--table", "newest", "1"])
     out, err = capsys.readouterr()
     assert (e.value.code, out) == (2, "")
     assert "invalid choice: 'newest'" in err.splitlines()[-1] and "Traceback" not in err
@@ -508,14 +509,14 @@ def test_list(capsys: pytest.CaptureFixture[str]) -> None:
 )
 def test_usage_errors(argv: list[str], message: str, capsys: pytest.CaptureFixture[str]) -> None:
     with pytest.raises(SystemExit) as e:
-        cli.main(["devid", *argv])
+        main(["devid", *argv])
     err = capsys.readouterr().err
     assert e.value.code == 2 and message in err.splitlines()[-1] and "Traceback" not in err
 
 
 def test_help_has_an_example(capsys: pytest.CaptureFixture[str]) -> None:
     with pytest.raises(SystemExit) as e:
-        cli.main(["devid", "--help"])
+        main(["devid", "--help"])
     out = capsys.readouterr().out
     assert e.value.code == 0
     assert "px4params devid --table legacy 73225" in out and "--encode --bus-type i2c" in out

@@ -1,4 +1,4 @@
-"""Tests for px4params.dsdl_loader: the schema model built from pydsdl and pydronecan."""
+"""Tests for px4params.dsdl.loader: the schema model built from pydsdl and pydronecan."""
 
 from __future__ import annotations
 
@@ -13,8 +13,8 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from px4params import dsdl_loader
-from px4params.dsdl_loader import load_model
+from px4params.dsdl import loader as dsdl_loader
+from px4params.dsdl.loader import load_model
 from px4params.errors import DsdlError, Px4ParamsError
 
 PYTHON_DIR = Path(dsdl_loader.__file__).resolve().parent.parent
@@ -580,7 +580,7 @@ def _run_python(code: str, cache_dir: Path) -> str:
 
 def test_cache_hit_imports_no_parser(tmp_path: Path) -> None:
     code = (
-        "import sys; from px4params.dsdl_loader import load_model; load_model(); "
+        "import sys; from px4params.dsdl.loader import load_model; load_model(); "
         "print(sorted(m for m in sys.modules if m.partition('.')[0] in "
         "('pydsdl', 'dronecan', '_px4params_dronecan_dsdl')))"
     )
@@ -765,7 +765,7 @@ def test_duplicate_type(tmp_path: Path) -> None:
 
 
 def test_bundled_root_given_again_is_read_once(tmp_path: Path) -> None:
-    bundled = Path(dsdl_loader.__file__).parent / "dsdl" / "px"  # through the package symlink
+    bundled = Path(__file__).resolve().parents[1] / "dsdl" / "px"  # through the root symlink
     model = load_model([bundled], include_dronecan=False, cache_dir=tmp_path)
     assert "px.Ina238.1.0" in model["types"]
 

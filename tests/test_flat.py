@@ -8,9 +8,9 @@ import px4params
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from px4params import flat
-from px4params.classic import ClassicParam
 from px4params.errors import InstanceError, LeafError, Px4ParamsError
+from px4params.store import flat
+from px4params.store.classic import ClassicParam
 from strategies import value_strategy
 
 BUNDLED_PX = [key for key in px4params.load_schema(use_env=False) if key.startswith("px.")]

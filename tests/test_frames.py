@@ -1,5 +1,5 @@
-"""CAN frames of DroneCAN transfers (native ``can_frames``/``reassemble``, px4params.transfer and
-the ``px4params frames`` command) against pydronecan's ``Transfer.to_frames()``/``from_frames()``.
+"""CAN frames of DroneCAN transfers (native ``can_frames``/``reassemble``,
+px4params.links.can_transfer and the ``px4params frames`` command) against pydronecan's ``Transfer.to_frames()``/``from_frames()``.
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ from dronecan import transport
 from dronecan_oracle import fill, same, to_plain
 from px4params import _native
 from px4params.errors import Px4ParamsError, TransferError
-from px4params.transfer import Frame, can_id, frames, reassemble
+from px4params.links.can_transfer import Frame, can_id, frames, reassemble
 
 BATTERY = "uavcan.equipment.power.BatteryInfo"
 NODE_STATUS = "uavcan.protocol.NodeStatus"

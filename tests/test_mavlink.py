@@ -17,15 +17,15 @@ from typing import Any
 
 import px4params
 import pytest
-from px4params.classic import ClassicParam
-from px4params.cli_param import open_session
-from px4params.mavlink_server import (
+from px4params.links.mavlink import (
     CAPABILITIES,
     MavlinkParamServer,
     param_hash,
     param_set_message,
     param_value_of,
 )
+from px4params.store.classic import ClassicParam
+from px4params.store.session import open_session
 
 mavutil = pytest.importorskip("pymavlink.mavutil")
 from pymavlink.dialects.v20 import common as mavlink  # noqa: E402

@@ -1,4 +1,4 @@
-"""parameters.json for ground stations (px4params.metadata): the talk's INA238 entry, fields
+"""parameters.json for ground stations (px4params.gcs.metadata): the talk's INA238 entry, fields
 that are the leaves of the default value, every union variant, and QGC's rules for the file."""
 
 from __future__ import annotations
@@ -13,9 +13,8 @@ from typing import Any
 import px4params
 import pytest
 from metadata_support import TST_KEY, real_parameters_json, write_tst
-from px4params import gcs_codec
-from px4params.classic import CLASSIC_ENV, ClassicParamsError
-from px4params.metadata import (
+from px4params.gcs import codec as gcs_codec
+from px4params.gcs.metadata import (
     QGC_TYPE,
     MetadataError,
     build_parameters_json,
@@ -23,7 +22,8 @@ from px4params.metadata import (
     describe_value,
     structured_entry,
 )
-from px4params.params import metadata_default, parameter_specs
+from px4params.store.classic import CLASSIC_ENV, ClassicParamsError
+from px4params.store.spec import metadata_default, parameter_specs
 
 #: FactMetaData::createFromJsonObject (QGroundControl, src/FactSystem/FactMetaData.cc) checks
 #: these keys' JSON types; one of another type makes QGC drop the entry's metadata.

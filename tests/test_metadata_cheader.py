@@ -1,4 +1,4 @@
-"""The generated C header (px4params.cheader): it compiles as C11 and C++17 without warnings,
+"""The generated C header (px4params.gcs.cheader): it compiles as C11 and C++17 without warnings,
 has the talk's struct, and its encode/decode functions give the Rust codec's bytes."""
 
 from __future__ import annotations
@@ -20,8 +20,8 @@ from metadata_support import (
     wide_value_strategy,
     write_tst,
 )
-from px4params.cheader import c_type_names, generate_header, guard_from_filename
-from px4params.params import parameter_specs
+from px4params.gcs.cheader import c_type_names, generate_header, guard_from_filename
+from px4params.store.spec import parameter_specs
 from strategies import value_strategy
 
 BUNDLED = px4params.load_schema(use_env=False)

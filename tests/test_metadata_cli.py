@@ -11,11 +11,11 @@ from pathlib import Path
 import px4params
 import pytest
 from metadata_support import real_parameters_json, write_tst
-from px4params import cli
-from px4params.cheader import generate_header
-from px4params.classic import CLASSIC_ENV
-from px4params.metadata import build_parameters_json
-from px4params.params import parameter_specs
+from px4params.cli.main import main
+from px4params.gcs.cheader import generate_header
+from px4params.gcs.metadata import build_parameters_json
+from px4params.store.classic import CLASSIC_ENV
+from px4params.store.spec import parameter_specs
 
 SCHEMA = px4params.load_schema(use_env=False)
 PARAMS = [s.name for s in parameter_specs(SCHEMA)]
@@ -29,7 +29,7 @@ def _clean_env(monkeypatch: pytest.MonkeyPatch) -> None:
 
 def run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
     try:
-        code = cli.main(list(argv))
+        code = main(list(argv))
     except SystemExit as e:  # argparse usage errors
         code = int(e.code or 0)
     out, err = capsys.readouterr()
@@ -176,7 +176,7 @@ def test_failures(
 def test_help_has_an_example(capsys: pytest.CaptureFixture[str]) -> None:
     code, out, _ = run(capsys, "metadata", "--help")
     assert code == 0
-    assert "example:\n  px4params metadata --json parameters.json --classic" in out
+    assert "example:\n  px4params metadata --json parameters.json --header" in out
     assert "$PX4PARAMS_PARAMETERS_JSON" in out and "--header FILE" in out
     code, out, _ = run(capsys, "--help")
     assert "metadata" in out

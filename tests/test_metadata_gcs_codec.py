@@ -1,4 +1,4 @@
-"""Decoding from metadata alone (px4params.gcs_codec): the same bytes as the DSDL path for every
+"""Decoding from metadata alone (px4params.gcs.codec): the same bytes as the DSDL path for every
 type, with nothing but the parameters.json entry, and every error it reports."""
 
 from __future__ import annotations
@@ -18,8 +18,9 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from metadata_support import wide_value_strategy, write_tst
-from px4params import gcs_codec
-from px4params.gcs_codec import (
+from px4params.dsdl.schema import to_json_value
+from px4params.gcs import codec as gcs_codec
+from px4params.gcs.codec import (
     GcsDecodeError,
     GcsEncodeError,
     MetadataFormatError,
@@ -27,9 +28,8 @@ from px4params.gcs_codec import (
     f16_from_float,
     float_from_f16,
 )
-from px4params.metadata import build_parameters_json, describe_value
-from px4params.params import parameter_specs
-from px4params.schema import to_json_value
+from px4params.gcs.metadata import build_parameters_json, describe_value
+from px4params.store.spec import parameter_specs
 from strategies import value_strategy
 
 CODEC_FILE = Path(gcs_codec.__file__)

@@ -11,8 +11,9 @@ from pathlib import Path
 
 import pytest
 import shared_data
-from px4params import devid, migrate
-from px4params.cli import build_parser
+from px4params import migrate
+from px4params.cli.main import build_parser
+from px4params.vehicle import devid
 from shared_data import SHARED_DATA, shared_file
 
 CURRENT_TSV = SHARED_DATA / shared_data.CURRENT_TSV
@@ -79,7 +80,7 @@ def run_airframe(airframe: Path, store: Path, tmp_path: Path) -> subprocess.Comp
 
 
 def load_store(store: Path, monkeypatch: pytest.MonkeyPatch):
-    from px4params.cli_param import open_session
+    from px4params.store.session import open_session
 
     return open_session(str(store), os.environ.get("PX4PARAMS_PARAMETERS_JSON")).store
 

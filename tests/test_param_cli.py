@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 
 import pytest
-from px4params import cli
+from px4params.cli.main import main
 
 TALK = """\
 param add INA238#0
@@ -28,7 +28,7 @@ def store(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
 
 
 def run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
-    code = cli.main(list(argv))
+    code = main(list(argv))
     out, err = capsys.readouterr()
     return code, out, err
 
@@ -392,9 +392,10 @@ def test_usage_errors_exit_2() -> None:
 
 
 def test_every_verb_has_help_with_an_example() -> None:
-    from px4params.cli_param import VERBS
+    from px4params.cli.main import build_parser
+    from px4params.nsh.param import VERBS
 
-    cli.build_parser()
+    build_parser()
     assert set(VERBS) >= {
         "add",
         "rm",

@@ -17,10 +17,10 @@ import px4params
 import pytest
 from dronecan.dsdl.signature import Signature
 from dronecan_oracle import BUNDLED
-from px4params import dsdl_loader
-from px4params.dsdl_loader import load_model
+from px4params.dsdl import loader as dsdl_loader
+from px4params.dsdl.loader import load_model
+from px4params.dsdl.signature import data_type_signature, normalized_definition, transfer_crc_seed
 from px4params.errors import DsdlError
-from px4params.signature import data_type_signature, normalized_definition, transfer_crc_seed
 
 NAMES = sorted(BUNDLED)
 OVERRIDDEN = sorted(n for n, t in BUNDLED.items() if t.override_signature is not None)

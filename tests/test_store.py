@@ -10,16 +10,10 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from hypothesis.stateful import RuleBasedStateMachine, invariant, precondition, rule
-from px4params.classic import ClassicParam, ClassicParamsError
-from px4params.errors import (
-    EncodeError,
-    InstanceError,
-    LeafError,
-    StoreError,
-    ValueShapeError,
-)
-from px4params.params import metadata_default, parameter_specs
-from px4params.storefile import encode_file
+from px4params.errors import EncodeError, InstanceError, LeafError, StoreError, ValueShapeError
+from px4params.store.classic import ClassicParam, ClassicParamsError
+from px4params.store.file import encode_file
+from px4params.store.spec import metadata_default, parameter_specs
 from shared_data import PARAMETERS_JSON, shared_file
 
 CLASSIC = [

@@ -14,9 +14,9 @@ from pathlib import Path
 
 import px4params
 import pytest
-from px4params.classic import ClassicParam
 from px4params.errors import StoreFileError
-from px4params.storefile import (
+from px4params.store.classic import ClassicParam
+from px4params.store.file import (
     HAS_DEFAULT,
     HAS_VALUE,
     HEADER,
@@ -230,7 +230,7 @@ def test_translation_needs_the_old_type(store: px4params.Store, tmp_path: Path) 
 
 SAVER = """
 import sys, px4params
-from px4params.classic import ClassicParam
+from px4params.store.classic import ClassicParam
 schema = px4params.load_schema(use_env=False)
 store = px4params.Store(schema)
 store.add("INA238#0")
@@ -303,7 +303,7 @@ def test_a_refused_load_keeps_unknown_classic_records(
     fewer.load_from(good)
     bad = tmp_path / "bad.params"
     bad.write_text("1\t1\tSYS_AUTOSTART\tx\t6\n")
-    from px4params import paramfile
+    from px4params.store import paramfile
 
     with pytest.raises(paramfile.ParamFileError):
         paramfile.read(fewer, str(bad), reset=True)

@@ -7,41 +7,51 @@
 >>> data = ina.encode(value)
 >>> ina.get_leaf(data, 4).value
 69
+
+The names below are imported on first use: ``import px4params`` itself costs next to nothing,
+so a command that needs only part of the package loads only that part.
 """
 
-from .errors import (
-    CodecError,
-    DecodeError,
-    DsdlError,
-    EncodeError,
-    InstanceError,
-    LeafError,
-    Px4ParamsError,
-    StoreError,
-    StoreFileError,
-    TransferError,
-    ValueShapeError,
-)
-from .schema import DataType, Leaf, Schema, load_schema, to_json_value
-from .store import InstanceView, Store
+from __future__ import annotations
 
-__all__ = [
-    "CodecError",
-    "DataType",
-    "DecodeError",
-    "DsdlError",
-    "EncodeError",
-    "InstanceError",
-    "InstanceView",
-    "Leaf",
-    "LeafError",
-    "Px4ParamsError",
-    "Schema",
-    "Store",
-    "StoreError",
-    "StoreFileError",
-    "TransferError",
-    "ValueShapeError",
-    "load_schema",
-    "to_json_value",
-]
+import importlib
+
+#: Public name -> the module that defines it.
+_EXPORTS = {
+    "CodecError": "px4params.errors",
+    "CommandError": "px4params.errors",
+    "DecodeError": "px4params.errors",
+    "DeviceIdError": "px4params.errors",
+    "DsdlError": "px4params.errors",
+    "EncodeError": "px4params.errors",
+    "InstanceError": "px4params.errors",
+    "LeafError": "px4params.errors",
+    "Px4ParamsError": "px4params.errors",
+    "StoreError": "px4params.errors",
+    "StoreFileError": "px4params.errors",
+    "TransferError": "px4params.errors",
+    "ValueShapeError": "px4params.errors",
+    "DataType": "px4params.dsdl.schema",
+    "Leaf": "px4params.dsdl.schema",
+    "Schema": "px4params.dsdl.schema",
+    "load_schema": "px4params.dsdl.schema",
+    "to_json_value": "px4params.dsdl.schema",
+    "InstanceView": "px4params.store.store",
+    "Key": "px4params.store.store",
+    "Store": "px4params.store.store",
+}
+
+__all__ = sorted(_EXPORTS)
+
+
+def __getattr__(name: str) -> object:
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module 'px4params' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value  # once imported, a plain attribute
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_EXPORTS))

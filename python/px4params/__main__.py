@@ -1,5 +1,5 @@
-"""`python -m px4params` is the `px4params` command."""
+"""``python -m px4params`` is the ``px4params`` command."""
 
-from .cli import main
+from px4params.cli.main import main
 
 raise SystemExit(main())

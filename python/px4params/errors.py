@@ -10,13 +10,23 @@ import os
 import re
 
 __all__ = [
+    "BenchFileError",
+    "ClassicParamsError",
     "CodecError",
+    "CommandError",
     "DecodeError",
     "DeviceIdError",
+    "DriversFileError",
     "DsdlError",
     "EncodeError",
+    "FlatError",
     "InstanceError",
     "LeafError",
+    "ManifestError",
+    "MetadataError",
+    "MigrationError",
+    "ParamFileError",
+    "ParameterSetError",
     "Px4ParamsError",
     "StoreError",
     "StoreFileError",
@@ -128,3 +138,45 @@ class DeviceIdError(Px4ParamsError):
     """A PX4 device ID, one of its parts, a devtype table or a flight log could not be used
     (out of range, unknown name, unreadable file, ...). ``str()`` is a single line.
     """
+
+
+class MetadataError(Px4ParamsError):
+    """The parameter set cannot be written as one ``parameters.json`` (e.g. a name clash)."""
+
+
+class ParameterSetError(Px4ParamsError):
+    """The DSDL types do not make a valid parameter set (e.g. two types with one name)."""
+
+
+class FlatError(ParameterSetError):
+    """A type or parameter set cannot be destructured (a leaf wider than 32 bits, a name longer
+    than 16 characters or clashing with another), or a flat name or value is refused."""
+
+
+class ClassicParamsError(Px4ParamsError):
+    """A ``parameters.json`` that cannot be used, or a classic value of the wrong kind."""
+
+
+class ParamFileError(Px4ParamsError):
+    """A ``.params`` or JSON parameter file that cannot be used; names the file and line."""
+
+
+class MigrationError(Px4ParamsError):
+    """The configuration cannot be read (missing, not a ``.params`` file or ULog, malformed)."""
+
+
+class BenchFileError(Px4ParamsError):
+    """A bench file cannot be used. ``str()`` is one line: file, entry, problem."""
+
+
+class DriversFileError(Px4ParamsError):
+    """The driver declarations cannot be used. ``str()`` is one line: file, driver, problem."""
+
+
+class ManifestError(Px4ParamsError):
+    """There is no manifest to boot (no store file, or an airframe file that fails)."""
+
+
+class CommandError(Px4ParamsError):
+    """A command that failed (a ``param`` verb, an airframe line, a CLI command): reported as
+    one line, exit status 1."""

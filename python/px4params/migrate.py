@@ -37,9 +37,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from . import devid
-from .errors import Px4ParamsError
-from .schema import Schema
+from px4params.dsdl.schema import Schema
+from px4params.errors import MigrationError, Px4ParamsError
+from px4params.vehicle import devid
 
 __all__ = [
     "LEGACY_DRIVERS",
@@ -58,10 +58,6 @@ _FLOAT_TYPES = {9, 10}
 #: The I2C bus board scripts start external drivers on (``-X -b 1``).
 DEFAULT_I2C_BUS = 1
 _CAL_ID = re.compile(r"CAL_(?P<sensor>[A-Z]+?)(?P<n>\d+)_ID")
-
-
-class MigrationError(Px4ParamsError):
-    """The configuration cannot be read (missing, not a ``.params`` file or ULog, malformed)."""
 
 
 @dataclass(frozen=True)
@@ -312,7 +308,7 @@ def _json(value: Any) -> Any:
 
 class _Builder:
     def __init__(self, config: OldConfig, schema: Schema, table: devid.DevtypeTable) -> None:
-        from .store import Store
+        from px4params.store.store import Store
 
         self.config = config
         self.params = config.params
@@ -520,7 +516,7 @@ class _Builder:
 
 
 def _default_address(store: Any, param: str) -> int:
-    from .params import metadata_default
+    from px4params.store.spec import metadata_default
 
     spec = store.spec(param)
     value = metadata_default(store.schema, spec.data_type.key)
@@ -554,7 +550,7 @@ def migrate(
     table: devid.DevtypeTable | str = "current",
 ) -> Proposal:
     """Proposes a manifest for ``config`` (see the module doc)."""
-    from .schema import load_schema
+    from px4params.dsdl.schema import load_schema
 
     names = devid.load_table(table) if isinstance(table, str) else table
     return _Builder(config, schema or load_schema(include_dronecan=False), names).run()

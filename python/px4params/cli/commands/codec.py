@@ -1,0 +1,340 @@
+"""``px4params types|encode|decode|frames|demo``: the codec on the command line."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Callable
+from typing import Any, TextIO
+
+from px4params.cli.options import dsdl_option
+from px4params.dsdl.schema import DataType, Schema, load_schema, to_json_value
+from px4params.errors import CommandError, Px4ParamsError
+from px4params.status import EXIT_FAILED, EXIT_OK
+
+
+def parse_hex(text: str) -> bytes:
+    """Bytes from hex such as ``daef7c00``, ``DA EF 7C 00`` or ``0xdaef7c00``."""
+    cleaned = "".join(text.split()).removeprefix("0x").removeprefix("0X")
+    try:
+        return bytes.fromhex(cleaned)
+    except ValueError:
+        raise CommandError(f"not hex bytes: {text.strip()!r} (expected e.g. 'daef7c00')") from None
+
+
+def parse_json(text: str) -> Any:
+    text = text.strip()  # a stdin line's newline would move an end-of-input error to "column 1"
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as e:
+        raise CommandError(f"not JSON: {e.msg} at column {e.colno} in {text.strip()!r}") from None
+    except (ValueError, RecursionError) as e:  # e.g. a 5000-digit number, 100000 nested [
+        raise CommandError(f"not JSON: {e}") from None
+
+
+def dump_json(value: Any) -> str:
+    return json.dumps(to_json_value(value), separators=(", ", ": "))
+
+
+def find_type(schema: Schema, name: str) -> DataType:
+    try:
+        return schema[name]
+    except KeyError:
+        hint = schema.suggest(name)
+        extra = f" (did you mean: {', '.join(hint)}?)" if hint else " (see 'px4params types')"
+        raise CommandError(f"unknown type '{name}'{extra}") from None
+
+
+def _schema(args: argparse.Namespace) -> Schema:
+    return load_schema(args.dsdl or ())
+
+
+def _each_item(item: str, stdin: TextIO, out: TextIO, convert: Callable[[str], str]) -> int:
+    """Converts one item, or each line of stdin when ``item`` is ``-`` (batch use)."""
+    if item != "-":
+        print(convert(item), file=out)
+        return EXIT_OK
+    status = EXIT_OK
+    for number, line in enumerate(stdin, start=1):
+        if not line.strip():
+            continue
+        try:
+            print(convert(line), file=out)
+        except (Px4ParamsError, UnicodeError) as e:
+            print(f"px4params: <stdin>:{number}: {e}", file=sys.stderr)
+            status = EXIT_FAILED
+    return status
+
+
+def cmd_types(args: argparse.Namespace) -> int:
+    schema = _schema(args)
+    rows = []
+    for key in schema:
+        t = schema[key]
+        tags = t.doc.get("tags", {})
+        rows.append(
+            {
+                "key": key,
+                "name": t.name,
+                "version": list(t.version) if t.version else None,
+                "kind": t.definition["kind"],
+                "dialect": t.definition.get("dialect"),
+                "min_bits": t.min_bits,
+                "max_bits": t.max_bits,
+                "max_instances": tags.get("max_instances"),
+                "short": t.doc.get("short", ""),
+            }
+        )
+    if args.json:
+        print(json.dumps(rows, indent=2))
+        return EXIT_OK
+    width = max(len(r["key"]) for r in rows)
+    for r in rows:
+        bits = (
+            f"{r['min_bits']}..{r['max_bits']}"
+            if r["min_bits"] != r["max_bits"]
+            else str(r["min_bits"])
+        )
+        print(f"{r['key']:<{width}}  {r['kind']:<6} {bits:>12} bits  {r['short']}".rstrip())
+    return EXIT_OK
+
+
+def cmd_encode(args: argparse.Namespace) -> int:
+    t = find_type(_schema(args), args.type)
+
+    def convert(text: str) -> str:
+        return t.encode(parse_json(text), tao=not args.no_tao, saturate=args.saturate).hex()
+
+    return _each_item(args.value, sys.stdin, sys.stdout, convert)
+
+
+def cmd_decode(args: argparse.Namespace) -> int:
+    t = find_type(_schema(args), args.type)
+
+    def convert(text: str) -> str:
+        return dump_json(t.decode(parse_hex(text), tao=not args.no_tao))
+
+    return _each_item(args.hex, sys.stdin, sys.stdout, convert)
+
+
+def cmd_frames(args: argparse.Namespace) -> int:
+    from px4params.links import can_transfer  # only this command needs it
+
+    t = find_type(_schema(args), args.type)
+    half = can_transfer.service_half(t)
+    if half is None and args.dest_node is not None:
+        raise CommandError(f"{t.key} is a message; --dest-node is for service requests/responses")
+    if half is not None and args.dest_node is None:
+        raise CommandError(f"{t.key} is a service {half}; give --dest-node N (1..127)")
+    if args.source_node == 0:
+        raise CommandError("anonymous transfers (source node 0) are not supported; give 1..127")
+    dtid = args.dtid if args.dtid is not None else t.dtid
+    if dtid is None:
+        raise CommandError(f"{t.key} has no default data type ID; give --dtid N")
+    text = sys.stdin.read() if args.value == "-" else args.value
+    try:
+        out = can_transfer.frames(
+            t,
+            parse_json(text),
+            source_node=args.source_node,
+            transfer_id=args.transfer_id,
+            priority=args.priority,
+            dest_node=args.dest_node,
+            dtid=dtid,
+            canfd=args.canfd,
+            saturate=args.saturate,
+        )
+    except ValueError as e:  # numbers out of range (EncodeError is not a ValueError)
+        raise CommandError(str(e)) from None
+    if args.json:
+        rows = [{"can_id": f.can_id, "data": f.data.hex()} for f in out]
+        print(json.dumps(rows, indent=2))
+    else:
+        for f in out:
+            print(f"{f.can_id:08x} {f.data.hex()}")
+    return EXIT_OK
+
+
+#: The talk's airframe lines for INA238#0, as a value.
+TALK_INA238 = {"bus": {"i2c": {"bus_id": 1, "address": 0x45}}, "current": 200, "shunt": 0.0003}
+
+
+def cmd_demo(args: argparse.Namespace) -> int:
+    schema = _schema(args)
+    t = schema["px.Ina238"]
+    print(f"{t.key}: {t.doc.get('short', '')}")
+    print("value (the talk's airframe lines):")
+    for line in (
+        "param add INA238#0",
+        "param set-default INA238#0[3] 1",
+        "param set-default INA238#0[4] 0x45",
+        "param set-default INA238#0[5] 200",
+        "param set-default INA238#0[6] 0.0003",
+    ):
+        print(f"  {line}")
+    data = t.encode(TALK_INA238)
+    print(f"encoded ({len(data)} bytes, DroneCAN bit packing): {data.hex(' ')}")
+    print("leaves:")
+    for leaf in t.leaves(data):
+        value = leaf.value
+        shown = f"{value:.7g}" if isinstance(value, float) else str(value)
+        if leaf.path.endswith("._tag"):
+            union = leaf.path.removesuffix("._tag")
+            variant = next(iter(_at_path(t.decode(data), union)))
+            shown += f" ({variant})"
+        elif (
+            isinstance(value, int) and not isinstance(value, bool) and leaf.path.endswith("address")
+        ):
+            shown += f" ({value:#04x})"
+        print(f"  [{leaf.index}] {leaf.path:<20} {leaf.type:<8} {shown}")
+    print(f"decoded back: {dump_json(t.decode(data))}")
+    golden = schema_golden_vector()
+    print(
+        f"golden vector (0xBEDA:uint12, -1:int3, -5:int4, -1:int2, 0x88:uint4): {golden.hex(' ')}"
+    )
+    return EXIT_OK
+
+
+def _at_path(value: Any, path: str) -> Any:
+    for part in path.split("."):
+        value = value[part]
+    return value
+
+
+def schema_golden_vector() -> bytes:
+    """The DroneCAN reference vector, encoded through a throwaway schema of its five fields."""
+
+    def scalar(kind: str, bits: int, cast: str) -> dict[str, Any]:
+        return {"kind": kind, "bits": bits, "cast": cast}
+
+    fields = [
+        ("a", scalar("uint", 12, "truncated")),
+        ("b", scalar("int", 3, "saturated")),
+        ("c", scalar("int", 4, "saturated")),
+        ("d", scalar("int", 2, "saturated")),
+        ("e", scalar("uint", 4, "truncated")),
+    ]
+    model = {
+        "format": 1,
+        "types": {
+            "golden.Vector": {
+                "name": "golden.Vector",
+                "version": None,
+                "kind": "struct",
+                "dialect": "uavcan",
+                "fields": [{"name": n, "type": ty} for n, ty in fields],
+            }
+        },
+    }
+    t = Schema(model)["golden.Vector"]
+    return t.encode({"a": 0xBEDA, "b": -1, "c": -5, "d": -1, "e": 0x88})
+
+
+def _add_types(p: argparse.ArgumentParser) -> None:
+    p.description = "List every loaded type (bundled px types, DroneCAN standard types, --dsdl)."
+    p.epilog = "example:\n  px4params types --json"
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.set_defaults(func=cmd_types)
+
+
+def _add_encode(p: argparse.ArgumentParser) -> None:
+    p.description = "Encode a JSON value of TYPE; '-' reads one per line from stdin."
+    p.epilog = (
+        "example:\n  px4params encode px.Ina238 "
+        '\'{"bus": {"i2c": {"bus_id": 1, "address": 69}}, "current": 200, "shunt": 0.0003}\'\n'
+        "  10031720ea0c"
+    )
+    _type_argument(p)
+    p.add_argument("value", metavar="VALUE", help="a JSON value, or - for one per line on stdin")
+    p.add_argument("--no-tao", action="store_true", help="no tail array optimization (CAN FD)")
+    p.add_argument(
+        "--saturate",
+        action="store_true",
+        help="clamp out-of-range numbers per the fields' cast modes (default: refuse)",
+    )
+    p.set_defaults(func=cmd_encode)
+
+
+def _add_decode(p: argparse.ArgumentParser) -> None:
+    p.description = "Decode hex bytes of TYPE; '-' reads one per line from stdin."
+    p.epilog = (
+        "examples:\n  px4params decode px.Ina238 10031720ea0c\n"
+        "  px4params decode px.Ina238 '10 03 17 20 ea 0c'\n"
+        "  px4params decode uavcan.protocol.NodeStatus 39300000000700"
+    )
+    _type_argument(p)
+    p.add_argument("hex", metavar="HEX", help="hex bytes, or - for one item per line on stdin")
+    p.add_argument("--no-tao", action="store_true", help="no tail array optimization (CAN FD)")
+    p.set_defaults(func=cmd_decode)
+
+
+def _type_argument(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "type", metavar="TYPE", help="type name, e.g. px.Ina238 or uavcan.protocol.NodeStatus"
+    )
+
+
+def _add_frames(p: argparse.ArgumentParser) -> None:
+    p.description = """\
+Encode a JSON value of TYPE and print the CAN frames of one DroneCAN transfer
+of it, one per line: the 29-bit CAN ID and the frame data (tail byte
+included), both in hex. A multi-frame transfer starts with its CRC; on CAN FD
+the payload has no tail array optimization and is padded to a valid frame
+length. For a service half (TYPE ending in .Request or .Response) give
+--dest-node."""
+    p.epilog = """\
+example:
+  px4params frames uavcan.protocol.NodeStatus --source-node 10 --transfer-id 3 \\
+    '{"uptime_sec": 5, "health": 0, "mode": 0, "sub_mode": 0, "vendor_specific_status_code": 0}'
+  1f01550a 05000000000000c3"""
+    p.add_argument(
+        "type", metavar="TYPE", help="type name, e.g. uavcan.equipment.power.BatteryInfo"
+    )
+    p.add_argument("value", metavar="JSON", help="the value as JSON, or - to read it from stdin")
+    p.add_argument(
+        "--transfer-id", type=int, default=0, metavar="N", help="transfer ID 0..31 (default 0)"
+    )
+    p.add_argument(
+        "--source-node", type=int, default=1, metavar="N", help="source node ID 1..127 (default 1)"
+    )
+    p.add_argument(
+        "--dest-node", type=int, metavar="N", help="destination node ID 1..127 (services only)"
+    )
+    p.add_argument(
+        "--priority", type=int, default=31, metavar="N", help="priority 0..31 (default 31, lowest)"
+    )
+    p.add_argument("--dtid", type=int, metavar="N", help="data type ID (default: the type's own)")
+    p.add_argument("--canfd", action="store_true", help="CAN FD frames (up to 64 bytes)")
+    p.add_argument(
+        "--saturate",
+        action="store_true",
+        help="clamp out-of-range numbers per the fields' cast modes (default: refuse)",
+    )
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.set_defaults(func=cmd_frames)
+
+
+def _add_demo(p: argparse.ArgumentParser) -> None:
+    p.description = (
+        "Encode the INA238#0 example of the PX4 Device Manifest talk, print its leaves "
+        "[0]..[6] and bytes, decode it back."
+    )
+    p.epilog = "example:\n  px4params demo"
+    p.set_defaults(func=cmd_demo)
+
+
+_ADDERS: dict[str, Callable[[argparse.ArgumentParser], None]] = {
+    "types": _add_types,
+    "encode": _add_encode,
+    "decode": _add_decode,
+    "frames": _add_frames,
+    "demo": _add_demo,
+}
+
+
+def add_parser(sub: Any, name: str, summary: str) -> None:
+    """Registers the codec command ``name`` on the main parser's subcommands."""
+    p = sub.add_parser(name, help=summary, formatter_class=argparse.RawDescriptionHelpFormatter)
+    dsdl_option(p)
+    _ADDERS[name](p)

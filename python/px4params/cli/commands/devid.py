@@ -1,0 +1,126 @@
+"""``px4params devid``: PX4 device IDs (the work is in ``px4params.vehicle.devid``)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from typing import Any
+
+from px4params.errors import CommandError
+from px4params.status import EXIT_OK
+
+DEVID_PARTS = ("bus_type", "bus", "address", "devtype")
+
+
+def cmd_devid(args: argparse.Namespace) -> int:
+    from px4params.vehicle import devid
+
+    parser: argparse.ArgumentParser = args.devid_parser
+    modes = [m for m in ("ids", "encode", "log", "list") if getattr(args, m)]
+    if len(modes) != 1:
+        parser.error("give device IDs, or one of --encode, --log FILE, --list")
+    given = [p for p in DEVID_PARTS if getattr(args, p) is not None]
+    if given and not args.encode:
+        parser.error("--bus-type, --bus, --address and --devtype go with --encode")
+    if args.encode and len(given) != len(DEVID_PARTS):
+        missing = [f"--{p.replace('_', '-')}" for p in DEVID_PARTS if p not in given]
+        parser.error(f"--encode needs {', '.join(missing)}")
+    if args.devtypes is not None and args.table == "legacy":
+        parser.error("--devtypes is the current table's source; it does not go with --table legacy")
+
+    # Loaded before any output, so a missing current table is one error and no partial result.
+    table = devid.load_table(args.table, args.devtypes)
+    if args.list:
+        if args.json:
+            listed = [
+                {"code": r.code, "name": r.name, "kind": r.kind, "macro": r.macro} for r in table
+            ]
+            print(json.dumps(listed))
+        else:
+            for r in table:
+                print(f"0x{r.code:02X}  {r.kind or '-':<10}  {r.name}")
+        return EXIT_OK
+    if args.log:
+        entries = devid.decode_log(args.log, table)
+        if not entries:
+            raise CommandError(f"{args.log}: no CAL_*_ID parameters in this log")
+        if args.json:
+            rows = [e.as_dict() for e in entries]
+            print(json.dumps({"file": args.log, "table": table.label, "parameters": rows}))
+            return EXIT_OK
+        width = max(len(e.param) for e in entries)
+        for e in entries:
+            when = f" @{e.timestamp_us / 1e6:.3f}s" if e.timestamp_us is not None else ""
+            shown = e.device.describe() if e.device else f"invalid: {e.problem}"
+            value = e.device.hex if e.device else ""
+            print(f"{e.param:<{width}} {e.value!s:>8} {value:>8}  {shown}{when}")
+        return EXIT_OK
+    if args.encode:
+        value = devid.encode(args.bus_type, args.bus, args.address, args.devtype, table)
+        decoded = [devid.decode(value, table)]
+    else:
+        # Parse every ID before printing any, so a bad one fails the command cleanly.
+        decoded = [devid.decode(devid.parse_device_id(text), table) for text in args.ids]
+    if args.json:
+        rows = [d.as_dict() for d in decoded]
+        print(json.dumps(rows[0] if args.encode else rows))
+    else:
+        for d in decoded:
+            print(f"{d.value} ({d.hex}): {d.describe()}")
+    return EXIT_OK
+
+
+def add_parser(sub: Any, name: str, summary: str) -> None:
+    """Registers ``px4params devid``."""
+    from px4params.vehicle.devid import TABLES
+
+    p = sub.add_parser(
+        name,
+        help=summary,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        description="""\
+Decode PX4 24-bit device IDs (bits 0-2 bus type, 3-7 bus, 8-15 address,
+16-23 devtype), build one with --encode, or decode every CAL_*_ID parameter
+of a ULog flight log with --log. The devtype names come from --table:
+'legacy' (the PX4 driver guide's table) or 'current' (today's drv_sensor.h,
+read from --devtypes FILE, $PX4PARAMS_DEVTYPES, or
+../shared/data/px4_devtypes_current.tsv; FILE is a TSV 'code<TAB>name' or a
+drv_sensor.h). An ID of 0 means no device.""",
+        epilog="""\
+examples:
+  px4params devid --table legacy 73225 66826 263178
+  73225 (0x011E09): HMC5883 (MAG), I2C bus 1, address 0x1E
+  ...
+  px4params devid --encode --bus-type i2c --bus 1 --address 0x0c --devtype AK09916
+  592905 (0x090C09): AK09916 (MAG), I2C bus 1, address 0x0C
+  px4params devid --log flight.ulg --json
+  px4params devid --list --table legacy""",
+    )
+    p.add_argument("ids", nargs="*", metavar="ID", help="device IDs, decimal or 0x hex")
+    p.add_argument(
+        "--table",
+        choices=TABLES,
+        default="current",
+        help="devtype table for names (default: current)",
+    )
+    p.add_argument(
+        "--devtypes",
+        metavar="FILE",
+        help="current table: a TSV (code<TAB>name) or PX4's drv_sensor.h "
+        "(default: $PX4PARAMS_DEVTYPES, then ../shared/data/px4_devtypes_current.tsv)",
+    )
+    p.add_argument("--encode", action="store_true", help="build an ID from the four parts below")
+    p.add_argument(
+        "--bus-type",
+        metavar="T",
+        help="unknown, i2c, spi, uavcan, simulation, serial, mavlink, or 0..7",
+    )
+    p.add_argument("--bus", metavar="N", help="bus number 0..31")
+    p.add_argument("--address", metavar="A", help="address 0..255 (e.g. 0x0c)")
+    p.add_argument(
+        "--devtype", metavar="D", help="devtype code 0..255, or a name from the table (AK09916)"
+    )
+    p.add_argument("--log", metavar="FILE.ulg", help="decode every CAL_*_ID of a ULog file")
+    p.add_argument("--list", action="store_true", help="print the devtype table")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.set_defaults(func=cmd_devid, devid_parser=p)

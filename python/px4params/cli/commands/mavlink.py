@@ -1,0 +1,141 @@
+"""``px4params mavlink serve``: the store's parameters over MAVLink (see mavlink_server.py)."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import signal
+import threading
+from typing import Any
+
+from px4params.cli.options import store_options
+from px4params.errors import CommandError
+from px4params.status import EXIT_OK
+from px4params.store.store import default_store_path
+
+__all__ = ["add_parser", "parse_udp"]
+
+
+def parse_udp(text: str) -> tuple[str, int]:
+    """``HOST:PORT`` (argparse type): a host name or IPv4 address and a port 0..65535."""
+    host, sep, port = text.strip().rpartition(":")
+    if not sep or not host or not port.isdigit() or not 0 <= int(port) <= 65535:
+        raise argparse.ArgumentTypeError(
+            f"'{text}' is not HOST:PORT (expected e.g. 127.0.0.1:14550, port 0..65535)"
+        )
+    return host, int(port)
+
+
+def _id(text: str) -> int:
+    if not text.isdigit() or not 1 <= int(text) <= 255:
+        raise argparse.ArgumentTypeError(f"'{text}' is not a MAVLink ID (expected 1..255)")
+    return int(text)
+
+
+def cmd_serve(args: argparse.Namespace) -> int:
+    from px4params.links.mavlink import MavlinkParamServer
+    from px4params.store.flat import flat_map
+    from px4params.store.session import open_session
+
+    # The same store, classic parameters and types as `px4params param` uses.
+    existed = os.path.exists(args.store or default_store_path())
+    session = open_session(args.store, args.classic, args.dsdl or ())
+    store, path = session.store, session.path
+    where = path if existed else f"{path}, new: written on the first accepted change"
+    flat_count = len(flat_map(store).table())  # also refuses types that cannot be destructured
+
+    def classic_int(name: str, fallback: int) -> int:
+        if name in store.parameters and store.classic(name) is not None:
+            value = store.get(name)
+            return int(value) if 1 <= value <= 255 else fallback
+        return fallback
+
+    system_id = args.sysid or classic_int("MAV_SYS_ID", 1)
+    component_id = args.compid or classic_int("MAV_COMP_ID", 1)
+
+    def log(line: str) -> None:
+        print(line, flush=True)
+
+    host, port = args.udp
+    try:
+        server = MavlinkParamServer(
+            store,
+            host,
+            port,
+            save_path=path,
+            system_id=system_id,
+            component_id=component_id,
+            gcs=args.gcs or (),
+            log=log,
+        )
+    except OSError as e:
+        raise CommandError(f"cannot listen on udp {host}:{port}: {e.strerror or e}") from None
+    bound_host, bound_port = server.address
+    total = len(server.entries())
+    log(
+        f"serving {total} parameters ({total - flat_count} classic, {flat_count} destructured) "
+        f"on udp {bound_host}:{bound_port} as system {system_id}, component {component_id} "
+        f"(store: {where}); Ctrl-C stops"
+    )
+    if threading.current_thread() is threading.main_thread():
+        # `kill` (SIGTERM) stops as cleanly as Ctrl-C.
+        signal.signal(signal.SIGTERM, lambda *_: server.stop())
+    try:
+        server.serve_forever()
+    except KeyboardInterrupt:
+        server.stop()
+    s = server.stats
+    log(
+        f"stopped: {s['received']} messages received ({s['ignored']} ignored), "
+        f"{s['accepted']} writes accepted, {s['refused']} refused"
+    )
+    return EXIT_OK
+
+
+def add_parser(sub: Any, name: str, summary: str) -> None:
+    """Registers ``px4params mavlink``."""
+    p = sub.add_parser(
+        name,
+        help=summary,
+        description="MAVLink parameter protocol for ground stations.",
+    )
+    verbs = p.add_subparsers(dest="mavlink_command", required=True, metavar="VERB")
+    s = verbs.add_parser(
+        "serve",
+        help="serve classic and destructured parameters over UDP",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        description="""\
+Serve the store's parameters with the MAVLink parameter protocol, as PX4
+does: the classic parameters and every leaf of every structured instance
+as a flat parameter (INA238#1.bus.i2c.address is INA238_1C; see
+'px4params param flat'). Answers PARAM_REQUEST_LIST (_HASH_CHECK first),
+PARAM_REQUEST_READ (by name or index) and PARAM_SET (type and range
+checked; accepted writes are saved to the store file at once), sends
+HEARTBEAT and, when asked, AUTOPILOT_VERSION (int32 values are encoded
+bytewise). Anything else is ignored. Ctrl-C or SIGTERM stops.""",
+        epilog="""\
+examples:
+  px4params mavlink serve --udp 0.0.0.0:14540 --store vehicle.store
+  px4params mavlink serve --udp 127.0.0.1:14580 --gcs 127.0.0.1:14550   # QGC finds it
+  mavproxy.py --master udpout:127.0.0.1:14540   # then: param show INA238_*""",
+    )
+    s.add_argument(
+        "--udp",
+        type=parse_udp,
+        required=True,
+        metavar="HOST:PORT",
+        help="address to listen on (port 0: any free port, printed at start)",
+    )
+    s.add_argument(
+        "--gcs",
+        type=parse_udp,
+        action="append",
+        metavar="HOST:PORT",
+        help="also send heartbeats here before it speaks, e.g. QGC's 127.0.0.1:14550 (repeatable)",
+    )
+    s.add_argument("--sysid", type=_id, metavar="N", help="system ID (default: MAV_SYS_ID, else 1)")
+    s.add_argument(
+        "--compid", type=_id, metavar="N", help="component ID (default: MAV_COMP_ID, else 1)"
+    )
+    store_options(s)  # --store, --classic, --dsdl as for `px4params param`
+    s.set_defaults(func=cmd_serve)

@@ -1,0 +1,87 @@
+"""``px4params metadata``: parameters.json for ground stations and a C header for firmware
+(the work is in ``px4params.gcs``)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from typing import Any
+
+from px4params.cli.options import dsdl_option
+from px4params.dsdl.schema import load_schema
+from px4params.errors import CommandError
+from px4params.status import EXIT_OK
+
+
+def cmd_metadata(args: argparse.Namespace) -> int:
+    from px4params.gcs import cheader, metadata
+    from px4params.store.spec import parameter_specs
+
+    parser: argparse.ArgumentParser = args.metadata_parser
+    if args.json is None and args.header is None:
+        parser.error("give --json FILE, --header FILE or both")
+    if args.json == "-" and args.header == "-":
+        parser.error("--json and --header cannot both write to stdout (-)")
+    if args.classic is not None and args.json is None:
+        parser.error("--classic goes with --json (the header has no classic parameters)")
+    schema = load_schema(args.dsdl or ())
+    specs = parameter_specs(schema)
+    # Everything is generated before anything is written: a failure leaves no half output.
+    outputs: list[tuple[str, str, str]] = []
+    if args.json is not None:
+        classic = metadata.classic_source(args.classic)
+        document = metadata.build_parameters_json(schema, classic, specs=specs)
+        text = json.dumps(document, allow_nan=False) + "\n"
+        count = len(document["parameters"]) - len(specs)
+        outputs.append((args.json, text, f"{len(specs)} structured + {count} classic parameters"))
+    if args.header is not None:
+        guard = cheader.guard_from_filename(None if args.header == "-" else args.header)
+        text = cheader.generate_header(schema, specs, guard=guard)
+        outputs.append((args.header, text, f"C header for {len(specs)} parameters"))
+    to_stdout = any(path == "-" for path, _, _ in outputs)
+    for path, text, what in outputs:
+        if path == "-":
+            sys.stdout.write(text)
+            continue
+        try:
+            with open(path, "w", encoding="utf-8") as f:
+                f.write(text)
+        except OSError as e:
+            raise CommandError(f"{path}: cannot write: {e.strerror}") from None
+        if not to_stdout:  # stdout carries the other output, unmixed
+            print(f"wrote {path}: {what}")
+    return EXIT_OK
+
+
+def add_parser(sub: Any, name: str, summary: str) -> None:
+    """Registers ``px4params metadata``."""
+    p = sub.add_parser(
+        name,
+        help=summary,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        description="""\
+Write the parameter metadata of every structured parameter (the px types with
+@max_instances or @param):
+  --json FILE    QGC's parameters.json (version 1) with each parameter's fields
+                 in [k] order and every union variant, plus the classic
+                 parameters of --classic FILE or $PX4PARAMS_PARAMETERS_JSON
+  --header FILE  a C header: one struct per type, sizes, parameter ids and
+                 instance counts, static inline encode/decode functions
+FILE '-' writes to stdout.""",
+        epilog="""\
+example:
+  px4params metadata --json parameters.json --header px4_params.h
+  wrote parameters.json: 9 structured + 0 classic parameters
+  wrote px4_params.h: C header for 9 parameters""",
+    )
+    dsdl_option(p)
+    p.add_argument("--json", metavar="FILE", help="write parameters.json here")
+    p.add_argument("--header", metavar="FILE", help="write the C header here")
+    p.add_argument(
+        "--classic",
+        metavar="FILE",
+        help="a PX4 parameters.json whose classic parameters to include "
+        "(default: $PX4PARAMS_PARAMETERS_JSON, else none)",
+    )
+    p.set_defaults(func=cmd_metadata, metadata_parser=p)

@@ -1,0 +1,92 @@
+"""``px4params migrate``: propose a device manifest from today's configuration (migrate.py)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from typing import Any
+
+from px4params.errors import CommandError
+from px4params.status import EXIT_OK
+
+__all__ = ["add_parser"]
+
+
+def cmd_migrate(args: argparse.Namespace) -> int:
+    from px4params import migrate
+    from px4params.dsdl.schema import load_schema
+    from px4params.vehicle import devid
+
+    parser: argparse.ArgumentParser = args.migrate_parser
+    if args.devtypes is not None and args.table == "legacy":
+        parser.error("--devtypes is the current table's source; it does not go with --table legacy")
+    # Everything is read and checked before anything is written.
+    table = devid.load_table(args.table, args.devtypes)
+    config = migrate.read_config(args.file)
+    proposal = migrate.migrate(config, load_schema(args.dsdl or (), include_dronecan=False), table)
+    airframe = proposal.airframe()
+    if args.output is not None:
+        try:
+            with open(args.output, "w", encoding="utf-8") as f:
+                f.write(airframe)
+        except OSError as e:
+            raise CommandError(f"{args.output}: cannot write: {e.strerror}") from None
+    if args.json:
+        print(json.dumps(proposal.as_dict(), indent=2))
+    elif args.output is not None:
+        sys.stdout.write(proposal.report())
+        print(f"\nwrote {args.output}: {len(proposal.instances)} instances")
+    else:  # the airframe on stdout (to redirect), the report beside it on stderr
+        sys.stdout.write(airframe)
+        sys.stderr.write(proposal.report())
+    return EXIT_OK
+
+
+def add_parser(sub: Any, name: str, summary: str) -> None:
+    """Registers ``px4params migrate``."""
+    from px4params.vehicle.devid import TABLES
+
+    p = sub.add_parser(
+        name,
+        help=summary,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        description="""\
+Read today's configuration, a QGC .params file or the parameters of a ULog
+flight log, and propose a device manifest: an airframe file of 'param add' /
+'param set-default' lines for 'px4params run', and a report. Enabled drivers
+(SENS_EN_*) with a bundled type become instances on I2C bus 1 at the driver's
+default address, with their legacy settings (INA238_CURRENT, ...); sensors found
+(CAL_*_ID device IDs) on I2C become instances on their bus and address. The
+report lists what is not part of the manifest (internal SPI sensors, ...) and
+what could not be carried over; nothing is dropped silently.""",
+        epilog="""\
+examples:
+  px4params migrate flight.ulg -o vehicle.airframe   # report on stdout
+  px4params migrate vehicle.params > vehicle.airframe # report on stderr
+  px4params migrate old.ulg --table legacy --json
+  px4params run vehicle.airframe --store vehicle.store""",
+    )
+    p.add_argument("file", metavar="FILE", help="QGC .params file or ULog (.ulg) flight log")
+    p.add_argument(
+        "-o", "--output", metavar="AIRFRAME", help="write the airframe file here (default: stdout)"
+    )
+    p.add_argument("--json", action="store_true", help="the proposal and report as JSON")
+    p.add_argument(
+        "--table",
+        choices=TABLES,
+        default="current",
+        help="devtype table for CAL_*_ID device IDs (default: current)",
+    )
+    p.add_argument(
+        "--devtypes",
+        metavar="FILE",
+        help="current table: a TSV (code<TAB>name) or drv_sensor.h (as for px4params devid)",
+    )
+    p.add_argument(
+        "--dsdl",
+        action="append",
+        metavar="DIR",
+        help="extra DSDL root namespace folder (repeatable): more parameter types",
+    )
+    p.set_defaults(func=cmd_migrate, migrate_parser=p)

@@ -1,0 +1,38 @@
+"""``px4params param VERB ...``: NSH's ``param`` command on a store file (the verbs are in
+``px4params.nsh.param``)."""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+from px4params.cli.options import store_options
+from px4params.nsh.param import add_verbs, verb_load
+from px4params.store.session import locked_session
+
+
+def cmd_param(args: argparse.Namespace) -> int:
+    recovering = args.verb is verb_load and args.file is not None
+    with locked_session(
+        args.store, args.classic, args.dsdl or (), start_empty_if_unreadable=recovering
+    ) as session:
+        return int(args.verb(session, args))
+
+
+def add_parser(sub: Any, name: str, summary: str) -> None:
+    """Registers ``px4params param`` and its verbs."""
+    p = sub.add_parser(
+        name,
+        help=summary,
+        description="PX4's param command over structured instances (INA238#0, INA238#0[4], "
+        "INA238#0.bus.i2c.address) and classic parameters, on a store file.",
+        epilog="examples:\n  px4params param add INA238#0\n"
+        "  px4params param set-default INA238#0[4] 0x45\n"
+        "  px4params param show -l INA238#0\n"
+        "  px4params param compare INA238#0.current 200 && echo configured",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    store_options(p)
+    verbs = p.add_subparsers(dest="verb_name", required=True, metavar="VERB")
+    add_verbs(verbs)
+    p.set_defaults(func=cmd_param)

@@ -1,0 +1,90 @@
+"""The ``px4params`` command: parse the command line, import the one command it names, run it.
+
+Exit codes are in ``status.py``. Every error a command raises on purpose
+(:class:`px4params.errors.Px4ParamsError`) is one line on stderr, never a traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+from collections.abc import Sequence
+
+from px4params.errors import Px4ParamsError
+from px4params.status import EXIT_FAILED, EXIT_INTERRUPTED
+
+#: Every command, in the order ``--help`` lists them: its module in ``px4params.cli.commands``
+#: (imported only when the command runs) and its one-line summary.
+COMMANDS: dict[str, tuple[str, str]] = {
+    "demo": ("codec", "encode the talk's INA238 example and show its leaves"),
+    "types": ("codec", "list the loaded types"),
+    "encode": ("codec", "encode a value of TYPE"),
+    "decode": ("codec", "decode a value of TYPE"),
+    "frames": ("codec", "split a value of TYPE into DroneCAN CAN frames"),
+    "param": ("param", "PX4's param command over structured instances and classic parameters"),
+    "run": ("run", "run an airframe file of param lines (all or nothing)"),
+    "autostart": (
+        "autostart",
+        "driver autostart from the manifest: startup script, plan, simulated bench run",
+    ),
+    "devid": ("devid", "decode, encode or list PX4 device IDs (CAL_MAG0_ID, ...)"),
+    "migrate": (
+        "migrate",
+        "propose a device manifest (airframe file) from a .params file or a ULog",
+    ),
+    "metadata": (
+        "metadata",
+        "write parameters.json for ground stations and a C header for firmware",
+    ),
+    "mavlink": ("mavlink", "serve the store's parameters over MAVLink (UDP)"),
+    "completion": ("completion", "shell completion script (bash), or the names it completes"),
+}
+
+_DESCRIPTION = """\
+Structured, instanced PX4 parameters: a device manifest in the vehicle's
+parameters, stored bit-packed with the DroneCAN rules, from which drivers
+autostart and arming is checked."""
+
+
+def build_parser(only: str | None = None) -> argparse.ArgumentParser:
+    """The whole parser, or with ``only`` the parser of that one command (the others appear in
+    ``--help`` by name and summary, without importing their modules)."""
+    parser = argparse.ArgumentParser(
+        prog="px4params",
+        description=_DESCRIPTION,
+        epilog="'px4params COMMAND --help' shows a command's options and examples.",
+    )
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    for name, (module_name, summary) in COMMANDS.items():
+        if only is None or name == only:
+            module = importlib.import_module(f"px4params.cli.commands.{module_name}")
+            module.add_parser(sub, name, summary)
+        else:
+            sub.add_parser(name, help=summary, add_help=False)
+    return parser
+
+
+def _command_in(argv: Sequence[str]) -> str | None:
+    """The command ``argv`` names (its first word that is not an option), if it is one."""
+    for word in argv:
+        if not word.startswith("-"):
+            return word if word in COMMANDS else None
+    return None
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    words = list(sys.argv[1:] if argv is None else argv)
+    command = _command_in(words)
+    # Without a command there is nothing to run: the parser reports usage or prints --help.
+    parser = build_parser(only=command) if command else build_parser(only="")
+    args = parser.parse_args(words)
+    try:
+        return int(args.func(args))
+    except (Px4ParamsError, UnicodeError) as e:
+        print(f"px4params: error: {e}", file=sys.stderr)
+        return EXIT_FAILED
+    except BrokenPipeError:
+        return EXIT_FAILED
+    except KeyboardInterrupt:
+        return EXIT_INTERRUPTED

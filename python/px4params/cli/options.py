@@ -1,0 +1,37 @@
+"""Options several commands share."""
+
+from __future__ import annotations
+
+import argparse
+
+from px4params.store.classic import CLASSIC_ENV
+
+
+def dsdl_option(p: argparse.ArgumentParser) -> None:
+    """``--dsdl DIR``: the extra DSDL roots every schema-loading command takes."""
+    p.add_argument(
+        "--dsdl",
+        action="append",
+        metavar="DIR",
+        help="extra DSDL root namespace folder (repeatable; also $PX4PARAMS_DSDL_PATH)",
+    )
+
+
+def store_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--store",
+        metavar="FILE",
+        help="store file (default: $PX4PARAMS_STORE, else ./px4params.store)",
+    )
+    p.add_argument(
+        "--classic",
+        metavar="JSON",
+        help="PX4 parameters.json with the classic parameters "
+        f"(default: ${CLASSIC_ENV}, else a bundled minimal set)",
+    )
+    p.add_argument(
+        "--dsdl",
+        action="append",
+        metavar="DIR",
+        help="extra DSDL root namespace folder (repeatable)",
+    )

@@ -1,0 +1,16 @@
+"""What the package ships besides code, found in one place: the bundled DSDL root namespaces
+(``dsdl/px``), the driver declarations (``drivers.toml``) and a minimal set of classic PX4
+parameters (``classic_parameters.json``)."""
+
+from __future__ import annotations
+
+import os
+
+_HERE = os.path.dirname(os.path.abspath(__file__))
+
+#: Each subfolder is a root namespace of DSDL parameter types (today: ``px``).
+DSDL_DIR = os.path.join(_HERE, "dsdl")
+#: The bundled driver declarations (see ``px4params.vehicle.drivers``).
+DRIVERS_TOML = os.path.join(_HERE, "drivers.toml")
+#: Classic parameters used when no PX4 ``parameters.json`` is given (see ``store.classic``).
+CLASSIC_PARAMETERS_JSON = os.path.join(_HERE, "classic_parameters.json")

@@ -1,0 +1,1085 @@
+"""Load DSDL parameter types into one JSON-serialisable schema model.
+
+Two parsers feed the model:
+
+* ``.dsdl`` root namespaces (pydsdl syntax: ``Name.1.0.dsdl``, ``@sealed``) are read with pydsdl.
+  They are serialised with the DroneCAN rules, so only ``@sealed`` types are accepted.
+* ``.uavcan`` root namespaces (DroneCAN / UAVCAN v0) are read with pydronecan's parser; this
+  includes the standard set bundled with pydronecan (``uavcan.*``, ``dronecan.*``, ...).
+
+Metadata lives in pydsdl doc comments (``.doc``), which pydsdl assigns like this:
+
+* The type's doc is the comment block at the very top of the file: contiguous ``#`` lines up to
+  the first empty line or the first statement. An empty line inside it ends it, so separate
+  paragraphs with a bare ``#`` line. For a service, the block right after ``---`` is the
+  response's doc.
+* A field's doc is the comment on the field's own line (after the statement) followed by the
+  comment lines directly below it, up to the next empty line, statement or directive.
+  Comments above a field belong to nobody.
+
+Inside a doc the first non-empty line is the short description, the following lines the long
+description, and ``@tag value`` lines (after the text) carry the metadata, PX4-annotation style.
+
+The model is cached as JSON (see :func:`load_model`); a cache hit imports neither pydsdl nor
+dronecan.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import hashlib
+import importlib.util
+import json
+import logging
+import math
+import os
+import re
+import sys
+import tempfile
+import types
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from px4params.data import DSDL_DIR
+from px4params.errors import DsdlError
+
+if TYPE_CHECKING:
+    import pydsdl
+
+__all__ = ["MODEL_FORMAT", "default_cache_dir", "load_model"]
+
+#: Bumped whenever the model's shape changes, so that older caches are rebuilt.
+#: 2: type entries carry ``service`` and ``signature_override`` (data type signatures).
+MODEL_FORMAT = 2
+
+#: Each subfolder is a root namespace shipped with the package (today: ``px``).
+BUNDLED_DSDL_DIR = Path(DSDL_DIR)
+
+Model = dict[str, Any]
+TypeSpec = dict[str, Any]
+
+_log = logging.getLogger(__name__)
+
+_SCALAR_KINDS = ("uint", "int", "float", "bool")
+_FLOAT_MAX = {16: 65504.0, 32: 3.4028234663852886e38, 64: sys.float_info.max}
+
+# Name under which pydronecan's parser package is loaded without running dronecan/__init__.py.
+_PRIVATE_DRONECAN_DSDL = "_px4params_dronecan_dsdl"
+
+
+# --------------------------------------------------------------------------------------------------
+# Public API
+
+
+def default_cache_dir() -> Path:
+    """Where :func:`load_model` caches models unless told otherwise."""
+    explicit = os.environ.get("PX4PARAMS_CACHE_DIR")
+    if explicit:
+        return Path(explicit)
+    xdg = os.environ.get("XDG_CACHE_HOME")
+    if xdg:
+        return Path(xdg) / "px4params"
+    return Path.home() / ".cache" / "px4params"
+
+
+def load_model(
+    extra_roots: Sequence[str | os.PathLike[str]] = (),
+    *,
+    include_dronecan: bool = True,
+    cache_dir: str | os.PathLike[str] | None = None,
+) -> Model:
+    """Load every type of the bundled, DroneCAN-standard and extra roots into one model.
+
+    ``extra_roots`` are root namespace folders (the folder name is the root namespace, e.g.
+    ``.../px``); each is routed by its files: ``*.dsdl`` to pydsdl, ``*.uavcan`` to pydronecan.
+    The result is cached in ``cache_dir`` (default :func:`default_cache_dir`) under a key over
+    the parser versions and every DSDL file's path and contents.
+
+    Raises:
+        DsdlError: a definition, its metadata or a root folder is invalid.
+    """
+    roots = _collect_roots(extra_roots, include_dronecan)
+    directory = Path(cache_dir) if cache_dir is not None else default_cache_dir()
+    cache_file = directory / f"model-{_cache_key(roots, include_dronecan)}.json"
+    cached = _read_cache(cache_file)
+    if cached is not None:
+        return cached
+    model = _build_model(roots)
+    _write_cache(cache_file, model)
+    return model
+
+
+# --------------------------------------------------------------------------------------------------
+# Roots and cache
+
+
+@dataclass(frozen=True)
+class _Root:
+    path: Path
+    dialect: str  # "dsdl" (pydsdl) or "uavcan" (pydronecan)
+    files: tuple[Path, ...]
+
+
+def _collect_roots(
+    extra_roots: Sequence[str | os.PathLike[str]], include_dronecan: bool
+) -> list[_Root]:
+    candidates: list[Path] = []
+    if BUNDLED_DSDL_DIR.is_dir():
+        bundled = BUNDLED_DSDL_DIR.resolve()
+        candidates += sorted(
+            p for p in bundled.iterdir() if p.is_dir() and not p.name.startswith(".")
+        )
+    if include_dronecan:
+        specs = _dronecan_package_dir() / "dsdl_specs"
+        # Every namespace pydronecan ships (uavcan, dronecan, ardupilot, com, cuav, mppt, ...).
+        candidates += sorted(p for p in specs.iterdir() if p.is_dir() and any(p.rglob("*.uavcan")))
+    # abspath, not resolve: a symlinked folder's own name is the namespace name.
+    candidates += [Path(os.path.abspath(os.fspath(r))) for r in extra_roots]
+
+    roots: list[_Root] = []
+    seen: set[Path] = set()
+    for path in candidates:
+        real = path.resolve()  # the same folder reached through a symlink is read once
+        if real not in seen:
+            seen.add(real)
+            roots.append(_classify_root(path))
+    return roots
+
+
+def _classify_root(path: Path) -> _Root:
+    if not path.is_dir():
+        raise DsdlError("DSDL root namespace folder does not exist or is not a folder", path)
+    by_suffix: dict[str, list[Path]] = {".dsdl": [], ".uavcan": []}
+    for folder, _dirs, names in os.walk(path, followlinks=True):
+        for name in names:
+            suffix = os.path.splitext(name)[1]
+            if suffix in by_suffix:
+                by_suffix[suffix].append(Path(folder, name))
+    dsdl, uavcan = by_suffix[".dsdl"], by_suffix[".uavcan"]
+    if dsdl and uavcan:
+        raise DsdlError(
+            "DSDL root mixes .dsdl (pydsdl) and .uavcan (DroneCAN) files; "
+            "keep each dialect in its own root namespace folder",
+            path,
+        )
+    if not dsdl and not uavcan:
+        raise DsdlError("DSDL root contains no .dsdl or .uavcan files", path)
+    files = tuple(sorted(dsdl or uavcan, key=lambda p: p.relative_to(path).as_posix()))
+    return _Root(path, "dsdl" if dsdl else "uavcan", files)
+
+
+def _dronecan_package_dir() -> Path:
+    # find_spec locates the package without executing dronecan/__init__.py (which parses all DSDL).
+    spec = importlib.util.find_spec("dronecan")
+    if spec is None or not spec.submodule_search_locations:
+        raise DsdlError(
+            "pydronecan (package 'dronecan') is not installed; use include_dronecan=False"
+        )
+    return Path(next(iter(spec.submodule_search_locations)))
+
+
+def _dist_version(name: str) -> str:
+    """Identifies the installed package by its module file's path, size and time: a new
+    install changes them. (Cheaper than importlib.metadata, which costs every CLI call ~30 ms.)"""
+    spec = importlib.util.find_spec(name)
+    if spec is None or spec.origin is None:
+        return "not-installed"
+    try:
+        st = os.stat(spec.origin)
+    except OSError:
+        return "not-installed"
+    return f"{spec.origin}:{st.st_size}:{st.st_mtime_ns}"
+
+
+@functools.cache
+def _loader_fingerprint() -> str:
+    # A changed loader may build a different model from the same files: never reuse its cache.
+    try:
+        return hashlib.sha256(Path(__file__).read_bytes()).hexdigest()
+    except OSError:
+        return "unknown"
+
+
+def _cache_key(roots: Sequence[_Root], include_dronecan: bool) -> str:
+    digest = hashlib.sha256()
+
+    def put(*parts: str) -> None:
+        for part in parts:
+            digest.update(part.encode("utf-8", "surrogateescape"))
+            digest.update(b"\0")
+
+    put(
+        "px4params-dsdl-model",
+        str(MODEL_FORMAT),
+        _loader_fingerprint(),
+        "pydsdl=" + _dist_version("pydsdl"),
+        "dronecan=" + _dist_version("dronecan"),
+        f"include_dronecan={include_dronecan}",
+    )
+    for root in roots:
+        # The absolute root is part of the key because the model records absolute file paths.
+        put("root", root.dialect, str(root.path), str(len(root.files)))
+        for file in root.files:
+            try:
+                data = file.read_bytes()
+            except OSError as ex:
+                raise DsdlError(f"cannot read DSDL file: {ex.strerror or ex}", file) from ex
+            put(file.relative_to(root.path).as_posix(), str(len(data)))
+            digest.update(data)
+    return digest.hexdigest()
+
+
+def _read_cache(path: Path) -> Model | None:
+    try:
+        model = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):  # missing, unreadable, not UTF-8 or not JSON: rebuild
+        return None
+    if (
+        isinstance(model, dict)
+        and model.get("format") == MODEL_FORMAT
+        and isinstance(model.get("types"), dict)
+    ):
+        return model
+    return None
+
+
+def _write_cache(path: Path, model: Model) -> None:
+    # Best effort: a read-only or full cache folder must not break loading.
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+        try:
+            with os.fdopen(fd, "w", encoding="utf-8") as out:
+                json.dump(model, out, separators=(",", ":"))
+            os.replace(tmp, path)  # atomic: readers see the old file or the whole new one
+        except BaseException:
+            with contextlib.suppress(OSError):
+                os.unlink(tmp)
+            raise
+    except OSError as ex:
+        _log.debug("not caching the DSDL model in %s: %s", path, ex)
+
+
+# --------------------------------------------------------------------------------------------------
+# Building the model
+
+
+def _build_model(roots: Sequence[_Root]) -> Model:
+    builder = _ModelBuilder()
+    pydsdl_roots = [r for r in roots if r.dialect == "dsdl"]
+    dronecan_roots = [r for r in roots if r.dialect == "uavcan"]
+    if pydsdl_roots:
+        builder.add_pydsdl(pydsdl_roots)
+    if dronecan_roots:
+        builder.add_dronecan(dronecan_roots)
+    builder.resolve_path_defaults()
+    builder.check_references()
+    return {"format": MODEL_FORMAT, "types": {k: builder.types[k] for k in sorted(builder.types)}}
+
+
+@dataclass
+class _PathDefault:
+    """``@default <path> <value>`` on a composite field, checked once every type is known."""
+
+    file: str
+    line: int | None
+    owner: str
+    field_name: str
+    ref: TypeSpec
+    path: str
+    value: str
+    target: dict[str, Any]
+
+
+@dataclass
+class _ModelBuilder:
+    types: dict[str, TypeSpec] = field(default_factory=dict)
+    path_defaults: list[_PathDefault] = field(default_factory=list)
+
+    def _add(self, key: str, spec: TypeSpec) -> None:
+        previous = self.types.get(key)
+        if previous is not None:
+            raise DsdlError(
+                f"type {key} is defined twice (also in {previous['file']})", spec["file"], 1
+            )
+        self.types[key] = spec
+
+    # ---- pydsdl --------------------------------------------------------------------------------
+
+    def add_pydsdl(self, roots: Sequence[_Root]) -> None:
+        import pydsdl  # lazy: a cache hit must not pay for it
+
+        for root in roots:
+            lookup = [str(r.path) for r in roots if r is not root]
+            try:
+                composites = pydsdl.read_namespace(
+                    str(root.path),
+                    lookup,
+                    # DroneCAN data type IDs do not follow Cyphal's regulated port-ID ranges.
+                    allow_unregulated_fixed_port_id=True,
+                )
+            except pydsdl.Error as ex:
+                raise DsdlError(ex.text, ex.path, ex.line) from ex
+            except Exception as ex:  # pydsdl bugs and I/O errors still surface as one error type
+                raise DsdlError(f"pydsdl failed: {ex}", root.path) from ex
+            for composite in composites:
+                self._add_pydsdl_type(composite)
+
+    def _add_pydsdl_type(self, t: pydsdl.CompositeType) -> None:
+        import pydsdl
+
+        file = str(Path(t.source_file_path).absolute())
+        sections = _scan_pydsdl_source(_read_source(file))
+        if isinstance(t, pydsdl.ServiceType):
+            parts = [(t.request_type, 0), (t.response_type, 1)]
+        else:
+            parts = [(t, 0)]
+        for part, index in parts:
+            section = sections[index] if index < len(sections) else _Section()
+            if isinstance(part, pydsdl.DelimitedType):
+                line = next((n for n, name in section.directives if name == "extent"), 1)
+                raise DsdlError(
+                    f"{_pydsdl_key(part)} is not @sealed (delimited, @extent); px4params "
+                    "serialises with the DroneCAN rules and supports only @sealed types",
+                    file,
+                    line,
+                )
+            key = _pydsdl_key(part)
+            attrs = [a for a in section.attrs if a.is_field]
+            if len(attrs) != len(part.fields):  # scanner out of step: give no line numbers
+                attrs = [_Attr(line=None, is_field=True)] * len(part.fields)
+            fields: list[dict[str, Any]] = []
+            for f, attr in zip(part.fields, attrs, strict=True):
+                ftype = _pydsdl_field_type(f.data_type, file, attr.line)
+                doc_lines = _doc_lines(f.doc, attr.doc, attr.line)
+                doc = self._field_doc(doc_lines, file, key, f.name, ftype)
+                fields.append({"name": f.name, "type": ftype, "line": attr.line, "doc": doc})
+            header = _doc_lines(part.doc, section.header, 1)
+            self._add(
+                key,
+                {
+                    "name": part.full_name,
+                    "version": [part.version.major, part.version.minor],
+                    "kind": "union" if isinstance(part, pydsdl.UnionType) else "struct",
+                    "dialect": "dsdl",
+                    "file": file,
+                    "line": 1,
+                    "dtid": t.fixed_port_id,
+                    "doc": _type_doc(header, file),
+                    "fields": fields,
+                    # Both halves of a service share one data type signature: the service's.
+                    "service": t.full_name if isinstance(t, pydsdl.ServiceType) else None,
+                    "signature_override": None,
+                },
+            )
+
+    # ---- pydronecan ----------------------------------------------------------------------------
+
+    def add_dronecan(self, roots: Sequence[_Root]) -> None:
+        parser = _dronecan_parser()
+        try:
+            with _silenced(f"{parser.__name__}.parser"):
+                parsed = parser.parse_namespaces([str(r.path) for r in roots])
+        except parser.DsdlException as ex:
+            raise _dronecan_error(ex) from ex
+        except Exception as ex:  # parser bugs and I/O errors still surface as one error type
+            raise DsdlError(f"DroneCAN DSDL parser failed: {ex}") from ex
+        for t in parsed:
+            self._add_dronecan_type(t)
+
+    def _add_dronecan_type(self, t: Any) -> None:
+        file = os.path.abspath(t.source_file)
+        sections = _scan_uavcan_source(t.source_text)
+        if t.kind == t.KIND_SERVICE:
+            parts = [
+                (f"{t.full_name}.Request", t.request_fields, t.request_union, 0),
+                (f"{t.full_name}.Response", t.response_fields, t.response_union, 1),
+            ]
+        else:
+            parts = [(t.full_name, t.fields, t.union, 0)]
+        for name, parsed_fields, is_union, index in parts:
+            section = sections[index] if index < len(sections) else _UavcanSection()
+            lines = section.fields
+            if len(lines) != len(parsed_fields):
+                lines = [(None, "")] * len(parsed_fields)
+            fields = [
+                {
+                    "name": f.name or "",
+                    "type": _dronecan_field_type(f.type),
+                    "line": line,
+                    "doc": {"short": comment, "long": "", "tags": {}},
+                }
+                for f, (line, comment) in zip(parsed_fields, lines, strict=True)
+            ]
+            short, long = _short_and_long(section.header)
+            self._add(
+                name,
+                {
+                    "name": name,
+                    "version": list(t.version) if t.version else None,
+                    "kind": "union" if is_union else "struct",
+                    "dialect": "uavcan",
+                    "file": file,
+                    "line": 1,
+                    "dtid": t.default_dtid,
+                    # pydronecan files use free-form comments, not our @tags: text only.
+                    "doc": {"short": short, "long": long, "tags": {}},
+                    "fields": fields,
+                    "service": t.full_name if t.kind == t.KIND_SERVICE else None,
+                    # OVERRIDE_SIGNATURE 0x...: replaces the DSDL signature (not the nested
+                    # types' extension of it); pydronecan's parser keeps it on the type.
+                    "signature_override": getattr(t, "override_signature", None),
+                },
+            )
+
+    # ---- field metadata ------------------------------------------------------------------------
+
+    def _field_doc(
+        self,
+        lines: list[tuple[int | None, str]],
+        file: str,
+        owner: str,
+        field_name: str,
+        ftype: TypeSpec,
+    ) -> dict[str, Any]:
+        short, long, raw_tags = _split_doc(lines, file)
+        tags: dict[str, Any] = {}
+        kind = ftype["kind"]
+        scalar = ftype["elem"] if kind in ("array", "dynarray") else ftype
+        if scalar["kind"] not in _SCALAR_KINDS:
+            scalar = None
+        for tag in raw_tags:
+            if tag.name not in _FIELD_TAGS:
+                raise tag.error(f"unknown metadata tag @{tag.name} {_expected(_FIELD_TAGS)}", file)
+            repeatable = tag.name in ("value", "bit") or (tag.name == "default" and kind == "ref")
+            if tag.name in tags and not repeatable:
+                raise tag.error(f"duplicate metadata tag @{tag.name}", file)
+            if kind == "void":
+                raise tag.error(f"@{tag.name}: padding fields take no metadata", file)
+            try:
+                if tag.name == "reboot_required":
+                    tags[tag.name] = _parse_bool(tag.value)
+                elif kind == "ref" and tag.name == "default":
+                    self._queue_path_default(tag, file, owner, field_name, ftype, tags)
+                elif scalar is None:
+                    raise _TagValueError(f"does not apply to a {_type_name(ftype)} field")
+                else:
+                    _apply_scalar_tag(tags, tag, scalar)
+            except _TagValueError as ex:
+                raise tag.error(f"@{tag.name} {ex}", file) from None
+        if scalar is not None:
+            _check_bounds(tags, lines, file)
+        return {"short": short, "long": long, "tags": tags}
+
+    def _queue_path_default(
+        self,
+        tag: _Tag,
+        file: str,
+        owner: str,
+        field_name: str,
+        ftype: TypeSpec,
+        tags: dict[str, Any],
+    ) -> None:
+        match = _PATH_DEFAULT_RE.fullmatch(tag.value)
+        if match is None:
+            raise _TagValueError(
+                f"on a composite field takes '<field.path> <value>' (e.g. i2c.address 0x45), "
+                f"got {tag.value!r}"
+            )
+        target = tags.setdefault("default", {})
+        if match["path"] in target:
+            raise _TagValueError(f"sets {match['path']} twice")
+        target[match["path"]] = None  # keeps the written order; filled in by resolve_path_defaults
+        self.path_defaults.append(
+            _PathDefault(
+                file, tag.line, owner, field_name, ftype, match["path"], match["value"], target
+            )
+        )
+
+    def resolve_path_defaults(self) -> None:
+        chosen: dict[tuple[str, str, str], str] = {}  # (owner, field, union path) -> variant
+        for pd in self.path_defaults:
+            try:
+                leaf, leaf_tags = self._walk_default_path(pd, chosen)
+                value = _scalar_value(leaf["type"], pd.value)
+                _check_within(value, leaf_tags)
+            except _TagValueError as ex:
+                raise DsdlError(f"@default {pd.path}: {ex}", pd.file, pd.line) from None
+            pd.target[pd.path] = value
+
+    def _walk_default_path(
+        self, pd: _PathDefault, chosen: dict[tuple[str, str, str], str]
+    ) -> tuple[dict[str, Any], dict[str, Any]]:
+        current: dict[str, Any] = {"type": pd.ref, "doc": {"tags": {}}}
+        walked: list[str] = []
+        for part in pd.path.split("."):
+            if current["type"]["kind"] != "ref":
+                raise _TagValueError(f"'{'.'.join(walked)}' is not a composite field")
+            spec = self.types.get(current["type"]["name"])
+            if spec is None:
+                raise _TagValueError(f"unknown type {current['type']['name']}")
+            names = [f["name"] for f in spec["fields"] if f["name"]]
+            nxt = next((f for f in spec["fields"] if f["name"] == part), None)
+            if nxt is None or not part:
+                raise _TagValueError(
+                    f"{spec['name']} has no field '{part}' (has: {', '.join(names)})"
+                )
+            if part == "p_version":
+                raise _TagValueError("p_version is filled in by the code and takes no default")
+            if spec["kind"] == "union":
+                slot = (pd.owner, pd.field_name, ".".join(walked))
+                if chosen.setdefault(slot, part) != part:
+                    raise _TagValueError(
+                        f"selects union variant '{part}' but another @default selects "
+                        f"'{chosen[slot]}'"
+                    )
+            walked.append(part)
+            current = nxt
+        if current["type"]["kind"] not in _SCALAR_KINDS:
+            raise _TagValueError(f"'{pd.path}' is not a scalar field")
+        return current, current["doc"]["tags"]
+
+    def check_references(self) -> None:
+        for key, spec in self.types.items():
+            for f in spec["fields"]:
+                ref = _innermost(f["type"])
+                if ref["kind"] == "ref" and ref["name"] not in self.types:
+                    raise DsdlError(
+                        f"{key}.{f['name']} refers to unknown type {ref['name']}",
+                        spec["file"],
+                        f["line"],
+                    )
+
+
+# --------------------------------------------------------------------------------------------------
+# Field types
+
+
+def _pydsdl_key(t: pydsdl.CompositeType) -> str:
+    return f"{t.full_name}.{t.version.major}.{t.version.minor}"
+
+
+def _pydsdl_field_type(dt: pydsdl.SerializableType, file: str, line: int | None) -> TypeSpec:
+    import pydsdl
+
+    def cast(p: pydsdl.PrimitiveType) -> str:
+        return (
+            "truncated" if p.cast_mode == pydsdl.PrimitiveType.CastMode.TRUNCATED else "saturated"
+        )
+
+    if isinstance(dt, pydsdl.BooleanType):
+        return {"kind": "bool"}
+    if isinstance(dt, pydsdl.VoidType):
+        return {"kind": "void", "bits": dt.bit_length}
+    if isinstance(dt, pydsdl.FloatType):
+        return {"kind": "float", "bits": dt.bit_length, "cast": cast(dt)}
+    if isinstance(dt, pydsdl.SignedIntegerType):
+        return {"kind": "int", "bits": dt.bit_length, "cast": cast(dt)}
+    if isinstance(dt, pydsdl.UnsignedIntegerType):  # also byte and utf8 (8 bits)
+        return {"kind": "uint", "bits": dt.bit_length, "cast": cast(dt)}
+    if isinstance(dt, pydsdl.FixedLengthArrayType):
+        return {
+            "kind": "array",
+            "elem": _pydsdl_field_type(dt.element_type, file, line),
+            "len": dt.capacity,
+        }
+    if isinstance(dt, pydsdl.VariableLengthArrayType):
+        elem = _pydsdl_field_type(dt.element_type, file, line)
+        return {"kind": "dynarray", "elem": elem, "max": dt.capacity}
+    if isinstance(dt, pydsdl.DelimitedType):
+        raise DsdlError(
+            f"{_pydsdl_key(dt)} is not @sealed; px4params supports only @sealed types", file, line
+        )
+    if isinstance(dt, pydsdl.CompositeType):
+        return {"kind": "ref", "name": _pydsdl_key(dt)}
+    raise DsdlError(f"unsupported data type {dt}", file, line)
+
+
+def _dronecan_field_type(dt: Any) -> TypeSpec:
+    if dt.category == dt.CATEGORY_PRIMITIVE:
+        if dt.kind == dt.KIND_BOOLEAN:
+            # The cast mode of a bool changes nothing but its signature; kept only if unusual.
+            if dt.cast_mode == dt.CAST_MODE_TRUNCATED:
+                return {"kind": "bool", "cast": "truncated"}
+            return {"kind": "bool"}
+        kind = {dt.KIND_UNSIGNED_INT: "uint", dt.KIND_SIGNED_INT: "int", dt.KIND_FLOAT: "float"}[
+            dt.kind
+        ]
+        cast = "truncated" if dt.cast_mode == dt.CAST_MODE_TRUNCATED else "saturated"
+        return {"kind": kind, "bits": dt.bitlen, "cast": cast}
+    if dt.category == dt.CATEGORY_VOID:
+        return {"kind": "void", "bits": dt.bitlen}
+    if dt.category == dt.CATEGORY_ARRAY:
+        elem = _dronecan_field_type(dt.value_type)
+        if dt.mode == dt.MODE_STATIC:
+            return {"kind": "array", "elem": elem, "len": dt.max_size}
+        return {"kind": "dynarray", "elem": elem, "max": dt.max_size}  # [<N] is already N-1
+    return {"kind": "ref", "name": dt.full_name}
+
+
+def _innermost(t: TypeSpec) -> TypeSpec:
+    while t["kind"] in ("array", "dynarray"):
+        t = t["elem"]
+    return t
+
+
+def _type_name(t: TypeSpec) -> str:
+    kind = t["kind"]
+    if kind in ("uint", "int", "float", "void"):
+        return f"{kind}{t['bits']}"
+    if kind == "array":
+        return f"{_type_name(t['elem'])}[{t['len']}]"
+    if kind == "dynarray":
+        return f"{_type_name(t['elem'])}[<={t['max']}]"
+    if kind == "ref":
+        return t["name"]
+    return kind
+
+
+# --------------------------------------------------------------------------------------------------
+# pydronecan's parser, without importing the dronecan package
+
+
+def _dronecan_parser() -> types.ModuleType:
+    """Return pydronecan's ``dronecan.dsdl`` package, or a private copy of it.
+
+    ``import dronecan.dsdl`` runs ``dronecan/__init__.py``, which parses every bundled
+    definition (a noticeable delay) only to be thrown away here. So unless dronecan is already
+    imported, the parser package is loaded from its files under a private module name.
+    """
+    loaded = sys.modules.get("dronecan.dsdl")
+    if loaded is not None:
+        return loaded
+    private = sys.modules.get(_PRIVATE_DRONECAN_DSDL)
+    if private is not None:
+        return private
+
+    folder = _dronecan_package_dir() / "dsdl"
+    spec = importlib.util.spec_from_file_location(
+        _PRIVATE_DRONECAN_DSDL, folder / "__init__.py", submodule_search_locations=[str(folder)]
+    )
+    if spec is None or spec.loader is None:
+        raise DsdlError("cannot load pydronecan's DSDL parser", folder)
+    module = importlib.util.module_from_spec(spec)
+
+    # dsdl/common.py does `from dronecan import UAVCANException`, its only link to the package.
+    # A stand-in satisfies it; it is visible only while the parser modules execute.
+    stand_in = None
+    if "dronecan" not in sys.modules:
+        stand_in = types.ModuleType("dronecan")
+        stand_in.UAVCANException = type("UAVCANException", (Exception,), {})  # type: ignore[attr-defined]
+        sys.modules["dronecan"] = stand_in
+    sys.modules[_PRIVATE_DRONECAN_DSDL] = module
+    try:
+        spec.loader.exec_module(module)
+    except BaseException:
+        for name in [n for n in sys.modules if n.partition(".")[0] == _PRIVATE_DRONECAN_DSDL]:
+            del sys.modules[name]
+        raise
+    finally:
+        if stand_in is not None and sys.modules.get("dronecan") is stand_in:
+            del sys.modules["dronecan"]
+    # The private copy's log is ours alone; its parse() logs every syntax error as an
+    # "Internal error" with a traceback, which we report as a DsdlError instead.
+    logging.getLogger(f"{_PRIVATE_DRONECAN_DSDL}.parser").disabled = True
+    return module
+
+
+@contextlib.contextmanager
+def _silenced(logger_name: str) -> Iterator[None]:
+    logger = logging.getLogger(logger_name)
+    previous = logger.disabled
+    logger.disabled = True
+    try:
+        yield
+    finally:
+        logger.disabled = previous
+
+
+def _dronecan_error(ex: BaseException) -> DsdlError:
+    # parse() re-wraps each error as "Internal error: <file:line: text>" without a line, and an
+    # error in a nested type gets the referencing line. The innermost DsdlException in the
+    # __context__ chain is the original, with the right file and line.
+    chain: list[Any] = []
+    seen: set[int] = set()
+    current: BaseException | None = ex
+    while current is not None and id(current) not in seen:
+        seen.add(id(current))
+        if type(current).__name__ == "DsdlException":
+            chain.append(current)
+        current = current.__context__
+    origin = chain[-1] if chain else ex
+    file = next((c.file for c in reversed(chain) if getattr(c, "file", None)), None)
+    message = str(origin.args[0]) if origin.args else str(origin)
+    return DsdlError(message, file, getattr(origin, "line", None))
+
+
+# --------------------------------------------------------------------------------------------------
+# Source scanning (line numbers; pydsdl and pydronecan keep none for fields or comments)
+
+
+@dataclass
+class _Attr:
+    line: int | None
+    is_field: bool
+    doc: list[tuple[int, str]] = field(default_factory=list)
+
+
+@dataclass
+class _Section:
+    header: list[tuple[int, str]] = field(default_factory=list)
+    attrs: list[_Attr] = field(default_factory=list)
+    directives: list[tuple[int, str]] = field(default_factory=list)
+
+
+def _read_source(file: str) -> str:
+    try:
+        with open(file, encoding="utf-8", errors="replace") as f:
+            return f.read()
+    except OSError:
+        return ""  # only line numbers are lost
+
+
+def _split_comment(line: str) -> tuple[str, str | None]:
+    """Split a DSDL line into statement and ``#`` comment, ignoring ``#`` in string literals."""
+    quote = None
+    i = 0
+    while i < len(line):
+        ch = line[i]
+        if quote is not None:
+            if ch == "\\":
+                i += 1
+            elif ch == quote:
+                quote = None
+        elif ch in "'\"":
+            quote = ch
+        elif ch == "#":
+            return line[:i], line[i:]
+        i += 1
+    return line, None
+
+
+def _scan_pydsdl_source(text: str) -> list[_Section]:
+    """Mirror pydsdl's comment attribution (see the module docstring), with line numbers."""
+    sections = [_Section()]
+    pending: list[tuple[int, str]] = []
+    is_header = True
+    queued: _Attr | None = None
+
+    def flush() -> None:
+        nonlocal pending, is_header, queued
+        if is_header:
+            sections[-1].header = pending
+        elif queued is not None:
+            queued.doc = pending
+            queued = None
+        is_header = False
+        pending = []
+
+    for number, raw in enumerate(text.split("\n"), start=1):
+        line = raw[:-1] if raw.endswith("\r") else raw
+        if line == "":  # only a truly empty line ends a comment block
+            flush()
+            continue
+        statement, comment = _split_comment(line)
+        statement = statement.strip()
+        if statement:
+            flush()
+            if re.fullmatch(r"-{3,}", statement):
+                sections.append(_Section())
+                is_header = True
+            elif statement.startswith("@"):
+                name = re.match(r"@\s*([A-Za-z_]\w*)", statement)
+                sections[-1].directives.append((number, name[1] if name else ""))
+            else:
+                # "T name = value" is a constant; "=" inside "[<=N]" is not.
+                is_constant = "=" in re.sub(r"\[[^\]]*\]", "", statement)
+                queued = _Attr(line=number, is_field=not is_constant)
+                sections[-1].attrs.append(queued)
+        if comment is not None:
+            pending.append((number, comment[2:] if comment.startswith("# ") else comment[1:]))
+    flush()
+    return sections
+
+
+@dataclass
+class _UavcanSection:
+    header: list[str] = field(default_factory=list)
+    fields: list[tuple[int | None, str]] = field(default_factory=list)  # (line, trailing comment)
+
+
+def _scan_uavcan_source(text: str) -> list[_UavcanSection]:
+    """Find field lines the way pydronecan tokenizes, plus the leading comment block."""
+    sections = [_UavcanSection()]
+    header_open = True
+    for number, raw in enumerate(text.splitlines(), start=1):
+        code, hash_, comment = raw.partition("#")
+        tokens = code.split()
+        if not tokens:
+            if header_open and hash_:
+                sections[-1].header.append(comment[1:] if comment.startswith(" ") else comment)
+            elif header_open and sections[-1].header:
+                header_open = False  # an empty line ends the leading comment block
+            continue
+        header_open = False
+        if tokens == ["---"]:
+            sections.append(_UavcanSection())
+            header_open = True
+        elif tokens == ["@union"] or tokens[0] == "OVERRIDE_SIGNATURE" or "=" in tokens:
+            continue  # directive or constant
+        else:
+            sections[-1].fields.append((number, comment.strip()))
+    return sections
+
+
+def _doc_lines(
+    doc: str, scanned: list[tuple[int, str]], fallback: int | None
+) -> list[tuple[int | None, str]]:
+    lines = doc.split("\n") if doc else []
+    if [text for _, text in scanned] == lines:
+        return list(scanned)
+    return [(fallback, text) for text in lines]  # scanner out of step: report the attribute line
+
+
+# --------------------------------------------------------------------------------------------------
+# Metadata
+
+
+class _TagValueError(Exception):
+    """A tag's value is invalid; the caller adds the tag name and location."""
+
+
+@dataclass
+class _Tag:
+    name: str
+    value: str
+    line: int | None
+
+    def error(self, message: str, file: str) -> DsdlError:
+        return DsdlError(message, file, self.line)
+
+
+_TAG_RE = re.compile(r"@(\w*)(?:\s+(.*))?")
+_PATH_DEFAULT_RE = re.compile(r"(?P<path>[A-Za-z_]\w*(?:\.[A-Za-z_]\w*)*)\s+(?P<value>\S+)")
+_INT_RE = re.compile(r"[+-]?(?:0[xX][0-9a-fA-F]+|[0-9]+)")
+_FLOAT_RE = re.compile(r"[+-]?(?:[0-9]+\.[0-9]*|\.[0-9]+|[0-9]+)(?:[eE][+-]?[0-9]+)?")
+_PARAM_NAME_RE = re.compile(r"[A-Z][A-Z0-9_]*")
+_CATEGORIES = ("Standard", "Developer", "System")  # the values QGC knows
+
+
+def _expected(names: Sequence[str] | dict[str, Any]) -> str:
+    return f"(expected one of: {', '.join('@' + n for n in sorted(names))})"
+
+
+def _split_doc(lines: list[tuple[int | None, str]], file: str) -> tuple[str, str, list[_Tag]]:
+    text: list[str] = []
+    tags: list[_Tag] = []
+    for number, raw in lines:
+        stripped = raw.strip()
+        if stripped.startswith("@"):
+            match = _TAG_RE.fullmatch(stripped)
+            if match is None or not match[1]:
+                raise DsdlError(f"malformed metadata tag {stripped!r}", file, number)
+            tags.append(_Tag(match[1], (match[2] or "").strip(), number))
+        elif tags:
+            if stripped:  # text after the tags would silently belong to nothing
+                raise DsdlError(
+                    f"description text after the metadata tags: {stripped!r} "
+                    "(write the description before the @tags)",
+                    file,
+                    number,
+                )
+        else:
+            text.append(raw.rstrip())
+    short, long = _short_and_long(text)
+    return short, long, tags
+
+
+def _short_and_long(text: list[str]) -> tuple[str, str]:
+    lines = list(text)
+    while lines and not lines[0].strip():
+        lines.pop(0)
+    if not lines:
+        return "", ""
+    short = lines.pop(0).strip()
+    while lines and not lines[0].strip():
+        lines.pop(0)
+    while lines and not lines[-1].strip():
+        lines.pop()
+    return short, "\n".join(line.rstrip() for line in lines)
+
+
+def _parse_bool(text: str) -> bool:
+    if text == "true":
+        return True
+    if text == "false":
+        return False
+    raise _TagValueError(f"expects true or false, got {text!r}")
+
+
+def _parse_number(text: str) -> int | float:
+    if _INT_RE.fullmatch(text):
+        sign = -1 if text.startswith("-") else 1
+        digits = text.lstrip("+-")
+        return sign * int(digits, 16 if digits[:2].lower() == "0x" else 10)
+    if _FLOAT_RE.fullmatch(text):
+        value = float(text)
+        if math.isfinite(value):
+            return value
+    raise _TagValueError(f"expects a number (69, 0x45, -1, 0.0003, 1e-3), got {text!r}")
+
+
+def _parse_int(text: str, minimum: int) -> int:
+    value = _parse_number(text) if _INT_RE.fullmatch(text) else None
+    if not isinstance(value, int) or value < minimum:
+        raise _TagValueError(f"expects an integer >= {minimum}, got {text!r}")
+    return value
+
+
+def _parse_text(text: str) -> str:
+    if not text:
+        raise _TagValueError("expects a value")
+    return text
+
+
+def _parse_category(text: str) -> str:
+    if text not in _CATEGORIES:
+        raise _TagValueError(f"expects one of {', '.join(_CATEGORIES)}, got {text!r}")
+    return text
+
+
+def _parse_param_name(text: str) -> str:
+    if not _PARAM_NAME_RE.fullmatch(text) or len(text) > 16:
+        raise _TagValueError(
+            f"expects an upper-case parameter name of at most 16 characters, got {text!r}"
+        )
+    return text
+
+
+_TYPE_TAGS: dict[str, Callable[[str], Any]] = {
+    "group": _parse_text,
+    "category": _parse_category,
+    "max_instances": lambda text: _parse_int(text, 1),
+    "reboot_required": _parse_bool,
+    "param": _parse_param_name,
+}
+
+_FIELD_TAGS = (
+    "unit",
+    "default",
+    "min",
+    "max",
+    "decimal",
+    "increment",
+    "value",
+    "bit",
+    "reboot_required",
+)
+
+
+def _type_doc(lines: list[tuple[int | None, str]], file: str) -> dict[str, Any]:
+    short, long, raw_tags = _split_doc(lines, file)
+    tags: dict[str, Any] = {}
+    for tag in raw_tags:
+        parse = _TYPE_TAGS.get(tag.name)
+        if parse is None:
+            raise tag.error(f"unknown metadata tag @{tag.name} {_expected(_TYPE_TAGS)}", file)
+        if tag.name in tags:
+            raise tag.error(f"duplicate metadata tag @{tag.name}", file)
+        try:
+            tags[tag.name] = parse(tag.value)
+        except _TagValueError as ex:
+            raise tag.error(f"@{tag.name} {ex}", file) from None
+    return {"short": short, "long": long, "tags": tags}
+
+
+def _int_range(t: TypeSpec) -> tuple[int, int]:
+    bits = t["bits"]
+    if t["kind"] == "uint":
+        return 0, (1 << bits) - 1
+    return -(1 << (bits - 1)), (1 << (bits - 1)) - 1
+
+
+def _scalar_value(t: TypeSpec, text: str) -> int | float | bool:
+    """Parse a value of scalar type ``t`` and check that the type can hold it."""
+    kind = t["kind"]
+    if kind == "bool":
+        return _parse_bool(text)
+    if kind not in ("uint", "int", "float"):
+        raise _TagValueError(f"does not apply to a {_type_name(t)} field")
+    number = _parse_number(text)
+    if kind == "float":
+        value = float(number)
+        if abs(value) > _FLOAT_MAX[t["bits"]]:
+            raise _TagValueError(f"{text} does not fit {_type_name(t)}")
+        return value
+    if not isinstance(number, int):
+        raise _TagValueError(f"expects an integer for {_type_name(t)}, got {text!r}")
+    low, high = _int_range(t)
+    if not low <= number <= high:
+        raise _TagValueError(f"{text} is out of range for {_type_name(t)} ({low}..{high})")
+    return number
+
+
+def _apply_scalar_tag(tags: dict[str, Any], tag: _Tag, scalar: TypeSpec) -> None:
+    name, text = tag.name, tag.value
+    numeric = scalar["kind"] != "bool"
+    if name == "default":
+        tags[name] = _scalar_value(scalar, text)
+        return
+    if not numeric:
+        raise _TagValueError("does not apply to a bool field")
+    if name == "unit":
+        tags[name] = _parse_text(text)
+    elif name in ("min", "max"):
+        tags[name] = _scalar_value(scalar, text)
+    elif name == "decimal":
+        tags[name] = _parse_int(text, 0)
+    elif name == "increment":
+        value = _scalar_value(scalar, text)
+        if value <= 0:
+            raise _TagValueError(f"expects a positive number, got {text!r}")
+        tags[name] = value
+    elif name in ("value", "bit"):
+        match = re.fullmatch(r"(\S+)\s+(.+)", text)
+        if match is None:
+            raise _TagValueError(f"expects '<number> <description>', got {text!r}")
+        if name == "value":
+            number: int | float | bool = _scalar_value(scalar, match[1])
+        else:
+            if scalar["kind"] == "float":
+                raise _TagValueError("does not apply to a float field")
+            number = _parse_int(match[1], 0)
+            if number >= scalar["bits"]:
+                raise _TagValueError(f"bit {number} does not exist in {_type_name(scalar)}")
+        entries = tags.setdefault(name, [])
+        if any(existing == number for existing, _ in entries):
+            raise _TagValueError(f"lists {match[1]} twice")
+        entries.append([number, match[2].strip()])
+
+
+def _check_within(value: int | float | bool, tags: dict[str, Any]) -> None:
+    if isinstance(value, bool):
+        return
+    low, high = tags.get("min"), tags.get("max")
+    if low is not None and value < low:
+        raise _TagValueError(f"{value} is below the field's @min {low}")
+    if high is not None and value > high:
+        raise _TagValueError(f"{value} is above the field's @max {high}")
+
+
+def _check_bounds(tags: dict[str, Any], lines: list[tuple[int | None, str]], file: str) -> None:
+    def line_of(name: str) -> int | None:
+        return next((n for n, text in lines if text.strip().startswith(f"@{name}")), None)
+
+    low, high = tags.get("min"), tags.get("max")
+    if low is not None and high is not None and low > high:
+        raise DsdlError(f"@min {low} is greater than @max {high}", file, line_of("max"))
+    if "default" in tags:
+        try:
+            _check_within(tags["default"], tags)
+        except _TagValueError as ex:
+            raise DsdlError(f"@default {ex}", file, line_of("default")) from None

@@ -1,0 +1,244 @@
+"""The Python API over compiled types: load a schema, then encode, decode and access leaves."""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Iterator, Mapping, MutableMapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+from px4params import _native
+from px4params.dsdl import signature as _signature
+from px4params.dsdl.loader import load_model
+
+__all__ = ["DSDL_PATH_ENV", "DataType", "Leaf", "Schema", "load_schema", "to_json_value"]
+
+#: Colon-separated extra DSDL root namespace folders, added to every schema loaded by default.
+DSDL_PATH_ENV = "PX4PARAMS_DSDL_PATH"
+
+
+@dataclass(frozen=True)
+class Leaf:
+    """One leaf of a value: its number ``[k]``, path, DSDL type and value.
+
+    Union tags have paths ending in ``._tag`` and dynamic array lengths in ``._len`` (type
+    ``tail`` when the length is implied by tail array optimization).
+    """
+
+    index: int
+    path: str
+    type: str
+    value: int | float | bool
+
+
+class DataType:
+    """One type, compiled: DroneCAN (UAVCAN v0) serialization and leaf access.
+
+    Values are plain data: a struct is a dict of field name to value (``p_version`` and padding
+    may be left out), a union a dict with exactly one key, arrays lists (``uint8`` arrays also
+    take ``bytes`` or ``str``), floats may be given as ``"nan"``, ``"inf"``, ``"-inf"``.
+    """
+
+    def __init__(
+        self,
+        key: str,
+        definition: Mapping[str, Any],
+        native: _native.DataType,
+        types: Mapping[str, Mapping[str, Any]] | None = None,
+        signatures: MutableMapping[str, int] | None = None,
+    ) -> None:
+        self.key = key
+        self.definition = definition
+        self._native = native
+        # Every type of the schema (for nested types' signatures) and the schema's memo of them.
+        self._types = types if types is not None else {key: definition}
+        self._signatures = signatures if signatures is not None else {}
+
+    @property
+    def name(self) -> str:
+        """Full name without version, e.g. ``px.Ina238``."""
+        return str(self.definition["name"])
+
+    @property
+    def version(self) -> tuple[int, int] | None:
+        """``(major, minor)``, or None for DroneCAN types without a version."""
+        v = self.definition.get("version")
+        return (int(v[0]), int(v[1])) if v else None
+
+    @property
+    def doc(self) -> Mapping[str, Any]:
+        """Parsed doc-comment metadata: ``short``, ``long`` and ``tags``."""
+        return self.definition.get("doc") or {}
+
+    @property
+    def signature(self) -> int:
+        """The DroneCAN data type signature (64 bits): CRC-64-WE of the normalized definition,
+        extended with the nested types' signatures; a service's for both of its halves. It seeds
+        the CRC of multi-frame transfers (see :mod:`px4params.dsdl.signature`)."""
+        return _signature.data_type_signature(self._types, self.key, memo=self._signatures)
+
+    @property
+    def dtid(self) -> int | None:
+        """Default data type ID (DroneCAN) or fixed port ID (pydsdl), or None."""
+        dtid = self.definition.get("dtid")
+        return int(dtid) if dtid is not None else None
+
+    @property
+    def min_bits(self) -> int:
+        """Smallest encoded length in bits (without tail array optimization)."""
+        return self._native.min_bits
+
+    @property
+    def max_bits(self) -> int:
+        """Largest encoded length in bits (without tail array optimization)."""
+        return self._native.max_bits
+
+    @property
+    def max_bytes(self) -> int:
+        """Largest encoded length in bytes."""
+        return (self._native.max_bits + 7) // 8
+
+    def encode(
+        self, value: Mapping[str, Any], *, tao: bool = True, saturate: bool = False
+    ) -> bytes:
+        """Encodes ``value``. Out-of-range numbers are refused unless ``saturate`` is set,
+        which applies the fields' cast modes (clamping ``saturated`` fields)."""
+        return self._native.encode(value, tao=tao, saturate=saturate)
+
+    def decode(
+        self, data: bytes, *, tao: bool = True, allow_trailing: bool = False
+    ) -> dict[str, Any]:
+        """Decodes ``data``; whole bytes after the value are refused unless ``allow_trailing``."""
+        return self._native.decode(bytes(data), tao=tao, allow_trailing=allow_trailing)
+
+    def decode_fragments(
+        self, fragments: Sequence[bytes], *, tao: bool = True, allow_trailing: bool = False
+    ) -> dict[str, Any]:
+        """Decodes a value whose bytes arrive in pieces (e.g. CAN frame payloads), reading
+        across the pieces without joining them."""
+        return self._native.decode_fragments(
+            [bytes(f) for f in fragments], tao=tao, allow_trailing=allow_trailing
+        )
+
+    def default(self, *, tao: bool = True) -> bytes:
+        """The encoding of the zero value (``p_version`` filled, first variants, empty arrays)."""
+        return self._native.default(tao=tao)
+
+    def leaves(self, data: bytes | None = None, *, tao: bool = True) -> list[Leaf]:
+        """Every leaf of ``data`` (of the default value when None) in ``[k]`` order."""
+        raw = self.default(tao=tao) if data is None else bytes(data)
+        return [Leaf(*row) for row in self._native.leaves(raw, tao=tao)]
+
+    def get_leaf(self, data: bytes, target: int | str, *, tao: bool = True) -> Leaf:
+        """Reads leaf ``[k]`` (an int) or a path such as ``"bus.i2c.address"``, without
+        decoding the rest."""
+        return Leaf(*self._native.get_leaf(bytes(data), target, tao=tao))
+
+    def set_leaf(
+        self,
+        data: bytes,
+        target: int | str,
+        value: Any,
+        *,
+        tao: bool = True,
+        saturate: bool = False,
+    ) -> bytes:
+        """Returns ``data`` with one leaf replaced. Setting a union tag selects that variant
+        with its default value; setting an array length truncates or appends defaults."""
+        return self._native.set_leaf(bytes(data), target, value, tao=tao, saturate=saturate)
+
+    def __repr__(self) -> str:
+        return f"<DataType {self.key}>"
+
+
+class Schema(Mapping[str, DataType]):
+    """Every loaded type, compiled once into one layout.
+
+    Look types up by key (``"px.Ina238.1.1"``, ``"uavcan.protocol.GetNodeInfo.Request"``) or by
+    name without version (``"px.Ina238"``: the newest version).
+    """
+
+    def __init__(self, model: Mapping[str, Any]) -> None:
+        self.model = model
+        types: dict[str, Any] = dict(model["types"])
+        self._definitions = types
+        self._native = _native.Schema(types)
+        newest: dict[str, tuple[tuple[int, int], str]] = {}
+        for key, definition in types.items():
+            version = definition.get("version")
+            if version:
+                rank = (int(version[0]), int(version[1]))
+                name = definition["name"]
+                if name not in newest or newest[name][0] < rank:
+                    newest[name] = (rank, key)
+        self._newest = {name: key for name, (_, key) in newest.items()}
+        self._cache: dict[str, DataType] = {}
+        self._signatures: dict[str, int] = {}
+
+    def resolve(self, name: str) -> str:
+        """The key of ``name`` (a key, or a versionless name meaning its newest version)."""
+        if name in self._definitions:
+            return name
+        if name in self._newest:
+            return self._newest[name]
+        raise KeyError(name)
+
+    def __getitem__(self, name: str) -> DataType:
+        key = self.resolve(name)
+        cached = self._cache.get(key)
+        if cached is None:
+            cached = DataType(
+                key,
+                self._definitions[key],
+                self._native.get(key),
+                self._definitions,
+                self._signatures,
+            )
+            self._cache[key] = cached
+        return cached
+
+    def __contains__(self, name: object) -> bool:
+        return isinstance(name, str) and (name in self._definitions or name in self._newest)
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(sorted(self._definitions))
+
+    def __len__(self) -> int:
+        return len(self._definitions)
+
+    def suggest(self, name: str, limit: int = 3) -> list[str]:
+        """Keys that look like ``name`` (for "did you mean" in error messages)."""
+        import difflib
+
+        candidates = list(self._definitions) + list(self._newest)
+        return difflib.get_close_matches(name, candidates, n=limit, cutoff=0.6)
+
+
+def load_schema(
+    dsdl: Sequence[str | os.PathLike[str]] = (),
+    *,
+    include_dronecan: bool = True,
+    use_env: bool = True,
+    cache_dir: str | os.PathLike[str] | None = None,
+) -> Schema:
+    """Loads the bundled ``px`` types, the DroneCAN standard types and the extra root namespace
+    folders ``dsdl`` (plus those in ``$PX4PARAMS_DSDL_PATH`` when ``use_env``).
+
+    Parsing happens once per set of DSDL files; later calls read a cached model.
+    """
+    roots = [os.fspath(d) for d in dsdl]
+    if use_env:
+        roots += [p for p in os.environ.get(DSDL_PATH_ENV, "").split(os.pathsep) if p]
+    return Schema(load_model(roots, include_dronecan=include_dronecan, cache_dir=cache_dir))
+
+
+def to_json_value(value: Any) -> Any:
+    """``value`` with non-finite floats spelled ``"nan"``, ``"inf"``, ``"-inf"`` (JSON has none)."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return "nan" if math.isnan(value) else ("inf" if value > 0 else "-inf")
+    if isinstance(value, dict):
+        return {k: to_json_value(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [to_json_value(v) for v in value]
+    return value

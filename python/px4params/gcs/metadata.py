@@ -1,0 +1,400 @@
+"""``parameters.json`` for ground stations: QGC component metadata with structured parameters.
+
+The document is QGC's parameter component metadata (``{"version": 1, "parameters": [...]}``).
+Classic parameters are copied unchanged from the ``parameters.json`` they came from. Each
+structured parameter gets one entry with QGC's keys (``name``, ``type``, ``default``, ``group``,
+``category``, ``shortDesc``, ``longDesc``, ``rebootRequired``) and, beside them, keys QGC ignores:
+
+``max_instances``
+    number of instance slots (``INA238#0`` ..), ``null`` for a shared parameter.
+``dsdl_type``, ``max_bytes``, ``default_encoded``
+    the DSDL type, the largest encoding and the hex encoding of ``default`` (DroneCAN rules,
+    no tail array optimization: how parameters are stored).
+``fields``
+    every leaf of the default value in ``[k]`` order (``index`` is ``k``). Each leaf has
+    ``name`` (its DSDL field), ``path`` (``bus.i2c.address``), ``type`` (``uint7``,
+    ``float16``, ``bool``), ``role`` and ``default``, ``min``, ``max``, and when the DSDL
+    says so ``unit``, ``shortDesc``, ``longDesc``, ``decimalPlaces``, ``increment``,
+    ``values`` (QGC's enum format) and ``cast`` (``saturated``/``truncated``).
+
+Roles: ``value``; ``version`` (``p_version``, filled in by the code, its ``default`` is the
+type's version); ``union_tag`` (path ``<union>._tag``; ``variants`` lists every variant with
+its own ``fields``, so that any variant can be decoded; the selected variant's leaves follow the
+tag inline); ``length`` (a dynamic array's length prefix, path ``<array>._len``; ``element``
+describes one element with paths ``<array>[]...``, ``element_min_bits`` decides tail array
+optimization); ``padding`` (``voidN`` bits, path ``<struct>._pad``, not a leaf: no ``index``).
+Static array elements are leaves ``<array>[i]``. :mod:`px4params.gcs.codec` encodes and decodes
+values from this description alone.
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+import os
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+from px4params.dsdl.schema import Schema, to_json_value
+from px4params.errors import MetadataError
+from px4params.store.classic import CLASSIC_ENV, ClassicParam, load_classic
+from px4params.store.spec import ParamSpec, metadata_default, parameter_specs
+
+__all__ = [
+    "METADATA_VERSION",
+    "QGC_TYPE",
+    "MetadataError",
+    "build_parameters_json",
+    "classic_source",
+    "describe_value",
+    "length_bits",
+    "structured_entry",
+    "tag_bits",
+    "type_name",
+]
+
+#: QGC reads only version 1 of the parameter metadata and ignores the file otherwise.
+METADATA_VERSION = 1
+
+#: The ``type`` of a structured entry. QGC's FactMetaData::stringToType knows Uint8 .. Int64,
+#: Float, Double, String, Bool, ElapsedSeconds and Custom (case-insensitively); an unknown type
+#: makes QGC drop the entry's metadata with an "Unknown type" warning. "Custom" is the one type
+#: that is honest (the value is no int32 or float) and whose conversions accept anything: QGC
+#: turns the structured ``default`` into an (empty) byte array without an "Invalid default
+#: value" warning, where "Int32" (the talk's slide) would warn. QGC builds older than the Custom
+#: type skip just these entries, and QGC ignores the keys it does not know (max_instances,
+#: fields, ...), so classic parameters load either way.
+QGC_TYPE = "Custom"
+
+#: PX4's names for a parameter without @group / @category.
+DEFAULT_GROUP = "Miscellaneous"
+DEFAULT_CATEGORY = "Standard"
+
+_FLOAT_MAX = {16: 65504.0, 32: 3.4028234663852886e38, 64: 1.7976931348623157e308}
+
+
+def classic_source(explicit: str | os.PathLike[str] | None) -> str | None:
+    """The classic ``parameters.json`` to include: ``explicit``, else
+    ``$PX4PARAMS_PARAMETERS_JSON``, else None (no classic parameters)."""
+    if explicit is not None:
+        return os.fspath(explicit)
+    return os.environ.get(CLASSIC_ENV) or None
+
+
+def build_parameters_json(
+    schema: Schema,
+    classic_path: str | os.PathLike[str] | None = None,
+    *,
+    specs: Sequence[ParamSpec] | None = None,
+) -> dict[str, Any]:
+    """The whole document: the classic parameters of ``classic_path`` (in file order,
+    unchanged, with its ``translation`` section) followed by every structured parameter."""
+    classic: list[ClassicParam] = load_classic(classic_path) if classic_path is not None else []
+    structured = [
+        structured_entry(schema, s) for s in (parameter_specs(schema) if specs is None else specs)
+    ]
+    classic_names = {p.name for p in classic}
+    for entry in structured:
+        if entry["name"] in classic_names:
+            raise MetadataError(
+                f"parameter {entry['name']} is both structured ({entry['dsdl_type']}) and "
+                f"classic (in {os.fspath(classic_path or '')})"
+            )
+    document: dict[str, Any] = {
+        "version": METADATA_VERSION,
+        "parameters": [dict(p.entry) for p in classic] + structured,
+    }
+    translation = _classic_translation(classic_path) if classic_path is not None else None
+    if translation is not None:
+        # QGC translates shortDesc/longDesc/... through this section; it keys entries by name,
+        # so it covers the structured entries too.
+        document["translation"] = translation
+    return document
+
+
+def _classic_translation(path: str | os.PathLike[str]) -> Any:
+    # load_classic has read and checked the file already; it keeps only the parameters.
+    with open(path, encoding="utf-8") as f:
+        return json.load(f).get("translation")
+
+
+def structured_entry(schema: Schema, spec: ParamSpec) -> dict[str, Any]:
+    """The ``parameters.json`` entry of one structured parameter."""
+    data_type = spec.data_type
+    doc = data_type.doc
+    tags = doc.get("tags") or {}
+    default = metadata_default(schema, data_type.key)
+    entry: dict[str, Any] = {
+        "name": spec.name,
+        "type": QGC_TYPE,
+        "default": to_json_value(default),
+        "group": str(tags.get("group", DEFAULT_GROUP)),
+        "category": str(tags.get("category", DEFAULT_CATEGORY)),
+        "shortDesc": doc.get("short") or spec.name,
+    }
+    if doc.get("long"):
+        entry["longDesc"] = doc["long"]
+    if "reboot_required" in tags:
+        entry["rebootRequired"] = bool(tags["reboot_required"])
+    entry["max_instances"] = spec.max_instances
+    entry["dsdl_type"] = data_type.key
+    entry["max_bytes"] = data_type.max_bytes
+    entry["default_encoded"] = data_type.encode(default, tao=False).hex()
+    entry["fields"] = describe_value(schema, data_type.key, default)
+    return entry
+
+
+def describe_value(schema: Schema, key: str, value: Mapping[str, Any]) -> list[dict[str, Any]]:
+    """Every leaf of ``value`` (a value of type ``key`` as :meth:`DataType.encode` takes it;
+    ``p_version`` may be left out) in ``[k]`` order, with the descriptions of unselected
+    variants and array elements (see the module doc)."""
+    # Refuse what does not encode (wrong shape, out of range) with the codec's messages.
+    schema[key].encode(value, tao=False)
+    entries: list[dict[str, Any]] = []
+    _Describer(schema).struct(key, value, "", entries)
+    numbered: list[dict[str, Any]] = []
+    k = 0
+    for entry in entries:
+        if entry["role"] == "padding":
+            numbered.append(entry)
+        else:
+            numbered.append({"index": k, **entry})
+            k += 1
+    return numbered
+
+
+def type_name(spec: Mapping[str, Any]) -> str:
+    """``uint7``, ``float16``, ``bool``, ``void3``, ``px.I2c.1.0``, ``uint8[<=92]``,
+    ``float16[4]``."""
+    kind = spec["kind"]
+    if kind == "bool":
+        return "bool"
+    if kind in ("uint", "int", "float", "void"):
+        return f"{kind}{spec['bits']}"
+    if kind == "ref":
+        return str(spec["name"])
+    if kind == "array":
+        return f"{type_name(spec['elem'])}[{spec['len']}]"
+    return f"{type_name(spec['elem'])}[<={spec['max']}]"
+
+
+def tag_bits(variants: int) -> int:
+    """Width of a union tag: ceil(log2(n))."""
+    return max(variants - 1, 0).bit_length()
+
+
+def length_bits(max_len: int) -> int:
+    """Width of a dynamic array's length prefix: ceil(log2(max + 1))."""
+    return max_len.bit_length()
+
+
+class _Describer:
+    def __init__(self, schema: Schema) -> None:
+        self.schema = schema
+        self.types: Mapping[str, Any] = schema.model["types"]
+
+    # -- walking a value -------------------------------------------------------------------
+
+    def struct(self, key: str, value: Any, path: str, out: list[dict[str, Any]]) -> None:
+        definition = self.types[key]
+        if definition["kind"] == "union":
+            raise MetadataError(f"{key}: a parameter's type must be a struct, not a union")
+        fields = definition["fields"]
+        versioned = definition.get("dialect") == "dsdl"
+        for field in fields:
+            ftype, name = field["type"], field["name"]
+            if ftype["kind"] == "void":
+                out.append(
+                    {"path": _join(path, "_pad"), "type": type_name(ftype), "role": "padding"}
+                )
+                continue
+            fpath = _join(path, name)
+            if versioned and name == "p_version":
+                version = (definition.get("version") or [0, 0])[1]
+                out.append(self.leaf(ftype, fpath, name, field.get("doc"), version, "version"))
+                continue
+            self.field(ftype, value[name], fpath, name, field.get("doc"), out)
+
+    def field(
+        self,
+        spec: Mapping[str, Any],
+        value: Any,
+        path: str,
+        name: str,
+        doc: Mapping[str, Any] | None,
+        out: list[dict[str, Any]],
+    ) -> None:
+        kind = spec["kind"]
+        if kind == "ref":
+            if self.types[spec["name"]]["kind"] == "union":
+                self.union(spec["name"], value, path, name, doc, out)
+            else:
+                self.struct(spec["name"], value, path, out)
+        elif kind == "array":
+            for i, item in enumerate(value):
+                self.field(spec["elem"], item, f"{path}[{i}]", name, doc, out)
+        elif kind == "dynarray":
+            element: list[dict[str, Any]] = []
+            self.field(
+                spec["elem"], self.default_of(spec["elem"], None), f"{path}[]", name, doc, element
+            )
+            entry = _described(
+                {
+                    "name": name,
+                    "path": f"{path}._len",
+                    "type": f"uint{length_bits(spec['max'])}",
+                    "role": "length",
+                },
+                doc,
+            )
+            entry.update(
+                default=len(value),
+                min=0,
+                max=spec["max"],
+                element_min_bits=self.min_bits(spec["elem"]),
+                element=element,
+            )
+            out.append(entry)
+            for i, item in enumerate(value):
+                self.field(spec["elem"], item, f"{path}[{i}]", name, doc, out)
+        else:
+            out.append(self.leaf(spec, path, name, doc, value, "value"))
+
+    def union(
+        self,
+        key: str,
+        value: Any,
+        path: str,
+        name: str,
+        doc: Mapping[str, Any] | None,
+        out: list[dict[str, Any]],
+    ) -> None:
+        fields = self.types[key]["fields"]
+        selected = next(iter(value))
+        index = next(i for i, f in enumerate(fields) if f["name"] == selected)
+        variants: list[dict[str, Any]] = []
+        for i, field in enumerate(fields):
+            vdoc = field.get("doc") or {}
+            given = value[selected] if i == index else self.default_of(field["type"], vdoc)
+            described: list[dict[str, Any]] = []
+            vpath = _join(path, field["name"])
+            self.field(field["type"], given, vpath, field["name"], vdoc, described)
+            variant: dict[str, Any] = {
+                "tag": i,
+                "name": field["name"],
+                "type": type_name(field["type"]),
+            }
+            if vdoc.get("short"):
+                variant["shortDesc"] = vdoc["short"]
+            variant["fields"] = described
+            variants.append(variant)
+        entry = _described(
+            {
+                "name": name,
+                "path": f"{path}._tag",
+                "type": f"uint{tag_bits(len(fields))}",
+                "role": "union_tag",
+            },
+            doc,
+        )
+        entry.update(
+            default=index,
+            min=0,
+            max=len(fields) - 1,
+            values=[
+                {"value": v["tag"], "description": v.get("shortDesc", v["name"])} for v in variants
+            ],
+            variants=variants,
+        )
+        out.append(entry)
+        # The selected variant's leaves follow the tag and get numbered; its copy in
+        # ``variants`` stays unnumbered, like the others.
+        out.extend(copy.deepcopy(variants[index]["fields"]))
+
+    def leaf(
+        self,
+        spec: Mapping[str, Any],
+        path: str,
+        name: str,
+        doc: Mapping[str, Any] | None,
+        value: Any,
+        role: str,
+    ) -> dict[str, Any]:
+        kind, tags = spec["kind"], (doc or {}).get("tags") or {}
+        entry = _described({"name": name, "path": path, "type": type_name(spec), "role": role}, doc)
+        if "unit" in tags:
+            entry["unit"] = str(tags["unit"])
+        entry["default"] = to_json_value(value)
+        # A version takes one value: the code fills it in and refuses any other.
+        low, high = (value, value) if role == "version" else _natural_range(spec)
+        entry["min"] = to_json_value(tags.get("min", low))
+        entry["max"] = to_json_value(tags.get("max", high))
+        if "decimal" in tags:
+            entry["decimalPlaces"] = int(tags["decimal"])
+        if "increment" in tags:
+            entry["increment"] = tags["increment"]
+        if "value" in tags:
+            entry["values"] = [{"value": v, "description": str(d)} for v, d in tags["value"]]
+        if kind != "bool":
+            entry["cast"] = spec.get("cast", "saturated")
+        return entry
+
+    # -- defaults and sizes ----------------------------------------------------------------
+
+    def default_of(self, spec: Mapping[str, Any], doc: Mapping[str, Any] | None) -> Any:
+        """The default of an unselected variant or of an array element: its @default metadata
+        for our DSDL types, zero for DroneCAN's."""
+        kind = spec["kind"]
+        tags = (doc or {}).get("tags") or {}
+        if kind == "ref":
+            if self.types[spec["name"]].get("dialect") == "dsdl":
+                return metadata_default(self.schema, spec["name"])
+            data_type = self.schema[spec["name"]]
+            return data_type.decode(data_type.default(tao=False), tao=False)
+        if kind == "array":
+            return [self.default_of(spec["elem"], None) for _ in range(spec["len"])]
+        if kind == "dynarray":
+            return []
+        if "default" in tags and not isinstance(tags["default"], Mapping):
+            return tags["default"]
+        return False if kind == "bool" else 0.0 if kind == "float" else 0
+
+    def min_bits(self, spec: Mapping[str, Any]) -> int:
+        kind = spec["kind"]
+        if kind == "bool":
+            return 1
+        if kind in ("uint", "int", "float", "void"):
+            return int(spec["bits"])
+        if kind == "array":
+            return int(spec["len"]) * self.min_bits(spec["elem"])
+        if kind == "dynarray":
+            return length_bits(spec["max"])
+        definition = self.types[spec["name"]]
+        sizes = [self.min_bits(f["type"]) for f in definition["fields"]]
+        if definition["kind"] == "union":
+            return tag_bits(len(sizes)) + min(sizes)
+        return sum(sizes)
+
+
+def _join(path: str, name: str) -> str:
+    return f"{path}.{name}" if path else name
+
+
+def _described(entry: dict[str, Any], doc: Mapping[str, Any] | None) -> dict[str, Any]:
+    if doc and doc.get("short"):
+        entry["shortDesc"] = doc["short"]
+    if doc and doc.get("long"):
+        entry["longDesc"] = doc["long"]
+    return entry
+
+
+def _natural_range(spec: Mapping[str, Any]) -> tuple[Any, Any]:
+    kind = spec["kind"]
+    if kind == "bool":
+        return False, True
+    bits = int(spec["bits"])
+    if kind == "uint":
+        return 0, (1 << bits) - 1
+    if kind == "int":
+        return -(1 << (bits - 1)), (1 << (bits - 1)) - 1
+    return -_FLOAT_MAX[bits], _FLOAT_MAX[bits]

@@ -1,0 +1,587 @@
+"""A MAVLink parameter server over UDP: the store's classic and destructured parameters, served
+the way PX4 serves its own, so that QGroundControl, MAVSDK or pymavlink can list, read and write
+them.
+
+What it does (PX4's ``mavlink_parameters.cpp`` is the model):
+
+* ``HEARTBEAT`` once a second (autopilot ``MAV_AUTOPILOT_PX4``) to every peer heard from and to
+  the ``gcs`` addresses given (QGroundControl waits on UDP 14550 for a vehicle to speak first).
+* ``AUTOPILOT_VERSION`` on ``MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES`` or ``MAV_CMD_REQUEST_MESSAGE``
+  (148), with ``MAV_PROTOCOL_CAPABILITY_PARAM_ENCODE_BYTEWISE``: ``int32`` values travel as their
+  four bytes inside the ``float`` field, as PX4 sends them.
+* ``PARAM_REQUEST_LIST``: first ``_HASH_CHECK`` (index -1, ``MAV_PARAM_TYPE_UINT32``, PX4's CRC32
+  over every name and value, so that a ground station can use its cache), then every parameter
+  in name order. A ``PARAM_SET`` of ``_HASH_CHECK`` stops the stream, as in PX4.
+* ``PARAM_REQUEST_READ`` by name (``_HASH_CHECK`` too) or by index.
+* ``PARAM_SET``: the name must exist and the type must be the parameter's (``INT32`` or
+  ``REAL32``); the value must fit the parameter (``int32``, ``float32``, or the leaf's own range,
+  checked by the store). An accepted write is saved through the store (when a store file is
+  given; if saving fails the write is undone) and answered with ``PARAM_VALUE``; a refused one
+  changes nothing and is answered with ``PARAM_VALUE`` of the unchanged value, a ``STATUSTEXT``
+  saying why and a ``PARAM_ERROR``. Writing a union tag (e.g. ``INA238_1A``) changes which leaves
+  are live: the newly live ones are announced with ``PARAM_VALUE`` too.
+* Anything else (other messages, other targets, garbage bytes, bad CRCs) is ignored.
+
+The parameters are the store's classic ones and the destructured leaves of its structured
+instances (:mod:`px4params.store.flat`); the structured values themselves (wider than 32 bits)
+are not offered. Parameter metadata bounds (``@min``/``@max``) are not enforced, as PX4 does not
+either.
+
+pymavlink decodes a ``float`` field through a Python float, which turns an ``int32`` whose bit
+pattern is a signalling NaN (-8388607..-4194305, 2139095041..2143289343) into another number.
+This server therefore reads values from the raw payload and writes them byte-exact;
+:func:`param_value_of` and :func:`param_set_message` do the same for clients.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import select
+import socket
+import struct
+import threading
+import time
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+from pymavlink.dialects.v20 import common as mavlink
+
+from px4params.errors import Px4ParamsError
+from px4params.store import flat
+
+if TYPE_CHECKING:
+    from px4params.store.store import Store
+
+__all__ = [
+    "HASH_PARAM",
+    "MavlinkParamServer",
+    "ParamEntry",
+    "param_hash",
+    "param_set_message",
+    "param_value_of",
+]
+
+HASH_PARAM = "_HASH_CHECK"
+CAPABILITIES = (
+    mavlink.MAV_PROTOCOL_CAPABILITY_PARAM_ENCODE_BYTEWISE | mavlink.MAV_PROTOCOL_CAPABILITY_MAVLINK2
+)
+_INT32, _REAL32 = mavlink.MAV_PARAM_TYPE_INT32, mavlink.MAV_PARAM_TYPE_REAL32
+_TYPE_NAMES = {_INT32: "INT32", _REAL32: "REAL32", mavlink.MAV_PARAM_TYPE_UINT32: "UINT32"}
+#: STATUSTEXT carries 50 characters per chunk.
+_TEXT_CHUNK = 50
+#: Parameters sent per burst while streaming a list, and the pause between bursts: about 4000
+#: a second, paced so that a slow client's socket buffer does not overflow (PX4 paces too);
+#: incoming messages (a _HASH_CHECK stop) are read between bursts.
+_STREAM_BURST = 20
+_STREAM_PAUSE = 0.005
+#: Peers remembered (for heartbeats and change notices); the oldest is forgotten beyond this.
+_MAX_PEERS = 16
+
+Address = tuple[str, int]
+
+
+@dataclass(frozen=True)
+class ParamEntry:
+    """One parameter as MAVLink carries it: name, ``MAV_PARAM_TYPE_*`` and the four bytes."""
+
+    name: str
+    mav_type: int
+    raw: bytes
+
+    @property
+    def value(self) -> int | float:
+        return struct.unpack("<i" if self.mav_type == _INT32 else "<f", self.raw)[0]
+
+
+def _payload_of(msg: Any) -> bytes:
+    """The payload bytes of a received message, from its frame: pymavlink's ``get_payload()``
+    slices the frame after a MAVLink 1 header even for MAVLink 2 frames, whose header is four
+    bytes longer, so for MAVLink 2 it starts with the component and message IDs."""
+    frame = bytes(msg.get_msgbuf())
+    header = 10 if frame[:1] == b"\xfd" else 6
+    return frame[header : header + frame[1]]
+
+
+def param_value_of(msg: Any) -> int | float:
+    """The value of a received ``PARAM_VALUE`` or ``PARAM_SET``, read from the payload bytes
+    (bytewise encoding: ``int32`` types as integers), immune to pymavlink's NaN rewriting."""
+    raw = (_payload_of(msg) + bytes(4))[:4]  # MAVLink 2 trims trailing zero bytes
+    if msg.param_type == mavlink.MAV_PARAM_TYPE_REAL32:
+        return float(struct.unpack("<f", raw)[0])
+    if msg.param_type == mavlink.MAV_PARAM_TYPE_UINT32:
+        return int(struct.unpack("<I", raw)[0])
+    return int(struct.unpack("<i", raw)[0])
+
+
+def _raw_of(value: int | float, mav_type: int) -> bytes:
+    if mav_type == _REAL32:
+        return struct.pack("<f", value)
+    if mav_type == mavlink.MAV_PARAM_TYPE_UINT32:
+        return struct.pack("<I", value)
+    return struct.pack("<i", value)
+
+
+class _RawParamValue(mavlink.MAVLink_param_value_message):
+    """PARAM_VALUE whose value bytes are written as given (not through a Python float)."""
+
+    def __init__(self, name: str, raw: bytes, mav_type: int, count: int, index: int) -> None:
+        super().__init__(name.encode(), 0.0, mav_type, count, index)
+        self.raw = raw
+
+    def pack(self, mav: mavlink.MAVLink, force_mavlink1: bool = False) -> bytes:
+        fields = (self.param_count, self.param_index, self._param_id_raw, self.param_type)
+        payload = bytearray(self.unpacker.pack(0.0, *fields))
+        payload[0:4] = self.raw
+        return self._pack(mav, self.crc_extra, bytes(payload), force_mavlink1=force_mavlink1)
+
+
+class _RawParamSet(mavlink.MAVLink_param_set_message):
+    """PARAM_SET whose value bytes are written as given."""
+
+    def __init__(self, system: int, component: int, name: str, raw: bytes, mav_type: int) -> None:
+        super().__init__(system, component, name.encode(), 0.0, mav_type)
+        self.raw = raw
+
+    def pack(self, mav: mavlink.MAVLink, force_mavlink1: bool = False) -> bytes:
+        fields = (self.target_system, self.target_component, self._param_id_raw, self.param_type)
+        payload = bytearray(self.unpacker.pack(0.0, *fields))
+        payload[0:4] = self.raw
+        return self._pack(mav, self.crc_extra, bytes(payload), force_mavlink1=force_mavlink1)
+
+
+def param_set_message(
+    target_system: int, target_component: int, name: str, value: int | float, mav_type: int
+) -> mavlink.MAVLink_param_set_message:
+    """A ``PARAM_SET`` with the value encoded bytewise (for clients: ``conn.mav.send(msg)``)."""
+    return _RawParamSet(target_system, target_component, name, _raw_of(value, mav_type), mav_type)
+
+
+def _crc32part(data: bytes, crc: int) -> int:
+    # NuttX/PX4 crc32part: the reflected CRC-32 table without pre- or post-inversion.
+    import zlib
+
+    return zlib.crc32(data, crc ^ 0xFFFFFFFF) ^ 0xFFFFFFFF
+
+
+def param_hash(entries: Iterable[ParamEntry]) -> int:
+    """PX4's ``param_hash_check``: CRC32 over each parameter's name and value bytes in index
+    order (QGroundControl computes the same over its cache)."""
+    crc = 0
+    for entry in entries:
+        crc = _crc32part(entry.name.encode(), crc)
+        crc = _crc32part(entry.raw, crc)
+    return crc
+
+
+def _name_of(raw: Any) -> str:
+    text = raw.decode("ascii", "replace") if isinstance(raw, bytes) else str(raw)
+    return text.split("\0", 1)[0]
+
+
+class _Sink:
+    """pymavlink's encoder wants a file; the server sends the bytes itself."""
+
+    def write(self, data: bytes) -> None:  # pragma: no cover - never called
+        pass
+
+
+class MavlinkParamServer:
+    """Serves ``store`` over UDP at ``host:port`` (port 0 picks a free one: see ``address``).
+
+    ``save_path``: the store file accepted writes are saved to (None: kept in memory only).
+    ``gcs``: addresses to send heartbeats to before they speak (e.g. QGC's 127.0.0.1:14550).
+    ``log``: called with one line per accepted or refused write.
+    """
+
+    def __init__(
+        self,
+        store: Store,
+        host: str = "127.0.0.1",
+        port: int = 14550,
+        *,
+        save_path: str | os.PathLike[str] | None = None,
+        system_id: int = 1,
+        component_id: int = 1,
+        gcs: Iterable[Address] = (),
+        log: Callable[[str], None] | None = None,
+        heartbeat_interval: float = 1.0,
+    ) -> None:
+        self.store = store
+        self.flat = flat.flat_map(store)  # refuses a store whose leaves cannot be destructured
+        self.save_path = save_path
+        self.system_id = system_id
+        self.component_id = component_id
+        self.log = log or (lambda line: None)
+        self.heartbeat_interval = heartbeat_interval
+        self._gcs = list(gcs)
+        self._sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        try:
+            self._sock.bind((host, port))
+        except OSError:
+            self._sock.close()
+            raise
+        self._sock.setblocking(False)
+        self._mav = mavlink.MAVLink(_Sink(), srcSystem=system_id, srcComponent=component_id)
+        self._seen: dict[Address, None] = {}  # peers heard from, oldest first
+        self._entries: list[ParamEntry] | None = None
+        self._stream: tuple[Address, int] | None = None  # (peer, next index; -1 = hash)
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._next_heartbeat = 0.0
+        self._next_burst = 0.0
+        self._text_id = 0
+        #: Counters, for tests and the CLI's summary.
+        self.stats = {"received": 0, "ignored": 0, "sent": 0, "accepted": 0, "refused": 0}
+
+    # -- lifecycle ----------------------------------------------------------------------------
+
+    @property
+    def address(self) -> Address:
+        host, port = self._sock.getsockname()[:2]
+        return str(host), int(port)
+
+    def serve_forever(self, poll: float = 0.05) -> None:
+        """Runs until :meth:`stop` (or Ctrl-C in the caller); closes the socket at the end."""
+        try:
+            while not self._stop.is_set():
+                self.step(poll)
+        finally:
+            self._sock.close()
+
+    def start(self) -> MavlinkParamServer:
+        """Serves in a background thread (for tests and embedding)."""
+        self._thread = threading.Thread(target=self.serve_forever, name="mavlink-params")
+        self._thread.daemon = True
+        self._thread.start()
+        return self
+
+    def stop(self) -> None:
+        """Asks the loop to end; waits for the background thread if there is one."""
+        self._stop.set()
+        if self._thread is not None and self._thread is not threading.current_thread():
+            self._thread.join()
+
+    def __enter__(self) -> MavlinkParamServer:
+        return self.start()
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()
+
+    def step(self, timeout: float) -> None:
+        """One turn: read what arrived (waiting up to ``timeout``), stream, heartbeat."""
+        now = time.monotonic()
+        if now >= self._next_heartbeat:
+            self._heartbeat()
+            self._next_heartbeat = now + self.heartbeat_interval
+        timeout = min(timeout, max(0.0, self._next_heartbeat - now))
+        if self._stream is not None:
+            timeout = min(timeout, max(0.0, self._next_burst - now))
+        readable, _, _ = select.select([self._sock], [], [], timeout)
+        if readable:
+            self._read_all()
+        if self._stream is not None and time.monotonic() >= self._next_burst:
+            self._next_burst = time.monotonic() + _STREAM_PAUSE
+            try:
+                self._stream_some()
+            except Exception as e:  # a bug must not stop the server: drop this stream
+                self._stream = None
+                self.log(f"error streaming parameters: {type(e).__name__}: {e}")
+
+    # -- receiving ----------------------------------------------------------------------------
+
+    def _read_all(self) -> None:
+        for _ in range(256):  # bounded, so that streaming and heartbeats go on under a flood
+            try:
+                data, peer = self._sock.recvfrom(65535)
+            except (BlockingIOError, InterruptedError):
+                return
+            except OSError:  # e.g. ICMP port unreachable from a peer that went away
+                continue
+            for msg in self._parse(peer[:2], data):
+                self.stats["received"] += 1
+                try:
+                    handled = self._handle(peer[:2], msg)
+                except Exception as e:  # a bug must not stop the server; count and go on
+                    self.log(f"error handling {msg.get_type()}: {type(e).__name__}: {e}")
+                    handled = False
+                if not handled:
+                    self.stats["ignored"] += 1
+
+    def _parse(self, peer: Address, data: bytes) -> list[Any]:
+        self._seen.pop(peer, None)
+        if len(self._seen) >= _MAX_PEERS:
+            self._seen.pop(next(iter(self._seen)))
+        self._seen[peer] = None  # most recent last
+        # A fresh parser per datagram: over UDP a frame never spans datagrams, so garbage in one
+        # (a bogus length byte) cannot swallow the frames of the next.
+        parser = mavlink.MAVLink(_Sink())
+        parser.robust_parsing = True  # bad bytes become BAD_DATA, not exceptions
+        try:
+            messages = parser.parse_buffer(data) or []
+        except Exception:  # pymavlink raises assorted errors on garbage
+            self.stats["ignored"] += 1
+            return []
+        bad = [m for m in messages if m.get_type() == "BAD_DATA"]
+        self.stats["ignored"] += len(bad)
+        return [m for m in messages if m.get_type() != "BAD_DATA"]
+
+    def _for_us(self, msg: Any) -> bool:
+        return msg.target_system in (0, self.system_id) and msg.target_component in (
+            0,
+            self.component_id,
+        )
+
+    def _handle(self, peer: Address, msg: Any) -> bool:
+        kind = msg.get_type()
+        if kind == "HEARTBEAT":
+            return True
+        if kind == "PARAM_REQUEST_LIST" and self._for_us(msg):
+            # A request during a stream restarts it without the hash, as PX4 does.
+            self._stream = (peer, 0 if self._stream is not None else -1)
+            return True
+        if kind == "PARAM_REQUEST_READ" and self._for_us(msg):
+            self._read(peer, msg, _name_of(msg.param_id), msg.param_index)
+            return True
+        if kind == "PARAM_SET" and self._for_us(msg):
+            self._set(peer, _name_of(msg.param_id), msg)
+            return True
+        if kind == "COMMAND_LONG" and self._for_us(msg):
+            self._command(peer, msg)
+            return True
+        return False
+
+    # -- parameters ---------------------------------------------------------------------------
+
+    def entries(self) -> list[ParamEntry]:
+        """Every parameter served, in index order (by name, as PX4 sorts them)."""
+        if self._entries is None:
+            rows: list[ParamEntry] = []
+            for name in self.store.parameters:
+                classic = self.store.classic(name)
+                if classic is not None:
+                    kind = _REAL32 if classic.is_float else _INT32
+                    rows.append(ParamEntry(name, kind, _raw_of(self.store.get(name), kind)))
+            for row in self.flat.table():
+                kind = _REAL32 if row.mav_type == flat.FLOAT32 else _INT32
+                rows.append(ParamEntry(row.name, kind, _raw_of(row.value, kind)))
+            rows.sort(key=lambda e: e.name.encode())
+            self._entries = rows
+        return self._entries
+
+    def _find(self, name: str) -> tuple[int, ParamEntry] | None:
+        for index, entry in enumerate(self.entries()):
+            if entry.name == name:
+                return index, entry
+        return None
+
+    def _value_msg(self, index: int, entry: ParamEntry) -> _RawParamValue:
+        return _RawParamValue(entry.name, entry.raw, entry.mav_type, len(self.entries()), index)
+
+    def _hash_msg(self) -> _RawParamValue:
+        raw = struct.pack("<I", param_hash(self.entries()))
+        # index -1 as PX4 sends it: the uint16 field holds 65535
+        uint32 = mavlink.MAV_PARAM_TYPE_UINT32
+        return _RawParamValue(HASH_PARAM, raw, uint32, len(self.entries()), 0xFFFF)
+
+    def _stream_some(self) -> None:
+        assert self._stream is not None
+        peer, index = self._stream
+        entries = self.entries()
+        for _ in range(_STREAM_BURST):
+            if index == -1:
+                self._send(self._hash_msg(), [peer])
+            elif index < len(entries):
+                self._send(self._value_msg(index, entries[index]), [peer])
+            else:
+                self._stream = None
+                return
+            index += 1
+        self._stream = (peer, index)
+
+    def _read(self, peer: Address, msg: Any, name: str, index: int) -> None:
+        if index < 0:
+            if name == HASH_PARAM:
+                self._send(self._hash_msg(), [peer])
+                return
+            found = self._find(name)
+            if found is None:
+                self._error(peer, msg, name, -1, self._missing(name))
+                return
+            self._send(self._value_msg(*found), [peer])
+            return
+        entries = self.entries()
+        if index >= len(entries):
+            self._error(peer, msg, name, index, f"[pm] unknown param ID: {index}")
+            return
+        self._send(self._value_msg(index, entries[index]), [peer])
+
+    def _missing(self, name: str) -> str:
+        if name in self.flat:
+            try:
+                self.flat.find(name)
+            except Px4ParamsError as e:  # not live, or its instance does not exist
+                return str(e)
+        return f"[pm] unknown param: {name}"
+
+    def _set(self, peer: Address, name: str, msg: Any) -> None:
+        if name == HASH_PARAM:
+            self._stream = None  # the ground station has our parameters cached: stop sending
+            return
+        found = self._find(name)
+        if found is None:
+            self._refuse(
+                peer, msg, name, None, self._missing(name), mavlink.MAV_PARAM_ERROR_DOES_NOT_EXIST
+            )
+            return
+        entry = found[1]
+        if msg.param_type != entry.mav_type:
+            given = _TYPE_NAMES.get(msg.param_type, str(msg.param_type))
+            self._refuse(
+                peer,
+                msg,
+                name,
+                found,
+                f"{name}: type {given} refused: the parameter is {_TYPE_NAMES[entry.mav_type]}",
+                mavlink.MAV_PARAM_ERROR_VALUE_OUT_OF_RANGE,
+            )
+            return
+        value = param_value_of(msg)
+        live_before = {e.name for e in self.entries()}
+        try:
+            with self.store.transaction():
+                if name in self.flat:
+                    flat.set_flat(self.store, name, value)
+                else:
+                    self.store.set(name, value)
+                if self.save_path is not None:
+                    self.store.save(self.save_path)
+        except (Px4ParamsError, OSError) as e:
+            # flat errors name the parameter already; store errors name the leaf
+            why = str(e) if str(e).startswith(name) else f"{name}: {e}"
+            self._refuse(peer, msg, name, found, why, mavlink.MAV_PARAM_ERROR_VALUE_OUT_OF_RANGE)
+            return
+        self._entries = None
+        self.stats["accepted"] += 1
+        new = self._find(name)
+        assert new is not None
+        shown = _shown(new[1].value)
+        self.log(f"{name} = {shown}" + (", saved" if self.save_path is not None else ""))
+        everyone = self._peers(peer)
+        self._send(self._value_msg(*new), everyone)
+        # A union tag or array length written: announce the leaves that became live.
+        for i, e in enumerate(self.entries()):
+            if e.name not in live_before:
+                self._send(self._value_msg(i, e), everyone)
+
+    def _refuse(
+        self,
+        peer: Address,
+        msg: Any,
+        name: str,
+        found: tuple[int, ParamEntry] | None,
+        why: str,
+        code: int,
+    ) -> None:
+        self.stats["refused"] += 1
+        self.log(f"refused: {why}")
+        if found is not None:  # the unchanged value, so that the ground station shows it
+            self._send(self._value_msg(*found), [peer])
+        self._error(peer, msg, name, found[0] if found else -1, why, code)
+
+    def _error(
+        self,
+        peer: Address,
+        msg: Any,
+        name: str,
+        index: int,
+        why: str,
+        code: int = mavlink.MAV_PARAM_ERROR_DOES_NOT_EXIST,
+    ) -> None:
+        self._statustext(why, [peer])
+        error = mavlink.MAVLink_param_error_message(
+            msg.get_srcSystem(),
+            msg.get_srcComponent(),
+            name.encode()[:16],
+            max(-1, min(index, 0x7FFF)),
+            code,
+        )
+        self._send(error, [peer])
+
+    # -- other messages -----------------------------------------------------------------------
+
+    def _command(self, peer: Address, msg: Any) -> None:
+        wants_version = msg.command == mavlink.MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES or (
+            msg.command == mavlink.MAV_CMD_REQUEST_MESSAGE
+            and int(msg.param1) == mavlink.MAVLINK_MSG_ID_AUTOPILOT_VERSION
+        )
+        result = mavlink.MAV_RESULT_ACCEPTED if wants_version else mavlink.MAV_RESULT_UNSUPPORTED
+        ack = mavlink.MAVLink_command_ack_message(msg.command, result)
+        self._send(ack, [peer])
+        if wants_version:
+            self._send(self.autopilot_version(), [peer])
+
+    def autopilot_version(self) -> mavlink.MAVLink_autopilot_version_message:
+        zeros = [0] * 8
+        return mavlink.MAVLink_autopilot_version_message(
+            CAPABILITIES, 0, 0, 0, 0, zeros, zeros, zeros, 0, 0, 0, [0] * 18
+        )
+
+    def _heartbeat(self) -> None:
+        targets = self._peers(None)
+        if not targets:
+            return
+        msg = mavlink.MAVLink_heartbeat_message(
+            mavlink.MAV_TYPE_GENERIC,
+            mavlink.MAV_AUTOPILOT_PX4,
+            mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
+            0,
+            mavlink.MAV_STATE_STANDBY,
+            3,
+        )
+        self._send(msg, targets)
+
+    def _statustext(self, text: str, peers: list[Address]) -> None:
+        """STATUSTEXT, split into 50-character chunks with an id when longer (MAVLink 2)."""
+        data = text.encode("ascii", "replace")
+        if len(data) <= _TEXT_CHUNK:
+            chunks, text_id = [data], 0
+        else:
+            self._text_id = self._text_id % 0xFFFF + 1
+            text_id = self._text_id
+            chunks = [data[i : i + _TEXT_CHUNK] for i in range(0, len(data), _TEXT_CHUNK)]
+            if len(chunks[-1]) == _TEXT_CHUNK:
+                chunks.append(b"")  # the end is marked by a NUL
+        for seq, chunk in enumerate(chunks):
+            msg = mavlink.MAVLink_statustext_message(
+                mavlink.MAV_SEVERITY_WARNING, chunk, text_id, seq
+            )
+            self._send(msg, peers)
+
+    def _peers(self, first: Address | None) -> list[Address]:
+        peers = list(self._seen)
+        peers += [g for g in self._gcs if g not in peers]
+        if first is not None and first not in peers:
+            peers.insert(0, first)
+        return peers
+
+    def _send(self, msg: Any, peers: list[Address]) -> None:
+        buf = msg.pack(self._mav)
+        self._mav.seq = (self._mav.seq + 1) % 256
+        for peer in peers:
+            for _ in range(50):
+                try:
+                    self._sock.sendto(buf, peer)
+                    self.stats["sent"] += 1
+                    break
+                except BlockingIOError:  # send buffer full (list streaming): wait, don't drop
+                    select.select([], [self._sock], [], 0.01)
+                except OSError:  # a peer that cannot be reached must not stop the others
+                    break
+
+
+def _shown(value: int | float) -> str:
+    if isinstance(value, float) and math.isfinite(value):
+        return f"{value:.9g}"
+    return str(value)

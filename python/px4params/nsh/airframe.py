@@ -1,0 +1,196 @@
+"""``px4params run FILE``: airframe and startup files of ``param`` lines, as PX4 runs them.
+
+What a file may hold, line by line:
+
+- ``param VERB ...``: any verb of ``px4params param`` (the talk's five lines work verbatim);
+- ``set VAR value`` and ``$VAR`` / ``${VAR}`` in later lines;
+- ``if param compare|greater ...`` / ``then`` / ``else`` / ``fi`` blocks (nestable);
+- ``echo ...``; comments (``#`` at the start of a line) and blank lines.
+
+A failing line is reported as ``FILE:LINE: message`` and stops the run; nothing of the file is
+kept (all or nothing: the store file is written once, when every line succeeded). With
+``keep_going`` every failing line is reported, the lines that succeeded are kept and saved, and
+the run still fails.
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+import shlex
+from dataclasses import dataclass, field
+from typing import TextIO
+
+from px4params.errors import CommandError, Px4ParamsError
+from px4params.nsh import param
+from px4params.store.session import Session
+
+_VAR = re.compile(r"\$(?:\{([A-Za-z_][A-Za-z0-9_]*)\}|([A-Za-z_][A-Za-z0-9_]*))")
+
+
+class _ArgumentError(Exception):
+    pass
+
+
+class _Parser(argparse.ArgumentParser):
+    """Reports usage errors as exceptions instead of exiting: a bad line is one error."""
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        raise _ArgumentError(message)
+
+
+def _param_parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="param", add_help=False)
+    verbs = parser.add_subparsers(
+        dest="verb_name", required=True, metavar="VERB", parser_class=_Parser
+    )
+    param.add_verbs(verbs)
+    return parser
+
+
+@dataclass
+class _Block:
+    """An ``if`` block: whether its condition held and which branch is running."""
+
+    condition: bool
+    line: int
+    in_else: bool = False
+    seen_then: bool = False
+
+    def active(self) -> bool:
+        return self.seen_then and (self.condition != self.in_else)
+
+
+@dataclass
+class Run:
+    """The outcome of running a file."""
+
+    errors: list[str] = field(default_factory=list)
+    lines_run: int = 0
+
+
+def run_file(path: str, session: Session, *, keep_going: bool, err: TextIO) -> Run:
+    """Runs ``path`` against ``session``'s store; saves it once when the file succeeded (or,
+    with ``keep_going``, when anything succeeded)."""
+    try:
+        with open(path, encoding="utf-8") as f:
+            lines = f.read().splitlines()
+    except OSError as e:
+        raise CommandError(f"{path}: cannot read: {e.strerror}") from None
+    except UnicodeDecodeError as e:
+        raise CommandError(f"{path}: not a text file ({e.reason})") from None
+    session.autosave = False
+    parser = _param_parser()
+    variables: dict[str, str] = {}
+    blocks: list[_Block] = []
+    result = Run()
+    for number, raw in enumerate(lines, start=1):
+        where = f"{path}:{number}"
+        try:
+            _line(raw, parser, session, variables, blocks, where, number, result)
+        except (CommandError, Px4ParamsError, _ArgumentError, ValueError) as e:
+            result.errors.append(f"{where}: {e}")
+            print(f"px4params: {where}: {e}", file=err)
+            if not keep_going:
+                return result
+    if blocks:
+        message = f"{path}:{blocks[-1].line}: 'if' without 'fi'"
+        result.errors.append(message)
+        print(f"px4params: {message}", file=err)
+        if not keep_going:
+            return result
+    if (session.changed or session.deferred) and (not result.errors or keep_going):
+        session.save()
+    return result
+
+
+def _line(
+    raw: str,
+    parser: argparse.ArgumentParser,
+    session: Session,
+    variables: dict[str, str],
+    blocks: list[_Block],
+    where: str,
+    number: int,
+    result: Run,
+) -> None:
+    text = raw.strip()
+    if not text or text.startswith("#"):
+        return
+    words = shlex.split(_expand(text, variables))
+    if not words:
+        return
+    head = words[0]
+    running = all(b.active() for b in blocks)
+    if head in ("then", "else", "fi"):
+        _block_word(head, words, blocks)
+        return
+    if head == "if":
+        # A condition inside a branch that does not run is not evaluated, but still nests.
+        condition = running and _condition(words[1:], parser, session)
+        blocks.append(_Block(condition, number))
+        return
+    if blocks and not blocks[-1].seen_then:
+        raise CommandError("expected 'then' after 'if'")
+    if not running:
+        return
+    result.lines_run += 1
+    if head == "set":
+        if len(words) != 3 or not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", words[1]):
+            raise CommandError("set takes a variable name and one value: set VAR value")
+        variables[words[1]] = words[2]
+    elif head == "echo":
+        print(" ".join(words[1:]), file=session.out)
+    elif head == "param":
+        args = _parse(parser, words[1:])
+        status = args.verb(session, args)
+        if status != param.EXIT_OK and args.verb_name not in ("compare", "greater"):
+            raise CommandError(f"param {args.verb_name} failed")
+    else:
+        raise CommandError(
+            f"unknown command '{head}' (airframe files run param, set, echo and if/then/else/fi)"
+        )
+
+
+def _block_word(word: str, words: list[str], blocks: list[_Block]) -> None:
+    if len(words) != 1:
+        raise CommandError(f"'{word}' stands alone on its line")
+    if not blocks:
+        raise CommandError(f"'{word}' without 'if'")
+    block = blocks[-1]
+    if word == "then":
+        if block.seen_then:
+            raise CommandError("a second 'then' in one 'if'")
+        block.seen_then = True
+    elif word == "else":
+        if not block.seen_then or block.in_else:
+            raise CommandError("'else' must follow 'then' once")
+        block.in_else = True
+    else:
+        if not block.seen_then:
+            raise CommandError("'fi' before 'then'")
+        blocks.pop()
+
+
+def _condition(words: list[str], parser: argparse.ArgumentParser, session: Session) -> bool:
+    if len(words) < 2 or words[0] != "param" or words[1] not in ("compare", "greater"):
+        raise CommandError("'if' takes a 'param compare' or 'param greater' command")
+    args = _parse(parser, words[1:])
+    return bool(args.verb(session, args) == param.EXIT_OK)
+
+
+def _parse(parser: argparse.ArgumentParser, words: list[str]) -> argparse.Namespace:
+    try:
+        return parser.parse_args(words)
+    except _ArgumentError as e:
+        raise CommandError(f"param: {e}") from None
+
+
+def _expand(text: str, variables: dict[str, str]) -> str:
+    def value(match: re.Match[str]) -> str:
+        name = match.group(1) or match.group(2)
+        if name not in variables:
+            raise CommandError(f"${name} is not set (set {name} value)")
+        return variables[name]
+
+    return _VAR.sub(value, text)

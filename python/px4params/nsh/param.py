@@ -1,0 +1,690 @@
+"""NSH's ``param`` verbs over structured instances and classic parameters, on a session's store
+(shared by ``px4params param`` and airframe files).
+
+Every verb that changes something saves the store when it succeeds (as PX4 autosaves); a
+refused change saves nothing and leaves the file as it was.
+"""
+
+from __future__ import annotations
+
+import argparse
+import fnmatch
+import json
+import math
+import os
+import re
+import struct
+from collections.abc import Callable
+from typing import Any
+
+from px4params.dsdl.schema import Leaf, to_json_value
+from px4params.errors import CommandError, InstanceError, Px4ParamsError
+from px4params.status import EXIT_FAILED, EXIT_OK
+from px4params.store.session import Session
+from px4params.store.store import Key, Store
+
+_INT = re.compile(r"[+-]?(0[xX][0-9a-fA-F]+|[0-9]+)")
+_FLOAT = re.compile(r"[+-]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][+-]?[0-9]+)?")
+
+
+# -- values given as text -------------------------------------------------------------------
+
+
+def parse_number(text: str, kind: str, where: str) -> int | float | bool:
+    """``text`` as a value of a leaf of type ``kind`` (``uint7``, ``float16``, ``bool``, classic
+    ``Int32``/``Float``): decimal or 0x hex integers, floats only for float leaves. Anything
+    else is refused (PX4's ``param set`` silently reads ``0x45`` as 0; we do not)."""
+    t = text.strip()
+    if kind == "bool":
+        lowered = t.lower()
+        if lowered in ("1", "true"):
+            return True
+        if lowered in ("0", "false"):
+            return False
+        raise CommandError(f"{where}: '{text}' is not a boolean (expected 0, 1, true or false)")
+    if kind.startswith("float") or kind == "Float":
+        if _INT.fullmatch(t):
+            return float(int(t, 0)) if not t.lstrip("+-").startswith("0x") else float(int(t, 16))
+        if _FLOAT.fullmatch(t) or t.lower() in ("nan", "inf", "+inf", "-inf"):
+            return float(t)
+        raise CommandError(f"{where}: '{text}' is not a number (expected e.g. 0.0003, 2e-4 or 5)")
+    if _INT.fullmatch(t):
+        sign = -1 if t.startswith("-") else 1
+        digits = t.lstrip("+-")
+        return sign * int(digits, 16 if digits[:2].lower() == "0x" else 10)
+    raise CommandError(
+        f"{where}: '{text}' is not an integer (expected decimal or 0x hex, e.g. 69 or 0x45)"
+    )
+
+
+def parse_value(store: Store, key: Key, text: str) -> Any:
+    """The value ``text`` given for ``key``: a number for a leaf or a classic parameter, JSON
+    for a whole structured value."""
+    classic = store.classic(key.param)
+    if classic is not None:
+        return parse_number(text, classic.type, str(key))
+    if key.leaf is None:
+        try:
+            return json.loads(text)
+        except (json.JSONDecodeError, RecursionError, ValueError) as e:
+            msg = getattr(e, "msg", str(e))
+            raise CommandError(
+                f"{key}: a whole value is JSON ({msg} in {text!r}); "
+                f'e.g. \'{{"bus": {{"i2c": {{"bus_id": 1, "address": 69}}}}, ...}}\''
+            ) from None
+    leaf = store.leaf(key)
+    kind = (
+        "uint"
+        if leaf.path.endswith(("._tag", "._len")) or leaf.path in ("_tag", "_len")
+        else leaf.type
+    )
+    return parse_number(text, kind, str(key))
+
+
+# -- showing values -------------------------------------------------------------------------
+
+
+def short_float(value: float, kind: str) -> str:
+    """The shortest decimal that stores as the same float16/float32 (``0.0003``, not
+    ``0.0002999305725097656``)."""
+    if not math.isfinite(value):
+        return "nan" if math.isnan(value) else ("inf" if value > 0 else "-inf")
+    code = {"float16": "<e", "float32": "<f", "Float": "<f"}.get(kind)
+    if code is None:
+        return repr(value)
+    target = struct.pack(code, value)
+    for digits in range(1, 18):
+        text = f"{value:.{digits}g}"
+        if struct.pack(code, float(text)) == target:
+            if "e" in text and 1e-4 <= abs(value) < 1e16:  # 5000, not 5e+03
+                text = f"{float(text):f}".rstrip("0").rstrip(".")
+            return text
+    return repr(value)
+
+
+def shown_value(store: Store, name: str | Key, *, default: bool = False) -> str:
+    """A value on one line: a classic number, or a structured value without its p_version
+    fields, floats as short as they are stored."""
+    name = Key.parse(name)
+    classic = store.classic(name.param)
+    value = store.get(name, default=default)
+    if classic is not None:
+        return short_float(value, "Float") if classic.is_float else str(value)
+    kinds = {leaf.path: leaf.type for leaf in store.leaves(name, default=default)}
+    return _compact(value, "", kinds)
+
+
+def _compact(value: Any, prefix: str, kinds: dict[str, str]) -> str:
+    if isinstance(value, dict):
+        items = [
+            f"{k}: {_compact(v, f'{prefix}{k}.', kinds)}"
+            for k, v in value.items()
+            if k != "p_version"
+        ]
+        return "{" + ", ".join(items) + "}"
+    if isinstance(value, list):
+        return "[" + ", ".join(_compact(v, prefix, kinds) for v in value) + "]"
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, float):
+        return short_float(value, kinds.get(prefix[:-1], "float64"))
+    return str(value)
+
+
+def shown_leaf(leaf: Leaf) -> str:
+    if isinstance(leaf.value, float):
+        return short_float(leaf.value, leaf.type)
+    if isinstance(leaf.value, bool):
+        return "true" if leaf.value else "false"
+    return str(leaf.value)
+
+
+def field_tags(store: Store, name: str, path: str) -> dict[str, Any]:
+    """The doc-comment tags (unit, min, max, ...) of the field a leaf path ends at."""
+    data_type = store.data_type(name)
+    types = store.schema.model["types"]
+    spec: dict[str, Any] = {"kind": "ref", "name": data_type.key}
+    tags: dict[str, Any] = {}
+    for step in path.split("."):
+        if spec.get("kind") != "ref" or step in ("_tag", "_len"):
+            return {}
+        fields = {f["name"]: f for f in types[spec["name"]]["fields"]}
+        if step not in fields:
+            return {}
+        tags = (fields[step].get("doc") or {}).get("tags") or {}
+        spec = fields[step]["type"]
+    return tags if isinstance(tags, dict) else {}
+
+
+def _matches(name: str, patterns: list[str]) -> bool:
+    if not patterns:
+        return True
+    return any(fnmatch.fnmatchcase(name.upper(), p.upper()) for p in patterns)
+
+
+# -- verbs ----------------------------------------------------------------------------------
+
+Verb = Callable[[Session, argparse.Namespace], int]
+
+
+def verb_add(s: Session, a: argparse.Namespace) -> int:
+    with s.store.transaction():
+        added = [s.store.add(name) for name in a.names]
+    s.done()
+    for name in added:
+        print(name, file=s.out)
+    return EXIT_OK
+
+
+def verb_rm(s: Session, a: argparse.Namespace) -> int:
+    with s.store.transaction():
+        for name in a.names:
+            s.store.remove(name)
+    s.done()
+    return EXIT_OK
+
+
+def resolve_name(store: Store, name: str) -> Key:
+    """``name`` parsed once into the key every later step takes; a destructured flat name
+    (``INA238_1C``) becomes the leaf it stands for (``INA238#1[4]``), so that both spellings
+    set the same leaf."""
+    try:
+        key = Key.parse(name)
+        if key.param in store.parameters:
+            return key
+    except InstanceError:
+        pass
+    from px4params.store.flat import resolve_flat
+
+    try:
+        return Key.parse(resolve_flat(store, name))
+    except Px4ParamsError:
+        return Key.parse(name)  # not a flat name either: the store's own error names the problem
+
+
+def _write(s: Session, name: str, text: str, *, default: bool) -> None:
+    key = resolve_name(s.store, name)
+    value = parse_value(s.store, key, text)
+    if default:
+        s.store.set_default(key, value)
+    else:
+        s.store.set(key, value)
+
+
+def verb_set(s: Session, a: argparse.Namespace) -> int:
+    if a.fail not in (None, "fail"):
+        raise CommandError(f"unexpected '{a.fail}' after the value (only 'fail' may follow)")
+    _write(s, a.name, a.value, default=False)
+    s.done()
+    return EXIT_OK
+
+
+def verb_set_default(s: Session, a: argparse.Namespace) -> int:
+    try:
+        _write(s, a.name, a.value, default=True)
+    except InstanceError as e:
+        if a.silent and "unknown parameter" in str(e):
+            return EXIT_FAILED
+        raise
+    s.done()
+    return EXIT_OK
+
+
+def _compare(s: Session, a: argparse.Namespace, greater: bool) -> int:
+    key = resolve_name(s.store, a.name)
+    try:
+        current = s.store.get(key)
+    except InstanceError:
+        if a.silent:
+            return EXIT_FAILED
+        raise
+    for text in a.values:
+        wanted = parse_value(s.store, key, text)
+        if isinstance(current, float) and isinstance(wanted, int | float):
+            kind = _float_kind(s.store, key)
+            wanted = float(short_float(float(wanted), kind)) if kind else float(wanted)
+            current_cmp: Any = float(short_float(current, kind)) if kind else current
+        else:
+            current_cmp = current
+        if isinstance(current_cmp, dict):
+            if greater:
+                raise CommandError(f"{key}: greater compares numbers, not whole values")
+            matched = _same_value(s.store, key, wanted)
+        else:
+            matched = current_cmp > wanted if greater else current_cmp == wanted
+        if matched:
+            return EXIT_OK
+    return EXIT_FAILED
+
+
+def _float_kind(store: Store, key: Key) -> str | None:
+    classic = store.classic(key.param)
+    if classic is not None:
+        return "Float" if classic.is_float else None
+    leaf = store.leaf(key)
+    return leaf.type if leaf.type.startswith("float") else None
+
+
+def _same_value(store: Store, key: Key, wanted: Any) -> bool:
+    data_type = store.data_type(key)
+    try:
+        return data_type.encode(wanted, tao=False) == store.encoded(key)
+    except Px4ParamsError:
+        return False
+
+
+def verb_compare(s: Session, a: argparse.Namespace) -> int:
+    return _compare(s, a, greater=False)
+
+
+def verb_greater(s: Session, a: argparse.Namespace) -> int:
+    return _compare(s, a, greater=True)
+
+
+def verb_show(s: Session, a: argparse.Namespace) -> int:
+    store = s.store
+    if a.leaves:
+        return _show_leaves(s, a)
+    if a.quiet:
+        if len(a.filters) != 1 or "*" in a.filters[0]:
+            raise CommandError("show -q takes one exact name")
+        key = resolve_name(store, a.filters[0])
+        shown = shown_value(store, key) if key.leaf is None else shown_leaf(store.leaf(key))
+        print(shown, file=s.out)
+        return EXIT_OK
+    for f in a.filters:
+        if "[" in f or "." in f:
+            raise CommandError(
+                f"show lists instances and parameters; for the leaf {f} use show -q {f}, "
+                "for all leaves show -l INSTANCE"
+            )
+    rows = []
+    used_index = 0
+    position = {p: i for i, p in enumerate(store.parameters)}
+    for name in store.names():
+        index = position[Key.parse(name).param]
+        used, unsaved = store.state(name)
+        changed = store.changed(name)
+        structured = store.classic(Key.parse(name).param) is None
+        # PX4 shows used parameters; a manifest's instances are always of interest.
+        if not (a.all or structured or used or changed):
+            continue
+        if a.changed and not changed:
+            continue
+        if not _matches(name, a.filters):
+            continue
+        rows.append((name, index, used_index if used else -1, used, unsaved, changed))
+        used_index += int(used)
+    if a.json:
+        listed = [
+            {
+                "name": name,
+                "index": index,
+                "value": to_json_value(store.get(name)),
+                "default": to_json_value(store.get(name, default=True)),
+                "changed": changed,
+                "saved": not unsaved,
+                "used": used,
+            }
+            for name, index, _, used, unsaved, changed in rows
+        ]
+        print(json.dumps(listed), file=s.out)
+        return EXIT_OK
+    print("Symbols: x = used, + = saved, * = unsaved", file=s.out)
+    for name, index, uindex, used, unsaved, changed in rows:
+        mark = ("*" if unsaved else "+") if changed else " "
+        print(
+            f"{'x' if used else ' '} {mark} {name} [{uindex},{index}] : {shown_value(store, name)}",
+            file=s.out,
+        )
+    total = len(list(store.names()))
+    print(f"\n {len(rows)}/{total} parameters shown.", file=s.out)
+    return EXIT_OK
+
+
+def _show_leaves(s: Session, a: argparse.Namespace) -> int:
+    store = s.store
+    if len(a.filters) != 1:
+        raise CommandError("show -l takes one instance, e.g. show -l INA238#0")
+    name = a.filters[0]
+    leaves = store.leaves(name)
+    defaults = {leaf.path: leaf for leaf in store.leaves(name, default=True)}
+    rows = []
+    for leaf in leaves:
+        tags = field_tags(store, name, leaf.path)
+        default = defaults.get(leaf.path)
+        rows.append(
+            {
+                "index": leaf.index,
+                "path": leaf.path,
+                "type": leaf.type,
+                "value": leaf.value,
+                "default": default.value if default is not None else None,
+                "unit": tags.get("unit", ""),
+                "shown": shown_leaf(leaf),
+                "default_shown": shown_leaf(default) if default is not None else "-",
+            }
+        )
+    if a.json:
+        for row in rows:
+            del row["shown"], row["default_shown"]
+        print(json.dumps(to_json_value(rows)), file=s.out)
+        return EXIT_OK
+    width = max(len(r["path"]) for r in rows)
+    for r in rows:
+        print(
+            f"[{r['index']}] {r['path']:<{width}} {r['type']:<8} {r['shown']:>10} "
+            f"{r['default_shown']:>10} {r['unit']}".rstrip(),
+            file=s.out,
+        )
+    return EXIT_OK
+
+
+def _expand(store: Store, patterns: list[str]) -> list[str | Key]:
+    """Names matching ``patterns``: a trailing ``*`` matches, a parameter name stands for all
+    its instances, and destructured flat names for their leaves."""
+    names = list(store.names())
+    found: list[str | Key] = []
+    for p in patterns:
+        upper = p.upper()
+        if "*" in p:
+            found += [n for n in names if fnmatch.fnmatchcase(n, upper)]
+        elif upper in store.parameters and store.spec(upper) is not None and "#" not in upper:
+            spec = store.spec(upper)
+            found += store.instances(upper) if spec is not None and not spec.shared else [upper]
+        else:
+            found.append(resolve_name(store, p))
+    return found
+
+
+def verb_reset(s: Session, a: argparse.Namespace) -> int:
+    with s.store.transaction():
+        for name in _expand(s.store, a.names):
+            s.store.reset(name)
+    s.done()
+    return EXIT_OK
+
+
+def verb_reset_all(s: Session, a: argparse.Namespace) -> int:
+    keep = set()
+    for name in _expand(s.store, a.excludes):
+        key = Key.parse(name)
+        keep.add(key.param if key.instance is None else f"{key.param}#{key.instance}")
+    with s.store.transaction():
+        for name in list(s.store.names()):
+            if name not in keep:
+                s.store.reset(name)
+    s.done()
+    return EXIT_OK
+
+
+def verb_touch(s: Session, a: argparse.Namespace) -> int:
+    for name in _expand(s.store, a.names):
+        s.store.mark_used(name)
+    return EXIT_OK
+
+
+def verb_save(s: Session, a: argparse.Namespace) -> int:
+    if not a.file or os.path.abspath(a.file) == os.path.abspath(s.path):
+        s.done()  # the store's own file: now, or when the airframe file has succeeded
+        if s.autosave:
+            print(f"saved {s.path}", file=s.out)
+        return EXIT_OK
+    file = a.file
+
+    def write() -> None:
+        size = s.store.save(file)
+        print(f"saved {file} ({size} bytes)", file=s.out)
+
+    s.write_later(write)
+    return EXIT_OK
+
+
+def _load(s: Session, a: argparse.Namespace, merge: bool) -> int:
+    from px4params.store import paramfile
+
+    source = a.file or s.path
+    if paramfile.kind_of(source):
+        report = paramfile.read(s.store, source, reset=not merge)
+    else:
+        report = s.store.import_from(source) if merge else s.store.load_from(source)
+    for line in report:
+        print(line, file=s.out)
+    if a.file:  # loading the store's own file changes nothing to save
+        s.done()
+    return EXIT_OK
+
+
+def verb_load(s: Session, a: argparse.Namespace) -> int:
+    return _load(s, a, merge=False)
+
+
+def verb_import(s: Session, a: argparse.Namespace) -> int:
+    return _load(s, a, merge=True)
+
+
+def verb_export(s: Session, a: argparse.Namespace) -> int:
+    from px4params.store import paramfile
+
+    if paramfile.kind_of(a.file) is None:
+        raise CommandError(f"{a.file}: export writes .params (QGC) or .json files")
+    file = a.file
+
+    def write() -> None:
+        size = paramfile.write(s.store, file)
+        print(f"wrote {file} ({size} bytes)", file=s.out)
+
+    s.write_later(write)
+    return EXIT_OK
+
+
+def verb_status(s: Session, a: argparse.Namespace) -> int:
+    store = s.store
+    names = list(store.names())
+    instances = [n for n in names if "#" in n]
+    slots, size = store.capacity
+    exists = os.path.exists(s.path)
+    status = {
+        "store": s.path,
+        "file_bytes": os.path.getsize(s.path) if exists else None,
+        "structured_parameters": len(store.specs),
+        "classic_parameters": len(store.parameters) - len(store.specs),
+        "instances": len(instances),
+        "changed": len(store.changed()),
+        "reserved_slots": slots,
+        "reserved_bytes": size,
+    }
+    if a.json:
+        print(json.dumps(status), file=s.out)
+        return EXIT_OK
+    file_text = f"{status['file_bytes']} bytes" if exists else "not saved yet"
+    print(f"store: {s.path} ({file_text})", file=s.out)
+    print(
+        f"parameters: {status['structured_parameters']} structured, "
+        f"{status['classic_parameters']} classic",
+        file=s.out,
+    )
+    print(f"instances: {len(instances)} ({', '.join(instances) or 'none'})", file=s.out)
+    print(f"changed from defaults: {status['changed']}", file=s.out)
+    print(f"memory reserved: {size} bytes in {slots} slots", file=s.out)
+    return EXIT_OK
+
+
+def verb_find(s: Session, a: argparse.Namespace) -> int:
+    key = Key.parse(a.name)
+    index = s.store.parameters.index(s.store._param(key.param).name)
+    print(f"Found param {key.param} at index {index}", file=s.out)
+    return EXIT_OK
+
+
+def verb_flat(s: Session, a: argparse.Namespace) -> int:
+    from px4params.store.flat import flat_table
+
+    table = [p for p in flat_table(s.store) if _matches(p.name, a.filters)]
+    if a.json:
+        print(json.dumps([p.as_dict() for p in table]), file=s.out)
+        return EXIT_OK
+    for p in table:
+        shown = short_float(p.value, "float32") if isinstance(p.value, float) else str(p.value)
+        print(
+            f"{p.name:<16} {p.leaf:<14} {p.instance}.{p.path:<24} {p.mav_type:<6} {shown}",
+            file=s.out,
+        )
+    return EXIT_OK
+
+
+def verb_instances(s: Session, a: argparse.Namespace) -> int:
+    names = s.store.instances(a.param)
+    if a.json:
+        print(json.dumps(names), file=s.out)
+    else:
+        for name in names:
+            print(name, file=s.out)
+    return EXIT_OK
+
+
+# -- the parser -----------------------------------------------------------------------------
+
+VERBS: dict[str, tuple[Verb, str, str]] = {}
+
+
+def _verb(sub: Any, name: str, func: Verb, summary: str, example: str) -> argparse.ArgumentParser:
+    p = sub.add_parser(
+        name,
+        help=summary,
+        description=summary,
+        epilog=f"example:\n  {example}",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.set_defaults(verb=func)
+    VERBS[name] = (func, summary, example)
+    return p
+
+
+def add_verbs(sub: Any) -> None:
+    """The ``param`` verbs (shared by ``px4params param`` and airframe files)."""
+    p = _verb(
+        sub,
+        "add",
+        verb_add,
+        "add instances (NAME#N, or NAME for the next free one)",
+        "px4params param add INA238#0",
+    )
+    p.add_argument("names", nargs="+", metavar="NAME")
+    p = _verb(
+        sub,
+        "rm",
+        verb_rm,
+        "remove instances (the others keep their numbers)",
+        "px4params param rm INA238#1",
+    )
+    p.add_argument("names", nargs="+", metavar="NAME")
+    p = _verb(
+        sub,
+        "set",
+        verb_set,
+        "set a value, a leaf ([k] or path) or a classic parameter",
+        "px4params param set INA238#0[4] 0x45",
+    )
+    p.add_argument("name")
+    p.add_argument("value")
+    p.add_argument("fail", nargs="?", help="accepted for NSH compatibility: errors always fail")
+    p = _verb(
+        sub,
+        "set-default",
+        verb_set_default,
+        "set a default (the value follows unless it was changed)",
+        "px4params param set-default INA238#0[6] 0.0003",
+    )
+    p.add_argument(
+        "-s", dest="silent", action="store_true", help="an unknown parameter fails silently"
+    )
+    p.add_argument("name")
+    p.add_argument("value")
+    for name, func, summary in (
+        ("compare", verb_compare, "exit 0 if NAME equals one of the values, else 1"),
+        ("greater", verb_greater, "exit 0 if NAME is greater than one of the values, else 1"),
+    ):
+        p = _verb(sub, name, func, summary, f"px4params param {name} INA238#0.current 200")
+        p.add_argument(
+            "-s", dest="silent", action="store_true", help="an unknown parameter fails silently"
+        )
+        p.add_argument("name")
+        p.add_argument("values", nargs="+", metavar="VALUE")
+    p = _verb(
+        sub,
+        "show",
+        verb_show,
+        "show instances and changed or used classic parameters (-a: all)",
+        "px4params param show -l INA238#0",
+    )
+    p.add_argument("-a", dest="all", action="store_true", help="every parameter")
+    p.add_argument("-c", dest="changed", action="store_true", help="only changed ones")
+    p.add_argument("-q", dest="quiet", action="store_true", help="only the value of one name")
+    p.add_argument(
+        "-l",
+        dest="leaves",
+        action="store_true",
+        help="the leaves of one instance: [k] path type value default unit",
+    )
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.add_argument("filters", nargs="*", metavar="FILTER", help="names, a trailing * matches")
+    p = _verb(
+        sub,
+        "reset",
+        verb_reset,
+        "set values back to their defaults",
+        "px4params param reset INA238#*",
+    )
+    p.add_argument("names", nargs="+", metavar="NAME")
+    p = _verb(
+        sub,
+        "reset_all",
+        verb_reset_all,
+        "reset every value except the excluded",
+        "px4params param reset_all SYS_AUTOSTART",
+    )
+    p.add_argument("excludes", nargs="*", metavar="EXCLUDE")
+    p = _verb(
+        sub, "touch", verb_touch, "mark as used (within one run)", "px4params param touch INA238#0"
+    )
+    p.add_argument("names", nargs="+", metavar="NAME")
+    for name, func, summary in (
+        ("save", verb_save, "save the store (to FILE)"),
+        ("load", verb_load, "reset, then load FILE (a store, QGC .params or .json file)"),
+        ("import", verb_import, "merge FILE (a store, QGC .params or .json file)"),
+    ):
+        p = _verb(sub, name, func, summary, f"px4params param {name} backup.store")
+        p.add_argument("file", nargs="?", metavar="FILE")
+    p = _verb(
+        sub,
+        "export",
+        verb_export,
+        "write a QGC .params file (instances destructured) or a .json export",
+        "px4params param export vehicle.params",
+    )
+    p.add_argument("file", metavar="FILE")
+    p = _verb(
+        sub, "status", verb_status, "show the store file and its use", "px4params param status"
+    )
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p = _verb(sub, "find", verb_find, "show a parameter's index", "px4params param find INA238")
+    p.add_argument("name")
+    p = _verb(
+        sub,
+        "flat",
+        verb_flat,
+        "the destructured flat parameters (MAVLink names) of every instance",
+        "px4params param flat INA238_0*",
+    )
+    p.add_argument("filters", nargs="*", metavar="FILTER", help="names, a trailing * matches")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p = _verb(
+        sub,
+        "instances",
+        verb_instances,
+        "list a parameter's instances in order",
+        "px4params param instances INA238",
+    )
+    p.add_argument("param")
+    p.add_argument("--json", action="store_true", help="machine-readable output")

@@ -1,0 +1,117 @@
+"""Classic PX4 parameters: flat ``int32`` / ``float`` values described by a ``parameters.json``.
+
+The file is QGC's component metadata as a PX4 build writes it (``{"version": 1, "parameters":
+[...]}``, each entry with at least ``name``, ``type`` ``Int32`` or ``Float`` and ``default``).
+Entries are kept whole, so that metadata written back out loses nothing.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import struct
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+from px4params.data import CLASSIC_PARAMETERS_JSON
+from px4params.errors import ClassicParamsError
+
+__all__ = [
+    "BUNDLED_CLASSIC",
+    "CLASSIC_ENV",
+    "ClassicParam",
+    "ClassicParamsError",
+    "classic_value",
+    "load_classic",
+]
+
+#: Environment variable naming the ``parameters.json`` whose classic parameters the store holds.
+CLASSIC_ENV = "PX4PARAMS_PARAMETERS_JSON"
+#: The classic parameters used when none are named: the few that airframes next to a device
+#: manifest and the migration from today's configuration need (``data/classic_parameters.json``).
+BUNDLED_CLASSIC = CLASSIC_PARAMETERS_JSON
+
+INT32_MIN, INT32_MAX = -(2**31), 2**31 - 1
+_TYPES = ("Int32", "Float")
+
+
+@dataclass(frozen=True)
+class ClassicParam:
+    """One classic parameter."""
+
+    name: str
+    #: ``Int32`` or ``Float``, as in parameters.json.
+    type: str
+    default: int | float
+    #: The whole parameters.json entry.
+    entry: Mapping[str, Any] = field(default_factory=dict, compare=False, repr=False)
+
+    @property
+    def is_float(self) -> bool:
+        return self.type == "Float"
+
+
+def load_classic(path: str | os.PathLike[str]) -> list[ClassicParam]:
+    """The classic parameters of a ``parameters.json``, in file order."""
+    where = os.fspath(path)
+    try:
+        with open(where, encoding="utf-8") as f:
+            document = json.load(f)
+    except OSError as e:
+        raise ClassicParamsError(f"{where}: cannot read: {e.strerror}") from None
+    except (json.JSONDecodeError, UnicodeDecodeError) as e:
+        raise ClassicParamsError(f"{where}: not JSON: {e}") from None
+    if not isinstance(document, dict) or not isinstance(document.get("parameters"), list):
+        raise ClassicParamsError(
+            f"{where}: not a parameters.json (expected an object with a 'parameters' list)"
+        )
+    if document.get("version") != 1:
+        raise ClassicParamsError(
+            f"{where}: parameters.json version {document.get('version')!r} (expected 1)"
+        )
+    params: list[ClassicParam] = []
+    seen: set[str] = set()
+    for number, entry in enumerate(document["parameters"]):
+        where_entry = f"{where}: parameters[{number}]"
+        if not isinstance(entry, dict):
+            raise ClassicParamsError(f"{where_entry}: expected an object")
+        name, kind = entry.get("name"), entry.get("type")
+        if not isinstance(name, str) or not name or len(name) > 16:
+            raise ClassicParamsError(f"{where_entry}: 'name' must be 1 to 16 characters")
+        if kind not in _TYPES:
+            raise ClassicParamsError(
+                f"{where_entry} ({name}): 'type' {kind!r} is not Int32 or Float"
+            )
+        if name in seen:
+            raise ClassicParamsError(f"{where_entry}: duplicate parameter {name}")
+        seen.add(name)
+        try:
+            default = classic_value(kind, entry.get("default", 0))
+        except ClassicParamsError as e:
+            raise ClassicParamsError(f"{where_entry} ({name}): default: {e}") from None
+        params.append(ClassicParam(name, kind, default, entry))
+    return params
+
+
+def classic_value(kind: str, value: Any) -> int | float:
+    """``value`` as a classic parameter of type ``kind`` holds it (floats rounded to float32)."""
+    if isinstance(value, bool):
+        value = int(value)
+    if kind == "Int32":
+        if isinstance(value, float) and value.is_integer():
+            value = int(value)
+        if not isinstance(value, int):
+            raise ClassicParamsError(f"expected an integer, got {value!r}")
+        if not INT32_MIN <= value <= INT32_MAX:
+            raise ClassicParamsError(
+                f"value {value} is out of range (expected {INT32_MIN} to {INT32_MAX})"
+            )
+        return value
+    if not isinstance(value, int | float):
+        raise ClassicParamsError(f"expected a number, got {value!r}")
+    value = float(value)
+    if math.isfinite(value) and abs(value) > 3.4028234663852886e38:
+        raise ClassicParamsError(f"value {value} does not fit a float32")
+    return struct.unpack("<f", struct.pack("<f", value))[0]

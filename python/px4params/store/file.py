@@ -1,0 +1,466 @@
+"""The store file: what differs from the defaults, one CRC-checked record per parameter.
+
+The format is described in ``docs/store-format.md``. In short (integers little-endian)::
+
+    header   "PX4P"  u8 format version (1)  u8 flags (0)  u32 schema fingerprint
+    records  u8 kind, key, payloads, u16 CRC-16-CCITT-FALSE of the record's bytes
+    trailer  u32 CRC-32 (zlib) of every byte before it
+
+A file is checked completely (trailer, then every record) before anything is applied, and it
+is applied to a copy of the store that replaces the store only when all of it went in.
+Saving writes a temporary file, fsyncs it, keeps the old file as ``FILE.bak`` and renames the
+new one over ``FILE``: a crash at any moment leaves the old or the new file intact.
+"""
+
+from __future__ import annotations
+
+import binascii
+import json
+import os
+import struct
+import tempfile
+import zlib
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+from px4params.dsdl.schema import DataType
+from px4params.errors import Px4ParamsError, StoreError, StoreFileError
+from px4params.store.spec import ParamSpec, _default_of
+
+if TYPE_CHECKING:
+    from px4params.store.store import Store, _Param
+
+MAGIC = b"PX4P"
+FORMAT_VERSION = 1
+HEADER = struct.Struct("<4sBBI")
+TRAILER = struct.Struct("<I")
+
+KIND_STRUCTURED = 1
+KIND_CLASSIC = 2
+HAS_DEFAULT = 0x10
+HAS_VALUE = 0x20
+
+
+def fingerprint(specs: list[ParamSpec]) -> int:
+    """CRC-32 over the structured parameters' names, types and major versions: records refer
+    to parameters by their index in this list, so a file only fits a schema with the same."""
+    text = "\n".join(
+        f"{s.name}={s.data_type.name}.{(s.data_type.version or (0, 0))[0]}" for s in specs
+    )
+    return zlib.crc32(text.encode())
+
+
+# -- writing ------------------------------------------------------------------------------------
+
+
+def encode_file(store: Store) -> bytes:
+    """The store's file content."""
+    out = bytearray(HEADER.pack(MAGIC, FORMAT_VERSION, 0, fingerprint(store.specs)))
+    for p in store._order:
+        for instance in store._native.instances(p.index):
+            record = _record(store, p, instance)
+            if record is not None:
+                out += record + struct.pack("<H", _crc16(record))
+    for record in store._foreign.values():  # classic values of parameters this store lacks
+        out += record + struct.pack("<H", _crc16(record))
+    out += TRAILER.pack(zlib.crc32(out))
+    return bytes(out)
+
+
+def _record(store: Store, p: _Param, instance: int) -> bytes | None:
+    native = store._native
+    value = native.get(p.index, instance)
+    default = native.get(p.index, instance, default=True)
+    flags = (HAS_DEFAULT if default != native.type_default(p.index) else 0) | (
+        HAS_VALUE if value != default else 0
+    )
+    if p.classic is not None:
+        if not flags:
+            return None
+        name = p.name.encode()
+        record = bytearray([KIND_CLASSIC | flags, len(name)]) + name
+        record += default if flags & HAS_DEFAULT else b""
+        record += value if flags & HAS_VALUE else b""
+        return bytes(record)
+    # An instance is written even when it is all defaults: that it exists is configuration.
+    if p.shared and not flags:
+        return None
+    record = bytearray([KIND_STRUCTURED | flags]) + _varint(p.index) + _varint(instance)
+    for present, payload in ((flags & HAS_DEFAULT, default), (flags & HAS_VALUE, value)):
+        if present:
+            record += _varint(len(payload)) + payload
+    return bytes(record)
+
+
+def save(store: Store, path: str | os.PathLike[str]) -> int:
+    """Writes the store to ``path`` atomically, keeping the previous file as ``path.bak``."""
+    target = os.fspath(path)
+    data = encode_file(store)
+    folder = os.path.dirname(os.path.abspath(target))
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{os.path.basename(target)}.", dir=folder)
+    except OSError as e:
+        raise StoreFileError(f"cannot write: {e.strerror}", target) from None
+    try:
+        with os.fdopen(fd, "wb") as f:
+            # mkstemp makes the file private; give it the mode a new file gets (or the old
+            # file's), so that other users and tools can read the store as before.
+            os.fchmod(f.fileno(), _mode_for(target))
+            f.write(data)
+            f.flush()
+            os.fsync(f.fileno())
+        if os.path.exists(target):
+            _keep_backup(target)
+        os.replace(tmp, target)  # atomic: readers see the old file or the whole new one
+        _fsync_folder(folder)
+    except OSError as e:
+        with _ignoring_os_errors():
+            os.unlink(tmp)
+        raise StoreFileError(f"cannot write: {e.strerror}", target) from None
+    return len(data)
+
+
+def _mode_for(target: str) -> int:
+    try:
+        return os.stat(target).st_mode & 0o777
+    except OSError:
+        umask = os.umask(0)
+        os.umask(umask)
+        return 0o666 & ~umask
+
+
+def _keep_backup(target: str) -> None:
+    """``target.bak`` becomes the current file, without a moment where ``target`` is gone."""
+    backup = target + ".bak"
+    staging = f"{backup}.{os.getpid()}.tmp"
+    with _ignoring_os_errors():
+        os.unlink(staging)
+    try:
+        os.link(target, staging)
+    except OSError:  # no hard links here: copy instead
+        with open(target, "rb") as src, open(staging, "wb") as dst:
+            dst.write(src.read())
+            dst.flush()
+            os.fsync(dst.fileno())
+    os.replace(staging, backup)
+
+
+def _fsync_folder(folder: str) -> None:
+    with _ignoring_os_errors():
+        fd = os.open(folder, os.O_RDONLY)
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+
+
+class _ignoring_os_errors:
+    def __enter__(self) -> None:
+        return None
+
+    def __exit__(self, kind: Any, value: Any, tb: Any) -> bool:
+        return kind is not None and issubclass(kind, OSError)
+
+
+# -- reading ------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Record:
+    """One checked record."""
+
+    offset: int
+    kind: int
+    #: Parameter index (structured) or name (classic).
+    key: int | str
+    instance: int
+    default: bytes | None
+    value: bytes | None
+    #: The record's bytes without its CRC.
+    raw: bytes = b""
+
+
+def read_file(path: str | os.PathLike[str], fp: int) -> list[Record]:
+    """Every record of the file, after checking all of it."""
+    where = os.fspath(path)
+    try:
+        with open(where, "rb") as f:
+            data = f.read()
+    except OSError as e:
+        raise StoreFileError(f"cannot read: {e.strerror}", where) from None
+    return parse(data, fp, where)
+
+
+def parse(data: bytes, fp: int, where: str) -> list[Record]:
+    """Checks ``data`` completely and returns its records."""
+    if len(data) < HEADER.size or data[:4] != MAGIC:
+        raise StoreFileError("not a px4params store file (no PX4P header)", where, 0)
+    _magic, version, flags, file_fp = HEADER.unpack_from(data)
+    if version != FORMAT_VERSION:
+        raise StoreFileError(
+            f"store file format version {version} (this px4params reads {FORMAT_VERSION})",
+            where,
+            4,
+        )
+    if len(data) < HEADER.size + TRAILER.size:
+        raise StoreFileError("file is truncated (no trailer)", where, len(data))
+    body_end = len(data) - TRAILER.size
+    (crc,) = TRAILER.unpack_from(data, body_end)
+    if zlib.crc32(data[:body_end]) != crc:
+        raise StoreFileError(
+            "file is corrupted or truncated (CRC-32 mismatch); nothing was applied",
+            where,
+            body_end,
+        )
+    if flags != 0:
+        raise StoreFileError(f"unknown header flags 0x{flags:02x}", where, 5)
+    if file_fp != fp:
+        raise StoreFileError(
+            f"written for another schema (fingerprint 0x{file_fp:08x}, this schema has "
+            f"0x{fp:08x}: its parameters or their types differ)",
+            where,
+            6,
+        )
+    records = []
+    pos = HEADER.size
+    while pos < body_end:
+        reader = _Reader(data, pos, body_end, where)
+        record = reader.record()
+        (crc,) = struct.unpack_from("<H", data, reader.pos)
+        if _crc16(data[pos : reader.pos]) != crc:
+            raise StoreFileError("record is corrupted (CRC-16 mismatch)", where, pos)
+        records.append(record)
+        pos = reader.pos + 2
+    return records
+
+
+class _Reader:
+    def __init__(self, data: bytes, pos: int, end: int, where: str) -> None:
+        self.data, self.pos, self.end, self.where, self.start = data, pos, end, where, pos
+
+    def fail(self, what: str) -> StoreFileError:
+        return StoreFileError(f"record is malformed: {what}", self.where, self.start)
+
+    def take(self, n: int) -> bytes:
+        if self.pos + n > self.end:
+            raise self.fail("it runs past the end of the file")
+        chunk = self.data[self.pos : self.pos + n]
+        self.pos += n
+        return chunk
+
+    def varint(self) -> int:
+        value, shift = 0, 0
+        while True:
+            byte = self.take(1)[0]
+            value |= (byte & 0x7F) << shift
+            if not byte & 0x80:
+                return value
+            shift += 7
+            if shift > 28:
+                raise self.fail("a number is too long")
+
+    def record(self) -> Record:
+        head = self.take(1)[0]
+        kind, flags = head & 0x0F, head & 0xF0
+        if flags & ~(HAS_DEFAULT | HAS_VALUE):
+            raise self.fail(f"unknown flags 0x{head:02x}")
+        if kind == KIND_CLASSIC:
+            key: int | str = self.take(self.take(1)[0]).decode("ascii", "replace")
+            instance = 0
+            sizes = (4, 4)
+        elif kind == KIND_STRUCTURED:
+            key, instance = self.varint(), self.varint()
+            if instance > 0xFFFF:
+                raise self.fail(f"instance {instance} is out of range")
+            sizes = (-1, -1)
+        else:
+            raise self.fail(f"unknown record kind {kind}")
+        payloads: list[bytes | None] = []
+        for flag, size in zip((HAS_DEFAULT, HAS_VALUE), sizes, strict=True):
+            if flags & flag:
+                payloads.append(self.take(size if size >= 0 else self.varint()))
+            else:
+                payloads.append(None)
+        if self.pos + 2 > self.end:
+            raise self.fail("it runs past the end of the file")
+        raw = self.data[self.start : self.pos]
+        return Record(self.start, kind, key, instance, payloads[0], payloads[1], raw)
+
+
+# -- applying -----------------------------------------------------------------------------------
+
+
+def apply_file(store: Store, path: str | os.PathLike[str], *, merge: bool) -> list[str]:
+    """Applies a checked file to a copy of the store (reset first unless ``merge``); the copy
+    replaces the store only when every record went in. Returns the report's lines."""
+    where = os.fspath(path)
+    records = read_file(where, fingerprint(store.specs))
+    work = store._native.copy() if merge else store._initial.copy()
+    report: list[str] = []
+    foreign = dict(store._foreign) if merge else {}
+    by_index = {p.index: p for p in store._order if p.spec is not None}
+    for record in records:
+        try:
+            _apply(store, work, record, by_index, report, foreign)
+        except Px4ParamsError as e:
+            raise StoreFileError(f"record cannot be applied: {e}", where, record.offset) from None
+    work.mark_saved()
+    store._native.restore(work)
+    store._foreign = foreign
+    return report
+
+
+def _apply(
+    store: Store,
+    work: Any,
+    record: Record,
+    by_index: Mapping[int, _Param],
+    report: list[str],
+    foreign: dict[str, bytes],
+) -> None:
+    if record.kind == KIND_CLASSIC:
+        assert isinstance(record.key, str)
+        p = store._params.get(record.key)
+        if p is None or p.classic is None:
+            # Kept as it is and written back by the next save: nothing is lost because this
+            # store was opened with another set of classic parameters.
+            foreign[record.key] = record.raw
+            report.append(f"{record.key}: not a classic parameter of this store; kept unchanged")
+            return
+        for payload, default in ((record.default, True), (record.value, False)):
+            if payload is not None:
+                work.set_encoded(p.index, 0, payload, default=default)
+        return
+    assert isinstance(record.key, int)
+    p = by_index.get(record.key)
+    if p is None or p.spec is None:
+        raise StoreError(f"no parameter #{record.key}")
+    if not p.shared and not work.slot(p.index, record.instance)[0]:  # import may merge
+        work.add(p.index, record.instance)
+    name = store._instance_name(p, record.instance)
+    data_type = p.spec.data_type
+    default = record.default
+    if default is not None:
+        default = _current(store, data_type, name, default, work.type_default(p.index), report)
+        work.set_encoded(p.index, record.instance, default, default=True)
+    if record.value is not None:
+        base = work.get(p.index, record.instance, default=True)
+        value = _current(store, data_type, name, record.value, base, report)
+        work.set_encoded(p.index, record.instance, value)
+
+
+# -- version translation ------------------------------------------------------------------------
+
+
+def stored_version(data_type: DataType, payload: bytes) -> int | None:
+    """The minor version a payload was written with: its leading ``p_version`` field."""
+    fields = data_type.definition.get("fields") or []
+    if not fields or fields[0]["name"] != "p_version" or fields[0]["type"]["kind"] != "uint":
+        return None
+    bits = int(fields[0]["type"]["bits"])
+    return payload[0] >> (8 - bits) if payload else None
+
+
+def _current(
+    store: Store,
+    data_type: DataType,
+    name: str,
+    payload: bytes,
+    base: bytes,
+    report: list[str],
+) -> bytes:
+    """``payload`` in the current version of ``data_type``, translated when it was written by
+    another minor version: fields carried over by name, new ones from ``base``."""
+    version = data_type.version
+    written = stored_version(data_type, payload)
+    if version is None or written is None or written == version[1]:
+        return payload
+    old_key = f"{data_type.name}.{version[0]}.{written}"
+    if old_key not in store.schema:
+        raise StoreError(f"{name} was stored by {old_key}, which this schema does not have")
+    old = store.schema[old_key].decode(payload, tao=False)
+    target = data_type.decode(base, tao=False)
+    kept: list[str] = []
+    dropped: list[str] = []
+    new: list[str] = []
+    spec = {"kind": "ref", "name": data_type.key}
+    merged = _carry(store, spec, old, target, "", kept, dropped, new)
+    try:
+        data = data_type.encode(merged, tao=False)
+    except Px4ParamsError as e:
+        raise StoreError(f"{name}: cannot translate from {old_key}: {e}") from None
+    line = f"{name}: translated {old_key} -> {data_type.key}: kept {', '.join(kept) or 'nothing'}"
+    if new:
+        line += f"; new, from defaults: {', '.join(new)}"
+    if dropped:
+        line += f"; dropped: {', '.join(dropped)}"
+    report.append(line)
+    return data
+
+
+def _carry(
+    store: Store,
+    spec: Mapping[str, Any],
+    old: Any,
+    new: Any,
+    prefix: str,
+    kept: list[str],
+    dropped: list[str],
+    added: list[str],
+) -> Any:
+    """``new`` (a value of type ``spec``) with what ``old`` has under the same names."""
+    if spec["kind"] != "ref" or not isinstance(old, dict) or not isinstance(new, dict):
+        if isinstance(old, dict) or isinstance(new, dict):  # a field changed its kind
+            dropped.append(prefix.rstrip(".") or "value")
+            return new
+        kept.append(prefix.rstrip("."))
+        return old
+    definition = store.schema.model["types"][spec["name"]]
+    fields = {f["name"]: f["type"] for f in definition["fields"] if f["type"]["kind"] != "void"}
+    if definition["kind"] == "union":
+        (variant,) = old
+        if variant not in fields:
+            dropped.append(f"{prefix}{variant}={_shown(old[variant])}")
+            return new
+        base = new.get(variant)
+        if base is None:
+            base = _default_of(store.schema, fields[variant], None)
+        inner = _carry(
+            store, fields[variant], old[variant], base, f"{prefix}{variant}.", kept, dropped, added
+        )
+        return {variant: inner}
+    merged = dict(new)
+    for k, v in old.items():
+        if k == "p_version":
+            continue
+        if k in fields:
+            merged[k] = _carry(
+                store, fields[k], v, new.get(k), f"{prefix}{k}.", kept, dropped, added
+            )
+        else:
+            dropped.append(f"{prefix}{k}={_shown(v)}")
+    added.extend(prefix + k for k in fields if k not in old and k != "p_version")
+    return merged
+
+
+def _shown(value: Any) -> str:
+    """A dropped value, as the report shows it (JSON, so that it can be typed back in)."""
+    return json.dumps(value, separators=(",", ":"))
+
+
+def _varint(n: int) -> bytes:
+    out = bytearray()
+    while True:
+        byte = n & 0x7F
+        n >>= 7
+        if n:
+            out.append(byte | 0x80)
+        else:
+            out.append(byte)
+            return bytes(out)
+
+
+def _crc16(data: bytes) -> int:
+    """CRC-16-CCITT-FALSE (poly 0x1021, init 0xFFFF): ``binascii.crc_hqx`` with that seed."""
+    return binascii.crc_hqx(data, 0xFFFF)

@@ -1,0 +1,533 @@
+"""Destructured parameters: every leaf of a structured instance as a flat PX4 parameter.
+
+MAVLink and today's tools carry flat parameters: a name of at most 16 characters and a 32-bit
+value, ``int32`` or ``float32``. A structured instance is also offered destructured, one flat
+parameter per leaf (``p_version`` leaves excluded), named from the instance and a letter::
+
+    INA238#1.bus._tag          -> INA238_1A   (the talk's "bus_type")
+    INA238#1.bus.i2c.bus_id    -> INA238_1B
+    INA238#1.bus.i2c.address   -> INA238_1C
+    INA238#1.current           -> INA238_1P
+    INA238#1.shunt             -> INA238_1Q
+
+A shared parameter (no instances) has no number: ``INA238_SHARED_A``.
+
+**Letters.** Letters are given over the *type*, not over a value, so that a name never moves:
+walk the type in declaration order and give the next letter to every leaf of *every* union
+variant (not only the selected one), every union tag, every dynamic array length and every
+element slot up to the array's maximum; ``p_version`` fields and padding get none. Letters run
+``A``..``Z``, then ``AA``, ``AB``, ... (spreadsheet columns). For ``px.Ina238`` (``Bus`` is
+``@union {I2c i2c; Spi spi; Serial serial; Dronecan dronecan; Simulation sim; Mavlink
+mavlink}``): ``A`` bus tag, ``B``/``C`` i2c bus_id/address, ``D``..``G`` spi, ``H``/``I``
+serial, ``J``/``K`` dronecan, ``L`` sim, ``M``..``O`` mavlink, ``P`` current, ``Q`` shunt. With
+I2C first this gives exactly the talk's ``A``/``B``/``C``. Appending a variant or field to a
+type (the way DSDL types grow) appends letters and moves no existing name; inserting one in the
+middle moves the letters after it, as it moves the ``[k]`` indices.
+
+**Live leaves.** Only the leaves present in the instance's current value are offered: those of
+the selected union variants and of the existing dynamic array elements. Selecting another
+variant (writing the tag, e.g. ``INA238_1A = 1`` for SPI) makes that variant's leaves appear
+(with their defaults) and the old ones disappear; their letters never change.
+
+**Values.** Integer leaves (``uintN``/``intN``, union tags, array lengths) are ``int32``; a
+``uint32`` travels as its bit pattern (values from 2^31 read negative, the same bits). Float
+leaves are ``float32``; a ``float16`` is exactly representable, and a ``float32`` written to a
+``float16`` leaf is rounded as the DroneCAN rules say (the value read back is the stored one).
+Booleans are ``int32`` 0 or 1: a one-bit bitmask (the talk's "booleans -> bitmask"; ground
+stations show a checkbox). A leaf wider than 32 bits (``uint64``, ``float64``, ...) cannot be
+offered: such a parameter type is refused (:class:`FlatError`) when the map is built. Dynamic
+arrays are offered as their length (a leaf like any other) plus one slot per element up to the
+maximum length, each live only below the current length; a long array therefore needs many
+letters, and the 16-character limit refuses types that would need too many.
+
+Names are checked once per store (:func:`flat_map`): at most 16 characters for every instance
+number up to ``max_instances``, unique, and none equal to a classic or structured parameter's
+name; a violation is a :class:`FlatError` naming the parameter.
+"""
+
+from __future__ import annotations
+
+import math
+import weakref
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+from px4params.dsdl.schema import DataType, Leaf
+from px4params.errors import FlatError, InstanceError, LeafError
+from px4params.store.spec import MAX_NAME_LEN, ParamSpec
+
+if TYPE_CHECKING:
+    from px4params.store.store import Store
+
+__all__ = [
+    "FlatError",
+    "FlatLayout",
+    "FlatMap",
+    "FlatParam",
+    "FlatSlot",
+    "flat_map",
+    "flat_table",
+    "from_flat",
+    "get_flat",
+    "layout",
+    "letters",
+    "resolve_flat",
+    "set_flat",
+    "to_flat",
+]
+
+#: MAVLink carries 32 bits per parameter.
+MAX_LEAF_BITS = 32
+INT32 = "int32"
+FLOAT32 = "float32"
+
+
+def letters(number: int) -> str:
+    """``0`` -> ``A``, ``25`` -> ``Z``, ``26`` -> ``AA``, ``27`` -> ``AB`` (bijective base 26)."""
+    if number < 0:
+        raise ValueError(f"letter number {number} is negative")
+    text = ""
+    number += 1
+    while number:
+        number, rest = divmod(number - 1, 26)
+        text = chr(ord("A") + rest) + text
+    return text
+
+
+@dataclass(frozen=True)
+class FlatSlot:
+    """One letter of a type: a leaf that may be live, depending on the value.
+
+    ``requires`` lists what must hold for the leaf to exist, outermost first: ``(path, "==",
+    n)`` for a union tag selecting variant ``n``, ``(path, ">", i)`` for an array length
+    above element ``i``.
+    """
+
+    letter: str
+    #: Leaf path as :meth:`DataType.leaves` writes it (``bus.i2c.address``, ``bus._tag``).
+    path: str
+    #: DSDL type of the leaf (``uint7``, ``float16``, ``bool``; ``uint3`` for a 6-variant tag).
+    type: str
+    #: ``int32`` or ``float32``: how the flat parameter carries it.
+    mav_type: str
+    #: ``value``, ``union_tag`` or ``length``.
+    role: str
+    #: Smallest and largest value of the leaf itself (a tag's range is its variants).
+    min: int | float
+    max: int | float
+    requires: tuple[tuple[str, str, int], ...] = ()
+
+    def to_flat(self, value: int | float | bool) -> int | float:
+        """A leaf value as the flat parameter carries it."""
+        if self.mav_type == FLOAT32:
+            return float(value)
+        number = int(value)
+        if self.type == "uint32" and number >= 1 << 31:
+            number -= 1 << 32  # bit pattern
+        return number
+
+    def from_flat(self, number: Any) -> int | float | bool:
+        """A flat parameter's number as the leaf's value (type-checked; range is the store's)."""
+        if self.mav_type == FLOAT32:
+            if isinstance(number, bool) or not isinstance(number, int | float):
+                raise FlatError(f"expected a number, got {number!r}")
+            return float(number)
+        if isinstance(number, float) and number.is_integer():
+            number = int(number)
+        if isinstance(number, bool) or not isinstance(number, int):
+            raise FlatError(f"expected an integer, got {number!r}")
+        if self.type == "bool":
+            if number not in (0, 1):
+                raise FlatError(f"value {number} is not a boolean (expected 0 or 1)")
+            return bool(number)
+        if self.type == "uint32" and -(1 << 31) <= number < 0:
+            number += 1 << 32  # bit pattern
+        return number
+
+
+class FlatLayout:
+    """The letters of one type (see the module doc for the rule)."""
+
+    def __init__(self, key: str, slots: list[FlatSlot]) -> None:
+        self.key = key
+        self.slots = slots
+        self._by_letter = {s.letter: s for s in slots}
+        self._by_path = {s.path: s for s in slots}
+
+    def slot(self, letter: str) -> FlatSlot | None:
+        return self._by_letter.get(letter)
+
+    def slot_for_path(self, path: str) -> FlatSlot | None:
+        return self._by_path.get(path)
+
+    def __len__(self) -> int:
+        return len(self.slots)
+
+    def __iter__(self) -> Iterator[FlatSlot]:
+        return iter(self.slots)
+
+
+_LAYOUTS: weakref.WeakKeyDictionary[DataType, FlatLayout] = weakref.WeakKeyDictionary()
+
+
+def layout(data_type: DataType) -> FlatLayout:
+    """The letters of ``data_type``; :class:`FlatError` if a leaf is wider than 32 bits."""
+    cached = _LAYOUTS.get(data_type)
+    if cached is None:
+        cached = FlatLayout(data_type.key, _Walker(data_type).run())
+        _LAYOUTS[data_type] = cached
+    return cached
+
+
+class _Walker:
+    def __init__(self, data_type: DataType) -> None:
+        self.key = data_type.key
+        self.types: Mapping[str, Mapping[str, Any]] = data_type._types
+        self.slots: list[FlatSlot] = []
+
+    def run(self) -> list[FlatSlot]:
+        self.walk({"kind": "ref", "name": self.key}, "", ())
+        return self.slots
+
+    def add(
+        self,
+        path: str,
+        type_name: str,
+        mav_type: str,
+        role: str,
+        lo: float,
+        hi: float,
+        requires: tuple[tuple[str, str, int], ...],
+    ) -> None:
+        slot = FlatSlot(letters(len(self.slots)), path, type_name, mav_type, role, lo, hi, requires)
+        self.slots.append(slot)
+
+    def walk(self, spec: Mapping[str, Any], path: str, requires: tuple[Any, ...]) -> None:
+        kind = spec["kind"]
+        if kind == "ref":
+            definition = self.types[spec["name"]]
+            fields = [f for f in definition["fields"] if f["type"]["kind"] != "void"]
+            if definition["kind"] == "union":
+                tag = _join(path, "_tag")
+                bits = max(1, math.ceil(math.log2(len(fields))))
+                self.add(tag, f"uint{bits}", INT32, "union_tag", 0, len(fields) - 1, requires)
+                for number, f in enumerate(fields):
+                    self.walk(f["type"], _join(path, f["name"]), (*requires, (tag, "==", number)))
+                return
+            for f in fields:
+                if f["name"] == "p_version" and f["type"]["kind"] in ("uint", "int"):
+                    continue  # filled in by the code, never set by users: not offered
+                self.walk(f["type"], _join(path, f["name"]), requires)
+        elif kind == "array":
+            for i in range(spec["len"]):
+                self.walk(spec["elem"], f"{path}[{i}]", requires)
+        elif kind == "dynarray":
+            length = _join(path, "_len")
+            bits = max(1, int(spec["max"]).bit_length())
+            self.add(length, f"uint{bits}", INT32, "length", 0, spec["max"], requires)
+            for i in range(spec["max"]):
+                self.walk(spec["elem"], f"{path}[{i}]", (*requires, (length, ">", i)))
+        elif kind == "bool":
+            self.add(path, "bool", INT32, "value", 0, 1, requires)
+        elif kind in ("uint", "int", "float"):
+            bits = int(spec["bits"])
+            name = f"{kind}{bits}"
+            if bits > MAX_LEAF_BITS:
+                raise FlatError(
+                    f"{self.key}: leaf {path or '(value)'} is {name}: destructured parameters "
+                    f"carry at most {MAX_LEAF_BITS} bits (MAVLink), so this type cannot be a "
+                    "parameter"
+                )
+            if kind == "float":
+                top = 65504.0 if bits == 16 else 3.4028234663852886e38
+                self.add(path, name, FLOAT32, "value", -top, top, requires)
+            elif kind == "uint":
+                self.add(path, name, INT32, "value", 0, (1 << bits) - 1, requires)
+            else:
+                half = 1 << (bits - 1)
+                self.add(path, name, INT32, "value", -half, half - 1, requires)
+        # void: padding, not a leaf
+
+
+def _join(path: str, name: str) -> str:
+    return f"{path}.{name}" if path else name
+
+
+# -- type level: values <-> flat letters ------------------------------------------------------
+
+
+def to_flat(data_type: DataType, value: Mapping[str, Any] | bytes) -> dict[str, int | float]:
+    """The live leaves of a value (or of its stored bytes) as ``{letter: number}``, in letter
+    order, numbers as the flat parameters carry them."""
+    data = value if isinstance(value, bytes) else data_type.encode(value, tao=False)
+    return _flat_of_leaves(layout(data_type), data_type.leaves(data, tao=False))
+
+
+def _flat_of_leaves(lay: FlatLayout, leaves: list[Leaf]) -> dict[str, int | float]:
+    flat: dict[str, int | float] = {}
+    for leaf in leaves:
+        slot = lay.slot_for_path(leaf.path)
+        if slot is not None:
+            flat[slot.letter] = slot.to_flat(leaf.value)
+    return flat
+
+
+def from_flat(data_type: DataType, flat: Mapping[str, Any]) -> dict[str, Any]:
+    """The value whose live leaves are ``flat`` (``{letter: number}``): the inverse of
+    :func:`to_flat`. Every live letter must be given and no other."""
+    lay = layout(data_type)
+    used: set[str] = set()
+
+    def take(path: str) -> Any:
+        slot = lay.slot_for_path(path)
+        assert slot is not None
+        if slot.letter not in flat:
+            raise FlatError(f"{data_type.key}: letter {slot.letter} ({path}) is missing")
+        used.add(slot.letter)
+        try:
+            return slot.from_flat(flat[slot.letter])
+        except FlatError as e:
+            raise FlatError(f"{data_type.key}: letter {slot.letter} ({path}): {e}") from None
+
+    def build(spec: Mapping[str, Any], path: str) -> Any:
+        kind = spec["kind"]
+        if kind == "ref":
+            definition = data_type._types[spec["name"]]
+            fields = [f for f in definition["fields"] if f["type"]["kind"] != "void"]
+            if definition["kind"] == "union":
+                tag = take(_join(path, "_tag"))
+                if not 0 <= tag < len(fields):
+                    raise FlatError(
+                        f"{data_type.key}: {_join(path, '_tag')}: no variant {tag} "
+                        f"(expected 0 to {len(fields) - 1})"
+                    )
+                chosen = fields[tag]
+                return {chosen["name"]: build(chosen["type"], _join(path, chosen["name"]))}
+            return {
+                f["name"]: build(f["type"], _join(path, f["name"]))
+                for f in fields
+                if not (f["name"] == "p_version" and f["type"]["kind"] in ("uint", "int"))
+            }
+        if kind == "array":
+            return [build(spec["elem"], f"{path}[{i}]") for i in range(spec["len"])]
+        if kind == "dynarray":
+            length = take(_join(path, "_len"))
+            if not 0 <= length <= spec["max"]:
+                raise FlatError(
+                    f"{data_type.key}: {_join(path, '_len')}: length {length} is out of range "
+                    f"(expected 0 to {spec['max']})"
+                )
+            return [build(spec["elem"], f"{path}[{i}]") for i in range(length)]
+        return take(path)
+
+    value = build({"kind": "ref", "name": data_type.key}, "")
+    extra = [letter for letter in flat if letter not in used]
+    if extra:
+        paths = ", ".join(
+            f"{x} ({s.path})" if (s := lay.slot(x)) else f"{x} (no such letter)" for x in extra
+        )
+        raise FlatError(f"{data_type.key}: letters not live in this value: {paths}")
+    return value
+
+
+# -- store level: flat names of instances -----------------------------------------------------
+
+
+@dataclass(frozen=True)
+class FlatParam:
+    """One live destructured parameter of a store."""
+
+    #: Flat name, e.g. ``INA238_1C``.
+    name: str
+    #: The instance, e.g. ``INA238#1``.
+    instance: str
+    #: The leaf's ``[k]`` index in the current value.
+    index: int
+    slot: FlatSlot
+    #: The value as the flat parameter carries it (``int`` for ``int32``).
+    value: int | float
+
+    @property
+    def leaf(self) -> str:
+        """The leaf's structured name, ``INA238#1[4]``."""
+        return f"{self.instance}[{self.index}]"
+
+    @property
+    def path(self) -> str:
+        return self.slot.path
+
+    @property
+    def type(self) -> str:
+        return self.slot.type
+
+    @property
+    def mav_type(self) -> str:
+        return self.slot.mav_type
+
+    def as_dict(self) -> dict[str, Any]:
+        value: Any = self.value
+        if isinstance(value, float) and not math.isfinite(value):
+            value = "nan" if math.isnan(value) else ("inf" if value > 0 else "-inf")
+        return {
+            "name": self.name,
+            "leaf": self.leaf,
+            "path": f"{self.instance}.{self.path}",
+            "type": self.type,
+            "mav_type": self.mav_type,
+            "role": self.slot.role,
+            "value": value,
+        }
+
+
+class FlatMap:
+    """The destructured names of a store's parameter set (checked once, at construction)."""
+
+    def __init__(self, store: Store) -> None:
+        self._store = store
+        self._layouts: dict[str, FlatLayout] = {}
+        self._owner: dict[str, tuple[ParamSpec, int | None, FlatSlot]] = {}
+        structured = {spec.name for spec in store.specs}
+        classic = {name for name in store.parameters if name not in structured}
+        for spec in store.specs:
+            lay = layout(spec.data_type)
+            self._layouts[spec.name] = lay
+            numbers: list[int | None] = (
+                [None] if spec.shared else list(range(spec.max_instances or 0))
+            )
+            for number in numbers:
+                for slot in lay:
+                    name = self.name_of(spec, number, slot)
+                    if len(name) > MAX_NAME_LEN:
+                        raise FlatError(
+                            f"{spec.name}: destructured name {name} has {len(name)} characters "
+                            f"(at most {MAX_NAME_LEN}): {spec.data_type.key} has {len(lay)} "
+                            "flat leaves; shorten the parameter name or the type"
+                        )
+                    if name in classic or name in structured:
+                        kind = "classic" if name in classic else "structured"
+                        where = f"{spec.instance_name(number or 0)}.{slot.path}"
+                        raise FlatError(
+                            f"{spec.name}: destructured name {name} ({where}) is the name of a "
+                            f"{kind} parameter"
+                        )
+                    if name in self._owner:
+                        other, other_number, other_slot = self._owner[name]
+                        raise FlatError(
+                            f"destructured name {name} is used twice: "
+                            f"{spec.instance_name(number or 0)}.{slot.path} and "
+                            f"{other.instance_name(other_number or 0)}.{other_slot.path}"
+                        )
+                    self._owner[name] = (spec, number, slot)
+
+    @staticmethod
+    def name_of(spec: ParamSpec, number: int | None, slot: FlatSlot) -> str:
+        if spec.shared or number is None:
+            return f"{spec.name}_{slot.letter}"
+        return f"{spec.name}_{number}{slot.letter}"
+
+    def layout_of(self, param: str) -> FlatLayout:
+        return self._layouts[param]
+
+    def __contains__(self, name: object) -> bool:
+        return isinstance(name, str) and name.upper() in self._owner
+
+    def owner(self, name: str) -> tuple[str, FlatSlot]:
+        """``(instance name, slot)`` of a flat name, live or not; :class:`InstanceError` if
+        the name belongs to no structured parameter."""
+        found = self._owner.get(name.strip().upper())
+        if found is None:
+            raise InstanceError(f"'{name}' is not a destructured parameter name")
+        spec, number, slot = found
+        return spec.instance_name(number or 0), slot
+
+    def table(self) -> list[FlatParam]:
+        """Every live flat parameter of every existing instance, in store order."""
+        rows: list[FlatParam] = []
+        for spec in self._store.specs:
+            lay = self._layouts[spec.name]
+            for instance in self._store.instances(spec.name):
+                number = None if spec.shared else int(instance.rpartition("#")[2])
+                for leaf in self._store.leaves(instance):
+                    slot = lay.slot_for_path(leaf.path)
+                    if slot is None:
+                        continue  # p_version
+                    name = self.name_of(spec, number, slot)
+                    rows.append(
+                        FlatParam(name, instance, leaf.index, slot, slot.to_flat(leaf.value))
+                    )
+        return rows
+
+    def find(self, name: str) -> FlatParam:
+        """The live flat parameter ``name``; a clear error when its instance does not exist or
+        its leaf is not live (an unselected variant, an array element past the length)."""
+        instance, slot = self.owner(name)
+        flat_name = name.strip().upper()
+        if instance not in self._store:
+            raise InstanceError(
+                f"{flat_name} belongs to {instance}, which does not exist (add it first: "
+                f"param add {instance})"
+            )
+        for leaf in self._store.leaves(instance):
+            if leaf.path == slot.path:
+                return FlatParam(flat_name, instance, leaf.index, slot, slot.to_flat(leaf.value))
+        why = self._why(flat_name, instance)
+        raise LeafError(f"{flat_name} ({instance}.{slot.path}) is not live: {why}")
+
+    def _why(self, flat_name: str, instance: str) -> str:
+        spec, number, slot = self._owner[flat_name]
+        live = {leaf.path: leaf.value for leaf in self._store.leaves(instance)}
+        for path, op, n in slot.requires:
+            if path not in live:
+                continue  # an outer requirement fails first
+            selector = self._layouts[spec.name].slot_for_path(path)
+            assert selector is not None
+            selector_name = self.name_of(spec, number, selector)
+            if op == "==" and live[path] != n:
+                return f"{path} selects variant {live[path]}, not {n} (set {selector_name} to {n})"
+            if op == ">" and not live[path] > n:
+                return f"{path} is {live[path]} (set {selector_name} above {n})"
+        return "not in the current value"  # pragma: no cover - requires cover every case
+
+
+_MAPS: weakref.WeakKeyDictionary[Store, FlatMap] = weakref.WeakKeyDictionary()
+
+
+def flat_map(store: Store) -> FlatMap:
+    """The store's :class:`FlatMap`, built (and checked) on first use."""
+    found = _MAPS.get(store)
+    if found is None:
+        found = FlatMap(store)
+        _MAPS[store] = found
+    return found
+
+
+def flat_table(store: Store) -> list[FlatParam]:
+    """Every live destructured parameter (``px4params param flat``)."""
+    return flat_map(store).table()
+
+
+def resolve_flat(store: Store, name: str) -> str:
+    """The structured leaf name of a live flat parameter: ``INA238_1C`` -> ``INA238#1[4]``."""
+    return flat_map(store).find(name).leaf
+
+
+def get_flat(store: Store, name: str) -> int | float:
+    """A live flat parameter's value as it is carried (``int32`` or ``float32``)."""
+    return flat_map(store).find(name).value
+
+
+def set_flat(store: Store, name: str, number: Any, *, default: bool = False) -> FlatParam:
+    """Writes a flat parameter's number to its leaf (the store checks the range; a refused
+    write changes nothing) and returns the parameter as stored (floats rounded)."""
+    fmap = flat_map(store)
+    param = fmap.find(name)
+    try:
+        value = param.slot.from_flat(number)
+    except FlatError as e:
+        raise FlatError(f"{param.name} ({param.instance}.{param.path}): {e}") from None
+    if default:
+        store.set_default(param.leaf, value)
+    else:
+        store.set(param.leaf, value)
+    return fmap.find(param.name)

@@ -1,0 +1,207 @@
+"""Parameter files for other tools: QGC ``.params`` files and a JSON export.
+
+QGC ``.params``: ``#`` comment lines, then one TAB-separated line per parameter,
+``vehicle-id component-id name value type`` (type 6 int32, 9 float32; floats with 18
+decimals), as QGroundControl saves and loads them. Classic parameters are written as they are;
+structured instances in their destructured form (one flat parameter per leaf, ``INA238_0C``,
+see :mod:`px4params.store.flat`), so a ground station that knows only flat parameters can load them.
+
+JSON: ``{"format": "px4params", "version": 1, "instances": {"INA238#0": {"value": ...,
+"default": ...}}, "classic": {"SYS_AUTOSTART": 4001}}`` with every existing instance and every
+classic parameter that differs from its default.
+
+Reading either applies everything or nothing (one store transaction).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import re
+from typing import Any
+
+from px4params.dsdl.schema import to_json_value
+from px4params.errors import InstanceError, ParamFileError, Px4ParamsError
+from px4params.store.store import Key, Store
+
+MAV_PARAM_TYPE_INT32 = 6
+MAV_PARAM_TYPE_REAL32 = 9
+JSON_FORMAT = "px4params"
+
+_FLAT_INSTANCE = re.compile(r"(?P<param>[A-Z0-9_]+?)_(?P<instance>\d+)(?P<letters>[A-Z]+)")
+
+
+def kind_of(path: str) -> str | None:
+    """``qgc`` or ``json`` by the file's extension; None for anything else (a store file)."""
+    ext = os.path.splitext(path)[1].lower()
+    return {".params": "qgc", ".json": "json"}.get(ext)
+
+
+# -- writing ----------------------------------------------------------------------------------
+
+
+def export_qgc(store: Store, *, vehicle: int = 1, component: int = 1) -> str:
+    from px4params.store.flat import flat_table
+
+    lines = [
+        "# Onboard parameters for Vehicle 1, written by px4params",
+        "#",
+        "# Structured instances are written destructured: one flat parameter per leaf.",
+        "#",
+        "# Vehicle-Id\tComponent-Id\tName\tValue\tType",
+    ]
+    for name in store.names():
+        classic = store.classic(Key.parse(name).param)
+        if classic is not None and store.changed(name):
+            lines.append(_line(vehicle, component, name, store.get(name), classic.is_float))
+    for p in flat_table(store):
+        lines.append(_line(vehicle, component, p.name, p.value, p.mav_type == "float32"))
+    return "\n".join(lines) + "\n"
+
+
+def _line(vehicle: int, component: int, name: str, value: float, is_float: bool) -> str:
+    if is_float:
+        text = f"{value:.18f}" if math.isfinite(value) else str(value)
+        return f"{vehicle}\t{component}\t{name}\t{text}\t{MAV_PARAM_TYPE_REAL32}"
+    return f"{vehicle}\t{component}\t{name}\t{int(value)}\t{MAV_PARAM_TYPE_INT32}"
+
+
+def export_json(store: Store) -> str:
+    instances = {
+        name: {
+            "value": to_json_value(_without_versions(store.get(name))),
+            "default": to_json_value(_without_versions(store.get(name, default=True))),
+        }
+        for name in store.names()
+        if store.classic(Key.parse(name).param) is None and ("#" in name or store.changed(name))
+    }
+    classic = {
+        name: to_json_value(store.get(name))
+        for name in store.names()
+        if store.classic(Key.parse(name).param) is not None and store.changed(name)
+    }
+    document = {"format": JSON_FORMAT, "version": 1, "instances": instances, "classic": classic}
+    return json.dumps(document, indent=1) + "\n"
+
+
+def _without_versions(value: Any) -> Any:
+    if isinstance(value, dict):
+        return {k: _without_versions(v) for k, v in value.items() if k != "p_version"}
+    if isinstance(value, list):
+        return [_without_versions(v) for v in value]
+    return value
+
+
+def write(store: Store, path: str) -> int:
+    kind = kind_of(path)
+    if kind is None:
+        raise ParamFileError(f"{path}: export writes .params (QGC) or .json files")
+    text = export_qgc(store) if kind == "qgc" else export_json(store)
+    try:
+        with open(path, "w", encoding="utf-8") as f:
+            f.write(text)
+    except OSError as e:
+        raise ParamFileError(f"{path}: cannot write: {e.strerror}") from None
+    return len(text.encode())
+
+
+# -- reading ----------------------------------------------------------------------------------
+
+
+def read(store: Store, path: str, *, reset: bool) -> list[str]:
+    """Applies a ``.params`` or JSON file (after resetting the store when ``reset``); all of
+    it or, on any error, nothing. Returns report lines."""
+    kind = kind_of(path)
+    try:
+        with open(path, encoding="utf-8") as f:
+            text = f.read()
+    except OSError as e:
+        raise ParamFileError(f"{path}: cannot read: {e.strerror}") from None
+    except UnicodeDecodeError as e:
+        raise ParamFileError(f"{path}: not a text file ({e.reason})") from None
+    with store.transaction():
+        if reset:
+            store.reset_to_initial()
+        if kind == "qgc":
+            return _read_qgc(store, path, text)
+        return _read_json(store, path, text)
+
+
+def _read_qgc(store: Store, path: str, text: str) -> list[str]:
+    from px4params.store.flat import set_flat
+
+    report: list[str] = []
+    for number, raw in enumerate(text.splitlines(), start=1):
+        line = raw.strip()
+        if not line or line.startswith("#"):
+            continue
+        where = f"{path}:{number}"
+        parts = line.split("\t")
+        if len(parts) != 5:
+            raise ParamFileError(
+                f"{where}: expected 5 TAB-separated columns "
+                f"(vehicle-id, component-id, name, value, type), got {len(parts)}"
+            )
+        _, _, name, value_text, type_text = parts
+        if type_text not in (str(MAV_PARAM_TYPE_INT32), str(MAV_PARAM_TYPE_REAL32)):
+            raise ParamFileError(
+                f"{where}: {name}: type {type_text!r} is not 6 (int32) or 9 (float)"
+            )
+        try:
+            number_value: int | float = (
+                int(value_text) if type_text == str(MAV_PARAM_TYPE_INT32) else float(value_text)
+            )
+        except ValueError:
+            raise ParamFileError(f"{where}: {name}: value {value_text!r} is not a number") from None
+        try:
+            if name in store.parameters:
+                store.set(name, number_value)
+                continue
+            match = _FLAT_INSTANCE.fullmatch(name)
+            if match is None or match["param"] not in store.parameters:
+                report.append(f"{where}: {name}: not a parameter of this store; skipped")
+                continue
+            instance = f"{match['param']}#{int(match['instance'])}"
+            if instance not in store:
+                store.add(instance)
+            set_flat(store, name, number_value)
+        except Px4ParamsError as e:
+            raise ParamFileError(f"{where}: {e}") from None
+    return report
+
+
+def _read_json(store: Store, path: str, text: str) -> list[str]:
+    try:
+        document = json.loads(text)
+    except json.JSONDecodeError as e:
+        raise ParamFileError(f"{path}:{e.lineno}: not JSON: {e.msg}") from None
+    if not isinstance(document, dict) or document.get("format") != JSON_FORMAT:
+        raise ParamFileError(f'{path}: not a px4params JSON export (no "format": "px4params")')
+    if document.get("version") != 1:
+        raise ParamFileError(
+            f"{path}: JSON export version {document.get('version')!r} (expected 1)"
+        )
+    instances = document.get("instances") or {}
+    classic = document.get("classic") or {}
+    if not isinstance(instances, dict) or not isinstance(classic, dict):
+        raise ParamFileError(f"{path}: 'instances' and 'classic' must be objects")
+    for name, entry in instances.items():
+        try:
+            key = Key.parse(name)
+            if not isinstance(entry, dict):
+                raise ParamFileError(f'{name}: expected {{"value": ..., "default": ...}}')
+            if key.instance is not None and name not in store:
+                store.add(name)
+            if "default" in entry:
+                store.set_default(name, entry["default"])
+            if "value" in entry:
+                store.set(name, entry["value"])
+        except (Px4ParamsError, InstanceError) as e:
+            raise ParamFileError(f"{path}: instances: {e}") from None
+    for name, value in classic.items():
+        try:
+            store.set(name, value)
+        except Px4ParamsError as e:
+            raise ParamFileError(f"{path}: classic: {e}") from None
+    return []

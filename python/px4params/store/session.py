@@ -1,0 +1,122 @@
+"""A session on the store file: open it (a new store when there is none), hold its lock while a
+command or a whole airframe file works on it, and save once when the work succeeded.
+
+Writes to other files asked for during a batch (``param save FILE``, ``param export FILE``) are
+deferred until the batch succeeds: a failing airframe file leaves no file half-written.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import sys
+from collections.abc import Callable, Iterable, Iterator
+from dataclasses import dataclass, field
+from typing import TextIO
+
+from px4params.dsdl.schema import load_schema
+from px4params.errors import StoreFileError
+from px4params.store.classic import BUNDLED_CLASSIC, CLASSIC_ENV
+from px4params.store.store import Store, default_store_path
+
+
+@dataclass
+class Session:
+    """The store a ``param`` command (or a whole airframe file) works on."""
+
+    store: Store
+    path: str
+    out: TextIO = field(default_factory=lambda: sys.stdout)
+    #: Save after each changing verb (off while an airframe file runs: it saves once).
+    autosave: bool = True
+    changed: bool = False
+    #: Writes to other files asked for during a batch, done when the batch succeeds.
+    deferred: list[Callable[[], None]] = field(default_factory=list)
+
+    def done(self) -> None:
+        """Records a change; saves it unless a batch is running."""
+        self.changed = True
+        if self.autosave:
+            self.save()
+
+    def write_later(self, write: Callable[[], None]) -> None:
+        """Writes a file now, or when the batch succeeds: a failed airframe file leaves no
+        file behind that it wrote half-way."""
+        if self.autosave:
+            write()
+        else:
+            self.deferred.append(write)
+
+    def save(self) -> None:
+        self.store.save(self.path)
+        self.changed = False
+        for write in self.deferred:
+            write()
+        self.deferred.clear()
+
+
+def open_session(
+    store_path: str | None,
+    classic: str | None,
+    dsdl: Iterable[str] = (),
+    out: TextIO | None = None,
+    *,
+    start_empty_if_unreadable: bool = False,
+) -> Session:
+    """The store in ``store_path`` (default file when None); a new, empty one when the file
+    does not exist yet (or, with ``start_empty_if_unreadable``, cannot be used: for ``param
+    load FILE``, the way back from a damaged store)."""
+    path = store_path or default_store_path()
+    # Parameters are px types: DroneCAN's standard messages are not needed (and slow to load).
+    schema = load_schema(list(dsdl), include_dronecan=False)
+    source = classic or os.environ.get(CLASSIC_ENV) or BUNDLED_CLASSIC
+    store = Store(schema, classic=source)
+    if os.path.exists(path):
+        try:
+            store.load_from(path)
+        except StoreFileError as e:
+            if start_empty_if_unreadable:
+                store.reset_to_initial()
+            else:
+                backup = path + ".bak"
+                hint = (
+                    f"; the previous save is in {backup}: px4params param load {backup}"
+                    if os.path.exists(backup)
+                    else ""
+                )
+                raise StoreFileError(f"{e.message}{hint}", e.file, e.offset) from None
+    return Session(store, path, out or sys.stdout)
+
+
+@contextlib.contextmanager
+def store_lock(path: str) -> Iterator[None]:
+    """Holds ``FILE.lock`` while a command reads, changes and saves the store, so that two
+    commands at once do not lose one's change (POSIX advisory lock; elsewhere, no lock)."""
+    try:
+        import fcntl
+    except ImportError:  # not POSIX
+        yield
+        return
+    try:
+        handle = open(path + ".lock", "a")  # noqa: SIM115 - held for the whole block
+    except OSError:
+        yield  # a read-only folder: reading still works, saving will report the problem
+        return
+    with handle:
+        fcntl.flock(handle.fileno(), fcntl.LOCK_EX)
+        yield
+
+
+@contextlib.contextmanager
+def locked_session(
+    store_path: str | None,
+    classic: str | None,
+    dsdl: Iterable[str] = (),
+    *,
+    start_empty_if_unreadable: bool = False,
+) -> Iterator[Session]:
+    """:func:`open_session` under the store's lock, held until the block ends."""
+    with store_lock(store_path or default_store_path()):
+        yield open_session(
+            store_path, classic, dsdl, start_empty_if_unreadable=start_empty_if_unreadable
+        )

@@ -1,0 +1,163 @@
+"""The parameter set: which types are parameters, their names, instances and default values.
+
+A ``px`` type is a parameter when its doc comment carries ``@max_instances N`` (an instanced
+parameter: ``INA238#0`` .. ``INA238#<N-1>``) or ``@param NAME`` without ``@max_instances`` (a
+single value shared by all instances, e.g. ``INA238_SHARED``). The parameter's name is
+``@param`` when given, otherwise the type's short name in upper snake case
+(``px.Ina238`` -> ``INA238``, ``px.Ina238Shared`` -> ``INA238_SHARED``). A parameter always
+uses the newest version of its type; older versions stay loadable for translating stored data.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+from px4params.dsdl.schema import DataType, Schema
+from px4params.errors import ParameterSetError
+
+__all__ = ["ParamSpec", "ParameterSetError", "metadata_default", "parameter_specs"]
+
+_CAMEL_BOUNDARY = re.compile(r"(?<=[a-z0-9])(?=[A-Z])")
+_PARAM_NAME = re.compile(r"[A-Z][A-Z0-9_]*")
+#: PX4 parameter names have at most 16 characters.
+MAX_NAME_LEN = 16
+
+
+@dataclass(frozen=True)
+class ParamSpec:
+    """One structured parameter."""
+
+    #: Parameter name, e.g. ``INA238``.
+    name: str
+    #: The type (its newest version).
+    data_type: DataType
+    #: Number of instance slots, or None for a shared (not instanced) parameter.
+    max_instances: int | None
+
+    @property
+    def shared(self) -> bool:
+        """A single value shared by all instances (no ``#N``)."""
+        return self.max_instances is None
+
+    @property
+    def slots(self) -> int:
+        """Slots reserved: ``max_instances``, or 1 for a shared parameter."""
+        return self.max_instances or 1
+
+    def instance_name(self, instance: int) -> str:
+        """``INA238#0``, or the bare name for a shared parameter."""
+        return self.name if self.shared else f"{self.name}#{instance}"
+
+
+def default_param_name(type_name: str) -> str:
+    """``px.Ina238Shared`` -> ``INA238_SHARED``."""
+    short = type_name.rsplit(".", 1)[-1]
+    return _CAMEL_BOUNDARY.sub("_", short).upper()
+
+
+def parameter_specs(schema: Schema) -> list[ParamSpec]:
+    """Every parameter of ``schema``, sorted by name."""
+    specs: dict[str, ParamSpec] = {}
+    origin: dict[str, str] = {}
+    newest: dict[str, str] = {}
+    for key in schema:
+        definition = schema.model["types"][key]
+        if definition.get("dialect") != "dsdl" or definition.get("service"):
+            continue
+        name = str(definition["name"])
+        if name not in newest or schema.resolve(name) == key:
+            newest[name] = schema.resolve(name)
+    for type_name, key in sorted(newest.items()):
+        data_type = schema[key]
+        tags = data_type.doc.get("tags") or {}
+        if "max_instances" not in tags and "param" not in tags:
+            continue
+        name = tags.get("param") or default_param_name(type_name)
+        if not _PARAM_NAME.fullmatch(name) or len(name) > MAX_NAME_LEN:
+            raise ParameterSetError(
+                f"{data_type.definition.get('file')}: parameter name {name!r} of {type_name} "
+                f"is not an upper-case name of at most {MAX_NAME_LEN} characters "
+                "(set one with @param NAME)"
+            )
+        if name in specs:
+            raise ParameterSetError(
+                f"{data_type.definition.get('file')}: parameter name {name} of {type_name} "
+                f"is already used by {origin[name]} (set another with @param NAME)"
+            )
+        max_instances = tags.get("max_instances")
+        specs[name] = ParamSpec(name, data_type, int(max_instances) if max_instances else None)
+        origin[name] = type_name
+    return [specs[n] for n in sorted(specs)]
+
+
+def metadata_default(schema: Schema, key: str) -> dict[str, Any]:
+    """The value of type ``key`` built from its fields' ``@default`` metadata (recursively);
+    fields without one are zero, unions take their first variant unless a path default
+    (``@default i2c.address 0x45``) names another."""
+    value = _default_of(schema, {"kind": "ref", "name": key}, None)
+    assert isinstance(value, dict)
+    return value
+
+
+def _default_of(schema: Schema, type_spec: Mapping[str, Any], given: Any) -> Any:
+    kind = type_spec["kind"]
+    if kind == "ref":
+        definition = schema.model["types"][type_spec["name"]]
+        overrides = _nest(given) if isinstance(given, Mapping) else {}
+        fields = [f for f in definition["fields"] if f["type"]["kind"] != "void"]
+        if definition["kind"] == "union":
+            chosen = next((f for f in fields if f["name"] in overrides), fields[0])
+            return {chosen["name"]: _field_default(schema, chosen, overrides.get(chosen["name"]))}
+        return {
+            f["name"]: _field_default(schema, f, overrides.get(f["name"]))
+            for f in fields
+            if f["name"] != "p_version"
+        }
+    if kind == "array":
+        return [_default_of(schema, type_spec["elem"], None) for _ in range(type_spec["len"])]
+    if kind == "dynarray":
+        return []
+    if given is not None:
+        return given
+    if kind == "bool":
+        return False
+    if kind == "float":
+        return 0.0
+    return 0
+
+
+def _field_default(schema: Schema, field: Mapping[str, Any], override: Any) -> Any:
+    tags = (field.get("doc") or {}).get("tags") or {}
+    declared = tags.get("default")
+    if isinstance(declared, Mapping) and isinstance(override, Mapping):
+        declared = {**declared, **_flatten(override)}
+    elif override is not None:
+        declared = override
+    return _default_of(schema, field["type"], declared)
+
+
+def _nest(paths: Mapping[str, Any]) -> dict[str, Any]:
+    """``{"i2c.address": 69}`` -> ``{"i2c": {"address": 69}}``."""
+    nested: dict[str, Any] = {}
+    for path, value in paths.items():
+        head, _, rest = path.partition(".")
+        if rest:
+            inner = nested.setdefault(head, {})
+            if isinstance(inner, dict):
+                inner[rest] = value
+        else:
+            nested[head] = value
+    return nested
+
+
+def _flatten(value: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
+    flat: dict[str, Any] = {}
+    for k, v in value.items():
+        if isinstance(v, Mapping):
+            flat.update(_flatten(v, f"{prefix}{k}."))
+        else:
+            flat[f"{prefix}{k}"] = v
+    return flat

@@ -1,0 +1,518 @@
+"""The parameter store: structured instances (``INA238#0``), shared structured parameters and
+classic PX4 parameters, in memory reserved once by the Rust core.
+
+>>> import px4params
+>>> store = px4params.Store(px4params.load_schema())
+>>> store.add("INA238#0")
+'INA238#0'
+>>> store["INA238#0"][4] = 0x45
+>>> store["INA238#0"].bus.i2c.address
+69
+
+Names: ``INA238#0`` is instance 0 of parameter ``INA238``; ``INA238#0[4]`` its leaf ``[4]``;
+``INA238#0.bus.i2c.address`` a leaf by path; a shared or classic parameter has no ``#N``.
+Every change is all-or-nothing: a refused one leaves the store exactly as it was.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import re
+import struct
+from collections.abc import Iterator, Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+from px4params import _native
+from px4params.dsdl.schema import DataType, Leaf, Schema, load_schema
+from px4params.errors import InstanceError, LeafError, StoreError
+from px4params.store.classic import (
+    CLASSIC_ENV,
+    ClassicParam,
+    ClassicParamsError,
+    classic_value,
+    load_classic,
+)
+from px4params.store.spec import ParamSpec, metadata_default, parameter_specs
+
+__all__ = ["DEFAULT_STORE", "STORE_ENV", "InstanceView", "Key", "Store", "default_store_path"]
+
+#: Environment variable naming the store file (``--store FILE`` overrides it).
+STORE_ENV = "PX4PARAMS_STORE"
+#: The store file used when neither ``--store`` nor ``$PX4PARAMS_STORE`` names one.
+DEFAULT_STORE = "px4params.store"
+
+_KEY = re.compile(
+    r"(?P<name>[A-Za-z][A-Za-z0-9_]*)(?:#(?P<instance>\d+))?"
+    r"(?:\[(?P<index>\d+)\]|\.(?P<path>[A-Za-z_][A-Za-z0-9_.\[\]]*))?"
+)
+
+
+#: Instance numbers are 16-bit in the core (``max_instances`` is far below).
+MAX_INSTANCE = 0xFFFF
+#: Leaf numbers beyond this name no leaf of any storable value.
+MAX_LEAF = 1 << 31
+
+
+def default_store_path() -> str:
+    """``$PX4PARAMS_STORE``, or ``px4params.store`` in the current directory."""
+    return os.environ.get(STORE_ENV) or DEFAULT_STORE
+
+
+@dataclass(frozen=True)
+class Key:
+    """A parsed name: parameter, instance (None for shared and classic ones) and leaf."""
+
+    param: str
+    instance: int | None
+    leaf: int | str | None
+
+    @classmethod
+    def parse(cls, text: str | Key) -> Key:
+        """``text`` parsed (a :class:`Key` is returned as it is: a name typed by a user is parsed
+        once, where it enters, and the key is passed on)."""
+        if isinstance(text, Key):
+            return text
+        match = _KEY.fullmatch(text.strip())
+        if not match:
+            raise InstanceError(
+                f"'{text}' is not a parameter name (expected NAME, NAME#N, NAME#N[k] or "
+                "NAME#N.path, e.g. INA238#0.bus.i2c.address)"
+            )
+        instance = match["instance"]
+        if instance is not None and int(instance) > MAX_INSTANCE:
+            raise InstanceError(f"{text}: instance {int(instance)} is out of range")
+        leaf: int | str | None = None
+        if match["index"] is not None:
+            leaf = int(match["index"])
+            if leaf > MAX_LEAF:
+                raise InstanceError(f"{text}: no leaf [{leaf}]")
+        elif match["path"] is not None:
+            leaf = match["path"]
+        return cls(match["name"].upper(), int(instance) if instance else None, leaf)
+
+    def __str__(self) -> str:
+        name = self.param if self.instance is None else f"{self.param}#{self.instance}"
+        if isinstance(self.leaf, int):
+            return f"{name}[{self.leaf}]"
+        return name if self.leaf is None else f"{name}.{self.leaf}"
+
+
+@dataclass(frozen=True)
+class _Param:
+    """A parameter of the store: structured (``spec``) or classic (``classic``)."""
+
+    index: int
+    name: str
+    spec: ParamSpec | None
+    classic: ClassicParam | None
+
+    @property
+    def shared(self) -> bool:
+        return self.spec is None or self.spec.shared
+
+
+class Store:
+    """Structured and classic parameters, with defaults and per-instance state.
+
+    ``schema`` defaults to the bundled types; ``classic`` is a list of classic parameters or a
+    PX4 ``parameters.json`` path (default: ``$PX4PARAMS_PARAMETERS_JSON``, else none).
+    """
+
+    def __init__(
+        self,
+        schema: Schema | None = None,
+        *,
+        classic: Sequence[ClassicParam] | str | os.PathLike[str] | None = None,
+    ) -> None:
+        self.schema = schema if schema is not None else load_schema()
+        if classic is None and os.environ.get(CLASSIC_ENV):
+            classic = os.environ[CLASSIC_ENV]
+        if isinstance(classic, str | os.PathLike):
+            classic = load_classic(classic)
+        self.specs = parameter_specs(self.schema)
+        params: list[_Param] = []
+        rows: list[tuple[str, str, int | None]] = []
+        for spec in self.specs:
+            params.append(_Param(len(params), spec.name, spec, None))
+            rows.append((spec.name, spec.data_type.key, spec.max_instances))
+        structured = {p.name for p in params}
+        for c in classic or ():
+            if c.name in structured:
+                raise StoreError(f"classic parameter {c.name} has the name of a structured one")
+            params.append(_Param(len(params), c.name, None, c))
+            rows.append((c.name, "@float32" if c.is_float else "@int32", None))
+        self._params = {p.name: p for p in params}
+        if len(self._params) != len(params):
+            raise StoreError("two classic parameters have the same name")
+        self._order = params
+        self._native = _native.Store(self.schema._native, rows)
+        for p in params:
+            self._native.set_type_default(p.index, self._type_default(p))
+        self._native.mark_saved()
+        self._initial = self._native.copy()
+        # The destructured (MAVLink) names must be valid for every type: checked once, here,
+        # so that a type with a leaf over 32 bits or a clashing name is refused at load.
+        from px4params.store.flat import flat_map
+
+        flat_map(self)
+        #: Classic records of a loaded file whose parameters this store lacks, kept to be saved.
+        self._foreign: dict[str, bytes] = {}
+
+    def _type_default(self, p: _Param) -> bytes:
+        if p.classic is not None:
+            return _classic_bytes(p.classic, p.classic.default)
+        assert p.spec is not None
+        value = metadata_default(self.schema, p.spec.data_type.key)
+        return p.spec.data_type.encode(value, tao=False)
+
+    # -- names --------------------------------------------------------------------------------
+
+    @property
+    def parameters(self) -> list[str]:
+        """Every parameter name: structured ones (sorted), then classic ones (file order)."""
+        return [p.name for p in self._order]
+
+    def spec(self, name: str) -> ParamSpec | None:
+        """The structured parameter ``name`` (None for a classic one)."""
+        return self._param(name).spec
+
+    def classic(self, name: str) -> ClassicParam | None:
+        """The classic parameter ``name`` (None for a structured one)."""
+        return self._param(name).classic
+
+    def _param(self, name: str) -> _Param:
+        p = self._params.get(name.upper())
+        if p is None:
+            import difflib
+
+            hint = difflib.get_close_matches(name.upper(), list(self._params), n=3)
+            extra = f" (did you mean: {', '.join(hint)}?)" if hint else ""
+            raise InstanceError(f"unknown parameter '{name}'{extra}")
+        return p
+
+    def _resolve(self, text: str | Key) -> tuple[_Param, int, Key]:
+        key = Key.parse(text)
+        p = self._param(key.param)
+        if p.shared:
+            if key.instance is not None:
+                raise InstanceError(f"{p.name} is not instanced: write {p.name}, not {text}")
+            return p, 0, key
+        if key.instance is None:
+            raise InstanceError(f"{p.name} has instances: name one, e.g. {p.name}#0")
+        return p, key.instance, key
+
+    def _instance_name(self, p: _Param, instance: int) -> str:
+        return p.name if p.shared else f"{p.name}#{instance}"
+
+    def data_type(self, name: str | Key) -> DataType:
+        """The type of a structured parameter."""
+        p = self._param(Key.parse(name).param)
+        if p.spec is None:
+            raise InstanceError(f"{p.name} is a classic parameter, not a structured one")
+        return p.spec.data_type
+
+    # -- instances ----------------------------------------------------------------------------
+
+    def add(self, name: str | Key) -> str:
+        """Adds ``INA238#N``, or the lowest free instance for ``INA238``; returns its name."""
+        key = Key.parse(name)
+        p = self._param(key.param)
+        if key.leaf is not None:
+            raise InstanceError(f"add takes an instance, not a leaf: {name}")
+        if p.shared:
+            raise InstanceError(f"{p.name}: a shared parameter has no instances to add")
+        number = self._native.add(p.index, key.instance)
+        return self._instance_name(p, number)
+
+    def remove(self, name: str | Key) -> None:
+        """Removes an instance; the others keep their numbers."""
+        p, instance, key = self._resolve(name)
+        if key.leaf is not None:
+            raise InstanceError(f"rm takes an instance, not a leaf: {name}")
+        if p.shared:
+            raise InstanceError(f"{p.name}: a shared parameter has no instances to remove")
+        self._native.remove(p.index, instance)
+
+    def instances(self, param: str | Key) -> list[str]:
+        """The instances of ``param`` that exist, in order (what a driver's ``auto`` starts)."""
+        p = self._param(Key.parse(param).param)
+        return [self._instance_name(p, i) for i in self._native.instances(p.index)]
+
+    def names(self) -> Iterator[str]:
+        """Every existing instance and every shared or classic parameter, in store order."""
+        for p in self._order:
+            for i in self._native.instances(p.index):
+                yield self._instance_name(p, i)
+
+    def __contains__(self, name: object) -> bool:
+        if not isinstance(name, str):
+            return False
+        try:
+            p, instance, _ = self._resolve(name)
+            return self._native.slot(p.index, instance)[0]
+        except InstanceError:
+            return False
+
+    def __iter__(self) -> Iterator[str]:
+        return self.names()
+
+    def __getitem__(self, name: str | Key) -> InstanceView:
+        p, instance, key = self._resolve(name)
+        if key.leaf is not None:
+            raise InstanceError(f"store[...] takes an instance; use store.get('{name}')")
+        if not self._native.slot(p.index, instance)[0]:  # also checks the range
+            raise InstanceError(
+                f"{self._instance_name(p, instance)}: instance does not exist "
+                "(add it first: param add)"
+            )
+        return InstanceView(self, p, instance)
+
+    # -- values -------------------------------------------------------------------------------
+
+    def get(self, name: str | Key, *, default: bool = False) -> Any:
+        """A whole value (dict; a number for a classic parameter) or one leaf's value."""
+        p, instance, key = self._resolve(name)
+        if key.leaf is not None:
+            return self.leaf(key, default=default).value
+        data = self._native.get(p.index, instance, default=default)
+        if p.classic is not None:
+            return _classic_from_bytes(p.classic, data)
+        assert p.spec is not None
+        return p.spec.data_type.decode(data, tao=False)
+
+    def leaf(self, name: str | Key, *, default: bool = False) -> Leaf:
+        """One leaf, named ``NAME#N[k]`` or ``NAME#N.path``."""
+        p, instance, key = self._resolve(name)
+        if key.leaf is None or p.classic is not None:
+            raise InstanceError(f"'{name}' names no leaf (expected NAME#N[k] or NAME#N.path)")
+        return Leaf(*self._native.get_leaf(p.index, instance, key.leaf, default=default))
+
+    def leaves(self, name: str | Key, *, default: bool = False) -> list[Leaf]:
+        """Every leaf of an instance's value (or default) in ``[k]`` order."""
+        p, instance, _ = self._resolve(name)
+        if p.spec is None:
+            raise InstanceError(f"{p.name} is a classic parameter: it has no leaves")
+        data = self._native.get(p.index, instance, default=default)
+        return p.spec.data_type.leaves(data, tao=False)
+
+    def _whole(self, name: str | Key, what: str) -> tuple[_Param, int]:
+        """An instance or parameter named without a leaf (``what`` says who asks)."""
+        p, instance, key = self._resolve(name)
+        if key.leaf is not None:
+            raise InstanceError(f"{what} takes an instance or parameter, not a leaf: {name}")
+        return p, instance
+
+    def encoded(self, name: str | Key, *, default: bool = False) -> bytes:
+        """An instance's stored bytes (DroneCAN rules, no tail array optimization)."""
+        p, instance = self._whole(name, "encoded")
+        return self._native.get(p.index, instance, default=default)
+
+    def set(self, name: str | Key, value: Any, *, saturate: bool = False) -> None:
+        """Sets a whole value, a leaf (``NAME#N[k]``, ``NAME#N.path``) or a classic parameter."""
+        self._write(name, value, default=False, saturate=saturate)
+
+    def set_default(self, name: str | Key, value: Any, *, saturate: bool = False) -> None:
+        """Sets the default, like ``param set-default``: the value follows unless changed."""
+        self._write(name, value, default=True, saturate=saturate)
+
+    def _write(self, name: str | Key, value: Any, *, default: bool, saturate: bool) -> None:
+        p, instance, key = self._resolve(name)
+        if p.classic is not None:
+            if key.leaf is not None:
+                raise InstanceError(f"{p.name} is a classic parameter: it has no leaves")
+            try:
+                data = _classic_bytes(p.classic, value)
+            except ClassicParamsError as e:
+                raise ClassicParamsError(f"{p.name}: {e}") from None
+            self._native.set_encoded(p.index, 0, data, default=default)
+        elif key.leaf is None:
+            self._native.set_value(p.index, instance, value, default=default, saturate=saturate)
+        else:
+            self._native.set_leaf(
+                p.index, instance, key.leaf, value, default=default, saturate=saturate
+            )
+
+    def set_encoded(self, name: str | Key, data: bytes, *, default: bool = False) -> None:
+        """Sets a whole value from its stored bytes (checked before it is taken)."""
+        p, instance, _ = self._resolve(name)
+        self._native.set_encoded(p.index, instance, bytes(data), default=default)
+
+    def reset(self, name: str | Key) -> None:
+        """Sets a value, or one leaf (``INA238#0[4]``), back to its default."""
+        p, instance, key = self._resolve(name)
+        if key.leaf is None:
+            self._native.reset(p.index, instance)
+            return
+        try:
+            default = self.leaf(name, default=True)
+        except LeafError as e:
+            raise LeafError(f"{e} (in the default value, which has another shape)") from None
+        self.set(name, default.value)
+
+    def reset_all(self) -> None:
+        """Sets every value back to its default (instances stay)."""
+        for name in list(self.names()):
+            self.reset(name)
+
+    def reset_to_initial(self) -> None:
+        """Back to a new store: no instance, every value its default."""
+        self._native.restore(self._initial)
+        self._foreign = {}
+
+    def changed(self, name: str | Key | None = None) -> Any:
+        """Whether ``name`` differs from its default; without a name, every name that does."""
+        if name is not None:
+            p, instance = self._whole(name, "changed")
+            return self._native.changed(p.index, instance)
+        return [n for n in self.names() if self.changed(n)]
+
+    def state(self, name: str | Key) -> tuple[bool, bool]:
+        """``(used, unsaved)`` of an instance or parameter."""
+        p, instance = self._whole(name, "state")
+        _, used, unsaved = self._native.slot(p.index, instance)
+        return used, unsaved
+
+    def mark_used(self, name: str | Key) -> None:
+        """Marks an instance as read by a driver (PX4's ``x`` in ``param show``)."""
+        p, instance = self._whole(name, "touch")
+        self._native.mark_used(p.index, instance)
+
+    @property
+    def capacity(self) -> tuple[int, int]:
+        """``(slots, bytes)`` of memory reserved for every parameter's values and defaults."""
+        return self._native.capacity
+
+    # -- all-or-nothing batches ---------------------------------------------------------------
+
+    @contextlib.contextmanager
+    def transaction(self) -> Iterator[Store]:
+        """Applies every change in the block, or none if it raises."""
+        backup, foreign = self._native.copy(), dict(self._foreign)
+        try:
+            yield self
+        except BaseException:
+            self._native.restore(backup)
+            self._foreign = foreign
+            raise
+
+    # -- files --------------------------------------------------------------------------------
+
+    def save(self, path: str | os.PathLike[str] | None = None) -> int:
+        """Saves atomically (the previous file is kept as ``FILE.bak``); returns its size."""
+        from px4params.store.file import save
+
+        size = save(self, path if path is not None else default_store_path())
+        self._native.mark_saved()
+        return size
+
+    def load_from(self, path: str | os.PathLike[str] | None = None) -> list[str]:
+        """Resets the store, then applies the file (``param load``); returns the report."""
+        from px4params.store.file import apply_file
+
+        return apply_file(self, path if path is not None else default_store_path(), merge=False)
+
+    def import_from(self, path: str | os.PathLike[str] | None = None) -> list[str]:
+        """Merges the file into the store (``param import``); returns the report."""
+        from px4params.store.file import apply_file
+
+        return apply_file(self, path if path is not None else default_store_path(), merge=True)
+
+    @classmethod
+    def load(
+        cls,
+        path: str | os.PathLike[str] | None = None,
+        schema: Schema | None = None,
+        *,
+        classic: Sequence[ClassicParam] | str | os.PathLike[str] | None = None,
+    ) -> Store:
+        """A new store with the file's content."""
+        store = cls(schema, classic=classic)
+        store.load_from(path)
+        return store
+
+    def __repr__(self) -> str:
+        return f"<Store {len(list(self.names()))} instances of {len(self._order)} parameters>"
+
+
+class InstanceView:
+    """One instance: ``view[4]``, ``view[4] = 0x45``, ``view.bus.i2c.address``, ``view.value``.
+
+    Attribute access walks the path and returns a leaf's value, or a view of a nested struct.
+    """
+
+    __slots__ = ("_instance", "_param", "_prefix", "_store")
+
+    def __init__(self, store: Store, param: _Param, instance: int, prefix: str = "") -> None:
+        object.__setattr__(self, "_store", store)
+        object.__setattr__(self, "_param", param)
+        object.__setattr__(self, "_instance", instance)
+        object.__setattr__(self, "_prefix", prefix)
+
+    @property
+    def name(self) -> str:
+        """``INA238#0``."""
+        return self._store._instance_name(self._param, self._instance)
+
+    @property
+    def value(self) -> Any:
+        """The whole value (of the nested part, for a nested view)."""
+        whole = self._store.get(self.name)
+        for step in filter(None, self._prefix.split(".")):
+            whole = whole[step]
+        return whole
+
+    @property
+    def default(self) -> Any:
+        """The instance's default value."""
+        return self._store.get(self.name, default=True)
+
+    def set(self, value: Mapping[str, Any]) -> None:
+        """Sets the whole value."""
+        if self._prefix:
+            raise InstanceError(f"{self.name}.{self._prefix}: set whole values on the instance")
+        self._store.set(self.name, value)
+
+    def leaves(self) -> list[Leaf]:
+        """Every leaf in ``[k]`` order."""
+        return self._store.leaves(self.name)
+
+    def _target(self, item: int | str) -> str:
+        if isinstance(item, int) and not isinstance(item, bool):
+            if self._prefix:
+                raise InstanceError(f"{self.name}.{self._prefix}: [k] counts from the instance")
+            return f"{self.name}[{item}]"
+        return f"{self.name}.{self._prefix}{item}"
+
+    def __getitem__(self, item: int | str) -> Any:
+        return self._store.leaf(self._target(item)).value
+
+    def __setitem__(self, item: int | str, value: Any) -> None:
+        self._store.set(self._target(item), value)
+
+    def __getattr__(self, attr: str) -> Any:
+        if attr.startswith("__"):
+            raise AttributeError(attr)
+        path = f"{self._prefix}{attr}"
+        try:
+            return self._store.leaf(f"{self.name}.{path}").value
+        except LeafError as e:  # a struct or union: walk into it
+            if "not a leaf" not in str(e):
+                raise
+        return InstanceView(self._store, self._param, self._instance, f"{path}.")
+
+    def __setattr__(self, attr: str, value: Any) -> None:
+        self._store.set(f"{self.name}.{self._prefix}{attr}", value)
+
+    def __repr__(self) -> str:
+        return f"<{self.name}{'.' + self._prefix[:-1] if self._prefix else ''} {self.value!r}>"
+
+
+def _classic_bytes(param: ClassicParam, value: Any) -> bytes:
+    number = classic_value(param.type, value)
+    return struct.pack("<f" if param.is_float else "<i", number)
+
+
+def _classic_from_bytes(param: ClassicParam, data: bytes) -> int | float:
+    return struct.unpack("<f" if param.is_float else "<i", data)[0]
