@@ -1,5 +1,6 @@
 """CAN frames of DroneCAN transfers (native ``can_frames``/``reassemble``,
-px4params.links.can_transfer and the ``px4params frames`` command) against pydronecan's ``Transfer.to_frames()``/``from_frames()``.
+px4params.links.can_transfer and the ``px4params frames`` command) against pydronecan's
+``Transfer.to_frames()``/``from_frames()``.
 """
 
 from __future__ import annotations
