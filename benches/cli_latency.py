@@ -1,13 +1,18 @@
-"""Wall time of ``px4params param show`` on a warm cache (model and bytecode; target: 150 ms),
-with the bare interpreter start as the baseline measured in the same run.
+"""Wall time of short ``px4params`` commands against the bare interpreter, measured in the same
+run with the runs interleaved (this machine is noisy), bytecode cached as users have it, the
+DSDL model cached; and what ``import px4params`` costs (``-X importtime``, cumulative).
 
-    python benches/cli_latency.py [--runs 20]
+Targets (issue 13): ``param show`` and ``decode`` median <= 2.5x ``python -c pass``;
+``import px4params`` <= 25 ms.
+
+    python benches/cli_latency.py [--runs 30]
 """
 
 from __future__ import annotations
 
 import argparse
 import os
+import re
 import statistics
 import subprocess
 import sys
@@ -15,41 +20,68 @@ import tempfile
 import time
 
 
-def timed(argv: list[str], env: dict[str, str], runs: int) -> list[float]:
-    times = []
-    for _ in range(runs):
-        start = time.perf_counter()
-        subprocess.run(argv, env=env, check=True, stdout=subprocess.DEVNULL)
-        times.append(time.perf_counter() - start)
-    return times
+def once(argv: list[str], env: dict[str, str], cwd: str) -> float:
+    start = time.perf_counter()
+    subprocess.run(argv, env=env, cwd=cwd, check=True, stdout=subprocess.DEVNULL)
+    return time.perf_counter() - start
+
+
+def import_ms(env: dict[str, str], cwd: str) -> float:
+    """``import px4params``, cumulative microseconds of its line in ``-X importtime``."""
+    out = subprocess.run(
+        [sys.executable, "-X", "importtime", "-c", "import px4params"],
+        env=env,
+        cwd=cwd,
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stderr
+    match = re.search(r"\|\s*(\d+) \| px4params$", out, re.M)
+    assert match, out
+    return int(match.group(1)) / 1000
 
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("--runs", type=int, default=20)
+    parser.add_argument("--runs", type=int, default=30)
     args = parser.parse_args()
+    cli = os.path.join(os.path.dirname(sys.executable), "px4params")
     with tempfile.TemporaryDirectory() as tmp:
         env = dict(os.environ, PX4PARAMS_STORE=os.path.join(tmp, "bench.store"))
-        # As users run it: with compiled bytecode cached (this machine's environment turns
-        # writing it off, which would make every run compile every module again).
-        env.pop("PYTHONDONTWRITEBYTECODE", None)
-        cli = [sys.executable, "-m", "px4params"]
-        for line in ("param add INA238#0", "param set-default INA238#0[4] 0x45"):
-            subprocess.run(cli + line.split(), env=env, check=True, stdout=subprocess.DEVNULL)
-        timed([*cli, "param", "show"], env, 2)  # warm the model cache and the OS caches
-        rows = [
-            ("python -c pass (baseline)", timed([sys.executable, "-c", "pass"], env, args.runs)),
-            ("px4params param show", timed([*cli, "param", "show"], env, args.runs)),
-            (
-                "px4params param show -l INA238#0",
-                timed([*cli, "param", "show", "-l", "INA238#0"], env, args.runs),
-            ),
-        ]
-    base = statistics.median(rows[0][1])
+        env.pop("PYTHONDONTWRITEBYTECODE", None)  # as users run it: bytecode written and reused
+        examples = os.path.join(os.path.dirname(__file__), "..", "examples")
+        airframe = os.path.join(examples, "two_batteries.airframe")
+        subprocess.run(
+            [cli, "run", airframe], env=env, cwd=tmp, check=True, stdout=subprocess.DEVNULL
+        )
+        commands = {
+            "python -c pass (baseline)": [sys.executable, "-c", "pass"],
+            "px4params param show": [cli, "param", "show"],
+            "px4params param show -l INA238#0": [cli, "param", "show", "-l", "INA238#0"],
+            "px4params decode NodeStatus": [
+                cli,
+                "decode",
+                "uavcan.protocol.NodeStatus",
+                "39300000000700",
+            ],
+            "px4params --help": [cli, "--help"],
+        }
+        for argv in commands.values():  # warm the model cache, bytecode and the OS caches
+            once(argv, env, tmp)
+            once(argv, env, tmp)
+        times: dict[str, list[float]] = {label: [] for label in commands}
+        for _ in range(args.runs):
+            for label, argv in commands.items():
+                times[label].append(once(argv, env, tmp))
+        imports = [import_ms(env, tmp) for _ in range(args.runs)]
+    base = statistics.median(times["python -c pass (baseline)"])
     print(f"{'command':36} {'median':>8} {'min':>8} {'vs baseline':>11}")
-    for label, times in rows:
-        median = statistics.median(times)
-        print(f"{label:36} {median * 1e3:6.1f}ms {min(times) * 1e3:6.1f}ms {median / base:10.1f}x")
+    for label, values in times.items():
+        median = statistics.median(values)
+        print(f"{label:36} {median * 1e3:6.1f}ms {min(values) * 1e3:6.1f}ms {median / base:10.2f}x")
+    print(
+        f"import px4params (-X importtime, cumulative): median {statistics.median(imports):.1f} ms"
+    )
     return 0
 
 

@@ -5,6 +5,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
+export PATH="$PWD/.venv/bin:$PATH"
 
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
@@ -28,3 +29,6 @@ if px4params autostart run --bench examples/two_batteries_faults.bench.toml --du
     echo "(unexpected: the faulty bench may arm)"; exit 1
 fi
 echo "(exit status 1: the vehicle may not arm)"
+echo
+echo "px4params is installed in .venv: 'source .venv/bin/activate' puts it on PATH (or run"
+echo ".venv/bin/px4params). 'bash scripts/test.sh' runs every test."

@@ -21,3 +21,5 @@ else
     echo "== building the Rust extension (maturin, release): the first build takes about 2 minutes on 2 cores"
 fi
 .venv/bin/maturin develop --release --extras test
+
+echo "== ready: 'source .venv/bin/activate' puts px4params on PATH (or run .venv/bin/px4params)"

@@ -13,11 +13,12 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from px4params.dsdl import cache as model_cache
 from px4params.dsdl import loader as dsdl_loader
-from px4params.dsdl.loader import load_model
+from px4params.dsdl.cache import load_model
 from px4params.errors import DsdlError, Px4ParamsError
 
-PYTHON_DIR = Path(dsdl_loader.__file__).resolve().parent.parent
+PYTHON_DIR = Path(dsdl_loader.__file__).resolve().parents[2]
 
 PX_STRUCTS = [
     "I2c",
@@ -97,7 +98,7 @@ def test_bundled_types_present(px_model: dict[str, Any]) -> None:
     for name in [*PX_STRUCTS, "Bus"]:
         assert f"px.{name}.1.0" in keys
     assert all(spec["dialect"] == "dsdl" for spec in px_model["types"].values())
-    assert px_model["format"] == dsdl_loader.MODEL_FORMAT
+    assert px_model["format"] == model_cache.MODEL_FORMAT
 
 
 def test_every_struct_starts_with_p_version(px_model: dict[str, Any]) -> None:
@@ -263,7 +264,7 @@ def test_dronecan_standard_set_complete(full_model: dict[str, Any]) -> None:
 
 
 def test_every_bundled_uavcan_file_is_loaded(full_model: dict[str, Any]) -> None:
-    specs = Path(dsdl_loader._dronecan_package_dir(), "dsdl_specs")
+    specs = Path(model_cache.dronecan_package_dir(), "dsdl_specs")
     files = sorted(specs.rglob("*.uavcan"))
     assert len(files) >= 147
     loaded = {spec["file"] for spec in full_model["types"].values()}
@@ -516,7 +517,7 @@ def test_second_load_hits_cache(tmp_path: Path, monkeypatch: pytest.MonkeyPatch)
     def fail(*_args: object, **_kwargs: object) -> None:
         raise AssertionError("parsed again instead of using the cache")
 
-    monkeypatch.setattr(dsdl_loader, "_build_model", fail)
+    monkeypatch.setattr(dsdl_loader, "build_model", fail)
     assert load_model(include_dronecan=False, cache_dir=tmp_path) == first
     assert len(list(tmp_path.glob("model-*.json"))) == 1
 
@@ -525,12 +526,12 @@ def test_default_cache_dir_from_environment(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     monkeypatch.setenv("PX4PARAMS_CACHE_DIR", str(tmp_path / "env"))
-    assert dsdl_loader.default_cache_dir() == tmp_path / "env"
+    assert model_cache.default_cache_dir() == str(tmp_path / "env")
     load_model(include_dronecan=False)
     assert len(list((tmp_path / "env").glob("model-*.json"))) == 1
     monkeypatch.delenv("PX4PARAMS_CACHE_DIR")
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
-    assert dsdl_loader.default_cache_dir() == tmp_path / "xdg" / "px4params"
+    assert model_cache.default_cache_dir() == str(tmp_path / "xdg" / "px4params")
 
 
 def test_cache_key_follows_file_contents(tmp_path: Path) -> None:
@@ -546,7 +547,7 @@ def test_cache_key_follows_file_contents(tmp_path: Path) -> None:
     assert len(list((tmp_path / "cache").glob("model-*.json"))) == 2
     # Options are part of the key as well.
     keys = {
-        dsdl_loader._cache_key(dsdl_loader._collect_roots([root], flag), flag)
+        model_cache.cache_key_text(model_cache.collect_roots([root], flag), flag)
         for flag in (True, False)
     }
     assert len(keys) == 2
@@ -580,7 +581,7 @@ def _run_python(code: str, cache_dir: Path) -> str:
 
 def test_cache_hit_imports_no_parser(tmp_path: Path) -> None:
     code = (
-        "import sys; from px4params.dsdl.loader import load_model; load_model(); "
+        "import sys; from px4params.dsdl.cache import load_model; load_model(); "
         "print(sorted(m for m in sys.modules if m.partition('.')[0] in "
         "('pydsdl', 'dronecan', '_px4params_dronecan_dsdl')))"
     )

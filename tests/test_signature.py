@@ -17,8 +17,8 @@ import px4params
 import pytest
 from dronecan.dsdl.signature import Signature
 from dronecan_oracle import BUNDLED
-from px4params.dsdl import loader as dsdl_loader
-from px4params.dsdl.loader import load_model
+from px4params.dsdl import cache as model_cache
+from px4params.dsdl.cache import load_model
 from px4params.dsdl.signature import data_type_signature, normalized_definition, transfer_crc_seed
 from px4params.errors import DsdlError
 
@@ -238,9 +238,9 @@ def write(root: Path, relative: str, text: str) -> None:
 
 
 def test_model_format_bumped(tmp_path: Path) -> None:
-    assert dsdl_loader.MODEL_FORMAT >= 2
+    assert model_cache.MODEL_FORMAT >= 2
     model = load_model(include_dronecan=False, cache_dir=tmp_path)
-    assert model["format"] == dsdl_loader.MODEL_FORMAT
+    assert model["format"] == model_cache.MODEL_FORMAT
     assert all("service" in t and "signature_override" in t for t in model["types"].values())
 
 

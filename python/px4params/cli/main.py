@@ -47,9 +47,10 @@ parameters, stored bit-packed with the DroneCAN rules, from which drivers
 autostart and arming is checked."""
 
 
-def build_parser(only: str | None = None) -> argparse.ArgumentParser:
+def build_parser(only: str | None = None, words: Sequence[str] = ()) -> argparse.ArgumentParser:
     """The whole parser, or with ``only`` the parser of that one command (the others appear in
-    ``--help`` by name and summary, without importing their modules)."""
+    ``--help`` by name and summary, without importing their modules). ``words``, the command
+    line, lets a command build only the part of its parser it runs (``param show``)."""
     parser = argparse.ArgumentParser(
         prog="px4params",
         description=_DESCRIPTION,
@@ -59,7 +60,7 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
     for name, (module_name, summary) in COMMANDS.items():
         if only is None or name == only:
             module = importlib.import_module(f"px4params.cli.commands.{module_name}")
-            module.add_parser(sub, name, summary)
+            module.add_parser(sub, name, summary, words)
         else:
             sub.add_parser(name, help=summary, add_help=False)
     return parser
@@ -77,7 +78,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     words = list(sys.argv[1:] if argv is None else argv)
     command = _command_in(words)
     # Without a command there is nothing to run: the parser reports usage or prints --help.
-    parser = build_parser(only=command) if command else build_parser(only="")
+    parser = build_parser(only=command or "", words=words)
     args = parser.parse_args(words)
     try:
         return int(args.func(args))

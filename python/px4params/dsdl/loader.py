@@ -20,43 +20,32 @@ Metadata lives in pydsdl doc comments (``.doc``), which pydsdl assigns like this
 Inside a doc the first non-empty line is the short description, the following lines the long
 description, and ``@tag value`` lines (after the text) carry the metadata, PX4-annotation style.
 
-The model is cached as JSON (see :func:`load_model`); a cache hit imports neither pydsdl nor
-dronecan.
+The model is cached as JSON by :mod:`px4params.dsdl.cache`; a cache hit imports neither this
+module nor pydsdl nor dronecan.
 """
 
 from __future__ import annotations
 
 import contextlib
-import functools
-import hashlib
 import importlib.util
-import json
 import logging
 import math
 import os
 import re
 import sys
-import tempfile
 import types
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from px4params.data import DSDL_DIR
+from px4params.dsdl.cache import MODEL_FORMAT, Root, dronecan_package_dir
 from px4params.errors import DsdlError
 
 if TYPE_CHECKING:
     import pydsdl
 
-__all__ = ["MODEL_FORMAT", "default_cache_dir", "load_model"]
-
-#: Bumped whenever the model's shape changes, so that older caches are rebuilt.
-#: 2: type entries carry ``service`` and ``signature_override`` (data type signatures).
-MODEL_FORMAT = 2
-
-#: Each subfolder is a root namespace shipped with the package (today: ``px``).
-BUNDLED_DSDL_DIR = Path(DSDL_DIR)
+__all__ = ["build_model"]
 
 Model = dict[str, Any]
 TypeSpec = dict[str, Any]
@@ -71,203 +60,12 @@ _PRIVATE_DRONECAN_DSDL = "_px4params_dronecan_dsdl"
 
 
 # --------------------------------------------------------------------------------------------------
-# Public API
-
-
-def default_cache_dir() -> Path:
-    """Where :func:`load_model` caches models unless told otherwise."""
-    explicit = os.environ.get("PX4PARAMS_CACHE_DIR")
-    if explicit:
-        return Path(explicit)
-    xdg = os.environ.get("XDG_CACHE_HOME")
-    if xdg:
-        return Path(xdg) / "px4params"
-    return Path.home() / ".cache" / "px4params"
-
-
-def load_model(
-    extra_roots: Sequence[str | os.PathLike[str]] = (),
-    *,
-    include_dronecan: bool = True,
-    cache_dir: str | os.PathLike[str] | None = None,
-) -> Model:
-    """Load every type of the bundled, DroneCAN-standard and extra roots into one model.
-
-    ``extra_roots`` are root namespace folders (the folder name is the root namespace, e.g.
-    ``.../px``); each is routed by its files: ``*.dsdl`` to pydsdl, ``*.uavcan`` to pydronecan.
-    The result is cached in ``cache_dir`` (default :func:`default_cache_dir`) under a key over
-    the parser versions and every DSDL file's path and contents.
-
-    Raises:
-        DsdlError: a definition, its metadata or a root folder is invalid.
-    """
-    roots = _collect_roots(extra_roots, include_dronecan)
-    directory = Path(cache_dir) if cache_dir is not None else default_cache_dir()
-    cache_file = directory / f"model-{_cache_key(roots, include_dronecan)}.json"
-    cached = _read_cache(cache_file)
-    if cached is not None:
-        return cached
-    model = _build_model(roots)
-    _write_cache(cache_file, model)
-    return model
-
-
-# --------------------------------------------------------------------------------------------------
-# Roots and cache
-
-
-@dataclass(frozen=True)
-class _Root:
-    path: Path
-    dialect: str  # "dsdl" (pydsdl) or "uavcan" (pydronecan)
-    files: tuple[Path, ...]
-
-
-def _collect_roots(
-    extra_roots: Sequence[str | os.PathLike[str]], include_dronecan: bool
-) -> list[_Root]:
-    candidates: list[Path] = []
-    if BUNDLED_DSDL_DIR.is_dir():
-        bundled = BUNDLED_DSDL_DIR.resolve()
-        candidates += sorted(
-            p for p in bundled.iterdir() if p.is_dir() and not p.name.startswith(".")
-        )
-    if include_dronecan:
-        specs = _dronecan_package_dir() / "dsdl_specs"
-        # Every namespace pydronecan ships (uavcan, dronecan, ardupilot, com, cuav, mppt, ...).
-        candidates += sorted(p for p in specs.iterdir() if p.is_dir() and any(p.rglob("*.uavcan")))
-    # abspath, not resolve: a symlinked folder's own name is the namespace name.
-    candidates += [Path(os.path.abspath(os.fspath(r))) for r in extra_roots]
-
-    roots: list[_Root] = []
-    seen: set[Path] = set()
-    for path in candidates:
-        real = path.resolve()  # the same folder reached through a symlink is read once
-        if real not in seen:
-            seen.add(real)
-            roots.append(_classify_root(path))
-    return roots
-
-
-def _classify_root(path: Path) -> _Root:
-    if not path.is_dir():
-        raise DsdlError("DSDL root namespace folder does not exist or is not a folder", path)
-    by_suffix: dict[str, list[Path]] = {".dsdl": [], ".uavcan": []}
-    for folder, _dirs, names in os.walk(path, followlinks=True):
-        for name in names:
-            suffix = os.path.splitext(name)[1]
-            if suffix in by_suffix:
-                by_suffix[suffix].append(Path(folder, name))
-    dsdl, uavcan = by_suffix[".dsdl"], by_suffix[".uavcan"]
-    if dsdl and uavcan:
-        raise DsdlError(
-            "DSDL root mixes .dsdl (pydsdl) and .uavcan (DroneCAN) files; "
-            "keep each dialect in its own root namespace folder",
-            path,
-        )
-    if not dsdl and not uavcan:
-        raise DsdlError("DSDL root contains no .dsdl or .uavcan files", path)
-    files = tuple(sorted(dsdl or uavcan, key=lambda p: p.relative_to(path).as_posix()))
-    return _Root(path, "dsdl" if dsdl else "uavcan", files)
-
-
-def _dronecan_package_dir() -> Path:
-    # find_spec locates the package without executing dronecan/__init__.py (which parses all DSDL).
-    spec = importlib.util.find_spec("dronecan")
-    if spec is None or not spec.submodule_search_locations:
-        raise DsdlError(
-            "pydronecan (package 'dronecan') is not installed; use include_dronecan=False"
-        )
-    return Path(next(iter(spec.submodule_search_locations)))
-
-
-def _dist_version(name: str) -> str:
-    """Identifies the installed package by its module file's path, size and time: a new
-    install changes them. (Cheaper than importlib.metadata, which costs every CLI call ~30 ms.)"""
-    spec = importlib.util.find_spec(name)
-    if spec is None or spec.origin is None:
-        return "not-installed"
-    try:
-        st = os.stat(spec.origin)
-    except OSError:
-        return "not-installed"
-    return f"{spec.origin}:{st.st_size}:{st.st_mtime_ns}"
-
-
-@functools.cache
-def _loader_fingerprint() -> str:
-    # A changed loader may build a different model from the same files: never reuse its cache.
-    try:
-        return hashlib.sha256(Path(__file__).read_bytes()).hexdigest()
-    except OSError:
-        return "unknown"
-
-
-def _cache_key(roots: Sequence[_Root], include_dronecan: bool) -> str:
-    digest = hashlib.sha256()
-
-    def put(*parts: str) -> None:
-        for part in parts:
-            digest.update(part.encode("utf-8", "surrogateescape"))
-            digest.update(b"\0")
-
-    put(
-        "px4params-dsdl-model",
-        str(MODEL_FORMAT),
-        _loader_fingerprint(),
-        "pydsdl=" + _dist_version("pydsdl"),
-        "dronecan=" + _dist_version("dronecan"),
-        f"include_dronecan={include_dronecan}",
-    )
-    for root in roots:
-        # The absolute root is part of the key because the model records absolute file paths.
-        put("root", root.dialect, str(root.path), str(len(root.files)))
-        for file in root.files:
-            try:
-                data = file.read_bytes()
-            except OSError as ex:
-                raise DsdlError(f"cannot read DSDL file: {ex.strerror or ex}", file) from ex
-            put(file.relative_to(root.path).as_posix(), str(len(data)))
-            digest.update(data)
-    return digest.hexdigest()
-
-
-def _read_cache(path: Path) -> Model | None:
-    try:
-        model = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError):  # missing, unreadable, not UTF-8 or not JSON: rebuild
-        return None
-    if (
-        isinstance(model, dict)
-        and model.get("format") == MODEL_FORMAT
-        and isinstance(model.get("types"), dict)
-    ):
-        return model
-    return None
-
-
-def _write_cache(path: Path, model: Model) -> None:
-    # Best effort: a read-only or full cache folder must not break loading.
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-        try:
-            with os.fdopen(fd, "w", encoding="utf-8") as out:
-                json.dump(model, out, separators=(",", ":"))
-            os.replace(tmp, path)  # atomic: readers see the old file or the whole new one
-        except BaseException:
-            with contextlib.suppress(OSError):
-                os.unlink(tmp)
-            raise
-    except OSError as ex:
-        _log.debug("not caching the DSDL model in %s: %s", path, ex)
-
-
-# --------------------------------------------------------------------------------------------------
 # Building the model
 
 
-def _build_model(roots: Sequence[_Root]) -> Model:
+def build_model(roots: Sequence[Root]) -> Model:
+    """The model of every type in ``roots`` (parsed now; :func:`px4params.dsdl.cache.load_model`
+    caches it)."""
     builder = _ModelBuilder()
     pydsdl_roots = [r for r in roots if r.dialect == "dsdl"]
     dronecan_roots = [r for r in roots if r.dialect == "uavcan"]
@@ -309,7 +107,7 @@ class _ModelBuilder:
 
     # ---- pydsdl --------------------------------------------------------------------------------
 
-    def add_pydsdl(self, roots: Sequence[_Root]) -> None:
+    def add_pydsdl(self, roots: Sequence[Root]) -> None:
         import pydsdl  # lazy: a cache hit must not pay for it
 
         for root in roots:
@@ -378,7 +176,7 @@ class _ModelBuilder:
 
     # ---- pydronecan ----------------------------------------------------------------------------
 
-    def add_dronecan(self, roots: Sequence[_Root]) -> None:
+    def add_dronecan(self, roots: Sequence[Root]) -> None:
         parser = _dronecan_parser()
         try:
             with _silenced(f"{parser.__name__}.parser"):
@@ -657,7 +455,7 @@ def _dronecan_parser() -> types.ModuleType:
     if private is not None:
         return private
 
-    folder = _dronecan_package_dir() / "dsdl"
+    folder = Path(dronecan_package_dir()) / "dsdl"
     spec = importlib.util.spec_from_file_location(
         _PRIVATE_DRONECAN_DSDL, folder / "__init__.py", submodule_search_locations=[str(folder)]
     )

@@ -5,12 +5,11 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Iterator, Mapping, MutableMapping, Sequence
-from dataclasses import dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 from px4params import _native
 from px4params.dsdl import signature as _signature
-from px4params.dsdl.loader import load_model
+from px4params.dsdl.cache import load_model
 
 __all__ = ["DSDL_PATH_ENV", "DataType", "Leaf", "Schema", "load_schema", "to_json_value"]
 
@@ -18,8 +17,7 @@ __all__ = ["DSDL_PATH_ENV", "DataType", "Leaf", "Schema", "load_schema", "to_jso
 DSDL_PATH_ENV = "PX4PARAMS_DSDL_PATH"
 
 
-@dataclass(frozen=True)
-class Leaf:
+class Leaf(NamedTuple):
     """One leaf of a value: its number ``[k]``, path, DSDL type and value.
 
     Union tags have paths ending in ``._tag`` and dynamic array lengths in ``._len`` (type

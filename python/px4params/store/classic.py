@@ -12,8 +12,8 @@ import math
 import os
 import struct
 from collections.abc import Mapping
-from dataclasses import dataclass, field
-from typing import Any
+from types import MappingProxyType
+from typing import Any, NamedTuple
 
 from px4params.data import CLASSIC_PARAMETERS_JSON
 from px4params.errors import ClassicParamsError
@@ -37,8 +37,7 @@ INT32_MIN, INT32_MAX = -(2**31), 2**31 - 1
 _TYPES = ("Int32", "Float")
 
 
-@dataclass(frozen=True)
-class ClassicParam:
+class ClassicParam(NamedTuple):
     """One classic parameter."""
 
     name: str
@@ -46,11 +45,14 @@ class ClassicParam:
     type: str
     default: int | float
     #: The whole parameters.json entry.
-    entry: Mapping[str, Any] = field(default_factory=dict, compare=False, repr=False)
+    entry: Mapping[str, Any] = MappingProxyType({})
 
     @property
     def is_float(self) -> bool:
         return self.type == "Float"
+
+    def __repr__(self) -> str:  # without the entry, which can be long
+        return f"ClassicParam(name={self.name!r}, type={self.type!r}, default={self.default!r})"
 
 
 def load_classic(path: str | os.PathLike[str]) -> list[ClassicParam]:

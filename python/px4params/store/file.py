@@ -18,11 +18,9 @@ import binascii
 import json
 import os
 import struct
-import tempfile
 import zlib
 from collections.abc import Mapping
-from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 from px4params.dsdl.schema import DataType
 from px4params.errors import Px4ParamsError, StoreError, StoreFileError
@@ -99,6 +97,8 @@ def save(store: Store, path: str | os.PathLike[str]) -> int:
     data = encode_file(store)
     folder = os.path.dirname(os.path.abspath(target))
     try:
+        import tempfile  # here: it costs a command 5 ms to import, and only saves need it
+
         fd, tmp = tempfile.mkstemp(prefix=f".{os.path.basename(target)}.", dir=folder)
     except OSError as e:
         raise StoreFileError(f"cannot write: {e.strerror}", target) from None
@@ -166,8 +166,7 @@ class _ignoring_os_errors:
 # -- reading ------------------------------------------------------------------------------------
 
 
-@dataclass(frozen=True)
-class Record:
+class Record(NamedTuple):
     """One checked record."""
 
     offset: int

@@ -50,8 +50,7 @@ from __future__ import annotations
 import math
 import weakref
 from collections.abc import Iterator, Mapping
-from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 from px4params.dsdl.schema import DataType, Leaf
 from px4params.errors import FlatError, InstanceError, LeafError
@@ -95,8 +94,7 @@ def letters(number: int) -> str:
     return text
 
 
-@dataclass(frozen=True)
-class FlatSlot:
+class FlatSlot(NamedTuple):
     """One letter of a type: a leaf that may be live, depending on the value.
 
     ``requires`` lists what must hold for the leaf to exist, outermost first: ``(path, "==",
@@ -334,8 +332,7 @@ def from_flat(data_type: DataType, flat: Mapping[str, Any]) -> dict[str, Any]:
 # -- store level: flat names of instances -----------------------------------------------------
 
 
-@dataclass(frozen=True)
-class FlatParam:
+class FlatParam(NamedTuple):
     """One live destructured parameter of a store."""
 
     #: Flat name, e.g. ``INA238_1C``.

@@ -11,7 +11,6 @@ import contextlib
 import os
 import sys
 from collections.abc import Callable, Iterable, Iterator
-from dataclasses import dataclass, field
 from typing import TextIO
 
 from px4params.dsdl.schema import load_schema
@@ -20,18 +19,21 @@ from px4params.store.classic import BUNDLED_CLASSIC, CLASSIC_ENV
 from px4params.store.store import Store, default_store_path
 
 
-@dataclass
 class Session:
-    """The store a ``param`` command (or a whole airframe file) works on."""
+    """The store a ``param`` command (or a whole airframe file) works on, and the file it is
+    saved to."""
 
-    store: Store
-    path: str
-    out: TextIO = field(default_factory=lambda: sys.stdout)
-    #: Save after each changing verb (off while an airframe file runs: it saves once).
-    autosave: bool = True
-    changed: bool = False
-    #: Writes to other files asked for during a batch, done when the batch succeeds.
-    deferred: list[Callable[[], None]] = field(default_factory=list)
+    def __init__(
+        self, store: Store, path: str, out: TextIO | None = None, *, autosave: bool = True
+    ) -> None:
+        self.store = store
+        self.path = path
+        self.out = out if out is not None else sys.stdout
+        #: Save after each changing verb (off while an airframe file runs: it saves once).
+        self.autosave = autosave
+        self.changed = False
+        #: Writes to other files asked for during a batch, done when the batch succeeds.
+        self.deferred: list[Callable[[], None]] = []
 
     def done(self) -> None:
         """Records a change; saves it unless a batch is running."""

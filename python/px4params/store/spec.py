@@ -12,8 +12,7 @@ from __future__ import annotations
 
 import re
 from collections.abc import Mapping
-from dataclasses import dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 from px4params.dsdl.schema import DataType, Schema
 from px4params.errors import ParameterSetError
@@ -26,8 +25,7 @@ _PARAM_NAME = re.compile(r"[A-Z][A-Z0-9_]*")
 MAX_NAME_LEN = 16
 
 
-@dataclass(frozen=True)
-class ParamSpec:
+class ParamSpec(NamedTuple):
     """One structured parameter."""
 
     #: Parameter name, e.g. ``INA238``.

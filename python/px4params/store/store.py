@@ -21,8 +21,7 @@ import os
 import re
 import struct
 from collections.abc import Iterator, Mapping, Sequence
-from dataclasses import dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 from px4params import _native
 from px4params.dsdl.schema import DataType, Leaf, Schema, load_schema
@@ -60,8 +59,7 @@ def default_store_path() -> str:
     return os.environ.get(STORE_ENV) or DEFAULT_STORE
 
 
-@dataclass(frozen=True)
-class Key:
+class Key(NamedTuple):
     """A parsed name: parameter, instance (None for shared and classic ones) and leaf."""
 
     param: str
@@ -99,8 +97,7 @@ class Key:
         return name if self.leaf is None else f"{name}.{self.leaf}"
 
 
-@dataclass(frozen=True)
-class _Param:
+class _Param(NamedTuple):
     """A parameter of the store: structured (``spec``) or classic (``classic``)."""
 
     index: int
@@ -247,7 +244,7 @@ class Store:
                 yield self._instance_name(p, i)
 
     def __contains__(self, name: object) -> bool:
-        if not isinstance(name, str):
+        if not isinstance(name, str | Key):
             return False
         try:
             p, instance, _ = self._resolve(name)

@@ -8,6 +8,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -166,7 +167,7 @@ def _report(result: RunResult, i2c_buses: list[int], have_manifest: bool) -> lis
     return lines
 
 
-def add_parser(sub: Any, name: str, summary: str) -> None:
+def add_parser(sub: Any, name: str, summary: str, words: Sequence[str] = ()) -> None:
     """Registers ``autostart`` and its three verbs on the main parser's subcommands."""
     common = argparse.ArgumentParser(add_help=False)
     common.add_argument(

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any, TextIO
 
 from px4params.cli.options import dsdl_option
@@ -333,7 +333,7 @@ _ADDERS: dict[str, Callable[[argparse.ArgumentParser], None]] = {
 }
 
 
-def add_parser(sub: Any, name: str, summary: str) -> None:
+def add_parser(sub: Any, name: str, summary: str, words: Sequence[str] = ()) -> None:
     """Registers the codec command ``name`` on the main parser's subcommands."""
     p = sub.add_parser(name, help=summary, formatter_class=argparse.RawDescriptionHelpFormatter)
     dsdl_option(p)

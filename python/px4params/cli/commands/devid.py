@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+from collections.abc import Sequence
 from typing import Any
 
 from px4params.errors import CommandError
@@ -70,7 +71,7 @@ def cmd_devid(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def add_parser(sub: Any, name: str, summary: str) -> None:
+def add_parser(sub: Any, name: str, summary: str, words: Sequence[str] = ()) -> None:
     """Registers ``px4params devid``."""
     from px4params.vehicle.devid import TABLES
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from collections.abc import Sequence
 from typing import Any
 
 from px4params.cli.options import dsdl_option
@@ -54,7 +55,7 @@ def cmd_metadata(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def add_parser(sub: Any, name: str, summary: str) -> None:
+def add_parser(sub: Any, name: str, summary: str, words: Sequence[str] = ()) -> None:
     """Registers ``px4params metadata``."""
     p = sub.add_parser(
         name,

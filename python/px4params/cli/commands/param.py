@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import argparse
+from collections.abc import Sequence
 from typing import Any
 
 from px4params.cli.options import store_options
@@ -19,8 +20,9 @@ def cmd_param(args: argparse.Namespace) -> int:
         return int(args.verb(session, args))
 
 
-def add_parser(sub: Any, name: str, summary: str) -> None:
-    """Registers ``px4params param`` and its verbs."""
+def add_parser(sub: Any, name: str, summary: str, words: Sequence[str] = ()) -> None:
+    """Registers ``px4params param`` and its verbs (with ``words``, the command line, only the
+    verb it names is built in full)."""
     p = sub.add_parser(
         name,
         help=summary,
@@ -34,5 +36,18 @@ def add_parser(sub: Any, name: str, summary: str) -> None:
     )
     store_options(p)
     verbs = p.add_subparsers(dest="verb_name", required=True, metavar="VERB")
-    add_verbs(verbs)
+    add_verbs(verbs, only=_verb_in(words, name))
     p.set_defaults(func=cmd_param)
+
+
+def _verb_in(words: Sequence[str], command: str) -> str | None:
+    """The verb after ``command`` in ``words`` (skipping options and their values)."""
+    rest = list(words[words.index(command) + 1 :]) if command in words else []
+    while rest:
+        word = rest.pop(0)
+        if word in ("--store", "--classic", "--dsdl"):
+            if rest:
+                rest.pop(0)
+        elif not word.startswith("-"):
+            return word  # not a verb: every verb is a stub, and argparse names the choices
+    return None

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from collections.abc import Sequence
 from typing import Any
 
 from px4params.cli.options import store_options
@@ -30,7 +31,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     return EXIT_FAILED if result.errors else EXIT_OK
 
 
-def add_parser(sub: Any, name: str, summary: str) -> None:
+def add_parser(sub: Any, name: str, summary: str, words: Sequence[str] = ()) -> None:
     """Registers ``px4params run``."""
     p = sub.add_parser(
         name,

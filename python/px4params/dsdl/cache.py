@@ -1,0 +1,241 @@
+"""Where the schema model comes from on every call but the first: a cache of the model that
+:mod:`px4params.dsdl.loader` builds, so that a command parses no DSDL and imports no parser.
+
+The cache file's name is a key over what the model is built from: the model format, the
+loader's own modules, the installed pydsdl and pydronecan, and every DSDL file of every root
+(its path, size and modification time). A file modified less than two seconds before the key is
+taken is keyed by its contents too: two writes within the file system's timestamp resolution
+keep the same time (git's "racy" files). A cache hit costs a directory walk, a ``stat`` per
+file and one JSON read; this module imports nothing heavier than ``json`` for it.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import importlib.machinery
+import json
+import os
+import time
+import zlib
+from collections.abc import Sequence
+from typing import Any
+
+from px4params.data import DSDL_DIR
+from px4params.errors import DsdlError
+
+#: Bumped whenever the model's shape changes, so that older caches are rebuilt.
+#: 2: type entries carry ``service`` and ``signature_override`` (data type signatures).
+MODEL_FORMAT = 2
+
+#: Environment variable naming the cache folder.
+CACHE_ENV = "PX4PARAMS_CACHE_DIR"
+
+#: Files modified this recently (seconds) are keyed by their contents as well.
+RACY_SECONDS = 2.0
+
+Model = dict[str, Any]
+
+_HERE = os.path.dirname(os.path.abspath(__file__))
+#: The modules whose code decides what the model holds.
+_LOADER_MODULES = ("loader.py", "cache.py")
+
+
+class Root:
+    """A DSDL root namespace folder: its path (the folder name is the namespace), its dialect
+    (``"dsdl"``, read with pydsdl, or ``"uavcan"``, read with pydronecan's parser) and files."""
+
+    __slots__ = ("dialect", "files", "path")
+
+    def __init__(self, path: str, dialect: str, files: tuple[str, ...]) -> None:
+        self.path = path
+        self.dialect = dialect
+        self.files = files
+
+    def __repr__(self) -> str:
+        return f"Root({self.path!r}, {self.dialect!r}, {len(self.files)} files)"
+
+
+def default_cache_dir() -> str:
+    """``$PX4PARAMS_CACHE_DIR``, else ``$XDG_CACHE_HOME/px4params``, else ``~/.cache/px4params``."""
+    explicit = os.environ.get(CACHE_ENV)
+    if explicit:
+        return explicit
+    xdg = os.environ.get("XDG_CACHE_HOME")
+    if xdg:
+        return os.path.join(xdg, "px4params")
+    return os.path.join(os.path.expanduser("~"), ".cache", "px4params")
+
+
+def load_model(
+    extra_roots: Sequence[str | os.PathLike[str]] = (),
+    *,
+    include_dronecan: bool = True,
+    cache_dir: str | os.PathLike[str] | None = None,
+) -> Model:
+    """Load every type of the bundled, DroneCAN-standard and extra roots into one model.
+
+    ``extra_roots`` are root namespace folders (the folder name is the root namespace, e.g.
+    ``.../px``); each is routed by its files: ``*.dsdl`` to pydsdl, ``*.uavcan`` to pydronecan.
+    The model is cached in ``cache_dir`` (default :func:`default_cache_dir`).
+
+    Raises:
+        DsdlError: a definition, its metadata or a root folder is invalid.
+    """
+    roots = collect_roots(extra_roots, include_dronecan)
+    key_text = cache_key_text(roots, include_dronecan)
+    directory = os.fspath(cache_dir) if cache_dir is not None else default_cache_dir()
+    name = f"model-{zlib.crc32(key_text.encode('utf-8', 'surrogateescape')):08x}.json"
+    cache_file = os.path.join(directory, name)
+    cached = _read_cache(cache_file, key_text)
+    if cached is not None:
+        return cached
+    from px4params.dsdl.loader import build_model  # a miss: now the parsers are needed
+
+    model = build_model(roots)
+    _write_cache(cache_file, key_text, model)
+    return model
+
+
+def collect_roots(
+    extra_roots: Sequence[str | os.PathLike[str]], include_dronecan: bool
+) -> list[Root]:
+    """The bundled roots, pydronecan's (when ``include_dronecan``) and ``extra_roots``, each
+    once (the same folder through a symlink is read once)."""
+    # (folder, whether it must hold definitions)
+    candidates: list[tuple[str, bool]] = []
+    if os.path.isdir(DSDL_DIR):
+        bundled = os.path.realpath(DSDL_DIR)
+        candidates += sorted(
+            (e.path, True) for e in os.scandir(bundled) if e.is_dir() and e.name[0] != "."
+        )
+    if include_dronecan:
+        specs = os.path.join(dronecan_package_dir(), "dsdl_specs")
+        # Every namespace pydronecan ships (uavcan, dronecan, ardupilot, com, cuav, mppt, ...).
+        candidates += sorted((e.path, False) for e in os.scandir(specs) if e.is_dir())
+    # abspath, not realpath: a symlinked folder's own name is the namespace name.
+    candidates += [(os.path.abspath(os.fspath(r)), True) for r in extra_roots]
+
+    roots: list[Root] = []
+    seen: set[str] = set()
+    for path, required in candidates:
+        real = os.path.realpath(path)
+        if real in seen:
+            continue
+        seen.add(real)
+        root = _classify_root(path, required=required)
+        if root is not None:
+            roots.append(root)
+    return roots
+
+
+def _classify_root(path: str, *, required: bool = True) -> Root | None:
+    if not os.path.isdir(path):
+        raise DsdlError("DSDL root namespace folder does not exist or is not a folder", path)
+    dsdl: list[str] = []
+    uavcan: list[str] = []
+    for folder, _dirs, names in os.walk(path, followlinks=True):
+        for name in names:
+            if name.endswith(".dsdl"):
+                dsdl.append(os.path.join(folder, name))
+            elif name.endswith(".uavcan"):
+                uavcan.append(os.path.join(folder, name))
+    if dsdl and uavcan:
+        raise DsdlError(
+            "DSDL root mixes .dsdl (pydsdl) and .uavcan (DroneCAN) files; "
+            "keep each dialect in its own root namespace folder",
+            path,
+        )
+    if not dsdl and not uavcan:
+        if not required:
+            return None  # a folder of pydronecan's without definitions
+        raise DsdlError("DSDL root contains no .dsdl or .uavcan files", path)
+    files = tuple(sorted(dsdl or uavcan, key=lambda p: os.path.relpath(p, path).split(os.sep)))
+    return Root(path, "dsdl" if dsdl else "uavcan", files)
+
+
+def dronecan_package_dir() -> str:
+    """pydronecan's package folder, found without running ``dronecan/__init__.py`` (which parses
+    all of its DSDL)."""
+    spec = importlib.machinery.PathFinder.find_spec("dronecan")
+    if spec is None or not spec.submodule_search_locations:
+        raise DsdlError(
+            "pydronecan (package 'dronecan') is not installed; use include_dronecan=False"
+        )
+    return next(iter(spec.submodule_search_locations))
+
+
+def _installed(name: str) -> str:
+    """Identifies an installed package by its module file's path, size and time: a new install
+    changes them (cheaper than importlib.metadata, which costs a command ~30 ms)."""
+    spec = importlib.machinery.PathFinder.find_spec(name)
+    if spec is None or spec.origin is None:
+        return "not-installed"
+    try:
+        st = os.stat(spec.origin)
+    except OSError:
+        return "not-installed"
+    return f"{spec.origin}:{st.st_size}:{st.st_mtime_ns}"
+
+
+def cache_key_text(roots: Sequence[Root], include_dronecan: bool) -> str:
+    """What the model is built from, as text (see the module documentation)."""
+    racy_after = (time.time() - RACY_SECONDS) * 1e9
+    parts = [
+        "px4params-dsdl-model",
+        str(MODEL_FORMAT),
+        f"pydsdl={_installed('pydsdl')}",
+        f"dronecan={_installed('dronecan')}",
+        f"include_dronecan={include_dronecan}",
+    ]
+    files = [os.path.join(_HERE, m) for m in _LOADER_MODULES]
+    for root in roots:
+        parts.append(f"root {root.dialect} {root.path} {len(root.files)}")
+        files += root.files
+    for file in files:
+        try:
+            st = os.stat(file)
+        except OSError as ex:
+            raise DsdlError(f"cannot read DSDL file: {ex.strerror or ex}", file) from ex
+        parts.append(f"{file} {st.st_size} {st.st_mtime_ns}")
+        if st.st_mtime_ns > racy_after:
+            parts.append(f"crc32={_file_crc(file):08x}")
+    return "\n".join(parts)
+
+
+def _file_crc(path: str) -> int:
+    try:
+        with open(path, "rb") as f:
+            return zlib.crc32(f.read())
+    except OSError as ex:
+        raise DsdlError(f"cannot read DSDL file: {ex.strerror or ex}", path) from ex
+
+
+def _read_cache(path: str, key_text: str) -> Model | None:
+    try:
+        with open(path, encoding="utf-8") as f:
+            model = json.load(f)
+    except (OSError, ValueError):  # missing, unreadable, not UTF-8 or not JSON: rebuild
+        return None
+    if (
+        isinstance(model, dict)
+        and model.get("format") == MODEL_FORMAT
+        and model.get("key") == key_text  # a different key with the same CRC is a miss
+        and isinstance(model.get("types"), dict)
+    ):
+        return model
+    return None
+
+
+def _write_cache(path: str, key_text: str, model: Model) -> None:
+    # Best effort: a read-only or full cache folder must not break loading.
+    model["key"] = key_text
+    folder, name = os.path.split(path)
+    tmp = os.path.join(folder, f".{name}.{os.getpid()}.tmp")
+    try:
+        os.makedirs(folder, exist_ok=True)
+        with open(tmp, "w", encoding="utf-8") as out:
+            json.dump(model, out, separators=(",", ":"))
+        os.replace(tmp, path)  # atomic: readers see the old file or the whole new one
+    except OSError:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
