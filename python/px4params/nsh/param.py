@@ -592,7 +592,7 @@ def _add_verbs(sub: Any) -> None:
         "add",
         verb_add,
         "add instances (NAME#N, or NAME for the next free one)",
-        "px4params param add INA238#0",
+        "px4params param add INA238#2",
     )
     p.add_argument("names", nargs="+", metavar="NAME")
     p = _verb(
@@ -629,7 +629,8 @@ def _add_verbs(sub: Any) -> None:
         ("compare", verb_compare, "exit 0 if NAME equals one of the values, else 1"),
         ("greater", verb_greater, "exit 0 if NAME is greater than one of the values, else 1"),
     ):
-        p = _verb(sub, name, func, summary, f"px4params param {name} INA238#0.current 200")
+        limit = 200 if name == "compare" else 100
+        p = _verb(sub, name, func, summary, f"px4params param {name} INA238#0.current {limit}")
         p.add_argument(
             "-s", dest="silent", action="store_true", help="an unknown parameter fails silently"
         )

@@ -256,9 +256,9 @@ examples:
   px4params autostart run --store vehicle.store --bench examples/two_batteries.bench.toml
   px4params autostart run --airframe examples/two_batteries.airframe \\
     --bench examples/two_batteries_faults.bench.toml --seed 3 --duration 20 \\
-    --events run.jsonl --timeline run.svg
+    --events run.jsonl --timeline run.svg   # arming refused: exit status 1
   px4params autostart run --store vehicle.store --legacy \\
-    --bench examples/two_batteries_faults.bench.toml""",
+    --bench examples/two_batteries_faults.bench.toml   # refused too: exit status 1""",
     )
     v.add_argument("--bench", required=True, metavar="FILE", help="the bench file (TOML)")
     v.add_argument(

@@ -89,7 +89,12 @@ def add_parser(sub: Any, name: str, summary: str, words: Sequence[str] = ()) -> 
     p = sub.add_parser(
         name,
         help=summary,
-        description=__doc__,
+        description="""\
+Shell completion for bash (zsh after 'autoload bashcompinit; bashcompinit'):
+commands and param verbs, and parameter names (every parameter, every instance
+slot INA238#0..INA238#3, the leaves of existing instances such as
+INA238#0.bus.i2c.address), asked of 'px4params completion names' for the store
+in use.""",
         epilog='example:\n  eval "$(px4params completion bash)"',
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )

@@ -28,9 +28,9 @@ def add_parser(sub: Any, name: str, summary: str, words: Sequence[str] = ()) -> 
         help=summary,
         description="PX4's param command over structured instances (INA238#0, INA238#0[4], "
         "INA238#0.bus.i2c.address) and classic parameters, on a store file.",
-        epilog="examples:\n  px4params param add INA238#0\n"
-        "  px4params param set-default INA238#0[4] 0x45\n"
-        "  px4params param show -l INA238#0\n"
+        epilog="examples:\n  px4params param add INA238#2\n"
+        "  px4params param set-default INA238#2[4] 0x46\n"
+        "  px4params param show -l INA238#2\n"
         "  px4params param compare INA238#0.current 200 && echo configured",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )

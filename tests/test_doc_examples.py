@@ -1,0 +1,270 @@
+"""Every command example users read runs and succeeds: the ```sh blocks of README.md and docs/,
+and the examples in every ``--help`` epilog. Documentation that rots fails here.
+
+Conventions for whoever writes a page or a help text:
+
+- Every non-comment line of a ```sh block is a command; a line ending in ``\\`` continues on
+  the next. A page's blocks run in order, in one scratch folder per page, where ``examples/``
+  and ``../shared/data/`` resolve as in the checkout and ``px4params`` is on PATH.
+- A command expected to fail says so in its comment: ``# ... exit status N``.
+- ``<!-- examples: skip (REASON) -->`` on the line before a block skips that block.
+- Commands that set up the checkout itself (``bash scripts/...``, ``source .venv/...``) are not
+  run: the test suite is already running inside what they set up.
+- ``--help`` examples run in a scratch folder holding the example airframe's store (as
+  ``px4params.store`` and ``vehicle.store``), a QGC export of it (``vehicle.params``), a copy
+  (``backup.store``) and the shared sample log as ``flight.ulg`` / ``old.ulg``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from shared_data import SAMPLE_LOG, SHARED_DATA
+
+REPO = Path(__file__).resolve().parents[1]
+PAGES = [REPO / "README.md", *sorted((REPO / "docs").glob("*.md"))]
+SKIP_MARK = re.compile(r"<!--\s*examples:\s*skip\s*\((?P<reason>[^)]*)\)\s*-->")
+EXIT_STATUS = re.compile(r"#.*\bexit status (?P<status>\d+)")
+SETUP_COMMANDS = ("bash scripts/", "source .venv/", ". .venv/", "git clone", "cd ")
+#: --help examples that cannot run in a test, and why.
+HELP_EXCEPTIONS = {
+    "px4params mavlink serve": "a server: it runs until stopped (tests/test_mavlink.py runs it)",
+}
+TIMEOUT = 120
+
+
+class Example:
+    """One command of a page or an epilog, where it was written, and the exit status it
+    expects."""
+
+    def __init__(self, where: str, command: str) -> None:
+        self.where = where
+        self.command = command
+        match = EXIT_STATUS.search(command)
+        self.status = int(match["status"]) if match else 0
+
+    def __repr__(self) -> str:
+        return f"{self.where}: {self.command}"
+
+
+def _commands(lines: list[tuple[int, str]], source: str) -> list[Example]:
+    """The commands of a block's ``(line number, text)`` lines, continuations joined."""
+    examples: list[Example] = []
+    pending = ""
+    first = 0
+    for number, text in lines:
+        stripped = text.strip()
+        if not pending and (not stripped or stripped.startswith("#")):
+            continue
+        if not pending:
+            first = number
+        if stripped.endswith("\\"):
+            pending += stripped[:-1] + " "
+            continue
+        examples.append(Example(f"{source}:{first}", pending + stripped))
+        pending = ""
+    assert not pending, f"{source}:{first}: a continued command never ends"
+    return examples
+
+
+def page_examples(page: Path) -> tuple[list[Example], list[str]]:
+    """The runnable commands of a page, and the skipped blocks with their reasons."""
+    lines = page.read_text(encoding="utf-8").splitlines()
+    examples: list[Example] = []
+    skipped: list[str] = []
+    source = page.relative_to(REPO).as_posix()
+    i = 0
+    previous = ""
+    while i < len(lines):
+        line = lines[i]
+        if line.strip() in ("```sh", "```bash", "```shell"):
+            start = i + 1
+            end = start
+            while end < len(lines) and lines[end].strip() != "```":
+                end += 1
+            block = [(n + 1, lines[n]) for n in range(start, end)]
+            mark = SKIP_MARK.search(previous)
+            if mark:
+                skipped.append(f"{source}:{start}: {mark['reason']}")
+            else:
+                examples += [
+                    e for e in _commands(block, source) if not e.command.startswith(SETUP_COMMANDS)
+                ]
+            i = end + 1
+            previous = ""
+            continue
+        if line.strip():
+            previous = line
+        i += 1
+    return examples, skipped
+
+
+def help_examples() -> list[tuple[str, list[Example]]]:
+    """Each parser with an epilog and the ``px4params`` commands in it."""
+    from px4params.cli.main import build_parser
+
+    found: list[tuple[str, list[Example]]] = []
+
+    def walk(parser: argparse.ArgumentParser, path: str) -> None:
+        if parser.epilog:
+            lines = [(n, t) for n, t in enumerate(parser.epilog.splitlines(), start=1)]
+            # Only the command lines (and their continuations); output lines are not run.
+            picked: list[tuple[int, str]] = []
+            continuing = False
+            for number, text in lines:
+                if text.strip().startswith("px4params ") or continuing:
+                    picked.append((number, text))
+                    continuing = text.rstrip().endswith("\\")
+            examples = _commands(picked, f"{path} --help")
+            if examples:
+                found.append((path, examples))
+        for action in parser._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                for name, sub in action.choices.items():
+                    walk(sub, f"{path} {name}")
+
+    walk(build_parser(), "px4params")
+    return found
+
+
+def _scratch(tmp_path: Path) -> Path:
+    """``tmp/work`` with ``examples`` and ``../shared`` as in the checkout."""
+    work = tmp_path / "work"
+    work.mkdir()
+    (work / "examples").symlink_to(REPO / "examples")
+    if SHARED_DATA.is_dir():
+        (tmp_path / "shared").symlink_to(SHARED_DATA.parent)
+    return work
+
+
+def _env() -> dict[str, str]:
+    env = {
+        k: v
+        for k, v in os.environ.items()
+        if not k.startswith("PX4PARAMS_") or k in ("PX4PARAMS_CACHE_DIR", "PX4PARAMS_SHARED_DATA")
+    }
+    env["PATH"] = os.path.dirname(sys.executable) + os.pathsep + env.get("PATH", "")
+    return env
+
+
+def _run(example: Example, cwd: Path, env: dict[str, str]) -> None:
+    try:
+        proc = subprocess.run(
+            ["bash", "-c", example.command],
+            cwd=cwd,
+            env=env,
+            capture_output=True,
+            text=True,
+            timeout=TIMEOUT,
+            stdin=subprocess.DEVNULL,
+        )
+    except subprocess.TimeoutExpired:
+        pytest.fail(f"{example}: still running after {TIMEOUT} s")
+    assert proc.returncode == example.status, (
+        f"{example}: exit status {proc.returncode}, expected {example.status}\n"
+        f"stdout: {proc.stdout[-2000:]}\nstderr: {proc.stderr[-2000:]}"
+    )
+    assert "Traceback" not in proc.stderr, f"{example}: {proc.stderr}"
+
+
+def _needs_shared(examples: list[Example]) -> bool:
+    return any("../shared/" in e.command for e in examples)
+
+
+@pytest.mark.parametrize("page", PAGES, ids=lambda p: p.relative_to(REPO).as_posix())
+def test_page_examples_run(page: Path, tmp_path: Path) -> None:
+    examples, _skipped = page_examples(page)
+    if not examples:
+        pytest.skip(f"{page.name} has no command examples")
+    if _needs_shared(examples) and not (SHARED_DATA / SAMPLE_LOG).is_file():
+        pytest.skip(f"{page.name} uses ../shared/data, absent here ({SHARED_DATA})")
+    work = _scratch(tmp_path)
+    env = _env()
+    for example in examples:
+        _run(example, work, env)
+
+
+def test_skipped_blocks_give_a_reason() -> None:
+    for page in PAGES:
+        _examples, skipped = page_examples(page)
+        for entry in skipped:
+            assert entry.split(": ", 1)[1].strip(), f"{entry}: a skip needs its reason"
+
+
+def test_readme_and_docs_have_examples() -> None:
+    # The extraction itself is tested: a page without its fences parsed would pass vacuously.
+    counts = {page.name: len(page_examples(page)[0]) for page in PAGES}
+    assert counts["README.md"] >= 3
+    assert sum(counts.values()) >= 60, counts
+
+
+def _prepare_help_scratch(tmp_path: Path, env: dict[str, str], examples: list[Example]) -> Path:
+    work = _scratch(tmp_path)
+    airframe = "examples/two_batteries.airframe"
+    commands = [
+        f"px4params run {airframe}",
+        "px4params param export vehicle.params",
+        "cp px4params.store backup.store",
+    ]
+    # vehicle.store too, unless the examples write it themselves with 'px4params run'.
+    if not any(e.command.startswith("px4params run ") for e in examples):
+        commands.append("cp px4params.store vehicle.store")
+    for command in commands:
+        subprocess.run(["bash", "-c", command], cwd=work, env=env, check=True, capture_output=True)
+    log = SHARED_DATA / SAMPLE_LOG
+    if log.is_file():
+        for name in ("flight.ulg", "old.ulg"):
+            shutil.copy(log, work / name)
+    return work
+
+
+HELP = help_examples()
+
+
+@pytest.mark.parametrize("parser, examples", HELP, ids=[path for path, _ in HELP])
+def test_help_examples_run(parser: str, examples: list[Example], tmp_path: Path) -> None:
+    env = _env()
+    work = _prepare_help_scratch(tmp_path, env, examples)
+    ran = 0
+    for example in examples:
+        if any(example.command.startswith(prefix) for prefix in HELP_EXCEPTIONS):
+            continue
+        if ".ulg" in example.command and not (work / "flight.ulg").exists():
+            pytest.skip(f"{example}: needs {SAMPLE_LOG} from {SHARED_DATA}, absent here")
+        _run(example, work, env)
+        ran += 1
+    if not ran:
+        pytest.skip(f"{parser}: {HELP_EXCEPTIONS.get(examples[0].command.split(' --')[0], '')}")
+
+
+def test_help_examples_are_found() -> None:
+    commands = [e.command for _, examples in HELP for e in examples]
+    assert any(c.startswith("px4params param show") for c in commands)
+    # Continuation lines are joined into one command.
+    assert any(
+        "--timeline run.svg" in c and c.startswith("px4params autostart run") for c in commands
+    )
+    assert len(HELP) >= 30
+
+
+def test_help_text_is_plain_text() -> None:
+    """No reStructuredText markup (``x``, :mod:, ...) in any help text users see."""
+    from px4params.cli.main import build_parser
+
+    def texts(parser: argparse.ArgumentParser) -> list[str]:
+        out = [parser.description or "", parser.epilog or "", parser.format_help()]
+        for action in parser._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                for sub in action.choices.values():
+                    out += texts(sub)
+        return out
+
+    for text in texts(build_parser()):
+        assert "``" not in text and ":mod:" not in text and ":func:" not in text, text[:300]
