@@ -52,3 +52,12 @@ def test_public_names_import_on_first_use() -> None:
     assert px4params.Store.__module__ == "px4params.store.store"
     assert issubclass(px4params.StoreFileError, px4params.Px4ParamsError)
     assert set(px4params.__all__) <= set(dir(px4params))
+
+
+def test_version_is_pyprojects() -> None:
+    import tomllib
+
+    import px4params
+
+    with open(PACKAGE.parents[1] / "pyproject.toml", "rb") as f:
+        assert px4params.__version__ == tomllib.load(f)["project"]["version"]

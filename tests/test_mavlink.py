@@ -185,13 +185,17 @@ def test_out_of_range_and_classic_sets(served: tuple[MavlinkParamServer, Client]
     ]
     client.set("BAT1_CAPACITY", 5000.0, REAL32)
     assert param_value_of(client.expect("PARAM_VALUE")) == 5000.0
-    client.set("INA238_1Q", 0.0005, REAL32)  # rounded to float16, answered as stored
+    # Stored as float16 (1049 * 2**-21), but the echo is the float32 that was sent: clients
+    # (MAVSDK, QGC, MAVProxy) take a write as done only when the echo equals what they sent.
+    client.set("INA238_1Q", 0.0005, REAL32)
     answer = client.expect("PARAM_VALUE", where=lambda m: m.param_id == "INA238_1Q")
-    assert param_value_of(answer) == pytest.approx(0.0005, rel=1e-3)
-    assert param_value_of(answer) != struct.unpack("<f", struct.pack("<f", 0.0005))[0]
+    sent_float32 = struct.unpack("<f", struct.pack("<f", 0.0005))[0]
+    assert answer.param_value == sent_float32
+    float16 = 1049 * 2**-21  # 0.000500202...: the float16 nearest 0.0005
+    assert client.read("INA238_1Q").param_value == float16  # later reads: what is stored
     server.stop()
     assert server.store.get("BAT1_CAPACITY") == 5000.0
-    assert server.store.get("INA238#1.shunt") == param_value_of(answer)
+    assert server.store.get("INA238#1.shunt") == float16
     assert server.stats["accepted"] == 2 and server.stats["refused"] == 2
 
 

@@ -16,6 +16,9 @@ from __future__ import annotations
 
 import importlib
 
+#: The package's version (pyproject.toml's; a test keeps them equal).
+__version__ = "0.1.0"
+
 #: Public name -> the module that defines it.
 _EXPORTS = {
     "CodecError": "px4params.errors",

@@ -65,3 +65,4 @@ from px4params.store.store import (
 )
 
 __all__: list[str]
+__version__: str

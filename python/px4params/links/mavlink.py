@@ -232,6 +232,8 @@ class MavlinkParamServer:
         self._next_heartbeat = 0.0
         self._next_burst = 0.0
         self._text_id = 0
+        #: AUTOPILOT_VERSION's uid and uid2 for this store.
+        self.uid = store_uid(save_path, store.parameters)
         #: Counters, for tests and the CLI's summary.
         self.stats = {"received": 0, "ignored": 0, "sent": 0, "accepted": 0, "refused": 0}
 
@@ -469,11 +471,21 @@ class MavlinkParamServer:
         shown = _shown(new[1].value)
         self.log(f"{name} = {shown}" + (", saved" if self.save_path is not None else ""))
         everyone = self._peers(peer)
-        self._send(self._value_msg(*new), everyone)
+        self._send(self._echo(msg, *new), everyone)
         # A union tag or array length written: announce the leaves that became live.
         for i, e in enumerate(self.entries()):
             if e.name not in live_before:
                 self._send(self._value_msg(i, e), everyone)
+
+    def _echo(self, msg: Any, index: int, stored: ParamEntry) -> _RawParamValue:
+        """The PARAM_VALUE that acknowledges an accepted write. A float leaf stored narrower
+        than float32 (float16) holds the value rounded; ground stations (MAVSDK, QGC,
+        MAVProxy) take a write as acknowledged only when the echo equals what they sent, so
+        the echo carries the float32 they sent; reads and lists report the stored value."""
+        if stored.mav_type == _REAL32:
+            sent = (_payload_of(msg) + bytes(4))[:4]
+            return _RawParamValue(stored.name, sent, _REAL32, len(self.entries()), index)
+        return self._value_msg(index, stored)
 
     def _refuse(
         self,
@@ -512,20 +524,53 @@ class MavlinkParamServer:
     # -- other messages -----------------------------------------------------------------------
 
     def _command(self, peer: Address, msg: Any) -> None:
-        wants_version = msg.command == mavlink.MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES or (
-            msg.command == mavlink.MAV_CMD_REQUEST_MESSAGE
-            and int(msg.param1) == mavlink.MAVLINK_MSG_ID_AUTOPILOT_VERSION
+        """Every COMMAND_LONG gets a COMMAND_ACK: accepted, or unsupported for what this server
+        does not do, or denied for parameters that name nothing (NaN, infinities, huge)."""
+        result, then = self._command_result(msg)
+        ack = mavlink.MAVLink_command_ack_message(
+            msg.command, result, 0, 0, msg.get_srcSystem(), msg.get_srcComponent()
         )
-        result = mavlink.MAV_RESULT_ACCEPTED if wants_version else mavlink.MAV_RESULT_UNSUPPORTED
-        ack = mavlink.MAVLink_command_ack_message(msg.command, result)
         self._send(ack, [peer])
-        if wants_version:
-            self._send(self.autopilot_version(), [peer])
+        if then is not None:
+            self._send(then, [peer])
+
+    def _command_result(self, msg: Any) -> tuple[int, Any | None]:
+        if msg.command == mavlink.MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES:
+            return mavlink.MAV_RESULT_ACCEPTED, self.autopilot_version()
+        if msg.command != mavlink.MAV_CMD_REQUEST_MESSAGE:
+            return mavlink.MAV_RESULT_UNSUPPORTED, None
+        message_id = _message_id(msg.param1)
+        if message_id is None:
+            return mavlink.MAV_RESULT_DENIED, None
+        reply = self._requested(message_id)
+        if reply is None:
+            return mavlink.MAV_RESULT_UNSUPPORTED, None
+        return mavlink.MAV_RESULT_ACCEPTED, reply
+
+    def _requested(self, message_id: int) -> Any | None:
+        """The message MAV_CMD_REQUEST_MESSAGE asks for, if this server provides it."""
+        if message_id == mavlink.MAVLINK_MSG_ID_AUTOPILOT_VERSION:
+            return self.autopilot_version()
+        return None
 
     def autopilot_version(self) -> mavlink.MAVLink_autopilot_version_message:
+        """PX4's AUTOPILOT_VERSION: capabilities, the package's version as flight software
+        version (PX4's encoding: major, minor, patch, release type in the four bytes) and a uid
+        that stays the same for the same store."""
         zeros = [0] * 8
         return mavlink.MAVLink_autopilot_version_message(
-            CAPABILITIES, 0, 0, 0, 0, zeros, zeros, zeros, 0, 0, 0, [0] * 18
+            CAPABILITIES,
+            software_version(),
+            0,
+            0,
+            0,
+            zeros,
+            zeros,
+            zeros,
+            0,
+            0,
+            self.uid[0],
+            list(self.uid[1]),
         )
 
     def _heartbeat(self) -> None:
@@ -579,6 +624,41 @@ class MavlinkParamServer:
                     select.select([], [self._sock], [], 0.01)
                 except OSError:  # a peer that cannot be reached must not stop the others
                     break
+
+
+def _message_id(param: float) -> int | None:
+    """A message ID given in a float command parameter, or None if it is none (NaN, inf,
+    fractional, negative or beyond MAVLink 2's 24 bits)."""
+    if not math.isfinite(param) or param != int(param) or not 0 <= param < 1 << 24:
+        return None
+    return int(param)
+
+
+def software_version() -> int:
+    """This package's version as PX4 encodes ``flight_sw_version``: major, minor and patch in
+    the top three bytes, the release type in the lowest (255 official, 0 development)."""
+    from px4params import __version__
+
+    parts = [int(p) for p in __version__.split("+")[0].split(".")[:3] if p.isdigit()]
+    major, minor, patch = [*parts, 0, 0, 0][:3]
+    release = 0 if "dev" in __version__ else 255
+    return (major & 0xFF) << 24 | (minor & 0xFF) << 16 | (patch & 0xFF) << 8 | release
+
+
+def store_uid(
+    store_path: str | os.PathLike[str] | None, parameters: Iterable[str]
+) -> tuple[int, bytes]:
+    """``(uid, uid2)`` of AUTOPILOT_VERSION for a store: from its file's real path, so that the
+    same store file is the same vehicle to a ground station (QGC keys its caches by it), else
+    from its parameter names."""
+    import hashlib
+
+    if store_path is not None:
+        source = "file:" + os.path.realpath(os.fspath(store_path))
+    else:
+        source = "memory:" + ",".join(parameters)
+    digest = hashlib.sha256(source.encode("utf-8", "surrogateescape")).digest()
+    return int.from_bytes(digest[:8], "little") or 1, digest[8:26]
 
 
 def _shown(value: int | float) -> str:
