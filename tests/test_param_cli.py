@@ -654,3 +654,22 @@ def test_saved_files_are_readable_by_others(
     finally:
         os.umask(old)
     assert store.stat().st_mode & 0o777 == 0o644
+
+
+def test_a_flat_name_that_is_not_live_says_why(
+    store: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    talk(capsys, tmp_path)
+    assert param(capsys, "set", "INA238_0A", "1")[0] == 0  # SPI: the I2C leaves are not live
+    code, _, err = param(capsys, "set", "INA238_0C", "70")
+    assert code == 1
+    assert err == (
+        "px4params: error: INA238_0C (INA238#0.bus.i2c.address) is not live: bus._tag selects "
+        "variant 1, not 0 (set INA238_0A to 0)\n"
+    )
+    code, _, err = param(capsys, "set", "INA238_3C", "70")
+    assert (code, err) == (
+        1,
+        "px4params: error: INA238_3C belongs to INA238#3, which does not exist "
+        "(add it first: param add INA238#3)\n",
+    )

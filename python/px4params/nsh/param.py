@@ -187,19 +187,20 @@ def verb_rm(s: Session, a: argparse.Namespace) -> int:
 def resolve_name(store: Store, name: str) -> Key:
     """``name`` parsed once into the key every later step takes; a destructured flat name
     (``INA238_1C``) becomes the leaf it stands for (``INA238#1[4]``), so that both spellings
-    set the same leaf."""
+    set the same leaf. A flat name whose leaf is not live (another union variant selected) or
+    whose instance does not exist says so."""
     try:
         key = Key.parse(name)
         if key.param in store.parameters:
             return key
     except InstanceError:
         pass
-    from px4params.store.flat import resolve_flat
+    from px4params.store.flat import flat_map
 
-    try:
-        return Key.parse(resolve_flat(store, name))
-    except Px4ParamsError:
-        return Key.parse(name)  # not a flat name either: the store's own error names the problem
+    fmap = flat_map(store)
+    if name in fmap:
+        return Key.parse(fmap.find(name).leaf)
+    return Key.parse(name)  # neither: the store's own error names the problem
 
 
 def _write(s: Session, name: str, text: str, *, default: bool) -> None:
