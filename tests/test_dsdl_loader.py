@@ -15,6 +15,7 @@ from typing import Any
 import pytest
 from px4params.dsdl import cache as model_cache
 from px4params.dsdl import loader as dsdl_loader
+from px4params.dsdl import roots as model_roots
 from px4params.dsdl.cache import load_model
 from px4params.errors import DsdlError, Px4ParamsError
 
@@ -264,7 +265,7 @@ def test_dronecan_standard_set_complete(full_model: dict[str, Any]) -> None:
 
 
 def test_every_bundled_uavcan_file_is_loaded(full_model: dict[str, Any]) -> None:
-    specs = Path(model_cache.dronecan_package_dir(), "dsdl_specs")
+    specs = Path(model_roots.dronecan_package_dir(), "dsdl_specs")
     files = sorted(specs.rglob("*.uavcan"))
     assert len(files) >= 147
     loaded = {spec["file"] for spec in full_model["types"].values()}
@@ -547,7 +548,7 @@ def test_cache_key_follows_file_contents(tmp_path: Path) -> None:
     assert len(list((tmp_path / "cache").glob("model-*.json"))) == 2
     # Options are part of the key as well.
     keys = {
-        model_cache.cache_key_text(model_cache.collect_roots([root], flag), flag)
+        model_cache.cache_key_text(model_roots.collect_roots([root], flag), flag)
         for flag in (True, False)
     }
     assert len(keys) == 2

@@ -126,8 +126,15 @@ def test_ina238_entry_shows_the_talks_seven_fields(
     assert ina["shortDesc"] == "INA238 power monitor"
     data_type = schema["px.Ina238"]
     assert ina["dsdl_type"] == data_type.key and ina["max_bytes"] == data_type.max_bytes
-    assert ina["default"] == metadata_default(schema, data_type.key)
-    assert ina["default_encoded"] == data_type.encode(ina["default"], tao=False).hex()
+    assert ina["default_value"] == metadata_default(schema, data_type.key)
+    # QGC holds a Custom default as bytes: the DroneCAN encoding, in hex (the talk's bytes)
+    assert ina["default"] == "1001151dea0c"
+    assert data_type.decode(bytes.fromhex(ina["default"]), tao=False) == {
+        "p_version": 1,
+        "bus": {"i2c": {"p_version": 0, "bus_id": 0, "address": 0x45}},
+        "current": 327,
+        "shunt": data_type.decode(bytes.fromhex(ina["default"]), tao=False)["shunt"],
+    }
     f = {row["path"]: row for row in ina["fields"]}
     assert f["p_version"]["default"] == data_type.version[1]  # type: ignore[index]
     assert f["bus.i2c.address"]["default"] == 0x45
@@ -167,7 +174,11 @@ def test_ina238_entry_shows_the_talks_seven_fields(
 def test_the_document_is_qgcs_version_1(document: dict[str, Any]) -> None:
     assert document["version"] == 1
     names = [e["name"] for e in document["parameters"]]
-    assert names == sorted(s for s in names)  # no classic parameters: structured, by name
+    structured_names = [e["name"] for e in document["parameters"] if e["type"] == "Custom"]
+    flat_names = names[len(structured_names) :]
+    # no classic parameters: structured ones by name, then their destructured names
+    assert names[: len(structured_names)] == sorted(structured_names)
+    assert flat_names[:3] == ["AK09916_0A", "AK09916_0B", "AK09916_0C"]
     assert {"INA238", "INA226", "INA228", "AK09916", "RM3100"} <= set(names)
     json.dumps(document, allow_nan=False)  # plain JSON: no NaN or infinities
 
@@ -187,7 +198,7 @@ def test_fields_are_the_leaves_of_the_default_value(
     checked = 0
     for sch, spec in all_specs(schema, tst_schema):
         entry = structured_entry(sch, spec)
-        data = bytes.fromhex(entry["default_encoded"])
+        data = bytes.fromhex(entry["default"])
         leaves = spec.data_type.leaves(data, tao=False)
         fields = [f for f in entry["fields"] if f["role"] != "padding"]
         assert [(f["index"], f["path"], f["type"]) for f in fields] == [
@@ -319,9 +330,9 @@ def test_value_types_match_the_real_file(
     for entry in structured(schema, tst_schema):
         for key, value in entry.items():
             if key == "default":
-                # A "Custom" value is structured: QGC converts Custom values to a byte array
-                # without looking at them (FactMetaData::convertAndValidateRaw).
-                assert entry["type"] == "Custom" and json_kind(value) == "object"
+                # QGC converts a Custom value to a byte array (FactMetaData::convertAndValidateRaw):
+                # the encoding, as a hex string.
+                assert entry["type"] == "Custom" and json_kind(value) == "string"
             elif key in kinds:
                 assert json_kind(value) in kinds[key], (entry["name"], key)
             else:
@@ -329,8 +340,9 @@ def test_value_types_match_the_real_file(
                     "max_instances",
                     "dsdl_type",
                     "max_bytes",
-                    "default_encoded",
+                    "default_value",
                     "fields",
+                    "flat",
                 )
 
 
@@ -351,9 +363,10 @@ def test_classic_parameters_are_copied_unchanged(
     document = build_parameters_json(schema, real_parameters_json())
     params = document["parameters"]
     assert params[: len(real["parameters"])] == real["parameters"]
-    assert [e["name"] for e in params[len(real["parameters"]) :]] == [
-        s.name for s in parameter_specs(schema)
-    ]
+    specs = parameter_specs(schema)
+    after = params[len(real["parameters"]) :]
+    assert [e["name"] for e in after[: len(specs)]] == [s.name for s in specs]
+    assert all(e["type"] in ("Int32", "Float") for e in after[len(specs) :])
     assert document["translation"] == real["translation"]
     assert document["version"] == 1
     names = [e["name"] for e in params]

@@ -14,11 +14,14 @@ from metadata_support import real_parameters_json, write_tst
 from px4params.cli.main import main
 from px4params.gcs.cheader import generate_header
 from px4params.gcs.metadata import build_parameters_json
+from px4params.store import flat
 from px4params.store.classic import CLASSIC_ENV
 from px4params.store.spec import parameter_specs
 
 SCHEMA = px4params.load_schema(use_env=False)
 PARAMS = [s.name for s in parameter_specs(SCHEMA)]
+#: Destructured names: every letter of every instance slot.
+FLAT = sum(len(flat.layout(s.data_type)) * s.slots for s in parameter_specs(SCHEMA))
 
 
 @pytest.fixture(autouse=True)
@@ -48,10 +51,13 @@ def test_json_without_classic_parameters(
     target = tmp_path / "parameters.json"
     code, out, err = run(capsys, "metadata", "--json", str(target))
     assert (code, err) == (0, "")
-    assert out == f"wrote {target}: {len(PARAMS)} structured + 0 classic parameters\n"
+    assert out == (
+        f"wrote {target}: {len(PARAMS)} structured ({FLAT} destructured names) + 0 classic "
+        "parameters\n"
+    )
     document = json.loads(target.read_text(encoding="utf-8"))
     assert document == build_parameters_json(SCHEMA)
-    assert [e["name"] for e in document["parameters"]] == PARAMS
+    assert [e["name"] for e in document["parameters"]][: len(PARAMS)] == PARAMS
 
 
 def test_json_with_the_real_classic_parameters(
@@ -62,7 +68,10 @@ def test_json_with_the_real_classic_parameters(
     code, out, _ = run(capsys, "metadata", "--json", str(target), "--classic", str(real))
     assert code == 0
     classic = len(json.loads(real.read_text(encoding="utf-8"))["parameters"])
-    assert out == f"wrote {target}: {len(PARAMS)} structured + {classic} classic parameters\n"
+    assert out == (
+        f"wrote {target}: {len(PARAMS)} structured ({FLAT} destructured names) + {classic} "
+        "classic parameters\n"
+    )
     assert json.loads(target.read_text(encoding="utf-8")) == build_parameters_json(SCHEMA, real)
 
 
@@ -73,7 +82,8 @@ def test_classic_parameters_from_the_environment(
     code, out, _ = run(capsys, "metadata", "--json", "-")
     assert code == 0
     names = [e["name"] for e in json.loads(out)["parameters"]]
-    assert names == ["FROM_ENV", *PARAMS]
+    assert names[: len(PARAMS) + 1] == ["FROM_ENV", *PARAMS]
+    assert len(names) == 1 + len(PARAMS) + FLAT
     # --classic wins over the environment.
     given = small_classic(tmp_path / "given.json", "GIVEN_A", "GIVEN_B")
     code, out, _ = run(capsys, "metadata", "--json", "-", "--classic", str(given))

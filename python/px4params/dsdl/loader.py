@@ -39,7 +39,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from px4params.dsdl.cache import MODEL_FORMAT, Root, dronecan_package_dir
+from px4params.dsdl.roots import Root, dronecan_package_dir
 from px4params.errors import DsdlError
 
 if TYPE_CHECKING:
@@ -75,7 +75,7 @@ def build_model(roots: Sequence[Root]) -> Model:
         builder.add_dronecan(dronecan_roots)
     builder.resolve_path_defaults()
     builder.check_references()
-    return {"format": MODEL_FORMAT, "types": {k: builder.types[k] for k in sorted(builder.types)}}
+    return {"types": {k: builder.types[k] for k in sorted(builder.types)}}
 
 
 @dataclass

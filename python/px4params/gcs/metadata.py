@@ -7,9 +7,15 @@ structured parameter gets one entry with QGC's keys (``name``, ``type``, ``defau
 
 ``max_instances``
     number of instance slots (``INA238#0`` ..), ``null`` for a shared parameter.
-``dsdl_type``, ``max_bytes``, ``default_encoded``
-    the DSDL type, the largest encoding and the hex encoding of ``default`` (DroneCAN rules,
-    no tail array optimization: how parameters are stored).
+``default`` (a QGC key) is the hex encoding of the default value (DroneCAN rules, no tail
+array optimization: how parameters are stored), a scalar QGC can hold as bytes; the value itself
+is ``default_value``.
+``dsdl_type``, ``max_bytes``, ``default_value``
+    the DSDL type, the largest encoding and the default as a structured value.
+``flat``
+    the destructured names' letters in order (``letter``, ``path``, ``type`` ``Int32`` or
+    ``Float``); each name (``INA238_1C``) also has an entry of its own, as classic parameters
+    do, after the structured entries (see :func:`flat_entries`).
 ``fields``
     every leaf of the default value in ``[k]`` order (``index`` is ``k``). Each leaf has
     ``name`` (its DSDL field), ``path`` (``bus.i2c.address``), ``type`` (``uint7``,
@@ -36,7 +42,8 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 from px4params.dsdl.schema import Schema, to_json_value
-from px4params.errors import MetadataError
+from px4params.errors import FlatError, MetadataError
+from px4params.store import flat
 from px4params.store.classic import CLASSIC_ENV, ClassicParam, load_classic
 from px4params.store.spec import ParamSpec, metadata_default, parameter_specs
 
@@ -90,8 +97,10 @@ def build_parameters_json(
     """The whole document: the classic parameters of ``classic_path`` (in file order,
     unchanged, with its ``translation`` section) followed by every structured parameter."""
     classic: list[ClassicParam] = load_classic(classic_path) if classic_path is not None else []
-    structured = [
-        structured_entry(schema, s) for s in (parameter_specs(schema) if specs is None else specs)
+    chosen = parameter_specs(schema) if specs is None else specs
+    structured = [structured_entry(schema, s) for s in chosen]
+    destructured = [
+        e for s, entry in zip(chosen, structured, strict=True) for e in flat_entries(s, entry)
     ]
     classic_names = {p.name for p in classic}
     for entry in structured:
@@ -102,7 +111,7 @@ def build_parameters_json(
             )
     document: dict[str, Any] = {
         "version": METADATA_VERSION,
-        "parameters": [dict(p.entry) for p in classic] + structured,
+        "parameters": [dict(p.entry) for p in classic] + structured + destructured,
     }
     translation = _classic_translation(classic_path) if classic_path is not None else None
     if translation is not None:
@@ -110,6 +119,18 @@ def build_parameters_json(
         # so it covers the structured entries too.
         document["translation"] = translation
     return document
+
+
+def count_entries(document: Mapping[str, Any]) -> dict[str, int]:
+    """How many entries of a document are structured, destructured (flat names) and classic."""
+    entries = document["parameters"]
+    structured = sum(1 for e in entries if e.get("type") == QGC_TYPE)
+    destructured = sum(len(e.get("flat", ())) * (e.get("max_instances") or 1) for e in entries)
+    return {
+        "structured": structured,
+        "destructured": destructured,
+        "classic": len(entries) - structured - destructured,
+    }
 
 
 def _classic_translation(path: str | os.PathLike[str]) -> Any:
@@ -127,7 +148,8 @@ def structured_entry(schema: Schema, spec: ParamSpec) -> dict[str, Any]:
     entry: dict[str, Any] = {
         "name": spec.name,
         "type": QGC_TYPE,
-        "default": to_json_value(default),
+        # QGC holds a Custom default as bytes (QVariant::toByteArray): the encoding, in hex.
+        "default": data_type.encode(default, tao=False).hex(),
         "group": str(tags.get("group", DEFAULT_GROUP)),
         "category": str(tags.get("category", DEFAULT_CATEGORY)),
         "shortDesc": doc.get("short") or spec.name,
@@ -139,9 +161,108 @@ def structured_entry(schema: Schema, spec: ParamSpec) -> dict[str, Any]:
     entry["max_instances"] = spec.max_instances
     entry["dsdl_type"] = data_type.key
     entry["max_bytes"] = data_type.max_bytes
-    entry["default_encoded"] = data_type.encode(default, tao=False).hex()
+    entry["default_value"] = to_json_value(default)
     entry["fields"] = describe_value(schema, data_type.key, default)
+    try:
+        letters = flat.layout(data_type)
+    except FlatError:
+        return entry  # a leaf wider than 32 bits: the type has no destructured names
+    entry["flat"] = [
+        {"letter": slot.letter, "path": slot.path, "type": _QGC_FLAT_TYPE[slot.mav_type]}
+        for slot in letters
+    ]
     return entry
+
+
+#: How a destructured leaf is carried, in parameters.json's type names.
+_QGC_FLAT_TYPE = {flat.INT32: "Int32", flat.FLOAT32: "Float"}
+_INT32_RANGE = (-(1 << 31), (1 << 31) - 1)
+
+
+def flat_entries(spec: ParamSpec, entry: Mapping[str, Any]) -> list[dict[str, Any]]:
+    """One ``parameters.json`` entry per destructured name a vehicle can report for ``spec``
+    (every letter of every instance slot: ``INA238_0A`` .. ``INA238_3Q``), as the classic
+    entries QGC matches by name: ``Int32`` or ``Float``, the leaf's default, range, unit,
+    decimal places and enum values, and a description naming the instance and the path
+    (``INA238 #1: bus.i2c.address``). ``entry`` is the parameter's :func:`structured_entry`."""
+    if "flat" not in entry:
+        return []
+    leaves = _leaves_by_path(entry["fields"])
+    numbers: list[int | None] = [None] if spec.shared else list(range(spec.slots))
+    out: list[dict[str, Any]] = []
+    for number in numbers:
+        owner = spec.name if number is None else f"{spec.name} #{number}"
+        for slot in flat.layout(spec.data_type):
+            leaf = leaves.get(slot.path) or leaves.get(_generic_path(slot.path)) or {}
+            item: dict[str, Any] = {
+                "name": flat.FlatMap.name_of(spec, number, slot),
+                "type": _QGC_FLAT_TYPE[slot.mav_type],
+                "default": slot.to_flat(leaf.get("default", 0)),
+                "group": entry["group"],
+                "category": entry["category"],
+                "shortDesc": f"{owner}: {slot.path}",
+            }
+            about = [leaf.get("shortDesc", ""), leaf.get("longDesc", "")]
+            live = [_condition(spec, number, path, op, n) for path, op, n in slot.requires]
+            where = f"Leaf {slot.path} of {spec.instance_name(number or 0)} ({spec.name}, "
+            where += f"{entry['dsdl_type']})" + (
+                f", present while {' and '.join(live)}." if live else "."
+            )
+            item["longDesc"] = "\n".join(t for t in (*about, where) if t)
+            low, high = _flat_range(slot, leaf)
+            if low is not None:
+                item["min"], item["max"] = low, high
+            if "unit" in leaf:
+                item["units"] = leaf["unit"]
+            for key in ("decimalPlaces", "increment", "values"):
+                if key in leaf:
+                    item[key] = leaf[key]
+            if "rebootRequired" in entry:
+                item["rebootRequired"] = entry["rebootRequired"]
+            out.append(item)
+    return out
+
+
+def _leaves_by_path(fields: Sequence[Mapping[str, Any]]) -> dict[str, Mapping[str, Any]]:
+    """Every described leaf by path, those of every union variant and array element too."""
+    found: dict[str, Mapping[str, Any]] = {}
+    for leaf in fields:
+        if "path" in leaf:
+            found.setdefault(leaf["path"], leaf)
+        for variant in leaf.get("variants", ()):
+            found.update(
+                (k, v) for k, v in _leaves_by_path(variant["fields"]).items() if k not in found
+            )
+        if "element" in leaf:
+            found.update(
+                (k, v) for k, v in _leaves_by_path(leaf["element"]).items() if k not in found
+            )
+    return found
+
+
+def _generic_path(path: str) -> str:
+    """``arr[3].x`` -> ``arr[].x``: how a dynamic array's element is described."""
+    import re
+
+    return re.sub(r"\[\d+\]", "[]", path)
+
+
+def _condition(spec: ParamSpec, number: int | None, path: str, op: str, n: int) -> str:
+    selector = flat.layout(spec.data_type).slot_for_path(path)
+    name = flat.FlatMap.name_of(spec, number, selector) if selector is not None else path
+    return f"{name} = {n}" if op == "==" else f"{name} > {n}"
+
+
+def _flat_range(slot: flat.FlatSlot, leaf: Mapping[str, Any]) -> tuple[Any, Any]:
+    """The leaf's range (its ``@min``/``@max`` when given) as the flat parameter carries it;
+    ``(None, None)`` when that is not one interval (a uint32 carried as its bit pattern)."""
+    low, high = leaf.get("min", slot.min), leaf.get("max", slot.max)
+    if slot.mav_type == flat.FLOAT32:
+        return float(low), float(high)
+    low, high = int(low), int(high)
+    if not _INT32_RANGE[0] <= low <= high <= _INT32_RANGE[1]:
+        return None, None
+    return low, high
 
 
 def describe_value(schema: Schema, key: str, value: Mapping[str, Any]) -> list[dict[str, Any]]:

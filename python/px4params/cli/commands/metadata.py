@@ -34,8 +34,15 @@ def cmd_metadata(args: argparse.Namespace) -> int:
         classic = metadata.classic_source(args.classic)
         document = metadata.build_parameters_json(schema, classic, specs=specs)
         text = json.dumps(document, allow_nan=False) + "\n"
-        count = len(document["parameters"]) - len(specs)
-        outputs.append((args.json, text, f"{len(specs)} structured + {count} classic parameters"))
+        counts = metadata.count_entries(document)
+        outputs.append(
+            (
+                args.json,
+                text,
+                f"{counts['structured']} structured ({counts['destructured']} destructured names)"
+                f" + {counts['classic']} classic parameters",
+            )
+        )
     if args.header is not None:
         guard = cheader.guard_from_filename(None if args.header == "-" else args.header)
         text = cheader.generate_header(schema, specs, guard=guard)
@@ -73,7 +80,7 @@ FILE '-' writes to stdout.""",
         epilog="""\
 example:
   px4params metadata --json parameters.json --header px4_params.h
-  wrote parameters.json: 9 structured + 0 classic parameters
+  wrote parameters.json: 9 structured (624 destructured names) + 0 classic parameters
   wrote px4_params.h: C header for 9 parameters""",
     )
     dsdl_option(p)
