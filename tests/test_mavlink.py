@@ -17,13 +17,7 @@ from typing import Any
 
 import px4params
 import pytest
-from px4params.links.mavlink import (
-    CAPABILITIES,
-    MavlinkParamServer,
-    param_hash,
-    param_set_message,
-    param_value_of,
-)
+from px4params.links.mavlink import CAPABILITIES, MavlinkParamServer
 from px4params.store.classic import ClassicParam
 from px4params.store.session import open_session
 
@@ -38,6 +32,50 @@ CLASSIC = [
 ]
 # int32 values whose bit patterns are signalling NaNs: pymavlink's float field rewrites them.
 SNAN_INT32 = (-8388607, -4194305, 2139095041, 2143289343)
+
+
+# -- what a client does, written here and not taken from the server -------------------------
+
+
+def value_of(msg: Any) -> int | float:
+    """A PARAM_VALUE's value as a PX4 ground station reads it: REAL32 through pymavlink's
+    float, INT32/UINT32 from the four value bytes of the frame itself (bytewise encoding;
+    the float field would rewrite signalling-NaN patterns). The payload starts after the
+    header: 10 bytes in MAVLink 2 (0xFD), 6 in MAVLink 1; MAVLink 2 trims trailing zeros."""
+    if msg.param_type == REAL32:
+        return float(msg.param_value)
+    frame = bytes(msg.get_msgbuf())
+    start = 10 if frame[0] == 0xFD else 6
+    raw = (frame[start : start + frame[1]] + bytes(4))[:4]
+    return struct.unpack("<I" if msg.param_type == mavlink.MAV_PARAM_TYPE_UINT32 else "<i", raw)[0]
+
+
+def set_frame(mav: Any, system: int, component: int, name: str, value: float, kind: int) -> bytes:
+    """A PARAM_SET frame whose value bytes are the int32's own (bytewise) or the float32's:
+    packed by pymavlink with a zero value, the four value bytes (the payload's first field)
+    written in, and the checksum computed again with pymavlink's CRC."""
+    msg = mavlink.MAVLink_param_set_message(system, component, name.encode(), 0.0, kind)
+    frame = bytearray(msg.pack(mav))
+    assert frame[0] == 0xFD
+    code = {REAL32: "<f", mavlink.MAV_PARAM_TYPE_UINT32: "<I"}.get(kind, "<i")
+    frame[10:14] = struct.pack(code, value)
+    length = frame[1]
+    crc = mavutil.x25crc(bytes(frame[1 : 10 + length]))
+    crc.accumulate(bytes([msg.crc_extra]))
+    frame[10 + length : 12 + length] = struct.pack("<H", crc.crc)
+    return bytes(frame)
+
+
+def px4_hash_check(params: list[tuple[str, bytes]]) -> int:
+    """PX4's param_hash_check(): crc32part (reflected CRC-32, 0xEDB88320, no inversions) over
+    each parameter's name and then its four value bytes, in index (name) order."""
+    crc = 0
+    for name, raw in params:
+        for byte in name.encode() + raw:
+            crc ^= byte
+            for _ in range(8):
+                crc = (crc >> 1) ^ 0xEDB88320 if crc & 1 else crc >> 1
+    return crc
 
 
 class Client:
@@ -74,7 +112,7 @@ class Client:
         return self.expect("PARAM_VALUE", where=lambda m: m.param_id == name)
 
     def set(self, name: str, value: int | float, mav_type: int) -> None:
-        self.send(param_set_message(1, 1, name, value, mav_type))
+        self.conn.write(set_frame(self.conn.mav, 1, 1, name, value, mav_type))
 
     def list_all(self) -> tuple[Any, dict[str, Any]]:
         """PARAM_REQUEST_LIST, then by index whatever UDP lost, as QGC does."""
@@ -136,30 +174,36 @@ def test_list_read_set(served: tuple[MavlinkParamServer, Client], schema, tmp_pa
     # PX4 sends _HASH_CHECK first: index -1, UINT32, CRC32 over names and values
     assert first.param_id == "_HASH_CHECK" and first.param_index == 0xFFFF
     assert first.param_type == mavlink.MAV_PARAM_TYPE_UINT32
-    assert param_value_of(first) == param_hash(server.entries())
+    # PX4's hash over the parameters as listed (names in index order, their value bytes)
+    names = sorted(listed)
+    raw = [
+        struct.pack("<f" if listed[n].param_type == REAL32 else "<i", value_of(listed[n]))
+        for n in names
+    ]
+    assert value_of(first) == px4_hash_check(list(zip(names, raw, strict=True)))
     expected = ["SYS_AUTOSTART", "BAT1_CAPACITY", "SENS_EXT_I2C_PRB"]
     expected += [f"INA238_1{x}" for x in "ABCPQ"]
     assert sorted(listed) == sorted(expected)
     assert first.param_count == len(expected)
     assert [listed[n].param_index for n in sorted(listed)] == list(range(len(expected)))
-    assert param_value_of(listed["INA238_1C"]) == 0x45 and listed["INA238_1C"].param_type == INT32
-    assert param_value_of(listed["BAT1_CAPACITY"]) == -1.0
+    assert value_of(listed["INA238_1C"]) == 0x45 and listed["INA238_1C"].param_type == INT32
+    assert value_of(listed["BAT1_CAPACITY"]) == -1.0
     assert listed["INA238_1Q"].param_type == REAL32
-    assert param_value_of(listed["INA238_1Q"]) == server.store.get("INA238#1.shunt")
+    assert value_of(listed["INA238_1Q"]) == server.store.get("INA238#1.shunt")
 
     read = client.read("INA238_1C")
-    assert param_value_of(read) == 0x45 and read.param_count == len(expected)
+    assert value_of(read) == 0x45 and read.param_count == len(expected)
 
     client.set("INA238_1C", 0x46, INT32)
     answer = client.expect("PARAM_VALUE", where=lambda m: m.param_id == "INA238_1C")
-    assert param_value_of(answer) == 0x46
+    assert value_of(answer) == 0x46
     saved = px4params.Store.load(tmp_path / "vehicle.store", schema, classic=CLASSIC)
     assert saved.get("INA238#1")["bus"]["i2c"]["address"] == 0x46  # through the store, saved
 
     client.set("INA238_1C", 71.0, REAL32)  # wrong type: refused, value unchanged
     got = client.collect(0.5)
     values = [m for m in got if m.get_type() == "PARAM_VALUE"]
-    assert [param_value_of(m) for m in values] == [0x46]
+    assert [value_of(m) for m in values] == [0x46]
     assert Client.text(got) == ["INA238_1C: type REAL32 refused: the parameter is INT32"]
     errors = [m for m in got if m.get_type() == "PARAM_ERROR"]
     assert [(e.param_id, e.error) for e in errors] == [
@@ -174,7 +218,7 @@ def test_out_of_range_and_classic_sets(served: tuple[MavlinkParamServer, Client]
     server, client = served
     client.set("INA238_1C", 200, INT32)  # uint7
     got = client.collect(0.5)
-    assert [param_value_of(m) for m in got if m.get_type() == "PARAM_VALUE"] == [0x45]
+    assert [value_of(m) for m in got if m.get_type() == "PARAM_VALUE"] == [0x45]
     assert Client.text(got) == [
         "INA238_1C: INA238#1: bus.i2c.address: value 200 is out of range (expected 0 to 127)"
     ]
@@ -184,7 +228,7 @@ def test_out_of_range_and_classic_sets(served: tuple[MavlinkParamServer, Client]
         "INA238_1Q: INA238#1: shunt: value 1000000 is out of range (expected -65504 to 65504)"
     ]
     client.set("BAT1_CAPACITY", 5000.0, REAL32)
-    assert param_value_of(client.expect("PARAM_VALUE")) == 5000.0
+    assert value_of(client.expect("PARAM_VALUE")) == 5000.0
     # Stored as float16 (1049 * 2**-21), but the echo is the float32 that was sent: clients
     # (MAVSDK, QGC, MAVProxy) take a write as done only when the echo equals what they sent.
     client.set("INA238_1Q", 0.0005, REAL32)
@@ -207,9 +251,9 @@ def test_int32_that_looks_like_a_signalling_nan(
     server, client = served
     client.set("SYS_AUTOSTART", value, INT32)
     answer = client.expect("PARAM_VALUE", where=lambda m: m.param_id == "SYS_AUTOSTART")
-    assert param_value_of(answer) == value
+    assert value_of(answer) == value
     assert struct.pack("<f", answer.param_value) != struct.pack("<i", value)  # the corruption
-    assert param_value_of(client.read("SYS_AUTOSTART")) == value
+    assert value_of(client.read("SYS_AUTOSTART")) == value
     server.stop()
     assert server.store.get("SYS_AUTOSTART") == value
 
@@ -223,7 +267,7 @@ def test_selecting_a_variant_announces_its_leaves(
     assert [m.param_id for m in got] == ["INA238_1A"] + [f"INA238_1{x}" for x in "DEFG"]
     assert {m.param_count for m in got} == {10}
     client.set("INA238_1E", 3, INT32)
-    assert param_value_of(client.expect("PARAM_VALUE")) == 3
+    assert value_of(client.expect("PARAM_VALUE")) == 3
     client.set("INA238_1C", 0x46, INT32)  # the I2C address is not live any more
     got = client.collect(0.5)
     assert Client.text(got) == [
@@ -265,7 +309,7 @@ def test_hash_check_set_stops_the_stream(schema: px4params.Schema) -> None:
         client.conn.mav.param_request_list_send(1, 1)
         first = client.expect("PARAM_VALUE")
         assert first.param_id == "_HASH_CHECK"
-        client.set("_HASH_CHECK", param_value_of(first), mavlink.MAV_PARAM_TYPE_UINT32)
+        client.set("_HASH_CHECK", value_of(first), mavlink.MAV_PARAM_TYPE_UINT32)
         got = [m for m in client.collect(2.5) if m.get_type() == "PARAM_VALUE"]
         assert 0 < len(got) < 6000  # stopped part-way (6000 take about 1.5 s)
     finally:
@@ -274,24 +318,45 @@ def test_hash_check_set_stops_the_stream(schema: px4params.Schema) -> None:
 
 
 def test_autopilot_version_and_heartbeat(served: tuple[MavlinkParamServer, Client]) -> None:
-    _, client = served
+    server, client = served
     heartbeat = client.expect("HEARTBEAT", timeout=3)
     assert heartbeat.autopilot == mavlink.MAV_AUTOPILOT_PX4
     client.conn.mav.command_long_send(
         1, 1, mavlink.MAV_CMD_REQUEST_MESSAGE, 0, mavlink.MAVLINK_MSG_ID_AUTOPILOT_VERSION,
         0, 0, 0, 0, 0, 0,
     )  # fmt: skip
-    ack = client.expect("COMMAND_ACK")
-    assert ack.result == mavlink.MAV_RESULT_ACCEPTED
-    version = client.expect("AUTOPILOT_VERSION")
+    got = [m for m in client.collect(0.5) if m.get_type() in ("AUTOPILOT_VERSION", "COMMAND_ACK")]
+    # The message, then its ACK, as PX4 answers MAV_CMD_REQUEST_MESSAGE.
+    assert [m.get_type() for m in got] == ["AUTOPILOT_VERSION", "COMMAND_ACK"]
+    version, ack = got
+    assert (ack.command, ack.result) == (
+        mavlink.MAV_CMD_REQUEST_MESSAGE,
+        mavlink.MAV_RESULT_ACCEPTED,
+    )
+    assert (ack.target_system, ack.target_component) == (255, 190)
     assert version.capabilities & mavlink.MAV_PROTOCOL_CAPABILITY_PARAM_ENCODE_BYTEWISE
     assert version.capabilities == CAPABILITIES
+    # px4params 0.1.0 as PX4 encodes flight_sw_version: major, minor, patch, 255 = official
+    assert px4params.__version__ == "0.1.0"
+    assert version.flight_sw_version == 0x000100FF
+    uid = version.uid
+    assert uid != 0
     client.conn.mav.command_long_send(
         1, 1, mavlink.MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES, 0, 1, 0, 0, 0, 0, 0, 0
     )
-    assert client.expect("AUTOPILOT_VERSION").capabilities == CAPABILITIES
+    again = client.expect("AUTOPILOT_VERSION")
+    assert (again.capabilities, again.uid) == (CAPABILITIES, uid)  # the same vehicle
     client.conn.mav.command_long_send(1, 1, mavlink.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, 0, 0, 0, 0, 0)
-    assert client.expect("COMMAND_ACK").result == mavlink.MAV_RESULT_UNSUPPORTED
+    takeoff = client.expect("COMMAND_ACK", where=lambda m: m.command == mavlink.MAV_CMD_NAV_TAKEOFF)
+    assert takeoff.result == mavlink.MAV_RESULT_UNSUPPORTED
+    # Another store file is another vehicle; the same file (reopened) is the same one.
+    other = MavlinkParamServer(server.store, "127.0.0.1", 0, save_path="/tmp/another.store")
+    same = MavlinkParamServer(server.store, "127.0.0.1", 0, save_path=server.save_path)
+    try:
+        assert other.uid[0] != uid and same.uid[0] == uid
+    finally:
+        other.stop()
+        same.stop()
 
 
 def test_malformed_and_foreign_packets_are_ignored(
@@ -300,10 +365,10 @@ def test_malformed_and_foreign_packets_are_ignored(
     server, client = served
     raw = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     target = server.address
-    good = param_set_message(1, 1, "SYS_AUTOSTART", 4001, INT32).pack(client.conn.mav)
+    good = set_frame(client.conn.mav, 1, 1, "SYS_AUTOSTART", 4001, INT32)
     bad_crc = good[:-1] + bytes([good[-1] ^ 0xFF])
-    foreign = param_set_message(42, 1, "SYS_AUTOSTART", 4001, INT32).pack(client.conn.mav)
-    other_component = param_set_message(1, 77, "SYS_AUTOSTART", 4001, INT32).pack(client.conn.mav)
+    foreign = set_frame(client.conn.mav, 42, 1, "SYS_AUTOSTART", 4001, INT32)
+    other_component = set_frame(client.conn.mav, 1, 77, "SYS_AUTOSTART", 4001, INT32)
     for packet in (
         b"",
         b"\x00" * 3,
@@ -318,7 +383,7 @@ def test_malformed_and_foreign_packets_are_ignored(
     raw.close()
     client.conn.mav.param_request_read_send(1, 1, b"SYS_AUTOSTART", -1)
     answer = client.expect("PARAM_VALUE", where=lambda m: m.param_id == "SYS_AUTOSTART")
-    assert param_value_of(answer) == 0  # still serving, and nothing was set
+    assert value_of(answer) == 0  # still serving, and nothing was set
     server.stop()
     assert server.store.get("SYS_AUTOSTART") == 0
     assert server.stats["ignored"] >= 2 and server.stats["accepted"] == 0
@@ -335,7 +400,7 @@ def test_failed_save_undoes_the_write(store: px4params.Store, tmp_path: Path) ->
     try:
         client.set("INA238_1C", 0x46, INT32)
         got = client.collect(0.5)
-        assert [param_value_of(m) for m in got if m.get_type() == "PARAM_VALUE"] == [0x45]
+        assert [value_of(m) for m in got if m.get_type() == "PARAM_VALUE"] == [0x45]
         assert Client.text(got)[0].startswith("INA238_1C: ")
     finally:
         client.close()
@@ -433,8 +498,8 @@ def test_cli_serves_a_saved_store(tmp_path: Path, monkeypatch: pytest.MonkeyPatc
         assert "as system 7, component 1" in banner
         port = int(banner.split("on udp 127.0.0.1:")[1].split()[0])
         client = Client(port)
-        client.send(param_set_message(7, 1, "INA238_0P", 100, INT32))
-        assert param_value_of(client.expect("PARAM_VALUE")) == 100
+        client.conn.write(set_frame(client.conn.mav, 7, 1, "INA238_0P", 100, INT32))
+        assert value_of(client.expect("PARAM_VALUE")) == 100
         assert proc.stdout.readline() == "INA238_0P = 100, saved\n"
         client.close()
     finally:

@@ -1,6 +1,6 @@
 """What the package ships besides code, found in one place: the bundled DSDL root namespaces
-(``dsdl/px``), the driver declarations (``drivers.toml``) and a minimal set of classic PX4
-parameters (``classic_parameters.json``)."""
+(``dsdl/px``), the driver declarations (``drivers.toml``), a minimal set of classic PX4
+parameters (``classic_parameters.json``) and MAVLink messages pymavlink lacks (``mavlink/``)."""
 
 from __future__ import annotations
 
@@ -14,3 +14,5 @@ DSDL_DIR = os.path.join(_HERE, "dsdl")
 DRIVERS_TOML = os.path.join(_HERE, "drivers.toml")
 #: Classic parameters used when no PX4 ``parameters.json`` is given (see ``store.classic``).
 CLASSIC_PARAMETERS_JSON = os.path.join(_HERE, "classic_parameters.json")
+#: MAVLink messages pymavlink's dialects lack (COMPONENT_METADATA, COMPONENT_INFORMATION).
+MAVLINK_COMPONENT_XML = os.path.join(_HERE, "mavlink", "component_information.xml")

@@ -93,10 +93,14 @@ def build_parameters_json(
     classic_path: str | os.PathLike[str] | None = None,
     *,
     specs: Sequence[ParamSpec] | None = None,
+    classic_params: Sequence[ClassicParam] | None = None,
 ) -> dict[str, Any]:
     """The whole document: the classic parameters of ``classic_path`` (in file order,
-    unchanged, with its ``translation`` section) followed by every structured parameter."""
-    classic: list[ClassicParam] = load_classic(classic_path) if classic_path is not None else []
+    unchanged, with its ``translation`` section), or ``classic_params`` (a store's), followed by
+    every structured parameter and every destructured name."""
+    classic: list[ClassicParam] = (
+        load_classic(classic_path) if classic_path is not None else list(classic_params or ())
+    )
     chosen = parameter_specs(schema) if specs is None else specs
     structured = [structured_entry(schema, s) for s in chosen]
     destructured = [

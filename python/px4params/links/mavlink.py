@@ -20,6 +20,14 @@ What it does (PX4's ``mavlink_parameters.cpp`` is the model):
   changes nothing and is answered with ``PARAM_VALUE`` of the unchanged value, a ``STATUSTEXT``
   saying why and a ``PARAM_ERROR``. Writing a union tag (e.g. ``INA238_1A``) changes which leaves
   are live: the newly live ones are announced with ``PARAM_VALUE`` too.
+* Component metadata as PX4 serves it: ``MAV_CMD_REQUEST_MESSAGE`` for ``COMPONENT_METADATA``
+  (397) or ``COMPONENT_INFORMATION`` (395) is answered with the ``mftp://`` URI and CRC of the
+  general metadata file, which lists ``parameters.json.xz`` (every classic, structured and
+  destructured parameter of the store, :mod:`px4params.gcs.component_information`); both are
+  downloaded with MAVLink FTP (``FILE_TRANSFER_PROTOCOL``, the read-only subset of
+  :mod:`px4params.links.mavlink_ftp`).
+* Every ``COMMAND_LONG`` is answered with ``COMMAND_ACK``: accepted, unsupported, or denied when
+  its parameters name nothing (NaN, infinities, a message ID beyond 24 bits).
 * Anything else (other messages, other targets, garbage bytes, bad CRCs) is ignored.
 
 The parameters are the store's classic ones and the destructured leaves of its structured
@@ -49,6 +57,9 @@ from typing import TYPE_CHECKING, Any
 from pymavlink.dialects.v20 import common as mavlink
 
 from px4params.errors import Px4ParamsError
+from px4params.gcs.component_information import ComponentFiles, px4_crc32
+from px4params.links import mavlink_messages
+from px4params.links.mavlink_ftp import MavftpServer
 from px4params.store import flat
 
 if TYPE_CHECKING:
@@ -64,6 +75,9 @@ __all__ = [
 ]
 
 HASH_PARAM = "_HASH_CHECK"
+#: Message IDs of COMPONENT_METADATA and COMPONENT_INFORMATION (not in pymavlink's dialects).
+COMPONENT_METADATA = 397
+COMPONENT_INFORMATION = 395
 CAPABILITIES = (
     mavlink.MAV_PROTOCOL_CAPABILITY_PARAM_ENCODE_BYTEWISE | mavlink.MAV_PROTOCOL_CAPABILITY_MAVLINK2
 )
@@ -158,20 +172,13 @@ def param_set_message(
     return _RawParamSet(target_system, target_component, name, _raw_of(value, mav_type), mav_type)
 
 
-def _crc32part(data: bytes, crc: int) -> int:
-    # NuttX/PX4 crc32part: the reflected CRC-32 table without pre- or post-inversion.
-    import zlib
-
-    return zlib.crc32(data, crc ^ 0xFFFFFFFF) ^ 0xFFFFFFFF
-
-
 def param_hash(entries: Iterable[ParamEntry]) -> int:
     """PX4's ``param_hash_check``: CRC32 over each parameter's name and value bytes in index
     order (QGroundControl computes the same over its cache)."""
     crc = 0
     for entry in entries:
-        crc = _crc32part(entry.name.encode(), crc)
-        crc = _crc32part(entry.raw, crc)
+        crc = px4_crc32(entry.name.encode(), crc)
+        crc = px4_crc32(entry.raw, crc)
     return crc
 
 
@@ -234,6 +241,13 @@ class MavlinkParamServer:
         self._text_id = 0
         #: AUTOPILOT_VERSION's uid and uid2 for this store.
         self.uid = store_uid(save_path, store.parameters)
+        #: The metadata files (general, parameters.json.xz) and the FTP server that serves them.
+        classic = [c for c in map(store.classic, store.parameters) if c is not None]
+        self.metadata = ComponentFiles(
+            store.schema, store.specs, classic, component_id=component_id
+        )
+        self.ftp = MavftpServer(self.metadata.files)
+        self._started = time.monotonic()
         #: Counters, for tests and the CLI's summary.
         self.stats = {"received": 0, "ignored": 0, "sent": 0, "accepted": 0, "refused": 0}
 
@@ -351,6 +365,9 @@ class MavlinkParamServer:
             return True
         if kind == "COMMAND_LONG" and self._for_us(msg):
             self._command(peer, msg)
+            return True
+        if kind == "FILE_TRANSFER_PROTOCOL" and self._for_us(msg):
+            self._file_transfer(peer, msg)
             return True
         return False
 
@@ -526,13 +543,13 @@ class MavlinkParamServer:
     def _command(self, peer: Address, msg: Any) -> None:
         """Every COMMAND_LONG gets a COMMAND_ACK: accepted, or unsupported for what this server
         does not do, or denied for parameters that name nothing (NaN, infinities, huge)."""
-        result, then = self._command_result(msg)
+        result, reply = self._command_result(msg)
+        if reply is not None:  # the message first, then the ACK, as PX4 does
+            self._send(reply, [peer])
         ack = mavlink.MAVLink_command_ack_message(
             msg.command, result, 0, 0, msg.get_srcSystem(), msg.get_srcComponent()
         )
         self._send(ack, [peer])
-        if then is not None:
-            self._send(then, [peer])
 
     def _command_result(self, msg: Any) -> tuple[int, Any | None]:
         if msg.command == mavlink.MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES:
@@ -551,7 +568,24 @@ class MavlinkParamServer:
         """The message MAV_CMD_REQUEST_MESSAGE asks for, if this server provides it."""
         if message_id == mavlink.MAVLINK_MSG_ID_AUTOPILOT_VERSION:
             return self.autopilot_version()
+        uptime = int((time.monotonic() - self._started) * 1000) & 0xFFFFFFFF
+        if message_id == COMPONENT_METADATA:
+            return mavlink_messages.component_metadata(
+                uptime, self.metadata.general_crc, self.metadata.general_uri
+            )
+        if message_id == COMPONENT_INFORMATION:
+            return mavlink_messages.component_information(
+                uptime, self.metadata.general_crc, self.metadata.general_uri
+            )
         return None
+
+    def _file_transfer(self, peer: Address, msg: Any) -> None:
+        """MAVLink FTP: every response goes to the requester's system and component."""
+        for payload in self.ftp.handle(bytes(msg.payload)):
+            reply = mavlink.MAVLink_file_transfer_protocol_message(
+                0, msg.get_srcSystem(), msg.get_srcComponent(), list(payload)
+            )
+            self._send(reply, [peer])
 
     def autopilot_version(self) -> mavlink.MAVLink_autopilot_version_message:
         """PX4's AUTOPILOT_VERSION: capabilities, the package's version as flight software
