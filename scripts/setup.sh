@@ -22,4 +22,8 @@ else
 fi
 .venv/bin/maturin develop --release --extras test
 
+# MAVProxy, a ground station the tests drive: without its declared GUI dependencies (vtk,
+# opencv, matplotlib: hundreds of MB it does not need to list and set parameters).
+.venv/bin/python -m pip install --quiet --disable-pip-version-check --no-deps "mavproxy==1.8.75"
+
 echo "== ready: 'source .venv/bin/activate' puts px4params on PATH (or run .venv/bin/px4params)"

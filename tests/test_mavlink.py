@@ -464,6 +464,8 @@ def test_cli_serve_and_ctrl_c(tmp_path: Path, schema: px4params.Schema) -> None:
         assert proc.stdout is not None
         banner = proc.stdout.readline()
         assert re.match(r"serving (\d+) parameters \(\1 classic, 0 destructured\) on udp ", banner)
+        announced = proc.stdout.readline()
+        assert announced.startswith("component metadata: mftp://px4params/general.json (crc 0x")
         assert "(store: " in banner and "new: written on the first accepted change" in banner
         port = int(banner.split("on udp 127.0.0.1:")[1].split()[0])
         client = Client(port)
@@ -495,6 +497,7 @@ def test_cli_serves_a_saved_store(tmp_path: Path, monkeypatch: pytest.MonkeyPatc
         assert proc.stdout is not None
         banner = proc.stdout.readline()
         assert re.match(r"serving \d+ parameters \(\d+ classic, 5 destructured\)", banner)
+        assert proc.stdout.readline().startswith("component metadata: ")
         assert "as system 7, component 1" in banner
         port = int(banner.split("on udp 127.0.0.1:")[1].split()[0])
         client = Client(port)

@@ -78,6 +78,11 @@ def cmd_serve(args: argparse.Namespace) -> int:
         f"on udp {bound_host}:{bound_port} as system {system_id}, component {component_id} "
         f"(store: {where}); Ctrl-C stops"
     )
+    files = server.metadata
+    log(
+        f"component metadata: {files.general_uri} (crc {files.general_crc:#010x}) lists "
+        f"parameters.json.xz ({len(files.parameters)} bytes), over MAVLink FTP"
+    )
     if threading.current_thread() is threading.main_thread():
         # `kill` (SIGTERM) stops as cleanly as Ctrl-C.
         signal.signal(signal.SIGTERM, lambda *_: server.stop())
