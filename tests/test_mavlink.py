@@ -30,6 +30,18 @@ CLASSIC = [
     ClassicParam("BAT1_CAPACITY", "Float", -1.0),
     ClassicParam("SENS_EXT_I2C_PRB", "Int32", 1),
 ]
+#: The bundled instanced parameters, each with an instance mask P_INST.
+INSTANCED = [
+    "AK09916",
+    "BMM350",
+    "INA226",
+    "INA228",
+    "INA238",
+    "IST8310",
+    "LIS3MDL",
+    "QMC5883L",
+    "RM3100",
+]
 # int32 values whose bit patterns are signalling NaNs: pymavlink's float field rewrites them.
 SNAN_INT32 = (-8388607, -4194305, 2139095041, 2143289343)
 
@@ -183,6 +195,7 @@ def test_list_read_set(served: tuple[MavlinkParamServer, Client], schema, tmp_pa
     assert value_of(first) == px4_hash_check(list(zip(names, raw, strict=True)))
     expected = ["SYS_AUTOSTART", "BAT1_CAPACITY", "SENS_EXT_I2C_PRB"]
     expected += [f"INA238_1{x}" for x in "ABCPQ"]
+    expected += [f"{p}_INST" for p in INSTANCED]  # instance masks: bit N while P#N exists
     assert sorted(listed) == sorted(expected)
     assert first.param_count == len(expected)
     assert [listed[n].param_index for n in sorted(listed)] == list(range(len(expected)))
@@ -265,7 +278,7 @@ def test_selecting_a_variant_announces_its_leaves(
     client.set("INA238_1A", 1, INT32)  # SPI
     got = [m for m in client.collect(0.7) if m.get_type() == "PARAM_VALUE"]
     assert [m.param_id for m in got] == ["INA238_1A"] + [f"INA238_1{x}" for x in "DEFG"]
-    assert {m.param_count for m in got} == {10}
+    assert {m.param_count for m in got} == {10 + len(INSTANCED)}
     client.set("INA238_1E", 3, INT32)
     assert value_of(client.expect("PARAM_VALUE")) == 3
     client.set("INA238_1C", 0x46, INT32)  # the I2C address is not live any more
@@ -297,7 +310,9 @@ def test_unknown_names_and_indices(served: tuple[MavlinkParamServer, Client]) ->
     assert not [m for m in got if m.get_type() == "PARAM_VALUE"]
     read = client.read("_HASH_CHECK")  # by name too, as PX4
     assert read.param_type == mavlink.MAV_PARAM_TYPE_UINT32
-    client.conn.mav.param_request_read_send(1, 1, b"", 3)  # by index, in name order
+    # by index, in name order: AK09916_INST BAT1_CAPACITY BMM350_INST INA226_INST INA228_INST
+    # INA238_1A INA238_1B INA238_1C
+    client.conn.mav.param_request_read_send(1, 1, b"", 7)
     assert client.expect("PARAM_VALUE").param_id == "INA238_1C"
 
 
@@ -563,3 +578,31 @@ def test_cli_errors(tmp_path: Path) -> None:
 def test_cli_help_has_examples(tmp_path: Path) -> None:
     r = _cli("mavlink", "serve", "--help", tmp_path=tmp_path)
     assert r.returncode == 0 and "examples:" in r.stdout and "--gcs" in r.stdout
+
+
+def test_instances_added_and_removed_through_the_mask(
+    served: tuple[MavlinkParamServer, Client], schema: px4params.Schema, tmp_path: Path
+) -> None:
+    """INA238_INST: bit N while INA238#N exists; writing it adds and removes instances."""
+    server, client = served
+    assert value_of(client.read("INA238_INST")) == 0b0010
+    client.set("INA238_INST", 0b1001, INT32)  # add #0 and #3, remove #1
+    got = [m for m in client.collect(0.7) if m.get_type() == "PARAM_VALUE"]
+    assert value_of(got[0]) == 0b1001 and got[0].param_id == "INA238_INST"
+    announced = {m.param_id for m in got[1:]}
+    assert {f"INA238_{n}{x}" for n in (0, 3) for x in "ABCPQ"} <= announced
+    assert value_of(client.read("INA238_0C")) == 0x45  # a new instance has its defaults
+    client.conn.mav.param_request_read_send(1, 1, b"INA238_1C", -1)
+    assert Client.text(client.collect(0.5)) == [
+        "INA238_1C belongs to INA238#1, which does not exist (add it first: param add INA238#1)"
+    ]
+    client.set("INA238_INST", 0b10000, INT32)  # INA238 has 4 instance slots
+    got = client.collect(0.5)
+    assert Client.text(got) == [
+        "INA238_INST: value 16 is not a mask of INA238's 4 instances (expected 0 to 15)"
+    ]
+    assert value_of(client.read("INA238_INST")) == 0b1001  # refused: unchanged, read back
+    server.stop()
+    assert server.store.instances("INA238") == ["INA238#0", "INA238#3"]
+    saved = px4params.Store.load(tmp_path / "vehicle.store", schema, classic=CLASSIC)
+    assert saved.instances("INA238") == ["INA238#0", "INA238#3"]

@@ -109,7 +109,9 @@ def test_mavsdk_lists_reads_and_writes(vehicle: MavlinkParamServer) -> None:
     assert "SYS_AUTOSTART" in results["ints"] and "INA238_1Q" in results["floats"]
     listed = len(results["ints"]) + len(results["floats"])
     classic = sum(1 for name in store.parameters if store.classic(name) is not None)
-    assert listed == classic + 5  # 5 live leaves of INA238#1 (A, B, C, P, Q)
+    masks = sum(1 for name in store.parameters if store.spec(name) and not store.spec(name).shared)
+    assert listed == classic + 5 + masks  # 5 live leaves of INA238#1 (A, B, C, P, Q), masks
+    assert results["ints"]["INA238_INST"] == 0b10  # INA238#1 exists
     assert results["floats"]["INA238_1Q"] == pytest.approx(0.0003, rel=1e-3)
     assert results["read_c"] == ADDRESS
     assert results["after_c"] == 0x46
@@ -168,7 +170,10 @@ def test_mavproxy_lists_and_sets(vehicle: MavlinkParamServer) -> None:
     )
     out = proc.stdout
     assert "Detected vehicle 1:1" in out, out[-2000:]
-    listed = sum(1 for n in vehicle.store.parameters if vehicle.store.classic(n) is not None) + 5
+    store = vehicle.store
+    classic = sum(1 for n in store.parameters if store.classic(n) is not None)
+    masks = sum(1 for n in store.parameters if store.spec(n) and not store.spec(n).shared)
+    listed = classic + 5 + masks
     assert f"Received {listed} parameters" in out
     assert f"Have {listed}/{listed} params" in out
     first, second = out.split("INA238_1A", 2)[1:3]

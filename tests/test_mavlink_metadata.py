@@ -291,6 +291,8 @@ def document(schema: px4params.Schema) -> dict[str, Any]:
 def _flat_names(document: dict[str, Any]) -> set[str]:
     names = set()
     for entry in document["parameters"]:
+        if entry.get("flat") and entry["max_instances"]:
+            names.add(f"{entry['name']}_INST")  # the instance mask
         for letter in (f["letter"] for f in entry.get("flat", ())):
             if entry["max_instances"] is None:
                 names.add(f"{entry['name']}_{letter}")

@@ -21,7 +21,10 @@ from px4params.store.spec import parameter_specs
 SCHEMA = px4params.load_schema(use_env=False)
 PARAMS = [s.name for s in parameter_specs(SCHEMA)]
 #: Destructured names: every letter of every instance slot.
-FLAT = sum(len(flat.layout(s.data_type)) * s.slots for s in parameter_specs(SCHEMA))
+FLAT = sum(
+    len(flat.layout(s.data_type)) * s.slots + (0 if s.shared else 1)  # + the instance mask
+    for s in parameter_specs(SCHEMA)
+)
 
 
 @pytest.fixture(autouse=True)

@@ -129,7 +129,11 @@ def count_entries(document: Mapping[str, Any]) -> dict[str, int]:
     """How many entries of a document are structured, destructured (flat names) and classic."""
     entries = document["parameters"]
     structured = sum(1 for e in entries if e.get("type") == QGC_TYPE)
-    destructured = sum(len(e.get("flat", ())) * (e.get("max_instances") or 1) for e in entries)
+    destructured = sum(
+        len(e.get("flat", ())) * (e.get("max_instances") or 1)
+        + (1 if e.get("flat") and 0 < (e.get("max_instances") or 0) <= flat.MASK_BITS else 0)
+        for e in entries
+    )
     return {
         "structured": structured,
         "destructured": destructured,
@@ -185,15 +189,18 @@ _INT32_RANGE = (-(1 << 31), (1 << 31) - 1)
 
 def flat_entries(spec: ParamSpec, entry: Mapping[str, Any]) -> list[dict[str, Any]]:
     """One ``parameters.json`` entry per destructured name a vehicle can report for ``spec``
-    (every letter of every instance slot: ``INA238_0A`` .. ``INA238_3Q``), as the classic
+    (its instance mask ``INA238_INST``, a bitmask, and every letter of every instance slot:
+    ``INA238_0A`` .. ``INA238_3Q``), as the classic
     entries QGC matches by name: ``Int32`` or ``Float``, the leaf's default, range, unit,
     decimal places and enum values, and a description naming the instance and the path
     (``INA238 #1: bus.i2c.address``). ``entry`` is the parameter's :func:`structured_entry`."""
     if "flat" not in entry:
         return []
+    out: list[dict[str, Any]] = []
+    if not spec.shared and spec.slots <= flat.MASK_BITS:
+        out.append(_mask_entry(spec, entry))
     leaves = _leaves_by_path(entry["fields"])
     numbers: list[int | None] = [None] if spec.shared else list(range(spec.slots))
-    out: list[dict[str, Any]] = []
     for number in numbers:
         owner = spec.name if number is None else f"{spec.name} #{number}"
         for slot in flat.layout(spec.data_type):
@@ -225,6 +232,28 @@ def flat_entries(spec: ParamSpec, entry: Mapping[str, Any]) -> list[dict[str, An
                 item["rebootRequired"] = entry["rebootRequired"]
             out.append(item)
     return out
+
+
+def _mask_entry(spec: ParamSpec, entry: Mapping[str, Any]) -> dict[str, Any]:
+    """``INA238_INST``: which instances exist, one bit each; writing it adds and removes them."""
+    item: dict[str, Any] = {
+        "name": flat.mask_name(spec),
+        "type": "Int32",
+        "default": 0,
+        "group": entry["group"],
+        "category": entry["category"],
+        "shortDesc": f"{spec.name} instances",
+        "longDesc": (
+            f"Bit N is set while {spec.name}#N exists. Setting a bit adds that instance with its "
+            "defaults; clearing one removes it (the other instances keep their numbers)."
+        ),
+        "min": 0,
+        "max": (1 << spec.slots) - 1,
+        "bitmask": [{"index": n, "description": f"{spec.name} #{n}"} for n in range(spec.slots)],
+    }
+    if "rebootRequired" in entry:
+        item["rebootRequired"] = entry["rebootRequired"]
+    return item
 
 
 def _leaves_by_path(fields: Sequence[Mapping[str, Any]]) -> dict[str, Mapping[str, Any]]:

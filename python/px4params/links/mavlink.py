@@ -19,7 +19,9 @@ What it does (PX4's ``mavlink_parameters.cpp`` is the model):
   given; if saving fails the write is undone) and answered with ``PARAM_VALUE``; a refused one
   changes nothing and is answered with ``PARAM_VALUE`` of the unchanged value, a ``STATUSTEXT``
   saying why and a ``PARAM_ERROR``. Writing a union tag (e.g. ``INA238_1A``) changes which leaves
-  are live: the newly live ones are announced with ``PARAM_VALUE`` too.
+  are live: the newly live ones are announced with ``PARAM_VALUE`` too. Writing an instance mask
+  (``INA238_INST``, bit N for ``INA238#N``) adds and removes instances (see
+  :mod:`px4params.store.flat`); the new instance's leaves are announced the same way.
 * Component metadata as PX4 serves it: ``MAV_CMD_REQUEST_MESSAGE`` for ``COMPONENT_METADATA``
   (397) or ``COMPONENT_INFORMATION`` (395) is answered with the ``mftp://`` URI and CRC of the
   general metadata file, which lists ``parameters.json.xz`` (every classic, structured and
@@ -385,6 +387,8 @@ class MavlinkParamServer:
             for row in self.flat.table():
                 kind = _REAL32 if row.mav_type == flat.FLOAT32 else _INT32
                 rows.append(ParamEntry(row.name, kind, _raw_of(row.value, kind)))
+            for name, _, mask in self.flat.masks():
+                rows.append(ParamEntry(name, _INT32, _raw_of(mask, _INT32)))
             rows.sort(key=lambda e: e.name.encode())
             self._entries = rows
         return self._entries
@@ -472,6 +476,10 @@ class MavlinkParamServer:
             with self.store.transaction():
                 if name in self.flat:
                     flat.set_flat(self.store, name, value)
+                elif self.flat.mask_spec(name) is not None:
+                    added, removed = self.flat.set_mask(name, value)
+                    changes = [f"added {n}" for n in added] + [f"removed {n}" for n in removed]
+                    self.log(f"{name}: " + (", ".join(changes) or "no change"))
                 else:
                     self.store.set(name, value)
                 if self.save_path is not None:
@@ -489,7 +497,8 @@ class MavlinkParamServer:
         self.log(f"{name} = {shown}" + (", saved" if self.save_path is not None else ""))
         everyone = self._peers(peer)
         self._send(self._echo(msg, *new), everyone)
-        # A union tag or array length written: announce the leaves that became live.
+        # A union tag, array length or instance mask written: announce the leaves that became
+        # live (with the new count; a ground station re-reads the list when the count drops).
         for i, e in enumerate(self.entries()):
             if e.name not in live_before:
                 self._send(self._value_msg(i, e), everyone)

@@ -40,6 +40,12 @@ arrays are offered as their length (a leaf like any other) plus one slot per ele
 maximum length, each live only below the current length; a long array therefore needs many
 letters, and the 16-character limit refuses types that would need too many.
 
+**Instances.** Each instanced parameter also has an *instance mask*, ``INA238_INST`` (int32):
+bit N is set while ``INA238#N`` exists. Writing it adds the instances whose bits it sets (with
+their defaults) and removes those it clears, all or nothing; this is how a ground station adds
+and removes instances with nothing but PARAM_SET (QGC edits it as a bitmask). Parameters with
+more than 31 instance slots have no mask.
+
 Names are checked once per store (:func:`flat_map`): at most 16 characters for every instance
 number up to ``max_instances``, unique, and none equal to a classic or structured parameter's
 name; a violation is a :class:`FlatError` naming the parameter.
@@ -80,6 +86,16 @@ __all__ = [
 MAX_LEAF_BITS = 32
 INT32 = "int32"
 FLOAT32 = "float32"
+
+
+#: An instance mask is one int32: parameters with more instance slots have none.
+MASK_BITS = 31
+
+
+def mask_name(spec: ParamSpec) -> str:
+    """``INA238_INST``: the flat parameter whose bit N says whether ``INA238#N`` exists. A
+    ground station adds and removes instances by writing it (as QGC edits a bitmask)."""
+    return f"{spec.name}_INST"
 
 
 def letters(number: int) -> str:
@@ -416,6 +432,59 @@ class FlatMap:
                             f"{other.instance_name(other_number or 0)}.{other_slot.path}"
                         )
                     self._owner[name] = (spec, number, slot)
+        self._masks: dict[str, ParamSpec] = {}
+        for spec in store.specs:
+            if spec.shared or (spec.max_instances or 0) > MASK_BITS:
+                continue  # no instances to add, or more than one int32 can list
+            name = mask_name(spec)
+            if len(name) > MAX_NAME_LEN or name in classic or name in self._owner:
+                raise FlatError(
+                    f"{spec.name}: instance mask {name} is longer than {MAX_NAME_LEN} characters "
+                    "or the name of another parameter"
+                )
+            self._masks[name] = spec
+
+    # -- instance masks: adding and removing instances with a flat write -------------------
+
+    def masks(self) -> list[tuple[str, ParamSpec, int]]:
+        """``(name, parameter, value)`` of every instance mask: bit N set while ``NAME#N``
+        exists."""
+        return [(name, spec, self.mask_value(spec)) for name, spec in self._masks.items()]
+
+    def mask_spec(self, name: str) -> ParamSpec | None:
+        """The parameter whose instance mask ``name`` is, or None."""
+        return self._masks.get(name.strip().upper())
+
+    def mask_value(self, spec: ParamSpec) -> int:
+        return sum(1 << int(n.rpartition("#")[2]) for n in self._store.instances(spec.name))
+
+    def set_mask(self, name: str, number: Any) -> tuple[list[str], list[str]]:
+        """Adds the instances whose bits ``number`` sets and removes those it clears, all or
+        nothing; returns ``(added, removed)``."""
+        spec = self.mask_spec(name)
+        if spec is None:
+            raise InstanceError(f"'{name}' is not an instance mask")
+        if isinstance(number, float) and number.is_integer():
+            number = int(number)
+        slots = spec.max_instances or 0
+        if isinstance(number, bool) or not isinstance(number, int) or not 0 <= number < 1 << slots:
+            raise FlatError(
+                f"{mask_name(spec)}: value {number!r} is not a mask of {spec.name}'s "
+                f"{slots} instances (expected 0 to {(1 << slots) - 1})"
+            )
+        current = self.mask_value(spec)
+        added = [
+            spec.instance_name(n) for n in range(slots) if number >> n & 1 and not current >> n & 1
+        ]
+        removed = [
+            spec.instance_name(n) for n in range(slots) if current >> n & 1 and not number >> n & 1
+        ]
+        with self._store.transaction():
+            for instance in removed:
+                self._store.remove(instance)
+            for instance in added:
+                self._store.add(instance)
+        return added, removed
 
     @staticmethod
     def name_of(spec: ParamSpec, number: int | None, slot: FlatSlot) -> str:

@@ -80,7 +80,7 @@ FILE '-' writes to stdout.""",
         epilog="""\
 example:
   px4params metadata --json parameters.json --header px4_params.h
-  wrote parameters.json: 9 structured (624 destructured names) + 0 classic parameters
+  wrote parameters.json: 9 structured (633 destructured names) + 0 classic parameters
   wrote px4_params.h: C header for 9 parameters""",
     )
     dsdl_option(p)
