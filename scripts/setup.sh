@@ -26,4 +26,13 @@ fi
 # opencv, matplotlib: hundreds of MB it does not need to list and set parameters).
 .venv/bin/python -m pip install --quiet --disable-pip-version-check --no-deps "mavproxy==1.8.75"
 
+# Chromium for the page's browser tests (Debian's package; Playwright cannot download browsers
+# here). Installed with apt where this runs as root on Debian; elsewhere those tests skip.
+if ! command -v chromium >/dev/null 2>&1 && command -v apt-get >/dev/null 2>&1 \
+        && [ "$(id -u)" = 0 ]; then
+    echo "== installing Debian's chromium for the browser tests (apt-get, about a minute)"
+    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null \
+        || echo "(chromium could not be installed: the browser tests will skip)"
+fi
+
 echo "== ready: 'source .venv/bin/activate' puts px4params on PATH (or run .venv/bin/px4params)"

@@ -36,6 +36,7 @@ SETUP_COMMANDS = ("bash scripts/", "source .venv/", ". .venv/", "git clone", "cd
 #: --help examples that cannot run in a test, and why.
 HELP_EXCEPTIONS = {
     "px4params mavlink serve": "a server: it runs until stopped (tests/test_mavlink.py runs it)",
+    "px4params gui": "a server: it runs until stopped (tests/test_gui.py runs it)",
 }
 TIMEOUT = 120
 

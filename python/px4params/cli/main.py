@@ -38,6 +38,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "write parameters.json for ground stations and a C header for firmware",
     ),
     "mavlink": ("mavlink", "serve the store's parameters over MAVLink (UDP)"),
+    "gui": ("gui", "a ground-station page for the manifest, over MAVLink or a store file"),
     "completion": ("completion", "shell completion script (bash), or the names it completes"),
 }
 

@@ -216,6 +216,8 @@ class MavlinkParamServer:
         gcs: Iterable[Address] = (),
         log: Callable[[str], None] | None = None,
         heartbeat_interval: float = 1.0,
+        health: Callable[[], list[str]] | None = None,
+        health_interval: float = 2.0,
     ) -> None:
         self.store = store
         self.flat = flat.flat_map(store)  # refuses a store whose leaves cannot be destructured
@@ -224,6 +226,11 @@ class MavlinkParamServer:
         self.component_id = component_id
         self.log = log or (lambda line: None)
         self.heartbeat_interval = heartbeat_interval
+        #: Lines reporting each device's health (``health: ina238 INA238#1 on ...: critical:
+        #: ...``), sent as STATUSTEXT every ``health_interval`` seconds to every peer.
+        self.health = health
+        self.health_interval = health_interval
+        self._next_health = 0.0
         self._gcs = list(gcs)
         self._sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         try:
@@ -293,6 +300,9 @@ class MavlinkParamServer:
         if now >= self._next_heartbeat:
             self._heartbeat()
             self._next_heartbeat = now + self.heartbeat_interval
+        if self.health is not None and now >= self._next_health:
+            self._next_health = now + self.health_interval
+            self._report_health()
         timeout = min(timeout, max(0.0, self._next_heartbeat - now))
         if self._stream is not None:
             timeout = min(timeout, max(0.0, self._next_burst - now))
@@ -379,16 +389,9 @@ class MavlinkParamServer:
         """Every parameter served, in index order (by name, as PX4 sorts them)."""
         if self._entries is None:
             rows: list[ParamEntry] = []
-            for name in self.store.parameters:
-                classic = self.store.classic(name)
-                if classic is not None:
-                    kind = _REAL32 if classic.is_float else _INT32
-                    rows.append(ParamEntry(name, kind, _raw_of(self.store.get(name), kind)))
-            for row in self.flat.table():
-                kind = _REAL32 if row.mav_type == flat.FLOAT32 else _INT32
-                rows.append(ParamEntry(row.name, kind, _raw_of(row.value, kind)))
-            for name, _, mask in self.flat.masks():
-                rows.append(ParamEntry(name, _INT32, _raw_of(mask, _INT32)))
+            for name, value in flat.flat_values(self.store).items():
+                kind = _REAL32 if isinstance(value, float) else _INT32
+                rows.append(ParamEntry(name, kind, _raw_of(value, kind)))
             rows.sort(key=lambda e: e.name.encode())
             self._entries = rows
         return self._entries
@@ -474,14 +477,9 @@ class MavlinkParamServer:
         live_before = {e.name for e in self.entries()}
         try:
             with self.store.transaction():
-                if name in self.flat:
-                    flat.set_flat(self.store, name, value)
-                elif self.flat.mask_spec(name) is not None:
-                    added, removed = self.flat.set_mask(name, value)
-                    changes = [f"added {n}" for n in added] + [f"removed {n}" for n in removed]
-                    self.log(f"{name}: " + (", ".join(changes) or "no change"))
-                else:
-                    self.store.set(name, value)
+                change = flat.write_flat(self.store, name, value)
+                if self.flat.mask_spec(name) is not None:
+                    self.log(change)
                 if self.save_path is not None:
                     self.store.save(self.save_path)
         except (Px4ParamsError, OSError) as e:
@@ -629,6 +627,18 @@ class MavlinkParamServer:
             3,
         )
         self._send(msg, targets)
+
+    def _report_health(self) -> None:
+        peers = self._peers(None)
+        if not peers or self.health is None:
+            return
+        try:
+            lines = self.health()
+        except Exception as e:  # a failing health source must not stop the server
+            self.log(f"error reporting health: {type(e).__name__}: {e}")
+            return
+        for line in lines:
+            self._statustext(line, peers)
 
     def _statustext(self, text: str, peers: list[Address]) -> None:
         """STATUSTEXT, split into 50-character chunks with an id when longer (MAVLink 2)."""

@@ -597,3 +597,37 @@ def set_flat(store: Store, name: str, number: Any, *, default: bool = False) -> 
     else:
         store.set(param.leaf, value)
     return fmap.find(param.name)
+
+
+def flat_values(store: Store) -> dict[str, int | float]:
+    """What a ground station sees of a store: every classic parameter, every live destructured
+    name and every instance mask, with the numbers they carry (name -> int or float)."""
+    fmap = flat_map(store)
+    values: dict[str, int | float] = {}
+    for name in store.parameters:
+        if store.classic(name) is not None:
+            values[name] = store.get(name)
+    for row in fmap.table():
+        values[row.name] = row.value
+    for name, _, mask in fmap.masks():
+        values[name] = mask
+    return values
+
+
+def write_flat(store: Store, name: str, number: Any) -> str:
+    """Writes one parameter as a ground station names it (a classic name, a destructured name
+    or an instance mask), checked by the store; a refused write raises and changes nothing.
+    Returns a short description of what changed."""
+    fmap = flat_map(store)
+    if name in fmap:
+        param = set_flat(store, name, number)
+        return f"{name} = {param.value}"
+    if fmap.mask_spec(name) is not None:
+        added, removed = fmap.set_mask(name, number)
+        changes = [f"added {n}" for n in added] + [f"removed {n}" for n in removed]
+        return f"{name}: " + (", ".join(changes) or "no change")
+    classic = store.classic(name)
+    if classic is None:
+        raise InstanceError(f"unknown parameter '{name}'")
+    store.set(name, number)
+    return f"{name} = {store.get(name)}"

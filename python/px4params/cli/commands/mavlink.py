@@ -1,4 +1,4 @@
-"""``px4params mavlink serve``: the store's parameters over MAVLink (see mavlink_server.py)."""
+"""``px4params mavlink serve``: the store's parameters over MAVLink (``links.mavlink``)."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import argparse
 import os
 import signal
 import threading
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 from px4params.cli.options import store_options
@@ -33,6 +33,30 @@ def _id(text: str) -> int:
     return int(text)
 
 
+def _bench_health(args: argparse.Namespace, store: Any) -> Callable[[], list[str]]:
+    """Health lines of the store's manifest booted on the simulated bench ``--bench``: one per
+    configured instance, as the commander reports them; booted again when the manifest
+    changes."""
+    from px4params.store.flat import flat_values
+    from px4params.vehicle.autostart import configured
+    from px4params.vehicle.drivers import load_drivers
+    from px4params.vehicle.simbench import load_bench, run
+
+    drivers = load_drivers(None, store.specs)
+    bench = load_bench(args.bench, drivers)  # errors now, before serving
+    memo: dict[str, Any] = {}
+
+    def lines() -> list[str]:
+        key = repr(sorted(flat_values(store).items()))
+        if memo.get("key") != key:
+            result = run(bench, drivers, configured(store, drivers), duration=args.bench_duration)
+            memo["key"] = key
+            memo["lines"] = [f"health: {i.failure_line()}" for i in result.instances]
+        return list(memo["lines"])
+
+    return lines
+
+
 def cmd_serve(args: argparse.Namespace) -> int:
     from px4params.links.mavlink import MavlinkParamServer
     from px4params.store.flat import flat_map
@@ -57,6 +81,7 @@ def cmd_serve(args: argparse.Namespace) -> int:
     def log(line: str) -> None:
         print(line, flush=True)
 
+    health = _bench_health(args, store) if args.bench else None
     host, port = args.udp
     try:
         server = MavlinkParamServer(
@@ -68,6 +93,7 @@ def cmd_serve(args: argparse.Namespace) -> int:
             component_id=component_id,
             gcs=args.gcs or (),
             log=log,
+            health=health,
         )
     except OSError as e:
         raise CommandError(f"cannot listen on udp {host}:{port}: {e.strerror or e}") from None
@@ -144,4 +170,17 @@ examples:
         "--compid", type=_id, metavar="N", help="component ID (default: MAV_COMP_ID, else 1)"
     )
     store_options(s)  # --store, --classic, --dsdl as for `px4params param`
+    s.add_argument(
+        "--bench",
+        metavar="FILE.toml",
+        help="boot the manifest on this simulated bench and report each device's health as "
+        "STATUSTEXT every 2 s ('health: ina238 INA238#1 on I2C bus 2 address 0x45: critical: ...')",
+    )
+    s.add_argument(
+        "--bench-duration",
+        type=float,
+        default=10.0,
+        metavar="S",
+        help="simulated seconds of each bench boot (default 10)",
+    )
     s.set_defaults(func=cmd_serve)

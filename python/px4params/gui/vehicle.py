@@ -1,0 +1,446 @@
+"""What the page talks to: a vehicle over MAVLink, or a store file offline. Both offer the same
+flat view a ground station has (classic parameters, destructured names, instance masks, by
+name, as numbers), the metadata that describes it (``parameters.json``), writes that are
+checked by the vehicle and answered accepted or refused with its reason, and health reports.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import logging
+import lzma
+import math
+import os
+import struct
+import threading
+import time
+from collections.abc import Callable
+from typing import Any
+
+from px4params.errors import CommandError, Px4ParamsError
+from px4params.links.mavlink import param_set_message, param_value_of
+
+__all__ = ["MavlinkVehicle", "StoreVehicle", "WriteResult"]
+
+Listener = Callable[[dict[str, Any]], None]
+
+
+class WriteResult:
+    """One write's outcome: ``ok`` (acknowledged), the value the vehicle reports afterwards,
+    and its reason when refused."""
+
+    def __init__(self, name: str, ok: bool, value: int | float | None, reason: str = "") -> None:
+        self.name = name
+        self.ok = ok
+        self.value = value
+        self.reason = reason
+
+    def as_dict(self) -> dict[str, Any]:
+        return {
+            "name": self.name,
+            "ok": self.ok,
+            "value": _json_number(self.value),
+            "reason": self.reason,
+        }
+
+
+def _json_number(value: int | float | None) -> int | float | str | None:
+    if isinstance(value, float) and not math.isfinite(value):
+        return "nan" if math.isnan(value) else ("inf" if value > 0 else "-inf")
+    return value
+
+
+class _Base:
+    """Values, health lines and listeners (the page's WebSocket) shared by both kinds."""
+
+    mode = ""
+
+    def __init__(self) -> None:
+        self.values: dict[str, int | float] = {}
+        self.metadata: dict[str, Any] = {"version": 1, "parameters": []}
+        #: STATUSTEXT lines (newest last) and the health of each device that reported one.
+        self.messages: list[str] = []
+        self.health: dict[str, dict[str, str]] = {}
+        self._listeners: list[Listener] = []
+        self._lock = threading.RLock()
+
+    def listen(self, listener: Listener) -> Callable[[], None]:
+        self._listeners.append(listener)
+        return lambda: self._listeners.remove(listener)
+
+    def _notify(self, event: dict[str, Any]) -> None:
+        for listener in list(self._listeners):
+            listener(event)
+
+    def _status(self, text: str) -> None:
+        """A STATUSTEXT from the vehicle: kept, and read for health reports."""
+        self.messages.append(text)
+        del self.messages[:-200]
+        report = parse_health(text)
+        if report is not None:
+            self.health[report["instance"]] = report
+        self._notify({"kind": "status", "text": text, "health": report})
+
+    def state(self) -> dict[str, Any]:
+        with self._lock:
+            return {
+                "mode": self.mode,
+                "source": self.source,
+                "values": {k: _json_number(v) for k, v in self.values.items()},
+                "messages": self.messages[-50:],
+                "health": list(self.health.values()),
+            }
+
+    source = ""
+
+
+def parse_health(text: str) -> dict[str, str] | None:
+    """A health report line, as the commander and ``mavlink serve --bench`` write them:
+    ``health: ina238 INA238#1 on I2C bus 2 address 0x45: critical: not found``."""
+    if not text.startswith("health: "):
+        return None
+    head, _, rest = text[len("health: ") :].partition(": ")
+    state, _, reason = rest.partition(": ")
+    words = head.split(" ", 2)
+    if len(words) < 2 or state not in ("nominal", "warning", "critical"):
+        return None
+    where = words[2].removeprefix("on ") if len(words) > 2 else ""
+    return {
+        "driver": words[0],
+        "instance": words[1],
+        "location": where,
+        "state": state,
+        "reason": reason,
+    }
+
+
+# -- offline: a store file -----------------------------------------------------------------
+
+
+class StoreVehicle(_Base):
+    """A store file edited offline with the same checks: every accepted write is saved
+    atomically through the store (its backup and lock as for ``px4params param``)."""
+
+    mode = "store"
+
+    def __init__(self, store_path: str | None, classic: str | None, dsdl: list[str]) -> None:
+        from px4params.gcs.metadata import build_parameters_json
+        from px4params.store.session import open_session
+
+        super().__init__()
+        self._session = open_session(store_path, classic, dsdl)
+        store = self._session.store
+        self.source = self._session.path
+        classic_params = [c for c in map(store.classic, store.parameters) if c is not None]
+        self.metadata = build_parameters_json(
+            store.schema, specs=store.specs, classic_params=classic_params
+        )
+        self._reload()
+
+    @property
+    def store(self) -> Any:
+        return self._session.store
+
+    def _reload(self) -> None:
+        from px4params.store.flat import flat_values
+
+        self.values = flat_values(self.store)
+
+    def write(self, name: str, value: int | float) -> WriteResult:
+        from px4params.store.session import store_lock
+
+        with self._lock, store_lock(self._session.path):
+            try:
+                from px4params.store.flat import write_flat
+
+                with self.store.transaction():
+                    write_flat(self.store, name, value)
+                    self.store.save(self._session.path)
+            except (Px4ParamsError, OSError) as e:
+                reason = str(e) if str(e).startswith(name) else f"{name}: {e}"
+                return WriteResult(name, False, self.values.get(name), reason)
+            self._reload()
+        self._notify({"kind": "values", "values": self.state()["values"]})
+        return WriteResult(name, True, self.values.get(name))
+
+    def close(self) -> None:
+        pass
+
+
+# -- a vehicle over MAVLink ------------------------------------------------------------------
+
+
+class MavlinkVehicle(_Base):
+    """A vehicle (``px4params mavlink serve`` or a PX4) over MAVLink on UDP, as a ground station
+    talks to it: heartbeats, the parameter list, component metadata over MAVLink FTP (or a
+    ``parameters.json`` given), writes with PARAM_SET read back, STATUSTEXT."""
+
+    mode = "mavlink"
+
+    def __init__(
+        self,
+        address: tuple[str, int],
+        metadata_file: str | None = None,
+        *,
+        timeout: float = 10.0,
+    ) -> None:
+        super().__init__()
+        os.environ.setdefault("MAVLINK20", "1")
+        from pymavlink import mavutil
+
+        from px4params.links import mavlink_messages
+
+        host, port = address
+        self.source = f"udp {host}:{port}"
+        self._conn = mavutil.mavlink_connection(
+            f"udpout:{host}:{port}", source_system=255, source_component=190, dialect="common"
+        )
+        self._mav = mavutil.mavlink
+        mavlink_messages.register(self._mav)
+        self._system = 1
+        self._component = 1
+        self._stop = threading.Event()
+        self._waiters: dict[str, list[Any]] = {}
+        self._chunks: dict[int, list[str]] = {}
+        self._count = 0
+        self._connect(timeout)
+        self.metadata = self._load_metadata(metadata_file, timeout)
+        self._thread = threading.Thread(target=self._receive, name="gui-mavlink", daemon=True)
+        self._thread.start()
+        self._heartbeats = threading.Thread(target=self._beat, name="gui-heartbeat", daemon=True)
+        self._heartbeats.start()
+        self.refresh(timeout)
+
+    # -- connection ------------------------------------------------------------------------
+
+    def _send_heartbeat(self) -> None:
+        mav = self._mav
+        self._conn.mav.heartbeat_send(mav.MAV_TYPE_GCS, mav.MAV_AUTOPILOT_INVALID, 0, 0, 0)
+
+    def _connect(self, timeout: float) -> None:
+        end = time.monotonic() + timeout
+        while time.monotonic() < end:
+            self._send_heartbeat()
+            msg = self._conn.recv_match(type="HEARTBEAT", blocking=True, timeout=0.5)
+            if msg is not None and msg.get_srcComponent() == 1:
+                self._system = msg.get_srcSystem()
+                return
+        raise CommandError(f"no vehicle answered on {self.source} within {timeout:.0f} s")
+
+    def _load_metadata(self, metadata_file: str | None, timeout: float) -> dict[str, Any]:
+        if metadata_file is not None:
+            try:
+                with open(metadata_file, encoding="utf-8") as f:
+                    return dict(json.load(f))
+            except (OSError, ValueError) as e:
+                raise CommandError(f"{metadata_file}: cannot read the metadata: {e}") from None
+        document = self._fetch_metadata(timeout)
+        if document is None:
+            raise CommandError(
+                f"the vehicle on {self.source} serves no parameter metadata over MAVLink FTP; "
+                "give --metadata parameters.json"
+            )
+        return document
+
+    def _fetch_metadata(self, timeout: float) -> dict[str, Any] | None:
+        """COMPONENT_METADATA, then the general file and parameters.json(.xz) over MAVLink FTP,
+        as QGC fetches them."""
+        from pymavlink import mavftp
+
+        mav = self._mav
+        uri = None
+        for message_id, kind in ((397, "COMPONENT_METADATA"), (395, "COMPONENT_INFORMATION")):
+            self._conn.mav.command_long_send(
+                self._system,
+                self._component,
+                mav.MAV_CMD_REQUEST_MESSAGE,
+                0,
+                message_id,
+                0,
+                0,
+                0,
+                0,
+                0,
+                0,
+            )
+            end = time.monotonic() + min(timeout, 3.0)
+            while time.monotonic() < end and uri is None:
+                msg = self._conn.recv_match(type=[kind, "COMMAND_ACK"], blocking=True, timeout=0.5)
+                if msg is None:
+                    continue
+                if msg.get_type() == kind:
+                    uri = msg.uri if message_id == 397 else msg.general_metadata_uri
+                elif msg.command == mav.MAV_CMD_REQUEST_MESSAGE and msg.result != 0:
+                    break
+            if uri:
+                break
+        if not uri or not uri.startswith("mftp://"):
+            return None
+        ftp = mavftp.MAVFTP(self._conn, self._system, self._component)
+        with _quiet_logging():  # pymavlink's mavftp warns about reads shorter than asked
+            return self._download(ftp, uri)
+
+    def _download(self, ftp: Any, uri: str) -> dict[str, Any] | None:
+        general = ftp.read(_mftp_path(uri), 1 << 20)
+        if not general:
+            return None
+        entries = json.loads(general).get("metadataTypes", [])
+        parameters = next((e for e in entries if e.get("type") == 1), None)
+        if parameters is None or not str(parameters.get("uri", "")).startswith("mftp://"):
+            return None
+        data = ftp.read(_mftp_path(parameters["uri"]), 1 << 26)
+        if not data:
+            return None
+        if parameters["uri"].endswith((".xz", ".lzma")):
+            data = lzma.decompress(data)
+        return dict(json.loads(data))
+
+    def _beat(self) -> None:
+        while not self._stop.wait(1.0):
+            with contextlib.suppress(OSError):
+                self._send_heartbeat()
+
+    def _receive(self) -> None:
+        while not self._stop.is_set():
+            try:
+                msg = self._conn.recv_match(blocking=True, timeout=0.2)
+            except (OSError, ValueError):
+                continue
+            if msg is None:
+                continue
+            kind = msg.get_type()
+            if kind == "PARAM_VALUE":
+                self._param_value(msg)
+            elif kind == "STATUSTEXT":
+                self._statustext(msg)
+            elif kind == "PARAM_ERROR":
+                with self._lock:
+                    for waiter in self._waiters.get(msg.param_id, []):
+                        waiter.append(("error", msg))
+
+    def _statustext(self, msg: Any) -> None:
+        """STATUSTEXT, its 50-character chunks joined (MAVLink 2: ``id`` and ``chunk_seq``;
+        a chunk shorter than 50 characters ends the text)."""
+        text = msg.text
+        if not getattr(msg, "id", 0):
+            self._status(text)
+            return
+        parts = self._chunks.setdefault(msg.id, [])
+        parts.append(text)
+        if len(text) < 50:
+            del self._chunks[msg.id]
+            self._status("".join(parts))
+
+    def _param_value(self, msg: Any) -> None:
+        name = msg.param_id
+        if name == "_HASH_CHECK":
+            return
+        value = param_value_of(msg)
+        with self._lock:
+            self._count = msg.param_count
+            self.values[name] = value
+            for waiter in self._waiters.get(name, []):
+                waiter.append(("value", value))
+        self._notify({"kind": "value", "name": name, "value": _json_number(value)})
+
+    # -- parameters --------------------------------------------------------------------------
+
+    def refresh(self, timeout: float = 10.0) -> None:
+        """The whole list again (PARAM_REQUEST_LIST, then by index what UDP lost)."""
+        with self._lock:
+            self.values.clear()
+            self._count = 0
+        self._conn.mav.param_request_list_send(self._system, self._component)
+        end = time.monotonic() + timeout
+        quiet = time.monotonic()
+        seen = 0
+        while time.monotonic() < end:
+            time.sleep(0.1)
+            with self._lock:
+                have, count = len(self.values), self._count
+            if count and have >= count:
+                break
+            if have != seen:
+                seen, quiet = have, time.monotonic()
+            elif count and time.monotonic() - quiet > 0.5:
+                self._conn.mav.param_request_list_send(self._system, self._component)
+                quiet = time.monotonic()
+        self._notify({"kind": "values", "values": self.state()["values"]})
+
+    def write(self, name: str, value: int | float, timeout: float = 1.5) -> WriteResult:
+        """PARAM_SET (PX4's bytewise int32 encoding), then the vehicle's answer: acknowledged
+        when the echo carries the value sent, refused with PARAM_ERROR and STATUSTEXT's reason
+        (or when it echoes another value), and read back."""
+        mav = self._mav
+        is_float = isinstance(value, float)
+        kind = mav.MAV_PARAM_TYPE_REAL32 if is_float else mav.MAV_PARAM_TYPE_INT32
+        before = len(self.messages)
+        answers: list[Any] = []
+        with self._lock:
+            self._waiters.setdefault(name, []).append(answers)
+        try:
+            for _attempt in range(3):
+                message = param_set_message(self._system, self._component, name, value, kind)
+                self._conn.write(message.pack(self._conn.mav))
+                end = time.monotonic() + timeout
+                while time.monotonic() < end and not answers:
+                    time.sleep(0.02)
+                if answers:
+                    break
+            time.sleep(0.1)  # a PARAM_ERROR and STATUSTEXT follow a refusal's PARAM_VALUE
+        finally:
+            with self._lock:
+                self._waiters[name].remove(answers)
+        reasons = [m for m in self.messages[before:] if name in m]
+        errors = [a for a in answers if a[0] == "error"]
+        values = [a[1] for a in answers if a[0] == "value"]
+        if not answers:
+            return WriteResult(
+                name, False, self.values.get(name), f"{name}: no answer from the vehicle"
+            )
+        echoed = values[0] if values else None
+        sent = struct.unpack("<f", struct.pack("<f", value))[0] if is_float else value
+        if errors or echoed != sent:
+            reason = reasons[0] if reasons else f"{name}: the vehicle kept {echoed}"
+            return WriteResult(name, False, echoed, reason)
+        read = self.read(name)
+        return WriteResult(name, True, read if read is not None else echoed)
+
+    def read(self, name: str, timeout: float = 1.0) -> int | float | None:
+        answers: list[Any] = []
+        with self._lock:
+            self._waiters.setdefault(name, []).append(answers)
+        try:
+            self._conn.mav.param_request_read_send(self._system, self._component, name.encode(), -1)
+            end = time.monotonic() + timeout
+            while time.monotonic() < end and not answers:
+                time.sleep(0.02)
+        finally:
+            with self._lock:
+                self._waiters[name].remove(answers)
+        values = [a[1] for a in answers if a[0] == "value"]
+        return values[0] if values else None
+
+    def close(self) -> None:
+        self._stop.set()
+        self._thread.join(timeout=2)
+        self._heartbeats.join(timeout=2)
+        self._conn.close()
+
+
+@contextlib.contextmanager
+def _quiet_logging() -> Any:
+    logging.disable(logging.WARNING)
+    try:
+        yield
+    finally:
+        logging.disable(logging.NOTSET)
+
+
+def _mftp_path(uri: str) -> str:
+    """The path of an ``mftp://`` URI (``[;comp=N]`` dropped), as QGC reads it."""
+    rest = uri[len("mftp://") :]
+    if rest.startswith("[;comp="):
+        rest = rest.split("]", 1)[1]
+    return "/" + rest.lstrip("/")

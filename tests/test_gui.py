@@ -1,0 +1,351 @@
+"""``px4params gui`` in a real headless Chromium (Debian's package, driven by Playwright): against
+``px4params mavlink serve`` with the example airframe, and offline on a store file. Every test
+fails on any console error of the page.
+
+Set ``PX4PARAMS_SCREENSHOTS`` to a folder to keep the screenshots (docs/images has them)."""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import px4params
+import pytest
+from px4params.store.classic import BUNDLED_CLASSIC
+
+sync_api = pytest.importorskip("playwright.sync_api", reason="Playwright (pip install playwright)")
+
+REPO = Path(__file__).resolve().parents[1]
+AIRFRAME = REPO / "examples" / "two_batteries.airframe"
+FAULTS = REPO / "examples" / "two_batteries_faults.bench.toml"
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+if CHROMIUM is None:
+    pytest.skip(
+        "no Chromium: scripts/setup.sh installs Debian's chromium with apt where it can",
+        allow_module_level=True,
+    )
+CLI = [sys.executable, "-m", "px4params"]
+TIMEOUT = 15_000  # ms, for anything the page waits on
+
+
+class Started:
+    """A command that prints a line and keeps running: its process and that line's match."""
+
+    def __init__(self, argv: list[str], pattern: str, env: dict[str, str], cwd: Path) -> None:
+        self.proc = subprocess.Popen(
+            argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env, cwd=cwd
+        )
+        assert self.proc.stdout is not None
+        line = self.proc.stdout.readline()
+        match = re.search(pattern, line)
+        if match is None:
+            self.stop()
+            raise AssertionError(f"{argv[3:5]}: {line!r} {self.proc.stderr.read()[-2000:]}")  # type: ignore[union-attr]
+        self.match = match
+
+    def stop(self) -> None:
+        self.proc.terminate()
+        try:
+            self.proc.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            self.proc.wait()
+
+
+def _env(tmp: Path) -> dict[str, str]:
+    env = {
+        k: v
+        for k, v in os.environ.items()
+        if not k.startswith("PX4PARAMS_") or k == "PX4PARAMS_CACHE_DIR"
+    }
+    env["PX4PARAMS_STORE"] = str(tmp / "vehicle.store")
+    return env
+
+
+@pytest.fixture
+def store_file(tmp_path: Path) -> Path:
+    env = _env(tmp_path)
+    subprocess.run(
+        [*CLI, "run", str(AIRFRAME)], env=env, cwd=tmp_path, check=True, capture_output=True
+    )
+    return tmp_path / "vehicle.store"
+
+
+@pytest.fixture
+def vehicle(store_file: Path) -> Iterator[Started]:
+    served = Started(
+        [
+            *CLI,
+            "mavlink",
+            "serve",
+            "--udp",
+            "127.0.0.1:0",
+            "--store",
+            str(store_file),
+            "--bench",
+            str(FAULTS),
+        ],
+        r"on udp 127\.0\.0\.1:(\d+) ",
+        _env(store_file.parent),
+        store_file.parent,
+    )
+    yield served
+    served.stop()
+
+
+def _gui(argv: list[str], tmp: Path) -> Started:
+    return Started(
+        [*CLI, "gui", *argv, "--http", "127.0.0.1:0"],
+        r"on (http://127\.0\.0\.1:\d+/)",
+        _env(tmp),
+        tmp,
+    )
+
+
+@pytest.fixture
+def gui(vehicle: Started, store_file: Path) -> Iterator[str]:
+    page = _gui(["--udp", f"127.0.0.1:{vehicle.match[1]}"], store_file.parent)
+    yield page.match[1]
+    page.stop()
+
+
+@pytest.fixture(scope="module")
+def browser() -> Iterator[Any]:
+    with sync_api.sync_playwright() as p:
+        chromium = p.chromium.launch(executable_path=CHROMIUM, headless=True, args=["--no-sandbox"])
+        yield chromium
+        chromium.close()
+
+
+@pytest.fixture
+def page(browser: Any) -> Iterator[Any]:
+    context = browser.new_context(viewport={"width": 1400, "height": 1000})
+    page = context.new_page()
+    page.set_default_timeout(TIMEOUT)
+    errors: list[str] = []
+    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    yield page
+    context.close()
+    assert errors == [], f"console errors: {errors}"
+
+
+def _open(page: Any, url: str) -> None:
+    page.goto(url)
+    page.wait_for_selector("body[data-ready=true]")
+
+
+def _write_all(page: Any) -> list[str]:
+    """Open the review, write every row, and return each row's result text."""
+    page.click("#review-open")
+    page.wait_for_selector("dialog#review[open]")
+    page.click("#review-write")
+    page.wait_for_function(
+        "[...document.querySelectorAll('#review-table .result')].every(r => r.textContent)"
+    )
+    results = page.locator("#review-table .result").all_inner_texts()
+    page.click("#review-close")
+    return results
+
+
+def _stored(store_file: Path) -> px4params.Store:
+    return px4params.Store.load(
+        store_file, px4params.load_schema(include_dronecan=False), classic=BUNDLED_CLASSIC
+    )
+
+
+def _shot(page: Any, name: str, tmp_path: Path) -> None:
+    folder = Path(os.environ.get("PX4PARAMS_SCREENSHOTS") or tmp_path)
+    folder.mkdir(parents=True, exist_ok=True)
+    page.screenshot(path=str(folder / name))
+
+
+# -- over MAVLink ----------------------------------------------------------------------------
+
+
+def test_instances_listed_and_an_address_written(
+    gui: str, page: Any, store_file: Path, tmp_path: Path
+) -> None:
+    _open(page, gui)
+    assert page.locator(".instance[data-instance='INA238#0']").is_visible()
+    assert page.locator(".instance[data-instance='INA238#1']").is_visible()
+    assert page.locator("#param-INA238 .slot").inner_text().startswith("2 of 4 instances")
+    address = page.locator(".instance[data-instance='INA238#1'] input[data-name='INA238_1C']")
+    assert address.input_value() == "69"
+    address.fill("0x46")
+    assert page.inner_text("#pending") == "1"
+    page.locator(".instance[data-instance='INA238#1']").scroll_into_view_if_needed()
+    _shot(page, "gui-instances.png", tmp_path)
+    page.click("#review-open")
+    row = page.locator("#review-table tr[data-name='INA238_1C']")
+    assert (
+        row.locator("td").nth(2).inner_text() == "69"
+        and row.locator("td").nth(3).inner_text() == "70"
+    )
+    _shot(page, "gui-review.png", tmp_path)
+    page.click("#review-write")
+    page.wait_for_function("document.querySelector('#review-table .result').textContent !== ''")
+    assert row.locator(".result").inner_text() == "acknowledged: 70"
+    page.click("#review-close")
+    assert _stored(store_file).get("INA238#1.bus.i2c.address") == 0x46  # saved by the vehicle
+    assert address.input_value() == "70"
+
+
+def test_out_of_range_is_refused_in_the_page_and_never_sent(
+    gui: str, page: Any, store_file: Path, vehicle: Started
+) -> None:
+    _open(page, gui)
+    address = page.locator("input[data-name='INA238_1C']")
+    address.fill("300")
+    error = page.locator(".instance[data-instance='INA238#1'] .error")
+    assert error.inner_text() == "300: above the maximum 127"
+    assert page.inner_text("#pending") == "0" and page.locator("#review-open").is_disabled()
+    address.fill("0x4G")
+    assert error.inner_text() == "0x4G: not an integer (decimal or 0x hex)"
+    assert _stored(store_file).get("INA238#1.bus.i2c.address") == 0x45
+    vehicle.stop()
+    log = vehicle.proc.stdout.read()  # type: ignore[union-attr]
+    assert "INA238_1C" not in log  # no write reached the vehicle
+
+
+def test_switching_the_bus_to_spi_shows_the_spi_fields(gui: str, page: Any) -> None:
+    _open(page, gui)
+    card = page.locator(".instance[data-instance='INA238#1']")
+    assert card.locator("[data-variant='i2c']").is_visible()
+    card.locator("select[data-name='INA238_1A']").select_option("1")
+    spi = card.locator("[data-variant='spi']")
+    labels = spi.locator(".field .label").all_inner_texts()
+    assert labels[:2] == ["bus_id", "chip_select"] and "mode" in labels
+    assert card.locator("[data-variant='i2c']").count() == 0
+    assert page.inner_text("#pending") == "1"  # the tag; the SPI fields show their defaults
+
+
+def test_an_instance_added_and_removed(gui: str, page: Any, store_file: Path) -> None:
+    _open(page, gui)
+    page.click("#add-INA238")
+    assert page.locator(".instance[data-instance='INA238#2'].new").is_visible()
+    assert _write_all(page) == ["acknowledged: 7"]  # INA238_INST: #0, #1, #2
+    page.wait_for_selector(
+        ".instance[data-instance='INA238#2']:not(.new) input[data-name='INA238_2C']"
+    )
+    assert _stored(store_file).instances("INA238") == ["INA238#0", "INA238#1", "INA238#2"]
+    page.click(".instance[data-instance='INA238#2'] button.remove")
+    assert page.locator(".instance[data-instance='INA238#2'].removed").is_visible()
+    assert _write_all(page) == ["acknowledged: 3"]
+    assert _stored(store_file).instances("INA238") == ["INA238#0", "INA238#1"]
+    page.wait_for_selector(".instance[data-instance='INA238#2']", state="detached")
+
+
+def test_a_params_file_loads_into_the_review(
+    gui: str, page: Any, tmp_path: Path, store_file: Path
+) -> None:
+    _open(page, gui)
+    qgc = tmp_path / "change.params"
+    qgc.write_text(
+        "# Onboard parameters for Vehicle 1\n#\n# Vehicle-Id\tComponent-Id\tName\tValue\tType\n"
+        "1\t1\tINA238_1C\t71\t6\n1\t1\tINA238_0P\t250\t6\n1\t1\tSYS_AUTOSTART\t4001\t6\n"
+        "1\t1\tNOT_ON_THIS_VEHICLE\t1\t6\n"
+    )
+    page.set_input_files("#load", str(qgc))
+    page.wait_for_selector("dialog#review[open]")
+    names = page.locator("#review-table tbody tr").evaluate_all(
+        "rows => rows.map(r => r.dataset.name)"
+    )
+    assert sorted(names) == ["INA238_0P", "INA238_1C", "SYS_AUTOSTART"]
+    assert "NOT_ON_THIS_VEHICLE: the vehicle has no such parameter" in page.inner_text(
+        "#review-notes"
+    )
+    page.click("#review-write")
+    page.wait_for_function(
+        "[...document.querySelectorAll('#review-table .result')].every(r => r.textContent)"
+    )
+    results = page.locator("#review-table .result").all_inner_texts()
+    assert sorted(results) == ["acknowledged: 250", "acknowledged: 4001", "acknowledged: 71"]
+    stored = _stored(store_file)
+    assert (stored.get("INA238#1.bus.i2c.address"), stored.get("INA238#0.current")) == (71, 250)
+    assert stored.get("SYS_AUTOSTART") == 4001
+
+
+def test_classic_parameters_as_qgc_lists_them(gui: str, page: Any, store_file: Path) -> None:
+    _open(page, gui)
+    page.click("button[data-tab='classic']")
+    page.fill("#search", "autostart")
+    row = page.locator("tr[data-param='SYS_AUTOSTART']")
+    assert row.locator(".reboot").inner_text() == "reboot"
+    assert not row.evaluate("r => r.classList.contains('modified')")
+    row.locator("input").fill("4001")
+    assert _write_all(page) == ["acknowledged: 4001"]
+    assert row.evaluate("r => r.classList.contains('modified')")  # differs from the default
+    row.locator("button").click()  # reset to default
+    assert _write_all(page) == ["acknowledged: 0"]
+    assert _stored(store_file).get("SYS_AUTOSTART") == 0
+    page.fill("#search", "")
+    page.check("#modified-only")
+    assert page.locator("tr[data-param='SYS_AUTOSTART']").count() == 0
+
+
+def test_health_of_each_device(gui: str, page: Any, tmp_path: Path) -> None:
+    _open(page, gui)
+    page.wait_for_selector("#health-table tr[data-instance='INA238#1']", state="attached")
+    page.click("button[data-tab='health']")
+    row = page.locator("#health-table tr[data-instance='INA238#1']")
+    assert row.locator("td").nth(3).inner_text() == "critical"
+    assert "lost" in row.locator("td").nth(4).inner_text()
+    _shot(page, "gui-health.png", tmp_path)
+    page.click("button[data-tab='manifest']")
+    assert page.locator(".instance[data-instance='INA238#1'] .badge").inner_text() == "critical"
+
+
+def test_save_as_params_and_airframe(gui: str, page: Any, tmp_path: Path) -> None:
+    _open(page, gui)
+    with page.expect_download() as download:
+        page.click("#save-params")
+    text = Path(download.value.path()).read_text()
+    assert "1\t1\tINA238_1C\t69\t6" in text
+    with page.expect_download() as download:
+        page.click("#save-airframe")
+    airframe = Path(download.value.path()).read_text()
+    assert "param add INA238#1" in airframe and "param set-default INA238#1[4] 69" in airframe
+    # the airframe is a real one: it rebuilds the same instances
+    target = tmp_path / "rebuilt"
+    target.mkdir()
+    (target / "saved.airframe").write_text(airframe)
+    env = _env(target)
+    subprocess.run(
+        [*CLI, "run", "saved.airframe"], env=env, cwd=target, check=True, capture_output=True
+    )
+    rebuilt = _stored(target / "vehicle.store")
+    assert rebuilt.instances("INA238") == ["INA238#0", "INA238#1"]
+    assert rebuilt.get("INA238#1.bus.i2c.bus_id") == 2
+
+
+# -- offline ---------------------------------------------------------------------------------
+
+
+def test_offline_on_a_store_file(store_file: Path, page: Any) -> None:
+    started = _gui(["--store", str(store_file)], store_file.parent)
+    try:
+        _open(page, started.match[1])
+        assert "offline store" in page.inner_text("#source")
+        page.fill("input[data-name='INA238_0P']", "300")
+        assert _write_all(page) == ["acknowledged: 300"]
+        page.fill("input[data-name='INA238_0P']", "5000")  # uint10: at most 1023
+        assert page.locator(".instance[data-instance='INA238#0'] .error").is_visible()
+        page.goto("about:blank")  # leave before the server stops (no reconnecting socket)
+    finally:
+        started.stop()
+    assert _stored(store_file).get("INA238#0.current") == 300
+    assert (store_file.parent / "vehicle.store.bak").exists()  # saved atomically, with a backup
+
+
+def test_state_api_is_json(gui: str, page: Any) -> None:
+    response = page.request.get(gui + "api/state")
+    body = json.loads(response.text())
+    assert body["mode"] == "mavlink" and body["values"]["INA238_INST"] == 3
