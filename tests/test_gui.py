@@ -349,3 +349,38 @@ def test_state_api_is_json(gui: str, page: Any) -> None:
     response = page.request.get(gui + "api/state")
     body = json.loads(response.text())
     assert body["mode"] == "mavlink" and body["values"]["INA238_INST"] == 3
+
+
+def test_a_dynamic_array_gets_items_added_and_removed(tmp_path: Path, page: Any) -> None:
+    """No bundled type has a dynamic array: one of our own, offline, through --dsdl."""
+    root = tmp_path / "ext" / "arr"
+    root.mkdir(parents=True)
+    (root / "Things.1.0.dsdl").write_text(
+        "# A list of things\n# @max_instances 2\nuint8[<=3] items\n# The items\n# @max 200\n@sealed\n"
+    )
+    store = tmp_path / "things.store"
+    started = _gui(["--store", str(store), "--dsdl", str(root)], tmp_path)
+    try:
+        _open(page, started.match[1])
+        page.click("#add-THINGS")
+        assert _write_all(page) == ["acknowledged: 1"]  # THINGS_INST: THINGS#0
+        card = page.locator(".instance[data-instance='THINGS#0']")
+        length = card.locator("[data-field='items._len']")
+        assert "0 of 3" in length.inner_text()
+        length.locator("button", has_text="Add").click()
+        length.locator("button", has_text="Add").click()
+        items = card.locator(".array-items input")
+        assert items.count() == 2
+        items.nth(0).fill("7")
+        items.nth(1).fill("201")  # @max 200
+        assert card.locator(".error").inner_text() == "201: above the maximum 200"
+        items.nth(1).fill("9")
+        assert sorted(_write_all(page)) == ["acknowledged: 2", "acknowledged: 7", "acknowledged: 9"]
+        card.locator("[data-field='items._len'] button", has_text="Remove last").click()
+        assert _write_all(page) == ["acknowledged: 1"]
+        page.goto("about:blank")
+    finally:
+        started.stop()
+    schema = px4params.load_schema([root], include_dronecan=False)
+    saved = px4params.Store.load(store, schema, classic=BUNDLED_CLASSIC)
+    assert saved.get("THINGS#0")["items"] == [7]
