@@ -356,7 +356,8 @@ def test_a_dynamic_array_gets_items_added_and_removed(tmp_path: Path, page: Any)
     root = tmp_path / "ext" / "arr"
     root.mkdir(parents=True)
     (root / "Things.1.0.dsdl").write_text(
-        "# A list of things\n# @max_instances 2\nuint8[<=3] items\n# The items\n# @max 200\n@sealed\n"
+        "# A list of things\n# @max_instances 2\n"
+        "uint8[<=3] items\n# The items\n# @max 200\n@sealed\n"
     )
     store = tmp_path / "things.store"
     started = _gui(["--store", str(store), "--dsdl", str(root)], tmp_path)
