@@ -62,7 +62,7 @@ def build_parser(only: str | None = None, words: Sequence[str] = ()) -> argparse
         if only is None or name == only:
             module = importlib.import_module(f"px4params.cli.commands.{module_name}")
             module.add_parser(sub, name, summary, words)
-        else:
+        elif only not in COMMANDS:  # listed by name for --help and usage errors
             sub.add_parser(name, help=summary, add_help=False)
     return parser
 

@@ -560,7 +560,8 @@ class _Unbuilt:
 def _verb(sub: Any, name: str, func: Verb, summary: str, example: str) -> Any:
     VERBS[name] = (func, summary, example)
     if _only is not None and name != _only:
-        sub.add_parser(name, help=summary, add_help=False)
+        if _listed:  # by name only, for usage errors and --help
+            sub.add_parser(name, help=summary, add_help=False)
         return _Unbuilt()
     p = sub.add_parser(
         name,
@@ -574,17 +575,21 @@ def _verb(sub: Any, name: str, func: Verb, summary: str, example: str) -> Any:
 
 
 _only: str | None = None
+_listed = True
 
 
 def add_verbs(sub: Any, only: str | None = None) -> None:
     """The ``param`` verbs (shared by ``px4params param`` and airframe files); with ``only``,
-    just that verb's parser is built (the others are listed by name)."""
-    global _only
-    _only = only
+    just that verb's parser is built (all of them, listed by name, when it is no verb)."""
+    global _only, _listed
+    _only, _listed = only, only is None
     try:
         _add_verbs(sub)
     finally:
-        _only = None
+        _only, _listed = None, True
+    if only is not None and only not in VERBS:  # no verb: list them all for the usage error
+        for name, (_, summary, _) in VERBS.items():
+            sub.add_parser(name, help=summary, add_help=False)
 
 
 def _add_verbs(sub: Any) -> None:
