@@ -52,6 +52,9 @@ class DataType:
         # Every type of the schema (for nested types' signatures) and the schema's memo of them.
         self._types = types if types is not None else {key: definition}
         self._signatures = signatures if signatures is not None else {}
+        #: What other layers derive from the type once and keep with it (its destructured
+        #: letters, ``px4params.store.flat.layout``).
+        self.derived: dict[str, Any] = {}
 
     @property
     def name(self) -> str:

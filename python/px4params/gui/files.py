@@ -154,7 +154,8 @@ def _run_airframe(scratch: Any, filename: str, text: str) -> list[str]:
         errors = io.StringIO()
         result = run_file(path, session, keep_going=False, err=errors)
         if result.errors:
-            message = errors.getvalue().strip().replace(path, filename)
+            lines = errors.getvalue().strip().replace(path, filename).splitlines()
+            message = " ".join(line.removeprefix("px4params: ") for line in lines)
             raise CommandError(message or f"{filename}: the airframe file failed")
     return []
 

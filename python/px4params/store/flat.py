@@ -54,7 +54,6 @@ name; a violation is a :class:`FlatError` naming the parameter.
 from __future__ import annotations
 
 import math
-import weakref
 from collections.abc import Iterator, Mapping
 from typing import TYPE_CHECKING, Any, NamedTuple
 
@@ -182,15 +181,13 @@ class FlatLayout:
         return iter(self.slots)
 
 
-_LAYOUTS: weakref.WeakKeyDictionary[DataType, FlatLayout] = weakref.WeakKeyDictionary()
-
-
 def layout(data_type: DataType) -> FlatLayout:
-    """The letters of ``data_type``; :class:`FlatError` if a leaf is wider than 32 bits."""
-    cached = _LAYOUTS.get(data_type)
+    """The letters of ``data_type`` (computed once per type, kept in its ``derived``);
+    :class:`FlatError` if a leaf is wider than 32 bits."""
+    cached = data_type.derived.get("flat_layout")
     if cached is None:
         cached = FlatLayout(data_type.key, _Walker(data_type).run())
-        _LAYOUTS[data_type] = cached
+        data_type.derived["flat_layout"] = cached
     return cached
 
 
@@ -556,16 +553,9 @@ class FlatMap:
         return "not in the current value"  # pragma: no cover - requires cover every case
 
 
-_MAPS: weakref.WeakKeyDictionary[Store, FlatMap] = weakref.WeakKeyDictionary()
-
-
 def flat_map(store: Store) -> FlatMap:
-    """The store's :class:`FlatMap`, built (and checked) on first use."""
-    found = _MAPS.get(store)
-    if found is None:
-        found = FlatMap(store)
-        _MAPS[store] = found
-    return found
+    """The store's :class:`FlatMap` (built and checked with the store)."""
+    return store.destructured
 
 
 def flat_table(store: Store) -> list[FlatParam]:

@@ -151,9 +151,10 @@ class Store:
         self._initial = self._native.copy()
         # The destructured (MAVLink) names must be valid for every type: checked once, here,
         # so that a type with a leaf over 32 bits or a clashing name is refused at load.
-        from px4params.store.flat import flat_map
+        from px4params.store.flat import FlatMap
 
-        flat_map(self)
+        #: The destructured (flat) names of this store's parameters.
+        self.destructured = FlatMap(self)
         #: Classic records of a loaded file whose parameters this store lacks, kept to be saved.
         self._foreign: dict[str, bytes] = {}
 

@@ -89,8 +89,9 @@ function parseValue(text, kind, min, max) {
   return { value: v };
 }
 
-function shown(v) {
+function shown(v, decimals) {
   if (v === undefined || v === null) return "";
+  if (typeof v === "number" && typeof decimals === "number") return v.toFixed(decimals);
   if (typeof v === "number" && !Number.isInteger(v)) return String(Number(v.toPrecision(7)));
   return String(v);
 }
@@ -226,7 +227,8 @@ function leafRow(e, n, f, title) {
     control.addEventListener("change", () => { stage(name, Number(control.value), label, f.unit); markRow(control, name); });
   } else {
     control = el("input", {
-      type: "text", inputmode: kind === "Float" ? "decimal" : "numeric", "data-name": name, value: shown(value),
+      type: "text", inputmode: kind === "Float" ? "decimal" : "numeric", "data-name": name,
+      value: shown(value, kind === "Float" ? f.decimalPlaces : undefined),
       "aria-label": label, title: `${f.min} .. ${f.max}${f.unit ? " " + f.unit : ""}`,
     });
     control.addEventListener("input", () => {
@@ -281,7 +283,8 @@ function classicRow(e) {
   const value = effective(e.name);
   const modified = typeof e.default === "number" && value !== e.default;
   const row = el("tr", { class: (modified ? "modified" : "") + (S.staged.has(e.name) ? " changed" : ""), "data-param": e.name });
-  const input = el("input", { type: "text", value: shown(value), "data-name": e.name, "aria-label": e.name });
+  const decimals = e.type === "Float" ? e.decimalPlaces : undefined;
+  const input = el("input", { type: "text", value: shown(value, decimals), "data-name": e.name, "aria-label": e.name });
   const error = el("div", { class: "error" });
   input.addEventListener("input", () => {
     const parsed = parseValue(input.value, e.type, e.min, e.max);
