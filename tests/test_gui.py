@@ -385,3 +385,18 @@ def test_a_dynamic_array_gets_items_added_and_removed(tmp_path: Path, page: Any)
     schema = px4params.load_schema([root], include_dronecan=False)
     saved = px4params.Store.load(store, schema, classic=BUNDLED_CLASSIC)
     assert saved.get("THINGS#0")["items"] == [7]
+
+
+def test_other_sites_cannot_write(gui: str, page: Any, store_file: Path) -> None:
+    """A page of another site in the same browser cannot write parameters: a cross-site
+    'simple' request (text/plain) is refused, as is any request naming another origin."""
+    body = json.dumps({"changes": [{"name": "INA238_1C", "value": 1}]})
+    plain = page.request.post(gui + "api/write", data=body, headers={"content-type": "text/plain"})
+    assert plain.status == 415
+    foreign = page.request.post(
+        gui + "api/write",
+        data=body,
+        headers={"content-type": "application/json", "origin": "http://evil.example"},
+    )
+    assert foreign.status == 403
+    assert _stored(store_file).get("INA238#1.bus.i2c.address") == 0x45

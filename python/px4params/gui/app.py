@@ -47,6 +47,9 @@ def make_app(vehicle: Any) -> Starlette:
     floats = {e["name"] for e in vehicle.metadata.get("parameters", ()) if e.get("type") == "Float"}
 
     async def write(request: Request) -> Response:
+        refused = _foreign(request)
+        if refused is not None:
+            return refused
         try:
             changes = (await request.json())["changes"]
             pairs = [
@@ -63,6 +66,9 @@ def make_app(vehicle: Any) -> Starlette:
         return JSONResponse({"results": results, "values": vehicle.state()["values"]})
 
     async def review(request: Request) -> Response:
+        refused = _foreign(request)
+        if refused is not None:
+            return refused
         try:
             body = await request.json()
             filename, text = str(body["filename"]), str(body["text"])
@@ -93,6 +99,10 @@ def make_app(vehicle: Any) -> Starlette:
         return Response(text, media_type="text/plain; charset=utf-8", headers=headers)
 
     async def socket(ws: WebSocket) -> None:
+        origin = ws.headers.get("origin")
+        if origin is not None and origin != f"http://{ws.headers.get('host')}":
+            await ws.close(code=1008)  # another site's page may not watch the vehicle
+            return
         await ws.accept()
         loop = asyncio.get_running_loop()
         queue: asyncio.Queue[dict[str, Any]] = asyncio.Queue()
@@ -116,6 +126,18 @@ def make_app(vehicle: Any) -> Starlette:
         Mount("/static", StaticFiles(directory=STATIC), name="static"),
     ]
     return Starlette(routes=routes)
+
+
+def _foreign(request: Request) -> Response | None:
+    """Refuses a write another site's page could send from the user's browser: only JSON (a
+    cross-site JSON request needs the browser's preflight, which this server never grants)
+    and, when the browser names the origin, this page's own."""
+    if not request.headers.get("content-type", "").startswith("application/json"):
+        return JSONResponse({"error": "expected a JSON body (content-type application/json)"}, 415)
+    origin = request.headers.get("origin")
+    if origin is not None and origin != f"http://{request.headers.get('host')}":
+        return JSONResponse({"error": f"requests from {origin} are not accepted"}, 403)
+    return None
 
 
 def _number(value: Any, is_float: bool) -> int | float:
