@@ -312,13 +312,12 @@ def test_empty_and_disabled(tmp_path: Path, devtypes: devid.DevtypeTable) -> Non
         (b"# only comments\n\n", "{path}: no parameters (not a QGC .params file?)"),
         (
             b"# x\n1\t1\tSYS_AUTOSTART\t4001\n",
-            "{path}:2: expected 5 TAB-separated fields (vehicle-id component-id name value type), "
-            "got 4",
+            "{path}:2: expected 5 TAB-separated columns (vehicle-id, component-id, name, value, "
+            "type), got 4",
         ),
         (
             b"1\t1\tSYS_AUTOSTART\t40.5\t6\n",
-            "{path}:1: '1\\t1\\tSYS_AUTOSTART\\t40.5\\t6': ids and type must be integers and the "
-            "value a number of that type",
+            "{path}:1: SYS_AUTOSTART: value '40.5' is not an integer (type 6)",
         ),
         (b"ULog\x01\x12\x35\x01" + struct.pack("<Q", 0), "{path}: the log has no parameters"),
         (

@@ -38,7 +38,8 @@ from pathlib import Path
 from typing import Any
 
 from px4params.dsdl.schema import Schema
-from px4params.errors import MigrationError, Px4ParamsError
+from px4params.errors import MigrationError, ParamFileError, Px4ParamsError
+from px4params.formats import qgc_params
 from px4params.vehicle import devid
 
 __all__ = [
@@ -54,7 +55,6 @@ __all__ = [
 
 ULOG_MAGIC = b"ULog\x01\x12\x35"
 #: MAV_PARAM_TYPE codes of float parameters in QGC files (REAL32, REAL64).
-_FLOAT_TYPES = {9, 10}
 #: The I2C bus board scripts start external drivers on (``-X -b 1``).
 DEFAULT_I2C_BUS = 1
 _CAL_ID = re.compile(r"CAL_(?P<sensor>[A-Z]+?)(?P<n>\d+)_ID")
@@ -135,26 +135,11 @@ def _read_params(where: str) -> OldConfig:
         text = Path(where).read_text(encoding="utf-8")
     except UnicodeDecodeError:
         raise MigrationError(f"{where}: neither a ULog file nor a QGC .params text file") from None
-    rows: list[tuple[int, int, str, int | float]] = []
-    for number, line in enumerate(text.splitlines(), start=1):
-        if not line.strip() or line.lstrip().startswith("#"):
-            continue
-        parts = line.split("\t") if "\t" in line else line.split()
-        if len(parts) != 5:
-            raise MigrationError(
-                f"{where}:{number}: expected 5 TAB-separated fields (vehicle-id component-id "
-                f"name value type), got {len(parts)}"
-            )
-        vehicle, component, name, value, kind = (p.strip() for p in parts)
-        try:
-            ids = (int(vehicle), int(component), int(kind))
-            number_value: int | float = float(value) if ids[2] in _FLOAT_TYPES else _int_text(value)
-        except ValueError:
-            raise MigrationError(
-                f"{where}:{number}: {line.strip()!r}: ids and type must be integers and the "
-                "value a number of that type"
-            ) from None
-        rows.append((ids[0], ids[1], name, number_value))
+    try:
+        read = qgc_params.read(text, where)
+    except ParamFileError as e:
+        raise MigrationError(str(e)) from None
+    rows = [(r.vehicle, r.component, r.name, r.value) for r in read]
     if not rows:
         raise MigrationError(f"{where}: no parameters (not a QGC .params file?)")
     # The autopilot is component 1; other components (gimbals, ...) are not the vehicle's.
@@ -167,13 +152,6 @@ def _read_params(where: str) -> OldConfig:
         if c != chosen
     ]
     return OldConfig(where, "QGC .params", params, [f"component {chosen}"], skipped)
-
-
-def _int_text(text: str) -> int:
-    value = float(text)
-    if not value.is_integer():
-        raise ValueError(text)
-    return int(value)
 
 
 # -- the proposal -----------------------------------------------------------------------------

@@ -15,6 +15,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from px4params.errors import CommandError, Px4ParamsError
+from px4params.formats import qgc_params
 from px4params.store.classic import ClassicParam
 
 __all__ = ["export_airframe", "export_params", "review_file"]
@@ -74,27 +75,13 @@ def _read_params(
 ) -> tuple[dict[str, Any], list[str]]:
     new: dict[str, Any] = {}
     notes: list[str] = []
-    for number, raw in enumerate(text.splitlines(), start=1):
-        line = raw.strip()
-        if not line or line.startswith("#"):
-            continue
-        parts = line.split("\t") if "\t" in line else line.split()
-        if len(parts) != 5:
-            raise CommandError(
-                f"{filename}:{number}: expected 5 TAB-separated columns "
-                f"(vehicle-id, component-id, name, value, type), got {len(parts)}"
+    for row in qgc_params.read(text, filename):
+        if row.name not in values:
+            notes.append(
+                f"{filename}:{row.line}: {row.name}: the vehicle has no such parameter; skipped"
             )
-        _, _, name, value, kind = parts
-        try:
-            number_value: int | float = float(value) if kind in ("9", "10") else int(float(value))
-        except ValueError:
-            raise CommandError(
-                f"{filename}:{number}: {name}: value {value!r} is not a number"
-            ) from None
-        if name not in values:
-            notes.append(f"{filename}:{number}: {name}: the vehicle has no such parameter; skipped")
             continue
-        new[name] = number_value
+        new[row.name] = row.value
     return new, notes
 
 

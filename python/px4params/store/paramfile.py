@@ -16,17 +16,16 @@ Reading either applies everything or nothing (one store transaction).
 from __future__ import annotations
 
 import json
-import math
 import os
 import re
 from typing import Any
 
 from px4params.dsdl.schema import to_json_value
 from px4params.errors import InstanceError, ParamFileError, Px4ParamsError
+from px4params.formats import qgc_params
+from px4params.formats.qgc_params import format_line
 from px4params.store.store import Key, Store
 
-MAV_PARAM_TYPE_INT32 = 6
-MAV_PARAM_TYPE_REAL32 = 9
 JSON_FORMAT = "px4params"
 
 _FLAT_INSTANCE = re.compile(r"(?P<param>[A-Z0-9_]+?)_(?P<instance>\d+)(?P<letters>[A-Z]+)")
@@ -54,17 +53,10 @@ def export_qgc(store: Store, *, vehicle: int = 1, component: int = 1) -> str:
     for name in store.names():
         classic = store.classic(Key.parse(name).param)
         if classic is not None and store.changed(name):
-            lines.append(_line(vehicle, component, name, store.get(name), classic.is_float))
+            lines.append(format_line(vehicle, component, name, store.get(name), classic.is_float))
     for p in flat_table(store):
-        lines.append(_line(vehicle, component, p.name, p.value, p.mav_type == "float32"))
+        lines.append(format_line(vehicle, component, p.name, p.value, p.mav_type == "float32"))
     return "\n".join(lines) + "\n"
-
-
-def _line(vehicle: int, component: int, name: str, value: float, is_float: bool) -> str:
-    if is_float:
-        text = f"{value:.18f}" if math.isfinite(value) else str(value)
-        return f"{vehicle}\t{component}\t{name}\t{text}\t{MAV_PARAM_TYPE_REAL32}"
-    return f"{vehicle}\t{component}\t{name}\t{int(value)}\t{MAV_PARAM_TYPE_INT32}"
 
 
 def export_json(store: Store) -> str:
@@ -132,28 +124,14 @@ def _read_qgc(store: Store, path: str, text: str) -> list[str]:
     from px4params.store.flat import set_flat
 
     report: list[str] = []
-    for number, raw in enumerate(text.splitlines(), start=1):
-        line = raw.strip()
-        if not line or line.startswith("#"):
-            continue
-        where = f"{path}:{number}"
-        parts = line.split("\t")
-        if len(parts) != 5:
+    for row in qgc_params.read(text, path):
+        where, name, number_value = f"{path}:{row.line}", row.name, row.value
+        if row.type not in (qgc_params.INT32, qgc_params.REAL32):
             raise ParamFileError(
-                f"{where}: expected 5 TAB-separated columns "
-                f"(vehicle-id, component-id, name, value, type), got {len(parts)}"
+                f"{where}: {name}: type '{row.type}' is not 6 (int32) or 9 (float)"
             )
-        _, _, name, value_text, type_text = parts
-        if type_text not in (str(MAV_PARAM_TYPE_INT32), str(MAV_PARAM_TYPE_REAL32)):
-            raise ParamFileError(
-                f"{where}: {name}: type {type_text!r} is not 6 (int32) or 9 (float)"
-            )
-        try:
-            number_value: int | float = (
-                int(value_text) if type_text == str(MAV_PARAM_TYPE_INT32) else float(value_text)
-            )
-        except ValueError:
-            raise ParamFileError(f"{where}: {name}: value {value_text!r} is not a number") from None
+        if row.type == qgc_params.REAL32:
+            number_value = float(number_value)
         try:
             if name in store.parameters:
                 store.set(name, number_value)

@@ -1,0 +1,2 @@
+"""File formats of other tools, read and written in one place each: QGroundControl's ``.params``
+files (``qgc_params``)."""

@@ -1,0 +1,79 @@
+"""QGroundControl's ``.params`` files: ``#`` comment lines, then one line per parameter,
+``vehicle-id component-id name value type`` separated by TABs (as QGC writes them; spaces are
+accepted too, as hand-edited files have them). ``type`` is a ``MAV_PARAM_TYPE``: 6 int32,
+9 float32 (QGC writes floats with 18 decimals), the others as MAVLink numbers them.
+
+This is the one reader of the format; the store's import, migration and the page use it."""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+from px4params.errors import ParamFileError
+
+__all__ = ["FLOAT_TYPES", "INT32", "REAL32", "QgcRow", "format_line", "read"]
+
+#: MAV_PARAM_TYPE of the two kinds PX4 has.
+INT32, REAL32 = 6, 9
+#: MAV_PARAM_TYPE values that hold floats (REAL32, REAL64).
+FLOAT_TYPES = frozenset({9, 10})
+
+
+class QgcRow(NamedTuple):
+    """One parameter line: where it is, whose it is, and its value as its type says."""
+
+    line: int
+    vehicle: int
+    component: int
+    name: str
+    value: int | float
+    type: int
+
+
+def read(text: str, where: str) -> list[QgcRow]:
+    """Every parameter line of ``text`` (the file ``where``, for messages). A line that is not
+    five fields, ids and a type that are not integers, or a value that is not a number of its
+    type is a :class:`ParamFileError` naming the file, the line and the field."""
+    rows: list[QgcRow] = []
+    for number, raw in enumerate(text.splitlines(), start=1):
+        line = raw.strip()
+        if not line or line.startswith("#"):
+            continue
+        at = f"{where}:{number}"
+        parts = [p.strip() for p in (line.split("\t") if "\t" in line else line.split())]
+        if len(parts) != 5:
+            raise ParamFileError(
+                f"{at}: expected 5 TAB-separated columns "
+                f"(vehicle-id, component-id, name, value, type), got {len(parts)}"
+            )
+        vehicle, component, name, value, kind = parts
+        try:
+            ids = (int(vehicle), int(component), int(kind))
+        except ValueError:
+            raise ParamFileError(
+                f"{at}: {name}: vehicle-id, component-id and type must be integers, got "
+                f"{vehicle!r}, {component!r}, {kind!r}"
+            ) from None
+        rows.append(QgcRow(number, ids[0], ids[1], name, _value(value, ids[2], at, name), ids[2]))
+    return rows
+
+
+def _value(text: str, kind: int, at: str, name: str) -> int | float:
+    try:
+        number = float(text)
+    except ValueError:
+        raise ParamFileError(f"{at}: {name}: value {text!r} is not a number") from None
+    if kind in FLOAT_TYPES:
+        return number
+    if not number.is_integer():
+        raise ParamFileError(f"{at}: {name}: value {text!r} is not an integer (type {kind})")
+    return int(text) if text.lstrip("+-").isdigit() else int(number)
+
+
+def format_line(vehicle: int, component: int, name: str, value: int | float, is_float: bool) -> str:
+    """One line as QGC writes it: floats with 18 decimals, TAB-separated."""
+    if is_float:
+        text = f"{value:.18f}" if math.isfinite(value) else str(value)
+        return f"{vehicle}\t{component}\t{name}\t{text}\t{REAL32}"
+    return f"{vehicle}\t{component}\t{name}\t{int(value)}\t{INT32}"

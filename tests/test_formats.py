@@ -1,0 +1,72 @@
+"""QGC .params files (px4params.formats.qgc_params): what QGC writes reads back exactly, and
+the real files in ../shared/data read as QGC wrote them."""
+
+from __future__ import annotations
+
+import math
+import struct
+
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+from px4params.errors import ParamFileError
+from px4params.formats import qgc_params
+from shared_data import shared_file
+
+
+@given(
+    st.floats(width=32, allow_nan=False, allow_infinity=False).filter(
+        lambda v: v == 0 or abs(v) >= 1e-9  # 18 decimals: smaller ones lose digits (QGC's format)
+    )
+)
+def test_a_float32_written_with_18_decimals_reads_back_exactly(value: float) -> None:
+    (row,) = qgc_params.read(qgc_params.format_line(1, 1, "X", value, True), "f")
+    assert struct.pack("<f", row.value) == struct.pack("<f", value)
+    assert row.type == qgc_params.REAL32
+
+
+@given(st.integers(-(2**31), 2**31 - 1))
+def test_int32_reads_back(value: int) -> None:
+    (row,) = qgc_params.read(qgc_params.format_line(1, 1, "X", value, False), "f")
+    assert (row.value, row.type) == (value, qgc_params.INT32)
+
+
+def test_non_finite_floats_are_written_readably() -> None:
+    (row,) = qgc_params.read(qgc_params.format_line(1, 1, "X", math.inf, True), "f")
+    assert row.value == math.inf
+
+
+@pytest.mark.parametrize("name", ["qgc_offline_editing_v1.4.params", "qgc_px4_mocklink.params"])
+def test_real_qgc_files(name: str) -> None:
+    path = shared_file(name)
+    rows = qgc_params.read(path.read_text(encoding="utf-8"), name)
+    assert len(rows) > 100
+    assert {r.type for r in rows} <= {1, 2, 3, 4, 5, 6, 7, 8, 9, 10}
+    assert all(isinstance(r.value, float) == (r.type in qgc_params.FLOAT_TYPES) for r in rows)
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        (
+            "1\t1\tA\t5\n",
+            "f:1: expected 5 TAB-separated columns (vehicle-id, component-id, name, value, type), "
+            "got 4",
+        ),
+        (
+            "# c\n1\tx\tA\t5\t6\n",
+            "f:2: A: vehicle-id, component-id and type must be integers, got '1', 'x', '6'",
+        ),
+        ("1\t1\tA\tfive\t6\n", "f:1: A: value 'five' is not a number"),
+        ("1\t1\tA\t5.5\t6\n", "f:1: A: value '5.5' is not an integer (type 6)"),
+    ],
+)
+def test_errors_name_the_line_and_field(text: str, message: str) -> None:
+    with pytest.raises(ParamFileError) as caught:
+        qgc_params.read(text, "f")
+    assert str(caught.value) == message
+
+
+def test_spaces_instead_of_tabs() -> None:
+    (row,) = qgc_params.read("1 1 SYS_AUTOSTART 4001 6", "f")
+    assert (row.name, row.value) == ("SYS_AUTOSTART", 4001)
