@@ -249,9 +249,11 @@ def test_help_examples_run(parser: str, examples: list[Example], tmp_path: Path)
 
 
 def _needs_shared_data(command: str) -> bool:
-    """A flight log, or today's devtype table (devid's default, which px4params does not ship)."""
-    devid_current = command.startswith("px4params devid") and "--table legacy" not in command
-    return ".ulg" in command or "../shared/" in command or devid_current
+    """A flight log, or today's devtype table (the default of devid and migrate, which
+    px4params does not ship)."""
+    uses_table = command.startswith(("px4params devid", "px4params migrate"))
+    current_table = uses_table and "--table legacy" not in command
+    return ".ulg" in command or "../shared/" in command or current_table
 
 
 def test_help_examples_are_found() -> None:
