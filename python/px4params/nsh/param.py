@@ -557,60 +557,54 @@ class _Unbuilt:
         pass
 
 
-def _verb(sub: Any, name: str, func: Verb, summary: str, example: str) -> Any:
-    VERBS[name] = (func, summary, example)
-    if _only is not None and name != _only:
-        if _listed:  # by name only, for usage errors and --help
-            sub.add_parser(name, help=summary, add_help=False)
-        return _Unbuilt()
-    p = sub.add_parser(
-        name,
-        help=summary,
-        description=summary,
-        epilog=f"example:\n  {example}",
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
-    p.set_defaults(verb=func)
-    return p
+class _VerbParsers:
+    """Adds the verbs' parsers to ``sub``: every one, or with ``only`` just that verb's (the
+    others' arguments go to an :class:`_Unbuilt`)."""
 
+    def __init__(self, sub: Any, only: str | None) -> None:
+        self.sub = sub
+        self.only = only
 
-_only: str | None = None
-_listed = True
+    def __call__(self, name: str, func: Verb, summary: str, example: str) -> Any:
+        VERBS[name] = (func, summary, example)
+        if self.only is not None and name != self.only:
+            return _Unbuilt()
+        p = self.sub.add_parser(
+            name,
+            help=summary,
+            description=summary,
+            epilog=f"example:\n  {example}",
+            formatter_class=argparse.RawDescriptionHelpFormatter,
+        )
+        p.set_defaults(verb=func)
+        return p
 
 
 def add_verbs(sub: Any, only: str | None = None) -> None:
     """The ``param`` verbs (shared by ``px4params param`` and airframe files); with ``only``,
     just that verb's parser is built (all of them, listed by name, when it is no verb)."""
-    global _only, _listed
-    _only, _listed = only, only is None
-    try:
-        _add_verbs(sub)
-    finally:
-        _only, _listed = None, True
+    _add_verbs(_VerbParsers(sub, only))
     if only is not None and only not in VERBS:  # no verb: list them all for the usage error
         for name, (_, summary, _) in VERBS.items():
             sub.add_parser(name, help=summary, add_help=False)
 
 
-def _add_verbs(sub: Any) -> None:
-    p = _verb(
-        sub,
+def _add_verbs(verb: _VerbParsers) -> None:
+    p = verb(
         "add",
         verb_add,
         "add instances (NAME#N, or NAME for the next free one)",
         "px4params param add INA238#2",
     )
     p.add_argument("names", nargs="+", metavar="NAME")
-    p = _verb(
-        sub,
+    p = verb(
         "rm",
         verb_rm,
         "remove instances (the others keep their numbers)",
         "px4params param rm INA238#1",
     )
     p.add_argument("names", nargs="+", metavar="NAME")
-    p = _verb(
-        sub,
+    p = verb(
         "set",
         verb_set,
         "set a value, a leaf ([k] or path) or a classic parameter",
@@ -619,8 +613,7 @@ def _add_verbs(sub: Any) -> None:
     p.add_argument("name")
     p.add_argument("value")
     p.add_argument("fail", nargs="?", help="accepted for NSH compatibility: errors always fail")
-    p = _verb(
-        sub,
+    p = verb(
         "set-default",
         verb_set_default,
         "set a default (the value follows unless it was changed)",
@@ -636,14 +629,13 @@ def _add_verbs(sub: Any) -> None:
         ("greater", verb_greater, "exit 0 if NAME is greater than one of the values, else 1"),
     ):
         limit = 200 if name == "compare" else 100
-        p = _verb(sub, name, func, summary, f"px4params param {name} INA238#0.current {limit}")
+        p = verb(name, func, summary, f"px4params param {name} INA238#0.current {limit}")
         p.add_argument(
             "-s", dest="silent", action="store_true", help="an unknown parameter fails silently"
         )
         p.add_argument("name")
         p.add_argument("values", nargs="+", metavar="VALUE")
-    p = _verb(
-        sub,
+    p = verb(
         "show",
         verb_show,
         "show instances and changed or used classic parameters (-a: all)",
@@ -660,49 +652,41 @@ def _add_verbs(sub: Any) -> None:
     )
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.add_argument("filters", nargs="*", metavar="FILTER", help="names, a trailing * matches")
-    p = _verb(
-        sub,
+    p = verb(
         "reset",
         verb_reset,
         "set values back to their defaults",
         "px4params param reset INA238#*",
     )
     p.add_argument("names", nargs="+", metavar="NAME")
-    p = _verb(
-        sub,
+    p = verb(
         "reset_all",
         verb_reset_all,
         "reset every value except the excluded",
         "px4params param reset_all SYS_AUTOSTART",
     )
     p.add_argument("excludes", nargs="*", metavar="EXCLUDE")
-    p = _verb(
-        sub, "touch", verb_touch, "mark as used (within one run)", "px4params param touch INA238#0"
-    )
+    p = verb("touch", verb_touch, "mark as used (within one run)", "px4params param touch INA238#0")
     p.add_argument("names", nargs="+", metavar="NAME")
     for name, func, summary in (
         ("save", verb_save, "save the store (to FILE)"),
         ("load", verb_load, "reset, then load FILE (a store, QGC .params or .json file)"),
         ("import", verb_import, "merge FILE (a store, QGC .params or .json file)"),
     ):
-        p = _verb(sub, name, func, summary, f"px4params param {name} backup.store")
+        p = verb(name, func, summary, f"px4params param {name} backup.store")
         p.add_argument("file", nargs="?", metavar="FILE")
-    p = _verb(
-        sub,
+    p = verb(
         "export",
         verb_export,
         "write a QGC .params file (instances destructured) or a .json export",
         "px4params param export vehicle.params",
     )
     p.add_argument("file", metavar="FILE")
-    p = _verb(
-        sub, "status", verb_status, "show the store file and its use", "px4params param status"
-    )
+    p = verb("status", verb_status, "show the store file and its use", "px4params param status")
     p.add_argument("--json", action="store_true", help="machine-readable output")
-    p = _verb(sub, "find", verb_find, "show a parameter's index", "px4params param find INA238")
+    p = verb("find", verb_find, "show a parameter's index", "px4params param find INA238")
     p.add_argument("name")
-    p = _verb(
-        sub,
+    p = verb(
         "flat",
         verb_flat,
         "the destructured flat parameters (MAVLink names) of every instance",
@@ -710,8 +694,7 @@ def _add_verbs(sub: Any) -> None:
     )
     p.add_argument("filters", nargs="*", metavar="FILTER", help="names, a trailing * matches")
     p.add_argument("--json", action="store_true", help="machine-readable output")
-    p = _verb(
-        sub,
+    p = verb(
         "instances",
         verb_instances,
         "list a parameter's instances in order",
