@@ -30,7 +30,7 @@ from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
 from px4params.dsdl.schema import Schema
-from px4params.gcs.metadata import length_bits, tag_bits
+from px4params.gcs.metadata import length_bits, min_bits, tag_bits
 from px4params.store.spec import ParamSpec
 
 __all__ = ["c_member_name", "c_type_names", "generate_header", "guard_from_filename"]
@@ -560,7 +560,7 @@ class _Generator:
             ]
         if kind == "dynarray":
             max_len, len_bits = spec["max"], length_bits(spec["max"])
-            tail_capable = self.min_bits(spec["elem"]) >= 8
+            tail_capable = min_bits(self.schema, spec["elem"]) >= 8
             lines = []
             width = next(w for w in (8, 16, 32, 64) if len_bits <= w)
             if max_len < (1 << width) - 1:
@@ -692,7 +692,7 @@ class _Generator:
             len_type = self.scalar_ctype({"kind": "uint", "bits": len_bits})
             inner = "    " * (depth + 1)
             lines = []
-            if tail != "false" and self.min_bits(spec["elem"]) >= 8:
+            if tail != "false" and min_bits(self.schema, spec["elem"]) >= 8:
                 # Tail array optimization: the elements take every remaining whole byte.
                 lines += [
                     f"{pad}if ({tail}) {{",
@@ -757,18 +757,6 @@ class _Generator:
                 *check,
             ]
         return [f"{pad}err = px4params_get_f{bits}(buffer, size_bits, bit, &{expr});", *check]
-
-    def min_bits(self, spec: Mapping[str, Any]) -> int:
-        kind = spec["kind"]
-        if kind == "bool":
-            return 1
-        if kind in ("uint", "int", "float", "void"):
-            return int(spec["bits"])
-        if kind == "array":
-            return int(spec["len"]) * self.min_bits(spec["elem"])
-        if kind == "dynarray":
-            return length_bits(spec["max"])
-        return self.schema[spec["name"]].min_bits
 
     # -- parameters ------------------------------------------------------------------------
 

@@ -55,6 +55,7 @@ __all__ = [
     "classic_source",
     "describe_value",
     "length_bits",
+    "min_bits",
     "structured_entry",
     "tag_bits",
     "type_name",
@@ -332,6 +333,21 @@ def type_name(spec: Mapping[str, Any]) -> str:
     return f"{type_name(spec['elem'])}[<={spec['max']}]"
 
 
+def min_bits(schema: Schema, spec: Mapping[str, Any]) -> int:
+    """The fewest bits a field of type ``spec`` encodes to (what decides whether a dynamic
+    array's elements allow tail array optimization)."""
+    kind = spec["kind"]
+    if kind == "bool":
+        return 1
+    if kind in ("uint", "int", "float", "void"):
+        return int(spec["bits"])
+    if kind == "array":
+        return int(spec["len"]) * min_bits(schema, spec["elem"])
+    if kind == "dynarray":
+        return length_bits(spec["max"])
+    return schema[spec["name"]].min_bits
+
+
 def tag_bits(variants: int) -> int:
     """Width of a union tag: ceil(log2(n))."""
     return max(variants - 1, 0).bit_length()
@@ -405,7 +421,7 @@ class _Describer:
                 default=len(value),
                 min=0,
                 max=spec["max"],
-                element_min_bits=self.min_bits(spec["elem"]),
+                element_min_bits=min_bits(self.schema, spec["elem"]),
                 element=element,
             )
             out.append(entry)
@@ -512,22 +528,6 @@ class _Describer:
         if "default" in tags and not isinstance(tags["default"], Mapping):
             return tags["default"]
         return False if kind == "bool" else 0.0 if kind == "float" else 0
-
-    def min_bits(self, spec: Mapping[str, Any]) -> int:
-        kind = spec["kind"]
-        if kind == "bool":
-            return 1
-        if kind in ("uint", "int", "float", "void"):
-            return int(spec["bits"])
-        if kind == "array":
-            return int(spec["len"]) * self.min_bits(spec["elem"])
-        if kind == "dynarray":
-            return length_bits(spec["max"])
-        definition = self.types[spec["name"]]
-        sizes = [self.min_bits(f["type"]) for f in definition["fields"]]
-        if definition["kind"] == "union":
-            return tag_bits(len(sizes)) + min(sizes)
-        return sum(sizes)
 
 
 def _join(path: str, name: str) -> str:
