@@ -61,6 +61,7 @@ from pymavlink.dialects.v20 import common as mavlink
 from px4params.errors import Px4ParamsError
 from px4params.gcs.component_information import ComponentFiles, px4_crc32
 from px4params.links import mavlink_messages
+from px4params.links.identity import store_digest, version_parts
 from px4params.links.mavlink_ftp import MavftpServer
 from px4params.store import flat
 
@@ -690,27 +691,16 @@ def _message_id(param: float) -> int | None:
 def software_version() -> int:
     """This package's version as PX4 encodes ``flight_sw_version``: major, minor and patch in
     the top three bytes, the release type in the lowest (255 official, 0 development)."""
-    from px4params import __version__
-
-    parts = [int(p) for p in __version__.split("+")[0].split(".")[:3] if p.isdigit()]
-    major, minor, patch = [*parts, 0, 0, 0][:3]
-    release = 0 if "dev" in __version__ else 255
+    major, minor, patch, development = version_parts()
+    release = 0 if development else 255
     return (major & 0xFF) << 24 | (minor & 0xFF) << 16 | (patch & 0xFF) << 8 | release
 
 
 def store_uid(
     store_path: str | os.PathLike[str] | None, parameters: Iterable[str]
 ) -> tuple[int, bytes]:
-    """``(uid, uid2)`` of AUTOPILOT_VERSION for a store: from its file's real path, so that the
-    same store file is the same vehicle to a ground station (QGC keys its caches by it), else
-    from its parameter names."""
-    import hashlib
-
-    if store_path is not None:
-        source = "file:" + os.path.realpath(os.fspath(store_path))
-    else:
-        source = "memory:" + ",".join(parameters)
-    digest = hashlib.sha256(source.encode("utf-8", "surrogateescape")).digest()
+    """``(uid, uid2)`` of AUTOPILOT_VERSION for a store (:func:`identity.store_digest`)."""
+    digest = store_digest(store_path, parameters)
     return int.from_bytes(digest[:8], "little") or 1, digest[8:26]
 
 

@@ -37,24 +37,10 @@ def _bench_health(args: argparse.Namespace, store: Any) -> Callable[[], list[str
     """Health lines of the store's manifest booted on the simulated bench ``--bench``: one per
     configured instance, as the commander reports them; booted again when the manifest
     changes."""
-    from px4params.store.flat import flat_values
-    from px4params.vehicle.autostart import configured
-    from px4params.vehicle.drivers import load_drivers
-    from px4params.vehicle.simbench import load_bench, run
+    from px4params.vehicle.health import ManifestHealth
 
-    drivers = load_drivers(None, store.specs)
-    bench = load_bench(args.bench, drivers)  # errors now, before serving
-    memo: dict[str, Any] = {}
-
-    def lines() -> list[str]:
-        key = repr(sorted(flat_values(store).items()))
-        if memo.get("key") != key:
-            result = run(bench, drivers, configured(store, drivers), duration=args.bench_duration)
-            memo["key"] = key
-            memo["lines"] = [f"health: {i.failure_line()}" for i in result.instances]
-        return list(memo["lines"])
-
-    return lines
+    health = ManifestHealth(store, args.bench, duration=args.bench_duration)
+    return lambda: [f"health: {d.line}" for d in health.devices()]
 
 
 def cmd_serve(args: argparse.Namespace) -> int:
