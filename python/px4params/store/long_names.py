@@ -1,0 +1,162 @@
+"""DroneCAN's names of destructured parameters: the talk's long, readable names.
+
+DroneCAN's ``uavcan.protocol.param.GetSet`` carries names of up to 92 characters and 64-bit
+integers, so the leaves of a structured instance need no letters there (MAVLink's 16 characters
+do, :mod:`px4params.store.flat`). A leaf's long name is the instance and the leaf's path, upper
+case, joined with ``_``::
+
+    INA238#1.bus._tag          -> INA238_1_BUS_TYPE      (a union's tag: <FIELD>_TYPE)
+    INA238#1.bus.i2c.bus_id    -> INA238_1_I2C_BUS_ID    (the variant names the union)
+    INA238#1.bus.i2c.address   -> INA238_1_I2C_ADDRESS
+    INA238#1.shunt             -> INA238_1_SHUNT
+    INA238_SHARED.x            -> INA238_SHARED_X        (a shared parameter: no number)
+
+Inside a union the selected variant's name stands for the union field (``I2C_ADDRESS``, not
+``BUS_I2C_ADDRESS``), as in the talk. Array elements are numbered (``CELLS_3``), a dynamic
+array's length is ``<FIELD>_LEN``. Where two leaves of one type would get the same short name
+(two unions with a variant of one name), those leaves keep their whole path instead. Names are
+given over the type, like the letters, so a leaf's name never depends on its value; which
+leaves are *live* (selected variant, existing elements) does. The instance mask keeps its flat
+name (``INA238_INST``).
+
+Names are checked when the map is built: at most 92 characters and none equal to another
+parameter's name; a violation is a :class:`FlatError` naming the parameter.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from typing import TYPE_CHECKING, NamedTuple
+
+from px4params.errors import FlatError
+from px4params.store.flat import FlatLayout, FlatSlot, layout, mask_name
+from px4params.store.spec import ParamSpec
+
+if TYPE_CHECKING:
+    from px4params.store.store import Store
+
+__all__ = ["MAX_LONG_NAME_LEN", "LongLeaf", "LongNames", "leaf_names"]
+
+#: ``uavcan.protocol.param.GetSet``'s name is ``uint8[<=92]``.
+MAX_LONG_NAME_LEN = 92
+
+
+def _components(path: str, unions: set[str]) -> list[str]:
+    """The name parts of a leaf path: ``bus.i2c.address`` -> ``[I2C, ADDRESS]`` when ``bus``
+    is a union."""
+    parts: list[str] = []
+    prefix, plain = "", False
+    for piece in path.split("."):
+        field, _, rest = piece.partition("[")
+        if prefix in unions and plain and field != "_tag":
+            parts.pop()  # the variant stands for the union field (not for an element number)
+        parts.append({"_tag": "TYPE", "_len": "LEN"}.get(field, field.upper()))
+        if rest:
+            parts.extend(rest.rstrip("]").split("]["))
+        prefix, plain = (f"{prefix}.{piece}" if prefix else piece), not rest
+    return parts
+
+
+def leaf_names(lay: FlatLayout) -> dict[str, str]:
+    """``{leaf path: long name part}`` of every slot of a type (see the module doc)."""
+    unions = {
+        tag[: -len("._tag")] if tag != "_tag" else ""
+        for slot in lay
+        for tag, op, _ in slot.requires
+        if op == "=="
+    }
+    short = {slot.path: "_".join(_components(slot.path, unions)) for slot in lay}
+    counts = Counter(short.values())
+    return {
+        path: name if counts[name] == 1 else "_".join(_components(path, set()))
+        for path, name in short.items()
+    }
+
+
+class LongLeaf(NamedTuple):
+    """One live leaf under its long name."""
+
+    name: str
+    #: The instance, e.g. ``INA238#1``.
+    instance: str
+    #: The leaf's ``[k]`` index in the current value.
+    index: int
+    slot: FlatSlot
+
+    @property
+    def leaf(self) -> str:
+        """``INA238#1[4]``."""
+        return f"{self.instance}[{self.index}]"
+
+
+class LongNames:
+    """The long names of a store's parameter set (checked once, at construction)."""
+
+    def __init__(self, store: Store) -> None:
+        self._store = store
+        self._parts: dict[str, dict[str, str]] = {}
+        self._owner: dict[str, tuple[ParamSpec, int | None, FlatSlot]] = {}
+        taken = set(store.parameters) | {name for name, _, _ in store.destructured.masks()}
+        for spec in store.specs:
+            lay = layout(spec.data_type)
+            parts = self._parts[spec.name] = leaf_names(lay)
+            numbers: list[int | None] = (
+                [None] if spec.shared else list(range(spec.max_instances or 0))
+            )
+            for number in numbers:
+                for slot in lay:
+                    name = self.name_of(spec, number, parts[slot.path])
+                    where = f"{spec.instance_name(number or 0)}.{slot.path}"
+                    if len(name) > MAX_LONG_NAME_LEN:
+                        raise FlatError(
+                            f"{spec.name}: DroneCAN name {name} ({where}) has {len(name)} "
+                            f"characters (at most {MAX_LONG_NAME_LEN})"
+                        )
+                    if name in taken or name in self._owner:
+                        raise FlatError(
+                            f"{spec.name}: DroneCAN name {name} ({where}) is the name of "
+                            "another parameter"
+                        )
+                    self._owner[name] = (spec, number, slot)
+
+    @staticmethod
+    def name_of(spec: ParamSpec, number: int | None, part: str) -> str:
+        if spec.shared or number is None:
+            return f"{spec.name}_{part}"
+        return f"{spec.name}_{number}_{part}"
+
+    def __contains__(self, name: object) -> bool:
+        return isinstance(name, str) and name in self._owner
+
+    def table(self) -> list[LongLeaf]:
+        """Every live leaf of every existing instance, in store order."""
+        rows: list[LongLeaf] = []
+        for spec in self._store.specs:
+            lay, parts = layout(spec.data_type), self._parts[spec.name]
+            for instance in self._store.instances(spec.name):
+                number = None if spec.shared else int(instance.rpartition("#")[2])
+                for leaf in self._store.leaves(instance):
+                    slot = lay.slot_for_path(leaf.path)
+                    if slot is not None:  # p_version has none
+                        name = self.name_of(spec, number, parts[slot.path])
+                        rows.append(LongLeaf(name, instance, leaf.index, slot))
+        return rows
+
+    def find(self, name: str) -> LongLeaf | None:
+        """The live leaf called ``name`` (exact, upper case), or None: no such name, its
+        instance does not exist, or its leaf is not live."""
+        found = self._owner.get(name)
+        if found is None:
+            return None
+        spec, number, slot = found
+        instance = spec.instance_name(number or 0)
+        if instance not in self._store:
+            return None
+        for leaf in self._store.leaves(instance):
+            if leaf.path == slot.path:
+                return LongLeaf(name, instance, leaf.index, slot)
+        return None
+
+    def mask_names(self) -> dict[str, ParamSpec]:
+        """The instance masks, by name (``INA238_INST``)."""
+        return {mask_name(spec): spec for _, spec, _ in self._store.destructured.masks()}
