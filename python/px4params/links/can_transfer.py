@@ -15,6 +15,7 @@ Anonymous messages (source node 0) are not supported.
 
 from __future__ import annotations
 
+import time
 from collections.abc import Mapping, Sequence
 from typing import Any, NamedTuple
 
@@ -23,9 +24,13 @@ from px4params.dsdl.schema import DataType
 
 __all__ = [
     "DEFAULT_PRIORITY",
+    "CanId",
     "Frame",
+    "Transfer",
+    "TransferReceiver",
     "can_id",
     "frames",
+    "parse_can_id",
     "reassemble",
     "service_half",
 ]
@@ -138,3 +143,113 @@ def reassemble(
     # CAN FD padding of a multi-frame transfer is zero bytes after the value.
     value = data_type.decode(payload, tao=not canfd, allow_trailing=canfd)
     return value, int(transfer_id)
+
+
+class CanId(NamedTuple):
+    """The fields of a 29-bit DroneCAN CAN ID."""
+
+    priority: int
+    dtid: int
+    source_node: int
+    #: None for a message.
+    dest_node: int | None = None
+    request: bool = False
+
+    @property
+    def service(self) -> bool:
+        return self.dest_node is not None
+
+
+def parse_can_id(identifier: int) -> CanId:
+    """The inverse of :func:`can_id` (anonymous messages give source node 0)."""
+    priority, source = identifier >> 24 & 0x1F, identifier & 0x7F
+    if identifier & 0x80:
+        return CanId(
+            priority,
+            identifier >> 16 & 0xFF,
+            source,
+            identifier >> 8 & 0x7F,
+            bool(identifier & 0x8000),
+        )
+    return CanId(priority, identifier >> 8 & 0xFFFF, source)
+
+
+class Transfer(NamedTuple):
+    """A complete transfer as received: its ID fields, transfer ID and frame data (tail bytes
+    included, CRC not yet checked: that needs the data type's signature, see
+    :func:`reassemble`)."""
+
+    id: CanId
+    transfer_id: int
+    datas: list[bytes]
+
+
+#: DroneCAN's transfer timeout: a session silent this long is forgotten.
+TRANSFER_TIMEOUT = 2.0
+#: Frames of one transfer at most (GetNodeInfo's largest response needs 60 on classic CAN).
+MAX_TRANSFER_FRAMES = 256
+
+
+class TransferReceiver:
+    """Frames in, complete transfers out, per the DroneCAN rules: one session per (type, kind,
+    source, destination); a transfer starts with a start-of-transfer frame whose toggle bit is
+    clear, every next frame has the same transfer ID and the other toggle, the last has the
+    end bit. A frame that breaks the rules drops the session; frames without a session (a
+    transfer joined half-way) are ignored; a transfer repeated with the same transfer ID
+    within the timeout (a redundant interface) is delivered once.
+
+    ``accept`` says which transfers to assemble (by their ID fields), e.g. only services
+    addressed to this node.
+    """
+
+    def __init__(self, accept: Any = None, *, clock: Any = time.monotonic) -> None:
+        self._accept = accept
+        self._clock = clock
+        self._sessions: dict[tuple[Any, ...], tuple[int, int, float, list[bytes]]] = {}
+        self._done: dict[tuple[Any, ...], tuple[int, float]] = {}
+        #: Frames ignored (foreign, malformed, out of order), for logs and tests.
+        self.ignored = 0
+
+    def feed(self, frame: Frame) -> Transfer | None:
+        """The transfer ``frame`` completes, or None."""
+        ident = parse_can_id(frame.can_id)
+        if not frame.data or ident.source_node == 0:
+            self.ignored += 1
+            return None
+        if self._accept is not None and not self._accept(ident):
+            return None
+        tail = frame.data[-1]
+        start, end, toggle, tid = tail & 0x80, tail & 0x40, (tail >> 5) & 1, tail & 0x1F
+        key = (ident.dtid, ident.service, ident.request, ident.source_node, ident.dest_node)
+        now = self._clock()
+        if start:
+            if toggle:
+                self.ignored += 1
+                return None
+            last = self._done.get(key)
+            if last is not None and last[0] == tid and now - last[1] < TRANSFER_TIMEOUT:
+                self.ignored += 1  # the same transfer again
+                return None
+            self._sessions[key] = (tid, 0, now, [])
+        session = self._sessions.get(key)
+        if session is None:
+            self.ignored += 1
+            return None
+        expected_tid, expected_toggle, started, datas = session
+        if tid != expected_tid or toggle != expected_toggle or now - started > TRANSFER_TIMEOUT:
+            del self._sessions[key]
+            self.ignored += 1
+            return None
+        datas.append(bytes(frame.data))
+        if len(datas) > MAX_TRANSFER_FRAMES:
+            del self._sessions[key]
+            self.ignored += 1
+            return None
+        if not end:
+            self._sessions[key] = (expected_tid, expected_toggle ^ 1, started, datas)
+            return None
+        del self._sessions[key]
+        self._done[key] = (tid, now)
+        if len(self._done) > 4096:  # many peers over a long time: forget the oldest
+            self._done.pop(next(iter(self._done)))
+        return Transfer(ident, tid, datas)
