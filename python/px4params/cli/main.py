@@ -39,6 +39,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "write parameters.json for ground stations and a C header for firmware",
     ),
     "mavlink": ("mavlink", "serve the store's parameters over MAVLink (UDP)"),
+    "dronecan": (
+        "dronecan",
+        "serve the store's parameters as a DroneCAN node over SLCAN, or reach a remote node's",
+    ),
     "gui": ("gui", "a ground-station page for the manifest, over MAVLink or a store file"),
     "completion": ("completion", "shell completion script (bash), or the names it completes"),
 }
