@@ -79,11 +79,9 @@ def main() -> None:
     extra = ["--classic", str(classic)] if classic.is_file() else []
     with tempfile.TemporaryDirectory() as work:
         store = Path(work) / "vehicle.store"
-        subprocess.run(
-            [*PX4PARAMS, "run", str(ROOT / "examples/two_batteries.airframe"), "--store", str(store)],
-            check=True,
-            capture_output=True,
-        )
+        airframe = str(ROOT / "examples/two_batteries.airframe")
+        run = [*PX4PARAMS, "run", airframe, "--store", str(store)]
+        subprocess.run(run, check=True, capture_output=True)
         with served(store, *extra) as path:
             trips, totals, count = ours(path, args.reads, args.runs)
             theirs = pydronecan(path, args.runs)

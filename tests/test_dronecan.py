@@ -629,3 +629,22 @@ def test_dronecan_serve_refuses_a_missing_device(tmp_path: Path) -> None:
 def test_dronecan_help_lists_the_verbs() -> None:
     out = _run("dronecan", "--help").stdout
     assert "serve" in out and "param" in out
+
+
+def test_a_failing_serial_line_is_one_error() -> None:
+    from px4params.links.slcan import read_port
+
+    class Unplugged:
+        def fileno(self) -> int:
+            return 0
+
+        def read(self, size: int) -> bytes:
+            raise OSError(5, "Input/output error")
+
+        def write(self, data: bytes) -> int:
+            return len(data)
+
+    with pytest.raises(
+        SlcanError, match=r"^the serial line failed: \[Errno 5\] Input/output error$"
+    ):
+        read_port(Unplugged())

@@ -10,6 +10,7 @@ transfer rules as the node (:mod:`px4params.links.can_transfer`). Each request i
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Callable, Iterator
 from typing import Any, NamedTuple
 
@@ -159,8 +160,6 @@ class DronecanParamClient:
         )
 
     def _wait(self, response_type: DataType, dtid: int, tid: int) -> dict[str, Any] | None:
-        import time
-
         deadline = time.monotonic() + self.timeout
         while (left := deadline - time.monotonic()) > 0:
             frame = self.host.receive(left)

@@ -41,7 +41,7 @@ from px4params.links import can_transfer
 from px4params.links.can_transfer import CanId, Frame, Transfer, TransferReceiver
 from px4params.links.dronecan_params import EMPTY, DronecanParams, variant_name
 from px4params.links.identity import store_digest, version_parts
-from px4params.links.slcan import SerialPort, SlcanAdapter
+from px4params.links.slcan import SerialPort, SlcanAdapter, read_port
 
 if TYPE_CHECKING:
     from px4params.store.store import Store
@@ -144,10 +144,7 @@ class DronecanParamNode:
         ready, _, _ = select.select([self.port.fileno()], [], [], wait)
         if not ready:
             return
-        data = self.port.read(4096)
-        if not data:
-            return
-        replies, frames = self.adapter.feed(data)
+        replies, frames = self.adapter.feed(read_port(self.port))
         if replies:
             self.port.write(replies)
         for frame in frames:
@@ -331,7 +328,8 @@ class DronecanParamNode:
             self.store.reset_to_initial()
         else:
             try:
-                self.store.load_from(self.save_path)
+                with self.store.transaction():  # a bad file leaves the running values
+                    self.store.load_from(self.save_path)
             except Px4ParamsError as e:
                 self.log(f"restart: the store file cannot be read, values kept: {e}")
                 return

@@ -42,6 +42,7 @@ __all__ = [
     "open_pty",
     "open_serial",
     "parse_frame",
+    "read_port",
 ]
 
 ACK = b"\r"
@@ -265,10 +266,7 @@ class SlcanHost:
         if not any(b in self._buffer for b in (0x0D, 0x07)):
             ready, _, _ = select.select([self.port.fileno()], [], [], max(0.0, timeout))
             if ready:
-                chunk = self.port.read(4096)
-                if not chunk:
-                    raise SlcanError("the serial line was closed")
-                self._buffer += chunk
+                self._buffer += read_port(self.port)
         lines: list[tuple[bytes, bytes]] = []
         start = 0
         for i, byte in enumerate(self._buffer):
@@ -277,6 +275,21 @@ class SlcanHost:
                 start = i + 1
         del self._buffer[:start]
         return lines
+
+
+def read_port(port: SerialPort) -> bytes:
+    """What is waiting on a port that ``select`` found readable.
+
+    Raises:
+        SlcanError: the line is gone (a USB device unplugged, the other end of a pty closed).
+    """
+    try:
+        chunk = port.read(4096)
+    except OSError as e:  # pyserial's SerialException is one
+        raise SlcanError(f"the serial line failed: {e}") from None
+    if not chunk:
+        raise SlcanError("the serial line was closed")
+    return chunk
 
 
 class _FdPort:
