@@ -18,10 +18,15 @@ import os
 import time
 import zlib
 from collections.abc import Sequence
-from typing import Any
 
+from px4params._records import TYPE_CHECKING
 from px4params.dsdl.roots import Root, collect_roots
 from px4params.errors import DsdlError
+
+if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
+    from typing import Any
+
+    Model = dict[str, Any]
 
 #: Bumped whenever the model's shape changes, so that older caches are rebuilt.
 #: 2: type entries carry ``service`` and ``signature_override`` (data type signatures).
@@ -32,8 +37,6 @@ CACHE_ENV = "PX4PARAMS_CACHE_DIR"
 
 #: Files modified this recently (seconds) are keyed by their contents as well.
 RACY_SECONDS = 2.0
-
-Model = dict[str, Any]
 
 _HERE = os.path.dirname(os.path.abspath(__file__))
 #: The modules whose code decides what the model holds.

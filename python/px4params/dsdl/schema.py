@@ -5,11 +5,16 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Iterator, Mapping, MutableMapping, Sequence
-from typing import Any, NamedTuple
 
 from px4params import _native
+from px4params._records import TYPE_CHECKING
 from px4params.dsdl import signature as _signature
 from px4params.dsdl.cache import load_model
+
+if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
+    from typing import Any, NamedTuple
+else:
+    from px4params._records import NamedTuple
 
 __all__ = ["DSDL_PATH_ENV", "DataType", "Leaf", "Schema", "load_schema", "to_json_value"]
 

@@ -21,10 +21,13 @@ but a changed layout changes the signature, as it does for DroneCAN types.
 from __future__ import annotations
 
 from collections.abc import Mapping, MutableMapping
-from typing import Any
 
 from px4params import _native
+from px4params._records import TYPE_CHECKING
 from px4params.errors import DsdlError
+
+if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
+    from typing import Any
 
 __all__ = ["data_type_signature", "normalized_definition", "transfer_crc_seed"]
 

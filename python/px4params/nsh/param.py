@@ -15,13 +15,16 @@ import os
 import re
 import struct
 from collections.abc import Callable
-from typing import Any
 
+from px4params._records import TYPE_CHECKING
 from px4params.dsdl.schema import Leaf, to_json_value
 from px4params.errors import CommandError, InstanceError, Px4ParamsError
 from px4params.status import EXIT_FAILED, EXIT_OK
 from px4params.store.session import Session
 from px4params.store.store import Key, Store
+
+if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
+    from typing import Any
 
 _INT = re.compile(r"[+-]?(0[xX][0-9a-fA-F]+|[0-9]+)")
 _FLOAT = re.compile(r"[+-]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][+-]?[0-9]+)?")

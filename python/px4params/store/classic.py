@@ -13,10 +13,15 @@ import os
 import struct
 from collections.abc import Mapping
 from types import MappingProxyType
-from typing import Any, NamedTuple
 
+from px4params._records import TYPE_CHECKING
 from px4params.data import CLASSIC_PARAMETERS_JSON
 from px4params.errors import ClassicParamsError
+
+if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
+    from typing import Any, NamedTuple
+else:
+    from px4params._records import NamedTuple
 
 __all__ = [
     "BUNDLED_CLASSIC",

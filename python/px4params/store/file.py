@@ -20,14 +20,18 @@ import os
 import struct
 import zlib
 from collections.abc import Mapping
-from typing import TYPE_CHECKING, Any, NamedTuple
 
+from px4params._records import TYPE_CHECKING
 from px4params.dsdl.schema import DataType
 from px4params.errors import Px4ParamsError, StoreError, StoreFileError
 from px4params.store.spec import ParamSpec, _default_of
 
-if TYPE_CHECKING:
+if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
+    from typing import Any, NamedTuple
+
     from px4params.store.store import Store, _Param
+else:
+    from px4params._records import NamedTuple
 
 MAGIC = b"PX4P"
 FORMAT_VERSION = 1

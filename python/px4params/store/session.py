@@ -11,12 +11,15 @@ import contextlib
 import os
 import sys
 from collections.abc import Callable, Iterable, Iterator
-from typing import TextIO
 
+from px4params._records import TYPE_CHECKING
 from px4params.dsdl.schema import load_schema
 from px4params.errors import StoreFileError
 from px4params.store.classic import BUNDLED_CLASSIC, CLASSIC_ENV
 from px4params.store.store import Store, default_store_path
+
+if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
+    from typing import TextIO
 
 
 class Session:

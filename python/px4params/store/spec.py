@@ -12,10 +12,15 @@ from __future__ import annotations
 
 import re
 from collections.abc import Mapping
-from typing import Any, NamedTuple
 
+from px4params._records import TYPE_CHECKING
 from px4params.dsdl.schema import DataType, Schema
 from px4params.errors import ParameterSetError
+
+if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
+    from typing import Any, NamedTuple
+else:
+    from px4params._records import NamedTuple
 
 __all__ = ["ParamSpec", "ParameterSetError", "metadata_default", "parameter_specs"]
 

@@ -21,9 +21,9 @@ import os
 import re
 import struct
 from collections.abc import Iterator, Mapping, Sequence
-from typing import Any, NamedTuple
 
 from px4params import _native
+from px4params._records import TYPE_CHECKING
 from px4params.dsdl.schema import DataType, Leaf, Schema, load_schema
 from px4params.errors import InstanceError, LeafError, StoreError
 from px4params.store.classic import (
@@ -34,6 +34,11 @@ from px4params.store.classic import (
     load_classic,
 )
 from px4params.store.spec import ParamSpec, metadata_default, parameter_specs
+
+if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
+    from typing import Any, NamedTuple
+else:
+    from px4params._records import NamedTuple
 
 __all__ = ["DEFAULT_STORE", "STORE_ENV", "InstanceView", "Key", "Store", "default_store_path"]
 

@@ -6,12 +6,15 @@ import argparse
 import json
 import sys
 from collections.abc import Callable, Sequence
-from typing import Any, TextIO
 
+from px4params._records import TYPE_CHECKING
 from px4params.cli.options import dsdl_option
 from px4params.dsdl.schema import DataType, Schema, load_schema, to_json_value
 from px4params.errors import CommandError, Px4ParamsError
 from px4params.status import EXIT_FAILED, EXIT_OK
+
+if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
+    from typing import Any, TextIO
 
 
 def parse_hex(text: str) -> bytes:

@@ -5,11 +5,14 @@ from __future__ import annotations
 
 import argparse
 from collections.abc import Sequence
-from typing import Any
 
+from px4params._records import TYPE_CHECKING
 from px4params.cli.options import store_options
 from px4params.nsh.param import add_verbs, verb_load
 from px4params.store.session import locked_session
+
+if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
+    from typing import Any
 
 
 def cmd_param(args: argparse.Namespace) -> int:
