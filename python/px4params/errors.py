@@ -25,6 +25,7 @@ __all__ = [
     "ManifestError",
     "MetadataError",
     "MigrationError",
+    "NumberError",
     "ParamFileError",
     "ParameterSetError",
     "Px4ParamsError",
@@ -91,6 +92,11 @@ class DecodeError(CodecError):
 
 class ValueShapeError(EncodeError):
     """A value does not have the shape of its type (missing or unknown fields, wrong nesting)."""
+
+
+class NumberError(Px4ParamsError, ValueError):
+    """A number out of every range before it is even converted (thousands of digits, ``1e400``),
+    or a JSON constant (``Infinity``, ``NaN``) that JSON does not have."""
 
 
 class LeafError(CodecError, LookupError):

@@ -10,7 +10,8 @@ from __future__ import annotations
 import math
 from typing import NamedTuple
 
-from px4params.errors import ParamFileError
+from px4params.errors import NumberError, ParamFileError
+from px4params.numbers import abbreviated, parse_float, parse_int
 
 __all__ = ["FLOAT_TYPES", "INT32", "REAL32", "QgcRow", "format_line", "read"]
 
@@ -49,11 +50,12 @@ def read(text: str, where: str) -> list[QgcRow]:
             )
         vehicle, component, name, value, kind = parts
         try:
-            ids = (int(vehicle), int(component), int(kind))
+            ids = (parse_int(vehicle), parse_int(component), parse_int(kind))
         except ValueError:
+            shown = ", ".join(f"'{abbreviated(t)}'" for t in (vehicle, component, kind))
             raise ParamFileError(
-                f"{at}: {name}: vehicle-id, component-id and type must be integers, got "
-                f"{vehicle!r}, {component!r}, {kind!r}"
+                f"{at}: {abbreviated(name)}: vehicle-id, component-id and type must be integers, "
+                f"got {shown}"
             ) from None
         rows.append(QgcRow(number, ids[0], ids[1], name, _value(value, ids[2], at, name), ids[2]))
     return rows
@@ -61,14 +63,18 @@ def read(text: str, where: str) -> list[QgcRow]:
 
 def _value(text: str, kind: int, at: str, name: str) -> int | float:
     try:
-        number = float(text)
+        number = parse_float(text)
+        if kind not in FLOAT_TYPES and text.lstrip("+-").isdigit():
+            return parse_int(text)
+    except NumberError as e:
+        raise ParamFileError(f"{at}: {name}: {e}") from None
     except ValueError:
-        raise ParamFileError(f"{at}: {name}: value {text!r} is not a number") from None
+        raise ParamFileError(f"{at}: {name}: value '{abbreviated(text)}' is not a number") from None
     if kind in FLOAT_TYPES:
         return number
     if not number.is_integer():
         raise ParamFileError(f"{at}: {name}: value {text!r} is not an integer (type {kind})")
-    return int(text) if text.lstrip("+-").isdigit() else int(number)
+    return int(number)
 
 
 def format_line(vehicle: int, component: int, name: str, value: int | float, is_float: bool) -> str:

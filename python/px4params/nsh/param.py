@@ -14,11 +14,13 @@ import math
 import os
 import re
 import struct
+import sys
 from collections.abc import Callable
 
 from px4params._records import TYPE_CHECKING
 from px4params.dsdl.schema import Leaf, to_json_value
-from px4params.errors import CommandError, InstanceError, Px4ParamsError
+from px4params.errors import CommandError, InstanceError, NumberError, Px4ParamsError
+from px4params.numbers import abbreviated, load_json, parse_float, parse_int
 from px4params.status import EXIT_FAILED, EXIT_OK
 from px4params.store.session import Session
 from px4params.store.store import Key, Store
@@ -45,18 +47,22 @@ def parse_number(text: str, kind: str, where: str) -> int | float | bool:
         if lowered in ("0", "false"):
             return False
         raise CommandError(f"{where}: '{text}' is not a boolean (expected 0, 1, true or false)")
-    if kind.startswith("float") or kind == "Float":
+    try:
+        if kind.startswith("float") or kind == "Float":
+            if _INT.fullmatch(t):
+                return float(parse_int(t, 16 if "x" in t[:3].lower() else 10))
+            if _FLOAT.fullmatch(t) or t.lower() in ("nan", "inf", "+inf", "-inf"):
+                return parse_float(t)
+            raise CommandError(
+                f"{where}: '{abbreviated(text)}' is not a number (expected e.g. 0.0003, 2e-4 or 5)"
+            )
         if _INT.fullmatch(t):
-            return float(int(t, 0)) if not t.lstrip("+-").startswith("0x") else float(int(t, 16))
-        if _FLOAT.fullmatch(t) or t.lower() in ("nan", "inf", "+inf", "-inf"):
-            return float(t)
-        raise CommandError(f"{where}: '{text}' is not a number (expected e.g. 0.0003, 2e-4 or 5)")
-    if _INT.fullmatch(t):
-        sign = -1 if t.startswith("-") else 1
-        digits = t.lstrip("+-")
-        return sign * int(digits, 16 if digits[:2].lower() == "0x" else 10)
+            return parse_int(t, 16 if "x" in t[:3].lower() else 10)
+    except NumberError as e:
+        raise CommandError(f"{where}: {e}") from None
     raise CommandError(
-        f"{where}: '{text}' is not an integer (expected decimal or 0x hex, e.g. 69 or 0x45)"
+        f"{where}: '{abbreviated(text)}' is not an integer (expected decimal or 0x hex, e.g. 69 or "
+        "0x45)"
     )
 
 
@@ -68,11 +74,13 @@ def parse_value(store: Store, key: Key, text: str) -> Any:
         return parse_number(text, classic.type, str(key))
     if key.leaf is None:
         try:
-            return json.loads(text)
+            return load_json(text)
+        except NumberError as e:
+            raise CommandError(f"{key}: {e}") from None
         except (json.JSONDecodeError, RecursionError, ValueError) as e:
             msg = getattr(e, "msg", str(e))
             raise CommandError(
-                f"{key}: a whole value is JSON ({msg} in {text!r}); "
+                f"{key}: a whole value is JSON ({msg} in '{abbreviated(text)}'); "
                 f'e.g. \'{{"bus": {{"i2c": {{"bus_id": 1, "address": 69}}}}, ...}}\''
             ) from None
     leaf = store.leaf(key)
@@ -213,6 +221,15 @@ def _write(s: Session, name: str, text: str, *, default: bool) -> None:
         s.store.set_default(key, value)
     else:
         s.store.set(key, value)
+    if isinstance(value, float) and value != 0 and math.isfinite(value):
+        stored = s.store.get(key, default=default)
+        if stored == 0:
+            # The DroneCAN rules round it to zero (as pydronecan and libcanard do): said once.
+            print(
+                f"px4params: warning: {key}: {text.strip()} is below the smallest "
+                f"{_float_kind(s.store, key) or 'float'} and is stored as 0",
+                file=sys.stderr,
+            )
 
 
 def verb_set(s: Session, a: argparse.Namespace) -> int:

@@ -46,7 +46,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from px4params.errors import DeviceIdError
+from px4params.errors import DeviceIdError, NumberError
+from px4params.numbers import abbreviated, parse_int
 
 __all__ = [
     "BUS_TYPES",
@@ -211,7 +212,10 @@ def _parse_code(token: str, where: str) -> int:
     token = token.strip().strip("()").rstrip("uUlL")
     if not _NUMBER.fullmatch(token):
         raise DeviceIdError(f"{where}: devtype code {token!r} is not a number")
-    code = int(token, 16) if token[:2].lower() == "0x" else int(token)
+    try:
+        code = parse_int(token, 16 if token[:2].lower() == "0x" else 10)
+    except NumberError as e:
+        raise DeviceIdError(f"{where}: devtype code {e}") from None
     if code > 0xFF:
         raise DeviceIdError(f"{where}: devtype code {token} is out of range 0..255 (0x00..0xFF)")
     return code
@@ -383,15 +387,19 @@ def parse_device_id(text: str) -> int:
     ``.px4log`` dumps print parameters)."""
     token = text.strip()
     value: int | None = None
-    if re.fullmatch(r"[+-]?0[xX][0-9a-fA-F]+", token):
-        value = int(token, 16)
-    elif re.fullmatch(r"[+-]?[0-9]+", token):
-        value = int(token, 10)
-    elif re.fullmatch(r"[+-]?[0-9]+\.0*", token):
-        value = int(float(token))
+    try:
+        if re.fullmatch(r"[+-]?0[xX][0-9a-fA-F]+", token):
+            value = parse_int(token, 16)
+        elif re.fullmatch(r"[+-]?[0-9]+", token):
+            value = parse_int(token, 10)
+        elif re.fullmatch(r"[+-]?[0-9]+\.0*", token):
+            value = parse_int(token.partition(".")[0], 10)
+    except NumberError as e:
+        raise DeviceIdError(f"not a device ID: {e}") from None
     if value is None:
         raise DeviceIdError(
-            f"not a device ID: {text!r} (expected decimal or 0x hex, 0..{MAX_DEVICE_ID})"
+            f"not a device ID: '{abbreviated(text)}' (expected decimal or 0x hex, "
+            f"0..{MAX_DEVICE_ID})"
         )
     return _check_id(value)
 
@@ -424,7 +432,10 @@ def _number(value: int | str, what: str, bits: int) -> int:
         token = value.strip()
         if not _NUMBER.fullmatch(token.lstrip("+-")):
             raise DeviceIdError(f"{what} {value!r} is not a number (expected 0..{top})")
-        number = int(token, 16) if token.lstrip("+-")[:2].lower() == "0x" else int(token, 10)
+        try:
+            number = parse_int(token, 16 if token.lstrip("+-")[:2].lower() == "0x" else 10)
+        except NumberError as e:
+            raise DeviceIdError(f"{what}: {e}") from None
         shown = token
     elif isinstance(value, bool) or not isinstance(value, int):
         raise DeviceIdError(f"{what} must be an int, not {type(value).__name__}")

@@ -1,0 +1,86 @@
+"""Numbers from users and files, parsed with bounds that no valid value comes near.
+
+No parameter, leaf, instance number or device ID field is wider than 64 bits, so an integer of
+more than :data:`MAX_DIGITS` digits is out of range whatever it names. Python refuses to
+convert more than 4300 digits at all (and takes quadratic time below that), so a long number
+is refused here, before conversion, with a message that names it shortly.
+
+Floats follow one rule everywhere: a finite number written out of float64's range (``1e400``)
+is refused, not read as infinity; infinities and NaN are written ``inf``, ``-inf`` and ``nan``
+(as strings in JSON, whose numbers have none).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+from px4params.errors import NumberError
+
+__all__ = ["MAX_DIGITS", "NumberError", "abbreviated", "load_json", "parse_float", "parse_int"]
+
+#: Far beyond 64 bits (20 decimal digits), far below Python's limit of 4300.
+MAX_DIGITS = 64
+
+
+def abbreviated(text: str) -> str:
+    """``text`` itself when short, else its ends and its length: ``999999...999999 (5000
+    digits)``."""
+    text = text.strip()
+    if len(text) <= 32:
+        return text
+    return f"{text[:12]}...{text[-6:]} ({len(text)} characters)"
+
+
+def parse_int(text: str, base: int = 10) -> int:
+    """``text`` (already checked to be an integer literal of ``base``; sign and ``0x`` allowed)
+    as an int.
+
+    Raises:
+        NumberError: more than :data:`MAX_DIGITS` digits.
+    """
+    digits = text.strip().lstrip("+-")
+    if digits[:2].lower() in ("0x", "0b", "0o"):
+        digits = digits[2:]
+    if len(digits) > MAX_DIGITS:
+        raise NumberError(
+            f"{abbreviated(text)} is out of range ({len(digits)} digits: no value is wider "
+            "than 64 bits)"
+        )
+    return int(text.strip(), base)
+
+
+def parse_float(text: str) -> float:
+    """``text`` as a float: ``inf``/``nan`` as written; a finite number beyond float64's range
+    (``1e400``) is refused.
+
+    Raises:
+        NumberError: out of float64's range.
+        ValueError: not a number.
+    """
+    value = float(text)
+    if math.isinf(value) and "inf" not in text.lower():
+        raise NumberError(
+            f"{abbreviated(text)} is out of range of a float64 (write inf or -inf for infinity)"
+        )
+    return value
+
+
+def _json_int(text: str) -> int:
+    return parse_int(text)
+
+
+_CONSTANTS = {"Infinity": "inf", "-Infinity": "-inf", "NaN": "nan"}
+
+
+def _json_constant(name: str) -> float:
+    raise NumberError(f'{name} is not JSON; write "{_CONSTANTS[name]}" (a string) instead')
+
+
+def load_json(text: str) -> object:
+    """``json.loads`` with the bounds above: long integers, ``1e400`` and the non-standard
+    ``Infinity``/``NaN`` are refused (:class:`NumberError`); other errors are as
+    ``json.loads`` raises them."""
+    return json.loads(
+        text, parse_int=_json_int, parse_float=parse_float, parse_constant=_json_constant
+    )
