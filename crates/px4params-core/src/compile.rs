@@ -114,8 +114,8 @@ impl OwnedLayout {
         let e = *self.get(elem)?;
         Ok(self.push(Node {
             kind: Kind::Array { elem, len },
-            min_bits: e.min_bits * u64::from(len),
-            max_bits: e.max_bits * u64::from(len),
+            min_bits: e.min_bits.saturating_mul(u64::from(len)),
+            max_bits: e.max_bits.saturating_mul(u64::from(len)),
             fixed_leaves: e.fixed_leaves.and_then(|l| l.checked_mul(len)),
             segments: Span::default(),
         }))
@@ -135,7 +135,10 @@ impl OwnedLayout {
                 len_bits,
             },
             min_bits: u64::from(len_bits),
-            max_bits: u64::from(len_bits) + e.max_bits * u64::from(max),
+            max_bits: e
+                .max_bits
+                .saturating_mul(u64::from(max))
+                .saturating_add(u64::from(len_bits)),
             fixed_leaves: None,
             segments: Span::default(),
         }))
@@ -147,8 +150,9 @@ impl OwnedLayout {
         let (mut min_bits, mut max_bits, mut leaves) = (0u64, 0u64, Some(0u32));
         for &(name, node, role) in fields {
             let n = *self.get(node)?;
-            min_bits += n.min_bits;
-            max_bits += n.max_bits;
+            // Saturating: a size beyond u64 reads as u64::MAX instead of wrapping.
+            min_bits = min_bits.saturating_add(n.min_bits);
+            max_bits = max_bits.saturating_add(n.max_bits);
             leaves = match (leaves, n.fixed_leaves) {
                 (Some(a), Some(b)) => a.checked_add(b),
                 _ => None,
@@ -191,8 +195,8 @@ impl OwnedLayout {
                 count: variants.len() as u32,
                 tag_bits,
             },
-            min_bits: u64::from(tag_bits) + min_bits,
-            max_bits: u64::from(tag_bits) + max_bits,
+            min_bits: min_bits.saturating_add(u64::from(tag_bits)),
+            max_bits: max_bits.saturating_add(u64::from(tag_bits)),
             fixed_leaves: None,
             segments: Span::default(),
         }))
@@ -332,5 +336,23 @@ impl core::fmt::Display for BuildError {
             Self::UnknownNode(id) => write!(f, "node {id} does not exist"),
             Self::VoidVariant => f.write_str("a union variant cannot be padding"),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sizes_saturate_instead_of_wrapping() {
+        let mut layout = OwnedLayout::default();
+        let mut node = layout.uint(8, Cast::Saturated).unwrap();
+        for _ in 0..4 {
+            node = layout.array(node, u32::MAX).unwrap();
+        }
+        let dynamic = layout.dyn_array(node, u32::MAX).unwrap();
+        let layout = layout.as_layout();
+        assert_eq!(layout.node(node).max_bits, u64::MAX);
+        assert_eq!(layout.node(dynamic).max_bits, u64::MAX);
     }
 }

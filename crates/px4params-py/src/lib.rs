@@ -18,7 +18,7 @@ use px4params_core::leaf::{encode_default, get_leaf, locate, set_leaf, Target};
 use px4params_core::Scalar;
 use pyo3::exceptions::{PyKeyError, PyTypeError};
 use pyo3::prelude::*;
-use pyo3::types::{PyBytes, PyDict, PyList, PyString, PyTuple};
+use pyo3::types::{PyBool, PyBytes, PyDict, PyInt, PyList, PyString, PyTuple};
 
 use values::{kind_name, scalar_to_py, LeafRows, PySink, PySource, ValueError};
 
@@ -222,6 +222,18 @@ struct DataType {
 pub(crate) fn target_of<'a>(target: &'a Bound<'_, PyAny>) -> PyResult<Target<'a>> {
     if let Ok(k) = target.extract::<usize>() {
         return Ok(Target::Index(k));
+    }
+    if target.is_instance_of::<PyInt>() && !target.is_instance_of::<PyBool>() {
+        // Negative, or beyond any value's leaves: no such leaf, as for any index too high.
+        let text = target.str().map(|t| t.to_string()).unwrap_or_default();
+        let shown = if !text.is_empty() && text.len() <= 32 {
+            text
+        } else {
+            "a number of more than 32 digits".to_string()
+        };
+        return Err(LeafError::new_err(format!(
+            "no leaf [{shown}] (leaf indices are 0 and up)"
+        )));
     }
     if let Ok(s) = target.cast::<PyString>() {
         // A borrowed &str lives as long as the Python string, which outlives the call.

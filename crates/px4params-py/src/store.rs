@@ -121,12 +121,25 @@ impl Store {
             names.push(name);
         }
         let layout = compiled.layout.as_layout();
-        let capacity = store::plan(&layout, &mut defs)
-            .map_err(|e| StoreError::new_err(e.display(&layout).to_string()))?;
+        // The core names a parameter by its number; the user knows it by its name.
+        let named = |e: CoreError| {
+            let text = e.display(&layout).to_string();
+            match e {
+                CoreError::NoSuchParam { param }
+                | CoreError::NotPlanned { param }
+                | CoreError::Unsupported { param } => {
+                    let name = names.get(param as usize).map_or("?", String::as_str);
+                    StoreError::new_err(
+                        text.replace(&format!("parameter #{param}"), &format!("parameter {name}")),
+                    )
+                }
+                _ => StoreError::new_err(text),
+            }
+        };
+        let capacity = store::plan(&layout, &mut defs).map_err(named)?;
         let slots = vec![Slot::default(); capacity.slots];
         let bytes = vec![0u8; capacity.bytes];
-        let inner = CoreStore::new(&layout, defs, slots, bytes)
-            .map_err(|e| StoreError::new_err(e.display(&layout).to_string()))?;
+        let inner = CoreStore::new(&layout, defs, slots, bytes).map_err(named)?;
         Ok(Self {
             compiled: Arc::clone(&compiled),
             inner,

@@ -40,7 +40,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from px4params.dsdl.roots import Root, dronecan_package_dir
-from px4params.errors import DsdlError
+from px4params.errors import DsdlError, NumberError
+from px4params.numbers import abbreviated, parse_float, parse_int
 
 if TYPE_CHECKING:
     import pydsdl
@@ -75,6 +76,7 @@ def build_model(roots: Sequence[Root]) -> Model:
         builder.add_dronecan(dronecan_roots)
     builder.resolve_path_defaults()
     builder.check_references()
+    builder.check_sizes()
     return {"types": {k: builder.types[k] for k in sorted(builder.types)}}
 
 
@@ -119,6 +121,8 @@ class _ModelBuilder:
                     # DroneCAN data type IDs do not follow Cyphal's regulated port-ID ranges.
                     allow_unregulated_fixed_port_id=True,
                 )
+            except pydsdl.InternalError as ex:
+                raise DsdlError(_internal_error_text(ex), ex.path, ex.line) from ex
             except pydsdl.Error as ex:
                 raise DsdlError(ex.text, ex.path, ex.line) from ex
             except Exception as ex:  # pydsdl bugs and I/O errors still surface as one error type
@@ -350,6 +354,57 @@ class _ModelBuilder:
                         spec["file"],
                         f["line"],
                     )
+
+    def check_sizes(self) -> None:
+        """Refuses a type whose largest value exceeds :data:`MAX_TYPE_BYTES`, before anything is
+        sized by it (the codec reserves buffers and unrolls fixed arrays by the maximum)."""
+        memo: dict[str, int] = {}
+
+        def bits(spec: TypeSpec) -> int:
+            kind = spec["kind"]
+            if kind == "ref":
+                return type_bits(spec["name"])
+            if kind == "array":
+                return int(spec["len"]) * bits(spec["elem"])
+            if kind == "dynarray":
+                return int(spec["max"]).bit_length() + int(spec["max"]) * bits(spec["elem"])
+            return 1 if kind == "bool" else int(spec.get("bits", 0))
+
+        def type_bits(key: str) -> int:
+            if key not in memo:
+                memo[key] = 0  # a cycle (refused elsewhere) must not recurse forever
+                fields = [bits(f["type"]) for f in self.types[key]["fields"]]
+                if self.types[key]["kind"] == "union":
+                    memo[key] = max(1, (len(fields) - 1).bit_length()) + max(fields, default=0)
+                else:
+                    memo[key] = sum(fields)
+            return memo[key]
+
+        for key, spec in self.types.items():
+            size = type_bits(key)
+            if size > MAX_TYPE_BYTES * 8:
+                raise DsdlError(
+                    f"{key}: its largest value has {size:,} bits ({-(-size // 8):,} bytes); "
+                    f"types are limited to {MAX_TYPE_BYTES:,} bytes",
+                    spec["file"],
+                    spec["line"],
+                )
+
+
+def _internal_error_text(ex: Exception) -> str:
+    """What is wrong with the user's file, for an error pydsdl calls its own (it asks users to
+    report it to pydsdl, which does not help them)."""
+    cause = ex.__cause__ or ex.__context__
+    if isinstance(cause, UnicodeDecodeError):
+        byte = cause.object[cause.start]
+        return f"not a text file: byte 0x{byte:02X} at offset {cause.start} is not UTF-8"
+    if isinstance(cause, RecursionError):
+        return (
+            "types nest too deeply to read (a chain of hundreds of types referring to each other)"
+        )
+    text = str(getattr(ex, "text", "") or "").split("PLEASE REPORT AT")[0].strip()
+    what = f"{type(cause).__name__}: {cause}" if cause is not None else text or "unknown"
+    return f"pydsdl cannot read this definition ({what})"
 
 
 # --------------------------------------------------------------------------------------------------
@@ -663,6 +718,13 @@ class _Tag:
 _TAG_RE = re.compile(r"@(\w*)(?:\s+(.*))?")
 _PATH_DEFAULT_RE = re.compile(r"(?P<path>[A-Za-z_]\w*(?:\.[A-Za-z_]\w*)*)\s+(?P<value>\S+)")
 _INT_RE = re.compile(r"[+-]?(?:0[xX][0-9a-fA-F]+|[0-9]+)")
+#: Instances of one parameter at most: far beyond any vehicle (PX4 publishes at most 10 of a
+#: sensor), small enough that the store's memory stays reserved up front.
+MAX_INSTANCES = 256
+#: The largest value of a type may take at most this many bytes (what a store slot holds, 170
+#: times DroneCAN's largest standard message), so that a hostile type cannot make the codec
+#: reserve gigabytes.
+MAX_TYPE_BYTES = 65535
 _FLOAT_RE = re.compile(r"[+-]?(?:[0-9]+\.[0-9]*|\.[0-9]+|[0-9]+)(?:[eE][+-]?[0-9]+)?")
 _PARAM_NAME_RE = re.compile(r"[A-Z][A-Z0-9_]*")
 _CATEGORIES = ("Standard", "Developer", "System")  # the values QGC knows
@@ -719,21 +781,23 @@ def _parse_bool(text: str) -> bool:
 
 
 def _parse_number(text: str) -> int | float:
-    if _INT_RE.fullmatch(text):
-        sign = -1 if text.startswith("-") else 1
-        digits = text.lstrip("+-")
-        return sign * int(digits, 16 if digits[:2].lower() == "0x" else 10)
-    if _FLOAT_RE.fullmatch(text):
-        value = float(text)
-        if math.isfinite(value):
-            return value
+    try:
+        if _INT_RE.fullmatch(text):
+            return parse_int(text, 16 if "x" in text[:3].lower() else 10)
+        if _FLOAT_RE.fullmatch(text):
+            value = parse_float(text)
+            if math.isfinite(value):
+                return value
+    except NumberError as e:
+        raise _TagValueError(str(e)) from None
     raise _TagValueError(f"expects a number (69, 0x45, -1, 0.0003, 1e-3), got {text!r}")
 
 
-def _parse_int(text: str, minimum: int) -> int:
+def _parse_int(text: str, minimum: int, maximum: int | None = None) -> int:
     value = _parse_number(text) if _INT_RE.fullmatch(text) else None
-    if not isinstance(value, int) or value < minimum:
-        raise _TagValueError(f"expects an integer >= {minimum}, got {text!r}")
+    if not isinstance(value, int) or value < minimum or (maximum is not None and value > maximum):
+        expected = f"{minimum}..{maximum}" if maximum is not None else f">= {minimum}"
+        raise _TagValueError(f"expects an integer {expected}, got '{abbreviated(text)}'")
     return value
 
 
@@ -760,7 +824,7 @@ def _parse_param_name(text: str) -> str:
 _TYPE_TAGS: dict[str, Callable[[str], Any]] = {
     "group": _parse_text,
     "category": _parse_category,
-    "max_instances": lambda text: _parse_int(text, 1),
+    "max_instances": lambda text: _parse_int(text, 1, MAX_INSTANCES),
     "reboot_required": _parse_bool,
     "param": _parse_param_name,
 }
