@@ -96,16 +96,22 @@ def _record(store: Store, p: _Param, instance: int) -> bytes | None:
 
 
 def save(store: Store, path: str | os.PathLike[str]) -> int:
-    """Writes the store to ``path`` atomically, keeping the previous file as ``path.bak``."""
-    target = os.fspath(path)
+    """Writes the store to ``path`` atomically, keeping the previous file as ``path.bak``.
+
+    A symbolic link is followed: the file it points to is replaced, the link stays. Temporary
+    files carry the writer's process ID (``.NAME.PID.XXXX.tmp``, ``NAME.bak.PID.tmp``); those
+    a killed save left behind are removed by the next save in the folder."""
+    given = os.fspath(path)
+    target = os.path.realpath(given)
     data = encode_file(store)
-    folder = os.path.dirname(os.path.abspath(target))
+    folder = os.path.dirname(target)
+    base = os.path.basename(target)
     try:
         import tempfile  # here: it costs a command 5 ms to import, and only saves need it
 
-        fd, tmp = tempfile.mkstemp(prefix=f".{os.path.basename(target)}.", dir=folder)
+        fd, tmp = tempfile.mkstemp(prefix=f".{base}.{os.getpid()}.", suffix=".tmp", dir=folder)
     except OSError as e:
-        raise StoreFileError(f"cannot write: {e.strerror}", target) from None
+        raise StoreFileError(f"cannot write: {e.strerror}", given) from None
     try:
         with os.fdopen(fd, "wb") as f:
             # mkstemp makes the file private; give it the mode a new file gets (or the old
@@ -121,8 +127,34 @@ def save(store: Store, path: str | os.PathLike[str]) -> int:
     except OSError as e:
         with _ignoring_os_errors():
             os.unlink(tmp)
-        raise StoreFileError(f"cannot write: {e.strerror}", target) from None
+        raise StoreFileError(f"cannot write: {e.strerror}", given) from None
+    _remove_stale(folder, base)
     return len(data)
+
+
+def _remove_stale(folder: str, base: str) -> None:
+    """Removes the temporary files of saves of ``base`` whose process is gone (killed while
+    saving); a running save's files are left alone."""
+    prefixes = (f".{base}.", f"{base}.bak.")
+    with _ignoring_os_errors():
+        for name in os.listdir(folder):
+            if not (name.startswith(prefixes) and name.endswith(".tmp")):
+                continue
+            rest = name[len(f".{base}.") if name.startswith(".") else len(f"{base}.bak.") :]
+            pid = rest.split(".", 1)[0]
+            if pid.isdigit() and int(pid) != os.getpid() and not _alive(int(pid)):
+                with _ignoring_os_errors():
+                    os.unlink(os.path.join(folder, name))
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:  # another user's process: alive
+        return True
+    return True
 
 
 def _mode_for(target: str) -> int:

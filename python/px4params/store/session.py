@@ -103,7 +103,8 @@ def store_lock(path: str) -> Iterator[None]:
         yield
         return
     try:
-        handle = open(path + ".lock", "a")  # noqa: SIM115 - held for the whole block
+        # By the file's real path: two names of one file (a symbolic link) share the lock.
+        handle = open(os.path.realpath(path) + ".lock", "a")  # noqa: SIM115 - held for the block
     except OSError:
         yield  # a read-only folder: reading still works, saving will report the problem
         return
