@@ -351,14 +351,30 @@ def test_no_tao_on_ina238_changes_nothing(capsys: pytest.CaptureFixture[str]) ->
 
 
 @pytest.mark.parametrize(
+    ("spelled", "message"),
+    [
+        ("NaN", 'NaN is not JSON; write "nan" (a string) instead'),
+        ("Infinity", 'Infinity is not JSON; write "inf" (a string) instead'),
+        ("-Infinity", '-Infinity is not JSON; write "-inf" (a string) instead'),
+        ("1e400", "1e400 is out of range of a float64 (write inf or -inf for infinity)"),
+        ("-1e400", "-1e400 is out of range of a float64 (write inf or -inf for infinity)"),
+    ],
+)
+def test_non_finite_floats_are_strings_not_json_extensions(
+    spelled: str, message: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """JSON has no infinities: Python's NaN/Infinity extensions and numbers beyond float64
+    (which Python reads as infinity) are refused, not encoded as infinity."""
+    code, out, err = main_out(["encode", "px.Ina238", INA.replace("0.0003", spelled)], capsys)
+    assert (code, out, err) == (1, "", f"px4params: error: {message}\n")
+
+
+@pytest.mark.parametrize(
     ("spelled", "hex_text", "shown"),
     [
         ('"nan"', "10031720ff7f", "nan"),
-        ("NaN", "10031720ff7f", "nan"),
         ('"inf"', "10031720007c", "inf"),
-        ("Infinity", "10031720007c", "inf"),
         ('"-inf"', "1003172000fc", "-inf"),
-        ("-Infinity", "1003172000fc", "-inf"),
     ],
 )
 def test_non_finite_floats(
@@ -430,35 +446,60 @@ def test_saturate_clamps_instead_of_refusing(
 
 
 def test_batch_encode(run: Cli) -> None:
-    lines = [INA, ina(current=1), "", ina(shunt="nan")]
+    lines = [INA, ina(current=1), ina(shunt="nan")]
     proc = run("encode", "px.Ina238", "-", input="\n".join(lines) + "\n")
     assert ok_lines(proc) == [INA_HEX, "10031404ea0c", "10031720ff7f"]
 
 
 def test_batch_decode(run: Cli) -> None:
-    proc = run("decode", "px.Ina238", "-", input=f"{INA_HEX}\r\n0x10 03 17 20 ff 7f\n\n")
+    proc = run("decode", "px.Ina238", "-", input=f"{INA_HEX}\r\n0x10 03 17 20 ff 7f\n")
     out = [json.loads(line) for line in ok_lines(proc)]
     assert [v["current"] for v in out] == [200, 200]
     assert out[1]["shunt"] == "nan"
+
+
+def test_batch_gives_one_line_per_line_and_blank_is_the_empty_payload(run: Cli) -> None:
+    proc = run("decode", "uavcan.protocol.param.Empty", "-", input="\n\n")
+    assert ok_lines(proc) == ["{}", "{}"]
+    proc = run("encode", "uavcan.protocol.param.Empty", "-", input="{}\n{}\n")
+    assert ok_lines(proc) == ["", ""]
+    proc = run("decode", "px.Ina238", "-", input=f"{INA_HEX}\n\n{INA_HEX}\n")
+    assert proc.returncode == 1
+    lines = proc.stdout.splitlines()
+    assert len(lines) == 3 and lines[1].startswith("error: px.Ina238.1.1: ")
+    assert json.loads(lines[0]) == json.loads(lines[2])
 
 
 def test_batch_encode_reports_bad_lines_and_goes_on(run: Cli) -> None:
     lines = [INA, "{bad", "", ina(current=None), ina(current=2), "[1"]
     proc = run("encode", "px.Ina238", "-", input="\n".join(lines) + "\n")
     assert proc.returncode == 1
-    assert proc.stdout.splitlines() == [INA_HEX, "10031408ea0c"]
+    errors = [
+        "not JSON: Expecting property name enclosed in double quotes at column 2 in '{bad'",
+        "not JSON: Expecting value at column 1 in ''",
+        "px.Ina238.1.1: current: missing field (give every field, or use --defaults to fill the "
+        "missing ones from the type's defaults)",
+        "not JSON: Expecting ',' delimiter at column 3 in '[1'",
+    ]
+    assert proc.stdout.splitlines() == [
+        INA_HEX,
+        f"error: {errors[0]}",
+        f"error: {errors[1]}",
+        f"error: {errors[2]}",
+        "10031408ea0c",
+        f"error: {errors[3]}",
+    ]
     assert proc.stderr.splitlines() == [
-        "px4params: <stdin>:2: not JSON: Expecting property name enclosed in double quotes "
-        "at column 2 in '{bad'",
-        "px4params: <stdin>:4: px.Ina238.1.1: current: missing field",
-        "px4params: <stdin>:6: not JSON: Expecting ',' delimiter at column 3 in '[1'",
+        f"px4params: <stdin>:{n}: {e}" for n, e in zip((2, 3, 4, 6), errors, strict=True)
     ]
 
 
 def test_batch_decode_one_bad_line(run: Cli) -> None:
     proc = run("decode", "px.Ina238", "-", input=f"{INA_HEX}\nxyz\n00031720ff7f\n")
     assert proc.returncode == 1
-    first, third = (json.loads(line) for line in proc.stdout.splitlines())
+    first, error, third = proc.stdout.splitlines()
+    assert error == "error: not hex bytes: 'xyz' (expected e.g. 'daef7c00')"
+    first, third = json.loads(first), json.loads(third)
     assert (first["current"], third["shunt"]) == (200, "nan")
     assert proc.stderr.splitlines() == [
         "px4params: <stdin>:2: not hex bytes: 'xyz' (expected e.g. 'daef7c00')"
@@ -474,7 +515,7 @@ def test_batch_in_process(stdin: Callable[[str], None], capsys: pytest.CaptureFi
     code, out, err = main_out(["decode", "px.Ina238", "-"], capsys)
     assert code == 1
     assert json.loads(out.splitlines()[0])["current"] == 200
-    assert len(out.splitlines()) == 1
+    assert out.splitlines()[1].startswith("error: px.Ina238.1.1: current: data is truncated")
     assert err.startswith("px4params: <stdin>:2: px.Ina238.1.1: current: data is truncated")
     assert len(err.splitlines()) == 1
 
@@ -633,7 +674,7 @@ ERRORS: list[tuple[str, list[str], list[str]]] = [
     (
         "json-huge-integer",
         ["encode", "px.Ina238", '{"current": ' + "1" * 5000 + "}"],
-        ["not JSON: ", "4300 digits"],
+        ["111111111111...111111 (5000 characters) is out of range (5000 digits"],
     ),
     (
         "json-too-deep",

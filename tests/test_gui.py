@@ -18,9 +18,8 @@ from typing import Any
 
 import px4params
 import pytest
+from playwright import sync_api
 from px4params.store.classic import BUNDLED_CLASSIC
-
-sync_api = pytest.importorskip("playwright.sync_api", reason="Playwright (pip install playwright)")
 
 REPO = Path(__file__).resolve().parents[1]
 AIRFRAME = REPO / "examples" / "two_batteries.airframe"

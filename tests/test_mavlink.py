@@ -20,9 +20,8 @@ import pytest
 from px4params.links.mavlink import CAPABILITIES, MavlinkParamServer
 from px4params.store.classic import ClassicParam
 from px4params.store.session import open_session
-
-mavutil = pytest.importorskip("pymavlink.mavutil")
-from pymavlink.dialects.v20 import common as mavlink  # noqa: E402
+from pymavlink import mavutil
+from pymavlink.dialects.v20 import common as mavlink
 
 INT32, REAL32 = mavlink.MAV_PARAM_TYPE_INT32, mavlink.MAV_PARAM_TYPE_REAL32
 CLASSIC = [

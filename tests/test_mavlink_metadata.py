@@ -24,9 +24,9 @@ from px4params.store.classic import BUNDLED_CLASSIC
 from shared_data import PARAMETERS_JSON, shared_file
 
 os.environ.setdefault("MAVLINK20", "1")
-mavutil = pytest.importorskip("pymavlink.mavutil")
-jsonschema = pytest.importorskip("jsonschema")
-from pymavlink.dialects.v20 import common as mavlink  # noqa: E402
+import jsonschema
+from pymavlink import mavutil
+from pymavlink.dialects.v20 import common as mavlink
 
 HEADER = struct.Struct("<HBBBBBBI")
 

@@ -148,7 +148,13 @@ def test_sample_log(sample_log: Path, tmp_path: Path, monkeypatch: pytest.Monkey
     ]
     assert proposal.replaced[0].startswith("SENS_EXT_I2C_PRB = 1: external I2C devices were found")
     assert "SENS_EN_PX4FLOW" in proposal.disabled
-    assert proposal.not_carried == []
+    # PX4's metadata: SENS_EN_THERMAL is thermal control (-1 unavailable, 0 off, 1 on), not a
+    # driver that the manifest replaces.
+    assert "SENS_EN_THERMAL" not in proposal.disabled
+    assert proposal.not_carried == [
+        "SENS_EN_THERMAL = 0 (thermal control off): not a driver switch; it stays a classic "
+        "parameter"
+    ]
     assert f"Unchanged: {proposal.unchanged} other parameters stay classic" in report
     assert proposal.unchanged == 980 - len(proposal.used) and proposal.unchanged > 900
 
@@ -280,7 +286,8 @@ def test_clamping_rotation_and_twice_found(tmp_path: Path, devtypes: devid.Devty
     assert ina.values["current"] == 200
     assert ina.notes[0] == "INA226_CURRENT = 500 A becomes current = 200 A (uint10, 1..200)"
     assert "rotation" not in ak0.values
-    assert ak1.notes == ["CAL_MAG2_ROT = -1 (internal, board rotation): rotation left 0"]
+    # PX4's metadata: -1 is "Internal" (the board's rotation); AK09916 has no internal flag.
+    assert ak1.notes == ["CAL_MAG2_ROT = -1 (Internal): rotation left 0 (the board's)"]
     assert proposal.not_carried == [
         "CAL_MAG0_ROT = 3: HMC5883 has no rotation field",
         "CAL_MAG1_ROT = 100: AK09916#0.rotation must be 0..40",

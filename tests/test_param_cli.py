@@ -522,7 +522,10 @@ def test_unknown_names_in_params_files_are_reported(
     path.write_text("1\t1\tMPC_XY_VEL_MAX\t8.5\t9\n1\t1\tSYS_AUTOSTART\t4001\t6\n")
     code, out, _ = param(capsys, "import", str(path))
     assert code == 0
-    assert out == f"{path}:1: MPC_XY_VEL_MAX: not a parameter of this store; skipped\n"
+    assert out == (
+        f"{path}:1: MPC_XY_VEL_MAX: not a parameter of this store; skipped\n"
+        f"{path}: 1 parameters not in this store were skipped\n"
+    )
 
 
 def test_shell_completion(store: Path, capsys: pytest.CaptureFixture[str]) -> None:

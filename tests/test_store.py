@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
-import os
+import atexit
+import shutil
+import tempfile
 from pathlib import Path
 
 import px4params
@@ -440,8 +442,9 @@ def _leaf_value(type_name: str) -> st.SearchStrategy[object]:
 
 
 SCHEMA = px4params.load_schema(use_env=False)
-TMP = Path(os.environ.get("PYTEST_TMP", "/tmp")) / f"px4params-store-machine-{os.getpid()}"
-TMP.mkdir(parents=True, exist_ok=True)
+# The state machine cannot take fixtures: a folder of its own, removed when the run ends.
+TMP = Path(tempfile.mkdtemp(prefix="px4params-store-machine-"))
+atexit.register(shutil.rmtree, TMP, ignore_errors=True)
 
 TestStoreMachine = StoreMachine.TestCase
 TestStoreMachine.settings = settings(

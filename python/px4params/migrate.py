@@ -59,6 +59,20 @@ ULOG_MAGIC = b"ULog\x01\x12\x35"
 DEFAULT_I2C_BUS = 1
 _CAL_ID = re.compile(r"CAL_(?P<sensor>[A-Z]+?)(?P<n>\d+)_ID")
 
+#: ``SENS_EN_*`` parameters that are not a driver's on/off switch, with the meaning of their
+#: values in PX4's parameter metadata (parameters.json ``values``); they are reported with
+#: that meaning and stay classic parameters.
+NOT_DRIVER_SWITCHES: dict[str, dict[int, str]] = {
+    "SENS_EN_THERMAL": {
+        -1: "thermal control unavailable",
+        0: "thermal control off",
+        1: "thermal control enabled",
+    },
+}
+#: ``CAL_<SENSOR><n>_ROT = -1``: PX4's metadata value "Internal" (an internal sensor forces it;
+#: the board's rotation applies).
+INTERNAL_ROTATION = -1
+
 
 @dataclass(frozen=True)
 class LegacyDriver:
@@ -372,6 +386,13 @@ class _Builder:
             driver = name.removeprefix("SENS_EN_")
             value = self.params[name]
             self.use(name)
+            if name in NOT_DRIVER_SWITCHES:
+                meaning = NOT_DRIVER_SWITCHES[name].get(int(value), "a value PX4 does not list")
+                self.proposal.not_carried.append(
+                    f"{name} = {_shown(value)} ({meaning}): not a driver switch; it stays a "
+                    "classic parameter"
+                )
+                continue
             if not value:
                 self.proposal.disabled.append(name)
                 continue
@@ -469,8 +490,16 @@ class _Builder:
                 self.proposal.not_carried.append(
                     f"{rotation} = {_shown(value_rot)}: {spec.name} has no rotation field"
                 )
-            elif value_rot == -1:
-                inst.notes.append(f"{rotation} = -1 (internal, board rotation): rotation left 0")
+            elif value_rot == INTERNAL_ROTATION:
+                # PX4's "Internal": the sensor is the flight controller's, on its rotation.
+                paths = {leaf.path for leaf in self.store.leaves(inst.name)}
+                if "internal" in paths and self.field_value(inst, "internal", rotation, True):
+                    inst.notes.append(
+                        f"{rotation} = -1 (Internal): internal = true, rotation left 0 (the "
+                        "board's)"
+                    )
+                else:
+                    inst.notes.append(f"{rotation} = -1 (Internal): rotation left 0 (the board's)")
             else:
                 self.field_value(inst, "rotation", rotation, value_rot)
 

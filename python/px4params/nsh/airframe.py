@@ -16,6 +16,7 @@ the run still fails.
 from __future__ import annotations
 
 import argparse
+import os
 import re
 import shlex
 from dataclasses import dataclass, field
@@ -99,7 +100,10 @@ def run_file(path: str, session: Session, *, keep_going: bool, err: TextIO) -> R
         print(f"px4params: {message}", file=err)
         if not keep_going:
             return result
-    if (session.changed or session.deferred) and (not result.errors or keep_going):
+    # A file that changes nothing (only comments) still makes the store it was run for: the
+    # next command then finds one instead of being told to run this file.
+    new_store = not os.path.exists(session.path)
+    if (session.changed or session.deferred or new_store) and (not result.errors or keep_going):
         session.save()
     return result
 

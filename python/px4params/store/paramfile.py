@@ -21,9 +21,10 @@ import re
 from typing import Any
 
 from px4params.dsdl.schema import to_json_value
-from px4params.errors import InstanceError, ParamFileError, Px4ParamsError
+from px4params.errors import InstanceError, NumberError, ParamFileError, Px4ParamsError
 from px4params.formats import qgc_params
 from px4params.formats.qgc_params import format_line
+from px4params.numbers import load_json
 from px4params.store.store import Key, Store
 
 JSON_FORMAT = "px4params"
@@ -124,6 +125,7 @@ def _read_qgc(store: Store, path: str, text: str) -> list[str]:
     from px4params.store.flat import set_flat
 
     report: list[str] = []
+    skipped = 0
     for row in qgc_params.read(text, path):
         where, name, number_value = f"{path}:{row.line}", row.name, row.value
         if row.type not in (qgc_params.INT32, qgc_params.REAL32):
@@ -134,26 +136,50 @@ def _read_qgc(store: Store, path: str, text: str) -> list[str]:
             number_value = float(number_value)
         try:
             if name in store.parameters:
+                classic = store.classic(name)
+                if classic is not None:
+                    _check_type(where, name, row.type, classic.is_float)
                 store.set(name, number_value)
                 continue
             match = _FLAT_INSTANCE.fullmatch(name)
             if match is None or match["param"] not in store.parameters:
                 report.append(f"{where}: {name}: not a parameter of this store; skipped")
+                skipped += 1
                 continue
             instance = f"{match['param']}#{int(match['instance'])}"
+            _, slot = store.destructured.owner(name)
+            _check_type(where, name, row.type, slot.mav_type == "float32")
             if instance not in store:
                 store.add(instance)
             set_flat(store, name, number_value)
-        except Px4ParamsError as e:
-            raise ParamFileError(f"{where}: {e}") from None
+        except ParamFileError:
+            raise
+        except Px4ParamsError as e:  # named as the file names it, and as the store does
+            text = str(e) if str(e).startswith(name) else f"{name}: {e}"
+            raise ParamFileError(f"{where}: {text}") from None
+    if skipped:
+        report.append(f"{path}: {skipped} parameters not in this store were skipped")
     return report
+
+
+def _check_type(where: str, name: str, given: int, is_float: bool) -> None:
+    """The type column must be the parameter's (QGC refuses a mismatch too)."""
+    expected = qgc_params.REAL32 if is_float else qgc_params.INT32
+    if given != expected:
+        names = {qgc_params.INT32: "INT32 (6)", qgc_params.REAL32: "REAL32 (9)"}
+        raise ParamFileError(
+            f"{where}: {name}: type {names[given]} in the file, but the parameter is "
+            f"{names[expected]}"
+        )
 
 
 def _read_json(store: Store, path: str, text: str) -> list[str]:
     try:
-        document = json.loads(text)
+        document = load_json(text)
     except json.JSONDecodeError as e:
         raise ParamFileError(f"{path}:{e.lineno}: not JSON: {e.msg}") from None
+    except (NumberError, RecursionError) as e:
+        raise ParamFileError(f"{path}: {e}") from None
     if not isinstance(document, dict) or document.get("format") != JSON_FORMAT:
         raise ParamFileError(f'{path}: not a px4params JSON export (no "format": "px4params")')
     if document.get("version") != 1:

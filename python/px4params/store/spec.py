@@ -22,7 +22,13 @@ if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
 else:
     from px4params._records import NamedTuple
 
-__all__ = ["ParamSpec", "ParameterSetError", "metadata_default", "parameter_specs"]
+__all__ = [
+    "ParamSpec",
+    "ParameterSetError",
+    "metadata_default",
+    "parameter_specs",
+    "with_defaults",
+]
 
 _CAMEL_BOUNDARY = re.compile(r"(?<=[a-z0-9])(?=[A-Z])")
 _PARAM_NAME = re.compile(r"[A-Z][A-Z0-9_]*")
@@ -103,6 +109,41 @@ def metadata_default(schema: Schema, key: str) -> dict[str, Any]:
     value = _default_of(schema, {"kind": "ref", "name": key}, None)
     assert isinstance(value, dict)
     return value
+
+
+def with_defaults(schema: Schema, key: str, value: Any) -> Any:
+    """``value`` with every field it leaves out taken from the type's defaults (as
+    :func:`metadata_default` builds them), at every depth: in a union, the given variant is
+    completed from that variant's defaults. What ``value`` gives is kept as it is, so the codec
+    still reports what is wrong with it."""
+    return _fill(schema, {"kind": "ref", "name": key}, value, metadata_default(schema, key))
+
+
+def _fill(schema: Schema, type_spec: Mapping[str, Any], given: Any, default: Any) -> Any:
+    kind = type_spec["kind"]
+    if kind == "ref" and isinstance(given, Mapping):
+        definition = schema.model["types"][type_spec["name"]]
+        fields = {f["name"]: f for f in definition["fields"] if f["type"]["kind"] != "void"}
+        defaults = default if isinstance(default, Mapping) else {}
+        if definition["kind"] == "union":
+            if len(given) != 1 or next(iter(given)) not in fields:
+                return given
+            name, inner = next(iter(given.items()))
+            base = (
+                defaults[name] if name in defaults else _field_default(schema, fields[name], None)
+            )
+            return {name: _fill(schema, fields[name]["type"], inner, base)}
+        out = dict(given)
+        for name, f in fields.items():
+            if name == "p_version":
+                continue  # filled in by the codec
+            base = defaults[name] if name in defaults else _field_default(schema, f, None)
+            out[name] = _fill(schema, f["type"], given[name], base) if name in given else base
+        return out
+    if kind in ("array", "dynarray") and isinstance(given, list):
+        element = _default_of(schema, type_spec["elem"], None)
+        return [_fill(schema, type_spec["elem"], item, element) for item in given]
+    return given
 
 
 def _default_of(schema: Schema, type_spec: Mapping[str, Any], given: Any) -> Any:

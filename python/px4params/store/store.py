@@ -26,6 +26,7 @@ from px4params import _native
 from px4params._records import TYPE_CHECKING
 from px4params.dsdl.schema import DataType, Leaf, Schema, load_schema
 from px4params.errors import InstanceError, LeafError, StoreError
+from px4params.numbers import abbreviated
 from px4params.store.classic import (
     CLASSIC_ENV,
     ClassicParam,
@@ -84,13 +85,16 @@ class Key(NamedTuple):
                 "NAME#N.path, e.g. INA238#0.bus.i2c.address)"
             )
         instance = match["instance"]
-        if instance is not None and int(instance) > MAX_INSTANCE:
-            raise InstanceError(f"{text}: instance {int(instance)} is out of range")
+        # (digits counted first: Python will not convert thousands of them)
+        if instance is not None and (len(instance) > 5 or int(instance) > MAX_INSTANCE):
+            raise InstanceError(
+                f"{abbreviated(text)}: instance {abbreviated(instance)} is out of range"
+            )
         leaf: int | str | None = None
         if match["index"] is not None:
+            if len(match["index"]) > 10 or int(match["index"]) > MAX_LEAF:
+                raise InstanceError(f"{abbreviated(text)}: no leaf [{abbreviated(match['index'])}]")
             leaf = int(match["index"])
-            if leaf > MAX_LEAF:
-                raise InstanceError(f"{text}: no leaf [{leaf}]")
         elif match["path"] is not None:
             leaf = match["path"]
         return cls(match["name"].upper(), int(instance) if instance else None, leaf)
@@ -192,7 +196,7 @@ class Store:
 
             hint = difflib.get_close_matches(name.upper(), list(self._params), n=3)
             extra = f" (did you mean: {', '.join(hint)}?)" if hint else ""
-            raise InstanceError(f"unknown parameter '{name}'{extra}")
+            raise InstanceError(f"unknown parameter '{abbreviated(name)}'{extra}")
         return p
 
     def _resolve(self, text: str | Key) -> tuple[_Param, int, Key]:
@@ -290,7 +294,10 @@ class Store:
         p, instance, key = self._resolve(name)
         if key.leaf is None or p.classic is not None:
             raise InstanceError(f"'{name}' names no leaf (expected NAME#N[k] or NAME#N.path)")
-        return Leaf(*self._native.get_leaf(p.index, instance, key.leaf, default=default))
+        try:
+            return Leaf(*self._native.get_leaf(p.index, instance, key.leaf, default=default))
+        except LeafError as e:
+            raise _naming_the_field(e, key) from None
 
     def leaves(self, name: str | Key, *, default: bool = False) -> list[Leaf]:
         """Every leaf of an instance's value (or default) in ``[k]`` order."""
@@ -333,9 +340,12 @@ class Store:
         elif key.leaf is None:
             self._native.set_value(p.index, instance, value, default=default, saturate=saturate)
         else:
-            self._native.set_leaf(
-                p.index, instance, key.leaf, value, default=default, saturate=saturate
-            )
+            try:
+                self._native.set_leaf(
+                    p.index, instance, key.leaf, value, default=default, saturate=saturate
+                )
+            except LeafError as e:
+                raise _naming_the_field(e, key) from None
 
     def set_encoded(self, name: str | Key, data: bytes, *, default: bool = False) -> None:
         """Sets a whole value from its stored bytes (checked before it is taken)."""
@@ -437,6 +447,14 @@ class Store:
 
     def __repr__(self) -> str:
         return f"<Store {len(list(self.names()))} instances of {len(self._order)} parameters>"
+
+
+def _naming_the_field(error: LeafError, key: Key) -> LeafError:
+    """The core cannot name a field it did not find; the key can: ``no such field: nope``."""
+    text = str(error)
+    if isinstance(key.leaf, str) and text.endswith("no such field"):
+        return LeafError(f"{text}: {key.leaf}")
+    return error
 
 
 class InstanceView:

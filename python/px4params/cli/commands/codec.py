@@ -10,7 +10,8 @@ from collections.abc import Callable, Sequence
 from px4params._records import TYPE_CHECKING
 from px4params.cli.options import dsdl_option
 from px4params.dsdl.schema import DataType, Schema, load_schema, to_json_value
-from px4params.errors import CommandError, Px4ParamsError
+from px4params.errors import CommandError, EncodeError, NumberError, Px4ParamsError
+from px4params.numbers import abbreviated, load_json
 from px4params.status import EXIT_FAILED, EXIT_OK
 
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
@@ -29,9 +30,13 @@ def parse_hex(text: str) -> bytes:
 def parse_json(text: str) -> Any:
     text = text.strip()  # a stdin line's newline would move an end-of-input error to "column 1"
     try:
-        return json.loads(text)
+        return load_json(text)
+    except NumberError as e:
+        raise CommandError(str(e)) from None
     except json.JSONDecodeError as e:
-        raise CommandError(f"not JSON: {e.msg} at column {e.colno} in {text.strip()!r}") from None
+        raise CommandError(
+            f"not JSON: {e.msg} at column {e.colno} in '{abbreviated(text)}'"
+        ) from None
     except (ValueError, RecursionError) as e:  # e.g. a 5000-digit number, 100000 nested [
         raise CommandError(f"not JSON: {e}") from None
 
@@ -54,19 +59,26 @@ def _schema(args: argparse.Namespace) -> Schema:
 
 
 def _each_item(item: str, stdin: TextIO, out: TextIO, convert: Callable[[str], str]) -> int:
-    """Converts one item, or each line of stdin when ``item`` is ``-`` (batch use)."""
+    """Converts one item, or each line of stdin when ``item`` is ``-`` (batch use).
+
+    A batch prints exactly one line per input line, so that output line N answers input line
+    N: the result, or ``error: <why>`` for a line that cannot be converted (also on stderr,
+    with its line number; the exit status is then 1). A blank line is an item too: the empty
+    payload for ``decode`` (a valid value of ``uavcan.protocol.param.Empty``, an empty
+    ``ArrayCommand``, ...)."""
     if item != "-":
         print(convert(item), file=out)
         return EXIT_OK
     status = EXIT_OK
     for number, line in enumerate(stdin, start=1):
-        if not line.strip():
-            continue
         try:
-            print(convert(line), file=out)
+            result = convert(line.rstrip("\r\n"))
         except (Px4ParamsError, UnicodeError) as e:
+            print(f"error: {e}", file=out)
             print(f"px4params: <stdin>:{number}: {e}", file=sys.stderr)
             status = EXIT_FAILED
+        else:
+            print(result, file=out)
     return status
 
 
@@ -104,10 +116,25 @@ def cmd_types(args: argparse.Namespace) -> int:
 
 
 def cmd_encode(args: argparse.Namespace) -> int:
-    t = find_type(_schema(args), args.type)
+    schema = _schema(args)
+    t = find_type(schema, args.type)
 
     def convert(text: str) -> str:
-        return t.encode(parse_json(text), tao=not args.no_tao, saturate=args.saturate).hex()
+        value = parse_json(text)
+        if args.defaults:
+            from px4params.store.spec import with_defaults
+
+            value = with_defaults(schema, t.key, value)
+        try:
+            return t.encode(value, tao=not args.no_tao, saturate=args.saturate).hex()
+        except EncodeError as e:
+            if str(e).endswith("missing field") and not args.defaults:
+                # pydronecan and C structs make a missing field zero; we say how to fill it.
+                raise EncodeError(
+                    f"{e} (give every field, or use --defaults to fill the missing ones from the "
+                    "type's defaults)"
+                ) from None
+            raise
 
     return _each_item(args.value, sys.stdin, sys.stdout, convert)
 
@@ -242,7 +269,10 @@ def _add_types(p: argparse.ArgumentParser) -> None:
 
 
 def _add_encode(p: argparse.ArgumentParser) -> None:
-    p.description = "Encode a JSON value of TYPE; '-' reads one per line from stdin."
+    p.description = (
+        "Encode a JSON value of TYPE; '-' reads one per line from stdin and prints one line "
+        "per input line (the hex, or 'error: WHY')."
+    )
     p.epilog = (
         "example:\n  px4params encode px.Ina238 "
         '\'{"bus": {"i2c": {"bus_id": 1, "address": 69}}, "current": 200, "shunt": 0.0003}\'\n'
@@ -252,6 +282,11 @@ def _add_encode(p: argparse.ArgumentParser) -> None:
     p.add_argument("value", metavar="VALUE", help="a JSON value, or - for one per line on stdin")
     p.add_argument("--no-tao", action="store_true", help="no tail array optimization (CAN FD)")
     p.add_argument(
+        "--defaults",
+        action="store_true",
+        help="fill the fields the value leaves out from the type's defaults (@default, else 0)",
+    )
+    p.add_argument(
         "--saturate",
         action="store_true",
         help="clamp out-of-range numbers per the fields' cast modes (default: refuse)",
@@ -260,7 +295,10 @@ def _add_encode(p: argparse.ArgumentParser) -> None:
 
 
 def _add_decode(p: argparse.ArgumentParser) -> None:
-    p.description = "Decode hex bytes of TYPE; '-' reads one per line from stdin."
+    p.description = (
+        "Decode hex bytes of TYPE; '-' reads one per line from stdin and prints one line per "
+        "input line (the JSON, or 'error: WHY'; a blank line is the empty payload)."
+    )
     p.epilog = (
         "examples:\n  px4params decode px.Ina238 10031720ea0c\n"
         "  px4params decode px.Ina238 '10 03 17 20 ea 0c'\n"

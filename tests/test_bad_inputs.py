@@ -1,0 +1,378 @@
+"""The catalogue of bad inputs: every command and file format given what a clumsy user or an
+attacker would give it. Each case asserts the exit status, a message without a traceback (one
+``px4params: error:`` line naming what was wrong; argparse's usage lines for usage errors) and
+that the store file's bytes did not change.
+
+Cases run in-process (``cli.main``) in a scratch folder with the example airframe's store; the
+count is checked, so that the catalogue cannot shrink unnoticed.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import os
+import shutil
+import subprocess
+import sys
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import pytest
+from px4params.cli.main import main
+
+ROOT = Path(__file__).resolve().parents[1]
+AIRFRAME = ROOT / "examples" / "two_batteries.airframe"
+HUGE = "9" * 5000
+HUGE_HEX = "0x" + "f" * 5000
+HUGE_TEXT = "x" * 100_000
+INA_VALUE = '{"bus": {"i2c": {"bus_id": 1, "address": 69}}, "current": 200, "shunt": 0.0003}'
+
+
+@dataclass(frozen=True)
+class Case:
+    """``px4params ARGS`` (``{dir}`` is the scratch folder); ``files`` are written there first
+    (text or bytes)."""
+
+    args: tuple[str, ...]
+    status: int = 1
+    #: A fragment the error line must hold (for status 1).
+    says: str = ""
+    files: dict[str, str | bytes] = field(default_factory=dict)
+
+    @property
+    def id(self) -> str:
+        text = " ".join(self.args)
+        return text if len(text) <= 60 else text[:40] + "..." + text[-12:]
+
+
+def _cases() -> Iterator[Case]:
+    # -- param set / set-default: every kind of target, every kind of bad value -------------
+    targets = {
+        "SYS_AUTOSTART": "int",  # classic Int32
+        "INA238_SHUNT": "float",  # classic Float
+        "INA238#0[4]": "int",  # uint7 leaf
+        "INA238#0.bus.i2c.bus_id": "int",  # uint4 leaf by path
+        "INA238#0.shunt": "float",  # float16 leaf
+        "INA238#0.bus._tag": "int",  # union tag
+    }
+    bad_for = {
+        "int": [HUGE, HUGE_HEX, "abc", "1.5", "1e400", "0x", "", "nan", "inf", "0x1G", "1_0"],
+        "float": [HUGE, HUGE_HEX, "abc", "1e400", "1e4000", "", "0x1p3", "1,5", "one"],
+    }
+    for verb in ("set", "set-default"):
+        for target, kind in targets.items():
+            for value in bad_for[kind]:
+                says = target if value else ""
+                yield Case(("param", "--store", "{dir}/v.store", verb, target, value), says=says)
+    # out of range for the leaf (checked by the store)
+    for target, value in [
+        ("INA238#0[4]", "128"),
+        ("INA238#0[4]", "-1"),
+        ("INA238#0.bus.i2c.bus_id", "16"),
+        ("INA238#0.shunt", "70000"),
+        ("INA238#0.bus._tag", "6"),
+        ("SYS_AUTOSTART", "2147483648"),
+        ("SYS_AUTOSTART", "-2147483649"),
+        ("INA238#0.current", "1024"),
+    ]:
+        yield Case(("param", "--store", "{dir}/v.store", "set", target, value), says="out of range")
+    # whole values as JSON
+    for value, says in [
+        ('{"current": ' + HUGE + "}", "out of range"),
+        ('{"shunt": 1e400}', "out of range"),
+        ('{"shunt": Infinity}', "Infinity is not JSON"),
+        ('{"shunt": NaN}', "NaN is not JSON"),
+        ("{", "JSON"),
+        ("[" * 100_000, "INA238#0"),
+        (INA_VALUE[:-1] + ', "nope": 1}', "nope"),
+        ('{"bus": {"usb": {}}}', "usb"),
+        (INA_VALUE.replace("200", '"200"'), "current"),
+        (INA_VALUE.replace("200", "true"), "current"),
+        ("null", "INA238#0"),
+        ("[]", "INA238#0"),
+    ]:
+        yield Case(("param", "--store", "{dir}/v.store", "set", "INA238#0", value), says=says)
+    # names
+    for name, says in [
+        ("INA238#" + HUGE, "out of range"),
+        ("INA238#0[" + HUGE + "]", "no leaf"),
+        ("INA238#4[4]", "INA238#4"),
+        ("INA238#99999", "INA238#99999"),
+        ("INA238#-1", "INA238#-1"),
+        ("NOPE#0", "NOPE"),
+        ("NOPE", "NOPE"),
+        ("INA238#0[99]", "no leaf [99]"),
+        ("INA238#0.bus.spi.bus_id", "INA238#0"),
+        ("INA238#0.nope", "nope"),
+        ("#0", "#0"),
+        ("INA238#0..x", "INA238#0..x"),
+        ("INA238#2[4]", "INA238#2"),
+        (HUGE_TEXT, "(100000 characters)"),
+    ]:
+        yield Case(("param", "--store", "{dir}/v.store", "set", name, "1"), says=says)
+    # compare / greater
+    for verb in ("compare", "greater"):
+        for name, value in [
+            ("SYS_AUTOSTART", HUGE),
+            ("SYS_AUTOSTART", "abc"),
+            ("INA238#0.shunt", "1e400"),
+            ("NOPE", "1"),
+            ("INA238#3.current", "1"),
+        ]:
+            yield Case(("param", "--store", "{dir}/v.store", verb, name, value), says=name[:6])
+    # add / rm / reset / instances
+    for verb, name in [
+        ("add", "INA238#" + HUGE),
+        ("add", "INA238#4"),
+        ("add", "INA238#0"),
+        ("add", "NOPE#0"),
+        ("add", "SYS_AUTOSTART"),
+        ("add", "INA238#0.current"),
+        ("rm", "INA238#3"),
+        ("rm", "NOPE#0"),
+        ("rm", "INA238#" + HUGE),
+        ("rm", "SYS_AUTOSTART"),
+        ("reset", "NOPE#0"),
+        ("reset", "INA238#3"),
+        ("instances", "NOPE"),
+    ]:
+        yield Case(("param", "--store", "{dir}/v.store", verb, name))
+    # -- param import / load: bad files -------------------------------------------------------
+    params_files: dict[str, tuple[str | bytes, str]] = {
+        "columns.params": ("1\t1\tSYS_AUTOSTART\t4001\n", "expected 5"),
+        "type.params": ("1\t1\tSYS_AUTOSTART\t2.0\t9\n", "REAL32 (9) in the file"),
+        "type2.params": ("1\t1\tINA238_SHUNT\t1\t6\n", "INT32 (6) in the file"),
+        "fraction.params": ("1\t1\tSYS_AUTOSTART\t1.5\t6\n", "not an integer"),
+        "huge.params": (f"1\t1\tSYS_AUTOSTART\t{HUGE}\t6\n", "out of range"),
+        "hugeid.params": (f"{HUGE}\t1\tSYS_AUTOSTART\t1\t6\n", "must be integers"),
+        "range.params": ("1\t1\tSYS_AUTOSTART\t4294967296\t6\n", "SYS_AUTOSTART"),
+        "word.params": ("1\t1\tSYS_AUTOSTART\tabc\t6\n", "not a number"),
+        "kind.params": ("1\t1\tSYS_AUTOSTART\t1\t4\n", "is not 6 (int32) or 9 (float)"),
+        "leaf.params": ("1\t1\tINA238_0C\t200\t6\n", "INA238_0C"),
+        "binary.params": (b"\xff\xfe\x00garbage\x00", "not a text file"),
+        "binary.json": (b"\x89PNG\r\n\x1a\n", "json"),
+        "bad.json": ("{", "not JSON"),
+        "inf.json": ('{"format": "px4params", "version": 1, "x": Infinity}', "Infinity"),
+        "e400.json": ('{"format": "px4params", "version": 1, "x": 1e400}', "out of range"),
+        "hugeint.json": ('{"format": "px4params", "version": 1, "x": ' + HUGE + "}", "range"),
+        "deep.json": ("[" * 100_000 + "]" * 100_000, "deep.json"),
+        "other.json": ('{"format": "qgc"}', "not a px4params JSON export"),
+        "version.json": ('{"format": "px4params", "version": 99}', "version"),
+        "empty.store": (b"", "empty.store"),
+        "magic.store": (b"NOPE" + bytes(20), "magic.store"),
+        "truncated.store": (b"PX4P\x01", "truncated.store"),
+        "random.store": (bytes(range(256)) * 4, "random.store"),
+        "noext.txt": ("hello\n", "noext.txt"),
+    }
+    for name, (content, says) in params_files.items():
+        for verb in ("import", "load"):
+            yield Case(
+                ("param", "--store", "{dir}/v.store", verb, "{dir}/" + name),
+                says=says,
+                files={name: content},
+            )
+    yield Case(("param", "--store", "{dir}/v.store", "import", "{dir}/missing.params"))
+    # -- encode / decode --------------------------------------------------------------------
+    ina = "px.Ina238"
+    for value, says in [
+        ('{"current": ' + HUGE + "}", "out of range"),
+        ('{"shunt": 1e400}', "out of range"),
+        ('{"shunt": -Infinity}', "-Infinity is not JSON"),
+        ('{"bus": {"i2c": {"bus_id": 1, "address": 69}}, "current": 200}', "missing field"),
+        ('{"bus": {"i2c": {"bus_id": 1, "address": 128}}, "current": 200, "shunt": 0}', "128"),
+        ('{"bus": {"i2c": {}, "spi": {}}, "current": 1, "shunt": 0}', "bus"),
+        ("[" * 100_000, "JSON"),
+        ("", "JSON"),
+        (HUGE_TEXT, "JSON"),
+        ('"text"', "dict"),
+    ]:
+        yield Case(("encode", ina, value), says=says)
+    for type_name, value in [
+        ("uavcan.equipment.power.BatteryInfo", '{"voltage": 1}'),
+        ("uavcan.protocol.NodeStatus", '{"uptime_sec": -1}'),
+        ("uavcan.protocol.NodeStatus", '{"health": 4}'),
+        ("px.Nope", "{}"),
+        ("uavcan.protocol.param.GetSet.Request", '{"name": "' + "a" * 93 + '"}'),
+    ]:
+        yield Case(("encode", type_name, value))
+    for hex_text, says in [
+        ("1003", "truncated"),
+        ("10031720ea0c00", "too long"),
+        ("xyz", "not hex bytes"),
+        ("100", "not hex bytes"),
+        ("ff" * 70_000, "union tag 7 selects no variant"),
+        ("1f", "union tag"),
+    ]:
+        yield Case(("decode", ina, hex_text), says=says)
+    yield Case(("decode", "uavcan.protocol.NodeStatus", "00"), says="truncated")
+    yield Case(("frames", ina, '{"current": 1}'), says="no default data type ID")
+    yield Case(("frames", ina, '{"current": 1}', "--dtid", "1"), says="missing field")
+    # -- devid ----------------------------------------------------------------------------------
+    for args in [
+        (HUGE,),
+        (HUGE_HEX,),
+        ("abc",),
+        ("-1",),
+        ("16777216",),
+        ("1.5",),
+        ("--encode", "--bus", HUGE, "--bus-type", "I2C", "--address", "1", "--devtype", "1"),
+        ("--encode", "--bus", "32", "--bus-type", "I2C", "--address", "1", "--devtype", "1"),
+        ("--encode", "--bus", "1", "--bus-type", "USB", "--address", "1", "--devtype", "1"),
+        ("--encode", "--bus", "1", "--bus-type", "I2C", "--address", "256", "--devtype", "1"),
+        ("--encode", "--bus", "1", "--bus-type", "I2C", "--address", "1", "--devtype", HUGE),
+        ("--log", "{dir}/missing.ulg"),
+        ("--log", "{dir}/bad.ulg"),
+    ]:
+        yield Case(("devid", "--table", "legacy", *args), files={"bad.ulg": b"ULog\x01garbage"})
+    # -- run: airframe files --------------------------------------------------------------------
+    for line, says in [
+        (f"param set SYS_AUTOSTART {HUGE}", "frame.airframe:1"),
+        ("param set INA238#0.shunt 1e400", "frame.airframe:1"),
+        ("param add INA238#" + HUGE, "frame.airframe:1"),
+        ("param nope", "frame.airframe:1"),
+        ("if param compare SYS_AUTOSTART 1\nthen", "'if' without 'fi'"),
+        ("fi", "frame.airframe:1"),
+        ("set X", "frame.airframe:1"),
+        ("param set INA238#0 '{'", "frame.airframe:1"),
+        ("reboot now", "frame.airframe:1"),
+        ("param set SYS_AUTOSTART 'unterminated", "frame.airframe:1"),
+        ("param load {dir}/missing.store", "frame.airframe:1"),
+    ]:
+        yield Case(
+            ("run", "{dir}/frame.airframe", "--store", "{dir}/v.store"),
+            says=says,
+            files={"frame.airframe": line.replace("{dir}", "DIR") + "\n"},
+        )
+    yield Case(("run", "{dir}/missing.airframe", "--store", "{dir}/v.store"), says="cannot read")
+    yield Case(
+        ("run", "{dir}/bin.airframe", "--store", "{dir}/v.store"),
+        says="not a text file",
+        files={"bin.airframe": b"\xff\xfe\xfa"},
+    )
+    # -- migrate --------------------------------------------------------------------------------
+    for name, content in [
+        ("bad.params", "not\ta\tparams\tfile\n"),
+        ("bin.params", b"\x00\x01\xff"),
+        ("trunc.ulg", b"ULog\x01\x12\x35"),
+        ("junk.ulg", bytes(range(256))),
+    ]:
+        yield Case(("migrate", "{dir}/" + name, "--table", "legacy"), files={name: content})
+    yield Case(("migrate", "{dir}/missing.params", "--table", "legacy"))
+    # -- hostile DSDL ---------------------------------------------------------------------------
+    dsdl_cases: dict[str, tuple[dict[str, str | bytes], str]] = {
+        "binary": ({"B.1.0.dsdl": bytes(range(128, 256))}, "not a text file"),
+        "nested": (
+            {
+                "L1.1.0.dsdl": "uint8[65535] x\n@sealed\n",
+                "L2.1.0.dsdl": "L1.1.0[65535] x\n@sealed\n",
+            },
+            "types are limited to 65,535 bytes",
+        ),
+        "huge": ({"L3.1.0.dsdl": "uint8[100000000] x\n@sealed\n"}, "limited to 65,535 bytes"),
+        "instances": (
+            {"W.1.0.dsdl": "# @max_instances 65536\nuint8 x\n@sealed\n"},
+            "@max_instances expects an integer 1..256",
+        ),
+        "unknown": ({"R.1.0.dsdl": "Nope.1.0 x\n@sealed\n"}, "R.1.0.dsdl"),
+        "syntax": ({"S.1.0.dsdl": "uint8 x y z\n@sealed\n"}, "S.1.0.dsdl"),
+        "tag": ({"T.1.0.dsdl": "# @nope 1\nuint8 x\n@sealed\n"}, "unknown metadata tag @nope"),
+        "default": (
+            {"D.1.0.dsdl": "uint8 x\n# @default " + HUGE + "\n@sealed\n"},
+            "out of range",
+        ),
+    }
+    for name, (files, says) in dsdl_cases.items():
+        yield Case(
+            ("types", "--dsdl", "{dir}/" + name + "/acme"),
+            says=says,
+            files={f"{name}/acme/{f}": c for f, c in files.items()},
+        )
+    # -- usage errors (exit 2) -------------------------------------------------------------------
+    for args in [
+        ("nope",),
+        ("param",),
+        ("param", "--store", "{dir}/v.store", "set", "SYS_AUTOSTART"),
+        ("encode",),
+        ("decode", ina),
+        ("devid", "--table", "nope", "1"),
+        ("dronecan", "param", "list", "--slcan", "{dir}/x", "--node", "0"),
+        ("dronecan", "param", "list", "--slcan", "{dir}/x", "--node", HUGE),
+        ("dronecan", "serve", "--slcan-pty", "--node-id", "128"),
+        ("mavlink", "serve", "--udp", "nope"),
+        ("mavlink", "serve", "--udp", "127.0.0.1:" + HUGE),
+        ("autostart", "run", "--duration", "x"),
+        ("frames", ina, "{}", "--transfer-id", HUGE),
+    ]:
+        yield Case(args, status=2)
+    yield Case(
+        ("dronecan", "param", "list", "--slcan", "{dir}/x", "--node", "1"), says="cannot open"
+    )
+    yield Case(("dronecan", "serve", "--slcan", "{dir}/x", "--store", "{dir}/v.store"))
+
+
+CASES = list(_cases())
+
+
+def test_the_catalogue_is_large() -> None:
+    assert len(CASES) >= 200, len(CASES)
+
+
+@pytest.fixture(scope="module")
+def template(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    folder = tmp_path_factory.mktemp("template")
+    subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "px4params",
+            "run",
+            str(AIRFRAME),
+            "--store",
+            str(folder / "v.store"),
+        ],
+        check=True,
+        capture_output=True,
+    )
+    return folder / "v.store"
+
+
+def _run(args: list[str], cwd: Path) -> tuple[int, str, str]:
+    out, err = io.StringIO(), io.StringIO()
+    old = os.getcwd()
+    os.chdir(cwd)
+    try:
+        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+            try:
+                status = main(args)
+            except SystemExit as e:  # argparse's usage errors
+                status = int(e.code or 0)
+    finally:
+        os.chdir(old)
+    return status, out.getvalue(), err.getvalue()
+
+
+@pytest.mark.parametrize("case", CASES, ids=[c.id for c in CASES])
+def test_bad_input(case: Case, template: Path, tmp_path: Path) -> None:
+    shutil.copy(template, tmp_path / "v.store")
+    for name, content in case.files.items():
+        path = tmp_path / name
+        path.parent.mkdir(parents=True, exist_ok=True)
+        if isinstance(content, bytes):
+            path.write_bytes(content)
+        else:
+            path.write_text(content.replace("DIR", str(tmp_path)))
+    before = (tmp_path / "v.store").read_bytes()
+    args = [a.replace("{dir}", str(tmp_path)) for a in case.args]
+    status, _, err = _run(args, tmp_path)
+    assert status == case.status, err
+    assert "Traceback" not in err
+    lines = err.splitlines()
+    if case.status == 1:
+        errors = [line for line in lines if line.startswith("px4params: ")]
+        assert errors and len(errors[-1]) < 2000, err[:500]
+        assert case.says in err, (case.says, err[:500])
+    else:
+        assert lines and "error:" in lines[-1], err
+    assert (tmp_path / "v.store").read_bytes() == before
