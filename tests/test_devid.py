@@ -407,7 +407,8 @@ def test_sample_log_cli(current: Path, capsys: pytest.CaptureFixture[str]) -> No
     assert lines["CAL_MAG2_ID"].endswith("no device")
     code, out, _ = run_cli(capsys, "--log", log, "--json")
     doc = json.loads(out)
-    assert code == 0 and doc["file"] == log and doc["table"] == "current"
+    # The log's firmware is v1.11.2 (ver_sw_release 0x010B0200): read with that era's table.
+    assert code == 0 and doc["file"] == log and doc["table"] == "px4-v1.11"
     rows = {r["param"]: r for r in doc["parameters"]}
     assert rows["CAL_MAG1_ID"]["device"]["devtype_name"] == "AK09916"
     assert rows["CAL_MAG2_ID"]["device"]["no_device"] is True
@@ -540,3 +541,39 @@ def test_subprocess_contract(tmp_path: Path) -> None:
         bad = run(*argv)
         assert bad.returncode == 1 and bad.stdout == ""
         assert_one_line_error(bad.stderr, message)
+
+
+def test_a_2017_log_is_read_with_the_table_of_its_era(current: Path) -> None:
+    """sample_appended_multiple.ulg is PX4 v1.6.0 (2017): its CAL_ACC0_ID 0x370E0A is the
+    ICM-20602 of drv_sensor.h then (DRV_ACC_DEVTYPE_ICM20602 0x37), not today's BMI270, and its
+    CAL_ACC1_ID 0x16040A an MPU9250 accelerometer, not today's FLOW simulator."""
+    log = shared_file("sample_appended_multiple.ulg")
+    entries = {e.param: e for e in devid.decode_log(log) if e.timestamp_us is None}
+    acc0, acc1 = entries["CAL_ACC0_ID"].device, entries["CAL_ACC1_ID"].device
+    assert acc0 is not None and acc1 is not None
+    assert (acc0.table, acc0.devtype_name, acc0.devtype_kind) == ("px4-v1.6", "ICM20602", "ACC")
+    assert (acc1.devtype_name, acc1.devtype_kind) == ("MPU9250", "ACC")
+    assert not any(e.warning for e in entries.values())
+    # With today's table the same codes are other chips, and a FLOW code in CAL_ACC is flagged.
+    today = {e.param: e for e in devid.decode_log(log, "current") if e.timestamp_us is None}
+    assert today["CAL_ACC0_ID"].device.devtype_name == "BMI270"  # type: ignore[union-attr]
+    assert today["CAL_ACC1_ID"].warning == (
+        "devtype 0x16 is FLOW in the current table, which does not fit CAL_ACC1_ID (ACC/IMU): "
+        "the log may be of another era (--table)"
+    )
+
+
+def test_tables_by_release() -> None:
+    release = lambda major, minor, patch: major << 24 | minor << 16 | patch << 8  # noqa: E731
+    assert devid.table_for_release(release(1, 6, 0)) == "px4-v1.6"
+    assert devid.table_for_release(release(1, 10, 2)) == "px4-v1.8"
+    assert devid.table_for_release(release(1, 12, 3)) == "px4-v1.11"
+    assert devid.table_for_release(release(1, 13, 2)) == "px4-v1.13"
+    assert devid.table_for_release(release(1, 14, 0)) == "current"
+    assert devid.table_for_release(release(1, 5, 5)) == "legacy"
+    assert devid.table_for_release(None) == "current"
+    # Known answers written down from each era's drv_sensor.h: 0x37 and the ICM-20602.
+    assert devid.load_table("px4-v1.8").name_of(0x37) == "ICM20602"
+    assert devid.load_table("px4-v1.11").name_of(0x37) == "ICM20602_LEGACY"
+    assert devid.load_table("px4-v1.11").name_of(0x38) == "ICM20602"
+    assert devid.load_table("px4-v1.13").name_of(0x37) is None

@@ -107,6 +107,9 @@ class OldConfig:
     details: list[str] = field(default_factory=list)
     #: Lines of the input that were not used (e.g. other components of a .params file).
     skipped: list[str] = field(default_factory=list)
+    #: The firmware release of a log (ULog ``ver_sw_release``), which says which devtype table
+    #: its device IDs follow; None for a .params file.
+    release: int | None = None
 
 
 def read_config(path: str | os.PathLike[str]) -> OldConfig:
@@ -141,7 +144,8 @@ def _read_ulog(where: str) -> OldConfig:
     details = [f"{key} {info[key]}" for key in ("ver_hw", "ver_sw_branch", "ver_sw") if key in info]
     if changed:
         details.append(f"last values of {len(set(changed))} parameters changed during the log")
-    return OldConfig(where, "ULog", params, details)
+    release = info.get("ver_sw_release")
+    return OldConfig(where, "ULog", params, details, release=int(release) if release else None)
 
 
 def _read_params(where: str) -> OldConfig:

@@ -14,5 +14,7 @@ DSDL_DIR = os.path.join(_HERE, "dsdl")
 DRIVERS_TOML = os.path.join(_HERE, "drivers.toml")
 #: Classic parameters used when no PX4 ``parameters.json`` is given (see ``store.classic``).
 CLASSIC_PARAMETERS_JSON = os.path.join(_HERE, "classic_parameters.json")
+#: Devtype tables of older PX4 releases (``px4-v1.6.tsv`` ...), with their version ranges.
+DEVTYPES_DIR = os.path.join(_HERE, "devtypes")
 #: MAVLink messages pymavlink's dialects lack (COMPONENT_METADATA, COMPONENT_INFORMATION).
 MAVLINK_COMPONENT_XML = os.path.join(_HERE, "mavlink", "component_information.xml")

@@ -11,6 +11,12 @@ Devtype tables (which chip a code names) changed between PX4 releases, so two ar
 
 ``legacy``
     The table of the PX4 driver guide's "Device IDs" page, transcribed below as our own data.
+``px4-v1.6``, ``px4-v1.8``, ``px4-v1.11``, ``px4-v1.13``
+    ``drv_sensor.h`` as PX4 1.6-1.7, 1.8-1.10, 1.11-1.12 and 1.13 had it (shipped in
+    ``data/devtypes``, each file saying where it was read). ``decode_log`` reads a log with
+    the table of its firmware version (``ver_sw_release``) unless told otherwise: a 2017 log's
+    ``0x37`` is an ICM20602, today's a BMI270. A device whose devtype is of another sensor kind
+    than its parameter (a FLOW code in ``CAL_ACC0_ID``) is flagged.
 ``current``
     Today's ``drv_sensor.h``. It is not shipped with px4params; it is read at run time from, in
     this order: the ``path`` argument (the CLI's ``--devtypes FILE``), ``$PX4PARAMS_DEVTYPES``,
@@ -61,15 +67,31 @@ __all__ = [
     "decode_log",
     "encode",
     "find_current_table",
+    "kind_mismatch",
     "legacy_table",
     "load_table",
     "parse_device_id",
     "parse_devtypes",
+    "table_for_release",
 ]
 
 MAX_DEVICE_ID = (1 << 24) - 1
 DEVTYPES_ENV = "PX4PARAMS_DEVTYPES"
-TABLES = ("legacy", "current")
+#: Tables of older releases: label -> (first version, last version), from ``data/devtypes``.
+ERA_TABLES: dict[str, tuple[tuple[int, int, int], tuple[int, int, int]]] = {
+    "px4-v1.6": ((1, 6, 0), (1, 7, 99)),
+    "px4-v1.8": ((1, 8, 0), (1, 10, 99)),
+    "px4-v1.11": ((1, 11, 0), (1, 12, 99)),
+    "px4-v1.13": ((1, 13, 0), (1, 13, 99)),
+}
+TABLES = ("legacy", "current", *ERA_TABLES)
+#: The sensor kinds (devtype macro kinds) a calibration parameter's device may have.
+_KINDS_OF = {
+    "ACC": {"ACC", "IMU"},
+    "GYRO": {"GYR", "GYRO", "IMU"},
+    "MAG": {"MAG", "IMU"},
+    "BARO": {"BARO"},
+}
 
 #: Bus type codes (3 bits) and their names; code 7 is representable but has no name.
 BUS_TYPES: dict[int, str] = {
@@ -289,17 +311,61 @@ def _read_table(path: str, _mtime_ns: int, _size: int) -> DevtypeTable:
 
 
 def load_table(which: str = "current", path: str | os.PathLike[str] | None = None) -> DevtypeTable:
-    """The ``legacy`` table, or the ``current`` one read from ``path`` or the usual places."""
+    """The ``legacy`` table, a release's (``px4-v1.6`` ...), or the ``current`` one read from
+    ``path`` or the usual places."""
     if which == "legacy":
         return legacy_table()
+    if which in ERA_TABLES:
+        return _era_table(which)
     if which != "current":
-        raise DeviceIdError(f"unknown devtype table {which!r} (expected one of: legacy, current)")
+        raise DeviceIdError(
+            f"unknown devtype table {which!r} (expected one of: {', '.join(TABLES)})"
+        )
     found = find_current_table(path)
     try:
         stat = found.stat()
     except OSError as e:
         raise DeviceIdError(f"cannot read devtypes file {found}: {e.strerror}") from None
     return _read_table(str(found), stat.st_mtime_ns, stat.st_size)
+
+
+@functools.cache
+def _era_table(label: str) -> DevtypeTable:
+    from px4params.data import DEVTYPES_DIR
+
+    path = os.path.join(DEVTYPES_DIR, f"{label}.tsv")
+    with open(path, encoding="utf-8") as f:
+        return DevtypeTable(label, path, parse_devtypes(f.read(), path))
+
+
+def table_for_release(release: int | None) -> str:
+    """The table for a log of firmware ``release`` (ULog's ``ver_sw_release``: major, minor,
+    patch and type in its four bytes): a release's table where one is shipped, ``legacy``
+    before 1.6, ``current`` from 1.14 on or when the version is not known."""
+    if not release:
+        return "current"
+    version = (release >> 24 & 0xFF, release >> 16 & 0xFF, release >> 8 & 0xFF)
+    for label, (first, last) in ERA_TABLES.items():
+        if first <= version <= last:
+            return label
+    return "legacy" if version < (1, 6, 0) else "current"
+
+
+def kind_mismatch(param: str, device: DeviceId) -> str | None:
+    """Why ``device`` cannot be what calibration parameter ``param`` holds (a flow sensor's
+    devtype in ``CAL_ACC0_ID``: the table is probably of another era), or None."""
+    sensor = re.fullmatch(r"CAL_([A-Z]+?)\d*_ID", param)
+    if sensor is None or device.no_device or not device.devtype_kind:
+        return None
+    allowed = _KINDS_OF.get(sensor[1])
+    kinds = set(device.devtype_kind.split("/"))
+    if allowed is None or kinds & allowed:
+        return None
+    return (
+        f"devtype 0x{device.devtype:02X} is {device.devtype_kind} in the {device.table} table, "
+        f"which does not fit {param} ({'/'.join(sorted(allowed))}): the log may be of another "
+        "era (--table)"
+    )
 
 
 def _table(table: DevtypeTable | str | None) -> DevtypeTable | None:
@@ -494,6 +560,8 @@ class LogDeviceId:
     device: DeviceId | None
     problem: str | None = None
     timestamp_us: int | None = None
+    #: The devtype's sensor kind does not fit the parameter (see :func:`kind_mismatch`).
+    warning: str | None = None
 
     def as_dict(self) -> dict[str, Any]:
         return {
@@ -502,6 +570,7 @@ class LogDeviceId:
             "timestamp_us": self.timestamp_us,
             "device": self.device.as_dict() if self.device else None,
             "problem": self.problem,
+            "warning": self.warning,
         }
 
 
@@ -517,16 +586,22 @@ def _log_entry(
     if isinstance(value, float) and math.isfinite(value) and value.is_integer():
         number = int(value)  # very old firmware logged every parameter as a float
     if isinstance(number, int) and 0 <= number <= MAX_DEVICE_ID:
-        return LogDeviceId(param, number, decode(number, names), None, timestamp_us)
+        device = decode(number, names)
+        warning = kind_mismatch(param, device)
+        return LogDeviceId(param, number, device, None, timestamp_us, warning)
     problem = f"{value!r} is not a 24-bit device ID"
     return LogDeviceId(param, value, None, problem, timestamp_us)
 
 
 def decode_log(
-    path: str | os.PathLike[str], table: DevtypeTable | str | None = "current"
+    path: str | os.PathLike[str],
+    table: DevtypeTable | str | None = "auto",
+    devtypes: str | os.PathLike[str] | None = None,
 ) -> list[LogDeviceId]:
     """Every device ID parameter of a ULog file (sorted by name; changes during the log follow
-    their parameter's initial value, in time order)."""
+    their parameter's initial value, in time order). ``table`` ``auto`` picks the table of the
+    log's firmware version (:func:`table_for_release`; ``devtypes`` is the current table's
+    file)."""
     from pyulog import ULog  # imported here: only this function needs it
 
     where = Path(path)
@@ -540,6 +615,8 @@ def decode_log(
         raise DeviceIdError(f"cannot read log file {where}: {e.strerror}") from None
     except Exception as e:  # pyulog signals bad data with its own and with generic exceptions
         raise DeviceIdError(f"{where}: not a ULog file ({e})") from None
+    if table == "auto":
+        table = load_table(table_for_release(log.msg_info_dict.get("ver_sw_release")), devtypes)
     names = _table(table)
     entries: list[LogDeviceId] = []
     for param in sorted(log.initial_parameters):

@@ -28,9 +28,13 @@ def cmd_devid(args: argparse.Namespace) -> int:
         parser.error(f"--encode needs {', '.join(missing)}")
     if args.devtypes is not None and args.table == "legacy":
         parser.error("--devtypes is the current table's source; it does not go with --table legacy")
+    if args.table == "auto" and not args.log:
+        parser.error("--table auto reads the firmware version of a --log")
+    # A log is read with its firmware's table; IDs without a log with today's.
+    which = args.table or ("auto" if args.log else "current")
 
     # Loaded before any output, so a missing current table is one error and no partial result.
-    table = devid.load_table(args.table, args.devtypes)
+    table = devid.load_table(which, args.devtypes) if which != "auto" else None
     if args.list:
         if args.json:
             listed = [
@@ -42,19 +46,22 @@ def cmd_devid(args: argparse.Namespace) -> int:
                 print(f"0x{r.code:02X}  {r.kind or '-':<10}  {r.name}")
         return EXIT_OK
     if args.log:
-        entries = devid.decode_log(args.log, table)
+        entries = devid.decode_log(args.log, table or "auto", args.devtypes)
         if not entries:
             raise CommandError(f"{args.log}: no CAL_*_ID parameters in this log")
+        label = next((e.device.table for e in entries if e.device), which)
         if args.json:
             rows = [e.as_dict() for e in entries]
-            print(json.dumps({"file": args.log, "table": table.label, "parameters": rows}))
+            print(json.dumps({"file": args.log, "table": label, "parameters": rows}))
             return EXIT_OK
         width = max(len(e.param) for e in entries)
         for e in entries:
             when = f" @{e.timestamp_us / 1e6:.3f}s" if e.timestamp_us is not None else ""
             shown = e.device.describe() if e.device else f"invalid: {e.problem}"
             value = e.device.hex if e.device else ""
-            print(f"{e.param:<{width}} {e.value!s:>8} {value:>8}  {shown}{when}")
+            warning = f"  (warning: {e.warning})" if e.warning else ""
+            print(f"{e.param:<{width}} {e.value!s:>8} {value:>8}  {shown}{when}{warning}")
+        print(f"(devtypes: the {label} table)")
         return EXIT_OK
     if args.encode:
         value = devid.encode(args.bus_type, args.bus, args.address, args.devtype, table)
@@ -83,10 +90,13 @@ def add_parser(sub: Any, name: str, summary: str, words: Sequence[str] = ()) -> 
 Decode PX4 24-bit device IDs (bits 0-2 bus type, 3-7 bus, 8-15 address,
 16-23 devtype), build one with --encode, or decode every CAL_*_ID parameter
 of a ULog flight log with --log. The devtype names come from --table:
-'legacy' (the PX4 driver guide's table) or 'current' (today's drv_sensor.h,
-read from --devtypes FILE, $PX4PARAMS_DEVTYPES, or
-../shared/data/px4_devtypes_current.tsv; FILE is a TSV 'code<TAB>name' or a
-drv_sensor.h). An ID of 0 means no device.""",
+'legacy' (the PX4 driver guide's table), a release's (px4-v1.6 for PX4
+1.6-1.7, px4-v1.8 for 1.8-1.10, px4-v1.11 for 1.11-1.12, px4-v1.13), or
+'current' (today's drv_sensor.h, read from --devtypes FILE,
+$PX4PARAMS_DEVTYPES, or ../shared/data/px4_devtypes_current.tsv; FILE is a
+TSV 'code<TAB>name' or a drv_sensor.h). Codes were reassigned over the years,
+so --log picks the table of the log's firmware version, and flags a devtype
+of another sensor kind than its parameter. An ID of 0 means no device.""",
         epilog="""\
 examples:
   px4params devid --table legacy 73225 66826 263178
@@ -100,9 +110,10 @@ examples:
     p.add_argument("ids", nargs="*", metavar="ID", help="device IDs, decimal or 0x hex")
     p.add_argument(
         "--table",
-        choices=TABLES,
-        default="current",
-        help="devtype table for names (default: current)",
+        choices=(*TABLES, "auto"),
+        help="devtype table for names: legacy, current, a release's (px4-v1.6, px4-v1.8, "
+        "px4-v1.11, px4-v1.13), or auto, the --log's firmware's (default: auto with --log, "
+        "else current)",
     )
     p.add_argument(
         "--devtypes",

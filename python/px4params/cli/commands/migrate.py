@@ -23,8 +23,10 @@ def cmd_migrate(args: argparse.Namespace) -> int:
     if args.devtypes is not None and args.table == "legacy":
         parser.error("--devtypes is the current table's source; it does not go with --table legacy")
     # Everything is read and checked before anything is written.
-    table = devid.load_table(args.table, args.devtypes)
     config = migrate.read_config(args.file)
+    # A log's device IDs follow the devtype table of its firmware; a .params file has no version.
+    which = args.table or devid.table_for_release(config.release)
+    table = devid.load_table(which, args.devtypes)
     proposal = migrate.migrate(config, load_schema(args.dsdl or (), include_dronecan=False), table)
     airframe = proposal.airframe()
     if args.output is not None:
@@ -76,8 +78,7 @@ examples:
     p.add_argument(
         "--table",
         choices=TABLES,
-        default="current",
-        help="devtype table for CAL_*_ID device IDs (default: current)",
+        help="devtype table for CAL_*_ID device IDs (default: a log's firmware's, else current)",
     )
     p.add_argument(
         "--devtypes",
