@@ -389,3 +389,61 @@ def test_cli(tmp_path: Path) -> None:
     assert "param add AK09916" not in (tmp_path / "legacy.airframe").read_text()
     r = cli("migrate", "--help")
     assert r.returncode == 0 and "examples:" in r.stdout
+
+
+def test_float_settings_round_to_nearest_and_disabled_sensors_are_noted(
+    tmp_path: Path, devtypes: devid.DevtypeTable
+) -> None:
+    """199.6 A is 200 A, not 199 (rounded, not floored); an I2C magnetometer calibrated but
+    disabled (CAL_MAG0_EN = 0) is carried with a note saying so."""
+    rows: list[tuple[str, object, int]] = [
+        ("SENS_EN_INA238", 1, 6),
+        ("INA238_CURRENT", 199.6, 9),
+        ("CAL_MAG0_ID", AK09916_I2C1, 6),
+        ("CAL_MAG0_EN", 0, 6),
+    ]
+    proposal = migrate.migrate(migrate.read_config(params_file(tmp_path / "p", rows)), None,
+                               devtypes)  # fmt: skip
+    ina, ak = proposal.instances
+    assert ina.values["current"] == 200
+    assert ak.notes == ["CAL_MAG0_EN = 0: the sensor was disabled for use"]
+
+
+def test_an_internal_magnetometer_gets_the_internal_flag(
+    tmp_path: Path, devtypes: devid.DevtypeTable
+) -> None:
+    """CAL_MAG0_ROT = -1 is PX4's "Internal": the IST8310 type's own internal flag says so."""
+    ist8310 = devid.encode("i2c", 1, 0x0E, 0x06)
+    rows: list[tuple[str, object, int]] = [("CAL_MAG0_ID", ist8310, 6), ("CAL_MAG0_ROT", -1, 6)]
+    proposal = migrate.migrate(migrate.read_config(params_file(tmp_path / "p", rows)), None,
+                               devid.load_table("px4-v1.13"))  # fmt: skip
+    (ist,) = proposal.instances
+    assert ist.name == "IST8310#0" and ist.values["internal"] is True
+    assert ist.notes == ["CAL_MAG0_ROT = -1 (Internal): internal = true, rotation left 0 (the "
+                         "board's)"]  # fmt: skip
+
+
+def test_qgc_offline_editing_params_file() -> None:
+    """QGC's offline-editing sample: every calibration slot empty, three rangefinder drivers
+    off: nothing to carry, the three listed as not enabled."""
+    config = migrate.read_config(shared_file("qgc_offline_editing_v1.4.params"))
+    proposal = migrate.migrate(config, None, "legacy")
+    assert proposal.instances == [] and proposal.not_in_manifest == []
+    assert {"SENS_EN_LL40LS", "SENS_EN_MB12XX", "SENS_EN_SF0X"} <= set(proposal.disabled)
+
+
+def test_qgc_mocklink_params_file() -> None:
+    """QGC's MockLink (a simulated PX4): its sensors are the simulator's, bus type 0, which the
+    driver guide's table names ACCELSIM/GYROSIM/MAGSIM codes; none is an I2C device."""
+    config = migrate.read_config(shared_file("qgc_px4_mocklink.params"))
+    proposal = migrate.migrate(config, None, "legacy")
+    assert proposal.instances == []
+    found = {line.split(" = ")[0]: line for line in proposal.not_in_manifest}
+    assert set(found) == {"CAL_ACC0_ID", "CAL_ACC1_ID", "CAL_GYRO0_ID", "CAL_MAG0_ID"}
+    assert "CAL_ACC0_ID = 1376264: GYROSIM (ACC), bus type 0, bus 1" in found["CAL_ACC0_ID"]
+    assert "CAL_ACC1_ID = 1310728: ACCELSIM (ACC), bus type 0, bus 1" in found["CAL_ACC1_ID"]
+    assert "GYROSIM (GYR)" in found["CAL_GYRO0_ID"] and "ACCELSIM (MAG)" in found["CAL_MAG0_ID"]
+    assert config.skipped == [
+        "component 2: 1 parameters (not the autopilot's)",
+        "component 3: 1 parameters (not the autopilot's)",
+    ]

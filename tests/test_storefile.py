@@ -319,3 +319,45 @@ def test_records_with_impossible_instance_numbers(store: px4params.Store, tmp_pa
         StoreFileError, match=r"record is malformed: instance 70000 is out of range"
     ):
         store.load_from(path)
+
+
+def _crc16_ccitt_false(data: bytes) -> int:
+    """CRC-16-CCITT-FALSE written from its definition (poly 0x1021, init 0xFFFF, no reflection,
+    no final xor), independent of the product's table."""
+    crc = 0xFFFF
+    for byte in data:
+        crc ^= byte << 8
+        for _ in range(8):
+            crc = ((crc << 1) ^ 0x1021) if crc & 0x8000 else crc << 1
+            crc &= 0xFFFF
+    return crc
+
+
+def test_crc16_reference_check_value() -> None:
+    assert _crc16_ccitt_false(b"123456789") == 0x29B1  # the catalogue's check value
+
+
+def test_golden_file_bytes_follow_the_documented_format(schema: px4params.Schema) -> None:
+    """The bytes of a small store, written down from docs/store-format.md: header, one
+    structured record (an instance of defaults only), one classic record (default and value),
+    CRC-16 per record, CRC-32 trailer."""
+    store = px4params.Store(schema, classic=[ClassicParam("SYS_AUTOSTART", "Int32", 0)])
+    store.add("INA238#0")
+    store.set_default("SYS_AUTOSTART", 10)
+    store.set("SYS_AUTOSTART", 4001)
+    names = [s.name for s in store.specs]
+    assert names == sorted(names)
+    lines = "\n".join(f"{s.name}={s.data_type.name}.{s.data_type.version[0]}" for s in store.specs)
+    header = b"PX4P" + bytes([1, 0]) + zlib.crc32(lines.encode()).to_bytes(4, "little")
+    structured = bytes([0x01, names.index("INA238"), 0])  # kind 1, no flags, instance 0
+    classic = (
+        bytes([0x02 | 0x10 | 0x20, 13])
+        + b"SYS_AUTOSTART"
+        + (10).to_bytes(4, "little", signed=True)
+        + (4001).to_bytes(4, "little", signed=True)
+    )
+    body = header
+    for record in (structured, classic):
+        body += record + _crc16_ccitt_false(record).to_bytes(2, "little")
+    expected = body + zlib.crc32(body).to_bytes(4, "little")
+    assert encode_file(store) == expected
