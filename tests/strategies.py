@@ -2,12 +2,25 @@
 
 from __future__ import annotations
 
+import math
+import os
+import struct
 from collections.abc import Mapping
 from typing import Any
 
 from hypothesis import strategies as st
 
 FLOAT16_MAX = 65504.0
+
+#: Hypothesis budgets are multiplied by this: 1 in CI (seconds), more in the scheduled long run
+#: (``scripts/fuzz.sh``), which also lifts the cap on array lengths below.
+SCALE_ENV = "PX4PARAMS_HYPOTHESIS_SCALE"
+SCALE = max(1, int(os.environ.get(SCALE_ENV, "1") or 1))
+
+
+def budget(examples: int) -> int:
+    """``examples`` in CI, ``SCALE`` times as many in the long run."""
+    return examples * SCALE
 
 
 def scalar_strategy(spec: Mapping[str, Any], *, infinities: bool) -> st.SearchStrategy[Any]:
@@ -35,10 +48,12 @@ def scalar_strategy(spec: Mapping[str, Any], *, infinities: bool) -> st.SearchSt
 
 
 def value_strategy(
-    types: Mapping[str, Any], key: str, *, infinities: bool = True, max_len: int = 6
+    types: Mapping[str, Any], key: str, *, infinities: bool = True, max_len: int | None = None
 ) -> st.SearchStrategy[dict[str, Any]]:
-    """Values of type ``key``; dynamic arrays are capped at ``max_len`` elements (plus their
-    maximum now and then) to keep examples small."""
+    """Values of type ``key``; dynamic arrays are capped at ``max_len`` elements (default 6 in
+    CI, none in the long run) plus their maximum now and then, to keep CI's examples small."""
+    if max_len is None:
+        max_len = 6 if SCALE == 1 else 1 << 30
     memo: dict[str, st.SearchStrategy[Any]] = {}
 
     def of_type(spec: Mapping[str, Any]) -> st.SearchStrategy[Any]:
@@ -70,3 +85,48 @@ def value_strategy(
         return memo[name]
 
     return composite(key)
+
+
+def expected_decoded(types: Mapping[str, Any], key: str, value: Any) -> Any:
+    """What decoding the encoding of ``value`` must give, worked out from the type's fields
+    alone (not by the codec): the same value, floats rounded to their field's width by Python's
+    own IEEE 754 conversion (``struct``), and the ``p_version`` a struct carries left out (the
+    codec fills it in). Compare with :func:`same_decoded`."""
+
+    def of(spec: Mapping[str, Any], v: Any) -> Any:
+        kind = spec["kind"]
+        if kind == "ref":
+            definition = types[spec["name"]]
+            fields = {f["name"]: f["type"] for f in definition["fields"]}
+            return {k: of(fields[k], x) for k, x in v.items() if k != "p_version"}
+        if kind in ("array", "dynarray"):
+            return [of(spec["elem"], x) for x in v]
+        if kind == "float" and spec["bits"] in (16, 32) and math.isfinite(v):
+            code = "<e" if spec["bits"] == 16 else "<f"
+            return struct.unpack(code, struct.pack(code, v))[0]
+        return v
+
+    return of({"kind": "ref", "name": key}, value)
+
+
+def same_decoded(expected: Any, decoded: Any) -> bool:
+    """``decoded`` is ``expected`` (its extra ``p_version`` keys aside); floats equal, or both
+    NaN, or one float16 rounding step apart (DroneCAN breaks ties away from zero, Python to
+    even)."""
+    if isinstance(expected, dict):
+        return isinstance(decoded, dict) and all(
+            k in decoded and same_decoded(v, decoded[k]) for k, v in expected.items()
+        )
+    if isinstance(expected, list):
+        return (
+            isinstance(decoded, list)
+            and len(expected) == len(decoded)
+            and all(same_decoded(a, b) for a, b in zip(expected, decoded, strict=True))
+        )
+    if isinstance(expected, float):
+        if isinstance(decoded, str):  # non-finite values decode as "nan", "inf", "-inf"
+            decoded = float(decoded)
+        if math.isnan(expected):
+            return isinstance(decoded, float) and math.isnan(decoded)
+        return decoded == expected or math.isclose(decoded, expected, rel_tol=2**-10)
+    return bool(expected == decoded) and type(expected) is type(decoded)

@@ -33,6 +33,7 @@ from px4params.vehicle.simbench import (
 )
 from px4params.vehicle.timeline import render_svg
 from shared_data import current_devtypes
+from strategies import budget
 
 REPO = Path(__file__).resolve().parents[1]
 AIRFRAME = REPO / "examples" / "two_batteries.airframe"
@@ -516,7 +517,9 @@ benches = st.builds(
 
 
 @settings(
-    max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+    max_examples=budget(40),
+    deadline=None,
+    suppress_health_check=[HealthCheck.function_scoped_fixture],
 )
 @given(bench=benches, seed=st.integers(0, 2**32), legacy=st.booleans())
 def test_a_run_is_determined_by_its_seed(bench, seed, legacy, drivers, manifest):
@@ -527,7 +530,9 @@ def test_a_run_is_determined_by_its_seed(bench, seed, legacy, drivers, manifest)
 
 
 @settings(
-    max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+    max_examples=budget(40),
+    deadline=None,
+    suppress_health_check=[HealthCheck.function_scoped_fixture],
 )
 @given(bench=benches, seed=st.integers(0, 1000))
 def test_the_commander_refuses_exactly_the_devices_not_nominal(bench, seed, drivers, manifest):
@@ -554,7 +559,9 @@ def test_the_commander_refuses_exactly_the_devices_not_nominal(bench, seed, driv
 
 
 @settings(
-    max_examples=30, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+    max_examples=budget(30),
+    deadline=None,
+    suppress_health_check=[HealthCheck.function_scoped_fixture],
 )
 @given(
     places=st.lists(

@@ -9,7 +9,7 @@ import pytest
 from dronecan_oracle import same
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from strategies import value_strategy
+from strategies import budget, value_strategy
 
 SCHEMA = px4params.load_schema(use_env=False)
 KEYS = sorted(SCHEMA.model["types"])
@@ -21,7 +21,7 @@ def _pieces(data: bytes, cuts: list[int]) -> list[bytes]:
 
 
 @pytest.mark.parametrize("key", KEYS)
-@settings(max_examples=10, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=budget(10), deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(data=st.data(), cuts=st.lists(st.integers(0, 10_000), max_size=12), tao=st.booleans())
 def test_fragments_decode_like_flat(
     key: str, data: st.DataObject, cuts: list[int], tao: bool
@@ -35,7 +35,7 @@ def test_fragments_decode_like_flat(
 
 
 @given(data=st.binary(max_size=60), cuts=st.lists(st.integers(0, 100), max_size=8))
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=budget(300), deadline=None)
 def test_bad_fragments_fail_like_flat(data: bytes, cuts: list[int]) -> None:
     t = SCHEMA["px.Ina238"]
     try:

@@ -22,6 +22,7 @@ from px4params.cli.main import main
 from px4params.errors import DeviceIdError, Px4ParamsError
 from px4params.vehicle import devid
 from shared_data import SHARED_DATA, shared_file
+from strategies import budget
 
 CURRENT_TSV = SHARED_DATA / shared_data.CURRENT_TSV
 
@@ -346,7 +347,7 @@ def test_id_spellings() -> None:
         devid.decode(1 << 24, None)
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=budget(300), deadline=None)
 @given(
     bus_type=st.integers(0, 7),
     bus=st.integers(0, 31),
@@ -364,7 +365,7 @@ def test_encode_decode_round_trip(bus_type: int, bus: int, address: int, devtype
     assert devid.encode(str(bus_type), hex(bus), str(address), hex(devtype)) == value
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=budget(300), deadline=None)
 @given(st.integers(0, devid.MAX_DEVICE_ID))
 def test_decode_encode_round_trip(value: int) -> None:
     d = devid.decode(value, None)

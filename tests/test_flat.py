@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 from px4params.errors import InstanceError, LeafError, Px4ParamsError
 from px4params.store import flat
 from px4params.store.classic import ClassicParam
-from strategies import value_strategy
+from strategies import budget, value_strategy
 
 BUNDLED_PX = [key for key in px4params.load_schema(use_env=False) if key.startswith("px.")]
 
@@ -173,7 +173,7 @@ def test_round_trip_bundled(schema: px4params.Schema, key: str) -> None:
     """structured -> flat -> structured is identical for random values of every bundled type."""
     data_type = schema[key]
 
-    @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+    @settings(max_examples=budget(60), deadline=None, suppress_health_check=[HealthCheck.too_slow])
     @given(value_strategy(schema.model["types"], key))
     def check(value: dict) -> None:
         _round_trip(data_type, value)
@@ -184,7 +184,7 @@ def test_round_trip_bundled(schema: px4params.Schema, key: str) -> None:
 def test_round_trip_arrays_and_unions(extra_schema: px4params.Schema) -> None:
     data_type = extra_schema["tst.Arrays"]
 
-    @settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+    @settings(max_examples=budget(150), deadline=None, suppress_health_check=[HealthCheck.too_slow])
     @given(value_strategy(extra_schema.model["types"], "tst.Arrays.1.0"))
     def check(value: dict) -> None:
         _round_trip(data_type, value)
@@ -195,7 +195,7 @@ def test_round_trip_arrays_and_unions(extra_schema: px4params.Schema) -> None:
     assert flat.from_flat(top, {"A": 1, "C": 2.5}) == {"b": 2.5}
 
 
-@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=budget(40), deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(data=st.data())
 def test_round_trip_through_the_store(schema: px4params.Schema, data: st.DataObject) -> None:
     """Flat values written one by one in letter order rebuild the instance exactly."""

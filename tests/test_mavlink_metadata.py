@@ -27,6 +27,7 @@ os.environ.setdefault("MAVLINK20", "1")
 import jsonschema
 from pymavlink import mavutil
 from pymavlink.dialects.v20 import common as mavlink
+from strategies import budget
 
 HEADER = struct.Struct("<HBBBBBBI")
 
@@ -164,7 +165,7 @@ def test_burst_read_streams_to_eof_like_px4() -> None:
     assert rounds == 2  # 51200 bytes: more than one burst of packets
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=budget(60), deadline=None)
 @given(st.binary(max_size=3000), st.integers(0, 3100), st.integers(0, 255))
 def test_reads_are_slices(content: bytes, offset: int, size: int) -> None:
     server = MavftpServer({"/f": content})
@@ -176,7 +177,7 @@ def test_reads_are_slices(content: bytes, offset: int, size: int) -> None:
         assert reply.data == content[offset : offset + min(size or MAX_DATA, MAX_DATA)]
 
 
-@settings(max_examples=200, deadline=None)
+@settings(max_examples=budget(200), deadline=None)
 @given(st.binary(min_size=0, max_size=260))
 def test_garbage_requests_never_raise(payload: bytes) -> None:
     for reply in MavftpServer(FILES).handle(payload):
@@ -422,7 +423,7 @@ def _handler() -> MavlinkParamServer:
     return _SERVER[0]
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=budget(60), deadline=None)
 @given(st.integers(0, 65535), st.floats(allow_nan=True, allow_infinity=True, width=32))
 def test_any_command_gets_one_answer(command: int, param1: float) -> None:
     """The command handler alone: one COMMAND_ACK (and at most one message before it) for any
