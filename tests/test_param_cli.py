@@ -477,7 +477,7 @@ BAD_FILES = [
     (
         "x.params",
         "#\n1\t1\tINA238_0C\t300\t6\n",
-        "x.params:2: INA238#0: bus.i2c.address: value 300",
+        "x.params:2: INA238_0C: INA238#0: bus.i2c.address: value 300",
     ),
     ("x.json", "{", "x.json:1: not JSON: Expecting property name"),
     ("x.json", '{"format": "other"}', 'not a px4params JSON export (no "format": "px4params")'),

@@ -341,6 +341,35 @@ fn battery_info_tail_array() {
     assert!(same(&dec(&l, root, &without, false).unwrap(), &leaves));
 }
 
+/// TAO applies to the last field only: a dynamic byte array before it keeps its length prefix.
+/// Bytes written down by hand from the DroneCAN rules: `uint8[<=3] a = [1, 2]`, `uint8[<=3] b
+/// = [3]` is `10` (a's length, 2 bits) `00000001 00000010`, then b: with TAO `00000011`, else
+/// `01 00000011`.
+#[test]
+fn tao_only_for_the_last_field() {
+    use px4params_core::layout::Role;
+    use px4params_core::Cast;
+
+    let mut l = OwnedLayout::default();
+    let byte = l.uint(8, Cast::Saturated).unwrap();
+    let a = l.dyn_array(byte, 3).unwrap();
+    let b = l.dyn_array(byte, 3).unwrap();
+    let root = l
+        .structure(&[("a", a, Role::Data), ("b", b, Role::Data)])
+        .unwrap();
+    let leaves = [2u64, 1, 2, 1, 3].map(Scalar::Uint);
+    assert_eq!(enc(&l, root, &leaves, true), [0x80, 0x40, 0x80, 0xC0]);
+    assert_eq!(enc(&l, root, &leaves, false), [0x80, 0x40, 0x90, 0x30]);
+    assert!(same(
+        &dec(&l, root, &[0x80, 0x40, 0x80, 0xC0], true).unwrap(),
+        &leaves
+    ));
+    assert!(same(
+        &dec(&l, root, &[0x80, 0x40, 0x90, 0x30], false).unwrap(),
+        &leaves
+    ));
+}
+
 fn layouts() -> Vec<(OwnedLayout, NodeId)> {
     let builders: [fn(&mut OwnedLayout) -> NodeId; 4] = [
         common::ina238,
