@@ -11,7 +11,7 @@ from pathlib import Path
 import dronecan
 import px4params
 import pytest
-from px4params.errors import DsdlError, LeafError, NumberError
+from px4params.errors import DsdlError, LeafError, NumberError, StoreError
 from px4params.numbers import load_json, parse_float, parse_int
 from px4params.store.classic import BUNDLED_CLASSIC
 
@@ -197,3 +197,28 @@ def test_the_store_names_a_field_it_did_not_find(schema: px4params.Schema) -> No
         store.leaf("INA238#0.nope")
     with pytest.raises(LeafError, match=r"^INA238#0: no such field: nope$"):
         store.set("INA238#0.nope", 1)
+
+
+def test_a_parameter_the_store_cannot_hold_is_named() -> None:
+    """Past the loader's size limit (a model built by hand), the store names the parameter,
+    not its internal number."""
+    big = {"kind": "array", "len": 70000, "elem": {"kind": "uint", "bits": 8, "cast": "saturated"}}
+    model = {
+        "types": {
+            "t.Big.1.0": {
+                "name": "t.Big",
+                "version": [1, 0],
+                "kind": "struct",
+                "dialect": "dsdl",
+                "file": "Big.1.0.dsdl",
+                "line": 1,
+                "dtid": None,
+                "service": None,
+                "signature_override": None,
+                "doc": {"short": "Big", "long": "", "tags": {"max_instances": 1}},
+                "fields": [{"name": "x", "type": big, "line": 2}],
+            }
+        }
+    }
+    with pytest.raises(StoreError, match=r"^parameter BIG cannot be stored \(no slot, or a value"):
+        px4params.Store(px4params.Schema(model), classic=[])
