@@ -25,15 +25,18 @@ from px4params.links.can_transfer import Frame, TransferReceiver
 from px4params.links.slcan import SlcanAdapter
 from px4params.store.classic import BUNDLED_CLASSIC
 from px4params.store.file import encode_file
-from strategies import budget
+from strategies import SCALE, budget
 
 SCHEMA = px4params.load_schema(use_env=False)
 KEYS = sorted(SCHEMA.keys())
 
 
 def fuzz(examples: int) -> settings:
+    """The budget; in the long run also a deadline, so that an input that takes a reader
+    minutes (a denial of service) is reported with the input, like a crash."""
+    deadline = None if SCALE == 1 else 20_000
     return settings(
-        max_examples=budget(examples), deadline=None, suppress_health_check=list(HealthCheck)
+        max_examples=budget(examples), deadline=deadline, suppress_health_check=list(HealthCheck)
     )
 
 

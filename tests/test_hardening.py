@@ -222,3 +222,20 @@ def test_a_parameter_the_store_cannot_hold_is_named() -> None:
     }
     with pytest.raises(StoreError, match=r"^parameter BIG cannot be stored \(no slot, or a value"):
         px4params.Store(px4params.Schema(model), classic=[])
+
+
+def test_types_that_use_each_other_too_often_are_refused_before_pydsdl(tmp_path: Path) -> None:
+    """Found by the fuzz run: pydsdl recomputes a type's alignment for every use, so six small
+    files that use each other a few hundred times over took it 18 s (and more types, minutes).
+    They are counted first and refused."""
+    files = {
+        "T0.1.0.dsdl": "int3 a\nfloat16 b\n@sealed\n",
+        "T1.1.0.dsdl": "@union\n"
+        + "".join(f"T0.1.0[<=2] v{i}\n" for i in range(300))
+        + "@sealed\n",
+        "T2.1.0.dsdl": "".join(f"T1.1.0 f{i}\n" for i in range(100)) + "@sealed\n",
+    }
+    with pytest.raises(DsdlError) as e:
+        _types(tmp_path, files)
+    assert "acme.T2.1.0 uses its types so many times over (" in str(e.value)
+    assert "at most 20,000): pydsdl would take seconds to minutes to read it" in str(e.value)

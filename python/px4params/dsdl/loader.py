@@ -112,6 +112,7 @@ class _ModelBuilder:
     def add_pydsdl(self, roots: Sequence[Root]) -> None:
         import pydsdl  # lazy: a cache hit must not pay for it
 
+        _check_expansion(roots)
         for root in roots:
             lookup = [str(r.path) for r in roots if r is not root]
             try:
@@ -389,6 +390,61 @@ class _ModelBuilder:
                     spec["file"],
                     spec["line"],
                 )
+
+
+#: Fields of a type counted through every type it uses, at most: far beyond real types (the
+#: bundled ones have fewer than 100), far below what makes pydsdl, which walks the same
+#: structure again for every use of a type, take seconds.
+MAX_EXPANDED_FIELDS = 20_000
+_FIELD_LINE = re.compile(r"\s*(?P<type>[A-Za-z_][\w.]*)(?:\[[^\]]*\])?\s+[A-Za-z_]\w*\s*(?:#.*)?$")
+
+
+def _check_expansion(roots: Sequence[Root]) -> None:
+    """Refuses, before pydsdl reads them, types that use each other so many times over that
+    pydsdl would take minutes (it recomputes a type's properties for every use): a cheap
+    reading of the field lines, counting each type's fields through every type it uses."""
+    uses: dict[str, list[str]] = {}
+    files: dict[str, str] = {}
+    for root in roots:
+        namespace = os.path.basename(os.path.normpath(str(root.path)))
+        for file in root.files:
+            stem = os.path.basename(file).removesuffix(".dsdl")
+            key = f"{namespace}.{stem}"
+            try:
+                with open(file, encoding="utf-8") as f:
+                    lines = f.read().splitlines()
+            except (OSError, UnicodeDecodeError):
+                continue  # pydsdl reports it
+            fields = []
+            for line in lines:
+                match = _FIELD_LINE.match(line)
+                if match and not match["type"].startswith(("uint", "int", "float", "bool", "void")):
+                    ref = match["type"]
+                    fields.append(ref if ref.count(".") > 2 else f"{namespace}.{ref}")
+                elif match:
+                    fields.append("")
+            uses[key], files[key] = fields, file
+    memo: dict[str, int] = {}
+    for start in sorted(uses):  # depth first without recursion: chains may be thousands long
+        stack = [start]
+        while stack:
+            key = stack[-1]
+            pending = [r for r in uses[key] if r in uses and r not in memo and r not in stack]
+            if pending:
+                stack.extend(pending[:1])
+                continue
+            stack.pop()
+            total = sum(1 + memo.get(r, 0) for r in uses[key])  # a cycle counts once
+            memo[key] = min(total, 10 * MAX_EXPANDED_FIELDS)
+    for key in sorted(uses):
+        count = memo[key]
+        if count > MAX_EXPANDED_FIELDS:
+            raise DsdlError(
+                f"{key} uses its types so many times over ({count:,} fields counted through "
+                f"every use; at most {MAX_EXPANDED_FIELDS:,}): pydsdl would take seconds to "
+                "minutes to read it",
+                files[key],
+            )
 
 
 def _internal_error_text(ex: Exception) -> str:
