@@ -9,7 +9,7 @@ import os
 import signal
 import sys
 import threading
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from typing import Any
 
 from px4params.cli.options import store_options
@@ -72,13 +72,18 @@ def cmd_serve(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _client(args: argparse.Namespace) -> Any:
+@contextlib.contextmanager
+def _client(args: argparse.Namespace) -> Iterator[Any]:
+    """The client on an opened SLCAN channel, closed again (``C``) when the command ends."""
     from px4params.links.dronecan_client import DronecanParamClient
     from px4params.links.slcan import SlcanHost, open_serial
 
     host = SlcanHost(open_serial(args.slcan))
     host.start(int(args.bitrate))
-    return DronecanParamClient(host, args.node, local_node=args.local_node, timeout=args.timeout)
+    try:
+        yield DronecanParamClient(host, args.node, local_node=args.local_node, timeout=args.timeout)
+    finally:
+        host.stop()
 
 
 def _line(param: Any) -> str:
@@ -94,14 +99,14 @@ def _line(param: Any) -> str:
 
 
 def cmd_param_list(args: argparse.Namespace) -> int:
-    client = _client(args)
     terminal = sys.stderr.isatty()
 
     def progress(count: int) -> None:
         if terminal and count % 25 == 0:
             print(f"\r{count} parameters read...", end="", file=sys.stderr, flush=True)
 
-    rows = [_line(p) for p in client.list(progress)]
+    with _client(args) as client:
+        rows = [_line(p) for p in client.list(progress)]
     if terminal:
         print("\r" + " " * 40 + "\r", end="", file=sys.stderr)
     print("\n".join(rows))
@@ -112,8 +117,8 @@ def cmd_param_list(args: argparse.Namespace) -> int:
 def cmd_param_get(args: argparse.Namespace) -> int:
     from px4params.links.dronecan_client import DronecanError
 
-    client = _client(args)
-    param = client.get(args.name)
+    with _client(args) as client:
+        param = client.get(args.name)
     if param is None:
         raise DronecanError(f"node {args.node} has no parameter {args.name}")
     print(_line(param))
@@ -123,21 +128,21 @@ def cmd_param_get(args: argparse.Namespace) -> int:
 def cmd_param_set(args: argparse.Namespace) -> int:
     from px4params.links.dronecan_client import DronecanError, parse_value
 
-    client = _client(args)
-    before = client.get(args.name)
-    if before is None:
-        raise DronecanError(f"node {args.node} has no parameter {args.name}")
-    try:
-        value = parse_value(args.value, before.value)
-    except DronecanError as e:
-        raise DronecanError(f"{args.name}: {e}") from None
-    print(_line(client.set(args.name, value)))
+    with _client(args) as client:
+        before = client.get(args.name)
+        if before is None:
+            raise DronecanError(f"node {args.node} has no parameter {args.name}")
+        try:
+            value = parse_value(args.value, before.value)
+        except DronecanError as e:
+            raise DronecanError(f"{args.name}: {e}") from None
+        print(_line(client.set(args.name, value)))
     return EXIT_OK
 
 
 def cmd_param_save(args: argparse.Namespace) -> int:
-    client = _client(args)
-    client.save()
+    with _client(args) as client:
+        client.save()
     print(f"node {args.node} saved its parameters")
     return EXIT_OK
 
