@@ -35,3 +35,20 @@ def store_options(p: argparse.ArgumentParser) -> None:
         metavar="DIR",
         help="extra DSDL root namespace folder (repeatable)",
     )
+
+
+def bench_options(p: argparse.ArgumentParser, reported: str) -> None:
+    """``--bench FILE.toml`` and ``--bench-duration S`` of the servers; ``reported`` says how
+    they report the devices' health."""
+    p.add_argument(
+        "--bench",
+        metavar="FILE.toml",
+        help=f"boot the manifest on this simulated bench and report {reported}",
+    )
+    p.add_argument(
+        "--bench-duration",
+        type=float,
+        default=10.0,
+        metavar="S",
+        help="simulated seconds of each bench boot (default 10)",
+    )

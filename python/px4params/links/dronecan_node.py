@@ -30,7 +30,6 @@ from __future__ import annotations
 
 import os
 import select
-import threading
 import time
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
@@ -41,6 +40,7 @@ from px4params.links import can_transfer
 from px4params.links.can_transfer import CanId, Frame, Transfer, TransferReceiver
 from px4params.links.dronecan_params import EMPTY, DronecanParams, variant_name
 from px4params.links.identity import store_digest, version_parts
+from px4params.links.serving import ServingLoop
 from px4params.links.slcan import SerialPort, SlcanAdapter, read_port
 
 if TYPE_CHECKING:
@@ -63,7 +63,7 @@ _SERVICES = {
 }
 
 
-class DronecanParamNode:
+class DronecanParamNode(ServingLoop):
     """Serves ``store`` as node ``node_id`` on ``port`` (an SLCAN serial line, this end being
     the adapter).
 
@@ -72,6 +72,8 @@ class DronecanParamNode:
     :class:`~px4params.vehicle.health.ManifestHealth`; None reports OK.
     ``log``: called with one line per write, refusal, save and restart.
     """
+
+    thread_name = "dronecan-node"
 
     def __init__(
         self,
@@ -87,6 +89,7 @@ class DronecanParamNode:
     ) -> None:
         if not 1 <= node_id <= 127:
             raise ValueError(f"node ID {node_id} is out of range (expected 1..127)")
+        super().__init__()
         self.store = store
         self.port = port
         self.node_id = node_id
@@ -109,29 +112,10 @@ class DronecanParamNode:
         self._started = time.monotonic()
         self._next_status = 0.0
         self._status_tid = 0
-        self._stop = threading.Event()
-        self._thread: threading.Thread | None = None
         #: Counters, for tests and the CLI's summary.
         self.stats = {"requests": 0, "ignored": 0, "accepted": 0, "refused": 0, "saves": 0}
 
     # -- lifecycle ----------------------------------------------------------------------------
-
-    def serve_forever(self, poll: float = 0.05) -> None:
-        """Runs until :meth:`stop` (or Ctrl-C in the caller)."""
-        while not self._stop.is_set():
-            self.step(poll)
-
-    def start(self) -> DronecanParamNode:
-        """Serves in a background thread (for embedding)."""
-        self._thread = threading.Thread(target=self.serve_forever, name="dronecan-node")
-        self._thread.daemon = True
-        self._thread.start()
-        return self
-
-    def stop(self) -> None:
-        self._stop.set()
-        if self._thread is not None and self._thread is not threading.current_thread():
-            self._thread.join()
 
     def step(self, timeout: float) -> None:
         """One turn: read what the host wrote (waiting up to ``timeout``), answer, and send

@@ -50,7 +50,6 @@ import os
 import select
 import socket
 import struct
-import threading
 import time
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
@@ -63,6 +62,7 @@ from px4params.gcs.component_information import ComponentFiles, px4_crc32
 from px4params.links import mavlink_messages
 from px4params.links.identity import store_digest, version_parts
 from px4params.links.mavlink_ftp import MavftpServer
+from px4params.links.serving import ServingLoop
 from px4params.store import flat
 
 if TYPE_CHECKING:
@@ -197,13 +197,15 @@ class _Sink:
         pass
 
 
-class MavlinkParamServer:
+class MavlinkParamServer(ServingLoop):
     """Serves ``store`` over UDP at ``host:port`` (port 0 picks a free one: see ``address``).
 
     ``save_path``: the store file accepted writes are saved to (None: kept in memory only).
     ``gcs``: addresses to send heartbeats to before they speak (e.g. QGC's 127.0.0.1:14550).
     ``log``: called with one line per accepted or refused write.
     """
+
+    thread_name = "mavlink-params"
 
     def __init__(
         self,
@@ -220,6 +222,7 @@ class MavlinkParamServer:
         health: Callable[[], list[str]] | None = None,
         health_interval: float = 2.0,
     ) -> None:
+        super().__init__()
         self.store = store
         self.flat = flat.flat_map(store)  # refuses a store whose leaves cannot be destructured
         self.save_path = save_path
@@ -244,8 +247,6 @@ class MavlinkParamServer:
         self._seen: dict[Address, None] = {}  # peers heard from, oldest first
         self._entries: list[ParamEntry] | None = None
         self._stream: tuple[Address, int] | None = None  # (peer, next index; -1 = hash)
-        self._stop = threading.Event()
-        self._thread: threading.Thread | None = None
         self._next_heartbeat = 0.0
         self._next_burst = 0.0
         self._text_id = 0
@@ -268,32 +269,9 @@ class MavlinkParamServer:
         host, port = self._sock.getsockname()[:2]
         return str(host), int(port)
 
-    def serve_forever(self, poll: float = 0.05) -> None:
-        """Runs until :meth:`stop` (or Ctrl-C in the caller); closes the socket at the end."""
-        try:
-            while not self._stop.is_set():
-                self.step(poll)
-        finally:
-            self._sock.close()
-
-    def start(self) -> MavlinkParamServer:
-        """Serves in a background thread (for tests and embedding)."""
-        self._thread = threading.Thread(target=self.serve_forever, name="mavlink-params")
-        self._thread.daemon = True
-        self._thread.start()
-        return self
-
-    def stop(self) -> None:
-        """Asks the loop to end; waits for the background thread if there is one."""
-        self._stop.set()
-        if self._thread is not None and self._thread is not threading.current_thread():
-            self._thread.join()
-
-    def __enter__(self) -> MavlinkParamServer:
-        return self.start()
-
-    def __exit__(self, *exc: object) -> None:
-        self.stop()
+    def close(self) -> None:
+        """The socket, once the loop has ended."""
+        self._sock.close()
 
     def step(self, timeout: float) -> None:
         """One turn: read what arrived (waiting up to ``timeout``), stream, heartbeat."""

@@ -12,7 +12,7 @@ import threading
 from collections.abc import Iterator, Sequence
 from typing import Any
 
-from px4params.cli.options import store_options
+from px4params.cli.options import bench_options, store_options
 from px4params.status import EXIT_OK
 from px4params.store.store import default_store_path
 
@@ -197,18 +197,7 @@ examples:
         help="CAN bit rate the adapter starts with (the host may set another; default 1000000)",
     )
     store_options(s)
-    s.add_argument(
-        "--bench",
-        metavar="FILE.toml",
-        help="boot the manifest on this simulated bench: NodeStatus health from its devices",
-    )
-    s.add_argument(
-        "--bench-duration",
-        type=float,
-        default=10.0,
-        metavar="S",
-        help="simulated seconds of each bench boot (default 10)",
-    )
+    bench_options(s, "the devices' health in NodeStatus")
     s.set_defaults(func=cmd_serve)
 
     q = verbs.add_parser(

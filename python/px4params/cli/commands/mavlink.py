@@ -9,7 +9,7 @@ import threading
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from px4params.cli.options import store_options
+from px4params.cli.options import bench_options, store_options
 from px4params.errors import CommandError
 from px4params.status import EXIT_OK
 from px4params.store.store import default_store_path
@@ -156,17 +156,9 @@ examples:
         "--compid", type=_id, metavar="N", help="component ID (default: MAV_COMP_ID, else 1)"
     )
     store_options(s)  # --store, --classic, --dsdl as for `px4params param`
-    s.add_argument(
-        "--bench",
-        metavar="FILE.toml",
-        help="boot the manifest on this simulated bench and report each device's health as "
-        "STATUSTEXT every 2 s ('health: ina238 INA238#1 on I2C bus 2 address 0x45: critical: ...')",
-    )
-    s.add_argument(
-        "--bench-duration",
-        type=float,
-        default=10.0,
-        metavar="S",
-        help="simulated seconds of each bench boot (default 10)",
+    bench_options(
+        s,
+        "each device's health as STATUSTEXT every 2 s ('health: ina238 INA238#1 on I2C bus 2 "
+        "address 0x45: critical: ...')",
     )
     s.set_defaults(func=cmd_serve)
