@@ -3,8 +3,21 @@
 from __future__ import annotations
 
 import argparse
+from collections.abc import Callable
 
 from px4params.store.classic import CLASSIC_ENV
+
+
+def identifier(what: str, high: int) -> Callable[[str], int]:
+    """An argparse type: a decimal ID 1..``high`` (``what`` names it in the error)."""
+
+    def parse(text: str) -> int:
+        # (digits counted first: Python will not convert thousands of them)
+        if not text.isdigit() or len(text) > 5 or not 1 <= int(text) <= high:
+            raise argparse.ArgumentTypeError(f"'{text[:20]}' is not a {what} (expected 1..{high})")
+        return int(text)
+
+    return parse
 
 
 def dsdl_option(p: argparse.ArgumentParser) -> None:

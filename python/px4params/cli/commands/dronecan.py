@@ -12,7 +12,7 @@ import threading
 from collections.abc import Iterator, Sequence
 from typing import Any
 
-from px4params.cli.options import bench_options, store_options
+from px4params.cli.options import bench_options, identifier, store_options
 from px4params.status import EXIT_OK
 from px4params.store.store import default_store_path
 
@@ -21,10 +21,7 @@ __all__ = ["add_parser"]
 _BITRATES = ("10000", "20000", "50000", "100000", "125000", "250000", "500000", "800000", "1000000")
 
 
-def _node_id(text: str) -> int:
-    if not text.isdigit() or not 1 <= int(text) <= 127:
-        raise argparse.ArgumentTypeError(f"'{text}' is not a DroneCAN node ID (expected 1..127)")
-    return int(text)
+_node_id = identifier("DroneCAN node ID", 127)
 
 
 def cmd_serve(args: argparse.Namespace) -> int:

@@ -9,7 +9,7 @@ import threading
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from px4params.cli.options import bench_options, store_options
+from px4params.cli.options import bench_options, identifier, store_options
 from px4params.errors import CommandError
 from px4params.status import EXIT_OK
 from px4params.store.store import default_store_path
@@ -27,10 +27,7 @@ def parse_udp(text: str) -> tuple[str, int]:
     return host, int(port)
 
 
-def _id(text: str) -> int:
-    if not text.isdigit() or not 1 <= int(text) <= 255:
-        raise argparse.ArgumentTypeError(f"'{text}' is not a MAVLink ID (expected 1..255)")
-    return int(text)
+_id = identifier("MAVLink ID", 255)
 
 
 def _bench_health(args: argparse.Namespace, store: Any) -> Callable[[], list[str]]:
