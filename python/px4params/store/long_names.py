@@ -125,9 +125,6 @@ class LongNames:
             return f"{spec.name}_{part}"
         return f"{spec.name}_{number}_{part}"
 
-    def __contains__(self, name: object) -> bool:
-        return isinstance(name, str) and name in self._owner
-
     def table(self) -> list[LongLeaf]:
         """Every live leaf of every existing instance, in store order."""
         rows: list[LongLeaf] = []
@@ -141,21 +138,6 @@ class LongNames:
                         name = self.name_of(spec, number, parts[slot.path])
                         rows.append(LongLeaf(name, instance, leaf.index, slot))
         return rows
-
-    def find(self, name: str) -> LongLeaf | None:
-        """The live leaf called ``name`` (exact, upper case), or None: no such name, its
-        instance does not exist, or its leaf is not live."""
-        found = self._owner.get(name)
-        if found is None:
-            return None
-        spec, number, slot = found
-        instance = spec.instance_name(number or 0)
-        if instance not in self._store:
-            return None
-        for leaf in self._store.leaves(instance):
-            if leaf.path == slot.path:
-                return LongLeaf(name, instance, leaf.index, slot)
-        return None
 
     def mask_names(self) -> dict[str, ParamSpec]:
         """The instance masks, by name (``INA238_INST``)."""
