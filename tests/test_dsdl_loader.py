@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import json
+import marshal
 import math
 import os
 import pickle
 import subprocess
 import sys
 import textwrap
+import zlib
 from pathlib import Path
 from typing import Any
 
@@ -212,7 +214,10 @@ def test_magnetometers(px_model: dict[str, Any]) -> None:
 
 
 def test_model_is_json_roundtrip_stable(px_model: dict[str, Any]) -> None:
-    assert json.loads(json.dumps(px_model)) == px_model
+    # Every definition is plain data (the cache packs each one; nothing else may be in them).
+    types = dict(px_model["types"].items())
+    assert json.loads(json.dumps(types)) == types
+    assert json.loads(json.dumps(px_model["newest"])) == px_model["newest"]
 
 
 # --------------------------------------------------------------------------------------------------
@@ -522,7 +527,7 @@ def test_second_load_hits_cache(tmp_path: Path, monkeypatch: pytest.MonkeyPatch)
 
     monkeypatch.setattr(dsdl_loader, "build_model", fail)
     assert load_model(include_dronecan=False, cache_dir=tmp_path) == first
-    assert len(list(tmp_path.glob("model-*.json"))) == 1
+    assert len(list(tmp_path.glob("model-*.marshal"))) == 1
 
 
 def test_default_cache_dir_from_environment(
@@ -531,7 +536,7 @@ def test_default_cache_dir_from_environment(
     monkeypatch.setenv("PX4PARAMS_CACHE_DIR", str(tmp_path / "env"))
     assert model_cache.default_cache_dir() == str(tmp_path / "env")
     load_model(include_dronecan=False)
-    assert len(list((tmp_path / "env").glob("model-*.json"))) == 1
+    assert len(list((tmp_path / "env").glob("model-*.marshal"))) == 1
     monkeypatch.delenv("PX4PARAMS_CACHE_DIR")
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
     assert model_cache.default_cache_dir() == str(tmp_path / "xdg" / "px4params")
@@ -547,7 +552,7 @@ def test_cache_key_follows_file_contents(tmp_path: Path) -> None:
     assert load_ext(tmp_path, root)["types"]["ext.Thing.1.0"]["fields"][0]["doc"]["tags"] == {
         "default": 2
     }
-    assert len(list((tmp_path / "cache").glob("model-*.json"))) == 2
+    assert len(list((tmp_path / "cache").glob("model-*.marshal"))) == 2
     # Options are part of the key as well.
     keys = {
         model_cache.cache_key_text(model_roots.collect_roots([root], flag), flag)
@@ -556,13 +561,39 @@ def test_cache_key_follows_file_contents(tmp_path: Path) -> None:
     assert len(keys) == 2
 
 
-@pytest.mark.parametrize("garbage", [b"", b"{not json", b"\xff\xfe\x00", b'{"format": 99}', b"[]"])
-def test_corrupt_cache_is_rebuilt(tmp_path: Path, garbage: bytes) -> None:
+def _flip_last_byte(data: bytes) -> bytes:
+    return data[:-1] + bytes([data[-1] ^ 1])
+
+
+def _marshal_with_crc(value: object) -> bytes:
+    body = marshal.dumps(value)
+    return b"P4MC" + zlib.crc32(body).to_bytes(4, "little") + body
+
+
+@pytest.mark.parametrize(
+    "damage",
+    [
+        lambda _: b"",
+        lambda _: b"{not json",
+        lambda _: b"\xff\xfe\x00",
+        lambda data: data[: len(data) // 2],  # torn
+        _flip_last_byte,  # the CRC catches it before marshal sees it
+        lambda data: _marshal_with_crc((marshal.loads(data[8:])[0], {"format": 99})),  # older
+        lambda data: _marshal_with_crc(("another key", marshal.loads(data[8:])[1])),
+        lambda _: _marshal_with_crc([]),
+        lambda _: b"P4MC" + zlib.crc32(b"\xff").to_bytes(4, "little") + b"\xff",  # bad marshal
+    ],
+)
+def test_corrupt_cache_is_rebuilt(tmp_path: Path, damage: Any) -> None:
     good = load_model(include_dronecan=False, cache_dir=tmp_path)
-    (cache_file,) = tmp_path.glob("model-*.json")
-    cache_file.write_bytes(garbage)
+    (cache_file,) = tmp_path.glob("model-*.marshal")
+    cache_file.write_bytes(damage(cache_file.read_bytes()))
     assert load_model(include_dronecan=False, cache_dir=tmp_path) == good
-    assert json.loads(cache_file.read_text(encoding="utf-8")) == good
+    rewritten = cache_file.read_bytes()
+    assert rewritten[4:8] == zlib.crc32(rewritten[8:]).to_bytes(4, "little")
+    stored = marshal.loads(rewritten[8:])[1]  # each type packed on its own
+    assert {k: marshal.loads(v) for k, v in stored["types"].items()} == dict(good["types"].items())
+    assert stored["newest"] == good["newest"]
     assert not list(tmp_path.glob(".*.tmp"))
 
 

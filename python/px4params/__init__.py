@@ -14,8 +14,6 @@ so a command that needs only part of the package loads only that part.
 
 from __future__ import annotations
 
-import importlib
-
 #: The package's version (pyproject.toml's; a test keeps them equal).
 __version__ = "0.1.0"
 
@@ -51,7 +49,7 @@ def __getattr__(name: str) -> object:
     module = _EXPORTS.get(name)
     if module is None:
         raise AttributeError(f"module 'px4params' has no attribute {name!r}")
-    value = getattr(importlib.import_module(module), name)
+    value = getattr(__import__(module, fromlist=[name]), name)
     globals()[name] = value  # once imported, a plain attribute
     return value
 

@@ -12,7 +12,6 @@ is refused, not read as infinity; infinities and NaN are written ``inf``, ``-inf
 
 from __future__ import annotations
 
-import json
 import math
 
 from px4params.errors import NumberError
@@ -81,6 +80,8 @@ def load_json(text: str) -> object:
     """``json.loads`` with the bounds above: long integers, ``1e400`` and the non-standard
     ``Infinity``/``NaN`` are refused (:class:`NumberError`); other errors are as
     ``json.loads`` raises them."""
+    import json  # here: a command that reads no JSON does not pay 2 ms to import it
+
     return json.loads(
         text, parse_int=_json_int, parse_float=parse_float, parse_constant=_json_constant
     )

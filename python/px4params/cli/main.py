@@ -7,7 +7,6 @@ Exit codes are in ``status.py``. Every error a command raises on purpose
 from __future__ import annotations
 
 import argparse
-import importlib
 import os
 import sys
 from collections.abc import Sequence
@@ -59,7 +58,13 @@ class Parser(argparse.ArgumentParser):
     too (argparse makes them of their parent's)."""
 
     def _get_formatter(self) -> argparse.HelpFormatter:
-        return self.formatter_class(prog=self.prog, width=_terminal_width() - 2)
+        global _width
+        if _width is None:  # argparse makes a formatter for every argument it adds: ask once
+            _width = _terminal_width()
+        return self.formatter_class(prog=self.prog, width=_width - 2)
+
+
+_width: int | None = None
 
 
 def _terminal_width() -> int:
@@ -86,7 +91,7 @@ def build_parser(only: str | None = None, words: Sequence[str] = ()) -> argparse
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name, (module_name, summary) in COMMANDS.items():
         if only is None or name == only:
-            module = importlib.import_module(f"px4params.cli.commands.{module_name}")
+            module = __import__(f"px4params.cli.commands.{module_name}", fromlist=["add_parser"])
             module.add_parser(sub, name, summary, words)
         elif only not in COMMANDS:  # listed by name for --help and usage errors
             sub.add_parser(name, help=summary, add_help=False)

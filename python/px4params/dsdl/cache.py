@@ -6,20 +6,32 @@ loader's own modules, the installed pydsdl and pydronecan, and every DSDL file o
 (its path, size and modification time). A file modified less than two seconds before the key is
 taken is keyed by its contents too: two writes within the file system's timestamp resolution
 keep the same time (git's "racy" files). A cache hit costs a directory walk, a ``stat`` per
-file and one JSON read; this module imports nothing heavier than ``json`` for it.
+file and one read of a :mod:`px4params.cache_file`.
+
+Each type's definition is cached packed (marshalled on its own) and unpacked on first use
+(:class:`LazyTypes`), with the newest version of every name and the types each type refers to
+beside them: a command that works on one DroneCAN message does not unpack the other two
+hundred, and :class:`px4params.dsdl.schema.Schema` compiles only what it is asked for.
 """
 
 from __future__ import annotations
 
-import contextlib
+import binascii
 import importlib.machinery
-import json
+import marshal
 import os
 import time
-import zlib
-from collections.abc import Sequence
+from collections.abc import Iterator, Mapping, Sequence
 
 from px4params._records import TYPE_CHECKING
+from px4params.cache_file import (
+    INTERPRETER,
+    RACY_SECONDS,
+    cache_path,
+    default_cache_dir,
+    read_cached,
+    write_cached,
+)
 from px4params.dsdl.roots import Root, collect_roots
 from px4params.errors import DsdlError
 
@@ -30,28 +42,13 @@ if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
 
 #: Bumped whenever the model's shape changes, so that older caches are rebuilt.
 #: 2: type entries carry ``service`` and ``signature_override`` (data type signatures).
-MODEL_FORMAT = 2
+#: 3: a marshal cache file instead of JSON, each type packed on its own.
+MODEL_FORMAT = 3
 
-#: Environment variable naming the cache folder.
-CACHE_ENV = "PX4PARAMS_CACHE_DIR"
-
-#: Files modified this recently (seconds) are keyed by their contents as well.
-RACY_SECONDS = 2.0
 
 _HERE = os.path.dirname(os.path.abspath(__file__))
 #: The modules whose code decides what the model holds.
 _LOADER_MODULES = ("loader.py", "cache.py")
-
-
-def default_cache_dir() -> str:
-    """``$PX4PARAMS_CACHE_DIR``, else ``$XDG_CACHE_HOME/px4params``, else ``~/.cache/px4params``."""
-    explicit = os.environ.get(CACHE_ENV)
-    if explicit:
-        return explicit
-    xdg = os.environ.get("XDG_CACHE_HOME")
-    if xdg:
-        return os.path.join(xdg, "px4params")
-    return os.path.join(os.path.expanduser("~"), ".cache", "px4params")
 
 
 def load_model(
@@ -72,16 +69,85 @@ def load_model(
     roots = collect_roots(extra_roots, include_dronecan)
     key_text = cache_key_text(roots, include_dronecan)
     directory = os.fspath(cache_dir) if cache_dir is not None else default_cache_dir()
-    name = f"model-{zlib.crc32(key_text.encode('utf-8', 'surrogateescape')):08x}.json"
-    cache_file = os.path.join(directory, name)
+    cache_file = cache_path(directory, "model", key_text)
     cached = _read_cache(cache_file, key_text)
     if cached is not None:
-        return cached
+        return _unpacked(cached)
     from px4params.dsdl.loader import build_model  # a miss: now the parsers are needed
 
-    model = {"format": MODEL_FORMAT, **build_model(roots)}
-    _write_cache(cache_file, key_text, model)
-    return model
+    types = build_model(roots)["types"]
+    packed = {
+        "format": MODEL_FORMAT,
+        "types": {key: marshal.dumps(definition) for key, definition in types.items()},
+        "newest": newest_versions(types),
+        "refs": {key: sorted(type_refs(definition)) for key, definition in types.items()},
+    }
+    write_cached(cache_file, key_text, packed)
+    return _unpacked(packed, types)
+
+
+class LazyTypes(Mapping[str, "Model"]):
+    """A model's ``types``: key -> definition, each unpacked on first use."""
+
+    def __init__(self, packed: dict[str, bytes], unpacked: Model | None = None) -> None:
+        self._packed = packed
+        self._unpacked: dict[str, Model] = dict(unpacked or {})
+
+    def __getitem__(self, key: str) -> Model:
+        definition = self._unpacked.get(key)
+        if definition is None:
+            definition = marshal.loads(self._packed[key])
+            self._unpacked[key] = definition
+        return definition
+
+    def __contains__(self, key: object) -> bool:
+        return key in self._packed
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._packed)
+
+    def __len__(self) -> int:
+        return len(self._packed)
+
+    def __repr__(self) -> str:
+        return f"<LazyTypes: {len(self._packed)} types, {len(self._unpacked)} unpacked>"
+
+
+def _unpacked(packed: Model, types: Model | None = None) -> Model:
+    return {
+        "format": packed["format"],
+        "types": LazyTypes(packed["types"], types),
+        "newest": packed["newest"],
+        "refs": packed["refs"],
+    }
+
+
+def newest_versions(types: Mapping[str, Model]) -> dict[str, str]:
+    """Name without version -> key of its newest version, for the versioned (DSDL) types."""
+    newest: dict[str, tuple[tuple[int, int], str]] = {}
+    for key, definition in types.items():
+        version = definition.get("version")
+        if version:
+            rank = (int(version[0]), int(version[1]))
+            name = definition["name"]
+            if name not in newest or newest[name][0] < rank:
+                newest[name] = (rank, key)
+    return {name: key for name, (_, key) in newest.items()}
+
+
+def type_refs(definition: Model) -> set[str]:
+    """The keys of the types ``definition``'s fields refer to (directly)."""
+    found: set[str] = set()
+    pending: list[object] = [definition.get("fields")]
+    while pending:
+        item = pending.pop()
+        if isinstance(item, dict):
+            if item.get("kind") == "ref":
+                found.add(item["name"])
+            pending.extend(item.values())
+        elif isinstance(item, list):
+            pending.extend(item)
+    return found
 
 
 def _installed(name: str) -> str:
@@ -103,6 +169,7 @@ def cache_key_text(roots: Sequence[Root], include_dronecan: bool) -> str:
     parts = [
         "px4params-dsdl-model",
         str(MODEL_FORMAT),
+        INTERPRETER,
         f"pydsdl={_installed('pydsdl')}",
         f"dronecan={_installed('dronecan')}",
         f"include_dronecan={include_dronecan}",
@@ -125,37 +192,17 @@ def cache_key_text(roots: Sequence[Root], include_dronecan: bool) -> str:
 def _file_crc(path: str) -> int:
     try:
         with open(path, "rb") as f:
-            return zlib.crc32(f.read())
+            return binascii.crc32(f.read())
     except OSError as ex:
         raise DsdlError(f"cannot read DSDL file: {ex.strerror or ex}", path) from ex
 
 
 def _read_cache(path: str, key_text: str) -> Model | None:
-    try:
-        with open(path, encoding="utf-8") as f:
-            model = json.load(f)
-    except (OSError, ValueError):  # missing, unreadable, not UTF-8 or not JSON: rebuild
-        return None
+    model = read_cached(path, key_text)
     if (
         isinstance(model, dict)
         and model.get("format") == MODEL_FORMAT
-        and model.get("key") == key_text  # a different key with the same CRC is a miss
         and isinstance(model.get("types"), dict)
     ):
         return model
     return None
-
-
-def _write_cache(path: str, key_text: str, model: Model) -> None:
-    # Best effort: a read-only or full cache folder must not break loading.
-    model["key"] = key_text
-    folder, name = os.path.split(path)
-    tmp = os.path.join(folder, f".{name}.{os.getpid()}.tmp")
-    try:
-        os.makedirs(folder, exist_ok=True)
-        with open(tmp, "w", encoding="utf-8") as out:
-            json.dump(model, out, separators=(",", ":"))
-        os.replace(tmp, path)  # atomic: readers see the old file or the whole new one
-    except OSError:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)

@@ -9,7 +9,7 @@ from collections.abc import Iterator, Mapping, MutableMapping, Sequence
 from px4params import _native
 from px4params._records import TYPE_CHECKING
 from px4params.dsdl import signature as _signature
-from px4params.dsdl.cache import load_model
+from px4params.dsdl.cache import load_model, newest_versions, type_refs
 
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
     from typing import Any, NamedTuple
@@ -167,20 +167,36 @@ class Schema(Mapping[str, DataType]):
 
     def __init__(self, model: Mapping[str, Any]) -> None:
         self.model = model
-        types: dict[str, Any] = dict(model["types"])
+        types: Mapping[str, Any] = model["types"]
         self._definitions = types
-        self._native = _native.Schema(types)
-        newest: dict[str, tuple[tuple[int, int], str]] = {}
-        for key, definition in types.items():
-            version = definition.get("version")
-            if version:
-                rank = (int(version[0]), int(version[1]))
-                name = definition["name"]
-                if name not in newest or newest[name][0] < rank:
-                    newest[name] = (rank, key)
-        self._newest = {name: key for name, (_, key) in newest.items()}
+        # A cached model carries these; a model built by hand has them worked out here.
+        self._newest: Mapping[str, str] = model.get("newest") or newest_versions(types)
+        self._refs: Mapping[str, Sequence[str]] = model.get("refs") or {}
+        self._all: _native.Schema | None = None
         self._cache: dict[str, DataType] = {}
         self._signatures: dict[str, int] = {}
+
+    @property
+    def _native(self) -> _native.Schema:
+        """Every type compiled into one layout (a store's types must share one)."""
+        if self._all is None:
+            self._all = _native.Schema(dict(self._definitions.items()))
+        return self._all
+
+    def _compiled(self, key: str) -> _native.DataType:
+        """``key`` compiled: from the whole layout once there is one, else with only the types
+        it uses (a command on one message does not compile two hundred)."""
+        if self._all is not None:
+            return self._all.get(key)
+        closure, pending = {}, [key]
+        while pending:
+            name = pending.pop()
+            if name not in closure:
+                definition = self._definitions[name]
+                closure[name] = definition
+                refs = self._refs.get(name)
+                pending.extend(refs if refs is not None else type_refs(definition))
+        return _native.Schema(closure).get(key)
 
     def resolve(self, name: str) -> str:
         """The key of ``name`` (a key, or a versionless name meaning its newest version)."""
@@ -197,7 +213,7 @@ class Schema(Mapping[str, DataType]):
             cached = DataType(
                 key,
                 self._definitions[key],
-                self._native.get(key),
+                self._compiled(key),
                 self._definitions,
                 self._signatures,
             )

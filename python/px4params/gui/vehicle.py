@@ -148,9 +148,9 @@ class StoreVehicle(_Base):
         self.values = flat_values(self.store)
 
     def write(self, name: str, value: int | float) -> WriteResult:
-        from px4params.store.session import store_lock
+        from px4params.store.session import StoreLock
 
-        with self._lock, store_lock(self._session.path):
+        with self._lock, StoreLock(self._session.path):
             try:
                 from px4params.store.flat import write_flat
 

@@ -278,10 +278,10 @@ class DronecanParamNode(ServingLoop):
         if self.save_path is None:
             self.log(f"refused: {what}: no store file (serving a store in memory)")
             return False
-        from px4params.store.session import store_lock
+        from px4params.store.session import StoreLock
 
         try:
-            with store_lock(self.save_path):
+            with StoreLock(self.save_path):
                 if erase:
                     # Every value at its default goes to the file; the running values stay
                     # until the next restart (the transaction is undone).

@@ -8,8 +8,6 @@ refused change saves nothing and leaves the file as it was.
 from __future__ import annotations
 
 import argparse
-import fnmatch
-import json
 import math
 import os
 import re
@@ -26,10 +24,12 @@ from px4params.store.session import Session
 from px4params.store.store import Key, Store
 
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
-    from typing import Any
+    from typing import Any, TextIO
 
-_INT = re.compile(r"[+-]?(0[xX][0-9a-fA-F]+|[0-9]+)")
-_FLOAT = re.compile(r"[+-]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][+-]?[0-9]+)?")
+# Pattern strings: ``re`` compiles them on first use, so that commands that parse no number do
+# not pay for it.
+_INT = r"[+-]?(0[xX][0-9a-fA-F]+|[0-9]+)"
+_FLOAT = r"[+-]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][+-]?[0-9]+)?"
 
 
 # -- values given as text -------------------------------------------------------------------
@@ -49,14 +49,14 @@ def parse_number(text: str, kind: str, where: str) -> int | float | bool:
         raise CommandError(f"{where}: '{text}' is not a boolean (expected 0, 1, true or false)")
     try:
         if kind.startswith("float") or kind == "Float":
-            if _INT.fullmatch(t):
+            if re.fullmatch(_INT, t):
                 return float(parse_int(t, 16 if "x" in t[:3].lower() else 10))
-            if _FLOAT.fullmatch(t) or t.lower() in ("nan", "inf", "+inf", "-inf"):
+            if re.fullmatch(_FLOAT, t) or t.lower() in ("nan", "inf", "+inf", "-inf"):
                 return parse_float(t)
             raise CommandError(
                 f"{where}: '{abbreviated(text)}' is not a number (expected e.g. 0.0003, 2e-4 or 5)"
             )
-        if _INT.fullmatch(t):
+        if re.fullmatch(_INT, t):
             return parse_int(t, 16 if "x" in t[:3].lower() else 10)
     except NumberError as e:
         raise CommandError(f"{where}: {e}") from None
@@ -77,7 +77,7 @@ def parse_value(store: Store, key: Key, text: str) -> Any:
             return load_json(text)
         except NumberError as e:
             raise CommandError(f"{key}: {e}") from None
-        except (json.JSONDecodeError, RecursionError, ValueError) as e:
+        except (RecursionError, ValueError) as e:  # json.JSONDecodeError is a ValueError
             msg = getattr(e, "msg", str(e))
             raise CommandError(
                 f"{key}: a whole value is JSON ({msg} in '{abbreviated(text)}'); "
@@ -170,6 +170,8 @@ def field_tags(store: Store, name: str, path: str) -> dict[str, Any]:
 def _matches(name: str, patterns: list[str]) -> bool:
     if not patterns:
         return True
+    import fnmatch
+
     return any(fnmatch.fnmatchcase(name.upper(), p.upper()) for p in patterns)
 
 
@@ -349,7 +351,7 @@ def verb_show(s: Session, a: argparse.Namespace) -> int:
             }
             for name, index, _, used, unsaved, changed in rows
         ]
-        print(json.dumps(listed), file=s.out)
+        _print_json(listed, s.out)
         return EXIT_OK
     print("Symbols: x = used, + = saved, * = unsaved", file=s.out)
     for name, index, uindex, used, unsaved, changed in rows:
@@ -389,7 +391,7 @@ def _show_leaves(s: Session, a: argparse.Namespace) -> int:
     if a.json:
         for row in rows:
             del row["shown"], row["default_shown"]
-        print(json.dumps(to_json_value(rows)), file=s.out)
+        _print_json(to_json_value(rows), s.out)
         return EXIT_OK
     width = max(len(r["path"]) for r in rows)
     for r in rows:
@@ -409,6 +411,8 @@ def _expand(store: Store, patterns: list[str]) -> list[str | Key]:
     for p in patterns:
         upper = p.upper()
         if "*" in p:
+            import fnmatch
+
             found += [n for n in names if fnmatch.fnmatchcase(n, upper)]
         elif upper in store.parameters and store.spec(upper) is not None and "#" not in upper:
             spec = store.spec(upper)
@@ -516,7 +520,7 @@ def verb_status(s: Session, a: argparse.Namespace) -> int:
         "reserved_bytes": size,
     }
     if a.json:
-        print(json.dumps(status), file=s.out)
+        _print_json(status, s.out)
         return EXIT_OK
     file_text = f"{status['file_bytes']} bytes" if exists else "not saved yet"
     print(f"store: {s.path} ({file_text})", file=s.out)
@@ -543,7 +547,7 @@ def verb_flat(s: Session, a: argparse.Namespace) -> int:
 
     table = [p for p in flat_table(s.store) if _matches(p.name, a.filters)]
     if a.json:
-        print(json.dumps([p.as_dict() for p in table]), file=s.out)
+        _print_json([p.as_dict() for p in table], s.out)
         return EXIT_OK
     for p in table:
         shown = short_float(p.value, "float32") if isinstance(p.value, float) else str(p.value)
@@ -557,7 +561,7 @@ def verb_flat(s: Session, a: argparse.Namespace) -> int:
 def verb_instances(s: Session, a: argparse.Namespace) -> int:
     names = s.store.instances(a.param)
     if a.json:
-        print(json.dumps(names), file=s.out)
+        _print_json(names, s.out)
     else:
         for name in names:
             print(name, file=s.out)
@@ -722,3 +726,9 @@ def _add_verbs(verb: _VerbParsers) -> None:
     )
     p.add_argument("param")
     p.add_argument("--json", action="store_true", help="machine-readable output")
+
+
+def _print_json(value: object, out: TextIO) -> None:
+    import json  # here: the commands that print no JSON do not pay 2 ms to import it
+
+    print(json.dumps(value), file=out)

@@ -7,14 +7,22 @@ Entries are kept whole, so that metadata written back out loses nothing.
 
 from __future__ import annotations
 
-import json
 import math
 import os
 import struct
+import time
 from collections.abc import Mapping
 from types import MappingProxyType
 
 from px4params._records import TYPE_CHECKING
+from px4params.cache_file import (
+    INTERPRETER,
+    RACY_SECONDS,
+    cache_path,
+    default_cache_dir,
+    read_cached,
+    write_cached,
+)
 from px4params.data import CLASSIC_PARAMETERS_JSON
 from px4params.errors import ClassicParamsError
 
@@ -61,8 +69,40 @@ class ClassicParam(NamedTuple):
 
 
 def load_classic(path: str | os.PathLike[str]) -> list[ClassicParam]:
-    """The classic parameters of a ``parameters.json``, in file order."""
+    """The classic parameters of a ``parameters.json``, in file order (checked once per version
+    of the file: later calls read them from a :mod:`px4params.cache_file`)."""
     where = os.fspath(path)
+    key = _cache_key(where)
+    cache = cache_path(default_cache_dir(), "classic", key) if key else ""
+    cached = read_cached(cache, key) if key else None
+    if isinstance(cached, list):
+        return [ClassicParam(*row) for row in cached]
+    params = _parse_classic(where)
+    if key:
+        write_cached(cache, key, [(p.name, p.type, p.default, dict(p.entry)) for p in params])
+    return params
+
+
+def _cache_key(where: str) -> str | None:
+    """What the cached parameters of ``where`` are valid for: its real path, size and time;
+    None for a file modified within the time stamps' resolution (parsed every time)."""
+    try:
+        real = os.path.realpath(where)
+        st = os.stat(real)
+        code = os.stat(__file__)  # the checks below decide what is cached
+    except (OSError, ValueError):
+        return None  # reported by the parse
+    if st.st_mtime_ns > (time.time() - RACY_SECONDS) * 1e9:
+        return None
+    return (
+        f"px4params-classic {INTERPRETER} {__file__} {code.st_size} {code.st_mtime_ns}\n"
+        f"{real} {st.st_size} {st.st_mtime_ns}"
+    )
+
+
+def _parse_classic(where: str) -> list[ClassicParam]:
+    import json  # only on a cache miss: json costs a command 2 ms to import
+
     try:
         with open(where, encoding="utf-8") as f:
             document = json.load(f)

@@ -4,7 +4,7 @@ The format is described in ``docs/store-format.md``. In short (integers little-e
 
     header   "PX4P"  u8 format version (1)  u8 flags (0)  u32 schema fingerprint
     records  u8 kind, key, payloads, u16 CRC-16-CCITT-FALSE of the record's bytes
-    trailer  u32 CRC-32 (zlib) of every byte before it
+    trailer  u32 CRC-32 (zlib's) of every byte before it
 
 A file is checked completely (trailer, then every record) before anything is applied, and it
 is applied to a copy of the store that replaces the store only when all of it went in.
@@ -15,10 +15,8 @@ new one over ``FILE``: a crash at any moment leaves the old or the new file inta
 from __future__ import annotations
 
 import binascii
-import json
 import os
 import struct
-import zlib
 from collections.abc import Mapping
 
 from px4params._records import TYPE_CHECKING
@@ -50,7 +48,7 @@ def fingerprint(specs: list[ParamSpec]) -> int:
     text = "\n".join(
         f"{s.name}={s.data_type.name}.{(s.data_type.version or (0, 0))[0]}" for s in specs
     )
-    return zlib.crc32(text.encode())
+    return binascii.crc32(text.encode())
 
 
 # -- writing ------------------------------------------------------------------------------------
@@ -66,7 +64,7 @@ def encode_file(store: Store) -> bytes:
                 out += record + struct.pack("<H", _crc16(record))
     for record in store._foreign.values():  # classic values of parameters this store lacks
         out += record + struct.pack("<H", _crc16(record))
-    out += TRAILER.pack(zlib.crc32(out))
+    out += TRAILER.pack(binascii.crc32(out))
     return bytes(out)
 
 
@@ -242,7 +240,7 @@ def parse(data: bytes, fp: int, where: str) -> list[Record]:
         raise StoreFileError("file is truncated (no trailer)", where, len(data))
     body_end = len(data) - TRAILER.size
     (crc,) = TRAILER.unpack_from(data, body_end)
-    if zlib.crc32(data[:body_end]) != crc:
+    if binascii.crc32(data[:body_end]) != crc:
         raise StoreFileError(
             "file is corrupted or truncated (CRC-32 mismatch); nothing was applied",
             where,
@@ -481,6 +479,8 @@ def _carry(
 
 def _shown(value: Any) -> str:
     """A dropped value, as the report shows it (JSON, so that it can be typed back in)."""
+    import json
+
     return json.dumps(value, separators=(",", ":"))
 
 

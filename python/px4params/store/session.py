@@ -7,10 +7,9 @@ deferred until the batch succeeds: a failing airframe file leaves no file half-w
 
 from __future__ import annotations
 
-import contextlib
 import os
 import sys
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Callable, Iterable
 
 from px4params._records import TYPE_CHECKING
 from px4params.dsdl.schema import load_schema
@@ -19,7 +18,7 @@ from px4params.store.classic import BUNDLED_CLASSIC, CLASSIC_ENV
 from px4params.store.store import Store, default_store_path
 
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
-    from typing import TextIO
+    from typing import IO, TextIO
 
 
 class Session:
@@ -93,36 +92,62 @@ def open_session(
     return Session(store, path, out or sys.stdout)
 
 
-@contextlib.contextmanager
-def store_lock(path: str) -> Iterator[None]:
+class StoreLock:
     """Holds ``FILE.lock`` while a command reads, changes and saves the store, so that two
-    commands at once do not lose one's change (POSIX advisory lock; elsewhere, no lock)."""
-    try:
-        import fcntl
-    except ImportError:  # not POSIX
-        yield
-        return
-    try:
-        # By the file's real path: two names of one file (a symbolic link) share the lock.
-        handle = open(os.path.realpath(path) + ".lock", "a")  # noqa: SIM115 - held for the block
-    except OSError:
-        yield  # a read-only folder: reading still works, saving will report the problem
-        return
-    with handle:
-        fcntl.flock(handle.fileno(), fcntl.LOCK_EX)
-        yield
+    commands at once do not lose one's change (POSIX advisory lock; elsewhere, no lock):
+    ``with StoreLock(path):``. A class, not ``contextlib.contextmanager``: contextlib costs
+    every command 1 ms to import."""
+
+    def __init__(self, path: str) -> None:
+        self._path = path
+        self._handle: IO[str] | None = None
+
+    def __enter__(self) -> None:
+        try:
+            import fcntl
+        except ImportError:  # not POSIX
+            return
+        try:
+            # By the file's real path: two names of one file (a symbolic link) share the lock.
+            handle = open(os.path.realpath(self._path) + ".lock", "a")
+        except OSError:
+            return  # a read-only folder: reading still works, saving will report the problem
+        try:
+            fcntl.flock(handle.fileno(), fcntl.LOCK_EX)
+        except BaseException:
+            handle.close()
+            raise
+        self._handle = handle
+
+    def __exit__(self, *exc: object) -> None:
+        if self._handle is not None:
+            self._handle.close()  # closing releases the lock
+            self._handle = None
 
 
-@contextlib.contextmanager
-def locked_session(
-    store_path: str | None,
-    classic: str | None,
-    dsdl: Iterable[str] = (),
-    *,
-    start_empty_if_unreadable: bool = False,
-) -> Iterator[Session]:
-    """:func:`open_session` under the store's lock, held until the block ends."""
-    with store_lock(store_path or default_store_path()):
-        yield open_session(
-            store_path, classic, dsdl, start_empty_if_unreadable=start_empty_if_unreadable
-        )
+class LockedSession:
+    """:func:`open_session` under the store's lock, held until the block ends:
+    ``with LockedSession(path, classic) as session:``."""
+
+    def __init__(
+        self,
+        store_path: str | None,
+        classic: str | None,
+        dsdl: Iterable[str] = (),
+        *,
+        start_empty_if_unreadable: bool = False,
+    ) -> None:
+        self._args = (store_path, classic, list(dsdl), start_empty_if_unreadable)
+        self._lock = StoreLock(store_path or default_store_path())
+
+    def __enter__(self) -> Session:
+        store_path, classic, dsdl, start_empty = self._args
+        self._lock.__enter__()
+        try:
+            return open_session(store_path, classic, dsdl, start_empty_if_unreadable=start_empty)
+        except BaseException:
+            self._lock.__exit__()
+            raise
+
+    def __exit__(self, *exc: object) -> None:
+        self._lock.__exit__()

@@ -10,7 +10,7 @@ uses the newest version of its type; older versions stay loadable for translatin
 
 from __future__ import annotations
 
-import re
+import itertools
 from collections.abc import Mapping
 
 from px4params._records import TYPE_CHECKING
@@ -30,8 +30,8 @@ __all__ = [
     "with_defaults",
 ]
 
-_CAMEL_BOUNDARY = re.compile(r"(?<=[a-z0-9])(?=[A-Z])")
-_PARAM_NAME = re.compile(r"[A-Z][A-Z0-9_]*")
+#: What a parameter name is made of (after a first letter A-Z).
+_NAME_CHARS = "ABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_"
 #: PX4 parameter names have at most 16 characters.
 MAX_NAME_LEN = 16
 
@@ -64,7 +64,17 @@ class ParamSpec(NamedTuple):
 def default_param_name(type_name: str) -> str:
     """``px.Ina238Shared`` -> ``INA238_SHARED``."""
     short = type_name.rsplit(".", 1)[-1]
-    return _CAMEL_BOUNDARY.sub("_", short).upper()
+    out = short[:1]
+    for before, char in itertools.pairwise(short):  # "_" where a capital follows a-z or 0-9
+        if "A" <= char <= "Z" and ("a" <= before <= "z" or "0" <= before <= "9"):
+            out += "_"
+        out += char
+    return out.upper()
+
+
+def _is_param_name(name: str) -> bool:
+    """``[A-Z][A-Z0-9_]*`` (without a regular expression: compiling one costs every command)."""
+    return "A" <= name[:1] <= "Z" and not name.strip(_NAME_CHARS)
 
 
 def parameter_specs(schema: Schema) -> list[ParamSpec]:
@@ -85,7 +95,7 @@ def parameter_specs(schema: Schema) -> list[ParamSpec]:
         if "max_instances" not in tags and "param" not in tags:
             continue
         name = tags.get("param") or default_param_name(type_name)
-        if not _PARAM_NAME.fullmatch(name) or len(name) > MAX_NAME_LEN:
+        if not _is_param_name(name) or len(name) > MAX_NAME_LEN:
             raise ParameterSetError(
                 f"{data_type.definition.get('file')}: parameter name {name!r} of {type_name} "
                 f"is not an upper-case name of at most {MAX_NAME_LEN} characters "

@@ -16,7 +16,6 @@ Every change is all-or-nothing: a refused one leaves the store exactly as it was
 
 from __future__ import annotations
 
-import contextlib
 import os
 import re
 import struct
@@ -48,7 +47,9 @@ STORE_ENV = "PX4PARAMS_STORE"
 #: The store file used when neither ``--store`` nor ``$PX4PARAMS_STORE`` names one.
 DEFAULT_STORE = "px4params.store"
 
-_KEY = re.compile(
+#: A name: ``NAME``, ``NAME#N``, then ``[k]`` or ``.path``. A pattern string: ``re`` compiles it
+#: once, on first use, so that commands that parse no name do not pay for it.
+_KEY = (
     r"(?P<name>[A-Za-z][A-Za-z0-9_]*)(?:#(?P<instance>\d+))?"
     r"(?:\[(?P<index>\d+)\]|\.(?P<path>[A-Za-z_][A-Za-z0-9_.\[\]]*))?"
 )
@@ -78,7 +79,7 @@ class Key(NamedTuple):
         once, where it enters, and the key is passed on)."""
         if isinstance(text, Key):
             return text
-        match = _KEY.fullmatch(text.strip())
+        match = re.fullmatch(_KEY, text.strip())
         if not match:
             raise InstanceError(
                 f"'{text}' is not a parameter name (expected NAME, NAME#N, NAME#N[k] or "
@@ -137,6 +138,9 @@ class Store:
             classic = os.environ[CLASSIC_ENV]
         if isinstance(classic, str | os.PathLike):
             classic = load_classic(classic)
+        # One layout for all the store's types, compiled before the types are looked up, so
+        # that they are taken from it rather than compiled one by one.
+        native_schema = self.schema._native
         self.specs = parameter_specs(self.schema)
         params: list[_Param] = []
         rows: list[tuple[str, str, int | None]] = []
@@ -153,7 +157,7 @@ class Store:
         if len(self._params) != len(params):
             raise StoreError("two classic parameters have the same name")
         self._order = params
-        self._native = _native.Store(self.schema._native, rows)
+        self._native = _native.Store(native_schema, rows)
         for p in params:
             self._native.set_type_default(p.index, self._type_default(p))
         self._native.mark_saved()
@@ -399,16 +403,10 @@ class Store:
 
     # -- all-or-nothing batches ---------------------------------------------------------------
 
-    @contextlib.contextmanager
-    def transaction(self) -> Iterator[Store]:
-        """Applies every change in the block, or none if it raises."""
-        backup, foreign = self._native.copy(), dict(self._foreign)
-        try:
-            yield self
-        except BaseException:
-            self._native.restore(backup)
-            self._foreign = foreign
-            raise
+    def transaction(self) -> _Transaction:
+        """``with store.transaction():`` applies every change in the block, or none if it
+        raises."""
+        return _Transaction(self)
 
     # -- files --------------------------------------------------------------------------------
 
@@ -537,3 +535,20 @@ def _classic_bytes(param: ClassicParam, value: Any) -> bytes:
 
 def _classic_from_bytes(param: ClassicParam, data: bytes) -> int | float:
     return struct.unpack("<f" if param.is_float else "<i", data)[0]
+
+
+class _Transaction:
+    """:meth:`Store.transaction` (a class: ``contextlib`` costs every command 1 ms to import)."""
+
+    def __init__(self, store: Store) -> None:
+        self._store = store
+
+    def __enter__(self) -> Store:
+        store = self._store
+        self._backup, self._foreign = store._native.copy(), dict(store._foreign)
+        return store
+
+    def __exit__(self, kind: object, error: object, trace: object) -> None:
+        if kind is not None:  # BaseException included: an interrupt changes nothing either
+            self._store._native.restore(self._backup)
+            self._store._foreign = self._foreign

@@ -9,7 +9,7 @@ from collections.abc import Sequence
 from px4params._records import TYPE_CHECKING
 from px4params.cli.options import store_options
 from px4params.nsh.param import add_verbs, verb_load
-from px4params.store.session import locked_session
+from px4params.store.session import LockedSession
 
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
     from typing import Any
@@ -17,7 +17,7 @@ if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
 
 def cmd_param(args: argparse.Namespace) -> int:
     recovering = args.verb is verb_load and args.file is not None
-    with locked_session(
+    with LockedSession(
         args.store, args.classic, args.dsdl or (), start_empty_if_unreadable=recovering
     ) as session:
         return int(args.verb(session, args))

@@ -11,7 +11,7 @@ from typing import Any
 from px4params.cli.options import store_options
 from px4params.nsh import airframe
 from px4params.status import EXIT_FAILED, EXIT_OK
-from px4params.store.session import locked_session
+from px4params.store.session import LockedSession
 
 _DESCRIPTION = """\
 Run a file of param lines as PX4's startup and airframe scripts have them:
@@ -26,7 +26,7 @@ and saved, and the run still fails."""
 
 
 def cmd_run(args: argparse.Namespace) -> int:
-    with locked_session(args.store, args.classic, args.dsdl or ()) as session:
+    with LockedSession(args.store, args.classic, args.dsdl or ()) as session:
         result = airframe.run_file(args.file, session, keep_going=args.keep_going, err=sys.stderr)
     return EXIT_FAILED if result.errors else EXIT_OK
 
