@@ -32,6 +32,7 @@ __all__ = [
     "StoreError",
     "StoreFileError",
     "TransferError",
+    "ULogError",
     "ValueShapeError",
 ]
 
@@ -181,6 +182,11 @@ class DriversFileError(Px4ParamsError):
 
 class ManifestError(Px4ParamsError):
     """There is no manifest to boot (no store file, or an airframe file that fails)."""
+
+
+class ULogError(Px4ParamsError):
+    """A flight log (ULog) that cannot be written as asked, or read back as a log of
+    ``px4params autostart run --ulog``."""
 
 
 class CommandError(Px4ParamsError):

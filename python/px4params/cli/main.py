@@ -28,6 +28,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "autostart",
         "driver autostart from the manifest: startup script, plan, simulated bench run",
     ),
+    "health": ("health", "the per-device story of a flight log from 'autostart run --ulog'"),
     "devid": ("devid", "decode, encode or list PX4 device IDs (CAL_MAG0_ID, ...)"),
     "migrate": (
         "migrate",

@@ -810,6 +810,7 @@ class _Sim:
                     transfers=out.transfers,
                     bad_transfers=out.bad_transfers,
                     resets=out.resets,
+                    probe_attempts=out.probe_attempts,
                 )
         ok = self.may_arm()
         if not self.arming or self.arming[-1][1] != ok:

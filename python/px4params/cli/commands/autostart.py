@@ -75,12 +75,21 @@ def cmd_run(args: argparse.Namespace) -> int:
         duration=args.duration,
         seed=args.seed,
         legacy=args.legacy,
-        record_events=bool(args.events),
+        record_events=bool(args.events or args.ulog),
     )
     written: list[str] = []
     if args.events:
         _write(args.events, "".join(json.dumps(e) + "\n" for e in result.events or ()))
         written.append(f"{len(result.events or ())} events to {args.events}")
+    if args.ulog:
+        from px4params import __version__
+        from px4params.store.flat import flat_values
+        from px4params.vehicle.flight_log import run_ulog
+
+        parameters = flat_values(store) if store is not None else {}
+        data = run_ulog(result, parameters, manifest or (), version=__version__)
+        _write(args.ulog, data)
+        written.append(f"ULog ({len(data)} bytes) to {args.ulog}")
     if args.timeline:
         from px4params.vehicle.timeline import render_svg
 
@@ -96,9 +105,10 @@ def cmd_run(args: argparse.Namespace) -> int:
     return EXIT_OK if result.may_arm else EXIT_FAILED
 
 
-def _write(path: str, text: str) -> None:
+def _write(path: str, content: str | bytes) -> None:
+    data = content.encode() if isinstance(content, str) else content
     try:
-        Path(path).write_text(text, encoding="utf-8")
+        Path(path).write_bytes(data)
     except OSError as e:
         raise CommandError(f"cannot write {path}: {e.strerror}") from None
 
@@ -275,4 +285,11 @@ examples:
         "--events", metavar="FILE.jsonl", help="write the event log, one JSON object per line"
     )
     v.add_argument("--timeline", metavar="FILE.svg", help="write the health timeline picture")
+    v.add_argument(
+        "--ulog",
+        metavar="FILE.ulg",
+        help="write the run as a PX4 flight log: parameters, the manifest, each device's health "
+        "and perf counters and the arming checks for the whole run (read it with "
+        "'px4params health FILE.ulg', pyulog or Flight Review)",
+    )
     v.set_defaults(func=cmd_run)

@@ -1,0 +1,104 @@
+"""``px4params health FILE.ulg``: the per-device story of a flight log written by
+``px4params autostart run --ulog`` (the work is in ``px4params.vehicle.flight_log``)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from collections.abc import Sequence
+from typing import Any
+
+from px4params.errors import CommandError
+from px4params.status import EXIT_FAILED, EXIT_OK
+
+
+def cmd_health(args: argparse.Namespace) -> int:
+    from px4params.vehicle.flight_log import read_run_ulog
+
+    result = read_run_ulog(args.log)
+    if args.timeline:
+        from px4params.vehicle.timeline import render_svg
+
+        try:
+            with open(args.timeline, "w", encoding="utf-8") as f:
+                f.write(render_svg(result))
+        except OSError as e:
+            raise CommandError(f"{args.timeline}: cannot write: {e.strerror}") from None
+    if args.json:
+        print(json.dumps(result.as_dict(), indent=2))
+    else:
+        for line in story(result, args.log):
+            print(line)
+        if args.timeline:
+            print(f"wrote health timeline to {args.timeline}")
+    return EXIT_OK if result.may_arm else EXIT_FAILED
+
+
+def story(result: Any, path: str) -> list[str]:
+    """The log as a reader wants it: the verdict, the first failure, then each device."""
+    verdict = "may arm" if result.may_arm else "arming refused"
+    lines = [
+        f"{path}: {result.mode} boot of {result.bench}, {result.duration:g} s (seed "
+        f"{result.seed}): {verdict} at the end"
+    ]
+    first = _first_failure(result)
+    if first is not None:
+        t, inst, reason = first
+        lines.append(f"first failure: {inst.name} ({inst.driver}) at {t:.2f} s: {reason}")
+    changes = ", ".join(f"{'may arm' if ok else 'refused'} at {t:.2f} s" for t, ok in result.arming)
+    lines.append(f"commander: {changes or 'no answer logged'}")
+    for inst in result.instances:
+        device = f", device ID 0x{inst.device_id:06X}" if inst.device_id else ""
+        lines.append(f"{inst.name} ({inst.driver} on {inst.location}{device})")
+        events = [
+            (t, f"{level}{': ' + reason if reason else ''}") for t, level, reason in inst.timeline
+        ]
+        events += [
+            (t, "started" if what == "start" else "lost (driver reset)") for t, what in inst.marks
+        ]
+        for t, text in sorted(events, key=lambda e: e[0]):
+            lines.append(f"  {t:7.2f} s  {text}")
+        lines.append(
+            f"  at the end: {inst.health}; {inst.transfers} transfers, {inst.bad_transfers} "
+            f"errors, {inst.resets} timeouts, {inst.probe_attempts} probe attempts"
+        )
+    if result.silently_missing:
+        lines.append("silently missing (configured, never started, no message):")
+        lines += [f"  {line}" for line in result.silently_missing]
+    return lines
+
+
+def _first_failure(result: Any) -> tuple[float, Any, str] | None:
+    """The earliest moment a device that had been running went critical (lost), else the
+    earliest critical entry of any device."""
+    lost = [
+        (t, inst, reason)
+        for inst in result.instances
+        for t, level, reason in inst.timeline
+        if level == "critical" and inst.started_at is not None and t > inst.started_at
+    ]
+    if lost:
+        return min(lost, key=lambda x: x[0])
+    return None
+
+
+def add_parser(sub: Any, name: str, summary: str, words: Sequence[str] = ()) -> None:
+    p = sub.add_parser(
+        name,
+        help=summary,
+        description="Read a flight log written by 'px4params autostart run --ulog' (with "
+        "pyulog) and tell each device's story: when it started, every change of its health "
+        "with the reason, resets, its last perf counters, and the commander's answers. The "
+        "first line after the header names the first device that was lost, and when.\n"
+        "Exit code 0: the log ends with 'may arm'; 1: arming refused (or an error).",
+        epilog="""\
+examples:
+  px4params autostart run --airframe examples/two_batteries.airframe \\
+    --bench examples/two_batteries_faults.bench.toml --ulog run.ulg   # exit status 1
+  px4params health run.ulg --timeline run.svg   # the same story: exit status 1""",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.add_argument("log", metavar="FILE.ulg", help="the flight log")
+    p.add_argument("--timeline", metavar="FILE.svg", help="write the health timeline picture")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.set_defaults(func=cmd_health)

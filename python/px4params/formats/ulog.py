@@ -1,0 +1,174 @@
+"""Writing ULog, PX4's flight log format (PX4 dev guide, "ULog File Format"), as pyulog, Flight
+Review and PX4's own log tools read it.
+
+A file is a 16-byte header, then messages of ``uint16 size, uint8 type, payload``. The
+definitions section (flag bits ``B`` first, then formats ``F``, information ``I``/``M`` and
+parameters ``P``) comes before the data section (subscriptions ``A``, data ``D``, logged
+messages ``L``). Data follows its format's fields in order, little-endian and packed; the
+first field of every format is ``uint64_t timestamp`` in microseconds.
+
+>>> log = ULogWriter()
+>>> log.info("sys_name", "px4params")
+>>> log.define("arming_check", [("uint64_t", "timestamp"), ("bool", "may_arm")])
+>>> log.data(log.subscribe("arming_check"), 1_000_000, True)
+>>> log.getvalue()[:7]
+b'ULog\\x01\\x125'
+"""
+
+from __future__ import annotations
+
+import struct
+
+from px4params._records import TYPE_CHECKING
+from px4params.errors import ULogError
+
+if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
+    from collections.abc import Sequence
+
+#: The first seven bytes of every ULog file; the eighth is the format version.
+MAGIC = b"ULog\x01\x12\x35"
+VERSION = 1
+
+#: Logged message levels, as PX4 writes them (syslog's, as ASCII digits).
+LEVELS = {
+    "emergency": b"0",
+    "alert": b"1",
+    "critical": b"2",
+    "error": b"3",
+    "warning": b"4",
+    "notice": b"5",
+    "info": b"6",
+    "debug": b"7",
+}
+
+#: ULog's scalar field types and their ``struct`` codes.
+_SCALARS = {
+    "int8_t": "b",
+    "uint8_t": "B",
+    "int16_t": "h",
+    "uint16_t": "H",
+    "int32_t": "i",
+    "uint32_t": "I",
+    "int64_t": "q",
+    "uint64_t": "Q",
+    "float": "f",
+    "double": "d",
+    "bool": "?",
+    "char": "c",
+}
+
+
+class ULogWriter:
+    """Builds a ULog file in memory: definitions first, then data, in timestamp order."""
+
+    def __init__(self, start_us: int = 0) -> None:
+        self._out = bytearray(MAGIC + bytes([VERSION]) + struct.pack("<Q", start_us))
+        # Flag bits: no compatibility flags, no appended data.
+        self._message(b"B", bytes(16) + bytes(24))
+        self._packers: dict[str, struct.Struct] = {}
+        self._subscriptions: list[struct.Struct] = []
+        self._multi_ids: dict[str, int] = {}
+        self._in_data = False
+        self._last_us = start_us
+
+    def _message(self, kind: bytes, payload: bytes) -> None:
+        if len(payload) > 0xFFFF:
+            raise ULogError(
+                f"ULog message '{kind.decode()}' of {len(payload)} bytes (at most 65535)"
+            )
+        self._out += struct.pack("<HB", len(payload), kind[0]) + payload
+
+    def _definition(self, what: str) -> None:
+        if self._in_data:
+            raise ULogError(f"{what} after the first data message: definitions come first")
+
+    # -- definitions ------------------------------------------------------------------------
+
+    def define(self, name: str, fields: Sequence[tuple[str, str]]) -> None:
+        """A message format: ``fields`` are ``(type, name)``, e.g. ``("char[24]", "instance")``;
+        the first must be ``("uint64_t", "timestamp")``."""
+        self._definition(f"format {name}")
+        if not fields or tuple(fields[0]) != ("uint64_t", "timestamp"):
+            raise ULogError(f"format {name}: the first field must be uint64_t timestamp")
+        codes = "".join(_code(kind, f"{name}.{field}") for kind, field in fields)
+        self._packers[name] = struct.Struct("<" + codes)
+        text = f"{name}:" + "".join(f"{kind} {field};" for kind, field in fields)
+        self._message(b"F", text.encode())
+
+    def info(self, key: str, value: str | int | float, *, multi: bool = False) -> None:
+        """An information message (``multi``: one of several values under one key)."""
+        self._definition(f"information {key}")
+        head, body = _typed(key, value)
+        kind, prefix = (b"M", b"\x00") if multi else (b"I", b"")
+        self._message(kind, prefix + bytes([len(head)]) + head + body)
+
+    def parameter(self, name: str, value: int | float) -> None:
+        """A parameter's value at the start of the log: ``int32_t`` for an int, else ``float``."""
+        self._definition(f"parameter {name}")
+        head, body = _typed(name, value)
+        self._message(b"P", bytes([len(head)]) + head + body)
+
+    # -- data -------------------------------------------------------------------------------
+
+    def subscribe(self, name: str) -> int:
+        """Starts logging a defined message: its next instance (multi ID 0, 1, ...); returns the
+        ID its data is written under."""
+        packer = self._packers.get(name)
+        if packer is None:
+            raise ULogError(f"no format {name} defined")
+        self._in_data = True
+        msg_id = len(self._subscriptions)
+        multi_id = self._multi_ids.get(name, 0)
+        if msg_id > 0xFFFF or multi_id > 0xFF:
+            raise ULogError(f"too many subscriptions of {name}")
+        self._multi_ids[name] = multi_id + 1
+        self._message(b"A", struct.pack("<BH", multi_id, msg_id) + name.encode())
+        self._subscriptions.append(packer)
+        return msg_id
+
+    def data(self, msg_id: int, timestamp_us: int, *values: object) -> None:
+        """One sample of subscription ``msg_id``: its timestamp, then the other fields."""
+        self._advance(timestamp_us)
+        packed = self._subscriptions[msg_id].pack(
+            timestamp_us, *(v.encode() if isinstance(v, str) else v for v in values)
+        )
+        self._message(b"D", struct.pack("<H", msg_id) + packed)
+
+    def log(self, level: str, timestamp_us: int, text: str) -> None:
+        """A logged message (``level`` one of :data:`LEVELS`)."""
+        self._in_data = True
+        self._advance(timestamp_us)
+        self._message(b"L", LEVELS[level] + struct.pack("<Q", timestamp_us) + text.encode())
+
+    def _advance(self, timestamp_us: int) -> None:
+        if timestamp_us < self._last_us:
+            raise ULogError(
+                f"timestamp {timestamp_us} us is before the previous one ({self._last_us} us)"
+            )
+        self._last_us = timestamp_us
+
+    def getvalue(self) -> bytes:
+        return bytes(self._out)
+
+
+def _code(kind: str, where: str) -> str:
+    base, bracket, count = kind.partition("[")
+    code = _SCALARS.get(base)
+    if code is None:
+        raise ULogError(f"{where}: unknown ULog type {kind!r}")
+    if not bracket:
+        return code
+    n = count[:-1]
+    if not n.isdigit() or not count.endswith("]"):
+        raise ULogError(f"{where}: bad array type {kind!r}")
+    return f"{n}s" if base == "char" else code * int(n)
+
+
+def _typed(key: str, value: str | int | float) -> tuple[bytes, bytes]:
+    """An information or parameter key with its type (``char[9] sys_name``) and the value."""
+    if isinstance(value, str):
+        body = value.encode()
+        return f"char[{len(body)}] {key}".encode(), body
+    if isinstance(value, int):  # bool included
+        return f"int32_t {key}".encode(), struct.pack("<i", int(value))
+    return f"float {key}".encode(), struct.pack("<f", value)

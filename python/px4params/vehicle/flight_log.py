@@ -1,0 +1,345 @@
+"""A simulated bench run as a ULog (``px4params autostart run --ulog FILE``), and back
+(``px4params health FILE.ulg``).
+
+The talk: "perf counters are only streamed to ulog before and after arming. Not helpful in a
+crash." Here they are streamed for the whole run, once a second, beside each driver instance's
+health, so that a log cut short by a crash still says which device failed and when.
+
+What the log holds:
+
+- **Parameters**: what a ground station sees of the store (classic parameters, every live
+  destructured name, the instance masks), so Flight Review lists them.
+- **Information**: ``sys_name``, ``ver_sw``, the run (mode, bench, seed, duration); as
+  multi-information, ``manifest_instance`` (one line per configured instance) and
+  ``driver_instance`` (per topic multi ID: instance, driver, bus kind, bus, address) and,
+  for a legacy boot, ``silently_missing`` (configured instances nothing started).
+- **Topics**, one multi ID per driver instance: ``driver_health`` (on every change and once a
+  second: health 0 nominal, 1 warning, 2 critical), ``driver_perf`` (once a second: transfers,
+  errors, timeouts, probe attempts, time since the driver last started) and ``arming_check``
+  (on every change and once a second).
+- **Logged messages**: a driver started, a device lost, a warning, a recovery, arming refused
+  or allowed, with PX4's levels.
+"""
+
+from __future__ import annotations
+
+from px4params._records import TYPE_CHECKING
+from px4params.errors import ULogError
+from px4params.formats.ulog import ULogWriter
+from px4params.vehicle.autostart import describe_location
+
+if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
+    from collections.abc import Mapping, Sequence
+    from typing import Any
+
+    from px4params.vehicle.autostart import Configured
+    from px4params.vehicle.simbench import RunResult
+
+#: ``driver_health.health`` values.
+HEALTH_CODES = {"nominal": 0, "warning": 1, "critical": 2}
+HEALTH_NAMES = {code: name for name, code in HEALTH_CODES.items()}
+
+#: Characters of an instance name the topics carry (``INA238#0``, ``ist8310@i2c1``).
+NAME_CHARS = 24
+
+_HEALTH_FIELDS = [
+    ("uint64_t", "timestamp"),
+    ("uint32_t", "device_id"),
+    ("uint8_t", "health"),
+    ("bool", "registered"),
+    (f"char[{NAME_CHARS}]", "instance"),
+]
+_PERF_FIELDS = [
+    ("uint64_t", "timestamp"),
+    ("uint32_t", "transfers"),
+    ("uint32_t", "errors"),
+    ("uint32_t", "timeouts"),
+    ("uint32_t", "probe_attempts"),
+    ("uint64_t", "elapsed_us"),
+    (f"char[{NAME_CHARS}]", "instance"),
+]
+_ARMING_FIELDS = [
+    ("uint64_t", "timestamp"),
+    ("bool", "may_arm"),
+    ("uint8_t", "blocking"),
+]
+
+#: The logged message level of each health a device changes to.
+_LEVEL_OF = {"critical": "error", "warning": "warning", "nominal": "notice"}
+
+
+def _us(t: float) -> int:
+    return round(t * 1_000_000)
+
+
+def run_ulog(
+    result: RunResult,
+    parameters: Mapping[str, int | float],
+    manifest: Sequence[Configured] = (),
+    *,
+    version: str = "",
+) -> bytes:
+    """The ULog of ``result`` (a run with its events recorded), with ``parameters`` (name ->
+    value, as :func:`px4params.store.flat.flat_values` gives them) and the ``manifest``."""
+    if result.events is None:
+        raise ValueError("the run's events were not recorded (run(..., record_events=True))")
+    log = ULogWriter()
+    log.define("driver_health", _HEALTH_FIELDS)
+    log.define("driver_perf", _PERF_FIELDS)
+    log.define("arming_check", _ARMING_FIELDS)
+    log.info("sys_name", "px4params")
+    log.info("ver_sw", version or "unknown")
+    log.info("ver_hw", "PX4PARAMS_BENCH")
+    log.info("px4params_mode", result.mode)
+    log.info("px4params_bench", result.bench)
+    log.info("px4params_seed", result.seed)
+    log.info("px4params_duration_us", str(_us(result.duration)))
+    for c in manifest:
+        line = f"{c.instance} {c.driver.name if c.driver else '-'} on {c.location}"
+        log.info("manifest_instance", line, multi=True)
+    for line in result.silently_missing:  # a legacy boot compared with the manifest
+        log.info("silently_missing", line, multi=True)
+    for inst in result.instances:  # in multi ID order
+        line = f"{inst.name} {inst.driver} {inst.kind} {inst.bus_id} {inst.address}"
+        log.info("driver_instance", line, multi=True)
+    for name, value in parameters.items():
+        log.parameter(name, value)
+    _Stream(log, result).play()
+    return log.getvalue()
+
+
+class _Stream:
+    """Replays a run's events into the data section."""
+
+    def __init__(self, log: ULogWriter, result: RunResult) -> None:
+        self.log = log
+        self.result = result
+        self.health_ids: dict[str, int] = {}
+        self.perf_ids: dict[str, int] = {}
+        self.arming_id: int | None = None
+        self.health: dict[str, str] = {}
+        self.device_ids: dict[str, int] = {}
+        self.started_at: dict[str, float] = {}
+        self.registered = {i.name: i.registered for i in result.instances}
+        self.may_arm = False
+        self.last_perf_t = -1.0
+        # Instances in the order the result lists them get multi IDs 0, 1, ... per topic.
+        for inst in result.instances:
+            self.health_ids[inst.name] = log.subscribe("driver_health")
+            self.perf_ids[inst.name] = log.subscribe("driver_perf")
+        self.arming_id = log.subscribe("arming_check")
+
+    def play(self) -> None:
+        for event in sorted(self.result.events or (), key=lambda e: e["t"]):
+            handler = getattr(self, f"on_{event['event']}", None)
+            if handler is not None:
+                handler(event, _us(event["t"]))
+
+    # -- topics -------------------------------------------------------------------------------
+
+    def _health_sample(self, name: str, at: int) -> None:
+        msg_id = self.health_ids.get(name)
+        if msg_id is None:  # an instance the result leaves out (a quiet legacy start)
+            return
+        code = HEALTH_CODES[self.health.get(name, "critical")]
+        registered = self.registered.get(name, True)
+        self.log.data(msg_id, at, self.device_ids.get(name, 0), code, registered, name)
+
+    def _arming_sample(self, at: int) -> None:
+        blocking = sum(1 for h in self.health.values() if h != "nominal")
+        assert self.arming_id is not None
+        self.log.data(self.arming_id, at, self.may_arm, min(blocking, 255))
+
+    # -- events -------------------------------------------------------------------------------
+
+    def on_register(self, e: dict[str, Any], at: int) -> None:
+        name = e["instance"]
+        if name in self.health:  # a legacy driver registers once it runs: health follows
+            return
+        self.health[name] = "critical"  # until the first answer: what the commander assumes
+        self._health_sample(name, at)
+        self.log.log("debug", at, f"{e['driver']} {name} on {_where(e)}: critical: starting")
+
+    def on_started(self, e: dict[str, Any], at: int) -> None:
+        name = e["instance"]
+        self.device_ids[name] = int(e.get("device_id") or 0)
+        self.started_at[name] = e["t"]
+        self.log.log(
+            "info",
+            at,
+            f"{e['driver']} {name}: started on {_where(e)} (device ID {e['device_id_hex']}, "
+            f"after {e['attempts']} probe attempts)",
+        )
+
+    def on_reset(self, e: dict[str, Any], at: int) -> None:
+        name = e["instance"]
+        self.started_at.pop(name, None)
+        lost = f"{e['driver']} {name}: device lost on {_where(e)}: {e['reason']}"
+        self.log.log("error", at, lost)
+
+    def on_start_failed(self, e: dict[str, Any], at: int) -> None:
+        self.log.log(
+            "debug", at, f"{e['driver']} on {_where(e)}: quiet start found nothing ({e['reason']})"
+        )
+
+    def on_health(self, e: dict[str, Any], at: int) -> None:
+        name, level = e["instance"], e["health"]
+        before = self.health.get(name)
+        self.health[name] = level
+        self._health_sample(name, at)
+        if level == "nominal" and before in (None, "critical") and name in self.started_at:
+            text = "recovered" if before is not None and self._was_lost(name) else "nominal"
+        else:
+            text = f"{level}: {e.get('reason') or ''}".rstrip(": ")
+        self.log.log(_LEVEL_OF[level], at, f"{e['driver']} {name} on {_where(e)}: {text}")
+
+    def _was_lost(self, name: str) -> bool:
+        inst = next((i for i in self.result.instances if i.name == name), None)
+        return inst is not None and any(what == "reset" for _, what in inst.marks)
+
+    def on_perf(self, e: dict[str, Any], at: int) -> None:
+        name = e["instance"]
+        if e["t"] != self.last_perf_t:  # once a second: the commander's answer too
+            self.last_perf_t = e["t"]
+            self._arming_sample(at)
+        self._health_sample(name, at)
+        msg_id = self.perf_ids.get(name)
+        if msg_id is None:
+            return
+        since = self.started_at.get(name)
+        elapsed = _us(e["t"] - since) if since is not None else 0
+        self.log.data(
+            msg_id,
+            at,
+            e["transfers"],
+            e["bad_transfers"],
+            e["resets"],
+            e.get("probe_attempts", 0),
+            elapsed,
+            name,
+        )
+
+    def on_arming(self, e: dict[str, Any], at: int) -> None:
+        self.may_arm = bool(e["may_arm"])
+        self._arming_sample(at)
+        if self.may_arm:
+            self.log.log("info", at, "commander: may arm: every manifest device is nominal")
+        else:
+            blocking = sorted(n for n, h in self.health.items() if h != "nominal")
+            which = ", ".join(blocking) if blocking else "devices still starting"
+            self.log.log("warning", at, f"commander: arming refused: {which}")
+
+
+def _where(e: Mapping[str, Any]) -> str:
+    return describe_location(e["bus"], e["bus_id"], e["address"])
+
+
+# -- reading a log back ------------------------------------------------------------------------
+
+
+def read_run_ulog(path: str) -> RunResult:
+    """The run a ULog written by :func:`run_ulog` tells (``px4params health``): every instance
+    with its health timeline, starts and resets, last perf counters, and the commander's
+    answers. :class:`ULogError` for a file that is not such a log."""
+    from pyulog import ULog
+
+    from px4params.vehicle.simbench import InstanceResult, RunResult
+
+    try:
+        ulog = ULog(path)
+    except OSError as e:
+        raise ULogError(f"{path}: cannot read: {e.strerror or e}") from None
+    except Exception as e:  # pyulog raises bare Exceptions for what it cannot parse
+        raise ULogError(f"{path}: not a ULog file ({e})") from None
+    info = ulog.msg_info_dict
+    lines = ulog.msg_info_multiple_dict.get("driver_instance")
+    if "px4params_mode" not in info or lines is None:
+        raise ULogError(
+            f"{path}: not a log of 'px4params autostart run --ulog' (no driver_instance "
+            "information)"
+        )
+    topics = {(d.name, d.multi_id): d.data for d in ulog.data_list}
+    said = _messages(ulog.logged_messages)
+    instances: list[InstanceResult] = []
+    for multi_id, parts in enumerate(lines):
+        fields = "".join(parts).split(" ")
+        if len(fields) != 5 or not fields[3].isdigit() or not fields[4].isdigit():
+            raise ULogError(f"{path}: driver_instance {multi_id}: cannot read {''.join(parts)!r}")
+        name, driver, kind, bus_id, address = fields
+        inst = InstanceResult(name, driver, None, kind, int(bus_id), int(address))
+        health = topics.get(("driver_health", multi_id))
+        if health is not None:
+            _health_story(inst, health, said)
+        perf = topics.get(("driver_perf", multi_id))
+        if perf is not None and len(perf["timestamp"]):
+            inst.transfers = int(perf["transfers"][-1])
+            inst.bad_transfers = int(perf["errors"][-1])
+            inst.resets = int(perf["timeouts"][-1])
+            inst.probe_attempts = int(perf["probe_attempts"][-1])
+        for t, what in said.get((name, "mark"), []):
+            inst.marks.append((t, what))
+            if what == "start" and inst.started_at is None:
+                inst.started_at = t
+        instances.append(inst)
+    arming_data = topics.get(("arming_check", 0))
+    arming: list[tuple[float, bool]] = []
+    if arming_data is not None:
+        for stamp, ok in zip(arming_data["timestamp"], arming_data["may_arm"], strict=True):
+            if not arming or arming[-1][1] != bool(ok):
+                arming.append((int(stamp) / 1e6, bool(ok)))
+    may_arm = bool(arming and arming[-1][1])
+    blocking = [i for i in instances if i.registered and i.health != "nominal"]
+    return RunResult(
+        mode=str(info["px4params_mode"]),
+        seed=int(info.get("px4params_seed", 0)),
+        duration=int(info.get("px4params_duration_us", "0")) / 1e6,
+        bench=str(info.get("px4params_bench", "")),
+        instances=instances,
+        may_arm=may_arm,
+        failures=[i.failure_line() for i in blocking] if not may_arm else [],
+        silently_missing=[
+            "".join(parts) for parts in ulog.msg_info_multiple_dict.get("silently_missing", [])
+        ],
+        arming=arming,
+    )
+
+
+def _messages(logged: Sequence[Any]) -> dict[tuple[str, Any], list[tuple[float, str]]]:
+    """What the logged messages say per instance: ``(name, t_us)`` -> health texts, and
+    ``(name, "mark")`` -> starts and resets, as :class:`_Stream` words them."""
+    said: dict[tuple[str, Any], list[tuple[float, str]]] = {}
+    for m in logged:
+        words = m.message.split(" ", 2)
+        if len(words) < 3:
+            continue
+        name, rest = words[1].rstrip(":"), words[2]
+        t = int(m.timestamp) / 1e6
+        if words[1].endswith(":") and rest.startswith("started on "):
+            said.setdefault((name, "mark"), []).append((t, "start"))
+        elif words[1].endswith(":") and rest.startswith("device lost on "):
+            said.setdefault((name, "mark"), []).append((t, "reset"))
+        elif rest.startswith("on ") and ": " in rest:
+            said.setdefault((name, int(m.timestamp)), []).append((t, rest.split(": ", 1)[1]))
+    return said
+
+
+def _health_story(inst: Any, data: Mapping[str, Any], said: Mapping[Any, Any]) -> None:
+    codes, stamps = data["health"], data["timestamp"]
+    previous = None
+    for stamp, code in zip(stamps, codes, strict=True):
+        level = HEALTH_NAMES.get(int(code), "critical")
+        texts = said.get((inst.name, int(stamp)), [])
+        reason = texts[-1][1] if texts else ""
+        if reason.startswith(f"{level}: "):
+            reason = reason[len(level) + 2 :]
+        elif reason in ("nominal", "recovered"):
+            reason = ""
+        if level != previous or (texts and reason != inst.reason):
+            inst.timeline.append((int(stamp) / 1e6, level, reason))
+            inst.reason = reason
+        previous = level
+        inst.health = level
+    if len(stamps):
+        inst.registered = bool(data["registered"][-1])
+        device_id = int(data["device_id"][-1])
+        inst.device_id = device_id or None

@@ -1,0 +1,276 @@
+"""Flight logs: ``autostart run --ulog`` writes a ULog that pyulog (the library of PX4's log
+tools and Flight Review) reads, and ``px4params health`` tells it back.
+
+The expected values are worked out here from the ULog specification (PX4 dev guide, "ULog File
+Format") and from the bench file, not taken from the writer.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+import struct
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from px4params.cli.main import main
+from px4params.errors import Px4ParamsError, ULogError
+from px4params.formats.ulog import ULogWriter
+from pyulog import ULog
+from shared_data import shared_file
+
+REPO = Path(__file__).resolve().parents[1]
+AIRFRAME = REPO / "examples" / "two_batteries.airframe"
+FAULTS = REPO / "examples" / "two_batteries_faults.bench.toml"
+
+
+# -- the writer, byte by byte -------------------------------------------------------------------
+
+
+def test_header_and_flag_bits() -> None:
+    data = ULogWriter(start_us=0x0102030405060708).getvalue()
+    # "ULog", 0x01 0x12 0x35, version 1, the start time (uint64, little-endian).
+    assert data[:16] == b"\x55\x4c\x6f\x67\x01\x12\x35\x01" + bytes.fromhex("0807060504030201")
+    # Flag bits: size 40, type 'B', 8 compat + 8 incompat flag bytes, 3 appended offsets.
+    assert data[16:19] == b"\x28\x00B" and data[19:] == bytes(40)
+
+
+def test_definitions_and_data_bytes() -> None:
+    log = ULogWriter()
+    log.define("t", [("uint64_t", "timestamp"), ("int16_t", "x"), ("char[3]", "s")])
+    log.info("sys_name", "ab")
+    log.parameter("P_INT", 7)
+    log.parameter("P_FLT", 0.5)
+    msg_id = log.subscribe("t")
+    log.data(msg_id, 5, -2, "hi")
+    log.log("error", 6, "lost")
+    body = log.getvalue()[16 + 3 + 40 :]
+    fmt = b"t:uint64_t timestamp;int16_t x;char[3] s;"
+    key = b"char[2] sys_name"
+    expected = b"".join(
+        [
+            struct.pack("<HB", len(fmt), ord("F")) + fmt,
+            struct.pack("<HB", 1 + len(key) + 2, ord("I")) + bytes([len(key)]) + key + b"ab",
+            struct.pack("<HB", 1 + 13 + 4, ord("P")) + b"\x0dint32_t P_INT" + b"\x07\x00\x00\x00",
+            struct.pack("<HB", 1 + 11 + 4, ord("P")) + b"\x0bfloat P_FLT" + b"\x00\x00\x00\x3f",
+            struct.pack("<HB", 3 + 1, ord("A")) + b"\x00\x00\x00t",  # multi ID 0, msg ID 0
+            struct.pack("<HB", 2 + 8 + 2 + 3, ord("D")) + b"\x00\x00" + (5).to_bytes(8, "little")
+            + b"\xfe\xff" + b"hi\x00",
+            struct.pack("<HB", 1 + 8 + 4, ord("L")) + b"3" + (6).to_bytes(8, "little") + b"lost",
+        ]
+    )  # fmt: skip
+    assert body == expected
+
+
+def test_multi_ids_count_per_message() -> None:
+    log = ULogWriter()
+    log.define("a", [("uint64_t", "timestamp")])
+    log.define("b", [("uint64_t", "timestamp")])
+    ids = [log.subscribe(name) for name in ("a", "b", "a", "a")]
+    assert ids == [0, 1, 2, 3]
+    subscriptions = [m for m in _messages(log.getvalue()) if m[0] == "A"]
+    assert [(p[0], p[3:].decode()) for _, p in subscriptions] == [(0, "a"), (0, "b"), (1, "a"),
+                                                                   (2, "a")]  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("act", "message"),
+    [
+        (lambda w: w.define("x", [("uint32_t", "time")]), "format x: the first field must be"),
+        (lambda w: w.define("x", [("uint64_t", "timestamp"), ("int", "y")]), "x.y: unknown ULog"),
+        (lambda w: w.define("x", [("uint64_t", "timestamp"), ("char[", "y")]), "bad array type"),
+        (lambda w: w.subscribe("nothing"), "no format nothing defined"),
+        (lambda w: (w.log("info", 1, "a"), w.info("k", "v")), "information k after the first"),
+        (lambda w: (w.log("info", 9, "a"), w.log("info", 8, "b")), "timestamp 8 us is before"),
+        (lambda w: w.info("k", "v" * 70000), "'I' of 70014 bytes \\(at most 65535\\)"),
+    ],
+)
+def test_writer_errors(act, message) -> None:
+    with pytest.raises(ULogError, match=message) as info:
+        act(ULogWriter())
+    assert isinstance(info.value, Px4ParamsError) and "\n" not in str(info.value)
+
+
+def _messages(data: bytes) -> list[tuple[str, bytes]]:
+    """The messages of a ULog file, by an independent reading of the framing."""
+    assert data[:7] == b"ULog\x01\x12\x35"
+    pos, out = 16, []
+    while pos < len(data):
+        size, kind = struct.unpack_from("<HB", data, pos)
+        out.append((chr(kind), data[pos + 3 : pos + 3 + size]))
+        pos += 3 + size
+    assert pos == len(data)
+    return out
+
+
+# -- a faulty bench run, read with pyulog ---------------------------------------------------------
+
+
+def _run(tmp_path: Path, capsys, *args: str) -> tuple[int, Path, str]:
+    log = tmp_path / "run.ulg"
+    status = main(
+        ["autostart", "run", "--airframe", str(AIRFRAME), "--bench", str(FAULTS), "--ulog",
+         str(log), *args]
+    )  # fmt: skip
+    out = capsys.readouterr()
+    assert out.err == ""
+    return status, log, out.out
+
+
+def _name(data, n: int) -> str:
+    """A char[] field as pyulog gives it (one int8 column per character)."""
+    chars = [int(data[f"instance[{i}]"][n]) for i in range(24)]
+    return bytes(c for c in chars if c).decode()
+
+
+def test_faulty_bench_log_read_with_pyulog(tmp_path, capsys) -> None:
+    status, path, out = _run(tmp_path, capsys)
+    assert status == 1 and f"to {path}" in out
+    ulog = ULog(str(path))
+    info = ulog.msg_info_dict
+    assert info["sys_name"] == "px4params" and info["px4params_mode"] == "manifest"
+    assert info["px4params_duration_us"] == "10000000"
+    assert ulog.msg_info_multiple_dict["manifest_instance"] == [
+        ["INA238#0 ina238 on I2C bus 1 address 0x45"],
+        ["INA238#1 ina238 on I2C bus 2 address 0x45"],
+        ["AK09916#0 ak09916 on I2C bus 1 address 0x0C"],
+    ]
+    # Parameters: classic ones and the destructured names a ground station sees.
+    params = ulog.initial_parameters
+    assert params["SENS_EXT_I2C_PRB"] == 1
+    assert params["INA238_1C"] == 0x45  # INA238#1's I2C address (letter C: bus.i2c.address)
+    assert params["INA238_INST"] == 0b11  # the instance mask: INA238#0 and #1
+
+    topics = {(d.name, d.multi_id): d.data for d in ulog.data_list}
+    assert {name for name, _ in topics} == {"driver_health", "driver_perf", "arming_check"}
+    # Multi IDs: one per instance, in the manifest's order.
+    for multi_id, name in enumerate(["INA238#0", "INA238#1", "AK09916#0"]):
+        for topic in ("driver_health", "driver_perf"):
+            data = topics[(topic, multi_id)]
+            assert {_name(data, n) for n in range(len(data["timestamp"]))} == {name}
+    # Published device IDs, from the bench's buses and addresses and drv_sensor.h's devtypes.
+    ina1 = topics[("driver_health", 1)]
+    assert int(ina1["device_id"][-1]) == (0xD4 << 16) | (0x45 << 8) | (2 << 3) | 1
+    assert int(topics[("driver_health", 2)]["device_id"][-1]) == 0x090C09
+    # Timestamps never go back, in every topic and in the logged messages.
+    for data in topics.values():
+        stamps = [int(t) for t in data["timestamp"]]
+        assert stamps == sorted(stamps) and stamps[-1] <= 10_000_000
+    logged = [int(m.timestamp) for m in ulog.logged_messages]
+    assert logged == sorted(logged)
+    # INA238#1 dies at 6 s: healthy before, critical at the end, one reset (timeout) counted.
+    health = list(zip(ina1["timestamp"], ina1["health"], strict=True))
+    assert all(h == 0 for t, h in health if 100_000 <= t < 6_000_000)
+    assert health[-1][1] == 2
+    assert int(topics[("driver_perf", 1)]["timeouts"][-1]) == 1
+    # Logged messages with PX4's levels.
+    said = [(m.log_level_str(), m.message) for m in ulog.logged_messages]
+    assert ("ERROR", "ina238 INA238#1: device lost on I2C bus 2 address 0x45: 10 bad transfers in "
+            "a row") in said  # fmt: skip
+    assert ("WARNING", "commander: arming refused: AK09916#0, INA238#0") in said
+    assert any(level == "INFO" and text.startswith("ak09916 AK09916#0: started") for level, text
+               in said)  # fmt: skip
+
+
+def test_perf_counters_continuous_across_arming(tmp_path, capsys) -> None:
+    # --legacy, seed 3: the commander says "may arm" at 0.1 s and "refused" at 6.5 s.
+    status, path, _ = _run(tmp_path, capsys, "--legacy", "--seed", "3")
+    assert status == 1
+    ulog = ULog(str(path))
+    arming = next(d.data for d in ulog.data_list if d.name == "arming_check")
+    changes = [
+        (int(t), bool(ok))
+        for n, (t, ok) in enumerate(zip(arming["timestamp"], arming["may_arm"], strict=True))
+        if n == 0 or bool(ok) != bool(arming["may_arm"][n - 1])
+    ]
+    assert changes == [(100_000, True), (6_500_000, False)]
+    perf = next(d.data for d in ulog.data_list if d.name == "driver_perf")
+    stamps = [int(t) for t in perf["timestamp"]]
+    assert stamps == [n * 1_000_000 for n in range(1, 11)]  # every second, armed or not
+    transfers = [int(x) for x in perf["transfers"]]
+    assert transfers == sorted(transfers) and transfers[0] > 0
+    assert ulog.msg_info_multiple_dict["silently_missing"] == [
+        ["ina238 INA238#0 on I2C bus 1 address 0x45: never started, nobody was told"],
+        ["ak09916 AK09916#0 on I2C bus 1 address 0x0C: never started, nobody was told"],
+    ]
+
+
+@pytest.mark.skipif(shutil.which("ulog_info") is None, reason="pyulog's ulog_info is not on PATH")
+def test_pyulog_command_line_tools_read_it(tmp_path, capsys) -> None:
+    _, path, _ = _run(tmp_path, capsys)
+    info = subprocess.run(
+        ["ulog_info", str(path)], capture_output=True, text=True, check=True, timeout=60
+    ).stdout
+    assert "driver_health" in info and "sys_name: px4params" in info
+    messages = subprocess.run(
+        ["ulog_messages", str(path)], capture_output=True, text=True, check=True, timeout=60
+    ).stdout
+    assert "device lost on I2C bus 2 address 0x45" in messages
+    subprocess.run(["ulog2csv", "-o", str(tmp_path), str(path)], check=True, timeout=60)
+    rows = (tmp_path / "run_driver_perf_1.csv").read_text().splitlines()
+    assert rows[0].startswith("timestamp,transfers,errors,timeouts,probe_attempts,elapsed_us")
+    assert len(rows) == 1 + 10
+
+
+# -- px4params health -----------------------------------------------------------------------------
+
+
+def test_health_tells_the_story(tmp_path, capsys) -> None:
+    direct = tmp_path / "direct.svg"
+    _, path, _ = _run(tmp_path, capsys, "--timeline", str(direct))
+    picture = tmp_path / "from_log.svg"
+    assert main(["health", str(path), "--timeline", str(picture)]) == 1
+    out = capsys.readouterr().out.splitlines()
+    assert out[1] == "first failure: INA238#1 (ina238) at 6.50 s: no data for 0.6 s"
+    assert out[2] == "commander: refused at 0.10 s"
+    at = out.index("INA238#1 (ina238 on I2C bus 2 address 0x45, device ID 0xD44511)")
+    assert "     6.90 s  lost (driver reset)" in out[at:]
+    assert any(line.startswith("  at the end: critical; ") and "1 timeouts" in line
+               for line in out[at:])  # fmt: skip
+    # The picture drawn from the log is the picture drawn from the run.
+    assert picture.read_text() == direct.read_text()
+
+
+def test_health_json(tmp_path, capsys) -> None:
+    _, path, _ = _run(tmp_path, capsys)
+    assert main(["health", str(path), "--json"]) == 1
+    doc = json.loads(capsys.readouterr().out)
+    by = {i["instance"]: i for i in doc["instances"]}
+    assert by["INA238#1"]["perf"]["resets"] == 1 and by["INA238#1"]["health"] == "critical"
+    assert by["AK09916#0"]["marks"][0][1] == "start"
+
+
+def test_health_errors(tmp_path, capsys) -> None:
+    missing = tmp_path / "nothing.ulg"
+    assert main(["health", str(missing)]) == 1
+    expected = f"px4params: error: {missing}: cannot read: No such file or directory\n"
+    assert capsys.readouterr().err == expected
+    garbage = tmp_path / "garbage.ulg"
+    garbage.write_bytes(b"not a log at all")
+    assert main(["health", str(garbage)]) == 1
+    err = capsys.readouterr().err
+    assert (
+        err.startswith(f"px4params: error: {garbage}: not a ULog file (") and err.count("\n") == 1
+    )
+
+
+def test_health_refuses_a_px4_flight_log(capsys) -> None:
+    real = shared_file("sample_log_small.ulg")  # skips with the reason when ../shared is absent
+    assert main(["health", str(real)]) == 1
+    assert capsys.readouterr().err == (
+        f"px4params: error: {real}: not a log of 'px4params autostart run --ulog' (no "
+        "driver_instance information)\n"
+    )
+
+
+def test_health_runs_as_a_command(tmp_path) -> None:
+    """No traceback on the way out, through the installed entry point's module."""
+    result = subprocess.run(
+        [sys.executable, "-m", "px4params", "health", str(tmp_path / "x.ulg")],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert result.returncode == 1 and "Traceback" not in result.stderr
