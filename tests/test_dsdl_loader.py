@@ -812,3 +812,32 @@ def test_dsdl_error_is_picklable() -> None:
     assert str(copy) == "/x/y.dsdl:7: bad thing"
     assert str(DsdlError("no location")) == "no location"
     assert str(DsdlError("no line", Path("/x"))) == "/x: no line"
+
+
+# --------------------------------------------------------------------------------------------------
+# Named value lists (@values)
+
+
+def test_values_names_a_bundled_list(tmp_path: Path) -> None:
+    root = tmp_path / "ext"
+    write(root, "Mag.1.0.dsdl", "# M\nuint6 rotation\n# @values rotation\n# @default 0\n@sealed\n")
+    tags = load_ext(tmp_path, root)["types"]["ext.Mag.1.0"]["fields"][0]["doc"]["tags"]
+    # PX4's Rotation enum (src/lib/conversion/rotation.h): 41 entries, 0..40.
+    assert [n for n, _ in tags["value"]] == list(range(41))
+    assert tags["value"][10] == [10, "Roll 180 deg, Yaw 90 deg"]
+    assert tags["value"][38] == [38, "Roll 90 deg, Pitch 68 deg, Yaw 293 deg"]
+
+
+@pytest.mark.parametrize(
+    ("field", "message"),
+    [
+        ("uint6 r\n# @values compass", "@values names no value list 'compass' (expected one of: "),
+        ("uint4 r\n# @values rotation", "@values 16 is out of range for uint4 (0..15)"),
+        ("uint6 r\n# @value 3 three\n# @values rotation", "@values rotation: lists 3 twice"),
+        ("bool r\n# @values rotation", "@values does not apply to a bool field"),
+    ],
+)
+def test_values_errors(tmp_path: Path, field: str, message: str) -> None:
+    path = write(tmp_path / "ext", "Bad.1.0.dsdl", f"# B\n{field}\n@sealed\n")
+    error = _error(tmp_path, tmp_path / "ext")
+    assert str(error).startswith(f"{path}:") and message in str(error)

@@ -10,6 +10,8 @@ _HERE = os.path.dirname(os.path.abspath(__file__))
 
 #: Each subfolder is a root namespace of DSDL parameter types (today: ``px``).
 DSDL_DIR = os.path.join(_HERE, "dsdl")
+#: Value lists DSDL fields name with ``@values NAME`` (PX4's rotation enum, ...).
+VALUE_SETS_TOML = os.path.join(_HERE, "value_sets.toml")
 #: The bundled driver declarations (see ``px4params.vehicle.drivers``).
 DRIVERS_TOML = os.path.join(_HERE, "drivers.toml")
 #: Classic parameters used when no PX4 ``parameters.json`` is given (see ``store.classic``).

@@ -32,6 +32,7 @@ from px4params.cache_file import (
     read_cached,
     write_cached,
 )
+from px4params.data import VALUE_SETS_TOML
 from px4params.dsdl.roots import Root, collect_roots
 from px4params.errors import DsdlError
 
@@ -174,7 +175,7 @@ def cache_key_text(roots: Sequence[Root], include_dronecan: bool) -> str:
         f"dronecan={_installed('dronecan')}",
         f"include_dronecan={include_dronecan}",
     ]
-    files = [os.path.join(_HERE, m) for m in _LOADER_MODULES]
+    files = [os.path.join(_HERE, m) for m in _LOADER_MODULES] + [VALUE_SETS_TOML]
     for root in roots:
         parts.append(f"root {root.dialect} {root.path} {len(root.files)}")
         files += root.files

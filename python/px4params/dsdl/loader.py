@@ -33,12 +33,14 @@ import math
 import os
 import re
 import sys
+import tomllib
 import types
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from px4params.data import VALUE_SETS_TOML
 from px4params.dsdl.roots import Root, dronecan_package_dir
 from px4params.errors import DsdlError, NumberError
 from px4params.numbers import abbreviated, parse_float, parse_int
@@ -893,6 +895,7 @@ _FIELD_TAGS = (
     "decimal",
     "increment",
     "value",
+    "values",
     "bit",
     "reboot_required",
 )
@@ -961,6 +964,13 @@ def _apply_scalar_tag(tags: dict[str, Any], tag: _Tag, scalar: TypeSpec) -> None
         if value <= 0:
             raise _TagValueError(f"expects a positive number, got {text!r}")
         tags[name] = value
+    elif name == "values":
+        entries = tags.setdefault("value", [])
+        for number_text, description in _value_set(text).items():
+            number = _scalar_value(scalar, number_text)
+            if any(existing == number for existing, _ in entries):
+                raise _TagValueError(f"{text}: lists {number_text} twice")
+            entries.append([number, description])
     elif name in ("value", "bit"):
         match = re.fullmatch(r"(\S+)\s+(.+)", text)
         if match is None:
@@ -977,6 +987,21 @@ def _apply_scalar_tag(tags: dict[str, Any], tag: _Tag, scalar: TypeSpec) -> None
         if any(existing == number for existing, _ in entries):
             raise _TagValueError(f"lists {match[1]} twice")
         entries.append([number, match[2].strip()])
+
+
+_value_sets: dict[str, dict[str, str]] = {}
+
+
+def _value_set(name: str) -> dict[str, str]:
+    """The value list ``name`` of ``data/value_sets.toml`` (``@values rotation``)."""
+    if not _value_sets:
+        with open(VALUE_SETS_TOML, "rb") as f:
+            _value_sets.update(tomllib.load(f))
+    found = _value_sets.get(name.strip())
+    if found is None:
+        known = ", ".join(sorted(_value_sets))
+        raise _TagValueError(f"names no value list {name.strip()!r} (expected one of: {known})")
+    return found
 
 
 def _check_within(value: int | float | bool, tags: dict[str, Any]) -> None:
