@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import random
+import re
 import signal
 import struct
 import subprocess
@@ -68,10 +69,13 @@ def test_save_load_round_trip(store: px4params.Store, tmp_path: Path) -> None:
 
 def test_only_what_differs_is_written(store: px4params.Store, tmp_path: Path) -> None:
     empty = encode_file(store)
-    assert len(empty) == HEADER.size + 4  # header and trailer, no record
+    assert len(empty) == HEADER.size + 4 + 4  # header, an empty table, trailer, no record
     store.add("INA238#1")  # presence is configuration: one record without payloads
     one = encode_file(store)
-    assert len(one) == len(empty) + 5  # kind, parameter, instance, CRC-16
+    line = len("INA238=px.Ina238.1") + 1  # the table names it once: length, text
+    assert len(one) == len(empty) + line + 5  # + kind, parameter, instance, CRC-16
+    store.add("INA238#2")
+    assert len(encode_file(store)) == len(one) + 5
 
 
 def test_save_keeps_a_backup(store: px4params.Store, tmp_path: Path) -> None:
@@ -131,7 +135,7 @@ def test_truncated_files_are_refused(store: px4params.Store, tmp_path: Path) -> 
     [
         (b"", "not a px4params store file (no PX4P header) (at byte 0)"),
         (b"BSON\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00", "not a px4params store file"),
-        (b"PX4P\x02\x00\x00\x00\x00\x00", "store file format version 2 (this px4params reads 1)"),
+        (b"PX4P\x03\x00\x00\x00\x00\x00", "format version 3 (this px4params reads 1 and 2)"),
         (b"PX4P\x01\x00\x00\x00\x00\x00", "file is truncated (no trailer)"),
     ],
 )
@@ -338,18 +342,17 @@ def test_crc16_reference_check_value() -> None:
 
 
 def test_golden_file_bytes_follow_the_documented_format(schema: px4params.Schema) -> None:
-    """The bytes of a small store, written down from docs/store-format.md: header, one
-    structured record (an instance of defaults only), one classic record (default and value),
-    CRC-16 per record, CRC-32 trailer."""
+    """The bytes of a small store, written down from docs/store-format.md: header with the
+    table's fingerprint, the parameter table, one structured record (an instance of defaults
+    only), one classic record (default and value), CRC-16 per record, CRC-32 trailer."""
     store = px4params.Store(schema, classic=[ClassicParam("SYS_AUTOSTART", "Int32", 0)])
     store.add("INA238#0")
     store.set_default("SYS_AUTOSTART", 10)
     store.set("SYS_AUTOSTART", 4001)
-    names = [s.name for s in store.specs]
-    assert names == sorted(names)
-    lines = "\n".join(f"{s.name}={s.data_type.name}.{s.data_type.version[0]}" for s in store.specs)
-    header = b"PX4P" + bytes([1, 0]) + zlib.crc32(lines.encode()).to_bytes(4, "little")
-    structured = bytes([0x01, names.index("INA238"), 0])  # kind 1, no flags, instance 0
+    line = b"INA238=px.Ina238.1"  # the only structured parameter with a record
+    header = b"PX4P" + bytes([2, 0]) + zlib.crc32(line).to_bytes(4, "little")
+    table = bytes([0x03, 1, len(line)]) + line  # kind 3, one entry, its length, its text
+    structured = bytes([0x01, 0, 0])  # kind 1, no flags, table entry 0, instance 0
     classic = (
         bytes([0x02 | 0x10 | 0x20, 13])
         + b"SYS_AUTOSTART"
@@ -357,7 +360,109 @@ def test_golden_file_bytes_follow_the_documented_format(schema: px4params.Schema
         + (4001).to_bytes(4, "little", signed=True)
     )
     body = header
-    for record in (structured, classic):
+    for record in (table, structured, classic):
         body += record + _crc16_ccitt_false(record).to_bytes(2, "little")
     expected = body + zlib.crc32(body).to_bytes(4, "little")
     assert encode_file(store) == expected
+
+
+# -- format 1, and schemas that differ from the writer's ----------------------------------------
+
+#: The structured parameters px4params bundled while the store file had no table (format 1).
+FIRST_BUNDLED = [
+    "AK09916=px.Ak09916.1",
+    "BMM350=px.Bmm350.1",
+    "INA226=px.Ina226.1",
+    "INA228=px.Ina228.1",
+    "INA238=px.Ina238.1",
+    "IST8310=px.Ist8310.1",
+    "LIS3MDL=px.Lis3mdl.1",
+    "QMC5883L=px.Qmc5883l.1",
+    "RM3100=px.Rm3100.1",
+]
+
+
+def _file(version: int, fp: int, records: list[bytes]) -> bytes:
+    body = bytearray(HEADER.pack(MAGIC, version, 0, fp))
+    for r in records:
+        body += r + struct.pack("<H", _crc16(r))
+    return bytes(body + struct.pack("<I", zlib.crc32(body)))
+
+
+def _table(lines: list[str]) -> bytes:
+    out = bytes([0x03]) + _varint(len(lines))
+    return out + b"".join(_varint(len(x)) + x.encode() for x in lines)
+
+
+def test_a_format_1_file_of_the_first_bundled_types_loads(store, tmp_path) -> None:
+    """The upgrade path: a store saved by px4params before its types grew (no table; records
+    index the first nine bundled parameters) loads into today's schema."""
+    fp = zlib.crc32("\n".join(FIRST_BUNDLED).encode())
+    ina238 = FIRST_BUNDLED.index("INA238=px.Ina238.1")  # 4 then; 12 in today's list
+    payload = store.schema["px.Ina238"].encode(
+        {"bus": {"i2c": {"bus_id": 2, "address": 0x41}}, "current": 150, "shunt": 0.0005},
+        tao=False,
+    )
+    record = bytes([KIND_STRUCTURED | HAS_VALUE]) + _varint(ina238) + _varint(1)
+    path = tmp_path / "old.store"
+    path.write_bytes(_file(1, fp, [record + _varint(len(payload)) + payload]))
+    store.load_from(path)
+    assert store.instances("INA238") == ["INA238#1"]
+    assert store.get("INA238#1.bus.i2c.address") == 0x41
+    store.save(path)  # written back as format 2, with its table
+    assert path.read_bytes()[4] == 2
+    assert px4params.Store.load(path, store.schema, classic=CLASSIC).get("INA238#1") == store.get(
+        "INA238#1"
+    )
+
+
+def test_a_format_1_file_of_another_schema_is_refused(store, tmp_path) -> None:
+    path = tmp_path / "other.store"
+    path.write_bytes(_file(1, 0x12345678, []))
+    with pytest.raises(StoreFileError, match=r"written for another schema \(fingerprint "
+                       r"0x12345678, this schema has 0x[0-9a-f]{8}: its parameters or their "
+                       r"types differ\) \(at byte 6\)$"):  # fmt: skip
+        store.load_from(path)
+
+
+def test_a_table_entry_this_schema_lacks(store, tmp_path) -> None:
+    lines = ["FOO=vendor.Foo.1", "INA238=px.Ina238.2", "INA238=px.Ina238.1"]
+    fp = zlib.crc32("\n".join(lines).encode())
+    path = tmp_path / "t.store"
+    # Unused entries are harmless: only entry 2 has a record.
+    path.write_bytes(_file(2, fp, [_table(lines), bytes([KIND_STRUCTURED, 2, 0])]))
+    store.load_from(path)
+    assert store.instances("INA238") == ["INA238#0"]
+    for entry, message in (
+        (0, "FOO was stored as vendor.Foo.1; this schema has no such parameter"),
+        (1, "INA238 was stored as px.Ina238.2; this schema has px.Ina238.1"),
+    ):
+        path.write_bytes(_file(2, fp, [_table(lines), bytes([KIND_STRUCTURED, entry, 1])]))
+        with pytest.raises(StoreFileError, match=re.escape(f"record cannot be applied: {message}")):
+            store.load_from(path)
+        assert store.instances("INA238") == ["INA238#0"]  # left as it was
+
+
+@pytest.mark.parametrize(
+    ("records", "message"),
+    [
+        ([], "record is malformed: it runs past the end of the file (at byte 10)"),
+        ([bytes([0x01, 0, 0])], "a format 2 file starts with its parameter table"),
+        ([_table(["X"])], "parameter table entry 'X' is not NAME=TYPE.MAJOR"),
+        ([_table([])[:1] + b"\x01\x02\xff\xfe"], "a parameter table entry is not ASCII"),
+        ([_table([]), _table([])], "record is malformed: a second parameter table"),
+    ],
+)
+def test_malformed_tables(store, tmp_path, records, message) -> None:
+    path = tmp_path / "t.store"
+    path.write_bytes(_file(2, zlib.crc32(b""), records))
+    with pytest.raises(StoreFileError, match=re.escape(message)):
+        store.load_from(path)
+
+
+def test_a_table_that_does_not_match_its_fingerprint(store, tmp_path) -> None:
+    path = tmp_path / "t.store"
+    path.write_bytes(_file(2, 0xDEADBEEF, [_table(["INA238=px.Ina238.1"])]))
+    with pytest.raises(StoreFileError, match=r"the parameter table does not match the header's "
+                       r"fingerprint \(at byte 10\)$"):  # fmt: skip
+        store.load_from(path)

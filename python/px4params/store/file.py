@@ -2,9 +2,14 @@
 
 The format is described in ``docs/store-format.md``. In short (integers little-endian)::
 
-    header   "PX4P"  u8 format version (1)  u8 flags (0)  u32 schema fingerprint
+    header   "PX4P"  u8 format version (2)  u8 flags (0)  u32 fingerprint of the table
+    table    the structured parameters the records refer to by index (NAME=TYPE.MAJOR)
     records  u8 kind, key, payloads, u16 CRC-16-CCITT-FALSE of the record's bytes
     trailer  u32 CRC-32 (zlib's) of every byte before it
+
+A file names its own parameters, so a schema with more types (a newer px4params, another DSDL
+folder) reads it. Format 1 files had no table: they are read by a schema with the same
+parameters, or with the first bundled set plus the same extra types.
 
 A file is checked completely (trailer, then every record) before anything is applied, and it
 is applied to a copy of the store that replaces the store only when all of it went in.
@@ -32,23 +37,44 @@ else:
     from px4params._records import NamedTuple
 
 MAGIC = b"PX4P"
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
+#: Format versions this reader takes (1: without the parameter table).
+READABLE_VERSIONS = (1, 2)
 HEADER = struct.Struct("<4sBBI")
 TRAILER = struct.Struct("<I")
 
 KIND_STRUCTURED = 1
 KIND_CLASSIC = 2
+KIND_TABLE = 3
 HAS_DEFAULT = 0x10
 HAS_VALUE = 0x20
 
 
+#: Structured parameters bundled after format 1 was replaced: a format 1 file was written by
+#: a schema without them (the first nine bundled types, plus any extra DSDL folder's).
+ADDED_AFTER_FORMAT_1 = frozenset(
+    {
+        "ASP5033", "AUAV", "BATMON", "BATT_SMBUS", "ETS3", "HMC5883", "ICM20948", "IIS2MDC",
+        "IRLOCK", "IST8308", "LL40LS", "MB12XX", "MCP9808", "MS4515", "MS4525DO", "MS5525DSO",
+        "PCF8583", "QMC5883P", "SDP3X", "SF1XX", "SHT3X", "SPA06", "SPL06", "TERARANGER",
+        "TF02PRO", "TMP102", "VL53L0X", "VL53L1X",
+    }
+)  # fmt: skip
+
+
+def table_lines(specs: list[ParamSpec]) -> list[str]:
+    """``NAME=TYPE.MAJOR`` of each structured parameter, in order: what records refer to by
+    index."""
+    return [f"{s.name}={s.data_type.name}.{(s.data_type.version or (0, 0))[0]}" for s in specs]
+
+
 def fingerprint(specs: list[ParamSpec]) -> int:
-    """CRC-32 over the structured parameters' names, types and major versions: records refer
-    to parameters by their index in this list, so a file only fits a schema with the same."""
-    text = "\n".join(
-        f"{s.name}={s.data_type.name}.{(s.data_type.version or (0, 0))[0]}" for s in specs
-    )
-    return binascii.crc32(text.encode())
+    """CRC-32 over the structured parameters' names, types and major versions."""
+    return _lines_crc(table_lines(specs))
+
+
+def _lines_crc(lines: list[str]) -> int:
+    return binascii.crc32("\n".join(lines).encode())
 
 
 # -- writing ------------------------------------------------------------------------------------
@@ -56,19 +82,31 @@ def fingerprint(specs: list[ParamSpec]) -> int:
 
 def encode_file(store: Store) -> bytes:
     """The store's file content."""
-    out = bytearray(HEADER.pack(MAGIC, FORMAT_VERSION, 0, fingerprint(store.specs)))
+    # The table lists the structured parameters the records use, in store order.
+    used: dict[int, int] = {}
+    records = bytearray()
     for p in store._order:
         for instance in store._native.instances(p.index):
-            record = _record(store, p, instance)
-            if record is not None:
-                out += record + struct.pack("<H", _crc16(record))
+            index = used.get(p.index, len(used))
+            record = _record(store, p, instance, index)
+            if record is None:
+                continue
+            if p.classic is None:
+                used[p.index] = index
+            records += record + struct.pack("<H", _crc16(record))
+    lines = table_lines([p.spec for p in store._order if p.index in used and p.spec])
+    out = bytearray(HEADER.pack(MAGIC, FORMAT_VERSION, 0, _lines_crc(lines)))
+    table = bytearray([KIND_TABLE]) + _varint(len(lines))
+    for line in lines:
+        table += _varint(len(line)) + line.encode()
+    out += table + struct.pack("<H", _crc16(table)) + records
     for record in store._foreign.values():  # classic values of parameters this store lacks
         out += record + struct.pack("<H", _crc16(record))
     out += TRAILER.pack(binascii.crc32(out))
     return bytes(out)
 
 
-def _record(store: Store, p: _Param, instance: int) -> bytes | None:
+def _record(store: Store, p: _Param, instance: int, table_index: int) -> bytes | None:
     native = store._native
     value = native.get(p.index, instance)
     default = native.get(p.index, instance, default=True)
@@ -86,7 +124,7 @@ def _record(store: Store, p: _Param, instance: int) -> bytes | None:
     # An instance is written even when it is all defaults: that it exists is configuration.
     if p.shared and not flags:
         return None
-    record = bytearray([KIND_STRUCTURED | flags]) + _varint(p.index) + _varint(instance)
+    record = bytearray([KIND_STRUCTURED | flags]) + _varint(table_index) + _varint(instance)
     for present, payload in ((flags & HAS_DEFAULT, default), (flags & HAS_VALUE, value)):
         if present:
             record += _varint(len(payload)) + payload
@@ -214,25 +252,36 @@ class Record(NamedTuple):
     raw: bytes = b""
 
 
-def read_file(path: str | os.PathLike[str], fp: int) -> list[Record]:
-    """Every record of the file, after checking all of it."""
+class FileContent(NamedTuple):
+    """A checked file."""
+
+    version: int
+    fingerprint: int
+    #: The parameter table (``NAME=TYPE.MAJOR`` per index); None in a format 1 file.
+    table: list[str] | None
+    records: list[Record]
+
+
+def read_file(path: str | os.PathLike[str]) -> FileContent:
+    """The whole file, after checking all of it."""
     where = os.fspath(path)
     try:
         with open(where, "rb") as f:
             data = f.read()
     except OSError as e:
         raise StoreFileError(f"cannot read: {e.strerror}", where) from None
-    return parse(data, fp, where)
+    return parse(data, where)
 
 
-def parse(data: bytes, fp: int, where: str) -> list[Record]:
-    """Checks ``data`` completely and returns its records."""
+def parse(data: bytes, where: str) -> FileContent:
+    """Checks ``data`` completely and returns its table and records."""
     if len(data) < HEADER.size or data[:4] != MAGIC:
         raise StoreFileError("not a px4params store file (no PX4P header)", where, 0)
     _magic, version, flags, file_fp = HEADER.unpack_from(data)
-    if version != FORMAT_VERSION:
+    if version not in READABLE_VERSIONS:
         raise StoreFileError(
-            f"store file format version {version} (this px4params reads {FORMAT_VERSION})",
+            f"store file format version {version} (this px4params reads "
+            f"{' and '.join(map(str, READABLE_VERSIONS))})",
             where,
             4,
         )
@@ -248,24 +297,31 @@ def parse(data: bytes, fp: int, where: str) -> list[Record]:
         )
     if flags != 0:
         raise StoreFileError(f"unknown header flags 0x{flags:02x}", where, 5)
-    if file_fp != fp:
-        raise StoreFileError(
-            f"written for another schema (fingerprint 0x{file_fp:08x}, this schema has "
-            f"0x{fp:08x}: its parameters or their types differ)",
-            where,
-            6,
-        )
     records = []
     pos = HEADER.size
+    table = None
+    if version >= 2:
+        reader = _Reader(data, pos, body_end, where)
+        table = reader.table()
+        _check_crc16(data, pos, reader.pos, where)
+        if _lines_crc(table) != file_fp:
+            raise StoreFileError(
+                "the parameter table does not match the header's fingerprint", where, pos
+            )
+        pos = reader.pos + 2
     while pos < body_end:
         reader = _Reader(data, pos, body_end, where)
         record = reader.record()
-        (crc,) = struct.unpack_from("<H", data, reader.pos)
-        if _crc16(data[pos : reader.pos]) != crc:
-            raise StoreFileError("record is corrupted (CRC-16 mismatch)", where, pos)
+        _check_crc16(data, pos, reader.pos, where)
         records.append(record)
         pos = reader.pos + 2
-    return records
+    return FileContent(version, file_fp, table, records)
+
+
+def _check_crc16(data: bytes, start: int, end: int, where: str) -> None:
+    (crc,) = struct.unpack_from("<H", data, end)
+    if _crc16(data[start:end]) != crc:
+        raise StoreFileError("record is corrupted (CRC-16 mismatch)", where, start)
 
 
 class _Reader:
@@ -293,6 +349,26 @@ class _Reader:
             if shift > 28:
                 raise self.fail("a number is too long")
 
+    def table(self) -> list[str]:
+        """The parameter table: kind 3, a count, then each ``NAME=TYPE.MAJOR`` with its
+        length."""
+        if self.take(1)[0] != KIND_TABLE:
+            raise self.fail("a format 2 file starts with its parameter table")
+        lines = []
+        for _ in range(self.varint()):
+            raw = self.take(self.varint())
+            try:
+                line = raw.decode("ascii")
+            except UnicodeDecodeError:
+                raise self.fail("a parameter table entry is not ASCII") from None
+            name, equals, key = line.partition("=")
+            if not equals or not name or not key:
+                raise self.fail(f"parameter table entry {line!r} is not NAME=TYPE.MAJOR")
+            lines.append(line)
+        if self.pos + 2 > self.end:
+            raise self.fail("it runs past the end of the file")
+        return lines
+
     def record(self) -> Record:
         head = self.take(1)[0]
         kind, flags = head & 0x0F, head & 0xF0
@@ -307,6 +383,8 @@ class _Reader:
             if instance > 0xFFFF:
                 raise self.fail(f"instance {instance} is out of range")
             sizes = (-1, -1)
+        elif kind == KIND_TABLE:
+            raise self.fail("a second parameter table")
         else:
             raise self.fail(f"unknown record kind {kind}")
         payloads: list[bytes | None] = []
@@ -328,12 +406,12 @@ def apply_file(store: Store, path: str | os.PathLike[str], *, merge: bool) -> li
     """Applies a checked file to a copy of the store (reset first unless ``merge``); the copy
     replaces the store only when every record went in. Returns the report's lines."""
     where = os.fspath(path)
-    records = read_file(where, fingerprint(store.specs))
+    content = read_file(where)
     work = store._native.copy() if merge else store._initial.copy()
     report: list[str] = []
     foreign = dict(store._foreign) if merge else {}
-    by_index = {p.index: p for p in store._order if p.spec is not None}
-    for record in records:
+    by_index = _file_parameters(store, content, where)
+    for record in content.records:
         try:
             _apply(store, work, record, by_index, report, foreign)
         except Px4ParamsError as e:
@@ -344,11 +422,42 @@ def apply_file(store: Store, path: str | os.PathLike[str], *, merge: bool) -> li
     return report
 
 
+def _file_parameters(store: Store, content: FileContent, where: str) -> dict[int, _Param | str]:
+    """The file's parameter indices -> this store's parameters; an entry this store has not
+    (another type, or no such parameter) maps to the file's ``NAME=TYPE.MAJOR``, an error only
+    if a record uses it."""
+    lines = content.table
+    if lines is None:  # format 1: the table is the fingerprint's list, this schema's or older
+        first = [s for s in store.specs if s.name not in ADDED_AFTER_FORMAT_1]
+        lines = next(
+            (
+                x
+                for x in (table_lines(store.specs), table_lines(first))
+                if _lines_crc(x) == content.fingerprint
+            ),
+            None,
+        )
+        if lines is None:
+            raise StoreFileError(
+                f"written for another schema (fingerprint 0x{content.fingerprint:08x}, this "
+                f"schema has 0x{fingerprint(store.specs):08x}: its parameters or their types "
+                "differ)",
+                where,
+                6,
+            )
+    current = dict(zip(table_lines(store.specs), store.specs, strict=True))
+    found: dict[int, _Param | str] = {}
+    for index, line in enumerate(lines):
+        spec = current.get(line)
+        found[index] = store._params[spec.name] if spec is not None else line
+    return found
+
+
 def _apply(
     store: Store,
     work: Any,
     record: Record,
-    by_index: Mapping[int, _Param],
+    by_index: Mapping[int, _Param | str],
     report: list[str],
     foreign: dict[str, bytes],
 ) -> None:
@@ -367,6 +476,15 @@ def _apply(
         return
     assert isinstance(record.key, int)
     p = by_index.get(record.key)
+    if isinstance(p, str):
+        name, _, key = p.partition("=")
+        spec = store.spec(name) if name in store._params else None
+        has = (
+            f"this schema has {_table_key(spec)}"
+            if spec is not None
+            else "this schema has no such parameter"
+        )
+        raise StoreError(f"{name} was stored as {key}; {has}")
     if p is None or p.spec is None:
         raise StoreError(f"no parameter #{record.key}")
     if not p.shared and not work.slot(p.index, record.instance)[0]:  # import may merge
@@ -381,6 +499,10 @@ def _apply(
         base = work.get(p.index, record.instance, default=True)
         value = _current(store, data_type, name, record.value, base, report)
         work.set_encoded(p.index, record.instance, value)
+
+
+def _table_key(spec: ParamSpec) -> str:
+    return table_lines([spec])[0].partition("=")[2]
 
 
 # -- version translation ------------------------------------------------------------------------
