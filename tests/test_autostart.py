@@ -13,7 +13,7 @@ import pytest
 from px4params import Store
 from px4params.cli.main import main
 from px4params.store.spec import parameter_specs
-from px4params.vehicle import autostart, devid
+from px4params.vehicle import autostart, devid, simbench
 from px4params.vehicle.autostart import (
     ManifestError,
     configured,
@@ -29,6 +29,7 @@ from px4params.vehicle.drivers import (
     load_drivers,
     parse_drivers,
 )
+from px4params.vehicle.simbench import parse_bench
 from shared_data import current_devtypes
 
 REPO = Path(__file__).resolve().parents[1]
@@ -82,6 +83,8 @@ def test_devtypes_are_todays_drv_sensor_codes(drivers):
     for d in drivers:
         names = [r.name for r in table.lookup(d.devtype)]
         assert d.chip in names, f"{d.name}: 0x{d.devtype:02X} is {names} in the current table"
+        for chip in d.also_chips:  # the other devtypes it publishes (SDP32, SDP33) exist too
+            assert table.resolve(chip), f"{d.name}: {chip} is not in the current table"
 
 
 def test_known_codes_and_chip_ids(drivers):
@@ -95,6 +98,36 @@ def test_known_codes_and_chip_ids(drivers):
         "lis3mdl": (0x05, 0x0F, 0x3D),
         "qmc5883l": (0x08, 0x0D, 0xFF),
         "rm3100": (0x07, 0x36, 0x22),
+        # rc.sensors' probe block (SENS_EXT_I2C_PRB)
+        "icm20948_i2c_passthrough": (0x28, 0x00, 0xEA),
+        "hmc5883": (0x01, 0x0A, ord("H")),
+        "iis2mdc": (0x0E, 0x4F, 0x40),
+        "ist8308": (0x0B, 0x00, 0x08),
+        "qmc5883p": (0x0F, 0x00, 0x80),
+        # rc.sensors' SENS_EN_* starts; None: the probe reads no ID register
+        "ms4525do": (0x48, None, None),
+        "ms4515": (0x47, None, None),
+        "ms5525dso": (0x49, None, None),
+        "sdp3x": (0x4A, None, None),
+        "ets_airspeed": (0x46, None, None),
+        "asp5033": (0xE4, None, None),
+        "auav": (0xE6, None, None),
+        "ll40ls": (0x70, None, None),
+        "lightware_laser_i2c": (0x73, None, None),
+        "teraranger": (0x75, 0x01, 0xA1),
+        "vl53l0x": (0x76, 0xC0, 0xEE),
+        "vl53l1x": (0x91, None, None),
+        "mb12xx": (0x72, None, None),
+        "tf02pro": (0xE0, None, None),
+        "spl06": (0x4F, 0x0D, 0x10),
+        "spa06": (0xE8, 0x0D, 0x11),
+        "mcp9808": (0xEE, 0x06, 0x54),
+        "tmp102": (0xF0, None, None),
+        "sht3x": (0xB1, None, None),
+        "pcf8583": (0x7E, None, None),
+        "irlock": (0x7D, None, None),
+        "batt_smbus": (0x7C, None, None),
+        "batmon": (0x9D, None, None),
     }
     got = {d.name: (d.devtype, d.chip_id_register, d.chip_id) for d in drivers}
     assert got == expected
@@ -154,7 +187,9 @@ def test_plan_of_the_example_airframe(store, drivers):
 def test_plan_text_and_json(tmp_path, capsys):
     assert main(["autostart", "plan", "--airframe", str(AIRFRAME)]) == 0
     out = capsys.readouterr().out
-    assert "ina226 auto  (order 10, parameter INA226, devtype 0xD0): nothing to start" in out
+    idle = out.splitlines()[-1]  # the drivers with no instance, together, in start order
+    assert idle.startswith("nothing to start (35 drivers): ina226, ina228, icm20948_i2c_passth")
+    assert "ina238" not in idle and "ak09916" not in idle
     assert "ina238 auto  (order 30, parameter INA238, devtype 0xD4): 2 instances" in out
     line = next(x for x in out.splitlines() if "INA238#0" in x)
     assert "I2C bus 1 address 0x45" in line and "current=200" in line and "0xD44509" in line
@@ -293,6 +328,24 @@ def _error(text: str, specs=None) -> str:
         (("rate_hz = 10", "rate_hz = 0"), "rate_hz 0 is out of range (expected > 0 and <= 10000)"),
         (("rate_hz = 10", 'rate_hz = "fast"'), "rate_hz must be a number, not 'fast'"),
         (("rate_hz = 10", "rate_hz = 10\ndescription = 3"), "description must be a string"),
+        (("chip_id = 0x238\n", ""), "chip_id_register and chip_id go together"),
+        (("rate_hz = 10", "rate_hz = 10\nkind = 7"), "kind must be a string, not 7"),
+        (("rate_hz = 10", 'rate_hz = 10\nalso_chips = ["SDP 32"]'), "also_chips: 'SDP 32' is not"),
+        (("rate_hz = 10", "rate_hz = 10\nalso_chips = 3"), "also_chips must be a list of strings"),
+        (("rate_hz = 10", 'rate_hz = 10\nstarted_by = "magic"'), "started_by 'magic' is not one"),
+        (
+            ("rate_hz = 10", 'rate_hz = 10\nstarted_by = "parameter"'),
+            'started_by = "parameter" needs enabled_by',
+        ),
+        (("rate_hz = 10", 'rate_hz = 10\nenabled_by = "sens_en"'), "enabled_by 'sens_en' is not"),
+        (("rate_hz = 10", "rate_hz = 10\nenabled_values = [2]"), "enabled_values needs enabled_by"),
+        (
+            ("rate_hz = 10", 'rate_hz = 10\nenabled_by = "SENS_EN_X"\nenabled_values = [0]'),
+            "enabled_values must be a list of non-zero integers, not [0]",
+        ),
+        (("rate_hz = 10", 'rate_hz = 10\nsettings = { x = "y" }'), "settings must be a table"),
+        (("rate_hz = 10", 'rate_hz = 10\nswitch_field = "current"'), "switch_field must be a"),
+        (("rate_hz = 10", "rate_hz = 10\nsources = [1]"), "sources must be a list of strings"),
     ],
 )
 def test_drivers_file_errors(change, message):
@@ -330,6 +383,44 @@ def test_drivers_file_against_the_schema(specs):
         "(did you mean INA238?)"
     )
     assert parse_drivers(INA238, "d.toml", specs).missing(specs)  # the others lack drivers
+    unknown = INA238.replace("rate_hz = 10", 'rate_hz = 10\nsettings = { INA238_X = "volts" }')
+    assert _error(unknown, specs).startswith(
+        "drivers.toml: driver 'ina238': INA238 has no field 'volts' (its fields: bus._tag, "
+    )
+
+
+def test_every_bundled_driver_is_documented(drivers):
+    """docs/drivers.md has a row per declared driver, with its facts (nothing rots)."""
+    rows = {}
+    for line in (REPO / "docs" / "drivers.md").read_text(encoding="utf-8").splitlines():
+        cells = [c.strip() for c in line.strip("|").split("|")]
+        if line.startswith("| `") and len(cells) == 9:
+            rows[cells[0].strip("`")] = cells
+    assert set(rows) == {d.name for d in drivers}
+    for d in drivers:
+        row = rows[d.name]
+        assert row[1] == f"`{d.parameter}`" and row[3] == ", ".join(d.chips)
+        assert (row[4], row[5]) == (f"0x{d.default_address:02X}", f"0x{d.devtype:02X}")
+        assert (d.enabled_by or "-") in row[8]
+
+
+def test_legacy_boot_starts_only_what_todays_px4_starts_unasked(drivers):
+    # rc.sensors' probe block and the power monitors' launcher start on their own; a SENS_EN_*
+    # switch starts the others, and a legacy boot has no switch set: an airspeed sensor on the
+    # bench stays unstarted, while an HMC5883 is found by probing.
+    bench = parse_bench(
+        '[[device]]\nchip = "MS4525DO"\nbus = "i2c"\nbus_id = 1\naddress = 0x28\n\n'
+        '[[device]]\nchip = "HMC5883"\nbus = "i2c"\nbus_id = 1\naddress = 0x1E\n',
+        "bench.toml",
+        drivers,
+    )
+    result = simbench.run(bench, drivers, None, duration=1.0, legacy=True, record_events=True)
+    started = {e["driver"] for e in result.events or () if e["event"] == "legacy_start"}
+    assert started == {d.name for d in drivers if d.started_by in ("probe", "launcher")}
+    assert {"ist8310", "hmc5883", "iis2mdc", "ist8308", "qmc5883p", "ak09916", "ina238"} <= started
+    assert not started & {"ms4525do", "sdp3x", "ll40ls", "lightware_laser_i2c", "batt_smbus"}
+    running = {i.driver for i in result.instances if i.started_at is not None}
+    assert running == {"hmc5883"}  # iis2mdc, lis3mdl at 0x1E read the wrong ID: quiet
 
 
 def test_drivers_file_not_found_and_env(tmp_path, monkeypatch, capsys):

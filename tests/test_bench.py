@@ -391,7 +391,7 @@ ONE = '[[device]]\nchip = "INA238"\nbus = "i2c"\nbus_id = 1\naddress = 0x45\n'
         (
             ONE.replace('"INA238"', '"XYZ"'),
             "bench.toml: device #1 (XYZ): unknown chip 'XYZ' (no declared driver drives it; "
-            "known: AK09916, BMM350,",
+            "known: AK09916, ASP5033, AUAV, BATMON_SMBUS,",
         ),
         (ONE.replace("bus_id = 1\n", ""), "bench.toml: device #1 (INA238): missing key 'bus_id'"),
         (

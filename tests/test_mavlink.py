@@ -29,18 +29,15 @@ CLASSIC = [
     ClassicParam("BAT1_CAPACITY", "Float", -1.0),
     ClassicParam("SENS_EXT_I2C_PRB", "Int32", 1),
 ]
-#: The bundled instanced parameters, each with an instance mask P_INST.
-INSTANCED = [
-    "AK09916",
-    "BMM350",
-    "INA226",
-    "INA228",
-    "INA238",
-    "IST8310",
-    "LIS3MDL",
-    "QMC5883L",
-    "RM3100",
-]
+#: The bundled instanced parameters, each with an instance mask P_INST: one per DSDL file with
+#: @max_instances in the bundled px folder (read from the files here, not from the store).
+INSTANCED = sorted(
+    {
+        re.sub(r"(?<=[a-z0-9])(?=[A-Z])", "_", path.name.split(".")[0]).upper()  # BattSmbus
+        for path in (Path(px4params.__file__).parent / "data" / "dsdl" / "px").glob("*.dsdl")
+        if "@max_instances" in path.read_text(encoding="utf-8")
+    }
+)
 # int32 values whose bit patterns are signalling NaNs: pymavlink's float field rewrites them.
 SNAN_INT32 = (-8388607, -4194305, 2139095041, 2143289343)
 
@@ -309,9 +306,10 @@ def test_unknown_names_and_indices(served: tuple[MavlinkParamServer, Client]) ->
     assert not [m for m in got if m.get_type() == "PARAM_VALUE"]
     read = client.read("_HASH_CHECK")  # by name too, as PX4
     assert read.param_type == mavlink.MAV_PARAM_TYPE_UINT32
-    # by index, in name order: AK09916_INST BAT1_CAPACITY BMM350_INST INA226_INST INA228_INST
-    # INA238_1A INA238_1B INA238_1C
-    client.conn.mav.param_request_read_send(1, 1, b"", 7)
+    # by index, in name order: AK09916_INST ... BAT1_CAPACITY ... INA238_1A INA238_1B INA238_1C
+    names = ["SYS_AUTOSTART", "BAT1_CAPACITY", "SENS_EXT_I2C_PRB"]
+    names = sorted(names + [f"INA238_1{x}" for x in "ABCPQ"] + [f"{p}_INST" for p in INSTANCED])
+    client.conn.mav.param_request_read_send(1, 1, b"", names.index("INA238_1C"))
     assert client.expect("PARAM_VALUE").param_id == "INA238_1C"
 
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import struct
 import subprocess
 import sys
@@ -21,10 +22,11 @@ CURRENT_TSV = SHARED_DATA / shared_data.CURRENT_TSV
 # A small devtype table of our own, so that the .params tests need no shared data.
 DEVTYPES = (
     "code\tname\n0x01\tDRV_MAG_DEVTYPE_HMC5883\n0x09\tDRV_MAG_DEVTYPE_AK09916\n"
-    "0x0A\tDRV_MAG_DEVTYPE_LIS2MDL\n"
+    "0x0A\tDRV_MAG_DEVTYPE_LIS2MDL\n0x0B\tDRV_MAG_DEVTYPE_TST5883\n"
 )
 AK09916_I2C1 = devid.encode("i2c", 1, 0x0C, 0x09)  # 592905, as in the sample log
 HMC5883_I2C1 = devid.encode("i2c", 1, 0x1E, 0x01)  # 73225, the driver guide's example
+TST5883_I2C1 = devid.encode("i2c", 1, 0x1E, 0x0B)  # a chip of this test's own type
 UAVCAN_BARO = devid.encode("uavcan", 0, 125, 0x40)
 SIM_MAG = devid.encode("simulation", 0, 1, 0x09)
 UNKNOWN_I2C = devid.encode("i2c", 2, 0x30, 0x77)
@@ -45,7 +47,7 @@ ROWS: list[tuple[str, object, int]] = [
     ("INA238_SHUNT", 0.0003, 9),  # float16 holds 0.000299931
     ("INA238_CONFIG", 3, 6),  # no field for it
     ("SENS_EN_INA226", 0, 6),
-    ("SENS_EN_LL40LS", 1, 6),  # no bundled type
+    ("SENS_EN_LL40LS", 1, 6),  # 1 is the PWM driver; the I2C one (bundled) is 2
     ("SENS_EXT_I2C_PRB", 1, 6),
     ("CAL_MAG0_ID", AK09916_I2C1, 6),
     ("CAL_MAG0_ROT", 2, 6),
@@ -195,11 +197,12 @@ def test_params_file(
     assert config.kind == "QGC .params" and config.params["INA238_SHUNT"] == pytest.approx(0.0003)
     assert config.skipped == ["component 100: 1 parameters (not the autopilot's)"]
     proposal = migrate.migrate(config, table=devtypes)
-    ina, ak = proposal.instances
-    assert ina.name == "INA238#0" and ak.name == "AK09916#0"
+    ina, ak, hmc = proposal.instances
+    assert (ina.name, ak.name, hmc.name) == ("INA238#0", "AK09916#0", "HMC5883#0")
     assert ina.origin == (
-        "SENS_EN_INA238 = 1: started today on I2C bus 1 at the driver's default address 0x45"
+        "SENS_EN_INA238 = 1: ina238 started today on I2C bus 1 at the driver's default address 0x45"
     )
+    assert hmc.values == {"bus.i2c.bus_id": 1, "bus.i2c.address": 0x1E}
     assert ina.values["current"] == 327 and ina.values["shunt"] == pytest.approx(0.0003, rel=1e-3)
     assert ina.notes == [
         "INA238_CURRENT = 327.68 A becomes current = 327 A (uint10, 1..327)",
@@ -209,15 +212,12 @@ def test_params_file(
     assert ak.values == {"bus.i2c.bus_id": 1, "bus.i2c.address": 0x0C, "rotation": 2}
     assert proposal.not_carried == [
         "INA238_CONFIG = 3: INA238 has no field for it",
-        "SENS_EN_LL40LS = 1: no bundled parameter type LL40LS; the driver stays enabled by this "
-        "classic parameter, outside the manifest",
+        "SENS_EN_LL40LS = 1: starts no I2C driver of the manifest (its ll40ls starts on 2); it "
+        "stays a classic parameter",
         "CAL_MAG2_ID = 33554432: not a device ID",
         f"CAL_ACC1_ID = {UNKNOWN_I2C}: devtype 0x77 (not in the current table), I2C bus 2, "
         "address 0x30: no bundled parameter type for devtype 0x77; today it is found by probing, "
         "in the manifest it needs a type",
-        f"CAL_MAG1_ID = {HMC5883_I2C1}: HMC5883 (MAG), I2C bus 1, address 0x1E: no bundled "
-        "parameter type for HMC5883; today it is found by probing, in the manifest it needs a "
-        "type",
     ]
     assert proposal.not_in_manifest == [
         f"CAL_BARO0_ID = {UAVCAN_BARO}: devtype 0x40 (not in the current table), UAVCAN bus 0, "
@@ -251,8 +251,8 @@ def test_params_file(
 def test_clamping_rotation_and_twice_found(tmp_path: Path, devtypes: devid.DevtypeTable) -> None:
     extra = tmp_path / "tst"
     extra.mkdir()
-    (extra / "Hmc5883.1.0.dsdl").write_text(
-        "# HMC5883\n# @max_instances 2\n\nuint4 p_version\npx.Bus.1.0 bus\n# Bus\n"
+    (extra / "Tst5883.1.0.dsdl").write_text(  # no driver declaration, no rotation field
+        "# TST5883\n# @max_instances 2\n\nuint4 p_version\npx.Bus.1.0 bus\n# Bus\n"
         "# @default i2c.address 0x1E\n\nuint3 gain\n@sealed\n"
     )
     (extra / "Lis2mdl.1.0.dsdl").write_text(  # a rotation field without @min/@max
@@ -266,8 +266,8 @@ def test_clamping_rotation_and_twice_found(tmp_path: Path, devtypes: devid.Devty
     rows: list[tuple[str, object, int]] = [
         ("SENS_EN_INA226", 1, 6),
         ("INA226_CURRENT", 500.0, 9),
-        ("SENS_EN_HMC5883", 1, 6),  # enabled and calibrated: one instance
-        ("CAL_MAG0_ID", HMC5883_I2C1, 6),
+        ("SENS_EN_TST5883", 1, 6),  # enabled and calibrated: one instance
+        ("CAL_MAG0_ID", TST5883_I2C1, 6),
         ("CAL_MAG0_ROT", 3, 6),
         ("CAL_MAG1_ID", AK09916_I2C1, 6),
         ("CAL_MAG1_ROT", 100, 6),
@@ -279,9 +279,9 @@ def test_clamping_rotation_and_twice_found(tmp_path: Path, devtypes: devid.Devty
     proposal = migrate.migrate(migrate.read_config(params_file(tmp_path / "p", rows)), schema,
                                devtypes)  # fmt: skip
     names = [i.name for i in proposal.instances]
-    assert names == ["HMC5883#0", "INA226#0", "AK09916#0", "AK09916#1", "LIS2MDL#0"]
-    hmc, ina, ak0, ak1, _ = proposal.instances
-    assert hmc.notes == [f"also CAL_MAG0_ID = {HMC5883_I2C1}: HMC5883 (MAG), I2C bus 1, "
+    assert names == ["INA226#0", "TST5883#0", "AK09916#0", "AK09916#1", "LIS2MDL#0"]
+    ina, tst, ak0, ak1, _ = proposal.instances
+    assert tst.notes == [f"also CAL_MAG0_ID = {TST5883_I2C1}: TST5883 (MAG), I2C bus 1, "
                          "address 0x1E"]  # fmt: skip
     assert ina.values["current"] == 200
     assert ina.notes[0] == "INA226_CURRENT = 500 A becomes current = 200 A (uint10, 1..200)"
@@ -289,7 +289,7 @@ def test_clamping_rotation_and_twice_found(tmp_path: Path, devtypes: devid.Devty
     # PX4's metadata: -1 is "Internal" (the board's rotation); AK09916 has no internal flag.
     assert ak1.notes == ["CAL_MAG2_ROT = -1 (Internal): rotation left 0 (the board's)"]
     assert proposal.not_carried == [
-        "CAL_MAG0_ROT = 3: HMC5883 has no rotation field",
+        "CAL_MAG0_ROT = 3: TST5883 has no rotation field",
         "CAL_MAG1_ROT = 100: AK09916#0.rotation must be 0..40",
         "CAL_MAG3_ROT = 5: LIS2MDL#0: rotation: value 5 is out of range (expected 0 to 3)",
     ]
@@ -363,7 +363,7 @@ def test_cli(tmp_path: Path) -> None:
     r = cli("migrate", str(path), "--devtypes", str(tsv), "--json")
     assert r.returncode == 0, r.stderr
     document = json.loads(r.stdout)
-    assert [i["name"] for i in document["instances"]] == ["INA238#0", "AK09916#0"]
+    assert [i["name"] for i in document["instances"]] == ["INA238#0", "AK09916#0", "HMC5883#0"]
     assert document["airframe"].startswith("# Device manifest")
 
     r = cli("migrate", str(path), "--table", "legacy", "--devtypes", str(tsv))
@@ -447,3 +447,52 @@ def test_qgc_mocklink_params_file() -> None:
         "component 2: 1 parameters (not the autopilot's)",
         "component 3: 1 parameters (not the autopilot's)",
     ]
+
+
+# Every real sample: the external devices PX4 found become instances; what stays out is internal
+# (SPI) or simulated. The device IDs are read with pyulog and split by hand here (bits 0-2 the
+# bus type, 1 = I2C), not by the product's decoder.
+REAL_SAMPLES = {
+    "sample_log_small.ulg": ["AK09916#0"],  # AK09916 on I2C bus 1 (CubeOrange, v1.11)
+    "sample_appended_multiple.ulg": ["HMC5883#0"],  # HMC5883 on I2C bus 2 (FMUv4 Pro, v1.6)
+    "sample_px4_events.ulg": [],  # SITL: simulated sensors only
+    "qgc_offline_editing_v1.4.params": [],  # nothing calibrated
+    "qgc_px4_mocklink.params": [],  # MockLink's simulated sensors, bus type 0
+}
+
+
+def _device_ids(path: Path) -> dict[str, int]:
+    if path.suffix == ".ulg":
+        from pyulog import ULog
+
+        params = ULog(str(path), parse_header_only=True).initial_parameters
+    else:
+        params = {}
+        for line in path.read_text().splitlines():
+            cells = line.split("\t")
+            if len(cells) == 5 and cells[1] == "1":
+                params[cells[2]] = float(cells[3])
+    return {k: int(v) for k, v in params.items() if re.fullmatch(r"CAL_\w+_ID", k) and v}
+
+
+@pytest.mark.parametrize("name", sorted(REAL_SAMPLES))
+def test_every_external_device_of_the_real_samples_becomes_an_instance(name, capsys) -> None:
+    path = shared_file(name)  # skips with the reason when ../shared is absent
+    from px4params.cli.main import main
+
+    assert main(["migrate", str(path), "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    names = [i["name"] for i in report["instances"]]
+    assert names == REAL_SAMPLES[name]
+    external = {v for v in _device_ids(path).values() if v & 0x7 == 1}  # I2C
+    assert len(external) == len(names)
+    for inst in report["instances"]:
+        value = int(inst["origin"].split(" = ")[1].split(":")[0])
+        assert value in external
+        assert inst["values"]["bus.i2c.bus_id"] == (value >> 3) & 0x1F
+        assert inst["values"]["bus.i2c.address"] == (value >> 8) & 0xFF
+    for line in report["not_in_manifest"]:
+        assert "internal SPI sensor" in line or (
+            "not an I2C device" in line and ("simulation bus" in line or "bus type 0" in line)
+        ), line
+    assert not [line for line in report["not_carried"] if "no bundled parameter type" in line]

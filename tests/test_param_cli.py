@@ -56,7 +56,7 @@ def test_the_talks_five_lines(
     lines = out.splitlines()
     assert lines[0] == "Symbols: x = used, + = saved, * = unsaved"
     assert lines[1] == (
-        "    INA238#0 [-1,4] : {bus: {i2c: {bus_id: 1, address: 69}}, current: 200, shunt: 0.0003}"
+        "    INA238#0 [-1,12] : {bus: {i2c: {bus_id: 1, address: 69}}, current: 200, shunt: 0.0003}"
     )
     code, out, _ = param(capsys, "show", "-l", "INA238#0")
     assert code == 0
@@ -78,7 +78,7 @@ def test_set_changes_and_marks_unsaved_then_saved(
     talk(capsys, tmp_path)
     assert param(capsys, "set", "INA238#0.bus.i2c.address", "0x46")[0] == 0
     _, out, _ = param(capsys, "show", "-c")
-    assert "  + INA238#0 [-1,4] : {bus: {i2c: {bus_id: 1, address: 70}}" in out
+    assert "  + INA238#0 [-1,12] : {bus: {i2c: {bus_id: 1, address: 70}}" in out
     _, out, _ = param(capsys, "show", "--json", "INA*")
     [row] = json.loads(out)
     assert row["value"]["bus"]["i2c"]["address"] == 70
@@ -92,7 +92,7 @@ def test_add_rm_instances_find_status(store: Path, capsys: pytest.CaptureFixture
     assert param(capsys, "rm", "INA238#0")[0] == 0
     assert param(capsys, "instances", "INA238") == (0, "INA238#1\n", "")
     assert param(capsys, "instances", "INA238", "--json") == (0, '["INA238#1"]\n', "")
-    assert param(capsys, "find", "INA238#1") == (0, "Found param INA238 at index 4\n", "")
+    assert param(capsys, "find", "INA238#1") == (0, "Found param INA238 at index 12\n", "")
     _, out, _ = param(capsys, "status", "--json")
     status = json.loads(out)
     assert status["instances"] == 2 and status["store"] == str(store)
@@ -120,8 +120,8 @@ def test_classic_parameters(store: Path, capsys: pytest.CaptureFixture[str]) -> 
     assert param(capsys, "greater", "BAT1_CAPACITY", "5000")[0] == 0
     assert param(capsys, "greater", "BAT1_CAPACITY", "6000")[0] == 1
     _, out, _ = param(capsys, "show", "-a", "BAT1_*")
-    assert "  + BAT1_CAPACITY [-1,16] : 5000.5" in out
-    assert "    BAT1_N_CELLS [-1,15] : 0" in out
+    assert "  + BAT1_CAPACITY [-1,44] : 5000.5" in out
+    assert "    BAT1_N_CELLS [-1,43] : 0" in out
     assert param(capsys, "reset", "BAT1_*")[0] == 0
     assert param(capsys, "show", "-q", "BAT1_CAPACITY") == (0, "-1\n", "")
     assert param(capsys, "reset_all", "SYS_AUTOSTART")[0] == 0

@@ -7,16 +7,19 @@ that could not be carried over. Nothing is dropped silently.
 
 What is carried over:
 
-* **Enabled drivers** (``SENS_EN_<DRIVER>`` not 0) whose parameter type is bundled become an
-  instance on the driver's default bus: I2C bus 1 (board scripts start them as
-  ``<driver> -X -b 1 ...``) at the type's default address; their legacy settings
-  (``INA238_CURRENT``, ``INA238_SHUNT``, ...) fill the fields of the same meaning, rounded and
-  clamped to the field, with a note when the value changes. Legacy settings without a field
-  (``INA226_CONFIG``, ...) are listed as not carried over.
+* **Enabled drivers** (a driver's ``enabled_by`` switch in the driver declarations,
+  ``SENS_EN_SDP3X``, ``SENS_EN_INA238``, ... not 0) become an instance on I2C bus 1 (board
+  scripts start power monitors as ``<driver> -X -b 1 ...``; rc.sensors starts the others on
+  every external bus) at the type's default address; the switch's value goes to the declared
+  ``switch_field`` (a model number), and the declared legacy settings (``INA238_CURRENT``,
+  ``SF1XX_ROT``, ...) fill their fields, rounded and clamped, with a note when the value
+  changes. Legacy settings without a field (``INA226_CONFIG``, ...) are listed as not carried
+  over.
 * **Sensors found** (the ``CAL_<SENSOR><n>_ID`` device IDs, decoded with :mod:`.devid`): an I2C
-  device whose chip has a bundled type (``AK09916`` on I2C bus 1 at 0x0C) becomes an instance
-  on that bus and address, with ``CAL_MAG<n>_ROT`` as its rotation. Today such external devices
-  are found by probing (``SENS_EXT_I2C_PRB``); in the manifest they are stated.
+  device whose chip a declared driver publishes (``AK09916`` on I2C bus 1 at 0x0C) becomes an
+  instance of that driver's type on that bus and address, with ``CAL_MAG<n>_ROT`` as its
+  rotation. Today such external devices are found by probing (``SENS_EXT_I2C_PRB``); in the
+  manifest they are stated.
 
 What is reported, not carried: internal sensors (SPI, started by the board's startup script),
 DroneCAN and other buses, chips without a bundled type, enabled drivers without one, and the
@@ -32,7 +35,6 @@ import math
 import os
 import re
 import struct
-from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -41,10 +43,9 @@ from px4params.dsdl.schema import Schema
 from px4params.errors import MigrationError, ParamFileError, Px4ParamsError
 from px4params.formats import qgc_params
 from px4params.vehicle import devid
+from px4params.vehicle.drivers import Driver, load_drivers
 
 __all__ = [
-    "LEGACY_DRIVERS",
-    "LegacyDriver",
     "MigrationError",
     "OldConfig",
     "Proposal",
@@ -74,25 +75,11 @@ NOT_DRIVER_SWITCHES: dict[str, dict[int, str]] = {
 INTERNAL_ROTATION = -1
 
 
-@dataclass(frozen=True)
-class LegacyDriver:
-    """A driver started today by ``SENS_EN_<name>``, and its legacy settings."""
-
-    #: The structured parameter (``INA238``).
-    param: str
-    #: Legacy parameter -> field path (``INA238_CURRENT`` -> ``current``).
-    settings: Mapping[str, str]
-    #: What ``-t``-like options of today's start line the type has no field for.
-    unmapped_options: str = ""
-
-
-LEGACY_DRIVERS: dict[str, LegacyDriver] = {
-    name: LegacyDriver(
-        name,
-        {f"{name}_CURRENT": "current", f"{name}_SHUNT": "shunt"},
-        "battery index (-t 1)",
-    )
-    for name in ("INA226", "INA228", "INA238")
+#: What options of today's start lines (board scripts) the types have no field for.
+UNMAPPED_OPTIONS = {
+    "ina226": "battery index (-t 1)",
+    "ina228": "battery index (-t 1)",
+    "ina238": "battery index (-t 1)",
 }
 
 
@@ -310,6 +297,7 @@ class _Builder:
         self.params = config.params
         self.store = Store(schema, classic=[])  # scratch: checks every value and gives [k]
         self.specs = {s.name: s for s in self.store.specs}
+        self.drivers = load_drivers(None, self.store.specs)
         self.table = table
         self.proposal = Proposal(config, table.label)
 
@@ -386,8 +374,9 @@ class _Builder:
         return self.proposal
 
     def enabled_drivers(self) -> None:
-        for name in sorted(n for n in self.params if n.startswith("SENS_EN_")):
-            driver = name.removeprefix("SENS_EN_")
+        switches = self.drivers.switches()
+        names = {n for n in self.params if n.startswith("SENS_EN_") or n in switches}
+        for name in sorted(names):
             value = self.params[name]
             self.use(name)
             if name in NOT_DRIVER_SWITCHES:
@@ -400,38 +389,68 @@ class _Builder:
             if not value:
                 self.proposal.disabled.append(name)
                 continue
-            spec = self.specs.get(driver)
-            if spec is None or spec.shared:
+            declared = switches.get(name) or self.undeclared(name)
+            if not declared:
                 self.proposal.not_carried.append(
-                    f"{name} = {_shown(value)}: no bundled parameter type {driver}; the driver "
-                    "stays enabled by this classic parameter, outside the manifest"
+                    f"{name} = {_shown(value)}: no bundled parameter type "
+                    f"{name.removeprefix('SENS_EN_')}; the driver stays enabled by this classic "
+                    "parameter, outside the manifest"
                 )
                 continue
-            address = _default_address(self.store, spec.name)
-            inst = self.add(
-                spec.name,
-                DEFAULT_I2C_BUS,
-                address,
-                f"{name} = {_shown(value)}: started today on I2C bus {DEFAULT_I2C_BUS} at the "
-                f"driver's default address 0x{address:02X}",
-            )
-            legacy = LEGACY_DRIVERS.get(spec.name)
-            mapped = dict(legacy.settings) if legacy else {}
-            for old, path in mapped.items():
-                if old in self.params:
-                    self.use(old)
-                    self.field_value(inst, path, old, self.params[old])
-            for old in sorted(self.params):
-                if old.startswith(f"{spec.name}_") and old not in mapped:
-                    self.use(old)
-                    self.proposal.not_carried.append(
-                        f"{old} = {_shown(self.params[old])}: {spec.name} has no field for it"
-                    )
-            if legacy and legacy.unmapped_options:
-                inst.notes.append(
-                    f"today's start line also sets the {legacy.unmapped_options}: "
-                    f"{spec.name} has no field for it"
+            starting = [d for d in declared if d.starts_on(value)]
+            if not starting:
+                wanted = ", ".join(str(v) for d in declared for v in d.enabled_values)
+                self.proposal.not_carried.append(
+                    f"{name} = {_shown(value)}: starts no I2C driver of the manifest (its "
+                    f"{', '.join(d.name for d in declared)} starts on {wanted}); it stays a "
+                    "classic parameter"
                 )
+                continue
+            for driver in starting:
+                self.enabled_driver(name, value, driver)
+
+    def undeclared(self, switch: str) -> list[Driver]:
+        """A type of an extra DSDL folder without a driver declaration: ``SENS_EN_<NAME>``
+        enables parameter ``NAME``'s driver, started as the power monitors are."""
+        spec = self.specs.get(switch.removeprefix("SENS_EN_"))
+        if not switch.startswith("SENS_EN_") or spec is None or spec.shared:
+            return []
+        name = spec.name.lower()
+        return [Driver(name, spec.name, spec.name, True, 0, ("i2c",), None, 0, None, None, 1.0,
+                       started_by="launcher", enabled_by=switch)]  # fmt: skip
+
+    def enabled_driver(self, switch: str, value: int | float, driver: Driver) -> None:
+        spec = self.specs[driver.parameter]
+        address = _default_address(self.store, spec.name)
+        where = (
+            f"on I2C bus {DEFAULT_I2C_BUS}"
+            if driver.started_by == "launcher"
+            else f"on every external I2C bus (proposed: bus {DEFAULT_I2C_BUS}, check it)"
+        )
+        inst = self.add(
+            spec.name,
+            DEFAULT_I2C_BUS,
+            address,
+            f"{switch} = {_shown(value)}: {driver.name} started today {where} at the driver's "
+            f"default address 0x{address:02X}",
+        )
+        if driver.switch_field:
+            self.field_value(inst, driver.switch_field, switch, value)
+        for old, path in driver.settings.items():
+            if old in self.params:
+                self.use(old)
+                self.field_value(inst, path, old, self.params[old])
+        for old in sorted(self.params):
+            if old.startswith(f"{spec.name}_") and old not in driver.settings:
+                self.use(old)
+                self.proposal.not_carried.append(
+                    f"{old} = {_shown(self.params[old])}: {spec.name} has no field for it"
+                )
+        options = UNMAPPED_OPTIONS.get(driver.name)
+        if options:
+            inst.notes.append(
+                f"today's start line also sets the {options}: {spec.name} has no field for it"
+            )
 
     def devices(self) -> None:
         found: dict[int, list[str]] = {}
@@ -463,8 +482,12 @@ class _Builder:
         ]
         self.use(*(n.removesuffix("_ID") + "_EN" for n in names))
         off = f" (disabled: {', '.join(disabled)})" if disabled else ""
-        chips = (dev.devtype_name or "").split("/")
-        spec = next((self.specs[c] for c in chips if c in self.specs), None)
+        # The type of the driver that publishes the chip; else a type named as the chip (an
+        # extra DSDL folder's, without a driver declaration).
+        chips = self.drivers.chips()
+        chip_names = (dev.devtype_name or "").split("/")
+        param = next((chips[c].parameter for c in chip_names if c in chips), None)
+        spec = self.specs.get(param or next((c for c in chip_names if c in self.specs), ""))
         if dev.bus_type != 1:  # not I2C
             what = {
                 2: "internal SPI sensor: started by the board's startup script, not by the "

@@ -291,10 +291,15 @@ def load_manifest(
 
 
 def plan_lines(entries: Sequence[PlanEntry]) -> list[str]:
-    """The plan as text, one driver header then one line per instance."""
+    """The plan as text, one driver header then one line per instance; the drivers with
+    nothing to start are named together on the last line."""
     lines: list[str] = []
+    idle: list[str] = []
     for e in entries:
         d = e.driver
+        if d is not None and not e.instances:
+            idle.append(d.name)
+            continue
         if d is None:
             lines.append(f"(no driver) parameter {e.parameter}: {len(e.instances)} instance(s)")
         else:
@@ -303,7 +308,7 @@ def plan_lines(entries: Sequence[PlanEntry]) -> list[str]:
             lines.append(
                 f"{d.name} auto  (order {d.order}, parameter {d.parameter}, "
                 f"devtype 0x{d.devtype:02X}{auto}): "
-                + (f"{count} instance{'s' if count != 1 else ''}" if count else "nothing to start")
+                + f"{count} instance{'s' if count != 1 else ''}"
             )
         for c in e.instances:
             ident = c.device_id
@@ -315,4 +320,6 @@ def plan_lines(entries: Sequence[PlanEntry]) -> list[str]:
                 tail = ""
             settings = format_settings(c.settings)
             lines.append(f"  {c.instance:<12} {c.location:<24} {settings}  {tail}".rstrip())
+    if idle:
+        lines.append(f"nothing to start ({len(idle)} drivers): {', '.join(idle)}")
     return lines

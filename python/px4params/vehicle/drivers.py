@@ -15,10 +15,24 @@ entries: one ``[[driver]]`` table per driver with these keys (all required unles
                       i2c, spi, serial, dronecan, sim, mavlink
     default_address   I2C address 0..127 used when none is configured; required with "i2c"
     devtype           devtype code 0..255 of the published device ID (today's drv_sensor.h)
-    chip_id_register  register 0..255 the probe reads
-    chip_id           value 0..65535 the probe expects in that register
+    chip_id_register  optional register 0..255 the probe reads; with chip_id, or neither (a
+                      probe that reads no ID: it only needs the device to answer)
+    chip_id           optional value 0..65535 the probe expects in that register
     rate_hz           transfers per second once running, > 0 and <= 10000
     description       optional text
+    kind              optional: what the device measures (``magnetometer``, ``airspeed``, ...)
+    also_chips        optional list of other chip names the driver publishes (``SDP32``)
+    started_by        optional, how today's PX4 starts the driver: ``probe`` (the default:
+                      rc.sensors probes every external I2C bus), ``launcher`` (the I2C launcher
+                      or the board's script) or ``parameter`` (only while ``enabled_by`` is set)
+    enabled_by        optional legacy on/off parameter the manifest replaces (``SENS_EN_SDP3X``);
+                      required with ``started_by = "parameter"``
+    enabled_values    optional list of ``enabled_by`` values that start this driver (default:
+                      any but 0)
+    switch_field      optional field that takes ``enabled_by``'s value (a model number)
+    settings          optional table: legacy parameter -> field path of the instance
+    probe             optional text: what the probe checks when it reads no ID
+    sources           optional list of PX4-Autopilot paths the facts come from
 
 Every problem is a :class:`DriversFileError` whose text is one line naming the file, the driver
 and what is wrong, e.g. ``drivers.toml: driver 'ina238': default_address 200 is out of range
@@ -32,7 +46,7 @@ import os
 import re
 import tomllib
 from collections.abc import Iterator, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -77,11 +91,26 @@ _REQUIRED = (
     "order",
     "buses",
     "devtype",
-    "chip_id_register",
-    "chip_id",
     "rate_hz",
 )
-_OPTIONAL = ("autostart", "default_address", "description")
+_OPTIONAL = (
+    "autostart",
+    "default_address",
+    "chip_id_register",
+    "chip_id",
+    "description",
+    "kind",
+    "also_chips",
+    "started_by",
+    "enabled_by",
+    "enabled_values",
+    "switch_field",
+    "settings",
+    "probe",
+    "sources",
+)
+#: How today's PX4 starts a driver without a manifest.
+STARTED_BY = ("probe", "launcher", "parameter")
 _KEYS = _REQUIRED + _OPTIONAL
 MAX_RATE_HZ = 10_000
 
@@ -98,10 +127,31 @@ class Driver:
     buses: tuple[str, ...]
     default_address: int | None
     devtype: int
-    chip_id_register: int
-    chip_id: int
+    chip_id_register: int | None
+    chip_id: int | None
     rate_hz: float
     description: str = ""
+    kind: str = ""
+    also_chips: tuple[str, ...] = ()
+    started_by: str = "probe"
+    enabled_by: str | None = None
+    enabled_values: tuple[int, ...] = ()
+    switch_field: str | None = None
+    #: Legacy parameter -> field path.
+    settings: Mapping[str, str] = field(default_factory=dict)
+    probe: str = ""
+    sources: tuple[str, ...] = ()
+
+    @property
+    def chips(self) -> tuple[str, ...]:
+        """Every chip name the driver publishes (drv_sensor.h's), upper case."""
+        return (self.chip.upper(), *(c.upper() for c in self.also_chips))
+
+    def starts_on(self, value: int | float) -> bool:
+        """Whether today's PX4 starts the driver with ``enabled_by = value``."""
+        if self.enabled_values:
+            return value in self.enabled_values
+        return bool(value)
 
     @property
     def auto_line(self) -> str:
@@ -141,12 +191,22 @@ class Drivers:
         return [d for d in self._list if d.autostart]
 
     def chips(self) -> dict[str, Driver]:
-        """Chip name (upper case) -> the first driver declaring it: how the bench's devices
-        answer a probe."""
+        """Chip name (upper case) -> the first driver declaring it (``chip`` or
+        ``also_chips``): how the bench's devices answer a probe, and which type a device ID's
+        chip is."""
         chips: dict[str, Driver] = {}
         for d in self._list:
-            chips.setdefault(d.chip.upper(), d)
+            for chip in d.chips:
+                chips.setdefault(chip, d)
         return chips
+
+    def switches(self) -> dict[str, list[Driver]]:
+        """Legacy on/off parameter (``enabled_by``) -> the drivers it starts today."""
+        found: dict[str, list[Driver]] = {}
+        for d in self._list:
+            if d.enabled_by:
+                found.setdefault(d.enabled_by, []).append(d)
+        return found
 
     def missing(self, specs: Sequence[ParamSpec]) -> list[str]:
         """Instanced parameters of ``specs`` that no driver starts."""
@@ -258,9 +318,50 @@ def _driver(table: Any, number: int, source: str, known: Mapping[str, ParamSpec]
         raise fail(f"rate_hz must be a number, not {rate!r}")
     if not 0 < rate <= MAX_RATE_HZ:
         raise fail(f"rate_hz {rate} is out of range (expected > 0 and <= {MAX_RATE_HZ})")
-    description = table.get("description", "")
-    if not isinstance(description, str):
-        raise fail(f"description must be a string, not {description!r}")
+    texts = {key: table.get(key, "") for key in ("description", "kind", "probe")}
+    for key, value in texts.items():
+        if not isinstance(value, str):
+            raise fail(f"{key} must be a string, not {value!r}")
+    if ("chip_id_register" in table) != ("chip_id" in table):
+        raise fail(
+            "chip_id_register and chip_id go together (or neither, for a probe that reads no ID)"
+        )
+    also_chips = _strings(table, "also_chips", fail)
+    for other in also_chips:
+        if not _CHIP.fullmatch(other):
+            raise fail(f"also_chips: {other!r} is not a chip name like SDP32")
+    started_by = table.get("started_by", "probe")
+    if started_by not in STARTED_BY:
+        raise fail(f"started_by {started_by!r} is not one of: {', '.join(STARTED_BY)}")
+    enabled_by = table.get("enabled_by")
+    if enabled_by is not None and (
+        not isinstance(enabled_by, str) or not _PARAM.fullmatch(enabled_by)
+    ):
+        raise fail(
+            f"enabled_by {enabled_by!r} is not an upper-case parameter name like SENS_EN_SDP3X"
+        )
+    if started_by == "parameter" and enabled_by is None:
+        raise fail('started_by = "parameter" needs enabled_by (the parameter that starts it today)')
+    enabled_values = table.get("enabled_values", [])
+    if not isinstance(enabled_values, list) or not all(
+        isinstance(v, int) and not isinstance(v, bool) and v != 0 for v in enabled_values
+    ):
+        raise fail(f"enabled_values must be a list of non-zero integers, not {enabled_values!r}")
+    if enabled_values and enabled_by is None:
+        raise fail("enabled_values needs enabled_by")
+    settings = table.get("settings", {})
+    if not isinstance(settings, dict) or not all(
+        isinstance(k, str) and _PARAM.fullmatch(k) and isinstance(v, str)
+        for k, v in settings.items()
+    ):
+        raise fail('settings must be a table of legacy parameter = "field.path"')
+    switch_field = table.get("switch_field")
+    if switch_field is not None and (not isinstance(switch_field, str) or enabled_by is None):
+        raise fail("switch_field must be a field name, with enabled_by")
+    if known is not None:
+        _check_fields(
+            known[parameter], [*settings.values(), *([switch_field] if switch_field else [])], fail
+        )
 
     return Driver(
         name=str(name),
@@ -271,11 +372,39 @@ def _driver(table: Any, number: int, source: str, known: Mapping[str, ParamSpec]
         buses=tuple(buses),
         default_address=default_address,
         devtype=_int(table, "devtype", 0, 255, fail),
-        chip_id_register=_int(table, "chip_id_register", 0, 255, fail),
-        chip_id=_int(table, "chip_id", 0, 0xFFFF, fail),
+        chip_id_register=(
+            _int(table, "chip_id_register", 0, 255, fail) if "chip_id_register" in table else None
+        ),
+        chip_id=_int(table, "chip_id", 0, 0xFFFF, fail) if "chip_id" in table else None,
         rate_hz=float(rate),
-        description=description,
+        description=texts["description"],
+        kind=texts["kind"],
+        also_chips=tuple(also_chips),
+        started_by=started_by,
+        enabled_by=enabled_by,
+        enabled_values=tuple(enabled_values),
+        switch_field=switch_field,
+        settings=dict(settings),
+        probe=texts["probe"],
+        sources=tuple(_strings(table, "sources", fail)),
     )
+
+
+def _strings(table: Mapping[str, Any], key: str, fail: Any) -> list[str]:
+    value = table.get(key, [])
+    if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+        raise fail(f"{key} must be a list of strings, not {value!r}")
+    return value
+
+
+def _check_fields(spec: ParamSpec, paths: Sequence[str], fail: Any) -> None:
+    """Every path names a leaf of the parameter's type (in its default value)."""
+    leaves = {leaf.path for leaf in spec.data_type.leaves()}
+    for path in paths:
+        if path not in leaves:
+            raise fail(
+                f"{spec.name} has no field {path!r} (its fields: {', '.join(sorted(leaves))})"
+            )
 
 
 def _text(table: Mapping[str, Any], key: str, fail: Any) -> str:

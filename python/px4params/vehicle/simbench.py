@@ -39,9 +39,11 @@ again). Every ``TICK`` it reports its health:
 
 The commander knows the manifest: arming is refused while any configured instance is not
 nominal, with one line per failing device. ``legacy=True`` runs today's behaviour instead:
-every declared driver is started with ``-X -q start`` on every I2C bus of the bench at its
-default address, probes a fixed three times at boot and, if nothing answers, quietly does not
-start; the commander only knows what started, so a missing device is not reported.
+every driver today's PX4 starts without being asked (``started_by`` probe or launcher: not the
+ones a ``SENS_EN_*`` switch starts) is started with ``-X -q start`` on every I2C bus of the
+bench at its default address, probes a fixed three times at boot and, if nothing answers,
+quietly does not start; the commander only knows what started, so a missing device is not
+reported.
 """
 
 from __future__ import annotations
@@ -533,7 +535,7 @@ class _Instance:
                 self.tick_bad += 1
                 return False, "no ACK" if result == _NACK else "bus error"
             self.tick_good += 1
-            if step == PROBE_CHIP_ID_STEP:
+            if step == PROBE_CHIP_ID_STEP and driver.chip_id is not None:
                 value = self.sim.chip_answer(link.answer, driver)
                 if value != driver.chip_id:
                     return False, (
@@ -704,7 +706,8 @@ class _Sim:
             return device.chip_id
         real = self.chips[device.chip.upper()]
         # A chip answers its id only in its own id register; elsewhere it reads 0.
-        return real.chip_id if real.chip_id_register == driver.chip_id_register else 0
+        same_register = real.chip_id_register == driver.chip_id_register
+        return real.chip_id or 0 if same_register else 0
 
     def device_id(self, driver: Driver, out: InstanceResult) -> int:
         from px4params.vehicle.devid import encode
@@ -772,6 +775,8 @@ class _Sim:
         buses = self.bench.i2c_buses()
         for driver in self.drivers:
             if "i2c" not in driver.buses or driver.default_address is None:
+                continue
+            if driver.started_by == "parameter":  # only while its SENS_EN_* is set
                 continue
             self.schedule(0.0, functools.partial(self._legacy_start, driver=driver, buses=buses))
 

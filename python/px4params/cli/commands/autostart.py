@@ -119,8 +119,8 @@ def _report(result: RunResult, i2c_buses: list[int], have_manifest: bool) -> lis
     if result.mode == "legacy":
         buses = ", ".join(map(str, i2c_buses)) or "none"
         lines.append(
-            f"legacy boot of {result.bench}: every driver '-X -q start' on I2C buses {buses} at "
-            f"its default address, {LEGACY_PROBES} probes, no manifest; "
+            f"legacy boot of {result.bench}: every probed driver '-X -q start' on I2C buses "
+            f"{buses} at its default address, {LEGACY_PROBES} probes, no manifest; "
             f"{result.duration:g} s simulated, seed {result.seed}"
         )
     else:
@@ -258,7 +258,7 @@ simulated time. Drivers probe with retries and backoff, publish device IDs,
 count transfers, bad transfers and resets and report health; the commander
 refuses arming while a configured device is not nominal, one line per device.
 Exit code 0: may arm; 1: arming refused (or an error).
---legacy runs today's behaviour instead: every driver '-X -q start' at its
+--legacy runs today's behaviour instead: every probed driver '-X -q start' at its
 default address, three probes, no manifest; with a manifest at hand it names
 the devices that went silently missing.""",
         epilog="""\
