@@ -300,3 +300,24 @@ def test_shared_parameter_names(tmp_path: Path) -> None:
 
 def test_errors_are_px4params_errors() -> None:
     assert issubclass(flat.FlatError, Px4ParamsError)
+
+
+def test_the_flat_check_is_remembered_per_schema_and_classic_names(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setenv("PX4PARAMS_CACHE_DIR", str(tmp_path / "verdicts"))
+    files = {"Foo.1.0.dsdl": "# F\n# @max_instances 2\n\nuint4 p_version\nuint8 x\n@sealed\n"}
+    root = dsdl_root(tmp_path, files, "bad")
+    schema = px4params.load_schema([root], use_env=False, cache_dir=tmp_path / "cache")
+    first = px4params.Store(schema, classic=[])
+    assert first._destructured is not None  # checked now, the verdict written
+    again = px4params.Store(schema, classic=[])
+    assert again._destructured is None  # remembered: the names are worked out on first use
+    assert "FOO_1A" in again.destructured
+    # Other classic names are another check: a clash is still refused at load.
+    with pytest.raises(flat.FlatError, match=r"^FOO: destructured name FOO_1A \(FOO#1.x\) is "
+                       r"the name of a classic parameter$"):  # fmt: skip
+        px4params.Store(schema, classic=[ClassicParam("FOO_1A", "Int32", 0)])
+    # A schema built by hand (no model cache key) is checked every time.
+    hand = px4params.Schema({"types": dict(schema.model["types"].items())})
+    assert px4params.Store(hand, classic=[])._destructured is not None

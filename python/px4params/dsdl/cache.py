@@ -17,7 +17,6 @@ hundred, and :class:`px4params.dsdl.schema.Schema` compiles only what it is aske
 from __future__ import annotations
 
 import binascii
-import importlib.machinery
 import marshal
 import os
 import time
@@ -33,7 +32,7 @@ from px4params.cache_file import (
     write_cached,
 )
 from px4params.data import VALUE_SETS_TOML
-from px4params.dsdl.roots import Root, collect_roots
+from px4params.dsdl.roots import Root, collect_roots, package_init
 from px4params.errors import DsdlError
 
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
@@ -73,7 +72,7 @@ def load_model(
     cache_file = cache_path(directory, "model", key_text)
     cached = _read_cache(cache_file, key_text)
     if cached is not None:
-        return _unpacked(cached)
+        return _unpacked(cached, key_text)
     from px4params.dsdl.loader import build_model  # a miss: now the parsers are needed
 
     types = build_model(roots)["types"]
@@ -84,7 +83,7 @@ def load_model(
         "refs": {key: sorted(type_refs(definition)) for key, definition in types.items()},
     }
     write_cached(cache_file, key_text, packed)
-    return _unpacked(packed, types)
+    return _unpacked(packed, key_text, types)
 
 
 class LazyTypes(Mapping[str, "Model"]):
@@ -114,12 +113,14 @@ class LazyTypes(Mapping[str, "Model"]):
         return f"<LazyTypes: {len(self._packed)} types, {len(self._unpacked)} unpacked>"
 
 
-def _unpacked(packed: Model, types: Model | None = None) -> Model:
+def _unpacked(packed: Model, key_text: str, types: Model | None = None) -> Model:
     return {
         "format": packed["format"],
         "types": LazyTypes(packed["types"], types),
         "newest": packed["newest"],
         "refs": packed["refs"],
+        # What the model was built from: what depends on it alone can be cached under it.
+        "key": key_text,
     }
 
 
@@ -154,14 +155,14 @@ def type_refs(definition: Model) -> set[str]:
 def _installed(name: str) -> str:
     """Identifies an installed package by its module file's path, size and time: a new install
     changes them (cheaper than importlib.metadata, which costs a command ~30 ms)."""
-    spec = importlib.machinery.PathFinder.find_spec(name)
-    if spec is None or spec.origin is None:
+    origin = package_init(name)
+    if origin is None:
         return "not-installed"
     try:
-        st = os.stat(spec.origin)
+        st = os.stat(origin)
     except OSError:
         return "not-installed"
-    return f"{spec.origin}:{st.st_size}:{st.st_mtime_ns}"
+    return f"{origin}:{st.st_size}:{st.st_mtime_ns}"
 
 
 def cache_key_text(roots: Sequence[Root], include_dronecan: bool) -> str:

@@ -3,8 +3,8 @@ user's), each with its dialect and files."""
 
 from __future__ import annotations
 
-import importlib.machinery
 import os
+import sys
 from collections.abc import Sequence
 
 from px4params.data import DSDL_DIR
@@ -83,12 +83,23 @@ def _classify_root(path: str, *, required: bool = True) -> Root | None:
     return Root(path, "dsdl" if dsdl else "uavcan", files)
 
 
+def package_init(name: str) -> str | None:
+    """The ``__init__.py`` of the installed (regular) package ``name``, found on ``sys.path`` as
+    the import system would, without importing it or ``importlib`` (which costs a command
+    0.3 ms)."""
+    for entry in sys.path:
+        candidate = os.path.join(entry or os.curdir, name, "__init__.py")
+        if os.path.isfile(candidate):
+            return os.path.abspath(candidate)
+    return None
+
+
 def dronecan_package_dir() -> str:
     """pydronecan's package folder, found without running ``dronecan/__init__.py`` (which parses
     all of its DSDL)."""
-    spec = importlib.machinery.PathFinder.find_spec("dronecan")
-    if spec is None or not spec.submodule_search_locations:
+    init = package_init("dronecan")
+    if init is None:
         raise DsdlError(
             "pydronecan (package 'dronecan') is not installed; use include_dronecan=False"
         )
-    return next(iter(spec.submodule_search_locations))
+    return os.path.dirname(init)

@@ -16,6 +16,7 @@ Every change is all-or-nothing: a refused one leaves the store exactly as it was
 
 from __future__ import annotations
 
+import binascii
 import os
 import re
 import struct
@@ -23,6 +24,7 @@ from collections.abc import Iterator, Mapping, Sequence
 
 from px4params import _native
 from px4params._records import TYPE_CHECKING
+from px4params.cache_file import cache_path, default_cache_dir, read_cached, write_cached
 from px4params.dsdl.schema import DataType, Leaf, Schema, load_schema
 from px4params.errors import InstanceError, LeafError, StoreError
 from px4params.numbers import abbreviated
@@ -37,10 +39,15 @@ from px4params.store.spec import ParamSpec, metadata_default, parameter_specs
 
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
     from typing import Any, NamedTuple
+
+    from px4params.store.flat import FlatMap
 else:
     from px4params._records import NamedTuple
 
 __all__ = ["DEFAULT_STORE", "STORE_ENV", "InstanceView", "Key", "Store", "default_store_path"]
+
+#: The module that checks flat names (its code is part of the cached verdict's key).
+_FLAT_MODULE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "flat.py")
 
 #: Environment variable naming the store file (``--store FILE`` overrides it).
 STORE_ENV = "PX4PARAMS_STORE"
@@ -162,14 +169,27 @@ class Store:
             self._native.set_type_default(p.index, self._type_default(p))
         self._native.mark_saved()
         self._initial = self._native.copy()
-        # The destructured (MAVLink) names must be valid for every type: checked once, here,
-        # so that a type with a leaf over 32 bits or a clashing name is refused at load.
-        from px4params.store.flat import FlatMap
-
-        #: The destructured (flat) names of this store's parameters.
-        self.destructured = FlatMap(self)
+        # The destructured (MAVLink) names must be valid for every type: checked here, so that
+        # a type with a leaf over 32 bits or a clashing name is refused at load. The check
+        # depends only on the schema and the classic names, so once passed it is remembered
+        # in the cache folder and the names are worked out on first use.
+        self._destructured: FlatMap | None = None
+        verdict = _flat_check_file(self)
+        if verdict is None or read_cached(*verdict) is not True:
+            self._destructured = self.destructured
+            if verdict is not None:
+                write_cached(*verdict, True)
         #: Classic records of a loaded file whose parameters this store lacks, kept to be saved.
         self._foreign: dict[str, bytes] = {}
+
+    @property
+    def destructured(self) -> FlatMap:
+        """The destructured (flat, MAVLink) names of this store's parameters."""
+        if self._destructured is None:
+            from px4params.store.flat import FlatMap
+
+            self._destructured = FlatMap(self)
+        return self._destructured
 
     def _type_default(self, p: _Param) -> bytes:
         if p.classic is not None:
@@ -552,3 +572,21 @@ class _Transaction:
         if kind is not None:  # BaseException included: an interrupt changes nothing either
             self._store._native.restore(self._backup)
             self._store._foreign = self._foreign
+
+
+def _flat_check_file(store: Store) -> tuple[str, str] | None:
+    """Where the verdict of the flat-name check of ``store``'s schema and classic names is
+    cached, and under which key; None for a schema not loaded through the model cache."""
+    model_key = store.schema.model.get("key")
+    if not isinstance(model_key, str):
+        return None
+    try:
+        code = os.stat(_FLAT_MODULE)
+    except OSError:
+        return None
+    classic = ",".join(sorted(p.name for p in store._order if p.classic is not None))
+    key = (
+        f"px4params-flat-check {code.st_size} {code.st_mtime_ns}\n{model_key}\n"
+        f"classic {binascii.crc32(classic.encode()):08x} {len(classic)}"
+    )
+    return cache_path(default_cache_dir(), "flatcheck", key), key
