@@ -156,10 +156,43 @@ fn descatter(c: &mut Criterion) {
     group.finish();
 }
 
+/// The transfer CRC over BatteryInfo's 55 payload bytes: the core's table-driven CRC-16
+/// against the bit-by-bit definition (written here, as the baseline), side by side.
+fn transfer_crc(c: &mut Criterion) {
+    fn bitwise(mut crc: u16, bytes: &[u8]) -> u16 {
+        for &b in bytes {
+            crc ^= u16::from(b) << 8;
+            for _ in 0..8 {
+                crc = if crc & 0x8000 != 0 {
+                    (crc << 1) ^ 0x1021
+                } else {
+                    crc << 1
+                };
+            }
+        }
+        crc
+    }
+    let mut owned = OwnedLayout::default();
+    let root = common::battery_info(&mut owned);
+    let flat = encoded(&owned.as_layout(), root, &battery_leaves());
+    assert_eq!(
+        px4params_core::crc::crc16(0xBEEF, &flat),
+        bitwise(0xBEEF, &flat)
+    );
+    let mut group = c.benchmark_group("CRC-16 of BatteryInfo");
+    group.bench_function("bit by bit (baseline)", |b| {
+        b.iter(|| bitwise(0xBEEF, black_box(&flat)))
+    });
+    group.bench_function("table", |b| {
+        b.iter(|| px4params_core::crc::crc16(0xBEEF, black_box(&flat)))
+    });
+    group.finish();
+}
+
 fn codec(c: &mut Criterion) {
     bench_type(c, "px.Ina238", common::ina238, ina238_leaves());
     bench_type(c, "BatteryInfo", common::battery_info, battery_leaves());
 }
 
-criterion_group!(benches, codec, descatter);
+criterion_group!(benches, codec, descatter, transfer_crc);
 criterion_main!(benches);

@@ -8,7 +8,7 @@
 
 use core::fmt;
 
-use crate::crc::crc16;
+use crate::crc::{crc16, crc16_pieces};
 use crate::scatter::{FramePayloads, Pieces};
 
 const START: u8 = 0x80;
@@ -279,7 +279,7 @@ pub fn receive<'f, 'a>(
             return Err(TransferError::TooShort);
         }
         let got = u16::from_le_bytes([first[0], first[1]]);
-        let computed = (0..payload.count()).fold(crc_seed, |crc, i| crc16(crc, payload.piece(i)));
+        let computed = crc16_pieces(crc_seed, (0..payload.count()).map(|i| payload.piece(i)));
         if got != computed {
             return Err(TransferError::Crc { got, computed });
         }
