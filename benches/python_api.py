@@ -71,6 +71,23 @@ def main() -> None:
                 f"{key:<38} {op:<7} {ours * 1e9:>9.0f}ns {theirs * 1e9:>9.0f}ns "
                 f"{theirs / ours:>6.1f}x"
             )
+    store_rows(schema)
+
+
+def store_rows(schema: px4params.Schema) -> None:
+    """Reading one leaf of an instance by name, against a dict lookup (a flat parameter
+    table's cost) in the same run."""
+    store = px4params.Store(schema, classic=[])
+    for n in range(4):
+        store.add(f"INA238#{n}")
+    flat = {f"INA238_{n}P": 327 for n in range(4)}
+    ours = best(lambda: store.get("INA238#3.current"))
+    theirs = best(lambda: flat["INA238_3P"])
+    label = 'Store.get("INA238#3.current")'
+    print(
+        f"\n{label:<38} {'get':<7} {ours * 1e9:>9.0f}ns {theirs * 1e9:>9.0f}ns (dict) "
+        f"{ours / theirs:>6.1f}x slower"
+    )
 
 
 if __name__ == "__main__":

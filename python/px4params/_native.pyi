@@ -57,6 +57,9 @@ class Store:
     def get_leaf(
         self, param: int, instance: int, target: int | str, *, default: bool = False
     ) -> tuple[int, str, str, int | float | bool]: ...
+    def get_leaf_value(
+        self, param: int, instance: int, target: int | str, *, default: bool = False
+    ) -> int | float | bool: ...
     def set_leaf(
         self,
         param: int,

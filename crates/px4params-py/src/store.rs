@@ -267,6 +267,25 @@ impl Store {
         (leaf.index, path, type_name, scalar_to_py(py, value)?).into_pyobject(py)
     }
 
+    /// Reads one leaf's value only (`Store.get` of a leaf: no path or type text is built).
+    #[pyo3(signature = (param, instance, target, *, default = false))]
+    fn get_leaf_value<'py>(
+        &self,
+        py: Python<'py>,
+        param: u32,
+        instance: u16,
+        target: &Bound<'py, PyAny>,
+        default: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let layout = self.layout();
+        let t = target_of(target)?;
+        let (_, value) = self
+            .inner
+            .get_leaf(&layout, param, instance, which(default), t)
+            .map_err(|e| self.err(py, param, Some(instance), e, Op::Leaf))?;
+        scalar_to_py(py, value)
+    }
+
     /// Writes one leaf of an instance's value (or default).
     #[pyo3(signature = (param, instance, target, value, *, default = false, saturate = false))]
     #[allow(clippy::too_many_arguments)] // mirrors the Python call's arguments one to one

@@ -62,6 +62,9 @@ _KEY = (
 )
 
 
+#: Names whose resolution a store keeps (a bound: names can come from anywhere).
+_RESOLVED_MAX = 4096
+
 #: Instance numbers are 16-bit in the core (``max_instances`` is far below).
 MAX_INSTANCE = 0xFFFF
 #: Leaf numbers beyond this name no leaf of any storable value.
@@ -179,6 +182,7 @@ class Store:
             self._destructured = self.destructured
             if verdict is not None:
                 write_cached(*verdict, True)
+        self._resolved: dict[str | Key, tuple[_Param, int, Key]] = {}
         #: Classic records of a loaded file whose parameters this store lacks, kept to be saved.
         self._foreign: dict[str, bytes] = {}
 
@@ -224,15 +228,28 @@ class Store:
         return p
 
     def _resolve(self, text: str | Key) -> tuple[_Param, int, Key]:
+        # A name resolves the same way for the store's life (whether the instance exists is
+        # the core's to say): each text is parsed once.
+        try:
+            found = self._resolved.get(text)
+        except TypeError:  # not a name at all: Key.parse says so
+            found = None
+        if found is not None:
+            return found
         key = Key.parse(text)
         p = self._param(key.param)
         if p.shared:
             if key.instance is not None:
                 raise InstanceError(f"{p.name} is not instanced: write {p.name}, not {text}")
-            return p, 0, key
-        if key.instance is None:
+            found = (p, 0, key)
+        elif key.instance is None:
             raise InstanceError(f"{p.name} has instances: name one, e.g. {p.name}#0")
-        return p, key.instance, key
+        else:
+            found = (p, key.instance, key)
+        if len(self._resolved) >= _RESOLVED_MAX:
+            self._resolved.clear()
+        self._resolved[text] = found  # text is a str or a Key here: Key.parse took it
+        return found
 
     def _instance_name(self, p: _Param, instance: int) -> str:
         return p.name if p.shared else f"{p.name}#{instance}"
@@ -306,7 +323,12 @@ class Store:
         """A whole value (dict; a number for a classic parameter) or one leaf's value."""
         p, instance, key = self._resolve(name)
         if key.leaf is not None:
-            return self.leaf(key, default=default).value
+            if p.classic is not None:
+                return self.leaf(key, default=default).value  # which refuses it
+            try:  # the value alone: no Leaf, no path or type text
+                return self._native.get_leaf_value(p.index, instance, key.leaf, default=default)
+            except LeafError as e:
+                raise _naming_the_field(e, key) from None
         data = self._native.get(p.index, instance, default=default)
         if p.classic is not None:
             return _classic_from_bytes(p.classic, data)
