@@ -6,8 +6,9 @@ use px4params_core::compile::OwnedLayout;
 use px4params_core::layout::{NodeId, Role};
 use px4params_core::Cast;
 use pyo3::exceptions::PyValueError;
+use pyo3::intern;
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyList};
+use pyo3::types::{PyDict, PyList, PyString};
 
 /// Compiles every type of `types` (key → type dict); returns the layout and each key's root.
 pub fn compile_model(
@@ -33,7 +34,13 @@ struct Compiler<'a, 'py> {
     in_progress: Vec<String>,
 }
 
-fn item<'py>(d: &Bound<'py, PyDict>, key: &str, what: &str) -> PyResult<Bound<'py, PyAny>> {
+/// `d[key]`. Keys are interned Python strings (`intern!`): their hashes are cached, where a
+/// `&str` key would make and hash a new string on every look-up.
+fn item<'py>(
+    d: &Bound<'py, PyDict>,
+    key: &Bound<'py, PyString>,
+    what: &str,
+) -> PyResult<Bound<'py, PyAny>> {
     d.get_item(key)?
         .ok_or_else(|| PyValueError::new_err(format!("schema model: {what} has no '{key}'")))
 }
@@ -58,26 +65,26 @@ impl Compiler<'_, '_> {
             .ok_or_else(|| PyValueError::new_err(format!("schema model: unknown type {key}")))?;
         let def = def.cast_into::<PyDict>()?;
         self.in_progress.push(key.to_owned());
-        let kind: String = item(&def, "kind", key)?.extract()?;
+        let kind: String = item(&def, intern!(def.py(), "kind"), key)?.extract()?;
         // p_version holds the minor version: one major version is one parameter type.
-        let version: Option<u32> = match def.get_item("version")? {
+        let version: Option<u32> = match def.get_item(intern!(def.py(), "version"))? {
             Some(v) if !v.is_none() => Some(v.get_item(1)?.extract()?),
             _ => None,
         };
-        let dialect: String = match def.get_item("dialect")? {
+        let dialect: String = match def.get_item(intern!(def.py(), "dialect"))? {
             Some(d) => d.extract()?,
             None => "dsdl".into(),
         };
-        let fields = item(&def, "fields", key)?.cast_into::<PyList>()?;
+        let fields = item(&def, intern!(def.py(), "fields"), key)?.cast_into::<PyList>()?;
         let mut members: Vec<(String, NodeId, Role)> = Vec::with_capacity(fields.len());
         for f in fields.iter() {
             let f = f.cast_into::<PyDict>()?;
-            let name: String = item(&f, "name", key)?.extract()?;
-            let ty = item(&f, "type", key)?.cast_into::<PyDict>()?;
+            let name: String = item(&f, intern!(f.py(), "name"), key)?.extract()?;
+            let ty = item(&f, intern!(f.py(), "type"), key)?.cast_into::<PyDict>()?;
             let what = format!("{key}.{name}");
             let node = self.ty(&ty, &what)?;
             let is_void = ty
-                .get_item("kind")?
+                .get_item(intern!(ty.py(), "kind"))?
                 .is_some_and(|k| k.eq("void").unwrap_or(false));
             let role = if is_void {
                 Role::Padding
@@ -109,10 +116,10 @@ impl Compiler<'_, '_> {
     }
 
     fn ty(&mut self, ty: &Bound<'_, PyDict>, what: &str) -> PyResult<NodeId> {
-        let kind: String = item(ty, "kind", what)?.extract()?;
-        let bits = || -> PyResult<u32> { item(ty, "bits", what)?.extract() };
+        let kind: String = item(ty, intern!(ty.py(), "kind"), what)?.extract()?;
+        let bits = || -> PyResult<u32> { item(ty, intern!(ty.py(), "bits"), what)?.extract() };
         let cast = || -> PyResult<Cast> {
-            match ty.get_item("cast")? {
+            match ty.get_item(intern!(ty.py(), "cast"))? {
                 Some(c) if c.eq("truncated")? => Ok(Cast::Truncated),
                 _ => Ok(Cast::Saturated),
             }
@@ -125,18 +132,18 @@ impl Compiler<'_, '_> {
             "bool" => Ok(l.boolean()),
             "void" => l.void(bits()?),
             "array" | "dynarray" => {
-                let elem = item(ty, "elem", what)?.cast_into::<PyDict>()?;
+                let elem = item(ty, intern!(ty.py(), "elem"), what)?.cast_into::<PyDict>()?;
                 let elem = self.ty(&elem, what)?;
                 if kind == "array" {
-                    let len: u32 = item(ty, "len", what)?.extract()?;
+                    let len: u32 = item(ty, intern!(ty.py(), "len"), what)?.extract()?;
                     self.layout.array(elem, len)
                 } else {
-                    let max: u32 = item(ty, "max", what)?.extract()?;
+                    let max: u32 = item(ty, intern!(ty.py(), "max"), what)?.extract()?;
                     self.layout.dyn_array(elem, max)
                 }
             }
             "ref" => {
-                let name: String = item(ty, "name", what)?.extract()?;
+                let name: String = item(ty, intern!(ty.py(), "name"), what)?.extract()?;
                 return self.composite(&name);
             }
             other => {

@@ -6,8 +6,9 @@
 use std::sync::Arc;
 
 use px4params_core::layout::Layout;
-use px4params_core::leaf::Target;
+use px4params_core::leaf::{Leaf, Target};
 use px4params_core::store::{self, Capacity, ParamDef, Slot, StoreError as CoreError, Which};
+use px4params_core::Scalar;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyTuple};
@@ -45,6 +46,22 @@ fn which(default: bool) -> Which {
 impl Store {
     fn layout(&self) -> Layout<'_> {
         self.compiled.layout.as_layout()
+    }
+
+    /// Leaf `target` of an instance's value (or default), located and read.
+    fn read_leaf(
+        &self,
+        py: Python<'_>,
+        param: u32,
+        instance: u16,
+        target: &Bound<'_, PyAny>,
+        default: bool,
+    ) -> PyResult<(Leaf, Scalar)> {
+        let layout = self.layout();
+        let t = target_of(target)?;
+        self.inner
+            .get_leaf(&layout, param, instance, which(default), t)
+            .map_err(|e| self.err(py, param, Some(instance), e, Op::Leaf))
     }
 
     /// `INA238#2`, or `INA238` for a shared parameter.
@@ -257,13 +274,8 @@ impl Store {
         target: &Bound<'py, PyAny>,
         default: bool,
     ) -> PyResult<Bound<'py, PyTuple>> {
-        let layout = self.layout();
-        let t = target_of(target)?;
-        let (leaf, value) = self
-            .inner
-            .get_leaf(&layout, param, instance, which(default), t)
-            .map_err(|e| self.err(py, param, Some(instance), e, Op::Leaf))?;
-        let (path, type_name) = describe(&layout, &leaf);
+        let (leaf, value) = self.read_leaf(py, param, instance, target, default)?;
+        let (path, type_name) = describe(&self.layout(), &leaf);
         (leaf.index, path, type_name, scalar_to_py(py, value)?).into_pyobject(py)
     }
 
@@ -277,12 +289,7 @@ impl Store {
         target: &Bound<'py, PyAny>,
         default: bool,
     ) -> PyResult<Bound<'py, PyAny>> {
-        let layout = self.layout();
-        let t = target_of(target)?;
-        let (_, value) = self
-            .inner
-            .get_leaf(&layout, param, instance, which(default), t)
-            .map_err(|e| self.err(py, param, Some(instance), e, Op::Leaf))?;
+        let (_, value) = self.read_leaf(py, param, instance, target, default)?;
         scalar_to_py(py, value)
     }
 

@@ -33,7 +33,7 @@ if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
     from typing import Any
 
     from px4params.vehicle.autostart import Configured
-    from px4params.vehicle.simbench import RunResult
+    from px4params.vehicle.simbench import InstanceResult, RunResult
 
 #: ``driver_health.health`` values.
 HEALTH_CODES = {"nominal": 0, "warning": 1, "critical": 2}
@@ -323,7 +323,7 @@ def _messages(logged: Sequence[Any]) -> dict[tuple[str, Any], list[tuple[float, 
     return said
 
 
-def _health_story(inst: Any, data: Mapping[str, Any], said: Mapping[Any, Any]) -> None:
+def _health_story(inst: InstanceResult, data: Mapping[str, Any], said: Mapping[Any, Any]) -> None:
     codes, stamps = data["health"], data["timestamp"]
     previous = None
     for stamp, code in zip(stamps, codes, strict=True):

@@ -8,8 +8,12 @@ import json
 from collections.abc import Sequence
 from typing import Any
 
+from px4params._records import TYPE_CHECKING
 from px4params.errors import CommandError
 from px4params.status import EXIT_FAILED, EXIT_OK
+
+if TYPE_CHECKING:
+    from px4params.vehicle.simbench import InstanceResult, RunResult
 
 
 def cmd_health(args: argparse.Namespace) -> int:
@@ -34,7 +38,7 @@ def cmd_health(args: argparse.Namespace) -> int:
     return EXIT_OK if result.may_arm else EXIT_FAILED
 
 
-def story(result: Any, path: str) -> list[str]:
+def story(result: RunResult, path: str) -> list[str]:
     """The log as a reader wants it: the verdict, the first failure, then each device."""
     verdict = "may arm" if result.may_arm else "arming refused"
     lines = [
@@ -68,7 +72,7 @@ def story(result: Any, path: str) -> list[str]:
     return lines
 
 
-def _first_failure(result: Any) -> tuple[float, Any, str] | None:
+def _first_failure(result: RunResult) -> tuple[float, InstanceResult, str] | None:
     """The earliest moment a device that had been running went critical (lost), else the
     earliest critical entry of any device."""
     lost = [
