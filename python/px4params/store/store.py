@@ -167,6 +167,7 @@ class Store:
         if len(self._params) != len(params):
             raise StoreError("two classic parameters have the same name")
         self._order = params
+        self._resolved: dict[str | Key, tuple[_Param, int, Key]] = {}
         self._native = _native.Store(native_schema, rows)
         for p in params:
             self._native.set_type_default(p.index, self._type_default(p))
@@ -182,7 +183,6 @@ class Store:
             self._destructured = self.destructured
             if verdict is not None:
                 write_cached(*verdict, True)
-        self._resolved: dict[str | Key, tuple[_Param, int, Key]] = {}
         #: Classic records of a loaded file whose parameters this store lacks, kept to be saved.
         self._foreign: dict[str, bytes] = {}
 
