@@ -23,12 +23,17 @@ step "the startup script and the plan" px4params autostart plan
 step "boot on a bench where everything is present: may arm" \
     px4params autostart run --bench examples/two_batteries.bench.toml --duration 10
 echo
-echo "== boot on a bench with faults: arming refused, one line per device"
-echo "\$ px4params autostart run --bench examples/two_batteries_faults.bench.toml --duration 10"
-if px4params autostart run --bench examples/two_batteries_faults.bench.toml --duration 10; then
+echo "== boot on a bench with faults: arming refused, one line per device; a flight log of it"
+echo "\$ px4params autostart run --bench examples/two_batteries_faults.bench.toml --duration 10 --ulog run.ulg"
+if px4params autostart run --bench examples/two_batteries_faults.bench.toml --duration 10 \
+    --ulog "$work/run.ulg"; then
     echo "(unexpected: the faulty bench may arm)"; exit 1
 fi
 echo "(exit status 1: the vehicle may not arm)"
+echo
+echo "== the flight log read back: which device failed, and when"
+echo "\$ px4params health run.ulg"
+px4params health "$work/run.ulg" | head -n 3 || true
 echo
 echo "px4params is installed in .venv: 'source .venv/bin/activate' puts it on PATH (or run"
 echo ".venv/bin/px4params). 'bash scripts/test.sh' runs every test."
