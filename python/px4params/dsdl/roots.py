@@ -79,7 +79,9 @@ def _classify_root(path: str, *, required: bool = True) -> Root | None:
         if not required:
             return None  # a folder of pydronecan's without definitions
         raise DsdlError("DSDL root contains no .dsdl or .uavcan files", path)
-    files = tuple(sorted(dsdl or uavcan, key=lambda p: os.path.relpath(p, path).split(os.sep)))
+    # Sorted by the path inside the root, folder by folder (os.walk's paths start with `path`:
+    # cutting it off is what os.path.relpath would do, without its cost on every command).
+    files = tuple(sorted(dsdl or uavcan, key=lambda p: p[len(path) :].lstrip(os.sep).split(os.sep)))
     return Root(path, "dsdl" if dsdl else "uavcan", files)
 
 
