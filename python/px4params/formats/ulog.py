@@ -147,6 +147,11 @@ class ULogWriter:
             )
         self._last_us = timestamp_us
 
+    @property
+    def last_timestamp_us(self) -> int:
+        """The latest timestamp written so far: nothing may be written before it."""
+        return self._last_us
+
     def getvalue(self) -> bytes:
         return bytes(self._out)
 

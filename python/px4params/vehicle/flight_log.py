@@ -17,8 +17,9 @@ What the log holds:
   second: health 0 nominal, 1 warning, 2 critical), ``driver_perf`` (once a second: transfers,
   errors, timeouts, probe attempts, time since the driver last started) and ``arming_check``
   (on every change and once a second).
-- **Logged messages**: a driver started, a device lost, a warning, a recovery, arming refused
-  or allowed, with PX4's levels.
+- **Logged messages**: a driver started (INFO), a warning (WARNING), a device lost (ERROR), a
+  lost device started again ("recovered", NOTICE), back to nominal (NOTICE), arming refused
+  (WARNING) or allowed (INFO), with PX4's levels.
 """
 
 from __future__ import annotations
@@ -120,6 +121,7 @@ class _Stream:
         self.health: dict[str, str] = {}
         self.device_ids: dict[str, int] = {}
         self.started_at: dict[str, float] = {}
+        self.lost: set[str] = set()
         self.registered = {i.name: i.registered for i in result.instances}
         self.may_arm = False
         self.last_perf_t = -1.0
@@ -164,18 +166,23 @@ class _Stream:
         name = e["instance"]
         self.device_ids[name] = int(e.get("device_id") or 0)
         self.started_at[name] = e["t"]
+        again = name in self.lost  # the device was lost and answers again
+        self.lost.discard(name)
         self.log.log(
-            "info",
+            "notice" if again else "info",
             at,
-            f"{e['driver']} {name}: started on {_where(e)} (device ID {e['device_id_hex']}, "
-            f"after {e['attempts']} probe attempts)",
+            f"{e['driver']} {name}: {'recovered: started again' if again else 'started'} on "
+            f"{_where(e)} (device ID {e['device_id_hex']}, after {e['attempts']} probe attempts)",
         )
 
     def on_reset(self, e: dict[str, Any], at: int) -> None:
         name = e["instance"]
         self.started_at.pop(name, None)
+        self.lost.add(name)
         lost = f"{e['driver']} {name}: device lost on {_where(e)}: {e['reason']}"
-        self.log.log("error", at, lost)
+        # At the moment it was lost (the simulation notices it at the end of its time slice),
+        # unless something later is written already.
+        self.log.log("error", max(_us(e.get("at", e["t"])), self.log.last_timestamp_us), lost)
 
     def on_start_failed(self, e: dict[str, Any], at: int) -> None:
         self.log.log(
@@ -184,18 +191,10 @@ class _Stream:
 
     def on_health(self, e: dict[str, Any], at: int) -> None:
         name, level = e["instance"], e["health"]
-        before = self.health.get(name)
         self.health[name] = level
         self._health_sample(name, at)
-        if level == "nominal" and before in (None, "critical") and name in self.started_at:
-            text = "recovered" if before is not None and self._was_lost(name) else "nominal"
-        else:
-            text = f"{level}: {e.get('reason') or ''}".rstrip(": ")
+        text = "nominal" if level == "nominal" else f"{level}: {e.get('reason') or ''}".rstrip(": ")
         self.log.log(_LEVEL_OF[level], at, f"{e['driver']} {name} on {_where(e)}: {text}")
-
-    def _was_lost(self, name: str) -> bool:
-        inst = next((i for i in self.result.instances if i.name == name), None)
-        return inst is not None and any(what == "reset" for _, what in inst.marks)
 
     def on_perf(self, e: dict[str, Any], at: int) -> None:
         name = e["instance"]
@@ -314,7 +313,7 @@ def _messages(logged: Sequence[Any]) -> dict[tuple[str, Any], list[tuple[float, 
             continue
         name, rest = words[1].rstrip(":"), words[2]
         t = int(m.timestamp) / 1e6
-        if words[1].endswith(":") and rest.startswith("started on "):
+        if words[1].endswith(":") and rest.startswith(("started on ", "recovered: started again")):
             said.setdefault((name, "mark"), []).append((t, "start"))
         elif words[1].endswith(":") and rest.startswith("device lost on "):
             said.setdefault((name, "mark"), []).append((t, "reset"))
@@ -332,7 +331,7 @@ def _health_story(inst: InstanceResult, data: Mapping[str, Any], said: Mapping[A
         reason = texts[-1][1] if texts else ""
         if reason.startswith(f"{level}: "):
             reason = reason[len(level) + 2 :]
-        elif reason in ("nominal", "recovered"):
+        elif reason == "nominal":
             reason = ""
         if level != previous or (texts and reason != inst.reason):
             inst.timeline.append((int(stamp) / 1e6, level, reason))
