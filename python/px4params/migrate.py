@@ -415,9 +415,22 @@ class _Builder:
         spec = self.specs.get(switch.removeprefix("SENS_EN_"))
         if not switch.startswith("SENS_EN_") or spec is None or spec.shared:
             return []
-        name = spec.name.lower()
-        return [Driver(name, spec.name, spec.name, True, 0, ("i2c",), None, 0, None, None, 1.0,
-                       started_by="launcher", enabled_by=switch)]  # fmt: skip
+        driver = Driver(
+            name=spec.name.lower(),
+            parameter=spec.name,
+            chip=spec.name,
+            autostart=True,
+            order=0,
+            buses=("i2c",),
+            default_address=None,
+            devtype=0,
+            chip_id_register=None,
+            chip_id=None,
+            rate_hz=1.0,
+            started_by="launcher",
+            enabled_by=switch,
+        )
+        return [driver]
 
     def enabled_driver(self, switch: str, value: int | float, driver: Driver) -> None:
         spec = self.specs[driver.parameter]

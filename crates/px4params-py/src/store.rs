@@ -306,14 +306,10 @@ impl Store {
         default: bool,
         saturate: bool,
     ) -> PyResult<()> {
+        let (leaf, _) = self.read_leaf(py, param, instance, target, default)?;
         let compiled = Arc::clone(&self.compiled);
         let layout = compiled.layout.as_layout();
-        let t = target_of(target)?;
         let w = which(default);
-        let (leaf, _) = self
-            .inner
-            .get_leaf(&layout, param, instance, w, t)
-            .map_err(|e| self.err(py, param, Some(instance), e, Op::Leaf))?;
         let name = self.instance_name(param, Some(instance));
         let scalar = leaf_value(py, &compiled, &name, &leaf, value, saturate)?;
         let target = Target::Index(leaf.index);
