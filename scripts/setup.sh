@@ -12,15 +12,17 @@ if [ ! -x .venv/bin/python ]; then
 fi
 export VIRTUAL_ENV="$PWD/.venv"
 
-echo "== Python dependencies into .venv (pip)"
-.venv/bin/python -m pip install --quiet --disable-pip-version-check "maturin>=1.5,<2"
+echo "== build tools into .venv (pip: maturin, uv)"
+# uv installs the package: its console script starts without importing `re` (pip's costs
+# every px4params command about 8 ms).
+.venv/bin/python -m pip install --quiet --disable-pip-version-check "maturin>=1.7,<2" "uv>=0.4,<1"
 
 if [ -e target/release/.fingerprint ]; then
     echo "== building the Rust extension (maturin, release; incremental, usually seconds)"
 else
     echo "== building the Rust extension (maturin, release): the first build takes about 2 minutes on 2 cores"
 fi
-.venv/bin/maturin develop --release --extras test
+.venv/bin/maturin develop --uv --release --extras test
 
 # MAVProxy, a ground station the tests drive: without its declared GUI dependencies (vtk,
 # opencv, matplotlib: hundreds of MB it does not need to list and set parameters).

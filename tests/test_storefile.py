@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import binascii
 import os
 import random
 import re
@@ -17,17 +18,29 @@ import px4params
 import pytest
 from px4params.errors import StoreFileError
 from px4params.store.classic import ClassicParam
-from px4params.store.file import (
-    HAS_DEFAULT,
-    HAS_VALUE,
-    HEADER,
-    KIND_STRUCTURED,
-    MAGIC,
-    _crc16,
-    _varint,
-    encode_file,
-    fingerprint,
-)
+from px4params.store.file import encode_file, fingerprint
+
+# The format's constants, as docs/store-format.md gives them (written here, not imported: the
+# tests build files independently of the code that reads them).
+MAGIC = b"PX4P"
+HEADER = struct.Struct("<4sBBI")
+KIND_STRUCTURED = 1
+HAS_DEFAULT = 0x10
+HAS_VALUE = 0x20
+
+
+def _varint(n: int) -> bytes:
+    """LEB128: 7 bits a byte, low bits first, the top bit on every byte but the last."""
+    out = bytearray()
+    while n >= 0x80:
+        out.append(n & 0x7F | 0x80)
+        n >>= 7
+    return bytes(out + bytes([n]))
+
+
+def _crc16(data: bytes) -> int:
+    """CRC-16-CCITT-FALSE: ``binascii.crc_hqx`` (XMODEM's polynomial) from 0xFFFF."""
+    return binascii.crc_hqx(data, 0xFFFF)
 
 CLASSIC = [ClassicParam("SYS_AUTOSTART", "Int32", 0), ClassicParam("BAT1_CAPACITY", "Float", -1.0)]
 

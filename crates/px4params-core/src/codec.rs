@@ -637,7 +637,7 @@ fn push_flat_path(layout: &Layout<'_>, fields: Span, leaf: u32, path: &mut Path)
     let mut j = leaf;
     for index in fields.first..fields.first + fields.count {
         let node = layout.fields[index as usize].node;
-        let n = layout.node(node).fixed_leaves.unwrap_or(0);
+        let n = layout.node(node).fixed_leaves().unwrap_or(0);
         if j < n {
             path.push(Step::Field(index));
             push_fixed_path(layout, node, j, path);
@@ -651,7 +651,7 @@ fn push_fixed_path(layout: &Layout<'_>, id: NodeId, leaf: u32, path: &mut Path) 
     match layout.node(id).kind {
         Kind::Struct { first, count } => push_flat_path(layout, Span { first, count }, leaf, path),
         Kind::Array { elem, .. } => {
-            let n = layout.node(elem).fixed_leaves.unwrap_or(1).max(1);
+            let n = layout.node(elem).fixed_leaves().unwrap_or(1).max(1);
             path.push(Step::Index(leaf / n));
             push_fixed_path(layout, elem, leaf % n, path);
         }

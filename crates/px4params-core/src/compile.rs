@@ -5,9 +5,14 @@ use alloc::vec::Vec;
 
 use crate::layout::{
     array_len_bits, union_tag_bits, Field, FlatItem, Kind, Layout, Node, NodeId, Role, Segment,
-    Span,
+    Span, VARIABLE,
 };
 use crate::scalar::Cast;
+
+/// [`Node::leaves`] from a count that is `None` for a node whose shape varies.
+fn leaves_or_variable(leaves: Option<u32>) -> u32 {
+    leaves.filter(|&n| n != VARIABLE).unwrap_or(VARIABLE)
+}
 
 /// Why a type could not be compiled.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -104,7 +109,7 @@ impl OwnedLayout {
             kind: Kind::Void { bits: bits as u8 },
             min_bits: u64::from(bits),
             max_bits: u64::from(bits),
-            fixed_leaves: Some(0),
+            leaves: 0,
             segments: Span::default(),
         }))
     }
@@ -116,7 +121,7 @@ impl OwnedLayout {
             kind: Kind::Array { elem, len },
             min_bits: e.min_bits.saturating_mul(u64::from(len)),
             max_bits: e.max_bits.saturating_mul(u64::from(len)),
-            fixed_leaves: e.fixed_leaves.and_then(|l| l.checked_mul(len)),
+            leaves: leaves_or_variable(e.fixed_leaves().and_then(|l| l.checked_mul(len))),
             segments: Span::default(),
         }))
     }
@@ -139,7 +144,7 @@ impl OwnedLayout {
                 .max_bits
                 .saturating_mul(u64::from(max))
                 .saturating_add(u64::from(len_bits)),
-            fixed_leaves: None,
+            leaves: VARIABLE,
             segments: Span::default(),
         }))
     }
@@ -153,7 +158,7 @@ impl OwnedLayout {
             // Saturating: a size beyond u64 reads as u64::MAX instead of wrapping.
             min_bits = min_bits.saturating_add(n.min_bits);
             max_bits = max_bits.saturating_add(n.max_bits);
-            leaves = match (leaves, n.fixed_leaves) {
+            leaves = match (leaves, n.fixed_leaves()) {
                 (Some(a), Some(b)) => a.checked_add(b),
                 _ => None,
             };
@@ -167,7 +172,7 @@ impl OwnedLayout {
             },
             min_bits,
             max_bits,
-            fixed_leaves: leaves,
+            leaves: leaves_or_variable(leaves),
             segments,
         }))
     }
@@ -197,7 +202,7 @@ impl OwnedLayout {
             },
             min_bits: min_bits.saturating_add(u64::from(tag_bits)),
             max_bits: max_bits.saturating_add(u64::from(tag_bits)),
-            fixed_leaves: None,
+            leaves: VARIABLE,
             segments: Span::default(),
         }))
     }
@@ -211,7 +216,7 @@ impl OwnedLayout {
             kind,
             min_bits: u64::from(bits),
             max_bits: u64::from(bits),
-            fixed_leaves: Some(1),
+            leaves: 1,
             segments: Span::default(),
         })
     }
@@ -223,7 +228,7 @@ impl OwnedLayout {
         let mut i = first;
         while i < first + count {
             let field = self.fields[i as usize];
-            if self.nodes[field.node as usize].fixed_leaves.is_none() {
+            if self.nodes[field.node as usize].fixed_leaves().is_none() {
                 self.segments.push(Segment::Field(i));
                 i += 1;
                 continue;
@@ -234,7 +239,7 @@ impl OwnedLayout {
             while i < first + count {
                 let f = self.fields[i as usize];
                 let node = self.nodes[f.node as usize];
-                let Some(n) = node.fixed_leaves else { break };
+                let Some(n) = node.fixed_leaves() else { break };
                 leaves += n;
                 bits += node.min_bits;
                 match f.role {

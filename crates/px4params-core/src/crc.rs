@@ -1,4 +1,5 @@
-//! DroneCAN checksums: CRC-64-WE data type signatures and the CRC-16-CCITT-FALSE transfer CRC.
+//! DroneCAN checksums: CRC-64-WE data type signatures and the CRC-16-CCITT-FALSE transfer CRC;
+//! and the store file's CRC-32.
 
 /// A running CRC-64-WE (poly `0x42F0E1EBA9EA3693`, init and final xor all ones), the DSDL
 /// signature hash.
@@ -146,6 +147,41 @@ pub fn transfer_crc_seed(signature: u64) -> u16 {
     crc16(0xFFFF, &signature.to_le_bytes())
 }
 
+/// CRC-32 (IEEE 802.3, zlib's `crc32`: reflected poly `0xEDB88320`, init and final xor all
+/// ones) continuing from `crc` (0 to start), as the store file's trailer uses it.
+///
+/// Four bits at a time from a 64-byte table: a store file is read once at boot, so size
+/// matters more here than speed.
+pub fn crc32(crc: u32, bytes: &[u8]) -> u32 {
+    let mut crc = !crc;
+    for &b in bytes {
+        crc ^= u32::from(b);
+        crc = (crc >> 4) ^ CRC32_NIBBLES[(crc & 15) as usize];
+        crc = (crc >> 4) ^ CRC32_NIBBLES[(crc & 15) as usize];
+    }
+    !crc
+}
+
+const CRC32_NIBBLES: [u32; 16] = {
+    let mut table = [0u32; 16];
+    let mut i = 0;
+    while i < 16 {
+        let mut c = i as u32;
+        let mut k = 0;
+        while k < 4 {
+            c = if c & 1 != 0 {
+                (c >> 1) ^ 0xEDB8_8320
+            } else {
+                c >> 1
+            };
+            k += 1;
+        }
+        table[i] = c;
+        i += 1;
+    }
+    table
+};
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -155,6 +191,9 @@ mod tests {
         // The standard check string of both CRCs.
         assert_eq!(dsdl_signature(b"123456789"), 0x62EC_59E3_F1A4_F00A);
         assert_eq!(crc16(0xFFFF, b"123456789"), 0x29B1);
+        assert_eq!(crc32(0, b"123456789"), 0xCBF4_3926);
+        assert_eq!(crc32(crc32(0, b"1234"), b"56789"), 0xCBF4_3926);
+        assert_eq!(crc32(0, b""), 0);
         let mut s = Signature::default();
         s.add(b"123");
         s.add(b"456789");

@@ -10,7 +10,10 @@ use crate::scalar::Cast;
 pub type NodeId = u32;
 
 /// What a node is.
+// `repr(C, u8)` here and on the other table types: firmware keeps layouts in `const` C tables
+// (`px4params metadata --firmware`), so their memory layout is C's.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(C, u8)]
 pub enum Kind {
     /// `uintN`, `1 <= N <= 64`.
     Uint {
@@ -76,6 +79,7 @@ pub enum Kind {
 
 /// A range of entries in one of the layout's tables.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[repr(C)]
 pub struct Span {
     /// First entry.
     pub first: u32,
@@ -95,6 +99,7 @@ impl Span {
 
 /// One primitive position of a flattened fixed-shape value.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(C, u8)]
 pub enum FlatItem {
     /// A primitive leaf (one of the scalar kinds).
     Leaf(Kind),
@@ -106,6 +111,7 @@ pub enum FlatItem {
 
 /// A piece of a struct, for walking flat leaf lists quickly.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(C, u8)]
 pub enum Segment {
     /// Consecutive fixed-shape fields, flattened to primitive items.
     Flat {
@@ -124,6 +130,7 @@ pub enum Segment {
 
 /// A node with its precomputed sizes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(C)]
 pub struct Node {
     /// What the node is.
     pub kind: Kind,
@@ -131,15 +138,28 @@ pub struct Node {
     pub min_bits: u64,
     /// Largest encoded length in bits (without tail array optimization).
     pub max_bits: u64,
-    /// For nodes without unions or dynamic arrays inside: the number of leaves. Such a node
-    /// always encodes to exactly `min_bits` bits, so it can be skipped without reading it.
-    pub fixed_leaves: Option<u32>,
+    /// For nodes without unions or dynamic arrays inside: the number of leaves; [`VARIABLE`]
+    /// for the others (see [`Node::fixed_leaves`]).
+    pub leaves: u32,
     /// For structs: the struct split into [`Segment`]s (in [`Layout::segments`]).
     pub segments: Span,
 }
 
+/// [`Node::leaves`] of a node whose shape varies (it has a union or a dynamic array inside).
+pub const VARIABLE: u32 = u32::MAX;
+
+impl Node {
+    /// For nodes without unions or dynamic arrays inside: the number of leaves. Such a node
+    /// always encodes to exactly `min_bits` bits, so it can be skipped without reading it.
+    #[inline]
+    pub fn fixed_leaves(&self) -> Option<u32> {
+        (self.leaves != VARIABLE).then_some(self.leaves)
+    }
+}
+
 /// What a field of a struct (or a union variant) is for.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(C, u8)]
 pub enum Role {
     /// An ordinary field.
     Data,
@@ -151,6 +171,7 @@ pub enum Role {
 
 /// A named member of a struct or union.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(C)]
 pub struct Field {
     /// Start of the name in [`Layout::names`].
     pub name_start: u32,

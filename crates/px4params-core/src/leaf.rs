@@ -269,7 +269,7 @@ impl<R: BitRead + ?Sized> Seek<'_, '_, '_, R> {
     fn node(&mut self, id: NodeId, field: Option<u32>) -> Result<Option<Position>, ()> {
         let layout = self.layout;
         let node = layout.node(id);
-        if let Some(n) = node.fixed_leaves {
+        if let Some(n) = node.fixed_leaves() {
             if self.k >= n as usize {
                 self.k -= n as usize;
                 self.pos += node.min_bits as usize;
@@ -535,7 +535,7 @@ impl<R: BitRead + ?Sized> Walk<'_, '_, R> {
     fn skip(&mut self, id: NodeId, tao: bool) -> Result<(), LeafAccessError> {
         let layout = self.layout;
         let node = layout.node(id);
-        if let Some(n) = node.fixed_leaves {
+        if let Some(n) = node.fixed_leaves() {
             self.pos += node.min_bits as usize;
             self.leaves += n as usize;
             return Ok(());
@@ -611,7 +611,7 @@ impl<R: BitRead + ?Sized> Walk<'_, '_, R> {
     ) -> Result<Option<Leaf>, LeafAccessError> {
         let layout = self.layout;
         let node = layout.node(id);
-        if let Some(n) = node.fixed_leaves {
+        if let Some(n) = node.fixed_leaves() {
             if *k >= n as usize {
                 *k -= n as usize;
                 self.pos += node.min_bits as usize;

@@ -1,6 +1,7 @@
 //! The core of px4params: DroneCAN (UAVCAN v0) bit-packed serialization driven by compiled
 //! layouts, leaf access in encoded data, flat leaf values, descattering (decoding from
-//! payloads in pieces), the fixed-capacity instance parameter store, data type signatures and CAN transfers.
+//! payloads in pieces), the fixed-capacity instance parameter store and its file format, data
+//! type signatures and CAN transfers.
 //!
 //! `no_std` and allocation-free; the `alloc` feature adds [`compile::OwnedLayout`] to build
 //! layouts at run time. Firmware can instead keep a [`layout::Layout`] in static tables.
@@ -19,6 +20,7 @@ pub mod codec;
 pub mod compile;
 pub mod crc;
 pub mod error;
+pub mod file;
 pub mod layout;
 pub mod leaf;
 pub mod pages;

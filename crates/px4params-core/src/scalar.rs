@@ -2,6 +2,7 @@
 
 /// How an out-of-range value is brought into a field (DSDL `saturated` / `truncated`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
 pub enum Cast {
     /// Clamp integers to the field's range; clamp finite floats to the largest finite value.
     Saturated,

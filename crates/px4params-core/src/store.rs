@@ -36,6 +36,7 @@ const STORED: EncodeOptions = EncodeOptions {
 
 /// One parameter's place in the store.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(C)]
 pub struct ParamDef {
     /// The parameter's type.
     pub root: NodeId,
@@ -151,6 +152,7 @@ const UNSAVED: u8 = 4;
 
 /// The state of one instance (or of a parameter's type default).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[repr(C)]
 pub struct Slot {
     value_len: u16,
     default_len: u16,
@@ -669,6 +671,11 @@ where
         self.stage(data);
         self.commit(&def, instance, which, data.len());
         Ok(())
+    }
+
+    /// Checks `data` as [`Store::set_encoded`] would, without writing it.
+    pub fn check_value(&self, layout: &Layout<'_>, param: u32, data: &[u8]) -> Result<()> {
+        check_encoded(layout, self.def(param)?.root, data)
     }
 
     /// Sets an instance's value back to its default.

@@ -3,6 +3,7 @@
 //! Core errors become the exception classes of `px4params.errors` here, and only here.
 
 mod compile;
+mod file;
 mod store;
 mod transfer;
 mod values;
@@ -479,6 +480,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Schema>()?;
     m.add_class::<DataType>()?;
     m.add_class::<store::Store>()?;
+    m.add_function(wrap_pyfunction!(file::check_store_file, m)?)?;
     m.add_function(wrap_pyfunction!(transfer::dsdl_signature, m)?)?;
     m.add_function(wrap_pyfunction!(transfer::data_type_signature, m)?)?;
     m.add_function(wrap_pyfunction!(transfer::transfer_crc_seed, m)?)?;

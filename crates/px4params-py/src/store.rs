@@ -19,7 +19,7 @@ use crate::{describe, leaf_value, target_of, to_py_err, Compiled, Op, Schema, Va
 pyo3::import_exception!(px4params.errors, StoreError);
 pyo3::import_exception!(px4params.errors, InstanceError);
 
-type CoreStore = store::Store<Vec<ParamDef>, Vec<Slot>, Vec<u8>>;
+pub(crate) type CoreStore = store::Store<Vec<ParamDef>, Vec<Slot>, Vec<u8>>;
 
 /// Key of the `int32` root in the parameter list (a classic integer parameter).
 const CLASSIC_INT: &str = "@int32";
@@ -194,6 +194,20 @@ impl Store {
         }
         self.inner = other.inner.clone();
         Ok(())
+    }
+
+    /// The store's file: `names` per parameter index, `(table line, False)` for a structured
+    /// parameter (`NAME=TYPE.MAJOR`) or `(name, True)` for a classic one; `order` the
+    /// parameters in file order; `foreign` records kept from a loaded file, written back.
+    fn file_bytes<'py>(
+        &self,
+        py: Python<'py>,
+        names: Vec<(String, bool)>,
+        order: Vec<u32>,
+        foreign: Vec<Vec<u8>>,
+    ) -> PyResult<Bound<'py, PyBytes>> {
+        let bytes = crate::file::store_file_bytes(&self.inner, &names, &order, &foreign)?;
+        Ok(PyBytes::new(py, &bytes))
     }
 
     /// Sets the type default of parameter `param` (encoded without tail array optimization).

@@ -11,6 +11,10 @@ A file names its own parameters, so a schema with more types (a newer px4params,
 folder) reads it. Format 1 files had no table: they are read by a schema with the same
 parameters, or with the first bundled set plus the same extra types.
 
+The bytes are read and written by the core (``px4params_core::file``), the implementation
+firmware uses through the C ABI; this module maps the file's parameters to the store's,
+translates values stored by older minor versions, and does the file system's part.
+
 A file is checked completely (trailer, then every record) before anything is applied, and it
 is applied to a copy of the store that replaces the store only when all of it went in.
 Saving writes a temporary file, fsyncs it, keeps the old file as ``FILE.bak`` and renames the
@@ -21,9 +25,9 @@ from __future__ import annotations
 
 import binascii
 import os
-import struct
 from collections.abc import Mapping
 
+from px4params._native import check_store_file
 from px4params._records import TYPE_CHECKING
 from px4params.dsdl.schema import DataType
 from px4params.errors import Px4ParamsError, StoreError, StoreFileError
@@ -36,18 +40,9 @@ if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
 else:
     from px4params._records import NamedTuple
 
-MAGIC = b"PX4P"
-FORMAT_VERSION = 2
-#: Format versions this reader takes (1: without the parameter table).
-READABLE_VERSIONS = (1, 2)
-HEADER = struct.Struct("<4sBBI")
-TRAILER = struct.Struct("<I")
-
+#: Record kinds, as the core's checked records carry them.
 KIND_STRUCTURED = 1
 KIND_CLASSIC = 2
-KIND_TABLE = 3
-HAS_DEFAULT = 0x10
-HAS_VALUE = 0x20
 
 
 #: Structured parameters bundled after format 1 was replaced: a format 1 file was written by
@@ -81,54 +76,13 @@ def _lines_crc(lines: list[str]) -> int:
 
 
 def encode_file(store: Store) -> bytes:
-    """The store's file content."""
-    # The table lists the structured parameters the records use, in store order.
-    used: dict[int, int] = {}
-    records = bytearray()
-    for p in store._order:
-        for instance in store._native.instances(p.index):
-            index = used.get(p.index, len(used))
-            record = _record(store, p, instance, index)
-            if record is None:
-                continue
-            if p.classic is None:
-                used[p.index] = index
-            records += record + struct.pack("<H", _crc16(record))
-    lines = table_lines([p.spec for p in store._order if p.index in used and p.spec])
-    out = bytearray(HEADER.pack(MAGIC, FORMAT_VERSION, 0, _lines_crc(lines)))
-    table = bytearray([KIND_TABLE]) + _varint(len(lines))
-    for line in lines:
-        table += _varint(len(line)) + line.encode()
-    out += table + struct.pack("<H", _crc16(table)) + records
-    for record in store._foreign.values():  # classic values of parameters this store lacks
-        out += record + struct.pack("<H", _crc16(record))
-    out += TRAILER.pack(binascii.crc32(out))
-    return bytes(out)
-
-
-def _record(store: Store, p: _Param, instance: int, table_index: int) -> bytes | None:
-    native = store._native
-    value = native.get(p.index, instance)
-    default = native.get(p.index, instance, default=True)
-    flags = (HAS_DEFAULT if default != native.type_default(p.index) else 0) | (
-        HAS_VALUE if value != default else 0
-    )
-    if p.classic is not None:
-        if not flags:
-            return None
-        name = p.name.encode()
-        record = bytearray([KIND_CLASSIC | flags, len(name)]) + name
-        record += default if flags & HAS_DEFAULT else b""
-        record += value if flags & HAS_VALUE else b""
-        return bytes(record)
-    # An instance is written even when it is all defaults: that it exists is configuration.
-    if p.shared and not flags:
-        return None
-    record = bytearray([KIND_STRUCTURED | flags]) + _varint(table_index) + _varint(instance)
-    for present, payload in ((flags & HAS_DEFAULT, default), (flags & HAS_VALUE, value)):
-        if present:
-            record += _varint(len(payload)) + payload
-    return bytes(record)
+    """The store's file content, written by the core (the bytes firmware writes too)."""
+    names = [
+        (p.name, True) if p.classic is not None else (table_lines([p.spec])[0], False)  # type: ignore[list-item]
+        for p in sorted(store._params.values(), key=lambda p: p.index)
+    ]
+    order = [p.index for p in store._order]
+    return bytes(store._native.file_bytes(names, order, list(store._foreign.values())))
 
 
 def save(store: Store, path: str | os.PathLike[str]) -> int:
@@ -274,129 +228,9 @@ def read_file(path: str | os.PathLike[str]) -> FileContent:
 
 
 def parse(data: bytes, where: str) -> FileContent:
-    """Checks ``data`` completely and returns its table and records."""
-    if len(data) < HEADER.size or data[:4] != MAGIC:
-        raise StoreFileError("not a px4params store file (no PX4P header)", where, 0)
-    _magic, version, flags, file_fp = HEADER.unpack_from(data)
-    if version not in READABLE_VERSIONS:
-        raise StoreFileError(
-            f"store file format version {version} (this px4params reads "
-            f"{' and '.join(map(str, READABLE_VERSIONS))})",
-            where,
-            4,
-        )
-    if len(data) < HEADER.size + TRAILER.size:
-        raise StoreFileError("file is truncated (no trailer)", where, len(data))
-    body_end = len(data) - TRAILER.size
-    (crc,) = TRAILER.unpack_from(data, body_end)
-    if binascii.crc32(data[:body_end]) != crc:
-        raise StoreFileError(
-            "file is corrupted or truncated (CRC-32 mismatch); nothing was applied",
-            where,
-            body_end,
-        )
-    if flags != 0:
-        raise StoreFileError(f"unknown header flags 0x{flags:02x}", where, 5)
-    records = []
-    pos = HEADER.size
-    table = None
-    if version >= 2:
-        reader = _Reader(data, pos, body_end, where)
-        table = reader.table()
-        _check_crc16(data, pos, reader.pos, where)
-        if _lines_crc(table) != file_fp:
-            raise StoreFileError(
-                "the parameter table does not match the header's fingerprint", where, pos
-            )
-        pos = reader.pos + 2
-    while pos < body_end:
-        reader = _Reader(data, pos, body_end, where)
-        record = reader.record()
-        _check_crc16(data, pos, reader.pos, where)
-        records.append(record)
-        pos = reader.pos + 2
-    return FileContent(version, file_fp, table, records)
-
-
-def _check_crc16(data: bytes, start: int, end: int, where: str) -> None:
-    (crc,) = struct.unpack_from("<H", data, end)
-    if _crc16(data[start:end]) != crc:
-        raise StoreFileError("record is corrupted (CRC-16 mismatch)", where, start)
-
-
-class _Reader:
-    def __init__(self, data: bytes, pos: int, end: int, where: str) -> None:
-        self.data, self.pos, self.end, self.where, self.start = data, pos, end, where, pos
-
-    def fail(self, what: str) -> StoreFileError:
-        return StoreFileError(f"record is malformed: {what}", self.where, self.start)
-
-    def take(self, n: int) -> bytes:
-        if self.pos + n > self.end:
-            raise self.fail("it runs past the end of the file")
-        chunk = self.data[self.pos : self.pos + n]
-        self.pos += n
-        return chunk
-
-    def varint(self) -> int:
-        value, shift = 0, 0
-        while True:
-            byte = self.take(1)[0]
-            value |= (byte & 0x7F) << shift
-            if not byte & 0x80:
-                return value
-            shift += 7
-            if shift > 28:
-                raise self.fail("a number is too long")
-
-    def table(self) -> list[str]:
-        """The parameter table: kind 3, a count, then each ``NAME=TYPE.MAJOR`` with its
-        length."""
-        if self.take(1)[0] != KIND_TABLE:
-            raise self.fail("a format 2 file starts with its parameter table")
-        lines = []
-        for _ in range(self.varint()):
-            raw = self.take(self.varint())
-            try:
-                line = raw.decode("ascii")
-            except UnicodeDecodeError:
-                raise self.fail("a parameter table entry is not ASCII") from None
-            name, equals, key = line.partition("=")
-            if not equals or not name or not key:
-                raise self.fail(f"parameter table entry {line!r} is not NAME=TYPE.MAJOR")
-            lines.append(line)
-        if self.pos + 2 > self.end:
-            raise self.fail("it runs past the end of the file")
-        return lines
-
-    def record(self) -> Record:
-        head = self.take(1)[0]
-        kind, flags = head & 0x0F, head & 0xF0
-        if flags & ~(HAS_DEFAULT | HAS_VALUE):
-            raise self.fail(f"unknown flags 0x{head:02x}")
-        if kind == KIND_CLASSIC:
-            key: int | str = self.take(self.take(1)[0]).decode("ascii", "replace")
-            instance = 0
-            sizes = (4, 4)
-        elif kind == KIND_STRUCTURED:
-            key, instance = self.varint(), self.varint()
-            if instance > 0xFFFF:
-                raise self.fail(f"instance {instance} is out of range")
-            sizes = (-1, -1)
-        elif kind == KIND_TABLE:
-            raise self.fail("a second parameter table")
-        else:
-            raise self.fail(f"unknown record kind {kind}")
-        payloads: list[bytes | None] = []
-        for flag, size in zip((HAS_DEFAULT, HAS_VALUE), sizes, strict=True):
-            if flags & flag:
-                payloads.append(self.take(size if size >= 0 else self.varint()))
-            else:
-                payloads.append(None)
-        if self.pos + 2 > self.end:
-            raise self.fail("it runs past the end of the file")
-        raw = self.data[self.start : self.pos]
-        return Record(self.start, kind, key, instance, payloads[0], payloads[1], raw)
+    """Checks ``data`` completely (in the core) and returns its table and records."""
+    version, file_fp, table, records = check_store_file(data, where)
+    return FileContent(version, file_fp, table, [Record(*r) for r in records])
 
 
 # -- applying -----------------------------------------------------------------------------------
@@ -604,20 +438,3 @@ def _shown(value: Any) -> str:
     import json
 
     return json.dumps(value, separators=(",", ":"))
-
-
-def _varint(n: int) -> bytes:
-    out = bytearray()
-    while True:
-        byte = n & 0x7F
-        n >>= 7
-        if n:
-            out.append(byte | 0x80)
-        else:
-            out.append(byte)
-            return bytes(out)
-
-
-def _crc16(data: bytes) -> int:
-    """CRC-16-CCITT-FALSE (poly 0x1021, init 0xFFFF): ``binascii.crc_hqx`` with that seed."""
-    return binascii.crc_hqx(data, 0xFFFF)

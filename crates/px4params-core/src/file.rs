@@ -1,0 +1,1066 @@
+//! The store file (`docs/store-format.md`): what differs from the defaults, one CRC-checked
+//! record per instance, behind a table naming the structured parameters the records use.
+//!
+//! One implementation for the host and for firmware, over caller-provided buffers:
+//! - [`check`] verifies a whole file (header, trailer CRC-32, the table and its fingerprint,
+//!   every record's structure and CRC-16) before anything is read out of it;
+//! - [`Writer`] writes a file record by record, [`write_store`] a [`Store`]'s content;
+//! - [`apply`] puts a checked file into a store, all of it or (when any record is refused)
+//!   nothing.
+//!
+//! The host keeps what needs a file system or a schema: atomic replace, backups, locking,
+//! and translating values stored by an older minor version of their type.
+
+use core::fmt;
+
+use crate::crc::{crc16, crc32};
+use crate::layout::Layout;
+use crate::store::{ParamDef, Slot, Store, StoreError, Which};
+
+/// The first four bytes of every store file.
+pub const MAGIC: [u8; 4] = *b"PX4P";
+/// The format version [`Writer`] writes.
+pub const FORMAT_VERSION: u8 = 2;
+/// Format 1: no parameter table (records index the writer's whole parameter list).
+pub const FORMAT_1: u8 = 1;
+/// Record kind: a structured parameter's instance.
+pub const KIND_STRUCTURED: u8 = 1;
+/// Record kind: a classic parameter.
+pub const KIND_CLASSIC: u8 = 2;
+/// Record kind: the parameter table.
+pub const KIND_TABLE: u8 = 3;
+/// Record flag: the record holds a default.
+pub const HAS_DEFAULT: u8 = 0x10;
+/// Record flag: the record holds a value.
+pub const HAS_VALUE: u8 = 0x20;
+/// Magic, version, flags and the table's fingerprint.
+pub const HEADER_LEN: usize = 10;
+/// The CRC-32 of everything before it.
+pub const TRAILER_LEN: usize = 4;
+/// A classic parameter's name is 1 to 16 characters (PX4's limit).
+pub const CLASSIC_NAME_MAX: usize = 16;
+
+const CRC16_SEED: u16 = 0xFFFF;
+
+/// Why a file was refused, at [`FileError::offset`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FileErrorKind<'a> {
+    /// No `PX4P` header.
+    NotAStoreFile,
+    /// A format version this reader does not know.
+    Version(u8),
+    /// Shorter than a header and a trailer.
+    NoTrailer,
+    /// The trailer's CRC-32 does not match.
+    Corrupted,
+    /// Header flags other than 0.
+    HeaderFlags(u8),
+    /// The table's lines do not hash to the header's fingerprint.
+    Fingerprint,
+    /// A record's (or the table's) CRC-16 does not match.
+    RecordCrc,
+    /// A record runs past the end of the file.
+    PastEnd,
+    /// A number longer than five bytes.
+    LongNumber,
+    /// A format 2 file whose first record is not the table.
+    TableFirst,
+    /// A table entry with a byte above 127.
+    TableNotAscii,
+    /// A table entry that is not `NAME=TYPE.MAJOR`.
+    TableEntry(&'a [u8]),
+    /// A record's first byte with unknown flags (the whole byte).
+    RecordFlags(u8),
+    /// An instance number above 65535.
+    Instance(u64),
+    /// A second parameter table.
+    SecondTable,
+    /// An unknown record kind.
+    RecordKind(u8),
+}
+
+/// A file refused by [`check`]: what and where (byte offset in the file).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct FileError<'a> {
+    /// What is wrong.
+    pub kind: FileErrorKind<'a>,
+    /// Byte offset of the problem (the start of the record it is in).
+    pub offset: usize,
+}
+
+impl fmt::Display for FileError<'_> {
+    /// One line, without the offset (the caller adds the file's name and the offset).
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        use FileErrorKind as K;
+        let malformed =
+            |f: &mut fmt::Formatter<'_>, what: &str| write!(f, "record is malformed: {what}");
+        match self.kind {
+            K::NotAStoreFile => f.write_str("not a px4params store file (no PX4P header)"),
+            K::Version(v) => write!(
+                f,
+                "store file format version {v} (this px4params reads {FORMAT_1} and {FORMAT_VERSION})"
+            ),
+            K::NoTrailer => f.write_str("file is truncated (no trailer)"),
+            K::Corrupted => f.write_str(
+                "file is corrupted or truncated (CRC-32 mismatch); nothing was applied",
+            ),
+            K::HeaderFlags(flags) => write!(f, "unknown header flags 0x{flags:02x}"),
+            K::Fingerprint => {
+                f.write_str("the parameter table does not match the header's fingerprint")
+            }
+            K::RecordCrc => f.write_str("record is corrupted (CRC-16 mismatch)"),
+            K::PastEnd => malformed(f, "it runs past the end of the file"),
+            K::LongNumber => malformed(f, "a number is too long"),
+            K::TableFirst => malformed(f, "a format 2 file starts with its parameter table"),
+            K::TableNotAscii => malformed(f, "a parameter table entry is not ASCII"),
+            K::TableEntry(line) => {
+                f.write_str("record is malformed: parameter table entry ")?;
+                write_quoted(f, line)?;
+                f.write_str(" is not NAME=TYPE.MAJOR")
+            }
+            K::RecordFlags(head) => write!(f, "record is malformed: unknown flags 0x{head:02x}"),
+            K::Instance(n) => write!(f, "record is malformed: instance {n} is out of range"),
+            K::SecondTable => malformed(f, "a second parameter table"),
+            K::RecordKind(kind) => write!(f, "record is malformed: unknown record kind {kind}"),
+        }
+    }
+}
+
+/// ASCII text quoted as Python's `repr` quotes it (the message names the entry as it is).
+fn write_quoted(f: &mut fmt::Formatter<'_>, text: &[u8]) -> fmt::Result {
+    let quote = if text.contains(&b'\'') && !text.contains(&b'"') {
+        '"'
+    } else {
+        '\''
+    };
+    write!(f, "{quote}")?;
+    for &b in text {
+        match b {
+            b'\\' => f.write_str("\\\\")?,
+            b'\t' => f.write_str("\\t")?,
+            b'\n' => f.write_str("\\n")?,
+            b'\r' => f.write_str("\\r")?,
+            _ if b as char == quote => write!(f, "\\{quote}")?,
+            0x20..=0x7E => write!(f, "{}", b as char)?,
+            _ => write!(f, "\\x{b:02x}")?,
+        }
+    }
+    write!(f, "{quote}")
+}
+
+/// A record's key.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Key<'a> {
+    /// A structured parameter: its index in the file's table (format 2), or in the writer's
+    /// list of structured parameters (format 1).
+    Structured(u64),
+    /// A classic parameter: its name (ASCII as written; not checked).
+    Classic(&'a [u8]),
+}
+
+/// One checked record.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Record<'a> {
+    /// Byte offset of the record in the file.
+    pub offset: usize,
+    /// Whose record it is.
+    pub key: Key<'a>,
+    /// The instance number (0 for shared and classic parameters).
+    pub instance: u16,
+    /// The instance's default, when it differs from the type's.
+    pub default: Option<&'a [u8]>,
+    /// The value, when it differs from the default.
+    pub value: Option<&'a [u8]>,
+    /// The record's bytes without its CRC.
+    pub raw: &'a [u8],
+}
+
+/// A file [`check`] verified completely.
+#[derive(Clone, Copy, Debug)]
+pub struct Checked<'a> {
+    data: &'a [u8],
+    /// Its format version (1 or 2).
+    pub version: u8,
+    /// The header's fingerprint: the CRC-32 of the table's lines joined with `\n`.
+    pub fingerprint: u32,
+    table: Option<usize>,
+    records: usize,
+    end: usize,
+}
+
+impl<'a> Checked<'a> {
+    /// The parameter table's `NAME=TYPE.MAJOR` lines (none in a format 1 file).
+    pub fn table(&self) -> TableLines<'a> {
+        let mut reader = Reader::new(self.data, self.table.unwrap_or(0), self.end);
+        let count = match self.table {
+            Some(_) => reader.take(1).and_then(|_| reader.varint()).unwrap_or(0),
+            None => 0,
+        };
+        TableLines { reader, count }
+    }
+
+    /// Whether the file has a parameter table (format 2).
+    pub fn has_table(&self) -> bool {
+        self.table.is_some()
+    }
+
+    /// The records, in file order.
+    pub fn records(&self) -> Records<'a> {
+        Records {
+            data: self.data,
+            pos: self.records,
+            end: self.end,
+        }
+    }
+}
+
+/// The lines of a checked file's parameter table.
+#[derive(Clone, Debug)]
+pub struct TableLines<'a> {
+    reader: Reader<'a>,
+    count: u64,
+}
+
+impl<'a> Iterator for TableLines<'a> {
+    type Item = &'a str;
+
+    fn next(&mut self) -> Option<&'a str> {
+        if self.count == 0 {
+            return None;
+        }
+        self.count -= 1;
+        let len = self.reader.varint().ok()?;
+        let line = self.reader.take(len).ok()?;
+        core::str::from_utf8(line).ok()
+    }
+}
+
+/// The records of a checked file.
+#[derive(Clone, Debug)]
+pub struct Records<'a> {
+    data: &'a [u8],
+    pos: usize,
+    end: usize,
+}
+
+impl<'a> Iterator for Records<'a> {
+    type Item = Record<'a>;
+
+    fn next(&mut self) -> Option<Record<'a>> {
+        if self.pos >= self.end {
+            return None;
+        }
+        let (record, next) = read_record(self.data, self.pos, self.end).ok()?;
+        self.pos = next;
+        Some(record)
+    }
+}
+
+/// Checks all of `data` and returns it as a [`Checked`] file.
+pub fn check(data: &[u8]) -> Result<Checked<'_>, FileError<'_>> {
+    let fail = |kind, offset| Err(FileError { kind, offset });
+    if data.len() < HEADER_LEN || data[..4] != MAGIC {
+        return fail(FileErrorKind::NotAStoreFile, 0);
+    }
+    let version = data[4];
+    if version != FORMAT_1 && version != FORMAT_VERSION {
+        return fail(FileErrorKind::Version(version), 4);
+    }
+    if data.len() < HEADER_LEN + TRAILER_LEN {
+        return fail(FileErrorKind::NoTrailer, data.len());
+    }
+    let end = data.len() - TRAILER_LEN;
+    if crc32(0, &data[..end]) != u32::from_le_bytes(le4(&data[end..])) {
+        return fail(FileErrorKind::Corrupted, end);
+    }
+    if data[5] != 0 {
+        return fail(FileErrorKind::HeaderFlags(data[5]), 5);
+    }
+    let fingerprint = u32::from_le_bytes(le4(&data[6..]));
+    let mut pos = HEADER_LEN;
+    let mut table = None;
+    if version >= 2 {
+        let mut reader = Reader::new(data, pos, end);
+        let lines_crc = reader.table()?;
+        check_crc16(data, pos, reader.pos)?;
+        if lines_crc != fingerprint {
+            return fail(FileErrorKind::Fingerprint, pos);
+        }
+        table = Some(pos);
+        pos = reader.pos + 2;
+    }
+    let records = pos;
+    while pos < end {
+        let (_, next) = read_record(data, pos, end)?;
+        pos = next;
+    }
+    Ok(Checked {
+        data,
+        version,
+        fingerprint,
+        table,
+        records,
+        end,
+    })
+}
+
+fn le4(bytes: &[u8]) -> [u8; 4] {
+    let mut out = [0; 4];
+    out.copy_from_slice(&bytes[..4]);
+    out
+}
+
+/// The record at `pos` with its CRC checked, and where the next one starts.
+fn read_record(data: &[u8], pos: usize, end: usize) -> Result<(Record<'_>, usize), FileError<'_>> {
+    let mut reader = Reader::new(data, pos, end);
+    let record = reader.record()?;
+    check_crc16(data, pos, reader.pos)?;
+    Ok((record, reader.pos + 2))
+}
+
+fn check_crc16(data: &[u8], start: usize, end: usize) -> Result<(), FileError<'_>> {
+    // The reader made sure two bytes follow.
+    let stored = u16::from_le_bytes([data[end], data[end + 1]]);
+    if crc16(CRC16_SEED, &data[start..end]) != stored {
+        return Err(FileError {
+            kind: FileErrorKind::RecordCrc,
+            offset: start,
+        });
+    }
+    Ok(())
+}
+
+/// Reads one record (or the table) starting at `start`, never past `end`.
+#[derive(Clone, Debug)]
+struct Reader<'a> {
+    data: &'a [u8],
+    start: usize,
+    pos: usize,
+    end: usize,
+}
+
+impl<'a> Reader<'a> {
+    fn new(data: &'a [u8], pos: usize, end: usize) -> Self {
+        Self {
+            data,
+            start: pos,
+            pos,
+            end,
+        }
+    }
+
+    fn fail<T>(&self, kind: FileErrorKind<'a>) -> Result<T, FileError<'a>> {
+        Err(FileError {
+            kind,
+            offset: self.start,
+        })
+    }
+
+    fn take(&mut self, n: u64) -> Result<&'a [u8], FileError<'a>> {
+        if n > (self.end - self.pos) as u64 {
+            return self.fail(FileErrorKind::PastEnd);
+        }
+        let chunk = &self.data[self.pos..self.pos + n as usize];
+        self.pos += n as usize;
+        Ok(chunk)
+    }
+
+    fn byte(&mut self) -> Result<u8, FileError<'a>> {
+        Ok(self.take(1)?[0])
+    }
+
+    /// LEB128, at most five bytes.
+    fn varint(&mut self) -> Result<u64, FileError<'a>> {
+        let mut value = 0u64;
+        let mut shift = 0;
+        loop {
+            let byte = self.byte()?;
+            value |= u64::from(byte & 0x7F) << shift;
+            if byte & 0x80 == 0 {
+                return Ok(value);
+            }
+            shift += 7;
+            if shift > 28 {
+                return self.fail(FileErrorKind::LongNumber);
+            }
+        }
+    }
+
+    fn two_more(&self) -> Result<(), FileError<'a>> {
+        if self.pos + 2 > self.end {
+            return self.fail(FileErrorKind::PastEnd);
+        }
+        Ok(())
+    }
+
+    /// The parameter table; returns the CRC-32 of its lines joined with `\n`.
+    fn table(&mut self) -> Result<u32, FileError<'a>> {
+        if self.byte()? != KIND_TABLE {
+            return self.fail(FileErrorKind::TableFirst);
+        }
+        let mut lines_crc = 0;
+        for i in 0..self.varint()? {
+            let len = self.varint()?;
+            let line = self.take(len)?;
+            if !line.is_ascii() {
+                return self.fail(FileErrorKind::TableNotAscii);
+            }
+            match line.iter().position(|&b| b == b'=') {
+                Some(eq) if eq > 0 && eq + 1 < line.len() => {}
+                _ => return self.fail(FileErrorKind::TableEntry(line)),
+            }
+            if i > 0 {
+                lines_crc = crc32(lines_crc, b"\n");
+            }
+            lines_crc = crc32(lines_crc, line);
+        }
+        self.two_more()?;
+        Ok(lines_crc)
+    }
+
+    fn record(&mut self) -> Result<Record<'a>, FileError<'a>> {
+        let head = self.byte()?;
+        let (kind, flags) = (head & 0x0F, head & 0xF0);
+        if flags & !(HAS_DEFAULT | HAS_VALUE) != 0 {
+            return self.fail(FileErrorKind::RecordFlags(head));
+        }
+        let (key, instance, fixed) = match kind {
+            KIND_CLASSIC => {
+                let len = self.byte()?;
+                (Key::Classic(self.take(len.into())?), 0, Some(4))
+            }
+            KIND_STRUCTURED => {
+                let index = self.varint()?;
+                let instance = self.varint()?;
+                if instance > u64::from(u16::MAX) {
+                    return self.fail(FileErrorKind::Instance(instance));
+                }
+                (Key::Structured(index), instance as u16, None)
+            }
+            KIND_TABLE => return self.fail(FileErrorKind::SecondTable),
+            _ => return self.fail(FileErrorKind::RecordKind(kind)),
+        };
+        let mut payload = |flag: u8| -> Result<Option<&'a [u8]>, FileError<'a>> {
+            if flags & flag == 0 {
+                return Ok(None);
+            }
+            let len = match fixed {
+                Some(n) => n,
+                None => self.varint()?,
+            };
+            self.take(len).map(Some)
+        };
+        let default = payload(HAS_DEFAULT)?;
+        let value = payload(HAS_VALUE)?;
+        self.two_more()?;
+        Ok(Record {
+            offset: self.start,
+            key,
+            instance,
+            default,
+            value,
+            raw: &self.data[self.start..self.pos],
+        })
+    }
+}
+
+// -- writing ------------------------------------------------------------------------------------
+
+/// Why a file could not be written.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum WriteError {
+    /// The buffer is too small; the file needs at least this many bytes.
+    BufferFull {
+        /// Bytes needed so far (a lower bound of the whole).
+        needed: usize,
+    },
+    /// A classic parameter's name is empty or longer than [`CLASSIC_NAME_MAX`].
+    ClassicName,
+}
+
+impl fmt::Display for WriteError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            WriteError::BufferFull { needed } => {
+                write!(
+                    f,
+                    "the store file needs more than the buffer's {needed} bytes"
+                )
+            }
+            WriteError::ClassicName => write!(
+                f,
+                "a classic parameter's name must be 1 to {CLASSIC_NAME_MAX} characters"
+            ),
+        }
+    }
+}
+
+/// Writes a store file into a caller's buffer: [`Writer::new`] writes the header and the
+/// table, then records, then [`Writer::finish`] the trailer.
+#[derive(Debug)]
+pub struct Writer<'b> {
+    buf: &'b mut [u8],
+    len: usize,
+}
+
+impl<'b> Writer<'b> {
+    /// Starts a file whose table holds `table`'s `NAME=TYPE.MAJOR` lines (records refer to
+    /// them by position).
+    pub fn new<'l, T>(buf: &'b mut [u8], table: T) -> Result<Self, WriteError>
+    where
+        T: IntoIterator<Item = &'l str>,
+        T::IntoIter: Clone,
+    {
+        let lines = table.into_iter();
+        let mut fingerprint = 0;
+        let mut count = 0u64;
+        for (i, line) in lines.clone().enumerate() {
+            if i > 0 {
+                fingerprint = crc32(fingerprint, b"\n");
+            }
+            fingerprint = crc32(fingerprint, line.as_bytes());
+            count += 1;
+        }
+        let mut w = Self { buf, len: 0 };
+        w.put(&MAGIC)?;
+        w.put(&[FORMAT_VERSION, 0])?;
+        w.put(&fingerprint.to_le_bytes())?;
+        let start = w.len;
+        w.put(&[KIND_TABLE])?;
+        w.varint(count)?;
+        for line in lines {
+            w.varint(line.len() as u64)?;
+            w.put(line.as_bytes())?;
+        }
+        w.crc16_from(start)?;
+        Ok(w)
+    }
+
+    /// A structured parameter's record: `index` in the table, `instance` (0 when shared), the
+    /// default if it differs from the type's, the value if it differs from the default.
+    pub fn structured(
+        &mut self,
+        index: u32,
+        instance: u16,
+        default: Option<&[u8]>,
+        value: Option<&[u8]>,
+    ) -> Result<(), WriteError> {
+        let start = self.len;
+        self.put(&[KIND_STRUCTURED | flags(default, value)])?;
+        self.varint(index.into())?;
+        self.varint(instance.into())?;
+        for payload in [default, value].into_iter().flatten() {
+            self.varint(payload.len() as u64)?;
+            self.put(payload)?;
+        }
+        self.crc16_from(start)
+    }
+
+    /// A classic parameter's record (values are the 4 bytes of an int32 or float32).
+    pub fn classic(
+        &mut self,
+        name: &[u8],
+        default: Option<&[u8]>,
+        value: Option<&[u8]>,
+    ) -> Result<(), WriteError> {
+        if name.is_empty() || name.len() > CLASSIC_NAME_MAX {
+            return Err(WriteError::ClassicName);
+        }
+        let start = self.len;
+        self.put(&[KIND_CLASSIC | flags(default, value), name.len() as u8])?;
+        self.put(name)?;
+        for payload in [default, value].into_iter().flatten() {
+            self.put(payload)?;
+        }
+        self.crc16_from(start)
+    }
+
+    /// A record read from another file ([`Record::raw`]), written back as it was.
+    pub fn raw(&mut self, record: &[u8]) -> Result<(), WriteError> {
+        let start = self.len;
+        self.put(record)?;
+        self.crc16_from(start)
+    }
+
+    /// Writes the trailer; returns the file's length.
+    pub fn finish(mut self) -> Result<usize, WriteError> {
+        let crc = crc32(0, &self.buf[..self.len]);
+        self.put(&crc.to_le_bytes())?;
+        Ok(self.len)
+    }
+
+    fn put(&mut self, bytes: &[u8]) -> Result<(), WriteError> {
+        let end = self.len + bytes.len();
+        let Some(to) = self.buf.get_mut(self.len..end) else {
+            return Err(WriteError::BufferFull { needed: end });
+        };
+        to.copy_from_slice(bytes);
+        self.len = end;
+        Ok(())
+    }
+
+    fn varint(&mut self, mut n: u64) -> Result<(), WriteError> {
+        loop {
+            let byte = (n & 0x7F) as u8;
+            n >>= 7;
+            if n == 0 {
+                return self.put(&[byte]);
+            }
+            self.put(&[byte | 0x80])?;
+        }
+    }
+
+    fn crc16_from(&mut self, start: usize) -> Result<(), WriteError> {
+        let crc = crc16(CRC16_SEED, &self.buf[start..self.len]);
+        self.put(&crc.to_le_bytes())
+    }
+}
+
+fn flags(default: Option<&[u8]>, value: Option<&[u8]>) -> u8 {
+    (if default.is_some() { HAS_DEFAULT } else { 0 })
+        | (if value.is_some() { HAS_VALUE } else { 0 })
+}
+
+// -- a store's file -----------------------------------------------------------------------------
+
+/// How a store's parameter is named in its file.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FileName<'n> {
+    /// A structured parameter: its table line, `NAME=TYPE.MAJOR` (`INA238=px.Ina238.1`).
+    Structured(&'n str),
+    /// A classic parameter: its name (`BAT1_CAPACITY`); its values are 4 bytes.
+    Classic(&'n str),
+}
+
+/// Writes `store`'s content: for each parameter in `order` (indices into the store and into
+/// `names`), a record per instance (a shared or classic parameter only when it differs from
+/// its defaults); then `foreign`, records kept from a file that this store could not place.
+/// Returns the file's length in `buf`.
+pub fn write_store<'f, D, S, B>(
+    store: &Store<D, S, B>,
+    names: &[FileName<'_>],
+    order: &[u32],
+    foreign: impl IntoIterator<Item = &'f [u8]>,
+    buf: &mut [u8],
+) -> Result<usize, SaveError>
+where
+    D: AsRef<[ParamDef]>,
+    S: AsRef<[Slot]> + AsMut<[Slot]>,
+    B: AsRef<[u8]> + AsMut<[u8]>,
+{
+    for &param in order {
+        names
+            .get(param as usize)
+            .ok_or(SaveError::NoName { param })?;
+        store.def(param).map_err(|_| SaveError::NoName { param })?;
+    }
+    // The table: the structured parameters that have records, in `order`.
+    let has_records = |param: u32| match names[param as usize] {
+        FileName::Classic(_) => false,
+        FileName::Structured(_) => {
+            let shared = store.def(param).map(|d| d.shared).unwrap_or(false);
+            let mut instances = store.instances(param).into_iter().flatten();
+            match shared {
+                false => instances.next().is_some(),
+                true => instances.any(|i| differs(store, param, i) != (None, None)),
+            }
+        }
+    };
+    let table = order
+        .iter()
+        .filter(|&&p| has_records(p))
+        .map(|&p| match names[p as usize] {
+            FileName::Structured(line) | FileName::Classic(line) => line,
+        });
+    let mut w = Writer::new(buf, table)?;
+    let mut index = 0;
+    for &param in order {
+        let shared = store.def(param).map(|d| d.shared).unwrap_or(false);
+        let instances = store.instances(param).into_iter().flatten();
+        match names[param as usize] {
+            FileName::Classic(name) => {
+                for instance in instances {
+                    let (default, value) = differs(store, param, instance);
+                    if default.is_some() || value.is_some() {
+                        w.classic(name.as_bytes(), default, value)?;
+                    }
+                }
+            }
+            FileName::Structured(_) => {
+                if !has_records(param) {
+                    continue;
+                }
+                for instance in instances {
+                    let (default, value) = differs(store, param, instance);
+                    if shared && default.is_none() && value.is_none() {
+                        continue;
+                    }
+                    w.structured(index, instance, default, value)?;
+                }
+                index += 1;
+            }
+        }
+    }
+    for record in foreign {
+        w.raw(record)?;
+    }
+    Ok(w.finish()?)
+}
+
+/// An instance's default if it differs from its type's, and its value if it differs from its
+/// default.
+fn differs<D, S, B>(
+    store: &Store<D, S, B>,
+    param: u32,
+    instance: u16,
+) -> (Option<&[u8]>, Option<&[u8]>)
+where
+    D: AsRef<[ParamDef]>,
+    S: AsRef<[Slot]> + AsMut<[Slot]>,
+    B: AsRef<[u8]> + AsMut<[u8]>,
+{
+    let (Ok(value), Ok(default), Ok(type_default)) = (
+        store.get(param, instance, Which::Value),
+        store.get(param, instance, Which::Default),
+        store.type_default(param),
+    ) else {
+        return (None, None);
+    };
+    (
+        (default != type_default).then_some(default),
+        (value != default).then_some(value),
+    )
+}
+
+/// Why a store could not be saved.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SaveError {
+    /// The file does not fit the buffer, or a name cannot be written.
+    Write(WriteError),
+    /// `order` names a parameter the store or `names` does not have.
+    NoName {
+        /// Its index.
+        param: u32,
+    },
+}
+
+impl From<WriteError> for SaveError {
+    fn from(e: WriteError) -> Self {
+        SaveError::Write(e)
+    }
+}
+
+impl fmt::Display for SaveError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            SaveError::Write(e) => e.fmt(f),
+            SaveError::NoName { param } => write!(f, "no parameter #{param} to save"),
+        }
+    }
+}
+
+// -- applying -----------------------------------------------------------------------------------
+
+/// Why a checked file could not be applied to a store (nothing of it was).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ApplyError {
+    /// A format 1 file: only the host reads those (it knows the older parameter lists).
+    Format1,
+    /// A record of a structured parameter the store does not have under that table line
+    /// (another type, another major version, or no such parameter).
+    UnknownParameter {
+        /// The record's offset in the file.
+        offset: usize,
+    },
+    /// The store refused a record (an instance out of range, a value that does not decode,
+    /// or a value stored by another minor version, which only the host translates).
+    Refused {
+        /// The record's offset in the file.
+        offset: usize,
+        /// What the store said.
+        error: StoreError,
+    },
+}
+
+impl ApplyError {
+    /// The offset of the record it is about (0 for [`ApplyError::Format1`]).
+    pub fn offset(&self) -> usize {
+        match *self {
+            ApplyError::Format1 => 0,
+            ApplyError::UnknownParameter { offset } | ApplyError::Refused { offset, .. } => offset,
+        }
+    }
+}
+
+/// What [`apply`] did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Applied {
+    /// Records applied.
+    pub records: usize,
+    /// Classic records of parameters the store does not have (left out).
+    pub foreign: usize,
+}
+
+/// Applies a checked file to `store` (which the caller has reset, for a load): every record is
+/// checked against the store first, then all of them are written, and the store is marked
+/// saved. On an error nothing was written.
+pub fn apply<D, S, B>(
+    store: &mut Store<D, S, B>,
+    layout: &Layout<'_>,
+    names: &[FileName<'_>],
+    file: &Checked<'_>,
+) -> Result<Applied, ApplyError>
+where
+    D: AsRef<[ParamDef]>,
+    S: AsRef<[Slot]> + AsMut<[Slot]>,
+    B: AsRef<[u8]> + AsMut<[u8]>,
+{
+    if !file.has_table() {
+        return Err(ApplyError::Format1);
+    }
+    let mut applied = Applied::default();
+    for pass in [Pass::Check, Pass::Write] {
+        applied = Applied::default();
+        for record in file.records() {
+            let Some(param) = place(names, file, &record) else {
+                match record.key {
+                    Key::Classic(_) => applied.foreign += 1,
+                    Key::Structured(_) => {
+                        return Err(ApplyError::UnknownParameter {
+                            offset: record.offset,
+                        })
+                    }
+                }
+                continue;
+            };
+            put(store, layout, param, &record, pass).map_err(|error| ApplyError::Refused {
+                offset: record.offset,
+                error,
+            })?;
+            applied.records += 1;
+        }
+    }
+    store.mark_saved();
+    Ok(applied)
+}
+
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Pass {
+    Check,
+    Write,
+}
+
+/// The store's parameter a record is for.
+fn place(names: &[FileName<'_>], file: &Checked<'_>, record: &Record<'_>) -> Option<u32> {
+    let wanted = match record.key {
+        Key::Classic(name) => FileName::Classic(core::str::from_utf8(name).ok()?),
+        Key::Structured(index) => {
+            FileName::Structured(file.table().nth(usize::try_from(index).ok()?)?)
+        }
+    };
+    names.iter().position(|n| *n == wanted).map(|p| p as u32)
+}
+
+fn put<D, S, B>(
+    store: &mut Store<D, S, B>,
+    layout: &Layout<'_>,
+    param: u32,
+    record: &Record<'_>,
+    pass: Pass,
+) -> Result<(), StoreError>
+where
+    D: AsRef<[ParamDef]>,
+    S: AsRef<[Slot]> + AsMut<[Slot]>,
+    B: AsRef<[u8]> + AsMut<[u8]>,
+{
+    let def = store.def(param)?;
+    let instance = record.instance;
+    if pass == Pass::Check {
+        if def.shared && instance != 0 {
+            return Err(StoreError::NotPresent { instance });
+        }
+        if instance >= def.instances {
+            return Err(StoreError::InstanceOutOfRange {
+                instance: instance.into(),
+                max_instances: def.instances,
+            });
+        }
+        for payload in [record.default, record.value].into_iter().flatten() {
+            store.check_value(layout, param, payload)?;
+        }
+        return Ok(());
+    }
+    if !def.shared && !store.slot(param, instance)?.present() {
+        store.add(param, Some(instance))?;
+    }
+    if let Some(default) = record.default {
+        store.set_encoded(layout, param, instance, Which::Default, default)?;
+    }
+    if let Some(value) = record.value {
+        store.set_encoded(layout, param, instance, Which::Value, value)?;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+    use std::vec::Vec;
+
+    #[test]
+    fn an_empty_file_is_eighteen_bytes_as_documented() {
+        let mut buf = [0u8; 64];
+        let w = Writer::new(&mut buf, [""; 0]).unwrap();
+        let len = w.finish().unwrap();
+        // Header (the fingerprint, CRC-32 of no lines, is 0), the empty table and its CRC-16,
+        // the trailer.
+        assert_eq!(len, 18);
+        assert_eq!(&buf[..10], b"PX4P\x02\x00\x00\x00\x00\x00");
+        assert_eq!(&buf[10..12], &[KIND_TABLE, 0]);
+        assert_eq!(
+            u16::from_le_bytes([buf[12], buf[13]]),
+            reference_crc16(&[KIND_TABLE, 0])
+        );
+        let checked = check(&buf[..len]).unwrap();
+        assert_eq!((checked.version, checked.fingerprint), (2, 0));
+        assert_eq!(checked.records().count(), 0);
+    }
+
+    /// CRC-16-CCITT-FALSE bit by bit, as the catalogue defines it.
+    fn reference_crc16(data: &[u8]) -> u16 {
+        let mut crc = 0xFFFFu16;
+        for &b in data {
+            crc ^= u16::from(b) << 8;
+            for _ in 0..8 {
+                crc = if crc & 0x8000 != 0 {
+                    (crc << 1) ^ 0x1021
+                } else {
+                    crc << 1
+                };
+            }
+        }
+        crc
+    }
+
+    fn sample(buf: &mut [u8]) -> usize {
+        let mut w = Writer::new(buf, ["INA238=px.Ina238.1", "AK09916=px.Ak09916.1"]).unwrap();
+        w.structured(0, 1, Some(&[0x10, 0x22]), None).unwrap();
+        w.structured(1, 0, None, Some(&[7])).unwrap();
+        w.classic(b"BAT1_CAPACITY", None, Some(&[0, 0, 0x7A, 0x44]))
+            .unwrap();
+        w.finish().unwrap()
+    }
+
+    #[test]
+    fn a_written_file_reads_back() {
+        let mut buf = [0u8; 256];
+        let len = sample(&mut buf);
+        let checked = check(&buf[..len]).unwrap();
+        let lines: Vec<&str> = checked.table().collect();
+        assert_eq!(lines, ["INA238=px.Ina238.1", "AK09916=px.Ak09916.1"]);
+        let expected_fp = crc32(0, b"INA238=px.Ina238.1\nAK09916=px.Ak09916.1");
+        assert_eq!(checked.fingerprint, expected_fp);
+        let records: Vec<Record<'_>> = checked.records().collect();
+        assert_eq!(records.len(), 3);
+        assert_eq!(records[0].key, Key::Structured(0));
+        assert_eq!(
+            (records[0].instance, records[0].default),
+            (1, Some(&[0x10, 0x22][..]))
+        );
+        assert_eq!(records[0].value, None);
+        assert_eq!(records[1].value, Some(&[7][..]));
+        assert_eq!(records[2].key, Key::Classic(b"BAT1_CAPACITY"));
+        assert_eq!(records[2].raw[0], KIND_CLASSIC | HAS_VALUE);
+    }
+
+    #[test]
+    fn every_flipped_bit_is_caught() {
+        let mut buf = [0u8; 256];
+        let len = sample(&mut buf);
+        for bit in 0..len * 8 {
+            let mut copy = buf;
+            copy[bit / 8] ^= 1 << (bit % 8);
+            assert!(check(&copy[..len]).is_err(), "bit {bit}");
+        }
+        for cut in 0..len {
+            assert!(check(&buf[..cut]).is_err(), "cut at {cut}");
+        }
+    }
+
+    #[test]
+    fn errors_name_what_and_where() {
+        let err = check(b"PX4Q\x02\x00\x00\x00\x00\x00").unwrap_err();
+        assert_eq!((err.kind, err.offset), (FileErrorKind::NotAStoreFile, 0));
+        assert_eq!(
+            std::format!("{err}"),
+            "not a px4params store file (no PX4P header)"
+        );
+        let err = check(b"PX4P\x07\x00\x00\x00\x00\x00\x00\x00\x00\x00").unwrap_err();
+        assert_eq!(
+            std::format!("{err}"),
+            "store file format version 7 (this px4params reads 1 and 2)"
+        );
+        let entry = FileError {
+            kind: FileErrorKind::TableEntry(b"it's\n"),
+            offset: 10,
+        };
+        assert_eq!(
+            std::format!("{entry}"),
+            "record is malformed: parameter table entry \"it's\\n\" is not NAME=TYPE.MAJOR"
+        );
+    }
+
+    #[test]
+    fn a_full_buffer_is_an_error_not_a_panic() {
+        let mut big = [0u8; 256];
+        let len = sample(&mut big);
+        for size in 0..len {
+            let mut buf = std::vec![0u8; size];
+            let result = (|| {
+                let mut w = Writer::new(&mut buf, ["INA238=px.Ina238.1", "AK09916=px.Ak09916.1"])?;
+                w.structured(0, 1, Some(&[0x10, 0x22]), None)?;
+                w.structured(1, 0, None, Some(&[7]))?;
+                w.classic(b"BAT1_CAPACITY", None, Some(&[0, 0, 0x7A, 0x44]))?;
+                w.finish()
+            })();
+            assert!(
+                matches!(result, Err(WriteError::BufferFull { .. })),
+                "size {size}"
+            );
+        }
+    }
+
+    proptest! {
+        #[test]
+        fn records_round_trip(
+            records in proptest::collection::vec(
+                (0u32..5, any::<u16>(),
+                 proptest::option::of(proptest::collection::vec(any::<u8>(), 0..40)),
+                 proptest::option::of(proptest::collection::vec(any::<u8>(), 0..300))),
+                0..12),
+        ) {
+            let mut buf = std::vec![0u8; 8192];
+            let table = ["A=x.A.1", "B=x.B.1", "C=x.C.2", "D=y.D.1", "E=y.E.9"];
+            let mut w = Writer::new(&mut buf, table).unwrap();
+            for (index, instance, default, value) in &records {
+                w.structured(*index, *instance, default.as_deref(), value.as_deref()).unwrap();
+            }
+            let len = w.finish().unwrap();
+            let checked = check(&buf[..len]).unwrap();
+            let read: Vec<Record<'_>> = checked.records().collect();
+            prop_assert_eq!(read.len(), records.len());
+            for (r, (index, instance, default, value)) in read.iter().zip(&records) {
+                prop_assert_eq!(r.key, Key::Structured(u64::from(*index)));
+                prop_assert_eq!(r.instance, *instance);
+                prop_assert_eq!(r.default, default.as_deref());
+                prop_assert_eq!(r.value, value.as_deref());
+            }
+        }
+
+        #[test]
+        fn garbage_never_panics(data in proptest::collection::vec(any::<u8>(), 0..200)) {
+            let _ = check(&data).map(|c| (c.table().count(), c.records().count()));
+        }
+    }
+}
