@@ -28,13 +28,16 @@ fi
 # opencv, matplotlib: hundreds of MB it does not need to list and set parameters).
 .venv/bin/python -m pip install --quiet --disable-pip-version-check --no-deps "mavproxy==1.8.75"
 
-# Chromium for the page's browser tests (Debian's package; Playwright cannot download browsers
-# here). Installed with apt where this runs as root on Debian; elsewhere those tests skip.
-if ! command -v chromium >/dev/null 2>&1 && command -v apt-get >/dev/null 2>&1 \
-        && [ "$(id -u)" = 0 ]; then
-    echo "== installing Debian's chromium for the browser tests (apt-get, about a minute)"
-    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null \
-        || echo "(chromium could not be installed: the browser tests will skip)"
+# Debian packages the tests use: Chromium for the page's browser tests (Playwright cannot
+# download browsers here) and cbindgen, which checks the C ABI's committed header. Installed
+# with apt where this runs as root on Debian; elsewhere those tests skip.
+missing=()
+command -v chromium >/dev/null 2>&1 || missing+=(chromium)
+command -v cbindgen >/dev/null 2>&1 || missing+=(cbindgen)
+if [ ${#missing[@]} -gt 0 ] && command -v apt-get >/dev/null 2>&1 && [ "$(id -u)" = 0 ]; then
+    echo "== installing Debian's ${missing[*]} for the tests (apt-get, about a minute)"
+    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${missing[@]}" >/dev/null \
+        || echo "(${missing[*]} could not be installed: the tests that need them will skip)"
 fi
 
 echo "== ready: 'source .venv/bin/activate' puts px4params on PATH (or run .venv/bin/px4params)"

@@ -29,7 +29,9 @@ PARAMS = [s.name for s in parameter_specs(BUNDLED)]
 TESTED_PARAMS = [*PARAMS, "EVERYTHING_SH"]
 TALK = {"bus": {"i2c": {"bus_id": 1, "address": 0x45}}, "current": 200, "shunt": 0.0003}
 C_FLAGS = ["-std=c11", "-Wall", "-Wextra", "-Werror"]
-CXX_FLAGS = ["-std=c++17", "-Wall", "-Werror"]
+# The header's C++ part includes the C ABI's px4params.hpp.
+FFI_INCLUDE = str(Path(__file__).resolve().parent.parent / "crates" / "px4params-ffi" / "include")
+CXX_FLAGS = ["-std=c++17", "-Wall", "-Werror", f"-I{FFI_INCLUDE}"]
 
 
 def slow(examples: int) -> settings:

@@ -127,8 +127,15 @@ def test_extra_dsdl_folders(capsys: pytest.CaptureFixture[str], tmp_path: Path) 
 @pytest.mark.parametrize(
     ("argv", "message"),
     [
-        ([], "give --json FILE, --header FILE or both"),
-        (["--json", "-", "--header", "-"], "--json and --header cannot both write to stdout (-)"),
+        ([], "give --json FILE, --header FILE, --firmware FILE.c, or several"),
+        (
+            ["--json", "-", "--header", "-"],
+            "only one of --json, --header and --firmware can write to stdout (-)",
+        ),
+        (
+            ["--header", "-", "--firmware", "-"],
+            "only one of --json, --header and --firmware can write to stdout (-)",
+        ),
         (
             ["--header", "x.h", "--classic", "p.json"],
             "--classic goes with --json (the header has no classic parameters)",

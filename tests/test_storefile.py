@@ -42,6 +42,7 @@ def _crc16(data: bytes) -> int:
     """CRC-16-CCITT-FALSE: ``binascii.crc_hqx`` (XMODEM's polynomial) from 0xFFFF."""
     return binascii.crc_hqx(data, 0xFFFF)
 
+
 CLASSIC = [ClassicParam("SYS_AUTOSTART", "Int32", 0), ClassicParam("BAT1_CAPACITY", "Float", -1.0)]
 
 

@@ -632,13 +632,26 @@ pub enum FileName<'n> {
     Classic(&'n str),
 }
 
+/// The names a store's parameters have in its file, by parameter index: a slice of
+/// [`FileName`]s on a host, generated tables in firmware.
+pub trait FileNames {
+    /// Parameter `param`'s name (`None` past the last parameter).
+    fn name(&self, param: u32) -> Option<FileName<'_>>;
+}
+
+impl FileNames for [FileName<'_>] {
+    fn name(&self, param: u32) -> Option<FileName<'_>> {
+        self.get(param as usize).copied()
+    }
+}
+
 /// Writes `store`'s content: for each parameter in `order` (indices into the store and into
 /// `names`), a record per instance (a shared or classic parameter only when it differs from
 /// its defaults); then `foreign`, records kept from a file that this store could not place.
 /// Returns the file's length in `buf`.
 pub fn write_store<'f, D, S, B>(
     store: &Store<D, S, B>,
-    names: &[FileName<'_>],
+    names: &(impl FileNames + ?Sized),
     order: &[u32],
     foreign: impl IntoIterator<Item = &'f [u8]>,
     buf: &mut [u8],
@@ -649,15 +662,13 @@ where
     B: AsRef<[u8]> + AsMut<[u8]>,
 {
     for &param in order {
-        names
-            .get(param as usize)
-            .ok_or(SaveError::NoName { param })?;
+        names.name(param).ok_or(SaveError::NoName { param })?;
         store.def(param).map_err(|_| SaveError::NoName { param })?;
     }
     // The table: the structured parameters that have records, in `order`.
-    let has_records = |param: u32| match names[param as usize] {
-        FileName::Classic(_) => false,
-        FileName::Structured(_) => {
+    let has_records = |param: u32| match names.name(param) {
+        None | Some(FileName::Classic(_)) => false,
+        Some(FileName::Structured(_)) => {
             let shared = store.def(param).map(|d| d.shared).unwrap_or(false);
             let mut instances = store.instances(param).into_iter().flatten();
             match shared {
@@ -669,16 +680,18 @@ where
     let table = order
         .iter()
         .filter(|&&p| has_records(p))
-        .map(|&p| match names[p as usize] {
-            FileName::Structured(line) | FileName::Classic(line) => line,
+        .map(|&p| match names.name(p) {
+            Some(FileName::Structured(line) | FileName::Classic(line)) => line,
+            None => "",
         });
     let mut w = Writer::new(buf, table)?;
     let mut index = 0;
     for &param in order {
         let shared = store.def(param).map(|d| d.shared).unwrap_or(false);
         let instances = store.instances(param).into_iter().flatten();
-        match names[param as usize] {
-            FileName::Classic(name) => {
+        match names.name(param) {
+            None => {}
+            Some(FileName::Classic(name)) => {
                 for instance in instances {
                     let (default, value) = differs(store, param, instance);
                     if default.is_some() || value.is_some() {
@@ -686,7 +699,7 @@ where
                     }
                 }
             }
-            FileName::Structured(_) => {
+            Some(FileName::Structured(_)) => {
                 if !has_records(param) {
                     continue;
                 }
@@ -801,14 +814,15 @@ pub struct Applied {
     pub foreign: usize,
 }
 
-/// Applies a checked file to `store` (which the caller has reset, for a load): every record is
-/// checked against the store first, then all of them are written, and the store is marked
-/// saved. On an error nothing was written.
+/// Applies a checked file to `store`: every record is checked against the store first; then,
+/// with `clear`, the store is cleared ([`Store::clear`]: a load rather than a merge), all
+/// records are written, and the store is marked saved. On an error nothing was written.
 pub fn apply<D, S, B>(
     store: &mut Store<D, S, B>,
     layout: &Layout<'_>,
-    names: &[FileName<'_>],
+    names: &(impl FileNames + ?Sized),
     file: &Checked<'_>,
+    clear: bool,
 ) -> Result<Applied, ApplyError>
 where
     D: AsRef<[ParamDef]>,
@@ -821,6 +835,9 @@ where
     let mut applied = Applied::default();
     for pass in [Pass::Check, Pass::Write] {
         applied = Applied::default();
+        if pass == Pass::Write && clear {
+            store.clear();
+        }
         for record in file.records() {
             let Some(param) = place(names, file, &record) else {
                 match record.key {
@@ -851,14 +868,21 @@ enum Pass {
 }
 
 /// The store's parameter a record is for.
-fn place(names: &[FileName<'_>], file: &Checked<'_>, record: &Record<'_>) -> Option<u32> {
+fn place(
+    names: &(impl FileNames + ?Sized),
+    file: &Checked<'_>,
+    record: &Record<'_>,
+) -> Option<u32> {
     let wanted = match record.key {
         Key::Classic(name) => FileName::Classic(core::str::from_utf8(name).ok()?),
         Key::Structured(index) => {
             FileName::Structured(file.table().nth(usize::try_from(index).ok()?)?)
         }
     };
-    names.iter().position(|n| *n == wanted).map(|p| p as u32)
+    (0..)
+        .map_while(|p| Some((p, names.name(p)?)))
+        .find(|(_, n)| *n == wanted)
+        .map(|(p, _)| p)
 }
 
 fn put<D, S, B>(

@@ -673,6 +673,26 @@ where
         Ok(())
     }
 
+    /// Back to the state [`Store::new`] and the type defaults give: every instance absent,
+    /// shared parameters at their type defaults, all marked unsaved.
+    pub fn clear(&mut self) {
+        for param in 0..self.defs.as_ref().len() {
+            let def = self.defs.as_ref()[param];
+            let first = def.first_slot as usize + 1;
+            if def.shared {
+                self.fill_instance(&def, 0);
+                self.slots.as_mut()[first].flags = PRESENT | UNSAVED;
+            } else {
+                for slot in &mut self.slots.as_mut()[first..first + def.instances as usize] {
+                    *slot = Slot {
+                        flags: UNSAVED,
+                        ..Slot::default()
+                    };
+                }
+            }
+        }
+    }
+
     /// Checks `data` as [`Store::set_encoded`] would, without writing it.
     pub fn check_value(&self, layout: &Layout<'_>, param: u32, data: &[u8]) -> Result<()> {
         check_encoded(layout, self.def(param)?.root, data)

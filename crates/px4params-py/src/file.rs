@@ -83,7 +83,7 @@ pub(crate) fn store_file_bytes(
     let mut buf = vec![0u8; 4096];
     loop {
         let foreign = foreign.iter().map(Vec::as_slice);
-        match file::write_store(store, &names, order, foreign, &mut buf) {
+        match file::write_store(store, names.as_slice(), order, foreign, &mut buf) {
             Ok(len) => {
                 buf.truncate(len);
                 return Ok(buf);

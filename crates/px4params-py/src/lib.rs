@@ -5,6 +5,7 @@
 mod compile;
 mod file;
 mod store;
+mod tables;
 mod transfer;
 mod values;
 

@@ -44,8 +44,16 @@ fn which(default: bool) -> Which {
 }
 
 impl Store {
-    fn layout(&self) -> Layout<'_> {
+    pub(crate) fn layout(&self) -> Layout<'_> {
         self.compiled.layout.as_layout()
+    }
+
+    pub(crate) fn core(&self) -> &CoreStore {
+        &self.inner
+    }
+
+    pub(crate) fn capacity_of(&self) -> Capacity {
+        self.capacity
     }
 
     /// Leaf `target` of an instance's value (or default), located and read.
@@ -194,6 +202,11 @@ impl Store {
         }
         self.inner = other.inner.clone();
         Ok(())
+    }
+
+    /// The layout and the plan as tuples, for C tables (`px4params metadata --firmware`).
+    fn tables<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
+        crate::tables::tables(py, self)
     }
 
     /// The store's file: `names` per parameter index, `(table line, False)` for a structured

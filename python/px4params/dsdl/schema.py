@@ -188,7 +188,12 @@ class Schema(Mapping[str, DataType]):
         it uses (a command on one message does not compile two hundred)."""
         if self._all is not None:
             return self._all.get(key)
-        closure, pending = {}, [key]
+        return _native.Schema(self._closure([key])).get(key)
+
+    def _closure(self, keys: list[str]) -> dict[str, Any]:
+        """The definitions of ``keys`` and of every type they use."""
+        closure: dict[str, Any] = {}
+        pending = list(keys)
         while pending:
             name = pending.pop()
             if name not in closure:
@@ -196,7 +201,7 @@ class Schema(Mapping[str, DataType]):
                 closure[name] = definition
                 refs = self._refs.get(name)
                 pending.extend(refs if refs is not None else type_refs(definition))
-        return _native.Schema(closure).get(key)
+        return closure
 
     def resolve(self, name: str) -> str:
         """The key of ``name`` (a key, or a versionless name meaning its newest version)."""

@@ -419,8 +419,43 @@ class _Generator:
         for key in keys:
             out += ["", *self.encoder(key), "", *self.decoder(key)]
         out += ["", *self.parameters(specs)]
-        out += ["", "#ifdef __cplusplus", "}", "#endif", "", f"#endif /* {guard} */", ""]
+        out += ["", "#ifdef __cplusplus", "}", "#endif", "", *self.cxx(specs)]
+        out += ["", f"#endif /* {guard} */", ""]
         return "\n".join(out)
+
+    def cxx(self, specs: Sequence[ParamSpec]) -> list[str]:
+        """For C++ (unless PX4PARAMS_NO_CXX): each type's codec and each parameter's typed id
+        for the API of ``px4params.hpp`` (``load_and_decode_param<px_Ina238>(px4::params::
+        INA238, 0, data)``, ``param_find_instances(params::INA238)``)."""
+        out = [
+            "#if defined(__cplusplus) && !defined(PX4PARAMS_NO_CXX)",
+            '#include "px4params.hpp"',
+            "",
+            "namespace px4 {",
+            "namespace params {",
+        ]
+        for key in dict.fromkeys(s.data_type.key for s in specs):
+            name = self.cname(key)
+            out += [
+                "",
+                "template <>",
+                f"struct codec<struct {name}> {{",
+                f"    static constexpr size_t max_size = {self.macro(name)}_MAX_SIZE;",
+                f"    static int encode(const struct {name} &value, uint8_t *buffer) {{",
+                f"        return {name}_encode(&value, buffer, false);",
+                "    }",
+                "    static int decode(const uint8_t *buffer, size_t size,",
+                f"                      struct {name} &value) {{",
+                f"        return {name}_decode(buffer, size, &value, false);",
+                "    }",
+                "};",
+            ]
+        out.append("")
+        for s in specs:
+            name, macro = self.cname(s.data_type.key), self.macro(s.name)
+            out.append(f"constexpr param<struct {name}> {macro}{{PX4_PARAM_{macro}}};")
+        out += ["", "}  // namespace params", "}  // namespace px4", "#endif"]
+        return out
 
     def type_decl(self, key: str) -> list[str]:
         definition = self.types[key]

@@ -195,6 +195,11 @@ class Store:
             self._destructured = FlatMap(self)
         return self._destructured
 
+    def _type_defaults(self) -> list[bytes]:
+        """Each structured parameter's type default (encoded without tail array
+        optimization), in parameter order."""
+        return [self._type_default(p) for p in self._order if p.classic is None]
+
     def _type_default(self, p: _Param) -> bytes:
         if p.classic is not None:
             return _classic_bytes(p.classic, p.classic.default)
