@@ -1,0 +1,66 @@
+"""Instructions per codec call, counted by valgrind's callgrind (stable where this machine's
+times are not): runs ``benches/instructions.rs`` (``cargo bench --no-run`` builds it with the
+bench profile, as criterion's figures are) N times and 0 times, and divides the difference.
+
+    python benches/instructions.py [--n 2000] [OP ...]
+
+Skips with a message when valgrind is not installed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+OPS = ["battery/encode", "battery/decode", "ina238/encode", "ina238/decode"]
+
+
+def build() -> Path:
+    """The instructions bench binary, built as `cargo bench` builds it."""
+    out = subprocess.run(
+        ["cargo", "bench", "-p", "px4params-core", "--features", "alloc", "--bench",
+         "instructions", "--no-run", "--message-format", "json"],
+        cwd=ROOT, capture_output=True, text=True, check=True,
+    ).stdout  # fmt: skip
+    for line in out.splitlines():
+        message = json.loads(line)
+        artifact = message.get("reason") == "compiler-artifact" and message.get("executable")
+        if artifact and message["target"]["name"] == "instructions":
+            return Path(message["executable"])
+    raise SystemExit("instructions: cargo did not report the bench binary")
+
+
+def count(binary: Path, op: str, n: int) -> int:
+    proc = subprocess.run(
+        ["valgrind", "--tool=callgrind", "--callgrind-out-file=/dev/null", str(binary), op, str(n)],
+        capture_output=True, text=True, check=True,
+    )  # fmt: skip
+    match = re.search(r"Collected : (\d+)", proc.stderr)
+    assert match, proc.stderr
+    return int(match.group(1))
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--n", type=int, default=2000)
+    parser.add_argument("ops", nargs="*", default=OPS, metavar="OP")
+    args = parser.parse_args()
+    if shutil.which("valgrind") is None:
+        print("instructions: valgrind is not installed (Debian: apt-get install valgrind)")
+        return 0
+    binary = build()
+    print(f"{'call':18} {'instructions':>12}")
+    for op in args.ops:
+        per_call = (count(binary, op, args.n) - count(binary, op, 0)) / args.n
+        print(f"{op:18} {per_call:>12.0f}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,230 @@
+"""Code size of the core as firmware links it: ``.text`` bytes of a ``no_std`` cdylib probe that
+exports only what it names, built from this workspace with ``opt-level = "s"``, fat LTO,
+``codegen-units = 1`` and ``panic = "abort"`` (issue 17's build), per feature set:
+
+- ``codec``: encode and decode from and to a flat leaf list (``LeafSource`` / ``LeafSink``);
+- ``all``: that, plus leaf get/set in encoded data, descattering, CAN frames and receive, the
+  store and its file format (the C ABI of ``crates/px4params-ffi``).
+
+Targets (issue 17): codec <= 6 KB, all <= 16 KB. For scale, libcanard's ``canard.c`` is
+5,485 bytes (gcc -Os) and dsdlc's BatteryInfo encode+decode 2,622 (same machine, x86_64).
+
+    python benches/size.py [--keep DIR] [--symbols N]
+
+``--symbols N`` lists each probe's N largest functions (``nm --size-sort``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+TARGETS = {"codec": 6 * 1024, "all": 16 * 1024}
+
+PROBE_TOML = """\
+[package]
+name = "px4params-size-probe"
+version = "0.0.0"
+edition = "2021"
+publish = false
+
+[lib]
+crate-type = ["cdylib"]
+path = "lib.rs"
+
+[features]
+all = ["dep:px4params-ffi"]
+
+[dependencies]
+px4params-core = {{ path = "{core}" }}
+px4params-ffi = {{ path = "{ffi}", features = ["firmware"], optional = true }}
+
+[profile.release]
+opt-level = "s"
+lto = "fat"
+codegen-units = 1
+panic = "abort"
+
+[workspace]
+"""
+
+# Every export takes its arguments from the caller, so that nothing is constant-folded away.
+PROBE_RS = """\
+#![no_std]
+use px4params_core::codec::{decode, encode, DecodeOptions, EncodeOptions};
+use px4params_core::layout::Layout;
+use px4params_core::value::{LeafSink, LeafSource};
+use px4params_core::Scalar;
+
+#[cfg(not(feature = "all"))]
+#[panic_handler]
+fn panic(_: &core::panic::PanicInfo<'_>) -> ! {
+    loop {}
+}
+
+#[no_mangle]
+pub extern "C" fn probe_encode(
+    layout: &Layout<'static>, root: u32, leaves: *const Scalar, n: usize, out: *mut u8,
+    cap: usize, tao: bool,
+) -> isize {
+    let leaves = unsafe { core::slice::from_raw_parts(leaves, n) };
+    let out = unsafe { core::slice::from_raw_parts_mut(out, cap) };
+    let options = EncodeOptions { tao, saturate: false, keep_versions: false };
+    match encode(layout, root, &mut LeafSource::new(leaves), out, options) {
+        Ok(n) => n as isize,
+        Err(_) => -1,
+    }
+}
+
+#[no_mangle]
+pub extern "C" fn probe_decode(
+    layout: &Layout<'static>, root: u32, data: *const u8, len: usize, leaves: *mut Scalar,
+    n: usize, tao: bool,
+) -> isize {
+    let data = unsafe { core::slice::from_raw_parts(data, len) };
+    let leaves = unsafe { core::slice::from_raw_parts_mut(leaves, n) };
+    let mut sink = LeafSink::new(leaves);
+    match decode(layout, root, data, &mut sink, DecodeOptions { tao, allow_trailing: false }) {
+        Ok(bits) => bits as isize,
+        Err(_) => -1,
+    }
+}
+
+#[cfg(feature = "all")]
+pub use px4params_ffi::*;
+
+#[cfg(feature = "all")]
+mod more {
+    use super::*;
+    use px4params_core::leaf::{get_leaf, set_leaf, Target};
+    use px4params_core::scatter::Scattered;
+    use px4params_core::transfer::{frames, receive};
+
+    #[no_mangle]
+    pub extern "C" fn probe_get_leaf(
+        layout: &Layout<'static>, root: u32, data: *const u8, len: usize, k: usize,
+        out: &mut Scalar,
+    ) -> isize {
+        let data = unsafe { core::slice::from_raw_parts(data, len) };
+        match get_leaf(layout, root, data, Target::Index(k), false) {
+            Ok((_, v)) => { *out = v; 0 }
+            Err(_) => -1,
+        }
+    }
+
+    #[no_mangle]
+    pub extern "C" fn probe_set_leaf(
+        layout: &Layout<'static>, root: u32, data: *const u8, len: usize, k: usize, v: Scalar,
+        out: *mut u8, cap: usize,
+    ) -> isize {
+        let data = unsafe { core::slice::from_raw_parts(data, len) };
+        let out = unsafe { core::slice::from_raw_parts_mut(out, cap) };
+        let options = EncodeOptions { tao: false, saturate: false, keep_versions: false };
+        match set_leaf(layout, root, data, Target::Index(k), v, out, options) {
+            Ok(n) => n as isize,
+            Err(_) => -1,
+        }
+    }
+
+    #[no_mangle]
+    pub extern "C" fn probe_frames(
+        payload: *const u8, len: usize, seed: u16, out: *mut u8,
+    ) -> usize {
+        let payload = unsafe { core::slice::from_raw_parts(payload, len) };
+        let mut written = 0;
+        for frame in frames(payload, seed, 0, false) {
+            let bytes = frame.as_bytes();
+            let to = unsafe { out.add(written) };
+            unsafe { core::ptr::copy_nonoverlapping(bytes.as_ptr(), to, bytes.len()) };
+            written += bytes.len();
+        }
+        written
+    }
+
+    /// A transfer's frames checked and decoded where they lie (descattering).
+    #[no_mangle]
+    pub extern "C" fn probe_receive_decode(
+        layout: &Layout<'static>, root: u32, frames_in: *const &[u8], n: usize, seed: u16,
+        leaves: *mut Scalar, cap: usize,
+    ) -> isize {
+        let frames_in = unsafe { core::slice::from_raw_parts(frames_in, n) };
+        let leaves = unsafe { core::slice::from_raw_parts_mut(leaves, cap) };
+        let Ok(received) = receive(frames_in, seed) else { return -1 };
+        let stream = Scattered::new(&received.payload);
+        let mut sink = LeafSink::new(leaves);
+        let options = DecodeOptions { tao: true, allow_trailing: false };
+        match decode(layout, root, &stream, &mut sink, options) {
+            Ok(bits) => bits as isize,
+            Err(_) => -1,
+        }
+    }
+}
+"""
+
+
+def text_size(library: Path) -> int:
+    out = subprocess.run(["size", "-A", str(library)], capture_output=True, text=True, check=True)
+    match = re.search(r"^\.text\s+(\d+)", out.stdout, re.M)
+    assert match, out.stdout
+    return int(match.group(1))
+
+
+def largest(library: Path, n: int) -> list[str]:
+    out = subprocess.run(
+        ["nm", "--size-sort", "-r", "-C", "--radix=d", str(library)],
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout
+    return [line for line in out.splitlines() if " t " in line or " T " in line][:n]
+
+
+def build(probe: Path, feature: str, target: Path) -> Path:
+    command = ["cargo", "build", "--release", "-q", "--manifest-path", str(probe / "Cargo.toml")]
+    if feature == "all":
+        command += ["--features", "all"]
+    env = dict(os.environ, CARGO_TARGET_DIR=str(target / feature))
+    subprocess.run(command, check=True, env=env)
+    return target / feature / "release" / "libpx4params_size_probe.so"
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawTextHelpFormatter
+    )
+    parser.add_argument("--keep", metavar="DIR", help="build in DIR (kept; rebuilds are faster)")
+    parser.add_argument("--symbols", type=int, default=0, metavar="N")
+    args = parser.parse_args()
+    for tool in ("cargo", "size", "nm"):
+        if shutil.which(tool) is None:
+            print(f"size: {tool} is not installed", file=sys.stderr)
+            return 1
+    with tempfile.TemporaryDirectory() as tmp:
+        work = Path(args.keep) if args.keep else Path(tmp)
+        probe = work / "probe"
+        probe.mkdir(parents=True, exist_ok=True)
+        core, ffi = ROOT / "crates" / "px4params-core", ROOT / "crates" / "px4params-ffi"
+        (probe / "Cargo.toml").write_text(PROBE_TOML.format(core=core, ffi=ffi))
+        (probe / "lib.rs").write_text(PROBE_RS)
+        print(f"{'probe':8} {'.text bytes':>12} {'target':>8}")
+        failed = False
+        for feature, target in TARGETS.items():
+            library = build(probe, feature, work / "target")
+            size = text_size(library)
+            verdict = "ok" if size <= target else "OVER"
+            failed |= size > target
+            print(f"{feature:8} {size:>12,} {target:>8,}  {verdict}")
+            for line in largest(library, args.symbols):
+                print(f"    {line}")
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
