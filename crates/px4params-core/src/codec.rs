@@ -291,7 +291,7 @@ impl<S: Source> Encoder<'_, '_, S> {
             .map_err(|needed| self.fail(ErrorKind::BufferTooSmall { needed }))
     }
 
-    #[inline(always)]
+    #[inline(never)]
     fn scalar(&mut self, kind: Kind, value: Scalar) -> Result<(), Stop> {
         let raw =
             fast_raw(kind, value, self.saturate).map_err(|e| self.fail(ErrorKind::Scalar(e)))?;

@@ -28,6 +28,7 @@ pub mod scalar;
 pub mod scatter;
 pub mod store;
 pub mod transfer;
+pub mod translate;
 pub mod value;
 
 pub use codec::{decode, encode, DecodeOptions, EncodeOptions};

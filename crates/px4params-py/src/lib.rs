@@ -151,6 +151,9 @@ pub(crate) struct Compiled {
     names: Vec<Py<PyString>>,
 }
 
+/// A translated value and each field's fate (`Schema.translate`).
+type Translated<'py> = (Bound<'py, PyBytes>, Vec<(&'static str, String)>);
+
 /// A schema compiled into one flat layout; hands out [`DataType`]s by key.
 #[pyclass(frozen, module = "px4params._native")]
 pub(crate) struct Schema {
@@ -203,6 +206,53 @@ impl Schema {
             root,
             name: key.to_owned(),
         })
+    }
+
+    /// `data`, a stored value of type `old`, as a value of type `new` (see
+    /// `px4params_core::translate`), with the fields `new` added taken from `base`: the bytes
+    /// and each field's fate as `("kept" | "new" | "dropped", path)`. Raises `StoreError`.
+    fn translate<'py>(
+        &self,
+        py: Python<'py>,
+        old: &str,
+        data: &[u8],
+        new: &str,
+        base: &[u8],
+    ) -> PyResult<Translated<'py>> {
+        let root = |key: &str| {
+            self.compiled
+                .roots
+                .get(key)
+                .copied()
+                .ok_or_else(|| PyKeyError::new_err(key.to_owned()))
+        };
+        let (old_root, new_root) = (root(old)?, root(new)?);
+        let layout = self.compiled.layout.as_layout();
+        let mut out = vec![0u8; layout.max_bytes(new_root)];
+        let mut changes = Vec::new();
+        let mut record = |c: px4params_core::translate::Change<'_>| {
+            use px4params_core::translate::Change;
+            changes.push(match c {
+                Change::Kept(p) => ("kept", p.to_owned()),
+                Change::New(p) => ("new", p.to_owned()),
+                Change::Dropped(p) => ("dropped", p.to_owned()),
+            });
+        };
+        let translated = px4params_core::translate::translate(
+            &layout,
+            old_root,
+            data,
+            new_root,
+            base,
+            &mut out,
+            &mut record,
+        );
+        match translated {
+            Ok(len) => Ok((PyBytes::new(py, &out[..len]), changes)),
+            Err(e) => Err(store::StoreErrorClass::new_err(
+                e.display(&layout).to_string(),
+            )),
+        }
     }
 
     /// Number of nodes in the compiled layout (shared nested types count once).

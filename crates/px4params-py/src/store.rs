@@ -17,6 +17,7 @@ use crate::values::{scalar_to_py, PySource};
 use crate::{describe, leaf_value, target_of, to_py_err, Compiled, Op, Schema, ValueErrorClass};
 
 pyo3::import_exception!(px4params.errors, StoreError);
+pub(crate) use StoreError as StoreErrorClass;
 pyo3::import_exception!(px4params.errors, InstanceError);
 
 pub(crate) type CoreStore = store::Store<Vec<ParamDef>, Vec<Slot>, Vec<u8>>;

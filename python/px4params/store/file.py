@@ -31,7 +31,7 @@ from px4params._native import check_store_file
 from px4params._records import TYPE_CHECKING
 from px4params.dsdl.schema import DataType
 from px4params.errors import Px4ParamsError, StoreError, StoreFileError
-from px4params.store.spec import ParamSpec, _default_of
+from px4params.store.spec import ParamSpec
 
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
     from typing import Any, NamedTuple
@@ -368,69 +368,29 @@ def _current(
     old_key = f"{data_type.name}.{version[0]}.{written}"
     if old_key not in store.schema:
         raise StoreError(f"{name} was stored by {old_key}, which this schema does not have")
-    old = store.schema[old_key].decode(payload, tao=False)
-    target = data_type.decode(base, tao=False)
-    kept: list[str] = []
-    dropped: list[str] = []
-    new: list[str] = []
-    spec = {"kind": "ref", "name": data_type.key}
-    merged = _carry(store, spec, old, target, "", kept, dropped, new)
-    try:
-        data = data_type.encode(merged, tao=False)
-    except Px4ParamsError as e:
+    try:  # the core's translation, the one firmware runs
+        data, changes = store.schema._native.translate(old_key, payload, data_type.key, base)
+    except StoreError as e:
         raise StoreError(f"{name}: cannot translate from {old_key}: {e}") from None
+    kept = [path for change, path in changes if change == "kept"]
+    new = [path for change, path in changes if change == "new"]
+    dropped = [path for change, path in changes if change == "dropped"]
     line = f"{name}: translated {old_key} -> {data_type.key}: kept {', '.join(kept) or 'nothing'}"
     if new:
         line += f"; new, from defaults: {', '.join(new)}"
     if dropped:
-        line += f"; dropped: {', '.join(dropped)}"
+        old = store.schema[old_key].decode(payload, tao=False)
+        shown = [f"{path}={_shown(_value_at(old, path))}" for path in dropped]
+        line += f"; dropped: {', '.join(shown)}"
     report.append(line)
     return data
 
 
-def _carry(
-    store: Store,
-    spec: Mapping[str, Any],
-    old: Any,
-    new: Any,
-    prefix: str,
-    kept: list[str],
-    dropped: list[str],
-    added: list[str],
-) -> Any:
-    """``new`` (a value of type ``spec``) with what ``old`` has under the same names."""
-    if spec["kind"] != "ref" or not isinstance(old, dict) or not isinstance(new, dict):
-        if isinstance(old, dict) or isinstance(new, dict):  # a field changed its kind
-            dropped.append(prefix.rstrip(".") or "value")
-            return new
-        kept.append(prefix.rstrip("."))
-        return old
-    definition = store.schema.model["types"][spec["name"]]
-    fields = {f["name"]: f["type"] for f in definition["fields"] if f["type"]["kind"] != "void"}
-    if definition["kind"] == "union":
-        (variant,) = old
-        if variant not in fields:
-            dropped.append(f"{prefix}{variant}={_shown(old[variant])}")
-            return new
-        base = new.get(variant)
-        if base is None:
-            base = _default_of(store.schema, fields[variant], None)
-        inner = _carry(
-            store, fields[variant], old[variant], base, f"{prefix}{variant}.", kept, dropped, added
-        )
-        return {variant: inner}
-    merged = dict(new)
-    for k, v in old.items():
-        if k == "p_version":
-            continue
-        if k in fields:
-            merged[k] = _carry(
-                store, fields[k], v, new.get(k), f"{prefix}{k}.", kept, dropped, added
-            )
-        else:
-            dropped.append(f"{prefix}{k}={_shown(v)}")
-    added.extend(prefix + k for k in fields if k not in old and k != "p_version")
-    return merged
+def _value_at(value: Any, path: str) -> Any:
+    """The part of a decoded value at a dotted path of field and variant names."""
+    for name in path.split("."):
+        value = value.get(name) if isinstance(value, dict) else None
+    return value
 
 
 def _shown(value: Any) -> str:
