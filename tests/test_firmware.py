@@ -215,12 +215,11 @@ def store_file_bytes(table: list[str], records: list[bytes]) -> bytes:
     return body + zlib.crc32(body).to_bytes(4, "little")
 
 
-def test_a_value_of_an_older_minor_version_is_left_to_the_host(
+def test_a_value_of_an_older_minor_version_is_translated_as_the_host_does(
     example: Path, tmp_path: Path
 ) -> None:
-    """Firmware does not translate a value stored by an older minor version of its type: it
-    refuses the file (PX4P_ERR_VERSION) and loads nothing; the host's ``param load``
-    translates it."""
+    """A store written before INA238 1.1 (shunt in micro-ohms): firmware translates it with the
+    older layout the tables carry, as ``param load`` does, to the same bytes."""
     import px4params
 
     schema = px4params.load_schema(use_env=False)
@@ -231,15 +230,40 @@ def test_a_value_of_an_older_minor_version_is_left_to_the_host(
     record = bytes([0x21, 0, 0, len(old)]) + old  # kind 1 with a value: INA238#0
     path = tmp_path / "old.store"
     path.write_bytes(store_file_bytes(["INA238=px.Ina238.1"], [record]))
+    back = tmp_path / "back.store"
+    out = run([str(example), str(path), str(back)], tmp_path).stdout
+    # shunt is new in 1.1: the default's (0.0003 as a float16)
+    assert out.splitlines()[1].split() == [
+        "INA238#0", "I2C", "bus", "3", "address", "0x41", "current=100", "shunt=0.00029993",
+    ]  # fmt: skip
+    store = px4params.Store(schema, classic=[])
+    report = store.load_from(path)
+    assert report == [
+        "INA238#0: translated px.Ina238.1.0 -> px.Ina238.1.1: kept bus.i2c.bus_id, "
+        "bus.i2c.address, current; new, from defaults: shunt; dropped: shunt_uohm=500"
+    ]
+    host = tmp_path / "host.store"
+    store.save(host)
+    assert back.read_bytes() == host.read_bytes()
+
+
+def test_a_value_of_an_unknown_minor_version_is_refused(example: Path, tmp_path: Path) -> None:
+    import px4params
+
+    schema = px4params.load_schema(use_env=False)
+    value = bytearray(schema["px.Ina238"].encode(schema["px.Ina238"].decode(
+        schema["px.Ina238"].default(tao=False), tao=False), tao=False))  # fmt: skip
+    value[0] = (value[0] & 0x0F) | (5 << 4)  # p_version 5: no such version
+    record = bytes([0x21, 0, 0, len(value)]) + bytes(value)
+    path = tmp_path / "future.store"
+    path.write_bytes(store_file_bytes(["INA238=px.Ina238.1"], [record]))
     proc = subprocess.run([str(example), str(path)], capture_output=True, text=True)
     assert (proc.returncode, proc.stderr) == (
         1,
         "ina238_auto: loading the store file: PX4P_ERR_VERSION\n",
     )
-    store = px4params.Store(schema, classic=[])
-    report = store.load_from(path)
-    assert store.get("INA238#0.bus.i2c.address") == 0x41
-    assert any("translated px.Ina238.1.0 -> px.Ina238.1.1" in line for line in report)
+    with pytest.raises(px4params.errors.StoreFileError, match=r"px\.Ina238\.1\.5"):
+        px4params.Store(schema, classic=[]).load_from(path)
 
 
 def test_the_committed_header_is_what_cbindgen_generates(tmp_path: Path) -> None:

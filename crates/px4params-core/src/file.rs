@@ -14,8 +14,9 @@
 use core::fmt;
 
 use crate::crc::{crc16, crc32};
-use crate::layout::Layout;
+use crate::layout::{Kind, Layout, NodeId, Role};
 use crate::store::{ParamDef, Slot, Store, StoreError, Which};
+use crate::translate::TranslateError;
 
 /// The first four bytes of every store file.
 pub const MAGIC: [u8; 4] = *b"PX4P";
@@ -637,6 +638,12 @@ pub enum FileName<'n> {
 pub trait FileNames {
     /// Parameter `param`'s name (`None` past the last parameter).
     fn name(&self, param: u32) -> Option<FileName<'_>>;
+
+    /// The root of minor version `minor` of parameter `param`'s type, when the layout has that
+    /// older version: values it stored are translated on [`apply`].
+    fn older(&self, _param: u32, _minor: u32) -> Option<NodeId> {
+        None
+    }
 }
 
 impl FileNames for [FileName<'_>] {
@@ -785,13 +792,14 @@ pub enum ApplyError {
         /// The record's offset in the file.
         offset: usize,
     },
-    /// The store refused a record (an instance out of range, a value that does not decode,
-    /// or a value stored by another minor version, which only the host translates).
+    /// The store refused a record: an instance out of range, a value that does not decode,
+    /// or one stored by another minor version of its type that the layout does not have (or
+    /// that does not translate).
     Refused {
         /// The record's offset in the file.
         offset: usize,
         /// What the store said.
-        error: StoreError,
+        error: StoreError<TranslateError>,
     },
 }
 
@@ -850,9 +858,11 @@ where
                 }
                 continue;
             };
-            put(store, layout, param, &record, pass).map_err(|error| ApplyError::Refused {
-                offset: record.offset,
-                error,
+            put(store, layout, names, param, &record, pass).map_err(|error| {
+                ApplyError::Refused {
+                    offset: record.offset,
+                    error,
+                }
             })?;
             applied.records += 1;
         }
@@ -888,18 +898,20 @@ fn place(
 fn put<D, S, B>(
     store: &mut Store<D, S, B>,
     layout: &Layout<'_>,
+    names: &(impl FileNames + ?Sized),
     param: u32,
     record: &Record<'_>,
     pass: Pass,
-) -> Result<(), StoreError>
+) -> Result<(), StoreError<TranslateError>>
 where
     D: AsRef<[ParamDef]>,
     S: AsRef<[Slot]> + AsMut<[Slot]>,
     B: AsRef<[u8]> + AsMut<[u8]>,
 {
-    let def = store.def(param)?;
+    let def = store.def(param).map_err(StoreError::widen)?;
     let instance = record.instance;
-    if pass == Pass::Check {
+    let check = pass == Pass::Check;
+    if check {
         if def.shared && instance != 0 {
             return Err(StoreError::NotPresent { instance });
         }
@@ -909,182 +921,52 @@ where
                 max_instances: def.instances,
             });
         }
-        for payload in [record.default, record.value].into_iter().flatten() {
-            store.check_value(layout, param, payload)?;
+    } else if !def.shared
+        && !store
+            .slot(param, instance)
+            .map_err(StoreError::widen)?
+            .present()
+    {
+        store
+            .add(param, Some(instance))
+            .map_err(StoreError::widen)?;
+    }
+    for (payload, which) in [
+        (record.default, Which::Default),
+        (record.value, Which::Value),
+    ] {
+        let Some(payload) = payload else { continue };
+        // A value stored by an older minor version is translated, when the layout has it.
+        let older = match stored_minor(layout, def.root, payload) {
+            Some((stored, current)) if stored != current => names.older(param, stored),
+            _ => None,
+        };
+        match (older, check) {
+            (Some(old), _) => {
+                store.set_translated(layout, param, instance, which, old, payload, check)?
+            }
+            (None, true) => store
+                .check_value(layout, param, payload)
+                .map_err(StoreError::widen)?,
+            (None, false) => store
+                .set_encoded(layout, param, instance, which, payload)
+                .map_err(StoreError::widen)?,
         }
-        return Ok(());
-    }
-    if !def.shared && !store.slot(param, instance)?.present() {
-        store.add(param, Some(instance))?;
-    }
-    if let Some(default) = record.default {
-        store.set_encoded(layout, param, instance, Which::Default, default)?;
-    }
-    if let Some(value) = record.value {
-        store.set_encoded(layout, param, instance, Which::Value, value)?;
     }
     Ok(())
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use proptest::prelude::*;
-    use std::vec::Vec;
-
-    #[test]
-    fn an_empty_file_is_eighteen_bytes_as_documented() {
-        let mut buf = [0u8; 64];
-        let w = Writer::new(&mut buf, [""; 0]).unwrap();
-        let len = w.finish().unwrap();
-        // Header (the fingerprint, CRC-32 of no lines, is 0), the empty table and its CRC-16,
-        // the trailer.
-        assert_eq!(len, 18);
-        assert_eq!(&buf[..10], b"PX4P\x02\x00\x00\x00\x00\x00");
-        assert_eq!(&buf[10..12], &[KIND_TABLE, 0]);
-        assert_eq!(
-            u16::from_le_bytes([buf[12], buf[13]]),
-            reference_crc16(&[KIND_TABLE, 0])
-        );
-        let checked = check(&buf[..len]).unwrap();
-        assert_eq!((checked.version, checked.fingerprint), (2, 0));
-        assert_eq!(checked.records().count(), 0);
-    }
-
-    /// CRC-16-CCITT-FALSE bit by bit, as the catalogue defines it.
-    fn reference_crc16(data: &[u8]) -> u16 {
-        let mut crc = 0xFFFFu16;
-        for &b in data {
-            crc ^= u16::from(b) << 8;
-            for _ in 0..8 {
-                crc = if crc & 0x8000 != 0 {
-                    (crc << 1) ^ 0x1021
-                } else {
-                    crc << 1
-                };
-            }
+/// The minor version a stored value of `root` was written by (its leading `p_version`
+/// field), and the current one; `None` for a type without `p_version`.
+pub fn stored_minor(layout: &Layout<'_>, root: NodeId, payload: &[u8]) -> Option<(u32, u32)> {
+    let first = layout.members(root).first()?;
+    let Role::Version(current) = first.role else {
+        return None;
+    };
+    match layout.node(first.node).kind {
+        Kind::Uint { bits, .. } if bits <= 8 => {
+            Some((u32::from(payload.first()? >> (8 - bits)), current))
         }
-        crc
-    }
-
-    fn sample(buf: &mut [u8]) -> usize {
-        let mut w = Writer::new(buf, ["INA238=px.Ina238.1", "AK09916=px.Ak09916.1"]).unwrap();
-        w.structured(0, 1, Some(&[0x10, 0x22]), None).unwrap();
-        w.structured(1, 0, None, Some(&[7])).unwrap();
-        w.classic(b"BAT1_CAPACITY", None, Some(&[0, 0, 0x7A, 0x44]))
-            .unwrap();
-        w.finish().unwrap()
-    }
-
-    #[test]
-    fn a_written_file_reads_back() {
-        let mut buf = [0u8; 256];
-        let len = sample(&mut buf);
-        let checked = check(&buf[..len]).unwrap();
-        let lines: Vec<&str> = checked.table().collect();
-        assert_eq!(lines, ["INA238=px.Ina238.1", "AK09916=px.Ak09916.1"]);
-        let expected_fp = crc32(0, b"INA238=px.Ina238.1\nAK09916=px.Ak09916.1");
-        assert_eq!(checked.fingerprint, expected_fp);
-        let records: Vec<Record<'_>> = checked.records().collect();
-        assert_eq!(records.len(), 3);
-        assert_eq!(records[0].key, Key::Structured(0));
-        assert_eq!(
-            (records[0].instance, records[0].default),
-            (1, Some(&[0x10, 0x22][..]))
-        );
-        assert_eq!(records[0].value, None);
-        assert_eq!(records[1].value, Some(&[7][..]));
-        assert_eq!(records[2].key, Key::Classic(b"BAT1_CAPACITY"));
-        assert_eq!(records[2].raw[0], KIND_CLASSIC | HAS_VALUE);
-    }
-
-    #[test]
-    fn every_flipped_bit_is_caught() {
-        let mut buf = [0u8; 256];
-        let len = sample(&mut buf);
-        for bit in 0..len * 8 {
-            let mut copy = buf;
-            copy[bit / 8] ^= 1 << (bit % 8);
-            assert!(check(&copy[..len]).is_err(), "bit {bit}");
-        }
-        for cut in 0..len {
-            assert!(check(&buf[..cut]).is_err(), "cut at {cut}");
-        }
-    }
-
-    #[test]
-    fn errors_name_what_and_where() {
-        let err = check(b"PX4Q\x02\x00\x00\x00\x00\x00").unwrap_err();
-        assert_eq!((err.kind, err.offset), (FileErrorKind::NotAStoreFile, 0));
-        assert_eq!(
-            std::format!("{err}"),
-            "not a px4params store file (no PX4P header)"
-        );
-        let err = check(b"PX4P\x07\x00\x00\x00\x00\x00\x00\x00\x00\x00").unwrap_err();
-        assert_eq!(
-            std::format!("{err}"),
-            "store file format version 7 (this px4params reads 1 and 2)"
-        );
-        let entry = FileError {
-            kind: FileErrorKind::TableEntry(b"it's\n"),
-            offset: 10,
-        };
-        assert_eq!(
-            std::format!("{entry}"),
-            "record is malformed: parameter table entry \"it's\\n\" is not NAME=TYPE.MAJOR"
-        );
-    }
-
-    #[test]
-    fn a_full_buffer_is_an_error_not_a_panic() {
-        let mut big = [0u8; 256];
-        let len = sample(&mut big);
-        for size in 0..len {
-            let mut buf = std::vec![0u8; size];
-            let result = (|| {
-                let mut w = Writer::new(&mut buf, ["INA238=px.Ina238.1", "AK09916=px.Ak09916.1"])?;
-                w.structured(0, 1, Some(&[0x10, 0x22]), None)?;
-                w.structured(1, 0, None, Some(&[7]))?;
-                w.classic(b"BAT1_CAPACITY", None, Some(&[0, 0, 0x7A, 0x44]))?;
-                w.finish()
-            })();
-            assert!(
-                matches!(result, Err(WriteError::BufferFull { .. })),
-                "size {size}"
-            );
-        }
-    }
-
-    proptest! {
-        #[test]
-        fn records_round_trip(
-            records in proptest::collection::vec(
-                (0u32..5, any::<u16>(),
-                 proptest::option::of(proptest::collection::vec(any::<u8>(), 0..40)),
-                 proptest::option::of(proptest::collection::vec(any::<u8>(), 0..300))),
-                0..12),
-        ) {
-            let mut buf = std::vec![0u8; 8192];
-            let table = ["A=x.A.1", "B=x.B.1", "C=x.C.2", "D=y.D.1", "E=y.E.9"];
-            let mut w = Writer::new(&mut buf, table).unwrap();
-            for (index, instance, default, value) in &records {
-                w.structured(*index, *instance, default.as_deref(), value.as_deref()).unwrap();
-            }
-            let len = w.finish().unwrap();
-            let checked = check(&buf[..len]).unwrap();
-            let read: Vec<Record<'_>> = checked.records().collect();
-            prop_assert_eq!(read.len(), records.len());
-            for (r, (index, instance, default, value)) in read.iter().zip(&records) {
-                prop_assert_eq!(r.key, Key::Structured(u64::from(*index)));
-                prop_assert_eq!(r.instance, *instance);
-                prop_assert_eq!(r.default, default.as_deref());
-                prop_assert_eq!(r.value, value.as_deref());
-            }
-        }
-
-        #[test]
-        fn garbage_never_panics(data in proptest::collection::vec(any::<u8>(), 0..200)) {
-            let _ = check(&data).map(|c| (c.table().count(), c.records().count()));
-        }
+        _ => None,
     }
 }

@@ -693,6 +693,46 @@ where
         }
     }
 
+    /// Writes `data`, a stored value of `old` (an older version of the parameter's type), as a
+    /// value of the current version ([`crate::translate`]): fields carried over by name, the
+    /// new ones from the instance's default (for a value) or the type's default (for a
+    /// default). With `check_only` it translates without writing anything.
+    #[allow(clippy::too_many_arguments)]
+    pub fn set_translated(
+        &mut self,
+        layout: &Layout<'_>,
+        param: u32,
+        instance: u16,
+        which: Which,
+        old: NodeId,
+        data: &[u8],
+        check_only: bool,
+    ) -> Result<(), crate::translate::TranslateError> {
+        let def = self.def(param).map_err(StoreError::widen)?;
+        let index = slot_index(&def, instance).map_err(StoreError::widen)?;
+        let present = self.slots.as_ref()[index].present();
+        if !check_only {
+            self.present_slot(&def, instance)
+                .map_err(StoreError::widen)?;
+        }
+        let (from, len) = if which == Which::Value && present {
+            self.span(&def, index, Which::Default)
+        } else {
+            let len = self.slots.as_ref()[def.first_slot as usize].default_len;
+            (def.first_byte as usize, len as usize)
+        };
+        let scratch = self.scratch;
+        let (head, tail) = self.bytes.as_mut().split_at_mut(scratch);
+        let base = &head[from..from + len];
+        let out = &mut tail[..def.slot_bytes as usize];
+        let written =
+            crate::translate::translate(layout, old, data, def.root, base, out, &mut |_| {})?;
+        if !check_only {
+            self.commit(&def, instance, which, written);
+        }
+        Ok(())
+    }
+
     /// Checks `data` as [`Store::set_encoded`] would, without writing it.
     pub fn check_value(&self, layout: &Layout<'_>, param: u32, data: &[u8]) -> Result<()> {
         check_encoded(layout, self.def(param)?.root, data)

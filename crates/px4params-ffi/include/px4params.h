@@ -52,7 +52,7 @@
 // `p_version` leaves are written by the store, never by the caller.
 #define PX4P_ERR_VERSION_LEAF -11
 
-// A value stored by another minor version of its type: `px4params` on the host translates it.
+// A value stored by another minor version of its type that the tables do not carry.
 #define PX4P_ERR_VERSION -12
 
 // The output buffer is too small.
@@ -381,6 +381,17 @@ typedef struct {
   uint32_t type_default_len;
 } px4p_param;
 
+// An older minor version of a parameter's type that the tables carry, so that values it
+// stored are translated on load.
+typedef struct {
+  // The parameter.
+  uint32_t param;
+  // The minor version.
+  uint32_t minor;
+  // The root node of that version of the type.
+  uint32_t root;
+} px4p_version;
+
 // Everything generated for a firmware's store: the layout, each parameter's definition as
 // the core's `plan` laid it out, its file name and type default, and the memory it needs.
 typedef struct {
@@ -394,6 +405,10 @@ typedef struct {
   const uint32_t *order;
   // Number of parameters.
   uint32_t param_count;
+  // Older versions of the parameters' types.
+  const px4p_version *versions;
+  // Number of older versions.
+  uint32_t version_count;
   // Slots the store needs.
   uint32_t slot_count;
   // Bytes the store needs.
@@ -435,7 +450,8 @@ int32_t px4p_store_open(px4p_store *store,
 
 // Replaces the store's content with a store file's (written by `px4params param save` or by
 // [`px4p_store_save`]). The file and every record are checked before anything changes: on any
-// error the store is as it was. Returns the number of records applied.
+// error the store is as it was. Values stored by an older minor version of their type are
+// translated when the tables carry that version. Returns the number of records applied.
 int32_t px4p_store_load(px4p_store *store, const uint8_t *data, uintptr_t len);
 
 // Writes the store's file into `buf` (the bytes `px4params param load` reads); returns its

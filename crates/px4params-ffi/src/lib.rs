@@ -71,6 +71,19 @@ pub struct px4p_param {
     pub type_default_len: u32,
 }
 
+/// An older minor version of a parameter's type that the tables carry, so that values it
+/// stored are translated on load.
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct px4p_version {
+    /// The parameter.
+    pub param: u32,
+    /// The minor version.
+    pub minor: u32,
+    /// The root node of that version of the type.
+    pub root: u32,
+}
+
 /// Everything generated for a firmware's store: the layout, each parameter's definition as
 /// the core's `plan` laid it out, its file name and type default, and the memory it needs.
 #[repr(C)]
@@ -86,6 +99,10 @@ pub struct px4p_tables {
     pub order: *const u32,
     /// Number of parameters.
     pub param_count: u32,
+    /// Older versions of the parameters' types.
+    pub versions: *const px4p_version,
+    /// Number of older versions.
+    pub version_count: u32,
     /// Slots the store needs.
     pub slot_count: u32,
     /// Bytes the store needs.
@@ -145,7 +162,7 @@ pub const PX4P_ERR_VALUE: i32 = -9;
 pub const PX4P_ERR_NO_SUCH_LEAF: i32 = -10;
 /// `p_version` leaves are written by the store, never by the caller.
 pub const PX4P_ERR_VERSION_LEAF: i32 = -11;
-/// A value stored by another minor version of its type: `px4params` on the host translates it.
+/// A value stored by another minor version of its type that the tables do not carry.
 pub const PX4P_ERR_VERSION: i32 = -12;
 /// The output buffer is too small.
 pub const PX4P_ERR_BUFFER: i32 = -13;
@@ -212,6 +229,10 @@ impl Open {
 
     fn params(&self) -> &'static [px4p_param] {
         unsafe { table(self.tables.params, self.tables.param_count) }.unwrap_or(&[])
+    }
+
+    fn versions(&self) -> &'static [px4p_version] {
+        unsafe { table(self.tables.versions, self.tables.version_count) }.unwrap_or(&[])
     }
 }
 
@@ -289,8 +310,8 @@ pub unsafe extern "C" fn px4p_store_open(
     0
 }
 
-/// The parameters' file names, read from the C tables.
-struct CNames(&'static [px4p_param]);
+/// The parameters' file names and older type versions, read from the C tables.
+struct CNames(&'static [px4p_param], &'static [px4p_version]);
 
 impl file::FileNames for CNames {
     fn name(&self, param: u32) -> Option<FileName<'_>> {
@@ -307,11 +328,20 @@ impl file::FileNames for CNames {
             _ => FileName::Classic(text),
         })
     }
+
+    fn older(&self, param: u32, minor: u32) -> Option<u32> {
+        let v = self
+            .1
+            .iter()
+            .find(|v| v.param == param && v.minor == minor)?;
+        Some(v.root)
+    }
 }
 
 /// Replaces the store's content with a store file's (written by `px4params param save` or by
 /// [`px4p_store_save`]). The file and every record are checked before anything changes: on any
-/// error the store is as it was. Returns the number of records applied.
+/// error the store is as it was. Values stored by an older minor version of their type are
+/// translated when the tables carry that version. Returns the number of records applied.
 #[no_mangle]
 pub unsafe extern "C" fn px4p_store_load(
     store: *mut px4p_store,
@@ -328,7 +358,7 @@ pub unsafe extern "C" fn px4p_store_load(
         return PX4P_ERR_FILE;
     };
     let layout = open.layout();
-    let names = CNames(open.params());
+    let names = CNames(open.params(), open.versions());
     match file::apply(&mut open.store, &layout, &names, &checked, true) {
         Ok(applied) => clamp(applied.records),
         Err(ApplyError::Format1) => PX4P_ERR_FILE_FORMAT_1,
@@ -348,7 +378,7 @@ pub unsafe extern "C" fn px4p_store_save(store: *mut px4p_store, buf: *mut u8, c
     let Some(buf) = bytes_in_mut(buf, cap) else {
         return PX4P_ERR_ARGUMENT;
     };
-    let names = CNames(open.params());
+    let names = CNames(open.params(), open.versions());
     let order = open.tables.order;
     let Some(order) = table(order, open.tables.param_count) else {
         return PX4P_ERR_TABLES;

@@ -57,6 +57,10 @@ impl Store {
         self.capacity
     }
 
+    pub(crate) fn root_of(&self, key: &str) -> Option<u32> {
+        self.compiled.roots.get(key).copied()
+    }
+
     /// Leaf `target` of an instance's value (or default), located and read.
     fn read_leaf(
         &self,
@@ -205,9 +209,14 @@ impl Store {
         Ok(())
     }
 
-    /// The layout and the plan as tuples, for C tables (`px4params metadata --firmware`).
-    fn tables<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
-        crate::tables::tables(py, self)
+    /// The layout and the plan as tuples, for C tables (`px4params metadata --firmware`), with
+    /// the root nodes of the types `roots` names (older versions the tables carry).
+    fn tables<'py>(
+        &self,
+        py: Python<'py>,
+        roots: Vec<String>,
+    ) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
+        crate::tables::tables(py, self, &roots)
     }
 
     /// The store's file: `names` per parameter index, `(table line, False)` for a structured

@@ -40,8 +40,12 @@ fn kind<'py>(py: Python<'py>, k: Kind) -> PyResult<Bound<'py, PyTuple>> {
 }
 
 /// The store's tables: a dict of `nodes`, `fields`, `names`, `segments`, `flat`, `defs` and
-/// `capacity`.
-pub(crate) fn tables<'py>(py: Python<'py>, store: &Store) -> PyResult<Bound<'py, PyDict>> {
+/// `capacity`, and `roots` (key: root node).
+pub(crate) fn tables<'py>(
+    py: Python<'py>,
+    store: &Store,
+    roots: &[String],
+) -> PyResult<Bound<'py, PyDict>> {
     let layout = store.layout();
     let out = PyDict::new(py);
     let mut nodes = Vec::new();
@@ -116,5 +120,13 @@ pub(crate) fn tables<'py>(py: Python<'py>, store: &Store) -> PyResult<Bound<'py,
         "capacity",
         (store.capacity_of().slots, store.capacity_of().bytes),
     )?;
+    let found = PyDict::new(py);
+    for key in roots {
+        let root = store
+            .root_of(key)
+            .ok_or_else(|| pyo3::exceptions::PyKeyError::new_err(key.clone()))?;
+        found.set_item(key, root)?;
+    }
+    out.set_item("roots", found)?;
     Ok(out)
 }

@@ -10,7 +10,9 @@ The file defines ``px4_param_tables`` (a ``px4p_tables``) and the sizes its stor
     px4p_store_open(&store, &px4_param_tables, slots, PX4_PARAM_STORE_SLOTS, bytes,
                     PX4_PARAM_STORE_BYTES);
 
-Parameter IDs are those of ``enum px4_param_id`` in the header ``--header`` writes (the
+Older minor versions of the types that the schema keeps (``px.Ina238.1.0``) come along, so
+that firmware translates values they stored, as ``param load`` does. Parameter IDs are those
+of ``enum px4_param_id`` in the header ``--header`` writes (the
 structured parameters in name order). Only the types the parameters use are compiled in.
 Values of type ``float16`` and the like keep the DroneCAN encoding: the tables are the core's
 own (``repr(C)``) types, so the firmware runs the same code as the host.
@@ -33,12 +35,13 @@ def generate_tables(
 ) -> str:
     """The C source of the tables for ``specs`` (with their type defaults, encoded without
     tail array optimization); ``header`` is the metadata header it includes, or ``""``."""
-    closure = schema._closure([s.data_type.key for s in specs])
+    older = _older_versions(schema, specs)
+    closure = schema._closure([s.data_type.key for s in specs] + [key for _, _, key in older])
     rows = [(s.name, s.data_type.key, s.max_instances) for s in specs]
     store = _native.Store(_native.Schema(closure), rows)
     for index, default in enumerate(type_defaults):
         store.set_type_default(index, default)
-    t = store.tables()
+    t = store.tables([key for _, _, key in older])
     slots, size = t["capacity"]
     out = [
         "/* The device manifest's parameter tables for the px4params C ABI.",
@@ -100,6 +103,14 @@ def generate_tables(
         "/* File order: by name, as px4params saves. */",
         f"static const uint32_t order[] = {{ {', '.join(map(str, order))} }};",
         "",
+        "/* Older minor versions of the types, so that values they stored are translated. */",
+        "static const px4p_version versions[] = {",
+        *(
+            [_version(param, minor, t["roots"][key], key) for param, minor, key in older]
+            or ["    {0},"]
+        ),
+        "};",
+        "",
         "const px4p_tables px4_param_tables = {",
         "    .layout = {",
         f"        .nodes = nodes, .node_count = {len(t['nodes'])},",
@@ -109,11 +120,29 @@ def generate_tables(
         f"        .flat = flat, .flat_count = {len(t['flat'])},",
         "    },",
         f"    .defs = defs, .params = params, .order = order, .param_count = {len(specs)},",
+        f"    .versions = versions, .version_count = {len(older)},",
         f"    .slot_count = {slots}, .byte_count = {size},",
         "};",
         "",
     ]
     return "\n".join(out)
+
+
+def _version(param: int, minor: int, root: int, key: str) -> str:
+    return f"    {{ .param = {param}, .minor = {minor}, .root = {root} }}, /* {key} */"
+
+
+def _older_versions(schema: Schema, specs: Sequence[ParamSpec]) -> list[tuple[int, int, str]]:
+    """``(parameter, minor, key)`` of each older minor version of a parameter's type that the
+    schema still has (``px.Ina238.1.0`` beside ``px.Ina238.1.1``)."""
+    out = []
+    for param, spec in enumerate(specs):
+        major, minor = spec.data_type.version or (0, 0)
+        for m in range(minor):
+            key = f"{spec.data_type.name}.{major}.{m}"
+            if key in schema:
+                out.append((param, m, key))
+    return out
 
 
 # The C ABI header's union members per kind (cbindgen's names: C keywords get a "_").
