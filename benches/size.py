@@ -1,6 +1,8 @@
 """Code size of the core as firmware links it: ``.text`` bytes of a ``no_std`` cdylib probe that
 exports only what it names, built from this workspace with ``opt-level = "s"``, fat LTO,
-``codegen-units = 1`` and ``panic = "abort"`` (issue 17's build), per feature set:
+``codegen-units = 1`` and ``panic = "abort"`` (issue 17's build), per feature set, each with
+the core as hosts build it and with its ``compact`` feature (firmware: the codec without its
+fast paths for flat leaf lists; same bytes):
 
 - ``codec``: encode and decode from and to a flat leaf list (``LeafSource`` / ``LeafSink``);
 - ``all``: that, plus leaf get/set in encoded data, descattering, CAN frames and receive, the
@@ -41,6 +43,7 @@ path = "lib.rs"
 
 [features]
 all = ["dep:px4params-ffi"]
+compact = ["px4params-core/compact"]
 
 [dependencies]
 px4params-core = {{ path = "{core}" }}
@@ -186,13 +189,14 @@ def largest(library: Path, n: int) -> list[str]:
     return [line for line in out.splitlines() if " t " in line or " T " in line][:n]
 
 
-def build(probe: Path, feature: str, target: Path) -> Path:
+def build(probe: Path, features: list[str], target: Path) -> Path:
     command = ["cargo", "build", "--release", "-q", "--manifest-path", str(probe / "Cargo.toml")]
-    if feature == "all":
-        command += ["--features", "all"]
-    env = dict(os.environ, CARGO_TARGET_DIR=str(target / feature))
+    if features:
+        command += ["--features", ",".join(features)]
+    name = "-".join(features) or "codec"
+    env = dict(os.environ, CARGO_TARGET_DIR=str(target / name))
     subprocess.run(command, check=True, env=env)
-    return target / feature / "release" / "libpx4params_size_probe.so"
+    return target / name / "release" / "libpx4params_size_probe.so"
 
 
 def main() -> int:
@@ -213,16 +217,23 @@ def main() -> int:
         core, ffi = ROOT / "crates" / "px4params-core", ROOT / "crates" / "px4params-ffi"
         (probe / "Cargo.toml").write_text(PROBE_TOML.format(core=core, ffi=ffi))
         (probe / "lib.rs").write_text(PROBE_RS)
-        print(f"{'probe':8} {'.text bytes':>12} {'target':>8}")
+        print(f"{'probe':16} {'.text bytes':>12} {'target':>8}")
         failed = False
         for feature, target in TARGETS.items():
-            library = build(probe, feature, work / "target")
-            size = text_size(library)
-            verdict = "ok" if size <= target else "OVER"
-            failed |= size > target
-            print(f"{feature:8} {size:>12,} {target:>8,}  {verdict}")
-            for line in largest(library, args.symbols):
-                print(f"    {line}")
+            for compact in (False, True):
+                features = [
+                    f
+                    for f in ("all" if feature == "all" else "", "compact" if compact else "")
+                    if f
+                ]
+                library = build(probe, features, work / "target")
+                size = text_size(library)
+                verdict = "ok" if size <= target else "OVER"
+                failed |= size > target
+                label = f"{feature}{' compact' if compact else ''}"
+                print(f"{label:16} {size:>12,} {target:>8,}  {verdict}")
+                for line in largest(library, args.symbols):
+                    print(f"    {line}")
     return 1 if failed else 0
 
 

@@ -11,6 +11,8 @@ echo "== rust: fmt, clippy, tests"
 cargo fmt --all -- --check
 cargo clippy --workspace --all-targets --features px4params-core/alloc -- -D warnings
 cargo test -p px4params-core --features alloc
+# The firmware build's codec (without the fast paths for flat leaf lists): same bytes, same errors.
+cargo test -p px4params-core --features alloc,compact
 
 echo "== python: ruff, import layers, pytest"
 ruff check python tests benches

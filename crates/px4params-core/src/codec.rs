@@ -12,6 +12,11 @@ use crate::scalar::{self, Scalar};
 /// layout could).
 pub const MAX_DEPTH: usize = 64;
 
+/// Whether flat sources and sinks take the fixed-shape fast paths (runs of leaves in one
+/// loop). Feature `compact` (firmware, built for size) leaves them out: the field-by-field
+/// path gives the same bytes in about half the code.
+const FAST_PATHS: bool = !cfg!(feature = "compact");
+
 /// Options for encoding.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct EncodeOptions {
@@ -102,7 +107,9 @@ pub trait Source {
     /// Whether the source is a flat leaf list that supports [`Source::leaf_run`]: the encoder
     /// then skips the struct calls and takes fixed-shape runs of leaves at once.
     const FLAT: bool = false;
-    /// The next `n` leaves, for flat sources; `None` for others.
+    /// The next `n` leaves, for flat sources; `None` for others. An error (fewer than `n`
+    /// left) must leave the source where it was: the encoder then takes the leaves one by one
+    /// and names the first one missing.
     #[inline]
     fn leaf_run(&mut self, _n: usize) -> Option<Result<&[Scalar], Self::Error>> {
         None
@@ -320,7 +327,7 @@ impl<S: Source> Encoder<'_, '_, S> {
             }
             Kind::Void { bits } => self.write(0, bits.into())?,
             Kind::Struct { first, count } => {
-                if S::FLAT {
+                if S::FLAT && FAST_PATHS {
                     self.flat_struct(id, first, count, tao)?;
                 } else {
                     let r = self.source.begin_struct();
@@ -429,6 +436,20 @@ impl<S: Source> Encoder<'_, '_, S> {
         Ok(used)
     }
 
+    /// A flat run the source has too few leaves for: its fields one by one, to fail at the
+    /// first leaf missing.
+    #[cold]
+    #[inline(never)]
+    fn missing_leaf(&mut self, fields: Span, end: u32, tao: bool) -> Stop {
+        for i in fields.first..fields.first + fields.count {
+            if let Err(stop) = self.field(i, tao && i + 1 == end) {
+                return stop;
+            }
+        }
+        // The leaves were there after all: the source is inconsistent.
+        self.fail(ErrorKind::MissingField)
+    }
+
     /// A struct from a flat source: fixed-shape runs of fields in one tight loop each.
     fn flat_struct(&mut self, id: NodeId, first: u32, count: u32, tao: bool) -> Result<(), Stop> {
         let layout = self.layout;
@@ -446,7 +467,11 @@ impl<S: Source> Encoder<'_, '_, S> {
                         Some(Ok(run)) => {
                             encode_items(&mut self.out, items.of(layout.flat), run, saturate, keep)
                         }
-                        Some(Err(e)) => return Err(self.fail(ErrorKind::Value(e))),
+                        // Not enough leaves (nothing was taken): field by field, which names
+                        // the first leaf missing, as a build without this fast path does.
+                        Some(Err(_)) => {
+                            return Err(self.missing_leaf(fields, first + count, tao));
+                        }
                         None => {
                             for i in fields.first..fields.first + fields.count {
                                 self.field(i, tao && i + 1 == first + count)?;
@@ -469,12 +494,12 @@ impl<S: Source> Encoder<'_, '_, S> {
 
     fn elements(&mut self, elem: NodeId, n: usize, tao: bool) -> Result<(), Stop> {
         let kind = self.layout.node(elem).kind;
-        if S::FLAT && is_scalar(kind) {
+        if S::FLAT && FAST_PATHS && is_scalar(kind) {
             let saturate = self.saturate;
             let outcome = match self.source.leaf_run(n) {
                 Some(Ok(run)) => Some(encode_scalars(&mut self.out, kind, run, saturate)),
-                Some(Err(e)) => return Err(self.fail(ErrorKind::Value(e))),
-                None => None,
+                // Not enough leaves: element by element names the first one missing.
+                Some(Err(_)) | None => None,
             };
             match outcome {
                 Some(Ok(())) => {
@@ -752,7 +777,7 @@ impl<'d, R: BitRead + ?Sized + 'd, K: Sink> Decoder<'_, 'd, R, K> {
                 self.read(bits.into())?;
             }
             Kind::Struct { first, count } => {
-                if K::FLAT {
+                if K::FLAT && FAST_PATHS {
                     self.flat_struct(id, first, count, tao)?;
                 } else {
                     let r = self.sink.begin_struct(count as usize);
@@ -960,7 +985,7 @@ impl<'d, R: BitRead + ?Sized + 'd, K: Sink> Decoder<'_, 'd, R, K> {
     /// Returns false when the sink is not flat or the data is too short (walk instead).
     fn flat_elements(&mut self, kind: Kind, n: usize) -> Result<bool, Stop> {
         let bits = scalar_bits(kind);
-        if !K::FLAT || (bits as usize).saturating_mul(n) > self.remaining() {
+        if !(K::FLAT && FAST_PATHS) || (bits as usize).saturating_mul(n) > self.remaining() {
             return Ok(false);
         }
         let mut reader = self.reader;

@@ -8,7 +8,7 @@
 //! carried whole. `p_version` fields take the new version. Each carried, new and dropped
 //! field is reported by path, in the new type's order (dropped ones where their struct ends).
 
-use core::fmt::{self, Write};
+use core::fmt;
 
 use crate::bits::BitRead;
 use crate::codec::{self, EncodeOptions, Source};
@@ -117,13 +117,34 @@ impl PathBuf {
     }
 }
 
-impl Write for PathBuf {
-    fn write_str(&mut self, s: &str) -> fmt::Result {
+impl PathBuf {
+    // By hand rather than with `core::fmt`, which would cost firmware kilobytes of code.
+    fn push(&mut self, s: &str) -> Result<()> {
         let end = self.len + s.len();
-        let to = self.bytes.get_mut(self.len..end).ok_or(fmt::Error)?;
+        let to = self
+            .bytes
+            .get_mut(self.len..end)
+            .ok_or(TranslateError::PathTooLong)?;
         to.copy_from_slice(s.as_bytes());
         self.len = end;
         Ok(())
+    }
+
+    fn push_index(&mut self, index: usize) -> Result<()> {
+        let mut digits = [0u8; 20];
+        let mut at = digits.len();
+        let mut n = index;
+        loop {
+            at -= 1;
+            digits[at] = b'0' + (n % 10) as u8;
+            n /= 10;
+            if n == 0 {
+                break;
+            }
+        }
+        self.push("[")?;
+        self.push(core::str::from_utf8(&digits[at..]).unwrap_or("0"))?;
+        self.push("]")
     }
 }
 
@@ -164,19 +185,29 @@ impl<R: BitRead + ?Sized, B: BitRead + ?Sized> Merge<'_, '_, '_, R, B> {
         self.frames[self.depth - 1]
     }
 
+    /// Goes down to `name` (a field or variant; `""` stays at the path) or, with `index`, to
+    /// an element.
     fn enter(
         &mut self,
         old: Option<NodeId>,
         report: bool,
-        segment: fmt::Arguments<'_>,
+        name: &str,
+        index: Option<usize>,
     ) -> Result<()> {
         if self.depth >= DEPTH_MAX {
             return Err(TranslateError::PathTooLong);
         }
         let mark = self.path.len;
-        self.path
-            .write_fmt(segment)
-            .map_err(|_| TranslateError::PathTooLong)?;
+        match index {
+            Some(i) => self.path.push_index(i)?,
+            None if name.is_empty() => {}
+            None => {
+                if self.path.len > 0 {
+                    self.path.push(".")?;
+                }
+                self.path.push(name)?;
+            }
+        }
         self.frames[self.depth] = Frame { old, report, mark };
         self.depth += 1;
         Ok(())
@@ -186,14 +217,6 @@ impl<R: BitRead + ?Sized, B: BitRead + ?Sized> Merge<'_, '_, '_, R, B> {
         if self.depth > 1 {
             self.depth -= 1;
             self.path.len = self.frames[self.depth].mark;
-        }
-    }
-
-    fn dot(&self) -> &'static str {
-        if self.path.len == 0 {
-            ""
-        } else {
-            "."
         }
     }
 
@@ -237,8 +260,7 @@ fn read<D: BitRead + ?Sized>(
     suffix: &str,
 ) -> Result<Scalar> {
     let mut full = *path;
-    full.write_str(suffix)
-        .map_err(|_| TranslateError::PathTooLong)?;
+    full.push(suffix)?;
     let target = Target::Path(full.as_str().trim_start_matches('.'));
     leaf::get_leaf(layout, root, data, target, false)
         .map(|(_, v)| v)
@@ -306,8 +328,7 @@ impl<R: BitRead + ?Sized, B: BitRead + ?Sized> Source for Merge<'_, '_, '_, R, B
         };
         let changed_kind = frame.old.is_some() && old.is_none() && self.old_member(name).is_some();
         let added = frame.old.is_some() && self.old_member(name).is_none();
-        let dot = self.dot();
-        self.enter(old, report, format_args!("{dot}{name}"))?;
+        self.enter(old, report, name, None)?;
         if frame.report && changed_kind {
             self.report(What::Dropped);
         }
@@ -332,8 +353,7 @@ impl<R: BitRead + ?Sized, B: BitRead + ?Sized> Source for Merge<'_, '_, '_, R, B
             if f.role != Role::Data || fields.iter().any(|n| layout.name(n) == name) {
                 continue;
             }
-            let dot = self.dot();
-            self.enter(None, false, format_args!("{dot}{name}"))?;
+            self.enter(None, false, name, None)?;
             self.report(What::Dropped);
             self.leave();
         }
@@ -354,14 +374,13 @@ impl<R: BitRead + ?Sized, B: BitRead + ?Sized> Source for Merge<'_, '_, '_, R, B
                     layout.name(n) == name
                         && shape(layout.node(n.node).kind) == shape(layout.node(v.node).kind)
                 };
-                let dot = self.dot();
                 if let Some(i) = variants.iter().position(same) {
-                    self.enter(Some(v.node), frame.report, format_args!("{dot}{name}"))?;
+                    self.enter(Some(v.node), frame.report, name, None)?;
                     return Ok(i as u32);
                 }
                 // The new type has no such variant (or holds another kind of value in it):
                 // dropped, and the base's variant instead.
-                self.enter(None, false, format_args!("{dot}{name}"))?;
+                self.enter(None, false, name, None)?;
                 if frame.report {
                     self.report(What::Dropped);
                 }
@@ -373,8 +392,7 @@ impl<R: BitRead + ?Sized, B: BitRead + ?Sized> Source for Merge<'_, '_, '_, R, B
             _ => 0,
         };
         let name = variants.get(tag as usize).map_or("", |v| layout.name(v));
-        let dot = self.dot();
-        self.enter(None, false, format_args!("{dot}{name}"))?;
+        self.enter(None, false, name, None)?;
         Ok(tag)
     }
 
@@ -408,13 +426,13 @@ impl<R: BitRead + ?Sized, B: BitRead + ?Sized> Source for Merge<'_, '_, '_, R, B
             Some(Kind::Array { elem, .. } | Kind::DynArray { elem, .. }) => Some(elem),
             _ => None,
         };
-        self.enter(elem, false, format_args!(""))?;
+        self.enter(elem, false, "", None)?;
         Ok(len)
     }
 
     fn element(&mut self, index: usize) -> Result<()> {
         let frame = self.top();
-        self.enter(frame.old, false, format_args!("[{index}]"))
+        self.enter(frame.old, false, "", Some(index))
     }
 
     fn end_element(&mut self) {

@@ -302,7 +302,7 @@ fn missing_and_version_fields() {
     .unwrap_err();
     assert_eq!(
         err.display(&layout).to_string(),
-        "bus.i2c: the leaf list ends before the value"
+        "bus.i2c.bus_id: the leaf list ends before the value"
     );
     // Buffer too small.
     let err = encode(
