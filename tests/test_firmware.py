@@ -77,6 +77,7 @@ def abi_checks(example: Path, staticlib: Path) -> Path:
 # slots, a 6-byte stored value, `current` is leaf [5] (uint10, default 327) and `p_version`
 # leaf [0].
 ABI_ANSWERS = """\
+get from a store never opened: -1 PX4P_ERR_ARGUMENT
 open without tables: -1 PX4P_ERR_ARGUMENT
 open with too little memory: -2 PX4P_ERR_TABLES
 open: 0 PX4P_OK

@@ -9,6 +9,7 @@
 extern const px4p_tables px4_param_tables;
 
 static px4p_store store;
+static px4p_store never_opened;
 static px4p_slot slots[256];
 static uint8_t bytes[8192];
 
@@ -21,6 +22,7 @@ int main(void) {
     px4p_value v;
     const uint32_t ina = PX4_PARAM_INA238;
 
+    show("get from a store never opened", px4p_get(&never_opened, ina, 0, 0, buf, sizeof buf));
     show("open without tables", px4p_store_open(&store, NULL, slots, 256, bytes, sizeof bytes));
     show("open with too little memory", px4p_store_open(&store, &px4_param_tables, slots, 256, bytes, 16));
     show("open", px4p_store_open(&store, &px4_param_tables, slots, 256, bytes, sizeof bytes));

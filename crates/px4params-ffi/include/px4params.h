@@ -86,7 +86,8 @@ typedef uint8_t px4p_cast;
 #endif // __cplusplus
 
 // Room for a store, in the caller's memory (`static px4p_store store;`). Opened by
-// [`px4p_store_open`]; the tables and memory given there must outlive it.
+// [`px4p_store_open`]; the tables and memory given there must outlive it. Every other
+// function refuses a store that was not opened (`PX4P_ERR_ARGUMENT`).
 typedef struct {
   // Private (`u64`s: 8-byte aligned).
   uint64_t opaque[12];

@@ -110,7 +110,8 @@ pub struct px4p_tables {
 }
 
 /// Room for a store, in the caller's memory (`static px4p_store store;`). Opened by
-/// [`px4p_store_open`]; the tables and memory given there must outlive it.
+/// [`px4p_store_open`]; the tables and memory given there must outlive it. Every other
+/// function refuses a store that was not opened (`PX4P_ERR_ARGUMENT`).
 #[repr(C)]
 pub struct px4p_store {
     /// Private (`u64`s: 8-byte aligned).
@@ -177,11 +178,16 @@ pub const PX4P_ERR_END: i32 = -17;
 
 type CStore = Store<&'static [ParamDef], &'static mut [Slot], &'static mut [u8]>;
 
-/// What [`px4p_store`] holds.
+/// What [`px4p_store`] holds once opened; `magic` first, so that a store never opened (or
+/// memory that is not a store) is refused rather than used.
+#[repr(C)]
 struct Open {
+    magic: u64,
     tables: &'static px4p_tables,
     store: CStore,
 }
+
+const OPEN: u64 = u64::from_le_bytes(*b"px4p-ok!");
 
 const _: () = assert!(size_of::<Open>() <= size_of::<px4p_store>());
 const _: () = assert!(align_of::<Open>() <= align_of::<px4p_store>());
@@ -207,12 +213,18 @@ unsafe fn layout_of(t: &px4p_layout) -> Option<Layout<'static>> {
 }
 
 unsafe fn open<'a>(store: *const px4p_store) -> Option<&'a Open> {
-    // SAFETY: px4p_store_open wrote an `Open` here; the caller passes a store it opened.
-    store.cast::<Open>().as_ref()
+    // SAFETY: the magic word is only there where px4p_store_open wrote an `Open`.
+    match store.as_ref() {
+        Some(s) if s.opaque[0] == OPEN => store.cast::<Open>().as_ref(),
+        _ => None,
+    }
 }
 
 unsafe fn open_mut<'a>(store: *mut px4p_store) -> Option<&'a mut Open> {
-    store.cast::<Open>().as_mut()
+    match store.as_ref() {
+        Some(s) if s.opaque[0] == OPEN => store.cast::<Open>().as_mut(),
+        _ => None,
+    }
 }
 
 impl Open {
@@ -301,6 +313,7 @@ pub unsafe extern "C" fn px4p_store_open(
     }
     core.mark_saved();
     let open = Open {
+        magic: OPEN,
         tables,
         store: core,
     };
