@@ -16,7 +16,15 @@ import math
 
 from px4params.errors import NumberError
 
-__all__ = ["MAX_DIGITS", "NumberError", "abbreviated", "load_json", "parse_float", "parse_int"]
+__all__ = [
+    "MAX_DIGITS",
+    "NumberError",
+    "abbreviated",
+    "dump_json",
+    "load_json",
+    "parse_float",
+    "parse_int",
+]
 
 #: Far beyond 64 bits (20 decimal digits), far below Python's limit of 4300.
 MAX_DIGITS = 64
@@ -85,3 +93,57 @@ def load_json(text: str) -> object:
     return json.loads(
         text, parse_int=_json_int, parse_float=parse_float, parse_constant=_json_constant
     )
+
+
+def dump_json(value: object, separators: tuple[str, str] = (", ", ": ")) -> str:
+    """``json.dumps(value, separators=separators)``, written here for plain values (numbers,
+    ASCII strings, lists, dicts with string keys): importing ``json`` imports ``re``, which
+    costs a short command a third of Python's start. Anything else is json's to write."""
+    parts: list[str] = []
+    try:
+        plain = _json_parts(value, parts, *separators)
+    except RecursionError:  # deep, or a cycle (which json reports)
+        plain = False
+    if plain:
+        return "".join(parts)
+    import json
+
+    return json.dumps(value, separators=separators)
+
+
+def _json_parts(value: object, parts: list[str], item: str, key: str) -> bool:
+    """Appends ``value``'s JSON text to ``parts``; False if it is not a plain value."""
+    if isinstance(value, str):
+        if not (value.isascii() and value.isprintable()) or '"' in value or "\\" in value:
+            return False  # escapes: json's
+        parts.append(f'"{value}"')
+    elif value is None or value is True or value is False:
+        parts.append("null" if value is None else "true" if value else "false")
+    elif isinstance(value, int):
+        parts.append(int.__repr__(value))
+    elif isinstance(value, float):
+        if not math.isfinite(value):
+            return False  # NaN, Infinity: json's
+        parts.append(float.__repr__(value))
+    elif isinstance(value, (list, tuple)):
+        parts.append("[")
+        for i, element in enumerate(value):
+            if i:
+                parts.append(item)
+            if not _json_parts(element, parts, item, key):
+                return False
+        parts.append("]")
+    elif isinstance(value, dict):
+        parts.append("{")
+        for i, (name, element) in enumerate(value.items()):
+            if i:
+                parts.append(item)
+            if not isinstance(name, str) or not _json_parts(name, parts, item, key):
+                return False
+            parts.append(key)
+            if not _json_parts(element, parts, item, key):
+                return False
+        parts.append("}")
+    else:
+        return False
+    return True

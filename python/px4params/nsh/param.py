@@ -10,7 +10,6 @@ from __future__ import annotations
 import argparse
 import math
 import os
-import re
 import struct
 import sys
 from collections.abc import Callable
@@ -18,7 +17,7 @@ from collections.abc import Callable
 from px4params._records import TYPE_CHECKING
 from px4params.dsdl.schema import Leaf, to_json_value
 from px4params.errors import CommandError, InstanceError, NumberError, Px4ParamsError
-from px4params.numbers import abbreviated, load_json, parse_float, parse_int
+from px4params.numbers import abbreviated, dump_json, load_json, parse_float, parse_int
 from px4params.status import EXIT_FAILED, EXIT_OK
 from px4params.store.session import Session
 from px4params.store.store import Key, Store
@@ -26,8 +25,8 @@ from px4params.store.store import Key, Store
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
     from typing import Any, TextIO
 
-# Pattern strings: ``re`` compiles them on first use, so that commands that parse no number do
-# not pay for it.
+# Pattern strings, and ``re`` imported on first use: commands that parse no number do not pay
+# for it.
 _INT = r"[+-]?(0[xX][0-9a-fA-F]+|[0-9]+)"
 _FLOAT = r"[+-]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][+-]?[0-9]+)?"
 
@@ -39,6 +38,8 @@ def parse_number(text: str, kind: str, where: str) -> int | float | bool:
     """``text`` as a value of a leaf of type ``kind`` (``uint7``, ``float16``, ``bool``, classic
     ``Int32``/``Float``): decimal or 0x hex integers, floats only for float leaves. Anything
     else is refused (PX4's ``param set`` silently reads ``0x45`` as 0; we do not)."""
+    import re
+
     t = text.strip()
     if kind == "bool":
         lowered = t.lower()
@@ -729,6 +730,4 @@ def _add_verbs(verb: _VerbParsers) -> None:
 
 
 def _print_json(value: object, out: TextIO) -> None:
-    import json  # here: the commands that print no JSON do not pay 2 ms to import it
-
-    print(json.dumps(value), file=out)
+    print(dump_json(value), file=out)

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from collections.abc import Callable, Sequence
 
@@ -11,7 +10,7 @@ from px4params._records import TYPE_CHECKING
 from px4params.cli.options import dsdl_option
 from px4params.dsdl.schema import DataType, Schema, load_schema, to_json_value
 from px4params.errors import CommandError, EncodeError, NumberError, Px4ParamsError
-from px4params.numbers import abbreviated, load_json
+from px4params.numbers import abbreviated, dump_json, load_json
 from px4params.status import EXIT_FAILED, EXIT_OK
 
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
@@ -28,6 +27,8 @@ def parse_hex(text: str) -> bytes:
 
 
 def parse_json(text: str) -> Any:
+    import json  # for its error class (load_json imports it anyway)
+
     text = text.strip()  # a stdin line's newline would move an end-of-input error to "column 1"
     try:
         return load_json(text)
@@ -41,8 +42,8 @@ def parse_json(text: str) -> Any:
         raise CommandError(f"not JSON: {e}") from None
 
 
-def dump_json(value: Any) -> str:
-    return json.dumps(to_json_value(value), separators=(", ", ": "))
+def value_json(value: Any) -> str:
+    return dump_json(to_json_value(value))
 
 
 def find_type(schema: Schema, name: str) -> DataType:
@@ -102,6 +103,8 @@ def cmd_types(args: argparse.Namespace) -> int:
             }
         )
     if args.json:
+        import json
+
         print(json.dumps(rows, indent=2))
         return EXIT_OK
     width = max(len(r["key"]) for r in rows)
@@ -143,7 +146,7 @@ def cmd_decode(args: argparse.Namespace) -> int:
     t = find_type(_schema(args), args.type)
 
     def convert(text: str) -> str:
-        return dump_json(t.decode(parse_hex(text), tao=not args.no_tao))
+        return value_json(t.decode(parse_hex(text), tao=not args.no_tao))
 
     return _each_item(args.hex, sys.stdin, sys.stdout, convert)
 
@@ -178,6 +181,8 @@ def cmd_frames(args: argparse.Namespace) -> int:
     except ValueError as e:  # numbers out of range (EncodeError is not a ValueError)
         raise CommandError(str(e)) from None
     if args.json:
+        import json
+
         rows = [{"can_id": f.can_id, "data": f.data.hex()} for f in out]
         print(json.dumps(rows, indent=2))
     else:
@@ -218,7 +223,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
         ):
             shown += f" ({value:#04x})"
         print(f"  [{leaf.index}] {leaf.path:<20} {leaf.type:<8} {shown}")
-    print(f"decoded back: {dump_json(t.decode(data))}")
+    print(f"decoded back: {value_json(t.decode(data))}")
     golden = schema_golden_vector()
     print(
         f"golden vector (0xBEDA:uint12, -1:int3, -5:int4, -1:int2, 0x88:uint4): {golden.hex(' ')}"
