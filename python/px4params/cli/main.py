@@ -6,13 +6,16 @@ Exit codes are in ``status.py``. Every error a command raises on purpose
 
 from __future__ import annotations
 
-import argparse
-import os
 import sys
 from collections.abc import Sequence
 
+from px4params._records import TYPE_CHECKING
+from px4params.cli.parsing import ArgumentParser
 from px4params.errors import Px4ParamsError
 from px4params.status import EXIT_FAILED, EXIT_INTERRUPTED
+
+if TYPE_CHECKING:
+    import argparse
 
 #: Every command, in the order ``--help`` lists them: its module in ``px4params.cli.commands``
 #: (imported only when the command runs) and its one-line summary.
@@ -53,38 +56,12 @@ parameters, stored bit-packed with the DroneCAN rules, from which drivers
 autostart and arming is checked."""
 
 
-class Parser(argparse.ArgumentParser):
-    """argparse's parser, whose help formatter takes the terminal's width from ``os`` (argparse
-    asks ``shutil``, which costs every command 3 ms to import). Subparsers are of this class
-    too (argparse makes them of their parent's)."""
-
-    def _get_formatter(self) -> argparse.HelpFormatter:
-        global _width
-        if _width is None:  # argparse makes a formatter for every argument it adds: ask once
-            _width = _terminal_width()
-        return self.formatter_class(prog=self.prog, width=_width - 2)
-
-
-_width: int | None = None
-
-
-def _terminal_width() -> int:
-    """As ``shutil.get_terminal_size()`` finds it: $COLUMNS, the terminal, else 80."""
-    try:
-        return int(os.environ["COLUMNS"])
-    except (KeyError, ValueError):
-        pass
-    try:
-        return os.get_terminal_size(sys.__stdout__.fileno()).columns or 80  # type: ignore[union-attr]
-    except (AttributeError, ValueError, OSError):
-        return 80
-
-
-def build_parser(only: str | None = None, words: Sequence[str] = ()) -> argparse.ArgumentParser:
-    """The whole parser, or with ``only`` the parser of that one command (the others appear in
-    ``--help`` by name and summary, without importing their modules). ``words``, the command
-    line, lets a command build only the part of its parser it runs (``param show``)."""
-    parser = Parser(
+def declare(only: str | None = None, words: Sequence[str] = ()) -> ArgumentParser:
+    """The command line's grammar (see ``parsing.py``): the whole of it, or with ``only`` that
+    one command's (the others appear in ``--help`` by name and summary, without importing their
+    modules). ``words``, the command line, lets a command declare only the part it runs
+    (``param show``)."""
+    parser = ArgumentParser(
         prog="px4params",
         description=_DESCRIPTION,
         epilog="'px4params COMMAND --help' shows a command's options and examples.",
@@ -99,6 +76,11 @@ def build_parser(only: str | None = None, words: Sequence[str] = ()) -> argparse
     return parser
 
 
+def build_parser(only: str | None = None, words: Sequence[str] = ()) -> argparse.ArgumentParser:
+    """argparse's parser of :func:`declare`'s grammar."""
+    return declare(only, words).argparse()
+
+
 def _command_in(argv: Sequence[str]) -> str | None:
     """The command ``argv`` names (its first word that is not an option), if it is one."""
     for word in argv:
@@ -111,7 +93,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     words = list(sys.argv[1:] if argv is None else argv)
     command = _command_in(words)
     # Without a command there is nothing to run: the parser reports usage or prints --help.
-    parser = build_parser(only=command or "", words=words)
+    parser = declare(only=command or "", words=words)
     args = parser.parse_args(words)
     try:
         return int(args.func(args))

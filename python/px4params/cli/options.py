@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-import argparse
 from collections.abc import Callable
 
+from px4params.cli.parsing import ArgumentParser, type_error
 from px4params.store.classic import CLASSIC_ENV
 
 
@@ -14,13 +14,13 @@ def identifier(what: str, high: int) -> Callable[[str], int]:
     def parse(text: str) -> int:
         # (digits counted first: Python will not convert thousands of them)
         if not text.isdigit() or len(text) > 5 or not 1 <= int(text) <= high:
-            raise argparse.ArgumentTypeError(f"'{text[:20]}' is not a {what} (expected 1..{high})")
+            raise type_error(f"'{text[:20]}' is not a {what} (expected 1..{high})")
         return int(text)
 
     return parse
 
 
-def dsdl_option(p: argparse.ArgumentParser) -> None:
+def dsdl_option(p: ArgumentParser) -> None:
     """``--dsdl DIR``: the extra DSDL roots every schema-loading command takes."""
     p.add_argument(
         "--dsdl",
@@ -30,7 +30,7 @@ def dsdl_option(p: argparse.ArgumentParser) -> None:
     )
 
 
-def store_options(p: argparse.ArgumentParser) -> None:
+def store_options(p: ArgumentParser) -> None:
     p.add_argument(
         "--store",
         metavar="FILE",
@@ -50,7 +50,7 @@ def store_options(p: argparse.ArgumentParser) -> None:
     )
 
 
-def bench_options(p: argparse.ArgumentParser, reported: str) -> None:
+def bench_options(p: ArgumentParser, reported: str) -> None:
     """``--bench FILE.toml`` and ``--bench-duration S`` of the servers; ``reported`` says how
     they report the devices' health."""
     p.add_argument(

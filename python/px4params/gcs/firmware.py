@@ -23,8 +23,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
-from px4params import _native
 from px4params.dsdl.schema import Schema
+from px4params.store.layout_tables import layout_tables
 from px4params.store.spec import ParamSpec
 
 __all__ = ["generate_tables"]
@@ -36,12 +36,7 @@ def generate_tables(
     """The C source of the tables for ``specs`` (with their type defaults, encoded without
     tail array optimization); ``header`` is the metadata header it includes, or ``""``."""
     older = _older_versions(schema, specs)
-    closure = schema._closure([s.data_type.key for s in specs] + [key for _, _, key in older])
-    rows = [(s.name, s.data_type.key, s.max_instances) for s in specs]
-    store = _native.Store(_native.Schema(closure), rows)
-    for index, default in enumerate(type_defaults):
-        store.set_type_default(index, default)
-    t = store.tables([key for _, _, key in older])
+    t = layout_tables(schema, specs, type_defaults, [key for _, _, key in older])
     slots, size = t["capacity"]
     out = [
         "/* The device manifest's parameter tables for the px4params C ABI.",

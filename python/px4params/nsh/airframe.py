@@ -45,7 +45,7 @@ def _param_parser() -> argparse.ArgumentParser:
     verbs = parser.add_subparsers(
         dest="verb_name", required=True, metavar="VERB", parser_class=_Parser
     )
-    param.add_verbs(verbs)
+    param.add_verbs(verbs, argparse.RawDescriptionHelpFormatter)
     return parser
 
 

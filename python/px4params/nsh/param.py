@@ -7,12 +7,10 @@ refused change saves nothing and leaves the file as it was.
 
 from __future__ import annotations
 
-import argparse
 import math
 import os
 import struct
 import sys
-from collections.abc import Callable
 
 from px4params._records import TYPE_CHECKING
 from px4params.dsdl.schema import Leaf, to_json_value
@@ -23,7 +21,12 @@ from px4params.store.session import Session
 from px4params.store.store import Key, Store
 
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
+    import argparse
+    from collections.abc import Callable
     from typing import Any, TextIO
+
+    #: A verb: the session, the parsed command line (argparse's namespace, or one alike).
+    Verb = Callable[[Session, argparse.Namespace], int]
 
 # Pattern strings, and ``re`` imported on first use: commands that parse no number do not pay
 # for it.
@@ -177,8 +180,6 @@ def _matches(name: str, patterns: list[str]) -> bool:
 
 
 # -- verbs ----------------------------------------------------------------------------------
-
-Verb = Callable[[Session, argparse.Namespace], int]
 
 
 def verb_add(s: Session, a: argparse.Namespace) -> int:
@@ -586,9 +587,10 @@ class _VerbParsers:
     """Adds the verbs' parsers to ``sub``: every one, or with ``only`` just that verb's (the
     others' arguments go to an :class:`_Unbuilt`)."""
 
-    def __init__(self, sub: Any, only: str | None) -> None:
+    def __init__(self, sub: Any, only: str | None, formatter_class: Any) -> None:
         self.sub = sub
         self.only = only
+        self.formatter_class = formatter_class
 
     def __call__(self, name: str, func: Verb, summary: str, example: str) -> Any:
         VERBS[name] = (func, summary, example)
@@ -599,16 +601,19 @@ class _VerbParsers:
             help=summary,
             description=summary,
             epilog=f"example:\n  {example}",
-            formatter_class=argparse.RawDescriptionHelpFormatter,
+            formatter_class=self.formatter_class,
         )
         p.set_defaults(verb=func)
         return p
 
 
-def add_verbs(sub: Any, only: str | None = None) -> None:
-    """The ``param`` verbs (shared by ``px4params param`` and airframe files); with ``only``,
-    just that verb's parser is built (all of them, listed by name, when it is no verb)."""
-    _add_verbs(_VerbParsers(sub, only))
+def add_verbs(sub: Any, formatter_class: Any, only: str | None = None) -> None:
+    """The ``param`` verbs (shared by ``px4params param`` and airframe files) on ``sub``,
+    argparse's subcommands or those of ``px4params.cli.parsing`` (whose declaration argparse
+    builds only when asked: ``formatter_class`` is the help formatter of argparse's or its
+    stand-in there). With ``only``, just that verb's parser is built (all of them, listed by
+    name, when it is no verb)."""
+    _add_verbs(_VerbParsers(sub, only, formatter_class))
     if only is not None and only not in VERBS:  # no verb: list them all for the usage error
         for name, (_, summary, _) in VERBS.items():
             sub.add_parser(name, help=summary, add_help=False)

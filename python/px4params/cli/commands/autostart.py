@@ -5,13 +5,13 @@ timeline.py; this module is only the command line).
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
+from px4params.cli.parsing import ArgumentParser, RawDescriptionHelpFormatter
 from px4params.dsdl.schema import load_schema
 from px4params.errors import CommandError
 from px4params.status import EXIT_FAILED, EXIT_OK
@@ -20,6 +20,9 @@ from px4params.store.store import STORE_ENV, default_store_path
 from px4params.vehicle.autostart import configured, load_manifest, plan, plan_lines, script
 from px4params.vehicle.drivers import DEFAULT_DRIVERS, DRIVERS_ENV, load_drivers
 from px4params.vehicle.simbench import LEGACY_PROBES, RunResult, load_bench, run
+
+if TYPE_CHECKING:
+    import argparse
 
 __all__ = ["add_parser"]
 
@@ -179,7 +182,7 @@ def _report(result: RunResult, i2c_buses: list[int], have_manifest: bool) -> lis
 
 def add_parser(sub: Any, name: str, summary: str, words: Sequence[str] = ()) -> None:
     """Registers ``autostart`` and its three verbs on the main parser's subcommands."""
-    common = argparse.ArgumentParser(add_help=False)
+    common = ArgumentParser(add_help=False)
     common.add_argument(
         "--dsdl",
         action="append",
@@ -191,7 +194,7 @@ def add_parser(sub: Any, name: str, summary: str, words: Sequence[str] = ()) -> 
         metavar="FILE",
         help=f"driver declarations (default: ${DRIVERS_ENV}, else the bundled drivers.toml)",
     )
-    manifest = argparse.ArgumentParser(add_help=False)
+    manifest = ArgumentParser(add_help=False)
     source = manifest.add_mutually_exclusive_group()
     source.add_argument(
         "--store",
@@ -208,7 +211,7 @@ def add_parser(sub: Any, name: str, summary: str, words: Sequence[str] = ()) -> 
     p = sub.add_parser(
         name,
         help=summary,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        formatter_class=RawDescriptionHelpFormatter,
         description="""\
 Drivers declared in drivers.toml start from the manifest: 'script' prints the
 startup script (a '<driver> auto' line per autostart driver, in declared order,
@@ -250,7 +253,7 @@ examples:
         "run",
         parents=[common, manifest],
         help="boot the manifest on a simulated bench; exit 0 if the vehicle may arm",
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        formatter_class=RawDescriptionHelpFormatter,
         description="""\
 Boot the manifest on the bench described by --bench FILE (devices by bus and
 address, with faults: absent, chip_id, error_rate, dies_after, power_up) in

@@ -2,18 +2,19 @@
 
 from __future__ import annotations
 
-import argparse
 import sys
 from collections.abc import Callable, Sequence
 
 from px4params._records import TYPE_CHECKING
 from px4params.cli.options import dsdl_option
+from px4params.cli.parsing import ArgumentParser, RawDescriptionHelpFormatter
 from px4params.dsdl.schema import DataType, Schema, load_schema, to_json_value
 from px4params.errors import CommandError, EncodeError, NumberError, Px4ParamsError
 from px4params.numbers import abbreviated, dump_json, load_json
 from px4params.status import EXIT_FAILED, EXIT_OK
 
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
+    import argparse
     from typing import Any, TextIO
 
 
@@ -266,14 +267,14 @@ def schema_golden_vector() -> bytes:
     return t.encode({"a": 0xBEDA, "b": -1, "c": -5, "d": -1, "e": 0x88})
 
 
-def _add_types(p: argparse.ArgumentParser) -> None:
+def _add_types(p: ArgumentParser) -> None:
     p.description = "List every loaded type (bundled px types, DroneCAN standard types, --dsdl)."
     p.epilog = "example:\n  px4params types --json"
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.set_defaults(func=cmd_types)
 
 
-def _add_encode(p: argparse.ArgumentParser) -> None:
+def _add_encode(p: ArgumentParser) -> None:
     p.description = (
         "Encode a JSON value of TYPE; '-' reads one per line from stdin and prints one line "
         "per input line (the hex, or 'error: WHY')."
@@ -299,7 +300,7 @@ def _add_encode(p: argparse.ArgumentParser) -> None:
     p.set_defaults(func=cmd_encode)
 
 
-def _add_decode(p: argparse.ArgumentParser) -> None:
+def _add_decode(p: ArgumentParser) -> None:
     p.description = (
         "Decode hex bytes of TYPE; '-' reads one per line from stdin and prints one line per "
         "input line (the JSON, or 'error: WHY'; a blank line is the empty payload)."
@@ -315,13 +316,13 @@ def _add_decode(p: argparse.ArgumentParser) -> None:
     p.set_defaults(func=cmd_decode)
 
 
-def _type_argument(p: argparse.ArgumentParser) -> None:
+def _type_argument(p: ArgumentParser) -> None:
     p.add_argument(
         "type", metavar="TYPE", help="type name, e.g. px.Ina238 or uavcan.protocol.NodeStatus"
     )
 
 
-def _add_frames(p: argparse.ArgumentParser) -> None:
+def _add_frames(p: ArgumentParser) -> None:
     p.description = """\
 Encode a JSON value of TYPE and print the CAN frames of one DroneCAN transfer
 of it, one per line: the 29-bit CAN ID and the frame data (tail byte
@@ -361,7 +362,7 @@ example:
     p.set_defaults(func=cmd_frames)
 
 
-def _add_demo(p: argparse.ArgumentParser) -> None:
+def _add_demo(p: ArgumentParser) -> None:
     p.description = (
         "Encode the INA238#0 example of the PX4 Device Manifest talk, print its leaves "
         "[0]..[6] and bytes, decode it back."
@@ -370,7 +371,7 @@ def _add_demo(p: argparse.ArgumentParser) -> None:
     p.set_defaults(func=cmd_demo)
 
 
-_ADDERS: dict[str, Callable[[argparse.ArgumentParser], None]] = {
+_ADDERS: dict[str, Callable[[ArgumentParser], None]] = {
     "types": _add_types,
     "encode": _add_encode,
     "decode": _add_decode,
@@ -381,6 +382,6 @@ _ADDERS: dict[str, Callable[[argparse.ArgumentParser], None]] = {
 
 def add_parser(sub: Any, name: str, summary: str, words: Sequence[str] = ()) -> None:
     """Registers the codec command ``name`` on the main parser's subcommands."""
-    p = sub.add_parser(name, help=summary, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = sub.add_parser(name, help=summary, formatter_class=RawDescriptionHelpFormatter)
     dsdl_option(p)
     _ADDERS[name](p)

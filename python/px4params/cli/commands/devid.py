@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
-import argparse
 import json
 from collections.abc import Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
+from px4params.cli.parsing import ArgumentParser, RawDescriptionHelpFormatter
 from px4params.errors import CommandError
 from px4params.status import EXIT_OK
+
+if TYPE_CHECKING:
+    import argparse
 
 DEVID_PARTS = ("bus_type", "bus", "address", "devtype")
 
@@ -16,7 +19,7 @@ DEVID_PARTS = ("bus_type", "bus", "address", "devtype")
 def cmd_devid(args: argparse.Namespace) -> int:
     from px4params.vehicle import devid
 
-    parser: argparse.ArgumentParser = args.devid_parser
+    parser: ArgumentParser = args.devid_parser
     modes = [m for m in ("ids", "encode", "log", "list") if getattr(args, m)]
     if len(modes) != 1:
         parser.error("give device IDs, or one of --encode, --log FILE, --list")
@@ -85,7 +88,7 @@ def add_parser(sub: Any, name: str, summary: str, words: Sequence[str] = ()) -> 
     p = sub.add_parser(
         name,
         help=summary,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        formatter_class=RawDescriptionHelpFormatter,
         description="""\
 Decode PX4 24-bit device IDs (bits 0-2 bus type, 3-7 bus, 8-15 address,
 16-23 devtype), build one with --encode, or decode every CAL_*_ID parameter

@@ -3,18 +3,21 @@
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import os
 import signal
 import sys
 import threading
 from collections.abc import Iterator, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from px4params.cli.options import bench_options, identifier, store_options
+from px4params.cli.parsing import RawDescriptionHelpFormatter
 from px4params.status import EXIT_OK
 from px4params.store.store import default_store_path
+
+if TYPE_CHECKING:
+    import argparse
 
 __all__ = ["add_parser"]
 
@@ -151,7 +154,7 @@ def add_parser(sub: Any, name: str, summary: str, words: Sequence[str] = ()) -> 
     s = verbs.add_parser(
         "serve",
         help="serve the store's parameters as a DroneCAN node behind an SLCAN line",
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        formatter_class=RawDescriptionHelpFormatter,
         description="""\
 Be a DroneCAN node that serves the store's parameters, behind an SLCAN
 adapter on a serial line (as a flight controller passing CAN over USB
@@ -200,7 +203,7 @@ examples:
     q = verbs.add_parser(
         "param",
         help="list, get, set or save a remote node's parameters",
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        formatter_class=RawDescriptionHelpFormatter,
         description="""\
 Read and write the parameters of a DroneCAN node (a peripheral: GPS,
 power module, ESC; or 'px4params dronecan serve') through an SLCAN

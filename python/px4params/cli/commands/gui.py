@@ -3,15 +3,18 @@
 
 from __future__ import annotations
 
-import argparse
 import socket
 from collections.abc import Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from px4params.cli.commands.mavlink import parse_udp
 from px4params.cli.options import store_options
+from px4params.cli.parsing import RawDescriptionHelpFormatter
 from px4params.errors import CommandError
 from px4params.status import EXIT_OK
+
+if TYPE_CHECKING:
+    import argparse
 
 _DESCRIPTION = """\
 Serve a ground-station page for the device manifest on loopback and print its
@@ -81,7 +84,7 @@ def add_parser(sub: Any, name: str, summary: str, words: Sequence[str] = ()) -> 
 examples:
   px4params gui --udp 127.0.0.1:14540                 # a vehicle (px4params mavlink serve)
   px4params gui --store vehicle.store --http 127.0.0.1:8081 --open""",
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        formatter_class=RawDescriptionHelpFormatter,
     )
     where = p.add_mutually_exclusive_group()
     where.add_argument(

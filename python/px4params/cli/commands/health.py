@@ -3,16 +3,18 @@
 
 from __future__ import annotations
 
-import argparse
 import json
 from collections.abc import Sequence
 from typing import Any
 
 from px4params._records import TYPE_CHECKING
+from px4params.cli.parsing import RawDescriptionHelpFormatter
 from px4params.errors import CommandError
 from px4params.status import EXIT_FAILED, EXIT_OK
 
 if TYPE_CHECKING:
+    import argparse
+
     from px4params.vehicle.simbench import InstanceResult, RunResult
 
 
@@ -100,7 +102,7 @@ examples:
   px4params autostart run --airframe examples/two_batteries.airframe \\
     --bench examples/two_batteries_faults.bench.toml --ulog run.ulg   # exit status 1
   px4params health run.ulg --timeline run.svg   # the same story: exit status 1""",
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        formatter_class=RawDescriptionHelpFormatter,
     )
     p.add_argument("log", metavar="FILE.ulg", help="the flight log")
     p.add_argument("--timeline", metavar="FILE.svg", help="write the health timeline picture")

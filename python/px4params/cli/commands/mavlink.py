@@ -2,17 +2,20 @@
 
 from __future__ import annotations
 
-import argparse
 import os
 import signal
 import threading
 from collections.abc import Callable, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from px4params.cli.options import bench_options, identifier, store_options
+from px4params.cli.parsing import RawDescriptionHelpFormatter, type_error
 from px4params.errors import CommandError
 from px4params.status import EXIT_OK
 from px4params.store.store import default_store_path
+
+if TYPE_CHECKING:
+    import argparse
 
 __all__ = ["add_parser", "parse_udp"]
 
@@ -21,7 +24,7 @@ def parse_udp(text: str) -> tuple[str, int]:
     """``HOST:PORT`` (argparse type): a host name or IPv4 address and a port 0..65535."""
     host, sep, port = text.strip().rpartition(":")
     if not sep or not host or not port.isdigit() or not 0 <= int(port) <= 65535:
-        raise argparse.ArgumentTypeError(
+        raise type_error(
             f"'{text}' is not HOST:PORT (expected e.g. 127.0.0.1:14550, port 0..65535)"
         )
     return host, int(port)
@@ -118,7 +121,7 @@ def add_parser(sub: Any, name: str, summary: str, words: Sequence[str] = ()) -> 
     s = verbs.add_parser(
         "serve",
         help="serve classic and destructured parameters over UDP",
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        formatter_class=RawDescriptionHelpFormatter,
         description="""\
 Serve the store's parameters with the MAVLink parameter protocol, as PX4
 does: the classic parameters and every leaf of every structured instance

@@ -3,24 +3,27 @@ store tables for firmware (the work is in ``px4params.gcs``)."""
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import sys
 from collections.abc import Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from px4params.cli.options import dsdl_option
+from px4params.cli.parsing import ArgumentParser, RawDescriptionHelpFormatter
 from px4params.dsdl.schema import load_schema
 from px4params.errors import CommandError
 from px4params.status import EXIT_OK
+
+if TYPE_CHECKING:
+    import argparse
 
 
 def cmd_metadata(args: argparse.Namespace) -> int:
     from px4params.gcs import cheader, metadata
     from px4params.store.spec import parameter_specs
 
-    parser: argparse.ArgumentParser = args.metadata_parser
+    parser: ArgumentParser = args.metadata_parser
     if args.json is None and args.header is None and args.firmware is None:
         parser.error("give --json FILE, --header FILE, --firmware FILE.c, or several")
     if [args.json, args.header, args.firmware].count("-") > 1:
@@ -76,7 +79,7 @@ def add_parser(sub: Any, name: str, summary: str, words: Sequence[str] = ()) -> 
     p = sub.add_parser(
         name,
         help=summary,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        formatter_class=RawDescriptionHelpFormatter,
         description="""\
 Write the parameter metadata of every structured parameter (the px types with
 @max_instances or @param):

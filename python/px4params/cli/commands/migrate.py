@@ -2,14 +2,17 @@
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 from collections.abc import Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
+from px4params.cli.parsing import ArgumentParser, RawDescriptionHelpFormatter
 from px4params.errors import CommandError
 from px4params.status import EXIT_OK
+
+if TYPE_CHECKING:
+    import argparse
 
 __all__ = ["add_parser"]
 
@@ -19,7 +22,7 @@ def cmd_migrate(args: argparse.Namespace) -> int:
     from px4params.dsdl.schema import load_schema
     from px4params.vehicle import devid
 
-    parser: argparse.ArgumentParser = args.migrate_parser
+    parser: ArgumentParser = args.migrate_parser
     if args.devtypes is not None and args.table == "legacy":
         parser.error("--devtypes is the current table's source; it does not go with --table legacy")
     # Everything is read and checked before anything is written.
@@ -53,7 +56,7 @@ def add_parser(sub: Any, name: str, summary: str, words: Sequence[str] = ()) -> 
     p = sub.add_parser(
         name,
         help=summary,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        formatter_class=RawDescriptionHelpFormatter,
         description="""\
 Read today's configuration, a QGC .params file or the parameters of a ULog
 flight log, and propose a device manifest: an airframe file of 'param add' /

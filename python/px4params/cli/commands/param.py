@@ -3,15 +3,16 @@
 
 from __future__ import annotations
 
-import argparse
 from collections.abc import Sequence
 
 from px4params._records import TYPE_CHECKING
 from px4params.cli.options import store_options
+from px4params.cli.parsing import RawDescriptionHelpFormatter
 from px4params.nsh.param import add_verbs, verb_load
 from px4params.store.session import LockedSession
 
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
+    import argparse
     from typing import Any
 
 
@@ -35,11 +36,11 @@ def add_parser(sub: Any, name: str, summary: str, words: Sequence[str] = ()) -> 
         "  px4params param set-default INA238#2[4] 0x46\n"
         "  px4params param show -l INA238#2\n"
         "  px4params param compare INA238#0.current 200 && echo configured",
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        formatter_class=RawDescriptionHelpFormatter,
     )
     store_options(p)
     verbs = p.add_subparsers(dest="verb_name", required=True, metavar="VERB")
-    add_verbs(verbs, only=_verb_in(words, name))
+    add_verbs(verbs, RawDescriptionHelpFormatter, only=_verb_in(words, name))
     p.set_defaults(func=cmd_param)
 
 

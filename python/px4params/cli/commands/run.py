@@ -3,15 +3,18 @@
 
 from __future__ import annotations
 
-import argparse
 import sys
 from collections.abc import Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from px4params.cli.options import store_options
+from px4params.cli.parsing import RawDescriptionHelpFormatter
 from px4params.nsh import airframe
 from px4params.status import EXIT_FAILED, EXIT_OK
 from px4params.store.session import LockedSession
+
+if TYPE_CHECKING:
+    import argparse
 
 _DESCRIPTION = """\
 Run a file of param lines as PX4's startup and airframe scripts have them:
@@ -38,7 +41,7 @@ def add_parser(sub: Any, name: str, summary: str, words: Sequence[str] = ()) -> 
         help=summary,
         description=_DESCRIPTION,
         epilog="example:\n  px4params run examples/two_batteries.airframe --store vehicle.store",
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        formatter_class=RawDescriptionHelpFormatter,
     )
     p.add_argument("file", metavar="FILE", help="airframe or startup file")
     p.add_argument(
