@@ -5,7 +5,6 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from px4params.cli.parsing import ArgumentParser, type_error
-from px4params.store.classic import CLASSIC_ENV
 
 
 def identifier(what: str, high: int) -> Callable[[str], int]:
@@ -31,6 +30,8 @@ def dsdl_option(p: ArgumentParser) -> None:
 
 
 def store_options(p: ArgumentParser) -> None:
+    from px4params.store.classic import CLASSIC_ENV  # (here: decode reads no store)
+
     p.add_argument(
         "--store",
         metavar="FILE",
