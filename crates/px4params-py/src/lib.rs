@@ -4,6 +4,7 @@
 
 mod compile;
 mod file;
+mod plain;
 mod store;
 mod tables;
 mod transfer;
@@ -12,11 +13,13 @@ mod values;
 use std::collections::HashMap;
 use std::sync::Arc;
 
+use px4params_core::bits::BitRead;
 use px4params_core::codec::{decode, encode, DecodeOptions, EncodeOptions, LeafKind};
 use px4params_core::compile::OwnedLayout;
 use px4params_core::error::{Error, ErrorKind};
 use px4params_core::layout::{Layout, NodeId};
 use px4params_core::leaf::{encode_default, get_leaf, locate, set_leaf, Target};
+use px4params_core::value::{LeafSink, LeafSource};
 use px4params_core::Scalar;
 use pyo3::exceptions::{PyKeyError, PyTypeError};
 use pyo3::prelude::*;
@@ -149,6 +152,9 @@ pub(crate) struct Compiled {
     classic_roots: [NodeId; 2],
     /// Every field name as an interned Python string, by field index (decoding builds dicts).
     names: Vec<Py<PyString>>,
+    /// Per struct node, made on first use: a dict of its field names (values None) that
+    /// decoding copies and fills, cheaper than growing a new dict key by key.
+    templates: Vec<std::sync::OnceLock<Py<PyDict>>>,
 }
 
 /// A translated value and each field's fate (`Schema.translate`).
@@ -177,12 +183,14 @@ impl Schema {
             .iter()
             .map(|f| PyString::intern(py, view.name(f)).unbind())
             .collect();
+        let templates = (0..view.nodes.len()).map(|_| Default::default()).collect();
         Ok(Self {
             compiled: Arc::new(Compiled {
                 layout,
                 roots,
                 classic_roots,
                 names,
+                templates,
             }),
         })
     }
@@ -204,7 +212,7 @@ impl Schema {
         Ok(DataType {
             compiled: Arc::clone(&self.compiled),
             root,
-            name: key.to_owned(),
+            key: key.to_owned(),
         })
     }
 
@@ -263,12 +271,29 @@ impl Schema {
 }
 
 /// One compiled type: encode, decode and leaf access with the DroneCAN rules.
-#[pyclass(frozen, module = "px4params._native")]
+///
+/// `px4params.dsdl.schema.DataType` subclasses it, so that its users call `encode` and `decode`
+/// here directly, with no Python call in between.
+#[pyclass(frozen, subclass, module = "px4params._native")]
 struct DataType {
     compiled: Arc<Compiled>,
     root: NodeId,
+    /// The type's key, e.g. `px.Ina238.1.1`.
     #[pyo3(get)]
-    name: String,
+    key: String,
+}
+
+/// Bytes given as `bytes` (read in place) or as anything `bytes()` takes a buffer from.
+fn bytes_of<'py>(data: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyBytes>> {
+    if let Ok(b) = data.cast::<PyBytes>() {
+        return Ok(b.clone());
+    }
+    // SAFETY: a live object; the result is a new reference or null with an exception set.
+    unsafe { Bound::from_owned_ptr_or_err(data.py(), pyo3::ffi::PyBytes_FromObject(data.as_ptr())) }
+        .map(|b| {
+            b.cast_into::<PyBytes>()
+                .expect("PyBytes_FromObject returns bytes")
+        })
 }
 
 pub(crate) fn target_of<'a>(target: &'a Bound<'_, PyAny>) -> PyResult<Target<'a>> {
@@ -303,13 +328,65 @@ impl DataType {
     }
 
     fn err<E: ValueErrorClass>(&self, py: Python<'_>, err: Error<E>, op: Op) -> PyErr {
-        to_py_err(py, &self.name, &self.layout(), err, op)
+        to_py_err(py, &self.key, &self.layout(), err, op)
+    }
+
+    /// Decodes into a leaf list, then builds the Python value from it (see [`plain`]); on
+    /// any failure the general path decodes again and words the error.
+    fn decode_from<'py, R: BitRead + ?Sized>(
+        &self,
+        py: Python<'py>,
+        data: &R,
+        tao: bool,
+        allow_trailing: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let layout = self.layout();
+        let names = &self.compiled.names;
+        let options = DecodeOptions {
+            tao,
+            allow_trailing,
+        };
+        // Most values have few leaves: a stack buffer first, then one big enough for any
+        // value of this length (every leaf but tags and lengths takes a bit).
+        let mut stack = [Scalar::Uint(0); 64];
+        let mut heap = Vec::new();
+        for attempt in 0..2 {
+            let storage: &mut [Scalar] = if attempt == 0 {
+                &mut stack
+            } else {
+                heap.resize(2 * data.bit_len() + 64, Scalar::Uint(0));
+                &mut heap
+            };
+            let mut sink = LeafSink::new(storage);
+            match decode(&layout, self.root, data, &mut sink, options) {
+                Ok(_) => return plain::value_of(py, &self.compiled, self.root, sink.leaves()),
+                Err(e) if e.kind == ErrorKind::Value(px4params_core::value::LeafError::Full) => {}
+                Err(_) => break,
+            }
+        }
+        let mut sink = PySink::new(py, names);
+        match decode(&layout, self.root, data, &mut sink, options) {
+            Ok(_) => Ok(sink.into_value().expect("a decoded value")),
+            Err(e) => Err(self.err(py, e, Op::Decode)),
+        }
     }
 }
 
 #[pymethods]
 impl DataType {
-    /// Encodes a value (dict) to bytes.
+    /// The same compiled type (for subclasses made from one `Schema.get` gave).
+    #[new]
+    fn new(compiled: PyRef<'_, DataType>) -> Self {
+        Self {
+            compiled: Arc::clone(&compiled.compiled),
+            root: compiled.root,
+            key: compiled.key.clone(),
+        }
+    }
+
+    /// Encodes ``value`` (a dict; see the class) to bytes. Out-of-range numbers are refused
+    /// unless ``saturate`` is set, which applies the fields' cast modes (clamping
+    /// ``saturated`` fields).
     #[pyo3(signature = (value, *, tao = true, saturate = false))]
     fn encode<'py>(
         &self,
@@ -327,37 +404,41 @@ impl DataType {
             heap = vec![0u8; layout.max_bytes(self.root)];
             &mut heap
         };
-        let mut source = PySource::new(value, &self.compiled.names, saturate);
         let options = EncodeOptions {
             tao,
             saturate,
             keep_versions: false,
         };
+        let names = &self.compiled.names;
+        let mut leaves = Vec::with_capacity(64);
+        if plain::leaves_of(&layout, names, self.root, &value, &mut leaves).is_some() {
+            let mut source = LeafSource::new(&leaves);
+            if let Ok(n) = encode(&layout, self.root, &mut source, out, options) {
+                if source.consumed() == leaves.len() {
+                    return Ok(PyBytes::new(py, &out[..n]));
+                }
+            }
+        }
+        // Not plain, or refused: the general path encodes it or words the error.
+        let mut source = PySource::new(value, names, saturate);
         match encode(&layout, self.root, &mut source, out, options) {
             Ok(n) => Ok(PyBytes::new(py, &out[..n])),
             Err(e) => Err(self.err(py, e, Op::Encode)),
         }
     }
 
-    /// Decodes bytes to a value (dict).
+    /// Decodes ``data`` (bytes, or anything ``bytes()`` takes) to a value; whole bytes after
+    /// the value are refused unless ``allow_trailing``.
     #[pyo3(signature = (data, *, tao = true, allow_trailing = false))]
     fn decode<'py>(
         &self,
         py: Python<'py>,
-        data: &[u8],
+        data: &Bound<'py, PyAny>,
         tao: bool,
         allow_trailing: bool,
     ) -> PyResult<Bound<'py, PyAny>> {
-        let layout = self.layout();
-        let mut sink = PySink::new(py, &self.compiled.names);
-        let options = DecodeOptions {
-            tao,
-            allow_trailing,
-        };
-        match decode(&layout, self.root, data, &mut sink, options) {
-            Ok(_) => Ok(sink.into_value().expect("a decoded value")),
-            Err(e) => Err(self.err(py, e, Op::Decode)),
-        }
+        let data = bytes_of(data)?;
+        self.decode_from(py, data.as_bytes(), tao, allow_trailing)
     }
 
     /// Decodes a value whose bytes arrive in pieces, reading across them without joining them.
@@ -369,18 +450,9 @@ impl DataType {
         tao: bool,
         allow_trailing: bool,
     ) -> PyResult<Bound<'py, PyAny>> {
-        let layout = self.layout();
         let pieces: Vec<&[u8]> = fragments.iter().map(Vec::as_slice).collect();
         let data = px4params_core::scatter::Scattered::new(&pieces[..]);
-        let mut sink = PySink::new(py, &self.compiled.names);
-        let options = DecodeOptions {
-            tao,
-            allow_trailing,
-        };
-        match decode(&layout, self.root, &data, &mut sink, options) {
-            Ok(_) => Ok(sink.into_value().expect("a decoded value")),
-            Err(e) => Err(self.err(py, e, Op::Decode)),
-        }
+        self.decode_from(py, &data, tao, allow_trailing)
     }
 
     /// Every leaf of an encoded value as `(index, path, type, value)`.
@@ -436,7 +508,7 @@ impl DataType {
         let t = target_of(target)?;
         let leaf =
             locate(&layout, self.root, data, t, tao).map_err(|e| self.err(py, e, Op::Leaf))?;
-        let scalar = leaf_value(py, &self.compiled, &self.name, &leaf, value, saturate)?;
+        let scalar = leaf_value(py, &self.compiled, &self.key, &leaf, value, saturate)?;
         let mut out = vec![0u8; layout.max_bytes(self.root).max(data.len())];
         let options = EncodeOptions {
             tao,
@@ -479,7 +551,7 @@ impl DataType {
     }
 
     fn __repr__(&self) -> String {
-        format!("<DataType {}>", self.name)
+        format!("<DataType {}>", self.key)
     }
 }
 

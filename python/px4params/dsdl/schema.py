@@ -35,13 +35,26 @@ class Leaf(NamedTuple):
     value: int | float | bool
 
 
-class DataType:
+class DataType(_native.DataType):
     """One type, compiled: DroneCAN (UAVCAN v0) serialization and leaf access.
 
     Values are plain data: a struct is a dict of field name to value (``p_version`` and padding
     may be left out), a union a dict with exactly one key, arrays lists (``uint8`` arrays also
     take ``bytes`` or ``str``), floats may be given as ``"nan"``, ``"inf"``, ``"-inf"``.
+
+    ``encode``, ``decode``, ``min_bits``, ``max_bits`` and ``key`` are the compiled type's own
+    (``px4params._native.DataType``): called straight, with no Python in between.
     """
+
+    def __new__(
+        cls,
+        key: str,
+        definition: Mapping[str, Any],
+        native: _native.DataType,
+        types: Mapping[str, Mapping[str, Any]] | None = None,
+        signatures: MutableMapping[str, int] | None = None,
+    ) -> DataType:
+        return super().__new__(cls, native)
 
     def __init__(
         self,
@@ -51,9 +64,7 @@ class DataType:
         types: Mapping[str, Mapping[str, Any]] | None = None,
         signatures: MutableMapping[str, int] | None = None,
     ) -> None:
-        self.key = key
         self.definition = definition
-        self._native = native
         # Every type of the schema (for nested types' signatures) and the schema's memo of them.
         self._types = types if types is not None else {key: definition}
         self._signatures = signatures if signatures is not None else {}
@@ -91,55 +102,32 @@ class DataType:
         return int(dtid) if dtid is not None else None
 
     @property
-    def min_bits(self) -> int:
-        """Smallest encoded length in bits (without tail array optimization)."""
-        return self._native.min_bits
-
-    @property
-    def max_bits(self) -> int:
-        """Largest encoded length in bits (without tail array optimization)."""
-        return self._native.max_bits
-
-    @property
     def max_bytes(self) -> int:
         """Largest encoded length in bytes."""
-        return (self._native.max_bits + 7) // 8
-
-    def encode(
-        self, value: Mapping[str, Any], *, tao: bool = True, saturate: bool = False
-    ) -> bytes:
-        """Encodes ``value``. Out-of-range numbers are refused unless ``saturate`` is set,
-        which applies the fields' cast modes (clamping ``saturated`` fields)."""
-        return self._native.encode(value, tao=tao, saturate=saturate)
-
-    def decode(
-        self, data: bytes, *, tao: bool = True, allow_trailing: bool = False
-    ) -> dict[str, Any]:
-        """Decodes ``data``; whole bytes after the value are refused unless ``allow_trailing``."""
-        return self._native.decode(bytes(data), tao=tao, allow_trailing=allow_trailing)
+        return (self.max_bits + 7) // 8
 
     def decode_fragments(
         self, fragments: Sequence[bytes], *, tao: bool = True, allow_trailing: bool = False
     ) -> dict[str, Any]:
         """Decodes a value whose bytes arrive in pieces (e.g. CAN frame payloads), reading
         across the pieces without joining them."""
-        return self._native.decode_fragments(
+        return super().decode_fragments(
             [bytes(f) for f in fragments], tao=tao, allow_trailing=allow_trailing
         )
 
     def default(self, *, tao: bool = True) -> bytes:
         """The encoding of the zero value (``p_version`` filled, first variants, empty arrays)."""
-        return self._native.default(tao=tao)
+        return super().default(tao=tao)
 
     def leaves(self, data: bytes | None = None, *, tao: bool = True) -> list[Leaf]:
         """Every leaf of ``data`` (of the default value when None) in ``[k]`` order."""
         raw = self.default(tao=tao) if data is None else bytes(data)
-        return [Leaf(*row) for row in self._native.leaves(raw, tao=tao)]
+        return [Leaf(*row) for row in super().leaves(raw, tao=tao)]
 
     def get_leaf(self, data: bytes, target: int | str, *, tao: bool = True) -> Leaf:
         """Reads leaf ``[k]`` (an int) or a path such as ``"bus.i2c.address"``, without
         decoding the rest."""
-        return Leaf(*self._native.get_leaf(bytes(data), target, tao=tao))
+        return Leaf(*super().get_leaf(bytes(data), target, tao=tao))
 
     def set_leaf(
         self,
@@ -152,10 +140,7 @@ class DataType:
     ) -> bytes:
         """Returns ``data`` with one leaf replaced. Setting a union tag selects that variant
         with its default value; setting an array length truncates or appends defaults."""
-        return self._native.set_leaf(bytes(data), target, value, tao=tao, saturate=saturate)
-
-    def __repr__(self) -> str:
-        return f"<DataType {self.key}>"
+        return super().set_leaf(bytes(data), target, value, tao=tao, saturate=saturate)
 
 
 class Schema(Mapping[str, DataType]):

@@ -1,0 +1,142 @@
+"""Encoding takes a fast path for plain values (dicts, lists, ints, floats of the exact built-in
+types) and a general one for anything else. Whichever is taken, the bytes and the errors are
+the same: here the general path is forced with dict and list subclasses."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import px4params
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from strategies import budget, value_strategy
+
+SCHEMA = px4params.load_schema(use_env=False)
+TYPES = SCHEMA.model["types"]
+KEYS = sorted(k for k, d in TYPES.items() if d["kind"] in ("struct", "union"))
+
+
+class Record(dict):  # type: ignore[type-arg]
+    """Not an exact dict: the encoder reads it the general way."""
+
+
+class Items(list):  # type: ignore[type-arg]
+    """Not an exact list: the encoder reads it the general way."""
+
+
+def general(value: Any) -> Any:
+    """``value`` with every dict and list replaced by a subclass."""
+    if isinstance(value, dict):
+        return Record({k: general(v) for k, v in value.items()})
+    if isinstance(value, list):
+        return Items(general(v) for v in value)
+    return value
+
+
+def outcome(t: px4params.DataType, value: Any, **options: Any) -> tuple[str, str]:
+    try:
+        return ("bytes", t.encode(value, **options).hex())
+    except Exception as e:  # the class and the message must agree
+        # Messages name the type given: the subclasses stand for dict and list.
+        text = str(e).replace("got Record", "got dict").replace("got Items", "got list")
+        return (type(e).__name__, text)
+
+
+def spoiled(value: Any, how: int, key_index: int) -> Any:
+    """``value`` broken in one of several ways a user breaks values."""
+    if not isinstance(value, dict) or not value:
+        return {"unknown": 1} if how % 2 else 3
+    keys = list(value)
+    key = keys[key_index % len(keys)]
+    broken = dict(value)
+    if how == 0:
+        del broken[key]
+    elif how == 1:
+        broken["no_such_field"] = 0
+    elif how == 2:
+        broken[key] = 1 << 70  # beyond 64 bits
+    elif how == 3:
+        broken[key] = "text"
+    elif how == 4:
+        broken[key] = True
+    elif how == 5:
+        broken[key] = -1
+    elif how == 6:
+        broken[key] = [1, 2, 3]
+    elif how == 7:
+        broken[key] = 2.5
+    elif how == 8:
+        broken[key] = "nan"
+    else:
+        broken[key] = {"x": 1}
+    return broken
+
+
+@pytest.mark.parametrize("key", KEYS)
+@settings(max_examples=budget(8), deadline=None, suppress_health_check=list(HealthCheck))
+@given(data=st.data(), tao=st.booleans(), saturate=st.booleans())
+def test_fast_and_general_paths_agree(
+    key: str, data: st.DataObject, tao: bool, saturate: bool
+) -> None:
+    t = SCHEMA[key]
+    value = data.draw(value_strategy(TYPES, key, infinities=False))
+    options = {"tao": tao, "saturate": saturate}
+    fast = outcome(t, value, **options)
+    assert fast == outcome(t, general(value), **options)
+    assert fast[0] == "bytes"
+    broken = spoiled(value, data.draw(st.integers(0, 9)), data.draw(st.integers(0, 50)))
+    assert outcome(t, broken, **options) == outcome(t, general(broken), **options)
+
+
+def test_byte_strings_tuples_and_interned_keys_take_the_fast_path_to_the_same_bytes() -> None:
+    t = SCHEMA["uavcan.equipment.power.BatteryInfo"]
+    value = {
+        "temperature": 300.5,
+        "voltage": 16,  # an int for a float field
+        "current": -12.25,
+        "average_power_10sec": 201.0,
+        "remaining_capacity_wh": 55.5,
+        "full_charge_capacity_wh": 99.0,
+        "hours_to_full_charge": 0.0,
+        "status_flags": 3,
+        "state_of_health_pct": 97,
+        "state_of_charge_pct": 80,
+        "state_of_charge_pct_stdev": 2,
+        "battery_id": 1,
+        "model_instance_id": 123456,
+        "model_name": "PX4 battery",
+    }
+    expected = t.encode(general(value))
+    assert t.encode(value) == expected
+    assert t.encode({**value, "model_name": b"PX4 battery"}) == expected
+    assert t.encode({**value, "model_name": tuple(b"PX4 battery")}) == expected
+    # Keys in another order, and keys that are equal strings but not the interned names.
+    reordered = {"".join(list(k)): value[k] for k in reversed(list(value))}
+    assert t.encode(reordered) == expected
+    assert t.decode(expected)["model_name"] == list(b"PX4 battery")
+
+
+def test_decode_takes_any_bytes_like_data() -> None:
+    t = SCHEMA["uavcan.protocol.NodeStatus"]
+    data = bytes.fromhex("39300000000700")
+    value = t.decode(data)
+    assert value == {
+        "uptime_sec": 12345,
+        "health": 0,
+        "mode": 0,
+        "sub_mode": 0,
+        "vendor_specific_status_code": 7,
+    }
+    assert t.decode(bytearray(data)) == value
+    assert t.decode(memoryview(data)) == value
+    with pytest.raises(TypeError):
+        t.decode(12345)  # type: ignore[arg-type]
+
+
+def test_decoded_dicts_are_new_each_time() -> None:
+    # Decoding copies a dict of the field names per struct: the copies must not share values.
+    t = SCHEMA["uavcan.protocol.NodeStatus"]
+    first = t.decode(bytes.fromhex("39300000000700"))
+    first["uptime_sec"] = 0
+    assert t.decode(bytes.fromhex("39300000000700"))["uptime_sec"] == 12345
