@@ -19,7 +19,7 @@ use px4params_core::compile::OwnedLayout;
 use px4params_core::error::{Error, ErrorKind};
 use px4params_core::layout::{Layout, NodeId};
 use px4params_core::leaf::{encode_default, get_leaf, locate, set_leaf, Target};
-use px4params_core::value::{LeafSink, LeafSource};
+use px4params_core::value::{LeafError as LeafListError, LeafSink, LeafSource};
 use px4params_core::Scalar;
 use pyo3::exceptions::{PyKeyError, PyTypeError};
 use pyo3::prelude::*;
@@ -346,23 +346,37 @@ impl DataType {
             tao,
             allow_trailing,
         };
-        // Most values have few leaves: a stack buffer first, then one big enough for any
-        // value of this length (every leaf but tags and lengths takes a bit).
-        let mut stack = [Scalar::Uint(0); 64];
-        let mut heap = Vec::new();
-        for attempt in 0..2 {
-            let storage: &mut [Scalar] = if attempt == 0 {
-                &mut stack
-            } else {
-                heap.resize(2 * data.bit_len() + 64, Scalar::Uint(0));
-                &mut heap
-            };
-            let mut sink = LeafSink::new(storage);
-            match decode(&layout, self.root, data, &mut sink, options) {
-                Ok(_) => return plain::value_of(py, &self.compiled, self.root, sink.leaves()),
-                Err(e) if e.kind == ErrorKind::Value(px4params_core::value::LeafError::Full) => {}
-                Err(_) => break,
+        // As many leaves as the type has when its shape is fixed; else room for most values
+        // first, then for any value of this length short of pathological ones (every leaf but
+        // tags and lengths takes a bit), which the general path takes.
+        let first = layout
+            .node(self.root)
+            .fixed_leaves()
+            .map_or(64, |n| n as usize);
+        let sizes = [first, 2 * data.bit_len() + 64];
+        let decoded = plain::with_leaves(|leaves| {
+            for size in sizes {
+                if leaves.len() < size {
+                    leaves.resize(size, Scalar::Uint(0));
+                }
+                let mut sink = LeafSink::new(&mut leaves[..size]);
+                match decode(&layout, self.root, data, &mut sink, options) {
+                    Ok(_) => {
+                        return Some(plain::value_of(
+                            py,
+                            &self.compiled,
+                            self.root,
+                            sink.leaves(),
+                        ))
+                    }
+                    Err(e) if e.kind == ErrorKind::Value(LeafListError::Full) => {}
+                    Err(_) => return None,
+                }
             }
+            None
+        });
+        if let Some(value) = decoded {
+            return value;
         }
         let mut sink = PySink::new(py, names);
         match decode(&layout, self.root, data, &mut sink, options) {
@@ -410,14 +424,15 @@ impl DataType {
             keep_versions: false,
         };
         let names = &self.compiled.names;
-        let mut leaves = Vec::with_capacity(64);
-        if plain::leaves_of(&layout, names, self.root, &value, &mut leaves).is_some() {
-            let mut source = LeafSource::new(&leaves);
-            if let Ok(n) = encode(&layout, self.root, &mut source, out, options) {
-                if source.consumed() == leaves.len() {
-                    return Ok(PyBytes::new(py, &out[..n]));
-                }
-            }
+        let encoded = plain::with_leaves(|leaves| {
+            leaves.clear();
+            plain::leaves_of(&layout, names, self.root, &value, leaves)?;
+            let mut source = LeafSource::new(leaves);
+            let n = encode(&layout, self.root, &mut source, out, options).ok()?;
+            (source.consumed() == leaves.len()).then_some(n)
+        });
+        if let Some(n) = encoded {
+            return Ok(PyBytes::new(py, &out[..n]));
         }
         // Not plain, or refused: the general path encodes it or words the error.
         let mut source = PySource::new(value, names, saturate);

@@ -8,6 +8,8 @@
 //! 64 bits, a wrong length) makes it give up, and the general path then encodes the value or
 //! words the error. Giving up costs only the work done so far.
 
+use std::cell::RefCell;
+
 use px4params_core::layout::{Kind, Layout, NodeId, Role};
 use px4params_core::Scalar;
 use pyo3::ffi;
@@ -16,6 +18,28 @@ use pyo3::types::{PyBytes, PyDict, PyList, PyString, PyTuple};
 
 use crate::values::scalar_to_py;
 use crate::Compiled;
+
+thread_local! {
+    /// The leaf list of the call in progress, kept between calls (most values fit the last
+    /// one's room, and allocating is a good part of a small value's cost).
+    static LEAVES: RefCell<Vec<Scalar>> = const { RefCell::new(Vec::new()) };
+}
+
+/// Runs `f` with this thread's leaf list (a new one if a call is already using it: Python
+/// code run by a look-up may encode too).
+pub fn with_leaves<R>(f: impl FnOnce(&mut Vec<Scalar>) -> R) -> R {
+    LEAVES.with(|cell| match cell.try_borrow_mut() {
+        Ok(mut leaves) => {
+            let result = f(&mut leaves);
+            // The room a rare big value needed is not kept.
+            if leaves.capacity() > 4096 {
+                *leaves = Vec::new();
+            }
+            result
+        }
+        Err(_) => f(&mut Vec::new()),
+    })
+}
 
 /// A value's leaves in `[k]` order, as [`px4params_core::value::LeafSource`] reads them:
 /// `None` when the value is not plain (the general path takes it).
