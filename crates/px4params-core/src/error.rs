@@ -19,25 +19,57 @@ pub enum Step {
 
 const INDEX_FLAG: u32 = 1 << 31;
 
+/// A step in the 32 bits a [`Path`] keeps it in.
+pub(crate) fn pack_step(step: Step) -> u32 {
+    match step {
+        Step::Field(f) => f & !INDEX_FLAG,
+        Step::Index(i) => (i & !INDEX_FLAG) | INDEX_FLAG,
+    }
+}
+
 /// The position of a value inside a type, e.g. `bus.i2c.address` or `cells[3]`.
 ///
 /// Steps are packed in 32 bits each (the top bit tells an array index from a field) so that
 /// errors stay small enough to return by value.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+// Equality compares the steps the path holds (up to `depth`), not what popped steps left behind.
+#[derive(Clone, Copy, Debug, Default)]
 pub struct Path {
     steps: [u32; MAX_PATH_DEPTH],
     depth: u32,
 }
 
+impl PartialEq for Path {
+    fn eq(&self, other: &Self) -> bool {
+        let held = (self.depth as usize).min(MAX_PATH_DEPTH);
+        self.depth == other.depth && self.steps[..held] == other.steps[..held]
+    }
+}
+
+impl Eq for Path {}
+
 impl Path {
+    /// A path `depth` steps deep whose steps [`Path::set_packed`] fills in.
+    pub(crate) fn with_depth(depth: u32) -> Self {
+        Self {
+            steps: [0; MAX_PATH_DEPTH],
+            depth,
+        }
+    }
+
+    /// Sets step `i` (counted from the value) to a step packed by [`pack_step`]; steps beyond
+    /// [`MAX_PATH_DEPTH`] are not remembered.
+    #[inline]
+    pub(crate) fn set_packed(&mut self, i: usize, packed: u32) {
+        if let Some(s) = self.steps.get_mut(i) {
+            *s = packed;
+        }
+    }
+
     /// Appends a step (remembered only within [`MAX_PATH_DEPTH`]).
     #[inline]
     pub fn push(&mut self, step: Step) {
         if (self.depth as usize) < MAX_PATH_DEPTH {
-            self.steps[self.depth as usize] = match step {
-                Step::Field(f) => f & !INDEX_FLAG,
-                Step::Index(i) => (i & !INDEX_FLAG) | INDEX_FLAG,
-            };
+            self.steps[self.depth as usize] = pack_step(step);
         }
         self.depth += 1;
     }
