@@ -656,8 +656,8 @@ impl FileNames for [FileName<'_>] {
 /// `names`), a record per instance (a shared or classic parameter only when it differs from
 /// its defaults); then `foreign`, records kept from a file that this store could not place.
 /// Returns the file's length in `buf`.
-pub fn write_store<'f, D, S, B>(
-    store: &Store<D, S, B>,
+pub fn write_store<'f, D, S, B, T>(
+    store: &Store<D, S, B, T>,
     names: &(impl FileNames + ?Sized),
     order: &[u32],
     foreign: impl IntoIterator<Item = &'f [u8]>,
@@ -667,6 +667,7 @@ where
     D: AsRef<[ParamDef]>,
     S: AsRef<[Slot]> + AsMut<[Slot]>,
     B: AsRef<[u8]> + AsMut<[u8]>,
+    T: AsRef<[crate::table::LeafSlot]> + AsMut<[crate::table::LeafSlot]>,
 {
     for &param in order {
         names.name(param).ok_or(SaveError::NoName { param })?;
@@ -729,8 +730,8 @@ where
 
 /// An instance's default if it differs from its type's, and its value if it differs from its
 /// default.
-fn differs<D, S, B>(
-    store: &Store<D, S, B>,
+fn differs<D, S, B, T>(
+    store: &Store<D, S, B, T>,
     param: u32,
     instance: u16,
 ) -> (Option<&[u8]>, Option<&[u8]>)
@@ -738,6 +739,7 @@ where
     D: AsRef<[ParamDef]>,
     S: AsRef<[Slot]> + AsMut<[Slot]>,
     B: AsRef<[u8]> + AsMut<[u8]>,
+    T: AsRef<[crate::table::LeafSlot]> + AsMut<[crate::table::LeafSlot]>,
 {
     let (Ok(value), Ok(default), Ok(type_default)) = (
         store.get(param, instance, Which::Value),
@@ -825,8 +827,8 @@ pub struct Applied {
 /// Applies a checked file to `store`: every record is checked against the store first; then,
 /// with `clear`, the store is cleared ([`Store::clear`]: a load rather than a merge), all
 /// records are written, and the store is marked saved. On an error nothing was written.
-pub fn apply<D, S, B>(
-    store: &mut Store<D, S, B>,
+pub fn apply<D, S, B, T>(
+    store: &mut Store<D, S, B, T>,
     layout: &Layout<'_>,
     names: &(impl FileNames + ?Sized),
     file: &Checked<'_>,
@@ -836,6 +838,7 @@ where
     D: AsRef<[ParamDef]>,
     S: AsRef<[Slot]> + AsMut<[Slot]>,
     B: AsRef<[u8]> + AsMut<[u8]>,
+    T: AsRef<[crate::table::LeafSlot]> + AsMut<[crate::table::LeafSlot]>,
 {
     if !file.has_table() {
         return Err(ApplyError::Format1);
@@ -895,8 +898,8 @@ fn place(
         .map(|(p, _)| p)
 }
 
-fn put<D, S, B>(
-    store: &mut Store<D, S, B>,
+fn put<D, S, B, T>(
+    store: &mut Store<D, S, B, T>,
     layout: &Layout<'_>,
     names: &(impl FileNames + ?Sized),
     param: u32,
@@ -907,6 +910,7 @@ where
     D: AsRef<[ParamDef]>,
     S: AsRef<[Slot]> + AsMut<[Slot]>,
     B: AsRef<[u8]> + AsMut<[u8]>,
+    T: AsRef<[crate::table::LeafSlot]> + AsMut<[crate::table::LeafSlot]>,
 {
     let def = store.def(param).map_err(StoreError::widen)?;
     let instance = record.instance;

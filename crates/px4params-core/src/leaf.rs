@@ -409,7 +409,7 @@ impl<R: BitRead + ?Sized> Seek<'_, '_, '_, R> {
     }
 }
 
-fn read_uint<R: BitRead + ?Sized>(data: &R, offset: usize, bits: u32) -> u64 {
+pub(crate) fn read_uint<R: BitRead + ?Sized>(data: &R, offset: usize, bits: u32) -> u64 {
     scalar::from_stream(data.read_bits(offset, bits), bits)
 }
 

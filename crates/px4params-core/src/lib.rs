@@ -27,6 +27,7 @@ pub mod pages;
 pub mod scalar;
 pub mod scatter;
 pub mod store;
+pub mod table;
 pub mod transfer;
 pub mod translate;
 pub mod value;

@@ -75,8 +75,8 @@ impl Pieces for PagePieces<'_, '_> {
 /// Writes the values (or defaults) of every existing instance of `store` back to back over
 /// `pages` (all of one size), recording each in `index`. Returns the number of values written.
 /// Nothing is written when they do not fit ([`StoreError::PagesFull`]).
-pub fn write_pages<D, S, B>(
-    store: &Store<D, S, B>,
+pub fn write_pages<D, S, B, T>(
+    store: &Store<D, S, B, T>,
     which: Which,
     pages: &mut [&mut [u8]],
     index: &mut [PagedValue],
@@ -85,6 +85,7 @@ where
     D: AsRef<[ParamDef]>,
     S: AsRef<[Slot]> + AsMut<[Slot]>,
     B: AsRef<[u8]> + AsMut<[u8]>,
+    T: AsRef<[crate::table::LeafSlot]> + AsMut<[crate::table::LeafSlot]>,
 {
     let size = pages.first().map_or(0, |p| p.len());
     if size == 0 || pages.iter().any(|p| p.len() != size) {

@@ -26,6 +26,7 @@ use crate::error::{Error, ErrorKind, Path, Step};
 use crate::layout::{Layout, NodeId, Role};
 use crate::leaf::{self, Leaf, Position, Target};
 use crate::scalar::{self, Scalar};
+use crate::table::{LeafSlot, LeafTable};
 
 /// Stored values never use tail array optimization: each one delimits itself.
 const STORED: EncodeOptions = EncodeOptions {
@@ -354,13 +355,30 @@ impl<E: fmt::Display> fmt::Display for StoreErrorDisplay<'_, E> {
 }
 
 /// The store, over caller-provided memory: definitions `D`, slots `S` and bytes `B` (slices,
-/// arrays or vectors). The layout is passed to each operation that needs it.
+/// arrays or vectors), and optionally leaf tables `T` ([`Store::with_tables`]) that make
+/// reading a leaf by number a table lookup. The layout is passed to each operation that needs
+/// it.
 #[derive(Clone, Debug)]
-pub struct Store<D, S, B> {
+pub struct Store<D, S, B, T = [LeafSlot; 0]> {
     defs: D,
     slots: S,
     bytes: B,
+    tables: T,
     scratch: usize,
+}
+
+/// Number of [`LeafSlot`]s that [`Store::with_tables`] needs for `defs` (laid out by [`plan`])
+/// to give every parameter's type a complete leaf table ([`crate::table`]): one per parameter,
+/// and each distinct type's table.
+pub fn table_slots(layout: &Layout<'_>, defs: &[ParamDef]) -> usize {
+    let mut total = defs.len();
+    for (i, def) in defs.iter().enumerate() {
+        let seen = defs[..i].iter().any(|d| d.root == def.root);
+        if !seen && (def.root as usize) < layout.nodes.len() {
+            total += LeafTable::slots_needed(layout, def.root);
+        }
+    }
+    total
 }
 
 type Result<T, E = Infallible> = core::result::Result<T, StoreError<E>>;
@@ -374,14 +392,38 @@ where
     /// A store over `defs` (laid out by [`plan`]) with every instance absent, shared
     /// parameters present, and each type's default the zero value ([`leaf::encode_default`]).
     pub fn new(layout: &Layout<'_>, defs: D, slots: S, bytes: B) -> Result<Self> {
+        Store::with_tables(layout, defs, slots, bytes, [])
+    }
+}
+
+impl<D, S, B, T> Store<D, S, B, T>
+where
+    D: AsRef<[ParamDef]>,
+    S: AsRef<[Slot]> + AsMut<[Slot]>,
+    B: AsRef<[u8]> + AsMut<[u8]>,
+    T: AsRef<[LeafSlot]> + AsMut<[LeafSlot]>,
+{
+    /// [`Store::new`], with the parameters' leaf tables built in `tables`: then reading or
+    /// writing leaf `[k]` is a table lookup ([`crate::table`]) for the leaves a type's shape
+    /// fixes. [`table_slots`] says how many slots cover every type completely; with fewer,
+    /// the tables cover what fits and the rest is walked as without them (same results).
+    pub fn with_tables(
+        layout: &Layout<'_>,
+        defs: D,
+        slots: S,
+        bytes: B,
+        mut tables: T,
+    ) -> Result<Self> {
         let (needed, scratch) = check_plan(layout, defs.as_ref())?;
         if slots.as_ref().len() < needed.slots || bytes.as_ref().len() < needed.bytes {
             return Err(StoreError::Memory { needed });
         }
+        build_tables(layout, defs.as_ref(), tables.as_mut());
         let mut store = Self {
             defs,
             slots,
             bytes,
+            tables,
             scratch: needed.bytes - scratch,
         };
         store.slots.as_mut().fill(Slot::default());
@@ -515,8 +557,12 @@ where
         target: Target<'_>,
     ) -> Result<(Leaf, Scalar)> {
         let def = self.def(param)?;
-        let data = self.get(param, instance, which)?;
-        Ok(leaf::get_leaf(layout, def.root, data, target, false)?)
+        let index = self.present_slot(&def, instance)?;
+        let data = self.region(&def, index, which);
+        Ok(match self.table(param) {
+            Some(table) => table.get_leaf(layout, data, target, false)?,
+            None => leaf::get_leaf(layout, def.root, data, target, false)?,
+        })
     }
 
     /// Reads leaf `[k]` of an instance's value or default: the fast path for drivers (no field
@@ -530,9 +576,20 @@ where
         k: usize,
     ) -> Result<Scalar> {
         let def = self.def(param)?;
-        let data = self.get(param, instance, which)?;
-        match leaf::seek(layout, def.root, data, k) {
-            Some(found) => Ok(found.read(data)),
+        let index = self.present_slot(&def, instance)?;
+        let found = match self.table(param) {
+            Some(table) => {
+                // The value and what follows it in memory: bits are read 64 at a time.
+                let (start, len) = self.span(&def, index, which);
+                table.read_prefix(layout, &self.bytes.as_ref()[start..], len, k)
+            }
+            None => {
+                let data = self.region(&def, index, which);
+                leaf::seek(layout, def.root, data, k).map(|p| p.read(data))
+            }
+        };
+        match found {
+            Some(value) => Ok(value),
             None => self
                 .get_leaf(layout, param, instance, which, Target::Index(k))
                 .map(|(_, value)| value),
@@ -558,7 +615,8 @@ where
         let index = self.present_slot(&def, instance)?;
         let data = self.region(&def, index, which);
         let fast = match target {
-            Target::Index(k) => leaf::seek(layout, def.root, data, k)
+            Target::Index(k) => self
+                .seek(layout, &def, param, data, k)
                 .filter(|p| matches!(p.kind, LeafKind::Scalar(_)) && !p.version),
             Target::Path(_) => None,
         };
@@ -766,6 +824,36 @@ where
         }
     }
 
+    /// Parameter `param`'s leaf table, if it has one.
+    #[inline]
+    fn table(&self, param: u32) -> Option<LeafTable<'_>> {
+        let tables = self.tables.as_ref();
+        let index = tables.get(param as usize)?;
+        let start = index.a as usize;
+        if start == 0 {
+            return None;
+        }
+        Some(LeafTable::built(
+            tables.get(start..start + index.b as usize)?,
+        ))
+    }
+
+    /// [`leaf::seek`] in a value of parameter `param`, through its table if it has one.
+    #[inline]
+    fn seek(
+        &self,
+        layout: &Layout<'_>,
+        def: &ParamDef,
+        param: u32,
+        data: &[u8],
+        k: usize,
+    ) -> Option<Position> {
+        match self.table(param) {
+            Some(table) => table.seek(layout, data, k),
+            None => leaf::seek(layout, def.root, data, k),
+        }
+    }
+
     fn instances_free(&self, def: &ParamDef) -> Option<u16> {
         let first = def.first_slot as usize + 1;
         let slots = &self.slots.as_ref()[first..first + def.instances as usize];
@@ -831,6 +919,34 @@ where
             }
         }
         self.slots.as_mut()[index].flags |= UNSAVED;
+    }
+}
+
+/// Builds the leaf tables of `defs` in `tables`: first one slot per parameter that says where
+/// its type's table is (`{start, len}`, start 0 for none), then the tables, one per type.
+fn build_tables(layout: &Layout<'_>, defs: &[ParamDef], tables: &mut [LeafSlot]) {
+    if tables.len() < defs.len() {
+        tables.fill(LeafSlot::default());
+        return;
+    }
+    let (index, rest) = tables.split_at_mut(defs.len());
+    let mut used = 0;
+    for (i, def) in defs.iter().enumerate() {
+        index[i] = match defs[..i].iter().position(|d| d.root == def.root) {
+            Some(same) => index[same],
+            None => match LeafTable::build(layout, def.root, &mut rest[used..]) {
+                Ok(table) => {
+                    let slot = LeafSlot {
+                        a: (defs.len() + used) as u32,
+                        b: table.len() as u32,
+                        c: 0,
+                    };
+                    used += table.len();
+                    slot
+                }
+                Err(_) => LeafSlot::default(),
+            },
+        };
     }
 }
 

@@ -1,0 +1,316 @@
+//! Leaf tables (`px4params_core::table`) answer exactly as the walk does: the same leaves,
+//! paths, values and errors, for random types and random data, and for tables cut short by
+//! small storage; the store answers the same with and without its tables.
+
+mod common;
+
+use proptest::prelude::*;
+use px4params_core::codec::{decode, DecodeOptions};
+use px4params_core::compile::OwnedLayout;
+use px4params_core::layout::{NodeId, Role};
+use px4params_core::leaf::{get_leaf, locate, seek, Leaf, LeafAccessError, Target};
+use px4params_core::store::{plan, table_slots, ParamDef, Slot, Store, Which};
+use px4params_core::table::{LeafSlot, LeafTable};
+use px4params_core::value::{LeafSink, LeafSource};
+use px4params_core::{Cast, Scalar};
+
+/// A random type, built into a layout by [`Ty::build`].
+#[derive(Clone, Debug)]
+enum Ty {
+    Uint(u32),
+    Int(u32),
+    Float(u32),
+    Bool,
+    Void(u32),
+    /// Fields; `true` makes a `uint` field a `p_version`.
+    Struct(Vec<(Ty, bool)>),
+    Union(Vec<Ty>),
+    Array(Box<Ty>, u32),
+    Dyn(Box<Ty>, u32),
+}
+
+impl Ty {
+    fn has_dyn(&self) -> bool {
+        match self {
+            Ty::Dyn(..) => true,
+            Ty::Struct(fields) => fields.iter().any(|(t, _)| t.has_dyn()),
+            Ty::Union(variants) => variants.iter().any(Ty::has_dyn),
+            Ty::Array(t, _) => t.has_dyn(),
+            _ => false,
+        }
+    }
+
+    fn build(&self, l: &mut OwnedLayout) -> NodeId {
+        match self {
+            Ty::Uint(b) => l.uint(*b, Cast::Saturated).unwrap(),
+            Ty::Int(b) => l.int(*b, Cast::Truncated).unwrap(),
+            Ty::Float(b) => l.float(*b, Cast::Saturated).unwrap(),
+            Ty::Bool => l.boolean(),
+            Ty::Void(b) => l.void(*b).unwrap(),
+            Ty::Struct(fields) => {
+                let built: Vec<(String, NodeId, Role)> = fields
+                    .iter()
+                    .enumerate()
+                    .map(|(i, (t, version))| {
+                        let role = match t {
+                            Ty::Void(_) => Role::Padding,
+                            Ty::Uint(_) if *version => Role::Version(1),
+                            _ => Role::Data,
+                        };
+                        (format!("f{i}"), t.build(l), role)
+                    })
+                    .collect();
+                let refs: Vec<(&str, NodeId, Role)> = built
+                    .iter()
+                    .map(|(n, id, r)| (n.as_str(), *id, *r))
+                    .collect();
+                l.structure(&refs).unwrap()
+            }
+            Ty::Union(variants) => {
+                let built: Vec<(String, NodeId)> = variants
+                    .iter()
+                    .enumerate()
+                    .map(|(i, t)| (format!("v{i}"), t.build(l)))
+                    .collect();
+                let refs: Vec<(&str, NodeId)> =
+                    built.iter().map(|(n, id)| (n.as_str(), *id)).collect();
+                l.union(&refs).unwrap()
+            }
+            Ty::Array(t, n) => {
+                let e = t.build(l);
+                l.array(e, *n).unwrap()
+            }
+            Ty::Dyn(t, n) => {
+                let e = t.build(l);
+                l.dyn_array(e, *n).unwrap()
+            }
+        }
+    }
+}
+
+fn primitive() -> impl Strategy<Value = Ty> {
+    prop_oneof![
+        (1u32..=64).prop_map(Ty::Uint),
+        (1u32..=12).prop_map(Ty::Uint),
+        (2u32..=64).prop_map(Ty::Int),
+        prop_oneof![Just(16u32), Just(32), Just(64)].prop_map(Ty::Float),
+        Just(Ty::Bool),
+    ]
+}
+
+fn any_type() -> impl Strategy<Value = Ty> {
+    primitive().prop_recursive(4, 40, 5, |inner| {
+        let field = prop_oneof![
+            4 => (inner.clone(), any::<bool>()),
+            1 => (1u32..=9).prop_map(|b| (Ty::Void(b), false)),
+        ];
+        prop_oneof![
+            3 => proptest::collection::vec(field, 0..5).prop_map(Ty::Struct),
+            2 => proptest::collection::vec(inner.clone(), 2..5).prop_map(Ty::Union),
+            1 => (inner.clone(), 1u32..4).prop_map(|(t, n)| Ty::Array(Box::new(t), n)),
+            1 => (inner, 1u32..4).prop_map(|(t, n)| Ty::Dyn(Box::new(t), n)),
+        ]
+    })
+}
+
+fn same_scalar(a: Scalar, b: Scalar) -> bool {
+    match (a, b) {
+        (Scalar::Float(x), Scalar::Float(y)) => x.to_bits() == y.to_bits(),
+        _ => a == b,
+    }
+}
+
+type Got = Result<(Leaf, Scalar), LeafAccessError>;
+
+fn same(a: &Got, b: &Got) -> bool {
+    match (a, b) {
+        (Ok((la, va)), Ok((lb, vb))) => la == lb && same_scalar(*va, *vb),
+        (Err(x), Err(y)) => x == y,
+        _ => false,
+    }
+}
+
+/// Every leaf number up to a few beyond the value's leaves, read through `table` and walked.
+fn check_all(
+    layout: &px4params_core::Layout<'_>,
+    root: NodeId,
+    table: &LeafTable<'_>,
+    data: &[u8],
+) -> Result<(), TestCaseError> {
+    for tao in [false, true] {
+        for k in 0..48 {
+            let target = Target::Index(k);
+            let walked = get_leaf(layout, root, data, target, tao);
+            let tabled = table.get_leaf(layout, data, target, tao);
+            prop_assert!(
+                same(&walked, &tabled),
+                "[{}] tao {}: walk {:?}, table {:?}",
+                k,
+                tao,
+                walked,
+                tabled
+            );
+            prop_assert_eq!(
+                locate(layout, root, data, target, tao),
+                table.locate(layout, data, target, tao)
+            );
+        }
+    }
+    for k in 0..48 {
+        prop_assert_eq!(
+            seek(layout, root, data, k),
+            table.seek(layout, data, k),
+            "seek [{}]",
+            k
+        );
+    }
+    Ok(())
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(400))]
+
+    /// On random types, with random bytes and with valid values, the table gives what the
+    /// walk gives, complete and cut short.
+    #[test]
+    fn tables_answer_as_the_walk(ty in any_type(), data in proptest::collection::vec(any::<u8>(), 0..48), cut in any::<prop::sample::Index>()) {
+        let mut l = OwnedLayout::default();
+        let root = ty.build(&mut l);
+        let layout = l.as_layout();
+        let needed = LeafTable::slots_needed(&layout, root);
+        let mut storage = vec![LeafSlot::default(); needed];
+        let table = LeafTable::build(&layout, root, &mut storage).unwrap();
+        prop_assert_eq!(table.len(), needed);
+        prop_assert!(!table.is_cut_short());
+        prop_assert_eq!(table.root(), root);
+        // Random bytes: tags and lengths that are out of range, data that ends early.
+        check_all(&layout, root, &table, &data)?;
+        // A valid value (the longest prefix that decodes), exactly and with bytes after it.
+        let mut leaves = [Scalar::Uint(0); 512];
+        let mut sink = LeafSink::new(&mut leaves);
+        let opts = DecodeOptions { tao: false, allow_trailing: true };
+        if let Ok(bits) = decode(&layout, root, &data[..], &mut sink, opts) {
+            let value = &data[..bits.div_ceil(8)];
+            check_all(&layout, root, &table, value)?;
+            // Without dynamic arrays, the table alone finds every leaf of a valid value.
+            if !ty.has_dyn() {
+                for k in 0..sink.leaves().len() {
+                    prop_assert!(table.covers(value, k), "[{}] not covered", k);
+                }
+            }
+        }
+        // A table cut short by its storage answers the same.
+        let size = LeafTable::MIN_SLOTS + cut.index(needed.max(LeafTable::MIN_SLOTS) - 1);
+        let mut small = vec![LeafSlot::default(); size];
+        let short = LeafTable::build(&layout, root, &mut small).unwrap();
+        prop_assert!(short.len() <= size);
+        prop_assert_eq!(short.is_cut_short(), size < needed);
+        check_all(&layout, root, &short, &data)?;
+    }
+}
+
+#[test]
+fn ina238_is_covered_through_its_union() {
+    let mut l = OwnedLayout::default();
+    let root = common::ina238(&mut l);
+    let layout = l.as_layout();
+    let mut storage = vec![LeafSlot::default(); LeafTable::slots_needed(&layout, root)];
+    let table = LeafTable::build(&layout, root, &mut storage).unwrap();
+    // The talk's value: I2C bus 1, address 0x45, 200 mA, 0.0003 ohm.
+    let mut talk: Vec<Scalar> = [0, 0, 0, 1, 0x45, 200].map(Scalar::Uint).to_vec();
+    talk.push(Scalar::Float(0.0003));
+    let mut data = [0u8; 16];
+    let opts = px4params_core::EncodeOptions::default();
+    let len = px4params_core::encode(&layout, root, &mut LeafSource::new(&talk), &mut data, opts);
+    let data = &data[..len.unwrap()];
+    let (leaf, value) = table
+        .get_leaf(&layout, data, Target::Index(4), false)
+        .unwrap();
+    assert_eq!(leaf.path.display(&layout).to_string(), "bus.i2c.address");
+    assert_eq!(leaf.bit_offset, 15);
+    assert_eq!(value, Scalar::Uint(0x45));
+    assert!(seek(&layout, root, data, 4).is_some());
+    assert!((0..7).all(|k| table.covers(data, k)));
+    assert!(!table.covers(data, 7));
+    // Storage for none of it: every leaf is walked.
+    let mut two = [LeafSlot::default(); 2];
+    let bare = LeafTable::build(&layout, root, &mut two).unwrap();
+    assert!(bare.is_cut_short());
+    assert_eq!(
+        bare.get_leaf(&layout, data, Target::Index(4), false),
+        get_leaf(&layout, root, data, Target::Index(4), false)
+    );
+    assert!(LeafTable::build(&layout, root, &mut two[..1]).is_err());
+}
+
+/// Two stores over the same parameters, one with its tables: every read and write agrees.
+#[test]
+fn stores_with_and_without_tables_agree() {
+    let mut l = OwnedLayout::default();
+    let roots = [
+        common::ina238(&mut l),
+        common::battery_info(&mut l),
+        common::kitchen_sink(&mut l),
+        common::golden(&mut l),
+    ];
+    let layout = l.as_layout();
+    let mut defs: Vec<ParamDef> = roots.iter().map(|&r| ParamDef::instanced(r, 2)).collect();
+    defs.push(ParamDef::shared(roots[0]));
+    let capacity = plan(&layout, &mut defs).unwrap();
+    let n = table_slots(&layout, &defs);
+    let mut plain = Store::new(
+        &layout,
+        defs.clone(),
+        vec![Slot::default(); capacity.slots],
+        vec![0u8; capacity.bytes],
+    )
+    .unwrap();
+    // Complete tables, and tables cut short (down to none at all).
+    for slots in [n, n / 2, defs.len() + 3, defs.len(), 3] {
+        let mut tabled = Store::with_tables(
+            &layout,
+            defs.clone(),
+            vec![Slot::default(); capacity.slots],
+            vec![0u8; capacity.bytes],
+            vec![LeafSlot::default(); slots],
+        )
+        .unwrap();
+        let mut plain = plain.clone();
+        for param in 0..4 {
+            plain.add(param, Some(1)).unwrap();
+            tabled.add(param, Some(1)).unwrap();
+        }
+        for round in 0..3u64 {
+            for param in 0..5u32 {
+                let instance = if param == 4 { 0 } else { 1 };
+                for k in 0..40 {
+                    let target = Target::Index(k);
+                    let a = plain.get_leaf(&layout, param, instance, Which::Value, target);
+                    let b = tabled.get_leaf(&layout, param, instance, Which::Value, target);
+                    assert_eq!(a, b, "param {param} [{k}]");
+                    let a = plain.read(&layout, param, instance, Which::Default, k);
+                    let b = tabled.read(&layout, param, instance, Which::Default, k);
+                    assert_eq!(a, b, "param {param} [{k}]");
+                    let value = Scalar::Uint(round * 7 + k as u64);
+                    let a =
+                        plain.set_leaf(&layout, param, instance, Which::Value, target, value, true);
+                    let b = tabled.set_leaf(
+                        &layout,
+                        param,
+                        instance,
+                        Which::Value,
+                        target,
+                        value,
+                        true,
+                    );
+                    assert_eq!(a, b, "set param {param} [{k}]");
+                    assert_eq!(
+                        plain.get(param, instance, Which::Value),
+                        tabled.get(param, instance, Which::Value)
+                    );
+                }
+            }
+        }
+    }
+    plain.clear();
+}
