@@ -9,6 +9,7 @@ use px4params_core::codec::{decode, encode, DecodeOptions, EncodeOptions};
 use px4params_core::compile::OwnedLayout;
 use px4params_core::layout::Layout;
 use px4params_core::leaf::{get_leaf, set_leaf, Target};
+use px4params_core::table::{LeafSlot, LeafTable};
 use px4params_core::value::{LeafSink, LeafSource};
 use px4params_core::{NodeId, Scalar};
 use std::hint::black_box;
@@ -88,6 +89,20 @@ fn bench_type(
                 true,
             )
             .unwrap()
+        })
+    });
+    let mut storage = vec![LeafSlot::default(); LeafTable::slots_needed(&layout, root)];
+    let table = LeafTable::build(&layout, root, &mut storage).unwrap();
+    c.bench_function(&format!("{name}/get_leaf (table)"), |b| {
+        b.iter(|| {
+            table
+                .get_leaf(
+                    &layout,
+                    black_box(&bytes[..]),
+                    Target::Index(black_box(k)),
+                    true,
+                )
+                .unwrap()
         })
     });
     let value = leaves[k];

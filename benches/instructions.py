@@ -18,7 +18,10 @@ import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-OPS = ["battery/encode", "battery/decode", "ina238/encode", "ina238/decode"]
+OPS = [
+    "battery/encode", "battery/decode", "ina238/encode", "ina238/decode",
+    "ina238/get_leaf4", "ina238/table_get_leaf4", "store/get_leaf4", "store/read4",
+]  # fmt: skip
 
 
 def build() -> Path:

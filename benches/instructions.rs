@@ -3,13 +3,19 @@
 //! runs minus the count of 0 runs, divided by N, is the instructions of one call (stable where
 //! time on this machine is not).
 //!
-//! OP: `battery/encode`, `battery/decode`, `ina238/encode`, `ina238/decode`.
+//! OP: `battery/encode`, `battery/decode`, `ina238/encode`, `ina238/decode`; leaf `[4]` of
+//! INA238 (`bus.i2c.address`): `ina238/get_leaf4` (on encoded bytes), `store/get_leaf4` and
+//! `store/read4` (in the store, built with its leaf tables), `ina238/table_get_leaf4` (on
+//! encoded bytes, through the type's leaf table).
 
 #[path = "../crates/px4params-core/tests/common/mod.rs"]
 mod common;
 
 use px4params_core::codec::{decode, encode, DecodeOptions, EncodeOptions};
 use px4params_core::compile::OwnedLayout;
+use px4params_core::leaf::{get_leaf, Target};
+use px4params_core::store::{plan, table_slots, ParamDef, Slot, Store, Which};
+use px4params_core::table::{LeafSlot, LeafTable};
 use px4params_core::value::{LeafSink, LeafSource};
 use px4params_core::Scalar;
 use std::hint::black_box;
@@ -34,6 +40,9 @@ fn main() {
         _ => return,
     };
     let (ty, what) = op.split_once('/').expect("OP: TYPE/encode or TYPE/decode");
+    if ty == "store" {
+        return store_ops(what, n);
+    }
     let mut owned = OwnedLayout::default();
     let (root, leaves) = match ty {
         "battery" => (common::battery_info(&mut owned), battery_leaves()),
@@ -56,6 +65,8 @@ fn main() {
     .unwrap();
     let bytes = out[..len].to_vec();
     let mut storage = [Scalar::Uint(0); 64];
+    let mut slots = vec![LeafSlot::default(); LeafTable::slots_needed(&layout, root)];
+    let table = LeafTable::build(&layout, root, &mut slots).unwrap();
     for _ in 0..n {
         match what {
             "encode" => {
@@ -72,6 +83,60 @@ fn main() {
                     &mut sink,
                     DecodeOptions::default(),
                 );
+                black_box(r.unwrap());
+            }
+            "get_leaf4" => {
+                let r = get_leaf(
+                    &layout,
+                    root,
+                    black_box(&bytes[..]),
+                    Target::Index(black_box(4)),
+                    false,
+                );
+                black_box(r.unwrap());
+            }
+            "table_get_leaf4" => {
+                let data = black_box(&bytes[..]);
+                let r = table.get_leaf(&layout, data, Target::Index(black_box(4)), false);
+                black_box(r.unwrap());
+            }
+            _ => panic!("unknown operation {what}"),
+        }
+    }
+}
+
+/// Leaf `[4]` of an INA238 instance in a store (as `benches/store.rs` sets it up).
+fn store_ops(what: &str, n: usize) {
+    let mut owned = OwnedLayout::default();
+    let ina = common::ina238(&mut owned);
+    let layout = owned.as_layout();
+    let mut defs = vec![ParamDef::instanced(ina, 4)];
+    let capacity = plan(&layout, &mut defs).unwrap();
+    let slots = vec![Slot::default(); capacity.slots];
+    let tables = vec![LeafSlot::default(); table_slots(&layout, &defs)];
+    let bytes = vec![0u8; capacity.bytes];
+    let mut store = Store::with_tables(&layout, defs, slots, bytes, tables).unwrap();
+    let mut talk: Vec<Scalar> = [0, 0, 0, 1, 0x45, 200].map(Scalar::Uint).to_vec();
+    talk.push(Scalar::Float(0.0003));
+    store.add(0, Some(2)).unwrap();
+    let mut src = px4params_core::value::LeafSource::new(&talk);
+    store
+        .set_from(&layout, 0, 2, Which::Value, &mut src, false)
+        .unwrap();
+    for _ in 0..n {
+        match what {
+            "get_leaf4" => {
+                let r = store.get_leaf(
+                    &layout,
+                    0,
+                    black_box(2),
+                    Which::Value,
+                    Target::Index(black_box(4)),
+                );
+                black_box(r.unwrap());
+            }
+            "read4" => {
+                let r = store.read(&layout, 0, black_box(2), Which::Value, black_box(4));
                 black_box(r.unwrap());
             }
             _ => panic!("unknown operation {what}"),

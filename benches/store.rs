@@ -1,5 +1,7 @@
 //! Leaf access in the instance store (target: get and set of one leaf within 50 ns), with the
-//! same access on a bare encoded buffer as the baseline measured in the same run.
+//! same access on a bare encoded buffer as the baseline measured in the same run: walked
+//! (`leaf::get_leaf`) and through the type's leaf table (`LeafTable::get_leaf`). The store is
+//! built with its leaf tables (`Store::with_tables`).
 
 #[path = "../crates/px4params-core/tests/common/mod.rs"]
 mod common;
@@ -7,7 +9,8 @@ mod common;
 use criterion::{criterion_group, criterion_main, Criterion};
 use px4params_core::compile::OwnedLayout;
 use px4params_core::leaf::{get_leaf, Target};
-use px4params_core::store::{plan, ParamDef, Slot, Store, Which};
+use px4params_core::store::{plan, table_slots, ParamDef, Slot, Store, Which};
+use px4params_core::table::{LeafSlot, LeafTable};
 use px4params_core::value::LeafSource;
 use px4params_core::Scalar;
 use std::hint::black_box;
@@ -19,11 +22,14 @@ fn store_leaf_access(c: &mut Criterion) {
     let layout = owned.as_layout();
     let mut defs = vec![ParamDef::instanced(ina, 4), ParamDef::shared(battery)];
     let capacity = plan(&layout, &mut defs).unwrap();
-    let mut store = Store::new(
+    // With its leaf tables (`Store::with_tables`): `[k]` is a table lookup.
+    let tables = vec![LeafSlot::default(); table_slots(&layout, &defs)];
+    let mut store = Store::with_tables(
         &layout,
         defs,
         vec![Slot::default(); capacity.slots],
         vec![0u8; capacity.bytes],
+        tables,
     )
     .unwrap();
     let talk = [
@@ -98,6 +104,21 @@ fn store_leaf_access(c: &mut Criterion) {
             )
             .unwrap()
             .1
+        })
+    });
+    let mut storage = vec![LeafSlot::default(); LeafTable::slots_needed(&layout, ina)];
+    let table = LeafTable::build(&layout, ina, &mut storage).unwrap();
+    c.bench_function("buffer/Ina238/get_leaf [4] (table)", |b| {
+        b.iter(|| {
+            table
+                .get_leaf(
+                    &layout,
+                    black_box(&bare[..]),
+                    Target::Index(black_box(4)),
+                    false,
+                )
+                .unwrap()
+                .1
         })
     });
     let mut n = 0u64;
