@@ -48,21 +48,11 @@ impl PartialEq for Path {
 impl Eq for Path {}
 
 impl Path {
-    /// A path `depth` steps deep whose steps [`Path::set_packed`] fills in.
-    pub(crate) fn with_depth(depth: u32) -> Self {
-        Self {
-            steps: [0; MAX_PATH_DEPTH],
-            depth,
-        }
-    }
-
-    /// Sets step `i` (counted from the value) to a step packed by [`pack_step`]; steps beyond
-    /// [`MAX_PATH_DEPTH`] are not remembered.
+    /// A path `depth` steps deep holding `steps` (packed by [`pack_step`]; those beyond
+    /// `depth` must be zero).
     #[inline]
-    pub(crate) fn set_packed(&mut self, i: usize, packed: u32) {
-        if let Some(s) = self.steps.get_mut(i) {
-            *s = packed;
-        }
+    pub(crate) fn from_packed(depth: u32, steps: [u32; MAX_PATH_DEPTH]) -> Self {
+        Self { steps, depth }
     }
 
     /// Appends a step (remembered only within [`MAX_PATH_DEPTH`]).

@@ -558,11 +558,18 @@ where
     ) -> Result<(Leaf, Scalar)> {
         let def = self.def(param)?;
         let index = self.present_slot(&def, instance)?;
-        let data = self.region(&def, index, which);
-        Ok(match self.table(param) {
-            Some(table) => table.get_leaf(layout, data, target, false)?,
-            None => leaf::get_leaf(layout, def.root, data, target, false)?,
-        })
+        let found = match self.table(param) {
+            Some(table) => {
+                // The value and what follows it in memory: bits are read 64 at a time.
+                let (start, len) = self.span(&def, index, which);
+                table.get_leaf_prefix(layout, &self.bytes.as_ref()[start..], len, target)
+            }
+            None => {
+                let data = self.region(&def, index, which);
+                leaf::get_leaf(layout, def.root, data, target, false)
+            }
+        };
+        found.map_err(StoreError::Codec)
     }
 
     /// Reads leaf `[k]` of an instance's value or default: the fast path for drivers (no field

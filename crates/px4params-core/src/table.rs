@@ -174,6 +174,31 @@ impl<'s> LeafTable<'s> {
         leaf::get_leaf(layout, self.root(), data, target, tao)
     }
 
+    /// [`LeafTable::get_leaf`] for the store: the value is the first `len` bytes of `data`,
+    /// which goes on (see [`LeafTable::read_prefix`]).
+    #[inline]
+    pub(crate) fn get_leaf_prefix(
+        &self,
+        layout: &Layout<'_>,
+        data: &[u8],
+        len: usize,
+        target: Target<'_>,
+    ) -> Result<(Leaf, Scalar), LeafAccessError> {
+        if let Target::Index(k) = target {
+            if let Some((bit_offset, entry)) = self.find_within(data, len * 8, k) {
+                let leaf = Leaf {
+                    index: k,
+                    bit_offset,
+                    kind: entry.kind(),
+                    path: self.path(entry.1),
+                };
+                return Ok((leaf, entry.read(data, bit_offset)));
+            }
+        }
+        let value = data.get(..len).unwrap_or(&[]);
+        leaf::get_leaf(layout, self.root(), value, target, false)
+    }
+
     /// Finds leaf `[k]` of `data`, a value of the table's type encoded without tail array
     /// optimization: [`leaf::seek`], faster.
     pub fn seek<R: BitRead + ?Sized>(
@@ -309,20 +334,15 @@ impl<'s> LeafTable<'s> {
         let Some(first) = words.first() else {
             return Path::default();
         };
-        let mut path = Path::with_depth(first.a);
-        for i in 0..(first.a as usize).min(MAX_PATH_DEPTH) {
-            let w = i + 1;
-            let Some(slot) = words.get(w / 3) else {
-                break;
-            };
-            let step = match w % 3 {
-                0 => slot.a,
-                1 => slot.b,
-                _ => slot.c,
-            };
-            path.set_packed(i, step);
+        // Whole slots at a time: words after the steps held are zero.
+        let n = ((first.a as usize).min(MAX_PATH_DEPTH) + 1).div_ceil(3);
+        let mut all = [0u32; MAX_PATH_DEPTH + 3];
+        for (chunk, slot) in all.chunks_exact_mut(3).zip(words.iter().take(n)) {
+            chunk.copy_from_slice(&[slot.a, slot.b, slot.c]);
         }
-        path
+        let mut steps = [0u32; MAX_PATH_DEPTH];
+        steps.copy_from_slice(&all[1..=MAX_PATH_DEPTH]);
+        Path::from_packed(first.a, steps)
     }
 }
 
