@@ -1,12 +1,26 @@
-"""Python API speed against pydronecan, measured in the same run on the same values.
+"""Python API speed against its baselines, measured in the same run on the same values: the
+codec against pydronecan (``_pack`` of a prebuilt value object, and ``unpack``), reading one
+leaf of an instance by name against a dict lookup (a flat parameter table's cost).
 
-Run: python benches/python_api.py  (prints one line per type and operation, and the ratio).
+    python benches/python_api.py [--runs 5] [--instructions]
+
+Each row is timed ``--runs`` times, ours and the baseline one after the other (this machine is
+noisy), best of timeit's repeats each time; the median of the runs is printed, with the ratio
+and issue 18's target. ``--instructions`` adds valgrind's instruction counts per call (the
+count of N calls minus that of none, divided by N), which load does not change.
 """
 
 from __future__ import annotations
 
+import argparse
+import os
+import re
+import shutil
+import statistics
+import subprocess
 import sys
 import timeit
+from collections.abc import Callable
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
@@ -38,56 +52,134 @@ NODE_STATUS = {
     "sub_mode": 0,
     "vendor_specific_status_code": 7,
 }
-CASES = [
-    ("uavcan.equipment.power.BatteryInfo", BATTERY),
-    ("uavcan.protocol.NodeStatus", NODE_STATUS),
-]
+BATTERY_KEY = "uavcan.equipment.power.BatteryInfo"
+NODE_STATUS_KEY = "uavcan.protocol.NodeStatus"
+
+# Row name -> (what the baseline is, how the target is read, the target).
+ROWS = {
+    "BatteryInfo encode": ("pydronecan", "faster", 100.0),
+    "BatteryInfo decode": ("pydronecan", "faster", 150.0),
+    "NodeStatus encode": ("pydronecan", "faster", 60.0),
+    "NodeStatus decode": ("pydronecan", "faster", 100.0),
+    'Store.get("INA238#3.current")': ("dict lookup", "at most", 0.5e-6),
+}
 
 
-def best(stmt, repeat: int = 5) -> float:
-    """Best time per call in seconds."""
-    timer = timeit.Timer(stmt)
-    number, _ = timer.autorange()
-    return min(timer.repeat(repeat=repeat, number=number)) / number
-
-
-def main() -> None:
+def calls() -> dict[str, tuple[Callable[[], object], Callable[[], object]]]:
+    """Each row's two calls (ours, the baseline), ready to run; checked to agree first."""
     schema = px4params.load_schema(use_env=False)
-    print(f"{'type':<38} {'op':<7} {'px4params':>11} {'pydronecan':>11} {'ratio':>7}")
-    for key, value in CASES:
+    made: dict[str, tuple[Callable[[], object], Callable[[], object]]] = {}
+    for name, key, value in (
+        ("BatteryInfo", BATTERY_KEY, BATTERY),
+        ("NodeStatus", NODE_STATUS_KEY, NODE_STATUS),
+    ):
         t = schema[key]
         obj = fill(new_value(key), value)
         data = t.encode(value)
         assert bytes(transport.bytes_from_bits(obj._pack(True))) == data
-        ours_enc = best(lambda t=t, value=value: t.encode(value))
-        theirs_enc = best(lambda obj=obj: transport.bytes_from_bits(obj._pack(True)))
-        ours_dec = best(lambda t=t, data=data: t.decode(data))
-        theirs_dec = best(lambda key=key, data=data: unpack(key, data, tao=True))
-        for op, ours, theirs in (
-            ("encode", ours_enc, theirs_enc),
-            ("decode", ours_dec, theirs_dec),
-        ):
-            print(
-                f"{key:<38} {op:<7} {ours * 1e9:>9.0f}ns {theirs * 1e9:>9.0f}ns "
-                f"{theirs / ours:>6.1f}x"
-            )
-    store_rows(schema)
-
-
-def store_rows(schema: px4params.Schema) -> None:
-    """Reading one leaf of an instance by name, against a dict lookup (a flat parameter
-    table's cost) in the same run."""
+        made[f"{name} encode"] = (
+            lambda t=t, value=value: t.encode(value),
+            lambda obj=obj: transport.bytes_from_bits(obj._pack(True)),
+        )
+        made[f"{name} decode"] = (
+            lambda t=t, data=data: t.decode(data),
+            lambda key=key, data=data: unpack(key, data, tao=True),
+        )
     store = px4params.Store(schema, classic=[])
     for n in range(4):
         store.add(f"INA238#{n}")
     flat = {f"INA238_{n}P": 327 for n in range(4)}
-    ours = best(lambda: store.get("INA238#3.current"))
-    theirs = best(lambda: flat["INA238_3P"])
-    label = 'Store.get("INA238#3.current")'
-    print(
-        f"\n{label:<38} {'get':<7} {ours * 1e9:>9.0f}ns {theirs * 1e9:>9.0f}ns (dict) "
-        f"{ours / theirs:>6.1f}x slower"
+    assert store.get("INA238#3.current") == flat["INA238_3P"]
+    made['Store.get("INA238#3.current")'] = (
+        lambda: store.get("INA238#3.current"),
+        lambda: flat["INA238_3P"],
     )
+    return made
+
+
+def best(call: Callable[[], object], repeat: int = 5) -> float:
+    """Best time per call in seconds."""
+    timer = timeit.Timer(call)
+    number, _ = timer.autorange()
+    return min(timer.repeat(repeat=repeat, number=number)) / number
+
+
+def instructions(row: str, side: int, seconds_per_call: float) -> float:
+    """Instructions per call of one side of ``row``, under callgrind: as many calls as take a
+    fifth of a second natively, with a fixed hash seed so that the runs differ only in them."""
+    n = min(200_000, max(1000, int(0.2 / seconds_per_call)))
+
+    def count(times: int) -> int:
+        err = subprocess.run(
+            [
+                "valgrind",
+                "--tool=callgrind",
+                "--callgrind-out-file=/dev/null",
+                sys.executable,
+                __file__,
+                "--loop",
+                row,
+                str(side),
+                str(times),
+            ],
+            capture_output=True,
+            text=True,
+            check=True,
+            env=dict(os.environ, PYTHONHASHSEED="0"),
+        ).stderr
+        match = re.search(r"refs:\s+([\d,]+)", err)
+        assert match, err
+        return int(match.group(1).replace(",", ""))
+
+    return (count(n) - count(0)) / n
+
+
+def show(row: str, ours: float, theirs: float, ours_ir: float | None, theirs_ir: float | None):
+    _, how, target = ROWS[row]
+    if how == "faster":
+        ratio, met = f"{theirs / ours:7.1f}x", theirs / ours >= target
+        goal = f">= {target:.0f}x"
+    else:
+        ratio, met = f"{ours / theirs:7.1f}x slower", ours <= target
+        goal = f"<= {target * 1e6:.1f} us"
+    line = f"{row:<31} {ours * 1e9:>8.0f} ns {theirs * 1e9:>9.0f} ns {ratio:>14}  {goal:<10}"
+    line += " met" if met else " not met"
+    if ours_ir is not None and theirs_ir is not None:
+        line += f"   {ours_ir:>8.0f} {theirs_ir:>9.0f} Ir ({theirs_ir / ours_ir:.1f}x)"
+    print(line, flush=True)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--runs", type=int, default=5)
+    parser.add_argument("--instructions", action="store_true")
+    parser.add_argument("--loop", nargs=3, metavar=("ROW", "SIDE", "N"), help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    made = calls()
+    if args.loop:
+        row, side, n = args.loop
+        call = made[row][int(side)]
+        for _ in range(int(n)):
+            call()
+        return
+    if args.instructions and not shutil.which("valgrind"):
+        print("valgrind is missing: no instruction counts", file=sys.stderr)
+        args.instructions = False
+    times: dict[str, tuple[list[float], list[float]]] = {row: ([], []) for row in made}
+    for _ in range(args.runs):
+        for row, (ours, theirs) in made.items():
+            times[row][0].append(best(ours))
+            times[row][1].append(best(theirs))
+    print(f"{os.cpu_count()} CPUs, Python {sys.version.split()[0]}, {args.runs} runs, medians")
+    print(f"{'':<31} {'px4params':>11} {'baseline':>12} {'ratio':>14}  target")
+    for row in made:
+        ours, theirs = (statistics.median(t) for t in times[row])
+        counts = (
+            (instructions(row, 0, ours), instructions(row, 1, theirs))
+            if args.instructions
+            else (None, None)
+        )
+        show(row, ours, theirs, *counts)
 
 
 if __name__ == "__main__":
