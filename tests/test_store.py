@@ -507,3 +507,26 @@ def test_restore_takes_only_a_copy_of_the_same_store(schema: px4params.Schema) -
     with pytest.raises(ValueError, match=r"^restore takes a copy of this store"):
         one._native.restore(other._native)
     one._native.restore(one._native.copy())
+
+
+def test_a_leaf_read_before_reads_the_same_and_fails_the_same(store: px4params.Store) -> None:
+    # Store.get keeps the core's arguments for leaf names it has read: what it answers, and
+    # how it refuses once the instance is gone, must not change.
+    store.add("INA238#1")
+    store.set("INA238#1.current", 200)
+    first = [
+        store.get(name) for name in ("INA238#1.current", "INA238#1[4]", "INA238#1.bus.i2c.address")
+    ]
+    assert [
+        store.get(name) for name in ("INA238#1.current", "INA238#1[4]", "INA238#1.bus.i2c.address")
+    ] == first
+    assert first[0] == 200
+    assert store.get("INA238#1.current", default=True) == 327
+    store.set("INA238#1.bus._tag", 1)  # spi: the i2c path names nothing now
+    with pytest.raises(px4params.LeafError, match=r"bus\.i2c"):
+        store.get("INA238#1.bus.i2c.address")
+    store.remove("INA238#1")
+    with pytest.raises(
+        px4params.InstanceError, match=r"^INA238#1: instance does not exist \(add it first"
+    ):
+        store.get("INA238#1.current")

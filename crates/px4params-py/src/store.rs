@@ -317,7 +317,8 @@ impl Store {
     }
 
     /// Reads one leaf's value only (`Store.get` of a leaf: no path or type text is built).
-    #[pyo3(signature = (param, instance, target, *, default = false))]
+    /// `default` may be given by position: keywords cost a call a tenth of its time.
+    #[pyo3(signature = (param, instance, target, default = false))]
     fn get_leaf_value<'py>(
         &self,
         py: Python<'py>,

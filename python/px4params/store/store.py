@@ -25,7 +25,7 @@ from px4params import _native
 from px4params._records import TYPE_CHECKING
 from px4params.cache_file import cache_path, default_cache_dir, read_cached, write_cached
 from px4params.dsdl.schema import DataType, Leaf, Schema, load_schema
-from px4params.errors import InstanceError, LeafError, StoreError
+from px4params.errors import InstanceError, LeafError, Px4ParamsError, StoreError
 from px4params.numbers import abbreviated
 from px4params.store.classic import (
     CLASSIC_ENV,
@@ -210,6 +210,8 @@ class Store:
             raise StoreError("two classic parameters have the same name")
         self._order = params
         self._resolved: dict[str | Key, tuple[_Param, int, Key]] = {}
+        # Leaf names read before, as the core's arguments: Store.get of a leaf in one call.
+        self._leaf_reads: dict[str | Key, tuple[int, int, int | str]] = {}
         self._native = _native.Store(native_schema, rows)
         for p in params:
             self._native.set_type_default(p.index, self._type_default(p))
@@ -368,14 +370,28 @@ class Store:
 
     def get(self, name: str | Key, *, default: bool = False) -> Any:
         """A whole value (dict; a number for a classic parameter) or one leaf's value."""
+        try:
+            read = self._leaf_reads.get(name)
+        except TypeError:  # not a name at all: _resolve says so
+            read = None
+        if read is not None:
+            index, number, leaf = read
+            try:
+                return self._native.get_leaf_value(index, number, leaf, default)
+            except Px4ParamsError:
+                pass  # (the instance was removed, ...) worded below
         p, instance, key = self._resolve(name)
         if key.leaf is not None:
             if p.classic is not None:
                 return self.leaf(key, default=default).value  # which refuses it
             try:  # the value alone: no Leaf, no path or type text
-                return self._native.get_leaf_value(p.index, instance, key.leaf, default=default)
+                value = self._native.get_leaf_value(p.index, instance, key.leaf, default)
             except LeafError as e:
                 raise _naming_the_field(e, key) from None
+            if len(self._leaf_reads) >= _RESOLVED_MAX:
+                self._leaf_reads.clear()
+            self._leaf_reads[name] = (p.index, instance, key.leaf)
+            return value
         data = self._native.get(p.index, instance, default=default)
         if p.classic is not None:
             return _classic_from_bytes(p.classic, data)
