@@ -8,6 +8,7 @@ use std::sync::Arc;
 use px4params_core::layout::Layout;
 use px4params_core::leaf::{Leaf, Target};
 use px4params_core::store::{self, Capacity, ParamDef, Slot, StoreError as CoreError, Which};
+use px4params_core::table::LeafSlot;
 use px4params_core::Scalar;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -20,7 +21,8 @@ pyo3::import_exception!(px4params.errors, StoreError);
 pub(crate) use StoreError as StoreErrorClass;
 pyo3::import_exception!(px4params.errors, InstanceError);
 
-pub(crate) type CoreStore = store::Store<Vec<ParamDef>, Vec<Slot>, Vec<u8>>;
+// With a leaf table per type: leaf [k] is a lookup and a bit read (`px4params_core::table`).
+pub(crate) type CoreStore = store::Store<Vec<ParamDef>, Vec<Slot>, Vec<u8>, Vec<LeafSlot>>;
 
 /// Key of the `int32` root in the parameter list (a classic integer parameter).
 const CLASSIC_INT: &str = "@int32";
@@ -169,7 +171,8 @@ impl Store {
         let capacity = store::plan(&layout, &mut defs).map_err(named)?;
         let slots = vec![Slot::default(); capacity.slots];
         let bytes = vec![0u8; capacity.bytes];
-        let inner = CoreStore::new(&layout, defs, slots, bytes).map_err(named)?;
+        let tables = vec![LeafSlot::default(); store::table_slots(&layout, &defs)];
+        let inner = CoreStore::with_tables(&layout, defs, slots, bytes, tables).map_err(named)?;
         Ok(Self {
             compiled: Arc::clone(&compiled),
             inner,
