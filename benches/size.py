@@ -61,6 +61,8 @@ panic = "abort"
 # Every export takes its arguments from the caller, so that nothing is constant-folded away.
 PROBE_RS = """\
 #![no_std]
+// The exports pass Rust types: the probe is linked for its size, never called from C.
+#![allow(improper_ctypes_definitions)]
 use px4params_core::codec::{decode, encode, DecodeOptions, EncodeOptions};
 use px4params_core::layout::Layout;
 use px4params_core::value::{LeafSink, LeafSource};
