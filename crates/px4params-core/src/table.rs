@@ -63,7 +63,11 @@ const VERSION: u32 = 1 << 31;
 /// The most slots a table uses (types with more leaves are covered up to there).
 const MAX_SLOTS: usize = 1 << 16;
 
-/// The storage given to [`LeafTable::build`] holds fewer than [`LeafTable::MIN_SLOTS`] slots.
+/// The fewest slots a table is built in (it then covers nothing: every access walks).
+// A module constant, not an associated one: cbindgen would put that in the C header.
+pub const MIN_SLOTS: usize = 2;
+
+/// The storage given to [`LeafTable::build`] holds fewer than [`MIN_SLOTS`] slots.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct TableTooSmall;
 
@@ -74,9 +78,6 @@ pub struct LeafTable<'s> {
 }
 
 impl<'s> LeafTable<'s> {
-    /// The fewest slots a table is built in (it then covers nothing: every access walks).
-    pub const MIN_SLOTS: usize = 2;
-
     /// Number of slots a table of `root` needs to cover every leaf the type's shape fixes
     /// (at most 65536: a type with more leaves is covered up to there).
     pub fn slots_needed(layout: &Layout<'_>, root: NodeId) -> usize {
@@ -92,7 +93,7 @@ impl<'s> LeafTable<'s> {
         root: NodeId,
         storage: &'s mut [LeafSlot],
     ) -> Result<Self, TableTooSmall> {
-        if storage.len() < Self::MIN_SLOTS {
+        if storage.len() < MIN_SLOTS {
             return Err(TableTooSmall);
         }
         let cap = storage.len();

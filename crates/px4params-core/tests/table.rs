@@ -10,7 +10,7 @@ use px4params_core::compile::OwnedLayout;
 use px4params_core::layout::{NodeId, Role};
 use px4params_core::leaf::{get_leaf, locate, seek, Leaf, LeafAccessError, Target};
 use px4params_core::store::{plan, table_slots, ParamDef, Slot, Store, Which};
-use px4params_core::table::{LeafSlot, LeafTable};
+use px4params_core::table::{self, LeafSlot, LeafTable};
 use px4params_core::value::{LeafSink, LeafSource};
 use px4params_core::{Cast, Scalar};
 
@@ -200,7 +200,7 @@ proptest! {
             }
         }
         // A table cut short by its storage answers the same.
-        let size = LeafTable::MIN_SLOTS + cut.index(needed.max(LeafTable::MIN_SLOTS) - 1);
+        let size = table::MIN_SLOTS + cut.index(needed.max(table::MIN_SLOTS) - 1);
         let mut small = vec![LeafSlot::default(); size];
         let short = LeafTable::build(&layout, root, &mut small).unwrap();
         prop_assert!(short.len() <= size);
