@@ -2,7 +2,10 @@
 times are not): runs ``benches/instructions.rs`` (``cargo bench --no-run`` builds it with the
 bench profile, as criterion's figures are) N times and 0 times, and divides the difference.
 
-    python benches/instructions.py [--n 2000] [OP ...]
+    python benches/instructions.py [--n 2000] [--compact] [OP ...]
+
+``--compact`` counts the firmware build of the core (feature ``compact``: the codec without
+its fast paths for flat leaf lists, built for size; see ``benches/size.py``).
 
 Skips with a message when valgrind is not installed.
 """
@@ -24,10 +27,11 @@ OPS = [
 ]  # fmt: skip
 
 
-def build() -> Path:
+def build(compact: bool) -> Path:
     """The instructions bench binary, built as `cargo bench` builds it."""
+    features = "alloc,compact" if compact else "alloc"
     out = subprocess.run(
-        ["cargo", "bench", "-p", "px4params-core", "--features", "alloc", "--bench",
+        ["cargo", "bench", "-p", "px4params-core", "--features", features, "--bench",
          "instructions", "--no-run", "--message-format", "json"],
         cwd=ROOT, capture_output=True, text=True, check=True,
     ).stdout  # fmt: skip
@@ -52,12 +56,13 @@ def count(binary: Path, op: str, n: int) -> int:
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--n", type=int, default=2000)
+    parser.add_argument("--compact", action="store_true", help="the core's firmware build")
     parser.add_argument("ops", nargs="*", default=OPS, metavar="OP")
     args = parser.parse_args()
     if shutil.which("valgrind") is None:
         print("instructions: valgrind is not installed (Debian: apt-get install valgrind)")
         return 0
-    binary = build()
+    binary = build(args.compact)
     print(f"{'call':18} {'instructions':>12}")
     for op in args.ops:
         per_call = (count(binary, op, args.n) - count(binary, op, 0)) / args.n

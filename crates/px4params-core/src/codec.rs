@@ -282,6 +282,7 @@ struct Encoder<'l, 'o, S: Source> {
 
 impl<S: Source> Encoder<'_, '_, S> {
     #[cold]
+    #[inline(never)]
     fn fail(&mut self, kind: ErrorKind<S::Error>) -> Stop {
         self.error = Some(Error {
             kind,
@@ -291,7 +292,9 @@ impl<S: Source> Encoder<'_, '_, S> {
         Stop(())
     }
 
-    #[inline(always)]
+    // One out-of-line copy in firmware builds (feature `compact`): every kind of node writes.
+    #[cfg_attr(not(feature = "compact"), inline(always))]
+    #[cfg_attr(feature = "compact", inline(never))]
     fn write(&mut self, raw: u64, bits: u32) -> Result<(), Stop> {
         self.out
             .write(scalar::to_stream(raw, bits), bits)
@@ -395,6 +398,7 @@ impl<S: Source> Encoder<'_, '_, S> {
 
     /// Encodes field `index`; returns 1 when the input had it (0 for padding and filled-in
     /// versions), so that the struct can tell unknown input fields.
+    #[cfg_attr(feature = "compact", inline(never))]
     fn field(&mut self, index: u32, last: bool) -> Result<usize, Stop> {
         let layout = self.layout;
         let field = layout.fields[index as usize];
@@ -643,6 +647,9 @@ fn encode_scalars(
 /// [`scalar_raw`] with the in-range unsigned case first.
 #[inline(always)]
 fn fast_raw(kind: Kind, value: Scalar, saturate: bool) -> Result<u64, scalar::ScalarError> {
+    if !FAST_PATHS {
+        return scalar_raw(kind, value, saturate);
+    }
     match (kind, value) {
         (Kind::Uint { bits, .. }, Scalar::Uint(v)) if v <= crate::bits::mask(bits.into()) => Ok(v),
         // In range (NaN compares false and takes the general path, as do infinities).
@@ -725,6 +732,7 @@ impl<'d, R: BitRead + ?Sized + 'd, K: Sink> Decoder<'_, 'd, R, K> {
     }
 
     #[cold]
+    #[inline(never)]
     fn fail(&mut self, kind: ErrorKind<K::Error>) -> Stop {
         let at = self.pos();
         self.fail_at(at, kind)
@@ -732,6 +740,7 @@ impl<'d, R: BitRead + ?Sized + 'd, K: Sink> Decoder<'_, 'd, R, K> {
 
     /// Fails pointing at `bit_offset` (the start of what was found wrong).
     #[cold]
+    #[inline(never)]
     fn fail_at(&mut self, bit_offset: usize, kind: ErrorKind<K::Error>) -> Stop {
         self.error = Some(Error {
             kind,
@@ -874,14 +883,7 @@ impl<'d, R: BitRead + ?Sized + 'd, K: Sink> Decoder<'_, 'd, R, K> {
                                 max,
                             }));
                         }
-                        self.path.push(Step::Index(n as u32));
-                        let elem_kind = layout.node(elem).kind;
-                        if is_scalar(elem_kind) {
-                            self.leaf(elem_kind)?;
-                        } else {
-                            self.node(elem, false)?;
-                        }
-                        self.path.pop();
+                        self.element(elem, n as u32, false)?;
                         n += 1;
                     }
                     let r = self.sink.end_array(n);
@@ -904,13 +906,7 @@ impl<'d, R: BitRead + ?Sized + 'd, K: Sink> Decoder<'_, 'd, R, K> {
                     let elem_kind = layout.node(elem).kind;
                     let done = is_scalar(elem_kind) && self.flat_elements(elem_kind, n as usize)?;
                     for i in (if done { n as u32 } else { 0 })..n as u32 {
-                        self.path.push(Step::Index(i));
-                        if is_scalar(elem_kind) {
-                            self.leaf(elem_kind)?;
-                        } else {
-                            self.node(elem, tao && u64::from(i) + 1 == n)?;
-                        }
-                        self.path.pop();
+                        self.element(elem, i, tao && u64::from(i) + 1 == n)?;
                     }
                     let r = self.sink.end_array(n as usize);
                     self.sunk(r)?;
@@ -918,6 +914,20 @@ impl<'d, R: BitRead + ?Sized + 'd, K: Sink> Decoder<'_, 'd, R, K> {
             }
         }
         self.depth -= 1;
+        Ok(())
+    }
+
+    /// Element `i` of a dynamic array (primitive elements without recursion).
+    #[cfg_attr(feature = "compact", inline(never))]
+    fn element(&mut self, elem: NodeId, i: u32, last: bool) -> Result<(), Stop> {
+        self.path.push(Step::Index(i));
+        let kind = self.layout.node(elem).kind;
+        if is_scalar(kind) {
+            self.leaf(kind)?;
+        } else {
+            self.node(elem, last)?;
+        }
+        self.path.pop();
         Ok(())
     }
 
