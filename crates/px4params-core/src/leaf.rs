@@ -464,6 +464,8 @@ struct Walk<'l, 'd, R: BitRead + ?Sized> {
 }
 
 impl<R: BitRead + ?Sized> Walk<'_, '_, R> {
+    #[cold]
+    #[inline(never)]
     fn fail(&self, kind: ErrorKind<Infallible>) -> LeafAccessError {
         Error {
             kind,
@@ -849,6 +851,8 @@ struct Transcoder<'l, 'o, R: BitRead + ?Sized> {
 }
 
 impl<R: BitRead + ?Sized> Transcoder<'_, '_, R> {
+    #[cold]
+    #[inline(never)]
     fn fail(&self, kind: ErrorKind<Infallible>) -> LeafAccessError {
         Error {
             kind,
