@@ -1,6 +1,8 @@
-"""Encoding takes a fast path for plain values (dicts, lists, ints, floats of the exact built-in
-types) and a general one for anything else. Whichever is taken, the bytes and the errors are
-the same: here the general path is forced with dict and list subclasses."""
+"""Encoding and decoding take fast paths for plain values (dicts, lists, tuples, ints, floats of
+the exact built-in types): a type's compiled program where it has one, else a leaf list; the
+general path takes anything else. Whichever is taken, the bytes, values and errors are the same:
+here the general path is forced with dict and list subclasses, and decoding the same bytes in
+pieces (which no program does) is the reference for decoding them whole."""
 
 from __future__ import annotations
 
@@ -140,3 +142,38 @@ def test_decoded_dicts_are_new_each_time() -> None:
     first = t.decode(bytes.fromhex("39300000000700"))
     first["uptime_sec"] = 0
     assert t.decode(bytes.fromhex("39300000000700"))["uptime_sec"] == 12345
+
+
+def decoded(t: px4params.DataType, data: bytes, pieces: int, **options: Any) -> tuple[str, str]:
+    try:
+        if pieces == 1:
+            return ("value", repr(t.decode(data, **options)))
+        cut = len(data) // pieces
+        fragments = [data[:cut], data[cut:]] if pieces == 2 else [data[:cut], b"", data[cut:]]
+        return ("value", repr(t.decode_fragments(fragments, **options)))
+    except Exception as e:  # the class and the message must agree
+        return (type(e).__name__, str(e))
+
+
+@pytest.mark.parametrize("key", KEYS)
+@settings(max_examples=budget(8), deadline=None, suppress_health_check=list(HealthCheck))
+@given(data=st.data(), tao=st.booleans(), allow_trailing=st.booleans())
+def test_whole_and_fragmented_decoding_agree(
+    key: str, data: st.DataObject, tao: bool, allow_trailing: bool
+) -> None:
+    t = SCHEMA[key]
+    value = data.draw(value_strategy(TYPES, key, infinities=True))
+    encoded = t.encode(value, tao=tao)
+    # The value's bytes, cut short, with bytes after them, or changed at random.
+    how = data.draw(st.integers(0, 3))
+    if how == 1 and encoded:
+        encoded = encoded[: data.draw(st.integers(0, len(encoded) - 1))]
+    elif how == 2:
+        encoded += data.draw(st.binary(min_size=1, max_size=4))
+    elif how == 3:
+        encoded = data.draw(st.binary(max_size=len(encoded) + 2))
+    options = {"tao": tao, "allow_trailing": allow_trailing}
+    whole = decoded(t, encoded, 1, **options)
+    assert whole == decoded(t, encoded, data.draw(st.integers(2, 3)), **options)
+    if how == 0:
+        assert whole[0] == "value"

@@ -366,6 +366,16 @@ mod tests {
     use super::*;
 
     #[test]
+    fn masks_of_every_width() {
+        assert_eq!(mask(0), 0);
+        assert_eq!(mask(64), u64::MAX);
+        for n in 1..64u32 {
+            // Against the arithmetic definition, 2^n - 1.
+            assert_eq!(u128::from(mask(n)), (1u128 << n) - 1, "n={n}");
+        }
+    }
+
+    #[test]
     fn write_then_read_at_every_offset() {
         for n in 1..=64u32 {
             for offset in 0..17usize {

@@ -644,6 +644,22 @@ fn encode_scalars(
     written.map_err(|e| (at, e.unwrap_or_else(FlatFail::Buffer)))
 }
 
+/// The bits the encoder writes for a primitive `value` of `kind`, in stream order, and how
+/// many: what a binding that walks a type its own way (see `px4params-py`'s programs) writes,
+/// so that its bytes are the encoder's.
+#[inline(always)]
+pub fn scalar_stream(
+    kind: Kind,
+    value: Scalar,
+    saturate: bool,
+) -> Result<(u64, u32), scalar::ScalarError> {
+    let bits = scalar_bits(kind);
+    Ok((
+        scalar::to_stream(fast_raw(kind, value, saturate)?, bits),
+        bits,
+    ))
+}
+
 /// [`scalar_raw`] with the in-range unsigned case first.
 #[inline(always)]
 fn fast_raw(kind: Kind, value: Scalar, saturate: bool) -> Result<u64, scalar::ScalarError> {
@@ -1085,9 +1101,12 @@ fn scalar_of(kind: Kind, raw: u64) -> Scalar {
     }
 }
 
-/// Reads a scalar leaf's value at `bit_offset` (no bounds check beyond the data's).
+/// Reads a scalar leaf's value at `bit_offset`, as the decoder does.
+///
+/// # Panics
+/// If the leaf's bits lie outside `data` (callers check the length first).
 #[inline(always)]
-pub(crate) fn read_scalar<R: BitRead + ?Sized>(data: &R, bit_offset: usize, kind: Kind) -> Scalar {
+pub fn read_scalar<R: BitRead + ?Sized>(data: &R, bit_offset: usize, kind: Kind) -> Scalar {
     let bits = scalar_bits(kind);
     if bits == 0 {
         return Scalar::Uint(0);
@@ -1098,9 +1117,9 @@ pub(crate) fn read_scalar<R: BitRead + ?Sized>(data: &R, bit_offset: usize, kind
     )
 }
 
-/// The bit width of a scalar kind.
+/// The bit width of a scalar kind (0 for containers).
 #[inline(always)]
-pub(crate) fn scalar_bits(kind: Kind) -> u32 {
+pub fn scalar_bits(kind: Kind) -> u32 {
     match kind {
         Kind::Uint { bits, .. } | Kind::Int { bits, .. } | Kind::Float { bits, .. } => bits.into(),
         Kind::Bool => 1,

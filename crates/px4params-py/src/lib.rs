@@ -5,6 +5,7 @@
 mod compile;
 mod file;
 mod plain;
+mod program;
 mod store;
 mod tables;
 mod transfer;
@@ -17,7 +18,7 @@ use px4params_core::bits::BitRead;
 use px4params_core::codec::{decode, encode, DecodeOptions, EncodeOptions, LeafKind};
 use px4params_core::compile::OwnedLayout;
 use px4params_core::error::{Error, ErrorKind};
-use px4params_core::layout::{Layout, NodeId};
+use px4params_core::layout::{Kind, Layout, NodeId, Role};
 use px4params_core::leaf::{encode_default, get_leaf, locate, set_leaf, Target};
 use px4params_core::value::{LeafError as LeafListError, LeafSink, LeafSource};
 use px4params_core::Scalar;
@@ -153,8 +154,52 @@ pub(crate) struct Compiled {
     /// Every field name as an interned Python string, by field index (decoding builds dicts).
     names: Vec<Py<PyString>>,
     /// Per struct node, made on first use: a dict of its field names (values None) that
-    /// decoding copies and fills, cheaper than growing a new dict key by key.
-    templates: Vec<std::sync::OnceLock<Py<PyDict>>>,
+    /// decoding copies and fills, cheaper than growing a new dict key by key; `None` for
+    /// structs small enough for a new dict (see [`Compiled::new_dict`]).
+    templates: Vec<std::sync::OnceLock<Option<Py<PyDict>>>>,
+    /// Per node, made on first use: the struct's program, when it has one.
+    programs: Vec<std::sync::OnceLock<Option<program::Program>>>,
+}
+
+/// The most keys a new dict holds without growing (CPython's smallest table, 8 slots, is
+/// filled to two thirds).
+const SMALL_DICT: usize = 5;
+
+impl Compiled {
+    /// A new dict for a value of struct `id`, to be filled in field order. A struct of more
+    /// fields than a new dict holds without growing gets a copy of its template (its field
+    /// names, values None, made on first use): replacing values costs less than growing.
+    fn new_dict<'py>(&self, py: Python<'py>, id: NodeId) -> PyResult<Bound<'py, PyDict>> {
+        let template = self.templates[id as usize].get_or_init(|| {
+            let layout = self.layout.as_layout();
+            let Kind::Struct { first, count } = layout.node(id).kind else {
+                return None;
+            };
+            let named = (first..first + count)
+                .filter(|&index| layout.fields[index as usize].role != Role::Padding);
+            if named.clone().count() <= SMALL_DICT {
+                return None;
+            }
+            let dict = PyDict::new(py);
+            for index in named {
+                // Inserting into a new dict fails only without memory: the copy below would
+                // fail the same way and raise.
+                let _ = dict.set_item(self.names[index as usize].bind(py), py.None());
+            }
+            Some(dict.unbind())
+        });
+        match template {
+            Some(template) => template.bind(py).copy(),
+            None => Ok(PyDict::new(py)),
+        }
+    }
+
+    /// The program of type `root`, compiled on first use.
+    fn program(&self, root: NodeId) -> Option<&program::Program> {
+        self.programs[root as usize]
+            .get_or_init(|| program::Program::compile(&self.layout.as_layout(), root))
+            .as_ref()
+    }
 }
 
 /// A translated value and each field's fate (`Schema.translate`).
@@ -184,6 +229,7 @@ impl Schema {
             .map(|f| PyString::intern(py, view.name(f)).unbind())
             .collect();
         let templates = (0..view.nodes.len()).map(|_| Default::default()).collect();
+        let programs = (0..view.nodes.len()).map(|_| Default::default()).collect();
         Ok(Self {
             compiled: Arc::new(Compiled {
                 layout,
@@ -191,6 +237,7 @@ impl Schema {
                 classic_roots,
                 names,
                 templates,
+                programs,
             }),
         })
     }
@@ -332,6 +379,24 @@ impl DataType {
         to_py_err(py, &self.key, &self.layout(), err, op)
     }
 
+    /// Encodes a plain value by its leaf list (see [`plain`]); `None` when it is not plain or
+    /// the encoder refused it.
+    fn plain_encode(
+        &self,
+        layout: &Layout<'_>,
+        value: &Bound<'_, PyAny>,
+        out: &mut [u8],
+        options: EncodeOptions,
+    ) -> Option<usize> {
+        plain::with_leaves(|leaves| {
+            leaves.clear();
+            plain::leaves_of(layout, &self.compiled.names, self.root, value, leaves)?;
+            let mut source = LeafSource::new(leaves);
+            let n = encode(layout, self.root, &mut source, out, options).ok()?;
+            (source.consumed() == leaves.len()).then_some(n)
+        })
+    }
+
     /// Decodes into a leaf list, then builds the Python value from it (see [`plain`]); on
     /// any failure the general path decodes again and words the error.
     fn decode_from<'py, R: BitRead + ?Sized>(
@@ -425,13 +490,11 @@ impl DataType {
             keep_versions: false,
         };
         let names = &self.compiled.names;
-        let encoded = plain::with_leaves(|leaves| {
-            leaves.clear();
-            plain::leaves_of(&layout, names, self.root, &value, leaves)?;
-            let mut source = LeafSource::new(leaves);
-            let n = encode(&layout, self.root, &mut source, out, options).ok()?;
-            (source.consumed() == leaves.len()).then_some(n)
-        });
+        let encoded = if let Some(program) = self.compiled.program(self.root) {
+            program.encode(names, &value, out, tao, saturate)
+        } else {
+            self.plain_encode(&layout, &value, out, options)
+        };
         if let Some(n) = encoded {
             return Ok(PyBytes::new(py, &out[..n]));
         }
@@ -454,6 +517,13 @@ impl DataType {
         allow_trailing: bool,
     ) -> PyResult<Bound<'py, PyAny>> {
         let data = bytes_of(data)?;
+        if let Some(program) = self.compiled.program(self.root) {
+            if let Some(value) =
+                program.decode(py, &self.compiled, data.as_bytes(), tao, allow_trailing)?
+            {
+                return Ok(value);
+            }
+        }
         self.decode_from(py, data.as_bytes(), tao, allow_trailing)
     }
 

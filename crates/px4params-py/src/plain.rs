@@ -1,7 +1,8 @@
-//! The fast path of `encode` and `decode`: plain values (dicts, lists, tuples, ints, floats,
-//! bools, bytes and str of the exact built-in types) converted straight to and from the core's
-//! flat leaf lists, walking the compiled layout once, so that the core's flat fast paths do the
-//! bits.
+//! The fast path of `encode` and `decode` for types without a program ([`crate::program`]: those
+//! with unions or arrays of composites) and for data in pieces: plain values (dicts, lists,
+//! tuples, ints, floats, bools, bytes and str of the exact built-in types) converted straight to
+//! and from the core's flat leaf lists, walking the compiled layout once, so that the core's
+//! flat fast paths do the bits. Programs share its readers of plain values.
 //!
 //! It never decides anything the general path ([`crate::values`]) would decide differently:
 //! whatever it does not recognise (a subclass, a missing or unknown field, an integer beyond
@@ -213,14 +214,14 @@ impl Flatten<'_, '_, '_> {
 /// A struct's dict read in field order: the entries are taken in the dict's own order while it
 /// matches the fields' (as for values written in source code, or decoded), by the key's
 /// identity with the field's interned name; any other key is looked up.
-struct Entries<'a, 'py> {
+pub(crate) struct Entries<'a, 'py> {
     dict: &'a Bound<'py, PyDict>,
     pos: ffi::Py_ssize_t,
     next: Option<(*mut ffi::PyObject, *mut ffi::PyObject)>,
 }
 
 impl<'a, 'py> Entries<'a, 'py> {
-    fn new(dict: &'a Bound<'py, PyDict>) -> Self {
+    pub(crate) fn new(dict: &'a Bound<'py, PyDict>) -> Self {
         let mut entries = Self {
             dict,
             pos: 0,
@@ -230,6 +231,7 @@ impl<'a, 'py> Entries<'a, 'py> {
         entries
     }
 
+    #[inline(always)]
     fn advance(&mut self) {
         let (mut key, mut value) = (std::ptr::null_mut(), std::ptr::null_mut());
         // SAFETY: the dict is alive (held for 'a); `pos` is only ever advanced by this call.
@@ -240,13 +242,20 @@ impl<'a, 'py> Entries<'a, 'py> {
 
     /// The value of the field named `name`, borrowed from the dict: null when absent, `None`
     /// when the look-up raised.
-    fn get(&mut self, name: &Py<PyString>) -> Option<*mut ffi::PyObject> {
+    #[inline(always)]
+    pub(crate) fn get(&mut self, name: &Py<PyString>) -> Option<*mut ffi::PyObject> {
         if let Some((key, value)) = self.next {
             if key == name.as_ptr() {
                 self.advance();
                 return Some(value);
             }
         }
+        self.look_up(name)
+    }
+
+    /// A key out of the fields' order, or not the interned name: looked up.
+    #[inline(never)]
+    fn look_up(&mut self, name: &Py<PyString>) -> Option<*mut ffi::PyObject> {
         // SAFETY: both objects are alive; a borrowed result or null (raised or absent).
         let value = unsafe { ffi::PyDict_GetItemWithError(self.dict.as_ptr(), name.as_ptr()) };
         // SAFETY: called with the GIL held.
@@ -258,8 +267,8 @@ impl<'a, 'py> Entries<'a, 'py> {
 }
 
 /// A primitive as the general path reads it, for the exact built-in types only.
-#[inline]
-fn scalar(kind: Kind, obj: *mut ffi::PyObject) -> Option<Scalar> {
+#[inline(always)]
+pub(crate) fn scalar(kind: Kind, obj: *mut ffi::PyObject) -> Option<Scalar> {
     // SAFETY (all calls): `obj` is a live object, checked for its exact type before each
     // call that expects one; failures are reported (and left for `leaves_of` to clear).
     unsafe {
@@ -293,7 +302,7 @@ fn scalar(kind: Kind, obj: *mut ffi::PyObject) -> Option<Scalar> {
 ///
 /// SAFETY: `obj` is a live object.
 #[inline]
-unsafe fn integer(obj: *mut ffi::PyObject) -> Option<Scalar> {
+pub(crate) unsafe fn integer(obj: *mut ffi::PyObject) -> Option<Scalar> {
     if ffi::PyLong_CheckExact(obj) == 0 {
         return None;
     }
@@ -362,18 +371,7 @@ impl<'py> Build<'_, '_, 'py> {
             }
             Kind::Struct { first, count } => {
                 let fields = first..first + count;
-                let template = self.compiled.templates[id as usize].get_or_init(|| {
-                    let dict = PyDict::new(self.py);
-                    for index in fields.clone() {
-                        if layout.fields[index as usize].role != Role::Padding {
-                            // Inserting into a new dict fails only without memory: the
-                            // copy below would fail the same way and raise.
-                            let _ = dict.set_item(self.name(index), self.py.None());
-                        }
-                    }
-                    dict.unbind()
-                });
-                let dict = template.bind(self.py).copy()?;
+                let dict = self.compiled.new_dict(self.py, id)?;
                 for index in fields {
                     let field = layout.fields[index as usize];
                     if field.role != Role::Padding {
@@ -414,7 +412,7 @@ impl<'py> Build<'_, '_, 'py> {
     }
 }
 
-fn is_primitive(kind: Kind) -> bool {
+pub(crate) fn is_primitive(kind: Kind) -> bool {
     matches!(
         kind,
         Kind::Uint { .. } | Kind::Int { .. } | Kind::Float { .. } | Kind::Bool

@@ -379,6 +379,7 @@ impl<'py, 'n> PySink<'py, 'n> {
 }
 
 /// A scalar as a Python object.
+#[inline]
 pub fn scalar_to_py<'py>(py: Python<'py>, value: Scalar) -> PyResult<Bound<'py, PyAny>> {
     Ok(match value {
         Scalar::Uint(v) => v.into_pyobject(py)?.into_any(),
