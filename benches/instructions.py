@@ -24,6 +24,7 @@ ROOT = Path(__file__).resolve().parent.parent
 OPS = [
     "battery/encode", "battery/decode", "ina238/encode", "ina238/decode",
     "ina238/get_leaf4", "ina238/table_get_leaf4", "store/get_leaf4", "store/read4",
+    "battery/receive", "battery/transfer_crc",
 ]  # fmt: skip
 
 
@@ -63,10 +64,10 @@ def main() -> int:
         print("instructions: valgrind is not installed (Debian: apt-get install valgrind)")
         return 0
     binary = build(args.compact)
-    print(f"{'call':18} {'instructions':>12}")
+    print(f"{'call':22} {'instructions':>12}")
     for op in args.ops:
         per_call = (count(binary, op, args.n) - count(binary, op, 0)) / args.n
-        print(f"{op:18} {per_call:>12.0f}")
+        print(f"{op:22} {per_call:>12.0f}")
     return 0
 
 

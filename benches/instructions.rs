@@ -6,19 +6,26 @@
 //! OP: `battery/encode`, `battery/decode`, `ina238/encode`, `ina238/decode`; leaf `[4]` of
 //! INA238 (`bus.i2c.address`): `ina238/get_leaf4` (on encoded bytes), `store/get_leaf4` and
 //! `store/read4` (in the store, built with its leaf tables), `ina238/table_get_leaf4` (on
-//! encoded bytes, through the type's leaf table).
+//! encoded bytes, through the type's leaf table). `battery/receive`: checking the CAN frames
+//! of a BatteryInfo transfer (tail bytes and the transfer CRC); `battery/transfer_crc`: the
+//! CRC alone, over the payload in one piece.
 
 #[path = "../crates/px4params-core/tests/common/mod.rs"]
 mod common;
 
 use px4params_core::codec::{decode, encode, DecodeOptions, EncodeOptions};
 use px4params_core::compile::OwnedLayout;
+use px4params_core::crc::crc16;
 use px4params_core::leaf::{get_leaf, Target};
 use px4params_core::store::{plan, table_slots, ParamDef, Slot, Store, Which};
 use px4params_core::table::{LeafSlot, LeafTable};
+use px4params_core::transfer::{frames, receive};
 use px4params_core::value::{LeafSink, LeafSource};
 use px4params_core::Scalar;
 use std::hint::black_box;
+
+/// The transfer CRC's seed (a data type signature's CRC, as for any type).
+const SEED: u16 = 0xBEEF;
 
 fn battery_leaves() -> Vec<Scalar> {
     let mut leaves: Vec<Scalar> = [300.5, 16.8, -12.25, 201.0, 55.5, 99.0, 0.0]
@@ -67,6 +74,10 @@ fn main() {
     let mut storage = [Scalar::Uint(0); 64];
     let mut slots = vec![LeafSlot::default(); LeafTable::slots_needed(&layout, root)];
     let table = LeafTable::build(&layout, root, &mut slots).unwrap();
+    let frame_data: Vec<Vec<u8>> = frames(&bytes, SEED, 3, false)
+        .map(|f| f.as_bytes().to_vec())
+        .collect();
+    let frame_refs: Vec<&[u8]> = frame_data.iter().map(Vec::as_slice).collect();
     for _ in 0..n {
         match what {
             "encode" => {
@@ -99,6 +110,13 @@ fn main() {
                 let data = black_box(&bytes[..]);
                 let r = table.get_leaf(&layout, data, Target::Index(black_box(4)), false);
                 black_box(r.unwrap());
+            }
+            "receive" => {
+                let r = receive(black_box(&frame_refs), SEED);
+                black_box(r.unwrap().transfer_id);
+            }
+            "transfer_crc" => {
+                black_box(crc16(SEED, black_box(&bytes[..])));
             }
             _ => panic!("unknown operation {what}"),
         }
