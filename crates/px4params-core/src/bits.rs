@@ -240,7 +240,16 @@ impl<'o> BitWriter<'o> {
                 }
             };
             debug_assert!(n <= 64 && value & !mask(n) == 0);
-            let stored = if n > 32 {
+            let stored = if cfg!(feature = "compact") {
+                // Firmware (built for size): one copy of `put`, taking both halves; the high
+                // one is empty for values of up to 32 bits.
+                [
+                    (value >> 32, n.saturating_sub(32)),
+                    (value & mask(32), n.min(32)),
+                ]
+                .into_iter()
+                .try_for_each(|(half, k)| put(out, &mut acc, &mut pending, &mut bytes, half, k))
+            } else if n > 32 {
                 // Over 32 bits: two halves, so that pending (< 32) + n stays within 64.
                 put(out, &mut acc, &mut pending, &mut bytes, value >> 32, n - 32).and_then(|()| {
                     put(
