@@ -177,3 +177,45 @@ def test_whole_and_fragmented_decoding_agree(
     assert whole == decoded(t, encoded, data.draw(st.integers(2, 3)), **options)
     if how == 0:
         assert whole[0] == "value"
+
+
+class Sneaky:
+    """A key with a field name's hash, so that looking that field up compares it, and the
+    comparison runs ``action`` once armed."""
+
+    def __init__(self, name: str, action: Any) -> None:
+        self.name, self.action, self.armed = name, action, False
+
+    def __hash__(self) -> int:
+        return hash(self.name)
+
+    def __eq__(self, other: object) -> bool:
+        if self.armed:
+            self.action()
+        return False
+
+
+def test_python_code_run_by_a_field_look_up_is_survived() -> None:
+    t = SCHEMA["uavcan.protocol.NodeStatus"]
+    fields = {"uptime_sec": 1, "health": 0, "mode": 0, "sub_mode": 0}
+    fields["vendor_specific_status_code"] = 7
+
+    def compared() -> None:
+        raise RuntimeError("compared")
+
+    # Its exception comes out unchanged, whichever path met it first.
+    value: dict[Any, Any] = {}
+    sneaky = Sneaky("mode", compared)
+    value[sneaky] = 1
+    value.update(fields)
+    sneaky.armed = True
+    with pytest.raises(RuntimeError, match="compared"):
+        t.encode(value)
+    # A look-up that empties the dict: read as it then is, with nothing freed under the reader.
+    value = {}
+    sneaky = Sneaky("mode", value.clear)
+    value[sneaky] = 1
+    value.update(fields)
+    sneaky.armed = True
+    with pytest.raises(px4params.ValueShapeError, match="uptime_sec: missing field"):
+        t.encode(value)
