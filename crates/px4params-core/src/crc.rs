@@ -82,6 +82,16 @@ pub fn crc16(mut crc: u16, bytes: &[u8]) -> u16 {
     crc
 }
 
+/// [`crc16`] of four bytes given as one big-endian word.
+#[inline(always)]
+pub(crate) fn crc16_word(crc: u16, word: u32) -> u16 {
+    let [t0, t1, t2, t3] = &CRC16_TABLES;
+    let [b0, b1, b2, b3] = word.to_be_bytes();
+    let high = (crc >> 8) as u8 ^ b0;
+    let low = crc as u8 ^ b1;
+    t3[usize::from(high)] ^ t2[usize::from(low)] ^ t1[usize::from(b2)] ^ t0[usize::from(b3)]
+}
+
 /// [`crc16`] over `pieces` as if they were one run of bytes: the four-byte steps go on across
 /// the pieces' edges (a transfer's CAN frames carry 7 payload bytes each).
 pub fn crc16_pieces<'a>(mut crc: u16, pieces: impl IntoIterator<Item = &'a [u8]>) -> u16 {

@@ -164,6 +164,12 @@ impl<'f, 'a> FramePayloads<'f, 'a> {
         Self { frames }
     }
 
+    /// Frame `i`, tail byte included.
+    #[inline]
+    pub(crate) fn frame(&self, i: usize) -> &'a [u8] {
+        self.frames[i]
+    }
+
     /// Bytes before frame `i`'s payload: the transfer CRC in the first of several frames.
     #[inline(always)]
     fn head(&self, i: usize) -> usize {

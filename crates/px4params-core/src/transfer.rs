@@ -8,7 +8,7 @@
 
 use core::fmt;
 
-use crate::crc::{crc16, crc16_pieces};
+use crate::crc::{crc16, crc16_pieces, crc16_word};
 use crate::scatter::{FramePayloads, Pieces};
 
 const START: u8 = 0x80;
@@ -279,7 +279,12 @@ pub fn receive<'f, 'a>(
             return Err(TransferError::TooShort);
         }
         let got = u16::from_le_bytes([first[0], first[1]]);
-        let computed = crc16_pieces(crc_seed, (0..payload.count()).map(|i| payload.piece(i)));
+        let computed = if cfg!(feature = "compact") {
+            // Firmware built for size: without the register path for full frames.
+            crc16_pieces(crc_seed, (0..payload.count()).map(|i| payload.piece(i)))
+        } else {
+            payload_crc(crc_seed, &payload)
+        };
         if got != computed {
             return Err(TransferError::Crc { got, computed });
         }
@@ -288,6 +293,38 @@ pub fn receive<'f, 'a>(
         transfer_id: expected,
         payload,
     })
+}
+
+/// The CRC of a multi-frame transfer's payload. Full classic CAN frames (all but the last)
+/// are read 8 bytes at a time and their 5 or 7 payload bytes go through a register, four-byte
+/// steps crossing the frames' edges; other frames take [`crc16_pieces`].
+fn payload_crc(mut crc: u16, payload: &FramePayloads<'_, '_>) -> u16 {
+    // `held` bytes (fewer than 4) wait for a step in the low bytes of `pending`.
+    let (mut pending, mut held) = (0u64, 0u32);
+    for i in 0..payload.count() {
+        let piece = payload.piece(i);
+        let Ok(frame) = <[u8; 8]>::try_from(payload.frame(i)) else {
+            let waiting = pending.to_be_bytes();
+            let rest = (i..payload.count()).map(|j| payload.piece(j));
+            return crc16_pieces(
+                crc,
+                core::iter::once(&waiting[8 - held as usize..]).chain(rest),
+            );
+        };
+        // The piece ends before the tail byte: the low bytes of the frame's word, shifted.
+        let n = piece.len() as u32;
+        let bytes = (u64::from_be_bytes(frame) >> 8) & crate::bits::mask(8 * n);
+        let joined = (u128::from(pending) << (8 * n)) | u128::from(bytes);
+        let mut left = held + n;
+        while left >= 4 {
+            left -= 4;
+            crc = crc16_word(crc, (joined >> (8 * left)) as u32);
+        }
+        pending = joined as u64 & crate::bits::mask(8 * left);
+        held = left;
+    }
+    let waiting = pending.to_be_bytes();
+    crc16(crc, &waiting[8 - held as usize..])
 }
 
 #[cfg(test)]
@@ -311,6 +348,36 @@ mod tests {
         assert_eq!(f[1], [6, 7, 8, 0x65]);
         let crc = crc16(0x1234, &[1, 2, 3, 4, 5, 6, 7, 8]);
         assert_eq!(f[0][..2], crc.to_le_bytes());
+    }
+
+    #[test]
+    fn the_crc_covers_every_payload_byte_across_frame_edges() {
+        for canfd in [false, true] {
+            for len in 0..100usize {
+                let payload: Vec<u8> = (0..len).map(|i| (i * 29 + 3) as u8).collect();
+                let f = split(&payload, canfd);
+                let refs: Vec<&[u8]> = f.iter().map(Vec::as_slice).collect();
+                assert!(
+                    receive(&refs, 0x1234).is_ok(),
+                    "length {len}, CAN FD {canfd}"
+                );
+                if canfd || f.len() == 1 {
+                    continue;
+                }
+                // One bit changed anywhere in the payload (after the CRC, before the tail).
+                for (i, frame) in f.iter().enumerate() {
+                    for j in (if i == 0 { 2 } else { 0 })..frame.len() - 1 {
+                        let mut changed = f.clone();
+                        changed[i][j] ^= 0x10;
+                        let refs: Vec<&[u8]> = changed.iter().map(Vec::as_slice).collect();
+                        assert!(
+                            matches!(receive(&refs, 0x1234), Err(TransferError::Crc { .. })),
+                            "length {len}, frame {i}, byte {j}"
+                        );
+                    }
+                }
+            }
+        }
     }
 
     #[test]
