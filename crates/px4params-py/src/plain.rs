@@ -172,18 +172,7 @@ impl Flatten<'_, '_, '_> {
             let kind = self.layout.node(elem).kind;
             let primitive = is_primitive(kind);
             for i in 0..n as ffi::Py_ssize_t {
-                // SAFETY: an exact list or tuple; an index out of range (the list shrank)
-                // gives null and an error, and the general path takes over.
-                let item = unsafe {
-                    if list {
-                        ffi::PyList_GetItem(ptr, i)
-                    } else {
-                        ffi::PyTuple_GetItem(ptr, i)
-                    }
-                };
-                if item.is_null() {
-                    return None;
-                }
+                let item = item_at(ptr, list, i)?;
                 if primitive {
                     self.leaves.push(scalar(kind, item)?);
                 } else {
@@ -209,6 +198,25 @@ impl Flatten<'_, '_, '_> {
         }
         Some(())
     }
+}
+
+/// Item `i` of `seq`, an exact list (`list`) or tuple that the caller holds, borrowed; `None`
+/// when out of range (the list shrank), with an error set that the caller clears.
+#[inline(always)]
+pub(crate) fn item_at(
+    seq: *mut ffi::PyObject,
+    list: bool,
+    i: ffi::Py_ssize_t,
+) -> Option<*mut ffi::PyObject> {
+    // SAFETY: `seq` is a live exact list or tuple (checked by the caller).
+    let item = unsafe {
+        if list {
+            ffi::PyList_GetItem(seq, i)
+        } else {
+            ffi::PyTuple_GetItem(seq, i)
+        }
+    };
+    (!item.is_null()).then_some(item)
 }
 
 /// A struct's dict read in field order: the entries are taken in the dict's own order while it

@@ -23,7 +23,7 @@ use pyo3::ffi;
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict, PyList, PyString, PyTuple};
 
-use crate::plain::{integer, is_primitive, scalar as plain_scalar, Entries};
+use crate::plain::{integer, is_primitive, item_at, scalar as plain_scalar, Entries};
 use crate::values::scalar_to_py;
 use crate::Compiled;
 
@@ -346,16 +346,7 @@ impl Encoder<'_, '_, '_> {
                 }
             }
             for i in 0..n as ffi::Py_ssize_t {
-                // SAFETY: an exact list or tuple, held; an index out of range (the list
-                // shrank) gives null and an error, and the general path takes over.
-                let item = unsafe {
-                    if list {
-                        ffi::PyList_GetItem(ptr, i)
-                    } else {
-                        ffi::PyTuple_GetItem(ptr, i)
-                    }
-                };
-                let value = plain_scalar(elem, present(item)?)?;
+                let value = plain_scalar(elem, item_at(ptr, list, i)?)?;
                 self.scalar(elem, value)?;
             }
             return Some(());
@@ -401,15 +392,7 @@ impl Encoder<'_, '_, '_> {
 /// Item `i` of an exact list (or tuple) of ints, when it fits a byte.
 #[inline]
 fn byte_at(seq: *mut ffi::PyObject, list: bool, i: ffi::Py_ssize_t) -> Option<u8> {
-    // SAFETY: `seq` is a live, held exact list or tuple; an index out of range (the list
-    // shrank) gives null and an error, which the caller clears.
-    let item = present(unsafe {
-        if list {
-            ffi::PyList_GetItem(seq, i)
-        } else {
-            ffi::PyTuple_GetItem(seq, i)
-        }
-    })?;
+    let item = item_at(seq, list, i)?;
     // SAFETY: a live item, read at once.
     match unsafe { integer(item) }? {
         Scalar::Uint(v) => u8::try_from(v).ok(),
