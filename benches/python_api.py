@@ -1,6 +1,8 @@
 """Python API speed against its baselines, measured in the same run on the same values: the
 codec against pydronecan (``_pack`` of a prebuilt value object, and ``unpack``), reading one
-leaf of an instance by name against a dict lookup (a flat parameter table's cost).
+leaf of an instance by name against a dict lookup (a flat parameter table's cost). The
+``_many`` rows are the batch calls, per message of a batch of 100, against pydronecan's one
+message (it has no batch call).
 
     python benches/python_api.py [--runs 5] [--instructions]
 
@@ -61,14 +63,23 @@ ROWS = {
     "BatteryInfo decode": ("pydronecan", "faster", 150.0),
     "NodeStatus encode": ("pydronecan", "faster", 60.0),
     "NodeStatus decode": ("pydronecan", "faster", 100.0),
+    "BatteryInfo encode_many": ("pydronecan", "faster", 100.0),
+    "BatteryInfo decode_many": ("pydronecan", "faster", 150.0),
+    "NodeStatus encode_many": ("pydronecan", "faster", 60.0),
+    "NodeStatus decode_many": ("pydronecan", "faster", 100.0),
     'Store.get("INA238#3.current")': ("dict lookup", "at most", 0.5e-6),
 }
+#: Messages per batch call in the ``_many`` rows.
+BATCH = 100
+
+Call = Callable[[], object]
 
 
-def calls() -> dict[str, tuple[Callable[[], object], Callable[[], object]]]:
-    """Each row's two calls (ours, the baseline), ready to run; checked to agree first."""
+def calls() -> dict[str, tuple[Call, Call, int]]:
+    """Each row's two calls (ours, the baseline), ready to run, and how many messages our call
+    handles; checked to agree first."""
     schema = px4params.load_schema(use_env=False)
-    made: dict[str, tuple[Callable[[], object], Callable[[], object]]] = {}
+    made: dict[str, tuple[Call, Call, int]] = {}
     for name, key, value in (
         ("BatteryInfo", BATTERY_KEY, BATTERY),
         ("NodeStatus", NODE_STATUS_KEY, NODE_STATUS),
@@ -77,14 +88,14 @@ def calls() -> dict[str, tuple[Callable[[], object], Callable[[], object]]]:
         obj = fill(new_value(key), value)
         data = t.encode(value)
         assert bytes(transport.bytes_from_bits(obj._pack(True))) == data
-        made[f"{name} encode"] = (
-            lambda t=t, value=value: t.encode(value),
-            lambda obj=obj: transport.bytes_from_bits(obj._pack(True)),
-        )
-        made[f"{name} decode"] = (
-            lambda t=t, data=data: t.decode(data),
-            lambda key=key, data=data: unpack(key, data, tao=True),
-        )
+        pack = lambda obj=obj: transport.bytes_from_bits(obj._pack(True))  # noqa: E731
+        unpack_one = lambda key=key, data=data: unpack(key, data, tao=True)  # noqa: E731
+        made[f"{name} encode"] = (lambda t=t, value=value: t.encode(value), pack, 1)
+        made[f"{name} decode"] = (lambda t=t, data=data: t.decode(data), unpack_one, 1)
+        values, items = [dict(value) for _ in range(BATCH)], [data] * BATCH
+        assert t.encode_many(values) == items and t.decode_many(items) == [t.decode(data)] * BATCH
+        made[f"{name} encode_many"] = (lambda t=t, v=values: t.encode_many(v), pack, BATCH)
+        made[f"{name} decode_many"] = (lambda t=t, d=items: t.decode_many(d), unpack_one, BATCH)
     store = px4params.Store(schema, classic=[])
     for n in range(4):
         store.add(f"INA238#{n}")
@@ -93,8 +104,9 @@ def calls() -> dict[str, tuple[Callable[[], object], Callable[[], object]]]:
     made['Store.get("INA238#3.current")'] = (
         lambda: store.get("INA238#3.current"),
         lambda: flat["INA238_3P"],
+        1,
     )
-    return made
+    return dict(sorted(made.items(), key=lambda row: list(ROWS).index(row[0])))
 
 
 def best(call: Callable[[], object], repeat: int = 5) -> float:
@@ -167,15 +179,16 @@ def main() -> None:
         args.instructions = False
     times: dict[str, tuple[list[float], list[float]]] = {row: ([], []) for row in made}
     for _ in range(args.runs):
-        for row, (ours, theirs) in made.items():
-            times[row][0].append(best(ours))
+        for row, (ours, theirs, per) in made.items():
+            times[row][0].append(best(ours) / per)
             times[row][1].append(best(theirs))
     print(f"{os.cpu_count()} CPUs, Python {sys.version.split()[0]}, {args.runs} runs, medians")
     print(f"{'':<31} {'px4params':>11} {'baseline':>12} {'ratio':>14}  target")
     for row in made:
         ours, theirs = (statistics.median(t) for t in times[row])
+        per = made[row][2]
         counts = (
-            (instructions(row, 0, ours), instructions(row, 1, theirs))
+            (instructions(row, 0, ours * per) / per, instructions(row, 1, theirs))
             if args.instructions
             else (None, None)
         )

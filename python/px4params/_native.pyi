@@ -1,5 +1,6 @@
 """Type stubs for the compiled extension (crates/px4params-py)."""
 
+from collections.abc import Iterable
 from typing import Any, Self
 
 class Schema:
@@ -30,6 +31,16 @@ class DataType:
         tao: bool = True,
         allow_trailing: bool = False,
     ) -> Any: ...
+    def encode_many(
+        self, values: Iterable[Any], *, tao: bool = True, saturate: bool = False
+    ) -> list[bytes]: ...
+    def decode_many(
+        self,
+        items: Iterable[bytes | bytearray | memoryview],
+        *,
+        tao: bool = True,
+        allow_trailing: bool = False,
+    ) -> list[Any]: ...
     def decode_fragments(
         self, fragments: list[bytes], *, tao: bool = True, allow_trailing: bool = False
     ) -> Any: ...

@@ -82,7 +82,10 @@ class CodecError(Px4ParamsError):
     Attributes (set by whoever raises it):
         path: where in the value the problem is, e.g. ``"bus.i2c.address"`` or ``"[4]"``.
         bit_offset: bit position in the serialised data, or None when not applicable.
+        index: which item of a batch call (``encode_many``, ``decode_many``) failed, else None.
     """
+
+    index: int | None = None
 
 
 class EncodeError(CodecError):

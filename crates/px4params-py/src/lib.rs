@@ -2,6 +2,7 @@
 //!
 //! Core errors become the exception classes of `px4params.errors` here, and only here.
 
+mod batch;
 mod compile;
 mod file;
 mod plain;
@@ -450,6 +451,66 @@ impl DataType {
             Err(e) => Err(self.err(py, e, Op::Decode)),
         }
     }
+
+    /// Runs `f` with room for the type's largest value: on the stack up to 256 bytes.
+    fn with_out<R>(&self, f: impl FnOnce(&mut [u8]) -> R) -> R {
+        let max = self.layout().max_bytes(self.root);
+        if max <= 256 {
+            f(&mut [0u8; 256])
+        } else {
+            f(&mut vec![0u8; max])
+        }
+    }
+
+    /// Encodes `value` using `out` (room for the type's largest value; what it holds before
+    /// does not matter: every byte of the result is written).
+    fn encode_into<'py>(
+        &self,
+        value: &Bound<'py, PyAny>,
+        out: &mut [u8],
+        tao: bool,
+        saturate: bool,
+    ) -> PyResult<Bound<'py, PyBytes>> {
+        let py = value.py();
+        let layout = self.layout();
+        let options = EncodeOptions {
+            tao,
+            saturate,
+            keep_versions: false,
+        };
+        let names = &self.compiled.names;
+        let encoded = if let Some(program) = self.compiled.program(self.root) {
+            program.encode(names, value, out, tao, saturate)
+        } else {
+            self.plain_encode(&layout, value, out, options)
+        };
+        if let Some(n) = encoded {
+            return Ok(PyBytes::new(py, &out[..n]));
+        }
+        // Not plain, or refused: the general path encodes it or words the error.
+        let mut source = PySource::new(value.clone(), names, saturate);
+        match encode(&layout, self.root, &mut source, out, options) {
+            Ok(n) => Ok(PyBytes::new(py, &out[..n])),
+            Err(e) => Err(self.err(py, e, Op::Encode)),
+        }
+    }
+
+    /// Decodes whole bytes: by the type's program when it has one, else by the leaf list or
+    /// the general path ([`DataType::decode_from`]).
+    fn decode_bytes<'py>(
+        &self,
+        py: Python<'py>,
+        data: &[u8],
+        tao: bool,
+        allow_trailing: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        if let Some(program) = self.compiled.program(self.root) {
+            if let Some(value) = program.decode(py, &self.compiled, data, tao, allow_trailing)? {
+                return Ok(value);
+            }
+        }
+        self.decode_from(py, data, tao, allow_trailing)
+    }
 }
 
 #[pymethods]
@@ -470,40 +531,11 @@ impl DataType {
     #[pyo3(signature = (value, *, tao = true, saturate = false))]
     fn encode<'py>(
         &self,
-        py: Python<'py>,
-        value: Bound<'py, PyAny>,
+        value: &Bound<'py, PyAny>,
         tao: bool,
         saturate: bool,
     ) -> PyResult<Bound<'py, PyBytes>> {
-        let layout = self.layout();
-        let mut buf = [0u8; 256];
-        let mut heap;
-        let out: &mut [u8] = if layout.max_bytes(self.root) <= buf.len() {
-            &mut buf
-        } else {
-            heap = vec![0u8; layout.max_bytes(self.root)];
-            &mut heap
-        };
-        let options = EncodeOptions {
-            tao,
-            saturate,
-            keep_versions: false,
-        };
-        let names = &self.compiled.names;
-        let encoded = if let Some(program) = self.compiled.program(self.root) {
-            program.encode(names, &value, out, tao, saturate)
-        } else {
-            self.plain_encode(&layout, &value, out, options)
-        };
-        if let Some(n) = encoded {
-            return Ok(PyBytes::new(py, &out[..n]));
-        }
-        // Not plain, or refused: the general path encodes it or words the error.
-        let mut source = PySource::new(value, names, saturate);
-        match encode(&layout, self.root, &mut source, out, options) {
-            Ok(n) => Ok(PyBytes::new(py, &out[..n])),
-            Err(e) => Err(self.err(py, e, Op::Encode)),
-        }
+        self.with_out(|out| self.encode_into(value, out, tao, saturate))
     }
 
     /// Decodes ``data`` (bytes, or anything ``bytes()`` takes) to a value; whole bytes after
@@ -511,20 +543,45 @@ impl DataType {
     #[pyo3(signature = (data, *, tao = true, allow_trailing = false))]
     fn decode<'py>(
         &self,
-        py: Python<'py>,
         data: &Bound<'py, PyAny>,
         tao: bool,
         allow_trailing: bool,
     ) -> PyResult<Bound<'py, PyAny>> {
         let data = bytes_of(data)?;
-        if let Some(program) = self.compiled.program(self.root) {
-            if let Some(value) =
-                program.decode(py, &self.compiled, data.as_bytes(), tao, allow_trailing)?
-            {
-                return Ok(value);
-            }
-        }
-        self.decode_from(py, data.as_bytes(), tao, allow_trailing)
+        self.decode_bytes(data.py(), data.as_bytes(), tao, allow_trailing)
+    }
+
+    /// ``encode`` of each value of ``values`` (any iterable), in one call: a list of bytes.
+    /// The first value that cannot be encoded raises what ``encode`` raises, its message
+    /// starting ``item N:`` and its ``index`` attribute N.
+    #[pyo3(signature = (values, *, tao = true, saturate = false))]
+    fn encode_many<'py>(
+        &self,
+        values: &Bound<'py, PyAny>,
+        tao: bool,
+        saturate: bool,
+    ) -> PyResult<Bound<'py, PyList>> {
+        self.with_out(|out| {
+            batch::map_items(values, |value| {
+                Ok(self.encode_into(value, out, tao, saturate)?.into_any())
+            })
+        })
+    }
+
+    /// ``decode`` of each item of ``items`` (any iterable of bytes-like objects), in one
+    /// call: a list of values. The first item that cannot be decoded raises what ``decode``
+    /// raises, its message starting ``item N:`` and its ``index`` attribute N.
+    #[pyo3(signature = (items, *, tao = true, allow_trailing = false))]
+    fn decode_many<'py>(
+        &self,
+        items: &Bound<'py, PyAny>,
+        tao: bool,
+        allow_trailing: bool,
+    ) -> PyResult<Bound<'py, PyList>> {
+        batch::map_items(items, |item| {
+            let data = bytes_of(item)?;
+            self.decode_bytes(item.py(), data.as_bytes(), tao, allow_trailing)
+        })
     }
 
     /// Decodes a value whose bytes arrive in pieces, reading across them without joining them.

@@ -42,8 +42,9 @@ class DataType(_native.DataType):
     may be left out), a union a dict with exactly one key, arrays lists (``uint8`` arrays also
     take ``bytes`` or ``str``), floats may be given as ``"nan"``, ``"inf"``, ``"-inf"``.
 
-    ``encode``, ``decode``, ``min_bits``, ``max_bits`` and ``key`` are the compiled type's own
-    (``px4params._native.DataType``): called straight, with no Python in between.
+    ``encode``, ``decode``, their batch forms ``encode_many`` and ``decode_many``, ``min_bits``,
+    ``max_bits`` and ``key`` are the compiled type's own (``px4params._native.DataType``):
+    called straight, with no Python in between.
     """
 
     def __new__(
