@@ -8,7 +8,9 @@
 //! `store/read4` (in the store, built with its leaf tables), `ina238/table_get_leaf4` (on
 //! encoded bytes, through the type's leaf table). `battery/receive`: checking the CAN frames
 //! of a BatteryInfo transfer (tail bytes and the transfer CRC); `battery/transfer_crc`: the
-//! CRC alone, over the payload in one piece.
+//! CRC alone, over the payload in one piece. `node_status/encode|decode` and
+//! `file_read_response/encode|decode` (an empty read) are issue 18's small messages, whose
+//! fixed cost per call matters most.
 
 #[path = "../crates/px4params-core/tests/common/mod.rs"]
 mod common;
@@ -53,6 +55,15 @@ fn main() {
     let mut owned = OwnedLayout::default();
     let (root, leaves) = match ty {
         "battery" => (common::battery_info(&mut owned), battery_leaves()),
+        "node_status" => (
+            common::node_status(&mut owned),
+            [12345, 0, 0, 0, 7].map(Scalar::Uint).to_vec(),
+        ),
+        // An empty read: the error value and the data's length.
+        "file_read_response" => (
+            common::file_read_response(&mut owned),
+            vec![Scalar::Int(0), Scalar::Uint(0)],
+        ),
         "ina238" => {
             let mut v: Vec<Scalar> = [0, 0, 0, 1, 0x45, 200].map(Scalar::Uint).to_vec();
             v.push(Scalar::Float(0.0003));

@@ -82,6 +82,33 @@ pub fn battery_info(l: &mut OwnedLayout) -> NodeId {
     l.structure(&fields).unwrap()
 }
 
+/// `uavcan.protocol.NodeStatus`: uint32 uptime_sec, uint2 health, uint3 mode, uint3 sub_mode,
+/// uint16 vendor_specific_status_code.
+pub fn node_status(l: &mut OwnedLayout) -> NodeId {
+    let u32_ = l.uint(32, Saturated).unwrap();
+    let u2 = l.uint(2, Saturated).unwrap();
+    let u3 = l.uint(3, Saturated).unwrap();
+    let u16_ = l.uint(16, Saturated).unwrap();
+    l.structure(&[
+        ("uptime_sec", u32_, Role::Data),
+        ("health", u2, Role::Data),
+        ("mode", u3, Role::Data),
+        ("sub_mode", u3, Role::Data),
+        ("vendor_specific_status_code", u16_, Role::Data),
+    ])
+    .unwrap()
+}
+
+/// `uavcan.protocol.file.Read.Response`: an `Error` struct (int16 value) and uint8[<=256] data.
+pub fn file_read_response(l: &mut OwnedLayout) -> NodeId {
+    let i16_ = l.int(16, Saturated).unwrap();
+    let u8_ = l.uint(8, Saturated).unwrap();
+    let error = l.structure(&[("value", i16_, Role::Data)]).unwrap();
+    let data = l.dyn_array(u8_, 256).unwrap();
+    l.structure(&[("error", error, Role::Data), ("data", data, Role::Data)])
+        .unwrap()
+}
+
 /// The golden vector's fields: uint12, int3, int4, int2, uint4 (the first and last truncated).
 pub fn golden(l: &mut OwnedLayout) -> NodeId {
     let a = l.uint(12, Truncated).unwrap();
