@@ -62,20 +62,32 @@ pub fn data_type_signature(dsdl_signature: u64, nested: &[u64]) -> u64 {
 
 /// CRC-16-CCITT-FALSE (poly `0x1021`, no reflection, no final xor) continuing from `crc`.
 ///
-/// Four bytes at a time ("slicing by 4"): the four table lookups of a step do not depend on
-/// each other, so they overlap, where byte at a time (or bit by bit) every step waits for the
-/// one before. The tables are 2 KB of read-only data, computed at compile time.
+/// Eight bytes at a time on hosts, four in firmware builds (`compact`) ("slicing by 8 / 4"):
+/// the table lookups of a step do not depend on each other, so they overlap, where byte at a
+/// time (or bit by bit) every step waits for the one before. The tables (4 KB, 2 KB in
+/// firmware) are read-only data computed at compile time.
 pub fn crc16(mut crc: u16, bytes: &[u8]) -> u16 {
-    let [t0, t1, t2, t3] = &CRC16_TABLES;
-    let mut chunks = bytes.chunks_exact(4);
-    for c in &mut chunks {
-        let high = (crc >> 8) as u8 ^ c[0];
-        let low = crc as u8 ^ c[1];
-        crc = t3[usize::from(high)]
-            ^ t2[usize::from(low)]
-            ^ t1[usize::from(c[2])]
-            ^ t0[usize::from(c[3])];
+    #[cfg_attr(feature = "compact", allow(unused_mut))]
+    let mut rest = bytes;
+    #[cfg(not(feature = "compact"))]
+    {
+        let t = &CRC16_TABLES;
+        let mut chunks = rest.chunks_exact(8);
+        for c in &mut chunks {
+            let high = (crc >> 8) as u8 ^ c[0];
+            let low = crc as u8 ^ c[1];
+            crc = (t[7][usize::from(high)] ^ t[6][usize::from(low)])
+                ^ (t[5][usize::from(c[2])] ^ t[4][usize::from(c[3])])
+                ^ (t[3][usize::from(c[4])] ^ t[2][usize::from(c[5])])
+                ^ (t[1][usize::from(c[6])] ^ t[0][usize::from(c[7])]);
+        }
+        rest = chunks.remainder();
     }
+    let mut chunks = rest.chunks_exact(4);
+    for c in &mut chunks {
+        crc = crc16_word(crc, u32::from_be_bytes([c[0], c[1], c[2], c[3]]));
+    }
+    let t0 = &CRC16_TABLES[0];
     for &b in chunks.remainder() {
         crc = (crc << 8) ^ t0[usize::from((crc >> 8) as u8 ^ b)];
     }
@@ -84,12 +96,12 @@ pub fn crc16(mut crc: u16, bytes: &[u8]) -> u16 {
 
 /// [`crc16`] of four bytes given as one big-endian word.
 #[inline(always)]
-pub(crate) fn crc16_word(crc: u16, word: u32) -> u16 {
-    let [t0, t1, t2, t3] = &CRC16_TABLES;
+fn crc16_word(crc: u16, word: u32) -> u16 {
+    let t = &CRC16_TABLES;
     let [b0, b1, b2, b3] = word.to_be_bytes();
     let high = (crc >> 8) as u8 ^ b0;
     let low = crc as u8 ^ b1;
-    t3[usize::from(high)] ^ t2[usize::from(low)] ^ t1[usize::from(b2)] ^ t0[usize::from(b3)]
+    t[3][usize::from(high)] ^ t[2][usize::from(low)] ^ t[1][usize::from(b2)] ^ t[0][usize::from(b3)]
 }
 
 /// [`crc16`] over `pieces` as if they were one run of bytes: the four-byte steps go on across
@@ -117,12 +129,15 @@ pub fn crc16_pieces<'a>(mut crc: u16, pieces: impl IntoIterator<Item = &'a [u8]>
     crc16(crc, &carry[..held])
 }
 
+/// Bytes per step of [`crc16`] (and tables): firmware builds keep 2 KB of tables.
+const SLICES: usize = if cfg!(feature = "compact") { 4 } else { 8 };
+
 /// `CRC16_TABLES[k][n]`: the CRC register after shifting byte `n` and then `k` zero bytes
 /// through it from zero.
-static CRC16_TABLES: [[u16; 256]; 4] = crc16_tables();
+static CRC16_TABLES: [[u16; 256]; SLICES] = crc16_tables();
 
-const fn crc16_tables() -> [[u16; 256]; 4] {
-    let mut tables = [[0u16; 256]; 4];
+const fn crc16_tables() -> [[u16; 256]; SLICES] {
+    let mut tables = [[0u16; 256]; SLICES];
     let mut n = 0;
     while n < 256 {
         let mut crc = (n as u16) << 8;
@@ -139,7 +154,7 @@ const fn crc16_tables() -> [[u16; 256]; 4] {
         n += 1;
     }
     let mut k = 1;
-    while k < 4 {
+    while k < SLICES {
         let mut n = 0;
         while n < 256 {
             let prev = tables[k - 1][n];
@@ -230,7 +245,7 @@ mod tests {
                 assert_eq!(crc16(start, &[byte]), bitwise(start, byte));
             }
         }
-        // Every length around the four-byte steps, every start.
+        // Every length around the eight- and four-byte steps, every start.
         let data: std::vec::Vec<u8> = (0..67u32).map(|i| (i * 37 + 11) as u8).collect();
         for len in 0..data.len() {
             let expected = data[..len].iter().fold(0xFFFF, |crc, &b| bitwise(crc, b));

@@ -8,7 +8,7 @@
 
 use core::fmt;
 
-use crate::crc::{crc16, crc16_pieces, crc16_word};
+use crate::crc::{crc16, crc16_pieces};
 use crate::scatter::{FramePayloads, Pieces};
 
 const START: u8 = 0x80;
@@ -252,25 +252,12 @@ pub fn receive<'f, 'a>(
     let last = frames.len() - 1;
     for (i, frame) in frames.iter().enumerate() {
         let tail = tail_of(i, frame)?;
-        if tail & 0x1F != expected {
-            return Err(TransferError::TransferId {
-                frame: i,
-                got: tail & 0x1F,
-                expected,
-            });
-        }
-        match (i, tail & START != 0) {
-            (0, false) => return Err(TransferError::NoStart),
-            (i, true) if i > 0 => return Err(TransferError::UnexpectedStart { frame: i }),
-            _ => {}
-        }
-        match (i == last, tail & END != 0) {
-            (true, false) => return Err(TransferError::NoEnd),
-            (false, true) => return Err(TransferError::UnexpectedEnd { frame: i }),
-            _ => {}
-        }
-        if (tail & TOGGLE != 0) != (i % 2 == 1) {
-            return Err(TransferError::Toggle { frame: i });
+        // All 8 bits of a frame's tail byte are fixed by its place in the transfer.
+        let start = if i == 0 { START } else { 0 };
+        let end = if i == last { END } else { 0 };
+        let toggle = if i % 2 == 1 { TOGGLE } else { 0 };
+        if tail != expected | start | end | toggle {
+            return Err(tail_error(i, tail, expected, last));
         }
     }
     let payload = FramePayloads::new(frames);
@@ -280,7 +267,8 @@ pub fn receive<'f, 'a>(
         }
         let got = u16::from_le_bytes([first[0], first[1]]);
         let computed = if cfg!(feature = "compact") {
-            // Firmware built for size: without the register path for full frames.
+            // Firmware built for size: no gathering buffer; the four-byte steps go on across
+            // the pieces.
             crc16_pieces(crc_seed, (0..payload.count()).map(|i| payload.piece(i)))
         } else {
             payload_crc(crc_seed, &payload)
@@ -295,36 +283,54 @@ pub fn receive<'f, 'a>(
     })
 }
 
-/// The CRC of a multi-frame transfer's payload. Full classic CAN frames (all but the last)
-/// are read 8 bytes at a time and their 5 or 7 payload bytes go through a register, four-byte
-/// steps crossing the frames' edges; other frames take [`crc16_pieces`].
+/// What is wrong with frame `i`'s tail byte `tail`, which is not the one its place fixes.
+#[cold]
+fn tail_error(i: usize, tail: u8, expected: u8, last: usize) -> TransferError {
+    if tail & 0x1F != expected {
+        return TransferError::TransferId {
+            frame: i,
+            got: tail & 0x1F,
+            expected,
+        };
+    }
+    match (i, tail & START != 0) {
+        (0, false) => return TransferError::NoStart,
+        (i, true) if i > 0 => return TransferError::UnexpectedStart { frame: i },
+        _ => {}
+    }
+    match (i == last, tail & END != 0) {
+        (true, false) => TransferError::NoEnd,
+        (false, true) => TransferError::UnexpectedEnd { frame: i },
+        _ => TransferError::Toggle { frame: i },
+    }
+}
+
+/// The CRC of a multi-frame transfer's payload, gathered into one run of bytes a buffer at a
+/// time so that [`crc16`] takes eight bytes a step across the frames' edges. A full classic
+/// CAN frame is copied whole (one 8-byte store) and the next piece overwrites its tail byte.
 fn payload_crc(mut crc: u16, payload: &FramePayloads<'_, '_>) -> u16 {
-    // `held` bytes (fewer than 4) wait for a step in the low bytes of `pending`.
-    let (mut pending, mut held) = (0u64, 0u32);
+    let mut run = [0u8; 320];
+    let mut len = 0;
     for i in 0..payload.count() {
         let piece = payload.piece(i);
-        let Ok(frame) = <[u8; 8]>::try_from(payload.frame(i)) else {
-            let waiting = pending.to_be_bytes();
-            let rest = (i..payload.count()).map(|j| payload.piece(j));
-            return crc16_pieces(
-                crc,
-                core::iter::once(&waiting[8 - held as usize..]).chain(rest),
-            );
-        };
-        // The piece ends before the tail byte: the low bytes of the frame's word, shifted.
-        let n = piece.len() as u32;
-        let bytes = (u64::from_be_bytes(frame) >> 8) & crate::bits::mask(8 * n);
-        let joined = (u128::from(pending) << (8 * n)) | u128::from(bytes);
-        let mut left = held + n;
-        while left >= 4 {
-            left -= 4;
-            crc = crc16_word(crc, (joined >> (8 * left)) as u32);
+        let n = piece.len();
+        if len + n.max(8) > run.len() {
+            crc = crc16(crc, &run[..len]);
+            len = 0;
+            if n > run.len() {
+                // Not a CAN frame's piece, but checked all the same.
+                crc = crc16(crc, piece);
+                continue;
+            }
         }
-        pending = joined as u64 & crate::bits::mask(8 * left);
-        held = left;
+        match <[u8; 8]>::try_from(payload.frame(i)) {
+            // The payload is the frame's first 7 bytes.
+            Ok(frame) if n == 7 => run[len..len + 8].copy_from_slice(&frame),
+            _ => run[len..len + n].copy_from_slice(piece),
+        }
+        len += n;
     }
-    let waiting = pending.to_be_bytes();
-    crc16(crc, &waiting[8 - held as usize..])
+    crc16(crc, &run[..len])
 }
 
 #[cfg(test)]
@@ -376,6 +382,54 @@ mod tests {
                         );
                     }
                 }
+            }
+        }
+    }
+
+    /// Frames of any sizes (not only CAN's) carrying `payload`, its CRC first.
+    fn cut(payload: &[u8], sizes: &[usize]) -> Vec<Vec<u8>> {
+        let mut bytes = crc16(0x1234, payload).to_le_bytes().to_vec();
+        bytes.extend_from_slice(payload);
+        let mut out = Vec::new();
+        let mut rest = &bytes[..];
+        for (i, &size) in sizes.iter().cycle().enumerate() {
+            let (piece, more) = rest.split_at(size.min(rest.len()));
+            rest = more;
+            let mut tail = 5 | if i % 2 == 1 { TOGGLE } else { 0 };
+            tail |= if i == 0 { START } else { 0 } | if rest.is_empty() { END } else { 0 };
+            out.push([piece, &[tail]].concat());
+            if rest.is_empty() {
+                return out;
+            }
+        }
+        unreachable!("the sizes are not all zero")
+    }
+
+    #[test]
+    fn long_transfers_and_pieces_of_any_size_are_checked_whole() {
+        for len in [300, 318, 319, 320, 321, 640, 700, 4000] {
+            let payload: Vec<u8> = (0..len).map(|i| (i * 29 + 3) as u8).collect();
+            for sizes in [
+                &[7][..],
+                &[63],
+                &[3, 7, 1],
+                &[500],
+                &[7, 7, 400, 7, 2],
+                &[2, 330],
+            ] {
+                let mut f = cut(&payload, sizes);
+                let refs: Vec<&[u8]> = f.iter().map(Vec::as_slice).collect();
+                assert!(receive(&refs, 0x1234).is_ok(), "{len} bytes in {sizes:?}");
+                if f.len() == 1 {
+                    continue; // a single frame carries no CRC
+                }
+                // The last payload byte changed.
+                let last = f.len() - 1;
+                let at = f[last].len() - 2;
+                f[last][at] ^= 1;
+                let refs: Vec<&[u8]> = f.iter().map(Vec::as_slice).collect();
+                let crc = matches!(receive(&refs, 0x1234), Err(TransferError::Crc { .. }));
+                assert!(crc, "{len} bytes in {sizes:?}");
             }
         }
     }
