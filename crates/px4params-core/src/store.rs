@@ -584,19 +584,33 @@ where
     ) -> Result<Scalar> {
         let def = self.def(param)?;
         let index = self.present_slot(&def, instance)?;
-        let found = match self.table(param) {
-            Some(table) => {
-                // The value and what follows it in memory: bits are read 64 at a time.
-                let (start, len) = self.span(&def, index, which);
-                table.read_prefix(layout, &self.bytes.as_ref()[start..], len, k)
+        if let Some(table) = self.table(param) {
+            // The value and what follows it in memory: bits are read 64 at a time.
+            let (start, len) = self.span(&def, index, which);
+            if let Some(value) = table.read_known(&self.bytes.as_ref()[start..], len, k) {
+                return Ok(value);
             }
-            None => {
-                let data = self.region(&def, index, which);
-                leaf::seek(layout, def.root, data, k).map(|p| p.read(data))
-            }
-        };
-        match found {
-            Some(value) => Ok(value),
+        }
+        self.read_walked(layout, param, instance, which, k)
+    }
+
+    /// [`Store::read`] of a leaf its table does not answer for: walked, out of line so that
+    /// the table's path stays small.
+    #[cold]
+    #[inline(never)]
+    fn read_walked(
+        &self,
+        layout: &Layout<'_>,
+        param: u32,
+        instance: u16,
+        which: Which,
+        k: usize,
+    ) -> Result<Scalar> {
+        let def = self.def(param)?;
+        let index = self.present_slot(&def, instance)?;
+        let data = self.region(&def, index, which);
+        match leaf::seek(layout, def.root, data, k) {
+            Some(p) => Ok(p.read(data)),
             None => self
                 .get_leaf(layout, param, instance, which, Target::Index(k))
                 .map(|(_, value)| value),

@@ -176,7 +176,7 @@ impl<'s> LeafTable<'s> {
     }
 
     /// [`LeafTable::get_leaf`] for the store: the value is the first `len` bytes of `data`,
-    /// which goes on (see [`LeafTable::read_prefix`]).
+    /// which goes on (see [`LeafTable::read_known`]).
     #[inline]
     pub(crate) fn get_leaf_prefix(
         &self,
@@ -235,23 +235,13 @@ impl<'s> LeafTable<'s> {
         }
     }
 
-    /// [`LeafTable::read`] for the store: the value is the first `len` bytes of `data`, which
-    /// goes on (so that bits are read a 64-bit window at a time even at the value's end).
+    /// [`LeafTable::read`] for the store, when the table alone answers (`None` leaves it to
+    /// the walk): the value is the first `len` bytes of `data`, which goes on (so that bits
+    /// are read a 64-bit window at a time even at the value's end).
     #[inline]
-    pub(crate) fn read_prefix(
-        &self,
-        layout: &Layout<'_>,
-        data: &[u8],
-        len: usize,
-        k: usize,
-    ) -> Option<Scalar> {
-        match self.find_within(data, len * 8, k) {
-            Some((at, entry)) => Some(entry.read(data, at)),
-            None => {
-                let value = data.get(..len)?;
-                leaf::seek(layout, self.root(), value, k).map(|p| p.read(value))
-            }
-        }
+    pub(crate) fn read_known(&self, data: &[u8], len: usize, k: usize) -> Option<Scalar> {
+        self.find_within(data, len * 8, k)
+            .map(|(at, entry)| entry.read(data, at))
     }
 
     /// Whether the table alone answers for leaf `[k]` of `data` (without walking the value).
