@@ -127,7 +127,7 @@ fn bench_type(
 /// the issue asks for (frames within 1.3x of flat) comes from one stretch of the run.
 fn descatter(c: &mut Criterion) {
     use px4params_core::scatter::{FramePayloads, Scattered};
-    use px4params_core::transfer::{frames, receive};
+    use px4params_core::transfer::{frames, receive, receive_into};
     let mut owned = OwnedLayout::default();
     let root = common::battery_info(&mut owned);
     let layout = owned.as_layout();
@@ -166,6 +166,21 @@ fn descatter(c: &mut Criterion) {
             let data = Scattered::new(&r.payload);
             let mut sink = LeafSink::new(&mut storage);
             decode(&layout, root, &data, &mut sink, DecodeOptions::default()).unwrap()
+        })
+    });
+    let mut buffer = vec![0u8; layout.max_bytes(root)];
+    group.bench_function("frames checked into a buffer and decoded", |b| {
+        b.iter(|| {
+            let (_, len) = receive_into(black_box(&refs), seed, &mut buffer).unwrap();
+            let mut sink = LeafSink::new(&mut storage);
+            decode(
+                &layout,
+                root,
+                &buffer[..len],
+                &mut sink,
+                DecodeOptions::default(),
+            )
+            .unwrap()
         })
     });
     group.finish();

@@ -7,7 +7,8 @@
 //! INA238 (`bus.i2c.address`): `ina238/get_leaf4` (on encoded bytes), `store/get_leaf4` and
 //! `store/read4` (in the store, built with its leaf tables), `ina238/table_get_leaf4` (on
 //! encoded bytes, through the type's leaf table). `battery/receive`: checking the CAN frames
-//! of a BatteryInfo transfer (tail bytes and the transfer CRC); `battery/transfer_crc`: the
+//! of a BatteryInfo transfer (tail bytes and the transfer CRC), `battery/receive_into` the same
+//! copying the payload into a buffer; `battery/transfer_crc`: the
 //! CRC alone, over the payload in one piece. `node_status/encode|decode` and
 //! `file_read_response/encode|decode` (an empty read) are issue 18's small messages, whose
 //! fixed cost per call matters most.
@@ -21,7 +22,7 @@ use px4params_core::crc::crc16;
 use px4params_core::leaf::{get_leaf, Target};
 use px4params_core::store::{plan, table_slots, ParamDef, Slot, Store, Which};
 use px4params_core::table::{LeafSlot, LeafTable};
-use px4params_core::transfer::{frames, receive};
+use px4params_core::transfer::{frames, receive, receive_into};
 use px4params_core::value::{LeafSink, LeafSource};
 use px4params_core::Scalar;
 use std::hint::black_box;
@@ -125,6 +126,10 @@ fn main() {
             "receive" => {
                 let r = receive(black_box(&frame_refs), SEED);
                 black_box(r.unwrap().transfer_id);
+            }
+            "receive_into" => {
+                let r = receive_into(black_box(&frame_refs), SEED, &mut out);
+                black_box(r.unwrap());
             }
             "transfer_crc" => {
                 black_box(crc16(SEED, black_box(&bytes[..])));

@@ -182,6 +182,13 @@ pub enum TransferError {
     },
     /// A multi-frame transfer too short to hold its CRC.
     TooShort,
+    /// The payload does not fit the buffer given to [`receive_into`].
+    TooLong {
+        /// The payload's length in bytes.
+        len: usize,
+        /// The buffer's.
+        room: usize,
+    },
     /// The transfer CRC does not match the payload.
     Crc {
         /// The CRC in the first frame.
@@ -218,6 +225,10 @@ impl fmt::Display for TransferError {
                 "frame {frame} has the wrong toggle bit (a frame is missing, repeated or out of order)"
             ),
             Self::TooShort => f.write_str("multi-frame transfer too short to hold its CRC"),
+            Self::TooLong { len, room } => write!(
+                f,
+                "the payload's {len} bytes do not fit the {room}-byte buffer"
+            ),
             Self::Crc { got, computed } => write!(
                 f,
                 "transfer CRC mismatch: frames say {got:#06x}, payload gives {computed:#06x}"
@@ -237,21 +248,66 @@ pub struct Received<'f, 'a> {
 }
 
 /// Checks the frames of one transfer: tail bits, transfer ID, toggle, and the CRC of a
-/// multi-frame transfer (computed over the pieces, without copying them).
+/// multi-frame transfer (computed over the pieces, which stay where they are).
 pub fn receive<'f, 'a>(
     frames: &'f [&'a [u8]],
     crc_seed: u16,
 ) -> Result<Received<'f, 'a>, TransferError> {
-    let first = frames.first().ok_or(TransferError::Empty)?;
+    let (transfer_id, len) = check_tails(frames)?;
+    let payload = FramePayloads::new(frames);
+    if let Some(got) = sent_crc(frames)? {
+        let computed = if cfg!(feature = "compact") {
+            // Firmware built for size: no gathering buffer; the four-byte steps go on across
+            // the pieces.
+            crc16_pieces(crc_seed, (0..payload.count()).map(|i| payload.piece(i)))
+        } else {
+            payload_crc(crc_seed, &payload, len)
+        };
+        check_crc(got, computed)?;
+    }
+    Ok(Received {
+        transfer_id,
+        payload,
+    })
+}
+
+/// [`receive`] into a buffer, as firmware reassembles a transfer: checks the frames and
+/// copies the payload to the start of `out` (bytes after it are left alone); returns the
+/// transfer ID and the payload's length. The payload can then be decoded in one piece.
+pub fn receive_into(
+    frames: &[&[u8]],
+    crc_seed: u16,
+    out: &mut [u8],
+) -> Result<(u8, usize), TransferError> {
+    let (transfer_id, len) = check_tails(frames)?;
+    let got = sent_crc(frames)?;
+    let payload = FramePayloads::new(frames);
+    let room = out.len();
+    let out = out
+        .get_mut(..len)
+        .ok_or(TransferError::TooLong { len, room })?;
+    gather(&payload, out);
+    if let Some(got) = got {
+        check_crc(got, crc16(crc_seed, out))?;
+    }
+    Ok((transfer_id, len))
+}
+
+/// Checks every frame's tail byte; returns the transfer ID and the payload's length (bytes
+/// other than tail bytes and a multi-frame transfer's CRC, which [`sent_crc`] checks is there).
+fn check_tails(frames: &[&[u8]]) -> Result<(u8, usize), TransferError> {
     let tail_of = |i: usize, f: &[u8]| {
         f.last()
             .copied()
             .ok_or(TransferError::EmptyFrame { frame: i })
     };
+    let first = frames.first().ok_or(TransferError::Empty)?;
     let expected = tail_of(0, first)? & 0x1F;
     let last = frames.len() - 1;
+    let mut bytes = 0;
     for (i, frame) in frames.iter().enumerate() {
         let tail = tail_of(i, frame)?;
+        bytes += frame.len();
         // All 8 bits of a frame's tail byte are fixed by its place in the transfer.
         let start = if i == 0 { START } else { 0 };
         let end = if i == last { END } else { 0 };
@@ -260,27 +316,26 @@ pub fn receive<'f, 'a>(
             return Err(tail_error(i, tail, expected, last));
         }
     }
-    let payload = FramePayloads::new(frames);
-    if frames.len() > 1 {
-        if first.len() < 3 {
-            return Err(TransferError::TooShort);
-        }
-        let got = u16::from_le_bytes([first[0], first[1]]);
-        let computed = if cfg!(feature = "compact") {
-            // Firmware built for size: no gathering buffer; the four-byte steps go on across
-            // the pieces.
-            crc16_pieces(crc_seed, (0..payload.count()).map(|i| payload.piece(i)))
-        } else {
-            payload_crc(crc_seed, &payload)
-        };
-        if got != computed {
-            return Err(TransferError::Crc { got, computed });
-        }
+    let crc = if last > 0 { 2 } else { 0 };
+    Ok((expected, (bytes - frames.len()).saturating_sub(crc)))
+}
+
+/// The CRC a multi-frame transfer starts with (`None` for a single frame, which has none).
+fn sent_crc(frames: &[&[u8]]) -> Result<Option<u16>, TransferError> {
+    match frames {
+        [_] | [] => Ok(None),
+        [first, ..] => match **first {
+            [low, high, _, ..] => Ok(Some(u16::from_le_bytes([low, high]))),
+            _ => Err(TransferError::TooShort),
+        },
     }
-    Ok(Received {
-        transfer_id: expected,
-        payload,
-    })
+}
+
+fn check_crc(got: u16, computed: u16) -> Result<(), TransferError> {
+    if got != computed {
+        return Err(TransferError::Crc { got, computed });
+    }
+    Ok(())
 }
 
 /// What is wrong with frame `i`'s tail byte `tail`, which is not the one its place fixes.
@@ -305,32 +360,37 @@ fn tail_error(i: usize, tail: u8, expected: u8, last: usize) -> TransferError {
     }
 }
 
-/// The CRC of a multi-frame transfer's payload, gathered into one run of bytes a buffer at a
-/// time so that [`crc16`] takes eight bytes a step across the frames' edges. A full classic
-/// CAN frame is copied whole (one 8-byte store) and the next piece overwrites its tail byte.
-fn payload_crc(mut crc: u16, payload: &FramePayloads<'_, '_>) -> u16 {
+/// The CRC of a multi-frame transfer's payload, gathered into one run of bytes (up to 320
+/// bytes; longer payloads take [`crc16_pieces`]) so that [`crc16`] takes eight bytes a step
+/// across the frames' edges.
+fn payload_crc(crc: u16, payload: &FramePayloads<'_, '_>, len: usize) -> u16 {
     let mut run = [0u8; 320];
-    let mut len = 0;
+    match run.get_mut(..len) {
+        Some(run) => {
+            gather(payload, run);
+            crc16(crc, run)
+        }
+        None => crc16_pieces(crc, (0..payload.count()).map(|i| payload.piece(i))),
+    }
+}
+
+/// Copies the payload's pieces one after another into `out`, which is exactly their length.
+fn gather(payload: &FramePayloads<'_, '_>, out: &mut [u8]) {
+    let mut at = 0;
     for i in 0..payload.count() {
         let piece = payload.piece(i);
         let n = piece.len();
-        if len + n.max(8) > run.len() {
-            crc = crc16(crc, &run[..len]);
-            len = 0;
-            if n > run.len() {
-                // Not a CAN frame's piece, but checked all the same.
-                crc = crc16(crc, piece);
-                continue;
-            }
+        match (
+            <[u8; 8]>::try_from(payload.frame(i)),
+            out.get_mut(at..at + 8),
+        ) {
+            // The piece is the frame's first 7 bytes: one 8-byte store, whose last byte (the
+            // tail byte) a later piece overwrites, as it lies within `out`.
+            (Ok(frame), Some(room)) if n == 7 => room.copy_from_slice(&frame),
+            _ => out[at..at + n].copy_from_slice(piece),
         }
-        match <[u8; 8]>::try_from(payload.frame(i)) {
-            // The payload is the frame's first 7 bytes.
-            Ok(frame) if n == 7 => run[len..len + 8].copy_from_slice(&frame),
-            _ => run[len..len + n].copy_from_slice(piece),
-        }
-        len += n;
+        at += n;
     }
-    crc16(crc, &run[..len])
 }
 
 #[cfg(test)]
@@ -432,6 +492,63 @@ mod tests {
                 assert!(crc, "{len} bytes in {sizes:?}");
             }
         }
+    }
+
+    /// `receive_into` agrees with `receive` (its payload joined), leaving the buffer's bytes
+    /// after the payload alone; one byte short of room is refused.
+    fn agrees_with_receive_into(refs: &[&[u8]]) {
+        let mut out = [0xAAu8; 5000];
+        let into = receive_into(refs, 0x1234, &mut out);
+        let joined = receive(refs, 0x1234).map(|r| {
+            let pieces = (0..r.payload.count()).map(|i| r.payload.piece(i));
+            (
+                r.transfer_id,
+                pieces.flat_map(<[u8]>::to_vec).collect::<Vec<u8>>(),
+            )
+        });
+        match (into, joined) {
+            (Ok((id, len)), Ok((expected_id, payload))) => {
+                assert_eq!((id, &out[..len]), (expected_id, &payload[..]));
+                assert!(out[len..].iter().all(|&b| b == 0xAA));
+                if len > 0 {
+                    let short = receive_into(refs, 0x1234, &mut out[..len - 1]);
+                    let too_long = TransferError::TooLong { len, room: len - 1 };
+                    assert_eq!(short, Err(too_long));
+                }
+            }
+            (into, joined) => assert_eq!(into.map(|_| ()), joined.map(|_| ())),
+        }
+    }
+
+    #[test]
+    fn receive_into_a_buffer_agrees_with_receive() {
+        for canfd in [false, true] {
+            for len in (0..100usize).chain([300, 321, 700]) {
+                let payload: Vec<u8> = (0..len).map(|i| (i * 29 + 3) as u8).collect();
+                let mut f = split(&payload, canfd);
+                agrees_with_receive_into(&f.iter().map(Vec::as_slice).collect::<Vec<_>>());
+                // Broken: a payload byte, a tail byte, a frame left out.
+                let last = f.len() - 1;
+                f[last][0] ^= 1;
+                agrees_with_receive_into(&f.iter().map(Vec::as_slice).collect::<Vec<_>>());
+                f[last][0] ^= 1;
+                let tail = f[0].len() - 1;
+                f[0][tail] ^= TOGGLE;
+                agrees_with_receive_into(&f.iter().map(Vec::as_slice).collect::<Vec<_>>());
+                f[0][tail] ^= TOGGLE;
+                f.remove(last / 2);
+                agrees_with_receive_into(&f.iter().map(Vec::as_slice).collect::<Vec<_>>());
+            }
+        }
+        for sizes in [&[3, 7, 1][..], &[500], &[7, 7, 400, 7, 2], &[0, 9]] {
+            let payload: Vec<u8> = (0..1000).map(|i| (i * 7 + 1) as u8).collect();
+            let f = cut(&payload, sizes);
+            agrees_with_receive_into(&f.iter().map(Vec::as_slice).collect::<Vec<_>>());
+        }
+        assert_eq!(
+            receive_into(&[], 0x1234, &mut [0; 8]),
+            Err(TransferError::Empty)
+        );
     }
 
     #[test]

@@ -1,7 +1,6 @@
 //! DroneCAN signatures and CAN transfers for Python.
 
 use px4params_core::crc;
-use px4params_core::scatter::Pieces;
 use px4params_core::transfer;
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyList};
@@ -52,11 +51,10 @@ pub fn reassemble<'py>(
     signature: u64,
 ) -> PyResult<(Bound<'py, PyBytes>, u8)> {
     let refs: Vec<&[u8]> = frames.iter().map(Vec::as_slice).collect();
-    let received = transfer::receive(&refs, crc::transfer_crc_seed(signature))
-        .map_err(|e| TransferError::new_err(e.to_string()))?;
-    let mut payload = Vec::new();
-    for i in 0..received.payload.count() {
-        payload.extend_from_slice(received.payload.piece(i));
-    }
-    Ok((PyBytes::new(py, &payload), received.transfer_id))
+    // The frames' bytes hold the payload and more.
+    let mut payload = vec![0u8; frames.iter().map(Vec::len).sum()];
+    let (transfer_id, len) =
+        transfer::receive_into(&refs, crc::transfer_crc_seed(signature), &mut payload)
+            .map_err(|e| TransferError::new_err(e.to_string()))?;
+    Ok((PyBytes::new(py, &payload[..len]), transfer_id))
 }
