@@ -549,6 +549,11 @@ mod tests {
             receive_into(&[], 0x1234, &mut [0; 8]),
             Err(TransferError::Empty)
         );
+        let short = receive_into(&[&[1, 2, 3, 0xC5]], 0x1234, &mut [0; 2]).unwrap_err();
+        assert_eq!(
+            short.to_string(),
+            "the payload's 3 bytes do not fit the 2-byte buffer"
+        );
     }
 
     #[test]
