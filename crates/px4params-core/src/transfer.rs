@@ -396,6 +396,7 @@ fn gather(payload: &FramePayloads<'_, '_>, out: &mut [u8]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::string::ToString;
     use std::vec::Vec;
 
     fn split(payload: &[u8], canfd: bool) -> Vec<Vec<u8>> {
