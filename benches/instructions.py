@@ -23,9 +23,10 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 OPS = [
     "battery/encode", "battery/decode", "ina238/encode", "ina238/decode",
-    "ina238/get_leaf4", "ina238/table_get_leaf4", "store/get_leaf4", "store/read4",
-    "battery/receive", "battery/receive_into", "battery/transfer_crc", "node_status/encode", "node_status/decode",
-    "file_read_response/encode", "file_read_response/decode",
+    "ina238/get_leaf4", "ina238/table_get_leaf4", "ina238/table_read4", "store/get_leaf4",
+    "store/read4", "battery/receive", "battery/receive_into", "battery/transfer_crc",
+    "node_status/encode", "node_status/decode", "file_read_response/encode",
+    "file_read_response/decode",
 ]  # fmt: skip
 
 

@@ -5,13 +5,13 @@
 //!
 //! OP: `battery/encode`, `battery/decode`, `ina238/encode`, `ina238/decode`; leaf `[4]` of
 //! INA238 (`bus.i2c.address`): `ina238/get_leaf4` (on encoded bytes), `store/get_leaf4` and
-//! `store/read4` (in the store, built with its leaf tables), `ina238/table_get_leaf4` (on
-//! encoded bytes, through the type's leaf table). `battery/receive`: checking the CAN frames
-//! of a BatteryInfo transfer (tail bytes and the transfer CRC), `battery/receive_into` the same
-//! copying the payload into a buffer; `battery/transfer_crc`: the
-//! CRC alone, over the payload in one piece. `node_status/encode|decode` and
-//! `file_read_response/encode|decode` (an empty read) are issue 18's small messages, whose
-//! fixed cost per call matters most.
+//! `store/read4` (in the store, built with its leaf tables), `ina238/table_get_leaf4` and
+//! `ina238/table_read4` (the value alone) on encoded bytes, through the type's leaf table.
+//! `battery/receive`: checking the CAN frames of a BatteryInfo transfer (tail bytes and the
+//! transfer CRC), `battery/receive_into` the same copying the payload into a buffer;
+//! `battery/transfer_crc`: the CRC alone, over the payload in one piece.
+//! `node_status/encode|decode` and `file_read_response/encode|decode` (an empty read) are
+//! issue 18's small messages, whose fixed cost per call matters most.
 
 #[path = "../crates/px4params-core/tests/common/mod.rs"]
 mod common;
@@ -121,6 +121,11 @@ fn main() {
             "table_get_leaf4" => {
                 let data = black_box(&bytes[..]);
                 let r = table.get_leaf(&layout, data, Target::Index(black_box(4)), false);
+                black_box(r.unwrap());
+            }
+            "table_read4" => {
+                let data = black_box(&bytes[..]);
+                let r = table.read(&layout, data, black_box(4));
                 black_box(r.unwrap());
             }
             "receive" => {

@@ -121,6 +121,13 @@ fn store_leaf_access(c: &mut Criterion) {
                 .1
         })
     });
+    c.bench_function("buffer/Ina238/read [4] (table)", |b| {
+        b.iter(|| {
+            table
+                .read(&layout, black_box(&bare[..]), black_box(4))
+                .unwrap()
+        })
+    });
     let mut n = 0u64;
     c.bench_function("store/Ina238/set_leaf [5]", |b| {
         b.iter(|| {
