@@ -104,6 +104,13 @@ pub const fn mask(n: u32) -> u64 {
     ((1u128 << (n & 127)) - 1) as u64
 }
 
+/// [`mask`] for `1 <= n <= 64` (a field's width), in one shift.
+#[inline(always)]
+pub(crate) const fn field_mask(n: u32) -> u64 {
+    debug_assert!(n >= 1 && n <= 64);
+    u64::MAX >> (64 - n)
+}
+
 /// Reads `n` bits (`1..=64`) at bit `offset` from `data` as a big-endian stream value.
 ///
 /// # Panics
@@ -210,7 +217,7 @@ impl<'o> BitWriter<'o> {
     /// when `out` is too small.
     #[inline(always)]
     pub fn write(&mut self, value: u64, n: u32) -> Result<(), usize> {
-        let value = value & mask(n);
+        let value = value & field_mask(n);
         match self.write_run(1, |_| Ok::<_, ()>((value, n))) {
             Ok(()) => Ok(()),
             Err(Err(needed)) => Err(needed),
@@ -378,9 +385,10 @@ mod tests {
     fn masks_of_every_width() {
         assert_eq!(mask(0), 0);
         assert_eq!(mask(64), u64::MAX);
-        for n in 1..64u32 {
+        for n in 1..=64u32 {
             // Against the arithmetic definition, 2^n - 1.
             assert_eq!(u128::from(mask(n)), (1u128 << n) - 1, "n={n}");
+            assert_eq!(u128::from(field_mask(n)), (1u128 << n) - 1, "n={n}");
         }
     }
 

@@ -667,7 +667,9 @@ fn fast_raw(kind: Kind, value: Scalar, saturate: bool) -> Result<u64, scalar::Sc
         return scalar_raw(kind, value, saturate);
     }
     match (kind, value) {
-        (Kind::Uint { bits, .. }, Scalar::Uint(v)) if v <= crate::bits::mask(bits.into()) => Ok(v),
+        (Kind::Uint { bits, .. }, Scalar::Uint(v)) if v <= crate::bits::field_mask(bits.into()) => {
+            Ok(v)
+        }
         // In range (NaN compares false and takes the general path, as do infinities).
         (Kind::Float { bits: 16, .. }, Scalar::Float(v)) if v.abs() <= scalar::FLOAT16_MAX => {
             Ok(u64::from(scalar::f16_from_f32(v as f32)))

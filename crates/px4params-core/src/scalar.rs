@@ -93,12 +93,12 @@ pub fn to_stream(value: u64, bits: u32) -> u64 {
     if whole == 0 {
         return value & crate::bits::mask(rest);
     }
-    let low = value & crate::bits::mask(whole * 8);
+    let low = value & crate::bits::field_mask(whole * 8);
     let swapped = low.swap_bytes() >> (64 - whole * 8);
     if rest == 0 {
         swapped
     } else {
-        (swapped << rest) | ((value >> (whole * 8)) & crate::bits::mask(rest))
+        (swapped << rest) | ((value >> (whole * 8)) & crate::bits::field_mask(rest))
     }
 }
 
@@ -122,7 +122,7 @@ pub fn from_stream(stream: u64, bits: u32) -> u64 {
 /// Encodes an unsigned integer field of `bits` bits to raw bits.
 #[inline]
 pub fn uint_raw(value: Scalar, bits: u32, cast: Cast, saturate: bool) -> Result<u64, ScalarError> {
-    let max = crate::bits::mask(bits);
+    let max = crate::bits::field_mask(bits);
     let range = || ScalarError::OutOfRange {
         value,
         min: Scalar::Uint(0),
@@ -151,9 +151,9 @@ pub fn uint_raw(value: Scalar, bits: u32, cast: Cast, saturate: bool) -> Result<
 /// Encodes a signed integer field of `bits` bits to raw (two's complement) bits.
 #[inline]
 pub fn int_raw(value: Scalar, bits: u32, cast: Cast, saturate: bool) -> Result<u64, ScalarError> {
-    let max = (crate::bits::mask(bits) >> 1) as i64;
+    let max = (crate::bits::field_mask(bits) >> 1) as i64;
     let min = -max - 1;
-    let mask = crate::bits::mask(bits);
+    let mask = crate::bits::field_mask(bits);
     let range = || ScalarError::OutOfRange {
         value,
         min: Scalar::Int(min),
@@ -242,7 +242,7 @@ mod tests {
     #[test]
     fn stream_order_round_trips() {
         for bits in 1..=64 {
-            let v = 0x0123_4567_89AB_CDEFu64 & crate::bits::mask(bits);
+            let v = 0x0123_4567_89AB_CDEFu64 & crate::bits::field_mask(bits);
             assert_eq!(from_stream(to_stream(v, bits), bits), v, "bits={bits}");
         }
         // 0xEDA as 12 bits: low byte DA first, then the top nibble E.
