@@ -90,57 +90,55 @@ fn main() {
         .map(|f| f.as_bytes().to_vec())
         .collect();
     let frame_refs: Vec<&[u8]> = frame_data.iter().map(Vec::as_slice).collect();
-    for _ in 0..n {
-        match what {
-            "encode" => {
-                let mut src = LeafSource::new(black_box(&leaves));
-                let r = encode(&layout, root, &mut src, &mut out, EncodeOptions::default());
-                black_box(r.unwrap());
-            }
-            "decode" => {
-                let mut sink = LeafSink::new(&mut storage);
-                let r = decode(
-                    &layout,
-                    root,
-                    black_box(&bytes[..]),
-                    &mut sink,
-                    DecodeOptions::default(),
-                );
-                black_box(r.unwrap());
-            }
-            "get_leaf4" => {
-                let r = get_leaf(
-                    &layout,
-                    root,
-                    black_box(&bytes[..]),
-                    Target::Index(black_box(4)),
-                    false,
-                );
-                black_box(r.unwrap());
-            }
-            "table_get_leaf4" => {
-                let data = black_box(&bytes[..]);
-                let r = table.get_leaf(&layout, data, Target::Index(black_box(4)), false);
-                black_box(r.unwrap());
-            }
-            "table_read4" => {
-                let data = black_box(&bytes[..]);
-                let r = table.read(&layout, data, black_box(4));
-                black_box(r.unwrap());
-            }
-            "receive" => {
-                let r = receive(black_box(&frame_refs), SEED);
-                black_box(r.unwrap().transfer_id);
-            }
-            "receive_into" => {
-                let r = receive_into(black_box(&frame_refs), SEED, &mut out);
-                black_box(r.unwrap());
-            }
-            "transfer_crc" => {
-                black_box(crc16(SEED, black_box(&bytes[..])));
-            }
-            _ => panic!("unknown operation {what}"),
-        }
+    match what {
+        "encode" => repeat(n, || {
+            let mut src = LeafSource::new(black_box(&leaves));
+            let r = encode(&layout, root, &mut src, &mut out, EncodeOptions::default());
+            black_box(r.unwrap());
+        }),
+        "decode" => repeat(n, || {
+            let mut sink = LeafSink::new(&mut storage);
+            let r = decode(
+                &layout,
+                root,
+                black_box(&bytes[..]),
+                &mut sink,
+                DecodeOptions::default(),
+            );
+            black_box(r.unwrap());
+        }),
+        "get_leaf4" => repeat(n, || {
+            let r = get_leaf(
+                &layout,
+                root,
+                black_box(&bytes[..]),
+                Target::Index(black_box(4)),
+                false,
+            );
+            black_box(r.unwrap());
+        }),
+        "table_get_leaf4" => repeat(n, || {
+            let data = black_box(&bytes[..]);
+            let r = table.get_leaf(&layout, data, Target::Index(black_box(4)), false);
+            black_box(r.unwrap());
+        }),
+        "table_read4" => repeat(n, || {
+            let data = black_box(&bytes[..]);
+            let r = table.read(&layout, data, black_box(4));
+            black_box(r.unwrap());
+        }),
+        "receive" => repeat(n, || {
+            let r = receive(black_box(&frame_refs), SEED);
+            black_box(r.unwrap().transfer_id);
+        }),
+        "receive_into" => repeat(n, || {
+            let r = receive_into(black_box(&frame_refs), SEED, &mut out);
+            black_box(r.unwrap());
+        }),
+        "transfer_crc" => repeat(n, || {
+            black_box(crc16(SEED, black_box(&bytes[..])));
+        }),
+        _ => panic!("unknown operation {what}"),
     }
 }
 
@@ -162,23 +160,28 @@ fn store_ops(what: &str, n: usize) {
     store
         .set_from(&layout, 0, 2, Which::Value, &mut src, false)
         .unwrap();
+    match what {
+        "get_leaf4" => repeat(n, || {
+            let r = store.get_leaf(
+                &layout,
+                0,
+                black_box(2),
+                Which::Value,
+                Target::Index(black_box(4)),
+            );
+            black_box(r.unwrap());
+        }),
+        "read4" => repeat(n, || {
+            let r = store.read(&layout, 0, black_box(2), Which::Value, black_box(4));
+            black_box(r.unwrap());
+        }),
+        _ => panic!("unknown operation {what}"),
+    }
+}
+
+/// Runs `op` `n` times (each operation its own loop: no dispatch inside the count).
+fn repeat(n: usize, mut op: impl FnMut()) {
     for _ in 0..n {
-        match what {
-            "get_leaf4" => {
-                let r = store.get_leaf(
-                    &layout,
-                    0,
-                    black_box(2),
-                    Which::Value,
-                    Target::Index(black_box(4)),
-                );
-                black_box(r.unwrap());
-            }
-            "read4" => {
-                let r = store.read(&layout, 0, black_box(2), Which::Value, black_box(4));
-                black_box(r.unwrap());
-            }
-            _ => panic!("unknown operation {what}"),
-        }
+        op();
     }
 }
