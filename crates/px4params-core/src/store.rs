@@ -594,9 +594,9 @@ where
         self.read_walked(layout, param, instance, which, k)
     }
 
-    /// [`Store::read`] of a leaf its table does not answer for: walked, out of line so that
-    /// the table's path stays small.
-    #[cold]
+    /// [`Store::read`] of a leaf its table does not answer for, and every read of a store
+    /// without tables (the C ABI's): walked, out of line so that the table's path stays small
+    /// (not `#[cold]`: firmware reads through here).
     #[inline(never)]
     fn read_walked(
         &self,
