@@ -13,6 +13,10 @@
 //! Bytes per parameter: its type's default, then for each instance its value and its default,
 //! each `slot_bytes` long (the type's largest encoding). One scratch area of the largest
 //! `slot_bytes` follows all parameters.
+//!
+//! Optional leaf tables ([`Store::with_tables`]) serve drivers, which read leaves far more
+//! often than anything writes them: where each instance's first leaves are is worked out
+//! whenever its value or default changes, so that [`Store::read`] is a lookup and a bit read.
 
 // Errors are returned by value: the core never allocates, so they cannot be boxed.
 #![allow(clippy::result_large_err)]
@@ -26,7 +30,11 @@ use crate::error::{Error, ErrorKind, Path, Step};
 use crate::layout::{Layout, NodeId, Role};
 use crate::leaf::{self, Leaf, Position, Target};
 use crate::scalar::{self, Scalar};
-use crate::table::{LeafSlot, LeafTable};
+use crate::table::{LeafSlot, LeafTable, UNRESOLVED};
+
+/// The most leaves resolved per instance value or default ([`table_slots`]): later leaves are
+/// found through the table on each read.
+const RESOLVED_MAX: usize = 32;
 
 /// Stored values never use tail array optimization: each one delimits itself.
 const STORED: EncodeOptions = EncodeOptions {
@@ -368,17 +376,29 @@ pub struct Store<D, S, B, T = [LeafSlot; 0]> {
 }
 
 /// Number of [`LeafSlot`]s that [`Store::with_tables`] needs for `defs` (laid out by [`plan`])
-/// to give every parameter's type a complete leaf table ([`crate::table`]): one per parameter,
-/// and each distinct type's table.
+/// to give every parameter's type a complete leaf table ([`crate::table`]) and every instance
+/// its resolved leaves: one per parameter, each distinct type's table, and for each instance's
+/// value and default one per leaf its table may answer for (up to 32: where the instance's
+/// first leaves are, worked out whenever its value changes, so that a read goes straight to
+/// the bits).
 pub fn table_slots(layout: &Layout<'_>, defs: &[ParamDef]) -> usize {
     let mut total = defs.len();
     for (i, def) in defs.iter().enumerate() {
-        let seen = defs[..i].iter().any(|d| d.root == def.root);
-        if !seen && (def.root as usize) < layout.nodes.len() {
-            total += LeafTable::slots_needed(layout, def.root);
+        if (def.root as usize) >= layout.nodes.len() {
+            continue;
         }
+        let (slots, entries) = LeafTable::needed(layout, def.root);
+        if !defs[..i].iter().any(|d| d.root == def.root) {
+            total += slots;
+        }
+        total += resolved_per_value(entries) * 2 * def.instances as usize;
     }
     total
+}
+
+/// Leaves resolved per value of a type whose table has `entries` leaf entries.
+fn resolved_per_value(entries: usize) -> usize {
+    entries.min(RESOLVED_MAX)
 }
 
 type Result<T, E = Infallible> = core::result::Result<T, StoreError<E>>;
@@ -405,8 +425,10 @@ where
 {
     /// [`Store::new`], with the parameters' leaf tables built in `tables`: then reading or
     /// writing leaf `[k]` is a table lookup ([`crate::table`]) for the leaves a type's shape
-    /// fixes. [`table_slots`] says how many slots cover every type completely; with fewer,
-    /// the tables cover what fits and the rest is walked as without them (same results).
+    /// fixes, and reading one of an instance's first leaves a lookup of where it was found
+    /// when the value last changed. [`table_slots`] says how many slots cover every type and
+    /// instance completely; with fewer, the tables cover what fits, instances are resolved
+    /// while room remains, and the rest is walked as without them (same results).
     pub fn with_tables(
         layout: &Layout<'_>,
         defs: D,
@@ -434,7 +456,7 @@ where
             let len = leaf::encode_default(layout, def.root, region, false)?;
             store.slots.as_mut()[def.first_slot as usize].default_len = len as u16;
             if def.shared {
-                store.fill_instance(&def, 0);
+                store.fill_instance(param as u32, &def, 0);
                 store.slots.as_mut()[def.first_slot as usize + 1].flags = PRESENT;
             }
         }
@@ -466,7 +488,7 @@ where
         self.slots.as_mut()[def.first_slot as usize].default_len = data.len() as u16;
         if def.shared {
             self.stage(data);
-            self.commit(&def, 0, Which::Default, data.len());
+            self.commit(param, &def, 0, Which::Default, data.len());
         }
         Ok(())
     }
@@ -512,7 +534,7 @@ where
                 max_instances: def.instances,
             })?,
         };
-        self.fill_instance(&def, instance);
+        self.fill_instance(param, &def, instance);
         self.slots.as_mut()[def.first_slot as usize + 1 + instance as usize].flags =
             PRESENT | UNSAVED;
         Ok(instance)
@@ -562,7 +584,14 @@ where
             Some(table) => {
                 // The value and what follows it in memory: bits are read 64 at a time.
                 let (start, len) = self.span(&def, index, which);
-                table.get_leaf_prefix(layout, &self.bytes.as_ref()[start..], len, target)
+                let data = &self.bytes.as_ref()[start..];
+                if let Target::Index(k) = target {
+                    let resolved = self.resolved(param, &def, index, which, k);
+                    if let Some(found) = resolved.and_then(|r| table.get_resolved(r, data, k)) {
+                        return Ok(found);
+                    }
+                }
+                table.get_leaf_prefix(layout, data, len, target)
             }
             None => {
                 let data = self.region(&def, index, which);
@@ -584,8 +613,14 @@ where
     ) -> Result<Scalar> {
         let def = self.def(param)?;
         let index = self.present_slot(&def, instance)?;
-        if let Some(table) = self.table(param) {
+        if let Some(resolved) = self.resolved(param, &def, index, which, k) {
             // The value and what follows it in memory: bits are read 64 at a time.
+            let (start, _) = self.span(&def, index, which);
+            if let Some(value) = LeafTable::read_resolved(resolved, &self.bytes.as_ref()[start..]) {
+                return Ok(value);
+            }
+        }
+        if let Some(table) = self.table(param) {
             let (start, len) = self.span(&def, index, which);
             if let Some(value) = table.read_known(&self.bytes.as_ref()[start..], len, k) {
                 return Ok(value);
@@ -708,7 +743,7 @@ where
             &mut tail[..end - scratch],
             options,
         )?;
-        self.commit(&def, instance, which, new_len);
+        self.commit(param, &def, instance, which, new_len);
         Ok(())
     }
 
@@ -730,7 +765,7 @@ where
         let scratch = self.scratch;
         let out = &mut self.bytes.as_mut()[scratch..scratch + def.slot_bytes as usize];
         let len = codec::encode(layout, def.root, source, out, options)?;
-        self.commit(&def, instance, which, len);
+        self.commit(param, &def, instance, which, len);
         Ok(())
     }
 
@@ -748,7 +783,7 @@ where
         self.present_slot(&def, instance)?;
         check_encoded(layout, def.root, data)?;
         self.stage(data);
-        self.commit(&def, instance, which, data.len());
+        self.commit(param, &def, instance, which, data.len());
         Ok(())
     }
 
@@ -759,7 +794,7 @@ where
             let def = self.defs.as_ref()[param];
             let first = def.first_slot as usize + 1;
             if def.shared {
-                self.fill_instance(&def, 0);
+                self.fill_instance(param as u32, &def, 0);
                 self.slots.as_mut()[first].flags = PRESENT | UNSAVED;
             } else {
                 for slot in &mut self.slots.as_mut()[first..first + def.instances as usize] {
@@ -807,7 +842,7 @@ where
         let written =
             crate::translate::translate(layout, old, data, def.root, base, out, &mut |_| {})?;
         if !check_only {
-            self.commit(&def, instance, which, written);
+            self.commit(param, &def, instance, which, written);
         }
         Ok(())
     }
@@ -827,6 +862,7 @@ where
         let slot = &mut self.slots.as_mut()[index];
         slot.value_len = len as u16;
         slot.flags |= UNSAVED;
+        self.resolve(param, &def, index, Which::Value);
         Ok(())
     }
 
@@ -857,6 +893,61 @@ where
         Some(LeafTable::built(
             tables.get(start..start + index.b as usize)?,
         ))
+    }
+
+    /// Where leaf `[k]` of an instance's value or default was resolved (see
+    /// [`Store::resolve`]), if it was.
+    #[inline(always)]
+    fn resolved(
+        &self,
+        param: u32,
+        def: &ParamDef,
+        index: usize,
+        which: Which,
+        k: usize,
+    ) -> Option<LeafSlot> {
+        let (first, n) = self.resolved_area(param, def, index, which)?;
+        if k >= n {
+            return None;
+        }
+        self.tables.as_ref().get(first + k).copied()
+    }
+
+    /// Where an instance's resolved leaves are in the tables' storage, and how many there
+    /// are (`None`: not resolved).
+    #[inline(always)]
+    fn resolved_area(
+        &self,
+        param: u32,
+        def: &ParamDef,
+        index: usize,
+        which: Which,
+    ) -> Option<(usize, usize)> {
+        let packed = self.tables.as_ref().get(param as usize)?.c;
+        let (start, n) = ((packed >> 8) as usize, (packed & 0xFF) as usize);
+        let instance = index - def.first_slot as usize - 1;
+        let value = match which {
+            Which::Value => 2 * instance,
+            Which::Default => 2 * instance + 1,
+        };
+        (start != 0).then_some((start + value * n, n))
+    }
+
+    /// Works out where the leaves of an instance's value or default are, after it changed:
+    /// the leaves its table answers for, as many as were given room.
+    fn resolve(&mut self, param: u32, def: &ParamDef, index: usize, which: Which) {
+        let Some((first, n)) = self.resolved_area(param, def, index, which) else {
+            return;
+        };
+        let mut found = [UNRESOLVED; RESOLVED_MAX];
+        let found = &mut found[..n];
+        if let Some(table) = self.table(param) {
+            let (start, len) = self.span(def, index, which);
+            table.resolve(&self.bytes.as_ref()[start..], len, found);
+        }
+        if let Some(area) = self.tables.as_mut().get_mut(first..first + n) {
+            area.copy_from_slice(found);
+        }
     }
 
     /// [`leaf::seek`] in a value of parameter `param`, through its table if it has one.
@@ -903,7 +994,7 @@ where
     }
 
     /// Copies the type default into an instance's value and default.
-    fn fill_instance(&mut self, def: &ParamDef, instance: u16) {
+    fn fill_instance(&mut self, param: u32, def: &ParamDef, instance: u16) {
         let len = self.slots.as_ref()[def.first_slot as usize].default_len;
         let index = def.first_slot as usize + 1 + instance as usize;
         let from = def.first_byte as usize;
@@ -914,6 +1005,8 @@ where
         let slot = &mut self.slots.as_mut()[index];
         slot.value_len = len;
         slot.default_len = len;
+        self.resolve(param, def, index, Which::Value);
+        self.resolve(param, def, index, Which::Default);
     }
 
     fn stage(&mut self, data: &[u8]) {
@@ -923,7 +1016,7 @@ where
 
     /// Moves the staged `len` bytes into an instance's value or default (and into its value
     /// too when a default is written and the value was equal to the old default).
-    fn commit(&mut self, def: &ParamDef, instance: u16, which: Which, len: usize) {
+    fn commit(&mut self, param: u32, def: &ParamDef, instance: u16, which: Which, len: usize) {
         let index = def.first_slot as usize + 1 + instance as usize;
         let follows = which == Which::Default && self.values_equal(def, index);
         let scratch = self.scratch;
@@ -938,13 +1031,17 @@ where
                 Which::Value => slot.value_len = len as u16,
                 Which::Default => slot.default_len = len as u16,
             }
+            self.resolve(param, def, index, w);
         }
         self.slots.as_mut()[index].flags |= UNSAVED;
     }
 }
 
 /// Builds the leaf tables of `defs` in `tables`: first one slot per parameter that says where
-/// its type's table is (`{start, len}`, start 0 for none), then the tables, one per type.
+/// its type's table is and where its instances' resolved leaves are (`{start, len, resolved}`,
+/// start 0 for none; `resolved` is the start shifted left by 8 bits, or-ed with the leaves per
+/// value, 0 for none), then the tables, one per type, then the parameters' resolved leaves,
+/// each instance's value and then its default (filled in as instances get values).
 fn build_tables(layout: &Layout<'_>, defs: &[ParamDef], tables: &mut [LeafSlot]) {
     if tables.len() < defs.len() {
         tables.fill(LeafSlot::default());
@@ -968,6 +1065,22 @@ fn build_tables(layout: &Layout<'_>, defs: &[ParamDef], tables: &mut [LeafSlot])
                 Err(_) => LeafSlot::default(),
             },
         };
+    }
+    for (i, def) in defs.iter().enumerate() {
+        let (start, len) = (index[i].a as usize, index[i].b as usize);
+        if start == 0 {
+            continue;
+        }
+        let table = LeafTable::built(&rest[start - defs.len()..][..len]);
+        let n = resolved_per_value(table.entries());
+        let area = n * 2 * def.instances as usize;
+        let first = defs.len() + used;
+        if n == 0 || area > rest.len() - used || first >= 1 << 24 {
+            continue;
+        }
+        rest[used..used + area].fill(UNRESOLVED);
+        index[i].c = (first as u32) << 8 | n as u32;
+        used += area;
     }
 }
 

@@ -11,8 +11,9 @@
 //! of [`leaf::locate`], [`leaf::get_leaf`] and [`leaf::seek`]: whatever the table does not
 //! answer (paths, leaves beyond it, malformed data) goes to them.
 //!
-//! Layout of the slots: slot 0 is the table's header and doubles as a run that covers nothing
-//! (its terminator hands over to the walk). Then come *runs*, each a header and its leaf
+//! Layout of the slots: slot 0 is the table's header (its number of leaf entries, its type and
+//! whether it was cut short) and doubles as a run that covers nothing (its terminator hands
+//! over to the walk). Then come *runs*, each a header and its leaf
 //! entries at bit offsets from the run's start, and the union *jump tables* that lead from a
 //! tag to a variant's run; at the end, each leaf's field path (*path records*).
 
@@ -57,6 +58,12 @@ const BOOL: u32 = 3;
 const TAG: u32 = 4;
 const TRUNCATED: u32 = 1 << 11;
 const UNION_NODE: u32 = 12;
+/// A leaf [`LeafTable::resolve`] did not find: its `what` has a class no entry has.
+pub(crate) const UNRESOLVED: LeafSlot = LeafSlot {
+    a: 0,
+    b: u32::MAX,
+    c: 0,
+};
 /// Unions with node numbers from here on are not put in tables.
 const MAX_UNION_NODE: u32 = 1 << 19;
 const VERSION: u32 = 1 << 31;
@@ -81,9 +88,15 @@ impl<'s> LeafTable<'s> {
     /// Number of slots a table of `root` needs to cover every leaf the type's shape fixes
     /// (at most 65536: a type with more leaves is covered up to there).
     pub fn slots_needed(layout: &Layout<'_>, root: NodeId) -> usize {
+        Self::needed(layout, root).0
+    }
+
+    /// [`LeafTable::slots_needed`], and the number of leaf entries of that complete table (at
+    /// least the number of leaves it answers for, whatever the data).
+    pub(crate) fn needed(layout: &Layout<'_>, root: NodeId) -> (usize, usize) {
         let mut builder = Builder::new(layout, &mut [], usize::MAX);
         builder.build(root);
-        builder.len + builder.high
+        (builder.len + builder.high, builder.entries as usize)
     }
 
     /// Builds the table of `root` in `storage`, covering what fits (all of it with
@@ -130,6 +143,56 @@ impl<'s> LeafTable<'s> {
     /// Whether the storage ran out before the table covered what the type's shape fixes.
     pub fn is_cut_short(&self) -> bool {
         self.slots.first().is_some_and(|s| s.c & INDEX != 0)
+    }
+
+    /// Number of leaf entries in the table: no leaf `[k]` with `k` from here on is answered
+    /// by it.
+    pub(crate) fn entries(&self) -> usize {
+        self.slots.first().map_or(0, |s| s.a as usize)
+    }
+
+    /// Where leaves `[0]`, `[1]`, .. of the value in the first `len` bytes of `data` are, one
+    /// to each slot of `out`, for [`LeafTable::read_resolved`]: resolved once for a value
+    /// that is read many times (a store's instances).
+    pub(crate) fn resolve(&self, data: &[u8], len: usize, out: &mut [LeafSlot]) {
+        for (k, slot) in out.iter_mut().enumerate() {
+            *slot = match self.find_within(data, len * 8, k) {
+                Some((at, entry)) => LeafSlot {
+                    a: at as u32,
+                    b: entry.0,
+                    c: entry.1,
+                },
+                None => UNRESOLVED,
+            };
+        }
+    }
+
+    /// The value of a leaf that [`LeafTable::resolve`] found in the value starting `data`
+    /// (`None` when it did not: the table does not answer for the leaf).
+    #[inline(always)]
+    pub(crate) fn read_resolved(resolved: LeafSlot, data: &[u8]) -> Option<Scalar> {
+        (resolved.b != UNRESOLVED.b)
+            .then(|| Entry(resolved.b, resolved.c).read(data, resolved.a as usize))
+    }
+
+    /// [`LeafTable::read_resolved`] with the leaf's description, as [`LeafTable::get_leaf`]
+    /// gives it, for leaf `[k]`.
+    #[inline]
+    pub(crate) fn get_resolved(
+        &self,
+        resolved: LeafSlot,
+        data: &[u8],
+        k: usize,
+    ) -> Option<(Leaf, Scalar)> {
+        let value = Self::read_resolved(resolved, data)?;
+        let entry = Entry(resolved.b, resolved.c);
+        let leaf = Leaf {
+            index: k,
+            bit_offset: resolved.a as usize,
+            kind: entry.kind(),
+            path: self.path(entry.1),
+        };
+        Some((leaf, value))
     }
 
     /// Finds leaf `target` in `data`, a value of the table's type: [`leaf::locate`], faster.
@@ -429,6 +492,8 @@ struct Builder<'l, 'a, 'o> {
     pos: u64,
     /// The storage ran out.
     full: bool,
+    /// Leaf entries laid out.
+    entries: u32,
 }
 
 impl<'l, 'a, 'o> Builder<'l, 'a, 'o> {
@@ -445,6 +510,7 @@ impl<'l, 'a, 'o> Builder<'l, 'a, 'o> {
             leaves: 0,
             pos: 0,
             full: false,
+            entries: 0,
         }
     }
 
@@ -456,7 +522,7 @@ impl<'l, 'a, 'o> Builder<'l, 'a, 'o> {
         self.put(
             0,
             LeafSlot {
-                a: 0,
+                a: self.entries,
                 b: root,
                 c: WALK | u32::from(self.full),
             },
@@ -563,6 +629,7 @@ impl<'l, 'a, 'o> Builder<'l, 'a, 'o> {
         };
         self.put(i, slot);
         self.leaves += 1;
+        self.entries += 1;
         self.advance(Entry(what, 0).bits().into());
     }
 

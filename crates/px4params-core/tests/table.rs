@@ -314,3 +314,202 @@ fn stores_with_and_without_tables_agree() {
     }
     plain.clear();
 }
+
+/// A store operation, for [`stores_agree_after_any_operations`].
+#[derive(Clone, Debug)]
+enum Op {
+    Add(u16),
+    Remove(u16),
+    /// Parameter, instance, the default (else the value), leaf, value.
+    SetLeaf(u32, u16, bool, usize, u64),
+    /// Leaves `[0]` to `[15]` set to values from a seed (so that data read from the wrong
+    /// place shows).
+    Scramble(u32, u16, bool, u64),
+    /// Parameter, instance, the default, bytes (mostly refused: random).
+    SetEncoded(u32, u16, bool, Vec<u8>),
+    /// An instance's value set to another's: always a valid value.
+    Copy(u16, u16),
+    Reset(u32, u16),
+    /// The type default set to an instance's value (the shared parameter's default follows).
+    TypeDefault(u32, u16),
+    Clear,
+}
+
+fn any_op() -> impl Strategy<Value = Op> {
+    // Few instances and leaves, so that operations meet on the same ones.
+    let inst = 0u16..2;
+    prop_oneof![
+        2 => inst.clone().prop_map(Op::Add),
+        1 => inst.clone().prop_map(Op::Remove),
+        // Small values keep tags and lengths valid; others fill the bits.
+        6 => (0u32..2, inst.clone(), any::<bool>(), 0usize..8, prop_oneof![0u64..4, any::<u64>()])
+            .prop_map(|(p, i, d, k, v)| Op::SetLeaf(p, i, d, k, v)),
+        1 => (0u32..2, inst.clone(), any::<bool>(), proptest::collection::vec(any::<u8>(), 0..12))
+            .prop_map(|(p, i, d, b)| Op::SetEncoded(p, i, d, b)),
+        2 => (0u32..2, inst.clone(), any::<bool>(), any::<u64>())
+            .prop_map(|(p, i, d, seed)| Op::Scramble(p, i, d, seed)),
+        2 => (inst.clone(), inst.clone()).prop_map(|(a, b)| Op::Copy(a, b)),
+        1 => (0u32..2, inst.clone()).prop_map(|(p, i)| Op::Reset(p, i)),
+        1 => (0u32..2, inst).prop_map(|(p, i)| Op::TypeDefault(p, i)),
+        1 => Just(Op::Clear),
+    ]
+}
+
+type AnyStore = Store<Vec<ParamDef>, Vec<Slot>, Vec<u8>, Vec<LeafSlot>>;
+
+/// Applies `op`; what it returned, in a form all stores can be compared by.
+fn apply(store: &mut AnyStore, layout: &px4params_core::Layout<'_>, op: &Op) -> String {
+    let which = |default: bool| {
+        if default {
+            Which::Default
+        } else {
+            Which::Value
+        }
+    };
+    let result = match op {
+        Op::Add(i) => store.add(0, Some(*i)).map(|_| ()),
+        Op::Remove(i) => store.remove(0, *i),
+        Op::SetLeaf(p, i, d, k, v) => store.set_leaf(
+            layout,
+            *p,
+            *i,
+            which(*d),
+            Target::Index(*k),
+            Scalar::Uint(*v),
+            true,
+        ),
+        Op::Scramble(p, i, d, seed) => {
+            let results: Vec<_> = (0..16u64)
+                .map(|k| {
+                    let value = seed.rotate_left(k as u32 * 7) >> (k % 5 * 12);
+                    let target = Target::Index(k as usize);
+                    store.set_leaf(layout, *p, *i, which(*d), target, Scalar::Uint(value), true)
+                })
+                .collect();
+            return format!("{results:?}");
+        }
+        Op::SetEncoded(p, i, d, bytes) => store.set_encoded(layout, *p, *i, which(*d), bytes),
+        Op::Copy(to, from) => match store.get(0, *from, Which::Value) {
+            Ok(value) => {
+                let value = value.to_vec();
+                store.set_encoded(layout, 0, *to, Which::Value, &value)
+            }
+            Err(e) => Err(e),
+        },
+        Op::Reset(p, i) => store.reset(*p, *i),
+        Op::TypeDefault(p, i) => match store.get(*p, *i, Which::Value) {
+            Ok(value) => {
+                let value = value.to_vec();
+                store.set_type_default(layout, *p, &value)
+            }
+            Err(e) => Err(e),
+        },
+        Op::Clear => {
+            store.clear();
+            Ok(())
+        }
+    };
+    format!("{result:?}")
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(300))]
+
+    /// A store with complete tables (each instance's leaves resolved whenever its value
+    /// changes), one with room for only some of that, and one without tables read every leaf
+    /// alike after any sequence of operations.
+    #[test]
+    fn stores_agree_after_any_operations(ty in any_type(), ops in proptest::collection::vec(any_op(), 1..40), cut in any::<prop::sample::Index>()) {
+        let mut l = OwnedLayout::default();
+        let root = ty.build(&mut l);
+        let layout = l.as_layout();
+        let mut defs = vec![ParamDef::instanced(root, 4), ParamDef::shared(root)];
+        let Ok(capacity) = plan(&layout, &mut defs) else {
+            return Ok(());
+        };
+        let full = table_slots(&layout, &defs);
+        let new = |tables: usize| {
+            Store::with_tables(
+                &layout,
+                defs.clone(),
+                vec![Slot::default(); capacity.slots],
+                vec![0u8; capacity.bytes],
+                vec![LeafSlot::default(); tables],
+            )
+            .unwrap()
+        };
+        let mut stores = [new(0), new(full), new(defs.len() + cut.index(full - defs.len() + 1))];
+        for op in &ops {
+            let results: Vec<String> = stores.iter_mut().map(|s| apply(s, &layout, op)).collect();
+            prop_assert!(results.iter().all(|r| *r == results[0]), "{:?}: {:?}", op, results);
+            for (param, instances) in [(0u32, 0u16..4), (1, 0..1)] {
+                for instance in instances {
+                    for which in [Which::Value, Which::Default] {
+                        let plain = &stores[0];
+                        for (s, tabled) in stores.iter().enumerate().skip(1) {
+                            prop_assert_eq!(plain.get(param, instance, which), tabled.get(param, instance, which));
+                            for k in 0..40 {
+                                let target = Target::Index(k);
+                                let a = plain.get_leaf(&layout, param, instance, which, target);
+                                let b = tabled.get_leaf(&layout, param, instance, which, target);
+                                let agree = match (&a, &b) {
+                                    (Ok(x), Ok(y)) => same(&Ok(*x), &Ok(*y)),
+                                    _ => a == b,
+                                };
+                                prop_assert!(agree, "store {} #{} {:?} [{}] after {:?}: {:?} / {:?}", s, instance, which, k, op, a, b);
+                                let a = plain.read(&layout, param, instance, which, k);
+                                let b = tabled.read(&layout, param, instance, which, k);
+                                let agree = match (a, b) {
+                                    (Ok(x), Ok(y)) => same_scalar(x, y),
+                                    _ => a == b,
+                                };
+                                prop_assert!(agree, "read: store {} #{} {:?} [{}] after {:?}: {:?} / {:?}", s, instance, which, k, op, a, b);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// An INA238 whose value moved to another bus and back to its default by `reset` reads the
+/// default's leaves again (where its leaves are is worked out anew on every change).
+#[test]
+fn reset_reads_the_default_leaves() {
+    let mut l = OwnedLayout::default();
+    let root = common::ina238(&mut l);
+    let layout = l.as_layout();
+    let mut defs = vec![ParamDef::instanced(root, 2)];
+    let capacity = plan(&layout, &mut defs).unwrap();
+    let mut store = Store::with_tables(
+        &layout,
+        defs.clone(),
+        vec![Slot::default(); capacity.slots],
+        vec![0u8; capacity.bytes],
+        vec![LeafSlot::default(); table_slots(&layout, &defs)],
+    )
+    .unwrap();
+    store.add(0, Some(1)).unwrap();
+    let set = |store: &mut AnyStore, which, k, value| {
+        let target = Target::Index(k);
+        store
+            .set_leaf(&layout, 0, 1, which, target, Scalar::Uint(value), false)
+            .unwrap()
+    };
+    // The default (and the value, which follows it): I2C address 0x45, current 300.
+    set(&mut store, Which::Default, 4, 0x45);
+    set(&mut store, Which::Default, 5, 300);
+    // The value on SPI: leaf [4] is now the SPI device.
+    set(&mut store, Which::Value, 1, 1);
+    set(&mut store, Which::Value, 4, 7);
+    assert_eq!(
+        store.read(&layout, 0, 1, Which::Value, 4),
+        Ok(Scalar::Uint(7))
+    );
+    store.reset(0, 1).unwrap();
+    let read = |k| store.read(&layout, 0, 1, Which::Value, k);
+    assert_eq!(read(1), Ok(Scalar::Uint(0)));
+    assert_eq!(read(4), Ok(Scalar::Uint(0x45)));
+    assert_eq!(read(5), Ok(Scalar::Uint(300)));
+}

@@ -21,7 +21,8 @@ pyo3::import_exception!(px4params.errors, StoreError);
 pub(crate) use StoreError as StoreErrorClass;
 pyo3::import_exception!(px4params.errors, InstanceError);
 
-// With a leaf table per type: leaf [k] is a lookup and a bit read (`px4params_core::table`).
+// With a leaf table per type and each instance's first leaves resolved when its value changes:
+// reading leaf [k] is a lookup and a bit read (`px4params_core::table`, `store::table_slots`).
 pub(crate) type CoreStore = store::Store<Vec<ParamDef>, Vec<Slot>, Vec<u8>, Vec<LeafSlot>>;
 
 /// Key of the `int32` root in the parameter list (a classic integer parameter).
