@@ -4,6 +4,7 @@
 
 mod batch;
 mod compile;
+mod fastcall;
 mod file;
 mod plain;
 mod program;
@@ -453,9 +454,13 @@ impl DataType {
     }
 
     /// Runs `f` with room for the type's largest value: on the stack up to 256 bytes.
+    #[inline]
     fn with_out<R>(&self, f: impl FnOnce(&mut [u8]) -> R) -> R {
         let max = self.layout().max_bytes(self.root);
-        if max <= 256 {
+        // Small messages (NodeStatus: 7 bytes) zero a small buffer.
+        if max <= 32 {
+            f(&mut [0u8; 32])
+        } else if max <= 256 {
             f(&mut [0u8; 256])
         } else {
             f(&mut vec![0u8; max])
@@ -745,6 +750,7 @@ pub(crate) fn describe(layout: &Layout<'_>, leaf: &px4params_core::leaf::Leaf) -
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Schema>()?;
     m.add_class::<DataType>()?;
+    fastcall::install(&m.py().get_type::<DataType>())?;
     m.add_class::<store::Store>()?;
     m.add_function(wrap_pyfunction!(file::check_store_file, m)?)?;
     m.add_function(wrap_pyfunction!(transfer::dsdl_signature, m)?)?;
