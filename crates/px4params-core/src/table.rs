@@ -47,7 +47,8 @@ const INDEX: u32 = !KIND;
 // A leaf entry is `{offset, what, path}`: its bit offset from the run's start, what it is (its
 // width in bits 0..8, its `CLASS` in bits 8..11, `TRUNCATED`, a tag's union node in bits 12..31
 // and `VERSION` for a `p_version` field) and its path record. A path record is the path's
-// depth and then its remembered steps (packed as in `Path`), 32 bits each, three to a slot;
+// depth and then its remembered steps (packed as in `Path`), 32 bits each, three to a slot,
+// zeros after them to fill `RECORD_SLOTS` slots (so that a path is copied in one piece);
 // records are numbered by where they start counted from the table's end (0: the empty path).
 // A jump table entry is `{run, variants, tag bits}` (run 0: the walk).
 const CLASS: u32 = 8;
@@ -67,6 +68,10 @@ pub(crate) const UNRESOLVED: LeafSlot = LeafSlot {
 /// Unions with node numbers from here on are not put in tables.
 const MAX_UNION_NODE: u32 = 1 << 19;
 const VERSION: u32 = 1 << 31;
+/// Slots of a path record: its depth and `MAX_PATH_DEPTH` steps, three words to a slot.
+const RECORD_SLOTS: usize = (MAX_PATH_DEPTH + 1).div_ceil(3);
+// `LeafTable::path` copies a record's 5 slots, 12 steps, word by word.
+const _: () = assert!(RECORD_SLOTS == 5 && MAX_PATH_DEPTH == 12);
 /// The most slots a table uses (types with more leaves are covered up to there).
 const MAX_SLOTS: usize = 1 << 16;
 
@@ -377,26 +382,14 @@ impl<'s> LeafTable<'s> {
     #[inline]
     fn path(&self, record: u32) -> Path {
         let slots = self.slots;
-        let Some(words) = slots
-            .len()
-            .checked_sub(record as usize)
-            .filter(|_| record != 0)
-            .and_then(|start| slots.get(start..))
-        else {
-            return Path::default();
-        };
-        let Some(first) = words.first() else {
-            return Path::default();
-        };
-        // Whole slots at a time: words after the steps held are zero.
-        let n = ((first.a as usize).min(MAX_PATH_DEPTH) + 1).div_ceil(3);
-        let mut all = [0u32; MAX_PATH_DEPTH + 3];
-        for (chunk, slot) in all.chunks_exact_mut(3).zip(words.iter().take(n)) {
-            chunk.copy_from_slice(&[slot.a, slot.b, slot.c]);
+        let start = slots.len().wrapping_sub(record as usize);
+        match slots.get(start..start.wrapping_add(RECORD_SLOTS)) {
+            Some(&[a, b, c, d, e]) if record != 0 => Path::from_packed(
+                a.a,
+                [a.b, a.c, b.a, b.b, b.c, c.a, c.b, c.c, d.a, d.b, d.c, e.a],
+            ),
+            _ => Path::default(),
         }
-        let mut steps = [0u32; MAX_PATH_DEPTH];
-        steps.copy_from_slice(&all[1..=MAX_PATH_DEPTH]);
-        Path::from_packed(first.a, steps)
     }
 }
 
@@ -604,15 +597,14 @@ impl<'l, 'a, 'o> Builder<'l, 'a, 'o> {
             0
         } else {
             let held = (self.depth as usize).min(MAX_PATH_DEPTH);
-            let mut words = [0u32; MAX_PATH_DEPTH + 3];
+            let mut words = [0u32; RECORD_SLOTS * 3];
             words[0] = self.depth;
             words[1..=held].copy_from_slice(&self.steps[..held]);
-            let n = (held + 1).div_ceil(3);
-            let Some(record) = self.alloc_end(n) else {
+            let Some(record) = self.alloc_end(RECORD_SLOTS) else {
                 return;
             };
             let start = self.cap - record as usize;
-            for (j, w) in words[..n * 3].chunks(3).enumerate() {
+            for (j, w) in words.chunks(3).enumerate() {
                 let slot = LeafSlot {
                     a: w[0],
                     b: w[1],
