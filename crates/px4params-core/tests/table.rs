@@ -513,3 +513,36 @@ fn reset_reads_the_default_leaves() {
     assert_eq!(read(4), Ok(Scalar::Uint(0x45)));
     assert_eq!(read(5), Ok(Scalar::Uint(300)));
 }
+
+/// Deeply nested leaves keep their whole field paths (as many steps as a path holds, and the
+/// depth beyond): every step of every depth comes back from the table as the walk gives it.
+#[test]
+fn deep_paths_come_back_whole() {
+    for depth in [1, 2, 3, 4, 5, 6, 11, 12, 13, 14, 20] {
+        let mut l = OwnedLayout::default();
+        let u3 = l.uint(3, Cast::Saturated).unwrap();
+        let mut node = l.uint(5, Cast::Saturated).unwrap();
+        for level in 0..depth {
+            let names = [format!("a{level}"), format!("b{level}")];
+            node = l
+                .structure(&[
+                    (names[0].as_str(), u3, Role::Data),
+                    (names[1].as_str(), node, Role::Data),
+                ])
+                .unwrap();
+        }
+        let layout = l.as_layout();
+        let mut storage = vec![LeafSlot::default(); LeafTable::slots_needed(&layout, node)];
+        let table = LeafTable::build(&layout, node, &mut storage).unwrap();
+        let data = [0xA5u8; 16];
+        for k in 0..=depth {
+            let walked = get_leaf(&layout, node, &data[..], Target::Index(k), false);
+            let tabled = table.get_leaf(&layout, &data[..], Target::Index(k), false);
+            assert!(walked.is_ok(), "depth {depth} [{k}]: {walked:?}");
+            assert_eq!(tabled, walked, "depth {depth} [{k}]");
+            let (leaf, _) = tabled.unwrap();
+            let (expected, _) = walked.unwrap();
+            assert_eq!(format!("{:?}", leaf.path), format!("{:?}", expected.path));
+        }
+    }
+}
