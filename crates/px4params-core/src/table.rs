@@ -13,9 +13,9 @@
 //!
 //! Layout of the slots: slot 0 is the table's header (its number of leaf entries, its type and
 //! whether it was cut short) and doubles as a run that covers nothing (its terminator hands
-//! over to the walk). Then come *runs*, each a header and its leaf
-//! entries at bit offsets from the run's start, and the union *jump tables* that lead from a
-//! tag to a variant's run; at the end, each leaf's field path (*path records*).
+//! over to the walk). Then come *runs*, each a header and its leaf entries at bit offsets from
+//! the run's start, and the union *jump tables* that lead from a tag to a variant's run; at
+//! the end, each leaf's field path (*path records*).
 
 use crate::bits::BitRead;
 use crate::codec::{LeafKind, MAX_DEPTH};
