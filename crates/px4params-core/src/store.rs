@@ -613,20 +613,20 @@ where
     ) -> Result<Scalar> {
         let def = self.def(param)?;
         let index = self.present_slot(&def, instance)?;
-        if let Some(resolved) = self.resolved(param, &def, index, which, k) {
-            // The value and what follows it in memory: bits are read 64 at a time.
-            let (start, _) = self.span(&def, index, which);
-            if let Some(value) = LeafTable::read_resolved(resolved, &self.bytes.as_ref()[start..]) {
-                return Ok(value);
-            }
+        // The value and what follows it in memory: bits are read 64 at a time.
+        let (start, len) = self.span(&def, index, which);
+        let data = &self.bytes.as_ref()[start..];
+        let known = match self.resolved(param, &def, index, which, k) {
+            // Resolution is the table's final answer: a leaf it did not find is walked.
+            Some(resolved) => LeafTable::read_resolved(resolved, data),
+            None => self
+                .table(param)
+                .and_then(|table| table.read_known(data, len, k)),
+        };
+        match known {
+            Some(value) => Ok(value),
+            None => self.read_walked(layout, param, instance, which, k),
         }
-        if let Some(table) = self.table(param) {
-            let (start, len) = self.span(&def, index, which);
-            if let Some(value) = table.read_known(&self.bytes.as_ref()[start..], len, k) {
-                return Ok(value);
-            }
-        }
-        self.read_walked(layout, param, instance, which, k)
     }
 
     /// [`Store::read`] of a leaf its table does not answer for, and every read of a store
