@@ -2,7 +2,8 @@
 codec against pydronecan (``_pack`` of a prebuilt value object, and ``unpack``), reading one
 leaf of an instance by name against a dict lookup (a flat parameter table's cost). The
 ``_many`` rows are the batch calls, per message of a batch of 100, against pydronecan's one
-message (it has no batch call).
+message (it has no batch call); the ``decode_struct`` rows decode into a ``StructValue``, an
+object with the fields as attributes, as pydronecan's ``unpack`` does.
 
     python benches/python_api.py [--runs 5] [--instructions]
 
@@ -67,6 +68,8 @@ ROWS = {
     "BatteryInfo decode": ("pydronecan", "faster", 150.0),
     "NodeStatus encode": ("pydronecan", "faster", 60.0),
     "NodeStatus decode": ("pydronecan", "faster", 100.0),
+    "BatteryInfo decode_struct": ("pydronecan", "faster", 150.0),
+    "NodeStatus decode_struct": ("pydronecan", "faster", 100.0),
     "BatteryInfo encode_many": ("pydronecan", "faster", 100.0),
     "BatteryInfo decode_many": ("pydronecan", "faster", 150.0),
     "NodeStatus encode_many": ("pydronecan", "faster", 60.0),
@@ -115,6 +118,9 @@ def calls() -> dict[str, tuple[Call, Call, int]]:
         assert bytes(pack.run()) == data  # type: ignore[arg-type]
         made[f"{name} encode"] = (Call("t.encode(value)", {"t": t, "value": value}), pack, 1)
         made[f"{name} decode"] = (Call("t.decode(data)", {"t": t, "data": data}), unpack_one, 1)
+        typed = Call("t.decode_struct(data)", {"t": t, "data": data})
+        assert typed.run()._asdict() == t.decode(data)  # type: ignore[attr-defined]
+        made[f"{name} decode_struct"] = (typed, unpack_one, 1)
         values, items = [dict(value) for _ in range(BATCH)], [data] * BATCH
         assert t.encode_many(values) == items and t.decode_many(items) == [t.decode(data)] * BATCH
         made[f"{name} encode_many"] = (Call("t.encode_many(v)", {"t": t, "v": values}), pack, BATCH)

@@ -35,6 +35,7 @@ _EXPORTS = {
     "DataType": "px4params.dsdl.schema",
     "Leaf": "px4params.dsdl.schema",
     "Schema": "px4params.dsdl.schema",
+    "StructValue": "px4params.dsdl.schema",
     "load_schema": "px4params.dsdl.schema",
     "to_json_value": "px4params.dsdl.schema",
     "InstanceView": "px4params.store.store",

@@ -10,6 +10,9 @@ from px4params.dsdl.schema import (
     Schema as Schema,
 )
 from px4params.dsdl.schema import (
+    StructValue as StructValue,
+)
+from px4params.dsdl.schema import (
     load_schema as load_schema,
 )
 from px4params.dsdl.schema import (

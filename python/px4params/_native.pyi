@@ -1,7 +1,7 @@
 """Type stubs for the compiled extension (crates/px4params-py)."""
 
 from collections.abc import Iterable
-from typing import Any, Self
+from typing import Any, ClassVar, Self, final
 
 class Schema:
     def __init__(self, types: dict[str, Any]) -> None: ...
@@ -12,6 +12,20 @@ class Schema:
     ) -> tuple[bytes, list[tuple[str, str]]]: ...
     @property
     def node_count(self) -> int: ...
+
+@final
+class StructValue:
+    """A decoded struct (``DataType.decode_struct``): its fields are attributes."""
+
+    def __getattr__(self, name: str) -> Any: ...
+    def _asdict(self) -> dict[str, Any]: ...
+    @property
+    def _fields(self) -> tuple[str, ...]: ...
+    @property
+    def _type(self) -> str: ...
+    def __eq__(self, other: object) -> bool: ...
+    def __ne__(self, other: object) -> bool: ...
+    __hash__: ClassVar[None]  # type: ignore[assignment]
 
 class DataType:
     """One compiled type (``Schema.get``); ``px4params.DataType`` subclasses it."""
@@ -31,6 +45,13 @@ class DataType:
         tao: bool = True,
         allow_trailing: bool = False,
     ) -> Any: ...
+    def decode_struct(
+        self,
+        data: bytes | bytearray | memoryview,
+        *,
+        tao: bool = True,
+        allow_trailing: bool = False,
+    ) -> StructValue: ...
     def encode_many(
         self, values: Iterable[Any], *, tao: bool = True, saturate: bool = False
     ) -> list[bytes]: ...

@@ -1,4 +1,4 @@
-//! `DataType.encode` and `DataType.decode` as CPython's own fast-call methods.
+//! `DataType.encode`, `decode` and `decode_struct` as CPython's own fast-call methods.
 //!
 //! A call with the value alone (`t.encode(value)`, `t.decode(data)`), by far the most common,
 //! goes straight to the codec: pyo3's argument parsing and call wrapper cost about a tenth of
@@ -24,11 +24,14 @@ use crate::DataType;
 /// The pyo3 methods replaced, for the calls the fast path does not take.
 static ENCODE: PyOnceLock<Py<PyAny>> = PyOnceLock::new();
 static DECODE: PyOnceLock<Py<PyAny>> = PyOnceLock::new();
+static DECODE_STRUCT: PyOnceLock<Py<PyAny>> = PyOnceLock::new();
 
-/// Replaces `encode` and `decode` of `DataType` (the class `ty`) with fast-call methods.
+/// Replaces `encode`, `decode` and `decode_struct` of `DataType` (the class `ty`) with
+/// fast-call methods.
 pub(crate) fn install(ty: &Bound<'_, PyType>) -> PyResult<()> {
     replace(ty, c"encode", encode, &ENCODE)?;
-    replace(ty, c"decode", decode, &DECODE)
+    replace(ty, c"decode", decode::<false>, &DECODE)?;
+    replace(ty, c"decode_struct", decode::<true>, &DECODE_STRUCT)
 }
 
 fn replace(
@@ -75,21 +78,27 @@ unsafe extern "C" fn encode(
     }
 }
 
-unsafe extern "C" fn decode(
+/// `decode`, or `decode_struct` when `STRUCT`.
+unsafe extern "C" fn decode<const STRUCT: bool>(
     slf: *mut ffi::PyObject,
     args: *const *mut ffi::PyObject,
     nargs: ffi::Py_ssize_t,
     kwnames: *mut ffi::PyObject,
 ) -> *mut ffi::PyObject {
+    let full = if STRUCT { &DECODE_STRUCT } else { &DECODE };
     // SAFETY: as for `encode`.
     unsafe {
-        fast_call(slf, args, nargs, kwnames, &DECODE, |t, data| {
+        fast_call(slf, args, nargs, kwnames, full, |t, data| {
+            let py = data.py();
+            let decode = |bytes: &[u8]| match STRUCT {
+                true => t.decode_struct_bytes(py, bytes, true, false),
+                false => t.decode_bytes(py, bytes, true, false),
+            };
             // `bytes` itself is read in place, with no new reference.
             if let Ok(bytes) = data.cast_exact::<PyBytes>() {
-                return t.decode_bytes(data.py(), bytes.as_bytes(), true, false);
+                return decode(bytes.as_bytes());
             }
-            let data = crate::bytes_of(data)?;
-            t.decode_bytes(data.py(), data.as_bytes(), true, false)
+            decode(crate::bytes_of(data)?.as_bytes())
         })
     }
 }

@@ -9,6 +9,7 @@ mod file;
 mod plain;
 mod program;
 mod store;
+mod structs;
 mod tables;
 mod transfer;
 mod values;
@@ -28,6 +29,7 @@ use pyo3::exceptions::{PyKeyError, PyTypeError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyBytes, PyDict, PyInt, PyList, PyString, PyTuple};
 
+use structs::StructValue;
 use values::{kind_name, scalar_to_py, LeafRows, PySink, PySource, ValueError};
 
 pyo3::import_exception!(px4params.errors, EncodeError);
@@ -161,6 +163,10 @@ pub(crate) struct Compiled {
     templates: Vec<std::sync::OnceLock<Option<Py<PyDict>>>>,
     /// Per node, made on first use: the struct's program, when it has one.
     programs: Vec<std::sync::OnceLock<Option<program::Program>>>,
+    /// Per node: the key of the type it is (empty for nodes that are no type of the model).
+    type_keys: Vec<String>,
+    /// Per node: how many named fields it has (structs; 0 for other nodes).
+    named_counts: Vec<u32>,
 }
 
 /// The most keys a new dict holds without growing (CPython's smallest table, 8 slots, is
@@ -168,17 +174,33 @@ pub(crate) struct Compiled {
 const SMALL_DICT: usize = 5;
 
 impl Compiled {
+    /// The named fields of struct `id` (padding is not named), as indices into
+    /// [`Layout::fields`]; none for other nodes.
+    fn named_fields(&self, id: NodeId) -> impl Iterator<Item = u32> + Clone + '_ {
+        let layout = self.layout.as_layout();
+        let fields = match layout.node(id).kind {
+            Kind::Struct { first, count } => first..first + count,
+            _ => 0..0,
+        };
+        fields.filter(move |&index| layout.fields[index as usize].role != Role::Padding)
+    }
+
+    /// How many named fields struct `id` has.
+    fn named_count(&self, id: NodeId) -> u32 {
+        self.named_counts[id as usize]
+    }
+
+    /// The key of the type node `id` is, e.g. `uavcan.protocol.NodeStatus.1.0`.
+    fn type_key(&self, id: NodeId) -> &str {
+        self.type_keys.get(id as usize).map_or("", String::as_str)
+    }
+
     /// A new dict for a value of struct `id`, to be filled in field order. A struct of more
     /// fields than a new dict holds without growing gets a copy of its template (its field
     /// names, values None, made on first use): replacing values costs less than growing.
     fn new_dict<'py>(&self, py: Python<'py>, id: NodeId) -> PyResult<Bound<'py, PyDict>> {
         let template = self.templates[id as usize].get_or_init(|| {
-            let layout = self.layout.as_layout();
-            let Kind::Struct { first, count } = layout.node(id).kind else {
-                return None;
-            };
-            let named = (first..first + count)
-                .filter(|&index| layout.fields[index as usize].role != Role::Padding);
+            let named = self.named_fields(id);
             if named.clone().count() <= SMALL_DICT {
                 return None;
             }
@@ -232,6 +254,18 @@ impl Schema {
             .collect();
         let templates = (0..view.nodes.len()).map(|_| Default::default()).collect();
         let programs = (0..view.nodes.len()).map(|_| Default::default()).collect();
+        let mut type_keys = vec![String::new(); view.nodes.len()];
+        for (key, &id) in &roots {
+            type_keys[id as usize].clone_from(key);
+        }
+        let named_counts = (0..view.nodes.len() as NodeId)
+            .map(|id| match view.node(id).kind {
+                Kind::Struct { first, count } => (first..first + count)
+                    .filter(|&i| view.fields[i as usize].role != Role::Padding)
+                    .count() as u32,
+                _ => 0,
+            })
+            .collect();
         Ok(Self {
             compiled: Arc::new(Compiled {
                 layout,
@@ -240,6 +274,8 @@ impl Schema {
                 names,
                 templates,
                 programs,
+                type_keys,
+                named_counts,
             }),
         })
     }
@@ -492,6 +528,10 @@ impl DataType {
         if let Some(n) = encoded {
             return Ok(PyBytes::new(py, &out[..n]));
         }
+        if let Ok(value) = value.cast_exact::<StructValue>() {
+            let plain = value.get().as_dict(py)?;
+            return self.encode_into(&plain, out, tao, saturate);
+        }
         // Not plain, or refused: the general path encodes it or words the error.
         let mut source = PySource::new(value.clone(), names, saturate);
         match encode(&layout, self.root, &mut source, out, options) {
@@ -510,11 +550,39 @@ impl DataType {
         allow_trailing: bool,
     ) -> PyResult<Bound<'py, PyAny>> {
         if let Some(program) = self.compiled.program(self.root) {
-            if let Some(value) = program.decode(py, &self.compiled, data, tao, allow_trailing)? {
+            let decoded =
+                program.decode::<Bound<PyDict>>(py, &self.compiled, data, tao, allow_trailing)?;
+            if let Some(value) = decoded {
                 return Ok(value);
             }
         }
         self.decode_from(py, data, tao, allow_trailing)
+    }
+
+    /// [`DataType::decode_bytes`] into a [`StructValue`]: by the program straight, else
+    /// made from the plain value.
+    fn decode_struct_bytes<'py>(
+        &self,
+        py: Python<'py>,
+        data: &[u8],
+        tao: bool,
+        allow_trailing: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        if !matches!(self.layout().node(self.root).kind, Kind::Struct { .. }) {
+            return Err(PyTypeError::new_err(format!(
+                "{}: a union has no struct value; decode() gives its one-key dict",
+                self.key
+            )));
+        }
+        if let Some(program) = self.compiled.program(self.root) {
+            let decoded =
+                program.decode::<program::Fields>(py, &self.compiled, data, tao, allow_trailing)?;
+            if let Some(value) = decoded {
+                return Ok(value);
+            }
+        }
+        let plain = self.decode_from(py, data, tao, allow_trailing)?;
+        structs::from_plain(&self.compiled, self.root, plain)
     }
 }
 
@@ -554,6 +622,19 @@ impl DataType {
     ) -> PyResult<Bound<'py, PyAny>> {
         let data = bytes_of(data)?;
         self.decode_bytes(data.py(), data.as_bytes(), tao, allow_trailing)
+    }
+
+    /// ``decode``, into a ``StructValue`` (fields as attributes, nested structs struct values
+    /// too) instead of a dict. The type must be a struct.
+    #[pyo3(signature = (data, *, tao = true, allow_trailing = false))]
+    fn decode_struct<'py>(
+        &self,
+        data: &Bound<'py, PyAny>,
+        tao: bool,
+        allow_trailing: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let data = bytes_of(data)?;
+        self.decode_struct_bytes(data.py(), data.as_bytes(), tao, allow_trailing)
     }
 
     /// ``encode`` of each value of ``values`` (any iterable), in one call: a list of bytes.
@@ -750,6 +831,7 @@ pub(crate) fn describe(layout: &Layout<'_>, leaf: &px4params_core::leaf::Leaf) -
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Schema>()?;
     m.add_class::<DataType>()?;
+    m.add_class::<StructValue>()?;
     fastcall::install(&m.py().get_type::<DataType>())?;
     m.add_class::<store::Store>()?;
     m.add_function(wrap_pyfunction!(file::check_store_file, m)?)?;

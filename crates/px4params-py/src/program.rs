@@ -13,6 +13,7 @@
 //! makes it give up; the general path then does the work or words the error.
 
 use std::slice;
+use std::sync::Arc;
 
 use px4params_core::bits::{read_bits, BitWriter};
 use px4params_core::codec::{read_scalar, scalar_bits, scalar_stream};
@@ -24,6 +25,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict, PyList, PyString, PyTuple};
 
 use crate::plain::{integer, is_primitive, item_at, scalar as plain_scalar, Entries};
+use crate::structs::StructValue;
 use crate::values::scalar_to_py;
 use crate::Compiled;
 
@@ -59,6 +61,103 @@ enum Len {
     /// `T[<=max]` with a `len_bits` prefix; `tail` when the array ends the value and its
     /// elements have 8 bits or more, so the tail-array optimization drops the prefix.
     Dynamic { max: u32, len_bits: u8, tail: bool },
+}
+
+/// What decoding makes of each struct: a dict (`decode`) or a struct value (`decode_struct`).
+pub(crate) trait Form<'py>: Sized {
+    /// An empty value of struct `node`.
+    fn begin(py: Python<'py>, compiled: &Arc<Compiled>, node: NodeId) -> PyResult<Self>;
+    /// Adds field `name` (its index in the layout), the fields coming in order.
+    fn put(
+        &mut self,
+        py: Python<'py>,
+        compiled: &Arc<Compiled>,
+        name: u32,
+        item: Bound<'py, PyAny>,
+    ) -> PyResult<()>;
+    /// The value, every field added.
+    fn end(
+        self,
+        py: Python<'py>,
+        compiled: &Arc<Compiled>,
+        node: NodeId,
+    ) -> PyResult<Bound<'py, PyAny>>;
+}
+
+impl<'py> Form<'py> for Bound<'py, PyDict> {
+    #[inline(always)]
+    fn begin(py: Python<'py>, compiled: &Arc<Compiled>, node: NodeId) -> PyResult<Self> {
+        compiled.new_dict(py, node)
+    }
+
+    #[inline(always)]
+    fn put(
+        &mut self,
+        py: Python<'py>,
+        compiled: &Arc<Compiled>,
+        name: u32,
+        item: Bound<'py, PyAny>,
+    ) -> PyResult<()> {
+        self.set_item(compiled.names[name as usize].bind(py), item)
+    }
+
+    fn end(self, _: Python<'py>, _: &Arc<Compiled>, _: NodeId) -> PyResult<Bound<'py, PyAny>> {
+        Ok(self.into_any())
+    }
+}
+
+/// A struct value's field values, filled in order.
+pub(crate) struct Fields<'py> {
+    values: Bound<'py, PyTuple>,
+    filled: usize,
+}
+
+impl<'py> Form<'py> for Fields<'py> {
+    #[inline(always)]
+    fn begin(py: Python<'py>, compiled: &Arc<Compiled>, node: NodeId) -> PyResult<Self> {
+        let count = compiled.named_count(node) as ffi::Py_ssize_t;
+        // SAFETY: a new tuple of empty slots, each filled below before the tuple is shared
+        // (one dropped half-filled frees only what it holds).
+        let values = unsafe {
+            Bound::from_owned_ptr_or_err(py, ffi::PyTuple_New(count))?.cast_into_unchecked()
+        };
+        Ok(Self { values, filled: 0 })
+    }
+
+    #[inline(always)]
+    fn put(
+        &mut self,
+        _: Python<'py>,
+        _: &Arc<Compiled>,
+        _: u32,
+        item: Bound<'py, PyAny>,
+    ) -> PyResult<()> {
+        // SAFETY: the program has one item per named field, the tuple's length; the slot is
+        // empty and takes the reference.
+        let status = unsafe {
+            ffi::PyTuple_SetItem(
+                self.values.as_ptr(),
+                self.filled as ffi::Py_ssize_t,
+                item.into_ptr(),
+            )
+        };
+        self.filled += 1;
+        if status == 0 {
+            Ok(())
+        } else {
+            Err(PyErr::fetch(self.values.py()))
+        }
+    }
+
+    fn end(
+        self,
+        py: Python<'py>,
+        compiled: &Arc<Compiled>,
+        node: NodeId,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let value = StructValue::new(compiled, node, self.values.unbind());
+        Ok(Bound::new(py, value)?.into_any())
+    }
 }
 
 /// A struct type's program.
@@ -110,11 +209,12 @@ impl Program {
         encoder.out.finish().ok()
     }
 
-    /// Decodes `data` into a new dict, as the general path builds it; `Ok(None)` to give up.
-    pub(crate) fn decode<'py>(
+    /// Decodes `data` into a new dict (`F` a dict) or struct value (`F` [`Fields`]), as the
+    /// general path builds it; `Ok(None)` to give up.
+    pub(crate) fn decode<'py, F: Form<'py>>(
         &self,
         py: Python<'py>,
-        compiled: &Compiled,
+        compiled: &Arc<Compiled>,
         data: &[u8],
         tao: bool,
         allow_trailing: bool,
@@ -137,13 +237,13 @@ impl Program {
             pos: 0,
             tao,
         };
-        let Some(dict) = decoder.fields(&mut self.steps.iter(), self.root)? else {
+        let Some(value) = decoder.fields::<F>(&mut self.steps.iter(), self.root)? else {
             return Ok(None);
         };
         if !allow_trailing && data.len() > decoder.pos.div_ceil(8) {
             return Ok(None);
         }
-        Ok(Some(dict.into_any()))
+        Ok(Some(value))
     }
 }
 
@@ -408,7 +508,7 @@ fn present(item: *mut ffi::PyObject) -> Option<*mut ffi::PyObject> {
 
 struct Decoder<'a, 'py> {
     py: Python<'py>,
-    compiled: &'a Compiled,
+    compiled: &'a Arc<Compiled>,
     /// The data, perhaps with zeros after it.
     data: &'a [u8],
     /// The data's own length in bits.
@@ -424,7 +524,7 @@ impl<'py> Decoder<'_, 'py> {
     }
 
     /// The next primitive, or `None` when the data ends first.
-    #[inline]
+    #[inline(always)]
     fn scalar(&mut self, kind: Kind) -> Option<Scalar> {
         let bits = scalar_bits(kind) as usize;
         if bits > self.bits_left() {
@@ -435,13 +535,13 @@ impl<'py> Decoder<'_, 'py> {
         Some(value)
     }
 
-    /// The steps of one struct (of type `node`), up to its [`Step::End`], into a new dict.
-    fn fields(
+    /// The steps of one struct (of type `node`), up to its [`Step::End`], into a new `F`.
+    fn fields<F: Form<'py>>(
         &mut self,
         steps: &mut slice::Iter<'_, Step>,
         node: NodeId,
-    ) -> PyResult<Option<Bound<'py, PyDict>>> {
-        let dict = self.compiled.new_dict(self.py, node)?;
+    ) -> PyResult<Option<Bound<'py, PyAny>>> {
+        let mut built = F::begin(self.py, self.compiled, node)?;
         while let Some(&step) = steps.next() {
             let (name, item) = match step {
                 Step::Leaf { name, kind } | Step::Version { name, kind, .. } => {
@@ -458,8 +558,8 @@ impl<'py> Decoder<'_, 'py> {
                     self.pos += usize::from(bits);
                     continue;
                 }
-                Step::Begin { name, node } => match self.fields(steps, node)? {
-                    Some(inner) => (name, inner.into_any()),
+                Step::Begin { name, node } => match self.fields::<F>(steps, node)? {
+                    Some(inner) => (name, inner),
                     None => return Ok(None),
                 },
                 Step::End => break,
@@ -468,9 +568,9 @@ impl<'py> Decoder<'_, 'py> {
                     None => return Ok(None),
                 },
             };
-            dict.set_item(self.compiled.names[name as usize].bind(self.py), item)?;
+            built.put(self.py, self.compiled, name, item)?;
         }
-        Ok(Some(dict))
+        built.end(self.py, self.compiled, node).map(Some)
     }
 
     fn array(&mut self, elem: Kind, len: Len) -> PyResult<Option<Bound<'py, PyAny>>> {

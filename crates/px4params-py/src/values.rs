@@ -11,6 +11,8 @@ use pyo3::types::{
     PyBool, PyByteArray, PyBytes, PyDict, PyFloat, PyInt, PyList, PySequence, PyString, PyTuple,
 };
 
+use crate::structs::StructValue;
+
 /// Why a Python value does not fit: a message for the user, or an exception from Python code.
 pub enum ValueError {
     /// The value has the wrong shape or kind (becomes `ValueShapeError`).
@@ -163,6 +165,12 @@ impl<'py> Source for PySource<'py, '_> {
     fn begin_struct(&mut self) -> Result<(), ValueError> {
         let obj = self.current();
         if obj.is_instance_of::<PyDict>() {
+            Ok(())
+        } else if let Ok(value) = obj.cast_exact::<StructValue>() {
+            // Taken as its dict, which replaces it on the stack.
+            let plain = value.get().as_dict(self.py)?.into_any();
+            self.stack.pop();
+            self.stack.push(Frame::Obj(plain));
             Ok(())
         } else {
             Err(shape("a dict (struct)", obj))

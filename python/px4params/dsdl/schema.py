@@ -16,7 +16,15 @@ if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
 else:
     from px4params._records import NamedTuple
 
-__all__ = ["DSDL_PATH_ENV", "DataType", "Leaf", "Schema", "load_schema", "to_json_value"]
+__all__ = [
+    "DSDL_PATH_ENV",
+    "DataType",
+    "Leaf",
+    "Schema",
+    "StructValue",
+    "load_schema",
+    "to_json_value",
+]
 
 #: Colon-separated extra DSDL root namespace folders, added to every schema loaded by default.
 DSDL_PATH_ENV = "PX4PARAMS_DSDL_PATH"
@@ -35,6 +43,13 @@ class Leaf(NamedTuple):
     value: int | float | bool
 
 
+#: A decoded struct whose fields are attributes (``DataType.decode_struct``), as pydronecan's
+#: decoded objects read: ``status.uptime_sec``. Frozen; like a named tuple, its own names start
+#: with an underscore: ``_asdict()`` (what ``decode`` gives), ``_fields``, ``_type`` (the key).
+#: Nested structs are struct values too, arrays lists, unions one-key dicts.
+StructValue = _native.StructValue
+
+
 class DataType(_native.DataType):
     """One type, compiled: DroneCAN (UAVCAN v0) serialization and leaf access.
 
@@ -42,9 +57,12 @@ class DataType(_native.DataType):
     may be left out), a union a dict with exactly one key, arrays lists (``uint8`` arrays also
     take ``bytes`` or ``str``), floats may be given as ``"nan"``, ``"inf"``, ``"-inf"``.
 
-    ``encode``, ``decode``, their batch forms ``encode_many`` and ``decode_many``, ``min_bits``,
-    ``max_bits`` and ``key`` are the compiled type's own (``px4params._native.DataType``):
-    called straight, with no Python in between.
+    ``decode_struct`` decodes a struct type into a :class:`StructValue` instead, its fields
+    attributes; ``encode`` takes one as its ``_asdict()``, in a dict too.
+
+    ``encode``, ``decode``, ``decode_struct``, the batch forms ``encode_many`` and
+    ``decode_many``, ``min_bits``, ``max_bits`` and ``key`` are the compiled type's own
+    (``px4params._native.DataType``): called straight, with no Python in between.
     """
 
     def __new__(
