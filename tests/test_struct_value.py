@@ -24,7 +24,13 @@ TYPES = SCHEMA.model["types"]
 STRUCTS = sorted(k for k, d in TYPES.items() if d["kind"] == "struct")
 STANDARD = [k for k in STRUCTS if TYPES[k].get("dialect") == "uavcan"]
 NODE_STATUS = SCHEMA["uavcan.protocol.NodeStatus"]
-STATUS = {"uptime_sec": 12345, "health": 1, "mode": 2, "sub_mode": 0, "vendor_specific_status_code": 7}
+STATUS = {
+    "uptime_sec": 12345,
+    "health": 1,
+    "mode": 2,
+    "sub_mode": 0,
+    "vendor_specific_status_code": 7,
+}
 
 
 def plain(value: Any) -> Any:
@@ -103,7 +109,8 @@ def test_nested_structs_are_struct_values_and_unions_one_key_dicts() -> None:
 def test_equality_is_by_type_and_fields() -> None:
     data = NODE_STATUS.encode(STATUS)
     a, b = NODE_STATUS.decode_struct(data), NODE_STATUS.decode_struct(data)
-    assert a == b and not a != b
+    assert a == b
+    assert (a != b) is False
     assert a != NODE_STATUS.decode_struct(NODE_STATUS.encode({**STATUS, "health": 2}))
     assert a != STATUS and a._asdict() == STATUS
     other = px4params.Schema(
@@ -119,7 +126,7 @@ def test_equality_is_by_type_and_fields() -> None:
 def test_unknown_fields_and_unions_are_refused_by_name() -> None:
     value = NODE_STATUS.decode_struct(NODE_STATUS.encode(STATUS))
     with pytest.raises(AttributeError) as raised:
-        value.uptime
+        _ = value.uptime
     assert str(raised.value) == (
         "uavcan.protocol.NodeStatus has no field 'uptime' (its fields: uptime_sec, health, "
         "mode, sub_mode, vendor_specific_status_code)"
