@@ -5,7 +5,7 @@ leaf of an instance by name against a dict lookup (a flat parameter table's cost
 message (it has no batch call); the ``decode_struct`` rows decode into a ``StructValue``, an
 object with the fields as attributes, as pydronecan's ``unpack`` does.
 
-    python benches/python_api.py [--runs 5] [--instructions]
+    python benches/python_api.py [--runs 5] [--instructions] [--rows TEXT ...]
 
 Each row is timed ``--runs`` times, ours and the baseline one after the other (this machine is
 noisy), best of timeit's repeats each time; the median of the runs is printed, with the ratio
@@ -193,6 +193,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--runs", type=int, default=5)
     parser.add_argument("--instructions", action="store_true")
+    parser.add_argument("--rows", nargs="+", metavar="TEXT", help="only rows naming any TEXT")
     parser.add_argument("--loop", nargs=3, metavar=("ROW", "SIDE", "N"), help=argparse.SUPPRESS)
     args = parser.parse_args()
     made = calls()
@@ -200,6 +201,8 @@ def main() -> None:
         row, side, n = args.loop
         made[row][int(side)].timer().timeit(int(n))
         return
+    if args.rows and not args.loop:
+        made = {row: c for row, c in made.items() if any(text in row for text in args.rows)}
     if args.instructions and not shutil.which("valgrind"):
         print("valgrind is missing: no instruction counts", file=sys.stderr)
         args.instructions = False
