@@ -63,9 +63,8 @@ PROBE_RS = """\
 #![no_std]
 // The exports pass Rust types: the probe is linked for its size, never called from C.
 #![allow(improper_ctypes_definitions)]
-use px4params_core::codec::{decode, encode, DecodeOptions, EncodeOptions};
+use px4params_core::codec::{decode_leaves, encode_leaves, DecodeOptions, EncodeOptions};
 use px4params_core::layout::Layout;
-use px4params_core::value::{LeafSink, LeafSource};
 use px4params_core::Scalar;
 
 #[cfg(not(feature = "all"))]
@@ -82,7 +81,7 @@ pub extern "C" fn probe_encode(
     let leaves = unsafe { core::slice::from_raw_parts(leaves, n) };
     let out = unsafe { core::slice::from_raw_parts_mut(out, cap) };
     let options = EncodeOptions { tao, saturate: false, keep_versions: false };
-    match encode(layout, root, &mut LeafSource::new(leaves), out, options) {
+    match encode_leaves(layout, root, leaves, out, options) {
         Ok(n) => n as isize,
         Err(_) => -1,
     }
@@ -95,9 +94,8 @@ pub extern "C" fn probe_decode(
 ) -> isize {
     let data = unsafe { core::slice::from_raw_parts(data, len) };
     let leaves = unsafe { core::slice::from_raw_parts_mut(leaves, n) };
-    let mut sink = LeafSink::new(leaves);
-    match decode(layout, root, data, &mut sink, DecodeOptions { tao, allow_trailing: false }) {
-        Ok(bits) => bits as isize,
+    match decode_leaves(layout, root, data, leaves, DecodeOptions { tao, allow_trailing: false }) {
+        Ok(decoded) => decoded.bits as isize,
         Err(_) => -1,
     }
 }
@@ -108,7 +106,7 @@ pub use px4params_ffi::*;
 #[cfg(feature = "all")]
 mod more {
     use super::*;
-    use px4params_core::leaf::{get_leaf, set_leaf, Target};
+    use px4params_core::leaf::{get_leaf_at, set_leaf_at};
     use px4params_core::scatter::Scattered;
     use px4params_core::transfer::{frames, receive};
 
@@ -118,7 +116,7 @@ mod more {
         out: &mut Scalar,
     ) -> isize {
         let data = unsafe { core::slice::from_raw_parts(data, len) };
-        match get_leaf(layout, root, data, Target::Index(k), false) {
+        match get_leaf_at(layout, root, data, k, false) {
             Ok((_, v)) => { *out = v; 0 }
             Err(_) => -1,
         }
@@ -132,7 +130,7 @@ mod more {
         let data = unsafe { core::slice::from_raw_parts(data, len) };
         let out = unsafe { core::slice::from_raw_parts_mut(out, cap) };
         let options = EncodeOptions { tao: false, saturate: false, keep_versions: false };
-        match set_leaf(layout, root, data, Target::Index(k), v, out, options) {
+        match set_leaf_at(layout, root, data, k, v, out, options) {
             Ok(n) => n as isize,
             Err(_) => -1,
         }
@@ -163,10 +161,9 @@ mod more {
         let leaves = unsafe { core::slice::from_raw_parts_mut(leaves, cap) };
         let Ok(received) = receive(frames_in, seed) else { return -1 };
         let stream = Scattered::new(&received.payload);
-        let mut sink = LeafSink::new(leaves);
         let options = DecodeOptions { tao: true, allow_trailing: false };
-        match decode(layout, root, &stream, &mut sink, options) {
-            Ok(bits) => bits as isize,
+        match decode_leaves(layout, root, &stream, leaves, options) {
+            Ok(decoded) => decoded.bits as isize,
             Err(_) => -1,
         }
     }

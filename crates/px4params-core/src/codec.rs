@@ -7,6 +7,8 @@ use crate::bits::{BitRead, BitReader, BitWriter};
 use crate::error::{Error, ErrorKind, Path, Step};
 use crate::layout::{Field, FlatItem, Kind, Layout, NodeId, Role, Segment, Span};
 use crate::scalar::{self, Scalar};
+use crate::value::{LeafError, LeafSink, LeafSource};
+use crate::walk;
 
 /// Nesting deeper than this is refused (DSDL cannot express recursion; a corrupt static
 /// layout could).
@@ -246,6 +248,52 @@ pub fn decode<R: BitRead + ?Sized, K: Sink>(
         });
     }
     Ok(end)
+}
+
+/// A value decoded into a flat leaf list: the bits it took and the leaves written.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Decoded {
+    /// Bits the value took.
+    pub bits: usize,
+    /// Leaves written to the front of the list.
+    pub leaves: usize,
+}
+
+/// Encodes the value given as a flat leaf list (see [`crate::value`]) into `out`; returns the
+/// length in bytes. Firmware builds (feature `compact`) do it through [`crate::walk`]: the
+/// same bytes, and the same error where a value has one fault (a value with a bad leaf whose
+/// buffer is also too small may report either).
+pub fn encode_leaves(
+    layout: &Layout<'_>,
+    root: NodeId,
+    leaves: &[Scalar],
+    out: &mut [u8],
+    options: EncodeOptions,
+) -> Result<usize, Error<LeafError>> {
+    if cfg!(feature = "compact") {
+        return walk::encode(layout, root, leaves, out, options);
+    }
+    encode(layout, root, &mut LeafSource::new(leaves), out, options)
+}
+
+/// Decodes a value of type `root` from `data` into the flat leaf list `leaves`. Firmware
+/// builds (feature `compact`) do it through [`crate::walk`]: the same leaves and errors.
+pub fn decode_leaves<R: BitRead + ?Sized>(
+    layout: &Layout<'_>,
+    root: NodeId,
+    data: &R,
+    leaves: &mut [Scalar],
+    options: DecodeOptions,
+) -> Result<Decoded, Error<LeafError>> {
+    if cfg!(feature = "compact") {
+        return walk::decode(layout, root, data, leaves, options);
+    }
+    let mut sink = LeafSink::new(leaves);
+    let bits = decode(layout, root, data, &mut sink, options)?;
+    Ok(Decoded {
+        bits,
+        leaves: sink.leaves().len(),
+    })
 }
 
 /// Internal failure marker: the error itself waits in the walker's slot, so that results stay
@@ -1093,7 +1141,7 @@ fn decode_items<B: BitReader>(reader: &mut B, items: &[FlatItem], slots: &mut [S
 
 /// A scalar from its raw bits.
 #[inline(always)]
-fn scalar_of(kind: Kind, raw: u64) -> Scalar {
+pub(crate) fn scalar_of(kind: Kind, raw: u64) -> Scalar {
     match kind {
         Kind::Uint { .. } => Scalar::Uint(raw),
         Kind::Int { bits, .. } => Scalar::Int(scalar::sign_extend(raw, bits.into())),

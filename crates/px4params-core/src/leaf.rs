@@ -8,10 +8,13 @@
 use core::convert::Infallible;
 
 use crate::bits::{copy_bits, BitRead};
-use crate::codec::{read_scalar, scalar_bits, scalar_raw, tail_optimized, LeafKind, MAX_DEPTH};
+use crate::codec::{
+    read_scalar, scalar_bits, scalar_raw, tail_optimized, EncodeOptions, LeafKind, MAX_DEPTH,
+};
 use crate::error::{Error, ErrorKind, Path, Step};
 use crate::layout::{FlatItem, Kind, Layout, NodeId, Role, Segment, Span};
 use crate::scalar::{self, Scalar};
+use crate::walk;
 
 /// Which leaf to access.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -47,51 +50,55 @@ pub fn locate<R: BitRead + ?Sized>(
     target: Target<'_>,
     tao: bool,
 ) -> Result<Leaf, LeafAccessError> {
-    let mut walk = Walk {
-        layout,
-        data,
-        pos: 0,
-        path: Path::default(),
-        leaves: 0,
-        depth: 0,
+    let path = match target {
+        Target::Index(k) => return locate_at(layout, root, data, k, tao),
+        Target::Path(path) => path,
     };
-    let found = match target {
-        Target::Index(k) => {
-            let mut k = k;
-            walk.by_index(root, tao, &mut k)?
-        }
-        Target::Path(path) => {
-            let mut tokens = Tokens { rest: path };
-            Some(walk.by_path(root, tao, &mut tokens)?)
-        }
-    };
-    match found {
-        Some(leaf) => {
-            let bits = leaf_bits(&leaf);
-            if leaf.bit_offset + bits as usize > data.bit_len() {
-                return Err(Error {
-                    kind: ErrorKind::Truncated {
-                        needed_bits: leaf.bit_offset + bits as usize,
-                        available_bits: data.bit_len(),
-                    },
-                    bit_offset: leaf.bit_offset,
-                    path: leaf.path,
-                });
-            }
-            Ok(leaf)
-        }
+    let mut walk = Walk::new(layout, data);
+    let leaf = walk.by_path(root, tao, &mut Tokens { rest: path })?;
+    within(data, leaf)
+}
+
+/// Finds leaf `[k]` in `data`, a value of type `root`.
+pub fn locate_at<R: BitRead + ?Sized>(
+    layout: &Layout<'_>,
+    root: NodeId,
+    data: &R,
+    k: usize,
+    tao: bool,
+) -> Result<Leaf, LeafAccessError> {
+    if cfg!(feature = "compact") {
+        return walk::locate(layout, root, data, k, tao).map(|(leaf, _)| leaf);
+    }
+    let mut walk = Walk::new(layout, data);
+    let mut left = k;
+    match walk.by_index(root, tao, &mut left)? {
+        Some(leaf) => within(data, leaf),
         None => Err(Error {
             kind: ErrorKind::NoSuchLeaf {
-                index: match target {
-                    Target::Index(k) => k,
-                    Target::Path(_) => 0,
-                },
+                index: k,
                 count: walk.leaves,
             },
             bit_offset: walk.pos,
             path: Path::default(),
         }),
     }
+}
+
+/// `leaf`, checked to lie within `data` (the walks pass over fixed-shape parts unread).
+fn within<R: BitRead + ?Sized>(data: &R, leaf: Leaf) -> Result<Leaf, LeafAccessError> {
+    let end = leaf.bit_offset + leaf_bits(&leaf) as usize;
+    if end > data.bit_len() {
+        return Err(Error {
+            kind: ErrorKind::Truncated {
+                needed_bits: end,
+                available_bits: data.bit_len(),
+            },
+            bit_offset: leaf.bit_offset,
+            path: leaf.path,
+        });
+    }
+    Ok(leaf)
 }
 
 /// Reads a located leaf's value. A tag or length reads as [`Scalar::Uint`].
@@ -106,14 +113,8 @@ pub fn read_leaf<R: BitRead + ?Sized>(
         LeafKind::Tag { bits, .. } => Scalar::Uint(read_uint(data, leaf.bit_offset, bits.into())),
         LeafKind::Len { bits: 0, array } => {
             // Tail-optimized: count the elements up to the end of the data.
-            let mut walk = Walk {
-                layout,
-                data,
-                pos: leaf.bit_offset,
-                path: leaf.path,
-                leaves: 0,
-                depth: 0,
-            };
+            let mut walk = Walk::new(layout, data);
+            (walk.pos, walk.path) = (leaf.bit_offset, leaf.path);
             let Kind::DynArray { elem, .. } = layout.node(array).kind else {
                 return Ok(Scalar::Uint(0));
             };
@@ -131,7 +132,26 @@ pub fn get_leaf<R: BitRead + ?Sized>(
     target: Target<'_>,
     tao: bool,
 ) -> Result<(Leaf, Scalar), LeafAccessError> {
+    if let Target::Index(k) = target {
+        return get_leaf_at(layout, root, data, k, tao);
+    }
     let leaf = locate(layout, root, data, target, tao)?;
+    let value = read_leaf(layout, data, &leaf, tao)?;
+    Ok((leaf, value))
+}
+
+/// Reads leaf `[k]` of `data`.
+pub fn get_leaf_at<R: BitRead + ?Sized>(
+    layout: &Layout<'_>,
+    root: NodeId,
+    data: &R,
+    k: usize,
+    tao: bool,
+) -> Result<(Leaf, Scalar), LeafAccessError> {
+    if cfg!(feature = "compact") {
+        return walk::locate(layout, root, data, k, tao);
+    }
+    let leaf = locate_at(layout, root, data, k, tao)?;
     let value = read_leaf(layout, data, &leaf, tao)?;
     Ok((leaf, value))
 }
@@ -148,41 +168,56 @@ pub fn set_leaf<R: BitRead + ?Sized>(
     target: Target<'_>,
     value: Scalar,
     out: &mut [u8],
-    options: crate::codec::EncodeOptions,
+    options: EncodeOptions,
 ) -> Result<usize, LeafAccessError> {
     let leaf = locate(layout, root, data, target, options.tao)?;
-    if let LeafKind::Scalar(kind) = leaf.kind {
-        let raw = scalar_raw(kind, value, options.saturate).map_err(|e| Error {
-            kind: ErrorKind::Scalar(e),
-            bit_offset: leaf.bit_offset,
-            path: leaf.path,
-        })?;
-        let len = data.bit_len() / 8;
-        if out.len() < len {
-            return Err(Error {
-                kind: ErrorKind::BufferTooSmall { needed: len },
-                bit_offset: 0,
-                path: Path::default(),
-            });
-        }
-        copy_bits(data, 0, out, 0, len * 8);
-        let bits = scalar_bits(kind);
-        crate::bits::write_bits(out, leaf.bit_offset, scalar::to_stream(raw, bits), bits);
-        return Ok(len);
-    }
-    let mut t = Transcoder {
-        layout,
-        old: Some(data),
-        rpos: 0,
-        out,
-        wpos: 0,
-        leaves: 0,
-        edit: Some((leaf.index, value)),
-        path: Path::default(),
-        depth: 0,
+    set_located(layout, root, data, &leaf, value, out, options)
+}
+
+/// [`set_leaf`] of leaf `[k]`.
+pub fn set_leaf_at<R: BitRead + ?Sized>(
+    layout: &Layout<'_>,
+    root: NodeId,
+    data: &R,
+    k: usize,
+    value: Scalar,
+    out: &mut [u8],
+    options: EncodeOptions,
+) -> Result<usize, LeafAccessError> {
+    let leaf = locate_at(layout, root, data, k, options.tao)?;
+    set_located(layout, root, data, &leaf, value, out, options)
+}
+
+fn set_located<R: BitRead + ?Sized>(
+    layout: &Layout<'_>,
+    root: NodeId,
+    data: &R,
+    leaf: &Leaf,
+    value: Scalar,
+    out: &mut [u8],
+    options: EncodeOptions,
+) -> Result<usize, LeafAccessError> {
+    let LeafKind::Scalar(kind) = leaf.kind else {
+        // A new tag or length changes the value's shape: written anew.
+        return walk::transcode(layout, root, data, leaf.index, value, out, options);
     };
-    t.node(root, options.tao, options.tao, true)?;
-    Ok(t.finish())
+    let raw = scalar_raw(kind, value, options.saturate).map_err(|e| Error {
+        kind: ErrorKind::Scalar(e),
+        bit_offset: leaf.bit_offset,
+        path: leaf.path,
+    })?;
+    let len = data.bit_len() / 8;
+    if out.len() < len {
+        return Err(Error {
+            kind: ErrorKind::BufferTooSmall { needed: len },
+            bit_offset: 0,
+            path: Path::default(),
+        });
+    }
+    copy_bits(data, 0, out, 0, len * 8);
+    let bits = scalar_bits(kind);
+    crate::bits::write_bits(out, leaf.bit_offset, scalar::to_stream(raw, bits), bits);
+    Ok(len)
 }
 
 /// Writes the default encoding of `root` into `out`: zeros, `p_version` set to the type's
@@ -193,19 +228,7 @@ pub fn encode_default(
     out: &mut [u8],
     tao: bool,
 ) -> Result<usize, LeafAccessError> {
-    let mut t: Transcoder<'_, '_, [u8]> = Transcoder {
-        layout,
-        old: None,
-        rpos: 0,
-        out,
-        wpos: 0,
-        leaves: 0,
-        edit: None,
-        path: Path::default(),
-        depth: 0,
-    };
-    t.node(root, tao, tao, false)?;
-    Ok(t.finish())
+    walk::encode_default(layout, root, out, tao)
 }
 
 /// Where leaf `[k]` of a value encoded without tail array optimization is, found by
@@ -241,6 +264,9 @@ pub fn seek<R: BitRead + ?Sized>(
     data: &R,
     k: usize,
 ) -> Option<Position> {
+    if cfg!(feature = "compact") {
+        return walk::seek(layout, root, data, k);
+    }
     let mut seek = Seek {
         layout,
         data,
@@ -463,7 +489,18 @@ struct Walk<'l, 'd, R: BitRead + ?Sized> {
     depth: usize,
 }
 
-impl<R: BitRead + ?Sized> Walk<'_, '_, R> {
+impl<'l, 'd, R: BitRead + ?Sized> Walk<'l, 'd, R> {
+    fn new(layout: &'l Layout<'l>, data: &'d R) -> Self {
+        Self {
+            layout,
+            data,
+            pos: 0,
+            path: Path::default(),
+            leaves: 0,
+            depth: 0,
+        }
+    }
+
     #[cold]
     #[inline(never)]
     fn fail(&self, kind: ErrorKind<Infallible>) -> LeafAccessError {
@@ -833,253 +870,5 @@ impl<R: BitRead + ?Sized> Walk<'_, '_, R> {
         };
         self.depth -= 1;
         Ok(leaf)
-    }
-}
-
-/// Re-encodes a value while reading it, optionally replacing one leaf; with no old data it
-/// writes the default value.
-struct Transcoder<'l, 'o, R: BitRead + ?Sized> {
-    layout: &'l Layout<'l>,
-    old: Option<&'o R>,
-    rpos: usize,
-    out: &'o mut [u8],
-    wpos: usize,
-    leaves: usize,
-    edit: Option<(usize, Scalar)>,
-    path: Path,
-    depth: usize,
-}
-
-impl<R: BitRead + ?Sized> Transcoder<'_, '_, R> {
-    #[cold]
-    #[inline(never)]
-    fn fail(&self, kind: ErrorKind<Infallible>) -> LeafAccessError {
-        Error {
-            kind,
-            bit_offset: self.rpos,
-            path: self.path,
-        }
-    }
-
-    fn finish(self) -> usize {
-        let bytes = self.wpos.div_ceil(8);
-        crate::bits::zero_bits(self.out, self.wpos, bytes * 8 - self.wpos);
-        bytes
-    }
-
-    fn write(&mut self, raw: u64, bits: u32) -> Result<(), LeafAccessError> {
-        if bits == 0 {
-            return Ok(());
-        }
-        if self.wpos + bits as usize > self.out.len() * 8 {
-            return Err(self.fail(ErrorKind::BufferTooSmall {
-                needed: (self.wpos + bits as usize).div_ceil(8),
-            }));
-        }
-        crate::bits::write_bits(self.out, self.wpos, scalar::to_stream(raw, bits), bits);
-        self.wpos += bits as usize;
-        Ok(())
-    }
-
-    fn read(&mut self, bits: u32) -> Result<u64, LeafAccessError> {
-        let Some(old) = self.old else { return Ok(0) };
-        if bits == 0 {
-            return Ok(0);
-        }
-        if self.rpos + bits as usize > old.bit_len() {
-            return Err(self.fail(ErrorKind::Truncated {
-                needed_bits: self.rpos + bits as usize,
-                available_bits: old.bit_len(),
-            }));
-        }
-        let v = read_uint(old, self.rpos, bits);
-        self.rpos += bits as usize;
-        Ok(v)
-    }
-
-    /// The replacement for the leaf being read now, if it is the edited one.
-    fn edited(&mut self) -> Option<Scalar> {
-        let k = self.leaves;
-        self.leaves += 1;
-        match self.edit {
-            Some((index, value)) if index == k => Some(value),
-            _ => None,
-        }
-    }
-
-    fn new_count(&self, value: Scalar, limit: u32) -> Result<u32, LeafAccessError> {
-        match value {
-            Scalar::Uint(v) if v < u64::from(limit) => Ok(v as u32),
-            Scalar::Int(v) if v >= 0 && (v as u64) < u64::from(limit) => Ok(v as u32),
-            _ => Err(
-                self.fail(ErrorKind::Scalar(scalar::ScalarError::OutOfRange {
-                    value,
-                    min: Scalar::Uint(0),
-                    max: Scalar::Uint(u64::from(limit) - 1),
-                })),
-            ),
-        }
-    }
-
-    /// Skips an old value that is being dropped.
-    fn skip_old(&mut self, id: NodeId, tao: bool) -> Result<(), LeafAccessError> {
-        let Some(old) = self.old else { return Ok(()) };
-        let mut walk = Walk {
-            layout: self.layout,
-            data: old,
-            pos: self.rpos,
-            path: self.path,
-            leaves: 0,
-            depth: self.depth,
-        };
-        walk.skip(id, tao)?;
-        self.rpos = walk.pos;
-        Ok(())
-    }
-
-    /// `rtao`/`wtao`: the tail-array flag on the read and on the write side (they differ when
-    /// an enclosing array's length changes). `reading`: false writes the default value.
-    fn node(
-        &mut self,
-        id: NodeId,
-        rtao: bool,
-        wtao: bool,
-        reading: bool,
-    ) -> Result<(), LeafAccessError> {
-        self.depth += 1;
-        if self.depth > MAX_DEPTH {
-            return Err(self.fail(ErrorKind::TooDeep));
-        }
-        let layout = self.layout;
-        match layout.node(id).kind {
-            kind @ (Kind::Uint { .. } | Kind::Int { .. } | Kind::Float { .. } | Kind::Bool) => {
-                let bits = scalar_bits(kind);
-                let raw = if reading {
-                    let raw = self.read(bits)?;
-                    match self.edited() {
-                        Some(v) => scalar_raw(kind, v, false)
-                            .map_err(|e| self.fail(ErrorKind::Scalar(e)))?,
-                        None => raw,
-                    }
-                } else {
-                    0
-                };
-                self.write(raw, bits)?;
-            }
-            Kind::Void { bits } => {
-                if reading {
-                    self.read(bits.into())?;
-                }
-                self.write(0, bits.into())?;
-            }
-            Kind::Struct { first, count } => {
-                for i in 0..count {
-                    let field = layout.fields[(first + i) as usize];
-                    let last = i + 1 == count;
-                    self.path.push(Step::Field(first + i));
-                    match field.role {
-                        Role::Version(v) if !reading => {
-                            self.write(v.into(), scalar_bits(layout.node(field.node).kind))?
-                        }
-                        _ => self.node(field.node, rtao && last, wtao && last, reading)?,
-                    }
-                    self.path.pop();
-                }
-            }
-            Kind::Union {
-                first,
-                count,
-                tag_bits,
-            } => {
-                let (old_tag, new_tag) = if reading {
-                    let old = self.read(tag_bits.into())?;
-                    if old >= u64::from(count) {
-                        return Err(self.fail(ErrorKind::BadUnionTag {
-                            tag: old,
-                            variants: count,
-                        }));
-                    }
-                    let new = match self.edited() {
-                        Some(v) => self.new_count(v, count)?,
-                        None => old as u32,
-                    };
-                    (old as u32, new)
-                } else {
-                    (0, 0)
-                };
-                self.write(new_tag.into(), tag_bits.into())?;
-                let variant = |t: u32| layout.fields[(first + t) as usize].node;
-                self.path.push(Step::Field(first + new_tag));
-                if reading && old_tag != new_tag {
-                    self.skip_old(variant(old_tag), rtao)?;
-                    self.node(variant(new_tag), rtao, wtao, false)?;
-                } else {
-                    self.node(variant(new_tag), rtao, wtao, reading)?;
-                }
-                self.path.pop();
-            }
-            Kind::Array { elem, len } => {
-                for i in 0..len {
-                    let last = i + 1 == len;
-                    self.path.push(Step::Index(i));
-                    self.node(elem, rtao && last, wtao && last, reading)?;
-                    self.path.pop();
-                }
-            }
-            Kind::DynArray {
-                elem,
-                max,
-                len_bits,
-            } => {
-                let rtail = tail_optimized(layout, elem, rtao);
-                let wtail = tail_optimized(layout, elem, wtao);
-                let (old_n, new_n) = if reading {
-                    let old_n = if rtail {
-                        let old = self.old.expect("reading implies old data");
-                        let mut walk = Walk {
-                            layout,
-                            data: old,
-                            pos: self.rpos,
-                            path: self.path,
-                            leaves: 0,
-                            depth: self.depth,
-                        };
-                        let n = walk.tail_count(elem, rtao)?;
-                        if n > max as usize {
-                            return Err(self.fail(ErrorKind::ArrayTooLong { len: n as u64, max }));
-                        }
-                        n as u32
-                    } else {
-                        let n = self.read(len_bits.into())?;
-                        if n > u64::from(max) {
-                            return Err(self.fail(ErrorKind::ArrayTooLong { len: n, max }));
-                        }
-                        n as u32
-                    };
-                    let new_n = match self.edited() {
-                        Some(v) => self.new_count(v, max + 1)?,
-                        None => old_n,
-                    };
-                    (old_n, new_n)
-                } else {
-                    (0, 0)
-                };
-                if !wtail {
-                    self.write(new_n.into(), len_bits.into())?;
-                }
-                for i in 0..new_n {
-                    let r = !rtail && rtao && i + 1 == old_n;
-                    let w = !wtail && wtao && i + 1 == new_n;
-                    self.path.push(Step::Index(i));
-                    self.node(elem, r, w, reading && i < old_n)?;
-                    self.path.pop();
-                }
-                for i in new_n..old_n {
-                    self.skip_old(elem, !rtail && rtao && i + 1 == old_n)?;
-                }
-            }
-        }
-        self.depth -= 1;
-        Ok(())
     }
 }

@@ -31,6 +31,7 @@ pub mod table;
 pub mod transfer;
 pub mod translate;
 pub mod value;
+pub mod walk;
 
 pub use codec::{decode, encode, DecodeOptions, EncodeOptions};
 pub use error::{Error, ErrorKind, Path};

@@ -646,9 +646,7 @@ where
         let data = self.region(&def, index, which);
         match leaf::seek(layout, def.root, data, k) {
             Some(p) => Ok(p.read(data)),
-            None => self
-                .get_leaf(layout, param, instance, which, Target::Index(k))
-                .map(|(_, value)| value),
+            None => Ok(leaf::get_leaf_at(layout, def.root, data, k, false)?.1),
         }
     }
 
@@ -667,15 +665,36 @@ where
         value: Scalar,
         saturate: bool,
     ) -> Result<()> {
+        let k = match target {
+            Target::Index(k) => k,
+            Target::Path(_) => {
+                let def = self.def(param)?;
+                let index = self.present_slot(&def, instance)?;
+                let data = self.region(&def, index, which);
+                leaf::locate(layout, def.root, data, target, false)?.index
+            }
+        };
+        self.set_leaf_at(layout, param, instance, which, k, value, saturate)
+    }
+
+    /// [`Store::set_leaf`] of leaf `[k]`.
+    #[allow(clippy::too_many_arguments)] // one call names one leaf of one instance: all needed
+    pub fn set_leaf_at(
+        &mut self,
+        layout: &Layout<'_>,
+        param: u32,
+        instance: u16,
+        which: Which,
+        k: usize,
+        value: Scalar,
+        saturate: bool,
+    ) -> Result<()> {
         let def = self.def(param)?;
         let index = self.present_slot(&def, instance)?;
         let data = self.region(&def, index, which);
-        let fast = match target {
-            Target::Index(k) => self
-                .seek(layout, &def, param, data, k)
-                .filter(|p| matches!(p.kind, LeafKind::Scalar(_)) && !p.version),
-            Target::Path(_) => None,
-        };
+        let fast = self
+            .seek(layout, &def, param, data, k)
+            .filter(|p| matches!(p.kind, LeafKind::Scalar(_)) && !p.version);
         let (bit_offset, kind) = match fast {
             Some(Position {
                 bit_offset,
@@ -683,7 +702,7 @@ where
                 ..
             }) => (bit_offset, Some(kind)),
             _ => {
-                let found = leaf::locate(layout, def.root, data, target, false)?;
+                let found = leaf::locate_at(layout, def.root, data, k, false)?;
                 if is_version(layout, &found.path) {
                     return Err(StoreError::VersionLeaf { path: found.path });
                 }
@@ -707,7 +726,7 @@ where
                 // Only the fast path gets here: find the field path for the error.
                 Err(e) => {
                     let data = self.region(&def, index, which);
-                    let found = leaf::locate(layout, def.root, data, target, false)?;
+                    let found = leaf::locate_at(layout, def.root, data, k, false)?;
                     return Err(StoreError::Codec(Error {
                         kind: ErrorKind::Scalar(e),
                         bit_offset,
@@ -734,11 +753,11 @@ where
         let (head, tail) = self.bytes.as_mut().split_at_mut(scratch);
         let (start, len) = span_of(&def, self.slots.as_ref()[index], index, which);
         let options = EncodeOptions { saturate, ..STORED };
-        let new_len = leaf::set_leaf(
+        let new_len = leaf::set_leaf_at(
             layout,
             def.root,
             &head[start..start + len],
-            target,
+            k,
             value,
             &mut tail[..end - scratch],
             options,
@@ -839,8 +858,7 @@ where
         let (head, tail) = self.bytes.as_mut().split_at_mut(scratch);
         let base = &head[from..from + len];
         let out = &mut tail[..def.slot_bytes as usize];
-        let written =
-            crate::translate::translate(layout, old, data, def.root, base, out, &mut |_| {})?;
+        let written = crate::translate::translate_value(layout, old, data, def.root, base, out)?;
         if !check_only {
             self.commit(param, &def, instance, which, written);
         }
@@ -1130,6 +1148,9 @@ fn is_version(layout: &Layout<'_>, path: &Path) -> bool {
 /// Checks that `data` is exactly one stored value of `root` whose `p_version` fields hold the
 /// version.
 fn check_encoded(layout: &Layout<'_>, root: NodeId, data: &[u8]) -> Result<()> {
+    if cfg!(feature = "compact") {
+        return crate::walk::check_versions(layout, root, data).map_err(StoreError::Codec);
+    }
     let mut sink = VersionCheck { layout };
     let options = codec::DecodeOptions {
         tao: false,

@@ -94,6 +94,23 @@ pub fn translate<R: BitRead + ?Sized, B: BitRead + ?Sized>(
     codec::encode(layout, new, &mut source, out, options)
 }
 
+/// [`translate`] without the report: what a store does with an older version's value.
+/// Firmware builds (feature `compact`) translate through [`crate::walk`] (the same bytes and
+/// errors; no field paths are built).
+pub fn translate_value<R: BitRead + ?Sized, B: BitRead + ?Sized>(
+    layout: &Layout<'_>,
+    old: NodeId,
+    old_data: &R,
+    new: NodeId,
+    base: &B,
+    out: &mut [u8],
+) -> core::result::Result<usize, Error<TranslateError>> {
+    if cfg!(feature = "compact") {
+        return crate::walk::translate(layout, old, old_data, new, base, out);
+    }
+    translate(layout, old, old_data, new, base, out, &mut |_| {})
+}
+
 /// A dotted path being built, in a fixed buffer.
 #[derive(Clone, Copy)]
 struct PathBuf {

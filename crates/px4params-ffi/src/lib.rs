@@ -20,7 +20,6 @@ use core::slice;
 
 use px4params_core::file::{self, ApplyError, FileName, SaveError, WriteError};
 use px4params_core::layout::{Field, FlatItem, Layout, Node, Segment};
-use px4params_core::leaf::Target;
 use px4params_core::store::{ParamDef, Slot, Store, StoreError, Which};
 use px4params_core::{ErrorKind, Scalar};
 
@@ -468,12 +467,12 @@ pub unsafe extern "C" fn px4p_get_leaf(
         return PX4P_ERR_ARGUMENT;
     };
     let layout = open.layout();
-    let target = Target::Index(leaf as usize);
+    let k = leaf as usize;
     match open
         .store
-        .get_leaf(&layout, param, instance, which(which_default), target)
+        .read(&layout, param, instance, which(which_default), k)
     {
-        Ok((_, scalar)) => {
+        Ok(scalar) => {
             *out = value_of(scalar);
             0
         }
@@ -500,11 +499,10 @@ pub unsafe extern "C" fn px4p_set_leaf(
         return PX4P_ERR_ARGUMENT;
     };
     let layout = open.layout();
-    let target = Target::Index(leaf as usize);
-    let w = which(which_default);
+    let (k, w) = (leaf as usize, which(which_default));
     let result = open
         .store
-        .set_leaf(&layout, param, instance, w, target, scalar, saturate != 0);
+        .set_leaf_at(&layout, param, instance, w, k, scalar, saturate != 0);
     result.map_or_else(store_code, |()| 0)
 }
 

@@ -1,9 +1,11 @@
 //! Layouts for the tests and benchmarks, built by hand as the Python loader would build them.
 #![allow(dead_code)]
 
+use proptest::prelude::*;
 use px4params_core::compile::OwnedLayout;
 use px4params_core::layout::{NodeId, Role};
 use px4params_core::Cast::{Saturated, Truncated};
+use px4params_core::{Cast, Scalar};
 
 /// The talk's INA238 type (`px.Ina238.1.0`) and its `Bus` union.
 pub fn ina238(l: &mut OwnedLayout) -> NodeId {
@@ -163,4 +165,110 @@ pub fn kitchen_sink(l: &mut OwnedLayout) -> NodeId {
         ("tail", tail, Role::Data),
     ])
     .unwrap()
+}
+
+/// A random type, built into a layout by [`Ty::build`].
+#[derive(Clone, Debug)]
+pub enum Ty {
+    Uint(u32),
+    Int(u32),
+    Float(u32),
+    Bool,
+    Void(u32),
+    /// Fields; `true` makes a `uint` field a `p_version`.
+    Struct(Vec<(Ty, bool)>),
+    Union(Vec<Ty>),
+    Array(Box<Ty>, u32),
+    Dyn(Box<Ty>, u32),
+}
+
+impl Ty {
+    pub fn has_dyn(&self) -> bool {
+        match self {
+            Ty::Dyn(..) => true,
+            Ty::Struct(fields) => fields.iter().any(|(t, _)| t.has_dyn()),
+            Ty::Union(variants) => variants.iter().any(Ty::has_dyn),
+            Ty::Array(t, _) => t.has_dyn(),
+            _ => false,
+        }
+    }
+
+    pub fn build(&self, l: &mut OwnedLayout) -> NodeId {
+        match self {
+            Ty::Uint(b) => l.uint(*b, Cast::Saturated).unwrap(),
+            Ty::Int(b) => l.int(*b, Cast::Truncated).unwrap(),
+            Ty::Float(b) => l.float(*b, Cast::Saturated).unwrap(),
+            Ty::Bool => l.boolean(),
+            Ty::Void(b) => l.void(*b).unwrap(),
+            Ty::Struct(fields) => {
+                let built: Vec<(String, NodeId, Role)> = fields
+                    .iter()
+                    .enumerate()
+                    .map(|(i, (t, version))| {
+                        let role = match t {
+                            Ty::Void(_) => Role::Padding,
+                            Ty::Uint(_) if *version => Role::Version(1),
+                            _ => Role::Data,
+                        };
+                        (format!("f{i}"), t.build(l), role)
+                    })
+                    .collect();
+                let refs: Vec<(&str, NodeId, Role)> = built
+                    .iter()
+                    .map(|(n, id, r)| (n.as_str(), *id, *r))
+                    .collect();
+                l.structure(&refs).unwrap()
+            }
+            Ty::Union(variants) => {
+                let built: Vec<(String, NodeId)> = variants
+                    .iter()
+                    .enumerate()
+                    .map(|(i, t)| (format!("v{i}"), t.build(l)))
+                    .collect();
+                let refs: Vec<(&str, NodeId)> =
+                    built.iter().map(|(n, id)| (n.as_str(), *id)).collect();
+                l.union(&refs).unwrap()
+            }
+            Ty::Array(t, n) => {
+                let e = t.build(l);
+                l.array(e, *n).unwrap()
+            }
+            Ty::Dyn(t, n) => {
+                let e = t.build(l);
+                l.dyn_array(e, *n).unwrap()
+            }
+        }
+    }
+}
+
+pub fn primitive() -> impl Strategy<Value = Ty> {
+    prop_oneof![
+        (1u32..=64).prop_map(Ty::Uint),
+        (1u32..=12).prop_map(Ty::Uint),
+        (2u32..=64).prop_map(Ty::Int),
+        prop_oneof![Just(16u32), Just(32), Just(64)].prop_map(Ty::Float),
+        Just(Ty::Bool),
+    ]
+}
+
+pub fn any_type() -> impl Strategy<Value = Ty> {
+    primitive().prop_recursive(4, 40, 5, |inner| {
+        let field = prop_oneof![
+            4 => (inner.clone(), any::<bool>()),
+            1 => (1u32..=9).prop_map(|b| (Ty::Void(b), false)),
+        ];
+        prop_oneof![
+            3 => proptest::collection::vec(field, 0..5).prop_map(Ty::Struct),
+            2 => proptest::collection::vec(inner.clone(), 2..5).prop_map(Ty::Union),
+            1 => (inner.clone(), 1u32..4).prop_map(|(t, n)| Ty::Array(Box::new(t), n)),
+            1 => (inner, 1u32..4).prop_map(|(t, n)| Ty::Dyn(Box::new(t), n)),
+        ]
+    })
+}
+
+pub fn same_scalar(a: Scalar, b: Scalar) -> bool {
+    match (a, b) {
+        (Scalar::Float(x), Scalar::Float(y)) => x.to_bits() == y.to_bits(),
+        _ => a == b,
+    }
 }
