@@ -23,6 +23,11 @@ pub trait BitRead {
     /// A reader of the bits from `offset` on, one field after another: what a decoder uses,
     /// as it reads forwards. It gives the same bits as [`BitRead::read_bits`].
     fn reader(&self, offset: usize) -> Self::Reader<'_>;
+
+    /// Byte `index` (`index < self.bit_len() / 8`), as the small walk ([`crate::walk`]) reads.
+    fn byte(&self, index: usize) -> u8 {
+        self.read_bits(index * 8, 8) as u8
+    }
 }
 
 /// Reads a [`BitRead`] forwards from a position; made by [`BitRead::reader`]. The caller
@@ -95,6 +100,11 @@ impl BitRead for [u8] {
             pos: offset,
         }
     }
+
+    #[inline]
+    fn byte(&self, index: usize) -> u8 {
+        self[index]
+    }
 }
 
 /// Mask of the low `n` bits, `n <= 64`.
@@ -122,8 +132,8 @@ pub fn read_bits(data: &[u8], offset: usize, n: u32) -> u64 {
     let shift = (offset % 8) as u32;
     let last = (offset + n as usize - 1) / 8;
     // Fast path: the bits (plus the leading skipped bits) fit a 64-bit window; near the end
-    // of the data the window is zero-filled.
-    if shift + n <= 64 {
+    // of the data the window is zero-filled. Firmware builds (`compact`) take the loop alone.
+    if !cfg!(feature = "compact") && shift + n <= 64 {
         let word = if let Some(bytes) = data.get(first..first + 8) {
             let mut window = [0u8; 8];
             window.copy_from_slice(bytes);
@@ -156,8 +166,9 @@ pub fn write_bits(out: &mut [u8], offset: usize, value: u64, n: u32) {
     debug_assert!((1..=64).contains(&n));
     let first = offset / 8;
     let shift = (offset % 8) as u32;
-    // Fast path: read-modify-write one 64-bit window holding all the bits.
-    if shift + n <= 64 && first + 8 <= out.len() {
+    // Fast path: read-modify-write one 64-bit window holding all the bits (not in firmware
+    // builds, `compact`, which take the loop alone).
+    if !cfg!(feature = "compact") && shift + n <= 64 && first + 8 <= out.len() {
         let mut window = [0u8; 8];
         window.copy_from_slice(&out[first..first + 8]);
         let word = u64::from_be_bytes(window);

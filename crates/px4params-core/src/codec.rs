@@ -1179,7 +1179,8 @@ pub fn scalar_bits(kind: Kind) -> u32 {
 }
 
 /// Raw bits of `value` for a scalar kind, honouring the cast mode.
-#[inline]
+#[cfg_attr(not(feature = "compact"), inline)]
+#[cfg_attr(feature = "compact", inline(never))]
 pub(crate) fn scalar_raw(
     kind: Kind,
     value: Scalar,

@@ -644,7 +644,13 @@ where
         let def = self.def(param)?;
         let index = self.present_slot(&def, instance)?;
         let data = self.region(&def, index, which);
-        match leaf::seek(layout, def.root, data, k) {
+        // Firmware builds find and read the leaf in one walk; hosts seek first (faster).
+        let sought = if cfg!(feature = "compact") {
+            None
+        } else {
+            leaf::seek(layout, def.root, data, k)
+        };
+        match sought {
             Some(p) => Ok(p.read(data)),
             None => Ok(leaf::get_leaf_at(layout, def.root, data, k, false)?.1),
         }
@@ -692,40 +698,24 @@ where
         let def = self.def(param)?;
         let index = self.present_slot(&def, instance)?;
         let data = self.region(&def, index, which);
-        let fast = self
-            .seek(layout, &def, param, data, k)
-            .filter(|p| matches!(p.kind, LeafKind::Scalar(_)) && !p.version);
-        let (bit_offset, kind) = match fast {
+        // Hosts seek (through the leaf table) first and find the leaf's path only for an
+        // error; firmware builds find it in one walk.
+        let fast = match cfg!(feature = "compact") {
+            true => None,
+            false => self
+                .seek(layout, &def, param, data, k)
+                .filter(|p| matches!(p.kind, LeafKind::Scalar(_)) && !p.version),
+        };
+        // Where the leaf is, and for a primitive leaf, its kind and new bits.
+        let (bit_offset, scalar) = match fast {
             Some(Position {
                 bit_offset,
                 kind: LeafKind::Scalar(kind),
                 ..
-            }) => (bit_offset, Some(kind)),
-            _ => {
-                let found = leaf::locate_at(layout, def.root, data, k, false)?;
-                if is_version(layout, &found.path) {
-                    return Err(StoreError::VersionLeaf { path: found.path });
-                }
-                match found.kind {
-                    LeafKind::Scalar(kind) => {
-                        // Convert here, where the path for the error is known.
-                        codec::scalar_raw(kind, value, saturate).map_err(|e| Error {
-                            kind: ErrorKind::Scalar(e),
-                            bit_offset: found.bit_offset,
-                            path: found.path,
-                        })?;
-                        (found.bit_offset, Some(kind))
-                    }
-                    _ => (found.bit_offset, None),
-                }
-            }
-        };
-        if let Some(kind) = kind {
-            let raw = match codec::scalar_raw(kind, value, saturate) {
-                Ok(raw) => raw,
-                // Only the fast path gets here: find the field path for the error.
+            }) => match codec::scalar_raw(kind, value, saturate) {
+                Ok(raw) => (bit_offset, Some((kind, raw))),
+                // Find the field path for the error.
                 Err(e) => {
-                    let data = self.region(&def, index, which);
                     let found = leaf::locate_at(layout, def.root, data, k, false)?;
                     return Err(StoreError::Codec(Error {
                         kind: ErrorKind::Scalar(e),
@@ -733,7 +723,27 @@ where
                         path: found.path,
                     }));
                 }
-            };
+            },
+            _ => {
+                let found = leaf::locate_at(layout, def.root, data, k, false)?;
+                if is_version(layout, &found.path) {
+                    return Err(StoreError::VersionLeaf { path: found.path });
+                }
+                let scalar = match found.kind {
+                    LeafKind::Scalar(kind) => {
+                        let raw = codec::scalar_raw(kind, value, saturate).map_err(|e| Error {
+                            kind: ErrorKind::Scalar(e),
+                            bit_offset: found.bit_offset,
+                            path: found.path,
+                        })?;
+                        Some((kind, raw))
+                    }
+                    _ => None,
+                };
+                (found.bit_offset, scalar)
+            }
+        };
+        if let Some((kind, raw)) = scalar {
             let follows = which == Which::Default && self.values_equal(&def, index);
             let bits = codec::scalar_bits(kind);
             let stream = scalar::to_stream(raw, bits);
@@ -753,7 +763,8 @@ where
         let (head, tail) = self.bytes.as_mut().split_at_mut(scratch);
         let (start, len) = span_of(&def, self.slots.as_ref()[index], index, which);
         let options = EncodeOptions { saturate, ..STORED };
-        let new_len = leaf::set_leaf_at(
+        // A tag or a length: the value is written anew.
+        let new_len = crate::walk::transcode(
             layout,
             def.root,
             &head[start..start + len],

@@ -16,7 +16,7 @@
 
 use core::convert::Infallible;
 
-use crate::bits::{write_bits, zero_bits, BitRead};
+use crate::bits::BitRead;
 use crate::codec::{
     scalar_bits, scalar_of, scalar_raw, tail_optimized, DecodeOptions, Decoded, EncodeOptions,
     LeafKind, MAX_DEPTH,
@@ -24,7 +24,7 @@ use crate::codec::{
 use crate::error::{Error, ErrorKind, Path, Step};
 use crate::layout::{Kind, Layout, NodeId, Role};
 use crate::leaf::{Leaf, LeafAccessError, Position};
-use crate::scalar::{self, Scalar, ScalarError};
+use crate::scalar::{Scalar, ScalarError};
 use crate::translate::TranslateError;
 use crate::value::LeafError;
 
@@ -32,8 +32,8 @@ use crate::value::LeafError;
 pub trait Input {
     /// Total number of bits.
     fn bit_len(&self) -> usize;
-    /// `n` bits (`1..=64`) at `offset` as a stream value; the caller checks the length.
-    fn bits(&self, offset: usize, n: u32) -> u64;
+    /// Byte `index`; the caller checks the length.
+    fn byte(&self, index: usize) -> u8;
 }
 
 /// Any [`BitRead`] as an [`Input`] (a pointer to it: the data itself may be unsized).
@@ -43,8 +43,8 @@ impl<R: BitRead + ?Sized> Input for Bits<'_, R> {
     fn bit_len(&self) -> usize {
         self.0.bit_len()
     }
-    fn bits(&self, offset: usize, n: u32) -> u64 {
-        self.0.read_bits(offset, n)
+    fn byte(&self, index: usize) -> u8 {
+        self.0.byte(index)
     }
 }
 
@@ -68,17 +68,9 @@ pub struct LeafAt<'w> {
 pub enum Halt {
     /// What the visit looked for is found: the walk ends without error.
     Found,
-    /// The walk fails with this error, at the leaf.
-    Refuse(ErrorKind<Refusal>),
-}
-
-/// The visits' own errors.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Refusal {
-    /// A flat leaf list's.
-    Leaves(LeafError),
-    /// A translation's.
-    Translate(TranslateError),
+    /// The walk fails with this error, at the leaf. The visits' own errors are those of leaf
+    /// lists (a translation's is one: its leaf cannot be read).
+    Refuse(ErrorKind<LeafError>),
 }
 
 /// What a walk does at each leaf, besides reading and writing it.
@@ -100,8 +92,8 @@ pub trait Visit {
 enum Mode {
     /// Read from the data, visited, and written as the visit says.
     Data,
-    /// Read and passed over: an old union variant or array elements that are dropped, or the
-    /// elements of a tail array counted.
+    /// Read (every bit of it) and passed over: an old union variant or array elements that
+    /// are dropped, or the elements of a tail array counted.
     Skip,
     /// Given by the visit.
     Given,
@@ -116,6 +108,30 @@ impl Mode {
 
     fn visits(self) -> bool {
         matches!(self, Mode::Data | Mode::Given)
+    }
+}
+
+/// How a part of the value is walked: where its values come from, and whether it ends the
+/// value read and the value written (tail array optimization applies to its last field).
+#[derive(Clone, Copy)]
+struct How {
+    mode: Mode,
+    rtao: bool,
+    wtao: bool,
+}
+
+impl How {
+    /// For a member: tail array optimization only for the `last` one.
+    fn within(self, last: bool) -> How {
+        How {
+            mode: self.mode,
+            rtao: self.rtao && last,
+            wtao: self.wtao && last,
+        }
+    }
+
+    fn with(self, mode: Mode) -> How {
+        How { mode, ..self }
     }
 }
 
@@ -138,8 +154,8 @@ struct Walk<'w> {
     path: Path,
     depth: usize,
     visit: &'w mut dyn Visit,
-    error: Option<Error<Refusal>>,
-    found: bool,
+    /// The error a walk stopped at (none when it stopped because its visit found its leaf).
+    error: Option<Error<LeafError>>,
     /// The output is too small: the walk goes on without writing, to tell how small.
     overflow: bool,
 }
@@ -169,7 +185,7 @@ fn run(
     root: NodeId,
     job: Job<'_>,
     visit: &mut dyn Visit,
-) -> Result<Walked, Error<Refusal>> {
+) -> Result<Walked, Error<LeafError>> {
     let mode = if job.input.is_some() {
         Mode::Data
     } else {
@@ -190,16 +206,17 @@ fn run(
         depth: 0,
         visit,
         error: None,
-        found: false,
         overflow: false,
     };
     let tao = job.options.tao;
-    match walk.node(root, tao, tao, mode) {
-        Err(Stop) if !walk.found => Err(walk.error.take().unwrap_or(Error {
-            kind: ErrorKind::TooDeep,
-            bit_offset: 0,
-            path: Path::default(),
-        })),
+    let how = How {
+        mode,
+        rtao: tao,
+        wtao: tao,
+    };
+    let stopped = walk.node(root, None, how).is_err();
+    match walk.error {
+        Some(error) if stopped => Err(error),
         _ if walk.overflow => Err(Error {
             kind: ErrorKind::BufferTooSmall {
                 needed: walk.wpos.div_ceil(8),
@@ -227,7 +244,7 @@ impl Walk<'_> {
 
     #[cold]
     #[inline(never)]
-    fn fail_at(&mut self, bit_offset: usize, kind: ErrorKind<Refusal>) -> Stop {
+    fn fail_at(&mut self, bit_offset: usize, kind: ErrorKind<LeafError>) -> Stop {
         self.error = Some(Error {
             kind,
             bit_offset,
@@ -236,7 +253,7 @@ impl Walk<'_> {
         Stop
     }
 
-    fn fail(&mut self, kind: ErrorKind<Refusal>) -> Stop {
+    fn fail(&mut self, kind: ErrorKind<LeafError>) -> Stop {
         self.fail_at(self.pos(), kind)
     }
 
@@ -252,8 +269,18 @@ impl Walk<'_> {
                 available_bits: available,
             }));
         }
-        let raw = scalar::from_stream(input.bits(self.rpos, bits), bits);
-        self.rpos = needed;
+        // The value's bytes, least significant first (its top bits last), each read most
+        // significant bit first: a byte at a time, from the two bytes it may span.
+        let (mut raw, mut shift) = (0, 0);
+        while self.rpos < needed {
+            let n = (needed - self.rpos).min(8) as u32;
+            let (i, s) = (self.rpos / 8, (self.rpos % 8) as u32);
+            let next = if s + n > 8 { input.byte(i + 1) } else { 0 };
+            let window = (u32::from(input.byte(i)) << 8 | u32::from(next)) << s;
+            raw |= u64::from((window >> (16 - n)) & ((1 << n) - 1)) << shift;
+            shift += 8;
+            self.rpos += n as usize;
+        }
         Ok(raw)
     }
 
@@ -264,10 +291,25 @@ impl Walk<'_> {
         let end = self.wpos + bits as usize;
         // A value too long for the output is still walked to its end (its faults come first).
         self.overflow |= end > self.out.len() * 8;
-        if !self.overflow {
-            write_bits(self.out, self.wpos, scalar::to_stream(raw, bits), bits);
+        if self.overflow {
+            self.wpos = end;
+            return Ok(());
         }
-        self.wpos = end;
+        // As `read` reads them: a byte at a time into the two bytes it may span.
+        let mut value = raw;
+        while self.wpos < end {
+            let n = (end - self.wpos).min(8) as u32;
+            let (i, s) = (self.wpos / 8, (self.wpos % 8) as u32);
+            let place = 16 - n - s;
+            let bits = ((value as u32) & ((1 << n) - 1)) << place;
+            let keep = !(((1u32 << n) - 1) << place);
+            self.out[i] = (u32::from(self.out[i]) & (keep >> 8)) as u8 | (bits >> 8) as u8;
+            if s + n > 8 {
+                self.out[i + 1] = (u32::from(self.out[i + 1]) & keep) as u8 | bits as u8;
+            }
+            value >>= 8;
+            self.wpos += n as usize;
+        }
         Ok(())
     }
 
@@ -295,10 +337,7 @@ impl Walk<'_> {
     #[cold]
     fn halt(&mut self, halt: Halt) -> Stop {
         match halt {
-            Halt::Found => {
-                self.found = true;
-                Stop
-            }
+            Halt::Found => Stop,
             Halt::Refuse(kind) => self.fail(kind),
         }
     }
@@ -308,34 +347,32 @@ impl Walk<'_> {
         match value {
             Scalar::Uint(n) => Ok(n),
             Scalar::Int(n) if n >= 0 => Ok(n as u64),
-            _ => Err(self.fail(ErrorKind::Value(Refusal::Leaves(LeafError::NotACount)))),
+            _ => Err(self.fail(ErrorKind::Value(LeafError::NotACount))),
         }
     }
 
-    /// Passes over a fixed-shape part by its length, unread, where the walk skips it or where
-    /// it only looks for a leaf after it; says whether it did.
+    /// Passes over a fixed-shape part by its length, unread, where the walk looks for a leaf
+    /// after it; says whether it did.
     fn passed_over(&mut self, id: NodeId, mode: Mode) -> bool {
         let node = self.layout.node(id);
         let Some(n) = node.fixed_leaves() else {
             return false;
         };
-        let seeking = mode == Mode::Data && !self.writing;
         let before = self
             .skip_below
             .is_some_and(|k| self.leaves + n as usize <= k);
-        if mode == Mode::Skip || (seeking && before) {
+        if mode == Mode::Data && !self.writing && before {
             self.rpos += node.min_bits as usize;
-            if seeking {
-                self.leaves += n as usize;
-            }
+            self.leaves += n as usize;
             return true;
         }
         false
     }
 
-    fn node(&mut self, id: NodeId, rtao: bool, wtao: bool, mode: Mode) -> Result<(), Stop> {
-        let layout = self.layout;
-        let node = layout.node(id);
+    /// Walks node `id`, reached by `via` (a step on the path while inside; none for padding
+    /// and the root).
+    fn node(&mut self, id: NodeId, via: Option<Step>, how: How) -> Result<(), Stop> {
+        let mode = how.mode;
         if self.passed_over(id, mode) {
             return Ok(());
         }
@@ -343,75 +380,75 @@ impl Walk<'_> {
         if self.depth > MAX_DEPTH {
             return Err(self.fail(ErrorKind::TooDeep));
         }
-        match node.kind {
+        let layout = self.layout;
+        let mut version = None;
+        if let Some(step) = via {
+            if let Step::Field(f) = step {
+                if let Role::Version(v) = layout.fields[f as usize].role {
+                    version = Some(v);
+                }
+            }
+            self.path.push(step);
+        }
+        match layout.node(id).kind {
             Kind::Void { bits } => {
                 self.read(bits.into(), mode)?;
                 self.write(0, bits.into(), mode)?;
             }
             Kind::Struct { first, count } => {
                 for i in first..first + count {
-                    let last = i + 1 == first + count;
-                    self.field(i, rtao && last, wtao && last, mode)?;
+                    let field = layout.fields[i as usize];
+                    let via = (field.role != Role::Padding).then_some(Step::Field(i));
+                    self.node(field.node, via, how.within(i + 1 == first + count))?;
                 }
             }
             Kind::Union {
                 first,
                 count,
                 tag_bits,
-            } => self.union(id, first, count, tag_bits, rtao, wtao, mode)?,
+            } => {
+                let kind = LeafKind::Tag {
+                    bits: tag_bits,
+                    union: id,
+                };
+                let (old, tag) = self.count_leaf(kind, count.into(), None, mode)?;
+                self.write(tag, tag_bits.into(), mode)?;
+                let variant = |t: u64| {
+                    (
+                        first + t as u32,
+                        layout.fields[(first + t as u32) as usize].node,
+                    )
+                };
+                let (index, node) = variant(tag);
+                let mut how = how;
+                if mode == Mode::Data && tag != old {
+                    // The old variant is passed over, the new one written with its default.
+                    let (old_index, old_node) = variant(old);
+                    self.node(old_node, Some(Step::Field(old_index)), how.with(Mode::Skip))?;
+                    how = how.with(Mode::Default);
+                }
+                self.node(node, Some(Step::Field(index)), how)?;
+            }
             Kind::Array { elem, len } => {
                 if mode == Mode::Given {
                     let r = self.visit.fixed_len(&self.path, len);
                     r.map_err(|halt| self.halt(halt))?;
                 }
                 for i in 0..len {
-                    let last = i + 1 == len;
-                    self.element(elem, i, rtao && last, wtao && last, mode)?;
+                    self.node(elem, Some(Step::Index(i)), how.within(i + 1 == len))?;
                 }
             }
             Kind::DynArray {
                 elem,
                 max,
                 len_bits,
-            } => self.dyn_array(id, elem, max, len_bits, rtao, wtao, mode)?,
-            kind => self.scalar(kind, None, mode)?,
+            } => self.dyn_array(id, elem, max, len_bits, how)?,
+            kind => self.scalar(kind, version, mode)?,
+        }
+        if via.is_some() {
+            self.path.pop();
         }
         self.depth -= 1;
-        Ok(())
-    }
-
-    fn field(&mut self, index: u32, rtao: bool, wtao: bool, mode: Mode) -> Result<(), Stop> {
-        let field = self.layout.fields[index as usize];
-        let version = match field.role {
-            Role::Padding => return self.node(field.node, rtao, wtao, mode),
-            Role::Version(v) => Some(v),
-            Role::Data => None,
-        };
-        if self.passed_over(field.node, mode) {
-            return Ok(());
-        }
-        self.path.push(Step::Field(index));
-        match self.layout.node(field.node).kind {
-            kind @ (Kind::Uint { .. } | Kind::Int { .. } | Kind::Float { .. } | Kind::Bool) => {
-                self.scalar(kind, version, mode)?
-            }
-            _ => self.node(field.node, rtao, wtao, mode)?,
-        }
-        self.path.pop();
-        Ok(())
-    }
-
-    fn element(
-        &mut self,
-        elem: NodeId,
-        i: u32,
-        rtao: bool,
-        wtao: bool,
-        mode: Mode,
-    ) -> Result<(), Stop> {
-        self.path.push(Step::Index(i));
-        self.node(elem, rtao, wtao, mode)?;
-        self.path.pop();
         Ok(())
     }
 
@@ -445,126 +482,107 @@ impl Walk<'_> {
         self.write(raw, bits, mode)
     }
 
-    #[allow(clippy::too_many_arguments)] // one union node, unpacked
-    fn union(
+    /// A union tag or dynamic array length (`kind`): read where the mode reads (a tail
+    /// array's elements counted, `tail`), visited, then checked against `limit` (the number
+    /// of variants, or the maximum length plus one). Returns the count read and the new one.
+    fn count_leaf(
         &mut self,
-        id: NodeId,
-        first: u32,
-        count: u32,
-        tag_bits: u8,
-        rtao: bool,
-        wtao: bool,
+        kind: LeafKind,
+        limit: u64,
+        tail: Option<(NodeId, u32)>,
         mode: Mode,
-    ) -> Result<(), Stop> {
+    ) -> Result<(u64, u64), Stop> {
         let at = self.pos();
-        let old = self.read(tag_bits.into(), mode)?;
-        let mut tag = old;
+        let (bits, tag) = match kind {
+            LeafKind::Tag { bits, .. } => (bits, true),
+            LeafKind::Len { bits, .. } => (bits, false),
+            LeafKind::Scalar(_) => (0, false),
+        };
+        let old = match tail {
+            Some((elem, max)) if mode.reads() => self.tail_count(elem, max)?,
+            _ => self.read(bits.into(), mode)?,
+        };
+        let mut new = old;
         if mode.visits() {
-            let kind = LeafKind::Tag {
-                bits: tag_bits,
-                union: id,
-            };
-            // Visited before it is checked: a tag can be looked at even when it is bad.
-            if let Some(v) =
-                self.visit(kind, None, at, mode.reads().then_some(Scalar::Uint(old)))?
-            {
-                tag = self.count(v)?.min(u32::MAX.into());
+            // Visited before it is checked: a bad one can be looked at.
+            let read = mode.reads().then_some(Scalar::Uint(old));
+            if let Some(v) = self.visit(kind, None, at, read)? {
+                new = self.count(v)?;
+                if tag {
+                    new = new.min(u32::MAX.into());
+                }
             }
         }
-        for t in [old, tag] {
-            if t >= u64::from(count) {
-                let at = if t == old && mode.reads() {
-                    at
-                } else {
-                    self.pos()
-                };
-                return Err(self.fail_at(
-                    at,
-                    ErrorKind::BadUnionTag {
-                        tag: t,
-                        variants: count,
-                    },
-                ));
-            }
+        if old >= limit && mode.reads() {
+            return Err(self.count_fault(at, old, limit, tag));
         }
-        self.write(tag, tag_bits.into(), mode)?;
-        let variant = |t: u64| self.layout.fields[(first + t as u32) as usize].node;
-        self.path.push(Step::Field(first + tag as u32));
-        if mode == Mode::Data && tag != old {
-            self.node(variant(old), rtao, wtao, Mode::Skip)?;
-            self.node(variant(tag), rtao, wtao, Mode::Default)?;
-        } else {
-            self.node(variant(tag), rtao, wtao, mode)?;
+        if new >= limit {
+            let at = self.pos();
+            return Err(self.count_fault(at, new, limit, tag));
         }
-        self.path.pop();
-        Ok(())
+        Ok((old, new))
     }
 
-    #[allow(clippy::too_many_arguments)] // one array node, unpacked
+    /// A tag that selects no variant, or an array length over the maximum.
+    #[cold]
+    #[inline(never)]
+    fn count_fault(&mut self, at: usize, n: u64, limit: u64, tag: bool) -> Stop {
+        let fault = if tag {
+            ErrorKind::BadUnionTag {
+                tag: n,
+                variants: limit as u32,
+            }
+        } else {
+            ErrorKind::ArrayTooLong {
+                len: n,
+                max: (limit - 1) as u32,
+            }
+        };
+        self.fail_at(at, fault)
+    }
+
     fn dyn_array(
         &mut self,
         id: NodeId,
         elem: NodeId,
         max: u32,
         len_bits: u8,
-        rtao: bool,
-        wtao: bool,
-        mode: Mode,
+        how: How,
     ) -> Result<(), Stop> {
-        let rtail = tail_optimized(self.layout, elem, rtao) && mode.reads();
-        let wtail = tail_optimized(self.layout, elem, wtao);
-        let at = self.pos();
-        let old = if !mode.reads() {
-            0
-        } else if rtail {
-            self.tail_count(elem, max)?
-        } else {
-            self.read(len_bits.into(), mode)?
+        let mode = how.mode;
+        let rtail = tail_optimized(self.layout, elem, how.rtao) && mode.reads();
+        let wtail = tail_optimized(self.layout, elem, how.wtao);
+        let tail = if mode.reads() { rtail } else { wtail };
+        let kind = LeafKind::Len {
+            bits: if tail { 0 } else { len_bits },
+            array: id,
         };
-        let mut n = old;
-        if mode.visits() {
-            let tail = if mode.reads() { rtail } else { wtail };
-            let kind = LeafKind::Len {
-                bits: if tail { 0 } else { len_bits },
-                array: id,
-            };
-            let read = mode.reads().then_some(Scalar::Uint(old));
-            if let Some(v) = self.visit(kind, None, at, read)? {
-                n = self.count(v)?;
-            }
-        }
-        for len in [old, n] {
-            if len > u64::from(max) {
-                let at = if len == old && mode.reads() {
-                    at
-                } else {
-                    self.pos()
-                };
-                return Err(self.fail_at(at, ErrorKind::ArrayTooLong { len, max }));
-            }
-        }
+        let counted = rtail.then_some((elem, max));
+        let (old, n) = self.count_leaf(kind, u64::from(max) + 1, counted, mode)?;
         if !wtail {
             self.write(n, len_bits.into(), mode)?;
         }
         let (old, n) = (old as u32, n as u32);
         for i in 0..n.max(old) {
-            let r = !rtail && rtao && i + 1 == old;
-            let w = !wtail && wtao && i + 1 == n;
-            let part = match mode {
-                _ if i >= n => Mode::Skip,
-                Mode::Data if i >= old => Mode::Default,
-                mode => mode,
+            let part = How {
+                mode: match mode {
+                    _ if i >= n => Mode::Skip,
+                    Mode::Data if i >= old => Mode::Default,
+                    mode => mode,
+                },
+                rtao: !rtail && how.rtao && i + 1 == old,
+                wtao: !wtail && how.wtao && i + 1 == n,
             };
-            self.element(elem, i, r, w, part)?;
+            self.node(elem, Some(Step::Index(i)), part)?;
         }
         Ok(())
     }
 
     /// The number of elements of a tail-optimized array from here: as many as there are whole
-    /// bytes left for (read ahead, then read again). An element that cannot be read counts:
-    /// reading it again then fails where decoding it in order does.
+    /// bytes left for. They are read ahead (every bit, so that a fault is found where
+    /// decoding them in order finds it), then read again.
     fn tail_count(&mut self, elem: NodeId, max: u32) -> Result<u64, Stop> {
-        let (start, depth, path) = (self.rpos, self.depth, self.path);
+        let start = self.rpos;
         let len = self.input.map_or(0, |i| i.bit_len());
         let mut n = 0;
         while len.saturating_sub(self.rpos) >= 8 {
@@ -575,11 +593,13 @@ impl Walk<'_> {
                 };
                 return Err(self.fail(too_long));
             }
+            let skip = How {
+                mode: Mode::Skip,
+                rtao: false,
+                wtao: false,
+            };
+            self.node(elem, Some(Step::Index(n)), skip)?;
             n += 1;
-            if self.element(elem, n - 1, false, false, Mode::Skip).is_err() {
-                (self.error, self.depth, self.path) = (None, depth, path);
-                break;
-            }
         }
         self.rpos = start;
         Ok(n.into())
@@ -595,21 +615,9 @@ fn same_integer(given: Scalar, version: u32) -> bool {
 }
 
 /// The error of a walk whose visit refuses nothing.
-fn plain(e: Error<Refusal>) -> LeafAccessError {
+fn plain(e: Error<LeafError>) -> LeafAccessError {
     Error {
         kind: e.kind.map_value(|_| ErrorKind::TooDeep),
-        bit_offset: e.bit_offset,
-        path: e.path,
-    }
-}
-
-/// The error of a walk over a flat leaf list.
-fn of_leaves(e: Error<Refusal>) -> Error<LeafError> {
-    Error {
-        kind: e.kind.map_value(|r| match r {
-            Refusal::Leaves(e) => ErrorKind::Value(e),
-            Refusal::Translate(_) => ErrorKind::TooDeep,
-        }),
         bit_offset: e.bit_offset,
         path: e.path,
     }
@@ -623,7 +631,7 @@ struct Collect<'s> {
 
 impl Visit for Collect<'_> {
     fn leaf(&mut self, _: &LeafAt<'_>, old: Option<Scalar>) -> Result<Option<Scalar>, Halt> {
-        let full = Halt::Refuse(ErrorKind::Value(Refusal::Leaves(LeafError::Full)));
+        let full = Halt::Refuse(ErrorKind::Value(LeafError::Full));
         *self.leaves.get_mut(self.len).ok_or(full)? = old.unwrap_or(Scalar::Uint(0));
         self.len += 1;
         Ok(None)
@@ -638,7 +646,7 @@ struct Supply<'s> {
 
 impl Visit for Supply<'_> {
     fn leaf(&mut self, _: &LeafAt<'_>, _: Option<Scalar>) -> Result<Option<Scalar>, Halt> {
-        let exhausted = Halt::Refuse(ErrorKind::Value(Refusal::Leaves(LeafError::Exhausted)));
+        let exhausted = Halt::Refuse(ErrorKind::Value(LeafError::Exhausted));
         let v = *self.leaves.get(self.next).ok_or(exhausted)?;
         self.next += 1;
         Ok(Some(v))
@@ -665,9 +673,7 @@ pub fn decode<R: BitRead + ?Sized>(
             ..EncodeOptions::default()
         },
     };
-    let end = run(layout, root, job, &mut collect)
-        .map_err(of_leaves)?
-        .read;
+    let end = run(layout, root, job, &mut collect)?.read;
     let (used, len) = (end.div_ceil(8), BitRead::bit_len(data) / 8);
     if !options.allow_trailing && len > used {
         return Err(Error {
@@ -693,7 +699,7 @@ pub fn encode(
     options: EncodeOptions,
 ) -> Result<usize, Error<LeafError>> {
     let mut supply = Supply { leaves, next: 0 };
-    write_whole(layout, root, None, out, options, &mut supply).map_err(of_leaves)
+    write_whole(layout, root, None, out, options, &mut supply)
 }
 
 /// A walk that writes a whole value into `out` (reading `input` if any); its length in bytes,
@@ -705,7 +711,7 @@ fn write_whole(
     out: &mut [u8],
     options: EncodeOptions,
     visit: &mut dyn Visit,
-) -> Result<usize, Error<Refusal>> {
+) -> Result<usize, Error<LeafError>> {
     let job = Job {
         input,
         out: &mut *out,
@@ -715,7 +721,10 @@ fn write_whole(
     };
     let end = run(layout, root, job, visit)?.written;
     let bytes = end.div_ceil(8);
-    zero_bits(out, end, bytes * 8 - end);
+    if end % 8 != 0 {
+        // The last byte's unused bits.
+        out[end / 8] &= 0xFF << (8 - end % 8);
+    }
     Ok(bytes)
 }
 
@@ -971,9 +980,9 @@ fn read_at<R: BitRead + ?Sized>(
         path: Some((path, leaf)),
         found: None,
     };
-    let unreadable = Halt::Refuse(ErrorKind::Value(Refusal::Translate(
-        TranslateError::Unreadable,
-    )));
+    // Not there: the stored value holds less than the walk asks of it (the only refusal
+    // of a translation, which makes it TranslateError::Unreadable).
+    let unreadable = Halt::Refuse(ErrorKind::Value(LeafError::Exhausted));
     match find(layout, root, data, &mut found, false) {
         Ok((_, value, _)) => Ok(value),
         Err(_) => Err(unreadable),
@@ -1164,10 +1173,9 @@ pub fn translate<R: BitRead + ?Sized, B: BitRead + ?Sized>(
     };
     let written = write_whole(layout, new, None, out, options, &mut carry);
     written.map_err(|e| Error {
-        kind: e.kind.map_value(|r| match r {
-            Refusal::Translate(t) => ErrorKind::Value(t),
-            Refusal::Leaves(_) => ErrorKind::TooDeep,
-        }),
+        kind: e
+            .kind
+            .map_value(|_| ErrorKind::Value(TranslateError::Unreadable)),
         bit_offset: e.bit_offset,
         path: e.path,
     })
