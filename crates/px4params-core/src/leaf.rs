@@ -7,7 +7,7 @@
 
 use core::convert::Infallible;
 
-use crate::bits::{copy_bits, BitRead};
+use crate::bits::BitRead;
 use crate::codec::{
     read_scalar, scalar_bits, scalar_raw, tail_optimized, EncodeOptions, LeafKind, MAX_DEPTH,
 };
@@ -188,7 +188,8 @@ pub fn set_leaf_at<R: BitRead + ?Sized>(
     set_located(layout, root, data, &leaf, value, out, options)
 }
 
-fn set_located<R: BitRead + ?Sized>(
+/// [`set_leaf`] of a leaf already located in `data`.
+pub(crate) fn set_located<R: BitRead + ?Sized>(
     layout: &Layout<'_>,
     root: NodeId,
     data: &R,
@@ -214,9 +215,10 @@ fn set_located<R: BitRead + ?Sized>(
             path: Path::default(),
         });
     }
-    copy_bits(data, 0, out, 0, len * 8);
-    let bits = scalar_bits(kind);
-    crate::bits::write_bits(out, leaf.bit_offset, scalar::to_stream(raw, bits), bits);
+    for (i, byte) in out[..len].iter_mut().enumerate() {
+        *byte = data.byte(i);
+    }
+    walk::put(out, leaf.bit_offset, raw, scalar_bits(kind));
     Ok(len)
 }
 

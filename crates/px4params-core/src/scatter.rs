@@ -448,6 +448,37 @@ impl<'p, P: Pieces + ?Sized> BitRead for Scattered<'p, P> {
         }
     }
 
+    /// Firmware builds (`compact`) find the byte's piece from the place of the byte read
+    /// before, without the window's code.
+    #[inline]
+    fn byte(&self, index: usize) -> u8 {
+        if !cfg!(feature = "compact") {
+            return self.read_bits(index * 8, 8) as u8;
+        }
+        // From the piece of the byte read before (remembered as the window's next place,
+        // the window emptied), or from the first when the byte lies before it.
+        let w = self.window.get();
+        let (mut i, mut start) = match index >= w.next_start {
+            true => (w.next.index, w.next_start),
+            false => (0, 0),
+        };
+        while i < self.pieces.count() {
+            let piece = self.pieces.piece(i);
+            if let Some(&byte) = piece.get(index - start) {
+                let next = Place { index: i, skip: 0 };
+                self.window.set(Window {
+                    held: 0,
+                    next,
+                    next_start: start,
+                    ..w
+                });
+                return byte;
+            }
+            (i, start) = (i + 1, start + piece.len());
+        }
+        0
+    }
+
     #[inline]
     fn reader(&self, offset: usize) -> ScatteredReader<'_, P> {
         let w = self.window.get();

@@ -611,6 +611,10 @@ where
         which: Which,
         k: usize,
     ) -> Result<Scalar> {
+        if cfg!(feature = "compact") {
+            // Firmware builds read by one walk (leaf tables are a host's speed-up).
+            return self.read_walked(layout, param, instance, which, k);
+        }
         let def = self.def(param)?;
         let index = self.present_slot(&def, instance)?;
         // The value and what follows it in memory: bits are read 64 at a time.
@@ -697,15 +701,14 @@ where
     ) -> Result<()> {
         let def = self.def(param)?;
         let index = self.present_slot(&def, instance)?;
+        if cfg!(feature = "compact") {
+            return self.set_leaf_copied(layout, param, &def, instance, which, k, value, saturate);
+        }
         let data = self.region(&def, index, which);
-        // Hosts seek (through the leaf table) first and find the leaf's path only for an
-        // error; firmware builds find it in one walk.
-        let fast = match cfg!(feature = "compact") {
-            true => None,
-            false => self
-                .seek(layout, &def, param, data, k)
-                .filter(|p| matches!(p.kind, LeafKind::Scalar(_)) && !p.version),
-        };
+        // Seek (through the leaf table) first; the leaf's path is found only for an error.
+        let fast = self
+            .seek(layout, &def, param, data, k)
+            .filter(|p| matches!(p.kind, LeafKind::Scalar(_)) && !p.version);
         // Where the leaf is, and for a primitive leaf, its kind and new bits.
         let (bit_offset, scalar) = match fast {
             Some(Position {
@@ -774,6 +777,37 @@ where
             options,
         )?;
         self.commit(param, &def, instance, which, new_len);
+        Ok(())
+    }
+
+    /// [`Store::set_leaf_at`] as firmware builds do it, in little code: the leaf is found in
+    /// one walk, and the value with it written goes through the scratch area (a primitive leaf
+    /// copied and written over, a tag or length transcoded).
+    #[allow(clippy::too_many_arguments)] // one call names one leaf of one instance: all needed
+    fn set_leaf_copied(
+        &mut self,
+        layout: &Layout<'_>,
+        param: u32,
+        def: &ParamDef,
+        instance: u16,
+        which: Which,
+        k: usize,
+        value: Scalar,
+        saturate: bool,
+    ) -> Result<()> {
+        let index = slot_index(def, instance)?;
+        let (start, len) = span_of(def, self.slots.as_ref()[index], index, which);
+        let (scratch, end) = (self.scratch, self.bytes.as_ref().len());
+        let (head, tail) = self.bytes.as_mut().split_at_mut(scratch);
+        let data = &head[start..start + len];
+        let found = leaf::locate_at(layout, def.root, data, k, false)?;
+        if is_version(layout, &found.path) {
+            return Err(StoreError::VersionLeaf { path: found.path });
+        }
+        let options = EncodeOptions { saturate, ..STORED };
+        let out = &mut tail[..end - scratch];
+        let new_len = leaf::set_located(layout, def.root, data, &found, value, out, options)?;
+        self.commit(param, def, instance, which, new_len);
         Ok(())
     }
 

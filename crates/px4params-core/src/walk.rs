@@ -295,21 +295,8 @@ impl Walk<'_> {
             self.wpos = end;
             return Ok(());
         }
-        // As `read` reads them: a byte at a time into the two bytes it may span.
-        let mut value = raw;
-        while self.wpos < end {
-            let n = (end - self.wpos).min(8) as u32;
-            let (i, s) = (self.wpos / 8, (self.wpos % 8) as u32);
-            let place = 16 - n - s;
-            let bits = ((value as u32) & ((1 << n) - 1)) << place;
-            let keep = !(((1u32 << n) - 1) << place);
-            self.out[i] = (u32::from(self.out[i]) & (keep >> 8)) as u8 | (bits >> 8) as u8;
-            if s + n > 8 {
-                self.out[i + 1] = (u32::from(self.out[i + 1]) & keep) as u8 | bits as u8;
-            }
-            value >>= 8;
-            self.wpos += n as usize;
-        }
+        put(self.out, self.wpos, raw, bits);
+        self.wpos = end;
         Ok(())
     }
 
@@ -513,20 +500,11 @@ impl Walk<'_> {
                 }
             }
         }
-        if old >= limit && mode.reads() {
-            return Err(self.count_fault(at, old, limit, tag));
-        }
-        if new >= limit {
-            let at = self.pos();
-            return Err(self.count_fault(at, new, limit, tag));
-        }
-        Ok((old, new))
-    }
-
-    /// A tag that selects no variant, or an array length over the maximum.
-    #[cold]
-    #[inline(never)]
-    fn count_fault(&mut self, at: usize, n: u64, limit: u64, tag: bool) -> Stop {
+        let (n, at) = match (old, new) {
+            (old, _) if old >= limit && mode.reads() => (old, at),
+            (_, new) if new >= limit => (new, self.pos()),
+            _ => return Ok((old, new)),
+        };
         let fault = if tag {
             ErrorKind::BadUnionTag {
                 tag: n,
@@ -538,7 +516,7 @@ impl Walk<'_> {
                 max: (limit - 1) as u32,
             }
         };
-        self.fail_at(at, fault)
+        Err(self.fail_at(at, fault))
     }
 
     fn dyn_array(
@@ -603,6 +581,26 @@ impl Walk<'_> {
         }
         self.rpos = start;
         Ok(n.into())
+    }
+}
+
+/// Writes the low `bits` bits of `raw` at bit `pos` of `out` as a DroneCAN scalar (its bytes
+/// least significant first, the top bits last, each most significant bit first), a byte at a
+/// time into the two bytes it may span; the caller checks that `out` holds them.
+pub(crate) fn put(out: &mut [u8], mut pos: usize, raw: u64, bits: u32) {
+    let (mut value, end) = (raw, pos + bits as usize);
+    while pos < end {
+        let n = (end - pos).min(8) as u32;
+        let (i, s) = (pos / 8, (pos % 8) as u32);
+        let place = 16 - n - s;
+        let bits = ((value as u32) & ((1 << n) - 1)) << place;
+        let keep = !(((1u32 << n) - 1) << place);
+        out[i] = (u32::from(out[i]) & (keep >> 8)) as u8 | (bits >> 8) as u8;
+        if s + n > 8 {
+            out[i + 1] = (u32::from(out[i + 1]) & keep) as u8 | bits as u8;
+        }
+        value >>= 8;
+        pos += n as usize;
     }
 }
 
