@@ -122,60 +122,58 @@ pub fn from_stream(stream: u64, bits: u32) -> u64 {
 /// Encodes an unsigned integer field of `bits` bits to raw bits.
 #[inline]
 pub fn uint_raw(value: Scalar, bits: u32, cast: Cast, saturate: bool) -> Result<u64, ScalarError> {
-    let max = crate::bits::field_mask(bits);
-    let range = || ScalarError::OutOfRange {
-        value,
-        min: Scalar::Uint(0),
-        max: Scalar::Uint(max),
-    };
-    match value {
-        Scalar::Uint(v) if v <= max => Ok(v),
-        Scalar::Uint(v) => match cast {
-            Cast::Truncated => Ok(v & max),
-            Cast::Saturated if saturate => Ok(max),
-            Cast::Saturated => Err(range()),
-        },
-        Scalar::Int(v) if v >= 0 => uint_raw(Scalar::Uint(v as u64), bits, cast, saturate),
-        Scalar::Int(v) => match cast {
-            Cast::Truncated => Ok(v as u64 & max),
-            Cast::Saturated if saturate => Ok(0),
-            Cast::Saturated => Err(range()),
-        },
-        Scalar::Bool(b) if bits == 1 => Ok(u64::from(b)),
-        _ => Err(ScalarError::WrongKind {
-            expected: "an integer",
-        }),
+    if let (Scalar::Bool(b), 1) = (value, bits) {
+        return Ok(u64::from(b));
     }
+    let max = crate::bits::field_mask(bits);
+    integer_raw(value, 0, i128::from(max), max, cast, saturate)
 }
 
 /// Encodes a signed integer field of `bits` bits to raw (two's complement) bits.
 #[inline]
 pub fn int_raw(value: Scalar, bits: u32, cast: Cast, saturate: bool) -> Result<u64, ScalarError> {
-    let max = (crate::bits::field_mask(bits) >> 1) as i64;
-    let min = -max - 1;
     let mask = crate::bits::field_mask(bits);
-    let range = || ScalarError::OutOfRange {
-        value,
-        min: Scalar::Int(min),
-        max: Scalar::Int(max),
-    };
-    let clamp_or_fail = |v: i128| -> Result<u64, ScalarError> {
-        if v >= i128::from(min) && v <= i128::from(max) {
-            return Ok(v as i64 as u64 & mask);
+    let max = i128::from(mask >> 1);
+    integer_raw(value, -max - 1, max, mask, cast, saturate)
+}
+
+/// An integer `value` for a field holding `min..=max` in the bits of `mask`, cast as `cast`
+/// says where it is out of range (clamped only when `saturate`).
+fn integer_raw(
+    value: Scalar,
+    min: i128,
+    max: i128,
+    mask: u64,
+    cast: Cast,
+    saturate: bool,
+) -> Result<u64, ScalarError> {
+    let v = match value {
+        Scalar::Uint(v) => i128::from(v),
+        Scalar::Int(v) => i128::from(v),
+        _ => {
+            return Err(ScalarError::WrongKind {
+                expected: "an integer",
+            })
         }
-        match cast {
-            Cast::Truncated => Ok(v as u64 & mask),
-            Cast::Saturated if saturate => Ok((if v < 0 { min } else { max }) as u64 & mask),
-            Cast::Saturated => Err(range()),
+    };
+    let raw = match cast {
+        _ if (min..=max).contains(&v) => v,
+        Cast::Truncated => v,
+        Cast::Saturated if saturate => v.clamp(min, max),
+        Cast::Saturated => {
+            // The range as the field's kind of number: unsigned from 0, signed otherwise.
+            let bound = |b: i128| match min {
+                0 => Scalar::Uint(b as u64),
+                _ => Scalar::Int(b as i64),
+            };
+            return Err(ScalarError::OutOfRange {
+                value,
+                min: bound(min),
+                max: bound(max),
+            });
         }
     };
-    match value {
-        Scalar::Int(v) => clamp_or_fail(i128::from(v)),
-        Scalar::Uint(v) => clamp_or_fail(i128::from(v)),
-        _ => Err(ScalarError::WrongKind {
-            expected: "an integer",
-        }),
-    }
+    Ok(raw as u64 & mask)
 }
 
 /// Encodes a float field of 16, 32 or 64 bits to raw bits.

@@ -32,8 +32,9 @@ use crate::value::LeafError;
 pub trait Input {
     /// Total number of bits.
     fn bit_len(&self) -> usize;
-    /// Byte `index`; the caller checks the length.
-    fn byte(&self, index: usize) -> u8;
+    /// Bytes `index` and `index + 1` as a big-endian pair, 0 for the second one where it
+    /// lies beyond the end; the caller checks that the first one does not.
+    fn pair(&self, index: usize) -> u16;
 }
 
 /// Any [`BitRead`] as an [`Input`] (a pointer to it: the data itself may be unsized).
@@ -43,8 +44,12 @@ impl<R: BitRead + ?Sized> Input for Bits<'_, R> {
     fn bit_len(&self) -> usize {
         self.0.bit_len()
     }
-    fn byte(&self, index: usize) -> u8 {
-        self.0.byte(index)
+    fn pair(&self, index: usize) -> u16 {
+        let next = match index + 1 < self.0.bit_len() / 8 {
+            true => self.0.byte(index + 1),
+            false => 0,
+        };
+        u16::from(self.0.byte(index)) << 8 | u16::from(next)
     }
 }
 
@@ -64,13 +69,13 @@ pub struct LeafAt<'w> {
 }
 
 /// Why a [`Visit`] stops its walk.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Halt {
     /// What the visit looked for is found: the walk ends without error.
     Found,
-    /// The walk fails with this error, at the leaf. The visits' own errors are those of leaf
-    /// lists (a translation's is one: its leaf cannot be read).
-    Refuse(ErrorKind<LeafError>),
+    /// The walk fails at the leaf, with the error [`Visit::refusal`] gives (results stay
+    /// small enough for registers).
+    Refused,
 }
 
 /// What a walk does at each leaf, besides reading and writing it.
@@ -79,6 +84,12 @@ pub trait Visit {
     /// Returns the value to write in its place (`None`: the value read, or when nothing is
     /// read, the default: zero, or the type's version for `p_version`).
     fn leaf(&mut self, at: &LeafAt<'_>, old: Option<Scalar>) -> Result<Option<Scalar>, Halt>;
+
+    /// The error of the last [`Halt::Refused`]. The visits' own errors are those of leaf
+    /// lists (a translation's is one: a leaf it cannot read).
+    fn refusal(&self) -> ErrorKind<LeafError> {
+        ErrorKind::TooDeep
+    }
 
     /// A static array of `len` elements is about to be written at `path` from given values
     /// (its length is not a leaf).
@@ -270,13 +281,12 @@ impl Walk<'_> {
             }));
         }
         // The value's bytes, least significant first (its top bits last), each read most
-        // significant bit first: a byte at a time, from the two bytes it may span.
+        // significant bit first: a byte at a time, from the pair of bytes it may span.
         let (mut raw, mut shift) = (0, 0);
         while self.rpos < needed {
             let n = (needed - self.rpos).min(8) as u32;
             let (i, s) = (self.rpos / 8, (self.rpos % 8) as u32);
-            let next = if s + n > 8 { input.byte(i + 1) } else { 0 };
-            let window = (u32::from(input.byte(i)) << 8 | u32::from(next)) << s;
+            let window = u32::from(input.pair(i)) << s;
             raw |= u64::from((window >> (16 - n)) & ((1 << n) - 1)) << shift;
             shift += 8;
             self.rpos += n as usize;
@@ -325,7 +335,10 @@ impl Walk<'_> {
     fn halt(&mut self, halt: Halt) -> Stop {
         match halt {
             Halt::Found => Stop,
-            Halt::Refuse(kind) => self.fail(kind),
+            Halt::Refused => {
+                let kind = self.visit.refusal();
+                self.fail(kind)
+            }
         }
     }
 
@@ -557,8 +570,9 @@ impl Walk<'_> {
     }
 
     /// The number of elements of a tail-optimized array from here: as many as there are whole
-    /// bytes left for. They are read ahead (every bit, so that a fault is found where
-    /// decoding them in order finds it), then read again.
+    /// bytes left for. Elements of variable shape are read ahead (every bit, so that a fault
+    /// is found where decoding them in order finds it), then read again; fixed-shape ones are
+    /// counted by their length.
     fn tail_count(&mut self, elem: NodeId, max: u32) -> Result<u64, Stop> {
         let start = self.rpos;
         let len = self.input.map_or(0, |i| i.bit_len());
@@ -571,12 +585,18 @@ impl Walk<'_> {
                 };
                 return Err(self.fail(too_long));
             }
-            let skip = How {
-                mode: Mode::Skip,
-                rtao: false,
-                wtao: false,
-            };
-            self.node(elem, Some(Step::Index(n)), skip)?;
+            let node = self.layout.node(elem);
+            if node.fixed_leaves().is_some() {
+                // Any fault in it is found when it is read.
+                self.rpos += node.min_bits as usize;
+            } else {
+                let skip = How {
+                    mode: Mode::Skip,
+                    rtao: false,
+                    wtao: false,
+                };
+                self.node(elem, Some(Step::Index(n)), skip)?;
+            }
             n += 1;
         }
         self.rpos = start;
@@ -629,10 +649,14 @@ struct Collect<'s> {
 
 impl Visit for Collect<'_> {
     fn leaf(&mut self, _: &LeafAt<'_>, old: Option<Scalar>) -> Result<Option<Scalar>, Halt> {
-        let full = Halt::Refuse(ErrorKind::Value(LeafError::Full));
-        *self.leaves.get_mut(self.len).ok_or(full)? = old.unwrap_or(Scalar::Uint(0));
+        let slot = self.leaves.get_mut(self.len).ok_or(Halt::Refused)?;
+        *slot = old.unwrap_or(Scalar::Uint(0));
         self.len += 1;
         Ok(None)
+    }
+
+    fn refusal(&self) -> ErrorKind<LeafError> {
+        ErrorKind::Value(LeafError::Full)
     }
 }
 
@@ -644,10 +668,13 @@ struct Supply<'s> {
 
 impl Visit for Supply<'_> {
     fn leaf(&mut self, _: &LeafAt<'_>, _: Option<Scalar>) -> Result<Option<Scalar>, Halt> {
-        let exhausted = Halt::Refuse(ErrorKind::Value(LeafError::Exhausted));
-        let v = *self.leaves.get(self.next).ok_or(exhausted)?;
+        let v = *self.leaves.get(self.next).ok_or(Halt::Refused)?;
         self.next += 1;
         Ok(Some(v))
+    }
+
+    fn refusal(&self) -> ErrorKind<LeafError> {
+        ErrorKind::Value(LeafError::Exhausted)
     }
 }
 
@@ -730,6 +757,8 @@ fn write_whole(
 struct Find<'p> {
     /// The data's length in bits.
     bit_len: usize,
+    /// Where a leaf that lies beyond the data starts.
+    beyond: usize,
     k: usize,
     path: Option<(&'p Path, LeafClass)>,
     found: Option<(Leaf, Scalar, bool)>,
@@ -762,10 +791,8 @@ impl Visit for Find<'_> {
         }
         if at.bit_offset > self.bit_len {
             // A tail array's length, after parts passed over unread that end beyond the data.
-            return Err(Halt::Refuse(ErrorKind::Truncated {
-                needed_bits: at.bit_offset,
-                available_bits: self.bit_len,
-            }));
+            self.beyond = at.bit_offset;
+            return Err(Halt::Refused);
         }
         let leaf = Leaf {
             index: at.index,
@@ -775,6 +802,13 @@ impl Visit for Find<'_> {
         };
         self.found = Some((leaf, old.unwrap_or(Scalar::Uint(0)), at.version.is_some()));
         Err(Halt::Found)
+    }
+
+    fn refusal(&self) -> ErrorKind<LeafError> {
+        ErrorKind::Truncated {
+            needed_bits: self.beyond,
+            available_bits: self.bit_len,
+        }
     }
 }
 
@@ -821,6 +855,7 @@ pub fn locate<R: BitRead + ?Sized>(
 ) -> Result<(Leaf, Scalar), LeafAccessError> {
     let mut found = Find {
         bit_len: BitRead::bit_len(data),
+        beyond: 0,
         k,
         path: None,
         found: None,
@@ -838,6 +873,7 @@ pub fn seek<R: BitRead + ?Sized>(
 ) -> Option<Position> {
     let mut found = Find {
         bit_len: BitRead::bit_len(data),
+        beyond: 0,
         k,
         path: None,
         found: None,
@@ -855,6 +891,8 @@ struct Edit<'l> {
     layout: &'l Layout<'l>,
     k: usize,
     value: Scalar,
+    /// The number of variants, or the array's maximum plus one, the value is not below.
+    limit: u64,
 }
 
 impl Visit for Edit<'_> {
@@ -874,15 +912,20 @@ impl Visit for Edit<'_> {
             },
             LeafKind::Scalar(_) => return Ok(Some(self.value)),
         };
+        self.limit = limit;
         match self.value {
             Scalar::Uint(v) if v < limit => Ok(Some(self.value)),
             Scalar::Int(v) if v >= 0 && (v as u64) < limit => Ok(Some(self.value)),
-            value => Err(Halt::Refuse(ErrorKind::Scalar(ScalarError::OutOfRange {
-                value,
-                min: Scalar::Uint(0),
-                max: Scalar::Uint(limit.saturating_sub(1)),
-            }))),
+            _ => Err(Halt::Refused),
         }
+    }
+
+    fn refusal(&self) -> ErrorKind<LeafError> {
+        ErrorKind::Scalar(ScalarError::OutOfRange {
+            value: self.value,
+            min: Scalar::Uint(0),
+            max: Scalar::Uint(self.limit.saturating_sub(1)),
+        })
     }
 }
 
@@ -898,7 +941,12 @@ pub fn transcode<R: BitRead + ?Sized>(
     out: &mut [u8],
     options: EncodeOptions,
 ) -> Result<usize, LeafAccessError> {
-    let mut edit = Edit { layout, k, value };
+    let mut edit = Edit {
+        layout,
+        k,
+        value,
+        limit: 0,
+    };
     write_whole(layout, root, Some(&Bits(data)), out, options, &mut edit).map_err(plain)
 }
 
@@ -930,14 +978,22 @@ pub fn check_versions(
     root: NodeId,
     data: &[u8],
 ) -> Result<(), Error<Infallible>> {
-    struct Versions;
+    struct Versions(Scalar, u32);
     impl Visit for Versions {
         fn leaf(&mut self, at: &LeafAt<'_>, old: Option<Scalar>) -> Result<Option<Scalar>, Halt> {
             match (at.version, old) {
                 (Some(expected), Some(given)) if given != Scalar::Uint(expected.into()) => {
-                    Err(Halt::Refuse(ErrorKind::VersionMismatch { given, expected }))
+                    *self = Versions(given, expected);
+                    Err(Halt::Refused)
                 }
                 _ => Ok(None),
+            }
+        }
+
+        fn refusal(&self) -> ErrorKind<LeafError> {
+            ErrorKind::VersionMismatch {
+                given: self.0,
+                expected: self.1,
             }
         }
     }
@@ -951,7 +1007,9 @@ pub fn check_versions(
             ..EncodeOptions::default()
         },
     };
-    let end = run(layout, root, job, &mut Versions).map_err(plain)?.read;
+    let end = run(layout, root, job, &mut Versions(Scalar::Uint(0), 0))
+        .map_err(plain)?
+        .read;
     let (used, len) = (end.div_ceil(8), data.len());
     if len > used {
         return Err(Error {
@@ -974,16 +1032,15 @@ fn read_at<R: BitRead + ?Sized>(
 ) -> Result<Scalar, Halt> {
     let mut found = Find {
         bit_len: BitRead::bit_len(data),
+        beyond: 0,
         k: 0,
         path: Some((path, leaf)),
         found: None,
     };
-    // Not there: the stored value holds less than the walk asks of it (the only refusal
-    // of a translation, which makes it TranslateError::Unreadable).
-    let unreadable = Halt::Refuse(ErrorKind::Value(LeafError::Exhausted));
+    // Not there: the stored value holds less than the walk asks of it.
     match find(layout, root, data, &mut found, false) {
         Ok((_, value, _)) => Ok(value),
-        Err(_) => Err(unreadable),
+        Err(_) => Err(Halt::Refused),
     }
 }
 
@@ -1006,6 +1063,8 @@ struct Carry<'a, R: ?Sized, B: ?Sized> {
     old_data: &'a R,
     new_root: NodeId,
     base: &'a B,
+    /// A static array the old value has with another length: that length, and the new one.
+    wrong_len: Option<(u64, u32)>,
 }
 
 impl<R: BitRead + ?Sized, B: BitRead + ?Sized> Carry<'_, R, B> {
@@ -1136,11 +1195,19 @@ impl<R: BitRead + ?Sized, B: BitRead + ?Sized> Visit for Carry<'_, R, B> {
     fn fixed_len(&mut self, path: &Path, len: u32) -> Result<(), Halt> {
         let (old, steps) = self.old_at(path)?;
         match self.old_len(old, &steps)? {
-            Some(n) if n != u64::from(len) => Err(Halt::Refuse(ErrorKind::WrongArrayLength {
-                len: n,
-                expected: len,
-            })),
+            Some(n) if n != u64::from(len) => {
+                self.wrong_len = Some((n, len));
+                Err(Halt::Refused)
+            }
             _ => Ok(()),
+        }
+    }
+
+    fn refusal(&self) -> ErrorKind<LeafError> {
+        match self.wrong_len {
+            Some((len, expected)) => ErrorKind::WrongArrayLength { len, expected },
+            // A leaf the old value or the base does not hold (TranslateError::Unreadable).
+            None => ErrorKind::Value(LeafError::Exhausted),
         }
     }
 }
@@ -1163,6 +1230,7 @@ pub fn translate<R: BitRead + ?Sized, B: BitRead + ?Sized>(
         old_data,
         new_root: new,
         base,
+        wrong_len: None,
     };
     let options = EncodeOptions {
         tao: false,
