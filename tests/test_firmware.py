@@ -1,6 +1,7 @@
 """Firmware: the C ABI (crates/px4params-ffi) with the tables of ``metadata --firmware``, the
 talk's C++ API, and the example ``examples/firmware/ina238_auto.cpp``, built with g++ and run
-against store files that ``px4params`` wrote."""
+against store files that ``px4params`` wrote; each with the core as hosts build it and as
+firmware builds it for size (``compact``)."""
 
 from __future__ import annotations
 
@@ -29,12 +30,18 @@ def run(command: list[str], cwd: Path, **kw: object) -> subprocess.CompletedProc
     return proc
 
 
-@pytest.fixture(scope="module")
-def staticlib() -> Path:
+@pytest.fixture(scope="module", params=["default", "compact"])
+def staticlib(request: pytest.FixtureRequest) -> Path:
+    """The C ABI's static library, with the core as hosts build it and as firmware builds it
+    for size (feature ``compact``: every value goes through the small walk)."""
     if shutil.which("cargo") is None:
         pytest.skip("cargo is not installed: the C ABI cannot be built")
-    run(["cargo", "build", "-q", "-p", "px4params-ffi", "--release"], ROOT)
+    command = ["cargo", "build", "-q", "-p", "px4params-ffi", "--release"]
     target = Path(os.environ.get("CARGO_TARGET_DIR", ROOT / "target"))
+    if request.param == "compact":
+        target = target / "compact"
+        command += ["--features", "compact", "--target-dir", str(target)]
+    run(command, ROOT)
     lib = target / "release" / "libpx4params_ffi.a"
     assert lib.exists()
     return lib

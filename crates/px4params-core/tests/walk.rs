@@ -15,6 +15,7 @@ use px4params_core::compile::OwnedLayout;
 use px4params_core::error::Error;
 use px4params_core::layout::{Layout, NodeId, Role};
 use px4params_core::leaf::{get_leaf, seek, Target};
+use px4params_core::scatter::Scattered;
 use px4params_core::value::{LeafError, LeafSink, LeafSource};
 use px4params_core::{walk, Cast, ErrorKind, Scalar};
 
@@ -212,6 +213,42 @@ proptest! {
                     prop_assert_eq!(walk::seek(&layout, root, &bytes[..], k), seek(&layout, root, &bytes[..], k), "[{}]", k);
                 }
             }
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(300))]
+
+    /// A payload in pieces (CAN frames, pool blocks) reads as it does whole: decoding and
+    /// every leaf, results and errors alike.
+    #[test]
+    fn pieces_read_as_whole(ty in any_type(), data in proptest::collection::vec(any::<u8>(), 0..64), cuts in proptest::collection::vec(0usize..64, 0..12), tao in any::<bool>()) {
+        let mut l = OwnedLayout::default();
+        let root = ty.build(&mut l);
+        let layout = l.as_layout();
+        let mut cuts: Vec<usize> = cuts.iter().map(|c| c % (data.len() + 1)).collect();
+        cuts.sort_unstable();
+        let mut pieces: Vec<&[u8]> = Vec::new();
+        let mut at = 0;
+        for c in cuts.iter().chain([&data.len()]) {
+            pieces.push(&data[at..*c]);
+            at = *c;
+        }
+        let scattered = Scattered::new(&pieces[..]);
+        let options = DecodeOptions { tao, allow_trailing: false };
+        let (mut a, mut b) = (vec![Scalar::Uint(0); 600], vec![Scalar::Uint(0); 600]);
+        let whole = walk::decode(&layout, root, &data[..], &mut a, options);
+        let parts = walk::decode(&layout, root, &scattered, &mut b, options);
+        prop_assert_eq!(format!("{whole:?}"), format!("{parts:?}"));
+        if let Ok(decoded) = whole {
+            prop_assert!(same_leaves(&a[..decoded.leaves], &b[..decoded.leaves]));
+        }
+        // Leaves from last to first: reads jump backwards through the pieces too.
+        for k in (0..40).rev() {
+            let whole = walk::locate(&layout, root, &data[..], k, tao);
+            let parts = walk::locate(&layout, root, &scattered, k, tao);
+            prop_assert_eq!(format!("{whole:?}"), format!("{parts:?}"), "[{}]", k);
         }
     }
 }
