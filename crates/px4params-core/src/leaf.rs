@@ -132,8 +132,8 @@ pub fn get_leaf<R: BitRead + ?Sized>(
     target: Target<'_>,
     tao: bool,
 ) -> Result<(Leaf, Scalar), LeafAccessError> {
-    if let Target::Index(k) = target {
-        return get_leaf_at(layout, root, data, k, tao);
+    if let (Target::Index(k), true) = (target, cfg!(feature = "compact")) {
+        return walk::locate(layout, root, data, k, tao);
     }
     let leaf = locate(layout, root, data, target, tao)?;
     let value = read_leaf(layout, data, &leaf, tao)?;
@@ -151,9 +151,7 @@ pub fn get_leaf_at<R: BitRead + ?Sized>(
     if cfg!(feature = "compact") {
         return walk::locate(layout, root, data, k, tao);
     }
-    let leaf = locate_at(layout, root, data, k, tao)?;
-    let value = read_leaf(layout, data, &leaf, tao)?;
-    Ok((leaf, value))
+    get_leaf(layout, root, data, Target::Index(k), tao)
 }
 
 /// Writes `value` to leaf `target`, producing the new encoding in `out`; returns its length.
