@@ -56,9 +56,7 @@ impl Path {
     }
 
     /// Appends a step (remembered only within [`MAX_PATH_DEPTH`]).
-    // One out-of-line copy in firmware builds (feature `compact`): every walker pushes steps.
-    #[cfg_attr(not(feature = "compact"), inline)]
-    #[cfg_attr(feature = "compact", inline(never))]
+    #[inline]
     pub fn push(&mut self, step: Step) {
         if (self.depth as usize) < MAX_PATH_DEPTH {
             self.steps[self.depth as usize] = pack_step(step);
