@@ -180,6 +180,22 @@ struct Job<'w> {
     options: EncodeOptions,
 }
 
+impl<'w> Job<'w> {
+    /// A walk that reads `input` and writes nothing (`skip_below`: see [`Walk::skip_below`]).
+    fn reading(input: &'w dyn Input, tao: bool, skip_below: Option<usize>) -> Self {
+        Job {
+            input: Some(input),
+            out: &mut [],
+            writing: false,
+            skip_below,
+            options: EncodeOptions {
+                tao,
+                ..EncodeOptions::default()
+            },
+        }
+    }
+}
+
 /// Where a walk ended.
 struct Walked {
     /// Bits read.
@@ -688,16 +704,8 @@ pub fn decode<R: BitRead + ?Sized>(
     options: DecodeOptions,
 ) -> Result<Decoded, Error<LeafError>> {
     let mut collect = Collect { leaves, len: 0 };
-    let job = Job {
-        input: Some(&Bits(data)),
-        out: &mut [],
-        writing: false,
-        skip_below: None,
-        options: EncodeOptions {
-            tao: options.tao,
-            ..EncodeOptions::default()
-        },
-    };
+    let bits = Bits(data);
+    let job = Job::reading(&bits, options.tao, None);
     let end = run(layout, root, job, &mut collect)?.read;
     let (used, len) = (end.div_ceil(8), BitRead::bit_len(data) / 8);
     if !options.allow_trailing && len > used {
@@ -819,20 +827,9 @@ fn find<R: BitRead + ?Sized>(
     find: &mut Find<'_>,
     tao: bool,
 ) -> Result<(Leaf, Scalar, bool), LeafAccessError> {
-    let job = Job {
-        input: Some(&Bits(data)),
-        out: &mut [],
-        writing: false,
-        skip_below: if find.path.is_some() {
-            None
-        } else {
-            Some(find.k)
-        },
-        options: EncodeOptions {
-            tao,
-            ..EncodeOptions::default()
-        },
-    };
+    let skip_below = find.path.is_none().then_some(find.k);
+    let bits = Bits(data);
+    let job = Job::reading(&bits, tao, skip_below);
     let walked = run(layout, root, job, find).map_err(plain)?;
     find.found.ok_or(Error {
         kind: ErrorKind::NoSuchLeaf {
@@ -997,16 +994,8 @@ pub fn check_versions(
             }
         }
     }
-    let job = Job {
-        input: Some(&Bits(data)),
-        out: &mut [],
-        writing: false,
-        skip_below: None,
-        options: EncodeOptions {
-            tao: false,
-            ..EncodeOptions::default()
-        },
-    };
+    let bits = Bits(data);
+    let job = Job::reading(&bits, false, None);
     let end = run(layout, root, job, &mut Versions(Scalar::Uint(0), 0))
         .map_err(plain)?
         .read;
