@@ -29,7 +29,7 @@ use crate::translate::TranslateError;
 use crate::value::LeafError;
 
 /// Bits a walk reads: [`BitRead`] behind a pointer, so that one walk serves every kind of data.
-pub trait Input {
+pub(crate) trait Input {
     /// Total number of bits.
     fn bit_len(&self) -> usize;
     /// Bytes `index` and `index + 1` as a big-endian pair, 0 for the second one where it
@@ -55,7 +55,7 @@ impl<R: BitRead + ?Sized> Input for Bits<'_, R> {
 
 /// A leaf as a walk hands it to its [`Visit`].
 #[derive(Clone, Copy, Debug)]
-pub struct LeafAt<'w> {
+pub(crate) struct LeafAt<'w> {
     /// Its number `[k]` in the value read (or, when nothing is read, in the value written).
     pub index: usize,
     /// What it is.
@@ -70,7 +70,7 @@ pub struct LeafAt<'w> {
 
 /// Why a [`Visit`] stops its walk.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Halt {
+pub(crate) enum Halt {
     /// What the visit looked for is found: the walk ends without error.
     Found,
     /// The walk fails at the leaf, with the error [`Visit::refusal`] gives (results stay
@@ -79,7 +79,7 @@ pub enum Halt {
 }
 
 /// What a walk does at each leaf, besides reading and writing it.
-pub trait Visit {
+pub(crate) trait Visit {
     /// Leaf `at`, whose value read is `old` (`None` when the walk reads nothing there).
     /// Returns the value to write in its place (`None`: the value read, or when nothing is
     /// read, the default: zero, or the type's version for `p_version`).
