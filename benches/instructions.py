@@ -4,8 +4,10 @@ bench profile, as criterion's figures are) N times and 0 times, and divides the 
 
     python benches/instructions.py [--n 2000] [--compact] [OP ...]
 
-``--compact`` counts the firmware build of the core (feature ``compact``: the codec without
-its fast paths for flat leaf lists, built for size; see ``benches/size.py``).
+``--compact`` counts the firmware build of the core (feature ``compact``: every value through
+one small walk, built for size; see ``benches/size.py``). ``encode``/``decode`` run the codec
+from and into a leaf list as a host does (the encoder and decoder over a source and a sink);
+``encode_leaves``/``decode_leaves`` as firmware calls it, through the walk in ``compact``.
 
 Skips with a message when valgrind is not installed.
 """
@@ -22,10 +24,12 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 OPS = [
-    "battery/encode", "battery/decode", "ina238/encode", "ina238/decode",
+    "battery/encode", "battery/decode", "battery/encode_leaves", "battery/decode_leaves",
+    "ina238/encode", "ina238/decode", "ina238/encode_leaves", "ina238/decode_leaves",
     "ina238/get_leaf4", "ina238/table_get_leaf4", "ina238/table_read4", "store/get_leaf4",
     "store/read4", "battery/receive", "battery/receive_into", "battery/transfer_crc",
-    "node_status/encode", "node_status/decode", "file_read_response/encode",
+    "node_status/encode", "node_status/decode", "node_status/encode_leaves",
+    "node_status/decode_leaves", "file_read_response/encode",
     "file_read_response/decode",
 ]  # fmt: skip
 
@@ -66,10 +70,10 @@ def main() -> int:
         print("instructions: valgrind is not installed (Debian: apt-get install valgrind)")
         return 0
     binary = build(args.compact)
-    print(f"{'call':22} {'instructions':>12}")
+    print(f"{'call':28} {'instructions':>12}")
     for op in args.ops:
         per_call = (count(binary, op, args.n) - count(binary, op, 0)) / args.n
-        print(f"{op:22} {per_call:>12.0f}")
+        print(f"{op:28} {per_call:>12.0f}")
     return 0
 
 

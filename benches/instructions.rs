@@ -16,14 +16,16 @@
 #[path = "../crates/px4params-core/tests/common/mod.rs"]
 mod common;
 
-use px4params_core::codec::{decode_leaves, encode, encode_leaves, DecodeOptions, EncodeOptions};
+use px4params_core::codec::{
+    decode, decode_leaves, encode, encode_leaves, DecodeOptions, EncodeOptions,
+};
 use px4params_core::compile::OwnedLayout;
 use px4params_core::crc::crc16;
 use px4params_core::leaf::{get_leaf, Target};
 use px4params_core::store::{plan, table_slots, ParamDef, Slot, Store, Which};
 use px4params_core::table::{LeafSlot, LeafTable};
 use px4params_core::transfer::{frames, receive, receive_into};
-use px4params_core::value::LeafSource;
+use px4params_core::value::{LeafSink, LeafSource};
 use px4params_core::Scalar;
 use std::hint::black_box;
 
@@ -91,13 +93,24 @@ fn main() {
         .collect();
     let frame_refs: Vec<&[u8]> = frame_data.iter().map(Vec::as_slice).collect();
     match what {
-        // A flat leaf list, as firmware holds a value: through the walk in compact builds.
         "encode" => repeat(n, || {
+            let mut src = LeafSource::new(black_box(&leaves));
+            let r = encode(&layout, root, &mut src, &mut out, EncodeOptions::default());
+            black_box(r.unwrap());
+        }),
+        "decode" => repeat(n, || {
+            let mut sink = LeafSink::new(&mut storage);
+            let data = black_box(&bytes[..]);
+            let r = decode(&layout, root, data, &mut sink, DecodeOptions::default());
+            black_box(r.unwrap());
+        }),
+        // A flat leaf list, as firmware holds a value: through the walk in compact builds.
+        "encode_leaves" => repeat(n, || {
             let leaves = black_box(&leaves[..]);
             let r = encode_leaves(&layout, root, leaves, &mut out, EncodeOptions::default());
             black_box(r.unwrap());
         }),
-        "decode" => repeat(n, || {
+        "decode_leaves" => repeat(n, || {
             let data = black_box(&bytes[..]);
             let r = decode_leaves(&layout, root, data, &mut storage, DecodeOptions::default());
             black_box(r.unwrap());

@@ -196,8 +196,8 @@ pub fn float_raw(value: Scalar, bits: u32, cast: Cast, saturate: bool) -> Result
     };
     let v = if v.is_finite() && v.abs() > limit {
         match cast {
-            Cast::Truncated => f64::INFINITY.copysign(v),
-            Cast::Saturated if saturate => limit.copysign(v),
+            Cast::Truncated => v.signum() * f64::INFINITY,
+            Cast::Saturated if saturate => v.signum() * limit,
             Cast::Saturated => {
                 return Err(ScalarError::OutOfRange {
                     value,
