@@ -157,10 +157,10 @@ pub(crate) struct Compiled {
     classic_roots: [NodeId; 2],
     /// Every field name as an interned Python string, by field index (decoding builds dicts).
     names: Vec<Py<PyString>>,
-    /// Per struct node, made on first use: a dict of its field names (values None) that
-    /// decoding copies and fills, cheaper than growing a new dict key by key; `None` for
-    /// structs small enough for a new dict (see [`Compiled::new_dict`]).
-    templates: Vec<std::sync::OnceLock<Option<Py<PyDict>>>>,
+    /// Per struct node of more fields than a new dict holds without growing, made on first
+    /// use: a dict of its field names (values None) that decoding copies and fills, cheaper
+    /// than growing a new dict key by key (see [`Compiled::new_dict`]).
+    templates: Vec<std::sync::OnceLock<Py<PyDict>>>,
     /// Per node, made on first use: the struct's program, when it has one.
     programs: Vec<std::sync::OnceLock<Option<program::Program>>>,
     /// Per node: the key of the type it is (empty for nodes that are no type of the model).
@@ -199,23 +199,20 @@ impl Compiled {
     /// fields than a new dict holds without growing gets a copy of its template (its field
     /// names, values None, made on first use): replacing values costs less than growing.
     fn new_dict<'py>(&self, py: Python<'py>, id: NodeId) -> PyResult<Bound<'py, PyDict>> {
+        // A plain count first: small structs (most messages) skip the template's lock.
+        if self.named_count(id) as usize <= SMALL_DICT {
+            return Ok(PyDict::new(py));
+        }
         let template = self.templates[id as usize].get_or_init(|| {
-            let named = self.named_fields(id);
-            if named.clone().count() <= SMALL_DICT {
-                return None;
-            }
             let dict = PyDict::new(py);
-            for index in named {
+            for index in self.named_fields(id) {
                 // Inserting into a new dict fails only without memory: the copy below would
                 // fail the same way and raise.
                 let _ = dict.set_item(self.names[index as usize].bind(py), py.None());
             }
-            Some(dict.unbind())
+            dict.unbind()
         });
-        match template {
-            Some(template) => template.bind(py).copy(),
-            None => Ok(PyDict::new(py)),
-        }
+        template.bind(py).copy()
     }
 
     /// The program of type `root`, compiled on first use.

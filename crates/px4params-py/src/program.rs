@@ -12,8 +12,9 @@
 //! subclass, a missing or unknown field, a number out of range, short data, trailing bytes)
 //! makes it give up; the general path then does the work or words the error.
 
-use std::slice;
+use std::mem::MaybeUninit;
 use std::sync::Arc;
+use std::{ptr, slice};
 
 use px4params_core::bits::{read_bits, BitWriter};
 use px4params_core::codec::{read_scalar, scalar_bits, scalar_stream};
@@ -219,15 +220,23 @@ impl Program {
         tao: bool,
         allow_trailing: bool,
     ) -> PyResult<Option<Bound<'py, PyAny>>> {
-        // Short data is read from a copy with zeros after it, so that every read takes the
-        // bit reader's fast path (a whole 8-byte window; the bounds are checked on `bit_len`).
-        let mut padded = [0u8; 256];
-        let window = match padded.get_mut(..data.len()) {
-            Some(head) if data.len() + 8 <= 256 => {
-                head.copy_from_slice(data);
-                &padded[..]
+        // Short data is read from a copy with 8 zero bytes after it, so that every read takes
+        // the bit reader's fast path (a whole 8-byte window; the bounds are checked on
+        // `bit_len`). Only those bytes are written: zeroing the whole buffer would cost as
+        // much as decoding a small message's field.
+        let mut padded = [MaybeUninit::<u8>::uninit(); 256];
+        let len = data.len();
+        let window = if len + 8 <= padded.len() {
+            // SAFETY: `len` bytes from `data` and 8 zeros fit the buffer; the slice made
+            // covers exactly the bytes written.
+            unsafe {
+                let to = padded.as_mut_ptr().cast::<u8>();
+                ptr::copy_nonoverlapping(data.as_ptr(), to, len);
+                ptr::write_bytes(to.add(len), 0, 8);
+                slice::from_raw_parts(to.cast_const(), len + 8)
             }
-            _ => data,
+        } else {
+            data
         };
         let mut decoder = Decoder {
             py,
@@ -523,6 +532,17 @@ impl<'py> Decoder<'_, 'py> {
         self.bit_len - self.pos
     }
 
+    /// The next unsigned integer of `bits` bits (1..=64), or `None` when the data ends first.
+    #[inline(always)]
+    fn uint(&mut self, bits: u32) -> Option<u64> {
+        if bits as usize > self.bits_left() {
+            return None;
+        }
+        let raw = scalar::from_stream(read_bits(self.data, self.pos, bits), bits);
+        self.pos += bits as usize;
+        Some(raw)
+    }
+
     /// The next primitive, or `None` when the data ends first.
     #[inline(always)]
     fn scalar(&mut self, kind: Kind) -> Option<Scalar> {
@@ -545,10 +565,22 @@ impl<'py> Decoder<'_, 'py> {
         while let Some(&step) = steps.next() {
             let (name, item) = match step {
                 Step::Leaf { name, kind } | Step::Version { name, kind, .. } => {
-                    let Some(value) = self.scalar(kind) else {
-                        return Ok(None);
+                    let item = match kind {
+                        // Unsigned fields, the most common, go straight to a Python int.
+                        Kind::Uint { bits, .. } => {
+                            let Some(raw) = self.uint(bits.into()) else {
+                                return Ok(None);
+                            };
+                            raw.into_pyobject(self.py)?.into_any()
+                        }
+                        _ => {
+                            let Some(value) = self.scalar(kind) else {
+                                return Ok(None);
+                            };
+                            scalar_to_py(self.py, value)?
+                        }
                     };
-                    (name, scalar_to_py(self.py, value)?)
+                    (name, item)
                 }
                 Step::Run { .. } => continue,
                 Step::Pad { bits } => {
