@@ -166,6 +166,52 @@ impl<'py> Form<'py> for Fields<'py> {
 pub(crate) struct Program {
     root: NodeId,
     steps: Box<[Step]>,
+    /// For a type of primitives and padding alone (NodeStatus, most small messages): each
+    /// field at its bit offset, which is fixed, so that decoding interprets no steps.
+    fixed: Option<Fixed>,
+}
+
+/// The fields of a type of primitives and padding alone, and its length in bits.
+#[derive(Debug)]
+struct Fixed {
+    fields: Box<[FixedField]>,
+    bits: usize,
+}
+
+/// A primitive field at a fixed bit offset.
+#[derive(Clone, Copy, Debug)]
+struct FixedField {
+    name: u32,
+    kind: Kind,
+    offset: u32,
+}
+
+impl Fixed {
+    /// The fields of `steps` (a root struct's, without runs) when all are primitives and
+    /// padding.
+    fn of(steps: &[Step]) -> Option<Self> {
+        let mut fields = Vec::with_capacity(steps.len());
+        let mut bits = 0u32;
+        for &step in steps {
+            match step {
+                Step::Leaf { name, kind } | Step::Version { name, kind, .. } => {
+                    fields.push(FixedField {
+                        name,
+                        kind,
+                        offset: bits,
+                    });
+                    bits += scalar_bits(kind);
+                }
+                Step::Pad { bits: pad } => bits += u32::from(pad),
+                Step::End => {}
+                Step::Begin { .. } | Step::Array { .. } | Step::Run { .. } => return None,
+            }
+        }
+        Some(Self {
+            fields: fields.into(),
+            bits: bits as usize,
+        })
+    }
 }
 
 impl Program {
@@ -179,6 +225,7 @@ impl Program {
         steps.push(Step::End);
         Some(Self {
             root,
+            fixed: Fixed::of(&steps),
             steps: with_runs(&steps).into(),
         })
     }
@@ -246,6 +293,15 @@ impl Program {
             pos: 0,
             tao,
         };
+        if let Some(fixed) = &self.fixed {
+            // Short data, or trailing bytes not allowed: the general path words the error.
+            let fits = data.len() * 8 >= fixed.bits
+                && (allow_trailing || data.len() == fixed.bits.div_ceil(8));
+            if !fits {
+                return Ok(None);
+            }
+            return decoder.fixed::<F>(&fixed.fields, self.root).map(Some);
+        }
         let Some(value) = decoder.fields::<F>(&mut self.steps.iter(), self.root)? else {
             return Ok(None);
         };
@@ -553,6 +609,30 @@ impl<'py> Decoder<'_, 'py> {
         let value = read_scalar(self.data, self.pos, kind);
         self.pos += bits;
         Some(value)
+    }
+
+    /// A struct (of type `node`) of primitives and padding alone, into a new `F`; the data
+    /// holds all of its bits.
+    fn fixed<F: Form<'py>>(
+        &self,
+        fields: &[FixedField],
+        node: NodeId,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let mut built = F::begin(self.py, self.compiled, node)?;
+        for field in fields {
+            let offset = field.offset as usize;
+            let item = match field.kind {
+                Kind::Uint { bits, .. } => {
+                    let raw = read_bits(self.data, offset, bits.into());
+                    scalar::from_stream(raw, bits.into())
+                        .into_pyobject(self.py)?
+                        .into_any()
+                }
+                kind => scalar_to_py(self.py, read_scalar(self.data, offset, kind))?,
+            };
+            built.put(self.py, self.compiled, field.name, item)?;
+        }
+        built.end(self.py, self.compiled, node)
     }
 
     /// The steps of one struct (of type `node`), up to its [`Step::End`], into a new `F`.
