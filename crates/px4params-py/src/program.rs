@@ -588,27 +588,18 @@ impl<'py> Decoder<'_, 'py> {
         self.bit_len - self.pos
     }
 
-    /// The next unsigned integer of `bits` bits (1..=64), or `None` when the data ends first.
+    /// The primitive of `kind` at bit `offset` as a Python object; the data holds its bits.
     #[inline(always)]
-    fn uint(&mut self, bits: u32) -> Option<u64> {
-        if bits as usize > self.bits_left() {
-            return None;
+    fn primitive_at(&self, kind: Kind, offset: usize) -> PyResult<Bound<'py, PyAny>> {
+        match kind {
+            // Unsigned fields, the most common, go straight to a Python int.
+            Kind::Uint { bits, .. } => {
+                let raw = read_bits(self.data, offset, bits.into());
+                let value = scalar::from_stream(raw, bits.into());
+                Ok(value.into_pyobject(self.py)?.into_any())
+            }
+            _ => scalar_to_py(self.py, read_scalar(self.data, offset, kind)),
         }
-        let raw = scalar::from_stream(read_bits(self.data, self.pos, bits), bits);
-        self.pos += bits as usize;
-        Some(raw)
-    }
-
-    /// The next primitive, or `None` when the data ends first.
-    #[inline(always)]
-    fn scalar(&mut self, kind: Kind) -> Option<Scalar> {
-        let bits = scalar_bits(kind) as usize;
-        if bits > self.bits_left() {
-            return None;
-        }
-        let value = read_scalar(self.data, self.pos, kind);
-        self.pos += bits;
-        Some(value)
     }
 
     /// A struct (of type `node`) of primitives and padding alone, into a new `F`; the data
@@ -620,16 +611,7 @@ impl<'py> Decoder<'_, 'py> {
     ) -> PyResult<Bound<'py, PyAny>> {
         let mut built = F::begin(self.py, self.compiled, node)?;
         for field in fields {
-            let offset = field.offset as usize;
-            let item = match field.kind {
-                Kind::Uint { bits, .. } => {
-                    let raw = read_bits(self.data, offset, bits.into());
-                    scalar::from_stream(raw, bits.into())
-                        .into_pyobject(self.py)?
-                        .into_any()
-                }
-                kind => scalar_to_py(self.py, read_scalar(self.data, offset, kind))?,
-            };
+            let item = self.primitive_at(field.kind, field.offset as usize)?;
             built.put(self.py, self.compiled, field.name, item)?;
         }
         built.end(self.py, self.compiled, node)
@@ -645,21 +627,12 @@ impl<'py> Decoder<'_, 'py> {
         while let Some(&step) = steps.next() {
             let (name, item) = match step {
                 Step::Leaf { name, kind } | Step::Version { name, kind, .. } => {
-                    let item = match kind {
-                        // Unsigned fields, the most common, go straight to a Python int.
-                        Kind::Uint { bits, .. } => {
-                            let Some(raw) = self.uint(bits.into()) else {
-                                return Ok(None);
-                            };
-                            raw.into_pyobject(self.py)?.into_any()
-                        }
-                        _ => {
-                            let Some(value) = self.scalar(kind) else {
-                                return Ok(None);
-                            };
-                            scalar_to_py(self.py, value)?
-                        }
-                    };
+                    let bits = scalar_bits(kind) as usize;
+                    if bits > self.bits_left() {
+                        return Ok(None);
+                    }
+                    let item = self.primitive_at(kind, self.pos)?;
+                    self.pos += bits;
                     (name, item)
                 }
                 Step::Run { .. } => continue,
