@@ -545,6 +545,11 @@ impl<S: Source> Encoder<'_, '_, S> {
     }
 
     fn elements(&mut self, elem: NodeId, n: usize, tao: bool) -> Result<(), Stop> {
+        if n == 0 {
+            // Empty arrays (an empty read, an unnamed device) are common in small messages.
+            self.source.end_array();
+            return Ok(());
+        }
         let kind = self.layout.node(elem).kind;
         if S::FLAT && FAST_PATHS && is_scalar(kind) {
             let saturate = self.saturate;
@@ -1186,6 +1191,12 @@ pub(crate) fn scalar_raw(
     value: Scalar,
     saturate: bool,
 ) -> Result<u64, scalar::ScalarError> {
+    if let (Kind::Int { bits, .. }, Scalar::Int(v), true) = (kind, value, FAST_PATHS) {
+        // In range (sign-extending from the field's width gives the value back): no casting.
+        if scalar::sign_extend(v as u64, bits.into()) == v {
+            return Ok(v as u64 & crate::bits::field_mask(bits.into()));
+        }
+    }
     match kind {
         Kind::Uint { bits, cast } => scalar::uint_raw(value, bits.into(), cast, saturate),
         Kind::Int { bits, cast } => scalar::int_raw(value, bits.into(), cast, saturate),
