@@ -1,5 +1,7 @@
 //! Encode and decode of `px.Ina238` and `uavcan.equipment.power.BatteryInfo` through the
-//! flat leaf representation, plus leaf access in encoded data.
+//! flat leaf representation, plus leaf access in encoded data; encode and decode of issue 18's
+//! small messages (`uavcan.protocol.NodeStatus`, an empty `uavcan.protocol.file.Read`
+//! response), whose fixed cost per call dominates.
 
 #[path = "../crates/px4params-core/tests/common/mod.rs"]
 mod common;
@@ -47,6 +49,39 @@ fn encoded(layout: &Layout<'_>, root: NodeId, leaves: &[Scalar]) -> Vec<u8> {
     out
 }
 
+/// `<name>/encode` and `<name>/decode` of the value `leaves`.
+fn bench_codec(
+    c: &mut Criterion,
+    name: &str,
+    layout: &Layout<'_>,
+    root: NodeId,
+    leaves: &[Scalar],
+) {
+    let bytes = encoded(layout, root, leaves);
+    let mut out = vec![0u8; layout.max_bytes(root)];
+    c.bench_function(&format!("{name}/encode"), |b| {
+        b.iter(|| {
+            let mut src = LeafSource::new(black_box(leaves));
+            encode(layout, root, &mut src, &mut out, EncodeOptions::default()).unwrap()
+        })
+    });
+    let mut storage = [Scalar::Uint(0); 64];
+    c.bench_function(&format!("{name}/decode"), |b| {
+        b.iter(|| {
+            let mut sink = LeafSink::new(&mut storage);
+            decode(
+                layout,
+                root,
+                black_box(&bytes[..]),
+                &mut sink,
+                DecodeOptions::default(),
+            )
+            .unwrap()
+        })
+    });
+}
+
+/// The codec rows, then leaf access to the middle leaf of the value `leaves`.
 fn bench_type(
     c: &mut Criterion,
     name: &str,
@@ -56,28 +91,9 @@ fn bench_type(
     let mut owned = OwnedLayout::default();
     let root = build(&mut owned);
     let layout = owned.as_layout();
+    bench_codec(c, name, &layout, root, &leaves);
     let bytes = encoded(&layout, root, &leaves);
     let mut out = vec![0u8; layout.max_bytes(root)];
-    c.bench_function(&format!("{name}/encode"), |b| {
-        b.iter(|| {
-            let mut src = LeafSource::new(black_box(&leaves));
-            encode(&layout, root, &mut src, &mut out, EncodeOptions::default()).unwrap()
-        })
-    });
-    let mut storage = [Scalar::Uint(0); 64];
-    c.bench_function(&format!("{name}/decode"), |b| {
-        b.iter(|| {
-            let mut sink = LeafSink::new(&mut storage);
-            decode(
-                &layout,
-                root,
-                black_box(&bytes[..]),
-                &mut sink,
-                DecodeOptions::default(),
-            )
-            .unwrap()
-        })
-    });
     let k = leaves.len() / 2;
     c.bench_function(&format!("{name}/get_leaf"), |b| {
         b.iter(|| {
@@ -222,6 +238,15 @@ fn transfer_crc(c: &mut Criterion) {
 fn codec(c: &mut Criterion) {
     bench_type(c, "px.Ina238", common::ina238, ina238_leaves());
     bench_type(c, "BatteryInfo", common::battery_info, battery_leaves());
+    let mut owned = OwnedLayout::default();
+    let root = common::node_status(&mut owned);
+    let leaves = [12345, 0, 0, 0, 7].map(Scalar::Uint);
+    bench_codec(c, "NodeStatus", &owned.as_layout(), root, &leaves);
+    let mut owned = OwnedLayout::default();
+    let root = common::file_read_response(&mut owned);
+    // An empty read: the error value and the data's length.
+    let leaves = [Scalar::Int(0), Scalar::Uint(0)];
+    bench_codec(c, "file.Read.Response", &owned.as_layout(), root, &leaves);
 }
 
 criterion_group!(benches, codec, descatter, transfer_crc);
