@@ -545,11 +545,6 @@ impl<S: Source> Encoder<'_, '_, S> {
     }
 
     fn elements(&mut self, elem: NodeId, n: usize, tao: bool) -> Result<(), Stop> {
-        if n == 0 {
-            // Empty arrays (an empty read, an unnamed device) are common in small messages.
-            self.source.end_array();
-            return Ok(());
-        }
         let kind = self.layout.node(elem).kind;
         if S::FLAT && FAST_PATHS && is_scalar(kind) {
             let saturate = self.saturate;
