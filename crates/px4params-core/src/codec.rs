@@ -1186,10 +1186,14 @@ pub(crate) fn scalar_raw(
     value: Scalar,
     saturate: bool,
 ) -> Result<u64, scalar::ScalarError> {
-    if let (Kind::Int { bits, .. }, Scalar::Int(v), true) = (kind, value, FAST_PATHS) {
-        // In range (sign-extending from the field's width gives the value back): no casting.
-        if scalar::sign_extend(v as u64, bits.into()) == v {
-            return Ok(v as u64 & crate::bits::field_mask(bits.into()));
+    // Hosts only (firmware keeps this function small): a signed value in range, which
+    // sign-extending from the field's width gives back, needs no casting rules. Here rather
+    // than in `fast_raw`, whose every unsigned field it would slow.
+    if FAST_PATHS {
+        if let (Kind::Int { bits, .. }, Scalar::Int(v)) = (kind, value) {
+            if scalar::sign_extend(v as u64, bits.into()) == v {
+                return Ok(v as u64 & crate::bits::field_mask(bits.into()));
+            }
         }
     }
     match kind {
