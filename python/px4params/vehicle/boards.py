@@ -122,7 +122,8 @@ class Board:
     releases: tuple[str, ...] = ()
     external_i2c_buses: tuple[int, ...] = ()
     internal_i2c_buses: tuple[int, ...] = ()
-    #: Shell conditions around the launcher (it runs only while no SENS_EN_INA2xx is 1), or "".
+    #: Shell conditions around the launcher per bus (``bus 1: $INA_CONFIGURED == no; ...``: it
+    #: runs only while no SENS_EN_INA2xx switch is 1), or "".
     i2c_launcher_when: str = ""
 
 
@@ -179,11 +180,19 @@ class BoardTable:
         return tuple(s.release for s in self._snapshots)
 
     def snapshot_for(self, release: str | int | None) -> str | None:
-        """The snapshot whose facts hold for ``release`` (None: today's, ``main``); None when the
-        release is older than every snapshot."""
+        """The snapshot whose facts hold for ``release`` (None, or a release series newer than
+        every release snapshot: today's, ``main``); None when the release is older than every
+        snapshot."""
         if release is None:
             return self._snapshots[-1].release
         wanted = tuple(float(x) for x in release_version(release))
+        released = [s for s in self._snapshots if s.release != _MAIN]
+        if (
+            self._snapshots[-1].release == _MAIN
+            and released
+            and wanted[:2] > released[-1].order[:2]
+        ):
+            return _MAIN  # a release newer than every release snapshot: today's main
         chosen = None
         for snap in self._snapshots:
             if snap.order <= wanted:
