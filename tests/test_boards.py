@@ -131,6 +131,12 @@ def test_cubeorange_imus_are_on_spi() -> None:
         True,
     )
     assert device(board, "ms5611", bus=1).kind == "baro"
+    # "-M": the ICM-20948's own magnetometer (icm20948_main.cpp's usage: "Enable Magnetometer"),
+    # so the board starts an internal compass on SPI 4 with the IMU's rotation
+    kinds = [
+        (d.kind, d.bus_kind, d.bus, d.rotation) for d in board.devices if d.driver == "icm20948"
+    ]
+    assert kinds == [("imu", "SPI", 4, 10), ("mag", "SPI", 4, 10)]
     assert board.i2c_launcher_buses == ()
 
 

@@ -30,7 +30,8 @@ A device or switch entry has ``driver``, ``kind`` (mag, baro, imu, power, other)
 command's options as written), ``line`` (in the newest snapshot of the row) and optional
 ``bus``, ``address``, ``rotation`` (the ``-R`` value, PX4's rotation enum) and ``when`` (the
 shell conditions around it, e.g. ``hw_type in V6C000002,V6C002002`` or ``$HAVE_PM2 == yes``).
-A switch entry also names its ``param``. A switch started with ``-X`` and no ``-b`` probes every
+An ``icm20948`` or ``mpu9250`` started with ``-M`` (the driver's "Enable Magnetometer") is
+listed twice, as ``imu`` and as ``mag``. A switch entry also names its ``param``. A switch started with ``-X`` and no ``-b`` probes every
 external I2C bus, so :class:`SwitchStart` rows are one per external bus of the board.
 
 A release picks the newest snapshot at or before it (a v1.16 log is read with v1.15.0's facts,
