@@ -24,6 +24,7 @@ from px4params.vehicle.boards import (
     load_boards,
     parse_boards,
     release_version,
+    render_markdown,
 )
 from shared_data import shared_file
 
@@ -487,3 +488,28 @@ def test_every_start_is_on_the_line_it_cites() -> None:
                 ), (start, written)
                 checked += 1
     assert checked > 1000
+
+
+# -- docs/boards.md -----------------------------------------------------------------------------
+
+DOCS = Path(__file__).resolve().parents[1] / "docs" / "boards.md"
+GENERATED = "<!-- generated from python/px4params/data/boards.toml"
+
+
+def test_docs_table_is_the_toml() -> None:
+    page = DOCS.read_text(encoding="utf-8")
+    assert GENERATED in page
+    generated = page.split(GENERATED, 1)[1].split("-->\n\n", 1)[1]
+    assert generated == render_markdown(load_boards()), (
+        "docs/boards.md is not boards.toml: regenerate its part after the 'generated' comment "
+        "with px4params.vehicle.boards.render_markdown(load_boards())"
+    )
+
+
+def test_docs_python_example_prints_what_it_says(capsys: pytest.CaptureFixture[str]) -> None:
+    page = DOCS.read_text(encoding="utf-8")
+    blocks = re.findall(r"```python\n(.*?)```", page, re.S)
+    assert len(blocks) == 1
+    exec(compile(blocks[0], str(DOCS), "exec"), {})
+    promised = re.findall(r"# (.+)$", blocks[0], re.M)
+    assert capsys.readouterr().out.splitlines() == promised

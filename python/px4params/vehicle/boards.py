@@ -31,8 +31,9 @@ command's options as written), ``line`` (in the newest snapshot of the row) and 
 ``bus``, ``address``, ``rotation`` (the ``-R`` value, PX4's rotation enum) and ``when`` (the
 shell conditions around it, e.g. ``hw_type in V6C000002,V6C002002`` or ``$HAVE_PM2 == yes``).
 An ``icm20948`` or ``mpu9250`` started with ``-M`` (the driver's "Enable Magnetometer") is
-listed twice, as ``imu`` and as ``mag``. A switch entry also names its ``param``. A switch started with ``-X`` and no ``-b`` probes every
-external I2C bus, so :class:`SwitchStart` rows are one per external bus of the board.
+listed twice, as ``imu`` and as ``mag``. A switch entry also names its ``param``. A switch
+started with ``-X`` and no ``-b`` probes every external I2C bus, so :class:`SwitchStart` rows
+are one per external bus of the board.
 
 A release picks the newest snapshot at or before it (a v1.16 log is read with v1.15.0's facts,
 as no v1.16/v1.17 snapshot was read); releases older than the oldest snapshot have no entry.
@@ -64,6 +65,7 @@ __all__ = [
     "load_boards",
     "parse_boards",
     "release_version",
+    "render_markdown",
 ]
 
 #: What a device measures, as the table names it.
@@ -169,11 +171,14 @@ class BoardTable:
         rows: Mapping[tuple[str, str], Board],
         names: Sequence[str],
         ver_hw: Mapping[str, str],
+        rc_sensors: Mapping[str, Sequence[tuple[Mapping[str, Any], str]]] | None = None,
     ) -> None:
         self._snapshots = tuple(sorted(snapshots, key=lambda s: s.order))
         self._rows = dict(rows)
         self._names = tuple(names)
         self._ver_hw = dict(ver_hw)
+        #: release -> rc.sensors switch starts as written (no bus: every external bus).
+        self._rc_sensors = dict(rc_sensors or {})
 
     @property
     def releases(self) -> tuple[str, ...]:
@@ -237,12 +242,12 @@ class BoardTable:
 
     def variants(self, name: str) -> tuple[Board, ...]:
         """Every row of board ``name``, oldest first (one per run of unchanged snapshots)."""
-        seen: list[Board] = []
+        newest: dict[tuple[str, ...], Board] = {}  # a TOML row, as its newest snapshot reads
         for snap in self._snapshots:
             row = self._rows.get((name, snap.release))
-            if row is not None and row not in seen:
-                seen.append(row)
-        return tuple(seen)
+            if row is not None:
+                newest[row.releases] = row
+        return tuple(newest.values())
 
 
 # -- reading the file -------------------------------------------------------------------------
@@ -504,7 +509,7 @@ def parse_boards(text: str, file: str = "boards.toml") -> BoardTable:
             )
         if name not in names:
             names.append(name)
-    return BoardTable(tuple(snapshots.values()), rows, names, ver_hw_names)
+    return BoardTable(tuple(snapshots.values()), rows, names, ver_hw_names, common)
 
 
 def _expand(
@@ -545,6 +550,93 @@ def _expand(
         )
         for bus in buses
     ]
+
+
+# -- the table as documentation ----------------------------------------------------------------
+
+
+def _cell(value: object) -> str:
+    if value is None or value == "":
+        return ""
+    if isinstance(value, bool):
+        return "yes" if value else "no"
+    return str(value).replace("|", "\\|")
+
+
+def _starts_table(
+    starts: Sequence[BoardDevice | SwitchStart | tuple[Mapping[str, Any], str]],
+) -> list[str]:
+    lines = [
+        "| switch | driver | kind | bus | address | -R | internal | when | options | line |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for start in starts:
+        if isinstance(start, tuple):
+            f = dict(start[0])
+            f["source"] = start[1]
+            if f["bus"] is None and f["bus_kind"] == "I2C":
+                f["bus"] = "every " + ("internal" if f["internal"] else "external")
+        else:
+            f = vars(start)
+        bus = f["bus_kind"] + (f" {f['bus']}" if f["bus"] is not None else "")
+        address = f"0x{f['address']:02x}" if f["address"] is not None else ""
+        line = f["source"].split(" ")[1].rsplit(":", 1)[-1]
+        cells = (
+            f.get("param", ""),
+            f["driver"],
+            f["kind"],
+            bus,
+            address,
+            f["rotation"],
+            f["internal"],
+            f["when"],
+            f"`{f['args'].removesuffix(' start')}`",
+            line,
+        )
+        lines.append("| " + " | ".join(_cell(c) for c in cells) + " |")
+    return lines
+
+
+def render_markdown(table: BoardTable) -> str:
+    """The generated part of ``docs/boards.md``: the snapshots, every board with its rows, and
+    rc.sensors' switch starts (a test keeps the page equal to this)."""
+    out = ["### Snapshots read", ""]
+    out += ["| release | PX4-Autopilot ref | commit | date |", "|---|---|---|---|"]
+    for snap in table._snapshots:
+        out.append(f"| {snap.release} | {snap.ref} | `{snap.commit}` | {snap.date} |")
+    out += ["", "### Boards", ""]
+    out += ["| board | label | ver_hw | rows (snapshots) |", "|---|---|---|---|"]
+    for board in table.all():
+        rows = " / ".join(", ".join(v.releases) for v in table.variants(board.name))
+        hw = ", ".join(board.ver_hw)
+        out.append(f"| [{board.name}](#{board.name}) | {board.label} | {hw} | {rows} |")
+    for board in table.all():
+        out += ["", f"#### {board.name}", ""]
+        for variant in table.variants(board.name):
+            out.append(
+                f"**{', '.join(variant.releases)}**: {variant.source.split(' and ROMFS')[0]}."
+            )
+            out.append("")
+            launcher = ", ".join(str(b) for b in variant.i2c_launcher_buses) or "none"
+            when = f" ({variant.i2c_launcher_when})" if variant.i2c_launcher_when else ""
+            out.append(
+                f"I2C buses: external {list(variant.external_i2c_buses)}, internal "
+                f"{list(variant.internal_i2c_buses)}; i2c_launcher scans: {launcher}{when}."
+            )
+            own = [s for s in variant.switches if "/rc.sensors:" not in s.source]
+            if variant.devices or own:
+                out += ["", *_starts_table([*variant.devices, *own])]
+            out.append("")
+    out += ["### Switch starts every board runs (ROMFS/px4fmu_common/init.d/rc.sensors)", ""]
+    seen: list[int] = []
+    for snap in table._snapshots:
+        starts = table._rc_sensors.get(snap.release)
+        if starts is None or id(starts) in seen:
+            continue
+        seen.append(id(starts))
+        releases = [r for r, s in table._rc_sensors.items() if s is starts]
+        out += [f"**{', '.join(releases)}**", "", *_starts_table(list(starts)), ""]
+    return "\n".join(out).rstrip("\n") + "\n"
 
 
 @functools.cache
