@@ -282,6 +282,15 @@ def test_mr_tropic_log_agrees_with_the_table_where_the_script_did_not_change() -
     # the vendor branch ran its launcher on bus 1; the merged board scans bus 3
     assert "running 'ina228 -X -b 1 -t 1 start'" in console
     assert board.i2c_launcher_buses == (3,)
+    # what it found is what the launcher tries (src/systemcmds/i2c_launcher/i2c_launcher.hpp:
+    # ina226 at 0x41, then ina228 and ina238 at 0x45)
+    found = re.search(r"Found address (0x[0-9a-f]+), running '(\w+) (.*)'", console)
+    assert found
+    probes = [(p.address, p.driver) for p in board.i2c_launcher_probes]
+    assert probes == [(0x41, "ina226"), (0x45, "ina228"), (0x45, "ina238")]
+    assert (int(found[1], 16), found[2]) in probes
+    args = board.i2c_launcher_probes[1].args.format(bus=1, index=1)
+    assert found[3] == args == "-X -b 1 -t 1 start"
 
 
 # -- bad rows ------------------------------------------------------------------------------------
@@ -417,6 +426,15 @@ def test_a_bad_row_is_named_in_one_line(old: str, new: str, message: str) -> Non
     assert "\n" not in text
 
 
+def test_a_launcher_without_what_it_tries_is_refused() -> None:
+    with pytest.raises(BoardsFileError) as err:
+        parse_boards(GOOD.replace("i2c_launcher_buses = []", "i2c_launcher_buses = [1]"))
+    assert str(err.value) == (
+        "boards.toml: board 'px4_fmu-v5' at v1.14.0: "
+        "i2c_launcher_buses but no [[i2c_launcher]] row for 'v1.14.0'"
+    )
+
+
 def test_a_board_twice_for_one_release_is_refused() -> None:
     board = GOOD[GOOD.index("[[board]]") :]
     with pytest.raises(BoardsFileError) as err:
@@ -487,6 +505,13 @@ def test_every_start_is_on_the_line_it_cites() -> None:
                     start.args.replace(" start", "") in words and start.driver in words
                 ), (start, written)
                 checked += 1
+            for probe in variant.i2c_launcher_probes:
+                m = cite.match(probe.source)
+                assert m, probe.source
+                text = _show(tuple(dirs), m.group(3), m.group(1))
+                assert text is not None
+                written = text.split("\n")[int(m.group(2)) - 1]
+                assert f'{{"{probe.driver}", 0x{probe.address:02x},' in written.replace("0x0", "0x")
     assert checked > 1000
 
 

@@ -21,6 +21,10 @@ a few snapshots (tagged releases and branches, listed in its ``[[snapshot]]`` ta
     ``board_config.h`` where there is none, named by ``i2c_buses_path``),
     ``i2c_launcher_buses`` and optional ``i2c_launcher_when``, and the lists ``device`` (started
     whatever the parameters) and ``switch`` (started behind a parameter).
+``[[i2c_launcher]]``
+    ``releases``, ``path``, ``args`` (the command it runs for a device it finds, ``{bus}`` and
+    ``{index}`` filled in) and a ``probe`` list (``driver``, ``kind``, ``address``, ``line``) in
+    the order it tries them: ``src/systemcmds/i2c_launcher``, the same for every board.
 ``[[rc_sensors]]``
     ``releases``, ``path`` and a ``switch`` list: ``ROMFS/px4fmu_common/init.d/rc.sensors``,
     the same for every board.
@@ -61,6 +65,7 @@ __all__ = [
     "BoardTable",
     "BoardsError",
     "BoardsFileError",
+    "LauncherProbe",
     "SwitchStart",
     "load_boards",
     "parse_boards",
@@ -112,6 +117,18 @@ class SwitchStart:
 
 
 @dataclass(frozen=True)
+class LauncherProbe:
+    """An address the board's ``i2c_launcher`` tries on each of its buses, and the driver it
+    starts there (``args`` with ``{bus}`` and ``{index}``, the battery index, to fill in)."""
+
+    driver: str
+    kind: str
+    address: int
+    args: str
+    source: str
+
+
+@dataclass(frozen=True)
 class Board:
     """One board over the PX4 snapshots in ``releases``."""
 
@@ -128,6 +145,8 @@ class Board:
     #: Shell conditions around the launcher per bus (``bus 1: $INA_CONFIGURED == no; ...``: it
     #: runs only while no SENS_EN_INA2xx switch is 1), or "".
     i2c_launcher_when: str = ""
+    #: What the launcher tries on each of ``i2c_launcher_buses``, in order (empty without one).
+    i2c_launcher_probes: tuple[LauncherProbe, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -239,6 +258,9 @@ class BoardTable:
                 if row is not None:
                     newest[name] = row
         return tuple(newest[n] for n in self._names if n in newest)
+
+    def _boards_at(self, release: str) -> list[Board]:
+        return [row for (_, snap), row in self._rows.items() if snap == release]
 
     def variants(self, name: str) -> tuple[Board, ...]:
         """Every row of board ``name``, oldest first (one per run of unchanged snapshots)."""
@@ -374,7 +396,7 @@ def parse_boards(text: str, file: str = "boards.toml") -> BoardTable:
     except tomllib.TOMLDecodeError as exc:
         raise BoardsFileError(f"{file}: not TOML: {exc}") from None
     top = _Row(file, "top level", doc)
-    top.only(("snapshot", "board"), ("rc_sensors",))
+    top.only(("snapshot", "board"), ("rc_sensors", "i2c_launcher"))
 
     snapshots: dict[str, _Snapshot] = {}
     for i, table in enumerate(top.tables("snapshot"), 1):
@@ -420,6 +442,31 @@ def parse_boards(text: str, file: str = "boards.toml") -> BoardTable:
             if snap.release in common:
                 row.fail(f"release {snap.release!r} has two [[rc_sensors]] rows")
             common[snap.release] = starts
+
+    launcher: dict[str, tuple[LauncherProbe, ...]] = {}
+    for i, table in enumerate(top.tables("i2c_launcher"), 1):
+        row = _Row(file, f"i2c_launcher {i}", table)
+        row.only(("releases", "path", "args", "probe"))
+        snaps = releases_of(row)
+        path, args = row.text("path"), row.text("args")
+        probes = []
+        for j, entry in enumerate(row.tables("probe"), 1):
+            probe = _Row(file, f"{row.where} probe {j}", entry)
+            probe.only(("driver", "kind", "address", "line"))
+            line = probe.number("line", 1, 100_000)
+            probes.append(
+                LauncherProbe(
+                    driver=probe.text("driver"),
+                    kind=probe.choice("kind", KINDS),
+                    address=probe.number("address", 0, 127),  # type: ignore[arg-type]
+                    args=args,
+                    source=cite(path, line, snaps),  # type: ignore[arg-type]
+                )
+            )
+        for snap in snaps:
+            if snap.release in launcher:
+                row.fail(f"release {snap.release!r} has two [[i2c_launcher]] rows")
+            launcher[snap.release] = tuple(probes)
 
     rows: dict[tuple[str, str], Board] = {}
     names: list[str] = []
@@ -494,18 +541,22 @@ def parse_boards(text: str, file: str = "boards.toml") -> BoardTable:
             rc_sensors = (
                 " and ROMFS/px4fmu_common/init.d/rc.sensors" if snap.release in common else ""
             )
+            launcher_buses = row.numbers("i2c_launcher_buses", 0, 255)
+            if launcher_buses and snap.release not in launcher:
+                row.fail(f"i2c_launcher_buses but no [[i2c_launcher]] row for {snap.release!r}")
             rows[key] = Board(
                 name=name,
                 label=row.text("label"),
                 ver_hw=ver_hw,
                 devices=tuple(devices),
-                i2c_launcher_buses=row.numbers("i2c_launcher_buses", 0, 255),
+                i2c_launcher_buses=launcher_buses,
                 switches=switches,
                 source="; ".join(sources) + rc_sensors,
                 releases=tuple(s.release for s in snaps),
                 external_i2c_buses=external,
                 internal_i2c_buses=internal,
                 i2c_launcher_when=row.text("i2c_launcher_when", ""),
+                i2c_launcher_probes=launcher[snap.release] if launcher_buses else (),
             )
         if name not in names:
             names.append(name)
@@ -627,6 +678,18 @@ def render_markdown(table: BoardTable) -> str:
             if variant.devices or own:
                 out += ["", *_starts_table([*variant.devices, *own])]
             out.append("")
+    out += ["### What i2c_launcher tries on each of its buses", ""]
+    seen_probes: list[tuple[LauncherProbe, ...]] = []
+    for snap in table._snapshots:
+        at = table._boards_at(snap.release)
+        probes = next((b.i2c_launcher_probes for b in at if b.i2c_launcher_probes), ())
+        if not probes or probes in seen_probes:
+            continue
+        seen_probes.append(probes)
+        out += [f"**from {snap.release}**: `{probes[0].args}`", ""]
+        out += ["| address | driver | kind | source |", "|---|---|---|---|"]
+        out += [f"| 0x{p.address:02x} | {p.driver} | {p.kind} | {p.source} |" for p in probes]
+        out.append("")
     out += ["### Switch starts every board runs (ROMFS/px4fmu_common/init.d/rc.sensors)", ""]
     seen: list[int] = []
     for snap in table._snapshots:
