@@ -78,6 +78,10 @@ def test_fmu_v5_internal_compass_carries_the_board_rotation() -> None:
     # its src/i2c.cpp: external 4, 2, 1; internal 3
     assert board.external_i2c_buses == (1, 2, 4)
     assert board.internal_i2c_buses == (3,)
+    # so the -I compass is on bus 3 (userguide_tteparams_v1.13.params: CAL_MAG0_ID on bus 3)
+    assert board.buses_of(internal[0]) == (3,)
+    assert board.buses_of(device(board, "ist8310", bus=1)) == (1,)
+    assert board.buses_of(device(board, "icm20689")) == ()  # SPI, no -b
 
 
 def test_mr_tropic_bmm350() -> None:

@@ -148,6 +148,15 @@ class Board:
     #: What the launcher tries on each of ``i2c_launcher_buses``, in order (empty without one).
     i2c_launcher_probes: tuple[LauncherProbe, ...] = ()
 
+    def buses_of(self, start: BoardDevice | SwitchStart) -> tuple[int, ...]:
+        """The buses a start can be on: its ``-b``, else every internal (``-I``) or external
+        (``-X``) I2C bus of the board, as PX4 tries them; () for SPI without ``-b``."""
+        if start.bus is not None:
+            return (start.bus,)
+        if start.bus_kind != "I2C":
+            return ()
+        return self.internal_i2c_buses if start.internal else self.external_i2c_buses
+
 
 @dataclass(frozen=True)
 class _Snapshot:
