@@ -90,6 +90,11 @@ def test_mr_tropic_bmm350() -> None:
     assert board is not None and board.name == "nxp_mr-tropic"
     mag = device(board, "bmm350")
     assert (mag.bus_kind, mag.bus, mag.rotation, mag.internal) == ("I2C", 4, 6, True)
+    # "if ! icm45686 -R 2 -b 3 -s start / then icm42688p -R 2 -b 3 -s -6 start": the second
+    # runs only when the first fails
+    fallback = device(board, "icm42688p")
+    assert fallback.when == "not icm45686 started (-R 2 -b 3 -s start)"
+    assert device(board, "icm45686").when == ""
 
 
 def test_6x_class_ina238_starts_one_monitor_per_power_port() -> None:
