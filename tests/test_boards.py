@@ -262,6 +262,26 @@ def test_ulog_of_a_cubeorange_on_v1_11() -> None:
     assert board.releases[0] == "v1.11.0"
 
 
+def test_cubeorange_log_device_ids_are_on_the_buses_the_table_names() -> None:
+    # sample_log_small.ulg's calibration IDs, decoded by hand (bits 0-2 bus type, 2 = SPI;
+    # bits 3-7 bus; bits 16-23 devtype): CAL_ACC0_ID 2424842 = SPI 1 ICM20649 (0x25),
+    # CAL_ACC1_ID 3670050 = SPI 4 ICM20602 (0x38), CAL_ACC2_ID 2621474 = SPI 4 ICM20948 (0x28),
+    # CAL_MAG0_ID 589858 = SPI 4 AK09916 (0x09): the ICM-20948's compass, started by its -M
+    log = pyulog.ULog(str(shared_file("sample_log_small.ulg")), [], False)
+    params = log.initial_parameters
+    assert [params[f"CAL_ACC{i}_ID"] for i in range(3)] == [2424842, 3670050, 2621474]
+    assert params["CAL_MAG0_ID"] == 589858
+    board = load_boards().for_ulog(log.msg_info_dict["ver_hw"], log.msg_info_dict["ver_sw_release"])
+    assert board is not None
+    on_spi = {(d.driver, d.kind, d.bus) for d in board.devices if d.bus_kind == "SPI"}
+    assert {
+        ("icm20649", "imu", 1),
+        ("icm20602", "imu", 4),
+        ("icm20948", "imu", 4),
+        ("icm20948", "mag", 4),
+    } <= on_spi
+
+
 def test_ulog_of_sitl_and_of_an_old_release_name_no_board_entry() -> None:
     sitl = ulog_info("sample_px4_events.ulg")
     assert load_boards().for_ulog(str(sitl["ver_hw"]), int(sitl["ver_sw_release"])) is None  # type: ignore[call-overload]
@@ -288,6 +308,13 @@ def test_mr_tropic_log_agrees_with_the_table_where_the_script_did_not_change() -
     for driver, bus, rotation in started:
         table_device = device(board, driver, bus=int(bus))
         assert table_device.rotation == int(rotation)
+    # CAL_MAG1_ID 15012897 = I2C (1) bus 4 address 0x14 BMM350 (0xE5); CAL_BARO0_ID 7239201 =
+    # I2C bus 4 address 0x76: the board's own compass, and the baro SENS_INT_BARO_EN starts
+    params = log.initial_parameters
+    assert (params["CAL_MAG1_ID"], params["CAL_BARO0_ID"]) == (15012897, 7239201)
+    assert device(board, "bmm350").internal and device(board, "bmm350").bus == 4
+    baro = switches(board, "SENS_INT_BARO_EN")
+    assert [(s.driver, s.kind, s.bus, s.internal) for s in baro] == [("bmp388", "baro", 4, True)]
     # the vendor branch ran its launcher on bus 1; the merged board scans bus 3
     assert "running 'ina228 -X -b 1 -t 1 start'" in console
     assert board.i2c_launcher_buses == (3,)
