@@ -47,6 +47,7 @@ and what is wrong.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import importlib.resources
 import math
@@ -158,6 +159,13 @@ class Board:
         return self.internal_i2c_buses if start.internal else self.external_i2c_buses
 
 
+#: A board's switch starts as read, before expansion per bus: (starts with their sources,
+#: external I2C buses, internal I2C buses, ver_hw).
+_Pending = tuple[
+    list[tuple[dict[str, Any], str]], tuple[int, ...], tuple[int, ...], tuple[str, ...]
+]
+
+
 @dataclass(frozen=True)
 class _Snapshot:
     release: str
@@ -200,6 +208,7 @@ class BoardTable:
         names: Sequence[str],
         ver_hw: Mapping[str, str],
         rc_sensors: Mapping[str, Sequence[tuple[Mapping[str, Any], str]]] | None = None,
+        pending: Mapping[tuple[str, str], _Pending] | None = None,
     ) -> None:
         self._snapshots = tuple(sorted(snapshots, key=lambda s: s.order))
         self._rows = dict(rows)
@@ -207,6 +216,20 @@ class BoardTable:
         self._ver_hw = dict(ver_hw)
         #: release -> rc.sensors switch starts as written (no bus: every external bus).
         self._rc_sensors = dict(rc_sensors or {})
+        #: (board, release) -> switch starts not yet expanded per bus (most are never asked for).
+        self._pending = dict(pending or {})
+
+    def _row(self, key: tuple[str, str]) -> Board | None:
+        board = self._rows.get(key)
+        if board is not None and key in self._pending:
+            starts, external, internal, ver_hw = self._pending.pop(key)
+            switches = tuple(
+                switch
+                for start, source in starts
+                for switch in _expand(start, source, external, internal, ver_hw)
+            )
+            board = self._rows[key] = dataclasses.replace(board, switches=switches)
+        return board
 
     @property
     def releases(self) -> tuple[str, ...]:
@@ -243,7 +266,7 @@ class BoardTable:
         snap = self.snapshot_for(release)
         if snap is None:
             return None
-        found = self._rows.get((name, snap))
+        found = self._row((name, snap))
         if found is not None:
             return found
         rows = self.variants(name)
@@ -263,19 +286,20 @@ class BoardTable:
         newest: dict[str, Board] = {}
         for snap in self._snapshots:
             for name in self._names:
-                row = self._rows.get((name, snap.release))
+                row = self._row((name, snap.release))
                 if row is not None:
                     newest[name] = row
         return tuple(newest[n] for n in self._names if n in newest)
 
     def _boards_at(self, release: str) -> list[Board]:
-        return [row for (_, snap), row in self._rows.items() if snap == release]
+        found = (self._row(key) for key in list(self._rows) if key[1] == release)
+        return [row for row in found if row is not None]
 
     def variants(self, name: str) -> tuple[Board, ...]:
         """Every row of board ``name``, oldest first (one per run of unchanged snapshots)."""
         newest: dict[tuple[str, ...], Board] = {}  # a TOML row, as its newest snapshot reads
         for snap in self._snapshots:
-            row = self._rows.get((name, snap.release))
+            row = self._row((name, snap.release))
             if row is not None:
                 newest[row.releases] = row
         return tuple(newest.values())
@@ -478,6 +502,7 @@ def parse_boards(text: str, file: str = "boards.toml") -> BoardTable:
             launcher[snap.release] = tuple(probes)
 
     rows: dict[tuple[str, str], Board] = {}
+    pending: dict[tuple[str, str], _Pending] = {}
     names: list[str] = []
     ver_hw_names: dict[str, str] = {}
     for i, table in enumerate(top.tables("board"), 1):
@@ -541,12 +566,8 @@ def parse_boards(text: str, file: str = "boards.toml") -> BoardTable:
             key = (name, snap.release)
             if key in rows:
                 row.fail(f"release {snap.release!r} already has a row for this board")
-            starts = own + common.get(snap.release, [])
-            switches = tuple(
-                s
-                for start, cite_ in starts
-                for s in _expand(start, cite_, external, internal, ver_hw)
-            )
+            # expanded to SwitchStarts per bus when the board is first asked for (BoardTable._row)
+            pending[key] = (own + common.get(snap.release, []), external, internal, ver_hw)
             rc_sensors = (
                 " and ROMFS/px4fmu_common/init.d/rc.sensors" if snap.release in common else ""
             )
@@ -559,7 +580,7 @@ def parse_boards(text: str, file: str = "boards.toml") -> BoardTable:
                 ver_hw=ver_hw,
                 devices=tuple(devices),
                 i2c_launcher_buses=launcher_buses,
-                switches=switches,
+                switches=(),
                 source="; ".join(sources) + rc_sensors,
                 releases=tuple(s.release for s in snaps),
                 external_i2c_buses=external,
@@ -569,7 +590,7 @@ def parse_boards(text: str, file: str = "boards.toml") -> BoardTable:
             )
         if name not in names:
             names.append(name)
-    return BoardTable(tuple(snapshots.values()), rows, names, ver_hw_names, common)
+    return BoardTable(tuple(snapshots.values()), rows, names, ver_hw_names, common, pending)
 
 
 def _expand(
