@@ -8,7 +8,8 @@ such as ``SENS_EN_INA238``, the drivers that a switch turns on (in that script a
 and to keep calibration rotations apart from driver rotations.
 
 The facts live in ``boards.toml`` beside the package data, transcribed from PX4-Autopilot at
-a few snapshots (tagged releases and branches, listed in its ``[[snapshot]]`` tables). Its keys:
+a few snapshots (tagged releases and branches, listed in its ``[[snapshot]]`` tables) by
+``scripts/transcribe_boards.py``. Its keys:
 
 ``[[snapshot]]``
     ``release`` (``"v1.14.0"``, ``"v1.18"`` for a release branch, ``"main"``), ``ref``,
@@ -40,7 +41,8 @@ started with ``-X`` and no ``-b`` probes every external I2C bus, so :class:`Swit
 are one per external bus of the board.
 
 A release picks the newest snapshot at or before it (a v1.16 log is read with v1.15.0's facts,
-as no v1.16/v1.17 snapshot was read); releases older than the oldest snapshot have no entry.
+as no v1.16/v1.17 snapshot was read), a release series newer than every release snapshot picks
+``main``; releases older than the oldest snapshot have no entry.
 Every problem with the file is a :class:`BoardsFileError` of one line naming the file, the row
 and what is wrong.
 """
