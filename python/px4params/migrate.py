@@ -1,51 +1,52 @@
 """Migration from today's PX4 configuration to a device manifest.
 
-Input: a QGC ``.params`` file or a ULog flight log (its parameters, read with pyulog). Output: a
-proposed airframe file of ``param add`` / ``param set-default`` lines (what ``px4params run``
-and, per the talk, PX4 itself run) and a report of where each line came from and of everything
-that could not be carried over. Nothing is dropped silently.
+Input: a QGC ``.params`` file, a ``param set`` / ``param set-default`` list (airframe syntax), or
+a ULog flight log (its parameters, information and boot console). Output: a proposed airframe
+file of ``param add`` / ``param set-default`` lines (what ``px4params run`` and, per the talk,
+PX4 itself run) and a report of where each line came from, of everything that could not be
+carried over and of every assumption made. Nothing is dropped silently.
 
-What is carried over:
+What the manifest takes over is what today's PX4 starts *outside* the board's own script:
 
-* **Enabled drivers** (a driver's ``enabled_by`` switch in the driver declarations,
-  ``SENS_EN_SDP3X``, ``SENS_EN_INA238``, ... not 0) become an instance on I2C bus 1 (board
-  scripts start power monitors as ``<driver> -X -b 1 ...``; rc.sensors starts the others on
-  every external bus) at the type's default address; the switch's value goes to the declared
-  ``switch_field`` (a model number), and the declared legacy settings (``INA238_CURRENT``,
-  ``SF1XX_ROT``, ...) fill their fields, rounded and clamped, with a note when the value
-  changes. Legacy settings without a field (``INA226_CONFIG``, ...) are listed as not carried
-  over.
-* **Sensors found** (the ``CAL_<SENSOR><n>_ID`` device IDs, decoded with :mod:`.devid`): an I2C
-  device whose chip a declared driver publishes (``AK09916`` on I2C bus 1 at 0x0C) becomes an
-  instance of that driver's type on that bus and address, with ``CAL_MAG<n>_ROT`` as its
-  rotation. Today such external devices are found by probing (``SENS_EXT_I2C_PRB``); in the
-  manifest they are stated.
+* **Devices found by probing** (``rc.sensors`` with ``SENS_EXT_I2C_PRB``): an external I2C
+  sensor of a ``CAL_<S>n_ID`` device ID (decoded with the devtype table of the file's firmware
+  era, :mod:`.vehicle.devid`) whose chip a declared driver publishes. Probing starts drivers
+  without ``-R``: the instance's rotation is 0; ``CAL_MAGn_ROT`` is calibration's and stays a
+  classic parameter.
+* **Drivers started by a switch** (``SENS_EN_MS4525DO``, ``SENS_EN_INA238``, ...): on the buses
+  the evidence or the board's switch rows give, else on I2C bus 1 with a line saying so.
+* **Power monitors ``i2c_launcher`` found** (a log's boot console says so).
 
-What is reported, not carried: internal sensors (SPI, started by the board's startup script),
-DroneCAN and other buses, chips without a bundled type, enabled drivers without one, and the
-probing switch the manifest replaces. Every other parameter (calibration, tuning, ...) stays a
-classic parameter: the count is reported.
+Left out, each with its reason: sensors the board's script starts (a board table row, PX4's
+"Internal" ``CAL_MAGn_ROT = -1``, an internal bus in the boot console, a ``-R`` rotation, which
+probing never passes), disabled slots (``CAL_<S>n_PRIO = 0`` from PX4 1.12 on, ``_EN = 0``
+before), DroneCAN and simulated sensors. Evidence first: the boot console (what actually
+started, on which bus, address and rotation) wins over every table.
 """
 
 from __future__ import annotations
 
-import contextlib
-import io
 import math
-import os
 import re
 import struct
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from px4params.dsdl.schema import Schema
-from px4params.errors import MigrationError, ParamFileError, Px4ParamsError
+from px4params.errors import MigrationError, NumberError, ParamFileError, Px4ParamsError, ULogError
 from px4params.formats import qgc_params
+from px4params.formats.ulog import MAGIC as ULOG_MAGIC
+from px4params.numbers import abbreviated, parse_float, parse_int
 from px4params.vehicle import devid
+from px4params.vehicle.console import DriverStart, started_drivers
 from px4params.vehicle.drivers import Driver, load_drivers
 
+if TYPE_CHECKING:
+    import os
+
 __all__ = [
+    "LeftOut",
     "MigrationError",
     "OldConfig",
     "Proposal",
@@ -54,9 +55,8 @@ __all__ = [
     "read_config",
 ]
 
-ULOG_MAGIC = b"ULog\x01\x12\x35"
-#: MAV_PARAM_TYPE codes of float parameters in QGC files (REAL32, REAL64).
-#: The I2C bus board scripts start external drivers on (``-X -b 1``).
+#: The I2C bus proposed for a switch-started driver when nothing says which (PX4 starts them
+#: with ``-X``, on every external bus; board scripts start power monitors ``-X -b 1``).
 DEFAULT_I2C_BUS = 1
 _CAL_ID = re.compile(r"CAL_(?P<sensor>[A-Z]+?)(?P<n>\d+)_ID")
 
@@ -70,10 +70,9 @@ NOT_DRIVER_SWITCHES: dict[str, dict[int, str]] = {
         1: "thermal control enabled",
     },
 }
-#: ``CAL_<SENSOR><n>_ROT = -1``: PX4's metadata value "Internal" (an internal sensor forces it;
-#: the board's rotation applies).
+#: ``CAL_<SENSOR><n>_ROT = -1``: PX4's metadata value "Internal": the sensor is the flight
+#: controller's, started by the board's script on the board's rotation.
 INTERNAL_ROTATION = -1
-
 
 #: What options of today's start lines (board scripts) the types have no field for.
 UNMAPPED_OPTIONS = {
@@ -81,6 +80,17 @@ UNMAPPED_OPTIONS = {
     "ina228": "battery index (-t 1)",
     "ina238": "battery index (-t 1)",
 }
+#: Driver modules PX4 1.13 renamed: the old name (older boot consoles) -> today's.
+RENAMED_MODULES = {
+    "ms4525_airspeed": "ms4525do",
+    "ms5525_airspeed": "ms5525dso",
+    "sdp3x_airspeed": "sdp3x",
+}
+#: QGC's ``# Version: 1.13.0 beta`` header line (QGC writes the firmware version it read).
+_QGC_VERSION = re.compile(r"#\s*Version:\s*v?(\d+)\.(\d+)\.(\d+)")
+_QGC_HEADER = re.compile(r"#\s*(Stack|Vehicle|Version|Git Revision):\s*(.*\S)")
+#: A line of an airframe-style parameter list.
+_PARAM_SET = re.compile(r"param\s+(set|set-default)\s+(\S+)\s+(\S+)\s*")
 
 
 @dataclass
@@ -88,58 +98,72 @@ class OldConfig:
     """Today's parameters: name -> value (int or float), from ``source``."""
 
     source: str
-    kind: str  # "ULog" or "QGC .params"
+    kind: str  # "ULog", "QGC .params" or "param set list"
     params: dict[str, int | float]
     #: Where the values came from, e.g. hardware and firmware of a log.
     details: list[str] = field(default_factory=list)
     #: Lines of the input that were not used (e.g. other components of a .params file).
     skipped: list[str] = field(default_factory=list)
-    #: The firmware release of a log (ULog ``ver_sw_release``), which says which devtype table
-    #: its device IDs follow; None for a .params file.
+    #: The firmware release of a log (ULog ``ver_sw_release``); None when it has none.
     release: int | None = None
+    #: The firmware version (major, minor, patch) the file names: a log's release, a QGC
+    #: file's ``# Version`` line; None when it names none.
+    version: tuple[int, int, int] | None = None
+    #: The board of a log (ULog ``ver_hw``, e.g. ``PX4_FMU_V6C``); None for parameter files.
+    hardware: str | None = None
+    #: The log's boot console (``boot_console_output``), when it has one.
+    console: str | None = None
 
 
 def read_config(path: str | os.PathLike[str]) -> OldConfig:
-    """Reads a ULog's parameters (their last values in the log) or a QGC ``.params`` file."""
-    where = os.fspath(path)
+    """Reads a ULog's parameters (their last values in the log), a QGC ``.params`` file, or a
+    ``param set`` list; told apart by the content, not the name."""
+    from px4params.formats.ulog import read_header
+
+    where = str(path)
     try:
         with open(where, "rb") as f:
             head = f.read(len(ULOG_MAGIC))
     except OSError as e:
         raise MigrationError(f"{where}: cannot read: {e.strerror}") from None
-    if head == ULOG_MAGIC:
-        return _read_ulog(where)
-    return _read_params(where)
-
-
-def _read_ulog(where: str) -> OldConfig:
-    from pyulog import ULog  # only ULog input needs it
-
+    if head != ULOG_MAGIC:
+        return _read_text(where)
     try:
-        with contextlib.redirect_stdout(io.StringIO()):  # pyulog prints warnings
-            log = ULog(where, message_name_filter_list=[])
-    except Exception as e:  # pyulog signals bad data with assorted exceptions
-        raise MigrationError(f"{where}: not a readable ULog file ({e})") from None
-    params: dict[str, int | float] = dict(log.initial_parameters)
-    changed = []
-    for _, name, value in log.changed_parameters:
-        params[name] = value
-        changed.append(name)
+        log = read_header(where)
+    except ULogError as e:
+        raise MigrationError(str(e)) from None
+    params = log.parameters
     if not params:
         raise MigrationError(f"{where}: the log has no parameters")
-    info = log.msg_info_dict
-    details = [f"{key} {info[key]}" for key in ("ver_hw", "ver_sw_branch", "ver_sw") if key in info]
+    details = [
+        f"{key} {log.info[key]}" for key in ("ver_hw", "ver_sw_branch", "ver_sw") if key in log.info
+    ]
+    changed = {name for _, name, _ in log.changed_parameters}
     if changed:
-        details.append(f"last values of {len(set(changed))} parameters changed during the log")
-    release = info.get("ver_sw_release")
-    return OldConfig(where, "ULog", params, details, release=int(release) if release else None)
+        details.append(f"last values of {len(changed)} parameters changed during the log")
+    release = log.release
+    version = (release >> 24 & 0xFF, release >> 16 & 0xFF, release >> 8 & 0xFF) if release else None
+    return OldConfig(
+        where, "ULog", params, details, release=release, version=version,
+        hardware=log.hardware, console=log.boot_console,
+    )  # fmt: skip
 
 
-def _read_params(where: str) -> OldConfig:
+def _read_text(where: str) -> OldConfig:
     try:
         text = Path(where).read_text(encoding="utf-8")
     except UnicodeDecodeError:
         raise MigrationError(f"{where}: neither a ULog file nor a QGC .params text file") from None
+    first = next(
+        (
+            line.strip()
+            for line in text.splitlines()
+            if line.strip() and not line.lstrip().startswith("#")
+        ),
+        "",
+    )
+    if first.startswith("param "):
+        return _read_param_list(text, where)
     try:
         read = qgc_params.read(text, where)
     except ParamFileError as e:
@@ -156,7 +180,46 @@ def _read_params(where: str) -> OldConfig:
         for c in components
         if c != chosen
     ]
-    return OldConfig(where, "QGC .params", params, [f"component {chosen}"], skipped)
+    details = [f"component {chosen}"]
+    version = None
+    for line in text.splitlines():
+        if not line.startswith("#"):
+            break
+        m = _QGC_VERSION.match(line.strip())
+        if m:
+            version = (int(m[1]), int(m[2]), int(m[3]))
+        h = _QGC_HEADER.match(line.strip())
+        if h:
+            details.append(f"{h[1]}: {h[2]}")
+    return OldConfig(where, "QGC .params", params, details, skipped, version=version)
+
+
+def _read_param_list(text: str, where: str) -> OldConfig:
+    """``param set NAME VALUE`` / ``param set-default NAME VALUE`` lines (an airframe file's
+    syntax); other shell lines are counted, not run."""
+    params: dict[str, int | float] = {}
+    other = 0
+    for number, raw in enumerate(text.splitlines(), start=1):
+        line = raw.strip()
+        if not line or line.startswith("#"):
+            continue
+        m = _PARAM_SET.fullmatch(line)
+        if not m:
+            other += 1
+            continue
+        name, value = m[2], m[3]
+        try:
+            params[name] = (
+                parse_int(value) if re.fullmatch(r"[+-]?\d+", value) else parse_float(value)
+            )
+        except (NumberError, ValueError):
+            raise MigrationError(
+                f"{where}:{number}: {name}: value '{abbreviated(value)}' is not a number"
+            ) from None
+    if not params:
+        raise MigrationError(f"{where}: no 'param set' lines")
+    skipped = [f"{other} other lines (not 'param set'): not read"] if other else []
+    return OldConfig(where, "param set list", params, [], skipped)
 
 
 # -- the proposal -----------------------------------------------------------------------------
@@ -177,14 +240,42 @@ class ProposedInstance:
 
 
 @dataclass
+class LeftOut:
+    """A device found (a device ID, a boot console line) that is not part of the manifest."""
+
+    #: Where it was found: ``CAL_MAG0_ID, CAL_MAG3_ID`` or ``boot console line 35``.
+    found: str
+    #: What it is, e.g. ``IST8310 (MAG), I2C bus 4, address 0x0C``.
+    device: str
+    #: Why, as a word: ``board`` (started by the board's script), ``disabled``, ``dronecan``,
+    #: ``simulation``, ``other bus``.
+    reason: str
+    #: The report's line.
+    line: str
+
+    def as_dict(self) -> dict[str, str]:
+        return {
+            "found": self.found,
+            "device": self.device,
+            "reason": self.reason,
+            "line": self.line,
+        }
+
+
+@dataclass
 class Proposal:
     """What :func:`migrate` proposes: the instances and the report."""
 
     config: OldConfig
     table: str
     instances: list[ProposedInstance] = field(default_factory=list)
-    #: Sensors found (device IDs) that are not part of the manifest, one line each.
-    not_in_manifest: list[str] = field(default_factory=list)
+    #: Devices found that are not part of the manifest, with the reason.
+    left_out: list[LeftOut] = field(default_factory=list)
+    #: What the migration cannot know and assumed instead (a bus, a board, the era), one line
+    #: each.
+    assumptions: list[str] = field(default_factory=list)
+    #: The board whose table was used (its PX4 name), None without one.
+    board: str | None = None
     #: Parameters whose job the manifest takes over.
     replaced: list[str] = field(default_factory=list)
     #: ``SENS_EN_*`` parameters that are 0: no driver to carry over.
@@ -193,6 +284,11 @@ class Proposal:
     not_carried: list[str] = field(default_factory=list)
     #: Parameters that were used to build the proposal.
     used: set[str] = field(default_factory=set)
+
+    @property
+    def not_in_manifest(self) -> list[str]:
+        """The report lines of :attr:`left_out`."""
+        return [item.line for item in self.left_out]
 
     @property
     def unchanged(self) -> int:
@@ -222,6 +318,7 @@ class Proposal:
         out = [f"Migration of {c.source} ({c.kind}, {len(c.params)} parameters)"]
         out += [f"  {d}" for d in c.details]
         out.append(f"  device IDs decoded with the {self.table} devtype table")
+        out.append(f"  board: {self.board}" if self.board else "  board: not known")
 
         def section(title: str, rows: list[str]) -> None:
             out.append("")
@@ -236,6 +333,7 @@ class Proposal:
             rows.extend(f"  note: {n}" for n in inst.notes)
         section("Instances proposed", rows)
         section("Sensors found but not in the manifest", self.not_in_manifest)
+        section("Not known, assumed", self.assumptions)
         section("Replaced by the manifest", self.replaced)
         if self.disabled:
             out.append(f"  not enabled, nothing to carry over: {', '.join(self.disabled)}")
@@ -253,6 +351,10 @@ class Proposal:
             "kind": self.config.kind,
             "parameters": len(self.config.params),
             "table": self.table,
+            "board": self.board,
+            "version": ".".join(map(str, self.config.version)) if self.config.version else None,
+            "assumptions": self.assumptions,
+            "left_out": [item.as_dict() for item in self.left_out],
             "instances": [
                 {
                     "name": i.name,
@@ -290,7 +392,14 @@ def _json(value: Any) -> Any:
 
 
 class _Builder:
-    def __init__(self, config: OldConfig, schema: Schema, table: devid.DevtypeTable) -> None:
+    def __init__(
+        self,
+        config: OldConfig,
+        schema: Schema,
+        table: devid.DevtypeTable,
+        board: Any,
+        assumptions: list[str],
+    ) -> None:
         from px4params.store.store import Store
 
         self.config = config
@@ -299,10 +408,21 @@ class _Builder:
         self.specs = {s.name: s for s in self.store.specs}
         self.drivers = load_drivers(None, self.store.specs)
         self.table = table
-        self.proposal = Proposal(config, table.label)
+        self.board = board
+        self.proposal = Proposal(config, table.label, assumptions=assumptions)
+        self.proposal.board = getattr(board, "name", None)
+        self.starts = started_drivers(config.console) if config.console else []
+        self.claimed: set[int] = set()  # boot console starts accounted for
 
     def use(self, *names: str) -> None:
         self.proposal.used.update(n for n in names if n in self.params)
+
+    def assume(self, line: str) -> None:
+        if line not in self.proposal.assumptions:
+            self.proposal.assumptions.append(line)
+
+    def leave_out(self, found: str, device: str, reason: str, why: str) -> None:
+        self.proposal.left_out.append(LeftOut(found, device, reason, f"{found}: {device}: {why}"))
 
     def add(self, param: str, bus: int, address: int, origin: str) -> ProposedInstance:
         """The instance of ``param`` on I2C ``bus`` at ``address``: a new one, or the one
@@ -329,8 +449,9 @@ class _Builder:
     def field_value(self, inst: ProposedInstance, path: str, legacy: str, value: Any) -> bool:
         """Carries ``legacy = value`` into field ``path``; False (and a not-carried line) when
         the field cannot hold it. A float setting (a physical quantity: current, shunt) is
-        rounded and clamped to the field's range, with a note; an integer setting (an
-        enumeration such as a rotation) out of range is not carried."""
+        rounded to nearest (``math.floor(v + 0.5)``) and clamped to the field's range, with a
+        note; an integer setting (an enumeration such as a rotation) out of range is not
+        carried."""
         param = inst.name.partition("#")[0]
         leaf = self.store.leaf(f"{inst.name}.{path}")
         tags = _field_tags(self.specs[param].data_type, path)
@@ -364,14 +485,108 @@ class _Builder:
             )
         return True
 
+    def set_rotation(self, inst: ProposedInstance, rotation: int, why: str) -> None:
+        """The driver's rotation (its ``-R``), where the type has the field."""
+        has_field = any(leaf.path == "rotation" for leaf in self.store.leaves(inst.name))
+        if has_field and self.field_value(inst, "rotation", why, rotation) and rotation:
+            inst.notes.append(f"rotation {rotation}: {why}")
+
     def run(self) -> Proposal:
         self.enabled_drivers()
         self.devices()
+        self.console_starts()
+        self.launcher_buses()
         self.probing()
         for inst in self.proposal.instances:
             leaves = {leaf.path: leaf.index for leaf in self.store.leaves(inst.name)}
             inst.indices = {path: leaves[path] for path in inst.values}
         return self.proposal
+
+    # -- what names what -----------------------------------------------------------------
+
+    def start_chips(self, start: DriverStart | str) -> set[str]:
+        """The chip names a started driver module publishes (drv_sensor.h's spelling)."""
+        name = start if isinstance(start, str) else start.driver
+        module = RENAMED_MODULES.get(name, name)
+        try:
+            return set(self.drivers[module].chips)
+        except KeyError:
+            bare = re.sub(r"_(accel|gyro|mag|baro|airspeed|i2c_passthrough)$", "", module)
+            return {bare.upper()}
+
+    def start_driver(self, start: DriverStart) -> Driver | None:
+        module = RENAMED_MODULES.get(start.driver, start.driver)
+        try:
+            return self.drivers[module]
+        except KeyError:
+            return None
+
+    def evidence(self, dev: devid.DeviceId) -> tuple[int, DriverStart] | None:
+        """The boot console start of device ``dev`` (same chip, bus and, where the line says,
+        address)."""
+        chips = set((dev.devtype_name or "").split("/")) - {""}
+        kind = {1: "I2C", 2: "SPI"}.get(dev.bus_type)
+        for i, start in enumerate(self.starts):
+            if i in self.claimed or start.bus_kind != kind or start.bus != dev.bus:
+                continue
+            if kind == "I2C" and start.address is not None and start.address != dev.address:
+                continue
+            if self.start_chips(start) & chips:
+                return i, start
+        return None
+
+    def board_device(self, chips: set[str], bus: int, address: int | None) -> Any:
+        """The board table's row that starts this I2C device, if any."""
+        if self.board is None:
+            return None
+        for row in self.board.devices:
+            if row.bus_kind.upper() != "I2C" or not (self.start_chips(row.driver) & chips):
+                continue
+            if row.bus is not None and row.bus != bus:
+                continue
+            at = row.address
+            if at is None and row.driver in {d.name for d in self.drivers}:
+                at = self.drivers[row.driver].default_address
+            if at is not None and address is not None and at != address:
+                continue
+            return row
+        return None
+
+    def started_by_board(
+        self,
+        chips: set[str],
+        bus: int,
+        address: int | None,
+        start: DriverStart | None,
+        internal_rot: str | None,
+        baro: bool,
+    ) -> str | None:
+        """Why the board's script starts this I2C device, or None when it does not (the
+        rules in the order they are trusted)."""
+        row = self.board_device(chips, bus, address)
+        if row is not None:
+            return f"started by the board's script ({row.source})"
+        if start is not None and start.internal and not start.launcher:
+            return (
+                f"on an internal bus (boot console line {start.line}): started by the board's "
+                "startup scripts"
+            )
+        if internal_rot is not None:
+            return f"{internal_rot} = -1 (Internal): started by the board's script"
+        if start is not None and start.rotation and not start.launcher:
+            return (
+                f"runs with rotation {start.rotation} (boot console line {start.line}): "
+                "rc.sensors probes without -R, so the board's script started it"
+            )
+        if baro:
+            self.assume(
+                "I2C barometers without a board table row are taken as started by the board's "
+                "script (barometers sit on the flight controller)"
+            )
+            return "a barometer: assumed started by the board's script"
+        return None
+
+    # -- drivers enabled by a switch ---------------------------------------------------------
 
     def enabled_drivers(self) -> None:
         switches = self.drivers.switches()
@@ -432,38 +647,80 @@ class _Builder:
         )
         return [driver]
 
+    def switch_places(self, switch: str, driver: Driver) -> list[tuple[int, int | None, str]]:
+        """Where the switch starts the driver: ``(bus, address or None, why)`` per instance,
+        from the boot console, else the board's switch rows, else a guess (reported)."""
+        places = []
+        for i, start in enumerate(self.starts):
+            if (
+                i not in self.claimed
+                and start.bus_kind == "I2C"
+                and self.start_driver(start) == driver
+            ):
+                self.claimed.add(i)
+                places.append(
+                    (start.bus, start.address, f"boot console line {start.line}: '{start.text}'")
+                )
+        if places:
+            return places
+        rows = [
+            r
+            for r in getattr(self.board, "switches", ())
+            if r.param == switch and r.driver == driver.name
+        ]
+        if rows:
+            return [
+                (r.bus, r.address, f"the board starts it with '{r.driver} {r.args}' ({r.source})")
+                for r in rows
+            ]
+        if self.config.console is not None:
+            self.assume(
+                f"{switch}: the boot console shows no {driver.name} start (not connected at "
+                f"boot?); proposed on I2C bus {DEFAULT_I2C_BUS}"
+            )
+        how = (
+            "-X -b 1 on the board"
+            if driver.started_by == "launcher"
+            else "-X, on every external bus"
+        )
+        self.assume(
+            f"{switch}: I2C bus {DEFAULT_I2C_BUS} is a guess (PX4 starts {driver.name} {how}; "
+            "nothing here says which bus it is on)"
+        )
+        return [(DEFAULT_I2C_BUS, None, "")]
+
     def enabled_driver(self, switch: str, value: int | float, driver: Driver) -> None:
         spec = self.specs[driver.parameter]
-        address = _default_address(self.store, spec.name)
-        where = (
-            f"on I2C bus {DEFAULT_I2C_BUS}"
-            if driver.started_by == "launcher"
-            else f"on every external I2C bus (proposed: bus {DEFAULT_I2C_BUS}, check it)"
-        )
-        inst = self.add(
-            spec.name,
-            DEFAULT_I2C_BUS,
-            address,
-            f"{switch} = {_shown(value)}: {driver.name} started today {where} at the driver's "
-            f"default address 0x{address:02X}",
-        )
-        if driver.switch_field:
-            self.field_value(inst, driver.switch_field, switch, value)
-        for old, path in driver.settings.items():
-            if old in self.params:
-                self.use(old)
-                self.field_value(inst, path, old, self.params[old])
+        for bus, at, why in self.switch_places(switch, driver):
+            address = at if at is not None else _default_address(self.store, spec.name)
+            where = f"on I2C bus {bus}" + (f" ({why})" if why else "")
+            default = " at the driver's default address" if at is None else ""
+            inst = self.add(
+                spec.name,
+                bus,
+                address,
+                f"{switch} = {_shown(value)}: {driver.name} started {where}{default} "
+                f"0x{address:02X}",
+            )
+            if driver.switch_field:
+                self.field_value(inst, driver.switch_field, switch, value)
+            for old, path in driver.settings.items():
+                if old in self.params:
+                    self.use(old)
+                    self.field_value(inst, path, old, self.params[old])
+            options = UNMAPPED_OPTIONS.get(driver.name)
+            if options:
+                inst.notes.append(
+                    f"today's start line also sets the {options}: {spec.name} has no field for it"
+                )
         for old in sorted(self.params):
             if old.startswith(f"{spec.name}_") and old not in driver.settings:
                 self.use(old)
                 self.proposal.not_carried.append(
                     f"{old} = {_shown(self.params[old])}: {spec.name} has no field for it"
                 )
-        options = UNMAPPED_OPTIONS.get(driver.name)
-        if options:
-            inst.notes.append(
-                f"today's start line also sets the {options}: {spec.name} has no field for it"
-            )
+
+    # -- devices of the calibration slots ---------------------------------------------------
 
     def devices(self) -> None:
         found: dict[int, list[str]] = {}
@@ -485,63 +742,169 @@ class _Builder:
         for value, names in found.items():
             self.device(value, names)
 
+    def disabled_slots(self, names: list[str]) -> list[str]:
+        """``CAL_<S>n_PRIO = 0`` (PX4 1.12 on) and ``CAL_<S>n_EN = 0`` (before) of the slots."""
+        off = []
+        for n in names:
+            for suffix in ("_PRIO", "_EN"):
+                setting = n.removesuffix("_ID") + suffix
+                if setting in self.params:
+                    self.use(setting)
+                    if not self.params[setting]:
+                        off.append(f"{setting} = 0")
+        return off
+
     def device(self, value: int, names: list[str]) -> None:
         dev = devid.decode(value, self.table)
-        where = f"{', '.join(names)} = {value}: {dev.describe()}"
-        disabled = [
-            f"{en} = 0"
+        found = f"{', '.join(names)} = {value}"
+        where = f"{found}: {dev.describe()}"
+        off = self.disabled_slots(names)
+        all_off = len(off) >= len(names) and all(
+            any(o.startswith(n.removesuffix("_ID") + "_") for o in off) for n in names
+        )
+        rotations = {
+            rot: self.params[rot]
             for n in names
-            if (en := n.removesuffix("_ID") + "_EN") in self.params and not self.params[en]
-        ]
-        self.use(*(n.removesuffix("_ID") + "_EN" for n in names))
-        off = f" (disabled: {', '.join(disabled)})" if disabled else ""
+            if (rot := n.removesuffix("_ID") + "_ROT") in self.params and n.startswith("CAL_MAG")
+        }
+        twice = ""
+        kinds = [(_CAL_ID.fullmatch(n) or {"sensor": n})["sensor"] for n in names]
+        repeated = sorted({k for k in kinds if kinds.count(k) > 1})
+        if repeated:
+            slots = [n for n, k in zip(names, kinds, strict=True) if k in repeated]
+            twice = f"; {' and '.join(slots)} hold the same device (reported once)"
+            if len(set(rotations.values())) > 1:
+                shown = ", ".join(f"{r} = {_shown(v)}" for r, v in rotations.items())
+                twice += f", with different rotations ({shown})"
+        chips = set((dev.devtype_name or "").split("/")) - {""}
+        if dev.bus_type == 2:  # SPI
+            hit = self.evidence(dev)
+            if hit:
+                self.claimed.add(hit[0])
+            why = "internal SPI sensor: started by the board's startup script, not by the manifest"
+            disabled = f" (disabled: {', '.join(off)})" if off else ""
+            self.leave_out(found, dev.describe() + disabled, "board", why + twice)
+            return
+        if dev.bus_type != 1:  # not I2C
+            reason, what = {
+                3: ("dronecan", "DroneCAN sensor: found on the CAN bus, not by the manifest"),
+                4: ("simulation", "simulated sensor: not part of the manifest"),
+            }.get(dev.bus_type, ("other bus", "not an I2C device: not part of the manifest"))
+            self.leave_out(found, dev.describe(), reason, what + twice)
+            return
+        hit = self.evidence(dev)
+        start = hit[1] if hit else None
+        if hit:
+            self.claimed.add(hit[0])
+        internal = next((r for r, v in rotations.items() if v == INTERNAL_ROTATION), None)
+        kind = set((dev.devtype_kind or "").split("/"))
+        baro = "BARO" in kind or all(k == "BARO" for k in kinds)
+        board = self.started_by_board(chips, dev.bus, dev.address, start, internal, baro)
+        disabled = f" (disabled: {', '.join(off)})" if off else ""
+        if board is not None:
+            self.leave_out(found, dev.describe(), "board", f"{board}{disabled}{twice}")
+            return
+        if all_off and off:
+            why = f"disabled ({', '.join(off)}): not proposed, an instance would make it required"
+            self.leave_out(found, dev.describe(), "disabled", why + twice)
+            return
         # The type of the driver that publishes the chip; else a type named as the chip (an
         # extra DSDL folder's, without a driver declaration).
-        chips = self.drivers.chips()
-        chip_names = (dev.devtype_name or "").split("/")
-        param = next((chips[c].parameter for c in chip_names if c in chips), None)
-        spec = self.specs.get(param or next((c for c in chip_names if c in self.specs), ""))
-        if dev.bus_type != 1:  # not I2C
-            what = {
-                2: "internal SPI sensor: started by the board's startup script, not by the "
-                "manifest",
-                3: "DroneCAN sensor: found on the CAN bus, not by the manifest",
-            }.get(dev.bus_type, "not an I2C device: not part of the manifest")
-            self.proposal.not_in_manifest.append(f"{where}{off}: {what}")
-            return
+        by_chip = self.drivers.chips()
+        param = next((by_chip[c].parameter for c in sorted(chips) if c in by_chip), None)
+        spec = self.specs.get(param or next((c for c in sorted(chips) if c in self.specs), ""))
         if spec is None:
             chip = dev.devtype_name or f"devtype 0x{dev.devtype:02X}"
             self.proposal.not_carried.append(
-                f"{where}{off}: no bundled parameter type for {chip}; today it is found by "
-                "probing, in the manifest it needs a type"
+                f"{where}{disabled}: no bundled parameter type for {chip}; today it is found by "
+                f"probing, in the manifest it needs a type{twice}"
             )
             return
-        inst = self.add(spec.name, dev.bus, dev.address, where)
-        if disabled:
-            inst.notes.append(f"{', '.join(disabled)}: the sensor was disabled for use")
-        sensor = _CAL_ID.fullmatch(names[0])
-        assert sensor is not None
-        rotation = f"CAL_{sensor['sensor']}{sensor['n']}_ROT"
-        if rotation in self.params:
-            self.use(rotation)
-            has_field = any(leaf.path == "rotation" for leaf in self.store.leaves(inst.name))
-            value_rot = self.params[rotation]
-            if not has_field:
-                self.proposal.not_carried.append(
-                    f"{rotation} = {_shown(value_rot)}: {spec.name} has no rotation field"
+        origin = (
+            where if start is None else f"{where}; boot console line {start.line}: '{start.text}'"
+        )
+        inst = self.add(spec.name, dev.bus, dev.address, origin)
+        if off:
+            inst.notes.append(f"{', '.join(off)}: one of its slots was disabled for use")
+        if twice:
+            inst.notes.append(twice.removeprefix("; "))
+        rotation = start.rotation if start is not None and start.rotation is not None else 0
+        self.set_rotation(inst, rotation, "the driver's -R (boot console)" if rotation else "")
+        for rot, v in rotations.items():
+            if not v:
+                continue
+            inst.notes.append(
+                f"{rot} = {_shown(v)} stays a classic parameter: calibration applies it; the "
+                f"driver's rotation is {rotation} (rc.sensors starts it without -R)"
+            )
+
+    # -- what the boot console shows, beyond the slots ---------------------------------------
+
+    def console_starts(self) -> None:
+        for i, start in enumerate(self.starts):
+            if i in self.claimed:
+                continue
+            at = f", address 0x{start.address:02X}" if start.address is not None else ""
+            device = f"{start.driver}, {start.bus_kind} bus {start.bus}{at}"
+            found = f"boot console line {start.line}"
+            if start.bus_kind == "SPI":
+                self.leave_out(
+                    found,
+                    device,
+                    "board",
+                    "internal SPI sensor: started by the board's startup script",
                 )
-            elif value_rot == INTERNAL_ROTATION:
-                # PX4's "Internal": the sensor is the flight controller's, on its rotation.
-                paths = {leaf.path for leaf in self.store.leaves(inst.name)}
-                if "internal" in paths and self.field_value(inst, "internal", rotation, True):
-                    inst.notes.append(
-                        f"{rotation} = -1 (Internal): internal = true, rotation left 0 (the "
-                        "board's)"
-                    )
-                else:
-                    inst.notes.append(f"{rotation} = -1 (Internal): rotation left 0 (the board's)")
-            else:
-                self.field_value(inst, "rotation", rotation, value_rot)
+                continue
+            chips = self.start_chips(start)
+            kinds = {e.kind for e in self.table if e.name in chips}
+            board = self.started_by_board(
+                chips, start.bus, start.address, start, None, kinds == {"BARO"}
+            )
+            if board is not None:
+                self.leave_out(found, device, "board", board)
+                continue
+            driver = self.start_driver(start)
+            if driver is None:
+                self.proposal.not_carried.append(
+                    f"{found}: '{start.text}': no bundled parameter type for {start.driver}; it "
+                    "stays started as today"
+                )
+                continue
+            spec = self.specs[driver.parameter]
+            address = start.address
+            if address is None:
+                address = _default_address(self.store, spec.name)
+                self.assume(
+                    f"{found}: '{start.text}' names no address (PX4 before 1.13 prints none): "
+                    f"{driver.name}'s default 0x{address:02X} assumed"
+                )
+            how = (
+                "found by i2c_launcher" if start.launcher else "started outside the board's script"
+            )
+            inst = self.add(spec.name, start.bus, address, f"{found}: '{start.text}' ({how})")
+            self.set_rotation(inst, start.rotation or 0, "the driver's -R (boot console)")
+            options = UNMAPPED_OPTIONS.get(driver.name)
+            if options:
+                inst.notes.append(
+                    f"the start line also sets the {options}: {spec.name} has no field for it"
+                )
+
+    def launcher_buses(self) -> None:
+        buses = tuple(getattr(self.board, "i2c_launcher_buses", ()) or ())
+        if not buses:
+            return
+        shown = ", ".join(str(b) for b in buses)
+        if any(s.launcher for s in self.starts):
+            return
+        what = (
+            "the boot console shows none it started"
+            if self.config.console is not None
+            else f"a {self.config.kind} does not say which it found"
+        )
+        self.assume(
+            f"the board's i2c_launcher scans I2C bus {shown} for power monitors (INA226, INA228, "
+            f"INA238) when no SENS_EN_INA* is set: {what}"
+        )
 
     def probing(self) -> None:
         name = "SENS_EXT_I2C_PRB"
@@ -594,10 +957,58 @@ def _shown(value: Any) -> str:
 def migrate(
     config: OldConfig,
     schema: Schema | None = None,
-    table: devid.DevtypeTable | str = "current",
+    table: devid.DevtypeTable | str | None = None,
+    board: Any = None,
 ) -> Proposal:
-    """Proposes a manifest for ``config`` (see the module doc)."""
+    """Proposes a manifest for ``config`` (see the module doc). ``table``: the devtype table
+    (default: the one of the file's firmware era); ``board``: a board of
+    :mod:`px4params.vehicle.boards` or its PX4 name (default: a log's ``ver_hw``'s)."""
     from px4params.dsdl.schema import load_schema
 
+    assumptions: list[str] = []
+    if table is None:
+        if config.version is not None:
+            table = devid.table_for_version(config.version)
+        else:
+            table, why = devid.table_for_parameters(config.params)
+            assumptions.append(why)
     names = devid.load_table(table) if isinstance(table, str) else table
-    return _Builder(config, schema or load_schema(include_dronecan=False), names).run()
+    chosen = _board(config, board, assumptions)
+    builder = _Builder(
+        config, schema or load_schema(include_dronecan=False), names, chosen, assumptions
+    )
+    return builder.run()
+
+
+def _board(config: OldConfig, board: Any, assumptions: list[str]) -> Any:
+    """The board whose table applies, or None (with the assumption said)."""
+    try:
+        from px4params.vehicle import boards
+    except ImportError:  # the board table is not part of this installation
+        boards = None
+    if board is not None and not isinstance(board, str):
+        return board
+    if board is not None:
+        found = boards.load_boards().by_name(board) if boards is not None else None
+        if found is None:
+            raise MigrationError(
+                f"unknown board {board!r} (expected a PX4 board name such as px4_fmu-v6c)"
+            )
+        return found
+    if config.hardware is not None:
+        version = ".".join(map(str, config.version)) if config.version else None
+        found = (
+            boards.load_boards().for_ulog(config.hardware, version) if boards is not None else None
+        )
+        if found is None:
+            assumptions.append(
+                f"board {config.hardware}: not in the board table; what its script starts is "
+                "judged from the parameters and the boot console"
+            )
+        return found
+    assumptions.append(
+        f"no board information in a {config.kind}: sensors with CAL_MAGn_ROT = -1 (Internal) "
+        "and I2C barometers are taken as the board's, other external I2C sensors as found by "
+        "probing (--board NAME uses the board's table)"
+    )
+    return None
