@@ -989,7 +989,11 @@ def _board(config: OldConfig, board: Any, assumptions: list[str]) -> Any:
     if board is not None and not isinstance(board, str):
         return board
     if board is not None:
-        found = boards.load_boards().by_name(board) if boards is not None else None
+        if boards is None:
+            raise MigrationError(
+                f"--board {board}: this installation has no board table (px4params.vehicle.boards)"
+            )
+        found = boards.load_boards().by_name(board)
         if found is None:
             raise MigrationError(
                 f"unknown board {board!r} (expected a PX4 board name such as px4_fmu-v6c)"
