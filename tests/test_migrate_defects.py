@@ -198,11 +198,25 @@ class SwitchRow:  # the agreed px4params.vehicle.boards.SwitchStart, for this te
 
 
 @dataclass(frozen=True)
-class BoardStandIn:  # the agreed Board's fields this test needs
+class DeviceRow:  # the agreed px4params.vehicle.boards.BoardDevice, for these tests only
+    driver: str
+    kind: str
+    bus_kind: str
+    bus: int | None
+    address: int | None
+    rotation: int | None
+    internal: bool
+    source: str
+
+
+@dataclass(frozen=True)
+class BoardStandIn:  # the agreed Board's fields these tests need
     name: str
-    devices: tuple = ()
+    devices: tuple[DeviceRow, ...] = ()
     i2c_launcher_buses: tuple[int, ...] = ()
     switches: tuple[SwitchRow, ...] = ()
+    external_i2c_buses: tuple[int, ...] = ()
+    internal_i2c_buses: tuple[int, ...] = ()
 
 
 def test_8_switch_started_drivers_run_where_the_evidence_says(tmp_path: Path, capsys) -> None:
@@ -294,3 +308,45 @@ def test_an_unknown_board_is_refused(tmp_path: Path, capsys) -> None:
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and err.startswith("px4params: error: ")
     assert "no_such-board" in err
+
+
+def test_the_board_table_says_what_the_board_starts(tmp_path: Path) -> None:
+    """A board row starting a compass (`ist8310 -X -b 1 -R 10 start`, `ist8310 -I -R 10
+    start`) leaves that compass out, naming the row; `-I` without `-b` covers the internal
+    buses only, so a GPS compass on another external bus is still an instance. A switch whose
+    rows have no -b (rc.sensors' `-X`: every external bus) gives one instance and says the bus
+    is not known; the launcher's buses are reported when nothing says what it found."""
+    script = "boards/test/init/rc.board_sensors"
+    board = BoardStandIn(
+        "test_board",
+        devices=(
+            DeviceRow("ist8310", "mag", "I2C", 1, None, 10, False, f"{script}:30"),
+            DeviceRow("ist8310", "mag", "I2C", None, None, 10, True, f"{script}:33"),
+        ),
+        i2c_launcher_buses=(1, 2),
+        switches=tuple(
+            SwitchRow("SENS_EN_MS4525DO", "ms4525do", bus, None, "start -X", "rc.sensors:148")
+            for bus in (1, 2, 4)
+        ),
+        external_i2c_buses=(1, 2, 4),
+        internal_i2c_buses=(3,),
+    )
+    rows = {
+        "CAL_MAG0_ID": devid.encode("i2c", 3, 0x0E, 0x06), "CAL_MAG0_ROT": -1,
+        "CAL_MAG1_ID": IST8310_GPS, "CAL_MAG1_ROT": 0,
+        "CAL_MAG2_ID": devid.encode("i2c", 2, 0x0E, 0x06), "CAL_MAG2_ROT": 0,
+        "SENS_EN_MS4525DO": 1,
+    }  # fmt: skip
+    proposal = migrate.migrate(migrate.read_config(params_file(tmp_path / "b.params", rows)),
+                               board=board)  # fmt: skip
+    got = [(i.name, i.values["bus.i2c.bus_id"]) for i in proposal.instances]
+    assert got == [("MS4525DO#0", 1), ("IST8310#0", 2)]
+    lines = {o.found.split(" = ")[0]: o.line for o in proposal.left_out}
+    assert lines["CAL_MAG0_ID"].endswith(f": started by the board's script ({script}:33)")
+    assert lines["CAL_MAG1_ID"].endswith(f": started by the board's script ({script}:30)")
+    assert proposal.assumptions == [
+        "SENS_EN_MS4525DO: test_board starts 'ms4525do start -X' on every external I2C bus (1, "
+        "2, 4; rc.sensors:148), so the bus it is found on is not known: bus 1 proposed",
+        "the board's i2c_launcher scans I2C bus 1, 2 for power monitors (INA226, INA228, "
+        "INA238) when no SENS_EN_INA* is set: a QGC .params does not say which it found",
+    ]

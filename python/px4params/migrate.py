@@ -544,6 +544,12 @@ class _Builder:
                 continue
             if row.bus is not None and row.bus != bus:
                 continue
+            if row.bus is None:  # -I or -X without -b: every internal, or external, bus
+                buses = getattr(
+                    self.board, "internal_i2c_buses" if row.internal else "external_i2c_buses", ()
+                )
+                if buses and bus not in buses:
+                    continue
             at = row.address
             if at is None and row.driver in {d.name for d in self.drivers}:
                 at = self.drivers[row.driver].default_address
@@ -647,7 +653,9 @@ class _Builder:
         )
         return [driver]
 
-    def switch_places(self, switch: str, driver: Driver) -> list[tuple[int, int | None, str]]:
+    def switch_places(
+        self, switch: str, value: int | float, driver: Driver
+    ) -> list[tuple[int, int | None, str]]:
         """Where the switch starts the driver: ``(bus, address or None, why)`` per instance,
         from the boot console, else the board's switch rows, else a guess (reported)."""
         places = []
@@ -666,13 +674,27 @@ class _Builder:
         rows = [
             r
             for r in getattr(self.board, "switches", ())
-            if r.param == switch and r.driver == driver.name
+            if r.param == switch
+            and r.driver == driver.name
+            and _holds(getattr(r, "when", ""), value)
         ]
-        if rows:
+        # A start with -b is on that bus; one without is PX4's -X: every external bus is
+        # tried, the device is found on one of them.
+        pinned = [r for r in rows if re.search(r"(^|\s)-b\s", r.args)]
+        if pinned:
             return [
                 (r.bus, r.address, f"the board starts it with '{r.driver} {r.args}' ({r.source})")
-                for r in rows
+                for r in pinned
             ]
+        if rows:
+            first = rows[0]
+            buses = ", ".join(str(b) for b in sorted({r.bus for r in rows}))
+            self.assume(
+                f"{switch}: {self.board.name} starts '{first.driver} {first.args}' on every "
+                f"external I2C bus ({buses}; {first.source}), so the bus it is found on is not "
+                f"known: bus {first.bus} proposed"
+            )
+            return [(first.bus, first.address, "")]
         if self.config.console is not None:
             self.assume(
                 f"{switch}: the boot console shows no {driver.name} start (not connected at "
@@ -691,7 +713,7 @@ class _Builder:
 
     def enabled_driver(self, switch: str, value: int | float, driver: Driver) -> None:
         spec = self.specs[driver.parameter]
-        for bus, at, why in self.switch_places(switch, driver):
+        for bus, at, why in self.switch_places(switch, value, driver):
             address = at if at is not None else _default_address(self.store, spec.name)
             where = f"on I2C bus {bus}" + (f" ({why})" if why else "")
             default = " at the driver's default address" if at is None else ""
@@ -925,6 +947,26 @@ class _Builder:
             )
 
 
+_CONDITION = re.compile(r"\s*[A-Z0-9_]+\s*(==|!=|>=|<=|>|<)\s*(-?\d+)")
+
+
+def _holds(when: str, value: int | float) -> bool:
+    """Whether a board row's condition on its switch (``SENS_EN_LL40LS == 2``, ``> 0``: the
+    first clause) holds for ``value``; a condition not of that form is taken as holding."""
+    m = _CONDITION.match(when or "")
+    if not m:
+        return True
+    limit = int(m[2])
+    return {
+        "==": value == limit,
+        "!=": value != limit,
+        ">=": value >= limit,
+        "<=": value <= limit,
+        ">": value > limit,
+        "<": value < limit,
+    }[m[1]]
+
+
 def _default_address(store: Any, param: str) -> int:
     from px4params.store.spec import metadata_default
 
@@ -993,17 +1035,17 @@ def _board(config: OldConfig, board: Any, assumptions: list[str]) -> Any:
             raise MigrationError(
                 f"--board {board}: this installation has no board table (px4params.vehicle.boards)"
             )
-        found = boards.load_boards().by_name(board)
+        version = "v" + ".".join(map(str, config.version)) if config.version else None
+        found = boards.load_boards().by_name(board, version)
         if found is None:
             raise MigrationError(
                 f"unknown board {board!r} (expected a PX4 board name such as px4_fmu-v6c)"
             )
         return found
     if config.hardware is not None:
-        version = ".".join(map(str, config.version)) if config.version else None
-        found = (
-            boards.load_boards().for_ulog(config.hardware, version) if boards is not None else None
-        )
+        table = boards.load_boards() if boards is not None else None
+        # The release picks the board's facts of that PX4 version.
+        found = table.for_ulog(config.hardware, config.release) if table is not None else None
         if found is None:
             assumptions.append(
                 f"board {config.hardware}: not in the board table; what its script starts is "
