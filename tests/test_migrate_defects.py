@@ -350,3 +350,28 @@ def test_the_board_table_says_what_the_board_starts(tmp_path: Path) -> None:
         "the board's i2c_launcher scans I2C bus 1, 2 for power monitors (INA226, INA228, "
         "INA238) when no SENS_EN_INA* is set: a QGC .params does not say which it found",
     ]
+
+
+def test_console_lines_are_read_as_px4_prints_them() -> None:
+    from px4params.vehicle.console import started_drivers
+
+    console = (
+        "ms5611 #0 on SPI bus 1 (devid=0x3d)\n"
+        "ak09916 #0 on I2C bus 1 (external, equal to '-b 2')\n"
+        "bmm350 #0 on I2C bus 4 address 0x14 rotation 6\n"
+        "INFO  [i2c_launcher] Found address 0x41, running 'ina226 -X -b 2 -a 0x41 -t 2 start'\n"
+        "ina226 #0 on I2C bus 2 (external) address 0x41\n"
+        "INFO  [i2c_launcher] Found address 0x45, running 'ina238 -X -b 1 -a 0xzz start'\n"
+        "WARN  [SPI_I2C] ist8310: no instance started (no device on bus?)\n"
+    )
+    got = [
+        (s.driver, s.bus_kind, s.bus, s.external, s.address, s.rotation, s.launcher, s.line)
+        for s in started_drivers(console)
+    ]
+    assert got == [
+        ("ms5611", "SPI", 1, False, None, None, False, 1),
+        ("ak09916", "I2C", 1, True, None, None, False, 2),
+        ("bmm350", "I2C", 4, False, 0x14, 6, False, 3),
+        ("ina226", "I2C", 2, True, 0x41, None, True, 4),  # the launcher's, with the driver's line
+        ("ina238", "I2C", 1, True, 0x45, None, True, 6),  # a bad -a keeps the found address
+    ]

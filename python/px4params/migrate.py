@@ -882,8 +882,8 @@ class _Builder:
             board = self.started_by_board(
                 chips, start.bus, start.address, start, None, kinds == {"BARO"}
             )
-            if board is not None:
-                self.leave_out(found, device, "board", board)
+            if board is not None:  # the line is already named: not twice
+                self.leave_out(found, device, "board", board.replace(f" ({found})", ""))
                 continue
             driver = self.start_driver(start)
             if driver is None:

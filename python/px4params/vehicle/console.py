@@ -61,7 +61,7 @@ def _launched(command: str, address: int) -> tuple[str, int | None, int]:
     for flag, value in itertools.pairwise(words):
         if flag == "-b" and value.isdigit():
             bus = int(value)
-        elif flag == "-a":
+        elif flag == "-a" and re.fullmatch(r"0[xX][0-9a-fA-F]+|\d+", value):
             address = int(value, 0)
     return (words[0] if words else ""), bus, address
 
