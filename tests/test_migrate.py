@@ -14,9 +14,7 @@ import shared_data
 from px4params import migrate
 from px4params.cli.main import build_parser
 from px4params.vehicle import devid
-from shared_data import SHARED_DATA, shared_file
-
-CURRENT_TSV = SHARED_DATA / shared_data.CURRENT_TSV
+from shared_data import shared_file
 
 # A small devtype table of our own, so that the .params tests need no shared data.
 DEVTYPES = (
@@ -110,18 +108,19 @@ def has_run_command() -> bool:
 
 @pytest.fixture
 def sample_log() -> Path:
-    shared_file(shared_data.CURRENT_TSV)
     return shared_file(shared_data.SAMPLE_LOG)
 
 
 def test_sample_log(sample_log: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    """The external AK09916 on I2C bus 1 at 0x0C becomes an instance; the boot console shows
-    the MS4525DO airspeed sensor rc.sensors started on I2C bus 2 (issue 34, defect 8: not bus
-    1); the airframe is accepted by `px4params run`."""
+    """The external AK09916 on I2C bus 1 at 0x0C becomes an instance; the log's
+    differential_pressure topic (0x472811: devtype 0x47, MS4525 in PX4 1.11's drv_sensor.h)
+    and its boot console show the MS4525DO airspeed sensor rc.sensors started on I2C bus 2 at
+    0x28 (issue 34, defect 8: not bus 1); the airframe is accepted by `px4params run`."""
     config = migrate.read_config(sample_log)
     assert config.kind == "ULog" and len(config.params) == 980
     assert "ver_hw CUBEPILOT_CUBEORANGE" in config.details
-    proposal = migrate.migrate(config, table=devid.load_table("current", CURRENT_TSV))
+    proposal = migrate.migrate(config)
+    assert proposal.table == "px4-v1.11"  # the log's release, v1.11.2
     assert [i.name for i in proposal.instances] == ["AK09916#0", "MS4525DO#0"]
     ak, ms = proposal.instances
     assert ak.values == {"bus.i2c.bus_id": 1, "bus.i2c.address": 0x0C, "rotation": 0}
@@ -131,13 +130,11 @@ def test_sample_log(sample_log: Path, tmp_path: Path, monkeypatch: pytest.Monkey
     )
     assert ms.values == {"bus.i2c.bus_id": 2, "bus.i2c.address": 0x28}
     assert ms.origin == (
-        "boot console line 27: 'ms4525_airspeed #0 on I2C bus 2 (external, equal to '-b 1')' "
-        "(started outside the board's script)"
+        "differential_pressure 0 = 4663313: MS4525 (DIFF_PRESS), I2C bus 2, address 0x28; boot "
+        "console line 27: 'ms4525_airspeed #0 on I2C bus 2 (external, equal to '-b 1')'"
     )
-    assert (
-        "boot console line 27: 'ms4525_airspeed #0 on I2C bus 2 (external, equal to '-b 1')' "
-        "names no address (PX4 before 1.13 prints none): ms4525do's default 0x28 assumed"
-    ) in proposal.assumptions
+    # The topic's device ID gives the address the 1.11 console line does not print.
+    assert not [a for a in proposal.assumptions if "names no address" in a]
     assert proposal.airframe().startswith(
         "# Device manifest migrated by px4params from sample_log_small.ulg (ULog)\n"
         "# Review before use: see the migration report.\n"
@@ -160,10 +157,8 @@ def test_sample_log(sample_log: Path, tmp_path: Path, monkeypatch: pytest.Monkey
         "CAL_ACC2_ID, CAL_GYRO2_ID = 2621474: ICM20948 (IMU), SPI bus 4, device 0" + internal,
         "CAL_MAG0_ID = 589858: AK09916 (MAG), SPI bus 4, device 0 (disabled: CAL_MAG0_EN = 0)"
         + internal,
-        "boot console line 20: ms5611, SPI bus 1: internal SPI sensor: started by the board's "
-        "startup script",
-        "boot console line 22: ms5611, SPI bus 4: internal SPI sensor: started by the board's "
-        "startup script",
+        "sensor_baro 0 = 3997706: MS5611 (BARO), SPI bus 1, device 0" + internal,
+        "sensor_baro 1 = 3997730: MS5611 (BARO), SPI bus 4, device 0" + internal,
     ]
     assert proposal.replaced[0].startswith("SENS_EXT_I2C_PRB = 1: external I2C devices were found")
     assert "SENS_EN_PX4FLOW" in proposal.disabled
@@ -199,7 +194,7 @@ def test_sample_log(sample_log: Path, tmp_path: Path, monkeypatch: pytest.Monkey
 
 def test_sample_log_cli(sample_log: Path, tmp_path: Path) -> None:
     out = tmp_path / "v.airframe"
-    r = cli("migrate", str(sample_log), "-o", str(out), "--devtypes", str(CURRENT_TSV))
+    r = cli("migrate", str(sample_log), "-o", str(out))
     assert r.returncode == 0, r.stderr
     assert r.stdout.startswith(f"Migration of {sample_log} (ULog, 980 parameters)\n")
     assert r.stdout.endswith(f"\nwrote {out}: 2 instances\n")

@@ -3,7 +3,8 @@ by PX4 and QGroundControl, none of them ours, none copied into this repository.
 
 For every file a truth table, written by reading the file by hand (its parameters with pyulog's
 ``ulog_params`` or a text editor, each ``CAL_*_ID`` split into bus type (bits 0-2), bus (3-7),
-address (8-15) and devtype (16-23) on paper, and its boot console line by line), says which
+address (8-15) and devtype (16-23) on paper, its boot console line by line, and the
+``device_id`` its sensor topics published, read with pyulog), says which
 instances a correct migration proposes (type, I2C bus, address, driver rotation) and what it
 leaves out and why:
 
@@ -13,6 +14,7 @@ leaves out and why:
 ``disabled``    ``CAL_<S>n_PRIO = 0`` (PX4 1.12 on) or ``CAL_<S>n_EN = 0``
 ``simulation``  a simulator's sensor (bus type 4)
 ``other bus``   bus type 0: the IDs of 2016/2017 firmware and of QGC's MockLink
+``dronecan``    bus type 3
 
 A file is found in ``$PX4PARAMS_CORPUS`` (a folder holding the files by their base name), in
 ``../shared/data`` (see its SOURCES.md), or read with ``git show`` from a snapshot of its
@@ -71,8 +73,9 @@ CORPUS = [
             "CAL_ACC1_ID, CAL_GYRO1_ID": BOARD,  # 0x380022 ICM20602 SPI 4
             "CAL_ACC2_ID, CAL_GYRO2_ID": BOARD,  # 0x280022 ICM20948 SPI 4
             "CAL_MAG0_ID": BOARD,  # 0x090022 AK09916 SPI 4 (CAL_MAG0_EN 0)
-            "ms5611, SPI bus 1": BOARD,
-            "ms5611, SPI bus 4": BOARD,
+            # sensor_baro 0 and 1 published 0x3D000A and 0x3D0022: MS5611 on SPI 1 and 4.
+            "MS5611 (BARO), SPI bus 1, device 0": BOARD,
+            "MS5611 (BARO), SPI bus 4, device 0": BOARD,
         },
     ),
     Truth(
@@ -101,6 +104,9 @@ CORPUS = [
             "CAL_ACC2_ID, CAL_GYRO2_ID": SIM,
             "CAL_MAG0_ID": SIM,
             "CAL_MAG1_ID": SIM,
+            # sensor_baro 0 and 1 published 0x65040C and 0x65050C: BAROSIM, simulation bus 1.
+            "BAROSIM (BARO), simulation bus 1, address 0x04": SIM,
+            "BAROSIM (BARO), simulation bus 1, address 0x05": SIM,
         },
     ),
     Truth(
@@ -187,6 +193,9 @@ CORPUS = [
             "CAL_ACC2_ID, CAL_GYRO2_ID": SIM,
             "CAL_MAG0_ID": SIM,
             "CAL_MAG1_ID": SIM,
+            # sensor_baro 0 and 1 published 0x65040C and 0x65050C: BAROSIM, simulation bus 1.
+            "BAROSIM (BARO), simulation bus 1, address 0x04": SIM,
+            "BAROSIM (BARO), simulation bus 1, address 0x05": SIM,
         },
     ),
     Truth(
@@ -199,7 +208,7 @@ CORPUS = [
             "CAL_GYRO0_ID": BOARD,
             "CAL_ACC1_ID, CAL_GYRO1_ID": BOARD,
             "CAL_MAG0_ID": BOARD,
-            "ms5611, I2C bus 4, address 0x77": BOARD,
+            "MS5611 (BARO), I2C bus 4, address 0x77": BOARD,  # sensor_baro 0: 0x3D7721
         },
     ),
     Truth(
@@ -239,9 +248,15 @@ CORPUS = [
         {"SENS_EN_LL40LS"},
     ),
     Truth(
-        # SITL, PX4 1.7.0 (2018): the simulator's IDs of then, bus type 0.
+        # SITL, PX4 1.7.3 (2018): the simulator's IDs of then, bus type 0.
         "14_19_29.ulg", *STIFAEL[:1], "inputlog/14_19_29.ulg", STIFAEL[1], False, "px4-v1.6", [],
-        {"CAL_ACC0_ID": OTHER, "CAL_ACC1_ID": OTHER, "CAL_GYRO0_ID": OTHER, "CAL_MAG0_ID": OTHER},
+        {
+            "CAL_ACC0_ID": OTHER, "CAL_ACC1_ID": OTHER, "CAL_GYRO0_ID": OTHER,
+            "CAL_MAG0_ID": OTHER,
+            # sensor_baro 0 published 0x074CFB: bus type 3 (UAVCAN) bus 31, node 0x4C,
+            # devtype 0x07 (none in 1.6): what SITL 1.7 wrote, not a device to carry.
+            "devtype 0x07 (not in the px4-v1.6 table), UAVCAN bus 31, node 76": "dronecan",
+        },
     ),
 ]  # fmt: skip
 

@@ -86,6 +86,18 @@ RENAMED_MODULES = {
     "ms5525_airspeed": "ms5525dso",
     "sdp3x_airspeed": "sdp3x",
 }
+#: Devtype names PX4 1.13 changed (drv_sensor.h's ``DRV_DIFF_PRESS_DEVTYPE_MS4525`` became
+#: ``..._MS4525DO``): an older era's name -> the driver declarations' chip.
+RENAMED_CHIPS = {"MS4525": "MS4525DO", "MS5525": "MS5525DSO"}
+#: The sensor kind of a log topic, as a calibration slot names it.
+_TOPIC_KIND = {
+    "sensor_accel": "ACC",
+    "sensor_gyro": "GYRO",
+    "sensor_mag": "MAG",
+    "sensor_baro": "BARO",
+    "differential_pressure": "DIFF_PRESS",
+    "distance_sensor": "DIST",
+}
 #: QGC's ``# Version: 1.13.0 beta`` header line (QGC writes the firmware version it read).
 _QGC_VERSION = re.compile(r"#\s*Version:\s*v?(\d+)\.(\d+)\.(\d+)")
 _QGC_HEADER = re.compile(r"#\s*(Stack|Vehicle|Version|Git Revision):\s*(.*\S)")
@@ -113,12 +125,14 @@ class OldConfig:
     hardware: str | None = None
     #: The log's boot console (``boot_console_output``), when it has one.
     console: str | None = None
+    #: ``(topic, multi_id, device_id)`` of the sensors that published in the log.
+    published: list[tuple[str, int, int]] = field(default_factory=list)
 
 
 def read_config(path: str | os.PathLike[str]) -> OldConfig:
     """Reads a ULog's parameters (their last values in the log), a QGC ``.params`` file, or a
     ``param set`` list; told apart by the content, not the name."""
-    from px4params.formats.ulog import read_header
+    from px4params.formats.ulog import read_device_ids, read_header
 
     where = str(path)
     try:
@@ -130,6 +144,7 @@ def read_config(path: str | os.PathLike[str]) -> OldConfig:
         return _read_text(where)
     try:
         log = read_header(where)
+        published = read_device_ids(where)
     except ULogError as e:
         raise MigrationError(str(e)) from None
     params = log.parameters
@@ -145,7 +160,7 @@ def read_config(path: str | os.PathLike[str]) -> OldConfig:
     version = (release >> 24 & 0xFF, release >> 16 & 0xFF, release >> 8 & 0xFF) if release else None
     return OldConfig(
         where, "ULog", params, details, release=release, version=version,
-        hardware=log.hardware, console=log.boot_console,
+        hardware=log.hardware, console=log.boot_console, published=published,
     )  # fmt: skip
 
 
@@ -524,7 +539,7 @@ class _Builder:
     def evidence(self, dev: devid.DeviceId) -> tuple[int, DriverStart] | None:
         """The boot console start of device ``dev`` (same chip, bus and, where the line says,
         address)."""
-        chips = set((dev.devtype_name or "").split("/")) - {""}
+        chips = _chips(dev)
         kind = {1: "I2C", 2: "SPI"}.get(dev.bus_type)
         for i, start in enumerate(self.starts):
             if i in self.claimed or start.bus_kind != kind or start.bus != dev.bus:
@@ -761,6 +776,13 @@ class _Builder:
                 found.setdefault(value, []).append(name)
         # CAL_<SENSOR>_PRIME selects one of the devices above: used, nothing of its own.
         self.use(*(n for n in self.params if re.fullmatch(r"CAL_[A-Z]+_PRIME", n)))
+        # Sensors that published in the log without a calibration slot (a barometer before
+        # PX4 1.12, an airspeed sensor, a rangefinder): found the same way.
+        for topic, multi_id, value in self.config.published:
+            if value not in found and value <= devid.MAX_DEVICE_ID:
+                found.setdefault(value, []).append(f"{topic} {multi_id}")
+            elif value in found and not found[value][0].startswith("CAL_"):
+                found[value].append(f"{topic} {multi_id}")
         for value, names in found.items():
             self.device(value, names)
 
@@ -790,7 +812,7 @@ class _Builder:
             if (rot := n.removesuffix("_ID") + "_ROT") in self.params and n.startswith("CAL_MAG")
         }
         twice = ""
-        kinds = [(_CAL_ID.fullmatch(n) or {"sensor": n})["sensor"] for n in names]
+        kinds = [_slot_kind(n) for n in names]
         repeated = sorted({k for k in kinds if kinds.count(k) > 1})
         if repeated:
             slots = [n for n, k in zip(names, kinds, strict=True) if k in repeated]
@@ -798,7 +820,7 @@ class _Builder:
             if len(set(rotations.values())) > 1:
                 shown = ", ".join(f"{r} = {_shown(v)}" for r, v in rotations.items())
                 twice += f", with different rotations ({shown})"
-        chips = set((dev.devtype_name or "").split("/")) - {""}
+        chips = _chips(dev)
         if dev.bus_type == 2:  # SPI
             hit = self.evidence(dev)
             if hit:
@@ -945,6 +967,18 @@ class _Builder:
             self.proposal.replaced.append(
                 f"{name} = 0: probing was off; the manifest starts the devices it lists"
             )
+
+
+def _chips(dev: devid.DeviceId) -> set[str]:
+    """The chip names of a device's devtype, older eras' names as today's drivers know them."""
+    names = set((dev.devtype_name or "").split("/")) - {""}
+    return names | {RENAMED_CHIPS[n] for n in names if n in RENAMED_CHIPS}
+
+
+def _slot_kind(name: str) -> str:
+    """``MAG`` of ``CAL_MAG0_ID``, ``BARO`` of the log topic ``sensor_baro 0``."""
+    m = _CAL_ID.fullmatch(name)
+    return m["sensor"] if m else _TOPIC_KIND.get(name.partition(" ")[0], name)
 
 
 _CONDITION = re.compile(r"\s*[A-Z0-9_]+\s*(==|!=|>=|<=|>|<)\s*(-?\d+)")

@@ -249,3 +249,39 @@ def read_header(path: str | os.PathLike[str]) -> ULogHeader:
     return ULogHeader(
         where, dict(log.msg_info_dict), dict(log.initial_parameters), changes, console
     )
+
+
+#: Topics whose samples carry the publishing sensor's ``device_id``.
+SENSOR_TOPICS = (
+    "sensor_accel",
+    "sensor_gyro",
+    "sensor_mag",
+    "sensor_baro",
+    "differential_pressure",
+    "distance_sensor",
+)
+
+
+def read_device_ids(path: str | os.PathLike[str]) -> list[tuple[str, int, int]]:
+    """``(topic, multi_id, device_id)`` of every sensor that published in the log (the sensor
+    topics above; each distinct non-zero ``device_id`` once, in the order logged). Only those
+    topics are parsed."""
+    from pyulog import ULog
+
+    where = os.fspath(path)
+    try:
+        with contextlib.redirect_stdout(io.StringIO()):
+            log = ULog(where, message_name_filter_list=list(SENSOR_TOPICS))
+    except OSError as e:
+        raise ULogError(f"{where}: cannot read: {e.strerror}") from None
+    except Exception as e:  # pyulog signals bad data with assorted exceptions
+        raise ULogError(f"{where}: not a readable ULog file ({e})") from None
+    found: list[tuple[str, int, int]] = []
+    for data in log.data_list:
+        ids = data.data.get("device_id")
+        if ids is None:
+            continue
+        for value in dict.fromkeys(int(v) for v in ids):
+            if value:
+                found.append((data.name, int(data.multi_id), value))
+    return found
