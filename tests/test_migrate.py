@@ -99,6 +99,14 @@ def apply_airframe(text: str, store) -> None:
             store.set_default(words[2], number)
 
 
+def boards_available() -> bool:
+    try:
+        import px4params.vehicle.boards  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
 def has_run_command() -> bool:
     return "run" in build_parser()._subparsers._group_actions[0].choices  # type: ignore[union-attr]
 
@@ -123,7 +131,10 @@ def test_sample_log(sample_log: Path, tmp_path: Path, monkeypatch: pytest.Monkey
     assert proposal.table == "px4-v1.11"  # the log's release, v1.11.2
     assert [i.name for i in proposal.instances] == ["AK09916#0", "MS4525DO#0"]
     ak, ms = proposal.instances
-    assert ak.values == {"bus.i2c.bus_id": 1, "bus.i2c.address": 0x0C, "rotation": 0}
+    # PX4 1.11's rc.sensors probes `ak09916 -X -R 6 start`: the board table knows it (the
+    # boards module); without it, probing's usual "no -R".
+    rotation = 6 if boards_available() else 0
+    assert ak.values == {"bus.i2c.bus_id": 1, "bus.i2c.address": 0x0C, "rotation": rotation}
     assert ak.origin == (
         "CAL_MAG1_ID = 592905: AK09916 (MAG), I2C bus 1, address 0x0C; boot console line 25: "
         "'ak09916 #0 on I2C bus 1 (external, equal to '-b 2')'"
@@ -147,7 +158,7 @@ def test_sample_log(sample_log: Path, tmp_path: Path, monkeypatch: pytest.Monkey
         "# [4] bus.i2c.address\n"
         "param set-default AK09916#0[4] 0x0C\n"
         "# [5] rotation\n"
-        "param set-default AK09916#0[5] 0\n"
+        f"param set-default AK09916#0[5] {rotation}\n"
     )
     report = proposal.report()
     internal = ": internal SPI sensor: started by the board's startup script, not by the manifest"

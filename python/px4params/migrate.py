@@ -573,6 +573,28 @@ class _Builder:
             return row
         return None
 
+    def probe_rotation(self, chips: set[str]) -> tuple[int, str] | None:
+        """The ``-R`` rc.sensors' probing passes this chip's driver in the board table's
+        release (PX4 1.11: ``ak09916 -X -R 6 start``), and where it says so; None if none."""
+        for row in getattr(self.board, "switches", ()):
+            if (
+                row.param == "SENS_EXT_I2C_PRB"
+                and row.rotation
+                and self.start_chips(row.driver) & chips
+            ):
+                return (
+                    row.rotation,
+                    f"rc.sensors probes it with '{row.driver} {row.args}' ({row.source})",
+                )
+        return None
+
+    def driver_rotation(self, start: DriverStart | None, chips: set[str]) -> tuple[int, str]:
+        """The driver's rotation of a device found by probing: the boot console's, else the
+        probe's ``-R``, else 0 (probing passes none); and why (empty for 0)."""
+        if start is not None and start.rotation is not None:
+            return start.rotation, "the driver's -R (boot console)" if start.rotation else ""
+        return self.probe_rotation(chips) or (0, "")
+
     def started_by_board(
         self,
         chips: set[str],
@@ -594,7 +616,10 @@ class _Builder:
             )
         if internal_rot is not None:
             return f"{internal_rot} = -1 (Internal): started by the board's script"
+        probed = self.probe_rotation(chips)
         if start is not None and start.rotation and not start.launcher:
+            if probed is not None and probed[0] == start.rotation:
+                return None  # rc.sensors' probe passes this -R itself
             return (
                 f"runs with rotation {start.rotation} (boot console line {start.line}): "
                 "rc.sensors probes without -R, so the board's script started it"
@@ -872,14 +897,14 @@ class _Builder:
             inst.notes.append(f"{', '.join(off)}: one of its slots was disabled for use")
         if twice:
             inst.notes.append(twice.removeprefix("; "))
-        rotation = start.rotation if start is not None and start.rotation is not None else 0
-        self.set_rotation(inst, rotation, "the driver's -R (boot console)" if rotation else "")
+        rotation, why = self.driver_rotation(start, chips)
+        self.set_rotation(inst, rotation, why)
         for rot, v in rotations.items():
             if not v:
                 continue
             inst.notes.append(
                 f"{rot} = {_shown(v)} stays a classic parameter: calibration applies it; the "
-                f"driver's rotation is {rotation} (rc.sensors starts it without -R)"
+                f"driver's rotation is {rotation} ({why or 'rc.sensors starts it without -R'})"
             )
 
     # -- what the boot console shows, beyond the slots ---------------------------------------
@@ -926,7 +951,7 @@ class _Builder:
                 "found by i2c_launcher" if start.launcher else "started outside the board's script"
             )
             inst = self.add(spec.name, start.bus, address, f"{found}: '{start.text}' ({how})")
-            self.set_rotation(inst, start.rotation or 0, "the driver's -R (boot console)")
+            self.set_rotation(inst, *self.driver_rotation(start, chips))
             options = UNMAPPED_OPTIONS.get(driver.name)
             if options:
                 inst.notes.append(
