@@ -503,7 +503,11 @@ class _Builder:
     def set_rotation(self, inst: ProposedInstance, rotation: int, why: str) -> None:
         """The driver's rotation (its ``-R``), where the type has the field."""
         has_field = any(leaf.path == "rotation" for leaf in self.store.leaves(inst.name))
-        if has_field and self.field_value(inst, "rotation", why, rotation) and rotation:
+        if (
+            has_field
+            and self.field_value(inst, "rotation", "the driver's -R", rotation)
+            and rotation
+        ):
             inst.notes.append(f"rotation {rotation}: {why}")
 
     def run(self) -> Proposal:
@@ -985,7 +989,7 @@ class _Builder:
             found = [i.name for i in self.proposal.instances]
             self.proposal.replaced.append(
                 f"{name} = {_shown(value)}: external I2C devices were found by probing; the "
-                f"manifest states them ({', '.join(found) or 'none found'}) and a missing one "
+                f"manifest states its devices ({', '.join(found) or 'none'}) and a missing one "
                 "fails the arming check instead of being skipped silently"
             )
         else:

@@ -76,7 +76,9 @@ examples:
   px4params migrate old.ulg --table legacy --json
   px4params run vehicle.airframe --store vehicle.store""",
     )
-    p.add_argument("file", metavar="FILE", help="QGC .params file or ULog (.ulg) flight log")
+    p.add_argument(
+        "file", metavar="FILE", help="QGC .params file, 'param set' list or ULog (.ulg) flight log"
+    )
     p.add_argument(
         "-o", "--output", metavar="AIRFRAME", help="write the airframe file here (default: stdout)"
     )
