@@ -375,3 +375,22 @@ def test_console_lines_are_read_as_px4_prints_them() -> None:
         ("ina226", "I2C", 2, True, 0x41, None, True, 4),  # the launcher's, with the driver's line
         ("ina238", "I2C", 1, True, 0x45, None, True, 6),  # a bad -a keeps the found address
     ]
+
+
+def test_migrate_needs_no_checkout_and_no_variable(tmp_path: Path) -> None:
+    """Today's devtype table ships with px4params: an installed `px4params migrate` decodes a
+    1.15 file's AK09916 (0x09) in any folder, with no $PX4PARAMS_DEVTYPES."""
+    import os
+    import subprocess
+    import sys
+
+    path = params_file(tmp_path / "v.params", {"CAL_MAG1_ID": devid.encode("i2c", 1, 0x0C, 0x09)})
+    env = {k: v for k, v in os.environ.items() if k != devid.DEVTYPES_ENV}
+    r = subprocess.run(
+        [sys.executable, "-m", "px4params", "migrate", str(path), "--json"],
+        cwd=tmp_path, capture_output=True, text=True, env=env, timeout=120, check=False,
+    )  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    report = json.loads(r.stdout)
+    assert report["table"] == "current"
+    assert instances(report) == [("AK09916#0", 1, 0x0C, 0)]
