@@ -259,7 +259,7 @@ def test_9_a_param_set_default_list_is_read(tmp_path: Path, capsys) -> None:
         "param set-default SENS_EN_INA238 1\n"
         f"param set CAL_MAG1_ID {QMC5883L_GPS}\n"
         "param set CAL_MAG1_PRIO 50\n"
-        "param set-default INA238_CURRENT 120.4\n"
+        "param set-default INA238_CURRENT 120.4  # the 120 A module\n"
         "set VEHICLE_TYPE mc\n"
     )
     config = migrate.read_config(path)

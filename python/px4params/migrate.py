@@ -215,8 +215,8 @@ def _read_param_list(text: str, where: str) -> OldConfig:
     params: dict[str, int | float] = {}
     other = 0
     for number, raw in enumerate(text.splitlines(), start=1):
-        line = raw.strip()
-        if not line or line.startswith("#"):
+        line = re.sub(r"(^|\s)#.*$", "", raw).strip()  # the shell's comments
+        if not line:
             continue
         m = _PARAM_SET.fullmatch(line)
         if not m:
@@ -832,8 +832,10 @@ class _Builder:
         found = f"{', '.join(names)} = {value}"
         where = f"{found}: {dev.describe()}"
         off = self.disabled_slots(names)
-        all_off = len(off) >= len(names) and all(
-            any(o.startswith(n.removesuffix("_ID") + "_") for o in off) for n in names
+        # Disabled when every calibration slot holding it is (a log's topics have no switch).
+        slots = [n for n in names if n.startswith("CAL_")]
+        all_off = bool(slots) and all(
+            any(o.startswith(n.removesuffix("_ID") + "_") for o in off) for n in slots
         )
         rotations = {
             rot: self.params[rot]
@@ -877,7 +879,7 @@ class _Builder:
         if board is not None:
             self.leave_out(found, dev.describe(), "board", f"{board}{disabled}{twice}")
             return
-        if all_off and off:
+        if all_off:
             why = f"disabled ({', '.join(off)}): not proposed, an instance would make it required"
             self.leave_out(found, dev.describe(), "disabled", why + twice)
             return
