@@ -1112,9 +1112,10 @@ def _board(config: OldConfig, board: Any, assumptions: list[str]) -> Any:
         # The release picks the board's facts of that PX4 version.
         found = table.for_ulog(config.hardware, config.release) if table is not None else None
         if found is None:
+            where = "not in the board table" if table is not None else "no board table here"
             assumptions.append(
-                f"board {config.hardware}: not in the board table; what its script starts is "
-                "judged from the parameters and the boot console"
+                f"board {config.hardware}: {where}; what its script starts is judged from the "
+                "parameters and the boot console"
             )
         return found
     assumptions.append(
