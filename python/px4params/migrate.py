@@ -1,7 +1,8 @@
 """Migration from today's PX4 configuration to a device manifest.
 
 Input: a QGC ``.params`` file, a ``param set`` / ``param set-default`` list (airframe syntax), or
-a ULog flight log (its parameters, information and boot console). Output: a proposed airframe
+a ULog flight log (its parameters, information, boot console and the ``device_id`` of every
+sensor that published). Output: a proposed airframe
 file of ``param add`` / ``param set-default`` lines (what ``px4params run`` and, per the talk,
 PX4 itself run) and a report of where each line came from, of everything that could not be
 carried over and of every assumption made. Nothing is dropped silently.
