@@ -1,4 +1,4 @@
-"""``px4params migrate``: propose a device manifest from today's configuration (migrate.py)."""
+"""``px4params migrate``: propose a device manifest from today's configuration (px4params.migrate)."""
 
 from __future__ import annotations
 
