@@ -1,4 +1,5 @@
-"""``px4params migrate``: propose a device manifest from today's configuration (px4params.migrate)."""
+"""``px4params migrate``: propose a device manifest from today's configuration (the work is in
+``px4params.migrate``)."""
 
 from __future__ import annotations
 
