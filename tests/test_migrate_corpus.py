@@ -335,3 +335,32 @@ def test_migrate_json_matches_the_truth_table(
     # Every proposed instance says where it came from; the airframe carries them all.
     for inst in report["instances"]:
         assert inst["origin"] and f"param add {inst['name']}\n" in report["airframe"]
+
+
+def test_the_amovlab_file_with_its_board_named(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The Amovlab F410 is a Pixhawk 6C: with `--board px4_fmu-v6c` the board's script decides.
+    PX4-Autopilot's boards/px4/fmu-v6c/init/rc.board_sensors (read at 13cbb684) starts
+    `ist8310 -X -b 4 -a 0xc start` (line 25: the internal compass of CAL_MAG0/CAL_MAG3) and
+    `ist8310 -X -b 1 -R 10 start` (line 28: the GPS puck's IST8310 at 0x0E, the stale
+    CAL_MAG2), so only the QMC5883L that rc.sensors probes stays an instance."""
+    try:
+        import px4params.vehicle.boards  # noqa: F401
+    except ImportError:
+        pytest.skip("needs px4params.vehicle.boards (the board table)")
+    (truth,) = [t for t in CORPUS if t.name == "px4docs_amovlabf410_v1.15.4.params"]
+    path = locate(truth, tmp_path)
+    assert main(["migrate", str(path), "--json", "--board", "px4_fmu-v6c"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["board"] == "px4_fmu-v6c"
+    assert [
+        (i["name"], i["values"]["bus.i2c.bus_id"], i["values"]["bus.i2c.address"],
+         i["values"]["rotation"])
+        for i in report["instances"]
+    ] == [("QMC5883L#0", 1, 0x0D, 0)]  # fmt: skip
+    lines = {left_out_key(i): i["line"] for i in report["left_out"]}
+    script = "boards/px4/fmu-v6c/init/rc.board_sensors"
+    assert f"{script}:25" in lines["CAL_MAG0_ID, CAL_MAG3_ID"]
+    assert f"{script}:28" in lines["CAL_MAG2_ID"]
+    assert not [a for a in report["assumptions"] if "no board information" in a]
