@@ -149,3 +149,21 @@ def test_letters_and_their_numbers_are_inverse() -> None:
     assert (flat.letters(26), flat.letters(702)) == ("AA", "AAA")
     for text in ("", "a", "A1", "Ä", "A_"):
         assert flat.letter_number(text) is None
+
+
+def test_dronecan_long_names_are_read_not_listed(tmp_path: Path) -> None:
+    from px4params.store.long_names import LongNames
+
+    root = dsdl_root(tmp_path, BIG, "acme")
+    schema = px4params.load_schema([root], use_env=False, cache_dir=tmp_path / "cache")
+    store = px4params.Store(schema)
+    names = LongNames(store)  # 256 x 65001 names were listed and checked here, one by one
+    spec = store.spec("INA238")
+    assert spec is not None
+    assert names._parse("INA238_1_I2C_ADDRESS") == (spec, 1, flat.layout(spec.data_type).slot("C"))
+    assert names._parse("BIG_255_DATA_64999") is not None
+    for missing in ("BIG_256_DATA_0", "BIG_01_DATA_0", "BIG_1_DATA_65000", "INA238_1_NOPE"):
+        assert names._parse(missing) is None
+    store.add("BIG#7")
+    store.set("BIG#7", {"data": [1, 2]})
+    assert [row.name for row in names.table()] == ["BIG_7_DATA_LEN", "BIG_7_DATA_0", "BIG_7_DATA_1"]

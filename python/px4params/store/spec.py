@@ -29,10 +29,12 @@ __all__ = [
     "ParamSpec",
     "ParameterSetError",
     "check_leaves",
+    "check_stored",
     "generic_path",
     "leaf_ranges",
     "metadata_default",
     "parameter_specs",
+    "stored_number",
     "with_defaults",
 ]
 
@@ -236,6 +238,25 @@ class LeafRange(NamedTuple):
     high: int | float | None
     #: 16, 32 or 64 for a float leaf (whose stored value is rounded), 0 for an integer one.
     float_bits: int
+    #: The bounds a stored value is compared with: ``low``/``high`` widened to where they
+    #: round at the leaf's width (0.1 is kept as 0.09998 by a float16, and is inside).
+    stored_low: int | float | None = None
+    stored_high: int | float | None = None
+    #: The leaf's DSDL type (``float16``, ``uint10``).
+    type: str = ""
+
+    @classmethod
+    def of(cls, low: float | None, high: float | None, float_bits: int, type: str) -> LeafRange:
+        if not float_bits:
+            return cls(low, high, 0, low, high, type)
+        return cls(
+            low,
+            high,
+            float_bits,
+            None if low is None else min(low, _rounded(low, float_bits)),
+            None if high is None else max(high, _rounded(high, float_bits)),
+            type,
+        )
 
 
 def leaf_ranges(data_type: DataType) -> dict[str, LeafRange]:
@@ -271,14 +292,14 @@ def _ranges_of(
         bits = int(spec["bits"])
         low, high = tags.get("min"), tags.get("max")
         if kind == "float":
-            found[path] = LeafRange(low, high, bits)
+            found[path] = LeafRange.of(low, high, bits, f"float{bits}")
             return
         top = (1 << bits) - 1 if kind == "uint" else (1 << (bits - 1)) - 1
         bottom = 0 if kind == "uint" else -(1 << (bits - 1))
         low = None if low is None or low <= bottom else low
         high = None if high is None or high >= top else high
         if low is not None or high is not None:
-            found[path] = LeafRange(low, high, 0)
+            found[path] = LeafRange.of(low, high, 0, f"{kind}{bits}")
 
 
 def generic_path(path: str) -> str:
@@ -307,32 +328,81 @@ def check_leaves(
     ``bounds``, outside its ``@min``/``@max``. ``where`` names the instance (``INA238#1``).
     Leaves are stored values: a float is compared with its bounds as they round to the leaf's
     width, so that a value given as exactly ``@min`` is never refused once stored. ``given``,
-    the number a one-leaf write was given, is named too where it is not what is stored."""
+    the number a one-leaf write was given, is what a refusal names (1e-12, not the 0 a float16
+    keeps of it)."""
     for leaf in leaves:
         rng = ranges.get(generic_path(leaf.path))
-        if rng is None or isinstance(leaf.value, bool):
-            continue
-        value = leaf.value
-        name = f"{where}.{leaf.path}"
-        if rng.float_bits:
-            if not math.isfinite(value):
-                raise ValueRangeError(
-                    f"{name}: {_shown(value)} is not a finite number ({leaf.type}: NaN and "
-                    "infinities are refused)"
-                )
-            if not bounds:
-                continue
-            low = None if rng.low is None else min(rng.low, _rounded(rng.low, rng.float_bits))
-            high = None if rng.high is None else max(rng.high, _rounded(rng.high, rng.float_bits))
-        elif not bounds:
-            continue
-        else:
-            low, high = rng.low, rng.high
-        if (low is not None and value < low) or (high is not None and value > high):
-            # The number the user gave, when there is one (1e-12, not the 0 it rounds to).
-            if isinstance(given, int | float) and not isinstance(given, bool):
-                value = given
-            raise ValueRangeError(f"{name}: {describe_outside(value, rng)}", bounds_only=True)
+        if rng is not None and not isinstance(leaf.value, bool):
+            check_stored(f"{where}.{leaf.path}", leaf.value, rng, bounds, given)
+
+
+def check_stored(
+    name: str, value: float, rng: LeafRange, bounds: bool = True, given: object = None
+) -> None:
+    """:func:`check_leaves` for one leaf named ``name`` that would store ``value``."""
+    if rng.float_bits and not math.isfinite(value):
+        raise ValueRangeError(
+            f"{name}: {_shown(value)} is not a finite number ({rng.type}: NaN and infinities "
+            "are refused)"
+        )
+    if not bounds:
+        return
+    low, high = rng.stored_low, rng.stored_high
+    if (low is not None and value < low) or (high is not None and value > high):
+        if isinstance(given, int | float) and not isinstance(given, bool):
+            value = given
+        raise ValueRangeError(f"{name}: {describe_outside(value, rng)}", bounds_only=True)
+
+
+def within(value: float, rng: LeafRange, bounds: bool = True) -> bool:
+    """Whether a leaf of ``rng`` may store ``value`` (:func:`check_stored` says why not)."""
+    if rng.float_bits and not math.isfinite(value):
+        return False
+    if not bounds:
+        return True
+    low, high = rng.stored_low, rng.stored_high
+    return (low is None or value >= low) and (high is None or value <= high)
+
+
+def in_type_range(value: float, type_name: str) -> bool:
+    """Whether a leaf of DSDL type ``type_name`` (``uint10``, ``float16``) can hold ``value`` at
+    all; outside it, the codec's own refusal is the one to give."""
+    kind = type_name.rstrip("0123456789")
+    bits = int(type_name[len(kind) :] or 0)
+    if kind == "float":
+        top = _FLOAT_MAX.get(bits)
+        return top is None or not math.isfinite(value) or abs(value) <= top
+    if kind == "uint":
+        return 0 <= value < 1 << bits
+    if kind == "int":
+        return -(1 << (bits - 1)) <= value < 1 << (bits - 1)
+    return True
+
+
+#: The largest finite float16 and float32.
+_FLOAT_MAX = {16: 65504.0, 32: 3.4028234663852886e38}
+
+
+def stored_number(value: object, rng: LeafRange) -> int | float | None:
+    """What a leaf of ``rng`` keeps of a plain ``int``/``float`` given to it (a float rounded to
+    the leaf's width), or None where only the codec can say (another kind of value, a float
+    for an integer leaf, a number beyond the float's range): then the write is checked on the
+    value it encodes."""
+    kind = type(value)
+    if rng.float_bits:
+        if kind is not float and kind is not int:
+            return None
+        number = float(value)  # type: ignore[arg-type]
+        if not math.isfinite(number):
+            return number
+        packer = _FLOAT_PACKERS.get(rng.float_bits)
+        if packer is None:
+            return number
+        try:
+            return float(packer.unpack(packer.pack(number))[0])
+        except OverflowError:
+            return None
+    return value if kind is int else None  # type: ignore[return-value]
 
 
 def describe_outside(value: float, rng: LeafRange) -> str:
@@ -342,6 +412,9 @@ def describe_outside(value: float, rng: LeafRange) -> str:
     if rng.low is not None:
         return f"{_shown(value)} is below {_shown(rng.low)} (@min)"
     return f"{_shown(value)} is above {_shown(rng.high)} (@max)"
+
+
+_FLOAT_PACKERS = {16: struct.Struct("<e"), 32: struct.Struct("<f")}
 
 
 def _rounded(value: float, bits: int) -> float:

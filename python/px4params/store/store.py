@@ -44,10 +44,14 @@ from px4params.store.classic import (
 from px4params.store.spec import (
     ParamSpec,
     check_leaves,
+    check_stored,
     generic_path,
+    in_type_range,
     leaf_ranges,
     metadata_default,
     parameter_specs,
+    stored_number,
+    within,
 )
 
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
@@ -589,14 +593,36 @@ class Store:
         ranges = leaf_ranges(data_type)
         if not ranges:
             return
-        try:
-            path = self._native.get_leaf(p.index, instance, target, default=default)[1]
-        except Px4ParamsError:
-            return  # no such instance or leaf: the write says so
+        if isinstance(target, str) and not target.endswith(("_tag", "_len")):
+            path = target  # a leaf named by its path: no need to ask the core
+        else:
+            try:
+                path = self._native.get_leaf(p.index, instance, target, default=default)[1]
+            except Px4ParamsError:
+                return  # no such instance or leaf: the write says so
         # A union tag or an array length brings other leaves into the value: check them all.
         whole = path.endswith(("_tag", "_len"))
-        if not whole and generic_path(path) not in ranges:
-            return
+        if not whole:
+            rng = ranges.get(generic_path(path))
+            if rng is None:
+                return
+            if not saturate:  # a plain number: checked without the codec (the common case)
+                stored = stored_number(value, rng)
+                if stored is not None:
+                    if within(stored, rng, not force):
+                        return
+                    # Refused: but a leaf that does not exist or a value its type cannot hold
+                    # is the write's own error, worded by the core.
+                    try:
+                        leaf_type = self._native.get_leaf(
+                            p.index, instance, target, default=default
+                        )[2]
+                    except Px4ParamsError:
+                        return
+                    if in_type_range(value, leaf_type):
+                        where = f"{self._instance_name(p, instance)}.{path}"
+                        check_stored(where, stored, rng, not force, value)
+                    return
         try:
             data = self._native.get(p.index, instance, default=default)
             data = data_type.set_leaf(data, target, value, tao=False, saturate=saturate)
