@@ -48,26 +48,36 @@ def scalar_strategy(spec: Mapping[str, Any], *, infinities: bool) -> st.SearchSt
 
 
 def value_strategy(
-    types: Mapping[str, Any], key: str, *, infinities: bool = True, max_len: int | None = None
+    types: Mapping[str, Any],
+    key: str,
+    *,
+    infinities: bool = True,
+    max_len: int | None = None,
+    storable: bool = False,
 ) -> st.SearchStrategy[dict[str, Any]]:
     """Values of type ``key``; dynamic arrays are capped at ``max_len`` elements (default 6 in
-    CI, none in the long run) plus their maximum now and then, to keep CI's examples small."""
+    CI, none in the long run) plus their maximum now and then, to keep CI's examples small.
+    ``storable`` values are what a store takes: within each field's ``@min``/``@max``, floats
+    finite."""
     if max_len is None:
         max_len = 6 if SCALE == 1 else 1 << 30
     memo: dict[str, st.SearchStrategy[Any]] = {}
 
-    def of_type(spec: Mapping[str, Any]) -> st.SearchStrategy[Any]:
+    def of_type(spec: Mapping[str, Any], tags: Mapping[str, Any]) -> st.SearchStrategy[Any]:
         kind = spec["kind"]
         if kind == "ref":
             return composite(spec["name"])
         if kind == "array":
-            return st.lists(of_type(spec["elem"]), min_size=spec["len"], max_size=spec["len"])
+            elem = of_type(spec["elem"], tags)
+            return st.lists(elem, min_size=spec["len"], max_size=spec["len"])
         if kind == "dynarray":
-            elem = of_type(spec["elem"])
+            elem = of_type(spec["elem"], tags)
             short = st.lists(elem, max_size=min(spec["max"], max_len))
             if spec["max"] <= max_len:
                 return short
             return st.one_of(short, st.lists(elem, min_size=spec["max"], max_size=spec["max"]))
+        if storable and kind != "bool":
+            return _within(spec, tags)
         return scalar_strategy(spec, infinities=infinities)
 
     def composite(name: str) -> st.SearchStrategy[Any]:
@@ -76,15 +86,38 @@ def value_strategy(
             fields = [f for f in definition["fields"] if f["type"]["kind"] != "void"]
             if definition["kind"] == "union":
                 memo[name] = st.one_of(
-                    *[of_type(f["type"]).map(lambda v, n=f["name"]: {n: v}) for f in fields]
+                    *[
+                        of_type(f["type"], _tags(f)).map(lambda v, n=f["name"]: {n: v})
+                        for f in fields
+                    ]
                 )
             else:
                 memo[name] = st.fixed_dictionaries(
-                    {f["name"]: of_type(f["type"]) for f in fields if f["name"] != "p_version"}
+                    {
+                        f["name"]: of_type(f["type"], _tags(f))
+                        for f in fields
+                        if f["name"] != "p_version"
+                    }
                 )
         return memo[name]
 
     return composite(key)
+
+
+def _tags(field: Mapping[str, Any]) -> Mapping[str, Any]:
+    return (field.get("doc") or {}).get("tags") or {}
+
+
+def _within(spec: Mapping[str, Any], tags: Mapping[str, Any]) -> st.SearchStrategy[Any]:
+    """A finite number of scalar type ``spec`` within the field's ``@min``/``@max``."""
+    bits, kind = spec["bits"], spec["kind"]
+    if kind == "float":
+        top = {16: FLOAT16_MAX, 32: 3.4028234663852886e38}.get(bits, 1.7976931348623157e308)
+        low, high = tags.get("min", -top), tags.get("max", top)
+        return st.floats(low, high)
+    low, high = (0, (1 << bits) - 1) if kind == "uint" else (
+        -(1 << (bits - 1)), (1 << (bits - 1)) - 1)  # fmt: skip
+    return st.integers(max(low, tags.get("min", low)), min(high, tags.get("max", high)))
 
 
 def expected_decoded(types: Mapping[str, Any], key: str, value: Any) -> Any:

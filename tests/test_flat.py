@@ -66,7 +66,8 @@ def test_talk_names(store: px4params.Store) -> None:
     ]  # fmt: skip
     assert [table[n].leaf for n in table] == [f"INA238#1[{k}]" for k in (1, 3, 4, 5, 6)]
     assert flat.resolve_flat(store, "INA238_1C") == "INA238#1[4]"
-    assert flat.resolve_flat(store, "ina238_1c") == "INA238#1[4]"  # PX4 names are upper case
+    with pytest.raises(InstanceError, match=r"did you mean INA238_1C\?\)$"):  # exact, as PX4's
+        flat.resolve_flat(store, "ina238_1c")
     assert table["INA238_1C"].mav_type == "int32"
     assert table["INA238_1Q"].mav_type == "float32"
     assert table["INA238_1Q"].value == store.get("INA238#1.shunt")  # float16 exactly
@@ -206,7 +207,7 @@ def test_round_trip_through_the_store(schema: px4params.Schema, data: st.DataObj
         key = spec.data_type.key
         source.add(instance)
         target.add(instance)
-        source.set(instance, data.draw(value_strategy(schema.model["types"], key)))
+        source.set(instance, data.draw(value_strategy(schema.model["types"], key, storable=True)))
     for row in flat.flat_table(source):
         flat.set_flat(target, row.name, row.value)
     for spec in source.specs:

@@ -54,9 +54,18 @@ def test_numbers_are_bounded_before_conversion() -> None:
 
 
 def test_a_float_too_small_for_its_leaf_is_stored_as_zero_with_a_warning(store: Path) -> None:
+    # Below the shunt's @min (0.00001): refused, naming the number given (not the 0 it rounds
+    # to); with --force both what is overridden and the rounding are said.
     result = cli("param", "--store", str(store), "set", "INA238#0.shunt", "1e-12")
+    assert (result.returncode, result.stderr) == (
+        1,
+        "px4params: error: INA238#0.shunt: 1e-12 is outside 0.00001..0.1 (@min/@max)\n",
+    )
+    result = cli("param", "--store", str(store), "set", "--force", "INA238#0.shunt", "1e-12")
     assert result.returncode == 0
     assert result.stderr == (
+        "px4params: warning: --force: INA238#0.shunt: 1e-12 is outside 0.00001..0.1 "
+        "(@min/@max); stored anyway\n"
         "px4params: warning: INA238#0.shunt: 1e-12 is below the smallest float16 and is "
         "stored as 0\n"
     )

@@ -613,7 +613,7 @@ def test_reset_all_keeps_what_is_excluded(store: Path, capsys: pytest.CaptureFix
     param(capsys, "set", "INA238#0.current", "300")
     param(capsys, "set", "AK09916#0.rotation", "2")
     param(capsys, "set", "SYS_AUTOSTART", "4001")
-    assert param(capsys, "reset_all", "ina238", "sys_autostart")[0] == 0
+    assert param(capsys, "reset_all", "INA238", "SYS_AUTOSTART")[0] == 0
     assert param(capsys, "show", "-q", "INA238#0.current")[1] == "300\n"
     assert param(capsys, "show", "-q", "SYS_AUTOSTART")[1] == "4001\n"
     assert param(capsys, "show", "-q", "AK09916#0.rotation")[1] == "0\n"

@@ -5,6 +5,7 @@ from __future__ import annotations
 import atexit
 import math
 import shutil
+import struct
 import tempfile
 from pathlib import Path
 
@@ -420,19 +421,48 @@ class StoreMachine(RuleBasedStateMachine):
 
 def _fits(schema: px4params.Schema, key: str, path: str, type_name: str, new: object) -> bool:
     """Whether a leaf takes ``new``, worked out from the DSDL alone (not by the codec): the
-    range of ``uintN``/``intN``/``floatN``, a union tag's variants, an array length's maximum."""
+    range of ``uintN``/``intN``/``floatN``, a union tag's variants, an array length's maximum,
+    the field's ``@min``/``@max``, and no NaN or infinity in a float."""
     if type_name == "bool":
         return isinstance(new, bool)
+    tags = _field_tags(schema, key, path)
     if type_name.startswith("float"):
         top = {"float16": 65504.0, "float32": 3.4028234663852886e38}.get(type_name, math.inf)
-        return isinstance(new, float) and (math.isnan(new) or abs(new) <= top)
+        if not (isinstance(new, float) and math.isfinite(new) and abs(new) <= top):
+            return False
+        code = {"float16": "<e", "float32": "<f"}[type_name]
+
+        def stored(x: float) -> float:  # the store compares what it would keep
+            return struct.unpack(code, struct.pack(code, x))[0]
+
+        low_ok = "min" not in tags or stored(new) >= min(tags["min"], stored(tags["min"]))
+        high_ok = "max" not in tags or stored(new) <= max(tags["max"], stored(tags["max"]))
+        return low_ok and high_ok
     assert isinstance(new, int)
     bits = int(type_name.lstrip("uint"))
     low, high = (0, (1 << bits) - 1) if type_name.startswith("u") else (
         -(1 << (bits - 1)), (1 << (bits - 1)) - 1)  # fmt: skip
     if path.endswith("_tag") or path.endswith("_len"):
         high = min(high, _selector_limit(schema, key, path))
+    low, high = max(low, tags.get("min", low)), min(high, tags.get("max", high))
     return low <= new <= high
+
+
+def _field_tags(schema: px4params.Schema, key: str, path: str) -> dict:
+    """The doc tags of the field a leaf path ends at (an array's tags are its elements')."""
+    types = schema.model["types"]
+    spec: dict = {"kind": "ref", "name": key}
+    tags: dict = {}
+    for part in path.split("."):
+        name = part.partition("[")[0]
+        if spec["kind"] != "ref" or name in ("_tag", "_len"):
+            return {}
+        field = next(f for f in types[spec["name"]]["fields"] if f["name"] == name)
+        tags = (field.get("doc") or {}).get("tags") or {}
+        spec = field["type"]
+        while spec["kind"] in ("array", "dynarray"):
+            spec = spec["elem"]
+    return tags
 
 
 def _selector_limit(schema: px4params.Schema, key: str, path: str) -> int:
@@ -495,7 +525,7 @@ def test_whole_values_round_trip(value: st.DataObject) -> None:
     store = px4params.Store(SCHEMA)
     spec = value.draw(st.sampled_from(store.specs))
     types, key = SCHEMA.model["types"], spec.data_type.key
-    v = value.draw(value_strategy(types, key, infinities=False))
+    v = value.draw(value_strategy(types, key, infinities=False, storable=True))
     name = store.add(spec.name)
     store.set(name, v)
     # The value read back is the value set, floats rounded as Python rounds them (not the codec).

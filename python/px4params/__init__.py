@@ -31,6 +31,7 @@ _EXPORTS = {
     "StoreError": "px4params.errors",
     "StoreFileError": "px4params.errors",
     "TransferError": "px4params.errors",
+    "ValueRangeError": "px4params.errors",
     "ValueShapeError": "px4params.errors",
     "DataType": "px4params.dsdl.schema",
     "Leaf": "px4params.dsdl.schema",

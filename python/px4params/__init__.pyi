@@ -55,6 +55,9 @@ from px4params.errors import (
     TransferError as TransferError,
 )
 from px4params.errors import (
+    ValueRangeError as ValueRangeError,
+)
+from px4params.errors import (
     ValueShapeError as ValueShapeError,
 )
 from px4params.store.store import (

@@ -34,6 +34,7 @@ __all__ = [
     "StoreFileError",
     "TransferError",
     "ULogError",
+    "ValueRangeError",
     "ValueShapeError",
 ]
 
@@ -126,6 +127,20 @@ class StoreError(Px4ParamsError):
 class InstanceError(StoreError, LookupError):
     """An unknown parameter, an instance number at or above ``max_instances``, an instance that
     does not exist or exists already, or no free instance left."""
+
+
+class ValueRangeError(StoreError, ValueError):
+    """A value outside its field's ``@min``/``@max``, or a NaN or infinity where the type takes
+    none; nothing was written.
+
+    Attributes:
+        bounds_only: True when only ``@min``/``@max`` were broken (what ``param set --force``
+            may override); False for a non-finite float, which nothing overrides.
+    """
+
+    def __init__(self, message: str, *, bounds_only: bool = False) -> None:
+        super().__init__(message)
+        self.bounds_only = bounds_only
 
 
 class StoreFileError(StoreError):

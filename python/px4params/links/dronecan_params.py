@@ -29,7 +29,7 @@ from px4params.errors import Px4ParamsError
 from px4params.store import flat
 from px4params.store.classic import INT32_MAX, INT32_MIN, ClassicParam
 from px4params.store.long_names import LongLeaf, LongNames
-from px4params.store.spec import ParamSpec
+from px4params.store.spec import ParamSpec, generic_path, leaf_ranges
 
 if TYPE_CHECKING:
     from px4params.store.store import Store
@@ -151,12 +151,17 @@ class DronecanParams:
             shown = EMPTY if default is None else {"boolean_value": int(bool(default))}
             return GetSetEntry(leaf.name, value, shown, _integer(0), _integer(1))
         variant = "real_value" if slot.mav_type == flat.FLOAT32 else "integer_value"
+        # The range the store enforces: the field's @min/@max where given, else its type's.
+        spec = self.store.spec(leaf.instance.partition("#")[0])
+        bounds = leaf_ranges(spec.data_type).get(generic_path(slot.path)) if spec else None
+        low = slot.min if bounds is None or bounds.low is None else bounds.low
+        high = slot.max if bounds is None or bounds.high is None else bounds.high
         return GetSetEntry(
             leaf.name,
             {variant: current},
             EMPTY if default is None else {variant: default},
-            _numeric(slot.min, variant),
-            _numeric(slot.max, variant),
+            _numeric(low, variant),
+            _numeric(high, variant),
         )
 
     # -- writes --------------------------------------------------------------------------------

@@ -34,8 +34,8 @@ What it does (PX4's ``mavlink_parameters.cpp`` is the model):
 
 The parameters are the store's classic ones and the destructured leaves of its structured
 instances (:mod:`px4params.store.flat`); the structured values themselves (wider than 32 bits)
-are not offered. Parameter metadata bounds (``@min``/``@max``) are not enforced, as PX4 does not
-either.
+are not offered. A leaf's ``@min``/``@max`` and finite floats are enforced by the store (as for
+every writer); a classic parameter's ``parameters.json`` bounds are not, as PX4 does not either.
 
 pymavlink decodes a ``float`` field through a Python float, which turns an ``int32`` whose bit
 pattern is a signalling NaN (-8388607..-4194305, 2139095041..2143289343) into another number.

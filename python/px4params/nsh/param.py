@@ -14,7 +14,13 @@ import sys
 
 from px4params._records import TYPE_CHECKING
 from px4params.dsdl.schema import Leaf, to_json_value
-from px4params.errors import CommandError, InstanceError, NumberError, Px4ParamsError
+from px4params.errors import (
+    CommandError,
+    InstanceError,
+    NumberError,
+    Px4ParamsError,
+    ValueRangeError,
+)
 from px4params.numbers import abbreviated, dump_json, load_json, parse_float, parse_int
 from px4params.status import EXIT_FAILED, EXIT_OK
 from px4params.store.session import Session
@@ -218,13 +224,18 @@ def resolve_name(store: Store, name: str) -> Key:
     return Key.parse(name)  # neither: the store's own error names the problem
 
 
-def _write(s: Session, name: str, text: str, *, default: bool) -> None:
+def _write(s: Session, name: str, text: str, *, default: bool, force: bool = False) -> None:
     key = resolve_name(s.store, name)
     value = parse_value(s.store, key, text)
-    if default:
-        s.store.set_default(key, value)
-    else:
-        s.store.set(key, value)
+    write = s.store.set_default if default else s.store.set
+    try:
+        write(key, value)
+    except ValueRangeError as e:
+        if not (force and e.bounds_only):
+            raise
+        # --force overrides @min/@max (never a NaN or an infinity), and says so.
+        print(f"px4params: warning: --force: {e}; stored anyway", file=sys.stderr)
+        write(key, value, force=True)
     if isinstance(value, float) and value != 0 and math.isfinite(value):
         stored = s.store.get(key, default=default)
         if stored == 0:
@@ -239,14 +250,14 @@ def _write(s: Session, name: str, text: str, *, default: bool) -> None:
 def verb_set(s: Session, a: argparse.Namespace) -> int:
     if a.fail not in (None, "fail"):
         raise CommandError(f"unexpected '{a.fail}' after the value (only 'fail' may follow)")
-    _write(s, a.name, a.value, default=False)
+    _write(s, a.name, a.value, default=False, force=getattr(a, "force", False))
     s.done()
     return EXIT_OK
 
 
 def verb_set_default(s: Session, a: argparse.Namespace) -> int:
     try:
-        _write(s, a.name, a.value, default=True)
+        _write(s, a.name, a.value, default=True, force=getattr(a, "force", False))
     except InstanceError as e:
         if a.silent and "unknown parameter" in str(e):
             return EXIT_FAILED
@@ -410,15 +421,14 @@ def _expand(store: Store, patterns: list[str]) -> list[str | Key]:
     its instances, and destructured flat names for their leaves."""
     names = list(store.names())
     found: list[str | Key] = []
-    for p in patterns:
-        upper = p.upper()
+    for p in patterns:  # exact, as PX4's names (an inexact one is refused with a hint)
         if "*" in p:
             import fnmatch
 
-            found += [n for n in names if fnmatch.fnmatchcase(n, upper)]
-        elif upper in store.parameters and store.spec(upper) is not None and "#" not in upper:
-            spec = store.spec(upper)
-            found += store.instances(upper) if spec is not None and not spec.shared else [upper]
+            found += [n for n in names if fnmatch.fnmatchcase(n, p)]
+        elif p in store.parameters and store.spec(p) is not None and "#" not in p:
+            spec = store.spec(p)
+            found += store.instances(p) if spec is not None and not spec.shared else [p]
         else:
             found.append(resolve_name(store, p))
     return found
@@ -607,19 +617,28 @@ class _VerbParsers:
         return p
 
 
-def add_verbs(sub: Any, formatter_class: Any, only: str | None = None) -> None:
+def add_verbs(
+    sub: Any, formatter_class: Any, only: str | None = None, *, cli: bool = False
+) -> None:
     """The ``param`` verbs (shared by ``px4params param`` and airframe files) on ``sub``,
     argparse's subcommands or those of ``px4params.cli.parsing`` (whose declaration argparse
     builds only when asked: ``formatter_class`` is the help formatter of argparse's or its
     stand-in there). With ``only``, just that verb's parser is built (all of them, listed by
-    name, when it is no verb)."""
-    _add_verbs(_VerbParsers(sub, only, formatter_class))
+    name, when it is no verb). ``cli`` adds what only the command line takes (``--force``:
+    an airframe file states values, it does not override ranges)."""
+    _add_verbs(_VerbParsers(sub, only, formatter_class), cli)
     if only is not None and only not in VERBS:  # no verb: list them all for the usage error
         for name, (_, summary, _) in VERBS.items():
             sub.add_parser(name, help=summary, add_help=False)
 
 
-def _add_verbs(verb: _VerbParsers) -> None:
+_FORCE_HELP = (
+    "store a value outside its field's @min/@max anyway (said on stderr); a NaN or an "
+    "infinity is refused all the same"
+)
+
+
+def _add_verbs(verb: _VerbParsers, cli: bool) -> None:
     p = verb(
         "add",
         verb_add,
@@ -643,6 +662,8 @@ def _add_verbs(verb: _VerbParsers) -> None:
     p.add_argument("name")
     p.add_argument("value")
     p.add_argument("fail", nargs="?", help="accepted for NSH compatibility: errors always fail")
+    if cli:
+        p.add_argument("--force", action="store_true", help=_FORCE_HELP)
     p = verb(
         "set-default",
         verb_set_default,
@@ -654,6 +675,8 @@ def _add_verbs(verb: _VerbParsers) -> None:
     )
     p.add_argument("name")
     p.add_argument("value")
+    if cli:
+        p.add_argument("--force", action="store_true", help=_FORCE_HELP)
     for name, func, summary in (
         ("compare", verb_compare, "exit 0 if NAME equals one of the values, else 1"),
         ("greater", verb_greater, "exit 0 if NAME is greater than one of the values, else 1"),

@@ -113,6 +113,23 @@ def letters(number: int) -> str:
     return text
 
 
+def letter_number(text: str) -> int | None:
+    """The inverse of :func:`letters`: ``A`` -> 0, ``AB`` -> 27; None for anything else."""
+    if not text:
+        return None
+    number = 0
+    for char in text:
+        if not "A" <= char <= "Z":
+            return None
+        number = number * 26 + ord(char) - ord("A") + 1
+    return number - 1
+
+
+def _first_with_letters(count: int) -> int:
+    """The first letter number written with ``count`` letters (``A`` 0, ``AA`` 26, ...)."""
+    return sum(26**n for n in range(1, count)) if count > 0 else 0
+
+
 class FlatSlot(NamedTuple):
     """One letter of a type: a leaf that may be live, depending on the value.
 
@@ -193,6 +210,49 @@ def layout(data_type: DataType) -> FlatLayout:
         cached = FlatLayout(data_type.key, _Walker(data_type).run())
         data_type.derived["flat_layout"] = cached
     return cached
+
+
+def slot_count(data_type: DataType) -> int:
+    """How many letters ``data_type`` has (its :func:`layout`'s length), counted over the type's
+    declaration without listing them; :class:`FlatError` if a leaf is wider than 32 bits."""
+    cached = data_type.derived.get("flat_count")
+    if cached is None:
+        cached = _count(data_type.key, data_type._types, {"kind": "ref", "name": data_type.key}, "")
+        data_type.derived["flat_count"] = cached
+    return int(cached)
+
+
+def _count(
+    key: str, types: Mapping[str, Mapping[str, Any]], spec: Mapping[str, Any], path: str
+) -> int:
+    """The letters of ``spec`` (the rule of :class:`_Walker`, counted)."""
+    kind = spec["kind"]
+    if kind == "ref":
+        definition = types[spec["name"]]
+        fields = [f for f in definition["fields"] if f["type"]["kind"] != "void"]
+        if definition["kind"] == "union":
+            return 1 + sum(_count(key, types, f["type"], _join(path, f["name"])) for f in fields)
+        return sum(
+            _count(key, types, f["type"], _join(path, f["name"]))
+            for f in fields
+            if not (f["name"] == "p_version" and f["type"]["kind"] in ("uint", "int"))
+        )
+    if kind == "array":
+        n = int(spec["len"])
+        return n * _count(key, types, spec["elem"], f"{path}[0]") if n else 0
+    if kind == "dynarray":
+        n = int(spec["max"])
+        return 1 + (n * _count(key, types, spec["elem"], f"{path}[0]") if n else 0)
+    if kind in ("uint", "int", "float"):
+        bits = int(spec["bits"])
+        if bits > MAX_LEAF_BITS:
+            raise FlatError(
+                f"{key}: leaf {path or '(value)'} is {kind}{bits}: destructured parameters "
+                f"carry at most {MAX_LEAF_BITS} bits (MAVLink), so this type cannot be a "
+                "parameter"
+            )
+        return 1
+    return 1 if kind == "bool" else 0  # void: padding, not a leaf
 
 
 class _Walker:
@@ -395,55 +455,102 @@ class FlatParam(NamedTuple):
 
 
 class FlatMap:
-    """The destructured names of a store's parameter set (checked once, at construction)."""
+    """The destructured names of a store's parameter set, checked at construction in time
+    proportional to the parameter set (not to ``max_instances`` times the letters): a name is
+    worked out when it is asked for, and a type's letters when one of its instances is."""
 
     def __init__(self, store: Store) -> None:
         self._store = store
-        self._layouts: dict[str, FlatLayout] = {}
-        self._owner: dict[str, tuple[ParamSpec, int | None, FlatSlot]] = {}
-        structured = {spec.name for spec in store.specs}
-        classic = {name for name in store.parameters if name not in structured}
+        self._specs = {spec.name: spec for spec in store.specs}
+        structured = set(self._specs)
+        classic = [name for name in store.parameters if name not in structured]
         for spec in store.specs:
-            lay = layout(spec.data_type)
-            self._layouts[spec.name] = lay
-            numbers: list[int | None] = (
-                [None] if spec.shared else list(range(spec.max_instances or 0))
-            )
-            for number in numbers:
-                for slot in lay:
-                    name = self.name_of(spec, number, slot)
-                    if len(name) > MAX_NAME_LEN:
-                        raise FlatError(
-                            f"{spec.name}: destructured name {name} has {len(name)} characters "
-                            f"(at most {MAX_NAME_LEN}): {spec.data_type.key} has {len(lay)} "
-                            "flat leaves; shorten the parameter name or the type"
-                        )
-                    if name in classic or name in structured:
-                        kind = "classic" if name in classic else "structured"
-                        where = f"{spec.instance_name(number or 0)}.{slot.path}"
-                        raise FlatError(
-                            f"{spec.name}: destructured name {name} ({where}) is the name of a "
-                            f"{kind} parameter"
-                        )
-                    if name in self._owner:
-                        other, other_number, other_slot = self._owner[name]
-                        raise FlatError(
-                            f"destructured name {name} is used twice: "
-                            f"{spec.instance_name(number or 0)}.{slot.path} and "
-                            f"{other.instance_name(other_number or 0)}.{other_slot.path}"
-                        )
-                    self._owner[name] = (spec, number, slot)
+            self._check_length(spec, slot_count(spec.data_type))
+        # Flat names cannot clash with each other (a parameter name, then "_", then digits and
+        # letters: each name has one owner); they can be another parameter's name.
+        for kind, names in (("classic", classic), ("structured", sorted(structured))):
+            for name in names:
+                owner = self._parse(name)
+                if owner is not None:
+                    spec, number, index = owner
+                    slot = self.layout_of(spec.name).slots[index]
+                    raise FlatError(
+                        f"{spec.name}: destructured name {name} "
+                        f"({spec.instance_name(number or 0)}.{slot.path}) is the name of a "
+                        f"{kind} parameter"
+                    )
         self._masks: dict[str, ParamSpec] = {}
         for spec in store.specs:
             if spec.shared or (spec.max_instances or 0) > MASK_BITS:
                 continue  # no instances to add, or more than one int32 can list
             name = mask_name(spec)
-            if len(name) > MAX_NAME_LEN or name in classic or name in self._owner:
+            if len(name) > MAX_NAME_LEN or name in classic or self._parse(name) is not None:
                 raise FlatError(
                     f"{spec.name}: instance mask {name} is longer than {MAX_NAME_LEN} characters "
                     "or the name of another parameter"
                 )
             self._masks[name] = spec
+
+    def _check_length(self, spec: ParamSpec, count: int) -> None:
+        """Refuses the first name (in instance, then letter order) over 16 characters."""
+        if not count:
+            return
+        numbers = [None] if spec.shared else [0, *(10**d for d in range(1, 6))]
+        for number in numbers:
+            if number is not None and number >= (spec.max_instances or 0):
+                break
+            room = (
+                MAX_NAME_LEN - len(spec.name) - 1 - len(str(number) if number is not None else "")
+            )
+            first = _first_with_letters(room + 1)  # the first letter number too long to fit
+            if first < count:
+                name = _flat_name(spec, number, letters(first))
+                raise FlatError(
+                    f"{spec.name}: destructured name {name} has {len(name)} characters "
+                    f"(at most {MAX_NAME_LEN}): {spec.data_type.key} has {count} flat leaves; "
+                    "shorten the parameter name or the type"
+                )
+
+    def _parse(self, name: str) -> tuple[ParamSpec, int | None, int] | None:
+        """``(parameter, instance number, letter number)`` whose flat name ``name`` is exactly,
+        or None."""
+        if len(name) > MAX_NAME_LEN:
+            return None
+        at = name.find("_")
+        while at > 0:
+            spec = self._specs.get(name[:at])
+            if spec is not None:
+                found = self._parse_rest(spec, name[at + 1 :])
+                if found is not None:
+                    return found
+            at = name.find("_", at + 1)
+        return None
+
+    def _parse_rest(self, spec: ParamSpec, rest: str) -> tuple[ParamSpec, int | None, int] | None:
+        number: int | None = None
+        if not spec.shared:
+            end = 0
+            while end < len(rest) and rest[end] in "0123456789":
+                end += 1
+            digits, rest = rest[:end], rest[end:]
+            if not digits or str(int(digits)) != digits or int(digits) >= (spec.max_instances or 0):
+                return None
+            number = int(digits)
+        index = letter_number(rest)
+        if index is None or index >= slot_count(spec.data_type):
+            return None
+        return spec, number, index
+
+    def names(self) -> Iterator[str]:
+        """Every destructured name a vehicle can report (each instance slot, each letter): a
+        long walk for types with many; commands ask for names one by one instead."""
+        for spec in self._store.specs:
+            numbers: list[int | None] = (
+                [None] if spec.shared else list(range(spec.max_instances or 0))
+            )
+            for number in numbers:
+                for slot in self.layout_of(spec.name):
+                    yield self.name_of(spec, number, slot)
 
     # -- instance masks: adding and removing instances with a flat write -------------------
 
@@ -454,7 +561,7 @@ class FlatMap:
 
     def mask_spec(self, name: str) -> ParamSpec | None:
         """The parameter whose instance mask ``name`` is, or None."""
-        return self._masks.get(name.strip().upper())
+        return self._masks.get(name)  # exact, as PX4's names
 
     def mask_value(self, spec: ParamSpec) -> int:
         return sum(1 << int(n.rpartition("#")[2]) for n in self._store.instances(spec.name))
@@ -489,22 +596,30 @@ class FlatMap:
 
     @staticmethod
     def name_of(spec: ParamSpec, number: int | None, slot: FlatSlot) -> str:
-        if spec.shared or number is None:
-            return f"{spec.name}_{slot.letter}"
-        return f"{spec.name}_{number}{slot.letter}"
+        return _flat_name(spec, number, slot.letter)
 
     def layout_of(self, param: str) -> FlatLayout:
-        return self._layouts[param]
+        """The letters of ``param``'s type (worked out on first use)."""
+        return layout(self._specs[param].data_type)
 
     def __contains__(self, name: object) -> bool:
-        return isinstance(name, str) and name.upper() in self._owner
+        return isinstance(name, str) and self._parse(name) is not None
+
+    def _owner(self, name: str) -> tuple[ParamSpec, int | None, FlatSlot] | None:
+        found = self._parse(name)  # exact, as PX4's names
+        if found is None:
+            return None
+        spec, number, index = found
+        return spec, number, self.layout_of(spec.name).slots[index]
 
     def owner(self, name: str) -> tuple[str, FlatSlot]:
         """``(instance name, slot)`` of a flat name, live or not; :class:`InstanceError` if
         the name belongs to no structured parameter."""
-        found = self._owner.get(name.strip().upper())
+        found = self._owner(name)
         if found is None:
-            raise InstanceError(f"'{name}' is not a destructured parameter name")
+            exact = name.strip().upper()
+            hint = f" (did you mean {exact}?)" if exact != name and exact in self else ""
+            raise InstanceError(f"'{name}' is not a destructured parameter name{hint}")
         spec, number, slot = found
         return spec.instance_name(number or 0), slot
 
@@ -512,8 +627,11 @@ class FlatMap:
         """Every live flat parameter of every existing instance, in store order."""
         rows: list[FlatParam] = []
         for spec in self._store.specs:
-            lay = self._layouts[spec.name]
-            for instance in self._store.instances(spec.name):
+            instances = self._store.instances(spec.name)
+            if not instances:
+                continue  # no letters worked out for a type without instances
+            lay = self.layout_of(spec.name)
+            for instance in instances:
                 number = None if spec.shared else int(instance.rpartition("#")[2])
                 for leaf in self._store.leaves(instance):
                     slot = lay.slot_for_path(leaf.path)
@@ -529,7 +647,7 @@ class FlatMap:
         """The live flat parameter ``name``; a clear error when its instance does not exist or
         its leaf is not live (an unselected variant, an array element past the length)."""
         instance, slot = self.owner(name)
-        flat_name = name.strip().upper()
+        flat_name = name
         if instance not in self._store:
             raise InstanceError(
                 f"{flat_name} belongs to {instance}, which does not exist (add it first: "
@@ -542,12 +660,14 @@ class FlatMap:
         raise LeafError(f"{flat_name} ({instance}.{slot.path}) is not live: {why}")
 
     def _why(self, flat_name: str, instance: str) -> str:
-        spec, number, slot = self._owner[flat_name]
+        found = self._owner(flat_name)
+        assert found is not None
+        spec, number, slot = found
         live = {leaf.path: leaf.value for leaf in self._store.leaves(instance)}
         for path, op, n in slot.requires:
             if path not in live:
                 continue  # an outer requirement fails first
-            selector = self._layouts[spec.name].slot_for_path(path)
+            selector = self.layout_of(spec.name).slot_for_path(path)
             assert selector is not None
             selector_name = self.name_of(spec, number, selector)
             if op == "==" and live[path] != n:
@@ -555,6 +675,13 @@ class FlatMap:
             if op == ">" and not live[path] > n:
                 return f"{path} is {live[path]} (set {selector_name} above {n})"
         return "not in the current value"  # pragma: no cover - requires cover every case
+
+
+def _flat_name(spec: ParamSpec, number: int | None, letter: str) -> str:
+    """``INA238_1C``; ``INA238_SHARED_A`` for a shared parameter."""
+    if spec.shared or number is None:
+        return f"{spec.name}_{letter}"
+    return f"{spec.name}_{number}{letter}"
 
 
 def flat_map(store: Store) -> FlatMap:

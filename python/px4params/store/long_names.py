@@ -90,34 +90,92 @@ class LongLeaf(NamedTuple):
 
 
 class LongNames:
-    """The long names of a store's parameter set (checked once, at construction)."""
+    """The long names of a store's parameter set, checked at construction in time proportional
+    to its types' leaves (not to ``max_instances`` times them: a name's owner is worked out by
+    reading the name, not by listing every instance's names)."""
 
     def __init__(self, store: Store) -> None:
         self._store = store
+        self._specs = {spec.name: spec for spec in store.specs}
         self._parts: dict[str, dict[str, str]] = {}
-        self._owner: dict[str, tuple[ParamSpec, int | None, FlatSlot]] = {}
-        taken = set(store.parameters) | {name for name, _, _ in store.destructured.masks()}
+        #: Per parameter, ``{long name part: slot}``.
+        self._slots: dict[str, dict[str, FlatSlot]] = {}
         for spec in store.specs:
             lay = layout(spec.data_type)
             parts = self._parts[spec.name] = leaf_names(lay)
-            numbers: list[int | None] = (
-                [None] if spec.shared else list(range(spec.max_instances or 0))
-            )
-            for number in numbers:
-                for slot in lay:
-                    name = self.name_of(spec, number, parts[slot.path])
+            by_part: dict[str, FlatSlot] = {}
+            for slot in lay:
+                part = parts[slot.path]
+                if part in by_part:  # one instance's names clash with each other
+                    self._clash(spec, None if spec.shared else 0, slot)
+                by_part[part] = slot
+            self._slots[spec.name] = by_part
+            self._check_length(spec, lay)
+        taken = set(store.parameters) | {name for name, _, _ in store.destructured.masks()}
+        for name in sorted(taken):
+            owner = self._parse(name)
+            if owner is not None:
+                self._clash(*owner)
+        # A parameter named like another's long names (INA238_1 beside INA238): its names are
+        # listed and read back as the other's (rare: parameters are named after their types).
+        for longer in store.specs:
+            if any(longer.name.startswith(f"{name}_") for name in self._specs):
+                for name, number, slot in self._names_of(longer):
+                    other = self._parse(name)
+                    if other is not None and other[0] is not longer:
+                        self._clash(longer, number, slot)
+
+    def _check_length(self, spec: ParamSpec, lay: FlatLayout) -> None:
+        """Refuses the first name (in instance, then leaf order) over 92 characters."""
+        numbers = [None] if spec.shared else [0, *(10**d for d in range(1, 6))]
+        parts = self._parts[spec.name]
+        for number in numbers:
+            if number is not None and number >= (spec.max_instances or 0):
+                break
+            for slot in lay:
+                name = self.name_of(spec, number, parts[slot.path])
+                if len(name) > MAX_LONG_NAME_LEN:
                     where = f"{spec.instance_name(number or 0)}.{slot.path}"
-                    if len(name) > MAX_LONG_NAME_LEN:
-                        raise FlatError(
-                            f"{spec.name}: DroneCAN name {name} ({where}) has {len(name)} "
-                            f"characters (at most {MAX_LONG_NAME_LEN})"
-                        )
-                    if name in taken or name in self._owner:
-                        raise FlatError(
-                            f"{spec.name}: DroneCAN name {name} ({where}) is the name of "
-                            "another parameter"
-                        )
-                    self._owner[name] = (spec, number, slot)
+                    raise FlatError(
+                        f"{spec.name}: DroneCAN name {name} ({where}) has {len(name)} "
+                        f"characters (at most {MAX_LONG_NAME_LEN})"
+                    )
+
+    def _clash(self, spec: ParamSpec, number: int | None, slot: FlatSlot) -> None:
+        name = self.name_of(spec, number, self._parts[spec.name][slot.path])
+        where = f"{spec.instance_name(number or 0)}.{slot.path}"
+        raise FlatError(
+            f"{spec.name}: DroneCAN name {name} ({where}) is the name of another parameter"
+        )
+
+    def _names_of(self, spec: ParamSpec) -> list[tuple[str, int | None, FlatSlot]]:
+        numbers: list[int | None] = [None] if spec.shared else list(range(spec.max_instances or 0))
+        parts = self._parts[spec.name]
+        return [
+            (self.name_of(spec, number, parts[slot.path]), number, slot)
+            for number in numbers
+            for slot in layout(spec.data_type)
+        ]
+
+    def _parse(self, name: str) -> tuple[ParamSpec, int | None, FlatSlot] | None:
+        """``(parameter, instance number, slot)`` whose long name ``name`` is exactly, or None."""
+        at = name.find("_")
+        while at > 0:
+            spec = self._specs.get(name[:at])
+            if spec is not None:
+                rest, number = name[at + 1 :], None
+                if not spec.shared:
+                    digits, _, rest = rest.partition("_")
+                    ok = digits.isascii() and digits.isdigit() and str(int(digits)) == digits
+                    number = int(digits) if ok else None
+                    if number is None or number >= (spec.max_instances or 0):
+                        at = name.find("_", at + 1)
+                        continue
+                slot = self._slots[spec.name].get(rest)
+                if slot is not None:
+                    return spec, number, slot
+            at = name.find("_", at + 1)
+        return None
 
     @staticmethod
     def name_of(spec: ParamSpec, number: int | None, part: str) -> str:

@@ -11,11 +11,13 @@ uses the newest version of its type; older versions stay loadable for translatin
 from __future__ import annotations
 
 import itertools
-from collections.abc import Mapping
+import math
+import struct
+from collections.abc import Iterable, Mapping
 
 from px4params._records import TYPE_CHECKING
-from px4params.dsdl.schema import DataType, Schema
-from px4params.errors import ParameterSetError
+from px4params.dsdl.schema import DataType, Leaf, Schema
+from px4params.errors import ParameterSetError, ValueRangeError
 
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
     from typing import Any, NamedTuple
@@ -23,10 +25,16 @@ else:
     from px4params._records import NamedTuple
 
 __all__ = [
+    "LeafRange",
     "ParamSpec",
     "ParameterSetError",
+    "check_leaves",
+    "check_stored",
+    "generic_path",
+    "leaf_ranges",
     "metadata_default",
     "parameter_specs",
+    "stored_number",
     "with_defaults",
 ]
 
@@ -215,3 +223,219 @@ def _flatten(value: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
         else:
             flat[f"{prefix}{k}"] = v
     return flat
+
+
+# -- what a leaf accepts: @min/@max, finite floats ------------------------------------------------
+
+
+class LeafRange(NamedTuple):
+    """What one leaf of a parameter accepts beyond its type's own range: its field's ``@min``
+    and ``@max`` (None where not given, or where it only repeats the type's range) and, for a
+    float leaf, finite numbers only (no bundled type needs NaN or an infinity, so no type can
+    ask for them: a NaN shunt is a battery monitor that reads nothing)."""
+
+    low: int | float | None
+    high: int | float | None
+    #: 16, 32 or 64 for a float leaf (whose stored value is rounded), 0 for an integer one.
+    float_bits: int
+    #: The bounds a stored value is compared with: ``low``/``high`` widened to where they
+    #: round at the leaf's width (0.1 is kept as 0.09998 by a float16, and is inside).
+    stored_low: int | float | None = None
+    stored_high: int | float | None = None
+    #: The leaf's DSDL type (``float16``, ``uint10``).
+    type: str = ""
+
+    @classmethod
+    def of(cls, low: float | None, high: float | None, float_bits: int, type: str) -> LeafRange:
+        if not float_bits:
+            return cls(low, high, 0, low, high, type)
+        return cls(
+            low,
+            high,
+            float_bits,
+            None if low is None else min(low, _rounded(low, float_bits)),
+            None if high is None else max(high, _rounded(high, float_bits)),
+            type,
+        )
+
+
+def leaf_ranges(data_type: DataType) -> dict[str, LeafRange]:
+    """``{path: LeafRange}`` of every leaf of ``data_type`` with something to check, its path
+    as :meth:`DataType.leaves` writes it with array indices left empty (``cells[].volts``).
+    Worked out once per type (kept in its ``derived``), in time proportional to the type's
+    declaration, not to its arrays' lengths."""
+    found = data_type.derived.get("leaf_ranges")
+    if found is None:
+        found = {}
+        _ranges_of(data_type._types, {"kind": "ref", "name": data_type.key}, "", {}, found)
+        data_type.derived["leaf_ranges"] = found
+    return found
+
+
+def _ranges_of(
+    types: Mapping[str, Mapping[str, Any]],
+    spec: Mapping[str, Any],
+    path: str,
+    tags: Mapping[str, Any],
+    found: dict[str, LeafRange],
+) -> None:
+    kind = spec["kind"]
+    if kind == "ref":
+        for f in types[spec["name"]]["fields"]:
+            if f["type"]["kind"] == "void":
+                continue
+            inner = (f.get("doc") or {}).get("tags") or {}
+            _ranges_of(types, f["type"], f"{path}.{f['name']}" if path else f["name"], inner, found)
+    elif kind in ("array", "dynarray"):  # a field's tags describe its elements
+        _ranges_of(types, spec["elem"], f"{path}[]", tags, found)
+    elif kind in ("uint", "int", "float"):
+        bits = int(spec["bits"])
+        low, high = tags.get("min"), tags.get("max")
+        if kind == "float":
+            found[path] = LeafRange.of(low, high, bits, f"float{bits}")
+            return
+        top = (1 << bits) - 1 if kind == "uint" else (1 << (bits - 1)) - 1
+        bottom = 0 if kind == "uint" else -(1 << (bits - 1))
+        low = None if low is None or low <= bottom else low
+        high = None if high is None or high >= top else high
+        if low is not None or high is not None:
+            found[path] = LeafRange.of(low, high, 0, f"{kind}{bits}")
+
+
+def generic_path(path: str) -> str:
+    """``cells[3].volts`` -> ``cells[].volts``: the key of :func:`leaf_ranges`."""
+    if "[" not in path:
+        return path
+    out, start = [], 0
+    while (open_at := path.find("[", start)) >= 0:
+        out.append(path[start : open_at + 1])
+        start = path.find("]", open_at)
+        if start < 0:
+            return path
+    out.append(path[start:])
+    return "".join(out)
+
+
+def check_leaves(
+    where: str,
+    leaves: Iterable[Leaf],
+    ranges: Mapping[str, LeafRange],
+    *,
+    bounds: bool = True,
+    given: object = None,
+) -> None:
+    """Refuses (:class:`ValueRangeError`) the first leaf that is a NaN or an infinity, or, with
+    ``bounds``, outside its ``@min``/``@max``. ``where`` names the instance (``INA238#1``).
+    Leaves are stored values: a float is compared with its bounds as they round to the leaf's
+    width, so that a value given as exactly ``@min`` is never refused once stored. ``given``,
+    the number a one-leaf write was given, is what a refusal names (1e-12, not the 0 a float16
+    keeps of it)."""
+    for leaf in leaves:
+        rng = ranges.get(generic_path(leaf.path))
+        if rng is not None and not isinstance(leaf.value, bool):
+            check_stored(f"{where}.{leaf.path}", leaf.value, rng, bounds, given)
+
+
+def check_stored(
+    name: str, value: float, rng: LeafRange, bounds: bool = True, given: object = None
+) -> None:
+    """:func:`check_leaves` for one leaf named ``name`` that would store ``value``."""
+    if rng.float_bits and not math.isfinite(value):
+        raise ValueRangeError(
+            f"{name}: {_shown(value)} is not a finite number ({rng.type}: NaN and infinities "
+            "are refused)"
+        )
+    if not bounds:
+        return
+    low, high = rng.stored_low, rng.stored_high
+    if (low is not None and value < low) or (high is not None and value > high):
+        if isinstance(given, int | float) and not isinstance(given, bool):
+            value = given
+        raise ValueRangeError(f"{name}: {describe_outside(value, rng)}", bounds_only=True)
+
+
+def within(value: float, rng: LeafRange, bounds: bool = True) -> bool:
+    """Whether a leaf of ``rng`` may store ``value`` (:func:`check_stored` says why not)."""
+    if rng.float_bits and not math.isfinite(value):
+        return False
+    if not bounds:
+        return True
+    low, high = rng.stored_low, rng.stored_high
+    return (low is None or value >= low) and (high is None or value <= high)
+
+
+def in_type_range(value: float, type_name: str) -> bool:
+    """Whether a leaf of DSDL type ``type_name`` (``uint10``, ``float16``) can hold ``value`` at
+    all; outside it, the codec's own refusal is the one to give."""
+    kind = type_name.rstrip("0123456789")
+    bits = int(type_name[len(kind) :] or 0)
+    if kind == "float":
+        top = _FLOAT_MAX.get(bits)
+        return top is None or not math.isfinite(value) or abs(value) <= top
+    if kind == "uint":
+        return 0 <= value < 1 << bits
+    if kind == "int":
+        return -(1 << (bits - 1)) <= value < 1 << (bits - 1)
+    return True
+
+
+#: The largest finite float16 and float32.
+_FLOAT_MAX = {16: 65504.0, 32: 3.4028234663852886e38}
+
+
+def stored_number(value: object, rng: LeafRange) -> int | float | None:
+    """What a leaf of ``rng`` keeps of a plain ``int``/``float`` given to it (a float rounded to
+    the leaf's width), or None where only the codec can say (another kind of value, a float
+    for an integer leaf, a number beyond the float's range): then the write is checked on the
+    value it encodes."""
+    kind = type(value)
+    if rng.float_bits:
+        if kind is not float and kind is not int:
+            return None
+        number = float(value)  # type: ignore[arg-type]
+        if not math.isfinite(number):
+            return number
+        packer = _FLOAT_PACKERS.get(rng.float_bits)
+        if packer is None:
+            return number
+        try:
+            return float(packer.unpack(packer.pack(number))[0])
+        except OverflowError:
+            return None
+    return value if kind is int else None  # type: ignore[return-value]
+
+
+def describe_outside(value: float, rng: LeafRange) -> str:
+    """``0 is outside 0.00001..0.1 (@min/@max)`` (or below @min / above @max alone)."""
+    if rng.low is not None and rng.high is not None:
+        return f"{_shown(value)} is outside {_shown(rng.low)}..{_shown(rng.high)} (@min/@max)"
+    if rng.low is not None:
+        return f"{_shown(value)} is below {_shown(rng.low)} (@min)"
+    return f"{_shown(value)} is above {_shown(rng.high)} (@max)"
+
+
+_FLOAT_PACKERS = {16: struct.Struct("<e"), 32: struct.Struct("<f")}
+
+
+def _rounded(value: float, bits: int) -> float:
+    """``value`` as a float of ``bits`` stores it (IEEE rounding; the DroneCAN rules round a tie
+    away from zero, which only widens what :func:`check_leaves` accepts by that tie)."""
+    code = {16: "<e", 32: "<f"}.get(bits)
+    if code is None:
+        return float(value)
+    try:
+        return float(struct.unpack(code, struct.pack(code, value))[0])
+    except OverflowError:
+        return float(value)
+
+
+def _shown(value: float) -> str:
+    """A number as a person writes it: ``0``, ``-1``, ``0.00001``, ``nan``, ``-inf``."""
+    if isinstance(value, int) or not math.isfinite(value):
+        return str(value)
+    if value.is_integer() and abs(value) < 1e16:
+        return str(int(value))
+    text = f"{value:.6g}"
+    if "e" in text and 1e-9 <= abs(value) < 1e16:
+        text = f"{float(text):.15f}".rstrip("0").rstrip(".")
+    return text

@@ -17,6 +17,7 @@ Every change is all-or-nothing: a refused one leaves the store exactly as it was
 from __future__ import annotations
 
 import binascii
+import math
 import os
 import struct
 from collections.abc import Iterator, Mapping, Sequence
@@ -25,7 +26,13 @@ from px4params import _native
 from px4params._records import TYPE_CHECKING
 from px4params.cache_file import cache_path, default_cache_dir, read_cached, write_cached
 from px4params.dsdl.schema import DataType, Leaf, Schema, load_schema
-from px4params.errors import InstanceError, LeafError, Px4ParamsError, StoreError
+from px4params.errors import (
+    InstanceError,
+    LeafError,
+    Px4ParamsError,
+    StoreError,
+    ValueRangeError,
+)
 from px4params.numbers import abbreviated
 from px4params.store.classic import (
     CLASSIC_ENV,
@@ -34,7 +41,18 @@ from px4params.store.classic import (
     classic_value,
     load_classic,
 )
-from px4params.store.spec import ParamSpec, metadata_default, parameter_specs
+from px4params.store.spec import (
+    ParamSpec,
+    check_leaves,
+    check_stored,
+    generic_path,
+    in_type_range,
+    leaf_ranges,
+    metadata_default,
+    parameter_specs,
+    stored_number,
+    within,
+)
 
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
     from typing import Any, NamedTuple
@@ -56,8 +74,8 @@ DEFAULT_STORE = "px4params.store"
 #: A name: ``NAME``, ``NAME#N``, then ``[k]`` or ``.path``. :func:`_split_key` reads it by hand
 #: (``re`` costs a short command a third of Python's start); the tests hold it to this.
 _KEY = (
-    r"(?P<name>[A-Za-z][A-Za-z0-9_]*)(?:#(?P<instance>\d+))?"
-    r"(?:\[(?P<index>\d+)\]|\.(?P<path>[A-Za-z_][A-Za-z0-9_.\[\]]*))?"
+    r"(?P<name>[A-Za-z][A-Za-z0-9_]*)(?:#(?P<instance>[0-9]+))?"
+    r"(?:\[(?P<index>[0-9]+)\]|\.(?P<path>[A-Za-z_][A-Za-z0-9_.\[\]]*))?"
 )
 _LETTERS = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz")
 _NAME_START = _LETTERS
@@ -97,11 +115,38 @@ def _split_key(text: str) -> tuple[str, str | None, str | None, str | None] | No
     return (name, instance, index, path) if i == end else None
 
 
+#: Digits of a name: ASCII only, as PX4's (``str.isdecimal`` would take ``٣`` for 3).
+_DIGITS = frozenset("0123456789")
+
+
 def _digits_end(text: str, i: int) -> int:
-    """Where the digits from ``i`` end (``\\d``: any Unicode decimal digit)."""
-    while i < len(text) and text[i].isdecimal():
+    """Where the ASCII digits from ``i`` end."""
+    while i < len(text) and text[i] in _DIGITS:
         i += 1
     return i
+
+
+def _exact_name_hint(text: str) -> str | None:
+    """The name ``text`` was probably meant to be, written exactly (no padding, the parameter
+    part in upper case, ASCII digits), when that is a name and not ``text``; else None."""
+    import unicodedata
+
+    candidate = "".join(
+        str(unicodedata.decimal(c)) if c.isdecimal() and c not in _DIGITS else c
+        for c in text.strip()
+    )
+    match = _split_key(candidate)
+    if match is None:
+        return None
+    name, instance, index, path = match
+    exact = name.upper()
+    if instance is not None:
+        exact += f"#{int(instance)}"
+    if index is not None:
+        exact += f"[{int(index)}]"
+    elif path is not None:
+        exact += f".{path}"
+    return exact if exact != text else None
 
 
 #: Names whose resolution a store keeps (a bound: names can come from anywhere).
@@ -131,11 +176,20 @@ class Key(NamedTuple):
         once, where it enters, and the key is passed on)."""
         if isinstance(text, Key):
             return text
-        match = _split_key(text.strip())
+        match = _split_key(text)
+        if match is not None and match[0] != match[0].upper():
+            match = None  # lower case: PX4's names are exact
         if not match:
+            hint = _exact_name_hint(text) if len(text) <= 1000 else None
+            if hint is not None:
+                shown = text if len(text) <= 32 else abbreviated(text)  # padding shown
+                raise InstanceError(
+                    f"'{shown}' is not a parameter name: names are exact, in upper case with "
+                    f"ASCII digits and no spaces, as PX4's (did you mean {hint}?)"
+                )
             raise InstanceError(
-                f"'{text}' is not a parameter name (expected NAME, NAME#N, NAME#N[k] or "
-                "NAME#N.path, e.g. INA238#0.bus.i2c.address)"
+                f"'{abbreviated(text)}' is not a parameter name (expected NAME, NAME#N, "
+                "NAME#N[k] or NAME#N.path, e.g. INA238#0.bus.i2c.address)"
             )
         name, instance, index, path = match
         # (digits counted first: Python will not convert thousands of them)
@@ -150,7 +204,7 @@ class Key(NamedTuple):
             leaf = int(index)
         elif path is not None:
             leaf = path
-        return cls(name.upper(), int(instance) if instance else None, leaf)
+        return cls(name, int(instance) if instance else None, leaf)
 
     def __str__(self) -> str:
         name = self.param if self.instance is None else f"{self.param}#{self.instance}"
@@ -267,11 +321,11 @@ class Store:
         return self._param(name).classic
 
     def _param(self, name: str) -> _Param:
-        p = self._params.get(name.upper())
+        p = self._params.get(name)  # exact, as PX4's names
         if p is None:
             import difflib
 
-            hint = difflib.get_close_matches(name.upper(), list(self._params), n=3)
+            hint = difflib.get_close_matches(name.strip().upper(), list(self._params), n=3)
             extra = f" (did you mean: {', '.join(hint)}?)" if hint else ""
             raise InstanceError(f"unknown parameter '{abbreviated(name)}'{extra}")
         return p
@@ -428,15 +482,26 @@ class Store:
         p, instance = self._whole(name, "encoded")
         return self._native.get(p.index, instance, default=default)
 
-    def set(self, name: str | Key, value: Any, *, saturate: bool = False) -> None:
-        """Sets a whole value, a leaf (``NAME#N[k]``, ``NAME#N.path``) or a classic parameter."""
-        self._write(name, value, default=False, saturate=saturate)
+    def set(
+        self, name: str | Key, value: Any, *, saturate: bool = False, force: bool = False
+    ) -> None:
+        """Sets a whole value, a leaf (``NAME#N[k]``, ``NAME#N.path``) or a classic parameter.
 
-    def set_default(self, name: str | Key, value: Any, *, saturate: bool = False) -> None:
-        """Sets the default, like ``param set-default``: the value follows unless changed."""
-        self._write(name, value, default=True, saturate=saturate)
+        A value outside its field's ``@min``/``@max`` or a NaN or infinity is refused
+        (:class:`ValueRangeError`, nothing written); ``force`` lets the ``@min``/``@max``
+        pass (``param set --force``), never a NaN or an infinity."""
+        self._write(name, value, default=False, saturate=saturate, force=force)
 
-    def _write(self, name: str | Key, value: Any, *, default: bool, saturate: bool) -> None:
+    def set_default(
+        self, name: str | Key, value: Any, *, saturate: bool = False, force: bool = False
+    ) -> None:
+        """Sets the default, like ``param set-default``: the value follows unless changed.
+        Checked as :meth:`set` checks a value."""
+        self._write(name, value, default=True, saturate=saturate, force=force)
+
+    def _write(
+        self, name: str | Key, value: Any, *, default: bool, saturate: bool, force: bool = False
+    ) -> None:
         p, instance, key = self._resolve(name)
         if p.classic is not None:
             if key.leaf is not None:
@@ -445,10 +510,13 @@ class Store:
                 data = _classic_bytes(p.classic, value)
             except ClassicParamsError as e:
                 raise ClassicParamsError(f"{p.name}: {e}") from None
+            self._check_encoded(p, 0, data, force=force)
             self._native.set_encoded(p.index, 0, data, default=default)
         elif key.leaf is None:
+            self._check_value(p, instance, value, default, saturate=saturate, force=force)
             self._native.set_value(p.index, instance, value, default=default, saturate=saturate)
         else:
+            self._check_leaf(p, instance, key.leaf, value, default, saturate=saturate, force=force)
             try:
                 self._native.set_leaf(
                     p.index, instance, key.leaf, value, default=default, saturate=saturate
@@ -456,9 +524,130 @@ class Store:
             except LeafError as e:
                 raise _naming_the_field(e, key) from None
 
+    # The store's one range check (every entry point writes through these): worked out on the
+    # value as it would be stored, before anything is written, so a refusal changes nothing.
+    # Only the leaves a write changes are checked: a value stored with --force stays writable.
+
+    def _check_value(
+        self, p: _Param, instance: int, value: Any, default: bool, *, saturate: bool, force: bool
+    ) -> None:
+        assert p.spec is not None
+        if not leaf_ranges(p.spec.data_type):
+            return
+        try:
+            data = p.spec.data_type.encode(value, tao=False, saturate=saturate)
+        except Px4ParamsError:
+            return  # not a value of the type: the write says what is wrong with it
+        self._check_encoded(p, instance, data, force=force, default=default)
+
+    def _check_encoded(
+        self, p: _Param, instance: int, data: bytes, *, force: bool, default: bool = False
+    ) -> None:
+        if p.spec is None:
+            if p.classic is not None and p.classic.is_float and len(data) == 4:
+                (number,) = struct.unpack("<f", data)
+                if not math.isfinite(number):
+                    raise ValueRangeError(
+                        f"{p.name}: {number} is not a finite number (Float: NaN and infinities "
+                        "are refused)"
+                    )
+            return
+        data_type = p.spec.data_type
+        ranges = leaf_ranges(data_type)
+        if not ranges:
+            return
+        try:
+            leaves = data_type.leaves(data, tao=False)
+        except Px4ParamsError:
+            return  # not a value of the type: the write says so
+        check_leaves(
+            self._instance_name(p, instance),
+            _changed_leaves(leaves, self._stored_leaves(p, instance, default)),
+            ranges,
+            bounds=not force,
+        )
+
+    def _stored_leaves(self, p: _Param, instance: int, default: bool) -> list[Leaf]:
+        """The leaves stored now (none for an instance that does not exist)."""
+        assert p.spec is not None
+        try:
+            data = self._native.get(p.index, instance, default=default)
+            return p.spec.data_type.leaves(data, tao=False)
+        except Px4ParamsError:
+            return []
+
+    def _check_leaf(
+        self,
+        p: _Param,
+        instance: int,
+        target: int | str,
+        value: Any,
+        default: bool,
+        *,
+        saturate: bool,
+        force: bool,
+    ) -> None:
+        if p.spec is None:
+            return
+        data_type = p.spec.data_type
+        ranges = leaf_ranges(data_type)
+        if not ranges:
+            return
+        if isinstance(target, str) and not target.endswith(("_tag", "_len")):
+            path = target  # a leaf named by its path: no need to ask the core
+        else:
+            try:
+                path = self._native.get_leaf(p.index, instance, target, default=default)[1]
+            except Px4ParamsError:
+                return  # no such instance or leaf: the write says so
+        # A union tag or an array length brings other leaves into the value: check them all.
+        whole = path.endswith(("_tag", "_len"))
+        if not whole:
+            rng = ranges.get(generic_path(path))
+            if rng is None:
+                return
+            if not saturate:  # a plain number: checked without the codec (the common case)
+                stored = stored_number(value, rng)
+                if stored is not None:
+                    if within(stored, rng, not force):
+                        return
+                    # Refused: but a leaf that does not exist or a value its type cannot hold
+                    # is the write's own error, worded by the core.
+                    try:
+                        leaf_type = self._native.get_leaf(
+                            p.index, instance, target, default=default
+                        )[2]
+                    except Px4ParamsError:
+                        return
+                    if in_type_range(value, leaf_type):
+                        where = f"{self._instance_name(p, instance)}.{path}"
+                        check_stored(where, stored, rng, not force, value)
+                    return
+        try:
+            data = self._native.get(p.index, instance, default=default)
+            data = data_type.set_leaf(data, target, value, tao=False, saturate=saturate)
+            leaves = (
+                _changed_leaves(
+                    data_type.leaves(data, tao=False), self._stored_leaves(p, instance, default)
+                )
+                if whole
+                else [data_type.get_leaf(data, target, tao=False)]
+            )
+        except Px4ParamsError:
+            return  # a value the leaf cannot hold: the write says so, in the store's words
+        check_leaves(
+            self._instance_name(p, instance),
+            leaves,
+            ranges,
+            bounds=not force,
+            given=None if whole else value,
+        )
+
     def set_encoded(self, name: str | Key, data: bytes, *, default: bool = False) -> None:
-        """Sets a whole value from its stored bytes (checked before it is taken)."""
+        """Sets a whole value from its stored bytes (checked before it is taken, its leaves
+        against their ``@min``/``@max`` too)."""
         p, instance, _ = self._resolve(name)
+        self._check_encoded(p, instance, bytes(data), force=False, default=default)
         self._native.set_encoded(p.index, instance, bytes(data), default=default)
 
     def reset(self, name: str | Key) -> None:
@@ -550,6 +739,12 @@ class Store:
 
     def __repr__(self) -> str:
         return f"<Store {len(list(self.names()))} instances of {len(self._order)} parameters>"
+
+
+def _changed_leaves(leaves: list[Leaf], before: list[Leaf]) -> list[Leaf]:
+    """The leaves of ``leaves`` that ``before`` does not hold with the same path and value."""
+    kept = {(leaf.path, repr(leaf.value)) for leaf in before}
+    return [leaf for leaf in leaves if (leaf.path, repr(leaf.value)) not in kept]
 
 
 def _naming_the_field(error: LeafError, key: Key) -> LeafError:

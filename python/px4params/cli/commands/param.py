@@ -40,7 +40,7 @@ def add_parser(sub: Any, name: str, summary: str, words: Sequence[str] = ()) -> 
     )
     store_options(p)
     verbs = p.add_subparsers(dest="verb_name", required=True, metavar="VERB")
-    add_verbs(verbs, RawDescriptionHelpFormatter, only=_verb_in(words, name))
+    add_verbs(verbs, RawDescriptionHelpFormatter, only=_verb_in(words, name), cli=True)
     p.set_defaults(func=cmd_param)
 
 
