@@ -288,6 +288,33 @@ def test_9_a_param_set_default_list_is_read(tmp_path: Path, capsys) -> None:
     )
 
 
+def test_a_version_less_list_of_px4_1_14_is_not_read_as_1_6(tmp_path: Path, capsys) -> None:
+    """Found with the corpus (PX4's docs asset reptile_dragon_2_params.params, a set-default
+    list with OSD_SCROLL_RATE): a version-less file without CAL_*_PRIO was read with the
+    px4-v1.6 table although it holds a parameter PX4 1.13 did not have. A GPS's QMC5883P
+    (devtype 0x0F, which drv_sensor.h of 1.6 does not name) then became "no bundled parameter
+    type" instead of the instance that probing found; OSD_SCROLL_RATE (msp_osd, not in the v1.13
+    tree) says PX4 1.14 or later, so today's table applies."""
+    qmc5883p = devid.encode("i2c", 1, 0x2C, 0x0F)
+    path = tmp_path / "plane.params"
+    path.write_text(
+        f"param set-default CAL_MAG1_ID {qmc5883p}\n"
+        "param set-default CAL_MAG1_ROT 0\n"
+        "param set-default OSD_SCROLL_RATE 50\n"
+    )
+    report = run_json(path, capsys)
+    assert report["table"] == "current"
+    assert report["assumptions"][0] == (
+        "no firmware version: OSD_SCROLL_RATE exists (PX4 1.14 and later; not in 1.13, "
+        "src/drivers/osd/msp_osd/module.yaml), so today's devtype table is assumed"
+    )
+    assert instances(report) == [("QMC5883P#0", 1, 0x2C, 0)]
+    assert report["not_carried"] == []
+    # Without such a parameter the era rule stays: a file without a version predates 1.6.
+    path.write_text(f"param set-default CAL_MAG1_ID {qmc5883p}\n")
+    assert run_json(path, capsys)["table"] == "px4-v1.6"
+
+
 def test_10_one_device_in_two_slots_is_reported_once(tmp_path: Path, capsys) -> None:
     rows = {
         "CAL_MAG0_ID": QMC5883L_GPS, "CAL_MAG0_ROT": 0,
