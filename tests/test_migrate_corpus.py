@@ -38,6 +38,10 @@ MIRRORS = Path("/work/.mirror")
 PYULOG = ("PX4/pyulog", "3cf17793f14709713ab297d3743314c658874068")
 FRRS = ("PX4/flight-review-rs", "0b1d5ee209e3b4ccfb30d91b675a9f7e8c484ad8")
 STIFAEL = ("Stifael/px4ulogtests", "c269c07b7822c6ac7097eddffbea1f9969bfa60d")
+#: PX4-Autopilot's docs/assets, read in a fork's snapshot (the four files are the same blobs
+#: as PX4's docs at that fork's date; other forks hold slightly different versions).
+PX4DOCS = ("dakejahl/PX4-Autopilot", "bb59c637cd74e04c000a0b8e35aac184251150d6")
+AIRFRAMES = "docs/assets/airframes"
 
 BOARD, DISABLED, SIM, OTHER = "board", "disabled", "simulation", "other bus"
 Instance = tuple[str, int, int, "int | None"]  # type, I2C bus, address, driver rotation
@@ -263,6 +267,45 @@ CORPUS = [
             "devtype 0x07 (not in the px4-v1.6 table), UAVCAN bus 31, node 76": "dronecan",
         },
     ),
+    Truth(
+        # Reptile Dragon 2 (the docs: ARK6X FMU, MS4525DO airspeed), a `param set-default`
+        # list of 63 lines, no version and no CAL_*_ID at all. OSD_SCROLL_RATE and the other
+        # msp_osd parameters are PX4 1.14 or later (no msp_osd in 1.13): today's table.
+        # SENS_EN_MS4525DO 1 is rc.sensors' `ms4525do start -X`, every external bus: the bus is
+        # not known; 0x28 is the MS4525DO's address.
+        "reptile_dragon_2_params.params", *PX4DOCS[:1],
+        f"{AIRFRAMES}/fw/reptile_dragon_2/reptile_dragon_2_params.params", PX4DOCS[1], False,
+        "current",
+        [("MS4525DO", 1, 0x28, None)],
+        {},
+        {"SENS_EN_MS4525DO"},
+    ),
+    Truth(
+        # Omnicopter (the docs: Holybro KakuteH7), "# Version: 1.13.0 dev": 118 rows of
+        # control allocation, PWM outputs and tuning; no CAL_*, no SENS_EN_*: nothing to carry.
+        "omnicopter.params", *PX4DOCS[:1], f"{AIRFRAMES}/multicopter/omnicopter/omnicopter.params",
+        PX4DOCS[1], False, "px4-v1.13", [], {},
+    ),
+    Truth(
+        # Foxtech Loong 2160 VTOL (the docs: Skynode or Pixhawk 6C, an SDP33 airspeed sensor,
+        # Auterion's digital power module), "# Version: 1.13.0", no CAL_*. SENS_EN_INA238 1:
+        # boards start `ina238 -X -b 1 -t 1 -k start` (5X/6X-class: also -b 2), rc.sensors
+        # never does, and no board is named: bus 1 is a guess, 0x45 the INA238's address.
+        # SENS_EN_SDP3X 1: rc.sensors' `sdp3x start -X` (0x21, else -a 0x22), any external bus.
+        "loong.params", *PX4DOCS[:1], f"{AIRFRAMES}/vtol/foxtech_loong_2160/loong.params",
+        PX4DOCS[1], False, "px4-v1.13",
+        [("INA238", 1, 0x45, None), ("SDP3X", 1, 0x21, None)],
+        {},
+        {"SENS_EN_INA238", "SENS_EN_SDP3X"},
+    ),
+    Truth(
+        # OMP Hobby ZMO tiltrotor VTOL (the docs: Skynode or Pixhawk 6C), a hand-trimmed QGC
+        # file without a version line: tuning and outputs only. FW_THR_ASPD_MIN,
+        # FW_T_THR_DAMPING and MPC_VEL_MAN_SIDE are not in PX4 1.13: today's table.
+        "omp_hobby_zmo.params", *PX4DOCS[:1],
+        f"{AIRFRAMES}/vtol/omp_hobby_zmo_fpv/omp_hobby_zmo.params", PX4DOCS[1], False, "current",
+        [], {},
+    ),
 ]  # fmt: skip
 
 
@@ -300,7 +343,7 @@ def left_out_key(item: dict[str, str]) -> str:
 
 
 def test_the_corpus_is_large_enough() -> None:
-    assert len(CORPUS) >= 15 - 1  # and the duplicate fixtures below are counted once
+    assert len(CORPUS) >= 18
     assert len({t.name for t in CORPUS}) == len(CORPUS)
     assert all(t.commit or t.shared for t in CORPUS)
 
