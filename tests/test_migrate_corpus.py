@@ -407,3 +407,32 @@ def test_the_amovlab_file_with_its_board_named(
     assert f"{script}:25" in lines["CAL_MAG0_ID, CAL_MAG3_ID"]
     assert f"{script}:28" in lines["CAL_MAG2_ID"]
     assert not [a for a in report["assumptions"] if "no board information" in a]
+
+
+def test_the_reptile_dragon_with_its_board_named(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The Reptile Dragon 2 flies an ARK6X FMU (its docs page, docs/en/frames_plane/
+    reptile_dragon_2.md). With `--board ark_fmu-v6x` the MS4525DO is still rc.sensors'
+    `ms4525do start -X` (ROMFS/px4fmu_common/init.d/rc.sensors line 172, read at bb59c637):
+    the driver tries every external bus, which on that board are I2C 1, 2 and 3
+    (boards/ark/fmu-v6x/src/i2c.cpp: initI2CBusExternal(1..3), bus 4 internal). So the bus stays
+    unknown and the report says so, naming the board's three buses instead of guessing blind."""
+    try:
+        import px4params.vehicle.boards  # noqa: F401
+    except ImportError:
+        pytest.skip("needs px4params.vehicle.boards (the board table)")
+    (truth,) = [t for t in CORPUS if t.name == "reptile_dragon_2_params.params"]
+    path = locate(truth, tmp_path)
+    assert main(["migrate", str(path), "--json", "--board", "ark_fmu-v6x"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["board"] == "ark_fmu-v6x"
+    assert [
+        (i["name"], i["values"]["bus.i2c.bus_id"], i["values"]["bus.i2c.address"])
+        for i in report["instances"]
+    ] == [("MS4525DO#0", 1, 0x28)]
+    (said,) = [a for a in report["assumptions"] if a.startswith("SENS_EN_MS4525DO:")]
+    assert "'ms4525do start -X' on every external I2C bus (1, 2, 3;" in said
+    assert "ROMFS/px4fmu_common/init.d/rc.sensors:172" in said
+    assert said.endswith("so the bus it is found on is not known: bus 1 proposed")
+    assert not [a for a in report["assumptions"] if "no board information" in a]
