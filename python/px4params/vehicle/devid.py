@@ -359,7 +359,8 @@ _PRIO_PARAM = re.compile(r"CAL_(ACC|GYRO|MAG|BARO)\d_PRIO")
 #: Each defined in PX4-Autopilot main (read in dakejahl/PX4-Autopilot
 #: bb59c637cd74e04c000a0b8e35aac184251150d6) at the path given, and absent from the whole tree
 #: of the v1.13 release line (aviant-tech/PX4-Autopilot 6308d5d260855f05b93e9e166e74bd806e434cd9,
-#: v1.13.2 to 1.13.6), which has no msp_osd driver at all.
+#: v1.13.2 to 1.13.6), which has no msp_osd driver at all, and from older trees (2016:
+#: bkueng/PX4-Autopilot 954a59ebbe; v1.11.3: auxoncorp/PX4-Autopilot 0e01909469).
 AFTER_PX4_1_13: dict[str, str] = {
     "OSD_SYMBOLS": "src/drivers/osd/msp_osd/module.yaml",
     "OSD_SCROLL_RATE": "src/drivers/osd/msp_osd/module.yaml",
