@@ -42,6 +42,7 @@ STIFAEL = ("Stifael/px4ulogtests", "c269c07b7822c6ac7097eddffbea1f9969bfa60d")
 #: as PX4's docs at that fork's date; other forks hold slightly different versions).
 PX4DOCS = ("dakejahl/PX4-Autopilot", "bb59c637cd74e04c000a0b8e35aac184251150d6")
 AIRFRAMES = "docs/assets/airframes"
+AUTERION = ("Auterion/px4-ulog-rs", "a11df05aef8b1ff0b442165951909751557d7dc4")
 
 BOARD, DISABLED, SIM, OTHER = "board", "disabled", "simulation", "other bus"
 Instance = tuple[str, int, int, "int | None"]  # type, I2C bus, address, driver rotation
@@ -306,6 +307,16 @@ CORPUS = [
         f"{AIRFRAMES}/vtol/omp_hobby_zmo_fpv/omp_hobby_zmo.params", PX4DOCS[1], False, "current",
         [], {},
     ),
+    Truth(
+        # SITL, PX4 1.8.0 beta (ver_sw_release 0x01080080, ver_hw SITL, no boot console, no
+        # sensor topics logged): the simulator's IDs of then have bus type 0, bus 1:
+        # 0x150008 (devtype 0x15, none in 1.8), 0x140008 ACCELSIM, 0x230008 GYROSIM, 0x030008
+        # MAGSIM. (sensor_selection's IDs are what the simulator reported, not configuration.)
+        "6ba1abc7-b433-4029-b8f5-3b2bb12d3b6c.ulg", *AUTERION[:1],
+        "tests/fixtures/6ba1abc7-b433-4029-b8f5-3b2bb12d3b6c.ulg", AUTERION[1], False, "px4-v1.8",
+        [],
+        {"CAL_ACC0_ID": OTHER, "CAL_ACC1_ID": OTHER, "CAL_GYRO0_ID": OTHER, "CAL_MAG0_ID": OTHER},
+    ),
 ]  # fmt: skip
 
 
@@ -343,7 +354,7 @@ def left_out_key(item: dict[str, str]) -> str:
 
 
 def test_the_corpus_is_large_enough() -> None:
-    assert len(CORPUS) >= 18
+    assert len(CORPUS) >= 19
     assert len({t.name for t in CORPUS}) == len(CORPUS)
     assert all(t.commit or t.shared for t in CORPUS)
 
