@@ -43,6 +43,7 @@ STIFAEL = ("Stifael/px4ulogtests", "c269c07b7822c6ac7097eddffbea1f9969bfa60d")
 PX4DOCS = ("dakejahl/PX4-Autopilot", "bb59c637cd74e04c000a0b8e35aac184251150d6")
 AIRFRAMES = "docs/assets/airframes"
 AUTERION = ("Auterion/px4-ulog-rs", "a11df05aef8b1ff0b442165951909751557d7dc4")
+CHAINPLAIN = ("Chainplain/PX4_ulog_2_xlsx", "dafdcfed06486b082026eb91f36e118730555843")
 
 BOARD, DISABLED, SIM, OTHER = "board", "disabled", "simulation", "other bus"
 Instance = tuple[str, int, int, "int | None"]  # type, I2C bus, address, driver rotation
@@ -317,6 +318,23 @@ CORPUS = [
         [],
         {"CAL_ACC0_ID": OTHER, "CAL_ACC1_ID": OTHER, "CAL_GYRO0_ID": OTHER, "CAL_MAG0_ID": OTHER},
     ),
+    Truth(
+        # Pixhawk 6C, PX4 v1.13.3 release (0x010D03FF), a fixed-wing (airframe 3000). Console
+        # lines 29-34: bmi055 and icm42688p on SPI 1; ms5611 on I2C bus 4 at 0x77 and ist8310
+        # at 0x0C on bus 4 (CAL_MAG0 0x060C21, CAL_MAG0_ROT -1); the GPS's IST8310 on bus 1 at
+        # 0x0E (CAL_MAG1 0x060E09) with rotation 10: the board's `ist8310 -X -b 1 -R 10 start`,
+        # so not probed; CAL_MAG1_ROT 0 is calibration's. Every SENS_EN_* driver switch is 0.
+        "log_9_2024-10-14-15-00-06.ulg", *CHAINPLAIN[:1], "log_9_2024-10-14-15-00-06.ulg",
+        CHAINPLAIN[1], False, "px4-v1.13", [],
+        {
+            "CAL_ACC0_ID": BOARD,  # 0x41000A BMI055 accelerometer
+            "CAL_GYRO0_ID": BOARD,  # 0x42000A BMI055 gyroscope
+            "CAL_ACC1_ID, CAL_GYRO1_ID": BOARD,  # 0x26000A ICM42688P
+            "CAL_MAG0_ID": BOARD,
+            "CAL_MAG1_ID": BOARD,
+            "MS5611 (BARO), I2C bus 4, address 0x77": BOARD,  # sensor_baro 0: 0x3D7721
+        },
+    ),
 ]  # fmt: skip
 
 
@@ -354,7 +372,7 @@ def left_out_key(item: dict[str, str]) -> str:
 
 
 def test_the_corpus_is_large_enough() -> None:
-    assert len(CORPUS) >= 19
+    assert len(CORPUS) >= 20
     assert len({t.name for t in CORPUS}) == len(CORPUS)
     assert all(t.commit or t.shared for t in CORPUS)
 
