@@ -337,6 +337,42 @@ def test_an_unknown_board_is_refused(tmp_path: Path, capsys) -> None:
     assert "no_such-board" in err
 
 
+def test_a_board_known_only_for_later_releases_is_named_so(tmp_path: Path, capsys) -> None:
+    """Found with the corpus (congtranv/px4-param's Pixhawk 4 file of PX4 1.10.1, and
+    flight-review-rs's Pixhawk 2 log of 1.9.0): the board table starts at PX4 v1.11.0, and a
+    board it has was called "unknown board 'px4_fmu-v5'" for an older file (and a log's
+    ver_hw "not in the board table"). The board is known; its start scripts of that release
+    are not, and the message says that."""
+    if not boards_available():
+        pytest.skip("needs px4params.vehicle.boards (the board table)")
+    path = params_file(tmp_path / "pixhawk4.params", {"CAL_MAG0_ID": IST8310_GPS}, "1.10.1 dev")
+    assert main(["migrate", str(path), "--board", "px4_fmu-v5"]) == 1
+    assert capsys.readouterr().err == (
+        f"px4params: error: --board px4_fmu-v5: the board table describes PX4 v1.11.0 and "
+        f"later, {path} is of PX4 1.10.1 (run without --board: the parameters and assumptions "
+        "decide)\n"
+    )
+    # Of a release the table has, the board's facts apply.
+    assert run_json(params_file(path, {"CAL_MAG0_ID": IST8310_GPS}, "1.13.0"), capsys, "--board",
+                    "px4_fmu-v5")["board"] == "px4_fmu-v5"  # fmt: skip
+    log = ulog_file(tmp_path / "v3.ulg", {"CAL_MAG0_ID": IST8310_GPS}, release=0x010900FF,
+                    hardware="PX4_FMU_V3")  # fmt: skip
+    report = run_json(log, capsys)
+    assert report["board"] is None
+    assert report["assumptions"][0] == (
+        "board PX4_FMU_V3: px4_fmu-v3 in the board table from PX4 v1.11.0 on, not for this log's "
+        "1.9.0; what its script starts is judged from the parameters and the boot console"
+    )
+
+
+def boards_available() -> bool:
+    try:
+        import px4params.vehicle.boards  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
 def test_the_board_table_says_what_the_board_starts(tmp_path: Path) -> None:
     """A board row starting a compass (`ist8310 -X -b 1 -R 10 start`, `ist8310 -I -R 10
     start`) leaves that compass out, naming the row; `-I` without `-b` covers the internal
