@@ -44,6 +44,8 @@ PX4DOCS = ("dakejahl/PX4-Autopilot", "bb59c637cd74e04c000a0b8e35aac184251150d6")
 AIRFRAMES = "docs/assets/airframes"
 AUTERION = ("Auterion/px4-ulog-rs", "a11df05aef8b1ff0b442165951909751557d7dc4")
 CHAINPLAIN = ("Chainplain/PX4_ulog_2_xlsx", "dafdcfed06486b082026eb91f36e118730555843")
+MAKETECH = ("Carl-Thibault/PX4-Config", "4ac665a7e6598a056cb0d1184fc382ae2cc79d86")
+CONGTRANV = ("congtranv/px4-param", "e45f6db777116edb273243180120fa845da59507")
 
 BOARD, DISABLED, SIM, OTHER = "board", "disabled", "simulation", "other bus"
 Instance = tuple[str, int, int, "int | None"]  # type, I2C bus, address, driver rotation
@@ -335,6 +337,46 @@ CORPUS = [
             "MS5611 (BARO), I2C bus 4, address 0x77": BOARD,  # sensor_baro 0: 0x3D7721
         },
     ),
+    Truth(
+        # MakeTech's "Pathfinder" quadrotor (its release notes: field tested, PX4 1.14.0),
+        # "# Version: 1.14.0": today's table. BMI055 (0x41000A, 0x42000A) and ICM42688P
+        # (0x26000A) on SPI 1, the IST8310 at I2C bus 4, 0x0C (0x060C21, CAL_MAG0_ROT -1): the
+        # Pixhawk 6C set, but the file names no board. The GPS's IST8310 on bus 1 at 0x0E
+        # (0x060E09, CAL_MAG1_ROT 0, PRIO 75) is then taken as found by probing, rotation 0.
+        "20260515 Pathfinder HW1.1 PX4-1.14.0.params", *MAKETECH[:1],
+        "aircraft/pathfinder/HW-1.1/PX4-1.14.0/20260515 Pathfinder HW1.1 PX4-1.14.0.params",
+        MAKETECH[1], False, "current",
+        [("IST8310", 1, 0x0E, 0)],
+        {
+            "CAL_ACC0_ID": BOARD,
+            "CAL_GYRO0_ID": BOARD,
+            "CAL_ACC1_ID, CAL_GYRO1_ID": BOARD,
+            "CAL_MAG0_ID": BOARD,
+        },
+    ),
+    Truth(
+        # A Pixhawk 4 (its README) flown with PX4 "1.10.1 dev": the px4-v1.8 table, _EN not
+        # _PRIO (all 1). ICM20689 accelerometer 0x3B000A and gyroscope 0x3C000A and BMI055
+        # (0x41030A, 0x42020A) on SPI 1; the internal IST8310 on I2C bus 3 (0x060E19,
+        # CAL_MAG1_ROT -1); the GPS's IST8310 on bus 1 at 0x0E (0x060E09, CAL_MAG0_ROT 0).
+        "px4-practice.params", *CONGTRANV[:1], "px4-practice.params", CONGTRANV[1], False,
+        "px4-v1.8",
+        [("IST8310", 1, 0x0E, 0)],
+        {
+            "CAL_ACC0_ID": BOARD,
+            "CAL_ACC1_ID": BOARD,
+            "CAL_GYRO0_ID": BOARD,
+            "CAL_GYRO1_ID": BOARD,
+            "CAL_MAG1_ID": BOARD,
+        },
+    ),
+    Truth(
+        # The same Pixhawk 4 set up for HITL (SYS_HITL 1, airframe 1001), "1.10.1 dev": only
+        # the board's ICM20689 slots (SPI 1) are set, every CAL_MAGn_ID is 0.
+        "px4-hitl-simulation.params", *CONGTRANV[:1], "px4-hitl-simulation.params",
+        CONGTRANV[1], False, "px4-v1.8", [],
+        {"CAL_ACC0_ID": BOARD, "CAL_GYRO0_ID": BOARD},
+    ),
 ]  # fmt: skip
 
 
@@ -372,7 +414,7 @@ def left_out_key(item: dict[str, str]) -> str:
 
 
 def test_the_corpus_is_large_enough() -> None:
-    assert len(CORPUS) >= 20
+    assert len(CORPUS) >= 23
     assert len({t.name for t in CORPUS}) == len(CORPUS)
     assert all(t.commit or t.shared for t in CORPUS)
 
