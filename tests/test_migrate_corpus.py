@@ -46,6 +46,9 @@ AUTERION = ("Auterion/px4-ulog-rs", "a11df05aef8b1ff0b442165951909751557d7dc4")
 CHAINPLAIN = ("Chainplain/PX4_ulog_2_xlsx", "dafdcfed06486b082026eb91f36e118730555843")
 MAKETECH = ("Carl-Thibault/PX4-Config", "4ac665a7e6598a056cb0d1184fc382ae2cc79d86")
 CONGTRANV = ("congtranv/px4-param", "e45f6db777116edb273243180120fa845da59507")
+HANG = ("Hang020713/Cartographer_test1", "8f01354b2947c5ebd07d2e5ba80798bebac53c04")
+MRN = ("MalteLoos/MRN", "914970d9225834a4273ab7d81d9d47171afb3d35")
+LEARNGIT = ("1874522282/learngit", "e0d12cec1801a75e659693db15af0ca9c5f0b235")
 
 BOARD, DISABLED, SIM, OTHER = "board", "disabled", "simulation", "other bus"
 Instance = tuple[str, int, int, "int | None"]  # type, I2C bus, address, driver rotation
@@ -377,6 +380,58 @@ CORPUS = [
         CONGTRANV[1], False, "px4-v1.8", [],
         {"CAL_ACC0_ID": BOARD, "CAL_GYRO0_ID": BOARD},
     ),
+    Truth(
+        # A rover (airframe 50000), "# Version: 1.18.0 alpha": BMI088 (0x6A000A, 0x66000A) and
+        # ICM42688P (0x26000A) on SPI 1; MS5611 on I2C bus 4 at 0x77 (CAL_BARO0 0x3D7721), an
+        # I2C barometer: the board's; IST8310 at bus 4, 0x0C, CAL_MAG0_ROT -1. CAL_GYRO2_ID
+        # 0x14010C is a simulator's IMU (bus type 4) left in the slot.
+        "original_px4.params", *HANG[:1], "data/original_px4.params", HANG[1], False, "current",
+        [],
+        {
+            "CAL_ACC0_ID": BOARD,
+            "CAL_GYRO0_ID": BOARD,
+            "CAL_ACC1_ID, CAL_GYRO1_ID": BOARD,
+            "CAL_BARO0_ID": BOARD,
+            "CAL_GYRO2_ID": SIM,
+            "CAL_MAG0_ID": BOARD,
+        },
+    ),
+    Truth(
+        # The same owner's boat (airframe 22001), "1.18.0 alpha": BMI055 (0x41000A, 0x42000A
+        # in CAL_GYRO3), BMI088 gyroscope 0x66000A, ICM42688P 0x26000A, all SPI 1; the same
+        # simulator IMU in CAL_GYRO2; the internal IST8310 (0x060C21, ROT -1); no CAL_BARO.
+        "px4_boat.param.params", *HANG[:1], "onboard_scripts/px4_boat.param.params", HANG[1],
+        False, "current", [],
+        {
+            "CAL_ACC0_ID": BOARD,
+            "CAL_GYRO0_ID": BOARD,
+            "CAL_ACC1_ID, CAL_GYRO1_ID": BOARD,
+            "CAL_GYRO2_ID": SIM,
+            "CAL_GYRO3_ID": BOARD,
+            "CAL_MAG0_ID": BOARD,
+        },
+    ),
+    Truth(
+        # SITL, "# Version: 1.17.0 alpha" (here named mrn_px4.params; px4.params in the repo):
+        # three simulated IMUs 0x14010C/0x140114/0x14011C (bus type 4, buses 1-3), BAROSIM
+        # 0x65010C, MAGSIM 0x03030C and 0x03040C. CAL_ACC*_PRIO -1 is "not set".
+        "mrn_px4.params", *MRN[:1], "px4.params", MRN[1], False, "current", [],
+        {
+            "CAL_ACC0_ID, CAL_GYRO0_ID": SIM,
+            "CAL_ACC1_ID, CAL_GYRO1_ID": SIM,
+            "CAL_ACC2_ID, CAL_GYRO2_ID": SIM,
+            "CAL_BARO0_ID": SIM,
+            "CAL_MAG0_ID": SIM,
+            "CAL_MAG1_ID": SIM,
+        },
+    ),
+    Truth(
+        # SITL (airframe 10016), "# Version: 1.9.0 dev" (learngit_px4.params here; px4.params in
+        # the repo): the px4-v1.8 table; the simulator's IDs of then have bus type 0 (0x150008,
+        # 0x140008 ACCELSIM, 0x230008 GYROSIM, 0x030008 MAGSIM).
+        "learngit_px4.params", *LEARNGIT[:1], "px4.params", LEARNGIT[1], False, "px4-v1.8", [],
+        {"CAL_ACC0_ID": OTHER, "CAL_ACC1_ID": OTHER, "CAL_GYRO0_ID": OTHER, "CAL_MAG0_ID": OTHER},
+    ),
 ]  # fmt: skip
 
 
@@ -414,7 +469,7 @@ def left_out_key(item: dict[str, str]) -> str:
 
 
 def test_the_corpus_is_large_enough() -> None:
-    assert len(CORPUS) >= 23
+    assert len(CORPUS) >= 27
     assert len({t.name for t in CORPUS}) == len(CORPUS)
     assert all(t.commit or t.shared for t in CORPUS)
 
