@@ -562,3 +562,21 @@ def test_the_reptile_dragon_with_its_board_named(
     assert "ROMFS/px4fmu_common/init.d/rc.sensors:172" in said
     assert said.endswith("so the bus it is found on is not known: bus 1 proposed")
     assert not [a for a in report["assumptions"] if "no board information" in a]
+
+
+def test_an_ardupilot_file_is_not_migrated(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A real QGC file of another autopilot: ArduPilot Copter 4.6.3 (gyumingim/drone's
+    param.params, "# Stack: ArduPilot" on line 3, INS_ACC_ID and COMPASS_DEV_ID instead of
+    CAL_*_ID). Nothing in it is PX4 configuration: migrate refuses it, naming the line."""
+    truth = Truth(
+        "ardupilot_param.params", "gyumingim/drone", "param.params",
+        "99313d7bbae4fba3ffd263aa1c33fb6fcbbdc36e", False, "", [], {},
+    )  # fmt: skip
+    path = locate(truth, tmp_path)
+    assert main(["migrate", str(path), "--json"]) == 1
+    assert capsys.readouterr().err == (
+        f"px4params: error: {path}:3: '# Stack: ArduPilot': not a PX4 parameter file (QGC "
+        "writes 'PX4' or 'PX4 Pro' there for PX4's)\n"
+    )

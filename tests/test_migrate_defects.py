@@ -365,6 +365,29 @@ def test_a_board_known_only_for_later_releases_is_named_so(tmp_path: Path, capsy
     )
 
 
+def test_another_autopilots_file_is_refused(tmp_path: Path, capsys) -> None:
+    """Found with the corpus (gyumingim/drone's param.params, an ArduPilot Copter 4.6.3 file
+    QGC wrote): it was "migrated" as PX4's, its version 4.6.3 picking today's devtype table and
+    1047 ArduPilot parameters reported as classic parameters that stay. QGC's '# Stack:' line
+    names the firmware; only PX4's parameters mean anything to a PX4 manifest."""
+    path = tmp_path / "copter.params"
+    path.write_text(
+        "# Onboard parameters for Vehicle 1\n#\n# Stack: ArduPilot\n# Vehicle: Quadrotor\n"
+        "# Version: 4.6.3 \n#\n# Vehicle-Id Component-Id Name Value Type\n"
+        "1\t1\tINS_ACC_ID\t3408650\t6\n"
+    )
+    assert main(["migrate", str(path)]) == 1
+    assert capsys.readouterr().err == (
+        f"px4params: error: {path}:3: '# Stack: ArduPilot': not a PX4 parameter file (QGC "
+        "writes 'PX4' or 'PX4 Pro' there for PX4's)\n"
+    )
+    # QGC's two spellings of PX4 are read.
+    for stack in ("PX4", "PX4 Pro"):
+        path.write_text(path.read_text().replace("ArduPilot", stack, 1))
+        assert run_json(path, capsys)["kind"] == "QGC .params"
+        path.write_text(path.read_text().replace(stack, "ArduPilot", 1))
+
+
 def boards_available() -> bool:
     try:
         import px4params.vehicle.boards  # noqa: F401
