@@ -49,6 +49,7 @@ CONGTRANV = ("congtranv/px4-param", "e45f6db777116edb273243180120fa845da59507")
 HANG = ("Hang020713/Cartographer_test1", "8f01354b2947c5ebd07d2e5ba80798bebac53c04")
 MRN = ("MalteLoos/MRN", "914970d9225834a4273ab7d81d9d47171afb3d35")
 LEARNGIT = ("1874522282/learngit", "e0d12cec1801a75e659693db15af0ca9c5f0b235")
+ABDELHAKIM = ("abdelhakim96/drone_code", "d4a8f92bb0d0956fb11388a0b6033eb614859578")
 
 BOARD, DISABLED, SIM, OTHER = "board", "disabled", "simulation", "other bus"
 Instance = tuple[str, int, int, "int | None"]  # type, I2C bus, address, driver rotation
@@ -432,6 +433,30 @@ CORPUS = [
         "learngit_px4.params", *LEARNGIT[:1], "px4.params", LEARNGIT[1], False, "px4-v1.8", [],
         {"CAL_ACC0_ID": OTHER, "CAL_ACC1_ID": OTHER, "CAL_GYRO0_ID": OTHER, "CAL_MAG0_ID": OTHER},
     ),
+    Truth(
+        # A 250 racer (airframe 4050), "# Version: 1.11.3": the px4-v1.11 table, _EN (all 1).
+        # ICM20689 IMU 0x3C000A and BMI055 (0x41000A, 0x42000A) on SPI 1, the IST8310 on I2C
+        # bus 3 at 0x0E (0x060E19, CAL_MAG0_ROT -1: the FMUv5 set). No external sensor.
+        "px4_params.params", *ABDELHAKIM[:1], "px4_params.params", ABDELHAKIM[1], False,
+        "px4-v1.11", [],
+        {
+            "CAL_ACC0_ID, CAL_GYRO0_ID": BOARD,
+            "CAL_ACC1_ID": BOARD,
+            "CAL_GYRO1_ID": BOARD,
+            "CAL_MAG0_ID": BOARD,
+        },
+    ),
+    Truth(
+        # The same vehicle's older file, another flight controller: ICM20602 0x38000A and
+        # ICM20689 0x3C000A (IMUs in 1.11's table) on SPI 1, the same internal IST8310.
+        "px4_params_kaffe_old.params", *ABDELHAKIM[:1], "px4_params_kaffe_old.params",
+        ABDELHAKIM[1], False, "px4-v1.11", [],
+        {
+            "CAL_ACC0_ID, CAL_GYRO0_ID": BOARD,
+            "CAL_ACC1_ID, CAL_GYRO1_ID": BOARD,
+            "CAL_MAG0_ID": BOARD,
+        },
+    ),
 ]  # fmt: skip
 
 
@@ -469,7 +494,7 @@ def left_out_key(item: dict[str, str]) -> str:
 
 
 def test_the_corpus_is_large_enough() -> None:
-    assert len(CORPUS) >= 27
+    assert len(CORPUS) >= 29
     assert len({t.name for t in CORPUS}) == len(CORPUS)
     assert all(t.commit or t.shared for t in CORPUS)
 
