@@ -38,8 +38,8 @@ MIRRORS = Path("/work/.mirror")
 PYULOG = ("PX4/pyulog", "3cf17793f14709713ab297d3743314c658874068")
 FRRS = ("PX4/flight-review-rs", "0b1d5ee209e3b4ccfb30d91b675a9f7e8c484ad8")
 STIFAEL = ("Stifael/px4ulogtests", "c269c07b7822c6ac7097eddffbea1f9969bfa60d")
-#: PX4-Autopilot's docs/assets, read in a fork's snapshot (the four files are the same blobs
-#: as PX4's docs at that fork's date; other forks hold slightly different versions).
+#: PX4-Autopilot's docs/assets as a fork's snapshot holds them (dakejahl's, 2026-08-13; the
+#: forks INDI-FLO, slgrobotics and others hold slightly different versions of three of them).
 PX4DOCS = ("dakejahl/PX4-Autopilot", "bb59c637cd74e04c000a0b8e35aac184251150d6")
 AIRFRAMES = "docs/assets/airframes"
 AUTERION = ("Auterion/px4-ulog-rs", "a11df05aef8b1ff0b442165951909751557d7dc4")
