@@ -574,6 +574,9 @@ def test_tables_by_release() -> None:
     assert devid.table_for_release(None) == "px4-v1.6"
     assert devid.table_for_release(0, {"CAL_MAG0_EN": 1}) == "px4-v1.6"
     assert devid.table_for_release(None, {"CAL_MAG0_PRIO": 50}) == "current"
+    # A parameter PX4 1.13 did not have (msp_osd's, the performance model's) says 1.14 on.
+    assert devid.table_for_release(None, {"FW_THR_ASPD_MIN": 0.34}) == "current"
+    assert devid.table_for_release(None, {"OSD_SYMBOLS": 2637823, "CAL_MAG0_EN": 1}) == "current"
     assert devid.table_for_version((1, 7, 99)) == "px4-v1.6"
     assert devid.table_for_version((1, 8, 0)) == "px4-v1.8"
     # Known answers written down from each era's drv_sensor.h: 0x37 and the ICM-20602.

@@ -38,6 +38,18 @@ MIRRORS = Path("/work/.mirror")
 PYULOG = ("PX4/pyulog", "3cf17793f14709713ab297d3743314c658874068")
 FRRS = ("PX4/flight-review-rs", "0b1d5ee209e3b4ccfb30d91b675a9f7e8c484ad8")
 STIFAEL = ("Stifael/px4ulogtests", "c269c07b7822c6ac7097eddffbea1f9969bfa60d")
+#: PX4-Autopilot's docs/assets as a fork's snapshot holds them (dakejahl's, 2026-08-13; the
+#: forks INDI-FLO, slgrobotics and others hold slightly different versions of three of them).
+PX4DOCS = ("dakejahl/PX4-Autopilot", "bb59c637cd74e04c000a0b8e35aac184251150d6")
+AIRFRAMES = "docs/assets/airframes"
+AUTERION = ("Auterion/px4-ulog-rs", "a11df05aef8b1ff0b442165951909751557d7dc4")
+CHAINPLAIN = ("Chainplain/PX4_ulog_2_xlsx", "dafdcfed06486b082026eb91f36e118730555843")
+MAKETECH = ("Carl-Thibault/PX4-Config", "4ac665a7e6598a056cb0d1184fc382ae2cc79d86")
+CONGTRANV = ("congtranv/px4-param", "e45f6db777116edb273243180120fa845da59507")
+HANG = ("Hang020713/Cartographer_test1", "8f01354b2947c5ebd07d2e5ba80798bebac53c04")
+MRN = ("MalteLoos/MRN", "914970d9225834a4273ab7d81d9d47171afb3d35")
+LEARNGIT = ("1874522282/learngit", "e0d12cec1801a75e659693db15af0ca9c5f0b235")
+ABDELHAKIM = ("abdelhakim96/drone_code", "d4a8f92bb0d0956fb11388a0b6033eb614859578")
 
 BOARD, DISABLED, SIM, OTHER = "board", "disabled", "simulation", "other bus"
 Instance = tuple[str, int, int, "int | None"]  # type, I2C bus, address, driver rotation
@@ -263,6 +275,188 @@ CORPUS = [
             "devtype 0x07 (not in the px4-v1.6 table), UAVCAN bus 31, node 76": "dronecan",
         },
     ),
+    Truth(
+        # Reptile Dragon 2 (the docs: ARK6X FMU, MS4525DO airspeed), a `param set-default`
+        # list of 63 lines, no version and no CAL_*_ID at all. OSD_SCROLL_RATE and the other
+        # msp_osd parameters are PX4 1.14 or later (no msp_osd in 1.13): today's table.
+        # SENS_EN_MS4525DO 1 is rc.sensors' `ms4525do start -X`, every external bus: the bus is
+        # not known; 0x28 is the MS4525DO's address.
+        "reptile_dragon_2_params.params", *PX4DOCS[:1],
+        f"{AIRFRAMES}/fw/reptile_dragon_2/reptile_dragon_2_params.params", PX4DOCS[1], False,
+        "current",
+        [("MS4525DO", 1, 0x28, None)],
+        {},
+        {"SENS_EN_MS4525DO"},
+    ),
+    Truth(
+        # Omnicopter (the docs: Holybro KakuteH7), "# Version: 1.13.0 dev": 118 rows of
+        # control allocation, PWM outputs and tuning; no CAL_*, no SENS_EN_*: nothing to carry.
+        "omnicopter.params", *PX4DOCS[:1], f"{AIRFRAMES}/multicopter/omnicopter/omnicopter.params",
+        PX4DOCS[1], False, "px4-v1.13", [], {},
+    ),
+    Truth(
+        # Foxtech Loong 2160 VTOL (the docs: Skynode or Pixhawk 6C, an SDP33 airspeed sensor,
+        # Auterion's digital power module), "# Version: 1.13.0", no CAL_*. SENS_EN_INA238 1:
+        # boards start `ina238 -X -b 1 -t 1 -k start` (5X/6X-class: also -b 2), rc.sensors
+        # never does, and no board is named: bus 1 is a guess, 0x45 the INA238's address.
+        # SENS_EN_SDP3X 1: rc.sensors' `sdp3x start -X` (0x21, else -a 0x22), any external bus.
+        "loong.params", *PX4DOCS[:1], f"{AIRFRAMES}/vtol/foxtech_loong_2160/loong.params",
+        PX4DOCS[1], False, "px4-v1.13",
+        [("INA238", 1, 0x45, None), ("SDP3X", 1, 0x21, None)],
+        {},
+        {"SENS_EN_INA238", "SENS_EN_SDP3X"},
+    ),
+    Truth(
+        # OMP Hobby ZMO tiltrotor VTOL (the docs: Skynode or Pixhawk 6C), a hand-trimmed QGC
+        # file without a version line: tuning and outputs only. FW_THR_ASPD_MIN,
+        # FW_T_THR_DAMPING and MPC_VEL_MAN_SIDE are not in PX4 1.13: today's table.
+        "omp_hobby_zmo.params", *PX4DOCS[:1],
+        f"{AIRFRAMES}/vtol/omp_hobby_zmo_fpv/omp_hobby_zmo.params", PX4DOCS[1], False, "current",
+        [], {},
+    ),
+    Truth(
+        # SITL, PX4 1.8.0 beta (ver_sw_release 0x01080080, ver_hw SITL, no boot console, no
+        # sensor topics logged): the simulator's IDs of then have bus type 0, bus 1:
+        # 0x150008 (devtype 0x15, none in 1.8), 0x140008 ACCELSIM, 0x230008 GYROSIM, 0x030008
+        # MAGSIM. (sensor_selection's IDs are what the simulator reported, not configuration.)
+        "6ba1abc7-b433-4029-b8f5-3b2bb12d3b6c.ulg", *AUTERION[:1],
+        "tests/fixtures/6ba1abc7-b433-4029-b8f5-3b2bb12d3b6c.ulg", AUTERION[1], False, "px4-v1.8",
+        [],
+        {"CAL_ACC0_ID": OTHER, "CAL_ACC1_ID": OTHER, "CAL_GYRO0_ID": OTHER, "CAL_MAG0_ID": OTHER},
+    ),
+    Truth(
+        # Pixhawk 6C, PX4 v1.13.3 release (0x010D03FF), a fixed-wing (airframe 3000). Console
+        # lines 29-34: bmi055 and icm42688p on SPI 1; ms5611 on I2C bus 4 at 0x77 and ist8310
+        # at 0x0C on bus 4 (CAL_MAG0 0x060C21, CAL_MAG0_ROT -1); the GPS's IST8310 on bus 1 at
+        # 0x0E (CAL_MAG1 0x060E09) with rotation 10: the board's `ist8310 -X -b 1 -R 10 start`,
+        # so not probed; CAL_MAG1_ROT 0 is calibration's. Every SENS_EN_* driver switch is 0.
+        "log_9_2024-10-14-15-00-06.ulg", *CHAINPLAIN[:1], "log_9_2024-10-14-15-00-06.ulg",
+        CHAINPLAIN[1], False, "px4-v1.13", [],
+        {
+            "CAL_ACC0_ID": BOARD,  # 0x41000A BMI055 accelerometer
+            "CAL_GYRO0_ID": BOARD,  # 0x42000A BMI055 gyroscope
+            "CAL_ACC1_ID, CAL_GYRO1_ID": BOARD,  # 0x26000A ICM42688P
+            "CAL_MAG0_ID": BOARD,
+            "CAL_MAG1_ID": BOARD,
+            "MS5611 (BARO), I2C bus 4, address 0x77": BOARD,  # sensor_baro 0: 0x3D7721
+        },
+    ),
+    Truth(
+        # MakeTech's "Pathfinder" quadrotor (its release notes: field tested, PX4 1.14.0),
+        # "# Version: 1.14.0": today's table. BMI055 (0x41000A, 0x42000A) and ICM42688P
+        # (0x26000A) on SPI 1, the IST8310 at I2C bus 4, 0x0C (0x060C21, CAL_MAG0_ROT -1): the
+        # Pixhawk 6C set, but the file names no board. The GPS's IST8310 on bus 1 at 0x0E
+        # (0x060E09, CAL_MAG1_ROT 0, PRIO 75) is then taken as found by probing, rotation 0.
+        "20260515 Pathfinder HW1.1 PX4-1.14.0.params", *MAKETECH[:1],
+        "aircraft/pathfinder/HW-1.1/PX4-1.14.0/20260515 Pathfinder HW1.1 PX4-1.14.0.params",
+        MAKETECH[1], False, "current",
+        [("IST8310", 1, 0x0E, 0)],
+        {
+            "CAL_ACC0_ID": BOARD,
+            "CAL_GYRO0_ID": BOARD,
+            "CAL_ACC1_ID, CAL_GYRO1_ID": BOARD,
+            "CAL_MAG0_ID": BOARD,
+        },
+    ),
+    Truth(
+        # A Pixhawk 4 (its README) flown with PX4 "1.10.1 dev": the px4-v1.8 table, _EN not
+        # _PRIO (all 1). ICM20689 accelerometer 0x3B000A and gyroscope 0x3C000A and BMI055
+        # (0x41030A, 0x42020A) on SPI 1; the internal IST8310 on I2C bus 3 (0x060E19,
+        # CAL_MAG1_ROT -1); the GPS's IST8310 on bus 1 at 0x0E (0x060E09, CAL_MAG0_ROT 0).
+        "px4-practice.params", *CONGTRANV[:1], "px4-practice.params", CONGTRANV[1], False,
+        "px4-v1.8",
+        [("IST8310", 1, 0x0E, 0)],
+        {
+            "CAL_ACC0_ID": BOARD,
+            "CAL_ACC1_ID": BOARD,
+            "CAL_GYRO0_ID": BOARD,
+            "CAL_GYRO1_ID": BOARD,
+            "CAL_MAG1_ID": BOARD,
+        },
+    ),
+    Truth(
+        # The same Pixhawk 4 set up for HITL (SYS_HITL 1, airframe 1001), "1.10.1 dev": only
+        # the board's ICM20689 slots (SPI 1) are set, every CAL_MAGn_ID is 0.
+        "px4-hitl-simulation.params", *CONGTRANV[:1], "px4-hitl-simulation.params",
+        CONGTRANV[1], False, "px4-v1.8", [],
+        {"CAL_ACC0_ID": BOARD, "CAL_GYRO0_ID": BOARD},
+    ),
+    Truth(
+        # A rover (airframe 50000), "# Version: 1.18.0 alpha": BMI088 (0x6A000A, 0x66000A) and
+        # ICM42688P (0x26000A) on SPI 1; MS5611 on I2C bus 4 at 0x77 (CAL_BARO0 0x3D7721), an
+        # I2C barometer: the board's; IST8310 at bus 4, 0x0C, CAL_MAG0_ROT -1. CAL_GYRO2_ID
+        # 0x14010C is a simulator's IMU (bus type 4) left in the slot.
+        "original_px4.params", *HANG[:1], "data/original_px4.params", HANG[1], False, "current",
+        [],
+        {
+            "CAL_ACC0_ID": BOARD,
+            "CAL_GYRO0_ID": BOARD,
+            "CAL_ACC1_ID, CAL_GYRO1_ID": BOARD,
+            "CAL_BARO0_ID": BOARD,
+            "CAL_GYRO2_ID": SIM,
+            "CAL_MAG0_ID": BOARD,
+        },
+    ),
+    Truth(
+        # The same owner's boat (airframe 22001), "1.18.0 alpha": BMI055 (0x41000A, 0x42000A
+        # in CAL_GYRO3), BMI088 gyroscope 0x66000A, ICM42688P 0x26000A, all SPI 1; the same
+        # simulator IMU in CAL_GYRO2; the internal IST8310 (0x060C21, ROT -1); no CAL_BARO.
+        "px4_boat.param.params", *HANG[:1], "onboard_scripts/px4_boat.param.params", HANG[1],
+        False, "current", [],
+        {
+            "CAL_ACC0_ID": BOARD,
+            "CAL_GYRO0_ID": BOARD,
+            "CAL_ACC1_ID, CAL_GYRO1_ID": BOARD,
+            "CAL_GYRO2_ID": SIM,
+            "CAL_GYRO3_ID": BOARD,
+            "CAL_MAG0_ID": BOARD,
+        },
+    ),
+    Truth(
+        # SITL, "# Version: 1.17.0 alpha" (here named mrn_px4.params; px4.params in the repo):
+        # three simulated IMUs 0x14010C/0x140114/0x14011C (bus type 4, buses 1-3), BAROSIM
+        # 0x65010C, MAGSIM 0x03030C and 0x03040C. CAL_ACC*_PRIO -1 is "not set".
+        "mrn_px4.params", *MRN[:1], "px4.params", MRN[1], False, "current", [],
+        {
+            "CAL_ACC0_ID, CAL_GYRO0_ID": SIM,
+            "CAL_ACC1_ID, CAL_GYRO1_ID": SIM,
+            "CAL_ACC2_ID, CAL_GYRO2_ID": SIM,
+            "CAL_BARO0_ID": SIM,
+            "CAL_MAG0_ID": SIM,
+            "CAL_MAG1_ID": SIM,
+        },
+    ),
+    Truth(
+        # SITL (airframe 10016), "# Version: 1.9.0 dev" (learngit_px4.params here; px4.params in
+        # the repo): the px4-v1.8 table; the simulator's IDs of then have bus type 0 (0x150008,
+        # 0x140008 ACCELSIM, 0x230008 GYROSIM, 0x030008 MAGSIM).
+        "learngit_px4.params", *LEARNGIT[:1], "px4.params", LEARNGIT[1], False, "px4-v1.8", [],
+        {"CAL_ACC0_ID": OTHER, "CAL_ACC1_ID": OTHER, "CAL_GYRO0_ID": OTHER, "CAL_MAG0_ID": OTHER},
+    ),
+    Truth(
+        # A 250 racer (airframe 4050), "# Version: 1.11.3": the px4-v1.11 table, _EN (all 1).
+        # ICM20689 IMU 0x3C000A and BMI055 (0x41000A, 0x42000A) on SPI 1, the IST8310 on I2C
+        # bus 3 at 0x0E (0x060E19, CAL_MAG0_ROT -1: the FMUv5 set). No external sensor.
+        "px4_params.params", *ABDELHAKIM[:1], "px4_params.params", ABDELHAKIM[1], False,
+        "px4-v1.11", [],
+        {
+            "CAL_ACC0_ID, CAL_GYRO0_ID": BOARD,
+            "CAL_ACC1_ID": BOARD,
+            "CAL_GYRO1_ID": BOARD,
+            "CAL_MAG0_ID": BOARD,
+        },
+    ),
+    Truth(
+        # The same vehicle's older file, another flight controller: ICM20602 0x38000A and
+        # ICM20689 0x3C000A (IMUs in 1.11's table) on SPI 1, the same internal IST8310.
+        "px4_params_kaffe_old.params", *ABDELHAKIM[:1], "px4_params_kaffe_old.params",
+        ABDELHAKIM[1], False, "px4-v1.11", [],
+        {
+            "CAL_ACC0_ID, CAL_GYRO0_ID": BOARD,
+            "CAL_ACC1_ID, CAL_GYRO1_ID": BOARD,
+            "CAL_MAG0_ID": BOARD,
+        },
+    ),
 ]  # fmt: skip
 
 
@@ -300,7 +494,7 @@ def left_out_key(item: dict[str, str]) -> str:
 
 
 def test_the_corpus_is_large_enough() -> None:
-    assert len(CORPUS) >= 15 - 1  # and the duplicate fixtures below are counted once
+    assert len(CORPUS) >= 29
     assert len({t.name for t in CORPUS}) == len(CORPUS)
     assert all(t.commit or t.shared for t in CORPUS)
 
@@ -364,3 +558,50 @@ def test_the_amovlab_file_with_its_board_named(
     assert f"{script}:25" in lines["CAL_MAG0_ID, CAL_MAG3_ID"]
     assert f"{script}:28" in lines["CAL_MAG2_ID"]
     assert not [a for a in report["assumptions"] if "no board information" in a]
+
+
+def test_the_reptile_dragon_with_its_board_named(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The Reptile Dragon 2 flies an ARK6X FMU (its docs page, docs/en/frames_plane/
+    reptile_dragon_2.md). With `--board ark_fmu-v6x` the MS4525DO is still rc.sensors'
+    `ms4525do start -X` (ROMFS/px4fmu_common/init.d/rc.sensors line 172, read at bb59c637):
+    the driver tries every external bus, which on that board are I2C 1, 2 and 3
+    (boards/ark/fmu-v6x/src/i2c.cpp: initI2CBusExternal(1..3), bus 4 internal). So the bus stays
+    unknown and the report says so, naming the board's three buses instead of guessing blind."""
+    try:
+        import px4params.vehicle.boards  # noqa: F401
+    except ImportError:
+        pytest.skip("needs px4params.vehicle.boards (the board table)")
+    (truth,) = [t for t in CORPUS if t.name == "reptile_dragon_2_params.params"]
+    path = locate(truth, tmp_path)
+    assert main(["migrate", str(path), "--json", "--board", "ark_fmu-v6x"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["board"] == "ark_fmu-v6x"
+    assert [
+        (i["name"], i["values"]["bus.i2c.bus_id"], i["values"]["bus.i2c.address"])
+        for i in report["instances"]
+    ] == [("MS4525DO#0", 1, 0x28)]
+    (said,) = [a for a in report["assumptions"] if a.startswith("SENS_EN_MS4525DO:")]
+    assert "'ms4525do start -X' on every external I2C bus (1, 2, 3;" in said
+    assert "ROMFS/px4fmu_common/init.d/rc.sensors:172" in said
+    assert said.endswith("so the bus it is found on is not known: bus 1 proposed")
+    assert not [a for a in report["assumptions"] if "no board information" in a]
+
+
+def test_an_ardupilot_file_is_not_migrated(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A real QGC file of another autopilot: ArduPilot Copter 4.6.3 (gyumingim/drone's
+    param.params, "# Stack: ArduPilot" on line 3, INS_ACC_ID and COMPASS_DEV_ID instead of
+    CAL_*_ID). Nothing in it is PX4 configuration: migrate refuses it, naming the line."""
+    truth = Truth(
+        "ardupilot_param.params", "gyumingim/drone", "param.params",
+        "99313d7bbae4fba3ffd263aa1c33fb6fcbbdc36e", False, "", [], {},
+    )  # fmt: skip
+    path = locate(truth, tmp_path)
+    assert main(["migrate", str(path), "--json"]) == 1
+    assert capsys.readouterr().err == (
+        f"px4params: error: {path}:3: '# Stack: ArduPilot': not a PX4 parameter file (QGC "
+        "writes 'PX4' or 'PX4 Pro' there for PX4's)\n"
+    )

@@ -288,6 +288,33 @@ def test_9_a_param_set_default_list_is_read(tmp_path: Path, capsys) -> None:
     )
 
 
+def test_a_version_less_list_of_px4_1_14_is_not_read_as_1_6(tmp_path: Path, capsys) -> None:
+    """Found with the corpus (PX4's docs asset reptile_dragon_2_params.params, a set-default
+    list with OSD_SCROLL_RATE): a version-less file without CAL_*_PRIO was read with the
+    px4-v1.6 table although it holds a parameter PX4 1.13 did not have. A GPS's QMC5883P
+    (devtype 0x0F, which drv_sensor.h of 1.6 does not name) then became "no bundled parameter
+    type" instead of the instance that probing found; OSD_SCROLL_RATE (msp_osd, not in the v1.13
+    tree) says PX4 1.14 or later, so today's table applies."""
+    qmc5883p = devid.encode("i2c", 1, 0x2C, 0x0F)
+    path = tmp_path / "plane.params"
+    path.write_text(
+        f"param set-default CAL_MAG1_ID {qmc5883p}\n"
+        "param set-default CAL_MAG1_ROT 0\n"
+        "param set-default OSD_SCROLL_RATE 50\n"
+    )
+    report = run_json(path, capsys)
+    assert report["table"] == "current"
+    assert report["assumptions"][0] == (
+        "no firmware version: OSD_SCROLL_RATE exists (PX4 1.14 and later; not in 1.13, "
+        "src/drivers/osd/msp_osd/module.yaml), so today's devtype table is assumed"
+    )
+    assert instances(report) == [("QMC5883P#0", 1, 0x2C, 0)]
+    assert report["not_carried"] == []
+    # Without such a parameter the era rule stays: a file without a version predates 1.6.
+    path.write_text(f"param set-default CAL_MAG1_ID {qmc5883p}\n")
+    assert run_json(path, capsys)["table"] == "px4-v1.6"
+
+
 def test_10_one_device_in_two_slots_is_reported_once(tmp_path: Path, capsys) -> None:
     rows = {
         "CAL_MAG0_ID": QMC5883L_GPS, "CAL_MAG0_ROT": 0,
@@ -308,6 +335,65 @@ def test_an_unknown_board_is_refused(tmp_path: Path, capsys) -> None:
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and err.startswith("px4params: error: ")
     assert "no_such-board" in err
+
+
+def test_a_board_known_only_for_later_releases_is_named_so(tmp_path: Path, capsys) -> None:
+    """Found with the corpus (congtranv/px4-param's Pixhawk 4 file of PX4 1.10.1, and
+    flight-review-rs's Pixhawk 2 log of 1.9.0): the board table starts at PX4 v1.11.0, and a
+    board it has was called "unknown board 'px4_fmu-v5'" for an older file (and a log's
+    ver_hw "not in the board table"). The board is known; its start scripts of that release
+    are not, and the message says that."""
+    if not boards_available():
+        pytest.skip("needs px4params.vehicle.boards (the board table)")
+    path = params_file(tmp_path / "pixhawk4.params", {"CAL_MAG0_ID": IST8310_GPS}, "1.10.1 dev")
+    assert main(["migrate", str(path), "--board", "px4_fmu-v5"]) == 1
+    assert capsys.readouterr().err == (
+        f"px4params: error: --board px4_fmu-v5: the board table describes PX4 v1.11.0 and "
+        f"later, {path} is of PX4 1.10.1 (run without --board: the parameters and assumptions "
+        "decide)\n"
+    )
+    # Of a release the table has, the board's facts apply.
+    assert run_json(params_file(path, {"CAL_MAG0_ID": IST8310_GPS}, "1.13.0"), capsys, "--board",
+                    "px4_fmu-v5")["board"] == "px4_fmu-v5"  # fmt: skip
+    log = ulog_file(tmp_path / "v3.ulg", {"CAL_MAG0_ID": IST8310_GPS}, release=0x010900FF,
+                    hardware="PX4_FMU_V3")  # fmt: skip
+    report = run_json(log, capsys)
+    assert report["board"] is None
+    assert report["assumptions"][0] == (
+        "board PX4_FMU_V3: px4_fmu-v3 in the board table from PX4 v1.11.0 on, not for this log's "
+        "1.9.0; what its script starts is judged from the parameters and the boot console"
+    )
+
+
+def test_another_autopilots_file_is_refused(tmp_path: Path, capsys) -> None:
+    """Found with the corpus (gyumingim/drone's param.params, an ArduPilot Copter 4.6.3 file
+    QGC wrote): it was "migrated" as PX4's, its version 4.6.3 picking today's devtype table and
+    1047 ArduPilot parameters reported as classic parameters that stay. QGC's '# Stack:' line
+    names the firmware; only PX4's parameters mean anything to a PX4 manifest."""
+    path = tmp_path / "copter.params"
+    path.write_text(
+        "# Onboard parameters for Vehicle 1\n#\n# Stack: ArduPilot\n# Vehicle: Quadrotor\n"
+        "# Version: 4.6.3 \n#\n# Vehicle-Id Component-Id Name Value Type\n"
+        "1\t1\tINS_ACC_ID\t3408650\t6\n"
+    )
+    assert main(["migrate", str(path)]) == 1
+    assert capsys.readouterr().err == (
+        f"px4params: error: {path}:3: '# Stack: ArduPilot': not a PX4 parameter file (QGC "
+        "writes 'PX4' or 'PX4 Pro' there for PX4's)\n"
+    )
+    # QGC's two spellings of PX4 are read.
+    for stack in ("PX4", "PX4 Pro"):
+        path.write_text(path.read_text().replace("ArduPilot", stack, 1))
+        assert run_json(path, capsys)["kind"] == "QGC .params"
+        path.write_text(path.read_text().replace(stack, "ArduPilot", 1))
+
+
+def boards_available() -> bool:
+    try:
+        import px4params.vehicle.boards  # noqa: F401
+    except ImportError:
+        return False
+    return True
 
 
 def test_the_board_table_says_what_the_board_starts(tmp_path: Path) -> None:

@@ -758,7 +758,15 @@ def _board(config: OldConfig, board: Any, assumptions: list[str]) -> Any:
                 f"--board {board}: this installation has no board table (px4params.vehicle.boards)"
             )
         version = "v" + ".".join(map(str, config.version)) if config.version else None
-        found = boards.load_boards().by_name(board, version)
+        table = boards.load_boards()
+        found = table.by_name(board, version)
+        if found is None and table.variants(board):
+            # A board the table has, but not for a release this old: its scripts then differ.
+            raise MigrationError(
+                f"--board {board}: the board table describes PX4 {table.releases[0]} and later, "
+                f"{config.source} is of PX4 {'.'.join(map(str, config.version or ()))} (run "
+                "without --board: the parameters and assumptions decide)"
+            )
         if found is None:
             raise MigrationError(
                 f"unknown board {board!r} (expected a PX4 board name such as px4_fmu-v6c)"
@@ -770,6 +778,12 @@ def _board(config: OldConfig, board: Any, assumptions: list[str]) -> Any:
         found = table.for_ulog(config.hardware, config.release) if table is not None else None
         if found is None:
             where = "not in the board table" if table is not None else "no board table here"
+            known = [b for b in table.all() if config.hardware.upper() in b.ver_hw] if table else []
+            if known and config.version is not None:
+                where = (
+                    f"{known[0].name} in the board table from PX4 {table.releases[0]} on, not "
+                    f"for this log's {'.'.join(map(str, config.version))}"
+                )
             assumptions.append(
                 f"board {config.hardware}: {where}; what its script starts is judged from the "
                 "parameters and the boot console"

@@ -117,13 +117,20 @@ def _read_text(where: str) -> OldConfig:
     ]
     details = [f"component {chosen}"]
     version = None
-    for line in text.splitlines():
+    for number, line in enumerate(text.splitlines(), start=1):
         if not line.startswith("#"):
             break
+        h = _QGC_HEADER.match(line.strip())
+        if h and h[1] == "Stack" and not h[2].upper().startswith("PX4"):
+            # QGC names the autopilot's firmware here ("PX4", "PX4 Pro", "ArduPilot"): another
+            # stack's parameters, device IDs and version number mean nothing to PX4.
+            raise MigrationError(
+                f"{where}:{number}: '# Stack: {abbreviated(h[2])}': not a PX4 parameter file "
+                "(QGC writes 'PX4' or 'PX4 Pro' there for PX4's)"
+            )
         m = _QGC_VERSION.match(line.strip())
         if m:
             version = (int(m[1]), int(m[2]), int(m[3]))
-        h = _QGC_HEADER.match(line.strip())
         if h:
             details.append(f"{h[1]}: {h[2]}")
     return OldConfig(where, "QGC .params", params, details, skipped, version=version)

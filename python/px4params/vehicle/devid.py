@@ -353,9 +353,32 @@ def table_for_release(release: int | None, params: Mapping[str, Any] | None = No
 _PRIO_PARAM = re.compile(r"CAL_(ACC|GYRO|MAG|BARO)\d_PRIO")
 
 
+#: Parameters PX4 1.13 did not have and later releases do: a file holding one is of PX4 1.14 or
+#: later, whatever else it lacks (a ``param set-default`` list never names a version, and a
+#: docs asset holds only the parameters of its vehicle's tuning, often no ``CAL_*`` at all).
+#: Each defined in PX4-Autopilot main (read in dakejahl/PX4-Autopilot
+#: bb59c637cd74e04c000a0b8e35aac184251150d6) at the path given, and absent from the whole tree
+#: of the v1.13 release line (aviant-tech/PX4-Autopilot 6308d5d260855f05b93e9e166e74bd806e434cd9,
+#: v1.13.2 to 1.13.6), which has no msp_osd driver at all, and from older trees (2016:
+#: bkueng/PX4-Autopilot 954a59ebbe; v1.11.3: auxoncorp/PX4-Autopilot 0e01909469).
+AFTER_PX4_1_13: dict[str, str] = {
+    "OSD_SYMBOLS": "src/drivers/osd/msp_osd/module.yaml",
+    "OSD_SCROLL_RATE": "src/drivers/osd/msp_osd/module.yaml",
+    "MPC_VEL_MAN_SIDE": "src/modules/mc_pos_control/multicopter_position_mode_params.yaml",
+    "FW_THR_ASPD_MIN": "src/lib/fw_performance_model/performance_model_params.yaml",
+    "FW_T_THR_DAMPING": "src/modules/fw_lateral_longitudinal_control/fw_lat_long_params.yaml",
+}
+
+
 def table_for_parameters(params: Mapping[str, Any]) -> tuple[str, str]:
     """The table for a file that names no firmware version, decided from its parameters, and
     why (one line for the report)."""
+    newer = sorted(n for n in params if n in AFTER_PX4_1_13)
+    if newer:
+        return "current", (
+            f"no firmware version: {newer[0]} exists (PX4 1.14 and later; not in 1.13, "
+            f"{AFTER_PX4_1_13[newer[0]]}), so today's devtype table is assumed"
+        )
     prio = sorted(n for n in params if _PRIO_PARAM.fullmatch(n))
     if prio:
         return "current", (
