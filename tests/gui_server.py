@@ -39,12 +39,12 @@ class Started:
 
 
 class Gui(Started):
-    """``px4params gui`` on 127.0.0.1 and a free port: ``base`` is the page's address
+    """``px4params gui`` on 127.0.0.1 and ``port`` (0: a free one): ``base`` is the page's address
     (``http://127.0.0.1:PORT/``), ``token`` the run's secret and ``url`` the two together, as
     printed."""
 
-    def __init__(self, argv: list[str], env: dict[str, str], cwd: Path) -> None:
-        super().__init__([*CLI, "gui", *argv, "--http", "127.0.0.1:0"], GUI_LINE, env, cwd)
+    def __init__(self, argv: list[str], env: dict[str, str], cwd: Path, port: int = 0) -> None:
+        super().__init__([*CLI, "gui", *argv, "--http", f"127.0.0.1:{port}"], GUI_LINE, env, cwd)
         self.base = self.match[1]
         self.port = int(self.match[2])
         self.token = self.match[3]

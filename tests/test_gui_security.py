@@ -337,3 +337,33 @@ def test_a_non_loopback_bind_needs_allow_remote(store_file: Path, where: str) ->
         f"px4params: error: --http {where} is not a loopback address: other machines could "
         "change the vehicle's parameters; add --allow-remote to mean it (docs/security.md)\n"
     )
+
+
+def test_allow_remote_lets_a_non_loopback_bind_through(store_file: Path) -> None:
+    """With --allow-remote the address is tried (192.0.2.7 is a documentation address that no
+    machine here has, so the bind itself fails: tests listen on loopback only)."""
+    result = subprocess.run(
+        [*CLI, "gui", "--store", str(store_file), "--http", "192.0.2.7:0", "--allow-remote"],
+        capture_output=True,
+        text=True,
+        env=env_for(store_file.parent),
+        timeout=60,
+    )
+    assert result.returncode != 0 and result.stdout == ""
+    assert result.stderr.startswith("px4params: error: cannot listen on http 192.0.2.7:0: ")
+    assert len(result.stderr.splitlines()) == 1
+
+
+def test_the_hosts_answered() -> None:
+    from px4params.gui.admission import allowed_hosts
+
+    loopback = {"localhost:8080", "127.0.0.1:8080", "[::1]:8080"}
+    assert allowed_hosts(8080, "127.0.0.1") == loopback
+    assert allowed_hosts(8080, "0.0.0.0") == loopback  # a wildcard is no name
+    assert allowed_hosts(8080, "192.168.1.5", ["Laptop", "proxy:9000", "[fe80::1]"]) == loopback | {
+        "192.168.1.5:8080",
+        "laptop:8080",
+        "proxy:9000",
+        "[fe80::1]:8080",
+    }
+    assert "localhost" in allowed_hosts(80, "127.0.0.1")  # browsers leave port 80 out
