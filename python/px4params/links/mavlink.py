@@ -61,7 +61,7 @@ from px4params.errors import Px4ParamsError
 from px4params.gcs.component_information import ComponentFiles, px4_crc32
 from px4params.links import mavlink_messages
 from px4params.links.identity import store_digest, version_parts
-from px4params.links.mavlink_ftp import MavftpServer
+from px4params.links.mavlink_ftp import SESSION_IDLE, MavftpServer
 from px4params.links.serving import ServingLoop
 from px4params.store import flat
 
@@ -203,6 +203,7 @@ class MavlinkParamServer(ServingLoop):
     ``save_path``: the store file accepted writes are saved to (None: kept in memory only).
     ``gcs``: addresses to send heartbeats to before they speak (e.g. QGC's 127.0.0.1:14550).
     ``log``: called with one line per accepted or refused write.
+    ``ftp_session_idle``: seconds after which an abandoned MAVLink FTP session is reclaimed.
     """
 
     thread_name = "mavlink-params"
@@ -221,6 +222,7 @@ class MavlinkParamServer(ServingLoop):
         heartbeat_interval: float = 1.0,
         health: Callable[[], list[str]] | None = None,
         health_interval: float = 2.0,
+        ftp_session_idle: float = SESSION_IDLE,
     ) -> None:
         super().__init__()
         self.store = store
@@ -257,7 +259,7 @@ class MavlinkParamServer(ServingLoop):
         self.metadata = ComponentFiles(
             store.schema, store.specs, classic, component_id=component_id
         )
-        self.ftp = MavftpServer(self.metadata.files)
+        self.ftp = MavftpServer(self.metadata.files, session_idle=ftp_session_idle)
         self._started = time.monotonic()
         #: Counters, for tests and the CLI's summary.
         self.stats = {"received": 0, "ignored": 0, "sent": 0, "accepted": 0, "refused": 0}

@@ -1,0 +1,217 @@
+"""``mavlink serve`` hard to misuse (issue 36), with pymavlink as the peer over UDP on
+127.0.0.1: abandoned MAVLink FTP sessions are reclaimed so that a client ordering its messages
+as QGroundControl's FTPManager does still gets the metadata; peers that went quiet get no more
+heartbeats or health text, and a parameter list is paced; MAVLink 2 signing."""
+
+from __future__ import annotations
+
+import json
+import lzma
+import os
+import struct
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import px4params
+import pytest
+from px4params.links.mavlink import MavlinkParamServer
+from px4params.store.classic import BUNDLED_CLASSIC
+from pymavlink import mavutil
+from pymavlink.dialects.v20 import common as mavlink
+
+os.environ.setdefault("MAVLINK20", "1")
+
+# MAVLink FTP, from the protocol's definition (mavlink.io/en/services/ftp.html): the payload's
+# header is seq (uint16), session, opcode, size, req_opcode, burst_complete, padding (uint8
+# each), offset (uint32), then up to 239 data bytes.
+FTP_HEADER = struct.Struct("<HBBBBBBI")
+OPEN_FILE_RO, READ_FILE, TERMINATE, RESET, BURST_READ = 4, 5, 1, 2, 15
+ACK, NAK = 128, 129
+EOF, NO_SESSIONS = 6, 5
+
+
+@pytest.fixture
+def store(schema: px4params.Schema) -> px4params.Store:
+    store = px4params.Store(schema, classic=BUNDLED_CLASSIC)
+    store.add("INA238#1")
+    store.set("INA238#1.bus.i2c.bus_id", 2)
+    return store
+
+
+class FtpClient:
+    """MAVLink FTP over pymavlink, one request at a time, as a ground station sends them."""
+
+    def __init__(self, port: int, system: int = 255, component: int = 190) -> None:
+        from px4params.links import mavlink_messages
+
+        self.conn = mavutil.mavlink_connection(
+            f"udpout:127.0.0.1:{port}",
+            source_system=system,
+            source_component=component,
+            dialect="common",
+        )
+        mavlink_messages.register(mavutil.mavlink)  # COMPONENT_METADATA is not in pymavlink yet
+        self.seq = 0
+
+    def ask(self, opcode: int, *, session: int = 0, offset: int = 0, data: bytes = b"") -> list:
+        """Sends one request; the replies to it (several for a burst), each as (header fields,
+        data)."""
+        self.seq = (self.seq + 1) & 0xFFFF
+        header = FTP_HEADER.pack(self.seq, session, opcode, len(data), 0, 0, 0, offset)
+        payload = (header + data).ljust(251, b"\0")
+        self.conn.mav.file_transfer_protocol_send(0, 1, 1, list(payload))
+        replies = []
+        end = time.monotonic() + 5
+        while time.monotonic() < end:
+            msg = self.conn.recv_match(type="FILE_TRANSFER_PROTOCOL", blocking=True, timeout=1)
+            if msg is None:
+                continue
+            raw = bytes(msg.payload)
+            _, sess, op, size, req, burst_complete, _, off = FTP_HEADER.unpack_from(raw)
+            if req != opcode:
+                continue  # a late reply to an earlier request
+            replies.append(
+                (
+                    {
+                        "session": sess,
+                        "opcode": op,
+                        "offset": off,
+                        "burst_complete": burst_complete,
+                    },
+                    raw[12 : 12 + size],
+                )
+            )
+            if opcode != BURST_READ or op == NAK or burst_complete:
+                return replies
+        if replies:
+            return replies
+        raise AssertionError(f"no answer to FTP opcode {opcode}")
+
+    def close(self) -> None:
+        self.conn.close()
+
+
+def qgc_download(client: FtpClient, path: str) -> bytes:
+    """A file as QGroundControl's FTPManager downloads it: OpenFileRO first (no reset before),
+    BurstReadFile to the end, ReadFile for what a burst left out, TerminateSession, then
+    ResetSessions last."""
+    ((opened, data),) = client.ask(OPEN_FILE_RO, data=path.encode() + b"\0")
+    assert opened["opcode"] == ACK, f"OpenFileRO {path}: NAK {data[0]}"
+    session = opened["session"]
+    size = struct.unpack("<I", data[:4])[0]
+    content = bytearray(size)
+    have: set[int] = set()
+    offset = 0
+    while offset < size:
+        for header, chunk in client.ask(BURST_READ, session=session, offset=offset):
+            if header["opcode"] == ACK:
+                content[header["offset"] : header["offset"] + len(chunk)] = chunk
+                have.update(range(header["offset"], header["offset"] + len(chunk)))
+        missing = [i for i in range(size) if i not in have]
+        if not missing:
+            break
+        offset = missing[0]
+        ((header, chunk),) = client.ask(READ_FILE, session=session, offset=offset)
+        if header["opcode"] == ACK:
+            content[offset : offset + len(chunk)] = chunk
+            have.update(range(offset, offset + len(chunk)))
+    ((closed, _),) = client.ask(TERMINATE, session=session)
+    assert closed["opcode"] == ACK
+    ((reset, _),) = client.ask(RESET)
+    assert reset["opcode"] == ACK
+    return bytes(content)
+
+
+@pytest.fixture
+def vehicle(store: px4params.Store, tmp_path: Path) -> Iterator[MavlinkParamServer]:
+    server = MavlinkParamServer(
+        store, "127.0.0.1", 0, save_path=tmp_path / "vehicle.store", ftp_session_idle=0.5
+    )
+    server.start()
+    yield server
+    server.stop()
+
+
+def _metadata_uri(client: FtpClient) -> tuple[str, int]:
+    client.conn.mav.command_long_send(
+        1, 1, mavlink.MAV_CMD_REQUEST_MESSAGE, 0, 397, 0, 0, 0, 0, 0, 0
+    )
+    msg = client.conn.recv_match(type="COMPONENT_METADATA", blocking=True, timeout=5)
+    assert msg is not None, "no COMPONENT_METADATA"
+    return msg.uri, msg.file_crc
+
+
+def _path(uri: str) -> str:
+    rest = uri.removeprefix("mftp://")
+    return "/" + (rest.split("]", 1)[1] if rest.startswith("[") else rest).lstrip("/")
+
+
+def test_abandoned_ftp_downloads_do_not_lock_out_qgroundcontrol(
+    vehicle: MavlinkParamServer,
+) -> None:
+    port = vehicle.address[1]
+    # four downloads interrupted after their first read: never terminated, never reset
+    for n in range(4):
+        quitter = FtpClient(port, system=200 + n)
+        ((opened, _),) = quitter.ask(OPEN_FILE_RO, data=b"/px4params/general.json\0")
+        assert opened["opcode"] == ACK
+        ((read, _),) = quitter.ask(READ_FILE, session=opened["session"])
+        assert read["opcode"] == ACK
+        quitter.close()
+    client = FtpClient(port)
+    try:
+        # while they are recent, sessions are busy (a slow download is not taken over)
+        ((busy, data),) = client.ask(OPEN_FILE_RO, data=b"/px4params/general.json\0")
+        assert (busy["opcode"], data[0]) == (NAK, NO_SESSIONS)
+        time.sleep(0.6)  # idle longer than the server's ftp_session_idle
+        uri, crc = _metadata_uri(client)
+        general = qgc_download(client, _path(uri))
+        (entry,) = json.loads(general)["metadataTypes"]
+        packed = qgc_download(client, _path(entry["uri"]))
+    finally:
+        client.close()
+    assert entry["fileCrc"] == _crc32part(packed) and crc == _crc32part(general)
+    names = {p["name"] for p in json.loads(lzma.decompress(packed))["parameters"]}
+    assert {"INA238_1B", "INA238_1C", "INA238_INST"} <= names
+    assert vehicle.ftp.reclaimed >= 1
+
+
+def _crc32part(data: bytes) -> int:
+    """PX4's crc32part: reflected CRC-32 (0xEDB88320), seed 0, no final inversion."""
+    crc = 0
+    for byte in data:
+        crc ^= byte
+        for _ in range(8):
+            crc = (crc >> 1) ^ 0xEDB88320 if crc & 1 else crc >> 1
+    return crc
+
+
+def test_a_session_in_use_is_never_taken_over() -> None:
+    """Only a session idle for session_idle seconds is reclaimed, the one idle longest; a
+    download that keeps reading keeps its session, however old."""
+    from px4params.links.mavlink_ftp import MavftpServer
+
+    now = [0.0]
+    server = MavftpServer({"/f": b"x" * 1000}, session_idle=3.0, clock=lambda: now[0])
+
+    def ask(opcode: int, session: int = 0, data: bytes = b"") -> tuple[int, int, bytes]:
+        header = FTP_HEADER.pack(1, session, opcode, len(data), 0, 0, 0, 0)
+        (reply,) = server.handle(header + data)[:1]
+        fields = FTP_HEADER.unpack_from(reply)
+        return fields[2], fields[1], reply[12 : 12 + fields[3]]
+
+    sessions = []
+    for _ in range(4):
+        sessions.append(ask(OPEN_FILE_RO, data=b"/f")[1])
+        now[0] += 1.0
+    now[0] = 10.0
+    for s in sessions[1:]:
+        assert ask(READ_FILE, session=s)[0] == ACK  # three still reading, at 10 s
+    now[0] = 12.0
+    opcode, session, _ = ask(OPEN_FILE_RO, data=b"/f")
+    assert (opcode, session) == (ACK, sessions[0])  # the abandoned one, idle 12 s
+    assert ask(READ_FILE, session=sessions[1])[0] == ACK
+    opcode, _, data = ask(OPEN_FILE_RO, data=b"/f")  # the rest were used 2 s ago: busy
+    assert (opcode, data[0]) == (NAK, NO_SESSIONS)
+    assert server.reclaimed == 1
