@@ -8,10 +8,12 @@ from __future__ import annotations
 import json
 import lzma
 import os
+import socket
 import struct
 import time
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import px4params
 import pytest
@@ -215,3 +217,85 @@ def test_a_session_in_use_is_never_taken_over() -> None:
     opcode, _, data = ask(OPEN_FILE_RO, data=b"/f")  # the rest were used 2 s ago: busy
     assert (opcode, data[0]) == (NAK, NO_SESSIONS)
     assert server.reclaimed == 1
+
+
+# -- peers that go away ---------------------------------------------------------------------
+
+
+def _receive_all(conn: Any, seconds: float) -> list[Any]:
+    got = []
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        msg = conn.recv_match(blocking=True, timeout=max(0.01, end - time.monotonic()))
+        if msg is not None:
+            got.append(msg)
+    return got
+
+
+def test_a_peer_that_went_away_gets_nothing_more(store: px4params.Store) -> None:
+    server = MavlinkParamServer(
+        store,
+        "127.0.0.1",
+        0,
+        heartbeat_interval=0.1,
+        health=lambda: ["health: ina238 INA238#1 on I2C bus 2 address 0x45: nominal"],
+        health_interval=0.1,
+        peer_timeout=0.5,
+    )
+    server.start()
+    conn = mavutil.mavlink_connection(
+        f"udpout:127.0.0.1:{server.address[1]}", source_system=255, source_component=190
+    )
+    try:
+        conn.mav.heartbeat_send(mavlink.MAV_TYPE_GCS, mavlink.MAV_AUTOPILOT_INVALID, 0, 0, 0)
+        kinds = {m.get_type() for m in _receive_all(conn, 0.4)}
+        assert {"HEARTBEAT", "STATUSTEXT"} <= kinds  # while it is heard from
+        _receive_all(conn, 0.4)  # it said nothing for 0.8 s, longer than peer_timeout
+        assert _receive_all(conn, 1.0) == []
+        conn.mav.heartbeat_send(mavlink.MAV_TYPE_GCS, mavlink.MAV_AUTOPILOT_INVALID, 0, 0, 0)
+        assert "HEARTBEAT" in {m.get_type() for m in _receive_all(conn, 0.4)}  # back again
+    finally:
+        conn.close()
+        server.stop()
+
+
+def test_a_parameter_list_is_paced(schema: px4params.Schema) -> None:
+    """One PARAM_REQUEST_LIST (14 bytes) is answered at param_rate in bursts of 20, not with
+    the whole list at once; and a requester that goes silent stops the stream."""
+    from px4params.store.classic import ClassicParam
+
+    many = [ClassicParam(f"TEST_P{i:03d}", "Int32", i) for i in range(400)]
+    store = px4params.Store(schema, classic=many)
+    server = MavlinkParamServer(store, "127.0.0.1", 0, param_rate=200.0, peer_timeout=1.0)
+    server.start()
+    sock = _udp_socket()
+    try:
+        request = mavlink.MAVLink_param_request_list_message(1, 1).pack(
+            mavlink.MAVLink(None, srcSystem=255, srcComponent=190)
+        )
+        sock.sendto(request, server.address)
+        start = time.monotonic()
+        arrivals = []
+        while time.monotonic() - start < 1.5:
+            try:
+                data = sock.recv(65535)
+            except TimeoutError:
+                continue
+            if data[7:10] == b"\x16\x00\x00":  # PARAM_VALUE (22)
+                arrivals.append(time.monotonic() - start)
+        early = sum(1 for t in arrivals if t < 0.25)
+        # at 200 a second: 40-60 in the first quarter second (fewer on a slow machine); all
+        # 401 at once would be the old behaviour
+        assert early <= 80, f"{early} PARAM_VALUE in the first 0.25 s"
+        # the requester never spoke again: after peer_timeout (1 s) the stream stopped
+        assert 100 <= len(arrivals) <= 260, len(arrivals)
+    finally:
+        sock.close()
+        server.stop()
+
+
+def _udp_socket() -> socket.socket:
+    sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    sock.bind(("127.0.0.1", 0))
+    sock.settimeout(0.05)
+    return sock
