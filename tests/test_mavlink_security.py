@@ -5,6 +5,7 @@ heartbeats or health text, and a parameter list is paced; MAVLink 2 signing."""
 
 from __future__ import annotations
 
+import hashlib
 import json
 import lzma
 import os
@@ -299,3 +300,275 @@ def _udp_socket() -> socket.socket:
     sock.bind(("127.0.0.1", 0))
     sock.settimeout(0.05)
     return sock
+
+
+# -- MAVLink 2 signing ----------------------------------------------------------------------
+
+PASSPHRASE = b"correct horse battery staple"
+#: The key as MAVProxy's `signing setup PASSPHRASE` derives it: SHA-256 of the passphrase.
+KEY = hashlib.sha256(PASSPHRASE).digest()
+OTHER_KEY = hashlib.sha256(b"another link").digest()
+INT32 = mavlink.MAV_PARAM_TYPE_INT32
+
+
+def _signed_client(port: int, key: bytes | None, system: int = 255) -> Any:
+    conn = mavutil.mavlink_connection(
+        f"udpout:127.0.0.1:{port}", source_system=system, source_component=190, dialect="common"
+    )  # MAVLink 2 (MAVLINK20 is set above): MAVLink 1 frames cannot be signed
+    if key is not None:
+        conn.setup_signing(key, sign_outgoing=True)  # pymavlink's own signing
+    conn.mav.heartbeat_send(mavlink.MAV_TYPE_GCS, mavlink.MAV_AUTOPILOT_INVALID, 0, 0, 0)
+    return conn
+
+
+def _set(conn: Any, name: str, value: int) -> None:
+    """PARAM_SET with the int32 in the value field's bytes (PX4's bytewise encoding)."""
+    raw = struct.unpack("<f", struct.pack("<i", value))[0]
+    conn.mav.param_set_send(1, 1, name.encode(), raw, INT32)
+
+
+def _answer(conn: Any, name: str, seconds: float) -> Any:
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        msg = conn.recv_match(type="PARAM_VALUE", blocking=True, timeout=0.2)
+        if msg is not None and msg.param_id == name:
+            return msg
+    return None
+
+
+def _int_of(msg: Any) -> int:
+    frame = bytes(msg.get_msgbuf())
+    return struct.unpack("<i", (frame[10 : 10 + frame[1]] + bytes(4))[:4])[0]
+
+
+@pytest.fixture
+def signed_serve(tmp_path: Path) -> Iterator[tuple[Any, int, Path]]:
+    """``mavlink serve --signing-key`` on a store with INA238#1 (address 0x45)."""
+    import subprocess
+    import sys
+
+    from gui_server import env_for
+
+    env = env_for(tmp_path)
+    store_file = tmp_path / "vehicle.store"
+    subprocess.run(
+        [sys.executable, "-m", "px4params", "param", "--store", str(store_file), "add", "INA238#1"],
+        env=env,
+        check=True,
+        capture_output=True,
+        timeout=60,
+    )
+    (tmp_path / "link.key").write_text(KEY.hex() + "\n")
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "px4params", "mavlink", "serve", "--udp", "127.0.0.1:0",
+         "--store", str(store_file), "--signing-key", str(tmp_path / "link.key")],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+    )  # fmt: skip
+    assert proc.stdout is not None
+    banner = proc.stdout.readline()
+    assert f"signed with the key in {tmp_path / 'link.key'} (unsigned messages are dropped)" in (
+        banner
+    ), banner
+    port = int(banner.split("on udp 127.0.0.1:")[1].split()[0].rstrip(","))
+    yield proc, port, store_file
+    if proc.poll() is None:
+        proc.kill()
+        proc.wait()
+
+
+def _address_in(store_file: Path) -> int:
+    schema = px4params.load_schema(include_dronecan=False)
+    return px4params.Store.load(store_file, schema, classic=BUNDLED_CLASSIC).get(
+        "INA238#1.bus.i2c.address"
+    )
+
+
+def test_signed_clients_list_and_set_and_nobody_else(
+    signed_serve: tuple[Any, int, Path],
+) -> None:
+    import signal
+
+    proc, port, store_file = signed_serve
+    conn = _signed_client(port, KEY)
+    try:
+        conn.mav.param_request_list_send(1, 1)
+        first = conn.recv_match(type="PARAM_VALUE", blocking=True, timeout=5)
+        assert first is not None and first.param_id == "_HASH_CHECK"
+        assert first.get_signed() and first.get_link_id() == 0  # the vehicle signs
+        names = {first.param_id}
+        while len(names) < first.param_count + 1:
+            msg = conn.recv_match(type="PARAM_VALUE", blocking=True, timeout=5)
+            assert msg is not None, f"{len(names)} of {first.param_count + 1}"
+            names.add(msg.param_id)
+        assert {"INA238_1A", "INA238_1C", "INA238_INST"} <= names
+        _set(conn, "INA238_1C", 70)
+        echo = _answer(conn, "INA238_1C", 5)
+        assert echo is not None and _int_of(echo) == 70
+    finally:
+        conn.close()
+    for key, value in ((None, 71), (OTHER_KEY, 72)):  # unsigned; signed with another key
+        intruder = _signed_client(port, key, system=254)
+        try:
+            intruder.mav.param_request_read_send(1, 1, b"INA238_1C", -1)
+            _set(intruder, "INA238_1C", value)
+            assert _answer(intruder, "INA238_1C", 1.5) is None  # dropped: not even an answer
+        finally:
+            intruder.close()
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=20)
+    assert proc.returncode == 0, err
+    assert "INA238_1C = 70, saved" in out and "71" not in out and "72" not in out
+    summary = out.splitlines()[-1]
+    assert summary.endswith(
+        "1 writes accepted, 0 refused; dropped 3 unsigned and 3 wrongly signed messages "
+        "(2 PARAM_SET)"
+    ), summary
+    assert _address_in(store_file) == 70
+
+
+def _signed_frame(msg: Any, key: bytes, link_id: int, timestamp: int, system: int = 255) -> bytes:
+    """``msg`` packed and signed by pymavlink with ``timestamp`` (10 us since 2015)."""
+    mav = mavlink.MAVLink(None, srcSystem=system, srcComponent=190)
+    mav.signing.secret_key = key
+    mav.signing.link_id = link_id
+    mav.signing.timestamp = timestamp
+    mav.signing.sign_outgoing = True
+    return bytes(msg.pack(mav))
+
+
+def _set_frame(value: int, key: bytes, link_id: int, timestamp: int) -> bytes:
+    raw = struct.unpack("<f", struct.pack("<i", value))[0]
+    msg = mavlink.MAVLink_param_set_message(1, 1, b"INA238_1C", raw, INT32)
+    return _signed_frame(msg, key, link_id, timestamp)
+
+
+def test_px4s_timestamp_rules(store: px4params.Store) -> None:
+    """PX4 (the MAVLink C library's mavlink_signature_check): a stream's timestamps must grow
+    (a replayed frame is dropped); a new stream may start at most a minute behind the
+    vehicle's clock; a frame whose signature is wrong changes no stream's timestamp."""
+    from px4params.links.mavlink_signing import signing_timestamp
+
+    server = MavlinkParamServer(store, "127.0.0.1", 0, signing_key=KEY)
+    server.start()
+    sock = _udp_socket()
+    now = signing_timestamp()
+
+    def send(frame: bytes) -> None:
+        sock.sendto(frame, server.address)
+        time.sleep(0.3)
+
+    try:
+        first = _set_frame(70, KEY, 1, now)
+        send(first)
+        assert store.get("INA238#1.bus.i2c.address") == 70
+        send(_set_frame(71, KEY, 1, now + 10))
+        assert store.get("INA238#1.bus.i2c.address") == 71
+        send(first)  # replayed
+        assert store.get("INA238#1.bus.i2c.address") == 71
+        # a forged frame (another key) with a far later timestamp must not block the stream
+        send(_set_frame(99, OTHER_KEY, 1, now + 10**9))
+        send(_set_frame(72, KEY, 1, now + 20))
+        assert store.get("INA238#1.bus.i2c.address") == 72
+        # new streams (link IDs 2, 3): two minutes behind is too old, 30 s behind is fine
+        send(_set_frame(73, KEY, 2, now - 120 * 100_000))
+        assert store.get("INA238#1.bus.i2c.address") == 72
+        send(_set_frame(74, KEY, 3, now - 30 * 100_000))
+        assert store.get("INA238#1.bus.i2c.address") == 74
+        assert server.stats["param_set_dropped"] == 3 and server.stats["badly_signed"] == 3
+        assert server.stats["accepted"] == 4
+    finally:
+        sock.close()
+        server.stop()
+
+
+@pytest.mark.parametrize(
+    "content, why",
+    [
+        (b"short", "not a signing key: expected 32 bytes or 64 hex digits (e.g. the SHA-256 "
+         "of the passphrase), found 5 bytes"),
+        (b"z" * 64, "not a signing key: expected 32 bytes or 64 hex digits (e.g. the SHA-256 "
+         "of the passphrase), found 64 bytes"),
+        (None, "cannot read the signing key: No such file or directory"),
+    ],
+)  # fmt: skip
+def test_a_bad_key_file_is_one_line(tmp_path: Path, content: bytes | None, why: str) -> None:
+    import subprocess
+    import sys
+
+    from gui_server import env_for
+
+    key = tmp_path / "link.key"
+    if content is not None:
+        key.write_bytes(content)
+    for command in (["mavlink", "serve", "--udp", "127.0.0.1:0"], ["gui", "--udp", "127.0.0.1:9"]):
+        result = subprocess.run(
+            [sys.executable, "-m", "px4params", *command, "--signing-key", str(key)],
+            capture_output=True,
+            text=True,
+            env=env_for(tmp_path),
+            timeout=60,
+        )
+        assert result.returncode == 1 and result.stdout == ""
+        assert result.stderr == f"px4params: error: {key}: {why}\n"
+
+
+def test_key_files_raw_or_hex(tmp_path: Path) -> None:
+    from px4params.links.mavlink_signing import load_key
+
+    (tmp_path / "raw").write_bytes(KEY)
+    (tmp_path / "hex").write_text(KEY.hex().upper() + "\n")
+    assert load_key(tmp_path / "raw") == load_key(tmp_path / "hex") == KEY
+
+
+def test_without_a_key_the_link_says_it_is_unsigned(tmp_path: Path) -> None:
+    import subprocess
+    import sys
+
+    from gui_server import env_for
+
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "px4params", "mavlink", "serve", "--udp", "127.0.0.1:0",
+         "--store", str(tmp_path / "v.store")],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env_for(tmp_path),
+    )  # fmt: skip
+    try:
+        assert proc.stdout is not None
+        banner = proc.stdout.readline()
+    finally:
+        proc.terminate()
+        proc.communicate(timeout=20)
+    assert (
+        ", unsigned: anyone who can send to it can set parameters (--signing-key FILE) " in banner
+    )
+
+
+def test_the_page_talks_to_a_signed_vehicle(signed_serve: tuple[Any, int, Path]) -> None:
+    """``gui --udp --signing-key``: the metadata over MAVLink FTP, the list and a write, all
+    signed (the vehicle drops anything else)."""
+    import http.client
+
+    from gui_server import Gui, env_for
+
+    proc, port, store_file = signed_serve
+    key = store_file.parent / "link.key"
+    env = env_for(store_file.parent)
+    page = Gui(["--udp", f"127.0.0.1:{port}", "--signing-key", str(key)], env, store_file.parent)
+    try:
+        conn = http.client.HTTPConnection("127.0.0.1", page.port, timeout=30)
+        headers = {"Authorization": f"token {page.token}", "Content-Type": "application/json"}
+        conn.request("GET", "/api/state", headers=headers)
+        state = json.loads(conn.getresponse().read())
+        assert state["source"] == f"udp 127.0.0.1:{port}, signed"
+        assert state["values"]["INA238_1C"] == 0x45
+        assert any(p["name"] == "INA238_1C" for p in state["metadata"]["parameters"])
+        body = json.dumps({"changes": [{"name": "INA238_1C", "value": 0x46}]})
+        conn.request("POST", "/api/write", body=body, headers=headers)
+        (result,) = json.loads(conn.getresponse().read())["results"]
+        assert result["ok"], result
+        conn.close()
+    finally:
+        page.stop()
+    assert _address_in(store_file) == 0x46
+    proc.terminate()
+    out, _ = proc.communicate(timeout=20)
+    assert "dropped 0 unsigned and 0 wrongly signed messages (0 PARAM_SET)" in out

@@ -174,7 +174,8 @@ class StoreVehicle(_Base):
 class MavlinkVehicle(_Base):
     """A vehicle (``px4params mavlink serve`` or a PX4) over MAVLink on UDP, as a ground station
     talks to it: heartbeats, the parameter list, component metadata over MAVLink FTP (or a
-    ``parameters.json`` given), writes with PARAM_SET read back, STATUSTEXT."""
+    ``parameters.json`` given), writes with PARAM_SET read back, STATUSTEXT. With
+    ``signing_key`` the link is signed (MAVLink 2 signing)."""
 
     mode = "mavlink"
 
@@ -184,6 +185,7 @@ class MavlinkVehicle(_Base):
         metadata_file: str | None = None,
         *,
         timeout: float = 10.0,
+        signing_key: bytes | None = None,
     ) -> None:
         super().__init__()
         os.environ.setdefault("MAVLINK20", "1")
@@ -196,6 +198,10 @@ class MavlinkVehicle(_Base):
         self._conn = mavutil.mavlink_connection(
             f"udpout:{host}:{port}", source_system=255, source_component=190, dialect="common"
         )
+        if signing_key is not None:
+            # MAVLink 2 signing, pymavlink's: every message signed, unsigned ones dropped
+            self._conn.setup_signing(signing_key, sign_outgoing=True)
+            self.source += ", signed"
         self._mav = mavutil.mavlink
         mavlink_messages.register(self._mav)
         self._system = 1

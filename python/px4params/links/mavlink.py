@@ -35,6 +35,9 @@ What it does (PX4's ``mavlink_parameters.cpp`` is the model):
 * Every ``COMMAND_LONG`` is answered with ``COMMAND_ACK``: accepted, unsupported, or denied when
   its parameters name nothing (NaN, infinities, a message ID beyond 24 bits).
 * Anything else (other messages, other targets, garbage bytes, bad CRCs) is ignored.
+* With a signing key, MAVLink 2 signing (:mod:`px4params.links.mavlink_signing`): every frame
+  sent is signed, and unsigned or wrongly signed frames are dropped and counted (a dropped
+  ``PARAM_SET`` in ``stats["param_set_dropped"]``); only signed frames make a peer heard from.
 
 The parameters are the store's classic ones and the destructured leaves of its structured
 instances (:mod:`px4params.store.flat`); the structured values themselves (wider than 32 bits)
@@ -66,6 +69,7 @@ from px4params.gcs.component_information import ComponentFiles, px4_crc32
 from px4params.links import mavlink_messages
 from px4params.links.identity import store_digest, version_parts
 from px4params.links.mavlink_ftp import SESSION_IDLE, MavftpServer
+from px4params.links.mavlink_signing import Signing
 from px4params.links.serving import ServingLoop
 from px4params.store import flat
 
@@ -216,6 +220,8 @@ class MavlinkParamServer(ServingLoop):
     ``ftp_session_idle``: seconds after which an abandoned MAVLink FTP session is reclaimed.
     ``peer_timeout``: seconds after which a silent peer gets no more heartbeats, health text or
     list stream. ``param_rate``: PARAM_VALUE messages a second while streaming a list.
+    ``signing_key``: the link's MAVLink 2 signing key (32 bytes; None: unsigned, as PX4 by
+    default).
     """
 
     thread_name = "mavlink-params"
@@ -237,6 +243,7 @@ class MavlinkParamServer(ServingLoop):
         ftp_session_idle: float = SESSION_IDLE,
         peer_timeout: float = PEER_TIMEOUT,
         param_rate: float = PARAM_RATE,
+        signing_key: bytes | None = None,
     ) -> None:
         super().__init__()
         self.store = store
@@ -260,6 +267,10 @@ class MavlinkParamServer(ServingLoop):
             raise
         self._sock.setblocking(False)
         self._mav = mavlink.MAVLink(_Sink(), srcSystem=system_id, srcComponent=component_id)
+        #: The link's signing state (None: unsigned).
+        self.signing = Signing(signing_key) if signing_key is not None else None
+        if self.signing is not None:
+            self.signing.sender(self._mav)
         self.peer_timeout = peer_timeout
         self._burst_pause = _STREAM_BURST / param_rate
         self._seen: dict[Address, float] = {}  # peer -> when last heard, oldest first
@@ -279,6 +290,9 @@ class MavlinkParamServer(ServingLoop):
         self._started = time.monotonic()
         #: Counters, for tests and the CLI's summary.
         self.stats = {"received": 0, "ignored": 0, "sent": 0, "accepted": 0, "refused": 0}
+        #: Frames dropped by signing: unsigned, wrongly signed (key, replayed or old
+        #: timestamp), and the PARAM_SETs among them.
+        self.stats |= {"unsigned": 0, "badly_signed": 0, "param_set_dropped": 0}
 
     # -- lifecycle ----------------------------------------------------------------------------
 
@@ -335,19 +349,38 @@ class MavlinkParamServer(ServingLoop):
                     self.stats["ignored"] += 1
 
     def _parse(self, peer: Address, data: bytes) -> list[Any]:
-        self._heard(peer)
         # A fresh parser per datagram: over UDP a frame never spans datagrams, so garbage in one
-        # (a bogus length byte) cannot swallow the frames of the next.
-        parser = mavlink.MAVLink(_Sink())
-        parser.robust_parsing = True  # bad bytes become BAD_DATA, not exceptions
+        # (a bogus length byte) cannot swallow the frames of the next. The signing state (the
+        # streams' timestamps) lives on in self.signing.
+        if self.signing is not None:
+            parser = self.signing.parser(_Sink())
+        else:
+            parser = mavlink.MAVLink(_Sink())
+            parser.robust_parsing = True  # bad bytes become BAD_DATA, not exceptions
         try:
             messages = parser.parse_buffer(data) or []
         except Exception:  # pymavlink raises assorted errors on garbage
+            messages = None
+        finally:
+            self._count_unsigned()
+        if messages is None:
             self.stats["ignored"] += 1
             return []
         bad = [m for m in messages if m.get_type() == "BAD_DATA"]
         self.stats["ignored"] += len(bad)
-        return [m for m in messages if m.get_type() != "BAD_DATA"]
+        good = [m for m in messages if m.get_type() != "BAD_DATA"]
+        if good or self.signing is None:
+            self._heard(peer)
+        return good
+
+    def _count_unsigned(self) -> None:
+        if self.signing is None:
+            return
+        for message_id, why in self.signing.refused:
+            self.stats["unsigned" if why == "unsigned" else "badly_signed"] += 1
+            if message_id == mavlink.MAVLINK_MSG_ID_PARAM_SET:
+                self.stats["param_set_dropped"] += 1
+        self.signing.refused.clear()
 
     def _heard(self, peer: Address) -> None:
         """Remembers ``peer`` as heard from now (most recent last), forgetting the peers

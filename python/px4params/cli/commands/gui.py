@@ -9,7 +9,7 @@ import sys
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
-from px4params.cli.commands.mavlink import parse_udp
+from px4params.cli.commands.mavlink import add_signing_option, parse_udp, signing_key
 from px4params.cli.options import store_options
 from px4params.cli.parsing import RawDescriptionHelpFormatter
 from px4params.errors import CommandError
@@ -55,8 +55,11 @@ def cmd_gui(args: argparse.Namespace) -> int:
             f"--http {host}:{port} is not a loopback address: other machines could change the "
             "vehicle's parameters; add --allow-remote to mean it (docs/security.md)"
         )
+    if args.signing_key is not None and args.udp is None:
+        args.gui_parser.error("--signing-key signs a vehicle's link: it needs --udp")
     if args.udp is not None:
-        vehicle: Any = MavlinkVehicle(args.udp, args.metadata)
+        key = signing_key(args.signing_key)
+        vehicle: Any = MavlinkVehicle(args.udp, args.metadata, signing_key=key)
     else:
         vehicle = StoreVehicle(args.store, args.classic, args.dsdl or [])
     sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
@@ -141,6 +144,7 @@ examples:
         metavar="HOST:PORT",
         help="where the page is served (default 127.0.0.1:8080; port 0 picks a free one)",
     )
+    add_signing_option(p, "the messages to the vehicle (with --udp)")
     p.add_argument(
         "--metadata",
         metavar="FILE",

@@ -1,0 +1,164 @@
+"""MAVLink 2 message signing (mavlink.io/en/guide/message_signing.html), with pymavlink's own
+signing code and PX4's rules for what is accepted.
+
+A signed frame ends with a link ID, a 48-bit timestamp (10 microsecond units since
+2015-01-01 00:00 UTC) and the first 6 bytes of SHA-256 over the key and the frame. A message is
+accepted when (as the MAVLink C library's ``mavlink_signature_check``, which PX4 uses):
+
+1. its signature is right (checked first: a forged frame changes no state);
+2. its stream, ``(link ID, system, component)``, is known and its timestamp is later than that
+   stream's last one (a replayed frame is refused), or the stream is new, at most
+   :data:`MAX_STREAMS` are known, and its timestamp is at most one minute behind ours;
+
+then the stream's timestamp and ours move up to it. Our own frames carry ``timestamp + 1`` each.
+Unsigned frames are refused, except the few PX4 accepts unsigned on a signed link
+(``RADIO_STATUS``, ``ADSB_VEHICLE``, ``COLLISION``: radios and traffic do not sign).
+
+Key files: the 32-byte secret, as 32 raw bytes or as 64 hexadecimal digits (a trailing newline
+allowed). Ground stations derive the key from a passphrase with SHA-256 (MAVProxy's ``signing
+setup PASSPHRASE``, QGroundControl's signing keys), so ``printf %s PASSPHRASE | sha256sum | cut
+-c1-64 > key.hex`` makes the file for the same link.
+"""
+
+from __future__ import annotations
+
+import copy
+import os
+import string
+import time
+from typing import Any
+
+from pymavlink.dialects.v20 import common as mavlink
+
+from px4params.errors import SigningKeyError
+
+__all__ = [
+    "MAX_STREAMS",
+    "Signing",
+    "load_key",
+    "signing_timestamp",
+]
+
+#: Seconds from the Unix epoch to 2015-01-01 00:00 UTC, MAVLink signing's epoch.
+EPOCH_2015 = 1420070400
+#: A new stream's first timestamp may be this far behind ours (one minute, in 10 us units).
+NEW_STREAM_WINDOW = 60 * 100_000
+#: Streams remembered (MAVLINK_MAX_SIGNING_STREAMS of the C library).
+MAX_STREAMS = 16
+#: Messages PX4 accepts unsigned on a signed link (``MavlinkSignControl``).
+UNSIGNED_ALLOWED = frozenset(
+    {
+        mavlink.MAVLINK_MSG_ID_RADIO_STATUS,
+        mavlink.MAVLINK_MSG_ID_ADSB_VEHICLE,
+        mavlink.MAVLINK_MSG_ID_COLLISION,
+    }
+)
+KEY_BYTES = 32
+
+
+def load_key(path: str | os.PathLike[str]) -> bytes:
+    """The secret in key file ``path``: 32 raw bytes, or 64 hex digits."""
+    try:
+        with open(path, "rb") as f:
+            data = f.read(4096)
+    except OSError as e:
+        raise SigningKeyError(
+            f"{os.fspath(path)}: cannot read the signing key: {e.strerror or e}"
+        ) from None
+    text = data.strip()
+    if len(data) == KEY_BYTES:
+        return data
+    if len(text) == 2 * KEY_BYTES and all(chr(c) in string.hexdigits for c in text):
+        return bytes.fromhex(text.decode("ascii"))
+    raise SigningKeyError(
+        f"{os.fspath(path)}: not a signing key: expected 32 bytes or 64 hex digits (e.g. the "
+        f"SHA-256 of the passphrase), found {len(data)} bytes"
+    )
+
+
+def signing_timestamp(now: float | None = None) -> int:
+    """MAVLink signing's clock: 10 microsecond units since 2015-01-01 (``now``: Unix time)."""
+    seconds = time.time() if now is None else now
+    return int(max(0.0, seconds - EPOCH_2015) * 100_000)
+
+
+class Signing:
+    """The signing state of one link: our key, link ID and timestamp, and the streams heard.
+    :meth:`sender` signs what a ``MAVLink`` object packs; :meth:`parser` makes parsers that
+    refuse what the rules above refuse, counting it in :attr:`refused` (by message ID)."""
+
+    def __init__(self, key: bytes, link_id: int = 0, *, now: float | None = None) -> None:
+        if len(key) != KEY_BYTES:
+            raise SigningKeyError(f"a signing key is {KEY_BYTES} bytes, not {len(key)}")
+        self.state = mavlink.MAVLinkSigning()
+        self.state.secret_key = key
+        self.state.link_id = link_id
+        self.state.sign_outgoing = True
+        self.state.timestamp = signing_timestamp(now)
+        self.state.allow_unsigned_callback = self._unsigned
+        #: Messages refused: ``(message ID, "unsigned" | "bad signature" | "old timestamp")``.
+        self.refused: list[tuple[int, str]] = []
+        self._why = "unsigned"
+
+    def sender(self, mav: mavlink.MAVLink) -> mavlink.MAVLink:
+        """``mav``, signing every frame it packs from now on (with this link's state)."""
+        mav.signing = self.state
+        return mav
+
+    def parser(self, file: Any) -> mavlink.MAVLink:
+        """A parser (robust: refused frames become ``BAD_DATA``) that checks signatures."""
+        parser = _CheckingParser(file, self)
+        parser.signing = self.state
+        parser.robust_parsing = True
+        return parser
+
+    def _unsigned(self, mav: Any, message_id: int) -> bool:
+        """pymavlink asks this about every frame it did not accept as signed."""
+        if message_id in UNSIGNED_ALLOWED and self._why == "unsigned":
+            return True
+        self.refused.append((message_id, self._why))
+        self._why = "unsigned"
+        return False
+
+    def check(self, mav: mavlink.MAVLink, frame: bytes, system: int, component: int) -> bool:
+        """PX4's acceptance of a signed frame (rules 1 and 2 above)."""
+        # 1. the signature, by pymavlink's own check against a blank copy of the state (no
+        #    streams, timestamp 0): it accepts any timestamp and changes nothing of ours
+        scratch = copy.copy(self.state)
+        scratch.stream_timestamps = {}
+        scratch.timestamp = 0
+        mav.signing = scratch
+        try:
+            good = mavlink.MAVLink.check_signature(mav, bytearray(frame), system, component)
+        finally:
+            mav.signing = self.state
+        if not good:
+            self._why = "bad signature"
+            return False
+        # 2. the timestamp, per stream
+        link_id = frame[-13]
+        stamp = int.from_bytes(frame[-12:-6], "little")
+        streams = self.state.stream_timestamps
+        key = (link_id, system, component)
+        last = streams.get(key)
+        if last is None:
+            if len(streams) >= MAX_STREAMS or stamp + NEW_STREAM_WINDOW < self.state.timestamp:
+                self._why = "old timestamp"
+                return False
+        elif stamp <= last:
+            self._why = "old timestamp"
+            return False
+        streams[key] = stamp
+        self.state.timestamp = max(self.state.timestamp, stamp)
+        return True
+
+
+class _CheckingParser(mavlink.MAVLink):
+    """pymavlink's parser with PX4's acceptance of signed frames."""
+
+    def __init__(self, file: Any, signing: Signing) -> None:
+        super().__init__(file)
+        self._checker = signing
+
+    def check_signature(self, msgbuf: bytearray, system: int, component: int) -> bool:
+        return self._checker.check(self, bytes(msgbuf), system, component)
