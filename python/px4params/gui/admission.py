@@ -34,7 +34,7 @@ __all__ = [
 ]
 
 #: Request bodies accepted, in bytes: a parameter file or a review of every parameter of a
-#: vehicle is far smaller (PX4's 1909 parameters as a QGC .params file: about 70 kB).
+#: vehicle is far smaller (PX4's 1909 parameters as a QGC .params file: under 100 kB).
 MAX_BODY = 1 << 20
 #: Changes one write request may carry; the page sends a longer review in parts. Each change is
 #: a round trip to the vehicle, and writes wait on each other.
