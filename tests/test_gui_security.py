@@ -367,3 +367,17 @@ def test_the_hosts_answered() -> None:
         "[fe80::1]:8080",
     }
     assert "localhost" in allowed_hosts(80, "127.0.0.1")  # browsers leave port 80 out
+
+
+def test_a_signing_key_needs_a_vehicle(store_file: Path) -> None:
+    result = subprocess.run(
+        [*CLI, "gui", "--store", str(store_file), "--signing-key", "link.key"],
+        capture_output=True,
+        text=True,
+        env=env_for(store_file.parent),
+        timeout=60,
+    )
+    assert result.returncode == 2 and result.stdout == ""
+    assert result.stderr.splitlines()[-1] == (
+        "px4params gui: error: --signing-key signs a vehicle's link: it needs --udp"
+    )
