@@ -5,6 +5,7 @@ heartbeats or health text, and a parameter list is paced; MAVLink 2 signing."""
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import lzma
@@ -572,3 +573,42 @@ def test_the_page_talks_to_a_signed_vehicle(signed_serve: tuple[Any, int, Path])
     proc.terminate()
     out, _ = proc.communicate(timeout=20)
     assert "dropped 0 unsigned and 0 wrongly signed messages (0 PARAM_SET)" in out
+
+
+def test_garbage_and_unsigned_frames_make_no_peer(store: px4params.Store) -> None:
+    """Only a MAVLink message (on a signed link, a signed one) makes its source a peer that gets
+    heartbeats: a forged source's garbage or unsigned frame starts nothing."""
+    from px4params.links.mavlink_signing import signing_timestamp
+
+    now = signing_timestamp()
+    for key in (None, KEY):
+        server = MavlinkParamServer(
+            store, "127.0.0.1", 0, heartbeat_interval=0.1, peer_timeout=5.0, signing_key=key
+        )
+        server.start()
+        sock = _udp_socket()
+        try:
+            unsigned = mavlink.MAVLink_heartbeat_message(6, 8, 0, 0, 0, 3).pack(
+                mavlink.MAVLink(None, srcSystem=255, srcComponent=190)
+            )
+            sock.sendto(os.urandom(64), server.address)
+            if key is not None:
+                sock.sendto(unsigned, server.address)
+            time.sleep(0.5)
+            received = []
+            with contextlib.suppress(TimeoutError):
+                while True:
+                    received.append(sock.recv(65535))
+            assert received == [], key
+            # a real message (signed on the signed link) and heartbeats come
+            hello = (
+                _signed_frame(mavlink.MAVLink_heartbeat_message(6, 8, 0, 0, 0, 3), key, 0, now)
+                if key is not None
+                else unsigned
+            )
+            sock.sendto(hello, server.address)
+            sock.settimeout(2.0)
+            assert sock.recv(65535)[:1] == b"\xfd"
+        finally:
+            sock.close()
+            server.stop()

@@ -37,7 +37,9 @@ What it does (PX4's ``mavlink_parameters.cpp`` is the model):
 * Anything else (other messages, other targets, garbage bytes, bad CRCs) is ignored.
 * With a signing key, MAVLink 2 signing (:mod:`px4params.links.mavlink_signing`): every frame
   sent is signed, and unsigned or wrongly signed frames are dropped and counted (a dropped
-  ``PARAM_SET`` in ``stats["param_set_dropped"]``); only signed frames make a peer heard from.
+  ``PARAM_SET`` in ``stats["param_set_dropped"]``).
+* A peer is heard from when it sends a MAVLink message (on a signed link: a signed one);
+  garbage and dropped frames do not count.
 
 The parameters are the store's classic ones and the destructured leaves of its structured
 instances (:mod:`px4params.store.flat`); the structured values themselves (wider than 32 bits)
@@ -369,7 +371,7 @@ class MavlinkParamServer(ServingLoop):
         bad = [m for m in messages if m.get_type() == "BAD_DATA"]
         self.stats["ignored"] += len(bad)
         good = [m for m in messages if m.get_type() != "BAD_DATA"]
-        if good or self.signing is None:
+        if good:  # garbage (or, on a signed link, anything unsigned) makes no peer
             self._heard(peer)
         return good
 
