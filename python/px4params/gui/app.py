@@ -127,6 +127,8 @@ def make_app(vehicle: Any, *, token: str, hosts: Iterable[str], cookie: str) -> 
             pass
         finally:
             gone.cancel()
+            if gone.done() and not gone.cancelled():
+                gone.exception()  # a receive that failed ended the socket: nothing to report
             stop()
 
     routes = [
