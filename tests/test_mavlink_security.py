@@ -246,7 +246,10 @@ def test_a_peer_that_went_away_gets_nothing_more(store: px4params.Store) -> None
     )
     server.start()
     conn = mavutil.mavlink_connection(
-        f"udpout:127.0.0.1:{server.address[1]}", source_system=255, source_component=190
+        f"udpout:127.0.0.1:{server.address[1]}",
+        source_system=255,
+        source_component=190,
+        dialect="common",
     )
     try:
         conn.mav.heartbeat_send(mavlink.MAV_TYPE_GCS, mavlink.MAV_AUTOPILOT_INVALID, 0, 0, 0)
