@@ -381,3 +381,21 @@ def test_a_signing_key_needs_a_vehicle(store_file: Path) -> None:
     assert result.stderr.splitlines()[-1] == (
         "px4params gui: error: --signing-key signs a vehicle's link: it needs --udp"
     )
+
+
+@pytest.mark.parametrize(
+    "host, loopback",
+    [
+        ("127.0.0.1", True),
+        ("127.0.0.2", True),  # all of 127.0.0.0/8 is loopback
+        ("localhost", True),
+        ("0.0.0.0", False),
+        ("192.0.2.7", False),
+        ("10.0.0.1", False),
+        ("no-such-host.invalid", False),
+    ],
+)
+def test_which_addresses_are_loopback(host: str, loopback: bool) -> None:
+    from px4params.cli.commands.gui import _is_loopback
+
+    assert _is_loopback(host) is loopback

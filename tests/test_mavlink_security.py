@@ -563,7 +563,7 @@ def test_the_page_talks_to_a_signed_vehicle(signed_serve: tuple[Any, int, Path])
         headers = {"Authorization": f"token {page.token}", "Content-Type": "application/json"}
         conn.request("GET", "/api/state", headers=headers)
         state = json.loads(conn.getresponse().read())
-        assert state["source"] == f"udp 127.0.0.1:{port}, signed"
+        assert state["source"] == f"udp 127.0.0.1:{port} (signed)"
         assert state["values"]["INA238_1C"] == 0x45
         assert any(p["name"] == "INA238_1C" for p in state["metadata"]["parameters"])
         body = json.dumps({"changes": [{"name": "INA238_1C", "value": 0x46}]})
@@ -616,3 +616,28 @@ def test_garbage_and_unsigned_frames_make_no_peer(store: px4params.Store) -> Non
         finally:
             sock.close()
             server.stop()
+
+
+def test_the_page_without_the_key_hears_nothing_and_says_why(store: px4params.Store) -> None:
+    from px4params.errors import CommandError
+    from px4params.gui.vehicle import MavlinkVehicle
+
+    server = MavlinkParamServer(store, "127.0.0.1", 0, signing_key=KEY, heartbeat_interval=0.1)
+    server.start()
+    try:
+        port = server.address[1]
+        with pytest.raises(CommandError) as refused:
+            MavlinkVehicle(("127.0.0.1", port), timeout=1.0)
+        assert str(refused.value) == (
+            f"no vehicle answered on udp 127.0.0.1:{port} within 1 s (a signed link drops "
+            "unsigned messages: --signing-key FILE)"
+        )
+        with pytest.raises(CommandError) as refused:
+            MavlinkVehicle(("127.0.0.1", port), timeout=1.0, signing_key=OTHER_KEY)
+        assert (
+            str(refused.value) == f"no vehicle answered on udp 127.0.0.1:{port} (signed) within 1 s"
+        )
+        assert server.stats["accepted"] == 0 and server.stats["unsigned"] >= 1
+        assert server.stats["badly_signed"] >= 1
+    finally:
+        server.stop()

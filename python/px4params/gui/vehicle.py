@@ -198,10 +198,11 @@ class MavlinkVehicle(_Base):
         self._conn = mavutil.mavlink_connection(
             f"udpout:{host}:{port}", source_system=255, source_component=190, dialect="common"
         )
+        self._signed = signing_key is not None
         if signing_key is not None:
             # MAVLink 2 signing, pymavlink's: every message signed, unsigned ones dropped
             self._conn.setup_signing(signing_key, sign_outgoing=True)
-            self.source += ", signed"
+            self.source += " (signed)"
         self._mav = mavutil.mavlink
         mavlink_messages.register(self._mav)
         self._system = 1
@@ -232,7 +233,10 @@ class MavlinkVehicle(_Base):
             if msg is not None and msg.get_srcComponent() == 1:
                 self._system = msg.get_srcSystem()
                 return
-        raise CommandError(f"no vehicle answered on {self.source} within {timeout:.0f} s")
+        hint = (
+            "" if self._signed else " (a signed link drops unsigned messages: --signing-key FILE)"
+        )
+        raise CommandError(f"no vehicle answered on {self.source} within {timeout:.0f} s{hint}")
 
     def _load_metadata(self, metadata_file: str | None, timeout: float) -> dict[str, Any]:
         if metadata_file is not None:
