@@ -641,3 +641,22 @@ def test_the_page_without_the_key_hears_nothing_and_says_why(store: px4params.St
         assert server.stats["badly_signed"] >= 1
     finally:
         server.stop()
+
+
+def test_unknown_message_ids_do_not_pass_unsigned(store: px4params.Store) -> None:
+    """pymavlink returns frames of message IDs it does not know without checking their
+    signature: on a signed link they are dropped like any unsigned frame, and make no peer."""
+    server = MavlinkParamServer(store, "127.0.0.1", 0, signing_key=KEY, heartbeat_interval=0.1)
+    server.start()
+    sock = _udp_socket()
+    try:
+        # a MAVLink 2 frame of message ID 0xABCDE (no dialect defines it), valid CRC aside
+        header = bytes([0xFD, 4, 0, 0, 0, 255, 190]) + (0xABCDE).to_bytes(3, "little")
+        sock.sendto(header + b"\x01\x02\x03\x04" + b"\x00\x00", server.address)
+        time.sleep(0.5)
+        with pytest.raises(TimeoutError):
+            sock.recv(65535)  # no heartbeat: not a peer
+        assert server.stats["unsigned"] == 1
+    finally:
+        sock.close()
+        server.stop()

@@ -200,8 +200,12 @@ class MavlinkVehicle(_Base):
         )
         self._signed = signing_key is not None
         if signing_key is not None:
-            # MAVLink 2 signing, pymavlink's: every message signed, unsigned ones dropped
-            self._conn.setup_signing(signing_key, sign_outgoing=True)
+            from px4params.links.mavlink_signing import Signing
+
+            # MAVLink 2 signing (pymavlink's): every message signed, and what arrives accepted
+            # by PX4's rules; unsigned and wrongly signed messages are dropped
+            self._conn.setup_signing(signing_key, sign_outgoing=True, link_id=0)
+            Signing(signing_key).attach(self._conn.mav)
             self.source += " (signed)"
         self._mav = mavutil.mavlink
         mavlink_messages.register(self._mav)

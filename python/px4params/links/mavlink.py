@@ -71,7 +71,7 @@ from px4params.gcs.component_information import ComponentFiles, px4_crc32
 from px4params.links import mavlink_messages
 from px4params.links.identity import store_digest, version_parts
 from px4params.links.mavlink_ftp import SESSION_IDLE, MavftpServer
-from px4params.links.mavlink_signing import Signing
+from px4params.links.mavlink_signing import Signing, accepted
 from px4params.links.serving import ServingLoop
 from px4params.store import flat
 
@@ -272,7 +272,7 @@ class MavlinkParamServer(ServingLoop):
         #: The link's signing state (None: unsigned).
         self.signing = Signing(signing_key) if signing_key is not None else None
         if self.signing is not None:
-            self.signing.sender(self._mav)
+            self.signing.attach(self._mav)
         self.peer_timeout = peer_timeout
         self._burst_pause = _STREAM_BURST / param_rate
         self._seen: dict[Address, float] = {}  # peer -> when last heard, oldest first
@@ -363,26 +363,24 @@ class MavlinkParamServer(ServingLoop):
             messages = parser.parse_buffer(data) or []
         except Exception:  # pymavlink raises assorted errors on garbage
             messages = None
-        finally:
-            self._count_unsigned()
+        if self.signing is not None:
+            dropped = self.signing.dropped
+            if messages is not None:  # frames of unknown IDs come back unchecked: drop them
+                kept = [m for m in messages if m.get_type() == "BAD_DATA" or accepted(m)]
+                dropped["unsigned"] += len(messages) - len(kept)
+                messages = kept
+            self.stats["unsigned"] = dropped["unsigned"]
+            self.stats["badly_signed"] = dropped["badly_signed"]
+            self.stats["param_set_dropped"] = dropped["param_set"]
         if messages is None:
             self.stats["ignored"] += 1
             return []
         bad = [m for m in messages if m.get_type() == "BAD_DATA"]
         self.stats["ignored"] += len(bad)
         good = [m for m in messages if m.get_type() != "BAD_DATA"]
-        if good:  # garbage (or, on a signed link, anything unsigned) makes no peer
-            self._heard(peer)
+        if good and (self.signing is None or any(m.get_signed() for m in good)):
+            self._heard(peer)  # garbage, or on a signed link anything unsigned, makes no peer
         return good
-
-    def _count_unsigned(self) -> None:
-        if self.signing is None:
-            return
-        for message_id, why in self.signing.refused:
-            self.stats["unsigned" if why == "unsigned" else "badly_signed"] += 1
-            if message_id == mavlink.MAVLINK_MSG_ID_PARAM_SET:
-                self.stats["param_set_dropped"] += 1
-        self.signing.refused.clear()
 
     def _heard(self, peer: Address) -> None:
         """Remembers ``peer`` as heard from now (most recent last), forgetting the peers

@@ -12,7 +12,9 @@ accepted when (as the MAVLink C library's ``mavlink_signature_check``, which PX4
 
 then the stream's timestamp and ours move up to it. Our own frames carry ``timestamp + 1`` each.
 Unsigned frames are refused, except the few PX4 accepts unsigned on a signed link
-(``RADIO_STATUS``, ``ADSB_VEHICLE``, ``COLLISION``: radios and traffic do not sign).
+(``RADIO_STATUS``, ``ADSB_VEHICLE``, ``COLLISION``: radios and traffic do not sign). pymavlink
+hands over frames of message IDs it does not know without checking them: :func:`accepted`
+tells them apart.
 
 Key files: the 32-byte secret, as 32 raw bytes or as 64 hexadecimal digits (a trailing newline
 allowed). Ground stations derive the key from a passphrase with SHA-256 (MAVProxy's ``signing
@@ -35,6 +37,7 @@ from px4params.errors import SigningKeyError
 __all__ = [
     "MAX_STREAMS",
     "Signing",
+    "accepted",
     "load_key",
     "signing_timestamp",
 ]
@@ -76,6 +79,12 @@ def load_key(path: str | os.PathLike[str]) -> bytes:
     )
 
 
+def accepted(msg: Any) -> bool:
+    """Whether a message a signing parser returned was signed and checked (or is one of the
+    few allowed unsigned); pymavlink returns messages of unknown IDs unchecked."""
+    return bool(msg.get_signed()) or msg.get_msgId() in UNSIGNED_ALLOWED
+
+
 def signing_timestamp(now: float | None = None) -> int:
     """MAVLink signing's clock: 10 microsecond units since 2015-01-01 (``now``: Unix time)."""
     seconds = time.time() if now is None else now
@@ -84,8 +93,9 @@ def signing_timestamp(now: float | None = None) -> int:
 
 class Signing:
     """The signing state of one link: our key, link ID and timestamp, and the streams heard.
-    :meth:`sender` signs what a ``MAVLink`` object packs; :meth:`parser` makes parsers that
-    refuse what the rules above refuse, counting it in :attr:`refused` (by message ID)."""
+    :meth:`parser` makes parsers that sign what they pack and refuse what the rules above
+    refuse, :meth:`attach` does the same to an existing ``MAVLink`` object (a mavutil
+    connection's); what is refused is counted in :attr:`dropped`."""
 
     def __init__(self, key: bytes, link_id: int = 0, *, now: float | None = None) -> None:
         if len(key) != KEY_BYTES:
@@ -96,28 +106,35 @@ class Signing:
         self.state.sign_outgoing = True
         self.state.timestamp = signing_timestamp(now)
         self.state.allow_unsigned_callback = self._unsigned
-        #: Messages refused: ``(message ID, "unsigned" | "bad signature" | "old timestamp")``.
-        self.refused: list[tuple[int, str]] = []
-        self._why = "unsigned"
+        #: Frames refused: ``unsigned``, ``badly_signed`` (wrong signature, replayed or old
+        #: timestamp), and how many of them were ``PARAM_SET``.
+        self.dropped = {"unsigned": 0, "badly_signed": 0, "param_set": 0}
+        self._bad = False
 
-    def sender(self, mav: mavlink.MAVLink) -> mavlink.MAVLink:
-        """``mav``, signing every frame it packs from now on (with this link's state)."""
+    def attach(self, mav: mavlink.MAVLink) -> mavlink.MAVLink:
+        """``mav`` signs every frame it packs from now on and accepts frames by the rules."""
         mav.signing = self.state
+
+        def check(msgbuf: bytearray, system: int, component: int) -> bool:
+            return self.check(mav, bytes(msgbuf), system, component)
+
+        mav.check_signature = check  # type: ignore[method-assign]
         return mav
 
     def parser(self, file: Any) -> mavlink.MAVLink:
         """A parser (robust: refused frames become ``BAD_DATA``) that checks signatures."""
-        parser = _CheckingParser(file, self)
-        parser.signing = self.state
+        parser = self.attach(mavlink.MAVLink(file))
         parser.robust_parsing = True
         return parser
 
     def _unsigned(self, mav: Any, message_id: int) -> bool:
         """pymavlink asks this about every frame it did not accept as signed."""
-        if message_id in UNSIGNED_ALLOWED and self._why == "unsigned":
+        bad, self._bad = self._bad, False
+        if message_id in UNSIGNED_ALLOWED and not bad:
             return True
-        self.refused.append((message_id, self._why))
-        self._why = "unsigned"
+        self.dropped["badly_signed" if bad else "unsigned"] += 1
+        if message_id == mavlink.MAVLINK_MSG_ID_PARAM_SET:
+            self.dropped["param_set"] += 1
         return False
 
     def check(self, mav: mavlink.MAVLink, frame: bytes, system: int, component: int) -> bool:
@@ -133,7 +150,7 @@ class Signing:
         finally:
             mav.signing = self.state
         if not good:
-            self._why = "bad signature"
+            self._bad = True
             return False
         # 2. the timestamp, per stream
         link_id = frame[-13]
@@ -143,22 +160,11 @@ class Signing:
         last = streams.get(key)
         if last is None:
             if len(streams) >= MAX_STREAMS or stamp + NEW_STREAM_WINDOW < self.state.timestamp:
-                self._why = "old timestamp"
+                self._bad = True
                 return False
         elif stamp <= last:
-            self._why = "old timestamp"
+            self._bad = True
             return False
         streams[key] = stamp
         self.state.timestamp = max(self.state.timestamp, stamp)
         return True
-
-
-class _CheckingParser(mavlink.MAVLink):
-    """pymavlink's parser with PX4's acceptance of signed frames."""
-
-    def __init__(self, file: Any, signing: Signing) -> None:
-        super().__init__(file)
-        self._checker = signing
-
-    def check_signature(self, msgbuf: bytearray, system: int, component: int) -> bool:
-        return self._checker.check(self, bytes(msgbuf), system, component)
