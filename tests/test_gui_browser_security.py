@@ -233,6 +233,27 @@ def test_a_rebound_name_can_neither_read_write_nor_watch(context: Any, store_fil
         gui.stop()
 
 
+def test_another_page_cannot_frame_the_page(context: Any, gui: Gui, attacker: str) -> None:
+    """Clickjacking: a page of another port (the same site, so the cookie would go along)
+    puts the real page in a frame to trick clicks on 'Write selected': the browser refuses."""
+    _open_real_page(context, gui)
+    evil = context.new_page()
+    evil.goto(attacker)
+    evil.evaluate(
+        """(url) => new Promise((resolve) => {
+          const frame = document.createElement("iframe");
+          frame.src = url;
+          frame.onload = () => resolve();
+          document.body.append(frame);
+          setTimeout(resolve, 5000);
+        })""",
+        gui.base,
+    )
+    (framed,) = [f for f in evil.frames if f != evil.main_frame]
+    assert "Device manifest" not in framed.content()
+    assert framed.query_selector("#review-write") is None
+
+
 def test_the_page_explains_a_413(context: Any, gui: Gui, tmp_path: Path) -> None:
     page = _open_real_page(context, gui)
     big = tmp_path / "huge.params"

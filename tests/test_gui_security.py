@@ -399,3 +399,12 @@ def test_which_addresses_are_loopback(host: str, loopback: bool) -> None:
     from px4params.cli.commands.gui import _is_loopback
 
     assert _is_loopback(host) is loopback
+
+
+def test_no_framing_no_sniffing_no_referrer(gui: Gui) -> None:
+    for path, headers in (("/", authorized(gui)), ("/api/state", {}), (f"/?token={gui.token}", {})):
+        _, answer, _ = request(gui, "GET", path, headers=headers)
+        assert answer["content-security-policy"] == "frame-ancestors 'none'", path
+        assert answer["x-frame-options"] == "DENY"
+        assert answer["x-content-type-options"] == "nosniff"
+        assert answer["referrer-policy"] == "no-referrer"

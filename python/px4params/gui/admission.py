@@ -12,7 +12,10 @@ files, the API and the WebSocket) that admits a request only when
    may send ``Authorization: token ...`` instead;
 4. its body is at most :data:`MAX_BODY` bytes (413 otherwise, before the route reads it).
 
-Refusals are JSON ``{"error": ...}`` (a WebSocket is closed before it opens: HTTP 403).
+Refusals are JSON ``{"error": ...}`` (a WebSocket is closed before it opens: HTTP 403). Every
+response also says that no other page may frame this one (clickjacking: a page of another port
+is the same site and would get the cookie), that the browser must not guess content types,
+and that the address (with a token, on the first visit) is never sent on as a referrer.
 """
 
 from __future__ import annotations
@@ -41,6 +44,13 @@ MAX_BODY = 1 << 20
 MAX_CHANGES = 256
 #: Names a browser on this machine uses for the loopback address.
 LOOPBACK_NAMES = ("localhost", "127.0.0.1", "[::1]")
+#: Headers of every response: no framing by other pages, no type sniffing, no referrer.
+SECURITY_HEADERS = (
+    (b"content-security-policy", b"frame-ancestors 'none'"),
+    (b"x-frame-options", b"DENY"),
+    (b"x-content-type-options", b"nosniff"),
+    (b"referrer-policy", b"no-referrer"),
+)
 
 Scope = MutableMapping[str, Any]
 Message = MutableMapping[str, Any]
@@ -97,6 +107,7 @@ class Admission:
         if scope["type"] not in ("http", "websocket"):
             await self.app(scope, receive, send)
             return
+        send = _with_security_headers(send)
         headers = _headers(scope)
         query = parse_qsl(scope.get("query_string", b"").decode("latin-1"), keep_blank_values=True)
         given = [v for k, v in query if k == "token"]
@@ -182,6 +193,15 @@ def _headers(scope: Scope) -> dict[str, str]:
     for key, value in scope.get("headers", ()):
         out.setdefault(key.decode("latin-1").lower(), value.decode("latin-1"))
     return out
+
+
+def _with_security_headers(send: Send) -> Send:
+    async def sending(message: Message) -> None:
+        if message["type"] == "http.response.start":
+            message = {**message, "headers": [*message.get("headers", ()), *SECURITY_HEADERS]}
+        await send(message)
+
+    return sending
 
 
 def _cookies(text: str) -> dict[str, str]:
