@@ -660,3 +660,26 @@ def test_unknown_message_ids_do_not_pass_unsigned(store: px4params.Store) -> Non
     finally:
         sock.close()
         server.stop()
+
+
+def test_a_key_others_can_read_is_warned_about(tmp_path: Path) -> None:
+    import subprocess
+    import sys
+
+    from gui_server import env_for
+
+    key = tmp_path / "link.key"
+    key.write_text(KEY.hex())
+    for mode, warned in ((0o644, True), (0o600, False)):
+        key.chmod(mode)
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "px4params", "mavlink", "serve", "--udp", "127.0.0.1:0",
+             "--store", str(tmp_path / "v.store"), "--signing-key", str(key)],
+            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env_for(tmp_path),
+        )  # fmt: skip
+        assert proc.stdout is not None
+        assert "signed with the key in" in proc.stdout.readline()
+        proc.terminate()
+        _, err = proc.communicate(timeout=20)
+        warning = f"px4params: warning: {key} can be read by other users: chmod 600 {key}\n"
+        assert err == (warning if warned else "")

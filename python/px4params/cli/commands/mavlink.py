@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import signal
+import sys
 import threading
 from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any
@@ -130,7 +131,14 @@ def signing_key(path: str | None) -> bytes | None:
         return None
     from px4params.links.mavlink_signing import load_key
 
-    return load_key(path)
+    key = load_key(path)
+    if os.stat(path).st_mode & 0o077:  # as ssh says of a private key others can read
+        print(
+            f"px4params: warning: {path} can be read by other users: chmod 600 {path}",
+            file=sys.stderr,
+            flush=True,
+        )
+    return key
 
 
 def add_signing_option(p: Any, who: str) -> None:
