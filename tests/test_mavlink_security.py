@@ -489,10 +489,10 @@ def test_px4s_timestamp_rules(store: px4params.Store) -> None:
 @pytest.mark.parametrize(
     "content, why",
     [
-        (b"short", "not a signing key: expected 32 bytes or 64 hex digits (e.g. the SHA-256 "
-         "of the passphrase), found 5 bytes"),
-        (b"z" * 64, "not a signing key: expected 32 bytes or 64 hex digits (e.g. the SHA-256 "
-         "of the passphrase), found 64 bytes"),
+        (b"short", "not a signing key: expected 32 bytes, 64 hex digits (e.g. the SHA-256 "
+         "of the passphrase) or PX4's 40-byte key file, found 5 bytes"),
+        (b"z" * 64, "not a signing key: expected 32 bytes, 64 hex digits (e.g. the SHA-256 "
+         "of the passphrase) or PX4's 40-byte key file, found 64 bytes"),
         (None, "cannot read the signing key: No such file or directory"),
     ],
 )  # fmt: skip
@@ -522,7 +522,10 @@ def test_key_files_raw_or_hex(tmp_path: Path) -> None:
 
     (tmp_path / "raw").write_bytes(KEY)
     (tmp_path / "hex").write_text(KEY.hex().upper() + "\n")
+    # PX4's mavlink-signing-key.bin: the key, then the uint64 timestamp
+    (tmp_path / "px4").write_bytes(KEY + struct.pack("<Q", 123456789))
     assert load_key(tmp_path / "raw") == load_key(tmp_path / "hex") == KEY
+    assert load_key(tmp_path / "px4") == KEY
 
 
 def test_without_a_key_the_link_says_it_is_unsigned(tmp_path: Path) -> None:

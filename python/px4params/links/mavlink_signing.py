@@ -16,10 +16,13 @@ Unsigned frames are refused, except the few PX4 accepts unsigned on a signed lin
 hands over frames of message IDs it does not know without checking them: :func:`accepted`
 tells them apart.
 
-Key files: the 32-byte secret, as 32 raw bytes or as 64 hexadecimal digits (a trailing newline
-allowed). Ground stations derive the key from a passphrase with SHA-256 (MAVProxy's ``signing
-setup PASSPHRASE``, QGroundControl's signing keys), so ``printf %s PASSPHRASE | sha256sum | cut
--c1-64 > key.hex`` makes the file for the same link.
+Key files: the 32-byte secret, as 32 raw bytes, as 64 hexadecimal digits (a trailing newline
+allowed), or as PX4 stores it (``mavlink/mavlink-signing-key.bin`` on the SD card: the key,
+then the 8-byte timestamp, which is not used here: the clock is; PX4-Autopilot
+``src/modules/mavlink/mavlink_sign_control.cpp``). Ground stations derive the key from a
+passphrase with SHA-256 (MAVProxy's ``signing setup PASSPHRASE``, QGroundControl's signing
+keys), so ``printf %s PASSPHRASE | sha256sum | cut -c1-64 > key.hex`` makes the file for the
+same link.
 """
 
 from __future__ import annotations
@@ -48,7 +51,8 @@ EPOCH_2015 = 1420070400
 NEW_STREAM_WINDOW = 60 * 100_000
 #: Streams remembered (MAVLINK_MAX_SIGNING_STREAMS of the C library).
 MAX_STREAMS = 16
-#: Messages PX4 accepts unsigned on a signed link (``MavlinkSignControl``).
+#: Messages PX4 accepts unsigned on a signed link (``unsigned_messages`` of
+#: ``mavlink_sign_control.cpp``).
 UNSIGNED_ALLOWED = frozenset(
     {
         mavlink.MAVLINK_MSG_ID_RADIO_STATUS,
@@ -57,10 +61,13 @@ UNSIGNED_ALLOWED = frozenset(
     }
 )
 KEY_BYTES = 32
+#: PX4's key file: the key and a uint64 timestamp.
+PX4_KEY_FILE_BYTES = KEY_BYTES + 8
 
 
 def load_key(path: str | os.PathLike[str]) -> bytes:
-    """The secret in key file ``path``: 32 raw bytes, or 64 hex digits."""
+    """The secret in key file ``path``: 32 raw bytes, 64 hex digits, or PX4's file (the key
+    and its timestamp)."""
     try:
         with open(path, "rb") as f:
             data = f.read(4096)
@@ -69,13 +76,13 @@ def load_key(path: str | os.PathLike[str]) -> bytes:
             f"{os.fspath(path)}: cannot read the signing key: {e.strerror or e}"
         ) from None
     text = data.strip()
-    if len(data) == KEY_BYTES:
-        return data
+    if len(data) in (KEY_BYTES, PX4_KEY_FILE_BYTES):
+        return data[:KEY_BYTES]
     if len(text) == 2 * KEY_BYTES and all(chr(c) in string.hexdigits for c in text):
         return bytes.fromhex(text.decode("ascii"))
     raise SigningKeyError(
-        f"{os.fspath(path)}: not a signing key: expected 32 bytes or 64 hex digits (e.g. the "
-        f"SHA-256 of the passphrase), found {len(data)} bytes"
+        f"{os.fspath(path)}: not a signing key: expected 32 bytes, 64 hex digits (e.g. the "
+        f"SHA-256 of the passphrase) or PX4's 40-byte key file, found {len(data)} bytes"
     )
 
 

@@ -147,8 +147,8 @@ def add_signing_option(p: Any, who: str) -> None:
         "--signing-key",
         metavar="FILE",
         help=f"sign {who} with MAVLink 2 signing and drop unsigned or wrongly signed messages; "
-        "FILE holds the 32-byte key, raw or as 64 hex digits (the SHA-256 of the passphrase "
-        "MAVProxy's 'signing setup' or QGC takes)",
+        "FILE holds the 32-byte key: raw, as 64 hex digits (the SHA-256 of the passphrase "
+        "MAVProxy's 'signing setup' or QGC takes) or PX4's mavlink-signing-key.bin",
     )
 
 
