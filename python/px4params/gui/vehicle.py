@@ -202,9 +202,9 @@ class MavlinkVehicle(_Base):
         if signing_key is not None:
             from px4params.links.mavlink_signing import Signing
 
-            # MAVLink 2 signing (pymavlink's): every message signed, and what arrives accepted
-            # by PX4's rules; unsigned and wrongly signed messages are dropped
-            self._conn.setup_signing(signing_key, sign_outgoing=True, link_id=0)
+            # MAVLink 2 signing (pymavlink's signing state and checks on the connection): every
+            # message signed, and what arrives accepted by PX4's rules; unsigned and wrongly
+            # signed messages are dropped
             Signing(signing_key).attach(self._conn.mav)
             self.source += " (signed)"
         self._mav = mavutil.mavlink

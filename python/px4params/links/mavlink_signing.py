@@ -159,7 +159,9 @@ class Signing:
         if not good:
             self._bad = True
             return False
-        # 2. the timestamp, per stream
+        # 2. the timestamp, per stream; ours follows the clock too (the spec's advice), so that
+        #    a long run does not let old new-stream frames through
+        self.state.timestamp = max(self.state.timestamp, signing_timestamp())
         link_id = frame[-13]
         stamp = int.from_bytes(frame[-12:-6], "little")
         streams = self.state.stream_timestamps
