@@ -408,3 +408,17 @@ def test_no_framing_no_sniffing_no_referrer(gui: Gui) -> None:
         assert answer["x-frame-options"] == "DENY"
         assert answer["x-content-type-options"] == "nosniff"
         assert answer["referrer-policy"] == "no-referrer"
+
+
+def test_a_large_websocket_message_closes_the_socket(gui: Gui) -> None:
+    async def flood() -> int | None:
+        async with websockets.connect(
+            f"ws://127.0.0.1:{gui.port}/ws", additional_headers=authorized(gui), open_timeout=10
+        ) as ws:
+            await ws.send("x" * 100_000)
+            with pytest.raises(websockets.ConnectionClosed):
+                await asyncio.wait_for(ws.recv(), 10)
+            return ws.close_code
+
+    assert asyncio.run(flood()) == 1009  # "message too big"
+    assert request(gui, "GET", "/api/state", headers=authorized(gui))[0] == 200

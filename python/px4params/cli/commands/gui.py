@@ -39,6 +39,10 @@ the loopback names and the address it listens on (--allow-host adds names).
 Listening on anything but loopback needs --allow-remote; see docs/security.md."""
 
 
+#: Bytes a WebSocket message from the client may have (the page sends none).
+WS_MAX_MESSAGE = 4096
+
+
 def cmd_gui(args: argparse.Namespace) -> int:
     import uvicorn
 
@@ -76,7 +80,14 @@ def cmd_gui(args: argparse.Namespace) -> int:
     app = make_app(vehicle, token=token, hosts=hosts, cookie=f"px4params-gui-{bound_port}")
     # Open WebSockets are closed at shutdown and their handlers end; the bound makes sure a
     # stuck one cannot keep SIGTERM or Ctrl-C from stopping the server.
-    config = uvicorn.Config(app, log_level="warning", lifespan="off", timeout_graceful_shutdown=0.5)
+    # The page sends nothing over its WebSocket: a client's messages are capped as small.
+    config = uvicorn.Config(
+        app,
+        log_level="warning",
+        lifespan="off",
+        timeout_graceful_shutdown=0.5,
+        ws_max_size=WS_MAX_MESSAGE,
+    )
     server = uvicorn.Server(config)
     sock.listen(128)  # connections wait in the backlog until the server accepts them
     shown = bound_host if bound_host != "0.0.0.0" else "127.0.0.1"
