@@ -20,6 +20,8 @@ import px4params
 import pytest
 import websockets
 from gui_server import CLI, Gui, env_for
+from px4params.cli.commands.gui import _is_loopback
+from px4params.gui.admission import allowed_hosts
 from px4params.store.classic import BUNDLED_CLASSIC
 
 REPO = Path(__file__).resolve().parents[1]
@@ -355,8 +357,6 @@ def test_allow_remote_lets_a_non_loopback_bind_through(store_file: Path) -> None
 
 
 def test_the_hosts_answered() -> None:
-    from px4params.gui.admission import allowed_hosts
-
     loopback = {"localhost:8080", "127.0.0.1:8080", "[::1]:8080"}
     assert allowed_hosts(8080, "127.0.0.1") == loopback
     assert allowed_hosts(8080, "0.0.0.0") == loopback  # a wildcard is no name
@@ -396,8 +396,6 @@ def test_a_signing_key_needs_a_vehicle(store_file: Path) -> None:
     ],
 )
 def test_which_addresses_are_loopback(host: str, loopback: bool) -> None:
-    from px4params.cli.commands.gui import _is_loopback
-
     assert _is_loopback(host) is loopback
 
 

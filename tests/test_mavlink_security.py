@@ -7,11 +7,15 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
+import http.client
 import json
 import lzma
 import os
+import signal
 import socket
 import struct
+import subprocess
+import sys
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -19,8 +23,13 @@ from typing import Any
 
 import px4params
 import pytest
+from gui_server import Gui, env_for
+from px4params.errors import CommandError
+from px4params.gui.vehicle import MavlinkVehicle
 from px4params.links.mavlink import MavlinkParamServer
-from px4params.store.classic import BUNDLED_CLASSIC
+from px4params.links.mavlink_ftp import MavftpServer
+from px4params.links.mavlink_signing import load_key, signing_timestamp
+from px4params.store.classic import BUNDLED_CLASSIC, ClassicParam
 from pymavlink import mavutil
 from pymavlink.dialects.v20 import common as mavlink
 
@@ -194,8 +203,6 @@ def _crc32part(data: bytes) -> int:
 def test_a_session_in_use_is_never_taken_over() -> None:
     """Only a session idle for session_idle seconds is reclaimed, the one idle longest; a
     download that keeps reading keeps its session, however old."""
-    from px4params.links.mavlink_ftp import MavftpServer
-
     now = [0.0]
     server = MavftpServer({"/f": b"x" * 1000}, session_idle=3.0, clock=lambda: now[0])
 
@@ -267,8 +274,6 @@ def test_a_peer_that_went_away_gets_nothing_more(store: px4params.Store) -> None
 def test_a_parameter_list_is_paced(schema: px4params.Schema) -> None:
     """One PARAM_REQUEST_LIST (14 bytes) is answered at param_rate in bursts of 20, not with
     the whole list at once; and a requester that goes silent stops the stream."""
-    from px4params.store.classic import ClassicParam
-
     many = [ClassicParam(f"TEST_P{i:03d}", "Int32", i) for i in range(400)]
     store = px4params.Store(schema, classic=many)
     server = MavlinkParamServer(store, "127.0.0.1", 0, param_rate=200.0, peer_timeout=1.0)
@@ -349,11 +354,6 @@ def _int_of(msg: Any) -> int:
 @pytest.fixture
 def signed_serve(tmp_path: Path) -> Iterator[tuple[Any, int, Path]]:
     """``mavlink serve --signing-key`` on a store with INA238#1 (address 0x45)."""
-    import subprocess
-    import sys
-
-    from gui_server import env_for
-
     env = env_for(tmp_path)
     store_file = tmp_path / "vehicle.store"
     subprocess.run(
@@ -391,8 +391,6 @@ def _address_in(store_file: Path) -> int:
 def test_signed_clients_list_and_set_and_nobody_else(
     signed_serve: tuple[Any, int, Path],
 ) -> None:
-    import signal
-
     proc, port, store_file = signed_serve
     conn = _signed_client(port, KEY)
     try:
@@ -451,8 +449,6 @@ def test_px4s_timestamp_rules(store: px4params.Store) -> None:
     """PX4 (the MAVLink C library's mavlink_signature_check): a stream's timestamps must grow
     (a replayed frame is dropped); a new stream may start at most a minute behind the
     vehicle's clock; a frame whose signature is wrong changes no stream's timestamp."""
-    from px4params.links.mavlink_signing import signing_timestamp
-
     server = MavlinkParamServer(store, "127.0.0.1", 0, signing_key=KEY)
     server.start()
     sock = _udp_socket()
@@ -497,11 +493,6 @@ def test_px4s_timestamp_rules(store: px4params.Store) -> None:
     ],
 )  # fmt: skip
 def test_a_bad_key_file_is_one_line(tmp_path: Path, content: bytes | None, why: str) -> None:
-    import subprocess
-    import sys
-
-    from gui_server import env_for
-
     key = tmp_path / "link.key"
     if content is not None:
         key.write_bytes(content)
@@ -518,8 +509,6 @@ def test_a_bad_key_file_is_one_line(tmp_path: Path, content: bytes | None, why: 
 
 
 def test_key_files_raw_or_hex(tmp_path: Path) -> None:
-    from px4params.links.mavlink_signing import load_key
-
     (tmp_path / "raw").write_bytes(KEY)
     (tmp_path / "hex").write_text(KEY.hex().upper() + "\n")
     # PX4's mavlink-signing-key.bin: the key, then the uint64 timestamp
@@ -529,11 +518,6 @@ def test_key_files_raw_or_hex(tmp_path: Path) -> None:
 
 
 def test_without_a_key_the_link_says_it_is_unsigned(tmp_path: Path) -> None:
-    import subprocess
-    import sys
-
-    from gui_server import env_for
-
     proc = subprocess.Popen(
         [sys.executable, "-m", "px4params", "mavlink", "serve", "--udp", "127.0.0.1:0",
          "--store", str(tmp_path / "v.store")],
@@ -553,10 +537,6 @@ def test_without_a_key_the_link_says_it_is_unsigned(tmp_path: Path) -> None:
 def test_the_page_talks_to_a_signed_vehicle(signed_serve: tuple[Any, int, Path]) -> None:
     """``gui --udp --signing-key``: the metadata over MAVLink FTP, the list and a write, all
     signed (the vehicle drops anything else)."""
-    import http.client
-
-    from gui_server import Gui, env_for
-
     proc, port, store_file = signed_serve
     key = store_file.parent / "link.key"
     env = env_for(store_file.parent)
@@ -585,8 +565,6 @@ def test_the_page_talks_to_a_signed_vehicle(signed_serve: tuple[Any, int, Path])
 def test_garbage_and_unsigned_frames_make_no_peer(store: px4params.Store) -> None:
     """Only a MAVLink message (on a signed link, a signed one) makes its source a peer that gets
     heartbeats: a forged source's garbage or unsigned frame starts nothing."""
-    from px4params.links.mavlink_signing import signing_timestamp
-
     now = signing_timestamp()
     for key in (None, KEY):
         server = MavlinkParamServer(
@@ -622,9 +600,6 @@ def test_garbage_and_unsigned_frames_make_no_peer(store: px4params.Store) -> Non
 
 
 def test_the_page_without_the_key_hears_nothing_and_says_why(store: px4params.Store) -> None:
-    from px4params.errors import CommandError
-    from px4params.gui.vehicle import MavlinkVehicle
-
     server = MavlinkParamServer(store, "127.0.0.1", 0, signing_key=KEY, heartbeat_interval=0.1)
     server.start()
     try:
@@ -666,11 +641,6 @@ def test_unknown_message_ids_do_not_pass_unsigned(store: px4params.Store) -> Non
 
 
 def test_a_key_others_can_read_is_warned_about(tmp_path: Path) -> None:
-    import subprocess
-    import sys
-
-    from gui_server import env_for
-
     key = tmp_path / "link.key"
     key.write_text(KEY.hex())
     for mode, warned in ((0o644, True), (0o600, False)):
