@@ -8,16 +8,15 @@ from __future__ import annotations
 
 import json
 import os
-import re
 import shutil
 import subprocess
-import sys
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import px4params
 import pytest
+from gui_server import CLI, Gui, Started, env_for
 from playwright import sync_api
 from px4params.store.classic import BUNDLED_CLASSIC
 
@@ -30,42 +29,11 @@ if CHROMIUM is None:
         "no Chromium: scripts/setup.sh installs Debian's chromium with apt where it can",
         allow_module_level=True,
     )
-CLI = [sys.executable, "-m", "px4params"]
 TIMEOUT = 15_000  # ms, for anything the page waits on
 
 
-class Started:
-    """A command that prints a line and keeps running: its process and that line's match."""
-
-    def __init__(self, argv: list[str], pattern: str, env: dict[str, str], cwd: Path) -> None:
-        self.proc = subprocess.Popen(
-            argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env, cwd=cwd
-        )
-        assert self.proc.stdout is not None
-        line = self.proc.stdout.readline()
-        match = re.search(pattern, line)
-        if match is None:
-            self.stop()
-            raise AssertionError(f"{argv[3:5]}: {line!r} {self.proc.stderr.read()[-2000:]}")  # type: ignore[union-attr]
-        self.match = match
-
-    def stop(self) -> None:
-        self.proc.terminate()
-        try:
-            self.proc.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            self.proc.kill()
-            self.proc.wait()
-
-
 def _env(tmp: Path) -> dict[str, str]:
-    env = {
-        k: v
-        for k, v in os.environ.items()
-        if not k.startswith("PX4PARAMS_") or k == "PX4PARAMS_CACHE_DIR"
-    }
-    env["PX4PARAMS_STORE"] = str(tmp / "vehicle.store")
-    return env
+    return env_for(tmp)
 
 
 @pytest.fixture
@@ -99,20 +67,21 @@ def vehicle(store_file: Path) -> Iterator[Started]:
     served.stop()
 
 
-def _gui(argv: list[str], tmp: Path) -> Started:
-    return Started(
-        [*CLI, "gui", *argv, "--http", "127.0.0.1:0"],
-        r"on (http://127\.0\.0\.1:\d+/)",
-        _env(tmp),
-        tmp,
-    )
+def _gui(argv: list[str], tmp: Path) -> Gui:
+    return Gui(argv, _env(tmp), tmp)
 
 
 @pytest.fixture
-def gui(vehicle: Started, store_file: Path) -> Iterator[str]:
+def served_gui(vehicle: Started, store_file: Path) -> Iterator[Gui]:
     page = _gui(["--udp", f"127.0.0.1:{vehicle.match[1]}"], store_file.parent)
-    yield page.match[1]
+    yield page
     page.stop()
+
+
+@pytest.fixture
+def gui(served_gui: Gui) -> str:
+    """The page's URL with its token, as printed."""
+    return served_gui.url
 
 
 @pytest.fixture(scope="module")
@@ -331,7 +300,7 @@ def test_save_as_params_and_airframe(gui: str, page: Any, tmp_path: Path) -> Non
 def test_offline_on_a_store_file(store_file: Path, page: Any) -> None:
     started = _gui(["--store", str(store_file)], store_file.parent)
     try:
-        _open(page, started.match[1])
+        _open(page, started.url)
         assert "offline store" in page.inner_text("#source")
         page.fill("input[data-name='INA238_0P']", "300")
         assert _write_all(page) == ["acknowledged: 300"]
@@ -345,7 +314,8 @@ def test_offline_on_a_store_file(store_file: Path, page: Any) -> None:
 
 
 def test_state_api_is_json(gui: str, page: Any) -> None:
-    response = page.request.get(gui + "api/state")
+    _open(page, gui)  # the token URL sets the cookie the API needs
+    response = page.request.get(gui.split("?")[0] + "api/state")
     body = json.loads(response.text())
     assert body["mode"] == "mavlink" and body["values"]["INA238_INST"] == 3
 
@@ -361,7 +331,7 @@ def test_a_dynamic_array_gets_items_added_and_removed(tmp_path: Path, page: Any)
     store = tmp_path / "things.store"
     started = _gui(["--store", str(store), "--dsdl", str(root)], tmp_path)
     try:
-        _open(page, started.match[1])
+        _open(page, started.url)
         page.click("#add-THINGS")
         assert _write_all(page) == ["acknowledged: 1"]  # THINGS_INST: THINGS#0
         card = page.locator(".instance[data-instance='THINGS#0']")
@@ -388,7 +358,10 @@ def test_a_dynamic_array_gets_items_added_and_removed(tmp_path: Path, page: Any)
 
 def test_other_sites_cannot_write(gui: str, page: Any, store_file: Path) -> None:
     """A page of another site in the same browser cannot write parameters: a cross-site
-    'simple' request (text/plain) is refused, as is any request naming another origin."""
+    'simple' request (text/plain) is refused, as is any request naming another origin, even
+    with the page's cookie."""
+    _open(page, gui)
+    gui = gui.split("?")[0]
     body = json.dumps({"changes": [{"name": "INA238_1C", "value": 1}]})
     plain = page.request.post(gui + "api/write", data=body, headers={"content-type": "text/plain"})
     assert plain.status == 415

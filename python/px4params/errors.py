@@ -30,6 +30,7 @@ __all__ = [
     "ParamFileError",
     "ParameterSetError",
     "Px4ParamsError",
+    "SigningKeyError",
     "StoreError",
     "StoreFileError",
     "TransferError",
@@ -118,6 +119,11 @@ class TransferError(Px4ParamsError):
 
     ``str()`` is a single line.
     """
+
+
+class SigningKeyError(Px4ParamsError):
+    """A MAVLink 2 signing key file that cannot be used (missing, or not 32 bytes / 64 hex
+    digits). ``str()`` is one line naming the file."""
 
 
 class StoreError(Px4ParamsError):

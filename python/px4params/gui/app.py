@@ -3,11 +3,14 @@ the package (nothing fetched from the internet), a JSON API over the vehicle, an
 that pushes values and status messages as they arrive.
 
     GET  /                      the page
-    GET  /api/state             mode, source, metadata, values, messages, health
+    GET  /api/state             mode, source, metadata, values, messages, health, limits
     POST /api/write             {"changes": [{"name", "value"}]} -> one result per change, in order
     POST /api/review            {"filename", "text"} -> the changes the file would make
     GET  /api/export?format=params|airframe   the configuration as a file
     WS   /ws                    {"kind": "value"|"values"|"status", ...}
+
+Every request passes :class:`~px4params.gui.admission.Admission` first (Host, Origin, the run's
+token, the body's size).
 """
 
 from __future__ import annotations
@@ -15,6 +18,7 @@ from __future__ import annotations
 import asyncio
 import json
 import os
+from collections.abc import Iterable
 from typing import Any
 
 from starlette.applications import Starlette
@@ -26,15 +30,17 @@ from starlette.websockets import WebSocket, WebSocketDisconnect
 
 from px4params.errors import Px4ParamsError
 from px4params.gui import files
+from px4params.gui.admission import MAX_BODY, MAX_CHANGES, Admission
 
 __all__ = ["make_app"]
 
 STATIC = os.path.join(os.path.dirname(os.path.abspath(__file__)), "static")
 
 
-def make_app(vehicle: Any) -> Starlette:
+def make_app(vehicle: Any, *, token: str, hosts: Iterable[str], cookie: str) -> Admission:
     """The application over ``vehicle`` (a :class:`~px4params.gui.vehicle.MavlinkVehicle` or
-    :class:`~px4params.gui.vehicle.StoreVehicle`)."""
+    :class:`~px4params.gui.vehicle.StoreVehicle`), admitting requests with ``token`` to
+    ``hosts`` (see :class:`~px4params.gui.admission.Admission`)."""
 
     async def page(request: Request) -> Response:
         return FileResponse(os.path.join(STATIC, "index.html"))
@@ -42,6 +48,7 @@ def make_app(vehicle: Any) -> Starlette:
     async def state(request: Request) -> Response:
         body = vehicle.state()
         body["metadata"] = vehicle.metadata
+        body["limits"] = {"changes": MAX_CHANGES, "body": MAX_BODY}  # the page writes in parts
         return JSONResponse(body)
 
     floats = {e["name"] for e in vehicle.metadata.get("parameters", ()) if e.get("type") == "Float"}
@@ -52,6 +59,8 @@ def make_app(vehicle: Any) -> Starlette:
             return refused
         try:
             changes = (await request.json())["changes"]
+            if isinstance(changes, list) and len(changes) > MAX_CHANGES:
+                return _too_many(len(changes))
             pairs = [
                 (str(c["name"]), _number(c["value"], str(c["name"]) in floats)) for c in changes
             ]
@@ -99,21 +108,27 @@ def make_app(vehicle: Any) -> Starlette:
         return Response(text, media_type="text/plain; charset=utf-8", headers=headers)
 
     async def socket(ws: WebSocket) -> None:
-        origin = ws.headers.get("origin")
-        if origin is not None and origin != f"http://{ws.headers.get('host')}":
-            await ws.close(code=1008)  # another site's page may not watch the vehicle
-            return
         await ws.accept()
         loop = asyncio.get_running_loop()
         queue: asyncio.Queue[dict[str, Any]] = asyncio.Queue()
         stop = vehicle.listen(lambda event: loop.call_soon_threadsafe(queue.put_nowait, event))
+        # Waits for the client as well as for events: a client that left (or the server's
+        # shutdown, which closes every socket) ends the handler at once, not at the next event.
+        gone = asyncio.ensure_future(_until_closed(ws))
         try:
-            while True:
-                event = await queue.get()
-                await ws.send_text(json.dumps(event))
+            while not gone.done():
+                event = asyncio.ensure_future(queue.get())
+                await asyncio.wait([event, gone], return_when=asyncio.FIRST_COMPLETED)
+                if not event.done():
+                    event.cancel()
+                    break
+                await ws.send_text(json.dumps(event.result()))
         except (WebSocketDisconnect, RuntimeError):
             pass
         finally:
+            gone.cancel()
+            if gone.done() and not gone.cancelled():
+                gone.exception()  # a receive that failed ended the socket: nothing to report
             stop()
 
     routes = [
@@ -125,18 +140,31 @@ def make_app(vehicle: Any) -> Starlette:
         WebSocketRoute("/ws", socket),
         Mount("/static", StaticFiles(directory=STATIC), name="static"),
     ]
-    return Starlette(routes=routes)
+    return Admission(Starlette(routes=routes), token=token, hosts=hosts, cookie=cookie)
+
+
+async def _until_closed(ws: WebSocket) -> None:
+    """Returns when the client closes the socket (the page sends nothing)."""
+    while (await ws.receive())["type"] != "websocket.disconnect":
+        pass
+
+
+def _too_many(count: int) -> Response:
+    return JSONResponse(
+        {
+            "error": f"{count} changes refused: at most {MAX_CHANGES} per request "
+            "(write them in parts)"
+        },
+        413,
+    )
 
 
 def _foreign(request: Request) -> Response | None:
-    """Refuses a write another site's page could send from the user's browser: only JSON (a
-    cross-site JSON request needs the browser's preflight, which this server never grants)
-    and, when the browser names the origin, this page's own."""
+    """Refuses a write another site's page could send from the user's browser without a
+    preflight: only JSON (a cross-site JSON request needs the browser's preflight, which this
+    server never grants). Other origins are refused before (``admission``)."""
     if not request.headers.get("content-type", "").startswith("application/json"):
         return JSONResponse({"error": "expected a JSON body (content-type application/json)"}, 415)
-    origin = request.headers.get("origin")
-    if origin is not None and origin != f"http://{request.headers.get('host')}":
-        return JSONResponse({"error": f"requests from {origin} are not accepted"}, 403)
     return None
 
 

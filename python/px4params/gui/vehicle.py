@@ -174,7 +174,8 @@ class StoreVehicle(_Base):
 class MavlinkVehicle(_Base):
     """A vehicle (``px4params mavlink serve`` or a PX4) over MAVLink on UDP, as a ground station
     talks to it: heartbeats, the parameter list, component metadata over MAVLink FTP (or a
-    ``parameters.json`` given), writes with PARAM_SET read back, STATUSTEXT."""
+    ``parameters.json`` given), writes with PARAM_SET read back, STATUSTEXT. With
+    ``signing_key`` the link is signed (MAVLink 2 signing)."""
 
     mode = "mavlink"
 
@@ -184,6 +185,7 @@ class MavlinkVehicle(_Base):
         metadata_file: str | None = None,
         *,
         timeout: float = 10.0,
+        signing_key: bytes | None = None,
     ) -> None:
         super().__init__()
         os.environ.setdefault("MAVLINK20", "1")
@@ -196,6 +198,15 @@ class MavlinkVehicle(_Base):
         self._conn = mavutil.mavlink_connection(
             f"udpout:{host}:{port}", source_system=255, source_component=190, dialect="common"
         )
+        self._signed = signing_key is not None
+        if signing_key is not None:
+            from px4params.links.mavlink_signing import Signing
+
+            # MAVLink 2 signing (pymavlink's signing state and checks on the connection): every
+            # message signed, and what arrives accepted by PX4's rules; unsigned and wrongly
+            # signed messages are dropped
+            Signing(signing_key).attach(self._conn.mav)
+            self.source += " (signed)"
         self._mav = mavutil.mavlink
         mavlink_messages.register(self._mav)
         self._system = 1
@@ -226,7 +237,10 @@ class MavlinkVehicle(_Base):
             if msg is not None and msg.get_srcComponent() == 1:
                 self._system = msg.get_srcSystem()
                 return
-        raise CommandError(f"no vehicle answered on {self.source} within {timeout:.0f} s")
+        hint = (
+            "" if self._signed else " (a signed link drops unsigned messages: --signing-key FILE)"
+        )
+        raise CommandError(f"no vehicle answered on {self.source} within {timeout:.0f} s{hint}")
 
     def _load_metadata(self, metadata_file: str | None, timeout: float) -> dict[str, Any]:
         if metadata_file is not None:

@@ -4,14 +4,18 @@ them.
 
 What it does (PX4's ``mavlink_parameters.cpp`` is the model):
 
-* ``HEARTBEAT`` once a second (autopilot ``MAV_AUTOPILOT_PX4``) to every peer heard from and to
-  the ``gcs`` addresses given (QGroundControl waits on UDP 14550 for a vehicle to speak first).
+* ``HEARTBEAT`` once a second (autopilot ``MAV_AUTOPILOT_PX4``) to every peer heard from in the
+  last ``peer_timeout`` seconds (a ground station sends its own heartbeat every second; a peer
+  that went away is dropped, as PX4 drops a UDP link's remote) and to the ``gcs`` addresses
+  given (QGroundControl waits on UDP 14550 for a vehicle to speak first).
 * ``AUTOPILOT_VERSION`` on ``MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES`` or ``MAV_CMD_REQUEST_MESSAGE``
   (148), with ``MAV_PROTOCOL_CAPABILITY_PARAM_ENCODE_BYTEWISE``: ``int32`` values travel as their
   four bytes inside the ``float`` field, as PX4 sends them.
 * ``PARAM_REQUEST_LIST``: first ``_HASH_CHECK`` (index -1, ``MAV_PARAM_TYPE_UINT32``, PX4's CRC32
   over every name and value, so that a ground station can use its cache), then every parameter
-  in name order. A ``PARAM_SET`` of ``_HASH_CHECK`` stops the stream, as in PX4.
+  in name order, paced (``param_rate`` a second, in bursts of 20 as PX4 sends them over UDP)
+  rather than at once, and only while the requester is still heard from. A ``PARAM_SET`` of
+  ``_HASH_CHECK`` stops the stream, as in PX4.
 * ``PARAM_REQUEST_READ`` by name (``_HASH_CHECK`` too) or by index.
 * ``PARAM_SET``: the name must exist and the type must be the parameter's (``INT32`` or
   ``REAL32``); the value must fit the parameter (``int32``, ``float32``, or the leaf's own range,
@@ -31,6 +35,11 @@ What it does (PX4's ``mavlink_parameters.cpp`` is the model):
 * Every ``COMMAND_LONG`` is answered with ``COMMAND_ACK``: accepted, unsupported, or denied when
   its parameters name nothing (NaN, infinities, a message ID beyond 24 bits).
 * Anything else (other messages, other targets, garbage bytes, bad CRCs) is ignored.
+* With a signing key, MAVLink 2 signing (:mod:`px4params.links.mavlink_signing`): every frame
+  sent is signed, and unsigned or wrongly signed frames are dropped and counted (a dropped
+  ``PARAM_SET`` in ``stats["param_set_dropped"]``).
+* A peer is heard from when it sends a MAVLink message (on a signed link: a signed one);
+  garbage and dropped frames do not count.
 
 The parameters are the store's classic ones and the destructured leaves of its structured
 instances (:mod:`px4params.store.flat`); the structured values themselves (wider than 32 bits)
@@ -61,7 +70,8 @@ from px4params.errors import Px4ParamsError
 from px4params.gcs.component_information import ComponentFiles, px4_crc32
 from px4params.links import mavlink_messages
 from px4params.links.identity import store_digest, version_parts
-from px4params.links.mavlink_ftp import MavftpServer
+from px4params.links.mavlink_ftp import SESSION_IDLE, MavftpServer
+from px4params.links.mavlink_signing import Signing, accepted
 from px4params.links.serving import ServingLoop
 from px4params.store import flat
 
@@ -88,11 +98,17 @@ _INT32, _REAL32 = mavlink.MAV_PARAM_TYPE_INT32, mavlink.MAV_PARAM_TYPE_REAL32
 _TYPE_NAMES = {_INT32: "INT32", _REAL32: "REAL32", mavlink.MAV_PARAM_TYPE_UINT32: "UINT32"}
 #: STATUSTEXT carries 50 characters per chunk.
 _TEXT_CHUNK = 50
-#: Parameters sent per burst while streaming a list, and the pause between bursts: about 4000
-#: a second, paced so that a slow client's socket buffer does not overflow (PX4 paces too);
-#: incoming messages (a _HASH_CHECK stop) are read between bursts.
+#: Parameters sent per burst while streaming a list (PX4 sends up to 20 at once over UDP);
+#: bursts follow each other at ``param_rate``, so that one request datagram is not answered
+#: with the whole list at once, and a slow client's socket buffer does not overflow. Incoming
+#: messages (a _HASH_CHECK stop) are read between bursts.
 _STREAM_BURST = 20
-_STREAM_PAUSE = 0.005
+#: PARAM_VALUE messages a second while streaming a list (about 19 kB/s): PX4's 1909 parameters
+#: in 4 s.
+PARAM_RATE = 500.0
+#: Seconds a peer stays one after it was last heard from (ground stations send a heartbeat
+#: every second).
+PEER_TIMEOUT = 5.0
 #: Peers remembered (for heartbeats and change notices); the oldest is forgotten beyond this.
 _MAX_PEERS = 16
 
@@ -203,6 +219,11 @@ class MavlinkParamServer(ServingLoop):
     ``save_path``: the store file accepted writes are saved to (None: kept in memory only).
     ``gcs``: addresses to send heartbeats to before they speak (e.g. QGC's 127.0.0.1:14550).
     ``log``: called with one line per accepted or refused write.
+    ``ftp_session_idle``: seconds after which an abandoned MAVLink FTP session is reclaimed.
+    ``peer_timeout``: seconds after which a silent peer gets no more heartbeats, health text or
+    list stream. ``param_rate``: PARAM_VALUE messages a second while streaming a list.
+    ``signing_key``: the link's MAVLink 2 signing key (32 bytes; None: unsigned, as PX4 by
+    default).
     """
 
     thread_name = "mavlink-params"
@@ -221,6 +242,10 @@ class MavlinkParamServer(ServingLoop):
         heartbeat_interval: float = 1.0,
         health: Callable[[], list[str]] | None = None,
         health_interval: float = 2.0,
+        ftp_session_idle: float = SESSION_IDLE,
+        peer_timeout: float = PEER_TIMEOUT,
+        param_rate: float = PARAM_RATE,
+        signing_key: bytes | None = None,
     ) -> None:
         super().__init__()
         self.store = store
@@ -244,7 +269,13 @@ class MavlinkParamServer(ServingLoop):
             raise
         self._sock.setblocking(False)
         self._mav = mavlink.MAVLink(_Sink(), srcSystem=system_id, srcComponent=component_id)
-        self._seen: dict[Address, None] = {}  # peers heard from, oldest first
+        #: The link's signing state (None: unsigned).
+        self.signing = Signing(signing_key) if signing_key is not None else None
+        if self.signing is not None:
+            self.signing.attach(self._mav)
+        self.peer_timeout = peer_timeout
+        self._burst_pause = _STREAM_BURST / param_rate
+        self._seen: dict[Address, float] = {}  # peer -> when last heard, oldest first
         self._entries: list[ParamEntry] | None = None
         self._stream: tuple[Address, int] | None = None  # (peer, next index; -1 = hash)
         self._next_heartbeat = 0.0
@@ -257,10 +288,13 @@ class MavlinkParamServer(ServingLoop):
         self.metadata = ComponentFiles(
             store.schema, store.specs, classic, component_id=component_id
         )
-        self.ftp = MavftpServer(self.metadata.files)
+        self.ftp = MavftpServer(self.metadata.files, session_idle=ftp_session_idle)
         self._started = time.monotonic()
         #: Counters, for tests and the CLI's summary.
         self.stats = {"received": 0, "ignored": 0, "sent": 0, "accepted": 0, "refused": 0}
+        #: Frames dropped by signing: unsigned, wrongly signed (key, replayed or old
+        #: timestamp), and the PARAM_SETs among them.
+        self.stats |= {"unsigned": 0, "badly_signed": 0, "param_set_dropped": 0}
 
     # -- lifecycle ----------------------------------------------------------------------------
 
@@ -289,7 +323,7 @@ class MavlinkParamServer(ServingLoop):
         if readable:
             self._read_all()
         if self._stream is not None and time.monotonic() >= self._next_burst:
-            self._next_burst = time.monotonic() + _STREAM_PAUSE
+            self._next_burst = time.monotonic() + self._burst_pause
             try:
                 self._stream_some()
             except Exception as e:  # a bug must not stop the server: drop this stream
@@ -317,22 +351,51 @@ class MavlinkParamServer(ServingLoop):
                     self.stats["ignored"] += 1
 
     def _parse(self, peer: Address, data: bytes) -> list[Any]:
-        self._seen.pop(peer, None)
-        if len(self._seen) >= _MAX_PEERS:
-            self._seen.pop(next(iter(self._seen)))
-        self._seen[peer] = None  # most recent last
         # A fresh parser per datagram: over UDP a frame never spans datagrams, so garbage in one
-        # (a bogus length byte) cannot swallow the frames of the next.
-        parser = mavlink.MAVLink(_Sink())
-        parser.robust_parsing = True  # bad bytes become BAD_DATA, not exceptions
+        # (a bogus length byte) cannot swallow the frames of the next. The signing state (the
+        # streams' timestamps) lives on in self.signing.
+        if self.signing is not None:
+            parser = self.signing.parser(_Sink())
+        else:
+            parser = mavlink.MAVLink(_Sink())
+            parser.robust_parsing = True  # bad bytes become BAD_DATA, not exceptions
         try:
             messages = parser.parse_buffer(data) or []
         except Exception:  # pymavlink raises assorted errors on garbage
+            messages = None
+        if self.signing is not None:
+            dropped = self.signing.dropped
+            if messages is not None:  # frames of unknown IDs come back unchecked: drop them
+                kept = [m for m in messages if m.get_type() == "BAD_DATA" or accepted(m)]
+                dropped["unsigned"] += len(messages) - len(kept)
+                messages = kept
+            self.stats["unsigned"] = dropped["unsigned"]
+            self.stats["badly_signed"] = dropped["badly_signed"]
+            self.stats["param_set_dropped"] = dropped["param_set"]
+        if messages is None:
             self.stats["ignored"] += 1
             return []
         bad = [m for m in messages if m.get_type() == "BAD_DATA"]
         self.stats["ignored"] += len(bad)
-        return [m for m in messages if m.get_type() != "BAD_DATA"]
+        good = [m for m in messages if m.get_type() != "BAD_DATA"]
+        if good and (self.signing is None or any(m.get_signed() for m in good)):
+            self._heard(peer)  # garbage, or on a signed link anything unsigned, makes no peer
+        return good
+
+    def _heard(self, peer: Address) -> None:
+        """Remembers ``peer`` as heard from now (most recent last), forgetting the peers
+        silent for longer than ``peer_timeout`` and the oldest beyond ``_MAX_PEERS``."""
+        now = time.monotonic()
+        self._seen.pop(peer, None)
+        for old in [p for p, t in self._seen.items() if now - t > self.peer_timeout]:
+            del self._seen[old]
+        if len(self._seen) >= _MAX_PEERS:
+            self._seen.pop(next(iter(self._seen)))
+        self._seen[peer] = now
+
+    def _alive(self, peer: Address) -> bool:
+        heard = self._seen.get(peer)
+        return heard is not None and time.monotonic() - heard <= self.peer_timeout
 
     def _for_us(self, msg: Any) -> bool:
         return msg.target_system in (0, self.system_id) and msg.target_component in (
@@ -393,6 +456,9 @@ class MavlinkParamServer(ServingLoop):
     def _stream_some(self) -> None:
         assert self._stream is not None
         peer, index = self._stream
+        if not self._alive(peer):  # the requester went away (or never was: a forged source)
+            self._stream = None
+            return
         entries = self.entries()
         for _ in range(_STREAM_BURST):
             if index == -1:
@@ -637,7 +703,8 @@ class MavlinkParamServer(ServingLoop):
             self._send(msg, peers)
 
     def _peers(self, first: Address | None) -> list[Address]:
-        peers = list(self._seen)
+        """The peers heard from recently, the ``gcs`` addresses, and ``first`` first."""
+        peers = [p for p in self._seen if self._alive(p)]
         peers += [g for g in self._gcs if g not in peers]
         if first is not None and first not in peers:
             peers.insert(0, first)

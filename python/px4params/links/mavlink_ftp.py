@@ -17,13 +17,19 @@ Supported: ``ResetSessions``, ``TerminateSession``, ``ListDirectory``, ``OpenFil
 ``ReadFile``, ``BurstReadFile`` and ``CalcFileCRC32``. Anything that would write is refused with
 ``NAK FileProtected``, any other opcode with ``NAK UnknownCommand``; unknown paths with ``NAK
 FileNotFound``, reads past the end with ``NAK EOF``, bad sessions with ``NAK InvalidSession``.
+
+Sessions a client abandons (a download interrupted, a ground station closed) are reclaimed once
+they have been idle for ``session_idle`` seconds and an open finds no free one: QGroundControl's
+FTPManager opens a file first and resets sessions only at the end, so without this four
+abandoned downloads would answer every later open with ``NoSessionsAvailable``.
 The protocol handler is pure (bytes in, bytes out); :mod:`px4params.links.mavlink` carries it.
 """
 
 from __future__ import annotations
 
 import struct
-from collections.abc import Mapping
+import time
+from collections.abc import Callable, Mapping
 
 from px4params.gcs.component_information import px4_crc32
 
@@ -38,6 +44,10 @@ MAX_SESSIONS = 4
 #: ``burst_complete`` and the client asks for the rest (PX4 stops a burst when its buffer runs
 #: short, after about 35 kB).
 BURST_PACKETS = 150
+#: Seconds a session may stay unused before an open that finds no free session takes it over
+#: (QGC retries an unanswered request after about a second, so a live download is never idle
+#: this long).
+SESSION_IDLE = 3.0
 
 
 class Op:
@@ -104,11 +114,24 @@ def make_request(
 
 
 class MavftpServer:
-    """Serves ``files`` (path -> bytes; paths are absolute, ``/`` separated) read-only."""
+    """Serves ``files`` (path -> bytes; paths are absolute, ``/`` separated) read-only.
+    ``session_idle``: seconds after which an unused session may be reclaimed; ``clock``: the
+    time in seconds (monotonic)."""
 
-    def __init__(self, files: Mapping[str, bytes]) -> None:
+    def __init__(
+        self,
+        files: Mapping[str, bytes],
+        *,
+        session_idle: float = SESSION_IDLE,
+        clock: Callable[[], float] = time.monotonic,
+    ) -> None:
         self.files = {self._normal(path): bytes(data) for path, data in files.items()}
+        self.session_idle = session_idle
+        self._clock = clock
         self._sessions: dict[int, str] = {}
+        self._used: dict[int, float] = {}  # session -> when last used
+        #: Sessions reclaimed after being abandoned (for tests and logs).
+        self.reclaimed = 0
 
     @staticmethod
     def _normal(path: str) -> str:
@@ -122,11 +145,13 @@ class MavftpServer:
         reply = _Reply(seq, session, opcode)
         if opcode == Op.RESET_SESSIONS:
             self._sessions.clear()
+            self._used.clear()
             return [reply.ack()]
         if opcode == Op.TERMINATE_SESSION:
             if session not in self._sessions:
                 return [reply.nak(Op.ERR_INVALID_SESSION)]
             del self._sessions[session]
+            del self._used[session]
             return [reply.ack()]
         if opcode == Op.LIST_DIRECTORY:
             return [self._list(reply, _text(data), offset)]
@@ -136,6 +161,7 @@ class MavftpServer:
             path = self._sessions.get(session)
             if path is None:
                 return [reply.nak(Op.ERR_INVALID_SESSION)]
+            self._used[session] = self._clock()
             content = self.files[path]
             if opcode == Op.READ_FILE:
                 if offset >= len(content):
@@ -156,12 +182,22 @@ class MavftpServer:
         path = self._normal(path)
         if path not in self.files:
             return reply.nak(Op.ERR_FILE_NOT_FOUND)
-        if len(self._sessions) >= MAX_SESSIONS:
+        if len(self._sessions) >= MAX_SESSIONS and not self._reclaim():
             return reply.nak(Op.ERR_NO_SESSIONS_AVAILABLE)
         session = next(i for i in range(256) if i not in self._sessions)
         self._sessions[session] = path
+        self._used[session] = self._clock()
         reply.session = session
         return reply.ack(struct.pack("<I", len(self.files[path])))
+
+    def _reclaim(self) -> bool:
+        """Frees the session unused longest if it has been idle ``session_idle`` seconds."""
+        oldest = min(self._used, key=self._used.__getitem__)
+        if self._clock() - self._used[oldest] < self.session_idle:
+            return False
+        del self._sessions[oldest], self._used[oldest]
+        self.reclaimed += 1
+        return True
 
     def _list(self, reply: _Reply, path: str, offset: int) -> bytes:
         folder = self._normal(path)

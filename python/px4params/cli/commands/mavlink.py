@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import signal
+import sys
 import threading
 from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any
@@ -17,7 +18,7 @@ from px4params.store.store import default_store_path
 if TYPE_CHECKING:
     import argparse
 
-__all__ = ["add_parser", "parse_udp"]
+__all__ = ["add_parser", "add_signing_option", "parse_udp", "signing_key"]
 
 
 def parse_udp(text: str) -> tuple[str, int]:
@@ -47,6 +48,8 @@ def cmd_serve(args: argparse.Namespace) -> int:
     from px4params.links.mavlink import MavlinkParamServer
     from px4params.store.flat import flat_map
     from px4params.store.session import open_session
+
+    key = signing_key(args.signing_key)
 
     # The same store, classic parameters and types as `px4params param` uses.
     existed = os.path.exists(args.store or default_store_path())
@@ -80,15 +83,20 @@ def cmd_serve(args: argparse.Namespace) -> int:
             gcs=args.gcs or (),
             log=log,
             health=health,
+            signing_key=key,
         )
     except OSError as e:
         raise CommandError(f"cannot listen on udp {host}:{port}: {e.strerror or e}") from None
     bound_host, bound_port = server.address
     total = len(server.entries())
+    if key is None:
+        signed = "unsigned: anyone who can send to it can set parameters (--signing-key FILE)"
+    else:
+        signed = f"signed with the key in {args.signing_key} (unsigned messages are dropped)"
     log(
         f"serving {total} parameters ({total - flat_count} classic, {flat_count} destructured) "
-        f"on udp {bound_host}:{bound_port} as system {system_id}, component {component_id} "
-        f"(store: {where}); Ctrl-C stops"
+        f"on udp {bound_host}:{bound_port} as system {system_id}, component {component_id}, "
+        f"{signed} (store: {where}); Ctrl-C stops"
     )
     files = server.metadata
     log(
@@ -103,11 +111,45 @@ def cmd_serve(args: argparse.Namespace) -> int:
     except KeyboardInterrupt:
         server.stop()
     s = server.stats
+    dropped = ""
+    if key is not None:
+        dropped = (
+            f"; dropped {s['unsigned']} unsigned and {s['badly_signed']} wrongly signed "
+            f"messages ({s['param_set_dropped']} PARAM_SET)"
+        )
     log(
         f"stopped: {s['received']} messages received ({s['ignored']} ignored), "
-        f"{s['accepted']} writes accepted, {s['refused']} refused"
+        f"{s['accepted']} writes accepted, {s['refused']} refused{dropped}"
     )
     return EXIT_OK
+
+
+def signing_key(path: str | None) -> bytes | None:
+    """The key in ``--signing-key FILE`` (None without the option); a bad file is a one-line
+    error."""
+    if path is None:
+        return None
+    from px4params.links.mavlink_signing import load_key
+
+    key = load_key(path)
+    if os.stat(path).st_mode & 0o077:  # as ssh says of a private key others can read
+        print(
+            f"px4params: warning: {path} can be read by other users: chmod 600 {path}",
+            file=sys.stderr,
+            flush=True,
+        )
+    return key
+
+
+def add_signing_option(p: Any, who: str) -> None:
+    """``--signing-key FILE`` (``mavlink serve`` and the page's ``--udp``)."""
+    p.add_argument(
+        "--signing-key",
+        metavar="FILE",
+        help=f"sign {who} with MAVLink 2 signing and drop unsigned or wrongly signed messages; "
+        "FILE holds the 32-byte key: raw, as 64 hex digits (the SHA-256 of the passphrase "
+        "MAVProxy's 'signing setup' or QGC takes) or PX4's mavlink-signing-key.bin",
+    )
 
 
 def add_parser(sub: Any, name: str, summary: str, words: Sequence[str] = ()) -> None:
@@ -130,10 +172,15 @@ as a flat parameter (INA238#1.bus.i2c.address is INA238_1C; see
 PARAM_REQUEST_READ (by name or index) and PARAM_SET (type and range
 checked; accepted writes are saved to the store file at once), sends
 HEARTBEAT and, when asked, AUTOPILOT_VERSION (int32 values are encoded
-bytewise). Anything else is ignored. Ctrl-C or SIGTERM stops.""",
+bytewise). Anything else is ignored. Ctrl-C or SIGTERM stops.
+
+Anyone who can send to the address can set parameters unless the link is
+signed (--signing-key FILE, MAVLink 2 signing as PX4 does it); listen on
+loopback unless the vehicle's link needs more (see docs/security.md).""",
         epilog="""\
 examples:
-  px4params mavlink serve --udp 0.0.0.0:14540 --store vehicle.store
+  px4params mavlink serve --udp 127.0.0.1:14540 --store vehicle.store
+  px4params mavlink serve --udp 127.0.0.1:14540 --signing-key link.key   # MAVLink 2 signing
   px4params mavlink serve --udp 127.0.0.1:14580 --gcs 127.0.0.1:14550   # QGC finds it
   mavproxy.py --master udpout:127.0.0.1:14540   # then: param show INA238_*""",
     )
@@ -155,6 +202,7 @@ examples:
     s.add_argument(
         "--compid", type=_id, metavar="N", help="component ID (default: MAV_COMP_ID, else 1)"
     )
+    add_signing_option(s, "every message sent")
     store_options(s)  # --store, --classic, --dsdl as for `px4params param`
     bench_options(
         s,

@@ -6,7 +6,7 @@
 
 const S = {
   meta: { parameters: [] }, values: {}, staged: new Map(), health: [], messages: [],
-  byName: new Map(), structured: [], classic: [], order: new Map(), notes: [], results: new Map(),
+  byName: new Map(), structured: [], classic: [], order: new Map(), notes: [], results: new Map(), limits: {},
 };
 
 const $ = (sel, root = document) => root.querySelector(sel);
@@ -356,21 +356,25 @@ async function writeSelected() {
   const changes = sortedChanges().filter((c) => chosen.includes(c.name));
   if (!changes.length) return;
   $("#review-write").disabled = true;
-  const response = await fetch("/api/write", {
-    method: "POST", headers: { "content-type": "application/json" },
-    body: JSON.stringify({ changes: changes.map((c) => ({ name: c.name, value: c.value })) }),
-  });
-  const answer = await response.json();
-  $("#review-write").disabled = false;
-  if (!response.ok) { $("#review-notes").textContent = answer.error; return; }
-  S.values = answer.values;
-  for (const r of answer.results) {
-    const row = document.querySelector(`#review-table tr[data-name="${CSS.escape(r.name)}"] .result`);
-    const text = r.ok ? `acknowledged: ${shown(r.value)}` : `refused: ${r.reason}`;
-    if (row) { row.textContent = text; row.className = `result ${r.ok ? "result-ok" : "result-refused"}`; }
-    S.results.set(r.name, text);
-    S.staged.delete(r.name);
+  // In parts of at most the server's limit of changes per request, in order.
+  const part = S.limits.changes || changes.length;
+  for (let i = 0; i < changes.length; i += part) {
+    const response = await fetch("/api/write", {
+      method: "POST", headers: { "content-type": "application/json" },
+      body: JSON.stringify({ changes: changes.slice(i, i + part).map((c) => ({ name: c.name, value: c.value })) }),
+    });
+    const answer = await response.json();
+    if (!response.ok) { $("#review-notes").textContent = answer.error; break; }
+    S.values = answer.values;
+    for (const r of answer.results) {
+      const row = document.querySelector(`#review-table tr[data-name="${CSS.escape(r.name)}"] .result`);
+      const text = r.ok ? `acknowledged: ${shown(r.value)}` : `refused: ${r.reason}`;
+      if (row) { row.textContent = text; row.className = `result ${r.ok ? "result-ok" : "result-refused"}`; }
+      S.results.set(r.name, text);
+      S.staged.delete(r.name);
+    }
   }
+  $("#review-write").disabled = false;
   updatePending();
   renderAll();
 }
@@ -447,6 +451,7 @@ async function start() {
   const response = await fetch("/api/state");
   const state = await response.json();
   S.meta = state.metadata; S.values = state.values; S.health = state.health; S.messages = state.messages;
+  S.limits = state.limits || {};
   $("#source").textContent = `${state.mode === "store" ? "offline store" : "vehicle"}: ${state.source}`;
   index();
   renderAll();

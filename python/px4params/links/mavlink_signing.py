@@ -1,0 +1,179 @@
+"""MAVLink 2 message signing (mavlink.io/en/guide/message_signing.html), with pymavlink's own
+signing code and PX4's rules for what is accepted.
+
+A signed frame ends with a link ID, a 48-bit timestamp (10 microsecond units since
+2015-01-01 00:00 UTC) and the first 6 bytes of SHA-256 over the key and the frame. A message is
+accepted when (as the MAVLink C library's ``mavlink_signature_check``, which PX4 uses):
+
+1. its signature is right (checked first: a forged frame changes no state);
+2. its stream, ``(link ID, system, component)``, is known and its timestamp is later than that
+   stream's last one (a replayed frame is refused), or the stream is new, at most
+   :data:`MAX_STREAMS` are known, and its timestamp is at most one minute behind ours;
+
+then the stream's timestamp and ours move up to it. Our own frames carry ``timestamp + 1`` each.
+Unsigned frames are refused, except the few PX4 accepts unsigned on a signed link
+(``RADIO_STATUS``, ``ADSB_VEHICLE``, ``COLLISION``: radios and traffic do not sign). pymavlink
+hands over frames of message IDs it does not know without checking them: :func:`accepted`
+tells them apart.
+
+Key files: the 32-byte secret, as 32 raw bytes, as 64 hexadecimal digits (a trailing newline
+allowed), or as PX4 stores it (``mavlink/mavlink-signing-key.bin`` on the SD card: the key,
+then the 8-byte timestamp, which is not used here: the clock is; PX4-Autopilot
+``src/modules/mavlink/mavlink_sign_control.cpp``). Ground stations derive the key from a
+passphrase with SHA-256 (MAVProxy's ``signing setup PASSPHRASE``, QGroundControl's signing
+keys), so ``printf %s PASSPHRASE | sha256sum | cut -c1-64 > key.hex`` makes the file for the
+same link.
+"""
+
+from __future__ import annotations
+
+import copy
+import os
+import string
+import time
+from typing import Any
+
+from pymavlink.dialects.v20 import common as mavlink
+
+from px4params.errors import SigningKeyError
+
+__all__ = [
+    "MAX_STREAMS",
+    "Signing",
+    "accepted",
+    "load_key",
+    "signing_timestamp",
+]
+
+#: Seconds from the Unix epoch to 2015-01-01 00:00 UTC, MAVLink signing's epoch.
+EPOCH_2015 = 1420070400
+#: A new stream's first timestamp may be this far behind ours (one minute, in 10 us units).
+NEW_STREAM_WINDOW = 60 * 100_000
+#: Streams remembered (MAVLINK_MAX_SIGNING_STREAMS of the C library).
+MAX_STREAMS = 16
+#: Messages PX4 accepts unsigned on a signed link (``unsigned_messages`` of
+#: ``mavlink_sign_control.cpp``).
+UNSIGNED_ALLOWED = frozenset(
+    {
+        mavlink.MAVLINK_MSG_ID_RADIO_STATUS,
+        mavlink.MAVLINK_MSG_ID_ADSB_VEHICLE,
+        mavlink.MAVLINK_MSG_ID_COLLISION,
+    }
+)
+KEY_BYTES = 32
+#: PX4's key file: the key and a uint64 timestamp.
+PX4_KEY_FILE_BYTES = KEY_BYTES + 8
+
+
+def load_key(path: str | os.PathLike[str]) -> bytes:
+    """The secret in key file ``path``: 32 raw bytes, 64 hex digits, or PX4's file (the key
+    and its timestamp)."""
+    try:
+        with open(path, "rb") as f:
+            data = f.read(4096)
+    except OSError as e:
+        raise SigningKeyError(
+            f"{os.fspath(path)}: cannot read the signing key: {e.strerror or e}"
+        ) from None
+    text = data.strip()
+    if len(data) in (KEY_BYTES, PX4_KEY_FILE_BYTES):
+        return data[:KEY_BYTES]
+    if len(text) == 2 * KEY_BYTES and all(chr(c) in string.hexdigits for c in text):
+        return bytes.fromhex(text.decode("ascii"))
+    raise SigningKeyError(
+        f"{os.fspath(path)}: not a signing key: expected 32 bytes, 64 hex digits (e.g. the "
+        f"SHA-256 of the passphrase) or PX4's 40-byte key file, found {len(data)} bytes"
+    )
+
+
+def accepted(msg: Any) -> bool:
+    """Whether a message a signing parser returned was signed and checked (or is one of the
+    few allowed unsigned); pymavlink returns messages of unknown IDs unchecked."""
+    return bool(msg.get_signed()) or msg.get_msgId() in UNSIGNED_ALLOWED
+
+
+def signing_timestamp(now: float | None = None) -> int:
+    """MAVLink signing's clock: 10 microsecond units since 2015-01-01 (``now``: Unix time)."""
+    seconds = time.time() if now is None else now
+    return int(max(0.0, seconds - EPOCH_2015) * 100_000)
+
+
+class Signing:
+    """The signing state of one link: our key, link ID and timestamp, and the streams heard.
+    :meth:`parser` makes parsers that sign what they pack and refuse what the rules above
+    refuse, :meth:`attach` does the same to an existing ``MAVLink`` object (a mavutil
+    connection's); what is refused is counted in :attr:`dropped`."""
+
+    def __init__(self, key: bytes, link_id: int = 0, *, now: float | None = None) -> None:
+        if len(key) != KEY_BYTES:
+            raise SigningKeyError(f"a signing key is {KEY_BYTES} bytes, not {len(key)}")
+        self.state = mavlink.MAVLinkSigning()
+        self.state.secret_key = key
+        self.state.link_id = link_id
+        self.state.sign_outgoing = True
+        self.state.timestamp = signing_timestamp(now)
+        self.state.allow_unsigned_callback = self._unsigned
+        #: Frames refused: ``unsigned``, ``badly_signed`` (wrong signature, replayed or old
+        #: timestamp), and how many of them were ``PARAM_SET``.
+        self.dropped = {"unsigned": 0, "badly_signed": 0, "param_set": 0}
+        self._bad = False
+
+    def attach(self, mav: mavlink.MAVLink) -> mavlink.MAVLink:
+        """``mav`` signs every frame it packs from now on and accepts frames by the rules."""
+        mav.signing = self.state
+
+        def check(msgbuf: bytearray, system: int, component: int) -> bool:
+            return self.check(mav, bytes(msgbuf), system, component)
+
+        mav.check_signature = check  # type: ignore[method-assign]
+        return mav
+
+    def parser(self, file: Any) -> mavlink.MAVLink:
+        """A parser (robust: refused frames become ``BAD_DATA``) that checks signatures."""
+        parser = self.attach(mavlink.MAVLink(file))
+        parser.robust_parsing = True
+        return parser
+
+    def _unsigned(self, mav: Any, message_id: int) -> bool:
+        """pymavlink asks this about every frame it did not accept as signed."""
+        bad, self._bad = self._bad, False
+        if message_id in UNSIGNED_ALLOWED and not bad:
+            return True
+        self.dropped["badly_signed" if bad else "unsigned"] += 1
+        if message_id == mavlink.MAVLINK_MSG_ID_PARAM_SET:
+            self.dropped["param_set"] += 1
+        return False
+
+    def check(self, mav: mavlink.MAVLink, frame: bytes, system: int, component: int) -> bool:
+        """PX4's acceptance of a signed frame (rules 1 and 2 above)."""
+        # 1. the signature, by pymavlink's own check against a blank copy of the state (no
+        #    streams, timestamp 0): it accepts any timestamp and changes nothing of ours
+        scratch = copy.copy(self.state)
+        scratch.stream_timestamps = {}
+        scratch.timestamp = 0
+        mav.signing = scratch
+        try:
+            good = mavlink.MAVLink.check_signature(mav, bytearray(frame), system, component)
+        finally:
+            mav.signing = self.state
+        if not good:
+            self._bad = True
+            return False
+        # 2. the timestamp, per stream; ours follows the clock too (the spec's advice), so that
+        #    a long run does not let old new-stream frames through
+        self.state.timestamp = max(self.state.timestamp, signing_timestamp())
+        link_id = frame[-13]
+        stamp = int.from_bytes(frame[-12:-6], "little")
+        streams = self.state.stream_timestamps
+        key = (link_id, system, component)
+        last = streams.get(key)
+        if last is None:
+            if len(streams) >= MAX_STREAMS or stamp + NEW_STREAM_WINDOW < self.state.timestamp:
+                self._bad = True
+                return False
+        elif stamp <= last:
+            self._bad = True
+            return False
+        streams[key] = stamp
+        self.state.timestamp = max(self.state.timestamp, stamp)
+        return True
