@@ -376,3 +376,97 @@ def test_bad_input(case: Case, template: Path, tmp_path: Path) -> None:
     else:
         assert lines and "error:" in lines[-1], err
     assert (tmp_path / "v.store").read_bytes() == before
+
+
+# -- hostile files: each kind of file the product reads, as what is not a file to read ---------
+#
+# Run as processes with a timeout: read as a file, a FIFO blocks for ever and /dev/zero grows
+# until memory runs out. Each file kind is given as a FIFO, a device (a link to /dev/zero), a
+# folder, a link to itself and a sparse file one byte over its kind's cap.
+
+#: (file name, command line with {f} for the file, the size cap of its kind)
+FILE_KINDS: dict[str, tuple[str, tuple[str, ...], int]] = {
+    "store": ("h.store", ("param", "--store", "{f}", "show"), 16 << 20),
+    "bench": (
+        "h.bench.toml",
+        ("autostart", "run", "--store", "{dir}/v.store", "--bench", "{f}"),
+        1 << 20,
+    ),
+    "drivers": (
+        "h.drivers.toml",
+        ("autostart", "run", "--store", "{dir}/v.store", "--bench", "{bench}", "--drivers", "{f}"),
+        1 << 20,
+    ),
+    "classic": (
+        "h.json",
+        ("param", "--store", "{dir}/v.store", "--classic", "{f}", "show"),
+        32 << 20,
+    ),
+    "dsdl": ("acme/H.1.0.dsdl", ("types", "--dsdl", "{dir}/acme"), 1 << 20),
+    "import": ("h.params", ("param", "--store", "{dir}/v.store", "import", "{f}"), 16 << 20),
+    "load": ("h.json", ("param", "--store", "{dir}/v.store", "load", "{f}"), 16 << 20),
+    "migrate-params": ("h.params", ("migrate", "{f}", "--table", "legacy"), 16 << 20),
+    "migrate-ulog": ("h.ulg", ("migrate", "{f}", "--table", "legacy"), 1 << 30),
+    "health": ("h.ulg", ("health", "{f}"), 1 << 30),
+    "devid": ("h.ulg", ("devid", "--table", "legacy", "--log", "{f}"), 1 << 30),
+    "airframe": ("h.airframe", ("run", "{f}", "--store", "{dir}/v.store"), 1 << 20),
+}
+
+#: What each shape of hostile file is, and what the error line says about it.
+SHAPES = {
+    "fifo": "is a FIFO (named pipe), not a regular file",
+    "device": "is a character device, not a regular file",
+    "folder": "is a folder, not a file",
+    "loop": "Too many levels of symbolic links",
+    "oversize": "too large for",
+}
+
+HOSTILE = [(kind, shape) for kind in FILE_KINDS for shape in SHAPES]
+
+
+def _make_hostile(path: Path, shape: str, cap: int) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    if shape == "fifo":
+        os.mkfifo(path)
+    elif shape == "device":
+        path.symlink_to("/dev/zero")
+    elif shape == "folder":
+        path.mkdir()
+    elif shape == "loop":
+        path.symlink_to(path.name)
+    else:
+        with open(path, "wb") as f:
+            f.truncate(cap + 1)  # sparse: one byte over the cap costs no disk
+
+
+@pytest.mark.parametrize(("kind", "shape"), HOSTILE, ids=[f"{k}-{s}" for k, s in HOSTILE])
+def test_hostile_file(kind: str, shape: str, template: Path, tmp_path: Path) -> None:
+    name, args, cap = FILE_KINDS[kind]
+    shutil.copy(template, tmp_path / "v.store")
+    before = (tmp_path / "v.store").read_bytes()
+    hostile = tmp_path / name
+    _make_hostile(hostile, shape, cap)
+    bench = ROOT / "examples" / "two_batteries.bench.toml"
+    words = [
+        a.replace("{f}", str(hostile))
+        .replace("{dir}", str(tmp_path))
+        .replace("{bench}", str(bench))
+        for a in args
+    ]
+    # A folder named like a definition is a namespace folder: a root without definitions.
+    says = "contains no .dsdl" if (kind, shape) == ("dsdl", "folder") else SHAPES[shape]
+    result = subprocess.run(
+        [sys.executable, "-m", "px4params", *words],
+        capture_output=True,
+        text=True,
+        timeout=20,
+        cwd=tmp_path,
+        check=False,
+        env={**os.environ, "PX4PARAMS_DSDL_PATH": ""},
+    )
+    assert result.returncode == 1, result.stderr
+    assert "Traceback" not in result.stderr
+    lines = result.stderr.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("px4params: error: "), result.stderr
+    assert says in lines[0] and str(tmp_path) in lines[0], lines[0]
+    assert (tmp_path / "v.store").read_bytes() == before

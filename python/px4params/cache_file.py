@@ -15,6 +15,7 @@ import os
 import sys
 
 from px4params._records import TYPE_CHECKING
+from px4params.reading import CACHE, read_bytes
 
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
     from typing import Any
@@ -56,8 +57,7 @@ def read_cached(path: str, key: str) -> Any:
     """The value cached in ``path`` under ``key``; None when missing, damaged or for another
     key."""
     try:
-        with open(path, "rb") as f:
-            data = f.read()
+        data = read_bytes(path, CACHE)
     except OSError:
         return None
     body = memoryview(data)[8:]

@@ -42,6 +42,7 @@ from typing import Any
 from px4params.dsdl.schema import Schema
 from px4params.errors import MigrationError, ParamFileError, Px4ParamsError
 from px4params.formats import qgc_params
+from px4params.reading import PARAM_FILE, ULOG, open_file, read_text
 from px4params.vehicle import devid
 from px4params.vehicle.drivers import Driver, load_drivers
 
@@ -103,7 +104,7 @@ def read_config(path: str | os.PathLike[str]) -> OldConfig:
     """Reads a ULog's parameters (their last values in the log) or a QGC ``.params`` file."""
     where = os.fspath(path)
     try:
-        with open(where, "rb") as f:
+        with open_file(where, ULOG) as f:
             head = f.read(len(ULOG_MAGIC))
     except OSError as e:
         raise MigrationError(f"{where}: cannot read: {e.strerror}") from None
@@ -116,8 +117,12 @@ def _read_ulog(where: str) -> OldConfig:
     from pyulog import ULog  # only ULog input needs it
 
     try:
-        with contextlib.redirect_stdout(io.StringIO()):  # pyulog prints warnings
-            log = ULog(where, message_name_filter_list=[])
+        file = open_file(where, ULOG)
+    except OSError as e:
+        raise MigrationError(f"{where}: cannot read: {e.strerror}") from None
+    try:
+        with file, contextlib.redirect_stdout(io.StringIO()):  # pyulog prints warnings
+            log = ULog(file, message_name_filter_list=[])
     except Exception as e:  # pyulog signals bad data with assorted exceptions
         raise MigrationError(f"{where}: not a readable ULog file ({e})") from None
     params: dict[str, int | float] = dict(log.initial_parameters)
@@ -137,7 +142,9 @@ def _read_ulog(where: str) -> OldConfig:
 
 def _read_params(where: str) -> OldConfig:
     try:
-        text = Path(where).read_text(encoding="utf-8")
+        text = read_text(where, PARAM_FILE)
+    except OSError as e:
+        raise MigrationError(f"{where}: cannot read: {e.strerror}") from None
     except UnicodeDecodeError:
         raise MigrationError(f"{where}: neither a ULog file nor a QGC .params text file") from None
     try:

@@ -34,6 +34,7 @@ from px4params.cache_file import (
 from px4params.data import VALUE_SETS_TOML
 from px4params.dsdl.roots import Root, collect_roots, package_init
 from px4params.errors import DsdlError
+from px4params.reading import DSDL, read_bytes
 
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
     from typing import Any
@@ -193,8 +194,7 @@ def cache_key_text(roots: Sequence[Root], include_dronecan: bool) -> str:
 
 def _file_crc(path: str) -> int:
     try:
-        with open(path, "rb") as f:
-            return binascii.crc32(f.read())
+        return binascii.crc32(read_bytes(path, DSDL))
     except OSError as ex:
         raise DsdlError(f"cannot read DSDL file: {ex.strerror or ex}", path) from ex
 

@@ -24,6 +24,7 @@ from typing import TextIO
 
 from px4params.errors import CommandError, Px4ParamsError
 from px4params.nsh import param
+from px4params.reading import AIRFRAME, read_text
 from px4params.store.session import Session
 
 _VAR = re.compile(r"\$(?:\{([A-Za-z_][A-Za-z0-9_]*)\}|([A-Za-z_][A-Za-z0-9_]*))")
@@ -74,8 +75,7 @@ def run_file(path: str, session: Session, *, keep_going: bool, err: TextIO) -> R
     """Runs ``path`` against ``session``'s store; saves it once when the file succeeded (or,
     with ``keep_going``, when anything succeeded)."""
     try:
-        with open(path, encoding="utf-8") as f:
-            lines = f.read().splitlines()
+        lines = read_text(path, AIRFRAME).splitlines()
     except OSError as e:
         raise CommandError(f"{path}: cannot read: {e.strerror}") from None
     except UnicodeDecodeError as e:

@@ -25,6 +25,7 @@ from px4params.cache_file import (
 )
 from px4params.data import CLASSIC_PARAMETERS_JSON
 from px4params.errors import ClassicParamsError
+from px4params.reading import CLASSIC_JSON, read_text
 
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
     from typing import Any, NamedTuple
@@ -104,8 +105,7 @@ def _parse_classic(where: str) -> list[ClassicParam]:
     import json  # only on a cache miss: json costs a command 2 ms to import
 
     try:
-        with open(where, encoding="utf-8") as f:
-            document = json.load(f)
+        document = json.loads(read_text(where, CLASSIC_JSON))
     except OSError as e:
         raise ClassicParamsError(f"{where}: cannot read: {e.strerror}") from None
     except (json.JSONDecodeError, UnicodeDecodeError) as e:

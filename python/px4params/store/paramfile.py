@@ -25,6 +25,7 @@ from px4params.errors import InstanceError, NumberError, ParamFileError, Px4Para
 from px4params.formats import qgc_params
 from px4params.formats.qgc_params import format_line
 from px4params.numbers import load_json
+from px4params.reading import PARAM_FILE, read_text
 from px4params.store.store import Key, Store
 
 JSON_FORMAT = "px4params"
@@ -107,8 +108,7 @@ def read(store: Store, path: str, *, reset: bool) -> list[str]:
     it or, on any error, nothing. Returns report lines."""
     kind = kind_of(path)
     try:
-        with open(path, encoding="utf-8") as f:
-            text = f.read()
+        text = read_text(path, PARAM_FILE)
     except OSError as e:
         raise ParamFileError(f"{path}: cannot read: {e.strerror}") from None
     except UnicodeDecodeError as e:

@@ -54,6 +54,7 @@ from typing import Any
 
 from px4params.errors import DeviceIdError, NumberError
 from px4params.numbers import abbreviated, parse_int
+from px4params.reading import DEVTYPES, ULOG, open_file, read_text
 
 __all__ = [
     "BUS_TYPES",
@@ -304,7 +305,7 @@ def find_current_table(path: str | os.PathLike[str] | None = None) -> Path:
 @functools.lru_cache(maxsize=8)
 def _read_table(path: str, _mtime_ns: int, _size: int) -> DevtypeTable:
     try:
-        text = Path(path).read_text(encoding="utf-8", errors="replace")
+        text = read_text(path, DEVTYPES, errors="replace")
     except OSError as e:
         raise DeviceIdError(f"cannot read devtypes file {path}: {e.strerror}") from None
     return DevtypeTable("current", path, parse_devtypes(text, path))
@@ -605,14 +606,16 @@ def decode_log(
     from pyulog import ULog  # imported here: only this function needs it
 
     where = Path(path)
-    if not where.exists():
-        raise DeviceIdError(f"log file not found: {where}")
     try:
-        # pyulog prints warnings to stdout, which would corrupt --json output.
-        with contextlib.redirect_stdout(io.StringIO()):
-            log = ULog(str(where), message_name_filter_list=[])
+        file = open_file(where, ULOG)
+    except FileNotFoundError:
+        raise DeviceIdError(f"log file not found: {where}") from None
     except OSError as e:
         raise DeviceIdError(f"cannot read log file {where}: {e.strerror}") from None
+    try:
+        # pyulog prints warnings to stdout, which would corrupt --json output.
+        with file, contextlib.redirect_stdout(io.StringIO()):
+            log = ULog(file, message_name_filter_list=[])
     except Exception as e:  # pyulog signals bad data with its own and with generic exceptions
         raise DeviceIdError(f"{where}: not a ULog file ({e})") from None
     if table == "auto":

@@ -52,6 +52,7 @@ from typing import Any
 
 from px4params.data import DRIVERS_TOML
 from px4params.errors import DriversFileError
+from px4params.reading import DRIVERS, read_text
 from px4params.store.spec import ParamSpec
 
 __all__ = [
@@ -222,7 +223,7 @@ def load_drivers(
         path = os.environ.get(DRIVERS_ENV) or DEFAULT_DRIVERS
     source = os.fspath(path)
     try:
-        text = Path(path).read_text(encoding="utf-8")
+        text = read_text(path, DRIVERS)
     except FileNotFoundError:
         raise DriversFileError(f"{source}: no such drivers file") from None
     except (OSError, UnicodeDecodeError) as e:

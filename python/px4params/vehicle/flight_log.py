@@ -27,6 +27,7 @@ from __future__ import annotations
 from px4params._records import TYPE_CHECKING
 from px4params.errors import ULogError
 from px4params.formats.ulog import ULogWriter
+from px4params.reading import ULOG, open_file
 from px4params.vehicle.autostart import describe_location
 
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
@@ -245,9 +246,12 @@ def read_run_ulog(path: str) -> RunResult:
     from px4params.vehicle.simbench import InstanceResult, RunResult
 
     try:
-        ulog = ULog(path)
+        file = open_file(path, ULOG)
     except OSError as e:
         raise ULogError(f"{path}: cannot read: {e.strerror or e}") from None
+    try:
+        with file:
+            ulog = ULog(file)
     except Exception as e:  # pyulog raises bare Exceptions for what it cannot parse
         raise ULogError(f"{path}: not a ULog file ({e})") from None
     info = ulog.msg_info_dict

@@ -63,6 +63,7 @@ from pathlib import Path
 from typing import Any
 
 from px4params.errors import BenchFileError
+from px4params.reading import BENCH, read_text
 from px4params.vehicle.autostart import Configured, describe_location
 from px4params.vehicle.drivers import BUS_KINDS, Driver, Drivers
 
@@ -162,7 +163,7 @@ def load_bench(path: str | os.PathLike[str], drivers: Drivers) -> Bench:
     """Reads and checks a bench file; chips must be ones ``drivers`` declare."""
     source = os.fspath(path)
     try:
-        text = Path(path).read_text(encoding="utf-8")
+        text = read_text(path, BENCH)
     except FileNotFoundError:
         raise BenchFileError(f"{source}: no such bench file") from None
     except (OSError, UnicodeDecodeError) as e:
