@@ -22,15 +22,17 @@ CLI = [sys.executable, "-m", "px4params"]
 SMALL = FileKind("a test file", 10)
 
 
-def cli(*args: str, cwd: Path | None = None, **kwargs: object) -> subprocess.CompletedProcess[str]:
+def cli(
+    *args: str, cwd: Path | None = None, timeout: float = 60, env: dict[str, str] | None = None
+) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
         [*CLI, *args],
         capture_output=True,
         text=True,
-        timeout=60,
+        timeout=timeout,
         cwd=cwd,
+        env=env,
         check=False,
-        **kwargs,  # type: ignore[arg-type]
     )
 
 
@@ -125,3 +127,157 @@ def test_every_product_read_goes_through_the_reader() -> None:
             if reads and '"w"' not in code and '"wb"' not in code and name not in allowed:
                 found.append(f"{name}:{number}: {line.strip()}")
     assert found == []
+
+
+# -- 2: strict inputs ---------------------------------------------------------------------------
+
+
+def _export(store: Path, tmp_path: Path) -> str:
+    exported = tmp_path / "e.json"
+    assert cli("param", "--store", str(store), "export", str(exported)).returncode == 0
+    return exported.read_text()
+
+
+@pytest.mark.parametrize("verb", ["load", "import"])
+def test_a_misspelled_top_level_key_of_a_json_export_changes_nothing(
+    verb: str, store: Path, tmp_path: Path
+) -> None:
+    text = _export(store, tmp_path).replace('"instances"', '"instancez"')
+    bad = tmp_path / "t.json"
+    bad.write_text(text)
+    before = store.read_bytes()
+    result = cli("param", "--store", str(store), verb, str(bad))
+    assert result.returncode == 1
+    assert result.stderr == (
+        f"px4params: error: {bad}: unknown top-level key 'instancez' (did you mean "
+        "'instances'?); nothing was changed\n"
+    )
+    assert store.read_bytes() == before
+
+
+@pytest.mark.parametrize(
+    ("body", "says"),
+    [
+        ('"instances": null', "'instances' must be an object, not null; nothing was changed"),
+        ('"classic": []', "'classic' must be an object, not an array; nothing was changed"),
+        ('"instances": {"INA238#0": {"valeu": {}}}', "unknown key 'valeu' (did you mean 'value'?)"),
+        ('"instances": {"INA238#0": []}', 'INA238#0: expected {"value": ..., "default": ...}'),
+        ('"instances": {"INA238#0.current": {"value": 1}}', "holds whole structured parameters"),
+        ('"instances": {"SYS_AUTOSTART": {"value": 1}}', "holds whole structured parameters"),
+        ('"classic": {"INA238#0": 1}', "INA238#0: not a classic parameter of this store"),
+        ('"comment": "x"', "unknown top-level key 'comment' (expected: format, version"),
+    ],
+)
+def test_wrong_shapes_in_a_json_export_are_named(
+    body: str, says: str, store: Path, tmp_path: Path
+) -> None:
+    bad = tmp_path / "t.json"
+    bad.write_text('{"format": "px4params", "version": 1, ' + body + "}")
+    before = store.read_bytes()
+    result = cli("param", "--store", str(store), "import", str(bad))
+    assert result.returncode == 1 and says in result.stderr, result.stderr
+    assert result.stderr.startswith(f"px4params: error: {bad}: ") and result.stderr.count("\n") == 1
+    assert store.read_bytes() == before
+
+
+def test_an_export_still_loads_back_to_the_same_store(store: Path, tmp_path: Path) -> None:
+    _export(store, tmp_path)
+    before = store.read_bytes()
+    result = cli("param", "--store", str(store), "load", str(tmp_path / "e.json"))
+    assert result.returncode == 0, result.stderr
+    assert store.read_bytes() == before
+
+
+@pytest.mark.parametrize(
+    ("kind", "text", "says"),
+    [
+        ("bench", "benchz = 1\n", "unknown top-level key 'benchz' (did you mean 'bench'?)"),
+        ("bench", "bus = 1\n", "'bus' must be [[bus]] tables"),
+        ("bench", "[[bus]]\nkind = []\n", "kind [] is not a simulated bus kind"),
+        ("drivers", "drivers = 1\n", "unknown top-level key 'drivers' (expected [[driver]]"),
+        (
+            "drivers",
+            '[[driver]]\nname = "x"\nparameter = "INA238"\nchip = "INA238"\norder = 1\n'
+            "devtype = 1\nrate_hz = 1\nbuses = [{}]\n",
+            "unknown bus kind {}",
+        ),
+        ("drivers", '[[driver]]\nname = "x"\nnope = 1\n', "unknown key 'nope' (expected: name,"),
+    ],
+)
+def test_toml_inputs_name_unknown_keys_and_wrong_shapes(
+    kind: str, text: str, says: str, store: Path, tmp_path: Path
+) -> None:
+    bad = tmp_path / f"bad.{kind}.toml"
+    bad.write_text(text)
+    bench = ROOT / "examples" / "two_batteries.bench.toml"
+    args = (
+        ["--bench", str(bad)] if kind == "bench" else ["--bench", str(bench), "--drivers", str(bad)]
+    )
+    result = cli("autostart", "run", "--store", str(store), *args)
+    assert result.returncode == 1 and "Traceback" not in result.stderr
+    assert result.stderr.startswith(f"px4params: error: {bad}: ") and says in result.stderr, (
+        result.stderr
+    )
+
+
+# -- 3: DSDL folders ----------------------------------------------------------------------------
+
+
+def _root_with_one_type(tmp_path: Path) -> Path:
+    root = tmp_path / "acme"
+    root.mkdir()
+    (root / "Thing.1.0.dsdl").write_text("uint8 x\n@sealed\n")
+    return root
+
+
+def test_a_link_cycle_in_a_dsdl_root_ends_and_each_folder_is_read_once(tmp_path: Path) -> None:
+    root = _root_with_one_type(tmp_path)
+    (root / "up").symlink_to("..")  # the folder holding the root: the root again, and more
+    (root / "again").symlink_to(".")  # the root itself
+    (root / "a").symlink_to("b")  # a two-link cycle
+    (root / "b").symlink_to("a")
+    result = cli("types", "--dsdl", str(root), env={**os.environ, "PX4PARAMS_DSDL_PATH": ""})
+    assert result.returncode == 0, result.stderr
+    assert [line.split()[0] for line in result.stdout.splitlines() if "acme" in line] == [
+        "acme.Thing.1.0"
+    ]
+
+
+@pytest.mark.parametrize(
+    ("root", "says"),
+    [
+        ("/", "/: the file system's root is not a DSDL root namespace folder"),
+        ("/usr", "/usr: DSDL root holds more than 10,000 files and folders"),
+    ],
+)
+def test_a_system_folder_as_dsdl_root_is_refused_quickly(root: str, says: str) -> None:
+    entries = zip(range(10_001), Path("/usr").rglob("*"), strict=False)
+    if root == "/usr" and sum(1 for _ in entries) <= 10_000:
+        pytest.skip("this /usr holds fewer than 10,000 entries")
+    result = cli("types", env={**os.environ, "PX4PARAMS_DSDL_PATH": root}, timeout=20)
+    assert result.returncode == 1
+    assert result.stderr.startswith(f"px4params: error: {says}"), result.stderr
+
+
+def test_dsdl_folders_deeper_than_the_cap_are_refused(tmp_path: Path) -> None:
+    root = _root_with_one_type(tmp_path)
+    deep = root
+    for _ in range(17):
+        deep = deep / "n"
+    deep.mkdir(parents=True)
+    result = cli("types", "--dsdl", str(root), env={**os.environ, "PX4PARAMS_DSDL_PATH": ""})
+    assert result.returncode == 1
+    assert "DSDL folders nested deeper than 16 levels" in result.stderr, result.stderr
+
+
+def test_a_definition_that_is_a_link_loop_is_named(tmp_path: Path) -> None:
+    root = _root_with_one_type(tmp_path)
+    (root / "A.1.0.dsdl").symlink_to("B.1.0.dsdl")
+    (root / "B.1.0.dsdl").symlink_to("A.1.0.dsdl")
+    result = cli("types", "--dsdl", str(root), env={**os.environ, "PX4PARAMS_DSDL_PATH": ""})
+    assert result.returncode == 1
+    assert re.fullmatch(
+        f"px4params: error: {root}/[AB].1.0.dsdl: cannot read DSDL file: Too many levels of "
+        "symbolic links\n",
+        result.stderr,
+    ), result.stderr

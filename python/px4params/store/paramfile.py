@@ -23,12 +23,16 @@ from typing import Any
 from px4params.dsdl.schema import to_json_value
 from px4params.errors import InstanceError, NumberError, ParamFileError, Px4ParamsError
 from px4params.formats import qgc_params
+from px4params.formats.keys import unknown_key
 from px4params.formats.qgc_params import format_line
 from px4params.numbers import load_json
 from px4params.reading import PARAM_FILE, read_text
 from px4params.store.store import Key, Store
 
 JSON_FORMAT = "px4params"
+#: The keys of a JSON export, and of each of its instances: any other is refused by name.
+JSON_KEYS = ("format", "version", "instances", "classic")
+_ENTRY_KEYS = ("value", "default")
 
 _FLAT_INSTANCE = re.compile(r"(?P<param>[A-Z0-9_]+?)_(?P<instance>\d+)(?P<letters>[A-Z]+)")
 
@@ -186,15 +190,30 @@ def _read_json(store: Store, path: str, text: str) -> list[str]:
         raise ParamFileError(
             f"{path}: JSON export version {document.get('version')!r} (expected 1)"
         )
-    instances = document.get("instances") or {}
-    classic = document.get("classic") or {}
-    if not isinstance(instances, dict) or not isinstance(classic, dict):
-        raise ParamFileError(f"{path}: 'instances' and 'classic' must be objects")
+    complaint = unknown_key(document, JSON_KEYS, "top-level key")
+    if complaint is not None:
+        raise ParamFileError(f"{path}: {complaint}; nothing was changed")
+    instances = document.get("instances", {})
+    classic = document.get("classic", {})
+    for section, value in (("instances", instances), ("classic", classic)):
+        if not isinstance(value, dict):
+            raise ParamFileError(
+                f"{path}: '{section}' must be an object, not {_json_kind(value)}; nothing was "
+                "changed"
+            )
     for name, entry in instances.items():
         try:
             key = Key.parse(name)
-            if not isinstance(entry, dict):
+            if key.leaf is not None or store.classic(key.param) is not None:
+                raise ParamFileError(
+                    f"{name}: 'instances' holds whole structured parameters (INA238#0, not a "
+                    "leaf or a classic parameter)"
+                )
+            if not isinstance(entry, dict):  # ({} adds the instance with its defaults)
                 raise ParamFileError(f'{name}: expected {{"value": ..., "default": ...}}')
+            complaint = unknown_key(entry, _ENTRY_KEYS)
+            if complaint is not None:
+                raise ParamFileError(f"{name}: {complaint}")
             if key.instance is not None and name not in store:
                 store.add(name)
             if "default" in entry:
@@ -205,7 +224,19 @@ def _read_json(store: Store, path: str, text: str) -> list[str]:
             raise ParamFileError(f"{path}: instances: {e}") from None
     for name, value in classic.items():
         try:
+            if store.classic(Key.parse(name).param) is None:
+                raise ParamFileError(f"{name}: not a classic parameter of this store")
             store.set(name, value)
         except Px4ParamsError as e:
             raise ParamFileError(f"{path}: classic: {e}") from None
     return []
+
+
+def _json_kind(value: Any) -> str:
+    """How JSON names the kind of ``value``: ``an array``, ``null``, ``a string``, ..."""
+    if value is None:
+        return "null"
+    if isinstance(value, bool):
+        return "a boolean"
+    kinds = {list: "an array", str: "a string", int: "a number", float: "a number"}
+    return kinds.get(type(value), "an object")

@@ -63,6 +63,7 @@ from pathlib import Path
 from typing import Any
 
 from px4params.errors import BenchFileError
+from px4params.formats.keys import unknown_key
 from px4params.reading import BENCH, read_text
 from px4params.vehicle.autostart import Configured, describe_location
 from px4params.vehicle.drivers import BUS_KINDS, Driver, Drivers
@@ -222,11 +223,9 @@ def _check_keys(
     error: Callable[[str], BenchFileError],
     what: str = "key",
 ) -> None:
-    for key in table:
-        if key not in allowed:
-            hint = difflib.get_close_matches(key, allowed, n=1)
-            extra = f"did you mean '{hint[0]}'?" if hint else f"expected: {', '.join(allowed)}"
-            raise error(f"unknown {what} '{key}' ({extra})")
+    complaint = unknown_key(table, allowed, what)
+    if complaint is not None:
+        raise error(complaint)
 
 
 def _bus(table: Any, where: str) -> BenchBus:
@@ -298,8 +297,8 @@ def _kind(table: dict[str, Any], fail: Callable[[str], BenchFileError], key: str
     if key not in table:
         raise fail(f"missing key '{key}'")
     kind = table[key]
-    if kind not in SIMULATED_BUSES:
-        also = " (not simulated)" if kind in BUS_KINDS else ""
+    if not isinstance(kind, str) or kind not in SIMULATED_BUSES:
+        also = " (not simulated)" if isinstance(kind, str) and kind in BUS_KINDS else ""
         raise fail(f"{key} {kind!r} is not a simulated bus kind{also} (expected i2c or spi)")
     return str(kind)
 
