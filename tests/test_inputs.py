@@ -281,3 +281,78 @@ def test_a_definition_that_is_a_link_loop_is_named(tmp_path: Path) -> None:
         "symbolic links\n",
         result.stderr,
     ), result.stderr
+
+
+# -- 4: airframe lines in linear time -----------------------------------------------------------
+
+
+def _run_airframe(store: Path, tmp_path: Path, text: str) -> subprocess.CompletedProcess[str]:
+    airframe = tmp_path / "frame.airframe"
+    airframe.write_text(text)
+    return cli("run", str(airframe), "--store", str(store), timeout=20)
+
+
+def test_a_megabyte_line_is_refused_at_once_naming_file_and_line(
+    store: Path, tmp_path: Path
+) -> None:
+    before = store.read_bytes()
+    result = _run_airframe(store, tmp_path, "# one\nparam set SYS_AUTOSTART " + "1" * 1_000_000)
+    assert result.returncode == 1
+    assert result.stderr == (
+        f"px4params: {tmp_path}/frame.airframe:2: line of 1,000,024 characters (at most 65,536)\n"
+    )
+    assert store.read_bytes() == before
+
+
+def test_doubling_a_variable_stops_at_the_line_cap(store: Path, tmp_path: Path) -> None:
+    before = store.read_bytes()
+    text = "set A x\n" + "set A $A$A\n" * 40
+    result = _run_airframe(store, tmp_path, text)
+    assert result.returncode == 1
+    # A holds 2**15 characters after line 16; line 17 would make 2**16 + 2.
+    assert result.stderr == (
+        f"px4params: {tmp_path}/frame.airframe:17: the line expands to more than 65,536 "
+        "characters\n"
+    )
+    assert store.read_bytes() == before
+
+
+def test_a_long_value_within_the_cap_is_split_as_the_shell_splits_it(
+    store: Path, tmp_path: Path
+) -> None:
+    padding = " " * 60_000
+    value = (
+        '{"bus": {"i2c": {"bus_id": 2, "address": 70}}, "current": 100,' + padding + '"shunt": 1}'
+    )
+    text = f'param set INA238#0 \'{value}\'\nset V "a \\"b\\" c"\nparam set SYS_AUTOSTART 4001\n'
+    result = _run_airframe(store, tmp_path, text)
+    assert result.returncode == 0, result.stderr
+    shown = cli("param", "--store", str(store), "show", "-q", "INA238#0.bus.i2c.address")
+    assert shown.stdout.strip() == "70"
+
+
+@pytest.mark.parametrize(
+    "line",
+    [
+        'a b  \'c d\' "e \\" \\\\ \\$ f" g\\ h \'\' "" i\'j\'"k"',
+        "'unterminated",
+        '"open \\',
+        "trailing \\",
+        "\t x\ty \r",
+    ],
+)
+def test_airframe_words_are_shlex_words(line: str) -> None:
+    import shlex
+
+    from px4params.errors import CommandError
+    from px4params.nsh.airframe import _words
+
+    try:
+        expected: list[str] | str = shlex.split(line)
+    except ValueError as e:
+        expected = str(e)
+    try:
+        got: list[str] | str = _words(line)
+    except CommandError as e:
+        got = str(e)
+    assert got == expected
