@@ -356,3 +356,122 @@ def test_airframe_words_are_shlex_words(line: str) -> None:
     except CommandError as e:
         got = str(e)
     assert got == expected
+
+
+# -- 5: caches that cannot lie -----------------------------------------------------------------
+
+
+def _env(cache: Path) -> dict[str, str]:
+    return {**os.environ, "PX4PARAMS_CACHE_DIR": str(cache), "PX4PARAMS_DSDL_PATH": ""}
+
+
+def _edit_keeping_mtime(path: Path, old: str, new: str) -> None:
+    """Replaces ``old`` by ``new`` (same length) in place, then puts the modification time back,
+    as ``cp -p`` onto an existing file or ``rsync -t`` leave an edited file."""
+    st = path.stat()
+    text = path.read_text()
+    assert len(old) == len(new) and old in text
+    path.write_text(text.replace(old, new))
+    os.utime(path, ns=(st.st_atime_ns, st.st_mtime_ns))
+    assert path.stat().st_mtime_ns == st.st_mtime_ns and path.stat().st_size == st.st_size
+
+
+def test_a_dsdl_edit_with_its_mtime_restored_is_seen(tmp_path: Path) -> None:
+    root = _root_with_one_type(tmp_path)
+    definition = root / "Thing.1.0.dsdl"
+    an_hour_ago = int((definition.stat().st_mtime - 3600) * 1e9)
+    os.utime(definition, ns=(an_hour_ago, an_hour_ago))  # not "racy": keyed by its stamp alone
+    env = _env(tmp_path / "cache")
+    first = cli("encode", "acme.Thing", '{"x": 5}', "--dsdl", str(root), env=env)
+    assert first.returncode == 0, first.stderr
+    _edit_keeping_mtime(definition, "uint8 x", "uint8 y")
+    second = cli("encode", "acme.Thing", '{"y": 5}', "--dsdl", str(root), env=env)
+    assert second.returncode == 0, second.stderr
+    assert second.stdout == first.stdout
+
+
+def test_a_parameters_json_edit_with_its_mtime_restored_is_seen(
+    store: Path, tmp_path: Path
+) -> None:
+    classic = tmp_path / "parameters.json"
+    classic.write_text(
+        '{"version": 1, "parameters": [{"name": "SYS_AUTOSTART", "type": "Int32", '
+        '"default": 1111}]}'
+    )
+    an_hour_ago = int((classic.stat().st_mtime - 3600) * 1e9)
+    os.utime(classic, ns=(an_hour_ago, an_hour_ago))
+    env = _env(tmp_path / "cache")
+    args = ("param", "--store", str(tmp_path / "new.store"), "--classic", str(classic))
+    first = cli(*args, "show", "-q", "SYS_AUTOSTART", env=env)
+    assert first.stdout.strip() == "1111", first.stderr
+    _edit_keeping_mtime(classic, "1111", "2222")
+    second = cli(*args, "show", "-q", "SYS_AUTOSTART", env=env)
+    assert second.stdout.strip() == "2222", second.stderr
+
+
+def _rewrite_cache_entry(cache: Path, kind: str, change: object) -> Path:
+    """Changes the value cached in ``cache``'s ``KIND-*.marshal`` with ``change(value)`` and
+    writes it back with a valid CRC, as something else than px4params could."""
+    import binascii
+    import marshal
+
+    (path,) = cache.glob(f"{kind}-*.marshal")
+    data = path.read_bytes()
+    key, value = marshal.loads(data[8:])
+    value = change(value)  # type: ignore[operator]
+    body = marshal.dumps((key, value))
+    path.write_bytes(data[:4] + binascii.crc32(body).to_bytes(4, "little") + body)
+    return path
+
+
+def _without_fields(model: dict) -> dict:  # type: ignore[type-arg]
+    import marshal
+
+    definition = marshal.loads(model["types"]["px.Ina238.1.1"])
+    del definition["fields"]
+    model["types"]["px.Ina238.1.1"] = marshal.dumps(definition)
+    return model
+
+
+def _newest_wrong(model: dict) -> dict:  # type: ignore[type-arg]
+    model["newest"]["px.Ina238"] = "px.Ina238.1.0"
+    return model
+
+
+def _refs_wrong(model: dict) -> dict:  # type: ignore[type-arg]
+    model["refs"]["px.Ina238.1.1"] = []
+    return model
+
+
+def _types_garbage(model: dict) -> dict:  # type: ignore[type-arg]
+    model["types"]["px.Ina238.1.1"] = b"\x00not marshal"
+    return model
+
+
+@pytest.mark.parametrize(
+    ("kind", "change", "says"),
+    [
+        ("model", _without_fields, "type px.Ina238.1.1: no 'kind' of struct or union, or no"),
+        ("model", _newest_wrong, "'newest' does not name the newest version of each type"),
+        ("model", _refs_wrong, "type px.Ina238.1.1: its list of referenced types is not"),
+        ("model", _types_garbage, "type px.Ina238.1.1: cannot unpack it"),
+        ("model", lambda model: {**model, "types": []}, "'types' is not a table of packed"),
+        ("classic", lambda rows: [[1, 2]], "not a list of classic parameters"),
+    ],
+)
+def test_a_cache_entry_of_the_wrong_shape_is_rebuilt_with_a_note(
+    kind: str, change: object, says: str, store: Path, tmp_path: Path
+) -> None:
+    cache = tmp_path / "cache"
+    env = _env(cache)
+    show = ("param", "--store", str(store), "show", "-q", "INA238#0.bus.i2c.address")
+    expected = cli(*show, env=env)
+    assert expected.returncode == 0 and expected.stdout.strip() == "69", expected.stderr
+    path = _rewrite_cache_entry(cache, kind, change)
+    noted = cli(*show, env=env)
+    assert noted.returncode == 0, noted.stderr
+    assert noted.stdout == expected.stdout
+    assert noted.stderr.startswith(f"px4params: note: {path}: {says}")
+    assert noted.stderr.endswith("; rebuilding it\n") and noted.stderr.count("\n") == 1
+    again = cli(*show, env=env)  # rebuilt: no note
+    assert again.returncode == 0 and again.stderr == "" and again.stdout == expected.stdout

@@ -35,6 +35,30 @@ _MAGIC = b"P4MC"
 INTERPRETER = f"{sys.implementation.cache_tag} marshal {marshal.version}"
 
 
+def file_stamp(st: os.stat_result) -> str:
+    """What tells one version of a file from another without reading it: its device and inode
+    (a file replaced by a rename is another), size, and modification and change times. The
+    change time is the one ``cp -p``, ``rsync -t``, ``tar`` and ``touch -d`` cannot set back:
+    they restore the modification time of an edited file, and the edit still changes ``ctime``."""
+    return f"{st.st_dev}:{st.st_ino} {st.st_size} {st.st_mtime_ns} {st.st_ctime_ns}"
+
+
+def is_racy(st: os.stat_result, now: float) -> bool:
+    """Whether the file was written so shortly before ``now`` (``time.time()``) that another
+    write could follow without changing its stamp: its key must then cover its contents."""
+    return max(st.st_mtime_ns, st.st_ctime_ns) > (now - RACY_SECONDS) * 1e9
+
+
+def discard(path: str, why: str) -> None:
+    """Removes a cache file whose content cannot be used although its CRC matched (written by
+    something else, or edited), with a note on stderr: the caller rebuilds it."""
+    print(f"px4params: note: {path}: {why}; rebuilding it", file=sys.stderr)
+    try:  # noqa: SIM105 - contextlib.suppress costs every command 1 ms to import
+        os.unlink(path)
+    except OSError:
+        pass
+
+
 def default_cache_dir() -> str:
     """``$PX4PARAMS_CACHE_DIR``, else ``$XDG_CACHE_HOME/px4params``, else ``~/.cache/px4params``."""
     explicit = os.environ.get(CACHE_ENV)
