@@ -475,3 +475,45 @@ def test_a_cache_entry_of_the_wrong_shape_is_rebuilt_with_a_note(
     assert noted.stderr.endswith("; rebuilding it\n") and noted.stderr.count("\n") == 1
     again = cli(*show, env=env)  # rebuilt: no note
     assert again.returncode == 0 and again.stderr == "" and again.stdout == expected.stdout
+
+
+# -- 6: output errors ---------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "args",
+    [
+        ("param", "--store", "{store}", "show"),
+        ("param", "--store", "{store}", "show", "-l", "INA238#0"),
+        ("types",),
+    ],
+)
+def test_a_full_disk_for_the_output_is_one_line(args: tuple[str, ...], store: Path) -> None:
+    words = [a.replace("{store}", str(store)) for a in args]
+    with open("/dev/full", "w") as full:
+        result = subprocess.run(
+            [*CLI, *words], stdout=full, stderr=subprocess.PIPE, text=True, timeout=60, check=False
+        )
+    assert result.returncode == 1
+    assert result.stderr == "px4params: error: cannot write the output: No space left on device\n"
+
+
+@pytest.mark.parametrize(
+    "args", [("param", "--store", "{store}", "show"), ("types",), ("devid", "--list")]
+)
+def test_a_reader_that_went_away_ends_the_command_quietly(
+    args: tuple[str, ...], store: Path
+) -> None:
+    words = [a.replace("{store}", str(store)) for a in args]
+    process = subprocess.Popen(
+        [*CLI, *words], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
+    assert process.stdout is not None and process.stderr is not None
+    process.stdout.close()  # as `| head -0` does: every write meets a closed pipe
+    try:
+        err = process.stderr.read()
+        status = process.wait(timeout=60)
+    finally:
+        process.kill()
+    assert err == ""
+    assert status == 141  # 128 + SIGPIPE, as shells report `yes | head -1`
