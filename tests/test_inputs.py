@@ -517,3 +517,69 @@ def test_a_reader_that_went_away_ends_the_command_quietly(
         process.kill()
     assert err == ""
     assert status == 141  # 128 + SIGPIPE, as shells report `yes | head -1`
+
+
+# -- 7: health of a log cut short ---------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def faults_log(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A log of the faults bench, written by the product (INA238#1 is lost at 6.9 s)."""
+    log = tmp_path_factory.mktemp("log") / "run.ulg"
+    result = cli(
+        "autostart",
+        "run",
+        "--airframe",
+        str(AIRFRAME),
+        "--bench",
+        str(ROOT / "examples" / "two_batteries_faults.bench.toml"),
+        "--ulog",
+        str(log),
+    )
+    assert result.returncode == 1 and log.exists(), result.stderr
+    return log
+
+
+def test_a_whole_log_has_no_warning(faults_log: Path) -> None:
+    result = cli("health", str(faults_log))
+    assert result.stdout.splitlines()[0].endswith("arming refused at the end")
+    assert "warning: the log ends" not in result.stdout
+    assert "INA238#1 (ina238) at 6.50 s" in result.stdout
+
+
+def test_health_of_a_log_cut_short_says_so_and_from_when(faults_log: Path, tmp_path: Path) -> None:
+    from pyulog import ULog
+
+    data = faults_log.read_bytes()
+    cut = tmp_path / "cut.ulg"
+    cut.write_bytes(data[: len(data) // 2])
+    # The oracle: the last moment the cut file holds, as pyulog reads it.
+    ulog = ULog(str(cut))
+    last = max([ulog.last_timestamp] + [m.timestamp for m in ulog.logged_messages]) / 1e6
+    assert last < 6.9  # cut before INA238#1 was lost
+    result = cli("health", str(cut))
+    assert result.returncode == 1 and "Traceback" not in result.stderr
+    lines = result.stdout.splitlines()
+    assert lines[0].endswith(f"arming refused at {last:.2f} s, where the log ends")
+    assert lines[1] == (
+        f"warning: the log ends at {last:.2f} s without the run's clean end (cut short?): its "
+        f"story is uncertain from {last:.2f} s on, and nothing after is known"
+    )
+    # The device lost later is not said to end nominal: its state is as of the log's end.
+    index = lines.index(next(line for line in lines if line.startswith("INA238#1 ")))
+    assert f"  at {last:.2f} s, where the log ends: nominal;" in "\n".join(lines[index:])
+    assert "at the end:" not in result.stdout
+    as_json = cli("health", str(cut), "--json")
+    import json
+
+    assert json.loads(as_json.stdout)["log_cut_at"] == pytest.approx(last)
+
+
+def test_a_log_missing_only_its_last_bytes_is_cut_short_too(
+    faults_log: Path, tmp_path: Path
+) -> None:
+    cut = tmp_path / "cut.ulg"
+    cut.write_bytes(faults_log.read_bytes()[:-3])
+    result = cli("health", str(cut))
+    assert result.returncode == 1
+    assert result.stdout.splitlines()[1].startswith("warning: the log ends at 10.00 s without")

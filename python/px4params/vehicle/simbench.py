@@ -432,6 +432,9 @@ class RunResult:
     #: (time, may arm) at every change of the commander's answer.
     arming: list[tuple[float, bool]] = field(default_factory=list)
     events: list[dict[str, Any]] | None = None
+    #: Read from a log cut short (no clean end): the last moment it holds, from which on what
+    #: it tells is uncertain; None for a whole run.
+    log_cut_at: float | None = None
 
     def as_dict(self) -> dict[str, Any]:
         return {
@@ -445,6 +448,7 @@ class RunResult:
             "silently_missing": self.silently_missing,
             "arming": [[t, ok] for t, ok in self.arming],
             "instances": [i.as_dict() for i in self.instances],
+            "log_cut_at": self.log_cut_at,
         }
 
 
