@@ -583,3 +583,41 @@ def test_a_log_missing_only_its_last_bytes_is_cut_short_too(
     result = cli("health", str(cut))
     assert result.returncode == 1
     assert result.stdout.splitlines()[1].startswith("warning: the log ends at 10.00 s without")
+
+
+# -- 8: durations -------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("value", ["nan", "-1", "inf", "0", "-inf", "1e400", "86401", "soon"])
+@pytest.mark.parametrize(
+    "command",
+    [
+        ("mavlink", "serve", "--store", "{store}", "--bench-duration"),
+        ("dronecan", "serve", "--slcan-pty", "--store", "{store}", "--bench-duration"),
+        ("autostart", "run", "--store", "{store}", "--bench", "{bench}", "--duration"),
+    ],
+    ids=["mavlink", "dronecan", "autostart"],
+)
+def test_a_duration_that_is_not_a_time_is_refused_as_the_line_is_read(
+    command: tuple[str, ...], value: str, store: Path
+) -> None:
+    bench = ROOT / "examples" / "two_batteries.bench.toml"
+    words = [w.replace("{store}", str(store)).replace("{bench}", str(bench)) for w in command]
+    words[-1] += f"={value}"  # (argparse takes "-inf" after a space for an option)
+    result = cli(*words, timeout=20)  # a server that started would not return
+    assert result.returncode == 2
+    option = command[-1]
+    assert result.stderr.splitlines()[-1] == (
+        f"px4params {command[0]} {command[1]}: error: argument {option}: expected seconds more "
+        f"than 0 and at most 86400, not '{value}'"
+    )
+
+
+def test_a_response_timeout_that_is_not_a_time_is_refused() -> None:
+    result = cli(
+        "dronecan", "param", "list", "--slcan", "/nonexistent", "--node", "1", "--timeout", "nan"
+    )
+    assert result.returncode == 2
+    assert result.stderr.splitlines()[-1].endswith(
+        "error: argument --timeout: expected seconds more than 0 and at most 3600, not 'nan'"
+    )
