@@ -5,6 +5,12 @@ that the store file's bytes did not change.
 
 Cases run in-process (``cli.main``) in a scratch folder with the example airframe's store; the
 count is checked, so that the catalogue cannot shrink unnoticed.
+
+Hostile files (the second part) run as processes with a 20 s timeout: every kind of file the
+product reads (store, bench, drivers, parameters.json, DSDL definition, .params/JSON for import
+and load, migrate's .params and .ulg, health's and devid's logs, airframe) given as a FIFO, a
+device, ``/dev/zero`` itself, a folder, a link to itself and a file one byte over its kind's
+cap; none may hang, print a traceback, change the store or replace the hostile file.
 """
 
 from __future__ import annotations
@@ -13,6 +19,7 @@ import contextlib
 import io
 import os
 import shutil
+import stat
 import subprocess
 import sys
 from collections.abc import Iterator
@@ -165,6 +172,31 @@ def _cases() -> Iterator[Case]:
         "truncated.store": (b"PX4P\x01", "truncated.store"),
         "random.store": (bytes(range(256)) * 4, "random.store"),
         "noext.txt": ("hello\n", "noext.txt"),
+        # strict JSON exports: a misspelled key used to empty the store (load) or do nothing
+        "instancez.json": (
+            '{"format": "px4params", "version": 1, "instancez": {}}',
+            "unknown top-level key 'instancez' (did you mean 'instances'?); nothing was changed",
+        ),
+        "null.json": (
+            '{"format": "px4params", "version": 1, "instances": null}',
+            "'instances' must be an object, not null",
+        ),
+        "array.json": (
+            '{"format": "px4params", "version": 1, "classic": [1]}',
+            "'classic' must be an object, not an array",
+        ),
+        "valeu.json": (
+            '{"format": "px4params", "version": 1, "instances": {"INA238#0": {"valeu": 1}}}',
+            "unknown key 'valeu' (did you mean 'value'?)",
+        ),
+        "leaf.json": (
+            '{"format": "px4params", "version": 1, "instances": {"INA238#0[4]": {"value": 1}}}',
+            "'instances' holds whole structured parameters",
+        ),
+        "classic.json": (
+            '{"format": "px4params", "version": 1, "classic": {"INA238#0": 1}}',
+            "INA238#0: not a classic parameter of this store",
+        ),
     }
     for name, (content, says) in params_files.items():
         for verb in ("import", "load"):
@@ -239,6 +271,14 @@ def _cases() -> Iterator[Case]:
         ("reboot now", "frame.airframe:1"),
         ("param set SYS_AUTOSTART 'unterminated", "frame.airframe:1"),
         ("param load {dir}/missing.store", "frame.airframe:1"),
+        # lines are bounded as written and as expanded (they took quadratic time)
+        ("param set SYS_AUTOSTART " + "1" * 1_000_000, "frame.airframe:1: line of 1,000,024"),
+        (
+            "set A x\n" + "set A $A$A\n" * 40,
+            "frame.airframe:17: the line expands to more than 65,536 characters",
+        ),
+        ('param set SYS_AUTOSTART "4001', "frame.airframe:1: No closing quotation"),
+        ("param set SYS_AUTOSTART 4001\\", "frame.airframe:1: No escaped character"),
     ]:
         yield Case(
             ("run", "{dir}/frame.airframe", "--store", "{dir}/v.store"),
@@ -289,6 +329,48 @@ def _cases() -> Iterator[Case]:
             says=says,
             files={f"{name}/acme/{f}": c for f, c in files.items()},
         )
+    # DSDL roots that are not namespace folders: refused at once, not walked for minutes
+    yield Case(("types", "--dsdl", "/"), says="the file system's root is not a DSDL root")
+    yield Case(("types", "--dsdl", "/usr"), says="/usr: DSDL root holds more than 10,000")
+    # -- bench and drivers TOML: unknown keys and wrong shapes ---------------------------------
+    bench = str(ROOT / "examples" / "two_batteries.bench.toml")
+    for text, says in [
+        ("benchz = 1\n", "unknown top-level key 'benchz' (did you mean 'bench'?)"),
+        ("bus = 1\n", "'bus' must be [[bus]] tables"),
+        ("device = 'x'\n", "'device' must be [[device]] tables"),
+        ("bench = [1]\n", "[bench] must be a table"),
+        ("[[bus]]\nkind = []\n", "kind [] is not a simulated bus kind"),
+        ("[[device]]\nchip = 'INA238'\nbus = 'i2c'\nbus_id = 'x'\naddress = 1\n", "bus_id"),
+    ]:
+        yield Case(
+            ("autostart", "run", "--store", "{dir}/v.store", "--bench", "{dir}/b.toml"),
+            says=says,
+            files={"b.toml": text},
+        )
+    for text, says in [
+        ("drivers = 1\n", "unknown top-level key 'drivers' (expected [[driver]] tables)"),
+        ("driver = [1]\n", "driver #1: is not a table"),
+        ("[[driver]]\nname = 'ina238'\nnope = 1\n", "unknown key 'nope' (expected: name,"),
+        (
+            "[[driver]]\nname = 'x'\nparameter = 'INA238'\nchip = 'INA238'\norder = 1\n"
+            "devtype = 1\nrate_hz = 1\nbuses = [{}]\n",
+            "unknown bus kind {}",
+        ),
+    ]:
+        yield Case(
+            (
+                "autostart",
+                "run",
+                "--store",
+                "{dir}/v.store",
+                "--bench",
+                bench,
+                "--drivers",
+                "{dir}/d.toml",
+            ),
+            says=says,
+            files={"d.toml": text},
+        )
     # -- usage errors (exit 2) -------------------------------------------------------------------
     for args in [
         ("nope",),
@@ -304,6 +386,14 @@ def _cases() -> Iterator[Case]:
         ("mavlink", "serve", "--udp", "127.0.0.1:" + HUGE),
         ("autostart", "run", "--duration", "x"),
         ("frames", ina, "{}", "--transfer-id", HUGE),
+        # durations: a server given one that is not a time used to start and fail every 2 s
+        *[
+            (*server, f"--bench-duration={value}")
+            for server in (("mavlink", "serve"), ("dronecan", "serve", "--slcan-pty"))
+            for value in ("nan", "-1", "inf", "-inf", "0", HUGE)
+        ],
+        ("autostart", "run", "--bench", "x.toml", "--duration=nan"),
+        ("dronecan", "param", "list", "--slcan", "{dir}/x", "--node", "1", "--timeout=-1"),
     ]:
         yield Case(args, status=2)
     yield Case(
@@ -316,7 +406,8 @@ CASES = list(_cases())
 
 
 def test_the_catalogue_is_large() -> None:
-    assert len(CASES) >= 200, len(CASES)
+    assert len(CASES) >= 350, len(CASES)
+    assert len(HOSTILE) >= 71, len(HOSTILE)
 
 
 @pytest.fixture(scope="module")
@@ -416,12 +507,19 @@ FILE_KINDS: dict[str, tuple[str, tuple[str, ...], int]] = {
 SHAPES = {
     "fifo": "is a FIFO (named pipe), not a regular file",
     "device": "is a character device, not a regular file",
+    "dev-zero": "is a character device, not a regular file",
     "folder": "is a folder, not a file",
     "loop": "Too many levels of symbolic links",
     "oversize": "too large for",
 }
 
-HOSTILE = [(kind, shape) for kind in FILE_KINDS for shape in SHAPES]
+# (/dev/zero itself is given where a file is named; a definition is found in a folder)
+HOSTILE = [
+    (kind, shape)
+    for kind in FILE_KINDS
+    for shape in SHAPES
+    if not (kind == "dsdl" and shape == "dev-zero")
+]
 
 
 def _make_hostile(path: Path, shape: str, cap: int) -> None:
@@ -445,7 +543,11 @@ def test_hostile_file(kind: str, shape: str, template: Path, tmp_path: Path) -> 
     shutil.copy(template, tmp_path / "v.store")
     before = (tmp_path / "v.store").read_bytes()
     hostile = tmp_path / name
-    _make_hostile(hostile, shape, cap)
+    if shape == "dev-zero":
+        hostile = Path("/dev/zero")
+    else:
+        _make_hostile(hostile, shape, cap)
+    kind_before = stat.S_IFMT(os.lstat(hostile).st_mode)
     bench = ROOT / "examples" / "two_batteries.bench.toml"
     words = [
         a.replace("{f}", str(hostile))
@@ -468,5 +570,7 @@ def test_hostile_file(kind: str, shape: str, template: Path, tmp_path: Path) -> 
     assert "Traceback" not in result.stderr
     lines = result.stderr.splitlines()
     assert len(lines) == 1 and lines[0].startswith("px4params: error: "), result.stderr
-    assert says in lines[0] and str(tmp_path) in lines[0], lines[0]
+    named = hostile.parent if (kind, shape) == ("dsdl", "folder") else hostile  # the root
+    assert says in lines[0] and str(named) in lines[0], lines[0]
     assert (tmp_path / "v.store").read_bytes() == before
+    assert stat.S_IFMT(os.lstat(hostile).st_mode) == kind_before  # not replaced by a file
