@@ -129,6 +129,25 @@ def test_every_product_read_goes_through_the_reader() -> None:
     assert found == []
 
 
+@pytest.mark.parametrize(
+    ("args", "where"),
+    [
+        (("encode", "px.Ina238", "-"), "<stdin>:1"),
+        (("decode", "px.Ina238", "-"), "<stdin>:1"),
+        (("frames", "px.Ina238", "-", "--dtid", "1"), "<stdin>"),
+    ],
+)
+def test_an_endless_stdin_is_refused_at_its_cap(args: tuple[str, ...], where: str) -> None:
+    with open("/dev/zero") as zero:
+        result = subprocess.run(
+            [*CLI, *args], stdin=zero, capture_output=True, text=True, timeout=20, check=False
+        )
+    assert result.returncode == 1
+    assert result.stderr == (
+        f"px4params: error: {where}: longer than 1,048,576 characters (an endless input?)\n"
+    )
+
+
 # -- 2: strict inputs ---------------------------------------------------------------------------
 
 
