@@ -97,6 +97,16 @@ def test_devices_folders_and_sockets_are_refused_before_reading(tmp_path: Path) 
         server.close()
 
 
+def test_a_device_is_not_even_opened(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Opening some devices does something (a watchdog's starts it): refused on its status."""
+    opened: list[str] = []
+    real_open = os.open
+    monkeypatch.setattr(os, "open", lambda path, *a: opened.append(path) or real_open(path, *a))
+    with pytest.raises(InputFileError, match="character device"):
+        read_bytes("/dev/zero", SMALL)
+    assert opened == []
+
+
 def test_a_link_loop_and_a_missing_file_are_the_system_errors(tmp_path: Path) -> None:
     loop = tmp_path / "loop"
     loop.symlink_to(loop)

@@ -1,12 +1,13 @@
 """The one way the product reads a file it is given: regular files only, each kind within a size
 that fits it.
 
-A FIFO, a device (``/dev/zero``), a socket or a folder given where a file is expected is refused
-before a byte is read, with one line naming the file and what it is: read as a file, a FIFO
-hangs the command and ``/dev/zero`` ends in a ``MemoryError``. The file is opened with
-``O_NONBLOCK`` (a FIFO without a writer cannot hang the open) and checked on the open
-descriptor (``fstat``), so a file swapped after a check is checked again. At most the kind's cap
-plus one byte is read, so a file that grows while it is read is refused too.
+A FIFO, a device (``/dev/zero``), a socket or a folder given where a file is expected is
+refused before a byte is read, with one line naming the file and what it is: read as a file, a
+FIFO hangs the command and ``/dev/zero`` ends in a ``MemoryError``. The file is checked before
+it is opened (opening a device can do something: a watchdog's starts it), opened with
+``O_NONBLOCK`` (a FIFO swapped in after the check cannot hang the open) and checked again on
+the open descriptor (``fstat``). At most the kind's cap plus one byte is read, so a file that
+grows while it is read is refused too.
 
 A library that reads from a file object (pyulog) is given one from :func:`open_file`; files a
 library opens itself (pydsdl's definitions) are checked with :func:`check_file` first.
@@ -127,16 +128,11 @@ def check_file(path: str | os.PathLike[str], kind: FileKind) -> os.stat_result:
 
 def _open_checked(where: str, kind: FileKind) -> int:
     """A descriptor of ``where`` opened for reading once it is known to be a regular file
-    within ``kind``'s size (checked on the descriptor itself)."""
+    within ``kind``'s size: checked before the open (opening some devices does something, a
+    watchdog's starts it) and again on the descriptor (the file may have been swapped)."""
+    check_file(where, kind)
     flags = os.O_RDONLY | os.O_NONBLOCK | os.O_NOCTTY | getattr(os, "O_CLOEXEC", 0)
-    try:
-        fd = os.open(where, flags)
-    except OSError as e:
-        if e.errno == errno.ENXIO:  # a socket (or a device without its driver): say which
-            refusal = _refusal(where, os.stat(where), kind)
-            if refusal is not None:
-                raise refusal from None
-        raise
+    fd = os.open(where, flags)
     try:
         refusal = _refusal(where, os.fstat(fd), kind)
     except BaseException:
