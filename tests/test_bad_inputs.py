@@ -158,6 +158,10 @@ def _cases() -> Iterator[Case]:
         "word.params": ("1\t1\tSYS_AUTOSTART\tabc\t6\n", "not a number"),
         "kind.params": ("1\t1\tSYS_AUTOSTART\t1\t4\n", "is not 6 (int32) or 9 (float)"),
         "leaf.params": ("1\t1\tINA238_0C\t200\t6\n", "INA238_0C"),
+        "twice.params": (
+            "1\t1\tSYS_AUTOSTART\t4001\t6\n# \n1\t1\tSYS_AUTOSTART\t4002\t6\n",
+            "twice.params:3: SYS_AUTOSTART: also set on line 1",
+        ),
         "binary.params": (b"\xff\xfe\x00garbage\x00", "not a text file"),
         "binary.json": (b"\x89PNG\r\n\x1a\n", "json"),
         "bad.json": ("{", "not JSON"),

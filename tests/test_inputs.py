@@ -209,6 +209,16 @@ def test_wrong_shapes_in_a_json_export_are_named(
     assert store.read_bytes() == before
 
 
+def test_a_params_file_setting_one_parameter_twice_is_refused(store: Path, tmp_path: Path) -> None:
+    bad = tmp_path / "twice.params"
+    bad.write_text("1\t1\tSYS_AUTOSTART\t4001\t6\n1\t1\tINA238_0C\t70\t6\n1\t1\tINA238_0C\t71\t6\n")
+    before = store.read_bytes()
+    result = cli("param", "--store", str(store), "import", str(bad))
+    assert result.returncode == 1
+    assert result.stderr == f"px4params: error: {bad}:3: INA238_0C: also set on line 2\n"
+    assert store.read_bytes() == before
+
+
 def test_an_export_still_loads_back_to_the_same_store(store: Path, tmp_path: Path) -> None:
     _export(store, tmp_path)
     before = store.read_bytes()

@@ -130,8 +130,11 @@ def _read_qgc(store: Store, path: str, text: str) -> list[str]:
 
     report: list[str] = []
     skipped = 0
+    first_line: dict[str, int] = {}
     for row in qgc_params.read(text, path):
         where, name, number_value = f"{path}:{row.line}", row.name, row.value
+        if first_line.setdefault(name, row.line) != row.line:  # which of two values is meant?
+            raise ParamFileError(f"{where}: {name}: also set on line {first_line[name]}")
         if row.type not in (qgc_params.INT32, qgc_params.REAL32):
             raise ParamFileError(
                 f"{where}: {name}: type '{row.type}' is not 6 (int32) or 9 (float)"
