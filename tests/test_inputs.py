@@ -472,6 +472,15 @@ def _without_fields(model: dict) -> dict:  # type: ignore[type-arg]
     return model
 
 
+def _bits_text(model: dict) -> dict:  # type: ignore[type-arg]
+    import marshal
+
+    definition = marshal.loads(model["types"]["px.Ina238.1.1"])
+    definition["fields"][0]["type"]["bits"] = "four"
+    model["types"]["px.Ina238.1.1"] = marshal.dumps(definition)
+    return model
+
+
 def _newest_wrong(model: dict) -> dict:  # type: ignore[type-arg]
     model["newest"]["px.Ina238"] = "px.Ina238.1.0"
     return model
@@ -491,6 +500,7 @@ def _types_garbage(model: dict) -> dict:  # type: ignore[type-arg]
     ("kind", "change", "says"),
     [
         ("model", _without_fields, "type px.Ina238.1.1: no 'kind' of struct or union, or no"),
+        ("model", _bits_text, "type px.Ina238.1.1: a field type of the wrong shape: {'kind'"),
         ("model", _newest_wrong, "'newest' does not name the newest version of each type"),
         ("model", _refs_wrong, "type px.Ina238.1.1: its list of referenced types is not"),
         ("model", _types_garbage, "type px.Ina238.1.1: cannot unpack it"),

@@ -339,7 +339,10 @@ def _definition_problem(
     while pending:
         item = pending.pop()
         needed = _TYPE_KEYS.get(item.get("kind")) if isinstance(item, dict) else None
-        if needed is None or any(k not in item for k in needed):
+        if needed is None or not all(
+            isinstance(item.get(k), dict if k == "elem" else str if k == "name" else int)
+            for k in needed
+        ):
             return f"a field type of the wrong shape: {item!r}"[:200]
         if "elem" in needed:
             pending.append(item["elem"])
