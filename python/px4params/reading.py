@@ -81,6 +81,16 @@ ULOG = FileKind("a flight log", 1 * GIB)
 # The cached schema model is 80 KiB.
 CACHE = FileKind("a cache file", 64 * MIB)
 
+#: Read only; a FIFO cannot block the open, a terminal does not become the controlling one
+#: (flags POSIX has; Windows has none of them and no FIFOs to fear).
+_READ_FLAGS = (
+    os.O_RDONLY
+    | getattr(os, "O_NONBLOCK", 0)
+    | getattr(os, "O_NOCTTY", 0)
+    | getattr(os, "O_CLOEXEC", 0)
+    | getattr(os, "O_BINARY", 0)
+)
+
 _KINDS = (
     (stat.S_ISDIR, "a folder, not a file"),
     (stat.S_ISFIFO, "a FIFO (named pipe), not a regular file"),
@@ -131,8 +141,7 @@ def _open_checked(where: str, kind: FileKind) -> int:
     within ``kind``'s size: checked before the open (opening some devices does something, a
     watchdog's starts it) and again on the descriptor (the file may have been swapped)."""
     check_file(where, kind)
-    flags = os.O_RDONLY | os.O_NONBLOCK | os.O_NOCTTY | getattr(os, "O_CLOEXEC", 0)
-    fd = os.open(where, flags)
+    fd = os.open(where, _READ_FLAGS)
     try:
         refusal = _refusal(where, os.fstat(fd), kind)
     except BaseException:
