@@ -496,6 +496,15 @@ def _types_garbage(model: dict) -> dict:  # type: ignore[type-arg]
     return model
 
 
+@pytest.fixture(scope="module")
+def warm_cache(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A cache folder holding the bundled model and classic parameters (built once)."""
+    cache = tmp_path_factory.mktemp("warm") / "cache"
+    result = cli("param", "--store", str(cache.parent / "v.store"), "show", env=_env(cache))
+    assert result.returncode == 0, result.stderr
+    return cache
+
+
 @pytest.mark.parametrize(
     ("kind", "change", "says"),
     [
@@ -509,9 +518,12 @@ def _types_garbage(model: dict) -> dict:  # type: ignore[type-arg]
     ],
 )
 def test_a_cache_entry_of_the_wrong_shape_is_rebuilt_with_a_note(
-    kind: str, change: object, says: str, store: Path, tmp_path: Path
+    kind: str, change: object, says: str, store: Path, tmp_path: Path, warm_cache: Path
 ) -> None:
+    import shutil
+
     cache = tmp_path / "cache"
+    shutil.copytree(warm_cache, cache)
     env = _env(cache)
     show = ("param", "--store", str(store), "show", "-q", "INA238#0.bus.i2c.address")
     expected = cli(*show, env=env)
