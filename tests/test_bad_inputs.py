@@ -5,6 +5,12 @@ that the store file's bytes did not change.
 
 Cases run in-process (``cli.main``) in a scratch folder with the example airframe's store; the
 count is checked, so that the catalogue cannot shrink unnoticed.
+
+Hostile files (the second part) run as processes with a 20 s timeout: every kind of file the
+product reads (store, bench, drivers, parameters.json, DSDL definition, .params/JSON for import
+and load, migrate's .params and .ulg, health's and devid's logs, airframe) given as a FIFO, a
+device, ``/dev/zero`` itself, a folder, a link to itself and a file one byte over its kind's
+cap; none may hang, print a traceback, change the store or replace the hostile file.
 """
 
 from __future__ import annotations
@@ -13,6 +19,7 @@ import contextlib
 import io
 import os
 import shutil
+import stat
 import subprocess
 import sys
 from collections.abc import Iterator
@@ -151,6 +158,10 @@ def _cases() -> Iterator[Case]:
         "word.params": ("1\t1\tSYS_AUTOSTART\tabc\t6\n", "not a number"),
         "kind.params": ("1\t1\tSYS_AUTOSTART\t1\t4\n", "is not 6 (int32) or 9 (float)"),
         "leaf.params": ("1\t1\tINA238_0C\t200\t6\n", "INA238_0C"),
+        "twice.params": (
+            "1\t1\tSYS_AUTOSTART\t4001\t6\n# \n1\t1\tSYS_AUTOSTART\t4002\t6\n",
+            "twice.params:3: SYS_AUTOSTART: also set on line 1",
+        ),
         "binary.params": (b"\xff\xfe\x00garbage\x00", "not a text file"),
         "binary.json": (b"\x89PNG\r\n\x1a\n", "json"),
         "bad.json": ("{", "not JSON"),
@@ -165,6 +176,31 @@ def _cases() -> Iterator[Case]:
         "truncated.store": (b"PX4P\x01", "truncated.store"),
         "random.store": (bytes(range(256)) * 4, "random.store"),
         "noext.txt": ("hello\n", "noext.txt"),
+        # strict JSON exports: a misspelled key used to empty the store (load) or do nothing
+        "instancez.json": (
+            '{"format": "px4params", "version": 1, "instancez": {}}',
+            "unknown top-level key 'instancez' (did you mean 'instances'?); nothing was changed",
+        ),
+        "null.json": (
+            '{"format": "px4params", "version": 1, "instances": null}',
+            "'instances' must be an object, not null",
+        ),
+        "array.json": (
+            '{"format": "px4params", "version": 1, "classic": [1]}',
+            "'classic' must be an object, not an array",
+        ),
+        "valeu.json": (
+            '{"format": "px4params", "version": 1, "instances": {"INA238#0": {"valeu": 1}}}',
+            "unknown key 'valeu' (did you mean 'value'?)",
+        ),
+        "leaf.json": (
+            '{"format": "px4params", "version": 1, "instances": {"INA238#0[4]": {"value": 1}}}',
+            "'instances' holds whole structured parameters",
+        ),
+        "classic.json": (
+            '{"format": "px4params", "version": 1, "classic": {"INA238#0": 1}}',
+            "INA238#0: not a classic parameter of this store",
+        ),
     }
     for name, (content, says) in params_files.items():
         for verb in ("import", "load"):
@@ -239,6 +275,14 @@ def _cases() -> Iterator[Case]:
         ("reboot now", "frame.airframe:1"),
         ("param set SYS_AUTOSTART 'unterminated", "frame.airframe:1"),
         ("param load {dir}/missing.store", "frame.airframe:1"),
+        # lines are bounded as written and as expanded (they took quadratic time)
+        ("param set SYS_AUTOSTART " + "1" * 1_000_000, "frame.airframe:1: line of 1,000,024"),
+        (
+            "set A x\n" + "set A $A$A\n" * 40,
+            "frame.airframe:17: the line expands to more than 65,536 characters",
+        ),
+        ('param set SYS_AUTOSTART "4001', "frame.airframe:1: No closing quotation"),
+        ("param set SYS_AUTOSTART 4001\\", "frame.airframe:1: No escaped character"),
     ]:
         yield Case(
             ("run", "{dir}/frame.airframe", "--store", "{dir}/v.store"),
@@ -289,6 +333,48 @@ def _cases() -> Iterator[Case]:
             says=says,
             files={f"{name}/acme/{f}": c for f, c in files.items()},
         )
+    # DSDL roots that are not namespace folders: refused at once, not walked for minutes
+    yield Case(("types", "--dsdl", "/"), says="the file system's root is not a DSDL root")
+    yield Case(("types", "--dsdl", "/usr"), says="/usr: DSDL root holds more than 10,000")
+    # -- bench and drivers TOML: unknown keys and wrong shapes ---------------------------------
+    bench = str(ROOT / "examples" / "two_batteries.bench.toml")
+    for text, says in [
+        ("benchz = 1\n", "unknown top-level key 'benchz' (did you mean 'bench'?)"),
+        ("bus = 1\n", "'bus' must be [[bus]] tables"),
+        ("device = 'x'\n", "'device' must be [[device]] tables"),
+        ("bench = [1]\n", "[bench] must be a table"),
+        ("[[bus]]\nkind = []\n", "kind [] is not a simulated bus kind"),
+        ("[[device]]\nchip = 'INA238'\nbus = 'i2c'\nbus_id = 'x'\naddress = 1\n", "bus_id"),
+    ]:
+        yield Case(
+            ("autostart", "run", "--store", "{dir}/v.store", "--bench", "{dir}/b.toml"),
+            says=says,
+            files={"b.toml": text},
+        )
+    for text, says in [
+        ("drivers = 1\n", "unknown top-level key 'drivers' (expected [[driver]] tables)"),
+        ("driver = [1]\n", "driver #1: is not a table"),
+        ("[[driver]]\nname = 'ina238'\nnope = 1\n", "unknown key 'nope' (expected: name,"),
+        (
+            "[[driver]]\nname = 'x'\nparameter = 'INA238'\nchip = 'INA238'\norder = 1\n"
+            "devtype = 1\nrate_hz = 1\nbuses = [{}]\n",
+            "unknown bus kind {}",
+        ),
+    ]:
+        yield Case(
+            (
+                "autostart",
+                "run",
+                "--store",
+                "{dir}/v.store",
+                "--bench",
+                bench,
+                "--drivers",
+                "{dir}/d.toml",
+            ),
+            says=says,
+            files={"d.toml": text},
+        )
     # -- usage errors (exit 2) -------------------------------------------------------------------
     for args in [
         ("nope",),
@@ -304,6 +390,14 @@ def _cases() -> Iterator[Case]:
         ("mavlink", "serve", "--udp", "127.0.0.1:" + HUGE),
         ("autostart", "run", "--duration", "x"),
         ("frames", ina, "{}", "--transfer-id", HUGE),
+        # durations: a server given one that is not a time used to start and fail every 2 s
+        *[
+            (*server, f"--bench-duration={value}")
+            for server in (("mavlink", "serve"), ("dronecan", "serve", "--slcan-pty"))
+            for value in ("nan", "-1", "inf", "-inf", "0", HUGE)
+        ],
+        ("autostart", "run", "--bench", "x.toml", "--duration=nan"),
+        ("dronecan", "param", "list", "--slcan", "{dir}/x", "--node", "1", "--timeout=-1"),
     ]:
         yield Case(args, status=2)
     yield Case(
@@ -316,7 +410,8 @@ CASES = list(_cases())
 
 
 def test_the_catalogue_is_large() -> None:
-    assert len(CASES) >= 200, len(CASES)
+    assert len(CASES) >= 350, len(CASES)
+    assert len(HOSTILE) >= 71, len(HOSTILE)
 
 
 @pytest.fixture(scope="module")
@@ -376,3 +471,110 @@ def test_bad_input(case: Case, template: Path, tmp_path: Path) -> None:
     else:
         assert lines and "error:" in lines[-1], err
     assert (tmp_path / "v.store").read_bytes() == before
+
+
+# -- hostile files: each kind of file the product reads, as what is not a file to read ---------
+#
+# Run as processes with a timeout: read as a file, a FIFO blocks for ever and /dev/zero grows
+# until memory runs out. Each file kind is given as a FIFO, a device (a link to /dev/zero), a
+# folder, a link to itself and a sparse file one byte over its kind's cap.
+
+#: (file name, command line with {f} for the file, the size cap of its kind)
+FILE_KINDS: dict[str, tuple[str, tuple[str, ...], int]] = {
+    "store": ("h.store", ("param", "--store", "{f}", "show"), 16 << 20),
+    "bench": (
+        "h.bench.toml",
+        ("autostart", "run", "--store", "{dir}/v.store", "--bench", "{f}"),
+        1 << 20,
+    ),
+    "drivers": (
+        "h.drivers.toml",
+        ("autostart", "run", "--store", "{dir}/v.store", "--bench", "{bench}", "--drivers", "{f}"),
+        1 << 20,
+    ),
+    "classic": (
+        "h.json",
+        ("param", "--store", "{dir}/v.store", "--classic", "{f}", "show"),
+        32 << 20,
+    ),
+    "dsdl": ("acme/H.1.0.dsdl", ("types", "--dsdl", "{dir}/acme"), 1 << 20),
+    "import": ("h.params", ("param", "--store", "{dir}/v.store", "import", "{f}"), 16 << 20),
+    "load": ("h.json", ("param", "--store", "{dir}/v.store", "load", "{f}"), 16 << 20),
+    "migrate-params": ("h.params", ("migrate", "{f}", "--table", "legacy"), 16 << 20),
+    "migrate-ulog": ("h.ulg", ("migrate", "{f}", "--table", "legacy"), 1 << 30),
+    "health": ("h.ulg", ("health", "{f}"), 1 << 30),
+    "devid": ("h.ulg", ("devid", "--table", "legacy", "--log", "{f}"), 1 << 30),
+    "airframe": ("h.airframe", ("run", "{f}", "--store", "{dir}/v.store"), 1 << 20),
+}
+
+#: What each shape of hostile file is, and what the error line says about it.
+SHAPES = {
+    "fifo": "is a FIFO (named pipe), not a regular file",
+    "device": "is a character device, not a regular file",
+    "dev-zero": "is a character device, not a regular file",
+    "folder": "is a folder, not a file",
+    "loop": "Too many levels of symbolic links",
+    "oversize": "too large for",
+}
+
+# (/dev/zero itself is given where a file is named; a definition is found in a folder)
+HOSTILE = [
+    (kind, shape)
+    for kind in FILE_KINDS
+    for shape in SHAPES
+    if not (kind == "dsdl" and shape == "dev-zero")
+]
+
+
+def _make_hostile(path: Path, shape: str, cap: int) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    if shape == "fifo":
+        os.mkfifo(path)
+    elif shape == "device":
+        path.symlink_to("/dev/zero")
+    elif shape == "folder":
+        path.mkdir()
+    elif shape == "loop":
+        path.symlink_to(path.name)
+    else:
+        with open(path, "wb") as f:
+            f.truncate(cap + 1)  # sparse: one byte over the cap costs no disk
+
+
+@pytest.mark.parametrize(("kind", "shape"), HOSTILE, ids=[f"{k}-{s}" for k, s in HOSTILE])
+def test_hostile_file(kind: str, shape: str, template: Path, tmp_path: Path) -> None:
+    name, args, cap = FILE_KINDS[kind]
+    shutil.copy(template, tmp_path / "v.store")
+    before = (tmp_path / "v.store").read_bytes()
+    hostile = tmp_path / name
+    if shape == "dev-zero":
+        hostile = Path("/dev/zero")
+    else:
+        _make_hostile(hostile, shape, cap)
+    kind_before = stat.S_IFMT(os.lstat(hostile).st_mode)
+    bench = ROOT / "examples" / "two_batteries.bench.toml"
+    words = [
+        a.replace("{f}", str(hostile))
+        .replace("{dir}", str(tmp_path))
+        .replace("{bench}", str(bench))
+        for a in args
+    ]
+    # A folder named like a definition is a namespace folder: a root without definitions.
+    says = "contains no .dsdl" if (kind, shape) == ("dsdl", "folder") else SHAPES[shape]
+    result = subprocess.run(
+        [sys.executable, "-m", "px4params", *words],
+        capture_output=True,
+        text=True,
+        timeout=20,
+        cwd=tmp_path,
+        check=False,
+        env={**os.environ, "PX4PARAMS_DSDL_PATH": ""},
+    )
+    assert result.returncode == 1, result.stderr
+    assert "Traceback" not in result.stderr
+    lines = result.stderr.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("px4params: error: "), result.stderr
+    named = hostile.parent if (kind, shape) == ("dsdl", "folder") else hostile  # the root
+    assert says in lines[0] and str(named) in lines[0], lines[0]
+    assert (tmp_path / "v.store").read_bytes() == before
+    assert stat.S_IFMT(os.lstat(hostile).st_mode) == kind_before  # not replaced by a file

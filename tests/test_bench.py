@@ -325,12 +325,16 @@ def test_json_result(tmp_path, capsys):
     assert result["instances"][0]["device_id_hex"] == "0xD44509"
 
 
-@pytest.mark.parametrize("duration", ["0", "-1", "nan", "100000"])
+@pytest.mark.parametrize("duration", ["0", "-1", "nan", "inf", "100000", "x"])
 def test_bad_duration(duration, capsys):
+    # Refused as the command line is read (a usage error), as every duration option is.
     args = ["autostart", "run", "--airframe", str(AIRFRAME), "--bench", str(BENCH)]
-    assert main([*args, "--duration", duration]) == 1
-    assert capsys.readouterr().err == (
-        "px4params: error: --duration must be more than 0 and at most 86400 seconds\n"
+    with pytest.raises(SystemExit) as e:
+        main([*args, "--duration", duration])
+    assert e.value.code == 2
+    assert capsys.readouterr().err.splitlines()[-1] == (
+        "px4params autostart run: error: argument --duration: expected seconds more than 0 and "
+        f"at most 86400, not '{duration}'"
     )
 
 

@@ -467,7 +467,7 @@ def test_log_errors(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     cases = [
         (missing, f"{missing}: cannot read: No such file or directory"),
         (not_ulog, f"{not_ulog}: not a ULog file (it does not start with ULog's magic bytes)"),
-        (tmp_path, f"{tmp_path}: cannot read: Is a directory"),
+        (tmp_path, f"{tmp_path}: cannot read: is a folder, not a file"),
         (empty, f"{empty}: no CAL_*_ID parameters in this log"),
     ]
     for path, message in cases:

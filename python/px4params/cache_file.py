@@ -15,6 +15,7 @@ import os
 import sys
 
 from px4params._records import TYPE_CHECKING
+from px4params.reading import CACHE, read_bytes
 
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
     from typing import Any
@@ -32,6 +33,30 @@ _MAGIC = b"P4MC"
 
 #: Part of every key: marshal's format belongs to the interpreter that wrote it.
 INTERPRETER = f"{sys.implementation.cache_tag} marshal {marshal.version}"
+
+
+def file_stamp(st: os.stat_result) -> str:
+    """What tells one version of a file from another without reading it: its device and inode
+    (a file replaced by a rename is another), size, and modification and change times. The
+    change time is the one ``cp -p``, ``rsync -t``, ``tar`` and ``touch -d`` cannot set back:
+    they restore the modification time of an edited file, and the edit still changes ``ctime``."""
+    return f"{st.st_dev}:{st.st_ino} {st.st_size} {st.st_mtime_ns} {st.st_ctime_ns}"
+
+
+def is_racy(st: os.stat_result, now: float) -> bool:
+    """Whether the file was written so shortly before ``now`` (``time.time()``) that another
+    write could follow without changing its stamp: its key must then cover its contents."""
+    return max(st.st_mtime_ns, st.st_ctime_ns) > (now - RACY_SECONDS) * 1e9
+
+
+def discard(path: str, why: str) -> None:
+    """Removes a cache file whose content cannot be used although its CRC matched (written by
+    something else, or edited), with a note on stderr: the caller rebuilds it."""
+    print(f"px4params: note: {path}: {why}; rebuilding it", file=sys.stderr)
+    try:  # noqa: SIM105 - contextlib.suppress costs every command 1 ms to import
+        os.unlink(path)
+    except OSError:
+        pass
 
 
 def default_cache_dir() -> str:
@@ -56,8 +81,7 @@ def read_cached(path: str, key: str) -> Any:
     """The value cached in ``path`` under ``key``; None when missing, damaged or for another
     key."""
     try:
-        with open(path, "rb") as f:
-            data = f.read()
+        data = read_bytes(path, CACHE)
     except OSError:
         return None
     body = memoryview(data)[8:]

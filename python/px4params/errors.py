@@ -21,6 +21,7 @@ __all__ = [
     "DsdlError",
     "EncodeError",
     "FlatError",
+    "InputFileError",
     "InstanceError",
     "LeafError",
     "ManifestError",
@@ -111,6 +112,19 @@ class NumberError(Px4ParamsError, ValueError):
 
 class LeafError(CodecError, LookupError):
     """No leaf at that ``[k]`` index or path, or the path runs through an unselected variant."""
+
+
+class InputFileError(Px4ParamsError, OSError):
+    """A file given to read that is not a regular file (a FIFO, a device, a socket, a folder) or
+    is larger than its kind of file can be (:mod:`px4params.reading`); nothing of it was read.
+
+    It is an ``OSError`` too (``errno`` EINVAL or EFBIG, ``strerror`` the reason, ``filename``
+    the path), so that a caller reporting ``cannot read: {strerror}`` reports it. ``str()`` is
+    one line: ``FILE: is a FIFO (named pipe), not a regular file``.
+    """
+
+    def __str__(self) -> str:
+        return f"{self.filename}: {self.strerror}"
 
 
 class TransferError(Px4ParamsError):

@@ -9,3 +9,6 @@ EXIT_FAILED = 1
 EXIT_USAGE = 2
 #: Interrupted by Ctrl-C (128 + SIGINT), as shells report it.
 EXIT_INTERRUPTED = 130
+#: The reader of the output went away (``| head -1``): 128 + SIGPIPE, as shells report a
+#: program that SIGPIPE ended; nothing is printed.
+EXIT_BROKEN_PIPE = 141

@@ -6,13 +6,14 @@ Exit codes are in ``status.py``. Every error a command raises on purpose
 
 from __future__ import annotations
 
+import errno
 import sys
 from collections.abc import Sequence
 
 from px4params._records import TYPE_CHECKING
 from px4params.cli.parsing import ArgumentParser
 from px4params.errors import Px4ParamsError
-from px4params.status import EXIT_FAILED, EXIT_INTERRUPTED
+from px4params.status import EXIT_BROKEN_PIPE, EXIT_FAILED, EXIT_INTERRUPTED
 
 if TYPE_CHECKING:
     import argparse
@@ -96,11 +97,40 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = declare(only=command or "", words=words)
     args = parser.parse_args(words)
     try:
-        return int(args.func(args))
+        status = int(args.func(args))
+        # Written now, so that a full disk is this command's error (not a traceback of the
+        # interpreter's flush at exit).
+        sys.stdout.flush()
+        return status
     except (Px4ParamsError, UnicodeError) as e:
         print(f"px4params: error: {e}", file=sys.stderr)
         return EXIT_FAILED
-    except BrokenPipeError:
+    except BrokenPipeError:  # the reader is gone: nobody to tell
+        _drop_output()
+        return EXIT_BROKEN_PIPE
+    except OSError as e:
+        if e.filename is not None or e.errno not in _OUTPUT_ERRNOS:
+            raise
+        _drop_output()
+        print(f"px4params: error: cannot write the output: {e.strerror}", file=sys.stderr)
         return EXIT_FAILED
     except KeyboardInterrupt:
         return EXIT_INTERRUPTED
+
+
+#: Errors of writing the output (``> /dev/full``, a full disk or quota, a file size limit, a
+#: failing device): file errors of commands carry their file's name, these do not.
+_OUTPUT_ERRNOS = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EIO})
+
+
+def _drop_output() -> None:
+    """Points standard output at ``/dev/null``, so that what is still buffered does not fail
+    again when the interpreter flushes it at exit."""
+    import os
+
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError, AttributeError):  # not a file (a test's StringIO), or closed
+        pass

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 
 from px4params.cli.parsing import ArgumentParser, type_error
@@ -15,6 +16,30 @@ def identifier(what: str, high: int) -> Callable[[str], int]:
         if not text.isdigit() or len(text) > 5 or not 1 <= int(text) <= high:
             raise type_error(f"'{text[:20]}' is not a {what} (expected 1..{high})")
         return int(text)
+
+    return parse
+
+
+#: The longest simulated bench boot: a day (a boot settles within seconds; simulated time is
+#: cheap, 600 s take 0.3 s, but not free).
+MAX_SIMULATED_SECONDS = 24 * 3600.0
+
+
+def seconds(high: float) -> Callable[[str], float]:
+    """An argparse type: a duration in seconds, more than 0 and at most ``high``. NaN, the
+    infinities and negative numbers are refused as the command line is read (a server would
+    otherwise start and fail every time it used the duration)."""
+
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            value = math.nan
+        if not 0 < value <= high:  # (False for NaN)
+            raise type_error(
+                f"expected seconds more than 0 and at most {high:g}, not '{text[:20]}'"
+            )
+        return value
 
     return parse
 
@@ -61,7 +86,7 @@ def bench_options(p: ArgumentParser, reported: str) -> None:
     )
     p.add_argument(
         "--bench-duration",
-        type=float,
+        type=seconds(MAX_SIMULATED_SECONDS),
         default=10.0,
         metavar="S",
         help="simulated seconds of each bench boot (default 10)",

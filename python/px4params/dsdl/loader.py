@@ -44,6 +44,7 @@ from px4params.data import VALUE_SETS_TOML
 from px4params.dsdl.roots import Root, dronecan_package_dir
 from px4params.errors import DsdlError, NumberError
 from px4params.numbers import abbreviated, parse_float, parse_int
+from px4params.reading import DSDL, read_text
 
 if TYPE_CHECKING:
     import pydsdl
@@ -413,8 +414,7 @@ def _check_expansion(roots: Sequence[Root]) -> None:
             stem = os.path.basename(file).removesuffix(".dsdl")
             key = f"{namespace}.{stem}"
             try:
-                with open(file, encoding="utf-8") as f:
-                    lines = f.read().splitlines()
+                lines = read_text(file, DSDL).splitlines()
             except (OSError, UnicodeDecodeError):
                 continue  # pydsdl reports it
             fields = []
@@ -648,8 +648,7 @@ class _Section:
 
 def _read_source(file: str) -> str:
     try:
-        with open(file, encoding="utf-8", errors="replace") as f:
-            return f.read()
+        return read_text(file, DSDL, errors="replace")
     except OSError:
         return ""  # only line numbers are lost
 

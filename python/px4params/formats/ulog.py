@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 
 from px4params._records import TYPE_CHECKING
 from px4params.errors import ULogError
+from px4params.reading import ULOG, open_file
 
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
     from collections.abc import Sequence
@@ -230,17 +231,19 @@ def read_header(path: str | os.PathLike[str]) -> ULogHeader:
 
     where = os.fspath(path)
     try:
-        with open(where, "rb") as f:
-            magic = f.read(len(MAGIC))
+        file = open_file(where, ULOG)
     except OSError as e:
         raise ULogError(f"{where}: cannot read: {e.strerror}") from None
-    if magic != MAGIC:
-        raise ULogError(f"{where}: not a ULog file (it does not start with ULog's magic bytes)")
-    try:
-        with contextlib.redirect_stdout(io.StringIO()):  # pyulog prints its warnings
-            log = ULog(where, message_name_filter_list=[])
-    except Exception as e:  # pyulog signals bad data with assorted exceptions
-        raise ULogError(f"{where}: not a readable ULog file ({e})") from None
+    with file:
+        magic = file.read(len(MAGIC))
+        if magic != MAGIC:
+            raise ULogError(f"{where}: not a ULog file (it does not start with ULog's magic bytes)")
+        file.seek(0)
+        try:
+            with contextlib.redirect_stdout(io.StringIO()):  # pyulog prints its warnings
+                log = ULog(file, message_name_filter_list=[])
+        except Exception as e:  # pyulog signals bad data with assorted exceptions
+            raise ULogError(f"{where}: not a readable ULog file ({e})") from None
     changes = [(int(t), str(n), v) for t, n, v in log.changed_parameters]
     console = None
     parts = log.msg_info_multiple_dict.get("boot_console_output")
@@ -270,8 +273,8 @@ def read_device_ids(path: str | os.PathLike[str]) -> list[tuple[str, int, int]]:
 
     where = os.fspath(path)
     try:
-        with contextlib.redirect_stdout(io.StringIO()):
-            log = ULog(where, message_name_filter_list=list(SENSOR_TOPICS))
+        with open_file(where, ULOG) as file, contextlib.redirect_stdout(io.StringIO()):
+            log = ULog(file, message_name_filter_list=list(SENSOR_TOPICS))
     except OSError as e:
         raise ULogError(f"{where}: cannot read: {e.strerror}") from None
     except Exception as e:  # pyulog signals bad data with assorted exceptions

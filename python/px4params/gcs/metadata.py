@@ -43,6 +43,7 @@ from typing import Any
 
 from px4params.dsdl.schema import Schema, to_json_value
 from px4params.errors import FlatError, MetadataError
+from px4params.reading import CLASSIC_JSON, read_text
 from px4params.store import flat
 from px4params.store.classic import CLASSIC_ENV, ClassicParam, load_classic
 from px4params.store.spec import ParamSpec, metadata_default, parameter_specs
@@ -144,8 +145,7 @@ def count_entries(document: Mapping[str, Any]) -> dict[str, int]:
 
 def _classic_translation(path: str | os.PathLike[str]) -> Any:
     # load_classic has read and checked the file already; it keeps only the parameters.
-    with open(path, encoding="utf-8") as f:
-        return json.load(f).get("translation")
+    return json.loads(read_text(path, CLASSIC_JSON)).get("translation")
 
 
 def structured_entry(schema: Schema, spec: ParamSpec) -> dict[str, Any]:

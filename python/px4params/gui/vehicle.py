@@ -20,6 +20,7 @@ from typing import Any
 
 from px4params.errors import CommandError, Px4ParamsError
 from px4params.links.mavlink import param_set_message, param_value_of
+from px4params.reading import METADATA_JSON, read_text
 
 __all__ = ["MavlinkVehicle", "StoreVehicle", "WriteResult"]
 
@@ -245,8 +246,7 @@ class MavlinkVehicle(_Base):
     def _load_metadata(self, metadata_file: str | None, timeout: float) -> dict[str, Any]:
         if metadata_file is not None:
             try:
-                with open(metadata_file, encoding="utf-8") as f:
-                    return dict(json.load(f))
+                return dict(json.loads(read_text(metadata_file, METADATA_JSON)))
             except (OSError, ValueError) as e:
                 raise CommandError(f"{metadata_file}: cannot read the metadata: {e}") from None
         document = self._fetch_metadata(timeout)

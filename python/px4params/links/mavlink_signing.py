@@ -36,6 +36,7 @@ from typing import Any
 from pymavlink.dialects.v20 import common as mavlink
 
 from px4params.errors import SigningKeyError
+from px4params.reading import SIGNING_KEY, read_bytes
 
 __all__ = [
     "MAX_STREAMS",
@@ -69,8 +70,7 @@ def load_key(path: str | os.PathLike[str]) -> bytes:
     """The secret in key file ``path``: 32 raw bytes, 64 hex digits, or PX4's file (the key
     and its timestamp)."""
     try:
-        with open(path, "rb") as f:
-            data = f.read(4096)
+        data = read_bytes(path, SIGNING_KEY)
     except OSError as e:
         raise SigningKeyError(
             f"{os.fspath(path)}: cannot read the signing key: {e.strerror or e}"

@@ -5,13 +5,13 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import TYPE_CHECKING
 
 from px4params.errors import MigrationError, NumberError, ParamFileError, ULogError
 from px4params.formats import qgc_params
 from px4params.formats.ulog import MAGIC as ULOG_MAGIC
 from px4params.numbers import abbreviated, parse_float, parse_int
+from px4params.reading import PARAM_FILE, ULOG, open_file, read_text
 
 if TYPE_CHECKING:
     import os
@@ -56,7 +56,7 @@ def read_config(path: str | os.PathLike[str]) -> OldConfig:
 
     where = str(path)
     try:
-        with open(where, "rb") as f:
+        with open_file(where, ULOG) as f:
             head = f.read(len(ULOG_MAGIC))
     except OSError as e:
         raise MigrationError(f"{where}: cannot read: {e.strerror}") from None
@@ -86,7 +86,9 @@ def read_config(path: str | os.PathLike[str]) -> OldConfig:
 
 def _read_text(where: str) -> OldConfig:
     try:
-        text = Path(where).read_text(encoding="utf-8")
+        text = read_text(where, PARAM_FILE)
+    except OSError as e:
+        raise MigrationError(f"{where}: cannot read: {e.strerror}") from None
     except UnicodeDecodeError:
         raise MigrationError(f"{where}: neither a ULog file nor a QGC .params text file") from None
     first = next(

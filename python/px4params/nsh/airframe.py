@@ -18,15 +18,31 @@ from __future__ import annotations
 import argparse
 import os
 import re
-import shlex
 from dataclasses import dataclass, field
 from typing import TextIO
 
 from px4params.errors import CommandError, Px4ParamsError
 from px4params.nsh import param
+from px4params.reading import AIRFRAME, read_text
 from px4params.store.session import Session
 
 _VAR = re.compile(r"\$(?:\{([A-Za-z_][A-Za-z0-9_]*)\}|([A-Za-z_][A-Za-z0-9_]*))")
+
+#: The longest line, as written and after ``$VAR`` expansion (PX4's NSH reads lines of 128
+#: characters; ours may hold a whole value as JSON). Lines stay bounded, so a file is read in
+#: time linear in its size, and ``set A $A$A`` repeated cannot double a line without end.
+MAX_LINE = 64 * 1024
+
+#: One piece of a line split into shell words (POSIX quoting, as ``shlex.split``, which takes
+#: quadratic time on long words): blanks, '...', "..." (``\"`` and ``\\`` escaped), ``\x``, a
+#: run of plain characters, or a quote or backslash left open.
+_PIECE = re.compile(
+    r"""(?P<blank>[ \t\r\n]+)|'(?P<single>[^']*)'|"(?P<double>(?:[^"\\]|\\.)*)"|\\(?P<escaped>.)"""
+    r"""|(?P<plain>[^ \t\r\n'"\\]+)|(?P<open>['"\\])""",
+    re.DOTALL,
+)
+_DOUBLE_ESCAPE = re.compile(r'\\(["\\])')
+_OPEN_ESCAPE = re.compile(r'(?:[^"\\]|\\.)*\\', re.DOTALL)
 
 
 class _ArgumentError(Exception):
@@ -74,8 +90,7 @@ def run_file(path: str, session: Session, *, keep_going: bool, err: TextIO) -> R
     """Runs ``path`` against ``session``'s store; saves it once when the file succeeded (or,
     with ``keep_going``, when anything succeeded)."""
     try:
-        with open(path, encoding="utf-8") as f:
-            lines = f.read().splitlines()
+        lines = read_text(path, AIRFRAME).splitlines()
     except OSError as e:
         raise CommandError(f"{path}: cannot read: {e.strerror}") from None
     except UnicodeDecodeError as e:
@@ -118,10 +133,12 @@ def _line(
     number: int,
     result: Run,
 ) -> None:
+    if len(raw) > MAX_LINE:
+        raise CommandError(f"line of {len(raw):,} characters (at most {MAX_LINE:,})")
     text = raw.strip()
     if not text or text.startswith("#"):
         return
-    words = shlex.split(_expand(text, variables))
+    words = _words(_expand(text, variables))
     if not words:
         return
     head = words[0]
@@ -191,10 +208,44 @@ def _parse(parser: argparse.ArgumentParser, words: list[str]) -> argparse.Namesp
 
 
 def _expand(text: str, variables: dict[str, str]) -> str:
+    """``text`` with ``$VAR`` and ``${VAR}`` replaced, at most :data:`MAX_LINE` characters."""
+    size = len(text)
+
     def value(match: re.Match[str]) -> str:
+        nonlocal size
         name = match.group(1) or match.group(2)
         if name not in variables:
             raise CommandError(f"${name} is not set (set {name} value)")
+        size += len(variables[name]) - len(match.group(0))
+        if size > MAX_LINE:
+            raise CommandError(f"the line expands to more than {MAX_LINE:,} characters")
         return variables[name]
 
     return _VAR.sub(value, text)
+
+
+def _words(text: str) -> list[str]:
+    """``text`` split into words as a POSIX shell quotes them (``shlex.split``'s rules and
+    errors), in one pass."""
+    words: list[str] = []
+    word: list[str] | None = None  # the word being read; None between words
+    for piece in _PIECE.finditer(text):
+        kind = piece.lastgroup
+        if kind == "blank":
+            if word is not None:
+                words.append("".join(word))
+                word = None
+            continue
+        if kind == "open":  # (a double quote open at a last backslash: that backslash's error)
+            open_escape = piece.group() == '"' and _OPEN_ESCAPE.fullmatch(text, piece.end())
+            escape = piece.group() == "\\" or open_escape
+            raise CommandError("No escaped character" if escape else "No closing quotation")
+        part = piece.group(kind or "plain")
+        if kind == "double":
+            part = _DOUBLE_ESCAPE.sub(r"\1", part)
+        if word is None:
+            word = []
+        word.append(part)
+    if word is not None:
+        words.append("".join(word))
+    return words

@@ -17,14 +17,17 @@ from types import MappingProxyType
 from px4params._records import TYPE_CHECKING
 from px4params.cache_file import (
     INTERPRETER,
-    RACY_SECONDS,
     cache_path,
     default_cache_dir,
+    discard,
+    file_stamp,
+    is_racy,
     read_cached,
     write_cached,
 )
 from px4params.data import CLASSIC_PARAMETERS_JSON
 from px4params.errors import ClassicParamsError
+from px4params.reading import CLASSIC_JSON, read_text
 
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
     from typing import Any, NamedTuple
@@ -75,37 +78,48 @@ def load_classic(path: str | os.PathLike[str]) -> list[ClassicParam]:
     key = _cache_key(where)
     cache = cache_path(default_cache_dir(), "classic", key) if key else ""
     cached = read_cached(cache, key) if key else None
-    if isinstance(cached, list):
-        return [ClassicParam(*row) for row in cached]
+    if cached is not None:
+        if isinstance(cached, list) and all(map(_is_cached_row, cached)):
+            return [ClassicParam(*row) for row in cached]
+        discard(cache, "not a list of classic parameters")
     params = _parse_classic(where)
     if key:
         write_cached(cache, key, [(p.name, p.type, p.default, dict(p.entry)) for p in params])
     return params
 
 
+def _is_cached_row(row: Any) -> bool:
+    """Whether a cached row is ``(name, type, default, entry)`` as :func:`load_classic` wrote."""
+    return (
+        isinstance(row, list | tuple)
+        and len(row) == 4
+        and isinstance(row[0], str)
+        and row[1] in _TYPES
+        and isinstance(row[2], int | float)
+        and isinstance(row[3], dict)
+    )
+
+
 def _cache_key(where: str) -> str | None:
-    """What the cached parameters of ``where`` are valid for: its real path, size and time;
-    None for a file modified within the time stamps' resolution (parsed every time)."""
+    """What the cached parameters of ``where`` are valid for: its real path and stamp (inode,
+    size, times: :func:`px4params.cache_file.file_stamp`); None for a file changed within the
+    time stamps' resolution (parsed every time)."""
     try:
         real = os.path.realpath(where)
         st = os.stat(real)
         code = os.stat(__file__)  # the checks below decide what is cached
     except (OSError, ValueError):
         return None  # reported by the parse
-    if st.st_mtime_ns > (time.time() - RACY_SECONDS) * 1e9:
+    if is_racy(st, time.time()):
         return None
-    return (
-        f"px4params-classic {INTERPRETER} {__file__} {code.st_size} {code.st_mtime_ns}\n"
-        f"{real} {st.st_size} {st.st_mtime_ns}"
-    )
+    return f"px4params-classic {INTERPRETER} {__file__} {file_stamp(code)}\n{real} {file_stamp(st)}"
 
 
 def _parse_classic(where: str) -> list[ClassicParam]:
     import json  # only on a cache miss: json costs a command 2 ms to import
 
     try:
-        with open(where, encoding="utf-8") as f:
-            document = json.load(f)
+        document = json.loads(read_text(where, CLASSIC_JSON))
     except OSError as e:
         raise ClassicParamsError(f"{where}: cannot read: {e.strerror}") from None
     except (json.JSONDecodeError, UnicodeDecodeError) as e:

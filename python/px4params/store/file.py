@@ -31,6 +31,7 @@ from px4params._native import check_store_file
 from px4params._records import TYPE_CHECKING
 from px4params.dsdl.schema import DataType
 from px4params.errors import Px4ParamsError, StoreError, StoreFileError
+from px4params.reading import STORE, read_bytes
 from px4params.store.spec import ParamSpec
 
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
@@ -220,8 +221,7 @@ def read_file(path: str | os.PathLike[str]) -> FileContent:
     """The whole file, after checking all of it."""
     where = os.fspath(path)
     try:
-        with open(where, "rb") as f:
-            data = f.read()
+        data = read_bytes(where, STORE)
     except OSError as e:
         raise StoreFileError(f"cannot read: {e.strerror}", where) from None
     return parse(data, where)

@@ -23,11 +23,16 @@ from typing import Any
 from px4params.dsdl.schema import to_json_value
 from px4params.errors import InstanceError, NumberError, ParamFileError, Px4ParamsError
 from px4params.formats import qgc_params
+from px4params.formats.keys import unknown_key
 from px4params.formats.qgc_params import format_line
 from px4params.numbers import load_json
+from px4params.reading import PARAM_FILE, read_text
 from px4params.store.store import Key, Store
 
 JSON_FORMAT = "px4params"
+#: The keys of a JSON export, and of each of its instances: any other is refused by name.
+JSON_KEYS = ("format", "version", "instances", "classic")
+_ENTRY_KEYS = ("value", "default")
 
 _FLAT_INSTANCE = re.compile(r"(?P<param>[A-Z0-9_]+?)_(?P<instance>\d+)(?P<letters>[A-Z]+)")
 
@@ -107,8 +112,7 @@ def read(store: Store, path: str, *, reset: bool) -> list[str]:
     it or, on any error, nothing. Returns report lines."""
     kind = kind_of(path)
     try:
-        with open(path, encoding="utf-8") as f:
-            text = f.read()
+        text = read_text(path, PARAM_FILE)
     except OSError as e:
         raise ParamFileError(f"{path}: cannot read: {e.strerror}") from None
     except UnicodeDecodeError as e:
@@ -126,8 +130,11 @@ def _read_qgc(store: Store, path: str, text: str) -> list[str]:
 
     report: list[str] = []
     skipped = 0
+    first_line: dict[str, int] = {}
     for row in qgc_params.read(text, path):
         where, name, number_value = f"{path}:{row.line}", row.name, row.value
+        if first_line.setdefault(name, row.line) != row.line:  # which of two values is meant?
+            raise ParamFileError(f"{where}: {name}: also set on line {first_line[name]}")
         if row.type not in (qgc_params.INT32, qgc_params.REAL32):
             raise ParamFileError(
                 f"{where}: {name}: type '{row.type}' is not 6 (int32) or 9 (float)"
@@ -186,15 +193,30 @@ def _read_json(store: Store, path: str, text: str) -> list[str]:
         raise ParamFileError(
             f"{path}: JSON export version {document.get('version')!r} (expected 1)"
         )
-    instances = document.get("instances") or {}
-    classic = document.get("classic") or {}
-    if not isinstance(instances, dict) or not isinstance(classic, dict):
-        raise ParamFileError(f"{path}: 'instances' and 'classic' must be objects")
+    complaint = unknown_key(document, JSON_KEYS, "top-level key")
+    if complaint is not None:
+        raise ParamFileError(f"{path}: {complaint}; nothing was changed")
+    instances = document.get("instances", {})
+    classic = document.get("classic", {})
+    for section, value in (("instances", instances), ("classic", classic)):
+        if not isinstance(value, dict):
+            raise ParamFileError(
+                f"{path}: '{section}' must be an object, not {_json_kind(value)}; nothing was "
+                "changed"
+            )
     for name, entry in instances.items():
         try:
             key = Key.parse(name)
-            if not isinstance(entry, dict):
+            if key.leaf is not None or store.classic(key.param) is not None:
+                raise ParamFileError(
+                    f"{name}: 'instances' holds whole structured parameters (INA238#0, not a "
+                    "leaf or a classic parameter)"
+                )
+            if not isinstance(entry, dict):  # ({} adds the instance with its defaults)
                 raise ParamFileError(f'{name}: expected {{"value": ..., "default": ...}}')
+            complaint = unknown_key(entry, _ENTRY_KEYS)
+            if complaint is not None:
+                raise ParamFileError(f"{name}: {complaint}")
             if key.instance is not None and name not in store:
                 store.add(name)
             if "default" in entry:
@@ -205,7 +227,19 @@ def _read_json(store: Store, path: str, text: str) -> list[str]:
             raise ParamFileError(f"{path}: instances: {e}") from None
     for name, value in classic.items():
         try:
+            if store.classic(Key.parse(name).param) is None:
+                raise ParamFileError(f"{name}: not a classic parameter of this store")
             store.set(name, value)
         except Px4ParamsError as e:
             raise ParamFileError(f"{path}: classic: {e}") from None
     return []
+
+
+def _json_kind(value: Any) -> str:
+    """How JSON names the kind of ``value``: ``an array``, ``null``, ``a string``, ..."""
+    if value is None:
+        return "null"
+    if isinstance(value, bool):
+        return "a boolean"
+    kinds = {list: "an array", str: "a string", int: "a number", float: "a number"}
+    return kinds.get(type(value), "an object")

@@ -75,7 +75,7 @@ def open_session(
     schema = load_schema(list(dsdl), include_dronecan=False)
     source = classic or os.environ.get(CLASSIC_ENV) or BUNDLED_CLASSIC
     store = Store(schema, classic=source)
-    if os.path.exists(path):
+    if _exists(path):
         try:
             store.load_from(path)
         except StoreFileError as e:
@@ -90,6 +90,18 @@ def open_session(
                 )
                 raise StoreFileError(f"{e.message}{hint}", e.file, e.offset) from None
     return Session(store, path, out or sys.stdout)
+
+
+def _exists(path: str) -> bool:
+    """Whether there is a file to load at ``path``: a link loop or a folder without access
+    is one (its reading reports it), where ``os.path.exists`` would start an empty store."""
+    try:
+        os.stat(path)
+    except FileNotFoundError:
+        return False
+    except OSError:
+        return True
+    return True
 
 
 class StoreLock:

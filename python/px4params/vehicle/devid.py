@@ -58,6 +58,7 @@ from typing import Any
 
 from px4params.errors import DeviceIdError, NumberError, ULogError
 from px4params.numbers import abbreviated, parse_int
+from px4params.reading import DEVTYPES, read_text
 
 __all__ = [
     "BUS_TYPES",
@@ -297,7 +298,7 @@ def find_current_table(path: str | os.PathLike[str] | None = None) -> Path:
 @functools.lru_cache(maxsize=8)
 def _read_table(path: str, _mtime_ns: int, _size: int) -> DevtypeTable:
     try:
-        text = Path(path).read_text(encoding="utf-8", errors="replace")
+        text = read_text(path, DEVTYPES, errors="replace")
     except OSError as e:
         raise DeviceIdError(f"cannot read devtypes file {path}: {e.strerror}") from None
     return DevtypeTable("current", path, parse_devtypes(text, path))

@@ -52,6 +52,8 @@ from typing import Any
 
 from px4params.data import DRIVERS_TOML
 from px4params.errors import DriversFileError
+from px4params.formats.keys import unknown_key
+from px4params.reading import DRIVERS, read_text
 from px4params.store.spec import ParamSpec
 
 __all__ = [
@@ -222,7 +224,7 @@ def load_drivers(
         path = os.environ.get(DRIVERS_ENV) or DEFAULT_DRIVERS
     source = os.fspath(path)
     try:
-        text = Path(path).read_text(encoding="utf-8")
+        text = read_text(path, DRIVERS)
     except FileNotFoundError:
         raise DriversFileError(f"{source}: no such drivers file") from None
     except (OSError, UnicodeDecodeError) as e:
@@ -265,11 +267,9 @@ def _driver(table: Any, number: int, source: str, known: Mapping[str, ParamSpec]
 
     if not isinstance(table, dict):
         raise fail("is not a table")
-    for key in table:
-        if key not in _KEYS:
-            hint = difflib.get_close_matches(key, _KEYS, n=1)
-            extra = f" (did you mean '{hint[0]}'?)" if hint else f" (expected: {', '.join(_KEYS)})"
-            raise fail(f"unknown key '{key}'{extra}")
+    complaint = unknown_key(table, _KEYS)
+    if complaint is not None:
+        raise fail(complaint)
     for key in _REQUIRED:
         if key not in table:
             raise fail(f"missing key '{key}'")
@@ -302,7 +302,7 @@ def _driver(table: Any, number: int, source: str, known: Mapping[str, ParamSpec]
     if not isinstance(buses, list) or not buses:
         raise fail(f"buses must be a non-empty list of bus kinds ({', '.join(BUS_KINDS)})")
     for kind in buses:
-        if kind not in BUS_KINDS:
+        if not isinstance(kind, str) or kind not in BUS_KINDS:
             raise fail(f"unknown bus kind {kind!r} (expected one of: {', '.join(BUS_KINDS)})")
     if len(set(buses)) != len(buses):
         raise fail(f"buses lists a kind twice: {buses}")

@@ -19,14 +19,23 @@ What the log holds:
   (on every change and once a second).
 - **Logged messages**: a driver started (INFO), a warning (WARNING), a device lost (ERROR), a
   lost device started again ("recovered", NOTICE), back to nominal (NOTICE), arming refused
-  (WARNING) or allowed (INFO), with PX4's levels.
+  (WARNING) or allowed (INFO), with PX4's levels; last, at the run's duration, the run's clean
+  end (INFO, :data:`END_OF_RUN`).
+
+A log without that last message was cut short (a crash, a full card, a copy that stopped): its
+story is known only up to the last moment it holds, and :func:`read_run_ulog` says from when it
+is uncertain (``RunResult.log_cut_at``) instead of telling the last state as the end.
 """
 
 from __future__ import annotations
 
+import contextlib
+import io
+
 from px4params._records import TYPE_CHECKING
 from px4params.errors import ULogError
 from px4params.formats.ulog import ULogWriter
+from px4params.reading import ULOG, open_file
 from px4params.vehicle.autostart import describe_location
 
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
@@ -64,6 +73,9 @@ _ARMING_FIELDS = [
     ("bool", "may_arm"),
     ("uint8_t", "blocking"),
 ]
+
+#: The text of the last logged message of a run's log, which says the log was not cut short.
+END_OF_RUN = "px4params: end of the run"
 
 #: The logged message level of each health a device changes to.
 _LEVEL_OF = {"critical": "error", "warning": "warning", "nominal": "notice"}
@@ -106,6 +118,7 @@ def run_ulog(
     for name, value in parameters.items():
         log.parameter(name, value)
     _Stream(log, result).play()
+    log.log("info", max(_us(result.duration), log.last_timestamp_us), END_OF_RUN)
     return log.getvalue()
 
 
@@ -245,9 +258,13 @@ def read_run_ulog(path: str) -> RunResult:
     from px4params.vehicle.simbench import InstanceResult, RunResult
 
     try:
-        ulog = ULog(path)
+        file = open_file(path, ULOG)
     except OSError as e:
         raise ULogError(f"{path}: cannot read: {e.strerror or e}") from None
+    try:
+        # (pyulog prints what it finds corrupt on stdout, which is the story's, or JSON)
+        with file, contextlib.redirect_stdout(io.StringIO()):
+            ulog = ULog(file)
     except Exception as e:  # pyulog raises bare Exceptions for what it cannot parse
         raise ULogError(f"{path}: not a ULog file ({e})") from None
     info = ulog.msg_info_dict
@@ -288,6 +305,9 @@ def read_run_ulog(path: str) -> RunResult:
                 arming.append((int(stamp) / 1e6, bool(ok)))
     may_arm = bool(arming and arming[-1][1])
     blocking = [i for i in instances if i.registered and i.health != "nominal"]
+    clean_end = not ulog.file_corruption and any(
+        m.message == END_OF_RUN for m in ulog.logged_messages[-1:]
+    )
     return RunResult(
         mode=str(info["px4params_mode"]),
         seed=int(info.get("px4params_seed", 0)),
@@ -300,7 +320,15 @@ def read_run_ulog(path: str) -> RunResult:
             "".join(parts) for parts in ulog.msg_info_multiple_dict.get("silently_missing", [])
         ],
         arming=arming,
+        log_cut_at=None if clean_end else _last_moment(ulog),
     )
+
+
+def _last_moment(ulog: Any) -> float:
+    """The latest time a log holds anything for (seconds): samples or logged messages. A log
+    cut there may have lost part of what happened at that very moment."""
+    stamps = [int(ulog.last_timestamp)] + [int(m.timestamp) for m in ulog.logged_messages[-1:]]
+    return max(stamps) / 1e6
 
 
 def _messages(logged: Sequence[Any]) -> dict[tuple[str, Any], list[tuple[float, str]]]:

@@ -63,6 +63,8 @@ from pathlib import Path
 from typing import Any
 
 from px4params.errors import BenchFileError
+from px4params.formats.keys import unknown_key
+from px4params.reading import BENCH, read_text
 from px4params.vehicle.autostart import Configured, describe_location
 from px4params.vehicle.drivers import BUS_KINDS, Driver, Drivers
 
@@ -162,7 +164,7 @@ def load_bench(path: str | os.PathLike[str], drivers: Drivers) -> Bench:
     """Reads and checks a bench file; chips must be ones ``drivers`` declare."""
     source = os.fspath(path)
     try:
-        text = Path(path).read_text(encoding="utf-8")
+        text = read_text(path, BENCH)
     except FileNotFoundError:
         raise BenchFileError(f"{source}: no such bench file") from None
     except (OSError, UnicodeDecodeError) as e:
@@ -221,11 +223,9 @@ def _check_keys(
     error: Callable[[str], BenchFileError],
     what: str = "key",
 ) -> None:
-    for key in table:
-        if key not in allowed:
-            hint = difflib.get_close_matches(key, allowed, n=1)
-            extra = f"did you mean '{hint[0]}'?" if hint else f"expected: {', '.join(allowed)}"
-            raise error(f"unknown {what} '{key}' ({extra})")
+    complaint = unknown_key(table, allowed, what)
+    if complaint is not None:
+        raise error(complaint)
 
 
 def _bus(table: Any, where: str) -> BenchBus:
@@ -297,8 +297,8 @@ def _kind(table: dict[str, Any], fail: Callable[[str], BenchFileError], key: str
     if key not in table:
         raise fail(f"missing key '{key}'")
     kind = table[key]
-    if kind not in SIMULATED_BUSES:
-        also = " (not simulated)" if kind in BUS_KINDS else ""
+    if not isinstance(kind, str) or kind not in SIMULATED_BUSES:
+        also = " (not simulated)" if isinstance(kind, str) and kind in BUS_KINDS else ""
         raise fail(f"{key} {kind!r} is not a simulated bus kind{also} (expected i2c or spi)")
     return str(kind)
 
@@ -432,6 +432,9 @@ class RunResult:
     #: (time, may arm) at every change of the commander's answer.
     arming: list[tuple[float, bool]] = field(default_factory=list)
     events: list[dict[str, Any]] | None = None
+    #: Read from a log cut short (no clean end): the last moment it holds, from which on what
+    #: it tells is uncertain; None for a whole run.
+    log_cut_at: float | None = None
 
     def as_dict(self) -> dict[str, Any]:
         return {
@@ -445,6 +448,7 @@ class RunResult:
             "silently_missing": self.silently_missing,
             "arming": [[t, ok] for t, ok in self.arming],
             "instances": [i.as_dict() for i in self.instances],
+            "log_cut_at": self.log_cut_at,
         }
 
 

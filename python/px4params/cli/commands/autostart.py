@@ -6,11 +6,11 @@ timeline.py; this module is only the command line).
 from __future__ import annotations
 
 import json
-import math
 from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from px4params.cli.options import MAX_SIMULATED_SECONDS, seconds
 from px4params.cli.parsing import ArgumentParser, RawDescriptionHelpFormatter
 from px4params.dsdl.schema import load_schema
 from px4params.errors import CommandError
@@ -25,8 +25,6 @@ if TYPE_CHECKING:
     import argparse
 
 __all__ = ["add_parser"]
-
-MAX_DURATION = 24 * 3600.0
 
 
 def _dsdl(args: argparse.Namespace) -> list[str]:
@@ -58,8 +56,6 @@ def cmd_plan(args: argparse.Namespace) -> int:
 
 
 def cmd_run(args: argparse.Namespace) -> int:
-    if not 0 < args.duration <= MAX_DURATION or math.isnan(args.duration):
-        raise CommandError(f"--duration must be more than 0 and at most {MAX_DURATION:g} seconds")
     # A legacy boot needs no manifest; one that exists is only used to name what went missing.
     store = None
     if not args.legacy or args.store or args.airframe or Path(default_store_path()).exists():
@@ -276,7 +272,7 @@ examples:
     v.add_argument("--bench", required=True, metavar="FILE", help="the bench file (TOML)")
     v.add_argument(
         "--duration",
-        type=float,
+        type=seconds(MAX_SIMULATED_SECONDS),
         default=10.0,
         metavar="S",
         help="simulated seconds (default 10)",

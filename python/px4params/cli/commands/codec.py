@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import sys
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 
 from px4params._records import TYPE_CHECKING
 from px4params.cli.options import dsdl_option
@@ -72,7 +72,7 @@ def _each_item(item: str, stdin: TextIO, out: TextIO, convert: Callable[[str], s
         print(convert(item), file=out)
         return EXIT_OK
     status = EXIT_OK
-    for number, line in enumerate(stdin, start=1):
+    for number, line in _stdin_lines(stdin):
         try:
             result = convert(line.rstrip("\r\n"))
         except (Px4ParamsError, UnicodeError) as e:
@@ -82,6 +82,29 @@ def _each_item(item: str, stdin: TextIO, out: TextIO, convert: Callable[[str], s
         else:
             print(result, file=out)
     return status
+
+
+#: The longest line read from stdin (``frames``: the whole input): the JSON of the largest
+#: value (65,535 bytes as a uint8 array) is about 260 KB. Beyond it, an endless input such as
+#: ``< /dev/zero`` is refused instead of read until memory runs out.
+MAX_STDIN_TEXT = 1 << 20
+
+
+def _stdin_lines(stdin: TextIO) -> Iterator[tuple[int, str]]:
+    """``(number, line)`` of each line of ``stdin``, each at most :data:`MAX_STDIN_TEXT`."""
+    number = 0
+    while True:
+        line = stdin.readline(MAX_STDIN_TEXT + 1)
+        if not line:
+            return
+        number += 1
+        if len(line) > MAX_STDIN_TEXT:
+            raise CommandError(f"<stdin>:{number}: {_too_long()}")
+        yield number, line
+
+
+def _too_long() -> str:
+    return f"longer than {MAX_STDIN_TEXT:,} characters (an endless input?)"
 
 
 def cmd_types(args: argparse.Namespace) -> int:
@@ -166,7 +189,9 @@ def cmd_frames(args: argparse.Namespace) -> int:
     dtid = args.dtid if args.dtid is not None else t.dtid
     if dtid is None:
         raise CommandError(f"{t.key} has no default data type ID; give --dtid N")
-    text = sys.stdin.read() if args.value == "-" else args.value
+    text = sys.stdin.read(MAX_STDIN_TEXT + 1) if args.value == "-" else args.value
+    if len(text) > MAX_STDIN_TEXT:
+        raise CommandError(f"<stdin>: {_too_long()}")
     try:
         out = can_transfer.frames(
             t,

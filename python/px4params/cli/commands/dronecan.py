@@ -11,7 +11,7 @@ import threading
 from collections.abc import Iterator, Sequence
 from typing import TYPE_CHECKING, Any
 
-from px4params.cli.options import bench_options, identifier, store_options
+from px4params.cli.options import bench_options, identifier, seconds, store_options
 from px4params.cli.parsing import RawDescriptionHelpFormatter
 from px4params.status import EXIT_OK
 from px4params.store.store import default_store_path
@@ -240,7 +240,7 @@ examples:
         )
         a.add_argument(
             "--timeout",
-            type=float,
+            type=seconds(3600.0),
             default=1.0,
             metavar="S",
             help="seconds to wait for each response (default 1; retried twice)",

@@ -37,16 +37,25 @@ def cmd_health(args: argparse.Namespace) -> int:
             print(line)
         if args.timeline:
             print(f"wrote health timeline to {args.timeline}")
-    return EXIT_OK if result.may_arm else EXIT_FAILED
+    # A log cut short cannot tell that the vehicle may arm: what came after its end is unknown.
+    return EXIT_OK if result.may_arm and result.log_cut_at is None else EXIT_FAILED
 
 
 def story(result: RunResult, path: str) -> list[str]:
-    """The log as a reader wants it: the verdict, the first failure, then each device."""
+    """The log as a reader wants it: the verdict, the first failure, then each device. For a
+    log cut short, the verdict and each device's state are as of where it ends, said so."""
     verdict = "may arm" if result.may_arm else "arming refused"
+    cut = result.log_cut_at
+    end = "at the end" if cut is None else f"at {cut:.2f} s, where the log ends"
     lines = [
         f"{path}: {result.mode} boot of {result.bench}, {result.duration:g} s (seed "
-        f"{result.seed}): {verdict} at the end"
+        f"{result.seed}): {verdict} {end}"
     ]
+    if cut is not None:
+        lines.append(
+            f"warning: the log ends at {cut:.2f} s without the run's clean end (cut short?): "
+            f"its story is uncertain from {cut:.2f} s on, and nothing after is known"
+        )
     first = _first_failure(result)
     if first is not None:
         t, inst, reason = first
@@ -65,7 +74,7 @@ def story(result: RunResult, path: str) -> list[str]:
         for t, text in sorted(events, key=lambda e: e[0]):
             lines.append(f"  {t:7.2f} s  {text}")
         lines.append(
-            f"  at the end: {inst.health}; {inst.transfers} transfers, {inst.bad_transfers} "
+            f"  {end}: {inst.health}; {inst.transfers} transfers, {inst.bad_transfers} "
             f"errors, {inst.resets} timeouts, {inst.probe_attempts} probe attempts"
         )
     if result.silently_missing:
@@ -95,8 +104,11 @@ def add_parser(sub: Any, name: str, summary: str, words: Sequence[str] = ()) -> 
         description="Read a flight log written by 'px4params autostart run --ulog' (with "
         "pyulog) and tell each device's story: when it started, every change of its health "
         "with the reason, resets, its last perf counters, and the commander's answers. The "
-        "first line after the header names the first device that was lost, and when.\n"
-        "Exit code 0: the log ends with 'may arm'; 1: arming refused (or an error).",
+        "first line after the header names the first device that was lost, and when. A log "
+        "without the run's clean end (cut short) is said to be, with the moment from which its "
+        "story is uncertain; states are then as of that moment.\n"
+        "Exit code 0: the log ends with 'may arm'; 1: arming refused, a log cut short (or an "
+        "error).",
         epilog="""\
 examples:
   px4params autostart run --airframe examples/two_batteries.airframe \\
