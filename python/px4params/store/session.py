@@ -13,20 +13,36 @@ from collections.abc import Callable, Iterable
 
 from px4params._records import TYPE_CHECKING
 from px4params.dsdl.schema import load_schema
-from px4params.errors import StoreFileError
+from px4params.errors import Px4ParamsError, StoreConflictError, StoreFileError
 from px4params.store.classic import BUNDLED_CLASSIC, CLASSIC_ENV
 from px4params.store.store import Store, default_store_path
 
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
-    from typing import IO, TextIO
+    from typing import Any, TextIO, TypeVar
+
+    T = TypeVar("T")
 
 
 class Session:
-    """The store a ``param`` command (or a whole airframe file) works on, and the file it is
-    saved to."""
+    """The store a writer works on, and the file it is saved to: the one write path.
+
+    Every writer (a ``param`` command or airframe file, ``gui --store``, ``mavlink serve``,
+    ``dronecan serve``) changes the file through :meth:`save` or :meth:`commit`, one
+    transaction: take the file's lock, re-read the file if another writer replaced it since
+    this session read it, put this session's own changes (what differs from what it read) on
+    top of the latest content, save atomically, release. A change to a leaf another writer
+    changed too since the read (to another value), or to an instance another writer removed,
+    is refused with :class:`StoreConflictError`: nothing is merged silently. Servers call
+    :meth:`poll` to notice other writers' changes."""
 
     def __init__(
-        self, store: Store, path: str, out: TextIO | None = None, *, autosave: bool = True
+        self,
+        store: Store,
+        path: str,
+        out: TextIO | None = None,
+        *,
+        autosave: bool = True,
+        identity: FileIdentity | bool | None = True,
     ) -> None:
         self.store = store
         self.path = path
@@ -36,6 +52,12 @@ class Session:
         self.changed = False
         #: Writes to other files asked for during a batch, done when the batch succeeds.
         self.deferred: list[Callable[[], None]] = []
+        #: The file as this session last read or wrote it (``True``: as it is now), and the
+        #: store's content then: this session's own changes are what differs from it.
+        self.identity = file_identity(path) if identity is True else identity or None
+        self._base = store._native.copy()
+        #: The file's identity at a re-read that failed (a conflict): not tried again.
+        self._refused: FileIdentity | None = None
 
     def done(self) -> None:
         """Records a change; saves it unless a batch is running."""
@@ -52,11 +74,224 @@ class Session:
             self.deferred.append(write)
 
     def save(self) -> None:
-        self.store.save(self.path)
+        """Saves this session's changes (the one transaction; see the class), then the
+        deferred writes."""
+        self.commit(lambda: None)
         self.changed = False
         for write in self.deferred:
             write()
         self.deferred.clear()
+
+    def commit(self, change: Callable[[], T]) -> T:
+        """Applies ``change`` (a function changing :attr:`store`) and saves, under the lock,
+        on top of the file's latest content: all of it or, when anything fails (a conflict,
+        a refused value, the disk), nothing, in memory and on disk."""
+        with StoreLock(self.path):
+            kept = (self.identity, self._base)
+            try:
+                with self.store.transaction():
+                    result = change()
+                    self._merge_latest()
+                    self.store.save(self.path)
+            except BaseException:
+                self.identity, self._base = kept
+                raise
+            self._synced()
+        return result
+
+    def poll(self) -> bool:
+        """For servers, often (it costs one ``stat``): when another writer replaced the file,
+        the store becomes its content with this session's unsaved changes on top; returns
+        whether that happened. A conflict or an unreadable file is raised once per version of
+        the file; the store is then left as it was."""
+        now = file_identity(self.path)
+        if now == self.identity or now == self._refused:
+            return False
+        with StoreLock(self.path):
+            try:
+                return self._merge_latest()
+            except Px4ParamsError:
+                self._refused = now
+                raise
+
+    def reload(self) -> None:
+        """The file's content, under the lock, replaces the store's (unsaved changes too)."""
+        with StoreLock(self.path):
+            now = file_identity(self.path)
+            with self.store.transaction():  # an unreadable file leaves the store as it was
+                _read_latest(self.store, self.path, now)
+            self.identity, self._base, self._refused = now, self.store._native.copy(), None
+
+    def rewrite(self, change: Callable[[Store], None]) -> None:
+        """Saves the file's latest content changed by ``change``, leaving the store (the
+        running values) as it is: DroneCAN's ERASE, whose defaults apply at the next
+        restart. The session's unsaved changes stay unsaved."""
+        store = self.store
+        with StoreLock(self.path):
+            try:
+                with store.transaction():
+                    _read_latest(store, self.path, file_identity(self.path))
+                    change(store)
+                    store.save(self.path)
+                    self.identity = file_identity(self.path)
+                    self._base = store._native.copy()
+                    raise _KeepRunningValues
+            except _KeepRunningValues:
+                pass
+
+    def _synced(self) -> None:
+        """The store was just saved: the file is its content."""
+        self.identity = file_identity(self.path)
+        self._base = self.store._native.copy()
+        self._refused = None
+
+    def _merge_latest(self) -> bool:
+        """Under the lock: when the file is not the one this session read, the store becomes
+        the file's content with this session's changes on top. Raises
+        :class:`StoreConflictError` (the store left as it was) when both changed the same."""
+        now = file_identity(self.path)
+        if now == self.identity:
+            return False
+        store = self.store
+        ours = store._native.copy()
+        with store.transaction():
+            _read_latest(store, self.path, now)
+            theirs = store._native.copy()
+            _put_on_top(store, self._base, ours, theirs, self.path)
+        self.identity, self._base, self._refused = now, theirs, None
+        return True
+
+
+class _KeepRunningValues(Exception):
+    """Undoes :meth:`Session.rewrite`'s change of the running values on purpose."""
+
+
+#: ``(device, inode, size, mtime_ns, ctime_ns)`` of a file: every save (a rename) changes it.
+FileIdentity = tuple[int, int, int, int, int]
+
+
+def file_identity(path: str) -> FileIdentity | None:
+    """The file's identity, None when there is no file."""
+    try:
+        info = os.stat(path)
+    except (FileNotFoundError, NotADirectoryError):
+        return None
+    except OSError as e:
+        raise StoreFileError(f"cannot read: {e.strerror}", path) from None
+    return (info.st_dev, info.st_ino, info.st_size, info.st_mtime_ns, info.st_ctime_ns)
+
+
+def _read_latest(store: Store, path: str, identity: FileIdentity | None) -> None:
+    if identity is None:  # removed by someone: a new store
+        store.reset_to_initial()
+    else:
+        store.load_from(path)
+
+
+# -- putting one writer's changes on top of another's -------------------------------------------
+
+#: A store's content: (parameter index, instance) -> (value bytes, default bytes).
+Content = dict[tuple[int, int], tuple[bytes, bytes]]
+
+
+def _content(store: Store, native: Any) -> Content:
+    return {
+        (p.index, i): (native.get(p.index, i, default=False), native.get(p.index, i, default=True))
+        for p in store._order
+        for i in native.instances(p.index)
+    }
+
+
+def _put_on_top(store: Store, base_native: Any, ours_native: Any, theirs: Any, path: str) -> None:
+    """The store holds ``theirs`` (the file's latest content); puts on top of it what
+    ``ours`` changed since ``base`` (what this writer read): whole instances added or removed,
+    values and defaults leaf by leaf. Raises :class:`StoreConflictError` for a leaf both
+    changed to different values, an instance one removed while the other changed it, or a
+    value whose shape (union variant, array length) both changed differently."""
+    base = _content(store, base_native)
+    ours = _content(store, ours_native)
+    latest = _content(store, theirs)
+    params = {p.index: p for p in store._order}
+    conflicts: list[str] = []
+    writes: list[tuple[tuple[int, int], tuple[bytes, bytes] | None]] = []
+    for key in sorted(base.keys() | ours.keys()):
+        before, mine, now = base.get(key), ours.get(key), latest.get(key)
+        if mine in (before, now):
+            continue  # not changed here, or changed the same way by both
+        p = params[key[0]]
+        name = store._instance_name(p, key[1])
+        if now == before:
+            writes.append((key, mine))  # changed here only
+        elif mine is None or now is None:
+            side = "here" if mine is None else "by another writer"
+            conflicts.append(f"{name} was removed {side} while the other side changed it")
+        else:
+            merged = []
+            for part, what in ((1, "default of "), (0, "")):
+                old = before[part] if before is not None else None
+                merged.append(_merge_value(p, name, what, old, mine[part], now[part], conflicts))
+            writes.append((key, (merged[0], merged[1])))
+    if conflicts:
+        more = f" (and {len(conflicts) - 1} more)" if len(conflicts) > 1 else ""
+        raise StoreConflictError(
+            f"{conflicts[0]} since this writer read {path}{more}; nothing was saved"
+        )
+    native = store._native
+    for (index, instance), value in writes:
+        if value is None:
+            native.remove(index, instance)
+            continue
+        if (index, instance) not in latest:
+            native.add(index, instance)
+        native.set_encoded(index, instance, value[1], default=True)
+        native.set_encoded(index, instance, value[0], default=False)
+
+
+def _merge_value(
+    p: Any,
+    name: str,
+    what: str,
+    before: bytes | None,
+    mine: bytes,
+    now: bytes,
+    conflicts: list[str],
+) -> bytes:
+    """One value (or default) changed here (``mine``) and by another writer (``now``): leaf by
+    leaf when both kept its shape, else a conflict."""
+    if mine in (before, now):
+        return now
+    if now == before:
+        return mine
+    if p.spec is None or before is None:  # a classic parameter (one number), or added twice
+        done = "added" if before is None else "changed"
+        conflicts.append(f"{what}{name} was {done} here and by another writer")
+        return now
+    data_type = p.spec.data_type
+    shapes = [
+        {leaf.path: leaf for leaf in data_type.leaves(data, tao=False)}
+        for data in (before, mine, now)
+    ]
+    old, ours, latest = shapes
+    if not (old.keys() == ours.keys() == latest.keys()):
+        conflicts.append(
+            f"{what}{name}: its shape (union variant or array length) was changed here and by "
+            "another writer"
+        )
+        return now
+    result = now
+    for path, leaf in ours.items():
+        if _same(leaf.value, old[path].value) or _same(leaf.value, latest[path].value):
+            continue
+        if not _same(latest[path].value, old[path].value):
+            conflicts.append(f"{what}{name}.{path} was changed here and by another writer")
+            continue
+        result = data_type.set_leaf(result, leaf.index, leaf.value, tao=False)
+    return result
+
+
+def _same(a: object, b: object) -> bool:
+    """Equal leaf values (NaN equals NaN: a NaN left alone is not a change)."""
+    return a == b or (a != a and b != b)
 
 
 def open_session(
@@ -75,7 +310,9 @@ def open_session(
     schema = load_schema(list(dsdl), include_dronecan=False)
     source = classic or os.environ.get(CLASSIC_ENV) or BUNDLED_CLASSIC
     store = Store(schema, classic=source)
-    if os.path.exists(path):
+    # Taken before reading: a save in between makes the next transaction read the file again.
+    identity = file_identity(path)
+    if identity is not None:
         try:
             store.load_from(path)
         except StoreFileError as e:
@@ -89,40 +326,99 @@ def open_session(
                     else ""
                 )
                 raise StoreFileError(f"{e.message}{hint}", e.file, e.offset) from None
-    return Session(store, path, out or sys.stdout)
+    return Session(store, path, out or sys.stdout, identity=identity)
 
 
 class StoreLock:
-    """Holds ``FILE.lock`` while a command reads, changes and saves the store, so that two
-    commands at once do not lose one's change (POSIX advisory lock; elsewhere, no lock):
-    ``with StoreLock(path):``. A class, not ``contextlib.contextmanager``: contextlib costs
-    every command 1 ms to import."""
+    """Holds ``FILE.lock`` while a writer reads, changes and saves the store, so that two
+    writers at once do not lose one's change: ``with StoreLock(path):``. A POSIX advisory
+    lock (``flock``) between processes, and a lock between the threads of this one; taken
+    again by the thread that holds it, it nests. A lock file that cannot be opened or locked
+    (a directory, a FIFO, no permission to make it) is an error: :class:`StoreFileError`
+    naming it. Where there is no ``flock`` (not POSIX) only the threads are kept apart. A
+    class, not ``contextlib.contextmanager``: contextlib costs every command 1 ms to import."""
 
     def __init__(self, path: str) -> None:
-        self._path = path
-        self._handle: IO[str] | None = None
+        # By the file's real path: two names of one file (a symbolic link) share the lock.
+        self.lock_path = os.path.realpath(path) + ".lock"
+        self._held: _Held | None = None
 
     def __enter__(self) -> None:
+        held = _HELD.setdefault(self.lock_path, _Held())
+        held.thread_lock.acquire()
         try:
-            import fcntl
-        except ImportError:  # not POSIX
-            return
-        try:
-            # By the file's real path: two names of one file (a symbolic link) share the lock.
-            handle = open(os.path.realpath(self._path) + ".lock", "a")
-        except OSError:
-            return  # a read-only folder: reading still works, saving will report the problem
-        try:
-            fcntl.flock(handle.fileno(), fcntl.LOCK_EX)
+            if held.depth == 0:
+                held.fd = _take_lock(self.lock_path)
+            held.depth += 1
         except BaseException:
-            handle.close()
+            held.thread_lock.release()
             raise
-        self._handle = handle
+        self._held = held
 
     def __exit__(self, *exc: object) -> None:
-        if self._handle is not None:
-            self._handle.close()  # closing releases the lock
-            self._handle = None
+        held, self._held = self._held, None
+        if held is None:
+            return
+        held.depth -= 1
+        if held.depth == 0 and held.fd is not None:
+            os.close(held.fd)  # closing releases the lock
+            held.fd = None
+        held.thread_lock.release()
+
+
+class _Held:
+    """A lock file this process holds: the descriptor, how deep, and the threads' lock."""
+
+    def __init__(self) -> None:
+        import threading  # here: a command that never locks does not pay for it
+
+        self.thread_lock = threading.RLock()
+        self.fd: int | None = None
+        self.depth = 0
+
+
+#: Lock files this process knows, by real path (``setdefault`` is atomic: no lock needed).
+_HELD: dict[str, _Held] = {}
+
+
+def _take_lock(lock_path: str) -> int | None:
+    """Opens and ``flock``s ``lock_path`` (made when missing): a regular file, opened without
+    following a link and without blocking on a FIFO; its descriptor, or None without flock."""
+    try:
+        import fcntl
+    except ImportError:  # not POSIX
+        return None
+    flags = os.O_CREAT | os.O_NOFOLLOW | os.O_NONBLOCK | os.O_CLOEXEC
+    try:
+        fd = os.open(lock_path, os.O_RDWR | flags, 0o666)
+    except OSError as e:
+        # A read-only lock file: flock needs no write access.
+        fd = _open_or(-1, lock_path, os.O_RDONLY | (flags & ~os.O_CREAT))
+        if not isinstance(e, PermissionError) or fd < 0:
+            raise StoreFileError(f"cannot lock the store: {e.strerror}", lock_path) from None
+    try:
+        import stat
+
+        kind = os.fstat(fd).st_mode
+        if not stat.S_ISREG(kind):
+            what = "a directory" if stat.S_ISDIR(kind) else "not a regular file"
+            raise StoreFileError(f"cannot lock the store: {what}", lock_path)
+        fcntl.flock(fd, fcntl.LOCK_EX)
+    except OSError as e:
+        os.close(fd)
+        raise StoreFileError(f"cannot lock the store: {e.strerror}", lock_path) from None
+    except BaseException:
+        os.close(fd)
+        raise
+    return fd
+
+
+def _open_or(fallback: int, path: str, flags: int) -> int:
+    """``os.open(path, flags)``, or ``fallback`` when it fails."""
+    try:
+        return os.open(path, flags)
+    except OSError:
+        return fallback
 
 
 class LockedSession:
@@ -142,12 +438,23 @@ class LockedSession:
 
     def __enter__(self) -> Session:
         store_path, classic, dsdl, start_empty = self._args
-        self._lock.__enter__()
+        # Reading needs no lock (saves replace the file whole): when it cannot be taken, a
+        # save tries again and reports why it cannot, before writing anything.
+        self._locked = _try_lock(self._lock)
         try:
             return open_session(store_path, classic, dsdl, start_empty_if_unreadable=start_empty)
         except BaseException:
-            self._lock.__exit__()
+            self.__exit__()
             raise
 
     def __exit__(self, *exc: object) -> None:
-        self._lock.__exit__()
+        if self._locked:
+            self._lock.__exit__()
+
+
+def _try_lock(lock: StoreLock) -> bool:
+    try:
+        lock.__enter__()
+    except StoreFileError:
+        return False
+    return True
