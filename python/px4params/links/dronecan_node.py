@@ -38,7 +38,7 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from px4params.dsdl.schema import Schema, load_schema
-from px4params.errors import Px4ParamsError
+from px4params.errors import Px4ParamsError, StoreConflictError
 from px4params.links import can_transfer
 from px4params.links.can_transfer import CanId, Frame, Transfer, TransferReceiver
 from px4params.links.dronecan_params import EMPTY, DronecanParams, variant_name
@@ -311,6 +311,16 @@ class DronecanParamNode(ServingLoop):
                 self.session.rewrite(lambda store: store.reset_all())
             else:
                 self.session.commit(lambda: None)
+        except StoreConflictError as e:
+            # Refused whole; the values shown become the file's, so that GetSet tells the
+            # truth and the client can set its changes again.
+            note = "; the node's values are the file's again"
+            try:
+                self.session.reload()
+            except Px4ParamsError:  # unreadable: the running values stay
+                note = ""
+            self.log(f"refused: {what}: {e}{note}")
+            return False
         except (Px4ParamsError, OSError) as e:
             self.log(f"refused: {what}: {e}")
             return False

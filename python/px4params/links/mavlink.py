@@ -57,7 +57,7 @@ from typing import TYPE_CHECKING, Any
 
 from pymavlink.dialects.v20 import common as mavlink
 
-from px4params.errors import Px4ParamsError
+from px4params.errors import Px4ParamsError, StoreConflictError
 from px4params.gcs.component_information import ComponentFiles, px4_crc32
 from px4params.links import mavlink_messages
 from px4params.links.identity import store_digest, version_parts
@@ -484,6 +484,9 @@ class MavlinkParamServer(ServingLoop):
         except (Px4ParamsError, OSError) as e:
             # flat errors name the parameter already; store errors name the leaf
             why = str(e) if str(e).startswith(name) else f"{name}: {e}"
+            if isinstance(e, StoreConflictError) and self.session is not None:
+                self._poll_store()  # the file's values, announced to every peer
+                found = self._find(name) or found
             self._refuse(peer, msg, name, found, why, mavlink.MAV_PARAM_ERROR_VALUE_OUT_OF_RANGE)
             return
         if self.flat.mask_spec(name) is not None:

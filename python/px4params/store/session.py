@@ -8,6 +8,7 @@ deferred until the batch succeeds: a failing airframe file leaves no file half-w
 from __future__ import annotations
 
 import os
+import stat
 import sys
 from collections.abc import Callable, Iterable
 
@@ -166,19 +167,37 @@ class _KeepRunningValues(Exception):
     """Undoes :meth:`Session.rewrite`'s change of the running values on purpose."""
 
 
-#: ``(device, inode, size, mtime_ns, ctime_ns)`` of a file: every save (a rename) changes it.
-FileIdentity = tuple[int, int, int, int, int]
+#: ``(device, inode, size, mtime_ns, ctime_ns, hash of the content)`` of a file. Every save (a
+#: rename) changes the inode, but a freed inode is soon used again and two saves within one
+#: clock tick have the same times: the content tells them apart (a store is kilobytes). Not a
+#: CRC-32: a store ends with the CRC-32 of what precedes it, so every store has the same one.
+FileIdentity = tuple[int, int, int, int, int, int]
+
+#: Files larger than this (not a store) are told apart by their status alone.
+_IDENTITY_READ_MAX = 1 << 24
 
 
 def file_identity(path: str) -> FileIdentity | None:
-    """The file's identity, None when there is no file."""
+    """The file's identity, None when there is no file. A FIFO or device is not read."""
     try:
-        info = os.stat(path)
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | os.O_CLOEXEC)
     except (FileNotFoundError, NotADirectoryError):
         return None
     except OSError as e:
         raise StoreFileError(f"cannot read: {e.strerror}", path) from None
-    return (info.st_dev, info.st_ino, info.st_size, info.st_mtime_ns, info.st_ctime_ns)
+    try:
+        info = os.fstat(fd)
+        content = 0
+        if stat.S_ISREG(info.st_mode) and info.st_size <= _IDENTITY_READ_MAX:
+            chunks = []
+            while chunk := os.read(fd, 1 << 16):
+                chunks.append(chunk)
+            content = hash(b"".join(chunks))  # (SipHash: identities stay in this process)
+    except OSError as e:
+        raise StoreFileError(f"cannot read: {e.strerror}", path) from None
+    finally:
+        os.close(fd)
+    return (info.st_dev, info.st_ino, info.st_size, info.st_mtime_ns, info.st_ctime_ns, content)
 
 
 def _read_latest(store: Store, path: str, identity: FileIdentity | None) -> None:
@@ -222,15 +241,19 @@ def _put_on_top(store: Store, base_native: Any, ours_native: Any, theirs: Any, p
         name = store._instance_name(p, key[1])
         if now == before:
             writes.append((key, mine))  # changed here only
-        elif mine is None or now is None:
-            side = "here" if mine is None else "by another writer"
-            conflicts.append(f"{name} was removed {side} while the other side changed it")
+        elif mine is None:
+            conflicts.append(f"{name} was removed here but changed by another writer")
+        elif now is None:
+            conflicts.append(f"{name} was removed by another writer but changed here")
         else:
-            merged = []
-            for part, what in ((1, "default of "), (0, "")):
-                old = before[part] if before is not None else None
-                merged.append(_merge_value(p, name, what, old, mine[part], now[part], conflicts))
-            writes.append((key, (merged[0], merged[1])))
+            value, default = (
+                _merge_value(
+                    p, name, what, None if before is None else before[part], mine[part],
+                    now[part], conflicts,
+                )
+                for part, what in ((0, ""), (1, "default of "))
+            )  # fmt: skip
+            writes.append((key, (value, default)))
     if conflicts:
         more = f" (and {len(conflicts) - 1} more)" if len(conflicts) > 1 else ""
         raise StoreConflictError(
@@ -256,8 +279,10 @@ def _merge_value(
     now: bytes,
     conflicts: list[str],
 ) -> bytes:
-    """One value (or default) changed here (``mine``) and by another writer (``now``): leaf by
-    leaf when both kept its shape, else a conflict."""
+    """One value (or default) changed here (``mine``) and by another writer (``now``), merged
+    leaf by leaf: each side's changed leaves go on top of the other's value; a leaf both
+    changed (to different values), or one changed inside a variant or array element the other
+    side replaced, is a conflict."""
     if mine in (before, now):
         return now
     if now == before:
@@ -267,25 +292,31 @@ def _merge_value(
         conflicts.append(f"{what}{name} was {done} here and by another writer")
         return now
     data_type = p.spec.data_type
-    shapes = [
-        {leaf.path: leaf for leaf in data_type.leaves(data, tao=False)}
-        for data in (before, mine, now)
-    ]
-    old, ours, latest = shapes
-    if not (old.keys() == ours.keys() == latest.keys()):
-        conflicts.append(
-            f"{what}{name}: its shape (union variant or array length) was changed here and by "
-            "another writer"
-        )
-        return now
-    result = now
-    for path, leaf in ours.items():
-        if _same(leaf.value, old[path].value) or _same(leaf.value, latest[path].value):
-            continue
-        if not _same(latest[path].value, old[path].value):
+
+    def leaves(data: bytes) -> dict[str, Any]:
+        return {leaf.path: leaf for leaf in data_type.leaves(data, tao=False)}
+
+    old, ours, latest = leaves(before), leaves(mine), leaves(now)
+    # Start from the side that changed the value's shape (union variant, array length), if
+    # only one did, and put the other side's changed leaves on top of it.
+    if ours.keys() != old.keys() and latest.keys() == old.keys():
+        result, changes = mine, latest
+    else:
+        result, changes = now, ours
+    first = leaves(result)
+    for path, leaf in changes.items():
+        if path in old and _same(leaf.value, old[path].value):
+            continue  # not changed on that side
+        target = leaves(result).get(path)  # again: a tag or length set may move leaves
+        if target is not None and _same(target.value, leaf.value):
+            continue  # changed the same way by both
+        start = first.get(path)
+        if target is None or (
+            start is not None and (path not in old or not _same(start.value, old[path].value))
+        ):
             conflicts.append(f"{what}{name}.{path} was changed here and by another writer")
             continue
-        result = data_type.set_leaf(result, leaf.index, leaf.value, tao=False)
+        result = data_type.set_leaf(result, target.index, leaf.value, tao=False)
     return result
 
 
@@ -397,8 +428,6 @@ def _take_lock(lock_path: str) -> int | None:
         if not isinstance(e, PermissionError) or fd < 0:
             raise StoreFileError(f"cannot lock the store: {e.strerror}", lock_path) from None
     try:
-        import stat
-
         kind = os.fstat(fd).st_mode
         if not stat.S_ISREG(kind):
             what = "a directory" if stat.S_ISDIR(kind) else "not a regular file"
