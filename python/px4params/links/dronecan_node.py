@@ -102,7 +102,9 @@ class DronecanParamNode(ServingLoop):
         if session is None and save_path is not None:
             session = Session(store, save_path)
         self.session = session
-        self.save_path = session.path if session is not None else None
+        if save_path is None and session is not None:
+            save_path = session.path
+        self.save_path = save_path
         self.poll_interval = poll_interval
         self._next_poll = 0.0
         self.health = health

@@ -237,7 +237,9 @@ class MavlinkParamServer(ServingLoop):
         if session is None and save_path is not None:
             session = Session(store, os.fspath(save_path))
         self.session = session
-        self.save_path = session.path if session is not None else None
+        if save_path is None and session is not None:
+            save_path = session.path
+        self.save_path = save_path
         self.poll_interval = poll_interval
         self._next_poll = 0.0
         self.system_id = system_id
