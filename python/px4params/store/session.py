@@ -57,8 +57,10 @@ class Session:
         #: store's content then: this session's own changes are what differs from it.
         self.identity = file_identity(path) if identity is True else identity or None
         self._base = store._native.copy()
-        #: The file's identity at a re-read that failed (a conflict): not tried again.
+        #: The file's identity at a re-read that failed (a conflict): not tried again; and the
+        #: error of a file that could not even be looked at, said once.
         self._refused: FileIdentity | None = None
+        self._unreadable = ""
 
     def done(self) -> None:
         """Records a change; saves it unless a batch is running."""
@@ -105,7 +107,14 @@ class Session:
         the store becomes its content with this session's unsaved changes on top; returns
         whether that happened. A conflict or an unreadable file is raised once per version of
         the file; the store is then left as it was."""
-        now = file_identity(self.path)
+        try:
+            now = file_identity(self.path)
+        except StoreFileError as e:  # e.g. no permission any more: said once
+            if self._unreadable == str(e):
+                return False
+            self._unreadable = str(e)
+            raise
+        self._unreadable = ""
         if now == self.identity or now == self._refused:
             return False
         with StoreLock(self.path):
@@ -173,6 +182,8 @@ class _KeepRunningValues(Exception):
 #: CRC-32: a store ends with the CRC-32 of what precedes it, so every store has the same one.
 FileIdentity = tuple[int, int, int, int, int, int]
 
+#: Opening a FIFO must not wait for a writer (POSIX only: elsewhere there are no FIFOs).
+_NONBLOCK = getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0)
 #: Files larger than this (not a store) are told apart by their status alone.
 _IDENTITY_READ_MAX = 1 << 24
 
@@ -180,7 +191,7 @@ _IDENTITY_READ_MAX = 1 << 24
 def file_identity(path: str) -> FileIdentity | None:
     """The file's identity, None when there is no file. A FIFO or device is not read."""
     try:
-        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | os.O_CLOEXEC)
+        fd = os.open(path, os.O_RDONLY | _NONBLOCK)
     except (FileNotFoundError, NotADirectoryError):
         return None
     except OSError as e:
