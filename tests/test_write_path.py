@@ -19,15 +19,19 @@ import threading
 import time
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import px4params
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from px4params.errors import StoreConflictError, StoreFileError
 from px4params.links.mavlink import MavlinkParamServer
 from px4params.store.classic import BUNDLED_CLASSIC
 from px4params.store.flat import write_flat
 from px4params.store.session import Session, open_session
 from pymavlink.dialects.v20 import common as mavlink
+from strategies import budget
 
 ROOT = Path(__file__).resolve().parents[1]
 AIRFRAME = ROOT / "examples" / "two_batteries.airframe"
@@ -296,6 +300,87 @@ def test_a_variant_switched_here_keeps_a_leaf_changed_there(store: Path) -> None
     after = stored(store)
     assert after.get("INA238#1.current") == 300
     assert "spi" in after.get("INA238#1")["bus"]
+
+
+#: What a writer may do to one instance of INA238 (k), in the property below, by the part of
+#: the value it changes: its current, its bus, or the whole instance (a default set is the
+#: whole instance's: the value follows it only while no leaf of the value differs).
+EDITS = {
+    "current": [lambda k, v: ("set", f"INA238#{k}.current", v % 1024)],
+    "bus": [
+        lambda k, v: ("set", f"INA238#{k}.bus.i2c.address", v % 128),
+        lambda k, v: ("set", f"INA238#{k}.bus._tag", 1),  # SPI: another shape
+    ],
+    "whole": [
+        lambda k, v: ("set-default", f"INA238#{k}.current", v % 1024),
+        lambda k, v: ("remove", f"INA238#{k}", None),
+        lambda k, v: ("add", f"INA238#{k}", None),
+    ],
+}
+
+
+def _apply(store: px4params.Store, edits: list[tuple[str, str, int | None]]) -> None:
+    for verb, name, value in edits:
+        try:
+            if verb == "set":
+                store.set(name, value)
+            elif verb == "set-default":
+                store.set_default(name, value)
+            elif verb == "remove":
+                store.remove(name)
+            else:
+                store.add(name)
+        except px4params.Px4ParamsError:
+            pass  # (an edit of a removed instance, an instance added twice: skipped)
+
+
+@st.composite
+def two_writers(draw: st.DrawFn) -> tuple[list[tuple[str, str, int | None]], ...]:
+    """Two writers' edits of INA238's instances: an instance is either one writer's (any
+    edit), or split (one writer changes its current, the other its bus)."""
+    edits: list[list[tuple[str, str, int | None]]] = [[], []]
+    owners = []
+    for _ in range(4):
+        if draw(st.booleans()):
+            writer = draw(st.sampled_from([0, 1]))
+            owners.append({part: writer for part in EDITS})
+        else:
+            writer = draw(st.sampled_from([0, 1]))
+            owners.append({"current": writer, "bus": 1 - writer})
+    for _ in range(draw(st.integers(1, 10))):
+        k = draw(st.integers(0, 3))
+        part = draw(st.sampled_from(sorted(owners[k])))
+        edit = draw(st.sampled_from(EDITS[part]))
+        edits[owners[k][part]].append(edit(k, draw(st.integers(0, 5000))))
+    return edits[0], edits[1]
+
+
+@settings(max_examples=budget(25), deadline=None)
+@given(edits=two_writers())
+def test_writers_of_disjoint_parts_lose_nothing(
+    schema: px4params.Schema, tmp_path_factory: pytest.TempPathFactory, edits: Any
+) -> None:
+    """Two writers read the file, each changes its own instances or its own part of a shared
+    one (values, defaults, a union variant, removing and adding), one saves, then the other:
+    the file holds both writers' changes, as if they had written one after the other."""
+    mine, theirs = edits
+    path = tmp_path_factory.mktemp("disjoint") / "vehicle.store"
+    start = px4params.Store(schema, classic=BUNDLED_CLASSIC)
+    start.add("INA238#0")
+    start.add("INA238#1")
+    start.save(path)
+    first, second = open_session(str(path), None), open_session(str(path), None)
+    _apply(first.store, mine)
+    first.save()
+    _apply(second.store, theirs)
+    second.save()
+    expected = stored(path.with_name("vehicle.store.bak"))  # what the first one saved
+    _apply(expected, theirs)
+    final = stored(path)
+    assert list(final.names()) == list(expected.names())
+    for name in final.names():
+        assert final.encoded(name) == expected.encoded(name), name
+        assert final.encoded(name, default=True) == expected.encoded(name, default=True), name
 
 
 # -- files the store never touches --------------------------------------------------------------
