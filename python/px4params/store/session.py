@@ -96,8 +96,10 @@ class Session:
                     result = change()
                     self._merge_latest()
                     self.store.save(self.path)
-            except BaseException:
+            except BaseException as e:
                 self.identity, self._base = kept
+                if isinstance(e, StoreConflictError):
+                    raise StoreConflictError(f"{e}; nothing was saved") from None
                 raise
             self._synced()
         return result
@@ -267,9 +269,7 @@ def _put_on_top(store: Store, base_native: Any, ours_native: Any, theirs: Any, p
             writes.append((key, (value, default)))
     if conflicts:
         more = f" (and {len(conflicts) - 1} more)" if len(conflicts) > 1 else ""
-        raise StoreConflictError(
-            f"{conflicts[0]} since this writer read {path}{more}; nothing was saved"
-        )
+        raise StoreConflictError(f"{conflicts[0]} since this writer read {path}{more}")
     native = store._native
     for (index, instance), value in writes:
         if value is None:
