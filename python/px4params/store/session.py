@@ -1,5 +1,9 @@
-"""A session on the store file: open it (a new store when there is none), hold its lock while a
-command or a whole airframe file works on it, and save once when the work succeeded.
+"""A session on the store file, and the file's one write path: every writer (a command or
+airframe file, ``gui --store``, ``mavlink serve``, ``dronecan serve``) saves through
+:meth:`Session.commit`, which takes the file's lock, reads the file again when another writer
+saved since this session read it, puts only this session's changes on top (refusing a leaf
+both changed) and saves atomically. A command holds the lock from reading to saving and saves
+once when its work succeeded.
 
 Writes to other files asked for during a batch (``param save FILE``, ``param export FILE``) are
 deferred until the batch succeeds: a failing airframe file leaves no file half-written.
@@ -105,7 +109,7 @@ class Session:
         return result
 
     def poll(self) -> bool:
-        """For servers, often (it costs one ``stat``): when another writer replaced the file,
+        """For servers, often (it reads a file of kilobytes): when another writer saved,
         the store becomes its content with this session's unsaved changes on top; returns
         whether that happened. A conflict or an unreadable file is raised once per version of
         the file; the store is then left as it was."""
