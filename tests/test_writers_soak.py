@@ -7,8 +7,10 @@
 
 each at least 200 distinct writes to its own three leaves (current, I2C bus, I2C address).
 Checked: nothing lost (the final file holds every writer's last value of each of its leaves),
-every version of the file seen during the run loads, and the MAVLink peer is shown the other
-writers' changes (its last PARAM_VALUE of every other writer's leaf is the final value).
+every version of the file seen during the run loads, and each server's view follows the file:
+the MAVLink peer is shown the other writers' changes (its last PARAM_VALUE of every other
+writer's leaf is the final value), the page's values and the DroneCAN node's GetSet answers
+are the file's.
 
 Servers bind 127.0.0.1 (the DroneCAN node a pseudo-terminal); every loop and wait is bounded.
 """
@@ -259,6 +261,22 @@ def dronecan_writer(pty: str) -> None:
         peer.close()
 
 
+def dronecan_view(pty: str) -> dict[str, int]:
+    """Every writer's leaves as the DroneCAN node answers GetSet (read only)."""
+    from test_dronecan import GETSET, Peer, _field
+
+    peer = Peer(pty, node_id=101)
+    try:
+        view = {}
+        for i in range(4):
+            for _, _, part, _ in LEAVES:
+                name = f"INA238_{i}_{part}"
+                view[name] = _field(peer.call(GETSET.Request(name=name.encode()), 10.0).value)[1]
+        return view
+    finally:
+        peer.close()
+
+
 # -- the run -------------------------------------------------------------------------------------
 
 
@@ -352,6 +370,27 @@ def test_four_writers_lose_nothing(store: Path, servers: dict[str, Server], tmp_
     peer.close()
     assert {k: peer.seen.get(k) for k in expected} == expected
     assert peer.told > 0
+
+    # The page's view (what its WebSocket pushed) and the DroneCAN node's are the file's too.
+    flat = {
+        f"INA238_{i}{letter}": final.get(f"INA238#{i}.{path}")
+        for i in range(4)
+        for path, letter, _, _ in LEAVES
+    }
+    page: dict[str, Any] = {}
+    deadline = time.monotonic() + 20
+    while time.monotonic() < deadline:
+        with urllib.request.urlopen(servers["gui"].match[1] + "api/state", timeout=30) as r:
+            page = json.load(r)["values"]
+        if all(page.get(k) == v for k, v in flat.items()):
+            break
+        time.sleep(0.2)
+    assert {k: page.get(k) for k in flat} == flat
+    assert dronecan_view(servers["dronecan"].match[1]) == {
+        f"INA238_{i}_{part}": final.get(f"INA238#{i}.{path}")
+        for i in range(4)
+        for path, _, part, _ in LEAVES
+    }
     assert len(samples) > 20
     print(
         f"\n4 x {WRITES} writes in {took:.1f} s; {len(samples)} versions of the file sampled; "
