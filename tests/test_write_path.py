@@ -442,6 +442,24 @@ def test_save_refuses_a_device_node(store: Path, tmp_path: Path) -> None:
     assert leftovers(tmp_path) == []
 
 
+def test_a_symbolic_link_loop_is_one_error_as_target_and_as_store(
+    store: Path, tmp_path: Path
+) -> None:
+    loop = tmp_path / "loop.store"
+    loop.symlink_to(loop.name)
+    saved = param(store, "save", str(loop))
+    assert saved.returncode == 1
+    assert saved.stderr == (
+        f"px4params: error: {loop}: cannot write: Too many levels of symbolic links\n"
+    )
+    used = param(loop, "set", "INA238#0.current", "300")
+    assert used.returncode == 1
+    assert used.stderr == (
+        f"px4params: error: {loop}: cannot read: Too many levels of symbolic links\n"
+    )
+    assert loop.is_symlink() and leftovers(tmp_path) == []
+
+
 def test_a_read_only_store_is_refused_not_replaced(store: Path) -> None:
     """The audit: a 0444 store was silently replaced (and kept mode 0444). Root may write it;
     its mode still says read-only."""
