@@ -21,6 +21,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
+import dronecan
 import px4params
 import pytest
 from hypothesis import given, settings
@@ -196,24 +197,38 @@ def test_an_instance_added_from_the_shell_survives_a_stale_mask_write(store: Pat
     assert stored(store).instances("INA238") == [f"INA238#{n}" for n in range(4)]
 
 
+def _getset(peer: Any, name: bytes, value: int | None = None) -> Any:
+    """GetSet by name (a write when ``value`` is given), with time for a loaded machine."""
+    from test_dronecan import GETSET
+
+    request = GETSET.Request(name=name)
+    if value is not None:
+        request.value = dronecan.uavcan.protocol.param.Value(integer_value=value)
+    return peer.call(request, timeout=10.0)
+
+
+def _save(peer: Any) -> Any:
+    from test_dronecan import OPCODE
+
+    return peer.call(OPCODE.Request(opcode=OPCODE.Request().OPCODE_SAVE), timeout=10.0)
+
+
 def test_a_cli_write_survives_a_dronecan_save(store: Path) -> None:
     """The audit: 100% of CLI writes lost at DroneCAN's SAVE. The node's view follows the file
     too: GetSet answers with the shell's value within a second."""
     from dronecan_bus import served
-    from test_dronecan import OPCODE, Peer, _field
+    from test_dronecan import Peer, _field
 
     with served(store) as pty:
         peer = Peer(pty)
         try:
-            peer.getset(name=b"INA238_1_CURRENT", integer_value=150)  # unsaved until SAVE
+            _getset(peer, b"INA238_1_CURRENT", 150)  # unsaved until SAVE
             assert param(store, "set", "INA238#0.current", "300").returncode == 0
             assert wait_for(
-                lambda: (
-                    _field(peer.getset(name=b"INA238_0_CURRENT").value) == ("integer_value", 300)
-                )
+                lambda: _field(_getset(peer, b"INA238_0_CURRENT").value) == ("integer_value", 300)
             )
-            assert _field(peer.getset(name=b"INA238_1_CURRENT").value) == ("integer_value", 150)
-            assert peer.call(OPCODE.Request(opcode=OPCODE.Request().OPCODE_SAVE)).ok
+            assert _field(_getset(peer, b"INA238_1_CURRENT").value) == ("integer_value", 150)
+            assert _save(peer).ok
         finally:
             peer.close()
     after = stored(store)
@@ -223,16 +238,16 @@ def test_a_cli_write_survives_a_dronecan_save(store: Path) -> None:
 
 def test_a_dronecan_save_of_a_leaf_the_shell_changed_is_refused(store: Path) -> None:
     from dronecan_bus import served
-    from test_dronecan import OPCODE, Peer, _field
+    from test_dronecan import Peer, _field
 
     with served(store) as pty:
         peer = Peer(pty)
         try:
-            peer.getset(name=b"INA238_1_CURRENT", integer_value=150)
+            _getset(peer, b"INA238_1_CURRENT", 150)
             assert param(store, "set", "INA238#1.current", "160").returncode == 0
-            assert not peer.call(OPCODE.Request(opcode=OPCODE.Request().OPCODE_SAVE)).ok
+            assert not _save(peer).ok
             # refused whole: the node shows the file's value again
-            assert _field(peer.getset(name=b"INA238_1_CURRENT").value) == ("integer_value", 160)
+            assert _field(_getset(peer, b"INA238_1_CURRENT").value) == ("integer_value", 160)
         finally:
             peer.close()
     assert stored(store).get("INA238#1.current") == 160
