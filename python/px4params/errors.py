@@ -32,6 +32,7 @@ __all__ = [
     "ParameterSetError",
     "Px4ParamsError",
     "SigningKeyError",
+    "StoreConflictError",
     "StoreError",
     "StoreFileError",
     "TransferError",
@@ -181,6 +182,13 @@ class StoreFileError(StoreError):
     def __str__(self) -> str:
         where = f" (at byte {self.offset})" if self.offset is not None else ""
         return f"{self.file}: {self.message}{where}"
+
+
+class StoreConflictError(StoreError):
+    """A change refused because another writer changed the same thing since this one read the
+    store: the same leaf (or classic parameter) to another value, or the instance it edits
+    removed. Nothing was written; the message names the first such leaf and how many there are.
+    """
 
 
 class DeviceIdError(Px4ParamsError):

@@ -120,12 +120,21 @@ def parse_health(text: str) -> dict[str, str] | None:
 
 
 class StoreVehicle(_Base):
-    """A store file edited offline with the same checks: every accepted write is saved
-    atomically through the store (its backup and lock as for ``px4params param``)."""
+    """A store file edited offline with the same checks: every accepted write is saved through
+    the store's one write path (:class:`~px4params.store.session.Session`: its lock, backup,
+    and other writers' changes kept). What other writers save is noticed within
+    ``poll_interval`` seconds and pushed to the page."""
 
     mode = "store"
 
-    def __init__(self, store_path: str | None, classic: str | None, dsdl: list[str]) -> None:
+    def __init__(
+        self,
+        store_path: str | None,
+        classic: str | None,
+        dsdl: list[str],
+        *,
+        poll_interval: float = 0.2,
+    ) -> None:
         from px4params.gcs.metadata import build_parameters_json
         from px4params.store.session import open_session
 
@@ -138,6 +147,25 @@ class StoreVehicle(_Base):
             store.schema, specs=store.specs, classic_params=classic_params
         )
         self._reload()
+        self._closing = threading.Event()
+        self._watcher = threading.Thread(
+            target=self._watch, args=(poll_interval,), name="gui-store-watch", daemon=True
+        )
+        self._watcher.start()
+
+    def _watch(self, interval: float) -> None:
+        """Other writers' saves: read into the store, and pushed to the page."""
+        while not self._closing.wait(interval):
+            try:
+                with self._lock:
+                    changed = self._session.poll()
+                    if changed:
+                        self._reload()
+            except (Px4ParamsError, OSError) as e:  # said once per version of the file
+                self._status(f"store changed by another writer, not read: {e}")
+                continue
+            if changed:
+                self._notify({"kind": "values", "values": self.state()["values"]})
 
     @property
     def store(self) -> Any:
@@ -149,15 +177,11 @@ class StoreVehicle(_Base):
         self.values = flat_values(self.store)
 
     def write(self, name: str, value: int | float) -> WriteResult:
-        from px4params.store.session import StoreLock
+        from px4params.store.flat import write_flat
 
-        with self._lock, StoreLock(self._session.path):
+        with self._lock:
             try:
-                from px4params.store.flat import write_flat
-
-                with self.store.transaction():
-                    write_flat(self.store, name, value)
-                    self.store.save(self._session.path)
+                self._session.commit(lambda: write_flat(self.store, name, value))
             except (Px4ParamsError, OSError) as e:
                 reason = str(e) if str(e).startswith(name) else f"{name}: {e}"
                 return WriteResult(name, False, self.values.get(name), reason)
@@ -166,7 +190,7 @@ class StoreVehicle(_Base):
         return WriteResult(name, True, self.values.get(name))
 
     def close(self) -> None:
-        pass
+        self._closing.set()
 
 
 # -- a vehicle over MAVLink ------------------------------------------------------------------

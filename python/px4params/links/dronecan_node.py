@@ -14,11 +14,15 @@ What it does (PX4's UAVCAN node and the DroneCAN specification are the model):
   under its long name, the instance masks). A write is checked like every other write; a
   refused one is answered with the unchanged value and changes nothing. Writes change the
   running values; ``ExecuteOpcode`` SAVE writes them to the store file.
-* ``uavcan.protocol.param.ExecuteOpcode``: SAVE saves the store (atomically, under its lock);
-  ERASE writes a store file with every value at its default (instances stay), which takes
-  effect at the next restart, as the specification says.
+* ``uavcan.protocol.param.ExecuteOpcode``: SAVE saves the node's changes through the store's
+  one write path (:class:`~px4params.store.session.Session`: under its lock, on top of what
+  other writers saved meanwhile; refused when both changed the same leaf); ERASE writes a
+  store file with every value at its default (instances stay), which takes effect at the next
+  restart, as the specification says.
 * ``uavcan.protocol.RestartNode`` with the right magic number: acknowledged, then the store is
   read again from its file.
+* What other writers save to the store file is read within a second (the node's unsaved
+  changes stay on top), so that GetSet answers with the file's values.
 
 Requests are reassembled from frames with the DroneCAN transfer rules
 (:class:`~px4params.links.can_transfer.TransferReceiver`); responses carry the request's
@@ -28,20 +32,20 @@ messages, malformed frames and requests for other services are ignored; the node
 
 from __future__ import annotations
 
-import os
 import select
 import time
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from px4params.dsdl.schema import Schema, load_schema
-from px4params.errors import Px4ParamsError
+from px4params.errors import Px4ParamsError, StoreConflictError
 from px4params.links import can_transfer
 from px4params.links.can_transfer import CanId, Frame, Transfer, TransferReceiver
 from px4params.links.dronecan_params import EMPTY, DronecanParams, variant_name
 from px4params.links.identity import store_digest, version_parts
 from px4params.links.serving import ServingLoop
 from px4params.links.slcan import SerialPort, SlcanAdapter, read_port
+from px4params.store.session import Session
 
 if TYPE_CHECKING:
     from px4params.store.store import Store
@@ -86,6 +90,8 @@ class DronecanParamNode(ServingLoop):
         log: Callable[[str], None] | None = None,
         status_interval: float = 1.0,
         schema: Schema | None = None,
+        session: Session | None = None,
+        poll_interval: float = 0.2,
     ) -> None:
         if not 1 <= node_id <= 127:
             raise ValueError(f"node ID {node_id} is out of range (expected 1..127)")
@@ -93,7 +99,14 @@ class DronecanParamNode(ServingLoop):
         self.store = store
         self.port = port
         self.node_id = node_id
+        if session is None and save_path is not None:
+            session = Session(store, save_path)
+        self.session = session
+        if save_path is None and session is not None:
+            save_path = session.path
         self.save_path = save_path
+        self.poll_interval = poll_interval
+        self._next_poll = 0.0
         self.health = health
         self.log = log or (lambda line: None)
         self.status_interval = status_interval
@@ -108,7 +121,7 @@ class DronecanParamNode(ServingLoop):
         self._node_status = types.get("uavcan.protocol.NodeStatus")
         self._by_dtid = {request.dtid: name for name, (request, _) in self._services.items()}
         self.receiver = TransferReceiver(self._for_us)
-        self.unique_id = store_digest(save_path, store.parameters)[:16]
+        self.unique_id = store_digest(self.save_path, store.parameters)[:16]
         self._started = time.monotonic()
         self._next_status = 0.0
         self._status_tid = 0
@@ -124,6 +137,9 @@ class DronecanParamNode(ServingLoop):
         if now >= self._next_status:
             self._next_status = now + self.status_interval
             self._send_status()
+        if self.session is not None and now >= self._next_poll:
+            self._next_poll = now + self.poll_interval
+            self._poll_store()
         wait = max(0.0, min(timeout, self._next_status - now))
         ready, _, _ = select.select([self.port.fileno()], [], [], wait)
         if not ready:
@@ -273,29 +289,45 @@ class DronecanParamNode(ServingLoop):
             self.log(f"refused: ExecuteOpcode {opcode} (SAVE is 0, ERASE is 1)")
         return {"argument": 0, "ok": ok}
 
+    def _poll_store(self) -> None:
+        """Other writers' saves: read into the store (this node's unsaved changes on top)."""
+        assert self.session is not None
+        try:
+            changed = self.session.poll()
+        except Px4ParamsError as e:  # said once per version of the file
+            self.log(f"store changed by another writer, not read: {e}")
+            return
+        if changed:
+            self.params = DronecanParams(self.store)
+            self.log("store changed by another writer: values read again")
+
     def _save(self, *, erase: bool) -> bool:
         what = "erase" if erase else "save"
-        if self.save_path is None:
+        if self.session is None:
             self.log(f"refused: {what}: no store file (serving a store in memory)")
             return False
-        from px4params.store.session import StoreLock
-
         try:
-            with StoreLock(self.save_path):
-                if erase:
-                    # Every value at its default goes to the file; the running values stay
-                    # until the next restart (the transaction is undone).
-                    with self.store.transaction():
-                        self.store.reset_all()
-                        self.store.save(self.save_path)
-                        raise _Undo
-                else:
-                    self.store.save(self.save_path)
-        except _Undo:
-            pass
+            if erase:
+                # Every value at its default goes to the file; the running values stay until
+                # the next restart.
+                self.session.rewrite(lambda store: store.reset_all())
+            else:
+                self.session.commit(lambda: None)
+        except StoreConflictError as e:
+            # Refused whole; the values shown become the file's, so that GetSet tells the
+            # truth and the client can set its changes again.
+            note = "; the node's values are the file's again"
+            try:
+                self.session.reload()
+            except Px4ParamsError:  # unreadable: the running values stay
+                note = ""
+            self.log(f"refused: {what}: {e}{note}")
+            return False
         except (Px4ParamsError, OSError) as e:
             self.log(f"refused: {what}: {e}")
             return False
+        finally:
+            self.params = DronecanParams(self.store)  # other writers' changes may be in
         self.stats["saves"] += 1
         self.log(f"{'erased' if erase else 'saved'}: {self.save_path}")
         return True
@@ -308,19 +340,14 @@ class DronecanParamNode(ServingLoop):
 
     def _reload(self) -> None:
         """A restart: the running values become the store file's again."""
-        if self.save_path is None or not os.path.exists(self.save_path):
+        if self.session is None:
             self.store.reset_to_initial()
         else:
             try:
-                with self.store.transaction():  # a bad file leaves the running values
-                    self.store.load_from(self.save_path)
+                self.session.reload()  # a bad file leaves the running values
             except Px4ParamsError as e:
                 self.log(f"restart: the store file cannot be read, values kept: {e}")
                 return
         self.params = DronecanParams(self.store)
         self._started = time.monotonic()
         self.log("restarted: values read again from the store file")
-
-
-class _Undo(Exception):
-    """Undoes a transaction on purpose."""

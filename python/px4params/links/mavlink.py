@@ -66,7 +66,7 @@ from typing import TYPE_CHECKING, Any
 
 from pymavlink.dialects.v20 import common as mavlink
 
-from px4params.errors import Px4ParamsError
+from px4params.errors import Px4ParamsError, StoreConflictError
 from px4params.gcs.component_information import ComponentFiles, px4_crc32
 from px4params.links import mavlink_messages
 from px4params.links.identity import store_digest, version_parts
@@ -74,6 +74,7 @@ from px4params.links.mavlink_ftp import SESSION_IDLE, MavftpServer
 from px4params.links.mavlink_signing import Signing, accepted
 from px4params.links.serving import ServingLoop
 from px4params.store import flat
+from px4params.store.session import Session
 
 if TYPE_CHECKING:
     from px4params.store.store import Store
@@ -109,6 +110,8 @@ PARAM_RATE = 500.0
 #: Seconds a peer stays one after it was last heard from (ground stations send a heartbeat
 #: every second).
 PEER_TIMEOUT = 5.0
+#: How often the store file is looked at for other writers' changes (one ``stat``), seconds.
+_POLL_INTERVAL = 0.2
 #: Peers remembered (for heartbeats and change notices); the oldest is forgotten beyond this.
 _MAX_PEERS = 16
 
@@ -216,7 +219,11 @@ class _Sink:
 class MavlinkParamServer(ServingLoop):
     """Serves ``store`` over UDP at ``host:port`` (port 0 picks a free one: see ``address``).
 
-    ``save_path``: the store file accepted writes are saved to (None: kept in memory only).
+    ``save_path``: the store file accepted writes are saved to (None: kept in memory only),
+    or ``session``: the store's session (:class:`~px4params.store.session.Session`, the one
+    write path: its lock, other writers' changes kept). Changes other writers save to the
+    file are noticed within ``poll_interval`` seconds and announced to every peer with
+    ``PARAM_VALUE``, as a write is.
     ``gcs``: addresses to send heartbeats to before they speak (e.g. QGC's 127.0.0.1:14550).
     ``log``: called with one line per accepted or refused write.
     ``ftp_session_idle``: seconds after which an abandoned MAVLink FTP session is reclaimed.
@@ -246,11 +253,20 @@ class MavlinkParamServer(ServingLoop):
         peer_timeout: float = PEER_TIMEOUT,
         param_rate: float = PARAM_RATE,
         signing_key: bytes | None = None,
+        session: Session | None = None,
+        poll_interval: float = _POLL_INTERVAL,
     ) -> None:
         super().__init__()
         self.store = store
         self.flat = flat.flat_map(store)  # refuses a store whose leaves cannot be destructured
+        if session is None and save_path is not None:
+            session = Session(store, os.fspath(save_path))
+        self.session = session
+        if save_path is None and session is not None:
+            save_path = session.path
         self.save_path = save_path
+        self.poll_interval = poll_interval
+        self._next_poll = 0.0
         self.system_id = system_id
         self.component_id = component_id
         self.log = log or (lambda line: None)
@@ -282,7 +298,7 @@ class MavlinkParamServer(ServingLoop):
         self._next_burst = 0.0
         self._text_id = 0
         #: AUTOPILOT_VERSION's uid and uid2 for this store.
-        self.uid = store_uid(save_path, store.parameters)
+        self.uid = store_uid(self.save_path, store.parameters)
         #: The metadata files (general, parameters.json.xz) and the FTP server that serves them.
         classic = [c for c in map(store.classic, store.parameters) if c is not None]
         self.metadata = ComponentFiles(
@@ -316,6 +332,9 @@ class MavlinkParamServer(ServingLoop):
         if self.health is not None and now >= self._next_health:
             self._next_health = now + self.health_interval
             self._report_health()
+        if self.session is not None and now >= self._next_poll:
+            self._next_poll = now + self.poll_interval
+            self._poll_store()
         timeout = min(timeout, max(0.0, self._next_heartbeat - now))
         if self._stream is not None:
             timeout = min(timeout, max(0.0, self._next_burst - now))
@@ -519,19 +538,27 @@ class MavlinkParamServer(ServingLoop):
             )
             return
         value = param_value_of(msg)
-        live_before = {e.name for e in self.entries()}
+        before = self.entries()
+
+        def change() -> str:
+            return flat.write_flat(self.store, name, value)
+
         try:
-            with self.store.transaction():
-                change = flat.write_flat(self.store, name, value)
-                if self.flat.mask_spec(name) is not None:
-                    self.log(change)
-                if self.save_path is not None:
-                    self.store.save(self.save_path)
+            if self.session is not None:  # saved through the one write path
+                line = self.session.commit(change)
+            else:
+                with self.store.transaction():
+                    line = change()
         except (Px4ParamsError, OSError) as e:
             # flat errors name the parameter already; store errors name the leaf
             why = str(e) if str(e).startswith(name) else f"{name}: {e}"
+            if isinstance(e, StoreConflictError) and self.session is not None:
+                self._poll_store()  # the file's values, announced to every peer
+                found = self._find(name) or found
             self._refuse(peer, msg, name, found, why, mavlink.MAV_PARAM_ERROR_VALUE_OUT_OF_RANGE)
             return
+        if self.flat.mask_spec(name) is not None:
+            self.log(line)
         self._entries = None
         self.stats["accepted"] += 1
         new = self._find(name)
@@ -541,10 +568,34 @@ class MavlinkParamServer(ServingLoop):
         everyone = self._peers(peer)
         self._send(self._echo(msg, *new), everyone)
         # A union tag, array length or instance mask written: announce the leaves that became
-        # live (with the new count; a ground station re-reads the list when the count drops).
+        # live (with the new count; a ground station re-reads the list when the count drops),
+        # and what other writers saved meanwhile.
+        self._announce(before, everyone, skip=name)
+
+    def _announce(self, before: list[ParamEntry], peers: list[Address], skip: str = "") -> int:
+        """PARAM_VALUE to ``peers`` for every parameter that is new or has another value than
+        in ``before``; returns how many."""
+        old = {e.name: e for e in before}
+        sent = 0
         for i, e in enumerate(self.entries()):
-            if e.name not in live_before:
-                self._send(self._value_msg(i, e), everyone)
+            if e.name != skip and old.get(e.name) != e:
+                self._send(self._value_msg(i, e), peers)
+                sent += 1
+        return sent
+
+    def _poll_store(self) -> None:
+        """Other writers' saves: read into the store, and announced to every peer."""
+        assert self.session is not None
+        before = self.entries()
+        try:
+            changed = self.session.poll()
+        except Px4ParamsError as e:  # said once per version of the file
+            self.log(f"store changed by another writer, not read: {e}")
+            return
+        if changed:
+            self._entries = None
+            count = self._announce(before, self._peers(None))
+            self.log(f"store changed by another writer: {count} parameters announced")
 
     def _echo(self, msg: Any, index: int, stored: ParamEntry) -> _RawParamValue:
         """The PARAM_VALUE that acknowledges an accepted write. A float leaf stored narrower

@@ -21,7 +21,13 @@ import re
 from typing import Any
 
 from px4params.dsdl.schema import to_json_value
-from px4params.errors import InstanceError, NumberError, ParamFileError, Px4ParamsError
+from px4params.errors import (
+    InstanceError,
+    NumberError,
+    ParamFileError,
+    Px4ParamsError,
+    StoreFileError,
+)
 from px4params.formats import qgc_params
 from px4params.formats.keys import unknown_key
 from px4params.formats.qgc_params import format_line
@@ -96,12 +102,12 @@ def write(store: Store, path: str) -> int:
     if kind is None:
         raise ParamFileError(f"{path}: export writes .params (QGC) or .json files")
     text = export_qgc(store) if kind == "qgc" else export_json(store)
-    try:
-        with open(path, "w", encoding="utf-8") as f:
-            f.write(text)
-    except OSError as e:
-        raise ParamFileError(f"{path}: cannot write: {e.strerror}") from None
-    return len(text.encode())
+    from px4params.store.file import write_file
+
+    try:  # as the store is saved: atomically, and only over a regular file
+        return write_file(path, text.encode(), keep_backup=False)
+    except StoreFileError as e:
+        raise ParamFileError(str(e)) from None
 
 
 # -- reading ----------------------------------------------------------------------------------

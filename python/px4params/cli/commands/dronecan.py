@@ -51,7 +51,7 @@ def cmd_serve(args: argparse.Namespace) -> int:
     else:
         port, device = open_serial(args.slcan), args.slcan
     node = DronecanParamNode(
-        store, port, node_id=args.node_id, save_path=path, health=health, log=log
+        store, port, node_id=args.node_id, session=session, health=health, log=log
     )
     node.adapter.bitrate = int(args.bitrate)
     where = path if existed else f"{path}, new: written on SAVE"

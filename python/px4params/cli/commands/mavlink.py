@@ -77,7 +77,7 @@ def cmd_serve(args: argparse.Namespace) -> int:
             store,
             host,
             port,
-            save_path=path,
+            session=session,
             system_id=system_id,
             component_id=component_id,
             gcs=args.gcs or (),
