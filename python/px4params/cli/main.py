@@ -47,6 +47,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "serve the store's parameters as a DroneCAN node over SLCAN, or reach a remote node's",
     ),
     "gui": ("gui", "a ground-station page for the manifest, over MAVLink or a store file"),
+    "examples": ("examples", "copy the example airframe, benches and .params file into a folder"),
     "completion": ("completion", "shell completion script (bash), or the names it completes"),
 }
 
