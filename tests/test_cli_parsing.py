@@ -266,7 +266,7 @@ def test_what_argparse_decides_goes_to_argparse() -> None:
         ["dronecan", "serve", "--slcan-pty", "--node-id", "0"],  # the type refuses it
         ["dronecan", "serve", "--slcan-pty", "--slcan", "x"],  # exclusive
         ["dronecan", "serve", "--node-id", "3"],  # one of an exclusive group is required
-        ["autostart", "run"],  # a required option
+        ["mavlink", "serve"],  # a required option
         ["decode", "--no-tao=1", "T", "H"],
         ["decode", "T", "H", "extra"],
     ):

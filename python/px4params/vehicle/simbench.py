@@ -170,6 +170,24 @@ def load_bench(path: str | os.PathLike[str], drivers: Drivers) -> Bench:
     return parse_bench(text, source, drivers)
 
 
+#: The source of the bench ``autostart run`` boots without ``--bench`` (the report's first line
+#: and the flight log name it).
+HEALTHY_BENCH = "a healthy bench (every configured device present, no faults)"
+
+
+def healthy_bench(manifest: Sequence[Configured]) -> Bench:
+    """The bench a manifest describes when nothing is wrong: each startable instance's chip at
+    its configured location, answering at once, with no faults (one per location: a second
+    instance there is refused by ``configured`` itself)."""
+    devices: dict[tuple[str, int, int], BenchDevice] = {}
+    for c in manifest:
+        if c.problems or c.driver is None or c.bus_kind not in SIMULATED_BUSES:
+            continue  # not startable: the run reports it as the manifest has it
+        key = (c.bus_kind, c.bus_id, c.address)
+        devices.setdefault(key, BenchDevice(c.driver.chip, c.bus_kind, c.bus_id, c.address))
+    return Bench(HEALTHY_BENCH, "healthy", {}, devices)
+
+
 def parse_bench(text: str, source: str, drivers: Drivers) -> Bench:
     """Checks a bench given as TOML text (see the module documentation)."""
     try:

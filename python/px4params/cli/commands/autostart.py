@@ -19,7 +19,7 @@ from px4params.store.spec import parameter_specs
 from px4params.store.store import STORE_ENV, default_store_path
 from px4params.vehicle.autostart import configured, load_manifest, plan, plan_lines, script
 from px4params.vehicle.drivers import DEFAULT_DRIVERS, DRIVERS_ENV, load_drivers
-from px4params.vehicle.simbench import LEGACY_PROBES, RunResult, load_bench, run
+from px4params.vehicle.simbench import LEGACY_PROBES, RunResult, healthy_bench, load_bench, run
 
 if TYPE_CHECKING:
     import argparse
@@ -69,8 +69,13 @@ def cmd_run(args: argparse.Namespace) -> int:
     else:
         specs = parameter_specs(load_schema(_dsdl(args), include_dronecan=False))
     drivers = load_drivers(args.drivers, specs)
-    bench = load_bench(args.bench, drivers)
     manifest = configured(store, drivers) if store is not None else None
+    if args.bench:
+        bench = load_bench(args.bench, drivers)
+    elif manifest is not None:
+        bench = healthy_bench(manifest)
+    else:
+        raise CommandError("--legacy without a manifest (--store or --airframe) needs --bench FILE")
     result = run(
         bench,
         drivers,
@@ -257,8 +262,10 @@ examples:
         description="""\
 Boot the manifest on the bench described by --bench FILE (devices by bus and
 address, with faults: absent, chip_id, error_rate, dies_after, power_up) in
-simulated time. Drivers probe with retries and backoff, publish device IDs,
-count transfers, bad transfers and resets and report health; the commander
+simulated time; without --bench, on a healthy bench: every configured device
+present, no faults (the first line says which). Drivers probe with retries and
+backoff, publish device IDs, count transfers, bad transfers and resets and
+report health; the commander
 refuses arming while a configured device is not nominal, one line per device.
 Exit code 0: may arm; 1: arming refused (or an error).
 --legacy runs today's behaviour instead: every probed driver '-X -q start' at its
@@ -273,7 +280,11 @@ examples:
   px4params autostart run --store vehicle.store --legacy \\
     --bench examples/two_batteries_faults.bench.toml   # refused too: exit status 1""",
     )
-    v.add_argument("--bench", required=True, metavar="FILE", help="the bench file (TOML)")
+    v.add_argument(
+        "--bench",
+        metavar="FILE",
+        help="the bench file (TOML; default: every configured device present and healthy)",
+    )
     v.add_argument(
         "--duration",
         type=float,
