@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
-# Sets up px4params in .venv (scripts/setup.sh), then runs every test and lint: cargo fmt, clippy
+# Sets up px4params and the test tools in .venv (scripts/setup.sh --test), then runs every test and lint: cargo fmt, clippy
 # and tests; ruff; the import layers (lint-imports); pytest (which also runs the doctests and
 # every command example of the README, docs/ and --help).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash scripts/setup.sh
+bash scripts/setup.sh --test
 export PATH="$PWD/.venv/bin:$PATH"
 
 echo "== rust: fmt, clippy, tests"
