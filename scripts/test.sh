@@ -14,6 +14,12 @@ cargo test -p px4params-core --features alloc
 # The firmware build's codec (without the fast paths for flat leaf lists): same bytes, same errors.
 cargo test -p px4params-core --features alloc,compact
 
+echo "== the wheel and sdist (release build: reuses setup's), for tests/test_wheel.py"
+dist=$(mktemp -d)
+bash scripts/package.sh "$dist"
+# tests/test_wheel.py installs it into a new venv outside the checkout and runs the smoke test
+export PX4PARAMS_WHEEL="$(echo "$dist"/*.whl)"
+
 echo "== python: ruff, import layers, pytest"
 ruff check python tests benches
 ruff format --check python tests benches

@@ -90,3 +90,20 @@ def test_demo_runs_in_an_empty_folder_without_hidden_settings(tmp_path: Path) ->
     )
     assert "manifest boot of a healthy bench" in proc.stdout
     assert "commander: may arm (all 3 configured devices nominal)" in proc.stdout
+
+
+def test_package_metadata_for_an_index() -> None:
+    import tomllib
+
+    project = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]
+    assert project["readme"] == "README.md" and project["license"] == "MIT"
+    license_text = (REPO / project["license-files"][0]).read_text()
+    assert license_text.startswith("MIT License\n\nCopyright (c) ")
+    assert "Permission is hereby granted, free of charge, to any person obtaining a copy" in (
+        license_text
+    )
+    assert "Programming Language :: Python :: 3.11" in project["classifiers"]
+    assert all(url.startswith("https://") for url in project["urls"].values())
+    # abi3: one wheel for every CPython from requires-python on
+    maturin = tomllib.loads((REPO / "pyproject.toml").read_text())["tool"]["maturin"]
+    assert "pyo3/abi3-py311" in maturin["features"] and project["requires-python"] == ">=3.11"
