@@ -97,9 +97,9 @@ def test_the_installed_package_is_the_wheels(installed: Installed) -> None:
 
 def test_wheel_tag_and_metadata() -> None:
     name = os.path.basename(WHEEL)
-    assert re.fullmatch(r"px4params-[\w.]+-cp311-abi3-manylinux_2_\d+_x86_64(\.\S+)?\.whl", name), (
-        name
-    )
+    # abi3 for CPython 3.11+, manylinux (manylinux_2_34 here; manylinux2014.manylinux_2_17 --zig)
+    tag = r"cp311-abi3-(manylinux2014_x86_64\.)?manylinux_2_\d+_x86_64"
+    assert re.fullmatch(rf"px4params-[\w.]+-{tag}\.whl", name), name
     with zipfile.ZipFile(WHEEL) as wheel:
         names = wheel.namelist()
         info = next(n for n in names if n.endswith(".dist-info/METADATA"))
