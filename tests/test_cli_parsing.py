@@ -289,7 +289,10 @@ def _cli(argv: list[str]) -> tuple[int, str]:
 def test_usage_errors_are_argparses() -> None:
     status, err = _cli(["param", "set", "X"])
     assert status == 2
-    assert err.startswith("usage: px4params param set [-h] name value [fail]\n")
+    assert err.startswith(
+        "usage: px4params param set [-h] [--store FILE] [--classic JSON] [--dsdl DIR]\n"
+        "                           name value [fail]\n"
+    )
     assert err.endswith("error: the following arguments are required: value\n")
     status, err = _cli(["dronecan", "serve", "--slcan-pty", "--node-id", "0"])
     assert status == 2

@@ -182,7 +182,7 @@ def test_sample_log_cli(sample_log: Path, tmp_path: Path) -> None:
     r = cli("migrate", str(sample_log), "-o", str(out), "--devtypes", str(CURRENT_TSV))
     assert r.returncode == 0, r.stderr
     assert r.stdout.startswith(f"Migration of {sample_log} (ULog, 980 parameters)\n")
-    assert r.stdout.endswith(f"\nwrote {out}: 1 instances\n")
+    assert r.stdout.endswith(f"\nwrote {out}: 1 instance\n")
     assert "param add AK09916#0\n" in out.read_text()
 
 

@@ -63,6 +63,7 @@ from pathlib import Path
 from typing import Any
 
 from px4params.errors import BenchFileError
+from px4params.numbers import counted
 from px4params.vehicle.autostart import Configured, describe_location
 from px4params.vehicle.drivers import BUS_KINDS, Driver, Drivers
 
@@ -637,11 +638,13 @@ class _Instance:
             if self.lost is not None:
                 at, why = self.lost
                 return "critical", (
-                    f"lost: reset at {at:.2f} s after {why}; {self.attempts} probe attempts "
+                    f"lost: reset at {at:.2f} s after {why}; "
+                    f"{counted(self.attempts, 'probe attempt')} "
                     f"since, last: {self.last_probe}"
                 )
             return "critical", (
-                f"not found: {self.last_probe} ({self.attempts} probe attempts, still retrying)"
+                f"not found: {self.last_probe} "
+                f"({counted(self.attempts, 'probe attempt')}, still retrying)"
             )
         if state != "running":
             return "critical", self.last_probe

@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any
 from px4params.cli.parsing import ArgumentParser, RawDescriptionHelpFormatter
 from px4params.dsdl.schema import load_schema
 from px4params.errors import CommandError
+from px4params.numbers import counted
 from px4params.status import EXIT_FAILED, EXIT_OK
 from px4params.store.spec import parameter_specs
 from px4params.store.store import STORE_ENV, default_store_path
@@ -88,7 +89,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     written: list[str] = []
     if args.events:
         _write(args.events, "".join(json.dumps(e) + "\n" for e in result.events or ()))
-        written.append(f"{len(result.events or ())} events to {args.events}")
+        written.append(f"{counted(len(result.events or ()), 'event')} to {args.events}")
     if args.ulog:
         from px4params import __version__
         from px4params.store.flat import flat_values
@@ -163,7 +164,8 @@ def _report(result: RunResult, i2c_buses: list[int], have_manifest: bool) -> lis
     if result.may_arm:
         if result.mode == "legacy":
             lines.append(
-                f"commander: may arm (it knows only the {registered} drivers that started)"
+                f"commander: may arm (it knows only the {counted(registered, 'driver')} that "
+                "started)"
             )
         else:
             lines.append(f"commander: may arm (all {count} configured devices nominal)")
