@@ -107,3 +107,20 @@ def test_package_metadata_for_an_index() -> None:
     # abi3: one wheel for every CPython from requires-python on
     maturin = tomllib.loads((REPO / "pyproject.toml").read_text())["tool"]["maturin"]
     assert "pyo3/abi3-py311" in maturin["features"] and project["requires-python"] == ">=3.11"
+
+
+def test_mavsdk_is_pinned_under_its_new_name() -> None:
+    """mavsdk 3.17.4 warns that the gRPC API moved to mavsdk-grpc (``mavsdk`` being the native
+    binding from 4 on): the tests pin the renamed package, which imports without the warning."""
+    import tomllib
+
+    project = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]
+    extras = project["optional-dependencies"]["test"]
+    assert "mavsdk-grpc==3.17.4" in extras
+    assert not [r for r in extras if r.split("=")[0].split("<")[0].split(">")[0] == "mavsdk"]
+    proc = subprocess.run(
+        [sys.executable, "-W", "error::FutureWarning", "-c", "import mavsdk_grpc"],
+        capture_output=True,
+        text=True,
+    )
+    assert (proc.returncode, proc.stderr) == (0, "")
