@@ -6,6 +6,7 @@ commands) runs in an empty folder, with no setting from the environment, and kee
 from __future__ import annotations
 
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -124,3 +125,39 @@ def test_mavsdk_is_pinned_under_its_new_name() -> None:
         text=True,
     )
     assert (proc.returncode, proc.stderr) == (0, "")
+
+
+def _budgets(scale: str) -> subprocess.CompletedProcess[str]:
+    code = "import strategies as s; print(s.budget(8), s.budget(300), s.LONG_RUN)"
+    env = dict(os.environ, PX4PARAMS_HYPOTHESIS_SCALE=scale)
+    return subprocess.run(
+        [sys.executable, "-c", code], cwd=REPO / "tests", env=env, capture_output=True, text=True
+    )
+
+
+def test_property_budgets_scale_with_the_environment() -> None:
+    assert _budgets("").stdout == "8 300 False\n"  # CI's
+    assert _budgets("0.2").stdout == "2 60 False\n"  # quicker, every property still runs
+    assert _budgets("0.01").stdout == "1 3 False\n"
+    assert _budgets("50").stdout == "400 15000 True\n"  # scripts/fuzz.sh
+    bad = _budgets("fast")
+    assert (bad.returncode, bad.stderr) == (
+        1,
+        "$PX4PARAMS_HYPOTHESIS_SCALE: 'fast' is not a number (1 is CI's budget)\n",
+    )
+    assert _budgets("0").stderr.endswith("out of range (more than 0, less than 10000)\n")
+
+
+def test_every_property_budget_scales() -> None:
+    """Every Hypothesis budget goes through strategies.budget(), so that CI stays fast and
+    scripts/fuzz.sh (which runs each file importing it) multiplies them all."""
+    fixed = []
+    for path in sorted((REPO / "tests").glob("test_*.py")):
+        if path.name == "test_scripts.py":  # (this test's own patterns)
+            continue
+        text = path.read_text()
+        fixed += [f"{path.name}: {m}" for m in re.findall(r"max_examples=(?!budget\()\S+", text)]
+        if "max_examples=" in text:
+            assert re.search(r"from strategies import .*budget", text), path.name
+    assert fixed == []
+    assert 'grep -l "from strategies import .*budget"' in (REPO / "scripts/fuzz.sh").read_text()
