@@ -64,14 +64,13 @@ def version_lines() -> list[str]:
     count and a digest of its files (two installs with one digest have the same types)."""
     import hashlib
 
-    from px4params import __version__, _native
+    from px4params import __version__
     from px4params.dsdl.roots import collect_roots
+    from px4params.dsdl.schema import core_version
 
     lines = [f"px4params {__version__}"]
-    lines.append(
-        f"core {_native.CORE_VERSION} (Rust, px4params-core; store file format "
-        f"{_native.STORE_FORMAT_VERSION})"
-    )
+    core, store_format = core_version()
+    lines.append(f"core {core} (Rust, px4params-core; store file format {store_format})")
     for root in collect_roots([], include_dronecan=False):
         digest = hashlib.sha256()
         for path in root.files:
