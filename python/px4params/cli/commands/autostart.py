@@ -227,6 +227,7 @@ auto starts, 'run' boots the manifest on a simulated bench.""",
         epilog="""\
 examples:
   px4params autostart script
+  px4params examples   # the example files, into ./examples
   px4params run examples/two_batteries.airframe --store vehicle.store
   px4params autostart plan --store vehicle.store
   px4params autostart run --store vehicle.store --bench examples/two_batteries.bench.toml""",

@@ -47,7 +47,8 @@ def add_parser(sub: Any, name: str, summary: str, words: Sequence[str] = ()) -> 
         name,
         help=summary,
         description=_DESCRIPTION,
-        epilog="example:\n  px4params run examples/two_batteries.airframe --store vehicle.store",
+        epilog="example:\n  px4params examples   # the example files, into ./examples\n"
+        "  px4params run examples/two_batteries.airframe --store vehicle.store",
         formatter_class=RawDescriptionHelpFormatter,
     )
     p.add_argument("file", metavar="FILE", help="airframe or startup file")
