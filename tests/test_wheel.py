@@ -211,3 +211,26 @@ def test_gui_starts_serves_and_stops(installed: Installed) -> None:
         if proc.poll() is None:
             proc.kill()
             proc.wait()
+
+
+def test_sdist_beside_the_wheel_holds_what_a_build_needs() -> None:
+    """scripts/package.sh writes the sdist beside the wheel: the Rust workspace the extension
+    builds from, the package with its data, and the files the metadata names."""
+    import tarfile
+
+    sdists = list(Path(WHEEL).parent.glob("px4params-*.tar.gz"))
+    assert len(sdists) == 1, sdists
+    with tarfile.open(sdists[0]) as sdist:
+        names = {n.split("/", 1)[1] for n in sdist.getnames() if "/" in n}
+    for needed in (
+        "pyproject.toml",
+        "README.md",
+        "LICENSE",
+        "Cargo.toml",
+        "Cargo.lock",
+        "crates/px4params-core/src/lib.rs",
+        "crates/px4params-py/src/lib.rs",
+        "python/px4params/data/examples/two_batteries.airframe",
+        "python/px4params/data/dsdl/px/Ina238.1.0.dsdl",
+    ):
+        assert needed in names, needed
