@@ -2,8 +2,18 @@
 # Sets up px4params in the checkout's own virtual environment, .venv (never the system
 # interpreter): the Python dependencies, then the Rust extension built by maturin and the
 # package installed editable. Run it again after pulling: only what changed is rebuilt.
+#   bash scripts/setup.sh          what px4params needs to run ([project.dependencies]): the demo
+#   bash scripts/setup.sh --test   and what the tests need: the test extras, MAVProxy, and
+#                                  Debian's chromium and cbindgen where apt-get can install them
 set -euo pipefail
 cd "$(dirname "$0")/.."
+
+with_tests=false
+case "${1:-}" in
+    --test) with_tests=true ;;
+    "") ;;
+    *) echo "usage: bash scripts/setup.sh [--test]" >&2; exit 2 ;;
+esac
 
 python=${PYTHON:-python3}
 if [ ! -x .venv/bin/python ]; then
@@ -21,6 +31,11 @@ if [ -e target/release/.fingerprint ]; then
     echo "== building the Rust extension (maturin, release; incremental, usually seconds)"
 else
     echo "== building the Rust extension (maturin, release): the first build takes about 2 minutes on 2 cores"
+fi
+if ! $with_tests; then
+    .venv/bin/maturin develop --uv --release
+    echo "== ready: 'source .venv/bin/activate' puts px4params on PATH (or run .venv/bin/px4params)"
+    exit 0
 fi
 .venv/bin/maturin develop --uv --release --extras test
 

@@ -1,23 +1,33 @@
 #!/usr/bin/env bash
-# Sets up px4params in .venv (scripts/setup.sh), then runs every test and lint: cargo fmt, clippy
-# and tests; ruff; the import layers (lint-imports); pytest (which also runs the doctests and
-# every command example of the README, docs/ and --help).
+# Sets up px4params and the test tools in .venv (scripts/setup.sh --test), then runs every test
+# and lint: cargo fmt, clippy and tests; the wheel built and installed outside the checkout
+# (tests/test_wheel.py); ruff; the import layers (lint-imports); pytest (which also runs the
+# doctests and every command example of the README, docs/ and --help). Each step says how long
+# the run has taken so far, and pytest lists its slowest tests (CI's budget: 15 minutes on 2
+# cores; the long property runs are scripts/fuzz.sh's).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash scripts/setup.sh
+bash scripts/setup.sh --test
 export PATH="$PWD/.venv/bin:$PATH"
 
-echo "== rust: fmt, clippy, tests"
+echo "== rust: fmt, clippy, tests (${SECONDS} s so far)"
 cargo fmt --all -- --check
 cargo clippy --workspace --all-targets --features px4params-core/alloc -- -D warnings
 cargo test -p px4params-core --features alloc
 # The firmware build's codec (without the fast paths for flat leaf lists): same bytes, same errors.
 cargo test -p px4params-core --features alloc,compact
 
-echo "== python: ruff, import layers, pytest"
+echo "== the wheel and sdist (release build: reuses setup's), for tests/test_wheel.py (${SECONDS} s so far)"
+dist=$(mktemp -d)
+bash scripts/package.sh "$dist"
+# tests/test_wheel.py installs it into a new venv outside the checkout and runs the smoke test
+export PX4PARAMS_WHEEL="$(echo "$dist"/*.whl)"
+
+echo "== python: ruff, import layers, pytest (${SECONDS} s so far)"
 ruff check python tests benches
 ruff format --check python tests benches
 lint-imports
 # The CLI tests run the installed command; keep their model cache inside the run.
 export PX4PARAMS_CACHE_DIR="${PX4PARAMS_CACHE_DIR:-$(mktemp -d)}"
-python -m pytest -q -p no:cacheprovider
+python -m pytest -q -p no:cacheprovider --durations=15
+echo "== all passed in ${SECONDS} s"

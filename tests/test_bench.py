@@ -338,11 +338,10 @@ def test_bad_duration(duration, capsys):
     )
 
 
-def test_bench_is_required(capsys):
-    with pytest.raises(SystemExit) as e:
-        main(["autostart", "run", "--airframe", str(AIRFRAME)])
-    assert e.value.code == 2
-    assert "--bench" in capsys.readouterr().err
+def test_without_bench_the_manifest_boots_healthy(capsys):
+    # (--bench was required; now a healthy bench is the default: tests/test_defaults.py)
+    assert main(["autostart", "run", "--airframe", str(AIRFRAME)]) == 0
+    assert capsys.readouterr().out.startswith("manifest boot of a healthy bench")
 
 
 # -- bench files: every error, by message -----------------------------------------------------

@@ -266,7 +266,7 @@ def test_what_argparse_decides_goes_to_argparse() -> None:
         ["dronecan", "serve", "--slcan-pty", "--node-id", "0"],  # the type refuses it
         ["dronecan", "serve", "--slcan-pty", "--slcan", "x"],  # exclusive
         ["dronecan", "serve", "--node-id", "3"],  # one of an exclusive group is required
-        ["autostart", "run"],  # a required option
+        ["mavlink", "serve"],  # a required option
         ["decode", "--no-tao=1", "T", "H"],
         ["decode", "T", "H", "extra"],
     ):
@@ -289,7 +289,11 @@ def _cli(argv: list[str]) -> tuple[int, str]:
 def test_usage_errors_are_argparses() -> None:
     status, err = _cli(["param", "set", "X"])
     assert status == 2
-    assert err.startswith("usage: px4params param set [-h] [--force] name value [fail]\n")
+    assert err.startswith(
+        "usage: px4params param set [-h] [--store FILE] [--classic JSON] [--dsdl DIR]\n"
+        "                           [--force]\n"
+        "                           name value [fail]\n"
+    )
     assert err.endswith("error: the following arguments are required: value\n")
     status, err = _cli(["dronecan", "serve", "--slcan-pty", "--node-id", "0"])
     assert status == 2

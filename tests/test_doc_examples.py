@@ -4,13 +4,18 @@ and the examples in every ``--help`` epilog. Documentation that rots fails here.
 Conventions for whoever writes a page or a help text:
 
 - Every non-comment line of a ```sh block is a command; a line ending in ``\\`` continues on
-  the next. A page's blocks run in order, in one scratch folder per page, where ``examples/``
-  and ``../shared/data/`` resolve as in the checkout and ``px4params`` is on PATH.
+  the next. A page's blocks run in order, in one scratch folder per page with nothing beside
+  it, as a user who installed the wheel has it (``px4params`` on PATH): a page that uses
+  ``examples/`` runs ``px4params examples`` first, and no page reads ``../shared/data``
+  (except those in ``READS_SHARED_DATA``, until their data is in the package).
+- Each page writes its own store files (``airframe.store``, ``autostart.store``, ...), so that
+  a reader who follows two pages in one folder does not run an airframe twice on one store.
 - A command expected to fail says so in its comment: ``# ... exit status N``.
 - ``<!-- examples: skip (REASON) -->`` on the line before a block skips that block.
 - Commands that set up the checkout itself (``bash scripts/...``, ``source .venv/...``) are not
   run: the test suite is already running inside what they set up.
-- ``--help`` examples run in a scratch folder holding the example airframe's store (as
+- ``--help`` examples run in a scratch folder holding the example files (``px4params
+  examples``), the example airframe's store (as
   ``px4params.store`` and ``vehicle.store``), a QGC export of it (``vehicle.params``), a copy
   (``backup.store``) and the shared sample log as ``flight.ulg`` / ``old.ulg``.
 """
@@ -26,7 +31,7 @@ import sys
 from pathlib import Path
 
 import pytest
-from shared_data import CURRENT_TSV, SAMPLE_LOG, SHARED_DATA
+from shared_data import CURRENT_TSV, PARAMETERS_JSON, SAMPLE_LOG, SHARED_DATA, shared_file
 
 REPO = Path(__file__).resolve().parents[1]
 PAGES = [REPO / "README.md", *sorted((REPO / "docs").glob("*.md"))]
@@ -43,6 +48,12 @@ HELP_EXCEPTIONS = {
     ),
 }
 TIMEOUT = 120
+#: Pages whose examples still read ../shared/data, and why (the rest may not): they run as in
+#: the checkout, with ``examples/`` and ``../shared`` beside them.
+READS_SHARED_DATA = {
+    "docs/device-ids.md": "today's devtype table: issue 34 moves it into the package",
+    "docs/upgrade-guide.md": "its worked example is a real PX4 flight log (issue 34)",
+}
 
 
 class Example:
@@ -139,12 +150,11 @@ def help_examples() -> list[tuple[str, list[Example]]]:
     return found
 
 
-def _scratch(tmp_path: Path) -> Path:
-    """``tmp/work`` with ``examples`` and ``../shared`` as in the checkout."""
+def _scratch(tmp_path: Path, shared: bool = False) -> Path:
+    """``tmp/work``, empty; with ``shared``, ``../shared`` as in the checkout."""
     work = tmp_path / "work"
     work.mkdir()
-    (work / "examples").symlink_to(REPO / "examples")
-    if SHARED_DATA.is_dir():
+    if shared and SHARED_DATA.is_dir():
         (tmp_path / "shared").symlink_to(SHARED_DATA.parent)
     return work
 
@@ -190,10 +200,40 @@ def test_page_examples_run(page: Path, tmp_path: Path) -> None:
         pytest.skip(f"{page.name} has no command examples")
     if _needs_shared(examples) and not (SHARED_DATA / SAMPLE_LOG).is_file():
         pytest.skip(f"{page.name} uses ../shared/data, absent here ({SHARED_DATA})")
-    work = _scratch(tmp_path)
+    source = page.relative_to(REPO).as_posix()
+    work = _scratch(tmp_path, shared=source in READS_SHARED_DATA)
+    if source in READS_SHARED_DATA:
+        (work / "examples").symlink_to(REPO / "examples")
     env = _env()
     for example in examples:
         _run(example, work, env)
+
+
+def test_pages_read_no_shared_data() -> None:
+    for page in PAGES:
+        source = page.relative_to(REPO).as_posix()
+        if source not in READS_SHARED_DATA:
+            assert not _needs_shared(page_examples(page)[0]), f"{source} reads ../shared"
+
+
+def _stores_written(examples: list[Example]) -> set[str]:
+    """The store files a page's commands name with ``--store``."""
+    return {m[1] for e in examples for m in re.finditer(r"--store[ =](\S+)", e.command)}
+
+
+def test_pages_write_their_own_stores() -> None:
+    # A reader following two pages in one folder would run the example airframe twice on one
+    # store ("INA238#0: instance exists already"): each page names its own.
+    owner: dict[str, str] = {}
+    for page in PAGES:
+        source = page.relative_to(REPO).as_posix()
+        if source == "docs/upgrade-guide.md":  # its vehicle.store is README's (issue 34's page)
+            continue
+        for store in _stores_written(page_examples(page)[0]):
+            assert owner.setdefault(store, source) == source, (
+                f"{store} is written by {owner[store]} and {source}"
+            )
+    assert owner["vehicle.store"] == "README.md" and owner["airframe.store"] == "docs/airframes.md"
 
 
 def test_skipped_blocks_give_a_reason() -> None:
@@ -211,9 +251,10 @@ def test_readme_and_docs_have_examples() -> None:
 
 
 def _prepare_help_scratch(tmp_path: Path, env: dict[str, str], examples: list[Example]) -> Path:
-    work = _scratch(tmp_path)
+    work = _scratch(tmp_path, shared=True)
     airframe = "examples/two_batteries.airframe"
     commands = [
+        "px4params examples",
         f"px4params run {airframe}",
         "px4params param export vehicle.params",
         "cp px4params.store backup.store",
@@ -285,3 +326,23 @@ def test_help_text_is_plain_text() -> None:
 
     for text in texts(build_parser()):
         assert "``" not in text and ":mod:" not in text and ":func:" not in text, text[:300]
+
+
+def test_store_page_classic_example_with_px4s_parameters_json(tmp_path: Path) -> None:
+    """The page's skipped block on classic parameters, with a real PX4 ``parameters.json``
+    (a reader has one from a PX4 build; px4params does not ship it)."""
+    shared = shared_file(PARAMETERS_JSON)
+    work = _scratch(tmp_path)
+    shutil.copy(shared, work / "px4_parameters.json")
+    text = (REPO / "docs" / "store.md").read_text(encoding="utf-8")
+    block = text[text.index("## Classic parameters") :].split("```sh\n", 1)[1].split("```", 1)[0]
+    lines = [(n, t) for n, t in enumerate(block.splitlines(), start=1)]
+    examples = _commands(lines, "docs/store.md (classic parameters)")
+    assert [e.command.split()[-2:] for e in examples] == [["MPC_XY_VEL_MAX", "8"], ["show", "-c"]]
+    env = _env()
+    for example in examples:
+        _run(example, work, env)
+    shown = subprocess.run(
+        ["bash", "-c", examples[-1].command], cwd=work, env=env, capture_output=True, text=True
+    ).stdout
+    assert "+ MPC_XY_VEL_MAX [-1,1040] : 8" in shown  # as the page shows it

@@ -227,7 +227,7 @@ def test_health_tells_the_story(tmp_path, capsys) -> None:
     assert out[2] == "commander: refused at 0.10 s"
     at = out.index("INA238#1 (ina238 on I2C bus 2 address 0x45, device ID 0xD44511)")
     assert "     6.90 s  lost (driver reset)" in out[at:]
-    assert any(line.startswith("  at the end: critical; ") and "1 timeouts" in line
+    assert any(line.startswith("  at the end: critical; ") and "1 timeout," in line
                for line in out[at:])  # fmt: skip
     # The picture drawn from the log is the picture drawn from the run.
     assert picture.read_text() == direct.read_text()

@@ -26,7 +26,7 @@ from px4params.links.can_transfer import Frame, TransferReceiver
 from px4params.links.slcan import SlcanAdapter
 from px4params.store.classic import BUNDLED_CLASSIC
 from px4params.store.file import encode_file
-from strategies import SCALE, budget
+from strategies import LONG_RUN, budget
 
 SCHEMA = px4params.load_schema(use_env=False)
 KEYS = sorted(SCHEMA.keys())
@@ -35,7 +35,7 @@ KEYS = sorted(SCHEMA.keys())
 def fuzz(examples: int) -> settings:
     """The budget; in the long run also a deadline, so that an input that takes a reader
     minutes (a denial of service) is reported with the input, like a crash."""
-    deadline = None if SCALE == 1 else 20_000
+    deadline = 20_000 if LONG_RUN else None
     return settings(
         max_examples=budget(examples), deadline=deadline, suppress_health_check=list(HealthCheck)
     )

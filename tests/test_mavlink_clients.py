@@ -59,8 +59,8 @@ def _free_tcp_port() -> int:
 
 
 def test_mavsdk_lists_reads_and_writes(vehicle: MavlinkParamServer) -> None:
-    import mavsdk
-    from mavsdk.param import ParamError
+    import mavsdk_grpc as mavsdk  # MAVSDK-Python's gRPC API under its new name (pyproject.toml)
+    from mavsdk_grpc.param import ParamError
 
     host, port = vehicle.address
     store = vehicle.store

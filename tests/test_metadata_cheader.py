@@ -22,7 +22,7 @@ from metadata_support import (
 )
 from px4params.gcs.cheader import c_type_names, generate_header, guard_from_filename
 from px4params.store.spec import parameter_specs
-from strategies import value_strategy
+from strategies import budget, value_strategy
 
 BUNDLED = px4params.load_schema(use_env=False)
 PARAMS = [s.name for s in parameter_specs(BUNDLED)]
@@ -36,7 +36,9 @@ CXX_FLAGS = ["-std=c++17", "-Wall", "-Werror", f"-I{FFI_INCLUDE}"]
 
 def slow(examples: int) -> settings:
     return settings(
-        max_examples=examples, deadline=None, suppress_health_check=[HealthCheck.too_slow]
+        max_examples=budget(examples),
+        deadline=None,
+        suppress_health_check=[HealthCheck.too_slow],
     )
 
 

@@ -30,7 +30,7 @@ from px4params.gcs.codec import (
 )
 from px4params.gcs.metadata import build_parameters_json, describe_value
 from px4params.store.spec import parameter_specs
-from strategies import value_strategy
+from strategies import budget, value_strategy
 
 CODEC_FILE = Path(gcs_codec.__file__)
 SCHEMA = px4params.load_schema(use_env=False)
@@ -42,7 +42,9 @@ INA = {"bus": {"i2c": {"bus_id": 1, "address": 0x45}}, "current": 200, "shunt": 
 
 def slow(examples: int) -> settings:
     return settings(
-        max_examples=examples, deadline=None, suppress_health_check=[HealthCheck.too_slow]
+        max_examples=budget(examples),
+        deadline=None,
+        suppress_health_check=[HealthCheck.too_slow],
     )
 
 

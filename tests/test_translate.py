@@ -11,6 +11,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from px4params.errors import StoreError
+from strategies import budget
 
 # Version 1.1 moves, adds, drops and changes fields of 1.0 in every way the rules cover.
 # (pydsdl wants the minor versions of a major version to be equally long: hence the voids.)
@@ -144,7 +145,7 @@ base_values = st.fixed_dictionaries(
 )
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=budget(300), deadline=None)
 @given(old=old_values, base=base_values)
 def test_translation_follows_the_rules(schema: px4params.Schema, old: Any, base: Any) -> None:
     old_bytes = schema[OLD].encode(old, tao=False)

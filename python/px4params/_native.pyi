@@ -3,6 +3,11 @@
 from collections.abc import Iterable
 from typing import Any, ClassVar, Self, final
 
+#: The compiled core's version (px4params-core's crate version).
+CORE_VERSION: str
+#: The store file format version the core writes.
+STORE_FORMAT_VERSION: int
+
 class Schema:
     def __init__(self, types: dict[str, Any]) -> None: ...
     def keys(self) -> list[str]: ...

@@ -20,6 +20,7 @@ __all__ = [
     "MAX_DIGITS",
     "NumberError",
     "abbreviated",
+    "counted",
     "dump_json",
     "load_json",
     "parse_float",
@@ -147,3 +148,13 @@ def _json_parts(value: object, parts: list[str], item: str, key: str) -> bool:
     else:
         return False
     return True
+
+
+def counted(count: int, noun: str, plural: str | None = None) -> str:
+    """``count`` and ``noun``, made plural unless it is one: ``counted(1, "instance")`` is
+    ``1 instance``, ``counted(2, "probe attempt")`` ``2 probe attempts``.
+
+    >>> counted(1, "timeout"), counted(0, "timeout"), counted(3, "entry", "entries")
+    ('1 timeout', '0 timeouts', '3 entries')
+    """
+    return f"{count} {noun if count == 1 else plural or noun + 's'}"

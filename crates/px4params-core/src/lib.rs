@@ -14,6 +14,9 @@ extern crate alloc;
 #[cfg(test)]
 extern crate std;
 
+/// The core's version (its crate's, which is the workspace's): `px4params --version` prints it.
+pub const VERSION: &str = env!("CARGO_PKG_VERSION");
+
 pub mod bits;
 pub mod codec;
 #[cfg(feature = "alloc")]

@@ -837,5 +837,9 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(transfer::transfer_crc_seed, m)?)?;
     m.add_function(wrap_pyfunction!(transfer::can_frames, m)?)?;
     m.add_function(wrap_pyfunction!(transfer::reassemble, m)?)?;
+    // The compiled core's own version and store file format, which a wheel may pair with
+    // another Python package version only by mistake (`px4params --version` shows both).
+    m.add("CORE_VERSION", px4params_core::VERSION)?;
+    m.add("STORE_FORMAT_VERSION", px4params_core::file::FORMAT_VERSION)?;
     Ok(())
 }

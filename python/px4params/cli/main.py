@@ -7,13 +7,14 @@ Exit codes are in ``status.py``. Every error a command raises on purpose
 from __future__ import annotations
 
 import errno
+import os
 import sys
 from collections.abc import Sequence
 
 from px4params._records import TYPE_CHECKING
-from px4params.cli.parsing import ArgumentParser
+from px4params.cli.parsing import SUPPRESS, ArgumentParser
 from px4params.errors import Px4ParamsError
-from px4params.status import EXIT_BROKEN_PIPE, EXIT_FAILED, EXIT_INTERRUPTED
+from px4params.status import EXIT_BROKEN_PIPE, EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK
 
 if TYPE_CHECKING:
     import argparse
@@ -48,6 +49,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "serve the store's parameters as a DroneCAN node over SLCAN, or reach a remote node's",
     ),
     "gui": ("gui", "a ground-station page for the manifest, over MAVLink or a store file"),
+    "examples": ("examples", "copy the example airframe, benches and .params file into a folder"),
     "completion": ("completion", "shell completion script (bash), or the names it completes"),
 }
 
@@ -55,6 +57,31 @@ _DESCRIPTION = """\
 Structured, instanced PX4 parameters: a device manifest in the vehicle's
 parameters, stored bit-packed with the DroneCAN rules, from which drivers
 autostart and arming is checked."""
+
+
+def version_lines() -> list[str]:
+    """What ``px4params --version`` prints: the package, the compiled core it runs on (a wheel
+    pairs them; a stale extension in a checkout would not) and the bundled DSDL set, as a type
+    count and a digest of its files (two installs with one digest have the same types)."""
+    import hashlib
+
+    from px4params import __version__
+    from px4params.dsdl.roots import collect_roots
+    from px4params.dsdl.schema import core_version
+
+    lines = [f"px4params {__version__}"]
+    core, store_format = core_version()
+    lines.append(f"core {core} (Rust, px4params-core; store file format {store_format})")
+    for root in collect_roots([], include_dronecan=False):
+        digest = hashlib.sha256()
+        for path in root.files:
+            digest.update(os.path.relpath(path, root.path).replace(os.sep, "/").encode() + b"\0")
+            with open(path, "rb") as f:
+                digest.update(f.read() + b"\0")
+        name = os.path.basename(root.path)
+        count = len(root.files)
+        lines.append(f"DSDL {name}: {count} types (bundled), sha256 {digest.hexdigest()[:16]}")
+    return lines
 
 
 def declare(only: str | None = None, words: Sequence[str] = ()) -> ArgumentParser:
@@ -66,6 +93,12 @@ def declare(only: str | None = None, words: Sequence[str] = ()) -> ArgumentParse
         prog="px4params",
         description=_DESCRIPTION,
         epilog="'px4params COMMAND --help' shows a command's options and examples.",
+    )
+    parser.add_argument(
+        "--version",
+        action="store_true",
+        default=SUPPRESS,  # main() answers it before parsing: no attribute in the namespace
+        help="print the versions of the package, its compiled core and its DSDL types, and exit",
     )
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name, (module_name, summary) in COMMANDS.items():
@@ -92,6 +125,12 @@ def _command_in(argv: Sequence[str]) -> str | None:
 
 def main(argv: Sequence[str] | None = None) -> int:
     words = list(sys.argv[1:] if argv is None else argv)
+    if words[:1] == ["--version"]:  # (as argparse's version action: it ends the parse)
+        try:
+            print("\n".join(version_lines()), flush=True)
+        except BrokenPipeError:
+            return EXIT_FAILED
+        return EXIT_OK
     command = _command_in(words)
     # Without a command there is nothing to run: the parser reports usage or prints --help.
     parser = declare(only=command or "", words=words)

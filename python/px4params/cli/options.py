@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 
-from px4params.cli.parsing import ArgumentParser, type_error
+from px4params.cli.parsing import SUPPRESS, ArgumentParser, type_error
 
 
 def identifier(what: str, high: int) -> Callable[[str], int]:
@@ -54,25 +54,32 @@ def dsdl_option(p: ArgumentParser) -> None:
     )
 
 
-def store_options(p: ArgumentParser) -> None:
+def store_options(p: ArgumentParser, *, after_verb: bool = False) -> None:
+    """``--store``, ``--classic`` and ``--dsdl``. ``after_verb``: on a verb of a command that
+    takes them before its verbs too (``param --store S show`` and ``param show --store S``):
+    given after the verb they win, and absent they leave the command's own (no default)."""
     from px4params.store.classic import CLASSIC_ENV  # (here: decode reads no store)
 
+    unset = {"default": SUPPRESS} if after_verb else {}
     p.add_argument(
         "--store",
         metavar="FILE",
         help="store file (default: $PX4PARAMS_STORE, else ./px4params.store)",
+        **unset,
     )
     p.add_argument(
         "--classic",
         metavar="JSON",
         help="PX4 parameters.json with the classic parameters "
         f"(default: ${CLASSIC_ENV}, else a bundled minimal set)",
+        **unset,
     )
     p.add_argument(
         "--dsdl",
         action="append",
         metavar="DIR",
         help="extra DSDL root namespace folder (repeatable)",
+        **unset,
     )
 
 

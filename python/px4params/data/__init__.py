@@ -1,6 +1,7 @@
 """What the package ships besides code, found in one place: the bundled DSDL root namespaces
 (``dsdl/px``), the driver declarations (``drivers.toml``), a minimal set of classic PX4
-parameters (``classic_parameters.json``) and MAVLink messages pymavlink lacks (``mavlink/``)."""
+parameters (``classic_parameters.json``), MAVLink messages pymavlink lacks (``mavlink/``) and
+the example files ``px4params examples`` copies out (``examples/``)."""
 
 from __future__ import annotations
 
@@ -20,3 +21,6 @@ CLASSIC_PARAMETERS_JSON = os.path.join(_HERE, "classic_parameters.json")
 DEVTYPES_DIR = os.path.join(_HERE, "devtypes")
 #: MAVLink messages pymavlink's dialects lack (COMPONENT_METADATA, COMPONENT_INFORMATION).
 MAVLINK_COMPONENT_XML = os.path.join(_HERE, "mavlink", "component_information.xml")
+#: The example airframe, its benches and a QGC export of the same vehicle configured the classic
+#: way (the checkout's ``examples/`` links to them; ``px4params examples DIR`` copies them out).
+EXAMPLES_DIR = os.path.join(_HERE, "examples")

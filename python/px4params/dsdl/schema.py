@@ -22,12 +22,19 @@ __all__ = [
     "Leaf",
     "Schema",
     "StructValue",
+    "core_version",
     "load_schema",
     "to_json_value",
 ]
 
 #: Colon-separated extra DSDL root namespace folders, added to every schema loaded by default.
 DSDL_PATH_ENV = "PX4PARAMS_DSDL_PATH"
+
+
+def core_version() -> tuple[str, int]:
+    """The compiled core's version and the store file format version it writes (for
+    ``px4params --version``: a wheel pairs core and package; a stale build would not)."""
+    return _native.CORE_VERSION, _native.STORE_FORMAT_VERSION
 
 
 class Leaf(NamedTuple):

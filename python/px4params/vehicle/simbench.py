@@ -64,6 +64,7 @@ from typing import Any
 
 from px4params.errors import BenchFileError
 from px4params.formats.keys import unknown_key
+from px4params.numbers import counted
 from px4params.reading import BENCH, read_text
 from px4params.vehicle.autostart import Configured, describe_location
 from px4params.vehicle.drivers import BUS_KINDS, Driver, Drivers
@@ -170,6 +171,24 @@ def load_bench(path: str | os.PathLike[str], drivers: Drivers) -> Bench:
     except (OSError, UnicodeDecodeError) as e:
         raise BenchFileError(f"{source}: cannot read: {getattr(e, 'strerror', e)}") from None
     return parse_bench(text, source, drivers)
+
+
+#: The source of the bench ``autostart run`` boots without ``--bench`` (the report's first line
+#: and the flight log name it).
+HEALTHY_BENCH = "a healthy bench (every configured device present, no faults)"
+
+
+def healthy_bench(manifest: Sequence[Configured]) -> Bench:
+    """The bench a manifest describes when nothing is wrong: each startable instance's chip at
+    its configured location, answering at once, with no faults (one per location: a second
+    instance there is refused by ``configured`` itself)."""
+    devices: dict[tuple[str, int, int], BenchDevice] = {}
+    for c in manifest:
+        if c.problems or c.driver is None or c.bus_kind not in SIMULATED_BUSES:
+            continue  # not startable: the run reports it as the manifest has it
+        key = (c.bus_kind, c.bus_id, c.address)
+        devices.setdefault(key, BenchDevice(c.driver.chip, c.bus_kind, c.bus_id, c.address))
+    return Bench(HEALTHY_BENCH, "healthy", {}, devices)
 
 
 def parse_bench(text: str, source: str, drivers: Drivers) -> Bench:
@@ -623,11 +642,13 @@ class _Instance:
             if self.lost is not None:
                 at, why = self.lost
                 return "critical", (
-                    f"lost: reset at {at:.2f} s after {why}; {self.attempts} probe attempts "
+                    f"lost: reset at {at:.2f} s after {why}; "
+                    f"{counted(self.attempts, 'probe attempt')} "
                     f"since, last: {self.last_probe}"
                 )
             return "critical", (
-                f"not found: {self.last_probe} ({self.attempts} probe attempts, still retrying)"
+                f"not found: {self.last_probe} "
+                f"({counted(self.attempts, 'probe attempt')}, still retrying)"
             )
         if state != "running":
             return "critical", self.last_probe

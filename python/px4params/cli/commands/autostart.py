@@ -14,12 +14,13 @@ from px4params.cli.options import MAX_SIMULATED_SECONDS, seconds
 from px4params.cli.parsing import ArgumentParser, RawDescriptionHelpFormatter
 from px4params.dsdl.schema import load_schema
 from px4params.errors import CommandError
+from px4params.numbers import counted
 from px4params.status import EXIT_FAILED, EXIT_OK
 from px4params.store.spec import parameter_specs
 from px4params.store.store import STORE_ENV, default_store_path
 from px4params.vehicle.autostart import configured, load_manifest, plan, plan_lines, script
 from px4params.vehicle.drivers import DEFAULT_DRIVERS, DRIVERS_ENV, load_drivers
-from px4params.vehicle.simbench import LEGACY_PROBES, RunResult, load_bench, run
+from px4params.vehicle.simbench import LEGACY_PROBES, RunResult, healthy_bench, load_bench, run
 
 if TYPE_CHECKING:
     import argparse
@@ -65,8 +66,13 @@ def cmd_run(args: argparse.Namespace) -> int:
     else:
         specs = parameter_specs(load_schema(_dsdl(args), include_dronecan=False))
     drivers = load_drivers(args.drivers, specs)
-    bench = load_bench(args.bench, drivers)
     manifest = configured(store, drivers) if store is not None else None
+    if args.bench:
+        bench = load_bench(args.bench, drivers)
+    elif manifest is not None:
+        bench = healthy_bench(manifest)
+    else:
+        raise CommandError("--legacy without a manifest (--store or --airframe) needs --bench FILE")
     result = run(
         bench,
         drivers,
@@ -79,7 +85,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     written: list[str] = []
     if args.events:
         _write(args.events, "".join(json.dumps(e) + "\n" for e in result.events or ()))
-        written.append(f"{len(result.events or ())} events to {args.events}")
+        written.append(f"{counted(len(result.events or ()), 'event')} to {args.events}")
     if args.ulog:
         from px4params import __version__
         from px4params.store.flat import flat_values
@@ -154,7 +160,8 @@ def _report(result: RunResult, i2c_buses: list[int], have_manifest: bool) -> lis
     if result.may_arm:
         if result.mode == "legacy":
             lines.append(
-                f"commander: may arm (it knows only the {registered} drivers that started)"
+                f"commander: may arm (it knows only the {counted(registered, 'driver')} that "
+                "started)"
             )
         else:
             lines.append(f"commander: may arm (all {count} configured devices nominal)")
@@ -216,6 +223,7 @@ auto starts, 'run' boots the manifest on a simulated bench.""",
         epilog="""\
 examples:
   px4params autostart script
+  px4params examples   # the example files, into ./examples
   px4params run examples/two_batteries.airframe --store vehicle.store
   px4params autostart plan --store vehicle.store
   px4params autostart run --store vehicle.store --bench examples/two_batteries.bench.toml""",
@@ -253,8 +261,10 @@ examples:
         description="""\
 Boot the manifest on the bench described by --bench FILE (devices by bus and
 address, with faults: absent, chip_id, error_rate, dies_after, power_up) in
-simulated time. Drivers probe with retries and backoff, publish device IDs,
-count transfers, bad transfers and resets and report health; the commander
+simulated time; without --bench, on a healthy bench: every configured device
+present, no faults (the first line says which). Drivers probe with retries and
+backoff, publish device IDs, count transfers, bad transfers and resets and
+report health; the commander
 refuses arming while a configured device is not nominal, one line per device.
 Exit code 0: may arm; 1: arming refused (or an error).
 --legacy runs today's behaviour instead: every probed driver '-X -q start' at its
@@ -269,7 +279,11 @@ examples:
   px4params autostart run --store vehicle.store --legacy \\
     --bench examples/two_batteries_faults.bench.toml   # refused too: exit status 1""",
     )
-    v.add_argument("--bench", required=True, metavar="FILE", help="the bench file (TOML)")
+    v.add_argument(
+        "--bench",
+        metavar="FILE",
+        help="the bench file (TOML; default: every configured device present and healthy)",
+    )
     v.add_argument(
         "--duration",
         type=seconds(MAX_SIMULATED_SECONDS),

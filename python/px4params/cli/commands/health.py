@@ -10,6 +10,7 @@ from typing import Any
 from px4params._records import TYPE_CHECKING
 from px4params.cli.parsing import RawDescriptionHelpFormatter
 from px4params.errors import CommandError
+from px4params.numbers import counted
 from px4params.status import EXIT_FAILED, EXIT_OK
 
 if TYPE_CHECKING:
@@ -74,8 +75,9 @@ def story(result: RunResult, path: str) -> list[str]:
         for t, text in sorted(events, key=lambda e: e[0]):
             lines.append(f"  {t:7.2f} s  {text}")
         lines.append(
-            f"  {end}: {inst.health}; {inst.transfers} transfers, {inst.bad_transfers} "
-            f"errors, {inst.resets} timeouts, {inst.probe_attempts} probe attempts"
+            f"  {end}: {inst.health}; {counted(inst.transfers, 'transfer')}, "
+            f"{counted(inst.bad_transfers, 'error')}, {counted(inst.resets, 'timeout')}, "
+            f"{counted(inst.probe_attempts, 'probe attempt')}"
         )
     if result.silently_missing:
         lines.append("silently missing (configured, never started, no message):")

@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING, Any
 
 from px4params.cli.parsing import ArgumentParser, RawDescriptionHelpFormatter
 from px4params.errors import CommandError
+from px4params.numbers import counted
 from px4params.status import EXIT_OK
 
 if TYPE_CHECKING:
@@ -45,7 +46,7 @@ def cmd_migrate(args: argparse.Namespace) -> int:
         print(json.dumps(proposal.as_dict(), indent=2))
     elif args.output is not None:
         sys.stdout.write(proposal.report())
-        print(f"\nwrote {args.output}: {len(proposal.instances)} instances")
+        print(f"\nwrote {args.output}: {counted(len(proposal.instances), 'instance')}")
     else:  # the airframe on stdout (to redirect), the report beside it on stderr
         sys.stdout.write(airframe)
         sys.stderr.write(proposal.report())

@@ -3,21 +3,43 @@
 
 from __future__ import annotations
 
+import os
 from collections.abc import Sequence
 
 from px4params._records import TYPE_CHECKING
 from px4params.cli.options import store_options
 from px4params.cli.parsing import RawDescriptionHelpFormatter
-from px4params.nsh.param import add_verbs, verb_load
-from px4params.store.session import LockedSession
+from px4params.nsh.param import (
+    add_verbs,
+    verb_compare,
+    verb_export,
+    verb_find,
+    verb_flat,
+    verb_greater,
+    verb_instances,
+    verb_load,
+    verb_show,
+    verb_status,
+)
+from px4params.store.session import LockedSession, open_session
+from px4params.store.store import default_store_path
 
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
     import argparse
     from typing import Any
 
 
+#: Verbs that never write the store file: where it does not exist (nothing to read or protect)
+#: they take no lock, so that 'param show' in an empty folder leaves no FILE.lock behind.
+_READING_VERBS = (verb_compare, verb_export, verb_find, verb_flat, verb_greater, verb_instances)
+_READING_VERBS += (verb_show, verb_status)
+
+
 def cmd_param(args: argparse.Namespace) -> int:
     recovering = args.verb is verb_load and args.file is not None
+    if args.verb in _READING_VERBS and not os.path.exists(args.store or default_store_path()):
+        session = open_session(args.store, args.classic, args.dsdl or ())
+        return int(args.verb(session, args))
     with LockedSession(
         args.store, args.classic, args.dsdl or (), start_empty_if_unreadable=recovering
     ) as session:
@@ -40,8 +62,27 @@ def add_parser(sub: Any, name: str, summary: str, words: Sequence[str] = ()) -> 
     )
     store_options(p)
     verbs = p.add_subparsers(dest="verb_name", required=True, metavar="VERB")
-    add_verbs(verbs, RawDescriptionHelpFormatter, only=_verb_in(words, name), cli=True)
+    add_verbs(
+        _VerbsWithStoreOptions(verbs),
+        RawDescriptionHelpFormatter,
+        only=_verb_in(words, name),
+        cli=True,
+    )
     p.set_defaults(func=cmd_param)
+
+
+class _VerbsWithStoreOptions:
+    """The verbs' subcommands, each also taking --store, --classic and --dsdl after the verb, as
+    'run FILE --store S' does (airframe files' verbs, built by the same add_verbs, do not)."""
+
+    def __init__(self, sub: Any) -> None:
+        self._sub = sub
+
+    def add_parser(self, name: str, **kwargs: Any) -> Any:
+        parser = self._sub.add_parser(name, **kwargs)
+        if kwargs.get("add_help", True):  # (not the stubs listed for a usage error)
+            store_options(parser, after_verb=True)
+        return parser
 
 
 def _verb_in(words: Sequence[str], command: str) -> str | None:

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import io
 import sys
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
@@ -30,7 +31,13 @@ and saved, and the run still fails."""
 
 def cmd_run(args: argparse.Namespace) -> int:
     with LockedSession(args.store, args.classic, args.dsdl or ()) as session:
+        out = session.out
+        if not args.keep_going:
+            # All or nothing, what the lines print too: a failed run shows only its error.
+            session.out = io.StringIO()
         result = airframe.run_file(args.file, session, keep_going=args.keep_going, err=sys.stderr)
+    if isinstance(session.out, io.StringIO) and not result.errors:
+        out.write(session.out.getvalue())
     return EXIT_FAILED if result.errors else EXIT_OK
 
 
@@ -40,7 +47,8 @@ def add_parser(sub: Any, name: str, summary: str, words: Sequence[str] = ()) -> 
         name,
         help=summary,
         description=_DESCRIPTION,
-        epilog="example:\n  px4params run examples/two_batteries.airframe --store vehicle.store",
+        epilog="example:\n  px4params examples   # the example files, into ./examples\n"
+        "  px4params run examples/two_batteries.airframe --store vehicle.store",
         formatter_class=RawDescriptionHelpFormatter,
     )
     p.add_argument("file", metavar="FILE", help="airframe or startup file")
