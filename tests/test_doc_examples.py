@@ -227,8 +227,6 @@ def test_pages_write_their_own_stores() -> None:
     owner: dict[str, str] = {}
     for page in PAGES:
         source = page.relative_to(REPO).as_posix()
-        if source == "docs/upgrade-guide.md":  # its vehicle.store is README's (issue 34's page)
-            continue
         for store in _stores_written(page_examples(page)[0]):
             assert owner.setdefault(store, source) == source, (
                 f"{store} is written by {owner[store]} and {source}"

@@ -23,6 +23,7 @@ from typing import Any
 
 import px4params
 import pytest
+from gui_server import GUI_LINE
 from px4params.errors import Px4ParamsError, StoreError, ValueRangeError
 from px4params.store.classic import BUNDLED_CLASSIC, ClassicParam
 from px4params.store.file import encode_file
@@ -327,14 +328,14 @@ def test_the_page_api_refuses_a_shunt_of_zero(tmp_path: Path, store_file: Path) 
     )
     try:
         assert proc.stdout is not None
-        match = re.search(r"on (http://127\.0\.0\.1:\d+/)", proc.stdout.readline())
+        match = re.search(GUI_LINE, proc.stdout.readline())
         assert match, proc.stderr.read() if proc.stderr else ""
         before = store_file.read_bytes()
         changes = [{"name": "INA238_1Q", "value": v} for v in (0, -1, "nan", "inf")]
         request = urllib.request.Request(
             match[1] + "api/write",
             data=json.dumps({"changes": changes}).encode(),
-            headers={"content-type": "application/json"},
+            headers={"content-type": "application/json", "authorization": f"token {match[3]}"},
             method="POST",
         )
         with urllib.request.urlopen(request, timeout=20) as response:

@@ -68,6 +68,7 @@ def version_lines() -> list[str]:
     from px4params import __version__
     from px4params.dsdl.roots import collect_roots
     from px4params.dsdl.schema import core_version
+    from px4params.reading import DSDL, read_bytes
 
     lines = [f"px4params {__version__}"]
     core, store_format = core_version()
@@ -76,8 +77,7 @@ def version_lines() -> list[str]:
         digest = hashlib.sha256()
         for path in root.files:
             digest.update(os.path.relpath(path, root.path).replace(os.sep, "/").encode() + b"\0")
-            with open(path, "rb") as f:
-                digest.update(f.read() + b"\0")
+            digest.update(read_bytes(path, DSDL) + b"\0")
         name = os.path.basename(root.path)
         count = len(root.files)
         lines.append(f"DSDL {name}: {count} types (bundled), sha256 {digest.hexdigest()[:16]}")
