@@ -1,0 +1,216 @@
+"""What the page knows about the manifest beyond ``parameters.json``: the declared drivers as
+the "Add a device" picker (grouped by what they measure, with each chip's name, what it needs
+and the values a new instance starts from), and every configured or staged instance read back
+from the flat values a ground station sees, with its location as PX4's ``status`` prints it and
+what would stop its driver from starting it (the autostart rules of
+:func:`~px4params.vehicle.autostart.configured_value`).
+
+    GET  /api/manifest          {"drivers": [...]} the picker, in the page's order
+    POST /api/manifest          {"values": {flat name: value}} -> {"devices": [...]}: the
+                                instances those values configure, with their problems
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+from starlette.requests import Request
+from starlette.responses import JSONResponse, Response
+from starlette.routing import Route
+
+from px4params.vehicle.autostart import Configured, configured_value, shared_locations
+from px4params.vehicle.drivers import Driver, Drivers
+
+__all__ = ["PICKER_GROUPS", "devices", "picker", "routes", "status_location"]
+
+#: The picker's groups, in order, and the driver kinds (``kind`` in drivers.toml) each holds;
+#: every other kind, and a parameter no driver declares, is under "other".
+PICKER_GROUPS: tuple[tuple[str, tuple[str, ...]], ...] = (
+    ("magnetometers", ("magnetometer", "IMU (magnetometer passthrough)")),
+    ("power monitors", ("power monitor", "battery")),
+    ("airspeed", ("airspeed", "airspeed / barometer")),
+    ("distance", ("distance",)),
+    ("barometers", ("barometer",)),
+)
+OTHER = "other"
+#: How many bus numbers a new instance's bus gets: PX4 numbers buses from 1.
+FIRST_BUS = 1
+_BUS_WORDS = {"i2c": "I2C", "spi": "SPI", "serial": "serial", "dronecan": "DroneCAN"}
+
+
+def status_location(kind: str, bus_id: int, address: int) -> str:
+    """Where a device is, as PX4's ``<driver> status`` and pilots say it: ``I2C bus 1, 0x45``,
+    ``SPI bus 1, chip select 2``."""
+    if kind == "i2c":
+        return f"I2C bus {bus_id}, 0x{address:02X}"
+    if kind == "spi":
+        return f"SPI bus {bus_id}, chip select {address}"
+    if kind == "dronecan":
+        return f"DroneCAN interface {bus_id}, node {address}"
+    if kind == "sim":
+        return f"simulation, instance {address}"
+    if kind == "mavlink":
+        return f"MAVLink instance {bus_id}, system {address}"
+    if kind == "serial":
+        return f"serial port {bus_id}"
+    return "no bus"
+
+
+def _group(driver: Driver | None) -> str:
+    kind = driver.kind if driver is not None else ""
+    return next((group for group, kinds in PICKER_GROUPS if kind in kinds), OTHER)
+
+
+def _needs(driver: Driver | None) -> str:
+    """What a chip needs to start, in words: ``I2C, address 0x45 (the driver's default)``."""
+    if driver is None:
+        return "no driver declared: nothing starts it"
+    ways = []
+    for bus in driver.buses:
+        if bus == "i2c" and driver.default_address is not None:
+            ways.append(f"I2C, address 0x{driver.default_address:02X} (the driver's default)")
+        else:
+            ways.append(_BUS_WORDS.get(bus, bus))
+    text = " or ".join(ways)
+    if not driver.autostart:
+        text += "; its driver does not autostart"
+    return text
+
+
+def _variant_starts(driver: Driver) -> dict[str, dict[str, int]]:
+    """Per bus kind the driver accepts, the fields an instance put on it starts with instead
+    of zeros that cannot start: bus 1 and, on I2C, the driver's default address."""
+    starts: dict[str, dict[str, int]] = {}
+    for bus in driver.buses:
+        if bus in ("i2c", "spi"):
+            starts[bus] = {"bus_id": FIRST_BUS}
+        if bus == "i2c" and driver.default_address is not None:
+            starts[bus]["address"] = driver.default_address
+    return starts
+
+
+def picker(metadata: Mapping[str, Any], drivers: Drivers) -> list[dict[str, Any]]:
+    """Every instanced structured parameter of ``metadata`` as the picker lists it, grouped
+    (:data:`PICKER_GROUPS` order, then "other") and by chip name within a group. ``start``
+    is what a new instance is staged with: the driver's first bus kind (``bus``) and, per bus
+    kind it accepts, the fields that differ from the DSDL defaults (``variants``). ``order``
+    is the driver's start order (None without a driver)."""
+    found = []
+    for entry in metadata.get("parameters", ()):
+        if entry.get("type") != "Custom" or entry.get("max_instances") is None:
+            continue
+        driver = drivers.for_parameter(entry["name"])
+        start: dict[str, Any] = {}
+        if driver is not None:
+            start = {"bus": driver.buses[0], "variants": _variant_starts(driver)}
+        found.append(
+            {
+                "parameter": entry["name"],
+                "driver": driver.name if driver is not None else None,
+                "chips": list(driver.chips) if driver is not None else [entry["name"]],
+                "kind": driver.kind if driver is not None else "",
+                "group": _group(driver),
+                "order": driver.order if driver is not None else None,
+                "buses": list(driver.buses) if driver is not None else [],
+                "default_address": driver.default_address if driver is not None else None,
+                "needs": _needs(driver),
+                "start": start,
+            }
+        )
+    order = [g for g, _ in PICKER_GROUPS] + [OTHER]
+    return sorted(found, key=lambda d: (order.index(d["group"]), d["chips"][0]))
+
+
+def _union_tags(fields: Sequence[Mapping[str, Any]]) -> dict[str, Mapping[str, Any]]:
+    """Union tag fields by path (``bus._tag``), nested ones inside variants included."""
+    found: dict[str, Mapping[str, Any]] = {}
+    for f in fields:
+        if f.get("role") == "union_tag":
+            found[f["path"]] = f
+            for variant in f.get("variants", ()):
+                found.update(_union_tags(variant.get("fields", ())))
+    return found
+
+
+def _instance_value(
+    entry: Mapping[str, Any], number: int | None, values: Mapping[str, Any]
+) -> dict[str, Any]:
+    """One instance's value rebuilt from its destructured flat parameters (``INA238_1B``...):
+    only the selected variants' leaves, nested as ``Store.get`` returns them."""
+    unions = _union_tags(entry.get("fields", ()))
+    prefix = entry["name"] + "_" + ("" if number is None else str(number))
+    flat = {f["path"]: values.get(prefix + f["letter"]) for f in entry.get("flat", ())}
+    value: dict[str, Any] = {}
+    for path, leaf in flat.items():
+        if leaf is None or path.endswith(("._tag", "._len")):
+            continue
+        parts = path.split(".")
+        selected = True
+        for depth in range(1, len(parts)):
+            union = ".".join(parts[:depth]) + "._tag"
+            if union in unions:
+                tag = flat.get(union)
+                names = [v["name"] for v in unions[union].get("variants", ())]
+                known = isinstance(tag, int) and 0 <= tag < len(names)
+                if not known or names[tag] != parts[depth]:
+                    selected = False
+        if not selected:
+            continue
+        node = value
+        for part in parts[:-1]:
+            node = node.setdefault(part, {})
+        node[parts[-1]] = leaf
+    return value
+
+
+def devices(
+    values: Mapping[str, Any], metadata: Mapping[str, Any], drivers: Drivers
+) -> list[dict[str, Any]]:
+    """The instances ``values`` configure (each parameter's ``_INST`` mask), in start order,
+    each with its location in ``status`` form and the problems that would stop it starting
+    (two instances at one bus address included)."""
+    entries = {
+        e["name"]: e
+        for e in metadata.get("parameters", ())
+        if e.get("type") == "Custom" and e.get("max_instances") is not None
+    }
+    declared = [d.parameter for d in drivers if d.parameter in entries]
+    order = declared + sorted(set(entries) - set(declared))
+    found: list[Configured] = []
+    for parameter in order:
+        mask = values.get(parameter + "_INST")
+        if not isinstance(mask, int):
+            continue
+        for n in range(entries[parameter]["max_instances"]):
+            if (mask >> n) & 1:
+                value = _instance_value(entries[parameter], n, values)
+                found.append(configured_value(value, drivers, parameter, f"{parameter}#{n}"))
+    return [
+        {
+            "instance": c.instance,
+            "parameter": c.parameter,
+            "driver": c.driver.name if c.driver is not None else None,
+            "kind": c.driver.kind if c.driver is not None else "",
+            "location": status_location(c.bus_kind, c.bus_id, c.address),
+            "problems": list(c.problems),
+        }
+        for c in shared_locations(found)
+    ]
+
+
+def routes(vehicle: Any, drivers: Drivers) -> list[Route]:
+    """The ``/api/manifest`` route over ``vehicle``'s metadata."""
+
+    async def manifest(request: Request) -> Response:
+        if request.method == "GET":
+            return JSONResponse({"drivers": picker(vehicle.metadata, drivers)})
+        try:
+            values = (await request.json())["values"]
+            if not isinstance(values, dict):
+                raise TypeError("values is not an object")
+        except (ValueError, KeyError, TypeError) as e:
+            return JSONResponse({"error": f"expected {{'values': {{name: value}}}}: {e}"}, 400)
+        return JSONResponse({"devices": devices(values, vehicle.metadata, drivers)})
+
+    return [Route("/api/manifest", manifest, methods=["GET", "POST"])]
