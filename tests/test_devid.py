@@ -68,12 +68,6 @@ def current(monkeypatch: pytest.MonkeyPatch) -> Path:
     return path
 
 
-@pytest.fixture
-def no_table(monkeypatch: pytest.MonkeyPatch) -> None:
-    """No current table anywhere: no variable, nothing at the fallback places."""
-    monkeypatch.setattr(devid, "_fallback_tables", list)
-
-
 def run_cli(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
     code = main(["devid", *argv])
     out, err = capsys.readouterr()
@@ -104,8 +98,7 @@ def test_guide_examples_legacy(
     assert d.describe() == f"{chip} (MAG), {bus_type} bus {bus}, {where}"
 
 
-def test_guide_examples_cli(capsys: pytest.CaptureFixture[str], no_table: None) -> None:
-    # The legacy table is built in: it works with no current table anywhere.
+def test_guide_examples_cli(capsys: pytest.CaptureFixture[str]) -> None:
     code, out, err = run_cli(capsys, "--table", "legacy", "73225", "66826", "0x4040A")
     assert (code, err) == (0, "")
     assert out.splitlines() == [
@@ -143,10 +136,26 @@ def test_current_table_from_tsv(current: Path) -> None:
     assert devid.decode(0xE90000, table).describe().startswith("ILABS/RGBLED_AW2023 (INS/LED)")
 
 
-def test_current_table_fallback_beside_repo(monkeypatch: pytest.MonkeyPatch) -> None:
-    shared_file(shared_data.CURRENT_TSV)
-    monkeypatch.setattr(devid, "_fallback_tables", lambda: [Path("/nonexistent.tsv"), CURRENT_TSV])
-    assert devid.find_current_table() == CURRENT_TSV.resolve()
+def test_current_table_is_shipped(tmp_path: Path) -> None:
+    """Today's table is part of the package: no variable, no file beside a checkout. It holds
+    what drv_sensor.h's #define lines say (the shared TSV, read from PX4-Autopilot), row for
+    row, and names where it was read."""
+    table = devid.load_table("current")
+    assert Path(table.source).name == "current.tsv" and "data/devtypes" in table.source
+    text = Path(table.source).read_text()
+    assert "src/drivers/drv_sensor.h in PX4/PX4-Autopilot commit" in text
+    assert "023ba6e01a6624e7b3f6782593a19e8870f9b973" in text
+    assert (len(table), len(list(table))) == (177, 178)
+    shared = devid.load_table("current", shared_file(shared_data.CURRENT_TSV))
+    assert [(e.code, e.macro) for e in table] == [(e.code, e.macro) for e in shared]
+    # An installed command, outside any checkout and with no variable set.
+    env = {k: v for k, v in os.environ.items() if k != devid.DEVTYPES_ENV}
+    r = subprocess.run([sys.executable, "-m", "px4params", "devid", "592905"], cwd=tmp_path,
+                       capture_output=True, text=True, env=env, timeout=60)  # fmt: skip
+    assert (r.returncode, r.stdout) == (
+        0,
+        "592905 (0x090C09): AK09916 (MAG), I2C bus 1, address 0x0C\n",
+    )
 
 
 def test_drv_sensor_header(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
@@ -201,17 +210,6 @@ def test_bad_table_files(tmp_path: Path, text: str, message: str) -> None:
     with pytest.raises(DeviceIdError) as e:
         devid.load_table("current", tsv)
     assert message in str(e.value) and "\n" not in str(e.value)
-
-
-def test_missing_current_table(no_table: None, capsys: pytest.CaptureFixture[str]) -> None:
-    with pytest.raises(DeviceIdError) as e:
-        devid.load_table("current")
-    message = str(e.value)
-    for hint in ("no current devtype table", "--devtypes FILE", "PX4PARAMS_DEVTYPES", "legacy"):
-        assert hint in message
-    code, out, err = run_cli(capsys, "592905")
-    assert (code, out) == (1, "")
-    assert_one_line_error(err, "no current devtype table", "--devtypes FILE")
 
 
 def test_missing_table_file(
@@ -467,9 +465,9 @@ def test_log_errors(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     not_ulog.write_text("these are not flight data\n")
     empty = write_ulog(tmp_path / "empty.ulg", {"SYS_ID": 1}, {})
     cases = [
-        (missing, f"log file not found: {missing}"),
-        (not_ulog, f"{not_ulog}: not a ULog file ("),
-        (tmp_path, f"cannot read log file {tmp_path}: "),
+        (missing, f"{missing}: cannot read: No such file or directory"),
+        (not_ulog, f"{not_ulog}: not a ULog file (it does not start with ULog's magic bytes)"),
+        (tmp_path, f"{tmp_path}: cannot read: Is a directory"),
         (empty, f"{empty}: no CAL_*_ID parameters in this log"),
     ]
     for path, message in cases:
@@ -537,7 +535,7 @@ def test_subprocess_contract(tmp_path: Path) -> None:
     for argv, message in (
         (("--table", "legacy", "0x1000000"), "does not fit in 24 bits"),
         (("592905",), "$PX4PARAMS_DEVTYPES not found"),
-        (("--table", "legacy", "--log", str(tmp_path / "x.ulg")), "log file not found"),
+        (("--table", "legacy", "--log", str(tmp_path / "x.ulg")), "x.ulg: cannot read: No such"),
     ):
         bad = run(*argv)
         assert bad.returncode == 1 and bad.stdout == ""
@@ -572,9 +570,33 @@ def test_tables_by_release() -> None:
     assert devid.table_for_release(release(1, 13, 2)) == "px4-v1.13"
     assert devid.table_for_release(release(1, 14, 0)) == "current"
     assert devid.table_for_release(release(1, 5, 5)) == "legacy"
-    assert devid.table_for_release(None) == "current"
+    # No version: the era rule (PX4 1.12's CAL_*_PRIO parameters, else before 1.6).
+    assert devid.table_for_release(None) == "px4-v1.6"
+    assert devid.table_for_release(0, {"CAL_MAG0_EN": 1}) == "px4-v1.6"
+    assert devid.table_for_release(None, {"CAL_MAG0_PRIO": 50}) == "current"
+    assert devid.table_for_version((1, 7, 99)) == "px4-v1.6"
+    assert devid.table_for_version((1, 8, 0)) == "px4-v1.8"
     # Known answers written down from each era's drv_sensor.h: 0x37 and the ICM-20602.
     assert devid.load_table("px4-v1.8").name_of(0x37) == "ICM20602"
     assert devid.load_table("px4-v1.11").name_of(0x37) == "ICM20602_LEGACY"
     assert devid.load_table("px4-v1.11").name_of(0x38) == "ICM20602"
     assert devid.load_table("px4-v1.13").name_of(0x37) is None
+
+
+def test_a_log_without_a_release_is_read_with_the_era_rule(tmp_path: Path) -> None:
+    """Issue 34, defect 5: a ULog without ver_sw_release (PX4 before 1.6) is not read with
+    today's table. 0x160000 in CAL_ACC1_ID is the MPU9250 accelerometer of 2016/2017
+    (DRV_ACC_DEVTYPE_MPU9250 0x16), today's FLOW simulator; with a CAL_*_PRIO parameter
+    (PX4 1.12 on) the log is read with today's table."""
+    old = write_ulog(tmp_path / "old.ulg", {"CAL_ACC1_ID": 0x160000, "CAL_MAG0_EN": 1}, {})
+    (acc,) = [e for e in devid.decode_log(old) if e.param == "CAL_ACC1_ID"]
+    assert acc.device is not None
+    assert (acc.device.table, acc.device.devtype_name, acc.device.devtype_kind) == (
+        "px4-v1.6", "MPU9250", "ACC",
+    )  # fmt: skip
+    assert acc.warning is None
+    new = write_ulog(tmp_path / "new.ulg", {"CAL_ACC1_ID": 0x370000, "CAL_ACC1_PRIO": 50}, {})
+    (acc,) = [e for e in devid.decode_log(new) if e.param == "CAL_ACC1_ID"]
+    assert acc.device is not None and (acc.device.table, acc.device.devtype_name) == (
+        "current", "BMI270",
+    )  # fmt: skip

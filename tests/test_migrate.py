@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 import os
-import re
 import struct
 import subprocess
 import sys
@@ -15,9 +14,7 @@ import shared_data
 from px4params import migrate
 from px4params.cli.main import build_parser
 from px4params.vehicle import devid
-from shared_data import SHARED_DATA, shared_file
-
-CURRENT_TSV = SHARED_DATA / shared_data.CURRENT_TSV
+from shared_data import shared_file
 
 # A small devtype table of our own, so that the .params tests need no shared data.
 DEVTYPES = (
@@ -102,6 +99,14 @@ def apply_airframe(text: str, store) -> None:
             store.set_default(words[2], number)
 
 
+def boards_available() -> bool:
+    try:
+        import px4params.vehicle.boards  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
 def has_run_command() -> bool:
     return "run" in build_parser()._subparsers._group_actions[0].choices  # type: ignore[union-attr]
 
@@ -111,33 +116,49 @@ def has_run_command() -> bool:
 
 @pytest.fixture
 def sample_log() -> Path:
-    shared_file(shared_data.CURRENT_TSV)
     return shared_file(shared_data.SAMPLE_LOG)
 
 
 def test_sample_log(sample_log: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    """The issue's must-show: the external AK09916 on I2C bus 1 at 0x0C becomes an instance,
-    and the airframe is accepted by `px4params run`."""
+    """The external AK09916 on I2C bus 1 at 0x0C becomes an instance; the log's
+    differential_pressure topic (0x472811: devtype 0x47, MS4525 in PX4 1.11's drv_sensor.h)
+    and its boot console show the MS4525DO airspeed sensor rc.sensors started on I2C bus 2 at
+    0x28 (issue 34, defect 8: not bus 1); the airframe is accepted by `px4params run`."""
     config = migrate.read_config(sample_log)
     assert config.kind == "ULog" and len(config.params) == 980
     assert "ver_hw CUBEPILOT_CUBEORANGE" in config.details
-    proposal = migrate.migrate(config, table=devid.load_table("current", CURRENT_TSV))
-    assert [i.name for i in proposal.instances] == ["AK09916#0"]
-    ak = proposal.instances[0]
-    assert ak.values == {"bus.i2c.bus_id": 1, "bus.i2c.address": 0x0C, "rotation": 0}
-    assert ak.origin == "CAL_MAG1_ID = 592905: AK09916 (MAG), I2C bus 1, address 0x0C"
-    assert proposal.airframe() == (
+    proposal = migrate.migrate(config)
+    assert proposal.table == "px4-v1.11"  # the log's release, v1.11.2
+    assert [i.name for i in proposal.instances] == ["AK09916#0", "MS4525DO#0"]
+    ak, ms = proposal.instances
+    # PX4 1.11's rc.sensors probes `ak09916 -X -R 6 start`: the board table knows it (the
+    # boards module); without it, probing's usual "no -R".
+    rotation = 6 if boards_available() else 0
+    assert ak.values == {"bus.i2c.bus_id": 1, "bus.i2c.address": 0x0C, "rotation": rotation}
+    assert ak.origin == (
+        "CAL_MAG1_ID = 592905: AK09916 (MAG), I2C bus 1, address 0x0C; boot console line 25: "
+        "'ak09916 #0 on I2C bus 1 (external, equal to '-b 2')'"
+    )
+    assert ms.values == {"bus.i2c.bus_id": 2, "bus.i2c.address": 0x28}
+    assert ms.origin == (
+        "differential_pressure 0 = 4663313: MS4525 (DIFF_PRESS), I2C bus 2, address 0x28; boot "
+        "console line 27: 'ms4525_airspeed #0 on I2C bus 2 (external, equal to '-b 1')'"
+    )
+    # The topic's device ID gives the address the 1.11 console line does not print.
+    assert not [a for a in proposal.assumptions if "names no address" in a]
+    assert proposal.airframe().startswith(
         "# Device manifest migrated by px4params from sample_log_small.ulg (ULog)\n"
         "# Review before use: see the migration report.\n"
         "\n"
-        "# AK09916#0: CAL_MAG1_ID = 592905: AK09916 (MAG), I2C bus 1, address 0x0C\n"
+        "# AK09916#0: CAL_MAG1_ID = 592905: AK09916 (MAG), I2C bus 1, address 0x0C; boot console "
+        "line 25: 'ak09916 #0 on I2C bus 1 (external, equal to '-b 2')'\n"
         "param add AK09916#0\n"
         "# [3] bus.i2c.bus_id\n"
         "param set-default AK09916#0[3] 1\n"
         "# [4] bus.i2c.address\n"
         "param set-default AK09916#0[4] 0x0C\n"
         "# [5] rotation\n"
-        "param set-default AK09916#0[5] 0\n"
+        f"param set-default AK09916#0[5] {rotation}\n"
     )
     report = proposal.report()
     internal = ": internal SPI sensor: started by the board's startup script, not by the manifest"
@@ -147,6 +168,8 @@ def test_sample_log(sample_log: Path, tmp_path: Path, monkeypatch: pytest.Monkey
         "CAL_ACC2_ID, CAL_GYRO2_ID = 2621474: ICM20948 (IMU), SPI bus 4, device 0" + internal,
         "CAL_MAG0_ID = 589858: AK09916 (MAG), SPI bus 4, device 0 (disabled: CAL_MAG0_EN = 0)"
         + internal,
+        "sensor_baro 0 = 3997706: MS5611 (BARO), SPI bus 1, device 0" + internal,
+        "sensor_baro 1 = 3997730: MS5611 (BARO), SPI bus 4, device 0" + internal,
     ]
     assert proposal.replaced[0].startswith("SENS_EXT_I2C_PRB = 1: external I2C devices were found")
     assert "SENS_EN_PX4FLOW" in proposal.disabled
@@ -155,7 +178,9 @@ def test_sample_log(sample_log: Path, tmp_path: Path, monkeypatch: pytest.Monkey
     assert "SENS_EN_THERMAL" not in proposal.disabled
     assert proposal.not_carried == [
         "SENS_EN_THERMAL = 0 (thermal control off): not a driver switch; it stays a classic "
-        "parameter"
+        "parameter",
+        "boot console line 18: 'rgbled #0 on I2C bus 1 (external, equal to '-b 2')': no bundled "
+        "parameter type for rgbled; it stays started as today",
     ]
     assert f"Unchanged: {proposal.unchanged} other parameters stay classic" in report
     assert proposal.unchanged == 980 - len(proposal.used) and proposal.unchanged > 900
@@ -173,16 +198,17 @@ def test_sample_log(sample_log: Path, tmp_path: Path, monkeypatch: pytest.Monkey
         store = px4params.Store()
         apply_airframe(proposal.airframe(), store)
     assert store.instances("AK09916") == ["AK09916#0"]
+    assert store.get("MS4525DO#0.bus.i2c.bus_id") == 2
     assert store.get("AK09916#0")["bus"] == {"i2c": {"p_version": 0, "bus_id": 1, "address": 12}}
     assert store.get("AK09916#0", default=True) == store.get("AK09916#0")  # set as defaults
 
 
 def test_sample_log_cli(sample_log: Path, tmp_path: Path) -> None:
     out = tmp_path / "v.airframe"
-    r = cli("migrate", str(sample_log), "-o", str(out), "--devtypes", str(CURRENT_TSV))
+    r = cli("migrate", str(sample_log), "-o", str(out))
     assert r.returncode == 0, r.stderr
     assert r.stdout.startswith(f"Migration of {sample_log} (ULog, 980 parameters)\n")
-    assert r.stdout.endswith(f"\nwrote {out}: 1 instances\n")
+    assert r.stdout.endswith(f"\nwrote {out}: 2 instances\n")
     assert "param add AK09916#0\n" in out.read_text()
 
 
@@ -200,16 +226,22 @@ def test_params_file(
     ina, ak, hmc = proposal.instances
     assert (ina.name, ak.name, hmc.name) == ("INA238#0", "AK09916#0", "HMC5883#0")
     assert ina.origin == (
-        "SENS_EN_INA238 = 1: ina238 started today on I2C bus 1 at the driver's default address 0x45"
+        "SENS_EN_INA238 = 1: ina238 started on I2C bus 1 at the driver's default address 0x45"
     )
-    assert hmc.values == {"bus.i2c.bus_id": 1, "bus.i2c.address": 0x1E}
+    assert hmc.values == {"bus.i2c.bus_id": 1, "bus.i2c.address": 0x1E, "rotation": 0}
     assert ina.values["current"] == 327 and ina.values["shunt"] == pytest.approx(0.0003, rel=1e-3)
     assert ina.notes == [
         "INA238_CURRENT = 327.68 A becomes current = 327 A (uint10, 1..327)",
         "INA238_SHUNT = 0.0003 Ohm becomes shunt = 0.000299930573 Ohm (float16, 1e-05..0.1)",
         "today's start line also sets the battery index (-t 1): INA238 has no field for it",
     ]
-    assert ak.values == {"bus.i2c.bus_id": 1, "bus.i2c.address": 0x0C, "rotation": 2}
+    # Issue 34, defect 3: CAL_MAG0_ROT is calibration's; the driver runs without -R.
+    assert ak.values == {"bus.i2c.bus_id": 1, "bus.i2c.address": 0x0C, "rotation": 0}
+    assert ak.notes == [
+        "CAL_MAG0_ROT = 2 stays a classic parameter: calibration applies it; the driver's "
+        "rotation is 0 (rc.sensors starts it without -R)"
+    ]
+    assert "CAL_MAG0_ROT" not in proposal.used
     assert proposal.not_carried == [
         "INA238_CONFIG = 3: INA238 has no field for it",
         "SENS_EN_LL40LS = 1: starts no I2C driver of the manifest (its ll40ls starts on 2); it "
@@ -222,14 +254,14 @@ def test_params_file(
     assert proposal.not_in_manifest == [
         f"CAL_BARO0_ID = {UAVCAN_BARO}: devtype 0x40 (not in the current table), UAVCAN bus 0, "
         "node 125: DroneCAN sensor: found on the CAN bus, not by the manifest",
-        f"CAL_MAG3_ID = {SIM_MAG}: AK09916 (MAG), simulation bus 0, address 0x01: not an I2C "
-        "device: not part of the manifest",
+        f"CAL_MAG3_ID = {SIM_MAG}: AK09916 (MAG), simulation bus 0, address 0x01: simulated "
+        "sensor: not part of the manifest",
     ]
     assert proposal.disabled == ["SENS_EN_INA226"]
-    assert proposal.unchanged == 1  # MC_ROLL_P
+    assert proposal.unchanged == 2  # MC_ROLL_P, and CAL_MAG0_ROT: calibration's, not the driver's
     report = proposal.report()
     assert "  component 100: 1 parameters (not the autopilot's)\n" in report
-    assert "Unchanged: 1 other parameters stay classic parameters" in report
+    assert "Unchanged: 2 other parameters stay classic parameters" in report
     assert "  not enabled, nothing to carry over: SENS_EN_INA226\n" in report
     data = proposal.as_dict()
     assert json.loads(json.dumps(data))["instances"][0]["indices"] == {
@@ -245,7 +277,7 @@ def test_params_file(
     store = load_store(store_file, monkeypatch)
     assert store.get("INA238#0.current") == 327
     assert store.get("INA238#0.bus.i2c.address") == 0x45
-    assert store.get("AK09916#0.rotation") == 2
+    assert store.get("AK09916#0.rotation") == 0
 
 
 def test_clamping_rotation_and_twice_found(tmp_path: Path, devtypes: devid.DevtypeTable) -> None:
@@ -279,20 +311,22 @@ def test_clamping_rotation_and_twice_found(tmp_path: Path, devtypes: devid.Devty
     proposal = migrate.migrate(migrate.read_config(params_file(tmp_path / "p", rows)), schema,
                                devtypes)  # fmt: skip
     names = [i.name for i in proposal.instances]
-    assert names == ["INA226#0", "TST5883#0", "AK09916#0", "AK09916#1", "LIS2MDL#0"]
-    ina, tst, ak0, ak1, _ = proposal.instances
-    assert tst.notes == [f"also CAL_MAG0_ID = {TST5883_I2C1}: TST5883 (MAG), I2C bus 1, "
-                         "address 0x1E"]  # fmt: skip
+    assert names == ["INA226#0", "TST5883#0", "AK09916#0", "LIS2MDL#0"]
+    ina, tst, ak0, lis = proposal.instances
+    assert tst.notes == [
+        f"also CAL_MAG0_ID = {TST5883_I2C1}: TST5883 (MAG), I2C bus 1, address 0x1E",
+        "CAL_MAG0_ROT = 3 stays a classic parameter: calibration applies it; the driver's "
+        "rotation is 0 (rc.sensors starts it without -R)",
+    ]
     assert ina.values["current"] == 200
     assert ina.notes[0] == "INA226_CURRENT = 500 A becomes current = 200 A (uint10, 1..200)"
-    assert "rotation" not in ak0.values
-    # PX4's metadata: -1 is "Internal" (the board's rotation); AK09916 has no internal flag.
-    assert ak1.notes == ["CAL_MAG2_ROT = -1 (Internal): rotation left 0 (the board's)"]
-    assert proposal.not_carried == [
-        "CAL_MAG0_ROT = 3: TST5883 has no rotation field",
-        "CAL_MAG1_ROT = 100: AK09916#0.rotation must be 0..40",
-        "CAL_MAG3_ROT = 5: LIS2MDL#0: rotation: value 5 is out of range (expected 0 to 3)",
-    ]
+    # The driver's rotation is 0 whatever calibration's is (100 is not even a rotation).
+    assert ak0.values["rotation"] == 0 and lis.values["rotation"] == 0
+    # PX4's metadata: -1 is "Internal": the board's script starts that compass.
+    (internal,) = [o for o in proposal.left_out if o.found.startswith("CAL_MAG2_ID")]
+    assert internal.reason == "board"
+    assert internal.line.endswith(": CAL_MAG2_ROT = -1 (Internal): started by the board's script")
+    assert proposal.not_carried == []
 
 
 def test_empty_and_disabled(tmp_path: Path, devtypes: devid.DevtypeTable) -> None:
@@ -391,36 +425,47 @@ def test_cli(tmp_path: Path) -> None:
     assert r.returncode == 0 and "examples:" in r.stdout
 
 
-def test_float_settings_round_to_nearest_and_disabled_sensors_are_noted(
+def test_float_settings_round_to_nearest_and_disabled_sensors_stay_out(
     tmp_path: Path, devtypes: devid.DevtypeTable
 ) -> None:
-    """199.6 A is 200 A, not 199 (rounded, not floored); an I2C magnetometer calibrated but
-    disabled (CAL_MAG0_EN = 0) is carried with a note saying so."""
+    """199.6 A is 200 A, not 199 (math.floor(v + 0.5), not floored); an I2C magnetometer
+    calibrated but disabled (CAL_MAG0_EN = 0 before PX4 1.12, CAL_MAG1_PRIO = 0 since: issue
+    34, defect 2) is left out: an instance would make a sensor PX4 does not use a required
+    one."""
     rows: list[tuple[str, object, int]] = [
         ("SENS_EN_INA238", 1, 6),
         ("INA238_CURRENT", 199.6, 9),
         ("CAL_MAG0_ID", AK09916_I2C1, 6),
         ("CAL_MAG0_EN", 0, 6),
+        ("CAL_MAG1_ID", HMC5883_I2C1, 6),
+        ("CAL_MAG1_PRIO", 0, 6),
     ]
     proposal = migrate.migrate(migrate.read_config(params_file(tmp_path / "p", rows)), None,
                                devtypes)  # fmt: skip
-    ina, ak = proposal.instances
+    (ina,) = proposal.instances
     assert ina.values["current"] == 200
-    assert ak.notes == ["CAL_MAG0_EN = 0: the sensor was disabled for use"]
+    assert [(o.found, o.reason) for o in proposal.left_out] == [
+        (f"CAL_MAG0_ID = {AK09916_I2C1}", "disabled"),
+        (f"CAL_MAG1_ID = {HMC5883_I2C1}", "disabled"),
+    ]
+    assert proposal.left_out[1].line == (
+        f"CAL_MAG1_ID = {HMC5883_I2C1}: HMC5883 (MAG), I2C bus 1, address 0x1E: disabled "
+        "(CAL_MAG1_PRIO = 0): not proposed, an instance would make it required"
+    )
 
 
-def test_an_internal_magnetometer_gets_the_internal_flag(
-    tmp_path: Path, devtypes: devid.DevtypeTable
-) -> None:
-    """CAL_MAG0_ROT = -1 is PX4's "Internal": the IST8310 type's own internal flag says so."""
+def test_an_internal_magnetometer_is_the_boards(tmp_path: Path) -> None:
+    """Issue 34, defect 1: CAL_MAG0_ROT = -1 is PX4's "Internal": the board's script starts the
+    compass (fmu-v5: `ist8310 -I -R 10 start`), so it is no manifest instance."""
     ist8310 = devid.encode("i2c", 1, 0x0E, 0x06)
     rows: list[tuple[str, object, int]] = [("CAL_MAG0_ID", ist8310, 6), ("CAL_MAG0_ROT", -1, 6)]
     proposal = migrate.migrate(migrate.read_config(params_file(tmp_path / "p", rows)), None,
                                devid.load_table("px4-v1.13"))  # fmt: skip
-    (ist,) = proposal.instances
-    assert ist.name == "IST8310#0" and ist.values["internal"] is True
-    assert ist.notes == ["CAL_MAG0_ROT = -1 (Internal): internal = true, rotation left 0 (the "
-                         "board's)"]  # fmt: skip
+    assert proposal.instances == []
+    assert proposal.not_in_manifest == [
+        f"CAL_MAG0_ID = {ist8310}: IST8310 (MAG), I2C bus 1, address 0x0E: CAL_MAG0_ROT = -1 "
+        "(Internal): started by the board's script"
+    ]
 
 
 def test_qgc_offline_editing_params_file() -> None:
@@ -447,52 +492,3 @@ def test_qgc_mocklink_params_file() -> None:
         "component 2: 1 parameters (not the autopilot's)",
         "component 3: 1 parameters (not the autopilot's)",
     ]
-
-
-# Every real sample: the external devices PX4 found become instances; what stays out is internal
-# (SPI) or simulated. The device IDs are read with pyulog and split by hand here (bits 0-2 the
-# bus type, 1 = I2C), not by the product's decoder.
-REAL_SAMPLES = {
-    "sample_log_small.ulg": ["AK09916#0"],  # AK09916 on I2C bus 1 (CubeOrange, v1.11)
-    "sample_appended_multiple.ulg": ["HMC5883#0"],  # HMC5883 on I2C bus 2 (FMUv4 Pro, v1.6)
-    "sample_px4_events.ulg": [],  # SITL: simulated sensors only
-    "qgc_offline_editing_v1.4.params": [],  # nothing calibrated
-    "qgc_px4_mocklink.params": [],  # MockLink's simulated sensors, bus type 0
-}
-
-
-def _device_ids(path: Path) -> dict[str, int]:
-    if path.suffix == ".ulg":
-        from pyulog import ULog
-
-        params = ULog(str(path), parse_header_only=True).initial_parameters
-    else:
-        params = {}
-        for line in path.read_text().splitlines():
-            cells = line.split("\t")
-            if len(cells) == 5 and cells[1] == "1":
-                params[cells[2]] = float(cells[3])
-    return {k: int(v) for k, v in params.items() if re.fullmatch(r"CAL_\w+_ID", k) and v}
-
-
-@pytest.mark.parametrize("name", sorted(REAL_SAMPLES))
-def test_every_external_device_of_the_real_samples_becomes_an_instance(name, capsys) -> None:
-    path = shared_file(name)  # skips with the reason when ../shared is absent
-    from px4params.cli.main import main
-
-    assert main(["migrate", str(path), "--json"]) == 0
-    report = json.loads(capsys.readouterr().out)
-    names = [i["name"] for i in report["instances"]]
-    assert names == REAL_SAMPLES[name]
-    external = {v for v in _device_ids(path).values() if v & 0x7 == 1}  # I2C
-    assert len(external) == len(names)
-    for inst in report["instances"]:
-        value = int(inst["origin"].split(" = ")[1].split(":")[0])
-        assert value in external
-        assert inst["values"]["bus.i2c.bus_id"] == (value >> 3) & 0x1F
-        assert inst["values"]["bus.i2c.address"] == (value >> 8) & 0xFF
-    for line in report["not_in_manifest"]:
-        assert "internal SPI sensor" in line or (
-            "not an I2C device" in line and ("simulation bus" in line or "bus type 0" in line)
-        ), line
-    assert not [line for line in report["not_carried"] if "no bundled parameter type" in line]

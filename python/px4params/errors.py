@@ -10,6 +10,8 @@ import os
 
 __all__ = [
     "BenchFileError",
+    "BoardsError",
+    "BoardsFileError",
     "ClassicParamsError",
     "CodecError",
     "CommandError",
@@ -189,6 +191,15 @@ class BenchFileError(Px4ParamsError):
 
 class DriversFileError(Px4ParamsError):
     """The driver declarations cannot be used. ``str()`` is one line: file, driver, problem."""
+
+
+class BoardsError(Px4ParamsError):
+    """A board look-up that cannot be answered as asked (a release that is no PX4 version)."""
+
+
+class BoardsFileError(BoardsError):
+    """The board table (``boards.toml``) cannot be used. ``str()`` is one line: file, row,
+    problem."""
 
 
 class ManifestError(Px4ParamsError):

@@ -1,5 +1,6 @@
-"""Writing ULog, PX4's flight log format (PX4 dev guide, "ULog File Format"), as pyulog, Flight
-Review and PX4's own log tools read it.
+"""ULog, PX4's flight log format (PX4 dev guide, "ULog File Format"): writing it, as pyulog, Flight
+Review and PX4's own log tools read it, and reading what a log says about its vehicle (the one
+reader of logs' parameters, information and boot console: :func:`read_header`).
 
 A file is a 16-byte header, then messages of ``uint16 size, uint8 type, payload``. The
 definitions section (flag bits ``B`` first, then formats ``F``, information ``I``/``M`` and
@@ -17,13 +18,18 @@ b'ULog\\x01\\x125'
 
 from __future__ import annotations
 
+import contextlib
+import io
+import os
 import struct
+from dataclasses import dataclass, field
 
 from px4params._records import TYPE_CHECKING
 from px4params.errors import ULogError
 
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
     from collections.abc import Sequence
+    from typing import Any
 
 #: The first seven bytes of every ULog file; the eighth is the format version.
 MAGIC = b"ULog\x01\x12\x35"
@@ -177,3 +183,105 @@ def _typed(key: str, value: str | int | float) -> tuple[bytes, bytes]:
     if isinstance(value, int):  # bool included
         return f"int32_t {key}".encode(), struct.pack("<i", int(value))
     return f"float {key}".encode(), struct.pack("<f", value)
+
+
+# -- reading ----------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class ULogHeader:
+    """What a log says about its vehicle: the information messages, the parameters at the start
+    and their changes during the log, and the boot console (``boot_console_output``, which PX4
+    logs since 1.12: every line the startup scripts printed)."""
+
+    path: str
+    info: dict[str, Any]
+    initial_parameters: dict[str, int | float]
+    #: ``(timestamp_us, name, value)`` of every parameter change logged, in time order.
+    changed_parameters: list[tuple[int, str, int | float]] = field(default_factory=list)
+    boot_console: str | None = None
+
+    @property
+    def parameters(self) -> dict[str, int | float]:
+        """Every parameter's last value in the log."""
+        params = dict(self.initial_parameters)
+        for _, name, value in self.changed_parameters:
+            params[name] = value
+        return params
+
+    @property
+    def release(self) -> int | None:
+        """``ver_sw_release`` (major, minor, patch, type in its four bytes), None when the log
+        has none (PX4 before 1.6) or it is 0."""
+        value = self.info.get("ver_sw_release")
+        return int(value) if isinstance(value, int) and value else None
+
+    @property
+    def hardware(self) -> str | None:
+        """``ver_hw``, the board (``PX4_FMU_V5``, ``CUBEPILOT_CUBEORANGE``, ``PX4_SITL``)."""
+        value = self.info.get("ver_hw")
+        return str(value) if value else None
+
+
+def read_header(path: str | os.PathLike[str]) -> ULogHeader:
+    """Reads a log's definitions (no data messages: fast on large logs). A file that cannot be
+    read or is not a ULog is a :class:`ULogError` naming it."""
+    from pyulog import ULog  # only reading logs needs it
+
+    where = os.fspath(path)
+    try:
+        with open(where, "rb") as f:
+            magic = f.read(len(MAGIC))
+    except OSError as e:
+        raise ULogError(f"{where}: cannot read: {e.strerror}") from None
+    if magic != MAGIC:
+        raise ULogError(f"{where}: not a ULog file (it does not start with ULog's magic bytes)")
+    try:
+        with contextlib.redirect_stdout(io.StringIO()):  # pyulog prints its warnings
+            log = ULog(where, message_name_filter_list=[])
+    except Exception as e:  # pyulog signals bad data with assorted exceptions
+        raise ULogError(f"{where}: not a readable ULog file ({e})") from None
+    changes = [(int(t), str(n), v) for t, n, v in log.changed_parameters]
+    console = None
+    parts = log.msg_info_multiple_dict.get("boot_console_output")
+    if parts:  # one list of string pieces per logged copy; the first is the boot
+        console = "".join(str(piece) for piece in parts[0])
+    return ULogHeader(
+        where, dict(log.msg_info_dict), dict(log.initial_parameters), changes, console
+    )
+
+
+#: Topics whose samples carry the publishing sensor's ``device_id``.
+SENSOR_TOPICS = (
+    "sensor_accel",
+    "sensor_gyro",
+    "sensor_mag",
+    "sensor_baro",
+    "differential_pressure",
+    "distance_sensor",
+)
+
+
+def read_device_ids(path: str | os.PathLike[str]) -> list[tuple[str, int, int]]:
+    """``(topic, multi_id, device_id)`` of every sensor that published in the log (the sensor
+    topics above; each distinct non-zero ``device_id`` once, in the order logged). Only those
+    topics are parsed."""
+    from pyulog import ULog
+
+    where = os.fspath(path)
+    try:
+        with contextlib.redirect_stdout(io.StringIO()):
+            log = ULog(where, message_name_filter_list=list(SENSOR_TOPICS))
+    except OSError as e:
+        raise ULogError(f"{where}: cannot read: {e.strerror}") from None
+    except Exception as e:  # pyulog signals bad data with assorted exceptions
+        raise ULogError(f"{where}: not a readable ULog file ({e})") from None
+    found: list[tuple[str, int, int]] = []
+    for data in log.data_list:
+        ids = data.data.get("device_id")
+        if ids is None:
+            continue
+        for value in dict.fromkeys(int(v) for v in ids):
+            if value:
+                found.append((data.name, int(data.multi_id), value))
+    return found

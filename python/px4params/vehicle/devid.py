@@ -18,12 +18,18 @@ Devtype tables (which chip a code names) changed between PX4 releases, so two ar
     ``0x37`` is an ICM20602, today's a BMI270. A device whose devtype is of another sensor kind
     than its parameter (a FLOW code in ``CAL_ACC0_ID``) is flagged.
 ``current``
-    Today's ``drv_sensor.h``. It is not shipped with px4params; it is read at run time from, in
-    this order: the ``path`` argument (the CLI's ``--devtypes FILE``), ``$PX4PARAMS_DEVTYPES``,
-    or ``../shared/data/px4_devtypes_current.tsv`` beside the repository or the working directory.
-    The file is either a TSV (``code<TAB>name`` per line, an optional ``code<TAB>name`` header,
-    codes decimal or ``0x`` hex) or a PX4 ``drv_sensor.h`` (its ``#define DRV_..._DEVTYPE_... 0x..``
-    lines); the format is recognised from the content.
+    Today's ``drv_sensor.h`` (PX4 1.14 and later), shipped as ``data/devtypes/current.tsv``
+    (naming the PX4-Autopilot commit it was read from). Another file can be given instead:
+    the ``path`` argument (the CLI's ``--devtypes FILE``) or ``$PX4PARAMS_DEVTYPES``. Such a
+    file is either a TSV (``code<TAB>name`` per line, an optional ``code<TAB>name`` header,
+    codes decimal or ``0x`` hex) or a PX4 ``drv_sensor.h`` (its ``#define DRV_..._DEVTYPE_...
+    0x..`` lines); the format is recognised from the content.
+
+Which table a file's IDs follow (the era rule): the firmware version it names (a log's
+``ver_sw_release``, a QGC file's ``# Version:`` line; :func:`table_for_version`), else what the
+parameters show (:func:`table_for_parameters`): ``CAL_<S>n_PRIO`` exist from PX4 1.12 on, so
+today's table; without them the file predates a version in logs and QGC files (PX4 < 1.6 for
+logs), read with ``px4-v1.6``, which names every code the driver guide's table names the same.
 
 Name normalization: a macro ``DRV_<KIND>_DEVTYPE_<NAME>`` becomes name ``NAME`` and kind ``KIND``
 (``DRV_MAG_DEVTYPE_AK09916`` is ``AK09916``, kind ``MAG``; ``DRV_DIFF_PRESS_DEVTYPE_SIM`` is
@@ -40,19 +46,17 @@ names one code only.
 
 from __future__ import annotations
 
-import contextlib
 import difflib
 import functools
-import io
 import math
 import os
 import re
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from px4params.errors import DeviceIdError, NumberError
+from px4params.errors import DeviceIdError, NumberError, ULogError
 from px4params.numbers import abbreviated, parse_int
 
 __all__ = [
@@ -72,7 +76,9 @@ __all__ = [
     "load_table",
     "parse_device_id",
     "parse_devtypes",
+    "table_for_parameters",
     "table_for_release",
+    "table_for_version",
 ]
 
 MAX_DEVICE_ID = (1 << 24) - 1
@@ -109,8 +115,6 @@ _BUS_TYPE_ALIASES = {"sim": 4, "dronecan": 3, "can": 3, "uart": 5}
 # Field widths and positions, as (name, shift, bits).
 _FIELDS = (("bus type", 0, 3), ("bus", 3, 5), ("address", 8, 8), ("devtype", 16, 8))
 
-# Where the current table is looked for when neither a path nor the variable is given.
-_FALLBACK_TABLE = Path("..", "shared", "data", "px4_devtypes_current.tsv")
 
 _MACRO = re.compile(r"DRV_(?:(?P<kind>[A-Z0-9_]+?)_)?DEVTYPE_(?P<name>[A-Z0-9_]+)")
 _DEFINE = re.compile(r"^\s*#\s*define\s+(?P<macro>DRV_\w*DEVTYPE\w*)\s+(?P<value>[^\s/]+)")
@@ -274,27 +278,16 @@ def parse_devtypes(text: str, source: str = "<devtypes>") -> list[Devtype]:
     return rows
 
 
-def _fallback_tables() -> list[Path]:
-    repo = Path(__file__).resolve().parents[3]  # python/px4params/vehicle/devid.py -> checkout
-    return [repo / _FALLBACK_TABLE, Path.cwd() / _FALLBACK_TABLE]
-
-
 def find_current_table(path: str | os.PathLike[str] | None = None) -> Path:
     """The file the current devtype table is read from (see the module documentation)."""
+    from px4params.data import DEVTYPES_DIR
+
     if path is not None:
         given, origin = Path(path), "devtypes file"
     elif os.environ.get(DEVTYPES_ENV):
         given, origin = Path(os.environ[DEVTYPES_ENV]), f"${DEVTYPES_ENV}"
     else:
-        for candidate in _fallback_tables():
-            if candidate.is_file():
-                return candidate.resolve()
-        raise DeviceIdError(
-            "no current devtype table: give --devtypes FILE or set "
-            f"{DEVTYPES_ENV}=FILE, FILE being a TSV (code<TAB>name) or PX4's drv_sensor.h "
-            f"(none at {_FALLBACK_TABLE.as_posix()} beside the repository or the working "
-            "directory); or use --table legacy"
-        )
+        return Path(DEVTYPES_DIR, "current.tsv")
     if not given.is_file():
         raise DeviceIdError(f"{origin} not found: {given}")
     return given
@@ -338,17 +331,42 @@ def _era_table(label: str) -> DevtypeTable:
         return DevtypeTable(label, path, parse_devtypes(f.read(), path))
 
 
-def table_for_release(release: int | None) -> str:
-    """The table for a log of firmware ``release`` (ULog's ``ver_sw_release``: major, minor,
-    patch and type in its four bytes): a release's table where one is shipped, ``legacy``
-    before 1.6, ``current`` from 1.14 on or when the version is not known."""
-    if not release:
-        return "current"
-    version = (release >> 24 & 0xFF, release >> 16 & 0xFF, release >> 8 & 0xFF)
+def table_for_version(version: tuple[int, int, int]) -> str:
+    """The table of firmware ``version`` (major, minor, patch): a release's table where one is
+    shipped, ``legacy`` before 1.6, ``current`` from 1.14 on."""
     for label, (first, last) in ERA_TABLES.items():
         if first <= version <= last:
             return label
     return "legacy" if version < (1, 6, 0) else "current"
+
+
+def table_for_release(release: int | None, params: Mapping[str, Any] | None = None) -> str:
+    """The table for a log of firmware ``release`` (ULog's ``ver_sw_release``: major, minor,
+    patch and type in its four bytes); without one, the era rule of :func:`table_for_parameters`
+    (``params``, the log's parameters; none given: ``px4-v1.6``)."""
+    if not release:
+        return table_for_parameters(params or {})[0]
+    return table_for_version((release >> 24 & 0xFF, release >> 16 & 0xFF, release >> 8 & 0xFF))
+
+
+#: Parameters PX4 has from 1.12 on: ``CAL_ACC0_PRIO`` ... (the priority that replaced ``_EN``).
+_PRIO_PARAM = re.compile(r"CAL_(ACC|GYRO|MAG|BARO)\d_PRIO")
+
+
+def table_for_parameters(params: Mapping[str, Any]) -> tuple[str, str]:
+    """The table for a file that names no firmware version, decided from its parameters, and
+    why (one line for the report)."""
+    prio = sorted(n for n in params if _PRIO_PARAM.fullmatch(n))
+    if prio:
+        return "current", (
+            f"no firmware version: {prio[0]} exists (PX4 1.12 and later), so today's devtype "
+            "table is assumed"
+        )
+    return "px4-v1.6", (
+        "no firmware version and no CAL_*_PRIO parameters (PX4 before 1.12): the px4-v1.6 "
+        "devtype table is assumed (files without a version predate it: ULog's ver_sw_release "
+        "and QGC's '# Version' came with PX4 1.6)"
+    )
 
 
 def kind_mismatch(param: str, device: DeviceId) -> str | None:
@@ -602,21 +620,14 @@ def decode_log(
     their parameter's initial value, in time order). ``table`` ``auto`` picks the table of the
     log's firmware version (:func:`table_for_release`; ``devtypes`` is the current table's
     file)."""
-    from pyulog import ULog  # imported here: only this function needs it
+    from px4params.formats.ulog import read_header
 
-    where = Path(path)
-    if not where.exists():
-        raise DeviceIdError(f"log file not found: {where}")
     try:
-        # pyulog prints warnings to stdout, which would corrupt --json output.
-        with contextlib.redirect_stdout(io.StringIO()):
-            log = ULog(str(where), message_name_filter_list=[])
-    except OSError as e:
-        raise DeviceIdError(f"cannot read log file {where}: {e.strerror}") from None
-    except Exception as e:  # pyulog signals bad data with its own and with generic exceptions
-        raise DeviceIdError(f"{where}: not a ULog file ({e})") from None
+        log = read_header(path)
+    except ULogError as e:
+        raise DeviceIdError(str(e)) from None
     if table == "auto":
-        table = load_table(table_for_release(log.msg_info_dict.get("ver_sw_release")), devtypes)
+        table = load_table(table_for_release(log.release, log.initial_parameters), devtypes)
     names = _table(table)
     entries: list[LogDeviceId] = []
     for param in sorted(log.initial_parameters):
@@ -625,5 +636,5 @@ def decode_log(
             entries.append(_log_entry(param, value, names, None))
             for time_us, changed, new in log.changed_parameters:
                 if changed == param:
-                    entries.append(_log_entry(param, new, names, int(time_us)))
+                    entries.append(_log_entry(param, new, names, time_us))
     return entries

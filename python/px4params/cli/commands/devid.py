@@ -95,11 +95,12 @@ Decode PX4 24-bit device IDs (bits 0-2 bus type, 3-7 bus, 8-15 address,
 of a ULog flight log with --log. The devtype names come from --table:
 'legacy' (the PX4 driver guide's table), a release's (px4-v1.6 for PX4
 1.6-1.7, px4-v1.8 for 1.8-1.10, px4-v1.11 for 1.11-1.12, px4-v1.13), or
-'current' (today's drv_sensor.h, read from --devtypes FILE,
-$PX4PARAMS_DEVTYPES, or ../shared/data/px4_devtypes_current.tsv; FILE is a
-TSV 'code<TAB>name' or a drv_sensor.h). Codes were reassigned over the years,
-so --log picks the table of the log's firmware version, and flags a devtype
-of another sensor kind than its parameter. An ID of 0 means no device.""",
+'current' (today's drv_sensor.h, shipped; --devtypes FILE or
+$PX4PARAMS_DEVTYPES read another, FILE a TSV 'code<TAB>name' or a
+drv_sensor.h). Codes were reassigned over the years, so --log picks the table
+of the log's firmware version (without one: PX4 1.12's CAL_*_PRIO parameters
+mean today's table, else px4-v1.6), and flags a devtype of another sensor
+kind than its parameter. An ID of 0 means no device.""",
         epilog="""\
 examples:
   px4params devid --table legacy 73225 66826 263178
@@ -122,7 +123,7 @@ examples:
         "--devtypes",
         metavar="FILE",
         help="current table: a TSV (code<TAB>name) or PX4's drv_sensor.h "
-        "(default: $PX4PARAMS_DEVTYPES, then ../shared/data/px4_devtypes_current.tsv)",
+        "(default: $PX4PARAMS_DEVTYPES, else the one shipped with px4params)",
     )
     p.add_argument("--encode", action="store_true", help="build an ID from the four parts below")
     p.add_argument(

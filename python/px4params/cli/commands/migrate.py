@@ -1,4 +1,5 @@
-"""``px4params migrate``: propose a device manifest from today's configuration (migrate.py)."""
+"""``px4params migrate``: propose a device manifest from today's configuration (the work is in
+``px4params.migrate``)."""
 
 from __future__ import annotations
 
@@ -27,10 +28,12 @@ def cmd_migrate(args: argparse.Namespace) -> int:
         parser.error("--devtypes is the current table's source; it does not go with --table legacy")
     # Everything is read and checked before anything is written.
     config = migrate.read_config(args.file)
-    # A log's device IDs follow the devtype table of its firmware; a .params file has no version.
-    which = args.table or devid.table_for_release(config.release)
-    table = devid.load_table(which, args.devtypes)
-    proposal = migrate.migrate(config, load_schema(args.dsdl or (), include_dronecan=False), table)
+    # The device IDs follow the devtype table of the file's firmware era unless one is given.
+    table = None
+    if args.table or args.devtypes:
+        table = devid.load_table(args.table or "current", args.devtypes)
+    schema = load_schema(args.dsdl or (), include_dronecan=False)
+    proposal = migrate.migrate(config, schema, table, args.board)
     airframe = proposal.airframe()
     if args.output is not None:
         try:
@@ -58,14 +61,15 @@ def add_parser(sub: Any, name: str, summary: str, words: Sequence[str] = ()) -> 
         help=summary,
         formatter_class=RawDescriptionHelpFormatter,
         description="""\
-Read today's configuration, a QGC .params file or the parameters of a ULog
+Read today's configuration, a QGC .params file, a 'param set' list or a ULog
 flight log, and propose a device manifest: an airframe file of 'param add' /
-'param set-default' lines for 'px4params run', and a report. Enabled drivers
-(SENS_EN_*) with a bundled type become instances on I2C bus 1 at the driver's
-default address, with their legacy settings (INA238_CURRENT, ...); sensors found
-(CAL_*_ID device IDs) on I2C become instances on their bus and address. The
-report lists what is not part of the manifest (internal SPI sensors, ...) and
-what could not be carried over; nothing is dropped silently.""",
+'param set-default' lines for 'px4params run', and a report. What the board's
+script starts stays out; devices found by probing (CAL_*_ID device IDs on
+external I2C), drivers enabled by a switch (SENS_EN_*) and power monitors the
+i2c_launcher found become instances. A log's boot console (what started, on
+which bus, address and rotation) wins over every table. The report lists what
+is left out and why, what could not be carried over, and every assumption
+made (a guessed bus, an unknown board); nothing is dropped silently.""",
         epilog="""\
 examples:
   px4params migrate flight.ulg -o vehicle.airframe   # report on stdout
@@ -73,7 +77,9 @@ examples:
   px4params migrate old.ulg --table legacy --json
   px4params run vehicle.airframe --store vehicle.store""",
     )
-    p.add_argument("file", metavar="FILE", help="QGC .params file or ULog (.ulg) flight log")
+    p.add_argument(
+        "file", metavar="FILE", help="QGC .params file, 'param set' list or ULog (.ulg) flight log"
+    )
     p.add_argument(
         "-o", "--output", metavar="AIRFRAME", help="write the airframe file here (default: stdout)"
     )
@@ -81,7 +87,15 @@ examples:
     p.add_argument(
         "--table",
         choices=TABLES,
-        help="devtype table for CAL_*_ID device IDs (default: a log's firmware's, else current)",
+        help="devtype table for CAL_*_ID device IDs (default: the one of the file's firmware "
+        "version, from a log's ver_sw_release or a QGC file's '# Version' line, else decided from "
+        "its parameters)",
+    )
+    p.add_argument(
+        "--board",
+        metavar="NAME",
+        help="PX4 board name (px4_fmu-v6c, ...): what its startup script starts (default: a "
+        "log's ver_hw; a .params file names no board)",
     )
     p.add_argument(
         "--devtypes",

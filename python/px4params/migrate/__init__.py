@@ -1,0 +1,41 @@
+"""Migration from today's PX4 configuration to a device manifest.
+
+Input: a QGC ``.params`` file, a ``param set`` / ``param set-default`` list (airframe syntax), or
+a ULog flight log (its parameters, information, boot console and the ``device_id`` of every
+sensor that published). Output: a proposed airframe
+file of ``param add`` / ``param set-default`` lines (what ``px4params run`` and, per the talk,
+PX4 itself run) and a report of where each line came from, of everything that could not be
+carried over and of every assumption made. Nothing is dropped silently.
+
+What the manifest takes over is what today's PX4 starts *outside* the board's own script:
+
+* **Devices found by probing** (``rc.sensors`` with ``SENS_EXT_I2C_PRB``): an external I2C
+  sensor of a ``CAL_<S>n_ID`` device ID (decoded with the devtype table of the file's firmware
+  era, :mod:`.vehicle.devid`) whose chip a declared driver publishes. Probing starts drivers
+  without ``-R``: the instance's rotation is 0; ``CAL_MAGn_ROT`` is calibration's and stays a
+  classic parameter.
+* **Drivers started by a switch** (``SENS_EN_MS4525DO``, ``SENS_EN_INA238``, ...): on the buses
+  the evidence or the board's switch rows give, else on I2C bus 1 with a line saying so.
+* **Power monitors ``i2c_launcher`` found** (a log's boot console says so).
+
+Left out, each with its reason: sensors the board's script starts (a board table row, PX4's
+"Internal" ``CAL_MAGn_ROT = -1``, an internal bus in the boot console, a ``-R`` rotation, which
+probing never passes), disabled slots (``CAL_<S>n_PRIO = 0`` from PX4 1.12 on, ``_EN = 0``
+before), DroneCAN and simulated sensors. Evidence first: the boot console (what actually
+started, on which bus, address and rotation) wins over every table.
+"""
+
+from px4params.errors import MigrationError
+from px4params.migrate.build import migrate
+from px4params.migrate.config import OldConfig, read_config
+from px4params.migrate.proposal import LeftOut, Proposal, ProposedInstance
+
+__all__ = [
+    "LeftOut",
+    "MigrationError",
+    "OldConfig",
+    "Proposal",
+    "ProposedInstance",
+    "migrate",
+    "read_config",
+]

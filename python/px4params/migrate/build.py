@@ -1,0 +1,783 @@
+"""Building the proposal: which device of today's configuration becomes a manifest instance, and
+why every other one does not (see the package documentation)."""
+
+from __future__ import annotations
+
+import math
+import re
+import struct
+from typing import Any
+
+from px4params.dsdl.schema import Schema
+from px4params.errors import MigrationError, Px4ParamsError
+from px4params.migrate.config import OldConfig
+from px4params.migrate.proposal import LeftOut, Proposal, ProposedInstance
+from px4params.vehicle import devid
+from px4params.vehicle.console import DriverStart, started_drivers
+from px4params.vehicle.drivers import Driver, load_drivers
+
+__all__ = ["migrate"]
+
+#: The I2C bus proposed for a switch-started driver when nothing says which (PX4 starts them
+#: with ``-X``, on every external bus; board scripts start power monitors ``-X -b 1``).
+DEFAULT_I2C_BUS = 1
+_CAL_ID = re.compile(r"CAL_(?P<sensor>[A-Z]+?)(?P<n>\d+)_ID")
+
+#: ``SENS_EN_*`` parameters that are not a driver's on/off switch, with the meaning of their
+#: values in PX4's parameter metadata (parameters.json ``values``); they are reported with
+#: that meaning and stay classic parameters.
+NOT_DRIVER_SWITCHES: dict[str, dict[int, str]] = {
+    "SENS_EN_THERMAL": {
+        -1: "thermal control unavailable",
+        0: "thermal control off",
+        1: "thermal control enabled",
+    },
+}
+#: ``CAL_<SENSOR><n>_ROT = -1``: PX4's metadata value "Internal": the sensor is the flight
+#: controller's, started by the board's script on the board's rotation.
+INTERNAL_ROTATION = -1
+
+#: What options of today's start lines (board scripts) the types have no field for.
+UNMAPPED_OPTIONS = {
+    "ina226": "battery index (-t 1)",
+    "ina228": "battery index (-t 1)",
+    "ina238": "battery index (-t 1)",
+}
+#: Driver modules PX4 1.13 renamed: the old name (older boot consoles) -> today's.
+RENAMED_MODULES = {
+    "ms4525_airspeed": "ms4525do",
+    "ms5525_airspeed": "ms5525dso",
+    "sdp3x_airspeed": "sdp3x",
+}
+#: Devtype names PX4 1.13 changed (drv_sensor.h's ``DRV_DIFF_PRESS_DEVTYPE_MS4525`` became
+#: ``..._MS4525DO``): an older era's name -> the driver declarations' chip.
+RENAMED_CHIPS = {"MS4525": "MS4525DO", "MS5525": "MS5525DSO"}
+#: The sensor kind of a log topic, as a calibration slot names it.
+_TOPIC_KIND = {
+    "sensor_accel": "ACC",
+    "sensor_gyro": "GYRO",
+    "sensor_mag": "MAG",
+    "sensor_baro": "BARO",
+    "differential_pressure": "DIFF_PRESS",
+    "distance_sensor": "DIST",
+}
+
+
+class _Builder:
+    def __init__(
+        self,
+        config: OldConfig,
+        schema: Schema,
+        table: devid.DevtypeTable,
+        board: Any,
+        assumptions: list[str],
+    ) -> None:
+        from px4params.store.store import Store
+
+        self.config = config
+        self.params = config.params
+        self.store = Store(schema, classic=[])  # scratch: checks every value and gives [k]
+        self.specs = {s.name: s for s in self.store.specs}
+        self.drivers = load_drivers(None, self.store.specs)
+        self.table = table
+        self.board = board
+        self.proposal = Proposal(config, table.label, assumptions=assumptions)
+        self.proposal.board = getattr(board, "name", None)
+        self.starts = started_drivers(config.console) if config.console else []
+        self.claimed: set[int] = set()  # boot console starts accounted for
+
+    def use(self, *names: str) -> None:
+        self.proposal.used.update(n for n in names if n in self.params)
+
+    def assume(self, line: str) -> None:
+        if line not in self.proposal.assumptions:
+            self.proposal.assumptions.append(line)
+
+    def leave_out(self, found: str, device: str, reason: str, why: str) -> None:
+        self.proposal.left_out.append(LeftOut(found, device, reason, f"{found}: {device}: {why}"))
+
+    def add(self, param: str, bus: int, address: int, origin: str) -> ProposedInstance:
+        """The instance of ``param`` on I2C ``bus`` at ``address``: a new one, or the one
+        proposed already for the same device (found twice, e.g. enabled and calibrated)."""
+        for inst in self.proposal.instances:
+            if inst.name.partition("#")[0] == param and (
+                inst.values["bus.i2c.bus_id"],
+                inst.values["bus.i2c.address"],
+            ) == (bus, address):
+                inst.notes.append(f"also {origin}")
+                return inst
+        instance = self.store.add(param)
+        values: dict[str, Any] = {}
+        if self.store.get(f"{instance}.bus._tag") != 0:
+            values["bus._tag"] = 0  # I2C
+        values["bus.i2c.bus_id"] = bus
+        values["bus.i2c.address"] = address
+        for path, value in values.items():  # the tag first: it resets the variant
+            self.store.set_default(f"{instance}.{path}", value)
+        inst = ProposedInstance(instance, origin, values)
+        self.proposal.instances.append(inst)
+        return inst
+
+    def field_value(self, inst: ProposedInstance, path: str, legacy: str, value: Any) -> bool:
+        """Carries ``legacy = value`` into field ``path``; False (and a not-carried line) when
+        the field cannot hold it. A float setting (a physical quantity: current, shunt) is
+        rounded to nearest (``math.floor(v + 0.5)``) and clamped to the field's range, with a
+        note; an integer setting (an enumeration such as a rotation) out of range is not
+        carried."""
+        param = inst.name.partition("#")[0]
+        leaf = self.store.leaf(f"{inst.name}.{path}")
+        tags = _field_tags(self.specs[param].data_type, path)
+        lo, hi = tags.get("min"), tags.get("max")
+        fitted: Any = value
+        if isinstance(value, float):
+            if leaf.type.startswith(("uint", "int")):
+                fitted = math.floor(value + 0.5) if math.isfinite(value) else value
+            if lo is not None and fitted < lo:
+                fitted = type(fitted)(lo)
+            if hi is not None and fitted > hi:
+                fitted = type(fitted)(hi)
+        elif (lo is not None and value < lo) or (hi is not None and value > hi):
+            self.proposal.not_carried.append(
+                f"{legacy} = {_shown(value)}: {inst.name}.{path} must be {lo}..{hi}"
+            )
+            return False
+        try:
+            self.store.set_default(f"{inst.name}.{path}", fitted)
+        except (Px4ParamsError, OverflowError, ValueError) as e:
+            self.proposal.not_carried.append(f"{legacy} = {_shown(value)}: {e}")
+            return False
+        stored = self.store.get(f"{inst.name}.{path}")
+        inst.values[path] = stored
+        if _differs(value, stored):
+            unit = f" {tags['unit']}" if "unit" in tags else ""
+            limits = f", {lo}..{hi}" if lo is not None or hi is not None else ""
+            inst.notes.append(
+                f"{legacy} = {_shown(value)}{unit} becomes {path} = {_shown(stored)}{unit} "
+                f"({leaf.type}{limits})"
+            )
+        return True
+
+    def set_rotation(self, inst: ProposedInstance, rotation: int, why: str) -> None:
+        """The driver's rotation (its ``-R``), where the type has the field."""
+        has_field = any(leaf.path == "rotation" for leaf in self.store.leaves(inst.name))
+        if (
+            has_field
+            and self.field_value(inst, "rotation", "the driver's -R", rotation)
+            and rotation
+        ):
+            inst.notes.append(f"rotation {rotation}: {why}")
+
+    def run(self) -> Proposal:
+        self.enabled_drivers()
+        self.devices()
+        self.console_starts()
+        self.launcher_buses()
+        self.probing()
+        for inst in self.proposal.instances:
+            leaves = {leaf.path: leaf.index for leaf in self.store.leaves(inst.name)}
+            inst.indices = {path: leaves[path] for path in inst.values}
+        return self.proposal
+
+    # -- what names what -----------------------------------------------------------------
+
+    def start_chips(self, start: DriverStart | str) -> set[str]:
+        """The chip names a started driver module publishes (drv_sensor.h's spelling)."""
+        name = start if isinstance(start, str) else start.driver
+        module = RENAMED_MODULES.get(name, name)
+        try:
+            return set(self.drivers[module].chips)
+        except KeyError:
+            bare = re.sub(r"_(accel|gyro|mag|baro|airspeed|i2c_passthrough)$", "", module)
+            return {bare.upper()}
+
+    def start_driver(self, start: DriverStart) -> Driver | None:
+        module = RENAMED_MODULES.get(start.driver, start.driver)
+        try:
+            return self.drivers[module]
+        except KeyError:
+            return None
+
+    def evidence(self, dev: devid.DeviceId) -> tuple[int, DriverStart] | None:
+        """The boot console start of device ``dev`` (same chip, bus and, where the line says,
+        address)."""
+        chips = _chips(dev)
+        kind = {1: "I2C", 2: "SPI"}.get(dev.bus_type)
+        for i, start in enumerate(self.starts):
+            if i in self.claimed or start.bus_kind != kind or start.bus != dev.bus:
+                continue
+            if kind == "I2C" and start.address is not None and start.address != dev.address:
+                continue
+            if self.start_chips(start) & chips:
+                return i, start
+        return None
+
+    def board_device(self, chips: set[str], bus: int, address: int | None) -> Any:
+        """The board table's row that starts this I2C device, if any."""
+        if self.board is None:
+            return None
+        for row in self.board.devices:
+            if row.bus_kind.upper() != "I2C" or not (self.start_chips(row.driver) & chips):
+                continue
+            if row.bus is not None and row.bus != bus:
+                continue
+            if row.bus is None:  # -I or -X without -b: every internal, or external, bus
+                buses = getattr(
+                    self.board, "internal_i2c_buses" if row.internal else "external_i2c_buses", ()
+                )
+                if buses and bus not in buses:
+                    continue
+            at = row.address
+            if at is None and row.driver in {d.name for d in self.drivers}:
+                at = self.drivers[row.driver].default_address
+            if at is not None and address is not None and at != address:
+                continue
+            return row
+        return None
+
+    def probe_rotation(self, chips: set[str]) -> tuple[int, str] | None:
+        """The ``-R`` rc.sensors' probing passes this chip's driver in the board table's
+        release (PX4 1.11: ``ak09916 -X -R 6 start``), and where it says so; None if none."""
+        for row in getattr(self.board, "switches", ()):
+            if (
+                row.param == "SENS_EXT_I2C_PRB"
+                and row.rotation
+                and self.start_chips(row.driver) & chips
+            ):
+                return (
+                    row.rotation,
+                    f"rc.sensors probes it with '{row.driver} {row.args}' ({row.source})",
+                )
+        return None
+
+    def driver_rotation(self, start: DriverStart | None, chips: set[str]) -> tuple[int, str]:
+        """The driver's rotation of a device found by probing: the boot console's, else the
+        probe's ``-R``, else 0 (probing passes none); and why (empty for 0)."""
+        if start is not None and start.rotation is not None:
+            return start.rotation, "the driver's -R (boot console)" if start.rotation else ""
+        return self.probe_rotation(chips) or (0, "")
+
+    def started_by_board(
+        self,
+        chips: set[str],
+        bus: int,
+        address: int | None,
+        start: DriverStart | None,
+        internal_rot: str | None,
+        baro: bool,
+    ) -> str | None:
+        """Why the board's script starts this I2C device, or None when it does not (the
+        rules in the order they are trusted)."""
+        row = self.board_device(chips, bus, address)
+        if row is not None:
+            return f"started by the board's script ({row.source})"
+        if start is not None and start.internal and not start.launcher:
+            return (
+                f"on an internal bus (boot console line {start.line}): started by the board's "
+                "startup scripts"
+            )
+        if internal_rot is not None:
+            return f"{internal_rot} = -1 (Internal): started by the board's script"
+        probed = self.probe_rotation(chips)
+        if start is not None and start.rotation and not start.launcher:
+            if probed is not None and probed[0] == start.rotation:
+                return None  # rc.sensors' probe passes this -R itself
+            return (
+                f"runs with rotation {start.rotation} (boot console line {start.line}): "
+                "rc.sensors probes without -R, so the board's script started it"
+            )
+        if baro:
+            self.assume(
+                "I2C barometers without a board table row are taken as started by the board's "
+                "script (barometers sit on the flight controller)"
+            )
+            return "a barometer: assumed started by the board's script"
+        return None
+
+    # -- drivers enabled by a switch ---------------------------------------------------------
+
+    def enabled_drivers(self) -> None:
+        switches = self.drivers.switches()
+        names = {n for n in self.params if n.startswith("SENS_EN_") or n in switches}
+        for name in sorted(names):
+            value = self.params[name]
+            self.use(name)
+            if name in NOT_DRIVER_SWITCHES:
+                meaning = NOT_DRIVER_SWITCHES[name].get(int(value), "a value PX4 does not list")
+                self.proposal.not_carried.append(
+                    f"{name} = {_shown(value)} ({meaning}): not a driver switch; it stays a "
+                    "classic parameter"
+                )
+                continue
+            if not value:
+                self.proposal.disabled.append(name)
+                continue
+            declared = switches.get(name) or self.undeclared(name)
+            if not declared:
+                self.proposal.not_carried.append(
+                    f"{name} = {_shown(value)}: no bundled parameter type "
+                    f"{name.removeprefix('SENS_EN_')}; the driver stays enabled by this classic "
+                    "parameter, outside the manifest"
+                )
+                continue
+            starting = [d for d in declared if d.starts_on(value)]
+            if not starting:
+                wanted = ", ".join(str(v) for d in declared for v in d.enabled_values)
+                self.proposal.not_carried.append(
+                    f"{name} = {_shown(value)}: starts no I2C driver of the manifest (its "
+                    f"{', '.join(d.name for d in declared)} starts on {wanted}); it stays a "
+                    "classic parameter"
+                )
+                continue
+            for driver in starting:
+                self.enabled_driver(name, value, driver)
+
+    def undeclared(self, switch: str) -> list[Driver]:
+        """A type of an extra DSDL folder without a driver declaration: ``SENS_EN_<NAME>``
+        enables parameter ``NAME``'s driver, started as the power monitors are."""
+        spec = self.specs.get(switch.removeprefix("SENS_EN_"))
+        if not switch.startswith("SENS_EN_") or spec is None or spec.shared:
+            return []
+        driver = Driver(
+            name=spec.name.lower(),
+            parameter=spec.name,
+            chip=spec.name,
+            autostart=True,
+            order=0,
+            buses=("i2c",),
+            default_address=None,
+            devtype=0,
+            chip_id_register=None,
+            chip_id=None,
+            rate_hz=1.0,
+            started_by="launcher",
+            enabled_by=switch,
+        )
+        return [driver]
+
+    def switch_places(
+        self, switch: str, value: int | float, driver: Driver
+    ) -> list[tuple[int, int | None, str]]:
+        """Where the switch starts the driver: ``(bus, address or None, why)`` per instance,
+        from the boot console, else the board's switch rows, else a guess (reported)."""
+        places = []
+        for i, start in enumerate(self.starts):
+            if (
+                i not in self.claimed
+                and start.bus_kind == "I2C"
+                and self.start_driver(start) == driver
+            ):
+                self.claimed.add(i)
+                places.append(
+                    (start.bus, start.address, f"boot console line {start.line}: '{start.text}'")
+                )
+        if places:
+            return places
+        rows = [
+            r
+            for r in getattr(self.board, "switches", ())
+            if r.param == switch
+            and r.driver == driver.name
+            and _holds(getattr(r, "when", ""), value)
+        ]
+        # A start with -b is on that bus; one without is PX4's -X: every external bus is
+        # tried, the device is found on one of them.
+        pinned = [r for r in rows if re.search(r"(^|\s)-b\s", r.args)]
+        if pinned:
+            return [
+                (r.bus, r.address, f"the board starts it with '{r.driver} {r.args}' ({r.source})")
+                for r in pinned
+            ]
+        if rows:
+            first = rows[0]
+            buses = ", ".join(str(b) for b in sorted({r.bus for r in rows}))
+            self.assume(
+                f"{switch}: {self.board.name} starts '{first.driver} {first.args}' on every "
+                f"external I2C bus ({buses}; {first.source}), so the bus it is found on is not "
+                f"known: bus {first.bus} proposed"
+            )
+            return [(first.bus, first.address, "")]
+        if self.config.console is not None:
+            self.assume(
+                f"{switch}: the boot console shows no {driver.name} start (not connected at "
+                f"boot?); proposed on I2C bus {DEFAULT_I2C_BUS}"
+            )
+        how = (
+            "-X -b 1 on the board"
+            if driver.started_by == "launcher"
+            else "-X, on every external bus"
+        )
+        self.assume(
+            f"{switch}: I2C bus {DEFAULT_I2C_BUS} is a guess (PX4 starts {driver.name} {how}; "
+            "nothing here says which bus it is on)"
+        )
+        return [(DEFAULT_I2C_BUS, None, "")]
+
+    def enabled_driver(self, switch: str, value: int | float, driver: Driver) -> None:
+        spec = self.specs[driver.parameter]
+        for bus, at, why in self.switch_places(switch, value, driver):
+            address = at if at is not None else _default_address(self.store, spec.name)
+            where = f"on I2C bus {bus}" + (f" ({why})" if why else "")
+            default = " at the driver's default address" if at is None else ""
+            inst = self.add(
+                spec.name,
+                bus,
+                address,
+                f"{switch} = {_shown(value)}: {driver.name} started {where}{default} "
+                f"0x{address:02X}",
+            )
+            if driver.switch_field:
+                self.field_value(inst, driver.switch_field, switch, value)
+            for old, path in driver.settings.items():
+                if old in self.params:
+                    self.use(old)
+                    self.field_value(inst, path, old, self.params[old])
+            options = UNMAPPED_OPTIONS.get(driver.name)
+            if options:
+                inst.notes.append(
+                    f"today's start line also sets the {options}: {spec.name} has no field for it"
+                )
+        for old in sorted(self.params):
+            if old.startswith(f"{spec.name}_") and old not in driver.settings:
+                self.use(old)
+                self.proposal.not_carried.append(
+                    f"{old} = {_shown(self.params[old])}: {spec.name} has no field for it"
+                )
+
+    # -- devices of the calibration slots ---------------------------------------------------
+
+    def devices(self) -> None:
+        found: dict[int, list[str]] = {}
+        for name in sorted(self.params):
+            m = _CAL_ID.fullmatch(name)
+            value = self.params[name]
+            if not m:
+                continue
+            self.use(name)
+            if isinstance(value, float) and value.is_integer():
+                value = int(value)
+            if not isinstance(value, int) or not 0 <= value <= devid.MAX_DEVICE_ID:
+                self.proposal.not_carried.append(f"{name} = {_shown(value)}: not a device ID")
+                continue
+            if value:
+                found.setdefault(value, []).append(name)
+        # CAL_<SENSOR>_PRIME selects one of the devices above: used, nothing of its own.
+        self.use(*(n for n in self.params if re.fullmatch(r"CAL_[A-Z]+_PRIME", n)))
+        # Sensors that published in the log without a calibration slot (a barometer before
+        # PX4 1.12, an airspeed sensor, a rangefinder): found the same way.
+        for topic, multi_id, value in self.config.published:
+            if value not in found and value <= devid.MAX_DEVICE_ID:
+                found.setdefault(value, []).append(f"{topic} {multi_id}")
+            elif value in found and not found[value][0].startswith("CAL_"):
+                found[value].append(f"{topic} {multi_id}")
+        for value, names in found.items():
+            self.device(value, names)
+
+    def disabled_slots(self, names: list[str]) -> list[str]:
+        """``CAL_<S>n_PRIO = 0`` (PX4 1.12 on) and ``CAL_<S>n_EN = 0`` (before) of the slots."""
+        off = []
+        for n in names:
+            for suffix in ("_PRIO", "_EN"):
+                setting = n.removesuffix("_ID") + suffix
+                if setting in self.params:
+                    self.use(setting)
+                    if not self.params[setting]:
+                        off.append(f"{setting} = 0")
+        return off
+
+    def device(self, value: int, names: list[str]) -> None:
+        dev = devid.decode(value, self.table)
+        found = f"{', '.join(names)} = {value}"
+        where = f"{found}: {dev.describe()}"
+        off = self.disabled_slots(names)
+        # Disabled when every calibration slot holding it is (a log's topics have no switch).
+        slots = [n for n in names if n.startswith("CAL_")]
+        all_off = bool(slots) and all(
+            any(o.startswith(n.removesuffix("_ID") + "_") for o in off) for n in slots
+        )
+        rotations = {
+            rot: self.params[rot]
+            for n in names
+            if (rot := n.removesuffix("_ID") + "_ROT") in self.params and n.startswith("CAL_MAG")
+        }
+        twice = ""
+        kinds = [_slot_kind(n) for n in names]
+        repeated = sorted({k for k in kinds if kinds.count(k) > 1})
+        if repeated:
+            slots = [n for n, k in zip(names, kinds, strict=True) if k in repeated]
+            twice = f"; {' and '.join(slots)} hold the same device (reported once)"
+            if len(set(rotations.values())) > 1:
+                shown = ", ".join(f"{r} = {_shown(v)}" for r, v in rotations.items())
+                twice += f", with different rotations ({shown})"
+        chips = _chips(dev)
+        if dev.bus_type == 2:  # SPI
+            hit = self.evidence(dev)
+            if hit:
+                self.claimed.add(hit[0])
+            why = "internal SPI sensor: started by the board's startup script, not by the manifest"
+            disabled = f" (disabled: {', '.join(off)})" if off else ""
+            self.leave_out(found, dev.describe() + disabled, "board", why + twice)
+            return
+        if dev.bus_type != 1:  # not I2C
+            reason, what = {
+                3: ("dronecan", "DroneCAN sensor: found on the CAN bus, not by the manifest"),
+                4: ("simulation", "simulated sensor: not part of the manifest"),
+            }.get(dev.bus_type, ("other bus", "not an I2C device: not part of the manifest"))
+            self.leave_out(found, dev.describe(), reason, what + twice)
+            return
+        hit = self.evidence(dev)
+        start = hit[1] if hit else None
+        if hit:
+            self.claimed.add(hit[0])
+        internal = next((r for r, v in rotations.items() if v == INTERNAL_ROTATION), None)
+        kind = set((dev.devtype_kind or "").split("/"))
+        baro = "BARO" in kind or all(k == "BARO" for k in kinds)
+        board = self.started_by_board(chips, dev.bus, dev.address, start, internal, baro)
+        disabled = f" (disabled: {', '.join(off)})" if off else ""
+        if board is not None:
+            self.leave_out(found, dev.describe(), "board", f"{board}{disabled}{twice}")
+            return
+        if all_off:
+            why = f"disabled ({', '.join(off)}): not proposed, an instance would make it required"
+            self.leave_out(found, dev.describe(), "disabled", why + twice)
+            return
+        # The type of the driver that publishes the chip; else a type named as the chip (an
+        # extra DSDL folder's, without a driver declaration).
+        by_chip = self.drivers.chips()
+        param = next((by_chip[c].parameter for c in sorted(chips) if c in by_chip), None)
+        spec = self.specs.get(param or next((c for c in sorted(chips) if c in self.specs), ""))
+        if spec is None:
+            chip = dev.devtype_name or f"devtype 0x{dev.devtype:02X}"
+            self.proposal.not_carried.append(
+                f"{where}{disabled}: no bundled parameter type for {chip}; today it is found by "
+                f"probing, in the manifest it needs a type{twice}"
+            )
+            return
+        origin = (
+            where if start is None else f"{where}; boot console line {start.line}: '{start.text}'"
+        )
+        inst = self.add(spec.name, dev.bus, dev.address, origin)
+        if off:
+            inst.notes.append(f"{', '.join(off)}: one of its slots was disabled for use")
+        if twice:
+            inst.notes.append(twice.removeprefix("; "))
+        rotation, why = self.driver_rotation(start, chips)
+        self.set_rotation(inst, rotation, why)
+        for rot, v in rotations.items():
+            if not v:
+                continue
+            inst.notes.append(
+                f"{rot} = {_shown(v)} stays a classic parameter: calibration applies it; the "
+                f"driver's rotation is {rotation} ({why or 'rc.sensors starts it without -R'})"
+            )
+
+    # -- what the boot console shows, beyond the slots ---------------------------------------
+
+    def console_starts(self) -> None:
+        for i, start in enumerate(self.starts):
+            if i in self.claimed:
+                continue
+            at = f", address 0x{start.address:02X}" if start.address is not None else ""
+            device = f"{start.driver}, {start.bus_kind} bus {start.bus}{at}"
+            found = f"boot console line {start.line}"
+            if start.bus_kind == "SPI":
+                self.leave_out(
+                    found,
+                    device,
+                    "board",
+                    "internal SPI sensor: started by the board's startup script",
+                )
+                continue
+            chips = self.start_chips(start)
+            kinds = {e.kind for e in self.table if e.name in chips}
+            board = self.started_by_board(
+                chips, start.bus, start.address, start, None, kinds == {"BARO"}
+            )
+            if board is not None:  # the line is already named: not twice
+                self.leave_out(found, device, "board", board.replace(f" ({found})", ""))
+                continue
+            driver = self.start_driver(start)
+            if driver is None:
+                self.proposal.not_carried.append(
+                    f"{found}: '{start.text}': no bundled parameter type for {start.driver}; it "
+                    "stays started as today"
+                )
+                continue
+            spec = self.specs[driver.parameter]
+            address = start.address
+            if address is None:
+                address = _default_address(self.store, spec.name)
+                self.assume(
+                    f"{found}: '{start.text}' names no address (PX4 before 1.13 prints none): "
+                    f"{driver.name}'s default 0x{address:02X} assumed"
+                )
+            how = (
+                "found by i2c_launcher" if start.launcher else "started outside the board's script"
+            )
+            inst = self.add(spec.name, start.bus, address, f"{found}: '{start.text}' ({how})")
+            self.set_rotation(inst, *self.driver_rotation(start, chips))
+            options = UNMAPPED_OPTIONS.get(driver.name)
+            if options:
+                inst.notes.append(
+                    f"the start line also sets the {options}: {spec.name} has no field for it"
+                )
+
+    def launcher_buses(self) -> None:
+        buses = tuple(getattr(self.board, "i2c_launcher_buses", ()) or ())
+        if not buses:
+            return
+        shown = ", ".join(str(b) for b in buses)
+        if any(s.launcher for s in self.starts):
+            return
+        what = (
+            "the boot console shows none it started"
+            if self.config.console is not None
+            else f"a {self.config.kind} does not say which it found"
+        )
+        self.assume(
+            f"the board's i2c_launcher scans I2C bus {shown} for power monitors (INA226, INA228, "
+            f"INA238) when no SENS_EN_INA* is set: {what}"
+        )
+
+    def probing(self) -> None:
+        name = "SENS_EXT_I2C_PRB"
+        if name not in self.params:
+            return
+        self.use(name)
+        value = self.params[name]
+        if value:
+            found = [i.name for i in self.proposal.instances]
+            self.proposal.replaced.append(
+                f"{name} = {_shown(value)}: external I2C devices were found by probing; the "
+                f"manifest states its devices ({', '.join(found) or 'none'}) and a missing one "
+                "fails the arming check instead of being skipped silently"
+            )
+        else:
+            self.proposal.replaced.append(
+                f"{name} = 0: probing was off; the manifest starts the devices it lists"
+            )
+
+
+def _chips(dev: devid.DeviceId) -> set[str]:
+    """The chip names of a device's devtype, older eras' names as today's drivers know them."""
+    names = set((dev.devtype_name or "").split("/")) - {""}
+    return names | {RENAMED_CHIPS[n] for n in names if n in RENAMED_CHIPS}
+
+
+def _slot_kind(name: str) -> str:
+    """``MAG`` of ``CAL_MAG0_ID``, ``BARO`` of the log topic ``sensor_baro 0``."""
+    m = _CAL_ID.fullmatch(name)
+    return m["sensor"] if m else _TOPIC_KIND.get(name.partition(" ")[0], name)
+
+
+_CONDITION = re.compile(r"\s*[A-Z0-9_]+\s*(==|!=|>=|<=|>|<)\s*(-?\d+)")
+
+
+def _holds(when: str, value: int | float) -> bool:
+    """Whether a board row's condition on its switch (``SENS_EN_LL40LS == 2``, ``> 0``: the
+    first clause) holds for ``value``; a condition not of that form is taken as holding."""
+    m = _CONDITION.match(when or "")
+    if not m:
+        return True
+    limit = int(m[2])
+    return {
+        "==": value == limit,
+        "!=": value != limit,
+        ">=": value >= limit,
+        "<=": value <= limit,
+        ">": value > limit,
+        "<": value < limit,
+    }[m[1]]
+
+
+def _default_address(store: Any, param: str) -> int:
+    from px4params.store.spec import metadata_default
+
+    spec = store.spec(param)
+    value = metadata_default(store.schema, spec.data_type.key)
+    bus = value.get("bus", {})
+    return int(bus.get("i2c", {}).get("address", 0))
+
+
+def _field_tags(data_type: Any, path: str) -> dict[str, Any]:
+    """The ``@min``/``@max``/``@unit`` tags of a top-level field."""
+    for f in data_type.definition["fields"]:
+        if f["name"] == path:
+            return dict((f.get("doc") or {}).get("tags") or {})
+    return {}
+
+
+def _differs(old: Any, new: Any) -> bool:
+    if isinstance(old, float) or isinstance(new, float):
+        return struct.pack("<f", float(old)) != struct.pack("<f", float(new))
+    return bool(old != new)
+
+
+def _shown(value: Any) -> str:
+    if isinstance(value, float):
+        return f"{value:.9g}"
+    return str(value)
+
+
+def migrate(
+    config: OldConfig,
+    schema: Schema | None = None,
+    table: devid.DevtypeTable | str | None = None,
+    board: Any = None,
+) -> Proposal:
+    """Proposes a manifest for ``config`` (see the module doc). ``table``: the devtype table
+    (default: the one of the file's firmware era); ``board``: a board of
+    :mod:`px4params.vehicle.boards` or its PX4 name (default: a log's ``ver_hw``'s)."""
+    from px4params.dsdl.schema import load_schema
+
+    assumptions: list[str] = []
+    if table is None:
+        if config.version is not None:
+            table = devid.table_for_version(config.version)
+        else:
+            table, why = devid.table_for_parameters(config.params)
+            assumptions.append(why)
+    names = devid.load_table(table) if isinstance(table, str) else table
+    chosen = _board(config, board, assumptions)
+    builder = _Builder(
+        config, schema or load_schema(include_dronecan=False), names, chosen, assumptions
+    )
+    return builder.run()
+
+
+def _board(config: OldConfig, board: Any, assumptions: list[str]) -> Any:
+    """The board whose table applies, or None (with the assumption said)."""
+    try:
+        from px4params.vehicle import boards
+    except ImportError:  # the board table is not part of this installation
+        boards = None
+    if board is not None and not isinstance(board, str):
+        return board
+    if board is not None:
+        if boards is None:
+            raise MigrationError(
+                f"--board {board}: this installation has no board table (px4params.vehicle.boards)"
+            )
+        version = "v" + ".".join(map(str, config.version)) if config.version else None
+        found = boards.load_boards().by_name(board, version)
+        if found is None:
+            raise MigrationError(
+                f"unknown board {board!r} (expected a PX4 board name such as px4_fmu-v6c)"
+            )
+        return found
+    if config.hardware is not None:
+        table = boards.load_boards() if boards is not None else None
+        # The release picks the board's facts of that PX4 version.
+        found = table.for_ulog(config.hardware, config.release) if table is not None else None
+        if found is None:
+            where = "not in the board table" if table is not None else "no board table here"
+            assumptions.append(
+                f"board {config.hardware}: {where}; what its script starts is judged from the "
+                "parameters and the boot console"
+            )
+        return found
+    assumptions.append(
+        f"no board information in a {config.kind}: sensors with CAL_MAGn_ROT = -1 (Internal) "
+        "and I2C barometers are taken as the board's, other external I2C sensors as found by "
+        "probing (--board NAME uses the board's table)"
+    )
+    return None

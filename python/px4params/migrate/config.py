@@ -1,0 +1,157 @@
+"""Reading today's configuration: a ULog flight log, a QGC ``.params`` file or a ``param set``
+list, told apart by the content."""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from px4params.errors import MigrationError, NumberError, ParamFileError, ULogError
+from px4params.formats import qgc_params
+from px4params.formats.ulog import MAGIC as ULOG_MAGIC
+from px4params.numbers import abbreviated, parse_float, parse_int
+
+if TYPE_CHECKING:
+    import os
+
+__all__ = ["OldConfig", "read_config"]
+
+#: QGC's ``# Version: 1.13.0 beta`` header line (QGC writes the firmware version it read).
+_QGC_VERSION = re.compile(r"#\s*Version:\s*v?(\d+)\.(\d+)\.(\d+)")
+_QGC_HEADER = re.compile(r"#\s*(Stack|Vehicle|Version|Git Revision):\s*(.*\S)")
+#: A line of an airframe-style parameter list.
+_PARAM_SET = re.compile(r"param\s+(set|set-default)\s+(\S+)\s+(\S+)\s*")
+
+
+@dataclass
+class OldConfig:
+    """Today's parameters: name -> value (int or float), from ``source``."""
+
+    source: str
+    kind: str  # "ULog", "QGC .params" or "param set list"
+    params: dict[str, int | float]
+    #: Where the values came from, e.g. hardware and firmware of a log.
+    details: list[str] = field(default_factory=list)
+    #: Lines of the input that were not used (e.g. other components of a .params file).
+    skipped: list[str] = field(default_factory=list)
+    #: The firmware release of a log (ULog ``ver_sw_release``); None when it has none.
+    release: int | None = None
+    #: The firmware version (major, minor, patch) the file names: a log's release, a QGC
+    #: file's ``# Version`` line; None when it names none.
+    version: tuple[int, int, int] | None = None
+    #: The board of a log (ULog ``ver_hw``, e.g. ``PX4_FMU_V6C``); None for parameter files.
+    hardware: str | None = None
+    #: The log's boot console (``boot_console_output``), when it has one.
+    console: str | None = None
+    #: ``(topic, multi_id, device_id)`` of the sensors that published in the log.
+    published: list[tuple[str, int, int]] = field(default_factory=list)
+
+
+def read_config(path: str | os.PathLike[str]) -> OldConfig:
+    """Reads a ULog's parameters (their last values in the log), a QGC ``.params`` file, or a
+    ``param set`` list; told apart by the content, not the name."""
+    from px4params.formats.ulog import read_device_ids, read_header
+
+    where = str(path)
+    try:
+        with open(where, "rb") as f:
+            head = f.read(len(ULOG_MAGIC))
+    except OSError as e:
+        raise MigrationError(f"{where}: cannot read: {e.strerror}") from None
+    if head != ULOG_MAGIC:
+        return _read_text(where)
+    try:
+        log = read_header(where)
+        published = read_device_ids(where)
+    except ULogError as e:
+        raise MigrationError(str(e)) from None
+    params = log.parameters
+    if not params:
+        raise MigrationError(f"{where}: the log has no parameters")
+    details = [
+        f"{key} {log.info[key]}" for key in ("ver_hw", "ver_sw_branch", "ver_sw") if key in log.info
+    ]
+    changed = {name for _, name, _ in log.changed_parameters}
+    if changed:
+        details.append(f"last values of {len(changed)} parameters changed during the log")
+    release = log.release
+    version = (release >> 24 & 0xFF, release >> 16 & 0xFF, release >> 8 & 0xFF) if release else None
+    return OldConfig(
+        where, "ULog", params, details, release=release, version=version,
+        hardware=log.hardware, console=log.boot_console, published=published,
+    )  # fmt: skip
+
+
+def _read_text(where: str) -> OldConfig:
+    try:
+        text = Path(where).read_text(encoding="utf-8")
+    except UnicodeDecodeError:
+        raise MigrationError(f"{where}: neither a ULog file nor a QGC .params text file") from None
+    first = next(
+        (
+            line.strip()
+            for line in text.splitlines()
+            if line.strip() and not line.lstrip().startswith("#")
+        ),
+        "",
+    )
+    if first.startswith("param "):
+        return _read_param_list(text, where)
+    try:
+        read = qgc_params.read(text, where)
+    except ParamFileError as e:
+        raise MigrationError(str(e)) from None
+    rows = [(r.vehicle, r.component, r.name, r.value) for r in read]
+    if not rows:
+        raise MigrationError(f"{where}: no parameters (not a QGC .params file?)")
+    # The autopilot is component 1; other components (gimbals, ...) are not the vehicle's.
+    components = sorted({c for _, c, _, _ in rows})
+    chosen = 1 if 1 in components else components[0]
+    params = {name: value for _, c, name, value in rows if c == chosen}
+    skipped = [
+        f"component {c}: {sum(1 for r in rows if r[1] == c)} parameters (not the autopilot's)"
+        for c in components
+        if c != chosen
+    ]
+    details = [f"component {chosen}"]
+    version = None
+    for line in text.splitlines():
+        if not line.startswith("#"):
+            break
+        m = _QGC_VERSION.match(line.strip())
+        if m:
+            version = (int(m[1]), int(m[2]), int(m[3]))
+        h = _QGC_HEADER.match(line.strip())
+        if h:
+            details.append(f"{h[1]}: {h[2]}")
+    return OldConfig(where, "QGC .params", params, details, skipped, version=version)
+
+
+def _read_param_list(text: str, where: str) -> OldConfig:
+    """``param set NAME VALUE`` / ``param set-default NAME VALUE`` lines (an airframe file's
+    syntax); other shell lines are counted, not run."""
+    params: dict[str, int | float] = {}
+    other = 0
+    for number, raw in enumerate(text.splitlines(), start=1):
+        line = re.sub(r"(^|\s)#.*$", "", raw).strip()  # the shell's comments
+        if not line:
+            continue
+        m = _PARAM_SET.fullmatch(line)
+        if not m:
+            other += 1
+            continue
+        name, value = m[2], m[3]
+        try:
+            params[name] = (
+                parse_int(value) if re.fullmatch(r"[+-]?\d+", value) else parse_float(value)
+            )
+        except (NumberError, ValueError):
+            raise MigrationError(
+                f"{where}:{number}: {name}: value '{abbreviated(value)}' is not a number"
+            ) from None
+    if not params:
+        raise MigrationError(f"{where}: no 'param set' lines")
+    skipped = [f"{other} other lines (not 'param set'): not read"] if other else []
+    return OldConfig(where, "param set list", params, [], skipped)

@@ -1,0 +1,741 @@
+"""PX4 boards as data: what each board's startup script starts, per PX4 release.
+
+A PX4 flight controller starts its own sensors before any manifest is read: the board's
+``init/rc.board_sensors`` (its IMUs, barometers and compasses, with the ``-R`` rotation of how
+they are mounted), its ``i2c_launcher`` (power monitors found on a bus) and, behind parameters
+such as ``SENS_EN_INA238``, the drivers that a switch turns on (in that script and in the
+``rc.sensors`` every board runs). Migration needs to know these to leave them out of a manifest
+and to keep calibration rotations apart from driver rotations.
+
+The facts live in ``boards.toml`` beside the package data, transcribed from PX4-Autopilot at
+a few snapshots (tagged releases and branches, listed in its ``[[snapshot]]`` tables) by
+``scripts/transcribe_boards.py``. Its keys:
+
+``[[snapshot]]``
+    ``release`` (``"v1.14.0"``, ``"v1.18"`` for a release branch, ``"main"``), ``ref``,
+    ``commit`` (40 hex digits) and ``date`` of the PX4-Autopilot tree read.
+``[[board]]``, one row per board and run of snapshots over which its facts did not change
+    ``name`` (PX4 target without the build label, ``px4_fmu-v6c``), ``label``, ``ver_hw`` (what
+    PX4 writes as the ULog's ``ver_hw``: the target name upper-cased with ``-`` made ``_``, then
+    older spellings), ``releases`` (the snapshots), ``path`` (the script read),
+    ``external_i2c_buses`` / ``internal_i2c_buses`` (the board's ``src/i2c.cpp``, or its
+    ``board_config.h`` where there is none, named by ``i2c_buses_path``),
+    ``i2c_launcher_buses`` and optional ``i2c_launcher_when``, and the lists ``device`` (started
+    whatever the parameters) and ``switch`` (started behind a parameter).
+``[[i2c_launcher]]``
+    ``releases``, ``path``, ``args`` (the command it runs for a device it finds, ``{bus}`` and
+    ``{index}`` filled in) and a ``probe`` list (``driver``, ``kind``, ``address``, ``line``) in
+    the order it tries them: ``src/systemcmds/i2c_launcher``, the same for every board.
+``[[rc_sensors]]``
+    ``releases``, ``path`` and a ``switch`` list: ``ROMFS/px4fmu_common/init.d/rc.sensors``,
+    the same for every board.
+
+A device or switch entry has ``driver``, ``kind`` (mag, baro, imu, power, other), ``bus_kind``
+(I2C or SPI), ``internal`` (PX4's ``-I``/``-s`` against ``-X``/``-S``), ``args`` (the start
+command's options as written), ``line`` (in the newest snapshot of the row) and optional
+``bus``, ``address``, ``rotation`` (the ``-R`` value, PX4's rotation enum) and ``when`` (the
+shell conditions around it, e.g. ``hw_type in V6C000002,V6C002002`` or ``$HAVE_PM2 == yes``).
+An ``icm20948`` or ``mpu9250`` started with ``-M`` (the driver's "Enable Magnetometer") is
+listed twice, as ``imu`` and as ``mag``. A switch entry also names its ``param``. A switch
+started with ``-X`` and no ``-b`` probes every external I2C bus, so :class:`SwitchStart` rows
+are one per external bus of the board.
+
+A release picks the newest snapshot at or before it (a v1.16 log is read with v1.15.0's facts,
+as no v1.16/v1.17 snapshot was read), a release series newer than every release snapshot picks
+``main``; releases older than the oldest snapshot have no entry.
+Every problem with the file is a :class:`BoardsFileError` of one line naming the file, the row
+and what is wrong.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import importlib.resources
+import math
+import re
+import tomllib
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+from px4params.data import VALUE_SETS_TOML
+from px4params.errors import BoardsError, BoardsFileError
+
+__all__ = [
+    "Board",
+    "BoardDevice",
+    "BoardTable",
+    "BoardsError",
+    "BoardsFileError",
+    "LauncherProbe",
+    "SwitchStart",
+    "load_boards",
+    "parse_boards",
+    "release_version",
+    "render_markdown",
+]
+
+#: What a device measures, as the table names it.
+KINDS = ("mag", "baro", "imu", "power", "other")
+BUS_KINDS = ("I2C", "SPI")
+_UPSTREAM = "PX4/PX4-Autopilot"
+_MAIN = "main"
+_VERSION = re.compile(r"v?(\d+)\.(\d+)(?:\.(\d+))?(?:[-+~][0-9A-Za-z.\-]*)?")
+
+
+@dataclass(frozen=True)
+class BoardDevice:
+    """A driver the board's script starts whatever the parameters."""
+
+    driver: str
+    kind: str
+    bus_kind: str
+    bus: int | None
+    address: int | None
+    rotation: int | None
+    internal: bool
+    source: str
+    #: Shell conditions around the start (hardware revision, an earlier start failing), or "".
+    when: str = ""
+    #: The start command's options as written in the script.
+    args: str = ""
+
+
+@dataclass(frozen=True)
+class SwitchStart:
+    """A driver started while a parameter (``param``) has the value ``when`` names."""
+
+    param: str
+    driver: str
+    bus: int
+    address: int | None
+    args: str
+    source: str
+    kind: str = "other"
+    bus_kind: str = "I2C"
+    rotation: int | None = None
+    internal: bool = False
+    when: str = ""
+
+
+@dataclass(frozen=True)
+class LauncherProbe:
+    """An address the board's ``i2c_launcher`` tries on each of its buses, and the driver it
+    starts there (``args`` with ``{bus}`` and ``{index}``, the battery index, to fill in)."""
+
+    driver: str
+    kind: str
+    address: int
+    args: str
+    source: str
+
+
+@dataclass(frozen=True)
+class Board:
+    """One board over the PX4 snapshots in ``releases``."""
+
+    name: str
+    label: str
+    ver_hw: tuple[str, ...]
+    devices: tuple[BoardDevice, ...]
+    i2c_launcher_buses: tuple[int, ...]
+    switches: tuple[SwitchStart, ...]
+    source: str
+    releases: tuple[str, ...] = ()
+    external_i2c_buses: tuple[int, ...] = ()
+    internal_i2c_buses: tuple[int, ...] = ()
+    #: Shell conditions around the launcher per bus (``bus 1: $INA_CONFIGURED == no; ...``: it
+    #: runs only while no SENS_EN_INA2xx switch is 1), or "".
+    i2c_launcher_when: str = ""
+    #: What the launcher tries on each of ``i2c_launcher_buses``, in order (empty without one).
+    i2c_launcher_probes: tuple[LauncherProbe, ...] = ()
+
+    def buses_of(self, start: BoardDevice | SwitchStart) -> tuple[int, ...]:
+        """The buses a start can be on: its ``-b``, else every internal (``-I``) or external
+        (``-X``) I2C bus of the board, as PX4 tries them; () for SPI without ``-b``."""
+        if start.bus is not None:
+            return (start.bus,)
+        if start.bus_kind != "I2C":
+            return ()
+        return self.internal_i2c_buses if start.internal else self.external_i2c_buses
+
+
+#: A board's switch starts as read, before expansion per bus: (starts with their sources,
+#: external I2C buses, internal I2C buses, ver_hw).
+_Pending = tuple[
+    list[tuple[dict[str, Any], str]], tuple[int, ...], tuple[int, ...], tuple[str, ...]
+]
+
+
+@dataclass(frozen=True)
+class _Snapshot:
+    release: str
+    ref: str
+    commit: str
+    date: str
+    order: tuple[float, ...]
+
+    def describe(self) -> str:
+        return f"{self.release} ({self.ref}, {self.commit[:10]}, {self.date})"
+
+
+def release_version(release: str | int) -> tuple[int, int, int]:
+    """``(major, minor, patch)`` of a PX4 release: ``"v1.13.0"``, ``"1.15.0-beta1"``, or a ULog's
+    ``ver_sw_release`` integer (``0xMMmmpptt``)."""
+    if isinstance(release, int) and not isinstance(release, bool):
+        if not 0 <= release < 1 << 32:
+            raise BoardsError(f"release {release} is no ULog ver_sw_release (0 .. 2**32-1)")
+        return (release >> 24, (release >> 16) & 0xFF, (release >> 8) & 0xFF)
+    if isinstance(release, str):
+        m = _VERSION.fullmatch(release.strip())
+        if m:
+            return (int(m.group(1)), int(m.group(2)), int(m.group(3) or 0))
+    raise BoardsError(f"release {release!r} is no PX4 version (expected e.g. 'v1.13.0')")
+
+
+def _snapshot_order(release: str) -> tuple[float, ...]:
+    if release == _MAIN:
+        return (math.inf,)
+    return tuple(float(x) for x in release_version(release))
+
+
+class BoardTable:
+    """Every board of ``boards.toml``, looked up by ULog ``ver_hw`` or by name, per release."""
+
+    def __init__(
+        self,
+        snapshots: Sequence[_Snapshot],
+        rows: Mapping[tuple[str, str], Board],
+        names: Sequence[str],
+        ver_hw: Mapping[str, str],
+        rc_sensors: Mapping[str, Sequence[tuple[Mapping[str, Any], str]]] | None = None,
+        pending: Mapping[tuple[str, str], _Pending] | None = None,
+    ) -> None:
+        self._snapshots = tuple(sorted(snapshots, key=lambda s: s.order))
+        self._rows = dict(rows)
+        self._names = tuple(names)
+        self._ver_hw = dict(ver_hw)
+        #: release -> rc.sensors switch starts as written (no bus: every external bus).
+        self._rc_sensors = dict(rc_sensors or {})
+        #: (board, release) -> switch starts not yet expanded per bus (most are never asked for).
+        self._pending = dict(pending or {})
+
+    def _row(self, key: tuple[str, str]) -> Board | None:
+        board = self._rows.get(key)
+        if board is not None and key in self._pending:
+            starts, external, internal, ver_hw = self._pending.pop(key)
+            switches = tuple(
+                switch
+                for start, source in starts
+                for switch in _expand(start, source, external, internal, ver_hw)
+            )
+            board = self._rows[key] = dataclasses.replace(board, switches=switches)
+        return board
+
+    @property
+    def releases(self) -> tuple[str, ...]:
+        """The snapshots the table was read from, oldest first."""
+        return tuple(s.release for s in self._snapshots)
+
+    def snapshot_for(self, release: str | int | None) -> str | None:
+        """The snapshot whose facts hold for ``release`` (None, or a release series newer than
+        every release snapshot: today's, ``main``); None when the release is older than every
+        snapshot."""
+        if release is None:
+            return self._snapshots[-1].release
+        wanted = tuple(float(x) for x in release_version(release))
+        released = [s for s in self._snapshots if s.release != _MAIN]
+        if (
+            self._snapshots[-1].release == _MAIN
+            and released
+            and wanted[:2] > released[-1].order[:2]
+        ):
+            return _MAIN  # a release newer than every release snapshot: today's main
+        chosen = None
+        for snap in self._snapshots:
+            if snap.order <= wanted:
+                chosen = snap.release
+        return chosen
+
+    def by_name(self, name: str, release: str | int | None = None) -> Board | None:
+        """The board ``name`` (``px4_fmu-v6c``) as PX4 ``release`` starts it (None: today).
+
+        A board missing from that release's snapshot is described by its nearest row: its oldest
+        when the release is older (a vendor branch had the board before the tag did: the MR-Tropic
+        log of ``v1.15.0-beta``), its newest when the board was later removed. None when the
+        release is older than every snapshot or the table has no such board."""
+        snap = self.snapshot_for(release)
+        if snap is None:
+            return None
+        found = self._row((name, snap))
+        if found is not None:
+            return found
+        rows = self.variants(name)
+        if not rows:
+            return None
+        order = [s.release for s in self._snapshots]
+        return rows[0] if order.index(rows[0].releases[0]) > order.index(snap) else rows[-1]
+
+    def for_ulog(self, ver_hw: str, release: str | int | None) -> Board | None:
+        """The board a ULog's ``ver_hw`` (``PX4_FMU_V6C``) names, as ``release`` (the log's
+        ``ver_sw_release``, None if it has none) starts it."""
+        name = self._ver_hw.get(ver_hw.strip().upper())
+        return None if name is None else self.by_name(name, release)
+
+    def all(self) -> tuple[Board, ...]:
+        """Every board once, as the newest snapshot that has it describes it."""
+        newest: dict[str, Board] = {}
+        for snap in self._snapshots:
+            for name in self._names:
+                row = self._row((name, snap.release))
+                if row is not None:
+                    newest[name] = row
+        return tuple(newest[n] for n in self._names if n in newest)
+
+    def _boards_at(self, release: str) -> list[Board]:
+        found = (self._row(key) for key in list(self._rows) if key[1] == release)
+        return [row for row in found if row is not None]
+
+    def variants(self, name: str) -> tuple[Board, ...]:
+        """Every row of board ``name``, oldest first (one per run of unchanged snapshots)."""
+        newest: dict[tuple[str, ...], Board] = {}  # a TOML row, as its newest snapshot reads
+        for snap in self._snapshots:
+            row = self._row((name, snap.release))
+            if row is not None:
+                newest[row.releases] = row
+        return tuple(newest.values())
+
+
+# -- reading the file -------------------------------------------------------------------------
+
+
+class _Row:
+    """Checks the keys of one TOML table, naming it in every error."""
+
+    def __init__(self, file: str, where: str, table: Any) -> None:
+        self.file, self.where = file, where
+        if not isinstance(table, dict):
+            self.fail(f"expected a table, got {type(table).__name__}")
+        self.table: dict[str, Any] = table
+
+    def fail(self, problem: str) -> None:
+        raise BoardsFileError(f"{self.file}: {self.where}: {problem}")
+
+    def only(self, required: Sequence[str], optional: Sequence[str] = ()) -> None:
+        for key in required:
+            if key not in self.table:
+                self.fail(f"missing key {key!r}")
+        for key in self.table:
+            if key not in required and key not in optional:
+                self.fail(
+                    f"unknown key {key!r} (expected one of {', '.join((*required, *optional))})"
+                )
+
+    def text(self, key: str, default: str | None = None) -> str:
+        value = self.table.get(key, default)
+        if not isinstance(value, str) or (default is None and not value):
+            self.fail(f"{key} {value!r} is not a non-empty string")
+        return value  # type: ignore[return-value]
+
+    def number(self, key: str, low: int, high: int, optional: bool = False) -> int | None:
+        value = self.table.get(key)
+        if value is None and optional:
+            return None
+        if not isinstance(value, int) or isinstance(value, bool):
+            self.fail(f"{key} {value!r} is not an integer")
+        if not low <= value <= high:  # type: ignore[operator]
+            self.fail(f"{key} {value} is out of range {low}..{high}")
+        return value  # type: ignore[return-value]
+
+    def choice(self, key: str, choices: Sequence[str]) -> str:
+        value = self.table.get(key)
+        if value not in choices:
+            self.fail(f"{key} {value!r} is not one of {', '.join(choices)}")
+        return value  # type: ignore[return-value]
+
+    def flag(self, key: str) -> bool:
+        value = self.table.get(key)
+        if not isinstance(value, bool):
+            self.fail(f"{key} {value!r} is not true or false")
+        return value  # type: ignore[return-value]
+
+    def numbers(self, key: str, low: int, high: int) -> tuple[int, ...]:
+        value = self.table.get(key, [])
+        if not isinstance(value, list) or not all(
+            isinstance(v, int) and not isinstance(v, bool) and low <= v <= high for v in value
+        ):
+            self.fail(f"{key} {value!r} is not a list of integers {low}..{high}")
+        return tuple(value)
+
+    def texts(self, key: str) -> tuple[str, ...]:
+        value = self.table.get(key)
+        if (
+            not isinstance(value, list)
+            or not value
+            or not all(isinstance(v, str) and v for v in value)
+        ):
+            self.fail(f"{key} {value!r} is not a non-empty list of strings")
+        return tuple(value)  # type: ignore[arg-type]
+
+    def tables(self, key: str) -> list[Any]:
+        value = self.table.get(key, [])
+        if not isinstance(value, list):
+            self.fail(f"{key} is not a list of tables")
+        return value  # type: ignore[no-any-return]
+
+
+_START_KEYS = ("driver", "kind", "bus_kind", "internal", "args", "line")
+_START_OPTIONAL = ("bus", "address", "rotation", "when")
+_DRIVER = re.compile(r"[a-z][a-z0-9_]*")
+_PARAM = re.compile(r"[A-Z][A-Z0-9_]*")
+_NAME = re.compile(r"[a-z0-9][a-z0-9-]*_[A-Za-z0-9][A-Za-z0-9_.-]*")
+
+
+@functools.cache
+def _rotation_max() -> int:
+    """The largest value of PX4's rotation enum, as ``value_sets.toml`` lists it."""
+    with open(VALUE_SETS_TOML, "rb") as f:
+        return max(int(k) for k in tomllib.load(f)["rotation"])
+
+
+def _start(row: _Row, switch: bool) -> dict[str, Any]:
+    row.only(("param", *_START_KEYS) if switch else _START_KEYS, _START_OPTIONAL)
+    driver = row.text("driver")
+    if not _DRIVER.fullmatch(driver):
+        row.fail(f"driver {driver!r} is not a PX4 module name (lower case, digits, _)")
+    fields: dict[str, Any] = {
+        "driver": driver,
+        "kind": row.choice("kind", KINDS),
+        "bus_kind": row.choice("bus_kind", BUS_KINDS),
+        "bus": row.number("bus", 0, 255, optional=True),
+        "address": row.number("address", 0, 127, optional=True),
+        "rotation": row.number("rotation", 0, _rotation_max(), optional=True),
+        "internal": row.flag("internal"),
+        "args": row.text("args"),
+        "when": row.text("when", ""),
+        "line": row.number("line", 1, 100_000),
+    }
+    if switch:
+        param = row.text("param")
+        if not _PARAM.fullmatch(param):
+            row.fail(f"param {param!r} is not a PX4 parameter name")
+        fields["param"] = param
+    return fields
+
+
+def parse_boards(text: str, file: str = "boards.toml") -> BoardTable:
+    """Read a board table from TOML text (see the module's docstring for the keys)."""
+    try:
+        doc = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise BoardsFileError(f"{file}: not TOML: {exc}") from None
+    top = _Row(file, "top level", doc)
+    top.only(("snapshot", "board"), ("rc_sensors", "i2c_launcher"))
+
+    snapshots: dict[str, _Snapshot] = {}
+    for i, table in enumerate(top.tables("snapshot"), 1):
+        row = _Row(file, f"snapshot {i}", table)
+        row.only(("release", "ref", "commit", "date"))
+        release = row.text("release")
+        row.where = f"snapshot {release!r}"
+        try:
+            order = _snapshot_order(release)
+        except BoardsError:
+            row.fail("release is not 'main' nor a PX4 version like 'v1.14.0'")
+        commit = row.text("commit")
+        if not re.fullmatch(r"[0-9a-f]{40}", commit):
+            row.fail(f"commit {commit!r} is not 40 hex digits")
+        if release in snapshots:
+            row.fail("release appears twice")
+        snapshots[release] = _Snapshot(release, row.text("ref"), commit, row.text("date"), order)
+    if not snapshots:
+        top.fail("no [[snapshot]] table")
+
+    def releases_of(row: _Row) -> tuple[_Snapshot, ...]:
+        keys = row.texts("releases")
+        for key in keys:
+            if key not in snapshots:
+                row.fail(f"release {key!r} is not a [[snapshot]] (known: {', '.join(snapshots)})")
+        return tuple(snapshots[k] for k in keys)
+
+    def cite(path: str, line: int, snaps: Sequence[_Snapshot]) -> str:
+        newest = max(snaps, key=lambda s: s.order)
+        return f"{_UPSTREAM} {path}:{line} at {newest.describe()}"
+
+    common: dict[str, list[tuple[dict[str, Any], str]]] = {}
+    for i, table in enumerate(top.tables("rc_sensors"), 1):
+        row = _Row(file, f"rc_sensors {i}", table)
+        row.only(("releases", "path", "switch"))
+        snaps = releases_of(row)
+        path = row.text("path")
+        starts = []
+        for j, entry in enumerate(row.tables("switch"), 1):
+            start = _start(_Row(file, f"{row.where} switch {j}", entry), switch=True)
+            starts.append((start, cite(path, start["line"], snaps)))
+        for snap in snaps:
+            if snap.release in common:
+                row.fail(f"release {snap.release!r} has two [[rc_sensors]] rows")
+            common[snap.release] = starts
+
+    launcher: dict[str, tuple[LauncherProbe, ...]] = {}
+    for i, table in enumerate(top.tables("i2c_launcher"), 1):
+        row = _Row(file, f"i2c_launcher {i}", table)
+        row.only(("releases", "path", "args", "probe"))
+        snaps = releases_of(row)
+        path, args = row.text("path"), row.text("args")
+        probes = []
+        for j, entry in enumerate(row.tables("probe"), 1):
+            probe = _Row(file, f"{row.where} probe {j}", entry)
+            probe.only(("driver", "kind", "address", "line"))
+            line = probe.number("line", 1, 100_000)
+            probes.append(
+                LauncherProbe(
+                    driver=probe.text("driver"),
+                    kind=probe.choice("kind", KINDS),
+                    address=probe.number("address", 0, 127),  # type: ignore[arg-type]
+                    args=args,
+                    source=cite(path, line, snaps),  # type: ignore[arg-type]
+                )
+            )
+        for snap in snaps:
+            if snap.release in launcher:
+                row.fail(f"release {snap.release!r} has two [[i2c_launcher]] rows")
+            launcher[snap.release] = tuple(probes)
+
+    rows: dict[tuple[str, str], Board] = {}
+    pending: dict[tuple[str, str], _Pending] = {}
+    names: list[str] = []
+    ver_hw_names: dict[str, str] = {}
+    for i, table in enumerate(top.tables("board"), 1):
+        row = _Row(file, f"board {i}", table)
+        row.only(
+            (
+                "name",
+                "label",
+                "ver_hw",
+                "releases",
+                "path",
+                "external_i2c_buses",
+                "internal_i2c_buses",
+                "i2c_launcher_buses",
+                "device",
+                "switch",
+            ),
+            ("i2c_buses_path", "i2c_launcher_when"),
+        )
+        name = row.text("name")
+        if not _NAME.fullmatch(name):
+            row.fail(f"name {name!r} is not a PX4 target name like 'px4_fmu-v6c'")
+        row.where = f"board {name!r}"
+        snaps = releases_of(row)
+        row.where = f"board {name!r} at {', '.join(s.release for s in snaps)}"
+        path = row.text("path")
+        ver_hw = row.texts("ver_hw")
+        for hw in ver_hw:
+            if hw != hw.upper():
+                row.fail(f"ver_hw {hw!r} is not upper case (PX4 writes it upper case)")
+            if ver_hw_names.setdefault(hw, name) != name:
+                row.fail(f"ver_hw {hw!r} already names board {ver_hw_names[hw]!r}")
+        external = row.numbers("external_i2c_buses", 0, 255)
+        internal = row.numbers("internal_i2c_buses", 0, 255)
+        buses_path = row.text("i2c_buses_path", "")
+        devices = []
+        for j, entry in enumerate(row.tables("device"), 1):
+            start = _start(_Row(file, f"{row.where} device {j}", entry), switch=False)
+            devices.append(
+                BoardDevice(
+                    driver=start["driver"],
+                    kind=start["kind"],
+                    bus_kind=start["bus_kind"],
+                    bus=start["bus"],
+                    address=start["address"],
+                    rotation=start["rotation"],
+                    internal=start["internal"],
+                    source=cite(path, start["line"], snaps),
+                    when=start["when"],
+                    args=start["args"],
+                )
+            )
+        own = []
+        for j, entry in enumerate(row.tables("switch"), 1):
+            start = _start(_Row(file, f"{row.where} switch {j}", entry), switch=True)
+            own.append((start, cite(path, start["line"], snaps)))
+        sources = [f"{_UPSTREAM} {path} at {', '.join(s.describe() for s in snaps)}"]
+        if buses_path:
+            sources.append(f"I2C buses from {buses_path}")
+        for snap in snaps:
+            key = (name, snap.release)
+            if key in rows:
+                row.fail(f"release {snap.release!r} already has a row for this board")
+            # expanded to SwitchStarts per bus when the board is first asked for (BoardTable._row)
+            pending[key] = (own + common.get(snap.release, []), external, internal, ver_hw)
+            rc_sensors = (
+                " and ROMFS/px4fmu_common/init.d/rc.sensors" if snap.release in common else ""
+            )
+            launcher_buses = row.numbers("i2c_launcher_buses", 0, 255)
+            if launcher_buses and snap.release not in launcher:
+                row.fail(f"i2c_launcher_buses but no [[i2c_launcher]] row for {snap.release!r}")
+            rows[key] = Board(
+                name=name,
+                label=row.text("label"),
+                ver_hw=ver_hw,
+                devices=tuple(devices),
+                i2c_launcher_buses=launcher_buses,
+                switches=(),
+                source="; ".join(sources) + rc_sensors,
+                releases=tuple(s.release for s in snaps),
+                external_i2c_buses=external,
+                internal_i2c_buses=internal,
+                i2c_launcher_when=row.text("i2c_launcher_when", ""),
+                i2c_launcher_probes=launcher[snap.release] if launcher_buses else (),
+            )
+        if name not in names:
+            names.append(name)
+    return BoardTable(tuple(snapshots.values()), rows, names, ver_hw_names, common, pending)
+
+
+def _expand(
+    start: Mapping[str, Any],
+    source: str,
+    external: Sequence[int],
+    internal: Sequence[int],
+    ver_hw: Sequence[str],
+) -> list[SwitchStart]:
+    """One SwitchStart per bus the start can run on: ``-b N`` names one; ``-X``/``-I`` without
+    it probe every external/internal I2C bus of the board. An SPI start without ``-b`` names no
+    bus the table knows, and a start another board's ``ver hwcmp`` keeps is not this board's."""
+    for clause in start["when"].split(" and "):
+        negated = clause.startswith("not ")
+        if clause.removeprefix("not ").startswith("board in "):
+            listed = clause.removeprefix("not ").removeprefix("board in ").split(",")
+            if any(hw in listed for hw in ver_hw) == negated:
+                return []
+    if start["bus"] is not None:
+        buses: Sequence[int] = (start["bus"],)
+    elif start["bus_kind"] == "I2C":
+        buses = internal if start["internal"] else external
+    else:
+        buses = ()
+    return [
+        SwitchStart(
+            param=start["param"],
+            driver=start["driver"],
+            bus=bus,
+            address=start["address"],
+            args=start["args"],
+            source=source,
+            kind=start["kind"],
+            bus_kind=start["bus_kind"],
+            rotation=start["rotation"],
+            internal=start["internal"],
+            when=start["when"],
+        )
+        for bus in buses
+    ]
+
+
+# -- the table as documentation ----------------------------------------------------------------
+
+
+def _cell(value: object) -> str:
+    if value is None or value == "":
+        return ""
+    if isinstance(value, bool):
+        return "yes" if value else "no"
+    return str(value).replace("|", "\\|")
+
+
+def _starts_table(
+    starts: Sequence[BoardDevice | SwitchStart | tuple[Mapping[str, Any], str]],
+) -> list[str]:
+    lines = [
+        "| switch | driver | kind | bus | address | -R | internal | when | options | line |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for start in starts:
+        if isinstance(start, tuple):
+            f = dict(start[0])
+            f["source"] = start[1]
+            if f["bus"] is None and f["bus_kind"] == "I2C":
+                f["bus"] = "every " + ("internal" if f["internal"] else "external")
+        else:
+            f = vars(start)
+        bus = f["bus_kind"] + (f" {f['bus']}" if f["bus"] is not None else "")
+        address = f"0x{f['address']:02x}" if f["address"] is not None else ""
+        line = f["source"].split(" ")[1].rsplit(":", 1)[-1]
+        cells = (
+            f.get("param", ""),
+            f["driver"],
+            f["kind"],
+            bus,
+            address,
+            f["rotation"],
+            f["internal"],
+            f["when"],
+            f"`{f['args'].removesuffix(' start')}`",
+            line,
+        )
+        lines.append("| " + " | ".join(_cell(c) for c in cells) + " |")
+    return lines
+
+
+def render_markdown(table: BoardTable) -> str:
+    """The generated part of ``docs/boards.md``: the snapshots, every board with its rows, and
+    rc.sensors' switch starts (a test keeps the page equal to this)."""
+    out = ["### Snapshots read", ""]
+    out += ["| release | PX4-Autopilot ref | commit | date |", "|---|---|---|---|"]
+    for snap in table._snapshots:
+        out.append(f"| {snap.release} | {snap.ref} | `{snap.commit}` | {snap.date} |")
+    out += ["", "### Boards", ""]
+    out += ["| board | label | ver_hw | rows (snapshots) |", "|---|---|---|---|"]
+    for board in table.all():
+        rows = " / ".join(", ".join(v.releases) for v in table.variants(board.name))
+        hw = ", ".join(board.ver_hw)
+        out.append(f"| [{board.name}](#{board.name}) | {board.label} | {hw} | {rows} |")
+    for board in table.all():
+        out += ["", f"#### {board.name}", ""]
+        for variant in table.variants(board.name):
+            out.append(
+                f"**{', '.join(variant.releases)}**: {variant.source.split(' and ROMFS')[0]}."
+            )
+            out.append("")
+            launcher = ", ".join(str(b) for b in variant.i2c_launcher_buses) or "none"
+            when = f" ({variant.i2c_launcher_when})" if variant.i2c_launcher_when else ""
+            out.append(
+                f"I2C buses: external {list(variant.external_i2c_buses)}, internal "
+                f"{list(variant.internal_i2c_buses)}; i2c_launcher scans: {launcher}{when}."
+            )
+            own = [s for s in variant.switches if "/rc.sensors:" not in s.source]
+            if variant.devices or own:
+                out += ["", *_starts_table([*variant.devices, *own])]
+            out.append("")
+    out += ["### What i2c_launcher tries on each of its buses", ""]
+    seen_probes: list[tuple[LauncherProbe, ...]] = []
+    for snap in table._snapshots:
+        at = table._boards_at(snap.release)
+        probes = next((b.i2c_launcher_probes for b in at if b.i2c_launcher_probes), ())
+        if not probes or probes in seen_probes:
+            continue
+        seen_probes.append(probes)
+        out += [f"**from {snap.release}**: `{probes[0].args}`", ""]
+        out += ["| address | driver | kind | source |", "|---|---|---|---|"]
+        out += [f"| 0x{p.address:02x} | {p.driver} | {p.kind} | {p.source} |" for p in probes]
+        out.append("")
+    out += ["### Switch starts every board runs (ROMFS/px4fmu_common/init.d/rc.sensors)", ""]
+    seen: list[int] = []
+    for snap in table._snapshots:
+        starts = table._rc_sensors.get(snap.release)
+        if starts is None or id(starts) in seen:
+            continue
+        seen.append(id(starts))
+        releases = [r for r, s in table._rc_sensors.items() if s is starts]
+        out += [f"**{', '.join(releases)}**", "", *_starts_table(list(starts)), ""]
+    return "\n".join(out).rstrip("\n") + "\n"
+
+
+@functools.cache
+def load_boards() -> BoardTable:
+    """The bundled board table (read once)."""
+    resource = importlib.resources.files("px4params.data").joinpath("boards.toml")
+    return parse_boards(resource.read_text(encoding="utf-8"), "boards.toml")

@@ -1,0 +1,576 @@
+"""The board table (``data/boards.toml``) and its loader, against PX4's own scripts read by hand.
+
+Each known answer below names the PX4-Autopilot file and release it was read from. Where a
+fetched PX4-Autopilot git directory is on this machine (``$PX4_AUTOPILOT_GIT``, colon-separated,
+or the mirrors the table was transcribed from), every row is also checked line by line against
+the script it cites.
+"""
+
+from __future__ import annotations
+
+import functools
+import os
+import re
+import subprocess
+from pathlib import Path
+
+import pytest
+import pyulog
+from px4params.errors import BoardsError, BoardsFileError
+from px4params.vehicle.boards import (
+    Board,
+    BoardDevice,
+    SwitchStart,
+    load_boards,
+    parse_boards,
+    release_version,
+    render_markdown,
+)
+from shared_data import shared_file
+
+SNAPSHOTS = ("v1.11.0", "v1.12.0", "v1.13.0", "v1.14.0", "v1.15.0", "v1.18", "main")
+
+
+def device(board: Board, driver: str, bus: int | None = None) -> BoardDevice:
+    found = [d for d in board.devices if d.driver == driver and (bus is None or d.bus == bus)]
+    assert len(found) == 1, (driver, bus, board.devices)
+    return found[0]
+
+
+def switches(board: Board, param: str) -> list[SwitchStart]:
+    return [s for s in board.switches if s.param == param]
+
+
+# -- known answers, read by hand from PX4-Autopilot ---------------------------------------------
+
+
+def test_fmu_v6c_compass_on_bus_4_is_external_since_v1_14() -> None:
+    # boards/px4/fmu-v6c/init/rc.board_sensors, v1.14.0 and main: "ist8310 -X -b 4 -a 0xc start"
+    for release in ("v1.14.0", "v1.15.3", None):
+        board = load_boards().by_name("px4_fmu-v6c", release)
+        assert board is not None
+        mag = device(board, "ist8310", bus=4)
+        assert (mag.kind, mag.bus_kind, mag.address, mag.rotation, mag.internal) == (
+            "mag",
+            "I2C",
+            0x0C,
+            None,
+            False,
+        )
+        assert "boards/px4/fmu-v6c/init/rc.board_sensors" in mag.source
+    # v1.13.0 started it as internal: "ist8310 -I -b 4 -a 0xc start"
+    old = load_boards().by_name("px4_fmu-v6c", "v1.13.2")
+    assert old is not None and device(old, "ist8310", bus=4).internal is True
+    # the GPS compass: "ist8310 -X -b 1 -R 10 start"
+    gps = device(old, "ist8310", bus=1)
+    assert (gps.rotation, gps.internal, gps.address) == (10, False, None)
+
+
+def test_fmu_v5_internal_compass_carries_the_board_rotation() -> None:
+    # boards/px4/fmu-v5/init/rc.board_sensors, v1.13.0 line 28: "ist8310 -I -R 10 start"
+    board = load_boards().by_name("px4_fmu-v5", "v1.13.0")
+    assert board is not None
+    internal = [d for d in board.devices if d.driver == "ist8310" and d.internal]
+    assert [(d.bus, d.rotation, d.bus_kind) for d in internal] == [(None, 10, "I2C")]
+    assert internal[0].source.startswith(
+        "PX4/PX4-Autopilot boards/px4/fmu-v5/init/rc.board_sensors:28 at v1.13.0"
+    )
+    # its src/i2c.cpp: external 4, 2, 1; internal 3
+    assert board.external_i2c_buses == (1, 2, 4)
+    assert board.internal_i2c_buses == (3,)
+    # so the -I compass is on bus 3 (userguide_tteparams_v1.13.params: CAL_MAG0_ID on bus 3)
+    assert board.buses_of(internal[0]) == (3,)
+    assert board.buses_of(device(board, "ist8310", bus=1)) == (1,)
+    assert board.buses_of(device(board, "icm20689")) == ()  # SPI, no -b
+
+
+def test_mr_tropic_bmm350() -> None:
+    # boards/nxp/mr-tropic/init/rc.board_sensors (release/1.18, main): "bmm350 -I -b 4 -R 6 start"
+    board = load_boards().for_ulog("NXP_MR_TROPIC", None)
+    assert board is not None and board.name == "nxp_mr-tropic"
+    mag = device(board, "bmm350")
+    assert (mag.bus_kind, mag.bus, mag.rotation, mag.internal) == ("I2C", 4, 6, True)
+    # "if ! icm45686 -R 2 -b 3 -s start / then icm42688p -R 2 -b 3 -s -6 start": the second
+    # runs only when the first fails
+    fallback = device(board, "icm42688p")
+    assert fallback.when == "not icm45686 started (-R 2 -b 3 -s start)"
+    assert device(board, "icm45686").when == ""
+
+
+def test_6x_class_ina238_starts_one_monitor_per_power_port() -> None:
+    # boards/px4/fmu-v6x/init/rc.board_sensors (main): under "if param compare SENS_EN_INA238 1"
+    # "ina238 -X -b 1 -t 1 -k start", and with a second power module "ina238 -X -b 2 -t 2 -k start"
+    board = load_boards().by_name("px4_fmu-v6x")
+    assert board is not None
+    found = switches(board, "SENS_EN_INA238")
+    assert [(s.driver, s.bus, s.address) for s in found] == [
+        ("ina238", 1, None),
+        ("ina238", 2, None),
+    ]
+    assert "-t 1" in found[0].args and "-t 2" in found[1].args
+    assert found[1].when == "SENS_EN_INA238 == 1 and $HAVE_PM2 == yes"
+    assert all(s.kind == "power" and not s.internal for s in found)
+    # with no SENS_EN_INA2xx set, "i2c_launcher start -b 1" (and -b 2 with a second module)
+    assert board.i2c_launcher_buses == (1, 2)
+    assert board.i2c_launcher_when == (
+        "bus 1: $INA_CONFIGURED == no; bus 2: $INA_CONFIGURED == no and $HAVE_PM2 == yes"
+    )
+
+
+def test_rc_sensors_switch_probes_every_external_bus() -> None:
+    # ROMFS/px4fmu_common/init.d/rc.sensors (v1.13.0): "ms4525do start -X" behind
+    # SENS_EN_MS4525DO, so on fmu-v5 it probes external buses 1, 2 and 4, not bus 1 alone
+    board = load_boards().by_name("px4_fmu-v5", "v1.13.0")
+    assert board is not None
+    found = switches(board, "SENS_EN_MS4525DO")
+    assert [(s.driver, s.bus) for s in found] == [("ms4525do", 1), ("ms4525do", 2), ("ms4525do", 4)]
+    assert "ROMFS/px4fmu_common/init.d/rc.sensors" in found[0].source
+
+
+def test_cubeorange_imus_are_on_spi() -> None:
+    # boards/cubepilot/cubeorange/init/rc.board_sensors (v1.14.0):
+    # "icm20602 -s -b 4 -R 12 start", "icm20948 -s -b 4 -R 10 -M start", "ms5611 -s -b 1 start"
+    board = load_boards().by_name("cubepilot_cubeorange", "v1.14.0")
+    assert board is not None
+    imu = device(board, "icm20602")
+    assert (imu.kind, imu.bus_kind, imu.bus, imu.rotation, imu.internal) == (
+        "imu",
+        "SPI",
+        4,
+        12,
+        True,
+    )
+    assert device(board, "ms5611", bus=1).kind == "baro"
+    # "-M": the ICM-20948's own magnetometer (icm20948_main.cpp's usage: "Enable Magnetometer"),
+    # so the board starts an internal compass on SPI 4 with the IMU's rotation
+    kinds = [
+        (d.kind, d.bus_kind, d.bus, d.rotation) for d in board.devices if d.driver == "icm20948"
+    ]
+    assert kinds == [("imu", "SPI", 4, 10), ("mag", "SPI", 4, 10)]
+    assert board.i2c_launcher_buses == ()
+
+
+def test_hardware_revisions_and_fallbacks_are_kept_as_conditions() -> None:
+    # fmu-v6c (v1.15.0): "if ver hwtypecmp V6C000002 V6C002002" BMI088, else BMI055
+    board = load_boards().by_name("px4_fmu-v6c", "v1.15.0")
+    assert board is not None
+    bmi = [(d.driver, d.when) for d in board.devices if d.driver.startswith("bmi")]
+    assert bmi == [
+        ("bmi088", "hw_type in V6C000002,V6C002002"),
+        ("bmi088", "hw_type in V6C000002,V6C002002"),
+        ("bmi055", "not hw_type in V6C000002,V6C002002"),
+        ("bmi055", "not hw_type in V6C000002,V6C002002"),
+    ]
+
+
+# -- the table as a whole ------------------------------------------------------------------------
+
+
+def test_every_row_loads_and_names_are_unique() -> None:
+    table = load_boards()
+    boards = table.all()
+    names = [b.name for b in boards]
+    assert len(names) == len(set(names)) >= 100
+    assert table.releases == SNAPSHOTS
+    for name in (
+        "px4_fmu-v2",
+        "px4_fmu-v3",
+        "px4_fmu-v4",
+        "px4_fmu-v4pro",
+        "px4_fmu-v5",
+        "px4_fmu-v5x",
+        "px4_fmu-v6c",
+        "px4_fmu-v6u",
+        "px4_fmu-v6x",
+        "px4_fmu-v6xrt",
+        "cubepilot_cubeorange",
+        "cubepilot_cubeorangeplus",
+        "cubepilot_cubeyellow",
+        "cuav_nora",
+        "cuav_x7pro",
+        "cuav_7-nano",
+        "holybro_durandal-v1",
+        "holybro_kakutef7",
+        "holybro_pix32v5",
+        "holybro_kakuteh7",
+        "ark_fmu-v6x",
+        "ark_pi6x",
+        "modalai_fc-v1",
+        "modalai_fc-v2",
+        "nxp_fmuk66-v3",
+        "nxp_mr-canhubk3",
+        "nxp_tropic-community",
+        "nxp_mr-tropic",
+    ):
+        assert name in names, name
+    ver_hw = [hw for b in boards for hw in b.ver_hw]
+    assert len(ver_hw) == len(set(ver_hw))
+    for board in boards:
+        assert board.ver_hw[0] == board.name.upper().replace("-", "_")
+        for variant in table.variants(board.name):
+            assert variant.source.startswith("PX4/PX4-Autopilot boards/")
+            for d in variant.devices:
+                assert d.kind in ("mag", "baro", "imu", "power", "other")
+                assert d.bus_kind in ("I2C", "SPI")
+                assert re.match(r"PX4/PX4-Autopilot \S+:\d+ at \S+ \(", d.source), d.source
+            for s in variant.switches:
+                assert s.bus >= 0 and s.param
+
+
+def test_each_release_reads_the_newest_snapshot_before_it() -> None:
+    table = load_boards()
+    assert table.snapshot_for("v1.13.3") == "v1.13.0"
+    assert table.snapshot_for("v1.16.1") == "v1.15.0"  # no v1.16/v1.17 snapshot
+    assert table.snapshot_for("v1.18.0-rc1") == "v1.18"
+    assert table.snapshot_for("v1.19.0") == "main"
+    assert table.snapshot_for(None) == "main"
+    assert table.snapshot_for("v1.10.1") is None
+    assert table.by_name("px4_fmu-v6c", "v1.10.1") is None
+    assert table.by_name("no_such-board") is None
+    # ULog ver_sw_release 0x010B0200 is v1.11.2
+    assert release_version(0x010B02FF) == (1, 11, 2)
+    assert release_version("1.15.0-beta1") == (1, 15, 0)
+
+
+@pytest.mark.parametrize(
+    ("release", "message"),
+    [
+        ("latest", "release 'latest' is no PX4 version (expected e.g. 'v1.13.0')"),
+        ("v1", "release 'v1' is no PX4 version (expected e.g. 'v1.13.0')"),
+        (-1, "release -1 is no ULog ver_sw_release (0 .. 2**32-1)"),
+    ],
+)
+def test_a_release_that_is_no_version_is_refused(release: str | int, message: str) -> None:
+    with pytest.raises(BoardsError) as err:
+        load_boards().for_ulog("PX4_FMU_V5", release)
+    assert str(err.value) == message
+
+
+# -- real ULogs ------------------------------------------------------------------------------------
+
+
+def ulog_info(name: str) -> dict[str, object]:
+    log = pyulog.ULog(str(shared_file(name)), [], False)
+    return dict(log.msg_info_dict)
+
+
+def test_ulog_of_a_cubeorange_on_v1_11() -> None:
+    info = ulog_info("sample_log_small.ulg")
+    assert info["ver_hw"] == "CUBEPILOT_CUBEORANGE"
+    board = load_boards().for_ulog(str(info["ver_hw"]), int(info["ver_sw_release"]))  # type: ignore[call-overload]
+    assert board is not None and board.name == "cubepilot_cubeorange"
+    assert board.releases[0] == "v1.11.0"
+
+
+def test_cubeorange_log_device_ids_are_on_the_buses_the_table_names() -> None:
+    # sample_log_small.ulg's calibration IDs, decoded by hand (bits 0-2 bus type, 2 = SPI;
+    # bits 3-7 bus; bits 16-23 devtype): CAL_ACC0_ID 2424842 = SPI 1 ICM20649 (0x25),
+    # CAL_ACC1_ID 3670050 = SPI 4 ICM20602 (0x38), CAL_ACC2_ID 2621474 = SPI 4 ICM20948 (0x28),
+    # CAL_MAG0_ID 589858 = SPI 4 AK09916 (0x09): the ICM-20948's compass, started by its -M
+    log = pyulog.ULog(str(shared_file("sample_log_small.ulg")), [], False)
+    params = log.initial_parameters
+    assert [params[f"CAL_ACC{i}_ID"] for i in range(3)] == [2424842, 3670050, 2621474]
+    assert params["CAL_MAG0_ID"] == 589858
+    board = load_boards().for_ulog(log.msg_info_dict["ver_hw"], log.msg_info_dict["ver_sw_release"])
+    assert board is not None
+    on_spi = {(d.driver, d.kind, d.bus) for d in board.devices if d.bus_kind == "SPI"}
+    assert {
+        ("icm20649", "imu", 1),
+        ("icm20602", "imu", 4),
+        ("icm20948", "imu", 4),
+        ("icm20948", "mag", 4),
+    } <= on_spi
+
+
+def test_ulog_of_sitl_and_of_an_old_release_name_no_board_entry() -> None:
+    sitl = ulog_info("sample_px4_events.ulg")
+    assert load_boards().for_ulog(str(sitl["ver_hw"]), int(sitl["ver_sw_release"])) is None  # type: ignore[call-overload]
+    # PX4 v1.6 wrote board_config.h's BOARD_NAME "PX4FMU_V4PRO"; boards/ scripts came later
+    old = ulog_info("sample_appended_multiple.ulg")
+    assert old["ver_hw"] == "PX4FMU_V4PRO"
+    table = load_boards()
+    assert table.for_ulog("PX4FMU_V4PRO", None) == table.by_name("px4_fmu-v4pro")
+    assert table.for_ulog(str(old["ver_hw"]), int(old["ver_sw_release"])) is None  # type: ignore[call-overload]
+
+
+def test_mr_tropic_log_agrees_with_the_table_where_the_script_did_not_change() -> None:
+    # frrs_ekf_failure.ulg: PX4 v1.15.0 beta from a vendor branch (before the board was merged);
+    # its boot console prints where each driver started.
+    path = shared_file("frrs_ekf_failure.ulg")
+    log = pyulog.ULog(str(path), [], False)
+    console = "".join(
+        "".join(part) for part in log.msg_info_multiple_dict["boot_console_output"][0]
+    )
+    board = load_boards().for_ulog(log.msg_info_dict["ver_hw"], log.msg_info_dict["ver_sw_release"])
+    assert board is not None and board.name == "nxp_mr-tropic"
+    started = re.findall(r"^(\w+) #0 on I2C bus (\d+).*?rotation (\d+)", console, re.M)
+    assert ("bmm350", "4", "6") in started and ("ist8310", "1", "10") in started
+    for driver, bus, rotation in started:
+        table_device = device(board, driver, bus=int(bus))
+        assert table_device.rotation == int(rotation)
+    # CAL_MAG1_ID 15012897 = I2C (1) bus 4 address 0x14 BMM350 (0xE5); CAL_BARO0_ID 7239201 =
+    # I2C bus 4 address 0x76: the board's own compass, and the baro SENS_INT_BARO_EN starts
+    params = log.initial_parameters
+    assert (params["CAL_MAG1_ID"], params["CAL_BARO0_ID"]) == (15012897, 7239201)
+    assert device(board, "bmm350").internal and device(board, "bmm350").bus == 4
+    baro = switches(board, "SENS_INT_BARO_EN")
+    assert [(s.driver, s.kind, s.bus, s.internal) for s in baro] == [("bmp388", "baro", 4, True)]
+    # the vendor branch ran its launcher on bus 1; the merged board scans bus 3
+    assert "running 'ina228 -X -b 1 -t 1 start'" in console
+    assert board.i2c_launcher_buses == (3,)
+    # what it found is what the launcher tries (src/systemcmds/i2c_launcher/i2c_launcher.hpp:
+    # ina226 at 0x41, then ina228 and ina238 at 0x45)
+    found = re.search(r"Found address (0x[0-9a-f]+), running '(\w+) (.*)'", console)
+    assert found
+    probes = [(p.address, p.driver) for p in board.i2c_launcher_probes]
+    assert probes == [(0x41, "ina226"), (0x45, "ina228"), (0x45, "ina238")]
+    assert (int(found[1], 16), found[2]) in probes
+    args = board.i2c_launcher_probes[1].args.format(bus=1, index=1)
+    assert found[3] == args == "-X -b 1 -t 1 start"
+
+
+# -- bad rows ------------------------------------------------------------------------------------
+
+GOOD = """
+[[snapshot]]
+release = "v1.14.0"
+ref = "tag v1.14.0"
+commit = "0123456789abcdef0123456789abcdef01234567"
+date = "2023-10-23"
+
+[[board]]
+name = "px4_fmu-v5"
+label = "Pixhawk 4"
+ver_hw = ["PX4_FMU_V5"]
+releases = ["v1.14.0"]
+path = "boards/px4/fmu-v5/init/rc.board_sensors"
+external_i2c_buses = [1, 2, 4]
+internal_i2c_buses = [3]
+i2c_launcher_buses = []
+
+[[board.device]]
+driver = "ist8310"
+kind = "mag"
+bus_kind = "I2C"
+rotation = 10
+internal = true
+args = "-I -R 10 start"
+line = 28
+
+[[board.switch]]
+param = "SENS_EN_X"
+driver = "ms4525do"
+kind = "other"
+bus_kind = "I2C"
+internal = false
+args = "start -X"
+line = 3
+"""
+
+
+def test_a_good_table_parses() -> None:
+    table = parse_boards(GOOD)
+    board = table.by_name("px4_fmu-v5", "v1.14.0")
+    assert board is not None
+    assert [s.bus for s in board.switches] == [1, 2, 4]
+    assert board.source == (
+        "PX4/PX4-Autopilot boards/px4/fmu-v5/init/rc.board_sensors at v1.14.0 "
+        "(tag v1.14.0, 0123456789, 2023-10-23)"
+    )
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "message"),
+    [
+        (
+            "rotation = 10",
+            "rotation = 99",
+            "boards.toml: board 'px4_fmu-v5' at v1.14.0 device 1: "
+            "rotation 99 is out of range 0..40",
+        ),
+        (
+            'kind = "mag"',
+            'kind = "compass"',
+            "boards.toml: board 'px4_fmu-v5' at v1.14.0 device 1: "
+            "kind 'compass' is not one of mag, baro, imu, power, other",
+        ),
+        (
+            "rotation = 10",
+            "rotation = 10\naddress = 0x80",
+            "boards.toml: board 'px4_fmu-v5' at v1.14.0 device 1: "
+            "address 128 is out of range 0..127",
+        ),
+        (
+            'releases = ["v1.14.0"]',
+            'releases = ["v1.14.1"]',
+            "boards.toml: board 'px4_fmu-v5': "
+            "release 'v1.14.1' is not a [[snapshot]] (known: v1.14.0)",
+        ),
+        (
+            'param = "SENS_EN_X"\n',
+            "",
+            "boards.toml: board 'px4_fmu-v5' at v1.14.0 switch 1: missing key 'param'",
+        ),
+        (
+            "internal = true",
+            "internal = true\nbus_nr = 3",
+            "boards.toml: board 'px4_fmu-v5' at v1.14.0 device 1: unknown key 'bus_nr' "
+            "(expected one of driver, kind, bus_kind, internal, args, line, bus, address, "
+            "rotation, when)",
+        ),
+        (
+            'ver_hw = ["PX4_FMU_V5"]',
+            'ver_hw = ["px4_fmu_v5"]',
+            "boards.toml: board 'px4_fmu-v5' at v1.14.0: "
+            "ver_hw 'px4_fmu_v5' is not upper case (PX4 writes it upper case)",
+        ),
+        (
+            'name = "px4_fmu-v5"',
+            'name = "Pixhawk 4"',
+            "boards.toml: board 1: name 'Pixhawk 4' is not a PX4 target name like 'px4_fmu-v6c'",
+        ),
+        (
+            'commit = "0123456789abcdef0123456789abcdef01234567"',
+            'commit = "0123456"',
+            "boards.toml: snapshot 'v1.14.0': commit '0123456' is not 40 hex digits",
+        ),
+        (
+            "external_i2c_buses = [1, 2, 4]",
+            'external_i2c_buses = ["1"]',
+            "boards.toml: board 'px4_fmu-v5' at v1.14.0: "
+            "external_i2c_buses ['1'] is not a list of integers 0..255",
+        ),
+        (
+            'driver = "ist8310"',
+            'driver = "IST8310"',
+            "boards.toml: board 'px4_fmu-v5' at v1.14.0 device 1: "
+            "driver 'IST8310' is not a PX4 module name (lower case, digits, _)",
+        ),
+        (
+            "[[board]]",
+            "[[board]]]",
+            "boards.toml: not TOML: ",
+        ),
+    ],
+)
+def test_a_bad_row_is_named_in_one_line(old: str, new: str, message: str) -> None:
+    assert old in GOOD
+    with pytest.raises(BoardsFileError) as err:
+        parse_boards(GOOD.replace(old, new, 1))
+    text = str(err.value)
+    assert text.startswith(message) if message.endswith(": ") else text == message
+    assert "\n" not in text
+
+
+def test_a_launcher_without_what_it_tries_is_refused() -> None:
+    with pytest.raises(BoardsFileError) as err:
+        parse_boards(GOOD.replace("i2c_launcher_buses = []", "i2c_launcher_buses = [1]"))
+    assert str(err.value) == (
+        "boards.toml: board 'px4_fmu-v5' at v1.14.0: "
+        "i2c_launcher_buses but no [[i2c_launcher]] row for 'v1.14.0'"
+    )
+
+
+def test_a_board_twice_for_one_release_is_refused() -> None:
+    board = GOOD[GOOD.index("[[board]]") :]
+    with pytest.raises(BoardsFileError) as err:
+        parse_boards(GOOD + board)
+    assert str(err.value) == (
+        "boards.toml: board 'px4_fmu-v5' at v1.14.0: "
+        "release 'v1.14.0' already has a row for this board"
+    )
+
+
+def test_two_boards_with_one_ver_hw_are_refused() -> None:
+    other = GOOD[GOOD.index("[[board]]") :].replace('name = "px4_fmu-v5"', 'name = "px4_fmu-v5x"')
+    with pytest.raises(BoardsFileError) as err:
+        parse_boards(GOOD + other)
+    assert str(err.value) == (
+        "boards.toml: board 'px4_fmu-v5x' at v1.14.0: "
+        "ver_hw 'PX4_FMU_V5' already names board 'px4_fmu-v5'"
+    )
+
+
+# -- the table against PX4's scripts, where a PX4-Autopilot git directory is at hand --------------
+
+_MIRRORS = (
+    "/work/.mirror/PonomarevDA+PX4-Autopilot/repo",
+    "/work/.mirror/dakejahl+PX4-Autopilot/repo",
+)
+
+
+def _px4_git_dirs() -> list[str]:
+    listed = os.environ.get("PX4_AUTOPILOT_GIT")
+    dirs = listed.split(os.pathsep) if listed else list(_MIRRORS)
+    return [d for d in dirs if Path(d).is_dir()]
+
+
+@functools.cache
+def _show(dirs: tuple[str, ...], commit: str, path: str) -> str | None:
+    for git_dir in dirs:
+        done = subprocess.run(
+            ["git", f"--git-dir={git_dir}", "show", f"{commit}:{path}"],
+            capture_output=True,
+            text=True,
+            check=False,
+        )
+        if done.returncode == 0:
+            return done.stdout
+    return None
+
+
+def test_every_start_is_on_the_line_it_cites() -> None:
+    dirs = _px4_git_dirs()
+    if not dirs:
+        pytest.skip("no PX4-Autopilot git directory (set $PX4_AUTOPILOT_GIT)")
+    cite = re.compile(r"PX4/PX4-Autopilot (\S+):(\d+) at \S+ \([^,]+, ([0-9a-f]{10}),")
+    checked = 0
+    table = load_boards()
+    for board in table.all():
+        for variant in table.variants(board.name):
+            for start in (*variant.devices, *variant.switches):
+                m = cite.match(start.source)
+                assert m, start.source
+                path, line, short = m.group(1), int(m.group(2)), m.group(3)
+                text = _show(tuple(dirs), short, path)
+                if text is None:
+                    pytest.skip(f"commit {short} is in none of {dirs}")
+                written = text.split("\n")[line - 1]
+                words = " ".join(written.split("#")[0].split())
+                assert f"{start.driver} {start.args}" in words or (
+                    start.args.replace(" start", "") in words and start.driver in words
+                ), (start, written)
+                checked += 1
+            for probe in variant.i2c_launcher_probes:
+                m = cite.match(probe.source)
+                assert m, probe.source
+                text = _show(tuple(dirs), m.group(3), m.group(1))
+                assert text is not None
+                written = text.split("\n")[int(m.group(2)) - 1]
+                assert f'{{"{probe.driver}", 0x{probe.address:02x},' in written.replace("0x0", "0x")
+    assert checked > 1000
+
+
+# -- docs/boards.md -----------------------------------------------------------------------------
+
+DOCS = Path(__file__).resolve().parents[1] / "docs" / "boards.md"
+GENERATED = "<!-- generated from python/px4params/data/boards.toml"
+
+
+def test_docs_table_is_the_toml() -> None:
+    page = DOCS.read_text(encoding="utf-8")
+    assert GENERATED in page
+    generated = page.split(GENERATED, 1)[1].split("-->\n\n", 1)[1]
+    assert generated == render_markdown(load_boards()), (
+        "docs/boards.md is not boards.toml: regenerate its part after the 'generated' comment "
+        "with px4params.vehicle.boards.render_markdown(load_boards())"
+    )
+
+
+def test_docs_python_example_prints_what_it_says(capsys: pytest.CaptureFixture[str]) -> None:
+    page = DOCS.read_text(encoding="utf-8")
+    blocks = re.findall(r"```python\n(.*?)```", page, re.S)
+    assert len(blocks) == 1
+    exec(compile(blocks[0], str(DOCS), "exec"), {})
+    promised = re.findall(r"# (.+)$", blocks[0], re.M)
+    assert capsys.readouterr().out.splitlines() == promised
