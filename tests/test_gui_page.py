@@ -243,8 +243,21 @@ def test_a_magnetometer_from_the_picker_starts_on_a_bench(browser: Any, tmp_path
         group = session.page.locator(".kind-group[data-group='magnetometers']")
         choice = group.locator(".choice[data-parameter='IST8310']")
         assert "needs I2C, address 0x0E (the driver's default)" in choice.inner_text()
+        page = session.page
+        page.select_option("#board", "px4_fmu-v6c")  # starts its GPS compass on bus 1 itself
         choice.locator("button").click()
         assert session.review() == ["add IST8310#0 (I2C bus 1, 0x0E)"]
+        # boards/px4/fmu-v6c/init/rc.board_sensors: "ist8310 -X -b 1 -R 10 start"
+        assert page.inner_text("#review-warnings li[data-instance='IST8310#0']") == (
+            "IST8310#0 (I2C bus 1, 0x0E) cannot start: the board Pixhawk 6C (FMUv6C) starts "
+            "this compass itself (ist8310 -X -b 1 -R 10 start, rotation 10 (Roll 180 deg, "
+            "Yaw 90 deg)) before the manifest; this instance's rotation 0 (No rotation) is not "
+            "used. Arming will be refused."
+        )
+        page.click("#review-close")
+        page.select_option("#board", "")  # a flight controller that starts no compass itself
+        session.review()
+        assert page.locator("#review-warnings").is_hidden()
         assert session.write() == ["acknowledged: 1"]
     devices = [("INA238", 1, 0x45), ("INA238", 2, 0x45), ("AK09916", 1, 0x0C)]
     for name, with_compass in (("healthy", True), ("no_compass", False)):
@@ -293,6 +306,14 @@ def test_the_vehicles_devices_come_first_then_the_picker(session: Session, tmp_p
     assert groups == kinds
     power = page.locator(".kind-group[data-group='power monitors'] .choice .chip")
     assert "INA238 ina238" in power.all_inner_texts()
+    api = session.gui.base + "api/manifest"
+    answer = page.request.post(api, data={"values": []})
+    assert (answer.status, answer.json()["error"]) == (
+        400,
+        "expected {'values': {name: value}, 'board': name}: values is not an object",
+    )
+    answer = page.request.post(api, data={"values": {}, "board": "px4_fmu-v99"})
+    assert answer.json() == {"error": "board 'px4_fmu-v99': not in the board table"}
     if session.mode == "udp":  # the faults bench: INA238#1's connector comes loose
         page.wait_for_selector(".instance[data-instance='INA238#1'] .badge.critical")
         blocks = session.card("INA238#1").locator(".blocks").inner_text()

@@ -5,24 +5,29 @@ from the flat values a ground station sees, with its location as PX4's ``status`
 what would stop its driver from starting it (the autostart rules of
 :func:`~px4params.vehicle.autostart.configured_value`).
 
-    GET  /api/manifest          {"drivers": [...]} the picker, in the page's order
-    POST /api/manifest          {"values": {flat name: value}} -> {"devices": [...]}: the
-                                instances those values configure, with their problems
+    GET  /api/manifest          {"drivers": [...], "boards": [...]} the picker, in the page's
+                                order, and the boards whose own starts are known
+    POST /api/manifest          {"values": {flat name: value}, "board": name or null}
+                                -> {"devices": [...]}: the instances those values configure,
+                                with their problems (on that board)
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from dataclasses import replace
 from typing import Any
 
 from starlette.requests import Request
 from starlette.responses import JSONResponse, Response
 from starlette.routing import Route
 
+from px4params.errors import BoardsError
 from px4params.vehicle.autostart import Configured, configured_value, shared_locations
+from px4params.vehicle.boards import Board, load_boards
 from px4params.vehicle.drivers import Driver, Drivers
 
-__all__ = ["PICKER_GROUPS", "devices", "picker", "routes", "status_location"]
+__all__ = ["PICKER_GROUPS", "board_starts", "devices", "picker", "routes", "status_location"]
 
 #: The picker's groups, in order, and the driver kinds (``kind`` in drivers.toml) each holds;
 #: every other kind, and a parameter no driver declares, is under "other".
@@ -164,12 +169,53 @@ def _instance_value(
     return value
 
 
+def _rotation_words(entry: Mapping[str, Any], rotation: int) -> str:
+    """``10 (Roll 180 deg, Yaw 90 deg)``: the rotation with its name from the field's values."""
+    field = next((f for f in entry.get("fields", ()) if f.get("path") == "rotation"), {})
+    name = next((v["description"] for v in field.get("values", ()) if v["value"] == rotation), "")
+    return f"{rotation} ({name})" if name else str(rotation)
+
+
+def board_starts(
+    board: Board, c: Configured, value: Mapping[str, Any], entry: Mapping[str, Any]
+) -> str | None:
+    """Why compass ``c`` cannot start on ``board``: the board's own script starts the same
+    driver at the same place first (with its own ``-R`` rotation); None when it does not."""
+    if c.driver is None or c.bus_kind not in ("i2c", "spi"):
+        return None
+    for start in board.devices:
+        if start.kind != "mag" or start.driver != c.driver.name:
+            continue
+        if start.bus_kind.lower() != c.bus_kind or c.bus_id not in board.buses_of(start):
+            continue
+        address = start.address if start.address is not None else c.driver.default_address
+        if c.bus_kind == "i2c" and address != c.address:
+            continue
+        theirs = "no rotation given" if start.rotation is None else "rotation "
+        if start.rotation is not None:
+            theirs += _rotation_words(entry, start.rotation)
+        mine = value.get("rotation")
+        ours = ""
+        if isinstance(mine, int):
+            ours = f"; this instance's rotation {_rotation_words(entry, mine)} is not used"
+        when = f" when {start.when}" if start.when else ""
+        return (
+            f"the board {board.label} starts this compass itself{when} "
+            f"({start.driver} {start.args}, {theirs}) before the manifest{ours}"
+        )
+    return None
+
+
 def devices(
-    values: Mapping[str, Any], metadata: Mapping[str, Any], drivers: Drivers
+    values: Mapping[str, Any],
+    metadata: Mapping[str, Any],
+    drivers: Drivers,
+    board: Board | None = None,
 ) -> list[dict[str, Any]]:
     """The instances ``values`` configure (each parameter's ``_INST`` mask), in start order,
-    each with its location in ``status`` form and the problems that would stop it starting
-    (two instances at one bus address included)."""
+    each with its location in ``status`` form and the problems that would stop it starting:
+    autostart's, two instances at one bus address, and on ``board`` a compass its own script
+    already starts."""
     entries = {
         e["name"]: e
         for e in metadata.get("parameters", ())
@@ -178,6 +224,7 @@ def devices(
     declared = [d.parameter for d in drivers if d.parameter in entries]
     order = declared + sorted(set(entries) - set(declared))
     found: list[Configured] = []
+    stored: dict[str, dict[str, Any]] = {}
     for parameter in order:
         mask = values.get(parameter + "_INST")
         if not isinstance(mask, int):
@@ -185,7 +232,18 @@ def devices(
         for n in range(entries[parameter]["max_instances"]):
             if (mask >> n) & 1:
                 value = _instance_value(entries[parameter], n, values)
+                stored[f"{parameter}#{n}"] = value
                 found.append(configured_value(value, drivers, parameter, f"{parameter}#{n}"))
+    found = shared_locations(found)
+    if board is not None:
+        for k, c in enumerate(found):
+            why = (
+                None
+                if c.problems
+                else board_starts(board, c, stored[c.instance], entries[c.parameter])
+            )
+            if why is not None:
+                found[k] = replace(c, problems=(why,))
     return [
         {
             "instance": c.instance,
@@ -195,8 +253,17 @@ def devices(
             "location": status_location(c.bus_kind, c.bus_id, c.address),
             "problems": list(c.problems),
         }
-        for c in shared_locations(found)
+        for c in found
     ]
+
+
+def _boards() -> list[dict[str, str]]:
+    """Every board of the bundled table (its newest facts), for the page's board choice; none
+    when the installation has no table."""
+    try:
+        return [{"name": b.name, "label": b.label} for b in load_boards().all()]
+    except (BoardsError, OSError):
+        return []
 
 
 def routes(vehicle: Any, drivers: Drivers) -> list[Route]:
@@ -204,13 +271,26 @@ def routes(vehicle: Any, drivers: Drivers) -> list[Route]:
 
     async def manifest(request: Request) -> Response:
         if request.method == "GET":
-            return JSONResponse({"drivers": picker(vehicle.metadata, drivers)})
+            return JSONResponse({"drivers": picker(vehicle.metadata, drivers), "boards": _boards()})
         try:
-            values = (await request.json())["values"]
+            body = await request.json()
+            values, name = body["values"], body.get("board")
             if not isinstance(values, dict):
                 raise TypeError("values is not an object")
-        except (ValueError, KeyError, TypeError) as e:
-            return JSONResponse({"error": f"expected {{'values': {{name: value}}}}: {e}"}, 400)
-        return JSONResponse({"devices": devices(values, vehicle.metadata, drivers)})
+            if name is not None and not isinstance(name, str):
+                raise TypeError("board is not a name")
+        except (ValueError, KeyError, TypeError, AttributeError) as e:
+            return JSONResponse(
+                {"error": f"expected {{'values': {{name: value}}, 'board': name}}: {e}"}, 400
+            )
+        board = None
+        if name:
+            try:
+                board = load_boards().by_name(name)
+            except BoardsError as e:
+                return JSONResponse({"error": str(e)}, 400)
+            if board is None:
+                return JSONResponse({"error": f"board {name!r}: not in the board table"}, 400)
+        return JSONResponse({"devices": devices(values, vehicle.metadata, drivers, board)})
 
     return [Route("/api/manifest", manifest, methods=["GET", "POST"])]

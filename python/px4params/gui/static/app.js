@@ -13,6 +13,7 @@ const S = {
   memory: {},         // union tag name -> {variant tag -> {flat name -> value}}, for the session
 };
 const MEMORY_KEY = "px4params.variants";
+const BOARD_KEY = "px4params.board"; // the flight controller, chosen once per browser
 
 const $ = (sel, root = document) => root.querySelector(sel);
 const el = (tag, attrs = {}, ...children) => {
@@ -130,7 +131,8 @@ function effectiveValues() {
 
 async function check(values) {
   const response = await fetch("/api/manifest", {
-    method: "POST", headers: { "content-type": "application/json" }, body: JSON.stringify({ values }),
+    method: "POST", headers: { "content-type": "application/json" },
+    body: JSON.stringify({ values, board: $("#board").value || null }),
   });
   const answer = await response.json();
   return new Map((answer.devices || []).map((d) => [d.instance, d]));
@@ -822,6 +824,11 @@ async function start() {
   S.mode = state.mode;
   S.picker = manifest.drivers || [];
   S.drivers = new Map(S.picker.map((d) => [d.parameter, d]));
+  const board = $("#board");
+  board.append(...(manifest.boards || []).map((b) => el("option", { value: b.name }, `${b.label} (${b.name})`)));
+  board.value = localStorage.getItem(BOARD_KEY) || "";
+  if (board.selectedIndex < 0) board.value = "";
+  board.addEventListener("change", () => { localStorage.setItem(BOARD_KEY, board.value); refreshDevices(); });
   $("#source").textContent = `${state.mode === "store" ? "offline store" : "vehicle"}: ${state.source}`;
   index();
   renderAll();
