@@ -111,7 +111,7 @@ function unstageInstance(e, n) {
 }
 
 function updatePending() {
-  $("#pending").textContent = S.staged.size;
+  $("#pending").textContent = S.staged.size ? reviewItems().length : 0; // review lines, not names
   $("#review-open").disabled = S.staged.size === 0;
 }
 
@@ -142,7 +142,7 @@ async function refreshDevices() {
   const [staged, now] = await Promise.all([check(effectiveValues()), check(S.values)]);
   S.devices = staged;
   S.devicesNow = now;
-  renderDeviceStatus();
+  renderHealth(); // the places in the health table, and every card's status
 }
 
 // -- reading what the user typed -------------------------------------------------------------
