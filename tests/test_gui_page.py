@@ -235,11 +235,15 @@ def test_a_new_instance_starts_from_the_driver_defaults_with_a_warning(
         assert "refresh parameters in your ground station" in notice.inner_text()
 
 
-def test_a_magnetometer_from_the_picker_starts_on_a_bench(browser: Any, tmp_path: Path) -> None:
-    """IST8310 added from the picker and written: ``autostart run`` of the saved store boots
-    on a bench where it answers at its default address (exit 0), and refuses arming where it
-    does not (exit 1): the instance is in the manifest as staged."""
-    for session in _session("store", browser, tmp_path):
+@pytest.mark.parametrize("mode", ["store", "udp"])
+def test_a_magnetometer_from_the_picker_starts_on_a_bench(
+    mode: str, browser: Any, tmp_path: Path
+) -> None:
+    """IST8310 added from the picker and written (offline, or by the vehicle, which saves its
+    store): ``autostart run`` of the saved store boots on a bench where it answers at its
+    default address (exit 0), and refuses arming where it does not (exit 1): the instance is
+    in the manifest as staged."""
+    for session in _session(mode, browser, tmp_path):
         group = session.page.locator(".kind-group[data-group='magnetometers']")
         choice = group.locator(".choice[data-parameter='IST8310']")
         assert "needs I2C, address 0x0E (the driver's default)" in choice.inner_text()
@@ -361,6 +365,27 @@ def test_floats_at_their_default_are_not_modified_and_reset_clears_the_mark(
     session: Session,
 ) -> None:
     page = session.page
+    # float16 as stored: the shunt holds 0.00029993; 0.0003 typed is that same value
+    # the page's float16, by the DroneCAN rule worked by hand: nearest, ties away from zero
+    # (1 + 2**-11 and 2049 are halfway), finite values clamped to 65504, 2**-25 halfway to
+    # the smallest subnormal 2**-24
+    cases = [0.0003, 1 + 2**-11, 2049, -2049, 70000, 2**-25, 0.1]
+    assert page.evaluate("xs => xs.map(f16round)", cases) == [
+        0.0002999305725097656,
+        1 + 2**-10,
+        2050,
+        -2050,
+        65504,
+        2**-24,
+        0.0999755859375,
+    ]
+    shunt = session.card("INA238#0").locator("input[data-name='INA238_0Q']")
+    shunt.fill("0.0003")
+    assert page.inner_text("#pending") == "0"
+    shunt.fill("0.00031")
+    assert page.inner_text("#pending") == "1"
+    shunt.fill("0.000300")
+    assert page.inner_text("#pending") == "0"
     page.click("button[data-tab='classic']")
     page.fill("#search", "INA238_")
     for name in ("INA238_CURRENT", "INA238_SHUNT"):
@@ -438,10 +463,11 @@ def test_a_removed_instance_leaves_the_health_view(udp: Session, tmp_path: Path)
 # -- a tablet in the field -------------------------------------------------------------------
 
 
-def test_a_tablet_800_by_1280(browser: Any, tmp_path: Path) -> None:
-    """No horizontal scrolling on any tab or in the review; every visible button, field and
-    switch at least 44 px high (a finger, not a mouse)."""
-    for session in _session("store", browser, tmp_path, 800, 1280):
+@pytest.mark.parametrize("mode", ["store", "udp"])
+def test_a_tablet_800_by_1280(mode: str, browser: Any, tmp_path: Path) -> None:
+    """No horizontal scrolling on any tab or in the review; every visible button, field,
+    switch and checkbox at least 44 px high and wide (a finger, not a mouse)."""
+    for session in _session(mode, browser, tmp_path, 800, 1280):
         page = session.page
         page.click("#add-INA238")
         session.review()

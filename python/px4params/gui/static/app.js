@@ -271,10 +271,7 @@ function renderDeviceStatus() {
 
 function setMask(e, want) {
   const maskName = e.name + "_INST";
-  const now = maskOf(e, S.values);
-  for (let n = 0; n < e.max_instances; n++) if (!((want >> n) & 1) || ((now >> n) & 1)) {
-    if (!((want >> n) & 1)) unstageInstance(e, n); // removed: its edits go too
-  }
+  for (let n = 0; n < e.max_instances; n++) if (!((want >> n) & 1)) unstageInstance(e, n); // its edits go too
   stage(maskName, want, { title: `${e.name} instances`, e });
 }
 
