@@ -316,6 +316,8 @@ def test_the_vehicles_devices_come_first_then_the_picker(session: Session, tmp_p
         400,
         "expected {'values': {name: value}, 'board': name}: values is not an object",
     )
+    answer = page.request.post(api, data={"values": {"INA238_INST": 1, "INA238_0B": "x"}})
+    assert answer.json()["error"].endswith(': values: INA238_0B is "x", not a number')
     answer = page.request.post(api, data={"values": {}, "board": "px4_fmu-v99"})
     assert answer.json() == {"error": "board 'px4_fmu-v99': not in the board table"}
     if session.mode == "udp":  # the faults bench: INA238#1's connector comes loose

@@ -14,6 +14,7 @@ what would stop its driver from starting it (the autostart rules of
 
 from __future__ import annotations
 
+import json
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
 from typing import Any
@@ -277,6 +278,9 @@ def routes(vehicle: Any, drivers: Drivers) -> list[Route]:
             values, name = body["values"], body.get("board")
             if not isinstance(values, dict):
                 raise TypeError("values is not an object")
+            for key, value in values.items():
+                if isinstance(value, bool) or not isinstance(value, int | float):
+                    raise TypeError(f"values: {key} is {json.dumps(value)}, not a number")
             if name is not None and not isinstance(name, str):
                 raise TypeError("board is not a name")
         except (ValueError, KeyError, TypeError, AttributeError) as e:

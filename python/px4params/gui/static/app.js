@@ -129,7 +129,9 @@ function effectiveValues() {
   return values;
 }
 
-async function check(values) {
+async function check(all) {
+  // numbers only: a non-finite float arrives as "nan"/"inf" and places no device
+  const values = Object.fromEntries(Object.entries(all).filter(([, v]) => typeof v === "number"));
   const response = await fetch("/api/manifest", {
     method: "POST", headers: { "content-type": "application/json" },
     body: JSON.stringify({ values, board: $("#board").value || null }),
