@@ -171,6 +171,8 @@ def test_a_bus_round_trip_through_spi_keeps_bus_and_address(session: Session) ->
     assert session.value("INA238#1")["bus"] == {
         "spi": {"bus_id": 0, "chip_select": 0, "max_frequency": 0, "mode": 3}
     }
+    page.reload()  # the page remembers for the browser session
+    page.wait_for_selector("body[data-ready=true]")
     card.locator("select[data-name='INA238_1A']").select_option(label="I2C")
     i2c = card.locator("[data-variant='i2c']")
     assert i2c.locator("input[data-name='INA238_1B']").input_value() == "2"
