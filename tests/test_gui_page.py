@@ -216,6 +216,10 @@ def test_a_new_instance_starts_from_the_driver_defaults_with_a_warning(
     assert card.locator("input[data-name='INA238_2B']").input_value() == "1"
     assert card.locator("input[data-name='INA238_2C']").input_value() == "0x45"
     assert session.review() == ["add INA238#2 (I2C bus 1, 0x45)"]
+    assert page.inner_text("#review-table .change .hint") == (
+        "with Bus the INA238 is connected to: I2C, I2C bus number 1, I2C address 0x45, "
+        "Max current 327 A, Shunt resistance 0.000300 Ohm"
+    )
     warning = page.locator("#review-warnings li[data-instance='INA238#2']")
     assert warning.inner_text() == (
         "INA238#2 (I2C bus 1, 0x45) cannot start: I2C bus 1 address 0x45 is already "

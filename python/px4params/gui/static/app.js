@@ -181,7 +181,8 @@ function valueText(f, v) {
   const named = f && f.values ? f.values.find((x) => x.value === v) : null;
   if (named) return named.description;
   const hex = f && f.format === "hex";
-  const text = numberText(typeof v === "number" && f && f.type && f.type.startsWith("float") ? Number(v.toPrecision(6)) : v, hex);
+  const float = typeof v === "number" && f && f.type && f.type.startsWith("float");
+  const text = float ? shown(v, f.decimalPlaces) : numberText(v, hex); // as the form shows it
   return f && f.unit ? `${text} ${f.unit}` : text;
 }
 
@@ -599,11 +600,17 @@ function reviewItems() {
       const adds = (want >> n) & 1 && !((now >> n) & 1), removes = !((want >> n) & 1) && (now >> n) & 1;
       if (!adds && !removes) continue;
       const names = [maskName];
-      if (adds) for (const c of S.staged.values()) if (c.e === e && c.n === n && c.name !== maskName) { names.push(c.name); used.add(c.name); }
+      const sets = [];
+      for (const c of S.staged.values()) {
+        if (!adds || c.e !== e || c.n !== n || c.name === maskName) continue;
+        names.push(c.name); used.add(c.name);
+        sets.push(c.tag ? `${labelOf(c.field)}: ${valueText(c.field, c.value)}` : `${labelOf(c.field)} ${valueText(c.field, c.value)}`);
+      }
       const where = (adds ? S.devices : S.devicesNow).get(titleOf(e, n));
       items.push({
         names, mask: { name: maskName, bit: n, add: Boolean(adds) }, instance: titleOf(e, n),
         text: `${adds ? "add" : "remove"} ${titleOf(e, n)}${where ? ` (${where.location})` : ""}`,
+        detail: sets.length ? `with ${sets.join(", ")}` : "",
       });
     }
   }
