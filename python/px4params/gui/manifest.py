@@ -46,8 +46,10 @@ _BUS_WORDS = {"i2c": "I2C", "spi": "SPI", "serial": "serial", "dronecan": "Drone
 
 
 def status_location(kind: str, bus_id: int, address: int) -> str:
-    """Where a device is, as PX4's ``<driver> status`` and pilots say it: ``I2C bus 1, 0x45``,
-    ``SPI bus 1, chip select 2``."""
+    """Where a device is, as pilots say it: ``I2C bus 1, 0x45``, ``SPI bus 1, chip select 2``.
+    PX4's ``<driver> status`` prints the same facts in this order (``Running on I2C Bus 1,
+    Address 0x45``: ``I2CSPIDriverBase::print_status``, PX4-Autopilot
+    platforms/common/i2c_spi_buses.cpp); the address in hex with two digits as there."""
     if kind == "i2c":
         return f"I2C bus {bus_id}, 0x{address:02X}"
     if kind == "spi":
