@@ -171,7 +171,7 @@ def test_i2c_matches_talk(px_model: dict[str, Any]) -> None:
         ("bus_id", 4),
         ("address", 7),
     ]
-    assert fields[2]["doc"]["tags"] == {"min": 0, "max": 127}
+    assert fields[2]["doc"]["tags"] == {"min": 0, "max": 127, "format": "hex"}
 
 
 def test_ina_metadata(px_model: dict[str, Any]) -> None:

@@ -897,6 +897,7 @@ _FIELD_TAGS = (
     "values",
     "bit",
     "reboot_required",
+    "format",
 )
 
 
@@ -954,6 +955,11 @@ def _apply_scalar_tag(tags: dict[str, Any], tag: _Tag, scalar: TypeSpec) -> None
         raise _TagValueError("does not apply to a bool field")
     if name == "unit":
         tags[name] = _parse_text(text)
+    elif name == "format":
+        # how ground stations show the number: "hex" for addresses, as datasheets write them
+        if text != "hex" or scalar["kind"] == "float":
+            raise _TagValueError(f"expects hex on an integer field, got {text!r}")
+        tags[name] = text
     elif name in ("min", "max"):
         tags[name] = _scalar_value(scalar, text)
     elif name == "decimal":

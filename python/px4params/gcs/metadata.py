@@ -21,7 +21,8 @@ is ``default_value``.
     ``name`` (its DSDL field), ``path`` (``bus.i2c.address``), ``type`` (``uint7``,
     ``float16``, ``bool``), ``role`` and ``default``, ``min``, ``max``, and when the DSDL
     says so ``unit``, ``shortDesc``, ``longDesc``, ``decimalPlaces``, ``increment``,
-    ``values`` (QGC's enum format) and ``cast`` (``saturated``/``truncated``).
+    ``values`` (QGC's enum format), ``format`` (``hex``: shown in hex, from ``@format hex``)
+    and ``cast`` (``saturated``/``truncated``).
 
 Roles: ``value``; ``version`` (``p_version``, filled in by the code, its ``default`` is the
 type's version); ``union_tag`` (path ``<union>._tag``; ``variants`` lists every variant with
@@ -505,6 +506,8 @@ class _Describer:
             entry["increment"] = tags["increment"]
         if "value" in tags:
             entry["values"] = [{"value": v, "description": str(d)} for v, d in tags["value"]]
+        if "format" in tags:
+            entry["format"] = tags["format"]
         if kind != "bool":
             entry["cast"] = spec.get("cast", "saturated")
         return entry

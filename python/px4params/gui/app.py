@@ -7,6 +7,8 @@ that pushes values and status messages as they arrive.
     POST /api/write             {"changes": [{"name", "value"}]} -> one result per change, in order
     POST /api/review            {"filename", "text"} -> the changes the file would make
     GET  /api/export?format=params|airframe   the configuration as a file
+    GET|POST /api/manifest      the picker, and the devices a set of values configures
+                                (:mod:`px4params.gui.manifest`)
     WS   /ws                    {"kind": "value"|"values"|"status", ...}
 
 Every request passes :class:`~px4params.gui.admission.Admission` first (Host, Origin, the run's
@@ -29,8 +31,9 @@ from starlette.staticfiles import StaticFiles
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
 from px4params.errors import Px4ParamsError
-from px4params.gui import files
+from px4params.gui import files, manifest
 from px4params.gui.admission import MAX_BODY, MAX_CHANGES, Admission
+from px4params.vehicle.drivers import load_drivers
 
 __all__ = ["make_app"]
 
@@ -137,6 +140,7 @@ def make_app(vehicle: Any, *, token: str, hosts: Iterable[str], cookie: str) -> 
         Route("/api/write", write, methods=["POST"]),
         Route("/api/review", review, methods=["POST"]),
         Route("/api/export", export),
+        *manifest.routes(vehicle, load_drivers()),  # the device cards and the picker
         WebSocketRoute("/ws", socket),
         Mount("/static", StaticFiles(directory=STATIC), name="static"),
     ]

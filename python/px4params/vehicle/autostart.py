@@ -35,11 +35,13 @@ __all__ = [
     "ManifestError",
     "PlanEntry",
     "configured",
+    "configured_value",
     "describe_location",
     "load_manifest",
     "plan",
     "plan_lines",
     "script",
+    "shared_locations",
 ]
 
 # Bus kind -> how its "address" field is called in px.Bus, and its range.
@@ -136,22 +138,29 @@ def configured(store: Store, drivers: Drivers) -> list[Configured]:
         except Px4ParamsError:  # declared for a parameter this store's schema lacks
             continue
         for name in instances:
-            found.append(_configured(store, drivers, parameter, name))
-    # Two instances at one bus address would both talk to the same device: start the first.
+            found.append(configured_value(store.get(name), drivers, parameter, name))
+    return shared_locations(found)
+
+
+def shared_locations(found: Sequence[Configured]) -> list[Configured]:
+    """``found`` (in start order) with each instance at a bus address an earlier one already
+    has marked: both would talk to the same device, so only the first starts."""
+    marked = list(found)
     taken: dict[tuple[str, int, int], str] = {}
-    for n, c in enumerate(found):
+    for n, c in enumerate(marked):
         if c.problems or c.bus_kind not in ("i2c", "spi"):
             continue
         key = (c.bus_kind, c.bus_id, c.address)
         if key in taken:
-            found[n] = replace(c, problems=(f"{c.location} is already {taken[key]}'s",))
+            marked[n] = replace(c, problems=(f"{c.location} is already {taken[key]}'s",))
         else:
             taken[key] = c.instance
-    return found
+    return marked
 
 
-def _configured(store: Store, drivers: Drivers, parameter: str, name: str) -> Configured:
-    value = store.get(name)
+def configured_value(value: Any, drivers: Drivers, parameter: str, name: str) -> Configured:
+    """Instance ``name`` of ``parameter`` holding ``value`` (as ``Store.get`` returns it), as
+    its driver's ``auto`` finds it, with what would stop the driver from starting it."""
     driver = drivers.for_parameter(parameter)
     bus = value.get("bus") if isinstance(value, dict) else None
     problems: list[str] = []
