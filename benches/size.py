@@ -15,14 +15,17 @@ small walk; the same bytes):
 Targets (issue 17), for the ``compact`` build: codec <= 6 KB, core <= 16 KB (the issue set
 none for the file format, which moved into the core after it was written); the exit status is
 1 when a probe is over its target. For scale, libcanard's ``canard.c`` is 5,485 bytes (gcc
--Os) and dsdlc's BatteryInfo encode+decode 2,622 (same machine, x86_64).
+-Os) and dsdlc's BatteryInfo encode+decode 2,622 (same machine, x86_64). On Cortex-M7 the
+ceilings are today's sizes (codec 6.5 KiB, core 16 KiB): issue 39 aims at codec <= 4 KiB and
+core <= 10 KiB, beside ``canard.c``'s 3,958 bytes there (arm-none-eabi-gcc -Os).
 
     python benches/size.py [--target TRIPLE] [--keep DIR] [--symbols N]
 
-``--target thumbv7em-none-eabihf`` (Cortex-M7, as PX4's FMUv5x/v6x fly: ``-C
-target-cpu=cortex-m7``) builds each probe as a static library and links it with ``arm-none-eabi-gcc`` keeping only what the exports reach
-(``--gc-sections``), then reads ``.text`` of that image; it needs ``rustup target add
-thumbv7em-none-eabihf`` and Debian's ``gcc-arm-none-eabi``.
+``--target thumbv7em-none-eabihf`` (Cortex-M7, as PX4's FMUv5x/v6x fly; ``-C
+target-cpu=cortex-m7``) builds each probe as a static library and links it with
+``arm-none-eabi-gcc``, keeping only what the exports reach (``--gc-sections``), then reads the
+``.text`` of that image; it needs ``rustup target add thumbv7em-none-eabihf`` and Debian's
+``gcc-arm-none-eabi``.
 
 ``--symbols N`` lists each probe's N largest functions (``nm --size-sort``).
 """
@@ -39,7 +42,11 @@ import tempfile
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-TARGETS: dict[str, int | None] = {"codec": 6 * 1024, "core": 16 * 1024, "all": None}
+# Ceilings of the compact build's .text, by target triple (None: the host).
+TARGETS: dict[str | None, dict[str, int | None]] = {
+    None: {"codec": 6 * 1024, "core": 16 * 1024, "all": None},
+    "thumbv7em-none-eabihf": {"codec": 6656, "core": 16 * 1024, "all": None},
+}
 
 PROBE_TOML = """\
 [package]
@@ -270,7 +277,8 @@ def binutil(tool: str, library: Path) -> str:
 
 
 def text_size(library: Path) -> int:
-    out = subprocess.run([binutil("size", library), "-A", str(library)], capture_output=True, text=True, check=True)
+    command = [binutil("size", library), "-A", str(library)]
+    out = subprocess.run(command, capture_output=True, text=True, check=True)
     match = re.search(r"^\.text\s+(\d+)", out.stdout, re.M)
     assert match, out.stdout
     return int(match.group(1))
@@ -320,7 +328,7 @@ def main() -> int:
     )
     parser.add_argument("--keep", metavar="DIR", help="build in DIR (kept; rebuilds are faster)")
     parser.add_argument("--symbols", type=int, default=0, metavar="N")
-    parser.add_argument("--target", metavar="TRIPLE", help="e.g. thumbv7em-none-eabihf")
+    parser.add_argument("--target", metavar="TRIPLE", choices=[t for t in TARGETS if t])
     args = parser.parse_args()
     tools = ["cargo", "size", "nm"] + (["arm-none-eabi-gcc"] if args.target else [])
     for tool in tools:
@@ -339,7 +347,7 @@ def main() -> int:
         # The targets are firmware's: the core built for size (`compact`).
         print(f"{'probe':8} {'host .text':>12} {'compact .text':>14} {'target':>8}")
         failed = False
-        for feature, target in TARGETS.items():
+        for feature, target in TARGETS[args.target].items():
             sizes = []
             for compact in (False, True):
                 features = [feature] if feature != "codec" else []

@@ -49,6 +49,7 @@ pub fn locate_at<R: BitRead + ?Sized>(
 
 /// [`locate_at`] with the plans `P`: the leaf walk that steps over fixed-shape parts
 /// ([`Plans::SEEK`]), else [`crate::walk`].
+#[inline]
 pub fn locate_at_with<P: Plans, R: BitRead + ?Sized>(
     layout: &Layout<'_>,
     root: NodeId,
@@ -121,8 +122,8 @@ pub fn get_leaf<R: BitRead + ?Sized>(
     target: Target<'_>,
     tao: bool,
 ) -> Result<(Leaf, Scalar), LeafAccessError> {
-    if let Target::Index(k) = target {
-        return get_leaf_at(layout, root, data, k, tao);
+    if let (Target::Index(k), false) = (target, Active::SEEK) {
+        return walk::locate(layout, root, data, k, tao);
     }
     let leaf = locate(layout, root, data, target, tao)?;
     let value = read_leaf(layout, data, &leaf, tao)?;
@@ -140,7 +141,7 @@ pub fn get_leaf_at<R: BitRead + ?Sized>(
     get_leaf_at_with::<Active, R>(layout, root, data, k, tao)
 }
 
-/// [`get_leaf_at`] with the plans `P`: located by [`locate_at_with`] and read
+/// [`get_leaf_at`] with the plans `P`: located and read as [`get_leaf`] does it
 /// ([`Plans::SEEK`]), else found and read in one [`crate::walk`].
 pub fn get_leaf_at_with<P: Plans, R: BitRead + ?Sized>(
     layout: &Layout<'_>,
@@ -152,9 +153,8 @@ pub fn get_leaf_at_with<P: Plans, R: BitRead + ?Sized>(
     if !P::SEEK {
         return walk::locate(layout, root, data, k, tao);
     }
-    let leaf = locate_at_with::<P, R>(layout, root, data, k, tao)?;
-    let value = read_leaf(layout, data, &leaf, tao)?;
-    Ok((leaf, value))
+    // One reader of located leaves ([`get_leaf`]), so that it stays inlined there.
+    get_leaf(layout, root, data, Target::Index(k), tao)
 }
 
 /// Writes `value` to leaf `target`, producing the new encoding in `out`; returns its length.
