@@ -1,5 +1,6 @@
-"""Firmware code size (issue 17): the core built for size (``compact``) stays within its
-targets, as ``benches/size.py`` measures them on small ``no_std`` probes (seconds to build)."""
+"""Firmware code size (issues 17 and 39): the core built for size (``compact``) stays within its
+targets, as ``benches/size.py`` measures them on small ``no_std`` probes (seconds to build), on
+the host and on Cortex-M7 (``thumbv7em-none-eabihf``, what PX4's FMUv5x/v6x fly)."""
 
 from __future__ import annotations
 
@@ -28,4 +29,32 @@ def test_the_firmware_build_is_within_its_size_targets() -> None:
     assert rows["codec"][2:] == ["6,144", "ok"], proc.stdout
     assert rows["core"][2:] == ["16,384", "ok"], proc.stdout
     assert rows["all"][2] == "-", proc.stdout
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+
+
+def _target_installed(triple: str) -> bool:
+    sysroot = subprocess.run(
+        ["rustc", "--print", "sysroot"], capture_output=True, text=True, check=True
+    ).stdout.strip()
+    return (Path(sysroot) / "lib" / "rustlib" / triple).is_dir()
+
+
+def test_the_cortex_m7_build_is_within_its_size_targets() -> None:
+    triple = "thumbv7em-none-eabihf"
+    missing = [t for t in ("cargo", "rustc", "arm-none-eabi-gcc", "arm-none-eabi-size", "nm")]
+    missing = [tool for tool in missing if shutil.which(tool) is None]
+    if missing:
+        pytest.skip(f"{', '.join(missing)} not installed: no Cortex-M7 image can be linked")
+    if not _target_installed(triple):
+        pytest.skip(f"Rust target {triple} not installed (rustup target add {triple})")
+    proc = subprocess.run(
+        [sys.executable, str(ROOT / "benches" / "size.py"), "--target", triple],
+        capture_output=True,
+        text=True,
+        timeout=900,
+    )
+    rows = {line.split()[0]: line.split()[1:] for line in proc.stdout.splitlines()[1:]}
+    # Today's sizes as ceilings (codec 6.5 KiB, core 16 KiB); issue 39 aims lower.
+    assert rows["codec"][2:] == ["6,656", "ok"], proc.stdout
+    assert rows["core"][2:] == ["16,384", "ok"], proc.stdout
     assert proc.returncode == 0, proc.stdout + proc.stderr

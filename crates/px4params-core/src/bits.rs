@@ -4,6 +4,8 @@
 //! first bit in the stream. The little-endian byte order of multi-byte scalars is applied on top
 //! of this by [`crate::scalar`].
 
+use crate::plan::{Active, Plans};
+
 /// A read-only bit stream. Implemented for contiguous bytes here; the trait lets the same
 /// decoders read payloads that lie in several pieces (descattering).
 pub trait BitRead {
@@ -132,8 +134,8 @@ pub fn read_bits(data: &[u8], offset: usize, n: u32) -> u64 {
     let shift = (offset % 8) as u32;
     let last = (offset + n as usize - 1) / 8;
     // Fast path: the bits (plus the leading skipped bits) fit a 64-bit window; near the end
-    // of the data the window is zero-filled. Firmware builds (`compact`) take the loop alone.
-    if !cfg!(feature = "compact") && shift + n <= 64 {
+    // of the data the window is zero-filled. Without plans (firmware) the loop alone runs.
+    if Active::WINDOWED_BITS && shift + n <= 64 {
         let word = if let Some(bytes) = data.get(first..first + 8) {
             let mut window = [0u8; 8];
             window.copy_from_slice(bytes);
@@ -168,7 +170,7 @@ pub fn write_bits(out: &mut [u8], offset: usize, value: u64, n: u32) {
     let shift = (offset % 8) as u32;
     // Fast path: read-modify-write one 64-bit window holding all the bits (not in firmware
     // builds, `compact`, which take the loop alone).
-    if !cfg!(feature = "compact") && shift + n <= 64 && first + 8 <= out.len() {
+    if Active::WINDOWED_BITS && shift + n <= 64 && first + 8 <= out.len() {
         let mut window = [0u8; 8];
         window.copy_from_slice(&out[first..first + 8]);
         let word = u64::from_be_bytes(window);
@@ -258,7 +260,7 @@ impl<'o> BitWriter<'o> {
                 }
             };
             debug_assert!(n <= 64 && value & !mask(n) == 0);
-            let stored = if cfg!(feature = "compact") {
+            let stored = if !Active::WINDOWED_BITS {
                 // Firmware (built for size): one copy of `put`, taking both halves; the high
                 // one is empty for values of up to 32 bits.
                 [

@@ -5,186 +5,16 @@
 
 use crate::bits::{BitRead, BitReader, BitWriter};
 use crate::error::{Error, ErrorKind, Path, Step};
-use crate::layout::{Field, FlatItem, Kind, Layout, NodeId, Role, Segment, Span};
+use crate::layout::{FlatItem, Kind, Layout, NodeId, Role, Segment, Span};
+use crate::plan::{Active, Plans};
+pub use crate::rules::{
+    read_scalar, scalar_bits, ArrayLen, At, DecodeOptions, Decoded, EncodeOptions, LeafKind, Sink,
+    Source, MAX_DEPTH,
+};
+pub(crate) use crate::rules::{scalar_of, scalar_raw, tail_optimized};
 use crate::scalar::{self, Scalar};
 use crate::value::{LeafError, LeafSink, LeafSource};
 use crate::walk;
-
-/// Nesting deeper than this is refused (DSDL cannot express recursion; a corrupt static
-/// layout could).
-pub const MAX_DEPTH: usize = 64;
-
-/// Whether flat sources and sinks take the fixed-shape fast paths (runs of leaves in one
-/// loop). Feature `compact` (firmware, built for size) leaves them out: the field-by-field
-/// path gives the same bytes in about half the code.
-const FAST_PATHS: bool = !cfg!(feature = "compact");
-
-/// Options for encoding.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct EncodeOptions {
-    /// Tail array optimization (on for classic CAN and for parameter storage, off for CAN FD).
-    pub tao: bool,
-    /// Clamp out-of-range values of `saturated` fields instead of refusing them.
-    pub saturate: bool,
-    /// Write `p_version` fields as given (re-encoding stored data of another version) instead
-    /// of refusing any value but the type's version.
-    pub keep_versions: bool,
-}
-
-impl Default for EncodeOptions {
-    fn default() -> Self {
-        Self {
-            tao: true,
-            saturate: false,
-            keep_versions: false,
-        }
-    }
-}
-
-/// Options for decoding.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct DecodeOptions {
-    /// Tail array optimization (see [`EncodeOptions::tao`]).
-    pub tao: bool,
-    /// Accept whole bytes after the value (CAN FD frames are padded to their DLC).
-    pub allow_trailing: bool,
-}
-
-impl Default for DecodeOptions {
-    fn default() -> Self {
-        Self {
-            tao: true,
-            allow_trailing: false,
-        }
-    }
-}
-
-/// What kind of leaf a position holds.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum LeafKind {
-    /// A primitive field: one of [`Kind::Uint`], [`Kind::Int`], [`Kind::Float`], [`Kind::Bool`].
-    Scalar(Kind),
-    /// A union's tag.
-    Tag {
-        /// Tag width in bits.
-        bits: u8,
-        /// The union node.
-        union: NodeId,
-    },
-    /// A dynamic array's length (encoded in `bits` bits; 0 when tail-array optimized).
-    Len {
-        /// Prefix width in bits, 0 under tail array optimization.
-        bits: u8,
-        /// The array node.
-        array: NodeId,
-    },
-}
-
-/// The length of an array as the decoder announces it.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ArrayLen {
-    /// A static array of this length (its length is not a leaf).
-    Fixed(usize),
-    /// A dynamic array whose length prefix says this.
-    Prefixed(usize),
-    /// A tail-optimized dynamic array: its length is known when it ends.
-    Tail,
-}
-
-/// Where the decoder is when it hands a leaf to a [`Sink`].
-#[derive(Clone, Copy, Debug)]
-pub struct At<'a> {
-    /// Field path of the leaf.
-    pub path: &'a Path,
-    /// Bit offset of the leaf in the data.
-    pub bit_offset: usize,
-    /// What the leaf is.
-    pub kind: LeafKind,
-}
-
-/// Supplies a value to the encoder, which asks for it in serialization order.
-pub trait Source {
-    /// The source's own error (e.g. "expected a dict, got str").
-    type Error;
-    /// Whether the source is a flat leaf list that supports [`Source::leaf_run`]: the encoder
-    /// then skips the struct calls and takes fixed-shape runs of leaves at once.
-    const FLAT: bool = false;
-    /// The next `n` leaves, for flat sources; `None` for others. An error (fewer than `n`
-    /// left) must leave the source where it was: the encoder then takes the leaves one by one
-    /// and names the first one missing.
-    #[inline]
-    fn leaf_run(&mut self, _n: usize) -> Option<Result<&[Scalar], Self::Error>> {
-        None
-    }
-    /// The primitive at the current position; `kind` is the field's type.
-    fn scalar(&mut self, kind: Kind) -> Result<Scalar, Self::Error>;
-    /// The current position must hold a struct.
-    fn begin_struct(&mut self) -> Result<(), Self::Error>;
-    /// Moves to field `name` (at `index` in [`Layout::fields`]) of the current struct;
-    /// `Ok(false)` when the input lacks it.
-    fn field(&mut self, index: u32, name: &str) -> Result<bool, Self::Error>;
-    /// Leaves the field entered by a successful [`Source::field`].
-    fn end_field(&mut self);
-    /// Ends the struct whose members are `fields`; `used` of them were present in the input,
-    /// so any further input field is unknown.
-    fn end_struct(
-        &mut self,
-        layout: &Layout<'_>,
-        fields: &[Field],
-        used: usize,
-    ) -> Result<(), Self::Error>;
-    /// The current position must hold a union: returns the index of the selected variant among
-    /// `variants` and moves into it.
-    fn begin_union(&mut self, layout: &Layout<'_>, variants: &[Field]) -> Result<u32, Self::Error>;
-    /// Leaves the union.
-    fn end_union(&mut self);
-    /// The current position must hold an array: returns its length. `fixed` is the declared
-    /// length of a static array, `None` for a dynamic one.
-    fn begin_array(&mut self, fixed: Option<u32>) -> Result<usize, Self::Error>;
-    /// Moves to element `index` of the current array.
-    fn element(&mut self, index: usize) -> Result<(), Self::Error>;
-    /// Leaves the element.
-    fn end_element(&mut self);
-    /// Leaves the array.
-    fn end_array(&mut self);
-}
-
-/// Receives a decoded value, in serialization order.
-pub trait Sink {
-    /// The sink's own error.
-    type Error;
-    /// Whether the sink is a flat leaf list that supports [`Sink::leaf_slots`]: the decoder
-    /// then skips the struct calls and fills fixed-shape runs of leaves at once.
-    const FLAT: bool = false;
-    /// Room for the next `n` leaves, for flat sinks; `None` for others.
-    #[inline]
-    fn leaf_slots(&mut self, _n: usize) -> Option<Result<&mut [Scalar], Self::Error>> {
-        None
-    }
-    /// A primitive field's value.
-    fn scalar(&mut self, value: Scalar, at: At<'_>) -> Result<(), Self::Error>;
-    /// A struct begins; `field` announces each member before its value.
-    fn begin_struct(&mut self, fields: usize) -> Result<(), Self::Error>;
-    /// The next value is field `name` (at `index` in [`Layout::fields`]) of the current struct.
-    fn field(&mut self, index: u32, name: &str) -> Result<(), Self::Error>;
-    /// The struct ends.
-    fn end_struct(&mut self) -> Result<(), Self::Error>;
-    /// A union begins with variant `name` (tag `tag`, at `index` in [`Layout::fields`])
-    /// selected; its value follows.
-    fn begin_union(
-        &mut self,
-        tag: u32,
-        index: u32,
-        name: &str,
-        at: At<'_>,
-    ) -> Result<(), Self::Error>;
-    /// The union ends.
-    fn end_union(&mut self) -> Result<(), Self::Error>;
-    /// An array begins.
-    fn begin_array(&mut self, len: ArrayLen, at: At<'_>) -> Result<(), Self::Error>;
-    /// The array ends with `len` elements.
-    fn end_array(&mut self, len: usize) -> Result<(), Self::Error>;
-}
 
 /// Encodes the value of type `root` from `source` into `out`; returns the length in bytes.
 ///
@@ -250,19 +80,8 @@ pub fn decode<R: BitRead + ?Sized, K: Sink>(
     Ok(end)
 }
 
-/// A value decoded into a flat leaf list: the bits it took and the leaves written.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Decoded {
-    /// Bits the value took.
-    pub bits: usize,
-    /// Leaves written to the front of the list.
-    pub leaves: usize,
-}
-
 /// Encodes the value given as a flat leaf list (see [`crate::value`]) into `out`; returns the
-/// length in bytes. Firmware builds (feature `compact`) do it through [`crate::walk`]: the
-/// same bytes, and the same error where a value has one fault (a value with a bad leaf whose
-/// buffer is also too small may report either).
+/// length in bytes. With the build's [`crate::plan::Active`] plans: see [`encode_leaves_with`].
 pub fn encode_leaves(
     layout: &Layout<'_>,
     root: NodeId,
@@ -270,14 +89,27 @@ pub fn encode_leaves(
     out: &mut [u8],
     options: EncodeOptions,
 ) -> Result<usize, Error<LeafError>> {
-    if cfg!(feature = "compact") {
+    encode_leaves_with::<Active>(layout, root, leaves, out, options)
+}
+
+/// [`encode_leaves`] with the plans `P`: the flat encoder ([`Plans::FLAT`]), else
+/// [`crate::walk`]: the same bytes, and the same error where a value has one fault (a value
+/// with a bad leaf whose buffer is also too small may report either).
+pub fn encode_leaves_with<P: Plans>(
+    layout: &Layout<'_>,
+    root: NodeId,
+    leaves: &[Scalar],
+    out: &mut [u8],
+    options: EncodeOptions,
+) -> Result<usize, Error<LeafError>> {
+    if !P::FLAT {
         return walk::encode(layout, root, leaves, out, options);
     }
     encode(layout, root, &mut LeafSource::new(leaves), out, options)
 }
 
-/// Decodes a value of type `root` from `data` into the flat leaf list `leaves`. Firmware
-/// builds (feature `compact`) do it through [`crate::walk`]: the same leaves and errors.
+/// Decodes a value of type `root` from `data` into the flat leaf list `leaves`, with the
+/// build's [`crate::plan::Active`] plans: see [`decode_leaves_with`].
 pub fn decode_leaves<R: BitRead + ?Sized>(
     layout: &Layout<'_>,
     root: NodeId,
@@ -285,7 +117,19 @@ pub fn decode_leaves<R: BitRead + ?Sized>(
     leaves: &mut [Scalar],
     options: DecodeOptions,
 ) -> Result<Decoded, Error<LeafError>> {
-    if cfg!(feature = "compact") {
+    decode_leaves_with::<Active, R>(layout, root, data, leaves, options)
+}
+
+/// [`decode_leaves`] with the plans `P`: the flat decoder ([`Plans::FLAT`]), else
+/// [`crate::walk`]: the same leaves and errors.
+pub fn decode_leaves_with<P: Plans, R: BitRead + ?Sized>(
+    layout: &Layout<'_>,
+    root: NodeId,
+    data: &R,
+    leaves: &mut [Scalar],
+    options: DecodeOptions,
+) -> Result<Decoded, Error<LeafError>> {
+    if !P::FLAT {
         return walk::decode(layout, root, data, leaves, options);
     }
     let mut sink = LeafSink::new(leaves);
@@ -309,12 +153,6 @@ fn stopped<E>(slot: Option<Error<E>>) -> Error<E> {
         bit_offset: 0,
         path: Path::default(),
     })
-}
-
-/// Whether a dynamic array with element `elem` drops its length prefix when it is last.
-#[inline]
-pub(crate) fn tail_optimized(layout: &Layout<'_>, elem: NodeId, tao: bool) -> bool {
-    tao && layout.node(elem).min_bits >= 8
 }
 
 struct Encoder<'l, 'o, S: Source> {
@@ -378,7 +216,7 @@ impl<S: Source> Encoder<'_, '_, S> {
             }
             Kind::Void { bits } => self.write(0, bits.into())?,
             Kind::Struct { first, count } => {
-                if S::FLAT && FAST_PATHS {
+                if S::FLAT && Active::FLAT {
                     self.flat_struct(id, first, count, tao)?;
                 } else {
                     let r = self.source.begin_struct();
@@ -466,7 +304,7 @@ impl<S: Source> Encoder<'_, '_, S> {
             } else if let (Role::Version(version), false) = (field.role, self.keep_versions) {
                 let given = self.source.scalar(kind);
                 let given = self.value(given)?;
-                if !same_integer(given, version) {
+                if !scalar::same_integer(given, version) {
                     return Err(self.fail(ErrorKind::VersionMismatch {
                         given,
                         expected: version,
@@ -546,7 +384,7 @@ impl<S: Source> Encoder<'_, '_, S> {
 
     fn elements(&mut self, elem: NodeId, n: usize, tao: bool) -> Result<(), Stop> {
         let kind = self.layout.node(elem).kind;
-        if S::FLAT && FAST_PATHS && is_scalar(kind) {
+        if S::FLAT && Active::FLAT && is_scalar(kind) {
             let saturate = self.saturate;
             let outcome = match self.source.leaf_run(n) {
                 Some(Ok(run)) => Some(encode_scalars(&mut self.out, kind, run, saturate)),
@@ -641,7 +479,7 @@ fn encode_items(
                 let v = leaves.next().unwrap_or(Scalar::Uint(0));
                 let raw = if keep_versions {
                     fast_raw(kind, v, saturate).map_err(FlatFail::Scalar)?
-                } else if same_integer(v, version) {
+                } else if scalar::same_integer(v, version) {
                     u64::from(version)
                 } else {
                     return Err(FlatFail::Version {
@@ -711,7 +549,7 @@ pub fn scalar_stream(
 /// [`scalar_raw`] with the in-range unsigned case first.
 #[inline(always)]
 fn fast_raw(kind: Kind, value: Scalar, saturate: bool) -> Result<u64, scalar::ScalarError> {
-    if !FAST_PATHS {
+    if !Active::FLAT {
         return scalar_raw(kind, value, saturate);
     }
     match (kind, value) {
@@ -763,14 +601,6 @@ fn is_scalar(kind: Kind) -> bool {
         kind,
         Kind::Uint { .. } | Kind::Int { .. } | Kind::Float { .. } | Kind::Bool
     )
-}
-
-fn same_integer(given: Scalar, version: u32) -> bool {
-    match given {
-        Scalar::Uint(v) => v == u64::from(version),
-        Scalar::Int(v) => v == i64::from(version),
-        _ => false,
-    }
 }
 
 struct Decoder<'l, 'd, R: BitRead + ?Sized + 'd, K: Sink> {
@@ -852,7 +682,7 @@ impl<'d, R: BitRead + ?Sized + 'd, K: Sink> Decoder<'_, 'd, R, K> {
                 self.read(bits.into())?;
             }
             Kind::Struct { first, count } => {
-                if K::FLAT && FAST_PATHS {
+                if K::FLAT && Active::FLAT {
                     self.flat_struct(id, first, count, tao)?;
                 } else {
                     let r = self.sink.begin_struct(count as usize);
@@ -1061,7 +891,7 @@ impl<'d, R: BitRead + ?Sized + 'd, K: Sink> Decoder<'_, 'd, R, K> {
     /// Returns false when the sink is not flat or the data is too short (walk instead).
     fn flat_elements(&mut self, kind: Kind, n: usize) -> Result<bool, Stop> {
         let bits = scalar_bits(kind);
-        if !(K::FLAT && FAST_PATHS) || (bits as usize).saturating_mul(n) > self.remaining() {
+        if !(K::FLAT && Active::FLAT) || (bits as usize).saturating_mul(n) > self.remaining() {
             return Ok(false);
         }
         let mut reader = self.reader;
@@ -1136,77 +966,5 @@ fn decode_items<B: BitReader>(reader: &mut B, items: &[FlatItem], slots: &mut [S
                 }
             }
         }
-    }
-}
-
-/// A scalar from its raw bits.
-#[inline(always)]
-pub(crate) fn scalar_of(kind: Kind, raw: u64) -> Scalar {
-    match kind {
-        Kind::Uint { .. } => Scalar::Uint(raw),
-        Kind::Int { bits, .. } => Scalar::Int(scalar::sign_extend(raw, bits.into())),
-        Kind::Float { bits, .. } => Scalar::Float(scalar::float_from_raw(raw, bits.into())),
-        Kind::Bool => Scalar::Bool(raw != 0),
-        _ => Scalar::Uint(0),
-    }
-}
-
-/// Reads a scalar leaf's value at `bit_offset`, as the decoder does.
-///
-/// # Panics
-/// If the leaf's bits lie outside `data` (callers check the length first).
-#[inline(always)]
-pub fn read_scalar<R: BitRead + ?Sized>(data: &R, bit_offset: usize, kind: Kind) -> Scalar {
-    let bits = scalar_bits(kind);
-    if bits == 0 {
-        return Scalar::Uint(0);
-    }
-    scalar_of(
-        kind,
-        scalar::from_stream(data.read_bits(bit_offset, bits), bits),
-    )
-}
-
-/// The bit width of a scalar kind (0 for containers).
-#[inline(always)]
-pub fn scalar_bits(kind: Kind) -> u32 {
-    match kind {
-        Kind::Uint { bits, .. } | Kind::Int { bits, .. } | Kind::Float { bits, .. } => bits.into(),
-        Kind::Bool => 1,
-        Kind::Void { bits } => bits.into(),
-        _ => 0,
-    }
-}
-
-/// Raw bits of `value` for a scalar kind, honouring the cast mode.
-#[cfg_attr(not(feature = "compact"), inline)]
-#[cfg_attr(feature = "compact", inline(never))]
-pub(crate) fn scalar_raw(
-    kind: Kind,
-    value: Scalar,
-    saturate: bool,
-) -> Result<u64, scalar::ScalarError> {
-    // Hosts only (firmware keeps this function small): a signed value in range, which
-    // sign-extending from the field's width gives back, needs no casting rules. Here rather
-    // than in `fast_raw`, whose every unsigned field it would slow.
-    if FAST_PATHS {
-        if let (Kind::Int { bits, .. }, Scalar::Int(v)) = (kind, value) {
-            if scalar::sign_extend(v as u64, bits.into()) == v {
-                return Ok(v as u64 & crate::bits::field_mask(bits.into()));
-            }
-        }
-    }
-    match kind {
-        Kind::Uint { bits, cast } => scalar::uint_raw(value, bits.into(), cast, saturate),
-        Kind::Int { bits, cast } => scalar::int_raw(value, bits.into(), cast, saturate),
-        Kind::Float { bits, cast } => scalar::float_raw(value, bits.into(), cast, saturate),
-        _ => match value {
-            Scalar::Bool(b) => Ok(u64::from(b)),
-            Scalar::Uint(v @ (0 | 1)) => Ok(v),
-            Scalar::Int(v @ (0 | 1)) => Ok(v as u64),
-            _ => Err(scalar::ScalarError::WrongKind {
-                expected: "a boolean",
-            }),
-        },
     }
 }

@@ -1,6 +1,8 @@
 //! DroneCAN checksums: CRC-64-WE data type signatures and the CRC-16-CCITT-FALSE transfer CRC;
 //! and the store file's CRC-32.
 
+use crate::plan::{Active, Plans};
+
 /// A running CRC-64-WE (poly `0x42F0E1EBA9EA3693`, init and final xor all ones), the DSDL
 /// signature hash.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -62,16 +64,16 @@ pub fn data_type_signature(dsdl_signature: u64, nested: &[u64]) -> u64 {
 
 /// CRC-16-CCITT-FALSE (poly `0x1021`, no reflection, no final xor) continuing from `crc`.
 ///
-/// Eight bytes at a time on hosts, four in firmware builds (`compact`) ("slicing by 8 / 4"):
-/// the table lookups of a step do not depend on each other, so they overlap, where byte at a
-/// time (or bit by bit) every step waits for the one before. The tables (4 KB, 2 KB in
-/// firmware) are read-only data computed at compile time.
+/// Eight bytes at a time on hosts, four without plans (firmware, [`crate::plan`]) ("slicing
+/// by 8 / 4"): the table lookups of a step do not depend on each other, so they overlap, where
+/// byte at a time (or bit by bit) every step waits for the one before. The tables (4 KB, 2 KB
+/// in firmware) are read-only data computed at compile time.
 pub fn crc16(mut crc: u16, bytes: &[u8]) -> u16 {
-    #[cfg_attr(feature = "compact", allow(unused_mut))]
     let mut rest = bytes;
-    #[cfg(not(feature = "compact"))]
-    {
-        let t = &CRC16_TABLES;
+    if SLICES == 8 {
+        // A slice (of known length: no bounds checks remain), so that the indices past 3 are
+        // no error where the tables are four.
+        let t: &[[u16; 256]] = &CRC16_TABLES;
         let mut chunks = rest.chunks_exact(8);
         for c in &mut chunks {
             let high = (crc >> 8) as u8 ^ c[0];
@@ -130,7 +132,7 @@ pub fn crc16_pieces<'a>(mut crc: u16, pieces: impl IntoIterator<Item = &'a [u8]>
 }
 
 /// Bytes per step of [`crc16`] (and tables): firmware builds keep 2 KB of tables.
-const SLICES: usize = if cfg!(feature = "compact") { 4 } else { 8 };
+const SLICES: usize = Active::CRC_SLICES;
 
 /// `CRC16_TABLES[k][n]`: the CRC register after shifting byte `n` and then `k` zero bytes
 /// through it from zero.

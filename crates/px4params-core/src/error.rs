@@ -136,6 +136,7 @@ impl fmt::Display for PathDisplay<'_> {
 /// carries the offending Python type's name; pure Rust uses [`Infallible`](core::convert::Infallible)
 /// or [`crate::value::LeafError`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
 pub enum ErrorKind<E> {
     /// The data ends before the value does.
     Truncated {

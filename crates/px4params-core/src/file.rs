@@ -45,6 +45,7 @@ const CRC16_SEED: u16 = 0xFFFF;
 
 /// Why a file was refused, at [`FileError::offset`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum FileErrorKind<'a> {
     /// No `PX4P` header.
     NotAStoreFile,
@@ -469,6 +470,7 @@ impl<'a> Reader<'a> {
 
 /// Why a file could not be written.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum WriteError {
     /// The buffer is too small; the file needs at least this many bytes.
     BufferFull {
@@ -756,6 +758,7 @@ where
 
 /// Why a store could not be saved.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum SaveError {
     /// The file does not fit the buffer, or a name cannot be written.
     Write(WriteError),
@@ -785,6 +788,7 @@ impl fmt::Display for SaveError {
 
 /// Why a checked file could not be applied to a store (nothing of it was).
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
 pub enum ApplyError {
     /// A format 1 file: only the host reads those (it knows the older parameter lists).
     Format1,

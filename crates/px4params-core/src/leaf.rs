@@ -8,39 +8,16 @@
 use core::convert::Infallible;
 
 use crate::bits::BitRead;
-use crate::codec::{
-    read_scalar, scalar_bits, scalar_raw, tail_optimized, EncodeOptions, LeafKind, MAX_DEPTH,
-};
 use crate::error::{Error, ErrorKind, Path, Step};
 use crate::layout::{FlatItem, Kind, Layout, NodeId, Role, Segment, Span};
-use crate::scalar::{self, Scalar};
+use crate::plan::{Active, Plans};
+pub(crate) use crate::rules::read_uint;
+use crate::rules::{
+    read_scalar, scalar_bits, scalar_raw, tail_optimized, EncodeOptions, LeafKind, MAX_DEPTH,
+};
+pub use crate::rules::{Leaf, LeafAccessError, Position, Target};
+use crate::scalar::Scalar;
 use crate::walk;
-
-/// Which leaf to access.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Target<'p> {
-    /// Leaf `[k]`.
-    Index(usize),
-    /// A dotted path such as `bus.i2c.address` or `cells[3]`; `_tag` names a union's tag
-    /// (`bus._tag`) and `_len` a dynamic array's length (`cells._len`).
-    Path(&'p str),
-}
-
-/// A located leaf.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Leaf {
-    /// Its number `[k]`.
-    pub index: usize,
-    /// Where its bits start.
-    pub bit_offset: usize,
-    /// What it is.
-    pub kind: LeafKind,
-    /// Its field path.
-    pub path: Path,
-}
-
-/// Codec errors of leaf access (no value source or sink involved).
-pub type LeafAccessError = Error<Infallible>;
 
 /// Finds a leaf in `data`, a value of type `root`.
 pub fn locate<R: BitRead + ?Sized>(
@@ -67,7 +44,20 @@ pub fn locate_at<R: BitRead + ?Sized>(
     k: usize,
     tao: bool,
 ) -> Result<Leaf, LeafAccessError> {
-    if cfg!(feature = "compact") {
+    locate_at_with::<Active, R>(layout, root, data, k, tao)
+}
+
+/// [`locate_at`] with the plans `P`: the leaf walk that steps over fixed-shape parts
+/// ([`Plans::SEEK`]), else [`crate::walk`].
+#[inline]
+pub fn locate_at_with<P: Plans, R: BitRead + ?Sized>(
+    layout: &Layout<'_>,
+    root: NodeId,
+    data: &R,
+    k: usize,
+    tao: bool,
+) -> Result<Leaf, LeafAccessError> {
+    if !P::SEEK {
         return walk::locate(layout, root, data, k, tao).map(|(leaf, _)| leaf);
     }
     let mut walk = Walk::new(layout, data);
@@ -132,7 +122,7 @@ pub fn get_leaf<R: BitRead + ?Sized>(
     target: Target<'_>,
     tao: bool,
 ) -> Result<(Leaf, Scalar), LeafAccessError> {
-    if let (Target::Index(k), true) = (target, cfg!(feature = "compact")) {
+    if let (Target::Index(k), false) = (target, Active::SEEK) {
         return walk::locate(layout, root, data, k, tao);
     }
     let leaf = locate(layout, root, data, target, tao)?;
@@ -148,9 +138,22 @@ pub fn get_leaf_at<R: BitRead + ?Sized>(
     k: usize,
     tao: bool,
 ) -> Result<(Leaf, Scalar), LeafAccessError> {
-    if cfg!(feature = "compact") {
+    get_leaf_at_with::<Active, R>(layout, root, data, k, tao)
+}
+
+/// [`get_leaf_at`] with the plans `P`: located and read as [`get_leaf`] does it
+/// ([`Plans::SEEK`]), else found and read in one [`crate::walk`].
+pub fn get_leaf_at_with<P: Plans, R: BitRead + ?Sized>(
+    layout: &Layout<'_>,
+    root: NodeId,
+    data: &R,
+    k: usize,
+    tao: bool,
+) -> Result<(Leaf, Scalar), LeafAccessError> {
+    if !P::SEEK {
         return walk::locate(layout, root, data, k, tao);
     }
+    // One reader of located leaves ([`get_leaf`]), so that it stays inlined there.
     get_leaf(layout, root, data, Target::Index(k), tao)
 }
 
@@ -231,30 +234,6 @@ pub fn encode_default(
     walk::encode_default(layout, root, out, tao)
 }
 
-/// Where leaf `[k]` of a value encoded without tail array optimization is, found by
-/// [`seek`]: cheaper than [`locate`] because it keeps no field path.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Position {
-    /// Where its bits start.
-    pub bit_offset: usize,
-    /// What it is.
-    pub kind: LeafKind,
-    /// The leaf is a `p_version` field.
-    pub version: bool,
-}
-
-impl Position {
-    /// Reads the leaf's value (a tag or length as [`Scalar::Uint`]).
-    pub fn read<R: BitRead + ?Sized>(&self, data: &R) -> Scalar {
-        match self.kind {
-            LeafKind::Scalar(kind) => read_scalar(data, self.bit_offset, kind),
-            LeafKind::Tag { bits, .. } | LeafKind::Len { bits, .. } => {
-                Scalar::Uint(read_uint(data, self.bit_offset, bits.into()))
-            }
-        }
-    }
-}
-
 /// Finds leaf `[k]` of `data`, a value of type `root` encoded without tail array optimization
 /// (as the store keeps values). `None` when there is no such leaf or the data is malformed:
 /// [`locate`] then says why.
@@ -264,7 +243,18 @@ pub fn seek<R: BitRead + ?Sized>(
     data: &R,
     k: usize,
 ) -> Option<Position> {
-    if cfg!(feature = "compact") {
+    seek_with::<Active, R>(layout, root, data, k)
+}
+
+/// [`seek`] with the plans `P`: the seek that keeps no path ([`Plans::SEEK`]), else
+/// [`crate::walk`].
+pub fn seek_with<P: Plans, R: BitRead + ?Sized>(
+    layout: &Layout<'_>,
+    root: NodeId,
+    data: &R,
+    k: usize,
+) -> Option<Position> {
+    if !P::SEEK {
         return walk::seek(layout, root, data, k);
     }
     let mut seek = Seek {
@@ -433,10 +423,6 @@ impl<R: BitRead + ?Sized> Seek<'_, '_, '_, R> {
         self.pos += bits as usize;
         Ok(n as u32)
     }
-}
-
-pub(crate) fn read_uint<R: BitRead + ?Sized>(data: &R, offset: usize, bits: u32) -> u64 {
-    scalar::from_stream(data.read_bits(offset, bits), bits)
 }
 
 fn leaf_bits(leaf: &Leaf) -> u32 {

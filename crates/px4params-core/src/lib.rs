@@ -27,6 +27,8 @@ pub mod file;
 pub mod layout;
 pub mod leaf;
 pub mod pages;
+pub mod plan;
+pub mod rules;
 pub mod scalar;
 pub mod scatter;
 pub mod store;

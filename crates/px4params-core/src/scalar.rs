@@ -25,6 +25,7 @@ pub enum Scalar {
 
 /// Why a scalar could not be stored in a field.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
 pub enum ScalarError {
     /// The value is outside the field's range and saturation was not requested.
     OutOfRange {
@@ -230,6 +231,15 @@ pub fn float_from_raw(raw: u64, bits: u32) -> f64 {
         16 => f64::from(f32_from_f16(raw as u16)),
         32 => f64::from(f32::from_bits(raw as u32)),
         _ => f64::from_bits(raw),
+    }
+}
+
+/// Whether `given` is the integer `version` (a `p_version` field's value: a float never is).
+pub(crate) fn same_integer(given: Scalar, version: u32) -> bool {
+    match given {
+        Scalar::Uint(v) => v == u64::from(version),
+        Scalar::Int(v) => v == i64::from(version),
+        _ => false,
     }
 }
 

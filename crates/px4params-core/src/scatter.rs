@@ -33,6 +33,7 @@
 use core::cell::Cell;
 
 use crate::bits::{BitRead, BitReader};
+use crate::plan::{Active, Plans};
 
 /// Up to 8 bytes of a piece, as [`Pieces::chunk`] gives them. `len` is 0 only where the piece
 /// has no bytes left (`left` is 0 then), and the word is zero after the `len` bytes.
@@ -452,7 +453,7 @@ impl<'p, P: Pieces + ?Sized> BitRead for Scattered<'p, P> {
     /// before, without the window's code.
     #[inline]
     fn byte(&self, index: usize) -> u8 {
-        if !cfg!(feature = "compact") {
+        if Active::WINDOWED_BITS {
             return self.read_bits(index * 8, 8) as u8;
         }
         // From the piece of the byte read before (remembered as the window's next place,

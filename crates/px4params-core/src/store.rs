@@ -29,6 +29,7 @@ use crate::codec::{self, ArrayLen, At, EncodeOptions, LeafKind, Sink, Source};
 use crate::error::{Error, ErrorKind, Path, Step};
 use crate::layout::{Layout, NodeId, Role};
 use crate::leaf::{self, Leaf, Position, Target};
+use crate::plan::{Active, Plans};
 use crate::scalar::{self, Scalar};
 use crate::table::{LeafSlot, LeafTable, UNRESOLVED};
 
@@ -194,6 +195,7 @@ pub enum Which {
 
 /// A store operation's error. `E` is the value source's error for whole-value writes.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
 pub enum StoreError<E = Infallible> {
     /// No parameter with this index.
     NoSuchParam {
@@ -611,8 +613,8 @@ where
         which: Which,
         k: usize,
     ) -> Result<Scalar> {
-        if cfg!(feature = "compact") {
-            // Firmware builds read by one walk (leaf tables are a host's speed-up).
+        if !Active::TABLES {
+            // Without plans, read by one walk (leaf tables are a host's speed-up).
             return self.read_walked(layout, param, instance, which, k);
         }
         let def = self.def(param)?;
@@ -648,11 +650,10 @@ where
         let def = self.def(param)?;
         let index = self.present_slot(&def, instance)?;
         let data = self.region(&def, index, which);
-        // Firmware builds find and read the leaf in one walk; hosts seek first (faster).
-        let sought = if cfg!(feature = "compact") {
-            None
-        } else {
-            leaf::seek(layout, def.root, data, k)
+        // Without plans the leaf is found and read in one walk; hosts seek first (faster).
+        let sought = match Active::SEEK {
+            false => None,
+            true => leaf::seek(layout, def.root, data, k),
         };
         match sought {
             Some(p) => Ok(p.read(data)),
@@ -701,7 +702,7 @@ where
     ) -> Result<()> {
         let def = self.def(param)?;
         let index = self.present_slot(&def, instance)?;
-        if cfg!(feature = "compact") {
+        if !Active::TABLES {
             return self.set_leaf_copied(layout, param, &def, instance, which, k, value, saturate);
         }
         let data = self.region(&def, index, which);
@@ -1193,7 +1194,7 @@ fn is_version(layout: &Layout<'_>, path: &Path) -> bool {
 /// Checks that `data` is exactly one stored value of `root` whose `p_version` fields hold the
 /// version.
 fn check_encoded(layout: &Layout<'_>, root: NodeId, data: &[u8]) -> Result<()> {
-    if cfg!(feature = "compact") {
+    if !Active::TRANSLATE {
         return crate::walk::check_versions(layout, root, data).map_err(StoreError::Codec);
     }
     let mut sink = VersionCheck { layout };

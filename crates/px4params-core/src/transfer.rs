@@ -9,6 +9,7 @@
 use core::fmt;
 
 use crate::crc::{crc16, crc16_pieces};
+use crate::plan::{Active, Plans};
 use crate::scatter::{FramePayloads, Pieces};
 
 const START: u8 = 0x80;
@@ -144,6 +145,7 @@ impl Iterator for Frames<'_> {
 
 /// Why received frames do not form a transfer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum TransferError {
     /// No frames at all.
     Empty,
@@ -256,7 +258,7 @@ pub fn receive<'f, 'a>(
     let (transfer_id, len) = check_tails(frames)?;
     let payload = FramePayloads::new(frames);
     if let Some(got) = sent_crc(frames)? {
-        let computed = if cfg!(feature = "compact") {
+        let computed = if !Active::GATHERED_CRC {
             // Firmware built for size: no gathering buffer; the four-byte steps go on across
             // the pieces.
             crc16_pieces(crc_seed, (0..payload.count()).map(|i| payload.piece(i)))

@@ -8,13 +8,13 @@
 //! carried whole. `p_version` fields take the new version. Each carried, new and dropped
 //! field is reported by path, in the new type's order (dropped ones where their struct ends).
 
-use core::fmt;
-
 use crate::bits::BitRead;
 use crate::codec::{self, EncodeOptions, Source};
 use crate::error::Error;
 use crate::layout::{Field, Kind, Layout, NodeId, Role};
 use crate::leaf::{self, Target};
+use crate::plan::{Active, Plans};
+pub use crate::rules::{TranslateError, PATH_MAX};
 use crate::scalar::Scalar;
 
 /// What happened to a field, by its dotted path in the new type (dropped: in the old type).
@@ -36,26 +36,6 @@ enum What {
     Dropped,
 }
 
-/// Why a value could not be translated (besides the codec's own errors).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum TranslateError {
-    /// A field path longer than [`PATH_MAX`] bytes.
-    PathTooLong,
-    /// The old data or the base could not be read at a path.
-    Unreadable,
-}
-
-impl fmt::Display for TranslateError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            TranslateError::PathTooLong => write!(f, "a field path over {PATH_MAX} bytes"),
-            TranslateError::Unreadable => f.write_str("the stored value cannot be read"),
-        }
-    }
-}
-
-/// Longest field path translation handles.
-pub const PATH_MAX: usize = 192;
 const DEPTH_MAX: usize = crate::codec::MAX_DEPTH * 2;
 
 /// Encodes into `out` the value of type `new` that `old_data` (a value of type `old`, stored
@@ -94,9 +74,8 @@ pub fn translate<R: BitRead + ?Sized, B: BitRead + ?Sized>(
     codec::encode(layout, new, &mut source, out, options)
 }
 
-/// [`translate`] without the report: what a store does with an older version's value.
-/// Firmware builds (feature `compact`) translate through [`crate::walk`] (the same bytes and
-/// errors; no field paths are built).
+/// [`translate`] without the report: what a store does with an older version's value, with
+/// the build's [`crate::plan::Active`] plans (see [`translate_value_with`]).
 pub fn translate_value<R: BitRead + ?Sized, B: BitRead + ?Sized>(
     layout: &Layout<'_>,
     old: NodeId,
@@ -105,7 +84,21 @@ pub fn translate_value<R: BitRead + ?Sized, B: BitRead + ?Sized>(
     base: &B,
     out: &mut [u8],
 ) -> core::result::Result<usize, Error<TranslateError>> {
-    if cfg!(feature = "compact") {
+    translate_value_with::<Active, R, B>(layout, old, old_data, new, base, out)
+}
+
+/// [`translate_value`] with the plans `P`: the path-keeping translator
+/// ([`Plans::TRANSLATE`]), else [`crate::walk`] (the same bytes and errors; no field paths
+/// are built).
+pub fn translate_value_with<P: Plans, R: BitRead + ?Sized, B: BitRead + ?Sized>(
+    layout: &Layout<'_>,
+    old: NodeId,
+    old_data: &R,
+    new: NodeId,
+    base: &B,
+    out: &mut [u8],
+) -> core::result::Result<usize, Error<TranslateError>> {
+    if !P::TRANSLATE {
         return crate::walk::translate(layout, old, old_data, new, base, out);
     }
     translate(layout, old, old_data, new, base, out, &mut |_| {})

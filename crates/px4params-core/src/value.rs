@@ -1,32 +1,10 @@
 //! A value as its flat list of leaves (see [`crate::leaf`] for the numbering), held in
 //! caller-provided storage: the representation firmware and the Rust store work with.
 
-use core::fmt;
-
-use crate::codec::{ArrayLen, At, Sink, Source};
 use crate::layout::{Field, Kind, Layout};
+pub use crate::rules::LeafError;
+use crate::rules::{ArrayLen, At, Sink, Source};
 use crate::scalar::Scalar;
-
-/// Why a leaf list could not be read or written.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum LeafError {
-    /// The list ended before the value did.
-    Exhausted,
-    /// The storage for decoded leaves is full.
-    Full,
-    /// A union tag or array length leaf that is not a non-negative integer.
-    NotACount,
-}
-
-impl fmt::Display for LeafError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(match self {
-            Self::Exhausted => "the leaf list ends before the value",
-            Self::Full => "too many leaves for the storage",
-            Self::NotACount => "a union tag or array length must be a non-negative integer",
-        })
-    }
-}
 
 /// Reads a value from a leaf list, for [`crate::codec::encode`].
 #[derive(Debug)]

@@ -17,16 +17,13 @@
 use core::convert::Infallible;
 
 use crate::bits::BitRead;
-use crate::codec::{
-    scalar_bits, scalar_of, scalar_raw, tail_optimized, DecodeOptions, Decoded, EncodeOptions,
-    LeafKind, MAX_DEPTH,
-};
 use crate::error::{Error, ErrorKind, Path, Step};
 use crate::layout::{Kind, Layout, NodeId, Role};
-use crate::leaf::{Leaf, LeafAccessError, Position};
-use crate::scalar::{Scalar, ScalarError};
-use crate::translate::TranslateError;
-use crate::value::LeafError;
+use crate::rules::{
+    scalar_bits, scalar_of, scalar_raw, tail_optimized, DecodeOptions, Decoded, EncodeOptions,
+    Leaf, LeafAccessError, LeafError, LeafKind, Position, TranslateError, MAX_DEPTH,
+};
+use crate::scalar::{self, Scalar, ScalarError};
 
 /// Bits a walk reads: [`BitRead`] behind a pointer, so that one walk serves every kind of data.
 pub(crate) trait Input {
@@ -481,7 +478,7 @@ impl Walk<'_> {
             if let Some(v) = self.visit(LeafKind::Scalar(kind), version, at, old)? {
                 raw = match version {
                     Some(expected) if mode == Mode::Given && !self.keep_versions => {
-                        if !same_integer(v, expected) {
+                        if !scalar::same_integer(v, expected) {
                             return Err(
                                 self.fail(ErrorKind::VersionMismatch { given: v, expected })
                             );
@@ -637,14 +634,6 @@ pub(crate) fn put(out: &mut [u8], mut pos: usize, raw: u64, bits: u32) {
         }
         value >>= 8;
         pos += n as usize;
-    }
-}
-
-fn same_integer(given: Scalar, version: u32) -> bool {
-    match given {
-        Scalar::Uint(v) => v == u64::from(version),
-        Scalar::Int(v) => v == i64::from(version),
-        _ => false,
     }
 }
 

@@ -8,7 +8,7 @@
 
 mod common;
 
-use common::{any_type, same_scalar};
+use common::{any_type, same_error, same_leaves, same_scalar};
 use proptest::prelude::*;
 use px4params_core::codec::{decode, encode, DecodeOptions, EncodeOptions};
 use px4params_core::compile::OwnedLayout;
@@ -18,21 +18,6 @@ use px4params_core::leaf::{get_leaf, seek, Target};
 use px4params_core::scatter::Scattered;
 use px4params_core::value::{LeafError, LeafSink, LeafSource};
 use px4params_core::{walk, Cast, ErrorKind, Scalar};
-
-fn same_leaves(a: &[Scalar], b: &[Scalar]) -> bool {
-    a.len() == b.len() && a.iter().zip(b).all(|(x, y)| same_scalar(*x, *y))
-}
-
-/// The errors both walks must report alike. A tail array longer than its maximum is found
-/// by the host's decoder at the element past the maximum, by the walk (which counts a tail
-/// array's elements before it reads them) at the array: same error, another place.
-fn same_error<E: PartialEq + core::fmt::Debug>(ours: &Error<E>, theirs: &Error<E>) -> bool {
-    match (&ours.kind, &theirs.kind) {
-        (ErrorKind::ArrayTooLong { max: a, .. }, ErrorKind::ArrayTooLong { max: b, .. }) => a == b,
-        // NaNs (in a wrong p_version, say) are equal when written out.
-        _ => ours == theirs || format!("{ours:?}") == format!("{theirs:?}"),
-    }
-}
 
 fn host_decode(
     layout: &Layout<'_>,

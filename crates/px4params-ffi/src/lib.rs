@@ -266,6 +266,8 @@ fn store_code<E>(e: StoreError<E>) -> i32 {
             ErrorKind::NoSuchLeaf { .. } => PX4P_ERR_NO_SUCH_LEAF,
             _ => PX4P_ERR_VALUE,
         },
+        // The core's errors are open to new kinds: one this ABI does not know is a refusal.
+        _ => PX4P_ERR_VALUE,
     }
 }
 
@@ -376,6 +378,7 @@ pub unsafe extern "C" fn px4p_store_load(
         Err(ApplyError::Format1) => PX4P_ERR_FILE_FORMAT_1,
         Err(ApplyError::UnknownParameter { .. }) => PX4P_ERR_FILE_PARAM,
         Err(ApplyError::Refused { error, .. }) => store_code(error),
+        Err(_) => PX4P_ERR_FILE,
     }
 }
 

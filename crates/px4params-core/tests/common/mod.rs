@@ -3,9 +3,10 @@
 
 use proptest::prelude::*;
 use px4params_core::compile::OwnedLayout;
+use px4params_core::error::Error;
 use px4params_core::layout::{NodeId, Role};
 use px4params_core::Cast::{Saturated, Truncated};
-use px4params_core::{Cast, Scalar};
+use px4params_core::{Cast, ErrorKind, Scalar};
 
 /// The talk's INA238 type (`px.Ina238.1.0`) and its `Bus` union.
 pub fn ina238(l: &mut OwnedLayout) -> NodeId {
@@ -270,5 +271,21 @@ pub fn same_scalar(a: Scalar, b: Scalar) -> bool {
     match (a, b) {
         (Scalar::Float(x), Scalar::Float(y)) => x.to_bits() == y.to_bits(),
         _ => a == b,
+    }
+}
+
+pub fn same_leaves(a: &[Scalar], b: &[Scalar]) -> bool {
+    a.len() == b.len() && a.iter().zip(b).all(|(x, y)| same_scalar(*x, *y))
+}
+
+/// The errors the walk and the host's plans must report alike. A tail array longer than its
+/// maximum is found by the host's decoder at the element past the maximum, by the walk
+/// (which counts a tail array's elements before it reads them) at the array: same error,
+/// another place.
+pub fn same_error<E: PartialEq + core::fmt::Debug>(ours: &Error<E>, theirs: &Error<E>) -> bool {
+    match (&ours.kind, &theirs.kind) {
+        (ErrorKind::ArrayTooLong { max: a, .. }, ErrorKind::ArrayTooLong { max: b, .. }) => a == b,
+        // NaNs (in a wrong p_version, say) are equal when written out.
+        _ => ours == theirs || format!("{ours:?}") == format!("{theirs:?}"),
     }
 }

@@ -1,0 +1,222 @@
+//! Every plan against the walk: each operation's dispatcher run with the host's plans
+//! (`HostPlans`) and with none (`NoPlans`, the walk alone, what firmware runs), in one build,
+//! over random types, random values (decoded from random bytes, then changed at random),
+//! buffers too small, exact and roomy, and data complete and cut short: the same bytes,
+//! leaves, positions and errors.
+//!
+//! Where the two report one fault differently, the test says so and compares what both must
+//! agree on (as `tests/walk.rs` does for the walk against the host's own walks). The store's
+//! leaf tables and in-place writes follow the build's plans: `cargo test --features
+//! alloc,compact` runs the store's tests over the walk.
+
+mod common;
+
+use common::{any_type, same_error, same_leaves, same_scalar};
+use proptest::prelude::*;
+use px4params_core::codec::{decode_leaves_with, encode_leaves_with, DecodeOptions, EncodeOptions};
+use px4params_core::compile::OwnedLayout;
+use px4params_core::error::Error;
+use px4params_core::layout::{Layout, NodeId};
+use px4params_core::leaf::{encode_default, get_leaf_at_with, locate_at_with, seek_with};
+use px4params_core::plan::{HostPlans, NoPlans, Plans};
+use px4params_core::translate::translate_value_with;
+use px4params_core::value::LeafError;
+use px4params_core::{ErrorKind, Scalar};
+
+type Decoded = Result<(usize, Vec<Scalar>), Error<LeafError>>;
+type Encoded = Result<Vec<u8>, Error<LeafError>>;
+
+fn decoded<P: Plans>(layout: &Layout<'_>, root: NodeId, data: &[u8], o: DecodeOptions) -> Decoded {
+    let mut leaves = vec![Scalar::Uint(0); 600];
+    let d = decode_leaves_with::<P, _>(layout, root, data, &mut leaves, o)?;
+    Ok((d.bits, leaves[..d.leaves].to_vec()))
+}
+
+fn encoded<P: Plans>(
+    layout: &Layout<'_>,
+    root: NodeId,
+    leaves: &[Scalar],
+    size: usize,
+    options: EncodeOptions,
+) -> Encoded {
+    let mut out = vec![0xA5u8; size];
+    let n = encode_leaves_with::<P>(layout, root, leaves, &mut out, options)?;
+    out.truncate(n);
+    Ok(out)
+}
+
+fn same_decoding(plan: &Decoded, walk: &Decoded) -> Result<(), TestCaseError> {
+    match (plan, walk) {
+        (Ok((a, x)), Ok((b, y))) => {
+            prop_assert!(a == b && same_leaves(x, y), "{:?} / {:?}", plan, walk)
+        }
+        (Err(a), Err(b)) => prop_assert!(same_error(a, b), "{:?} / {:?}", a, b),
+        _ => prop_assert!(false, "{:?} / {:?}", plan, walk),
+    }
+    Ok(())
+}
+
+fn same_encoding(plan: &Encoded, walk: &Encoded) -> Result<(), TestCaseError> {
+    match (plan, walk) {
+        (Ok(x), Ok(y)) => prop_assert_eq!(x, y),
+        (Err(x), Err(y)) => prop_assert!(same_error(x, y), "{:?} / {:?}", x, y),
+        _ => prop_assert!(false, "{:?} / {:?}", plan, walk),
+    }
+    Ok(())
+}
+
+/// A stored value of `root` (no tail array optimization): the longest prefix of `data` that
+/// decodes; `None` if none does.
+fn value_from(layout: &Layout<'_>, root: NodeId, data: &[u8]) -> Option<Vec<u8>> {
+    let options = DecodeOptions {
+        tao: false,
+        allow_trailing: true,
+    };
+    let (bits, _) = decoded::<NoPlans>(layout, root, data, options).ok()?;
+    Some(data[..bits.div_ceil(8)].to_vec())
+}
+
+/// `data`, and every prefix of it: the value complete and cut short.
+fn cut_short(data: &[u8]) -> impl Iterator<Item = &[u8]> {
+    (0..=data.len()).rev().map(move |n| &data[..n])
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(300))]
+
+    /// Decoding random bytes, and a value complete and cut short at every byte: the same
+    /// leaves and bits, or the same error.
+    #[test]
+    fn decode_plan_as_the_walk(ty in any_type(), data in proptest::collection::vec(any::<u8>(), 0..64), tao in any::<bool>(), allow_trailing in any::<bool>()) {
+        let mut l = OwnedLayout::default();
+        let root = ty.build(&mut l);
+        let layout = l.as_layout();
+        let options = DecodeOptions { tao, allow_trailing };
+        same_decoding(&decoded::<HostPlans>(&layout, root, &data, options), &decoded::<NoPlans>(&layout, root, &data, options))?;
+        let value = value_from(&layout, root, &data).unwrap_or_default();
+        for bytes in cut_short(&value) {
+            let options = DecodeOptions { tao: false, allow_trailing };
+            same_decoding(&decoded::<HostPlans>(&layout, root, bytes, options), &decoded::<NoPlans>(&layout, root, bytes, options))?;
+        }
+    }
+
+    /// Encoding leaf lists (decoded ones, changed at random, cut or lengthened) into buffers
+    /// too small by one, exact, roomy and of a random size: the same bytes, or the same error.
+    #[test]
+    fn encode_plan_as_the_walk(
+        ty in any_type(),
+        data in proptest::collection::vec(any::<u8>(), 0..64),
+        tweaks in proptest::collection::vec((any::<prop::sample::Index>(), any::<u64>(), 0u8..4), 0..3),
+        cut in 0usize..3,
+        cap in any::<prop::sample::Index>(),
+        tao in any::<bool>(),
+        saturate in any::<bool>(),
+        keep_versions in any::<bool>(),
+    ) {
+        let mut l = OwnedLayout::default();
+        let root = ty.build(&mut l);
+        let layout = l.as_layout();
+        let decoded = decoded::<NoPlans>(&layout, root, &data, DecodeOptions { tao, allow_trailing: true });
+        let mut leaves = decoded.map(|(_, leaves)| leaves).unwrap_or_default();
+        for (at, raw, kind) in &tweaks {
+            if leaves.is_empty() {
+                break;
+            }
+            let i = at.index(leaves.len());
+            leaves[i] = match kind {
+                0 => Scalar::Uint(*raw % 8),
+                1 => Scalar::Int(*raw as i64),
+                2 => Scalar::Float(f64::from_bits(*raw)),
+                _ => Scalar::Bool(raw % 2 == 1),
+            };
+        }
+        match cut {
+            1 => { leaves.pop(); }
+            2 => leaves.push(Scalar::Uint(1)),
+            _ => {}
+        }
+        let options = EncodeOptions { tao, saturate, keep_versions };
+        let room = layout.max_bytes(root);
+        let roomy = encoded::<NoPlans>(&layout, root, &leaves, room, options);
+        same_encoding(&encoded::<HostPlans>(&layout, root, &leaves, room, options), &roomy)?;
+        let exact = roomy.as_ref().map_or(0, Vec::len);
+        for size in [exact, exact.saturating_sub(1), cap.index(room + 2)] {
+            let plan = encoded::<HostPlans>(&layout, root, &leaves, size, options);
+            let walk = encoded::<NoPlans>(&layout, root, &leaves, size, options);
+            let too_small = |r: &Encoded| matches!(r, Err(e) if matches!(e.kind, ErrorKind::BufferTooSmall { .. }));
+            if too_small(&plan) || too_small(&walk) {
+                // Which fault is found first, a short buffer or a bad leaf, is each one's
+                // own order: both fail, and with room (above) they agree.
+                prop_assert!(plan.is_err() && walk.is_err(), "{:?} / {:?}", plan, walk);
+            } else {
+                same_encoding(&plan, &walk)?;
+            }
+        }
+    }
+
+    /// Leaf `[k]` of random bytes and of a value complete and cut short: located, read and
+    /// sought alike, or the same error.
+    #[test]
+    fn leaf_plans_as_the_walk(ty in any_type(), data in proptest::collection::vec(any::<u8>(), 0..64), tao in any::<bool>()) {
+        let mut l = OwnedLayout::default();
+        let root = ty.build(&mut l);
+        let layout = l.as_layout();
+        let value = value_from(&layout, root, &data).unwrap_or_default();
+        // Where a tail array is too long or an element of it broken, the leaf walk counts the
+        // elements its own way; the walk finds what decoding finds.
+        let malformed = tao && decoded::<NoPlans>(&layout, root, &data, DecodeOptions { tao, allow_trailing: true }).is_err();
+        let mut cases = vec![(&data[..], tao)];
+        cases.extend(cut_short(&value).map(|bytes| (bytes, false)));
+        for (bytes, tao) in cases {
+            for k in 0..24 {
+                let plan = get_leaf_at_with::<HostPlans, _>(&layout, root, bytes, k, tao);
+                let walk = get_leaf_at_with::<NoPlans, _>(&layout, root, bytes, k, tao);
+                let located = (locate_at_with::<HostPlans, _>(&layout, root, bytes, k, tao), locate_at_with::<NoPlans, _>(&layout, root, bytes, k, tao));
+                match (&plan, &walk) {
+                    (Err(_), _) | (_, Err(_)) if malformed && tao => {}
+                    (Ok((a, x)), Ok((b, y))) => {
+                        prop_assert!(a == b && same_scalar(*x, *y), "[{}] {:?} / {:?}", k, plan, walk);
+                        prop_assert_eq!(located.0, Ok(*a), "[{}]", k);
+                        prop_assert_eq!(located.1, Ok(*b), "[{}]", k);
+                    }
+                    (Err(a), Err(b)) => prop_assert!(same_error(a, b), "[{}] {:?} / {:?}", k, a, b),
+                    _ => prop_assert!(false, "[{}] {:?} / {:?}", k, plan, walk),
+                }
+                if !tao {
+                    prop_assert_eq!(seek_with::<HostPlans, _>(&layout, root, bytes, k), seek_with::<NoPlans, _>(&layout, root, bytes, k), "[{}]", k);
+                }
+            }
+        }
+    }
+
+    /// Translating a stored value of one random type (complete, cut short, or random bytes)
+    /// onto a value of another, whose fields meet by name: the same bytes, or the same error.
+    #[test]
+    fn translate_plan_as_the_walk(old in any_type(), new in any_type(), a in proptest::collection::vec(any::<u8>(), 0..40), b in proptest::collection::vec(any::<u8>(), 0..40)) {
+        let mut l = OwnedLayout::default();
+        let old_root = old.build(&mut l);
+        let new_root = new.build(&mut l);
+        let layout = l.as_layout();
+        let base = match value_from(&layout, new_root, &b) {
+            Some(v) => v,
+            None => {
+                let mut out = vec![0u8; layout.max_bytes(new_root)];
+                let n = encode_default(&layout, new_root, &mut out, false).unwrap();
+                out.truncate(n);
+                out
+            }
+        };
+        let value = value_from(&layout, old_root, &a).unwrap_or_default();
+        let size = layout.max_bytes(new_root) + 1;
+        for old_data in cut_short(&value).chain([&a[..]]) {
+            let (mut x, mut y) = (vec![0xA5u8; size], vec![0xA5u8; size]);
+            let plan = translate_value_with::<HostPlans, _, _>(&layout, old_root, old_data, new_root, &base[..], &mut x);
+            let walk = translate_value_with::<NoPlans, _, _>(&layout, old_root, old_data, new_root, &base[..], &mut y);
+            match (&plan, &walk) {
+                (Ok(p), Ok(q)) => prop_assert!(p == q && x[..*p] == y[..*q], "{:02x?} / {:02x?}", &x[..*p], &y[..*q]),
+                (Err(p), Err(q)) => prop_assert!(same_error(p, q), "{:?} / {:?}", p, q),
+                _ => prop_assert!(false, "{:?} / {:?}", plan, walk),
+            }
+        }
+    }
+}
