@@ -1,0 +1,167 @@
+"""DroneCAN rules that a wrong product would break without the rest of the suite noticing
+(issue 40: bugs planted one at a time stayed green). Each expected answer comes from the
+rule, not from our code:
+
+* ``uavcan.protocol.param.Value`` (DroneCAN DSDL, as pydronecan ships it) carries
+  ``boolean_value`` as a ``uint8`` "for alignment reasons": only 0 and 1 are booleans. A GetSet
+  request whose value is not one is refused, and the response carries the value the node
+  still holds (GetSet.uavcan: the response is the parameter's state after the request).
+* UAVCAN v0 specification, "Transfer reception": a transfer with the same transfer ID from
+  the same source is a duplicate (a redundant interface) only within the transfer timeout,
+  2 s; after it, the same transfer ID starts a new transfer (the 5-bit ID wraps every 32
+  transfers, so a node sending once a second reuses an ID every 32 s).
+"""
+
+from __future__ import annotations
+
+import subprocess
+from pathlib import Path
+from typing import Any
+
+import dronecan
+import px4params
+import pytest
+from dronecan import transport
+from dronecan_bus import PX4PARAMS, served
+from px4params.errors import Px4ParamsError
+from px4params.links.can_transfer import Frame, TransferReceiver
+from px4params.links.dronecan_params import DronecanParams
+from px4params.store.classic import BUNDLED_CLASSIC
+
+GETSET = dronecan.uavcan.protocol.param.GetSet
+OPCODE = dronecan.uavcan.protocol.param.ExecuteOpcode
+NODE = 1
+#: An IST8310 magnetometer: its ``internal`` field is a DSDL ``bool`` (dsdl/px/Ist8310.1.0.dsdl)
+#: with ``@default false``; DroneCAN's long name of instance 0's is IST8310_0_INTERNAL.
+AIRFRAME = "param add IST8310#0\nparam set-default IST8310#0.bus.i2c.bus_id 1\n"
+BOOLEAN = "IST8310_0_INTERNAL"
+
+
+@pytest.fixture
+def ist8310_store(tmp_path: Path) -> Path:
+    airframe = tmp_path / "ist8310.airframe"
+    airframe.write_text(AIRFRAME)
+    store = tmp_path / "vehicle.store"
+    subprocess.run(
+        [*PX4PARAMS, "run", str(airframe), "--store", str(store)],
+        check=True,
+        capture_output=True,
+        timeout=120,
+    )
+    return store
+
+
+def _load(path: Path) -> px4params.Store:
+    return px4params.Store.load(path, classic=BUNDLED_CLASSIC)
+
+
+@pytest.mark.parametrize("number", [2, 255])
+def test_getset_boolean_outside_0_1_is_refused_and_the_value_unchanged(
+    ist8310_store: Path, number: int
+) -> None:
+    store = _load(ist8310_store)
+    params = DronecanParams(store)
+    entry = params.entry(BOOLEAN)
+    assert entry is not None and entry.value == {"boolean_value": 0}  # @default false
+    before = {n: store.encoded(n) for n in store.names()}
+    with pytest.raises(Px4ParamsError) as refused:
+        params.set(BOOLEAN, {"boolean_value": number})
+    assert str(refused.value) == f"{BOOLEAN}: value {number} is not a boolean (0 or 1)"
+    assert {n: store.encoded(n) for n in store.names()} == before
+    assert store.get("IST8310#0.internal") is False
+    # 1 is a boolean: taken.
+    params.set(BOOLEAN, {"boolean_value": 1})
+    assert store.get("IST8310#0.internal") is True
+
+
+def _active(value: Any) -> tuple[str, Any]:
+    kind = dronecan.get_active_union_field(value)
+    return kind, getattr(value, kind) if kind != "empty" else None
+
+
+def test_pydronecan_getset_of_boolean_2_answers_the_unchanged_value(ist8310_store: Path) -> None:
+    """The same rule end to end: pydronecan (its own SLCAN driver) asks ``dronecan serve``."""
+    with served(ist8310_store) as path:
+        node = dronecan.make_node(path, node_id=100, bitrate=1_000_000)
+        try:
+
+            def call(request: Any) -> Any:
+                got: list[Any] = []
+                node.request(request, NODE, got.append, timeout=3.0)
+                for _ in range(400):  # at most about 4 s
+                    if got:
+                        break
+                    node.spin(0.01)
+                assert got and got[0] is not None, f"no response to {type(request).__name__}"
+                return got[0].response
+
+            def getset(**value: Any) -> Any:
+                request = GETSET.Request(name=BOOLEAN.encode())
+                if value:
+                    request.value = dronecan.uavcan.protocol.param.Value(**value)
+                return call(request)
+
+            assert _active(getset().value) == ("boolean_value", 0)
+            assert _active(getset(boolean_value=2).value) == ("boolean_value", 0)
+            assert _active(getset().value) == ("boolean_value", 0)
+            assert call(OPCODE.Request(opcode=OPCODE.Request().OPCODE_SAVE)).ok
+        finally:
+            node.close()
+    assert _load(ist8310_store).get("IST8310#0.internal") is False
+    assert f"refused: {BOOLEAN}: value 2 is not a boolean (0 or 1)" in served.output  # type: ignore[attr-defined]
+
+
+# -- the transfer timeout ------------------------------------------------------------------------
+
+
+class Clock:
+    """A clock the test moves by hand (no sleeping, no timing in assertions)."""
+
+    def __init__(self) -> None:
+        self.now = 100.0
+
+    def __call__(self) -> float:
+        return self.now
+
+
+def _frames(tid: int, *, long: bool) -> list[Frame]:
+    """pydronecan's frames of one transfer from node 10: a NodeStatus message (one frame), or
+    a GetSet response to node 20 (several)."""
+    if long:
+        payload = GETSET.Response(
+            name=b"INA238_1_CURRENT", value=dronecan.uavcan.protocol.param.Value(integer_value=7)
+        )
+        dest, service = 20, True
+    else:
+        payload = dronecan.uavcan.protocol.NodeStatus(uptime_sec=42)
+        dest, service = None, False
+    t = transport.Transfer(
+        payload=payload,
+        source_node_id=10,
+        dest_node_id=dest,
+        transfer_id=tid,
+        service_not_message=service,
+        request_not_response=False,
+    )
+    return [Frame(f.message_id, bytes(f.bytes)) for f in t.to_frames()]
+
+
+def _delivered(receiver: TransferReceiver, frames: list[Frame]) -> int:
+    return sum(receiver.feed(f) is not None for f in frames)
+
+
+@pytest.mark.parametrize("long", [False, True], ids=["single-frame", "multi-frame"])
+def test_same_transfer_id_after_the_2s_timeout_is_a_new_transfer(long: bool) -> None:
+    frames = _frames(5, long=long)
+    assert (len(frames) > 1) == long
+    clock = Clock()
+    receiver = TransferReceiver(clock=clock)
+    assert _delivered(receiver, frames) == 1
+    clock.now += 1.0  # within the timeout: the same transfer again (a redundant interface)
+    assert _delivered(receiver, frames) == 0
+    clock.now += 2.5  # 3.5 s after the first: transfer ID 5 again is a new transfer
+    assert _delivered(receiver, frames) == 1
+    clock.now += 30.0  # and so after any longer silence
+    assert _delivered(receiver, frames) == 1
+    # Another transfer ID from the same source is new at once.
+    assert _delivered(receiver, _frames(6, long=long)) == 1
