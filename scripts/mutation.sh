@@ -7,7 +7,9 @@
 #
 #   bash scripts/mutation.sh [TARGET ...]       default: every target below
 #   MUTATION_BUDGET=600     seconds per target (default 1800); what is left is "untested"
-#   MUTATION_BASELINE=1     without the tests/test_planted_*.py files (the "before" figures)
+#   MUTATION_BASELINE=1     without the tests/test_planted_*.py files (the "before" figures),
+#                           from scratch; a run after it tests again only its survivors
+#   MUTATION_FRESH=1        forget the targets' earlier results (kept in target/mutation)
 #
 # Python: mutmut 2 (pip install "mutmut==2.5.1", the "mutation" extra), which mutates the
 # files in place, one at a time, and restores them; so the work tree must be clean, and is
@@ -29,7 +31,7 @@ PY="python/px4params"
 # target | files to mutate (comma-separated) | pytest arguments (the tests that cover them)
 # The small targets are those of issue 40's own run; the package targets are CI's long run.
 TARGETS=(
-  "can_transfer|$PY/links/can_transfer.py|tests/test_dronecan.py tests/test_frames.py tests/test_fuzz.py tests/test_planted_dronecan.py -k 'receiver or frame or transfer'"
+  "can_transfer|$PY/links/can_transfer.py|tests/test_dronecan.py tests/test_frames.py tests/test_fuzz.py tests/test_planted_dronecan.py -k '(receiver or frame or transfer) and not cli'"
   "dronecan_params|$PY/links/dronecan_params.py|tests/test_dronecan.py tests/test_planted_dronecan.py -k 'long_name or getset or refused or writing or boolean'"
   "health|$PY/vehicle/health.py,$PY/cli/commands/health.py|tests/test_flight_log.py tests/test_dronecan.py tests/test_planted_health.py -k 'health or first_failure'"
   "links|$PY/links|tests/test_dronecan.py tests/test_frames.py tests/test_mavlink.py tests/test_mavlink_clients.py tests/test_mavlink_metadata.py tests/test_planted_dronecan.py"
@@ -61,12 +63,25 @@ python_target() {
     echo "$name: refused: python/ has uncommitted changes (mutmut edits files in place)" >&2
     exit 1
   fi
+  # The cache of each target is kept: a later run tests again only what survived or was not
+  # reached (mutmut keeps killed mutants killed). It notices new tests by a hash of the tests
+  # directory: the baseline hashes a copy of its own test files, so that the next full run
+  # tests its survivors again.
+  local tests_dir=tests
   if [ "${MUTATION_BASELINE:-0}" = 1 ]; then
     tests=$(echo "$tests" | sed -E 's# tests/test_planted_[a-z_]+\.py##g')
+    tests_dir=$(mktemp -d)
+    for f in $tests; do
+      case $f in tests/*.py) cp "$f" "$tests_dir/" ;; esac
+    done
+    rm -f "$OUT/$name.mutmut-cache"
   fi
+  [ "${MUTATION_FRESH:-0}" = 1 ] && rm -f "$OUT/$name.mutmut-cache"
   rm -f .mutmut-cache
-  trap restore EXIT INT TERM
-  timeout --signal=INT "$BUDGET" mutmut run --paths-to-mutate "$paths" \
+  [ -f "$OUT/$name.mutmut-cache" ] && cp "$OUT/$name.mutmut-cache" .mutmut-cache
+  trap restore EXIT
+  trap 'restore; exit 130' INT TERM
+  timeout --signal=INT "$BUDGET" mutmut run --paths-to-mutate "$paths" --tests-dir "$tests_dir" \
     --runner "python -m pytest -x -q -p no:cacheprovider $tests" \
     --simple-output --no-progress >"$OUT/$name.log" 2>&1 || true
   restore
@@ -120,7 +135,7 @@ print(
     f"equivalent); survivors in {report}"
 )
 EOF
-  rm -f .mutmut-cache
+  mv .mutmut-cache "$OUT/$name.mutmut-cache"
 }
 
 rust_target() {
