@@ -24,7 +24,7 @@ import pytest
 from dronecan import transport
 from dronecan_bus import PX4PARAMS, served
 from px4params.errors import Px4ParamsError
-from px4params.links.can_transfer import Frame, TransferReceiver
+from px4params.links.can_transfer import DEFAULT_PRIORITY, Frame, TransferReceiver, can_id
 from px4params.links.dronecan_params import DronecanParams
 from px4params.store.classic import BUNDLED_CLASSIC
 
@@ -165,3 +165,70 @@ def test_same_transfer_id_after_the_2s_timeout_is_a_new_transfer(long: bool) -> 
     assert _delivered(receiver, frames) == 1
     # Another transfer ID from the same source is new at once.
     assert _delivered(receiver, _frames(6, long=long)) == 1
+
+
+# -- CAN IDs (issue 40's mutation run: what survived in can_transfer.py) -------------------------
+
+
+def _pydronecan_can_id(payload: Any, *, source: int, dest: int | None, request: bool) -> int:
+    t = transport.Transfer(
+        payload=payload,
+        source_node_id=source,
+        dest_node_id=dest,
+        transfer_id=0,
+        transfer_priority=DEFAULT_PRIORITY,
+        service_not_message=dest is not None,
+        request_not_response=request,
+    )
+    return int(t.to_frames()[0].message_id)
+
+
+def test_can_ids_are_pydronecans_and_a_service_frame_is_a_response_unless_told() -> None:
+    status = dronecan.uavcan.protocol.NodeStatus()
+    assert can_id(341, source_node=10) == _pydronecan_can_id(
+        status, source=10, dest=None, request=False
+    )
+    response = GETSET.Response()
+    request = GETSET.Request()
+    # Without request=True a service frame is a response: bit 15 clear.
+    assert can_id(11, source_node=10, dest_node=20) == _pydronecan_can_id(
+        response, source=10, dest=20, request=False
+    )
+    assert can_id(11, source_node=10, dest_node=20, request=True) == _pydronecan_can_id(
+        request, source=10, dest=20, request=True
+    )
+    # The ends of every range are valid (UAVCAN v0: message type IDs 0..65535, service type
+    # IDs 0..255, node IDs 1..127, priorities 0..31).
+    assert can_id(0, source_node=1, priority=0) == 1
+    assert can_id(0xFFFF, source_node=127, priority=31) == 31 << 24 | 0xFFFF << 8 | 127
+    assert can_id(0, source_node=1, dest_node=1, priority=0) == 1 << 8 | 1 << 7 | 1
+    assert can_id(0xFF, source_node=127, dest_node=127) == (
+        31 << 24 | 0xFF << 16 | 127 << 8 | 1 << 7 | 127
+    )
+
+
+#: can_id's arguments, then the number refused: its name, range and value as the message gives
+#: them ("priority must be an integer in 0..31, got 32").
+OUT_OF_RANGE: list[tuple[dict[str, Any], str, str, str]] = [
+    ({"dtid": 341, "source_node": 10, "priority": 32}, "priority", "0..31", "32"),
+    ({"dtid": 341, "source_node": 10, "priority": -1}, "priority", "0..31", "-1"),
+    ({"dtid": 341, "source_node": 0}, "source node ID", "1..127", "0"),
+    ({"dtid": 341, "source_node": 128}, "source node ID", "1..127", "128"),
+    ({"dtid": 341, "source_node": True}, "source node ID", "1..127", "True"),
+    ({"dtid": 341, "source_node": 1.0}, "source node ID", "1..127", "1.0"),
+    ({"dtid": 65536, "source_node": 10}, "message data type ID", "0..65535", "65536"),
+    ({"dtid": -1, "source_node": 10}, "message data type ID", "0..65535", "-1"),
+    ({"dtid": 256, "source_node": 10, "dest_node": 20}, "service data type ID", "0..255", "256"),
+    ({"dtid": -1, "source_node": 10, "dest_node": 20}, "service data type ID", "0..255", "-1"),
+    ({"dtid": 11, "source_node": 10, "dest_node": 0}, "destination node ID", "1..127", "0"),
+    ({"dtid": 11, "source_node": 10, "dest_node": 128}, "destination node ID", "1..127", "128"),
+]
+
+
+@pytest.mark.parametrize(("arguments", "what", "limits", "given"), OUT_OF_RANGE)
+def test_can_id_refuses_numbers_out_of_range_by_name(
+    arguments: dict[str, Any], what: str, limits: str, given: str
+) -> None:
+    with pytest.raises(ValueError) as refused:
+        can_id(**arguments)
+    assert str(refused.value) == f"{what} must be an integer in {limits}, got {given}"
