@@ -264,3 +264,24 @@ def test_health_help_says_the_exit_codes(capsys: pytest.CaptureFixture[str]) -> 
     out = capsys.readouterr().out
     assert out.startswith("usage: px4params health [-h] [--timeline FILE.svg] [--json] FILE.ulg\n")
     assert "Exit code 0: the log ends with 'may arm'; 1: arming refused (or an error)." in out
+
+
+def test_manifest_health_of_a_type_no_driver_declares(tmp_path: Path) -> None:
+    import px4params
+    from px4params.store.classic import BUNDLED_CLASSIC
+    from px4params.vehicle.health import DeviceHealth, ManifestHealth
+
+    root = tmp_path / "acme"
+    root.mkdir()
+    (root / "Gadget.1.0.dsdl").write_text(
+        "# A gadget no driver declares\n# @max_instances 2\n\npx.Bus.1.0 bus\n# Bus\n\n@sealed\n"
+    )
+    schema = px4params.load_schema([root], use_env=False, cache_dir=tmp_path / "cache")
+    store = px4params.Store(schema, classic=BUNDLED_CLASSIC)
+    store.add("GADGET#0")
+    store.set("GADGET#0.bus.i2c.bus_id", 1)
+    store.set("GADGET#0.bus.i2c.address", 0x20)
+    line = "(no driver) GADGET#0 on I2C bus 1 address 0x20: warning: no driver declared for "
+    assert ManifestHealth(store).devices() == [
+        DeviceHealth("GADGET#0", "warning", line + "parameter GADGET")
+    ]
