@@ -101,12 +101,16 @@ for line in Path("scripts/mutation-equivalent.txt").read_text().splitlines():
         equivalent[(path, old, new)] = why
 db = sqlite3.connect(".mutmut-cache")
 rows = db.execute(
-    "SELECT Mutant.id, Mutant.status, SourceFile.filename, Line.line_number FROM Mutant"
+    "SELECT Mutant.id, Mutant.status, SourceFile.filename, Line.line_number,"
+    " Mutant.tested_against_hash FROM Mutant"
     " JOIN Line ON Mutant.line = Line.id JOIN SourceFile ON Line.sourcefile = SourceFile.id"
 ).fetchall()
+(tests_hash,) = db.execute("SELECT value FROM MiscData WHERE key = 'hash_of_tests'").fetchone()
 counts = {"killed": 0, "timeout": 0, "survived": 0, "untested": 0}
 survivors, equivalents = [], 0
-for mutant, status, path, number in rows:
+for mutant, status, path, number, tested_against in rows:
+    if status != "ok_killed" and tested_against != tests_hash:
+        status = "untested"  # a result of earlier tests, not yet tested again with these
     if status in ("ok_killed", "ok_suspicious"):
         counts["killed"] += 1
     elif status == "bad_timeout":

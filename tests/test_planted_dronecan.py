@@ -232,3 +232,94 @@ def test_can_id_refuses_numbers_out_of_range_by_name(
     with pytest.raises(ValueError) as refused:
         can_id(**arguments)
     assert str(refused.value) == f"{what} must be an integer in {limits}, got {given}"
+
+
+# -- GetSet entries (issue 40's mutation run: what survived in dronecan_params.py) ---------------
+
+EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "two_batteries.airframe"
+INT32_MIN, INT32_MAX = -(1 << 31), (1 << 31) - 1
+#: IEEE 754 single precision's largest finite value, (2 - 2**-23) * 2**127.
+FLT_MAX = (2 - 2**-23) * 2.0**127
+
+
+@pytest.fixture
+def example_params(tmp_path: Path) -> tuple[px4params.Store, DronecanParams]:
+    store_path = tmp_path / "vehicle.store"
+    subprocess.run(
+        [*PX4PARAMS, "run", str(EXAMPLE), "--store", str(store_path)],
+        check=True,
+        capture_output=True,
+        timeout=120,
+    )
+    store = _load(store_path)
+    return store, DronecanParams(store)
+
+
+def _integers(*numbers: int) -> tuple[dict[str, int], ...]:
+    return tuple({"integer_value": n} for n in numbers)
+
+
+def test_getset_entries_of_classic_parameters_and_masks(
+    example_params: tuple[px4params.Store, DronecanParams],
+) -> None:
+    """Bounds and defaults as PX4's parameter metadata gives them (BAT1_CAPACITY: Float,
+    default -1 "when unknown", -1..100000 mAh); an Int32 without bounds spans int32, what
+    MAVLink and the store can hold; an instance mask of INA238 (@max_instances 4) is 0..15,
+    no instance by default."""
+    store, params = example_params
+    capacity = params.entry("BAT1_CAPACITY")
+    assert capacity is not None
+    assert (capacity.value, capacity.default, capacity.min, capacity.max) == (
+        {"real_value": -1.0},
+        {"real_value": -1.0},
+        {"real_value": -1.0},
+        {"real_value": 100000.0},
+    )
+    mag = params.entry("CAL_MAG0_ID")
+    assert mag is not None
+    assert (mag.value, mag.default, mag.min, mag.max) == _integers(0, 0, INT32_MIN, INT32_MAX)
+    mask = params.entry("INA238_INST")
+    assert mask is not None
+    assert (mask.value, mask.default, mask.min, mask.max) == _integers(0b11, 0, 0, 15)
+    # Writes say what changed.
+    assert params.set("SYS_AUTOSTART", {"integer_value": 4001}) == "SYS_AUTOSTART = 4001"
+    assert store.get("SYS_AUTOSTART") == 4001
+    assert params.set("INA238_INST", {"integer_value": 0b11}) == "INA238_INST: no change"
+
+
+def test_getset_entries_of_leaves_keep_their_default_apart(
+    example_params: tuple[px4params.Store, DronecanParams],
+) -> None:
+    _, params = example_params
+    params.set("INA238_1_I2C_ADDRESS", {"integer_value": 0x44})
+    address = params.entry("INA238_1_I2C_ADDRESS")
+    assert address is not None
+    assert (address.value, address.default) == _integers(0x44, 0x45)  # the airframe's default
+    # On SPI the default (an I2C value) has no such leaf: GetSet's "empty" variant.
+    params.set("INA238_1_BUS_TYPE", {"integer_value": 1})
+    spi = params.entry("INA238_1_SPI_BUS_ID")
+    assert spi is not None and spi.default == {"empty": {}}
+    # A write without a value is refused by its variant's name.
+    with pytest.raises(Px4ParamsError) as refused:
+        params.set("INA238_1_SPI_BUS_ID", {})
+    assert str(refused.value) == (
+        "INA238_1_SPI_BUS_ID: empty refused: the parameter takes integer_value"
+    )
+
+
+def test_getset_bounds_of_float_leaves_are_their_types(tmp_path: Path) -> None:
+    """A float32 leaf spans IEEE 754 single precision (its largest finite value is a valid
+    bound, sent as real_value), a float16 one +-65504."""
+    root = tmp_path / "acme"
+    root.mkdir()
+    (root / "Floats.1.0.dsdl").write_text(
+        "# Floats\n# @max_instances 1\n\nfloat32 single\n# a\n\nfloat16 half\n# b\n\n@sealed\n"
+    )
+    schema = px4params.load_schema([root], use_env=False, cache_dir=tmp_path / "cache")
+    store = px4params.Store(schema, classic=BUNDLED_CLASSIC)
+    store.add("FLOATS#0")
+    params = DronecanParams(store)
+    single, half = params.entry("FLOATS_0_SINGLE"), params.entry("FLOATS_0_HALF")
+    assert single is not None and half is not None
+    assert (single.min, single.max) == ({"real_value": -FLT_MAX}, {"real_value": FLT_MAX})
+    assert (half.min, half.max) == ({"real_value": -65504.0}, {"real_value": 65504.0})
