@@ -1,8 +1,9 @@
 """``px4params gui`` rules that a wrong product would break without the rest of the suite
 noticing (issue 40: bugs planted one at a time stayed green):
 
-* the page's promise (docs/gui.md, app.js): an invalid entry is never sent, so a field whose
-  last entry is invalid has nothing in the review, even when a valid value was typed before;
+* the page's promise (docs/ground-stations.md: "An invalid entry is marked next to its field
+  ... and never staged"), so a field whose last entry is invalid has nothing in the review,
+  even when a valid value was typed before;
 * a WebSocket opened by a page of another site (its ``Origin`` is not this server's) is
   refused, as the HTTP routes refuse such requests: another site may not watch the vehicle.
 
