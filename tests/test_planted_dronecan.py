@@ -69,9 +69,19 @@ def test_getset_boolean_outside_0_1_is_refused_and_the_value_unchanged(
     assert str(refused.value) == f"{BOOLEAN}: value {number} is not a boolean (0 or 1)"
     assert {n: store.encoded(n) for n in store.names()} == before
     assert store.get("IST8310#0.internal") is False
-    # 1 is a boolean: taken.
+    # 1 and 0 are booleans: taken.
     params.set(BOOLEAN, {"boolean_value": 1})
     assert store.get("IST8310#0.internal") is True
+    params.set(BOOLEAN, {"boolean_value": 0})
+    assert store.get("IST8310#0.internal") is False
+    # GetSet's bounds are a NumericValue (no boolean variant): integers 0 and 1.
+    entry = params.entry(BOOLEAN)
+    assert entry is not None
+    assert (entry.default, entry.min, entry.max) == (
+        {"boolean_value": 0},
+        {"integer_value": 0},
+        {"integer_value": 1},
+    )
 
 
 def _active(value: Any) -> tuple[str, Any]:
@@ -297,8 +307,10 @@ def test_getset_entries_of_leaves_keep_their_default_apart(
     assert (address.value, address.default) == _integers(0x44, 0x45)  # the airframe's default
     # On SPI the default (an I2C value) has no such leaf: GetSet's "empty" variant.
     params.set("INA238_1_BUS_TYPE", {"integer_value": 1})
-    spi = params.entry("INA238_1_SPI_BUS_ID")
-    assert spi is not None and spi.default == {"empty": {}}
+    names = [params.name_at(i) or "" for i in range(len(params))]
+    spi = [params.entry(n) for n in names if n.startswith("INA238_1_SPI_")]
+    assert len(spi) >= 3  # bus_id, chip_select, mode, ...
+    assert all(e is not None and e.default == {"empty": {}} for e in spi)
     # A write without a value is refused by its variant's name.
     with pytest.raises(Px4ParamsError) as refused:
         params.set("INA238_1_SPI_BUS_ID", {})
@@ -323,3 +335,26 @@ def test_getset_bounds_of_float_leaves_are_their_types(tmp_path: Path) -> None:
     assert single is not None and half is not None
     assert (single.min, single.max) == ({"real_value": -FLT_MAX}, {"real_value": FLT_MAX})
     assert (half.min, half.max) == ({"real_value": -65504.0}, {"real_value": 65504.0})
+
+
+def test_getset_default_of_an_element_the_default_array_lacks_is_empty(tmp_path: Path) -> None:
+    """A dynamic array's default is empty: the elements a value has have no default, which
+    GetSet says with its "empty" variant; the length's default is 0, its bounds 0..capacity."""
+    root = tmp_path / "acme"
+    root.mkdir()
+    (root / "Things.1.0.dsdl").write_text(
+        "# Things\n# @max_instances 1\n\nuint8[<=3] items\n# x\n\n@sealed\n"
+    )
+    schema = px4params.load_schema([root], use_env=False, cache_dir=tmp_path / "cache")
+    store = px4params.Store(schema, classic=BUNDLED_CLASSIC)
+    store.add("THINGS#0")
+    store.set("THINGS#0", {"items": [7, 8]})
+    params = DronecanParams(store)
+    for name, value in (("THINGS_0_ITEMS_0", 7), ("THINGS_0_ITEMS_1", 8)):
+        entry = params.entry(name)
+        assert entry is not None
+        assert (entry.value, entry.default) == ({"integer_value": value}, {"empty": {}})
+        assert (entry.min, entry.max) == _integers(0, 255)  # uint8
+    length = params.entry("THINGS_0_ITEMS_LEN")
+    assert length is not None
+    assert (length.value, length.default, length.min, length.max) == _integers(2, 0, 0, 3)
