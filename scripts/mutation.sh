@@ -82,7 +82,7 @@ python_target() {
   [ -f "$OUT/$name.mutmut-cache" ] && cp "$OUT/$name.mutmut-cache" .mutmut-cache
   trap restore EXIT
   trap 'restore; exit 130' INT TERM
-  timeout --signal=INT "$BUDGET" mutmut run --paths-to-mutate "$paths" --tests-dir "$tests_dir" \
+  timeout --signal=INT --kill-after=60 "$BUDGET" mutmut run --paths-to-mutate "$paths" --tests-dir "$tests_dir" \
     --runner "python -m pytest -x -q -p no:cacheprovider $tests" \
     --simple-output --no-progress >"$OUT/$name.log" 2>&1 || true
   restore
