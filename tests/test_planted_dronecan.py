@@ -23,8 +23,17 @@ import px4params
 import pytest
 from dronecan import transport
 from dronecan_bus import PX4PARAMS, served
-from px4params.errors import Px4ParamsError
-from px4params.links.can_transfer import DEFAULT_PRIORITY, Frame, TransferReceiver, can_id
+from px4params.errors import EncodeError, Px4ParamsError
+from px4params.links.can_transfer import (
+    DEFAULT_PRIORITY,
+    CanId,
+    Frame,
+    TransferReceiver,
+    can_id,
+    frames,
+    parse_can_id,
+    reassemble,
+)
 from px4params.links.dronecan_params import DronecanParams
 from px4params.store.classic import BUNDLED_CLASSIC
 
@@ -169,7 +178,7 @@ def test_same_transfer_id_after_the_2s_timeout_is_a_new_transfer(long: bool) -> 
     assert _delivered(receiver, frames) == 1
     clock.now += 1.0  # within the timeout: the same transfer again (a redundant interface)
     assert _delivered(receiver, frames) == 0
-    clock.now += 2.5  # 3.5 s after the first: transfer ID 5 again is a new transfer
+    clock.now += 1.5  # 2.5 s after the first: transfer ID 5 again is a new transfer
     assert _delivered(receiver, frames) == 1
     clock.now += 30.0  # and so after any longer silence
     assert _delivered(receiver, frames) == 1
@@ -358,3 +367,113 @@ def test_getset_default_of_an_element_the_default_array_lacks_is_empty(tmp_path:
     length = params.entry("THINGS_0_ITEMS_LEN")
     assert length is not None
     assert (length.value, length.default, length.min, length.max) == _integers(2, 0, 0, 3)
+
+
+# -- frames, CAN IDs read back, the receiver's limits (what survived in can_transfer.py) --------
+
+
+@pytest.mark.parametrize(
+    "fields",
+    [
+        CanId(31, 0xFFFF, 127),
+        CanId(0, 0, 1),
+        CanId(17, 341, 10),
+        CanId(31, 0xFF, 127, 127, True),
+        CanId(0, 0, 1, 1, False),
+        CanId(30, 11, 10, 20, True),
+    ],
+)
+def test_parse_can_id_reads_back_every_field(fields: CanId) -> None:
+    identifier = can_id(
+        fields.dtid,
+        source_node=fields.source_node,
+        priority=fields.priority,
+        dest_node=fields.dest_node,
+        request=fields.request,
+    )
+    parsed = parse_can_id(identifier)
+    assert parsed == fields
+    assert parsed.service == (fields.dest_node is not None)
+    if fields.dest_node is None:  # a message: no destination, not a request
+        assert (parsed.dest_node, parsed.request) == (None, False)
+
+
+def test_frames_defaults_and_refusals(schema: px4params.Schema) -> None:
+    status = schema.get("uavcan.protocol.NodeStatus")
+    getset = schema.get("uavcan.protocol.param.GetSet.Request")
+    value = {"uptime_sec": 1, "health": 0, "mode": 0, "sub_mode": 0,
+             "vendor_specific_status_code": 0}  # fmt: skip
+    (frame,) = frames(status, value, source_node=10)
+    assert frame.data[-1] == 0xC0  # start and end of transfer, toggle 0, transfer ID 0
+    assert frame.can_id == can_id(341, source_node=10)
+    with pytest.raises(EncodeError):  # uint2 health: 4 does not fit, no saturation unless asked
+        frames(status, {**value, "health": 4}, source_node=10)
+    saturated = frames(status, {**value, "health": 4}, source_node=10, saturate=True)
+    assert reassemble(status, [f.data for f in saturated])[0]["health"] == 3
+    refusals = [
+        ({"dest_node": 20}, "uavcan.protocol.NodeStatus is a message; a destination node is "
+         "for services"),
+        ({}, "uavcan.protocol.param.GetSet.Request is a service request; it needs a "
+         "destination node"),
+        ({"transfer_id": 32}, "transfer ID must be an integer in 0..31, got 32"),
+    ]  # fmt: skip
+    for arguments, message in refusals:
+        data_type = status if "dest_node" in arguments or "transfer_id" in arguments else getset
+        with pytest.raises(ValueError) as refused:
+            frames(data_type, value if data_type is status else {}, source_node=10, **arguments)
+        assert str(refused.value).startswith(message), str(refused.value)
+    response = schema.get("uavcan.protocol.param.GetSet.Response")
+    (first, *_) = frames(response, _getset_response("X"), source_node=10, dest_node=20)
+    assert parse_can_id(first.can_id).request is False  # a response
+
+
+def _getset_response(name: str) -> dict[str, Any]:
+    empty = {"empty": {}}
+    return {"value": {"integer_value": -5}, "default_value": empty, "max_value": empty,
+            "min_value": empty, "name": name}  # fmt: skip
+
+
+def test_reassemble_reads_classic_can_by_default(schema: px4params.Schema) -> None:
+    response = schema.get("uavcan.protocol.param.GetSet.Response")
+    sent = frames(response, _getset_response("INA238_1_SOME_LONG_NAME"), source_node=10,
+                  dest_node=20, transfer_id=9)  # fmt: skip
+    assert len(sent) > 2  # multi-frame, the name's length left out (tail array optimization)
+    got, transfer_id = reassemble(response, [f.data for f in sent])
+    assert transfer_id == 9
+    assert bytes(got["name"]) == b"INA238_1_SOME_LONG_NAME"
+    assert got["value"] == {"integer_value": -5}
+
+
+def _hand_made_frames(count: int, tid: int = 3) -> list[Frame]:
+    """``count`` frames of one transfer from node 10, tail bytes by the rule (start bit on the
+    first, end bit on the last, toggle alternating from 0), payload bytes arbitrary."""
+    identifier = can_id(341, source_node=10)
+    out = []
+    for n in range(count):
+        tail = (0x80 if n == 0 else 0) | (0x40 if n == count - 1 else 0) | (n & 1) << 5 | tid
+        out.append(Frame(identifier, bytes(7) + bytes([tail])))
+    return out
+
+
+def test_receiver_takes_256_frames_and_drops_a_longer_transfer() -> None:
+    receiver = TransferReceiver()
+    done = [receiver.feed(f) for f in _hand_made_frames(256)]
+    assert done[-1] is not None and len(done[-1].datas) == 256
+    receiver = TransferReceiver()
+    assert all(receiver.feed(f) is None for f in _hand_made_frames(257))
+    assert receiver.ignored == 1  # the 257th frame drops the session
+
+
+def test_receiver_counts_what_it_ignores_and_skips_what_it_does_not_accept() -> None:
+    sent = _hand_made_frames(3)
+    receiver = TransferReceiver()
+    assert receiver.ignored == 0
+    # Joined half-way: two frames without a session, each counted once.
+    assert [receiver.feed(f) for f in sent[1:]] == [None, None]
+    assert receiver.ignored == 2
+    # Only services addressed to node 1 accepted: a message is skipped, not counted.
+    picky = TransferReceiver(lambda ident: ident.dest_node == 1)
+    assert [picky.feed(f) for f in sent] == [None, None, None]
+    assert picky.ignored == 0
+    everyone = TransferReceiver(lambda ident: True)
+    assert [everyone.feed(f) is not None for f in sent] == [False, False, True]
