@@ -425,6 +425,14 @@ def test_frames_defaults_and_refusals(schema: px4params.Schema) -> None:
     response = schema.get("uavcan.protocol.param.GetSet.Response")
     (first, *_) = frames(response, _getset_response("X"), source_node=10, dest_node=20)
     assert parse_can_id(first.can_id).request is False  # a response
+    with pytest.raises(ValueError) as refused:
+        frames(response, _getset_response("X"), source_node=10)
+    assert str(refused.value) == (
+        "uavcan.protocol.param.GetSet.Response is a service response; it needs a destination node"
+    )
+    with pytest.raises(ValueError) as refused:  # a px type has no DroneCAN data type ID
+        frames(schema.get("px.Tmp102"), {}, source_node=10)
+    assert str(refused.value) == "px.Tmp102.1.0 has no default data type ID; give one"
 
 
 def _getset_response(name: str) -> dict[str, Any]:
