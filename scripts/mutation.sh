@@ -32,7 +32,7 @@ PY="python/px4params"
 # target | files to mutate (comma-separated) | pytest arguments (the tests that cover them)
 # The small targets are those of issue 40's own run; the package targets are CI's long run.
 TARGETS=(
-  "can_transfer|$PY/links/can_transfer.py|tests/test_dronecan.py tests/test_frames.py tests/test_fuzz.py tests/test_planted_dronecan.py -k '(receiver or frame or transfer) and not cli'"
+  "can_transfer|$PY/links/can_transfer.py|tests/test_dronecan.py tests/test_frames.py tests/test_fuzz.py tests/test_planted_dronecan.py -k '(receiver or frame or transfer or can_id or reassembl) and not cli'"
   "dronecan_params|$PY/links/dronecan_params.py|tests/test_dronecan.py tests/test_planted_dronecan.py -k 'long_name or getset or refused or writing or boolean'"
   "health|$PY/vehicle/health.py,$PY/cli/commands/health.py|tests/test_flight_log.py tests/test_dronecan.py tests/test_planted_health.py -k 'health or first_failure'"
   "links|$PY/links|tests/test_dronecan.py tests/test_frames.py tests/test_mavlink.py tests/test_mavlink_clients.py tests/test_mavlink_metadata.py tests/test_planted_dronecan.py"

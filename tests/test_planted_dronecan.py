@@ -485,3 +485,38 @@ def test_receiver_counts_what_it_ignores_and_skips_what_it_does_not_accept() -> 
     assert picky.ignored == 0
     everyone = TransferReceiver(lambda ident: True)
     assert [everyone.feed(f) is not None for f in sent] == [False, False, True]
+
+
+def test_receiver_counts_each_kind_of_ignored_frame() -> None:
+    clock = Clock()
+    one = _hand_made_frames(1)  # a single-frame transfer, transfer ID 3
+    cases: list[tuple[str, list[Frame]]] = [
+        ("empty frames", [Frame(one[0].can_id, b""), Frame(one[0].can_id, b"")]),
+        ("anonymous frames", [Frame(one[0].can_id & ~0x7F, one[0].data)] * 2),
+        ("start frames with the toggle set",
+         [Frame(one[0].can_id, bytes([0xA3])), Frame(one[0].can_id, bytes([0xA4]))]),
+        ("the same transfer twice again", one * 3),
+        ("frames of another transfer ID in a session",
+         _hand_made_frames(3)[:1] + _hand_made_frames(3, tid=4)[1:2]
+         + _hand_made_frames(3, tid=5)[:1] + _hand_made_frames(3, tid=6)[1:2]),
+        ("two transfers of 257 frames", _hand_made_frames(257) + _hand_made_frames(257, tid=4)),
+    ]  # fmt: skip
+    for what, sent in cases:
+        receiver = TransferReceiver(clock=clock)
+        for frame in sent:
+            receiver.feed(frame)
+        assert receiver.ignored == 2, what
+
+
+def test_receiver_remembers_4096_finished_transfers() -> None:
+    """Duplicates are told apart by the last transfer of each session; the oldest record goes
+    once more than 4096 sessions finished (many peers over a long time)."""
+
+    def single(dtid: int) -> Frame:
+        return Frame(can_id(dtid, source_node=10), bytes([0xC0 | 3]))
+
+    receiver = TransferReceiver()
+    assert [receiver.feed(single(d)) is not None for d in range(4096)] == [True] * 4096
+    assert receiver.feed(single(0)) is None  # all 4096 remembered: a duplicate
+    assert receiver.feed(single(4096)) is not None  # the 4097th: the oldest is forgotten
+    assert receiver.feed(single(0)) is not None  # so this is a new transfer
