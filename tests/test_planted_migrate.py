@@ -40,7 +40,8 @@ def test_a_legacy_value_exactly_between_two_integers_rounds_half_up(
     rows = [("SENS_EN_INA238", "1", 6), ("INA238_CURRENT", legacy, 9)]
     old = tmp_path / "old.params"
     old.write_text("".join(f"1\t1\t{name}\t{value}\t{kind}\n" for name, value, kind in rows))
-    _cli("migrate", str(old), "-o", "new.airframe", cwd=tmp_path)
+    # No device IDs to decode: the legacy table, so that no current table (../shared) is needed.
+    _cli("migrate", str(old), "--table", "legacy", "-o", "new.airframe", cwd=tmp_path)
     _cli("run", "new.airframe", "--store", "vehicle.store", cwd=tmp_path)
     store = px4params.Store.load(tmp_path / "vehicle.store", classic=BUNDLED_CLASSIC)
     assert store.instances("INA238") == ["INA238#0"]
