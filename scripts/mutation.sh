@@ -1,0 +1,197 @@
+#!/usr/bin/env bash
+# The mutation run (scheduled with the long runs, not part of scripts/test.sh): small mistakes
+# are planted in the code one at a time, and the tests that cover it are run against each; a
+# mutant the tests let through is a blind spot (issue 40). Prints, per target, the mutants,
+# killed (tests failed, or hung: a timeout), survived, and of those the ones listed as
+# equivalent in scripts/mutation-equivalent.txt (a change no test can see, with the reason).
+#
+#   bash scripts/mutation.sh [TARGET ...]       default: every target below
+#   MUTATION_BUDGET=600     seconds per target (default 1800); what is left is "untested"
+#   MUTATION_BASELINE=1     without the tests/test_planted_*.py files (the "before" figures),
+#                           from scratch; a run after it tests again only its survivors
+#   MUTATION_FRESH=1        forget the targets' earlier results (kept in target/mutation)
+#
+# Python: mutmut 2 (pip install "mutmut==2.5.1", the "mutation" extra), which mutates the
+# files in place, one at a time, and restores them; so the work tree must be clean, and is
+# restored with git if the run is cut short. Rust: cargo-mutants (cargo install
+# cargo-mutants) over the core with its Rust tests; the C ABI crate's tests are pytest's, which
+# cargo-mutants cannot run, so that target says so and stops. The survivors of each target are
+# written to target/mutation/<target>.txt.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+ROOT=$PWD
+[ -d .venv ] && export PATH="$PWD/.venv/bin:$PATH"
+export PYTHONPATH="$PWD/python${PYTHONPATH:+:$PYTHONPATH}"
+export PYTHONDONTWRITEBYTECODE=1 # a mutant of the same size and second must not hit a stale .pyc
+export PX4PARAMS_CACHE_DIR="${PX4PARAMS_CACHE_DIR:-$(mktemp -d)}"
+BUDGET="${MUTATION_BUDGET:-1800}"
+OUT="${CARGO_TARGET_DIR:-$ROOT/target}/mutation"
+mkdir -p "$OUT"
+PY="python/px4params"
+
+# target | files to mutate (comma-separated) | pytest arguments (the tests that cover them)
+# The small targets are those of issue 40's own run; the package targets are CI's long run.
+TARGETS=(
+  "can_transfer|$PY/links/can_transfer.py|tests/test_dronecan.py tests/test_frames.py tests/test_fuzz.py tests/test_planted_dronecan.py -k '(receiver or frame or transfer or can_id or reassembl) and not cli'"
+  "dronecan_params|$PY/links/dronecan_params.py|tests/test_dronecan.py tests/test_planted_dronecan.py -k 'long_name or getset or refused or writing or boolean'"
+  "health|$PY/vehicle/health.py,$PY/cli/commands/health.py|tests/test_flight_log.py tests/test_dronecan.py tests/test_planted_health.py -k 'health or first_failure'"
+  "links|$PY/links|tests/test_dronecan.py tests/test_frames.py tests/test_mavlink.py tests/test_mavlink_clients.py tests/test_mavlink_metadata.py tests/test_planted_dronecan.py"
+  "gui|$PY/gui|tests/test_gui.py tests/test_gui_files.py tests/test_planted_gui.py"
+  "migrate|$PY/migrate.py|tests/test_migrate.py tests/test_planted_migrate.py"
+  "vehicle|$PY/vehicle|tests/test_autostart.py tests/test_bench.py tests/test_devid.py tests/test_flight_log.py tests/test_planted_health.py tests/test_planted_devid.py"
+  "store|$PY/store|tests/test_store.py tests/test_storefile.py tests/test_flat.py tests/test_param_cli.py"
+  "rust-core|crates/px4params-core|"
+  "rust-ffi|crates/px4params-ffi|"
+)
+
+if [ "$#" -eq 0 ]; then
+  set -- can_transfer dronecan_params health links gui migrate vehicle store rust-core rust-ffi
+fi
+
+restore() {
+  # mutmut restores each file after its mutant; a run cut short (budget, Ctrl-C) may not.
+  git checkout -- python 2>/dev/null || true
+  find python -name '*.py.bak' -delete 2>/dev/null || true
+}
+
+python_target() {
+  local name=$1 paths=$2 tests=$3
+  if ! command -v mutmut >/dev/null; then
+    echo "$name: skipped: mutmut is not installed (pip install 'mutmut==2.5.1')"
+    return
+  fi
+  if [ -n "$(git status --porcelain -- python)" ]; then
+    echo "$name: refused: python/ has uncommitted changes (mutmut edits files in place)" >&2
+    exit 1
+  fi
+  # The cache of each target is kept: a later run tests again only what survived or was not
+  # reached (mutmut keeps killed mutants killed). It notices new tests by a hash of the tests
+  # directory: the baseline hashes a copy of its own test files, so that the next full run
+  # tests its survivors again.
+  local tests_dir=tests
+  if [ "${MUTATION_BASELINE:-0}" = 1 ]; then
+    tests=$(echo "$tests" | sed -E 's# tests/test_planted_[a-z_]+\.py##g')
+    tests_dir=$(mktemp -d)
+    for f in $tests; do
+      case $f in tests/*.py) cp "$f" "$tests_dir/" ;; esac
+    done
+    rm -f "$OUT/$name.mutmut-cache"
+  fi
+  [ "${MUTATION_FRESH:-0}" = 1 ] && rm -f "$OUT/$name.mutmut-cache"
+  rm -f .mutmut-cache
+  [ -f "$OUT/$name.mutmut-cache" ] && cp "$OUT/$name.mutmut-cache" .mutmut-cache
+  trap restore EXIT
+  trap 'restore; exit 130' INT TERM
+  timeout --signal=INT --kill-after=60 "$BUDGET" mutmut run --paths-to-mutate "$paths" --tests-dir "$tests_dir" \
+    --runner "python -m pytest -x -q -p no:cacheprovider $tests" \
+    --simple-output --no-progress >"$OUT/$name.log" 2>&1 || true
+  restore
+  trap - EXIT INT TERM
+  python - "$name" "$OUT/$name.txt" <<'EOF'
+"""Counts the cache's mutants and lists each survivor as path, original line, mutated line."""
+import sqlite3
+import subprocess
+import sys
+from pathlib import Path
+
+name, report = sys.argv[1], Path(sys.argv[2])
+equivalent = {}
+for line in Path("scripts/mutation-equivalent.txt").read_text().splitlines():
+    if line.strip() and not line.startswith("#"):
+        path, old, new, why = line.split("\t")
+        equivalent[(path, old, new)] = why
+db = sqlite3.connect(".mutmut-cache")
+rows = db.execute(
+    "SELECT Mutant.id, Mutant.status, SourceFile.filename, Line.line_number,"
+    " Mutant.tested_against_hash FROM Mutant"
+    " JOIN Line ON Mutant.line = Line.id JOIN SourceFile ON Line.sourcefile = SourceFile.id"
+).fetchall()
+(tests_hash,) = db.execute("SELECT value FROM MiscData WHERE key = 'hash_of_tests'").fetchone()
+counts = {"killed": 0, "timeout": 0, "survived": 0, "untested": 0}
+survivors, equivalents = [], 0
+for mutant, status, path, number, tested_against in rows:
+    if status != "ok_killed" and tested_against != tests_hash:
+        status = "untested"  # a result of earlier tests, not yet tested again with these
+    if status in ("ok_killed", "ok_suspicious"):
+        counts["killed"] += 1
+    elif status == "bad_timeout":
+        counts["timeout"] += 1
+    elif status == "bad_survived":
+        counts["survived"] += 1
+        diff = subprocess.run(
+            ["mutmut", "show", str(mutant)], capture_output=True, text=True, check=False
+        ).stdout.splitlines()
+        old = next((d[1:].strip() for d in diff if d.startswith("-") and not d.startswith("---")), "")
+        new = next((d[1:].strip() for d in diff if d.startswith("+") and not d.startswith("+++")), "")
+        why = equivalent.get((path, old, new))
+        equivalents += why is not None
+        mark = f"equivalent: {why}" if why else "SURVIVED"
+        survivors.append(f"{path}:{number + 1}\t{old}\t{new}\t{mark}")
+    else:
+        counts["untested"] += 1
+tested = len(rows) - counts["untested"]
+detected = counts["killed"] + counts["timeout"]
+rate = f"{100 * detected / (tested - equivalents):.1f}%" if tested > equivalents else "-"
+report.write_text("".join(f"{s}\n" for s in survivors))
+print(
+    f"{name}: {len(rows)} mutants, {tested} tested: {counts['killed']} killed, "
+    f"{counts['timeout']} timed out, {counts['survived']} survived ({equivalents} equivalent), "
+    f"{counts['untested']} untested; kill rate {rate} (killed + timed out over tested less "
+    f"equivalent); survivors in {report}"
+)
+EOF
+  mv .mutmut-cache "$OUT/$name.mutmut-cache"
+}
+
+rust_target() {
+  local name=$1 crate=$2
+  local package
+  package=$(basename "$crate")
+  if [ "$package" = px4params-ffi ]; then
+    # cargo-mutants runs the crate's own Rust tests, and the C ABI has none: its tests are
+    # C programs built and run by pytest (tests/test_firmware.py, test_planted_firmware.py),
+    # which cargo-mutants cannot run. Every mutant would "survive": no figure is better.
+    echo "$name: skipped: the C ABI's tests are pytest's (tests/test_firmware.py), which" \
+      "cargo-mutants cannot run"
+    return
+  fi
+  if ! cargo mutants --version >/dev/null 2>&1; then
+    echo "$name: skipped: cargo-mutants is not installed (cargo install cargo-mutants)"
+    return
+  fi
+  # Builds share the machine: one job, under the build lock when there is one.
+  local lock=()
+  [ -e /tmp/px4params-build.lock ] && lock=(flock /tmp/px4params-build.lock)
+  "${lock[@]}" nice cargo mutants --package "$package" --features alloc --jobs 1 \
+    --timeout 300 --output "$OUT/$name" --cargo-arg=--release >"$OUT/$name.log" 2>&1 &
+  local pid=$!
+  (sleep "$BUDGET" && kill -INT "$pid" 2>/dev/null) &
+  local watchdog=$!
+  wait "$pid" || true
+  kill "$watchdog" 2>/dev/null || true
+  local results="$OUT/$name/mutants.out"
+  local caught missed timeout unviable
+  caught=$(wc -l <"$results/caught.txt" 2>/dev/null || echo 0)
+  missed=$(wc -l <"$results/missed.txt" 2>/dev/null || echo 0)
+  timeout=$(wc -l <"$results/timeout.txt" 2>/dev/null || echo 0)
+  unviable=$(wc -l <"$results/unviable.txt" 2>/dev/null || echo 0)
+  cp "$results/missed.txt" "$OUT/$name.txt" 2>/dev/null || true
+  echo "$name: $((caught + missed + timeout)) viable mutants tested: $caught killed, $timeout" \
+    "timed out, $missed survived; $unviable unviable (did not build); survivors in $OUT/$name.txt"
+}
+
+for name in "$@"; do
+  entry=""
+  for t in "${TARGETS[@]}"; do
+    [ "${t%%|*}" = "$name" ] && entry=$t
+  done
+  if [ -z "$entry" ]; then
+    echo "unknown target $name (expected one of: ${TARGETS[*]%%|*})" >&2
+    exit 1
+  fi
+  IFS='|' read -r _ paths tests <<<"$entry"
+  case $name in
+    rust-*) rust_target "$name" "$paths" ;;
+    *) python_target "$name" "$paths" "$tests" ;;
+  esac
+done
