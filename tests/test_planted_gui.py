@@ -143,7 +143,7 @@ def test_a_valid_then_invalid_entry_leaves_nothing_in_the_review(
     # ... then 300 in the same field: invalid, so the 70 typed before must not be written.
     address.fill("300")
     error = page.locator(".instance[data-instance='INA238#1'] .error")
-    assert error.inner_text() == "300: above the maximum 127"
+    assert error.inner_text() == "300: above the maximum 0x7F"  # the address, shown in hex
     assert page.inner_text("#pending") == "0"
     assert page.locator("#review-open").is_disabled()
     # A valid change elsewhere opens the review: only that one is in it.
