@@ -8,6 +8,7 @@ target) and names it in $PX4PARAMS_WHEEL; without it these tests skip."""
 
 from __future__ import annotations
 
+import json
 import os
 import re
 import shutil
@@ -201,9 +202,14 @@ def test_gui_starts_serves_and_stops(installed: Installed) -> None:
         line = proc.stdout.readline()
         url = re.search(r"http://\S+", line)
         assert url, line
-        with urllib.request.urlopen(url[0].rstrip(), timeout=30) as response:
+        # As a browser: the token URL sets the run's cookie and sends it back to the clean URL.
+        browser = urllib.request.build_opener(urllib.request.HTTPCookieProcessor())
+        with browser.open(url[0].rstrip(), timeout=30) as response:
             assert response.status == 200
+            assert "token" not in response.url
             assert b"<html" in response.read().lower()
+        with browser.open(response.url + "api/state", timeout=30) as state:
+            assert json.load(state)["mode"] == "store"
         proc.send_signal(signal.SIGINT)  # Ctrl-C, as it says: stopped, exit status 130
         assert proc.wait(timeout=30) in (0, 130)
         assert "Traceback" not in (proc.stderr.read() if proc.stderr else "")
