@@ -132,3 +132,25 @@ def test_migrate_and_param_import_name_a_mission_planner_file(tmp_path: Path, co
         f"parameter file), not QGC's .params: {EXPECTED}\n"
     )
     assert not (tmp_path / "vehicle.store").exists()
+
+
+@pytest.mark.parametrize("verb", ["import", "load"])
+def test_mission_planners_own_extension_is_named_too(tmp_path: Path, verb: str) -> None:
+    """Mission Planner saves ``.param`` files, which param load/import take for a store file:
+    the error names the format, not the missing store header."""
+    given = tmp_path / "copter.param"
+    given.write_text(MISSION_PLANNER, encoding="utf-8")
+    env = {k: v for k, v in os.environ.items() if not k.startswith("PX4PARAMS_")}
+    env["PX4PARAMS_CACHE_DIR"] = os.environ.get("PX4PARAMS_CACHE_DIR", str(tmp_path / "cache"))
+    env["PX4PARAMS_STORE"] = str(tmp_path / "vehicle.store")
+    result = subprocess.run(
+        [sys.executable, "-m", "px4params", "param", verb, str(given)],
+        capture_output=True, text=True, env=env, cwd=tmp_path, timeout=120,
+    )  # fmt: skip
+    assert (result.returncode, result.stdout) == (1, "")
+    assert result.stderr == (
+        f"px4params: error: {given}:2: a comma-separated NAME,VALUE line (Mission Planner's "
+        "parameter file), not a store file or QGC's .params: param load and import read store "
+        "files, .params (QGC) and .json\n"
+    )
+    assert not (tmp_path / "vehicle.store").exists()

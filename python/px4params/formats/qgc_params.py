@@ -15,7 +15,15 @@ from typing import NamedTuple
 from px4params.errors import NumberError, ParamFileError
 from px4params.numbers import abbreviated, parse_float, parse_int
 
-__all__ = ["FLOAT_TYPES", "INT32", "REAL32", "QgcRow", "format_line", "read"]
+__all__ = [
+    "FLOAT_TYPES",
+    "INT32",
+    "REAL32",
+    "QgcRow",
+    "format_line",
+    "other_ground_station_file",
+    "read",
+]
 
 #: MAV_PARAM_TYPE of the two kinds PX4 has.
 INT32, REAL32 = 6, 9
@@ -64,6 +72,17 @@ def read(text: str, where: str) -> list[QgcRow]:
             ) from None
         rows.append(QgcRow(number, ids[0], ids[1], name, _value(value, ids[2], at, name), ids[2]))
     return rows
+
+
+def other_ground_station_file(text: str) -> tuple[int, str] | None:
+    """The first parameter line of ``text`` and what it is when the file is Mission Planner's
+    or MAVProxy's (see :func:`_other_format`), else None."""
+    for number, raw in enumerate(text.splitlines(), start=1):
+        line = raw.strip()
+        if line and not line.startswith("#"):
+            found = _other_format(line) if "\t" not in line else None
+            return (number, found) if found is not None else None
+    return None
 
 
 def _other_format(line: str) -> str | None:
