@@ -4,7 +4,11 @@ the real files in ../shared/data read as QGC wrote them."""
 from __future__ import annotations
 
 import math
+import os
 import struct
+import subprocess
+import sys
+from pathlib import Path
 
 import pytest
 from hypothesis import given
@@ -70,3 +74,83 @@ def test_errors_name_the_line_and_field(text: str, message: str) -> None:
 def test_spaces_instead_of_tabs() -> None:
     (row,) = qgc_params.read("1 1 SYS_AUTOSTART 4001 6", "f")
     assert (row.name, row.value) == ("SYS_AUTOSTART", 4001)
+
+
+# Other ground stations' parameter files, as they save them: Mission Planner (ArduPilot's
+# ``.param``) writes a ``#NOTE:`` line, then NAME,VALUE comma-separated with six decimals;
+# MAVProxy's ``param save`` writes NAME and VALUE padded with spaces. Neither is QGC's.
+MISSION_PLANNER = (
+    "#NOTE: 26/11/2026 12:00:00 Frame : Quad\nACRO_BAL_PITCH,1.000000\nACRO_BAL_ROLL,1.000000\n"
+)
+MAVPROXY = "ACRO_BAL_PITCH   1.000000\nACRO_BAL_ROLL    1.000000\n"
+EXPECTED = "expected 5 TAB-separated columns (vehicle-id, component-id, name, value, type)"
+
+
+@pytest.mark.parametrize(
+    ("text", "found"),
+    [
+        (
+            MISSION_PLANNER,
+            "2: a comma-separated NAME,VALUE line (Mission Planner's parameter file)",
+        ),
+        (MAVPROXY, "1: a NAME VALUE line (MAVProxy's parameter file)"),
+    ],
+    ids=["mission-planner", "mavproxy"],
+)
+def test_another_ground_stations_file_is_named(text: str, found: str) -> None:
+    with pytest.raises(ParamFileError) as caught:
+        qgc_params.read(text, "f")
+    assert str(caught.value) == f"f:{found}, not QGC's .params: {EXPECTED}"
+
+
+@pytest.mark.parametrize(
+    "text",
+    ["1,2,3\n", "ACRO BAL PITCH,1\n", "A,one\n", "1\t1\tA\t5\n"],
+    ids=["three-commas", "name-with-spaces", "value-not-a-number", "four-columns"],
+)
+def test_what_looks_like_no_other_format_gets_the_column_count(text: str) -> None:
+    with pytest.raises(ParamFileError) as caught:
+        qgc_params.read(text, "f")
+    assert "Mission Planner" not in str(caught.value) and "MAVProxy" not in str(caught.value)
+    assert str(caught.value).startswith(f"f:1: {EXPECTED}, got ")
+
+
+@pytest.mark.parametrize("command", ["migrate", "param import"])
+def test_migrate_and_param_import_name_a_mission_planner_file(tmp_path: Path, command: str) -> None:
+    given = tmp_path / "copter.params"
+    given.write_text(MISSION_PLANNER, encoding="utf-8")
+    env = {k: v for k, v in os.environ.items() if not k.startswith("PX4PARAMS_")}
+    env["PX4PARAMS_CACHE_DIR"] = os.environ.get("PX4PARAMS_CACHE_DIR", str(tmp_path / "cache"))
+    env["PX4PARAMS_STORE"] = str(tmp_path / "vehicle.store")
+    result = subprocess.run(
+        [sys.executable, "-m", "px4params", *command.split(), str(given)],
+        capture_output=True, text=True, env=env, cwd=tmp_path, timeout=120,
+    )  # fmt: skip
+    assert (result.returncode, result.stdout) == (1, "")
+    assert result.stderr == (
+        f"px4params: error: {given}:2: a comma-separated NAME,VALUE line (Mission Planner's "
+        f"parameter file), not QGC's .params: {EXPECTED}\n"
+    )
+    assert not (tmp_path / "vehicle.store").exists()
+
+
+@pytest.mark.parametrize("verb", ["import", "load"])
+def test_mission_planners_own_extension_is_named_too(tmp_path: Path, verb: str) -> None:
+    """Mission Planner saves ``.param`` files, which param load/import take for a store file:
+    the error names the format, not the missing store header."""
+    given = tmp_path / "copter.param"
+    given.write_text(MISSION_PLANNER, encoding="utf-8")
+    env = {k: v for k, v in os.environ.items() if not k.startswith("PX4PARAMS_")}
+    env["PX4PARAMS_CACHE_DIR"] = os.environ.get("PX4PARAMS_CACHE_DIR", str(tmp_path / "cache"))
+    env["PX4PARAMS_STORE"] = str(tmp_path / "vehicle.store")
+    result = subprocess.run(
+        [sys.executable, "-m", "px4params", "param", verb, str(given)],
+        capture_output=True, text=True, env=env, cwd=tmp_path, timeout=120,
+    )  # fmt: skip
+    assert (result.returncode, result.stdout) == (1, "")
+    assert result.stderr == (
+        f"px4params: error: {given}:2: a comma-separated NAME,VALUE line (Mission Planner's "
+        "parameter file), not a store file or QGC's .params: param load and import read store "
+        "files, .params (QGC) and .json\n"
+    )
+    assert not (tmp_path / "vehicle.store").exists()

@@ -7,8 +7,6 @@ Set ``PX4PARAMS_SCREENSHOTS`` to a folder to keep the screenshots (docs/images h
 from __future__ import annotations
 
 import json
-import os
-import shutil
 import subprocess
 from collections.abc import Iterator
 from pathlib import Path
@@ -16,64 +14,36 @@ from typing import Any
 
 import px4params
 import pytest
-from gui_server import CLI, Gui, Started, env_for
-from playwright import sync_api
+from browser import chromium, shot, watched_page
+from gui_server import (
+    CLI,
+    Gui,
+    Started,
+    env_for,
+    gui_on_store,
+    gui_on_udp,
+    load_store,
+    make_store,
+    serve,
+)
 from px4params.store.classic import BUNDLED_CLASSIC
-
-REPO = Path(__file__).resolve().parents[1]
-AIRFRAME = REPO / "examples" / "two_batteries.airframe"
-FAULTS = REPO / "examples" / "two_batteries_faults.bench.toml"
-CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
-if CHROMIUM is None:
-    pytest.skip(
-        "no Chromium: scripts/setup.sh installs Debian's chromium with apt where it can",
-        allow_module_level=True,
-    )
-TIMEOUT = 15_000  # ms, for anything the page waits on
-
-
-def _env(tmp: Path) -> dict[str, str]:
-    return env_for(tmp)
 
 
 @pytest.fixture
 def store_file(tmp_path: Path) -> Path:
-    env = _env(tmp_path)
-    subprocess.run(
-        [*CLI, "run", str(AIRFRAME)], env=env, cwd=tmp_path, check=True, capture_output=True
-    )
-    return tmp_path / "vehicle.store"
+    return make_store(tmp_path)
 
 
 @pytest.fixture
 def vehicle(store_file: Path) -> Iterator[Started]:
-    served = Started(
-        [
-            *CLI,
-            "mavlink",
-            "serve",
-            "--udp",
-            "127.0.0.1:0",
-            "--store",
-            str(store_file),
-            "--bench",
-            str(FAULTS),
-        ],
-        r"on udp 127\.0\.0\.1:(\d+) ",
-        _env(store_file.parent),
-        store_file.parent,
-    )
+    served = serve(store_file)
     yield served
     served.stop()
 
 
-def _gui(argv: list[str], tmp: Path) -> Gui:
-    return Gui(argv, _env(tmp), tmp)
-
-
 @pytest.fixture
 def served_gui(vehicle: Started, store_file: Path) -> Iterator[Gui]:
-    page = _gui(["--udp", f"127.0.0.1:{vehicle.match[1]}"], store_file.parent)
+    page = gui_on_udp(vehicle, store_file.parent)
     yield page
     page.stop()
 
@@ -86,23 +56,14 @@ def gui(served_gui: Gui) -> str:
 
 @pytest.fixture(scope="module")
 def browser() -> Iterator[Any]:
-    with sync_api.sync_playwright() as p:
-        chromium = p.chromium.launch(executable_path=CHROMIUM, headless=True, args=["--no-sandbox"])
-        yield chromium
-        chromium.close()
+    with chromium() as launched:
+        yield launched
 
 
 @pytest.fixture
 def page(browser: Any) -> Iterator[Any]:
-    context = browser.new_context(viewport={"width": 1400, "height": 1000})
-    page = context.new_page()
-    page.set_default_timeout(TIMEOUT)
-    errors: list[str] = []
-    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
-    page.on("pageerror", lambda e: errors.append(str(e)))
-    yield page
-    context.close()
-    assert errors == [], f"console errors: {errors}"
+    with watched_page(browser) as watched:
+        yield watched
 
 
 def _open(page: Any, url: str) -> None:
@@ -123,18 +84,6 @@ def _write_all(page: Any) -> list[str]:
     return results
 
 
-def _stored(store_file: Path) -> px4params.Store:
-    return px4params.Store.load(
-        store_file, px4params.load_schema(include_dronecan=False), classic=BUNDLED_CLASSIC
-    )
-
-
-def _shot(page: Any, name: str, tmp_path: Path) -> None:
-    folder = Path(os.environ.get("PX4PARAMS_SCREENSHOTS") or tmp_path)
-    folder.mkdir(parents=True, exist_ok=True)
-    page.screenshot(path=str(folder / name))
-
-
 # -- over MAVLink ----------------------------------------------------------------------------
 
 
@@ -152,12 +101,12 @@ def test_instances_listed_and_an_address_written(
     page.click("#review-open")
     row = page.locator("#review-table tr[data-name='INA238_1C']")
     assert row.locator(".words").inner_text() == "INA238#1 I2C address: 0x45 → 0x46"
-    _shot(page, "gui-review.png", tmp_path)
+    shot(page, "gui-review.png", tmp_path)
     page.click("#review-write")
     page.wait_for_function("document.querySelector('#review-table .result').textContent !== ''")
     assert row.locator(".result").inner_text() == "acknowledged: 70"
     page.click("#review-close")
-    assert _stored(store_file).get("INA238#1.bus.i2c.address") == 0x46  # saved by the vehicle
+    assert load_store(store_file).get("INA238#1.bus.i2c.address") == 0x46  # saved by the vehicle
     assert address.input_value() == "0x46"
 
 
@@ -172,7 +121,7 @@ def test_out_of_range_is_refused_in_the_page_and_never_sent(
     assert page.inner_text("#pending") == "0" and page.locator("#review-open").is_disabled()
     address.fill("0x4G")
     assert error.inner_text() == "0x4G: not an integer (decimal or 0x hex)"
-    assert _stored(store_file).get("INA238#1.bus.i2c.address") == 0x45
+    assert load_store(store_file).get("INA238#1.bus.i2c.address") == 0x45
     vehicle.stop()
     log = vehicle.proc.stdout.read()  # type: ignore[union-attr]
     assert "INA238_1C" not in log  # no write reached the vehicle
@@ -198,11 +147,11 @@ def test_an_instance_added_and_removed(gui: str, page: Any, store_file: Path) ->
     page.wait_for_selector(
         ".instance[data-instance='INA238#2']:not(.new) input[data-name='INA238_2C']"
     )
-    assert _stored(store_file).instances("INA238") == ["INA238#0", "INA238#1", "INA238#2"]
+    assert load_store(store_file).instances("INA238") == ["INA238#0", "INA238#1", "INA238#2"]
     page.click(".instance[data-instance='INA238#2'] button.remove")
     assert page.locator(".instance[data-instance='INA238#2'].removed").is_visible()
     assert _write_all(page) == ["acknowledged: 3"]
-    assert _stored(store_file).instances("INA238") == ["INA238#0", "INA238#1"]
+    assert load_store(store_file).instances("INA238") == ["INA238#0", "INA238#1"]
     page.wait_for_selector(".instance[data-instance='INA238#2']", state="detached")
 
 
@@ -231,7 +180,7 @@ def test_a_params_file_loads_into_the_review(
     )
     results = page.locator("#review-table .result").all_inner_texts()
     assert sorted(results) == ["acknowledged: 250", "acknowledged: 4001", "acknowledged: 71"]
-    stored = _stored(store_file)
+    stored = load_store(store_file)
     assert (stored.get("INA238#1.bus.i2c.address"), stored.get("INA238#0.current")) == (71, 250)
     assert stored.get("SYS_AUTOSTART") == 4001
 
@@ -248,7 +197,7 @@ def test_classic_parameters_as_qgc_lists_them(gui: str, page: Any, store_file: P
     assert row.evaluate("r => r.classList.contains('modified')")  # differs from the default
     row.locator("button").click()  # reset to default
     assert _write_all(page) == ["acknowledged: 0"]
-    assert _stored(store_file).get("SYS_AUTOSTART") == 0
+    assert load_store(store_file).get("SYS_AUTOSTART") == 0
     page.fill("#search", "")
     page.check("#modified-only")
     assert page.locator("tr[data-param='SYS_AUTOSTART']").count() == 0
@@ -279,11 +228,11 @@ def test_save_as_params_and_airframe(gui: str, page: Any, tmp_path: Path) -> Non
     target = tmp_path / "rebuilt"
     target.mkdir()
     (target / "saved.airframe").write_text(airframe)
-    env = _env(target)
+    env = env_for(target)
     subprocess.run(
         [*CLI, "run", "saved.airframe"], env=env, cwd=target, check=True, capture_output=True
     )
-    rebuilt = _stored(target / "vehicle.store")
+    rebuilt = load_store(target / "vehicle.store")
     assert rebuilt.instances("INA238") == ["INA238#0", "INA238#1"]
     assert rebuilt.get("INA238#1.bus.i2c.bus_id") == 2
 
@@ -292,7 +241,7 @@ def test_save_as_params_and_airframe(gui: str, page: Any, tmp_path: Path) -> Non
 
 
 def test_offline_on_a_store_file(store_file: Path, page: Any) -> None:
-    started = _gui(["--store", str(store_file)], store_file.parent)
+    started = gui_on_store(store_file)
     try:
         _open(page, started.url)
         assert "offline store" in page.inner_text("#source")
@@ -303,7 +252,7 @@ def test_offline_on_a_store_file(store_file: Path, page: Any) -> None:
         page.goto("about:blank")  # leave before the server stops (no reconnecting socket)
     finally:
         started.stop()
-    assert _stored(store_file).get("INA238#0.current") == 300
+    assert load_store(store_file).get("INA238#0.current") == 300
     assert (store_file.parent / "vehicle.store.bak").exists()  # saved atomically, with a backup
 
 
@@ -323,7 +272,7 @@ def test_a_dynamic_array_gets_items_added_and_removed(tmp_path: Path, page: Any)
         "uint8[<=3] items\n# The items\n# @max 200\n@sealed\n"
     )
     store = tmp_path / "things.store"
-    started = _gui(["--store", str(store), "--dsdl", str(root)], tmp_path)
+    started = Gui(["--store", str(store), "--dsdl", str(root)], env_for(tmp_path), tmp_path)
     try:
         _open(page, started.url)
         page.click("#add-THINGS")
@@ -365,4 +314,4 @@ def test_other_sites_cannot_write(gui: str, page: Any, store_file: Path) -> None
         headers={"content-type": "application/json", "origin": "http://evil.example"},
     )
     assert foreign.status == 403
-    assert _stored(store_file).get("INA238#1.bus.i2c.address") == 0x45
+    assert load_store(store_file).get("INA238#1.bus.i2c.address") == 0x45

@@ -13,29 +13,15 @@ Playwright), in a browser that has opened the real page and so holds its cookie:
 from __future__ import annotations
 
 import contextlib
-import shutil
-import subprocess
 import threading
 from collections.abc import Iterator
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from pathlib import Path
 from typing import Any
 
-import px4params
 import pytest
-from gui_server import CLI, Gui, env_for
-from playwright import sync_api
-from px4params.store.classic import BUNDLED_CLASSIC
-
-REPO = Path(__file__).resolve().parents[1]
-AIRFRAME = REPO / "examples" / "two_batteries.airframe"
-CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
-if CHROMIUM is None:
-    pytest.skip(
-        "no Chromium: scripts/setup.sh installs Debian's chromium with apt where it can",
-        allow_module_level=True,
-    )
-TIMEOUT = 15_000  # ms
+from browser import TIMEOUT, chromium
+from gui_server import Gui, gui_on_store, load_store, make_store
 
 #: What an attacker's script tries against ``target`` (the page's server, from wherever the
 #: script runs): read the state, write INA238_INST = 0 (removes every INA238) as JSON and as a
@@ -73,34 +59,20 @@ ATTACK = """async (target) => {
 
 @pytest.fixture
 def store_file(tmp_path: Path) -> Path:
-    subprocess.run(
-        [*CLI, "run", str(AIRFRAME)],
-        env=env_for(tmp_path),
-        cwd=tmp_path,
-        check=True,
-        capture_output=True,
-        timeout=120,
-    )
-    return tmp_path / "vehicle.store"
+    return make_store(tmp_path)
 
 
 @pytest.fixture
 def gui(store_file: Path) -> Iterator[Gui]:
-    served = Gui(["--store", str(store_file)], env_for(store_file.parent), store_file.parent)
+    served = gui_on_store(store_file)
     yield served
     served.stop()
 
 
 @pytest.fixture(scope="module")
 def browser() -> Iterator[Any]:
-    with sync_api.sync_playwright() as p:
-        chromium = p.chromium.launch(
-            executable_path=CHROMIUM,
-            headless=True,
-            args=["--no-sandbox", "--host-resolver-rules=MAP evil.example 127.0.0.1"],
-        )
-        yield chromium
-        chromium.close()
+    with chromium("--host-resolver-rules=MAP evil.example 127.0.0.1") as launched:
+        yield launched
 
 
 @pytest.fixture
@@ -145,8 +117,7 @@ def attacker() -> Iterator[str]:
 
 
 def _instances(store_file: Path) -> list[str]:
-    schema = px4params.load_schema(include_dronecan=False)
-    return px4params.Store.load(store_file, schema, classic=BUNDLED_CLASSIC).instances("INA238")
+    return load_store(store_file).instances("INA238")
 
 
 def _open_real_page(context: Any, gui: Gui) -> Any:
@@ -217,7 +188,7 @@ def test_a_rebound_name_can_neither_read_write_nor_watch(context: Any, store_fil
         evil = context.new_page()
         evil.goto(evil_origin)
         assert evil.title() == "cute cats"
-    gui = Gui(["--store", str(store_file)], env_for(store_file.parent), store_file.parent, port)
+    gui = gui_on_store(store_file, port)
     try:
         real.goto(gui.url)  # the user's own page is open too, with its cookie
         real.wait_for_selector("body[data-ready=true]")

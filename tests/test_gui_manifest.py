@@ -4,37 +4,25 @@ from starting, and the ``@format hex`` tag behind addresses shown in hex."""
 
 from __future__ import annotations
 
-import subprocess
 from pathlib import Path
 from typing import Any
 
 import px4params
 import pytest
-from gui_server import CLI, env_for
+from gui_server import load_store, make_store
 from px4params.errors import DsdlError
 from px4params.gcs.metadata import build_parameters_json
 from px4params.gui.manifest import devices, picker, status_location
-from px4params.store.classic import BUNDLED_CLASSIC
 from px4params.store.flat import flat_values
 from px4params.vehicle.boards import load_boards
 from px4params.vehicle.drivers import load_drivers
-
-REPO = Path(__file__).resolve().parents[1]
-AIRFRAME = REPO / "examples" / "two_batteries.airframe"
 
 
 @pytest.fixture(scope="module")
 def vehicle(tmp_path_factory: pytest.TempPathFactory) -> tuple[dict[str, Any], dict[str, Any]]:
     """The example airframe's flat values and metadata, as the page gets them."""
     tmp = tmp_path_factory.mktemp("manifest")
-    subprocess.run(
-        [*CLI, "run", str(AIRFRAME)], env=env_for(tmp), cwd=tmp, check=True, capture_output=True
-    )
-    store = px4params.Store.load(
-        tmp / "vehicle.store",
-        px4params.load_schema(include_dronecan=False),
-        classic=BUNDLED_CLASSIC,
-    )
+    store = load_store(make_store(tmp))
     classic = [c for c in map(store.classic, store.parameters) if c is not None]
     metadata = build_parameters_json(store.schema, specs=store.specs, classic_params=classic)
     return dict(flat_values(store)), metadata

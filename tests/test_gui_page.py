@@ -9,8 +9,6 @@ Set ``PX4PARAMS_SCREENSHOTS`` to a folder to keep the screenshots (docs/images h
 
 from __future__ import annotations
 
-import os
-import shutil
 import subprocess
 from collections.abc import Iterator
 from pathlib import Path
@@ -18,21 +16,9 @@ from typing import Any
 
 import px4params
 import pytest
-from gui_server import CLI, Gui, Started, env_for
-from playwright import sync_api
-from px4params.store.classic import BUNDLED_CLASSIC
+from browser import chromium, open_page, shot
+from gui_server import CLI, Gui, env_for, gui_on_store, gui_on_udp, load_store, make_store, serve
 
-REPO = Path(__file__).resolve().parents[1]
-AIRFRAME = REPO / "examples" / "two_batteries.airframe"
-FAULTS = REPO / "examples" / "two_batteries_faults.bench.toml"
-CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
-if CHROMIUM is None:
-    pytest.skip(
-        "no Chromium: scripts/setup.sh installs Debian's chromium with apt where it can",
-        allow_module_level=True,
-    )
-TIMEOUT = 15_000  # ms, for anything the page waits on
-SERVE = [*CLI, "mavlink", "serve", "--udp", "127.0.0.1:0"]
 AUTOSTART_RUN = [*CLI, "autostart", "run"]
 
 
@@ -44,9 +30,7 @@ class Session:
         self.mode, self.store, self.page, self.gui = mode, store, page, gui
 
     def stored(self) -> px4params.Store:
-        return px4params.Store.load(
-            self.store, px4params.load_schema(include_dronecan=False), classic=BUNDLED_CLASSIC
-        )
+        return load_store(self.store)
 
     def value(self, instance: str) -> Any:
         """An instance's stored value without its p_version fields (the code fills them in)."""
@@ -80,51 +64,21 @@ def _without_versions(value: Any) -> Any:
 
 @pytest.fixture(scope="module")
 def browser() -> Iterator[Any]:
-    with sync_api.sync_playwright() as p:
-        chromium = p.chromium.launch(executable_path=CHROMIUM, headless=True, args=["--no-sandbox"])
-        yield chromium
-        chromium.close()
-
-
-def _page(browser: Any, width: int = 1400, height: int = 1000) -> tuple[Any, Any, list[str]]:
-    context = browser.new_context(viewport={"width": width, "height": height})
-    page = context.new_page()
-    page.set_default_timeout(TIMEOUT)
-    errors: list[str] = []
-    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
-    page.on("pageerror", lambda e: errors.append(str(e)))
-    return context, page, errors
-
-
-def _store(tmp_path: Path) -> Path:
-    subprocess.run(
-        [*CLI, "run", str(AIRFRAME)],
-        env=env_for(tmp_path),
-        cwd=tmp_path,
-        check=True,
-        capture_output=True,
-        timeout=120,
-    )
-    return tmp_path / "vehicle.store"
+    with chromium() as launched:
+        yield launched
 
 
 def _session(
     mode: str, browser: Any, tmp_path: Path, width: int = 1400, height: int = 1000
 ) -> Iterator[Session]:
-    store = _store(tmp_path)
-    env = env_for(tmp_path)
+    store = make_store(tmp_path)
     served = None
     if mode == "udp":
-        served = Started(
-            [*SERVE, "--store", str(store), "--bench", str(FAULTS)],
-            r"on udp 127\.0\.0\.1:(\d+) ",
-            env,
-            tmp_path,
-        )
-        gui = Gui(["--udp", f"127.0.0.1:{served.match[1]}"], env, tmp_path)
+        served = serve(store)
+        gui = gui_on_udp(served, tmp_path)
     else:
-        gui = Gui(["--store", str(store)], env, tmp_path)
-    context, page, errors = _page(browser, width, height)
+        gui = gui_on_store(store)
+    context, page, errors = open_page(browser, width, height)
     try:
         page.goto(gui.url)
         page.wait_for_selector("body[data-ready=true]")
@@ -146,12 +100,6 @@ def session(request: Any, browser: Any, tmp_path: Path) -> Iterator[Session]:
 @pytest.fixture
 def udp(browser: Any, tmp_path: Path) -> Iterator[Session]:
     yield from _session("udp", browser, tmp_path)
-
-
-def _shot(page: Any, name: str, tmp_path: Path, element: Any = None) -> None:
-    folder = Path(os.environ.get("PX4PARAMS_SCREENSHOTS") or tmp_path)
-    folder.mkdir(parents=True, exist_ok=True)
-    (element or page).screenshot(path=str(folder / name))
 
 
 # -- variants keep their values ----------------------------------------------------------------
@@ -227,7 +175,7 @@ def test_a_new_instance_starts_from_the_driver_defaults_with_a_warning(
     )
     assert page.inner_text("#review-write") == "Write anyway"
     if session.mode == "store":
-        _shot(page, "gui-review-warning.png", tmp_path, page.locator("dialog#review"))
+        shot(page, "gui-review-warning.png", tmp_path, page.locator("dialog#review"))
     assert session.write() == ["acknowledged: 7"]
     assert session.value("INA238#2") == {
         "bus": {"i2c": {"bus_id": 1, "address": 0x45}},
@@ -330,10 +278,10 @@ def test_the_vehicles_devices_come_first_then_the_picker(session: Session, tmp_p
         page.wait_for_selector(".instance[data-instance='INA238#1'] .badge.critical")
         blocks = session.card("INA238#1").locator(".blocks").inner_text()
         assert blocks.startswith("Blocks arming:\ncritical:")
-        _shot(page, "gui-manifest.png", tmp_path)
+        shot(page, "gui-manifest.png", tmp_path)
         header = page.locator("header").bounding_box()["height"]
         page.evaluate(f"scrollTo(0, document.querySelector('#add-a-device').offsetTop - {header})")
-        _shot(page, "gui-picker.png", tmp_path)
+        shot(page, "gui-picker.png", tmp_path)
 
 
 def test_fields_read_in_words_with_units_ranges_and_hex(session: Session) -> None:
@@ -455,7 +403,7 @@ def test_a_removed_instance_leaves_the_health_view(udp: Session, tmp_path: Path)
     )
     texts = page.locator("#messages .text").all_inner_texts()
     assert len(texts) == len(set(texts))
-    _shot(page, "gui-health.png", tmp_path)
+    shot(page, "gui-health.png", tmp_path)
     page.click("button[data-tab='manifest']")
     udp.card("INA238#1").locator("button.remove").click()
     assert udp.review() == ["remove INA238#1 (I2C bus 2, 0x45)"]

@@ -16,42 +16,29 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-import px4params
 import pytest
 import websockets
-from gui_server import CLI, Gui, env_for
+from gui_server import CLI, Gui, env_for, gui_on_store, load_store, make_store
 from px4params.cli.commands.gui import _is_loopback
 from px4params.gui.admission import allowed_hosts
-from px4params.store.classic import BUNDLED_CLASSIC
 
-REPO = Path(__file__).resolve().parents[1]
-AIRFRAME = REPO / "examples" / "two_batteries.airframe"
 WRITE = json.dumps({"changes": [{"name": "INA238_INST", "value": 0}]})  # removes both INA238s
 
 
 @pytest.fixture
 def store_file(tmp_path: Path) -> Path:
-    subprocess.run(
-        [*CLI, "run", str(AIRFRAME)],
-        env=env_for(tmp_path),
-        cwd=tmp_path,
-        check=True,
-        capture_output=True,
-        timeout=120,
-    )
-    return tmp_path / "vehicle.store"
+    return make_store(tmp_path)
 
 
 @pytest.fixture
 def gui(store_file: Path) -> Iterator[Gui]:
-    served = Gui(["--store", str(store_file)], env_for(store_file.parent), store_file.parent)
+    served = gui_on_store(store_file)
     yield served
     served.stop()
 
 
 def _instances(store_file: Path) -> list[str]:
-    schema = px4params.load_schema(include_dronecan=False)
-    return px4params.Store.load(store_file, schema, classic=BUNDLED_CLASSIC).instances("INA238")
+    return load_store(store_file).instances("INA238")
 
 
 def request(

@@ -551,6 +551,9 @@ def test_a_cache_entry_of_the_wrong_shape_is_rebuilt_with_a_note(
         ("param", "--store", "{store}", "show"),
         ("param", "--store", "{store}", "show", "-l", "INA238#0"),
         ("types",),
+        ("--help",),  # argparse ignores a failed write of its help
+        ("param", "--help"),
+        ("--version",),
     ],
 )
 def test_a_full_disk_for_the_output_is_one_line(args: tuple[str, ...], store: Path) -> None:

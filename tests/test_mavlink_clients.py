@@ -291,3 +291,46 @@ def test_parameter_download_over_ftp_is_refused_as_px4_does(
         assert "OpenFileRO failed, file/directory not found" in caplog.text
     finally:
         conn.close()
+
+
+# -- the page's own client (px4params gui --udp) --------------------------------------------
+
+
+class CurrentValueEcho(MavlinkParamServer):
+    """``mavlink serve`` acknowledging a write as the MAVLink parameter protocol words it
+    (mavlink.io/en/services/parameter.html: after PARAM_SET the recipient broadcasts the
+    *current* value): a float16 leaf's echo is the value it stores, not the float32 sent."""
+
+    def _echo(self, msg: Any, index: int, stored: Any) -> Any:
+        return self._value_msg(index, stored)
+
+
+@pytest.mark.parametrize("server", [MavlinkParamServer, CurrentValueEcho])
+def test_the_pages_client_writes_a_float16_leaf(
+    schema: px4params.Schema, tmp_path: Path, server: type[MavlinkParamServer]
+) -> None:
+    """The page's MAVLink client takes a float16 leaf's write as acknowledged whether the
+    vehicle echoes the float32 sent or the float16 it stores, and reports the stored value;
+    another value echoed is still a refusal."""
+    from px4params.gui.vehicle import MavlinkVehicle
+
+    store = px4params.Store(schema, classic=BUNDLED_CLASSIC)
+    store.add("INA238#1")
+    served = server(store, "127.0.0.1", 0, save_path=tmp_path / "vehicle.store")
+    served.start()
+    page = None
+    try:
+        page = MavlinkVehicle(served.address, timeout=10.0)
+        result = page.write("INA238_1Q", 0.0005)
+        assert (result.ok, result.reason) == (True, "")
+        assert result.value == FLOAT16_0_0005  # what is stored, read back
+        assert served.store.get("INA238#1.shunt") == FLOAT16_0_0005
+        refused = page.write("INA238_1Q", 1e6)  # float16 tops out at 65504
+        assert not refused.ok and refused.value == FLOAT16_0_0005
+        assert refused.reason == (
+            "INA238_1Q: INA238#1: shunt: value 1000000 is out of range (expected -65504 to 65504)"
+        )
+    finally:
+        if page is not None:
+            page.close()
+        served.stop()

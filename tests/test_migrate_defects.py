@@ -17,7 +17,6 @@ expected answer is PX4's behaviour as the issue states it, not what the code com
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
@@ -25,6 +24,7 @@ from px4params import migrate
 from px4params.cli.main import main
 from px4params.formats.ulog import ULogWriter
 from px4params.vehicle import devid
+from px4params.vehicle.boards import load_boards
 
 IST8310_INTERNAL = devid.encode("i2c", 4, 0x0C, 0x06)  # 396321, Pixhawk 6C's
 IST8310_GPS = devid.encode("i2c", 1, 0x0E, 0x06)  # 396809, a GPS puck's
@@ -187,50 +187,24 @@ def test_7_a_monitor_the_i2c_launcher_started_is_carried(tmp_path: Path, capsys)
     assert report["left_out"] == []
 
 
-@dataclass(frozen=True)
-class SwitchRow:  # the agreed px4params.vehicle.boards.SwitchStart, for this test only
-    param: str
-    driver: str
-    bus: int
-    address: int | None
-    args: str
-    source: str
-
-
-@dataclass(frozen=True)
-class DeviceRow:  # the agreed px4params.vehicle.boards.BoardDevice, for these tests only
-    driver: str
-    kind: str
-    bus_kind: str
-    bus: int | None
-    address: int | None
-    rotation: int | None
-    internal: bool
-    source: str
-
-
-@dataclass(frozen=True)
-class BoardStandIn:  # the agreed Board's fields these tests need
-    name: str
-    devices: tuple[DeviceRow, ...] = ()
-    i2c_launcher_buses: tuple[int, ...] = ()
-    switches: tuple[SwitchRow, ...] = ()
-    external_i2c_buses: tuple[int, ...] = ()
-    internal_i2c_buses: tuple[int, ...] = ()
-
-
 def test_8_switch_started_drivers_run_where_the_evidence_says(tmp_path: Path, capsys) -> None:
     console = "ms4525do #0 on I2C bus 2 (external) address 0x28\n"
     log = ulog_file(tmp_path / "a.ulg", {"SENS_EN_MS4525DO": 1}, console)
     report = run_json(log, capsys)
     assert instances(report) == [("MS4525DO#0", 2, 0x28, None)]
     assert not [a for a in report["assumptions"] if "is a guess" in a]
-    # Without evidence, one instance per row of the board's switch (one per power port).
-    source = "boards/px4/fmu-v6x/init/rc.board_sensors"
-    board = BoardStandIn("px4_fmu-v6x", switches=(
-        SwitchRow("SENS_EN_INA238", "ina238", 1, None, "-X -b 1 -t 1 -k start", source),
-        SwitchRow("SENS_EN_INA238", "ina238", 2, None, "-X -b 2 -t 2 -k start", source),
-    ))  # fmt: skip
+    # Without evidence, one instance per row of the board's switch (one per power port). PX4's
+    # boards/px4/fmu-v6x/init/rc.board_sensors: `if param compare SENS_EN_INA238 1` starts
+    # `ina238 -X -b 1 -t 1 -k start`, and `ina238 -X -b 2 -t 2 -k start` when the board has
+    # its second power port ($HAVE_PM2); the board table's rows name their lines.
+    board = load_boards().by_name("px4_fmu-v6x")
+    assert board is not None
+    rows = [s for s in board.switches if s.param == "SENS_EN_INA238"]
+    assert [(r.bus, r.args) for r in rows] == [
+        (1, "-X -b 1 -t 1 -k start"),
+        (2, "-X -b 2 -t 2 -k start"),
+    ]
+    assert all("boards/px4/fmu-v6x/init/rc.board_sensors:" in r.source for r in rows)
     config = migrate.read_config(params_file(tmp_path / "p.params", {"SENS_EN_INA238": 1}))
     proposal = migrate.migrate(config, board=board)
     got = [
@@ -240,7 +214,7 @@ def test_8_switch_started_drivers_run_where_the_evidence_says(tmp_path: Path, ca
     assert got == [("INA238#0", 1, 0x45), ("INA238#1", 2, 0x45)]
     assert proposal.instances[1].origin == (
         "SENS_EN_INA238 = 1: ina238 started on I2C bus 2 (the board starts it with 'ina238 -X -b "
-        f"2 -t 2 -k start' ({source})) at the driver's default address 0x45"
+        f"2 -t 2 -k start' ({rows[1].source})) at the driver's default address 0x45"
     )
     assert proposal.board == "px4_fmu-v6x"
     # Nothing says where: bus 1, and the report says it guessed.
@@ -343,8 +317,6 @@ def test_a_board_known_only_for_later_releases_is_named_so(tmp_path: Path, capsy
     board it has was called "unknown board 'px4_fmu-v5'" for an older file (and a log's
     ver_hw "not in the board table"). The board is known; its start scripts of that release
     are not, and the message says that."""
-    if not boards_available():
-        pytest.skip("needs px4params.vehicle.boards (the board table)")
     path = params_file(tmp_path / "pixhawk4.params", {"CAL_MAG0_ID": IST8310_GPS}, "1.10.1 dev")
     assert main(["migrate", str(path), "--board", "px4_fmu-v5"]) == 1
     assert capsys.readouterr().err == (
@@ -388,35 +360,26 @@ def test_another_autopilots_file_is_refused(tmp_path: Path, capsys) -> None:
         path.write_text(path.read_text().replace(stack, "ArduPilot", 1))
 
 
-def boards_available() -> bool:
-    try:
-        import px4params.vehicle.boards  # noqa: F401
-    except ImportError:
-        return False
-    return True
-
-
 def test_the_board_table_says_what_the_board_starts(tmp_path: Path) -> None:
-    """A board row starting a compass (`ist8310 -X -b 1 -R 10 start`, `ist8310 -I -R 10
-    start`) leaves that compass out, naming the row; `-I` without `-b` covers the internal
-    buses only, so a GPS compass on another external bus is still an instance. A switch whose
-    rows have no -b (rc.sensors' `-X`: every external bus) gives one instance and says the bus
-    is not known; the launcher's buses are reported when nothing says what it found."""
-    script = "boards/test/init/rc.board_sensors"
-    board = BoardStandIn(
-        "test_board",
-        devices=(
-            DeviceRow("ist8310", "mag", "I2C", 1, None, 10, False, f"{script}:30"),
-            DeviceRow("ist8310", "mag", "I2C", None, None, 10, True, f"{script}:33"),
-        ),
-        i2c_launcher_buses=(1, 2),
-        switches=tuple(
-            SwitchRow("SENS_EN_MS4525DO", "ms4525do", bus, None, "start -X", "rc.sensors:148")
-            for bus in (1, 2, 4)
-        ),
-        external_i2c_buses=(1, 2, 4),
-        internal_i2c_buses=(3,),
-    )
+    """A board row starting a compass leaves that compass out, naming the row; `-I` without
+    `-b` covers the internal buses only, so a GPS compass on another external bus is still an
+    instance. A switch whose rows have no -b (rc.sensors' `-X`: every external bus) gives one
+    instance and says the bus is not known; the launcher's buses are reported when nothing says
+    what it found. Pixhawk 4 (px4_fmu-v5), as PX4's boards/px4/fmu-v5/init/rc.board_sensors
+    starts it: `ist8310 -I -R 10 start` (internal I2C bus 3) and `ist8310 -X -b 1 -R 10 start`
+    (its GPS port, external bus 1); external buses 1, 2, 4 (boards/px4/fmu-v5/src/i2c.cpp)."""
+    boards = load_boards()
+    board = boards.by_name("px4_fmu-v5")
+    assert board is not None
+    assert (board.external_i2c_buses, board.internal_i2c_buses) == ((1, 2, 4), (3,))
+    ist8310 = {d.args: d for d in board.devices if d.driver == "ist8310"}
+    internal, gps = ist8310["-I -R 10 start"], ist8310["-X -b 1 -R 10 start"]
+    ms4525do = [s for s in board.switches if s.param == "SENS_EN_MS4525DO"]
+    assert [(s.bus, s.args) for s in ms4525do] == [
+        (1, "start -X"),
+        (2, "start -X"),
+        (4, "start -X"),
+    ]
     rows = {
         "CAL_MAG0_ID": devid.encode("i2c", 3, 0x0E, 0x06), "CAL_MAG0_ROT": -1,
         "CAL_MAG1_ID": IST8310_GPS, "CAL_MAG1_ROT": 0,
@@ -428,11 +391,21 @@ def test_the_board_table_says_what_the_board_starts(tmp_path: Path) -> None:
     got = [(i.name, i.values["bus.i2c.bus_id"]) for i in proposal.instances]
     assert got == [("MS4525DO#0", 1), ("IST8310#0", 2)]
     lines = {o.found.split(" = ")[0]: o.line for o in proposal.left_out}
-    assert lines["CAL_MAG0_ID"].endswith(f": started by the board's script ({script}:33)")
-    assert lines["CAL_MAG1_ID"].endswith(f": started by the board's script ({script}:30)")
+    assert lines["CAL_MAG0_ID"].endswith(f": started by the board's script ({internal.source})")
+    assert lines["CAL_MAG1_ID"].endswith(f": started by the board's script ({gps.source})")
     assert proposal.assumptions == [
-        "SENS_EN_MS4525DO: test_board starts 'ms4525do start -X' on every external I2C bus (1, "
-        "2, 4; rc.sensors:148), so the bus it is found on is not known: bus 1 proposed",
+        "SENS_EN_MS4525DO: px4_fmu-v5 starts 'ms4525do start -X' on every external I2C bus (1, "
+        f"2, 4; {ms4525do[0].source}), so the bus it is found on is not known: bus 1 proposed",
+    ]
+    # Pixhawk 6X runs `i2c_launcher start -b 1` (and `-b 2` with its second power port) when
+    # no SENS_EN_INA2xx is 1 (boards/px4/fmu-v6x/init/rc.board_sensors).
+    v6x = boards.by_name("px4_fmu-v6x")
+    assert v6x is not None and v6x.i2c_launcher_buses == (1, 2)
+    proposal = migrate.migrate(
+        migrate.read_config(params_file(tmp_path / "c.params", {"SENS_EN_MS4525DO": 0})),
+        board=v6x,
+    )
+    assert proposal.assumptions == [
         "the board's i2c_launcher scans I2C bus 1, 2 for power monitors (INA226, INA228, "
         "INA238) when no SENS_EN_INA* is set: a QGC .params does not say which it found",
     ]

@@ -128,6 +128,19 @@ class InputFileError(Px4ParamsError, OSError):
         return f"{self.filename}: {self.strerror}"
 
 
+class OutputFileError(Px4ParamsError, OSError):
+    """A file that cannot be written (:mod:`px4params.writing`): not a regular file (a FIFO, a
+    device, a folder), read-only, or the write failed; the file is left as it was and no
+    temporary file stays.
+
+    It is an ``OSError`` too (``strerror`` the reason, ``filename`` the path). ``str()`` is one
+    line: ``FILE: cannot write: a FIFO, not a regular file``.
+    """
+
+    def __str__(self) -> str:
+        return f"{self.filename}: {self.strerror}"
+
+
 class TransferError(Px4ParamsError):
     """CAN frames do not form one valid DroneCAN transfer (wrong toggle or tail bits, mixed
     transfer IDs, missing first or last frame, repeated or reordered frames, CRC mismatch).

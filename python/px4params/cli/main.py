@@ -125,18 +125,8 @@ def _command_in(argv: Sequence[str]) -> str | None:
 
 def main(argv: Sequence[str] | None = None) -> int:
     words = list(sys.argv[1:] if argv is None else argv)
-    if words[:1] == ["--version"]:  # (as argparse's version action: it ends the parse)
-        try:
-            print("\n".join(version_lines()), flush=True)
-        except BrokenPipeError:
-            return EXIT_FAILED
-        return EXIT_OK
-    command = _command_in(words)
-    # Without a command there is nothing to run: the parser reports usage or prints --help.
-    parser = declare(only=command or "", words=words)
-    args = parser.parse_args(words)
     try:
-        status = int(args.func(args))
+        status = _run(words)
         # Written now, so that a full disk is this command's error (not a traceback of the
         # interpreter's flush at exit).
         sys.stdout.flush()
@@ -155,6 +145,24 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_FAILED
     except KeyboardInterrupt:
         return EXIT_INTERRUPTED
+
+
+def _run(words: list[str]) -> int:
+    """The command ``words`` ask for, its exit status; ``--version`` and ``--help`` print and
+    end (their output's errors are reported as every command's)."""
+    if words[:1] == ["--version"]:  # (as argparse's version action: it ends the parse)
+        print("\n".join(version_lines()))
+        return EXIT_OK
+    command = _command_in(words)
+    # Without a command there is nothing to run: the parser reports usage or prints --help.
+    parser = declare(only=command or "", words=words)
+    try:
+        args = parser.parse_args(words)
+    except SystemExit as e:
+        if e.code not in (0, None):  # a usage error: usage and the error on stderr
+            raise
+        return EXIT_OK  # --help printed
+    return int(args.func(args))
 
 
 #: Errors of writing the output (``> /dev/full``, a full disk or quota, a file size limit, a

@@ -398,6 +398,14 @@ def _argparse() -> Any:
                     _width = _terminal_width()
                 return self.formatter_class(prog=self.prog, width=_width - 2)  # type: ignore[no-any-return]
 
+            def _print_message(self, message: str, file: Any = None) -> None:
+                # argparse ignores a failed write; --help's failing (a full disk) is reported
+                # by px4params.cli.main as any command's output error
+                if file is sys.stdout and message:
+                    file.write(message)
+                    return
+                super()._print_message(message, file)
+
         _Parser = Parser
     return argparse
 

@@ -3,7 +3,9 @@
 accepted too, as hand-edited files have them). ``type`` is a ``MAV_PARAM_TYPE``: 6 int32,
 9 float32 (QGC writes floats with 18 decimals), the others as MAVLink numbers them.
 
-This is the one reader of the format; the store's import, migration and the page use it."""
+A Mission Planner (``NAME,VALUE``) or MAVProxy (``NAME VALUE``) file given instead is named as
+such in the error. This is the one reader of the format; the store's import, migration and the
+page use it."""
 
 from __future__ import annotations
 
@@ -13,7 +15,15 @@ from typing import NamedTuple
 from px4params.errors import NumberError, ParamFileError
 from px4params.numbers import abbreviated, parse_float, parse_int
 
-__all__ = ["FLOAT_TYPES", "INT32", "REAL32", "QgcRow", "format_line", "read"]
+__all__ = [
+    "FLOAT_TYPES",
+    "INT32",
+    "REAL32",
+    "QgcRow",
+    "format_line",
+    "other_ground_station_file",
+    "read",
+]
 
 #: MAV_PARAM_TYPE of the two kinds PX4 has.
 INT32, REAL32 = 6, 9
@@ -44,10 +54,13 @@ def read(text: str, where: str) -> list[QgcRow]:
         at = f"{where}:{number}"
         parts = [p.strip() for p in (line.split("\t") if "\t" in line else line.split())]
         if len(parts) != 5:
-            raise ParamFileError(
-                f"{at}: expected 5 TAB-separated columns "
-                f"(vehicle-id, component-id, name, value, type), got {len(parts)}"
+            expected = (
+                "expected 5 TAB-separated columns (vehicle-id, component-id, name, value, type)"
             )
+            other = _other_format(line)
+            if other is not None:
+                raise ParamFileError(f"{at}: {other}, not QGC's .params: {expected}")
+            raise ParamFileError(f"{at}: {expected}, got {len(parts)}")
         vehicle, component, name, value, kind = parts
         try:
             ids = (parse_int(vehicle), parse_int(component), parse_int(kind))
@@ -59,6 +72,44 @@ def read(text: str, where: str) -> list[QgcRow]:
             ) from None
         rows.append(QgcRow(number, ids[0], ids[1], name, _value(value, ids[2], at, name), ids[2]))
     return rows
+
+
+def other_ground_station_file(text: str) -> tuple[int, str] | None:
+    """The first parameter line of ``text`` and what it is when the file is Mission Planner's
+    or MAVProxy's (see :func:`_other_format`), else None."""
+    for number, raw in enumerate(text.splitlines(), start=1):
+        line = raw.strip()
+        if line and not line.startswith("#"):
+            found = _other_format(line) if "\t" not in line else None
+            return (number, found) if found is not None else None
+    return None
+
+
+def _other_format(line: str) -> str | None:
+    """What a two-column ``NAME,VALUE`` or ``NAME VALUE`` line is: the parameter files of
+    Mission Planner (ArduPilot's ``.param``: ``NAME,VALUE``) and MAVProxy (``param save``:
+    ``NAME VALUE``), which carry no ids and no type."""
+    comma = [p.strip() for p in line.split(",")]
+    if len(comma) == 2 and _looks_like(comma):
+        return "a comma-separated NAME,VALUE line (Mission Planner's parameter file)"
+    spaced = line.split()
+    if len(spaced) == 2 and _looks_like(spaced):
+        return "a NAME VALUE line (MAVProxy's parameter file)"
+    return None
+
+
+def _looks_like(pair: list[str]) -> bool:
+    """A parameter name (letters, digits, ``_``) and a number."""
+    name, value = pair
+    if not name or not (name[0].isalpha() or name[0] == "_"):
+        return False
+    if not all(c.isascii() and (c.isalnum() or c == "_") for c in name):
+        return False
+    try:
+        parse_float(value)
+    except (ValueError, NumberError):
+        return False
+    return True
 
 
 def _value(text: str, kind: int, at: str, name: str) -> int | float:

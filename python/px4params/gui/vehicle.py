@@ -19,6 +19,7 @@ from collections.abc import Callable
 from typing import Any
 
 from px4params.errors import CommandError, Px4ParamsError
+from px4params.gcs.codec import f16_from_float, float_from_f16
 from px4params.links.mavlink import param_set_message, param_value_of
 from px4params.reading import METADATA_JSON, read_text
 
@@ -194,6 +195,17 @@ class StoreVehicle(_Base):
 
 
 # -- a vehicle over MAVLink ------------------------------------------------------------------
+
+
+def _as_stored(value: int | float, is_float: bool) -> tuple[int | float, ...]:
+    """The echoes that acknowledge a write of ``value``. A float goes out as float32;
+    ``mavlink serve`` echoes that float32, and a vehicle that echoes the current value as the
+    MAVLink parameter protocol words it echoes a float16 leaf as stored (rounded by the
+    DroneCAN rule). Any other value echoed is what the vehicle kept."""
+    if not is_float:
+        return (value,)
+    float32 = struct.unpack("<f", struct.pack("<f", value))[0]
+    return (float32, float_from_f16(f16_from_float(value)))
 
 
 class MavlinkVehicle(_Base):
@@ -408,8 +420,9 @@ class MavlinkVehicle(_Base):
 
     def write(self, name: str, value: int | float, timeout: float = 1.5) -> WriteResult:
         """PARAM_SET (PX4's bytewise int32 encoding), then the vehicle's answer: acknowledged
-        when the echo carries the value sent, refused with PARAM_ERROR and STATUSTEXT's reason
-        (or when it echoes another value), and read back."""
+        when the echo carries the value sent (a float as float32, or as the float16 a narrower
+        leaf stores), refused with PARAM_ERROR and STATUSTEXT's reason (or when it echoes
+        another value), and read back."""
         mav = self._mav
         is_float = isinstance(value, float)
         kind = mav.MAV_PARAM_TYPE_REAL32 if is_float else mav.MAV_PARAM_TYPE_INT32
@@ -438,8 +451,7 @@ class MavlinkVehicle(_Base):
                 name, False, self.values.get(name), f"{name}: no answer from the vehicle"
             )
         echoed = values[0] if values else None
-        sent = struct.unpack("<f", struct.pack("<f", value))[0] if is_float else value
-        if errors or echoed != sent:
+        if errors or echoed not in _as_stored(value, is_float):
             reason = reasons[0] if reasons else f"{name}: the vehicle kept {echoed}"
             return WriteResult(name, False, echoed, reason)
         read = self.read(name)

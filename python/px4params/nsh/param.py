@@ -19,6 +19,7 @@ from px4params.errors import (
     InstanceError,
     NumberError,
     Px4ParamsError,
+    StoreFileError,
     ValueRangeError,
 )
 from px4params.numbers import abbreviated, dump_json, load_json, parse_float, parse_int
@@ -484,7 +485,11 @@ def _load(s: Session, a: argparse.Namespace, merge: bool) -> int:
     if paramfile.kind_of(source):
         report = paramfile.read(s.store, source, reset=not merge)
     else:
-        report = s.store.import_from(source) if merge else s.store.load_from(source)
+        try:
+            report = s.store.import_from(source) if merge else s.store.load_from(source)
+        except StoreFileError:
+            paramfile.refuse_other_ground_station_file(source)  # (Mission Planner's .param)
+            raise
     for line in report:
         print(line, file=s.out)
     if a.file:  # loading the store's own file changes nothing to save

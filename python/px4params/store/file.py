@@ -25,13 +25,13 @@ from __future__ import annotations
 
 import binascii
 import os
-import stat
 from collections.abc import Mapping
 
+from px4params import writing
 from px4params._native import check_store_file
 from px4params._records import TYPE_CHECKING
 from px4params.dsdl.schema import DataType
-from px4params.errors import Px4ParamsError, StoreError, StoreFileError
+from px4params.errors import OutputFileError, Px4ParamsError, StoreError, StoreFileError
 from px4params.reading import STORE, read_bytes
 from px4params.store.spec import ParamSpec
 
@@ -94,159 +94,12 @@ def save(store: Store, path: str | os.PathLike[str]) -> int:
 
 
 def write_file(path: str | os.PathLike[str], data: bytes, *, keep_backup: bool) -> int:
-    """Writes ``data`` to ``path`` atomically (with ``keep_backup``, the previous file becomes
-    ``path.bak``); returns its size.
-
-    Only a regular file is replaced, or a new one made: a directory, FIFO, device or socket
-    is refused, as is a file without write permission (``cannot write: read-only``: a rename
-    would replace it, and keep its mode). A symbolic link is followed: the file it points to
-    is replaced, the link stays. Temporary files carry the writer's process ID
-    (``.NAME.PID.XXXX.tmp``, ``NAME.bak.PID.tmp``); a failed save removes its own, and those
-    a killed save left behind are removed by the next save in the folder."""
-    given = os.fspath(path)
-    target = os.path.realpath(given)
-    _check_replaceable(target, given)
-    folder = os.path.dirname(target)
-    base = os.path.basename(target)
+    """:func:`px4params.writing.write_file`, a refusal reported as a
+    :class:`~px4params.errors.StoreFileError` (the store's files are saved through it)."""
     try:
-        import tempfile  # here: it costs a command 5 ms to import, and only saves need it
-
-        fd, tmp = tempfile.mkstemp(prefix=f".{base}.{os.getpid()}.", suffix=".tmp", dir=folder)
-    except OSError as e:
-        raise StoreFileError(f"cannot write: {e.strerror}", given) from None
-    try:
-        with os.fdopen(fd, "wb") as f:
-            # mkstemp makes the file private; give it the mode a new file gets (or the old
-            # file's), so that other users and tools can read the store as before.
-            os.fchmod(f.fileno(), _mode_for(target))
-            f.write(data)
-            f.flush()
-            os.fsync(f.fileno())
-        if keep_backup and os.path.exists(target):
-            _keep_backup(target, given)
-        os.replace(tmp, target)  # atomic: readers see the old file or the whole new one
-        _fsync_folder(folder)
-    except BaseException as e:  # every failed save leaves no temporary file
-        with _ignoring_os_errors():
-            os.unlink(tmp)
-        if isinstance(e, OSError):
-            raise StoreFileError(f"cannot write: {e.strerror}", given) from None
-        raise
-    _remove_stale(folder, base)
-    return len(data)
-
-
-def _kind(mode: int) -> str | None:
-    """What a file that is not a regular file is (None for a regular file)."""
-    kinds = (
-        (stat.S_ISREG, None),
-        (stat.S_ISDIR, "a directory"),
-        (stat.S_ISFIFO, "a FIFO"),
-        (stat.S_ISCHR, "a character device"),
-        (stat.S_ISBLK, "a block device"),
-        (stat.S_ISSOCK, "a socket"),
-    )
-    return next((name for test, name in kinds if test(mode)), "not a regular file")
-
-
-def _check_replaceable(target: str, given: str) -> None:
-    """Refuses to replace anything but a writable regular file (a new path is fine)."""
-    try:
-        info = os.stat(target)
-    except FileNotFoundError:
-        return  # a new file (its folder is checked by creating the temporary file)
-    except OSError as e:
-        raise StoreFileError(f"cannot write: {e.strerror}", given) from None
-    kind = _kind(info.st_mode)
-    if kind is not None:
-        raise StoreFileError(f"cannot write: {kind}, not a regular file", given)
-    # (root may write a 0444 file: its mode still says read-only)
-    if not info.st_mode & 0o222 or not os.access(target, os.W_OK):
-        raise StoreFileError("cannot write: read-only", given)
-
-
-def _remove_stale(folder: str, base: str) -> None:
-    """Removes the temporary files of saves of ``base`` whose process is gone (killed while
-    saving); a running save's files are left alone."""
-    prefixes = (f".{base}.", f"{base}.bak.")
-    with _ignoring_os_errors():
-        for name in os.listdir(folder):
-            if not (name.startswith(prefixes) and name.endswith(".tmp")):
-                continue
-            rest = name[len(f".{base}.") if name.startswith(".") else len(f"{base}.bak.") :]
-            pid = rest.split(".", 1)[0]
-            if pid.isdigit() and int(pid) != os.getpid() and not _alive(int(pid)):
-                with _ignoring_os_errors():
-                    os.unlink(os.path.join(folder, name))
-
-
-def _alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except OSError:  # another user's process: alive
-        return True
-    return True
-
-
-def _mode_for(target: str) -> int:
-    try:
-        return os.stat(target).st_mode & 0o777
-    except OSError:
-        umask = os.umask(0)
-        os.umask(umask)
-        return 0o666 & ~umask
-
-
-def _keep_backup(target: str, given: str) -> None:
-    """``target.bak`` becomes the current file, without a moment where ``target`` is gone. A
-    ``.bak`` that is not a regular file (or a link) is refused, naming it."""
-    backup = target + ".bak"
-    shown = backup if os.path.islink(given) else given + ".bak"
-    try:
-        mode = os.lstat(backup).st_mode
-    except FileNotFoundError:
-        mode = stat.S_IFREG
-    except OSError as e:
-        raise StoreFileError(f"cannot keep the previous save: {e.strerror}", shown) from None
-    if not stat.S_ISLNK(mode) and _kind(mode) is not None:
-        raise StoreFileError(
-            f"cannot keep the previous save here: {_kind(mode)}, not a regular file", shown
-        )
-    staging = f"{backup}.{os.getpid()}.tmp"
-    with _ignoring_os_errors():
-        os.unlink(staging)
-    try:
-        try:
-            os.link(target, staging)
-        except OSError:  # no hard links here: copy instead
-            with open(target, "rb") as src, open(staging, "wb") as dst:
-                dst.write(src.read())
-                dst.flush()
-                os.fsync(dst.fileno())
-        os.replace(staging, backup)
-    except OSError as e:
-        with _ignoring_os_errors():
-            os.unlink(staging)
-        raise StoreFileError(f"cannot keep the previous save: {e.strerror}", shown) from None
-
-
-def _fsync_folder(folder: str) -> None:
-    with _ignoring_os_errors():
-        fd = os.open(folder, os.O_RDONLY)
-        try:
-            os.fsync(fd)
-        finally:
-            os.close(fd)
-
-
-class _ignoring_os_errors:
-    def __enter__(self) -> None:
-        return None
-
-    def __exit__(self, kind: Any, value: Any, tb: Any) -> bool:
-        return kind is not None and issubclass(kind, OSError)
+        return writing.write_file(path, data, keep_backup=keep_backup)
+    except OutputFileError as e:
+        raise StoreFileError(e.strerror, e.filename) from None
 
 
 # -- reading ------------------------------------------------------------------------------------

@@ -113,6 +113,23 @@ def write(store: Store, path: str) -> int:
 # -- reading ----------------------------------------------------------------------------------
 
 
+def refuse_other_ground_station_file(path: str) -> None:
+    """Raises a :class:`ParamFileError` naming the format when ``path`` (not a store file) is
+    Mission Planner's or MAVProxy's parameter file; returns otherwise."""
+    from px4params.formats.qgc_params import other_ground_station_file
+
+    try:
+        found = other_ground_station_file(read_text(path, PARAM_FILE))
+    except (OSError, UnicodeDecodeError):
+        return
+    if found is not None:
+        line, what = found
+        raise ParamFileError(
+            f"{path}:{line}: {what}, not a store file or QGC's .params: param load and import "
+            "read store files, .params (QGC) and .json"
+        )
+
+
 def read(store: Store, path: str, *, reset: bool) -> list[str]:
     """Applies a ``.params`` or JSON file (after resetting the store when ``reset``); all of
     it or, on any error, nothing. Returns report lines."""

@@ -21,6 +21,7 @@ from px4params.store.store import STORE_ENV, default_store_path
 from px4params.vehicle.autostart import configured, load_manifest, plan, plan_lines, script
 from px4params.vehicle.drivers import DEFAULT_DRIVERS, DRIVERS_ENV, load_drivers
 from px4params.vehicle.simbench import LEGACY_PROBES, RunResult, healthy_bench, load_bench, run
+from px4params.writing import write_file
 
 if TYPE_CHECKING:
     import argparse
@@ -111,11 +112,7 @@ def cmd_run(args: argparse.Namespace) -> int:
 
 
 def _write(path: str, content: str | bytes) -> None:
-    data = content.encode() if isinstance(content, str) else content
-    try:
-        Path(path).write_bytes(data)
-    except OSError as e:
-        raise CommandError(f"cannot write {path}: {e.strerror}") from None
+    write_file(path, content.encode() if isinstance(content, str) else content, keep_backup=False)
 
 
 def _report(result: RunResult, i2c_buses: list[int], have_manifest: bool) -> list[str]:

@@ -9,9 +9,9 @@ from typing import Any
 
 from px4params._records import TYPE_CHECKING
 from px4params.cli.parsing import RawDescriptionHelpFormatter
-from px4params.errors import CommandError
 from px4params.numbers import counted
 from px4params.status import EXIT_FAILED, EXIT_OK
+from px4params.writing import write_file
 
 if TYPE_CHECKING:
     import argparse
@@ -26,11 +26,7 @@ def cmd_health(args: argparse.Namespace) -> int:
     if args.timeline:
         from px4params.vehicle.timeline import render_svg
 
-        try:
-            with open(args.timeline, "w", encoding="utf-8") as f:
-                f.write(render_svg(result))
-        except OSError as e:
-            raise CommandError(f"{args.timeline}: cannot write: {e.strerror}") from None
+        write_file(args.timeline, render_svg(result).encode(), keep_backup=False)
     if args.json:
         print(json.dumps(result.as_dict(), indent=2))
     else:

@@ -12,8 +12,8 @@ from typing import TYPE_CHECKING, Any
 from px4params.cli.options import dsdl_option
 from px4params.cli.parsing import ArgumentParser, RawDescriptionHelpFormatter
 from px4params.dsdl.schema import load_schema
-from px4params.errors import CommandError
 from px4params.status import EXIT_OK
+from px4params.writing import write_file
 
 if TYPE_CHECKING:
     import argparse
@@ -64,11 +64,7 @@ def cmd_metadata(args: argparse.Namespace) -> int:
         if path == "-":
             sys.stdout.write(text)
             continue
-        try:
-            with open(path, "w", encoding="utf-8") as f:
-                f.write(text)
-        except OSError as e:
-            raise CommandError(f"{path}: cannot write: {e.strerror}") from None
+        write_file(path, text.encode(), keep_backup=False)
         if not to_stdout:  # stdout carries the other output, unmixed
             print(f"wrote {path}: {what}")
     return EXIT_OK

@@ -9,9 +9,9 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 from px4params.cli.parsing import ArgumentParser, RawDescriptionHelpFormatter
-from px4params.errors import CommandError
 from px4params.numbers import counted
 from px4params.status import EXIT_OK
+from px4params.writing import write_file
 
 if TYPE_CHECKING:
     import argparse
@@ -37,11 +37,7 @@ def cmd_migrate(args: argparse.Namespace) -> int:
     proposal = migrate.migrate(config, schema, table, args.board)
     airframe = proposal.airframe()
     if args.output is not None:
-        try:
-            with open(args.output, "w", encoding="utf-8") as f:
-                f.write(airframe)
-        except OSError as e:
-            raise CommandError(f"{args.output}: cannot write: {e.strerror}") from None
+        write_file(args.output, airframe.encode(), keep_backup=False)
     if args.json:
         print(json.dumps(proposal.as_dict(), indent=2))
     elif args.output is not None:

@@ -1,0 +1,148 @@
+"""Every file a command is asked to write goes through the one safe writer
+(``px4params.writing``): ``metadata --json/--header/--firmware``, ``migrate -o``,
+``health --timeline``, ``autostart run --timeline/--events/--ulog``. Only a regular file is
+replaced, or a new one made; a FIFO (which hung the command), a socket or a folder is refused
+with one line naming it, left as it was, and no temporary file stays behind."""
+
+from __future__ import annotations
+
+import os
+import resource
+import signal
+import socket
+import stat
+import subprocess
+import sys
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+CLI = [sys.executable, "-m", "px4params"]
+AIRFRAME = REPO / "examples" / "two_batteries.airframe"
+BENCH = REPO / "examples" / "two_batteries.bench.toml"
+PARAMS = REPO / "examples" / "two_batteries.params"
+
+
+def _fifo(path: Path) -> Path:
+    os.mkfifo(path)
+    return path
+
+
+def _socket(path: Path) -> Path:
+    with socket.socket(socket.AF_UNIX) as s:
+        s.bind(str(path))
+    return path
+
+
+def _directory(path: Path) -> Path:
+    path.mkdir()
+    return path
+
+
+def _px4params(tmp: Path, *argv: str) -> subprocess.CompletedProcess[str]:
+    env = {k: v for k, v in os.environ.items() if not k.startswith("PX4PARAMS_")}
+    env["PX4PARAMS_CACHE_DIR"] = os.environ.get("PX4PARAMS_CACHE_DIR", str(tmp / "cache"))
+    env["PX4PARAMS_STORE"] = str(tmp / "vehicle.store")
+    # a FIFO opened for writing without a reader blocks: the bound says "does not hang"
+    return subprocess.run(
+        [*CLI, *argv], capture_output=True, text=True, env=env, cwd=tmp, timeout=120
+    )
+
+
+def _ulog(tmp: Path) -> Path:
+    log = tmp / "run.ulg"
+    ran = _px4params(
+        tmp, "autostart", "run", "--airframe", str(AIRFRAME), "--bench", str(BENCH),
+        "--ulog", str(log),
+    )  # fmt: skip
+    assert log.is_file(), ran.stderr
+    return log
+
+
+#: Each command with its output file as ``{out}``; ``{log}`` is a bench run's ULog.
+COMMANDS = {
+    "metadata --json": ["metadata", "--json", "{out}"],
+    "metadata --header": ["metadata", "--header", "{out}"],
+    "metadata --firmware": ["metadata", "--firmware", "{out}"],
+    "migrate -o": ["migrate", str(PARAMS), "-o", "{out}"],
+    "health --timeline": ["health", "{log}", "--timeline", "{out}"],
+    "autostart run --timeline": [
+        "autostart", "run", "--airframe", str(AIRFRAME), "--bench", str(BENCH), "--timeline",
+        "{out}",
+    ],
+    "autostart run --events": [
+        "autostart", "run", "--airframe", str(AIRFRAME), "--bench", str(BENCH), "--events",
+        "{out}",
+    ],
+}  # fmt: skip
+
+
+def _argv(command: str, out: Path, tmp: Path) -> list[str]:
+    log = str(_ulog(tmp)) if command.startswith("health") else ""
+    return [a.format(out=out, log=log) for a in COMMANDS[command]]
+
+
+def _leftovers(folder: Path) -> list[str]:
+    return sorted(p.name for p in folder.iterdir() if p.name.endswith(".tmp"))
+
+
+@pytest.mark.parametrize(
+    ("make", "kind"),
+    [(_fifo, "a FIFO"), (_socket, "a socket"), (_directory, "a directory")],
+    ids=["fifo", "socket", "directory"],
+)
+@pytest.mark.parametrize("command", sorted(COMMANDS))
+def test_an_output_that_is_not_a_regular_file_is_refused(
+    tmp_path: Path, command: str, make: Callable[[Path], Path], kind: str
+) -> None:
+    out = tmp_path / "outputs" / "out"
+    out.parent.mkdir()
+    make(out)
+    mode = os.lstat(out).st_mode
+    result = _px4params(tmp_path, *_argv(command, out, tmp_path))
+    assert result.returncode == 1, result.stdout
+    assert result.stderr == f"px4params: error: {out}: cannot write: {kind}, not a regular file\n"
+    assert os.lstat(out).st_mode == mode
+    assert _leftovers(out.parent) == []
+
+
+@pytest.mark.parametrize("command", ["migrate -o", "health --timeline", "metadata --header"])
+def test_a_regular_file_is_replaced_whole(tmp_path: Path, command: str) -> None:
+    out = tmp_path / "outputs" / "out"
+    out.parent.mkdir()
+    out.write_text("x" * 1_000_000, encoding="utf-8")  # longer than any of the outputs
+    os.chmod(out, 0o640)
+    result = _px4params(tmp_path, *_argv(command, out, tmp_path))
+    assert result.returncode in (0, 1), result.stderr  # health: 1 when the run may not arm
+    assert f"wrote {out}" in result.stdout or f"to {out}" in result.stdout, result.stdout
+    text = out.read_text(encoding="utf-8")
+    assert "x" * 100 not in text and len(text) < 1_000_000
+    assert {"migrate -o": "param set", "health --timeline": "<svg"}.get(command, "#") in text
+    assert stat.S_IMODE(os.stat(out).st_mode) == 0o640  # the file's mode is kept
+    assert _leftovers(out.parent) == []
+
+
+def test_a_failed_write_leaves_the_old_file_and_no_temporary_file(tmp_path: Path) -> None:
+    """A write that fails half way (here the file size limit, ``ulimit -f``: EFBIG) keeps
+    the file as it was, and the temporary file is removed."""
+    out = tmp_path / "outputs" / "out.svg"
+    out.parent.mkdir()
+    out.write_text("old", encoding="utf-8")
+    log = _ulog(tmp_path)
+
+    def small_files() -> None:  # in the child: no SIGXFSZ, writes past 4 KiB fail
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+        resource.setrlimit(resource.RLIMIT_FSIZE, (4096, 4096))
+
+    env = {k: v for k, v in os.environ.items() if not k.startswith("PX4PARAMS_")}
+    env["PX4PARAMS_CACHE_DIR"] = os.environ.get("PX4PARAMS_CACHE_DIR", str(tmp_path / "cache"))
+    result = subprocess.run(
+        [*CLI, "health", str(log), "--timeline", str(out)],
+        capture_output=True, text=True, env=env, timeout=120, preexec_fn=small_files,
+    )  # fmt: skip
+    assert result.returncode == 1
+    assert result.stderr == f"px4params: error: {out}: cannot write: File too large\n"
+    assert out.read_text(encoding="utf-8") == "old"
+    assert sorted(p.name for p in out.parent.iterdir()) == ["out.svg"]
