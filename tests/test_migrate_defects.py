@@ -409,6 +409,14 @@ def test_the_board_table_says_what_the_board_starts(tmp_path: Path) -> None:
         "the board's i2c_launcher scans I2C bus 1, 2 for power monitors (INA226, INA228, "
         "INA238) when no SENS_EN_INA* is set: a QGC .params does not say which it found",
     ]
+    # With a power-monitor switch set, $INA_CONFIGURED is yes and the launcher does not run:
+    # the switch's starts are what runs, and nothing is left to guess about the launcher.
+    proposal = migrate.migrate(
+        migrate.read_config(params_file(tmp_path / "d.params", {"SENS_EN_INA238": 1})),
+        board=v6x,
+    )
+    assert [i.name for i in proposal.instances] == ["INA238#0", "INA238#1"]
+    assert not [a for a in proposal.assumptions if "i2c_launcher" in a], proposal.assumptions
 
 
 def test_console_lines_are_read_as_px4_prints_them() -> None:

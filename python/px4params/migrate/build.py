@@ -628,6 +628,12 @@ class _Builder:
         shown = ", ".join(str(b) for b in buses)
         if any(s.launcher for s in self.starts):
             return
+        # PX4's board scripts run the launcher only while no power-monitor switch is set
+        # ($INA_CONFIGURED == no): with one set, the switch's own starts are the truth.
+        switches = sorted(n for n, v in self.params.items() if _INA_SWITCH.fullmatch(n) and v)
+        when = getattr(self.board, "i2c_launcher_when", "") or ""
+        if switches and "INA_CONFIGURED" in when:
+            return
         what = (
             "the boot console shows none it started"
             if self.config.console is not None
@@ -710,6 +716,10 @@ def _differs(old: Any, new: Any) -> bool:
     if isinstance(old, float) or isinstance(new, float):
         return struct.pack("<f", float(old)) != struct.pack("<f", float(new))
     return bool(old != new)
+
+
+#: The power-monitor switches that keep PX4's i2c_launcher from running (SENS_EN_INA238, ...).
+_INA_SWITCH = re.compile(r"SENS_EN_INA2\d\d")
 
 
 def _shown(value: Any) -> str:
