@@ -50,10 +50,8 @@ HELP_EXCEPTIONS = {
 TIMEOUT = 120
 #: Pages whose examples still read ../shared/data, and why (the rest may not): they run as in
 #: the checkout, with ``examples/`` and ``../shared`` beside them.
-READS_SHARED_DATA = {
-    "docs/device-ids.md": "today's devtype table: issue 34 moves it into the package",
-    "docs/upgrade-guide.md": "its worked example is a real PX4 flight log (issue 34)",
-}
+#: Pages whose examples may read ../shared/data (none: a user has no such folder).
+READS_SHARED_DATA: dict[str, str] = {}
 
 
 class Example:
