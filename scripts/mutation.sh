@@ -37,7 +37,7 @@ TARGETS=(
   "health|$PY/vehicle/health.py,$PY/cli/commands/health.py|tests/test_flight_log.py tests/test_dronecan.py tests/test_planted_health.py -k 'health or first_failure'"
   "links|$PY/links|tests/test_dronecan.py tests/test_frames.py tests/test_mavlink.py tests/test_mavlink_clients.py tests/test_mavlink_metadata.py tests/test_planted_dronecan.py"
   "gui|$PY/gui|tests/test_gui.py tests/test_gui_files.py tests/test_planted_gui.py"
-  "migrate|$PY/migrate.py|tests/test_migrate.py tests/test_planted_migrate.py"
+  "migrate|$PY/migrate|tests/test_migrate.py tests/test_migrate_defects.py tests/test_migrate_corpus.py tests/test_planted_migrate.py"
   "vehicle|$PY/vehicle|tests/test_autostart.py tests/test_bench.py tests/test_devid.py tests/test_flight_log.py tests/test_planted_health.py tests/test_planted_devid.py"
   "store|$PY/store|tests/test_store.py tests/test_storefile.py tests/test_flat.py tests/test_param_cli.py"
   "rust-core|crates/px4params-core|"
