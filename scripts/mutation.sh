@@ -10,6 +10,19 @@
 #   MUTATION_BASELINE=1     without the tests/test_planted_*.py files (the "before" figures),
 #                           from scratch; a run after it tests again only its survivors
 #   MUTATION_FRESH=1        forget the targets' earlier results (kept in target/mutation)
+#   MUTATION_RUST_FILES="crates/px4params-core/src/scalar.rs crates/px4params-core/src/bits.rs"
+#                           rust-core: mutate only these files (cargo-mutants --file, paths
+#                           from the repository root); default: the whole crate
+#   MUTATION_RUST_TIMEOUT=120
+#                           rust-core: seconds one mutant's tests may run before it counts as
+#                           timed out (cargo-mutants --timeout; default 300)
+#   MUTATION_RUST_ARGS="--re f16_from"
+#                           rust-core: more cargo-mutants options, e.g. --re to re-test chosen
+#                           mutants only (space-separated; no quoting inside)
+#   The rust target's wall-clock budget is MUTATION_BUDGET too: at its end cargo-mutants is
+#   interrupted and the mutants it finished are counted. Its builds are debug builds (a
+#   mutant rebuilds the crate and its seven test programs; release's LTO links are the slow
+#   part) with the alloc feature, one job, niced, under /tmp/px4params-build.lock when it exists.
 #
 # Python: mutmut 2 (pip install "mutmut==2.5.1", the "mutation" extra), which mutates the
 # files in place, one at a time, and restores them; so the work tree must be clean, and is
@@ -162,22 +175,52 @@ rust_target() {
   # Builds share the machine: one job, under the build lock when there is one.
   local lock=()
   [ -e /tmp/px4params-build.lock ] && lock=(flock /tmp/px4params-build.lock)
-  "${lock[@]}" nice cargo mutants --package "$package" --features alloc --jobs 1 \
-    --timeout 300 --output "$OUT/$name" --cargo-arg=--release >"$OUT/$name.log" 2>&1 &
-  local pid=$!
-  (sleep "$BUDGET" && kill -INT "$pid" 2>/dev/null) &
-  local watchdog=$!
-  wait "$pid" || true
-  kill "$watchdog" 2>/dev/null || true
+  local scope=()
+  for f in ${MUTATION_RUST_FILES:-}; do
+    scope+=(--file "$f")
+  done
+  # shellcheck disable=SC2206 # extra options, split on spaces on purpose
+  local extra=(${MUTATION_RUST_ARGS:-})
+  rm -rf "$OUT/$name/mutants.out"
+  # The budget starts once the lock is held; an interrupted cargo-mutants keeps the lists of
+  # the mutants it finished.
+  "${lock[@]}" timeout --signal=INT --kill-after=60 "$BUDGET" \
+    nice cargo mutants --package "$package" --features alloc --jobs 1 \
+    --timeout "${MUTATION_RUST_TIMEOUT:-300}" "${scope[@]}" "${extra[@]}" \
+    --output "$OUT/$name" >"$OUT/$name.log" 2>&1 || true
   local results="$OUT/$name/mutants.out"
   local caught missed timeout unviable
   caught=$(wc -l <"$results/caught.txt" 2>/dev/null || echo 0)
   missed=$(wc -l <"$results/missed.txt" 2>/dev/null || echo 0)
   timeout=$(wc -l <"$results/timeout.txt" 2>/dev/null || echo 0)
   unviable=$(wc -l <"$results/unviable.txt" 2>/dev/null || echo 0)
-  cp "$results/missed.txt" "$OUT/$name.txt" 2>/dev/null || true
+  # Each survivor, marked equivalent where scripts/mutation-equivalent.txt gives the reason.
+  local equivalents
+  equivalents=$(python3 - "$results/missed.txt" "$OUT/$name.txt" <<'EOF'
+"""Marks cargo-mutants' missed mutants ("path:line:col: what") listed as equivalent."""
+import sys
+from pathlib import Path
+
+missed, report = Path(sys.argv[1]), Path(sys.argv[2])
+equivalent = {}
+for line in Path("scripts/mutation-equivalent.txt").read_text().splitlines():
+    if line.strip() and not line.startswith("#"):
+        path, what, tool, why = line.split("\t")
+        if tool == "(cargo-mutants)":
+            equivalent[(path, what)] = why
+lines, count = [], 0
+for entry in missed.read_text().splitlines() if missed.exists() else []:
+    where, what = entry.split(": ", 1)
+    why = equivalent.get((where.split(":")[0], what))
+    count += why is not None
+    lines.append(f"{entry}\t{f'equivalent: {why}' if why else 'SURVIVED'}")
+report.write_text("".join(f"{s}\n" for s in lines))
+print(count)
+EOF
+  )
   echo "$name: $((caught + missed + timeout)) viable mutants tested: $caught killed, $timeout" \
-    "timed out, $missed survived; $unviable unviable (did not build); survivors in $OUT/$name.txt"
+    "timed out, $missed survived ($equivalents equivalent); $unviable unviable (did not" \
+    "build); survivors in $OUT/$name.txt"
 }
 
 for name in "$@"; do
