@@ -16,9 +16,11 @@
 #   MUTATION_RUST_TIMEOUT=120
 #                           rust-core: seconds one mutant's tests may run before it counts as
 #                           timed out (cargo-mutants --timeout; default 300)
-#   MUTATION_RUST_ARGS="--re f16_from"
-#                           rust-core: more cargo-mutants options, e.g. --re to re-test chosen
-#                           mutants only (space-separated; no quoting inside)
+#   MUTATION_RUST_ARGS="--re (int_raw|float_raw) --cargo-test-arg=--lib --cargo-test-arg=--test=codec"
+#                           rust-core: more cargo-mutants options, last on its command line:
+#                           --re to test chosen mutants only, --cargo-test-arg to run only the
+#                           tests that cover them, --iterate to test again only what the last
+#                           run did not catch (space-separated; no quoting inside)
 #   The rust target's wall-clock budget is MUTATION_BUDGET too: at its end cargo-mutants is
 #   interrupted and the mutants it finished are counted. Its builds are debug builds (a
 #   mutant rebuilds the crate and its seven test programs; release's LTO links are the slow
@@ -181,27 +183,32 @@ rust_target() {
   done
   # shellcheck disable=SC2206 # extra options, split on spaces on purpose
   local extra=(${MUTATION_RUST_ARGS:-})
-  rm -rf "$OUT/$name/mutants.out"
   # The budget starts once the lock is held; an interrupted cargo-mutants keeps the lists of
   # the mutants it finished.
   "${lock[@]}" timeout --signal=INT --kill-after=60 "$BUDGET" \
     nice cargo mutants --package "$package" --features alloc --jobs 1 \
-    --timeout "${MUTATION_RUST_TIMEOUT:-300}" "${scope[@]}" "${extra[@]}" \
-    --output "$OUT/$name" >"$OUT/$name.log" 2>&1 || true
+    --timeout "${MUTATION_RUST_TIMEOUT:-300}" "${scope[@]}" --output "$OUT/$name" \
+    "${extra[@]}" >"$OUT/$name.log" 2>&1 || true
   local results="$OUT/$name/mutants.out"
   local caught missed timeout unviable
-  caught=$(wc -l <"$results/caught.txt" 2>/dev/null || echo 0)
-  missed=$(wc -l <"$results/missed.txt" 2>/dev/null || echo 0)
-  timeout=$(wc -l <"$results/timeout.txt" 2>/dev/null || echo 0)
-  unviable=$(wc -l <"$results/unviable.txt" 2>/dev/null || echo 0)
+  # With --iterate, the mutants caught by earlier runs are in previously_caught.txt.
+  caught=$( (cat "$results/caught.txt" "$results/previously_caught.txt" | wc -l) 2>/dev/null)
+  missed=$( (wc -l <"$results/missed.txt") 2>/dev/null || echo 0)
+  timeout=$( (wc -l <"$results/timeout.txt") 2>/dev/null || echo 0)
+  unviable=$( (wc -l <"$results/unviable.txt") 2>/dev/null || echo 0)
   # Each survivor, marked equivalent where scripts/mutation-equivalent.txt gives the reason.
-  local equivalents
-  equivalents=$(python3 - "$results/missed.txt" "$OUT/$name.txt" <<'EOF'
-"""Marks cargo-mutants' missed mutants ("path:line:col: what") listed as equivalent."""
+  local equivalents total
+  read -r equivalents total < <(python3 - "$results" "$OUT/$name.txt" <<'EOF'
+"""Marks cargo-mutants' missed mutants ("path:line:col: what") listed as equivalent; prints
+their count and the number of mutants in scope."""
+import json
 import sys
 from pathlib import Path
 
-missed, report = Path(sys.argv[1]), Path(sys.argv[2])
+results, report = Path(sys.argv[1]), Path(sys.argv[2])
+missed = results / "missed.txt"
+scope = results / "mutants.json"
+total = len(json.loads(scope.read_text())) if scope.exists() else 0
 equivalent = {}
 for line in Path("scripts/mutation-equivalent.txt").read_text().splitlines():
     if line.strip() and not line.startswith("#"):
@@ -215,12 +222,13 @@ for entry in missed.read_text().splitlines() if missed.exists() else []:
     count += why is not None
     lines.append(f"{entry}\t{f'equivalent: {why}' if why else 'SURVIVED'}")
 report.write_text("".join(f"{s}\n" for s in lines))
-print(count)
+print(count, total)
 EOF
   )
-  echo "$name: $((caught + missed + timeout)) viable mutants tested: $caught killed, $timeout" \
-    "timed out, $missed survived ($equivalents equivalent); $unviable unviable (did not" \
-    "build); survivors in $OUT/$name.txt"
+  local untested=$((total - caught - missed - timeout - unviable))
+  echo "$name: $total mutants, $((caught + missed + timeout)) viable tested: $caught killed," \
+    "$timeout timed out, $missed survived ($equivalents equivalent); $unviable unviable (did" \
+    "not build); $untested untested (budget); survivors in $OUT/$name.txt"
 }
 
 for name in "$@"; do
