@@ -191,8 +191,10 @@ rust_target() {
     "${extra[@]}" >"$OUT/$name.log" 2>&1 || true
   local results="$OUT/$name/mutants.out"
   local caught missed timeout unviable
-  # With --iterate, the mutants caught by earlier runs are in previously_caught.txt.
-  caught=$( (cat "$results/caught.txt" "$results/previously_caught.txt" | wc -l) 2>/dev/null)
+  caught=$( (wc -l <"$results/caught.txt") 2>/dev/null || echo 0)
+  # With --iterate, what earlier runs caught (or found unviable) is skipped and listed here.
+  local earlier
+  earlier=$( (wc -l <"$results/previously_caught.txt") 2>/dev/null || echo 0)
   missed=$( (wc -l <"$results/missed.txt") 2>/dev/null || echo 0)
   timeout=$( (wc -l <"$results/timeout.txt") 2>/dev/null || echo 0)
   unviable=$( (wc -l <"$results/unviable.txt") 2>/dev/null || echo 0)
@@ -228,7 +230,8 @@ EOF
   local untested=$((total - caught - missed - timeout - unviable))
   echo "$name: $total mutants, $((caught + missed + timeout)) viable tested: $caught killed," \
     "$timeout timed out, $missed survived ($equivalents equivalent); $unviable unviable (did" \
-    "not build); $untested untested (budget); survivors in $OUT/$name.txt"
+    "not build); $untested untested (budget); $earlier caught by earlier runs (--iterate);" \
+    "survivors in $OUT/$name.txt"
 }
 
 for name in "$@"; do
