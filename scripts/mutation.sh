@@ -10,6 +10,21 @@
 #   MUTATION_BASELINE=1     without the tests/test_planted_*.py files (the "before" figures),
 #                           from scratch; a run after it tests again only its survivors
 #   MUTATION_FRESH=1        forget the targets' earlier results (kept in target/mutation)
+#   MUTATION_RUST_FILES="crates/px4params-core/src/scalar.rs crates/px4params-core/src/bits.rs"
+#                           rust-core: mutate only these files (cargo-mutants --file, paths
+#                           from the repository root); default: the whole crate
+#   MUTATION_RUST_TIMEOUT=120
+#                           rust-core: seconds one mutant's tests may run before it counts as
+#                           timed out (cargo-mutants --timeout; default 300)
+#   MUTATION_RUST_ARGS="--re (int_raw|float_raw) --cargo-test-arg=--lib --cargo-test-arg=--test=codec"
+#                           rust-core: more cargo-mutants options, last on its command line:
+#                           --re to test chosen mutants only, --cargo-test-arg to run only the
+#                           tests that cover them, --iterate to test again only what the last
+#                           run did not catch (space-separated; no quoting inside)
+#   The rust target's wall-clock budget is MUTATION_BUDGET too: at its end cargo-mutants is
+#   interrupted and the mutants it finished are counted. Its builds are debug builds (a
+#   mutant rebuilds the crate and its seven test programs; release's LTO links are the slow
+#   part) with the alloc feature, one job, niced, under /tmp/px4params-build.lock when it exists.
 #
 # Python: mutmut 2 (pip install "mutmut==2.5.1", the "mutation" extra), which mutates the
 # files in place, one at a time, and restores them; so the work tree must be clean, and is
@@ -37,7 +52,7 @@ TARGETS=(
   "health|$PY/vehicle/health.py,$PY/cli/commands/health.py|tests/test_flight_log.py tests/test_dronecan.py tests/test_planted_health.py -k 'health or first_failure'"
   "links|$PY/links|tests/test_dronecan.py tests/test_frames.py tests/test_mavlink.py tests/test_mavlink_clients.py tests/test_mavlink_metadata.py tests/test_planted_dronecan.py"
   "gui|$PY/gui|tests/test_gui.py tests/test_gui_files.py tests/test_planted_gui.py"
-  "migrate|$PY/migrate.py|tests/test_migrate.py tests/test_planted_migrate.py"
+  "migrate|$PY/migrate|tests/test_migrate.py tests/test_migrate_defects.py tests/test_migrate_corpus.py tests/test_planted_migrate.py"
   "vehicle|$PY/vehicle|tests/test_autostart.py tests/test_bench.py tests/test_devid.py tests/test_flight_log.py tests/test_planted_health.py tests/test_planted_devid.py"
   "store|$PY/store|tests/test_store.py tests/test_storefile.py tests/test_flat.py tests/test_param_cli.py"
   "rust-core|crates/px4params-core|"
@@ -162,22 +177,61 @@ rust_target() {
   # Builds share the machine: one job, under the build lock when there is one.
   local lock=()
   [ -e /tmp/px4params-build.lock ] && lock=(flock /tmp/px4params-build.lock)
-  "${lock[@]}" nice cargo mutants --package "$package" --features alloc --jobs 1 \
-    --timeout 300 --output "$OUT/$name" --cargo-arg=--release >"$OUT/$name.log" 2>&1 &
-  local pid=$!
-  (sleep "$BUDGET" && kill -INT "$pid" 2>/dev/null) &
-  local watchdog=$!
-  wait "$pid" || true
-  kill "$watchdog" 2>/dev/null || true
+  local scope=()
+  for f in ${MUTATION_RUST_FILES:-}; do
+    scope+=(--file "$f")
+  done
+  # shellcheck disable=SC2206 # extra options, split on spaces on purpose
+  local extra=(${MUTATION_RUST_ARGS:-})
+  # The budget starts once the lock is held; an interrupted cargo-mutants keeps the lists of
+  # the mutants it finished.
+  "${lock[@]}" timeout --signal=INT --kill-after=60 "$BUDGET" \
+    nice cargo mutants --package "$package" --features alloc --jobs 1 \
+    --timeout "${MUTATION_RUST_TIMEOUT:-300}" "${scope[@]}" --output "$OUT/$name" \
+    "${extra[@]}" >"$OUT/$name.log" 2>&1 || true
   local results="$OUT/$name/mutants.out"
   local caught missed timeout unviable
-  caught=$(wc -l <"$results/caught.txt" 2>/dev/null || echo 0)
-  missed=$(wc -l <"$results/missed.txt" 2>/dev/null || echo 0)
-  timeout=$(wc -l <"$results/timeout.txt" 2>/dev/null || echo 0)
-  unviable=$(wc -l <"$results/unviable.txt" 2>/dev/null || echo 0)
-  cp "$results/missed.txt" "$OUT/$name.txt" 2>/dev/null || true
-  echo "$name: $((caught + missed + timeout)) viable mutants tested: $caught killed, $timeout" \
-    "timed out, $missed survived; $unviable unviable (did not build); survivors in $OUT/$name.txt"
+  caught=$( (wc -l <"$results/caught.txt") 2>/dev/null || echo 0)
+  # With --iterate, what earlier runs caught (or found unviable) is skipped and listed here.
+  local earlier
+  earlier=$( (wc -l <"$results/previously_caught.txt") 2>/dev/null || echo 0)
+  missed=$( (wc -l <"$results/missed.txt") 2>/dev/null || echo 0)
+  timeout=$( (wc -l <"$results/timeout.txt") 2>/dev/null || echo 0)
+  unviable=$( (wc -l <"$results/unviable.txt") 2>/dev/null || echo 0)
+  # Each survivor, marked equivalent where scripts/mutation-equivalent.txt gives the reason.
+  local equivalents total
+  read -r equivalents total < <(python3 - "$results" "$OUT/$name.txt" <<'EOF'
+"""Marks cargo-mutants' missed mutants ("path:line:col: what") listed as equivalent; prints
+their count and the number of mutants in scope."""
+import json
+import sys
+from pathlib import Path
+
+results, report = Path(sys.argv[1]), Path(sys.argv[2])
+missed = results / "missed.txt"
+scope = results / "mutants.json"
+total = len(json.loads(scope.read_text())) if scope.exists() else 0
+equivalent = {}
+for line in Path("scripts/mutation-equivalent.txt").read_text().splitlines():
+    if line.strip() and not line.startswith("#"):
+        path, what, tool, why = line.split("\t")
+        if tool == "(cargo-mutants)":
+            equivalent[(path, what)] = why
+lines, count = [], 0
+for entry in missed.read_text().splitlines() if missed.exists() else []:
+    where, what = entry.split(": ", 1)
+    why = equivalent.get((where.split(":")[0], what))
+    count += why is not None
+    lines.append(f"{entry}\t{f'equivalent: {why}' if why else 'SURVIVED'}")
+report.write_text("".join(f"{s}\n" for s in lines))
+print(count, total)
+EOF
+  )
+  local untested=$((total - caught - missed - timeout - unviable))
+  echo "$name: $total mutants, $((caught + missed + timeout)) viable tested: $caught killed," \
+    "$timeout timed out, $missed survived ($equivalents equivalent); $unviable unviable (did" \
+    "not build); $untested untested (budget); $earlier caught by earlier runs (--iterate);" \
+    "survivors in $OUT/$name.txt"
 }
 
 for name in "$@"; do
