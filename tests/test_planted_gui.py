@@ -13,7 +13,6 @@ the ``Origin`` header a browser would.
 
 from __future__ import annotations
 
-import os
 import re
 import shutil
 import subprocess
@@ -24,6 +23,7 @@ from typing import Any
 from urllib.parse import urlsplit
 
 import pytest
+from gui_server import env_for
 from websockets.exceptions import ConnectionClosed, InvalidStatus
 from websockets.sync.client import connect
 
@@ -33,14 +33,7 @@ CLI = [sys.executable, "-m", "px4params"]
 TIMEOUT = 15_000  # ms, for anything the page waits on
 
 
-def _env(tmp: Path) -> dict[str, str]:
-    env = {
-        k: v
-        for k, v in os.environ.items()
-        if not k.startswith("PX4PARAMS_") or k == "PX4PARAMS_CACHE_DIR"
-    }
-    env["PX4PARAMS_STORE"] = str(tmp / "vehicle.store")
-    return env
+_env = env_for  # the environment of a test's own px4params (tests/gui_server.py)
 
 
 @pytest.fixture

@@ -118,23 +118,7 @@ proptest! {
         let layout = l.as_layout();
         let decoded = decoded::<NoPlans>(&layout, root, &data, DecodeOptions { tao, allow_trailing: true });
         let mut leaves = decoded.map(|(_, leaves)| leaves).unwrap_or_default();
-        for (at, raw, kind) in &tweaks {
-            if leaves.is_empty() {
-                break;
-            }
-            let i = at.index(leaves.len());
-            leaves[i] = match kind {
-                0 => Scalar::Uint(*raw % 8),
-                1 => Scalar::Int(*raw as i64),
-                2 => Scalar::Float(f64::from_bits(*raw)),
-                _ => Scalar::Bool(raw % 2 == 1),
-            };
-        }
-        match cut {
-            1 => { leaves.pop(); }
-            2 => leaves.push(Scalar::Uint(1)),
-            _ => {}
-        }
+        common::tweak_leaves(&mut leaves, &tweaks, cut);
         let options = EncodeOptions { tao, saturate, keep_versions };
         let room = layout.max_bytes(root);
         let roomy = encoded::<NoPlans>(&layout, root, &leaves, room, options);

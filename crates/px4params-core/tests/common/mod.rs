@@ -289,3 +289,32 @@ pub fn same_error<E: PartialEq + core::fmt::Debug>(ours: &Error<E>, theirs: &Err
         _ => ours == theirs || format!("{ours:?}") == format!("{theirs:?}"),
     }
 }
+
+/// Spoils a valid leaf list as the encoder's tests need: each `(at, raw, kind)` replaces one
+/// leaf by a value of another kind (an out-of-range or wrong-kind leaf), and `cut` 1 drops
+/// the last leaf, 2 adds one too many.
+pub fn tweak_leaves(
+    leaves: &mut Vec<Scalar>,
+    tweaks: &[(prop::sample::Index, u64, u8)],
+    cut: usize,
+) {
+    for (at, raw, kind) in tweaks {
+        if leaves.is_empty() {
+            break;
+        }
+        let i = at.index(leaves.len());
+        leaves[i] = match kind {
+            0 => Scalar::Uint(*raw % 8),
+            1 => Scalar::Int(*raw as i64),
+            2 => Scalar::Float(f64::from_bits(*raw)),
+            _ => Scalar::Bool(raw % 2 == 1),
+        };
+    }
+    match cut {
+        1 => {
+            leaves.pop();
+        }
+        2 => leaves.push(Scalar::Uint(1)),
+        _ => {}
+    }
+}
