@@ -18,6 +18,7 @@ __all__ = [
     "DecodeError",
     "DeviceIdError",
     "DriversFileError",
+    "DronecanError",
     "DsdlError",
     "EncodeError",
     "FlatError",
@@ -28,10 +29,12 @@ __all__ = [
     "MetadataError",
     "MigrationError",
     "NumberError",
+    "OutputFileError",
     "ParamFileError",
     "ParameterSetError",
     "Px4ParamsError",
     "SigningKeyError",
+    "SlcanError",
     "StoreConflictError",
     "StoreError",
     "StoreFileError",
@@ -204,6 +207,14 @@ class StoreConflictError(StoreError):
     """
 
 
+class SlcanError(Px4ParamsError):
+    """An SLCAN line that is not a frame, or an adapter that does not answer as one should."""
+
+
+class DronecanError(Px4ParamsError):
+    """The remote DroneCAN node did not answer, answered something else, or refused."""
+
+
 class DeviceIdError(Px4ParamsError):
     """A PX4 device ID, one of its parts, a devtype table or a flight log could not be used
     (out of range, unknown name, unreadable file, ...). ``str()`` is a single line.
@@ -264,3 +275,29 @@ class ULogError(Px4ParamsError):
 class CommandError(Px4ParamsError):
     """A command that failed (a ``param`` verb, an airframe line, a CLI command): reported as
     one line, exit status 1."""
+
+
+# -- Signals within one module ---------------------------------------------------------------
+# Raised and caught inside the module named; never reach a caller, so not in ``__all__``. They
+# are here because every exception class of the package is (tests/test_errors.py). The one
+# exception to that rule: ``px4params.gcs.codec``'s, as that file is copied into ground stations
+# alone (an import-linter contract keeps it from importing this module).
+
+
+class LeftToArgparse(Exception):
+    """:mod:`px4params.cli.parsing`: its small interpreter leaves this command line to argparse."""
+
+
+class TagValueError(Exception):
+    """:mod:`px4params.dsdl.loader`: a metadata tag's value is invalid; the caller adds the
+    tag's name and location and raises :class:`DsdlError`."""
+
+
+class KeepRunningValues(Exception):
+    """:mod:`px4params.store.session`: undoes ``Session.rewrite``'s change of the running
+    values on purpose (the transaction rolls back, the file keeps the change)."""
+
+
+class NshArgumentError(Exception):
+    """:mod:`px4params.nsh.airframe`: argparse's usage error on one NSH command line, reported
+    as that line's error."""

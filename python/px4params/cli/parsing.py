@@ -29,6 +29,7 @@ import os
 import sys
 
 from px4params._records import TYPE_CHECKING
+from px4params.errors import LeftToArgparse
 
 if TYPE_CHECKING:
     import argparse
@@ -430,16 +431,12 @@ def _terminal_width() -> int:
 # -- the small interpreter ---------------------------------------------------------------------
 
 
-class _Refused(Exception):
-    """The small interpreter leaves this command line to argparse."""
-
-
 def _parse(parser: ArgumentParser, words: list[str]) -> dict[str, Any] | None:
     """The values of ``words`` as argparse would set them, or None to let argparse parse
     them."""
     try:
         return _parse_level(parser, words)
-    except _Refused:
+    except LeftToArgparse:
         return None
 
 
@@ -447,7 +444,7 @@ def _parse_level(parser: ArgumentParser, words: list[str]) -> dict[str, Any]:
     """One parser's part of argparse's ``parse_known_args``: its defaults, its options and
     positionals, and with a subcommand the subcommand's parser on the words after it."""
     if not parser._understood:
-        raise _Refused
+        raise LeftToArgparse
     values: dict[str, Any] = {}
     for argument in parser._actions:
         dest, default = argument.dest, argument.default
@@ -488,7 +485,7 @@ def _parse_level(parser: ArgumentParser, words: list[str]) -> dict[str, Any]:
         else:  # append
             items = values.get(argument.dest)
             if items is not None and not isinstance(items, list):
-                raise _Refused
+                raise LeftToArgparse
             values[argument.dest] = [*(items or ()), value]
     if parser._subparsers is None:
         positionals = _positionals(parser._positionals, positional_words, runs)
@@ -501,7 +498,7 @@ def _parse_level(parser: ArgumentParser, words: list[str]) -> dict[str, Any]:
         if argument in seen:
             continue
         if argument.required:
-            raise _Refused  # argparse: "the following arguments are required"
+            raise LeftToArgparse  # argparse: "the following arguments are required"
         default = argument.default
         if (
             isinstance(default, str)
@@ -514,7 +511,7 @@ def _parse_level(parser: ArgumentParser, words: list[str]) -> dict[str, Any]:
             continue
         given = [a for a in group.arguments if a in present]
         if len(given) > 1 or (group.required and not given):
-            raise _Refused  # "not allowed with argument", "one of the arguments is required"
+            raise LeftToArgparse  # "not allowed with argument", "one of the arguments is required"
     return values
 
 
@@ -525,12 +522,12 @@ def _flag(argument: _Argument, values: dict[str, Any]) -> None:
     elif argument.action == "append_const":
         items = values.get(argument.dest)
         if items is not None and not isinstance(items, list):
-            raise _Refused
+            raise LeftToArgparse
         values[argument.dest] = [*(items or ()), argument.const]
     else:  # count
         count = values.get(argument.dest)
         if count is not None and not isinstance(count, int):
-            raise _Refused
+            raise LeftToArgparse
         values[argument.dest] = (count or 0) + 1
 
 
@@ -538,10 +535,10 @@ def _subcommand(parser: ArgumentParser, word: str, rest: list[str]) -> dict[str,
     """The subcommand ``word`` picks, run on the words after it; its values override."""
     assert parser._subparsers is not None
     if len(parser._positionals) != 1:
-        raise _Refused  # positionals before the subcommand: argparse's matching decides
+        raise LeftToArgparse  # positionals before the subcommand: argparse's matching decides
     child = parser._subparsers.choices.get(word)
     if child is None:
-        raise _Refused  # argparse: "invalid choice"
+        raise LeftToArgparse  # argparse: "invalid choice"
     values: dict[str, Any] = {}
     if not _suppressed(parser._subparsers.argument.dest):
         values[parser._subparsers.argument.dest] = word
@@ -556,23 +553,23 @@ def _option(parser: ArgumentParser, words: list[str], i: int) -> tuple[_Argument
     name, equals, explicit = word.partition("=") if word.startswith("--") else (word, "", "")
     argument = parser._options.get(name)
     if argument is None or argument.action == "help":
-        raise _Refused  # unknown, abbreviated, -abc, -1, --, -h
+        raise LeftToArgparse  # unknown, abbreviated, -abc, -1, --, -h
     for above in parser._above:  # a parser above that might read the word as its abbreviation
         for option in above._options:
             if option != name and (
                 option.startswith(name) or (name[1] != "-" and option == name[:2])
             ):
-                raise _Refused
+                raise LeftToArgparse
     if not argument.takes_value:
         if equals:
-            raise _Refused  # argparse: "ignored explicit argument"
+            raise LeftToArgparse  # argparse: "ignored explicit argument"
         return argument, None, i + 1
     if equals:
         if explicit == "--":
-            raise _Refused  # argparse drops a value '--' (3.11: --opt=-- sets [])
+            raise LeftToArgparse  # argparse drops a value '--' (3.11: --opt=-- sets [])
         return argument, explicit, i + 1
     if i + 1 == len(words) or (words[i + 1][:1] == "-" and words[i + 1] != "-"):
-        raise _Refused  # argparse: "expected one argument" (or -1 as a value)
+        raise LeftToArgparse  # argparse: "expected one argument" (or -1 as a value)
     return argument, words[i + 1], i + 2
 
 
@@ -584,9 +581,9 @@ def _positionals(
     least = {None: 1, "?": 0, "*": 0, "+": 1}
     most = {None: 1, "?": 1, "*": len(words), "+": len(words)}
     if runs > 1 and any(a.nargs is not None for a in arguments):
-        raise _Refused  # positionals split by options: argparse versions differ
+        raise LeftToArgparse  # positionals split by options: argparse versions differ
     if not sum(least[a.nargs] for a in arguments) <= len(words):
-        raise _Refused  # argparse: "the following arguments are required"
+        raise LeftToArgparse  # argparse: "the following arguments are required"
     start = 0
     matched = []
     for k, argument in enumerate(arguments):
@@ -609,7 +606,7 @@ def _positionals(
             value = [_converted(argument, w) for w in taken]
         matched.append((argument, value))
     if start != len(words):
-        raise _Refused  # argparse: "unrecognized arguments"
+        raise LeftToArgparse  # argparse: "unrecognized arguments"
     return matched
 
 
@@ -617,7 +614,7 @@ def _converted(argument: _Argument, word: str) -> Any:
     """``word`` through the argument's type, checked against its choices."""
     value = _typed(argument, word)
     if argument.choices is not None and value not in argument.choices:
-        raise _Refused  # argparse: "invalid choice"
+        raise LeftToArgparse  # argparse: "invalid choice"
     return value
 
 
@@ -628,4 +625,4 @@ def _typed(argument: _Argument, word: str) -> Any:
     try:
         return convert(word)
     except Exception:
-        raise _Refused from None  # argparse reports it (or raises it, as it does)
+        raise LeftToArgparse from None  # argparse reports it (or raises it, as it does)

@@ -42,7 +42,7 @@ from typing import TYPE_CHECKING, Any
 
 from px4params.data import VALUE_SETS_TOML
 from px4params.dsdl.roots import Root, dronecan_package_dir
-from px4params.errors import DsdlError, NumberError
+from px4params.errors import DsdlError, NumberError, TagValueError
 from px4params.numbers import abbreviated, parse_float, parse_int
 from px4params.reading import DSDL, read_text
 
@@ -271,10 +271,10 @@ class _ModelBuilder:
                 elif kind == "ref" and tag.name == "default":
                     self._queue_path_default(tag, file, owner, field_name, ftype, tags)
                 elif scalar is None:
-                    raise _TagValueError(f"does not apply to a {_type_name(ftype)} field")
+                    raise TagValueError(f"does not apply to a {_type_name(ftype)} field")
                 else:
                     _apply_scalar_tag(tags, tag, scalar)
-            except _TagValueError as ex:
+            except TagValueError as ex:
                 raise tag.error(f"@{tag.name} {ex}", file) from None
         if scalar is not None:
             _check_bounds(tags, lines, file)
@@ -291,13 +291,13 @@ class _ModelBuilder:
     ) -> None:
         match = _PATH_DEFAULT_RE.fullmatch(tag.value)
         if match is None:
-            raise _TagValueError(
+            raise TagValueError(
                 f"on a composite field takes '<field.path> <value>' (e.g. i2c.address 0x45), "
                 f"got {tag.value!r}"
             )
         target = tags.setdefault("default", {})
         if match["path"] in target:
-            raise _TagValueError(f"sets {match['path']} twice")
+            raise TagValueError(f"sets {match['path']} twice")
         target[match["path"]] = None  # keeps the written order; filled in by resolve_path_defaults
         self.path_defaults.append(
             _PathDefault(
@@ -312,7 +312,7 @@ class _ModelBuilder:
                 leaf, leaf_tags = self._walk_default_path(pd, chosen)
                 value = _scalar_value(leaf["type"], pd.value)
                 _check_within(value, leaf_tags)
-            except _TagValueError as ex:
+            except TagValueError as ex:
                 raise DsdlError(f"@default {pd.path}: {ex}", pd.file, pd.line) from None
             pd.target[pd.path] = value
 
@@ -323,29 +323,29 @@ class _ModelBuilder:
         walked: list[str] = []
         for part in pd.path.split("."):
             if current["type"]["kind"] != "ref":
-                raise _TagValueError(f"'{'.'.join(walked)}' is not a composite field")
+                raise TagValueError(f"'{'.'.join(walked)}' is not a composite field")
             spec = self.types.get(current["type"]["name"])
             if spec is None:
-                raise _TagValueError(f"unknown type {current['type']['name']}")
+                raise TagValueError(f"unknown type {current['type']['name']}")
             names = [f["name"] for f in spec["fields"] if f["name"]]
             nxt = next((f for f in spec["fields"] if f["name"] == part), None)
             if nxt is None or not part:
-                raise _TagValueError(
+                raise TagValueError(
                     f"{spec['name']} has no field '{part}' (has: {', '.join(names)})"
                 )
             if part == "p_version":
-                raise _TagValueError("p_version is filled in by the code and takes no default")
+                raise TagValueError("p_version is filled in by the code and takes no default")
             if spec["kind"] == "union":
                 slot = (pd.owner, pd.field_name, ".".join(walked))
                 if chosen.setdefault(slot, part) != part:
-                    raise _TagValueError(
+                    raise TagValueError(
                         f"selects union variant '{part}' but another @default selects "
                         f"'{chosen[slot]}'"
                     )
             walked.append(part)
             current = nxt
         if current["type"]["kind"] not in _SCALAR_KINDS:
-            raise _TagValueError(f"'{pd.path}' is not a scalar field")
+            raise TagValueError(f"'{pd.path}' is not a scalar field")
         return current, current["doc"]["tags"]
 
     def check_references(self) -> None:
@@ -758,10 +758,6 @@ def _doc_lines(
 # Metadata
 
 
-class _TagValueError(Exception):
-    """A tag's value is invalid; the caller adds the tag name and location."""
-
-
 @dataclass
 class _Tag:
     name: str
@@ -834,7 +830,7 @@ def _parse_bool(text: str) -> bool:
         return True
     if text == "false":
         return False
-    raise _TagValueError(f"expects true or false, got {text!r}")
+    raise TagValueError(f"expects true or false, got {text!r}")
 
 
 def _parse_number(text: str) -> int | float:
@@ -846,33 +842,33 @@ def _parse_number(text: str) -> int | float:
             if math.isfinite(value):
                 return value
     except NumberError as e:
-        raise _TagValueError(str(e)) from None
-    raise _TagValueError(f"expects a number (69, 0x45, -1, 0.0003, 1e-3), got {text!r}")
+        raise TagValueError(str(e)) from None
+    raise TagValueError(f"expects a number (69, 0x45, -1, 0.0003, 1e-3), got {text!r}")
 
 
 def _parse_int(text: str, minimum: int, maximum: int | None = None) -> int:
     value = _parse_number(text) if _INT_RE.fullmatch(text) else None
     if not isinstance(value, int) or value < minimum or (maximum is not None and value > maximum):
         expected = f"{minimum}..{maximum}" if maximum is not None else f">= {minimum}"
-        raise _TagValueError(f"expects an integer {expected}, got '{abbreviated(text)}'")
+        raise TagValueError(f"expects an integer {expected}, got '{abbreviated(text)}'")
     return value
 
 
 def _parse_text(text: str) -> str:
     if not text:
-        raise _TagValueError("expects a value")
+        raise TagValueError("expects a value")
     return text
 
 
 def _parse_category(text: str) -> str:
     if text not in _CATEGORIES:
-        raise _TagValueError(f"expects one of {', '.join(_CATEGORIES)}, got {text!r}")
+        raise TagValueError(f"expects one of {', '.join(_CATEGORIES)}, got {text!r}")
     return text
 
 
 def _parse_param_name(text: str) -> str:
     if not _PARAM_NAME_RE.fullmatch(text) or len(text) > 16:
-        raise _TagValueError(
+        raise TagValueError(
             f"expects an upper-case parameter name of at most 16 characters, got {text!r}"
         )
     return text
@@ -912,7 +908,7 @@ def _type_doc(lines: list[tuple[int | None, str]], file: str) -> dict[str, Any]:
             raise tag.error(f"duplicate metadata tag @{tag.name}", file)
         try:
             tags[tag.name] = parse(tag.value)
-        except _TagValueError as ex:
+        except TagValueError as ex:
             raise tag.error(f"@{tag.name} {ex}", file) from None
     return {"short": short, "long": long, "tags": tags}
 
@@ -930,18 +926,18 @@ def _scalar_value(t: TypeSpec, text: str) -> int | float | bool:
     if kind == "bool":
         return _parse_bool(text)
     if kind not in ("uint", "int", "float"):
-        raise _TagValueError(f"does not apply to a {_type_name(t)} field")
+        raise TagValueError(f"does not apply to a {_type_name(t)} field")
     number = _parse_number(text)
     if kind == "float":
         value = float(number)
         if abs(value) > _FLOAT_MAX[t["bits"]]:
-            raise _TagValueError(f"{text} does not fit {_type_name(t)}")
+            raise TagValueError(f"{text} does not fit {_type_name(t)}")
         return value
     if not isinstance(number, int):
-        raise _TagValueError(f"expects an integer for {_type_name(t)}, got {text!r}")
+        raise TagValueError(f"expects an integer for {_type_name(t)}, got {text!r}")
     low, high = _int_range(t)
     if not low <= number <= high:
-        raise _TagValueError(f"{text} is out of range for {_type_name(t)} ({low}..{high})")
+        raise TagValueError(f"{text} is out of range for {_type_name(t)} ({low}..{high})")
     return number
 
 
@@ -952,13 +948,13 @@ def _apply_scalar_tag(tags: dict[str, Any], tag: _Tag, scalar: TypeSpec) -> None
         tags[name] = _scalar_value(scalar, text)
         return
     if not numeric:
-        raise _TagValueError("does not apply to a bool field")
+        raise TagValueError("does not apply to a bool field")
     if name == "unit":
         tags[name] = _parse_text(text)
     elif name == "format":
         # how ground stations show the number: "hex" for addresses, as datasheets write them
         if text != "hex" or scalar["kind"] == "float":
-            raise _TagValueError(f"expects hex on an integer field, got {text!r}")
+            raise TagValueError(f"expects hex on an integer field, got {text!r}")
         tags[name] = text
     elif name in ("min", "max"):
         tags[name] = _scalar_value(scalar, text)
@@ -967,30 +963,30 @@ def _apply_scalar_tag(tags: dict[str, Any], tag: _Tag, scalar: TypeSpec) -> None
     elif name == "increment":
         value = _scalar_value(scalar, text)
         if value <= 0:
-            raise _TagValueError(f"expects a positive number, got {text!r}")
+            raise TagValueError(f"expects a positive number, got {text!r}")
         tags[name] = value
     elif name == "values":
         entries = tags.setdefault("value", [])
         for number_text, description in _value_set(text).items():
             number = _scalar_value(scalar, number_text)
             if any(existing == number for existing, _ in entries):
-                raise _TagValueError(f"{text}: lists {number_text} twice")
+                raise TagValueError(f"{text}: lists {number_text} twice")
             entries.append([number, description])
     elif name in ("value", "bit"):
         match = re.fullmatch(r"(\S+)\s+(.+)", text)
         if match is None:
-            raise _TagValueError(f"expects '<number> <description>', got {text!r}")
+            raise TagValueError(f"expects '<number> <description>', got {text!r}")
         if name == "value":
             number: int | float | bool = _scalar_value(scalar, match[1])
         else:
             if scalar["kind"] == "float":
-                raise _TagValueError("does not apply to a float field")
+                raise TagValueError("does not apply to a float field")
             number = _parse_int(match[1], 0)
             if number >= scalar["bits"]:
-                raise _TagValueError(f"bit {number} does not exist in {_type_name(scalar)}")
+                raise TagValueError(f"bit {number} does not exist in {_type_name(scalar)}")
         entries = tags.setdefault(name, [])
         if any(existing == number for existing, _ in entries):
-            raise _TagValueError(f"lists {match[1]} twice")
+            raise TagValueError(f"lists {match[1]} twice")
         entries.append([number, match[2].strip()])
 
 
@@ -1005,7 +1001,7 @@ def _value_set(name: str) -> dict[str, str]:
     found = _value_sets.get(name.strip())
     if found is None:
         known = ", ".join(sorted(_value_sets))
-        raise _TagValueError(f"names no value list {name.strip()!r} (expected one of: {known})")
+        raise TagValueError(f"names no value list {name.strip()!r} (expected one of: {known})")
     return found
 
 
@@ -1014,9 +1010,9 @@ def _check_within(value: int | float | bool, tags: dict[str, Any]) -> None:
         return
     low, high = tags.get("min"), tags.get("max")
     if low is not None and value < low:
-        raise _TagValueError(f"{value} is below the field's @min {low}")
+        raise TagValueError(f"{value} is below the field's @min {low}")
     if high is not None and value > high:
-        raise _TagValueError(f"{value} is above the field's @max {high}")
+        raise TagValueError(f"{value} is above the field's @max {high}")
 
 
 def _check_bounds(tags: dict[str, Any], lines: list[tuple[int | None, str]], file: str) -> None:
@@ -1029,5 +1025,5 @@ def _check_bounds(tags: dict[str, Any], lines: list[tuple[int | None, str]], fil
     if "default" in tags:
         try:
             _check_within(tags["default"], tags)
-        except _TagValueError as ex:
+        except TagValueError as ex:
             raise DsdlError(f"@default {ex}", file, line_of("default")) from None

@@ -15,7 +15,7 @@ from collections.abc import Callable, Iterator
 from typing import Any, NamedTuple
 
 from px4params.dsdl.schema import DataType, Schema, load_schema
-from px4params.errors import Px4ParamsError
+from px4params.errors import DronecanError, Px4ParamsError
 from px4params.links import can_transfer
 from px4params.links.can_transfer import CanId, TransferReceiver
 from px4params.links.dronecan_params import EMPTY, variant_name
@@ -27,10 +27,6 @@ __all__ = ["DronecanError", "DronecanParamClient", "RemoteParam", "parse_value",
 DEFAULT_LOCAL_NODE = 127
 _GETSET = "uavcan.protocol.param.GetSet"
 _OPCODE = "uavcan.protocol.param.ExecuteOpcode"
-
-
-class DronecanError(Px4ParamsError):
-    """The remote node did not answer, answered something else, or refused."""
 
 
 class RemoteParam(NamedTuple):

@@ -27,7 +27,7 @@ import select
 import time
 from typing import Protocol
 
-from px4params.errors import Px4ParamsError
+from px4params.errors import SlcanError
 from px4params.links.can_transfer import Frame
 
 __all__ = [
@@ -51,10 +51,6 @@ NACK = b"\x07"
 BITRATES = (10_000, 20_000, 50_000, 100_000, 125_000, 250_000, 500_000, 800_000, 1_000_000)
 #: A line longer than the longest valid one (``T`` + 8 + 1 + 16 + 4) is noise: dropped.
 _MAX_LINE = 64
-
-
-class SlcanError(Px4ParamsError):
-    """An SLCAN line that is not a frame, or an adapter that does not answer as one should."""
 
 
 class SerialPort(Protocol):

@@ -21,7 +21,7 @@ import re
 from dataclasses import dataclass, field
 from typing import TextIO
 
-from px4params.errors import CommandError, Px4ParamsError
+from px4params.errors import CommandError, NshArgumentError, Px4ParamsError
 from px4params.nsh import param
 from px4params.reading import AIRFRAME, read_text
 from px4params.store.session import Session
@@ -45,15 +45,11 @@ _DOUBLE_ESCAPE = re.compile(r'\\(["\\])')
 _OPEN_ESCAPE = re.compile(r'(?:[^"\\]|\\.)*\\', re.DOTALL)
 
 
-class _ArgumentError(Exception):
-    pass
-
-
 class _Parser(argparse.ArgumentParser):
     """Reports usage errors as exceptions instead of exiting: a bad line is one error."""
 
     def error(self, message: str) -> None:  # type: ignore[override]
-        raise _ArgumentError(message)
+        raise NshArgumentError(message)
 
 
 def _param_parser() -> argparse.ArgumentParser:
@@ -104,7 +100,7 @@ def run_file(path: str, session: Session, *, keep_going: bool, err: TextIO) -> R
         where = f"{path}:{number}"
         try:
             _line(raw, parser, session, variables, blocks, where, number, result)
-        except (CommandError, Px4ParamsError, _ArgumentError, ValueError) as e:
+        except (CommandError, Px4ParamsError, NshArgumentError, ValueError) as e:
             result.errors.append(f"{where}: {e}")
             print(f"px4params: {where}: {e}", file=err)
             if not keep_going:
@@ -203,7 +199,7 @@ def _condition(words: list[str], parser: argparse.ArgumentParser, session: Sessi
 def _parse(parser: argparse.ArgumentParser, words: list[str]) -> argparse.Namespace:
     try:
         return parser.parse_args(words)
-    except _ArgumentError as e:
+    except NshArgumentError as e:
         raise CommandError(f"param: {e}") from None
 
 

@@ -18,7 +18,12 @@ from collections.abc import Callable, Iterable
 
 from px4params._records import TYPE_CHECKING
 from px4params.dsdl.schema import load_schema
-from px4params.errors import Px4ParamsError, StoreConflictError, StoreFileError
+from px4params.errors import (
+    KeepRunningValues,
+    Px4ParamsError,
+    StoreConflictError,
+    StoreFileError,
+)
 from px4params.store.classic import BUNDLED_CLASSIC, CLASSIC_ENV
 from px4params.store.store import Store, default_store_path
 
@@ -151,8 +156,8 @@ class Session:
                     store.save(self.path)
                     self.identity = file_identity(self.path)
                     self._base = store._native.copy()
-                    raise _KeepRunningValues
-            except _KeepRunningValues:
+                    raise KeepRunningValues
+            except KeepRunningValues:
                 pass
 
     def _synced(self) -> None:
@@ -176,10 +181,6 @@ class Session:
             _put_on_top(store, self._base, ours, theirs, self.path)
         self.identity, self._base, self._refused = now, theirs, None
         return True
-
-
-class _KeepRunningValues(Exception):
-    """Undoes :meth:`Session.rewrite`'s change of the running values on purpose."""
 
 
 #: ``(device, inode, size, mtime_ns, ctime_ns, hash of the content)`` of a file. Every save (a
