@@ -3,13 +3,31 @@
 from collections.abc import Iterable
 from typing import Any, ClassVar, Self, final
 
+from typing_extensions import disjoint_base
+
+__all__ = [
+    "CORE_VERSION",
+    "STORE_FORMAT_VERSION",
+    "DataType",
+    "Schema",
+    "Store",
+    "StructValue",
+    "can_frames",
+    "check_store_file",
+    "data_type_signature",
+    "dsdl_signature",
+    "reassemble",
+    "transfer_crc_seed",
+]
+
 #: The compiled core's version (px4params-core's crate version).
 CORE_VERSION: str
 #: The store file format version the core writes.
 STORE_FORMAT_VERSION: int
 
+@final
 class Schema:
-    def __init__(self, types: dict[str, Any]) -> None: ...
+    def __new__(cls, types: dict[str, Any]) -> Self: ...
     def keys(self) -> list[str]: ...
     def get(self, key: str) -> DataType: ...
     def translate(
@@ -28,10 +46,11 @@ class StructValue:
     def _fields(self) -> tuple[str, ...]: ...
     @property
     def _type(self) -> str: ...
-    def __eq__(self, other: object) -> bool: ...
-    def __ne__(self, other: object) -> bool: ...
-    __hash__: ClassVar[None]  # type: ignore[assignment]
+    def __eq__(self, value: object, /) -> bool: ...
+    def __ne__(self, value: object, /) -> bool: ...
+    __hash__: ClassVar[None]  # type: ignore[assignment]  # unhashable (it defines __eq__)
 
+@disjoint_base
 class DataType:
     """One compiled type (``Schema.get``); ``px4params.DataType`` subclasses it."""
 
@@ -87,15 +106,16 @@ class DataType:
     ) -> bytes: ...
     def default(self, *, tao: bool = True) -> bytes: ...
 
+@final
 class Store:
     """The instance parameter store of the Rust core: all memory reserved at construction."""
 
-    def __init__(self, schema: Schema, params: list[tuple[str, str, int | None]]) -> None: ...
+    def __new__(cls, schema: Schema, params: list[tuple[str, str, int | None]]) -> Self: ...
     @property
     def capacity(self) -> tuple[int, int]: ...
     def copy(self) -> Store: ...
     def restore(self, other: Store) -> None: ...
-    def tables(self) -> dict[str, Any]: ...
+    def tables(self, roots: list[str]) -> dict[str, Any]: ...
     def file_bytes(
         self, names: list[tuple[str, bool]], order: list[int], foreign: list[bytes]
     ) -> bytes: ...
@@ -111,7 +131,7 @@ class Store:
         self, param: int, instance: int, target: int | str, *, default: bool = False
     ) -> tuple[int, str, str, int | float | bool]: ...
     def get_leaf_value(
-        self, param: int, instance: int, target: int | str, *, default: bool = False
+        self, param: int, instance: int, target: int | str, default: bool = False
     ) -> int | float | bool: ...
     def set_leaf(
         self,
