@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Sets up px4params and the test tools in .venv (scripts/setup.sh --test), then runs every test
 # and lint: cargo fmt, clippy and tests; the wheel built and installed outside the checkout
-# (tests/test_wheel.py); ruff; the import layers (lint-imports); pytest (which also runs the
+# (tests/test_wheel.py); ruff; the import layers (lint-imports); the types (mypy, and stubtest of
+# the compiled extension against its stub); pytest (which also runs the
 # doctests and every command example of the README, docs/ and --help). Each step says how long
 # the run has taken so far, and pytest lists its slowest tests (CI's budget: 15 minutes on 2
 # cores; the long property runs are scripts/fuzz.sh's).
@@ -23,10 +24,15 @@ bash scripts/package.sh "$dist"
 # tests/test_wheel.py installs it into a new venv outside the checkout and runs the smoke test
 export PX4PARAMS_WHEEL="$(echo "$dist"/*.whl)"
 
-echo "== python: ruff, import layers, pytest (${SECONDS} s so far)"
+echo "== python: ruff, import layers, types, pytest (${SECONDS} s so far)"
 ruff check python tests benches
 ruff format --check python tests benches
 lint-imports
+# The package's types (pyproject.toml's [tool.mypy]); then the built extension against
+# _native.pyi (the allowlist holds only what stubtest cannot see, each with its reason).
+mypy
+python -m mypy.stubtest px4params._native --mypy-config-file pyproject.toml \
+    --allowlist scripts/stubtest-allowlist.txt
 # The CLI tests run the installed command; keep their model cache inside the run.
 export PX4PARAMS_CACHE_DIR="${PX4PARAMS_CACHE_DIR:-$(mktemp -d)}"
 python -m pytest -q -p no:cacheprovider --durations=15

@@ -56,6 +56,36 @@ def test_public_names_import_on_first_use() -> None:
     assert set(px4params.__all__) <= set(dir(px4params))
 
 
+def test_init_stub_is_what_init_exports() -> None:
+    """Type checkers read ``__init__.pyi`` instead of ``__init__.py``, whose names come from a
+    table at run time: the stub re-exports (``X as X``) each name of the table from the module
+    the table names, and declares nothing else but ``__all__`` and ``__version__``. (mypy, in
+    scripts/test.sh, checks that each such module has the name.)"""
+    import px4params
+
+    tree = ast.parse((PACKAGE / "__init__.pyi").read_text(encoding="utf-8"))
+    imported = [
+        (alias.name, alias.asname, node.module)
+        for node in tree.body
+        if isinstance(node, ast.ImportFrom)
+        for alias in node.names
+    ]
+    assert all(name == asname for name, asname, _ in imported)
+    assert {name: module for name, _, module in imported} == px4params._EXPORTS
+    assert len(imported) == len(px4params._EXPORTS)
+    declared = {
+        node.target.id
+        for node in tree.body
+        if isinstance(node, ast.AnnAssign) and isinstance(node.target, ast.Name)
+    }
+    assert declared == {"__all__", "__version__"}
+    assert [type(node) for node in tree.body if not isinstance(node, ast.ImportFrom)] == [
+        ast.Expr,  # the docstring
+        ast.AnnAssign,
+        ast.AnnAssign,
+    ]
+
+
 def test_version_is_pyprojects() -> None:
     import tomllib
 

@@ -33,13 +33,18 @@ class _NamedTupleMeta(type):
     def __new__(mcls, name: str, bases: tuple[type, ...], namespace: dict[str, object]) -> type:
         if namespace.get("_is_the_base"):
             return super().__new__(mcls, name, bases, namespace)
-        fields = list(namespace.get("__annotations__", {}))  # type: ignore[call-overload]
+        annotations = namespace.get("__annotations__")
+        fields = list(annotations) if isinstance(annotations, dict) else []
         defaults = [namespace[f] for f in fields if f in namespace]
         with_default = [f for f in fields if f in namespace]
         if with_default != fields[len(fields) - len(with_default) :]:
             raise TypeError(f"{name}: fields without a default cannot follow fields with one")
-        record = collections.namedtuple(
-            name, fields, defaults=defaults or None, module=str(namespace.get("__module__"))
+        # (mypy reads namedtuple() as a class statement, which needs literal names and defaults)
+        record = collections.namedtuple(  # type: ignore[misc]
+            name,
+            fields,
+            defaults=defaults or None,  # type: ignore[misc]
+            module=str(namespace.get("__module__")),
         )
         record.__qualname__ = str(namespace.get("__qualname__", name))
         for key, value in namespace.items():

@@ -34,7 +34,9 @@ from px4params.errors import LeftToArgparse
 if TYPE_CHECKING:
     import argparse
     from collections.abc import Callable, Iterable, Sequence
-    from typing import Any, NoReturn
+    from typing import Any, NoReturn, TypeVar
+
+    _Result = TypeVar("_Result")
 
 __all__ = [
     "SUPPRESS",
@@ -89,7 +91,7 @@ class Namespace:
             return NotImplemented
         return vars(self) == vars(other)
 
-    __hash__ = None  # type: ignore[assignment]
+    __hash__ = None  # type: ignore[assignment]  # unhashable, as argparse's Namespace
 
     def __contains__(self, key: str) -> bool:
         return key in self.__dict__
@@ -116,8 +118,8 @@ class _Recorded:
     _book: _Book
 
     def _record(
-        self, method: str, args: tuple[Any, ...], kwargs: dict[str, Any], result: Any
-    ) -> Any:
+        self, method: str, args: tuple[Any, ...], kwargs: dict[str, Any], result: _Result
+    ) -> _Result:
         self._book.calls.append((self, method, args, kwargs, result))
         return result
 
@@ -206,12 +208,12 @@ class _Container(_Recorded):
         if isinstance(self, _Group) and self.exclusive:
             self.arguments.append(argument)
             parser._understood &= bool(argument.option_strings)
-        return self._record("add_argument", names, declared, argument)  # type: ignore[no-any-return]
+        return self._record("add_argument", names, declared, argument)
 
     def add_mutually_exclusive_group(self, **kwargs: Any) -> _Group:
         group = _Group(self._parser, exclusive=True, required=bool(kwargs.get("required")))
         self._parser._groups.append(group)
-        return self._record("add_mutually_exclusive_group", (), kwargs, group)  # type: ignore[no-any-return]
+        return self._record("add_mutually_exclusive_group", (), kwargs, group)
 
 
 class _Group(_Container):
@@ -238,7 +240,14 @@ class ArgumentParser(_Container):
         self._groups: list[_Group] = []
         self._subparsers: _Subparsers | None = None
         self._above: list[ArgumentParser] = []  # the parsers whose subcommand this one is
-        understood = ("prog", "usage", "description", "epilog", "formatter_class", "add_help")
+        understood: tuple[str, ...] = (
+            "prog",
+            "usage",
+            "description",
+            "epilog",
+            "formatter_class",
+            "add_help",
+        )
         understood += ("help", "parents", "allow_abbrev", "exit_on_error")
         self._understood = not args and all(k in understood for k in kwargs)
         if _book is None:  # a parser of its own: its construction starts the book
@@ -280,7 +289,7 @@ class ArgumentParser(_Container):
 
     def add_argument_group(self, *args: Any, **kwargs: Any) -> _Group:
         group = _Group(self, exclusive=False)
-        return self._record("add_argument_group", args, kwargs, group)  # type: ignore[no-any-return]
+        return self._record("add_argument_group", args, kwargs, group)
 
     def add_subparsers(self, **kwargs: Any) -> _Subparsers:
         subparsers = _Subparsers(self, kwargs)
@@ -288,7 +297,7 @@ class ArgumentParser(_Container):
         self._subparsers = subparsers
         self._actions.append(subparsers.argument)
         self._positionals.append(subparsers.argument)
-        return self._record("add_subparsers", (), kwargs, subparsers)  # type: ignore[no-any-return]
+        return self._record("add_subparsers", (), kwargs, subparsers)
 
     def set_defaults(self, **kwargs: Any) -> None:
         self._defaults.update(kwargs)
@@ -311,7 +320,8 @@ class ArgumentParser(_Container):
     def argparse(self) -> argparse.ArgumentParser:
         """argparse's parser declared as this one (every parser of the declaration is built,
         once)."""
-        return self._argparse_object()  # type: ignore[no-any-return]
+        parser: argparse.ArgumentParser = self._argparse_object()
+        return parser
 
     def error(self, message: str) -> NoReturn:
         """argparse's usage error: usage and ``message`` on stderr, exit status 2."""
@@ -345,7 +355,7 @@ class _Subparsers(_Recorded):
         parser._understood &= "aliases" not in kwargs and "prog" not in kwargs
         parser._above = [*self._parent._above, self._parent]
         self.choices[name] = parser
-        return self._record("add_parser", (name,), kwargs, parser)  # type: ignore[no-any-return]
+        return self._record("add_parser", (name,), kwargs, parser)
 
 
 # -- argparse's interpreter: the declaration replayed ------------------------------------------
@@ -388,7 +398,7 @@ def _argparse() -> Any:
 
     if _Parser is None:
 
-        class Parser(argparse.ArgumentParser):  # type: ignore[misc, name-defined]
+        class Parser(argparse.ArgumentParser):
             """argparse's parser whose help formatter takes the terminal's width from ``os``
             (argparse asks ``shutil``, which costs every command 3 ms to import). Subparsers
             are of this class too (argparse makes them of their parent's)."""
@@ -397,7 +407,8 @@ def _argparse() -> Any:
                 global _width
                 if _width is None:  # argparse makes a formatter for every argument: ask once
                     _width = _terminal_width()
-                return self.formatter_class(prog=self.prog, width=_width - 2)  # type: ignore[no-any-return]
+                # typeshed's formatter_class takes prog alone; argparse's formatters take width.
+                return self.formatter_class(prog=self.prog, width=_width - 2)  # type: ignore[call-arg]
 
             def _print_message(self, message: str, file: Any = None) -> None:
                 # argparse ignores a failed write; --help's failing (a full disk) is reported
@@ -423,6 +434,7 @@ def _terminal_width() -> int:
     except (KeyError, ValueError):
         pass
     try:
+        # (no stdout at all: the AttributeError below)
         return os.get_terminal_size(sys.__stdout__.fileno()).columns or 80  # type: ignore[union-attr]
     except (AttributeError, ValueError, OSError):
         return 80

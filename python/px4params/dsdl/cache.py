@@ -140,21 +140,23 @@ class LazyTypes(Mapping[str, "Model"]):
         self._rebuild = rebuild
 
     def __getitem__(self, key: str) -> Model:
-        definition = self._unpacked.get(key)
-        if definition is None:
-            packed = self._packed[key]
-            if self._rebuild is None:  # built in this process: nothing to doubt
+        cached = self._unpacked.get(key)
+        if cached is not None:
+            return cached
+        packed = self._packed[key]
+        definition: Model
+        if self._rebuild is None:  # built in this process: nothing to doubt
+            definition = marshal.loads(packed)
+        else:
+            try:
                 definition = marshal.loads(packed)
-            else:
-                try:
-                    definition = marshal.loads(packed)
-                    problem = _definition_problem(key, definition, self._refs, self._newest)
-                except (ValueError, EOFError, TypeError) as e:
-                    problem = f"cannot unpack it ({e})"
-                if problem is not None:
-                    self._replace(self._rebuild(f"type {key}: {problem}"))
-                    return self[key]
-            self._unpacked[key] = definition
+                problem = _definition_problem(key, definition, self._refs, self._newest)
+            except (ValueError, EOFError, TypeError) as e:
+                problem = f"cannot unpack it ({e})"
+            if problem is not None:
+                self._replace(self._rebuild(f"type {key}: {problem}"))
+                return self[key]
+        self._unpacked[key] = definition
         return definition
 
     def _replace(self, built: tuple[Model, Model]) -> None:
@@ -331,14 +333,14 @@ def _definition_problem(
         not isinstance(version, list | tuple) or len(version) != 2 or newest.get(name) is None
     ):
         return f"version {version!r} is not (major, minor) of a known name"
-    pending = []
+    pending: list[Any] = []
     for field in fields:
         if not isinstance(field, dict) or not isinstance(field.get("name"), str):
             return "a field without a name"
         pending.append(field.get("type"))
     while pending:
         item = pending.pop()
-        needed = _TYPE_KEYS.get(item.get("kind")) if isinstance(item, dict) else None
+        needed = _TYPE_KEYS.get(item.get("kind", "")) if isinstance(item, dict) else None
         if needed is None or not all(
             isinstance(item.get(k), dict if k == "elem" else str if k == "name" else int)
             for k in needed

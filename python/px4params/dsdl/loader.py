@@ -538,7 +538,7 @@ def _innermost(t: TypeSpec) -> TypeSpec:
 
 
 def _type_name(t: TypeSpec) -> str:
-    kind = t["kind"]
+    kind: str = t["kind"]
     if kind in ("uint", "int", "float", "void"):
         return f"{kind}{t['bits']}"
     if kind == "array":
@@ -546,7 +546,7 @@ def _type_name(t: TypeSpec) -> str:
     if kind == "dynarray":
         return f"{_type_name(t['elem'])}[<={t['max']}]"
     if kind == "ref":
-        return t["name"]
+        return str(t["name"])
     return kind
 
 
@@ -581,6 +581,7 @@ def _dronecan_parser() -> types.ModuleType:
     stand_in = None
     if "dronecan" not in sys.modules:
         stand_in = types.ModuleType("dronecan")
+        # (a module made here: mypy knows no attributes of it)
         stand_in.UAVCANException = type("UAVCANException", (Exception,), {})  # type: ignore[attr-defined]
         sys.modules["dronecan"] = stand_in
     sys.modules[_PRIVATE_DRONECAN_DSDL] = module
@@ -977,7 +978,7 @@ def _apply_scalar_tag(tags: dict[str, Any], tag: _Tag, scalar: TypeSpec) -> None
         if match is None:
             raise TagValueError(f"expects '<number> <description>', got {text!r}")
         if name == "value":
-            number: int | float | bool = _scalar_value(scalar, match[1])
+            number = _scalar_value(scalar, match[1])
         else:
             if scalar["kind"] == "float":
                 raise TagValueError("does not apply to a float field")

@@ -13,6 +13,9 @@ from px4params.dsdl.cache import load_model, newest_versions, type_refs
 
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
     from typing import Any, NamedTuple
+
+    # (In Schema's body, the name _native is its property.)
+    from px4params._native import DataType as CompiledType
 else:
     from px4params._records import NamedTuple
 
@@ -44,7 +47,7 @@ class Leaf(NamedTuple):
     ``tail`` when the length is implied by tail array optimization).
     """
 
-    index: int
+    index: int  # type: ignore[assignment]  # a field named index hides tuple.index, as Leaf's must
     path: str
     type: str
     value: int | float | bool
@@ -137,15 +140,17 @@ class DataType(_native.DataType):
     ) -> dict[str, Any]:
         """Decodes a value whose bytes arrive in pieces (e.g. CAN frame payloads), reading
         across the pieces without joining them."""
-        return super().decode_fragments(
+        value: dict[str, Any] = super().decode_fragments(
             [bytes(f) for f in fragments], tao=tao, allow_trailing=allow_trailing
         )
+        return value
 
     def default(self, *, tao: bool = True) -> bytes:
         """The encoding of the zero value (``p_version`` filled, first variants, empty arrays)."""
         return super().default(tao=tao)
 
-    def leaves(self, data: bytes | None = None, *, tao: bool = True) -> list[Leaf]:
+    # The core's rows as Leaf records: a list of a subtype, which mypy's invariant list refuses.
+    def leaves(self, data: bytes | None = None, *, tao: bool = True) -> list[Leaf]:  # type: ignore[override]
         """Every leaf of ``data`` (of the default value when None) in ``[k]`` order."""
         raw = self.default(tao=tao) if data is None else bytes(data)
         return [Leaf(*row) for row in super().leaves(raw, tao=tao)]
@@ -194,7 +199,7 @@ class Schema(Mapping[str, DataType]):
             self._all = _native.Schema(dict(self._definitions.items()))
         return self._all
 
-    def _compiled(self, key: str) -> _native.DataType:
+    def _compiled(self, key: str) -> CompiledType:
         """``key`` compiled: from the whole layout once there is one, else with only the types
         it uses (a command on one message does not compile two hundred)."""
         if self._all is not None:

@@ -197,7 +197,7 @@ def f16_from_float(value: float) -> int:
     """IEEE binary16 bits as libuavcan/libcanard make them: the float is first rounded to
     float32, then to the nearest float16 with ties away from zero; overflow gives infinity, NaN
     0x7FFF (with its sign)."""
-    bits = struct.unpack("<I", struct.pack("<f", value))[0]
+    bits: int = struct.unpack("<I", struct.pack("<f", value))[0]
     sign = (bits >> 16) & 0x8000
     bits &= 0x7FFF_FFFF
     if bits > 0x7F80_0000:
@@ -431,7 +431,7 @@ class _Scalar(_Node):
                 return value & mask  # two's complement for negative values
             if not ctx.saturate:
                 raise ctx.fail(path, f"value {value} is out of range (expected {low} to {high})")
-            value = min(max(value, low), high)
+            return min(max(value, low), high) & mask
         return value & mask
 
     def float_raw(self, ctx: _Encoding, value: Any, path: str) -> int:
@@ -455,9 +455,9 @@ class _Scalar(_Node):
                 )
         if self.bits == 16:
             return f16_from_float(number)
-        if self.bits == 32:
-            return struct.unpack("<I", struct.pack("<f", number))[0]
-        return struct.unpack("<Q", struct.pack("<d", number))[0]
+        single, double = ("<f", "<I") if self.bits == 32 else ("<d", "<Q")
+        raw: int = struct.unpack(double, struct.pack(single, number))[0]
+        return raw
 
     def decode(self, reader: _Reader, path: str, tao: bool) -> Any:
         raw = _from_stream(reader.read(self.bits, path), self.bits)

@@ -160,8 +160,9 @@ def _instance_value(
             if union in unions:
                 tag = flat.get(union)
                 names = [v["name"] for v in unions[union].get("variants", ())]
-                known = isinstance(tag, int) and 0 <= tag < len(names)
-                if not known or names[tag] != parts[depth]:
+                if not (
+                    isinstance(tag, int) and 0 <= tag < len(names) and names[tag] == parts[depth]
+                ):
                     selected = False
         if not selected:
             continue
@@ -174,7 +175,9 @@ def _instance_value(
 
 def _rotation_words(entry: Mapping[str, Any], rotation: int) -> str:
     """``10 (Roll 180 deg, Yaw 90 deg)``: the rotation with its name from the field's values."""
-    field = next((f for f in entry.get("fields", ()) if f.get("path") == "rotation"), {})
+    field: Mapping[str, Any] = next(
+        (f for f in entry.get("fields", ()) if f.get("path") == "rotation"), {}
+    )
     name = next((v["description"] for v in field.get("values", ()) if v["value"] == rotation), "")
     return f"{rotation} ({name})" if name else str(rotation)
 

@@ -32,7 +32,7 @@ _OPCODE = "uavcan.protocol.param.ExecuteOpcode"
 class RemoteParam(NamedTuple):
     """A remote parameter as GetSet returned it (values as ``Value`` variants)."""
 
-    index: int | None
+    index: int | None  # type: ignore[assignment]  # a field named index hides tuple.index, as Leaf's must
     name: str
     value: dict[str, Any]
     default: dict[str, Any]
@@ -111,7 +111,7 @@ class DronecanParamClient:
         self.retries = retries
         types = schema or load_schema([], include_dronecan=True, use_env=False)
         self._types: dict[str, tuple[DataType, DataType]] = {
-            name: (types.get(f"{name}.Request"), types.get(f"{name}.Response"))
+            name: (types[f"{name}.Request"], types[f"{name}.Response"])
             for name in (_GETSET, _OPCODE)
         }
         self._tids: dict[int, int] = {}

@@ -115,10 +115,9 @@ class DronecanParamNode(ServingLoop):
         types = schema or load_schema([], include_dronecan=True, use_env=False)
         #: (request, response) of each service offered.
         self._services = {
-            name: (types.get(f"{name}.Request"), types.get(f"{name}.Response"))
-            for name in _SERVICES
+            name: (types[f"{name}.Request"], types[f"{name}.Response"]) for name in _SERVICES
         }
-        self._node_status = types.get("uavcan.protocol.NodeStatus")
+        self._node_status = types["uavcan.protocol.NodeStatus"]
         self._by_dtid = {request.dtid: name for name, (request, _) in self._services.items()}
         self.receiver = TransferReceiver(self._for_us)
         self.unique_id = store_digest(self.save_path, store.parameters)[:16]

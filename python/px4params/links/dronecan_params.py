@@ -55,7 +55,7 @@ def _real(number: float) -> dict[str, Any]:
     return {"real_value": float(number)}
 
 
-def _integer(number: int) -> dict[str, Any]:
+def _integer(number: int | float) -> dict[str, Any]:
     return {"integer_value": int(number)}
 
 

@@ -128,7 +128,8 @@ class ParamEntry:
 
     @property
     def value(self) -> int | float:
-        return struct.unpack("<i" if self.mav_type == _INT32 else "<f", self.raw)[0]
+        value: int | float = struct.unpack("<i" if self.mav_type == _INT32 else "<f", self.raw)[0]
+        return value
 
 
 def _payload_of(msg: Any) -> bytes:
@@ -159,7 +160,7 @@ def _raw_of(value: int | float, mav_type: int) -> bytes:
     return struct.pack("<i", value)
 
 
-class _RawParamValue(mavlink.MAVLink_param_value_message):
+class _RawParamValue(mavlink.MAVLink_param_value_message):  # type: ignore[misc]  # untyped
     """PARAM_VALUE whose value bytes are written as given (not through a Python float)."""
 
     def __init__(self, name: str, raw: bytes, mav_type: int, count: int, index: int) -> None:
@@ -170,10 +171,13 @@ class _RawParamValue(mavlink.MAVLink_param_value_message):
         fields = (self.param_count, self.param_index, self._param_id_raw, self.param_type)
         payload = bytearray(self.unpacker.pack(0.0, *fields))
         payload[0:4] = self.raw
-        return self._pack(mav, self.crc_extra, bytes(payload), force_mavlink1=force_mavlink1)
+        frame: bytes = self._pack(
+            mav, self.crc_extra, bytes(payload), force_mavlink1=force_mavlink1
+        )
+        return frame
 
 
-class _RawParamSet(mavlink.MAVLink_param_set_message):
+class _RawParamSet(mavlink.MAVLink_param_set_message):  # type: ignore[misc]  # untyped
     """PARAM_SET whose value bytes are written as given."""
 
     def __init__(self, system: int, component: int, name: str, raw: bytes, mav_type: int) -> None:
@@ -184,7 +188,10 @@ class _RawParamSet(mavlink.MAVLink_param_set_message):
         fields = (self.target_system, self.target_component, self._param_id_raw, self.param_type)
         payload = bytearray(self.unpacker.pack(0.0, *fields))
         payload[0:4] = self.raw
-        return self._pack(mav, self.crc_extra, bytes(payload), force_mavlink1=force_mavlink1)
+        frame: bytes = self._pack(
+            mav, self.crc_extra, bytes(payload), force_mavlink1=force_mavlink1
+        )
+        return frame
 
 
 def param_set_message(

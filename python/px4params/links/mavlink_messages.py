@@ -71,9 +71,10 @@ def _message_class(m: Any) -> type[mavlink.MAVLink_message]:
         values = [
             getattr(self, f"_{n}_raw") if n in strings else getattr(self, n) for n in wire_names
         ]
-        return self._pack(
+        frame: bytes = self._pack(
             mav, m.crc_extra, self.unpacker.pack(*values), force_mavlink1=force_mavlink1
         )
+        return frame
 
     attributes = {
         "__doc__": f"{m.name} (MAVLink message {m.id}), from px4params' MAVLink XML.",

@@ -125,7 +125,7 @@ class Signing:
         def check(msgbuf: bytearray, system: int, component: int) -> bool:
             return self.check(mav, bytes(msgbuf), system, component)
 
-        mav.check_signature = check  # type: ignore[method-assign]
+        mav.check_signature = check
         return mav
 
     def parser(self, file: Any) -> mavlink.MAVLink:

@@ -343,6 +343,7 @@ def open_serial(device: str, baudrate: int = 115_200) -> SerialPort:
     import serial
 
     try:
-        return serial.Serial(device, baudrate=baudrate, timeout=0, write_timeout=2)
+        port: SerialPort = serial.Serial(device, baudrate=baudrate, timeout=0, write_timeout=2)
+        return port
     except (serial.SerialException, OSError, ValueError) as e:
         raise SlcanError(f"cannot open serial device {device}: {e}") from None

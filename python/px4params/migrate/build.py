@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 import re
 import struct
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from px4params.dsdl.schema import Schema
 from px4params.errors import MigrationError, Px4ParamsError
@@ -15,6 +15,9 @@ from px4params.migrate.proposal import LeftOut, Proposal, ProposedInstance
 from px4params.vehicle import devid
 from px4params.vehicle.console import DriverStart, started_drivers
 from px4params.vehicle.drivers import Driver, load_drivers
+
+if TYPE_CHECKING:
+    from px4params.vehicle.boards import BoardTable
 
 __all__ = ["migrate"]
 
@@ -754,21 +757,26 @@ def migrate(
     return builder.run()
 
 
+def _board_table() -> BoardTable | None:
+    """The bundled board table, or None where this installation has none."""
+    try:
+        from px4params.vehicle.boards import load_boards
+    except ImportError:  # the board table is not part of this installation
+        return None
+    return load_boards()
+
+
 def _board(config: OldConfig, board: Any, assumptions: list[str]) -> Any:
     """The board whose table applies, or None (with the assumption said)."""
-    try:
-        from px4params.vehicle import boards
-    except ImportError:  # the board table is not part of this installation
-        boards = None
     if board is not None and not isinstance(board, str):
         return board
     if board is not None:
-        if boards is None:
+        table = _board_table()
+        if table is None:
             raise MigrationError(
                 f"--board {board}: this installation has no board table (px4params.vehicle.boards)"
             )
         version = "v" + ".".join(map(str, config.version)) if config.version else None
-        table = boards.load_boards()
         found = table.by_name(board, version)
         if found is None and table.variants(board):
             # A board the table has, but not for a release this old: its scripts then differ.
@@ -783,13 +791,13 @@ def _board(config: OldConfig, board: Any, assumptions: list[str]) -> Any:
             )
         return found
     if config.hardware is not None:
-        table = boards.load_boards() if boards is not None else None
+        table = _board_table()
         # The release picks the board's facts of that PX4 version.
         found = table.for_ulog(config.hardware, config.release) if table is not None else None
         if found is None:
             where = "not in the board table" if table is not None else "no board table here"
             known = [b for b in table.all() if config.hardware.upper() in b.ver_hw] if table else []
-            if known and config.version is not None:
+            if known and table is not None and config.version is not None:
                 where = (
                     f"{known[0].name} in the board table from PX4 {table.releases[0]} on, not "
                     f"for this log's {'.'.join(map(str, config.version))}"

@@ -19,11 +19,12 @@ import argparse
 import os
 import re
 from dataclasses import dataclass, field
-from typing import TextIO
+from typing import NoReturn, TextIO
 
 from px4params.errors import CommandError, NshArgumentError, Px4ParamsError
 from px4params.nsh import param
 from px4params.reading import AIRFRAME, read_text
+from px4params.status import EXIT_OK
 from px4params.store.session import Session
 
 _VAR = re.compile(r"\$(?:\{([A-Za-z_][A-Za-z0-9_]*)\}|([A-Za-z_][A-Za-z0-9_]*))")
@@ -48,7 +49,7 @@ _OPEN_ESCAPE = re.compile(r'(?:[^"\\]|\\.)*\\', re.DOTALL)
 class _Parser(argparse.ArgumentParser):
     """Reports usage errors as exceptions instead of exiting: a bad line is one error."""
 
-    def error(self, message: str) -> None:  # type: ignore[override]
+    def error(self, message: str) -> NoReturn:
         raise NshArgumentError(message)
 
 
@@ -161,7 +162,7 @@ def _line(
     elif head == "param":
         args = _parse(parser, words[1:])
         status = args.verb(session, args)
-        if status != param.EXIT_OK and args.verb_name not in ("compare", "greater"):
+        if status != EXIT_OK and args.verb_name not in ("compare", "greater"):
             raise CommandError(f"param {args.verb_name} failed")
     else:
         raise CommandError(
@@ -193,7 +194,7 @@ def _condition(words: list[str], parser: argparse.ArgumentParser, session: Sessi
     if len(words) < 2 or words[0] != "param" or words[1] not in ("compare", "greater"):
         raise CommandError("'if' takes a 'param compare' or 'param greater' command")
     args = _parse(parser, words[1:])
-    return bool(args.verb(session, args) == param.EXIT_OK)
+    return bool(args.verb(session, args) == EXIT_OK)
 
 
 def _parse(parser: argparse.ArgumentParser, words: list[str]) -> argparse.Namespace:

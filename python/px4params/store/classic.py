@@ -175,4 +175,4 @@ def classic_value(kind: str, value: Any) -> int | float:
     value = float(value)
     if math.isfinite(value) and abs(value) > 3.4028234663852886e38:
         raise ClassicParamsError(f"value {value} does not fit a float32")
-    return struct.unpack("<f", struct.pack("<f", value))[0]
+    return float(struct.unpack("<f", struct.pack("<f", value))[0])

@@ -79,6 +79,7 @@ def _lines_crc(lines: list[str]) -> int:
 
 def encode_file(store: Store) -> bytes:
     """The store's file content, written by the core (the bytes firmware writes too)."""
+    # (a parameter has a spec where it is not classic)
     names = [
         (p.name, True) if p.classic is not None else (table_lines([p.spec])[0], False)  # type: ignore[list-item]
         for p in sorted(store._params.values(), key=lambda p: p.index)
@@ -99,7 +100,7 @@ def write_file(path: str | os.PathLike[str], data: bytes, *, keep_backup: bool) 
     try:
         return writing.write_file(path, data, keep_backup=keep_backup)
     except OutputFileError as e:
-        raise StoreFileError(e.strerror, e.filename) from None
+        raise StoreFileError(e.strerror or str(e), e.filename) from None
 
 
 # -- reading ------------------------------------------------------------------------------------
@@ -209,8 +210,8 @@ def _apply(
 ) -> None:
     if record.kind == KIND_CLASSIC:
         assert isinstance(record.key, str)
-        p = store._params.get(record.key)
-        if p is None or p.classic is None:
+        param = store._params.get(record.key)
+        if param is None or param.classic is None:
             # Kept as it is and written back by the next save: nothing is lost because this
             # store was opened with another set of classic parameters.
             foreign[record.key] = record.raw
@@ -218,7 +219,7 @@ def _apply(
             return
         for payload, default in ((record.default, True), (record.value, False)):
             if payload is not None:
-                work.set_encoded(p.index, 0, payload, default=default)
+                work.set_encoded(param.index, 0, payload, default=default)
         return
     assert isinstance(record.key, int)
     p = by_index.get(record.key)
@@ -237,10 +238,10 @@ def _apply(
         work.add(p.index, record.instance)
     name = store._instance_name(p, record.instance)
     data_type = p.spec.data_type
-    default = record.default
-    if default is not None:
-        default = _current(store, data_type, name, default, work.type_default(p.index), report)
-        work.set_encoded(p.index, record.instance, default, default=True)
+    if record.default is not None:
+        base = work.type_default(p.index)
+        stored = _current(store, data_type, name, record.default, base, report)
+        work.set_encoded(p.index, record.instance, stored, default=True)
     if record.value is not None:
         base = work.get(p.index, record.instance, default=True)
         value = _current(store, data_type, name, record.value, base, report)

@@ -161,7 +161,7 @@ class FlatSlot(NamedTuple):
             number -= 1 << 32  # bit pattern
         return number
 
-    def from_flat(self, number: Any) -> int | float | bool:
+    def from_flat(self, number: object) -> int | float | bool:
         """A flat parameter's number as the leaf's value (type-checked; range is the store's)."""
         if self.mav_type == FLOAT32:
             if isinstance(number, bool) or not isinstance(number, int | float):
@@ -396,7 +396,7 @@ def from_flat(data_type: DataType, flat: Mapping[str, Any]) -> dict[str, Any]:
             return [build(spec["elem"], f"{path}[{i}]") for i in range(length)]
         return take(path)
 
-    value = build({"kind": "ref", "name": data_type.key}, "")
+    value: dict[str, Any] = build({"kind": "ref", "name": data_type.key}, "")
     extra = [letter for letter in flat if letter not in used]
     if extra:
         paths = ", ".join(
@@ -417,7 +417,7 @@ class FlatParam(NamedTuple):
     #: The instance, e.g. ``INA238#1``.
     instance: str
     #: The leaf's ``[k]`` index in the current value.
-    index: int
+    index: int  # type: ignore[assignment]  # a field named index hides tuple.index, as Leaf's must
     slot: FlatSlot
     #: The value as the flat parameter carries it (``int`` for ``int32``).
     value: int | float

@@ -80,7 +80,7 @@ class LongLeaf(NamedTuple):
     #: The instance, e.g. ``INA238#1``.
     instance: str
     #: The leaf's ``[k]`` index in the current value.
-    index: int
+    index: int  # type: ignore[assignment]  # a field named index hides tuple.index, as Leaf's must
     slot: FlatSlot
 
     @property

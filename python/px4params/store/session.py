@@ -276,14 +276,14 @@ def _put_on_top(store: Store, base_native: Any, ours_native: Any, theirs: Any, p
         more = f" (and {len(conflicts) - 1} more)" if len(conflicts) > 1 else ""
         raise StoreConflictError(f"{conflicts[0]} since this writer read {path}{more}")
     native = store._native
-    for (index, instance), value in writes:
-        if value is None:
+    for (index, instance), written in writes:
+        if written is None:
             native.remove(index, instance)
             continue
         if (index, instance) not in latest:
             native.add(index, instance)
-        native.set_encoded(index, instance, value[1], default=True)
-        native.set_encoded(index, instance, value[0], default=False)
+        native.set_encoded(index, instance, written[1], default=True)
+        native.set_encoded(index, instance, written[0], default=False)
 
 
 def _merge_value(

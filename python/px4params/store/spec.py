@@ -388,11 +388,10 @@ def stored_number(value: object, rng: LeafRange) -> int | float | None:
     the leaf's width), or None where only the codec can say (another kind of value, a float
     for an integer leaf, a number beyond the float's range): then the write is checked on the
     value it encodes."""
-    kind = type(value)
     if rng.float_bits:
-        if kind is not float and kind is not int:
+        if type(value) is not float and type(value) is not int:
             return None
-        number = float(value)  # type: ignore[arg-type]
+        number = float(value)
         if not math.isfinite(number):
             return number
         packer = _FLOAT_PACKERS.get(rng.float_bits)
@@ -402,7 +401,7 @@ def stored_number(value: object, rng: LeafRange) -> int | float | None:
             return float(packer.unpack(packer.pack(number))[0])
         except OverflowError:
             return None
-    return value if kind is int else None  # type: ignore[return-value]
+    return value if type(value) is int else None
 
 
 def describe_outside(value: float, rng: LeafRange) -> str:
@@ -411,6 +410,7 @@ def describe_outside(value: float, rng: LeafRange) -> str:
         return f"{_shown(value)} is outside {_shown(rng.low)}..{_shown(rng.high)} (@min/@max)"
     if rng.low is not None:
         return f"{_shown(value)} is below {_shown(rng.low)} (@min)"
+    assert rng.high is not None  # a value outside a range that has a bound
     return f"{_shown(value)} is above {_shown(rng.high)} (@max)"
 
 

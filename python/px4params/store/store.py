@@ -216,7 +216,7 @@ class Key(NamedTuple):
 class _Param(NamedTuple):
     """A parameter of the store: structured (``spec``) or classic (``classic``)."""
 
-    index: int
+    index: int  # type: ignore[assignment]  # a field named index hides tuple.index, as Leaf's must
     name: str
     spec: ParamSpec | None
     classic: ClassicParam | None
@@ -762,6 +762,10 @@ class InstanceView:
     """
 
     __slots__ = ("_instance", "_param", "_prefix", "_store")
+    _store: Store
+    _param: _Param
+    _instance: int
+    _prefix: str
 
     def __init__(self, store: Store, param: _Param, instance: int, prefix: str = "") -> None:
         object.__setattr__(self, "_store", store)
@@ -834,7 +838,8 @@ def _classic_bytes(param: ClassicParam, value: Any) -> bytes:
 
 
 def _classic_from_bytes(param: ClassicParam, data: bytes) -> int | float:
-    return struct.unpack("<f" if param.is_float else "<i", data)[0]
+    value: int | float = struct.unpack("<f" if param.is_float else "<i", data)[0]
+    return value
 
 
 class _Transaction:

@@ -57,7 +57,7 @@ import re
 import tomllib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, NoReturn
 
 from px4params.data import VALUE_SETS_TOML
 from px4params.errors import BoardsError, BoardsFileError
@@ -319,7 +319,7 @@ class _Row:
             self.fail(f"expected a table, got {type(table).__name__}")
         self.table: dict[str, Any] = table
 
-    def fail(self, problem: str) -> None:
+    def fail(self, problem: str) -> NoReturn:
         raise BoardsFileError(f"{self.file}: {self.where}: {problem}")
 
     def only(self, required: Sequence[str], optional: Sequence[str] = ()) -> None:
@@ -336,29 +336,30 @@ class _Row:
         value = self.table.get(key, default)
         if not isinstance(value, str) or (default is None and not value):
             self.fail(f"{key} {value!r} is not a non-empty string")
-        return value  # type: ignore[return-value]
+        return value
 
-    def number(self, key: str, low: int, high: int, optional: bool = False) -> int | None:
+    def optional_number(self, key: str, low: int, high: int) -> int | None:
+        return None if self.table.get(key) is None else self.number(key, low, high)
+
+    def number(self, key: str, low: int, high: int) -> int:
         value = self.table.get(key)
-        if value is None and optional:
-            return None
         if not isinstance(value, int) or isinstance(value, bool):
             self.fail(f"{key} {value!r} is not an integer")
-        if not low <= value <= high:  # type: ignore[operator]
+        if not low <= value <= high:
             self.fail(f"{key} {value} is out of range {low}..{high}")
-        return value  # type: ignore[return-value]
+        return value
 
     def choice(self, key: str, choices: Sequence[str]) -> str:
         value = self.table.get(key)
-        if value not in choices:
+        if not isinstance(value, str) or value not in choices:
             self.fail(f"{key} {value!r} is not one of {', '.join(choices)}")
-        return value  # type: ignore[return-value]
+        return value
 
     def flag(self, key: str) -> bool:
         value = self.table.get(key)
         if not isinstance(value, bool):
             self.fail(f"{key} {value!r} is not true or false")
-        return value  # type: ignore[return-value]
+        return value
 
     def numbers(self, key: str, low: int, high: int) -> tuple[int, ...]:
         value = self.table.get(key, [])
@@ -376,13 +377,13 @@ class _Row:
             or not all(isinstance(v, str) and v for v in value)
         ):
             self.fail(f"{key} {value!r} is not a non-empty list of strings")
-        return tuple(value)  # type: ignore[arg-type]
+        return tuple(value)
 
     def tables(self, key: str) -> list[Any]:
         value = self.table.get(key, [])
         if not isinstance(value, list):
             self.fail(f"{key} is not a list of tables")
-        return value  # type: ignore[no-any-return]
+        return value
 
 
 _START_KEYS = ("driver", "kind", "bus_kind", "internal", "args", "line")
@@ -408,9 +409,9 @@ def _start(row: _Row, switch: bool) -> dict[str, Any]:
         "driver": driver,
         "kind": row.choice("kind", KINDS),
         "bus_kind": row.choice("bus_kind", BUS_KINDS),
-        "bus": row.number("bus", 0, 255, optional=True),
-        "address": row.number("address", 0, 127, optional=True),
-        "rotation": row.number("rotation", 0, _rotation_max(), optional=True),
+        "bus": row.optional_number("bus", 0, 255),
+        "address": row.optional_number("address", 0, 127),
+        "rotation": row.optional_number("rotation", 0, _rotation_max()),
         "internal": row.flag("internal"),
         "args": row.text("args"),
         "when": row.text("when", ""),
@@ -493,9 +494,9 @@ def parse_boards(text: str, file: str = "boards.toml") -> BoardTable:
                 LauncherProbe(
                     driver=probe.text("driver"),
                     kind=probe.choice("kind", KINDS),
-                    address=probe.number("address", 0, 127),  # type: ignore[arg-type]
+                    address=probe.number("address", 0, 127),
                     args=args,
-                    source=cite(path, line, snaps),  # type: ignore[arg-type]
+                    source=cite(path, line, snaps),
                 )
             )
         for snap in snaps:

@@ -85,13 +85,12 @@ def started_drivers(console: str) -> list[DriverStart]:
         m = _STARTED.match(text)
         if not m:
             continue
-        address = int(m["address"], 16) if m["address"] else None
         start = DriverStart(
             m["driver"],
             m["kind"],
             int(m["bus"]),
             bool(m["external"]),
-            address,
+            int(m["address"], 16) if m["address"] else None,
             int(m["rotation"]) if m["rotation"] else None,
             False,
             number,

@@ -580,8 +580,12 @@ def encode(
     the current table, loaded only when a name needs it)."""
     if isinstance(devtype, str) and not _NUMBER.fullmatch(devtype.strip().lstrip("+-")):
         devtype = (_table(table) or load_table("current")).resolve(devtype)
-    parts = (_bus_type(bus_type), _number(bus, "bus", 5), _number(address, "address", 8))
-    parts += (_number(devtype, "devtype", 8),)
+    parts = (
+        _bus_type(bus_type),
+        _number(bus, "bus", 5),
+        _number(address, "address", 8),
+        _number(devtype, "devtype", 8),
+    )
     value = 0
     for part, (_, shift, _bits) in zip(parts, _FIELDS, strict=True):
         value |= part << shift

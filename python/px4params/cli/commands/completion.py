@@ -78,6 +78,7 @@ def cmd_completion(args: argparse.Namespace) -> int:
     from px4params.nsh.param import VERBS
 
     parser = build_parser()
+    # argparse's private fields, typed Optional: a parser with subcommands has them set.
     commands = sorted(
         choice
         for action in parser._subparsers._group_actions  # type: ignore[union-attr]

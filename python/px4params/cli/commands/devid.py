@@ -39,6 +39,7 @@ def cmd_devid(args: argparse.Namespace) -> int:
     # Loaded before any output, so a missing current table is one error and no partial result.
     table = devid.load_table(which, args.devtypes) if which != "auto" else None
     if args.list:
+        assert table is not None  # --list goes without --log: "auto" was refused above
         if args.json:
             listed = [
                 {"code": r.code, "name": r.name, "kind": r.kind, "macro": r.macro} for r in table
@@ -67,8 +68,8 @@ def cmd_devid(args: argparse.Namespace) -> int:
         print(f"(devtypes: the {label} table)")
         return EXIT_OK
     if args.encode:
-        value = devid.encode(args.bus_type, args.bus, args.address, args.devtype, table)
-        decoded = [devid.decode(value, table)]
+        device_id = devid.encode(args.bus_type, args.bus, args.address, args.devtype, table)
+        decoded = [devid.decode(device_id, table)]
     else:
         # Parse every ID before printing any, so a bad one fails the command cleanly.
         decoded = [devid.decode(devid.parse_device_id(text), table) for text in args.ids]

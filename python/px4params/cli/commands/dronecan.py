@@ -29,7 +29,7 @@ _node_id = identifier("DroneCAN node ID", 127)
 
 def cmd_serve(args: argparse.Namespace) -> int:
     from px4params.links.dronecan_node import NODE_NAME, DronecanParamNode
-    from px4params.links.slcan import open_pty, open_serial
+    from px4params.links.slcan import SerialPort, open_pty, open_serial
     from px4params.store.session import open_session
     from px4params.vehicle.health import ManifestHealth, worst
 
@@ -45,6 +45,7 @@ def cmd_serve(args: argparse.Namespace) -> int:
     def log(line: str) -> None:
         print(line, flush=True)
 
+    port: SerialPort
     if args.slcan_pty:
         port, device = open_pty()
         log(f"slcan: {device}")  # first line: a client opens this

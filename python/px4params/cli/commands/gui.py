@@ -85,7 +85,8 @@ def cmd_gui(args: argparse.Namespace) -> int:
         app,
         log_level="warning",
         lifespan="off",
-        timeout_graceful_shutdown=0.5,
+        # uvicorn annotates int but hands it to asyncio.wait_for, which takes seconds as float
+        timeout_graceful_shutdown=0.5,  # type: ignore[arg-type]
         ws_max_size=WS_MAX_MESSAGE,
     )
     server = uvicorn.Server(config)

@@ -31,8 +31,16 @@ if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
 
 #: Verbs that never write the store file: where it does not exist (nothing to read or protect)
 #: they take no lock, so that 'param show' in an empty folder leaves no FILE.lock behind.
-_READING_VERBS = (verb_compare, verb_export, verb_find, verb_flat, verb_greater, verb_instances)
-_READING_VERBS += (verb_show, verb_status)
+_READING_VERBS = (
+    verb_compare,
+    verb_export,
+    verb_find,
+    verb_flat,
+    verb_greater,
+    verb_instances,
+    verb_show,
+    verb_status,
+)
 
 
 def cmd_param(args: argparse.Namespace) -> int:
