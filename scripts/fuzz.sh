@@ -12,4 +12,4 @@ export PATH="$PWD/.venv/bin:$PATH"
 export PX4PARAMS_HYPOTHESIS_SCALE="${1:-50}"
 mapfile -t files < <(grep -l "from strategies import .*budget" tests/test_*.py)
 exec pytest -q -p no:cacheprovider --hypothesis-show-statistics \
-    tests/test_bad_inputs.py "${files[@]}"
+    tests/test_cli_bad_inputs.py "${files[@]}"

@@ -6,6 +6,8 @@ Exit codes, stderr and the no-traceback contract are checked through real subpro
 
 from __future__ import annotations
 
+import argparse
+import hashlib
 import io
 import json
 import os
@@ -13,13 +15,17 @@ import re
 import shutil
 import subprocess
 import sys
+import tomllib
 from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
+import dronecan
+import px4params
 import pytest
 from px4params import load_schema
-from px4params.cli.main import main
+from px4params.cli.main import build_parser, main
+from px4params.store.classic import BUNDLED_CLASSIC
 
 CACHE_ENV = "PX4PARAMS_CACHE_DIR"
 DSDL_PATH_ENV = "PX4PARAMS_DSDL_PATH"
@@ -919,3 +925,282 @@ def test_usage_error_in_process(capsys: pytest.CaptureFixture[str]) -> None:
     captured = capsys.readouterr()
     assert captured.out == ""
     assert "error: the following arguments are required: VALUE" in captured.err
+
+
+# -- px4params --version -----------------------------------------------------------------------
+# What works without options: ``px4params --version`` and ``autostart run`` without
+# ``--bench`` (a bench where every configured device is present and healthy).
+
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+def test_version_names_package_core_and_dsdl_set() -> None:
+    proc = subprocess.run(
+        [sys.executable, "-m", "px4params", "--version"], capture_output=True, text=True
+    )
+    assert (proc.returncode, proc.stderr) == (0, "")
+    package = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]["version"]
+    core = tomllib.loads((REPO / "Cargo.toml").read_text())["workspace"]["package"]["version"]
+    files = sorted((REPO / "python/px4params/data/dsdl/px").rglob("*.dsdl"))
+    digest = hashlib.sha256()
+    for f in files:
+        digest.update(f.relative_to(REPO / "python/px4params/data/dsdl/px").as_posix().encode())
+        digest.update(b"\0" + f.read_bytes() + b"\0")
+    assert proc.stdout.splitlines() == [
+        f"px4params {package}",
+        f"core {core} (Rust, px4params-core; store file format 2)",
+        f"DSDL px: {len(files)} types (bundled), sha256 {digest.hexdigest()[:16]}",
+    ]
+    assert len(files) >= 40
+
+
+def test_version_first_ends_the_parse(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["--version", "param", "show"]) == 0
+    assert capsys.readouterr().out.startswith("px4params ")
+
+
+# -- small frictions a new user met (issue 38) -------------------------------------------------
+# Small frictions a new user met (issue 38): a failed all-or-nothing run prints nothing on
+# stdout; reading a store that does not exist leaves no lock file; ``--store`` is taken after the
+# verb too; counts of one are singular.
+
+
+AIRFRAME = REPO / "examples" / "two_batteries.airframe"
+
+
+def run_here(capsys: pytest.CaptureFixture[str], *words: str) -> tuple[int, str, str]:
+    status = main(list(words))
+    out, err = capsys.readouterr()
+    return status, out, err
+
+
+def test_a_failed_run_prints_only_its_error(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    airframe = tmp_path / "bad.airframe"
+    airframe.write_text("param add INA238#0\nparam add INA238#1\nparam add BOGUS#0\n")
+    store = tmp_path / "v.store"
+    status, out, err = run_here(capsys, "run", str(airframe), "--store", str(store))
+    # Nothing of the file is kept, so nothing of it is shown as done.
+    assert (status, out) == (1, "")
+    assert err == f"px4params: {airframe}:3: unknown parameter 'BOGUS'\n"
+    assert not store.exists()
+    # With --keep-going the lines that succeeded are kept: they are shown.
+    status, out, err = run_here(capsys, "run", str(airframe), "--store", str(store), "--keep-going")
+    assert (status, out) == (1, "INA238#0\nINA238#1\n")
+    assert store.exists()
+
+
+def test_a_run_that_succeeds_prints_what_its_lines_print(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    status, out, err = run_here(capsys, "run", str(AIRFRAME), "--store", str(tmp_path / "v.store"))
+    assert (status, out, err) == (0, "INA238#0\nINA238#1\nAK09916#0\n", "")
+
+
+@pytest.mark.parametrize(
+    "verb",
+    [
+        ["show"],
+        ["show", "-c"],
+        ["status"],
+        ["flat"],
+        ["find", "INA"],
+        ["instances", "INA238"],
+        ["compare", "SYS_AUTOSTART", "0"],
+    ],
+)
+def test_reading_a_store_that_does_not_exist_leaves_no_file(
+    verb: list[str],
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.delenv("PX4PARAMS_STORE", raising=False)
+    main(["param", *verb])
+    capsys.readouterr()
+    assert sorted(p.name for p in tmp_path.iterdir()) == []
+
+
+def test_writing_verbs_still_lock(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.delenv("PX4PARAMS_STORE", raising=False)
+    assert run_here(capsys, "param", "add", "INA238#0")[0] == 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["px4params.store", "px4params.store.lock"]
+
+
+def test_store_after_the_verb(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    store = str(tmp_path / "v.store")
+    assert run_here(capsys, "run", str(AIRFRAME), "--store", store)[0] == 0
+    before = run_here(capsys, "param", "--store", store, "show", "-l", "INA238#0")
+    after = run_here(capsys, "param", "show", "-l", "INA238#0", "--store", store)
+    assert before == after and before[1].startswith("[0] p_version")
+    # after the verb it wins over the one before it
+    assert run_here(
+        capsys, "param", "--store", "other.store", "show", "--store", store
+    ) == run_here(capsys, "param", "show", "--store", store)
+    assert run_here(capsys, "param", "set", "INA238#0.current", "150", "--store", store)[0] == 0
+    assert (
+        run_here(capsys, "param", "--store", store, "show", "-q", "INA238#0.current")[1] == "150\n"
+    )
+
+
+def _leaves(
+    parser: argparse.ArgumentParser, path: str, above: set[str]
+) -> list[tuple[str, set[str], set[str]]]:
+    """Every command line's last parser, the options its parents take and its own."""
+    own = {o for a in parser._actions for o in a.option_strings}
+    subs = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+    if not subs:
+        return [(path, above, own)]
+    found = []
+    for name, sub in subs[0].choices.items():
+        found += _leaves(sub, f"{path} {name}", above | own)
+    return found
+
+
+def test_every_command_takes_its_store_options_after_the_verb() -> None:
+    leaves = _leaves(build_parser(), "px4params", set())
+    checked = 0
+    for path, above, own in leaves:
+        for option in ("--store", "--classic", "--dsdl"):
+            if option in above:
+                assert option in own, f"{path}: {option} only before the verb"
+                checked += 1
+        if "--store" in above | own:
+            checked += 1
+    assert checked > 20  # param's verbs, run, autostart plan and run, gui, servers ...
+
+
+def test_counts_of_one_are_singular(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    log = tmp_path / "run.ulg"
+    faults = REPO / "examples" / "two_batteries_faults.bench.toml"
+    argv = ["autostart", "run", "--airframe", str(AIRFRAME), "--bench", str(faults)]
+    assert run_here(capsys, *argv, "--ulog", str(log))[0] == 1
+    story = run_here(capsys, "health", str(log))[1]
+    # INA238#1 is lost once: one reset, which the story counts as one timeout
+    assert ", 1 timeout, " in story and "1 timeouts" not in story
+    migrated = tmp_path / "legacy.airframe"
+    params = REPO / "examples" / "two_batteries.params"
+    status, out, _ = run_here(
+        capsys, "migrate", "--table", "legacy", str(params), "-o", str(migrated)
+    )
+    assert status == 0
+    # the legacy table does not know the AK09916 (devtype 0x09): INA238#0 alone
+    assert out.endswith(f"\nwrote {migrated}: 1 instance\n")
+
+
+# -- the defects an outside audit found (those of the command line) ----------------------------
+# The defects an outside audit found, one test each (the catalogue of bad inputs is
+# ``test_cli_bad_inputs.py``): what users expect instead of a crash or a silently lost intent.
+
+
+CLI = [sys.executable, "-m", "px4params"]
+
+
+def cli(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [*CLI, *args], capture_output=True, text=True, timeout=120, cwd=cwd, check=False
+    )
+
+
+@pytest.fixture
+def store(tmp_path: Path) -> Path:
+    path = tmp_path / "real.store"
+    assert cli("run", str(AIRFRAME), "--store", str(path)).returncode == 0
+    return path
+
+
+# -- 8: a float below its leaf type's smallest ---------------------------------------------------
+
+
+def test_a_float_too_small_for_its_leaf_is_stored_as_zero_with_a_warning(store: Path) -> None:
+    # Below the shunt's @min (0.00001): refused, naming the number given (not the 0 it rounds
+    # to); with --force both what is overridden and the rounding are said.
+    result = cli("param", "--store", str(store), "set", "INA238#0.shunt", "1e-12")
+    assert (result.returncode, result.stderr) == (
+        1,
+        "px4params: error: INA238#0.shunt: 1e-12 is outside 0.00001..0.1 (@min/@max)\n",
+    )
+    result = cli("param", "--store", str(store), "set", "--force", "INA238#0.shunt", "1e-12")
+    assert result.returncode == 0
+    assert result.stderr == (
+        "px4params: warning: --force: INA238#0.shunt: 1e-12 is outside 0.00001..0.1 "
+        "(@min/@max); stored anyway\n"
+        "px4params: warning: INA238#0.shunt: 1e-12 is below the smallest float16 and is "
+        "stored as 0\n"
+    )
+    assert px4params.Store.load(store).get("INA238#0.shunt") == 0.0
+
+
+# -- 4, 5: the store file -----------------------------------------------------------------------
+
+
+def test_a_symlinked_store_stays_a_link_and_its_file_changes(store: Path) -> None:
+    link = store.with_name("link.store")
+    link.symlink_to(store.name)
+    assert cli("param", "--store", str(link), "set", "SYS_AUTOSTART", "4001").returncode == 0
+    assert link.is_symlink() and os.readlink(link) == store.name
+    assert px4params.Store.load(store, classic=BUNDLED_CLASSIC).get("SYS_AUTOSTART") == 4001
+    # One lock for both names: the lock file is the real file's.
+    assert store.with_name("real.store.lock").exists()
+    assert not store.with_name("link.store.lock").exists()
+
+
+def test_temporary_files_of_killed_saves_are_removed(store: Path) -> None:
+    dead = 2**22 + 12345  # beyond Linux's default pid_max: no such process
+    leftovers = [f".real.store.{dead}.abc123.tmp", f"real.store.bak.{dead}.tmp"]
+    alive = f".real.store.{os.getpid()}.zzz.tmp"  # this process: a save under way, kept
+    for name in [*leftovers, alive]:
+        store.with_name(name).write_bytes(b"half a save")
+    assert cli("param", "--store", str(store), "set", "SYS_AUTOSTART", "1").returncode == 0
+    names = {p.name for p in store.parent.iterdir()}
+    assert not names & set(leftovers)
+    assert alive in names
+
+
+# -- 6, 7, 9, 14: commands ------------------------------------------------------------------------
+
+
+def test_an_airframe_of_comments_still_makes_its_store(tmp_path: Path) -> None:
+    airframe = tmp_path / "empty.airframe"
+    airframe.write_text("# nothing yet\n\n")
+    result = cli("run", str(airframe), "--store", str(tmp_path / "new.store"))
+    assert result.returncode == 0
+    assert (tmp_path / "new.store").is_file()
+    shown = cli("param", "--store", str(tmp_path / "new.store"), "show")
+    assert shown.returncode == 0 and "parameters shown" in shown.stdout
+
+
+def test_the_type_column_of_a_params_file_is_checked(store: Path, tmp_path: Path) -> None:
+    params = tmp_path / "x.params"
+    params.write_text("1\t1\tSYS_AUTOSTART\t2.0\t9\n")
+    before = store.read_bytes()
+    result = cli("param", "--store", str(store), "import", str(params))
+    assert result.returncode == 1
+    assert result.stderr == (
+        f"px4params: error: {params}:1: SYS_AUTOSTART: type REAL32 (9) in the file, but the "
+        "parameter is INT32 (6)\n"
+    )
+    assert store.read_bytes() == before
+
+
+def test_encode_fills_missing_fields_on_request() -> None:
+    battery = "uavcan.equipment.power.BatteryInfo"
+    refused = cli("encode", battery, '{"voltage": 12.5}')
+    assert refused.returncode == 1
+    assert refused.stderr.endswith(
+        "temperature: missing field (give every field, or use --defaults to fill the missing "
+        "ones from the type's defaults)\n"
+    )
+    filled = cli("encode", battery, '{"voltage": 12.5}', "--defaults")
+    assert filled.returncode == 0
+    # pydronecan's answer: its BatteryInfo of zeros but voltage 12.5, packed with TAO.
+    from dronecan_oracle import pack
+
+    message = dronecan.uavcan.equipment.power.BatteryInfo(voltage=12.5)
+    assert bytes.fromhex(filled.stdout.strip()) == pack(message, tao=True)

@@ -14,6 +14,8 @@ import zlib
 from pathlib import Path
 from typing import Any
 
+import dronecan
+import px4params
 import pytest
 from px4params.dsdl import cache as model_cache
 from px4params.dsdl import loader as dsdl_loader
@@ -247,7 +249,6 @@ def _expected_fields(fields: list[Any]) -> list[tuple[str, dict[str, Any]]]:
 
 
 def test_dronecan_standard_set_complete(full_model: dict[str, Any]) -> None:
-    import dronecan
 
     types = full_model["types"]
     for name, t in dronecan.TYPENAMES.items():
@@ -281,7 +282,6 @@ def test_every_bundled_uavcan_file_is_loaded(full_model: dict[str, Any]) -> None
 
 
 def test_battery_info(full_model: dict[str, Any]) -> None:
-    import dronecan
 
     expected = dronecan.TYPENAMES["uavcan.equipment.power.BatteryInfo"]
     spec = full_model["types"]["uavcan.equipment.power.BatteryInfo"]
@@ -841,3 +841,63 @@ def test_values_errors(tmp_path: Path, field: str, message: str) -> None:
     path = write(tmp_path / "ext", "Bad.1.0.dsdl", f"# B\n{field}\n@sealed\n")
     error = _error(tmp_path, tmp_path / "ext")
     assert str(error).startswith(f"{path}:") and message in str(error)
+
+
+# -- hostile types (defects 2, 3 and 13 of an outside audit) -----------------------------------
+
+
+def _types(tmp_path: Path, files: dict[str, str | bytes]) -> px4params.Schema:
+    root = tmp_path / "acme"
+    root.mkdir(parents=True, exist_ok=True)
+    for name, text in files.items():
+        (root / name).write_bytes(text if isinstance(text, bytes) else text.encode())
+    return px4params.load_schema(
+        [root], include_dronecan=False, use_env=False, cache_dir=tmp_path / "cache"
+    )
+
+
+def test_a_type_too_large_is_refused_before_anything_is_allocated(tmp_path: Path) -> None:
+    with pytest.raises(DsdlError) as e:
+        _types(
+            tmp_path,
+            {
+                "L1.1.0.dsdl": "uint8[65535] x\n@sealed\n",
+                "L2.1.0.dsdl": "L1.1.0[65535] x\n@sealed\n",
+            },
+        )
+    assert str(e.value).endswith(
+        "acme.L2.1.0: its largest value has 34,358,689,800 bits (4,294,836,225 bytes); types "
+        "are limited to 65,535 bytes"
+    )
+    # Far below the limit: accepted.
+    schema = _types(tmp_path / "ok", {"Ok.1.0.dsdl": "uint8[65000] x\n@sealed\n"})
+    assert schema.get("acme.Ok").max_bits == 65000 * 8
+
+
+def test_max_instances_is_bounded(tmp_path: Path) -> None:
+    with pytest.raises(DsdlError, match=r"@max_instances expects an integer 1\.\.256, got '65536'"):
+        _types(tmp_path, {"W.1.0.dsdl": "# @max_instances 65536\nuint8 x\n@sealed\n"})
+
+
+def test_pydsdl_internal_errors_say_what_is_wrong_with_the_file(tmp_path: Path) -> None:
+    with pytest.raises(DsdlError) as e:
+        _types(tmp_path, {"B.1.0.dsdl": b"\xc7\x00binary"})
+    assert "not a text file: byte 0xC7 at offset 0 is not UTF-8" in str(e.value)
+    assert "PLEASE REPORT" not in str(e.value)
+
+
+def test_types_that_use_each_other_too_often_are_refused_before_pydsdl(tmp_path: Path) -> None:
+    """Found by the fuzz run: pydsdl recomputes a type's alignment for every use, so six small
+    files that use each other a few hundred times over took it 18 s (and more types, minutes).
+    They are counted first and refused."""
+    files = {
+        "T0.1.0.dsdl": "int3 a\nfloat16 b\n@sealed\n",
+        "T1.1.0.dsdl": "@union\n"
+        + "".join(f"T0.1.0[<=2] v{i}\n" for i in range(300))
+        + "@sealed\n",
+        "T2.1.0.dsdl": "".join(f"T1.1.0 f{i}\n" for i in range(100)) + "@sealed\n",
+    }
+    with pytest.raises(DsdlError) as e:
+        _types(tmp_path, files)
+    assert "acme.T2.1.0 uses its types so many times over (" in str(e.value)
+    assert "at most 20,000): pydsdl would take seconds to minutes to read it" in str(e.value)

@@ -4,20 +4,25 @@ from __future__ import annotations
 
 import atexit
 import math
+import os
+import re
 import shutil
 import struct
+import subprocess
+import sys
 import tempfile
 from pathlib import Path
 
 import px4params
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 from hypothesis.stateful import RuleBasedStateMachine, invariant, precondition, rule
 from px4params.errors import EncodeError, InstanceError, LeafError, StoreError, ValueShapeError
 from px4params.store.classic import ClassicParam, ClassicParamsError
 from px4params.store.file import encode_file
 from px4params.store.spec import metadata_default, parameter_specs
+from px4params.store.store import _KEY, Key, _split_key
 from shared_data import PARAMETERS_JSON, shared_file
 from strategies import budget
 
@@ -560,3 +565,156 @@ def test_a_leaf_read_before_reads_the_same_and_fails_the_same(store: px4params.S
         px4params.InstanceError, match=r"^INA238#1: instance does not exist \(add it first"
     ):
         store.get("INA238#1.current")
+
+
+# -- names split by hand (no re at run time), as the name expression would ---------------------
+
+
+#: Characters that mean something to the name expression, and some that do not.
+NAME_CHARS = "AZaz09_#[].-+ \t\n" + "\u0663\u00b2\u0130\u017f\u212a\u00e9"
+
+
+@settings(max_examples=budget(2000), deadline=None)
+@given(st.text(NAME_CHARS, max_size=14))
+@example("INA238#0.bus.i2c.address")
+@example("ina238#12[4]")
+@example("X#\u0663")  # an Arabic-Indic digit: not a digit of a name (ASCII only, as PX4)
+@example("K#1.\u212a")  # the Kelvin sign: [A-Za-z] is ASCII
+@example("A[1].b")
+@example("A#")
+def test_names_are_split_as_the_expression_matches(text: str) -> None:
+    match = re.fullmatch(_KEY, text)
+    expected = match.group("name", "instance", "index", "path") if match else None
+    assert _split_key(text) == expected
+
+
+def test_a_name_is_parsed_once_into_its_parts() -> None:
+    assert Key.parse("INA238#2[4]") == Key("INA238", 2, 4)
+    assert Key.parse("INA238#0.bus.i2c.address") == Key("INA238", 0, "bus.i2c.address")
+    assert Key.parse("SYS_AUTOSTART") == Key("SYS_AUTOSTART", None, None)
+
+
+# -- names are exact, as PX4's -----------------------------------------------------------------
+# Names are exact, as PX4's: ASCII digits only, upper case, no padding. PX4 finds a parameter by
+# comparing its name byte for byte (``param_find`` uses ``strcmp``), so ``ina238#0`` or ``INA238#٣``
+# (an Arabic-Indic three) name nothing there; here they are refused with the exact name as a hint,
+# at the one place names are parsed (``Key.parse``) and for destructured (MAVLink) names.
+
+
+EXACT = "names are exact, in upper case with ASCII digits and no spaces, as PX4's"
+
+
+@pytest.mark.parametrize(
+    ("text", "hint"),
+    [
+        ("INA238#\u0663", "INA238#3"),  # Arabic-Indic digit three
+        ("INA238#\u0661[4]", "INA238#1[4]"),
+        ("INA238#\uff11", "INA238#1"),  # fullwidth digit one
+        ("ina238#0", "INA238#0"),
+        ("Ina238#0.bus.i2c.address", "INA238#0.bus.i2c.address"),
+        (" INA238#0", "INA238#0"),
+        ("INA238#0 ", "INA238#0"),
+        ("INA238#0\t", "INA238#0"),
+        ("sys_autostart", "SYS_AUTOSTART"),
+    ],
+)
+def test_an_inexact_name_is_refused_with_the_exact_one(text: str, hint: str) -> None:
+    with pytest.raises(InstanceError) as e:
+        Key.parse(text)
+    assert str(e.value) == f"'{text}' is not a parameter name: {EXACT} (did you mean {hint}?)"
+
+
+def test_no_instance_is_added_under_an_inexact_name() -> None:
+    store = px4params.Store()
+    for text in ("INA238#\u0663", "ina238#3", "INA238#3 ", "ina238"):
+        with pytest.raises(InstanceError, match="did you mean INA238"):
+            store.add(text)
+    assert list(store.names()) == []
+    assert store.add("INA238#3") == "INA238#3"
+    assert "ina238#3" not in store and " INA238#3" not in store and "INA238#3" in store
+    with pytest.raises(InstanceError, match=rf"^'ina238' is not a parameter name: {EXACT} \("):
+        store.instances("ina238")
+
+
+def test_a_destructured_name_is_exact_too() -> None:
+    from px4params.store.flat import resolve_flat
+
+    store = px4params.Store()
+    store.add("INA238#1")
+    assert resolve_flat(store, "INA238_1C") == "INA238#1[4]"
+    for text in ("ina238_1c", "INA238_1C ", " INA238_1C"):
+        with pytest.raises(InstanceError) as e:
+            resolve_flat(store, text)
+        assert str(e.value) == (
+            f"'{text}' is not a destructured parameter name (did you mean INA238_1C?)"
+        )
+    assert "ina238_1c" not in store.destructured
+    assert store.destructured.mask_spec("ina238_inst") is None
+
+
+def test_the_cli_refuses_them_and_changes_nothing(tmp_path: Path) -> None:
+    store = tmp_path / "vehicle.store"
+    env = {k: v for k, v in os.environ.items() if not k.startswith("PX4PARAMS_")}
+    env["PX4PARAMS_CACHE_DIR"] = os.environ.get("PX4PARAMS_CACHE_DIR", str(tmp_path / "cache"))
+
+    def cli(*args: str) -> subprocess.CompletedProcess[str]:
+        return subprocess.run(
+            [sys.executable, "-m", "px4params", "param", "--store", str(store), *args],
+            capture_output=True,
+            text=True,
+            env=env,
+            timeout=120,
+        )
+
+    assert cli("add", "INA238#0").returncode == 0
+    before = store.read_bytes()
+    for args, hint in (
+        (("add", "INA238#\u0663"), "INA238#3"),
+        (("add", "ina238#1"), "INA238#1"),
+        (("set", "INA238#0.current ", "100"), "INA238#0.current"),
+        (("set", "ina238_0p", "100"), "INA238_0P"),
+    ):
+        result = cli(*args)
+        assert (result.returncode, result.stdout) == (1, "")
+        assert result.stderr == (
+            f"px4params: error: '{args[1]}' is not a parameter name: {EXACT} "
+            f"(did you mean {hint}?)\n"
+        )
+    assert store.read_bytes() == before
+
+
+# -- refusals that name what they refuse (an outside audit's defect 10) ------------------------
+
+
+def test_the_store_names_a_field_it_did_not_find(schema: px4params.Schema) -> None:
+    store = px4params.Store(schema)
+    store.add("INA238#0")
+    with pytest.raises(LeafError, match=r"^INA238#0: no such field: nope$"):
+        store.leaf("INA238#0.nope")
+    with pytest.raises(LeafError, match=r"^INA238#0: no such field: nope$"):
+        store.set("INA238#0.nope", 1)
+
+
+def test_a_parameter_the_store_cannot_hold_is_named() -> None:
+    """Past the loader's size limit (a model built by hand), the store names the parameter,
+    not its internal number."""
+    big = {"kind": "array", "len": 70000, "elem": {"kind": "uint", "bits": 8, "cast": "saturated"}}
+    model = {
+        "types": {
+            "t.Big.1.0": {
+                "name": "t.Big",
+                "version": [1, 0],
+                "kind": "struct",
+                "dialect": "dsdl",
+                "file": "Big.1.0.dsdl",
+                "line": 1,
+                "dtid": None,
+                "service": None,
+                "signature_override": None,
+                "doc": {"short": "Big", "long": "", "tags": {"max_instances": 1}},
+                "fields": [{"name": "x", "type": big, "line": 2}],
+            }
+        }
+    }
+    with pytest.raises(StoreError, match=r"^parameter BIG cannot be stored \(no slot, or a value"):
+        px4params.Store(px4params.Schema(model), classic=[])

@@ -1,6 +1,6 @@
 """Strict and bounded inputs (issue 35): the one file reader, strict JSON/TOML/.params inputs,
 DSDL folders walked once, airframe lines in linear time, caches that cannot lie, output errors,
-truncated logs and the servers' durations. The catalogue of bad inputs (``test_bad_inputs.py``)
+truncated logs and the servers' durations. The catalogue of bad inputs (``test_cli_bad_inputs.py``)
 runs every file kind as a FIFO, a device, a folder, a link loop and an over-size file."""
 
 from __future__ import annotations

@@ -15,7 +15,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from px4params import _native
 from strategies import budget, value_strategy
-from test_plain_path import spoiled
+from test_native_plain_path import spoiled
 
 SCHEMA = px4params.load_schema(use_env=False)
 TYPES = SCHEMA.model["types"]

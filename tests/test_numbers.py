@@ -1,40 +1,18 @@
-"""What the short commands do by hand, held to the modules they do without: importing ``re``
-(or ``json``, which imports it) costs ``param show`` or ``decode`` a third of Python's start."""
+"""``px4params.numbers``' JSON writer, held to :mod:`json`: it writes by hand what the short
+commands print, as importing ``json`` (which imports ``re``) costs ``param show`` or ``decode``
+a third of Python's start."""
 
 from __future__ import annotations
 
 import json
 import math
-import re
 
-from hypothesis import example, given, settings
+import pytest
+from hypothesis import given, settings
 from hypothesis import strategies as st
-from px4params.numbers import dump_json
-from px4params.store.store import _KEY, Key, _split_key
+from px4params.errors import NumberError
+from px4params.numbers import dump_json, load_json, parse_float, parse_int
 from strategies import budget
-
-#: Characters that mean something to the name expression, and some that do not.
-NAME_CHARS = "AZaz09_#[].-+ \t\n" + "\u0663\u00b2\u0130\u017f\u212a\u00e9"
-
-
-@settings(max_examples=budget(2000), deadline=None)
-@given(st.text(NAME_CHARS, max_size=14))
-@example("INA238#0.bus.i2c.address")
-@example("ina238#12[4]")
-@example("X#\u0663")  # an Arabic-Indic digit: not a digit of a name (ASCII only, as PX4)
-@example("K#1.\u212a")  # the Kelvin sign: [A-Za-z] is ASCII
-@example("A[1].b")
-@example("A#")
-def test_names_are_split_as_the_expression_matches(text: str) -> None:
-    match = re.fullmatch(_KEY, text)
-    expected = match.group("name", "instance", "index", "path") if match else None
-    assert _split_key(text) == expected
-
-
-def test_a_name_is_parsed_once_into_its_parts() -> None:
-    assert Key.parse("INA238#2[4]") == Key("INA238", 2, 4)
-    assert Key.parse("INA238#0.bus.i2c.address") == Key("INA238", 0, "bus.i2c.address")
-    assert Key.parse("SYS_AUTOSTART") == Key("SYS_AUTOSTART", None, None)
 
 
 def _plain() -> st.SearchStrategy[object]:
@@ -74,3 +52,23 @@ def test_json_of_a_decoded_value() -> None:
         assert "Circular reference" in str(e)
     else:
         raise AssertionError("a cycle was written")
+
+
+# -- numbers bounded before conversion (an outside audit's defects 1 and 8) --------------------
+
+
+def test_numbers_are_bounded_before_conversion() -> None:
+    assert parse_int("0x45", 16) == 0x45 and parse_int("-12") == -12
+    assert parse_int("9" * 64) == int("9" * 64)
+    with pytest.raises(NumberError, match=r"^999999999999\.\.\.999999 \(5000 characters\) is out"):
+        parse_int("9" * 5000)
+    with pytest.raises(NumberError, match="65 digits"):
+        parse_int("0x" + "f" * 65, 16)
+    assert parse_float("inf") == float("inf") and parse_float("1e300") == 1e300
+    with pytest.raises(NumberError, match=r"^1e400 is out of range of a float64"):
+        parse_float("1e400")
+    with pytest.raises(NumberError, match=r'^Infinity is not JSON; write "inf"'):
+        load_json('{"x": Infinity}')
+    with pytest.raises(NumberError, match=r"^1e400 is out of range"):
+        load_json("[1e400]")
+    assert load_json('{"x": 1.5, "y": "inf"}') == {"x": 1.5, "y": "inf"}
