@@ -27,7 +27,7 @@ CLI = [sys.executable, "-m", "px4params"]
 
 
 def run(command: list[str], cwd: Path, **kw: object) -> subprocess.CompletedProcess[str]:
-    proc = subprocess.run(command, cwd=cwd, capture_output=True, text=True, timeout=600, **kw)  # type: ignore[call-overload]
+    proc = subprocess.run(command, cwd=cwd, capture_output=True, text=True, timeout=900, **kw)  # type: ignore[call-overload]
     assert proc.returncode == 0, f"{command}: {proc.stderr[-4000:]}"
     return proc
 
@@ -341,12 +341,6 @@ save: 0 PX4P_OK
 """
 
 
-def _run(command: list[str], cwd: Path) -> subprocess.CompletedProcess[str]:
-    proc = subprocess.run(command, cwd=cwd, capture_output=True, text=True, timeout=900)
-    assert proc.returncode == 0, f"{command}: {proc.stderr[-4000:]}"
-    return proc
-
-
 @pytest.fixture(scope="module")
 def last_param(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """tests/firmware/last_param.c built against the generated tables and the C ABI's static
@@ -354,12 +348,12 @@ def last_param(tmp_path_factory: pytest.TempPathFactory) -> Path:
     if shutil.which("cargo") is None:
         pytest.skip("cargo is not installed: the C ABI cannot be built")
     gcc, _ = require_compilers()
-    _run(["cargo", "build", "-q", "-p", "px4params-ffi", "--release"], ROOT)
+    run(["cargo", "build", "-q", "-p", "px4params-ffi", "--release"], ROOT)
     target = Path(os.environ.get("CARGO_TARGET_DIR", ROOT / "target"))
     lib = target / "release" / "libpx4params_ffi.a"
     build = tmp_path_factory.mktemp("last_param")
-    _run([*CLI, "metadata", "--header", "px4_params.h", "--firmware", "px4_param_tables.c"], build)
-    _run(
+    run([*CLI, "metadata", "--header", "px4_params.h", "--firmware", "px4_param_tables.c"], build)
+    run(
         [gcc, "-std=c11", "-Wall", "-Wextra", "-Werror", f"-I{FFI / 'include'}", "-I.",
          str(ROOT / "tests" / "firmware" / "last_param.c"), "px4_param_tables.c", str(lib),
          "-lpthread", "-ldl", "-o", "last_param"],
@@ -376,7 +370,7 @@ def test_the_c_abi_opens_a_store_whose_last_parameter_is_in_the_table(last_param
     assert max(ids.values()) == count - 1
     assert ids["VL53L1X"] == count - 1, "the last parameter is no longer the VL53L1X"
     saved = last_param.parent / "from_c.store"
-    out = _run([str(last_param), str(saved)], last_param.parent).stdout
+    out = run([str(last_param), str(saved)], last_param.parent).stdout
     assert out == EXPECTED
     # The file the C ABI wrote, read by px4params: the new instance with its type's defaults.
     store = px4params.Store.load(saved, classic=BUNDLED_CLASSIC)
