@@ -8,6 +8,7 @@ import re
 import struct
 from typing import Any
 
+from px4params.dsdl.model import NO_DOC
 from px4params.dsdl.schema import Schema
 from px4params.errors import MigrationError, Px4ParamsError
 from px4params.migrate.config import OldConfig
@@ -126,8 +127,9 @@ class _Builder:
         carried."""
         param = inst.name.partition("#")[0]
         leaf = self.store.leaf(f"{inst.name}.{path}")
-        tags = _field_tags(self.specs[param].data_type, path)
-        lo, hi = tags.get("min"), tags.get("max")
+        field = self.specs[param].data_type.field_at(path)
+        doc = field.doc if field is not None else NO_DOC
+        lo, hi = doc.minimum, doc.maximum
         fitted: Any = value
         if isinstance(value, float):
             if leaf.type.startswith(("uint", "int")):
@@ -149,7 +151,7 @@ class _Builder:
         stored = self.store.get(f"{inst.name}.{path}")
         inst.values[path] = stored
         if _differs(value, stored):
-            unit = f" {tags['unit']}" if "unit" in tags else ""
+            unit = f" {doc.unit}" if doc.unit is not None else ""
             limits = f", {lo}..{hi}" if lo is not None or hi is not None else ""
             inst.notes.append(
                 f"{legacy} = {_shown(value)}{unit} becomes {path} = {_shown(stored)}{unit} "
@@ -702,14 +704,6 @@ def _default_address(store: Any, param: str) -> int:
     value = metadata_default(store.schema, spec.data_type.key)
     bus = value.get("bus", {})
     return int(bus.get("i2c", {}).get("address", 0))
-
-
-def _field_tags(data_type: Any, path: str) -> dict[str, Any]:
-    """The ``@min``/``@max``/``@unit`` tags of a top-level field."""
-    for f in data_type.definition["fields"]:
-        if f["name"] == path:
-            return dict((f.get("doc") or {}).get("tags") or {})
-    return {}
 
 
 def _differs(old: Any, new: Any) -> bool:

@@ -161,23 +161,6 @@ def shown_leaf(leaf: Leaf) -> str:
     return str(leaf.value)
 
 
-def field_tags(store: Store, name: str, path: str) -> dict[str, Any]:
-    """The doc-comment tags (unit, min, max, ...) of the field a leaf path ends at."""
-    data_type = store.data_type(name)
-    types = store.schema.model["types"]
-    spec: dict[str, Any] = {"kind": "ref", "name": data_type.key}
-    tags: dict[str, Any] = {}
-    for step in path.split("."):
-        if spec.get("kind") != "ref" or step in ("_tag", "_len"):
-            return {}
-        fields = {f["name"]: f for f in types[spec["name"]]["fields"]}
-        if step not in fields:
-            return {}
-        tags = (fields[step].get("doc") or {}).get("tags") or {}
-        spec = fields[step]["type"]
-    return tags if isinstance(tags, dict) else {}
-
-
 def _matches(name: str, patterns: list[str]) -> bool:
     if not patterns:
         return True
@@ -385,10 +368,11 @@ def _show_leaves(s: Session, a: argparse.Namespace) -> int:
         raise CommandError("show -l takes one instance, e.g. show -l INA238#0")
     name = a.filters[0]
     leaves = store.leaves(name)
+    data_type = store.data_type(name)
     defaults = {leaf.path: leaf for leaf in store.leaves(name, default=True)}
     rows = []
     for leaf in leaves:
-        tags = field_tags(store, name, leaf.path)
+        field = data_type.field_at(leaf.path)
         default = defaults.get(leaf.path)
         rows.append(
             {
@@ -397,7 +381,7 @@ def _show_leaves(s: Session, a: argparse.Namespace) -> int:
                 "type": leaf.type,
                 "value": leaf.value,
                 "default": default.value if default is not None else None,
-                "unit": tags.get("unit", ""),
+                "unit": (field.doc.unit if field is not None else None) or "",
                 "shown": shown_leaf(leaf),
                 "default_shown": shown_leaf(default) if default is not None else "-",
             }

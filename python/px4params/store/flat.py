@@ -57,6 +57,7 @@ import math
 from collections.abc import Iterator, Mapping
 
 from px4params._records import TYPE_CHECKING
+from px4params.dsdl.model import Field
 from px4params.dsdl.schema import DataType, Leaf
 from px4params.errors import FlatError, InstanceError, LeafError
 from px4params.store.spec import MAX_NAME_LEN, ParamSpec
@@ -217,48 +218,49 @@ def slot_count(data_type: DataType) -> int:
     declaration without listing them; :class:`FlatError` if a leaf is wider than 32 bits."""
     cached = data_type.derived.get("flat_count")
     if cached is None:
-        cached = _count(data_type.key, data_type._types, {"kind": "ref", "name": data_type.key}, "")
+        cached = _count(data_type, {"kind": "ref", "name": data_type.key}, "")
         data_type.derived["flat_count"] = cached
     return int(cached)
 
 
-def _count(
-    key: str, types: Mapping[str, Mapping[str, Any]], spec: Mapping[str, Any], path: str
-) -> int:
+def _count(data_type: DataType, spec: Mapping[str, Any], path: str) -> int:
     """The letters of ``spec`` (the rule of :class:`_Walker`, counted)."""
     kind = spec["kind"]
     if kind == "ref":
-        definition = types[spec["name"]]
-        fields = [f for f in definition["fields"] if f["type"]["kind"] != "void"]
-        if definition["kind"] == "union":
-            return 1 + sum(_count(key, types, f["type"], _join(path, f["name"])) for f in fields)
+        declared = data_type.nested_type_def(spec["name"])
+        fields = declared.data_fields
+        if declared.is_union:
+            return 1 + sum(_count(data_type, f.type, _join(path, f.name)) for f in fields)
         return sum(
-            _count(key, types, f["type"], _join(path, f["name"]))
-            for f in fields
-            if not (f["name"] == "p_version" and f["type"]["kind"] in ("uint", "int"))
+            _count(data_type, f.type, _join(path, f.name)) for f in fields if not _is_version(f)
         )
     if kind == "array":
         n = int(spec["len"])
-        return n * _count(key, types, spec["elem"], f"{path}[0]") if n else 0
+        return n * _count(data_type, spec["elem"], f"{path}[0]") if n else 0
     if kind == "dynarray":
         n = int(spec["max"])
-        return 1 + (n * _count(key, types, spec["elem"], f"{path}[0]") if n else 0)
+        return 1 + (n * _count(data_type, spec["elem"], f"{path}[0]") if n else 0)
     if kind in ("uint", "int", "float"):
         bits = int(spec["bits"])
         if bits > MAX_LEAF_BITS:
             raise FlatError(
-                f"{key}: leaf {path or '(value)'} is {kind}{bits}: destructured parameters "
-                f"carry at most {MAX_LEAF_BITS} bits (MAVLink), so this type cannot be a "
-                "parameter"
+                f"{data_type.key}: leaf {path or '(value)'} is {kind}{bits}: destructured "
+                f"parameters carry at most {MAX_LEAF_BITS} bits (MAVLink), so this type cannot "
+                "be a parameter"
             )
         return 1
     return 1 if kind == "bool" else 0  # void: padding, not a leaf
 
 
+def _is_version(field: Field) -> bool:
+    """``p_version``: filled in by the code, never set by users, so no letter of its own."""
+    return field.name == "p_version" and field.kind in ("uint", "int")
+
+
 class _Walker:
     def __init__(self, data_type: DataType) -> None:
         self.key = data_type.key
-        self.types: Mapping[str, Mapping[str, Any]] = data_type._types
+        self.data_type = data_type
         self.slots: list[FlatSlot] = []
 
     def run(self) -> list[FlatSlot]:
@@ -281,19 +283,18 @@ class _Walker:
     def walk(self, spec: Mapping[str, Any], path: str, requires: tuple[Any, ...]) -> None:
         kind = spec["kind"]
         if kind == "ref":
-            definition = self.types[spec["name"]]
-            fields = [f for f in definition["fields"] if f["type"]["kind"] != "void"]
-            if definition["kind"] == "union":
+            declared = self.data_type.nested_type_def(spec["name"])
+            fields = declared.data_fields
+            if declared.is_union:
                 tag = _join(path, "_tag")
                 bits = max(1, math.ceil(math.log2(len(fields))))
                 self.add(tag, f"uint{bits}", INT32, "union_tag", 0, len(fields) - 1, requires)
                 for number, f in enumerate(fields):
-                    self.walk(f["type"], _join(path, f["name"]), (*requires, (tag, "==", number)))
+                    self.walk(f.type, _join(path, f.name), (*requires, (tag, "==", number)))
                 return
             for f in fields:
-                if f["name"] == "p_version" and f["type"]["kind"] in ("uint", "int"):
-                    continue  # filled in by the code, never set by users: not offered
-                self.walk(f["type"], _join(path, f["name"]), requires)
+                if not _is_version(f):
+                    self.walk(f.type, _join(path, f.name), requires)
         elif kind == "array":
             for i in range(spec["len"]):
                 self.walk(spec["elem"], f"{path}[{i}]", requires)
@@ -368,9 +369,9 @@ def from_flat(data_type: DataType, flat: Mapping[str, Any]) -> dict[str, Any]:
     def build(spec: Mapping[str, Any], path: str) -> Any:
         kind = spec["kind"]
         if kind == "ref":
-            definition = data_type._types[spec["name"]]
-            fields = [f for f in definition["fields"] if f["type"]["kind"] != "void"]
-            if definition["kind"] == "union":
+            declared = data_type.nested_type_def(spec["name"])
+            fields = declared.data_fields
+            if declared.is_union:
                 tag = take(_join(path, "_tag"))
                 if not 0 <= tag < len(fields):
                     raise FlatError(
@@ -378,11 +379,9 @@ def from_flat(data_type: DataType, flat: Mapping[str, Any]) -> dict[str, Any]:
                         f"(expected 0 to {len(fields) - 1})"
                     )
                 chosen = fields[tag]
-                return {chosen["name"]: build(chosen["type"], _join(path, chosen["name"]))}
+                return {chosen.name: build(chosen.type, _join(path, chosen.name))}
             return {
-                f["name"]: build(f["type"], _join(path, f["name"]))
-                for f in fields
-                if not (f["name"] == "p_version" and f["type"]["kind"] in ("uint", "int"))
+                f.name: build(f.type, _join(path, f.name)) for f in fields if not _is_version(f)
             }
         if kind == "array":
             return [build(spec["elem"], f"{path}[{i}]") for i in range(spec["len"])]
