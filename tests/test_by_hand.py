@@ -10,7 +10,7 @@ import re
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from px4params.numbers import dump_json
-from px4params.store.store import _KEY, Key, _split_key
+from px4params.store.key import _KEY, Key, _split_key
 from strategies import budget
 
 #: Characters that mean something to the name expression, and some that do not.

@@ -101,21 +101,20 @@ class _Builder:
         """The instance of ``param`` on I2C ``bus`` at ``address``: a new one, or the one
         proposed already for the same device (found twice, e.g. enabled and calibrated)."""
         for inst in self.proposal.instances:
-            if inst.name.partition("#")[0] == param and (
+            if inst.key.param == param and (
                 inst.values["bus.i2c.bus_id"],
                 inst.values["bus.i2c.address"],
             ) == (bus, address):
                 inst.notes.append(f"also {origin}")
                 return inst
-        instance = self.store.add(param)
-        values: dict[str, Any] = {}
-        if self.store.get(f"{instance}.bus._tag") != 0:
+        inst = ProposedInstance(self.store.add(param), origin, {})
+        values = inst.values
+        if self.store.get(inst.key.at("bus._tag")) != 0:
             values["bus._tag"] = 0  # I2C
         values["bus.i2c.bus_id"] = bus
         values["bus.i2c.address"] = address
         for path, value in values.items():  # the tag first: it resets the variant
-            self.store.set_default(f"{instance}.{path}", value)
-        inst = ProposedInstance(instance, origin, values)
+            self.store.set_default(inst.key.at(path), value)
         self.proposal.instances.append(inst)
         return inst
 
@@ -125,9 +124,9 @@ class _Builder:
         rounded to nearest (``math.floor(v + 0.5)``) and clamped to the field's range, with a
         note; an integer setting (an enumeration such as a rotation) out of range is not
         carried."""
-        param = inst.name.partition("#")[0]
-        leaf = self.store.leaf(f"{inst.name}.{path}")
-        field = self.specs[param].data_type.field_at(path)
+        key = inst.key.at(path)
+        leaf = self.store.leaf(key)
+        field = self.specs[key.param].data_type.field_at(path)
         doc = field.doc if field is not None else NO_DOC
         lo, hi = doc.minimum, doc.maximum
         fitted: Any = value
@@ -144,11 +143,11 @@ class _Builder:
             )
             return False
         try:
-            self.store.set_default(f"{inst.name}.{path}", fitted)
+            self.store.set_default(key, fitted)
         except (Px4ParamsError, OverflowError, ValueError) as e:
             self.proposal.not_carried.append(f"{legacy} = {_shown(value)}: {e}")
             return False
-        stored = self.store.get(f"{inst.name}.{path}")
+        stored = self.store.get(key)
         inst.values[path] = stored
         if _differs(value, stored):
             unit = f" {doc.unit}" if doc.unit is not None else ""
@@ -161,7 +160,7 @@ class _Builder:
 
     def set_rotation(self, inst: ProposedInstance, rotation: int, why: str) -> None:
         """The driver's rotation (its ``-R``), where the type has the field."""
-        has_field = any(leaf.path == "rotation" for leaf in self.store.leaves(inst.name))
+        has_field = any(leaf.path == "rotation" for leaf in self.store.leaves(inst.key))
         if (
             has_field
             and self.field_value(inst, "rotation", "the driver's -R", rotation)
@@ -176,7 +175,7 @@ class _Builder:
         self.launcher_buses()
         self.probing()
         for inst in self.proposal.instances:
-            leaves = {leaf.path: leaf.index for leaf in self.store.leaves(inst.name)}
+            leaves = {leaf.path: leaf.index for leaf in self.store.leaves(inst.key)}
             inst.indices = {path: leaves[path] for path in inst.values}
         return self.proposal
 

@@ -19,6 +19,7 @@ from px4params._records import TYPE_CHECKING
 from px4params.dsdl.model import NO_DOC, Field, FieldDoc
 from px4params.dsdl.schema import DataType, Leaf, Schema
 from px4params.errors import ParameterSetError, ValueRangeError
+from px4params.store.key import Key
 
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
     from typing import Any, NamedTuple
@@ -67,7 +68,11 @@ class ParamSpec(NamedTuple):
 
     def instance_name(self, instance: int) -> str:
         """``INA238#0``, or the bare name for a shared parameter."""
-        return self.name if self.shared else f"{self.name}#{instance}"
+        return str(self.instance_key(instance))
+
+    def instance_key(self, instance: int) -> Key:
+        """The key of instance ``instance`` (of the parameter, for a shared one)."""
+        return Key(self.name, None if self.shared else instance, None)
 
 
 def default_param_name(type_name: str) -> str:
