@@ -164,3 +164,20 @@ def test_a_flat_name_of_an_unselected_variant_says_which_selector(
         LeafError, match=r"bus\._tag selects variant 0, not 1 \(set INA238_1A to 1\)"
     ):
         flat.set_flat(store, "INA238_1D", 1)
+
+
+def test_a_ground_station_write_reads_the_flat_name_once(
+    store: px4params.Store, counted: _Counting, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    fmap = flat.flat_map(store)
+    reads: list[str] = []
+    original = fmap._parse
+
+    def parse(name: str) -> Any:
+        reads.append(name)
+        return original(name)
+
+    monkeypatch.setattr(fmap, "_parse", parse)
+    assert flat.write_flat(store, "INA238_1C", 0x41) == "INA238_1C = 65"
+    assert reads == ["INA238_1C"]
+    assert counted.calls == Counter(get_leaf=1, set_leaf=1, get_leaf_value=1)

@@ -371,11 +371,11 @@ def _show_leaves(s: Session, a: argparse.Namespace) -> int:
     store = s.store
     if len(a.filters) != 1:
         raise CommandError("show -l takes one instance, e.g. show -l INA238#0")
-    name = a.filters[0]
-    leaves = store.leaves(name)
-    data_type = store.data_type(name)
-    defaults = {leaf.path: leaf for leaf in store.leaves(name, default=True)}
-    rows = []
+    key = Key.parse(a.filters[0])
+    leaves = store.leaves(key)
+    data_type = store.data_type(key)
+    defaults = {leaf.path: leaf for leaf in store.leaves(key, default=True)}
+    rows: list[dict[str, Any]] = []
     for leaf in leaves:
         field = data_type.field_at(leaf.path)
         default = defaults.get(leaf.path)
@@ -509,8 +509,7 @@ def verb_export(s: Session, a: argparse.Namespace) -> int:
 
 def verb_status(s: Session, a: argparse.Namespace) -> int:
     store = s.store
-    names = list(store.names())
-    instances = [n for n in names if "#" in n]
+    instances = [key for key in store.instance_keys() if key.instance is not None]
     slots, size = store.capacity
     exists = os.path.exists(s.path)
     status = {
@@ -533,7 +532,7 @@ def verb_status(s: Session, a: argparse.Namespace) -> int:
         f"{status['classic_parameters']} classic",
         file=s.out,
     )
-    print(f"instances: {len(instances)} ({', '.join(instances) or 'none'})", file=s.out)
+    print(f"instances: {len(instances)} ({', '.join(map(str, instances)) or 'none'})", file=s.out)
     print(f"changed from defaults: {status['changed']}", file=s.out)
     print(f"memory reserved: {size} bytes in {slots} slots", file=s.out)
     return EXIT_OK

@@ -619,16 +619,23 @@ class FlatMap:
         spec, number, index = found
         return spec, number, self.layout_of(spec.name).slots[index]
 
+    def lookup(self, name: str) -> tuple[Key, FlatSlot] | None:
+        """``(instance, slot)`` of a flat name, live or not; None if it is not one."""
+        found = self._owner(name)
+        if found is None:
+            return None
+        spec, number, slot = found
+        return spec.instance_key(number or 0), slot
+
     def owner(self, name: str) -> tuple[Key, FlatSlot]:
         """``(instance, slot)`` of a flat name, live or not; :class:`InstanceError` if the name
         belongs to no structured parameter."""
-        found = self._owner(name)
+        found = self.lookup(name)
         if found is None:
             exact = name.strip().upper()
             hint = f" (did you mean {exact}?)" if exact != name and exact in self else ""
             raise InstanceError(f"'{name}' is not a destructured parameter name{hint}")
-        spec, number, slot = found
-        return spec.instance_key(number or 0), slot
+        return found
 
     def table(self) -> list[FlatParam]:
         """Every live flat parameter of every existing instance, in store order."""
@@ -752,8 +759,9 @@ def write_flat(store: Store, name: str, number: Any) -> str:
     or an instance mask), checked by the store; a refused write raises and changes nothing.
     Returns a short description of what changed."""
     fmap = flat_map(store)
-    if name in fmap:
-        param = set_flat(store, name, number)
+    owner = fmap.lookup(name)  # the name read once: it names the leaf the write is given
+    if owner is not None:
+        param = write_live(store, fmap.live(name, *owner), number)
         return f"{name} = {param.value}"
     if fmap.mask_spec(name) is not None:
         added, removed = fmap.set_mask(name, number)

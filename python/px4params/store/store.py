@@ -370,18 +370,19 @@ class Store:
         A value outside its field's ``@min``/``@max`` or a NaN or infinity is refused
         (:class:`ValueRangeError`, nothing written); ``force`` lets the ``@min``/``@max``
         pass (``param set --force``), never a NaN or an infinity."""
-        self._write(name, value, default=False, saturate=saturate, force=force)
+        self._write(name, value, False, saturate, force)
 
     def set_default(
         self, name: str | Key, value: Any, *, saturate: bool = False, force: bool = False
     ) -> None:
         """Sets the default, like ``param set-default``: the value follows unless changed.
         Checked as :meth:`set` checks a value."""
-        self._write(name, value, default=True, saturate=saturate, force=force)
+        self._write(name, value, True, saturate, force)
 
     def _write(
-        self, name: str | Key, value: Any, *, default: bool, saturate: bool, force: bool = False
+        self, name: str | Key, value: Any, default: bool, saturate: bool, force: bool = False
     ) -> None:
+        # (Positional arguments here and in _check_leaf: every write passes through them.)
         p, instance, key = self._resolve(name)
         if p.classic is not None:
             if key.leaf is not None:
@@ -396,7 +397,7 @@ class Store:
             self._check_value(p, instance, value, default, saturate=saturate, force=force)
             self._native.set_value(p.index, instance, value, default=default, saturate=saturate)
         else:
-            self._check_leaf(p, instance, key.leaf, value, default, saturate=saturate, force=force)
+            self._check_leaf(p, instance, key.leaf, value, default, saturate, force)
             try:
                 self._native.set_leaf(
                     p.index, instance, key.leaf, value, default=default, saturate=saturate
@@ -463,7 +464,6 @@ class Store:
         target: int | str,
         value: Any,
         default: bool,
-        *,
         saturate: bool,
         force: bool,
     ) -> None:
