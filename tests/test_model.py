@@ -187,7 +187,7 @@ def test_a_malformed_field_tag_is_one_line_naming_type_field_and_tag(
     tags: dict[str, Any], message: str
 ) -> None:
     with pytest.raises(DsdlError) as caught:
-        type_def("x.Shunt.1.0", _definition(tags))
+        assert not type_def("x.Shunt.1.0", _definition(tags)).fields  # read when first asked for
     text = str(caught.value)
     assert "\n" not in text
     assert text.startswith("/dsdl/x/Shunt.1.0.dsdl:7: " + message), text
@@ -206,7 +206,7 @@ def test_a_malformed_type_tag_is_one_line_naming_type_and_tag(
     tags: dict[str, Any], message: str
 ) -> None:
     with pytest.raises(DsdlError) as caught:
-        type_def("x.Shunt.1.0", _definition({}, tags))
+        assert not type_def("x.Shunt.1.0", _definition({}, tags)).doc
     assert str(caught.value).startswith("/dsdl/x/Shunt.1.0.dsdl: " + message), caught.value
 
 
@@ -214,7 +214,7 @@ def test_a_doc_of_the_wrong_shape_is_refused() -> None:
     definition = _definition({})
     definition["fields"][0]["doc"] = ["not", "a", "table"]
     with pytest.raises(DsdlError, match=r"x\.Shunt\.1\.0\.shunt: doc is not a table"):
-        type_def("x.Shunt.1.0", definition)
+        assert not type_def("x.Shunt.1.0", definition).fields
 
 
 def test_a_hand_built_schema_is_refused_where_its_tags_are_first_read() -> None:

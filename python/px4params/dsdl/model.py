@@ -21,7 +21,7 @@ from px4params._records import TYPE_CHECKING
 from px4params.errors import DsdlError
 
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
-    from typing import Any, NamedTuple, TypedDict
+    from typing import Any, TypedDict
 
     class TypeSpec(TypedDict, total=False):
         """A field's type as the model holds it: ``kind`` (``uint``, ``int``, ``float``,
@@ -66,13 +66,32 @@ if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
 
     #: A scalar tag's value: a number of the field's type, or a bool for a bool field.
     Scalar = int | float | bool
-else:
-    from px4params._records import NamedTuple
 
 __all__ = ["NO_DOC", "Field", "FieldDoc", "TypeDef", "TypeDoc", "type_def"]
 
 
-class TypeDoc(NamedTuple):
+class _Doc:
+    """A doc comment: its description and its tags, each a named attribute; a tag not given
+    keeps the class's default (None, or ``()`` for a list). Read-only; equal when every value
+    is. (A plain class: a named tuple of fourteen fields costs every command its making.)"""
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def __init__(self, short: str = "", long: str = "", **tags: object) -> None:
+        self.__dict__.update(tags, short=short, long=long)
+
+    def __setattr__(self, name: str, value: object) -> None:
+        raise AttributeError(f"{type(self).__name__} is read-only")
+
+    def __eq__(self, other: object) -> bool:
+        return type(other) is type(self) and other.__dict__ == self.__dict__
+
+    def __repr__(self) -> str:
+        given = ", ".join(f"{k}={v!r}" for k, v in self.__dict__.items())
+        return f"{type(self).__name__}({given})"
+
+
+class TypeDoc(_Doc):
     """A type's doc comment: its description and type tags."""
 
     short: str = ""
@@ -94,7 +113,7 @@ class TypeDoc(NamedTuple):
         return self.max_instances is not None or self.param is not None
 
 
-class FieldDoc(NamedTuple):
+class FieldDoc(_Doc):
     """A field's doc comment: its description and field tags (of its elements, for an array)."""
 
     short: str = ""
@@ -131,41 +150,72 @@ class FieldDoc(NamedTuple):
 NO_DOC = FieldDoc()
 
 
-class Field(NamedTuple):
-    """One field of a type, padding included (``kind == "void"``, no name)."""
+class Field:
+    """One field of a type, padding included (``kind == "void"``, no name). Read-only."""
 
-    name: str
-    #: The field's type, JSON-shaped as the core compiles it.
-    type: TypeSpec
-    doc: FieldDoc
-    line: int | None = None
+    __slots__ = ("doc", "is_padding", "kind", "line", "name", "type")
+
+    def __init__(self, name: str, type: TypeSpec, doc: FieldDoc, line: int | None = None) -> None:
+        self.name = name
+        #: The field's type, JSON-shaped as the core compiles it.
+        self.type = type
+        self.doc = doc
+        #: Its line in the DSDL file, where known.
+        self.line = line
+        #: ``uint``, ``int``, ``float``, ``bool``, ``void``, ``array``, ``dynarray``, ``ref``.
+        self.kind: str = type["kind"]
+        #: ``voidN``: padding, no data.
+        self.is_padding = self.kind == "void"
+
+    def __repr__(self) -> str:
+        return f"Field(name={self.name!r}, type={self.type!r}, doc={self.doc!r})"
+
+
+class TypeDef:
+    """One type of the schema: a struct or union with its doc and fields.
+
+    Read-only. Its doc and fields are read from the model when first asked for, each once (a
+    command's store looks at every type's dialect, but at the fields of its parameters only).
+    """
+
+    __slots__ = ("_data_fields", "_definition", "_doc", "_fields", "dialect", "file", "is_union")
+    __slots__ += ("key", "name", "service", "version")
+
+    def __init__(self, key: str, definition: TypeDict | Mapping[str, Any]) -> None:
+        version = definition.get("version")
+        file = definition.get("file")
+        self._definition = definition
+        self._doc: TypeDoc | None = None
+        self._fields: tuple[Field, ...] | None = None
+        self._data_fields: list[Field] | None = None
+        self.key = key
+        #: Full name without version, e.g. ``px.Ina238``.
+        self.name = str(definition["name"])
+        self.is_union: bool = definition["kind"] == "union"
+        #: ``dsdl`` (our ``.dsdl`` types, with tags) or ``uavcan`` (DroneCAN's ``.uavcan``).
+        self.dialect: str | None = definition.get("dialect")
+        #: The service a request or response belongs to, else None.
+        self.service: str | None = definition.get("service")
+        self.version = (int(version[0]), int(version[1])) if version else None
+        self.file = str(file) if file is not None else None
 
     @property
-    def kind(self) -> str:
-        """``uint``, ``int``, ``float``, ``bool``, ``void``, ``array``, ``dynarray``, ``ref``."""
-        return self.type["kind"]
+    def doc(self) -> TypeDoc:
+        """The type's doc comment and type tags."""
+        if self._doc is None:
+            self._doc = _type_doc(self.key, self._definition)
+        return self._doc
 
     @property
-    def is_padding(self) -> bool:
-        return self.type["kind"] == "void"
-
-
-class TypeDef(NamedTuple):
-    """One type of the schema: a struct or union with its doc and fields."""
-
-    key: str
-    #: Full name without version, e.g. ``px.Ina238``.
-    name: str
-    is_union: bool
-    #: ``dsdl`` (our ``.dsdl`` types, with tags) or ``uavcan`` (DroneCAN's ``.uavcan`` files).
-    dialect: str | None
-    #: The service a request or response belongs to, else None.
-    service: str | None
-    version: tuple[int, int] | None
-    file: str | None
-    doc: TypeDoc
-    #: Every field in order, padding included.
-    fields: tuple[Field, ...]
+    def fields(self) -> tuple[Field, ...]:
+        """Every field in order, padding included."""
+        if self._fields is None:
+            key, file = self.key, self.file
+            self._fields = tuple(
+                Field(str(f["name"]), f["type"], _field_doc(key, file, f), f.get("line"))
+                for f in self._definition["fields"]
+            )
+        return self._fields
 
     @property
     def versioned(self) -> bool:
@@ -175,11 +225,16 @@ class TypeDef(NamedTuple):
     @property
     def data_fields(self) -> list[Field]:
         """The fields that hold data (no padding)."""
-        return [f for f in self.fields if not f.is_padding]
+        if self._data_fields is None:
+            self._data_fields = [f for f in self.fields if not f.is_padding]
+        return self._data_fields
 
     def field(self, name: str) -> Field | None:
         """The field ``name``, or None."""
         return next((f for f in self.fields if f.name == name and not f.is_padding), None)
+
+    def __repr__(self) -> str:
+        return f"<TypeDef {self.key}>"
 
 
 def type_def(
@@ -187,36 +242,15 @@ def type_def(
     definition: TypeDict | Mapping[str, Any],
     memo: MutableMapping[str, TypeDef] | None = None,
 ) -> TypeDef:
-    """``definition`` (the model's type ``key``) read into a :class:`TypeDef` (once: kept in
-    ``memo``, the schema's); :class:`DsdlError` naming the type, field and tag when a tag has
-    the wrong shape."""
-    if memo is not None:
-        found = memo.get(key)
-        if found is None:
-            found = memo[key] = type_def(key, definition)
-        return found
-    file = definition.get("file")
-    version = definition.get("version")
-    fields = tuple(
-        Field(
-            str(f["name"]),
-            f["type"],
-            _field_doc(key, file, f),
-            f.get("line"),
-        )
-        for f in definition["fields"]
-    )
-    return TypeDef(
-        key,
-        str(definition["name"]),
-        definition["kind"] == "union",
-        definition.get("dialect"),
-        definition.get("service"),
-        (int(version[0]), int(version[1])) if version else None,
-        str(file) if file is not None else None,
-        _type_doc(key, definition),
-        fields,
-    )
+    """``definition`` (the model's type ``key``) as a :class:`TypeDef` (once: kept in ``memo``,
+    the schema's). Its doc and fields raise :class:`DsdlError` naming the type, field and tag
+    when a tag has the wrong shape."""
+    if memo is None:
+        return TypeDef(key, definition)
+    found = memo.get(key)
+    if found is None:
+        found = memo[key] = TypeDef(key, definition)
+    return found
 
 
 # -- reading tags: one function per tag ---------------------------------------------------------
@@ -263,6 +297,17 @@ def _scalar(value: object) -> int | float | bool:
 
 
 def _named(value: object, number: Callable[[object], Any]) -> tuple[tuple[Any, str], ...]:
+    if type(value) is list:  # as the loader writes it, checked in one loop (rotation has 40)
+        pairs = []
+        for item in value:
+            if type(item) is not list or len(item) != 2:
+                break
+            n, text = item
+            if type(n) is not int or type(text) is not str or (n < 0 and number is not _scalar):
+                break
+            pairs.append((n, text))
+        else:
+            return tuple(pairs)
     if not isinstance(value, list | tuple):
         raise _Malformed(f"expects a list of [number, description], got {value!r}")
     out = []
@@ -289,7 +334,7 @@ def _display_format(value: object) -> str:
 
 def _field_default(value: object) -> tuple[str, object]:
     """``@default``: a scalar, or (a composite field's) a table of path -> scalar."""
-    if isinstance(value, Mapping):
+    if isinstance(value, dict):
         paths = {}
         for path, item in value.items():
             if not isinstance(path, str) or not path:
@@ -330,10 +375,10 @@ _TYPE_TAGS: dict[str, Callable[[object], object]] = {
 def _doc_parts(where: str, doc: object) -> tuple[str, str, Mapping[str, Any]]:
     if doc is None:
         return "", "", {}
-    if not isinstance(doc, Mapping):
+    if not isinstance(doc, dict):
         raise _Malformed(f"{where}: doc is not a table: {doc!r}")
     short, long, tags = doc.get("short") or "", doc.get("long") or "", doc.get("tags") or {}
-    if not isinstance(short, str) or not isinstance(long, str) or not isinstance(tags, Mapping):
+    if not isinstance(short, str) or not isinstance(long, str) or not isinstance(tags, dict):
         raise _Malformed(f"{where}: doc's short, long or tags has the wrong shape")
     return short, long, tags
 

@@ -272,6 +272,9 @@ class Schema(Mapping[str, DataType]):
     def type_def(self, name: str) -> TypeDef:
         """The declaration of type ``name`` (a key or a versionless name), typed
         (:mod:`px4params.dsdl.model`): read on first use, without compiling the type."""
+        found = self._type_defs.get(name)  # (a key, read before: the common case)
+        if found is not None:
+            return found
         key = self.resolve(name)
         return type_def(key, self._definitions[key], self._type_defs)
 
