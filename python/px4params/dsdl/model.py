@@ -9,8 +9,8 @@ field's tags a :class:`FieldDoc` (``field.doc.minimum``, ``field.doc.unit``,
 (:data:`_FIELD_TAGS`, :data:`_TYPE_TAGS`); a model whose tag has the wrong shape (a hand-built
 schema, an edited cache) is refused with one line naming the type, the field and the tag.
 
-Records are :mod:`px4params._records` named tuples (immutable; ``dataclasses`` and ``typing``
-cost a short command their import).
+The records are small read-only classes (``dataclasses``, ``typing`` and named tuples cost a
+short command their making); a type's doc and fields are read when first asked for, each once.
 """
 
 from __future__ import annotations
