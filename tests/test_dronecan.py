@@ -57,7 +57,7 @@ def _store(path: Path) -> px4params.Store:
 
 def test_long_names_are_the_talks(vehicle_store: Path) -> None:
     names = {
-        row.name: (row.leaf, row.slot.path) for row in LongNames(_store(vehicle_store)).table()
+        row.name: (str(row.leaf), row.slot.path) for row in LongNames(_store(vehicle_store)).table()
     }
     # The talk's three examples, written down from its slide.
     assert names["INA238_1_BUS_TYPE"] == ("INA238#1[1]", "bus._tag")

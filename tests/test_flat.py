@@ -64,7 +64,7 @@ def test_talk_names(store: px4params.Store) -> None:
     assert [table[n].path for n in table] == [
         "bus._tag", "bus.i2c.bus_id", "bus.i2c.address", "current", "shunt",
     ]  # fmt: skip
-    assert [table[n].leaf for n in table] == [f"INA238#1[{k}]" for k in (1, 3, 4, 5, 6)]
+    assert [str(table[n].leaf) for n in table] == [f"INA238#1[{k}]" for k in (1, 3, 4, 5, 6)]
     assert flat.resolve_flat(store, "INA238_1C") == "INA238#1[4]"
     with pytest.raises(InstanceError, match=r"did you mean INA238_1C\?\)$"):  # exact, as PX4's
         flat.resolve_flat(store, "ina238_1c")

@@ -15,6 +15,7 @@ import px4params
 import pytest
 from px4params.errors import FlatError
 from px4params.store import flat
+from px4params.store.key import Key
 from test_flat import dsdl_root
 
 BIG = {
@@ -46,13 +47,13 @@ def test_the_talks_names_are_unchanged() -> None:
     # SPEC: INA238#1.bus_type -> INA238_1A, i2c.bus_id -> INA238_1B, i2c.address -> INA238_1C.
     store = px4params.Store()
     names = store.destructured
-    assert names.owner("INA238_1A") == ("INA238#1", names.layout_of("INA238").slot("A"))
+    assert names.owner("INA238_1A") == (Key.parse("INA238#1"), names.layout_of("INA238").slot("A"))
     assert [names.owner(n)[1].path for n in ("INA238_1A", "INA238_1B", "INA238_1C")] == [
         "bus._tag",
         "bus.i2c.bus_id",
         "bus.i2c.address",
     ]
-    assert names.owner("INA238_3Q") == ("INA238#3", names.layout_of("INA238").slot("Q"))
+    assert names.owner("INA238_3Q") == (Key.parse("INA238#3"), names.layout_of("INA238").slot("Q"))
     for missing in ("INA238_4A", "INA238_1R", "INA238_01A", "INA238_A", "INA238_1", "X_1A"):
         assert missing not in names
 
@@ -63,19 +64,14 @@ def test_every_bundled_name_is_the_eager_maps() -> None:
     rows = []
     for name in names.names():
         instance, slot = names.owner(name)  # the lazy lookup is the listing's inverse
-        assert (
-            flat.FlatMap.name_of(store.spec(instance.partition("#")[0]), *_number(instance), slot)
-            == name
-        )  # type: ignore[arg-type]
-        if instance.partition("#")[0] in BUNDLED:
+        spec = store.spec(instance.param)
+        assert spec is not None
+        assert flat.FlatMap.name_of(spec, instance.instance, slot) == name
+        if instance.param in BUNDLED:
             rows.append(f"{name} {instance} {slot.letter} {slot.path}")
     rows.sort()
     assert len(rows) == BUNDLED_NAMES
     assert hashlib.sha256("\n".join(rows).encode()).hexdigest() == BUNDLED_DIGEST
-
-
-def _number(instance: str) -> tuple[int | None]:
-    return (int(instance.partition("#")[2]),) if "#" in instance else (None,)
 
 
 def test_a_store_of_a_huge_type_is_built_without_listing_its_names(tmp_path: Path) -> None:
@@ -84,7 +80,7 @@ def test_a_store_of_a_huge_type_is_built_without_listing_its_names(tmp_path: Pat
     big = schema["acme.Big"]
     store = px4params.Store(schema)
     assert store.destructured.owner("BIG_255" + flat.letters(65000)) == (
-        "BIG#255",
+        Key.parse("BIG#255"),
         flat.layout(big).slots[65000],
     )
     # Asking for a name of another type, or listing a store with no BIG instance, works out

@@ -21,8 +21,8 @@ from hypothesis.stateful import RuleBasedStateMachine, invariant, precondition, 
 from px4params.errors import EncodeError, InstanceError, LeafError, StoreError, ValueShapeError
 from px4params.store.classic import ClassicParam, ClassicParamsError
 from px4params.store.file import encode_file
+from px4params.store.key import _KEY, Key, _split_key
 from px4params.store.spec import metadata_default, parameter_specs
-from px4params.store.store import _KEY, Key, _split_key
 from shared_data import PARAMETERS_JSON, shared_file
 from strategies import budget
 

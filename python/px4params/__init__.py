@@ -40,7 +40,7 @@ _EXPORTS = {
     "load_schema": "px4params.dsdl.schema",
     "to_json_value": "px4params.dsdl.schema",
     "InstanceView": "px4params.store.store",
-    "Key": "px4params.store.store",
+    "Key": "px4params.store.key",
     "Store": "px4params.store.store",
 }
 

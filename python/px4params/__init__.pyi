@@ -60,11 +60,11 @@ from px4params.errors import (
 from px4params.errors import (
     ValueShapeError as ValueShapeError,
 )
-from px4params.store.store import (
-    InstanceView as InstanceView,
+from px4params.store.key import (
+    Key as Key,
 )
 from px4params.store.store import (
-    Key as Key,
+    InstanceView as InstanceView,
 )
 from px4params.store.store import (
     Store as Store,

@@ -289,8 +289,8 @@ class LeftToArgparse(Exception):
 
 
 class TagValueError(Exception):
-    """:mod:`px4params.dsdl.loader`: a metadata tag's value is invalid; the caller adds the
-    tag's name and location and raises :class:`DsdlError`."""
+    """:mod:`px4params.dsdl.loader` and :mod:`px4params.dsdl.model`: a metadata tag's value is
+    invalid; the caller adds the tag's name and location and raises :class:`DsdlError`."""
 
 
 class KeepRunningValues(Exception):

@@ -10,6 +10,7 @@ from px4params import _native
 from px4params._records import TYPE_CHECKING
 from px4params.dsdl import signature as _signature
 from px4params.dsdl.cache import load_model, newest_versions, type_refs
+from px4params.dsdl.model import Field, TypeDef, TypeDoc, type_def
 
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
     from typing import Any, NamedTuple
@@ -82,6 +83,7 @@ class DataType(_native.DataType):
         native: _native.DataType,
         types: Mapping[str, Mapping[str, Any]] | None = None,
         signatures: MutableMapping[str, int] | None = None,
+        type_defs: MutableMapping[str, TypeDef] | None = None,
     ) -> DataType:
         return super().__new__(cls, native)
 
@@ -92,11 +94,13 @@ class DataType(_native.DataType):
         native: _native.DataType,
         types: Mapping[str, Mapping[str, Any]] | None = None,
         signatures: MutableMapping[str, int] | None = None,
+        type_defs: MutableMapping[str, TypeDef] | None = None,
     ) -> None:
         self.definition = definition
         # Every type of the schema (for nested types' signatures) and the schema's memo of them.
         self._types = types if types is not None else {key: definition}
         self._signatures = signatures if signatures is not None else {}
+        self._type_defs = type_defs if type_defs is not None else {}
         #: What other layers derive from the type once and keep with it (its destructured
         #: letters, ``px4params.store.flat.layout``).
         self.derived: dict[str, Any] = {}
@@ -113,9 +117,36 @@ class DataType(_native.DataType):
         return (int(v[0]), int(v[1])) if v else None
 
     @property
-    def doc(self) -> Mapping[str, Any]:
-        """Parsed doc-comment metadata: ``short``, ``long`` and ``tags``."""
-        return self.definition.get("doc") or {}
+    def type_def(self) -> TypeDef:
+        """The type's declaration, typed: its doc, tags and fields
+        (:mod:`px4params.dsdl.model`), read once per schema."""
+        return type_def(self.key, self.definition, self._type_defs)
+
+    def nested_type_def(self, key: str) -> TypeDef:
+        """The declaration of ``key``, a type this one uses (or this one)."""
+        return type_def(key, self._types[key], self._type_defs)
+
+    def field_at(self, path: str) -> Field | None:
+        """The field a leaf path ends at (``bus.i2c.address``; ``cells[3].volts`` is field
+        ``volts`` of an element), or None: no such field, a union tag or an array length."""
+        declared: TypeDef | None = self.type_def
+        found = None
+        for step in path.split("."):
+            if declared is None:
+                return None
+            found = declared.field(step.partition("[")[0])
+            if found is None:
+                return None
+            spec = found.type
+            while spec["kind"] in ("array", "dynarray"):
+                spec = spec["elem"]
+            declared = self.nested_type_def(spec["name"]) if spec["kind"] == "ref" else None
+        return found
+
+    @property
+    def doc(self) -> TypeDoc:
+        """The type's doc comment: ``short``, ``long`` and its tags (``max_instances`` ...)."""
+        return self.type_def.doc
 
     @property
     def signature(self) -> int:
@@ -191,6 +222,7 @@ class Schema(Mapping[str, DataType]):
         self._all: _native.Schema | None = None
         self._cache: dict[str, DataType] = {}
         self._signatures: dict[str, int] = {}
+        self._type_defs: dict[str, TypeDef] = {}
 
     @property
     def _native(self) -> _native.Schema:
@@ -237,9 +269,19 @@ class Schema(Mapping[str, DataType]):
                 self._compiled(key),
                 self._definitions,
                 self._signatures,
+                self._type_defs,
             )
             self._cache[key] = cached
         return cached
+
+    def type_def(self, name: str) -> TypeDef:
+        """The declaration of type ``name`` (a key or a versionless name), typed
+        (:mod:`px4params.dsdl.model`): read on first use, without compiling the type."""
+        found = self._type_defs.get(name)  # (a key, read before: the common case)
+        if found is not None:
+            return found
+        key = self.resolve(name)
+        return type_def(key, self._definitions[key], self._type_defs)
 
     def __contains__(self, name: object) -> bool:
         return isinstance(name, str) and (name in self._definitions or name in self._newest)

@@ -29,6 +29,7 @@ import re
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
+from px4params.dsdl.model import Field
 from px4params.dsdl.schema import Schema
 from px4params.gcs.metadata import length_bits, min_bits, tag_bits
 from px4params.store.spec import ParamSpec
@@ -312,7 +313,6 @@ def c_member_name(name: str) -> str:
 class _Generator:
     def __init__(self, schema: Schema) -> None:
         self.schema = schema
-        self.types: Mapping[str, Any] = schema.model["types"]
         self.c_names: dict[str, str] = {}
 
     # -- names and order -------------------------------------------------------------------
@@ -326,8 +326,8 @@ class _Generator:
             if key in seen:
                 return
             seen.add(key)
-            for field in self.types[key]["fields"]:
-                spec = field["type"]
+            for field in self.schema.type_def(key).fields:
+                spec = field.type
                 while spec["kind"] in ("array", "dynarray"):
                     spec = spec["elem"]
                 if spec["kind"] == "ref":
@@ -342,12 +342,12 @@ class _Generator:
         # The newest version of a name is plain px_Bus; an older one also needed is px_Bus_1_0.
         by_name: dict[str, list[str]] = {}
         for key in keys:
-            by_name.setdefault(str(self.types[key]["name"]), []).append(key)
+            by_name.setdefault(self.schema.type_def(key).name, []).append(key)
         for name, versions in by_name.items():
             base = name.replace(".", "_")
-            ranked = sorted(versions, key=lambda k: tuple(self.types[k].get("version") or (0, 0)))
+            ranked = sorted(versions, key=lambda k: self.schema.type_def(k).version or (0, 0))
             for key in ranked[:-1]:
-                major, minor = self.types[key]["version"]
+                major, minor = self.schema.type_def(key).version or (0, 0)
                 self.c_names[key] = f"{base}_{major}_{minor}"
             self.c_names[ranked[-1]] = base
 
@@ -458,13 +458,13 @@ class _Generator:
         return out
 
     def type_decl(self, key: str) -> list[str]:
-        definition = self.types[key]
+        declared = self.schema.type_def(key)
         name = self.cname(key)
         macro = self.macro(name)
         data_type = self.schema[key]
-        doc = (definition.get("doc") or {}).get("short")
+        doc = declared.doc.short
         lines = [f"/* {key}{': ' + doc if doc else ''} */"]
-        version = definition.get("version")
+        version = declared.version
         if version:
             lines += [
                 f"#define {macro}_VERSION_MAJOR {version[0]}",
@@ -474,23 +474,21 @@ class _Generator:
             f"#define {macro}_MAX_SIZE {data_type.max_bytes}",
             f"#define {macro}_MAX_BITS {data_type.max_bits}",
         ]
-        fields = [f for f in definition["fields"] if f["type"]["kind"] != "void"]
+        fields = declared.data_fields
         for f in fields:
-            if f["type"]["kind"] == "dynarray":
-                spec = f["type"]
+            if f.kind == "dynarray":
+                spec = f.type
                 len_type = self.scalar_ctype({"kind": "uint", "bits": length_bits(spec["max"])})
                 lines += [
-                    f"struct {self.array_struct(key, f['name'])} {{",
+                    f"struct {self.array_struct(key, f.name)} {{",
                     f"    {len_type} len;",
                     f"    {self.elem_ctype(spec['elem'])} data[{spec['max']}];",
                     "};",
                 ]
         members = [self.member_decl(key, f) for f in fields]
-        if definition["kind"] == "union":
+        if declared.is_union:
             lines.append(f"enum {name}_tag {{")
-            lines += [
-                f"    {macro}_TAG_{self.macro(f['name'])} = {i}," for i, f in enumerate(fields)
-            ]
+            lines += [f"    {macro}_TAG_{self.macro(f.name)} = {i}," for i, f in enumerate(fields)]
             lines += [
                 "};",
                 f"struct {name} {{",
@@ -506,10 +504,10 @@ class _Generator:
             lines += [f"struct {name} {{", *[f"    {m}" for m in body], "};"]
         return lines
 
-    def member_decl(self, key: str, field: Mapping[str, Any]) -> str:
-        spec, name = field["type"], self.member(field["name"])
+    def member_decl(self, key: str, field: Field) -> str:
+        spec, name = field.type, self.member(field.name)
         if spec["kind"] == "dynarray":
-            return f"struct {self.array_struct(key, field['name'])} {name};"
+            return f"struct {self.array_struct(key, field.name)} {name};"
         if spec["kind"] == "array":
             return f"{self.elem_ctype(spec['elem'])} {name}[{spec['len']}];"
         return f"{self.elem_ctype(spec)} {name};"
@@ -517,7 +515,7 @@ class _Generator:
     # -- encoding --------------------------------------------------------------------------
 
     def encoder(self, key: str) -> list[str]:
-        definition = self.types[key]
+        declared = self.schema.type_def(key)
         name = self.cname(key)
         lines = [
             f"static inline int {name}_encode_bits(const struct {name} *msg, uint8_t *buffer, "
@@ -530,34 +528,33 @@ class _Generator:
             "    int err = 0;",
             "    (void)err;",
         ]
-        fields = definition["fields"]
-        if definition["kind"] == "union":
+        fields = declared.fields
+        if declared.is_union:
             bits = tag_bits(len(fields))
             lines.append("    switch (msg->union_tag) {")
             for i, f in enumerate(fields):
                 lines.append(f"    case {i}:")
                 lines.append(f"        px4params_put_uint(buffer, bit, {i}u, {bits}u, false);")
                 lines += self.encode_value(
-                    f["type"], f"msg->{self.member(f['name'])}", "tao", 2, key, f["name"]
+                    f.type, f"msg->{self.member(f.name)}", "tao", 2, key, f.name
                 )
                 lines.append("        break;")
             lines += ["    default:", "        return PX4PARAMS_ERR_UNION_TAG;", "    }"]
         else:
-            versioned = definition.get("dialect") == "dsdl"
             for i, f in enumerate(fields):
                 tail = "tao" if i == len(fields) - 1 else "false"
-                spec = f["type"]
+                spec = f.type
                 if spec["kind"] == "void":
                     lines.append(f"    *bit += {spec['bits']}u; /* void{spec['bits']} */")
-                elif versioned and f["name"] == "p_version":
-                    version = (definition.get("version") or [0, 0])[1]
+                elif declared.versioned and f.name == "p_version":
+                    version = (declared.version or (0, 0))[1]
                     lines.append(
                         f"    px4params_put_uint(buffer, bit, {version}u, {spec['bits']}u, false);"
                         " /* p_version: the type's version */"
                     )
                 else:
                     lines += self.encode_value(
-                        spec, f"msg->{self.member(f['name'])}", tail, 1, key, f["name"]
+                        spec, f"msg->{self.member(f.name)}", tail, 1, key, f.name
                     )
         lines += ["    return 0;", "}", ""]
         lines += [
@@ -644,7 +641,7 @@ class _Generator:
     # -- decoding --------------------------------------------------------------------------
 
     def decoder(self, key: str) -> list[str]:
-        definition = self.types[key]
+        declared = self.schema.type_def(key)
         name = self.cname(key)
         lines = [
             f"static inline int {name}_decode_bits(const uint8_t *buffer, size_t size_bits, "
@@ -658,8 +655,8 @@ class _Generator:
             "    int err = 0;",
             "    (void)err;",
         ]
-        fields = definition["fields"]
-        if definition["kind"] == "union":
+        fields = declared.fields
+        if declared.is_union:
             bits = tag_bits(len(fields))
             lines += [
                 "    uint64_t tag = 0;",
@@ -672,13 +669,13 @@ class _Generator:
             ]
             for i, f in enumerate(fields):
                 lines.append(f"    case {i}:")
-                lines += self.decode_value(f["type"], f"msg->{self.member(f['name'])}", "tao", 2)
+                lines += self.decode_value(f.type, f"msg->{self.member(f.name)}", "tao", 2)
                 lines.append("        break;")
             lines += ["    default:", "        return PX4PARAMS_ERR_UNION_TAG;", "    }"]
         else:
             for i, f in enumerate(fields):
                 tail = "tao" if i == len(fields) - 1 else "false"
-                spec = f["type"]
+                spec = f.type
                 if spec["kind"] == "void":
                     lines += [
                         "    {",
@@ -691,7 +688,7 @@ class _Generator:
                         "    }",
                     ]
                 else:
-                    lines += self.decode_value(spec, f"msg->{self.member(f['name'])}", tail, 1)
+                    lines += self.decode_value(spec, f"msg->{self.member(f.name)}", tail, 1)
         lines += ["    return 0;", "}", ""]
         lines += [
             f"static inline int {name}_decode(const uint8_t *buffer, size_t size, "

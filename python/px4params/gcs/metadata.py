@@ -42,6 +42,7 @@ import os
 from collections.abc import Mapping, Sequence
 from typing import Any
 
+from px4params.dsdl.model import NO_DOC, FieldDoc
 from px4params.dsdl.schema import Schema, to_json_value
 from px4params.errors import FlatError, MetadataError
 from px4params.reading import CLASSIC_JSON, read_text
@@ -153,21 +154,20 @@ def structured_entry(schema: Schema, spec: ParamSpec) -> dict[str, Any]:
     """The ``parameters.json`` entry of one structured parameter."""
     data_type = spec.data_type
     doc = data_type.doc
-    tags = doc.get("tags") or {}
     default = metadata_default(schema, data_type.key)
     entry: dict[str, Any] = {
         "name": spec.name,
         "type": QGC_TYPE,
         # QGC holds a Custom default as bytes (QVariant::toByteArray): the encoding, in hex.
         "default": data_type.encode(default, tao=False).hex(),
-        "group": str(tags.get("group", DEFAULT_GROUP)),
-        "category": str(tags.get("category", DEFAULT_CATEGORY)),
-        "shortDesc": doc.get("short") or spec.name,
+        "group": doc.group or DEFAULT_GROUP,
+        "category": doc.category or DEFAULT_CATEGORY,
+        "shortDesc": doc.short or spec.name,
     }
-    if doc.get("long"):
-        entry["longDesc"] = doc["long"]
-    if "reboot_required" in tags:
-        entry["rebootRequired"] = bool(tags["reboot_required"])
+    if doc.long:
+        entry["longDesc"] = doc.long
+    if doc.reboot_required is not None:
+        entry["rebootRequired"] = doc.reboot_required
     entry["max_instances"] = spec.max_instances
     entry["dsdl_type"] = data_type.key
     entry["max_bytes"] = data_type.max_bytes
@@ -362,29 +362,26 @@ def length_bits(max_len: int) -> int:
 class _Describer:
     def __init__(self, schema: Schema) -> None:
         self.schema = schema
-        self.types: Mapping[str, Any] = schema.model["types"]
 
     # -- walking a value -------------------------------------------------------------------
 
     def struct(self, key: str, value: Any, path: str, out: list[dict[str, Any]]) -> None:
-        definition = self.types[key]
-        if definition["kind"] == "union":
+        declared = self.schema.type_def(key)
+        if declared.is_union:
             raise MetadataError(f"{key}: a parameter's type must be a struct, not a union")
-        fields = definition["fields"]
-        versioned = definition.get("dialect") == "dsdl"
-        for field in fields:
-            ftype, name = field["type"], field["name"]
-            if ftype["kind"] == "void":
+        for field in declared.fields:
+            ftype, name = field.type, field.name
+            if field.is_padding:
                 out.append(
                     {"path": _join(path, "_pad"), "type": type_name(ftype), "role": "padding"}
                 )
                 continue
             fpath = _join(path, name)
-            if versioned and name == "p_version":
-                version = (definition.get("version") or [0, 0])[1]
-                out.append(self.leaf(ftype, fpath, name, field.get("doc"), version, "version"))
+            if declared.versioned and name == "p_version":
+                version = (declared.version or (0, 0))[1]
+                out.append(self.leaf(ftype, fpath, name, field.doc, version, "version"))
                 continue
-            self.field(ftype, value[name], fpath, name, field.get("doc"), out)
+            self.field(ftype, value[name], fpath, name, field.doc, out)
 
     def field(
         self,
@@ -392,12 +389,12 @@ class _Describer:
         value: Any,
         path: str,
         name: str,
-        doc: Mapping[str, Any] | None,
+        doc: FieldDoc,
         out: list[dict[str, Any]],
     ) -> None:
         kind = spec["kind"]
         if kind == "ref":
-            if self.types[spec["name"]]["kind"] == "union":
+            if self.schema.type_def(spec["name"]).is_union:
                 self.union(spec["name"], value, path, name, doc, out)
             else:
                 self.struct(spec["name"], value, path, out)
@@ -407,7 +404,7 @@ class _Describer:
         elif kind == "dynarray":
             element: list[dict[str, Any]] = []
             self.field(
-                spec["elem"], self.default_of(spec["elem"], None), f"{path}[]", name, doc, element
+                spec["elem"], self.default_of(spec["elem"], NO_DOC), f"{path}[]", name, doc, element
             )
             entry = _described(
                 {
@@ -437,26 +434,25 @@ class _Describer:
         value: Any,
         path: str,
         name: str,
-        doc: Mapping[str, Any] | None,
+        doc: FieldDoc,
         out: list[dict[str, Any]],
     ) -> None:
-        fields = self.types[key]["fields"]
+        fields = self.schema.type_def(key).fields
         selected = next(iter(value))
-        index = next(i for i, f in enumerate(fields) if f["name"] == selected)
+        index = next(i for i, f in enumerate(fields) if f.name == selected)
         variants: list[dict[str, Any]] = []
         for i, field in enumerate(fields):
-            vdoc = field.get("doc") or {}
-            given = value[selected] if i == index else self.default_of(field["type"], vdoc)
+            given = value[selected] if i == index else self.default_of(field.type, field.doc)
             described: list[dict[str, Any]] = []
-            vpath = _join(path, field["name"])
-            self.field(field["type"], given, vpath, field["name"], vdoc, described)
+            vpath = _join(path, field.name)
+            self.field(field.type, given, vpath, field.name, field.doc, described)
             variant: dict[str, Any] = {
                 "tag": i,
-                "name": field["name"],
-                "type": type_name(field["type"]),
+                "name": field.name,
+                "type": type_name(field.type),
             }
-            if vdoc.get("short"):
-                variant["shortDesc"] = vdoc["short"]
+            if field.doc.short:
+                variant["shortDesc"] = field.doc.short
             variant["fields"] = described
             variants.append(variant)
         entry = _described(
@@ -487,49 +483,48 @@ class _Describer:
         spec: Mapping[str, Any],
         path: str,
         name: str,
-        doc: Mapping[str, Any] | None,
+        doc: FieldDoc,
         value: Any,
         role: str,
     ) -> dict[str, Any]:
-        kind, tags = spec["kind"], (doc or {}).get("tags") or {}
+        kind = spec["kind"]
         entry = _described({"name": name, "path": path, "type": type_name(spec), "role": role}, doc)
-        if "unit" in tags:
-            entry["unit"] = str(tags["unit"])
+        if doc.unit is not None:
+            entry["unit"] = doc.unit
         entry["default"] = to_json_value(value)
         # A version takes one value: the code fills it in and refuses any other.
         low, high = (value, value) if role == "version" else _natural_range(spec)
-        entry["min"] = to_json_value(tags.get("min", low))
-        entry["max"] = to_json_value(tags.get("max", high))
-        if "decimal" in tags:
-            entry["decimalPlaces"] = int(tags["decimal"])
-        if "increment" in tags:
-            entry["increment"] = tags["increment"]
-        if "value" in tags:
-            entry["values"] = [{"value": v, "description": str(d)} for v, d in tags["value"]]
-        if "format" in tags:
-            entry["format"] = tags["format"]
+        entry["min"] = to_json_value(low if doc.minimum is None else doc.minimum)
+        entry["max"] = to_json_value(high if doc.maximum is None else doc.maximum)
+        if doc.decimal_places is not None:
+            entry["decimalPlaces"] = doc.decimal_places
+        if doc.increment is not None:
+            entry["increment"] = doc.increment
+        if doc.values:
+            entry["values"] = [{"value": v, "description": d} for v, d in doc.values]
+        if doc.display_format is not None:
+            entry["format"] = doc.display_format
         if kind != "bool":
             entry["cast"] = spec.get("cast", "saturated")
         return entry
 
     # -- defaults and sizes ----------------------------------------------------------------
 
-    def default_of(self, spec: Mapping[str, Any], doc: Mapping[str, Any] | None) -> Any:
+    def default_of(self, spec: Mapping[str, Any], doc: FieldDoc) -> Any:
         """The default of an unselected variant or of an array element: its @default metadata
         for our DSDL types, zero for DroneCAN's."""
         kind = spec["kind"]
-        tags = (doc or {}).get("tags") or {}
         if kind == "ref":
-            if self.types[spec["name"]].get("dialect") == "dsdl":
+            if self.schema.type_def(spec["name"]).versioned:
                 return metadata_default(self.schema, spec["name"])
             data_type = self.schema[spec["name"]]
             return data_type.decode(data_type.default(tao=False), tao=False)
         if kind == "array":
-            return [self.default_of(spec["elem"], None) for _ in range(spec["len"])]
+            return [self.default_of(spec["elem"], NO_DOC) for _ in range(spec["len"])]
         if kind == "dynarray":
             return []
-        if "default" in tags and not isinstance(tags["default"], Mapping):
-            return tags["default"]
+        if doc.default is not None:
+            return doc.default
         return False if kind == "bool" else 0.0 if kind == "float" else 0
 
 
@@ -537,11 +532,11 @@ def _join(path: str, name: str) -> str:
     return f"{path}.{name}" if path else name
 
 
-def _described(entry: dict[str, Any], doc: Mapping[str, Any] | None) -> dict[str, Any]:
-    if doc and doc.get("short"):
-        entry["shortDesc"] = doc["short"]
-    if doc and doc.get("long"):
-        entry["longDesc"] = doc["long"]
+def _described(entry: dict[str, Any], doc: FieldDoc) -> dict[str, Any]:
+    if doc.short:
+        entry["shortDesc"] = doc.short
+    if doc.long:
+        entry["longDesc"] = doc.long
     return entry
 
 

@@ -77,7 +77,7 @@ def can_id(
 
 def service_half(data_type: DataType) -> str | None:
     """``"request"`` or ``"response"`` for a half of a service, None for a message."""
-    if not data_type.definition.get("service"):
+    if not data_type.type_def.service:
         return None
     return "request" if data_type.name.endswith(".Request") else "response"
 

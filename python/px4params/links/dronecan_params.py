@@ -152,7 +152,7 @@ class DronecanParams:
             return GetSetEntry(leaf.name, value, shown, _integer(0), _integer(1))
         variant = "real_value" if slot.mav_type == flat.FLOAT32 else "integer_value"
         # The range the store enforces: the field's @min/@max where given, else its type's.
-        spec = self.store.spec(leaf.instance.partition("#")[0])
+        spec = self.store.spec(leaf.instance.param)
         bounds = leaf_ranges(spec.data_type).get(generic_path(slot.path)) if spec else None
         low = slot.min if bounds is None or bounds.low is None else bounds.low
         high = slot.max if bounds is None or bounds.high is None else bounds.high

@@ -8,6 +8,7 @@ import re
 import struct
 from typing import TYPE_CHECKING, Any
 
+from px4params.dsdl.model import NO_DOC
 from px4params.dsdl.schema import Schema
 from px4params.errors import MigrationError, Px4ParamsError
 from px4params.migrate.config import OldConfig
@@ -103,21 +104,20 @@ class _Builder:
         """The instance of ``param`` on I2C ``bus`` at ``address``: a new one, or the one
         proposed already for the same device (found twice, e.g. enabled and calibrated)."""
         for inst in self.proposal.instances:
-            if inst.name.partition("#")[0] == param and (
+            if inst.key.param == param and (
                 inst.values["bus.i2c.bus_id"],
                 inst.values["bus.i2c.address"],
             ) == (bus, address):
                 inst.notes.append(f"also {origin}")
                 return inst
-        instance = self.store.add(param)
-        values: dict[str, Any] = {}
-        if self.store.get(f"{instance}.bus._tag") != 0:
+        inst = ProposedInstance(self.store.add(param), origin, {})
+        values = inst.values
+        if self.store.get(inst.key.at("bus._tag")) != 0:
             values["bus._tag"] = 0  # I2C
         values["bus.i2c.bus_id"] = bus
         values["bus.i2c.address"] = address
         for path, value in values.items():  # the tag first: it resets the variant
-            self.store.set_default(f"{instance}.{path}", value)
-        inst = ProposedInstance(instance, origin, values)
+            self.store.set_default(inst.key.at(path), value)
         self.proposal.instances.append(inst)
         return inst
 
@@ -127,10 +127,11 @@ class _Builder:
         rounded to nearest (``math.floor(v + 0.5)``) and clamped to the field's range, with a
         note; an integer setting (an enumeration such as a rotation) out of range is not
         carried."""
-        param = inst.name.partition("#")[0]
-        leaf = self.store.leaf(f"{inst.name}.{path}")
-        tags = _field_tags(self.specs[param].data_type, path)
-        lo, hi = tags.get("min"), tags.get("max")
+        key = inst.key.at(path)
+        leaf = self.store.leaf(key)
+        field = self.specs[key.param].data_type.field_at(path)
+        doc = field.doc if field is not None else NO_DOC
+        lo, hi = doc.minimum, doc.maximum
         fitted: Any = value
         if isinstance(value, float):
             if leaf.type.startswith(("uint", "int")):
@@ -145,14 +146,14 @@ class _Builder:
             )
             return False
         try:
-            self.store.set_default(f"{inst.name}.{path}", fitted)
+            self.store.set_default(key, fitted)
         except (Px4ParamsError, OverflowError, ValueError) as e:
             self.proposal.not_carried.append(f"{legacy} = {_shown(value)}: {e}")
             return False
-        stored = self.store.get(f"{inst.name}.{path}")
+        stored = self.store.get(key)
         inst.values[path] = stored
         if _differs(value, stored):
-            unit = f" {tags['unit']}" if "unit" in tags else ""
+            unit = f" {doc.unit}" if doc.unit is not None else ""
             limits = f", {lo}..{hi}" if lo is not None or hi is not None else ""
             inst.notes.append(
                 f"{legacy} = {_shown(value)}{unit} becomes {path} = {_shown(stored)}{unit} "
@@ -162,7 +163,7 @@ class _Builder:
 
     def set_rotation(self, inst: ProposedInstance, rotation: int, why: str) -> None:
         """The driver's rotation (its ``-R``), where the type has the field."""
-        has_field = any(leaf.path == "rotation" for leaf in self.store.leaves(inst.name))
+        has_field = any(leaf.path == "rotation" for leaf in self.store.leaves(inst.key))
         if (
             has_field
             and self.field_value(inst, "rotation", "the driver's -R", rotation)
@@ -177,7 +178,7 @@ class _Builder:
         self.launcher_buses()
         self.probing()
         for inst in self.proposal.instances:
-            leaves = {leaf.path: leaf.index for leaf in self.store.leaves(inst.name)}
+            leaves = {leaf.path: leaf.index for leaf in self.store.leaves(inst.key)}
             inst.indices = {path: leaves[path] for path in inst.values}
         return self.proposal
 
@@ -705,14 +706,6 @@ def _default_address(store: Any, param: str) -> int:
     value = metadata_default(store.schema, spec.data_type.key)
     bus = value.get("bus", {})
     return int(bus.get("i2c", {}).get("address", 0))
-
-
-def _field_tags(data_type: Any, path: str) -> dict[str, Any]:
-    """The ``@min``/``@max``/``@unit`` tags of a top-level field."""
-    for f in data_type.definition["fields"]:
-        if f["name"] == path:
-            return dict((f.get("doc") or {}).get("tags") or {})
-    return {}
 
 
 def _differs(old: Any, new: Any) -> bool:

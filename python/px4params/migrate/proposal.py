@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from px4params.migrate.config import OldConfig
+from px4params.store.key import Key
 
 __all__ = ["LeftOut", "Proposal", "ProposedInstance"]
 
@@ -25,6 +26,11 @@ class ProposedInstance:
     notes: list[str] = field(default_factory=list)
     #: Filled in by :func:`migrate`: path -> ``[k]`` index.
     indices: dict[str, int] = field(default_factory=dict)
+    #: ``name`` parsed (once): what the store is given.
+    key: Key = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        self.key = Key.parse(self.name)
 
 
 @dataclass

@@ -77,9 +77,9 @@ def parse_number(text: str, kind: str, where: str) -> int | float | bool:
     )
 
 
-def parse_value(store: Store, key: Key, text: str) -> Any:
+def parse_value(store: Store, key: Key, text: str, leaf: Leaf | None = None) -> Any:
     """The value ``text`` given for ``key``: a number for a leaf or a classic parameter, JSON
-    for a whole structured value."""
+    for a whole structured value. ``leaf`` is the key's leaf when the caller has read it."""
     classic = store.classic(key.param)
     if classic is not None:
         return parse_number(text, classic.type, str(key))
@@ -94,7 +94,8 @@ def parse_value(store: Store, key: Key, text: str) -> Any:
                 f"{key}: a whole value is JSON ({msg} in '{abbreviated(text)}'); "
                 f'e.g. \'{{"bus": {{"i2c": {{"bus_id": 1, "address": 69}}}}, ...}}\''
             ) from None
-    leaf = store.leaf(key)
+    if leaf is None:
+        leaf = store.leaf(key)
     kind = (
         "uint"
         if leaf.path.endswith(("._tag", "._len")) or leaf.path in ("_tag", "_len")
@@ -161,23 +162,6 @@ def shown_leaf(leaf: Leaf) -> str:
     return str(leaf.value)
 
 
-def field_tags(store: Store, name: str, path: str) -> dict[str, Any]:
-    """The doc-comment tags (unit, min, max, ...) of the field a leaf path ends at."""
-    data_type = store.data_type(name)
-    types = store.schema.model["types"]
-    spec: dict[str, Any] = {"kind": "ref", "name": data_type.key}
-    tags: dict[str, Any] = {}
-    for step in path.split("."):
-        if spec.get("kind") != "ref" or step in ("_tag", "_len"):
-            return {}
-        fields = {f["name"]: f for f in types[spec["name"]]["fields"]}
-        if step not in fields:
-            return {}
-        tags = (fields[step].get("doc") or {}).get("tags") or {}
-        spec = fields[step]["type"]
-    return tags if isinstance(tags, dict) else {}
-
-
 def _matches(name: str, patterns: list[str]) -> bool:
     if not patterns:
         return True
@@ -221,13 +205,15 @@ def resolve_name(store: Store, name: str) -> Key:
 
     fmap = flat_map(store)
     if name in fmap:
-        return Key.parse(fmap.find(name).leaf)
+        return fmap.find(name).leaf
     return Key.parse(name)  # neither: the store's own error names the problem
 
 
 def _write(s: Session, name: str, text: str, *, default: bool, force: bool = False) -> None:
     key = resolve_name(s.store, name)
-    value = parse_value(s.store, key, text)
+    # The leaf is read once: its type parses the number and says whether it rounds to zero.
+    leaf = s.store.leaf(key) if key.leaf is not None and s.store.spec(key.param) else None
+    value = parse_value(s.store, key, text, leaf)
     write = s.store.set_default if default else s.store.set
     try:
         write(key, value)
@@ -243,7 +229,7 @@ def _write(s: Session, name: str, text: str, *, default: bool, force: bool = Fal
             # The DroneCAN rules round it to zero (as pydronecan and libcanard do): said once.
             print(
                 f"px4params: warning: {key}: {text.strip()} is below the smallest "
-                f"{_float_kind(s.store, key) or 'float'} and is stored as 0",
+                f"{_float_kind(s.store, key, leaf) or 'float'} and is stored as 0",
                 file=sys.stderr,
             )
 
@@ -294,11 +280,12 @@ def _compare(s: Session, a: argparse.Namespace, greater: bool) -> int:
     return EXIT_FAILED
 
 
-def _float_kind(store: Store, key: Key) -> str | None:
+def _float_kind(store: Store, key: Key, leaf: Leaf | None = None) -> str | None:
     classic = store.classic(key.param)
     if classic is not None:
         return "Float" if classic.is_float else None
-    leaf = store.leaf(key)
+    if leaf is None:
+        leaf = store.leaf(key)
     return leaf.type if leaf.type.startswith("float") else None
 
 
@@ -338,11 +325,12 @@ def verb_show(s: Session, a: argparse.Namespace) -> int:
     rows = []
     used_index = 0
     position = {p: i for i, p in enumerate(store.parameters)}
-    for name in store.names():
-        index = position[Key.parse(name).param]
-        used, unsaved = store.state(name)
-        changed = store.changed(name)
-        structured = store.classic(Key.parse(name).param) is None
+    for key in store.instance_keys():
+        name = str(key)
+        index = position[key.param]
+        used, unsaved = store.state(key)
+        changed = store.changed(key)
+        structured = store.classic(key.param) is None
         # PX4 shows used parameters; a manifest's instances are always of interest.
         if not (a.all or structured or used or changed):
             continue
@@ -383,12 +371,13 @@ def _show_leaves(s: Session, a: argparse.Namespace) -> int:
     store = s.store
     if len(a.filters) != 1:
         raise CommandError("show -l takes one instance, e.g. show -l INA238#0")
-    name = a.filters[0]
-    leaves = store.leaves(name)
-    defaults = {leaf.path: leaf for leaf in store.leaves(name, default=True)}
-    rows = []
+    key = Key.parse(a.filters[0])
+    leaves = store.leaves(key)
+    data_type = store.data_type(key)
+    defaults = {leaf.path: leaf for leaf in store.leaves(key, default=True)}
+    rows: list[dict[str, Any]] = []
     for leaf in leaves:
-        tags = field_tags(store, name, leaf.path)
+        field = data_type.field_at(leaf.path)
         default = defaults.get(leaf.path)
         rows.append(
             {
@@ -397,7 +386,7 @@ def _show_leaves(s: Session, a: argparse.Namespace) -> int:
                 "type": leaf.type,
                 "value": leaf.value,
                 "default": default.value if default is not None else None,
-                "unit": tags.get("unit", ""),
+                "unit": (field.doc.unit if field is not None else None) or "",
                 "shown": shown_leaf(leaf),
                 "default_shown": shown_leaf(default) if default is not None else "-",
             }
@@ -417,19 +406,20 @@ def _show_leaves(s: Session, a: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _expand(store: Store, patterns: list[str]) -> list[str | Key]:
+def _expand(store: Store, patterns: list[str]) -> list[Key]:
     """Names matching ``patterns``: a trailing ``*`` matches, a parameter name stands for all
     its instances, and destructured flat names for their leaves."""
-    names = list(store.names())
-    found: list[str | Key] = []
+    keys = list(store.instance_keys())
+    found: list[Key] = []
     for p in patterns:  # exact, as PX4's names (an inexact one is refused with a hint)
         if "*" in p:
             import fnmatch
 
-            found += [n for n in names if fnmatch.fnmatchcase(n, p)]
+            found += [k for k in keys if fnmatch.fnmatchcase(str(k), p)]
         elif p in store.parameters and store.spec(p) is not None and "#" not in p:
             spec = store.spec(p)
-            found += store.instances(p) if spec is not None and not spec.shared else [p]
+            shared = spec is None or spec.shared
+            found += [Key(p, None, None)] if shared else list(store.instance_keys(p))
         else:
             found.append(resolve_name(store, p))
     return found
@@ -444,14 +434,11 @@ def verb_reset(s: Session, a: argparse.Namespace) -> int:
 
 
 def verb_reset_all(s: Session, a: argparse.Namespace) -> int:
-    keep = set()
-    for name in _expand(s.store, a.excludes):
-        key = Key.parse(name)
-        keep.add(key.param if key.instance is None else f"{key.param}#{key.instance}")
+    keep = {key.whole for key in _expand(s.store, a.excludes)}
     with s.store.transaction():
-        for name in list(s.store.names()):
-            if name not in keep:
-                s.store.reset(name)
+        for key in list(s.store.instance_keys()):
+            if key not in keep:
+                s.store.reset(key)
     s.done()
     return EXIT_OK
 
@@ -522,8 +509,7 @@ def verb_export(s: Session, a: argparse.Namespace) -> int:
 
 def verb_status(s: Session, a: argparse.Namespace) -> int:
     store = s.store
-    names = list(store.names())
-    instances = [n for n in names if "#" in n]
+    instances = [key for key in store.instance_keys() if key.instance is not None]
     slots, size = store.capacity
     exists = os.path.exists(s.path)
     status = {
@@ -546,7 +532,7 @@ def verb_status(s: Session, a: argparse.Namespace) -> int:
         f"{status['classic_parameters']} classic",
         file=s.out,
     )
-    print(f"instances: {len(instances)} ({', '.join(instances) or 'none'})", file=s.out)
+    print(f"instances: {len(instances)} ({', '.join(map(str, instances)) or 'none'})", file=s.out)
     print(f"changed from defaults: {status['changed']}", file=s.out)
     print(f"memory reserved: {size} bytes in {slots} slots", file=s.out)
     return EXIT_OK

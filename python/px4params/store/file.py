@@ -257,10 +257,10 @@ def _table_key(spec: ParamSpec) -> str:
 
 def stored_version(data_type: DataType, payload: bytes) -> int | None:
     """The minor version a payload was written with: its leading ``p_version`` field."""
-    fields = data_type.definition.get("fields") or []
-    if not fields or fields[0]["name"] != "p_version" or fields[0]["type"]["kind"] != "uint":
+    fields = data_type.type_def.fields
+    if not fields or fields[0].name != "p_version" or fields[0].kind != "uint":
         return None
-    bits = int(fields[0]["type"]["bits"])
+    bits = int(fields[0].type["bits"])
     return payload[0] >> (8 - bits) if payload else None
 
 

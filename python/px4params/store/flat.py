@@ -57,8 +57,10 @@ import math
 from collections.abc import Iterator, Mapping
 
 from px4params._records import TYPE_CHECKING
+from px4params.dsdl.model import Field
 from px4params.dsdl.schema import DataType, Leaf
 from px4params.errors import FlatError, InstanceError, LeafError
+from px4params.store.key import Key
 from px4params.store.spec import MAX_NAME_LEN, ParamSpec
 
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
@@ -83,6 +85,7 @@ __all__ = [
     "resolve_flat",
     "set_flat",
     "to_flat",
+    "write_live",
 ]
 
 #: MAVLink carries 32 bits per parameter.
@@ -217,48 +220,49 @@ def slot_count(data_type: DataType) -> int:
     declaration without listing them; :class:`FlatError` if a leaf is wider than 32 bits."""
     cached = data_type.derived.get("flat_count")
     if cached is None:
-        cached = _count(data_type.key, data_type._types, {"kind": "ref", "name": data_type.key}, "")
+        cached = _count(data_type, {"kind": "ref", "name": data_type.key}, "")
         data_type.derived["flat_count"] = cached
     return int(cached)
 
 
-def _count(
-    key: str, types: Mapping[str, Mapping[str, Any]], spec: Mapping[str, Any], path: str
-) -> int:
+def _count(data_type: DataType, spec: Mapping[str, Any], path: str) -> int:
     """The letters of ``spec`` (the rule of :class:`_Walker`, counted)."""
     kind = spec["kind"]
     if kind == "ref":
-        definition = types[spec["name"]]
-        fields = [f for f in definition["fields"] if f["type"]["kind"] != "void"]
-        if definition["kind"] == "union":
-            return 1 + sum(_count(key, types, f["type"], _join(path, f["name"])) for f in fields)
+        declared = data_type.nested_type_def(spec["name"])
+        fields = declared.data_fields
+        if declared.is_union:
+            return 1 + sum(_count(data_type, f.type, _join(path, f.name)) for f in fields)
         return sum(
-            _count(key, types, f["type"], _join(path, f["name"]))
-            for f in fields
-            if not (f["name"] == "p_version" and f["type"]["kind"] in ("uint", "int"))
+            _count(data_type, f.type, _join(path, f.name)) for f in fields if not _is_version(f)
         )
     if kind == "array":
         n = int(spec["len"])
-        return n * _count(key, types, spec["elem"], f"{path}[0]") if n else 0
+        return n * _count(data_type, spec["elem"], f"{path}[0]") if n else 0
     if kind == "dynarray":
         n = int(spec["max"])
-        return 1 + (n * _count(key, types, spec["elem"], f"{path}[0]") if n else 0)
+        return 1 + (n * _count(data_type, spec["elem"], f"{path}[0]") if n else 0)
     if kind in ("uint", "int", "float"):
         bits = int(spec["bits"])
         if bits > MAX_LEAF_BITS:
             raise FlatError(
-                f"{key}: leaf {path or '(value)'} is {kind}{bits}: destructured parameters "
-                f"carry at most {MAX_LEAF_BITS} bits (MAVLink), so this type cannot be a "
-                "parameter"
+                f"{data_type.key}: leaf {path or '(value)'} is {kind}{bits}: destructured "
+                f"parameters carry at most {MAX_LEAF_BITS} bits (MAVLink), so this type cannot "
+                "be a parameter"
             )
         return 1
     return 1 if kind == "bool" else 0  # void: padding, not a leaf
 
 
+def _is_version(field: Field) -> bool:
+    """``p_version``: filled in by the code, never set by users, so no letter of its own."""
+    return field.name == "p_version" and field.kind in ("uint", "int")
+
+
 class _Walker:
     def __init__(self, data_type: DataType) -> None:
         self.key = data_type.key
-        self.types: Mapping[str, Mapping[str, Any]] = data_type._types
+        self.data_type = data_type
         self.slots: list[FlatSlot] = []
 
     def run(self) -> list[FlatSlot]:
@@ -281,19 +285,18 @@ class _Walker:
     def walk(self, spec: Mapping[str, Any], path: str, requires: tuple[Any, ...]) -> None:
         kind = spec["kind"]
         if kind == "ref":
-            definition = self.types[spec["name"]]
-            fields = [f for f in definition["fields"] if f["type"]["kind"] != "void"]
-            if definition["kind"] == "union":
+            declared = self.data_type.nested_type_def(spec["name"])
+            fields = declared.data_fields
+            if declared.is_union:
                 tag = _join(path, "_tag")
                 bits = max(1, math.ceil(math.log2(len(fields))))
                 self.add(tag, f"uint{bits}", INT32, "union_tag", 0, len(fields) - 1, requires)
                 for number, f in enumerate(fields):
-                    self.walk(f["type"], _join(path, f["name"]), (*requires, (tag, "==", number)))
+                    self.walk(f.type, _join(path, f.name), (*requires, (tag, "==", number)))
                 return
             for f in fields:
-                if f["name"] == "p_version" and f["type"]["kind"] in ("uint", "int"):
-                    continue  # filled in by the code, never set by users: not offered
-                self.walk(f["type"], _join(path, f["name"]), requires)
+                if not _is_version(f):
+                    self.walk(f.type, _join(path, f.name), requires)
         elif kind == "array":
             for i in range(spec["len"]):
                 self.walk(spec["elem"], f"{path}[{i}]", requires)
@@ -368,9 +371,9 @@ def from_flat(data_type: DataType, flat: Mapping[str, Any]) -> dict[str, Any]:
     def build(spec: Mapping[str, Any], path: str) -> Any:
         kind = spec["kind"]
         if kind == "ref":
-            definition = data_type._types[spec["name"]]
-            fields = [f for f in definition["fields"] if f["type"]["kind"] != "void"]
-            if definition["kind"] == "union":
+            declared = data_type.nested_type_def(spec["name"])
+            fields = declared.data_fields
+            if declared.is_union:
                 tag = take(_join(path, "_tag"))
                 if not 0 <= tag < len(fields):
                     raise FlatError(
@@ -378,11 +381,9 @@ def from_flat(data_type: DataType, flat: Mapping[str, Any]) -> dict[str, Any]:
                         f"(expected 0 to {len(fields) - 1})"
                     )
                 chosen = fields[tag]
-                return {chosen["name"]: build(chosen["type"], _join(path, chosen["name"]))}
+                return {chosen.name: build(chosen.type, _join(path, chosen.name))}
             return {
-                f["name"]: build(f["type"], _join(path, f["name"]))
-                for f in fields
-                if not (f["name"] == "p_version" and f["type"]["kind"] in ("uint", "int"))
+                f.name: build(f.type, _join(path, f.name)) for f in fields if not _is_version(f)
             }
         if kind == "array":
             return [build(spec["elem"], f"{path}[{i}]") for i in range(spec["len"])]
@@ -415,7 +416,7 @@ class FlatParam(NamedTuple):
     #: Flat name, e.g. ``INA238_1C``.
     name: str
     #: The instance, e.g. ``INA238#1``.
-    instance: str
+    instance: Key
     #: The leaf's ``[k]`` index in the current value.
     index: int  # type: ignore[assignment]  # a field named index hides tuple.index, as Leaf's must
     slot: FlatSlot
@@ -423,9 +424,15 @@ class FlatParam(NamedTuple):
     value: int | float
 
     @property
-    def leaf(self) -> str:
-        """The leaf's structured name, ``INA238#1[4]``."""
-        return f"{self.instance}[{self.index}]"
+    def leaf(self) -> Key:
+        """The leaf's structured key, ``INA238#1[4]``."""
+        return self.instance.at(self.index)
+
+    @property
+    def target(self) -> Key:
+        """The leaf by its path, ``INA238#1.bus.i2c.address``: what a write names (the store
+        takes its range from the path without asking the core which leaf ``[k]`` is)."""
+        return self.instance.at(self.slot.path)
 
     @property
     def path(self) -> str:
@@ -445,7 +452,7 @@ class FlatParam(NamedTuple):
             value = "nan" if math.isnan(value) else ("inf" if value > 0 else "-inf")
         return {
             "name": self.name,
-            "leaf": self.leaf,
+            "leaf": str(self.leaf),
             "path": f"{self.instance}.{self.path}",
             "type": self.type,
             "mav_type": self.mav_type,
@@ -564,7 +571,7 @@ class FlatMap:
         return self._masks.get(name)  # exact, as PX4's names
 
     def mask_value(self, spec: ParamSpec) -> int:
-        return sum(1 << int(n.rpartition("#")[2]) for n in self._store.instances(spec.name))
+        return sum(1 << (key.instance or 0) for key in self._store.instance_keys(spec.name))
 
     def set_mask(self, name: str, number: Any) -> tuple[list[str], list[str]]:
         """Adds the instances whose bits ``number`` sets and removes those it clears, all or
@@ -582,17 +589,17 @@ class FlatMap:
             )
         current = self.mask_value(spec)
         added = [
-            spec.instance_name(n) for n in range(slots) if number >> n & 1 and not current >> n & 1
+            spec.instance_key(n) for n in range(slots) if number >> n & 1 and not current >> n & 1
         ]
         removed = [
-            spec.instance_name(n) for n in range(slots) if current >> n & 1 and not number >> n & 1
+            spec.instance_key(n) for n in range(slots) if current >> n & 1 and not number >> n & 1
         ]
         with self._store.transaction():
             for instance in removed:
                 self._store.remove(instance)
             for instance in added:
                 self._store.add(instance)
-        return added, removed
+        return [str(k) for k in added], [str(k) for k in removed]
 
     @staticmethod
     def name_of(spec: ParamSpec, number: int | None, slot: FlatSlot) -> str:
@@ -612,64 +619,70 @@ class FlatMap:
         spec, number, index = found
         return spec, number, self.layout_of(spec.name).slots[index]
 
-    def owner(self, name: str) -> tuple[str, FlatSlot]:
-        """``(instance name, slot)`` of a flat name, live or not; :class:`InstanceError` if
-        the name belongs to no structured parameter."""
+    def lookup(self, name: str) -> tuple[Key, FlatSlot] | None:
+        """``(instance, slot)`` of a flat name, live or not; None if it is not one."""
         found = self._owner(name)
+        if found is None:
+            return None
+        spec, number, slot = found
+        return spec.instance_key(number or 0), slot
+
+    def owner(self, name: str) -> tuple[Key, FlatSlot]:
+        """``(instance, slot)`` of a flat name, live or not; :class:`InstanceError` if the name
+        belongs to no structured parameter."""
+        found = self.lookup(name)
         if found is None:
             exact = name.strip().upper()
             hint = f" (did you mean {exact}?)" if exact != name and exact in self else ""
             raise InstanceError(f"'{name}' is not a destructured parameter name{hint}")
-        spec, number, slot = found
-        return spec.instance_name(number or 0), slot
+        return found
 
     def table(self) -> list[FlatParam]:
         """Every live flat parameter of every existing instance, in store order."""
         rows: list[FlatParam] = []
-        for spec in self._store.specs:
-            instances = self._store.instances(spec.name)
-            if not instances:
-                continue  # no letters worked out for a type without instances
-            lay = self.layout_of(spec.name)
-            for instance in instances:
-                number = None if spec.shared else int(instance.rpartition("#")[2])
-                for leaf in self._store.leaves(instance):
-                    slot = lay.slot_for_path(leaf.path)
-                    if slot is None:
-                        continue  # p_version
-                    name = self.name_of(spec, number, slot)
-                    rows.append(
-                        FlatParam(name, instance, leaf.index, slot, slot.to_flat(leaf.value))
-                    )
+        for instance in self._store.instance_keys():
+            spec = self._specs.get(instance.param)
+            if spec is None:
+                continue  # a classic parameter
+            lay = self.layout_of(spec.name)  # (worked out for types with instances only)
+            for leaf in self._store.leaves(instance):
+                slot = lay.slot_for_path(leaf.path)
+                if slot is None:
+                    continue  # p_version
+                name = self.name_of(spec, instance.instance, slot)
+                rows.append(FlatParam(name, instance, leaf.index, slot, slot.to_flat(leaf.value)))
         return rows
 
     def find(self, name: str) -> FlatParam:
         """The live flat parameter ``name``; a clear error when its instance does not exist or
         its leaf is not live (an unselected variant, an array element past the length)."""
-        instance, slot = self.owner(name)
-        flat_name = name
-        if instance not in self._store:
-            raise InstanceError(
-                f"{flat_name} belongs to {instance}, which does not exist (add it first: "
-                f"param add {instance})"
-            )
-        for leaf in self._store.leaves(instance):
-            if leaf.path == slot.path:
-                return FlatParam(flat_name, instance, leaf.index, slot, slot.to_flat(leaf.value))
-        why = self._why(flat_name, instance)
-        raise LeafError(f"{flat_name} ({instance}.{slot.path}) is not live: {why}")
+        return self.live(name, *self.owner(name))
 
-    def _why(self, flat_name: str, instance: str) -> str:
-        found = self._owner(flat_name)
-        assert found is not None
-        spec, number, slot = found
+    def live(self, name: str, instance: Key, slot: FlatSlot) -> FlatParam:
+        """:meth:`find` of a name whose :meth:`owner` is known: its leaf, looked up once."""
+        try:
+            leaf = self._store.leaf(instance.at(slot.path))
+        except InstanceError:
+            if instance in self._store:
+                raise
+            raise InstanceError(
+                f"{name} belongs to {instance}, which does not exist (add it first: "
+                f"param add {instance})"
+            ) from None
+        except LeafError:
+            why = self._why(instance, slot)
+            raise LeafError(f"{name} ({instance}.{slot.path}) is not live: {why}") from None
+        return FlatParam(name, instance, leaf.index, slot, slot.to_flat(leaf.value))
+
+    def _why(self, instance: Key, slot: FlatSlot) -> str:
+        spec = self._specs[instance.param]
         live = {leaf.path: leaf.value for leaf in self._store.leaves(instance)}
         for path, op, n in slot.requires:
             if path not in live:
                 continue  # an outer requirement fails first
             selector = self.layout_of(spec.name).slot_for_path(path)
             assert selector is not None
-            selector_name = self.name_of(spec, number, selector)
+            selector_name = self.name_of(spec, instance.instance, selector)
             if op == "==" and live[path] != n:
                 return f"{path} selects variant {live[path]}, not {n} (set {selector_name} to {n})"
             if op == ">" and not live[path] > n:
@@ -696,7 +709,7 @@ def flat_table(store: Store) -> list[FlatParam]:
 
 def resolve_flat(store: Store, name: str) -> str:
     """The structured leaf name of a live flat parameter: ``INA238_1C`` -> ``INA238#1[4]``."""
-    return flat_map(store).find(name).leaf
+    return str(flat_map(store).find(name).leaf)
 
 
 def get_flat(store: Store, name: str) -> int | float:
@@ -707,17 +720,23 @@ def get_flat(store: Store, name: str) -> int | float:
 def set_flat(store: Store, name: str, number: Any, *, default: bool = False) -> FlatParam:
     """Writes a flat parameter's number to its leaf (the store checks the range; a refused
     write changes nothing) and returns the parameter as stored (floats rounded)."""
-    fmap = flat_map(store)
-    param = fmap.find(name)
+    return write_live(store, flat_map(store).find(name), number, default=default)
+
+
+def write_live(store: Store, param: FlatParam, number: Any, *, default: bool = False) -> FlatParam:
+    """:func:`set_flat` of a parameter found already (:meth:`FlatMap.live`)."""
     try:
         value = param.slot.from_flat(number)
     except FlatError as e:
         raise FlatError(f"{param.name} ({param.instance}.{param.path}): {e}") from None
+    target = param.target
     if default:
-        store.set_default(param.leaf, value)
+        store.set_default(target, value)
     else:
-        store.set(param.leaf, value)
-    return fmap.find(param.name)
+        store.set(target, value)
+    # As the vehicle now carries it (the value: after a new default, it follows unless
+    # changed); the leaf keeps its [k] (a union tag or a length is before what it changes).
+    return param._replace(value=param.slot.to_flat(store.get(target)))
 
 
 def flat_values(store: Store) -> dict[str, int | float]:
@@ -740,8 +759,9 @@ def write_flat(store: Store, name: str, number: Any) -> str:
     or an instance mask), checked by the store; a refused write raises and changes nothing.
     Returns a short description of what changed."""
     fmap = flat_map(store)
-    if name in fmap:
-        param = set_flat(store, name, number)
+    owner = fmap.lookup(name)  # the name read once: it names the leaf the write is given
+    if owner is not None:
+        param = write_live(store, fmap.live(name, *owner), number)
         return f"{name} = {param.value}"
     if fmap.mask_spec(name) is not None:
         added, removed = fmap.set_mask(name, number)

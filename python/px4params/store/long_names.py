@@ -30,6 +30,7 @@ from typing import TYPE_CHECKING, NamedTuple
 
 from px4params.errors import FlatError
 from px4params.store.flat import FlatLayout, FlatSlot, layout, mask_name
+from px4params.store.key import Key
 from px4params.store.spec import ParamSpec
 
 if TYPE_CHECKING:
@@ -78,15 +79,15 @@ class LongLeaf(NamedTuple):
 
     name: str
     #: The instance, e.g. ``INA238#1``.
-    instance: str
+    instance: Key
     #: The leaf's ``[k]`` index in the current value.
     index: int  # type: ignore[assignment]  # a field named index hides tuple.index, as Leaf's must
     slot: FlatSlot
 
     @property
-    def leaf(self) -> str:
+    def leaf(self) -> Key:
         """``INA238#1[4]``."""
-        return f"{self.instance}[{self.index}]"
+        return self.instance.at(self.index)
 
 
 class LongNames:
@@ -186,15 +187,16 @@ class LongNames:
     def table(self) -> list[LongLeaf]:
         """Every live leaf of every existing instance, in store order."""
         rows: list[LongLeaf] = []
-        for spec in self._store.specs:
+        for instance in self._store.instance_keys():
+            spec = self._specs.get(instance.param)
+            if spec is None:
+                continue  # a classic parameter
             lay, parts = layout(spec.data_type), self._parts[spec.name]
-            for instance in self._store.instances(spec.name):
-                number = None if spec.shared else int(instance.rpartition("#")[2])
-                for leaf in self._store.leaves(instance):
-                    slot = lay.slot_for_path(leaf.path)
-                    if slot is not None:  # p_version has none
-                        name = self.name_of(spec, number, parts[slot.path])
-                        rows.append(LongLeaf(name, instance, leaf.index, slot))
+            for leaf in self._store.leaves(instance):
+                slot = lay.slot_for_path(leaf.path)
+                if slot is not None:  # p_version has none
+                    name = self.name_of(spec, instance.instance, parts[slot.path])
+                    rows.append(LongLeaf(name, instance, leaf.index, slot))
         return rows
 
     def mask_names(self) -> dict[str, ParamSpec]:

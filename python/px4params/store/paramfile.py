@@ -62,28 +62,31 @@ def export_qgc(store: Store, *, vehicle: int = 1, component: int = 1) -> str:
         "#",
         "# Vehicle-Id\tComponent-Id\tName\tValue\tType",
     ]
-    for name in store.names():
-        classic = store.classic(Key.parse(name).param)
-        if classic is not None and store.changed(name):
-            lines.append(format_line(vehicle, component, name, store.get(name), classic.is_float))
+    for key in store.instance_keys():
+        classic = store.classic(key.param)
+        if classic is not None and store.changed(key):
+            lines.append(
+                format_line(vehicle, component, key.param, store.get(key), classic.is_float)
+            )
     for p in flat_table(store):
         lines.append(format_line(vehicle, component, p.name, p.value, p.mav_type == "float32"))
     return "\n".join(lines) + "\n"
 
 
 def export_json(store: Store) -> str:
+    keys = list(store.instance_keys())
     instances = {
-        name: {
-            "value": to_json_value(_without_versions(store.get(name))),
-            "default": to_json_value(_without_versions(store.get(name, default=True))),
+        str(key): {
+            "value": to_json_value(_without_versions(store.get(key))),
+            "default": to_json_value(_without_versions(store.get(key, default=True))),
         }
-        for name in store.names()
-        if store.classic(Key.parse(name).param) is None and ("#" in name or store.changed(name))
+        for key in keys
+        if store.classic(key.param) is None and (key.instance is not None or store.changed(key))
     }
     classic = {
-        name: to_json_value(store.get(name))
-        for name in store.names()
-        if store.classic(Key.parse(name).param) is not None and store.changed(name)
+        key.param: to_json_value(store.get(key))
+        for key in keys
+        if store.classic(key.param) is not None and store.changed(key)
     }
     document = {"format": JSON_FORMAT, "version": 1, "instances": instances, "classic": classic}
     return json.dumps(document, indent=1) + "\n"
@@ -149,7 +152,7 @@ def read(store: Store, path: str, *, reset: bool) -> list[str]:
 
 
 def _read_qgc(store: Store, path: str, text: str) -> list[str]:
-    from px4params.store.flat import set_flat
+    from px4params.store.flat import write_live
 
     report: list[str] = []
     skipped = 0
@@ -176,12 +179,12 @@ def _read_qgc(store: Store, path: str, text: str) -> list[str]:
                 report.append(f"{where}: {name}: not a parameter of this store; skipped")
                 skipped += 1
                 continue
-            instance = f"{match['param']}#{int(match['instance'])}"
-            _, slot = store.destructured.owner(name)
+            fmap = store.destructured
+            instance, slot = fmap.owner(name)
             _check_type(where, name, row.type, slot.mav_type == "float32")
             if instance not in store:
                 store.add(instance)
-            set_flat(store, name, number_value)
+            write_live(store, fmap.live(name, instance, slot), number_value)
         except ParamFileError:
             raise
         except Px4ParamsError as e:  # named as the file names it, and as the store does
@@ -240,19 +243,20 @@ def _read_json(store: Store, path: str, text: str) -> list[str]:
             complaint = unknown_key(entry, _ENTRY_KEYS)
             if complaint is not None:
                 raise ParamFileError(f"{name}: {complaint}")
-            if key.instance is not None and name not in store:
-                store.add(name)
+            if key.instance is not None and key not in store:
+                store.add(key)
             if "default" in entry:
-                store.set_default(name, entry["default"])
+                store.set_default(key, entry["default"])
             if "value" in entry:
-                store.set(name, entry["value"])
+                store.set(key, entry["value"])
         except (Px4ParamsError, InstanceError) as e:
             raise ParamFileError(f"{path}: instances: {e}") from None
     for name, value in classic.items():
         try:
-            if store.classic(Key.parse(name).param) is None:
+            key = Key.parse(name)
+            if store.classic(key.param) is None:
                 raise ParamFileError(f"{name}: not a classic parameter of this store")
-            store.set(name, value)
+            store.set(key, value)
         except Px4ParamsError as e:
             raise ParamFileError(f"{path}: classic: {e}") from None
     return []

@@ -16,8 +16,10 @@ import struct
 from collections.abc import Iterable, Mapping
 
 from px4params._records import TYPE_CHECKING
+from px4params.dsdl.model import NO_DOC, Field, FieldDoc
 from px4params.dsdl.schema import DataType, Leaf, Schema
 from px4params.errors import ParameterSetError, ValueRangeError
+from px4params.store.key import Key
 
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
     from typing import Any, NamedTuple
@@ -66,7 +68,11 @@ class ParamSpec(NamedTuple):
 
     def instance_name(self, instance: int) -> str:
         """``INA238#0``, or the bare name for a shared parameter."""
-        return self.name if self.shared else f"{self.name}#{instance}"
+        return str(self.instance_key(instance))
+
+    def instance_key(self, instance: int) -> Key:
+        """The key of instance ``instance`` (of the parameter, for a shared one)."""
+        return Key(self.name, None if self.shared else instance, None)
 
 
 def default_param_name(type_name: str) -> str:
@@ -91,31 +97,30 @@ def parameter_specs(schema: Schema) -> list[ParamSpec]:
     origin: dict[str, str] = {}
     newest: dict[str, str] = {}
     for key in schema:
-        definition = schema.model["types"][key]
-        if definition.get("dialect") != "dsdl" or definition.get("service"):
+        declared = schema.type_def(key)
+        if not declared.versioned or declared.service:
             continue
-        name = str(definition["name"])
-        if name not in newest or schema.resolve(name) == key:
-            newest[name] = schema.resolve(name)
+        if declared.name not in newest or schema.resolve(declared.name) == key:
+            newest[declared.name] = schema.resolve(declared.name)
     for type_name, key in sorted(newest.items()):
         data_type = schema[key]
-        tags = data_type.doc.get("tags") or {}
-        if "max_instances" not in tags and "param" not in tags:
+        declared = data_type.type_def
+        doc = declared.doc
+        if not doc.declares_parameter:
             continue
-        name = tags.get("param") or default_param_name(type_name)
+        name = doc.param or default_param_name(type_name)
         if not _is_param_name(name) or len(name) > MAX_NAME_LEN:
             raise ParameterSetError(
-                f"{data_type.definition.get('file')}: parameter name {name!r} of {type_name} "
+                f"{declared.file}: parameter name {name!r} of {type_name} "
                 f"is not an upper-case name of at most {MAX_NAME_LEN} characters "
                 "(set one with @param NAME)"
             )
         if name in specs:
             raise ParameterSetError(
-                f"{data_type.definition.get('file')}: parameter name {name} of {type_name} "
+                f"{declared.file}: parameter name {name} of {type_name} "
                 f"is already used by {origin[name]} (set another with @param NAME)"
             )
-        max_instances = tags.get("max_instances")
-        specs[name] = ParamSpec(name, data_type, int(max_instances) if max_instances else None)
+        specs[name] = ParamSpec(name, data_type, doc.max_instances)
         origin[name] = type_name
     return [specs[n] for n in sorted(specs)]
 
@@ -140,23 +145,23 @@ def with_defaults(schema: Schema, key: str, value: Any) -> Any:
 def _fill(schema: Schema, type_spec: Mapping[str, Any], given: Any, default: Any) -> Any:
     kind = type_spec["kind"]
     if kind == "ref" and isinstance(given, Mapping):
-        definition = schema.model["types"][type_spec["name"]]
-        fields = {f["name"]: f for f in definition["fields"] if f["type"]["kind"] != "void"}
+        declared = schema.type_def(type_spec["name"])
+        fields = {f.name: f for f in declared.data_fields}
         defaults = default if isinstance(default, Mapping) else {}
-        if definition["kind"] == "union":
+        if declared.is_union:
             if len(given) != 1 or next(iter(given)) not in fields:
                 return given
             name, inner = next(iter(given.items()))
             base = (
                 defaults[name] if name in defaults else _field_default(schema, fields[name], None)
             )
-            return {name: _fill(schema, fields[name]["type"], inner, base)}
+            return {name: _fill(schema, fields[name].type, inner, base)}
         out = dict(given)
         for name, f in fields.items():
             if name == "p_version":
                 continue  # filled in by the codec
             base = defaults[name] if name in defaults else _field_default(schema, f, None)
-            out[name] = _fill(schema, f["type"], given[name], base) if name in given else base
+            out[name] = _fill(schema, f.type, given[name], base) if name in given else base
         return out
     if kind in ("array", "dynarray") and isinstance(given, list):
         element = _default_of(schema, type_spec["elem"], None)
@@ -167,16 +172,16 @@ def _fill(schema: Schema, type_spec: Mapping[str, Any], given: Any, default: Any
 def _default_of(schema: Schema, type_spec: Mapping[str, Any], given: Any) -> Any:
     kind = type_spec["kind"]
     if kind == "ref":
-        definition = schema.model["types"][type_spec["name"]]
+        declared = schema.type_def(type_spec["name"])
         overrides = _nest(given) if isinstance(given, Mapping) else {}
-        fields = [f for f in definition["fields"] if f["type"]["kind"] != "void"]
-        if definition["kind"] == "union":
-            chosen = next((f for f in fields if f["name"] in overrides), fields[0])
-            return {chosen["name"]: _field_default(schema, chosen, overrides.get(chosen["name"]))}
+        fields = declared.data_fields
+        if declared.is_union:
+            chosen = next((f for f in fields if f.name in overrides), fields[0])
+            return {chosen.name: _field_default(schema, chosen, overrides.get(chosen.name))}
         return {
-            f["name"]: _field_default(schema, f, overrides.get(f["name"]))
+            f.name: _field_default(schema, f, overrides.get(f.name))
             for f in fields
-            if f["name"] != "p_version"
+            if f.name != "p_version"
         }
     if kind == "array":
         return [_default_of(schema, type_spec["elem"], None) for _ in range(type_spec["len"])]
@@ -191,14 +196,13 @@ def _default_of(schema: Schema, type_spec: Mapping[str, Any], given: Any) -> Any
     return 0
 
 
-def _field_default(schema: Schema, field: Mapping[str, Any], override: Any) -> Any:
-    tags = (field.get("doc") or {}).get("tags") or {}
-    declared = tags.get("default")
+def _field_default(schema: Schema, field: Field, override: Any) -> Any:
+    declared = field.doc.declared_default
     if isinstance(declared, Mapping) and isinstance(override, Mapping):
         declared = {**declared, **_flatten(override)}
     elif override is not None:
         declared = override
-    return _default_of(schema, field["type"], declared)
+    return _default_of(schema, field.type, declared)
 
 
 def _nest(paths: Mapping[str, Any]) -> dict[str, Any]:
@@ -267,30 +271,27 @@ def leaf_ranges(data_type: DataType) -> dict[str, LeafRange]:
     found = data_type.derived.get("leaf_ranges")
     if found is None:
         found = {}
-        _ranges_of(data_type._types, {"kind": "ref", "name": data_type.key}, "", {}, found)
+        _ranges_of(data_type, {"kind": "ref", "name": data_type.key}, "", NO_DOC, found)
         data_type.derived["leaf_ranges"] = found
     return found
 
 
 def _ranges_of(
-    types: Mapping[str, Mapping[str, Any]],
+    data_type: DataType,
     spec: Mapping[str, Any],
     path: str,
-    tags: Mapping[str, Any],
+    doc: FieldDoc,
     found: dict[str, LeafRange],
 ) -> None:
     kind = spec["kind"]
     if kind == "ref":
-        for f in types[spec["name"]]["fields"]:
-            if f["type"]["kind"] == "void":
-                continue
-            inner = (f.get("doc") or {}).get("tags") or {}
-            _ranges_of(types, f["type"], f"{path}.{f['name']}" if path else f["name"], inner, found)
+        for f in data_type.nested_type_def(spec["name"]).data_fields:
+            _ranges_of(data_type, f.type, f"{path}.{f.name}" if path else f.name, f.doc, found)
     elif kind in ("array", "dynarray"):  # a field's tags describe its elements
-        _ranges_of(types, spec["elem"], f"{path}[]", tags, found)
+        _ranges_of(data_type, spec["elem"], f"{path}[]", doc, found)
     elif kind in ("uint", "int", "float"):
         bits = int(spec["bits"])
-        low, high = tags.get("min"), tags.get("max")
+        low, high = doc.minimum, doc.maximum
         if kind == "float":
             found[path] = LeafRange.of(low, high, bits, f"float{bits}")
             return

@@ -41,6 +41,7 @@ from px4params.store.classic import (
     classic_value,
     load_classic,
 )
+from px4params.store.key import Key
 from px4params.store.spec import (
     ParamSpec,
     check_leaves,
@@ -71,146 +72,13 @@ STORE_ENV = "PX4PARAMS_STORE"
 #: The store file used when neither ``--store`` nor ``$PX4PARAMS_STORE`` names one.
 DEFAULT_STORE = "px4params.store"
 
-#: A name: ``NAME``, ``NAME#N``, then ``[k]`` or ``.path``. :func:`_split_key` reads it by hand
-#: (``re`` costs a short command a third of Python's start); the tests hold it to this.
-_KEY = (
-    r"(?P<name>[A-Za-z][A-Za-z0-9_]*)(?:#(?P<instance>[0-9]+))?"
-    r"(?:\[(?P<index>[0-9]+)\]|\.(?P<path>[A-Za-z_][A-Za-z0-9_.\[\]]*))?"
-)
-_LETTERS = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz")
-_NAME_START = _LETTERS
-_NAME_REST = _LETTERS | frozenset("0123456789_")
-_PATH_START = _LETTERS | frozenset("_")
-_PATH_REST = _NAME_REST | frozenset(".[]")
-
-
-def _split_key(text: str) -> tuple[str, str | None, str | None, str | None] | None:
-    """The groups name, instance, index and path of ``re.fullmatch(_KEY, text)``, or None.
-    (Each part ends at a character it cannot hold: the expression never backtracks.)"""
-    end = len(text)
-    if not end or text[0] not in _NAME_START:
-        return None
-    i = 1
-    while i < end and text[i] in _NAME_REST:
-        i += 1
-    name = text[:i]
-    instance = index = path = None
-    if i < end and text[i] == "#":
-        j = _digits_end(text, i + 1)
-        if j == i + 1:
-            return None
-        instance, i = text[i + 1 : j], j
-    if i < end and text[i] == "[":
-        j = _digits_end(text, i + 1)
-        if j == i + 1 or j == end or text[j] != "]":
-            return None
-        index, i = text[i + 1 : j], j + 1
-    elif i < end and text[i] == ".":
-        if i + 1 == end or text[i + 1] not in _PATH_START:
-            return None
-        j = i + 2
-        while j < end and text[j] in _PATH_REST:
-            j += 1
-        path, i = text[i + 1 : j], j
-    return (name, instance, index, path) if i == end else None
-
-
-#: Digits of a name: ASCII only, as PX4's (``str.isdecimal`` would take ``٣`` for 3).
-_DIGITS = frozenset("0123456789")
-
-
-def _digits_end(text: str, i: int) -> int:
-    """Where the ASCII digits from ``i`` end."""
-    while i < len(text) and text[i] in _DIGITS:
-        i += 1
-    return i
-
-
-def _exact_name_hint(text: str) -> str | None:
-    """The name ``text`` was probably meant to be, written exactly (no padding, the parameter
-    part in upper case, ASCII digits), when that is a name and not ``text``; else None."""
-    import unicodedata
-
-    candidate = "".join(
-        str(unicodedata.decimal(c)) if c.isdecimal() and c not in _DIGITS else c
-        for c in text.strip()
-    )
-    match = _split_key(candidate)
-    if match is None:
-        return None
-    name, instance, index, path = match
-    exact = name.upper()
-    if instance is not None:
-        exact += f"#{int(instance)}"
-    if index is not None:
-        exact += f"[{int(index)}]"
-    elif path is not None:
-        exact += f".{path}"
-    return exact if exact != text else None
-
-
 #: Names whose resolution a store keeps (a bound: names can come from anywhere).
 _RESOLVED_MAX = 4096
-
-#: Instance numbers are 16-bit in the core (``max_instances`` is far below).
-MAX_INSTANCE = 0xFFFF
-#: Leaf numbers beyond this name no leaf of any storable value.
-MAX_LEAF = 1 << 31
 
 
 def default_store_path() -> str:
     """``$PX4PARAMS_STORE``, or ``px4params.store`` in the current directory."""
     return os.environ.get(STORE_ENV) or DEFAULT_STORE
-
-
-class Key(NamedTuple):
-    """A parsed name: parameter, instance (None for shared and classic ones) and leaf."""
-
-    param: str
-    instance: int | None
-    leaf: int | str | None
-
-    @classmethod
-    def parse(cls, text: str | Key) -> Key:
-        """``text`` parsed (a :class:`Key` is returned as it is: a name typed by a user is parsed
-        once, where it enters, and the key is passed on)."""
-        if isinstance(text, Key):
-            return text
-        match = _split_key(text)
-        if match is not None and match[0] != match[0].upper():
-            match = None  # lower case: PX4's names are exact
-        if not match:
-            hint = _exact_name_hint(text) if len(text) <= 1000 else None
-            if hint is not None:
-                shown = text if len(text) <= 32 else abbreviated(text)  # padding shown
-                raise InstanceError(
-                    f"'{shown}' is not a parameter name: names are exact, in upper case with "
-                    f"ASCII digits and no spaces, as PX4's (did you mean {hint}?)"
-                )
-            raise InstanceError(
-                f"'{abbreviated(text)}' is not a parameter name (expected NAME, NAME#N, "
-                "NAME#N[k] or NAME#N.path, e.g. INA238#0.bus.i2c.address)"
-            )
-        name, instance, index, path = match
-        # (digits counted first: Python will not convert thousands of them)
-        if instance is not None and (len(instance) > 5 or int(instance) > MAX_INSTANCE):
-            raise InstanceError(
-                f"{abbreviated(text)}: instance {abbreviated(instance)} is out of range"
-            )
-        leaf: int | str | None = None
-        if index is not None:
-            if len(index) > 10 or int(index) > MAX_LEAF:
-                raise InstanceError(f"{abbreviated(text)}: no leaf [{abbreviated(index)}]")
-            leaf = int(index)
-        elif path is not None:
-            leaf = path
-        return cls(name, int(instance) if instance else None, leaf)
-
-    def __str__(self) -> str:
-        name = self.param if self.instance is None else f"{self.param}#{self.instance}"
-        if isinstance(self.leaf, int):
-            return f"{name}[{self.leaf}]"
-        return name if self.leaf is None else f"{name}.{self.leaf}"
 
 
 class _Param(NamedTuple):
@@ -355,7 +223,15 @@ class Store:
         return found
 
     def _instance_name(self, p: _Param, instance: int) -> str:
-        return p.name if p.shared else f"{p.name}#{instance}"
+        return str(self._instance_key(p, instance))
+
+    def _instance_key(self, p: _Param, instance: int) -> Key:
+        return Key(p.name, None if p.shared else instance, None)
+
+    def instance_key(self, param: str, instance: int) -> Key:
+        """The key of ``param``'s instance ``instance`` (of the parameter, for a shared or
+        classic one), whether or not it exists."""
+        return self._instance_key(self._param(param), instance)
 
     def data_type(self, name: str | Key) -> DataType:
         """The type of a structured parameter."""
@@ -388,14 +264,18 @@ class Store:
 
     def instances(self, param: str | Key) -> list[str]:
         """The instances of ``param`` that exist, in order (what a driver's ``auto`` starts)."""
-        p = self._param(Key.parse(param).param)
-        return [self._instance_name(p, i) for i in self._native.instances(p.index)]
+        return [str(key) for key in self.instance_keys(Key.parse(param).param)]
 
     def names(self) -> Iterator[str]:
         """Every existing instance and every shared or classic parameter, in store order."""
-        for p in self._order:
+        return (str(key) for key in self.instance_keys())
+
+    def instance_keys(self, param: str | None = None) -> Iterator[Key]:
+        """:meth:`names` (of ``param`` alone: :meth:`instances`) as keys, to pass on without
+        parsing them again."""
+        for p in self._order if param is None else (self._param(param),):
             for i in self._native.instances(p.index):
-                yield self._instance_name(p, i)
+                yield self._instance_key(p, i)
 
     def __contains__(self, name: object) -> bool:
         if not isinstance(name, str | Key):
@@ -490,18 +370,19 @@ class Store:
         A value outside its field's ``@min``/``@max`` or a NaN or infinity is refused
         (:class:`ValueRangeError`, nothing written); ``force`` lets the ``@min``/``@max``
         pass (``param set --force``), never a NaN or an infinity."""
-        self._write(name, value, default=False, saturate=saturate, force=force)
+        self._write(name, value, False, saturate, force)
 
     def set_default(
         self, name: str | Key, value: Any, *, saturate: bool = False, force: bool = False
     ) -> None:
         """Sets the default, like ``param set-default``: the value follows unless changed.
         Checked as :meth:`set` checks a value."""
-        self._write(name, value, default=True, saturate=saturate, force=force)
+        self._write(name, value, True, saturate, force)
 
     def _write(
-        self, name: str | Key, value: Any, *, default: bool, saturate: bool, force: bool = False
+        self, name: str | Key, value: Any, default: bool, saturate: bool, force: bool = False
     ) -> None:
+        # (Positional arguments here and in _check_leaf: every write passes through them.)
         p, instance, key = self._resolve(name)
         if p.classic is not None:
             if key.leaf is not None:
@@ -516,7 +397,7 @@ class Store:
             self._check_value(p, instance, value, default, saturate=saturate, force=force)
             self._native.set_value(p.index, instance, value, default=default, saturate=saturate)
         else:
-            self._check_leaf(p, instance, key.leaf, value, default, saturate=saturate, force=force)
+            self._check_leaf(p, instance, key.leaf, value, default, saturate, force)
             try:
                 self._native.set_leaf(
                     p.index, instance, key.leaf, value, default=default, saturate=saturate
@@ -583,7 +464,6 @@ class Store:
         target: int | str,
         value: Any,
         default: bool,
-        *,
         saturate: bool,
         force: bool,
     ) -> None:
@@ -593,13 +473,17 @@ class Store:
         ranges = leaf_ranges(data_type)
         if not ranges:
             return
+        # The leaf is looked up once: by the core for a write by [k] (its path says which
+        # range applies); for a write by path, only when a refusal needs its type.
+        found: tuple[int, str, str, Any] | None = None
         if isinstance(target, str) and not target.endswith(("_tag", "_len")):
             path = target  # a leaf named by its path: no need to ask the core
         else:
             try:
-                path = self._native.get_leaf(p.index, instance, target, default=default)[1]
+                found = self._native.get_leaf(p.index, instance, target, default=default)
             except Px4ParamsError:
                 return  # no such instance or leaf: the write says so
+            path = found[1]
         # A union tag or an array length brings other leaves into the value: check them all.
         whole = path.endswith(("_tag", "_len"))
         if not whole:
@@ -613,13 +497,14 @@ class Store:
                         return
                     # Refused: but a leaf that does not exist or a value its type cannot hold
                     # is the write's own error, worded by the core.
-                    try:
-                        leaf_type = self._native.get_leaf(
-                            p.index, instance, target, default=default
-                        )[2]
-                    except Px4ParamsError:
-                        return
-                    if in_type_range(value, leaf_type):
+                    if found is None:
+                        try:
+                            found = self._native.get_leaf(
+                                p.index, instance, target, default=default
+                            )
+                        except Px4ParamsError:
+                            return
+                    if in_type_range(value, found[2]):
                         where = f"{self._instance_name(p, instance)}.{path}"
                         check_stored(where, stored, rng, not force, value)
                     return
@@ -657,10 +542,10 @@ class Store:
             self._native.reset(p.index, instance)
             return
         try:
-            default = self.leaf(name, default=True)
+            default = self.leaf(key, default=True)
         except LeafError as e:
             raise LeafError(f"{e} (in the default value, which has another shape)") from None
-        self.set(name, default.value)
+        self.set(key, default.value)
 
     def reset_all(self) -> None:
         """Sets every value back to its default (instances stay)."""
@@ -761,10 +646,11 @@ class InstanceView:
     Attribute access walks the path and returns a leaf's value, or a view of a nested struct.
     """
 
-    __slots__ = ("_instance", "_param", "_prefix", "_store")
+    __slots__ = ("_instance", "_key", "_param", "_prefix", "_store")
     _store: Store
     _param: _Param
     _instance: int
+    _key: Key
     _prefix: str
 
     def __init__(self, store: Store, param: _Param, instance: int, prefix: str = "") -> None:
@@ -772,16 +658,18 @@ class InstanceView:
         object.__setattr__(self, "_param", param)
         object.__setattr__(self, "_instance", instance)
         object.__setattr__(self, "_prefix", prefix)
+        #: The instance's key, which every leaf's key is made from.
+        object.__setattr__(self, "_key", store._instance_key(param, instance))
 
     @property
     def name(self) -> str:
         """``INA238#0``."""
-        return self._store._instance_name(self._param, self._instance)
+        return str(self._key)
 
     @property
     def value(self) -> Any:
         """The whole value (of the nested part, for a nested view)."""
-        whole = self._store.get(self.name)
+        whole = self._store.get(self._key)
         for step in filter(None, self._prefix.split(".")):
             whole = whole[step]
         return whole
@@ -789,24 +677,24 @@ class InstanceView:
     @property
     def default(self) -> Any:
         """The instance's default value."""
-        return self._store.get(self.name, default=True)
+        return self._store.get(self._key, default=True)
 
     def set(self, value: Mapping[str, Any]) -> None:
         """Sets the whole value."""
         if self._prefix:
             raise InstanceError(f"{self.name}.{self._prefix}: set whole values on the instance")
-        self._store.set(self.name, value)
+        self._store.set(self._key, value)
 
     def leaves(self) -> list[Leaf]:
         """Every leaf in ``[k]`` order."""
-        return self._store.leaves(self.name)
+        return self._store.leaves(self._key)
 
-    def _target(self, item: int | str) -> str:
+    def _target(self, item: int | str) -> Key:
         if isinstance(item, int) and not isinstance(item, bool):
             if self._prefix:
                 raise InstanceError(f"{self.name}.{self._prefix}: [k] counts from the instance")
-            return f"{self.name}[{item}]"
-        return f"{self.name}.{self._prefix}{item}"
+            return self._key.at(item)
+        return self._key.at(f"{self._prefix}{item}")
 
     def __getitem__(self, item: int | str) -> Any:
         return self._store.leaf(self._target(item)).value
@@ -819,14 +707,14 @@ class InstanceView:
             raise AttributeError(attr)
         path = f"{self._prefix}{attr}"
         try:
-            return self._store.leaf(f"{self.name}.{path}").value
+            return self._store.leaf(self._key.at(path)).value
         except LeafError as e:  # a struct or union: walk into it
             if "not a leaf" not in str(e):
                 raise
         return InstanceView(self._store, self._param, self._instance, f"{path}.")
 
     def __setattr__(self, attr: str, value: Any) -> None:
-        self._store.set(f"{self.name}.{self._prefix}{attr}", value)
+        self._store.set(self._key.at(f"{self._prefix}{attr}"), value)
 
     def __repr__(self) -> str:
         return f"<{self.name}{'.' + self._prefix[:-1] if self._prefix else ''} {self.value!r}>"

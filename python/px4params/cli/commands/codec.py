@@ -109,21 +109,20 @@ def _too_long() -> str:
 
 def cmd_types(args: argparse.Namespace) -> int:
     schema = _schema(args)
-    rows = []
+    rows: list[dict[str, Any]] = []
     for key in schema:
         t = schema[key]
-        tags = t.doc.get("tags", {})
         rows.append(
             {
                 "key": key,
                 "name": t.name,
                 "version": list(t.version) if t.version else None,
-                "kind": t.definition["kind"],
-                "dialect": t.definition.get("dialect"),
+                "kind": "union" if t.type_def.is_union else "struct",
+                "dialect": t.type_def.dialect,
                 "min_bits": t.min_bits,
                 "max_bits": t.max_bits,
-                "max_instances": tags.get("max_instances"),
-                "short": t.doc.get("short", ""),
+                "max_instances": t.doc.max_instances,
+                "short": t.doc.short,
             }
         )
     if args.json:
@@ -224,7 +223,7 @@ TALK_INA238 = {"bus": {"i2c": {"bus_id": 1, "address": 0x45}}, "current": 200, "
 def cmd_demo(args: argparse.Namespace) -> int:
     schema = _schema(args)
     t = schema["px.Ina238"]
-    print(f"{t.key}: {t.doc.get('short', '')}")
+    print(f"{t.key}: {t.doc.short}")
     print("value (the talk's airframe lines):")
     for line in (
         "param add INA238#0",

@@ -1,0 +1,183 @@
+"""A name is a ``Key`` all the way down (``px4params.store.key``): parsed once where it enters,
+passed down as the key, text again only where it is shown; and a write looks its leaf up once.
+
+The leaf numbers are read off ``px.Ina238`` by hand: ``[0]`` p_version, ``[1]`` bus._tag,
+``[2]`` bus.i2c.p_version, ``[3]`` bus.i2c.bus_id, ``[4]`` bus.i2c.address, ``[5]`` current,
+``[6]`` shunt (the SPEC's talk: ``INA238_1C`` is ``INA238#1[4]``, the I2C address)."""
+
+from __future__ import annotations
+
+from collections import Counter
+from typing import Any
+
+import px4params
+import pytest
+from px4params.errors import InstanceError
+from px4params.store import flat
+from px4params.store.key import Key
+
+
+@pytest.fixture
+def store() -> px4params.Store:
+    store = px4params.Store(px4params.load_schema(use_env=False), classic=[])
+    store.add("INA238#1")
+    return store
+
+
+def test_a_key_names_a_leaf_of_its_instance() -> None:
+    instance = Key.parse("INA238#1")
+    assert instance.at(4) == Key("INA238", 1, 4) == Key.parse("INA238#1[4]")
+    assert instance.at("bus.i2c.address") == Key.parse("INA238#1.bus.i2c.address")
+    assert instance.at("cells[3].volts") == Key("INA238", 1, "cells[3].volts")
+    assert Key.parse("INA238#1[4]").whole == instance
+    assert instance.whole is instance
+    assert str(Key.parse("INA238_SHARED").at(2)) == "INA238_SHARED[2]"
+
+
+@pytest.mark.parametrize(
+    ("leaf", "message"),
+    [
+        (-1, r"^'INA238#1\[-1\]' is not a parameter name \(expected NAME, NAME#N"),
+        (1 << 40, r"^INA238#1\[1099511627776\]: no leaf \[1099511627776\]$"),
+        ("bus i2c", r"^'INA238#1\.bus i2c' is not a parameter name"),
+        ("", r"^'INA238#1\.' is not a parameter name"),
+        ("1st", r"^'INA238#1\.1st' is not a parameter name"),
+    ],
+)
+def test_a_leaf_that_no_name_could_hold_is_refused_as_parse_refuses_it(
+    leaf: Any, message: str
+) -> None:
+    with pytest.raises(InstanceError, match=message):
+        Key.parse("INA238#1").at(leaf)
+
+
+def test_a_key_is_shown_as_its_name_with_a_format_spec() -> None:
+    key = Key.parse("INA238#1[4]")
+    assert f"{key:<14}|" == "INA238#1[4]   |"
+    assert f"{key}" == "INA238#1[4]"
+
+
+def test_the_store_lists_its_instances_as_keys(store: px4params.Store) -> None:
+    store.add("INA238#3")
+    keys = [k for k in store.instance_keys() if k.param == "INA238"]
+    assert keys == [Key("INA238", 1, None), Key("INA238", 3, None)]
+    assert list(store.instance_keys("INA238")) == keys
+    assert [str(k) for k in store.instance_keys()] == list(store.names())
+
+
+def test_a_flat_parameter_carries_its_leaf_as_a_key(store: px4params.Store) -> None:
+    found = flat.flat_map(store).find("INA238_1C")
+    assert found.instance == Key("INA238", 1, None)
+    assert found.leaf == Key("INA238", 1, 4)
+    assert found.target == Key("INA238", 1, "bus.i2c.address")
+    assert found.as_dict()["leaf"] == "INA238#1[4]"  # text again where it is shown
+    assert flat.resolve_flat(store, "INA238_1C") == "INA238#1[4]"
+
+
+class _Counting:
+    """The store's core object, its leaf lookups counted (every other call passed on)."""
+
+    def __init__(self, native: Any) -> None:
+        self.native = native
+        self.calls: Counter[str] = Counter()
+
+    def __getattr__(self, name: str) -> Any:
+        method = getattr(self.native, name)
+        if name not in ("get_leaf", "get_leaf_value", "set_leaf", "get", "leaves"):
+            return method
+
+        def counted(*args: Any, **kwargs: Any) -> Any:
+            self.calls[name] += 1
+            return method(*args, **kwargs)
+
+        return counted
+
+
+@pytest.fixture
+def counted(store: px4params.Store, monkeypatch: pytest.MonkeyPatch) -> _Counting:
+    counting = _Counting(store._native)
+    monkeypatch.setattr(store, "_native", counting)
+    parsed: list[str] = []
+    original = Key.parse.__func__  # type: ignore[attr-defined]
+
+    def parse(cls: type[Key], text: str | Key) -> Key:
+        if not isinstance(text, Key):
+            parsed.append(text)
+        return original(cls, text)
+
+    monkeypatch.setattr(Key, "parse", classmethod(parse))
+    counting.parsed = parsed  # type: ignore[attr-defined]
+    return counting
+
+
+def test_a_write_by_path_looks_its_leaf_up_once(store: px4params.Store, counted: _Counting) -> None:
+    store.set("INA238#1.current", 100)  # a leaf with @min/@max: checked without the core
+    assert counted.calls == Counter(set_leaf=1)
+    assert store.get("INA238#1.current") == 100
+
+
+def test_a_write_of_a_key_parses_no_text(store: px4params.Store, counted: _Counting) -> None:
+    instance = Key("INA238", 1, None)  # (as a page or a file line parsed it, at the edge)
+    store.set(instance.at("shunt"), 0.001)
+    view = store[instance]
+    view.current = 200
+    view[4] = 0x41
+    assert counted.parsed == []  # type: ignore[attr-defined]
+    assert (store.get("INA238#1.current"), store.get("INA238#1[4]")) == (200, 0x41)
+
+
+def test_a_flat_write_looks_its_leaf_up_once(store: px4params.Store, counted: _Counting) -> None:
+    written = flat.set_flat(store, "INA238_1C", 0x41)
+    # Found (one lookup, which also says it is live), written by path (one), read back (one
+    # value: what the vehicle is told); no whole value decoded, no name parsed from text.
+    assert counted.calls == Counter(get_leaf=1, set_leaf=1, get_leaf_value=1)
+    assert counted.parsed == []  # type: ignore[attr-defined]
+    assert (written.leaf, written.value) == (Key("INA238", 1, 4), 0x41)
+    assert store.get("INA238#1.bus.i2c.address") == 0x41
+
+
+def test_a_flat_write_of_a_float_returns_what_is_stored(store: px4params.Store) -> None:
+    # 0.001 kept as a float16 is 0.0010004043579101562 (IEEE half: 0x1419).
+    written = flat.set_flat(store, "INA238_1Q", 0.001)
+    assert written.value == pytest.approx(0.0010004043579101562, rel=0, abs=1e-12)
+    assert written.leaf == Key("INA238", 1, 6)
+
+
+def test_a_flat_name_of_an_instance_that_does_not_exist_says_so(store: px4params.Store) -> None:
+    with pytest.raises(InstanceError, match=r"^INA238_2C belongs to INA238#2, which does not"):
+        flat.set_flat(store, "INA238_2C", 0x41)
+
+
+def test_a_flat_name_of_an_unselected_variant_says_which_selector(
+    store: px4params.Store,
+) -> None:
+    from px4params.errors import LeafError
+
+    # INA238_1D is bus.spi's first leaf; bus._tag (INA238_1A) selects I2C (0).
+    owner, slot = flat.flat_map(store).owner("INA238_1D")
+    assert (owner, slot.path.startswith("bus.spi")) == (Key("INA238", 1, None), True)
+    with pytest.raises(
+        LeafError, match=r"^INA238_1D \(INA238#1\.bus\.spi\.[a-z_]+\) is not live: "
+    ):
+        flat.set_flat(store, "INA238_1D", 1)
+    with pytest.raises(
+        LeafError, match=r"bus\._tag selects variant 0, not 1 \(set INA238_1A to 1\)"
+    ):
+        flat.set_flat(store, "INA238_1D", 1)
+
+
+def test_a_ground_station_write_reads_the_flat_name_once(
+    store: px4params.Store, counted: _Counting, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    fmap = flat.flat_map(store)
+    reads: list[str] = []
+    original = fmap._parse
+
+    def parse(name: str) -> Any:
+        reads.append(name)
+        return original(name)
+
+    monkeypatch.setattr(fmap, "_parse", parse)
+    assert flat.write_flat(store, "INA238_1C", 0x41) == "INA238_1C = 65"
+    assert reads == ["INA238_1C"]
+    assert counted.calls == Counter(get_leaf=1, set_leaf=1, get_leaf_value=1)
