@@ -337,87 +337,18 @@ fn name(code: i32) -> &'static str {
 
 // -- store files, by hand from docs/store-format.md ---------------------------------------------
 
-/// CRC-16-CCITT-FALSE: polynomial 0x1021, initial value 0xFFFF, no reflection, no final xor.
-fn crc16(data: &[u8]) -> u16 {
-    let mut crc = 0xFFFFu16;
-    for &b in data {
-        crc ^= u16::from(b) << 8;
-        for _ in 0..8 {
-            crc = if crc & 0x8000 != 0 {
-                (crc << 1) ^ 0x1021
-            } else {
-                crc << 1
-            };
-        }
-    }
-    crc
-}
-
-/// CRC-32 as zlib computes it (IEEE 802.3, reflected, polynomial 0xEDB88320).
-fn crc32(data: &[u8]) -> u32 {
-    let mut crc = !0u32;
-    for &b in data {
-        crc ^= u32::from(b);
-        for _ in 0..8 {
-            crc = if crc & 1 != 0 {
-                (crc >> 1) ^ 0xEDB8_8320
-            } else {
-                crc >> 1
-            };
-        }
-    }
-    !crc
-}
+#[path = "../../px4params-core/tests/support/store_file.rs"]
+mod store_file;
+use store_file::{classic_record, store_file};
 
 #[test]
 fn the_test_crcs_give_the_catalogue_check_values() {
-    assert_eq!(crc16(b"123456789"), 0x29B1);
-    assert_eq!(crc32(b"123456789"), 0xCBF4_3926);
+    store_file::assert_catalogue_check_values();
 }
 
-/// A store file of format `version`: header, the table (format 2), each record followed by
-/// its CRC-16, the CRC-32 trailer. Tables and records here are under 128 entries and bytes,
-/// so every varint is one byte.
-fn store_file(version: u8, table: &[&str], records: &[&[u8]]) -> Vec<u8> {
-    let mut file = b"PX4P".to_vec();
-    file.extend([version, 0]);
-    file.extend(crc32(table.join("\n").as_bytes()).to_le_bytes());
-    let mut chunks = vec![];
-    if version == 2 {
-        let mut t = vec![3, table.len() as u8];
-        for line in table {
-            t.push(line.len() as u8);
-            t.extend(line.as_bytes());
-        }
-        chunks.push(t);
-    }
-    chunks.extend(records.iter().map(|r| r.to_vec()));
-    for chunk in chunks {
-        file.extend(&chunk);
-        file.extend(crc16(&chunk).to_le_bytes());
-    }
-    file.extend(crc32(&file).to_le_bytes());
-    file
-}
-
-/// BAT_N_CELLS = 6: kind 2 with a value (0x22), the name's length and bytes, the int32.
-fn classic_record(name: &str, value: i32) -> Vec<u8> {
-    let mut r = vec![0x22, name.len() as u8];
-    r.extend(name.as_bytes());
-    r.extend(value.to_le_bytes());
-    r
-}
-
-/// A structured record: kind 1 with flag 0x20 when it holds a value.
+/// A structured record with a value or nothing.
 fn structured_record(index: u8, instance: u8, value: Option<&[u8]>) -> Vec<u8> {
-    match value {
-        None => vec![0x01, index, instance],
-        Some(v) => {
-            let mut r = vec![0x21, index, instance, v.len() as u8];
-            r.extend(v);
-            r
-        }
-    }
+    store_file::structured_record(index, instance, None, value)
 }
 
 // -- the tests -----------------------------------------------------------------------------------
@@ -805,8 +736,8 @@ fn a_store_is_saved_as_the_store_file_format_says() {
     // before, follows it (PX4's set-default) and is not saved.
     assert_eq!(set(s, SENS, 2, DEFAULT, &SENS_ADDRESS_22), 0);
     assert_eq!(get(s, SENS, 2, VALUE), Ok(SENS_ADDRESS_22.to_vec()));
-    let mut with_default = vec![0x11, 0, 2, 3];
-    with_default.extend(SENS_ADDRESS_22);
+    let with_default = store_file::structured_record(0, 2, Some(&SENS_ADDRESS_22), None);
+    assert_eq!(with_default[..4], [0x11, 0, 2, 3]);
     let expected = store_file(
         2,
         &["SENS=test.Sensor.1"],
