@@ -808,16 +808,19 @@ fn a_value_of_an_older_minor_version_is_translated() {
             Some(self.0)
         }
     }
+    // Address 0x22, disabled, offset 5 (0001 0100010 0 00101): translated, the last two
+    // would take the default's.
+    const OWN_FIELDS: [u8; 3] = [0x14, 0x42, 0x80];
     let data = store_file(
         2,
         &[SENS_LINE],
-        &[&structured_record(0, 0, None, Some(&ADDRESS_22))],
+        &[&structured_record(0, 0, None, Some(&OWN_FIELDS))],
     );
     let checked = check(&data).unwrap();
     let names = EveryMinor(f.sensor_1_0);
     let records = apply(&mut f.store, &layout, &names, &checked, true).map(|a| a.records);
     assert_eq!(records, Ok(1));
-    assert_eq!(f.store.get(SENS, 0, Which::Value).unwrap(), ADDRESS_22);
+    assert_eq!(f.store.get(SENS, 0, Which::Value).unwrap(), OWN_FIELDS);
 }
 
 #[test]
