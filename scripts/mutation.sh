@@ -8,7 +8,8 @@
 #   bash scripts/mutation.sh [TARGET ...]       default: every target below
 #   MUTATION_BUDGET=600     seconds per target (default 1800); what is left is "untested"
 #   MUTATION_BASELINE=1     without the tests marked issue40 (the "before" figures),
-#                           from scratch; a run after it tests again only its survivors
+#                           from scratch; a run after it tests again only its survivors. Rust
+#                           targets: without the test files issue 40 added (RUST_ISSUE40_TESTS)
 #   MUTATION_FRESH=1        forget the targets' earlier results (kept in target/mutation)
 #   MUTATION_RUST_FILES="crates/px4params-core/src/scalar.rs crates/px4params-core/src/bits.rs"
 #                           rust-core: mutate only these files (cargo-mutants --file, paths
@@ -29,9 +30,9 @@
 # Python: mutmut 2 (pip install "mutmut==2.5.1", the "mutation" extra), which mutates the
 # files in place, one at a time, and restores them; so the work tree must be clean, and is
 # restored with git if the run is cut short. Rust: cargo-mutants (cargo install
-# cargo-mutants) over the core with its Rust tests; the C ABI crate's tests are pytest's, which
-# cargo-mutants cannot run, so that target says so and stops. The survivors of each target are
-# written to target/mutation/<target>.txt.
+# cargo-mutants) over the core and the C ABI crate with their Rust tests (the C ABI's are
+# crates/px4params-ffi/tests/c_abi.rs, calling its functions as C does). The survivors of each
+# target are written to target/mutation/<target>.txt.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$PWD
@@ -57,7 +58,17 @@ TARGETS=(
   "store|$PY/store|tests/test_store.py tests/test_storefile.py tests/test_flat.py tests/test_param_cli.py"
   "rust-core|crates/px4params-core|"
   "rust-ffi|crates/px4params-ffi|"
+  # One file of the core each, with cargo test options choosing the tests that reach it (none:
+  # all of the crate's). Nothing in the core calls file.rs: only tests/file.rs reaches it.
+  "rust-file|crates/px4params-core/src/file.rs|--test=file"
+  "rust-store|crates/px4params-core/src/store.rs|"
+  "rust-pages|crates/px4params-core/src/pages.rs|"
+  "rust-crc|crates/px4params-core/src/crc.rs|"
+  "rust-scatter|crates/px4params-core/src/scatter.rs|"
+  "rust-transfer|crates/px4params-core/src/transfer.rs|"
 )
+# The Rust test files issue 40 added: MUTATION_BASELINE=1 leaves them out (the "before").
+RUST_ISSUE40_TESTS="c_abi crc file pages"
 
 if [ "$#" -eq 0 ]; then
   set -- can_transfer dronecan_params health links gui migrate vehicle store rust-core rust-ffi
@@ -159,17 +170,10 @@ EOF
 }
 
 rust_target() {
-  local name=$1 crate=$2
+  local name=$1 path=$2 tests=$3
+  # crates/<package>, or crates/<package>/src/<file>.rs to mutate that file only.
   local package
-  package=$(basename "$crate")
-  if [ "$package" = px4params-ffi ]; then
-    # cargo-mutants runs the crate's own Rust tests, and the C ABI has none: its tests are
-    # C programs built and run by pytest (tests/test_firmware.py),
-    # which cargo-mutants cannot run. Every mutant would "survive": no figure is better.
-    echo "$name: skipped: the C ABI's tests are pytest's (tests/test_firmware.py), which" \
-      "cargo-mutants cannot run"
-    return
-  fi
+  package=$(echo "$path" | cut -d/ -f2)
   if ! cargo mutants --version >/dev/null 2>&1; then
     echo "$name: skipped: cargo-mutants is not installed (cargo install cargo-mutants)"
     return
@@ -178,16 +182,41 @@ rust_target() {
   local lock=()
   [ -e /tmp/px4params-build.lock ] && lock=(flock /tmp/px4params-build.lock)
   local scope=()
+  case $path in *.rs) scope+=(--file "$path") ;; esac
   for f in ${MUTATION_RUST_FILES:-}; do
     scope+=(--file "$f")
   done
+  local features=()
+  [ "$package" = px4params-core ] && features=(--features alloc)
+  # The tests: the target's cargo test options, else all of the crate's. The baseline leaves
+  # out the test files issue 40 added, and the doc tests (cargo runs them only on their own).
+  local chosen=() t f
+  for t in $tests; do
+    if [ "${MUTATION_BASELINE:-0}" = 1 ] && [[ " $RUST_ISSUE40_TESTS " == *" ${t#--test=} "* ]]; then
+      continue
+    fi
+    chosen+=("--cargo-test-arg=$t")
+  done
+  if [ "${MUTATION_BASELINE:-0}" = 1 ] && [ -z "$tests" ]; then
+    for f in "crates/$package"/tests/*.rs; do
+      t=$(basename "$f" .rs)
+      case " $RUST_ISSUE40_TESTS " in *" $t "*) continue ;; esac
+      chosen+=("--cargo-test-arg=--test=$t")
+    done
+  fi
+  if [ "${MUTATION_BASELINE:-0}" = 1 ]; then
+    chosen+=(--cargo-test-arg=--lib) # never an empty choice, which would be every test
+  fi
   # shellcheck disable=SC2206 # extra options, split on spaces on purpose
   local extra=(${MUTATION_RUST_ARGS:-})
   # The budget starts once the lock is held; an interrupted cargo-mutants keeps the lists of
   # the mutants it finished.
-  "${lock[@]}" timeout --signal=INT --kill-after=60 "$BUDGET" \
-    nice cargo mutants --package "$package" --features alloc --jobs 1 \
-    --timeout "${MUTATION_RUST_TIMEOUT:-300}" "${scope[@]}" --output "$OUT/$name" \
+  # Its own target directory: cargo names a workspace member's artifacts by its path inside
+  # the workspace, so a mutated copy's and the work tree's collide, and a work tree build after
+  # a run was seen to take the last mutant's library for up to date.
+  "${lock[@]}" env CARGO_TARGET_DIR="$OUT/cargo-target" timeout --signal=INT --kill-after=60 "$BUDGET" \
+    nice cargo mutants --package "$package" "${features[@]}" --jobs 1 \
+    --timeout "${MUTATION_RUST_TIMEOUT:-300}" "${scope[@]}" "${chosen[@]}" --output "$OUT/$name" \
     "${extra[@]}" >"$OUT/$name.log" 2>&1 || true
   local results="$OUT/$name/mutants.out"
   local caught missed timeout unviable
@@ -245,7 +274,7 @@ for name in "$@"; do
   fi
   IFS='|' read -r _ paths tests <<<"$entry"
   case $name in
-    rust-*) rust_target "$name" "$paths" ;;
+    rust-*) rust_target "$name" "$paths" "$tests" ;;
     *) python_target "$name" "$paths" "$tests" ;;
   esac
 done
