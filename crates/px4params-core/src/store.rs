@@ -25,7 +25,7 @@ use core::convert::Infallible;
 use core::fmt;
 
 use crate::bits::write_bits;
-use crate::codec::{self, ArrayLen, At, EncodeOptions, LeafKind, Sink, Source};
+use crate::codec::{self, EncodeOptions, LeafKind, Source};
 use crate::error::{Error, ErrorKind, Path, Step};
 use crate::layout::{Layout, NodeId, Role};
 use crate::leaf::{self, Leaf, Position, Target};
@@ -1194,86 +1194,5 @@ fn is_version(layout: &Layout<'_>, path: &Path) -> bool {
 /// Checks that `data` is exactly one stored value of `root` whose `p_version` fields hold the
 /// version.
 fn check_encoded(layout: &Layout<'_>, root: NodeId, data: &[u8]) -> Result<()> {
-    if !Active::TRANSLATE {
-        return crate::walk::check_versions(layout, root, data).map_err(StoreError::Codec);
-    }
-    let mut sink = VersionCheck { layout };
-    let options = codec::DecodeOptions {
-        tao: false,
-        allow_trailing: false,
-    };
-    codec::decode(layout, root, data, &mut sink, options).map_err(|e| {
-        StoreError::Codec(Error {
-            kind: e.kind.map_value(|v| ErrorKind::VersionMismatch {
-                given: v.given,
-                expected: v.expected,
-            }),
-            bit_offset: e.bit_offset,
-            path: e.path,
-        })
-    })?;
-    Ok(())
-}
-
-/// A stored `p_version` that differs from the type's version.
-#[derive(Clone, Copy, Debug)]
-struct WrongVersion {
-    given: Scalar,
-    expected: u32,
-}
-
-/// A sink that keeps nothing and refuses `p_version` fields that differ from the version.
-struct VersionCheck<'l, 'a> {
-    layout: &'l Layout<'a>,
-}
-
-impl Sink for VersionCheck<'_, '_> {
-    type Error = WrongVersion;
-
-    fn scalar(&mut self, value: Scalar, at: At<'_>) -> core::result::Result<(), WrongVersion> {
-        if let Some(Step::Field(f)) = at.path.last() {
-            if let Some(Role::Version(expected)) =
-                self.layout.fields.get(f as usize).map(|f| f.role)
-            {
-                if value != Scalar::Uint(expected.into()) {
-                    return Err(WrongVersion {
-                        given: value,
-                        expected,
-                    });
-                }
-            }
-        }
-        Ok(())
-    }
-    fn begin_struct(&mut self, _fields: usize) -> core::result::Result<(), WrongVersion> {
-        Ok(())
-    }
-    fn field(&mut self, _index: u32, _name: &str) -> core::result::Result<(), WrongVersion> {
-        Ok(())
-    }
-    fn end_struct(&mut self) -> core::result::Result<(), WrongVersion> {
-        Ok(())
-    }
-    fn begin_union(
-        &mut self,
-        _tag: u32,
-        _index: u32,
-        _name: &str,
-        _at: At<'_>,
-    ) -> core::result::Result<(), WrongVersion> {
-        Ok(())
-    }
-    fn end_union(&mut self) -> core::result::Result<(), WrongVersion> {
-        Ok(())
-    }
-    fn begin_array(
-        &mut self,
-        _len: ArrayLen,
-        _at: At<'_>,
-    ) -> core::result::Result<(), WrongVersion> {
-        Ok(())
-    }
-    fn end_array(&mut self, _len: usize) -> core::result::Result<(), WrongVersion> {
-        Ok(())
-    }
+    codec::check_stored(layout, root, data).map_err(StoreError::Codec)
 }
