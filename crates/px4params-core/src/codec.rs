@@ -1014,19 +1014,10 @@ impl<'d, R: BitRead + ?Sized + 'd, K: Sink> Decoder<'_, 'd, R, K> {
         self.sunk(r)
     }
 
+    /// A primitive's value from its bits, by the one holder of the rule ([`scalar_of`]).
     #[inline]
     fn scalar(&mut self, kind: Kind) -> Result<Scalar, Stop> {
-        Ok(match kind {
-            Kind::Uint { bits, .. } => Scalar::Uint(self.read(bits.into())?),
-            Kind::Int { bits, .. } => {
-                Scalar::Int(scalar::sign_extend(self.read(bits.into())?, bits.into()))
-            }
-            Kind::Float { bits, .. } => {
-                Scalar::Float(scalar::float_from_raw(self.read(bits.into())?, bits.into()))
-            }
-            Kind::Bool => Scalar::Bool(self.read(1)? != 0),
-            _ => unreachable!("scalar() is only called for primitive kinds"),
-        })
+        Ok(scalar_of(kind, self.read(scalar_bits(kind))?))
     }
 }
 
