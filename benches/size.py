@@ -16,8 +16,9 @@ Targets (issue 17), for the ``compact`` build: codec <= 6 KB, core <= 16 KB (the
 none for the file format, which moved into the core after it was written); the exit status is
 1 when a probe is over its target. For scale, libcanard's ``canard.c`` is 5,485 bytes (gcc
 -Os) and dsdlc's BatteryInfo encode+decode 2,622 (same machine, x86_64). On Cortex-M7 the
-ceilings are today's sizes (codec 6.5 KiB, core 16 KiB): issue 39 aims at codec <= 4 KiB and
-core <= 10 KiB, beside ``canard.c``'s 3,958 bytes there (arm-none-eabi-gcc -Os).
+ceilings are the sizes reached (codec 6,548 bytes under 6.5 KiB; core 14,212 under 14 KiB,
+since the store's slot copies no longer bring ``memmove``): issue 39 aims at codec <= 4 KiB
+and core <= 10 KiB, beside ``canard.c``'s 3,958 bytes there (arm-none-eabi-gcc -Os).
 
     python benches/size.py [--target TRIPLE] [--keep DIR] [--symbols N]
 
@@ -45,7 +46,7 @@ ROOT = Path(__file__).resolve().parent.parent
 # Ceilings of the compact build's .text, by target triple (None: the host).
 TARGETS: dict[str | None, dict[str, int | None]] = {
     None: {"codec": 6 * 1024, "core": 16 * 1024, "all": None},
-    "thumbv7em-none-eabihf": {"codec": 6656, "core": 16 * 1024, "all": None},
+    "thumbv7em-none-eabihf": {"codec": 6656, "core": 14 * 1024, "all": None},
 }
 
 PROBE_TOML = """\

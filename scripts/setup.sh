@@ -4,7 +4,8 @@
 # package installed editable. Run it again after pulling: only what changed is rebuilt.
 #   bash scripts/setup.sh          what px4params needs to run ([project.dependencies]): the demo
 #   bash scripts/setup.sh --test   and what the tests need: the test extras, MAVProxy, and
-#                                  Debian's chromium and cbindgen where apt-get can install them
+#                                  Debian's chromium, cbindgen and gcc-arm-none-eabi where apt-get can
+#                                  install them, and Rust's thumbv7em-none-eabihf target
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -43,12 +44,22 @@ fi
 # opencv, matplotlib: hundreds of MB it does not need to list and set parameters).
 .venv/bin/python -m pip install --quiet --disable-pip-version-check --no-deps "mavproxy==1.8.75"
 
+# The Cortex-M7 size test (tests/test_size.py) builds the core for PX4's FMUv5x/v6x: Rust's
+# thumbv7em-none-eabihf target (about 30 MB, where rustup manages the toolchain) and
+# Debian's gcc-arm-none-eabi below to link it; without either that test skips.
+if command -v rustup >/dev/null 2>&1; then
+    rustup target add thumbv7em-none-eabihf >/dev/null 2>&1 \
+        || echo "(thumbv7em-none-eabihf could not be added: the Cortex-M7 size test will skip)"
+fi
+
 # Debian packages the tests use: Chromium for the page's browser tests (Playwright cannot
-# download browsers here) and cbindgen, which checks the C ABI's committed header. Installed
-# with apt where this runs as root on Debian; elsewhere those tests skip.
+# download browsers here), cbindgen, which checks the C ABI's committed header, and
+# gcc-arm-none-eabi (49 MB download) for the Cortex-M7 size test. Installed with apt where
+# this runs as root on Debian; elsewhere those tests skip.
 missing=()
 command -v chromium >/dev/null 2>&1 || missing+=(chromium)
 command -v cbindgen >/dev/null 2>&1 || missing+=(cbindgen)
+command -v arm-none-eabi-gcc >/dev/null 2>&1 || missing+=(gcc-arm-none-eabi)
 if [ ${#missing[@]} -gt 0 ] && command -v apt-get >/dev/null 2>&1 && [ "$(id -u)" = 0 ]; then
     echo "== installing Debian's ${missing[*]} for the tests (apt-get, about a minute)"
     apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${missing[@]}" >/dev/null \

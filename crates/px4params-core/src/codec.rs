@@ -3,6 +3,8 @@
 //! Values come from a [`Source`] and go to a [`Sink`], so the same walk serves Python objects
 //! in the binding, flat leaf lists in firmware and anything else, without allocating.
 
+use core::convert::Infallible;
+
 use crate::bits::{BitRead, BitReader, BitWriter};
 use crate::error::{Error, ErrorKind, Path, Step};
 use crate::layout::{FlatItem, Kind, Layout, NodeId, Role, Segment, Span};
@@ -92,9 +94,9 @@ pub fn encode_leaves(
     encode_leaves_with::<Active>(layout, root, leaves, out, options)
 }
 
-/// [`encode_leaves`] with the plans `P`: the flat encoder ([`Plans::FLAT`]), else
-/// [`crate::walk`]: the same bytes, and the same error where a value has one fault (a value
-/// with a bad leaf whose buffer is also too small may report either).
+/// [`encode_leaves`] with the plans `P`: the flat encoder ([`Plans::FLAT`]) answers or
+/// declines, and [`crate::walk`] answers what it declines: the same bytes, and every error
+/// worded by the walk.
 pub fn encode_leaves_with<P: Plans>(
     layout: &Layout<'_>,
     root: NodeId,
@@ -102,10 +104,13 @@ pub fn encode_leaves_with<P: Plans>(
     out: &mut [u8],
     options: EncodeOptions,
 ) -> Result<usize, Error<LeafError>> {
-    if !P::FLAT {
-        return walk::encode(layout, root, leaves, out, options);
+    if P::FLAT {
+        // The plan answers or declines: any fault is worded by the walk.
+        if let Ok(n) = encode(layout, root, &mut LeafSource::new(leaves), out, options) {
+            return Ok(n);
+        }
     }
-    encode(layout, root, &mut LeafSource::new(leaves), out, options)
+    walk::encode(layout, root, leaves, out, options)
 }
 
 /// Decodes a value of type `root` from `data` into the flat leaf list `leaves`, with the
@@ -120,8 +125,8 @@ pub fn decode_leaves<R: BitRead + ?Sized>(
     decode_leaves_with::<Active, R>(layout, root, data, leaves, options)
 }
 
-/// [`decode_leaves`] with the plans `P`: the flat decoder ([`Plans::FLAT`]), else
-/// [`crate::walk`]: the same leaves and errors.
+/// [`decode_leaves`] with the plans `P`: the flat decoder ([`Plans::FLAT`]) answers or
+/// declines, and [`crate::walk`] answers what it declines (every error worded by the walk).
 pub fn decode_leaves_with<P: Plans, R: BitRead + ?Sized>(
     layout: &Layout<'_>,
     root: NodeId,
@@ -129,15 +134,90 @@ pub fn decode_leaves_with<P: Plans, R: BitRead + ?Sized>(
     leaves: &mut [Scalar],
     options: DecodeOptions,
 ) -> Result<Decoded, Error<LeafError>> {
-    if !P::FLAT {
-        return walk::decode(layout, root, data, leaves, options);
+    if P::FLAT {
+        // The plan answers or declines: any fault is worded by the walk.
+        let mut sink = LeafSink::new(leaves);
+        if let Ok(bits) = decode(layout, root, data, &mut sink, options) {
+            let leaves = sink.leaves().len();
+            return Ok(Decoded { bits, leaves });
+        }
     }
-    let mut sink = LeafSink::new(leaves);
-    let bits = decode(layout, root, data, &mut sink, options)?;
-    Ok(Decoded {
-        bits,
-        leaves: sink.leaves().len(),
-    })
+    walk::decode(layout, root, data, leaves, options)
+}
+
+/// Checks that `data` is exactly one value of `root` stored without tail array optimization
+/// (as the store keeps values) whose `p_version` fields hold the type's version, with the
+/// build's [`crate::plan::Active`] plans: see [`check_stored_with`].
+pub fn check_stored(
+    layout: &Layout<'_>,
+    root: NodeId,
+    data: &[u8],
+) -> Result<(), Error<Infallible>> {
+    check_stored_with::<Active>(layout, root, data)
+}
+
+/// [`check_stored`] with the plans `P`: the decoder into a sink that keeps nothing
+/// ([`Plans::TRANSLATE`]) answers or declines, and [`crate::walk`] answers what it declines
+/// (every error worded by the walk).
+pub fn check_stored_with<P: Plans>(
+    layout: &Layout<'_>,
+    root: NodeId,
+    data: &[u8],
+) -> Result<(), Error<Infallible>> {
+    if P::TRANSLATE {
+        let options = DecodeOptions {
+            tao: false,
+            allow_trailing: false,
+        };
+        if decode(layout, root, data, &mut VersionCheck { layout }, options).is_ok() {
+            return Ok(());
+        }
+    }
+    walk::check_versions(layout, root, data)
+}
+
+/// A sink that keeps nothing and refuses `p_version` fields that differ from the version.
+struct VersionCheck<'l, 'a> {
+    layout: &'l Layout<'a>,
+}
+
+impl Sink for VersionCheck<'_, '_> {
+    /// A `p_version` that is not the type's: the plan declines.
+    type Error = ();
+
+    fn scalar(&mut self, value: Scalar, at: At<'_>) -> Result<(), ()> {
+        if let Some(Step::Field(f)) = at.path.last() {
+            if let Some(Role::Version(expected)) =
+                self.layout.fields.get(f as usize).map(|f| f.role)
+            {
+                if value != Scalar::Uint(expected.into()) {
+                    return Err(());
+                }
+            }
+        }
+        Ok(())
+    }
+    fn begin_struct(&mut self, _fields: usize) -> Result<(), ()> {
+        Ok(())
+    }
+    fn field(&mut self, _index: u32, _name: &str) -> Result<(), ()> {
+        Ok(())
+    }
+    fn end_struct(&mut self) -> Result<(), ()> {
+        Ok(())
+    }
+    fn begin_union(&mut self, _: u32, _: u32, _: &str, _: At<'_>) -> Result<(), ()> {
+        Ok(())
+    }
+    fn end_union(&mut self) -> Result<(), ()> {
+        Ok(())
+    }
+    fn begin_array(&mut self, _len: ArrayLen, _at: At<'_>) -> Result<(), ()> {
+        Ok(())
+    }
+    fn end_array(&mut self, _len: usize) -> Result<(), ()> {
+        Ok(())
+    }
 }
 
 /// Internal failure marker: the error itself waits in the walker's slot, so that results stay
@@ -934,19 +1014,10 @@ impl<'d, R: BitRead + ?Sized + 'd, K: Sink> Decoder<'_, 'd, R, K> {
         self.sunk(r)
     }
 
+    /// A primitive's value from its bits, by the one holder of the rule ([`scalar_of`]).
     #[inline]
     fn scalar(&mut self, kind: Kind) -> Result<Scalar, Stop> {
-        Ok(match kind {
-            Kind::Uint { bits, .. } => Scalar::Uint(self.read(bits.into())?),
-            Kind::Int { bits, .. } => {
-                Scalar::Int(scalar::sign_extend(self.read(bits.into())?, bits.into()))
-            }
-            Kind::Float { bits, .. } => {
-                Scalar::Float(scalar::float_from_raw(self.read(bits.into())?, bits.into()))
-            }
-            Kind::Bool => Scalar::Bool(self.read(1)? != 0),
-            _ => unreachable!("scalar() is only called for primitive kinds"),
-        })
+        Ok(scalar_of(kind, self.read(scalar_bits(kind))?))
     }
 }
 

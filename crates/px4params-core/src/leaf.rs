@@ -48,7 +48,8 @@ pub fn locate_at<R: BitRead + ?Sized>(
 }
 
 /// [`locate_at`] with the plans `P`: the leaf walk that steps over fixed-shape parts
-/// ([`Plans::SEEK`]), else [`crate::walk`].
+/// ([`Plans::SEEK`]) answers or declines; [`crate::walk`] answers the rest and words every
+/// error.
 #[inline]
 pub fn locate_at_with<P: Plans, R: BitRead + ?Sized>(
     layout: &Layout<'_>,
@@ -57,22 +58,27 @@ pub fn locate_at_with<P: Plans, R: BitRead + ?Sized>(
     k: usize,
     tao: bool,
 ) -> Result<Leaf, LeafAccessError> {
-    if !P::SEEK {
-        return walk::locate(layout, root, data, k, tao).map(|(leaf, _)| leaf);
+    if P::SEEK {
+        if let Some(leaf) = locate_plan(layout, root, data, k, tao) {
+            return Ok(leaf);
+        }
     }
+    walk::locate(layout, root, data, k, tao).map(|(leaf, _)| leaf)
+}
+
+/// The plan of [`locate_at`]: the leaf walk that steps over fixed-shape parts. It answers or
+/// declines (`None`: no such leaf, or malformed data, which [`crate::walk`] words).
+fn locate_plan<R: BitRead + ?Sized>(
+    layout: &Layout<'_>,
+    root: NodeId,
+    data: &R,
+    k: usize,
+    tao: bool,
+) -> Option<Leaf> {
     let mut walk = Walk::new(layout, data);
     let mut left = k;
-    match walk.by_index(root, tao, &mut left)? {
-        Some(leaf) => within(data, leaf),
-        None => Err(Error {
-            kind: ErrorKind::NoSuchLeaf {
-                index: k,
-                count: walk.leaves,
-            },
-            bit_offset: walk.pos,
-            path: Path::default(),
-        }),
-    }
+    let leaf = walk.by_index(root, tao, &mut left).ok()??;
+    within(data, leaf).ok()
 }
 
 /// `leaf`, checked to lie within `data` (the walks pass over fixed-shape parts unread).
@@ -122,8 +128,8 @@ pub fn get_leaf<R: BitRead + ?Sized>(
     target: Target<'_>,
     tao: bool,
 ) -> Result<(Leaf, Scalar), LeafAccessError> {
-    if let (Target::Index(k), false) = (target, Active::SEEK) {
-        return walk::locate(layout, root, data, k, tao);
+    if let Target::Index(k) = target {
+        return get_leaf_at(layout, root, data, k, tao);
     }
     let leaf = locate(layout, root, data, target, tao)?;
     let value = read_leaf(layout, data, &leaf, tao)?;
@@ -141,8 +147,9 @@ pub fn get_leaf_at<R: BitRead + ?Sized>(
     get_leaf_at_with::<Active, R>(layout, root, data, k, tao)
 }
 
-/// [`get_leaf_at`] with the plans `P`: located and read as [`get_leaf`] does it
-/// ([`Plans::SEEK`]), else found and read in one [`crate::walk`].
+/// [`get_leaf_at`] with the plans `P`: located by the leaf walk and read ([`Plans::SEEK`]),
+/// which answers or declines; else (and for what it declines) found and read in one
+/// [`crate::walk`], which words every error.
 pub fn get_leaf_at_with<P: Plans, R: BitRead + ?Sized>(
     layout: &Layout<'_>,
     root: NodeId,
@@ -150,11 +157,14 @@ pub fn get_leaf_at_with<P: Plans, R: BitRead + ?Sized>(
     k: usize,
     tao: bool,
 ) -> Result<(Leaf, Scalar), LeafAccessError> {
-    if !P::SEEK {
-        return walk::locate(layout, root, data, k, tao);
+    if P::SEEK {
+        if let Some(leaf) = locate_plan(layout, root, data, k, tao) {
+            if let Ok(value) = read_leaf(layout, data, &leaf, tao) {
+                return Ok((leaf, value));
+            }
+        }
     }
-    // One reader of located leaves ([`get_leaf`]), so that it stays inlined there.
-    get_leaf(layout, root, data, Target::Index(k), tao)
+    walk::locate(layout, root, data, k, tao)
 }
 
 /// Writes `value` to leaf `target`, producing the new encoding in `out`; returns its length.
@@ -185,7 +195,21 @@ pub fn set_leaf_at<R: BitRead + ?Sized>(
     out: &mut [u8],
     options: EncodeOptions,
 ) -> Result<usize, LeafAccessError> {
-    let leaf = locate_at(layout, root, data, k, options.tao)?;
+    set_leaf_at_with::<Active, R>(layout, root, data, k, value, out, options)
+}
+
+/// [`set_leaf_at`] with the plans `P`: the leaf located as [`locate_at_with`] finds it, then
+/// written ([`set_located`]).
+pub fn set_leaf_at_with<P: Plans, R: BitRead + ?Sized>(
+    layout: &Layout<'_>,
+    root: NodeId,
+    data: &R,
+    k: usize,
+    value: Scalar,
+    out: &mut [u8],
+    options: EncodeOptions,
+) -> Result<usize, LeafAccessError> {
+    let leaf = locate_at_with::<P, R>(layout, root, data, k, options.tao)?;
     set_located(layout, root, data, &leaf, value, out, options)
 }
 

@@ -88,8 +88,8 @@ pub fn translate_value<R: BitRead + ?Sized, B: BitRead + ?Sized>(
 }
 
 /// [`translate_value`] with the plans `P`: the path-keeping translator
-/// ([`Plans::TRANSLATE`]), else [`crate::walk`] (the same bytes and errors; no field paths
-/// are built).
+/// ([`Plans::TRANSLATE`]) answers or declines, and [`crate::walk`] answers what it declines
+/// (the same bytes; every error worded by the walk).
 pub fn translate_value_with<P: Plans, R: BitRead + ?Sized, B: BitRead + ?Sized>(
     layout: &Layout<'_>,
     old: NodeId,
@@ -98,10 +98,13 @@ pub fn translate_value_with<P: Plans, R: BitRead + ?Sized, B: BitRead + ?Sized>(
     base: &B,
     out: &mut [u8],
 ) -> core::result::Result<usize, Error<TranslateError>> {
-    if !P::TRANSLATE {
-        return crate::walk::translate(layout, old, old_data, new, base, out);
+    if P::TRANSLATE {
+        // The plan answers or declines: any fault is worded by the walk.
+        if let Ok(n) = translate(layout, old, old_data, new, base, out, &mut |_| {}) {
+            return Ok(n);
+        }
     }
-    translate(layout, old, old_data, new, base, out, &mut |_| {})
+    crate::walk::translate(layout, old, old_data, new, base, out)
 }
 
 /// A dotted path being built, in a fixed buffer.

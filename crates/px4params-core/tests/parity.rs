@@ -13,11 +13,15 @@ mod common;
 
 use common::{any_type, same_error, same_leaves, same_scalar};
 use proptest::prelude::*;
-use px4params_core::codec::{decode_leaves_with, encode_leaves_with, DecodeOptions, EncodeOptions};
+use px4params_core::codec::{
+    check_stored_with, decode_leaves_with, encode_leaves_with, DecodeOptions, EncodeOptions,
+};
 use px4params_core::compile::OwnedLayout;
 use px4params_core::error::Error;
 use px4params_core::layout::{Layout, NodeId};
-use px4params_core::leaf::{encode_default, get_leaf_at_with, locate_at_with, seek_with};
+use px4params_core::leaf::{
+    encode_default, get_leaf_at_with, locate_at_with, seek_with, set_leaf_at_with,
+};
 use px4params_core::plan::{HostPlans, NoPlans, Plans};
 use px4params_core::translate::translate_value_with;
 use px4params_core::value::LeafError;
@@ -202,5 +206,70 @@ proptest! {
                 _ => prop_assert!(false, "{:?} / {:?}", plan, walk),
             }
         }
+    }
+
+    /// Writing leaf `[k]` of a stored value (complete, cut short, or random bytes) with a
+    /// random value of each kind, into buffers roomy and too small: the same bytes, or the
+    /// same error.
+    #[test]
+    fn set_leaf_plan_as_the_walk(
+        ty in any_type(),
+        data in proptest::collection::vec(any::<u8>(), 0..64),
+        raw in any::<u64>(),
+        kind in 0u8..4,
+        saturate in any::<bool>(),
+        short in 0usize..3,
+    ) {
+        let mut l = OwnedLayout::default();
+        let root = ty.build(&mut l);
+        let layout = l.as_layout();
+        let value = value_from(&layout, root, &data).unwrap_or_default();
+        let v = match kind {
+            0 => Scalar::Uint(raw % 8),
+            1 => Scalar::Int(raw as i64),
+            2 => Scalar::Float(f64::from_bits(raw)),
+            _ => Scalar::Bool(raw % 2 == 1),
+        };
+        let options = EncodeOptions { tao: false, saturate, keep_versions: false };
+        let size = (layout.max_bytes(root).max(data.len()) + 1).saturating_sub(short * 2);
+        for bytes in cut_short(&value).chain([&data[..]]) {
+            for k in 0..24 {
+                let (mut x, mut y) = (vec![0xA5u8; size], vec![0xA5u8; size]);
+                let plan = set_leaf_at_with::<HostPlans, _>(&layout, root, bytes, k, v, &mut x, options);
+                let walk = set_leaf_at_with::<NoPlans, _>(&layout, root, bytes, k, v, &mut y, options);
+                match (&plan, &walk) {
+                    (Ok(p), Ok(q)) => prop_assert!(p == q && x[..*p] == y[..*q], "[{}] {:02x?} / {:02x?}", k, &x[..*p], &y[..*q]),
+                    (Err(p), Err(q)) => prop_assert!(same_error(p, q), "[{}] {:?} / {:?}", k, p, q),
+                    _ => prop_assert!(false, "[{}] {:?} / {:?}", k, plan, walk),
+                }
+            }
+        }
+    }
+
+    /// Checking a stored value's `p_version` fields (a value complete, cut short, with a
+    /// byte too many, or random bytes): the same answer, or the same error.
+    #[test]
+    fn check_plan_as_the_walk(ty in any_type(), data in proptest::collection::vec(any::<u8>(), 0..64)) {
+        let mut l = OwnedLayout::default();
+        let root = ty.build(&mut l);
+        let layout = l.as_layout();
+        let mut value = value_from(&layout, root, &data).unwrap_or_default();
+        let mut longer = value.clone();
+        longer.push(0);
+        for bytes in cut_short(&value).chain([&longer[..], &data[..]]) {
+            let plan = check_stored_with::<HostPlans>(&layout, root, bytes);
+            let walk = check_stored_with::<NoPlans>(&layout, root, bytes);
+            match (&plan, &walk) {
+                (Ok(()), Ok(())) => {}
+                (Err(p), Err(q)) => prop_assert!(same_error(p, q), "{:?} / {:?}", p, q),
+                _ => prop_assert!(false, "{:?} / {:?}", plan, walk),
+            }
+        }
+        // A stored value with its version spoiled: both refuse it alike.
+        if let Some(b) = value.first_mut() {
+            *b ^= 0x01;
+        }
+        let (plan, walk) = (check_stored_with::<HostPlans>(&layout, root, &value), check_stored_with::<NoPlans>(&layout, root, &value));
+        prop_assert!(plan.is_ok() == walk.is_ok(), "{:?} / {:?}", plan, walk);
     }
 }
