@@ -1,0 +1,81 @@
+"""The store's session (store/session.py) where test_write_path.py leaves it open: what a
+session made by a server (``Session(store, path)``) takes the file to be, where a batch's output
+goes, and that a run that changes nothing leaves the store file (and its backup) alone."""
+
+from __future__ import annotations
+
+import io
+import os
+from pathlib import Path
+
+import px4params
+import pytest
+from px4params.nsh.airframe import run_file
+from px4params.store.classic import BUNDLED_CLASSIC
+from px4params.store.session import Session, open_session
+
+
+@pytest.fixture
+def store_file(schema: px4params.Schema, tmp_path: Path) -> Path:
+    """A store with INA238#0, saved twice: the file and its backup (``FILE.bak``) differ."""
+    store = px4params.Store(schema, classic=BUNDLED_CLASSIC)
+    store.add("INA238#0")
+    path = tmp_path / "vehicle.store"
+    store.save(path)
+    store.set("INA238#0.current", 150)
+    store.save(path)
+    return path
+
+
+def test_a_server_session_takes_the_file_as_it_is_now(
+    schema: px4params.Schema, store_file: Path
+) -> None:
+    """``Session(store, path)`` (how mavlink serve and dronecan serve make theirs) starts from
+    the file as it is: with no other writer, poll() finds nothing new."""
+    store = px4params.Store.load(store_file, classic=BUNDLED_CLASSIC)
+    session = Session(store, str(store_file))
+    assert session.poll() is False
+    # another writer saves: now poll() notices, once
+    other = open_session(str(store_file), None)
+    other.store.set("INA238#0.current", 175)
+    other.save()
+    assert session.poll() is True
+    assert store.get("INA238#0.current") == 175
+    assert session.poll() is False
+
+
+def test_a_session_opened_on_a_file_takes_it_as_read(store_file: Path) -> None:
+    session = open_session(str(store_file), None)
+    assert session.poll() is False
+    session.store.set("INA238#0.current", 160)
+    session.save()
+    assert session.poll() is False  # its own save is not another writer's
+
+
+def test_a_batch_prints_to_the_sessions_output(
+    schema: px4params.Schema, store_file: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    script = tmp_path / "hello.txt"
+    script.write_text("echo hello from the file\n")
+    out = io.StringIO()
+    store = px4params.Store.load(store_file, classic=BUNDLED_CLASSIC)
+    session = Session(store, str(store_file), out)
+    result = run_file(str(script), session, keep_going=False, err=io.StringIO())
+    assert result.errors == []
+    assert out.getvalue() == "hello from the file\n"
+    assert capsys.readouterr().out == ""
+
+
+def test_a_file_that_changes_nothing_leaves_the_store_and_its_backup_alone(
+    store_file: Path, tmp_path: Path
+) -> None:
+    """Saving nothing new would still replace the file and turn the backup of the last real
+    save (``FILE.bak``) into a copy of the file: the way back would be lost."""
+    script = tmp_path / "nothing.txt"
+    script.write_text("# only a comment\necho nothing to change\nparam show -q INA238#0.current\n")
+    backup = Path(f"{store_file}.bak")
+    before = (os.stat(store_file).st_ino, store_file.read_bytes(), backup.read_bytes())
+    session = open_session(str(store_file), None, out=io.StringIO())
+    result = run_file(str(script), session, keep_going=False, err=io.StringIO())
+    assert result.errors == []
+    assert (os.stat(store_file).st_ino, store_file.read_bytes(), backup.read_bytes()) == before
