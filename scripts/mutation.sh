@@ -61,12 +61,13 @@ TARGETS=(
   "vehicle|$PY/vehicle|tests/test_autostart.py tests/test_bench.py tests/test_devid.py tests/test_flight_log.py tests/test_planted_health.py tests/test_planted_devid.py"
   "store|$PY/store|tests/test_store.py tests/test_storefile.py tests/test_flat.py tests/test_param_cli.py"
   # One module at a time, where a whole package does not finish in a budget: those that matter
-  # most for "a broken sensor never silent, nothing lost", each with the fast tests that cover it.
-  "session|$PY/store/session.py|tests/test_write_path.py tests/test_session.py -k 'not cli and not dronecan and not over_mavlink and not disjoint and not mavlink_serve'"
-  "migrate-config|$PY/migrate/config.py,$PY/migrate/proposal.py|tests/test_migrate.py tests/test_migrate_defects.py tests/test_planted_migrate.py tests/test_migrate_config.py"
+  # most for "a broken sensor never silent, nothing lost", each with the fast tests that cover it
+  # (the tests written for its survivors first: -x stops at the first that fails).
+  "session|$PY/store/session.py|tests/test_session.py tests/test_write_path.py -k 'not cli and not dronecan and not over_mavlink and not disjoint and not mavlink_serve'"
+  "migrate-config|$PY/migrate/config.py,$PY/migrate/proposal.py|tests/test_migrate_config.py tests/test_migrate.py tests/test_migrate_defects.py tests/test_planted_migrate.py"
   "devid|$PY/vehicle/devid.py|tests/test_devid.py tests/test_planted_devid.py"
-  "mavlink_ftp|$PY/links/mavlink_ftp.py|tests/test_mavlink_metadata.py tests/test_mavlink_security.py tests/test_mavlink_ftp.py -k 'ftp or open_read or naks or sessions_run or list_directory or crc32 or burst or slices or garbage'"
-  "admission|$PY/gui/admission.py|tests/test_gui_security.py tests/test_admission.py"
+  "mavlink_ftp|$PY/links/mavlink_ftp.py|tests/test_mavlink_ftp.py tests/test_mavlink_metadata.py tests/test_mavlink_security.py -k 'ftp or open_read or naks or sessions_run or list_directory or crc32 or burst or slices or garbage'"
+  "admission|$PY/gui/admission.py|tests/test_admission.py tests/test_gui_security.py"
   "rust-core|crates/px4params-core|"
   "rust-ffi|crates/px4params-ffi|"
 )

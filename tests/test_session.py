@@ -79,3 +79,65 @@ def test_a_file_that_changes_nothing_leaves_the_store_and_its_backup_alone(
     result = run_file(str(script), session, keep_going=False, err=io.StringIO())
     assert result.errors == []
     assert (os.stat(store_file).st_ino, store_file.read_bytes(), backup.read_bytes()) == before
+
+
+def test_a_batch_saves_its_changes_once_at_its_end(store_file: Path, tmp_path: Path) -> None:
+    script = tmp_path / "change.txt"
+    script.write_text("param set INA238#0.current 180\nparam set INA238#0.current 190\n")
+    session = open_session(str(store_file), None, out=io.StringIO())
+    result = run_file(str(script), session, keep_going=False, err=io.StringIO())
+    assert result.errors == []
+    saved = px4params.Store.load(store_file, classic=BUNDLED_CLASSIC)
+    assert saved.get("INA238#0.current") == 190
+    # one save: the backup is the file as it was before the run (150), not a middle state
+    backup = px4params.Store.load(f"{store_file}.bak", classic=BUNDLED_CLASSIC)
+    assert backup.get("INA238#0.current") == 150
+
+
+def test_a_removed_store_file_leaves_a_servers_values_alone(store_file: Path) -> None:
+    """poll() reads other writers' saves; a file someone removed is no save: the running
+    values stay. A change saved after it is one to an instance the other writer removed
+    (the class's rule): refused, nothing written."""
+    from px4params.errors import StoreConflictError
+
+    session = open_session(str(store_file), None)
+    os.remove(store_file)
+    assert session.poll() is False
+    assert session.store.get("INA238#0.current") == 150
+    with pytest.raises(StoreConflictError, match=r"^INA238#0 was removed by another writer"):
+        session.commit(lambda: session.store.set("INA238#0.current", 170))
+    assert session.store.get("INA238#0.current") == 150
+    assert not store_file.exists()
+
+
+def test_a_store_file_that_cannot_be_read_is_said_once_per_error(
+    store_file: Path, tmp_path: Path
+) -> None:
+    """A server polls often: an unreadable file (here a symbolic link loop) is reported
+    once, not at every poll, and again after it was readable in between."""
+    from px4params.errors import StoreFileError
+
+    link = tmp_path / "link.store"
+    link.symlink_to(store_file)
+    session = open_session(str(link), None)
+    assert session.poll() is False
+
+    def loop() -> None:
+        link.unlink()
+        link.symlink_to(link)
+
+    def mend() -> None:
+        link.unlink()
+        link.symlink_to(store_file)
+
+    loop()
+    with pytest.raises(StoreFileError) as said:
+        session.poll()
+    assert str(said.value) == f"{link}: cannot read: Too many levels of symbolic links"
+    assert session.poll() is False
+    assert session.poll() is False
+    mend()
+    assert session.poll() is False  # the same file as before: nothing new
+    loop()
+    with pytest.raises(StoreFileError):
+        session.poll()
