@@ -243,3 +243,14 @@ def test_every_writing_opcode_is_refused_as_protected_and_others_as_unknown() ->
         assert (got.opcode, got.req, got.seq, got.data) == (NAK, opcode, 6, b"\x09")
     for opcode in (0, 16, 127, 128, 255):
         assert reply(server, opcode, data=b"/f").data == b"\x07", opcode
+
+
+def test_make_request_builds_the_protocols_layout() -> None:
+    from px4params.links.mavlink_ftp import make_request
+
+    assert make_request(OPEN_RO, data=b"/f") == request(OPEN_RO, data=b"/f")
+    assert make_request(READ, seq=7, session=2, offset=300) == request(
+        READ, seq=7, session=2, offset=300
+    )
+    sized = make_request(READ, session=1, size=80)
+    assert len(sized) == PAYLOAD and sized[4] == 80 and sized[12:] == bytes(239)

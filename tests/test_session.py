@@ -141,3 +141,53 @@ def test_a_store_file_that_cannot_be_read_is_said_once_per_error(
     loop()
     with pytest.raises(StoreFileError):
         session.poll()
+
+
+def test_a_conflict_found_by_poll_is_said_once_per_version_of_the_file(store_file: Path) -> None:
+    """A server's unsaved change and another writer's save of the same leaf: poll() raises
+    the conflict once for that version of the file and leaves the store as it was."""
+    from px4params.errors import StoreConflictError
+
+    server = open_session(str(store_file), None)
+    server.store.set("INA238#0.current", 160)  # not saved yet
+    other = open_session(str(store_file), None)
+    other.store.set("INA238#0.current", 170)
+    other.save()
+    with pytest.raises(StoreConflictError, match=r"^INA238#0.current was changed here and by "):
+        server.poll()
+    assert server.store.get("INA238#0.current") == 160
+    assert server.poll() is False  # the same version: not said again
+    other.store.set("INA238#0.current", 171)
+    other.save()
+    with pytest.raises(StoreConflictError):
+        server.poll()  # a new version, still in conflict: said again
+
+
+def test_reload_takes_the_file_as_it_is_dropping_unsaved_changes(store_file: Path) -> None:
+    """DroneCAN's OpCode LOAD: the file's content replaces the running values."""
+    session = open_session(str(store_file), None)
+    session.store.set("INA238#0.current", 160)  # not saved
+    other = open_session(str(store_file), None)
+    other.store.add("INA238#1")
+    other.save()
+    session.reload()
+    assert session.store.get("INA238#0.current") == 150
+    assert session.store.instances("INA238") == ["INA238#0", "INA238#1"]
+    assert session.poll() is False  # what it read is now its view of the file
+
+
+def test_rewrite_changes_the_file_and_leaves_the_running_values(store_file: Path) -> None:
+    """DroneCAN's OpCode ERASE: the file's latest content, changed, is saved; the running
+    values (and the session's unsaved changes) stay until the next restart."""
+    session = open_session(str(store_file), None)
+    session.store.set("INA238#0.current", 160)  # not saved
+    other = open_session(str(store_file), None)
+    other.store.add("INA238#1")
+    other.save()
+    session.rewrite(lambda store: store.set("INA238#0.current", 120))
+    saved = px4params.Store.load(store_file, classic=BUNDLED_CLASSIC)
+    assert saved.get("INA238#0.current") == 120
+    assert saved.instances("INA238") == ["INA238#0", "INA238#1"]  # the other's save is kept
+    assert session.store.get("INA238#0.current") == 160
+    assert session.store.instances("INA238") == ["INA238#0"]
+    assert session.poll() is False  # its own save is not another writer's
