@@ -108,6 +108,14 @@ def test_a_removed_store_file_leaves_a_servers_values_alone(store_file: Path) ->
         session.commit(lambda: session.store.set("INA238#0.current", 170))
     assert session.store.get("INA238#0.current") == 150
     assert not store_file.exists()
+    # A save now is this session's change (INA238#1 added) on top of the removed file's
+    # (nothing); removed again after that save of its own, the running values stay too.
+    session.store.add("INA238#1")
+    session.save()
+    assert session.store.instances("INA238") == ["INA238#1"]
+    os.remove(store_file)
+    assert session.poll() is False
+    assert session.store.instances("INA238") == ["INA238#1"]
 
 
 def test_a_store_file_that_cannot_be_read_is_said_once_per_error(
@@ -191,3 +199,66 @@ def test_rewrite_changes_the_file_and_leaves_the_running_values(store_file: Path
     assert session.store.get("INA238#0.current") == 160
     assert session.store.instances("INA238") == ["INA238#0"]
     assert session.poll() is False  # its own save is not another writer's
+
+
+def test_after_a_rewrite_another_writers_save_is_merged_under_the_running_values(
+    store_file: Path,
+) -> None:
+    session = open_session(str(store_file), None)
+    session.store.set("INA238#0.current", 160)  # not saved
+    session.rewrite(lambda store: store.set("INA238#0.current", 120))
+    other = open_session(str(store_file), None)
+    assert other.store.get("INA238#0.current") == 120
+    other.store.set("INA238#0.bus.i2c.address", 0x46)
+    other.save()
+    assert session.poll() is True
+    assert session.store.get("INA238#0.bus.i2c.address") == 0x46
+    assert session.store.get("INA238#0.current") == 160  # its own unsaved change stays
+
+
+def test_a_store_path_that_is_a_fifo_is_refused_without_waiting_for_a_writer(
+    tmp_path: Path,
+) -> None:
+    """Opening a FIFO for reading waits for a writer unless it is opened non-blocking: the
+    store must be refused at once (a bound of 20 s stands for "never")."""
+    import threading
+
+    from px4params.errors import StoreFileError
+
+    fifo = tmp_path / "vehicle.store"
+    os.mkfifo(fifo)
+    outcome: list[BaseException | None] = []
+
+    def open_it() -> None:
+        try:
+            open_session(str(fifo), None)
+            outcome.append(None)
+        except BaseException as e:  # handed to the test's thread
+            outcome.append(e)
+
+    worker = threading.Thread(target=open_it, daemon=True)
+    worker.start()
+    worker.join(20)
+    if worker.is_alive():
+        with open(fifo, "wb"):  # lets the blocked open go on, so the thread can end
+            pass
+        worker.join(20)
+        pytest.fail("opening a store that is a FIFO waited for a writer")
+    (error,) = outcome
+    assert isinstance(error, StoreFileError)
+    assert str(error) == f"{fifo}: cannot read: is a FIFO (named pipe), not a regular file"
+
+
+def test_a_files_identity_reads_its_content_up_to_16_mib(tmp_path: Path) -> None:
+    """Two saves within one clock tick on a reused inode differ only in content: a store
+    (kilobytes) is told apart by it; files over 16 MiB (never a store) by status alone."""
+    from px4params.store.session import file_identity
+
+    path = tmp_path / "big"
+    data = bytes(range(256)) * (1 << 16)  # 16 MiB exactly
+    path.write_bytes(data)
+    identity = file_identity(str(path))
+    assert identity is not None and identity[5] == hash(data)
+    path.write_bytes(data + b"!")
+    larger = file_identity(str(path))
+    assert larger is not None and larger[2] == len(data) + 1 and larger[5] != hash(data + b"!")
