@@ -188,9 +188,9 @@ def test_a_session_idle_3_seconds_is_taken_over_by_default() -> None:
     server = MavftpServer({"/f": b"1"}, clock=clock)
     for _ in range(4):
         reply(server, OPEN_RO, data=b"/f")
-    clock.now += 2.9
+    clock.now += 2.5
     assert reply(server, OPEN_RO, data=b"/f").data == bytes([NO_SESSIONS])
-    clock.now += 0.1  # idle 3.0 s: "idle for session_idle seconds"
+    clock.now += 0.5  # idle 3.0 s exactly: "idle for session_idle seconds"
     taken = reply(server, OPEN_RO, data=b"/f")
     assert (taken.opcode, taken.session, server.reclaimed) == (ACK, 0, 1)
 
@@ -254,3 +254,9 @@ def test_make_request_builds_the_protocols_layout() -> None:
     )
     sized = make_request(READ, session=1, size=80)
     assert len(sized) == PAYLOAD and sized[4] == 80 and sized[12:] == bytes(239)
+
+
+def test_a_folder_whose_name_ends_in_x_lists_its_own_files() -> None:
+    server = MavftpServer({"/boX/f": b"1", "/bo/g": b"22"})
+    assert reply(server, LIST, data=b"/boX").data.split(b"\0")[:-1] == [b"Ff\t1"]
+    assert reply(server, LIST, data=b"/bo").data.split(b"\0")[:-1] == [b"Fg\t2"]

@@ -262,3 +262,16 @@ def test_a_files_identity_reads_its_content_up_to_16_mib(tmp_path: Path) -> None
     path.write_bytes(data + b"!")
     larger = file_identity(str(path))
     assert larger is not None and larger[2] == len(data) + 1 and larger[5] != hash(data + b"!")
+
+
+def test_a_file_that_fails_while_being_read_is_named_with_the_systems_reason() -> None:
+    """/proc/self/mem opens as a regular file but reading its first page fails (EIO): the
+    error names the file and the reason, as every other unreadable store."""
+    from px4params.errors import StoreFileError
+    from px4params.store.session import file_identity
+
+    if not os.path.exists("/proc/self/mem"):
+        pytest.skip("no /proc/self/mem here (Linux's procfs)")
+    with pytest.raises(StoreFileError) as refused:
+        file_identity("/proc/self/mem")
+    assert str(refused.value) == "/proc/self/mem: cannot read: Input/output error"
