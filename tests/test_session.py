@@ -275,3 +275,56 @@ def test_a_file_that_fails_while_being_read_is_named_with_the_systems_reason() -
     with pytest.raises(StoreFileError) as refused:
         file_identity("/proc/self/mem")
     assert str(refused.value) == "/proc/self/mem: cannot read: Input/output error"
+
+
+def _refusal(store_file: Path, here: object, there: object) -> str:
+    """The conflict message when this writer does ``here`` and another writer, saving first,
+    did ``there`` (each a function of a Store); the file keeps the other writer's save."""
+    from px4params.errors import StoreConflictError
+
+    session, other = open_session(str(store_file), None), open_session(str(store_file), None)
+    there(other.store)  # type: ignore[operator]
+    other.save()
+    saved = store_file.read_bytes()
+    with pytest.raises(StoreConflictError) as refused:
+        session.commit(lambda: here(session.store))  # type: ignore[operator]
+    assert store_file.read_bytes() == saved
+    return str(refused.value)
+
+
+def test_an_instance_removed_here_but_changed_there_is_refused(store_file: Path) -> None:
+    message = _refusal(
+        store_file,
+        lambda s: s.remove("INA238#0"),
+        lambda s: s.set("INA238#0.current", 175),
+    )
+    assert message == (
+        f"INA238#0 was removed here but changed by another writer since this writer read "
+        f"{store_file}; nothing was saved"
+    )
+
+
+def test_a_default_changed_by_both_is_refused_naming_the_default(store_file: Path) -> None:
+    message = _refusal(
+        store_file,
+        lambda s: s.set_default("INA238#0.current", 120),
+        lambda s: s.set_default("INA238#0.current", 130),
+    )
+    assert message == (
+        f"default of INA238#0.current was changed here and by another writer since this "
+        f"writer read {store_file}; nothing was saved"
+    )
+
+
+def _set_both(store: px4params.Store, current: int, address: int) -> None:
+    store.set("INA238#0.current", current)
+    store.set("INA238#0.bus.i2c.address", address)
+
+
+def test_several_conflicts_are_counted_after_the_first(store_file: Path) -> None:
+    two = _refusal(store_file, lambda s: _set_both(s, 160, 0x46), lambda s: _set_both(s, 170, 0x47))
+    # the first in the value's leaf order (the bus before the current), then how many more
+    assert two == (
+        f"INA238#0.bus.i2c.address was changed here and by another writer since this writer read "
+        f"{store_file} (and 1 more); nothing was saved"
+    )
