@@ -260,3 +260,16 @@ def test_a_folder_whose_name_ends_in_x_lists_its_own_files() -> None:
     server = MavftpServer({"/boX/f": b"1", "/bo/g": b"22"})
     assert reply(server, LIST, data=b"/boX").data.split(b"\0")[:-1] == [b"Ff\t1"]
     assert reply(server, LIST, data=b"/bo").data.split(b"\0")[:-1] == [b"Fg\t2"]
+
+
+def test_an_entry_that_does_not_fit_ends_the_listing_there() -> None:
+    # The client asks again from the number of entries it got: a later, shorter entry must
+    # not be slipped in after one left out (it would be listed twice, the other never).
+    files = {f"/d/name_{n:02}": b"x" for n in range(21)}  # 21 x 11 bytes: 231
+    files["/d/name_21_long"] = b"x"  # 16 bytes: does not fit
+    files["/d/zz"] = b"x"  # "Fzz\t1" and its NUL: 6 bytes, would fit
+    server = MavftpServer(files)
+    first = reply(server, LIST, data=b"/d").data.split(b"\0")[:-1]
+    assert len(first) == 21 and first[-1] == b"Fname_20\t1"
+    rest = reply(server, LIST, data=b"/d", offset=21).data.split(b"\0")[:-1]
+    assert rest == [b"Fname_21_long\t1", b"Fzz\t1"]

@@ -328,3 +328,24 @@ def test_several_conflicts_are_counted_after_the_first(store_file: Path) -> None
         f"INA238#0.bus.i2c.address was changed here and by another writer since this writer read "
         f"{store_file} (and 1 more); nothing was saved"
     )
+
+
+def test_a_removal_and_a_change_here_both_go_on_top_of_another_writers_save(
+    store_file: Path,
+) -> None:
+    setup = open_session(str(store_file), None)
+    setup.store.add("INA238#1")
+    setup.save()
+    session, other = open_session(str(store_file), None), open_session(str(store_file), None)
+    other.store.set("SYS_AUTOSTART", 4001)
+    other.save()
+
+    def change() -> None:
+        session.store.remove("INA238#0")
+        session.store.set("INA238#1.current", 180)
+
+    session.commit(change)
+    saved = px4params.Store.load(store_file, classic=BUNDLED_CLASSIC)
+    assert saved.instances("INA238") == ["INA238#1"]
+    assert saved.get("INA238#1.current") == 180
+    assert saved.get("SYS_AUTOSTART") == 4001
