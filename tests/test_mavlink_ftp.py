@@ -273,3 +273,14 @@ def test_an_entry_that_does_not_fit_ends_the_listing_there() -> None:
     assert len(first) == 21 and first[-1] == b"Fname_20\t1"
     rest = reply(server, LIST, data=b"/d", offset=21).data.split(b"\0")[:-1]
     assert rest == [b"Fname_21_long\t1", b"Fzz\t1"]
+
+
+def test_plain_acks_and_naks_carry_no_offset_and_only_their_data() -> None:
+    server = MavftpServer({"/f": b"abc"})
+    opened = reply(server, OPEN_RO, data=b"/f")
+    assert (opened.offset, opened.burst_complete, opened.data) == (0, 0, struct.pack("<I", 3))
+    for got in (reply(server, TERMINATE, session=opened.session), reply(server, RESET)):
+        assert (got.opcode, got.offset, got.burst_complete, got.data) == (ACK, 0, 0, b"")
+    missing = reply(server, OPEN_RO, data=b"/none", offset=77)
+    assert (missing.opcode, missing.offset, missing.burst_complete) == (NAK, 0, 0)
+    assert missing.data == bytes([NOT_FOUND])

@@ -349,3 +349,46 @@ def test_a_removal_and_a_change_here_both_go_on_top_of_another_writers_save(
     assert saved.instances("INA238") == ["INA238#1"]
     assert saved.get("INA238#1.current") == 180
     assert saved.get("SYS_AUTOSTART") == 4001
+
+
+def test_a_classic_parameter_changed_by_both_is_refused(store_file: Path) -> None:
+    message = _refusal(
+        store_file,
+        lambda s: s.set("SYS_AUTOSTART", 4001),
+        lambda s: s.set("SYS_AUTOSTART", 4002),
+    )
+    assert message == (
+        f"SYS_AUTOSTART was changed here and by another writer since this writer read "
+        f"{store_file}; nothing was saved"
+    )
+
+
+def _add_with_current(store: px4params.Store, current: int) -> None:
+    store.add("INA238#1")
+    store.set("INA238#1.current", current)
+
+
+def test_an_instance_added_by_both_with_other_values_is_refused(store_file: Path) -> None:
+    message = _refusal(
+        store_file, lambda s: _add_with_current(s, 160), lambda s: _add_with_current(s, 170)
+    )
+    assert message == (
+        f"INA238#1 was added here and by another writer since this writer read "
+        f"{store_file}; nothing was saved"
+    )
+
+
+def test_a_leaf_changed_inside_the_variant_this_writer_replaced_is_refused(
+    store_file: Path,
+) -> None:
+    """The other writer changed the I2C address; this one switched the bus to SPI: the
+    address would be lost without a word, so the switch is refused."""
+    message = _refusal(
+        store_file,
+        lambda s: s.set("INA238#0.bus._tag", 1),
+        lambda s: s.set("INA238#0.bus.i2c.address", 0x46),
+    )
+    assert message == (
+        f"INA238#0.bus.i2c.address was changed here and by another writer since this writer "
+        f"read {store_file}; nothing was saved"
+    )
