@@ -22,6 +22,8 @@
 #                           stopped); the first full run after it starts from the baseline's
 #                           results and tests again only its survivors and what it left
 #   MUTATION_FRESH=1        forget the target's earlier results (kept in target/mutation)
+#   MUTATION_REPORT_ONLY=1  test nothing: count the kept results again (with BASELINE=1, the
+#                           baseline's), e.g. after scripts/mutation-equivalent.txt changed
 #   MUTATION_RUST_FILES="crates/px4params-core/src/scalar.rs crates/px4params-core/src/bits.rs"
 #                           rust-core: mutate only these files (cargo-mutants --file, paths
 #                           from the repository root); default: the whole crate
@@ -130,13 +132,21 @@ python_target() {
   [ "${MUTATION_FRESH:-0}" = 1 ] && rm -f "$cache"
   rm -f .mutmut-cache
   [ -f "$cache" ] && cp "$cache" .mutmut-cache
-  trap restore EXIT
-  trap 'restore; exit 130' INT TERM
-  timeout --signal=INT --kill-after=60 "$(budget_for "$name")" mutmut run --paths-to-mutate "$paths" --tests-dir "$tests_dir" \
-    --runner "python -m pytest -x -q -p no:cacheprovider $tests" \
-    --simple-output --no-progress >"$OUT/$name.log" 2>&1 || true
-  restore
-  trap - EXIT INT TERM
+  if [ "${MUTATION_REPORT_ONLY:-0}" = 1 ]; then
+    if [ ! -f .mutmut-cache ]; then
+      echo "$name: no results kept in $cache: nothing to report"
+      return
+    fi
+  else
+    trap restore EXIT
+    trap 'restore; exit 130' INT TERM
+    timeout --signal=INT --kill-after=60 "$(budget_for "$name")" mutmut run \
+      --paths-to-mutate "$paths" --tests-dir "$tests_dir" \
+      --runner "python -m pytest -x -q -p no:cacheprovider $tests" \
+      --simple-output --no-progress >"$OUT/$name.log" 2>&1 || true
+    restore
+    trap - EXIT INT TERM
+  fi
   python - "$name" "$OUT/$name.txt" "${cache%.mutmut-cache}.figures" <<'EOF'
 """Counts the cache's mutants and lists each survivor as path, original line, mutated line;
 writes the figures as one tab-separated line for the table at the end."""

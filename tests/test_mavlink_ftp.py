@@ -49,6 +49,7 @@ def replies(
         request(opcode, seq=seq, session=session, offset=offset, data=data)
     ):
         assert len(payload) == PAYLOAD
+        assert payload[7] == 0  # the padding byte, zero as PX4 sends it
         seq_, session_, op, size, req, burst_complete, _, offset_ = HEADER.unpack_from(payload)
         out.append(Reply(seq_, session_, op, req, burst_complete, offset_, payload[12 : 12 + size]))
     return out
@@ -284,3 +285,9 @@ def test_plain_acks_and_naks_carry_no_offset_and_only_their_data() -> None:
     missing = reply(server, OPEN_RO, data=b"/none", offset=77)
     assert (missing.opcode, missing.offset, missing.burst_complete) == (NAK, 0, 0)
     assert missing.data == bytes([NOT_FOUND])
+
+
+def test_a_path_that_is_not_utf8_is_not_found_not_an_exception() -> None:
+    server = MavftpServer({"/f": b"1"})
+    for opcode in (OPEN_RO, LIST, CRC32):
+        assert reply(server, opcode, data=b"/\xff\xfe").data == bytes([NOT_FOUND]), opcode
