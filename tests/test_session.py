@@ -392,3 +392,16 @@ def test_a_leaf_changed_inside_the_variant_this_writer_replaced_is_refused(
         f"INA238#0.bus.i2c.address was changed here and by another writer since this writer "
         f"read {store_file}; nothing was saved"
     )
+
+
+def test_a_leaf_changed_the_same_way_by_both_is_no_conflict(store_file: Path) -> None:
+    """Both set the address to 0x46; only this writer changed the current: both kept."""
+    session, other = open_session(str(store_file), None), open_session(str(store_file), None)
+    other.store.set("INA238#0.bus.i2c.address", 0x46)
+    other.save()
+    session.store.set("INA238#0.bus.i2c.address", 0x46)
+    session.store.set("INA238#0.current", 300)
+    session.save()
+    saved = px4params.Store.load(store_file, classic=BUNDLED_CLASSIC)
+    assert saved.get("INA238#0.bus.i2c.address") == 0x46
+    assert saved.get("INA238#0.current") == 300
