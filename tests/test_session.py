@@ -405,3 +405,28 @@ def test_a_leaf_changed_the_same_way_by_both_is_no_conflict(store_file: Path) ->
     saved = px4params.Store.load(store_file, classic=BUNDLED_CLASSIC)
     assert saved.get("INA238#0.bus.i2c.address") == 0x46
     assert saved.get("INA238#0.current") == 300
+
+
+def test_a_type_ending_in_a_dynamic_array_is_merged_leaf_by_leaf(tmp_path: Path) -> None:
+    """A store holds values without the tail array optimisation (DroneCAN's TAO applies to a
+    message's last dynamic array only on the wire): merging must read them so. One writer
+    changes ``a``, the other the second element of the trailing array: both kept."""
+    root = tmp_path / "tst"
+    root.mkdir()
+    (root / "Tail.1.0.dsdl").write_text(
+        "# Tail\n# @max_instances 2\n\nuint4 p_version\nuint8 a\nuint8[<=3] tail\n@sealed\n"
+    )
+    dsdl = [str(root)]
+    schema = px4params.load_schema(dsdl, use_env=False, cache_dir=tmp_path / "cache")
+    store = px4params.Store(schema, classic=BUNDLED_CLASSIC)
+    store.add("TAIL#0")
+    store.set("TAIL#0", {"a": 1, "tail": [1, 2]})
+    path = str(tmp_path / "vehicle.store")
+    store.save(path)
+    here, there = open_session(path, None, dsdl), open_session(path, None, dsdl)
+    there.store.set("TAIL#0.a", 7)
+    there.save()
+    here.store.set("TAIL#0.tail[1]", 9)
+    here.save()
+    saved = open_session(path, None, dsdl).store.get("TAIL#0")
+    assert (saved["a"], saved["tail"]) == (7, [1, 9])
