@@ -47,3 +47,25 @@ def test_a_proposal_of_a_configuration_made_by_hand_reports_it() -> None:
     assert report.startswith("Migration of bench.params (QGC .params, 1 parameters)\n")
     assert "Unchanged: 1 other parameters stay classic parameters" in report
     assert proposal.as_dict()["not_carried"] == []
+
+
+def test_a_logs_details_and_version_are_its_information_fields() -> None:
+    """sample_log_small.ulg, read by hand with pyulog: ver_hw CUBEPILOT_CUBEORANGE,
+    ver_sw_branch v1.11.2_w_rc_sysid, ver_sw 8583f1da..., ver_sw_release 0x010B0200 (PX4's
+    encoding: major, minor, patch, type bytes): PX4 1.11.2."""
+    from shared_data import SAMPLE_LOG, shared_file
+
+    config = migrate.read_config(shared_file(SAMPLE_LOG))
+    assert config.details == [
+        "ver_hw CUBEPILOT_CUBEORANGE",
+        "ver_sw_branch v1.11.2_w_rc_sysid",
+        "ver_sw 8583f1da30b63154d6ba0bc187d86135dfe33cf9",
+    ]
+    assert (config.release, config.version) == (0x010B0200, (1, 11, 2))
+    assert config.hardware == "CUBEPILOT_CUBEORANGE"
+
+
+def test_a_folder_given_as_the_configuration_is_named_with_the_reason(tmp_path: Path) -> None:
+    with pytest.raises(migrate.MigrationError) as refused:
+        migrate.read_config(tmp_path)
+    assert str(refused.value) == f"{tmp_path}: cannot read: is a folder, not a file"
