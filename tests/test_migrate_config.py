@@ -69,3 +69,17 @@ def test_a_folder_given_as_the_configuration_is_named_with_the_reason(tmp_path: 
     with pytest.raises(migrate.MigrationError) as refused:
         migrate.read_config(tmp_path)
     assert str(refused.value) == f"{tmp_path}: cannot read: is a folder, not a file"
+
+
+def test_without_the_autopilots_component_the_lowest_is_read(tmp_path: Path) -> None:
+    """The autopilot is MAVLink component 1 (MAV_COMP_ID_AUTOPILOT1); a file without it (a
+    second autopilot, 2, and a gimbal, 154) is read from its lowest component."""
+    path = tmp_path / "vehicle.params"
+    path.write_text(
+        "# Onboard parameters for Vehicle 1\n"
+        "1\t154\tGMB_MODE\t2\t6\n1\t2\tSYS_AUTOSTART\t4001\t6\n1\t2\tMC_ROLL_P\t6.5\t9\n"
+    )
+    config = migrate.read_config(path)
+    assert config.params == {"SYS_AUTOSTART": 4001, "MC_ROLL_P": 6.5}
+    assert config.details[0] == "component 2"
+    assert config.skipped == ["component 154: 1 parameters (not the autopilot's)"]
