@@ -83,3 +83,17 @@ def test_without_the_autopilots_component_the_lowest_is_read(tmp_path: Path) -> 
     assert config.params == {"SYS_AUTOSTART": 4001, "MC_ROLL_P": 6.5}
     assert config.details[0] == "component 2"
     assert config.skipped == ["component 154: 1 parameters (not the autopilot's)"]
+
+
+def test_a_log_with_changed_parameters_is_read_at_their_last_values(tmp_path: Path) -> None:
+    from test_devid import write_ulog
+
+    log = write_ulog(
+        tmp_path / "changed.ulg",
+        {"SYS_AUTOSTART": 4001, "MC_ROLL_P": 6.5, "SENS_EN_INA238": 0},
+        {"SYS_AUTOSTART": 4002, "SENS_EN_INA238": 1},
+    )
+    config = migrate.read_config(log)
+    assert config.params == {"SYS_AUTOSTART": 4002, "MC_ROLL_P": 6.5, "SENS_EN_INA238": 1}
+    assert config.details == ["last values of 2 parameters changed during the log"]
+    assert (config.release, config.version, config.hardware) == (None, None, None)
