@@ -430,3 +430,80 @@ def test_a_type_ending_in_a_dynamic_array_is_merged_leaf_by_leaf(tmp_path: Path)
     here.save()
     saved = open_session(path, None, dsdl).store.get("TAIL#0")
     assert (saved["a"], saved["tail"]) == (7, [1, 9])
+
+
+def test_a_batch_of_a_session_opened_with_an_output_prints_there(
+    store_file: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    script = tmp_path / "hello.txt"
+    script.write_text("echo hello\n")
+    out = io.StringIO()
+    session = open_session(str(store_file), None, out=out)
+    assert run_file(str(script), session, keep_going=False, err=io.StringIO()).errors == []
+    assert (out.getvalue(), capsys.readouterr().out) == ("hello\n", "")
+
+
+def test_the_classic_parameters_given_are_the_ones_used(store_file: Path, tmp_path: Path) -> None:
+    """``--classic FILE``: a parameters.json of PX4's format (QGC's component metadata)."""
+    classic = tmp_path / "parameters.json"
+    classic.write_text(
+        '{"version": 1, "parameters": [{"name": "BENCH_ONLY", "type": "Int32", "default": 7}]}'
+    )
+    session = open_session(str(store_file), str(classic))
+    assert session.store.get("BENCH_ONLY") == 7
+
+
+def test_a_damaged_store_is_refused_with_the_way_back(store_file: Path) -> None:
+    """A store that cannot be read is an error naming it (never an empty store that the next
+    save would write over it), with the previous save's ``param load`` when there is one."""
+    from px4params.errors import StoreFileError
+
+    store_file.write_bytes(b"not a store at all")
+    with pytest.raises(StoreFileError) as refused:
+        open_session(str(store_file), None)
+    backup = f"{store_file}.bak"
+    hint = f"; the previous save is in {backup}: px4params param load {backup}"
+    assert str(refused.value) == (
+        f"{store_file}: not a px4params store file (no PX4P header){hint} (at byte 0)"
+    )
+    os.remove(backup)
+    with pytest.raises(StoreFileError) as without:
+        open_session(str(store_file), None)
+    assert str(without.value) == (
+        f"{store_file}: not a px4params store file (no PX4P header) (at byte 0)"
+    )
+    # `param load FILE` asks for an empty store instead: the way back
+    empty = open_session(str(store_file), None, start_empty_if_unreadable=True).store
+    assert empty.instances("INA238") == []
+
+
+def test_a_store_path_under_a_file_is_an_error_not_a_new_store(store_file: Path) -> None:
+    from px4params.errors import StoreFileError
+
+    with pytest.raises(StoreFileError) as refused:
+        open_session(f"{store_file}/vehicle.store", None)
+    assert str(refused.value) == f"{store_file}/vehicle.store: cannot read: Not a directory"
+
+
+def test_a_lock_taken_again_by_its_thread_is_held_until_the_outer_block_ends(
+    store_file: Path,
+) -> None:
+    """StoreLock nests: leaving the inner block must not release the file's flock."""
+    import fcntl
+
+    from px4params.store.session import StoreLock
+
+    def free() -> bool:
+        with open(f"{store_file}.lock", "a") as other:  # another open file: flock applies
+            try:
+                fcntl.flock(other.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                return False
+            fcntl.flock(other.fileno(), fcntl.LOCK_UN)
+            return True
+
+    with StoreLock(str(store_file)):
+        with StoreLock(str(store_file)):
+            assert not free()
+        assert not free()  # the outer block still holds it
+    assert free()
