@@ -97,3 +97,22 @@ def test_a_log_with_changed_parameters_is_read_at_their_last_values(tmp_path: Pa
     assert config.params == {"SYS_AUTOSTART": 4002, "MC_ROLL_P": 6.5, "SENS_EN_INA238": 1}
     assert config.details == ["last values of 2 parameters changed during the log"]
     assert (config.release, config.version, config.hardware) == (None, None, None)
+
+
+def test_only_the_header_before_the_first_row_describes_the_file(tmp_path: Path) -> None:
+    """QGC writes ``# Stack``, ``# Vehicle``, ``# Version`` at the top; a ``#`` line among the
+    rows (a user's note) is no header: it neither changes the version nor refuses the file."""
+    path = tmp_path / "vehicle.params"
+    path.write_text(
+        "# Onboard parameters for Vehicle 1\n#\n# Stack: PX4 Pro\n# Vehicle: Multi-Rotor\n"
+        "# Version: 1.14.0 dev\n#\n# Vehicle-Id Component-Id Name Value Type\n"
+        "1\t1\tSYS_AUTOSTART\t4001\t6\n"
+        "# Stack: ArduPilot\n# Version: 4.5.1\n"
+        "1\t1\tMC_ROLL_P\t6.5\t9\n"
+    )
+    config = migrate.read_config(path)
+    assert config.version == (1, 14, 0)
+    assert config.details == [
+        "component 1", "Stack: PX4 Pro", "Vehicle: Multi-Rotor", "Version: 1.14.0 dev",
+    ]  # fmt: skip
+    assert config.params == {"SYS_AUTOSTART": 4001, "MC_ROLL_P": 6.5}
