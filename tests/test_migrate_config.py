@@ -116,3 +116,26 @@ def test_only_the_header_before_the_first_row_describes_the_file(tmp_path: Path)
         "component 1", "Stack: PX4 Pro", "Vehicle: Multi-Rotor", "Version: 1.14.0 dev",
     ]  # fmt: skip
     assert config.params == {"SYS_AUTOSTART": 4001, "MC_ROLL_P": 6.5}
+
+
+def test_a_param_set_list_reads_every_set_line_and_counts_the_others(tmp_path: Path) -> None:
+    """An airframe's syntax: ``param set`` / ``param set-default NAME VALUE``; other shell
+    lines are not run, only counted; integers stay integers (PX4's INT32), the rest floats."""
+    path = tmp_path / "vehicle.airframe"
+    path.write_text(
+        "# an airframe\nparam set-default SYS_AUTOSTART 4001\necho starting\n"
+        "param set MC_ROLL_P 6.5  # tuned\nif param compare X 1\nparam set SENS_EN_INA238 1\n"
+    )
+    config = migrate.read_config(path)
+    assert config.kind == "param set list"
+    assert config.params == {"SYS_AUTOSTART": 4001, "MC_ROLL_P": 6.5, "SENS_EN_INA238": 1}
+    assert [type(v) for v in config.params.values()] == [int, float, int]
+    assert config.skipped == ["2 other lines (not 'param set'): not read"]
+
+
+def test_a_param_list_without_set_lines_is_refused(tmp_path: Path) -> None:
+    path = tmp_path / "vehicle.airframe"
+    path.write_text("param show SYS_AUTOSTART\nparam save\n")
+    with pytest.raises(migrate.MigrationError) as refused:
+        migrate.read_config(path)
+    assert str(refused.value) == f"{path}: no 'param set' lines"
