@@ -46,7 +46,13 @@ def test_a_proposal_of_a_configuration_made_by_hand_reports_it() -> None:
     report = proposal.report()
     assert report.startswith("Migration of bench.params (QGC .params, 1 parameters)\n")
     assert "Unchanged: 1 other parameters stay classic parameters" in report
-    assert proposal.as_dict()["not_carried"] == []
+    assert "\nNot known, assumed: none\n" in report and "  board: not known\n" in report
+    document = proposal.as_dict()
+    assert (document["not_carried"], document["assumptions"], document["board"]) == ([], [], None)
+    # an instance proposed by hand, its indices left to be filled in
+    proposal.instances.append(migrate.ProposedInstance("INA238#0", "on the bench", {}))
+    assert proposal.as_dict()["instances"][0]["indices"] == {}
+    assert "\n# INA238#0: on the bench\nparam add INA238#0\n" in proposal.airframe()
 
 
 def test_a_logs_details_and_version_are_its_information_fields() -> None:
