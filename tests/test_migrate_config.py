@@ -145,3 +145,58 @@ def test_a_param_list_without_set_lines_is_refused(tmp_path: Path) -> None:
     with pytest.raises(migrate.MigrationError) as refused:
         migrate.read_config(path)
     assert str(refused.value) == f"{path}: no 'param set' lines"
+
+
+def test_a_proposals_airframe_and_json_written_out_by_hand() -> None:
+    """The airframe's lines (``param add``, then ``param set-default NAME[k] VALUE`` under a
+    ``# [k] path`` comment) and the JSON's values: booleans as 0/1, floats to 9 significant
+    digits, addresses in hex; an infinity, which JSON cannot hold, as text."""
+    config = migrate.OldConfig(
+        "/logs/vehicle.params", "QGC .params", {"A": 1, "B": 2}, version=(1, 14, 0)
+    )
+    proposal = migrate.Proposal(config, table="px4-v1.14")
+    assert proposal.airframe() == (
+        "# Device manifest migrated by px4params from vehicle.params (QGC .params)\n"
+        "# Review before use: see the migration report.\n"
+        "# No device could be carried over.\n"
+    )
+    instance = migrate.ProposedInstance(
+        "TST#0",
+        "CAL_MAG0_ID = 1: by hand",
+        {"bus.i2c.address": 0x1E, "enabled": True, "off": False, "gain": 1 / 3, "limit": 300},
+        notes=["a note"],
+        indices={"bus.i2c.address": 4, "enabled": 5, "off": 6, "gain": 7, "limit": 8},
+    )
+    proposal.instances.append(instance)
+    proposal.used.add("A")
+    assert proposal.airframe().splitlines()[2:] == [
+        "",
+        "# TST#0: CAL_MAG0_ID = 1: by hand",
+        "param add TST#0",
+        "# [4] bus.i2c.address",
+        "param set-default TST#0[4] 0x1E",
+        "# [5] enabled",
+        "param set-default TST#0[5] 1",
+        "# [6] off",
+        "param set-default TST#0[6] 0",
+        "# [7] gain",
+        "param set-default TST#0[7] 0.333333333",
+        "# [8] limit",
+        "param set-default TST#0[8] 300",
+    ]
+    report = proposal.report()
+    assert (
+        "Instances proposed:\n  TST#0: CAL_MAG0_ID = 1: by hand\n"
+        "  bus.i2c.address = 0x1E, enabled = 1, off = 0, gain = 0.333333333, limit = 300\n"
+        "  note: a note\n"
+    ) in report
+    assert report.endswith(
+        "Unchanged: 1 other parameters stay classic parameters (calibration, tuning, ...); "
+        "the manifest does not replace them.\n"
+    )
+    instance.values["gain"] = float("inf")
+    document = proposal.as_dict()
+    assert document["version"] == "1.14.0" and document["table"] == "px4-v1.14"
+    assert document["instances"][0]["values"]["gain"] == "inf"
+    assert document["instances"][0]["values"]["limit"] == 300
+    assert document["unchanged"] == 1 and document["parameters"] == 2
