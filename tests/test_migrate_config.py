@@ -187,8 +187,8 @@ def test_a_proposals_airframe_and_json_written_out_by_hand() -> None:
     report = proposal.report()
     assert (
         "Instances proposed:\n  TST#0: CAL_MAG0_ID = 1: by hand\n"
-        "  bus.i2c.address = 0x1E, enabled = 1, off = 0, gain = 0.333333333, limit = 300\n"
-        "  note: a note\n"
+        "    bus.i2c.address = 0x1E, enabled = 1, off = 0, gain = 0.333333333, limit = 300\n"
+        "    note: a note\n"
     ) in report
     assert report.endswith(
         "Unchanged: 1 other parameters stay classic parameters (calibration, tuning, ...); "
