@@ -200,3 +200,66 @@ def test_a_proposals_airframe_and_json_written_out_by_hand() -> None:
     assert document["instances"][0]["values"]["gain"] == "inf"
     assert document["instances"][0]["values"]["limit"] == 300
     assert document["unchanged"] == 1 and document["parameters"] == 2
+
+
+def test_a_proposals_whole_report_written_out_by_hand() -> None:
+    config = migrate.OldConfig(
+        "vehicle.ulg", "ULog", {"A": 1, "B": 2, "C": 3}, details=["ver_hw X", "ver_sw y"],
+        skipped=["component 100: 1 parameters (not the autopilot's)"],
+    )  # fmt: skip
+    proposal = migrate.Proposal(
+        config,
+        table="px4-v1.11",
+        instances=[
+            migrate.ProposedInstance(
+                "INA238#0",
+                "SENS_EN_INA238 = 1",
+                {"current": 300, "shunt": 0.5},
+                ["a note"],
+                indices={"current": 5, "shunt": 6},
+            )
+        ],
+        left_out=[migrate.LeftOut("CAL_MAG1_ID", "IST8310", "board", "CAL_MAG1_ID: the board's")],
+        assumptions=["bus 1 assumed"],
+        board="px4_fmu-v5",
+        replaced=["SENS_EN_INA238"],
+        disabled=["SENS_EN_INA226", "SENS_EN_INA228"],
+        not_carried=["INA238_CONFIG = 3: no field"],
+        used={"A"},
+    )
+    assert proposal.report() == (
+        "Migration of vehicle.ulg (ULog, 3 parameters)\n"
+        "  ver_hw X\n"
+        "  ver_sw y\n"
+        "  device IDs decoded with the px4-v1.11 devtype table\n"
+        "  board: px4_fmu-v5\n"
+        "\n"
+        "Instances proposed:\n"
+        "  INA238#0: SENS_EN_INA238 = 1\n"
+        "    current = 300, shunt = 0.5\n"
+        "    note: a note\n"
+        "\n"
+        "Sensors found but not in the manifest:\n"
+        "  CAL_MAG1_ID: the board's\n"
+        "\n"
+        "Not known, assumed:\n"
+        "  bus 1 assumed\n"
+        "\n"
+        "Replaced by the manifest:\n"
+        "  SENS_EN_INA238\n"
+        "  not enabled, nothing to carry over: SENS_EN_INA226, SENS_EN_INA228\n"
+        "\n"
+        "Not carried over:\n"
+        "  INA238_CONFIG = 3: no field\n"
+        "  component 100: 1 parameters (not the autopilot's)\n"
+        "\n"
+        "Unchanged: 2 other parameters stay classic parameters (calibration, tuning, ...); the "
+        "manifest does not replace them.\n"
+    )
+    assert proposal.as_dict()["left_out"] == [
+        {"found": "CAL_MAG1_ID", "device": "IST8310", "reason": "board",
+         "line": "CAL_MAG1_ID: the board's"},
+    ]  # fmt: skip
+    assert proposal.as_dict()["not_carried"] == [
+        "INA238_CONFIG = 3: no field", "component 100: 1 parameters (not the autopilot's)",
+    ]  # fmt: skip
