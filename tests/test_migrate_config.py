@@ -256,10 +256,30 @@ def test_a_proposals_whole_report_written_out_by_hand() -> None:
         "Unchanged: 2 other parameters stay classic parameters (calibration, tuning, ...); the "
         "manifest does not replace them.\n"
     )
-    assert proposal.as_dict()["left_out"] == [
-        {"found": "CAL_MAG1_ID", "device": "IST8310", "reason": "board",
-         "line": "CAL_MAG1_ID: the board's"},
-    ]  # fmt: skip
-    assert proposal.as_dict()["not_carried"] == [
-        "INA238_CONFIG = 3: no field", "component 100: 1 parameters (not the autopilot's)",
-    ]  # fmt: skip
+    document = proposal.as_dict()
+    assert document == {
+        "source": "vehicle.ulg",
+        "kind": "ULog",
+        "parameters": 3,
+        "table": "px4-v1.11",
+        "board": "px4_fmu-v5",
+        "version": None,
+        "assumptions": ["bus 1 assumed"],
+        "left_out": [
+            {"found": "CAL_MAG1_ID", "device": "IST8310", "reason": "board",
+             "line": "CAL_MAG1_ID: the board's"},
+        ],
+        "instances": [
+            {"name": "INA238#0", "origin": "SENS_EN_INA238 = 1",
+             "values": {"current": 300, "shunt": 0.5}, "indices": {"current": 5, "shunt": 6},
+             "notes": ["a note"]},
+        ],
+        "not_in_manifest": ["CAL_MAG1_ID: the board's"],
+        "replaced": ["SENS_EN_INA238"],
+        "disabled": ["SENS_EN_INA226", "SENS_EN_INA228"],
+        "not_carried": [
+            "INA238_CONFIG = 3: no field", "component 100: 1 parameters (not the autopilot's)",
+        ],
+        "unchanged": 2,
+        "airframe": proposal.airframe(),
+    }  # fmt: skip
