@@ -118,7 +118,7 @@ python_target() {
   # tests its survivors again.
   local tests_dir=tests cache
   if [ "${MUTATION_BASELINE:-0}" = 1 ]; then
-    tests=$(echo "$tests" | sed -E "s# tests/($NEW_TESTS)\.py##g")
+    tests=$(echo "$tests" | sed -E "s#(^| )tests/($NEW_TESTS)\.py##g")
     tests_dir=$(mktemp -d)
     for f in $tests; do
       case $f in tests/*.py) cp "$f" "$tests_dir/" ;; esac
