@@ -507,3 +507,23 @@ def test_a_lock_taken_again_by_its_thread_is_held_until_the_outer_block_ends(
             assert not free()
         assert not free()  # the outer block still holds it
     assert free()
+
+
+def test_a_locked_session_holds_the_lock_for_its_block_only(store_file: Path) -> None:
+    import fcntl
+
+    from px4params.store.session import LockedSession
+
+    def free() -> bool:
+        with open(f"{store_file}.lock", "a") as other:
+            try:
+                fcntl.flock(other.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                return False
+            fcntl.flock(other.fileno(), fcntl.LOCK_UN)
+            return True
+
+    with LockedSession(str(store_file), None) as session:
+        assert session.store.get("INA238#0.current") == 150
+        assert not free()
+    assert free()
