@@ -4,8 +4,10 @@ goes, and that a run that changes nothing leaves the store file (and its backup)
 
 from __future__ import annotations
 
+import fcntl
 import io
 import os
+from collections.abc import Callable
 from pathlib import Path
 
 import px4params
@@ -25,6 +27,18 @@ def store_file(schema: px4params.Schema, tmp_path: Path) -> Path:
     store.set("INA238#0.current", 150)
     store.save(path)
     return path
+
+
+def _lock_is_free(store_file: Path) -> bool:
+    """Whether another open file of the store's lock could take it now (flock is per open
+    file, so this works within one process too)."""
+    with open(f"{store_file}.lock", "a") as other:
+        try:
+            fcntl.flock(other.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            return False
+        fcntl.flock(other.fileno(), fcntl.LOCK_UN)
+        return True
 
 
 def test_a_server_session_takes_the_file_as_it_is_now(
@@ -277,17 +291,21 @@ def test_a_file_that_fails_while_being_read_is_named_with_the_systems_reason() -
     assert str(refused.value) == "/proc/self/mem: cannot read: Input/output error"
 
 
-def _refusal(store_file: Path, here: object, there: object) -> str:
+def _refusal(
+    store_file: Path,
+    here: Callable[[px4params.Store], object],
+    there: Callable[[px4params.Store], object],
+) -> str:
     """The conflict message when this writer does ``here`` and another writer, saving first,
     did ``there`` (each a function of a Store); the file keeps the other writer's save."""
     from px4params.errors import StoreConflictError
 
     session, other = open_session(str(store_file), None), open_session(str(store_file), None)
-    there(other.store)  # type: ignore[operator]
+    there(other.store)
     other.save()
     saved = store_file.read_bytes()
     with pytest.raises(StoreConflictError) as refused:
-        session.commit(lambda: here(session.store))  # type: ignore[operator]
+        session.commit(lambda: here(session.store))
     assert store_file.read_bytes() == saved
     return str(refused.value)
 
@@ -489,41 +507,19 @@ def test_a_lock_taken_again_by_its_thread_is_held_until_the_outer_block_ends(
     store_file: Path,
 ) -> None:
     """StoreLock nests: leaving the inner block must not release the file's flock."""
-    import fcntl
-
     from px4params.store.session import StoreLock
-
-    def free() -> bool:
-        with open(f"{store_file}.lock", "a") as other:  # another open file: flock applies
-            try:
-                fcntl.flock(other.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
-            except BlockingIOError:
-                return False
-            fcntl.flock(other.fileno(), fcntl.LOCK_UN)
-            return True
 
     with StoreLock(str(store_file)):
         with StoreLock(str(store_file)):
-            assert not free()
-        assert not free()  # the outer block still holds it
-    assert free()
+            assert not _lock_is_free(store_file)
+        assert not _lock_is_free(store_file)  # the outer block still holds it
+    assert _lock_is_free(store_file)
 
 
 def test_a_locked_session_holds_the_lock_for_its_block_only(store_file: Path) -> None:
-    import fcntl
-
     from px4params.store.session import LockedSession
-
-    def free() -> bool:
-        with open(f"{store_file}.lock", "a") as other:
-            try:
-                fcntl.flock(other.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
-            except BlockingIOError:
-                return False
-            fcntl.flock(other.fileno(), fcntl.LOCK_UN)
-            return True
 
     with LockedSession(str(store_file), None) as session:
         assert session.store.get("INA238#0.current") == 150
-        assert not free()
-    assert free()
+        assert not _lock_is_free(store_file)
+    assert _lock_is_free(store_file)
