@@ -283,3 +283,18 @@ def test_a_proposals_whole_report_written_out_by_hand() -> None:
         "unchanged": 2,
         "airframe": proposal.airframe(),
     }  # fmt: skip
+
+
+def test_a_text_file_too_large_for_a_parameter_file_is_named_with_the_limit(
+    tmp_path: Path,
+) -> None:
+    """Not a ULog (no magic), and over the 16 MiB a parameter file may have: refused, one
+    line, before anything is read (a sparse file: nothing is written to disk)."""
+    path = tmp_path / "huge.params"
+    with open(path, "wb") as f:
+        f.truncate(16 * 1024 * 1024 + 1)
+    with pytest.raises(migrate.MigrationError) as refused:
+        migrate.read_config(path)
+    assert str(refused.value) == (
+        f"{path}: cannot read: too large for a parameter file (16 MiB; at most 16 MiB)"
+    )
