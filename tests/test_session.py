@@ -523,3 +523,31 @@ def test_a_locked_session_holds_the_lock_for_its_block_only(store_file: Path) ->
         assert session.store.get("INA238#0.current") == 150
         assert not _lock_is_free(store_file)
     assert _lock_is_free(store_file)
+
+
+def test_a_lock_file_that_is_a_symbolic_link_is_refused(store_file: Path, tmp_path: Path) -> None:
+    """The lock is opened without following a link: a link planted at FILE.lock (to a file
+    of someone else's) is an error naming it, not a lock taken on the link's target."""
+    from px4params.errors import StoreFileError
+
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.write_text("")
+    lock = Path(f"{store_file}.lock")
+    lock.symlink_to(elsewhere)
+    session = open_session(str(store_file), None)
+    with pytest.raises(StoreFileError) as refused:
+        session.save()
+    assert str(refused.value) == f"{lock}: cannot lock the store: Too many levels of symbolic links"
+
+
+def test_a_locked_session_of_a_damaged_store_is_an_error(store_file: Path) -> None:
+    from px4params.errors import StoreFileError
+    from px4params.store.session import LockedSession
+
+    store_file.write_bytes(b"not a store at all")
+    with (
+        pytest.raises(StoreFileError, match=r"not a px4params store file"),
+        LockedSession(str(store_file), None),
+    ):
+        pass
+    assert _lock_is_free(store_file)  # the lock is given back on the error
