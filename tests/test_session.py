@@ -551,3 +551,60 @@ def test_a_locked_session_of_a_damaged_store_is_an_error(store_file: Path) -> No
     ):
         pass
     assert _lock_is_free(store_file)  # the lock is given back on the error
+
+
+def _denied_writing_locks(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Opening a ``.lock`` file for writing fails as for a user without write access (the
+    tests run as root, whom the kernel never refuses); every other open is the real one."""
+    real_open = os.open
+
+    def open_as_user(path: str, flags: int, mode: int = 0o777, **kw: object) -> int:
+        if str(path).endswith(".lock") and flags & (os.O_RDWR | os.O_WRONLY):
+            raise PermissionError(13, "Permission denied", str(path))
+        return real_open(path, flags, mode)
+
+    monkeypatch.setattr(os, "open", open_as_user)
+
+
+def test_a_lock_file_the_user_may_only_read_is_locked_all_the_same(
+    store_file: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """flock needs no write access: a lock file made by another user (mode 0644) is opened
+    read-only and locked."""
+    from px4params.store.session import StoreLock
+
+    Path(f"{store_file}.lock").write_text("")
+    _denied_writing_locks(monkeypatch)
+    with StoreLock(str(store_file)):
+        assert not _lock_is_free(store_file)
+    assert _lock_is_free(store_file)
+
+
+def test_a_lock_file_the_user_may_not_make_is_an_error(
+    store_file: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from px4params.errors import StoreFileError
+    from px4params.store.session import StoreLock
+
+    lock = Path(f"{store_file}.lock")
+    _denied_writing_locks(monkeypatch)
+    with pytest.raises(StoreFileError) as refused, StoreLock(str(store_file)):
+        pass
+    assert str(refused.value) == f"{lock}: cannot lock the store: Permission denied"
+    assert not lock.exists()
+
+
+def test_a_read_only_lock_file_that_is_a_link_is_refused(
+    store_file: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from px4params.errors import StoreFileError
+    from px4params.store.session import StoreLock
+
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.write_text("")
+    lock = Path(f"{store_file}.lock")
+    lock.symlink_to(elsewhere)
+    _denied_writing_locks(monkeypatch)
+    with pytest.raises(StoreFileError) as refused, StoreLock(str(store_file)):
+        pass
+    assert str(refused.value) == f"{lock}: cannot lock the store: Permission denied"
