@@ -608,3 +608,43 @@ def test_a_read_only_lock_file_that_is_a_link_is_refused(
     with pytest.raises(StoreFileError) as refused, StoreLock(str(store_file)):
         pass
     assert str(refused.value) == f"{lock}: cannot lock the store: Permission denied"
+
+
+@pytest.mark.parametrize("kind", ["directory", "fifo"])
+def test_a_read_only_lock_that_is_no_regular_file_is_refused_at_once(
+    store_file: Path, monkeypatch: pytest.MonkeyPatch, kind: str
+) -> None:
+    """Opened read-only (no write access), a FIFO must not wait for a writer and a folder
+    must not be locked: each is named (a bound of 20 s stands for "never")."""
+    import threading
+
+    from px4params.errors import StoreFileError
+    from px4params.store.session import StoreLock
+
+    lock = Path(f"{store_file}.lock")
+    if kind == "directory":
+        lock.mkdir()
+    else:
+        os.mkfifo(lock)
+    _denied_writing_locks(monkeypatch)
+    outcome: list[BaseException | None] = []
+
+    def take() -> None:
+        try:
+            with StoreLock(str(store_file)):
+                outcome.append(None)
+        except BaseException as e:  # handed to the test's thread
+            outcome.append(e)
+
+    worker = threading.Thread(target=take, daemon=True)
+    worker.start()
+    worker.join(20)
+    if worker.is_alive():
+        with open(lock, "wb"):  # lets the blocked open go on, so the thread can end
+            pass
+        worker.join(20)
+        pytest.fail("a read-only FIFO lock waited for a writer")
+    (error,) = outcome
+    what = "a directory" if kind == "directory" else "not a regular file"
+    assert isinstance(error, StoreFileError)
+    assert str(error) == f"{lock}: cannot lock the store: {what}"
