@@ -356,7 +356,7 @@ fn write_elements(
 /// Decodes the value of `root` from `data` into a flat `sink` when the plan answers for it:
 /// the bits the value took, the sink holding its leaves as the general path leaves them.
 /// `None` (the sink untouched, nothing to report) for anything else: a type of another
-/// shape, a sink that is not a flat leaf list or has too little room, data cut short or with
+/// shape, data in pieces, a sink that is not a flat leaf list or has too little room, data cut short or with
 /// bytes after the value (unless allowed), an array longer than its maximum.
 #[inline(never)]
 pub fn decode<R: BitRead + ?Sized, K: Sink>(
@@ -367,6 +367,8 @@ pub fn decode<R: BitRead + ?Sized, K: Sink>(
     options: DecodeOptions,
 ) -> Option<usize> {
     let shape = Shape::of(layout, root, options.tao)?;
+    // Payloads in pieces are the general decoder's (its reader follows the pieces).
+    let data = data.contiguous()?;
     let bit_len = data.bit_len();
     let rest = bit_len.checked_sub(shape.bits)?;
     // The array's length and where the value ends, before the sink is asked for anything.

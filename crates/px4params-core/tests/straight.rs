@@ -441,3 +441,28 @@ fn the_plan_is_the_hosts() {
     const { assert!(!NoPlans::STRAIGHT && HostPlans::STRAIGHT) };
     assert_eq!(Active::STRAIGHT, cfg!(not(feature = "compact")));
 }
+
+/// Payloads in pieces (CAN frames) are the general decoder's: the plan declines them, and
+/// the dispatcher decodes them as the walk does.
+#[test]
+fn payloads_in_pieces_are_declined() {
+    use px4params_core::scatter::Scattered;
+    let mut l = OwnedLayout::default();
+    let node_status = common::node_status(&mut l);
+    let layout = l.as_layout();
+    let bytes = [0x39u8, 0x30, 0, 0, 0b1001_1101, 7, 0];
+    let pieces: [&[u8]; 2] = [&bytes[..3], &bytes[3..]];
+    let data = Scattered::new(&pieces[..]);
+    let mut leaves = [Scalar::Uint(0); 8];
+    let mut sink = LeafSink::new(&mut leaves);
+    let options = DecodeOptions::default();
+    assert_eq!(
+        straight::decode(&layout, node_status, &data, &mut sink, options),
+        None
+    );
+    assert_eq!(
+        codec::decode(&layout, node_status, &data, &mut sink, options),
+        Ok(56)
+    );
+    assert_eq!(sink.leaves(), [12345, 2, 3, 5, 7].map(Scalar::Uint));
+}
