@@ -12,6 +12,16 @@
 //! `battery/transfer_crc`: the CRC alone, over the payload in one piece.
 //! `node_status/encode|decode` and `file_read_response/encode|decode` (an empty read) are
 //! issue 18's small messages, whose fixed cost per call matters most.
+//! `battery/receive_decode` and `battery/receive_into_decode`: the frames checked and the
+//! value decoded (from the pieces, or from the payload gathered into a buffer), to set beside
+//! `battery/decode` (the flat decode).
+//!
+//! `instructions time ROUNDS ITERS OP` times OP instead, in ROUNDS rounds of ITERS calls,
+//! and prints `rust_ns c_ns` (medians of the rounds, nanoseconds per call). With `PX4PARAMS_CBENCH` naming the C baseline built as a shared library
+//! (`../shared/anchors/dronecan-c`, `c_setup`/`c_op`/`c_run`), each round runs the same
+//! message through the C code right after ours, interleaved in one process, so that this
+//! machine's drift falls on both alike (`c_ns` is `-` without it, or for an OP the baseline
+//! has no counterpart of).
 
 #[path = "../crates/px4params-core/tests/common/mod.rs"]
 mod common;
@@ -22,12 +32,15 @@ use px4params_core::codec::{
 use px4params_core::compile::OwnedLayout;
 use px4params_core::crc::crc16;
 use px4params_core::leaf::{get_leaf, Target};
+use px4params_core::scatter::Scattered;
 use px4params_core::store::{plan, table_slots, ParamDef, Slot, Store, Which};
 use px4params_core::table::{LeafSlot, LeafTable};
 use px4params_core::transfer::{frames, receive, receive_into};
 use px4params_core::value::{LeafSink, LeafSource};
 use px4params_core::Scalar;
+use std::ffi::{c_char, c_int, c_long, c_void, CString};
 use std::hint::black_box;
+use std::time::Instant;
 
 /// The transfer CRC's seed (a data type signature's CRC, as for any type).
 const SEED: u16 = 0xBEEF;
@@ -44,9 +57,119 @@ fn battery_leaves() -> Vec<Scalar> {
     leaves
 }
 
+/// The C baseline's op for one of ours (`cbench.c`'s `op_names`).
+fn c_op_name(op: &str) -> Option<&'static str> {
+    Some(match op {
+        "battery/encode" => "bat_enc",
+        "battery/decode" => "bat_dec",
+        "node_status/encode" => "ns_enc",
+        "node_status/decode" => "ns_dec",
+        "file_read_response/encode" => "rd0_enc",
+        "file_read_response/decode" => "rd0_dec",
+        _ => return None,
+    })
+}
+
+/// The C baseline as a shared library, loaded at run time (glibc's `dlopen`).
+struct CBench {
+    run: extern "C" fn(c_int, c_long),
+    op: extern "C" fn(*const c_char) -> c_int,
+}
+
+extern "C" {
+    fn dlopen(filename: *const c_char, flags: c_int) -> *mut c_void;
+    fn dlsym(handle: *mut c_void, symbol: *const c_char) -> *mut c_void;
+}
+
+impl CBench {
+    fn load(path: &str) -> CBench {
+        const RTLD_NOW: c_int = 2;
+        let path = CString::new(path).unwrap();
+        // SAFETY: a library built from cbench.c, whose exports have these signatures.
+        unsafe {
+            let handle = dlopen(path.as_ptr(), RTLD_NOW);
+            assert!(!handle.is_null(), "PX4PARAMS_CBENCH: cannot load {path:?}");
+            let symbol = |name: &str| {
+                let name = CString::new(name).unwrap();
+                let f = dlsym(handle, name.as_ptr());
+                assert!(!f.is_null(), "PX4PARAMS_CBENCH: no {name:?}");
+                f
+            };
+            let setup: extern "C" fn() = std::mem::transmute(symbol("c_setup"));
+            setup();
+            CBench {
+                run: std::mem::transmute::<*mut c_void, extern "C" fn(c_int, c_long)>(symbol(
+                    "c_run",
+                )),
+                op: std::mem::transmute::<*mut c_void, extern "C" fn(*const c_char) -> c_int>(
+                    symbol("c_op"),
+                ),
+            }
+        }
+    }
+
+    fn op(&self, name: &str) -> c_int {
+        let name = CString::new(name).unwrap();
+        let op = (self.op)(name.as_ptr());
+        assert!(op >= 0, "cbench has no op {name:?}");
+        op
+    }
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// `time ROUNDS ITERS OP`: how to time the op instead of counting it.
+struct Timing {
+    rounds: usize,
+    iters: usize,
+    c: Option<(CBench, c_int)>,
+}
+
+static TIMING: std::sync::OnceLock<Timing> = std::sync::OnceLock::new();
+
+/// Ours and C's nanoseconds per call (medians of the rounds), interleaved round by round.
+fn timed(t: &Timing, op: &mut dyn FnMut()) {
+    let (mut ours, mut theirs) = (Vec::new(), Vec::new());
+    for _ in 0..t.rounds {
+        let start = Instant::now();
+        for _ in 0..t.iters {
+            op();
+        }
+        ours.push(start.elapsed().as_secs_f64() * 1e9 / t.iters as f64);
+        if let Some((c, k)) = &t.c {
+            let start = Instant::now();
+            (c.run)(*k, t.iters as c_long);
+            theirs.push(start.elapsed().as_secs_f64() * 1e9 / t.iters as f64);
+        }
+    }
+    let c_ns = if theirs.is_empty() {
+        "-".to_string()
+    } else {
+        format!("{:.1}", median(theirs))
+    };
+    println!("{:.1} {c_ns}", median(ours));
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let (op, n) = match args.as_slice() {
+        [_, time, rounds, iters, op] if time == "time" => {
+            let c = std::env::var("PX4PARAMS_CBENCH").ok().and_then(|path| {
+                let c = CBench::load(&path);
+                let k = c.op(c_op_name(op)?);
+                Some((c, k))
+            });
+            let timing = Timing {
+                rounds: rounds.parse().expect("ROUNDS: a count"),
+                iters: iters.parse().expect("ITERS: a count"),
+                c,
+            };
+            TIMING.set(timing).ok();
+            (op.as_str(), 0)
+        }
         [_, op, n] => (op.as_str(), n.parse::<usize>().expect("N: a count")),
         // `cargo bench` runs every bench target with `--bench`: nothing to do here.
         _ => return,
@@ -143,6 +266,25 @@ fn main() {
             let r = receive_into(black_box(&frame_refs), SEED, &mut out);
             black_box(r.unwrap());
         }),
+        "receive_decode" => repeat(n, || {
+            let r = receive(black_box(&frame_refs), SEED).unwrap();
+            let data = Scattered::new(&r.payload);
+            let mut sink = LeafSink::new(&mut storage);
+            let r = decode(&layout, root, &data, &mut sink, DecodeOptions::default());
+            black_box(r.unwrap());
+        }),
+        "receive_into_decode" => repeat(n, || {
+            let (_, len) = receive_into(black_box(&frame_refs), SEED, &mut out).unwrap();
+            let mut sink = LeafSink::new(&mut storage);
+            let r = decode(
+                &layout,
+                root,
+                &out[..len],
+                &mut sink,
+                DecodeOptions::default(),
+            );
+            black_box(r.unwrap());
+        }),
         "transfer_crc" => repeat(n, || {
             black_box(crc16(SEED, black_box(&bytes[..])));
         }),
@@ -187,8 +329,12 @@ fn store_ops(what: &str, n: usize) {
     }
 }
 
-/// Runs `op` `n` times (each operation its own loop: no dispatch inside the count).
+/// Runs `op` `n` times (each operation its own loop: no dispatch inside the count), or times
+/// it (`time`).
 fn repeat(n: usize, mut op: impl FnMut()) {
+    if let Some(timing) = TIMING.get() {
+        return timed(timing, &mut op);
+    }
     for _ in 0..n {
         op();
     }

@@ -30,6 +30,13 @@ pub trait BitRead {
     fn byte(&self, index: usize) -> u8 {
         self.read_bits(index * 8, 8) as u8
     }
+
+    /// The bits as one run of bytes when they are one (`None` for payloads in pieces): what
+    /// a plan that reads whole bytes at a time needs (see [`crate::straight`]).
+    #[inline]
+    fn contiguous(&self) -> Option<&[u8]> {
+        None
+    }
 }
 
 /// Reads a [`BitRead`] forwards from a position; made by [`BitRead::reader`]. The caller
@@ -106,6 +113,11 @@ impl BitRead for [u8] {
     #[inline]
     fn byte(&self, index: usize) -> u8 {
         self[index]
+    }
+
+    #[inline]
+    fn contiguous(&self) -> Option<&[u8]> {
+        Some(self)
     }
 }
 

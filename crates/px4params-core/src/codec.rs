@@ -16,7 +16,7 @@ pub use crate::rules::{
 pub(crate) use crate::rules::{scalar_of, scalar_raw, tail_optimized};
 use crate::scalar::{self, Scalar};
 use crate::value::{LeafError, LeafSink, LeafSource};
-use crate::walk;
+use crate::{straight, walk};
 
 /// Encodes the value of type `root` from `source` into `out`; returns the length in bytes.
 ///
@@ -28,6 +28,11 @@ pub fn encode<S: Source>(
     out: &mut [u8],
     options: EncodeOptions,
 ) -> Result<usize, Error<S::Error>> {
+    if S::FLAT && Active::STRAIGHT {
+        if let Some(len) = straight::encode(layout, root, source, out, options) {
+            return Ok(len);
+        }
+    }
     let mut enc = Encoder {
         layout,
         out: BitWriter::new(out),
@@ -57,6 +62,11 @@ pub fn decode<R: BitRead + ?Sized, K: Sink>(
     sink: &mut K,
     options: DecodeOptions,
 ) -> Result<usize, Error<K::Error>> {
+    if K::FLAT && Active::STRAIGHT {
+        if let Some(bits) = straight::decode(layout, root, data, sink, options) {
+            return Ok(bits);
+        }
+    }
     let mut dec: Decoder<'_, '_, R, K> = Decoder {
         layout,
         reader: data.reader(0),

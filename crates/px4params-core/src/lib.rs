@@ -32,6 +32,7 @@ pub mod rules;
 pub mod scalar;
 pub mod scatter;
 pub mod store;
+pub mod straight;
 pub mod table;
 pub mod transfer;
 pub mod translate;

@@ -27,6 +27,9 @@ pub trait Plans {
     const GATHERED_CRC: bool;
     /// Bytes per step of the CRC-16 (8: tables of 4 KB; 4: 2 KB).
     const CRC_SLICES: usize;
+    /// Small fixed-shape types (a fixed run, perhaps ending in an array of primitives)
+    /// encoded and decoded in one straight pass ([`crate::straight`]).
+    const STRAIGHT: bool;
 }
 
 /// Every plan: what hosts run.
@@ -41,6 +44,7 @@ impl Plans for HostPlans {
     const TRANSLATE: bool = true;
     const GATHERED_CRC: bool = true;
     const CRC_SLICES: usize = 8;
+    const STRAIGHT: bool = true;
 }
 
 /// No plan: the walk alone, what firmware built for size runs.
@@ -55,6 +59,7 @@ impl Plans for NoPlans {
     const TRANSLATE: bool = false;
     const GATHERED_CRC: bool = false;
     const CRC_SLICES: usize = 4;
+    const STRAIGHT: bool = false;
 }
 
 /// The plans this build runs.

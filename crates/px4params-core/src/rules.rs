@@ -115,6 +115,13 @@ pub trait Source {
     fn leaf_run(&mut self, _n: usize) -> Option<Result<&[Scalar], Self::Error>> {
         None
     }
+    /// For flat sources, the leaves not taken yet, without taking them (`None` for others):
+    /// a plan reads them first and takes them ([`Source::leaf_run`]) only when it answers,
+    /// so that declining leaves the source where it was.
+    #[inline]
+    fn pending_leaves(&self) -> Option<&[Scalar]> {
+        None
+    }
     /// The primitive at the current position; `kind` is the field's type.
     fn scalar(&mut self, kind: Kind) -> Result<Scalar, Self::Error>;
     /// The current position must hold a struct.

@@ -366,7 +366,17 @@ fn tail_error(i: usize, tail: u8, expected: u8, last: usize) -> TransferError {
 /// bytes; longer payloads take [`crc16_pieces`]) so that [`crc16`] takes eight bytes a step
 /// across the frames' edges.
 fn payload_crc(crc: u16, payload: &FramePayloads<'_, '_>, len: usize) -> u16 {
-    let mut run = [0u8; 320];
+    // Most transfers are a few frames: a small run costs less to clear than the largest.
+    if len <= 64 {
+        return gathered_crc::<64>(crc, payload, len);
+    }
+    gathered_crc::<320>(crc, payload, len)
+}
+
+/// [`payload_crc`] through a run of `N` bytes.
+#[inline(always)]
+fn gathered_crc<const N: usize>(crc: u16, payload: &FramePayloads<'_, '_>, len: usize) -> u16 {
+    let mut run = [0u8; N];
     match run.get_mut(..len) {
         Some(run) => {
             gather(payload, run);

@@ -54,6 +54,11 @@ impl Source for LeafSource<'_> {
     }
 
     #[inline]
+    fn pending_leaves(&self) -> Option<&[Scalar]> {
+        self.leaves.get(self.next..)
+    }
+
+    #[inline]
     fn scalar(&mut self, _kind: Kind) -> Result<Scalar, LeafError> {
         self.take()
     }
