@@ -17,6 +17,8 @@ cargo clippy --workspace --all-targets --features px4params-core/alloc -- -D war
 cargo test -p px4params-core --features alloc
 # The firmware build's codec (without the fast paths for flat leaf lists): same bytes, same errors.
 cargo test -p px4params-core --features alloc,compact
+# The C ABI called from Rust as C calls it (its C programs run under pytest: tests/test_firmware.py).
+cargo test -p px4params-ffi
 
 echo "== the wheel and sdist (release build: reuses setup's), for tests/test_wheel.py (${SECONDS} s so far)"
 dist=$(mktemp -d)
