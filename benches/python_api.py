@@ -6,6 +6,7 @@ message (it has no batch call); the ``decode_struct`` rows decode into a ``Struc
 object with the fields as attributes, as pydronecan's ``unpack`` does.
 
     python benches/python_api.py [--runs 5] [--instructions] [--rows TEXT ...]
+    python benches/python_api.py --against OLD.so [--runs 5] [--rows TEXT ...]
 
 Each row is timed ``--runs`` times, ours and the baseline one after the other (this machine is
 noisy), best of timeit's repeats each time; the median of the runs is printed, with the ratio
@@ -14,17 +15,24 @@ its names local to timeit's loop, as ``python -m timeit`` times it), not through
 whose own call (about 20 ns) would be counted on both sides. ``--instructions`` adds
 valgrind's instruction counts per call (the count of N calls minus that of none, divided by
 N), which load does not change.
+
+``--against OLD.so`` times our side of each row with another build of ``px4params._native``
+(the package copied beside it with that module in place) and with this one, each run in a
+fresh process per build, the two builds taking turns to go first; it prints the medians and
+their ratio (this build's over the other's: below 1 is faster).
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import re
 import shutil
 import statistics
 import subprocess
 import sys
+import tempfile
 import timeit
 from dataclasses import dataclass
 from pathlib import Path
@@ -189,13 +197,53 @@ def show(row: str, ours: float, theirs: float, ours_ir: float | None, theirs_ir:
     print(line, flush=True)
 
 
+def against(old_so: Path, rows: list[str] | None, runs: int) -> None:
+    """Our side of each row with ``old_so`` and with this build, interleaved (see the module)."""
+    package = Path(px4params.__file__).resolve().parent
+    row_args = ["--rows", *rows] if rows else []
+    with tempfile.TemporaryDirectory() as tmp:
+        old_package = Path(tmp) / "px4params"
+        shutil.copytree(package, old_package, ignore=shutil.ignore_patterns("__pycache__"))
+        shutil.copyfile(old_so, old_package / "_native.abi3.so")
+        paths = {"before": tmp, "after": str(package.parent)}
+
+        def timed(side: str) -> dict[str, float]:
+            path = os.pathsep.join([paths[side], os.environ.get("PYTHONPATH", "")])
+            out = subprocess.run(
+                [sys.executable, __file__, "--ours-json", *row_args],
+                capture_output=True,
+                text=True,
+                check=True,
+                env=dict(os.environ, PYTHONPATH=path),
+            ).stdout
+            return json.loads(out)
+
+        times: dict[str, dict[str, list[float]]] = {"before": {}, "after": {}}
+        for run in range(runs):
+            for side in ("before", "after") if run % 2 == 0 else ("after", "before"):
+                for row, seconds in timed(side).items():
+                    times[side].setdefault(row, []).append(seconds)
+    print(f"{os.cpu_count()} CPUs, Python {sys.version.split()[0]}, {runs} runs, medians")
+    print(f"before: {old_so}\nafter:  {package / '_native.abi3.so'}")
+    print(f"{'':<31} {'before':>11} {'after':>11} {'after/before':>13}")
+    for row, before_times in times["before"].items():
+        before = statistics.median(before_times)
+        after = statistics.median(times["after"][row])
+        print(f"{row:<31} {before * 1e9:>8.0f} ns {after * 1e9:>8.0f} ns {after / before:>13.2f}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--runs", type=int, default=5)
     parser.add_argument("--instructions", action="store_true")
     parser.add_argument("--rows", nargs="+", metavar="TEXT", help="only rows naming any TEXT")
+    parser.add_argument("--against", type=Path, metavar="OLD.so", help="compare with this build")
     parser.add_argument("--loop", nargs=3, metavar=("ROW", "SIDE", "N"), help=argparse.SUPPRESS)
+    parser.add_argument("--ours-json", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
+    if args.against:
+        against(args.against, args.rows, args.runs)
+        return
     made = calls()
     if args.loop:
         row, side, n = args.loop
@@ -203,6 +251,9 @@ def main() -> None:
         return
     if args.rows and not args.loop:
         made = {row: c for row, c in made.items() if any(text in row for text in args.rows)}
+    if args.ours_json:
+        print(json.dumps({row: best(ours) / per for row, (ours, _, per) in made.items()}))
+        return
     if args.instructions and not shutil.which("valgrind"):
         print("valgrind is missing: no instruction counts", file=sys.stderr)
         args.instructions = False

@@ -23,6 +23,7 @@ use px4params_core::compile::OwnedLayout;
 use px4params_core::error::{Error, ErrorKind};
 use px4params_core::layout::{Kind, Layout, NodeId, Role};
 use px4params_core::leaf::{encode_default, get_leaf, locate, set_leaf, Target};
+use px4params_core::program::Program;
 use px4params_core::value::{LeafError as LeafListError, LeafSink, LeafSource};
 use px4params_core::Scalar;
 use pyo3::exceptions::{PyKeyError, PyTypeError};
@@ -162,7 +163,7 @@ pub(crate) struct Compiled {
     /// than growing a new dict key by key (see [`Compiled::new_dict`]).
     templates: Vec<std::sync::OnceLock<Py<PyDict>>>,
     /// Per node, made on first use: the struct's program, when it has one.
-    programs: Vec<std::sync::OnceLock<Option<program::Program>>>,
+    programs: Vec<std::sync::OnceLock<Option<Program>>>,
     /// Per node: the key of the type it is (empty for nodes that are no type of the model).
     type_keys: Vec<String>,
     /// Per node: how many named fields it has (structs; 0 for other nodes).
@@ -216,9 +217,9 @@ impl Compiled {
     }
 
     /// The program of type `root`, compiled on first use.
-    fn program(&self, root: NodeId) -> Option<&program::Program> {
+    fn program(&self, root: NodeId) -> Option<&Program> {
         self.programs[root as usize]
-            .get_or_init(|| program::Program::compile(&self.layout.as_layout(), root))
+            .get_or_init(|| Program::compile(&self.layout.as_layout(), root))
             .as_ref()
     }
 }
@@ -518,13 +519,16 @@ impl DataType {
         };
         let names = &self.compiled.names;
         let encoded = if let Some(program) = self.compiled.program(self.root) {
-            program.encode(names, value, out, tao, saturate)
+            let mut source = program::PyValues::new(py, names);
+            program.encode(&mut source, value.as_ptr(), out, options)
         } else {
             self.plain_encode(&layout, value, out, options)
         };
         if let Some(n) = encoded {
             return Ok(PyBytes::new(py, &out[..n]));
         }
+        // A look-up may have raised: the general path meets it again and reports it.
+        drop(PyErr::take(py));
         if let Ok(value) = value.cast_exact::<StructValue>() {
             let plain = value.get().as_dict(py)?;
             return self.encode_into(&plain, out, tao, saturate);
@@ -546,9 +550,13 @@ impl DataType {
         tao: bool,
         allow_trailing: bool,
     ) -> PyResult<Bound<'py, PyAny>> {
+        let options = DecodeOptions {
+            tao,
+            allow_trailing,
+        };
         if let Some(program) = self.compiled.program(self.root) {
-            let decoded =
-                program.decode::<Bound<PyDict>>(py, &self.compiled, data, tao, allow_trailing)?;
+            let mut built = program::Built::<Bound<PyDict>>::new(py, &self.compiled);
+            let decoded = program.decode(&mut built, data, options)?;
             if let Some(value) = decoded {
                 return Ok(value);
             }
@@ -571,9 +579,13 @@ impl DataType {
                 self.key
             )));
         }
+        let options = DecodeOptions {
+            tao,
+            allow_trailing,
+        };
         if let Some(program) = self.compiled.program(self.root) {
-            let decoded =
-                program.decode::<program::Fields>(py, &self.compiled, data, tao, allow_trailing)?;
+            let mut built = program::Built::<program::Fields>::new(py, &self.compiled);
+            let decoded = program.decode(&mut built, data, options)?;
             if let Some(value) = decoded {
                 return Ok(value);
             }
