@@ -152,10 +152,16 @@ def best(call: Call, repeat: int = 5) -> float:
     return min(timer.repeat(repeat=repeat, number=number)) / number
 
 
-def instructions(row: str, side: int, seconds_per_call: float) -> float:
+def instructions(
+    row: str, side: int, seconds_per_call: float, pythonpath: str | None = None
+) -> float:
     """Instructions per call of one side of ``row``, under callgrind: as many calls as take a
-    fifth of a second natively, with a fixed hash seed so that the runs differ only in them."""
+    fifth of a second natively, with a fixed hash seed so that the runs differ only in them;
+    with the package found first on ``pythonpath`` if given."""
     n = min(200_000, max(1000, int(0.2 / seconds_per_call)))
+    env = dict(os.environ, PYTHONHASHSEED="0")
+    if pythonpath:
+        env["PYTHONPATH"] = os.pathsep.join([pythonpath, env.get("PYTHONPATH", "")])
 
     def count(times: int) -> int:
         err = subprocess.run(
@@ -173,7 +179,7 @@ def instructions(row: str, side: int, seconds_per_call: float) -> float:
             capture_output=True,
             text=True,
             check=True,
-            env=dict(os.environ, PYTHONHASHSEED="0"),
+            env=env,
         ).stderr
         match = re.search(r"refs:\s+([\d,]+)", err)
         assert match, err
@@ -197,7 +203,7 @@ def show(row: str, ours: float, theirs: float, ours_ir: float | None, theirs_ir:
     print(line, flush=True)
 
 
-def against(old_so: Path, rows: list[str] | None, runs: int) -> None:
+def against(old_so: Path, rows: list[str] | None, runs: int, count: bool) -> None:
     """Our side of each row with ``old_so`` and with this build, interleaved (see the module)."""
     package = Path(px4params.__file__).resolve().parent
     row_args = ["--rows", *rows] if rows else []
@@ -223,13 +229,30 @@ def against(old_so: Path, rows: list[str] | None, runs: int) -> None:
             for side in ("before", "after") if run % 2 == 0 else ("after", "before"):
                 for row, seconds in timed(side).items():
                     times[side].setdefault(row, []).append(seconds)
-    print(f"{os.cpu_count()} CPUs, Python {sys.version.split()[0]}, {runs} runs, medians")
-    print(f"before: {old_so}\nafter:  {package / '_native.abi3.so'}")
-    print(f"{'':<31} {'before':>11} {'after':>11} {'after/before':>13}")
-    for row, before_times in times["before"].items():
-        before = statistics.median(before_times)
-        after = statistics.median(times["after"][row])
-        print(f"{row:<31} {before * 1e9:>8.0f} ns {after * 1e9:>8.0f} ns {after / before:>13.2f}")
+        print(f"{os.cpu_count()} CPUs, Python {sys.version.split()[0]}, {runs} runs, medians")
+        print(f"before: {old_so}\nafter:  {package / '_native.abi3.so'}")
+        head = f"{'':<31} {'before':>11} {'after':>11} {'after/before':>13}"
+        print(head + ("   Ir before     Ir after  ratio" if count else ""))
+        per_call = {row: per for row, (_, _, per) in calls().items()}
+        for row, before_times in times["before"].items():
+            before = statistics.median(before_times)
+            after = statistics.median(times["after"][row])
+            line = (
+                f"{row:<31} {before * 1e9:>8.0f} ns {after * 1e9:>8.0f} ns {after / before:>13.2f}"
+            )
+            if count:
+                per = per_call[row]
+                ir = [instructions(row, 0, after * per, paths[side]) / per for side in paths]
+                line += f"   {ir[0]:>9.0f} {ir[1]:>12.0f}  {ir[1] / ir[0]:.2f}"
+            print(line, flush=True)
+
+
+def which_valgrind() -> str | None:
+    """valgrind's path, or None (said on stderr)."""
+    found = shutil.which("valgrind")
+    if not found:
+        print("valgrind is missing: no instruction counts", file=sys.stderr)
+    return found
 
 
 def main() -> None:
@@ -242,7 +265,7 @@ def main() -> None:
     parser.add_argument("--ours-json", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.against:
-        against(args.against, args.rows, args.runs)
+        against(args.against, args.rows, args.runs, args.instructions and bool(which_valgrind()))
         return
     made = calls()
     if args.loop:
@@ -254,8 +277,7 @@ def main() -> None:
     if args.ours_json:
         print(json.dumps({row: best(ours) / per for row, (ours, _, per) in made.items()}))
         return
-    if args.instructions and not shutil.which("valgrind"):
-        print("valgrind is missing: no instruction counts", file=sys.stderr)
+    if args.instructions and not which_valgrind():
         args.instructions = False
     times: dict[str, tuple[list[float], list[float]]] = {row: ([], []) for row in made}
     for _ in range(args.runs):

@@ -237,20 +237,16 @@ impl Program {
         data: &[u8],
         options: DecodeOptions,
     ) -> Result<Option<K::Value>, K::Error> {
-        if let Some(fixed) = &self.fixed {
-            // Short data, or trailing bytes not allowed: the codec words the error.
-            let fits = data.len() * 8 >= fixed.bits
-                && (options.allow_trailing || data.len() == fixed.bits.div_ceil(8));
-            if !fits {
-                return Ok(None);
-            }
-            return fixed_struct(sink, data, &fixed.fields, self.root).map(Some);
-        }
-        // Short data is read from a copy with zero bytes after it, so that every read takes
-        // the bit reader's whole-window path (the bounds are checked on `bit_len`); the copy's
-        // room is chosen by the data's length, so that a small message zeroes little.
+        // The data is read from a copy with zero bytes after it, so that every read takes the
+        // bit reader's whole-window path (the bounds are checked on the data's own length);
+        // the copy's room is chosen by the data's length, so that a small message zeroes
+        // little.
         let len = data.len();
-        if len + 8 <= 64 {
+        if len + 8 <= 32 {
+            let mut window = [0u8; 32];
+            window[..len].copy_from_slice(data);
+            self.decode_window(sink, &window[..len + 8], len, options)
+        } else if len + 8 <= 64 {
             let mut window = [0u8; 64];
             window[..len].copy_from_slice(data);
             self.decode_window(sink, &window[..len + 8], len, options)
@@ -271,6 +267,15 @@ impl Program {
         len: usize,
         options: DecodeOptions,
     ) -> Result<Option<K::Value>, K::Error> {
+        if let Some(fixed) = &self.fixed {
+            // Short data, or trailing bytes not allowed: the codec words the error.
+            let fits =
+                len * 8 >= fixed.bits && (options.allow_trailing || len == fixed.bits.div_ceil(8));
+            if !fits {
+                return Ok(None);
+            }
+            return fixed_struct(sink, window, &fixed.fields, self.root).map(Some);
+        }
         let mut decoder = Decoder {
             sink,
             data: window,
