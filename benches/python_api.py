@@ -17,25 +17,26 @@ valgrind's instruction counts per call (the count of N calls minus that of none,
 N), which load does not change.
 
 ``--against OLD.so`` times our side of each row with another build of ``px4params._native``
-(the package copied beside it with that module in place) and with this one, each run in a
-fresh process per build, the two builds taking turns to go first; it prints the medians and
-their ratio (this build's over the other's: below 1 is faster).
+(loaded beside this one, as its own module) and with this one, in one process, the two one
+after the other for each row of each run, taking turns to go first; it prints the medians
+and their ratio (this build's over the other's: below 1 is faster).
 """
 
 from __future__ import annotations
 
 import argparse
-import json
+import importlib.machinery
+import importlib.util
 import os
 import re
 import shutil
 import statistics
 import subprocess
 import sys
-import tempfile
 import timeit
 from dataclasses import dataclass
 from pathlib import Path
+from types import ModuleType
 from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
@@ -203,48 +204,55 @@ def show(row: str, ours: float, theirs: float, ours_ir: float | None, theirs_ir:
     print(line, flush=True)
 
 
-def against(old_so: Path, rows: list[str] | None, runs: int, count: bool) -> None:
-    """Our side of each row with ``old_so`` and with this build, interleaved (see the module)."""
-    package = Path(px4params.__file__).resolve().parent
-    row_args = ["--rows", *rows] if rows else []
-    with tempfile.TemporaryDirectory() as tmp:
-        old_package = Path(tmp) / "px4params"
-        shutil.copytree(package, old_package, ignore=shutil.ignore_patterns("__pycache__"))
-        shutil.copyfile(old_so, old_package / "_native.abi3.so")
-        paths = {"before": tmp, "after": str(package.parent)}
+def load_native(path: Path) -> ModuleType:
+    """Another build of ``px4params._native``, loaded beside this one (its own module)."""
+    name = "px4params_before._native"
+    loader = importlib.machinery.ExtensionFileLoader(name, str(path))
+    spec = importlib.util.spec_from_file_location(name, path, loader=loader)
+    assert spec is not None
+    module = importlib.util.module_from_spec(spec)
+    loader.exec_module(module)
+    return module
 
-        def timed(side: str) -> dict[str, float]:
-            path = os.pathsep.join([paths[side], os.environ.get("PYTHONPATH", "")])
-            out = subprocess.run(
-                [sys.executable, __file__, "--ours-json", *row_args],
-                capture_output=True,
-                text=True,
-                check=True,
-                env=dict(os.environ, PYTHONPATH=path),
-            ).stdout
-            return json.loads(out)
 
-        times: dict[str, dict[str, list[float]]] = {"before": {}, "after": {}}
-        for run in range(runs):
+def calls_with(native: ModuleType) -> dict[str, Call]:
+    """Our side of each codec row, run by the build ``native`` (on its own ``DataType``s,
+    compiled from the same definitions). The store row is left out: a store is made through
+    the Python package, which uses this build."""
+    schema = px4params.load_schema(use_env=False)
+    compiled = native.Schema(dict(schema._definitions.items()))
+    made = {}
+    for row, (ours, _, _) in calls().items():
+        if "t" in ours.names:
+            names = dict(ours.names, t=compiled.get(ours.names["t"].key))
+            made[row] = Call(ours.statement, names)
+            assert repr(made[row].run()) == repr(ours.run())
+    return made
+
+
+def against(old_so: Path, rows: list[str] | None, runs: int) -> None:
+    """Our side of each row with ``old_so`` and with this build, in one process, the two
+    timed one after the other for each row of each run (see the module)."""
+    sides = {
+        "before": calls_with(load_native(old_so)),
+        "after": calls_with(px4params._native),
+    }
+    per = {row: n for row, (_, _, n) in calls().items() if row in sides["after"]}
+    if rows:
+        per = {row: n for row, n in per.items() if any(text in row for text in rows)}
+    times: dict[str, dict[str, list[float]]] = {side: {row: [] for row in per} for side in sides}
+    for run in range(runs):
+        for row in per:
             for side in ("before", "after") if run % 2 == 0 else ("after", "before"):
-                for row, seconds in timed(side).items():
-                    times[side].setdefault(row, []).append(seconds)
-        print(f"{os.cpu_count()} CPUs, Python {sys.version.split()[0]}, {runs} runs, medians")
-        print(f"before: {old_so}\nafter:  {package / '_native.abi3.so'}")
-        head = f"{'':<31} {'before':>11} {'after':>11} {'after/before':>13}"
-        print(head + ("   Ir before     Ir after  ratio" if count else ""))
-        per_call = {row: per for row, (_, _, per) in calls().items()}
-        for row, before_times in times["before"].items():
-            before = statistics.median(before_times)
-            after = statistics.median(times["after"][row])
-            line = (
-                f"{row:<31} {before * 1e9:>8.0f} ns {after * 1e9:>8.0f} ns {after / before:>13.2f}"
-            )
-            if count:
-                per = per_call[row]
-                ir = [instructions(row, 0, after * per, paths[side]) / per for side in paths]
-                line += f"   {ir[0]:>9.0f} {ir[1]:>12.0f}  {ir[1] / ir[0]:.2f}"
-            print(line, flush=True)
+                times[side][row].append(best(sides[side][row]) / per[row])
+    print(f"{os.cpu_count()} CPUs, Python {sys.version.split()[0]}, {runs} runs, medians")
+    print(f"before: {old_so}\nafter:  {Path(px4params._native.__file__).resolve()}")
+    print(f"{'':<31} {'before':>11} {'after':>11} {'after/before':>13}")
+    for row in per:
+        before = statistics.median(times["before"][row])
+        after = statistics.median(times["after"][row])
+        line = f"{row:<31} {before * 1e9:>8.0f} ns {after * 1e9:>8.0f} ns"
+        print(line + f" {after / before:>13.2f}", flush=True)
 
 
 def which_valgrind() -> str | None:
@@ -262,10 +270,9 @@ def main() -> None:
     parser.add_argument("--rows", nargs="+", metavar="TEXT", help="only rows naming any TEXT")
     parser.add_argument("--against", type=Path, metavar="OLD.so", help="compare with this build")
     parser.add_argument("--loop", nargs=3, metavar=("ROW", "SIDE", "N"), help=argparse.SUPPRESS)
-    parser.add_argument("--ours-json", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.against:
-        against(args.against, args.rows, args.runs, args.instructions and bool(which_valgrind()))
+        against(args.against, args.rows, args.runs)
         return
     made = calls()
     if args.loop:
@@ -274,9 +281,6 @@ def main() -> None:
         return
     if args.rows and not args.loop:
         made = {row: c for row, c in made.items() if any(text in row for text in args.rows)}
-    if args.ours_json:
-        print(json.dumps({row: best(ours) / per for row, (ours, _, per) in made.items()}))
-        return
     if args.instructions and not which_valgrind():
         args.instructions = False
     times: dict[str, tuple[list[float], list[float]]] = {row: ([], []) for row in made}

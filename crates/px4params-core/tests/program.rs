@@ -135,7 +135,7 @@ impl<'a> Source for General<'a> {
         }
     }
     fn field(&mut self, index: u32, _name: &str) -> Result<bool, Refused> {
-        let &Tree::Struct(ref fields) = *self.stack.last().unwrap() else {
+        let Tree::Struct(fields) = *self.stack.last().unwrap() else {
             return Err(Refused::Shape);
         };
         let found = fields.iter().find(|(i, _)| *i == index).map(|(_, t)| t);
@@ -164,7 +164,7 @@ impl<'a> Source for General<'a> {
         }
     }
     fn element(&mut self, index: usize) -> Result<(), Refused> {
-        let &Tree::List(ref items) = *self.stack.last().unwrap() else {
+        let Tree::List(items) = *self.stack.last().unwrap() else {
             return Err(Refused::Shape);
         };
         self.stack.push(&items[index]);
