@@ -210,6 +210,7 @@ impl Program {
 
     /// Encodes `value` (read from `source`) into `out`: the length in bytes, or `None` to
     /// decline. `out` needs room for the type's largest value; what it held does not matter.
+    #[inline]
     pub fn encode<S: ValueSource>(
         &self,
         source: &mut S,
@@ -231,6 +232,7 @@ impl Program {
 
     /// Decodes `data` into a value built by `sink`: `Ok(None)` to decline (the data is not a
     /// value the program reads as the codec would: short, too long, an array too long).
+    #[inline]
     pub fn decode<K: ValueSink>(
         &self,
         sink: &mut K,
@@ -260,6 +262,7 @@ impl Program {
     }
 
     /// [`Program::decode`] over `window`, the data (`len` bytes) perhaps with zeros after it.
+    #[inline]
     fn decode_window<K: ValueSink>(
         &self,
         sink: &mut K,
@@ -402,6 +405,7 @@ struct Encoder<'s, 'o, S> {
 
 impl<S: ValueSource> Encoder<'_, '_, S> {
     /// The steps of one struct, up to its [`Step::End`], from `fields`.
+    #[inline]
     fn fields(&mut self, steps: &mut slice::Iter<'_, Step>, mut fields: S::Struct) -> Option<()> {
         let mut used = 0;
         while let Some(&step) = steps.next() {
@@ -432,6 +436,7 @@ impl<S: ValueSource> Encoder<'_, '_, S> {
 
     /// A run of primitives and padding, written in one go (the writer's state stays in
     /// registers); `used` counts the fields found.
+    #[inline]
     fn run(
         &mut self,
         mut run: slice::Iter<'_, Step>,
@@ -523,6 +528,7 @@ fn scalar_at(data: &[u8], offset: usize, kind: Kind) -> Scalar {
 }
 
 /// A struct (of type `node`) of primitives and padding alone; `data` holds all of its bits.
+#[inline]
 fn fixed_struct<K: ValueSink>(
     sink: &mut K,
     data: &[u8],
