@@ -6,6 +6,7 @@ message (it has no batch call); the ``decode_struct`` rows decode into a ``Struc
 object with the fields as attributes, as pydronecan's ``unpack`` does.
 
     python benches/python_api.py [--runs 5] [--instructions] [--rows TEXT ...]
+    python benches/python_api.py --against OLD.so [--runs 5] [--rows TEXT ...]
 
 Each row is timed ``--runs`` times, ours and the baseline one after the other (this machine is
 noisy), best of timeit's repeats each time; the median of the runs is printed, with the ratio
@@ -14,11 +15,18 @@ its names local to timeit's loop, as ``python -m timeit`` times it), not through
 whose own call (about 20 ns) would be counted on both sides. ``--instructions`` adds
 valgrind's instruction counts per call (the count of N calls minus that of none, divided by
 N), which load does not change.
+
+``--against OLD.so`` times our side of each row with another build of ``px4params._native``
+(loaded beside this one, as its own module) and with this one, in one process, the two one
+after the other for each row of each run, taking turns to go first; it prints the medians
+and their ratio (this build's over the other's: below 1 is faster).
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib.machinery
+import importlib.util
 import os
 import re
 import shutil
@@ -28,6 +36,7 @@ import sys
 import timeit
 from dataclasses import dataclass
 from pathlib import Path
+from types import ModuleType
 from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
@@ -144,10 +153,16 @@ def best(call: Call, repeat: int = 5) -> float:
     return min(timer.repeat(repeat=repeat, number=number)) / number
 
 
-def instructions(row: str, side: int, seconds_per_call: float) -> float:
+def instructions(
+    row: str, side: int, seconds_per_call: float, pythonpath: str | None = None
+) -> float:
     """Instructions per call of one side of ``row``, under callgrind: as many calls as take a
-    fifth of a second natively, with a fixed hash seed so that the runs differ only in them."""
+    fifth of a second natively, with a fixed hash seed so that the runs differ only in them;
+    with the package found first on ``pythonpath`` if given."""
     n = min(200_000, max(1000, int(0.2 / seconds_per_call)))
+    env = dict(os.environ, PYTHONHASHSEED="0")
+    if pythonpath:
+        env["PYTHONPATH"] = os.pathsep.join([pythonpath, env.get("PYTHONPATH", "")])
 
     def count(times: int) -> int:
         err = subprocess.run(
@@ -165,7 +180,7 @@ def instructions(row: str, side: int, seconds_per_call: float) -> float:
             capture_output=True,
             text=True,
             check=True,
-            env=dict(os.environ, PYTHONHASHSEED="0"),
+            env=env,
         ).stderr
         match = re.search(r"refs:\s+([\d,]+)", err)
         assert match, err
@@ -189,13 +204,76 @@ def show(row: str, ours: float, theirs: float, ours_ir: float | None, theirs_ir:
     print(line, flush=True)
 
 
+def load_native(path: Path) -> ModuleType:
+    """Another build of ``px4params._native``, loaded beside this one (its own module)."""
+    name = "px4params_before._native"
+    loader = importlib.machinery.ExtensionFileLoader(name, str(path))
+    spec = importlib.util.spec_from_file_location(name, path, loader=loader)
+    assert spec is not None
+    module = importlib.util.module_from_spec(spec)
+    loader.exec_module(module)
+    return module
+
+
+def calls_with(native: ModuleType) -> dict[str, Call]:
+    """Our side of each codec row, run by the build ``native`` (on its own ``DataType``s,
+    compiled from the same definitions). The store row is left out: a store is made through
+    the Python package, which uses this build."""
+    schema = px4params.load_schema(use_env=False)
+    compiled = native.Schema(dict(schema._definitions.items()))
+    made = {}
+    for row, (ours, _, _) in calls().items():
+        if "t" in ours.names:
+            names = dict(ours.names, t=compiled.get(ours.names["t"].key))
+            made[row] = Call(ours.statement, names)
+            assert repr(made[row].run()) == repr(ours.run())
+    return made
+
+
+def against(old_so: Path, rows: list[str] | None, runs: int) -> None:
+    """Our side of each row with ``old_so`` and with this build, in one process, the two
+    timed one after the other for each row of each run (see the module)."""
+    sides = {
+        "before": calls_with(load_native(old_so)),
+        "after": calls_with(px4params._native),
+    }
+    per = {row: n for row, (_, _, n) in calls().items() if row in sides["after"]}
+    if rows:
+        per = {row: n for row, n in per.items() if any(text in row for text in rows)}
+    times: dict[str, dict[str, list[float]]] = {side: {row: [] for row in per} for side in sides}
+    for run in range(runs):
+        for row in per:
+            for side in ("before", "after") if run % 2 == 0 else ("after", "before"):
+                times[side][row].append(best(sides[side][row]) / per[row])
+    print(f"{os.cpu_count()} CPUs, Python {sys.version.split()[0]}, {runs} runs, medians")
+    print(f"before: {old_so}\nafter:  {Path(px4params._native.__file__).resolve()}")
+    print(f"{'':<31} {'before':>11} {'after':>11} {'after/before':>13}")
+    for row in per:
+        before = statistics.median(times["before"][row])
+        after = statistics.median(times["after"][row])
+        line = f"{row:<31} {before * 1e9:>8.0f} ns {after * 1e9:>8.0f} ns"
+        print(line + f" {after / before:>13.2f}", flush=True)
+
+
+def which_valgrind() -> str | None:
+    """valgrind's path, or None (said on stderr)."""
+    found = shutil.which("valgrind")
+    if not found:
+        print("valgrind is missing: no instruction counts", file=sys.stderr)
+    return found
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--runs", type=int, default=5)
     parser.add_argument("--instructions", action="store_true")
     parser.add_argument("--rows", nargs="+", metavar="TEXT", help="only rows naming any TEXT")
+    parser.add_argument("--against", type=Path, metavar="OLD.so", help="compare with this build")
     parser.add_argument("--loop", nargs=3, metavar=("ROW", "SIDE", "N"), help=argparse.SUPPRESS)
     args = parser.parse_args()
+    if args.against:
+        against(args.against, args.rows, args.runs)
+        return
     made = calls()
     if args.loop:
         row, side, n = args.loop
@@ -203,8 +281,7 @@ def main() -> None:
         return
     if args.rows and not args.loop:
         made = {row: c for row, c in made.items() if any(text in row for text in args.rows)}
-    if args.instructions and not shutil.which("valgrind"):
-        print("valgrind is missing: no instruction counts", file=sys.stderr)
+    if args.instructions and not which_valgrind():
         args.instructions = False
     times: dict[str, tuple[list[float], list[float]]] = {row: ([], []) for row in made}
     for _ in range(args.runs):

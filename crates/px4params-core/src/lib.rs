@@ -28,6 +28,8 @@ pub mod layout;
 pub mod leaf;
 pub mod pages;
 pub mod plan;
+#[cfg(feature = "alloc")]
+pub mod program;
 pub mod rules;
 pub mod scalar;
 pub mod scatter;

@@ -7,9 +7,8 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyList};
 
+use crate::errors;
 use crate::store::CoreStore;
-
-pyo3::import_exception!(px4params.errors, StoreFileError);
 
 /// A checked record: `(offset, kind, key, instance, default, value, raw)`.
 type RecordTuple<'py> = (
@@ -33,8 +32,8 @@ pub fn check_store_file<'py>(
     data: &[u8],
     r#where: &str,
 ) -> PyResult<CheckedTuple<'py>> {
-    let checked = file::check(data)
-        .map_err(|e| StoreFileError::new_err((e.to_string(), r#where.to_owned(), e.offset)))?;
+    let checked =
+        file::check(data).map_err(|e| errors::store_file(e.to_string(), r#where, e.offset))?;
     let table = checked
         .has_table()
         .then(|| checked.table().map(str::to_owned).collect());

@@ -1,9 +1,10 @@
 //! `px4params._native`: the Rust core, compiled once per schema, as frozen Python objects.
 //!
-//! Core errors become the exception classes of `px4params.errors` here, and only here.
+//! Core errors become the exception classes of `px4params.errors` in [`errors`], and only there.
 
 mod batch;
 mod compile;
+mod errors;
 mod fastcall;
 mod file;
 mod plain;
@@ -23,132 +24,16 @@ use px4params_core::compile::OwnedLayout;
 use px4params_core::error::{Error, ErrorKind};
 use px4params_core::layout::{Kind, Layout, NodeId, Role};
 use px4params_core::leaf::{encode_default, get_leaf, locate, set_leaf, Target};
+use px4params_core::program::Program;
 use px4params_core::value::{LeafError as LeafListError, LeafSink, LeafSource};
 use px4params_core::Scalar;
 use pyo3::exceptions::{PyKeyError, PyTypeError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyBytes, PyDict, PyInt, PyList, PyString, PyTuple};
 
+use errors::{Op, ValueErrorClass};
 use structs::StructValue;
-use values::{kind_name, scalar_to_py, LeafRows, PySink, PySource, ValueError};
-
-pyo3::import_exception!(px4params.errors, EncodeError);
-pyo3::import_exception!(px4params.errors, DecodeError);
-pyo3::import_exception!(px4params.errors, ValueShapeError);
-pyo3::import_exception!(px4params.errors, LeafError);
-
-/// Which operation failed, to pick the exception class.
-#[derive(Clone, Copy, PartialEq)]
-pub(crate) enum Op {
-    Encode,
-    Decode,
-    Leaf,
-}
-
-/// Which exception a value problem raises.
-enum Class {
-    /// Wrong shape or kind: `ValueShapeError`.
-    Shape,
-    /// A number outside its field: `EncodeError`.
-    Range,
-}
-
-/// How a value source's or sink's own error becomes an exception.
-pub(crate) trait ValueErrorClass: std::fmt::Display {
-    /// The class, or the exception Python code raised (propagated unchanged).
-    fn class(self) -> Result<Class, PyErr>;
-}
-
-impl ValueErrorClass for ValueError {
-    fn class(self) -> Result<Class, PyErr> {
-        match self {
-            ValueError::Shape(_) => Ok(Class::Shape),
-            ValueError::Range(_) => Ok(Class::Range),
-            ValueError::Py(e) => Err(e),
-        }
-    }
-}
-
-impl ValueErrorClass for std::convert::Infallible {
-    fn class(self) -> Result<Class, PyErr> {
-        match self {}
-    }
-}
-
-/// The one place where core errors become Python exceptions: one-line messages
-/// `TYPE: PATH: what (at bit N)`, with `path` and `bit_offset` attributes.
-pub(crate) fn to_py_err<E: ValueErrorClass>(
-    py: Python<'_>,
-    type_name: &str,
-    layout: &Layout<'_>,
-    err: Error<E>,
-    op: Op,
-) -> PyErr {
-    let path = err.path.display(layout).to_string();
-    let kind = err.kind;
-    let mut text = match &kind {
-        ErrorKind::Value(e) => e.to_string(),
-        k => k.to_string(),
-    };
-    if !path.is_empty() {
-        text = format!("{path}: {text}");
-    }
-    let data_fault = matches!(
-        kind,
-        ErrorKind::Truncated { .. }
-            | ErrorKind::TrailingBytes { .. }
-            | ErrorKind::BadUnionTag { .. }
-            | ErrorKind::TooDeep
-    ) || (op == Op::Decode && matches!(kind, ErrorKind::ArrayTooLong { .. }));
-    if data_fault {
-        text = format!("{text} (at bit {})", err.bit_offset);
-    }
-    let message = format!("{type_name}: {text}");
-    let exc = match kind {
-        ErrorKind::Value(e) => match e.class() {
-            Ok(class) => class_err(class, message),
-            Err(raised) => return raised,
-        },
-        _ if data_fault => DecodeError::new_err(message),
-        ErrorKind::MissingField | ErrorKind::WrongArrayLength { .. } => {
-            ValueShapeError::new_err(message)
-        }
-        ErrorKind::NoSuchLeaf { .. }
-        | ErrorKind::NoSuchPath
-        | ErrorKind::NotALeaf
-        | ErrorKind::VariantNotSelected => LeafError::new_err(message),
-        _ => EncodeError::new_err(message),
-    };
-    set_position(py, &exc, path, (op != Op::Encode).then_some(err.bit_offset));
-    exc
-}
-
-fn class_err(class: Class, message: String) -> PyErr {
-    match class {
-        Class::Shape => ValueShapeError::new_err(message),
-        Class::Range => EncodeError::new_err(message),
-    }
-}
-
-fn set_position(py: Python<'_>, exc: &PyErr, path: String, bit_offset: Option<usize>) {
-    let value = exc.value(py);
-    let _ = value.setattr("path", path);
-    let _ = value.setattr("bit_offset", bit_offset);
-}
-
-/// A value problem outside a codec walk (a leaf value given to `set_leaf`), classed as
-/// [`to_py_err`] classes it.
-fn value_error_to_py(py: Python<'_>, type_name: &str, path: &str, error: ValueError) -> PyErr {
-    let message = format!("{type_name}: {path}: {error}");
-    match error.class() {
-        Ok(class) => {
-            let exc = class_err(class, message);
-            set_position(py, &exc, path.to_owned(), None);
-            exc
-        }
-        Err(raised) => raised,
-    }
-}
+use values::{kind_name, scalar_to_py, LeafRows, PySink, PySource};
 
 pub(crate) struct Compiled {
     layout: OwnedLayout,
@@ -162,7 +47,7 @@ pub(crate) struct Compiled {
     /// than growing a new dict key by key (see [`Compiled::new_dict`]).
     templates: Vec<std::sync::OnceLock<Py<PyDict>>>,
     /// Per node, made on first use: the struct's program, when it has one.
-    programs: Vec<std::sync::OnceLock<Option<program::Program>>>,
+    programs: Vec<std::sync::OnceLock<Option<Program>>>,
     /// Per node: the key of the type it is (empty for nodes that are no type of the model).
     type_keys: Vec<String>,
     /// Per node: how many named fields it has (structs; 0 for other nodes).
@@ -216,9 +101,9 @@ impl Compiled {
     }
 
     /// The program of type `root`, compiled on first use.
-    fn program(&self, root: NodeId) -> Option<&program::Program> {
+    fn program(&self, root: NodeId) -> Option<&Program> {
         self.programs[root as usize]
-            .get_or_init(|| program::Program::compile(&self.layout.as_layout(), root))
+            .get_or_init(|| Program::compile(&self.layout.as_layout(), root))
             .as_ref()
     }
 }
@@ -339,9 +224,7 @@ impl Schema {
         );
         match translated {
             Ok(len) => Ok((PyBytes::new(py, &out[..len]), changes)),
-            Err(e) => Err(store::StoreErrorClass::new_err(
-                e.display(&layout).to_string(),
-            )),
+            Err(e) => Err(errors::translate(e.display(&layout).to_string())),
         }
     }
 
@@ -395,9 +278,7 @@ pub(crate) fn target_of<'a>(target: &'a Bound<'_, PyAny>) -> PyResult<Target<'a>
         } else {
             "a number of more than 32 digits".to_string()
         };
-        return Err(LeafError::new_err(format!(
-            "no leaf [{shown}] (leaf indices are 0 and up)"
-        )));
+        return Err(errors::no_leaf(&shown));
     }
     Err(PyTypeError::new_err(format!(
         "a leaf is named by its index [k] (int >= 0) or a path (str), got {}",
@@ -411,7 +292,7 @@ impl DataType {
     }
 
     fn err<E: ValueErrorClass>(&self, py: Python<'_>, err: Error<E>, op: Op) -> PyErr {
-        to_py_err(py, &self.key, &self.layout(), err, op)
+        errors::codec(py, &self.key, &self.layout(), err, op)
     }
 
     /// Encodes a plain value by its leaf list (see [`plain`]); `None` when it is not plain or
@@ -518,13 +399,16 @@ impl DataType {
         };
         let names = &self.compiled.names;
         let encoded = if let Some(program) = self.compiled.program(self.root) {
-            program.encode(names, value, out, tao, saturate)
+            let mut source = program::PyValues::new(py, names);
+            program.encode(&mut source, value.as_ptr(), out, options)
         } else {
             self.plain_encode(&layout, value, out, options)
         };
         if let Some(n) = encoded {
             return Ok(PyBytes::new(py, &out[..n]));
         }
+        // A look-up may have raised: the general path meets it again and reports it.
+        drop(PyErr::take(py));
         if let Ok(value) = value.cast_exact::<StructValue>() {
             let plain = value.get().as_dict(py)?;
             return self.encode_into(&plain, out, tao, saturate);
@@ -546,9 +430,13 @@ impl DataType {
         tao: bool,
         allow_trailing: bool,
     ) -> PyResult<Bound<'py, PyAny>> {
+        let options = DecodeOptions {
+            tao,
+            allow_trailing,
+        };
         if let Some(program) = self.compiled.program(self.root) {
-            let decoded =
-                program.decode::<Bound<PyDict>>(py, &self.compiled, data, tao, allow_trailing)?;
+            let mut built = program::Built::<Bound<PyDict>>::new(py, &self.compiled);
+            let decoded = program.decode(&mut built, data, options)?;
             if let Some(value) = decoded {
                 return Ok(value);
             }
@@ -571,9 +459,13 @@ impl DataType {
                 self.key
             )));
         }
+        let options = DecodeOptions {
+            tao,
+            allow_trailing,
+        };
         if let Some(program) = self.compiled.program(self.root) {
-            let decoded =
-                program.decode::<program::Fields>(py, &self.compiled, data, tao, allow_trailing)?;
+            let mut built = program::Built::<program::Fields>::new(py, &self.compiled);
+            let decoded = program.decode(&mut built, data, options)?;
             if let Some(value) = decoded {
                 return Ok(value);
             }
@@ -802,7 +694,7 @@ pub(crate) fn leaf_value(
     use px4params_core::codec::Source;
     source.scalar(kind).map_err(|e| {
         let (path, _) = describe(&compiled.layout.as_layout(), leaf);
-        value_error_to_py(py, type_name, &path, e)
+        errors::value(py, type_name, &path, e)
     })
 }
 

@@ -43,7 +43,8 @@ pub fn with_leaves<R>(f: impl FnOnce(&mut Vec<Scalar>) -> R) -> R {
 }
 
 /// A value's leaves in `[k]` order, as [`px4params_core::value::LeafSource`] reads them:
-/// `None` when the value is not plain (the general path takes it).
+/// `None` when the value is not plain (the general path takes it; a look-up may have raised,
+/// which the caller clears).
 pub fn leaves_of(
     layout: &Layout<'_>,
     names: &[Py<PyString>],
@@ -51,18 +52,13 @@ pub fn leaves_of(
     value: &Bound<'_, PyAny>,
     leaves: &mut Vec<Scalar>,
 ) -> Option<()> {
-    let done = Flatten {
+    Flatten {
         py: value.py(),
         layout,
         names,
         leaves,
     }
-    .node(root, value);
-    if done.is_none() {
-        // A look-up may have raised: the general path meets it again and reports it.
-        drop(PyErr::take(value.py()));
-    }
-    done
+    .node(root, value)
 }
 
 struct Flatten<'a, 'l, 'py> {
@@ -84,7 +80,7 @@ impl Flatten<'_, '_, '_> {
             Kind::Void { .. } => {}
             Kind::Struct { first, count } => {
                 let dict = obj.cast_exact::<PyDict>().ok()?;
-                let mut entries = Entries::new(dict);
+                let mut entries = Entries::new(dict.clone());
                 let mut used = 0;
                 for index in first..first + count {
                     let field = layout.fields[index as usize];
@@ -222,14 +218,15 @@ pub(crate) fn item_at(
 /// A struct's dict read in field order: the entries are taken in the dict's own order while it
 /// matches the fields' (as for values written in source code, or decoded), by the key's
 /// identity with the field's interned name; any other key is looked up.
-pub(crate) struct Entries<'a, 'py> {
-    dict: &'a Bound<'py, PyDict>,
+pub(crate) struct Entries<'py> {
+    dict: Bound<'py, PyDict>,
     pos: ffi::Py_ssize_t,
     next: Option<(*mut ffi::PyObject, *mut ffi::PyObject)>,
 }
 
-impl<'a, 'py> Entries<'a, 'py> {
-    pub(crate) fn new(dict: &'a Bound<'py, PyDict>) -> Self {
+impl<'py> Entries<'py> {
+    /// The entries of `dict`, which they hold.
+    pub(crate) fn new(dict: Bound<'py, PyDict>) -> Self {
         let mut entries = Self {
             dict,
             pos: 0,
@@ -242,7 +239,7 @@ impl<'a, 'py> Entries<'a, 'py> {
     #[inline(always)]
     fn advance(&mut self) {
         let (mut key, mut value) = (std::ptr::null_mut(), std::ptr::null_mut());
-        // SAFETY: the dict is alive (held for 'a); `pos` is only ever advanced by this call.
+        // SAFETY: the dict is alive (held); `pos` is only ever advanced by this call.
         let more =
             unsafe { ffi::PyDict_Next(self.dict.as_ptr(), &mut self.pos, &mut key, &mut value) };
         self.next = (more != 0).then_some((key, value));
@@ -259,6 +256,11 @@ impl<'a, 'py> Entries<'a, 'py> {
             }
         }
         self.look_up(name)
+    }
+
+    /// How many entries the dict has.
+    pub(crate) fn len(&self) -> usize {
+        self.dict.len()
     }
 
     /// A key out of the fields' order, or not the interned name: looked up.

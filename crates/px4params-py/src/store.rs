@@ -14,12 +14,9 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyTuple};
 
+use crate::errors::{self, Op, ValueErrorClass};
 use crate::values::{scalar_to_py, PySource};
-use crate::{describe, leaf_value, target_of, to_py_err, Compiled, Op, Schema, ValueErrorClass};
-
-pyo3::import_exception!(px4params.errors, StoreError);
-pub(crate) use StoreError as StoreErrorClass;
-pyo3::import_exception!(px4params.errors, InstanceError);
+use crate::{describe, leaf_value, target_of, Compiled, Schema};
 
 // With a leaf table per type and each instance's first leaves resolved when its value changes:
 // reading leaf [k] is a lookup and a bit read (`px4params_core::table`, `store::table_slots`).
@@ -89,7 +86,7 @@ impl Store {
         }
     }
 
-    /// The one place where store errors become Python exceptions.
+    /// A store error of the instance (or parameter) as a Python exception.
     fn err<E: ValueErrorClass>(
         &self,
         py: Python<'_>,
@@ -98,26 +95,9 @@ impl Store {
         err: CoreError<E>,
         op: Op,
     ) -> PyErr {
-        let layout = self.layout();
         let name = self.instance_name(param, instance);
-        match err {
-            CoreError::Codec(e) => to_py_err(py, &name, &layout, e, op),
-            CoreError::VersionLeaf { path } => {
-                let error: CoreError = CoreError::VersionLeaf { path };
-                StoreError::new_err(format!("{name}: {}", error.display(&layout)))
-            }
-            CoreError::Full { .. } => {
-                let name = self.instance_name(param, None);
-                InstanceError::new_err(format!("{name}: {}", err.display(&layout)))
-            }
-            CoreError::Memory { .. }
-            | CoreError::Unsupported { .. }
-            | CoreError::PagesFull { .. }
-            | CoreError::UnequalPages => {
-                StoreError::new_err(format!("{name}: {}", err.display(&layout)))
-            }
-            _ => InstanceError::new_err(format!("{name}: {}", err.display(&layout))),
-        }
+        let param_name = self.instance_name(param, None);
+        errors::store(py, &name, &param_name, &self.layout(), err, op)
     }
 }
 
@@ -154,21 +134,7 @@ impl Store {
             names.push(name);
         }
         let layout = compiled.layout.as_layout();
-        // The core names a parameter by its number; the user knows it by its name.
-        let named = |e: CoreError| {
-            let text = e.display(&layout).to_string();
-            match e {
-                CoreError::NoSuchParam { param }
-                | CoreError::NotPlanned { param }
-                | CoreError::Unsupported { param } => {
-                    let name = names.get(param as usize).map_or("?", String::as_str);
-                    StoreError::new_err(
-                        text.replace(&format!("parameter #{param}"), &format!("parameter {name}")),
-                    )
-                }
-                _ => StoreError::new_err(text),
-            }
-        };
+        let named = |e: CoreError| errors::store_plan(&layout, e, &names);
         let capacity = store::plan(&layout, &mut defs).map_err(named)?;
         let slots = vec![Slot::default(); capacity.slots];
         let bytes = vec![0u8; capacity.bytes];

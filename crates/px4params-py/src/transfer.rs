@@ -5,8 +5,6 @@ use px4params_core::transfer;
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyList};
 
-pyo3::import_exception!(px4params.errors, TransferError);
-
 /// CRC-64-WE of a normalized DSDL definition text.
 #[pyfunction]
 pub fn dsdl_signature(normalized: &[u8]) -> u64 {
@@ -55,6 +53,6 @@ pub fn reassemble<'py>(
     let mut payload = vec![0u8; frames.iter().map(Vec::len).sum()];
     let (transfer_id, len) =
         transfer::receive_into(&refs, crc::transfer_crc_seed(signature), &mut payload)
-            .map_err(|e| TransferError::new_err(e.to_string()))?;
+            .map_err(|e| crate::errors::transfer(e.to_string()))?;
     Ok((PyBytes::new(py, &payload[..len]), transfer_id))
 }
