@@ -308,11 +308,13 @@ impl<'o> BitWriter<'o> {
     /// Stores the pending whole bytes; `Err(needed_bytes)` when `out` is too small.
     fn flush_bytes(&mut self) -> Result<(), usize> {
         while self.pending >= 8 {
+            // Room first: a refused byte stays pending, so the writer's position (and what
+            // `finish` asks for) still counts it.
+            let Some(slot) = self.out.get_mut(self.bytes) else {
+                return Err(self.bytes + 1);
+            };
             self.pending -= 8;
-            match self.out.get_mut(self.bytes) {
-                Some(slot) => *slot = (self.acc >> self.pending) as u8,
-                None => return Err(self.bytes + 1),
-            }
+            *slot = (self.acc >> self.pending) as u8;
             self.bytes += 1;
         }
         self.acc &= mask(self.pending);

@@ -40,3 +40,16 @@ fn zero_bits_clears_exactly_the_bits_asked_for() {
     zero_bits(&mut out, 5, 70);
     assert_eq!(out, [0b1111_1000, 0, 0, 0, 0, 0, 0, 0, 0, 0b0001_1111]);
 }
+
+#[test]
+fn a_refused_aligned_slice_loses_no_bit() {
+    // 16 bits into 1 byte of room: the first byte is stored and the second has nowhere to go.
+    // The writer still holds all 16 bits, so finishing asks for 2 bytes rather than
+    // reporting 1 byte as a whole message.
+    let mut out = [0u8; 1];
+    let mut w = BitWriter::new(&mut out);
+    w.write(0xABCD, 16).unwrap();
+    assert!(w.aligned_bytes(0).is_none());
+    assert_eq!(w.bit_pos(), 16);
+    assert_eq!(w.finish(), Err(2));
+}
