@@ -108,3 +108,21 @@ def test_format_tag_errors_name_the_line(tmp_path: Path, line: str, error: str) 
     with pytest.raises(DsdlError) as e:
         px4params.load_schema([root], include_dronecan=False, cache_dir=None)
     assert str(e.value).endswith(f"Thing.1.0.dsdl:3: {error}"), str(e.value)
+
+
+def test_instances_are_named_by_their_number_as_the_store_names_them(vehicle: Any) -> None:
+    """``NAME#N`` for instance N, counted from 0 (docs/store.md): the picker names every slot
+    (the page shows these names, composing none) and a configured instance is named by its
+    bit of the ``_INST`` mask. ``@max_instances 4`` of px.Ina238 (dsdl/px/Ina238.1.1.dsdl)."""
+    values, metadata = vehicle
+    drivers = load_drivers()
+    by = {d["parameter"]: d for d in picker(metadata, drivers)}
+    assert by["INA238"]["instances"] == ["INA238#0", "INA238#1", "INA238#2", "INA238#3"]
+    assert by["AK09916"]["instances"][0] == "AK09916#0"
+    # Bit 2 alone: INA238#2, with the leaves INA238_2x (bus 1, address 0x41).
+    staged = dict(values, INA238_INST=0b100, INA238_2A=0, INA238_2B=1, INA238_2C=0x41)
+    found = [d for d in devices(staged, metadata, drivers) if d["parameter"] == "INA238"]
+    assert [(d["instance"], d["location"]) for d in found] == [("INA238#2", "I2C bus 1, 0x41")]
+    # The store, given the same instance, names it the same.
+    store = px4params.Store(px4params.load_schema(use_env=False), classic=[])
+    assert [d["instance"] for d in found] == [store.add("INA238#2")]

@@ -562,3 +562,49 @@ def test_a_valid_then_invalid_entry_leaves_nothing_in_the_review(
         "rows => rows.map(r => r.dataset.name)"
     )
     assert names == ["INA238_0C"]
+
+
+# -- names ------------------------------------------------------------------------------------
+
+
+def test_the_page_shows_instances_by_the_names_the_server_gives(
+    browser: Any, tmp_path: Path
+) -> None:
+    """The naming rule (``NAME#N``) is the server's alone: the page composes no instance name.
+    With every name the server sends rewritten on its way (``INA238#1`` -> ``INA238 no. 1``),
+    the cards, the picker's button, the locations and the review show the names as sent."""
+
+    def renamed(name: str) -> str:
+        return name.replace("#", " no. ")
+
+    def rename(route: Any) -> None:
+        response = route.fetch()
+        body = response.json()
+        for d in body.get("drivers", ()):
+            d["instances"] = [renamed(n) for n in d["instances"]]
+        for d in body.get("devices", ()):
+            d["instance"] = renamed(d["instance"])
+            d["problems"] = [renamed(p) for p in d["problems"]]  # "already INA238#0's"
+        route.fulfill(response=response, json=body)
+
+    gui = gui_on_store(make_store(tmp_path))
+    try:
+        with watched_page(browser) as page:
+            page.route("**/api/manifest", rename)
+            page.goto(gui.url)
+            page.wait_for_selector("body[data-ready=true]")
+            titles = page.locator("#devices .instance h3 .title").all_inner_texts()
+            assert sorted(titles) == ["AK09916 no. 0", "INA238 no. 0", "INA238 no. 1"]
+            card = page.locator(".instance[data-instance='INA238 no. 1']")
+            assert card.locator(".location").inner_text() == "I2C bus 2, 0x45"
+            assert page.inner_text("#add-INA238") == "Add INA238 no. 2"
+            page.click("#add-INA238")
+            assert page.locator(".instance[data-instance='INA238 no. 2']").count() == 1
+            page.click("#review-open")
+            page.wait_for_selector("dialog#review[open]")
+            lines = page.locator("#review-table .words").all_inner_texts()
+            assert lines == ["add INA238 no. 2 (I2C bus 1, 0x45)"]
+            assert "#" not in page.inner_text("#devices")
+            page.goto("about:blank")  # leave before the server stops
+    finally:
+        gui.stop()

@@ -292,3 +292,31 @@ def test_manifest_health_of_a_type_no_driver_declares(tmp_path: Path) -> None:
     assert ManifestHealth(store).devices() == [
         DeviceHealth("GADGET#0", "warning", line + "parameter GADGET")
     ]
+
+
+def test_manifest_health_names_an_instance_by_its_number_and_follows_its_value() -> None:
+    """Instance 3 alone (``NAME#N``: N is the instance's number, not its place among those
+    that exist, docs/store.md) is judged under its name, and judged again when its own value
+    changes (the answer is recomputed only when a structured instance's bytes change)."""
+    import px4params
+    from px4params.store.classic import BUNDLED_CLASSIC
+    from px4params.vehicle.health import DeviceHealth, ManifestHealth
+
+    store = px4params.Store(px4params.load_schema(use_env=False), classic=BUNDLED_CLASSIC)
+    store.add("INA238#3")
+    store.set("INA238#3.bus.i2c.bus_id", 1)
+    store.set("INA238#3.bus.i2c.address", 0x45)
+    health = ManifestHealth(store)
+    line = "ina238 INA238#3 on I2C bus 1 address 0x45: configured"
+    assert health.devices() == [DeviceHealth("INA238#3", "nominal", line)]
+    store.set("SYS_AUTOSTART", 4001)  # a classic parameter: the judgement stands
+    assert health.devices() == [DeviceHealth("INA238#3", "nominal", line)]
+    store.set("INA238#3.bus.i2c.address", 0x01)
+    assert health.devices() == [
+        DeviceHealth(
+            "INA238#3",
+            "warning",
+            "ina238 INA238#3 on I2C bus 1 address 0x01: warning: I2C address 0x01 is reserved "
+            "(use 0x03..0x77)",
+        )
+    ]

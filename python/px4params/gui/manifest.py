@@ -6,7 +6,8 @@ what would stop its driver from starting it (the autostart rules of
 :func:`~px4params.vehicle.autostart.configured_value`).
 
     GET  /api/manifest          {"drivers": [...], "boards": [...]} the picker, in the page's
-                                order, and the boards whose own starts are known
+                                order (with each instance slot's name, which the page shows
+                                as it is), and the boards whose own starts are known
     POST /api/manifest          {"values": {flat name: value}, "board": name or null}
                                 -> {"devices": [...]}: the instances those values configure,
                                 with their problems (on that board)
@@ -24,6 +25,7 @@ from starlette.responses import JSONResponse, Response
 from starlette.routing import Route
 
 from px4params.errors import BoardsError
+from px4params.store.key import Key
 from px4params.vehicle.autostart import Configured, configured_value, shared_locations
 from px4params.vehicle.boards import Board, load_boards
 from px4params.vehicle.drivers import Driver, Drivers
@@ -98,12 +100,19 @@ def _variant_starts(driver: Driver) -> dict[str, dict[str, int]]:
     return starts
 
 
+def _instance_names(parameter: str, slots: int) -> list[str]:
+    """The names of ``parameter``'s instance slots in number order, as the page shows them
+    (the page composes no name: the rule is :class:`Key`'s alone)."""
+    return [str(Key(parameter, n, None)) for n in range(slots)]
+
+
 def picker(metadata: Mapping[str, Any], drivers: Drivers) -> list[dict[str, Any]]:
     """Every instanced structured parameter of ``metadata`` as the picker lists it, grouped
     (:data:`PICKER_GROUPS` order, then "other") and by chip name within a group. ``start``
     is what a new instance is staged with: the driver's first bus kind (``bus``) and, per bus
     kind it accepts, the fields that differ from the DSDL defaults (``variants``). ``order``
-    is the driver's start order (None without a driver)."""
+    is the driver's start order (None without a driver); ``instances`` names each instance
+    slot (``INA238#0`` ...), by number."""
     found = []
     for entry in metadata.get("parameters", ()):
         if entry.get("type") != "Custom" or entry.get("max_instances") is None:
@@ -124,6 +133,7 @@ def picker(metadata: Mapping[str, Any], drivers: Drivers) -> list[dict[str, Any]
                 "default_address": driver.default_address if driver is not None else None,
                 "needs": _needs(driver),
                 "start": start,
+                "instances": _instance_names(entry["name"], entry["max_instances"]),
             }
         )
     order = [g for g, _ in PICKER_GROUPS] + [OTHER]
@@ -238,8 +248,9 @@ def devices(
         for n in range(entries[parameter]["max_instances"]):
             if (mask >> n) & 1:
                 value = _instance_value(entries[parameter], n, values)
-                stored[f"{parameter}#{n}"] = value
-                found.append(configured_value(value, drivers, parameter, f"{parameter}#{n}"))
+                name = str(Key(parameter, n, None))
+                stored[name] = value
+                found.append(configured_value(value, drivers, parameter, name))
     found = shared_locations(found)
     if board is not None:
         for k, c in enumerate(found):

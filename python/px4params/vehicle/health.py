@@ -62,10 +62,12 @@ class ManifestHealth:
         return list(self._devices)
 
     def _state(self) -> bytes:
+        """Every structured instance's name and stored bytes: what the judgement depends on."""
+        store = self.store
         parts = [
-            name.encode() + b"=" + self.store.encoded(name)
-            for name in self.store.names()
-            if self.store.spec(name.partition("#")[0]) is not None
+            str(key).encode() + b"=" + store.encoded(key)
+            for key in store.instance_keys()
+            if store.spec(key.param) is not None
         ]
         return b";".join(parts)
 

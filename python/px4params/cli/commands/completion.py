@@ -64,9 +64,9 @@ def names(store_path: str | None = None) -> list[str]:
             found.append(name)
         else:
             found += [name] + [spec.instance_name(i) for i in range(spec.slots)]
-    for name in store.names():
-        if store.classic(name.split("#")[0]) is None:
-            found += [f"{name}.{leaf.path}" for leaf in store.leaves(name)]
+    for key in store.instance_keys():
+        if store.classic(key.param) is None:
+            found += [str(key.at(leaf.path)) for leaf in store.leaves(key)]
     return found
 
 

@@ -9,6 +9,8 @@ const S = {
   meta: { parameters: [] }, values: {}, staged: new Map(), health: [], messages: [], mode: "",
   byName: new Map(), structured: [], classic: [], order: new Map(), notes: [], results: new Map(), limits: {},
   drivers: new Map(), picker: [], devices: new Map(), devicesNow: new Map(),
+  instanceNames: new Map(), // parameter -> its instances' names, by number (the server's)
+  instanceOf: new Map(),    // an instance's name -> {e, n}
   invalid: new Map(), // name -> {text, error}: a wrong entry stays until corrected or discarded
   memory: {},         // union tag name -> {variant tag -> {flat name -> value}}, for the session
 };
@@ -56,10 +58,17 @@ function index() {
   S.byName = new Map(S.meta.parameters.map((e) => [e.name, e]));
   S.structured = S.meta.parameters.filter((e) => e.type === "Custom");
   S.order = new Map();
+  S.instanceNames = new Map();
+  S.instanceOf = new Map();
   const destructured = new Set();
   for (const e of S.structured) {
     e._letters = new Map((e.flat || []).map((f) => [f.path, f.letter]));
-    if (e.max_instances !== null) { S.order.set(e.name + "_INST", 0); destructured.add(e.name + "_INST"); }
+    if (e.max_instances !== null) {
+      S.order.set(e.name + "_INST", 0); destructured.add(e.name + "_INST");
+      const names = (S.drivers.get(e.name) || {}).instances || [];
+      S.instanceNames.set(e.name, names);
+      names.forEach((name, n) => S.instanceOf.set(name, { e, n }));
+    }
     for (const f of e.flat || []) {
       for (let n = 0; n < (e.max_instances || 1); n++) {
         const name = flatName(e, n, f.path);
@@ -81,7 +90,9 @@ function flatName(e, n, path) {
 const current = (name) => S.values[name];
 const effective = (name) => (S.staged.has(name) ? S.staged.get(name).value : S.values[name]);
 const maskOf = (e, values) => (values ? values[e.name + "_INST"] : effective(e.name + "_INST")) || 0;
-const titleOf = (e, n) => (e.max_instances === null ? e.name : `${e.name}#${n}`);
+// An instance's name as the server gives it (/api/manifest: each picker entry's `instances`,
+// by number): the page composes no name. A shared parameter's is its own.
+const titleOf = (e, n) => (e.max_instances === null ? e.name : S.instanceNames.get(e.name)[n]);
 
 function defaultOf(name, field) {
   const entry = S.byName.get(name);
@@ -480,9 +491,9 @@ function renderPicker() {
           onclick: () => {
             const n = addInstance(e);
             renderManifest();
-            document.querySelector(`.instance[data-instance="${e.name}#${n}"]`)?.scrollIntoView({ block: "nearest" });
+            document.querySelector(`.instance[data-instance="${titleOf(e, n)}"]`)?.scrollIntoView({ block: "nearest" });
           },
-        }, free === undefined ? "All in use" : `Add ${d.parameter}#${free}`)));
+        }, free === undefined ? "All in use" : `Add ${titleOf(e, free)}`)));
     }
     root.append(el("section", { class: "kind-group", "data-group": group }, el("h3", {}, group), list));
   }
@@ -556,10 +567,9 @@ function classicRow(e) {
 // Health reports of instances the vehicle still has (a removed instance's last report goes).
 function visibleHealth() {
   return S.health.filter((h) => {
-    const m = /^(.+)#(\d+)$/.exec(h.instance);
-    const e = m && S.byName.get(m[1]);
-    if (!e || e.max_instances === null) return true;
-    return ((maskOf(e, S.values) >> Number(m[2])) & 1) === 1;
+    const found = S.instanceOf.get(h.instance);
+    if (!found) return true;
+    return ((maskOf(found.e, S.values) >> found.n) & 1) === 1;
   });
 }
 
