@@ -9,12 +9,14 @@ holds (GetSet.uavcan: the response is the parameter's state after the request)."
 from __future__ import annotations
 
 import subprocess
+from collections import Counter
 from pathlib import Path
 from typing import Any
 
 import dronecan
 import px4params
 import pytest
+from core_calls import count_core_calls
 from dronecan_bus import PX4PARAMS, served
 from px4params.errors import Px4ParamsError
 from px4params.links.dronecan_params import DronecanParams
@@ -231,3 +233,42 @@ def test_getset_default_of_an_element_the_default_array_lacks_is_empty(tmp_path:
     length = params.entry("THINGS_0_ITEMS_LEN")
     assert length is not None
     assert (length.value, length.default, length.min, length.max) == _integers(2, 0, 0, 3)
+
+
+@pytest.mark.parametrize(
+    ("name", "value", "change"),
+    [
+        # The leaf numbers of px.Ina238 by hand (tests/test_key.py): [4] bus.i2c.address,
+        # [6] shunt, a float16 that keeps 0.001 as 0.0010004043579101562 (IEEE half 0x1419).
+        ("INA238_1_I2C_ADDRESS", {"integer_value": 0x41}, "(INA238#1[4]) = 65"),
+        ("INA238_1_SHUNT", {"real_value": 0.001}, "(INA238#1[6]) = 0.0010004043579101562"),
+    ],
+)
+def test_a_getset_write_finds_its_leaf_once(
+    monkeypatch: pytest.MonkeyPatch, name: str, value: dict[str, Any], change: str
+) -> None:
+    """The list holds each leaf resolved (its instance and path): a write is one core call
+    that finds and writes the leaf, and one that reads back what is stored (what the response
+    and the change line carry); the value is not read first to learn its variant."""
+    store = px4params.Store(px4params.load_schema(use_env=False), classic=BUNDLED_CLASSIC)
+    store.add("INA238#1")
+    params = DronecanParams(store)
+    assert params.index_of(name) is not None  # the list is made before counting
+    counted = count_core_calls(store, monkeypatch)
+    assert params.set(name, value) == f"{name} {change}"
+    assert counted.calls == Counter(set_leaf=1, get_leaf_value=1)
+
+
+def test_a_getset_write_of_a_union_tag_reads_the_value_once_to_check_it(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A tag brings another variant's leaves in: the whole value is read once (their
+    @min/@max checked), the tag found and written once, and read back."""
+    store = px4params.Store(px4params.load_schema(use_env=False), classic=BUNDLED_CLASSIC)
+    store.add("INA238#1")
+    params = DronecanParams(store)
+    assert params.index_of("INA238_1_BUS_TYPE") is not None
+    counted = count_core_calls(store, monkeypatch)
+    assert params.set("INA238_1_BUS_TYPE", {"integer_value": 1}).endswith("(INA238#1[1]) = 1")
+    assert counted.calls == Counter(get=1, set_leaf=1, get_leaf_value=1)
+    assert "spi" in store.get("INA238#1")["bus"]

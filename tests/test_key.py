@@ -8,10 +8,12 @@ The leaf numbers are read off ``px.Ina238`` by hand: ``[0]`` p_version, ``[1]`` 
 from __future__ import annotations
 
 from collections import Counter
+from pathlib import Path
 from typing import Any
 
 import px4params
 import pytest
+from core_calls import CountingCore, count_core_calls
 from px4params.errors import InstanceError
 from px4params.store import flat
 from px4params.store.key import Key
@@ -74,29 +76,9 @@ def test_a_flat_parameter_carries_its_leaf_as_a_key(store: px4params.Store) -> N
     assert flat.resolve_flat(store, "INA238_1C") == "INA238#1[4]"
 
 
-class _Counting:
-    """The store's core object, its leaf lookups counted (every other call passed on)."""
-
-    def __init__(self, native: Any) -> None:
-        self.native = native
-        self.calls: Counter[str] = Counter()
-
-    def __getattr__(self, name: str) -> Any:
-        method = getattr(self.native, name)
-        if name not in ("get_leaf", "get_leaf_value", "set_leaf", "get", "leaves"):
-            return method
-
-        def counted(*args: Any, **kwargs: Any) -> Any:
-            self.calls[name] += 1
-            return method(*args, **kwargs)
-
-        return counted
-
-
 @pytest.fixture
-def counted(store: px4params.Store, monkeypatch: pytest.MonkeyPatch) -> _Counting:
-    counting = _Counting(store._native)
-    monkeypatch.setattr(store, "_native", counting)
+def counted(store: px4params.Store, monkeypatch: pytest.MonkeyPatch) -> CountingCore:
+    counting = count_core_calls(store, monkeypatch)
     parsed: list[str] = []
     original = Key.parse.__func__  # type: ignore[attr-defined]
 
@@ -110,13 +92,25 @@ def counted(store: px4params.Store, monkeypatch: pytest.MonkeyPatch) -> _Countin
     return counting
 
 
-def test_a_write_by_path_looks_its_leaf_up_once(store: px4params.Store, counted: _Counting) -> None:
+def test_a_write_by_path_looks_its_leaf_up_once(
+    store: px4params.Store, counted: CountingCore
+) -> None:
     store.set("INA238#1.current", 100)  # a leaf with @min/@max: checked without the core
     assert counted.calls == Counter(set_leaf=1)
     assert store.get("INA238#1.current") == 100
 
 
-def test_a_write_of_a_key_parses_no_text(store: px4params.Store, counted: _Counting) -> None:
+def test_a_write_of_a_union_tag_by_path_looks_its_leaf_up_once(
+    store: px4params.Store, counted: CountingCore
+) -> None:
+    # The tag brings SPI's leaves in: the value is read once to check them, the tag found
+    # and written once (its path needs no asking the core which leaf it is).
+    store.set(Key("INA238", 1, "bus._tag"), 1)
+    assert counted.calls == Counter(get=1, set_leaf=1)
+    assert list(store.get("INA238#1")["bus"]) == ["spi"]
+
+
+def test_a_write_of_a_key_parses_no_text(store: px4params.Store, counted: CountingCore) -> None:
     instance = Key("INA238", 1, None)  # (as a page or a file line parsed it, at the edge)
     store.set(instance.at("shunt"), 0.001)
     view = store[instance]
@@ -126,7 +120,7 @@ def test_a_write_of_a_key_parses_no_text(store: px4params.Store, counted: _Count
     assert (store.get("INA238#1.current"), store.get("INA238#1[4]")) == (200, 0x41)
 
 
-def test_a_flat_write_looks_its_leaf_up_once(store: px4params.Store, counted: _Counting) -> None:
+def test_a_flat_write_looks_its_leaf_up_once(store: px4params.Store, counted: CountingCore) -> None:
     written = flat.set_flat(store, "INA238_1C", 0x41)
     # Found (one lookup, which also says it is live), written by path (one), read back (one
     # value: what the vehicle is told); no whole value decoded, no name parsed from text.
@@ -167,7 +161,7 @@ def test_a_flat_name_of_an_unselected_variant_says_which_selector(
 
 
 def test_a_ground_station_write_reads_the_flat_name_once(
-    store: px4params.Store, counted: _Counting, monkeypatch: pytest.MonkeyPatch
+    store: px4params.Store, counted: CountingCore, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     fmap = flat.flat_map(store)
     reads: list[str] = []
@@ -181,3 +175,28 @@ def test_a_ground_station_write_reads_the_flat_name_once(
     assert flat.write_flat(store, "INA238_1C", 0x41) == "INA238_1C = 65"
     assert reads == ["INA238_1C"]
     assert counted.calls == Counter(get_leaf=1, set_leaf=1, get_leaf_value=1)
+
+
+#: How the naming rule would be written out again: a name composed (``f"{p}#{n}"``,
+#: ``p + "#" + n``, a page's `${p}#${n}`) or taken apart by hand (``split("#")``,
+#: ``partition("#")``, a page's ``/#(\d+)/``).
+_RULE_WRITTEN_OUT = ("}#{", '"#" +', '+ "#"', 'split("#")', 'partition("#")', "}#${", "#(\\d")
+
+
+def test_the_naming_rule_is_written_in_key_py_alone() -> None:
+    """``NAME#N`` is :meth:`Key.__str__`'s (and :meth:`Key.parse`'s) alone: no other module of
+    the package, nor the page's script, composes or splits a name by hand. (The DSDL loader's
+    ``#`` is a comment's, not a name's.)"""
+    package = Path(__file__).resolve().parents[1] / "python" / "px4params"
+    allowed = {"store/key.py", "dsdl/loader.py"}
+    sources = [*package.rglob("*.py"), package / "gui" / "static" / "app.js"]
+    found = [
+        f"{path.relative_to(package)}: {pattern}"
+        for path in sources
+        if str(path.relative_to(package)) not in allowed
+        for pattern in _RULE_WRITTEN_OUT
+        if pattern in path.read_text()
+    ]
+    assert found == []
+    key = (package / "store" / "key.py").read_text()
+    assert "}#{" in key  # (the patterns find the rule where it is)

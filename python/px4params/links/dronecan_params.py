@@ -72,6 +72,17 @@ def variant_name(value: dict[str, Any]) -> str:
     return next(iter(value)) if value else "empty"
 
 
+def _variant_of(ref: ClassicParam | ParamSpec | LongLeaf) -> str:
+    """The ``Value`` variant a parameter of the list takes (see the module doc)."""
+    if isinstance(ref, ClassicParam):
+        return "real_value" if ref.is_float else "integer_value"
+    if isinstance(ref, ParamSpec):
+        return "integer_value"
+    if ref.slot.type == "bool":
+        return "boolean_value"
+    return "real_value" if ref.slot.mav_type == flat.FLOAT32 else "integer_value"
+
+
 class DronecanParams:
     """The GetSet list of ``store`` (built on demand, rebuilt after a write changes it)."""
 
@@ -124,7 +135,7 @@ class DronecanParams:
         return self._leaf_entry(ref)
 
     def _classic_entry(self, classic: ClassicParam) -> GetSetEntry:
-        variant = "real_value" if classic.is_float else "integer_value"
+        variant = _variant_of(classic)
         value = self.store.get(classic.name)
         low, high = classic.entry.get("min"), classic.entry.get("max")
         if not classic.is_float:  # without metadata bounds, the store checks int32's
@@ -146,11 +157,11 @@ class DronecanParams:
             default: Any = default_leaf.value if default_leaf.path == slot.path else None
         except Px4ParamsError:  # the default value has another shape
             default = None
-        if slot.type == "bool":
-            value = {"boolean_value": int(bool(current))}
-            shown = EMPTY if default is None else {"boolean_value": int(bool(default))}
+        variant = _variant_of(leaf)
+        if variant == "boolean_value":
+            value = {variant: int(bool(current))}
+            shown = EMPTY if default is None else {variant: int(bool(default))}
             return GetSetEntry(leaf.name, value, shown, _integer(0), _integer(1))
-        variant = "real_value" if slot.mav_type == flat.FLOAT32 else "integer_value"
         # The range the store enforces: the field's @min/@max where given, else its type's.
         spec = self.store.spec(leaf.instance.param)
         bounds = leaf_ranges(spec.data_type).get(generic_path(slot.path)) if spec else None
@@ -174,14 +185,15 @@ class DronecanParams:
             Px4ParamsError: the write is refused (no such parameter, another variant, out of
                 range); nothing changed. The message names the parameter.
         """
-        entry = self.entry(name)
-        if entry is None:
+        index = self.index_of(name)
+        if index is None:
             raise Px4ParamsError(f"{name}: no such parameter")
-        given, expected = variant_name(value), variant_name(entry.value)
+        ref = self._rows()[index][1]
+        # The variant is the parameter's kind's: known without reading its value.
+        given, expected = variant_name(value), _variant_of(ref)
         if given != expected:
             raise Px4ParamsError(f"{name}: {given} refused: the parameter takes {expected}")
         number = value[given]
-        ref = self._rows()[self._index[name]][1]
         try:
             with self.store.transaction():
                 if isinstance(ref, ClassicParam):
@@ -195,8 +207,12 @@ class DronecanParams:
                     leaf_value = bool(number) if given == "boolean_value" else number
                     if given == "boolean_value" and number not in (0, 1):
                         raise Px4ParamsError(f"value {number} is not a boolean (0 or 1)")
-                    self.store.set(ref.leaf, leaf_value)
-                    change = f"{name} ({ref.leaf}) = {self.store.leaf(ref.leaf).value}"
+                    # Written by its path, resolved when the list was made: the core finds
+                    # the leaf once (a [k] would be looked up for its range, then again to be
+                    # written); read back as stored (a float16 rounds).
+                    target = ref.target
+                    self.store.set(target, leaf_value)
+                    change = f"{name} ({ref.leaf}) = {self.store.get(target)}"
         except Px4ParamsError as e:
             text = str(e)
             raise Px4ParamsError(text if text.startswith(name) else f"{name}: {text}") from None

@@ -89,6 +89,12 @@ class LongLeaf(NamedTuple):
         """``INA238#1[4]``."""
         return self.instance.at(self.index)
 
+    @property
+    def target(self) -> Key:
+        """The leaf by its path, ``INA238#1.bus.i2c.address``: what a write names (resolved
+        already: the store takes its range from the path and the core finds the leaf once)."""
+        return self.instance.at(self.slot.path)
+
 
 class LongNames:
     """The long names of a store's parameter set, checked at construction in time proportional

@@ -474,9 +474,10 @@ class Store:
         if not ranges:
             return
         # The leaf is looked up once: by the core for a write by [k] (its path says which
-        # range applies); for a write by path, only when a refusal needs its type.
+        # range applies); for a write by path (a union tag or a length too), only when a
+        # refusal needs its type.
         found: tuple[int, str, str, Any] | None = None
-        if isinstance(target, str) and not target.endswith(("_tag", "_len")):
+        if isinstance(target, str):
             path = target  # a leaf named by its path: no need to ask the core
         else:
             try:
@@ -509,11 +510,11 @@ class Store:
                         check_stored(where, stored, rng, not force, value)
                     return
         try:
-            data = self._native.get(p.index, instance, default=default)
-            data = data_type.set_leaf(data, target, value, tao=False, saturate=saturate)
+            stored = self._native.get(p.index, instance, default=default)
+            data = data_type.set_leaf(stored, target, value, tao=False, saturate=saturate)
             leaves = (
                 _changed_leaves(
-                    data_type.leaves(data, tao=False), self._stored_leaves(p, instance, default)
+                    data_type.leaves(data, tao=False), data_type.leaves(stored, tao=False)
                 )
                 if whole
                 else [data_type.get_leaf(data, target, tao=False)]
