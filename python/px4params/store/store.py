@@ -510,12 +510,10 @@ class Store:
                         check_stored(where, stored, rng, not force, value)
                     return
         try:
-            stored = self._native.get(p.index, instance, default=default)
-            data = data_type.set_leaf(stored, target, value, tao=False, saturate=saturate)
+            now = self._native.get(p.index, instance, default=default)
+            data = data_type.set_leaf(now, target, value, tao=False, saturate=saturate)
             leaves = (
-                _changed_leaves(
-                    data_type.leaves(data, tao=False), data_type.leaves(stored, tao=False)
-                )
+                _changed_leaves(data_type.leaves(data, tao=False), data_type.leaves(now, tao=False))
                 if whole
                 else [data_type.get_leaf(data, target, tao=False)]
             )
