@@ -186,11 +186,52 @@ def _definition(tags: dict[str, Any], type_tags: dict[str, Any] | None = None) -
 def test_a_malformed_field_tag_is_one_line_naming_type_field_and_tag(
     tags: dict[str, Any], message: str
 ) -> None:
+    (shunt,) = type_def("x.Shunt.1.0", _definition(tags)).fields  # tags not read yet
     with pytest.raises(DsdlError) as caught:
-        assert not type_def("x.Shunt.1.0", _definition(tags)).fields  # read when first asked for
+        assert not shunt.doc  # read when first asked for
     text = str(caught.value)
     assert "\n" not in text
     assert text.startswith("/dsdl/x/Shunt.1.0.dsdl:7: " + message), text
+
+
+@pytest.mark.parametrize(
+    ("tags", "message"),
+    [
+        ({"default": "x"}, "x.Shunt.1.0.shunt: @default expects a number or true/false, got 'x'"),
+        ({"default": {"": 1}}, "x.Shunt.1.0.shunt: @default expects field paths, got ''"),
+    ],
+)
+def test_a_default_read_alone_is_refused_in_the_docs_words(
+    tags: dict[str, Any], message: str
+) -> None:
+    """A store's defaults read ``@default`` alone (Field.declared_default), refused as the
+    whole doc would refuse it."""
+    (shunt,) = type_def("x.Shunt.1.0", _definition(tags)).fields
+    with pytest.raises(DsdlError) as caught:
+        assert shunt.declared_default is None
+    assert str(caught.value) == "/dsdl/x/Shunt.1.0.dsdl:7: " + message
+
+
+def test_a_default_is_read_without_the_other_tags() -> None:
+    """Only what is asked for is read: the default of a field whose @min is malformed is
+    there; its doc, asked for, is refused."""
+    (shunt,) = type_def("x.Shunt.1.0", _definition({"default": 0.5, "min": "low"})).fields
+    assert shunt.declared_default == 0.5
+    with pytest.raises(DsdlError, match=r"shunt: @min expects a number, got 'low'$"):
+        assert not shunt.doc
+    path = {"default": {"i2c.address": 0x45}}
+    (bus,) = type_def("x.Shunt.1.0", _definition(path)).fields
+    assert bus.declared_default == {"i2c.address": 0x45} == bus.doc.declared_default
+    assert type_def("x.Shunt.1.0", _definition({})).fields[0].declared_default is None
+
+
+def test_every_bundled_default_read_alone_is_the_docs() -> None:
+    types = load_schema(use_env=False).model["types"]
+    for key, definition in types.items():
+        alone = type_def(key, definition).fields  # (not kept: read again here)
+        whole = type_def(key, definition).fields
+        for field, again in zip(alone, whole, strict=True):
+            assert field.declared_default == again.doc.declared_default, (key, field.name)
 
 
 @pytest.mark.parametrize(
@@ -213,18 +254,28 @@ def test_a_malformed_type_tag_is_one_line_naming_type_and_tag(
 def test_a_doc_of_the_wrong_shape_is_refused() -> None:
     definition = _definition({})
     definition["fields"][0]["doc"] = ["not", "a", "table"]
+    (shunt,) = type_def("x.Shunt.1.0", definition).fields
     with pytest.raises(DsdlError, match=r"x\.Shunt\.1\.0\.shunt: doc is not a table"):
-        assert not type_def("x.Shunt.1.0", definition).fields
+        assert not shunt.doc
+    with pytest.raises(DsdlError, match=r"x\.Shunt\.1\.0\.shunt: doc is not a table"):
+        assert shunt.declared_default is None
 
 
 def test_a_hand_built_schema_is_refused_where_its_tags_are_first_read() -> None:
     """A schema made from a model dict reads a type's tags when a layer first asks for them:
-    the store's parameter set, here, names the bad tag (no store is built over it)."""
+    the store's defaults read ``@default`` (no store is built over a bad one); a field's range
+    is read by the first write it checks, which is refused naming the bad tag."""
     import px4params
 
-    schema = Schema({"types": {"x.Shunt.1.0": _definition({"min": "low"}, {"max_instances": 2})}})
+    bad_default = _definition({"default": "high"}, {"max_instances": 2})
+    with pytest.raises(DsdlError, match=r"x\.Shunt\.1\.0\.shunt: @default expects a number"):
+        px4params.Store(Schema({"types": {"x.Shunt.1.0": bad_default}}), classic=[])
+    bad_min = _definition({"min": "low"}, {"max_instances": 2})
+    store = px4params.Store(Schema({"types": {"x.Shunt.1.0": bad_min}}), classic=[])
+    store.add("SHUNT#0")
     with pytest.raises(DsdlError, match=r"x\.Shunt\.1\.0\.shunt: @min expects a number"):
-        px4params.Store(schema, classic=[])
+        store.set("SHUNT#0.shunt", 0.5)
+    assert store.get("SHUNT#0.shunt") == 0
 
 
 def test_each_tag_is_read_in_one_place() -> None:

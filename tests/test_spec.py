@@ -24,6 +24,7 @@ from typing import Any
 import px4params
 import pytest
 from gui_server import GUI_LINE
+from px4params.dsdl.schema import Schema, load_schema
 from px4params.errors import Px4ParamsError, StoreError, ValueRangeError
 from px4params.store.classic import BUNDLED_CLASSIC, ClassicParam
 from px4params.store.file import encode_file
@@ -351,3 +352,29 @@ def test_the_page_api_refuses_a_shunt_of_zero(tmp_path: Path, store_file: Path) 
         (False, f"INA238_1Q: INA238#1.shunt: inf {NOT_FINITE}"),
     ]
     assert store_file.read_bytes() == before
+
+
+def test_a_store_reads_its_defaults_without_the_fields_other_tags(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Building a store's defaults reads each field's ``@default`` alone: units, ranges and
+    value names are read for what is shown or checked (``param show`` reads none)."""
+    from px4params.dsdl import model
+
+    read: list[str] = []
+    original = model._field_doc
+
+    def field_doc(key: str, file: str | None, field: Any) -> Any:
+        read.append(f"{key}.{field.get('name')}")
+        return original(key, file, field)
+
+    monkeypatch.setattr(model, "_field_doc", field_doc)
+    schema = Schema(load_schema(use_env=False).model)  # its types not read yet
+    store = px4params.Store(schema, classic=[])
+    assert read == []
+    # The defaults are the declared ones (dsdl/px/Ina238.1.1.dsdl: @default 327, 0.0003).
+    store.add("INA238#0")
+    assert store.get("INA238#0.current") == 327
+    assert store.get("INA238#0.shunt") == pytest.approx(0.0003, rel=1e-3)
+    store.set("INA238#0.current", 100)  # a write checks the range: the doc is read then
+    assert "px.Ina238.1.1.current" in read

@@ -10,7 +10,8 @@ field's tags a :class:`FieldDoc` (``field.doc.minimum``, ``field.doc.unit``,
 schema, an edited cache) is refused with one line naming the type, the field and the tag.
 
 The records are small read-only classes (``dataclasses``, ``typing`` and named tuples cost a
-short command their making); a type's doc and fields are read when first asked for, each once.
+short command their making); a type's doc and fields are read when first asked for, each once,
+and so is a field's doc (its ``@default`` alone while only that is asked for: a store's defaults).
 """
 
 from __future__ import annotations
@@ -150,22 +151,62 @@ class FieldDoc(_Doc):
 NO_DOC = FieldDoc()
 
 
+#: A declared default not read yet.
+_UNREAD: Any = object()
+
+
 class Field:
-    """One field of a type, padding included (``kind == "void"``, no name). Read-only."""
+    """One field of a type, padding included (``kind == "void"``, no name). Read-only.
 
-    __slots__ = ("doc", "is_padding", "kind", "line", "name", "type")
+    A field made from the model (``source``: the type's key, its file and the model's field)
+    reads its doc comment when first asked for, and its ``@default`` alone while only that
+    is asked for: a command's store builds every parameter's default, but shows the other
+    tags (units, ranges, value names) of the few it prints, if any."""
 
-    def __init__(self, name: str, type: TypeSpec, doc: FieldDoc, line: int | None = None) -> None:
+    __slots__ = ("_default", "_doc", "_source", "is_padding", "kind", "line", "name", "type")
+
+    def __init__(
+        self,
+        name: str,
+        type: TypeSpec,
+        doc: FieldDoc | None = None,
+        line: int | None = None,
+        *,
+        source: tuple[str, str | None, Mapping[str, Any]] | None = None,
+    ) -> None:
         self.name = name
         #: The field's type, JSON-shaped as the core compiles it.
         self.type = type
-        self.doc = doc
+        self._doc = doc if doc is not None or source is not None else NO_DOC
+        self._source = source
+        self._default: Any = _UNREAD
         #: Its line in the DSDL file, where known.
         self.line = line
         #: ``uint``, ``int``, ``float``, ``bool``, ``void``, ``array``, ``dynarray``, ``ref``.
         self.kind: str = type["kind"]
         #: ``voidN``: padding, no data.
         self.is_padding = self.kind == "void"
+
+    @property
+    def doc(self) -> FieldDoc:
+        """The field's doc comment and tags (read once, when first asked for)."""
+        doc = self._doc
+        if doc is None:
+            assert self._source is not None
+            doc = self._doc = _field_doc(*self._source)
+        return doc
+
+    @property
+    def declared_default(
+        self,
+    ) -> int | float | bool | Mapping[str, int | float | bool] | None:
+        """``doc.declared_default``: read alone, without the other tags, until the doc is."""
+        if self._doc is not None:
+            return self._doc.declared_default
+        if self._default is _UNREAD:
+            assert self._source is not None
+            self._default = _declared_default(*self._source)
+        return self._default  # type: ignore[no-any-return]
 
     def __repr__(self) -> str:
         return f"Field(name={self.name!r}, type={self.type!r}, doc={self.doc!r})"
@@ -223,7 +264,7 @@ class TypeDef:
         if self._fields is None:
             key, file = self.key, self.file
             self._fields = tuple(
-                Field(str(f["name"]), f["type"], _field_doc(key, file, f), f.get("line"))
+                Field(str(f["name"]), f["type"], None, f.get("line"), source=(key, file, f))
                 for f in self._definition["fields"]
             )
         return self._fields
@@ -406,6 +447,25 @@ def _type_doc(key: str, definition: Mapping[str, Any]) -> TypeDoc:
         except TagValueError as e:
             raise DsdlError(f"{key}: @{tag} {e}", file) from None
     return TypeDoc(short, long, **values)
+
+
+def _declared_default(
+    key: str, file: str | None, field: Mapping[str, Any]
+) -> int | float | bool | Mapping[str, int | float | bool] | None:
+    """A field's ``@default`` (a scalar or a composite field's paths) read alone, refused in
+    :func:`_field_doc`'s words."""
+    where = f"{key}.{field.get('name') or '(padding)'}"
+    line = field.get("line")
+    try:
+        value = _doc_parts(where, field.get("doc"))[2].get("default")
+    except TagValueError as e:
+        raise DsdlError(str(e), file, line) from None
+    if value is None:
+        return None
+    try:
+        return _field_default(value)[1]  # type: ignore[return-value]
+    except TagValueError as e:
+        raise DsdlError(f"{where}: @default {e}", file, line) from None
 
 
 def _field_doc(key: str, file: str | None, field: Mapping[str, Any]) -> FieldDoc:

@@ -197,7 +197,7 @@ def _default_of(schema: Schema, type_spec: Mapping[str, Any], given: Any) -> Any
 
 
 def _field_default(schema: Schema, field: Field, override: Any) -> Any:
-    declared = field.doc.declared_default
+    declared = field.declared_default  # (the other tags are not read: see Field)
     if isinstance(declared, Mapping) and isinstance(override, Mapping):
         declared = {**declared, **_flatten(override)}
     elif override is not None:
