@@ -72,8 +72,8 @@ def value_strategy(
 ) -> st.SearchStrategy[dict[str, Any]]:
     """Values of type ``key``; dynamic arrays are capped at ``max_len`` elements (default 6 in
     CI, none in the long run) plus their maximum now and then, to keep CI's examples small.
-    ``storable`` values are what a store takes: within each field's ``@min``/``@max``, floats
-    finite."""
+    ``storable`` values are what a store takes: within each field's ``@min``/``@max`` and
+    ``@value`` list, floats finite."""
     if max_len is None:
         max_len = 1 << 30 if LONG_RUN else 6
     memo: dict[str, st.SearchStrategy[Any]] = {}
@@ -124,7 +124,10 @@ def _tags(field: Mapping[str, Any]) -> Mapping[str, Any]:
 
 
 def _within(spec: Mapping[str, Any], tags: Mapping[str, Any]) -> st.SearchStrategy[Any]:
-    """A finite number of scalar type ``spec`` within the field's ``@min``/``@max``."""
+    """A finite number of scalar type ``spec`` within the field's ``@min``/``@max``, one of its
+    ``@value`` list where it has one."""
+    if tags.get("value"):
+        return st.sampled_from([number for number, _ in tags["value"]])
     bits, kind = spec["bits"], spec["kind"]
     if kind == "float":
         top = {16: FLOAT16_MAX, 32: 3.4028234663852886e38}.get(bits, 1.7976931348623157e308)

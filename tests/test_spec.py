@@ -378,3 +378,108 @@ def test_a_store_reads_its_defaults_without_the_fields_other_tags(
     assert store.get("INA238#0.shunt") == pytest.approx(0.0003, rel=1e-3)
     store.set("INA238#0.current", 100)  # a write checks the range: the doc is read then
     assert "px.Ina238.1.1.current" in read
+
+
+# -- @value lists ------------------------------------------------------------------------------
+
+#: ``px.Serial.1.0``'s ``port`` (dsdl/px/Serial.1.0.dsdl), its @value lines as written there.
+SERIAL_PORTS = (
+    "0 (Disabled), 6 (UART 6), 101 (TELEM 1), 102 (TELEM 2), 103 (TELEM 3), "
+    "104 (TELEM/SERIAL 4), 201 (GPS 1), 202 (GPS 2), 203 (GPS 3), 300 (Radio Controller), "
+    "301 (Wifi Port)"
+)
+NOT_A_PORT = f"INA238#1.bus.serial.port: 105 is not one of its values (@value): {SERIAL_PORTS}"
+
+
+@pytest.fixture
+def on_serial(store: px4params.Store) -> px4params.Store:
+    store.set_default("INA238#1.bus._tag", 2)  # 0 i2c, 1 spi, 2 serial (dsdl/px/Bus.1.0.dsdl)
+    store.set("INA238#1.bus._tag", 2)
+    assert store.leaf("INA238#1[3]").path == "bus.serial.port"
+    return store
+
+
+@pytest.mark.parametrize("target", ["INA238#1.bus.serial.port", "INA238#1[3]"])
+@pytest.mark.parametrize("default", [False, True])
+def test_a_value_its_field_does_not_list_is_refused(
+    on_serial: px4params.Store, target: str, default: bool
+) -> None:
+    write = on_serial.set_default if default else on_serial.set
+    before = on_serial.encoded("INA238#1", default=default)
+    with pytest.raises(ValueRangeError) as e:
+        write(target, 105)
+    assert str(e.value) == NOT_A_PORT
+    assert e.value.bounds_only  # what --force may override
+    assert on_serial.encoded("INA238#1", default=default) == before
+    write(target, 104)  # TELEM/SERIAL 4: listed
+    assert on_serial.get("INA238#1.bus.serial.port", default=default) == 104
+
+
+def test_a_whole_value_and_a_flat_name_are_held_to_the_list(on_serial: px4params.Store) -> None:
+    from px4params.store import flat
+
+    value = {"bus": {"serial": {"port": 105, "baudrate": 0}}, "current": 100, "shunt": 0.001}
+    with pytest.raises(ValueRangeError, match=f"^{re.escape(NOT_A_PORT)}$"):
+        on_serial.set("INA238#1", value)
+    port = next(p for p in flat.flat_map(on_serial).table() if p.path == "bus.serial.port")
+    with pytest.raises(ValueRangeError, match=f"^{re.escape(NOT_A_PORT)}$"):
+        flat.write_flat(on_serial, port.name, 105)
+    assert on_serial.get("INA238#1.bus.serial.port") == 0
+    on_serial.set("INA238#1.bus.serial.port", 105, force=True)  # --force, as for @min/@max
+    assert on_serial.get("INA238#1.bus.serial.port") == 105
+
+
+def test_a_long_list_is_named_by_its_numbers_in_runs(tmp_path: Path) -> None:
+    root = tmp_path / "acme"
+    root.mkdir()
+    values = "".join(f"# @value {n} Mode {n}\n" for n in (*range(13), 20, 22, 23))
+    (root / "Gadget.1.0.dsdl").write_text(
+        f"# A gadget\n# @max_instances 1\n\nuint4 p_version\nuint5 mode\n# Mode\n{values}"
+        "\n@sealed\n"
+    )
+    schema = px4params.load_schema([root], use_env=False, cache_dir=tmp_path / "cache")
+    store = px4params.Store(schema, classic=[])
+    store.add("GADGET#0")
+    with pytest.raises(ValueRangeError) as e:
+        store.set("GADGET#0.mode", 21)
+    assert str(e.value) == "GADGET#0.mode: 21 is not one of its values (@value): 0..12, 20, 22..23"
+    store.set("GADGET#0.mode", 22)
+
+
+def test_every_bundled_default_is_in_its_list() -> None:
+    """A new instance, and every variant a tag can select, starts from values its lists take
+    (else a write that switches to it would be refused for a value nobody chose)."""
+    from px4params.store.spec import check_leaves, leaf_ranges
+
+    store = px4params.Store(load_schema(use_env=False), classic=[])
+    switched = 0
+    for spec in store.specs:
+        key = spec.instance_key(0)
+        if not spec.shared:
+            store.add(key)
+        check_leaves(str(key), store.leaves(key), leaf_ranges(spec.data_type))
+        for leaf in store.leaves(key):
+            if leaf.path.endswith("._tag"):
+                union = spec.data_type.field_at(leaf.path[: -len("._tag")])
+                assert union is not None
+                variants = store.schema.type_def(union.type["name"]).data_fields
+                for number in range(len(variants)):
+                    store.set(key.at(leaf.path), number)  # the variant's leaves are checked
+                    switched += 1
+    assert switched >= 6 * 30  # (every bus of every device type)
+
+
+def test_param_set_outside_the_list_is_one_line_and_force_stores_it(
+    tmp_path: Path, store_file: Path
+) -> None:
+    args = ("param", "--store", str(store_file))
+    assert _cli(tmp_path, *args, "set", "INA238#1.bus._tag", "2").returncode == 0
+    before = store_file.read_bytes()
+    result = _cli(tmp_path, *args, "set", "INA238#1.bus.serial.port", "105")
+    assert (result.returncode, result.stdout) == (1, "")
+    assert result.stderr == f"px4params: error: {NOT_A_PORT}\n"
+    assert store_file.read_bytes() == before
+    result = _cli(tmp_path, *args, "set", "--force", "INA238#1.bus.serial.port", "105")
+    assert result.returncode == 0
+    assert result.stderr == f"px4params: warning: --force: {NOT_A_PORT}; stored anyway\n"
+    assert px4params.Store.load(store_file).get("INA238#1.bus.serial.port") == 105

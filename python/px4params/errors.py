@@ -167,12 +167,13 @@ class InstanceError(StoreError, LookupError):
 
 
 class ValueRangeError(StoreError, ValueError):
-    """A value outside its field's ``@min``/``@max``, or a NaN or infinity where the type takes
-    none; nothing was written.
+    """A value outside its field's ``@min``/``@max`` or not in its ``@value`` list, or a NaN or
+    infinity where the type takes none; nothing was written.
 
     Attributes:
-        bounds_only: True when only ``@min``/``@max`` were broken (what ``param set --force``
-            may override); False for a non-finite float, which nothing overrides.
+        bounds_only: True when only ``@min``/``@max`` or the ``@value`` list were broken (what
+            ``param set --force`` may override); False for a non-finite float, which nothing
+            overrides.
     """
 
     def __init__(self, message: str, *, bounds_only: bool = False) -> None:

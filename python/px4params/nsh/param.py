@@ -220,7 +220,7 @@ def _write(s: Session, name: str, text: str, *, default: bool, force: bool = Fal
     except ValueRangeError as e:
         if not (force and e.bounds_only):
             raise
-        # --force overrides @min/@max (never a NaN or an infinity), and says so.
+        # --force overrides @min/@max and @value lists (never a NaN or an infinity), says so.
         print(f"px4params: warning: --force: {e}; stored anyway", file=sys.stderr)
         write(key, value, force=True)
     if isinstance(value, float) and value != 0 and math.isfinite(value):
@@ -624,8 +624,8 @@ def add_verbs(
 
 
 _FORCE_HELP = (
-    "store a value outside its field's @min/@max anyway (said on stderr); a NaN or an "
-    "infinity is refused all the same"
+    "store a value outside its field's @min/@max or @value list anyway (said on stderr); a "
+    "NaN or an infinity is refused all the same"
 )
 
 

@@ -229,14 +229,16 @@ def _flatten(value: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
     return flat
 
 
-# -- what a leaf accepts: @min/@max, finite floats ------------------------------------------------
+# -- what a leaf accepts: @min/@max, @value lists, finite floats -----------------------------------
 
 
 class LeafRange(NamedTuple):
     """What one leaf of a parameter accepts beyond its type's own range: its field's ``@min``
-    and ``@max`` (None where not given, or where it only repeats the type's range) and, for a
-    float leaf, finite numbers only (no bundled type needs NaN or an infinity, so no type can
-    ask for them: a NaN shunt is a battery monitor that reads nothing)."""
+    and ``@max`` (None where not given, or where it only repeats the type's range), the values
+    its ``@value`` list (or ``@values`` set) names, where it has one (a ground station offers
+    those alone, as QGC's list of a parameter's values), and, for a float leaf, finite numbers
+    only (no bundled type needs NaN or an infinity, so no type can ask for them: a NaN shunt
+    is a battery monitor that reads nothing)."""
 
     low: int | float | None
     high: int | float | None
@@ -248,11 +250,23 @@ class LeafRange(NamedTuple):
     stored_high: int | float | None = None
     #: The leaf's DSDL type (``float16``, ``uint10``).
     type: str = ""
+    #: The field's named values (``@value N text``), in order; none: any value in range.
+    values: tuple[tuple[int | float | bool, str], ...] = ()
+    #: Those values as the leaf stores them (a float rounded to its width).
+    stored_values: frozenset[int | float] = frozenset()
 
     @classmethod
-    def of(cls, low: float | None, high: float | None, float_bits: int, type: str) -> LeafRange:
+    def of(
+        cls,
+        low: float | None,
+        high: float | None,
+        float_bits: int,
+        type: str,
+        values: tuple[tuple[int | float | bool, str], ...] = (),
+    ) -> LeafRange:
+        stored = frozenset(_rounded(v, float_bits) if float_bits else v for v, _ in values)
         if not float_bits:
-            return cls(low, high, 0, low, high, type)
+            return cls(low, high, 0, low, high, type, values, stored)
         return cls(
             low,
             high,
@@ -260,6 +274,8 @@ class LeafRange(NamedTuple):
             None if low is None else min(low, _rounded(low, float_bits)),
             None if high is None else max(high, _rounded(high, float_bits)),
             type,
+            values,
+            stored,
         )
 
 
@@ -291,16 +307,16 @@ def _ranges_of(
         _ranges_of(data_type, spec["elem"], f"{path}[]", doc, found)
     elif kind in ("uint", "int", "float"):
         bits = int(spec["bits"])
-        low, high = doc.minimum, doc.maximum
+        low, high, values = doc.minimum, doc.maximum, doc.values
         if kind == "float":
-            found[path] = LeafRange.of(low, high, bits, f"float{bits}")
+            found[path] = LeafRange.of(low, high, bits, f"float{bits}", values)
             return
         top = (1 << bits) - 1 if kind == "uint" else (1 << (bits - 1)) - 1
         bottom = 0 if kind == "uint" else -(1 << (bits - 1))
         low = None if low is None or low <= bottom else low
         high = None if high is None or high >= top else high
-        if low is not None or high is not None:
-            found[path] = LeafRange.of(low, high, 0, f"{kind}{bits}")
+        if low is not None or high is not None or values:
+            found[path] = LeafRange.of(low, high, 0, f"{kind}{bits}", values)
 
 
 def generic_path(path: str) -> str:
@@ -349,10 +365,12 @@ def check_stored(
     if not bounds:
         return
     low, high = rng.stored_low, rng.stored_high
-    if (low is not None and value < low) or (high is not None and value > high):
+    outside = (low is not None and value < low) or (high is not None and value > high)
+    if outside or (rng.stored_values and value not in rng.stored_values):
         if isinstance(given, int | float) and not isinstance(given, bool):
             value = given
-        raise ValueRangeError(f"{name}: {describe_outside(value, rng)}", bounds_only=True)
+        why = describe_outside(value, rng) if outside else describe_not_listed(value, rng)
+        raise ValueRangeError(f"{name}: {why}", bounds_only=True)
 
 
 def within(value: float, rng: LeafRange, bounds: bool = True) -> bool:
@@ -362,7 +380,11 @@ def within(value: float, rng: LeafRange, bounds: bool = True) -> bool:
     if not bounds:
         return True
     low, high = rng.stored_low, rng.stored_high
-    return (low is None or value >= low) and (high is None or value <= high)
+    return (
+        (low is None or value >= low)
+        and (high is None or value <= high)
+        and (not rng.stored_values or value in rng.stored_values)
+    )
 
 
 def in_type_range(value: float, type_name: str) -> bool:
@@ -413,6 +435,33 @@ def describe_outside(value: float, rng: LeafRange) -> str:
         return f"{_shown(value)} is below {_shown(rng.low)} (@min)"
     assert rng.high is not None  # a value outside a range that has a bound
     return f"{_shown(value)} is above {_shown(rng.high)} (@max)"
+
+
+#: A value list longer than this is named by its numbers alone (PX4's rotations are 41).
+_NAMED_AT_MOST = 12
+
+
+def describe_not_listed(value: float, rng: LeafRange) -> str:
+    """``7 is not one of its values (@value): 0 (10 Hz), 1 (20 Hz), 2 (50 Hz)``; a long
+    list by its numbers, runs shortened (``0..40``)."""
+    if len(rng.values) <= _NAMED_AT_MOST:
+        allowed = ", ".join(f"{_shown(v)} ({text})" for v, text in rng.values)
+    else:
+        allowed = _runs(sorted(v for v, _ in rng.values))
+    return f"{_shown(value)} is not one of its values (@value): {allowed}"
+
+
+def _runs(numbers: list[int | float | bool]) -> str:
+    """``0, 6, 101..104, 201..203``: consecutive integers as one run."""
+    runs: list[list[float]] = []
+    for n in numbers:
+        if runs and type(n) is int and type(runs[-1][1]) is int and n == runs[-1][1] + 1:
+            runs[-1][1] = n
+        else:
+            runs.append([n, n])
+    return ", ".join(
+        _shown(low) if low == high else f"{_shown(low)}..{_shown(high)}" for low, high in runs
+    )
 
 
 _FLOAT_PACKERS = {16: struct.Struct("<e"), 32: struct.Struct("<f")}
