@@ -386,7 +386,7 @@ def test_a_store_reads_its_defaults_without_the_fields_other_tags(
 SERIAL_PORTS = (
     "0 (Disabled), 6 (UART 6), 101 (TELEM 1), 102 (TELEM 2), 103 (TELEM 3), "
     "104 (TELEM/SERIAL 4), 201 (GPS 1), 202 (GPS 2), 203 (GPS 3), 300 (Radio Controller), "
-    "301 (Wifi Port)"
+    "301 (Wifi Port), 401 (Pixhawk Payload Bus)"
 )
 NOT_A_PORT = f"INA238#1.bus.serial.port: 105 is not one of its values (@value): {SERIAL_PORTS}"
 
@@ -413,6 +413,15 @@ def test_a_value_its_field_does_not_list_is_refused(
     assert on_serial.encoded("INA238#1", default=default) == before
     write(target, 104)  # TELEM/SERIAL 4: listed
     assert on_serial.get("INA238#1.bus.serial.port", default=default) == 104
+
+
+def test_every_port_px4_numbers_is_listed(on_serial: px4params.Store) -> None:
+    # PX4's serial_ports table (Tools/serial/generate_config.py) numbers its ports 6, 101-104,
+    # 201-203, 300, 301 and 401 (Pixhawk Payload Bus); 0 is "disabled". Each must be storable
+    # without --force, or a real vehicle's port would be refused.
+    for port in (0, 6, 101, 102, 103, 104, 201, 202, 203, 300, 301, 401):
+        on_serial.set("INA238#1.bus.serial.port", port)
+        assert on_serial.get("INA238#1.bus.serial.port") == port
 
 
 def test_a_whole_value_and_a_flat_name_are_held_to_the_list(on_serial: px4params.Store) -> None:
