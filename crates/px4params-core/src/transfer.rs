@@ -251,6 +251,8 @@ pub struct Received<'f, 'a> {
 
 /// Checks the frames of one transfer: tail bits, transfer ID, toggle, and the CRC of a
 /// multi-frame transfer (computed over the pieces, which stay where they are).
+// Inline: the caller's frame holds the result (with its gathered run) without a copy.
+#[inline]
 pub fn receive<'f, 'a>(
     frames: &'f [&'a [u8]],
     crc_seed: u16,
