@@ -87,6 +87,13 @@ pub trait Pieces {
         chunk_of_piece(self, i, skip)
     }
 
+    /// The pieces as one run of bytes, where they are one or a copy of them is at hand
+    /// (`None` otherwise): what [`Scattered`] answers to [`BitRead::contiguous`].
+    #[inline]
+    fn contiguous(&self) -> Option<&[u8]> {
+        None
+    }
+
     /// Fills `out` with the bytes from piece `at.index`, byte `at.skip`, on, and returns
     /// where they end. Where the pieces end first, the rest of `out` is unspecified. Override
     /// to move short pieces a word at a time.
@@ -154,31 +161,47 @@ impl Pieces for [&[u8]] {
 
 /// The payload pieces of a DroneCAN transfer's CAN frames: each frame without its tail byte,
 /// and the first without the two transfer-CRC bytes when there are several frames.
+///
+/// [`crate::transfer::receive`] gathers a short multi-frame payload into one run to check its
+/// CRC (hosts only: [`crate::plan::Plans::GATHERED_CRC`]); the run is kept here, so that a
+/// plan that reads whole bytes ([`crate::straight`]) decodes from it as from flat bytes,
+/// through [`Pieces::contiguous`]. A single frame's payload is one run as it lies.
 #[derive(Clone, Copy, Debug)]
 pub struct FramePayloads<'f, 'a> {
     frames: &'f [&'a [u8]],
+    /// The payload gathered into one run: its first `gathered` bytes (none when 0, where
+    /// there is nothing to gather or it was not gathered).
+    run: [u8; RUN],
+    gathered: usize,
 }
+
+/// Bytes of a gathered payload that [`FramePayloads`] keeps (none without the plan).
+pub(crate) const RUN: usize = if Active::GATHERED_CRC { 64 } else { 0 };
 
 impl<'f, 'a> FramePayloads<'f, 'a> {
     /// Pieces over `frames` (each at least one byte long: the tail byte).
     pub fn new(frames: &'f [&'a [u8]]) -> Self {
-        Self { frames }
+        Self {
+            frames,
+            run: [0; RUN],
+            gathered: 0,
+        }
     }
 
-    /// Frame `i`, tail byte included.
+    /// Gathers the payload into the run kept with it, which must hold it (`len`, its length
+    /// in bytes, is at most [`RUN`]), and returns the run.
     #[inline]
-    pub(crate) fn frame(&self, i: usize) -> &'a [u8] {
-        self.frames[i]
+    pub(crate) fn gather(&mut self, len: usize) -> &[u8] {
+        let run = &mut self.run[..len];
+        gather(self.frames, run);
+        self.gathered = len;
+        run
     }
 
     /// Bytes before frame `i`'s payload: the transfer CRC in the first of several frames.
     #[inline(always)]
     fn head(&self, i: usize) -> usize {
-        if i == 0 && self.frames.len() > 1 {
-            2
-        } else {
-            0
-        }
+        head(self.frames, i)
     }
 
     /// [`Pieces::chunk`] of a frame other than a full 8-byte one: the last frame, a CAN FD
@@ -197,19 +220,28 @@ impl Pieces for FramePayloads<'_, '_> {
 
     #[inline]
     fn piece(&self, i: usize) -> &[u8] {
-        let frame = self.frames[i];
-        let body = &frame[..frame.len().saturating_sub(1)];
-        body.get(self.head(i)..).unwrap_or(&[])
+        piece(self.frames, i)
     }
 
     #[inline]
     fn total_len(&self) -> usize {
+        if self.gathered > 0 {
+            return self.gathered;
+        }
         let bodies: usize = self.frames.iter().map(|f| f.len().saturating_sub(1)).sum();
         let crc = self
             .frames
             .first()
             .map_or(0, |first| first.len().saturating_sub(1).min(self.head(0)));
         bodies - crc
+    }
+
+    #[inline]
+    fn contiguous(&self) -> Option<&[u8]> {
+        match self.frames {
+            [_] => Some(self.piece(0)),
+            _ => self.run.get(..self.gathered).filter(|run| !run.is_empty()),
+        }
     }
 
     #[inline(always)]
@@ -257,6 +289,51 @@ impl Pieces for FramePayloads<'_, '_> {
             at.step(n, n == rest.len());
         }
         at
+    }
+}
+
+/// Bytes before frame `i`'s payload: the transfer CRC in the first of several frames.
+#[inline(always)]
+fn head(frames: &[&[u8]], i: usize) -> usize {
+    if i == 0 && frames.len() > 1 {
+        2
+    } else {
+        0
+    }
+}
+
+/// Frame `i`'s payload: without its tail byte, and the transfer CRC in the first of several.
+#[inline]
+fn piece<'a>(frames: &[&'a [u8]], i: usize) -> &'a [u8] {
+    let frame = frames[i];
+    let body = &frame[..frame.len().saturating_sub(1)];
+    body.get(head(frames, i)..).unwrap_or(&[])
+}
+
+/// Copies the payloads of `frames` (each at least its tail byte) one after another into
+/// `out`, which is exactly their length.
+#[inline(always)]
+pub(crate) fn gather(frames: &[&[u8]], out: &mut [u8]) {
+    let Some((first, rest)) = frames.split_first() else {
+        return;
+    };
+    let head = if rest.is_empty() { 0 } else { 2 };
+    let piece = first
+        .get(head..first.len().saturating_sub(1))
+        .unwrap_or(&[]);
+    let mut at = piece.len();
+    copy_few(&mut out[..at], piece);
+    for &frame in rest {
+        if let (Ok(eight), Some(room)) = (<&[u8; 8]>::try_from(frame), out.get_mut(at..at + 8)) {
+            // A full classic frame: its 7 payload bytes and the tail byte in one 8-byte
+            // store; the tail byte lies within `out`, where the next piece overwrites it.
+            room.copy_from_slice(eight);
+            at += 7;
+            continue;
+        }
+        let piece = &frame[..frame.len().saturating_sub(1)];
+        copy_few(&mut out[at..at + piece.len()], piece);
+        at += piece.len();
     }
 }
 
@@ -447,6 +524,11 @@ impl<'p, P: Pieces + ?Sized> BitRead for Scattered<'p, P> {
             Some(value) => value,
             None => self.read_bits_refilled(offset, n),
         }
+    }
+
+    #[inline]
+    fn contiguous(&self) -> Option<&[u8]> {
+        self.pieces.contiguous()
     }
 
     /// Firmware builds (`compact`) find the byte's piece from the place of the byte read

@@ -10,7 +10,7 @@ use core::fmt;
 
 use crate::crc::{crc16, crc16_pieces};
 use crate::plan::{Active, Plans};
-use crate::scatter::{FramePayloads, Pieces};
+use crate::scatter::{gather, FramePayloads, Pieces, RUN};
 
 const START: u8 = 0x80;
 const END: u8 = 0x40;
@@ -251,19 +251,25 @@ pub struct Received<'f, 'a> {
 
 /// Checks the frames of one transfer: tail bits, transfer ID, toggle, and the CRC of a
 /// multi-frame transfer (computed over the pieces, which stay where they are).
+// Inline: the caller's frame holds the result (with its gathered run) without a copy.
+#[inline]
 pub fn receive<'f, 'a>(
     frames: &'f [&'a [u8]],
     crc_seed: u16,
 ) -> Result<Received<'f, 'a>, TransferError> {
     let (transfer_id, len) = check_tails(frames)?;
-    let payload = FramePayloads::new(frames);
+    let mut payload = FramePayloads::new(frames);
     if let Some(got) = sent_crc(frames)? {
         let computed = if !Active::GATHERED_CRC {
             // Firmware built for size: no gathering buffer; the four-byte steps go on across
             // the pieces.
             crc16_pieces(crc_seed, (0..payload.count()).map(|i| payload.piece(i)))
+        } else if len <= RUN {
+            // Most transfers are a few frames: gathered into the run the payload keeps, so
+            // that it is decoded from there as from flat bytes.
+            crc16(crc_seed, payload.gather(len))
         } else {
-            payload_crc(crc_seed, &payload, len)
+            gathered_crc::<320>(crc_seed, frames, len)
         };
         check_crc(got, computed)?;
     }
@@ -283,12 +289,11 @@ pub fn receive_into(
 ) -> Result<(u8, usize), TransferError> {
     let (transfer_id, len) = check_tails(frames)?;
     let got = sent_crc(frames)?;
-    let payload = FramePayloads::new(frames);
     let room = out.len();
     let out = out
         .get_mut(..len)
         .ok_or(TransferError::TooLong { len, room })?;
-    gather(&payload, out);
+    gather(frames, out);
     if let Some(got) = got {
         check_crc(got, crc16(crc_seed, out))?;
     }
@@ -298,23 +303,23 @@ pub fn receive_into(
 /// Checks every frame's tail byte; returns the transfer ID and the payload's length (bytes
 /// other than tail bytes and a multi-frame transfer's CRC, which [`sent_crc`] checks is there).
 fn check_tails(frames: &[&[u8]]) -> Result<(u8, usize), TransferError> {
-    let tail_of = |i: usize, f: &[u8]| {
-        f.last()
-            .copied()
-            .ok_or(TransferError::EmptyFrame { frame: i })
-    };
-    let first = frames.first().ok_or(TransferError::Empty)?;
-    let expected = tail_of(0, first)? & 0x1F;
-    let last = frames.len() - 1;
-    let mut bytes = 0;
-    for (i, frame) in frames.iter().enumerate() {
-        let tail = tail_of(i, frame)?;
+    let (first, rest) = frames.split_first().ok_or(TransferError::Empty)?;
+    let tail = *first.last().ok_or(TransferError::EmptyFrame { frame: 0 })?;
+    let expected = tail & 0x1F;
+    let last = rest.len();
+    // All 8 bits of a frame's tail byte are fixed by its place in the transfer: the toggle
+    // alternates from clear, the first has the start bit, the last the end bit.
+    let end = |i: usize| if i == last { END } else { 0 };
+    if tail != expected | START | end(0) {
+        return Err(tail_error(0, tail, expected, last));
+    }
+    let mut bytes = first.len();
+    let mut toggle = 0;
+    for (i, frame) in (1..).zip(rest) {
+        toggle ^= TOGGLE;
+        let tail = *frame.last().ok_or(TransferError::EmptyFrame { frame: i })?;
         bytes += frame.len();
-        // All 8 bits of a frame's tail byte are fixed by its place in the transfer.
-        let start = if i == 0 { START } else { 0 };
-        let end = if i == last { END } else { 0 };
-        let toggle = if i % 2 == 1 { TOGGLE } else { 0 };
-        if tail != expected | start | end | toggle {
+        if tail != expected | toggle | end(i) {
             return Err(tail_error(i, tail, expected, last));
         }
     }
@@ -362,46 +367,20 @@ fn tail_error(i: usize, tail: u8, expected: u8, last: usize) -> TransferError {
     }
 }
 
-/// The CRC of a multi-frame transfer's payload, gathered into one run of bytes (up to 320
-/// bytes; longer payloads take [`crc16_pieces`]) so that [`crc16`] takes eight bytes a step
-/// across the frames' edges.
-fn payload_crc(crc: u16, payload: &FramePayloads<'_, '_>, len: usize) -> u16 {
-    // Most transfers are a few frames: a small run costs less to clear than the largest.
-    if len <= 64 {
-        return gathered_crc::<64>(crc, payload, len);
-    }
-    gathered_crc::<320>(crc, payload, len)
-}
-
-/// [`payload_crc`] through a run of `N` bytes.
-#[inline(always)]
-fn gathered_crc<const N: usize>(crc: u16, payload: &FramePayloads<'_, '_>, len: usize) -> u16 {
+/// The CRC of a multi-frame transfer's payload of more than [`RUN`] bytes, gathered into one
+/// run of `N` bytes (longer payloads take [`crc16_pieces`]) so that [`crc16`] takes eight
+/// bytes a step across the frames' edges.
+fn gathered_crc<const N: usize>(crc: u16, frames: &[&[u8]], len: usize) -> u16 {
     let mut run = [0u8; N];
     match run.get_mut(..len) {
         Some(run) => {
-            gather(payload, run);
+            gather(frames, run);
             crc16(crc, run)
         }
-        None => crc16_pieces(crc, (0..payload.count()).map(|i| payload.piece(i))),
-    }
-}
-
-/// Copies the payload's pieces one after another into `out`, which is exactly their length.
-fn gather(payload: &FramePayloads<'_, '_>, out: &mut [u8]) {
-    let mut at = 0;
-    for i in 0..payload.count() {
-        let piece = payload.piece(i);
-        let n = piece.len();
-        match (
-            <[u8; 8]>::try_from(payload.frame(i)),
-            out.get_mut(at..at + 8),
-        ) {
-            // The piece is the frame's first 7 bytes: one 8-byte store, whose last byte (the
-            // tail byte) a later piece overwrites, as it lies within `out`.
-            (Ok(frame), Some(room)) if n == 7 => room.copy_from_slice(&frame),
-            _ => out[at..at + n].copy_from_slice(piece),
+        None => {
+            let payload = FramePayloads::new(frames);
+            crc16_pieces(crc, (0..payload.count()).map(|i| payload.piece(i)))
         }
-        at += n;
     }
 }
 
