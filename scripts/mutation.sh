@@ -97,6 +97,7 @@ TARGETS=(
   # gui/ and links/ one module at a time (mutlinks): the in-process tests of the module first
   # (milliseconds a mutant), then the ones that start the page's server.
   "gui-admission|$PY/gui/admission.py|tests/test_admission.py tests/test_gui_security.py"
+  "gui-files|$PY/gui/files.py|tests/test_gui_files.py"
   "rust-core|crates/px4params-core|"
   "rust-ffi|crates/px4params-ffi|"
   # One file of the core each, with cargo test options choosing the tests that reach it (none:
