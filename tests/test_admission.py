@@ -13,7 +13,14 @@ import json
 from typing import Any
 
 import pytest
-from px4params.gui.admission import MAX_BODY, SECURITY_HEADERS, Admission, allowed_hosts, new_token
+from px4params.gui.admission import (
+    MAX_BODY,
+    MAX_CHANGES,
+    SECURITY_HEADERS,
+    Admission,
+    allowed_hosts,
+    new_token,
+)
 
 TOKEN = "a1" * 24  # 48 hex digits, as new_token()'s
 HOST = "localhost:8765"
@@ -439,3 +446,43 @@ def test_other_scopes_pass_through_untouched() -> None:
 
     asyncio.run(app(scope, receive, send))
     assert route.calls == [(scope, b"")]
+
+
+def test_asgi_s_optional_keys_take_their_defaults() -> None:
+    """ASGI: an ``http.request`` message may leave out ``body`` (default empty) and
+    ``more_body`` (default False); a scope may leave out ``root_path`` (default empty)."""
+    route = Route()
+    app = admission(route)
+    scope: dict[str, Any] = {
+        "type": "http",
+        "method": "POST",
+        "path": "/api/write",
+        "query_string": b"",
+        "headers": [(b"host", HOST.encode()), (b"authorization", f"token {TOKEN}".encode())],
+    }
+    messages = [
+        {"type": "http.request", "body": b"{}", "more_body": True},
+        {"type": "http.request"},
+    ]
+    sent: list[dict[str, Any]] = []
+
+    async def receive() -> dict[str, Any]:
+        return messages.pop(0) if messages else {"type": "http.disconnect"}
+
+    async def send(message: dict[str, Any]) -> None:
+        sent.append(message)
+
+    asyncio.run(app(scope, receive, send))
+    assert status_of(sent) == 200 and route.calls[-1][1] == b"{}"
+    # the token URL of a scope without root_path redirects to the path alone
+    scope = {**scope, "method": "GET", "path": "/", "query_string": f"token={TOKEN}".encode()}
+    scope["headers"] = [(b"host", HOST.encode())]
+    sent.clear()
+    asyncio.run(app(scope, receive, send))
+    assert headers_of(sent)["location"] == "/"
+
+
+def test_the_documented_limits() -> None:
+    """docs/security.md: requests of at most 1 MiB, and at most 256 changes per write (the
+    page writes a longer review in parts of 256)."""
+    assert (MAX_BODY, MAX_CHANGES) == (1048576, 256)
