@@ -511,3 +511,41 @@ def test_a_restart_over_an_unreadable_file_keeps_the_values(bench: Bench, store_
     assert bench.call(RESTART.Request(magic_number=RESTART.Request().MAGIC_NUMBER)).ok
     assert bench.logged[-1].startswith("restart: the store file cannot be read, values kept: ")
     assert _field(bench.getset(ADDRESS).value) == ("integer_value", 0x44)
+
+
+# -- defaults ----------------------------------------------------------------------------------
+
+
+def test_the_defaults_follow_px4_and_the_specification(
+    store_file: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Node ID 1 (PX4's UAVCAN_NODE_ID default, docs/dronecan.md); NodeStatus at least once
+    per MAX_BROADCASTING_PERIOD_MS (NodeStatus.uavcan); other writers' saves read "within a
+    second". The protocol's own types are the bundled DroneCAN ones, whatever
+    PX4PARAMS_DSDL_PATH holds (a broken type there does not stop the node)."""
+    broken = tmp_path / "types" / "px"
+    broken.mkdir(parents=True)
+    (broken / "Broken.1.0.dsdl").write_text("uint8 x\nthis is not DSDL\n@sealed\n")
+    store = _load(store_file)
+    monkeypatch.setenv("PX4PARAMS_DSDL_PATH", str(broken))
+    line = Line()
+    try:
+        node = DronecanParamNode(store, line)
+        assert node.node_id == 1
+        assert node.status_interval <= NODE_STATUS().MAX_BROADCASTING_PERIOD_MS / 1000
+        assert node.poll_interval < 1.0
+        node.adapter.feed(b"S8\rO\r")
+        request = transport.Transfer(
+            source_node_id=PEER,
+            dest_node_id=1,
+            payload=NODE_INFO.Request(),
+            request_not_response=True,
+            service_not_message=True,
+        )
+        for frame in request.to_frames():
+            node.on_frame(Frame(frame.message_id, bytes(frame.bytes)))
+        answer = transport.Transfer()
+        answer.from_frames(line.frames())
+        assert bytes(answer.payload.name) == b"org.px4params"
+    finally:
+        line.close()
