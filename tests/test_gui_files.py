@@ -220,6 +220,17 @@ def test_a_metadata_entry_without_a_default_defaults_to_zero(vehicle: Any) -> No
     assert "TEST_NO_DEF" not in airframe
     airframe = files.export_airframe({**values, "TEST_NO_DEF": 7}, doc)
     assert "param set-default TEST_NO_DEF 7" in airframe.splitlines()
+    # a default that is no number (null in a hand-written document) counts as 0 too
+    doc["parameters"][-1] = {**extra, "default": None}
+    assert "TEST_NO_DEF" not in files.export_airframe({**values, "TEST_NO_DEF": 0}, doc)
+
+
+@pytest.mark.issue40
+def test_a_file_without_a_name_is_read_as_an_airframe(vehicle: Any) -> None:
+    """The page sends the file's name; a script may send none: its lines are airframe lines."""
+    values, metadata = vehicle
+    review = files.review_file("", "param set SYS_AUTOSTART 4001\n", values, metadata)
+    assert review["changes"] == [{"name": "SYS_AUTOSTART", "current": 0, "new": 4001}]
 
 
 @pytest.mark.issue40
