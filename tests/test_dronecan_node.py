@@ -549,3 +549,24 @@ def test_the_defaults_follow_px4_and_the_specification(
         assert bytes(answer.payload.name) == b"org.px4params"
     finally:
         line.close()
+
+
+def test_a_node_given_a_session_saves_to_its_file(
+    store_file: Path, schema: px4params.Schema
+) -> None:
+    """`dronecan serve` hands the node its Session (the store's one write path): SAVE writes
+    that file, and the node's unique ID is the one it has when given the path."""
+    from px4params.store.session import Session
+
+    store = _load(store_file)
+    made = Bench(store, schema, session=Session(store, str(store_file)))
+    by_path = Bench(_load(store_file), schema, save_path=str(store_file))
+    try:
+        made.getset(ADDRESS, integer_value=0x44)
+        assert made.opcode(OPCODE.Request().OPCODE_SAVE).ok
+        assert made.logged[-1] == f"saved: {store_file}"
+        assert _load(store_file).get("INA238#1.bus.i2c.address") == 0x44
+        assert made.node.unique_id == by_path.node.unique_id
+    finally:
+        made.close()
+        by_path.close()
