@@ -38,8 +38,11 @@ class Route:
     async def __call__(self, scope: dict[str, Any], receive: Any, send: Any) -> None:
         body = b""
         if scope["type"] == "http":
-            while True:
+            while True:  # as Starlette's Request.stream reads it
                 message = await receive()
+                if message["type"] == "http.disconnect":
+                    break
+                assert message["type"] == "http.request", message
                 body += message.get("body", b"")
                 if not message.get("more_body", False):
                     break
@@ -124,6 +127,9 @@ def call(
 
 
 def status_of(sent: list[dict[str, Any]]) -> int:
+    """The status of an HTTP answer: ``http.response.start``, then the body's messages."""
+    assert sent[0]["type"] == "http.response.start"
+    assert all(m["type"] == "http.response.body" for m in sent[1:]) and len(sent) > 1
     return sent[0]["status"]
 
 
@@ -132,6 +138,7 @@ def headers_of(sent: list[dict[str, Any]]) -> dict[str, str]:
 
 
 def error_of(sent: list[dict[str, Any]]) -> str:
+    status_of(sent)
     assert headers_of(sent)["content-type"] == "application/json"
     body = sent[1]["body"]
     assert headers_of(sent)["content-length"] == str(len(body))
