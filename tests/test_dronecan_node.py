@@ -570,3 +570,18 @@ def test_a_node_given_a_session_saves_to_its_file(
     finally:
         made.close()
         by_path.close()
+
+
+def test_a_node_without_a_store_file_keeps_turning(
+    store_file: Path, schema: px4params.Schema
+) -> None:
+    """Serving a store in memory: there is no file to look at, and each turn sends its
+    NodeStatus and reads the line as with one."""
+    made = Bench(_load(store_file), schema)
+    try:
+        made.node.status_interval = 0.0  # due at every turn
+        for _ in range(3):
+            made.node.step(0)
+        assert len(made.line.frames()) == 3 and made.logged == []
+    finally:
+        made.close()
