@@ -33,9 +33,9 @@ ADDRESS = "INA238_1_I2C_ADDRESS"
 
 
 class Line:
-    """The serial line's far end: what the node writes is kept; there is never anything to
-    read (the tests hand the node its frames directly). A pipe gives ``select`` a real
-    descriptor that is never ready."""
+    """The serial line: what the node writes is kept; what the host sends (:meth:`send`)
+    waits in a pipe, whose descriptor ``select`` watches. Most tests hand the node its frames
+    directly (:meth:`DronecanParamNode.on_frame`)."""
 
     def __init__(self) -> None:
         self._read, self._write = os.pipe()
@@ -45,7 +45,10 @@ class Line:
         return self._read
 
     def read(self, size: int) -> bytes:
-        return b""
+        return os.read(self._read, size)
+
+    def send(self, data: bytes) -> None:
+        os.write(self._write, data)
 
     def write(self, data: bytes) -> int:
         self.written += data
@@ -585,3 +588,49 @@ def test_a_node_without_a_store_file_keeps_turning(
         assert len(made.line.frames()) == 3 and made.logged == []
     finally:
         made.close()
+
+
+def test_a_turn_answers_what_the_host_wrote_on_the_line(bench: Bench) -> None:
+    """The host's SLCAN lines (Lawicel: ``V`` asks the version, ``T`` + identifier + length +
+    data sends a frame) are read by a turn of the loop and answered on the line."""
+    node = bench.node
+    node.status_interval = 3600
+    node.step(0)  # the first NodeStatus
+    bench.line.frames()
+    bench.line.send(b"V\r")
+    node.step(0)
+    assert bytes(bench.line.written) == b"V1013\r"
+    bench.line.written.clear()
+    request = transport.Transfer(
+        transfer_id=5,
+        source_node_id=PEER,
+        dest_node_id=node.node_id,
+        payload=NODE_INFO.Request(),
+        request_not_response=True,
+        service_not_message=True,
+    )
+    (frame,) = request.to_frames()
+    data = bytes(frame.bytes)
+    bench.line.send(b"T%08X%d%s\r" % (frame.message_id, len(data), data.hex().upper().encode()))
+    node.step(0)
+    answer = transport.Transfer()
+    answer.from_frames(bench.line.frames())
+    assert answer.is_response_to(request) and bytes(answer.payload.name) == b"org.px4params"
+
+
+def test_a_turn_with_nothing_to_read_does_not_wait() -> None:
+    """step(0) returns at once when nothing is due and nothing waits on the line (generous
+    bound: ten turns well under a second each)."""
+    import time
+
+    line = Line()
+    try:
+        store = px4params.Store(px4params.load_schema(use_env=False), classic=BUNDLED_CLASSIC)
+        node = DronecanParamNode(store, line)
+        node.status_interval = 3600
+        started = time.monotonic()
+        for _ in range(10):
+            node.step(0)
+        assert time.monotonic() - started < 5.0
+    finally:
+        line.close()
