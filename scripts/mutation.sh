@@ -63,6 +63,7 @@ BUDGET="${MUTATION_BUDGET:-1800}"
 # MUTATION_BUDGET, when set, is every target's; MUTATION_BUDGET_<target> (- as _) one's.
 declare -A BUDGETS=([session]=3600 [mavlink_ftp]=2400 [migrate-config]=2400 [devid]=5400
   [admission]=7200)
+BUDGETS+=([gui-admission]=2400 [gui-files]=1200 [dronecan_node]=5400) # mutlinks: 224, 110, 271 mutants
 budget_for() {
   local var="MUTATION_BUDGET_${1//-/_}"
   echo "${!var:-${MUTATION_BUDGET:-${BUDGETS[$1]:-1800}}}"
@@ -72,6 +73,7 @@ mkdir -p "$OUT"
 PY="python/px4params"
 # The test files written to kill the survivors (issue 40): MUTATION_BASELINE=1 runs without them.
 NEW_TESTS="test_session|test_migrate_config|test_mavlink_ftp"
+NEW_TESTS="$NEW_TESTS|test_admission|test_dronecan_node" # links/ and gui/ (mutlinks)
 
 # target | files to mutate (comma-separated) | pytest arguments (the tests that cover them)
 # The small targets are those of issue 40's own run; the package targets are CI's long run.
@@ -92,6 +94,14 @@ TARGETS=(
   "devid|$PY/vehicle/devid.py|tests/test_devid.py"
   "mavlink_ftp|$PY/links/mavlink_ftp.py|tests/test_mavlink_ftp.py tests/test_mavlink_metadata.py tests/test_mavlink_security.py -k 'ftp or open_read or naks or sessions_run or list_directory or crc32 or burst or slices or garbage'"
   "admission|$PY/gui/admission.py|tests/test_gui_security.py"
+  # gui/ and links/ one module at a time (mutlinks), with their in-process tests only (a few
+  # seconds a mutant): the tests that start the page's server or `dronecan serve` take 25-40 s
+  # each on 2 shared cores (the target admission above runs the server's). Issue 40's figures:
+  #   MUTATION_BASELINE=1 bash scripts/mutation.sh gui-admission gui-files dronecan_node
+  #   bash scripts/mutation.sh gui-admission gui-files dronecan_node
+  "gui-admission|$PY/gui/admission.py|tests/test_admission.py tests/test_gui_security.py::test_the_hosts_answered"
+  "gui-files|$PY/gui/files.py|tests/test_gui_files.py"
+  "dronecan_node|$PY/links/dronecan_node.py|tests/test_dronecan_node.py tests/test_fuzz.py::test_dronecan_node_answers_or_ignores"
   "rust-core|crates/px4params-core|"
   "rust-ffi|crates/px4params-ffi|"
   # One file of the core each, with cargo test options choosing the tests that reach it (none:

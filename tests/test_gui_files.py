@@ -88,3 +88,159 @@ def test_exports_rebuild_the_vehicle(vehicle: Any, schema: px4params.Schema, tmp
     review = files.review_file("saved.airframe", airframe, empty, metadata)
     rebuilt = dict(empty) | {c["name"]: c["new"] for c in review["changes"]}
     assert rebuilt == values
+
+
+# -- issue 40: what the mutation run of gui/files.py found untested --------------------------
+
+
+@pytest.fixture
+def two_monitors(schema: px4params.Schema) -> tuple[px4params.Store, dict[str, Any], Any]:
+    """A vehicle with INA238#0 and INA238#1 on I2C, and classic parameters changed: the
+    legacy INA238_CURRENT (a classic Float that shares the structured parameter's prefix),
+    BAT1_CAPACITY (Float) and SYS_AUTOSTART (Int32)."""
+    store = px4params.Store(schema, classic=BUNDLED_CLASSIC)
+    store.add("INA238#0")
+    store.add("INA238#1")
+    store.set("INA238#1.bus.i2c.bus_id", 2)
+    store.set("INA238_CURRENT", 100.0)
+    store.set("BAT1_CAPACITY", 5000.0)
+    store.set("SYS_AUTOSTART", 4001)
+    classic = [c for c in map(store.classic, store.parameters) if c is not None]
+    metadata = build_parameters_json(schema, specs=store.specs, classic_params=classic)
+    return store, flat_values(store), metadata
+
+
+@pytest.mark.issue40
+def test_changes_are_written_masks_then_union_tags_then_the_rest(two_monitors: Any) -> None:
+    """docs/ground-stations.md: "Writing goes in order (instance masks, then union tags, then
+    the rest)": a tag makes its variant's fields live, so INA238#1's switch to SPI (1A) goes
+    before INA238#0's address (0C), which sorts before it by name."""
+    _, values, metadata = two_monitors
+    airframe = (
+        "param set INA238#0.bus.i2c.address 0x41\n"
+        "param set INA238#1.bus._tag 1\n"
+        "param add INA238#2\n"
+    )
+    review = files.review_file("spi.airframe", airframe, values, metadata)
+    assert [c["name"] for c in review["changes"]] == [
+        "INA238_INST",  # INA238#2 added
+        "INA238_1A",  # INA238#1 to SPI
+        "INA238_2A",
+        "INA238_0C",
+        "INA238_1D",  # SPI's fields, live once 1A is written
+        "INA238_1E",
+        "INA238_1F",
+        "INA238_1G",
+        "INA238_2B",
+        "INA238_2C",
+        "INA238_2P",
+        "INA238_2Q",
+    ]
+
+
+@pytest.mark.issue40
+def test_a_params_file_skips_names_the_vehicle_lacks_with_a_note(vehicle: Any) -> None:
+    values, metadata = vehicle
+    text = "1\t1\tNO_SUCH_PARAM\t3\t6\n1\t1\tINA238_1C\t70\t6\n1\t1\tSYS_AUTOSTART\t4001\t6\n"
+    review = files.review_file("x.params", text, values, metadata)
+    assert review["notes"] == [
+        "x.params:1: NO_SUCH_PARAM: the vehicle has no such parameter; skipped"
+    ]
+    assert review["changes"] == [
+        {"name": "INA238_1C", "current": 0x45, "new": 70},
+        {"name": "SYS_AUTOSTART", "current": 0, "new": 4001},
+    ]
+
+
+@pytest.mark.issue40
+def test_a_json_file_changes_only_what_it_names(two_monitors: Any) -> None:
+    """A file that names one classic parameter leaves the instances and the other values as
+    the vehicle has them (loading a file onto the vehicle is no reset)."""
+    _, values, metadata = two_monitors
+    text = '{"format": "px4params", "version": 1, "classic": {"SYS_AUTOSTART": 4002}}'
+    review = files.review_file("Vehicle.JSON", text, values, metadata)
+    assert review == {
+        "changes": [{"name": "SYS_AUTOSTART", "current": 4001, "new": 4002}],
+        "notes": [],
+    }
+
+
+@pytest.mark.issue40
+def test_an_airframe_setting_a_classic_float_is_reviewed(two_monitors: Any) -> None:
+    """Without the offline store the classic parameters come from the metadata: Float ones
+    too, and a legacy name that shares a structured parameter's prefix (INA238_CURRENT)."""
+    _, values, metadata = two_monitors
+    airframe = "param set INA238_CURRENT 150\nparam set BAT1_CAPACITY 4000\n"
+    review = files.review_file("legacy.airframe", airframe, values, metadata)
+    changes = {c["name"]: (c["current"], c["new"]) for c in review["changes"]}
+    assert changes == {"INA238_CURRENT": (100.0, 150.0), "BAT1_CAPACITY": (5000.0, 4000.0)}
+
+
+@pytest.mark.issue40
+def test_a_failing_airframe_stops_at_its_first_error(vehicle: Any) -> None:
+    """One line naming the first failing line, as `px4params run` stops there."""
+    values, metadata = vehicle
+    with pytest.raises(Px4ParamsError) as caught:
+        files.review_file(
+            "bad.airframe",
+            "param add INA238#9\nparam add INA238#8\nparam set NO_SUCH 1\n",
+            values,
+            metadata,
+        )
+    assert str(caught.value) == (
+        "bad.airframe:1: INA238#9: instance 9 is out of range (max_instances is 4: instances 0..3)"
+    )
+
+
+@pytest.mark.issue40
+def test_the_airframe_export_lists_the_classic_parameters_changed(two_monitors: Any) -> None:
+    """PX4 airframes set classic parameters with `param set-default NAME VALUE`; those at
+    their default are left out. Over MAVLink (no offline store) as from the store."""
+    store, values, metadata = two_monitors
+    expected = [
+        "param set-default SYS_AUTOSTART 4001",
+        "param set-default INA238_CURRENT 100.0",
+        "param set-default BAT1_CAPACITY 5000.0",
+    ]
+    for offline in (None, store):
+        lines = files.export_airframe(values, metadata, offline).splitlines()
+        classic = [line for line in lines if line.startswith("param set-default ")]
+        classic = [line for line in classic if "#" not in line]
+        assert sorted(classic) == sorted(expected), offline
+
+
+@pytest.mark.issue40
+def test_a_metadata_entry_without_a_default_defaults_to_zero(vehicle: Any) -> None:
+    """PX4's parameter metadata may leave "default" out (it is optional in its schema): such
+    a parameter at 0 is unchanged, so the airframe leaves it out."""
+    values, metadata = vehicle
+    extra = {"name": "TEST_NO_DEF", "type": "Int32", "group": "Test"}
+    doc = {**metadata, "parameters": [*metadata["parameters"], extra]}
+    airframe = files.export_airframe({**values, "TEST_NO_DEF": 0}, doc)
+    assert "TEST_NO_DEF" not in airframe
+    airframe = files.export_airframe({**values, "TEST_NO_DEF": 7}, doc)
+    assert "param set-default TEST_NO_DEF 7" in airframe.splitlines()
+    # a default that is no number (null in a hand-written document) counts as 0 too
+    doc["parameters"][-1] = {**extra, "default": None}
+    assert "TEST_NO_DEF" not in files.export_airframe({**values, "TEST_NO_DEF": 0}, doc)
+
+
+@pytest.mark.issue40
+def test_a_file_without_a_name_is_read_as_an_airframe(vehicle: Any) -> None:
+    """The page sends the file's name; a script may send none: its lines are airframe lines."""
+    values, metadata = vehicle
+    review = files.review_file("", "param set SYS_AUTOSTART 4001\n", values, metadata)
+    assert review["changes"] == [{"name": "SYS_AUTOSTART", "current": 0, "new": 4001}]
+
+
+@pytest.mark.issue40
+def test_reviews_and_exports_use_the_offline_store_s_types(two_monitors: Any) -> None:
+    """With the offline store, the scratch copy is the store's (its schema and classic
+    parameters), not the bundled types: the review and both files are the same."""
+    store, values, metadata = two_monitors
+    text = "param set INA238#1.bus.i2c.address 0x46\n"
+    assert files.review_file("a.airframe", text, values, metadata, store) == files.review_file(
+        "a.airframe", text, values, metadata
+    )
+    params = files.export_params(values, metadata, store)
+    assert "1\t1\tINA238_CURRENT\t100" in params and "1\t1\tINA238_1B\t2\t6" in params

@@ -57,6 +57,7 @@ __all__ = [
     "build_parameters_json",
     "classic_source",
     "describe_value",
+    "destructured_names",
     "length_bits",
     "min_bits",
     "structured_entry",
@@ -129,15 +130,27 @@ def build_parameters_json(
     return document
 
 
+def destructured_names(entry: Mapping[str, Any]) -> set[str]:
+    """The flat names a vehicle reports for a structured entry (:func:`structured_entry`): its
+    instance mask ``INA238_INST`` (when the slots fit one) and every letter of every slot,
+    ``INA238_0A`` .. ``INA238_3Q`` (``NAME_A`` .. for a shared parameter). None for another
+    entry. A classic parameter may share the prefix (``INA238_CURRENT``): it is none of these."""
+    letters = [slot["letter"] for slot in entry.get("flat", ())]
+    slots = entry.get("max_instances") or 0
+    name = entry["name"]
+    if not slots:
+        return {f"{name}_{letter}" for letter in letters}
+    names = {f"{name}_{n}{letter}" for n in range(slots) for letter in letters}
+    if letters and slots <= flat.MASK_BITS:
+        names.add(f"{name}_INST")
+    return names
+
+
 def count_entries(document: Mapping[str, Any]) -> dict[str, int]:
     """How many entries of a document are structured, destructured (flat names) and classic."""
     entries = document["parameters"]
     structured = sum(1 for e in entries if e.get("type") == QGC_TYPE)
-    destructured = sum(
-        len(e.get("flat", ())) * (e.get("max_instances") or 1)
-        + (1 if e.get("flat") and 0 < (e.get("max_instances") or 0) <= flat.MASK_BITS else 0)
-        for e in entries
-    )
+    destructured = sum(len(destructured_names(e)) for e in entries if e.get("type") == QGC_TYPE)
     return {
         "structured": structured,
         "destructured": destructured,

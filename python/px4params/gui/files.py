@@ -16,6 +16,7 @@ from typing import Any
 
 from px4params.errors import CommandError, Px4ParamsError
 from px4params.formats import qgc_params
+from px4params.gcs.metadata import QGC_TYPE, destructured_names
 from px4params.store.classic import ClassicParam
 
 __all__ = ["export_airframe", "export_params", "review_file"]
@@ -87,13 +88,16 @@ def _read_params(
 
 def _classic_of(metadata: Mapping[str, Any]) -> list[ClassicParam]:
     """The classic parameters of a metadata document: Int32/Float entries that are not a
-    structured parameter's destructured names or instance mask."""
-    flat_prefixes = [e["name"] + "_" for e in metadata["parameters"] if e.get("type") == "Custom"]
+    structured parameter's destructured names or instance mask (``INA238_CURRENT`` is
+    classic, ``INA238_1C`` is not)."""
+    destructured = set().union(
+        *(destructured_names(e) for e in metadata["parameters"] if e.get("type") == QGC_TYPE)
+    )
     found = []
     for entry in metadata["parameters"]:
         if entry.get("type") not in ("Int32", "Float"):
             continue
-        if any(entry["name"].startswith(p) for p in flat_prefixes):
+        if entry["name"] in destructured:
             continue
         default = entry.get("default", 0)
         found.append(
