@@ -97,14 +97,17 @@ TARGETS=(
   # One file of the core each, with cargo test options choosing the tests that reach it (none:
   # all of the crate's). Nothing in the core calls file.rs: only tests/file.rs reaches it.
   "rust-file|crates/px4params-core/src/file.rs|--test=file"
-  "rust-store|crates/px4params-core/src/store.rs|"
+  # store.rs: its own tests, the leaf tables', the file's and the pages' (which go through it).
+  "rust-store|crates/px4params-core/src/store.rs|--lib --test=mutants_store --test=store --test=store_alloc --test=table --test=file --test=pages"
   "rust-pages|crates/px4params-core/src/pages.rs|"
   "rust-crc|crates/px4params-core/src/crc.rs|"
-  "rust-scatter|crates/px4params-core/src/scatter.rs|"
-  "rust-transfer|crates/px4params-core/src/transfer.rs|"
+  # The receive path: the unit tests in the file (--lib) and the test programs that read
+  # through it (codec, walk, straight, store and pages read values in pieces).
+  "rust-scatter|crates/px4params-core/src/scatter.rs|--lib --test=mutants_scatter --test=codec --test=walk --test=straight --test=store --test=pages"
+  "rust-transfer|crates/px4params-core/src/transfer.rs|--lib --test=mutants_transfer --test=codec"
 )
 # The Rust test files issue 40 added: MUTATION_BASELINE=1 leaves them out (the "before").
-RUST_ISSUE40_TESTS="c_abi crc file pages"
+RUST_ISSUE40_TESTS="c_abi crc file pages mutants_transfer mutants_scatter mutants_store"
 
 if [ "$#" -eq 0 ]; then
   set -- can_transfer dronecan_params health links gui migrate vehicle store rust-core rust-ffi
@@ -242,22 +245,25 @@ rust_target() {
   [ "$package" = px4params-core ] && features=(--features alloc)
   # The tests: the target's cargo test options, else all of the crate's. The baseline leaves
   # out the test files issue 40 added, and the doc tests (cargo runs them only on their own).
+  # Given to every cargo command (--cargo-arg), so that a mutant builds only the test
+  # programs that run: the others would cost a build each and tell nothing.
   local chosen=() t f
   for t in $tests; do
     if [ "${MUTATION_BASELINE:-0}" = 1 ] && [[ " $RUST_ISSUE40_TESTS " == *" ${t#--test=} "* ]]; then
       continue
     fi
-    chosen+=("--cargo-test-arg=$t")
+    chosen+=("--cargo-arg=$t")
   done
   if [ "${MUTATION_BASELINE:-0}" = 1 ] && [ -z "$tests" ]; then
     for f in "crates/$package"/tests/*.rs; do
       t=$(basename "$f" .rs)
       case " $RUST_ISSUE40_TESTS " in *" $t "*) continue ;; esac
-      chosen+=("--cargo-test-arg=--test=$t")
+      chosen+=("--cargo-arg=--test=$t")
     done
   fi
   if [ "${MUTATION_BASELINE:-0}" = 1 ]; then
-    chosen+=(--cargo-test-arg=--lib) # never an empty choice, which would be every test
+    # never an empty choice, which would be every test
+    [[ " ${chosen[*]} " == *" --cargo-arg=--lib "* ]] || chosen+=(--cargo-arg=--lib)
   fi
   # shellcheck disable=SC2206 # extra options, split on spaces on purpose
   local extra=(${MUTATION_RUST_ARGS:-})
