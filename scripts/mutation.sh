@@ -273,10 +273,12 @@ rust_target() {
   # Its own target directory: cargo names a workspace member's artifacts by its path inside
   # the workspace, so a mutated copy's and the work tree's collide, and a work tree build after
   # a run was seen to take the last mutant's library for up to date.
-  "${lock[@]}" env CARGO_TARGET_DIR="$OUT/cargo-target" timeout --signal=INT --kill-after=60 "$BUDGET" \
-    nice cargo mutants --package "$package" "${features[@]}" --jobs 1 \
-    --timeout "${MUTATION_RUST_TIMEOUT:-300}" "${scope[@]}" "${chosen[@]}" --output "$OUT/$name" \
-    "${extra[@]}" >"$OUT/$name.log" 2>&1 || true
+  # MUTATION_REPORT_ONLY=1: count the last run's lists again (after the equivalents changed).
+  [ "${MUTATION_REPORT_ONLY:-0}" = 1 ] ||
+    "${lock[@]}" env CARGO_TARGET_DIR="$OUT/cargo-target" timeout --signal=INT --kill-after=60 "$BUDGET" \
+      nice cargo mutants --package "$package" "${features[@]}" --jobs 1 \
+      --timeout "${MUTATION_RUST_TIMEOUT:-300}" "${scope[@]}" "${chosen[@]}" --output "$OUT/$name" \
+      "${extra[@]}" >"$OUT/$name.log" 2>&1 || true
   local results="$OUT/$name/mutants.out"
   local caught missed timeout unviable
   caught=$( (wc -l <"$results/caught.txt") 2>/dev/null || echo 0)
@@ -317,7 +319,9 @@ report.write_text("".join(f"{s}\n" for s in lines))
 print(count, total)
 EOF
   )
-  local untested=$((total - caught - missed - timeout - unviable))
+  # With --iterate, mutants.json holds only this run's mutants: the earlier ones are in scope too.
+  total=$((total + earlier))
+  local untested=$((total - earlier - caught - missed - timeout - unviable))
   echo "$name: $total mutants, $((caught + missed + timeout)) viable tested: $caught killed," \
     "$timeout timed out, $missed survived ($equivalents equivalent); $unviable unviable (did" \
     "not build); $untested untested (budget); $earlier caught by earlier runs (--iterate);" \
