@@ -387,3 +387,57 @@ fn malformed_frames_give_what_is_there() {
         (&[9u8][..], &[] as &[u8], 1)
     );
 }
+
+#[test]
+fn copy_out_past_the_end_fills_what_there_is_and_returns_the_end() {
+    // "Where the pieces end first, the rest of `out` is unspecified": the bytes there are come
+    // first, and the place returned is past the last piece.
+    let bytes = [1u8, 2, 3, 4, 5];
+    let p: [&[u8]; 2] = [&bytes[..3], &bytes[3..]];
+    let mut out = [0u8; 8];
+    let end = p[..].copy_out(Place { index: 0, skip: 1 }, &mut out);
+    assert_eq!(out[..4], [2, 3, 4, 5]);
+    assert_eq!(end, Place { index: 2, skip: 0 });
+    let frames: [&[u8]; 3] = [
+        &[0xC1, 0xC2, 1, 2, 3, 4, 5, 0x80],
+        &[6, 7, 8, 9, 10, 11, 12, 0x20],
+        &[13, 0x40],
+    ];
+    let p = FramePayloads::new(&frames);
+    let mut out = [0u8; 20];
+    let end = p.copy_out(Place { index: 0, skip: 3 }, &mut out);
+    assert_eq!(out[..10], [4, 5, 6, 7, 8, 9, 10, 11, 12, 13]);
+    assert_eq!(end, Place { index: 3, skip: 0 });
+}
+
+#[test]
+fn every_read_after_every_other_gives_the_joined_bytes() {
+    // A longer stream: a read can follow another from anywhere, near it or far ahead or behind.
+    let flat = stream(100);
+    let cuts: [&[usize]; 3] = [
+        &[7, 14, 21, 28, 35, 42, 49, 56, 63, 70, 77, 84, 91],
+        &[1, 50, 51, 99],
+        &[],
+    ];
+    for cuts in cuts {
+        let p = pieces(&flat, cuts);
+        let s = Scattered::new(&p[..]);
+        for a in 0..100 {
+            for b in 0..100 {
+                let (n, m) = (1 + (a * 7 + b) % 64, 1 + (a + b * 5) % 64);
+                let (n, m) = (n.min(800 - a * 8) as u32, m.min(800 - b * 8 - 3) as u32);
+                assert_eq!(
+                    s.read_bits(a * 8, n),
+                    bits(&flat, a * 8, n),
+                    "{cuts:?}: {a}"
+                );
+                let at = b * 8 + 3;
+                assert_eq!(
+                    s.read_bits(at, m),
+                    bits(&flat, at, m),
+                    "{cuts:?}: {a} then {b}"
+                );
+            }
+        }
+    }
+}
