@@ -603,3 +603,27 @@ fn every_error_keeps_its_fields_when_widened() {
         "current: value 5000 is out of range (expected 0 to 1023)"
     );
 }
+
+#[test]
+fn the_values_must_lie_within_four_gibibytes() {
+    // ParamDef::first_byte is a u32: the parameters' values end at byte u32::MAX at most.
+    // plan() only counts; nothing of that size is allocated here.
+    let mut big = OwnedLayout::default();
+    let byte = big.uint(8, Cast::Saturated).unwrap();
+    let largest = big.array(byte, 65535).unwrap();
+    let view = big.as_layout();
+    // (1 + 2 * 32768) * 65535 = 65537 * 65535 = u32::MAX.
+    let mut fits = vec![ParamDef::instanced(largest, 32768)];
+    let c = plan(&view, &mut fits).unwrap();
+    assert_eq!(c.bytes, u32::MAX as usize + 65535);
+    let mut over = vec![ParamDef::instanced(largest, 32769)];
+    assert_eq!(
+        plan(&view, &mut over),
+        Err(StoreError::Unsupported { param: 0 })
+    );
+    let mut second = vec![ParamDef::instanced(largest, 32768), ParamDef::shared(byte)];
+    assert_eq!(
+        plan(&view, &mut second),
+        Err(StoreError::Unsupported { param: 1 })
+    );
+}
