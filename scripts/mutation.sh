@@ -16,6 +16,14 @@
 #   MUTATION_BASELINE=1 bash scripts/mutation.sh session mavlink_ftp migrate-config   # before
 #   bash scripts/mutation.sh session mavlink_ftp migrate-config                       # after
 # Each target prints its line; the run ends with the table of each target's before and after.
+# Rust, one file of the core at a time (cargo-mutants builds and tests a mutant in 3-12 s here;
+# a run cut short by its budget goes on where it stopped with --iterate, which skips what was
+# caught and tests again what survived):
+#   MUTATION_BASELINE=1 MUTATION_RUST_TIMEOUT=20 bash scripts/mutation.sh rust-transfer   # before
+#   MUTATION_RUST_TIMEOUT=20 MUTATION_RUST_ARGS=--iterate bash scripts/mutation.sh rust-transfer
+# (the same for rust-scatter; of rust-store's 336 mutants one tenth was run, MUTATION_RUST_ARGS=
+# "--shard 0/10"). transfer.rs's and scatter.rs's survivors after are all listed in
+# scripts/mutation-equivalent.txt with the reason; the store sample's were all killed.
 # mutmut 2 looks up kept results by a line's text: a mutant of a line that occurs twice in its
 # file (two identical `raise` or `continue` lines) can stay "untested" in a run that starts from
 # earlier results. The figures say how many; plant such a mutant by hand to check it.

@@ -83,11 +83,8 @@ fn reads_at_any_offset_and_width_give_the_joined_bytes() {
                 );
             }
         }
-        for i in 0..40 {
-            assert_eq!(s.byte(i), flat[i], "{cuts:?}: byte {i}");
-        }
-        for i in (0..40).rev() {
-            assert_eq!(s.byte(i), flat[i], "{cuts:?}: byte {i}");
+        for (i, &b) in flat.iter().enumerate().chain(flat.iter().enumerate().rev()) {
+            assert_eq!(s.byte(i), b, "{cuts:?}: byte {i}");
         }
     }
 }
