@@ -16,6 +16,14 @@
 #   MUTATION_BASELINE=1 bash scripts/mutation.sh session mavlink_ftp migrate-config   # before
 #   bash scripts/mutation.sh session mavlink_ftp migrate-config                       # after
 # Each target prints its line; the run ends with the table of each target's before and after.
+# Rust, one file of the core at a time (cargo-mutants builds and tests a mutant in 3-12 s here;
+# a run cut short by its budget goes on where it stopped with --iterate, which skips what was
+# caught and tests again what survived):
+#   MUTATION_BASELINE=1 MUTATION_RUST_TIMEOUT=20 bash scripts/mutation.sh rust-transfer   # before
+#   MUTATION_RUST_TIMEOUT=20 MUTATION_RUST_ARGS=--iterate bash scripts/mutation.sh rust-transfer
+# (the same for rust-scatter; of rust-store's 336 mutants one tenth was run, MUTATION_RUST_ARGS=
+# "--shard 0/10"). transfer.rs's and scatter.rs's survivors after are all listed in
+# scripts/mutation-equivalent.txt with the reason; the store sample's were all killed.
 # mutmut 2 looks up kept results by a line's text: a mutant of a line that occurs twice in its
 # file (two identical `raise` or `continue` lines) can stay "untested" in a run that starts from
 # earlier results. The figures say how many; plant such a mutant by hand to check it.
@@ -107,14 +115,18 @@ TARGETS=(
   # One file of the core each, with cargo test options choosing the tests that reach it (none:
   # all of the crate's). Nothing in the core calls file.rs: only tests/file.rs reaches it.
   "rust-file|crates/px4params-core/src/file.rs|--test=file"
-  "rust-store|crates/px4params-core/src/store.rs|"
+  # store.rs: its own tests, the leaf tables', the file's and the pages' (which go through it).
+  "rust-store|crates/px4params-core/src/store.rs|--lib --test=mutants_store --test=store --test=store_alloc --test=table --test=file --test=pages"
   "rust-pages|crates/px4params-core/src/pages.rs|"
   "rust-crc|crates/px4params-core/src/crc.rs|"
-  "rust-scatter|crates/px4params-core/src/scatter.rs|"
-  "rust-transfer|crates/px4params-core/src/transfer.rs|"
+  # The receive path: the unit tests in the file (--lib) and the test programs that read
+  # values in pieces through it (codec, walk, pages; straight and store have one such test
+  # each, left out: a mutant would build them for little).
+  "rust-scatter|crates/px4params-core/src/scatter.rs|--lib --test=mutants_scatter --test=codec --test=walk --test=pages"
+  "rust-transfer|crates/px4params-core/src/transfer.rs|--lib --test=mutants_transfer --test=codec"
 )
 # The Rust test files issue 40 added: MUTATION_BASELINE=1 leaves them out (the "before").
-RUST_ISSUE40_TESTS="c_abi crc file pages"
+RUST_ISSUE40_TESTS="c_abi crc file pages mutants_transfer mutants_scatter mutants_store"
 
 if [ "$#" -eq 0 ]; then
   set -- can_transfer dronecan_params health links gui migrate vehicle store rust-core rust-ffi
@@ -252,22 +264,25 @@ rust_target() {
   [ "$package" = px4params-core ] && features=(--features alloc)
   # The tests: the target's cargo test options, else all of the crate's. The baseline leaves
   # out the test files issue 40 added, and the doc tests (cargo runs them only on their own).
+  # Given to every cargo command (--cargo-arg), so that a mutant builds only the test
+  # programs that run: the others would cost a build each and tell nothing.
   local chosen=() t f
   for t in $tests; do
     if [ "${MUTATION_BASELINE:-0}" = 1 ] && [[ " $RUST_ISSUE40_TESTS " == *" ${t#--test=} "* ]]; then
       continue
     fi
-    chosen+=("--cargo-test-arg=$t")
+    chosen+=("--cargo-arg=$t")
   done
   if [ "${MUTATION_BASELINE:-0}" = 1 ] && [ -z "$tests" ]; then
     for f in "crates/$package"/tests/*.rs; do
       t=$(basename "$f" .rs)
       case " $RUST_ISSUE40_TESTS " in *" $t "*) continue ;; esac
-      chosen+=("--cargo-test-arg=--test=$t")
+      chosen+=("--cargo-arg=--test=$t")
     done
   fi
   if [ "${MUTATION_BASELINE:-0}" = 1 ]; then
-    chosen+=(--cargo-test-arg=--lib) # never an empty choice, which would be every test
+    # never an empty choice, which would be every test
+    [[ " ${chosen[*]} " == *" --cargo-arg=--lib "* ]] || chosen+=(--cargo-arg=--lib)
   fi
   # shellcheck disable=SC2206 # extra options, split on spaces on purpose
   local extra=(${MUTATION_RUST_ARGS:-})
@@ -276,10 +291,12 @@ rust_target() {
   # Its own target directory: cargo names a workspace member's artifacts by its path inside
   # the workspace, so a mutated copy's and the work tree's collide, and a work tree build after
   # a run was seen to take the last mutant's library for up to date.
-  "${lock[@]}" env CARGO_TARGET_DIR="$OUT/cargo-target" timeout --signal=INT --kill-after=60 "$BUDGET" \
-    nice cargo mutants --package "$package" "${features[@]}" --jobs 1 \
-    --timeout "${MUTATION_RUST_TIMEOUT:-300}" "${scope[@]}" "${chosen[@]}" --output "$OUT/$name" \
-    "${extra[@]}" >"$OUT/$name.log" 2>&1 || true
+  # MUTATION_REPORT_ONLY=1: count the last run's lists again (after the equivalents changed).
+  [ "${MUTATION_REPORT_ONLY:-0}" = 1 ] ||
+    "${lock[@]}" env CARGO_TARGET_DIR="$OUT/cargo-target" timeout --signal=INT --kill-after=60 "$BUDGET" \
+      nice cargo mutants --package "$package" "${features[@]}" --jobs 1 \
+      --timeout "${MUTATION_RUST_TIMEOUT:-300}" "${scope[@]}" "${chosen[@]}" --output "$OUT/$name" \
+      "${extra[@]}" >"$OUT/$name.log" 2>&1 || true
   local results="$OUT/$name/mutants.out"
   local caught missed timeout unviable
   caught=$( (wc -l <"$results/caught.txt") 2>/dev/null || echo 0)
@@ -311,14 +328,18 @@ for line in Path("scripts/mutation-equivalent.txt").read_text().splitlines():
 lines, count = [], 0
 for entry in missed.read_text().splitlines() if missed.exists() else []:
     where, what = entry.split(": ", 1)
-    why = equivalent.get((where.split(":")[0], what))
+    path, line, column = where.split(":")
+    # By the words, or where the same words name several mutants, by line:col and words.
+    why = equivalent.get((path, what)) or equivalent.get((path, f"{line}:{column}: {what}"))
     count += why is not None
     lines.append(f"{entry}\t{f'equivalent: {why}' if why else 'SURVIVED'}")
 report.write_text("".join(f"{s}\n" for s in lines))
 print(count, total)
 EOF
   )
-  local untested=$((total - caught - missed - timeout - unviable))
+  # With --iterate, mutants.json holds only this run's mutants: the earlier ones are in scope too.
+  total=$((total + earlier))
+  local untested=$((total - earlier - caught - missed - timeout - unviable))
   echo "$name: $total mutants, $((caught + missed + timeout)) viable tested: $caught killed," \
     "$timeout timed out, $missed survived ($equivalents equivalent); $unviable unviable (did" \
     "not build); $untested untested (budget); $earlier caught by earlier runs (--iterate);" \
