@@ -179,7 +179,7 @@ python_target() {
     trap 'restore; exit 130' INT TERM
     timeout --signal=INT --kill-after=60 "$(budget_for "$name")" mutmut run \
       --paths-to-mutate "$paths" --tests-dir "$tests_dir" \
-      --runner "python -m pytest -x -q -p no:cacheprovider $tests" \
+      --runner "bash scripts/mutation-pytest.sh -x -q -p no:cacheprovider $tests" \
       --simple-output --no-progress >"$OUT/$name.log" 2>&1 || true
     restore
     trap - EXIT INT TERM
