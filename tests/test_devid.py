@@ -949,3 +949,59 @@ def test_the_devtype_name_errors_word_for_word() -> None:
         f"unknown devtype 'MPU925' in the legacy table (did you mean {', '.join(hint)}? give a "
         "code 0..255 or a name from 'px4params devid --list --table legacy')"
     )
+
+
+@pytest.mark.issue40
+def test_header_values_in_c_spellings(tmp_path: Path) -> None:
+    """A #define's value is a C integer literal, maybe in parentheses and with the suffixes C
+    allows (u, U, l, L); decimal codes are read in base 10."""
+    header = tmp_path / "drv_sensor.h"
+    header.write_text(
+        "#define DRV_MAG_DEVTYPE_A (0x0A)\n#define DRV_MAG_DEVTYPE_B 0x0Bu\n"
+        "#define DRV_MAG_DEVTYPE_C 0x0CUL\n#define DRV_BARO_DEVTYPE_D 55\n"
+        "#define DRV_BARO_DEVTYPE_E (19L)\n"
+    )
+    table = devid.load_table("current", header)
+    assert [(e.code, e.name) for e in table] == [
+        (0x0A, "A"), (0x0B, "B"), (0x0C, "C"), (19, "E"), (55, "D"),
+    ]  # fmt: skip
+
+
+@pytest.mark.issue40
+def test_bad_table_lines_word_for_word(tmp_path: Path) -> None:
+    tsv = tmp_path / "t.tsv"
+    for text, message in (
+        ("one\tA\n", f"{tsv}:1: devtype code 'one' is not a number"),
+        (
+            f"{'1' * 70}\tA\n",
+            f"{tsv}:1: devtype code 111111111111...111111 (70 characters) is out of range "
+            "(70 digits: no value is wider than 64 bits)",
+        ),
+        ("0x100\tA\n", f"{tsv}:1: devtype code 0x100 is out of range 0..255 (0x00..0xFF)"),
+    ):
+        tsv.write_text(text)
+        with pytest.raises(DeviceIdError) as e:
+            devid.load_table("current", tsv)
+        assert str(e.value) == message
+
+
+@pytest.mark.issue40
+def test_the_default_table_is_todays() -> None:
+    assert devid.load_table().label == "current"
+    assert devid.load_table().name_of(0x37) == "BMI270"  # docs/device-ids.md: since 1.14
+
+
+@pytest.mark.issue40
+def test_a_table_file_with_a_stray_byte_or_too_large(tmp_path: Path) -> None:
+    """A header saved in Latin-1 (a comment's author name) still gives its codes; a file over
+    the devtypes cap is refused by name before it is read."""
+    header = tmp_path / "drv_sensor.h"
+    header.write_bytes(b"/* Fran\xe7ois */\n#define DRV_MAG_DEVTYPE_AK09916 0x09\n")
+    assert devid.load_table("current", header).name_of(0x09) == "AK09916"
+    big = tmp_path / "big.tsv"
+    big.write_bytes(b"# " + b"x" * (2 * 1024 * 1024) + b"\n0x09\tAK09916\n")
+    with pytest.raises(DeviceIdError) as e:
+        devid.load_table("current", big)
+    assert str(e.value) == (
+        f"cannot read devtypes file {big}: too large for a devtypes table (2 MiB; at most 1 MiB)"
+    )

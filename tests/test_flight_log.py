@@ -303,3 +303,230 @@ def test_a_lost_device_that_answers_again_is_logged_as_recovered(tmp_path, capsy
     assert marks[1][0] == pytest.approx(6.06)  # when it was lost, not when the slice ended
     main(["health", str(log), "--timeline", str(picture)])
     assert picture.read_text() == direct.read_text()
+
+
+# -- a run written by hand, read back sample by sample (issue 40) ---------------------------------
+# The mutation run found what the bench runs above leave open. Here the events are written by
+# hand, so every sample and logged message the log must hold is known from docs/autostart.md
+# ("The flight log") and the ULog specification, and pyulog reads them back.
+
+INA = {"instance": "INA238#0", "driver": "ina238", "bus": "i2c", "bus_id": 1, "address": 0x45}
+AK = {"instance": "AK09916#0", "driver": "ak09916", "bus": "i2c", "bus_id": 1, "address": 0x0C}
+#: The device IDs the drivers publish: devtype, address, bus 1 << 3 | I2C (PX4's layout).
+INA_ID, AK_ID = 0xD44509, 0x090C09
+
+
+def _perf(where: dict, t: float, transfers: int, errors: int, resets: int, probes: int) -> dict:
+    return {"t": t, "event": "perf", **where, "transfers": transfers, "bad_transfers": errors,
+            "resets": resets, "probe_attempts": probes}  # fmt: skip
+
+
+HAND_EVENTS = [
+    {"t": 0.0, "event": "register", **INA},
+    {"t": 0.0, "event": "register", **AK},
+    {
+        "t": 0.05,
+        "event": "started",
+        **INA,
+        "device_id": INA_ID,
+        "device_id_hex": "0xD44509",
+        "attempts": 1,
+    },
+    {"t": 0.1, "event": "health", **INA, "health": "nominal", "reason": None},
+    {"t": 0.1, "event": "health", **AK, "health": "warning", "reason": "no answer yet"},
+    {"t": 0.1, "event": "arming", "may_arm": False},
+    _perf(INA, 1.0, 10, 1, 0, 1),
+    _perf(AK, 1.0, 0, 0, 0, 3),
+    {"t": 1.5, "event": "reset", **INA, "at": 1.45, "reason": "10 bad transfers in a row"},
+    {"t": 1.5, "event": "health", **INA, "health": "critical", "reason": "lost"},
+    _perf(INA, 2.0, 12, 11, 1, 1),
+    {
+        "t": 2.2,
+        "event": "started",
+        **INA,
+        "device_id": INA_ID,
+        "device_id_hex": "0xD44509",
+        "attempts": 2,
+    },
+    {"t": 2.3, "event": "health", **INA, "health": "nominal", "reason": None},
+    {"t": 2.3, "event": "health", **AK, "health": "nominal", "reason": None},
+    {"t": 2.3, "event": "arming", "may_arm": True},
+    _perf(INA, 3.0, 20, 11, 1, 2),
+]
+
+
+def _hand_run(events: list[dict], duration: float = 3.0, mode: str = "manifest"):
+    from px4params.vehicle.simbench import InstanceResult, RunResult
+
+    instances = [
+        InstanceResult("INA238#0", "ina238", "INA238", "i2c", 1, 0x45),
+        InstanceResult("AK09916#0", "ak09916", "AK09916", "i2c", 1, 0x0C),
+    ]
+    return RunResult(mode=mode, seed=7, duration=duration, bench="hand.bench.toml",
+                     instances=instances, may_arm=True, failures=[], events=events)  # fmt: skip
+
+
+def _samples(ulog: ULog, topic: str, multi_id: int, *fields: str) -> list[tuple]:
+    data = next(d.data for d in ulog.data_list if (d.name, d.multi_id) == (topic, multi_id))
+    return [tuple(int(data[f][n]) for f in fields) for n in range(len(data["timestamp"]))]
+
+
+@pytest.mark.issue40
+def test_a_hand_written_run_sample_by_sample(tmp_path: Path) -> None:
+    from px4params import __version__
+    from px4params.vehicle.flight_log import run_ulog
+
+    path = tmp_path / "hand.ulg"
+    path.write_bytes(run_ulog(_hand_run(HAND_EVENTS), {"SYS_AUTOSTART": 4001}, version="9.9"))
+    ulog = ULog(str(path))
+    info = ulog.msg_info_dict
+    assert (info["sys_name"], info["ver_sw"], info["px4params_seed"]) == ("px4params", "9.9", 7)
+    assert (info["px4params_mode"], info["px4params_bench"]) == ("manifest", "hand.bench.toml")
+    assert info["px4params_duration_us"] == "3000000" and "ver_hw" in info
+    assert __version__ != "9.9"
+    assert ulog.msg_info_multiple_dict["driver_instance"] == [
+        ["INA238#0 ina238 i2c 1 69"], ["AK09916#0 ak09916 i2c 1 12"],
+    ]  # fmt: skip
+    assert ulog.initial_parameters == {"SYS_AUTOSTART": 4001}
+    health = ("timestamp", "device_id", "health", "registered")
+    # Critical from registering (what the commander assumes until the first answer), the device
+    # ID once started, then every change and a sample with each second's perf counters.
+    assert _samples(ulog, "driver_health", 0, *health) == [
+        (0, 0, 2, 1),
+        (100_000, INA_ID, 0, 1),
+        (1_000_000, INA_ID, 0, 1),
+        (1_500_000, INA_ID, 2, 1),
+        (2_000_000, INA_ID, 2, 1),
+        (2_300_000, INA_ID, 0, 1),
+        (3_000_000, INA_ID, 0, 1),
+    ]
+    assert _samples(ulog, "driver_health", 1, *health) == [
+        (0, 0, 2, 1), (100_000, 0, 1, 1), (1_000_000, 0, 1, 1), (2_300_000, 0, 0, 1),
+    ]  # fmt: skip
+    perf = ("timestamp", "transfers", "errors", "timeouts", "probe_attempts", "elapsed_us")
+    # elapsed_us: the time since the driver last started (0 while it is lost or never started).
+    assert _samples(ulog, "driver_perf", 0, *perf) == [
+        (1_000_000, 10, 1, 0, 1, 950_000),
+        (2_000_000, 12, 11, 1, 1, 0),
+        (3_000_000, 20, 11, 1, 2, 800_000),
+    ]
+    assert _samples(ulog, "driver_perf", 1, *perf) == [(1_000_000, 0, 0, 0, 3, 0)]
+    # The commander's answer on every change and once a second, with how many devices block it.
+    assert _samples(ulog, "arming_check", 0, "timestamp", "may_arm", "blocking") == [
+        (100_000, 0, 1),
+        (1_000_000, 0, 1),
+        (2_000_000, 0, 2),  # INA238#0 lost, AK09916#0 warning
+        (2_300_000, 1, 0),
+        (3_000_000, 1, 0),
+    ]
+    said = [(int(m.timestamp), m.log_level_str(), m.message) for m in ulog.logged_messages]
+    where = "on I2C bus 1 address 0x45"
+    assert said == [
+        (0, "DEBUG", f"ina238 INA238#0 {where}: critical: starting"),
+        (0, "DEBUG", "ak09916 AK09916#0 on I2C bus 1 address 0x0C: critical: starting"),
+        (50_000, "INFO", f"ina238 INA238#0: started {where} (device ID 0xD44509, after 1 probe "
+                         "attempts)"),
+        (100_000, "NOTICE", f"ina238 INA238#0 {where}: nominal"),
+        (100_000, "WARNING", "ak09916 AK09916#0 on I2C bus 1 address 0x0C: warning: no answer yet"),
+        (100_000, "WARNING", "commander: arming refused: AK09916#0"),
+        (1_450_000, "ERROR", f"ina238 INA238#0: device lost {where}: 10 bad transfers in a row"),
+        (1_500_000, "ERROR", f"ina238 INA238#0 {where}: critical: lost"),
+        (2_200_000, "NOTICE", f"ina238 INA238#0: recovered: started again {where} (device ID "
+                              "0xD44509, after 2 probe attempts)"),
+        (2_300_000, "NOTICE", f"ina238 INA238#0 {where}: nominal"),
+        (2_300_000, "NOTICE", "ak09916 AK09916#0 on I2C bus 1 address 0x0C: nominal"),
+        (2_300_000, "INFO", "commander: may arm: every manifest device is nominal"),
+        (3_000_000, "INFO", "px4params: end of the run"),  # docs/autostart.md's words
+    ]  # fmt: skip
+
+
+@pytest.mark.issue40
+def test_a_hand_written_run_read_back(tmp_path: Path) -> None:
+    """px4params health's reading of the same log: each device's story as the events tell it."""
+    from px4params.vehicle.flight_log import read_run_ulog, run_ulog
+
+    path = tmp_path / "hand.ulg"
+    data = run_ulog(_hand_run(HAND_EVENTS), {}, version="9.9")
+    path.write_bytes(data)
+    run = read_run_ulog(str(path))
+    assert (run.mode, run.seed, run.duration, run.bench) == ("manifest", 7, 3.0, "hand.bench.toml")
+    assert (run.may_arm, run.failures, run.arming) == (True, [], [(0.1, False), (2.3, True)])
+    assert run.log_cut_at is None and run.silently_missing == []
+    ina, ak = run.instances
+    assert (ina.name, ina.driver, ina.kind, ina.bus_id, ina.address) == (
+        "INA238#0", "ina238", "i2c", 1, 0x45,
+    )  # fmt: skip
+    assert ina.timeline == [
+        (0.0, "critical", "starting"), (0.1, "nominal", ""), (1.5, "critical", "lost"),
+        (2.3, "nominal", ""),
+    ]  # fmt: skip
+    assert ina.marks == [(0.05, "start"), (1.45, "reset"), (2.2, "start")]
+    assert (ina.started_at, ina.device_id, ina.health, ina.reason, ina.registered) == (
+        0.05, INA_ID, "nominal", "", True,
+    )  # fmt: skip
+    assert (ina.transfers, ina.bad_transfers, ina.resets, ina.probe_attempts) == (20, 11, 1, 2)
+    assert ak.timeline == [
+        (0.0, "critical", "starting"), (0.1, "warning", "no answer yet"), (2.3, "nominal", ""),
+    ]  # fmt: skip
+    assert (ak.marks, ak.started_at, ak.device_id) == ([], None, None)  # never started
+    assert (ak.transfers, ak.probe_attempts) == (0, 3)
+
+    # The same log cut short just before its last message (the clean end): what it tells is
+    # known up to its last moment, 3 s (the last perf samples), and no further.
+    end = struct.pack("<HB", 1 + 8 + 25, ord("L")) + b"6" + (3_000_000).to_bytes(8, "little")
+    assert data.endswith(end + b"px4params: end of the run")
+    cut = tmp_path / "cut.ulg"
+    cut.write_bytes(data[: -len(end) - 25])
+    assert read_run_ulog(str(cut)).log_cut_at == 3.0
+
+
+@pytest.mark.issue40
+def test_before_the_commanders_first_answer_arming_is_refused(tmp_path: Path) -> None:
+    """A perf second before the commander has answered: the log says it may not arm, and an
+    instance nobody has reported on yet is critical (docs/autostart.md: critical until the
+    first answer). A device ID the driver did not give is 0, PX4's "no device"."""
+    from px4params.vehicle.flight_log import run_ulog
+
+    events = [
+        _perf(INA, 1.0, 5, 0, 0, 1),
+        {
+            "t": 1.2,
+            "event": "started",
+            **INA,
+            "device_id": None,
+            "device_id_hex": "-",
+            "attempts": 1,
+        },
+        {"t": 1.5, "event": "health", **INA, "health": "nominal", "reason": None},
+    ]
+    path = tmp_path / "early.ulg"
+    path.write_bytes(run_ulog(_hand_run(events, duration=2.0), {}))
+    ulog = ULog(str(path))
+    assert ulog.msg_info_dict["ver_sw"] == "unknown"  # no version given
+    assert _samples(ulog, "arming_check", 0, "timestamp", "may_arm", "blocking") == [
+        (1_000_000, 0, 0),
+    ]
+    assert _samples(ulog, "driver_health", 0, "timestamp", "device_id", "health") == [
+        (1_000_000, 0, 2), (1_500_000, 0, 0),
+    ]  # fmt: skip
+    perf = _samples(ulog, "driver_perf", 0, "timestamp", "elapsed_us")
+    assert perf == [(1_000_000, 0)]
+    assert ulog.logged_messages[-1].message == "px4params: end of the run"
+    assert int(ulog.logged_messages[-1].timestamp) == 2_000_000
+
+
+@pytest.mark.issue40
+def test_blocking_devices_are_counted_up_to_255(tmp_path: Path) -> None:
+    """arming_check.blocking is a uint8_t: 256 devices still starting (a ULog multi ID is a
+    uint8_t: at most 256 instances of a topic) count as 255."""
+    from px4params.vehicle.flight_log import run_ulog
+    from px4params.vehicle.simbench import InstanceResult, RunResult
+
+    names = [f"INA238#{n}" for n in range(256)]
+    instances = [InstanceResult(n, "ina238", None, "i2c", 1, 0x40) for n in names]
+    events = [{"t": 0.0, "event": "register", **INA, "instance": n} for n in names]
+    events.append({"t": 0.1, "event": "arming", "may_arm": False})
+    run = RunResult("manifest", 0, 1.0, "b", instances, False, [], events=events)
+    path = tmp_path / "many.ulg"
+    path.write_bytes(run_ulog(run, {}))
+    assert _samples(ULog(str(path)), "arming_check", 0, "timestamp", "blocking") == [(100_000, 255)]
