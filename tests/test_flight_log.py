@@ -530,3 +530,44 @@ def test_blocking_devices_are_counted_up_to_255(tmp_path: Path) -> None:
     path = tmp_path / "many.ulg"
     path.write_bytes(run_ulog(run, {}))
     assert _samples(ULog(str(path)), "arming_check", 0, "timestamp", "blocking") == [(100_000, 255)]
+
+
+@pytest.mark.issue40
+def test_the_topics_formats(tmp_path: Path) -> None:
+    """docs/autostart.md's topics, as pyulog reads their formats: PX4's field types, the device
+    ID a uint32_t as in sensor topics, instance names in 24 characters."""
+    from px4params.vehicle.flight_log import run_ulog
+
+    path = tmp_path / "hand.ulg"
+    path.write_bytes(run_ulog(_hand_run(HAND_EVENTS), {}))
+    formats = {name: f.fields for name, f in ULog(str(path)).message_formats.items()}
+    assert formats == {
+        "driver_health": [
+            ("uint64_t", 0, "timestamp"), ("uint32_t", 0, "device_id"), ("uint8_t", 0, "health"),
+            ("bool", 0, "registered"), ("char", 24, "instance"),
+        ],
+        "driver_perf": [
+            ("uint64_t", 0, "timestamp"), ("uint32_t", 0, "transfers"), ("uint32_t", 0, "errors"),
+            ("uint32_t", 0, "timeouts"), ("uint32_t", 0, "probe_attempts"),
+            ("uint64_t", 0, "elapsed_us"), ("char", 24, "instance"),
+        ],
+        "arming_check": [
+            ("uint64_t", 0, "timestamp"), ("bool", 0, "may_arm"), ("uint8_t", 0, "blocking"),
+        ],
+    }  # fmt: skip
+
+
+@pytest.mark.issue40
+def test_a_manifest_instance_without_a_driver_and_a_run_without_events(tmp_path: Path) -> None:
+    from px4params.vehicle.autostart import Configured
+    from px4params.vehicle.flight_log import run_ulog
+
+    gadget = Configured("GADGET#0", "GADGET", None, "i2c", 1, 0x20, {})
+    path = tmp_path / "gadget.ulg"
+    path.write_bytes(run_ulog(_hand_run(HAND_EVENTS), {}, [gadget]))
+    assert ULog(str(path)).msg_info_multiple_dict["manifest_instance"] == [
+        ["GADGET#0 - on I2C bus 1 address 0x20"]
+    ]
+    with pytest.raises(ValueError) as e:
+        run_ulog(_hand_run(None), {})  # type: ignore[arg-type]
+    assert str(e.value) == "the run's events were not recorded (run(..., record_events=True))"
