@@ -1005,3 +1005,41 @@ def test_a_table_file_with_a_stray_byte_or_too_large(tmp_path: Path) -> None:
     assert str(e.value) == (
         f"cannot read devtypes file {big}: too large for a devtypes table (2 MiB; at most 1 MiB)"
     )
+
+
+#: Parameters PX4 1.14 added (not in the 1.13 tree), each where PX4-Autopilot defines it.
+SINCE_PX4_1_14 = {
+    "OSD_SYMBOLS": "src/drivers/osd/msp_osd/module.yaml",
+    "OSD_SCROLL_RATE": "src/drivers/osd/msp_osd/module.yaml",
+    "MPC_VEL_MAN_SIDE": "src/modules/mc_pos_control/multicopter_position_mode_params.yaml",
+    "FW_THR_ASPD_MIN": "src/lib/fw_performance_model/performance_model_params.yaml",
+    "FW_T_THR_DAMPING": "src/modules/fw_lateral_longitudinal_control/fw_lat_long_params.yaml",
+}
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize("name", sorted(SINCE_PX4_1_14))
+def test_each_parameter_newer_than_1_13_means_todays_table(name: str) -> None:
+    """docs/device-ids.md: a file without a version that holds a parameter PX4 1.13 did not
+    have is read with today's table, and the report says which parameter and where PX4 has it."""
+    table, why = devid.table_for_parameters({name: 1, "CAL_MAG0_EN": 1})
+    assert table == "current"
+    assert why == (
+        f"no firmware version: {name} exists (PX4 1.14 and later; not in 1.13, "
+        f"{SINCE_PX4_1_14[name]}), so today's devtype table is assumed"
+    )
+
+
+@pytest.mark.issue40
+def test_the_era_rule_says_why_word_for_word() -> None:
+    assert devid.table_for_parameters({"CAL_GYRO1_PRIO": 50, "CAL_ACC0_PRIO": 50}) == (
+        "current",
+        "no firmware version: CAL_ACC0_PRIO exists (PX4 1.12 and later), so today's devtype "
+        "table is assumed",
+    )
+    assert devid.table_for_parameters({"CAL_MAG0_EN": 1}) == (
+        "px4-v1.6",
+        "no firmware version and no CAL_*_PRIO parameters (PX4 before 1.12): the px4-v1.6 "
+        "devtype table is assumed (files without a version predate it: ULog's ver_sw_release "
+        "and QGC's '# Version' came with PX4 1.6)",
+    )

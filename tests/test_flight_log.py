@@ -571,3 +571,27 @@ def test_a_manifest_instance_without_a_driver_and_a_run_without_events(tmp_path:
     with pytest.raises(ValueError) as e:
         run_ulog(_hand_run(None), {})  # type: ignore[arg-type]
     assert str(e.value) == "the run's events were not recorded (run(..., record_events=True))"
+
+
+@pytest.mark.issue40
+def test_health_messages_word_for_word(tmp_path: Path) -> None:
+    """The logged health changes: 'nominal' alone (whatever reason came with it), a level with
+    its reason, a level without one; and a quiet start that found nothing (DEBUG)."""
+    from px4params.vehicle.flight_log import run_ulog
+
+    events = [
+        {"t": 0.5, "event": "start_failed", **AK, "quiet": True, "reason": "no ACK"},
+        {"t": 0.6, "event": "health", **AK, "health": "critical", "reason": None},
+        {"t": 0.7, "event": "health", **AK, "health": "warning", "reason": "checksum error in AUX"},
+        {"t": 0.8, "event": "health", **INA, "health": "nominal", "reason": "answers again"},
+    ]
+    path = tmp_path / "texts.ulg"
+    path.write_bytes(run_ulog(_hand_run(events, duration=1.0), {}))
+    said = [(m.log_level_str(), m.message) for m in ULog(str(path)).logged_messages]
+    ak = "ak09916 AK09916#0 on I2C bus 1 address 0x0C"
+    assert said[:-1] == [
+        ("DEBUG", "ak09916 on I2C bus 1 address 0x0C: quiet start found nothing (no ACK)"),
+        ("ERROR", f"{ak}: critical"),
+        ("WARNING", f"{ak}: warning: checksum error in AUX"),
+        ("NOTICE", "ina238 INA238#0 on I2C bus 1 address 0x45: nominal"),
+    ]
