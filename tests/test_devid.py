@@ -1043,3 +1043,43 @@ def test_the_era_rule_says_why_word_for_word() -> None:
         "devtype table is assumed (files without a version predate it: ULog's ver_sw_release "
         "and QGC's '# Version' came with PX4 1.6)",
     )
+
+
+@pytest.mark.issue40
+def test_a_code_two_sensors_share_fits_either(capsys: pytest.CaptureFixture[str]) -> None:
+    """drv_sensor.h as PX4 1.13 had it defines 0x4C twice: DRV_DIFF_PRESS_DEVTYPE_SDP33 and
+    DRV_BARO_DEVTYPE_LPS33HW. An LPS33HW (I2C bus 1, 0x5C) in a barometer slot is no mistake;
+    in a magnetometer slot it is."""
+    device = devid.decode(0x4C5C09, "px4-v1.13")
+    assert (device.devtype_name, device.devtype_kind) == ("SDP33/LPS33HW", "DIFF_PRESS/BARO")
+    assert devid.kind_mismatch("CAL_BARO0_ID", device) is None
+    assert devid.kind_mismatch("CAL_MAG0_ID", device) == (
+        "devtype 0x4C is DIFF_PRESS/BARO in the px4-v1.13 table, which does not fit CAL_MAG0_ID "
+        "(IMU/MAG): the log may be of another era (--table)"
+    )
+
+
+@pytest.mark.issue40
+def test_a_decoded_id_is_a_value_and_its_json_fields() -> None:
+    """docs/device-ids.md's 592905: devtype 0x09, address 0x0C, I2C bus 1. A decoded ID is a
+    value (equal, hashable, not to be changed), and --json gives each field by name."""
+    d = devid.decode(592905, "current")
+    assert d == devid.decode(0x090C09, "current") and len({d, devid.decode(592905)}) == 1
+    with pytest.raises(AttributeError):
+        d.bus = 2  # type: ignore[misc]
+    assert d.as_dict() == {
+        "id": 592905,
+        "hex": "0x090C09",
+        "no_device": False,
+        "bus_type": 1,
+        "bus_type_name": "I2C",
+        "bus": 1,
+        "address": 12,
+        "devtype": 9,
+        "devtype_name": "AK09916",
+        "devtype_kind": "MAG",
+        "table": "current",
+        "description": "AK09916 (MAG), I2C bus 1, address 0x0C",
+    }
+    # A devtype without a sensor kind is named alone.
+    assert devid.decode(0xFF0C09, "current").describe() == "UNUSED, I2C bus 1, address 0x0C"

@@ -576,10 +576,12 @@ def test_a_manifest_instance_without_a_driver_and_a_run_without_events(tmp_path:
 @pytest.mark.issue40
 def test_health_messages_word_for_word(tmp_path: Path) -> None:
     """The logged health changes: 'nominal' alone (whatever reason came with it), a level with
-    its reason, a level without one; and a quiet start that found nothing (DEBUG)."""
+    its reason, a level without one; a quiet start that found nothing (DEBUG); the commander
+    refusing before any device has answered."""
     from px4params.vehicle.flight_log import run_ulog
 
     events = [
+        {"t": 0.1, "event": "arming", "may_arm": False},  # before any device has answered
         {"t": 0.5, "event": "start_failed", **AK, "quiet": True, "reason": "no ACK"},
         {"t": 0.6, "event": "health", **AK, "health": "critical", "reason": None},
         {"t": 0.7, "event": "health", **AK, "health": "warning", "reason": "checksum error in AUX"},
@@ -590,8 +592,43 @@ def test_health_messages_word_for_word(tmp_path: Path) -> None:
     said = [(m.log_level_str(), m.message) for m in ULog(str(path)).logged_messages]
     ak = "ak09916 AK09916#0 on I2C bus 1 address 0x0C"
     assert said[:-1] == [
+        ("WARNING", "commander: arming refused: devices still starting"),
         ("DEBUG", "ak09916 on I2C bus 1 address 0x0C: quiet start found nothing (no ACK)"),
         ("ERROR", f"{ak}: critical"),
         ("WARNING", f"{ak}: warning: checksum error in AUX"),
         ("NOTICE", "ina238 INA238#0 on I2C bus 1 address 0x45: nominal"),
     ]
+
+
+def _crafted(path: Path, mode: str | None, lines: list[str] | None) -> str:
+    """A ULog with the information px4params health looks for, or not."""
+    log = ULogWriter()
+    if mode is not None:
+        log.info("px4params_mode", mode)
+    for line in lines or ():
+        log.info("driver_instance", line, multi=True)
+    path.write_bytes(log.getvalue())
+    return str(path)
+
+
+@pytest.mark.issue40
+def test_health_refuses_logs_it_did_not_write_word_for_word(tmp_path: Path) -> None:
+    from px4params.vehicle.flight_log import read_run_ulog
+
+    refusal = "not a log of 'px4params autostart run --ulog' (no driver_instance information)"
+    for name, mode, lines in (
+        ("mode_only.ulg", "manifest", None),
+        ("instances_only.ulg", None, ["INA238#0 ina238 i2c 1 69"]),
+    ):
+        path = _crafted(tmp_path / name, mode, lines)
+        with pytest.raises(ULogError) as e:
+            read_run_ulog(path)
+        assert str(e.value) == f"{path}: {refusal}"
+    # A driver_instance line is "instance driver bus bus_id address", numbers in decimal.
+    for n, line in enumerate(
+        ["INA238#0 ina238 i2c one 69", "INA238#0 ina238 i2c 1 0x45", "INA238#0 ina238 i2c 1"]
+    ):
+        path = _crafted(tmp_path / f"bad{n}.ulg", "manifest", ["AK09916#0 ak09916 i2c 1 12", line])
+        with pytest.raises(ULogError) as e:
+            read_run_ulog(path)
+        assert str(e.value) == f"{path}: driver_instance 1: cannot read {line!r}"
