@@ -1083,3 +1083,22 @@ def test_a_decoded_id_is_a_value_and_its_json_fields() -> None:
     }
     # A devtype without a sensor kind is named alone.
     assert devid.decode(0xFF0C09, "current").describe() == "UNUSED, I2C bus 1, address 0x0C"
+
+
+@pytest.mark.issue40
+def test_bad_device_ids_word_for_word() -> None:
+    """docs/device-ids.md's error for an ID wider than 24 bits, and the others, whole."""
+    with pytest.raises(DeviceIdError) as e:
+        devid.decode(16777216, None)
+    assert str(e.value) == (
+        "device ID 16777216 does not fit in 24 bits (expected 0..16777215, 0x000000..0xFFFFFF)"
+    )
+    with pytest.raises(DeviceIdError) as e:
+        devid.decode(True, None)  # type: ignore[arg-type]
+    assert str(e.value) == "a device ID is an int, not bool"
+    with pytest.raises(DeviceIdError) as e:
+        devid.parse_device_id("9" * 70)
+    assert str(e.value) == (
+        "not a device ID: 999999999999...999999 (70 characters) is out of range (70 digits: no "
+        "value is wider than 64 bits)"
+    )

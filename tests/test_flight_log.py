@@ -513,6 +513,12 @@ def test_before_the_commanders_first_answer_arming_is_refused(tmp_path: Path) ->
     assert perf == [(1_000_000, 0)]
     assert ulog.logged_messages[-1].message == "px4params: end of the run"
     assert int(ulog.logged_messages[-1].timestamp) == 2_000_000
+    # Read back: AK09916#0 has no perf sample at all, so no counters.
+    from px4params.vehicle.flight_log import read_run_ulog
+
+    ina, ak = read_run_ulog(str(path)).instances
+    assert (ina.transfers, ina.probe_attempts, ina.device_id) == (5, 1, None)
+    assert (ak.transfers, ak.bad_transfers, ak.resets, ak.probe_attempts) == (0, 0, 0, 0)
 
 
 @pytest.mark.issue40
