@@ -1102,3 +1102,31 @@ def test_bad_device_ids_word_for_word() -> None:
         "not a device ID: 999999999999...999999 (70 characters) is out of range (70 digits: no "
         "value is wider than 64 bits)"
     )
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize(
+    ("parts", "message"),
+    [
+        (("i2c", 32, 0, 0), "bus 32 is out of range 0..31"),
+        (("i2c", 1, "0x100", 0), "address 0x100 is out of range 0..255, 0x00..0xFF"),
+        ((8, 1, 0, 0), "bus type 8 is out of range 0..7"),
+        (("i2c", "one", 0, 0), "bus 'one' is not a number (expected 0..31)"),
+        (("i2c", "X1", 0, 0), "bus 'X1' is not a number (expected 0..31)"),
+        (("i2c", 1.0, 0, 0), "bus must be an int, not float"),
+        (
+            ("i2c", 1, "9" * 70, 0),
+            "address: 999999999999...999999 (70 characters) is out of range (70 digits: no value "
+            "is wider than 64 bits)",
+        ),
+        (
+            ("X1", 1, 0, 0),
+            "unknown bus type 'X1' (expected one of: unknown, i2c, spi, uavcan, simulation, "
+            "serial, mavlink, or 0..7)",
+        ),
+    ],
+)
+def test_encode_errors_word_for_word(parts: tuple[object, ...], message: str) -> None:
+    with pytest.raises(DeviceIdError) as e:
+        devid.encode(*parts)  # type: ignore[arg-type]
+    assert str(e.value) == message

@@ -516,8 +516,13 @@ def test_before_the_commanders_first_answer_arming_is_refused(tmp_path: Path) ->
     # Read back: AK09916#0 has no perf sample at all, so no counters.
     from px4params.vehicle.flight_log import read_run_ulog
 
-    ina, ak = read_run_ulog(str(path)).instances
+    run = read_run_ulog(str(path))
+    ina, ak = run.instances
     assert (ina.transfers, ina.probe_attempts, ina.device_id) == (5, 1, None)
+    # No answer from the commander logged, only the refusal sampled at 1 s: AK09916#0 (never
+    # heard of, so critical: starting) blocks arming and the nominal INA238#0 does not.
+    assert (run.may_arm, run.arming) == (False, [(1.0, False)])
+    assert run.failures == ["ak09916 AK09916#0 on I2C bus 1 address 0x0C: critical: starting"]
     assert (ak.transfers, ak.bad_transfers, ak.resets, ak.probe_attempts) == (0, 0, 0, 0)
 
 
@@ -638,3 +643,17 @@ def test_health_refuses_logs_it_did_not_write_word_for_word(tmp_path: Path) -> N
         with pytest.raises(ULogError) as e:
             read_run_ulog(path)
         assert str(e.value) == f"{path}: driver_instance 1: cannot read {line!r}"
+
+
+@pytest.mark.issue40
+def test_a_run_with_nothing_but_its_end_and_a_log_without_the_run_figures(tmp_path: Path) -> None:
+    """A run with no events still ends cleanly (its end is its only message); a log with no
+    seed, duration or bench information reads as seed 0, 0 s, no bench."""
+    from px4params.vehicle.flight_log import read_run_ulog, run_ulog
+
+    path = tmp_path / "quiet.ulg"
+    path.write_bytes(run_ulog(_hand_run([], duration=1.0), {}))
+    assert [m.message for m in ULog(str(path)).logged_messages] == ["px4params: end of the run"]
+    assert read_run_ulog(str(path)).log_cut_at is None
+    bare = read_run_ulog(_crafted(tmp_path / "bare.ulg", "legacy", ["INA238#0 ina238 i2c 1 69"]))
+    assert (bare.mode, bare.seed, bare.duration, bare.bench) == ("legacy", 0, 0.0, "")
