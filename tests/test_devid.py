@@ -1124,9 +1124,14 @@ def test_bad_device_ids_word_for_word() -> None:
             "unknown bus type 'X1' (expected one of: unknown, i2c, spi, uavcan, simulation, "
             "serial, mavlink, or 0..7)",
         ),
+        (
+            ("i2c", 1, 0, "X9"),
+            "unknown devtype 'X9' in the legacy table (give a code 0..255 or a name from "
+            "'px4params devid --list --table legacy')",
+        ),
     ],
 )
 def test_encode_errors_word_for_word(parts: tuple[object, ...], message: str) -> None:
     with pytest.raises(DeviceIdError) as e:
-        devid.encode(*parts)  # type: ignore[arg-type]
+        devid.encode(*parts, table="legacy")  # type: ignore[arg-type]
     assert str(e.value) == message
