@@ -657,3 +657,19 @@ def test_a_run_with_nothing_but_its_end_and_a_log_without_the_run_figures(tmp_pa
     assert read_run_ulog(str(path)).log_cut_at is None
     bare = read_run_ulog(_crafted(tmp_path / "bare.ulg", "legacy", ["INA238#0 ina238 i2c 1 69"]))
     assert (bare.mode, bare.seed, bare.duration, bare.bench) == ("legacy", 0, 0.0, "")
+
+
+@pytest.mark.issue40
+def test_a_corrupt_log_is_no_clean_end_even_with_its_end_message(tmp_path: Path) -> None:
+    """A data message of a subscription the log never made (msg ID 99), just before the end:
+    pyulog reads the rest but calls the file corrupt, and what the log tells is uncertain from
+    its last moment on, although its last message is the run's end."""
+    from px4params.vehicle.flight_log import read_run_ulog, run_ulog
+
+    data = run_ulog(_hand_run(HAND_EVENTS), {})
+    end = 3 + 1 + 8 + len("px4params: end of the run")  # the last message, 'L'
+    stray = struct.pack("<HB", 3, ord("D")) + struct.pack("<H", 99) + b"\x00"
+    path = tmp_path / "corrupt.ulg"
+    path.write_bytes(data[:-end] + stray + data[-end:])
+    assert ULog(str(path)).logged_messages[-1].message == "px4params: end of the run"
+    assert read_run_ulog(str(path)).log_cut_at == 3.0
