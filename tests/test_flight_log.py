@@ -673,3 +673,23 @@ def test_a_corrupt_log_is_no_clean_end_even_with_its_end_message(tmp_path: Path)
     path.write_bytes(data[:-end] + stray + data[-end:])
     assert ULog(str(path)).logged_messages[-1].message == "px4params: end of the run"
     assert read_run_ulog(str(path)).log_cut_at == 3.0
+
+
+@pytest.mark.issue40
+def test_a_log_cut_after_a_message_with_no_sample_and_the_silently_missing(tmp_path: Path) -> None:
+    """A log whose only record is a logged message (a driver started at 0.5 s: no sample yet),
+    cut before its end: its last moment is the message's. And a legacy boot's silently missing
+    instances come back as the run listed them."""
+    from px4params.vehicle.flight_log import read_run_ulog, run_ulog
+
+    started = {"t": 0.5, "event": "started", **INA, "device_id": INA_ID,
+               "device_id_hex": "0xD44509", "attempts": 1}  # fmt: skip
+    run = _hand_run([started], duration=2.0, mode="legacy")
+    run.silently_missing = ["ak09916 AK09916#0 on I2C bus 1 address 0x0C: never started"]
+    data = run_ulog(run, {})
+    path = tmp_path / "whole.ulg"
+    path.write_bytes(data)
+    assert read_run_ulog(str(path)).silently_missing == run.silently_missing
+    cut = tmp_path / "cut.ulg"
+    cut.write_bytes(data[: -(3 + 1 + 8 + len("px4params: end of the run"))])
+    assert read_run_ulog(str(cut)).log_cut_at == 0.5
