@@ -1135,3 +1135,28 @@ def test_encode_errors_word_for_word(parts: tuple[object, ...], message: str) ->
     with pytest.raises(DeviceIdError) as e:
         devid.encode(*parts, table="legacy")  # type: ignore[arg-type]
     assert str(e.value) == message
+
+
+@pytest.mark.issue40
+def test_a_log_entry_is_a_value_and_its_json(tmp_path: Path) -> None:
+    """The largest 24-bit ID is still a device ID (all fields at their top: devtype 0xFF,
+    address 0xFF, bus 31, bus type 7); one past it is not. --json gives each entry's fields by
+    name, null where there is nothing."""
+    log = write_ulog(tmp_path / "edge.ulg", {"CAL_MAG0_ID": 0xFFFFFF, "CAL_MAG1_ID": 0x1000000}, {})
+    top, past = devid.decode_log(log, None)
+    assert top.device is not None and top.problem is None
+    assert (top.device.devtype, top.device.address, top.device.bus, top.device.bus_type) == (
+        0xFF, 0xFF, 31, 7,
+    )  # fmt: skip
+    assert past.as_dict() == {
+        "param": "CAL_MAG1_ID",
+        "value": 16777216,
+        "timestamp_us": None,
+        "device": None,
+        "problem": "16777216 is not a 24-bit device ID",
+        "warning": None,
+    }
+    with pytest.raises(AttributeError):
+        top.value = 1  # type: ignore[misc]
+    bare = devid.LogDeviceId("CAL_MAG0_ID", 0, devid.decode(0, None))
+    assert (bare.problem, bare.timestamp_us, bare.warning) == (None, None, None)
