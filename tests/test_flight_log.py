@@ -519,6 +519,8 @@ def test_before_the_commanders_first_answer_arming_is_refused(tmp_path: Path) ->
     run = read_run_ulog(str(path))
     ina, ak = run.instances
     assert (ina.transfers, ina.probe_attempts, ina.device_id) == (5, 1, None)
+    # Its first sample came with no logged message: no reason to tell.
+    assert ina.timeline == [(1.0, "critical", ""), (1.5, "nominal", "")]
     # No answer from the commander logged, only the refusal sampled at 1 s: AK09916#0 (never
     # heard of, so critical: starting) blocks arming and the nominal INA238#0 does not.
     assert (run.may_arm, run.arming) == (False, [(1.0, False)])
@@ -609,6 +611,11 @@ def test_health_messages_word_for_word(tmp_path: Path) -> None:
         ("WARNING", f"{ak}: warning: checksum error in AUX"),
         ("NOTICE", "ina238 INA238#0 on I2C bus 1 address 0x45: nominal"),
     ]
+    from px4params.vehicle.flight_log import read_run_ulog
+
+    ina, ak = read_run_ulog(str(path)).instances
+    assert (ina.timeline, ina.registered) == ([(0.8, "nominal", "")], True)  # one sample
+    assert ak.timeline == [(0.6, "critical", ""), (0.7, "warning", "checksum error in AUX")]
 
 
 def _crafted(path: Path, mode: str | None, lines: list[str] | None) -> str:
@@ -693,3 +700,25 @@ def test_a_log_cut_after_a_message_with_no_sample_and_the_silently_missing(tmp_p
     cut = tmp_path / "cut.ulg"
     cut.write_bytes(data[: -(3 + 1 + 8 + len("px4params: end of the run"))])
     assert read_run_ulog(str(cut)).log_cut_at == 0.5
+
+
+@pytest.mark.issue40
+def test_a_health_code_px4params_does_not_know_reads_as_critical(tmp_path: Path) -> None:
+    """driver_health.health is 0 nominal, 1 warning, 2 critical (docs/autostart.md); a code
+    beyond them (a newer writer's) is read as the worst known, critical."""
+    from px4params.vehicle.flight_log import read_run_ulog
+
+    log = ULogWriter()
+    log.info("px4params_mode", "manifest")
+    log.info("driver_instance", "INA238#0 ina238 i2c 1 69", multi=True)
+    log.define("driver_health", [("uint64_t", "timestamp"), ("uint32_t", "device_id"),
+                                 ("uint8_t", "health"), ("bool", "registered"),
+                                 ("char[24]", "instance")])  # fmt: skip
+    msg_id = log.subscribe("driver_health")
+    log.data(msg_id, 1_000_000, INA_ID, 0, True, "INA238#0")
+    log.data(msg_id, 2_000_000, INA_ID, 7, True, "INA238#0")
+    path = tmp_path / "newer.ulg"
+    path.write_bytes(log.getvalue())
+    (ina,) = read_run_ulog(str(path)).instances
+    assert ina.timeline == [(1.0, "nominal", ""), (2.0, "critical", "")]
+    assert (ina.health, ina.device_id) == ("critical", INA_ID)
