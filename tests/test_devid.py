@@ -675,3 +675,488 @@ def test_a_px4_1_7_log_is_read_with_the_1_6_era_table(
     assert entry["device"]["devtype"] == 3
     assert entry["device"]["devtype_name"] == name
     assert entry["device"]["devtype_kind"] == "MAG"
+
+
+# -- what the mutation run of issue 40 found no test for ------------------------------------------
+# Each from the rule: PX4's DeviceStructure and DeviceBusType (drivers/device/Device.hpp), the
+# drivers' device IDs, the eras of docs/device-ids.md, and the device IDs of the real logs in
+# ../shared/data (decoded by hand below from the layout).
+
+
+#: A release's ver_sw_release: major, minor, patch and type (255: a release) in its four bytes.
+def _release(major: int, minor: int, patch: int, kind: int = 255) -> int:
+    return major << 24 | minor << 16 | patch << 8 | kind
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize(
+    ("first", "last", "label"),
+    [
+        ((1, 6), (1, 7), "px4-v1.6"),
+        ((1, 8), (1, 10), "px4-v1.8"),
+        ((1, 11), (1, 12), "px4-v1.11"),
+        ((1, 13), (1, 13), "px4-v1.13"),
+    ],
+)
+def test_every_patch_release_of_an_era_reads_with_its_table(
+    first: tuple[int, int], last: tuple[int, int], label: str
+) -> None:
+    """docs/device-ids.md: the tables are drv_sensor.h as PX4 1.6-1.7, 1.8-1.10, 1.11-1.12 and
+    1.13 had it: every patch release of those lines, and ver_sw_release's patch is a byte."""
+    for major, minor in {first, last}:
+        for patch in (0, 1, 9, 99, 100, 255):
+            assert devid.table_for_version((major, minor, patch)) == label, (minor, patch)
+            assert devid.table_for_release(_release(major, minor, patch)) == label
+            assert devid.table_for_release(_release(major, minor, patch, 0)) == label  # a dev build
+    # The lines either side belong to the neighbouring tables.
+    assert devid.table_for_version((first[0], first[1] - 1, 255)) != label
+    assert devid.table_for_version((last[0], last[1] + 1, 0)) != label
+
+
+@pytest.mark.issue40
+def test_the_eras_end_at_legacy_below_and_current_above() -> None:
+    assert devid.table_for_version((1, 5, 255)) == "legacy"
+    assert devid.table_for_version((0, 9, 0)) == "legacy"
+    assert devid.table_for_version((1, 14, 0)) == "current"
+    assert devid.table_for_version((1, 15, 4)) == "current"
+    assert devid.table_for_version((2, 0, 0)) == "current"
+
+
+@pytest.mark.issue40
+def test_every_table_can_be_named(capsys: pytest.CaptureFixture[str]) -> None:
+    """The tables of docs/device-ids.md, each by its name, in the library and on the command line
+    (the shipped current table: no variable, no file)."""
+    names = ("legacy", "current", "px4-v1.6", "px4-v1.8", "px4-v1.11", "px4-v1.13")
+    with pytest.raises(DeviceIdError) as e:
+        devid.load_table("px4-v1.7")
+    assert str(e.value) == (
+        f"unknown devtype table 'px4-v1.7' (expected one of: {', '.join(names)})"
+    )
+    for name in names:
+        assert devid.load_table(name).label == name
+        code, out, err = run_cli(capsys, "--table", name, "--json", "73225")
+        assert (code, err) == (0, "") and json.loads(out)[0]["table"] == name
+    code, out, _ = run_cli(capsys, "--table", "current", "592905")
+    assert (code, out) == (0, "592905 (0x090C09): AK09916 (MAG), I2C bus 1, address 0x0C\n")
+
+
+#: PX4's DeviceBusType (drivers/device/Device.hpp): the bus type in bits 0-2 of a device ID.
+PX4_BUS_TYPES = {0: "unknown", 1: "I2C", 2: "SPI", 3: "UAVCAN", 4: "simulation", 5: "serial",
+                 6: "MAVLink"}  # fmt: skip
+
+
+@pytest.mark.issue40
+def test_bus_types_are_px4s() -> None:
+    for code, name in PX4_BUS_TYPES.items():
+        value = 0x4A << 16 | 0x21 << 8 | 2 << 3 | code  # devtype 0x4A, address 0x21, bus 2
+        d = devid.decode(value, None)
+        assert (d.bus_type, d.bus_type_name, d.bus, d.address) == (code, name, 2, 0x21)
+        # By name, in any case, as the CLI's --bus-type takes it.
+        for spelling in (name, name.lower(), name.upper()):
+            assert devid.encode(spelling, 2, 0x21, 0x4A) == value, spelling
+    assert devid.decode(7, None).bus_type_name is None
+    # Each bus type's address byte, as the driver guide explains it.
+    assert devid.decode(0x4A2115, None).describe() == "devtype 0x4A, serial bus 2, address 0x21"
+    assert devid.decode(0x4A2116, None).describe() == "devtype 0x4A, MAVLink bus 2, address 0x21"
+    assert devid.decode(0x4A2112, None).describe() == "devtype 0x4A, SPI bus 2, device 33"
+    assert devid.decode(0x4A2113, None).describe() == "devtype 0x4A, UAVCAN bus 2, node 33"
+    assert devid.decode(0x4A2110, None).describe() == (
+        "devtype 0x4A, bus type 0, bus 2, address 0x21"
+    )
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize(
+    ("spelling", "code"), [("sim", 4), ("dronecan", 3), ("can", 3), ("uart", 5), ("CAN", 3)]
+)
+def test_bus_type_spellings(spelling: str, code: int, capsys: pytest.CaptureFixture[str]) -> None:
+    """DroneCAN is UAVCAN v0 (bus type 3) and rides on CAN; a serial port is a UART."""
+    assert devid.encode(spelling, 0, 0, 0) == code
+    argv = ["--encode", "--bus-type", spelling, "--bus", "1", "--address", "2", "--devtype", "3"]
+    code_, out, _ = run_cli(capsys, *argv, "--json")
+    assert code_ == 0 and json.loads(out)["bus_type_name"] == PX4_BUS_TYPES[code]
+
+
+@pytest.mark.issue40
+def test_a_table_row_cannot_be_changed() -> None:
+    """A table hands out its rows: a caller changing one would change the table for everyone."""
+    row = devid.legacy_table().lookup(0x01)[0]
+    with pytest.raises(AttributeError):
+        row.name = "QMC5883"  # type: ignore[misc]
+    assert devid.legacy_table().name_of(0x01) == "HMC5883"
+    assert {row, devid.Devtype(0x01, "HMC5883", "MAG")} == {row}  # rows are values
+
+
+def _no_device_or_decoded(entries: list[devid.LogDeviceId]) -> dict[str, str]:
+    return {e.param: e.device.describe() for e in entries if e.device and e.timestamp_us is None}
+
+
+@pytest.mark.issue40
+def test_a_px4_1_15_log_known_answers() -> None:
+    """frrs_ekf_failure.ulg (PX4 1.15 beta, NXP MR-Tropic), decoded by hand from the layout:
+    0x660022 is devtype 0x66 (DRV_GYR_DEVTYPE_BMI088), address 0, 0x22 = bus 4 << 3 | SPI;
+    0x6E7621 is 0x6E (DRV_BARO_DEVTYPE_BMP390) at 0x76 on I2C bus 4; 0xE51421 the BMM350
+    (0xE5) at 0x14 on I2C bus 4. Each is the sensor kind of its parameter: no warning."""
+    entries = devid.decode_log(shared_file("frrs_ekf_failure.ulg"))
+    shown = _no_device_or_decoded(entries)
+    assert shown["CAL_GYRO1_ID"] == "BMI088 (GYR), SPI bus 4, device 0"
+    assert shown["CAL_ACC1_ID"] == "BMI088 (ACC), SPI bus 4, device 0"
+    assert shown["CAL_BARO0_ID"] == "BMP390 (BARO), I2C bus 4, address 0x76"
+    assert shown["CAL_MAG1_ID"] == "BMM350 (MAG), I2C bus 4, address 0x14"
+    assert shown["CAL_GYRO0_ID"] == shown["CAL_ACC0_ID"] == "ICM42686P (IMU), SPI bus 3, device 0"
+    assert all(e.device and e.device.table == "current" for e in entries)
+    assert [e.param for e in entries if e.warning] == []
+
+
+@pytest.mark.issue40
+def test_a_simulator_log_known_answers() -> None:
+    """sample_px4_events.ulg is a SITL log: its sensors are on bus type 4, simulation.
+    0x14010C: devtype 0x14 (DRV_IMU_DEVTYPE_SIM), address 1, 0x0C = bus 1 << 3 | 4;
+    0x03030C: 0x03 (DRV_MAG_DEVTYPE_MAGSIM) at address 3."""
+    entries = devid.decode_log(shared_file("sample_px4_events.ulg"))
+    shown = _no_device_or_decoded(entries)
+    assert shown["CAL_ACC0_ID"] == "SIM (IMU), simulation bus 1, address 0x01"
+    assert shown["CAL_GYRO2_ID"] == "SIM (IMU), simulation bus 3, address 0x01"
+    assert shown["CAL_MAG0_ID"] == "MAGSIM (MAG), simulation bus 1, address 0x03"
+    assert shown["CAL_BARO0_ID"] == "no device"
+    assert [e.param for e in entries if e.warning] == []
+
+
+@pytest.mark.issue40
+def test_the_cubeorange_log_has_no_kind_warnings() -> None:
+    """sample_log_small.ulg (PX4 1.11.2): IMU devtypes in CAL_ACC and CAL_GYRO, AK09916s in
+    CAL_MAG, each of its parameter's kind."""
+    entries = devid.decode_log(shared_file(shared_data.SAMPLE_LOG))
+    assert {e.device.devtype_kind for e in entries if e.device and not e.device.no_device} == {
+        "IMU", "MAG",
+    }  # fmt: skip
+    assert [e.param for e in entries if e.warning] == []
+
+
+#: An ADIS16448 on SPI bus 1, chip select 0: DRV_IMU_DEVTYPE_ADIS16448 0x57 (drv_sensor.h).
+ADIS16448 = 0x57 << 16 | 0 << 8 | 1 << 3 | 2
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize("param", ["CAL_ACC0_ID", "CAL_GYRO0_ID", "CAL_MAG0_ID", "CAL_BARO0_ID"])
+def test_an_imus_devtype_fits_each_of_its_sensors(param: str) -> None:
+    """PX4's ADIS16448 driver publishes its accelerometer, gyro, magnetometer and barometer with
+    the one device ID of the chip (PX4/PX4-Autopilot
+    src/drivers/imu/analog_devices/adis16448/ADIS16448.cpp): an IMU devtype is no mistake in
+    any of the four calibration slots."""
+    device = devid.decode(ADIS16448, "current")
+    assert (device.devtype_name, device.devtype_kind) == ("ADIS16448", "IMU")
+    assert devid.kind_mismatch(param, device) is None
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize(
+    ("param", "value", "allowed"),
+    [
+        ("CAL_MAG0_ID", 0x6E7621, "IMU/MAG"),  # the BMP390 barometer
+        ("CAL_BARO0_ID", 0xE51421, "BARO/IMU"),  # the BMM350 magnetometer
+        ("CAL_ACC1_ID", 0x660022, "ACC/IMU"),  # the BMI088's gyro
+        ("CAL_GYRO1_ID", 0x6A0022, "GYR/GYRO/IMU"),  # the BMI088's accelerometer
+    ],
+)
+def test_a_devtype_of_another_sensor_is_flagged(param: str, value: int, allowed: str) -> None:
+    device = devid.decode(value, "current")
+    assert devid.kind_mismatch(param, device) == (
+        f"devtype 0x{device.devtype:02X} is {device.devtype_kind} in the current table, which "
+        f"does not fit {param} ({allowed}): the log may be of another era (--table)"
+    )
+
+
+@pytest.mark.issue40
+def test_a_table_spelling_the_gyro_kind_gyro_fits_cal_gyro(tmp_path: Path) -> None:
+    """The parameters spell the sensor GYRO (CAL_GYRO0_ID), drv_sensor.h GYR: a table of one's
+    own may use either."""
+    tsv = tmp_path / "mine.tsv"
+    tsv.write_text("0x66\tDRV_GYRO_DEVTYPE_BMI088\n")
+    device = devid.decode(0x660022, devid.load_table("current", tsv))
+    assert device.devtype_kind == "GYRO"
+    assert devid.kind_mismatch("CAL_GYRO1_ID", device) is None
+    assert devid.kind_mismatch("CAL_ACC1_ID", device) is not None
+
+
+@pytest.mark.issue40
+def test_a_devtype_without_a_kind_keeps_its_macro(capsys: pytest.CaptureFixture[str]) -> None:
+    """Today's drv_sensor.h defines DRV_DEVTYPE_UNUSED 0xff, a macro with no sensor kind: it is
+    listed, and looked up, by that spelling."""
+    table = devid.load_table("current")
+    (unused,) = table.lookup(0xFF)
+    assert (unused.name, unused.kind, unused.macro) == ("UNUSED", None, "DRV_DEVTYPE_UNUSED")
+    assert table.resolve("drv_devtype_unused") == table.resolve("UNUSED") == 0xFF
+    assert devid.encode("i2c", 1, 0x0C, "DRV_DEVTYPE_UNUSED") == 0xFF0C09
+    code, out, _ = run_cli(capsys, "--list", "--json")
+    assert code == 0 and json.loads(out)[-1] == {
+        "code": 255, "name": "UNUSED", "kind": None, "macro": "DRV_DEVTYPE_UNUSED",
+    }  # fmt: skip
+    assert repr(devid.legacy_table()) == "DevtypeTable('legacy', 'the PX4 driver guide', 16 codes)"
+
+
+#: The PX4 driver guide's "Device IDs" table, as the guide prints it (drv_sensor.h's defines).
+DRIVER_GUIDE_TABLE = """\
+#define DRV_MAG_DEVTYPE_HMC5883  0x01
+#define DRV_MAG_DEVTYPE_LSM303D  0x02
+#define DRV_MAG_DEVTYPE_ACCELSIM 0x03
+#define DRV_MAG_DEVTYPE_MPU9250  0x04
+#define DRV_ACC_DEVTYPE_LSM303D  0x11
+#define DRV_ACC_DEVTYPE_BMA180   0x12
+#define DRV_ACC_DEVTYPE_MPU6000  0x13
+#define DRV_ACC_DEVTYPE_ACCELSIM 0x14
+#define DRV_ACC_DEVTYPE_GYROSIM  0x15
+#define DRV_ACC_DEVTYPE_MPU9250  0x16
+#define DRV_GYR_DEVTYPE_MPU6000  0x21
+#define DRV_GYR_DEVTYPE_L3GD20   0x22
+#define DRV_GYR_DEVTYPE_GYROSIM  0x23
+#define DRV_GYR_DEVTYPE_MPU9250  0x24
+#define DRV_RNG_DEVTYPE_MB12XX   0x31
+#define DRV_RNG_DEVTYPE_LL40LS   0x32
+"""
+
+
+@pytest.mark.issue40
+def test_the_legacy_table_is_the_driver_guides_row_for_row() -> None:
+    guide = [line.split()[1:] for line in DRIVER_GUIDE_TABLE.splitlines()]
+    assert [(e.macro, f"0x{e.code:02X}") for e in devid.legacy_table()] == [
+        (macro, code.upper().replace("0X", "0x")) for macro, code in guide
+    ]
+    # The 1.6 era's header names each of these codes the same (the era rule relies on it).
+    era = devid.load_table("px4-v1.6")
+    for entry in devid.legacy_table():
+        assert (era.name_of(entry.code), era.kind_of(entry.code)) == (entry.name, entry.kind)
+
+
+@pytest.mark.issue40
+def test_the_devtype_name_errors_word_for_word() -> None:
+    """docs/device-ids.md's ambiguous name, and a misspelling's hint of at most three spellings
+    (one line: MPU9250 has four close ones in the guide's table)."""
+    with pytest.raises(DeviceIdError) as e:
+        devid.encode("spi", 1, 4, "MPU9250", "legacy")
+    assert str(e.value) == (
+        "devtype 'MPU9250' is ambiguous in the legacy table: give one of MAG_MPU9250 (0x04), "
+        "ACC_MPU9250 (0x16), GYR_MPU9250 (0x24), or a code"
+    )
+    with pytest.raises(DeviceIdError) as e:
+        devid.encode("spi", 1, 4, "MPU925", "legacy")
+    message = str(e.value)
+    hint = message.split("did you mean ", 1)[1].split("? ", 1)[0].split(", ")
+    assert len(hint) == 3 and hint[0] == "MPU9250" and set(hint) < {
+        "MPU9250", "MAG_MPU9250", "ACC_MPU9250", "GYR_MPU9250",
+    }  # fmt: skip
+    assert message == (
+        f"unknown devtype 'MPU925' in the legacy table (did you mean {', '.join(hint)}? give a "
+        "code 0..255 or a name from 'px4params devid --list --table legacy')"
+    )
+
+
+@pytest.mark.issue40
+def test_header_values_in_c_spellings(tmp_path: Path) -> None:
+    """A #define's value is a C integer literal, maybe in parentheses and with the suffixes C
+    allows (u, U, l, L); decimal codes are read in base 10."""
+    header = tmp_path / "drv_sensor.h"
+    header.write_text(
+        "#define DRV_MAG_DEVTYPE_A (0x0A)\n#define DRV_MAG_DEVTYPE_B 0x0Bu\n"
+        "#define DRV_MAG_DEVTYPE_C 0x0CUL\n#define DRV_BARO_DEVTYPE_D 55\n"
+        "#define DRV_BARO_DEVTYPE_E (19L)\n"
+    )
+    table = devid.load_table("current", header)
+    assert [(e.code, e.name) for e in table] == [
+        (0x0A, "A"), (0x0B, "B"), (0x0C, "C"), (19, "E"), (55, "D"),
+    ]  # fmt: skip
+
+
+@pytest.mark.issue40
+def test_bad_table_lines_word_for_word(tmp_path: Path) -> None:
+    tsv = tmp_path / "t.tsv"
+    for text, message in (
+        ("one\tA\n", f"{tsv}:1: devtype code 'one' is not a number"),
+        (
+            f"{'1' * 70}\tA\n",
+            f"{tsv}:1: devtype code 111111111111...111111 (70 characters) is out of range "
+            "(70 digits: no value is wider than 64 bits)",
+        ),
+        ("0x100\tA\n", f"{tsv}:1: devtype code 0x100 is out of range 0..255 (0x00..0xFF)"),
+    ):
+        tsv.write_text(text)
+        with pytest.raises(DeviceIdError) as e:
+            devid.load_table("current", tsv)
+        assert str(e.value) == message
+
+
+@pytest.mark.issue40
+def test_the_default_table_is_todays() -> None:
+    assert devid.load_table().label == "current"
+    assert devid.load_table().name_of(0x37) == "BMI270"  # docs/device-ids.md: since 1.14
+
+
+@pytest.mark.issue40
+def test_a_table_file_with_a_stray_byte_or_too_large(tmp_path: Path) -> None:
+    """A header saved in Latin-1 (a comment's author name) still gives its codes; a file over
+    the devtypes cap is refused by name before it is read."""
+    header = tmp_path / "drv_sensor.h"
+    header.write_bytes(b"/* Fran\xe7ois */\n#define DRV_MAG_DEVTYPE_AK09916 0x09\n")
+    assert devid.load_table("current", header).name_of(0x09) == "AK09916"
+    big = tmp_path / "big.tsv"
+    big.write_bytes(b"# " + b"x" * (2 * 1024 * 1024) + b"\n0x09\tAK09916\n")
+    with pytest.raises(DeviceIdError) as e:
+        devid.load_table("current", big)
+    assert str(e.value) == (
+        f"cannot read devtypes file {big}: too large for a devtypes table (2 MiB; at most 1 MiB)"
+    )
+
+
+#: Parameters PX4 1.14 added (not in the 1.13 tree), each where PX4-Autopilot defines it.
+SINCE_PX4_1_14 = {
+    "OSD_SYMBOLS": "src/drivers/osd/msp_osd/module.yaml",
+    "OSD_SCROLL_RATE": "src/drivers/osd/msp_osd/module.yaml",
+    "MPC_VEL_MAN_SIDE": "src/modules/mc_pos_control/multicopter_position_mode_params.yaml",
+    "FW_THR_ASPD_MIN": "src/lib/fw_performance_model/performance_model_params.yaml",
+    "FW_T_THR_DAMPING": "src/modules/fw_lateral_longitudinal_control/fw_lat_long_params.yaml",
+}
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize("name", sorted(SINCE_PX4_1_14))
+def test_each_parameter_newer_than_1_13_means_todays_table(name: str) -> None:
+    """docs/device-ids.md: a file without a version that holds a parameter PX4 1.13 did not
+    have is read with today's table, and the report says which parameter and where PX4 has it."""
+    table, why = devid.table_for_parameters({name: 1, "CAL_MAG0_EN": 1})
+    assert table == "current"
+    assert why == (
+        f"no firmware version: {name} exists (PX4 1.14 and later; not in 1.13, "
+        f"{SINCE_PX4_1_14[name]}), so today's devtype table is assumed"
+    )
+
+
+@pytest.mark.issue40
+def test_the_era_rule_says_why_word_for_word() -> None:
+    assert devid.table_for_parameters({"CAL_GYRO1_PRIO": 50, "CAL_ACC0_PRIO": 50}) == (
+        "current",
+        "no firmware version: CAL_ACC0_PRIO exists (PX4 1.12 and later), so today's devtype "
+        "table is assumed",
+    )
+    assert devid.table_for_parameters({"CAL_MAG0_EN": 1}) == (
+        "px4-v1.6",
+        "no firmware version and no CAL_*_PRIO parameters (PX4 before 1.12): the px4-v1.6 "
+        "devtype table is assumed (files without a version predate it: ULog's ver_sw_release "
+        "and QGC's '# Version' came with PX4 1.6)",
+    )
+
+
+@pytest.mark.issue40
+def test_a_code_two_sensors_share_fits_either(capsys: pytest.CaptureFixture[str]) -> None:
+    """drv_sensor.h as PX4 1.13 had it defines 0x4C twice: DRV_DIFF_PRESS_DEVTYPE_SDP33 and
+    DRV_BARO_DEVTYPE_LPS33HW. An LPS33HW (I2C bus 1, 0x5C) in a barometer slot is no mistake;
+    in a magnetometer slot it is."""
+    device = devid.decode(0x4C5C09, "px4-v1.13")
+    assert (device.devtype_name, device.devtype_kind) == ("SDP33/LPS33HW", "DIFF_PRESS/BARO")
+    assert devid.kind_mismatch("CAL_BARO0_ID", device) is None
+    assert devid.kind_mismatch("CAL_MAG0_ID", device) == (
+        "devtype 0x4C is DIFF_PRESS/BARO in the px4-v1.13 table, which does not fit CAL_MAG0_ID "
+        "(IMU/MAG): the log may be of another era (--table)"
+    )
+
+
+@pytest.mark.issue40
+def test_a_decoded_id_is_a_value_and_its_json_fields() -> None:
+    """docs/device-ids.md's 592905: devtype 0x09, address 0x0C, I2C bus 1. A decoded ID is a
+    value (equal, hashable, not to be changed), and --json gives each field by name."""
+    d = devid.decode(592905, "current")
+    assert d == devid.decode(0x090C09, "current") and len({d, devid.decode(592905)}) == 1
+    with pytest.raises(AttributeError):
+        d.bus = 2  # type: ignore[misc]
+    assert d.as_dict() == {
+        "id": 592905,
+        "hex": "0x090C09",
+        "no_device": False,
+        "bus_type": 1,
+        "bus_type_name": "I2C",
+        "bus": 1,
+        "address": 12,
+        "devtype": 9,
+        "devtype_name": "AK09916",
+        "devtype_kind": "MAG",
+        "table": "current",
+        "description": "AK09916 (MAG), I2C bus 1, address 0x0C",
+    }
+    # A devtype without a sensor kind is named alone.
+    assert devid.decode(0xFF0C09, "current").describe() == "UNUSED, I2C bus 1, address 0x0C"
+
+
+@pytest.mark.issue40
+def test_bad_device_ids_word_for_word() -> None:
+    """docs/device-ids.md's error for an ID wider than 24 bits, and the others, whole."""
+    with pytest.raises(DeviceIdError) as e:
+        devid.decode(16777216, None)
+    assert str(e.value) == (
+        "device ID 16777216 does not fit in 24 bits (expected 0..16777215, 0x000000..0xFFFFFF)"
+    )
+    with pytest.raises(DeviceIdError) as e:
+        devid.decode(True, None)  # type: ignore[arg-type]
+    assert str(e.value) == "a device ID is an int, not bool"
+    with pytest.raises(DeviceIdError) as e:
+        devid.parse_device_id("9" * 70)
+    assert str(e.value) == (
+        "not a device ID: 999999999999...999999 (70 characters) is out of range (70 digits: no "
+        "value is wider than 64 bits)"
+    )
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize(
+    ("parts", "message"),
+    [
+        (("i2c", 32, 0, 0), "bus 32 is out of range 0..31"),
+        (("i2c", 1, "0x100", 0), "address 0x100 is out of range 0..255, 0x00..0xFF"),
+        ((8, 1, 0, 0), "bus type 8 is out of range 0..7"),
+        (("i2c", "one", 0, 0), "bus 'one' is not a number (expected 0..31)"),
+        (("i2c", "X1", 0, 0), "bus 'X1' is not a number (expected 0..31)"),
+        (("i2c", 1.0, 0, 0), "bus must be an int, not float"),
+        (
+            ("i2c", 1, "9" * 70, 0),
+            "address: 999999999999...999999 (70 characters) is out of range (70 digits: no value "
+            "is wider than 64 bits)",
+        ),
+        (
+            ("X1", 1, 0, 0),
+            "unknown bus type 'X1' (expected one of: unknown, i2c, spi, uavcan, simulation, "
+            "serial, mavlink, or 0..7)",
+        ),
+        (
+            ("i2c", 1, 0, "X9"),
+            "unknown devtype 'X9' in the legacy table (give a code 0..255 or a name from "
+            "'px4params devid --list --table legacy')",
+        ),
+    ],
+)
+def test_encode_errors_word_for_word(parts: tuple[object, ...], message: str) -> None:
+    with pytest.raises(DeviceIdError) as e:
+        devid.encode(*parts, table="legacy")  # type: ignore[arg-type]
+    assert str(e.value) == message
+
+
+@pytest.mark.issue40
+def test_a_log_entry_is_a_value_and_its_json(tmp_path: Path) -> None:
+    """The largest 24-bit ID is still a device ID (all fields at their top: devtype 0xFF,
+    address 0xFF, bus 31, bus type 7); one past it is not. --json gives each entry's fields by
+    name, null where there is nothing."""
+    log = write_ulog(tmp_path / "edge.ulg", {"CAL_MAG0_ID": 0xFFFFFF, "CAL_MAG1_ID": 0x1000000}, {})
+    top, past = devid.decode_log(log, None)
+    assert top.device is not None and top.problem is None
+    assert (top.device.devtype, top.device.address, top.device.bus, top.device.bus_type) == (
+        0xFF, 0xFF, 31, 7,
+    )  # fmt: skip
+    assert past.as_dict() == {
+        "param": "CAL_MAG1_ID",
+        "value": 16777216,
+        "timestamp_us": None,
+        "device": None,
+        "problem": "16777216 is not a 24-bit device ID",
+        "warning": None,
+    }
+    with pytest.raises(AttributeError):
+        top.value = 1  # type: ignore[misc]
+    bare = devid.LogDeviceId("CAL_MAG0_ID", 0, devid.decode(0, None))
+    assert (bare.problem, bare.timestamp_us, bare.warning) == (None, None, None)

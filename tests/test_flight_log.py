@@ -303,3 +303,422 @@ def test_a_lost_device_that_answers_again_is_logged_as_recovered(tmp_path, capsy
     assert marks[1][0] == pytest.approx(6.06)  # when it was lost, not when the slice ended
     main(["health", str(log), "--timeline", str(picture)])
     assert picture.read_text() == direct.read_text()
+
+
+# -- a run written by hand, read back sample by sample (issue 40) ---------------------------------
+# The mutation run found what the bench runs above leave open. Here the events are written by
+# hand, so every sample and logged message the log must hold is known from docs/autostart.md
+# ("The flight log") and the ULog specification, and pyulog reads them back.
+
+INA = {"instance": "INA238#0", "driver": "ina238", "bus": "i2c", "bus_id": 1, "address": 0x45}
+AK = {"instance": "AK09916#0", "driver": "ak09916", "bus": "i2c", "bus_id": 1, "address": 0x0C}
+#: The device IDs the drivers publish: devtype, address, bus 1 << 3 | I2C (PX4's layout).
+INA_ID, AK_ID = 0xD44509, 0x090C09
+
+
+def _perf(where: dict, t: float, transfers: int, errors: int, resets: int, probes: int) -> dict:
+    return {"t": t, "event": "perf", **where, "transfers": transfers, "bad_transfers": errors,
+            "resets": resets, "probe_attempts": probes}  # fmt: skip
+
+
+HAND_EVENTS = [
+    {"t": 0.0, "event": "register", **INA},
+    {"t": 0.0, "event": "register", **AK},
+    {
+        "t": 0.05,
+        "event": "started",
+        **INA,
+        "device_id": INA_ID,
+        "device_id_hex": "0xD44509",
+        "attempts": 1,
+    },
+    {"t": 0.1, "event": "health", **INA, "health": "nominal", "reason": None},
+    {"t": 0.1, "event": "health", **AK, "health": "warning", "reason": "no answer yet"},
+    {"t": 0.1, "event": "arming", "may_arm": False},
+    _perf(INA, 1.0, 10, 1, 0, 1),
+    _perf(AK, 1.0, 0, 0, 0, 3),
+    {"t": 1.5, "event": "reset", **INA, "at": 1.45, "reason": "10 bad transfers in a row"},
+    {"t": 1.5, "event": "health", **INA, "health": "critical", "reason": "lost"},
+    _perf(INA, 2.0, 12, 11, 1, 1),
+    {
+        "t": 2.2,
+        "event": "started",
+        **INA,
+        "device_id": INA_ID,
+        "device_id_hex": "0xD44509",
+        "attempts": 2,
+    },
+    {"t": 2.3, "event": "health", **INA, "health": "nominal", "reason": None},
+    {"t": 2.3, "event": "health", **AK, "health": "nominal", "reason": None},
+    {"t": 2.3, "event": "arming", "may_arm": True},
+    _perf(INA, 3.0, 20, 11, 1, 2),
+]
+
+
+def _hand_run(events: list[dict], duration: float = 3.0, mode: str = "manifest"):
+    from px4params.vehicle.simbench import InstanceResult, RunResult
+
+    instances = [
+        InstanceResult("INA238#0", "ina238", "INA238", "i2c", 1, 0x45),
+        InstanceResult("AK09916#0", "ak09916", "AK09916", "i2c", 1, 0x0C),
+    ]
+    return RunResult(mode=mode, seed=7, duration=duration, bench="hand.bench.toml",
+                     instances=instances, may_arm=True, failures=[], events=events)  # fmt: skip
+
+
+def _samples(ulog: ULog, topic: str, multi_id: int, *fields: str) -> list[tuple]:
+    data = next(d.data for d in ulog.data_list if (d.name, d.multi_id) == (topic, multi_id))
+    return [tuple(int(data[f][n]) for f in fields) for n in range(len(data["timestamp"]))]
+
+
+@pytest.mark.issue40
+def test_a_hand_written_run_sample_by_sample(tmp_path: Path) -> None:
+    from px4params import __version__
+    from px4params.vehicle.flight_log import run_ulog
+
+    path = tmp_path / "hand.ulg"
+    path.write_bytes(run_ulog(_hand_run(HAND_EVENTS), {"SYS_AUTOSTART": 4001}, version="9.9"))
+    ulog = ULog(str(path))
+    info = ulog.msg_info_dict
+    assert (info["sys_name"], info["ver_sw"], info["px4params_seed"]) == ("px4params", "9.9", 7)
+    assert (info["px4params_mode"], info["px4params_bench"]) == ("manifest", "hand.bench.toml")
+    assert info["px4params_duration_us"] == "3000000" and "ver_hw" in info
+    assert __version__ != "9.9"
+    assert ulog.msg_info_multiple_dict["driver_instance"] == [
+        ["INA238#0 ina238 i2c 1 69"], ["AK09916#0 ak09916 i2c 1 12"],
+    ]  # fmt: skip
+    assert ulog.initial_parameters == {"SYS_AUTOSTART": 4001}
+    health = ("timestamp", "device_id", "health", "registered")
+    # Critical from registering (what the commander assumes until the first answer), the device
+    # ID once started, then every change and a sample with each second's perf counters.
+    assert _samples(ulog, "driver_health", 0, *health) == [
+        (0, 0, 2, 1),
+        (100_000, INA_ID, 0, 1),
+        (1_000_000, INA_ID, 0, 1),
+        (1_500_000, INA_ID, 2, 1),
+        (2_000_000, INA_ID, 2, 1),
+        (2_300_000, INA_ID, 0, 1),
+        (3_000_000, INA_ID, 0, 1),
+    ]
+    assert _samples(ulog, "driver_health", 1, *health) == [
+        (0, 0, 2, 1), (100_000, 0, 1, 1), (1_000_000, 0, 1, 1), (2_300_000, 0, 0, 1),
+    ]  # fmt: skip
+    perf = ("timestamp", "transfers", "errors", "timeouts", "probe_attempts", "elapsed_us")
+    # elapsed_us: the time since the driver last started (0 while it is lost or never started).
+    assert _samples(ulog, "driver_perf", 0, *perf) == [
+        (1_000_000, 10, 1, 0, 1, 950_000),
+        (2_000_000, 12, 11, 1, 1, 0),
+        (3_000_000, 20, 11, 1, 2, 800_000),
+    ]
+    assert _samples(ulog, "driver_perf", 1, *perf) == [(1_000_000, 0, 0, 0, 3, 0)]
+    # The commander's answer on every change and once a second, with how many devices block it.
+    assert _samples(ulog, "arming_check", 0, "timestamp", "may_arm", "blocking") == [
+        (100_000, 0, 1),
+        (1_000_000, 0, 1),
+        (2_000_000, 0, 2),  # INA238#0 lost, AK09916#0 warning
+        (2_300_000, 1, 0),
+        (3_000_000, 1, 0),
+    ]
+    said = [(int(m.timestamp), m.log_level_str(), m.message) for m in ulog.logged_messages]
+    where = "on I2C bus 1 address 0x45"
+    assert said == [
+        (0, "DEBUG", f"ina238 INA238#0 {where}: critical: starting"),
+        (0, "DEBUG", "ak09916 AK09916#0 on I2C bus 1 address 0x0C: critical: starting"),
+        (50_000, "INFO", f"ina238 INA238#0: started {where} (device ID 0xD44509, after 1 probe "
+                         "attempts)"),
+        (100_000, "NOTICE", f"ina238 INA238#0 {where}: nominal"),
+        (100_000, "WARNING", "ak09916 AK09916#0 on I2C bus 1 address 0x0C: warning: no answer yet"),
+        (100_000, "WARNING", "commander: arming refused: AK09916#0"),
+        (1_450_000, "ERROR", f"ina238 INA238#0: device lost {where}: 10 bad transfers in a row"),
+        (1_500_000, "ERROR", f"ina238 INA238#0 {where}: critical: lost"),
+        (2_200_000, "NOTICE", f"ina238 INA238#0: recovered: started again {where} (device ID "
+                              "0xD44509, after 2 probe attempts)"),
+        (2_300_000, "NOTICE", f"ina238 INA238#0 {where}: nominal"),
+        (2_300_000, "NOTICE", "ak09916 AK09916#0 on I2C bus 1 address 0x0C: nominal"),
+        (2_300_000, "INFO", "commander: may arm: every manifest device is nominal"),
+        (3_000_000, "INFO", "px4params: end of the run"),  # docs/autostart.md's words
+    ]  # fmt: skip
+
+
+@pytest.mark.issue40
+def test_a_hand_written_run_read_back(tmp_path: Path) -> None:
+    """px4params health's reading of the same log: each device's story as the events tell it."""
+    from px4params.vehicle.flight_log import read_run_ulog, run_ulog
+
+    path = tmp_path / "hand.ulg"
+    data = run_ulog(_hand_run(HAND_EVENTS), {}, version="9.9")
+    path.write_bytes(data)
+    run = read_run_ulog(str(path))
+    assert (run.mode, run.seed, run.duration, run.bench) == ("manifest", 7, 3.0, "hand.bench.toml")
+    assert (run.may_arm, run.failures, run.arming) == (True, [], [(0.1, False), (2.3, True)])
+    assert run.log_cut_at is None and run.silently_missing == []
+    ina, ak = run.instances
+    assert (ina.name, ina.driver, ina.kind, ina.bus_id, ina.address) == (
+        "INA238#0", "ina238", "i2c", 1, 0x45,
+    )  # fmt: skip
+    assert ina.timeline == [
+        (0.0, "critical", "starting"), (0.1, "nominal", ""), (1.5, "critical", "lost"),
+        (2.3, "nominal", ""),
+    ]  # fmt: skip
+    assert ina.marks == [(0.05, "start"), (1.45, "reset"), (2.2, "start")]
+    assert (ina.started_at, ina.device_id, ina.health, ina.reason, ina.registered) == (
+        0.05, INA_ID, "nominal", "", True,
+    )  # fmt: skip
+    assert (ina.transfers, ina.bad_transfers, ina.resets, ina.probe_attempts) == (20, 11, 1, 2)
+    assert ak.timeline == [
+        (0.0, "critical", "starting"), (0.1, "warning", "no answer yet"), (2.3, "nominal", ""),
+    ]  # fmt: skip
+    assert (ak.marks, ak.started_at, ak.device_id) == ([], None, None)  # never started
+    assert (ak.transfers, ak.probe_attempts) == (0, 3)
+
+    # The same log cut short just before its last message (the clean end): what it tells is
+    # known up to its last moment, 3 s (the last perf samples), and no further.
+    end = struct.pack("<HB", 1 + 8 + 25, ord("L")) + b"6" + (3_000_000).to_bytes(8, "little")
+    assert data.endswith(end + b"px4params: end of the run")
+    cut = tmp_path / "cut.ulg"
+    cut.write_bytes(data[: -len(end) - 25])
+    assert read_run_ulog(str(cut)).log_cut_at == 3.0
+
+
+@pytest.mark.issue40
+def test_before_the_commanders_first_answer_arming_is_refused(tmp_path: Path) -> None:
+    """A perf second before the commander has answered: the log says it may not arm, and an
+    instance nobody has reported on yet is critical (docs/autostart.md: critical until the
+    first answer). A device ID the driver did not give is 0, PX4's "no device"."""
+    from px4params.vehicle.flight_log import run_ulog
+
+    events = [
+        _perf(INA, 1.0, 5, 0, 0, 1),
+        {
+            "t": 1.2,
+            "event": "started",
+            **INA,
+            "device_id": None,
+            "device_id_hex": "-",
+            "attempts": 1,
+        },
+        {"t": 1.5, "event": "health", **INA, "health": "nominal", "reason": None},
+    ]
+    path = tmp_path / "early.ulg"
+    path.write_bytes(run_ulog(_hand_run(events, duration=2.0), {}))
+    ulog = ULog(str(path))
+    assert ulog.msg_info_dict["ver_sw"] == "unknown"  # no version given
+    assert _samples(ulog, "arming_check", 0, "timestamp", "may_arm", "blocking") == [
+        (1_000_000, 0, 0),
+    ]
+    assert _samples(ulog, "driver_health", 0, "timestamp", "device_id", "health") == [
+        (1_000_000, 0, 2), (1_500_000, 0, 0),
+    ]  # fmt: skip
+    perf = _samples(ulog, "driver_perf", 0, "timestamp", "elapsed_us")
+    assert perf == [(1_000_000, 0)]
+    assert ulog.logged_messages[-1].message == "px4params: end of the run"
+    assert int(ulog.logged_messages[-1].timestamp) == 2_000_000
+    # Read back: AK09916#0 has no perf sample at all, so no counters.
+    from px4params.vehicle.flight_log import read_run_ulog
+
+    run = read_run_ulog(str(path))
+    ina, ak = run.instances
+    assert (ina.transfers, ina.probe_attempts, ina.device_id) == (5, 1, None)
+    # Its first sample came with no logged message: no reason to tell.
+    assert ina.timeline == [(1.0, "critical", ""), (1.5, "nominal", "")]
+    # No answer from the commander logged, only the refusal sampled at 1 s: AK09916#0 (never
+    # heard of, so critical: starting) blocks arming and the nominal INA238#0 does not.
+    assert (run.may_arm, run.arming) == (False, [(1.0, False)])
+    assert run.failures == ["ak09916 AK09916#0 on I2C bus 1 address 0x0C: critical: starting"]
+    assert (ak.transfers, ak.bad_transfers, ak.resets, ak.probe_attempts) == (0, 0, 0, 0)
+
+
+@pytest.mark.issue40
+def test_blocking_devices_are_counted_up_to_255(tmp_path: Path) -> None:
+    """arming_check.blocking is a uint8_t: 256 devices still starting (a ULog multi ID is a
+    uint8_t: at most 256 instances of a topic) count as 255."""
+    from px4params.vehicle.flight_log import run_ulog
+    from px4params.vehicle.simbench import InstanceResult, RunResult
+
+    names = [f"INA238#{n}" for n in range(256)]
+    instances = [InstanceResult(n, "ina238", None, "i2c", 1, 0x40) for n in names]
+    events = [{"t": 0.0, "event": "register", **INA, "instance": n} for n in names]
+    events.append({"t": 0.1, "event": "arming", "may_arm": False})
+    run = RunResult("manifest", 0, 1.0, "b", instances, False, [], events=events)
+    path = tmp_path / "many.ulg"
+    path.write_bytes(run_ulog(run, {}))
+    assert _samples(ULog(str(path)), "arming_check", 0, "timestamp", "blocking") == [(100_000, 255)]
+
+
+@pytest.mark.issue40
+def test_the_topics_formats(tmp_path: Path) -> None:
+    """docs/autostart.md's topics, as pyulog reads their formats: PX4's field types, the device
+    ID a uint32_t as in sensor topics, instance names in 24 characters."""
+    from px4params.vehicle.flight_log import run_ulog
+
+    path = tmp_path / "hand.ulg"
+    path.write_bytes(run_ulog(_hand_run(HAND_EVENTS), {}))
+    formats = {name: f.fields for name, f in ULog(str(path)).message_formats.items()}
+    assert formats == {
+        "driver_health": [
+            ("uint64_t", 0, "timestamp"), ("uint32_t", 0, "device_id"), ("uint8_t", 0, "health"),
+            ("bool", 0, "registered"), ("char", 24, "instance"),
+        ],
+        "driver_perf": [
+            ("uint64_t", 0, "timestamp"), ("uint32_t", 0, "transfers"), ("uint32_t", 0, "errors"),
+            ("uint32_t", 0, "timeouts"), ("uint32_t", 0, "probe_attempts"),
+            ("uint64_t", 0, "elapsed_us"), ("char", 24, "instance"),
+        ],
+        "arming_check": [
+            ("uint64_t", 0, "timestamp"), ("bool", 0, "may_arm"), ("uint8_t", 0, "blocking"),
+        ],
+    }  # fmt: skip
+
+
+@pytest.mark.issue40
+def test_a_manifest_instance_without_a_driver_and_a_run_without_events(tmp_path: Path) -> None:
+    from px4params.vehicle.autostart import Configured
+    from px4params.vehicle.flight_log import run_ulog
+
+    gadget = Configured("GADGET#0", "GADGET", None, "i2c", 1, 0x20, {})
+    path = tmp_path / "gadget.ulg"
+    path.write_bytes(run_ulog(_hand_run(HAND_EVENTS), {}, [gadget]))
+    assert ULog(str(path)).msg_info_multiple_dict["manifest_instance"] == [
+        ["GADGET#0 - on I2C bus 1 address 0x20"]
+    ]
+    with pytest.raises(ValueError) as e:
+        run_ulog(_hand_run(None), {})  # type: ignore[arg-type]
+    assert str(e.value) == "the run's events were not recorded (run(..., record_events=True))"
+
+
+@pytest.mark.issue40
+def test_health_messages_word_for_word(tmp_path: Path) -> None:
+    """The logged health changes: 'nominal' alone (whatever reason came with it), a level with
+    its reason, a level without one; a quiet start that found nothing (DEBUG); the commander
+    refusing before any device has answered."""
+    from px4params.vehicle.flight_log import run_ulog
+
+    events = [
+        {"t": 0.1, "event": "arming", "may_arm": False},  # before any device has answered
+        {"t": 0.5, "event": "start_failed", **AK, "quiet": True, "reason": "no ACK"},
+        {"t": 0.6, "event": "health", **AK, "health": "critical", "reason": None},
+        {"t": 0.7, "event": "health", **AK, "health": "warning", "reason": "checksum error in AUX"},
+        {"t": 0.8, "event": "health", **INA, "health": "nominal", "reason": "answers again"},
+    ]
+    path = tmp_path / "texts.ulg"
+    path.write_bytes(run_ulog(_hand_run(events, duration=1.0), {}))
+    said = [(m.log_level_str(), m.message) for m in ULog(str(path)).logged_messages]
+    ak = "ak09916 AK09916#0 on I2C bus 1 address 0x0C"
+    assert said[:-1] == [
+        ("WARNING", "commander: arming refused: devices still starting"),
+        ("DEBUG", "ak09916 on I2C bus 1 address 0x0C: quiet start found nothing (no ACK)"),
+        ("ERROR", f"{ak}: critical"),
+        ("WARNING", f"{ak}: warning: checksum error in AUX"),
+        ("NOTICE", "ina238 INA238#0 on I2C bus 1 address 0x45: nominal"),
+    ]
+    from px4params.vehicle.flight_log import read_run_ulog
+
+    ina, ak = read_run_ulog(str(path)).instances
+    assert (ina.timeline, ina.registered) == ([(0.8, "nominal", "")], True)  # one sample
+    assert ak.timeline == [(0.6, "critical", ""), (0.7, "warning", "checksum error in AUX")]
+
+
+def _crafted(path: Path, mode: str | None, lines: list[str] | None) -> str:
+    """A ULog with the information px4params health looks for, or not."""
+    log = ULogWriter()
+    if mode is not None:
+        log.info("px4params_mode", mode)
+    for line in lines or ():
+        log.info("driver_instance", line, multi=True)
+    path.write_bytes(log.getvalue())
+    return str(path)
+
+
+@pytest.mark.issue40
+def test_health_refuses_logs_it_did_not_write_word_for_word(tmp_path: Path) -> None:
+    from px4params.vehicle.flight_log import read_run_ulog
+
+    refusal = "not a log of 'px4params autostart run --ulog' (no driver_instance information)"
+    for name, mode, lines in (
+        ("mode_only.ulg", "manifest", None),
+        ("instances_only.ulg", None, ["INA238#0 ina238 i2c 1 69"]),
+    ):
+        path = _crafted(tmp_path / name, mode, lines)
+        with pytest.raises(ULogError) as e:
+            read_run_ulog(path)
+        assert str(e.value) == f"{path}: {refusal}"
+    # A driver_instance line is "instance driver bus bus_id address", numbers in decimal.
+    for n, line in enumerate(
+        ["INA238#0 ina238 i2c one 69", "INA238#0 ina238 i2c 1 0x45", "INA238#0 ina238 i2c 1"]
+    ):
+        path = _crafted(tmp_path / f"bad{n}.ulg", "manifest", ["AK09916#0 ak09916 i2c 1 12", line])
+        with pytest.raises(ULogError) as e:
+            read_run_ulog(path)
+        assert str(e.value) == f"{path}: driver_instance 1: cannot read {line!r}"
+
+
+@pytest.mark.issue40
+def test_a_run_with_nothing_but_its_end_and_a_log_without_the_run_figures(tmp_path: Path) -> None:
+    """A run with no events still ends cleanly (its end is its only message); a log with no
+    seed, duration or bench information reads as seed 0, 0 s, no bench."""
+    from px4params.vehicle.flight_log import read_run_ulog, run_ulog
+
+    path = tmp_path / "quiet.ulg"
+    path.write_bytes(run_ulog(_hand_run([], duration=1.0), {}))
+    assert [m.message for m in ULog(str(path)).logged_messages] == ["px4params: end of the run"]
+    assert read_run_ulog(str(path)).log_cut_at is None
+    bare = read_run_ulog(_crafted(tmp_path / "bare.ulg", "legacy", ["INA238#0 ina238 i2c 1 69"]))
+    assert (bare.mode, bare.seed, bare.duration, bare.bench) == ("legacy", 0, 0.0, "")
+
+
+@pytest.mark.issue40
+def test_a_corrupt_log_is_no_clean_end_even_with_its_end_message(tmp_path: Path) -> None:
+    """A data message of a subscription the log never made (msg ID 99), just before the end:
+    pyulog reads the rest but calls the file corrupt, and what the log tells is uncertain from
+    its last moment on, although its last message is the run's end."""
+    from px4params.vehicle.flight_log import read_run_ulog, run_ulog
+
+    data = run_ulog(_hand_run(HAND_EVENTS), {})
+    end = 3 + 1 + 8 + len("px4params: end of the run")  # the last message, 'L'
+    stray = struct.pack("<HB", 3, ord("D")) + struct.pack("<H", 99) + b"\x00"
+    path = tmp_path / "corrupt.ulg"
+    path.write_bytes(data[:-end] + stray + data[-end:])
+    assert ULog(str(path)).logged_messages[-1].message == "px4params: end of the run"
+    assert read_run_ulog(str(path)).log_cut_at == 3.0
+
+
+@pytest.mark.issue40
+def test_a_log_cut_after_a_message_with_no_sample_and_the_silently_missing(tmp_path: Path) -> None:
+    """A log whose only record is a logged message (a driver started at 0.5 s: no sample yet),
+    cut before its end: its last moment is the message's. And a legacy boot's silently missing
+    instances come back as the run listed them."""
+    from px4params.vehicle.flight_log import read_run_ulog, run_ulog
+
+    started = {"t": 0.5, "event": "started", **INA, "device_id": INA_ID,
+               "device_id_hex": "0xD44509", "attempts": 1}  # fmt: skip
+    run = _hand_run([started], duration=2.0, mode="legacy")
+    run.silently_missing = ["ak09916 AK09916#0 on I2C bus 1 address 0x0C: never started"]
+    data = run_ulog(run, {})
+    path = tmp_path / "whole.ulg"
+    path.write_bytes(data)
+    assert read_run_ulog(str(path)).silently_missing == run.silently_missing
+    cut = tmp_path / "cut.ulg"
+    cut.write_bytes(data[: -(3 + 1 + 8 + len("px4params: end of the run"))])
+    assert read_run_ulog(str(cut)).log_cut_at == 0.5
+
+
+@pytest.mark.issue40
+def test_a_health_code_px4params_does_not_know_reads_as_critical(tmp_path: Path) -> None:
+    """driver_health.health is 0 nominal, 1 warning, 2 critical (docs/autostart.md); a code
+    beyond them (a newer writer's) is read as the worst known, critical."""
+    from px4params.vehicle.flight_log import read_run_ulog
+
+    log = ULogWriter()
+    log.info("px4params_mode", "manifest")
+    log.info("driver_instance", "INA238#0 ina238 i2c 1 69", multi=True)
+    log.define("driver_health", [("uint64_t", "timestamp"), ("uint32_t", "device_id"),
+                                 ("uint8_t", "health"), ("bool", "registered"),
+                                 ("char[24]", "instance")])  # fmt: skip
+    msg_id = log.subscribe("driver_health")
+    log.data(msg_id, 1_000_000, INA_ID, 0, True, "INA238#0")
+    log.data(msg_id, 2_000_000, INA_ID, 7, True, "INA238#0")
+    path = tmp_path / "newer.ulg"
+    path.write_bytes(log.getvalue())
+    (ina,) = read_run_ulog(str(path)).instances
+    assert ina.timeline == [(1.0, "nominal", ""), (2.0, "critical", "")]
+    assert (ina.health, ina.device_id) == ("critical", INA_ID)

@@ -84,20 +84,25 @@ __all__ = [
 
 MAX_DEVICE_ID = (1 << 24) - 1
 DEVTYPES_ENV = "PX4PARAMS_DEVTYPES"
-#: Tables of older releases: label -> (first version, last version), from ``data/devtypes``.
-ERA_TABLES: dict[str, tuple[tuple[int, int, int], tuple[int, int, int]]] = {
-    "px4-v1.6": ((1, 6, 0), (1, 7, 99)),
-    "px4-v1.8": ((1, 8, 0), (1, 10, 99)),
-    "px4-v1.11": ((1, 11, 0), (1, 12, 99)),
-    "px4-v1.13": ((1, 13, 0), (1, 13, 99)),
+#: Tables of older releases: label -> (first, last) release line as (major, minor), from
+#: ``data/devtypes``. A line is every patch release of it: ver_sw_release's patch byte goes to
+#: 255, so no patch number can be an end.
+ERA_TABLES: dict[str, tuple[tuple[int, int], tuple[int, int]]] = {
+    "px4-v1.6": ((1, 6), (1, 7)),
+    "px4-v1.8": ((1, 8), (1, 10)),
+    "px4-v1.11": ((1, 11), (1, 12)),
+    "px4-v1.13": ((1, 13), (1, 13)),
 }
 TABLES = ("legacy", "current", *ERA_TABLES)
-#: The sensor kinds (devtype macro kinds) a calibration parameter's device may have.
+#: The sensor kinds (devtype macro kinds) a calibration parameter's device may have. An IMU's
+#: devtype is on every sensor of the chip: PX4's ADIS16448 driver publishes its magnetometer and
+#: barometer with the IMU's device ID (DRV_IMU_DEVTYPE_ADIS16448; PX4/PX4-Autopilot
+#: src/drivers/imu/analog_devices/adis16448/ADIS16448.cpp, 61d97e5).
 _KINDS_OF = {
     "ACC": {"ACC", "IMU"},
     "GYRO": {"GYR", "GYRO", "IMU"},
     "MAG": {"MAG", "IMU"},
-    "BARO": {"BARO"},
+    "BARO": {"BARO", "IMU"},
 }
 
 #: Bus type codes (3 bits) and their names; code 7 is representable but has no name.
@@ -336,7 +341,7 @@ def table_for_version(version: tuple[int, int, int]) -> str:
     """The table of firmware ``version`` (major, minor, patch): a release's table where one is
     shipped, ``legacy`` before 1.6, ``current`` from 1.14 on."""
     for label, (first, last) in ERA_TABLES.items():
-        if first <= version <= last:
+        if first <= version[:2] <= last:
             return label
     return "legacy" if version < (1, 6, 0) else "current"
 

@@ -359,7 +359,7 @@ def _health_story(inst: InstanceResult, data: Mapping[str, Any], said: Mapping[A
         reason = texts[-1][1] if texts else ""
         if reason.startswith(f"{level}: "):
             reason = reason[len(level) + 2 :]
-        elif reason == "nominal":
+        elif reason in ("nominal", level):  # a level logged without a reason (_Stream.on_health)
             reason = ""
         if level != previous or (texts and reason != inst.reason):
             inst.timeline.append((int(stamp) / 1e6, level, reason))
