@@ -1,8 +1,8 @@
-"""Encoding and decoding take fast paths for plain values (dicts, lists, tuples, ints, floats of
-the exact built-in types): a type's compiled program where it has one, else a leaf list; the
-general path takes anything else. Whichever is taken, the bytes, values and errors are the same:
-here the general path is forced with dict and list subclasses, and decoding the same bytes in
-pieces (which no program does) is the reference for decoding them whole."""
+"""Encoding takes a type's compiled program for plain values (dicts, lists, tuples, ints, floats
+of the exact built-in types); the general path takes anything else. Whichever is taken, the
+bytes and errors are the same: here the general path is forced with dict and list subclasses.
+Decoding is the program's alone (pydronecan is its reference, in test_pydronecan_diff.py);
+here the same bytes are decoded whole and in pieces, which are joined first."""
 
 from __future__ import annotations
 

@@ -1,34 +1,34 @@
-//! Value programs: a struct type compiled once into a flat list of steps (which field, of which
-//! kind, in which order; where nested structs begin and end; where arrays go), run over a
+//! Value programs: a type compiled once into flat lists of steps (which field, of which kind,
+//! in which order; where nested structs begin and end; where arrays and unions go), run over a
 //! caller's value representation through two small traits: [`ValueSource`] (read a value's
 //! fields and items, for encoding) and [`ValueSink`] (build one, for decoding). The Python
 //! binding implements them for Python objects, so that `encode` reads a dict and writes the
 //! bits, and `decode` reads the bits and builds the dict, each in one pass, with no leaf list
 //! and no walk in between.
 //!
-//! Programs cover the common shapes of parameters and messages: structs of primitives, nested
-//! structs, padding, versions and arrays of primitives. A type with a union or an array of
-//! composites inside has none.
+//! Programs cover every struct and union type: primitives, padding, versions, nested structs,
+//! unions (the tag, then the one variant), arrays of primitives and arrays of composites
+//! (static; dynamic with their length prefix; tail arrays without it, where tail array
+//! optimization applies: the last field of the top-level value, elements of 8 bits or more).
+//! Only a type nested deeper than the codec ever walks ([`MAX_DEPTH`]) has none.
 //!
 //! A program is a plan: it answers or declines, and never words an error. The bits come from
 //! the codec's own conversions ([`scalar_stream`], [`read_scalar`]); whatever a program does
 //! not take exactly as the codec would (a value the source declines, a missing or unknown
-//! field, a number out of range, an array of another length, short data, trailing bytes)
-//! makes it decline (`None`), and the caller then runs [`crate::codec::encode`] or
-//! [`crate::codec::decode`], which answers or words the error.
+//! field, a number out of range, an array of another length, an unknown union variant, short
+//! data, a bad tag, trailing bytes) makes it decline (`None`), and the caller then runs
+//! [`crate::codec::encode`] or [`crate::codec::decode`], which answers or words the error.
 
 use alloc::boxed::Box;
 use alloc::vec::Vec;
 use core::slice;
 
 use crate::bits::{read_bits, BitWriter};
-use crate::codec::{read_scalar, scalar_bits, scalar_stream, DecodeOptions, EncodeOptions};
+use crate::codec::{
+    read_scalar, scalar_bits, scalar_stream, DecodeOptions, EncodeOptions, MAX_DEPTH,
+};
 use crate::layout::{Kind, Layout, NodeId, Role};
 use crate::scalar::{self, Scalar};
-
-/// Nesting beyond this has no program (the codec's own limit is far above; no real type
-/// comes near either).
-const MAX_NESTING: usize = 16;
 
 /// Reads a value for [`Program::encode`]. Every method may decline (`None`): the value is not
 /// one the program takes as the codec would (the caller's general path then decides).
@@ -38,7 +38,7 @@ pub trait ValueSource {
     type Item: Copy;
     /// A struct being read: its fields are asked for in field order.
     type Struct;
-    /// An array of primitives being read.
+    /// An array being read (of primitives, or of composite items).
     type Array;
 
     /// Starts reading `item` as a struct.
@@ -48,6 +48,9 @@ pub trait ValueSource {
     /// The struct is read, `used` of its entries found as fields: declines when it holds
     /// others.
     fn end_struct(&mut self, fields: Self::Struct, used: usize) -> Option<()>;
+    /// `item` as a union whose variants are the `count` fields from index `first` of
+    /// [`Layout::fields`]: the selected variant (`0..count`) and its value.
+    fn union(&mut self, item: Self::Item, first: u32, count: u32) -> Option<(u32, Self::Item)>;
     /// `item` as a primitive of `kind` (its value, not yet checked against the kind's range).
     fn scalar(&mut self, item: Self::Item, kind: Kind) -> Option<Scalar>;
     /// Starts reading `item` as an array of `elem` primitives: the array and its length.
@@ -63,6 +66,11 @@ pub trait ValueSource {
             _ => None,
         }
     }
+    /// Starts reading `item` as an array of composite values (structs, unions, arrays): the
+    /// array and its length.
+    fn begin_items(&mut self, item: Self::Item) -> Option<(Self::Array, usize)>;
+    /// Item `index` (below the length) of an array of composite values.
+    fn item(&mut self, array: &Self::Array, index: usize) -> Option<Self::Item>;
 }
 
 /// Builds a value for [`Program::decode`]. Its errors are the sink's own (out of memory, say),
@@ -72,6 +80,8 @@ pub trait ValueSink {
     type Value;
     /// A struct being built, its fields put in field order.
     type Struct;
+    /// An array of composite values being built, its items pushed in order.
+    type Items;
     /// The sink's own error.
     type Error;
 
@@ -90,6 +100,14 @@ pub trait ValueSink {
         fields: Self::Struct,
         node: NodeId,
     ) -> Result<Self::Value, Self::Error>;
+    /// A value of union `node` whose selected variant is field `field` of [`Layout::fields`],
+    /// holding `value`.
+    fn union(
+        &mut self,
+        node: NodeId,
+        field: u32,
+        value: Self::Value,
+    ) -> Result<Self::Value, Self::Error>;
     /// A primitive's value.
     fn scalar(&mut self, value: Scalar) -> Result<Self::Value, Self::Error>;
     /// An array of `len` primitives, produced in order by `items`.
@@ -98,9 +116,16 @@ pub trait ValueSink {
         len: usize,
         items: impl Iterator<Item = Scalar>,
     ) -> Result<Self::Value, Self::Error>;
+    /// Starts an array of composite values; `len` is its length, or for a tail array the most
+    /// it can have.
+    fn begin_items(&mut self, len: usize) -> Result<Self::Items, Self::Error>;
+    /// Adds the next item.
+    fn push(&mut self, items: &mut Self::Items, value: Self::Value) -> Result<(), Self::Error>;
+    /// The array's value, every item pushed.
+    fn end_items(&mut self, items: Self::Items) -> Result<Self::Value, Self::Error>;
 }
 
-/// One step of a program, in the order of the bits. `field` is a field's index in
+/// One step of a struct's program, in the order of the bits. `field` is a field's index in
 /// [`Layout::fields`].
 #[derive(Clone, Copy, Debug)]
 enum Step {
@@ -120,6 +145,8 @@ enum Step {
     End,
     /// An array of primitives.
     Array { field: u32, elem: Kind, len: Len },
+    /// A union or an array of composites: the program's value `value` ([`Program::values`]).
+    Value { field: u32, value: u32 },
     /// The next `len` steps are primitives and padding, which the encoder writes in one run.
     Run { len: u32 },
 }
@@ -134,11 +161,40 @@ enum Len {
     Dynamic { max: u32, len_bits: u8, tail: bool },
 }
 
-/// A struct type's program.
+/// A value that is not a struct's field of its own: the root, a union's variant, an item of
+/// an array, a union or array of composites in a struct ([`Step::Value`]).
+#[derive(Debug)]
+enum Value {
+    /// A struct of type `node`: its steps, ending with [`Step::End`].
+    Struct { node: NodeId, steps: Box<[Step]> },
+    /// A primitive.
+    Scalar(Kind),
+    /// An array of primitives.
+    Array { elem: Kind, len: Len },
+    /// A union of type `node`, its variants the fields from `first`.
+    Union {
+        node: NodeId,
+        first: u32,
+        tag_bits: u8,
+        variants: Box<[Value]>,
+    },
+    /// An array of composites: its items' program, and the last item's when the array ends
+    /// the value (a tail array inside the last item may drop its prefix).
+    Items {
+        len: Len,
+        item: Box<Value>,
+        last: Option<Box<Value>>,
+    },
+}
+
+/// A type's program.
 #[derive(Debug)]
 pub struct Program {
     root: NodeId,
-    steps: Box<[Step]>,
+    /// The root's program: a struct's or a union's.
+    top: Value,
+    /// Unions and arrays of composites in structs, by [`Step::Value`].
+    values: Box<[Value]>,
     /// For a type of primitives and padding alone (NodeStatus, most small messages): each
     /// field at its bit offset, which is fixed, so that decoding interprets no steps.
     fixed: Option<Fixed>,
@@ -160,8 +216,7 @@ struct FixedField {
 }
 
 impl Fixed {
-    /// The fields of `steps` (a root struct's, without runs) when all are primitives and
-    /// padding.
+    /// The fields of `steps` (a root struct's) when all are primitives and padding.
     fn of(steps: &[Step]) -> Option<Self> {
         let mut fields = Vec::with_capacity(steps.len());
         let mut bits = 0u32;
@@ -176,8 +231,8 @@ impl Fixed {
                     bits += scalar_bits(kind);
                 }
                 Step::Pad { bits: pad } => bits += u32::from(pad),
-                Step::End => {}
-                Step::Begin { .. } | Step::Array { .. } | Step::Run { .. } => return None,
+                Step::End | Step::Run { .. } => {}
+                Step::Begin { .. } | Step::Array { .. } | Step::Value { .. } => return None,
             }
         }
         Some(Self {
@@ -188,22 +243,33 @@ impl Fixed {
 }
 
 impl Program {
-    /// The program of struct `root`, or `None` for shapes programs do not cover.
+    /// The program of struct or union type `root`; `None` for other nodes and for a type
+    /// nested deeper than the codec walks.
     pub fn compile(layout: &Layout<'_>, root: NodeId) -> Option<Self> {
-        let Kind::Struct { first, count } = layout.node(root).kind else {
+        if !matches!(
+            layout.node(root).kind,
+            Kind::Struct { .. } | Kind::Union { .. }
+        ) {
             return None;
+        }
+        let mut compiler = Compiler {
+            layout,
+            values: Vec::new(),
         };
-        let mut steps = Vec::new();
-        compile_struct(layout, first, count, true, 0, &mut steps)?;
-        steps.push(Step::End);
+        let top = compiler.value(root, true, 1)?;
+        let fixed = match &top {
+            Value::Struct { steps, .. } => Fixed::of(steps),
+            _ => None,
+        };
         Some(Self {
             root,
-            fixed: Fixed::of(&steps),
-            steps: with_runs(&steps).into(),
+            top,
+            values: compiler.values.into(),
+            fixed,
         })
     }
 
-    /// The struct type the program is of.
+    /// The type the program is of.
     pub fn root(&self) -> NodeId {
         self.root
     }
@@ -222,16 +288,24 @@ impl Program {
             source,
             room: out.len(),
             out: BitWriter::new(out),
+            values: &self.values,
             tao: options.tao,
             saturate: options.saturate,
         };
-        let fields = encoder.source.begin_struct(value)?;
-        encoder.fields(&mut self.steps.iter(), fields)?;
+        match &self.top {
+            // The common case first: a struct's steps, with no dispatch.
+            Value::Struct { steps, .. } => {
+                let fields = encoder.source.begin_struct(value)?;
+                encoder.fields(&mut steps.iter(), fields)?;
+            }
+            top => encoder.value(top, value)?,
+        }
         encoder.out.finish().ok()
     }
 
     /// Decodes `data` into a value built by `sink`: `Ok(None)` to decline (the data is not a
-    /// value the program reads as the codec would: short, too long, an array too long).
+    /// value the program reads as the codec would: short, too long, a bad tag, an array too
+    /// long).
     #[inline]
     pub fn decode<K: ValueSink>(
         &self,
@@ -284,9 +358,14 @@ impl Program {
             data: window,
             bit_len: len * 8,
             pos: 0,
+            values: &self.values,
             tao: options.tao,
         };
-        let Some(value) = decoder.fields(&mut self.steps.iter(), self.root)? else {
+        let decoded = match &self.top {
+            Value::Struct { steps, node } => decoder.fields(&mut steps.iter(), *node)?,
+            top => decoder.value(top)?,
+        };
+        let Some(value) = decoded else {
             return Ok(None);
         };
         if !options.allow_trailing && len > decoder.pos.div_ceil(8) {
@@ -296,64 +375,125 @@ impl Program {
     }
 }
 
-/// Appends the steps of a struct's fields; `tail` when the struct ends the value.
-fn compile_struct(
-    layout: &Layout<'_>,
-    first: u32,
-    count: u32,
-    tail: bool,
-    depth: usize,
-    steps: &mut Vec<Step>,
-) -> Option<()> {
-    if depth > MAX_NESTING {
-        return None;
-    }
-    for field in first..first + count {
-        let member = layout.fields[field as usize];
-        let last = tail && field + 1 == first + count;
-        let kind = layout.node(member.node).kind;
-        let step = match (member.role, kind) {
-            (Role::Padding, Kind::Void { bits }) => Step::Pad { bits },
-            (Role::Version(version), kind) if is_primitive(kind) => Step::Version {
-                field,
-                kind,
-                version,
-            },
-            (Role::Data, kind) if is_primitive(kind) => Step::Leaf { field, kind },
-            (Role::Data, Kind::Struct { first, count }) => {
-                steps.push(Step::Begin {
-                    field,
-                    node: member.node,
-                });
-                compile_struct(layout, first, count, last, depth + 1, steps)?;
-                Step::End
+/// Compiles a type's values, collecting the unions and arrays of composites its structs hold.
+struct Compiler<'l, 'a> {
+    layout: &'l Layout<'a>,
+    values: Vec<Value>,
+}
+
+impl Compiler<'_, '_> {
+    /// The program of a value of node `id`; `tail` when it ends the top-level value, `depth`
+    /// the codec's nesting at it (`None` beyond [`MAX_DEPTH`], or for padding as a value).
+    fn value(&mut self, id: NodeId, tail: bool, depth: usize) -> Option<Value> {
+        if depth > MAX_DEPTH {
+            return None;
+        }
+        let layout = self.layout;
+        Some(match layout.node(id).kind {
+            kind if is_primitive(kind) => Value::Scalar(kind),
+            Kind::Struct { first, count } => {
+                let mut steps = Vec::new();
+                self.fields(first, count, tail, depth, &mut steps)?;
+                steps.push(Step::End);
+                Value::Struct {
+                    node: id,
+                    steps: with_runs(&steps).into(),
+                }
             }
-            (Role::Data, Kind::Array { elem, len }) => Step::Array {
-                field,
-                elem: primitive(layout, elem)?,
-                len: Len::Fixed(len),
-            },
-            (
-                Role::Data,
-                Kind::DynArray {
-                    elem,
+            Kind::Union {
+                first,
+                count,
+                tag_bits,
+            } => {
+                let variants = (first..first + count)
+                    .map(|f| self.value(layout.fields[f as usize].node, tail, depth + 1))
+                    .collect::<Option<_>>()?;
+                Value::Union {
+                    node: id,
+                    first,
+                    tag_bits,
+                    variants,
+                }
+            }
+            Kind::Array { elem, len } => self.array(elem, Len::Fixed(len), tail, depth)?,
+            Kind::DynArray {
+                elem,
+                max,
+                len_bits,
+            } if len_bits > 0 => {
+                let len = Len::Dynamic {
                     max,
                     len_bits,
-                },
-            ) if len_bits > 0 => Step::Array {
-                field,
-                elem: primitive(layout, elem)?,
-                len: Len::Dynamic {
-                    max,
-                    len_bits,
-                    tail: last && layout.node(elem).min_bits >= 8,
-                },
-            },
+                    tail: tail && layout.node(elem).min_bits >= 8,
+                };
+                self.array(elem, len, tail, depth)?
+            }
             _ => return None,
-        };
-        steps.push(step);
+        })
     }
-    Some(())
+
+    /// An array of `elem` values; its last item ends the value when the array does.
+    fn array(&mut self, elem: NodeId, len: Len, tail: bool, depth: usize) -> Option<Value> {
+        if let Some(elem) = primitive(self.layout, elem) {
+            return Some(Value::Array { elem, len });
+        }
+        let item = Box::new(self.value(elem, false, depth + 1)?);
+        let last = match tail {
+            true => Some(Box::new(self.value(elem, true, depth + 1)?)),
+            false => None,
+        };
+        Some(Value::Items { len, item, last })
+    }
+
+    /// Appends the steps of a struct's fields; `tail` when the struct ends the value.
+    fn fields(
+        &mut self,
+        first: u32,
+        count: u32,
+        tail: bool,
+        depth: usize,
+        steps: &mut Vec<Step>,
+    ) -> Option<()> {
+        let layout = self.layout;
+        for field in first..first + count {
+            let member = layout.fields[field as usize];
+            let last = tail && field + 1 == first + count;
+            let kind = layout.node(member.node).kind;
+            let step = match (member.role, kind) {
+                (Role::Padding, Kind::Void { bits }) => Step::Pad { bits },
+                (Role::Version(version), kind) if is_primitive(kind) => Step::Version {
+                    field,
+                    kind,
+                    version,
+                },
+                (Role::Data, kind) if is_primitive(kind) => Step::Leaf { field, kind },
+                (Role::Data, Kind::Struct { first, count }) => {
+                    if depth + 1 > MAX_DEPTH {
+                        return None;
+                    }
+                    steps.push(Step::Begin {
+                        field,
+                        node: member.node,
+                    });
+                    self.fields(first, count, last, depth + 1, steps)?;
+                    Step::End
+                }
+                (Role::Data, _) => match self.value(member.node, last, depth + 1)? {
+                    Value::Array { elem, len } => Step::Array { field, elem, len },
+                    value => {
+                        self.values.push(value);
+                        Step::Value {
+                            field,
+                            value: self.values.len() as u32 - 1,
+                        }
+                    }
+                },
+                _ => return None,
+            };
+            steps.push(step);
+        }
+        Some(())
+    }
 }
 
 /// `steps` with a [`Step::Run`] before each run of primitives and padding.
@@ -394,16 +534,42 @@ fn primitive(layout: &Layout<'_>, id: NodeId) -> Option<Kind> {
     is_primitive(kind).then_some(kind)
 }
 
-struct Encoder<'s, 'o, S> {
+impl Len {
+    /// Whether the array drops its length prefix (tail array optimization is on, `tao`).
+    #[inline]
+    fn tail(self, tao: bool) -> bool {
+        matches!(self, Len::Dynamic { tail: true, .. }) && tao
+    }
+}
+
+/// Which program an array's item `i` of `n` follows: the last item's when the array ends the
+/// value and keeps its length prefix (a tail array's items never end the value).
+#[inline]
+fn item_of<'v>(
+    item: &'v Value,
+    last: Option<&'v Value>,
+    len: Len,
+    tao: bool,
+    i: usize,
+    n: usize,
+) -> &'v Value {
+    match last {
+        Some(last) if i + 1 == n && !len.tail(tao) => last,
+        _ => item,
+    }
+}
+
+struct Encoder<'s, 'o, 'p, S> {
     source: &'s mut S,
     out: BitWriter<'o>,
     /// The length of `out`.
     room: usize,
+    values: &'p [Value],
     tao: bool,
     saturate: bool,
 }
 
-impl<S: ValueSource> Encoder<'_, '_, S> {
+impl<S: ValueSource> Encoder<'_, '_, '_, S> {
     /// The steps of one struct, up to its [`Step::End`], from `fields`.
     #[inline]
     fn fields(&mut self, steps: &mut slice::Iter<'_, Step>, mut fields: S::Struct) -> Option<()> {
@@ -427,11 +593,64 @@ impl<S: ValueSource> Encoder<'_, '_, S> {
                     used += 1;
                     self.array(item, elem, len)?;
                 }
+                Step::Value { field, value } => {
+                    let item = self.source.field(&mut fields, field)??;
+                    used += 1;
+                    let values = self.values;
+                    self.value(&values[value as usize], item)?;
+                }
                 // Only ever inside runs.
                 Step::Leaf { .. } | Step::Version { .. } | Step::Pad { .. } => return None,
             }
         }
         self.source.end_struct(fields, used)
+    }
+
+    /// A value of its own (the root, a variant, an item).
+    fn value(&mut self, value: &Value, item: S::Item) -> Option<()> {
+        match value {
+            Value::Struct { steps, .. } => {
+                let fields = self.source.begin_struct(item)?;
+                self.fields(&mut steps.iter(), fields)
+            }
+            &Value::Scalar(kind) => {
+                let value = self.source.scalar(item, kind)?;
+                let (stream, bits) = scalar_stream(kind, value, self.saturate).ok()?;
+                self.out.write(stream, bits).ok()
+            }
+            &Value::Array { elem, len } => self.array(item, elem, len),
+            Value::Union {
+                first,
+                tag_bits,
+                variants,
+                ..
+            } => {
+                let count = variants.len() as u32;
+                let (tag, inner) = self.source.union(item, *first, count)?;
+                let variant = variants.get(tag as usize)?;
+                if *tag_bits > 0 {
+                    let bits = u32::from(*tag_bits);
+                    self.out
+                        .write(scalar::to_stream(tag.into(), bits), bits)
+                        .ok()?;
+                }
+                self.value(variant, inner)
+            }
+            Value::Items {
+                len,
+                item: each,
+                last,
+            } => {
+                let (array, n) = self.source.begin_items(item)?;
+                self.length(*len, n)?;
+                for i in 0..n {
+                    let inner = self.source.item(&array, i)?;
+                    let program = item_of(each, last.as_deref(), *len, self.tao, i, n);
+                    self.value(program, inner)?;
+                }
+                Some(())
+            }
+        }
     }
 
     /// A run of primitives and padding, written in one go (the writer's state stays in
@@ -544,7 +763,7 @@ fn fixed_struct<K: ValueSink>(
     sink.end_struct(built, node)
 }
 
-struct Decoder<'a, K> {
+struct Decoder<'a, 'p, K> {
     sink: &'a mut K,
     /// The data, perhaps with zeros after it.
     data: &'a [u8],
@@ -552,12 +771,23 @@ struct Decoder<'a, K> {
     bit_len: usize,
     /// The bit offset of the next read.
     pos: usize,
+    values: &'p [Value],
     tao: bool,
 }
 
-impl<K: ValueSink> Decoder<'_, K> {
+impl<K: ValueSink> Decoder<'_, '_, K> {
     fn bits_left(&self) -> usize {
         self.bit_len - self.pos
+    }
+
+    /// The next `bits` bits as an unsigned number (1 to 64 bits); `None` past the data.
+    fn uint(&mut self, bits: u8) -> Option<u64> {
+        if usize::from(bits) > self.bits_left() {
+            return None;
+        }
+        let n = scalar::from_stream(read_bits(self.data, self.pos, bits.into()), bits.into());
+        self.pos += usize::from(bits);
+        Some(n)
     }
 
     /// The steps of one struct (of type `node`), up to its [`Step::End`].
@@ -595,10 +825,87 @@ impl<K: ValueSink> Decoder<'_, K> {
                     Some(list) => (field, list),
                     None => return Ok(None),
                 },
+                Step::Value { field, value } => {
+                    let values = self.values;
+                    match self.value(&values[value as usize])? {
+                        Some(inner) => (field, inner),
+                        None => return Ok(None),
+                    }
+                }
             };
             self.sink.put(&mut built, field, item)?;
         }
         self.sink.end_struct(built, node).map(Some)
+    }
+
+    /// A value of its own (the root, a variant, an item).
+    fn value(&mut self, value: &Value) -> Result<Option<K::Value>, K::Error> {
+        match value {
+            Value::Struct { node, steps } => self.fields(&mut steps.iter(), *node),
+            &Value::Scalar(kind) => {
+                let bits = scalar_bits(kind) as usize;
+                if bits > self.bits_left() {
+                    return Ok(None);
+                }
+                let value = scalar_at(self.data, self.pos, kind);
+                self.pos += bits;
+                self.sink.scalar(value).map(Some)
+            }
+            &Value::Array { elem, len } => self.array(elem, len),
+            Value::Union {
+                node,
+                first,
+                tag_bits,
+                variants,
+            } => {
+                let tag = match *tag_bits {
+                    0 => 0,
+                    bits => match self.uint(bits) {
+                        Some(tag) => tag as usize,
+                        None => return Ok(None),
+                    },
+                };
+                let Some(variant) = variants.get(tag) else {
+                    return Ok(None);
+                };
+                let Some(inner) = self.value(variant)? else {
+                    return Ok(None);
+                };
+                self.sink.union(*node, first + tag as u32, inner).map(Some)
+            }
+            Value::Items { len, item, last } => {
+                let (n, max) = match *len {
+                    Len::Fixed(n) => (Some(n as usize), n as usize),
+                    Len::Dynamic { max, .. } if len.tail(self.tao) => (None, max as usize),
+                    Len::Dynamic { max, len_bits, .. } => match self.uint(len_bits) {
+                        Some(n) if n <= u64::from(max) => (Some(n as usize), n as usize),
+                        _ => return Ok(None),
+                    },
+                };
+                let mut items = self.sink.begin_items(n.unwrap_or(max))?;
+                let mut i = 0;
+                loop {
+                    let more = match n {
+                        Some(n) => i < n,
+                        // A tail array's items take every remaining whole byte.
+                        None => self.bits_left() >= 8,
+                    };
+                    if !more {
+                        break;
+                    }
+                    if i == max {
+                        return Ok(None);
+                    }
+                    let program = item_of(item, last.as_deref(), *len, self.tao, i, max);
+                    let Some(value) = self.value(program)? else {
+                        return Ok(None);
+                    };
+                    self.sink.push(&mut items, value)?;
+                    i += 1;
+                }
+                self.sink.end_items(items).map(Some)
+            }
+        }
     }
 
     fn array(&mut self, elem: Kind, len: Len) -> Result<Option<K::Value>, K::Error> {
@@ -610,17 +917,10 @@ impl<K: ValueSink> Decoder<'_, K> {
                 left @ 8.. => (left - 8) / bits + 1,
                 _ => 0,
             },
-            Len::Dynamic { len_bits, .. } => {
-                if usize::from(len_bits) > self.bits_left() {
-                    return Ok(None);
-                }
-                let n = scalar::from_stream(
-                    read_bits(self.data, self.pos, len_bits.into()),
-                    len_bits.into(),
-                );
-                self.pos += usize::from(len_bits);
-                n as usize
-            }
+            Len::Dynamic { len_bits, .. } => match self.uint(len_bits) {
+                Some(n) => n as usize,
+                None => return Ok(None),
+            },
         };
         let too_long = matches!(len, Len::Dynamic { max, .. } if n > max as usize);
         if too_long || n * bits > self.bits_left() {

@@ -1,29 +1,30 @@
 //! Value programs (`px4params_core::program`) against the codec's general encoder and decoder,
-//! over random struct types of the shapes programs cover (primitives, padding, versions,
-//! nested structs, fixed and dynamic arrays of primitives, tail arrays), random values (decoded
-//! from random bytes, then changed at random) and buffers too small, exact and roomy, data
-//! complete and cut short: a program answers with the codec's bytes or value, or declines;
-//! it declines exactly where the codec fails on a value it was given unchanged.
+//! over random struct and union types (primitives, padding, versions, nested structs, unions,
+//! fixed and dynamic arrays of primitives and of composites, tail arrays of both), random
+//! values (decoded from random bytes, then changed at random) and buffers too small, exact and
+//! roomy, data complete and cut short: a program answers with the codec's bytes or value, or
+//! declines; it declines exactly where the codec fails on a value it was given unchanged.
 //!
 //! Values are trees (`Tree`): the program reads and builds them through its traits, the codec
 //! through its `Source`, and its leaf lists are compared with a tree's leaves in `[k]` order.
 
 mod common;
 
-use common::{any_type, primitive, same_leaves, Ty};
+use common::{any_type, ina238, kitchen_sink, primitive, same_leaves, Ty};
 use proptest::prelude::*;
 use px4params_core::codec::{decode_leaves, encode, DecodeOptions, EncodeOptions, Source};
 use px4params_core::compile::OwnedLayout;
 use px4params_core::layout::{Field, Kind, Layout, NodeId, Role};
-use px4params_core::leaf::encode_default;
 use px4params_core::program::{Program, ValueSink, ValueSource};
 use px4params_core::Scalar;
 
-/// A value: primitives, structs as (field index, value) in any order, arrays of primitives.
+/// A value: primitives, structs as (field index, value) in any order, unions as (variant
+/// index among the union's, value), arrays.
 #[derive(Clone, Debug, PartialEq)]
 enum Tree {
     Leaf(Scalar),
     Struct(Vec<(u32, Tree)>),
+    Union(u32, Box<Tree>),
     List(Vec<Tree>),
 }
 
@@ -62,14 +63,27 @@ impl<'a> ValueSource for &'a Trees {
     fn element(&mut self, array: &Self::Array, index: usize, kind: Kind) -> Option<Scalar> {
         self.scalar(&array[index], kind)
     }
+    fn union(&mut self, item: &'a Tree, _first: u32, _count: u32) -> Option<(u32, &'a Tree)> {
+        match item {
+            Tree::Union(variant, value) => Some((*variant, value)),
+            _ => None,
+        }
+    }
+    fn begin_items(&mut self, item: &'a Tree) -> Option<(Self::Array, usize)> {
+        self.begin_array(item, Kind::Bool)
+    }
+    fn item(&mut self, array: &Self::Array, index: usize) -> Option<&'a Tree> {
+        array.get(index)
+    }
 }
 
-/// Builds trees for programs.
-struct Build;
+/// Builds trees for programs (of types in the layout it holds).
+struct Build<'l, 'a>(&'l Layout<'a>);
 
-impl ValueSink for Build {
+impl ValueSink for Build<'_, '_> {
     type Value = Tree;
     type Struct = Vec<(u32, Tree)>;
+    type Items = Vec<Tree>;
     type Error = core::convert::Infallible;
 
     fn begin_struct(&mut self, _node: NodeId) -> Result<Self::Struct, Self::Error> {
@@ -97,6 +111,23 @@ impl ValueSink for Build {
     ) -> Result<Tree, Self::Error> {
         let items: Vec<Tree> = items.map(Tree::Leaf).collect();
         assert_eq!(items.len(), len);
+        Ok(Tree::List(items))
+    }
+    fn union(&mut self, node: NodeId, field: u32, value: Tree) -> Result<Tree, Self::Error> {
+        let Kind::Union { first, count, .. } = self.0.node(node).kind else {
+            panic!("a union's node");
+        };
+        assert!((first..first + count).contains(&field));
+        Ok(Tree::Union(field - first, Box::new(value)))
+    }
+    fn begin_items(&mut self, _len: usize) -> Result<Vec<Tree>, Self::Error> {
+        Ok(Vec::new())
+    }
+    fn push(&mut self, items: &mut Vec<Tree>, value: Tree) -> Result<(), Self::Error> {
+        items.push(value);
+        Ok(())
+    }
+    fn end_items(&mut self, items: Vec<Tree>) -> Result<Tree, Self::Error> {
         Ok(Tree::List(items))
     }
 }
@@ -154,9 +185,15 @@ impl<'a> Source for General<'a> {
         }
     }
     fn begin_union(&mut self, _: &Layout<'_>, _: &[Field]) -> Result<u32, Refused> {
-        Err(Refused::Shape)
+        let Tree::Union(variant, value) = *self.stack.last().unwrap() else {
+            return Err(Refused::Shape);
+        };
+        self.stack.push(value);
+        Ok(*variant)
     }
-    fn end_union(&mut self) {}
+    fn end_union(&mut self) {
+        self.stack.pop();
+    }
     fn begin_array(&mut self, _fixed: Option<u32>) -> Result<usize, Refused> {
         match self.top() {
             Tree::List(items) => Ok(items.len()),
@@ -190,15 +227,21 @@ fn leaves_of(layout: &Layout<'_>, id: NodeId, tree: &Tree, out: &mut Vec<Scalar>
                 leaves_of(layout, layout.fields[*i as usize].node, t, out);
             }
         }
-        (Kind::Array { .. }, Tree::List(items)) | (Kind::DynArray { .. }, Tree::List(items)) => {
+        (Kind::Union { first, .. }, Tree::Union(variant, t)) => {
+            out.push(Scalar::Uint((*variant).into()));
+            leaves_of(
+                layout,
+                layout.fields[(first + variant) as usize].node,
+                t,
+                out,
+            );
+        }
+        (Kind::Array { elem, .. } | Kind::DynArray { elem, .. }, Tree::List(items)) => {
             if matches!(layout.node(id).kind, Kind::DynArray { .. }) {
                 out.push(Scalar::Uint(items.len() as u64));
             }
             for t in items {
-                let Tree::Leaf(s) = t else {
-                    panic!("arrays of primitives")
-                };
-                out.push(*s);
+                leaves_of(layout, elem, t, out);
             }
         }
         (_, Tree::Leaf(s)) => out.push(*s),
@@ -218,7 +261,9 @@ fn general_decode(
     Some((d.bits, leaves[..d.leaves].to_vec()))
 }
 
-/// Struct types of the shapes programs cover.
+/// Struct and union types: structs of primitives, padding, versions and arrays of primitives
+/// (the common shapes), holding structs, unions and arrays of composites (static, dynamic, in
+/// tail position too: the last field of a struct that ends the value).
 fn program_type() -> impl Strategy<Value = Ty> {
     let field = prop_oneof![
         6 => (primitive(), any::<bool>()),
@@ -227,24 +272,55 @@ fn program_type() -> impl Strategy<Value = Ty> {
         2 => (primitive(), 1u32..40).prop_map(|(t, n)| (Ty::Dyn(Box::new(t), n), false)),
         1 => (1u32..40).prop_map(|n| (Ty::Dyn(Box::new(Ty::Uint(8)), n), false)),
     ];
+    let nested_field = field.clone();
     let flat = proptest::collection::vec(field.clone(), 0..6).prop_map(Ty::Struct);
-    flat.prop_recursive(3, 32, 6, move |inner| {
-        let member = prop_oneof![3 => field.clone(), 1 => inner.prop_map(|t| (t, false))];
-        proptest::collection::vec(member, 0..6).prop_map(Ty::Struct)
-    })
-}
-
-/// Whether programs cover type `ty` (a struct field of it, at any depth).
-fn covered(ty: &Ty) -> bool {
-    match ty {
-        Ty::Union(_) => false,
-        Ty::Struct(fields) => fields.iter().all(|(t, _)| covered(t)),
-        Ty::Array(t, _) | Ty::Dyn(t, _) => !matches!(
-            **t,
-            Ty::Struct(_) | Ty::Union(_) | Ty::Array(..) | Ty::Dyn(..)
-        ),
-        _ => true,
-    }
+    let small = flat.prop_recursive(3, 32, 6, move |inner| {
+        let variant = prop_oneof![2 => inner.clone(), 1 => primitive()];
+        let union = proptest::collection::vec(variant, 2..5).prop_map(Ty::Union);
+        let composite = prop_oneof![2 => inner.clone(), 1 => union.clone()];
+        let member = prop_oneof![
+            6 => field.clone(),
+            2 => inner.clone().prop_map(|t| (t, false)),
+            2 => union.clone().prop_map(|t| (t, false)),
+            1 => (composite.clone(), 1u32..4).prop_map(|(t, n)| (Ty::Array(Box::new(t), n), false)),
+            2 => (composite, 1u32..6).prop_map(|(t, n)| (Ty::Dyn(Box::new(t), n), false)),
+        ];
+        prop_oneof![
+            4 => proptest::collection::vec(member, 0..6).prop_map(Ty::Struct),
+            1 => union,
+        ]
+    });
+    // Arrays of composites ending the value, whose items end in a dynamic array (under tail
+    // array optimization, only the last item's drops its prefix, and only when the outer
+    // array keeps its own), the items perhaps unions.
+    let nested = (
+        proptest::collection::vec(nested_field.clone(), 0..3),
+        proptest::collection::vec(nested_field, 0..3),
+        primitive(),
+        1u32..6,
+        1u32..5,
+        0u8..4,
+    )
+        .prop_map(|(mut outer, mut inner, elem, max_in, len_out, shape)| {
+            inner.push((Ty::Dyn(Box::new(elem), max_in), false));
+            let mut item = Ty::Struct(inner);
+            if shape & 2 != 0 {
+                item = Ty::Union(vec![Ty::Bool, item]);
+            }
+            let array = match shape & 1 {
+                0 => Ty::Array(Box::new(item), len_out),
+                _ => Ty::Dyn(Box::new(item), len_out),
+            };
+            outer.push((array, false));
+            Ty::Struct(outer)
+        });
+    // Any type of the codec's tests too (arrays of arrays, unions at the root), as a struct's
+    // field when it is not a struct or union itself.
+    let any = any_type().prop_map(|ty| match ty {
+        Ty::Struct(_) | Ty::Union(_) => ty,
+        other => Ty::Struct(vec![(other, false)]),
+    });
+    prop_oneof![3 => small, 1 => nested, 1 => any]
 }
 
 /// The nodes of a tree in pre-order, counted.
@@ -252,6 +328,7 @@ fn size(tree: &Tree) -> usize {
     1 + match tree {
         Tree::Leaf(_) => 0,
         Tree::Struct(fields) => fields.iter().map(|(_, t)| size(t)).sum(),
+        Tree::Union(_, t) => size(t),
         Tree::List(items) => items.iter().map(size).sum(),
     }
 }
@@ -274,7 +351,15 @@ fn change(tree: &mut Tree, at: &mut usize, how: u8, raw: u64) -> bool {
             }
             (Tree::Struct(fields), 1) => fields.push((u32::MAX, Tree::Leaf(Scalar::Uint(0)))),
             (t @ Tree::Struct(_), _) => *t = Tree::Leaf(Scalar::Uint(raw % 2)),
-            (Tree::List(items), 0) => items.push(Tree::Leaf(Scalar::Uint(raw % 256))),
+            (Tree::Union(variant, _), 0) => *variant = (raw % 5) as u32,
+            (t @ Tree::Union(..), _) => *t = Tree::Leaf(Scalar::Uint(raw % 2)),
+            (Tree::List(items), 0) => {
+                let copy = match items.first() {
+                    Some(first) if raw % 2 == 0 => first.clone(),
+                    _ => Tree::Leaf(Scalar::Uint(raw % 256)),
+                };
+                items.push(copy);
+            }
             (Tree::List(items), _) => {
                 items.pop();
             }
@@ -285,6 +370,7 @@ fn change(tree: &mut Tree, at: &mut usize, how: u8, raw: u64) -> bool {
     match tree {
         Tree::Leaf(_) => false,
         Tree::Struct(fields) => fields.iter_mut().any(|(_, t)| change(t, at, how, raw)),
+        Tree::Union(_, t) => change(t, at, how, raw),
         Tree::List(items) => items.iter_mut().any(|t| change(t, at, how, raw)),
     }
 }
@@ -318,19 +404,199 @@ fn by_codec(
     Some(out)
 }
 
+fn leaf(v: u64) -> Tree {
+    Tree::Leaf(Scalar::Uint(v))
+}
+
+/// Values of types with a union (INA238's bus) and a tail array of structs (the kitchen sink)
+/// are answered, with the codec's bytes, with and without tail array optimization, and read
+/// back as given; cut short by a byte, they are declined, as the codec refuses them.
+#[test]
+fn unions_and_arrays_of_structs_are_answered() {
+    let mut l = OwnedLayout::default();
+    let ina = ina238(&mut l);
+    let sink = kitchen_sink(&mut l);
+    // A tail array of structs ending in a dynamic array: the items keep their arrays' prefixes
+    // (only the last field of the top-level value drops it).
+    let nest_ty = Ty::Struct(vec![(
+        Ty::Dyn(
+            Box::new(Ty::Struct(vec![
+                (Ty::Uint(8), false),
+                (Ty::Dyn(Box::new(Ty::Uint(8)), 3), false),
+            ])),
+            3,
+        ),
+        false,
+    )]);
+    let nest = nest_ty.build(&mut l);
+    let layout = l.as_layout();
+    // Fields are numbered across the layout: the INA238's come after its bus structs'.
+    let field = |node: NodeId, name: &str| layout.member_index(node, name).unwrap();
+    let node_of = |node: NodeId, name: &str| layout.fields[field(node, name) as usize].node;
+    let spi_node = node_of(node_of(ina, "bus"), "spi");
+    let spi = Tree::Struct(vec![
+        (field(spi_node, "p_version"), leaf(0)),
+        (field(spi_node, "bus_id"), leaf(3)),
+        (field(spi_node, "device"), leaf(7)),
+    ]);
+    let ina_value = Tree::Struct(vec![
+        (field(ina, "p_version"), leaf(0)),
+        (field(ina, "bus"), Tree::Union(1, Box::new(spi))),
+        (field(ina, "current"), leaf(1000)),
+        (field(ina, "shunt"), Tree::Leaf(Scalar::Float(0.5))),
+    ]);
+    let choice = node_of(sink, "choice");
+    let pair = node_of(choice, "pair");
+    let tail = node_of(sink, "tail");
+    let Kind::DynArray { elem, .. } = layout.node(tail).kind else {
+        unreachable!()
+    };
+    let item = |a: u64, b: f64| {
+        Tree::Struct(vec![
+            (field(elem, "a"), leaf(a)),
+            (field(elem, "b"), Tree::Leaf(Scalar::Float(b))),
+        ])
+    };
+    let sink_value = Tree::Struct(vec![
+        (field(sink, "flag"), Tree::Leaf(Scalar::Bool(true))),
+        (
+            field(sink, "choice"),
+            Tree::Union(
+                0,
+                Box::new(Tree::Struct(vec![
+                    (field(pair, "x"), Tree::Leaf(Scalar::Int(-3))),
+                    (field(pair, "flag"), Tree::Leaf(Scalar::Bool(false))),
+                ])),
+            ),
+        ),
+        (
+            field(sink, "fixed"),
+            Tree::List(vec![Tree::Leaf(Scalar::Float(1.5)); 3]),
+        ),
+        (field(sink, "big"), Tree::Leaf(Scalar::Int(-5))),
+        (
+            field(sink, "tail"),
+            Tree::List(vec![item(1, 0.5), item(2, -2.0)]),
+        ),
+    ]);
+    let outer = layout.member_index(nest, "f0").unwrap();
+    let Kind::DynArray {
+        elem: nest_item, ..
+    } = layout.node(layout.fields[outer as usize].node).kind
+    else {
+        unreachable!()
+    };
+    let nest_elem = |a: u64, d: &[u64]| {
+        Tree::Struct(vec![
+            (layout.member_index(nest_item, "f0").unwrap(), leaf(a)),
+            (
+                layout.member_index(nest_item, "f1").unwrap(),
+                Tree::List(d.iter().map(|&v| leaf(v)).collect()),
+            ),
+        ])
+    };
+    let nest_value = Tree::Struct(vec![(
+        outer,
+        Tree::List(vec![nest_elem(1, &[1, 2]), nest_elem(2, &[3])]),
+    )]);
+    for (root, value) in [(ina, &ina_value), (sink, &sink_value), (nest, &nest_value)] {
+        let program = Program::compile(&layout, root).expect("a program");
+        let mut encodings = vec![];
+        for tao in [true, false] {
+            let options = EncodeOptions {
+                tao,
+                ..EncodeOptions::default()
+            };
+            let room = layout.max_bytes(root);
+            let ours = by_program(&program, value, room, options).expect("answered");
+            assert_eq!(
+                Some(&ours),
+                by_codec(&layout, root, value, room, options).as_ref()
+            );
+            let read = DecodeOptions {
+                tao,
+                allow_trailing: false,
+            };
+            let back = program.decode(&mut Build(&layout), &ours, read).unwrap();
+            assert_eq!(back.as_ref(), Some(value));
+            let short = &ours[..ours.len() - 1];
+            assert_eq!(
+                program.decode(&mut Build(&layout), short, read).unwrap(),
+                None
+            );
+            assert!(general_decode(&layout, root, short, read).is_none());
+            encodings.push(ours);
+        }
+        // The kitchen sink's tail array drops its 3-bit prefix (its items then start 3 bits
+        // earlier); the INA238 has no dynamic array.
+        assert_eq!(encodings[0] != encodings[1], root != ina);
+    }
+}
+
+/// A random value of node `id` in range of every field (versions the type's own), drawn from
+/// `seed`: what the encoder always takes.
+fn random_tree(layout: &Layout<'_>, id: NodeId, seed: &mut u64) -> Tree {
+    let mut draw = || {
+        // xorshift64*
+        *seed ^= *seed >> 12;
+        *seed ^= *seed << 25;
+        *seed ^= *seed >> 27;
+        seed.wrapping_mul(0x2545_F491_4F6C_DD1D)
+    };
+    let mask = |bits: u8| u64::MAX >> (64 - u32::from(bits));
+    match layout.node(id).kind {
+        Kind::Uint { bits, .. } => leaf(draw() & mask(bits)),
+        Kind::Int { bits, .. } => {
+            let raw = draw() & mask(bits);
+            let shift = 64 - u32::from(bits);
+            Tree::Leaf(Scalar::Int(((raw << shift) as i64) >> shift))
+        }
+        Kind::Float { .. } => Tree::Leaf(Scalar::Float((draw() % 2000) as f64 / 8.0 - 100.0)),
+        Kind::Bool => Tree::Leaf(Scalar::Bool(draw() & 1 == 1)),
+        Kind::Void { .. } => unreachable!("padding is no value"),
+        Kind::Struct { first, count } => Tree::Struct(
+            (first..first + count)
+                .filter_map(|i| {
+                    let field = layout.fields[i as usize];
+                    match field.role {
+                        Role::Padding => None,
+                        Role::Version(v) => Some((i, leaf(v.into()))),
+                        Role::Data => Some((i, random_tree(layout, field.node, seed))),
+                    }
+                })
+                .collect(),
+        ),
+        Kind::Union { first, count, .. } => {
+            let variant = (draw() % u64::from(count)) as u32;
+            let node = layout.fields[(first + variant) as usize].node;
+            Tree::Union(variant, Box::new(random_tree(layout, node, seed)))
+        }
+        Kind::Array { elem, len } => {
+            Tree::List((0..len).map(|_| random_tree(layout, elem, seed)).collect())
+        }
+        Kind::DynArray { elem, max, .. } => {
+            let n = draw() % (u64::from(max) + 1);
+            Tree::List((0..n).map(|_| random_tree(layout, elem, seed)).collect())
+        }
+    }
+}
+
+fn seed_of(data: &[u8]) -> u64 {
+    data.iter().fold(0x9E37_79B9_7F4A_7C15u64, |h, &b| {
+        (h ^ u64::from(b)).wrapping_mul(0x100_0000_01B3)
+    }) | 1
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(400))]
 
-    /// A program is compiled for exactly the struct types of the shapes it covers.
+    /// Every struct and union type has a program; other nodes have none.
     #[test]
-    fn programs_cover_their_shapes(ty in any_type()) {
-        let root_ty = match ty {
-            Ty::Struct(_) => ty,
-            other => Ty::Struct(vec![(other, false)]),
-        };
+    fn every_type_has_a_program(ty in any_type()) {
         let mut l = OwnedLayout::default();
-        let root = root_ty.build(&mut l);
-        prop_assert_eq!(Program::compile(&l.as_layout(), root).is_some(), covered(&root_ty), "{:?}", root_ty);
+        let root = ty.build(&mut l);
+        let composite = matches!(ty, Ty::Struct(_) | Ty::Union(_));
+        prop_assert_eq!(Program::compile(&l.as_layout(), root).is_some(), composite, "{:?}", ty);
     }
 
     /// Decoding random bytes, and a value complete and cut short at every byte: the codec's
@@ -340,16 +606,22 @@ proptest! {
         let mut l = OwnedLayout::default();
         let root = ty.build(&mut l);
         let layout = l.as_layout();
-        let program = Program::compile(&layout, root).expect("a covered shape");
+        let program = Program::compile(&layout, root).expect("a program");
         let stored = general_decode(&layout, root, &data, DecodeOptions { tao: false, allow_trailing: true })
             .map(|(bits, _)| data[..bits.div_ceil(8)].to_vec())
             .unwrap_or_default();
+        // A random value in range, encoded by the codec.
+        let value = random_tree(&layout, root, &mut seed_of(&data));
+        let encode_options = EncodeOptions { tao, ..EncodeOptions::default() };
+        let encoded = by_codec(&layout, root, &value, layout.max_bytes(root), encode_options)
+            .expect("a value in range");
         let mut cases = vec![(&data[..], tao)];
         cases.extend((0..=stored.len()).rev().map(|n| (&stored[..n], false)));
+        cases.extend((0..=encoded.len()).rev().map(|n| (&encoded[..n], tao)));
         for (bytes, tao) in cases {
             let options = DecodeOptions { tao, allow_trailing };
             let general = general_decode(&layout, root, bytes, options);
-            let ours = program.decode(&mut Build, bytes, options).unwrap();
+            let ours = program.decode(&mut Build(&layout), bytes, options).unwrap();
             match (&ours, &general) {
                 (Some(tree), Some((_, leaves))) => {
                     let mut flat = Vec::new();
@@ -378,16 +650,20 @@ proptest! {
         let mut l = OwnedLayout::default();
         let root = ty.build(&mut l);
         let layout = l.as_layout();
-        let program = Program::compile(&layout, root).expect("a covered shape");
+        let program = Program::compile(&layout, root).expect("a program");
         let room = layout.max_bytes(root);
-        let decoded = program.decode(&mut Build, &data, DecodeOptions { tao, allow_trailing: true }).unwrap();
-        let mut tree = decoded.unwrap_or_else(|| {
-            let mut out = vec![0u8; room];
-            let n = encode_default(&layout, root, &mut out, false).unwrap();
-            let options = DecodeOptions { tao: false, allow_trailing: false };
-            program.decode(&mut Build, &out[..n], options).unwrap().expect("the default value")
-        });
+        let decoded = program.decode(&mut Build(&layout), &data, DecodeOptions { tao, allow_trailing: true }).unwrap();
         let options = EncodeOptions { tao, saturate, keep_versions };
+        // A random value in range is never declined.
+        let random = random_tree(&layout, root, &mut seed_of(&data));
+        let answered = by_program(&program, &random, room, options);
+        prop_assert!(answered.is_some(), "{:?}", random);
+        prop_assert_eq!(&answered, &by_codec(&layout, root, &random, room, options), "{:?}", random);
+        // Values decoded from the bytes when they are one, else the random value.
+        let mut tree = match decoded {
+            Some(tree) if data.first().is_some_and(|b| b % 2 == 0) => tree,
+            _ => random,
+        };
         if !keep_versions {
             // A value decoded from random bytes may hold another version than the type's,
             // which the codec refuses.

@@ -131,6 +131,14 @@ pub(crate) fn value(py: Python<'_>, type_name: &str, path: &str, error: ValueErr
     }
 }
 
+/// Data of a type nested deeper than the codec walks, which has no program, decoded anyway.
+pub(crate) fn too_deep(type_name: &str) -> PyErr {
+    DecodeError::new_err(format!(
+        "{type_name}: the type nests deeper than {} levels",
+        px4params_core::codec::MAX_DEPTH
+    ))
+}
+
 /// A leaf named by an index that no value has (negative, or beyond any count).
 pub(crate) fn no_leaf(shown: &str) -> PyErr {
     LeafError::new_err(format!("no leaf [{shown}] (leaf indices are 0 and up)"))

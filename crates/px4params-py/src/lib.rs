@@ -7,7 +7,6 @@ mod compile;
 mod errors;
 mod fastcall;
 mod file;
-mod plain;
 mod program;
 mod store;
 mod structs;
@@ -18,14 +17,12 @@ mod values;
 use std::collections::HashMap;
 use std::sync::Arc;
 
-use px4params_core::bits::BitRead;
 use px4params_core::codec::{decode, encode, DecodeOptions, EncodeOptions, LeafKind};
 use px4params_core::compile::OwnedLayout;
-use px4params_core::error::{Error, ErrorKind};
+use px4params_core::error::Error;
 use px4params_core::layout::{Kind, Layout, NodeId, Role};
 use px4params_core::leaf::{encode_default, get_leaf, locate, set_leaf, Target};
 use px4params_core::program::Program;
-use px4params_core::value::{LeafError as LeafListError, LeafSink, LeafSource};
 use px4params_core::Scalar;
 use pyo3::exceptions::{PyKeyError, PyTypeError};
 use pyo3::prelude::*;
@@ -33,7 +30,7 @@ use pyo3::types::{PyBool, PyBytes, PyDict, PyInt, PyList, PyString, PyTuple};
 
 use errors::{Op, ValueErrorClass};
 use structs::StructValue;
-use values::{kind_name, scalar_to_py, LeafRows, PySink, PySource};
+use values::{kind_name, scalar_to_py, LeafRows, PySource};
 
 pub(crate) struct Compiled {
     layout: OwnedLayout,
@@ -295,75 +292,14 @@ impl DataType {
         errors::codec(py, &self.key, &self.layout(), err, op)
     }
 
-    /// Encodes a plain value by its leaf list (see [`plain`]); `None` when it is not plain or
-    /// the encoder refused it.
-    fn plain_encode(
-        &self,
-        layout: &Layout<'_>,
-        value: &Bound<'_, PyAny>,
-        out: &mut [u8],
-        options: EncodeOptions,
-    ) -> Option<usize> {
-        plain::with_leaves(|leaves| {
-            leaves.clear();
-            plain::leaves_of(layout, &self.compiled.names, self.root, value, leaves)?;
-            let mut source = LeafSource::new(leaves);
-            let n = encode(layout, self.root, &mut source, out, options).ok()?;
-            (source.consumed() == leaves.len()).then_some(n)
-        })
-    }
-
-    /// Decodes into a leaf list, then builds the Python value from it (see [`plain`]); on
-    /// any failure the general path decodes again and words the error.
-    fn decode_from<'py, R: BitRead + ?Sized>(
-        &self,
-        py: Python<'py>,
-        data: &R,
-        tao: bool,
-        allow_trailing: bool,
-    ) -> PyResult<Bound<'py, PyAny>> {
+    /// Data the type's program declined (or a type without one, nested deeper than the codec
+    /// walks): the codec decodes it again and words the error.
+    fn declined<'py>(&self, py: Python<'py>, data: &[u8], options: DecodeOptions) -> PyErr {
         let layout = self.layout();
-        let names = &self.compiled.names;
-        let options = DecodeOptions {
-            tao,
-            allow_trailing,
-        };
-        // As many leaves as the type has when its shape is fixed; else room for most values
-        // first, then for any value of this length short of pathological ones (every leaf but
-        // tags and lengths takes a bit), which the general path takes.
-        let first = layout
-            .node(self.root)
-            .fixed_leaves()
-            .map_or(64, |n| n as usize);
-        let sizes = [first, 2 * data.bit_len() + 64];
-        let decoded = plain::with_leaves(|leaves| {
-            for size in sizes {
-                if leaves.len() < size {
-                    leaves.resize(size, Scalar::Uint(0));
-                }
-                let mut sink = LeafSink::new(&mut leaves[..size]);
-                match decode(&layout, self.root, data, &mut sink, options) {
-                    Ok(_) => {
-                        return Some(plain::value_of(
-                            py,
-                            &self.compiled,
-                            self.root,
-                            sink.leaves(),
-                        ))
-                    }
-                    Err(e) if e.kind == ErrorKind::Value(LeafListError::Full) => {}
-                    Err(_) => return None,
-                }
-            }
-            None
-        });
-        if let Some(value) = decoded {
-            return value;
-        }
-        let mut sink = PySink::new(py, names);
-        match decode(&layout, self.root, data, &mut sink, options) {
-            Ok(_) => Ok(sink.into_value().expect("a decoded value")),
-            Err(e) => Err(self.err(py, e, Op::Decode)),
+        let mut rows = LeafRows::new(&layout);
+        match decode(&layout, self.root, data, &mut rows, options) {
+            Err(e) => self.err(py, e, Op::Decode),
+            Ok(_) => errors::too_deep(&self.key),
         }
     }
 
@@ -398,12 +334,10 @@ impl DataType {
             keep_versions: false,
         };
         let names = &self.compiled.names;
-        let encoded = if let Some(program) = self.compiled.program(self.root) {
+        let encoded = self.compiled.program(self.root).and_then(|program| {
             let mut source = program::PyValues::new(py, names);
             program.encode(&mut source, value.as_ptr(), out, options)
-        } else {
-            self.plain_encode(&layout, value, out, options)
-        };
+        });
         if let Some(n) = encoded {
             return Ok(PyBytes::new(py, &out[..n]));
         }
@@ -421,8 +355,7 @@ impl DataType {
         }
     }
 
-    /// Decodes whole bytes: by the type's program when it has one, else by the leaf list or
-    /// the general path ([`DataType::decode_from`]).
+    /// Decodes whole bytes by the type's program; what it declines, the codec words.
     fn decode_bytes<'py>(
         &self,
         py: Python<'py>,
@@ -441,11 +374,10 @@ impl DataType {
                 return Ok(value);
             }
         }
-        self.decode_from(py, data, tao, allow_trailing)
+        Err(self.declined(py, data, options))
     }
 
-    /// [`DataType::decode_bytes`] into a [`StructValue`]: by the program straight, else
-    /// made from the plain value.
+    /// [`DataType::decode_bytes`] into a [`StructValue`].
     fn decode_struct_bytes<'py>(
         &self,
         py: Python<'py>,
@@ -470,8 +402,7 @@ impl DataType {
                 return Ok(value);
             }
         }
-        let plain = self.decode_from(py, data, tao, allow_trailing)?;
-        structs::from_plain(&self.compiled, self.root, plain)
+        Err(self.declined(py, data, options))
     }
 }
 
@@ -559,7 +490,7 @@ impl DataType {
         })
     }
 
-    /// Decodes a value whose bytes arrive in pieces, reading across them without joining them.
+    /// Decodes a value whose bytes arrive in pieces.
     #[pyo3(signature = (fragments, *, tao = true, allow_trailing = false))]
     fn decode_fragments<'py>(
         &self,
@@ -568,9 +499,8 @@ impl DataType {
         tao: bool,
         allow_trailing: bool,
     ) -> PyResult<Bound<'py, PyAny>> {
-        let pieces: Vec<&[u8]> = fragments.iter().map(Vec::as_slice).collect();
-        let data = px4params_core::scatter::Scattered::new(&pieces[..]);
-        self.decode_from(py, &data, tao, allow_trailing)
+        // Joined: the program reads one run of bytes (the pieces are copies already).
+        self.decode_bytes(py, &fragments.concat(), tao, allow_trailing)
     }
 
     /// Every leaf of an encoded value as `(index, path, type, value)`.

@@ -1,6 +1,7 @@
-//! Python objects for the core's value programs ([`px4params_core::program`]): plain values
-//! read for encoding ([`PyValues`]: exact dicts, lists, tuples, ints, floats, bools, bytes and
-//! str) and dicts or struct values built by decoding ([`Built`]).
+//! Python objects for the core's value programs ([`px4params_core::program`]), which encode and
+//! decode every type: plain values read for encoding ([`PyValues`]: exact dicts, lists, tuples,
+//! ints, floats, bools, bytes and str; a union a one-key dict) and dicts or struct values built
+//! by decoding ([`Built`]). Conversion only: the programs hold the DroneCAN rules.
 //!
 //! Whatever a program's source does not take exactly as the general path ([`crate::values`])
 //! would (a subclass, an integer beyond 64 bits, a look-up that raised) makes it decline; the
@@ -16,7 +17,6 @@ use pyo3::ffi;
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict, PyList, PyString, PyTuple};
 
-use crate::plain::{item_at, scalar as plain_scalar, Entries};
 use crate::structs::StructValue;
 use crate::values::scalar_to_py;
 use crate::Compiled;
@@ -118,8 +118,8 @@ impl<'py> Form<'py> for Fields<'py> {
     }
 }
 
-/// Builds the Python value a program decodes: structs as `F` (dicts or struct values), arrays
-/// as lists, primitives as int, float and bool.
+/// Builds the Python value a program decodes: structs as `F` (dicts or struct values), unions
+/// as one-key dicts, arrays as lists, primitives as int, float and bool.
 pub(crate) struct Built<'py, 'c, F> {
     py: Python<'py>,
     compiled: &'c Arc<Compiled>,
@@ -139,6 +139,7 @@ impl<'py, 'c, F> Built<'py, 'c, F> {
 impl<'py, F: Form<'py>> ValueSink for Built<'py, '_, F> {
     type Value = Bound<'py, PyAny>;
     type Struct = F;
+    type Items = Bound<'py, PyList>;
     type Error = PyErr;
 
     #[inline(always)]
@@ -156,9 +157,28 @@ impl<'py, F: Form<'py>> ValueSink for Built<'py, '_, F> {
         fields.end(self.py, self.compiled, node)
     }
 
+    fn union(&mut self, _: NodeId, field: u32, value: Bound<'py, PyAny>) -> PyResult<Self::Value> {
+        let dict = PyDict::new(self.py);
+        dict.set_item(self.compiled.names[field as usize].bind(self.py), value)?;
+        Ok(dict.into_any())
+    }
+
     #[inline(always)]
     fn scalar(&mut self, value: Scalar) -> PyResult<Bound<'py, PyAny>> {
         scalar_to_py(self.py, value)
+    }
+
+    fn begin_items(&mut self, _len: usize) -> PyResult<Bound<'py, PyList>> {
+        // Appended to: a tail array's length is known when it ends.
+        Ok(PyList::empty(self.py))
+    }
+
+    fn push(&mut self, items: &mut Bound<'py, PyList>, value: Bound<'py, PyAny>) -> PyResult<()> {
+        items.append(value)
+    }
+
+    fn end_items(&mut self, items: Bound<'py, PyList>) -> PyResult<Bound<'py, PyAny>> {
+        Ok(items.into_any())
     }
 
     fn list(
@@ -273,6 +293,184 @@ impl<'py> ValueSource for PyValues<'py, '_> {
                 item_at(seq.as_ptr(), *list, index as ffi::Py_ssize_t)?,
             ),
             _ => Some(Scalar::Uint(array.bytes()?.get(index).copied()?.into())),
+        }
+    }
+
+    fn union(
+        &mut self,
+        item: *mut ffi::PyObject,
+        first: u32,
+        count: u32,
+    ) -> Option<(u32, *mut ffi::PyObject)> {
+        // SAFETY: a live item of a held container, held from here on (its one entry is
+        // borrowed from it, and no Python code runs while it is read).
+        let held = unsafe { Bound::from_borrowed_ptr(self.py, item) };
+        let dict = held.cast_exact::<PyDict>().ok()?;
+        if dict.len() != 1 {
+            return None;
+        }
+        let (mut pos, mut key, mut value) = (0, std::ptr::null_mut(), std::ptr::null_mut());
+        // SAFETY: a live dict of one entry, read once.
+        if unsafe { ffi::PyDict_Next(dict.as_ptr(), &mut pos, &mut key, &mut value) } == 0 {
+            return None;
+        }
+        // SAFETY: `key` is a live object; exact str keys compare without running Python code.
+        if unsafe { ffi::PyUnicode_CheckExact(key) } == 0 {
+            return None;
+        }
+        let names = &self.names[first as usize..(first + count) as usize];
+        let variant = names.iter().position(|name| {
+            // SAFETY: both are live exact str objects.
+            name.as_ptr() == key || unsafe { ffi::PyUnicode_Compare(name.as_ptr(), key) } == 0
+        })?;
+        Some((variant as u32, value))
+    }
+
+    fn begin_items(&mut self, item: *mut ffi::PyObject) -> Option<(PyArray<'py>, usize)> {
+        // SAFETY: a live item of a held container, held from here on.
+        let held = unsafe { Bound::from_borrowed_ptr(self.py, item) };
+        let list = held.is_exact_instance_of::<PyList>();
+        if !list && !held.is_exact_instance_of::<PyTuple>() {
+            return None;
+        }
+        let n = held.len().ok()?;
+        Some((PyArray::Seq { seq: held, list }, n))
+    }
+
+    #[inline(always)]
+    fn item(&mut self, array: &PyArray<'py>, index: usize) -> Option<*mut ffi::PyObject> {
+        match array {
+            PyArray::Seq { seq, list } => item_at(seq.as_ptr(), *list, index as ffi::Py_ssize_t),
+            _ => None,
+        }
+    }
+}
+
+/// Item `i` of `seq`, an exact list (`list`) or tuple that the caller holds, borrowed; `None`
+/// when out of range (the list shrank), with an error set that the caller clears.
+#[inline(always)]
+fn item_at(seq: *mut ffi::PyObject, list: bool, i: ffi::Py_ssize_t) -> Option<*mut ffi::PyObject> {
+    // SAFETY: `seq` is a live exact list or tuple (checked by the caller).
+    let item = unsafe {
+        if list {
+            ffi::PyList_GetItem(seq, i)
+        } else {
+            ffi::PyTuple_GetItem(seq, i)
+        }
+    };
+    (!item.is_null()).then_some(item)
+}
+
+/// A struct's dict read in field order: the entries are taken in the dict's own order while it
+/// matches the fields' (as for values written in source code, or decoded), by the key's
+/// identity with the field's interned name; any other key is looked up.
+pub(crate) struct Entries<'py> {
+    dict: Bound<'py, PyDict>,
+    pos: ffi::Py_ssize_t,
+    next: Option<(*mut ffi::PyObject, *mut ffi::PyObject)>,
+}
+
+impl<'py> Entries<'py> {
+    /// The entries of `dict`, which they hold.
+    fn new(dict: Bound<'py, PyDict>) -> Self {
+        let mut entries = Self {
+            dict,
+            pos: 0,
+            next: None,
+        };
+        entries.advance();
+        entries
+    }
+
+    #[inline(always)]
+    fn advance(&mut self) {
+        let (mut key, mut value) = (std::ptr::null_mut(), std::ptr::null_mut());
+        // SAFETY: the dict is alive (held); `pos` is only ever advanced by this call.
+        let more =
+            unsafe { ffi::PyDict_Next(self.dict.as_ptr(), &mut self.pos, &mut key, &mut value) };
+        self.next = (more != 0).then_some((key, value));
+    }
+
+    /// The value of the field named `name`, borrowed from the dict: null when absent, `None`
+    /// when the look-up raised.
+    #[inline(always)]
+    fn get(&mut self, name: &Py<PyString>) -> Option<*mut ffi::PyObject> {
+        if let Some((key, value)) = self.next {
+            if key == name.as_ptr() {
+                self.advance();
+                return Some(value);
+            }
+        }
+        self.look_up(name)
+    }
+
+    /// How many entries the dict has.
+    fn len(&self) -> usize {
+        self.dict.len()
+    }
+
+    /// A key out of the fields' order, or not the interned name: looked up.
+    #[inline(never)]
+    fn look_up(&mut self, name: &Py<PyString>) -> Option<*mut ffi::PyObject> {
+        // SAFETY: both objects are alive; a borrowed result or null (raised or absent).
+        let value = unsafe { ffi::PyDict_GetItemWithError(self.dict.as_ptr(), name.as_ptr()) };
+        // SAFETY: called with the GIL held.
+        if value.is_null() && unsafe { !ffi::PyErr_Occurred().is_null() } {
+            return None;
+        }
+        Some(value)
+    }
+}
+
+/// A primitive as the general path reads it, for the exact built-in types only.
+#[inline(always)]
+fn plain_scalar(kind: Kind, obj: *mut ffi::PyObject) -> Option<Scalar> {
+    // SAFETY (all calls): `obj` is a live object, checked for its exact type before each
+    // call that expects one; failures are reported (and left for the caller to clear).
+    unsafe {
+        match kind {
+            Kind::Uint { .. } | Kind::Int { .. } => integer(obj),
+            Kind::Float { .. } => {
+                if ffi::PyFloat_CheckExact(obj) != 0 {
+                    Some(Scalar::Float(ffi::PyFloat_AsDouble(obj)))
+                } else if ffi::PyLong_CheckExact(obj) != 0 {
+                    let v = ffi::PyLong_AsDouble(obj);
+                    (v != -1.0 || ffi::PyErr_Occurred().is_null()).then_some(Scalar::Float(v))
+                } else {
+                    None
+                }
+            }
+            _ => {
+                if obj == ffi::Py_True() || obj == ffi::Py_False() {
+                    Some(Scalar::Bool(obj == ffi::Py_True()))
+                } else {
+                    match integer(obj)? {
+                        Scalar::Uint(v @ (0 | 1)) => Some(Scalar::Bool(v == 1)),
+                        _ => None,
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// An exact int of up to 64 bits: `Uint` when not negative (the core's fast case), else `Int`.
+///
+/// SAFETY: `obj` is a live object.
+#[inline]
+unsafe fn integer(obj: *mut ffi::PyObject) -> Option<Scalar> {
+    if ffi::PyLong_CheckExact(obj) == 0 {
+        return None;
+    }
+    let mut overflow = 0;
+    let v = ffi::PyLong_AsLongLongAndOverflow(obj, &mut overflow);
+    match overflow {
+        0 if v >= 0 => Some(Scalar::Uint(v as u64)),
+        0 => Some(Scalar::Int(v)),
+        // Beyond i64: u64 may still hold it.
+        _ => {
+            let v = ffi::PyLong_AsUnsignedLongLong(obj);
+            (v != u64::MAX || ffi::PyErr_Occurred().is_null()).then_some(Scalar::Uint(v))
         }
     }
 }

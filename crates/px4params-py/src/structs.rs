@@ -10,8 +10,8 @@
 
 use std::sync::Arc;
 
-use px4params_core::layout::{Kind, NodeId};
-use pyo3::exceptions::{PyAttributeError, PyTypeError};
+use px4params_core::layout::NodeId;
+use pyo3::exceptions::PyAttributeError;
 use pyo3::prelude::*;
 use pyo3::pyclass::CompareOp;
 use pyo3::types::{PyDict, PyList, PyString, PyTuple};
@@ -88,58 +88,6 @@ fn to_plain<'py>(value: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
         return Ok(copy.into_any());
     }
     Ok(value.clone())
-}
-
-/// The plain value `value` of node `node` (as `decode` gives it) with its structs made struct
-/// values.
-pub(crate) fn from_plain<'py>(
-    compiled: &Arc<Compiled>,
-    node: NodeId,
-    value: Bound<'py, PyAny>,
-) -> PyResult<Bound<'py, PyAny>> {
-    let py = value.py();
-    let layout = compiled.layout.as_layout();
-    match layout.node(node).kind {
-        Kind::Struct { .. } => {
-            let dict = value.cast_into::<PyDict>()?;
-            let mut values = Vec::with_capacity(dict.len());
-            for index in compiled.named_fields(node) {
-                let field = layout.fields[index as usize];
-                let item = dict
-                    .get_item(compiled.names[index as usize].bind(py))?
-                    .ok_or_else(|| PyTypeError::new_err("a decoded struct lacks a field"))?;
-                values.push(from_plain(compiled, field.node, item)?);
-            }
-            let values = PyTuple::new(py, values)?.unbind();
-            Ok(Bound::new(py, StructValue::new(compiled, node, values))?.into_any())
-        }
-        Kind::Union { first, count, .. } => {
-            let dict = value.cast_into::<PyDict>()?;
-            let copy = PyDict::new(py);
-            for index in first..first + count {
-                let name = compiled.names[index as usize].bind(py);
-                if let Some(item) = dict.get_item(name)? {
-                    let variant = layout.fields[index as usize].node;
-                    copy.set_item(name, from_plain(compiled, variant, item)?)?;
-                }
-            }
-            Ok(copy.into_any())
-        }
-        Kind::Array { elem, .. } | Kind::DynArray { elem, .. }
-            if matches!(
-                layout.node(elem).kind,
-                Kind::Struct { .. }
-                    | Kind::Union { .. }
-                    | Kind::Array { .. }
-                    | Kind::DynArray { .. }
-            ) =>
-        {
-            let items = value.cast_into::<PyList>()?;
-            let made = items.iter().map(|item| from_plain(compiled, elem, item));
-            Ok(PyList::new(py, made.collect::<PyResult<Vec<_>>>()?)?.into_any())
-        }
-        _ => Ok(value),
-    }
 }
 
 #[pymethods]

@@ -1,5 +1,7 @@
 //! Python objects as codec values: dicts for structs, one-key dicts for unions, sequences for
-//! arrays (bytes and str too), int/float/bool for primitives, "nan"/"inf"/"-inf" for floats.
+//! arrays (bytes and str too), int/float/bool for primitives, "nan"/"inf"/"-inf" for floats,
+//! read by the core's general encoder ([`PySource`]: values of any type the programs decline,
+//! and the wording of every value error); decoded scalars as Python objects; leaf listings.
 
 use std::fmt;
 
@@ -339,53 +341,6 @@ impl<'py> Source for PySource<'py, '_> {
     }
 }
 
-enum Container<'py> {
-    Dict(Bound<'py, PyDict>, Option<Bound<'py, PyString>>),
-    List(Bound<'py, PyList>),
-}
-
-/// Builds Python objects from a decoded value.
-pub struct PySink<'py, 'n> {
-    py: Python<'py>,
-    names: &'n [Py<PyString>],
-    stack: Vec<Container<'py>>,
-    root: Option<Bound<'py, PyAny>>,
-}
-
-impl<'py, 'n> PySink<'py, 'n> {
-    /// `names` holds every field name of the layout as a Python string, by field index.
-    pub fn new(py: Python<'py>, names: &'n [Py<PyString>]) -> Self {
-        Self {
-            py,
-            names,
-            stack: Vec::with_capacity(8),
-            root: None,
-        }
-    }
-
-    pub fn into_value(self) -> Option<Bound<'py, PyAny>> {
-        self.root
-    }
-
-    fn put(&mut self, value: Bound<'py, PyAny>) -> PyResult<()> {
-        match self.stack.last_mut() {
-            None => {
-                self.root = Some(value);
-                Ok(())
-            }
-            Some(Container::Dict(d, key)) => {
-                let key = key.take().expect("a field name precedes each value");
-                d.set_item(key, value)
-            }
-            Some(Container::List(l)) => l.append(value),
-        }
-    }
-
-    fn name(&self, index: u32) -> Bound<'py, PyString> {
-        self.names[index as usize].bind(self.py).clone()
-    }
-}
-
 /// A scalar as a Python object.
 #[inline]
 pub fn scalar_to_py<'py>(py: Python<'py>, value: Scalar) -> PyResult<Bound<'py, PyAny>> {
@@ -395,64 +350,6 @@ pub fn scalar_to_py<'py>(py: Python<'py>, value: Scalar) -> PyResult<Bound<'py, 
         Scalar::Float(v) => v.into_pyobject(py)?.into_any(),
         Scalar::Bool(v) => PyBool::new(py, v).to_owned().into_any(),
     })
-}
-
-impl<'py> Sink for PySink<'py, '_> {
-    type Error = ValueError;
-
-    fn scalar(&mut self, value: Scalar, _at: At<'_>) -> Result<(), ValueError> {
-        let obj = scalar_to_py(self.py, value)?;
-        Ok(self.put(obj)?)
-    }
-
-    fn begin_struct(&mut self, _fields: usize) -> Result<(), ValueError> {
-        self.stack.push(Container::Dict(PyDict::new(self.py), None));
-        Ok(())
-    }
-
-    fn field(&mut self, index: u32, _name: &str) -> Result<(), ValueError> {
-        let name = self.name(index);
-        if let Some(Container::Dict(_, key)) = self.stack.last_mut() {
-            *key = Some(name);
-        }
-        Ok(())
-    }
-
-    fn end_struct(&mut self) -> Result<(), ValueError> {
-        if let Some(Container::Dict(d, _)) = self.stack.pop() {
-            self.put(d.into_any())?;
-        }
-        Ok(())
-    }
-
-    fn begin_union(
-        &mut self,
-        _tag: u32,
-        index: u32,
-        _name: &str,
-        _at: At<'_>,
-    ) -> Result<(), ValueError> {
-        let name = self.name(index);
-        self.stack
-            .push(Container::Dict(PyDict::new(self.py), Some(name)));
-        Ok(())
-    }
-
-    fn end_union(&mut self) -> Result<(), ValueError> {
-        self.end_struct()
-    }
-
-    fn begin_array(&mut self, _len: ArrayLen, _at: At<'_>) -> Result<(), ValueError> {
-        self.stack.push(Container::List(PyList::empty(self.py)));
-        Ok(())
-    }
-
-    fn end_array(&mut self, _len: usize) -> Result<(), ValueError> {
-        if let Some(Container::List(l)) = self.stack.pop() {
-            self.put(l.into_any())?;
-        }
-        Ok(())
-    }
 }
 
 /// One leaf of a decoded value, for listings.

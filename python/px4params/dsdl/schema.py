@@ -169,8 +169,7 @@ class DataType(_native.DataType):
     def decode_fragments(
         self, fragments: Sequence[bytes], *, tao: bool = True, allow_trailing: bool = False
     ) -> dict[str, Any]:
-        """Decodes a value whose bytes arrive in pieces (e.g. CAN frame payloads), reading
-        across the pieces without joining them."""
+        """Decodes a value whose bytes arrive in pieces (e.g. CAN frame payloads)."""
         value: dict[str, Any] = super().decode_fragments(
             [bytes(f) for f in fragments], tao=tao, allow_trailing=allow_trailing
         )
