@@ -37,14 +37,7 @@ struct Fixture {
 
 fn fixture() -> Fixture {
     let mut layout = OwnedLayout::default();
-    let ina = common::ina238(&mut layout);
-    let battery = common::battery_info(&mut layout);
-    let int32 = layout.int(32, Cast::Saturated).unwrap();
-    let mut defs = vec![
-        ParamDef::instanced(ina, 4),
-        ParamDef::shared(battery),
-        ParamDef::shared(int32),
-    ];
+    let mut defs = common::store_params(&mut layout);
     let capacity = plan(&layout.as_layout(), &mut defs).unwrap();
     Fixture {
         layout,

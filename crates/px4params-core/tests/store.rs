@@ -8,7 +8,7 @@ use px4params_core::layout::NodeId;
 use px4params_core::leaf::{self, Target};
 use px4params_core::store::{plan, ParamDef, Slot, Store, StoreError, Which};
 use px4params_core::value::LeafSource;
-use px4params_core::{Cast, EncodeOptions, Scalar};
+use px4params_core::{EncodeOptions, Scalar};
 
 type VecStore = Store<Vec<ParamDef>, Vec<Slot>, Vec<u8>>;
 
@@ -23,14 +23,7 @@ struct Fixture {
 
 fn fixture() -> Fixture {
     let mut layout = OwnedLayout::default();
-    let ina = common::ina238(&mut layout);
-    let battery = common::battery_info(&mut layout);
-    let int32 = layout.int(32, Cast::Saturated).unwrap();
-    let mut defs = vec![
-        ParamDef::instanced(ina, 4),
-        ParamDef::shared(battery),
-        ParamDef::shared(int32),
-    ];
+    let mut defs = common::store_params(&mut layout);
     let view = layout.as_layout();
     let capacity = plan(&view, &mut defs).unwrap();
     let store = Store::new(

@@ -5,10 +5,24 @@ use proptest::prelude::*;
 use px4params_core::compile::OwnedLayout;
 use px4params_core::error::Error;
 use px4params_core::layout::{NodeId, Role};
+use px4params_core::store::ParamDef;
 use px4params_core::Cast::{Saturated, Truncated};
 use px4params_core::{Cast, ErrorKind, Scalar};
 
 /// The talk's INA238 type (`px.Ina238.1.0`) and its `Bus` union.
+/// The store the store tests share: INA238 in four instances (index 0), a shared BatteryInfo
+/// (1) and a classic int32 parameter (2).
+pub fn store_params(l: &mut OwnedLayout) -> Vec<ParamDef> {
+    let ina = ina238(l);
+    let battery = battery_info(l);
+    let int32 = l.int(32, Saturated).unwrap();
+    vec![
+        ParamDef::instanced(ina, 4),
+        ParamDef::shared(battery),
+        ParamDef::shared(int32),
+    ]
+}
+
 pub fn ina238(l: &mut OwnedLayout) -> NodeId {
     let u4 = l.uint(4, Saturated).unwrap();
     let u7 = l.uint(7, Saturated).unwrap();
