@@ -385,6 +385,21 @@ def test_other_services_messages_and_broken_transfers_are_ignored(bench: Bench) 
     assert bytes(bench.call(NODE_INFO.Request()).name) == b"org.px4params"
 
 
+def test_the_counters_count_every_request_and_every_ignored_transfer(bench: Bench) -> None:
+    """The summary ``dronecan serve`` prints adds up: each answered request and each transfer
+    dropped (a service not offered, a bad CRC) counts once, whichever came first."""
+    node = bench.node
+    file_info = dronecan.uavcan.protocol.file.GetInfo.Request(
+        path=dronecan.uavcan.protocol.file.Path(path=b"x")
+    )
+    for _ in range(3):
+        assert bench.call(file_info) is None
+    assert node.stats["ignored"] == 3 and node.stats["requests"] == 0
+    for _ in range(3):
+        assert bytes(bench.call(NODE_INFO.Request()).name) == b"org.px4params"
+    assert node.stats["requests"] == 3 and node.stats["ignored"] == 3
+
+
 # -- ExecuteOpcode -----------------------------------------------------------------------------
 
 
