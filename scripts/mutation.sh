@@ -130,6 +130,15 @@ TARGETS=(
 )
 # The Rust test files issue 40 added: MUTATION_BASELINE=1 leaves them out (the "before").
 RUST_ISSUE40_TESTS="c_abi crc file pages mutants_transfer mutants_scatter mutants_store"
+# links/ and gui/, the rest module by module (issue 40, mutnet), each with in-process tests only
+# (a peer's bytes written by hand or by pymavlink/pydronecan, the ASGI app driven directly):
+#   MUTATION_BASELINE=1 MUTATION_BUDGET_slcan=1200 bash scripts/mutation.sh slcan    # before
+#   MUTATION_BUDGET_slcan=1200 bash scripts/mutation.sh slcan                        # after
+TARGETS+=(
+  "slcan|$PY/links/slcan.py|tests/test_slcan.py tests/test_dronecan.py tests/test_fuzz.py::test_slcan_adapter_takes_any_bytes -k 'slcan or serial_line'"
+)
+BUDGETS+=([slcan]=1200)
+NEW_TESTS="$NEW_TESTS|test_slcan"
 
 if [ "$#" -eq 0 ]; then
   set -- can_transfer dronecan_params health links gui migrate vehicle store rust-core rust-ffi
