@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import os
 import re
 import select
@@ -17,9 +18,15 @@ from typing import Any
 
 import px4params
 import pytest
-from px4params.links.mavlink import CAPABILITIES, MavlinkParamServer
+from px4params.links.mavlink import (
+    CAPABILITIES,
+    MavlinkParamServer,
+    param_set_message,
+    param_value_of,
+    software_version,
+)
 from px4params.store.classic import ClassicParam
-from px4params.store.session import open_session
+from px4params.store.session import Session, open_session
 from pymavlink import mavutil
 from pymavlink.dialects.v20 import common as mavlink
 
@@ -603,3 +610,635 @@ def test_instances_added_and_removed_through_the_mask(
     assert server.store.instances("INA238") == ["INA238#0", "INA238#3"]
     saved = px4params.Store.load(tmp_path / "vehicle.store", schema, classic=CLASSIC)
     assert saved.instances("INA238") == ["INA238#0", "INA238#3"]
+
+
+# -- the server turn by turn, in this thread (issue 40) -----------------------------------------
+
+
+class Station:
+    """A ground station on a UDP socket of its own: pymavlink's encoder (system 255, component
+    190, as QGC) and a fresh pymavlink parser per datagram for what comes back. The server is
+    driven turn by turn (:meth:`MavlinkParamServer.step`) in this thread, so that each turn's
+    answers are all there when it returns (loopback UDP delivers at once) and no test waits."""
+
+    def __init__(self, server: MavlinkParamServer, system: int = 255, component: int = 190):
+        self.server = server
+        self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        self.sock.bind(("127.0.0.1", 0))
+        self.sock.setblocking(False)
+        self.mav = mavlink.MAVLink(None, srcSystem=system, srcComponent=component)
+        self.frames: list[bytes] = []  # the datagrams of the last receive, raw
+
+    def send(self, msg: Any) -> None:
+        data = msg if isinstance(msg, bytes) else msg.pack(self.mav)
+        self.sock.sendto(data, self.server.address)
+
+    def receive(self) -> list[Any]:
+        got: list[Any] = []
+        self.frames = []
+        while True:
+            try:
+                data = self.sock.recv(65535)
+            except BlockingIOError:
+                return got
+            self.frames.append(data)
+            got += mavlink.MAVLink(None).parse_buffer(data) or []
+
+    def exchange(self, msg: Any) -> list[Any]:
+        """Sends ``msg``, turns the server once; what came back (heartbeats left out)."""
+        self.send(msg)
+        return turn(self.server, self)
+
+    def close(self) -> None:
+        self.sock.close()
+
+
+def turn(server: MavlinkParamServer, station: Station) -> list[Any]:
+    server.step(0.0)
+    return [m for m in station.receive() if m.get_type() != "HEARTBEAT"]
+
+
+def values(messages: list[Any]) -> list[tuple[str, int | float, int, int]]:
+    """The PARAM_VALUEs as (name, value, index, count)."""
+    return [
+        (m.param_id, value_of(m), m.param_index, m.param_count)
+        for m in messages
+        if m.get_type() == "PARAM_VALUE"
+    ]
+
+
+def kinds(messages: list[Any]) -> list[str]:
+    return [m.get_type() for m in messages]
+
+
+#: The parameters of the ``store`` fixture in PX4's index order (names sorted).
+NAMES = sorted(
+    ["SYS_AUTOSTART", "BAT1_CAPACITY", "SENS_EXT_I2C_PRB"]
+    + [f"INA238_1{x}" for x in "ABCPQ"]
+    + [f"{p}_INST" for p in INSTANCED]
+)
+
+
+@pytest.fixture
+def turns(store: px4params.Store, tmp_path: Path) -> Iterator[tuple[MavlinkParamServer, Station]]:
+    """The server (store file saved in tmp_path, heartbeats due once an hour, lists streamed as
+    fast as the turns come) and one ground station that has spoken (a HEARTBEAT)."""
+    lines: list[str] = []
+    server = MavlinkParamServer(
+        store,
+        "127.0.0.1",
+        0,
+        save_path=tmp_path / "vehicle.store",
+        heartbeat_interval=3600,
+        param_rate=1e9,
+        log=lines.append,
+    )
+    server.logged = lines  # type: ignore[attr-defined]
+    station = Station(server)
+    station.exchange(mavlink.MAVLink_heartbeat_message(6, 8, 0, 0, 0, 3))
+    yield server, station
+    station.close()
+    server.close()
+
+
+@pytest.mark.issue40
+class TestTurnByTurn:
+    """PX4's parameter protocol (mavlink_parameters.cpp), the MAVLink parameter and command
+    protocols, as a ground station sees them, one server turn at a time."""
+
+    def test_a_list_is_the_hash_then_every_parameter_in_name_order_20_a_turn(
+        self, turns: tuple[MavlinkParamServer, Station]
+    ) -> None:
+        server, station = turns
+        first = station.exchange(mavlink.MAVLink_param_request_list_message(1, 1))
+        assert kinds(first) == ["PARAM_VALUE"] * 20  # PX4: up to 20 at once over UDP
+        assert first[0].param_id == "_HASH_CHECK" and first[0].param_index == 0xFFFF
+        assert first[0].param_type == mavlink.MAV_PARAM_TYPE_UINT32
+        listed = values(first)[1:] + values(turn(server, station))
+        assert len(listed) == 39
+        listed += values(turn(server, station))
+        assert [name for name, _, _, _ in listed] == NAMES
+        assert [index for _, _, index, _ in listed] == list(range(len(NAMES)))
+        assert {count for _, _, _, count in [*listed, *values(first[:1])]} == {len(NAMES)}
+        raw = [struct.pack("<f" if isinstance(v, float) else "<i", v) for _, v, _, _ in listed]
+        hashed = px4_hash_check(list(zip(NAMES, raw, strict=True)))
+        assert value_of(first[0]) == hashed
+        assert turn(server, station) == []  # the list is done
+
+    def test_a_list_request_during_a_stream_restarts_it_without_the_hash(
+        self, turns: tuple[MavlinkParamServer, Station]
+    ) -> None:
+        _server, station = turns
+        station.exchange(mavlink.MAVLink_param_request_list_message(1, 1))
+        again = values(station.exchange(mavlink.MAVLink_param_request_list_message(1, 1)))
+        assert [(name, index) for name, _, index, _ in again] == list(
+            zip(NAMES[:20], range(20), strict=True)
+        )
+
+    def test_a_hash_check_set_stops_the_stream_and_is_no_write(
+        self, turns: tuple[MavlinkParamServer, Station]
+    ) -> None:
+        server, station = turns
+        first = station.exchange(mavlink.MAVLink_param_request_list_message(1, 1))
+        stop = set_frame(station.mav, 1, 1, "_HASH_CHECK", value_of(first[0]), 6)
+        assert station.exchange(stop) == []
+        assert turn(server, station) == []
+        assert server.stats["refused"] == 0 and server.stats["accepted"] == 0
+
+    def test_bursts_follow_each_other_at_the_parameter_rate(self, store: px4params.Store) -> None:
+        server = MavlinkParamServer(store, "127.0.0.1", 0, param_rate=20 / 3600)  # an hour
+        station = Station(server)
+        try:
+            first = station.exchange(mavlink.MAVLink_param_request_list_message(1, 1))
+            assert len(values(first)) == 20
+            assert turn(server, station) == []  # the next burst is an hour away
+        finally:
+            station.close()
+            server.close()
+
+    def test_a_stream_stops_when_its_requester_falls_silent(self, store: px4params.Store) -> None:
+        server = MavlinkParamServer(store, "127.0.0.1", 0, param_rate=1e9, peer_timeout=0.2)
+        station = Station(server)
+        try:
+            assert len(station.exchange(mavlink.MAVLink_param_request_list_message(1, 1))) == 20
+            time.sleep(0.3)  # longer than peer_timeout: the requester is gone
+            assert turn(server, station) == []
+            assert turn(server, station) == []
+        finally:
+            station.close()
+            server.close()
+
+    def test_requests_for_another_system_or_component_are_ignored_broadcasts_answered(
+        self, turns: tuple[MavlinkParamServer, Station]
+    ) -> None:
+        server, station = turns
+        before = dict(server.stats)
+        for system, component in ((2, 1), (1, 2), (0, 2), (2, 0)):
+            read = mavlink.MAVLink_param_request_read_message(system, component, b"", 0)
+            assert station.exchange(read) == []
+            command = mavlink.MAVLink_command_long_message(
+                system, component, mavlink.MAV_CMD_REQUEST_MESSAGE, 0, 148, 0, 0, 0, 0, 0, 0
+            )
+            assert station.exchange(command) == []
+        assert server.stats["received"] - before["received"] == 8
+        assert server.stats["ignored"] - before["ignored"] == 8
+        for system, component in ((0, 0), (1, 0), (0, 1)):
+            read = mavlink.MAVLink_param_request_read_message(system, component, b"", 0)
+            assert values(station.exchange(read)) == [(NAMES[0], 0, 0, len(NAMES))]
+        assert server.stats["ignored"] - before["ignored"] == 8
+        assert server.stats["sent"] - before["sent"] == 3
+
+    def test_a_read_by_index_ignores_the_name_and_the_last_index_is_count_minus_one(
+        self, turns: tuple[MavlinkParamServer, Station]
+    ) -> None:
+        _server, station = turns
+        by_index = mavlink.MAVLink_param_request_read_message(1, 1, b"SYS_AUTOSTART", 0)
+        assert values(station.exchange(by_index)) == [(NAMES[0], 0, 0, len(NAMES))]
+        last = len(NAMES) - 1
+        read = mavlink.MAVLink_param_request_read_message(1, 1, b"", last)
+        assert values(station.exchange(read)) == [(NAMES[last], 0, last, len(NAMES))]
+        by_name = mavlink.MAVLink_param_request_read_message(1, 1, b"INA238_1C", -1)
+        index = NAMES.index("INA238_1C")
+        assert values(station.exchange(by_name)) == [("INA238_1C", 0x45, index, len(NAMES))]
+
+    def test_a_read_of_the_hash_by_name_is_the_hash(
+        self, turns: tuple[MavlinkParamServer, Station]
+    ) -> None:
+        _server, station = turns
+        read = mavlink.MAVLink_param_request_read_message(1, 1, b"_HASH_CHECK", -1)
+        (got,) = station.exchange(read)
+        first = station.exchange(mavlink.MAVLink_param_request_list_message(1, 1))[0]
+        assert (got.param_id, got.param_index, got.param_count) == ("_HASH_CHECK", 0xFFFF, 45)
+        assert got.param_type == mavlink.MAV_PARAM_TYPE_UINT32
+        assert value_of(got) == value_of(first)
+
+    @pytest.mark.parametrize(
+        ("name", "index", "text", "error_index"),
+        [
+            (b"NO_SUCH_PARAM", -1, "[pm] unknown param: NO_SUCH_PARAM", -1),
+            (b"", 45, "[pm] unknown param ID: 45", 45),
+            (b"", 32767, "[pm] unknown param ID: 32767", 32767),
+        ],
+    )
+    def test_an_unknown_read_is_a_statustext_and_a_param_error_to_the_asker(
+        self,
+        turns: tuple[MavlinkParamServer, Station],
+        name: bytes,
+        index: int,
+        text: str,
+        error_index: int,
+    ) -> None:
+        server, station = turns
+        got = station.exchange(mavlink.MAVLink_param_request_read_message(1, 1, name, index))
+        assert kinds(got) == ["STATUSTEXT", "PARAM_ERROR"]
+        assert (got[0].text, got[0].severity) == (text, mavlink.MAV_SEVERITY_WARNING)
+        error = got[1]
+        assert (error.target_system, error.target_component) == (255, 190)
+        assert (error.param_id, error.param_index) == (name.decode(), error_index)
+        assert error.error == mavlink.MAV_PARAM_ERROR_DOES_NOT_EXIST
+        assert server.stats["refused"] == 0  # a read refuses nothing
+
+    def test_a_write_is_echoed_to_every_peer_saved_and_logged(
+        self, turns: tuple[MavlinkParamServer, Station], schema: px4params.Schema, tmp_path: Path
+    ) -> None:
+        server, station = turns
+        other = Station(server, system=254, component=191)
+        try:
+            other.exchange(mavlink.MAVLink_heartbeat_message(6, 8, 0, 0, 0, 3))
+            got = station.exchange(set_frame(station.mav, 1, 1, "INA238_1C", 0x46, INT32))
+            index = NAMES.index("INA238_1C")
+            assert values(got) == [("INA238_1C", 0x46, index, len(NAMES))]
+            assert values(other.receive()) == [("INA238_1C", 0x46, index, len(NAMES))]
+        finally:
+            other.close()
+        assert server.logged == ["INA238_1C = 70, saved"]  # type: ignore[attr-defined]
+        saved = px4params.Store.load(tmp_path / "vehicle.store", schema, classic=CLASSIC)
+        assert saved.get("INA238#1.bus.i2c.address") == 0x46
+        assert server.stats["accepted"] == 1 and server.stats["refused"] == 0
+
+    def test_a_write_in_memory_is_logged_without_saved(self, store: px4params.Store) -> None:
+        lines: list[str] = []
+        server = MavlinkParamServer(store, "127.0.0.1", 0, log=lines.append)
+        station = Station(server)
+        try:
+            got = station.exchange(set_frame(station.mav, 1, 1, "BAT1_CAPACITY", 0.1, REAL32))
+            assert [name for name, *_ in values(got)] == ["BAT1_CAPACITY"]
+        finally:
+            station.close()
+            server.close()
+        assert lines == ["BAT1_CAPACITY = 0.100000001"]  # float32 0.1, to 9 digits
+        assert store.get("BAT1_CAPACITY") == struct.unpack("<f", struct.pack("<f", 0.1))[0]
+
+    def test_a_mavlink_1_write_is_read_from_its_shorter_header(
+        self, turns: tuple[MavlinkParamServer, Station]
+    ) -> None:
+        server, station = turns
+        msg = mavlink.MAVLink_param_set_message(1, 1, b"SYS_AUTOSTART", 0.0, INT32)
+        frame = bytearray(msg.pack(station.mav, force_mavlink1=True))
+        assert frame[0] == 0xFE  # MAVLink 1: a 6-byte header
+        frame[6:10] = struct.pack("<i", 4001)
+        crc = mavutil.x25crc(bytes(frame[1 : 6 + frame[1]]))
+        crc.accumulate(bytes([msg.crc_extra]))
+        frame[6 + frame[1] :] = struct.pack("<H", crc.crc)
+        got = station.exchange(bytes(frame))
+        assert [(n, v) for n, v, _, _ in values(got)] == [("SYS_AUTOSTART", 4001)]
+        assert server.store.get("SYS_AUTOSTART") == 4001
+
+    @pytest.mark.parametrize(
+        ("name", "value", "kind", "why"),
+        [
+            ("INA238_1C", 70.0, REAL32, "INA238_1C: type REAL32 refused: the parameter is INT32"),
+            ("INA238_1C", 70, 5, "INA238_1C: type UINT32 refused: the parameter is INT32"),
+            ("INA238_1C", 70, 4, "INA238_1C: type 4 refused: the parameter is INT32"),
+            (
+                "BAT1_CAPACITY",
+                5,
+                INT32,
+                "BAT1_CAPACITY: type INT32 refused: the parameter is REAL32",
+            ),
+            (
+                "INA238_1C",
+                200,
+                INT32,
+                "INA238_1C: INA238#1: bus.i2c.address: value 200 is out of range "
+                "(expected 0 to 127)",
+            ),
+        ],
+    )
+    def test_a_refused_write_answers_the_unchanged_value_a_statustext_and_a_param_error(
+        self,
+        turns: tuple[MavlinkParamServer, Station],
+        name: str,
+        value: float,
+        kind: int,
+        why: str,
+    ) -> None:
+        server, station = turns
+        got = station.exchange(set_frame(station.mav, 1, 1, name, value, kind))
+        # the value, the reason (in 50-character chunks), the error: in that order
+        chunks = -(-len(why) // 50)
+        assert kinds(got) == ["PARAM_VALUE"] + ["STATUSTEXT"] * chunks + ["PARAM_ERROR"]
+        index = NAMES.index(name)
+        shown = {"INA238_1C": 0x45, "BAT1_CAPACITY": -1.0}[name]
+        assert values(got) == [(name, shown, index, len(NAMES))]
+        assert Client.text(got) == [why]
+        error = got[-1]
+        assert (error.param_id, error.param_index, error.target_system) == (name, index, 255)
+        assert error.error == mavlink.MAV_PARAM_ERROR_VALUE_OUT_OF_RANGE
+        assert server.logged == [f"refused: {why}"]  # type: ignore[attr-defined]
+        assert server.stats["refused"] == 1 and server.stats["accepted"] == 0
+        assert server.store.get("INA238#1.bus.i2c.address") == 0x45
+        assert server.store.get("BAT1_CAPACITY") == -1.0
+
+    def test_a_write_to_an_unknown_name_is_refused_without_a_value(
+        self, turns: tuple[MavlinkParamServer, Station]
+    ) -> None:
+        server, station = turns
+        got = station.exchange(set_frame(station.mav, 1, 1, "NO_SUCH_PARAM", 1, INT32))
+        assert kinds(got) == ["STATUSTEXT", "PARAM_ERROR"]
+        assert got[0].text == "[pm] unknown param: NO_SUCH_PARAM"
+        assert (got[1].param_index, got[1].error) == (-1, mavlink.MAV_PARAM_ERROR_DOES_NOT_EXIST)
+        assert server.stats["refused"] == 1
+
+    def test_a_write_that_selects_a_variant_announces_its_leaves_to_every_peer(
+        self, turns: tuple[MavlinkParamServer, Station]
+    ) -> None:
+        server, station = turns
+        got = values(station.exchange(set_frame(station.mav, 1, 1, "INA238_1A", 1, INT32)))
+        count = len(NAMES) + 2  # B, C (I2C) go; D, E, F, G (SPI) come
+        assert [(name, count_) for name, _, _, count_ in got] == [
+            (n, count) for n in ["INA238_1A", "INA238_1D", "INA238_1E", "INA238_1F", "INA238_1G"]
+        ]
+        assert got[0][1] == 1
+        assert server.logged == ["INA238_1A = 1, saved"]  # type: ignore[attr-defined]
+
+    def test_a_mask_write_logs_the_instances_it_changed(
+        self, turns: tuple[MavlinkParamServer, Station]
+    ) -> None:
+        server, station = turns
+        got = values(station.exchange(set_frame(station.mav, 1, 1, "INA238_INST", 0b11, INT32)))
+        assert got[0][:2] == ("INA238_INST", 3)
+        assert {name for name, *_ in got[1:]} == {f"INA238_0{x}" for x in "ABCPQ"}
+        assert server.logged[-1] == "INA238_INST = 3, saved"  # type: ignore[attr-defined]
+        assert len(server.logged) == 2 and "INA238#0" in server.logged[0]  # type: ignore[attr-defined]
+
+    def test_another_writer_s_save_is_announced_to_every_peer(
+        self, store: px4params.Store, tmp_path: Path, schema: px4params.Schema
+    ) -> None:
+        path = tmp_path / "vehicle.store"
+        store.save(path)
+        lines: list[str] = []
+        server = MavlinkParamServer(
+            store, "127.0.0.1", 0, save_path=path, poll_interval=0, log=lines.append
+        )
+        station = Station(server)
+        try:
+            station.exchange(mavlink.MAVLink_heartbeat_message(6, 8, 0, 0, 0, 3))
+            other = Session(px4params.Store.load(path, schema, classic=CLASSIC), str(path))
+            other.commit(lambda: other.store.set("SYS_AUTOSTART", 4001))
+            got = values(turn(server, station))
+            index = NAMES.index("SYS_AUTOSTART")
+            assert got == [("SYS_AUTOSTART", 4001, index, len(NAMES))]
+            assert lines == ["store changed by another writer: 1 parameters announced"]
+            assert turn(server, station) == []  # said once
+        finally:
+            station.close()
+            server.close()
+
+    @pytest.mark.parametrize(
+        ("command", "param1", "result", "reply"),
+        [
+            (mavlink.MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES, 1, 0, "AUTOPILOT_VERSION"),
+            (mavlink.MAV_CMD_REQUEST_MESSAGE, 148, 0, "AUTOPILOT_VERSION"),
+            (mavlink.MAV_CMD_REQUEST_MESSAGE, 397, 0, 397),
+            (mavlink.MAV_CMD_REQUEST_MESSAGE, 395, 0, 395),
+            (mavlink.MAV_CMD_REQUEST_MESSAGE, 0, 3, None),  # HEARTBEAT: not on request
+            (mavlink.MAV_CMD_REQUEST_MESSAGE, 2**24 - 1, 3, None),  # the largest ID: none such
+            (mavlink.MAV_CMD_REQUEST_MESSAGE, 2**24, 2, None),  # beyond 24 bits: denied
+            (mavlink.MAV_CMD_REQUEST_MESSAGE, -1, 2, None),
+            (mavlink.MAV_CMD_REQUEST_MESSAGE, 148.5, 2, None),
+            (mavlink.MAV_CMD_REQUEST_MESSAGE, float("nan"), 2, None),
+            (mavlink.MAV_CMD_REQUEST_MESSAGE, float("inf"), 2, None),
+            (mavlink.MAV_CMD_NAV_TAKEOFF, 0, 3, None),
+        ],
+    )
+    def test_every_command_long_gets_one_ack_to_its_sender_after_its_reply(
+        self,
+        turns: tuple[MavlinkParamServer, Station],
+        command: int,
+        param1: float,
+        result: int,
+        reply: str | int | None,
+    ) -> None:
+        _server, station = turns
+        msg = mavlink.MAVLink_command_long_message(1, 1, command, 0, param1, 0, 0, 0, 0, 0, 0)
+        got = station.exchange(msg)
+        ids = [int.from_bytes(frame[7:10], "little") for frame in station.frames]
+        if isinstance(reply, int):  # not in pymavlink's common dialect: by its message ID
+            assert ids == [reply, mavlink.MAVLINK_MSG_ID_COMMAND_ACK]
+        else:
+            assert kinds(got) == ([reply] if reply else []) + ["COMMAND_ACK"]
+        ack = got[-1]
+        assert (ack.command, ack.result, ack.progress, ack.result_param2) == (command, result, 0, 0)
+        assert (ack.target_system, ack.target_component) == (255, 190)
+        assert result == {0: mavlink.MAV_RESULT_ACCEPTED, 2: mavlink.MAV_RESULT_DENIED}.get(
+            result, mavlink.MAV_RESULT_UNSUPPORTED
+        )
+
+    def test_autopilot_version_is_px4s_encoding_of_this_package_and_store(
+        self, turns: tuple[MavlinkParamServer, Station]
+    ) -> None:
+        server, station = turns
+        msg = mavlink.MAVLink_command_long_message(
+            1, 1, mavlink.MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES, 0, 1, 0, 0, 0, 0, 0, 0
+        )
+        version = station.exchange(msg)[0]
+        assert version.capabilities == (
+            mavlink.MAV_PROTOCOL_CAPABILITY_PARAM_ENCODE_BYTEWISE
+            | mavlink.MAV_PROTOCOL_CAPABILITY_MAVLINK2
+        )
+        assert px4params.__version__ == "0.1.0"
+        assert version.flight_sw_version == 0x000100FF  # 0.1.0, official release (255)
+        assert (version.middleware_sw_version, version.os_sw_version) == (0, 0)
+        assert (version.board_version, version.vendor_id, version.product_id) == (0, 0, 0)
+        assert list(version.flight_custom_version) == [0] * 8
+        digest = hashlib.sha256(("file:" + os.path.realpath(server.save_path)).encode()).digest()
+        assert version.uid == int.from_bytes(digest[:8], "little")
+        assert bytes(version.uid2) == digest[8:26]
+
+    def test_heartbeats_go_to_the_gcs_before_it_speaks_and_once_an_interval(
+        self, store: px4params.Store
+    ) -> None:
+        gcs = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        gcs.bind(("127.0.0.1", 0))
+        gcs.setblocking(False)
+        server = MavlinkParamServer(
+            store, "127.0.0.1", 0, gcs=[gcs.getsockname()], system_id=7, component_id=9,
+            heartbeat_interval=3600,
+        )  # fmt: skip
+        try:
+            server.step(0.0)
+            server.step(0.0)  # the next is an hour away
+            (frame,) = _datagrams(gcs)
+            (beat,) = mavlink.MAVLink(None).parse_buffer(frame)
+            assert (beat.get_srcSystem(), beat.get_srcComponent()) == (7, 9)
+            assert (beat.type, beat.autopilot) == (
+                mavlink.MAV_TYPE_GENERIC,
+                mavlink.MAV_AUTOPILOT_PX4,
+            )
+            assert beat.base_mode == mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
+            assert (beat.custom_mode, beat.system_status) == (0, mavlink.MAV_STATE_STANDBY)
+            assert beat.mavlink_version == 3
+        finally:
+            gcs.close()
+            server.close()
+
+    def test_heartbeats_reach_the_16_latest_peers_heard_within_the_timeout(
+        self, store: px4params.Store
+    ) -> None:
+        server = MavlinkParamServer(store, "127.0.0.1", 0, heartbeat_interval=0, peer_timeout=3600)
+        stations = [Station(server) for _ in range(17)]
+        try:
+            for station in stations:
+                station.send(mavlink.MAVLink_heartbeat_message(6, 8, 0, 0, 0, 3))
+                server.step(0.0)
+            for station in stations:
+                station.receive()
+            server.step(0.0)
+            beats = [len(station.receive()) for station in stations]
+            assert beats == [0] + [1] * 16  # the oldest of 17 is forgotten
+        finally:
+            for station in stations:
+                station.close()
+            server.close()
+
+    def test_a_peer_silent_longer_than_the_timeout_gets_no_heartbeat(
+        self, store: px4params.Store
+    ) -> None:
+        server = MavlinkParamServer(store, "127.0.0.1", 0, heartbeat_interval=0, peer_timeout=0.2)
+        gone, staying = Station(server), Station(server)
+        try:
+            gone.exchange(mavlink.MAVLink_heartbeat_message(6, 8, 0, 0, 0, 3))
+            time.sleep(0.3)
+            staying.exchange(mavlink.MAVLink_heartbeat_message(6, 8, 0, 0, 0, 3))
+            gone.receive()
+            server.step(0.0)
+            assert gone.receive() == [] and kinds(staying.receive()) == ["HEARTBEAT"]
+        finally:
+            gone.close()
+            staying.close()
+            server.close()
+
+    def test_garbage_is_counted_and_makes_no_peer(self, store: px4params.Store) -> None:
+        server = MavlinkParamServer(store, "127.0.0.1", 0, heartbeat_interval=0)
+        station = Station(server)
+        try:
+            good = mavlink.MAVLink_heartbeat_message(6, 8, 0, 0, 0, 3).pack(station.mav)
+            bad_crc = good[:-1] + bytes([good[-1] ^ 0xFF])
+            station.send(bad_crc)
+            server.step(0.0)
+            server.step(0.0)
+            assert station.receive() == []  # not a peer: no heartbeat
+            assert server.stats["ignored"] == 1 and server.stats["received"] == 0
+        finally:
+            station.close()
+            server.close()
+
+    @pytest.mark.parametrize(
+        ("length", "chunks"),
+        [(50, [50]), (51, [50, 1]), (100, [50, 50, 0]), (120, [50, 50, 20])],
+    )
+    def test_long_health_lines_are_statustext_chunks_of_50_with_an_id(
+        self, store: px4params.Store, length: int, chunks: list[int]
+    ) -> None:
+        line = ("health: INA238#1 critical " * 10)[:length]
+        server = MavlinkParamServer(store, "127.0.0.1", 0, health=lambda: [line], health_interval=0)
+        station = Station(server)
+        try:
+            station.exchange(mavlink.MAVLink_heartbeat_message(6, 8, 0, 0, 0, 3))
+            got = turn(server, station)
+            assert [len(m.text) for m in got] == chunks
+            assert "".join(m.text for m in got) == line
+            assert [m.chunk_seq for m in got] == list(range(len(chunks)))
+            assert {m.id for m in got} == {0 if len(chunks) == 1 else 1}
+            assert {m.severity for m in got} == {mavlink.MAV_SEVERITY_WARNING}
+            got = turn(server, station)  # the next report: the next id
+            assert {m.id for m in got} == {0 if len(chunks) == 1 else 2}
+        finally:
+            station.close()
+            server.close()
+
+    def test_statustext_ids_wrap_from_65535_to_1(self, store: px4params.Store) -> None:
+        line = "x" * 60
+        server = MavlinkParamServer(store, "127.0.0.1", 0, health=lambda: [line], health_interval=0)
+        station = Station(server)
+        try:
+            station.exchange(mavlink.MAVLink_heartbeat_message(6, 8, 0, 0, 0, 3))
+            ids = [turn(server, station)[0].id for _ in range(3)]
+            server._text_id = 0xFFFE  # 65534 texts later
+            ids += [turn(server, station)[0].id for _ in range(2)]
+            assert ids == [1, 2, 3, 0xFFFF, 1]  # the first turn had no peer to tell
+        finally:
+            station.close()
+            server.close()
+
+    def test_a_failing_health_source_is_logged_and_the_server_goes_on(
+        self, store: px4params.Store
+    ) -> None:
+        def broken() -> list[str]:
+            raise RuntimeError("no sensors")
+
+        lines: list[str] = []
+        server = MavlinkParamServer(
+            store, "127.0.0.1", 0, health=broken, health_interval=0, log=lines.append
+        )
+        station = Station(server)
+        try:
+            station.exchange(mavlink.MAVLink_heartbeat_message(6, 8, 0, 0, 0, 3))
+            read = mavlink.MAVLink_param_request_read_message(1, 1, b"", 0)
+            assert values(station.exchange(read)) == [(NAMES[0], 0, 0, len(NAMES))]
+            assert lines[0] == "error reporting health: RuntimeError: no sensors"
+        finally:
+            station.close()
+            server.close()
+
+    def test_a_handler_that_fails_is_logged_counted_and_the_server_goes_on(
+        self, turns: tuple[MavlinkParamServer, Station], monkeypatch: pytest.MonkeyPatch
+    ) -> None:
+        server, station = turns
+
+        def broken(peer: Any, msg: Any) -> None:
+            raise ValueError("bug")
+
+        monkeypatch.setattr(server, "_command", broken)
+        msg = mavlink.MAVLink_command_long_message(1, 1, 400, 0, 0, 0, 0, 0, 0, 0, 0)
+        ignored = server.stats["ignored"]
+        assert station.exchange(msg) == []
+        assert server.logged == ["error handling COMMAND_LONG: ValueError: bug"]  # type: ignore[attr-defined]
+        assert server.stats["ignored"] == ignored + 1
+        read = mavlink.MAVLink_param_request_read_message(1, 1, b"", 0)
+        assert len(values(station.exchange(read))) == 1
+
+
+def _datagrams(sock: socket.socket) -> list[bytes]:
+    out = []
+    while True:
+        try:
+            out.append(sock.recv(65535))
+        except BlockingIOError:
+            return out
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize("value", [0, 1, -1, 2**31 - 1, -(2**31), *SNAN_INT32])
+def test_a_param_set_message_carries_an_int32_bytewise(value: int) -> None:
+    msg = param_set_message(1, 1, "SYS_AUTOSTART", value, INT32)
+    (parsed,) = mavlink.MAVLink(None).parse_buffer(msg.pack(mavlink.MAVLink(None)))
+    assert (parsed.target_system, parsed.target_component) == (1, 1)
+    assert (parsed.param_id, parsed.param_type) == ("SYS_AUTOSTART", INT32)
+    assert value_of(parsed) == value and param_value_of(parsed) == value
+
+
+@pytest.mark.issue40
+def test_param_value_of_reads_uint32_and_real32_and_mavlink_1() -> None:
+    uint32 = param_set_message(1, 1, "_HASH_CHECK", 0xFFFFFFFF, mavlink.MAV_PARAM_TYPE_UINT32)
+    (parsed,) = mavlink.MAVLink(None).parse_buffer(uint32.pack(mavlink.MAVLink(None)))
+    assert param_value_of(parsed) == 0xFFFFFFFF
+    real = param_set_message(1, 1, "BAT1_CAPACITY", 0.5, REAL32)
+    frame = real.pack(mavlink.MAVLink(None), force_mavlink1=True)
+    (parsed,) = mavlink.MAVLink(None).parse_buffer(frame)
+    assert frame[0] == 0xFE and param_value_of(parsed) == 0.5
+    assert isinstance(param_value_of(parsed), float)
+    zero = param_set_message(1, 1, "SYS_AUTOSTART", 0, INT32)  # MAVLink 2 trims the zeros
+    (parsed,) = mavlink.MAVLink(None).parse_buffer(zero.pack(mavlink.MAVLink(None)))
+    assert param_value_of(parsed) == 0
+
+
+@pytest.mark.issue40
+def test_a_development_version_is_release_type_0(monkeypatch: pytest.MonkeyPatch) -> None:
+    """PX4's flight_sw_version: major, minor, patch, then FIRMWARE_VERSION_TYPE (0 dev, 255
+    official)."""
+    monkeypatch.setattr(px4params, "__version__", "2.3.4.dev5")
+    assert software_version() == 0x020304_00
+    monkeypatch.setattr(px4params, "__version__", "1.15.300")
+    assert software_version() == 0x010F2CFF  # each part one byte (300 & 0xFF = 0x2C)
