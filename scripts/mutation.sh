@@ -146,6 +146,11 @@ TARGETS+=(
   "mavlink|$PY/links/mavlink.py|tests/test_mavlink.py -k 'TurnByTurn or bytewise or param_value_of or development_version or signalling_nan'"
 )
 BUDGETS+=([mavlink]=1800)
+# gui/app.py: its routes and WebSocket over ASGI in-process (no test in-process reached it
+# before: the page's server tests take 25-40 s a mutant, so there is no "before" run).
+TARGETS+=("gui-app|$PY/gui/app.py|tests/test_app.py")
+BUDGETS+=([gui-app]=1200)
+NEW_TESTS="$NEW_TESTS|test_app"
 
 if [ "$#" -eq 0 ]; then
   set -- can_transfer dronecan_params health links gui migrate vehicle store rust-core rust-ffi

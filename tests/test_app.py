@@ -1,0 +1,355 @@
+"""The page's server (``px4params.gui.app``) over a store file, spoken to in-process over ASGI
+(https://asgi.readthedocs.io/en/latest/specs/www.html) with the helpers of
+``tests/test_admission.py``: the routes of the module's docstring, their status codes (HTTP
+semantics: 400 for a body that is not what the route takes, 413 for too many changes, 415 for
+a body that is not JSON), the JSON bodies the page reads, and the WebSocket that pushes the
+vehicle's events. ``tests/test_gui.py`` runs the same app behind uvicorn with a browser."""
+
+from __future__ import annotations
+
+import asyncio
+import json
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import px4params
+import pytest
+from px4params.gui.admission import MAX_BODY, MAX_CHANGES, Admission
+from px4params.gui.app import STATIC, make_app
+from px4params.gui.vehicle import StoreVehicle
+from px4params.store.classic import BUNDLED_CLASSIC
+from test_admission import (
+    COOKIE,
+    HOST,
+    TOKEN,
+    authorized,
+    call,
+    error_of,
+    headers_of,
+    status_of,
+)
+
+JSON = ("Content-Type", "application/json")
+
+
+@pytest.fixture
+def store_file(tmp_path: Path, schema: px4params.Schema) -> Path:
+    store = px4params.Store(schema, classic=BUNDLED_CLASSIC)
+    store.add("INA238#1")
+    store.set("INA238#1.bus.i2c.address", 0x45)
+    path = tmp_path / "vehicle.store"
+    store.save(path)
+    return path
+
+
+@pytest.fixture
+def served(store_file: Path) -> Iterator[tuple[Admission, StoreVehicle]]:
+    vehicle = StoreVehicle(str(store_file), None, [], poll_interval=3600)
+    yield make_app(vehicle, token=TOKEN, hosts=[HOST], cookie=COOKIE), vehicle
+    vehicle.close()
+
+
+def body_of(sent: list[dict[str, Any]]) -> bytes:
+    status_of(sent)
+    return b"".join(m.get("body", b"") for m in sent[1:])
+
+
+def ask(
+    app: Admission,
+    path: str,
+    *,
+    query: str = "",
+    method: str = "GET",
+    headers: list[tuple[str, str]] | None = None,
+    body: bytes = b"",
+) -> list[dict[str, Any]]:
+    """One HTTP request as a server hands it over: the body, then nothing until the answer is
+    sent (a client that stays; Starlette's responses stop early on ``http.disconnect``)."""
+    scope = {
+        "type": "http",
+        "method": method,
+        "path": path,
+        "root_path": "",
+        "query_string": query.encode(),
+        "headers": [(k.lower().encode(), v.encode()) for k, v in headers or authorized()],
+    }
+    incoming = [{"type": "http.request", "body": body, "more_body": False}]
+    sent: list[dict[str, Any]] = []
+
+    async def receive() -> dict[str, Any]:
+        if incoming:
+            return incoming.pop(0)
+        await asyncio.Event().wait()  # the client waits for the answer
+        raise AssertionError("unreachable")
+
+    async def send(message: dict[str, Any]) -> None:
+        sent.append(message)
+
+    asyncio.run(app(scope, receive, send))
+    return sent
+
+
+def post(app: Admission, path: str, payload: Any, *, content_type: str = "application/json"):
+    data = payload if isinstance(payload, bytes) else json.dumps(payload).encode()
+    headers = authorized(("Content-Type", content_type), ("Content-Length", str(len(data))))
+    return ask(app, path, method="POST", headers=headers, body=data)
+
+
+def get(app: Admission, path: str, query: str = "") -> list[dict[str, Any]]:
+    return ask(app, path, query=query)
+
+
+# -- reading -----------------------------------------------------------------------------------
+
+
+def test_the_page_is_the_packaged_index_html(served: tuple[Admission, StoreVehicle]) -> None:
+    app, _ = served
+    sent = get(app, "/")
+    assert status_of(sent) == 200
+    assert headers_of(sent)["content-type"].startswith("text/html")
+    assert body_of(sent) == (Path(STATIC) / "index.html").read_bytes()
+    script = get(app, "/static/app.js")
+    assert status_of(script) == 200 and body_of(script) == (Path(STATIC) / "app.js").read_bytes()
+
+
+def test_state_is_the_vehicle_s_with_its_metadata_and_the_write_limits(
+    served: tuple[Admission, StoreVehicle], store_file: Path
+) -> None:
+    app, vehicle = served
+    sent = get(app, "/api/state")
+    assert status_of(sent) == 200 and headers_of(sent)["content-type"] == "application/json"
+    state = json.loads(body_of(sent))
+    assert state["mode"] == "store" and state["source"] == str(store_file)
+    assert state["values"]["INA238_1C"] == 0x45
+    assert state["metadata"] == vehicle.metadata
+    assert {"name": "INA238_1C"}.items() <= next(
+        e for e in state["metadata"]["parameters"] if e["name"] == "INA238_1C"
+    ).items()
+    assert state["limits"] == {"changes": 256, "body": 1 << 20}
+    assert (MAX_CHANGES, MAX_BODY) == (256, 1 << 20)
+    assert state["messages"] == [] and state["health"] == []
+
+
+def test_nothing_without_the_token(served: tuple[Admission, StoreVehicle]) -> None:
+    app, _ = served
+    sent = ask(app, "/api/state", headers=[("Host", HOST)])
+    assert status_of(sent) == 403 and error_of(sent).startswith("no token")
+
+
+# -- writing -----------------------------------------------------------------------------------
+
+
+def test_a_write_answers_one_result_per_change_in_order_and_the_values(
+    served: tuple[Admission, StoreVehicle], store_file: Path, schema: px4params.Schema
+) -> None:
+    app, _ = served
+    changes = [
+        {"name": "INA238_1C", "value": 70},
+        {"name": "INA238_1C", "value": 200},  # out of range: refused, value kept
+        {"name": "INA238_1P", "value": "0x140"},  # text in any base Python reads
+        {"name": "BAT1_CAPACITY", "value": "5000.5"},  # a Float parameter from text
+        {"name": "SYS_AUTOSTART", "value": 4001.0},  # an integral float for an Int32
+    ]
+    sent = post(app, "/api/write", {"changes": changes})
+    assert status_of(sent) == 200
+    answer = json.loads(body_of(sent))
+    assert [(r["name"], r["ok"], r["value"]) for r in answer["results"]] == [
+        ("INA238_1C", True, 70),
+        ("INA238_1C", False, 70),
+        ("INA238_1P", True, 320),
+        ("BAT1_CAPACITY", True, 5000.5),
+        ("SYS_AUTOSTART", True, 4001),
+    ]
+    assert answer["results"][0]["reason"] == ""
+    assert answer["results"][1]["reason"].startswith("INA238_1C: ")
+    assert "out of range" in answer["results"][1]["reason"]
+    assert answer["values"]["INA238_1C"] == 70 and answer["values"]["SYS_AUTOSTART"] == 4001
+    saved = px4params.Store.load(store_file, schema, classic=BUNDLED_CLASSIC)
+    assert saved.get("INA238#1.bus.i2c.address") == 70 and saved.get("SYS_AUTOSTART") == 4001
+    assert saved.get("BAT1_CAPACITY") == 5000.5
+
+
+@pytest.mark.parametrize(
+    ("payload", "why"),
+    [
+        ({"changes": [{"name": "INA238_1C", "value": 70.5}]}, "70.5 is not an integer"),
+        ({"changes": [{"name": "INA238_1C", "value": True}]}, "True is not a number"),
+        ({"changes": [{"name": "INA238_1C", "value": None}]}, "None is not a number"),
+        ({"changes": [{"name": "INA238_1C", "value": [1]}]}, "[1] is not a number"),
+        ({"changes": [{"name": "INA238_1C", "value": "seventy"}]}, "invalid literal for int()"),
+        ({"changes": [{"name": "INA238_1C"}]}, "'value'"),
+        ({"change": []}, "'changes'"),
+        (b"{not json", "Expecting property name"),
+    ],
+)
+def test_a_write_the_route_cannot_read_is_400_and_writes_nothing(
+    served: tuple[Admission, StoreVehicle], payload: Any, why: str
+) -> None:
+    app, vehicle = served
+    sent = post(app, "/api/write", payload)
+    assert status_of(sent) == 400
+    error = error_of(sent)
+    assert error.startswith("expected {'changes': [{'name', 'value'}]}: ")
+    assert why in error
+    assert vehicle.values["INA238_1C"] == 0x45
+
+
+def test_a_write_of_more_than_256_changes_is_413_before_any_is_read(
+    served: tuple[Admission, StoreVehicle],
+) -> None:
+    app, _ = served
+    bad = {"name": "INA238_1C", "value": 0.5}  # each unreadable: a 400 once counted
+    sent = post(app, "/api/write", {"changes": [bad] * 257})
+    assert status_of(sent) == 413
+    assert error_of(sent) == "257 changes refused: at most 256 per request (write them in parts)"
+    assert status_of(post(app, "/api/write", {"changes": [bad] * 256})) == 400
+
+
+@pytest.mark.parametrize("route", ["/api/write", "/api/review"])
+def test_a_post_that_is_not_json_is_415(served: tuple[Admission, StoreVehicle], route: str) -> None:
+    """A form or text/plain POST needs no CORS preflight: another site's page could send it."""
+    app, vehicle = served
+    for content_type in ("text/plain", "application/x-www-form-urlencoded", ""):
+        payload = {"changes": [{"name": "INA238_1C", "value": 70}]}
+        sent = post(app, route, payload, content_type=content_type)
+        assert status_of(sent) == 415
+        assert error_of(sent) == "expected a JSON body (content-type application/json)"
+    assert vehicle.values["INA238_1C"] == 0x45
+    sent = post(app, "/api/write", payload, content_type="application/json; charset=utf-8")
+    assert status_of(sent) == 200 and vehicle.values["INA238_1C"] == 70
+
+
+# -- files -------------------------------------------------------------------------------------
+
+
+def test_a_review_lists_what_a_params_file_would_change(
+    served: tuple[Admission, StoreVehicle],
+) -> None:
+    app, vehicle = served
+    text = "1\t1\tINA238_1C\t70\t6\n"  # QGC's .params: vehicle, component, name, value, type
+    sent = post(app, "/api/review", {"filename": "qgc.params", "text": text})
+    assert status_of(sent) == 200
+    found = json.loads(body_of(sent))
+    assert "INA238_1C" in json.dumps(found) and vehicle.values["INA238_1C"] == 0x45
+
+
+@pytest.mark.parametrize(
+    ("payload", "why"),
+    [({"filename": "x.params"}, "'text'"), ({"text": ""}, "'filename'"), (b"[", "Expecting")],
+)
+def test_a_review_the_route_cannot_read_is_400(
+    served: tuple[Admission, StoreVehicle], payload: Any, why: str
+) -> None:
+    app, _ = served
+    sent = post(app, "/api/review", payload)
+    assert status_of(sent) == 400
+    error = error_of(sent)
+    assert error.startswith("expected {'filename', 'text'}: ") and why in error
+
+
+def test_a_review_of_a_file_that_cannot_be_read_is_400_with_its_error(
+    served: tuple[Admission, StoreVehicle],
+) -> None:
+    app, _ = served
+    sent = post(app, "/api/review", {"filename": "bad.params", "text": "1\t1\tNOPE\n"})
+    assert status_of(sent) == 400
+    assert "bad.params" in error_of(sent)
+
+
+@pytest.mark.parametrize(
+    ("query", "name"),
+    [
+        ("", "vehicle.params"),
+        ("format=params", "vehicle.params"),
+        ("format=airframe", "vehicle.airframe"),
+    ],
+)
+def test_an_export_is_a_text_attachment_named_by_its_format(
+    served: tuple[Admission, StoreVehicle], query: str, name: str
+) -> None:
+    app, _ = served
+    sent = get(app, "/api/export", query)
+    assert status_of(sent) == 200
+    headers = headers_of(sent)
+    assert headers["content-type"] == "text/plain; charset=utf-8"
+    assert headers["content-disposition"] == f'attachment; filename="{name}"'
+    text = body_of(sent).decode()
+    if name.endswith(".params"):
+        assert "\tINA238_1C\t69\t6" in text  # QGC's columns, INT32 type 6
+    else:
+        assert "param add INA238#1\n" in text  # the shell's commands, by leaf index
+        assert "param set-default INA238#1[4] 69\n" in text
+
+
+def test_an_export_in_another_format_is_400(served: tuple[Admission, StoreVehicle]) -> None:
+    app, _ = served
+    sent = get(app, "/api/export", "format=xml")
+    assert status_of(sent) == 400
+    assert error_of(sent) == "format 'xml': expected params or airframe"
+
+
+# -- the WebSocket -----------------------------------------------------------------------------
+
+
+async def _socket_session(app: Admission, vehicle: StoreVehicle) -> list[dict[str, Any]]:
+    """Opens /ws, has the vehicle write (an event from another thread, as the store's watcher
+    sends them), then leaves: what the server sent."""
+    incoming: asyncio.Queue[dict[str, Any]] = asyncio.Queue()
+    sent: list[dict[str, Any]] = []
+    got_one = asyncio.Event()
+
+    async def receive() -> dict[str, Any]:
+        return await incoming.get()
+
+    async def send(message: dict[str, Any]) -> None:
+        sent.append(message)
+        if message["type"] == "websocket.send":
+            got_one.set()
+
+    scope = {
+        "type": "websocket",
+        "path": "/ws",
+        "root_path": "",
+        "query_string": b"",
+        "headers": [(k.lower().encode(), v.encode()) for k, v in authorized()],
+        "subprotocols": [],
+    }
+    incoming.put_nowait({"type": "websocket.connect"})
+    served = asyncio.ensure_future(app(scope, receive, send))
+    while not sent:
+        await asyncio.sleep(0.01)
+    assert sent[0]["type"] == "websocket.accept"
+    incoming.put_nowait({"type": "websocket.receive", "text": "hello"})  # the page says nothing
+    result = await asyncio.to_thread(vehicle.write, "INA238_1C", 71)
+    assert result.ok
+    await asyncio.wait_for(got_one.wait(), 10)
+    incoming.put_nowait({"type": "websocket.disconnect", "code": 1001})
+    await asyncio.wait_for(served, 10)  # the client left: the handler ends at once
+    return sent
+
+
+def test_the_socket_pushes_the_vehicle_s_events_and_stops_listening_when_closed(
+    served: tuple[Admission, StoreVehicle],
+) -> None:
+    app, vehicle = served
+    sent = asyncio.run(_socket_session(app, vehicle))
+    pushed = [json.loads(m["text"]) for m in sent if m["type"] == "websocket.send"]
+    assert pushed[0]["kind"] == "values" and pushed[0]["values"]["INA238_1C"] == 71
+    assert vehicle._listeners == []  # the page's listener is gone with its socket
+
+
+def test_a_socket_from_another_origin_is_closed_before_it_opens(
+    served: tuple[Admission, StoreVehicle],
+) -> None:
+    app, vehicle = served
+    headers = authorized(("Origin", "http://evil.example"))
+    sent = call(app, kind="websocket", path="/ws", headers=headers)
+    assert sent == [
+        {
+            "type": "websocket.close",
+            "code": 1008,
+            "reason": "requests from http://evil.example are not accepted",
+        }
+    ]
+    assert vehicle._listeners == []
