@@ -230,8 +230,11 @@ def test_a_review_lists_what_a_params_file_would_change(
     text = "1\t1\tINA238_1C\t70\t6\n"  # QGC's .params: vehicle, component, name, value, type
     sent = post(app, "/api/review", {"filename": "qgc.params", "text": text})
     assert status_of(sent) == 200
-    found = json.loads(body_of(sent))
-    assert "INA238_1C" in json.dumps(found) and vehicle.values["INA238_1C"] == 0x45
+    assert json.loads(body_of(sent)) == {
+        "changes": [{"name": "INA238_1C", "current": 0x45, "new": 70}],
+        "notes": [],
+    }
+    assert vehicle.values["INA238_1C"] == 0x45  # a review writes nothing
 
 
 @pytest.mark.parametrize(
@@ -353,3 +356,43 @@ def test_a_socket_from_another_origin_is_closed_before_it_opens(
         }
     ]
     assert vehicle._listeners == []
+
+
+def test_the_files_of_a_store_with_its_own_types_carry_their_parameters(tmp_path: Path) -> None:
+    """A store over a DSDL folder of its own: review and export go through that store's
+    types (the bundled ones know no PROBE)."""
+    root = tmp_path / "acme"
+    root.mkdir()
+    (root / "Probe.1.0.dsdl").write_text(
+        "# A level probe\n# @max_instances 2\n\nuint8 level\n@sealed\n"
+    )
+    schema = px4params.load_schema([str(root)], use_env=False, cache_dir=tmp_path / "cache")
+    store = px4params.Store(schema)
+    store.add("PROBE#1")
+    store.set("PROBE#1.level", 7)
+    store.save(tmp_path / "probe.store")
+    vehicle = StoreVehicle(str(tmp_path / "probe.store"), None, [str(root)], poll_interval=3600)
+    try:
+        app = make_app(vehicle, token=TOKEN, hosts=[HOST], cookie=COOKIE)
+        sent = post(
+            app, "/api/review", {"filename": "a.airframe", "text": "param set PROBE_1A 9\n"}
+        )
+        assert json.loads(body_of(sent)) == {
+            "changes": [{"name": "PROBE_1A", "current": 7, "new": 9}],
+            "notes": [],
+        }
+        assert body_of(get(app, "/api/export")).decode().endswith("\n1\t1\tPROBE_1A\t7\t6\n")
+        airframe = body_of(get(app, "/api/export", "format=airframe")).decode()
+        assert airframe.endswith("\nparam add PROBE#1\nparam set-default PROBE#1[0] 7\n")
+    finally:
+        vehicle.close()
+
+
+def test_a_write_whose_changes_are_not_a_list_is_400_whatever_their_length(
+    served: tuple[Admission, StoreVehicle],
+) -> None:
+    app, _ = served
+    for changes in ("x" * 300, {"name": "INA238_1C", "value": 70}, 5):
+        sent = post(app, "/api/write", {"changes": changes})
+        assert status_of(sent) == 400, changes
+        assert error_of(sent).startswith("expected {'changes': [{'name', 'value'}]}: ")
