@@ -151,6 +151,12 @@ BUDGETS+=([mavlink]=1800)
 TARGETS+=("gui-app|$PY/gui/app.py|tests/test_app.py")
 BUDGETS+=([gui-app]=1200)
 NEW_TESTS="$NEW_TESTS|test_app"
+# links/mavlink_signing.py: frames signed by hand (hashlib) and by pymavlink, in-process.
+TARGETS+=(
+  "mavlink_signing|$PY/links/mavlink_signing.py|tests/test_mavlink_signing.py tests/test_mavlink_security.py -k 'signing or key_file or timestamp_rules'"
+)
+BUDGETS+=([mavlink_signing]=900)
+NEW_TESTS="$NEW_TESTS|test_mavlink_signing"
 
 if [ "$#" -eq 0 ]; then
   set -- can_transfer dronecan_params health links gui migrate vehicle store rust-core rust-ffi
