@@ -153,7 +153,7 @@ BUDGETS+=([gui-app]=1200)
 NEW_TESTS="$NEW_TESTS|test_app"
 # links/mavlink_signing.py: frames signed by hand (hashlib) and by pymavlink, in-process.
 TARGETS+=(
-  "mavlink_signing|$PY/links/mavlink_signing.py|tests/test_mavlink_signing.py tests/test_mavlink_security.py -k 'signing or key_file or timestamp_rules'"
+  "mavlink_signing|$PY/links/mavlink_signing.py|tests/test_mavlink_signing.py tests/test_mavlink_security.py -k 'signing or key_files or timestamp_rules'"
 )
 BUDGETS+=([mavlink_signing]=900)
 NEW_TESTS="$NEW_TESTS|test_mavlink_signing"
