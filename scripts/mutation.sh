@@ -157,6 +157,12 @@ TARGETS+=(
 )
 BUDGETS+=([mavlink_signing]=900)
 NEW_TESTS="$NEW_TESTS|test_mavlink_signing"
+# links/dronecan_client.py: against a node played with pydronecan's transfers, in-process.
+TARGETS+=(
+  "dronecan_client|$PY/links/dronecan_client.py|tests/test_dronecan_client.py tests/test_dronecan.py::test_values_are_parsed_by_the_parameters_kind"
+)
+BUDGETS+=([dronecan_client]=900)
+NEW_TESTS="$NEW_TESTS|test_dronecan_client"
 
 if [ "$#" -eq 0 ]; then
   set -- can_transfer dronecan_params health links gui migrate vehicle store rust-core rust-ffi
