@@ -163,6 +163,11 @@ TARGETS+=(
 )
 BUDGETS+=([dronecan_client]=900)
 NEW_TESTS="$NEW_TESTS|test_dronecan_client"
+# gui/vehicle.py: StoreVehicle, health lines and the page's state, in-process (MavlinkVehicle's
+# lines are reached by the page's server tests only).
+TARGETS+=("gui-vehicle|$PY/gui/vehicle.py|tests/test_gui_vehicle.py")
+BUDGETS+=([gui-vehicle]=900)
+NEW_TESTS="$NEW_TESTS|test_gui_vehicle"
 
 if [ "$#" -eq 0 ]; then
   set -- can_transfer dronecan_params health links gui migrate vehicle store rust-core rust-ffi
