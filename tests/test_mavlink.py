@@ -757,11 +757,11 @@ class TestTurnByTurn:
             server.close()
 
     def test_a_stream_stops_when_its_requester_falls_silent(self, store: px4params.Store) -> None:
-        server = MavlinkParamServer(store, "127.0.0.1", 0, param_rate=1e9, peer_timeout=0.2)
+        server = MavlinkParamServer(store, "127.0.0.1", 0, param_rate=1e9, peer_timeout=0.5)
         station = Station(server)
         try:
             assert len(station.exchange(mavlink.MAVLink_param_request_list_message(1, 1))) == 20
-            time.sleep(0.3)  # longer than peer_timeout: the requester is gone
+            time.sleep(0.6)  # longer than peer_timeout: the requester is gone
             assert turn(server, station) == []
             assert turn(server, station) == []
         finally:
@@ -1095,11 +1095,11 @@ class TestTurnByTurn:
     def test_a_peer_silent_longer_than_the_timeout_gets_no_heartbeat(
         self, store: px4params.Store
     ) -> None:
-        server = MavlinkParamServer(store, "127.0.0.1", 0, heartbeat_interval=0, peer_timeout=0.2)
+        server = MavlinkParamServer(store, "127.0.0.1", 0, heartbeat_interval=0, peer_timeout=0.5)
         gone, staying = Station(server), Station(server)
         try:
             gone.exchange(mavlink.MAVLink_heartbeat_message(6, 8, 0, 0, 0, 3))
-            time.sleep(0.3)
+            time.sleep(0.6)
             staying.exchange(mavlink.MAVLink_heartbeat_message(6, 8, 0, 0, 0, 3))
             gone.receive()
             server.step(0.0)
