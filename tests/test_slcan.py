@@ -62,8 +62,11 @@ def test_a_frame_line_without_its_length_digit_is_named() -> None:
         SlcanError, match=r"^'t12': expected 3 hex digits of ID and a length digit$"
     ):
         parse_frame(b"t12")
-    with pytest.raises(SlcanError, match=r"^'tx230': expected 3 hex digits"):
-        parse_frame(b"tx230")
+    for bad in (b"tx230", b"tX230", b"TXXXXXXXX0"):  # x and X are no hex digits
+        with pytest.raises(SlcanError, match=r"hex digits of ID and a length digit$"):
+            parse_frame(bad)
+    with pytest.raises(SlcanError, match=r"^'t1232XX00': expected 2 data bytes in hex$"):
+        parse_frame(b"t1232XX00")
 
 
 def test_errors_quote_the_start_of_a_long_line() -> None:
@@ -133,11 +136,14 @@ def test_each_command_is_answered_cr_when_done_and_bel_when_refused() -> None:
 
 
 def test_every_bit_rate_digit_sets_its_rate() -> None:
+    """LAWICEL's table: S0 10 kbit/s, S1 20k, S2 50k, S3 100k, S4 125k, S5 250k, S6 500k,
+    S7 800k, S8 1 Mbit/s."""
+    lawicel = [10_000, 20_000, 50_000, 100_000, 125_000, 250_000, 500_000, 800_000, 1_000_000]
     adapter = SlcanAdapter()
-    for digit, rate in enumerate(BITRATES):
+    for digit, rate in enumerate(lawicel):
         assert adapter.feed(b"S%d\r" % digit) == (b"\r", [])
         assert adapter.bitrate == rate
-    assert BITRATES[0] == 10_000 and BITRATES[4] == 125_000 and BITRATES[8] == 1_000_000
+    assert list(BITRATES) == lawicel
 
 
 def test_open_twice_is_refused_and_close_twice_is_not() -> None:
