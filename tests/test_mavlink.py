@@ -930,6 +930,47 @@ class TestTurnByTurn:
         assert server.store.get("INA238#1.bus.i2c.address") == 0x45
         assert server.store.get("BAT1_CAPACITY") == -1.0
 
+    def test_a_float_write_echoes_the_float32_sent_and_reads_the_stored_float16(
+        self, turns: tuple[MavlinkParamServer, Station]
+    ) -> None:
+        """Ground stations take a write as done when the echo equals what they sent; the
+        leaf keeps the float16 nearest (1049 * 2**-21 for 0.0005)."""
+        server, station = turns
+        got = station.exchange(set_frame(station.mav, 1, 1, "INA238_1Q", 0.0005, REAL32))
+        sent = struct.unpack("<f", struct.pack("<f", 0.0005))[0]
+        index = NAMES.index("INA238_1Q")
+        assert values(got) == [("INA238_1Q", sent, index, len(NAMES))]
+        read = mavlink.MAVLink_param_request_read_message(1, 1, b"INA238_1Q", -1)
+        assert values(station.exchange(read)) == [("INA238_1Q", 1049 * 2**-21, index, len(NAMES))]
+        assert server.logged == [f"INA238_1Q = {1049 * 2**-21:.9g}, saved"]  # type: ignore[attr-defined]
+
+    @pytest.mark.parametrize(
+        ("name", "why"),
+        [
+            (
+                "INA238_2C",
+                "INA238_2C belongs to INA238#2, which does not exist (add it first: "
+                "param add INA238#2)",
+            ),
+            (
+                "INA238_1D",
+                "INA238_1D (INA238#1.bus.spi.bus_id) is not live: bus._tag selects variant 0, "
+                "not 1 (set INA238_1A to 1)",
+            ),
+        ],
+    )
+    def test_a_name_that_is_not_live_is_refused_with_the_reason(
+        self, turns: tuple[MavlinkParamServer, Station], name: str, why: str
+    ) -> None:
+        server, station = turns
+        read = mavlink.MAVLink_param_request_read_message(1, 1, name.encode(), -1)
+        got = station.exchange(read)
+        assert Client.text(got) == [why] and kinds(got)[-1] == "PARAM_ERROR"
+        got = station.exchange(set_frame(station.mav, 1, 1, name, 1, INT32))
+        assert Client.text(got) == [why] and values(got) == []
+        assert got[-1].error == mavlink.MAV_PARAM_ERROR_DOES_NOT_EXIST
+        assert server.logged == [f"refused: {why}"]  # type: ignore[attr-defined]
+
     def test_a_write_to_an_unknown_name_is_refused_without_a_value(
         self, turns: tuple[MavlinkParamServer, Station]
     ) -> None:
