@@ -196,6 +196,11 @@ def test_a_line_of_64_bytes_is_read_and_a_longer_one_dropped_whole() -> None:
     assert adapter.stats == {"commands": 2, "refused": 3, "frames": 0}
 
 
+def test_a_runaway_line_s_bel_follows_the_answers_before_it() -> None:
+    adapter = SlcanAdapter()
+    assert adapter.feed(b"V\r" + b"X" * 70 + b"\rN\r") == (b"V1013\r\x07NPX4P\r", [])
+
+
 def test_the_counters_count_lines_refusals_and_frames() -> None:
     adapter = SlcanAdapter()
     adapter.feed(b"O\rT000000010\rt0010\rQ\rQ\r")
@@ -273,6 +278,14 @@ def test_the_host_starts_at_1_mbit_by_default(adapter_peer: tuple[SlcanAdapter, 
     adapter, peer = adapter_peer
     SlcanHost(peer, timeout=2).start()
     assert bytes(peer.written) == b"\rC\rS8\rO\r" and adapter.bitrate == 1_000_000
+
+
+def test_the_host_waits_a_second_for_an_answer_by_default() -> None:
+    peer = Peer(lambda data: b"\r")
+    try:
+        assert SlcanHost(peer).timeout == 1.0
+    finally:
+        peer.close()
 
 
 def test_the_host_refuses_a_rate_slcan_has_no_digit_for() -> None:
