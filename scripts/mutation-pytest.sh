@@ -3,7 +3,14 @@
 # mutant killed only when its tests exit 1, but pytest exits 2 when a mutant breaks collection
 # (a syntax error, an import that fails): the product would not even import, so that mutant is
 # killed too. Other codes pass through (5, no tests collected, stays a setup error).
-python -m pytest "$@"
-rc=$?
-[ "$rc" -eq 2 ] && exit 1
-exit "$rc"
+# pytest runs in this very process (exec, pytest.main): mutmut's timeout kills the process it
+# started, and a pytest left running under a killed shell would keep mutmut reading its output
+# until it ended on its own (a mutant that makes a test wait forever stalled the whole run).
+exec python -c '
+import sys
+
+import pytest
+
+code = int(pytest.main(sys.argv[1:]))
+sys.exit(1 if code == 2 else code)
+' "$@"
