@@ -176,6 +176,7 @@ def test_values_are_shown_as_the_cli_prints_them() -> None:
     assert shown({"real_value": float("nan")}) == "nan"
     assert shown({"boolean_value": 1}) == "true" and shown({"boolean_value": 0}) == "false"
     assert shown({"string_value": list(b"GPS")}) == "'GPS'"
+    assert shown({"string_value": list(b"\xffGPS")}) == "'\ufffdGPS'"  # not UTF-8: replaced
     assert shown({"empty": {}}) == "(empty)"
 
 
