@@ -95,6 +95,10 @@ def test_a_link_starts_at_the_given_time_and_signs_with_its_link_id() -> None:
     assert stamps == [200_000, 200_001]  # each of our frames one tick later
 
 
+def test_a_link_signs_as_link_0_by_default() -> None:
+    assert heartbeat().pack(Signing(KEY).parser(None))[-13] == 0
+
+
 def test_a_key_is_32_bytes() -> None:
     with pytest.raises(SigningKeyError, match=r"^a signing key is 32 bytes, not 31$"):
         Signing(KEY[:31])
