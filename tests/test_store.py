@@ -18,7 +18,14 @@ import pytest
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 from hypothesis.stateful import RuleBasedStateMachine, invariant, precondition, rule
-from px4params.errors import EncodeError, InstanceError, LeafError, StoreError, ValueShapeError
+from px4params.errors import (
+    EncodeError,
+    InstanceError,
+    LeafError,
+    StoreError,
+    ValueRangeError,
+    ValueShapeError,
+)
 from px4params.store.classic import ClassicParam, ClassicParamsError
 from px4params.store.file import encode_file
 from px4params.store.key import _KEY, Key, _split_key
@@ -718,3 +725,276 @@ def test_a_parameter_the_store_cannot_hold_is_named() -> None:
     }
     with pytest.raises(StoreError, match=r"^parameter BIG cannot be stored \(no slot, or a value"):
         px4params.Store(px4params.Schema(model), classic=[])
+
+
+# -- issue 40: the survivors of store.py's mutation run ------------------------------------------
+
+
+@pytest.mark.issue40
+def test_the_store_file_is_named_by_the_environment_else_px4params_store(
+    store: px4params.Store, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from px4params.store.store import default_store_path
+
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.delenv("PX4PARAMS_STORE", raising=False)
+    assert default_store_path() == "px4params.store"
+    monkeypatch.setenv("PX4PARAMS_STORE", "")  # empty: not a name
+    assert default_store_path() == "px4params.store"
+    store.add("INA238#1")
+    assert store.save() == (tmp_path / "px4params.store").stat().st_size
+    monkeypatch.setenv("PX4PARAMS_STORE", str(tmp_path / "env.store"))
+    store.set("SYS_AUTOSTART", 4001)
+    store.save()
+    assert px4params.Store.load(None, store.schema, classic=CLASSIC).get("SYS_AUTOSTART") == 4001
+    other = px4params.Store(store.schema, classic=CLASSIC)
+    other.add("INA238#3")
+    other.import_from()
+    assert other.instances("INA238") == ["INA238#1", "INA238#3"]
+    other.load_from()
+    assert other.instances("INA238") == ["INA238#1"]
+    monkeypatch.delenv("PX4PARAMS_STORE")
+    assert px4params.Store.load(None, store.schema, classic=CLASSIC).get("SYS_AUTOSTART") == 0
+
+
+@pytest.mark.issue40
+def test_saving_and_loading_mark_instances_saved(store: px4params.Store, tmp_path: Path) -> None:
+    """``(used, unsaved)``: a change is unsaved until a save or a load; reading by a driver
+    (``mark_used``, PX4's ``x`` in ``param show``) is kept apart."""
+    store.add("INA238#0")
+    assert store.state("INA238#0") == (False, True)
+    store.mark_used("INA238#0")
+    assert store.state("INA238#0") == (True, True)
+    path = tmp_path / "s.store"
+    assert store.save(path) == path.stat().st_size
+    assert store.state("INA238#0") == (True, False)
+    store.set("SYS_AUTOSTART", 7)
+    assert store.state("SYS_AUTOSTART") == (False, True)
+    loaded = px4params.Store.load(path, store.schema, classic=CLASSIC)
+    assert loaded.state("INA238#0") == (False, False)
+    assert loaded.get("SYS_AUTOSTART") == 0
+    for call, word in ((store.state, "state"), (store.mark_used, "touch")):
+        with pytest.raises(InstanceError, match=rf"^{word} takes an instance or parameter, not a "
+                           r"leaf: INA238#0\[4\]$"):  # fmt: skip
+            call("INA238#0[4]")
+
+
+@pytest.mark.issue40
+def test_a_classic_list_from_the_environment(
+    schema: px4params.Schema, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``$PX4PARAMS_PARAMETERS_JSON`` names the classic parameters when none are given."""
+    path = tmp_path / "parameters.json"
+    path.write_text(
+        '{"version": 1, "parameters": [{"name": "MY_PARAM", "type": "Int32", "default": 3}]}'
+    )
+    monkeypatch.setenv("PX4PARAMS_PARAMETERS_JSON", str(path))
+    store = px4params.Store(schema)
+    assert store.parameters[-1] == "MY_PARAM" and store.get("MY_PARAM") == 3
+    assert px4params.Store(schema, classic=[]).parameters[-1] != "MY_PARAM"  # given: taken
+
+
+@pytest.mark.issue40
+def test_classic_names_must_be_new_and_distinct(schema: px4params.Schema) -> None:
+    with pytest.raises(
+        StoreError, match=r"^classic parameter INA238 has the name of a structured one$"
+    ):
+        px4params.Store(schema, classic=[ClassicParam("INA238", "Int32", 0)])
+    twice = [ClassicParam("A_B", "Int32", 0), ClassicParam("A_B", "Float", 1.0)]
+    with pytest.raises(StoreError, match=r"^two classic parameters have the same name$"):
+        px4params.Store(schema, classic=twice)
+
+
+@pytest.mark.issue40
+def test_what_a_structured_and_a_classic_parameter_are(store: px4params.Store) -> None:
+    assert store.classic("SYS_AUTOSTART") == CLASSIC[0]
+    assert store.classic("INA238") is None
+    assert store.data_type("INA238#2.current").key == "px.Ina238.1.1"
+    with pytest.raises(
+        InstanceError, match=r"^SYS_AUTOSTART is a classic parameter, not a structured one$"
+    ):
+        store.data_type("SYS_AUTOSTART")
+    assert str(store.instance_key("INA238", 2)) == "INA238#2"
+    assert str(store.instance_key("SYS_AUTOSTART", 2)) == "SYS_AUTOSTART"
+    store.add("INA238#1")
+    structured = [p for p in store.parameters if store.classic(p) is None]
+    assert len(store._type_defaults()) == len(structured)
+    assert store._type_defaults()[structured.index("INA238")] == store.encoded(
+        "INA238#1", default=True
+    )
+
+
+@pytest.mark.issue40
+def test_removing_refuses_leaves_and_shared_parameters(store: px4params.Store) -> None:
+    store.add("INA238#0")
+    with pytest.raises(InstanceError, match=r"^rm takes an instance, not a leaf: INA238#0\[4\]$"):
+        store.remove("INA238#0[4]")
+    with pytest.raises(
+        InstanceError, match=r"^SYS_AUTOSTART: a shared parameter has no instances to remove$"
+    ):
+        store.remove("SYS_AUTOSTART")
+    assert store.instances("INA238") == ["INA238#0"]
+
+
+@pytest.mark.issue40
+def test_indexing_takes_an_existing_instance_only(store: px4params.Store) -> None:
+    store.add("INA238#0")
+    with pytest.raises(
+        InstanceError,
+        match=r"^store\[\.\.\.\] takes an instance; use store\.get\('INA238#0\[4\]'\)$",
+    ):
+        store["INA238#0[4]"]
+    with pytest.raises(
+        InstanceError,
+        match=r"^INA238#1: instance does not exist \(add it first: param add\)$",
+    ):
+        store["INA238#1"]
+    assert 5 not in store and None not in store
+    assert "INA238#0" in store and "INA238#1" not in store and "NOPE#0" not in store
+    assert list(store) == list(store.names())
+
+
+@pytest.mark.issue40
+def test_a_classic_parameter_has_no_leaves(store: px4params.Store) -> None:
+    for call in (store.get, store.leaf):
+        with pytest.raises(
+            InstanceError,
+            match=r"^'SYS_AUTOSTART\.x' names no leaf \(expected NAME#N\[k\] or NAME#N\.path\)$",
+        ):
+            call("SYS_AUTOSTART.x")
+    with pytest.raises(InstanceError, match=r"^SYS_AUTOSTART is a classic parameter: it has no "
+                       r"leaves$"):  # fmt: skip
+        store.leaves("SYS_AUTOSTART")
+    with pytest.raises(InstanceError, match=r"^SYS_AUTOSTART is a classic parameter: it has no "
+                       r"leaves$"):  # fmt: skip
+        store.set("SYS_AUTOSTART.x", 1)
+    store.add("INA238#0")
+    with pytest.raises(InstanceError, match=r"^'INA238#0' names no leaf"):
+        store.leaf("INA238#0")
+    with pytest.raises(InstanceError, match=r"^encoded takes an instance or parameter, not a "
+                       r"leaf: INA238#0\[4\]$"):  # fmt: skip
+        store.encoded("INA238#0[4]")
+
+
+@pytest.mark.issue40
+def test_a_classic_value_that_is_not_a_number_names_the_parameter(store: px4params.Store) -> None:
+    with pytest.raises(ClassicParamsError, match=r"^SYS_AUTOSTART: "):
+        store.set("SYS_AUTOSTART", "banana")
+    for bad in (math.nan, math.inf, -math.inf):
+        with pytest.raises(
+            ValueRangeError,
+            match=rf"^BAT1_CAPACITY: {bad} is not a finite number \(Float: NaN and infinities "
+            r"are refused\)$",
+        ):
+            store.set("BAT1_CAPACITY", bad)
+    assert store.get("BAT1_CAPACITY") == -1.0
+    store.set("BAT1_CAPACITY", 3.4e38)  # finite, near float32's largest: taken
+    assert store.get("BAT1_CAPACITY") == pytest.approx(3.4e38, rel=1e-6)
+
+
+@pytest.mark.issue40
+def test_set_encoded_checks_the_ranges(store: px4params.Store) -> None:
+    """Stored bytes go through the same @min/@max check as values (nothing written when
+    refused)."""
+    store.add("INA238#0")
+    data_type = store.data_type("INA238")
+    value = store.get("INA238#0")
+    value["current"] = 100
+    store.set_encoded("INA238#0", data_type.encode(value, tao=False))
+    assert store.get("INA238#0.current") == 100
+    store.set_encoded("INA238#0", data_type.encode(value, tao=False), default=True)
+    assert store.get("INA238#0.current", default=True) == 100
+    before = store.encoded("INA238#0")
+    bad = dict(value, current=328)  # px/Ina238.1.1.dsdl: current @min 1 @max 327 (a uint10)
+    with pytest.raises(ValueRangeError, match=r"^INA238#0\.current: 328 "):
+        store.set_encoded("INA238#0", data_type.encode(bad, tao=False))
+    assert store.encoded("INA238#0") == before
+
+
+@pytest.mark.issue40
+def test_resetting(store: px4params.Store) -> None:
+    store.add("INA238#0")
+    store.set_default("INA238#0.current", 150)
+    store.set("INA238#0.current", 90)
+    store.set("INA238#0.bus.i2c.address", 0x41)
+    store.set("SYS_AUTOSTART", 4001)
+    store.reset("INA238#0.current")  # one leaf: back to the instance's default
+    assert store.get("INA238#0.current") == 150
+    assert store.get("INA238#0.bus.i2c.address") == 0x41
+    assert store.changed() == ["INA238#0", "SYS_AUTOSTART"]
+    assert store.changed("INA238#0") and not store.changed("BAT1_CAPACITY")
+    store.set("INA238#0.bus._tag", 1)  # now SPI: the default value is I2C
+    with pytest.raises(
+        LeafError,
+        match=r"\(in the default value, which has another shape\)$",
+    ):
+        store.reset("INA238#0.bus.spi.chip_select")
+    store.reset_all()
+    assert store.changed() == []
+    assert store.instances("INA238") == ["INA238#0"]  # instances stay
+    assert store.get("INA238#0.current") == 150
+    store.reset_to_initial()
+    assert list(store.names()) == ["SYS_AUTOSTART", "BAT1_CAPACITY", "SENS_EXT_I2C_PRB"]
+    assert store.get("SYS_AUTOSTART") == 0
+
+
+@pytest.mark.issue40
+def test_reset_to_initial_forgets_kept_classic_records(
+    schema: px4params.Schema, tmp_path: Path
+) -> None:
+    full = px4params.Store(schema, classic=CLASSIC)
+    full.set("BAT1_CAPACITY", 4200.0)
+    path = tmp_path / "p.store"
+    full.save(path)
+    fewer = px4params.Store(schema, classic=CLASSIC[:1])
+    fewer.load_from(path)
+    fewer.reset_to_initial()
+    fewer.save(path)
+    assert px4params.Store.load(path, schema, classic=CLASSIC).get("BAT1_CAPACITY") == -1.0
+
+
+@pytest.mark.issue40
+def test_an_instance_view(store: px4params.Store) -> None:
+    store.add("INA238#0")
+    view = store["INA238#0"]
+    assert view.name == "INA238#0"
+    view.current = 120
+    assert view.value["current"] == 120 and view.default["current"] != 120
+    bus = view.bus
+    assert bus.i2c.value == store.get("INA238#0")["bus"]["i2c"]
+    assert repr(bus.i2c) == f"<INA238#0.bus.i2c {bus.i2c.value!r}>"
+    assert repr(view) == f"<INA238#0 {view.value!r}>"
+    with pytest.raises(InstanceError, match=r"^INA238#0\.bus\.: set whole values on the instance$"):
+        bus.set({})
+    with pytest.raises(InstanceError, match=r"^INA238#0\.bus\.: \[k\] counts from the instance$"):
+        bus[0]
+    with pytest.raises(AttributeError):
+        view.__wrapped__  # noqa: B018  (dunder names are Python's, never a field)
+    with pytest.raises(LeafError, match="nope"):
+        view.nope  # noqa: B018
+    assert [leaf.path for leaf in view.leaves()] == [leaf.path for leaf in store.leaves("INA238#0")]
+    value = store.get("INA238#0")
+    value["current"] = 5
+    view.set(value)
+    assert store.get("INA238#0.current") == 5
+
+
+@pytest.mark.issue40
+def test_the_store_says_what_it_holds(store: px4params.Store) -> None:
+    store.add("INA238#0")
+    store.add("INA238#2")
+    n = len(store.parameters)
+    assert repr(store) == f"<Store 5 instances of {n} parameters>"
+
+
+@pytest.mark.issue40
+def test_a_transaction_interrupted_changes_nothing(store: px4params.Store) -> None:
+    store.add("INA238#0")
+    before = encode_file(store)
+    with pytest.raises(KeyboardInterrupt), store.transaction() as s:
+        s.add("INA238#1")
+        raise KeyboardInterrupt
+    assert encode_file(store) == before
+    with store.transaction() as s:
+        s.add("INA238#1")
+    assert store.instances("INA238") == ["INA238#0", "INA238#1"]
