@@ -998,3 +998,107 @@ def test_a_transaction_interrupted_changes_nothing(store: px4params.Store) -> No
     with store.transaction() as s:
         s.add("INA238#1")
     assert store.instances("INA238") == ["INA238#0", "INA238#1"]
+
+
+@pytest.mark.issue40
+def test_the_flat_name_check_is_remembered_per_schema(
+    schema: px4params.Schema, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The destructured names are checked when a store is made; the verdict is kept in the
+    cache folder, so that the next store of the same schema and classic names works them out
+    only on first use. A schema not loaded through the model cache is checked every time."""
+    monkeypatch.setenv("PX4PARAMS_CACHE_DIR", str(tmp_path))
+    first = px4params.Store(schema, classic=CLASSIC)
+    assert first._destructured is not None  # checked now
+    assert [p.name for p in tmp_path.iterdir() if p.name.startswith("flatcheck-")] != []
+    second = px4params.Store(schema, classic=CLASSIC)
+    assert second._destructured is None  # the verdict was read
+    assert second.destructured is not None
+    other = px4params.Store(schema, classic=CLASSIC[:1])  # other classic names: checked again
+    assert other._destructured is not None
+    bare = px4params.Schema(dict(schema.model, key=None))
+    for _ in range(2):
+        assert px4params.Store(bare, classic=[])._destructured is not None
+
+
+@pytest.mark.issue40
+def test_an_unknown_name_gets_three_hints_at_most(schema: px4params.Schema) -> None:
+    store = px4params.Store(schema, classic=[ClassicParam(f"BAT1_{c}", "Int32", 0) for c in "ABCD"])
+    with pytest.raises(
+        InstanceError,
+        match=r"^unknown parameter 'BAT1_X' \(did you mean: BAT1_D, BAT1_C, BAT1_B\?\)$",
+    ):
+        store.spec("BAT1_X")
+
+
+@pytest.mark.issue40
+def test_the_names_a_store_remembers_are_bounded(store: px4params.Store) -> None:
+    """Names can come from anywhere (a GCS, a file): at most 4096 resolutions are kept."""
+    for k in range(4097):
+        assert f"INA238#0[{k}]" not in store
+    assert 0 < len(store._resolved) <= 4096
+
+
+@pytest.mark.issue40
+def test_a_type_ending_in_a_variable_array_is_kept_whole(tmp_path: Path) -> None:
+    """Values are kept without tail array optimization (docs/store-format.md): the array of a
+    type whose last field is a variable-length array keeps its length prefix, and every read,
+    write and range check of the store takes the bytes so."""
+    root = tmp_path / "acme"
+    root.mkdir()
+    (root / "Table.1.0.dsdl").write_text(
+        "# @max_instances 2\nuint4 p_version\nuint8 gain\n# @max 100\n"
+        "uint8[<=200] cells\n# @max 50\n@sealed\n"
+    )
+    schema = px4params.load_schema([str(root)], use_env=False)
+    store = px4params.Store(schema, classic=[])
+    store.add("TABLE#0")
+    assert store.get("TABLE#0") == {"p_version": 0, "gain": 0, "cells": []}
+    # 4 + 8 bits, then the length prefix (8 bits for up to 200 cells): 3 bytes, not 2
+    assert store.encoded("TABLE#0", default=True) == bytes(3)
+    store.set("TABLE#0", {"gain": 5, "cells": [1, 2, 3]})
+    # p_version 0, gain 5, length 3, cells 1 2 3 (4-bit offset): the bytes read by hand
+    assert store.encoded("TABLE#0") == bytes.fromhex("005030102030")
+    assert [(leaf.path, leaf.value) for leaf in store.leaves("TABLE#0")] == [
+        ("p_version", 0), ("gain", 5), ("cells._len", 3), ("cells[0]", 1), ("cells[1]", 2),
+        ("cells[2]", 3),
+    ]  # fmt: skip
+    with pytest.raises(ValueRangeError, match=r"^TABLE#0\.cells\[1\]: 51 is above 50 \(@max\)$"):
+        store.set("TABLE#0.cells[1]", 51)
+    with pytest.raises(ValueRangeError, match=r"^TABLE#0\.cells\[3\]: 60 is above 50 \(@max\)$"):
+        store.set("TABLE#0", {"gain": 5, "cells": [1, 2, 3, 60]})
+    with pytest.raises(ValueRangeError, match=r"^TABLE#0\.gain: 101 is above 100 \(@max\)$"):
+        store.set("TABLE#0.gain", 101)
+    store.set("TABLE#0.cells._len", 4)  # a length brings a cell in: its default 0 is in range
+    assert store.get("TABLE#0")["cells"] == [1, 2, 3, 0]
+    store.set("TABLE#0.cells[3]", 50)
+    store.set_encoded("TABLE#0", bytes.fromhex("0050201000"), default=True)
+    assert store.get("TABLE#0", default=True)["cells"] == [1, 0]
+    assert store.get("TABLE#0")["cells"] == [1, 2, 3, 50]  # a changed value stays
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize(
+    ("call", "name", "message"),
+    [
+        ("get", "SYS_AUTOSTART#0", "SYS_AUTOSTART is not instanced: write SYS_AUTOSTART, not "
+         "SYS_AUTOSTART#0"),
+        ("get", "INA238", "INA238 has instances: name one, e.g. INA238#0"),
+        ("get", "ZZZZ", "unknown parameter 'ZZZZ'"),
+        ("add", "INA238#0[4]", "add takes an instance, not a leaf: INA238#0[4]"),
+        ("add", "SYS_AUTOSTART", "SYS_AUTOSTART: a shared parameter has no instances to add"),
+    ],
+)  # fmt: skip
+def test_naming_errors_word_for_word(store: px4params.Store, call, name, message) -> None:
+    with pytest.raises(InstanceError) as info:
+        getattr(store, call)(name)
+    assert str(info.value) == message
+
+
+@pytest.mark.issue40
+def test_a_name_that_is_not_text_is_refused_by_reads_and_writes(store: px4params.Store) -> None:
+    """(A list cannot be a key of the store's remembered names: it goes to the parser, which
+    refuses it in one line.)"""
+    for call in (store.get, store.encoded, store.reset, lambda name: store.set(name, 1)):
+        with pytest.raises(InstanceError, match=r"^\['INA238#0'\] is not a parameter name"):
+            call(["INA238#0"])
