@@ -1102,3 +1102,22 @@ def test_a_name_that_is_not_text_is_refused_by_reads_and_writes(store: px4params
     for call in (store.get, store.encoded, store.reset, lambda name: store.set(name, 1)):
         with pytest.raises(InstanceError, match=r"^\['INA238#0'\] is not a parameter name"):
             call(["INA238#0"])
+
+
+@pytest.mark.issue40
+def test_reads_give_the_value_unless_the_default_is_asked_for(store: px4params.Store) -> None:
+    store.add("INA238#0")
+    store.set("INA238#0.current", 99)
+    leaves = {leaf.path: leaf.value for leaf in store.leaves("INA238#0")}
+    defaults = {leaf.path: leaf.value for leaf in store.leaves("INA238#0", default=True)}
+    assert leaves["current"] == 99 and defaults["current"] != 99
+    assert store.encoded("INA238#0") != store.encoded("INA238#0", default=True)
+    assert store.data_type("INA238").decode(store.encoded("INA238#0"), tao=False)["current"] == 99
+    view = store["INA238#0"].bus
+    assert view["i2c.address"] == store.get("INA238#0.bus.i2c.address")  # a path from the view
+    with pytest.raises(LeafError) as info:
+        store.get("INA238#0.bus")
+    assert str(info.value) == "INA238#0: bus: not a leaf (a struct, union or array)"
+    with pytest.raises(InstanceError) as info:
+        store.changed("INA238#0[4]")
+    assert str(info.value) == "changed takes an instance or parameter, not a leaf: INA238#0[4]"
