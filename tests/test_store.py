@@ -1121,3 +1121,23 @@ def test_reads_give_the_value_unless_the_default_is_asked_for(store: px4params.S
     with pytest.raises(InstanceError) as info:
         store.changed("INA238#0[4]")
     assert str(info.value) == "changed takes an instance or parameter, not a leaf: INA238#0[4]"
+
+
+@pytest.mark.issue40
+def test_the_leaf_reads_a_store_remembers_are_bounded(tmp_path: Path) -> None:
+    """As names, the leaf reads kept to answer the next read in one call are bounded (4096):
+    here 4097 distinct names of existing leaves (cells[i] by path, then by [k])."""
+    root = tmp_path / "acme"
+    root.mkdir()
+    (root / "Big.1.0.dsdl").write_text(
+        "# @max_instances 1\nuint4 p_version\nuint8[<=2100] cells\n@sealed\n"
+    )
+    schema = px4params.load_schema([str(root)], use_env=False)
+    store = px4params.Store(schema, classic=[])
+    store.add("BIG#0")
+    store.set("BIG#0", {"cells": [7] * 2100})
+    for i in range(2100):
+        assert store.get(f"BIG#0.cells[{i}]") == 7
+    for i in range(4097 - 2100):
+        assert store.get(f"BIG#0[{i + 2}]") == 7  # [0] p_version, [1] the length
+    assert 0 < len(store._leaf_reads) <= 4096
