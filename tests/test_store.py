@@ -1141,3 +1141,12 @@ def test_the_leaf_reads_a_store_remembers_are_bounded(tmp_path: Path) -> None:
     for i in range(4097 - 2100):
         assert store.get(f"BIG#0[{i + 2}]") == 7  # [0] p_version, [1] the length
     assert 0 < len(store._leaf_reads) <= 4096
+
+
+@pytest.mark.issue40
+def test_an_int32_whose_bits_spell_a_float_nan_is_a_number(store: px4params.Store) -> None:
+    """Only Float classic parameters refuse NaN: an Int32 holds any 32-bit integer, also one
+    whose bytes would read as a float NaN (0x7FC00000) or infinity (0x7F800000)."""
+    for number in (0x7FC00000, 0x7F800000, -1):
+        store.set("SYS_AUTOSTART", number)
+        assert store.get("SYS_AUTOSTART") == number
