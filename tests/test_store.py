@@ -1150,3 +1150,31 @@ def test_an_int32_whose_bits_spell_a_float_nan_is_a_number(store: px4params.Stor
     for number in (0x7FC00000, 0x7F800000, -1):
         store.set("SYS_AUTOSTART", number)
         assert store.get("SYS_AUTOSTART") == number
+
+
+@pytest.mark.issue40
+def test_a_tag_or_a_length_brings_leaves_that_are_checked_too(tmp_path: Path) -> None:
+    """Selecting a union's variant or growing an array brings leaves in at their defaults:
+    those are held to their @min/@max like any written leaf. And only what a write changes is
+    checked: a value stored out of range with force stays writable as it is."""
+    root = tmp_path / "acme"
+    root.mkdir()
+    (root / "Choice.1.0.dsdl").write_text("@union\nuint8 low\nuint8 high\n# @min 1\n@sealed\n")
+    (root / "Row.1.0.dsdl").write_text(
+        "# @max_instances 1\nuint4 p_version\nChoice.1.0 choice\n"
+        "uint8[<=8] cells\n# @min 1\n# @max 50\n@sealed\n"
+    )
+    schema = px4params.load_schema([str(root)], use_env=False)
+    store = px4params.Store(schema, classic=[])
+    store.add("ROW#0")
+    store.set("ROW#0.cells._len", 0)
+    with pytest.raises(
+        ValueRangeError, match=r"^ROW#0\.cells\[0\]: 0 is outside 1\.\.50 \(@min/@max\)$"
+    ):
+        store.set("ROW#0.cells._len", 1)  # a new cell at 0
+    with pytest.raises(ValueRangeError, match=r"^ROW#0\.choice\.high: 0 is below 1 \(@min\)$"):
+        store.set("ROW#0.choice._tag", 1)  # high, at 0
+    assert store.get("ROW#0") == {"p_version": 0, "choice": {"low": 0}, "cells": []}
+    store.set("ROW#0", {"choice": {"low": 3}, "cells": [60]}, force=True)
+    store.set("ROW#0", {"choice": {"low": 4}, "cells": [60]})  # the cell is not changed
+    assert store.get("ROW#0")["cells"] == [60]
