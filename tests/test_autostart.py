@@ -461,3 +461,233 @@ def test_help_has_examples(capsys):
 
 def test_module_exports():
     assert set(autostart.__all__) >= {"configured", "plan", "script", "load_manifest"}
+
+
+# -- each bus variant, each refusal, the plan's words (issue 40: autostart.py's survivors) --------
+
+#: A driver of INA238 declared on every bus kind, so that each px.Bus variant is read as its
+#: driver's ``auto`` reads it (the bundled ina238 accepts I2C only).
+EVERY_BUS = INA238.replace(
+    'buses = ["i2c"]', 'buses = ["i2c", "spi", "serial", "dronecan", "sim", "mavlink"]'
+)
+
+
+def _device_id(bus_type: int, bus: int, address: int, devtype: int) -> int:
+    """PX4's DeviceStructure (src/lib/drivers/device/Device.hpp): bus_type 3 bits, bus 5,
+    address 8, devtype 8, from the low bits up."""
+    return bus_type | bus << 3 | address << 8 | devtype << 16
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize(
+    ("bus", "where", "location", "device_id"),
+    [
+        # px/I2c.1.0: bus_id, address; PX4's bus type 1
+        ({"i2c": {"bus_id": 2, "address": 0x41}}, (2, 0x41), "I2C bus 2 address 0x41",
+         _device_id(1, 2, 0x41, 0xD4)),
+        # px/Spi.1.0: bus_id, chip_select (the device's "address"); bus type 2
+        ({"spi": {"bus_id": 3, "chip_select": 5, "max_frequency": 0, "mode": 3}}, (3, 5),
+         "SPI bus 3 chip select 5", _device_id(2, 3, 5, 0xD4)),
+        # px/Dronecan.1.0: interface (the bus), node_id; bus type 3 (UAVCAN)
+        ({"dronecan": {"node_id": 42, "interface": 1}}, (1, 42), "DroneCAN interface 1 node 42",
+         _device_id(3, 1, 42, 0xD4)),
+        # px/Simulation.1.0: instance only; bus type 4
+        ({"sim": {"instance": 3}}, (0, 3), "simulation instance 3", _device_id(4, 0, 3, 0xD4)),
+        # px/Serial.1.0: port (the bus), no address; bus type 5
+        ({"serial": {"port": 2, "baudrate": 115200}}, (2, 0), "serial 2",
+         _device_id(5, 2, 0, 0xD4)),
+        # px/Mavlink.1.0: instance (the bus), system_id; bus type 6
+        ({"mavlink": {"instance": 1, "system_id": 7, "component_id": 1}}, (1, 7),
+         "MAVLink instance 1 system 7", _device_id(6, 1, 7, 0xD4)),
+    ],
+)  # fmt: skip
+def test_each_bus_variant_is_read_from_its_own_fields(specs, bus, where, location, device_id):
+    drivers = parse_drivers(EVERY_BUS, "d.toml", specs)
+    value = {"p_version": 1, "bus": bus, "current": 200, "shunt": 0.0003}
+    c = autostart.configured_value(value, drivers, "INA238", "INA238#0")
+    assert (c.bus_kind, (c.bus_id, c.address)) == (next(iter(bus)), where)
+    assert c.location == location
+    assert c.device_id == device_id
+    assert c.problems == () and c.startable
+    assert c.settings == {"current": 200, "shunt": 0.0003}  # neither p_version nor bus
+    assert c.as_dict() == {
+        "instance": "INA238#0",
+        "parameter": "INA238",
+        "driver": "ina238",
+        "bus": next(iter(bus)),
+        "bus_id": where[0],
+        "address": where[1],
+        "location": location,
+        "settings": {"current": 200, "shunt": 0.0003},
+        "problems": [],
+        "device_id": device_id,
+    }
+
+
+@pytest.mark.issue40
+def test_a_value_without_one_bus_is_not_started(drivers):
+    for value in ({"current": 1}, {"bus": {}}, 7):
+        c = autostart.configured_value(value, drivers, "INA238", "INA238#3")
+        assert (c.bus_kind, c.bus_id, c.address) == ("none", 0, 0)
+        assert c.problems == ("its value has no bus",)
+        assert c.location == "none 0" and c.device_id is None and not c.startable
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize(
+    ("address", "problems"),
+    [
+        (0x02, ("I2C address 0x02 is reserved (use 0x03..0x77)",)),
+        (0x03, ()),  # the I2C specification's first and last general addresses
+        (0x77, ()),
+        (0x78, ("I2C address 0x78 is reserved (use 0x03..0x77)",)),
+    ],
+)
+def test_reserved_i2c_addresses_are_refused(drivers, address, problems):
+    value = {"bus": {"i2c": {"bus_id": 1, "address": address}}}
+    c = autostart.configured_value(value, drivers, "INA238", "INA238#0")
+    assert c.problems == problems
+    assert c.startable is (problems == ())
+
+
+@pytest.mark.issue40
+def test_an_spi_bus_0_and_a_driver_without_autostart_are_refused(specs):
+    drivers = parse_drivers(EVERY_BUS, "d.toml", specs)
+    spi = {"bus": {"spi": {"bus_id": 0, "chip_select": 1}}}
+    c = autostart.configured_value(spi, drivers, "INA238", "INA238#0")
+    assert c.problems == ("spi bus_id is 0 (unset; buses are numbered from 1)",)
+    # bus 0 of a kind numbered otherwise is no problem: DroneCAN's first interface is 0
+    can = {"bus": {"dronecan": {"node_id": 10, "interface": 0}}}
+    assert autostart.configured_value(can, drivers, "INA238", "INA238#0").problems == ()
+    manual = parse_drivers(EVERY_BUS + "autostart = false\n", "d.toml", specs)
+    ok = {"bus": {"i2c": {"bus_id": 1, "address": 0x45}}}
+    c = autostart.configured_value(ok, manual, "INA238", "INA238#0")
+    assert c.problems == ("driver ina238 does not autostart",)
+    assert not c.startable
+
+
+@pytest.mark.issue40
+def test_a_shared_address_is_marked_on_i2c_and_spi_only(specs):
+    drivers = parse_drivers(EVERY_BUS, "d.toml", specs)
+
+    def at(name, bus):
+        return autostart.configured_value({"bus": bus}, drivers, "INA238", name)
+
+    found = [
+        at("INA238#0", {"spi": {"bus_id": 1, "chip_select": 2}}),
+        at("INA238#1", {"spi": {"bus_id": 1, "chip_select": 2}}),  # the same device
+        at("INA238#2", {"spi": {"bus_id": 2, "chip_select": 2}}),  # another bus
+        at("INA238#3", {"i2c": {"bus_id": 1, "address": 2}}),  # refused already: not taken
+        at("INA238#4", {"i2c": {"bus_id": 1, "address": 2}}),
+        at("INA238#5", {"sim": {"instance": 1}}),  # simulated devices share nothing
+        at("INA238#6", {"sim": {"instance": 1}}),
+    ]
+    marked = autostart.shared_locations(found)
+    assert [c.problems for c in marked] == [
+        (),
+        ("SPI bus 1 chip select 2 is already INA238#0's",),
+        (),
+        ("I2C address 0x02 is reserved (use 0x03..0x77)",),
+        ("I2C address 0x02 is reserved (use 0x03..0x77)",),
+        (),
+        (),
+    ]
+    assert found[1].problems == ()  # a marked copy: the list given is left as it was
+
+
+@pytest.mark.issue40
+def test_the_plan_lists_every_declared_driver_then_the_undeclared_parameters(schema, specs):
+    drivers = parse_drivers(INA238, "d.toml", specs)
+    s = Store(schema)
+    s.add("RM3100#1")
+    s.add("AK09916#0")
+    s.add("AK09916#2")
+    entries = plan(s, drivers)
+    assert [(e.driver and e.driver.name, e.parameter) for e in entries] == [
+        ("ina238", "INA238"),
+        (None, "AK09916"),  # undeclared, sorted by name, each once
+        (None, "RM3100"),
+    ]
+    assert [c.instance for c in entries[1].instances] == ["AK09916#0", "AK09916#2"]
+    assert entries[0].as_dict() == {
+        "driver": "ina238",
+        "parameter": "INA238",
+        "autostart": True,
+        "order": 30,
+        "devtype": 0xD4,
+        "instances": [],
+    }
+    assert entries[1].as_dict()["driver"] is None
+    assert entries[1].as_dict()["autostart"] is False
+    assert entries[1].as_dict()["order"] is None and entries[1].as_dict()["devtype"] is None
+
+
+@pytest.mark.issue40
+def test_a_driver_declared_for_a_parameter_the_schema_lacks_starts_nothing(schema, specs):
+    drivers = parse_drivers(INA238.replace('"INA238"', '"FUTURE"', 1), "d.toml", None)
+    s = Store(schema)
+    s.add("INA238#0")
+    found = configured(s, drivers)
+    assert [(c.parameter, c.instance) for c in found] == [("INA238", "INA238#0")]
+
+
+@pytest.mark.issue40
+def test_plan_lines_word_by_word(schema, specs):
+    drivers = parse_drivers(
+        INA238
+        + INA238.replace("ina238", "ina226").replace("INA238", "INA226").replace("30", "31")
+        + "autostart = false\n",
+        "d.toml",
+        specs,
+    )
+    s = Store(schema)
+    s.add("INA238#0")
+    s.set("INA238#0.bus.i2c.bus_id", 1)
+    s.set("INA238#0.bus.i2c.address", 0x45)
+    s.set("INA238#0.current", 200)  # the shunt's default, 0.0003, is float16's 0.00029993
+    s.add("AK09916#0")
+    lines = plan_lines(plan(s, drivers))
+    assert lines == [
+        "ina238 auto  (order 30, parameter INA238, devtype 0xD4): 1 instance",
+        "  INA238#0     I2C bus 1 address 0x45   current=200 shunt=0.00029993  "
+        "device id 13911305 (0xD44509)",
+        "(no driver) parameter AK09916: 1 instance(s)",
+        "  AK09916#0    I2C bus 0 address 0x0C   rotation=0 odr=3  "
+        "NOT STARTED: no driver declared for parameter AK09916",
+        "nothing to start (1 drivers): ina226",
+    ]
+    s.add("INA226#0")
+    s.add("INA226#1")
+    lines = plan_lines(plan(s, drivers))
+    assert "ina226 auto  (order 31, parameter INA226, devtype 0xD4, no autostart): 2 instances" in (
+        lines
+    )
+    assert not any(line.startswith("nothing to start") for line in lines)
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize(
+    ("settings", "text"),
+    [
+        ({"shunt": 0.000300000014}, "shunt=0.0003"),  # float32's nearest, 5 significant digits
+        ({"gain": 123456.7}, "gain=1.2346e+05"),
+        ({"enabled": True, "off": False}, "enabled=true off=false"),
+        ({"rows": [1, 2], "pair": {"a": 1}}, 'rows=[1,2] pair={"a":1}'),
+        ({"n": 3}, "n=3"),
+        ({}, ""),
+    ],
+)
+def test_settings_are_shown_one_word_each(settings, text):
+    assert autostart.format_settings(settings) == text
+
+
+@pytest.mark.issue40
+def test_a_location_beyond_a_device_id_has_none(schema, specs):
+    """A device ID holds a 5-bit bus (PX4's DeviceStructure): a serial port numbered 101
+    (TELEM 1, px/Serial.1.0's values) has no device ID, and the plan shows none."""
+    drivers = parse_drivers(EVERY_BUS, "d.toml", specs)
+    value = {"bus": {"serial": {"port": 101, "baudrate": 57600}}}
+    c = autostart.configured_value(value, drivers, "INA238", "INA238#0")
+    assert (c.location, c.device_id, c.problems) == ("serial 101", None, ())
+    entry = autostart.PlanEntry(c.driver, "INA238", (c,))
+    assert plan_lines([entry])[1] == "  INA238#0     serial 101"

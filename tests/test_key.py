@@ -200,3 +200,20 @@ def test_the_naming_rule_is_written_in_key_py_alone() -> None:
     assert found == []
     key = (package / "store" / "key.py").read_text()
     assert "}#{" in key  # (the patterns find the rule where it is)
+
+
+@pytest.mark.parametrize("given", [["INA238#0"], 7, None, b"INA238#0"])
+def test_what_is_not_text_is_refused_as_no_parameter_name(store, given: Any) -> None:
+    """A name that is not text (a list, a number, bytes) is refused in one line by every entry
+    point, as a name the parser cannot read, not with a Python error about ``strip``."""
+    message = rf"^{abbreviated_repr(given)} is not a parameter name \(a {type(given).__name__}; "
+    for call in (Key.parse, store.get, store.remove, store.leaf, store.add, store.data_type):
+        with pytest.raises(InstanceError, match=message + r"expected text or a Key\)$"):
+            call(given)
+    assert given not in store
+
+
+def abbreviated_repr(given: Any) -> str:
+    import re
+
+    return re.escape(repr(given))

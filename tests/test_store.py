@@ -18,7 +18,14 @@ import pytest
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 from hypothesis.stateful import RuleBasedStateMachine, invariant, precondition, rule
-from px4params.errors import EncodeError, InstanceError, LeafError, StoreError, ValueShapeError
+from px4params.errors import (
+    EncodeError,
+    InstanceError,
+    LeafError,
+    StoreError,
+    ValueRangeError,
+    ValueShapeError,
+)
 from px4params.store.classic import ClassicParam, ClassicParamsError
 from px4params.store.file import encode_file
 from px4params.store.key import _KEY, Key, _split_key
@@ -718,3 +725,456 @@ def test_a_parameter_the_store_cannot_hold_is_named() -> None:
     }
     with pytest.raises(StoreError, match=r"^parameter BIG cannot be stored \(no slot, or a value"):
         px4params.Store(px4params.Schema(model), classic=[])
+
+
+# -- issue 40: the survivors of store.py's mutation run ------------------------------------------
+
+
+@pytest.mark.issue40
+def test_the_store_file_is_named_by_the_environment_else_px4params_store(
+    store: px4params.Store, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from px4params.store.store import default_store_path
+
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.delenv("PX4PARAMS_STORE", raising=False)
+    assert default_store_path() == "px4params.store"
+    monkeypatch.setenv("PX4PARAMS_STORE", "")  # empty: not a name
+    assert default_store_path() == "px4params.store"
+    store.add("INA238#1")
+    assert store.save() == (tmp_path / "px4params.store").stat().st_size
+    monkeypatch.setenv("PX4PARAMS_STORE", str(tmp_path / "env.store"))
+    store.set("SYS_AUTOSTART", 4001)
+    store.save()
+    assert px4params.Store.load(None, store.schema, classic=CLASSIC).get("SYS_AUTOSTART") == 4001
+    other = px4params.Store(store.schema, classic=CLASSIC)
+    other.add("INA238#3")
+    other.import_from()
+    assert other.instances("INA238") == ["INA238#1", "INA238#3"]
+    other.load_from()
+    assert other.instances("INA238") == ["INA238#1"]
+    monkeypatch.delenv("PX4PARAMS_STORE")
+    assert px4params.Store.load(None, store.schema, classic=CLASSIC).get("SYS_AUTOSTART") == 0
+
+
+@pytest.mark.issue40
+def test_saving_and_loading_mark_instances_saved(store: px4params.Store, tmp_path: Path) -> None:
+    """``(used, unsaved)``: a change is unsaved until a save or a load; reading by a driver
+    (``mark_used``, PX4's ``x`` in ``param show``) is kept apart."""
+    store.add("INA238#0")
+    assert store.state("INA238#0") == (False, True)
+    store.mark_used("INA238#0")
+    assert store.state("INA238#0") == (True, True)
+    path = tmp_path / "s.store"
+    assert store.save(path) == path.stat().st_size
+    assert store.state("INA238#0") == (True, False)
+    store.set("SYS_AUTOSTART", 7)
+    assert store.state("SYS_AUTOSTART") == (False, True)
+    loaded = px4params.Store.load(path, store.schema, classic=CLASSIC)
+    assert loaded.state("INA238#0") == (False, False)
+    assert loaded.get("SYS_AUTOSTART") == 0
+    for call, word in ((store.state, "state"), (store.mark_used, "touch")):
+        with pytest.raises(InstanceError, match=rf"^{word} takes an instance or parameter, not a "
+                           r"leaf: INA238#0\[4\]$"):  # fmt: skip
+            call("INA238#0[4]")
+
+
+@pytest.mark.issue40
+def test_a_classic_list_from_the_environment(
+    schema: px4params.Schema, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``$PX4PARAMS_PARAMETERS_JSON`` names the classic parameters when none are given."""
+    path = tmp_path / "parameters.json"
+    path.write_text(
+        '{"version": 1, "parameters": [{"name": "MY_PARAM", "type": "Int32", "default": 3}]}'
+    )
+    monkeypatch.setenv("PX4PARAMS_PARAMETERS_JSON", str(path))
+    store = px4params.Store(schema)
+    assert store.parameters[-1] == "MY_PARAM" and store.get("MY_PARAM") == 3
+    assert px4params.Store(schema, classic=[]).parameters[-1] != "MY_PARAM"  # given: taken
+
+
+@pytest.mark.issue40
+def test_classic_names_must_be_new_and_distinct(schema: px4params.Schema) -> None:
+    with pytest.raises(
+        StoreError, match=r"^classic parameter INA238 has the name of a structured one$"
+    ):
+        px4params.Store(schema, classic=[ClassicParam("INA238", "Int32", 0)])
+    twice = [ClassicParam("A_B", "Int32", 0), ClassicParam("A_B", "Float", 1.0)]
+    with pytest.raises(StoreError, match=r"^two classic parameters have the same name$"):
+        px4params.Store(schema, classic=twice)
+
+
+@pytest.mark.issue40
+def test_what_a_structured_and_a_classic_parameter_are(store: px4params.Store) -> None:
+    assert store.classic("SYS_AUTOSTART") == CLASSIC[0]
+    assert store.classic("INA238") is None
+    assert store.data_type("INA238#2.current").key == "px.Ina238.1.1"
+    with pytest.raises(
+        InstanceError, match=r"^SYS_AUTOSTART is a classic parameter, not a structured one$"
+    ):
+        store.data_type("SYS_AUTOSTART")
+    assert str(store.instance_key("INA238", 2)) == "INA238#2"
+    assert str(store.instance_key("SYS_AUTOSTART", 2)) == "SYS_AUTOSTART"
+    store.add("INA238#1")
+    structured = [p for p in store.parameters if store.classic(p) is None]
+    assert len(store._type_defaults()) == len(structured)
+    assert store._type_defaults()[structured.index("INA238")] == store.encoded(
+        "INA238#1", default=True
+    )
+
+
+@pytest.mark.issue40
+def test_removing_refuses_leaves_and_shared_parameters(store: px4params.Store) -> None:
+    store.add("INA238#0")
+    with pytest.raises(InstanceError, match=r"^rm takes an instance, not a leaf: INA238#0\[4\]$"):
+        store.remove("INA238#0[4]")
+    with pytest.raises(
+        InstanceError, match=r"^SYS_AUTOSTART: a shared parameter has no instances to remove$"
+    ):
+        store.remove("SYS_AUTOSTART")
+    assert store.instances("INA238") == ["INA238#0"]
+
+
+@pytest.mark.issue40
+def test_indexing_takes_an_existing_instance_only(store: px4params.Store) -> None:
+    store.add("INA238#0")
+    with pytest.raises(
+        InstanceError,
+        match=r"^store\[\.\.\.\] takes an instance; use store\.get\('INA238#0\[4\]'\)$",
+    ):
+        store["INA238#0[4]"]
+    with pytest.raises(
+        InstanceError,
+        match=r"^INA238#1: instance does not exist \(add it first: param add\)$",
+    ):
+        store["INA238#1"]
+    assert 5 not in store and None not in store
+    assert "INA238#0" in store and "INA238#1" not in store and "NOPE#0" not in store
+    assert list(store) == list(store.names())
+
+
+@pytest.mark.issue40
+def test_a_classic_parameter_has_no_leaves(store: px4params.Store) -> None:
+    for call in (store.get, store.leaf):
+        with pytest.raises(
+            InstanceError,
+            match=r"^'SYS_AUTOSTART\.x' names no leaf \(expected NAME#N\[k\] or NAME#N\.path\)$",
+        ):
+            call("SYS_AUTOSTART.x")
+    with pytest.raises(InstanceError, match=r"^SYS_AUTOSTART is a classic parameter: it has no "
+                       r"leaves$"):  # fmt: skip
+        store.leaves("SYS_AUTOSTART")
+    with pytest.raises(InstanceError, match=r"^SYS_AUTOSTART is a classic parameter: it has no "
+                       r"leaves$"):  # fmt: skip
+        store.set("SYS_AUTOSTART.x", 1)
+    store.add("INA238#0")
+    with pytest.raises(InstanceError, match=r"^'INA238#0' names no leaf"):
+        store.leaf("INA238#0")
+    with pytest.raises(InstanceError, match=r"^encoded takes an instance or parameter, not a "
+                       r"leaf: INA238#0\[4\]$"):  # fmt: skip
+        store.encoded("INA238#0[4]")
+
+
+@pytest.mark.issue40
+def test_a_classic_value_that_is_not_a_number_names_the_parameter(store: px4params.Store) -> None:
+    with pytest.raises(ClassicParamsError, match=r"^SYS_AUTOSTART: "):
+        store.set("SYS_AUTOSTART", "banana")
+    for bad in (math.nan, math.inf, -math.inf):
+        with pytest.raises(
+            ValueRangeError,
+            match=rf"^BAT1_CAPACITY: {bad} is not a finite number \(Float: NaN and infinities "
+            r"are refused\)$",
+        ):
+            store.set("BAT1_CAPACITY", bad)
+    assert store.get("BAT1_CAPACITY") == -1.0
+    store.set("BAT1_CAPACITY", 3.4e38)  # finite, near float32's largest: taken
+    assert store.get("BAT1_CAPACITY") == pytest.approx(3.4e38, rel=1e-6)
+
+
+@pytest.mark.issue40
+def test_set_encoded_checks_the_ranges(store: px4params.Store) -> None:
+    """Stored bytes go through the same @min/@max check as values (nothing written when
+    refused)."""
+    store.add("INA238#0")
+    data_type = store.data_type("INA238")
+    value = store.get("INA238#0")
+    value["current"] = 100
+    store.set_encoded("INA238#0", data_type.encode(value, tao=False))
+    assert store.get("INA238#0.current") == 100
+    store.set_encoded("INA238#0", data_type.encode(value, tao=False), default=True)
+    assert store.get("INA238#0.current", default=True) == 100
+    before = store.encoded("INA238#0")
+    bad = dict(value, current=328)  # px/Ina238.1.1.dsdl: current @min 1 @max 327 (a uint10)
+    with pytest.raises(ValueRangeError, match=r"^INA238#0\.current: 328 "):
+        store.set_encoded("INA238#0", data_type.encode(bad, tao=False))
+    assert store.encoded("INA238#0") == before
+
+
+@pytest.mark.issue40
+def test_resetting(store: px4params.Store) -> None:
+    store.add("INA238#0")
+    store.set_default("INA238#0.current", 150)
+    store.set("INA238#0.current", 90)
+    store.set("INA238#0.bus.i2c.address", 0x41)
+    store.set("SYS_AUTOSTART", 4001)
+    store.reset("INA238#0.current")  # one leaf: back to the instance's default
+    assert store.get("INA238#0.current") == 150
+    assert store.get("INA238#0.bus.i2c.address") == 0x41
+    assert store.changed() == ["INA238#0", "SYS_AUTOSTART"]
+    assert store.changed("INA238#0") and not store.changed("BAT1_CAPACITY")
+    store.set("INA238#0.bus._tag", 1)  # now SPI: the default value is I2C
+    with pytest.raises(
+        LeafError,
+        match=r"\(in the default value, which has another shape\)$",
+    ):
+        store.reset("INA238#0.bus.spi.chip_select")
+    store.reset_all()
+    assert store.changed() == []
+    assert store.instances("INA238") == ["INA238#0"]  # instances stay
+    assert store.get("INA238#0.current") == 150
+    store.reset_to_initial()
+    assert list(store.names()) == ["SYS_AUTOSTART", "BAT1_CAPACITY", "SENS_EXT_I2C_PRB"]
+    assert store.get("SYS_AUTOSTART") == 0
+
+
+@pytest.mark.issue40
+def test_reset_to_initial_forgets_kept_classic_records(
+    schema: px4params.Schema, tmp_path: Path
+) -> None:
+    full = px4params.Store(schema, classic=CLASSIC)
+    full.set("BAT1_CAPACITY", 4200.0)
+    path = tmp_path / "p.store"
+    full.save(path)
+    fewer = px4params.Store(schema, classic=CLASSIC[:1])
+    fewer.load_from(path)
+    fewer.reset_to_initial()
+    fewer.save(path)
+    assert px4params.Store.load(path, schema, classic=CLASSIC).get("BAT1_CAPACITY") == -1.0
+
+
+@pytest.mark.issue40
+def test_an_instance_view(store: px4params.Store) -> None:
+    store.add("INA238#0")
+    view = store["INA238#0"]
+    assert view.name == "INA238#0"
+    view.current = 120
+    assert view.value["current"] == 120 and view.default["current"] != 120
+    bus = view.bus
+    assert bus.i2c.value == store.get("INA238#0")["bus"]["i2c"]
+    assert repr(bus.i2c) == f"<INA238#0.bus.i2c {bus.i2c.value!r}>"
+    assert repr(view) == f"<INA238#0 {view.value!r}>"
+    with pytest.raises(InstanceError, match=r"^INA238#0\.bus\.: set whole values on the instance$"):
+        bus.set({})
+    with pytest.raises(InstanceError, match=r"^INA238#0\.bus\.: \[k\] counts from the instance$"):
+        bus[0]
+    with pytest.raises(AttributeError):
+        view.__wrapped__  # noqa: B018  (dunder names are Python's, never a field)
+    with pytest.raises(LeafError, match="nope"):
+        view.nope  # noqa: B018
+    assert [leaf.path for leaf in view.leaves()] == [leaf.path for leaf in store.leaves("INA238#0")]
+    value = store.get("INA238#0")
+    value["current"] = 5
+    view.set(value)
+    assert store.get("INA238#0.current") == 5
+
+
+@pytest.mark.issue40
+def test_the_store_says_what_it_holds(store: px4params.Store) -> None:
+    store.add("INA238#0")
+    store.add("INA238#2")
+    n = len(store.parameters)
+    assert repr(store) == f"<Store 5 instances of {n} parameters>"
+
+
+@pytest.mark.issue40
+def test_a_transaction_interrupted_changes_nothing(store: px4params.Store) -> None:
+    store.add("INA238#0")
+    before = encode_file(store)
+    with pytest.raises(KeyboardInterrupt), store.transaction() as s:
+        s.add("INA238#1")
+        raise KeyboardInterrupt
+    assert encode_file(store) == before
+    with store.transaction() as s:
+        s.add("INA238#1")
+    assert store.instances("INA238") == ["INA238#0", "INA238#1"]
+
+
+@pytest.mark.issue40
+def test_the_flat_name_check_is_remembered_per_schema(
+    schema: px4params.Schema, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The destructured names are checked when a store is made; the verdict is kept in the
+    cache folder, so that the next store of the same schema and classic names works them out
+    only on first use. A schema not loaded through the model cache is checked every time."""
+    monkeypatch.setenv("PX4PARAMS_CACHE_DIR", str(tmp_path))
+    first = px4params.Store(schema, classic=CLASSIC)
+    assert first._destructured is not None  # checked now
+    assert [p.name for p in tmp_path.iterdir() if p.name.startswith("flatcheck-")] != []
+    second = px4params.Store(schema, classic=CLASSIC)
+    assert second._destructured is None  # the verdict was read
+    assert second.destructured is not None
+    other = px4params.Store(schema, classic=CLASSIC[:1])  # other classic names: checked again
+    assert other._destructured is not None
+    bare = px4params.Schema(dict(schema.model, key=None))
+    for _ in range(2):
+        assert px4params.Store(bare, classic=[])._destructured is not None
+
+
+@pytest.mark.issue40
+def test_an_unknown_name_gets_three_hints_at_most(schema: px4params.Schema) -> None:
+    store = px4params.Store(schema, classic=[ClassicParam(f"BAT1_{c}", "Int32", 0) for c in "ABCD"])
+    with pytest.raises(
+        InstanceError,
+        match=r"^unknown parameter 'BAT1_X' \(did you mean: BAT1_D, BAT1_C, BAT1_B\?\)$",
+    ):
+        store.spec("BAT1_X")
+
+
+@pytest.mark.issue40
+def test_the_names_a_store_remembers_are_bounded(store: px4params.Store) -> None:
+    """Names can come from anywhere (a GCS, a file): at most 4096 resolutions are kept."""
+    for k in range(4097):
+        assert f"INA238#0[{k}]" not in store
+    assert 0 < len(store._resolved) <= 4096
+
+
+@pytest.mark.issue40
+def test_a_type_ending_in_a_variable_array_is_kept_whole(tmp_path: Path) -> None:
+    """Values are kept without tail array optimization (docs/store-format.md): the array of a
+    type whose last field is a variable-length array keeps its length prefix, and every read,
+    write and range check of the store takes the bytes so."""
+    root = tmp_path / "acme"
+    root.mkdir()
+    (root / "Table.1.0.dsdl").write_text(
+        "# @max_instances 2\nuint4 p_version\nuint8 gain\n# @max 100\n"
+        "uint8[<=200] cells\n# @max 50\n@sealed\n"
+    )
+    schema = px4params.load_schema([str(root)], use_env=False)
+    store = px4params.Store(schema, classic=[])
+    store.add("TABLE#0")
+    assert store.get("TABLE#0") == {"p_version": 0, "gain": 0, "cells": []}
+    # 4 + 8 bits, then the length prefix (8 bits for up to 200 cells): 3 bytes, not 2
+    assert store.encoded("TABLE#0", default=True) == bytes(3)
+    store.set("TABLE#0", {"gain": 5, "cells": [1, 2, 3]})
+    # p_version 0, gain 5, length 3, cells 1 2 3 (4-bit offset): the bytes read by hand
+    assert store.encoded("TABLE#0") == bytes.fromhex("005030102030")
+    assert [(leaf.path, leaf.value) for leaf in store.leaves("TABLE#0")] == [
+        ("p_version", 0), ("gain", 5), ("cells._len", 3), ("cells[0]", 1), ("cells[1]", 2),
+        ("cells[2]", 3),
+    ]  # fmt: skip
+    with pytest.raises(ValueRangeError, match=r"^TABLE#0\.cells\[1\]: 51 is above 50 \(@max\)$"):
+        store.set("TABLE#0.cells[1]", 51)
+    with pytest.raises(ValueRangeError, match=r"^TABLE#0\.cells\[3\]: 60 is above 50 \(@max\)$"):
+        store.set("TABLE#0", {"gain": 5, "cells": [1, 2, 3, 60]})
+    with pytest.raises(ValueRangeError, match=r"^TABLE#0\.gain: 101 is above 100 \(@max\)$"):
+        store.set("TABLE#0.gain", 101)
+    store.set("TABLE#0.cells._len", 4)  # a length brings a cell in: its default 0 is in range
+    assert store.get("TABLE#0")["cells"] == [1, 2, 3, 0]
+    store.set("TABLE#0.cells[3]", 50)
+    store.set_encoded("TABLE#0", bytes.fromhex("0050201000"), default=True)
+    assert store.get("TABLE#0", default=True)["cells"] == [1, 0]
+    assert store.get("TABLE#0")["cells"] == [1, 2, 3, 50]  # a changed value stays
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize(
+    ("call", "name", "message"),
+    [
+        ("get", "SYS_AUTOSTART#0", "SYS_AUTOSTART is not instanced: write SYS_AUTOSTART, not "
+         "SYS_AUTOSTART#0"),
+        ("get", "INA238", "INA238 has instances: name one, e.g. INA238#0"),
+        ("get", "ZZZZ", "unknown parameter 'ZZZZ'"),
+        ("add", "INA238#0[4]", "add takes an instance, not a leaf: INA238#0[4]"),
+        ("add", "SYS_AUTOSTART", "SYS_AUTOSTART: a shared parameter has no instances to add"),
+    ],
+)  # fmt: skip
+def test_naming_errors_word_for_word(store: px4params.Store, call, name, message) -> None:
+    with pytest.raises(InstanceError) as info:
+        getattr(store, call)(name)
+    assert str(info.value) == message
+
+
+@pytest.mark.issue40
+def test_a_name_that_is_not_text_is_refused_by_reads_and_writes(store: px4params.Store) -> None:
+    """(A list cannot be a key of the store's remembered names: it goes to the parser, which
+    refuses it in one line.)"""
+    for call in (store.get, store.encoded, store.reset, lambda name: store.set(name, 1)):
+        with pytest.raises(InstanceError, match=r"^\['INA238#0'\] is not a parameter name"):
+            call(["INA238#0"])
+
+
+@pytest.mark.issue40
+def test_reads_give_the_value_unless_the_default_is_asked_for(store: px4params.Store) -> None:
+    store.add("INA238#0")
+    store.set("INA238#0.current", 99)
+    leaves = {leaf.path: leaf.value for leaf in store.leaves("INA238#0")}
+    defaults = {leaf.path: leaf.value for leaf in store.leaves("INA238#0", default=True)}
+    assert leaves["current"] == 99 and defaults["current"] != 99
+    assert store.encoded("INA238#0") != store.encoded("INA238#0", default=True)
+    assert store.data_type("INA238").decode(store.encoded("INA238#0"), tao=False)["current"] == 99
+    view = store["INA238#0"].bus
+    assert view["i2c.address"] == store.get("INA238#0.bus.i2c.address")  # a path from the view
+    with pytest.raises(LeafError) as info:
+        store.get("INA238#0.bus")
+    assert str(info.value) == "INA238#0: bus: not a leaf (a struct, union or array)"
+    with pytest.raises(InstanceError) as info:
+        store.changed("INA238#0[4]")
+    assert str(info.value) == "changed takes an instance or parameter, not a leaf: INA238#0[4]"
+
+
+@pytest.mark.issue40
+def test_the_leaf_reads_a_store_remembers_are_bounded(tmp_path: Path) -> None:
+    """As names, the leaf reads kept to answer the next read in one call are bounded (4096):
+    here 4097 distinct names of existing leaves (cells[i] by path, then by [k])."""
+    root = tmp_path / "acme"
+    root.mkdir()
+    (root / "Big.1.0.dsdl").write_text(
+        "# @max_instances 1\nuint4 p_version\nuint8[<=2100] cells\n@sealed\n"
+    )
+    schema = px4params.load_schema([str(root)], use_env=False)
+    store = px4params.Store(schema, classic=[])
+    store.add("BIG#0")
+    store.set("BIG#0", {"cells": [7] * 2100})
+    for i in range(2100):
+        assert store.get(f"BIG#0.cells[{i}]") == 7
+    for i in range(4097 - 2100):
+        assert store.get(f"BIG#0[{i + 2}]") == 7  # [0] p_version, [1] the length
+    assert 0 < len(store._leaf_reads) <= 4096
+
+
+@pytest.mark.issue40
+def test_an_int32_whose_bits_spell_a_float_nan_is_a_number(store: px4params.Store) -> None:
+    """Only Float classic parameters refuse NaN: an Int32 holds any 32-bit integer, also one
+    whose bytes would read as a float NaN (0x7FC00000) or infinity (0x7F800000)."""
+    for number in (0x7FC00000, 0x7F800000, -1):
+        store.set("SYS_AUTOSTART", number)
+        assert store.get("SYS_AUTOSTART") == number
+
+
+@pytest.mark.issue40
+def test_a_tag_or_a_length_brings_leaves_that_are_checked_too(tmp_path: Path) -> None:
+    """Selecting a union's variant or growing an array brings leaves in at their defaults:
+    those are held to their @min/@max like any written leaf. And only what a write changes is
+    checked: a value stored out of range with force stays writable as it is."""
+    root = tmp_path / "acme"
+    root.mkdir()
+    (root / "Choice.1.0.dsdl").write_text("@union\nuint8 low\nuint8 high\n# @min 1\n@sealed\n")
+    (root / "Row.1.0.dsdl").write_text(
+        "# @max_instances 1\nuint4 p_version\nChoice.1.0 choice\n"
+        "uint8[<=8] cells\n# @min 1\n# @max 50\n@sealed\n"
+    )
+    schema = px4params.load_schema([str(root)], use_env=False)
+    store = px4params.Store(schema, classic=[])
+    store.add("ROW#0")
+    store.set("ROW#0.cells._len", 0)
+    with pytest.raises(
+        ValueRangeError, match=r"^ROW#0\.cells\[0\]: 0 is outside 1\.\.50 \(@min/@max\)$"
+    ):
+        store.set("ROW#0.cells._len", 1)  # a new cell at 0
+    with pytest.raises(ValueRangeError, match=r"^ROW#0\.choice\.high: 0 is below 1 \(@min\)$"):
+        store.set("ROW#0.choice._tag", 1)  # high, at 0
+    assert store.get("ROW#0") == {"p_version": 0, "choice": {"low": 0}, "cells": []}
+    store.set("ROW#0", {"choice": {"low": 3}, "cells": [60]}, force=True)
+    store.set("ROW#0", {"choice": {"low": 4}, "cells": [60]})  # the cell is not changed
+    assert store.get("ROW#0")["cells"] == [60]

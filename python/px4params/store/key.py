@@ -113,6 +113,11 @@ class Key(NamedTuple):
         once, where it enters, and the key is passed on)."""
         if isinstance(text, Key):
             return text
+        if not isinstance(text, str):  # the Python API: a list or a number is no name either
+            raise InstanceError(
+                f"{abbreviated(repr(text))} is not a parameter name (a {type(text).__name__}; "
+                "expected text or a Key)"
+            )
         match = _split_key(text)
         if match is not None and match[0] != match[0].upper():
             match = None  # lower case: PX4's names are exact
