@@ -1,0 +1,77 @@
+//! Leaf access by path (`get_leaf` with `Target::Path`) against DroneCAN's tail array
+//! optimization as pydronecan applies it (issue 40): the last element of a length-prefixed
+//! dynamic array inherits the optimization, so the byte array that ends that element takes
+//! the remaining bytes without a length; the elements before it keep their lengths.
+//!
+//! The type (`mutcore.Inner`: `uint4 x`, `uint8[<=5] data`; `mutcore.Outer`: `uint8 a`,
+//! `mutcore.Inner[<=3] items`): an Inner is at least 7 bits long, under the 8 bits the
+//! optimization needs, so `items` keeps its 2-bit length even as the last field; the last
+//! Inner's `data` (uint8 elements) is optimized.
+
+use px4params_core::compile::OwnedLayout;
+use px4params_core::layout::Role;
+use px4params_core::leaf::{get_leaf, Target};
+use px4params_core::{Cast, NodeId, Scalar};
+
+/// a = 0x11, items = [{x: 1, data: [0xA1]}, {x: 2, data: [0xB1, 0xB2, 0xB3]}], encoded by
+/// pydronecan 1.0.27 from the DSDL above: `transport.bytes_from_bits(value._pack(tao))`.
+const WITH_TAO: [u8; 7] = [0x11, 0x84, 0xD0, 0x95, 0x8D, 0x95, 0x98];
+/// The same value with `_pack(False)`: the last Inner's data keeps its 3-bit length.
+const WITHOUT_TAO: [u8; 7] = [0x11, 0x84, 0xD0, 0x93, 0xB1, 0xB2, 0xB3];
+
+fn outer(l: &mut OwnedLayout) -> NodeId {
+    let u4 = l.uint(4, Cast::Saturated).unwrap();
+    let u8_ = l.uint(8, Cast::Saturated).unwrap();
+    let data = l.dyn_array(u8_, 5).unwrap();
+    let inner = l
+        .structure(&[("x", u4, Role::Data), ("data", data, Role::Data)])
+        .unwrap();
+    let items = l.dyn_array(inner, 3).unwrap();
+    l.structure(&[("a", u8_, Role::Data), ("items", items, Role::Data)])
+        .unwrap()
+}
+
+fn leaf_at(bytes: &[u8], path: &str, tao: bool) -> Option<Scalar> {
+    let mut l = OwnedLayout::default();
+    let root = outer(&mut l);
+    get_leaf(&l.as_layout(), root, bytes, Target::Path(path), tao)
+        .ok()
+        .map(|(_, v)| v)
+}
+
+#[test]
+fn the_last_element_of_a_prefixed_array_ends_in_a_tail_array_under_tao() {
+    for (path, want) in [
+        ("a", 0x11),
+        ("items[0].x", 1),
+        ("items[0].data[0]", 0xA1),
+        ("items[1].x", 2),
+        ("items[1].data[0]", 0xB1),
+        ("items[1].data[1]", 0xB2),
+        ("items[1].data[2]", 0xB3),
+    ] {
+        assert_eq!(
+            leaf_at(&WITH_TAO, path, true),
+            Some(Scalar::Uint(want)),
+            "{path}"
+        );
+    }
+    // The tail array holds three bytes: there is no fourth.
+    assert_eq!(leaf_at(&WITH_TAO, "items[1].data[3]", true), None);
+}
+
+#[test]
+fn without_tao_the_last_element_keeps_its_length() {
+    for (path, want) in [
+        ("items[0].data[0]", 0xA1),
+        ("items[1].x", 2),
+        ("items[1].data[2]", 0xB3),
+    ] {
+        assert_eq!(
+            leaf_at(&WITHOUT_TAO, path, false),
+            Some(Scalar::Uint(want)),
+            "{path}"
+        );
+    }
+    assert_eq!(leaf_at(&WITHOUT_TAO, "items[1].data[3]", false), None);
+}
