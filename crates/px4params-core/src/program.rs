@@ -59,7 +59,7 @@ pub trait ValueSource {
     fn element(&mut self, array: &Self::Array, index: usize, elem: Kind) -> Option<Scalar>;
     /// Element `index` of an array of `uint8`, when it is a value of 0 to 255: the bytes of a
     /// byte-aligned array are written straight.
-    #[inline]
+    #[inline(always)]
     fn byte(&mut self, array: &Self::Array, index: usize, elem: Kind) -> Option<u8> {
         match self.element(array, index, elem)? {
             Scalar::Uint(v) => u8::try_from(v).ok(),
@@ -696,6 +696,9 @@ impl<S: ValueSource> Encoder<'_, '_, '_, S> {
         written.ok()
     }
 
+    // Inlined into the struct loop, where nearly every array is (as before unions and arrays
+    // of composites gave it a second caller): a call here costs a plain struct's encode.
+    #[inline(always)]
     fn array(&mut self, item: S::Item, elem: Kind, len: Len) -> Option<()> {
         let (array, n) = self.source.begin_array(item, elem)?;
         self.length(len, n)?;
@@ -720,6 +723,7 @@ impl<S: ValueSource> Encoder<'_, '_, '_, S> {
     }
 
     /// Checks an array's length and writes its prefix.
+    #[inline(always)]
     fn length(&mut self, len: Len, n: usize) -> Option<()> {
         match len {
             Len::Fixed(len) => (n == len as usize).then_some(()),
