@@ -70,7 +70,7 @@ px4params-core = {{ path = "{core}" }}
 px4params-ffi = {{ path = "{ffi}", features = ["firmware"], optional = true }}
 
 [profile.release]
-opt-level = "s"
+opt-level = "{opt_level}"
 lto = "fat"
 codegen-units = 1
 panic = "abort"
@@ -298,6 +298,13 @@ def largest(library: Path, n: int) -> list[str]:
 # How a Cortex-M7 image is linked: the exports are the roots, everything else is collected.
 ARM_FLAGS = ["-mcpu=cortex-m7", "-mthumb", "-mfloat-abi=hard", "-mfpu=fpv5-d16"]
 EXPORTS = re.findall(r'pub extern "C" fn (\w+)', PROBE_RS)
+# newlib-nano, the C library arm-none-eabi-gcc links with its nano specs.
+LIBC = "-lc_nano"
+MEMORY_ROUTINES = {"memcpy", "memmove", "memset", "memcmp", "bcmp"} | {
+    f"__aeabi_{name}{align}"
+    for name in ("memcpy", "memmove", "memset", "memclr")
+    for align in ("", "4", "8")
+}
 
 
 def build(probe: Path, features: list[str], target: Path, triple: str | None) -> Path:
@@ -315,12 +322,68 @@ def build(probe: Path, features: list[str], target: Path, triple: str | None) ->
     if not triple:
         return target / name / "release" / "libpx4params_size_probe.so"
     archive = target / name / triple / "release" / "libpx4params_size_probe.a"
-    image = archive.with_suffix(".elf")
-    keep = [f"-Wl,--undefined={symbol}" for symbol in EXPORTS]
+    # The memory routines the core calls come from the C library, as in a firmware (Rust's
+    # own, in `compiler_builtins`, are weak symbols that a libc's replace): named first, so
+    # that the libc's are the ones linked.
+    wanted = {line.split()[-1] for line in nm(["-u", str(archive)]).splitlines() if line.strip()}
+    libc = [f"-Wl,--undefined={symbol}" for symbol in sorted(wanted & MEMORY_ROUTINES)]
+    return link_arm([*libc, LIBC, str(archive)], EXPORTS, archive.with_suffix(".elf"))
+
+
+def nm(arguments: list[str]) -> str:
+    command = ["arm-none-eabi-nm", *arguments]
+    return subprocess.run(command, capture_output=True, text=True, check=True).stdout
+
+
+def link_arm(inputs: list[str], roots: list[str], image: Path) -> Path:
+    """A Cortex-M7 image of `inputs` holding what `roots` reach (``--gc-sections``)."""
+    keep = [f"-Wl,--undefined={symbol}" for symbol in roots]
     link = ["arm-none-eabi-gcc", *ARM_FLAGS, "-nostartfiles", "-nostdlib", "-Wl,--gc-sections"]
-    link += ["-Wl,--entry=0", *keep, str(archive), "-lgcc", "-o", str(image)]
-    subprocess.run(link, check=True)
+    # newlib's memcpy objects lack a .note.GNU-stack section: ld's warning says nothing here.
+    link += ["-Wl,--no-warn-execstack", "-Wl,--entry=0", *keep, *inputs, LIBC, "-lgcc"]
+    subprocess.run([*link, "-o", str(image)], check=True)
     return image
+
+
+# The C baseline (issue 39): dronecan_dsdlc-generated C on libcanard v0, outside the project
+# (../shared/anchors/dronecan-c; PX4PARAMS_C_ANCHOR elsewhere), built with gcc -Os and linked
+# as the probes are: each image holds what the named API reaches, the memory routines from
+# the same libc.
+C_ANCHOR = Path(os.environ.get("PX4PARAMS_C_ANCHOR", ROOT.parent / "shared/anchors/dronecan-c"))
+C_MESSAGES = [
+    "uavcan.equipment.power.BatteryInfo",
+    "uavcan.protocol.NodeStatus",
+    "uavcan.protocol.GetNodeInfo_res",
+    "uavcan.protocol.file.Read_res",
+]
+
+
+def c_baseline(work: Path) -> dict[str, int]:
+    """``.text`` of libcanard's whole API, and with the four messages' encode/decode too."""
+    work.mkdir(parents=True, exist_ok=True)
+    includes = [f"-I{C_ANCHOR / 'libcanard'}", f"-I{C_ANCHOR / 'generated' / 'include'}"]
+    sources = [C_ANCHOR / "libcanard" / "canard.c"]
+    sources += sorted((C_ANCHOR / "generated" / "src").glob("*.c"))
+    objects = []
+    for source in sources:
+        obj = work / (source.stem + ".o")
+        compile_c = ["arm-none-eabi-gcc", *ARM_FLAGS, "-Os", "-DNDEBUG", *includes]
+        subprocess.run(
+            [*compile_c, "-ffunction-sections", "-c", str(source), "-o", str(obj)], check=True
+        )
+        objects.append(obj)
+
+    def api(obj: Path) -> list[str]:
+        out = nm(["--defined-only", "-g", str(obj)])
+        return [line.split()[-1] for line in out.splitlines() if line.split()[1] == "T"]
+
+    canard, messages = objects[0], [work / f"{m}.o" for m in C_MESSAGES]
+    roots = api(canard)
+    sizes = {"canard.c": text_size(link_arm([str(o) for o in objects], roots, work / "c.elf"))}
+    roots += [symbol for obj in messages for symbol in api(obj)]
+    both = link_arm([str(o) for o in objects], roots, work / "c-messages.elf")
+    sizes["canard.c + 4 messages"] = text_size(both)
+    return sizes
 
 
 def main() -> int:
@@ -330,6 +393,7 @@ def main() -> int:
     parser.add_argument("--keep", metavar="DIR", help="build in DIR (kept; rebuilds are faster)")
     parser.add_argument("--symbols", type=int, default=0, metavar="N")
     parser.add_argument("--target", metavar="TRIPLE", choices=[t for t in TARGETS if t])
+    parser.add_argument("--opt-level", choices=["s", "z"], default="z")
     args = parser.parse_args()
     tools = ["cargo", "size", "nm"] + (["arm-none-eabi-gcc"] if args.target else [])
     for tool in tools:
@@ -342,7 +406,9 @@ def main() -> int:
         probe.mkdir(parents=True, exist_ok=True)
         core, ffi = ROOT / "crates" / "px4params-core", ROOT / "crates" / "px4params-ffi"
         crate_type = "staticlib" if args.target else "cdylib"
-        toml = PROBE_TOML.format(core=core, ffi=ffi, crate_type=crate_type)
+        toml = PROBE_TOML.format(
+            core=core, ffi=ffi, crate_type=crate_type, opt_level=args.opt_level
+        )
         (probe / "Cargo.toml").write_text(toml)
         (probe / "lib.rs").write_text(PROBE_RS)
         # The targets are firmware's: the core built for size (`compact`).
@@ -364,6 +430,12 @@ def main() -> int:
                 failed |= small > target
                 verdict = "ok" if small <= target else "OVER"
                 print(f"{feature:8} {host:>12,} {small:>14,} {target:>8,}  {verdict}")
+        if args.target:
+            if (C_ANCHOR / "libcanard" / "canard.c").is_file():
+                for name, size in c_baseline(work / "c").items():
+                    print(f"C: {name} (gcc -Os) .text {size:,}")
+            else:
+                print(f"C: baseline not measured ({C_ANCHOR} not found)")
     return 1 if failed else 0
 
 
