@@ -64,11 +64,19 @@ pub fn data_type_signature(dsdl_signature: u64, nested: &[u64]) -> u64 {
 
 /// CRC-16-CCITT-FALSE (poly `0x1021`, no reflection, no final xor) continuing from `crc`.
 ///
-/// Eight bytes at a time on hosts, four without plans (firmware, [`crate::plan`]) ("slicing
-/// by 8 / 4"): the table lookups of a step do not depend on each other, so they overlap, where
-/// byte at a time (or bit by bit) every step waits for the one before. The tables (4 KB, 2 KB
-/// in firmware) are read-only data computed at compile time.
+/// Eight bytes at a time on hosts ("slicing by 8"): the table lookups of a step do not depend
+/// on each other, so they overlap, where byte at a time (or bit by bit) every step waits for
+/// the one before. The tables (4 KB) are read-only data computed at compile time. Without
+/// plans (firmware, [`crate::plan`]) half a byte at a time from a 32-byte table, as
+/// [`crc32`] goes: flash matters more there than a frame's few dozen cycles.
 pub fn crc16(mut crc: u16, bytes: &[u8]) -> u16 {
+    if SLICES == 0 {
+        for &b in bytes {
+            crc = crc16_nibble(crc, b >> 4);
+            crc = crc16_nibble(crc, b & 15);
+        }
+        return crc;
+    }
     let mut rest = bytes;
     if SLICES == 8 {
         // A slice (of known length: no bounds checks remain), so that the indices past 3 are
@@ -89,17 +97,24 @@ pub fn crc16(mut crc: u16, bytes: &[u8]) -> u16 {
     for c in &mut chunks {
         crc = crc16_word(crc, u32::from_be_bytes([c[0], c[1], c[2], c[3]]));
     }
-    let t0 = &CRC16_TABLES[0];
+    // A slice: where the tables are none (firmware), this code is never reached.
+    let t: &[[u16; 256]] = &CRC16_TABLES;
     for &b in chunks.remainder() {
-        crc = (crc << 8) ^ t0[usize::from((crc >> 8) as u8 ^ b)];
+        crc = (crc << 8) ^ t[0][usize::from((crc >> 8) as u8 ^ b)];
     }
     crc
+}
+
+/// Four bits of [`crc16`]: `nibble` (below 16) shifted through the register.
+#[inline(always)]
+fn crc16_nibble(crc: u16, nibble: u8) -> u16 {
+    (crc << 4) ^ CRC16_NIBBLES[usize::from(((crc >> 12) as u8 ^ nibble) & 15)]
 }
 
 /// [`crc16`] of four bytes given as one big-endian word.
 #[inline(always)]
 fn crc16_word(crc: u16, word: u32) -> u16 {
-    let t = &CRC16_TABLES;
+    let t: &[[u16; 256]] = &CRC16_TABLES;
     let [b0, b1, b2, b3] = word.to_be_bytes();
     let high = (crc >> 8) as u8 ^ b0;
     let low = crc as u8 ^ b1;
@@ -131,36 +146,57 @@ pub fn crc16_pieces<'a>(mut crc: u16, pieces: impl IntoIterator<Item = &'a [u8]>
     crc16(crc, &carry[..held])
 }
 
-/// Bytes per step of [`crc16`] (and tables): firmware builds keep 2 KB of tables.
+/// Bytes per step of [`crc16`] (and tables); 0: half a byte per step (firmware).
 const SLICES: usize = Active::CRC_SLICES;
 
 /// `CRC16_TABLES[k][n]`: the CRC register after shifting byte `n` and then `k` zero bytes
 /// through it from zero.
 static CRC16_TABLES: [[u16; 256]; SLICES] = crc16_tables();
 
-const fn crc16_tables() -> [[u16; 256]; SLICES] {
-    let mut tables = [[0u16; 256]; SLICES];
+/// `CRC16_NIBBLES[n]`: the CRC register after shifting the four bits `n` through it from zero.
+static CRC16_NIBBLES: [u16; 16] = {
+    let mut table = [0u16; 16];
     let mut n = 0;
-    while n < 256 {
-        let mut crc = (n as u16) << 8;
-        let mut bit = 0;
-        while bit < 8 {
-            crc = if crc & 0x8000 != 0 {
-                (crc << 1) ^ 0x1021
-            } else {
-                crc << 1
-            };
-            bit += 1;
-        }
-        tables[0][n] = crc;
+    while n < 16 {
+        table[n] = crc16_shifted((n as u16) << 12, 4);
         n += 1;
     }
-    let mut k = 1;
+    table
+};
+
+/// `crc` with `bits` zero bits shifted through it, bit by bit (the definition).
+const fn crc16_shifted(mut crc: u16, bits: u32) -> u16 {
+    let mut bit = 0;
+    while bit < bits {
+        crc = if crc & 0x8000 != 0 {
+            (crc << 1) ^ 0x1021
+        } else {
+            crc << 1
+        };
+        bit += 1;
+    }
+    crc
+}
+
+const fn crc16_tables() -> [[u16; 256]; SLICES] {
+    let mut first = [0u16; 256];
+    let mut n = 0;
+    while n < 256 {
+        first[n] = crc16_shifted((n as u16) << 8, 8);
+        n += 1;
+    }
+    // Table k from table k - 1 (k a variable: with no tables, no index is out of range).
+    let mut tables = [[0u16; 256]; SLICES];
+    let mut k = 0;
     while k < SLICES {
         let mut n = 0;
         while n < 256 {
-            let prev = tables[k - 1][n];
-            tables[k][n] = (prev << 8) ^ tables[0][(prev >> 8) as usize];
+            tables[k][n] = if k == 0 {
+                first[n]
+            } else {
+                let prev = tables[k - 1][n];
+                (prev << 8) ^ first[(prev >> 8) as usize]
+            };
             n += 1;
         }
         k += 1;

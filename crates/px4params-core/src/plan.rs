@@ -25,7 +25,7 @@ pub trait Plans {
     const TRANSLATE: bool;
     /// A multi-frame transfer's CRC over its payload gathered in runs (else across pieces).
     const GATHERED_CRC: bool;
-    /// Bytes per step of the CRC-16 (8: tables of 4 KB; 4: 2 KB).
+    /// Bytes per step of the CRC-16 (8: tables of 4 KB; 0: half a byte, a 32-byte table).
     const CRC_SLICES: usize;
     /// Small fixed-shape types (a fixed run, perhaps ending in an array of primitives)
     /// encoded and decoded in one straight pass ([`crate::straight`]).
@@ -58,7 +58,7 @@ impl Plans for NoPlans {
     const TABLES: bool = false;
     const TRANSLATE: bool = false;
     const GATHERED_CRC: bool = false;
-    const CRC_SLICES: usize = 4;
+    const CRC_SLICES: usize = 0;
     const STRAIGHT: bool = false;
 }
 

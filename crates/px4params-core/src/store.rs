@@ -453,13 +453,12 @@ where
         store.slots.as_mut().fill(Slot::default());
         for param in 0..store.defs.as_ref().len() {
             let def = store.defs.as_ref()[param];
-            let start = def.first_byte as usize;
-            let region = &mut store.bytes.as_mut()[start..start + def.slot_bytes as usize];
+            let region = store.bytes_mut(def.first_byte as usize, def.slot_bytes as usize);
             let len = leaf::encode_default(layout, def.root, region, false)?;
-            store.slots.as_mut()[def.first_slot as usize].default_len = len as u16;
+            store.with_slot(def.first_slot as usize, |s| s.default_len = len as u16);
             if def.shared {
                 store.fill_instance(param as u32, &def, 0);
-                store.slots.as_mut()[def.first_slot as usize + 1].flags = PRESENT;
+                store.with_slot(def.first_slot as usize + 1, |s| s.flags = PRESENT);
             }
         }
         Ok(store)
@@ -485,9 +484,11 @@ where
     pub fn set_type_default(&mut self, layout: &Layout<'_>, param: u32, data: &[u8]) -> Result<()> {
         let def = self.def(param)?;
         check_encoded(layout, def.root, data)?;
-        let start = def.first_byte as usize;
-        self.bytes.as_mut()[start..start + data.len()].copy_from_slice(data);
-        self.slots.as_mut()[def.first_slot as usize].default_len = data.len() as u16;
+        self.bytes_mut(def.first_byte as usize, data.len())
+            .copy_from_slice(data);
+        self.with_slot(def.first_slot as usize, |s| {
+            s.default_len = data.len() as u16
+        });
         if def.shared {
             self.stage(data);
             self.commit(param, &def, 0, Which::Default, data.len());
@@ -498,24 +499,22 @@ where
     /// The type default of parameter `param`.
     pub fn type_default(&self, param: u32) -> Result<&[u8]> {
         let def = self.def(param)?;
-        let len = self.slots.as_ref()[def.first_slot as usize].default_len as usize;
-        let start = def.first_byte as usize;
-        Ok(&self.bytes.as_ref()[start..start + len])
+        let len = self.slot_at(def.first_slot as usize).default_len as usize;
+        Ok(self.bytes_at(def.first_byte as usize, len))
     }
 
     /// The state of an instance.
     pub fn slot(&self, param: u32, instance: u16) -> Result<Slot> {
         let def = self.def(param)?;
         let index = slot_index(&def, instance)?;
-        Ok(self.slots.as_ref()[index])
+        Ok(self.slot_at(index))
     }
 
     /// The numbers of the instances that exist, in order.
     pub fn instances(&self, param: u32) -> Result<impl Iterator<Item = u16> + '_> {
         let def = self.def(param)?;
-        let first = def.first_slot as usize + 1;
-        let slots = &self.slots.as_ref()[first..first + def.instances as usize];
-        Ok((0..def.instances).filter(move |&i| slots[i as usize].present()))
+        let present = self.instance_slots(&def).iter().enumerate();
+        Ok(present.filter(|(_, s)| s.present()).map(|(i, _)| i as u16))
     }
 
     /// Adds instance `instance`, or the lowest free one when `None`; returns its number. It
@@ -527,7 +526,7 @@ where
         }
         let instance = match instance {
             Some(i) => {
-                if self.slots.as_ref()[slot_index(&def, i)?].present() {
+                if self.slot_at(slot_index(&def, i)?).present() {
                     return Err(StoreError::AlreadyPresent { instance: i });
                 }
                 i
@@ -537,8 +536,8 @@ where
             })?,
         };
         self.fill_instance(param, &def, instance);
-        self.slots.as_mut()[def.first_slot as usize + 1 + instance as usize].flags =
-            PRESENT | UNSAVED;
+        let index = def.first_slot as usize + 1 + instance as usize;
+        self.with_slot(index, |s| s.flags = PRESENT | UNSAVED);
         Ok(instance)
     }
 
@@ -549,10 +548,12 @@ where
             return Err(StoreError::Shared);
         }
         let index = self.present_slot(&def, instance)?;
-        self.slots.as_mut()[index] = Slot {
-            flags: UNSAVED,
-            ..Slot::default()
-        };
+        self.with_slot(index, |s| {
+            *s = Slot {
+                flags: UNSAVED,
+                ..Slot::default()
+            }
+        });
         Ok(())
     }
 
@@ -797,16 +798,20 @@ where
         saturate: bool,
     ) -> Result<()> {
         let index = slot_index(def, instance)?;
-        let (start, len) = span_of(def, self.slots.as_ref()[index], index, which);
-        let (scratch, end) = (self.scratch, self.bytes.as_ref().len());
-        let (head, tail) = self.bytes.as_mut().split_at_mut(scratch);
-        let data = &head[start..start + len];
+        let (start, len) = self.span(def, index, which);
+        // The value before the scratch area, the scratch area (to its end) after it; nothing
+        // (never: the memory was checked against the plan) is read and written as empty.
+        let (head, out) = self
+            .bytes
+            .as_mut()
+            .split_at_mut_checked(self.scratch)
+            .unwrap_or_default();
+        let data = head.get(start..start + len).unwrap_or_default();
         let found = leaf::locate_at(layout, def.root, data, k, false)?;
         if is_version(layout, &found.path) {
             return Err(StoreError::VersionLeaf { path: found.path });
         }
         let options = EncodeOptions { saturate, ..STORED };
-        let out = &mut tail[..end - scratch];
         let new_len = leaf::set_located(layout, def.root, data, &found, value, out, options)?;
         self.commit(param, def, instance, which, new_len);
         Ok(())
@@ -827,8 +832,7 @@ where
         self.present_slot(&def, instance)
             .map_err(StoreError::widen)?;
         let options = EncodeOptions { saturate, ..STORED };
-        let scratch = self.scratch;
-        let out = &mut self.bytes.as_mut()[scratch..scratch + def.slot_bytes as usize];
+        let out = self.bytes_mut(self.scratch, def.slot_bytes as usize);
         let len = codec::encode(layout, def.root, source, out, options)?;
         self.commit(param, &def, instance, which, len);
         Ok(())
@@ -860,13 +864,15 @@ where
             let first = def.first_slot as usize + 1;
             if def.shared {
                 self.fill_instance(param as u32, &def, 0);
-                self.slots.as_mut()[first].flags = PRESENT | UNSAVED;
+                self.with_slot(first, |s| s.flags = PRESENT | UNSAVED);
             } else {
-                for slot in &mut self.slots.as_mut()[first..first + def.instances as usize] {
-                    *slot = Slot {
-                        flags: UNSAVED,
-                        ..Slot::default()
-                    };
+                for instance in first..first + def.instances as usize {
+                    self.with_slot(instance, |s| {
+                        *s = Slot {
+                            flags: UNSAVED,
+                            ..Slot::default()
+                        }
+                    });
                 }
             }
         }
@@ -889,7 +895,7 @@ where
     ) -> Result<(), crate::translate::TranslateError> {
         let def = self.def(param).map_err(StoreError::widen)?;
         let index = slot_index(&def, instance).map_err(StoreError::widen)?;
-        let present = self.slots.as_ref()[index].present();
+        let present = self.slot_at(index).present();
         if !check_only {
             self.present_slot(&def, instance)
                 .map_err(StoreError::widen)?;
@@ -897,13 +903,17 @@ where
         let (from, len) = if which == Which::Value && present {
             self.span(&def, index, Which::Default)
         } else {
-            let len = self.slots.as_ref()[def.first_slot as usize].default_len;
+            let len = self.slot_at(def.first_slot as usize).default_len;
             (def.first_byte as usize, len as usize)
         };
-        let scratch = self.scratch;
-        let (head, tail) = self.bytes.as_mut().split_at_mut(scratch);
-        let base = &head[from..from + len];
-        let out = &mut tail[..def.slot_bytes as usize];
+        // Out of range (never: see `Store::slot_at`), the base and the output are empty.
+        let (head, tail) = self
+            .bytes
+            .as_mut()
+            .split_at_mut_checked(self.scratch)
+            .unwrap_or_default();
+        let base = head.get(from..from + len).unwrap_or_default();
+        let out = tail.get_mut(..def.slot_bytes as usize).unwrap_or_default();
         let written = crate::translate::translate_value(layout, old, data, def.root, base, out)?;
         if !check_only {
             self.commit(param, &def, instance, which, written);
@@ -923,9 +933,10 @@ where
         let (from, len) = self.span(&def, index, Which::Default);
         let (to, _) = self.span(&def, index, Which::Value);
         copy_apart(self.bytes.as_mut(), from, len, to);
-        let slot = &mut self.slots.as_mut()[index];
-        slot.value_len = len as u16;
-        slot.flags |= UNSAVED;
+        self.with_slot(index, |slot| {
+            slot.value_len = len as u16;
+            slot.flags |= UNSAVED;
+        });
         self.resolve(param, &def, index, Which::Value);
         Ok(())
     }
@@ -934,7 +945,7 @@ where
     pub fn mark_used(&mut self, param: u32, instance: u16) -> Result<()> {
         let def = self.def(param)?;
         let index = self.present_slot(&def, instance)?;
-        self.slots.as_mut()[index].flags |= USED;
+        self.with_slot(index, |s| s.flags |= USED);
         Ok(())
     }
 
@@ -1031,26 +1042,67 @@ where
     }
 
     fn instances_free(&self, def: &ParamDef) -> Option<u16> {
-        let first = def.first_slot as usize + 1;
-        let slots = &self.slots.as_ref()[first..first + def.instances as usize];
+        let slots = self.instance_slots(def);
         slots.iter().position(|s| !s.present()).map(|i| i as u16)
+    }
+
+    // The memory was checked against the plan when the store was made, so every slot and byte
+    // range the store works out is in range. The accessors below still check (safe code), and
+    // one out of range (never) reads as an absent slot or no bytes and is not written, where
+    // indexing would panic: firmware links no panic from the store.
+
+    /// Slot `index` (out of range: an absent slot).
+    fn slot_at(&self, index: usize) -> Slot {
+        self.slots.as_ref().get(index).copied().unwrap_or_default()
+    }
+
+    /// Changes slot `index` (out of range: nothing).
+    fn with_slot(&mut self, index: usize, change: impl FnOnce(&mut Slot)) {
+        if let Some(slot) = self.slots.as_mut().get_mut(index) {
+            change(slot);
+        }
+    }
+
+    /// The slots of a parameter's instances (out of range: none).
+    fn instance_slots(&self, def: &ParamDef) -> &[Slot] {
+        let first = def.first_slot as usize + 1;
+        let slots = self.slots.as_ref();
+        slots
+            .get(first..first + def.instances as usize)
+            .unwrap_or_default()
+    }
+
+    /// `len` bytes at `start` (out of range: none).
+    fn bytes_at(&self, start: usize, len: usize) -> &[u8] {
+        self.bytes
+            .as_ref()
+            .get(start..start + len)
+            .unwrap_or_default()
+    }
+
+    /// `len` bytes at `start`, to write (out of range: none).
+    fn bytes_mut(&mut self, start: usize, len: usize) -> &mut [u8] {
+        self.bytes
+            .as_mut()
+            .get_mut(start..start + len)
+            .unwrap_or_default()
     }
 
     fn present_slot(&self, def: &ParamDef, instance: u16) -> Result<usize> {
         let index = slot_index(def, instance)?;
-        if !self.slots.as_ref()[index].present() {
+        if !self.slot_at(index).present() {
             return Err(StoreError::NotPresent { instance });
         }
         Ok(index)
     }
 
     fn span(&self, def: &ParamDef, index: usize, which: Which) -> (usize, usize) {
-        span_of(def, self.slots.as_ref()[index], index, which)
+        span_of(def, self.slot_at(index), index, which)
     }
 
     fn region(&self, def: &ParamDef, index: usize, which: Which) -> &[u8] {
         let (start, len) = self.span(def, index, which);
-        &self.bytes.as_ref()[start..start + len]
+        self.bytes_at(start, len)
     }
 
     fn values_equal(&self, def: &ParamDef, index: usize) -> bool {
@@ -1059,23 +1111,24 @@ where
 
     /// Copies the type default into an instance's value and default.
     fn fill_instance(&mut self, param: u32, def: &ParamDef, instance: u16) {
-        let len = self.slots.as_ref()[def.first_slot as usize].default_len;
+        let len = self.slot_at(def.first_slot as usize).default_len;
         let index = def.first_slot as usize + 1 + instance as usize;
         let from = def.first_byte as usize;
         let value = from + (1 + 2 * instance as usize) * def.slot_bytes as usize;
         let bytes = self.bytes.as_mut();
         copy_apart(bytes, from, len as usize, value);
         copy_apart(bytes, from, len as usize, value + def.slot_bytes as usize);
-        let slot = &mut self.slots.as_mut()[index];
-        slot.value_len = len;
-        slot.default_len = len;
+        self.with_slot(index, |slot| {
+            slot.value_len = len;
+            slot.default_len = len;
+        });
         self.resolve(param, def, index, Which::Value);
         self.resolve(param, def, index, Which::Default);
     }
 
     fn stage(&mut self, data: &[u8]) {
-        let scratch = self.scratch;
-        self.bytes.as_mut()[scratch..scratch + data.len()].copy_from_slice(data);
+        self.bytes_mut(self.scratch, data.len())
+            .copy_from_slice(data);
     }
 
     /// Moves the staged `len` bytes into an instance's value or default (and into its value
@@ -1090,14 +1143,13 @@ where
         {
             let (to, _) = self.span(def, index, w);
             copy_apart(self.bytes.as_mut(), scratch, len, to);
-            let slot = &mut self.slots.as_mut()[index];
-            match w {
+            self.with_slot(index, |slot| match w {
                 Which::Value => slot.value_len = len as u16,
                 Which::Default => slot.default_len = len as u16,
-            }
+            });
             self.resolve(param, def, index, w);
         }
-        self.slots.as_mut()[index].flags |= UNSAVED;
+        self.with_slot(index, |s| s.flags |= UNSAVED);
     }
 }
 
@@ -1188,12 +1240,20 @@ fn copy_apart(bytes: &mut [u8], from: usize, len: usize, to: usize) {
     if from == to {
         return;
     }
+    // One split at the higher region and one bounds check per region, whichever way the copy
+    // goes (half the code of a split per direction).
+    let (low, high) = (from.min(to), from.max(to));
+    let Some((head, tail)) = bytes.split_at_mut_checked(high) else {
+        return;
+    };
+    // Out of range (never: the memory was checked against the plan): nothing is copied.
+    let (Some(low), Some(high)) = (head.get_mut(low..low + len), tail.get_mut(..len)) else {
+        return;
+    };
     if from < to {
-        let (head, tail) = bytes.split_at_mut(to);
-        tail[..len].copy_from_slice(&head[from..from + len]);
+        high.copy_from_slice(low);
     } else {
-        let (head, tail) = bytes.split_at_mut(from);
-        head[to..to + len].copy_from_slice(&tail[..len]);
+        low.copy_from_slice(high);
     }
 }
 
