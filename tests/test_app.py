@@ -34,16 +34,6 @@ JSON = ("Content-Type", "application/json")
 
 
 @pytest.fixture
-def store_file(tmp_path: Path, schema: px4params.Schema) -> Path:
-    store = px4params.Store(schema, classic=BUNDLED_CLASSIC)
-    store.add("INA238#1")
-    store.set("INA238#1.bus.i2c.address", 0x45)
-    path = tmp_path / "vehicle.store"
-    store.save(path)
-    return path
-
-
-@pytest.fixture
 def served(store_file: Path) -> Iterator[tuple[Admission, StoreVehicle]]:
     vehicle = StoreVehicle(str(store_file), None, [], poll_interval=3600)
     yield make_app(vehicle, token=TOKEN, hosts=[HOST], cookie=COOKIE), vehicle

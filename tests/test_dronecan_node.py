@@ -71,16 +71,6 @@ class Line:
         os.close(self._write)
 
 
-@pytest.fixture
-def store_file(tmp_path: Path, schema: px4params.Schema) -> Path:
-    store = px4params.Store(schema, classic=BUNDLED_CLASSIC)
-    store.add("INA238#1")
-    store.set("INA238#1.bus.i2c.address", 0x45)
-    path = tmp_path / "vehicle.store"
-    store.save(path)
-    return path
-
-
 def _load(path: Path) -> px4params.Store:
     return px4params.Store.load(path, classic=BUNDLED_CLASSIC)
 

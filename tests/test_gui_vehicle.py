@@ -18,16 +18,6 @@ from px4params.store.session import Session
 
 
 @pytest.fixture
-def store_file(tmp_path: Path, schema: px4params.Schema) -> Path:
-    store = px4params.Store(schema, classic=BUNDLED_CLASSIC)
-    store.add("INA238#1")
-    store.set("INA238#1.bus.i2c.address", 0x45)
-    path = tmp_path / "vehicle.store"
-    store.save(path)
-    return path
-
-
-@pytest.fixture
 def vehicle(store_file: Path) -> Iterator[StoreVehicle]:
     made = StoreVehicle(str(store_file), None, [], poll_interval=0.05)
     yield made
