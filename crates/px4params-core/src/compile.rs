@@ -45,6 +45,8 @@ pub struct OwnedLayout {
     names: String,
     segments: Vec<Segment>,
     flat: Vec<FlatItem>,
+    /// By node: the straight-line plan compiled for it ([`crate::straight::compile`]).
+    straight: Vec<Option<crate::straight::Straight>>,
 }
 
 impl OwnedLayout {
@@ -56,6 +58,7 @@ impl OwnedLayout {
             names: &self.names,
             segments: &self.segments,
             flat: &self.flat,
+            straight: &self.straight,
         }
     }
 
@@ -165,7 +168,7 @@ impl OwnedLayout {
             self.add_field(name, node, role);
         }
         let segments = self.segment(first, fields.len() as u32);
-        Ok(self.push(Node {
+        let id = self.push(Node {
             kind: Kind::Struct {
                 first,
                 count: fields.len() as u32,
@@ -174,7 +177,9 @@ impl OwnedLayout {
             max_bits,
             leaves: leaves_or_variable(leaves),
             segments,
-        }))
+        });
+        self.straight[id as usize] = crate::straight::compile(&self.as_layout(), id);
+        Ok(id)
     }
 
     /// Adds a union with these `(name, node)` variants, in tag order.
@@ -303,6 +308,7 @@ impl OwnedLayout {
 
     fn push(&mut self, node: Node) -> NodeId {
         self.nodes.push(node);
+        self.straight.push(None);
         (self.nodes.len() - 1) as NodeId
     }
 

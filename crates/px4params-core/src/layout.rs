@@ -196,6 +196,9 @@ pub struct Layout<'a> {
     pub segments: &'a [Segment],
     /// Flattened items of fixed-shape runs.
     pub flat: &'a [FlatItem],
+    /// The straight-line plan of each node that has one, by [`NodeId`]
+    /// ([`crate::straight`]; compiled by [`crate::compile`], empty in firmware's tables).
+    pub straight: &'a [Option<crate::straight::Straight>],
 }
 
 impl<'a> Layout<'a> {

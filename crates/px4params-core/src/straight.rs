@@ -13,129 +13,152 @@
 //! call began, and that path words the error. Firmware (`NoPlans`) does not run this plan
 //! ([`crate::plan::Plans::STRAIGHT`]).
 
-use crate::bits::{BitRead, BitReader};
-use crate::layout::{FlatItem, Kind, Layout, NodeId, Role, Segment};
+use crate::bits::{self, BitRead, BitReader};
+use crate::layout::{FlatItem, Kind, Layout, NodeId, Role, Segment, Span};
 use crate::rules::{
     scalar_bits, scalar_of, scalar_raw, DecodeOptions, EncodeOptions, Sink, Source,
 };
 use crate::scalar::{self, Scalar};
 
 /// The dynamic array of primitives that may end a straight-line type.
-#[derive(Clone, Copy, Debug)]
-struct Tail<'l> {
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Tail {
     /// The element's kind (a primitive).
-    elem: &'l Kind,
+    elem: Kind,
     /// Its width in bits.
     elem_bits: u32,
     /// Largest length.
     max: u32,
-    /// Width of the length prefix (written unless `tail_optimized`).
+    /// Width of the length prefix.
     len_bits: u32,
-    /// Tail array optimization: no prefix, the array takes the remaining whole bytes.
-    tail_optimized: bool,
+    /// Whether tail array optimization drops the prefix (elements of 8 bits or more): the
+    /// array then takes the remaining whole bytes.
+    tao_drops_prefix: bool,
 }
 
-impl Tail<'_> {
-    /// Bits of the length prefix as encoded.
+impl Tail {
+    /// Bits of the length prefix as encoded with or without tail array optimization.
     #[inline(always)]
-    fn prefix(&self) -> usize {
-        if self.tail_optimized {
+    fn prefix(&self, tao: bool) -> u32 {
+        if tao && self.tao_drops_prefix {
             0
         } else {
-            self.len_bits as usize
+            self.len_bits
         }
     }
 }
 
-/// A type the plan answers for: its fixed run, then perhaps one array.
+/// The straight-line plan of a type, compiled once ([`compile`], by
+/// [`crate::compile::OwnedLayout`] for each struct) and kept in [`Layout::straight`] at the
+/// type's node, so that choosing it is one load: a struct whose fields are its fixed run
+/// (the layout's one flat segment of it), then perhaps one dynamic array of primitives.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Straight {
+    /// The fixed run's items in [`Layout::flat`], in stream order (none when the struct is
+    /// the array alone).
+    items: Span,
+    /// Leaves of the fixed run.
+    leaves: u32,
+    /// Bits of the fixed run.
+    bits: u32,
+    tail: Option<Tail>,
+}
+
+/// The straight-line plan of `root` in `layout`, where the plan answers for it. The
+/// compiler splits a struct's fields into segments in field order (as the flat codec
+/// trusts): a flat run, then perhaps one field of another shape, which must be the last
+/// field and a dynamic array of primitives (it alone may be tail-optimized).
+pub fn compile(layout: &Layout<'_>, root: NodeId) -> Option<Straight> {
+    let node = layout.nodes.get(root as usize)?;
+    let Kind::Struct { first, count } = node.kind else {
+        return None;
+    };
+    let mut plan = Straight {
+        items: Span::default(),
+        leaves: 0,
+        bits: 0,
+        tail: None,
+    };
+    let last = match node.segments.of(layout.segments) {
+        [Segment::Flat {
+            items,
+            leaves,
+            bits,
+            ..
+        }, rest @ ..] => {
+            if items.of(layout.flat).len() != items.count as usize {
+                return None;
+            }
+            plan.items = *items;
+            plan.leaves = *leaves;
+            plan.bits = *bits;
+            match rest {
+                [] => return Some(plan),
+                [Segment::Field(i)] => *i,
+                _ => return None,
+            }
+        }
+        [Segment::Field(i)] => *i,
+        [] => return Some(plan),
+        _ => return None,
+    };
+    if u64::from(last) + 1 != u64::from(first) + u64::from(count) {
+        return None;
+    }
+    let field = layout.fields.get(last as usize)?;
+    let Kind::DynArray {
+        elem,
+        max,
+        len_bits,
+    } = layout.nodes.get(field.node as usize)?.kind
+    else {
+        return None;
+    };
+    let elem_node = layout.nodes.get(elem as usize)?;
+    let elem_bits = match elem_node.kind {
+        Kind::Uint { bits, .. } | Kind::Int { bits, .. } | Kind::Float { bits, .. } => {
+            u32::from(bits)
+        }
+        Kind::Bool => 1,
+        _ => return None,
+    };
+    if elem_bits == 0 || field.role != Role::Data {
+        return None;
+    }
+    plan.tail = Some(Tail {
+        elem: elem_node.kind,
+        elem_bits,
+        max,
+        len_bits: len_bits.into(),
+        tao_drops_prefix: elem_node.min_bits >= 8,
+    });
+    Some(plan)
+}
+
+/// A type the plan answers for, as one call runs it: its compiled plan with the items
+/// borrowed and the prefix known.
 #[derive(Clone, Copy, Debug)]
 struct Shape<'l> {
-    /// The fixed run's items, in stream order (empty when the struct is the array alone).
     items: &'l [FlatItem],
-    /// Leaves of the fixed run.
     leaves: usize,
-    /// Bits of the fixed run.
     bits: usize,
-    tail: Option<Tail<'l>>,
+    tail: Option<Tail>,
+    /// Bits of the array's length prefix as encoded (0 with tail array optimization).
+    prefix: u32,
 }
 
 impl<'l> Shape<'l> {
-    /// The shape of `root` when the plan answers for it, as a value encoded with or without
-    /// tail array optimization (`tao`). The layout's compiled segments are the plan: a struct
-    /// of one flat segment, and/or a last field that is a dynamic array of primitives.
+    /// The plan of `root`, chosen by its index (no search): `None` where it has none.
     #[inline(always)]
     fn of(layout: &Layout<'l>, root: NodeId, tao: bool) -> Option<Self> {
-        let node = layout.nodes.get(root as usize)?;
-        let Kind::Struct { first, count } = node.kind else {
-            return None;
-        };
-        // The compiler splits a struct's fields into segments in order (as the flat codec
-        // trusts): a flat run, then perhaps one field of another shape.
-        let (flat, last) = match node.segments.of(layout.segments) {
-            [Segment::Flat {
-                items,
-                leaves,
-                bits,
-                ..
-            }] => (Some((items, leaves, bits)), None),
-            [Segment::Flat {
-                items,
-                leaves,
-                bits,
-                ..
-            }, Segment::Field(i)] => (Some((items, leaves, bits)), Some(*i)),
-            [Segment::Field(i)] => (None, Some(*i)),
-            [] => (None, None),
-            _ => return None,
-        };
-        let mut shape = Shape {
-            items: &[],
-            leaves: 0,
-            bits: 0,
-            tail: None,
-        };
-        if let Some((items, leaves, bits)) = flat {
-            shape.items = items.of(layout.flat);
-            if shape.items.len() != items.count as usize {
-                return None;
-            }
-            shape.leaves = *leaves as usize;
-            shape.bits = *bits as usize;
-        }
-        if let Some(i) = last {
-            // The array must be the last field (it alone may be tail-optimized) and data.
-            if u64::from(i) + 1 != u64::from(first) + u64::from(count) {
-                return None;
-            }
-            let field = layout.fields.get(i as usize)?;
-            let Kind::DynArray {
-                elem,
-                max,
-                len_bits,
-            } = layout.nodes.get(field.node as usize)?.kind
-            else {
-                return None;
-            };
-            let elem_node = layout.nodes.get(elem as usize)?;
-            let elem_bits = match elem_node.kind {
-                Kind::Uint { bits, .. } | Kind::Int { bits, .. } | Kind::Float { bits, .. } => {
-                    u32::from(bits)
-                }
-                Kind::Bool => 1,
-                _ => return None,
-            };
-            if elem_bits == 0 || field.role != Role::Data {
-                return None;
-            }
-            shape.tail = Some(Tail {
-                elem: &elem_node.kind,
-                elem_bits,
-                max,
-                len_bits: len_bits.into(),
-                tail_optimized: tao && elem_node.min_bits >= 8,
-            });
-        }
-        Some(shape)
+        let plan = layout.straight.get(root as usize)?.as_ref()?;
+        Some(Shape {
+            items: plan.items.of(layout.flat),
+            leaves: plan.leaves as usize,
+            bits: plan.bits as usize,
+            tail: plan.tail,
+            prefix: plan.tail.map_or(0, |t| t.prefix(tao)),
+        })
     }
 }
 
@@ -233,18 +256,48 @@ impl Out<'_> {
         }
     }
 
-    /// Stores the pending bits, the last byte padded with zeros.
+    /// Stores the whole bytes pending (none left over), for bytes copied after them.
     #[inline(always)]
-    fn finish(mut self) {
-        let pad = (8 - self.pending % 8) % 8;
-        self.acc <<= pad;
-        self.pending += pad;
+    fn flush_bytes(&mut self) {
         while self.pending >= 8 {
             self.pending -= 8;
             if let Some(slot) = self.out.get_mut(self.at) {
                 *slot = (self.acc >> self.pending) as u8;
             }
             self.at += 1;
+        }
+    }
+
+    /// Stores the pending bits (fewer than 32), the last byte padded with zeros: one store
+    /// of one to four bytes.
+    #[inline(always)]
+    fn finish(self) {
+        // The pending bits at the top of a word, zeros after them (older bits shift out).
+        let word = ((self.acc << (32 - self.pending)) as u32).to_be_bytes();
+        let at = self.at;
+        let out = self.out;
+        match self.pending.div_ceil(8) {
+            0 => {}
+            1 => {
+                if let Some(b) = out.get_mut(at) {
+                    *b = word[0];
+                }
+            }
+            2 => {
+                if let Some(b) = out.get_mut(at..at + 2) {
+                    b.copy_from_slice(&word[..2]);
+                }
+            }
+            3 => {
+                if let Some(b) = out.get_mut(at..at + 3) {
+                    b.copy_from_slice(&word[..3]);
+                }
+            }
+            _ => {
+                if let Some(b) = out.get_mut(at..at + 4) {
+                    b.copy_from_slice(&word);
+                }
+            }
         }
     }
 }
@@ -273,20 +326,35 @@ pub fn encode<S: Source>(
     options: EncodeOptions,
 ) -> Option<usize> {
     let shape = Shape::of(layout, root, options.tao)?;
-    let leaves = source.pending_leaves()?;
-    let fixed = leaves.get(..shape.leaves)?;
-    let mut taken = shape.leaves;
-    let mut bits = shape.bits;
-    let mut elements: &[Scalar] = &[];
-    if let Some(tail) = shape.tail {
-        let n = count_of(*leaves.get(shape.leaves)?)?;
-        if n > tail.max as usize {
-            return None;
+    let (len, taken) = encode_leaves(&shape, source.pending_leaves()?, out, options)?;
+    // Take what was used, as the general path does (leaves after the value stay).
+    source.leaf_run(taken)?.ok()?;
+    Some(len)
+}
+
+/// [`encode`] of a shape from its leaves: the length in bytes and the leaves used.
+#[inline(always)]
+fn encode_leaves(
+    shape: &Shape<'_>,
+    leaves: &[Scalar],
+    out: &mut [u8],
+    options: EncodeOptions,
+) -> Option<(usize, usize)> {
+    let (fixed, after) = leaves.split_at_checked(shape.leaves)?;
+    let (bits, elements) = match shape.tail {
+        None => (shape.bits, &[][..]),
+        Some(tail) => {
+            let (&count, after) = after.split_first()?;
+            let n = count_of(count)?;
+            if n > tail.max as usize {
+                return None;
+            }
+            (
+                shape.bits + shape.prefix as usize + n * tail.elem_bits as usize,
+                after.get(..n)?,
+            )
         }
-        elements = leaves.get(shape.leaves + 1..shape.leaves + 1 + n)?;
-        taken += 1 + n;
-        bits += tail.prefix() + n * tail.elem_bits as usize;
-    }
+    };
     let len = bits.div_ceil(8);
     let mut out = Out {
         out: out.get_mut(..len)?,
@@ -295,11 +363,12 @@ pub fn encode<S: Source>(
         pending: 0,
     };
     let saturate = options.saturate;
+    // As many items as leaves and pads: the zip never stops short of a leaf item.
     let mut values = fixed.iter();
     for item in shape.items {
         let (stream, bits) = match item {
-            FlatItem::Pad(bits) => (0, u32::from(*bits)),
             FlatItem::Leaf(kind) => stream_of(kind, values.next()?, saturate)?,
+            FlatItem::Pad(bits) => (0, u32::from(*bits)),
             FlatItem::Version(kind, version) => {
                 version_stream(*kind, *values.next()?, *version, options)?
             }
@@ -307,15 +376,18 @@ pub fn encode<S: Source>(
         out.put(stream, bits);
     }
     if let Some(tail) = shape.tail {
-        if tail.prefix() != 0 {
-            out.put(elements.len() as u64, tail.len_bits);
+        if shape.prefix != 0 {
+            out.put(elements.len() as u64, shape.prefix);
         }
-        write_elements(&mut out, tail.elem, elements, saturate)?;
+        if !elements.is_empty() {
+            write_elements(&mut out, &tail.elem, elements, saturate)?;
+        }
     }
     out.finish();
-    // Take what was used, as the general path does (leaves after the value stay).
-    source.leaf_run(taken)?.ok()?;
-    Some(len)
+    Some((
+        len,
+        shape.leaves + shape.tail.map_or(0, |_| 1 + elements.len()),
+    ))
 }
 
 /// The elements of the ending array; byte strings on a byte boundary as plain bytes.
@@ -326,16 +398,9 @@ fn write_elements(
     elements: &[Scalar],
     saturate: bool,
 ) -> Option<()> {
-    if elements.is_empty() {
-        return Some(());
-    }
     if matches!(kind, Kind::Uint { bits: 8, .. }) && out.pending % 8 == 0 {
         // Store the whole bytes pending, then the string.
-        while out.pending >= 8 {
-            out.pending -= 8;
-            *out.out.get_mut(out.at)? = (out.acc >> out.pending) as u8;
-            out.at += 1;
-        }
+        out.flush_bytes();
         let bytes = out.out.get_mut(out.at..out.at + elements.len())?;
         for (byte, v) in bytes.iter_mut().zip(elements) {
             match *v {
@@ -356,8 +421,9 @@ fn write_elements(
 /// Decodes the value of `root` from `data` into a flat `sink` when the plan answers for it:
 /// the bits the value took, the sink holding its leaves as the general path leaves them.
 /// `None` (the sink untouched, nothing to report) for anything else: a type of another
-/// shape, data in pieces, a sink that is not a flat leaf list or has too little room, data cut short or with
-/// bytes after the value (unless allowed), an array longer than its maximum.
+/// shape, data in pieces, a sink that is not a flat leaf list or has too little room, data
+/// cut short or with bytes after the value (unless allowed), an array longer than its
+/// maximum.
 #[inline(never)]
 pub fn decode<R: BitRead + ?Sized, K: Sink>(
     layout: &Layout<'_>,
@@ -369,47 +435,55 @@ pub fn decode<R: BitRead + ?Sized, K: Sink>(
     let shape = Shape::of(layout, root, options.tao)?;
     // Payloads in pieces are the general decoder's (its reader follows the pieces).
     let data = data.contiguous()?;
-    let bit_len = data.bit_len();
-    let rest = bit_len.checked_sub(shape.bits)?;
-    // The array's length and where the value ends, before the sink is asked for anything.
-    let (n, end) = match shape.tail {
-        None => (0, shape.bits),
-        Some(tail) if tail.tail_optimized => {
-            // The array takes every remaining whole byte: whole elements, fewer than 8 bits
-            // left over.
-            let width = tail.elem_bits as usize;
-            let n = rest / width;
-            if rest - n * width >= 8 || n > tail.max as usize {
-                return None;
-            }
-            (n, shape.bits + n * width)
-        }
-        Some(tail) => {
-            let prefix = tail.prefix();
-            if rest < prefix {
-                return None;
-            }
-            let n = if prefix == 0 {
-                0
-            } else {
-                scalar::from_stream(data.read_bits(shape.bits, tail.len_bits), tail.len_bits)
-            };
-            let n = usize::try_from(n)
-                .ok()
-                .filter(|&n| n <= tail.max as usize)?;
-            let end = shape.bits + prefix + n * tail.elem_bits as usize;
-            if end > bit_len {
-                return None;
-            }
-            (n, end)
-        }
-    };
-    if !options.allow_trailing && bit_len / 8 > end.div_ceil(8) {
+    let (n, end) = measure(&shape, data)?;
+    if !options.allow_trailing && data.len() > end.div_ceil(8) {
         return None;
     }
     let total = shape.leaves + shape.tail.map_or(0, |_| 1 + n);
     let slots = sink.leaf_slots(total)?.ok()?;
-    let (fixed, slots) = slots.split_at_mut(shape.leaves);
+    decode_into(&shape, data, n, slots);
+    Some(end)
+}
+
+/// The length of the ending array (0 without one) and where the value ends in `data`, which
+/// holds it all; `None` where it does not.
+#[inline(always)]
+fn measure(shape: &Shape<'_>, data: &[u8]) -> Option<(usize, usize)> {
+    let bit_len = data.len() * 8;
+    let rest = bit_len.checked_sub(shape.bits)?;
+    let Some(tail) = shape.tail else {
+        return Some((0, shape.bits));
+    };
+    let width = tail.elem_bits as usize;
+    if shape.prefix == 0 {
+        // Tail-optimized: the array takes every remaining whole byte (whole elements, fewer
+        // than 8 bits left over).
+        let n = rest / width;
+        if rest - n * width >= 8 || n > tail.max as usize {
+            return None;
+        }
+        return Some((n, shape.bits + n * width));
+    }
+    let prefix = shape.prefix as usize;
+    if rest < prefix {
+        return None;
+    }
+    let n = scalar::from_stream(
+        bits::read_bits(data, shape.bits, shape.prefix),
+        shape.prefix,
+    );
+    let n = usize::try_from(n)
+        .ok()
+        .filter(|&n| n <= tail.max as usize)?;
+    let end = shape.bits + prefix + n * width;
+    (end <= bit_len).then_some((n, end))
+}
+
+/// Fills `slots` (the fixed run's leaves, then the array's length and `n` elements) from
+/// `data`, measured to hold them.
+#[inline(always)]
+fn decode_into(shape: &Shape<'_>, data: &[u8], n: usize, slots: &mut [Scalar]) {
+    let (fixed, slots) = slots.split_at_mut(shape.leaves.min(slots.len()));
     let mut bits_in = In {
         data,
         next: 0,
@@ -419,9 +493,6 @@ pub fn decode<R: BitRead + ?Sized, K: Sink>(
     let mut fixed = fixed.iter_mut();
     for item in shape.items {
         match item {
-            FlatItem::Pad(bits) => {
-                bits_in.take(u32::from(*bits));
-            }
             FlatItem::Leaf(kind) | FlatItem::Version(kind, _) => {
                 let bits = scalar_bits(*kind);
                 let raw = bits_in.take(bits);
@@ -429,21 +500,25 @@ pub fn decode<R: BitRead + ?Sized, K: Sink>(
                     *slot = scalar_of(*kind, scalar::from_stream(raw, bits));
                 }
             }
+            FlatItem::Pad(bits) => {
+                bits_in.take(u32::from(*bits));
+            }
         }
     }
     if let (Some(tail), [len, elements @ ..]) = (shape.tail, slots) {
         *len = Scalar::Uint(n as u64);
-        let mut reader = data.reader(shape.bits + tail.prefix());
-        read_elements(&mut reader, tail.elem, elements);
+        if !elements.is_empty() {
+            let mut reader = data.reader(shape.bits + shape.prefix as usize);
+            read_elements(&mut reader, &tail.elem, elements);
+        }
     }
-    Some(end)
 }
 
 /// Bits coming in most significant first from data the caller has measured: whole bytes
 /// gathered into a register ahead of the fields, so that a small value is read in a few
 /// loads without a bounds check per field.
-struct In<'d, R: BitRead + ?Sized> {
-    data: &'d R,
+struct In<'d> {
+    data: &'d [u8],
     /// The next byte to gather.
     next: usize,
     /// Gathered bits, left-aligned.
@@ -451,7 +526,7 @@ struct In<'d, R: BitRead + ?Sized> {
     avail: u32,
 }
 
-impl<R: BitRead + ?Sized> In<'_, R> {
+impl In<'_> {
     /// The next `bits` (`0..=64`) bits as a stream value.
     #[inline(always)]
     fn take(&mut self, bits: u32) -> u64 {
@@ -468,27 +543,38 @@ impl<R: BitRead + ?Sized> In<'_, R> {
             return 0;
         }
         if bits > self.avail {
-            // Up to 57 bits or the end of the data (which holds the value: measured first).
-            let len = self.data.bit_len() / 8;
-            if self.next + 8 <= len {
-                // A whole window: the bits after the gathered ones (those past the last
-                // whole byte counted are the stream's own, gathered again next time).
-                let word = self.data.read_bits(self.next * 8, 64);
-                self.acc |= word >> self.avail;
-                let whole = (64 - self.avail) / 8;
-                self.next += whole as usize;
-                self.avail += 8 * whole;
-            }
-            while self.avail <= 56 && self.next < len {
-                self.acc |= u64::from(self.data.byte(self.next)) << (56 - self.avail);
-                self.avail += 8;
-                self.next += 1;
-            }
+            self.refill();
         }
         let value = self.acc >> (64 - bits);
         self.acc <<= bits;
         self.avail = self.avail.saturating_sub(bits);
         value
+    }
+
+    /// Gathers up to 57 bits or up to the end of the data (which holds the value: measured
+    /// first).
+    #[inline(always)]
+    fn refill(&mut self) {
+        let data = self.data;
+        if let Some(window) = data.get(self.next..self.next + 8) {
+            // A whole window: the bits after the gathered ones (those past the last whole
+            // byte counted are the stream's own, gathered again next time).
+            let mut word = [0u8; 8];
+            word.copy_from_slice(window);
+            self.acc |= u64::from_be_bytes(word) >> self.avail;
+            let whole = (64 - self.avail) / 8;
+            self.next += whole as usize;
+            self.avail += 8 * whole;
+            return;
+        }
+        while self.avail <= 56 {
+            let Some(&byte) = data.get(self.next) else {
+                break;
+            };
+            self.acc |= u64::from(byte) << (56 - self.avail);
+            self.avail += 8;
+            self.next += 1;
+        }
     }
 }
 
@@ -496,9 +582,6 @@ impl<R: BitRead + ?Sized> In<'_, R> {
 /// boundary as plain bytes.
 #[inline(always)]
 fn read_elements<B: BitReader>(reader: &mut B, kind: &Kind, slots: &mut [Scalar]) {
-    if slots.is_empty() {
-        return;
-    }
     if matches!(kind, Kind::Uint { bits: 8, .. }) && reader.position() % 8 == 0 {
         let mut chunk = [0u8; 32];
         for group in slots.chunks_mut(chunk.len()) {

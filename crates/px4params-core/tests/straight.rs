@@ -466,3 +466,34 @@ fn payloads_in_pieces_are_declined() {
     );
     assert_eq!(sink.leaves(), [12345, 2, 3, 5, 7].map(Scalar::Uint));
 }
+
+/// The plan is the one compiled into the layout at the type's node: a layout without plans
+/// (firmware's tables, `straight: &[]`) is declined, and the dispatcher gives the walk's bytes.
+#[test]
+fn a_layout_without_plans_is_declined() {
+    let mut l = OwnedLayout::default();
+    let node_status = common::node_status(&mut l);
+    let compiled = l.as_layout();
+    assert!(compiled.straight[node_status as usize].is_some());
+    let bare = Layout {
+        straight: &[],
+        ..compiled
+    };
+    let leaves = [12345, 2, 3, 5, 7].map(Scalar::Uint);
+    let mut out = [0u8; 8];
+    let options = EncodeOptions::default();
+    let mut source = LeafSource::new(&leaves);
+    assert_eq!(
+        straight::encode(&bare, node_status, &mut source, &mut out, options),
+        None
+    );
+    assert_eq!(source.consumed(), 0);
+    let n = codec::encode(
+        &bare,
+        node_status,
+        &mut LeafSource::new(&leaves),
+        &mut out,
+        options,
+    );
+    assert_eq!(&out[..n.unwrap()], [0x39, 0x30, 0, 0, 0b1001_1101, 7, 0]);
+}

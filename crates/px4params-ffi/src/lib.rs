@@ -208,6 +208,8 @@ unsafe fn layout_of(t: &px4p_layout) -> Option<Layout<'static>> {
         names: core::str::from_utf8(names).ok()?,
         segments: table(t.segments, t.segment_count)?,
         flat: table(t.flat, t.flat_count)?,
+        // Firmware runs no straight-line plan (`NoPlans`).
+        straight: &[],
     })
 }
 
@@ -235,6 +237,7 @@ impl Open {
             names: "",
             segments: &[],
             flat: &[],
+            straight: &[],
         })
     }
 
