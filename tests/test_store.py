@@ -434,7 +434,7 @@ class StoreMachine(RuleBasedStateMachine):
 def _fits(schema: px4params.Schema, key: str, path: str, type_name: str, new: object) -> bool:
     """Whether a leaf takes ``new``, worked out from the DSDL alone (not by the codec): the
     range of ``uintN``/``intN``/``floatN``, a union tag's variants, an array length's maximum,
-    the field's ``@min``/``@max``, and no NaN or infinity in a float."""
+    the field's ``@min``/``@max`` and ``@value`` list, and no NaN or infinity in a float."""
     if type_name == "bool":
         return isinstance(new, bool)
     tags = _field_tags(schema, key, path)
@@ -457,7 +457,8 @@ def _fits(schema: px4params.Schema, key: str, path: str, type_name: str, new: ob
     if path.endswith("_tag") or path.endswith("_len"):
         high = min(high, _selector_limit(schema, key, path))
     low, high = max(low, tags.get("min", low)), min(high, tags.get("max", high))
-    return low <= new <= high
+    listed = {number for number, _ in tags.get("value", ())}  # @value: only these
+    return low <= new <= high and (not listed or new in listed)
 
 
 def _field_tags(schema: px4params.Schema, key: str, path: str) -> dict:
