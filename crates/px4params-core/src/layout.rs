@@ -198,7 +198,7 @@ pub struct Layout<'a> {
     pub flat: &'a [FlatItem],
     /// The straight-line plan of each node that has one, by [`NodeId`]
     /// ([`crate::straight`]; compiled by [`crate::compile`], empty in firmware's tables).
-    pub straight: &'a [Option<crate::straight::Straight>],
+    pub straight: &'a [Option<Straight>],
 }
 
 impl<'a> Layout<'a> {
@@ -277,4 +277,48 @@ mod tests {
         assert_eq!(array_len_bits(31), 5);
         assert_eq!(array_len_bits(255), 8);
     }
+}
+
+/// The dynamic array of primitives that may end a straight-line type.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct Tail {
+    /// The element's kind (a primitive).
+    pub(crate) elem: Kind,
+    /// Its width in bits.
+    pub(crate) elem_bits: u32,
+    /// Largest length.
+    pub(crate) max: u32,
+    /// Width of the length prefix.
+    pub(crate) len_bits: u32,
+    /// Whether tail array optimization drops the prefix (elements of 8 bits or more): the
+    /// array then takes the remaining whole bytes.
+    pub(crate) tao_drops_prefix: bool,
+}
+
+impl Tail {
+    /// Bits of the length prefix as encoded with or without tail array optimization.
+    #[inline(always)]
+    pub(crate) fn prefix(&self, tao: bool) -> u32 {
+        if tao && self.tao_drops_prefix {
+            0
+        } else {
+            self.len_bits
+        }
+    }
+}
+
+/// The straight-line plan of a type, compiled once ([`crate::straight::compile`], by
+/// [`crate::compile::OwnedLayout`] for each struct) and kept in [`Layout::straight`] at the
+/// type's node, so that choosing it is one load: a struct whose fields are its fixed run
+/// (the layout's one flat segment of it), then perhaps one dynamic array of primitives.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Straight {
+    /// The fixed run's items in [`Layout::flat`], in stream order (none when the struct is
+    /// the array alone).
+    pub(crate) items: Span,
+    /// Leaves of the fixed run.
+    pub(crate) leaves: u32,
+    /// Bits of the fixed run.
+    pub(crate) bits: u32,
+    pub(crate) tail: Option<Tail>,
 }

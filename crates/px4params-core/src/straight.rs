@@ -20,49 +20,8 @@ use crate::rules::{
 };
 use crate::scalar::{self, Scalar};
 
-/// The dynamic array of primitives that may end a straight-line type.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-struct Tail {
-    /// The element's kind (a primitive).
-    elem: Kind,
-    /// Its width in bits.
-    elem_bits: u32,
-    /// Largest length.
-    max: u32,
-    /// Width of the length prefix.
-    len_bits: u32,
-    /// Whether tail array optimization drops the prefix (elements of 8 bits or more): the
-    /// array then takes the remaining whole bytes.
-    tao_drops_prefix: bool,
-}
-
-impl Tail {
-    /// Bits of the length prefix as encoded with or without tail array optimization.
-    #[inline(always)]
-    fn prefix(&self, tao: bool) -> u32 {
-        if tao && self.tao_drops_prefix {
-            0
-        } else {
-            self.len_bits
-        }
-    }
-}
-
-/// The straight-line plan of a type, compiled once ([`compile`], by
-/// [`crate::compile::OwnedLayout`] for each struct) and kept in [`Layout::straight`] at the
-/// type's node, so that choosing it is one load: a struct whose fields are its fixed run
-/// (the layout's one flat segment of it), then perhaps one dynamic array of primitives.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Straight {
-    /// The fixed run's items in [`Layout::flat`], in stream order (none when the struct is
-    /// the array alone).
-    items: Span,
-    /// Leaves of the fixed run.
-    leaves: u32,
-    /// Bits of the fixed run.
-    bits: u32,
-    tail: Option<Tail>,
-}
+pub use crate::layout::Straight;
+use crate::layout::Tail;
 
 /// The straight-line plan of `root` in `layout`, where the plan answers for it. The
 /// compiler splits a struct's fields into segments in field order (as the flat codec
