@@ -215,3 +215,16 @@ def test_timeline_legend_names_each_color() -> None:
         assert float(swatch.get("y")) + 12 > float(words.get("y")) - 12
     for words, after in itertools.pairwise(follows):
         assert float(words.get("x")) + 7 * len(words.text) <= float(after.get("x"))
+
+
+def test_timeline_keeps_a_glitch_shorter_than_a_pixel() -> None:
+    # A critical moment of 5 ms in a 10 s run is less than a pixel wide: it is still drawn (a
+    # broken sensor is never silent), only segments of no length are left out.
+    result = _run()
+    result.instances[0].timeline = [(0.0, "nominal", ""), (5.0, "critical", "x"),
+                                    (5.005, "nominal", "")]  # fmt: skip
+    glitch = [
+        r for r in _bars(_svg(result)) if r.find(f"{NS}title").text == "5-5.005 s critical: x"
+    ]
+    assert len(glitch) == 1 and 0 < float(glitch[0].get("width")) < 1
+    assert glitch[0].get("fill") == RED
