@@ -168,6 +168,7 @@ def test_timeline_axis_ticks_at_a_round_step() -> None:
         (100, [0, 10, 20, 30, 40, 50, 60, 70, 80, 90, 100]),
         (0.5, [0, 0.05 * 1, 0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.45, 0.5]),
         (95, [0, 10, 20, 30, 40, 50, 60, 70, 80, 90]),
+        (21, [0, 5, 10, 15, 20]),  # step 2 would make 10.5 steps: more than ten
     ]:
         root = _svg(_run(duration, instances=[], silently_missing=[], arming=[]))
         x0, x1, axis_y = _axis(root)
