@@ -198,6 +198,11 @@ RUST_ISSUE40_TESTS="$RUST_ISSUE40_TESTS mutants_leaf"
 # each with its in-process tests only (no page server, no Chromium):
 #   MUTATION_BASELINE=1 nice bash scripts/mutation.sh timeline console     # before
 #   nice bash scripts/mutation.sh timeline console                         # after
+# Measured (mutants, killed, survived of which equivalent, kill rate): console before 67, 55,
+# 12 (4), 87.3%; after 67, 62, 4 (4), 100% (1 untested: a `continue` line that occurs twice,
+# planted by hand: killed); timeline before 201, 63, 138 (34), 37.7%; after 201, 166, 35 (34),
+# 99.4% (the survivor: the legend's swatches 10 px below their words, no test yet).
+# drivers, boards, gui-manifest and the remainders of gui-vehicle, gui-app, autostart: not run.
 TARGETS+=(
   "timeline|$PY/vehicle/timeline.py|tests/test_timeline.py tests/test_simbench.py -k 'timeline or svg'"
   "console|$PY/vehicle/console.py|tests/test_console.py tests/test_migrate_defects.py -k 'console or launcher or started or rotation or internal_bus'"
