@@ -100,7 +100,7 @@ def started_drivers(console: str) -> list[DriverStart]:
             (
                 i
                 for (driver, bus, at), i in launched.items()
-                if (driver, bus) == (start.driver, start.bus) and address in (None, at)
+                if (driver, bus) == (start.driver, start.bus) and start.address in (None, at)
             ),
             None,
         )
@@ -108,7 +108,7 @@ def started_drivers(console: str) -> list[DriverStart]:
             first = starts[earlier]
             starts[earlier] = DriverStart(
                 first.driver, start.bus_kind, start.bus, start.external,
-                address if address is not None else first.address, start.rotation, True,
+                start.address if start.address is not None else first.address, start.rotation, True,
                 first.line, first.text,
             )  # fmt: skip
             continue
