@@ -194,6 +194,16 @@ NEW_TESTS="$NEW_TESTS|test_file" # store/ (mutstore; the others are marked issue
 #   MUTATION_BUDGET=1800 MUTATION_RUST_TIMEOUT=120 \
 #     MUTATION_RUST_ARGS="--shard 0/60 --sharding round-robin" bash scripts/mutation.sh rust-core
 RUST_ISSUE40_TESTS="$RUST_ISSUE40_TESTS mutants_leaf"
+# store/ and migrate/, the modules not run before (mutfiles, issue 40), "nothing lost" first:
+# the .params/JSON files, each with its in-process tests only (main() called in the process,
+# no subprocess, no server). Issue 40's figures:
+#   MUTATION_BASELINE=1 nice bash scripts/mutation.sh store-paramfile    # before
+#   nice bash scripts/mutation.sh store-paramfile                        # after
+TARGETS+=(
+  "store-paramfile|$PY/store/paramfile.py|tests/test_paramfile.py tests/test_param_cli.py tests/test_cli_bad_inputs.py tests/test_storefile.py -k '(paramfile or export or bad_parameter or unknown_names or import or destructured or (bad_input and (params or json)) or other_ground) and not killing'"
+)
+BUDGETS+=([store-paramfile]=1800)
+NEW_TESTS="$NEW_TESTS|test_paramfile"
 
 if [ "$#" -eq 0 ]; then
   set -- can_transfer dronecan_params health links gui migrate vehicle store rust-core rust-ffi
