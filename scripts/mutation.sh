@@ -197,13 +197,17 @@ RUST_ISSUE40_TESTS="$RUST_ISSUE40_TESTS mutants_leaf"
 # store/ and migrate/, the modules not run before (mutfiles, issue 40), "nothing lost" first:
 # the .params/JSON files, each with its in-process tests only (main() called in the process,
 # no subprocess, no server). Issue 40's figures:
-#   MUTATION_BASELINE=1 nice bash scripts/mutation.sh store-paramfile    # before
-#   nice bash scripts/mutation.sh store-paramfile                        # after
+#   MUTATION_BASELINE=1 nice bash scripts/mutation.sh store-paramfile store-classic   # before
+#   nice bash scripts/mutation.sh store-paramfile store-classic                       # after
 TARGETS+=(
   "store-paramfile|$PY/store/paramfile.py|tests/test_paramfile.py tests/test_param_cli.py tests/test_cli_bad_inputs.py tests/test_storefile.py -k '(paramfile or export or bad_parameter or unknown_names or import or destructured or (bad_input and (params or json)) or other_ground) and not killing'"
 )
-BUDGETS+=([store-paramfile]=1800)
-NEW_TESTS="$NEW_TESTS|test_paramfile"
+# the classic parameters' parameters.json and values (cache included)
+TARGETS+=(
+  "store-classic|$PY/store/classic.py|tests/test_classic.py tests/test_store.py tests/test_metadata.py tests/test_cli_bad_inputs.py -k '(test_classic or classic or parameters_json or refused_changes or SYS_AUTOSTART or BAT1) and not TestStoreMachine'"
+)
+BUDGETS+=([store-paramfile]=1800 [store-classic]=1200)
+NEW_TESTS="$NEW_TESTS|test_paramfile|test_classic"
 
 if [ "$#" -eq 0 ]; then
   set -- can_transfer dronecan_params health links gui migrate vehicle store rust-core rust-ffi
