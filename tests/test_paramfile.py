@@ -312,6 +312,19 @@ def test_a_store_error_is_named_once_by_the_files_name(
     assert str(e.value).count("SENS_EN_INA238") == 1, str(e.value)
 
 
+def test_an_integer_out_of_range_is_named_as_written(
+    store: px4params.Store, tmp_path: Path
+) -> None:
+    # 2^53 + 1 has no float64: the message names the number of the file, not a rounded one
+    path = tmp_path / "x.params"
+    with pytest.raises(ParamFileError) as e:
+        read_file(store, path, "1\t1\tSYS_AUTOSTART\t9007199254740993\t6\n")
+    assert str(e.value) == (
+        f"{path}:1: SYS_AUTOSTART: value 9007199254740993 is out of range "
+        "(expected -2147483648 to 2147483647)"
+    )
+
+
 def test_a_name_set_twice_is_refused_with_both_lines(
     store: px4params.Store, tmp_path: Path
 ) -> None:
