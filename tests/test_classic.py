@@ -65,6 +65,14 @@ def test_entries_in_file_order_kept_whole(tmp_path: Path) -> None:
     assert repr(params[0]) == "ClassicParam(name='SYS_AUTOSTART', type='Int32', default=0)"
 
 
+def test_a_parameter_made_by_hand_has_an_empty_read_only_entry() -> None:
+    # readers of the entry (its min/max for DroneCAN, metadata written back out) take a mapping
+    param = ClassicParam("SYS_AUTOSTART", "Int32", 0)
+    assert dict(param.entry) == {} and param.entry.get("min") is None
+    with pytest.raises(TypeError):
+        param.entry["min"] = 1  # type: ignore[index]
+
+
 @pytest.mark.parametrize(
     ("document", "message"),
     [
