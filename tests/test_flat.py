@@ -530,3 +530,19 @@ def test_a_flat_row_as_a_dict(store: px4params.Store) -> None:
     words = [row._replace(value=v).as_dict()["value"] for v in (math.nan, math.inf, -math.inf)]
     assert words == ["nan", "inf", "-inf"]
     assert flat.resolve_flat(store, "INA238_0C") == "INA238#0[4]"
+
+
+@pytest.mark.issue40
+def test_an_instance_mask_is_one_int32_of_31_instances(tmp_path: Path) -> None:
+    """Bit N of the mask is instance N, in an int32 whose sign bit is no instance: a parameter
+    with 31 instance slots has a mask, one with 32 has none."""
+    files = {
+        f"{name.capitalize()}.1.0.dsdl": f"# {name}\n# @max_instances {slots}\n\nuint8 x\n@sealed\n"
+        for name, slots in (("wide", 31), ("wider", 32))
+    }
+    root = dsdl_root(tmp_path, files)
+    schema = px4params.load_schema([root], use_env=False, cache_dir=tmp_path / "cache")
+    fmap = flat.flat_map(px4params.Store(schema))
+    assert fmap.mask_spec("WIDE_INST") is not None
+    assert fmap.mask_spec("WIDER_INST") is None
+    assert "WIDER_INST" not in {name for name, _, _ in fmap.masks()}
