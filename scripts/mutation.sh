@@ -199,6 +199,10 @@ RUST_ISSUE40_TESTS="$RUST_ISSUE40_TESTS mutants_leaf"
 # no subprocess, no server). Issue 40's figures:
 #   MUTATION_BASELINE=1 nice bash scripts/mutation.sh store-paramfile store-classic   # before
 #   nice bash scripts/mutation.sh store-paramfile store-classic                       # after
+# (measured: paramfile 177 mutants, before 76.3%, after 175 killed, 2 untested (lines written
+# twice, planted by hand: killed); classic 104, before 61.2%, after 103 killed + 1 equivalent.
+# store-flat: 588 mutants; its before was a 360 s sample, MUTATION_BUDGET_store_flat=360: 18
+# tested, 2 survivors, both killed by test_flat.py's issue40 tests when planted by hand.)
 TARGETS+=(
   "store-paramfile|$PY/store/paramfile.py|tests/test_paramfile.py tests/test_param_cli.py tests/test_cli_bad_inputs.py tests/test_storefile.py -k '(paramfile or export or bad_parameter or unknown_names or import or destructured or (bad_input and (params or json)) or other_ground) and not killing'"
 )
