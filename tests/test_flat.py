@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import px4params
@@ -322,3 +323,226 @@ def test_the_flat_check_is_remembered_per_schema_and_classic_names(
     # A schema built by hand (no model cache key) is checked every time.
     hand = px4params.Schema({"types": dict(schema.model["types"].items())})
     assert px4params.Store(hand, classic=[])._destructured is not None
+
+
+# -- issue 40: the rules of the module doc, one by one ------------------------------------------
+
+
+@pytest.mark.issue40
+def test_letter_numbers_are_bijective_base_26() -> None:
+    assert [flat.letter_number(t) for t in ("A", "Z", "AA", "AB", "ZZ", "AAA")] == [
+        0, 25, 26, 27, 701, 702,
+    ]  # fmt: skip
+    for text in ("", "a", "A1", "_", "[", "@"):
+        assert flat.letter_number(text) is None, text
+    # the first letter number written with 1, 2 and 3 letters: A, AA, AAA
+    assert [flat._first_with_letters(n) for n in (0, 1, 2, 3)] == [0, 0, 26, 702]
+    with pytest.raises(ValueError, match=r"^letter number -1 is negative$"):
+        flat.letters(-1)
+
+
+@pytest.mark.issue40
+def test_the_ina238_letters_and_their_ranges(store: px4params.Store) -> None:
+    """The module doc's px.Ina238: A bus tag (6 variants: uint3, 0..5), B/C i2c, D..G spi, H/I
+    serial, J/K dronecan, L sim, M..O mavlink, P current, Q shunt (float16: +-65504)."""
+    slots = list(flat.flat_map(store).layout_of("INA238"))
+    assert "".join(s.letter for s in slots) == "ABCDEFGHIJKLMNOPQ"
+    tag, bus_id, address = slots[:3]
+    assert tag == flat.FlatSlot("A", "bus._tag", "uint3", "int32", "union_tag", 0, 5, ())
+    assert bus_id.requires == (("bus._tag", "==", 0),)
+    assert (address.path, address.type, address.min, address.max) == (
+        "bus.i2c.address", "uint7", 0, 127,
+    )  # fmt: skip
+    assert slots[3].requires == (("bus._tag", "==", 1),)
+    assert [s.requires[0][2] for s in slots[1:15]] == [0, 0, 1, 1, 1, 1, 2, 2, 3, 3, 4, 5, 5, 5]
+    assert (slots[15].path, slots[15].type, slots[15].max, slots[15].requires) == (
+        "current", "uint10", 1023, (),
+    )  # fmt: skip
+    shunt = slots[16]
+    assert (shunt.type, shunt.mav_type, shunt.min, shunt.max) == (
+        "float16", "float32", -65504.0, 65504.0,
+    )  # fmt: skip
+
+
+@pytest.mark.issue40
+def test_leaf_ranges_and_length_slots(extra_schema: px4params.Schema) -> None:
+    """uintN 0..2^N-1, intN -2^(N-1)..2^(N-1)-1, float32 +-FLT_MAX, bool 0..1; a dynamic
+    array's length ``uintB`` (B bits for its maximum) with one slot per element up to it."""
+    lay = flat.layout(extra_schema["tst.Arrays"])
+    by_path = {s.path: s for s in lay}
+    assert (by_path["big"].type, by_path["big"].min, by_path["big"].max) == ("uint32", 0, 2**32 - 1)
+    assert (by_path["neg"].type, by_path["neg"].min, by_path["neg"].max) == (
+        "int32", -(2**31), 2**31 - 1,
+    )  # fmt: skip
+    assert (by_path["pair[0].y"].min, by_path["pair[0].y"].max) == (-64, 63)
+    f32 = by_path["f"]
+    assert (f32.mav_type, f32.min, f32.max) == (
+        "float32",
+        -3.4028234663852886e38,
+        3.4028234663852886e38,
+    )
+    flag = by_path["pair[1].flag"]
+    assert (flag.type, flag.mav_type, flag.min, flag.max) == ("bool", "int32", 0, 1)
+    dyn = by_path["dyn._len"]
+    assert (dyn.type, dyn.role, dyn.min, dyn.max) == ("uint2", "length", 0, 3)
+    assert by_path["dyn[2]"].requires == (("dyn._len", ">", 2),)
+    choice = by_path["choice._tag"]
+    assert (choice.type, choice.max) == ("uint2", 2)  # 3 variants: 2 bits
+    assert by_path["choices[1].c[1]"].requires == (
+        ("choices._len", ">", 1), ("choices[1]._tag", "==", 2),
+    )  # fmt: skip
+    assert "p_version" not in " ".join(by_path)
+    assert flat.slot_count(extra_schema["tst.Arrays"]) == len(lay)
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize(
+    ("slot_type", "mav_type", "number", "value"),
+    [
+        ("uint32", "int32", -1, 2**32 - 1),  # bit pattern
+        ("uint32", "int32", -(2**31), 2**31),
+        ("uint32", "int32", 2**31 - 1, 2**31 - 1),
+        ("int32", "int32", -1, -1),  # only uint32 travels as a bit pattern
+        ("uint8", "int32", 7.0, 7),
+        ("bool", "int32", 1, True),
+        ("bool", "int32", 0, False),
+        ("float32", "float32", 2, 2.0),
+    ],
+)
+def test_numbers_as_carried_and_back(
+    slot_type: str, mav_type: str, number: object, value: object
+) -> None:
+    slot = flat.FlatSlot("A", "x", slot_type, mav_type, "value", 0, 0)
+    got = slot.from_flat(number)
+    assert got == value and type(got) is type(value)
+    back = slot.to_flat(got)
+    assert back == number and type(back) is (float if mav_type == "float32" else int)
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize(
+    ("slot_type", "mav_type", "number", "message"),
+    [
+        ("float32", "float32", True, "expected a number, got True"),
+        ("float32", "float32", None, "expected a number, got None"),
+        ("uint8", "int32", True, "expected an integer, got True"),
+        ("uint8", "int32", 2.5, "expected an integer, got 2.5"),
+        ("uint8", "int32", "1", "expected an integer, got '1'"),
+        ("bool", "int32", 2, "value 2 is not a boolean (expected 0 or 1)"),
+        ("bool", "int32", -1, "value -1 is not a boolean (expected 0 or 1)"),
+    ],
+)
+def test_numbers_refused(slot_type: str, mav_type: str, number: object, message: str) -> None:
+    slot = flat.FlatSlot("A", "x", slot_type, mav_type, "value", 0, 0)
+    with pytest.raises(flat.FlatError) as e:
+        slot.from_flat(number)
+    assert str(e.value) == message
+
+
+@pytest.mark.issue40
+def test_the_instance_mask_adds_and_removes_instances(store: px4params.Store) -> None:
+    """Bit N of INA238_INST is INA238#N: writing it adds and removes instances (QGC's bitmask)."""
+    fmap = flat.flat_map(store)
+    assert flat.mask_name(fmap.mask_spec("INA238_INST")) == "INA238_INST"
+    assert fmap.mask_spec("INA238_0C") is None and fmap.mask_spec("ina238_inst") is None
+    assert flat.write_flat(store, "INA238_INST", 0b101) == (
+        "INA238_INST: added INA238#0, added INA238#2"
+    )
+    assert [str(k) for k in store.instance_keys("INA238")] == ["INA238#0", "INA238#2"]
+    assert flat.write_flat(store, "INA238_INST", 5.0) == "INA238_INST: no change"
+    assert flat.write_flat(store, "INA238_INST", 0b1010) == (
+        "INA238_INST: added INA238#1, added INA238#3, removed INA238#0, removed INA238#2"
+    )
+    assert dict((n, v) for n, _, v in fmap.masks())["INA238_INST"] == 0b1010
+    values = flat.flat_values(store)
+    assert values["INA238_INST"] == 0b1010 and values["SYS_AUTOSTART"] == 0
+    assert values["INA238_1C"] == 0x45 and "INA238_0C" not in values
+    assert flat.write_flat(store, "INA238_INST", 0) == (
+        "INA238_INST: removed INA238#1, removed INA238#3"
+    )
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize("number", [16, -1, True, 1.5, "3", None])
+def test_a_mask_outside_the_instances_is_refused(store: px4params.Store, number: object) -> None:
+    store.add("INA238#1")
+    with pytest.raises(flat.FlatError) as e:
+        flat.write_flat(store, "INA238_INST", number)
+    assert str(e.value) == (
+        f"INA238_INST: value {number!r} is not a mask of INA238's 4 instances (expected 0 to 15)"
+    )
+    assert [str(k) for k in store.instance_keys("INA238")] == ["INA238#1"]
+
+
+@pytest.mark.issue40
+def test_write_flat_names_what_changed(store: px4params.Store) -> None:
+    store.add("INA238#0")
+    assert flat.write_flat(store, "INA238_0C", 70) == "INA238_0C = 70"
+    assert flat.write_flat(store, "SYS_AUTOSTART", 4001) == "SYS_AUTOSTART = 4001"
+    with pytest.raises(InstanceError, match=r"^unknown parameter 'NOPE'$"):
+        flat.write_flat(store, "NOPE", 1)
+    with pytest.raises(InstanceError, match=r"^'INA238_0C' is not an instance mask$"):
+        flat.flat_map(store).set_mask("INA238_0C", 1)
+
+
+@pytest.mark.issue40
+def test_flat_names_are_exact_with_a_hint(store: px4params.Store) -> None:
+    fmap = flat.flat_map(store)
+    assert fmap.lookup("INA238_0C") is not None and "INA238_3Q" in fmap
+    for name in ("INA238_4C", "INA238_00C", "INA238_0R", "INA238_C", "INA238_0", 5):
+        assert name not in fmap, name
+    with pytest.raises(InstanceError) as e:
+        fmap.owner("ina238_0c")
+    assert str(e.value) == (
+        "'ina238_0c' is not a destructured parameter name (did you mean INA238_0C?)"
+    )
+    with pytest.raises(InstanceError) as e:
+        fmap.owner("NOPE_0C")
+    assert str(e.value) == "'NOPE_0C' is not a destructured parameter name"
+
+
+@pytest.mark.issue40
+def test_a_leaf_of_another_variant_is_not_live_and_says_which(store: px4params.Store) -> None:
+    store.add("INA238#0")
+    with pytest.raises(LeafError) as e:
+        flat.get_flat(store, "INA238_0D")
+    assert str(e.value) == (
+        "INA238_0D (INA238#0.bus.spi.bus_id) is not live: bus._tag selects variant 0, not 1 "
+        "(set INA238_0A to 1)"
+    )
+
+
+@pytest.mark.issue40
+def test_a_flat_row_as_a_dict(store: px4params.Store) -> None:
+    store.add("INA238#0")
+    row = flat.flat_map(store).find("INA238_0Q")
+    assert (str(row.leaf), str(row.target)) == ("INA238#0[6]", "INA238#0.shunt")
+    assert row.as_dict() == {
+        "name": "INA238_0Q",
+        "leaf": "INA238#0[6]",
+        "path": "INA238#0.shunt",
+        "type": "float16",
+        "mav_type": "float32",
+        "role": "value",
+        "value": row.value,
+    }
+    # JSON has no NaN or infinities: they are written as words
+    words = [row._replace(value=v).as_dict()["value"] for v in (math.nan, math.inf, -math.inf)]
+    assert words == ["nan", "inf", "-inf"]
+    assert flat.resolve_flat(store, "INA238_0C") == "INA238#0[4]"
+
+
+@pytest.mark.issue40
+def test_an_instance_mask_is_one_int32_of_31_instances(tmp_path: Path) -> None:
+    """Bit N of the mask is instance N, in an int32 whose sign bit is no instance: a parameter
+    with 31 instance slots has a mask, one with 32 has none."""
+    files = {
+        f"{name.capitalize()}.1.0.dsdl": f"# {name}\n# @max_instances {slots}\n\nuint8 x\n@sealed\n"
+        for name, slots in (("wide", 31), ("wider", 32))
+    }
+    root = dsdl_root(tmp_path, files)
+    schema = px4params.load_schema([root], use_env=False, cache_dir=tmp_path / "cache")
+    fmap = flat.flat_map(px4params.Store(schema))
+    assert fmap.mask_spec("WIDE_INST") is not None
+    assert fmap.mask_spec("WIDER_INST") is None
+    assert "WIDER_INST" not in {name for name, _, _ in fmap.masks()}

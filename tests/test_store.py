@@ -1179,3 +1179,17 @@ def test_a_tag_or_a_length_brings_leaves_that_are_checked_too(tmp_path: Path) ->
     store.set("ROW#0", {"choice": {"low": 3}, "cells": [60]}, force=True)
     store.set("ROW#0", {"choice": {"low": 4}, "cells": [60]})  # the cell is not changed
     assert store.get("ROW#0")["cells"] == [60]
+
+
+@pytest.mark.issue40
+def test_set_encoded_sets_the_value_and_leaves_the_default(store: px4params.Store) -> None:
+    """Stored bytes given without ``default=True`` are the value (as set is): the default stays."""
+    store.add("INA238#0")
+    store.set("INA238#0.current", 300)
+    data = store.encoded("INA238#0")
+    store.reset("INA238#0")
+    store.set_encoded("INA238#0", data)
+    assert store.get("INA238#0.current") == 300
+    assert store.get("INA238#0.current", default=True) == 327  # the type's @default
+    store.set_encoded("INA238#0", store.encoded("INA238#0"), default=True)
+    assert store.get("INA238#0.current", default=True) == 300
