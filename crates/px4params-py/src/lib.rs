@@ -24,11 +24,10 @@ use px4params_core::layout::{Kind, Layout, NodeId, Role};
 use px4params_core::leaf::{encode_default, get_leaf, locate, set_leaf, Target};
 use px4params_core::program::Program;
 use px4params_core::Scalar;
-use pyo3::exceptions::{PyKeyError, PyTypeError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyBytes, PyDict, PyInt, PyList, PyString, PyTuple};
 
-use errors::{Op, ValueErrorClass};
+use errors::{Op, Refusal, SourceError};
 use structs::StructValue;
 use values::{kind_name, scalar_to_py, LeafRows, PySource};
 
@@ -95,6 +94,12 @@ impl Compiled {
             dict.unbind()
         });
         template.bind(py).copy()
+    }
+
+    /// The root node of the type with this exact key.
+    fn root(&self, key: &str) -> PyResult<NodeId> {
+        let root = self.roots.get(key).copied();
+        root.ok_or_else(|| Refusal::NoType { key }.into())
     }
 
     /// The program of type `root`, compiled on first use.
@@ -168,11 +173,7 @@ impl Schema {
 
     /// The compiled type with this exact key.
     fn get(&self, key: &str) -> PyResult<DataType> {
-        let root = *self
-            .compiled
-            .roots
-            .get(key)
-            .ok_or_else(|| PyKeyError::new_err(key.to_owned()))?;
+        let root = self.compiled.root(key)?;
         Ok(DataType {
             compiled: Arc::clone(&self.compiled),
             root,
@@ -191,14 +192,7 @@ impl Schema {
         new: &str,
         base: &[u8],
     ) -> PyResult<Translated<'py>> {
-        let root = |key: &str| {
-            self.compiled
-                .roots
-                .get(key)
-                .copied()
-                .ok_or_else(|| PyKeyError::new_err(key.to_owned()))
-        };
-        let (old_root, new_root) = (root(old)?, root(new)?);
+        let (old_root, new_root) = (self.compiled.root(old)?, self.compiled.root(new)?);
         let layout = self.compiled.layout.as_layout();
         let mut out = vec![0u8; layout.max_bytes(new_root)];
         let mut changes = Vec::new();
@@ -221,7 +215,7 @@ impl Schema {
         );
         match translated {
             Ok(len) => Ok((PyBytes::new(py, &out[..len]), changes)),
-            Err(e) => Err(errors::translate(e.display(&layout).to_string())),
+            Err(e) => Err(errors::translate(&layout, e)),
         }
     }
 
@@ -269,18 +263,9 @@ pub(crate) fn target_of<'a>(target: &'a Bound<'_, PyAny>) -> PyResult<Target<'a>
     }
     if target.is_instance_of::<PyInt>() && !target.is_instance_of::<PyBool>() {
         // Negative, or beyond any value's leaves: no such leaf, as for any index too high.
-        let text = target.str().map(|t| t.to_string()).unwrap_or_default();
-        let shown = if !text.is_empty() && text.len() <= 32 {
-            text
-        } else {
-            "a number of more than 32 digits".to_string()
-        };
-        return Err(errors::no_leaf(&shown));
+        return Err(Refusal::NoLeaf { index: target }.into());
     }
-    Err(PyTypeError::new_err(format!(
-        "a leaf is named by its index [k] (int >= 0) or a path (str), got {}",
-        target.get_type().name()?
-    )))
+    Err(Refusal::LeafTarget { target }.into())
 }
 
 impl DataType {
@@ -288,7 +273,7 @@ impl DataType {
         self.compiled.layout.as_layout()
     }
 
-    fn err<E: ValueErrorClass>(&self, py: Python<'_>, err: Error<E>, op: Op) -> PyErr {
+    fn err<E: SourceError>(&self, py: Python<'_>, err: Error<E>, op: Op) -> PyErr {
         errors::codec(py, &self.key, &self.layout(), err, op)
     }
 
@@ -299,7 +284,7 @@ impl DataType {
         let mut rows = LeafRows::new(&layout);
         match decode(&layout, self.root, data, &mut rows, options) {
             Err(e) => self.err(py, e, Op::Decode),
-            Ok(_) => errors::too_deep(&self.key),
+            Ok(_) => Refusal::TooDeep { key: &self.key }.into(),
         }
     }
 
@@ -386,10 +371,7 @@ impl DataType {
         allow_trailing: bool,
     ) -> PyResult<Bound<'py, PyAny>> {
         if !matches!(self.layout().node(self.root).kind, Kind::Struct { .. }) {
-            return Err(PyTypeError::new_err(format!(
-                "{}: a union has no struct value; decode() gives its one-key dict",
-                self.key
-            )));
+            return Err(Refusal::UnionStruct { key: &self.key }.into());
         }
         let options = DecodeOptions {
             tao,
@@ -624,7 +606,7 @@ pub(crate) fn leaf_value(
     use px4params_core::codec::Source;
     source.scalar(kind).map_err(|e| {
         let (path, _) = describe(&compiled.layout.as_layout(), leaf);
-        errors::value(py, type_name, &path, e)
+        errors::value(py, type_name, path, e)
     })
 }
 
