@@ -29,7 +29,7 @@ use pyo3::types::{PyBool, PyBytes, PyDict, PyInt, PyList, PyString, PyTuple};
 
 use errors::{Op, Refusal, SourceError};
 use structs::StructValue;
-use values::{kind_name, scalar_to_py, LeafRows, PySource};
+use values::{leaf_tuple, scalar_to_py, LeafRows, PySource};
 
 pub(crate) struct Compiled {
     layout: OwnedLayout,
@@ -54,16 +54,20 @@ pub(crate) struct Compiled {
 /// filled to two thirds).
 const SMALL_DICT: usize = 5;
 
+/// The named fields of node `id` of `layout` when it is a struct (padding is not named), as
+/// indices into [`Layout::fields`]; none for other nodes.
+fn named_fields<'a>(layout: Layout<'a>, id: NodeId) -> impl Iterator<Item = u32> + Clone + 'a {
+    let fields = match layout.node(id).kind {
+        Kind::Struct { first, count } => first..first + count,
+        _ => 0..0,
+    };
+    fields.filter(move |&index| layout.fields[index as usize].role != Role::Padding)
+}
+
 impl Compiled {
-    /// The named fields of struct `id` (padding is not named), as indices into
-    /// [`Layout::fields`]; none for other nodes.
+    /// The named fields of struct `id` (see [`named_fields`]).
     fn named_fields(&self, id: NodeId) -> impl Iterator<Item = u32> + Clone + '_ {
-        let layout = self.layout.as_layout();
-        let fields = match layout.node(id).kind {
-            Kind::Struct { first, count } => first..first + count,
-            _ => 0..0,
-        };
-        fields.filter(move |&index| layout.fields[index as usize].role != Role::Padding)
+        named_fields(self.layout.as_layout(), id)
     }
 
     /// How many named fields struct `id` has.
@@ -143,12 +147,7 @@ impl Schema {
             type_keys[id as usize].clone_from(key);
         }
         let named_counts = (0..view.nodes.len() as NodeId)
-            .map(|id| match view.node(id).kind {
-                Kind::Struct { first, count } => (first..first + count)
-                    .filter(|&i| view.fields[i as usize].role != Role::Padding)
-                    .count() as u32,
-                _ => 0,
-            })
+            .map(|id| named_fields(view, id).count() as u32)
             .collect();
         Ok(Self {
             compiled: Arc::new(Compiled {
@@ -175,6 +174,7 @@ impl Schema {
     fn get(&self, key: &str) -> PyResult<DataType> {
         let root = self.compiled.root(key)?;
         Ok(DataType {
+            max_bytes: self.compiled.layout.as_layout().max_bytes(root),
             compiled: Arc::clone(&self.compiled),
             root,
             key: key.to_owned(),
@@ -234,6 +234,8 @@ impl Schema {
 struct DataType {
     compiled: Arc<Compiled>,
     root: NodeId,
+    /// The length of the type's largest value in bytes.
+    max_bytes: usize,
     /// The type's key, e.g. `px.Ina238.1.1`.
     #[pyo3(get)]
     key: String,
@@ -291,10 +293,12 @@ impl DataType {
     /// Runs `f` with room for the type's largest value: on the stack up to 256 bytes.
     #[inline]
     fn with_out<R>(&self, f: impl FnOnce(&mut [u8]) -> R) -> R {
-        let max = self.layout().max_bytes(self.root);
-        // Small messages (NodeStatus: 7 bytes) zero a small buffer.
+        let max = self.max_bytes;
+        // Small messages (NodeStatus: 7 bytes, BatteryInfo: 55) zero a small buffer.
         if max <= 32 {
             f(&mut [0u8; 32])
+        } else if max <= 64 {
+            f(&mut [0u8; 64])
         } else if max <= 256 {
             f(&mut [0u8; 256])
         } else {
@@ -312,20 +316,35 @@ impl DataType {
         saturate: bool,
     ) -> PyResult<Bound<'py, PyBytes>> {
         let py = value.py();
-        let layout = self.layout();
         let options = EncodeOptions {
             tao,
             saturate,
             keep_versions: false,
         };
-        let names = &self.compiled.names;
         let encoded = self.compiled.program(self.root).and_then(|program| {
-            let mut source = program::PyValues::new(py, names);
+            let mut source = program::PyValues::new(py, &self.compiled.names);
             program.encode(&mut source, value.as_ptr(), out, options)
         });
-        if let Some(n) = encoded {
-            return Ok(PyBytes::new(py, &out[..n]));
+        match encoded {
+            Some(n) => Ok(PyBytes::new(py, &out[..n])),
+            None => self.encode_declined(value, out, options),
         }
+    }
+
+    /// A value the type's program declined (or a type without one): a struct value as its
+    /// dict, anything else by the general path, which encodes it or words the error.
+    #[cold]
+    #[inline(never)]
+    fn encode_declined<'py>(
+        &self,
+        value: &Bound<'py, PyAny>,
+        out: &mut [u8],
+        options: EncodeOptions,
+    ) -> PyResult<Bound<'py, PyBytes>> {
+        let py = value.py();
+        let (tao, saturate) = (options.tao, options.saturate);
+        let names = &self.compiled.names;
+        let layout = self.layout();
         // A look-up may have raised: the general path meets it again and reports it.
         drop(PyErr::take(py));
         if let Ok(value) = value.cast_exact::<StructValue>() {
@@ -340,8 +359,10 @@ impl DataType {
         }
     }
 
-    /// Decodes whole bytes by the type's program; what it declines, the codec words.
-    fn decode_bytes<'py>(
+    /// Decodes whole bytes by the type's program, structs as `F`; what it declines, the codec
+    /// words.
+    #[inline(always)]
+    fn decode_as<'py, F: program::Form<'py>>(
         &self,
         py: Python<'py>,
         data: &[u8],
@@ -353,13 +374,24 @@ impl DataType {
             allow_trailing,
         };
         if let Some(program) = self.compiled.program(self.root) {
-            let mut built = program::Built::<Bound<PyDict>>::new(py, &self.compiled);
+            let mut built = program::Built::<F>::new(py, &self.compiled);
             let decoded = program.decode(&mut built, data, options)?;
             if let Some(value) = decoded {
                 return Ok(value);
             }
         }
         Err(self.declined(py, data, options))
+    }
+
+    /// Decodes whole bytes into dicts.
+    fn decode_bytes<'py>(
+        &self,
+        py: Python<'py>,
+        data: &[u8],
+        tao: bool,
+        allow_trailing: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        self.decode_as::<Bound<PyDict>>(py, data, tao, allow_trailing)
     }
 
     /// [`DataType::decode_bytes`] into a [`StructValue`].
@@ -373,18 +405,7 @@ impl DataType {
         if !matches!(self.layout().node(self.root).kind, Kind::Struct { .. }) {
             return Err(Refusal::UnionStruct { key: &self.key }.into());
         }
-        let options = DecodeOptions {
-            tao,
-            allow_trailing,
-        };
-        if let Some(program) = self.compiled.program(self.root) {
-            let mut built = program::Built::<program::Fields>::new(py, &self.compiled);
-            let decoded = program.decode(&mut built, data, options)?;
-            if let Some(value) = decoded {
-                return Ok(value);
-            }
-        }
-        Err(self.declined(py, data, options))
+        self.decode_as::<program::Fields>(py, data, tao, allow_trailing)
     }
 }
 
@@ -394,6 +415,7 @@ impl DataType {
     #[new]
     fn new(compiled: PyRef<'_, DataType>) -> Self {
         Self {
+            max_bytes: compiled.max_bytes,
             compiled: Arc::clone(&compiled.compiled),
             root: compiled.root,
             key: compiled.key.clone(),
@@ -518,8 +540,7 @@ impl DataType {
         let t = target_of(target)?;
         let (leaf, value) =
             get_leaf(&layout, self.root, data, t, tao).map_err(|e| self.err(py, e, Op::Leaf))?;
-        let (path, type_name) = describe(&layout, &leaf);
-        (leaf.index, path, type_name, scalar_to_py(py, value)?).into_pyobject(py)
+        leaf_tuple(py, &layout, &leaf, value)
     }
 
     /// Writes one leaf; returns the new encoding. Changing a union tag selects that variant
@@ -605,27 +626,9 @@ pub(crate) fn leaf_value(
     let mut source = PySource::new(value, &compiled.names, saturate);
     use px4params_core::codec::Source;
     source.scalar(kind).map_err(|e| {
-        let (path, _) = describe(&compiled.layout.as_layout(), leaf);
+        let (path, _) = values::describe(&compiled.layout.as_layout(), leaf);
         errors::value(py, type_name, path, e)
     })
-}
-
-/// A leaf's path (with `_tag`/`_len` for tags and lengths) and type name.
-pub(crate) fn describe(layout: &Layout<'_>, leaf: &px4params_core::leaf::Leaf) -> (String, String) {
-    let mut path = leaf.path.display(layout).to_string();
-    let (suffix, type_name) = match leaf.kind {
-        LeafKind::Scalar(kind) => ("", kind_name(kind)),
-        LeafKind::Tag { bits, .. } => ("_tag", format!("uint{bits}")),
-        LeafKind::Len { bits: 0, .. } => ("_len", "tail".to_owned()),
-        LeafKind::Len { bits, .. } => ("_len", format!("uint{bits}")),
-    };
-    if !suffix.is_empty() {
-        if !path.is_empty() {
-            path.push('.');
-        }
-        path.push_str(suffix);
-    }
-    (path, type_name)
 }
 
 #[pymodule]

@@ -14,8 +14,8 @@ use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyTuple};
 
 use crate::errors::{self, Op, Refusal, SourceError};
-use crate::values::{scalar_to_py, PySource};
-use crate::{describe, leaf_value, target_of, Compiled, Schema};
+use crate::values::{leaf_tuple, scalar_to_py, PySource};
+use crate::{leaf_value, target_of, Compiled, Schema};
 
 // With a leaf table per type and each instance's first leaves resolved when its value changes:
 // reading leaf [k] is a lookup and a bit read (`px4params_core::table`, `store::table_slots`).
@@ -276,8 +276,7 @@ impl Store {
         default: bool,
     ) -> PyResult<Bound<'py, PyTuple>> {
         let (leaf, value) = self.read_leaf(py, param, instance, target, default)?;
-        let (path, type_name) = describe(&self.layout(), &leaf);
-        (leaf.index, path, type_name, scalar_to_py(py, value)?).into_pyobject(py)
+        leaf_tuple(py, &self.layout(), &leaf, value)
     }
 
     /// Reads one leaf's value only (`Store.get` of a leaf: no path or type text is built).

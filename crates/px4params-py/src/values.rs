@@ -5,7 +5,9 @@
 //! Python objects; leaf listings.
 
 use px4params_core::codec::{ArrayLen, At, LeafKind, Sink, Source};
+use px4params_core::error::Path;
 use px4params_core::layout::{Field, Kind, Layout};
+use px4params_core::leaf::Leaf;
 use px4params_core::Scalar;
 use pyo3::prelude::*;
 use pyo3::types::{
@@ -333,14 +335,9 @@ impl<'l> LeafRows<'l> {
         }
     }
 
-    fn push(&mut self, at: &At<'_>, suffix: &str, type_name: String, value: Scalar) {
-        let mut path = at.path.display(self.layout).to_string();
-        if !suffix.is_empty() {
-            if !path.is_empty() {
-                path.push('.');
-            }
-            path.push_str(suffix);
-        }
+    /// A row for the leaf at `at` (`tail`: a tail array's length, which has no bits).
+    fn push(&mut self, at: &At<'_>, tail: bool, value: Scalar) {
+        let (path, type_name) = leaf_name(self.layout, at.path, at.kind, tail);
         self.rows.push(LeafRow {
             index: self.rows.len(),
             path,
@@ -350,8 +347,50 @@ impl<'l> LeafRows<'l> {
     }
 }
 
+/// A leaf's path and type as listings show them: the field path, then `_tag` or `_len` for a
+/// union's tag or an array's length; the DSDL type (`uint8`), or `tail` for the length of a
+/// tail array (`tail`: no bits of its own).
+pub(crate) fn leaf_name(
+    layout: &Layout<'_>,
+    path: &Path,
+    kind: LeafKind,
+    tail: bool,
+) -> (String, String) {
+    let mut text = path.display(layout).to_string();
+    let (suffix, type_name) = match kind {
+        LeafKind::Scalar(kind) => ("", kind_name(kind)),
+        LeafKind::Tag { bits, .. } => ("_tag", format!("uint{bits}")),
+        LeafKind::Len { .. } if tail => ("_len", "tail".to_owned()),
+        LeafKind::Len { bits, .. } => ("_len", format!("uint{bits}")),
+    };
+    if !suffix.is_empty() {
+        if !text.is_empty() {
+            text.push('.');
+        }
+        text.push_str(suffix);
+    }
+    (text, type_name)
+}
+
+/// A located leaf's path and type name (see [`leaf_name`]).
+pub(crate) fn describe(layout: &Layout<'_>, leaf: &Leaf) -> (String, String) {
+    let tail = matches!(leaf.kind, LeafKind::Len { bits: 0, .. });
+    leaf_name(layout, &leaf.path, leaf.kind, tail)
+}
+
+/// A located leaf and its value as Python gets it: `(index, path, type, value)`.
+pub(crate) fn leaf_tuple<'py>(
+    py: Python<'py>,
+    layout: &Layout<'_>,
+    leaf: &Leaf,
+    value: Scalar,
+) -> PyResult<Bound<'py, PyTuple>> {
+    let (path, type_name) = describe(layout, leaf);
+    (leaf.index, path, type_name, scalar_to_py(py, value)?).into_pyobject(py)
+}
+
 /// The DSDL spelling of a scalar kind.
-pub fn kind_name(kind: Kind) -> String {
+fn kind_name(kind: Kind) -> String {
     match kind {
         Kind::Uint { bits, .. } => format!("uint{bits}"),
         Kind::Int { bits, .. } => format!("int{bits}"),
@@ -366,10 +405,9 @@ impl Sink for LeafRows<'_> {
     type Error = std::convert::Infallible;
 
     fn scalar(&mut self, value: Scalar, at: At<'_>) -> Result<(), Self::Error> {
-        let LeafKind::Scalar(kind) = at.kind else {
-            return Ok(());
-        };
-        self.push(&at, "", kind_name(kind), value);
+        if let LeafKind::Scalar(_) = at.kind {
+            self.push(&at, false, value);
+        }
         Ok(())
     }
     fn begin_struct(&mut self, _: usize) -> Result<(), Self::Error> {
@@ -382,10 +420,9 @@ impl Sink for LeafRows<'_> {
         Ok(())
     }
     fn begin_union(&mut self, tag: u32, _: u32, _: &str, at: At<'_>) -> Result<(), Self::Error> {
-        let LeafKind::Tag { bits, .. } = at.kind else {
-            return Ok(());
-        };
-        self.push(&at, "_tag", format!("uint{bits}"), Scalar::Uint(tag.into()));
+        if let LeafKind::Tag { .. } = at.kind {
+            self.push(&at, false, Scalar::Uint(tag.into()));
+        }
         Ok(())
     }
     fn end_union(&mut self) -> Result<(), Self::Error> {
@@ -393,17 +430,15 @@ impl Sink for LeafRows<'_> {
     }
     fn begin_array(&mut self, len: ArrayLen, at: At<'_>) -> Result<(), Self::Error> {
         self.depth += 1;
-        let LeafKind::Len { bits, .. } = at.kind else {
+        if !matches!(at.kind, LeafKind::Len { .. }) {
             return Ok(());
-        };
+        }
         match len {
             ArrayLen::Fixed(_) => {}
-            ArrayLen::Prefixed(n) => {
-                self.push(&at, "_len", format!("uint{bits}"), Scalar::Uint(n as u64))
-            }
+            ArrayLen::Prefixed(n) => self.push(&at, false, Scalar::Uint(n as u64)),
             ArrayLen::Tail => {
                 self.tail = Some((self.rows.len(), self.depth));
-                self.push(&at, "_len", "tail".into(), Scalar::Uint(0));
+                self.push(&at, true, Scalar::Uint(0));
             }
         }
         Ok(())
