@@ -637,6 +637,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<DataType>()?;
     m.add_class::<StructValue>()?;
     fastcall::install(&m.py().get_type::<DataType>())?;
+    program::find_small_ints(m.py());
     m.add_class::<store::Store>()?;
     m.add_function(wrap_pyfunction!(file::check_store_file, m)?)?;
     m.add_function(wrap_pyfunction!(transfer::dsdl_signature, m)?)?;

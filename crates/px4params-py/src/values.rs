@@ -301,7 +301,10 @@ impl<'py> Source for PySource<'py, '_> {
 #[inline]
 pub fn scalar_to_py<'py>(py: Python<'py>, value: Scalar) -> PyResult<Bound<'py, PyAny>> {
     Ok(match value {
-        Scalar::Uint(v) => v.into_pyobject(py)?.into_any(),
+        Scalar::Uint(v) => match crate::program::small_int_object(py, v) {
+            Some(int) => int,
+            None => v.into_pyobject(py)?.into_any(),
+        },
         Scalar::Int(v) => v.into_pyobject(py)?.into_any(),
         Scalar::Float(v) => v.into_pyobject(py)?.into_any(),
         Scalar::Bool(v) => PyBool::new(py, v).to_owned().into_any(),
