@@ -56,8 +56,8 @@ impl Store {
         self.capacity
     }
 
-    pub(crate) fn root_of(&self, key: &str) -> Option<u32> {
-        self.compiled.roots.get(key).copied()
+    pub(crate) fn root_of(&self, key: &str) -> PyResult<u32> {
+        self.compiled.root(key)
     }
 
     /// Leaf `target` of an instance's value (or default), located and read.
