@@ -13,20 +13,26 @@ noisy), best of timeit's repeats each time; the median of the runs is printed, w
 and issue 18's target. A call is timed as the statement a user writes (``t.encode(value)``,
 its names local to timeit's loop, as ``python -m timeit`` times it), not through a lambda,
 whose own call (about 20 ns) would be counted on both sides. ``--instructions`` adds
-valgrind's instruction counts per call (the count of N calls minus that of none, divided by
-N), which load does not change.
+valgrind's instruction counts per call: callgrind counts only inside the timed loop (run
+through ``operator.call``, which nothing else here calls), N calls minus none, divided by N,
+with the collector off and a fixed hash seed. Loading the schema and the modules is never
+counted (it costs some 5.5 billion instructions and varies by millions from run to run).
 
 ``--against OLD.so`` times our side of each row with another build of ``px4params._native``
 (loaded beside this one, as its own module) and with this one, in one process, the two one
 after the other for each row of each run, taking turns to go first; it prints the medians
-and their ratio (this build's over the other's: below 1 is faster).
+and their ratio (this build's over the other's: below 1 is faster). With ``--instructions``
+it adds each build's instructions per call inside the binding only (callgrind collecting in
+its entry points, ``BINDING_ENTRY_POINTS``), and their difference.
 """
 
 from __future__ import annotations
 
 import argparse
+import gc
 import importlib.machinery
 import importlib.util
+import operator
 import os
 import re
 import shutil
@@ -42,6 +48,7 @@ from typing import Any
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
 
 import px4params
+import px4params._native
 from dronecan import transport
 from dronecan_oracle import fill, new_value, unpack
 
@@ -105,6 +112,12 @@ ROWS = {
 }
 #: Messages per batch call in the ``_many`` rows.
 BATCH = 100
+#: Where callgrind counts a whole call: the timed loop, which ``--loop`` runs (alone) through
+#: ``operator.call``.
+LOOP_ENTRY_POINTS = ("_operator_call",)
+#: Where callgrind counts the binding's own work: the functions CPython calls in it for the
+#: codec rows (the fast-call methods, and pyo3's wrappers of the others).
+BINDING_ENTRY_POINTS = ("_native::fastcall::*", "_native::DataType::__pymethod_*")
 
 
 @dataclass(frozen=True)
@@ -175,15 +188,16 @@ def best(call: Call, repeat: int = 5) -> float:
 
 
 def instructions(
-    row: str, side: int, seconds_per_call: float, pythonpath: str | None = None
+    row: str, side: str, seconds_per_call: float, against: Path | None = None
 ) -> float:
-    """Instructions per call of one side of ``row``, under callgrind: as many calls as take a
-    fifth of a second natively, with a fixed hash seed so that the runs differ only in them;
-    with the package found first on ``pythonpath`` if given."""
-    n = min(200_000, max(1000, int(0.2 / seconds_per_call)))
-    env = dict(os.environ, PYTHONHASHSEED="0")
-    if pythonpath:
-        env["PYTHONPATH"] = os.pathsep.join([pythonpath, env.get("PYTHONPATH", "")])
+    """Instructions per call of one side of ``row`` (``ours``, ``baseline``; or ``before``,
+    ``after`` with ``against``, the other build), under callgrind, counted only where
+    ``--loop`` times the calls (the binding's entry points for ``before``/``after``): as many
+    calls as take a fiftieth of a second natively, minus none."""
+    n = min(20_000, max(500, int(0.02 / seconds_per_call)))
+    entry_points = BINDING_ENTRY_POINTS if against else LOOP_ENTRY_POINTS
+    toggles = [f"--toggle-collect={name}" for name in entry_points]
+    extra = ["--against", str(against)] if against else []
 
     def count(times: int) -> int:
         err = subprocess.run(
@@ -191,23 +205,40 @@ def instructions(
                 "valgrind",
                 "--tool=callgrind",
                 "--callgrind-out-file=/dev/null",
+                "--collect-atstart=no",
+                *toggles,
                 sys.executable,
                 __file__,
                 "--loop",
                 row,
-                str(side),
+                side,
                 str(times),
+                *extra,
             ],
             capture_output=True,
             text=True,
             check=True,
-            env=env,
+            env=dict(os.environ, PYTHONHASHSEED="0"),
         ).stderr
         match = re.search(r"refs:\s+([\d,]+)", err)
         assert match, err
         return int(match.group(1).replace(",", ""))
 
     return (count(n) - count(0)) / n
+
+
+def loop(row: str, side: str, n: int, against: Path | None) -> None:
+    """Runs one side of ``row`` ``n`` times through ``operator.call`` (what callgrind counts),
+    with the collector off so that no collection falls inside the calls."""
+    if side in ("before", "after"):
+        assert against, "--loop before/after needs --against OLD.so"
+        native = load_native(against) if side == "before" else px4params._native
+        call = calls_with(native)[row]
+    else:
+        call = calls()[row][("ours", "baseline").index(side)]
+    timer = call.timer()
+    gc.disable()
+    operator.call(timer.timeit, n)
 
 
 def show(row: str, ours: float, theirs: float, ours_ir: float | None, theirs_ir: float | None):
@@ -251,9 +282,10 @@ def calls_with(native: ModuleType) -> dict[str, Call]:
     return made
 
 
-def against(old_so: Path, rows: list[str] | None, runs: int) -> None:
+def against(old_so: Path, rows: list[str] | None, runs: int, counted: bool) -> None:
     """Our side of each row with ``old_so`` and with this build, in one process, the two
-    timed one after the other for each row of each run (see the module)."""
+    timed one after the other for each row of each run (see the module); with the binding's
+    instructions per call of each when ``counted``."""
     sides = {
         "before": calls_with(load_native(old_so)),
         "after": calls_with(px4params._native),
@@ -268,12 +300,21 @@ def against(old_so: Path, rows: list[str] | None, runs: int) -> None:
                 times[side][row].append(best(sides[side][row]) / per[row])
     print(f"{os.cpu_count()} CPUs, Python {sys.version.split()[0]}, {runs} runs, medians")
     print(f"before: {old_so}\nafter:  {Path(px4params._native.__file__).resolve()}")
-    print(f"{'':<31} {'before':>11} {'after':>11} {'after/before':>13}")
+    head = f"{'':<31} {'before':>11} {'after':>11} {'after/before':>13}"
+    print(head + ("   binding Ir: before    after  change" if counted else ""))
     for row in per:
         before = statistics.median(times["before"][row])
         after = statistics.median(times["after"][row])
-        line = f"{row:<31} {before * 1e9:>8.0f} ns {after * 1e9:>8.0f} ns"
-        print(line + f" {after / before:>13.2f}", flush=True)
+        line = f"{row:<31} {before * 1e9:>8.0f} ns {after * 1e9:>8.0f} ns {after / before:>13.2f}"
+        if counted:
+            # Per message, as the times: a batch row's call counts `per` messages.
+            ir = {
+                side: instructions(row, side, t * per[row], old_so) / per[row]
+                for side, t in (("before", before), ("after", after))
+            }
+            change = ir["after"] - ir["before"]
+            line += f"   {ir['before']:>17.1f} {ir['after']:>8.1f} {change:>+7.1f}"
+        print(line, flush=True)
 
 
 def which_valgrind() -> str | None:
@@ -292,18 +333,18 @@ def main() -> None:
     parser.add_argument("--against", type=Path, metavar="OLD.so", help="compare with this build")
     parser.add_argument("--loop", nargs=3, metavar=("ROW", "SIDE", "N"), help=argparse.SUPPRESS)
     args = parser.parse_args()
-    if args.against:
-        against(args.against, args.rows, args.runs)
-        return
-    made = calls()
     if args.loop:
         row, side, n = args.loop
-        made[row][int(side)].timer().timeit(int(n))
+        loop(row, side, int(n), args.against)
         return
-    if args.rows and not args.loop:
-        made = {row: c for row, c in made.items() if any(text in row for text in args.rows)}
     if args.instructions and not which_valgrind():
         args.instructions = False
+    if args.against:
+        against(args.against, args.rows, args.runs, args.instructions)
+        return
+    made = calls()
+    if args.rows:
+        made = {row: c for row, c in made.items() if any(text in row for text in args.rows)}
     times: dict[str, tuple[list[float], list[float]]] = {row: ([], []) for row in made}
     for _ in range(args.runs):
         for row, (ours, theirs, per) in made.items():
@@ -315,7 +356,7 @@ def main() -> None:
         ours, theirs = (statistics.median(t) for t in times[row])
         per = made[row][2]
         counts = (
-            (instructions(row, 0, ours * per) / per, instructions(row, 1, theirs))
+            (instructions(row, "ours", ours * per) / per, instructions(row, "baseline", theirs))
             if args.instructions
             else (None, None)
         )

@@ -219,3 +219,31 @@ def test_python_code_run_by_a_field_look_up_is_survived() -> None:
     sneaky.armed = True
     with pytest.raises(px4params.ValueShapeError, match="uptime_sec: missing field"):
         t.encode(value)
+
+
+def test_small_ints_are_read_and_made_as_the_numbers_they_are() -> None:
+    """Ints 0 to 255 are CPython's own objects, which the program knows by their address (a
+    value read, a value made): every one of them, and the numbers around them, encode as the
+    DroneCAN rules say (uint8 items are the bytes; int16 little-endian; a bool the next bit)
+    and decode to themselves."""
+    uint8 = {"kind": "uint", "bits": 8, "cast": "saturated"}
+    fields = [
+        ("items", {"kind": "dynarray", "elem": uint8, "max": 255}),
+        ("wide", {"kind": "int", "bits": 16, "cast": "saturated"}),
+        ("flag", {"kind": "bool"}),
+    ]
+    model = {"t.B": {"kind": "struct", "fields": [{"name": n, "type": t} for n, t in fields]}}
+    t = px4params._native.Schema(model).get("t.B")
+    items = list(range(255))
+    for wide in (0, 1, 7, 255, 256, 257, -1, -5, -6, 32767, -32768):
+        for flag in (0, 1, True, False):
+            data = t.encode({"items": items, "wide": wide, "flag": flag})
+            expected = bytes([255, *items]) + wide.to_bytes(2, "little", signed=True)
+            assert data == expected + (b"\x80" if flag else b"\x00")
+            value = t.decode(data)
+            assert value == {"items": items, "wide": wide, "flag": bool(flag)}
+            assert all(got is want for got, want in zip(value["items"], items, strict=True))
+    with pytest.raises(px4params.errors.EncodeError, match=r"items\[0\]: value 256 is out"):
+        t.encode({"items": [256], "wide": 0, "flag": 0})
+    with pytest.raises(px4params.errors.EncodeError, match=r"flag: value 2 is out of range"):
+        t.encode({"items": [], "wide": 0, "flag": 2})

@@ -10,7 +10,7 @@ use pyo3::ffi;
 use pyo3::prelude::*;
 use pyo3::types::{PyList, PyTuple};
 
-pyo3::import_exception!(px4params.errors, CodecError);
+use crate::errors::at_item;
 
 /// `each` of every item of `items` (any iterable), as a new list.
 pub(crate) fn map_items<'py>(
@@ -46,18 +46,4 @@ pub(crate) fn map_items<'py>(
         unsafe { ffi::PyList_SetItem(list.as_ptr(), i as ffi::Py_ssize_t, value.into_ptr()) };
     }
     Ok(list)
-}
-
-/// `err`, told that it comes from item `index` of a batch.
-fn at_item(py: Python<'_>, err: PyErr, index: usize) -> PyErr {
-    let value = err.value(py);
-    // Failing to reword the error (no memory) leaves it as it was: still the right error.
-    if value.is_instance_of::<CodecError>() {
-        let message = format!("item {index}: {value}");
-        let _ = value.setattr("args", (message,));
-        let _ = value.setattr("index", index);
-    } else {
-        let _ = value.call_method1("add_note", (format!("(item {index} of the batch)"),));
-    }
-    err
 }

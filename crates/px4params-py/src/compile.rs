@@ -2,13 +2,14 @@
 
 use std::collections::HashMap;
 
-use px4params_core::compile::OwnedLayout;
+use px4params_core::compile::{BuildError, OwnedLayout};
 use px4params_core::layout::{NodeId, Role};
 use px4params_core::Cast;
-use pyo3::exceptions::PyValueError;
 use pyo3::intern;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyString};
+
+use crate::errors::ModelError;
 
 /// Compiles every type of `types` (key → type dict); returns the layout and each key's root.
 pub fn compile_model(
@@ -41,12 +42,14 @@ fn item<'py>(
     key: &Bound<'py, PyString>,
     what: &str,
 ) -> PyResult<Bound<'py, PyAny>> {
-    d.get_item(key)?
-        .ok_or_else(|| PyValueError::new_err(format!("schema model: {what} has no '{key}'")))
+    d.get_item(key)?.ok_or_else(|| {
+        let key = key.to_string();
+        ModelError::NoEntry { what, key }.into()
+    })
 }
 
-fn build_err(what: &str, e: impl std::fmt::Display) -> PyErr {
-    PyValueError::new_err(format!("schema model: {what}: {e}"))
+fn build_err(what: &str) -> impl FnOnce(BuildError) -> PyErr + '_ {
+    move |err| ModelError::Layout { what, err }.into()
 }
 
 impl Compiler<'_, '_> {
@@ -55,14 +58,12 @@ impl Compiler<'_, '_> {
             return Ok(id);
         }
         if self.in_progress.iter().any(|k| k == key) {
-            return Err(PyValueError::new_err(format!(
-                "schema model: type {key} contains itself"
-            )));
+            return Err(ModelError::Recursive { key }.into());
         }
         let def = self
             .types
             .get_item(key)?
-            .ok_or_else(|| PyValueError::new_err(format!("schema model: unknown type {key}")))?;
+            .ok_or_else(|| PyErr::from(ModelError::UnknownType { key }))?;
         let def = def.cast_into::<PyDict>()?;
         self.in_progress.push(key.to_owned());
         let kind: String = item(&def, intern!(def.py(), "kind"), key)?.extract()?;
@@ -98,17 +99,13 @@ impl Compiler<'_, '_> {
         let id = if kind == "union" {
             let variants: Vec<(&str, NodeId)> =
                 members.iter().map(|(n, id, _)| (n.as_str(), *id)).collect();
-            self.layout
-                .union(&variants)
-                .map_err(|e| build_err(key, e))?
+            self.layout.union(&variants).map_err(build_err(key))?
         } else {
             let fields: Vec<(&str, NodeId, Role)> = members
                 .iter()
                 .map(|(n, id, r)| (n.as_str(), *id, *r))
                 .collect();
-            self.layout
-                .structure(&fields)
-                .map_err(|e| build_err(key, e))?
+            self.layout.structure(&fields).map_err(build_err(key))?
         };
         self.in_progress.pop();
         self.roots.insert(key.to_owned(), id);
@@ -147,11 +144,10 @@ impl Compiler<'_, '_> {
                 return self.composite(&name);
             }
             other => {
-                return Err(PyValueError::new_err(format!(
-                    "schema model: {what}: unknown type kind '{other}'"
-                )))
+                let kind = other.to_owned();
+                return Err(ModelError::UnknownKind { what, kind }.into());
             }
         };
-        built.map_err(|e| build_err(what, e))
+        built.map_err(build_err(what))
     }
 }

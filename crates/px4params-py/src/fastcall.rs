@@ -8,13 +8,11 @@
 //! fast path does not raise pyo3's own count of attached calls, so a `Py` dropped inside it
 //! (none is, on the paths measured) would be released at pyo3's next call rather than at once.
 
-use std::any::Any;
 use std::ffi::{CStr, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::ptr;
 
 use pyo3::ffi;
-use pyo3::panic::PanicException;
 use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
 use pyo3::types::{PyBytes, PyDict, PyTuple, PyType};
@@ -139,7 +137,7 @@ unsafe fn fast_call(
     let err = match result {
         Ok(Ok(object)) => return object,
         Ok(Err(err)) => err,
-        Err(payload) => PanicException::new_err(panic_message(payload)),
+        Err(payload) => crate::errors::panic(payload),
     };
     err.restore(py);
     ptr::null_mut()
@@ -157,9 +155,7 @@ unsafe fn pass_on(
     nargs: ffi::Py_ssize_t,
     kwnames: *mut ffi::PyObject,
 ) -> PyResult<*mut ffi::PyObject> {
-    let method = full
-        .get(py)
-        .ok_or_else(|| PanicException::new_err("px4params: DataType methods not installed"))?;
+    let method = full.get(py).ok_or_else(crate::errors::not_installed)?;
     // SAFETY: live objects, borrowed from the caller for the call.
     let borrowed = |p: *mut ffi::PyObject| unsafe { Bound::from_borrowed_ptr(py, p) };
     let names = (!kwnames.is_null()).then(|| borrowed(kwnames));
@@ -187,12 +183,4 @@ unsafe fn pass_on(
         .bind(py)
         .call(positional, kwargs.as_ref())
         .map(Bound::into_ptr)
-}
-
-fn panic_message(payload: Box<dyn Any + Send>) -> String {
-    let text = payload
-        .downcast_ref::<&str>()
-        .map(|s| s.to_string())
-        .or_else(|| payload.downcast_ref::<String>().cloned());
-    text.unwrap_or_else(|| "panic from Rust code".into())
 }

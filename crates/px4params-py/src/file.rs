@@ -3,7 +3,6 @@
 //! replace, backups, locking) and version translation.
 
 use px4params_core::file::{self, FileName, Key, SaveError, WriteError};
-use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyList};
 
@@ -32,8 +31,7 @@ pub fn check_store_file<'py>(
     data: &[u8],
     r#where: &str,
 ) -> PyResult<CheckedTuple<'py>> {
-    let checked =
-        file::check(data).map_err(|e| errors::store_file(e.to_string(), r#where, e.offset))?;
+    let checked = file::check(data).map_err(|e| errors::store_file(e, r#where))?;
     let table = checked
         .has_table()
         .then(|| checked.table().map(str::to_owned).collect());
@@ -90,7 +88,7 @@ pub(crate) fn store_file_bytes(
             Err(SaveError::Write(WriteError::BufferFull { needed })) => {
                 buf.resize(needed.max(buf.len() * 2), 0);
             }
-            Err(e) => return Err(PyValueError::new_err(e.to_string())),
+            Err(e) => return Err(errors::save(e)),
         }
     }
 }

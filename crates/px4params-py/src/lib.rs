@@ -24,13 +24,12 @@ use px4params_core::layout::{Kind, Layout, NodeId, Role};
 use px4params_core::leaf::{encode_default, get_leaf, locate, set_leaf, Target};
 use px4params_core::program::Program;
 use px4params_core::Scalar;
-use pyo3::exceptions::{PyKeyError, PyTypeError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyBytes, PyDict, PyInt, PyList, PyString, PyTuple};
 
-use errors::{Op, ValueErrorClass};
+use errors::{Op, Refusal, SourceError};
 use structs::StructValue;
-use values::{kind_name, scalar_to_py, LeafRows, PySource};
+use values::{leaf_tuple, scalar_to_py, LeafRows, PySource};
 
 pub(crate) struct Compiled {
     layout: OwnedLayout,
@@ -55,16 +54,20 @@ pub(crate) struct Compiled {
 /// filled to two thirds).
 const SMALL_DICT: usize = 5;
 
+/// The named fields of node `id` of `layout` when it is a struct (padding is not named), as
+/// indices into [`Layout::fields`]; none for other nodes.
+fn named_fields<'a>(layout: Layout<'a>, id: NodeId) -> impl Iterator<Item = u32> + Clone + 'a {
+    let fields = match layout.node(id).kind {
+        Kind::Struct { first, count } => first..first + count,
+        _ => 0..0,
+    };
+    fields.filter(move |&index| layout.fields[index as usize].role != Role::Padding)
+}
+
 impl Compiled {
-    /// The named fields of struct `id` (padding is not named), as indices into
-    /// [`Layout::fields`]; none for other nodes.
+    /// The named fields of struct `id` (see [`named_fields`]).
     fn named_fields(&self, id: NodeId) -> impl Iterator<Item = u32> + Clone + '_ {
-        let layout = self.layout.as_layout();
-        let fields = match layout.node(id).kind {
-            Kind::Struct { first, count } => first..first + count,
-            _ => 0..0,
-        };
-        fields.filter(move |&index| layout.fields[index as usize].role != Role::Padding)
+        named_fields(self.layout.as_layout(), id)
     }
 
     /// How many named fields struct `id` has.
@@ -95,6 +98,12 @@ impl Compiled {
             dict.unbind()
         });
         template.bind(py).copy()
+    }
+
+    /// The root node of the type with this exact key.
+    fn root(&self, key: &str) -> PyResult<NodeId> {
+        let root = self.roots.get(key).copied();
+        root.ok_or_else(|| Refusal::NoType { key }.into())
     }
 
     /// The program of type `root`, compiled on first use.
@@ -138,12 +147,7 @@ impl Schema {
             type_keys[id as usize].clone_from(key);
         }
         let named_counts = (0..view.nodes.len() as NodeId)
-            .map(|id| match view.node(id).kind {
-                Kind::Struct { first, count } => (first..first + count)
-                    .filter(|&i| view.fields[i as usize].role != Role::Padding)
-                    .count() as u32,
-                _ => 0,
-            })
+            .map(|id| named_fields(view, id).count() as u32)
             .collect();
         Ok(Self {
             compiled: Arc::new(Compiled {
@@ -168,12 +172,9 @@ impl Schema {
 
     /// The compiled type with this exact key.
     fn get(&self, key: &str) -> PyResult<DataType> {
-        let root = *self
-            .compiled
-            .roots
-            .get(key)
-            .ok_or_else(|| PyKeyError::new_err(key.to_owned()))?;
+        let root = self.compiled.root(key)?;
         Ok(DataType {
+            max_bytes: self.compiled.layout.as_layout().max_bytes(root),
             compiled: Arc::clone(&self.compiled),
             root,
             key: key.to_owned(),
@@ -191,14 +192,7 @@ impl Schema {
         new: &str,
         base: &[u8],
     ) -> PyResult<Translated<'py>> {
-        let root = |key: &str| {
-            self.compiled
-                .roots
-                .get(key)
-                .copied()
-                .ok_or_else(|| PyKeyError::new_err(key.to_owned()))
-        };
-        let (old_root, new_root) = (root(old)?, root(new)?);
+        let (old_root, new_root) = (self.compiled.root(old)?, self.compiled.root(new)?);
         let layout = self.compiled.layout.as_layout();
         let mut out = vec![0u8; layout.max_bytes(new_root)];
         let mut changes = Vec::new();
@@ -221,7 +215,7 @@ impl Schema {
         );
         match translated {
             Ok(len) => Ok((PyBytes::new(py, &out[..len]), changes)),
-            Err(e) => Err(errors::translate(e.display(&layout).to_string())),
+            Err(e) => Err(errors::translate(&layout, e)),
         }
     }
 
@@ -240,6 +234,8 @@ impl Schema {
 struct DataType {
     compiled: Arc<Compiled>,
     root: NodeId,
+    /// The length of the type's largest value in bytes.
+    max_bytes: usize,
     /// The type's key, e.g. `px.Ina238.1.1`.
     #[pyo3(get)]
     key: String,
@@ -269,18 +265,9 @@ pub(crate) fn target_of<'a>(target: &'a Bound<'_, PyAny>) -> PyResult<Target<'a>
     }
     if target.is_instance_of::<PyInt>() && !target.is_instance_of::<PyBool>() {
         // Negative, or beyond any value's leaves: no such leaf, as for any index too high.
-        let text = target.str().map(|t| t.to_string()).unwrap_or_default();
-        let shown = if !text.is_empty() && text.len() <= 32 {
-            text
-        } else {
-            "a number of more than 32 digits".to_string()
-        };
-        return Err(errors::no_leaf(&shown));
+        return Err(Refusal::NoLeaf { index: target }.into());
     }
-    Err(PyTypeError::new_err(format!(
-        "a leaf is named by its index [k] (int >= 0) or a path (str), got {}",
-        target.get_type().name()?
-    )))
+    Err(Refusal::LeafTarget { target }.into())
 }
 
 impl DataType {
@@ -288,7 +275,7 @@ impl DataType {
         self.compiled.layout.as_layout()
     }
 
-    fn err<E: ValueErrorClass>(&self, py: Python<'_>, err: Error<E>, op: Op) -> PyErr {
+    fn err<E: SourceError>(&self, py: Python<'_>, err: Error<E>, op: Op) -> PyErr {
         errors::codec(py, &self.key, &self.layout(), err, op)
     }
 
@@ -299,17 +286,19 @@ impl DataType {
         let mut rows = LeafRows::new(&layout);
         match decode(&layout, self.root, data, &mut rows, options) {
             Err(e) => self.err(py, e, Op::Decode),
-            Ok(_) => errors::too_deep(&self.key),
+            Ok(_) => Refusal::TooDeep { key: &self.key }.into(),
         }
     }
 
     /// Runs `f` with room for the type's largest value: on the stack up to 256 bytes.
     #[inline]
     fn with_out<R>(&self, f: impl FnOnce(&mut [u8]) -> R) -> R {
-        let max = self.layout().max_bytes(self.root);
-        // Small messages (NodeStatus: 7 bytes) zero a small buffer.
+        let max = self.max_bytes;
+        // Small messages (NodeStatus: 7 bytes, BatteryInfo: 55) zero a small buffer.
         if max <= 32 {
             f(&mut [0u8; 32])
+        } else if max <= 64 {
+            f(&mut [0u8; 64])
         } else if max <= 256 {
             f(&mut [0u8; 256])
         } else {
@@ -327,20 +316,35 @@ impl DataType {
         saturate: bool,
     ) -> PyResult<Bound<'py, PyBytes>> {
         let py = value.py();
-        let layout = self.layout();
         let options = EncodeOptions {
             tao,
             saturate,
             keep_versions: false,
         };
-        let names = &self.compiled.names;
         let encoded = self.compiled.program(self.root).and_then(|program| {
-            let mut source = program::PyValues::new(py, names);
+            let mut source = program::PyValues::new(py, &self.compiled.names);
             program.encode(&mut source, value.as_ptr(), out, options)
         });
-        if let Some(n) = encoded {
-            return Ok(PyBytes::new(py, &out[..n]));
+        match encoded {
+            Some(n) => Ok(PyBytes::new(py, &out[..n])),
+            None => self.encode_declined(value, out, options),
         }
+    }
+
+    /// A value the type's program declined (or a type without one): a struct value as its
+    /// dict, anything else by the general path, which encodes it or words the error.
+    #[cold]
+    #[inline(never)]
+    fn encode_declined<'py>(
+        &self,
+        value: &Bound<'py, PyAny>,
+        out: &mut [u8],
+        options: EncodeOptions,
+    ) -> PyResult<Bound<'py, PyBytes>> {
+        let py = value.py();
+        let (tao, saturate) = (options.tao, options.saturate);
+        let names = &self.compiled.names;
+        let layout = self.layout();
         // A look-up may have raised: the general path meets it again and reports it.
         drop(PyErr::take(py));
         if let Ok(value) = value.cast_exact::<StructValue>() {
@@ -355,8 +359,10 @@ impl DataType {
         }
     }
 
-    /// Decodes whole bytes by the type's program; what it declines, the codec words.
-    fn decode_bytes<'py>(
+    /// Decodes whole bytes by the type's program, structs as `F`; what it declines, the codec
+    /// words.
+    #[inline(always)]
+    fn decode_as<'py, F: program::Form<'py>>(
         &self,
         py: Python<'py>,
         data: &[u8],
@@ -368,13 +374,24 @@ impl DataType {
             allow_trailing,
         };
         if let Some(program) = self.compiled.program(self.root) {
-            let mut built = program::Built::<Bound<PyDict>>::new(py, &self.compiled);
+            let mut built = program::Built::<F>::new(py, &self.compiled);
             let decoded = program.decode(&mut built, data, options)?;
             if let Some(value) = decoded {
                 return Ok(value);
             }
         }
         Err(self.declined(py, data, options))
+    }
+
+    /// Decodes whole bytes into dicts.
+    fn decode_bytes<'py>(
+        &self,
+        py: Python<'py>,
+        data: &[u8],
+        tao: bool,
+        allow_trailing: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        self.decode_as::<Bound<PyDict>>(py, data, tao, allow_trailing)
     }
 
     /// [`DataType::decode_bytes`] into a [`StructValue`].
@@ -386,23 +403,9 @@ impl DataType {
         allow_trailing: bool,
     ) -> PyResult<Bound<'py, PyAny>> {
         if !matches!(self.layout().node(self.root).kind, Kind::Struct { .. }) {
-            return Err(PyTypeError::new_err(format!(
-                "{}: a union has no struct value; decode() gives its one-key dict",
-                self.key
-            )));
+            return Err(Refusal::UnionStruct { key: &self.key }.into());
         }
-        let options = DecodeOptions {
-            tao,
-            allow_trailing,
-        };
-        if let Some(program) = self.compiled.program(self.root) {
-            let mut built = program::Built::<program::Fields>::new(py, &self.compiled);
-            let decoded = program.decode(&mut built, data, options)?;
-            if let Some(value) = decoded {
-                return Ok(value);
-            }
-        }
-        Err(self.declined(py, data, options))
+        self.decode_as::<program::Fields>(py, data, tao, allow_trailing)
     }
 }
 
@@ -412,6 +415,7 @@ impl DataType {
     #[new]
     fn new(compiled: PyRef<'_, DataType>) -> Self {
         Self {
+            max_bytes: compiled.max_bytes,
             compiled: Arc::clone(&compiled.compiled),
             root: compiled.root,
             key: compiled.key.clone(),
@@ -536,8 +540,7 @@ impl DataType {
         let t = target_of(target)?;
         let (leaf, value) =
             get_leaf(&layout, self.root, data, t, tao).map_err(|e| self.err(py, e, Op::Leaf))?;
-        let (path, type_name) = describe(&layout, &leaf);
-        (leaf.index, path, type_name, scalar_to_py(py, value)?).into_pyobject(py)
+        leaf_tuple(py, &layout, &leaf, value)
     }
 
     /// Writes one leaf; returns the new encoding. Changing a union tag selects that variant
@@ -623,27 +626,9 @@ pub(crate) fn leaf_value(
     let mut source = PySource::new(value, &compiled.names, saturate);
     use px4params_core::codec::Source;
     source.scalar(kind).map_err(|e| {
-        let (path, _) = describe(&compiled.layout.as_layout(), leaf);
-        errors::value(py, type_name, &path, e)
+        let (path, _) = values::describe(&compiled.layout.as_layout(), leaf);
+        errors::value(py, type_name, path, e)
     })
-}
-
-/// A leaf's path (with `_tag`/`_len` for tags and lengths) and type name.
-pub(crate) fn describe(layout: &Layout<'_>, leaf: &px4params_core::leaf::Leaf) -> (String, String) {
-    let mut path = leaf.path.display(layout).to_string();
-    let (suffix, type_name) = match leaf.kind {
-        LeafKind::Scalar(kind) => ("", kind_name(kind)),
-        LeafKind::Tag { bits, .. } => ("_tag", format!("uint{bits}")),
-        LeafKind::Len { bits: 0, .. } => ("_len", "tail".to_owned()),
-        LeafKind::Len { bits, .. } => ("_len", format!("uint{bits}")),
-    };
-    if !suffix.is_empty() {
-        if !path.is_empty() {
-            path.push('.');
-        }
-        path.push_str(suffix);
-    }
-    (path, type_name)
 }
 
 #[pymodule]
@@ -652,6 +637,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<DataType>()?;
     m.add_class::<StructValue>()?;
     fastcall::install(&m.py().get_type::<DataType>())?;
+    program::find_small_ints(m.py());
     m.add_class::<store::Store>()?;
     m.add_function(wrap_pyfunction!(file::check_store_file, m)?)?;
     m.add_function(wrap_pyfunction!(transfer::dsdl_signature, m)?)?;

@@ -8,6 +8,7 @@
 //! general path then encodes the value or words the error.
 
 use std::marker::PhantomData;
+use std::sync::atomic::{AtomicU32, AtomicUsize, Ordering};
 use std::sync::Arc;
 
 use px4params_core::layout::{Kind, NodeId};
@@ -454,11 +455,67 @@ fn plain_scalar(kind: Kind, obj: *mut ffi::PyObject) -> Option<Scalar> {
     }
 }
 
+/// Where CPython's ints 0 to 255 are: each is one object (every `0` is the same object),
+/// and they lie one after the other, `1 << SMALL_SHIFT` bytes apart, from `SMALL_BASE` (0:
+/// not laid out so; every int is then read by a call). Found by [`find_small_ints`].
+static SMALL_BASE: AtomicUsize = AtomicUsize::new(0);
+static SMALL_SHIFT: AtomicU32 = AtomicU32::new(0);
+
+/// Finds CPython's small ints ([`SMALL_BASE`]), checking every one of them, once.
+pub(crate) fn find_small_ints(_py: Python<'_>) {
+    // SAFETY: attached to the interpreter (`_py`); each result is a new reference (or null),
+    // given back at once: a small int lives as long as the interpreter.
+    let at = |v: std::ffi::c_long| unsafe {
+        let int = ffi::PyLong_FromLong(v);
+        if int.is_null() {
+            ffi::PyErr_Clear();
+            return 0;
+        }
+        ffi::Py_DECREF(int);
+        int as usize
+    };
+    let base = at(0);
+    let stride = at(1).wrapping_sub(base);
+    let laid_out = base != 0
+        && stride.is_power_of_two()
+        && (0..256).all(|v| at(v) == base + v as usize * stride);
+    if laid_out {
+        SMALL_SHIFT.store(stride.trailing_zeros(), Ordering::Relaxed);
+        SMALL_BASE.store(base, Ordering::Relaxed);
+    }
+}
+
+/// The number `obj` is when it is one of CPython's ints 0 to 255, told by its address alone.
+#[inline(always)]
+fn small_int(obj: *mut ffi::PyObject) -> Option<u64> {
+    let base = SMALL_BASE.load(Ordering::Relaxed);
+    let shift = SMALL_SHIFT.load(Ordering::Relaxed);
+    let offset = (obj as usize).wrapping_sub(base);
+    let at_one = offset & ((1 << shift) - 1) == 0 && offset >> shift < 256;
+    (base != 0 && at_one).then_some((offset >> shift) as u64)
+}
+
+/// CPython's own object for `v` when it is 0 to 255 (a new reference, made with no call).
+#[inline(always)]
+pub(crate) fn small_int_object(py: Python<'_>, v: u64) -> Option<Bound<'_, PyAny>> {
+    let base = SMALL_BASE.load(Ordering::Relaxed);
+    if base == 0 || v >= 256 {
+        return None;
+    }
+    let int = base + ((v as usize) << SMALL_SHIFT.load(Ordering::Relaxed));
+    // SAFETY: the small int `v` (checked by `find_small_ints`), alive as long as the
+    // interpreter: a new reference to it.
+    Some(unsafe { Bound::from_borrowed_ptr(py, int as *mut ffi::PyObject) })
+}
+
 /// An exact int of up to 64 bits: `Uint` when not negative (the core's fast case), else `Int`.
 ///
 /// SAFETY: `obj` is a live object.
 #[inline]
 unsafe fn integer(obj: *mut ffi::PyObject) -> Option<Scalar> {
+    if let Some(v) = small_int(obj) {
+        return Some(Scalar::Uint(v));
+    }
     if ffi::PyLong_CheckExact(obj) == 0 {
         return None;
     }

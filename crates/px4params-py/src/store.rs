@@ -10,13 +10,12 @@ use px4params_core::leaf::{Leaf, Target};
 use px4params_core::store::{self, Capacity, ParamDef, Slot, StoreError as CoreError, Which};
 use px4params_core::table::LeafSlot;
 use px4params_core::Scalar;
-use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyTuple};
 
-use crate::errors::{self, Op, ValueErrorClass};
-use crate::values::{scalar_to_py, PySource};
-use crate::{describe, leaf_value, target_of, Compiled, Schema};
+use crate::errors::{self, Op, Refusal, SourceError};
+use crate::values::{leaf_tuple, scalar_to_py, PySource};
+use crate::{leaf_value, target_of, Compiled, Schema};
 
 // With a leaf table per type and each instance's first leaves resolved when its value changes:
 // reading leaf [k] is a lookup and a bit read (`px4params_core::table`, `store::table_slots`).
@@ -57,8 +56,8 @@ impl Store {
         self.capacity
     }
 
-    pub(crate) fn root_of(&self, key: &str) -> Option<u32> {
-        self.compiled.roots.get(key).copied()
+    pub(crate) fn root_of(&self, key: &str) -> PyResult<u32> {
+        self.compiled.root(key)
     }
 
     /// Leaf `target` of an instance's value (or default), located and read.
@@ -87,7 +86,7 @@ impl Store {
     }
 
     /// A store error of the instance (or parameter) as a Python exception.
-    fn err<E: ValueErrorClass>(
+    fn err<E: SourceError>(
         &self,
         py: Python<'_>,
         param: u32,
@@ -118,16 +117,13 @@ impl Store {
             let root = match key.as_str() {
                 CLASSIC_INT => compiled.classic_roots[0],
                 CLASSIC_FLOAT => compiled.classic_roots[1],
-                _ => *compiled.roots.get(&key).ok_or_else(|| {
-                    PyValueError::new_err(format!("parameter {name}: unknown type {key}"))
+                _ => *compiled.roots.get(&key).ok_or_else(|| Refusal::ParamType {
+                    name: &name,
+                    key: &key,
                 })?,
             };
             defs.push(match max_instances {
-                Some(0) => {
-                    return Err(PyValueError::new_err(format!(
-                        "parameter {name}: max_instances must be at least 1"
-                    )))
-                }
+                Some(0) => return Err(Refusal::NoInstances { name: &name }.into()),
                 Some(n) => ParamDef::instanced(root, n),
                 None => ParamDef::shared(root),
             });
@@ -171,9 +167,7 @@ impl Store {
             || self.names != other.names
             || self.inner.defs() != other.inner.defs()
         {
-            return Err(PyValueError::new_err(
-                "restore takes a copy of this store (same schema and parameters)",
-            ));
+            return Err(Refusal::NotACopy.into());
         }
         self.inner = other.inner.clone();
         Ok(())
@@ -282,8 +276,7 @@ impl Store {
         default: bool,
     ) -> PyResult<Bound<'py, PyTuple>> {
         let (leaf, value) = self.read_leaf(py, param, instance, target, default)?;
-        let (path, type_name) = describe(&self.layout(), &leaf);
-        (leaf.index, path, type_name, scalar_to_py(py, value)?).into_pyobject(py)
+        leaf_tuple(py, &self.layout(), &leaf, value)
     }
 
     /// Reads one leaf's value only (`Store.get` of a leaf: no path or type text is built).

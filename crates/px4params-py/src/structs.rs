@@ -11,12 +11,12 @@
 use std::sync::Arc;
 
 use px4params_core::layout::NodeId;
-use pyo3::exceptions::PyAttributeError;
 use pyo3::prelude::*;
 use pyo3::pyclass::CompareOp;
 use pyo3::types::{PyDict, PyList, PyString, PyTuple};
 use pyo3::{PyTraverseError, PyVisit};
 
+use crate::errors::Refusal;
 use crate::Compiled;
 
 /// A decoded struct: its fields are attributes (`value.uptime_sec`).
@@ -101,14 +101,12 @@ impl StructValue {
         });
         match found {
             Some(i) => Ok(self.values(py).get_item(i)?.unbind()),
-            None => {
-                let fields: Vec<String> = self.names().map(|n| n.to_string()).collect();
-                Err(PyAttributeError::new_err(format!(
-                    "{} has no field '{name}' (its fields: {})",
-                    self.key(),
-                    fields.join(", ")
-                )))
+            None => Err(Refusal::NoField {
+                key: self.key(),
+                name,
+                fields: self.names().map(|n| n.to_string()).collect(),
             }
+            .into()),
         }
     }
 

@@ -122,9 +122,7 @@ pub(crate) fn tables<'py>(
     )?;
     let found = PyDict::new(py);
     for key in roots {
-        let root = store
-            .root_of(key)
-            .ok_or_else(|| pyo3::exceptions::PyKeyError::new_err(key.clone()))?;
+        let root = store.root_of(key)?;
         found.set_item(key, root)?;
     }
     out.set_item("roots", found)?;

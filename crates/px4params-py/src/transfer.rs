@@ -53,6 +53,6 @@ pub fn reassemble<'py>(
     let mut payload = vec![0u8; frames.iter().map(Vec::len).sum()];
     let (transfer_id, len) =
         transfer::receive_into(&refs, crc::transfer_crc_seed(signature), &mut payload)
-            .map_err(|e| crate::errors::transfer(e.to_string()))?;
+            .map_err(crate::errors::transfer)?;
     Ok((PyBytes::new(py, &payload[..len]), transfer_id))
 }

@@ -1,54 +1,28 @@
 //! Python objects as codec values: dicts for structs, one-key dicts for unions, sequences for
 //! arrays (bytes and str too), int/float/bool for primitives, "nan"/"inf"/"-inf" for floats,
-//! read by the core's general encoder ([`PySource`]: values of any type the programs decline,
-//! and the wording of every value error); decoded scalars as Python objects; leaf listings.
-
-use std::fmt;
+//! read by the core's general encoder ([`PySource`]: values of any type the programs decline;
+//! what does not fit is a [`ValueError`], worded in [`crate::errors`]); decoded scalars as
+//! Python objects; leaf listings.
 
 use px4params_core::codec::{ArrayLen, At, LeafKind, Sink, Source};
+use px4params_core::error::Path;
 use px4params_core::layout::{Field, Kind, Layout};
+use px4params_core::leaf::Leaf;
 use px4params_core::Scalar;
 use pyo3::prelude::*;
 use pyo3::types::{
     PyBool, PyByteArray, PyBytes, PyDict, PyFloat, PyInt, PyList, PySequence, PyString, PyTuple,
 };
 
+use crate::errors::{names_of, Expected, ValueError};
 use crate::structs::StructValue;
 
-/// Why a Python value does not fit: a message for the user, or an exception from Python code.
-pub enum ValueError {
-    /// The value has the wrong shape or kind (becomes `ValueShapeError`).
-    Shape(String),
-    /// A number outside its field (becomes `EncodeError`).
-    Range(String),
-    /// Python raised while we looked at the value.
-    Py(PyErr),
-}
-
-impl fmt::Display for ValueError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            Self::Shape(m) | Self::Range(m) => f.write_str(m),
-            Self::Py(e) => write!(f, "{e}"),
-        }
+fn wrong<'py>(expected: Expected, value: &Bound<'py, PyAny>) -> ValueError<'py> {
+    // A new reference to the value: the error outlives the borrow it was found through.
+    ValueError::WrongType {
+        expected,
+        value: value.clone(),
     }
-}
-
-impl From<PyErr> for ValueError {
-    fn from(e: PyErr) -> Self {
-        Self::Py(e)
-    }
-}
-
-fn type_name(obj: &Bound<'_, PyAny>) -> String {
-    obj.get_type()
-        .name()
-        .map(|n| n.to_string())
-        .unwrap_or_else(|_| "?".into())
-}
-
-fn shape(expected: &str, obj: &Bound<'_, PyAny>) -> ValueError {
-    ValueError::Shape(format!("expected {expected}, got {}", type_name(obj)))
 }
 
 enum Frame<'py> {
@@ -57,7 +31,7 @@ enum Frame<'py> {
 }
 
 /// Reads a Python value for the encoder.
-pub struct PySource<'py, 'n> {
+pub(crate) struct PySource<'py, 'n> {
     py: Python<'py>,
     names: &'n [Py<PyString>],
     stack: Vec<Frame<'py>>,
@@ -67,7 +41,7 @@ pub struct PySource<'py, 'n> {
 impl<'py, 'n> PySource<'py, 'n> {
     /// `names` holds every field name of the layout as a Python string, by field index, so
     /// that dict look-ups use interned keys with cached hashes.
-    pub fn new(value: Bound<'py, PyAny>, names: &'n [Py<PyString>], saturate: bool) -> Self {
+    pub(crate) fn new(value: Bound<'py, PyAny>, names: &'n [Py<PyString>], saturate: bool) -> Self {
         Self {
             py: value.py(),
             names,
@@ -84,9 +58,9 @@ impl<'py, 'n> PySource<'py, 'n> {
         }
     }
 
-    fn integer(&self, obj: &Bound<'py, PyAny>, kind: Kind) -> Result<Scalar, ValueError> {
+    fn integer(&self, obj: &Bound<'py, PyAny>, kind: Kind) -> Result<Scalar, ValueError<'py>> {
         if obj.is_instance_of::<PyBool>() || !obj.is_instance_of::<PyInt>() {
-            return Err(shape("an integer", obj));
+            return Err(wrong(Expected::Integer, obj));
         }
         if let Ok(v) = obj.extract::<i64>() {
             return Ok(Scalar::Int(v));
@@ -103,24 +77,29 @@ impl<'py, 'n> PySource<'py, 'n> {
                 Scalar::Uint(u64::MAX)
             });
         }
+        // The field's range (only integer kinds, of at most 64 bits, come here).
         let (min, max) = match kind {
             Kind::Int { bits, .. } => {
-                let max = (1i128 << (bits - 1)) - 1;
-                (format!("{}", -max - 1), format!("{max}"))
+                let max = i64::MAX >> (64 - u32::from(bits));
+                (Scalar::Int(-max - 1), Scalar::Int(max))
             }
-            Kind::Uint { bits, .. } => ("0".into(), format!("{}", (1u128 << bits) - 1)),
-            _ => ("?".into(), "?".into()),
+            Kind::Uint { bits, .. } => (
+                Scalar::Uint(0),
+                Scalar::Uint(u64::MAX >> (64 - u32::from(bits))),
+            ),
+            _ => (Scalar::Uint(0), Scalar::Uint(u64::MAX)),
         };
-        Err(ValueError::Range(format!(
-            "value {} is out of range (expected {min} to {max})",
-            obj.str()?
-        )))
+        Err(ValueError::OutOfRange {
+            value: obj.clone(),
+            min,
+            max,
+        })
     }
 }
 
-fn float_of(obj: &Bound<'_, PyAny>) -> Result<f64, ValueError> {
+fn float_of<'py>(obj: &Bound<'py, PyAny>) -> Result<f64, ValueError<'py>> {
     if obj.is_instance_of::<PyBool>() {
-        return Err(shape("a number", obj));
+        return Err(wrong(Expected::Number, obj));
     }
     if obj.is_instance_of::<PyFloat>() || obj.is_instance_of::<PyInt>() {
         return Ok(obj.extract::<f64>()?);
@@ -130,18 +109,16 @@ fn float_of(obj: &Bound<'_, PyAny>) -> Result<f64, ValueError> {
             "nan" => Ok(f64::NAN),
             "inf" | "+inf" | "infinity" => Ok(f64::INFINITY),
             "-inf" | "-infinity" => Ok(f64::NEG_INFINITY),
-            other => Err(ValueError::Shape(format!(
-                "expected a number (or \"nan\", \"inf\", \"-inf\"), got '{other}'"
-            ))),
+            other => Err(ValueError::NotANumber { text: other.into() }),
         };
     }
-    Err(shape("a number", obj))
+    Err(wrong(Expected::Number, obj))
 }
 
 impl<'py> Source for PySource<'py, '_> {
-    type Error = ValueError;
+    type Error = ValueError<'py>;
 
-    fn scalar(&mut self, kind: Kind) -> Result<Scalar, ValueError> {
+    fn scalar(&mut self, kind: Kind) -> Result<Scalar, ValueError<'py>> {
         let obj = self.current().clone();
         match kind {
             Kind::Uint { .. } | Kind::Int { .. } => self.integer(&obj, kind),
@@ -152,19 +129,16 @@ impl<'py> Source for PySource<'py, '_> {
                 } else if obj.is_instance_of::<PyInt>() {
                     match obj.extract::<i64>() {
                         Ok(v @ (0 | 1)) => Ok(Scalar::Bool(v == 1)),
-                        _ => Err(ValueError::Range(format!(
-                            "value {} is out of range (expected a boolean: true, false, 0 or 1)",
-                            obj.str()?
-                        ))),
+                        _ => Err(ValueError::NotABoolean { value: obj }),
                     }
                 } else {
-                    Err(shape("a boolean", &obj))
+                    Err(wrong(Expected::Boolean, &obj))
                 }
             }
         }
     }
 
-    fn begin_struct(&mut self) -> Result<(), ValueError> {
+    fn begin_struct(&mut self) -> Result<(), ValueError<'py>> {
         let obj = self.current();
         if obj.is_instance_of::<PyDict>() {
             Ok(())
@@ -175,11 +149,11 @@ impl<'py> Source for PySource<'py, '_> {
             self.stack.push(Frame::Obj(plain));
             Ok(())
         } else {
-            Err(shape("a dict (struct)", obj))
+            Err(wrong(Expected::Struct, obj))
         }
     }
 
-    fn field(&mut self, index: u32, _name: &str) -> Result<bool, ValueError> {
+    fn field(&mut self, index: u32, _name: &str) -> Result<bool, ValueError<'py>> {
         let dict = self.current().cast::<PyDict>().map_err(PyErr::from)?;
         match dict.get_item(self.names[index as usize].bind(self.py))? {
             Some(v) => {
@@ -199,55 +173,42 @@ impl<'py> Source for PySource<'py, '_> {
         layout: &Layout<'_>,
         fields: &[Field],
         used: usize,
-    ) -> Result<(), ValueError> {
+    ) -> Result<(), ValueError<'py>> {
         let dict = self.current().cast::<PyDict>().map_err(PyErr::from)?;
         if dict.len() == used {
             return Ok(());
         }
-        let names: Vec<&str> = fields
-            .iter()
-            .map(|f| layout.name(f))
-            .filter(|n| !n.is_empty())
-            .collect();
+        let names = names_of(layout, fields);
         for key in dict.keys() {
             let known = key
                 .cast::<PyString>()
                 .ok()
-                .and_then(|k| k.to_str().ok().map(|k| names.contains(&k)))
+                .and_then(|k| k.to_str().ok().map(|k| names.iter().any(|n| n == k)))
                 .unwrap_or(false);
             if !known {
-                return Err(ValueError::Shape(format!(
-                    "unknown field {} (expected: {})",
-                    key.repr()?,
-                    names.join(", ")
-                )));
+                return Err(ValueError::UnknownField { key, fields: names });
             }
         }
         Ok(())
     }
 
-    fn begin_union(&mut self, layout: &Layout<'_>, variants: &[Field]) -> Result<u32, ValueError> {
-        let names = || {
-            variants
-                .iter()
-                .map(|f| layout.name(f))
-                .collect::<Vec<_>>()
-                .join(", ")
-        };
+    fn begin_union(
+        &mut self,
+        layout: &Layout<'_>,
+        variants: &[Field],
+    ) -> Result<u32, ValueError<'py>> {
         let obj = self.current();
         let Ok(dict) = obj.cast::<PyDict>() else {
-            return Err(ValueError::Shape(format!(
-                "expected a dict with one key, the union variant ({}), got {}",
-                names(),
-                type_name(obj)
-            )));
+            return Err(ValueError::NotAUnion {
+                value: obj.clone(),
+                variants: names_of(layout, variants),
+            });
         };
         if dict.len() != 1 {
-            return Err(ValueError::Shape(format!(
-                "a union takes exactly one variant ({}), got {} keys",
-                names(),
-                dict.len()
-            )));
+            return Err(ValueError::UnionKeys {
+                keys: dict.len(),
+                variants: names_of(layout, variants),
+            });
         }
         let (key, value) = dict.iter().next().expect("one item");
         let key_str = key
@@ -258,11 +219,10 @@ impl<'py> Source for PySource<'py, '_> {
             .as_deref()
             .and_then(|k| variants.iter().position(|f| layout.name(f) == k))
         else {
-            return Err(ValueError::Shape(format!(
-                "unknown union variant {} (expected one of: {})",
-                key.repr()?,
-                names()
-            )));
+            return Err(ValueError::UnknownVariant {
+                key,
+                variants: names_of(layout, variants),
+            });
         };
         self.stack.push(Frame::Obj(value));
         Ok(index as u32)
@@ -272,7 +232,7 @@ impl<'py> Source for PySource<'py, '_> {
         self.stack.pop();
     }
 
-    fn begin_array(&mut self, _fixed: Option<u32>) -> Result<usize, ValueError> {
+    fn begin_array(&mut self, _fixed: Option<u32>) -> Result<usize, ValueError<'py>> {
         let obj = self.current().clone();
         if let Ok(b) = obj.cast::<PyBytes>() {
             let bytes = b.as_bytes().to_vec();
@@ -288,11 +248,7 @@ impl<'py> Source for PySource<'py, '_> {
         }
         if let Ok(s) = obj.cast::<PyString>() {
             // A str that is not valid Unicode (lone surrogates) cannot become UTF-8 bytes.
-            let text = s.to_str().map_err(|_| {
-                ValueError::Shape(
-                    "expected a str encodable as UTF-8 (it has lone surrogates)".into(),
-                )
-            })?;
+            let text = s.to_str().map_err(|_| ValueError::NotUtf8)?;
             let bytes = text.as_bytes().to_vec();
             let n = bytes.len();
             self.stack.push(Frame::Bytes(bytes));
@@ -304,7 +260,7 @@ impl<'py> Source for PySource<'py, '_> {
             return Ok(n);
         }
         if obj.is_instance_of::<PyDict>() {
-            return Err(shape("a list (array)", &obj));
+            return Err(wrong(Expected::Array, &obj));
         }
         match obj.cast::<PySequence>() {
             Ok(seq) => {
@@ -312,11 +268,11 @@ impl<'py> Source for PySource<'py, '_> {
                 self.stack.push(Frame::Obj(obj));
                 Ok(n)
             }
-            Err(_) => Err(shape("a list (array)", &obj)),
+            Err(_) => Err(wrong(Expected::Array, &obj)),
         }
     }
 
-    fn element(&mut self, index: usize) -> Result<(), ValueError> {
+    fn element(&mut self, index: usize) -> Result<(), ValueError<'py>> {
         let item = match self.stack.last() {
             Some(Frame::Bytes(b)) => PyInt::new(self.py, b[index]).into_any(),
             Some(Frame::Obj(o)) => {
@@ -345,7 +301,10 @@ impl<'py> Source for PySource<'py, '_> {
 #[inline]
 pub fn scalar_to_py<'py>(py: Python<'py>, value: Scalar) -> PyResult<Bound<'py, PyAny>> {
     Ok(match value {
-        Scalar::Uint(v) => v.into_pyobject(py)?.into_any(),
+        Scalar::Uint(v) => match crate::program::small_int_object(py, v) {
+            Some(int) => int,
+            None => v.into_pyobject(py)?.into_any(),
+        },
         Scalar::Int(v) => v.into_pyobject(py)?.into_any(),
         Scalar::Float(v) => v.into_pyobject(py)?.into_any(),
         Scalar::Bool(v) => PyBool::new(py, v).to_owned().into_any(),
@@ -379,14 +338,9 @@ impl<'l> LeafRows<'l> {
         }
     }
 
-    fn push(&mut self, at: &At<'_>, suffix: &str, type_name: String, value: Scalar) {
-        let mut path = at.path.display(self.layout).to_string();
-        if !suffix.is_empty() {
-            if !path.is_empty() {
-                path.push('.');
-            }
-            path.push_str(suffix);
-        }
+    /// A row for the leaf at `at` (`tail`: a tail array's length, which has no bits).
+    fn push(&mut self, at: &At<'_>, tail: bool, value: Scalar) {
+        let (path, type_name) = leaf_name(self.layout, at.path, at.kind, tail);
         self.rows.push(LeafRow {
             index: self.rows.len(),
             path,
@@ -396,8 +350,50 @@ impl<'l> LeafRows<'l> {
     }
 }
 
+/// A leaf's path and type as listings show them: the field path, then `_tag` or `_len` for a
+/// union's tag or an array's length; the DSDL type (`uint8`), or `tail` for the length of a
+/// tail array (`tail`: no bits of its own).
+pub(crate) fn leaf_name(
+    layout: &Layout<'_>,
+    path: &Path,
+    kind: LeafKind,
+    tail: bool,
+) -> (String, String) {
+    let mut text = path.display(layout).to_string();
+    let (suffix, type_name) = match kind {
+        LeafKind::Scalar(kind) => ("", kind_name(kind)),
+        LeafKind::Tag { bits, .. } => ("_tag", format!("uint{bits}")),
+        LeafKind::Len { .. } if tail => ("_len", "tail".to_owned()),
+        LeafKind::Len { bits, .. } => ("_len", format!("uint{bits}")),
+    };
+    if !suffix.is_empty() {
+        if !text.is_empty() {
+            text.push('.');
+        }
+        text.push_str(suffix);
+    }
+    (text, type_name)
+}
+
+/// A located leaf's path and type name (see [`leaf_name`]).
+pub(crate) fn describe(layout: &Layout<'_>, leaf: &Leaf) -> (String, String) {
+    let tail = matches!(leaf.kind, LeafKind::Len { bits: 0, .. });
+    leaf_name(layout, &leaf.path, leaf.kind, tail)
+}
+
+/// A located leaf and its value as Python gets it: `(index, path, type, value)`.
+pub(crate) fn leaf_tuple<'py>(
+    py: Python<'py>,
+    layout: &Layout<'_>,
+    leaf: &Leaf,
+    value: Scalar,
+) -> PyResult<Bound<'py, PyTuple>> {
+    let (path, type_name) = describe(layout, leaf);
+    (leaf.index, path, type_name, scalar_to_py(py, value)?).into_pyobject(py)
+}
+
 /// The DSDL spelling of a scalar kind.
-pub fn kind_name(kind: Kind) -> String {
+fn kind_name(kind: Kind) -> String {
     match kind {
         Kind::Uint { bits, .. } => format!("uint{bits}"),
         Kind::Int { bits, .. } => format!("int{bits}"),
@@ -412,10 +408,9 @@ impl Sink for LeafRows<'_> {
     type Error = std::convert::Infallible;
 
     fn scalar(&mut self, value: Scalar, at: At<'_>) -> Result<(), Self::Error> {
-        let LeafKind::Scalar(kind) = at.kind else {
-            return Ok(());
-        };
-        self.push(&at, "", kind_name(kind), value);
+        if let LeafKind::Scalar(_) = at.kind {
+            self.push(&at, false, value);
+        }
         Ok(())
     }
     fn begin_struct(&mut self, _: usize) -> Result<(), Self::Error> {
@@ -428,10 +423,9 @@ impl Sink for LeafRows<'_> {
         Ok(())
     }
     fn begin_union(&mut self, tag: u32, _: u32, _: &str, at: At<'_>) -> Result<(), Self::Error> {
-        let LeafKind::Tag { bits, .. } = at.kind else {
-            return Ok(());
-        };
-        self.push(&at, "_tag", format!("uint{bits}"), Scalar::Uint(tag.into()));
+        if let LeafKind::Tag { .. } = at.kind {
+            self.push(&at, false, Scalar::Uint(tag.into()));
+        }
         Ok(())
     }
     fn end_union(&mut self) -> Result<(), Self::Error> {
@@ -439,17 +433,15 @@ impl Sink for LeafRows<'_> {
     }
     fn begin_array(&mut self, len: ArrayLen, at: At<'_>) -> Result<(), Self::Error> {
         self.depth += 1;
-        let LeafKind::Len { bits, .. } = at.kind else {
+        if !matches!(at.kind, LeafKind::Len { .. }) {
             return Ok(());
-        };
+        }
         match len {
             ArrayLen::Fixed(_) => {}
-            ArrayLen::Prefixed(n) => {
-                self.push(&at, "_len", format!("uint{bits}"), Scalar::Uint(n as u64))
-            }
+            ArrayLen::Prefixed(n) => self.push(&at, false, Scalar::Uint(n as u64)),
             ArrayLen::Tail => {
                 self.tail = Some((self.rows.len(), self.depth));
-                self.push(&at, "_len", "tail".into(), Scalar::Uint(0));
+                self.push(&at, true, Scalar::Uint(0));
             }
         }
         Ok(())
