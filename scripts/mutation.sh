@@ -50,7 +50,8 @@
 #   The rust target's wall-clock budget is MUTATION_BUDGET too: at its end cargo-mutants is
 #   interrupted and the mutants it finished are counted. Its builds are debug builds (a
 #   mutant rebuilds the crate and its seven test programs; release's LTO links are the slow
-#   part) with the alloc feature, one job, niced, under /tmp/px4params-build.lock when it exists.
+#   part) with the alloc feature, one job, niced, each mutant's build (not the whole run) under
+#   /tmp/px4params-build.lock when it exists (scripts/mutation-cargo.sh).
 #
 # Python: mutmut 2 (pip install "mutmut==2.5.1", the "mutation" extra), which mutates the
 # files in place, one at a time, and restores them; so the work tree must be clean, and is
@@ -319,9 +320,9 @@ rust_target() {
     echo "$name: skipped: cargo-mutants is not installed (cargo install cargo-mutants)"
     return
   fi
-  # Builds share the machine: one job, under the build lock when there is one.
-  local lock=()
-  [ -e /tmp/px4params-build.lock ] && lock=(flock /tmp/px4params-build.lock)
+  # Builds share the machine: one job, and each mutant's build under the build lock when there
+  # is one (cargo-mutants runs cargo as $CARGO: scripts/mutation-cargo.sh takes the lock per
+  # build, so a long run never keeps other builds out for longer than one build).
   local scope=()
   case $path in *.rs) scope+=(--file "$path") ;; esac
   for f in ${MUTATION_RUST_FILES:-}; do
@@ -353,15 +354,16 @@ rust_target() {
   fi
   # shellcheck disable=SC2206 # extra options, split on spaces on purpose
   local extra=(${MUTATION_RUST_ARGS:-})
-  # The budget starts once the lock is held; an interrupted cargo-mutants keeps the lists of
-  # the mutants it finished.
+  # An interrupted cargo-mutants keeps the lists of the mutants it finished. cargo-mutants is
+  # run as itself, not as `cargo mutants` (cargo would set CARGO to its own path).
   # Its own target directory: cargo names a workspace member's artifacts by its path inside
   # the workspace, so a mutated copy's and the work tree's collide, and a work tree build after
   # a run was seen to take the last mutant's library for up to date.
   # MUTATION_REPORT_ONLY=1: count the last run's lists again (after the equivalents changed).
   [ "${MUTATION_REPORT_ONLY:-0}" = 1 ] ||
-    "${lock[@]}" env CARGO_TARGET_DIR="$OUT/cargo-target" timeout --signal=INT --kill-after=60 "$BUDGET" \
-      nice cargo mutants --package "$package" "${features[@]}" --jobs 1 \
+    env CARGO_TARGET_DIR="$OUT/cargo-target" MUTATION_REAL_CARGO="$(command -v cargo)" \
+      CARGO="$ROOT/scripts/mutation-cargo.sh" timeout --signal=INT --kill-after=60 "$BUDGET" \
+      nice cargo-mutants mutants --package "$package" "${features[@]}" --jobs 1 \
       --timeout "${MUTATION_RUST_TIMEOUT:-300}" "${scope[@]}" "${chosen[@]}" --output "$OUT/$name" \
       "${extra[@]}" >"$OUT/$name.log" 2>&1 || true
   local results="$OUT/$name/mutants.out"
