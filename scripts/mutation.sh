@@ -195,6 +195,18 @@ NEW_TESTS="$NEW_TESTS|test_file" # store/ (mutstore; the others are marked issue
 #   MUTATION_BUDGET=1800 MUTATION_RUST_TIMEOUT=120 \
 #     MUTATION_RUST_ARGS="--shard 0/60 --sharding round-robin" bash scripts/mutation.sh rust-core
 RUST_ISSUE40_TESTS="$RUST_ISSUE40_TESTS mutants_leaf"
+# Rust, issue 40 (mutrust): every run at most 600 s (MUTATION_BUDGET=600), going on in the next
+# (--iterate for a file target; the rust-core sample with --re, one pattern per mutant it has
+# not tested yet). Each mutant's build takes the build lock on its own (scripts/mutation-cargo.sh).
+#   MUTATION_BUDGET=600 MUTATION_RUST_TIMEOUT=60 bash scripts/mutation.sh rust-ffi
+#   MUTATION_BUDGET=600 MUTATION_RUST_TIMEOUT=20 MUTATION_RUST_ARGS=--iterate \
+#     bash scripts/mutation.sh rust-scatter
+#   MUTATION_BASELINE=1 MUTATION_BUDGET=600 MUTATION_RUST_TIMEOUT=20 \
+#     MUTATION_RUST_ARGS="--shard 1/10" bash scripts/mutation.sh rust-store          # before
+#   MUTATION_BUDGET=600 MUTATION_RUST_TIMEOUT=20 MUTATION_RUST_ARGS="--shard 1/10" \
+#     bash scripts/mutation.sh rust-store                                             # after
+# The nesting bound (MAX_DEPTH) of the walk and of the leaf table: mutants_walk, mutants_table.
+RUST_ISSUE40_TESTS="$RUST_ISSUE40_TESTS mutants_walk mutants_table"
 
 if [ "$#" -eq 0 ]; then
   set -- can_transfer dronecan_params health links gui migrate vehicle store rust-core rust-ffi
