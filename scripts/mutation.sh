@@ -214,6 +214,9 @@ RUST_ISSUE40_TESTS="$RUST_ISSUE40_TESTS mutants_leaf"
 # Store::set_from's saturate flag: mutants_store_set_from (rust-core runs it; add
 # --test=mutants_store_set_from to rust-store's tests to count it there).
 RUST_ISSUE40_TESTS="$RUST_ISSUE40_TESTS mutants_walk mutants_table mutants_store_set_from"
+# Measured 2026-11-26 (after, 5 runs of 600 s): rust-core sample 61 mutants, 56 tested, 50
+# caught, 6 missed (all in scripts/mutation-equivalent.txt), 2 unviable, 3 untested (store.rs);
+# rust-ffi 77 mutants, 70 caught, 7 unviable (one run, 2.5 min).
 
 if [ "$#" -eq 0 ]; then
   set -- can_transfer dronecan_params health links gui migrate vehicle store rust-core rust-ffi
