@@ -1341,6 +1341,33 @@ class TestTurnByTurn:
             station.close()
             server.close()
 
+    def test_the_sequence_number_counts_every_frame_and_wraps_after_255(
+        self, turns: tuple[MavlinkParamServer, Station]
+    ) -> None:
+        """MAVLink's header: seq, one byte, one more for each frame sent (ground stations count
+        lost frames by its gaps)."""
+        server, station = turns
+        frames: list[bytes] = []
+        for _ in range(6):  # 46 frames a list
+            station.exchange(mavlink.MAVLink_param_request_list_message(1, 1))
+            frames += station.frames
+            while turn(server, station):
+                frames += station.frames
+        assert len(frames) == 6 * 46
+        seqs = [frame[4] for frame in frames]
+        assert seqs == [(seqs[0] + i) % 256 for i in range(len(frames))]
+
+    def test_a_frame_after_line_noise_in_a_datagram_is_answered_and_the_noise_counted(
+        self, turns: tuple[MavlinkParamServer, Station]
+    ) -> None:
+        """MAVLink parsers skip bytes until a start marker (PX4's mavlink_parse_char)."""
+        server, station = turns
+        read = mavlink.MAVLink_param_request_read_message(1, 1, b"", 0).pack(station.mav)
+        ignored = server.stats["ignored"]
+        got = station.exchange(b"\x00\x01noise" + read)
+        assert values(got) == [(NAMES[0], 0, 0, len(NAMES))]
+        assert server.stats["ignored"] - ignored == 1  # one BAD_DATA: pymavlink joins the run
+
 
 class Clock:
     """mavlink.py's ``time``: ``monotonic()`` is ``now``, which the test moves."""
