@@ -132,6 +132,7 @@ def test_a_class_takes_a_string_field_as_text_or_bytes_up_to_its_nul() -> None:
     ] == (
         b"mftp://b\0junk".ljust(100, b"\0")  # the bytes are sent as given
     )
+    assert cls(1, 2, b"mftp://\xe9").uri == "mftp://\ufffd"  # not ASCII: replaced, no error
     with pytest.raises(ValueError, match="zip"):
         cls(1, 2)  # every field is needed
 
