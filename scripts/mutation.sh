@@ -204,6 +204,9 @@ RUST_ISSUE40_TESTS="$RUST_ISSUE40_TESTS mutants_leaf"
 #   nice bash scripts/mutation.sh mavlink mavlink_messages identity serving
 # mavlink.py's ~550 mutants take 2-11 s each here: a run cut short by its budget goes on where
 # it stopped (MUTATION_BUDGET_mavlink=5400 for the rest).
+# Measured (2 shared cores, load 6): before/after tested 109/67 of mavlink's 544 (kill rate
+# 40.4%/98.4%), mavlink_messages 95/73 of 102 (56.9%/97.7%), identity 23/23 (52.4%/100%),
+# serving 13/13 (25.0%/100%), equivalents left out of the rates.
 TARGETS+=(
   "mavlink|$PY/links/mavlink.py|tests/test_mavlink.py -k 'TurnByTurn or bytewise or param_value_of or development_version or signalling_nan'"
   "mavlink_messages|$PY/links/mavlink_messages.py|tests/test_mavlink_messages.py tests/test_mavlink_metadata.py::test_every_command_long_is_answered"
