@@ -268,6 +268,27 @@ RUST_ISSUE40_TESTS="$RUST_ISSUE40_TESTS mutants_walk mutants_table mutants_store
 # caught, 6 missed (all in scripts/mutation-equivalent.txt), 2 unviable, 3 untested (store.rs);
 # rust-ffi 77 mutants, 70 caught, 7 unviable (one run, 2.5 min).
 
+# links/ module by module (issue 40, mutlinks): mavlink.py's target again (this entry replaces
+# the one above: the last entry of a name wins), mavlink_messages.py, identity.py, serving.py,
+# each with in-process tests only (the server driven turn by turn, pymavlink building and
+# parsing the frames; threads, no subprocesses), -x stopping at the first test that fails.
+# (A test named by node ID must not be in a NEW_TESTS file: the baseline strips the file's name.)
+#   MUTATION_BASELINE=1 nice bash scripts/mutation.sh mavlink mavlink_messages identity serving
+#   nice bash scripts/mutation.sh mavlink mavlink_messages identity serving
+# mavlink.py's ~550 mutants take 2-11 s each here: a run cut short by its budget goes on where
+# it stopped (MUTATION_BUDGET_mavlink=5400 for the rest).
+# Measured (2 shared cores, load 6): before/after tested 109/67 of mavlink's 544 (kill rate
+# 40.4%/98.4%), mavlink_messages 95/73 of 102 (56.9%/97.7%), identity 23/23 (52.4%/100%),
+# serving 13/13 (25.0%/100%), equivalents left out of the rates.
+TARGETS+=(
+  "mavlink|$PY/links/mavlink.py|tests/test_mavlink.py -k 'TurnByTurn or bytewise or param_value_of or development_version or signalling_nan'"
+  "mavlink_messages|$PY/links/mavlink_messages.py|tests/test_mavlink_messages.py tests/test_mavlink_metadata.py::test_every_command_long_is_answered"
+  "identity|$PY/links/identity.py|tests/test_identity.py tests/test_mavlink.py::test_autopilot_version_and_heartbeat"
+  "serving|$PY/links/serving.py|tests/test_serving.py tests/test_mavlink.py::test_list_read_set"
+)
+BUDGETS+=([mavlink]=3600 [mavlink_messages]=900 [identity]=600 [serving]=600)
+NEW_TESTS="$NEW_TESTS|test_mavlink_messages|test_identity|test_serving"
+
 if [ "$#" -eq 0 ]; then
   set -- can_transfer dronecan_params health links gui migrate vehicle store rust-core rust-ffi
 fi

@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any
 
 import px4params
+import px4params.links.mavlink as mavlink_server_module
 import pytest
 from px4params.links.mavlink import (
     CAPABILITIES,
@@ -1239,6 +1240,150 @@ class TestTurnByTurn:
         assert server.stats["ignored"] == ignored + 1
         read = mavlink.MAVLink_param_request_read_message(1, 1, b"", 0)
         assert len(values(station.exchange(read))) == 1
+
+    # -- the defaults' timing, on a clock the test moves (issue 40: PARAM_RATE, PEER_TIMEOUT) --
+
+    def test_a_list_streams_20_parameters_every_40_ms_by_default(
+        self, store: px4params.Store, clock: Clock
+    ) -> None:
+        """500 PARAM_VALUEs a second (PX4's 1909 parameters in about 4 s), in bursts of 20."""
+        server = MavlinkParamServer(store, "127.0.0.1", 0, heartbeat_interval=3600)
+        station = Station(server)
+        try:
+            station.exchange(mavlink.MAVLink_heartbeat_message(6, 8, 0, 0, 0, 3))
+            first = station.exchange(mavlink.MAVLink_param_request_list_message(1, 1))
+            assert len(values(first)) == 20
+            clock.now += 0.03995  # 20 / 500 s is 0.04 s
+            assert turn(server, station) == []
+            clock.now += 0.0001
+            assert [name for name, *_ in values(turn(server, station))] == NAMES[19:39]
+        finally:
+            station.close()
+            server.close()
+
+    def test_a_peer_is_one_for_5_s_after_it_was_last_heard_by_default(
+        self, store: px4params.Store, clock: Clock
+    ) -> None:
+        """Ground stations send a HEARTBEAT every second: 5 s of silence and it is gone."""
+        server = MavlinkParamServer(store, "127.0.0.1", 0, heartbeat_interval=0)
+        station = Station(server)
+        try:
+            station.exchange(mavlink.MAVLink_heartbeat_message(6, 8, 0, 0, 0, 3))
+            station.receive()
+            clock.now += 4.99
+            server.step(0.0)
+            assert kinds(station.receive()) == ["HEARTBEAT"]
+            clock.now += 0.02  # 5.01 s of silence
+            server.step(0.0)
+            assert station.receive() == []
+        finally:
+            station.close()
+            server.close()
+
+    def test_heartbeats_go_once_a_second_by_default(
+        self, store: px4params.Store, clock: Clock
+    ) -> None:
+        """MAVLink's heartbeat: 1 Hz."""
+        server = MavlinkParamServer(store, "127.0.0.1", 0)
+        station = Station(server)
+        try:
+            station.exchange(mavlink.MAVLink_heartbeat_message(6, 8, 0, 0, 0, 3))
+            station.receive()  # the first turn's heartbeat had no peer to go to
+            beats = []
+            for _ in range(4):
+                clock.now += 0.5
+                server.step(0.0)
+                beats.append(len(station.receive()))
+            assert beats == [0, 1, 0, 1]
+        finally:
+            station.close()
+            server.close()
+
+    def test_health_is_reported_every_2_s_by_default(
+        self, store: px4params.Store, clock: Clock
+    ) -> None:
+        line = "health: INA238#1 critical"
+        server = MavlinkParamServer(
+            store, "127.0.0.1", 0, heartbeat_interval=3600, health=lambda: [line]
+        )
+        station = Station(server)
+        try:
+            station.exchange(mavlink.MAVLink_heartbeat_message(6, 8, 0, 0, 0, 3))
+            reports = []
+            for _ in range(4):  # the first turn had no peer to tell
+                clock.now += 1.0
+                reports.append([m.text for m in turn(server, station)])
+            assert reports == [[], [line], [], [line]]
+        finally:
+            station.close()
+            server.close()
+
+    def test_the_store_file_is_looked_at_every_200_ms_by_default(
+        self,
+        store: px4params.Store,
+        tmp_path: Path,
+        schema: px4params.Schema,
+        clock: Clock,
+    ) -> None:
+        path = tmp_path / "vehicle.store"
+        store.save(path)
+        server = MavlinkParamServer(store, "127.0.0.1", 0, save_path=path, heartbeat_interval=3600)
+        station = Station(server)
+        try:
+            station.exchange(mavlink.MAVLink_heartbeat_message(6, 8, 0, 0, 0, 3))  # polled
+            other = Session(px4params.Store.load(path, schema, classic=CLASSIC), str(path))
+            other.commit(lambda: other.store.set("SYS_AUTOSTART", 4001))
+            clock.now += 0.19
+            assert turn(server, station) == []
+            clock.now += 0.02
+            assert [name for name, *_ in values(turn(server, station))] == ["SYS_AUTOSTART"]
+        finally:
+            station.close()
+            server.close()
+
+    def test_the_sequence_number_counts_every_frame_and_wraps_after_255(
+        self, turns: tuple[MavlinkParamServer, Station]
+    ) -> None:
+        """MAVLink's header: seq, one byte, one more for each frame sent (ground stations count
+        lost frames by its gaps)."""
+        server, station = turns
+        frames: list[bytes] = []
+        for _ in range(6):  # 46 frames a list
+            station.exchange(mavlink.MAVLink_param_request_list_message(1, 1))
+            frames += station.frames
+            while turn(server, station):
+                frames += station.frames
+        assert len(frames) == 6 * 46
+        seqs = [frame[4] for frame in frames]
+        assert seqs == [(seqs[0] + i) % 256 for i in range(len(frames))]
+
+    def test_a_frame_after_line_noise_in_a_datagram_is_answered_and_the_noise_counted(
+        self, turns: tuple[MavlinkParamServer, Station]
+    ) -> None:
+        """MAVLink parsers skip bytes until a start marker (PX4's mavlink_parse_char)."""
+        server, station = turns
+        read = mavlink.MAVLink_param_request_read_message(1, 1, b"", 0).pack(station.mav)
+        ignored = server.stats["ignored"]
+        got = station.exchange(b"\x00\x01noise" + read)
+        assert values(got) == [(NAMES[0], 0, 0, len(NAMES))]
+        assert server.stats["ignored"] - ignored == 1  # one BAD_DATA: pymavlink joins the run
+
+
+class Clock:
+    """mavlink.py's ``time``: ``monotonic()`` is ``now``, which the test moves."""
+
+    def __init__(self, now: float) -> None:
+        self.now = now
+
+    def monotonic(self) -> float:
+        return self.now
+
+
+@pytest.fixture
+def clock(monkeypatch: pytest.MonkeyPatch) -> Clock:
+    fake = Clock(1000.0)
+    monkeypatch.setattr(mavlink_server_module, "time", fake)
+    return fake
 
 
 def _datagrams(sock: socket.socket) -> list[bytes]:
