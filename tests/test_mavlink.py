@@ -1166,6 +1166,27 @@ class TestTurnByTurn:
             station.close()
             server.close()
 
+    def test_a_frame_of_an_unknown_message_id_is_garbage_and_makes_no_peer(
+        self, store: px4params.Store
+    ) -> None:
+        """Random bytes often hold a well-formed MAVLink 2 header with an ID the dialect lacks:
+        its CRC cannot be checked (no CRC_EXTRA), so PX4's parser drops it, and so do we."""
+        server = MavlinkParamServer(store, "127.0.0.1", 0, heartbeat_interval=0)
+        station = Station(server)
+        try:
+            # STX, length 1, flags 0 0, seq 0, system 255, component 190, ID 0xABCDE (none
+            # of common.xml's), one payload byte, any CRC
+            frame = bytes([0xFD, 1, 0, 0, 0, 255, 190, 0xDE, 0xBC, 0x0A, 7, 0x12, 0x34])
+            assert mavlink.MAVLink(None).parse_buffer(frame)[0].get_type() == "UNKNOWN_703710"
+            station.send(frame)
+            server.step(0.0)
+            server.step(0.0)
+            assert station.receive() == []  # not a peer: no heartbeat
+            assert server.stats["ignored"] == 1 and server.stats["received"] == 0
+        finally:
+            station.close()
+            server.close()
+
     @pytest.mark.parametrize(
         ("length", "chunks"),
         [(50, [50]), (51, [50, 1]), (100, [50, 50, 0]), (120, [50, 50, 20])],

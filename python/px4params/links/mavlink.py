@@ -211,6 +211,12 @@ def param_hash(entries: Iterable[ParamEntry]) -> int:
     return crc
 
 
+def _unchecked(msg: Any) -> bool:
+    """Whether pymavlink gave back bytes it could not check: BAD_DATA, or a frame of an
+    unknown message ID (``MAVLink_unknown``, no CRC_EXTRA to check its CRC with)."""
+    return msg.get_type() == "BAD_DATA" or isinstance(msg, mavlink.MAVLink_unknown)
+
+
 def _name_of(raw: Any) -> str:
     text = raw.decode("ascii", "replace") if isinstance(raw, bytes) else str(raw)
     return text.split("\0", 1)[0]
@@ -401,9 +407,10 @@ class MavlinkParamServer(ServingLoop):
         if messages is None:
             self.stats["ignored"] += 1
             return []
-        bad = [m for m in messages if m.get_type() == "BAD_DATA"]
-        self.stats["ignored"] += len(bad)
-        good = [m for m in messages if m.get_type() != "BAD_DATA"]
+        # A frame of an ID the dialect lacks comes back unchecked (its CRC needs the ID's
+        # CRC_EXTRA; PX4's parser checks it and drops it): garbage, as a bad CRC is.
+        good = [m for m in messages if not _unchecked(m)]
+        self.stats["ignored"] += len(messages) - len(good)
         if good and (self.signing is None or any(m.get_signed() for m in good)):
             self._heard(peer)  # garbage, or on a signed link anything unsigned, makes no peer
         return good
