@@ -1170,7 +1170,7 @@ class TestTurnByTurn:
         self, store: px4params.Store
     ) -> None:
         """Random bytes often hold a well-formed MAVLink 2 header with an ID the dialect lacks:
-        its CRC cannot be checked (no CRC_EXTRA), so PX4's parser drops it, and so do we."""
+        pymavlink cannot check its CRC (no CRC_EXTRA) and hands it back; it makes no peer."""
         server = MavlinkParamServer(store, "127.0.0.1", 0, heartbeat_interval=0)
         station = Station(server)
         try:

@@ -408,7 +408,8 @@ class MavlinkParamServer(ServingLoop):
             self.stats["ignored"] += 1
             return []
         # A frame of an ID the dialect lacks comes back unchecked (its CRC needs the ID's
-        # CRC_EXTRA; PX4's parser checks it and drops it): garbage, as a bad CRC is.
+        # CRC_EXTRA; MAVLink's C parser, PX4's, checks it with 0 and drops what fails):
+        # garbage, as a bad CRC is.
         good = [m for m in messages if not _unchecked(m)]
         self.stats["ignored"] += len(messages) - len(good)
         if good and (self.signing is None or any(m.get_signed() for m in good)):
