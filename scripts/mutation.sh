@@ -59,6 +59,9 @@
 # cargo-mutants) over the core and the C ABI crate with their Rust tests (the C ABI's are
 # crates/px4params-ffi/tests/c_abi.rs, calling its functions as C does). The survivors of each
 # target are written to target/mutation/<target>.txt.
+# While a run goes: do not edit this script (bash reads it as it runs, so the run's last table
+# comes out wrong) and do not run `mutmut show` on a target's cache (once it rewrote the cache
+# under the running mutmut, and results were lost).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$PWD
