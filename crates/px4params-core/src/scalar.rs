@@ -126,55 +126,76 @@ pub fn uint_raw(value: Scalar, bits: u32, cast: Cast, saturate: bool) -> Result<
     if let (Scalar::Bool(b), 1) = (value, bits) {
         return Ok(u64::from(b));
     }
-    let max = crate::bits::field_mask(bits);
-    integer_raw(value, 0, i128::from(max), max, cast, saturate)
+    integer_raw(value, crate::bits::field_mask(bits), false, cast, saturate)
 }
 
 /// Encodes a signed integer field of `bits` bits to raw (two's complement) bits.
 #[inline]
 pub fn int_raw(value: Scalar, bits: u32, cast: Cast, saturate: bool) -> Result<u64, ScalarError> {
-    let mask = crate::bits::field_mask(bits);
-    let max = i128::from(mask >> 1);
-    integer_raw(value, -max - 1, max, mask, cast, saturate)
+    integer_raw(value, crate::bits::field_mask(bits), true, cast, saturate)
 }
 
-/// An integer `value` for a field holding `min..=max` in the bits of `mask`, cast as `cast`
-/// says where it is out of range (clamped only when `saturate`).
+/// An integer `value` for a field of the bits of `mask` (two's complement when `signed`),
+/// cast as `cast` says where it is out of range (clamped only when `saturate`). In 64-bit
+/// arithmetic (no `i128`: on 32-bit cores every 128-bit compare is a run of instructions).
 fn integer_raw(
     value: Scalar,
-    min: i128,
-    max: i128,
     mask: u64,
+    signed: bool,
     cast: Cast,
     saturate: bool,
 ) -> Result<u64, ScalarError> {
-    let v = match value {
-        Scalar::Uint(v) => i128::from(v),
-        Scalar::Int(v) => i128::from(v),
+    // The field holds min..=max: 0..=mask unsigned, -(mask/2)-1..=mask/2 signed.
+    let max = if signed { mask >> 1 } else { mask };
+    let min = if signed { !max as i64 } else { 0 };
+    let (raw, below) = match value {
+        Scalar::Uint(v) => (v, false),
+        Scalar::Int(v) => (v as u64, v < min),
         _ => {
             return Err(ScalarError::WrongKind {
                 expected: "an integer",
             })
         }
     };
+    // Above the range: a value over `max` that is not a negative `Int`.
+    let above = raw > max && !matches!(value, Scalar::Int(v) if v < 0);
     let raw = match cast {
-        _ if (min..=max).contains(&v) => v,
-        Cast::Truncated => v,
-        Cast::Saturated if saturate => v.clamp(min, max),
+        _ if !below && !above => raw,
+        Cast::Truncated => raw,
+        Cast::Saturated if saturate && below => min as u64,
+        Cast::Saturated if saturate => max,
         Cast::Saturated => {
             // The range as the field's kind of number: unsigned from 0, signed otherwise.
-            let bound = |b: i128| match min {
-                0 => Scalar::Uint(b as u64),
-                _ => Scalar::Int(b as i64),
+            let (min, max) = match signed {
+                false => (Scalar::Uint(0), Scalar::Uint(max)),
+                true => (Scalar::Int(min), Scalar::Int(max as i64)),
             };
-            return Err(ScalarError::OutOfRange {
-                value,
-                min: bound(min),
-                max: bound(max),
-            });
+            return Err(ScalarError::OutOfRange { value, min, max });
         }
     };
-    Ok(raw as u64 & mask)
+    Ok(raw & mask)
+}
+
+/// `v` as the nearest float (`v as f64`). On 32-bit Arm, whose FPU converts 32-bit integers
+/// only, from its two halves: `hi * 2^32` and `lo` are exact, their sum rounds once, so the
+/// result is the same, without the 64-bit conversion routine (`__aeabi_l2d`, 146 bytes).
+#[inline]
+pub(crate) fn int_to_f64(v: i64) -> f64 {
+    if cfg!(target_arch = "arm") {
+        from_halves(f64::from((v >> 32) as i32), v as u32)
+    } else {
+        v as f64
+    }
+}
+
+/// [`int_to_f64`] for an unsigned `v` (`__aeabi_ul2d` on 32-bit Arm).
+#[inline]
+pub(crate) fn uint_to_f64(v: u64) -> f64 {
+    if cfg!(target_arch = "arm") {
+        from_halves(f64::from((v >> 32) as u32), v as u32)
+    } else {
+        v as f64
+    }
 }
 
 /// Encodes a float field of 16, 32 or 64 bits to raw bits.
@@ -182,8 +203,8 @@ fn integer_raw(
 pub fn float_raw(value: Scalar, bits: u32, cast: Cast, saturate: bool) -> Result<u64, ScalarError> {
     let v = match value {
         Scalar::Float(v) => v,
-        Scalar::Int(v) => v as f64,
-        Scalar::Uint(v) => v as f64,
+        Scalar::Int(v) => int_to_f64(v),
+        Scalar::Uint(v) => uint_to_f64(v),
         Scalar::Bool(_) => {
             return Err(ScalarError::WrongKind {
                 expected: "a number",
@@ -215,6 +236,12 @@ pub fn float_raw(value: Scalar, bits: u32, cast: Cast, saturate: bool) -> Result
         32 => u64::from((v as f32).to_bits()),
         _ => v.to_bits(),
     })
+}
+
+/// `hi * 2^32 + lo`, rounded once (both terms are exact).
+#[inline(always)]
+fn from_halves(hi: f64, lo: u32) -> f64 {
+    hi * 4_294_967_296.0 + f64::from(lo)
 }
 
 /// Sign-extends the low `bits` bits of `raw`.
@@ -306,6 +333,93 @@ mod tests {
                 expected: "an integer"
             })
         );
+    }
+
+    #[test]
+    fn integers_convert_to_floats_from_their_halves_as_casts_do() {
+        // Arm's conversion (hosts cast): exact below 2^53, rounded to nearest even above,
+        // halfway cases included (2^53 + 1 lies between two floats).
+        let mut values = std::vec![
+            0u64,
+            1,
+            u64::MAX,
+            u64::MAX - 1024,
+            (1 << 53) + 1,
+            (1 << 53) + 3
+        ];
+        values.extend(
+            (0..64)
+                .map(|k| 1u64 << k)
+                .flat_map(|p| [p, p - 1, p + 1, p | 0x401]),
+        );
+        values.extend((1..2000u64).map(|k| k.wrapping_mul(0x9E37_79B9_7F4A_7C15)));
+        for v in values {
+            let unsigned = from_halves(f64::from((v >> 32) as u32), v as u32);
+            assert_eq!(unsigned.to_bits(), (v as f64).to_bits(), "{v}");
+            let w = v as i64;
+            let signed = from_halves(f64::from((w >> 32) as i32), w as u32);
+            assert_eq!(signed.to_bits(), (w as f64).to_bits(), "{w}");
+            assert_eq!(int_to_f64(w).to_bits(), (w as f64).to_bits());
+            assert_eq!(uint_to_f64(v).to_bits(), (v as f64).to_bits());
+        }
+    }
+
+    #[test]
+    fn integer_casts_at_the_edges_of_every_width() {
+        let (sat, trunc) = (Cast::Saturated, Cast::Truncated);
+        for bits in 1..=64u32 {
+            let mask = crate::bits::field_mask(bits);
+            let (smax, smin) = ((mask >> 1) as i64, !((mask >> 1) as i64));
+            // In range: the value's bits.
+            assert_eq!(uint_raw(Scalar::Uint(mask), bits, sat, false), Ok(mask));
+            assert_eq!(uint_raw(Scalar::Int(0), bits, sat, false), Ok(0));
+            assert_eq!(
+                int_raw(Scalar::Int(smin), bits, sat, false),
+                Ok(smin as u64 & mask)
+            );
+            assert_eq!(
+                int_raw(Scalar::Uint(smax as u64), bits, sat, false),
+                Ok(smax as u64)
+            );
+            // Below: clamped to the minimum, or its low bits.
+            assert_eq!(uint_raw(Scalar::Int(-1), bits, sat, true), Ok(0));
+            assert_eq!(uint_raw(Scalar::Int(-1), bits, trunc, false), Ok(mask));
+            let out = uint_raw(Scalar::Int(-1), bits, sat, false);
+            let (min, max) = (Scalar::Uint(0), Scalar::Uint(mask));
+            let value = Scalar::Int(-1);
+            assert_eq!(out, Err(ScalarError::OutOfRange { value, min, max }));
+            if bits < 64 {
+                let low = Scalar::Int(smin - 1);
+                assert_eq!(int_raw(low, bits, sat, true), Ok(smin as u64 & mask));
+                let (min, max) = (Scalar::Int(smin), Scalar::Int(smax));
+                let out = int_raw(low, bits, sat, false);
+                assert_eq!(
+                    out,
+                    Err(ScalarError::OutOfRange {
+                        value: low,
+                        min,
+                        max
+                    })
+                );
+                // Above: clamped to the maximum, or its low bits.
+                let high = Scalar::Uint(mask + 1);
+                assert_eq!(uint_raw(high, bits, sat, true), Ok(mask));
+                assert_eq!(uint_raw(high, bits, trunc, false), Ok(0));
+            }
+            let high = Scalar::Uint(u64::MAX);
+            assert_eq!(int_raw(high, bits, sat, true), Ok(smax as u64));
+            assert_eq!(int_raw(high, bits, trunc, false), Ok(mask));
+            let (min, max) = (Scalar::Int(smin), Scalar::Int(smax));
+            let out = int_raw(high, bits, sat, false);
+            assert_eq!(
+                out,
+                Err(ScalarError::OutOfRange {
+                    value: high,
+                    min,
+                    max
+                })
+            );
+        }
     }
 
     #[test]

@@ -264,7 +264,7 @@ pub fn receive<'f, 'a>(
             // Firmware built for size: no gathering buffer; the four-byte steps go on across
             // the pieces.
             crc16_pieces(crc_seed, (0..payload.count()).map(|i| payload.piece(i)))
-        } else if len <= RUN {
+        } else if (..=RUN).contains(&len) {
             // Most transfers are a few frames: gathered into the run the payload keeps, so
             // that it is decoded from there as from flat bytes.
             crc16(crc_seed, payload.gather(len))
