@@ -247,8 +247,26 @@ fn from_halves(hi: f64, lo: u32) -> f64 {
 /// Sign-extends the low `bits` bits of `raw`.
 #[inline]
 pub fn sign_extend(raw: u64, bits: u32) -> i64 {
-    let shift = 64 - bits;
-    ((raw << shift) as i64) >> shift
+    if cfg!(target_pointer_width = "32") {
+        sign_extend_halves(raw, bits)
+    } else {
+        let shift = 64 - bits;
+        ((raw << shift) as i64) >> shift
+    }
+}
+
+/// [`sign_extend`] in 32-bit halves, as 32-bit cores take it: a 64-bit shift by a variable
+/// amount is a routine call there (`__aeabi_llsl`, `__aeabi_lasr`).
+#[inline(always)]
+fn sign_extend_halves(raw: u64, bits: u32) -> i64 {
+    if bits > 32 {
+        let shift = 64 - bits;
+        let high = (((raw >> 32) as u32 as i32) << shift) >> shift;
+        i64::from(high) << 32 | i64::from(raw as u32)
+    } else {
+        let shift = 32 - bits;
+        i64::from(((raw as u32 as i32) << shift) >> shift)
+    }
 }
 
 /// Decodes raw float bits of 16, 32 or 64 bits.
@@ -361,6 +379,30 @@ mod tests {
             assert_eq!(signed.to_bits(), (w as f64).to_bits(), "{w}");
             assert_eq!(int_to_f64(w).to_bits(), (w as f64).to_bits());
             assert_eq!(uint_to_f64(v).to_bits(), (v as f64).to_bits());
+        }
+    }
+
+    #[test]
+    fn sign_extension_in_halves_is_the_shifts_of_64_bits() {
+        let raws = [
+            0u64,
+            1,
+            u64::MAX,
+            0x8000_0000,
+            0x7FFF_FFFF,
+            0x0123_4567_89AB_CDEF,
+        ];
+        for bits in 1..=64u32 {
+            for raw in raws
+                .iter()
+                .flat_map(|&r| [r, !r, r >> (64 - bits), 1 << (bits - 1)])
+            {
+                // Bits above the field's too: both drop them.
+                let shift = 64 - bits;
+                let by_shifts = ((raw << shift) as i64) >> shift;
+                assert_eq!(sign_extend_halves(raw, bits), by_shifts, "{raw:#x} {bits}");
+                assert_eq!(sign_extend(raw, bits), by_shifts);
+            }
         }
     }
 
