@@ -176,25 +176,27 @@ fn integer_raw(
     Ok(raw & mask)
 }
 
-/// `v` as the nearest float (`v as f64`). On 32-bit Arm, whose FPU converts 32-bit integers
-/// only, from its two halves: `hi * 2^32` and `lo` are exact, their sum rounds once, so the
-/// result is the same, without the 64-bit conversion routine (`__aeabi_l2d`, 146 bytes).
+/// `v` as the nearest float (`v as f64`). On 32-bit cores, which convert 64-bit integers by
+/// a library routine, from its magnitude: the routine for unsigned integers serves both
+/// signs (`__aeabi_l2d`, 146 bytes, is not linked).
 #[inline]
-pub(crate) fn int_to_f64(v: i64) -> f64 {
-    if cfg!(target_arch = "arm") {
-        from_halves(f64::from((v >> 32) as i32), v as u32)
+fn int_to_f64(v: i64) -> f64 {
+    if cfg!(target_pointer_width = "32") {
+        by_magnitude(v)
     } else {
         v as f64
     }
 }
 
-/// [`int_to_f64`] for an unsigned `v` (`__aeabi_ul2d` on 32-bit Arm).
-#[inline]
-pub(crate) fn uint_to_f64(v: u64) -> f64 {
-    if cfg!(target_arch = "arm") {
-        from_halves(f64::from((v >> 32) as u32), v as u32)
+/// `v` as the nearest float, from its magnitude: rounding to nearest is the same for `-v`
+/// as for `v`, so the negated magnitude's float is `v`'s.
+#[inline(always)]
+fn by_magnitude(v: i64) -> f64 {
+    let magnitude = v.unsigned_abs() as f64;
+    if v < 0 {
+        -magnitude
     } else {
-        v as f64
+        magnitude
     }
 }
 
@@ -204,7 +206,7 @@ pub fn float_raw(value: Scalar, bits: u32, cast: Cast, saturate: bool) -> Result
     let v = match value {
         Scalar::Float(v) => v,
         Scalar::Int(v) => int_to_f64(v),
-        Scalar::Uint(v) => uint_to_f64(v),
+        Scalar::Uint(v) => v as f64,
         Scalar::Bool(_) => {
             return Err(ScalarError::WrongKind {
                 expected: "a number",
@@ -236,12 +238,6 @@ pub fn float_raw(value: Scalar, bits: u32, cast: Cast, saturate: bool) -> Result
         32 => u64::from((v as f32).to_bits()),
         _ => v.to_bits(),
     })
-}
-
-/// `hi * 2^32 + lo`, rounded once (both terms are exact).
-#[inline(always)]
-fn from_halves(hi: f64, lo: u32) -> f64 {
-    hi * 4_294_967_296.0 + f64::from(lo)
 }
 
 /// Sign-extends the low `bits` bits of `raw`.
@@ -354,31 +350,22 @@ mod tests {
     }
 
     #[test]
-    fn integers_convert_to_floats_from_their_halves_as_casts_do() {
-        // Arm's conversion (hosts cast): exact below 2^53, rounded to nearest even above,
-        // halfway cases included (2^53 + 1 lies between two floats).
-        let mut values = std::vec![
-            0u64,
-            1,
-            u64::MAX,
-            u64::MAX - 1024,
-            (1 << 53) + 1,
-            (1 << 53) + 3
-        ];
+    fn integers_convert_to_floats_from_their_magnitudes_as_casts_do() {
+        // 32-bit cores' conversion (hosts cast): exact below 2^53, rounded to nearest even
+        // above, halfway cases included (2^53 + 1 lies between two floats), either sign.
+        let mut values = std::vec![0i64, 1, -1, i64::MIN, i64::MAX, i64::MIN + 1];
+        values.extend([(1 << 53) + 1, (1 << 53) + 3, -(1 << 53) - 1, -(1 << 53) - 3]);
         values.extend(
-            (0..64)
-                .map(|k| 1u64 << k)
+            (0..63)
+                .map(|k| 1i64 << k)
                 .flat_map(|p| [p, p - 1, p + 1, p | 0x401]),
         );
-        values.extend((1..2000u64).map(|k| k.wrapping_mul(0x9E37_79B9_7F4A_7C15)));
+        values.extend((1..2000u64).map(|k| k.wrapping_mul(0x9E37_79B9_7F4A_7C15) as i64));
         for v in values {
-            let unsigned = from_halves(f64::from((v >> 32) as u32), v as u32);
-            assert_eq!(unsigned.to_bits(), (v as f64).to_bits(), "{v}");
-            let w = v as i64;
-            let signed = from_halves(f64::from((w >> 32) as i32), w as u32);
-            assert_eq!(signed.to_bits(), (w as f64).to_bits(), "{w}");
-            assert_eq!(int_to_f64(w).to_bits(), (w as f64).to_bits());
-            assert_eq!(uint_to_f64(v).to_bits(), (v as f64).to_bits());
+            for v in [v, v.wrapping_neg()] {
+                assert_eq!(by_magnitude(v).to_bits(), (v as f64).to_bits(), "{v}");
+                assert_eq!(int_to_f64(v).to_bits(), (v as f64).to_bits(), "{v}");
+            }
         }
     }
 
