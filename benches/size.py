@@ -46,8 +46,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 # Ceilings of the compact build's .text, by target triple (None: the host).
 TARGETS: dict[str | None, dict[str, int | None]] = {
-    None: {"codec": 5952, "core": 15360, "all": None},
-    "thumbv7em-none-eabihf": {"codec": 5440, "core": 12352, "all": None},
+    None: {"codec": 5888, "core": 14912, "all": None},
+    "thumbv7em-none-eabihf": {"codec": 5248, "core": 11840, "all": None},
 }
 
 PROBE_TOML = """\
@@ -293,7 +293,10 @@ def largest(library: Path, n: int) -> list[str]:
         text=True,
         check=True,
     ).stdout
-    return [line for line in out.splitlines() if " t " in line or " T " in line][:n]
+    # Weak definitions too (" W "): compiler_builtins' routines, such as the 64-bit shifts
+    # and conversions a 32-bit core calls, are weak.
+    code = (" t ", " T ", " W ")
+    return [line for line in out.splitlines() if any(kind in line for kind in code)][:n]
 
 
 # How a Cortex-M7 image is linked: the exports are the roots, everything else is collected.

@@ -14,6 +14,7 @@ export PATH="$PWD/.venv/bin:$PATH"
 echo "== rust: fmt, clippy, tests (${SECONDS} s so far)"
 cargo fmt --all -- --check
 cargo clippy --workspace --all-targets --features px4params-core/alloc -- -D warnings
+cargo clippy -p px4params-core --features compact -- -D warnings
 cargo test -p px4params-core --features alloc
 # The firmware build's codec (without the fast paths for flat leaf lists): same bytes, same errors.
 cargo test -p px4params-core --features alloc,compact

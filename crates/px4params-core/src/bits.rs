@@ -132,7 +132,20 @@ pub const fn mask(n: u32) -> u64 {
 #[inline(always)]
 pub(crate) const fn field_mask(n: u32) -> u64 {
     debug_assert!(n >= 1 && n <= 64);
-    u64::MAX >> (64 - n)
+    if cfg!(target_pointer_width = "32") {
+        field_mask_halves(n)
+    } else {
+        u64::MAX >> (64 - n)
+    }
+}
+
+/// [`field_mask`] in 32-bit halves, as 32-bit cores take it: a 64-bit shift by a variable
+/// amount is a routine call there (`__aeabi_llsr`).
+#[inline(always)]
+const fn field_mask_halves(n: u32) -> u64 {
+    let low = if n >= 32 { u32::MAX } else { !(u32::MAX << n) };
+    let high = if n > 32 { u32::MAX >> (64 - n) } else { 0 };
+    (high as u64) << 32 | low as u64
 }
 
 /// Reads `n` bits (`1..=64`) at bit `offset` from `data` as a big-endian stream value.
@@ -416,6 +429,7 @@ mod tests {
             // Against the arithmetic definition, 2^n - 1.
             assert_eq!(u128::from(mask(n)), (1u128 << n) - 1, "n={n}");
             assert_eq!(u128::from(field_mask(n)), (1u128 << n) - 1, "n={n}");
+            assert_eq!(field_mask_halves(n), field_mask(n), "n={n}");
         }
     }
 

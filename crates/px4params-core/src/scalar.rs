@@ -126,55 +126,78 @@ pub fn uint_raw(value: Scalar, bits: u32, cast: Cast, saturate: bool) -> Result<
     if let (Scalar::Bool(b), 1) = (value, bits) {
         return Ok(u64::from(b));
     }
-    let max = crate::bits::field_mask(bits);
-    integer_raw(value, 0, i128::from(max), max, cast, saturate)
+    integer_raw(value, crate::bits::field_mask(bits), false, cast, saturate)
 }
 
 /// Encodes a signed integer field of `bits` bits to raw (two's complement) bits.
 #[inline]
 pub fn int_raw(value: Scalar, bits: u32, cast: Cast, saturate: bool) -> Result<u64, ScalarError> {
-    let mask = crate::bits::field_mask(bits);
-    let max = i128::from(mask >> 1);
-    integer_raw(value, -max - 1, max, mask, cast, saturate)
+    integer_raw(value, crate::bits::field_mask(bits), true, cast, saturate)
 }
 
-/// An integer `value` for a field holding `min..=max` in the bits of `mask`, cast as `cast`
-/// says where it is out of range (clamped only when `saturate`).
+/// An integer `value` for a field of the bits of `mask` (two's complement when `signed`),
+/// cast as `cast` says where it is out of range (clamped only when `saturate`). In 64-bit
+/// arithmetic (no `i128`: on 32-bit cores every 128-bit compare is a run of instructions).
 fn integer_raw(
     value: Scalar,
-    min: i128,
-    max: i128,
     mask: u64,
+    signed: bool,
     cast: Cast,
     saturate: bool,
 ) -> Result<u64, ScalarError> {
-    let v = match value {
-        Scalar::Uint(v) => i128::from(v),
-        Scalar::Int(v) => i128::from(v),
+    // The field holds min..=max: 0..=mask unsigned, -(mask/2)-1..=mask/2 signed.
+    let max = if signed { mask >> 1 } else { mask };
+    let min = if signed { !max as i64 } else { 0 };
+    let (raw, below) = match value {
+        Scalar::Uint(v) => (v, false),
+        Scalar::Int(v) => (v as u64, v < min),
         _ => {
             return Err(ScalarError::WrongKind {
                 expected: "an integer",
             })
         }
     };
+    // Above the range: a value over `max` that is not a negative `Int`.
+    let above = raw > max && !matches!(value, Scalar::Int(v) if v < 0);
     let raw = match cast {
-        _ if (min..=max).contains(&v) => v,
-        Cast::Truncated => v,
-        Cast::Saturated if saturate => v.clamp(min, max),
+        _ if !below && !above => raw,
+        Cast::Truncated => raw,
+        Cast::Saturated if saturate && below => min as u64,
+        Cast::Saturated if saturate => max,
         Cast::Saturated => {
             // The range as the field's kind of number: unsigned from 0, signed otherwise.
-            let bound = |b: i128| match min {
-                0 => Scalar::Uint(b as u64),
-                _ => Scalar::Int(b as i64),
+            let (min, max) = match signed {
+                false => (Scalar::Uint(0), Scalar::Uint(max)),
+                true => (Scalar::Int(min), Scalar::Int(max as i64)),
             };
-            return Err(ScalarError::OutOfRange {
-                value,
-                min: bound(min),
-                max: bound(max),
-            });
+            return Err(ScalarError::OutOfRange { value, min, max });
         }
     };
-    Ok(raw as u64 & mask)
+    Ok(raw & mask)
+}
+
+/// `v` as the nearest float (`v as f64`). On 32-bit cores, which convert 64-bit integers by
+/// a library routine, from its magnitude: the routine for unsigned integers serves both
+/// signs (`__aeabi_l2d`, 146 bytes, is not linked).
+#[inline]
+fn int_to_f64(v: i64) -> f64 {
+    if cfg!(target_pointer_width = "32") {
+        by_magnitude(v)
+    } else {
+        v as f64
+    }
+}
+
+/// `v` as the nearest float, from its magnitude: rounding to nearest is the same for `-v`
+/// as for `v`, so the negated magnitude's float is `v`'s.
+#[inline(always)]
+fn by_magnitude(v: i64) -> f64 {
+    let magnitude = v.unsigned_abs() as f64;
+    if v < 0 {
+        -magnitude
+    } else {
+        magnitude
+    }
 }
 
 /// Encodes a float field of 16, 32 or 64 bits to raw bits.
@@ -182,7 +205,7 @@ fn integer_raw(
 pub fn float_raw(value: Scalar, bits: u32, cast: Cast, saturate: bool) -> Result<u64, ScalarError> {
     let v = match value {
         Scalar::Float(v) => v,
-        Scalar::Int(v) => v as f64,
+        Scalar::Int(v) => int_to_f64(v),
         Scalar::Uint(v) => v as f64,
         Scalar::Bool(_) => {
             return Err(ScalarError::WrongKind {
@@ -220,8 +243,26 @@ pub fn float_raw(value: Scalar, bits: u32, cast: Cast, saturate: bool) -> Result
 /// Sign-extends the low `bits` bits of `raw`.
 #[inline]
 pub fn sign_extend(raw: u64, bits: u32) -> i64 {
-    let shift = 64 - bits;
-    ((raw << shift) as i64) >> shift
+    if cfg!(target_pointer_width = "32") {
+        sign_extend_halves(raw, bits)
+    } else {
+        let shift = 64 - bits;
+        ((raw << shift) as i64) >> shift
+    }
+}
+
+/// [`sign_extend`] in 32-bit halves, as 32-bit cores take it: a 64-bit shift by a variable
+/// amount is a routine call there (`__aeabi_llsl`, `__aeabi_lasr`).
+#[inline(always)]
+fn sign_extend_halves(raw: u64, bits: u32) -> i64 {
+    if bits > 32 {
+        let shift = 64 - bits;
+        let high = (((raw >> 32) as u32 as i32) << shift) >> shift;
+        i64::from(high) << 32 | i64::from(raw as u32)
+    } else {
+        let shift = 32 - bits;
+        i64::from(((raw as u32 as i32) << shift) >> shift)
+    }
 }
 
 /// Decodes raw float bits of 16, 32 or 64 bits.
@@ -306,6 +347,108 @@ mod tests {
                 expected: "an integer"
             })
         );
+    }
+
+    #[test]
+    fn integers_convert_to_floats_from_their_magnitudes_as_casts_do() {
+        // 32-bit cores' conversion (hosts cast): exact below 2^53, rounded to nearest even
+        // above, halfway cases included (2^53 + 1 lies between two floats), either sign.
+        let mut values = std::vec![0i64, 1, -1, i64::MIN, i64::MAX, i64::MIN + 1];
+        values.extend([(1 << 53) + 1, (1 << 53) + 3, -(1 << 53) - 1, -(1 << 53) - 3]);
+        values.extend(
+            (0..63)
+                .map(|k| 1i64 << k)
+                .flat_map(|p| [p, p - 1, p + 1, p | 0x401]),
+        );
+        values.extend((1..2000u64).map(|k| k.wrapping_mul(0x9E37_79B9_7F4A_7C15) as i64));
+        for v in values {
+            for v in [v, v.wrapping_neg()] {
+                assert_eq!(by_magnitude(v).to_bits(), (v as f64).to_bits(), "{v}");
+                assert_eq!(int_to_f64(v).to_bits(), (v as f64).to_bits(), "{v}");
+            }
+        }
+    }
+
+    #[test]
+    fn sign_extension_in_halves_is_the_shifts_of_64_bits() {
+        let raws = [
+            0u64,
+            1,
+            u64::MAX,
+            0x8000_0000,
+            0x7FFF_FFFF,
+            0x0123_4567_89AB_CDEF,
+        ];
+        for bits in 1..=64u32 {
+            for raw in raws
+                .iter()
+                .flat_map(|&r| [r, !r, r >> (64 - bits), 1 << (bits - 1)])
+            {
+                // Bits above the field's too: both drop them.
+                let shift = 64 - bits;
+                let by_shifts = ((raw << shift) as i64) >> shift;
+                assert_eq!(sign_extend_halves(raw, bits), by_shifts, "{raw:#x} {bits}");
+                assert_eq!(sign_extend(raw, bits), by_shifts);
+            }
+        }
+    }
+
+    #[test]
+    fn integer_casts_at_the_edges_of_every_width() {
+        let (sat, trunc) = (Cast::Saturated, Cast::Truncated);
+        for bits in 1..=64u32 {
+            let mask = crate::bits::field_mask(bits);
+            let (smax, smin) = ((mask >> 1) as i64, !((mask >> 1) as i64));
+            // In range: the value's bits.
+            assert_eq!(uint_raw(Scalar::Uint(mask), bits, sat, false), Ok(mask));
+            assert_eq!(uint_raw(Scalar::Int(0), bits, sat, false), Ok(0));
+            assert_eq!(
+                int_raw(Scalar::Int(smin), bits, sat, false),
+                Ok(smin as u64 & mask)
+            );
+            assert_eq!(
+                int_raw(Scalar::Uint(smax as u64), bits, sat, false),
+                Ok(smax as u64)
+            );
+            // Below: clamped to the minimum, or its low bits.
+            assert_eq!(uint_raw(Scalar::Int(-1), bits, sat, true), Ok(0));
+            assert_eq!(uint_raw(Scalar::Int(-1), bits, trunc, false), Ok(mask));
+            let out = uint_raw(Scalar::Int(-1), bits, sat, false);
+            let (min, max) = (Scalar::Uint(0), Scalar::Uint(mask));
+            let value = Scalar::Int(-1);
+            assert_eq!(out, Err(ScalarError::OutOfRange { value, min, max }));
+            if bits < 64 {
+                let low = Scalar::Int(smin - 1);
+                assert_eq!(int_raw(low, bits, sat, true), Ok(smin as u64 & mask));
+                let (min, max) = (Scalar::Int(smin), Scalar::Int(smax));
+                let out = int_raw(low, bits, sat, false);
+                assert_eq!(
+                    out,
+                    Err(ScalarError::OutOfRange {
+                        value: low,
+                        min,
+                        max
+                    })
+                );
+                // Above: clamped to the maximum, or its low bits.
+                let high = Scalar::Uint(mask + 1);
+                assert_eq!(uint_raw(high, bits, sat, true), Ok(mask));
+                assert_eq!(uint_raw(high, bits, trunc, false), Ok(0));
+            }
+            let high = Scalar::Uint(u64::MAX);
+            assert_eq!(int_raw(high, bits, sat, true), Ok(smax as u64));
+            assert_eq!(int_raw(high, bits, trunc, false), Ok(mask));
+            let (min, max) = (Scalar::Int(smin), Scalar::Int(smax));
+            let out = int_raw(high, bits, sat, false);
+            assert_eq!(
+                out,
+                Err(ScalarError::OutOfRange {
+                    value: high,
+                    min,
+                    max
+                })
+            );
+        }
     }
 
     #[test]

@@ -82,7 +82,11 @@ pub fn frames(payload: &[u8], crc_seed: u16, transfer_id: u8, canfd: bool) -> Fr
         pad = fd_length(rest) - rest;
     }
     let crc = (payload.len() + pad > max - 1).then(|| {
-        let crc = crc16(crc16(crc_seed, payload), &[0u8; 64][..pad]);
+        // The padding's zeros one at a time (no zeroed buffer: a CAN FD pad is a few bytes).
+        let mut crc = crc16(crc_seed, payload);
+        for _ in 0..pad {
+            crc = crc16(crc, &[0]);
+        }
         crc.to_le_bytes()
     });
     Frames {
@@ -264,7 +268,7 @@ pub fn receive<'f, 'a>(
             // Firmware built for size: no gathering buffer; the four-byte steps go on across
             // the pieces.
             crc16_pieces(crc_seed, (0..payload.count()).map(|i| payload.piece(i)))
-        } else if len <= RUN {
+        } else if (..=RUN).contains(&len) {
             // Most transfers are a few frames: gathered into the run the payload keeps, so
             // that it is decoded from there as from flat bytes.
             crc16(crc_seed, payload.gather(len))
