@@ -21,6 +21,9 @@ use crate::{straight, walk};
 /// Encodes the value of type `root` from `source` into `out`; returns the length in bytes.
 ///
 /// `out` needs [`Layout::max_bytes`] bytes at most; only the bytes returned are written.
+// Inlined into the caller, so that a small value the straight plan answers costs no second
+// call and no frame of the general encoder.
+#[inline(always)]
 pub fn encode<S: Source>(
     layout: &Layout<'_>,
     root: NodeId,
@@ -33,6 +36,18 @@ pub fn encode<S: Source>(
             return Ok(len);
         }
     }
+    encode_general(layout, root, source, out, options)
+}
+
+/// [`encode`] by the general encoder.
+#[inline(never)]
+fn encode_general<S: Source>(
+    layout: &Layout<'_>,
+    root: NodeId,
+    source: &mut S,
+    out: &mut [u8],
+    options: EncodeOptions,
+) -> Result<usize, Error<S::Error>> {
     let mut enc = Encoder {
         layout,
         out: BitWriter::new(out),
@@ -55,6 +70,8 @@ pub fn encode<S: Source>(
 }
 
 /// Decodes a value of type `root` from `data` into `sink`; returns the bits used.
+// Inlined into the caller, as `encode` is.
+#[inline(always)]
 pub fn decode<R: BitRead + ?Sized, K: Sink>(
     layout: &Layout<'_>,
     root: NodeId,
@@ -67,6 +84,18 @@ pub fn decode<R: BitRead + ?Sized, K: Sink>(
             return Ok(bits);
         }
     }
+    decode_general(layout, root, data, sink, options)
+}
+
+/// [`decode`] by the general decoder.
+#[inline(never)]
+fn decode_general<R: BitRead + ?Sized, K: Sink>(
+    layout: &Layout<'_>,
+    root: NodeId,
+    data: &R,
+    sink: &mut K,
+    options: DecodeOptions,
+) -> Result<usize, Error<K::Error>> {
     let mut dec: Decoder<'_, '_, R, K> = Decoder {
         layout,
         reader: data.reader(0),
