@@ -94,89 +94,61 @@ pub fn compile(layout: &Layout<'_>, root: NodeId) -> Option<Straight> {
     Some(plan)
 }
 
-/// A type the plan answers for, as one call runs it: its compiled plan with the items
-/// borrowed and the prefix known.
-#[derive(Clone, Copy, Debug)]
-struct Shape<'l> {
-    items: &'l [FlatItem],
-    leaves: usize,
-    bits: usize,
-    tail: Option<Tail>,
-    /// Bits of the array's length prefix as encoded (0 with tail array optimization).
-    prefix: u32,
-}
-
-impl<'l> Shape<'l> {
-    /// The plan of `root`, chosen by its index (no search): `None` where it has none.
-    #[inline(always)]
-    fn of(layout: &Layout<'l>, root: NodeId, tao: bool) -> Option<Self> {
-        let plan = layout.straight.get(root as usize)?.as_ref()?;
-        Some(Shape {
-            items: plan.items.of(layout.flat),
-            leaves: plan.leaves as usize,
-            bits: plan.bits as usize,
-            tail: plan.tail,
-            prefix: plan.tail.map_or(0, |t| t.prefix(tao)),
-        })
-    }
-}
-
-/// The bits of `value` for a primitive `kind` in stream order, and how many; `None` where
-/// the general path has something to say (out of range, wrong kind, a rejected cast).
+/// The raw bits of `value` for a primitive `kind` (in the kind's width); `None` where the
+/// general path has something to say (out of range, wrong kind, a rejected cast).
 #[inline(always)]
-fn stream_of(kind: &Kind, value: &Scalar, saturate: bool) -> Option<(u64, u32)> {
+fn raw_of(kind: &Kind, value: &Scalar, saturate: bool) -> Option<u64> {
     // The common cases without the casting rules: an integer in range, a float that is finite
     // and in range (NaN compares false and takes the general rules, as do infinities).
-    let (raw, bits) = match (kind, value) {
+    match (kind, value) {
         (&Kind::Uint { bits, .. }, &Scalar::Uint(v)) if v <= u64::MAX >> (64 - u32::from(bits)) => {
-            (v, u32::from(bits))
+            Some(v)
         }
         (&Kind::Int { bits, .. }, &Scalar::Int(v))
             if scalar::sign_extend(v as u64, bits.into()) == v =>
         {
-            (
-                v as u64 & (u64::MAX >> (64 - u32::from(bits))),
-                u32::from(bits),
-            )
+            Some(v as u64 & (u64::MAX >> (64 - u32::from(bits))))
         }
         (&Kind::Float { bits: 16, .. }, &Scalar::Float(v)) if v.abs() <= scalar::FLOAT16_MAX => {
-            (u64::from(scalar::f16_from_f32(v as f32)), 16)
+            Some(u64::from(scalar::f16_from_f32(v as f32)))
         }
         (&Kind::Float { bits: 32, .. }, &Scalar::Float(v)) if v.abs() <= f64::from(f32::MAX) => {
-            (u64::from((v as f32).to_bits()), 32)
+            Some(u64::from((v as f32).to_bits()))
         }
-        (&Kind::Bool, &Scalar::Bool(b)) => (u64::from(b), 1),
-        _ => return cast(*kind, *value, saturate),
-    };
-    Some((scalar::to_stream(raw, bits), bits))
+        (&Kind::Bool, &Scalar::Bool(b)) => Some(u64::from(b)),
+        _ => cast(*kind, *value, saturate),
+    }
 }
 
-/// [`stream_of`] by the casting rules (saturation, truncation, the other kinds of value).
+/// [`raw_of`] by the casting rules (saturation, truncation, the other kinds of value).
 #[cold]
 #[inline(never)]
-fn cast(kind: Kind, value: Scalar, saturate: bool) -> Option<(u64, u32)> {
-    let raw = scalar_raw(kind, value, saturate).ok()?;
-    let bits = scalar_bits(kind);
-    Some((scalar::to_stream(raw, bits), bits))
+fn cast(kind: Kind, value: Scalar, saturate: bool) -> Option<u64> {
+    scalar_raw(kind, value, saturate).ok()
 }
 
-/// A `p_version` leaf: the type's own version unless versions are kept as given (the
-/// general path words a mismatch).
+/// A `p_version` leaf's raw bits: the type's own version unless versions are kept as given
+/// (the general path words a mismatch).
 #[cold]
 #[inline(never)]
-fn version_stream(
-    kind: Kind,
-    value: Scalar,
-    version: u32,
-    options: EncodeOptions,
-) -> Option<(u64, u32)> {
+fn version_raw(kind: Kind, value: Scalar, version: u32, options: EncodeOptions) -> Option<u64> {
     if options.keep_versions {
-        stream_of(&kind, &value, options.saturate)
+        raw_of(&kind, &value, options.saturate)
     } else if scalar::same_integer(value, version) {
-        stream_of(&kind, &Scalar::Uint(version.into()), false)
+        raw_of(&kind, &Scalar::Uint(version.into()), false)
     } else {
         None
     }
+}
+
+/// The bits of `value` for a primitive `kind` in stream order, and how many ([`raw_of`]).
+#[inline(always)]
+fn stream_of(kind: &Kind, value: &Scalar, saturate: bool) -> Option<(u64, u32)> {
+    let bits = scalar_bits(*kind);
+    Some((
+        scalar::to_stream(raw_of(kind, value, saturate)?, bits),
+        bits,
+    ))
 }
 
 /// Bits going out most significant first into a buffer holding exactly the value: fewer than
@@ -227,7 +199,21 @@ impl Out<'_> {
         }
     }
 
-    /// Stores the pending bits (fewer than 32), the last byte padded with zeros: one store
+    /// Stores 32 of the pending bits when more than 32 are pending (at most 64), so that
+    /// [`Out::put`] and [`Out::finish`] find at most 32.
+    #[inline(always)]
+    fn spill(&mut self) {
+        if self.pending > 32 {
+            self.pending -= 32;
+            let word = ((self.acc >> self.pending) as u32).to_be_bytes();
+            if let Some(slot) = self.out.get_mut(self.at..self.at + 4) {
+                slot.copy_from_slice(&word);
+            }
+            self.at += 4;
+        }
+    }
+
+    /// Stores the pending bits (at most 32), the last byte padded with zeros: one store
     /// of one to four bytes.
     #[inline(always)]
     fn finish(self) {
@@ -284,33 +270,37 @@ pub fn encode<S: Source>(
     out: &mut [u8],
     options: EncodeOptions,
 ) -> Option<usize> {
-    let shape = Shape::of(layout, root, options.tao)?;
-    let (len, taken) = encode_leaves(&shape, source.pending_leaves()?, out, options)?;
+    let plan = layout.straight.get(root as usize)?.as_ref()?;
+    let items = plan.items.of(layout.flat);
+    let (len, taken) = encode_leaves(plan, items, source.pending_leaves()?, out, options)?;
     // Take what was used, as the general path does (leaves after the value stay).
     source.leaf_run(taken)?.ok()?;
     Some(len)
 }
 
-/// [`encode`] of a shape from its leaves: the length in bytes and the leaves used.
+/// [`encode`] of a plan from its leaves: the length in bytes and the leaves used.
 #[inline(always)]
 fn encode_leaves(
-    shape: &Shape<'_>,
+    plan: &Straight,
+    items: &[FlatItem],
     leaves: &[Scalar],
     out: &mut [u8],
     options: EncodeOptions,
 ) -> Option<(usize, usize)> {
-    let (fixed, after) = leaves.split_at_checked(shape.leaves)?;
-    let (bits, elements) = match shape.tail {
-        None => (shape.bits, &[][..]),
+    let fixed_leaves = plan.leaves as usize;
+    let fixed = leaves.get(..fixed_leaves)?;
+    let (bits, prefix, elements) = match &plan.tail {
+        None => (plan.bits as usize, 0, &[][..]),
         Some(tail) => {
-            let (&count, after) = after.split_first()?;
-            let n = count_of(count)?;
+            let n = count_of(*leaves.get(fixed_leaves)?)?;
             if n > tail.max as usize {
                 return None;
             }
+            let prefix = tail.prefix(options.tao);
             (
-                shape.bits + shape.prefix as usize + n * tail.elem_bits as usize,
-                after.get(..n)?,
+                plan.bits as usize + prefix as usize + n * tail.elem_bits as usize,
+                prefix,
+                leaves.get(fixed_leaves + 1..fixed_leaves + 1 + n)?,
             )
         }
     };
@@ -322,21 +312,17 @@ fn encode_leaves(
         pending: 0,
     };
     let saturate = options.saturate;
-    // As many items as leaves and pads: the zip never stops short of a leaf item.
-    let mut values = fixed.iter();
-    for item in shape.items {
-        let (stream, bits) = match item {
-            FlatItem::Leaf(kind) => stream_of(kind, values.next()?, saturate)?,
-            FlatItem::Pad(bits) => (0, u32::from(*bits)),
-            FlatItem::Version(kind, version) => {
-                version_stream(*kind, *values.next()?, *version, options)?
-            }
-        };
-        out.put(stream, bits);
+    if plan.bits <= 64 {
+        // The whole run in one register, stored once below.
+        out.acc = fixed_word(items, fixed, options)?;
+        out.pending = plan.bits;
+        out.spill();
+    } else {
+        encode_run(&mut out, items, fixed, options)?;
     }
-    if let Some(tail) = shape.tail {
-        if shape.prefix != 0 {
-            out.put(elements.len() as u64, shape.prefix);
+    if let Some(tail) = &plan.tail {
+        if prefix != 0 {
+            out.put(elements.len() as u64, prefix);
         }
         if !elements.is_empty() {
             write_elements(&mut out, &tail.elem, elements, saturate)?;
@@ -345,8 +331,58 @@ fn encode_leaves(
     out.finish();
     Some((
         len,
-        shape.leaves + shape.tail.map_or(0, |_| 1 + elements.len()),
+        fixed_leaves + plan.tail.map_or(0, |_| 1 + elements.len()),
     ))
+}
+
+/// A fixed run of more than 64 bits into `out`. Out of line, as [`decode_run`] is.
+#[inline(never)]
+fn encode_run(
+    out: &mut Out<'_>,
+    items: &[FlatItem],
+    fixed: &[Scalar],
+    options: EncodeOptions,
+) -> Option<()> {
+    // As many items as leaves and pads: the zip never stops short of a leaf item.
+    let mut values = fixed.iter();
+    for item in items {
+        let (stream, bits) = item_stream(item, &mut values, options)?;
+        out.put(stream, bits);
+    }
+    Some(())
+}
+
+/// The stream bits of one item of the fixed run and how many, its leaf (if it has one)
+/// taken from `values`.
+#[inline(always)]
+fn item_stream(
+    item: &FlatItem,
+    values: &mut core::slice::Iter<'_, Scalar>,
+    options: EncodeOptions,
+) -> Option<(u64, u32)> {
+    match item {
+        FlatItem::Leaf(kind) => stream_of(kind, values.next()?, options.saturate),
+        FlatItem::Pad(bits) => Some((0, u32::from(*bits))),
+        FlatItem::Version(kind, version) => {
+            let bits = scalar_bits(*kind);
+            let raw = version_raw(*kind, *values.next()?, *version, options)?;
+            Some((scalar::to_stream(raw, bits), bits))
+        }
+    }
+}
+
+/// A fixed run of at most 64 bits as one stream value (its first bit the highest of those
+/// it takes): no store until the run is whole.
+#[inline(always)]
+fn fixed_word(items: &[FlatItem], fixed: &[Scalar], options: EncodeOptions) -> Option<u64> {
+    let mut acc = 0u64;
+    let mut values = fixed.iter();
+    for item in items {
+        let (stream, bits) = item_stream(item, &mut values, options)?;
+        // A 64-bit item is the run's only one (the run fits 64 bits): nothing to shift out.
+        acc = acc.checked_shl(bits).unwrap_or(0) | stream;
+    }
+    Some(acc)
 }
 
 /// The elements of the ending array; byte strings on a byte boundary as plain bytes.
@@ -391,84 +427,135 @@ pub fn decode<R: BitRead + ?Sized, K: Sink>(
     sink: &mut K,
     options: DecodeOptions,
 ) -> Option<usize> {
-    let shape = Shape::of(layout, root, options.tao)?;
+    let plan = layout.straight.get(root as usize)?.as_ref()?;
+    let items = plan.items.of(layout.flat);
     // Payloads in pieces are the general decoder's (its reader follows the pieces).
     let data = data.contiguous()?;
-    let (n, end) = measure(&shape, data)?;
+    let prefix = plan.tail.map_or(0, |t| t.prefix(options.tao));
+    let (n, end) = measure(plan, prefix, data)?;
     if !options.allow_trailing && data.len() > end.div_ceil(8) {
         return None;
     }
-    let total = shape.leaves + shape.tail.map_or(0, |_| 1 + n);
+    let fixed_leaves = plan.leaves as usize;
+    let total = fixed_leaves + plan.tail.map_or(0, |_| 1 + n);
     let slots = sink.leaf_slots(total)?.ok()?;
-    decode_into(&shape, data, n, slots);
+    let (fixed, rest) = slots.split_at_mut_checked(fixed_leaves)?;
+    if plan.bits <= 64 {
+        // The whole run from one load (the data holds it: measured).
+        decode_word(items, load_word(data), fixed);
+    } else {
+        decode_run(items, data, fixed);
+    }
+    if let (Some(tail), [len, elements @ ..]) = (&plan.tail, rest) {
+        *len = Scalar::Uint(n as u64);
+        if !elements.is_empty() {
+            let mut reader = data.reader(plan.bits as usize + prefix as usize);
+            read_elements(&mut reader, &tail.elem, elements);
+        }
+    }
     Some(end)
 }
 
 /// The length of the ending array (0 without one) and where the value ends in `data`, which
-/// holds it all; `None` where it does not.
+/// holds it all, with a length prefix of `prefix` bits; `None` where it does not.
 #[inline(always)]
-fn measure(shape: &Shape<'_>, data: &[u8]) -> Option<(usize, usize)> {
+fn measure(plan: &Straight, prefix: u32, data: &[u8]) -> Option<(usize, usize)> {
+    let bits = plan.bits as usize;
     let bit_len = data.len() * 8;
-    let rest = bit_len.checked_sub(shape.bits)?;
-    let Some(tail) = shape.tail else {
-        return Some((0, shape.bits));
+    let rest = bit_len.checked_sub(bits)?;
+    let Some(tail) = &plan.tail else {
+        return Some((0, bits));
     };
     let width = tail.elem_bits as usize;
-    if shape.prefix == 0 {
+    if prefix == 0 {
         // Tail-optimized: the array takes every remaining whole byte (whole elements, fewer
-        // than 8 bits left over).
-        let n = rest / width;
+        // than 8 bits left over). Bytes (the common case) without a division.
+        let n = if width == 8 { rest / 8 } else { rest / width };
         if rest - n * width >= 8 || n > tail.max as usize {
             return None;
         }
-        return Some((n, shape.bits + n * width));
+        return Some((n, bits + n * width));
     }
-    let prefix = shape.prefix as usize;
-    if rest < prefix {
+    let prefix_bits = prefix as usize;
+    if rest < prefix_bits {
         return None;
     }
-    let n = scalar::from_stream(
-        bits::read_bits(data, shape.bits, shape.prefix),
-        shape.prefix,
-    );
+    let n = scalar::from_stream(bits::read_bits(data, bits, prefix), prefix);
     let n = usize::try_from(n)
         .ok()
         .filter(|&n| n <= tail.max as usize)?;
-    let end = shape.bits + prefix + n * width;
+    let end = bits + prefix_bits + n * width;
     (end <= bit_len).then_some((n, end))
 }
 
-/// Fills `slots` (the fixed run's leaves, then the array's length and `n` elements) from
-/// `data`, measured to hold them.
+/// The first 8 bytes of `data` (fewer where it is shorter, zeros after them) as one
+/// big-endian word.
 #[inline(always)]
-fn decode_into(shape: &Shape<'_>, data: &[u8], n: usize, slots: &mut [Scalar]) {
-    let (fixed, slots) = slots.split_at_mut(shape.leaves.min(slots.len()));
+fn load_word(data: &[u8]) -> u64 {
+    if let Some(word) = data.first_chunk::<8>() {
+        return u64::from_be_bytes(*word);
+    }
+    // Fewer than 8 bytes: 4, 2 and 1 at a time, as the length's bits say.
+    let mut acc = 0u64;
+    let mut at = 0;
+    if let Some(four) = data.first_chunk::<4>() {
+        acc = u64::from(u32::from_be_bytes(*four)) << 32;
+        at = 4;
+    }
+    if let Some(two) = data.get(at..).and_then(|d| d.first_chunk::<2>()) {
+        acc |= u64::from(u16::from_be_bytes(*two)) << (48 - 8 * at);
+        at += 2;
+    }
+    if let Some(&one) = data.get(at) {
+        acc |= u64::from(one) << (56 - 8 * at);
+    }
+    acc
+}
+
+/// Fills `slots` with the leaves of a fixed run of at most 64 bits held in `word` (its first
+/// bit the highest).
+#[inline(always)]
+fn decode_word(items: &[FlatItem], mut word: u64, slots: &mut [Scalar]) {
+    let mut slots = slots.iter_mut();
+    for item in items {
+        match item {
+            FlatItem::Leaf(kind) | FlatItem::Version(kind, _) => {
+                let bits = scalar_bits(*kind);
+                // Items have 1 to 64 bits.
+                let raw = word.checked_shr(64 - bits).unwrap_or(0);
+                word = word.checked_shl(bits).unwrap_or(0);
+                if let Some(slot) = slots.next() {
+                    *slot = scalar_of(*kind, scalar::from_stream(raw, bits));
+                }
+            }
+            FlatItem::Pad(bits) => word = word.checked_shl(u32::from(*bits)).unwrap_or(0),
+        }
+    }
+}
+
+/// Fills `slots` with the leaves of a fixed run from `data`, measured to hold it. Out of
+/// line: one copy of the leaf conversions per function keeps them inlined in both paths.
+#[inline(never)]
+fn decode_run(items: &[FlatItem], data: &[u8], slots: &mut [Scalar]) {
     let mut bits_in = In {
         data,
         next: 0,
         acc: 0,
         avail: 0,
     };
-    let mut fixed = fixed.iter_mut();
-    for item in shape.items {
+    let mut slots = slots.iter_mut();
+    for item in items {
         match item {
             FlatItem::Leaf(kind) | FlatItem::Version(kind, _) => {
                 let bits = scalar_bits(*kind);
                 let raw = bits_in.take(bits);
-                if let Some(slot) = fixed.next() {
+                if let Some(slot) = slots.next() {
                     *slot = scalar_of(*kind, scalar::from_stream(raw, bits));
                 }
             }
             FlatItem::Pad(bits) => {
                 bits_in.take(u32::from(*bits));
             }
-        }
-    }
-    if let (Some(tail), [len, elements @ ..]) = (shape.tail, slots) {
-        *len = Scalar::Uint(n as u64);
-        if !elements.is_empty() {
-            let mut reader = data.reader(shape.bits + shape.prefix as usize);
-            read_elements(&mut reader, &tail.elem, elements);
         }
     }
 }
