@@ -321,4 +321,41 @@ pub struct Straight {
     /// Bits of the fixed run.
     pub(crate) bits: u32,
     pub(crate) tail: Option<Tail>,
+    /// The fixed run as steps, where it fits one 64-bit register and [`SMALL_STEPS`] steps.
+    pub(crate) small: Option<Small>,
+}
+
+/// Most items of a fixed run that a [`Small`] plan holds.
+pub(crate) const SMALL_STEPS: usize = 8;
+
+/// A fixed run of at most 64 bits as steps held in the plan itself: what a small value
+/// costs is the steps, without a look into [`Layout::flat`] or a match on [`Kind`] per item.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct Small {
+    pub(crate) steps: [Step; SMALL_STEPS],
+    pub(crate) count: u8,
+}
+
+/// One item of a [`Small`] plan: what it is and its width in bits (`1..=64`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) struct Step {
+    pub(crate) op: Op,
+    pub(crate) bits: u8,
+}
+
+/// What a [`Step`] is.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[repr(u8)]
+pub(crate) enum Op {
+    /// Padding: zeros, no leaf.
+    #[default]
+    Pad,
+    Uint,
+    Int,
+    Float16,
+    Float32,
+    Float64,
+    Bool,
+    /// A leaf the plan's item in [`Layout::flat`] decides (a `p_version` field).
+    Item,
 }

@@ -21,7 +21,7 @@ use crate::rules::{
 use crate::scalar::{self, Scalar};
 
 pub use crate::layout::Straight;
-use crate::layout::Tail;
+use crate::layout::{Op, Small, Step, Tail, SMALL_STEPS};
 
 /// The straight-line plan of `root` in `layout`, where the plan answers for it. The
 /// compiler splits a struct's fields into segments in field order (as the flat codec
@@ -37,6 +37,7 @@ pub fn compile(layout: &Layout<'_>, root: NodeId) -> Option<Straight> {
         leaves: 0,
         bits: 0,
         tail: None,
+        small: None,
     };
     let last = match node.segments.of(layout.segments) {
         [Segment::Flat {
@@ -51,13 +52,17 @@ pub fn compile(layout: &Layout<'_>, root: NodeId) -> Option<Straight> {
             plan.items = *items;
             plan.leaves = *leaves;
             plan.bits = *bits;
+            plan.small = small(items.of(layout.flat), *bits);
             match rest {
                 [] => return Some(plan),
                 [Segment::Field(i)] => *i,
                 _ => return None,
             }
         }
-        [Segment::Field(i)] => *i,
+        [Segment::Field(i)] => {
+            plan.small = small(&[], 0);
+            *i
+        }
         [] => return Some(plan),
         _ => return None,
     };
@@ -92,6 +97,46 @@ pub fn compile(layout: &Layout<'_>, root: NodeId) -> Option<Straight> {
         tao_drops_prefix: elem_node.min_bits >= 8,
     });
     Some(plan)
+}
+
+/// The steps of a fixed run of `bits` bits, where it has at most [`SMALL_STEPS`] items and
+/// 64 bits.
+fn small(items: &[FlatItem], bits: u32) -> Option<Small> {
+    if bits > 64 || items.len() > SMALL_STEPS {
+        return None;
+    }
+    let mut small = Small {
+        steps: [Step::default(); SMALL_STEPS],
+        count: items.len() as u8,
+    };
+    for (step, item) in small.steps.iter_mut().zip(items) {
+        *step = match *item {
+            FlatItem::Pad(bits) => Step { op: Op::Pad, bits },
+            FlatItem::Version(kind, _) => Step {
+                op: Op::Item,
+                bits: scalar_bits(kind) as u8,
+            },
+            FlatItem::Leaf(kind) => {
+                let op = match kind {
+                    Kind::Uint { .. } => Op::Uint,
+                    Kind::Int { .. } => Op::Int,
+                    Kind::Float { bits: 16, .. } => Op::Float16,
+                    Kind::Float { bits: 32, .. } => Op::Float32,
+                    Kind::Float { .. } => Op::Float64,
+                    Kind::Bool => Op::Bool,
+                    _ => return None,
+                };
+                Step {
+                    op,
+                    bits: scalar_bits(kind) as u8,
+                }
+            }
+        };
+        if step.bits == 0 {
+            return None;
+        }
+    }
+    Some(small)
 }
 
 /// The raw bits of `value` for a primitive `kind` (in the kind's width); `None` where the
@@ -141,14 +186,41 @@ fn version_raw(kind: Kind, value: Scalar, version: u32, options: EncodeOptions) 
     }
 }
 
-/// The bits of `value` for a primitive `kind` in stream order, and how many ([`raw_of`]).
+/// The bits of `value` for a primitive `kind` in stream order, and how many; `None` where
+/// the general path has something to say (out of range, wrong kind, a rejected cast). Each
+/// kind's own width, so that the byte order's shifts are constants.
 #[inline(always)]
 fn stream_of(kind: &Kind, value: &Scalar, saturate: bool) -> Option<(u64, u32)> {
-    let bits = scalar_bits(*kind);
-    Some((
-        scalar::to_stream(raw_of(kind, value, saturate)?, bits),
-        bits,
-    ))
+    let (raw, bits) = match (kind, value) {
+        (&Kind::Uint { bits, .. }, &Scalar::Uint(v)) if v <= u64::MAX >> (64 - u32::from(bits)) => {
+            (v, u32::from(bits))
+        }
+        (&Kind::Int { bits, .. }, &Scalar::Int(v))
+            if scalar::sign_extend(v as u64, bits.into()) == v =>
+        {
+            (
+                v as u64 & (u64::MAX >> (64 - u32::from(bits))),
+                u32::from(bits),
+            )
+        }
+        (&Kind::Float { bits: 16, .. }, &Scalar::Float(v)) if v.abs() <= scalar::FLOAT16_MAX => {
+            (u64::from(scalar::f16_from_f32(v as f32)), 16)
+        }
+        (&Kind::Float { bits: 32, .. }, &Scalar::Float(v)) if v.abs() <= f64::from(f32::MAX) => {
+            (u64::from((v as f32).to_bits()), 32)
+        }
+        (&Kind::Bool, &Scalar::Bool(b)) => (u64::from(b), 1),
+        _ => return cast_stream(*kind, *value, saturate),
+    };
+    Some((scalar::to_stream(raw, bits), bits))
+}
+
+/// [`stream_of`] by the casting rules (saturation, truncation, the other kinds of value).
+#[cold]
+#[inline(never)]
+fn cast_stream(kind: Kind, value: Scalar, saturate: bool) -> Option<(u64, u32)> {
+    let bits = scalar_bits(kind);
+    Some((scalar::to_stream(cast(kind, value, saturate)?, bits), bits))
 }
 
 /// Bits going out most significant first into a buffer holding exactly the value: fewer than
@@ -271,15 +343,191 @@ pub fn encode<S: Source>(
     options: EncodeOptions,
 ) -> Option<usize> {
     let plan = layout.straight.get(root as usize)?.as_ref()?;
-    let items = plan.items.of(layout.flat);
-    let (len, taken) = encode_leaves(plan, items, source.pending_leaves()?, out, options)?;
+    let leaves = source.pending_leaves()?;
+    let (len, taken) = match &plan.small {
+        Some(small) => encode_small(plan, small, layout.flat, leaves, out, options)?,
+        None => encode_leaves(plan, plan.items.of(layout.flat), leaves, out, options)?,
+    };
     // Take what was used, as the general path does (leaves after the value stay).
     source.leaf_run(taken)?.ok()?;
     Some(len)
 }
 
-/// [`encode`] of a plan from its leaves: the length in bytes and the leaves used.
+/// [`encode`] of a small plan from its leaves: the length in bytes and the leaves used.
 #[inline(always)]
+fn encode_small(
+    plan: &Straight,
+    small: &Small,
+    flat: &[FlatItem],
+    leaves: &[Scalar],
+    out: &mut [u8],
+    options: EncodeOptions,
+) -> Option<(usize, usize)> {
+    let fixed_leaves = plan.leaves as usize;
+    let mut values = leaves.get(..fixed_leaves)?.iter();
+    let mut acc = 0u64;
+    for (i, step) in small.steps.iter().take(small.count.into()).enumerate() {
+        let bits = u32::from(step.bits);
+        let raw = match step.op {
+            Op::Pad => 0,
+            op => {
+                let value = *values.next()?;
+                match step_raw(op, bits, value) {
+                    Some(raw) => raw,
+                    None => item_raw(plan, flat, i, value, options)?,
+                }
+            }
+        };
+        // A 64-bit step is the run's only one: nothing to shift out.
+        acc = acc.wrapping_shl(bits) | scalar::to_stream(raw, bits);
+    }
+    let Some(tail) = &plan.tail else {
+        let len = (plan.bits as usize).div_ceil(8);
+        store_word(out.get_mut(..len)?, acc, plan.bits);
+        return Some((len, fixed_leaves));
+    };
+    let n = count_of(*leaves.get(fixed_leaves)?)?;
+    if n > tail.max as usize {
+        return None;
+    }
+    let prefix = tail.prefix(options.tao);
+    let elements = leaves.get(fixed_leaves + 1..fixed_leaves + 1 + n)?;
+    let head = plan.bits + prefix;
+    let len = (head as usize + n * tail.elem_bits as usize).div_ceil(8);
+    let out = out.get_mut(..len)?;
+    let bytes = matches!(tail.elem, Kind::Uint { bits: 8, .. }) && head % 8 == 0;
+    if head <= 64 && (n == 0 || bytes) {
+        // The run and the length in one store, then the bytes.
+        if prefix != 0 {
+            acc = (acc << prefix) | n as u64;
+        }
+        store_word(out, acc, head);
+        copy_bytes(out.get_mut(head as usize / 8..)?, elements)?;
+    } else {
+        encode_tail(plan, tail, acc, prefix, elements, out, options.saturate)?;
+    }
+    Some((len, fixed_leaves + 1 + n))
+}
+
+/// The raw bits of a leaf for a [`Step`] of `bits` bits where they need no casting rules;
+/// `None` where the step's item in the layout decides ([`item_raw`]).
+#[inline(always)]
+fn step_raw(op: Op, bits: u32, value: Scalar) -> Option<u64> {
+    // The common cases without the casting rules, as in `raw_of`.
+    match (op, value) {
+        (Op::Uint, Scalar::Uint(v)) if v <= u64::MAX >> (64 - bits) => Some(v),
+        (Op::Int, Scalar::Int(v)) if scalar::sign_extend(v as u64, bits) == v => {
+            Some(v as u64 & (u64::MAX >> (64 - bits)))
+        }
+        (Op::Bool, Scalar::Bool(b)) => Some(u64::from(b)),
+        (Op::Float16 | Op::Float32 | Op::Float64, Scalar::Float(v)) => float_raw(op, v),
+        _ => None,
+    }
+}
+
+/// [`step_raw`] of a float in range (out of line: most small types have none, and their
+/// constants would load on every call).
+#[inline(never)]
+fn float_raw(op: Op, v: f64) -> Option<u64> {
+    match op {
+        Op::Float16 if v.abs() <= scalar::FLOAT16_MAX => {
+            Some(u64::from(scalar::f16_from_f32(v as f32)))
+        }
+        Op::Float32 if v.abs() <= f64::from(f32::MAX) => Some(u64::from((v as f32).to_bits())),
+        Op::Float64 => Some(v.to_bits()),
+        _ => None,
+    }
+}
+
+/// The raw bits of a leaf for item `i` of a plan's fixed run by the item itself: the
+/// casting rules, the version rule.
+#[cold]
+#[inline(never)]
+fn item_raw(
+    plan: &Straight,
+    flat: &[FlatItem],
+    i: usize,
+    value: Scalar,
+    options: EncodeOptions,
+) -> Option<u64> {
+    match *plan.items.of(flat).get(i)? {
+        FlatItem::Leaf(kind) => cast(kind, value, options.saturate),
+        FlatItem::Version(kind, version) => version_raw(kind, value, version, options),
+        FlatItem::Pad(_) => None,
+    }
+}
+
+/// Stores `acc`'s low `bits` (`<= 64`) bits at the start of `out` as stream bits, the last
+/// byte padded with zeros; where `out` has 8 bytes or more, all 8 (the bytes after the bits
+/// are the caller's to write next).
+#[inline(always)]
+fn store_word(out: &mut [u8], acc: u64, bits: u32) {
+    let bytes = acc.wrapping_shl(64 - bits).to_be_bytes();
+    if let Some(word) = out.first_chunk_mut::<8>() {
+        *word = bytes;
+        return;
+    }
+    // Fewer than 8 bytes: the count of bytes, each count its own stores.
+    let [b0, b1, b2, b3, b4, b5, b6, _] = bytes;
+    match (bits.div_ceil(8), out) {
+        (1, [t0, ..]) => *t0 = b0,
+        (2, [t0, t1, ..]) => [*t0, *t1] = [b0, b1],
+        (3, [t0, t1, t2, ..]) => [*t0, *t1, *t2] = [b0, b1, b2],
+        (4, [t0, t1, t2, t3, ..]) => [*t0, *t1, *t2, *t3] = [b0, b1, b2, b3],
+        (5, [t0, t1, t2, t3, t4, ..]) => [*t0, *t1, *t2, *t3, *t4] = [b0, b1, b2, b3, b4],
+        (6, [t0, t1, t2, t3, t4, t5, ..]) => {
+            [*t0, *t1, *t2, *t3, *t4, *t5] = [b0, b1, b2, b3, b4, b5];
+        }
+        (7, [t0, t1, t2, t3, t4, t5, t6, ..]) => {
+            [*t0, *t1, *t2, *t3, *t4, *t5, *t6] = [b0, b1, b2, b3, b4, b5, b6];
+        }
+        _ => {}
+    }
+}
+
+/// Bytes given as leaves into `out` (which has room for them); `None` for a leaf that is
+/// not a byte.
+#[inline(always)]
+fn copy_bytes(out: &mut [u8], elements: &[Scalar]) -> Option<()> {
+    for (byte, v) in out.iter_mut().zip(elements) {
+        match *v {
+            Scalar::Uint(b) if b <= 0xFF => *byte = b as u8,
+            _ => return None,
+        }
+    }
+    Some(())
+}
+
+/// The ending array of a small plan in the general way: `acc` holds the fixed run.
+#[inline(never)]
+fn encode_tail(
+    plan: &Straight,
+    tail: &Tail,
+    acc: u64,
+    prefix: u32,
+    elements: &[Scalar],
+    out: &mut [u8],
+    saturate: bool,
+) -> Option<()> {
+    let mut out = Out {
+        out,
+        at: 0,
+        acc,
+        pending: plan.bits,
+    };
+    out.spill();
+    if prefix != 0 {
+        out.put(elements.len() as u64, prefix);
+    }
+    if !elements.is_empty() {
+        write_elements(&mut out, &tail.elem, elements, saturate)?;
+    }
+    out.finish();
+    Some(())
+}
+
+/// [`encode`] of a plan from its leaves: the length in bytes and the leaves used.
+#[inline(never)]
 fn encode_leaves(
     plan: &Straight,
     items: &[FlatItem],
@@ -312,13 +560,11 @@ fn encode_leaves(
         pending: 0,
     };
     let saturate = options.saturate;
-    if plan.bits <= 64 {
-        // The whole run in one register, stored once below.
-        out.acc = fixed_word(items, fixed, options)?;
-        out.pending = plan.bits;
-        out.spill();
-    } else {
-        encode_run(&mut out, items, fixed, options)?;
+    // As many items as leaves and pads: the zip never stops short of a leaf item.
+    let mut values = fixed.iter();
+    for item in items {
+        let (stream, bits) = item_stream(item, &mut values, options)?;
+        out.put(stream, bits);
     }
     if let Some(tail) = &plan.tail {
         if prefix != 0 {
@@ -333,23 +579,6 @@ fn encode_leaves(
         len,
         fixed_leaves + plan.tail.map_or(0, |_| 1 + elements.len()),
     ))
-}
-
-/// A fixed run of more than 64 bits into `out`. Out of line, as [`decode_run`] is.
-#[inline(never)]
-fn encode_run(
-    out: &mut Out<'_>,
-    items: &[FlatItem],
-    fixed: &[Scalar],
-    options: EncodeOptions,
-) -> Option<()> {
-    // As many items as leaves and pads: the zip never stops short of a leaf item.
-    let mut values = fixed.iter();
-    for item in items {
-        let (stream, bits) = item_stream(item, &mut values, options)?;
-        out.put(stream, bits);
-    }
-    Some(())
 }
 
 /// The stream bits of one item of the fixed run and how many, its leaf (if it has one)
@@ -369,20 +598,6 @@ fn item_stream(
             Some((scalar::to_stream(raw, bits), bits))
         }
     }
-}
-
-/// A fixed run of at most 64 bits as one stream value (its first bit the highest of those
-/// it takes): no store until the run is whole.
-#[inline(always)]
-fn fixed_word(items: &[FlatItem], fixed: &[Scalar], options: EncodeOptions) -> Option<u64> {
-    let mut acc = 0u64;
-    let mut values = fixed.iter();
-    for item in items {
-        let (stream, bits) = item_stream(item, &mut values, options)?;
-        // A 64-bit item is the run's only one (the run fits 64 bits): nothing to shift out.
-        acc = acc.checked_shl(bits).unwrap_or(0) | stream;
-    }
-    Some(acc)
 }
 
 /// The elements of the ending array; byte strings on a byte boundary as plain bytes.
@@ -428,7 +643,6 @@ pub fn decode<R: BitRead + ?Sized, K: Sink>(
     options: DecodeOptions,
 ) -> Option<usize> {
     let plan = layout.straight.get(root as usize)?.as_ref()?;
-    let items = plan.items.of(layout.flat);
     // Payloads in pieces are the general decoder's (its reader follows the pieces).
     let data = data.contiguous()?;
     let prefix = plan.tail.map_or(0, |t| t.prefix(options.tao));
@@ -440,11 +654,10 @@ pub fn decode<R: BitRead + ?Sized, K: Sink>(
     let total = fixed_leaves + plan.tail.map_or(0, |_| 1 + n);
     let slots = sink.leaf_slots(total)?.ok()?;
     let (fixed, rest) = slots.split_at_mut_checked(fixed_leaves)?;
-    if plan.bits <= 64 {
+    match &plan.small {
         // The whole run from one load (the data holds it: measured).
-        decode_word(items, load_word(data), fixed);
-    } else {
-        decode_run(items, data, fixed);
+        Some(small) => decode_small(plan, small, layout.flat, load_word(data), fixed),
+        None => decode_run(plan.items.of(layout.flat), data, fixed),
     }
     if let (Some(tail), [len, elements @ ..]) = (&plan.tail, rest) {
         *len = Scalar::Uint(n as u64);
@@ -512,24 +725,45 @@ fn load_word(data: &[u8]) -> u64 {
     acc
 }
 
-/// Fills `slots` with the leaves of a fixed run of at most 64 bits held in `word` (its first
-/// bit the highest).
+/// Fills `slots` with the leaves of a small plan's fixed run held in `word` (its first bit
+/// the highest).
 #[inline(always)]
-fn decode_word(items: &[FlatItem], mut word: u64, slots: &mut [Scalar]) {
+fn decode_small(
+    plan: &Straight,
+    small: &Small,
+    flat: &[FlatItem],
+    mut word: u64,
+    slots: &mut [Scalar],
+) {
     let mut slots = slots.iter_mut();
-    for item in items {
-        match item {
-            FlatItem::Leaf(kind) | FlatItem::Version(kind, _) => {
-                let bits = scalar_bits(*kind);
-                // Items have 1 to 64 bits.
-                let raw = word.checked_shr(64 - bits).unwrap_or(0);
-                word = word.checked_shl(bits).unwrap_or(0);
-                if let Some(slot) = slots.next() {
-                    *slot = scalar_of(*kind, scalar::from_stream(raw, bits));
-                }
-            }
-            FlatItem::Pad(bits) => word = word.checked_shl(u32::from(*bits)).unwrap_or(0),
+    for (i, step) in small.steps.iter().take(small.count.into()).enumerate() {
+        let bits = u32::from(step.bits);
+        // Steps have 1 to 64 bits; a 64-bit one is the run's only one.
+        let raw = scalar::from_stream(word >> (64 - bits), bits);
+        word = word.wrapping_shl(bits);
+        let value = match step.op {
+            Op::Pad => continue,
+            Op::Uint => Scalar::Uint(raw),
+            Op::Int => Scalar::Int(scalar::sign_extend(raw, bits)),
+            Op::Float16 => Scalar::Float(f64::from(scalar::f32_from_f16(raw as u16))),
+            Op::Float32 => Scalar::Float(f64::from(f32::from_bits(raw as u32))),
+            Op::Float64 => Scalar::Float(f64::from_bits(raw)),
+            Op::Bool => Scalar::Bool(raw != 0),
+            Op::Item => item_of(plan, flat, i, raw),
+        };
+        if let Some(slot) = slots.next() {
+            *slot = value;
         }
+    }
+}
+
+/// The leaf of item `i` of a plan's fixed run from its raw bits, by the item's kind.
+#[cold]
+#[inline(never)]
+fn item_of(plan: &Straight, flat: &[FlatItem], i: usize, raw: u64) -> Scalar {
+    match plan.items.of(flat).get(i) {
+        Some(FlatItem::Leaf(kind) | FlatItem::Version(kind, _)) => scalar_of(*kind, raw),
+        _ => Scalar::Uint(0),
     }
 }
 
