@@ -21,7 +21,7 @@ use crate::rules::{
 use crate::scalar::{self, Scalar};
 
 pub use crate::layout::Straight;
-use crate::layout::{Op, Small, Step, Tail, SMALL_STEPS};
+use crate::layout::{Op, Order, Small, Step, Tail, SMALL_STEPS};
 
 /// The straight-line plan of `root` in `layout`, where the plan answers for it. The
 /// compiler splits a struct's fields into segments in field order (as the flat codec
@@ -93,8 +93,9 @@ pub fn compile(layout: &Layout<'_>, root: NodeId) -> Option<Straight> {
         elem: elem_node.kind,
         elem_bits,
         max,
-        len_bits: len_bits.into(),
-        tao_drops_prefix: elem_node.min_bits >= 8,
+        // Tail array optimization drops the prefix of elements of 8 bits or more.
+        prefixes: [len_bits, if elem_node.min_bits >= 8 { 0 } else { len_bits }],
+        bytes: matches!(elem_node.kind, Kind::Uint { bits: 8, .. }),
     });
     Some(plan)
 }
@@ -107,15 +108,29 @@ fn small(items: &[FlatItem], bits: u32) -> Option<Small> {
     }
     let mut small = Small {
         steps: [Step::default(); SMALL_STEPS],
-        count: items.len() as u8,
+        version: 0,
     };
+    let mut versions = 0;
     for (step, item) in small.steps.iter_mut().zip(items) {
         *step = match *item {
-            FlatItem::Pad(bits) => Step { op: Op::Pad, bits },
-            FlatItem::Version(kind, _) => Step {
-                op: Op::Item,
-                bits: scalar_bits(kind) as u8,
+            FlatItem::Pad(bits) => Step {
+                op: Op::Pad,
+                bits,
+                order: Order::Same,
             },
+            // One version that fits its field: others are the general path's.
+            FlatItem::Version(Kind::Uint { bits, .. }, version)
+                if versions == 0 && u64::from(version) <= u64::MAX >> (64 - u32::from(bits)) =>
+            {
+                versions += 1;
+                small.version = version;
+                Step {
+                    op: Op::Version,
+                    bits,
+                    order: Order::Same,
+                }
+            }
+            FlatItem::Version(..) => return None,
             FlatItem::Leaf(kind) => {
                 let op = match kind {
                     Kind::Uint { .. } => Op::Uint,
@@ -129,12 +144,18 @@ fn small(items: &[FlatItem], bits: u32) -> Option<Small> {
                 Step {
                     op,
                     bits: scalar_bits(kind) as u8,
+                    order: Order::Same,
                 }
             }
         };
         if step.bits == 0 {
             return None;
         }
+        step.order = match step.bits {
+            ..=8 => Order::Same,
+            bits if bits % 8 == 0 => Order::Bytes,
+            _ => Order::Mixed,
+        };
     }
     Some(small)
 }
@@ -345,7 +366,7 @@ pub fn encode<S: Source>(
     let plan = layout.straight.get(root as usize)?.as_ref()?;
     let leaves = source.pending_leaves()?;
     let (len, taken) = match &plan.small {
-        Some(small) => encode_small(plan, small, layout.flat, leaves, out, options)?,
+        Some(small) => encode_small(plan, small, leaves, out, options)?,
         None => encode_leaves(plan, plan.items.of(layout.flat), leaves, out, options)?,
     };
     // Take what was used, as the general path does (leaves after the value stay).
@@ -358,7 +379,6 @@ pub fn encode<S: Source>(
 fn encode_small(
     plan: &Straight,
     small: &Small,
-    flat: &[FlatItem],
     leaves: &[Scalar],
     out: &mut [u8],
     options: EncodeOptions,
@@ -366,20 +386,18 @@ fn encode_small(
     let fixed_leaves = plan.leaves as usize;
     let mut values = leaves.get(..fixed_leaves)?.iter();
     let mut acc = 0u64;
-    for (i, step) in small.steps.iter().take(small.count.into()).enumerate() {
+    let keep_versions = options.keep_versions;
+    for step in &small.steps {
         let bits = u32::from(step.bits);
+        if bits == 0 {
+            break;
+        }
         let raw = match step.op {
             Op::Pad => 0,
-            op => {
-                let value = *values.next()?;
-                match step_raw(op, bits, value) {
-                    Some(raw) => raw,
-                    None => item_raw(plan, flat, i, value, options)?,
-                }
-            }
+            op => step_raw(op, bits, values.next()?, small.version, keep_versions)?,
         };
         // A 64-bit step is the run's only one: nothing to shift out.
-        acc = acc.wrapping_shl(bits) | scalar::to_stream(raw, bits);
+        acc = acc.wrapping_shl(bits) | to_stream(raw, bits, step.order);
     }
     let Some(tail) = &plan.tail else {
         let len = (plan.bits as usize).div_ceil(8);
@@ -395,14 +413,16 @@ fn encode_small(
     let head = plan.bits + prefix;
     let len = (head as usize + n * tail.elem_bits as usize).div_ceil(8);
     let out = out.get_mut(..len)?;
-    let bytes = matches!(tail.elem, Kind::Uint { bits: 8, .. }) && head % 8 == 0;
+    let bytes = tail.bytes && head % 8 == 0;
     if head <= 64 && (n == 0 || bytes) {
         // The run and the length in one store, then the bytes.
         if prefix != 0 {
             acc = (acc << prefix) | n as u64;
         }
         store_word(out, acc, head);
-        copy_bytes(out.get_mut(head as usize / 8..)?, elements)?;
+        if n != 0 {
+            copy_bytes(out.get_mut(head as usize / 8..)?, elements)?;
+        }
     } else {
         encode_tail(plan, tail, acc, prefix, elements, out, options.saturate)?;
     }
@@ -410,78 +430,90 @@ fn encode_small(
 }
 
 /// The raw bits of a leaf for a [`Step`] of `bits` bits where they need no casting rules;
-/// `None` where the step's item in the layout decides ([`item_raw`]).
+/// `None` for the others (the general path casts, or words why not).
 #[inline(always)]
-fn step_raw(op: Op, bits: u32, value: Scalar) -> Option<u64> {
+fn step_raw(op: Op, bits: u32, value: &Scalar, version: u32, keep_versions: bool) -> Option<u64> {
     // The common cases without the casting rules, as in `raw_of`.
-    match (op, value) {
+    match (op, *value) {
         (Op::Uint, Scalar::Uint(v)) if v <= u64::MAX >> (64 - bits) => Some(v),
         (Op::Int, Scalar::Int(v)) if scalar::sign_extend(v as u64, bits) == v => {
             Some(v as u64 & (u64::MAX >> (64 - bits)))
         }
         (Op::Bool, Scalar::Bool(b)) => Some(u64::from(b)),
         (Op::Float16 | Op::Float32 | Op::Float64, Scalar::Float(v)) => float_raw(op, v),
+        (Op::Version, value) => version_step(bits, value, version, keep_versions),
         _ => None,
     }
 }
 
-/// [`step_raw`] of a float in range (out of line: most small types have none, and their
-/// constants would load on every call).
+/// [`scalar::to_stream`] for a step whose byte order is known.
+#[inline(always)]
+fn to_stream(raw: u64, bits: u32, order: Order) -> u64 {
+    match order {
+        Order::Same => raw,
+        // 8 to 64 bits: the shift is at most 56.
+        Order::Bytes => raw.swap_bytes() >> (64 - bits),
+        Order::Mixed => scalar::to_stream(raw, bits),
+    }
+}
+
+/// [`scalar::from_stream`] for a step whose byte order is known.
+#[inline(always)]
+fn from_stream(stream: u64, bits: u32, order: Order) -> u64 {
+    match order {
+        Order::Same => stream,
+        Order::Bytes => (stream << (64 - bits)).swap_bytes(),
+        Order::Mixed => scalar::from_stream(stream, bits),
+    }
+}
+
+/// [`step_raw`] of a float that needs no cast: in range, infinite or NaN (out of line: most
+/// small types have none, and their constants would load on every call). A finite value
+/// out of range is the casting rules'.
 #[inline(never)]
 fn float_raw(op: Op, v: f64) -> Option<u64> {
     match op {
-        Op::Float16 if v.abs() <= scalar::FLOAT16_MAX => {
+        Op::Float16 if v.abs() <= scalar::FLOAT16_MAX || !v.is_finite() => {
             Some(u64::from(scalar::f16_from_f32(v as f32)))
         }
-        Op::Float32 if v.abs() <= f64::from(f32::MAX) => Some(u64::from((v as f32).to_bits())),
+        Op::Float32 if v.abs() <= f64::from(f32::MAX) || !v.is_finite() => {
+            Some(u64::from((v as f32).to_bits()))
+        }
         Op::Float64 => Some(v.to_bits()),
         _ => None,
     }
 }
 
-/// The raw bits of a leaf for item `i` of a plan's fixed run by the item itself: the
-/// casting rules, the version rule.
+/// [`step_raw`] of a `p_version` field: the type's version (which fits the field) where the
+/// value is it, or the value kept as given where it fits.
 #[cold]
 #[inline(never)]
-fn item_raw(
-    plan: &Straight,
-    flat: &[FlatItem],
-    i: usize,
-    value: Scalar,
-    options: EncodeOptions,
-) -> Option<u64> {
-    match *plan.items.of(flat).get(i)? {
-        FlatItem::Leaf(kind) => cast(kind, value, options.saturate),
-        FlatItem::Version(kind, version) => version_raw(kind, value, version, options),
-        FlatItem::Pad(_) => None,
+fn version_step(bits: u32, value: Scalar, version: u32, keep_versions: bool) -> Option<u64> {
+    match value {
+        Scalar::Uint(v) if keep_versions => (v <= u64::MAX >> (64 - bits)).then_some(v),
+        _ if keep_versions => None,
+        _ => scalar::same_integer(value, version).then_some(version.into()),
     }
 }
 
-/// Stores `acc`'s low `bits` (`<= 64`) bits at the start of `out` as stream bits, the last
-/// byte padded with zeros; where `out` has 8 bytes or more, all 8 (the bytes after the bits
-/// are the caller's to write next).
+/// Stores `acc`'s low `bits` (`<= 64`) bits at the start of `out` as stream bits, zeros
+/// after them, filling `out` up to its 8th byte (which the bits need, or which the caller
+/// writes next): one to four stores, without a count of bytes.
 #[inline(always)]
 fn store_word(out: &mut [u8], acc: u64, bits: u32) {
     let bytes = acc.wrapping_shl(64 - bits).to_be_bytes();
+    let n = out.len();
     if let Some(word) = out.first_chunk_mut::<8>() {
         *word = bytes;
-        return;
-    }
-    // Fewer than 8 bytes: the count of bytes, each count its own stores.
-    let [b0, b1, b2, b3, b4, b5, b6, _] = bytes;
-    match (bits.div_ceil(8), out) {
-        (1, [t0, ..]) => *t0 = b0,
-        (2, [t0, t1, ..]) => [*t0, *t1] = [b0, b1],
-        (3, [t0, t1, t2, ..]) => [*t0, *t1, *t2] = [b0, b1, b2],
-        (4, [t0, t1, t2, t3, ..]) => [*t0, *t1, *t2, *t3] = [b0, b1, b2, b3],
-        (5, [t0, t1, t2, t3, t4, ..]) => [*t0, *t1, *t2, *t3, *t4] = [b0, b1, b2, b3, b4],
-        (6, [t0, t1, t2, t3, t4, t5, ..]) => {
-            [*t0, *t1, *t2, *t3, *t4, *t5] = [b0, b1, b2, b3, b4, b5];
-        }
-        (7, [t0, t1, t2, t3, t4, t5, t6, ..]) => {
-            [*t0, *t1, *t2, *t3, *t4, *t5, *t6] = [b0, b1, b2, b3, b4, b5, b6];
-        }
-        _ => {}
+    } else if n >= 4 {
+        // 4 to 7 bytes: the first four and the last four (overlapping).
+        out[..4].copy_from_slice(&bytes[..4]);
+        out[n - 4..].copy_from_slice(&bytes[n - 4..n]);
+    } else if n >= 2 {
+        out[..2].copy_from_slice(&bytes[..2]);
+        out[n - 2..].copy_from_slice(&bytes[n - 2..n]);
+    } else if let Some(first) = out.first_mut() {
+        *first = bytes[0];
     }
 }
 
@@ -656,7 +688,7 @@ pub fn decode<R: BitRead + ?Sized, K: Sink>(
     let (fixed, rest) = slots.split_at_mut_checked(fixed_leaves)?;
     match &plan.small {
         // The whole run from one load (the data holds it: measured).
-        Some(small) => decode_small(plan, small, layout.flat, load_word(data), fixed),
+        Some(small) => decode_small(small, load_word(data), fixed),
         None => decode_run(plan.items.of(layout.flat), data, fixed),
     }
     if let (Some(tail), [len, elements @ ..]) = (&plan.tail, rest) {
@@ -728,42 +760,28 @@ fn load_word(data: &[u8]) -> u64 {
 /// Fills `slots` with the leaves of a small plan's fixed run held in `word` (its first bit
 /// the highest).
 #[inline(always)]
-fn decode_small(
-    plan: &Straight,
-    small: &Small,
-    flat: &[FlatItem],
-    mut word: u64,
-    slots: &mut [Scalar],
-) {
+fn decode_small(small: &Small, mut word: u64, slots: &mut [Scalar]) {
     let mut slots = slots.iter_mut();
-    for (i, step) in small.steps.iter().take(small.count.into()).enumerate() {
+    for step in &small.steps {
         let bits = u32::from(step.bits);
+        if bits == 0 {
+            break;
+        }
         // Steps have 1 to 64 bits; a 64-bit one is the run's only one.
-        let raw = scalar::from_stream(word >> (64 - bits), bits);
+        let raw = from_stream(word >> (64 - bits), bits, step.order);
         word = word.wrapping_shl(bits);
         let value = match step.op {
             Op::Pad => continue,
-            Op::Uint => Scalar::Uint(raw),
+            Op::Uint | Op::Version => Scalar::Uint(raw),
             Op::Int => Scalar::Int(scalar::sign_extend(raw, bits)),
             Op::Float16 => Scalar::Float(f64::from(scalar::f32_from_f16(raw as u16))),
             Op::Float32 => Scalar::Float(f64::from(f32::from_bits(raw as u32))),
             Op::Float64 => Scalar::Float(f64::from_bits(raw)),
             Op::Bool => Scalar::Bool(raw != 0),
-            Op::Item => item_of(plan, flat, i, raw),
         };
         if let Some(slot) = slots.next() {
             *slot = value;
         }
-    }
-}
-
-/// The leaf of item `i` of a plan's fixed run from its raw bits, by the item's kind.
-#[cold]
-#[inline(never)]
-fn item_of(plan: &Straight, flat: &[FlatItem], i: usize, raw: u64) -> Scalar {
-    match plan.items.of(flat).get(i) {
-        Some(FlatItem::Leaf(kind) | FlatItem::Version(kind, _)) => scalar_of(*kind, raw),
-        _ => Scalar::Uint(0),
     }
 }
 
