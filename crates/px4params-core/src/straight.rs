@@ -413,8 +413,7 @@ fn encode_small(
     let head = plan.bits + prefix;
     let len = (head as usize + n * tail.elem_bits as usize).div_ceil(8);
     let out = out.get_mut(..len)?;
-    let bytes = tail.bytes && head % 8 == 0;
-    if head <= 64 && (n == 0 || bytes) {
+    if head <= 64 && (n == 0 || (tail.bytes && head % 8 == 0)) {
         // The run and the length in one store, then the bytes.
         if prefix != 0 {
             acc = (acc << prefix) | n as u64;
@@ -511,7 +510,9 @@ fn store_word(out: &mut [u8], acc: u64, bits: u32) {
         out[n - 4..].copy_from_slice(&bytes[n - 4..n]);
     } else if n >= 2 {
         out[..2].copy_from_slice(&bytes[..2]);
-        out[n - 2..].copy_from_slice(&bytes[n - 2..n]);
+        if let Some(third) = out.get_mut(2) {
+            *third = bytes[2];
+        }
     } else if let Some(first) = out.first_mut() {
         *first = bytes[0];
     }
