@@ -415,12 +415,16 @@ impl<S: Source> Encoder<'_, '_, S> {
         let present = self.source.field(index, layout.name(&field));
         let used = if self.value(present)? {
             let kind = layout.node(field.node).kind;
-            if field.role == Role::Data && is_scalar(kind) {
+            // A field one past the bound: `node` refuses it, as the walk does.
+            let deep = self.depth >= MAX_DEPTH;
+            if field.role == Role::Data && is_scalar(kind) && !deep {
                 // Primitive fields are the common case: no recursion.
                 let v = self.source.scalar(kind);
                 let v = self.value(v)?;
                 self.scalar(kind, v)?;
-            } else if let (Role::Version(version), false) = (field.role, self.keep_versions) {
+            } else if let (Role::Version(version), false, false) =
+                (field.role, self.keep_versions, deep)
+            {
                 let given = self.source.scalar(kind);
                 let given = self.value(given)?;
                 if !scalar::same_integer(given, version) {
@@ -468,11 +472,18 @@ impl<S: Source> Encoder<'_, '_, S> {
                     fields,
                     items,
                     leaves,
+                    height,
                     ..
                 } => {
                     let saturate = self.saturate;
                     let keep = self.keep_versions;
-                    let outcome = match self.source.leaf_run(leaves as usize) {
+                    // Deeper than the walk follows: field by field, which refuses the type.
+                    let run = if self.depth + height as usize > MAX_DEPTH {
+                        None
+                    } else {
+                        self.source.leaf_run(leaves as usize)
+                    };
+                    let outcome = match run {
                         Some(Ok(run)) => {
                             encode_items(&mut self.out, items.of(layout.flat), run, saturate, keep)
                         }
@@ -956,7 +967,8 @@ impl<'d, R: BitRead + ?Sized + 'd, K: Sink> Decoder<'_, 'd, R, K> {
         self.sunk(r)?;
         self.path.push(Step::Field(index));
         let kind = layout.node(field.node).kind;
-        if is_scalar(kind) {
+        // A field one past the bound goes to `node`, which refuses it as the walk does.
+        if is_scalar(kind) && self.depth < MAX_DEPTH {
             // Primitive fields are the common case: no recursion.
             self.leaf(kind)?;
         } else {
@@ -976,10 +988,13 @@ impl<'d, R: BitRead + ?Sized + 'd, K: Sink> Decoder<'_, 'd, R, K> {
                     items,
                     leaves,
                     bits,
+                    height,
                 } => {
                     // Enough data for the whole run means no read inside it can fail; if
-                    // not, the field-by-field walk finds where exactly it ends.
-                    let fits = bits as usize <= self.remaining();
+                    // not, the field-by-field walk finds where exactly it ends (and refuses a
+                    // run deeper than the walk follows).
+                    let fits = bits as usize <= self.remaining()
+                        && self.depth + height as usize <= MAX_DEPTH;
                     let slots = if fits {
                         self.sink.leaf_slots(leaves as usize)
                     } else {

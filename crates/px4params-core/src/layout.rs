@@ -123,6 +123,11 @@ pub enum Segment {
         leaves: u32,
         /// Total bit length.
         bits: u32,
+        /// The nesting the run covers: the most nodes from one of its fields down to a
+        /// primitive (1 for a primitive field). A plan that steps over the run declines where
+        /// the struct's depth plus this passes [`crate::rules::MAX_DEPTH`], as the walk
+        /// refuses such a type.
+        height: u32,
     },
     /// A field containing a union or a dynamic array: its index in [`Layout::fields`].
     Field(u32),

@@ -16,7 +16,7 @@
 use crate::bits::{self, BitRead, BitReader};
 use crate::layout::{FlatItem, Kind, Layout, NodeId, Role, Segment, Span};
 use crate::rules::{
-    scalar_bits, scalar_of, scalar_raw, DecodeOptions, EncodeOptions, Sink, Source,
+    scalar_bits, scalar_of, scalar_raw, DecodeOptions, EncodeOptions, Sink, Source, MAX_DEPTH,
 };
 use crate::scalar::{self, Scalar};
 
@@ -44,9 +44,14 @@ pub fn compile(layout: &Layout<'_>, root: NodeId) -> Option<Straight> {
             items,
             leaves,
             bits,
+            height,
             ..
         }, rest @ ..] => {
-            if items.of(layout.flat).len() != items.count as usize {
+            // The root is at depth 1: a run deeper than the walk follows is the walk's to
+            // refuse.
+            if items.of(layout.flat).len() != items.count as usize
+                || 1 + *height as usize > MAX_DEPTH
+            {
                 return None;
             }
             plan.items = *items;
