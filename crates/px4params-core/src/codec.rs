@@ -21,6 +21,9 @@ use crate::{straight, walk};
 /// Encodes the value of type `root` from `source` into `out`; returns the length in bytes.
 ///
 /// `out` needs [`Layout::max_bytes`] bytes at most; only the bytes returned are written.
+// Inlined into the caller, so that a small value the straight plan answers costs no second
+// call and no frame of the general encoder.
+#[inline(always)]
 pub fn encode<S: Source>(
     layout: &Layout<'_>,
     root: NodeId,
@@ -33,6 +36,18 @@ pub fn encode<S: Source>(
             return Ok(len);
         }
     }
+    encode_general(layout, root, source, out, options)
+}
+
+/// [`encode`] by the general encoder.
+#[inline(never)]
+fn encode_general<S: Source>(
+    layout: &Layout<'_>,
+    root: NodeId,
+    source: &mut S,
+    out: &mut [u8],
+    options: EncodeOptions,
+) -> Result<usize, Error<S::Error>> {
     let mut enc = Encoder {
         layout,
         out: BitWriter::new(out),
@@ -55,6 +70,8 @@ pub fn encode<S: Source>(
 }
 
 /// Decodes a value of type `root` from `data` into `sink`; returns the bits used.
+// Inlined into the caller, as `encode` is.
+#[inline(always)]
 pub fn decode<R: BitRead + ?Sized, K: Sink>(
     layout: &Layout<'_>,
     root: NodeId,
@@ -67,6 +84,18 @@ pub fn decode<R: BitRead + ?Sized, K: Sink>(
             return Ok(bits);
         }
     }
+    decode_general(layout, root, data, sink, options)
+}
+
+/// [`decode`] by the general decoder.
+#[inline(never)]
+fn decode_general<R: BitRead + ?Sized, K: Sink>(
+    layout: &Layout<'_>,
+    root: NodeId,
+    data: &R,
+    sink: &mut K,
+    options: DecodeOptions,
+) -> Result<usize, Error<K::Error>> {
     let mut dec: Decoder<'_, '_, R, K> = Decoder {
         layout,
         reader: data.reader(0),
@@ -386,12 +415,16 @@ impl<S: Source> Encoder<'_, '_, S> {
         let present = self.source.field(index, layout.name(&field));
         let used = if self.value(present)? {
             let kind = layout.node(field.node).kind;
-            if field.role == Role::Data && is_scalar(kind) {
+            // A field one past the bound: `node` refuses it, as the walk does.
+            let deep = self.depth >= MAX_DEPTH;
+            if field.role == Role::Data && is_scalar(kind) && !deep {
                 // Primitive fields are the common case: no recursion.
                 let v = self.source.scalar(kind);
                 let v = self.value(v)?;
                 self.scalar(kind, v)?;
-            } else if let (Role::Version(version), false) = (field.role, self.keep_versions) {
+            } else if let (Role::Version(version), false, false) =
+                (field.role, self.keep_versions, deep)
+            {
                 let given = self.source.scalar(kind);
                 let given = self.value(given)?;
                 if !scalar::same_integer(given, version) {
@@ -439,11 +472,18 @@ impl<S: Source> Encoder<'_, '_, S> {
                     fields,
                     items,
                     leaves,
+                    height,
                     ..
                 } => {
                     let saturate = self.saturate;
                     let keep = self.keep_versions;
-                    let outcome = match self.source.leaf_run(leaves as usize) {
+                    // Deeper than the walk follows: field by field, which refuses the type.
+                    let run = if self.depth + height as usize > MAX_DEPTH {
+                        None
+                    } else {
+                        self.source.leaf_run(leaves as usize)
+                    };
+                    let outcome = match run {
                         Some(Ok(run)) => {
                             encode_items(&mut self.out, items.of(layout.flat), run, saturate, keep)
                         }
@@ -927,7 +967,8 @@ impl<'d, R: BitRead + ?Sized + 'd, K: Sink> Decoder<'_, 'd, R, K> {
         self.sunk(r)?;
         self.path.push(Step::Field(index));
         let kind = layout.node(field.node).kind;
-        if is_scalar(kind) {
+        // A field one past the bound goes to `node`, which refuses it as the walk does.
+        if is_scalar(kind) && self.depth < MAX_DEPTH {
             // Primitive fields are the common case: no recursion.
             self.leaf(kind)?;
         } else {
@@ -947,10 +988,13 @@ impl<'d, R: BitRead + ?Sized + 'd, K: Sink> Decoder<'_, 'd, R, K> {
                     items,
                     leaves,
                     bits,
+                    height,
                 } => {
                     // Enough data for the whole run means no read inside it can fail; if
-                    // not, the field-by-field walk finds where exactly it ends.
-                    let fits = bits as usize <= self.remaining();
+                    // not, the field-by-field walk finds where exactly it ends (and refuses a
+                    // run deeper than the walk follows).
+                    let fits = bits as usize <= self.remaining()
+                        && self.depth + height as usize <= MAX_DEPTH;
                     let slots = if fits {
                         self.sink.leaf_slots(leaves as usize)
                     } else {

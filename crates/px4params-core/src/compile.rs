@@ -47,6 +47,9 @@ pub struct OwnedLayout {
     flat: Vec<FlatItem>,
     /// By node: the straight-line plan compiled for it ([`crate::straight::compile`]).
     straight: Vec<Option<crate::straight::Straight>>,
+    /// By node: the most nodes from it down to a primitive (1 for a primitive), for the
+    /// height of flat segments.
+    heights: Vec<u32>,
 }
 
 impl OwnedLayout {
@@ -240,13 +243,14 @@ impl OwnedLayout {
             }
             let run_first = i;
             let items_first = self.flat.len() as u32;
-            let (mut leaves, mut bits) = (0u32, 0u64);
+            let (mut leaves, mut bits, mut height) = (0u32, 0u64, 0u32);
             while i < first + count {
                 let f = self.fields[i as usize];
                 let node = self.nodes[f.node as usize];
                 let Some(n) = node.fixed_leaves() else { break };
                 leaves += n;
                 bits += node.min_bits;
+                height = height.max(self.heights[f.node as usize]);
                 match f.role {
                     Role::Version(v) => self.flat.push(FlatItem::Version(node.kind, v)),
                     _ => self.flatten(f.node),
@@ -264,6 +268,7 @@ impl OwnedLayout {
                 },
                 leaves,
                 bits: u32::try_from(bits).unwrap_or(u32::MAX),
+                height,
             });
         }
         Span {
@@ -307,6 +312,18 @@ impl OwnedLayout {
     }
 
     fn push(&mut self, node: Node) -> NodeId {
+        // Below the node: its members' or elements' heights (those nodes exist already).
+        let below = match node.kind {
+            Kind::Struct { first, count } | Kind::Union { first, count, .. } => self.fields
+                [first as usize..(first + count) as usize]
+                .iter()
+                .map(|f| self.heights[f.node as usize])
+                .max()
+                .unwrap_or(0),
+            Kind::Array { elem, .. } | Kind::DynArray { elem, .. } => self.heights[elem as usize],
+            _ => 0,
+        };
+        self.heights.push(below.saturating_add(1));
         self.nodes.push(node);
         self.straight.push(None);
         (self.nodes.len() - 1) as NodeId

@@ -123,6 +123,11 @@ pub enum Segment {
         leaves: u32,
         /// Total bit length.
         bits: u32,
+        /// The nesting the run covers: the most nodes from one of its fields down to a
+        /// primitive (1 for a primitive field). A plan that steps over the run declines where
+        /// the struct's depth plus this passes [`crate::rules::MAX_DEPTH`], as the walk
+        /// refuses such a type.
+        height: u32,
     },
     /// A field containing a union or a dynamic array: its index in [`Layout::fields`].
     Field(u32),
@@ -288,22 +293,19 @@ pub(crate) struct Tail {
     pub(crate) elem_bits: u32,
     /// Largest length.
     pub(crate) max: u32,
-    /// Width of the length prefix.
-    pub(crate) len_bits: u32,
-    /// Whether tail array optimization drops the prefix (elements of 8 bits or more): the
-    /// array then takes the remaining whole bytes.
-    pub(crate) tao_drops_prefix: bool,
+    /// Bits of the length prefix as encoded without and with tail array optimization (which
+    /// drops it for elements of 8 bits or more: the array then takes the remaining whole
+    /// bytes).
+    pub(crate) prefixes: [u8; 2],
+    /// Whether the elements are bytes (`uint8`).
+    pub(crate) bytes: bool,
 }
 
 impl Tail {
     /// Bits of the length prefix as encoded with or without tail array optimization.
     #[inline(always)]
     pub(crate) fn prefix(&self, tao: bool) -> u32 {
-        if tao && self.tao_drops_prefix {
-            0
-        } else {
-            self.len_bits
-        }
+        self.prefixes[usize::from(tao)].into()
     }
 }
 
@@ -321,4 +323,59 @@ pub struct Straight {
     /// Bits of the fixed run.
     pub(crate) bits: u32,
     pub(crate) tail: Option<Tail>,
+    /// The fixed run as steps, where it fits one 64-bit register and [`SMALL_STEPS`] steps.
+    pub(crate) small: Option<Small>,
+}
+
+/// Most items of a fixed run that a [`Small`] plan holds.
+pub(crate) const SMALL_STEPS: usize = 8;
+
+/// A fixed run of at most 64 bits as steps held in the plan itself: what a small value
+/// costs is the steps, without a look into [`Layout::flat`] or a match on [`Kind`] per item.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct Small {
+    /// The steps, then steps of 0 bits.
+    pub(crate) steps: [Step; SMALL_STEPS],
+    /// The type's version, for its [`Op::Version`] step (at most one).
+    pub(crate) version: u32,
+}
+
+/// One item of a [`Small`] plan: what it is, its width in bits (`1..=64`; 0 ends the
+/// steps) and how its bytes are ordered in the stream.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) struct Step {
+    pub(crate) op: Op,
+    pub(crate) bits: u8,
+    pub(crate) order: Order,
+}
+
+/// How a value's bits become stream bits ([`crate::scalar::to_stream`]), known per step.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[repr(u8)]
+pub(crate) enum Order {
+    /// At most 8 bits: as they are.
+    #[default]
+    Same,
+    /// Whole bytes: the bytes reversed.
+    Bytes,
+    /// Whole bytes and some bits more: the general rule.
+    Mixed,
+}
+
+/// What a [`Step`] is.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[repr(u8)]
+pub(crate) enum Op {
+    /// Padding: zeros, no leaf.
+    #[default]
+    Pad,
+    Uint,
+    Int,
+    Float16,
+    Float32,
+    Float64,
+    Bool,
+    /// A `p_version` field (an unsigned integer): the type's version unless versions are kept
+    /// as given.
+    Version,
 }

@@ -298,31 +298,69 @@ impl StoreError {
 
 impl<E: fmt::Display> StoreError<E> {
     /// Formats the error as one line (without the instance's name, which the caller knows),
-    /// with field names from `layout`.
+    /// with field names from `layout`; a parameter by its number (`parameter #3`).
     pub fn display<'a>(&'a self, layout: &'a Layout<'a>) -> impl fmt::Display + 'a {
+        StoreErrorDisplay::<E, &str> {
+            error: self,
+            layout,
+            names: &[],
+        }
+    }
+
+    /// [`StoreError::display`] for a caller that knows parameters by name: parameter `i` is
+    /// called `names[i]` (`parameter INA238`), by its number where `names` lacks it.
+    pub fn display_named<'a, N: AsRef<str>>(
+        &'a self,
+        layout: &'a Layout<'a>,
+        names: &'a [N],
+    ) -> impl fmt::Display + 'a {
         StoreErrorDisplay {
             error: self,
             layout,
+            names,
         }
     }
 }
 
-struct StoreErrorDisplay<'a, E> {
+struct StoreErrorDisplay<'a, E, N> {
     error: &'a StoreError<E>,
     layout: &'a Layout<'a>,
+    /// The parameters' names, by number (none: parameters by number).
+    names: &'a [N],
 }
 
-impl<E: fmt::Display> fmt::Display for StoreErrorDisplay<'_, E> {
+/// A parameter in an error: by its name where there is one, else by its number.
+struct Param<'a> {
+    param: u32,
+    name: Option<&'a str>,
+}
+
+impl fmt::Display for Param<'_> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.name {
+            Some(name) => f.write_str(name),
+            None => write!(f, "#{}", self.param),
+        }
+    }
+}
+
+impl<E: fmt::Display, N: AsRef<str>> fmt::Display for StoreErrorDisplay<'_, E, N> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let param = |param: &u32| Param {
+            param: *param,
+            name: self.names.get(*param as usize).map(AsRef::as_ref),
+        };
         match self.error {
-            StoreError::NoSuchParam { param } => write!(f, "no parameter #{param}"),
-            StoreError::NotPlanned { param } => write!(
+            StoreError::NoSuchParam { param: p } => write!(f, "no parameter {}", param(p)),
+            StoreError::NotPlanned { param: p } => write!(
                 f,
-                "parameter #{param} is not laid out as plan() lays it out"
+                "parameter {} is not laid out as plan() lays it out",
+                param(p)
             ),
-            StoreError::Unsupported { param } => write!(
+            StoreError::Unsupported { param: p } => write!(
                 f,
-                "parameter #{param} cannot be stored (no slot, or a value over 65535 bytes)"
+                "parameter {} cannot be stored (no slot, or a value over 65535 bytes)",
+                param(p)
             ),
             StoreError::InstanceOutOfRange {
                 instance,

@@ -16,12 +16,12 @@
 use crate::bits::{self, BitRead, BitReader};
 use crate::layout::{FlatItem, Kind, Layout, NodeId, Role, Segment, Span};
 use crate::rules::{
-    scalar_bits, scalar_of, scalar_raw, DecodeOptions, EncodeOptions, Sink, Source,
+    scalar_bits, scalar_of, scalar_raw, DecodeOptions, EncodeOptions, Sink, Source, MAX_DEPTH,
 };
 use crate::scalar::{self, Scalar};
 
 pub use crate::layout::Straight;
-use crate::layout::Tail;
+use crate::layout::{Op, Order, Small, Step, Tail, SMALL_STEPS};
 
 /// The straight-line plan of `root` in `layout`, where the plan answers for it. The
 /// compiler splits a struct's fields into segments in field order (as the flat codec
@@ -37,27 +37,37 @@ pub fn compile(layout: &Layout<'_>, root: NodeId) -> Option<Straight> {
         leaves: 0,
         bits: 0,
         tail: None,
+        small: None,
     };
     let last = match node.segments.of(layout.segments) {
         [Segment::Flat {
             items,
             leaves,
             bits,
+            height,
             ..
         }, rest @ ..] => {
-            if items.of(layout.flat).len() != items.count as usize {
+            // The root is at depth 1: a run deeper than the walk follows is the walk's to
+            // refuse.
+            if items.of(layout.flat).len() != items.count as usize
+                || 1 + *height as usize > MAX_DEPTH
+            {
                 return None;
             }
             plan.items = *items;
             plan.leaves = *leaves;
             plan.bits = *bits;
+            plan.small = small(items.of(layout.flat), *bits);
             match rest {
                 [] => return Some(plan),
                 [Segment::Field(i)] => *i,
                 _ => return None,
             }
         }
-        [Segment::Field(i)] => *i,
+        [Segment::Field(i)] => {
+            plan.small = small(&[], 0);
+            *i
+        }
         [] => return Some(plan),
         _ => return None,
     };
@@ -88,45 +98,125 @@ pub fn compile(layout: &Layout<'_>, root: NodeId) -> Option<Straight> {
         elem: elem_node.kind,
         elem_bits,
         max,
-        len_bits: len_bits.into(),
-        tao_drops_prefix: elem_node.min_bits >= 8,
+        // Tail array optimization drops the prefix of elements of 8 bits or more.
+        prefixes: [len_bits, if elem_node.min_bits >= 8 { 0 } else { len_bits }],
+        bytes: matches!(elem_node.kind, Kind::Uint { bits: 8, .. }),
     });
     Some(plan)
 }
 
-/// A type the plan answers for, as one call runs it: its compiled plan with the items
-/// borrowed and the prefix known.
-#[derive(Clone, Copy, Debug)]
-struct Shape<'l> {
-    items: &'l [FlatItem],
-    leaves: usize,
-    bits: usize,
-    tail: Option<Tail>,
-    /// Bits of the array's length prefix as encoded (0 with tail array optimization).
-    prefix: u32,
+/// The steps of a fixed run of `bits` bits, where it has at most [`SMALL_STEPS`] items and
+/// 64 bits.
+fn small(items: &[FlatItem], bits: u32) -> Option<Small> {
+    if bits > 64 || items.len() > SMALL_STEPS {
+        return None;
+    }
+    let mut small = Small {
+        steps: [Step::default(); SMALL_STEPS],
+        version: 0,
+    };
+    let mut versions = 0;
+    for (step, item) in small.steps.iter_mut().zip(items) {
+        *step = match *item {
+            FlatItem::Pad(bits) => Step {
+                op: Op::Pad,
+                bits,
+                order: Order::Same,
+            },
+            // One version that fits its field: others are the general path's.
+            FlatItem::Version(Kind::Uint { bits, .. }, version)
+                if versions == 0 && u64::from(version) <= u64::MAX >> (64 - u32::from(bits)) =>
+            {
+                versions += 1;
+                small.version = version;
+                Step {
+                    op: Op::Version,
+                    bits,
+                    order: Order::Same,
+                }
+            }
+            FlatItem::Version(..) => return None,
+            FlatItem::Leaf(kind) => {
+                let op = match kind {
+                    Kind::Uint { .. } => Op::Uint,
+                    Kind::Int { .. } => Op::Int,
+                    Kind::Float { bits: 16, .. } => Op::Float16,
+                    Kind::Float { bits: 32, .. } => Op::Float32,
+                    Kind::Float { .. } => Op::Float64,
+                    Kind::Bool => Op::Bool,
+                    _ => return None,
+                };
+                Step {
+                    op,
+                    bits: scalar_bits(kind) as u8,
+                    order: Order::Same,
+                }
+            }
+        };
+        if step.bits == 0 {
+            return None;
+        }
+        step.order = match step.bits {
+            ..=8 => Order::Same,
+            bits if bits % 8 == 0 => Order::Bytes,
+            _ => Order::Mixed,
+        };
+    }
+    Some(small)
 }
 
-impl<'l> Shape<'l> {
-    /// The plan of `root`, chosen by its index (no search): `None` where it has none.
-    #[inline(always)]
-    fn of(layout: &Layout<'l>, root: NodeId, tao: bool) -> Option<Self> {
-        let plan = layout.straight.get(root as usize)?.as_ref()?;
-        Some(Shape {
-            items: plan.items.of(layout.flat),
-            leaves: plan.leaves as usize,
-            bits: plan.bits as usize,
-            tail: plan.tail,
-            prefix: plan.tail.map_or(0, |t| t.prefix(tao)),
-        })
+/// The raw bits of `value` for a primitive `kind` (in the kind's width); `None` where the
+/// general path has something to say (out of range, wrong kind, a rejected cast).
+#[inline(always)]
+fn raw_of(kind: &Kind, value: &Scalar, saturate: bool) -> Option<u64> {
+    // The common cases without the casting rules: an integer in range, a float that is finite
+    // and in range (NaN compares false and takes the general rules, as do infinities).
+    match (kind, value) {
+        (&Kind::Uint { bits, .. }, &Scalar::Uint(v)) if v <= u64::MAX >> (64 - u32::from(bits)) => {
+            Some(v)
+        }
+        (&Kind::Int { bits, .. }, &Scalar::Int(v))
+            if scalar::sign_extend(v as u64, bits.into()) == v =>
+        {
+            Some(v as u64 & (u64::MAX >> (64 - u32::from(bits))))
+        }
+        (&Kind::Float { bits: 16, .. }, &Scalar::Float(v)) if v.abs() <= scalar::FLOAT16_MAX => {
+            Some(u64::from(scalar::f16_from_f32(v as f32)))
+        }
+        (&Kind::Float { bits: 32, .. }, &Scalar::Float(v)) if v.abs() <= f64::from(f32::MAX) => {
+            Some(u64::from((v as f32).to_bits()))
+        }
+        (&Kind::Bool, &Scalar::Bool(b)) => Some(u64::from(b)),
+        _ => cast(*kind, *value, saturate),
+    }
+}
+
+/// [`raw_of`] by the casting rules (saturation, truncation, the other kinds of value).
+#[cold]
+#[inline(never)]
+fn cast(kind: Kind, value: Scalar, saturate: bool) -> Option<u64> {
+    scalar_raw(kind, value, saturate).ok()
+}
+
+/// A `p_version` leaf's raw bits: the type's own version unless versions are kept as given
+/// (the general path words a mismatch).
+#[cold]
+#[inline(never)]
+fn version_raw(kind: Kind, value: Scalar, version: u32, options: EncodeOptions) -> Option<u64> {
+    if options.keep_versions {
+        raw_of(&kind, &value, options.saturate)
+    } else if scalar::same_integer(value, version) {
+        raw_of(&kind, &Scalar::Uint(version.into()), false)
+    } else {
+        None
     }
 }
 
 /// The bits of `value` for a primitive `kind` in stream order, and how many; `None` where
-/// the general path has something to say (out of range, wrong kind, a rejected cast).
+/// the general path has something to say (out of range, wrong kind, a rejected cast). Each
+/// kind's own width, so that the byte order's shifts are constants.
 #[inline(always)]
 fn stream_of(kind: &Kind, value: &Scalar, saturate: bool) -> Option<(u64, u32)> {
-    // The common cases without the casting rules: an integer in range, a float that is finite
-    // and in range (NaN compares false and takes the general rules, as do infinities).
     let (raw, bits) = match (kind, value) {
         (&Kind::Uint { bits, .. }, &Scalar::Uint(v)) if v <= u64::MAX >> (64 - u32::from(bits)) => {
             (v, u32::from(bits))
@@ -146,7 +236,7 @@ fn stream_of(kind: &Kind, value: &Scalar, saturate: bool) -> Option<(u64, u32)> 
             (u64::from((v as f32).to_bits()), 32)
         }
         (&Kind::Bool, &Scalar::Bool(b)) => (u64::from(b), 1),
-        _ => return cast(*kind, *value, saturate),
+        _ => return cast_stream(*kind, *value, saturate),
     };
     Some((scalar::to_stream(raw, bits), bits))
 }
@@ -154,29 +244,9 @@ fn stream_of(kind: &Kind, value: &Scalar, saturate: bool) -> Option<(u64, u32)> 
 /// [`stream_of`] by the casting rules (saturation, truncation, the other kinds of value).
 #[cold]
 #[inline(never)]
-fn cast(kind: Kind, value: Scalar, saturate: bool) -> Option<(u64, u32)> {
-    let raw = scalar_raw(kind, value, saturate).ok()?;
+fn cast_stream(kind: Kind, value: Scalar, saturate: bool) -> Option<(u64, u32)> {
     let bits = scalar_bits(kind);
-    Some((scalar::to_stream(raw, bits), bits))
-}
-
-/// A `p_version` leaf: the type's own version unless versions are kept as given (the
-/// general path words a mismatch).
-#[cold]
-#[inline(never)]
-fn version_stream(
-    kind: Kind,
-    value: Scalar,
-    version: u32,
-    options: EncodeOptions,
-) -> Option<(u64, u32)> {
-    if options.keep_versions {
-        stream_of(&kind, &value, options.saturate)
-    } else if scalar::same_integer(value, version) {
-        stream_of(&kind, &Scalar::Uint(version.into()), false)
-    } else {
-        None
-    }
+    Some((scalar::to_stream(cast(kind, value, saturate)?, bits), bits))
 }
 
 /// Bits going out most significant first into a buffer holding exactly the value: fewer than
@@ -227,7 +297,21 @@ impl Out<'_> {
         }
     }
 
-    /// Stores the pending bits (fewer than 32), the last byte padded with zeros: one store
+    /// Stores 32 of the pending bits when more than 32 are pending (at most 64), so that
+    /// [`Out::put`] and [`Out::finish`] find at most 32.
+    #[inline(always)]
+    fn spill(&mut self) {
+        if self.pending > 32 {
+            self.pending -= 32;
+            let word = ((self.acc >> self.pending) as u32).to_be_bytes();
+            if let Some(slot) = self.out.get_mut(self.at..self.at + 4) {
+                slot.copy_from_slice(&word);
+            }
+            self.at += 4;
+        }
+    }
+
+    /// Stores the pending bits (at most 32), the last byte padded with zeros: one store
     /// of one to four bytes.
     #[inline(always)]
     fn finish(self) {
@@ -284,33 +368,225 @@ pub fn encode<S: Source>(
     out: &mut [u8],
     options: EncodeOptions,
 ) -> Option<usize> {
-    let shape = Shape::of(layout, root, options.tao)?;
-    let (len, taken) = encode_leaves(&shape, source.pending_leaves()?, out, options)?;
+    let plan = layout.straight.get(root as usize)?.as_ref()?;
+    let leaves = source.pending_leaves()?;
+    let (len, taken) = match &plan.small {
+        Some(small) => encode_small(plan, small, leaves, out, options)?,
+        None => encode_leaves(plan, plan.items.of(layout.flat), leaves, out, options)?,
+    };
     // Take what was used, as the general path does (leaves after the value stay).
     source.leaf_run(taken)?.ok()?;
     Some(len)
 }
 
-/// [`encode`] of a shape from its leaves: the length in bytes and the leaves used.
+/// [`encode`] of a small plan from its leaves: the length in bytes and the leaves used.
 #[inline(always)]
-fn encode_leaves(
-    shape: &Shape<'_>,
+fn encode_small(
+    plan: &Straight,
+    small: &Small,
     leaves: &[Scalar],
     out: &mut [u8],
     options: EncodeOptions,
 ) -> Option<(usize, usize)> {
-    let (fixed, after) = leaves.split_at_checked(shape.leaves)?;
-    let (bits, elements) = match shape.tail {
-        None => (shape.bits, &[][..]),
+    let fixed_leaves = plan.leaves as usize;
+    let mut values = leaves.get(..fixed_leaves)?.iter();
+    let mut acc = 0u64;
+    let keep_versions = options.keep_versions;
+    for step in &small.steps {
+        let bits = u32::from(step.bits);
+        if bits == 0 {
+            break;
+        }
+        let raw = match step.op {
+            Op::Pad => 0,
+            op => step_raw(op, bits, values.next()?, small.version, keep_versions)?,
+        };
+        // A 64-bit step is the run's only one: nothing to shift out.
+        acc = acc.wrapping_shl(bits) | to_stream(raw, bits, step.order);
+    }
+    let Some(tail) = &plan.tail else {
+        let len = (plan.bits as usize).div_ceil(8);
+        store_word(out.get_mut(..len)?, acc, plan.bits);
+        return Some((len, fixed_leaves));
+    };
+    let n = count_of(*leaves.get(fixed_leaves)?)?;
+    if n > tail.max as usize {
+        return None;
+    }
+    let prefix = tail.prefix(options.tao);
+    let elements = leaves.get(fixed_leaves + 1..fixed_leaves + 1 + n)?;
+    let head = plan.bits + prefix;
+    let len = (head as usize + n * tail.elem_bits as usize).div_ceil(8);
+    let out = out.get_mut(..len)?;
+    if head <= 64 && (n == 0 || (tail.bytes && head % 8 == 0)) {
+        // The run and the length in one store, then the bytes.
+        if prefix != 0 {
+            acc = (acc << prefix) | n as u64;
+        }
+        store_word(out, acc, head);
+        if n != 0 {
+            copy_bytes(out.get_mut(head as usize / 8..)?, elements)?;
+        }
+    } else {
+        encode_tail(plan, tail, acc, prefix, elements, out, options.saturate)?;
+    }
+    Some((len, fixed_leaves + 1 + n))
+}
+
+/// The raw bits of a leaf for a [`Step`] of `bits` bits where they need no casting rules;
+/// `None` for the others (the general path casts, or words why not).
+#[inline(always)]
+fn step_raw(op: Op, bits: u32, value: &Scalar, version: u32, keep_versions: bool) -> Option<u64> {
+    // The common cases without the casting rules, as in `raw_of`.
+    match (op, *value) {
+        (Op::Uint, Scalar::Uint(v)) if v <= u64::MAX >> (64 - bits) => Some(v),
+        (Op::Int, Scalar::Int(v)) if scalar::sign_extend(v as u64, bits) == v => {
+            Some(v as u64 & (u64::MAX >> (64 - bits)))
+        }
+        (Op::Bool, Scalar::Bool(b)) => Some(u64::from(b)),
+        (Op::Float16 | Op::Float32 | Op::Float64, Scalar::Float(v)) => float_raw(op, v),
+        (Op::Version, value) => version_step(bits, value, version, keep_versions),
+        _ => None,
+    }
+}
+
+/// [`scalar::to_stream`] for a step whose byte order is known.
+#[inline(always)]
+fn to_stream(raw: u64, bits: u32, order: Order) -> u64 {
+    match order {
+        Order::Same => raw,
+        // 8 to 64 bits: the shift is at most 56.
+        Order::Bytes => raw.swap_bytes() >> (64 - bits),
+        Order::Mixed => scalar::to_stream(raw, bits),
+    }
+}
+
+/// [`scalar::from_stream`] for a step whose byte order is known.
+#[inline(always)]
+fn from_stream(stream: u64, bits: u32, order: Order) -> u64 {
+    match order {
+        Order::Same => stream,
+        Order::Bytes => (stream << (64 - bits)).swap_bytes(),
+        Order::Mixed => scalar::from_stream(stream, bits),
+    }
+}
+
+/// [`step_raw`] of a float that needs no cast: in range, infinite or NaN (out of line: most
+/// small types have none, and their constants would load on every call). A finite value
+/// out of range is the casting rules'.
+#[inline(never)]
+fn float_raw(op: Op, v: f64) -> Option<u64> {
+    match op {
+        Op::Float16 if v.abs() <= scalar::FLOAT16_MAX || !v.is_finite() => {
+            Some(u64::from(scalar::f16_from_f32(v as f32)))
+        }
+        Op::Float32 if v.abs() <= f64::from(f32::MAX) || !v.is_finite() => {
+            Some(u64::from((v as f32).to_bits()))
+        }
+        Op::Float64 => Some(v.to_bits()),
+        _ => None,
+    }
+}
+
+/// [`step_raw`] of a `p_version` field: the type's version (which fits the field) where the
+/// value is it, or the value kept as given where it fits.
+#[cold]
+#[inline(never)]
+fn version_step(bits: u32, value: Scalar, version: u32, keep_versions: bool) -> Option<u64> {
+    match value {
+        Scalar::Uint(v) if keep_versions => (v <= u64::MAX >> (64 - bits)).then_some(v),
+        _ if keep_versions => None,
+        _ => scalar::same_integer(value, version).then_some(version.into()),
+    }
+}
+
+/// Stores `acc`'s low `bits` (`<= 64`) bits at the start of `out` as stream bits, zeros
+/// after them, filling `out` up to its 8th byte (which the bits need, or which the caller
+/// writes next): one to four stores, without a count of bytes.
+#[inline(always)]
+fn store_word(out: &mut [u8], acc: u64, bits: u32) {
+    let bytes = acc.wrapping_shl(64 - bits).to_be_bytes();
+    let n = out.len();
+    if let Some(word) = out.first_chunk_mut::<8>() {
+        *word = bytes;
+    } else if n >= 4 {
+        // 4 to 7 bytes: the first four and the last four (overlapping).
+        out[..4].copy_from_slice(&bytes[..4]);
+        out[n - 4..].copy_from_slice(&bytes[n - 4..n]);
+    } else if n >= 2 {
+        out[..2].copy_from_slice(&bytes[..2]);
+        if let Some(third) = out.get_mut(2) {
+            *third = bytes[2];
+        }
+    } else if let Some(first) = out.first_mut() {
+        *first = bytes[0];
+    }
+}
+
+/// Bytes given as leaves into `out` (which has room for them); `None` for a leaf that is
+/// not a byte.
+#[inline(always)]
+fn copy_bytes(out: &mut [u8], elements: &[Scalar]) -> Option<()> {
+    for (byte, v) in out.iter_mut().zip(elements) {
+        match *v {
+            Scalar::Uint(b) if b <= 0xFF => *byte = b as u8,
+            _ => return None,
+        }
+    }
+    Some(())
+}
+
+/// The ending array of a small plan in the general way: `acc` holds the fixed run.
+#[inline(never)]
+fn encode_tail(
+    plan: &Straight,
+    tail: &Tail,
+    acc: u64,
+    prefix: u32,
+    elements: &[Scalar],
+    out: &mut [u8],
+    saturate: bool,
+) -> Option<()> {
+    let mut out = Out {
+        out,
+        at: 0,
+        acc,
+        pending: plan.bits,
+    };
+    out.spill();
+    if prefix != 0 {
+        out.put(elements.len() as u64, prefix);
+    }
+    if !elements.is_empty() {
+        write_elements(&mut out, &tail.elem, elements, saturate)?;
+    }
+    out.finish();
+    Some(())
+}
+
+/// [`encode`] of a plan from its leaves: the length in bytes and the leaves used.
+#[inline(never)]
+fn encode_leaves(
+    plan: &Straight,
+    items: &[FlatItem],
+    leaves: &[Scalar],
+    out: &mut [u8],
+    options: EncodeOptions,
+) -> Option<(usize, usize)> {
+    let fixed_leaves = plan.leaves as usize;
+    let fixed = leaves.get(..fixed_leaves)?;
+    let (bits, prefix, elements) = match &plan.tail {
+        None => (plan.bits as usize, 0, &[][..]),
         Some(tail) => {
-            let (&count, after) = after.split_first()?;
-            let n = count_of(count)?;
+            let n = count_of(*leaves.get(fixed_leaves)?)?;
             if n > tail.max as usize {
                 return None;
             }
+            let prefix = tail.prefix(options.tao);
             (
-                shape.bits + shape.prefix as usize + n * tail.elem_bits as usize,
-                after.get(..n)?,
+                plan.bits as usize + prefix as usize + n * tail.elem_bits as usize,
+                prefix,
+                leaves.get(fixed_leaves + 1..fixed_leaves + 1 + n)?,
             )
         }
     };
@@ -324,19 +600,13 @@ fn encode_leaves(
     let saturate = options.saturate;
     // As many items as leaves and pads: the zip never stops short of a leaf item.
     let mut values = fixed.iter();
-    for item in shape.items {
-        let (stream, bits) = match item {
-            FlatItem::Leaf(kind) => stream_of(kind, values.next()?, saturate)?,
-            FlatItem::Pad(bits) => (0, u32::from(*bits)),
-            FlatItem::Version(kind, version) => {
-                version_stream(*kind, *values.next()?, *version, options)?
-            }
-        };
+    for item in items {
+        let (stream, bits) = item_stream(item, &mut values, options)?;
         out.put(stream, bits);
     }
-    if let Some(tail) = shape.tail {
-        if shape.prefix != 0 {
-            out.put(elements.len() as u64, shape.prefix);
+    if let Some(tail) = &plan.tail {
+        if prefix != 0 {
+            out.put(elements.len() as u64, prefix);
         }
         if !elements.is_empty() {
             write_elements(&mut out, &tail.elem, elements, saturate)?;
@@ -345,8 +615,27 @@ fn encode_leaves(
     out.finish();
     Some((
         len,
-        shape.leaves + shape.tail.map_or(0, |_| 1 + elements.len()),
+        fixed_leaves + plan.tail.map_or(0, |_| 1 + elements.len()),
     ))
+}
+
+/// The stream bits of one item of the fixed run and how many, its leaf (if it has one)
+/// taken from `values`.
+#[inline(always)]
+fn item_stream(
+    item: &FlatItem,
+    values: &mut core::slice::Iter<'_, Scalar>,
+    options: EncodeOptions,
+) -> Option<(u64, u32)> {
+    match item {
+        FlatItem::Leaf(kind) => stream_of(kind, values.next()?, options.saturate),
+        FlatItem::Pad(bits) => Some((0, u32::from(*bits))),
+        FlatItem::Version(kind, version) => {
+            let bits = scalar_bits(*kind);
+            let raw = version_raw(*kind, *values.next()?, *version, options)?;
+            Some((scalar::to_stream(raw, bits), bits))
+        }
+    }
 }
 
 /// The elements of the ending array; byte strings on a byte boundary as plain bytes.
@@ -391,84 +680,140 @@ pub fn decode<R: BitRead + ?Sized, K: Sink>(
     sink: &mut K,
     options: DecodeOptions,
 ) -> Option<usize> {
-    let shape = Shape::of(layout, root, options.tao)?;
+    let plan = layout.straight.get(root as usize)?.as_ref()?;
     // Payloads in pieces are the general decoder's (its reader follows the pieces).
     let data = data.contiguous()?;
-    let (n, end) = measure(&shape, data)?;
+    let prefix = plan.tail.map_or(0, |t| t.prefix(options.tao));
+    let (n, end) = measure(plan, prefix, data)?;
     if !options.allow_trailing && data.len() > end.div_ceil(8) {
         return None;
     }
-    let total = shape.leaves + shape.tail.map_or(0, |_| 1 + n);
+    let fixed_leaves = plan.leaves as usize;
+    let total = fixed_leaves + plan.tail.map_or(0, |_| 1 + n);
     let slots = sink.leaf_slots(total)?.ok()?;
-    decode_into(&shape, data, n, slots);
+    let (fixed, rest) = slots.split_at_mut_checked(fixed_leaves)?;
+    match &plan.small {
+        // The whole run from one load (the data holds it: measured).
+        Some(small) => decode_small(small, load_word(data), fixed),
+        None => decode_run(plan.items.of(layout.flat), data, fixed),
+    }
+    if let (Some(tail), [len, elements @ ..]) = (&plan.tail, rest) {
+        *len = Scalar::Uint(n as u64);
+        if !elements.is_empty() {
+            let mut reader = data.reader(plan.bits as usize + prefix as usize);
+            read_elements(&mut reader, &tail.elem, elements);
+        }
+    }
     Some(end)
 }
 
 /// The length of the ending array (0 without one) and where the value ends in `data`, which
-/// holds it all; `None` where it does not.
+/// holds it all, with a length prefix of `prefix` bits; `None` where it does not.
 #[inline(always)]
-fn measure(shape: &Shape<'_>, data: &[u8]) -> Option<(usize, usize)> {
+fn measure(plan: &Straight, prefix: u32, data: &[u8]) -> Option<(usize, usize)> {
+    let bits = plan.bits as usize;
     let bit_len = data.len() * 8;
-    let rest = bit_len.checked_sub(shape.bits)?;
-    let Some(tail) = shape.tail else {
-        return Some((0, shape.bits));
+    let rest = bit_len.checked_sub(bits)?;
+    let Some(tail) = &plan.tail else {
+        return Some((0, bits));
     };
     let width = tail.elem_bits as usize;
-    if shape.prefix == 0 {
+    if prefix == 0 {
         // Tail-optimized: the array takes every remaining whole byte (whole elements, fewer
-        // than 8 bits left over).
-        let n = rest / width;
+        // than 8 bits left over). Bytes (the common case) without a division.
+        let n = if width == 8 { rest / 8 } else { rest / width };
         if rest - n * width >= 8 || n > tail.max as usize {
             return None;
         }
-        return Some((n, shape.bits + n * width));
+        return Some((n, bits + n * width));
     }
-    let prefix = shape.prefix as usize;
-    if rest < prefix {
+    let prefix_bits = prefix as usize;
+    if rest < prefix_bits {
         return None;
     }
-    let n = scalar::from_stream(
-        bits::read_bits(data, shape.bits, shape.prefix),
-        shape.prefix,
-    );
+    let n = scalar::from_stream(bits::read_bits(data, bits, prefix), prefix);
     let n = usize::try_from(n)
         .ok()
         .filter(|&n| n <= tail.max as usize)?;
-    let end = shape.bits + prefix + n * width;
+    let end = bits + prefix_bits + n * width;
     (end <= bit_len).then_some((n, end))
 }
 
-/// Fills `slots` (the fixed run's leaves, then the array's length and `n` elements) from
-/// `data`, measured to hold them.
+/// The first 8 bytes of `data` (fewer where it is shorter, zeros after them) as one
+/// big-endian word.
 #[inline(always)]
-fn decode_into(shape: &Shape<'_>, data: &[u8], n: usize, slots: &mut [Scalar]) {
-    let (fixed, slots) = slots.split_at_mut(shape.leaves.min(slots.len()));
+fn load_word(data: &[u8]) -> u64 {
+    if let Some(word) = data.first_chunk::<8>() {
+        return u64::from_be_bytes(*word);
+    }
+    // Fewer than 8 bytes: 4, 2 and 1 at a time, as the length's bits say.
+    let mut acc = 0u64;
+    let mut at = 0;
+    if let Some(four) = data.first_chunk::<4>() {
+        acc = u64::from(u32::from_be_bytes(*four)) << 32;
+        at = 4;
+    }
+    if let Some(two) = data.get(at..).and_then(|d| d.first_chunk::<2>()) {
+        acc |= u64::from(u16::from_be_bytes(*two)) << (48 - 8 * at);
+        at += 2;
+    }
+    if let Some(&one) = data.get(at) {
+        acc |= u64::from(one) << (56 - 8 * at);
+    }
+    acc
+}
+
+/// Fills `slots` with the leaves of a small plan's fixed run held in `word` (its first bit
+/// the highest).
+#[inline(always)]
+fn decode_small(small: &Small, mut word: u64, slots: &mut [Scalar]) {
+    let mut slots = slots.iter_mut();
+    for step in &small.steps {
+        let bits = u32::from(step.bits);
+        if bits == 0 {
+            break;
+        }
+        // Steps have 1 to 64 bits; a 64-bit one is the run's only one.
+        let raw = from_stream(word >> (64 - bits), bits, step.order);
+        word = word.wrapping_shl(bits);
+        let value = match step.op {
+            Op::Pad => continue,
+            Op::Uint | Op::Version => Scalar::Uint(raw),
+            Op::Int => Scalar::Int(scalar::sign_extend(raw, bits)),
+            Op::Float16 => Scalar::Float(f64::from(scalar::f32_from_f16(raw as u16))),
+            Op::Float32 => Scalar::Float(f64::from(f32::from_bits(raw as u32))),
+            Op::Float64 => Scalar::Float(f64::from_bits(raw)),
+            Op::Bool => Scalar::Bool(raw != 0),
+        };
+        if let Some(slot) = slots.next() {
+            *slot = value;
+        }
+    }
+}
+
+/// Fills `slots` with the leaves of a fixed run from `data`, measured to hold it. Out of
+/// line: one copy of the leaf conversions per function keeps them inlined in both paths.
+#[inline(never)]
+fn decode_run(items: &[FlatItem], data: &[u8], slots: &mut [Scalar]) {
     let mut bits_in = In {
         data,
         next: 0,
         acc: 0,
         avail: 0,
     };
-    let mut fixed = fixed.iter_mut();
-    for item in shape.items {
+    let mut slots = slots.iter_mut();
+    for item in items {
         match item {
             FlatItem::Leaf(kind) | FlatItem::Version(kind, _) => {
                 let bits = scalar_bits(*kind);
                 let raw = bits_in.take(bits);
-                if let Some(slot) = fixed.next() {
+                if let Some(slot) = slots.next() {
                     *slot = scalar_of(*kind, scalar::from_stream(raw, bits));
                 }
             }
             FlatItem::Pad(bits) => {
                 bits_in.take(u32::from(*bits));
             }
-        }
-    }
-    if let (Some(tail), [len, elements @ ..]) = (shape.tail, slots) {
-        *len = Scalar::Uint(n as u64);
-        if !elements.is_empty() {
-            let mut reader = data.reader(shape.bits + shape.prefix as usize);
-            read_elements(&mut reader, &tail.elem, elements);
         }
     }
 }

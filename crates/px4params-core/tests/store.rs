@@ -508,3 +508,45 @@ fn pages_that_are_too_small_are_refused() {
         "the pages or their index are too small (3 values of 34 bytes)"
     );
 }
+
+/// A caller that knows parameters by name gives the names as data ([`StoreError::display_named`]):
+/// the three errors about a parameter say it where the plain display says its number, and
+/// every other error reads as before (issue 39: the binding no longer edits the text).
+#[test]
+fn errors_name_a_parameter_by_the_name_given_or_by_its_number() {
+    let f = fixture();
+    let layout = f.layout.as_layout();
+    let names = ["INA238", "BATTERY", "SYS_AUTOSTART"];
+    let cases: [(StoreError, &str, &str); 5] = [
+        (
+            StoreError::Unsupported { param: 1 },
+            "parameter #1 cannot be stored (no slot, or a value over 65535 bytes)",
+            "parameter BATTERY cannot be stored (no slot, or a value over 65535 bytes)",
+        ),
+        (
+            StoreError::NotPlanned { param: 2 },
+            "parameter #2 is not laid out as plan() lays it out",
+            "parameter SYS_AUTOSTART is not laid out as plan() lays it out",
+        ),
+        (
+            StoreError::NoSuchParam { param: 0 },
+            "no parameter #0",
+            "no parameter INA238",
+        ),
+        // A number the names lack: by its number.
+        (
+            StoreError::NoSuchParam { param: 3 },
+            "no parameter #3",
+            "no parameter #3",
+        ),
+        (
+            StoreError::Full { max_instances: 4 },
+            "all 4 instances are in use (max_instances is 4)",
+            "all 4 instances are in use (max_instances is 4)",
+        ),
+    ];
+    for (error, by_number, by_name) in cases {
+        assert_eq!(error.display(&layout).to_string(), by_number);
+        assert_eq!(error.display_named(&layout, &names).to_string(), by_name);
+    }
+}

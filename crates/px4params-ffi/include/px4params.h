@@ -282,6 +282,11 @@ typedef struct {
   uint32_t leaves;
   // Total bit length.
   uint32_t bits;
+  // The nesting the run covers: the most nodes from one of its fields down to a
+  // primitive (1 for a primitive field). A plan that steps over the run declines where
+  // the struct's depth plus this passes [`crate::rules::MAX_DEPTH`], as the walk
+  // refuses such a type.
+  uint32_t height;
 } px4p_segment_Flat_Body;
 
 typedef struct {

@@ -330,20 +330,9 @@ pub(crate) fn store<E: SourceError>(
 }
 
 /// A store error while the store is planned, its parameter named by `names` (the user knows
-/// it by its name, the core's words by its number).
+/// it by its name): the core words it with the names given as data.
 pub(crate) fn store_plan(layout: &Layout<'_>, err: CoreStoreError, names: &[String]) -> PyErr {
-    let text = err.display(layout).to_string();
-    match err {
-        CoreStoreError::NoSuchParam { param }
-        | CoreStoreError::NotPlanned { param }
-        | CoreStoreError::Unsupported { param } => {
-            let name = names.get(param as usize).map_or("?", String::as_str);
-            StoreError::new_err(
-                text.replace(&format!("parameter #{param}"), &format!("parameter {name}")),
-            )
-        }
-        _ => StoreError::new_err(text),
-    }
+    StoreError::new_err(err.display_named(layout, names).to_string())
 }
 
 /// A stored value that does not translate to another version of its type.

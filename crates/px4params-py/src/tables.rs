@@ -79,12 +79,14 @@ pub(crate) fn tables<'py>(
                 items,
                 leaves,
                 bits,
+                height,
             } => (
                 "Flat",
                 (fields.first, fields.count),
                 (items.first, items.count),
                 leaves,
                 bits,
+                height,
             )
                 .into_pyobject(py)?,
             Segment::Field(index) => ("Field", index).into_pyobject(py)?,

@@ -196,10 +196,10 @@ def _field(field: Sequence[Any]) -> str:
 def _segment(segment: Sequence[Any]) -> str:
     if segment[0] == "Field":
         return f"{{ .tag = px4p_segment_Field, .field = {segment[1]} }}"
-    _, (ff, fc), (i_first, i_count), leaves, bits = segment
+    _, (ff, fc), (i_first, i_count), leaves, bits, height = segment
     return (
         f"{{ .tag = px4p_segment_Flat, .flat = {{ {{ {ff}, {fc} }}, {{ {i_first}, {i_count} }}, "
-        f"{leaves}, {bits} }} }}"
+        f"{leaves}, {bits}, {height} }} }}"
     )
 
 
