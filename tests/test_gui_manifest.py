@@ -4,18 +4,23 @@ from starting, and the ``@format hex`` tag behind addresses shown in hex."""
 
 from __future__ import annotations
 
+import asyncio
+import json
 from pathlib import Path
+from types import SimpleNamespace
 from typing import Any
 
 import px4params
 import pytest
 from gui_server import load_store, make_store
-from px4params.errors import DsdlError
+from px4params.errors import BoardsError, DsdlError
 from px4params.gcs.metadata import build_parameters_json
+from px4params.gui import manifest
 from px4params.gui.manifest import devices, picker, status_location
 from px4params.store.flat import flat_values
 from px4params.vehicle.boards import load_boards
 from px4params.vehicle.drivers import load_drivers
+from starlette.applications import Starlette
 
 
 @pytest.fixture(scope="module")
@@ -126,3 +131,115 @@ def test_instances_are_named_by_their_number_as_the_store_names_them(vehicle: An
     # The store, given the same instance, names it the same.
     store = px4params.Store(px4params.load_schema(use_env=False), classic=[])
     assert [d["instance"] for d in found] == [store.add("INA238#2")]
+
+
+# -- the route, in-process over ASGI (issue 40) ------------------------------------------------
+
+EXPECTED = "expected {'values': {name: value}, 'board': name}: "
+
+
+def _ask(metadata: dict[str, Any], method: str, body: bytes = b"") -> tuple[int, Any]:
+    """One request to ``/api/manifest`` as a server hands it over; the status and the JSON."""
+    app = Starlette(routes=manifest.routes(SimpleNamespace(metadata=metadata), load_drivers()))
+    scope = {
+        "type": "http", "method": method, "path": "/api/manifest", "root_path": "",
+        "query_string": b"", "headers": [(b"content-type", b"application/json")],
+    }  # fmt: skip
+    incoming = [{"type": "http.request", "body": body, "more_body": False}]
+    sent: list[dict[str, Any]] = []
+
+    async def receive() -> dict[str, Any]:
+        if incoming:
+            return incoming.pop(0)
+        await asyncio.Event().wait()
+        raise AssertionError("unreachable")
+
+    async def send(message: dict[str, Any]) -> None:
+        sent.append(message)
+
+    asyncio.run(app(scope, receive, send))
+    return sent[0]["status"], json.loads(b"".join(m.get("body", b"") for m in sent[1:]))
+
+
+def _post(metadata: dict[str, Any], payload: Any) -> tuple[int, Any]:
+    data = payload if isinstance(payload, bytes) else json.dumps(payload).encode()
+    return _ask(metadata, "POST", data)
+
+
+@pytest.mark.issue40
+def test_the_route_serves_the_picker_and_the_boards(vehicle: Any) -> None:
+    status, answer = _ask(vehicle[1], "GET")
+    assert status == 200
+    assert answer["drivers"] == picker(vehicle[1], load_drivers())
+    # every board of the bundled table, by name with its label (boards.toml)
+    assert answer["boards"] == [{"name": b.name, "label": b.label} for b in load_boards().all()]
+    assert {"name": "px4_fmu-v6c", "label": "Pixhawk 6C (FMUv6C)"} in answer["boards"]
+
+
+@pytest.mark.issue40
+def test_the_route_answers_the_devices_of_posted_values_on_a_board(vehicle: Any) -> None:
+    values, metadata = vehicle
+    staged = dict(values, IST8310_INST=1, IST8310_0A=0, IST8310_0B=1, IST8310_0C=0x0E)
+    status, answer = _post(metadata, {"values": staged, "board": "px4_fmu-v6c"})
+    assert status == 200
+    found = {d["instance"]: d for d in answer["devices"]}
+    # boards/px4/fmu-v6c/init/rc.board_sensors starts an ist8310 on bus 1 itself
+    assert found["IST8310#0"]["problems"][0].startswith("the board Pixhawk 6C (FMUv6C) starts")
+    assert found["IST8310#0"]["location"] == "I2C bus 1, 0x0E"
+    # no board (null or an empty name): the same devices without the board's starts
+    for board in (None, ""):
+        status, answer = _post(metadata, {"values": staged, "board": board})
+        assert status == 200
+        found = {d["instance"]: d for d in answer["devices"]}
+        assert found["IST8310#0"]["problems"] == []
+    status, answer = _post(metadata, {"values": staged})  # "board" left out
+    assert status == 200 and answer["devices"] == devices(staged, metadata, load_drivers())
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize(
+    ("payload", "error"),
+    [
+        ({"values": [1]}, "values is not an object"),
+        ({"values": {"INA238_INST": True}}, "values: INA238_INST is true, not a number"),
+        ({"values": {"INA238_INST": "1"}}, 'values: INA238_INST is "1", not a number'),
+        ({"values": {"INA238_INST": None}}, "values: INA238_INST is null, not a number"),
+        ({"values": {}, "board": 6}, "board is not a name"),
+        ({"board": "px4_fmu-v6c"}, "'values'"),
+    ],
+)
+def test_the_route_refuses_a_post_it_cannot_read_naming_what(
+    vehicle: Any, payload: Any, error: str
+) -> None:
+    assert _post(vehicle[1], payload) == (400, {"error": EXPECTED + error})
+
+
+@pytest.mark.issue40
+def test_the_route_refuses_a_body_that_is_not_a_json_object(vehicle: Any) -> None:
+    status, answer = _post(vehicle[1], b"{not json")
+    assert status == 400 and answer["error"].startswith(EXPECTED + "Expecting property name")
+    status, answer = _post(vehicle[1], [1, 2])
+    assert status == 400 and answer["error"].startswith(EXPECTED)
+
+
+@pytest.mark.issue40
+def test_the_route_refuses_a_board_not_in_the_table(vehicle: Any) -> None:
+    answer = _post(vehicle[1], {"values": {}, "board": "acme_nothing"})
+    assert answer == (400, {"error": "board 'acme_nothing': not in the board table"})
+
+
+@pytest.mark.issue40
+def test_without_a_readable_board_table_the_picker_stays_and_a_board_is_refused(
+    vehicle: Any, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # An installation whose boards.toml cannot be read: the page still gets its picker (no
+    # boards to choose from), and a post naming a board gets the table's error, not a crash.
+    def broken() -> Any:
+        raise BoardsError("boards.toml:1: not TOML")
+
+    monkeypatch.setattr(manifest, "load_boards", broken)
+    status, answer = _ask(vehicle[1], "GET")
+    assert status == 200 and answer["boards"] == [] and answer["drivers"]
+    assert _post(vehicle[1], {"values": {}, "board": "px4_fmu-v6c"}) == (
+        400, {"error": "boards.toml:1: not TOML"},
+    )  # fmt: skip
