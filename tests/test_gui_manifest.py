@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import asyncio
 import json
+from dataclasses import replace
 from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
@@ -19,7 +20,7 @@ from px4params.gui import manifest
 from px4params.gui.manifest import devices, picker, status_location
 from px4params.store.flat import flat_values
 from px4params.vehicle.boards import load_boards
-from px4params.vehicle.drivers import load_drivers
+from px4params.vehicle.drivers import Drivers, load_drivers
 from starlette.applications import Starlette
 
 
@@ -243,3 +244,92 @@ def test_without_a_readable_board_table_the_picker_stays_and_a_board_is_refused(
     assert _post(vehicle[1], {"values": {}, "board": "px4_fmu-v6c"}) == (
         400, {"error": "boards.toml:1: not TOML"},
     )  # fmt: skip
+
+
+# -- the picker and the locations, every kind (issue 40) ---------------------------------------
+
+
+@pytest.mark.issue40
+def test_every_bus_variant_has_its_location_in_words() -> None:
+    # The six variants of px.Bus (dsdl/px/Bus.1.0.dsdl), each with what its two numbers mean
+    # there: a DroneCAN interface and node ID, a simulated instance, a MAVLink instance and
+    # system ID, a serial port (no address); anything else is on no bus.
+    assert status_location("dronecan", 1, 125) == "DroneCAN interface 1, node 125"
+    assert status_location("sim", 0, 2) == "simulation, instance 2"
+    assert status_location("mavlink", 1, 42) == "MAVLink instance 1, system 42"
+    assert status_location("serial", 3, 0) == "serial port 3"
+    assert status_location("", 0, 0) == "no bus"
+    assert status_location("can", 1, 1) == "no bus"
+
+
+@pytest.mark.issue40
+def test_the_picker_groups_every_driver_by_what_it_measures(vehicle: Any) -> None:
+    # docs: a compass behind an IMU (icm20948's passthrough) is a magnetometer, a smart battery
+    # (batt_smbus, batmon) a power monitor, an airspeed sensor that also reads pressure (auav)
+    # airspeed; temperature, humidity, RPM and IR-beacon chips are "other".
+    measures = {
+        "magnetometer": "magnetometers", "IMU (magnetometer passthrough)": "magnetometers",
+        "power monitor": "power monitors", "battery": "power monitors",
+        "airspeed": "airspeed", "airspeed / barometer": "airspeed",
+        "distance": "distance", "barometer": "barometers",
+    }  # fmt: skip
+    chosen = picker(vehicle[1], load_drivers())
+    for d in chosen:
+        assert d["group"] == measures.get(d["kind"], "other"), d["parameter"]
+    by = {d["parameter"]: d["group"] for d in chosen}
+    assert (by["ICM20948"], by["BATT_SMBUS"], by["AUAV"]) == (
+        "magnetometers", "power monitors", "airspeed",
+    )  # fmt: skip
+    assert by["MCP9808"] == "other"
+    for group in dict.fromkeys(by.values()):  # by chip name within a group
+        names = [d["chips"][0] for d in chosen if d["group"] == group]
+        assert names == sorted(names)
+    # each chip says what it needs in PX4's words for the bus
+    needs = {d["parameter"]: d["needs"] for d in chosen}
+    assert needs["LIS3MDL"] == "I2C, address 0x1E (the driver's default) or SPI"
+
+
+@pytest.mark.issue40
+def test_the_picker_of_drivers_declared_otherwise(vehicle: Any) -> None:
+    """A driver on every bus kind, one without a default address, one that does not
+    autostart, and parameters no driver declares (drivers.toml of another installation)."""
+    real = load_drivers()
+    drivers = Drivers(
+        [
+            replace(real["ina238"], buses=("i2c", "spi", "serial", "dronecan"), autostart=False),
+            replace(real["ist8310"], default_address=None),
+        ],
+        "test",
+    )
+    _, metadata = vehicle
+    by = {d["parameter"]: d for d in picker(metadata, drivers)}
+    assert by["INA238"]["needs"] == (
+        "I2C, address 0x45 (the driver's default) or SPI or serial or DroneCAN; its driver "
+        "does not autostart"
+    )
+    # bus 1 on I2C and SPI (the driver's address on I2C); serial and DroneCAN start from their
+    # DSDL defaults
+    assert by["INA238"]["start"] == {
+        "bus": "i2c", "variants": {"i2c": {"bus_id": 1, "address": 0x45}, "spi": {"bus_id": 1}},
+    }  # fmt: skip
+    assert by["IST8310"]["needs"] == "I2C"
+    assert by["IST8310"]["start"]["variants"] == {"i2c": {"bus_id": 1}}
+    # No driver: listed under "other" by its own name, nothing to start it with.
+    assert {k: v for k, v in by["AK09916"].items() if k != "instances"} == {
+        "parameter": "AK09916", "driver": None, "chips": ["AK09916"], "kind": "",
+        "group": "other", "order": None, "buses": [], "default_address": None,
+        "needs": "no driver declared: nothing starts it", "start": {},
+    }  # fmt: skip
+
+
+@pytest.mark.issue40
+def test_the_picker_lists_instanced_structured_parameters_only(vehicle: Any) -> None:
+    # A structured parameter without @max_instances is one value, not instances to add; a
+    # classic parameter is no structure at all.
+    _, metadata = vehicle
+    (ina,) = [e for e in metadata["parameters"] if e["name"] == "INA238"]
+    single = {k: v for k, v in ina.items() if k != "max_instances"} | {"name": "ACME"}
+    classic = {"name": "ACME_CLASSIC", "type": "Int32", "max_instances": 4}
+    shown = picker({"parameters": [*metadata["parameters"], single, classic]}, load_drivers())
+    names = [d["parameter"] for d in shown]
+    assert "ACME" not in names and "ACME_CLASSIC" not in names and "INA238" in names
