@@ -17,7 +17,8 @@ from gui_server import load_store, make_store
 from px4params.errors import BoardsError, DsdlError
 from px4params.gcs.metadata import build_parameters_json
 from px4params.gui import manifest
-from px4params.gui.manifest import devices, picker, status_location
+from px4params.gui.manifest import _instance_value, devices, picker, status_location
+from px4params.store import flat
 from px4params.store.flat import flat_values
 from px4params.vehicle.boards import load_boards
 from px4params.vehicle.drivers import Drivers, load_drivers
@@ -333,3 +334,38 @@ def test_the_picker_lists_instanced_structured_parameters_only(vehicle: Any) -> 
     shown = picker({"parameters": [*metadata["parameters"], single, classic]}, load_drivers())
     names = [d["parameter"] for d in shown]
     assert "ACME" not in names and "ACME_CLASSIC" not in names and "INA238" in names
+
+
+@pytest.mark.issue40
+def test_an_instance_rebuilt_from_flat_values_is_the_stores_own(tmp_path: Path) -> None:
+    """The page rebuilds an instance from the flat values a ground station holds, stale leaves
+    of unselected variants included (a GCS keeps every letter): only the selected variants'
+    leaves are the instance's, a union inside a variant too, as ``Store.get`` returns it."""
+    root = tmp_path / "tst"
+    root.mkdir()
+    for name, text in {
+        "Mode.1.0.dsdl": "@union\nuint8 a\nfloat32 b\n@sealed\n",
+        "Wired.1.0.dsdl": "uint7 bus_id\nMode.1.0 mode\n@sealed\n",
+        # the union inside the second variant: only that variant's fields list its tag
+        "Link.1.0.dsdl": "@union\nuint8 radio\nWired.1.0 wired\n@sealed\n",
+        "Thing.1.0.dsdl": "# @max_instances 2\nuint4 p_version\nLink.1.0 link\n@sealed\n",
+    }.items():
+        (root / name).write_text(text)
+    schema = px4params.load_schema([root], use_env=False, cache_dir=tmp_path / "cache")
+    store = px4params.Store(schema, classic=[])
+    store.add("THING#1")
+    letters = {row.path: row.name for row in flat.flat_table(store)}
+    flat.set_flat(store, letters["link._tag"], 1)  # link: wired
+    letters = {row.path: row.name for row in flat.flat_table(store)}
+    flat.set_flat(store, letters["link.wired.mode._tag"], 1)  # mode: b
+    letters = {row.path: row.name for row in flat.flat_table(store)}
+    flat.set_flat(store, letters["link.wired.mode.b"], 2.5)
+    flat.set_flat(store, letters["link.wired.bus_id"], 3)
+    (entry,) = [e for e in build_parameters_json(schema)["parameters"] if e["name"] == "THING"]
+    values = dict(flat.flat_values(store))
+    paths = {f["letter"]: f["path"] for f in entry["flat"]}
+    assert (paths["B"], paths["E"]) == ("link.radio", "link.wired.mode.a")
+    values.update(THING_1B=9, THING_1E=7)  # stale: the radio variant and mode.a
+    rebuilt = _instance_value(entry, 1, values)
+    assert rebuilt == {"link": store.get("THING#1")["link"]}
+    assert rebuilt == {"link": {"wired": {"bus_id": 3, "mode": {"b": 2.5}}}}
