@@ -369,3 +369,15 @@ def test_an_instance_rebuilt_from_flat_values_is_the_stores_own(tmp_path: Path) 
     rebuilt = _instance_value(entry, 1, values)
     assert rebuilt == {"link": store.get("THING#1")["link"]}
     assert rebuilt == {"link": {"wired": {"bus_id": 3, "mode": {"b": 2.5}}}}
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize("tag", [6, 7, -1])
+def test_a_bus_tag_beyond_the_variants_selects_no_bus(vehicle: Any, tag: int) -> None:
+    # px.Bus has six variants (tags 0..5, dsdl/px/Bus.1.0.dsdl) in a 3-bit tag: a ground
+    # station can send 6 or 7 (or any int32): no variant is selected, so the instance has no
+    # bus and says so; the leaves of the I2C variant are not taken for it.
+    values, metadata = vehicle
+    staged = dict(values, INA238_INST=1, INA238_0A=tag, INA238_0B=1, INA238_0C=0x45)
+    (ina,) = [d for d in devices(staged, metadata, load_drivers()) if d["parameter"] == "INA238"]
+    assert (ina["location"], ina["problems"]) == ("no bus", ["its value has no bus"])
