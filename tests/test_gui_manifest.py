@@ -381,3 +381,67 @@ def test_a_bus_tag_beyond_the_variants_selects_no_bus(vehicle: Any, tag: int) ->
     staged = dict(values, INA238_INST=1, INA238_0A=tag, INA238_0B=1, INA238_0C=0x45)
     (ina,) = [d for d in devices(staged, metadata, load_drivers()) if d["parameter"] == "INA238"]
     assert (ina["location"], ina["problems"]) == ("no bus", ["its value has no bus"])
+
+
+@pytest.mark.issue40
+def test_a_board_compass_started_without_address_or_rotation(vehicle: Any) -> None:
+    # boards/accton-godwit/ga1/init/rc.board_sensors: "rm3100 -I -b 4 start": no -a (the
+    # driver's default address, 0x20 for the RM3100) and no -R. An RM3100 there is the board's;
+    # at another address or on another bus it is another chip.
+    values, metadata = vehicle
+    staged = dict(values, RM3100_INST=0b111, RM3100_0A=0, RM3100_0B=4, RM3100_0C=0x20)
+    staged.update(RM3100_0P=2, RM3100_1A=0, RM3100_1B=4, RM3100_1C=0x21)
+    staged.update(RM3100_2A=0, RM3100_2B=1, RM3100_2C=0x20, RM3100_2P=0)
+    board = load_boards().by_name("accton-godwit_ga1")
+    found = {d["instance"]: d for d in devices(staged, metadata, load_drivers(), board)}
+    assert found["RM3100#0"]["problems"] == [
+        f"the board {board.label} starts this compass itself (rm3100 -I -b 4 start, no "
+        "rotation given) before the manifest; this instance's rotation 2 (Yaw 90 deg) is not "
+        "used"
+    ]
+    assert found["RM3100#1"]["problems"] == [] and found["RM3100#2"]["problems"] == []
+    # without a rotation of its own (no P leaf): nothing about its rotation
+    del staged["RM3100_0P"]
+    found = {d["instance"]: d for d in devices(staged, metadata, load_drivers(), board)}
+    assert found["RM3100#0"]["problems"] == [
+        f"the board {board.label} starts this compass itself (rm3100 -I -b 4 start, no "
+        "rotation given) before the manifest"
+    ]
+
+
+@pytest.mark.issue40
+def test_a_board_compass_on_spi_is_any_chip_select_of_its_bus(vehicle: Any) -> None:
+    # boards/ark/mag: "rm3100 -s -b 2 start" (internal SPI bus 2, the board's chip select): an
+    # RM3100 on SPI bus 2 is the board's; on I2C bus 2 or SPI bus 1 it is not.
+    values, metadata = vehicle
+    staged = dict(values, RM3100_INST=0b111, RM3100_0A=1, RM3100_0D=2, RM3100_0E=1)
+    staged.update(RM3100_1A=0, RM3100_1B=2, RM3100_1C=0x20, RM3100_2A=1, RM3100_2D=1)
+    staged.update(RM3100_2E=1)
+    board = load_boards().by_name("ark_mag")
+    found = {d["instance"]: d for d in devices(staged, metadata, load_drivers(), board)}
+    assert found["RM3100#0"]["location"] == "SPI bus 2, chip select 1"
+    assert found["RM3100#0"]["problems"] == [
+        f"the board {board.label} starts this compass itself (rm3100 -s -b 2 start, no "
+        "rotation given) before the manifest"
+    ]
+    assert found["RM3100#1"]["problems"] == [] and found["RM3100#2"]["problems"] == []
+
+
+@pytest.mark.issue40
+def test_a_board_compass_started_on_a_condition_says_when(vehicle: Any) -> None:
+    # zeroone x6's rc.board_sensors starts "ist8310 -I -a 0x0E -R 12 start" when the RM3100
+    # did not start ("if ! rm3100 -I -b 4 start"): the problem says so. Rotation 12 is PX4's
+    # ROTATION_PITCH_180 (src/lib/conversion/rotation.h).
+    values, metadata = vehicle
+    staged = dict(values, IST8310_INST=1, IST8310_0A=0, IST8310_0B=4, IST8310_0C=0x0E)
+    board = load_boards().by_name("zeroone_x6")
+    (start,) = [s for s in board.devices if s.driver == "ist8310" and s.when]
+    assert (start.args, start.when) == (
+        "-I -a 0x0E -R 12 start", "not rm3100 started (-I -b 4 start)",
+    )  # fmt: skip
+    found = {d["instance"]: d for d in devices(staged, metadata, load_drivers(), board)}
+    assert found["IST8310#0"]["problems"] == [
+        f"the board {board.label} starts this compass itself when not rm3100 started (-I -b 4 "
+        "start) (ist8310 -I -a 0x0E -R 12 start, rotation 12 (Pitch 180 deg)) "
+        "before the manifest"
+    ]
