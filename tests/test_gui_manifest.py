@@ -445,3 +445,20 @@ def test_a_board_compass_started_on_a_condition_says_when(vehicle: Any) -> None:
         "start) (ist8310 -I -a 0x0E -R 12 start, rotation 12 (Pitch 180 deg)) "
         "before the manifest"
     ]
+
+
+@pytest.mark.issue40
+def test_devices_come_in_start_order(vehicle: Any) -> None:
+    # The order the autostart runs them (docs/autostart.md): the declared drivers by their
+    # "order" (lower first), each instance by number, then the parameters no driver starts, by
+    # name.
+    real = load_drivers()
+    drivers = Drivers([real["ina238"], replace(real["ist8310"], order=5)], "test")
+    assert real["ina238"].order == 30
+    values, metadata = vehicle
+    staged = dict(values, INA238_INST=0b11, IST8310_INST=1, BMM350_INST=1, AK09916_INST=1)
+    staged.update(INA238_1A=0, INA238_1B=3, INA238_1C=0x44)
+    staged.update(IST8310_0A=0, IST8310_0B=1, IST8310_0C=0x0E)
+    staged.update(BMM350_0A=0, BMM350_0B=1, BMM350_0C=0x14)
+    order = [d["instance"] for d in devices(staged, metadata, drivers)]
+    assert order == ["IST8310#0", "INA238#0", "INA238#1", "AK09916#0", "BMM350#0"]
