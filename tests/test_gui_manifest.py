@@ -462,3 +462,16 @@ def test_devices_come_in_start_order(vehicle: Any) -> None:
     staged.update(BMM350_0A=0, BMM350_0B=1, BMM350_0C=0x14)
     order = [d["instance"] for d in devices(staged, metadata, drivers)]
     assert order == ["IST8310#0", "INA238#0", "INA238#1", "AK09916#0", "BMM350#0"]
+
+
+@pytest.mark.issue40
+def test_a_rotation_without_a_name_is_shown_as_its_number(vehicle: Any) -> None:
+    # PX4's Rotation enum (src/lib/conversion/rotation.h) names 0..40 (ROTATION_MAX is 41): a
+    # staged 41 (the page stages what a ground station may send) is shown as its number.
+    values, metadata = vehicle
+    staged = dict(values, RM3100_INST=1, RM3100_0A=0, RM3100_0B=4, RM3100_0C=0x20)
+    staged.update(RM3100_0P=41)
+    board = load_boards().by_name("accton-godwit_ga1")
+    (found,) = [d for d in devices(staged, metadata, load_drivers(), board)
+                if d["instance"] == "RM3100#0"]  # fmt: skip
+    assert found["problems"][0].endswith("; this instance's rotation 41 is not used")
