@@ -460,8 +460,27 @@ def test_devices_come_in_start_order(vehicle: Any) -> None:
     staged.update(INA238_1A=0, INA238_1B=3, INA238_1C=0x44)
     staged.update(IST8310_0A=0, IST8310_0B=1, IST8310_0C=0x0E)
     staged.update(BMM350_0A=0, BMM350_0B=1, BMM350_0C=0x14)
-    order = [d["instance"] for d in devices(staged, metadata, drivers)]
-    assert order == ["IST8310#0", "INA238#0", "INA238#1", "AK09916#0", "BMM350#0"]
+    found = devices(staged, metadata, drivers)
+    assert [d["instance"] for d in found] == [
+        "IST8310#0", "INA238#0", "INA238#1", "AK09916#0", "BMM350#0",
+    ]  # fmt: skip
+    # an instance no driver starts: no driver, no kind, and it says so
+    assert {k: found[3][k] for k in ("driver", "kind", "problems", "location")} == {
+        "driver": None, "kind": "", "problems": ["no driver declared for parameter AK09916"],
+        "location": "I2C bus 1, 0x0C",
+    }  # fmt: skip
+    assert (found[0]["driver"], found[0]["kind"]) == ("ist8310", "magnetometer")
+    # A ground station that has not got a parameter's _INST (yet): the others are still read.
+    del staged["IST8310_INST"], staged["INA238_INST"]
+    assert [d["instance"] for d in devices(staged, metadata, drivers)] == [
+        "AK09916#0", "BMM350#0",
+    ]  # fmt: skip
+    # A structured parameter without instances has no _INST to read, whatever a GCS holds.
+    (ina,) = [e for e in metadata["parameters"] if e["name"] == "INA238"]
+    single = {k: v for k, v in ina.items() if k != "max_instances"} | {"name": "ACME"}
+    with_single = {"parameters": [*metadata["parameters"], single]}
+    found = devices(dict(staged, ACME_INST=1, ACME_0A=0), with_single, drivers)
+    assert [d["instance"] for d in found] == ["AK09916#0", "BMM350#0"]
 
 
 @pytest.mark.issue40
