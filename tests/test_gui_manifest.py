@@ -494,3 +494,30 @@ def test_a_rotation_without_a_name_is_shown_as_its_number(vehicle: Any) -> None:
     (found,) = [d for d in devices(staged, metadata, load_drivers(), board)
                 if d["instance"] == "RM3100#0"]  # fmt: skip
     assert found["problems"][0].endswith("; this instance's rotation 41 is not used")
+
+
+@pytest.mark.issue40
+def test_a_board_starting_a_compass_twice_claims_each_address(vehicle: Any) -> None:
+    # A script may start one driver at two addresses of a bus ("ist8310 -X -b 1 -a 0x0C start"
+    # then the driver's default 0x0E): each start claims its own address, whatever its rank.
+    values, metadata = vehicle
+    v6c = load_boards().by_name("px4_fmu-v6c")
+    (ist,) = [s for s in v6c.devices if s.driver == "ist8310" and s.bus == 1]
+    first = replace(ist, address=0x0C, args="-X -b 1 -a 0x0C -R 10 start")
+    board = replace(v6c, devices=(first, ist))
+    staged = dict(values, IST8310_INST=1, IST8310_0A=0, IST8310_0B=1, IST8310_0C=0x0E)
+    (found,) = [d for d in devices(staged, metadata, load_drivers(), board)
+                if d["instance"] == "IST8310#0"]  # fmt: skip
+    assert found["problems"][0].startswith(
+        "the board Pixhawk 6C (FMUv6C) starts this compass itself (ist8310 -X -b 1 -R 10 start,"
+    )
+
+
+@pytest.mark.issue40
+def test_a_leaf_the_ground_station_lacks_counts_as_unset(vehicle: Any) -> None:
+    # A GCS that has not read INA238_0B (the I2C bus) yet: the bus is unset, as 0 would be.
+    values, metadata = vehicle
+    staged = {k: v for k, v in values.items() if not k.startswith("INA238_")}
+    staged.update(INA238_INST=1, INA238_0A=0, INA238_0C=0x45)
+    (ina,) = [d for d in devices(staged, metadata, load_drivers()) if d["parameter"] == "INA238"]
+    assert ina["problems"] == ["i2c bus_id is 0 (unset; buses are numbered from 1)"]
