@@ -298,7 +298,9 @@ NEW_TESTS="$NEW_TESTS|test_mavlink_messages|test_identity|test_serving"
 # (22 min); after 305 tested, 298 killed, 7 survived (all 7 equivalent), 100%; 3 untested: the
 # `continue` lines that occur three times (mutmut 2's line-text lookup), each planted by hand
 # as `break`: killed. timeline's last survivor (the legend's swatches 10 px below their words)
-# is killed by test_timeline.py's test_timeline_legend_swatch_sits_on_the_row_of_its_words.
+# is killed by test_timeline.py's test_timeline_legend_swatch_sits_on_the_row_of_its_words:
+# timeline after, run afresh (13 min): 201 mutants, 201 tested, 167 killed, 34 survived (all 34
+# equivalent), 100%.
 # drivers, boards and the remainders of gui-vehicle, gui-app, autostart: not run yet.
 
 if [ "$#" -eq 0 ]; then
