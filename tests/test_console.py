@@ -112,3 +112,53 @@ def test_console_driver_lines_as_px4_prints_them() -> None:
     ]
     assert starts[0].text == "lsm9ds1_mag #0 on SPI bus 1"
     assert [s.internal for s in starts] == [True, False, True, True]
+
+
+def _boot_console(log: str) -> tuple[object, str]:
+    """A real log (read with pyulog) and its boot console as PX4 logged it."""
+    from pyulog import ULog
+    from shared_data import shared_file
+
+    ulog = ULog(str(shared_file(log)))  # skips with the reason when ../shared is absent
+    (pieces,) = ulog.msg_info_multiple_dict["boot_console_output"]
+    return ulog, "".join("".join(p) for p in pieces)
+
+
+def _devid_bus(device_id: int) -> tuple[int, int, int]:
+    """PX4's DeviceId bit fields: bus type (bits 0-2), bus (3-7), address (8-15)."""
+    return device_id & 0x7, (device_id >> 3) & 0x1F, (device_id >> 8) & 0xFF
+
+
+def test_console_an_i2c_bus_is_the_device_ids_not_the_external_index_of_px4_1_11() -> None:
+    # sample_log_small.ulg, PX4 v1.11.2 (a Cube: its board lists external I2C bus 2 before
+    # bus 1): "ak09916 #0 on I2C bus 1 (external, equal to '-b 2')" and "ms4525_airspeed #0 on
+    # I2C bus 2 (external, equal to '-b 1')". The "-b" there is the n-th external bus (PX4 1.11's
+    # -X -b; PX4-Autopilot#15679 made it the bus number after 1.11); the device IDs the log
+    # recorded for the same chips name the printed bus: sensor_mag's 0x90C09 (I2C, bus 1, 0x0C)
+    # and differential_pressure's (I2C, bus 2, 0x28).
+    ulog, console = _boot_console("sample_log_small.ulg")
+    recorded = {
+        _devid_bus(int(d.data["device_id"][0]))
+        for d in ulog.data_list
+        if d.name in ("sensor_mag", "differential_pressure")
+    }
+    assert {(1, 1, 0x0C), (1, 2, 0x28)} <= recorded  # I2C is bus type 1
+    starts = {s.driver: s for s in started_drivers(console)}
+    assert (starts["ak09916"].bus_kind, starts["ak09916"].bus) == ("I2C", 1)
+    assert (starts["ms4525_airspeed"].bus_kind, starts["ms4525_airspeed"].bus) == ("I2C", 2)
+    assert starts["ak09916"].external and starts["ms4525_airspeed"].external
+
+
+def test_console_the_launchers_bus_is_the_bus_its_driver_prints() -> None:
+    # frrs_ekf_failure.ulg, PX4 1.15 beta: i2c_launcher probes a bus by its number and runs
+    # "<driver> -X -b <that number>", and since PX4-Autopilot#15679 an I2C driver's -b is the
+    # board's bus number, the one its start line prints: "ina228 -X -b 1 -t 1 start" and
+    # "ina228 #0 on I2C bus 1 (external) address 0x45" are one device, started once.
+    _, console = _boot_console("frrs_ekf_failure.ulg")
+    assert "running 'ina228 -X -b 1 -t 1 start'" in console
+    assert "ina228 #0 on I2C bus 1 (external) address 0x45" in console
+    (ina,) = [s for s in started_drivers(console) if s.driver == "ina228"]
+    assert (ina.bus_kind, ina.bus, ina.address, ina.external, ina.launcher) == (
+        "I2C", 1, 0x45, True, True,
+    )  # fmt: skip
+    assert "[i2c_launcher]" in ina.text  # the start is the launcher's line

@@ -15,6 +15,12 @@ from px4params.vehicle.timeline import COLORS, render_svg
 
 NS = "{http://www.w3.org/2000/svg}"
 GREEN, AMBER, RED, GREY = "#2e7d32", "#f9a825", "#c62828", "#9e9e9e"
+LEGEND_WORDS = (
+    "nominal / may arm",
+    "warning",
+    "critical / refused",
+    "missing, nobody told (legacy)",
+)
 
 
 def _run(duration: float = 10.0, **changes) -> RunResult:
@@ -216,6 +222,20 @@ def test_timeline_legend_names_each_color() -> None:
         assert float(swatch.get("y")) + 12 > float(words.get("y")) - 12
     for words, after in itertools.pairwise(follows):
         assert float(words.get("x")) + 7 * len(words.text) <= float(after.get("x"))
+
+
+def test_timeline_legend_swatch_sits_on_the_row_of_its_words() -> None:
+    # SVG text's y is its baseline: a line of font-size f fills the em box from y - f down to
+    # y. A legend's swatch belongs to its words when its middle lies in that box (a swatch
+    # below the baseline reads as the key of the row beneath).
+    root = _svg(_run())
+    legend = [r for r in root.iter(f"{NS}rect") if r.get("width") == "12"]
+    words = [t for t in root.iter(f"{NS}text") if t.text in LEGEND_WORDS]
+    assert len(legend) == len(words) == 4
+    for swatch, text in zip(legend, words, strict=True):
+        middle = float(swatch.get("y")) + float(swatch.get("height")) / 2
+        baseline, size = float(text.get("y")), float(text.get("font-size"))
+        assert baseline - size <= middle <= baseline, (text.text, middle, baseline)
 
 
 def test_timeline_keeps_a_glitch_shorter_than_a_pixel() -> None:

@@ -10,7 +10,10 @@ The lines read, as PX4's ``I2CSPIDriverBase`` and ``i2c_launcher`` print them::
     INFO  [i2c_launcher] Found address 0x45, running 'ina228 -X -b 1 -t 1 start'
 
 "(external)" is PX4's flag for a bus outside the flight controller; a line without it is an
-internal bus. The bus number is PX4's (the device ID's), not the "-b" option's.
+internal bus. The bus number is PX4's (the device ID's). The "-b" of "equal to '-b 2'" is PX4
+1.11's n-th external bus; since PX4-Autopilot#15679 an I2C driver's "-b" is the board's bus
+number, the one its line prints, and i2c_launcher (in PX4 1.15's logs) passes the bus it
+probed as "-b": its "-b" and the driver line's bus name the same bus.
 """
 
 from __future__ import annotations
