@@ -3,7 +3,7 @@ times are not): runs ``benches/instructions.rs`` (``cargo bench --no-run`` build
 bench profile, as criterion's figures are) N times and 0 times, and divides the difference.
 
     python benches/instructions.py [--n 2000] [--compact] [OP ...]
-    python benches/instructions.py --table [--before REV] [--c DIR] [--rounds 9]
+    python benches/instructions.py --table [--compact] [--before REV] [--c DIR] [--rounds 9]
 
 ``--compact`` counts the firmware build of the core (feature ``compact``: every value through
 one small walk, built for size; see ``benches/size.py``). ``encode``/``decode`` run the codec
@@ -14,7 +14,8 @@ from and into a leaf list as a host does (the encoder and decoder over a source 
 times, those of the core at ``--before`` (built in a worktree of its own, ``/tmp/px4params-
 before-REV``, with this tree's bench harness, so that both run the same calls), and the C
 baseline's (``--c``, default ``../shared/anchors/dronecan-c``: dronecan_dsdlc-generated C on
-libcanard v0, built here with ``cc -O2``), with the ratios to C. Times are medians of
+libcanard v0, built here with ``cc -O2``), with the ratios to C; with ``--compact``, of both
+cores' firmware builds. Times are medians of
 ``--rounds`` rounds in which each build times its call and then the C code's on the same
 message in the same process (the rounds of the two builds alternate), so that this machine's
 drift falls on all alike; ratios of times are taken within one process. Cargo runs under
@@ -52,6 +53,7 @@ TABLE = [
     ("file_read_response/encode", "rd0_enc"), ("file_read_response/decode", "rd0_dec"),
     ("battery/receive", None), ("battery/receive_into", None),
     ("battery/receive_decode", None), ("battery/receive_into_decode", None),
+    ("battery/encode_leaves", None), ("battery/decode_leaves", None),
 ]  # fmt: skip
 C_DIR = ROOT.parent / "shared" / "anchors" / "dronecan-c"
 
@@ -137,9 +139,9 @@ def timed(binary: Path, op: str, lib: Path, iters: int) -> tuple[float, float | 
 
 
 def table(args: argparse.Namespace) -> int:
-    after = build(False)
+    after = build(args.compact)
     tree, target = before_tree(args.before)
-    before = build(False, tree, target)
+    before = build(args.compact, tree, target)
     c_exe, c_lib = build_c(args.c, Path("/tmp/px4params-cbench"))
     rows = []
     for op, c_op in TABLE:
@@ -154,7 +156,9 @@ def table(args: argparse.Namespace) -> int:
                     times[f"c_{name}"].append(c_ns)
         med = {k: statistics.median(v) if v else None for k, v in times.items()}
         rows.append((op, ours, c, med))
-    print(f"before: {args.before}; after: this tree; C: {args.c.name} (cc -O2); "
+    build_name = "compact (firmware)" if args.compact else "host"
+    print(f"{build_name} build; before: {args.before}; after: this tree; C: {args.c.name} "
+          "(cc -O2); "
           f"instructions per call (callgrind), ns per call (median of {args.rounds} rounds, "
           "C timed beside each build in one process)")  # fmt: skip
     print(f"| {'row':28} | instr before | instr after | instr C | after/C | ns before | "
