@@ -922,6 +922,30 @@ class TestTurnByTurnSetup:
             server.close()
         assert waits == [0.5, 0.25]
 
+    def test_while_a_list_streams_a_turn_waits_no_longer_than_until_the_next_burst(
+        self, store: px4params.Store, clock: Clock, monkeypatch: pytest.MonkeyPatch
+    ) -> None:
+        """The list's bursts go out at param_rate even when nothing arrives."""
+        waits: list[float] = []
+
+        def waiting(readers: Any, writers: Any, errors: Any, timeout: float) -> Any:
+            waits.append(timeout)
+            return select.select(readers, writers, errors, 0)
+
+        monkeypatch.setattr(mavlink_server_module, "select", types.SimpleNamespace(select=waiting))
+        server = MavlinkParamServer(store, "127.0.0.1", 0, heartbeat_interval=3600, param_rate=40)
+        station = Station(server)  # bursts of 20 at 40 a second: one every 0.5 s
+        try:
+            station.send(mavlink.MAVLink_param_request_list_message(1, 1))
+            server.step(10.0)  # no stream yet when it waits; then the first burst
+            assert len(values(station.receive())) == 20
+            clock.now += 0.25
+            server.step(10.0)
+        finally:
+            station.close()
+            server.close()
+        assert waits == [10.0, 0.25]
+
 
 @pytest.mark.issue40
 class TestTurnByTurn:
