@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import hashlib
+import json
+import lzma
 import os
 import re
 import select
@@ -12,6 +14,7 @@ import struct
 import subprocess
 import sys
 import time
+import types
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
@@ -700,6 +703,248 @@ def turns(store: px4params.Store, tmp_path: Path) -> Iterator[tuple[MavlinkParam
     yield server, station
     station.close()
     server.close()
+
+
+@pytest.mark.issue40
+class TestTurnByTurnSetup:
+    """What the server sets up and when its turns act (issue 40, mutlinks): before
+    TestTurnByTurn, so that the mutation run's -x meets them first (these are the tests that
+    catch mutants of the constructor and of the turn's timing)."""
+
+    def test_param_value_of_a_payload_trimmed_below_10_bytes(self) -> None:
+        """MAVLink 2 trims the payload's trailing zeros: a PARAM_SET with no name and type 0 keeps
+        6 bytes (value, target system and component), still LEN bytes after the 10-byte header."""
+        frame = set_frame(mavlink.MAVLink(None), 1, 1, "", 0x01020304, 0)
+        assert frame[1] == 6
+        (parsed,) = mavlink.MAVLink(None).parse_buffer(frame)
+        assert param_value_of(parsed) == 0x01020304
+
+    def test_by_default_it_listens_on_loopback_at_udp_14550(
+        self, store: px4params.Store, monkeypatch: pytest.MonkeyPatch
+    ) -> None:
+        """MAVLink's UDP convention: 14550 is the ground station's port; loopback unless a host
+        is given. The socket is asked for that address (and given a free port: a test must not
+        take 14550 from a ground station on this machine)."""
+        asked: list[Any] = []
+
+        class Recording(socket.socket):
+            def bind(self, address: Any) -> None:
+                asked.append(address)
+                super().bind(("127.0.0.1", 0))
+
+        fake = types.SimpleNamespace(
+            socket=Recording, AF_INET=socket.AF_INET, SOCK_DGRAM=socket.SOCK_DGRAM
+        )
+        monkeypatch.setattr(mavlink_server_module, "socket", fake)
+        server = MavlinkParamServer(store)
+        server.close()
+        assert asked == [("127.0.0.1", 14550)]
+
+    def test_a_server_given_only_a_session_saves_through_it_and_names_the_store_by_its_file(
+        self, store: px4params.Store, tmp_path: Path, schema: px4params.Schema
+    ) -> None:
+        path = tmp_path / "vehicle.store"
+        store.save(path)
+        lines: list[str] = []
+        server = MavlinkParamServer(
+            store, "127.0.0.1", 0, session=Session(store, str(path)), log=lines.append,
+            heartbeat_interval=3600,
+        )  # fmt: skip
+        station = Station(server)
+        try:
+            got = station.exchange(set_frame(station.mav, 1, 1, "SYS_AUTOSTART", 4001, INT32))
+            index = NAMES.index("SYS_AUTOSTART")
+            assert values(got) == [("SYS_AUTOSTART", 4001, index, len(NAMES))]
+            capabilities = mavlink.MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES
+            command = mavlink.MAVLink_command_long_message(
+                1, 1, capabilities, 0, 1, 0, 0, 0, 0, 0, 0
+            )
+            version = station.exchange(command)[0]
+        finally:
+            station.close()
+            server.close()
+        assert lines == ["SYS_AUTOSTART = 4001, saved"]
+        saved = px4params.Store.load(path, schema, classic=CLASSIC)
+        assert saved.get("SYS_AUTOSTART") == 4001
+        digest = hashlib.sha256(("file:" + os.path.realpath(path)).encode()).digest()
+        assert version.uid == int.from_bytes(digest[:8], "little")
+        assert bytes(version.uid2) == digest[8:26]
+
+    def test_the_counters_start_at_zero_and_count_what_happened(
+        self, store: px4params.Store
+    ) -> None:
+        server = MavlinkParamServer(store, "127.0.0.1", 0)
+        station = Station(server)
+        try:
+            read = mavlink.MAVLink_param_request_read_message(1, 1, b"", 0)
+            assert len(values(station.exchange(read))) == 1  # no peer for the first heartbeat
+        finally:
+            station.close()
+            server.close()
+        assert server.stats == {
+            "received": 1,
+            "ignored": 0,
+            "sent": 1,
+            "accepted": 0,
+            "refused": 0,
+            "unsigned": 0,
+            "badly_signed": 0,
+            "param_set_dropped": 0,
+        }
+
+    def test_with_a_signing_key_unsigned_frames_are_dropped_and_counted(
+        self, store: px4params.Store
+    ) -> None:
+        """MAVLink 2 signing: a signed link drops unsigned frames (and a PARAM_SET among them
+        changes nothing)."""
+        server = MavlinkParamServer(
+            store, "127.0.0.1", 0, signing_key=bytes(range(32)), heartbeat_interval=3600
+        )
+        station = Station(server)
+        try:
+            read = mavlink.MAVLink_param_request_read_message(1, 1, b"", 0)
+            assert station.exchange(read) == []
+            assert station.exchange(set_frame(station.mav, 1, 1, "SYS_AUTOSTART", 7, INT32)) == []
+        finally:
+            station.close()
+            server.close()
+        assert (server.stats["unsigned"], server.stats["param_set_dropped"]) == (2, 1)
+        assert server.stats["received"] == 0 and store.get("SYS_AUTOSTART") == 0
+
+    def test_the_parameter_metadata_downloaded_with_mavlink_ftp_has_the_classic_entries(
+        self, schema: px4params.Schema
+    ) -> None:
+        """As QGC does: COMPONENT_METADATA (by MAV_CMD_REQUEST_MESSAGE) gives the general
+        file's mftp:// URI and CRC; the general file names the parameters' file (xz) and its
+        CRC; both are read with MAVLink FTP (OpenFileRO, ReadFile until EOF). The store's
+        classic parameters are there with their parameters.json entries as PX4 wrote them."""
+        entry = {"name": "SYS_AUTOSTART", "type": "Int32", "default": 0, "group": "System"}
+        store = px4params.Store(schema, classic=[ClassicParam("SYS_AUTOSTART", "Int32", 0, entry)])
+        server = MavlinkParamServer(store, "127.0.0.1", 0, heartbeat_interval=3600)
+        station = Station(server)
+        try:
+            command = mavlink.MAVLink_command_long_message(
+                1, 1, mavlink.MAV_CMD_REQUEST_MESSAGE, 0, 397, 0, 0, 0, 0, 0, 0
+            )
+            station.exchange(command)
+            frame = next(f for f in station.frames if int.from_bytes(f[7:10], "little") == 397)
+            payload = (frame[10 : 10 + frame[1]] + bytes(108))[:108]
+            _, general_crc, uri = struct.unpack("<II100s", payload)
+            general = ftp_download(station, uri.split(b"\0")[0].decode())
+            assert px4_hash_check([("", general)]) == general_crc  # crc32part over the bytes
+            (listed,) = json.loads(general)["metadataTypes"]
+            assert listed["type"] == 1  # COMP_METADATA_TYPE_PARAMETER
+            compressed = ftp_download(station, listed["uri"])
+        finally:
+            station.close()
+            server.close()
+        assert px4_hash_check([("", compressed)]) == listed["fileCrc"]
+        document = json.loads(lzma.decompress(compressed))
+        assert document["parameters"][0] == entry
+
+    # -- what is due at once, and how long a turn may wait (issue 40, mutlinks) -----------------
+
+    def test_at_a_clock_reading_0_the_first_turn_does_all_that_is_due(
+        self, store: px4params.Store, tmp_path: Path, schema: px4params.Schema, clock: Clock
+    ) -> None:
+        """time.monotonic()'s origin is undefined (it may read 0 or less): the first turn
+        sends the heartbeat and the health report, looks at the store file and sends a
+        requested list's first burst."""
+        clock.now = 0.0
+        path = tmp_path / "vehicle.store"
+        store.save(path)
+        gcs = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        gcs.bind(("127.0.0.1", 0))
+        gcs.setblocking(False)
+        line = "health: INA238#1 critical"
+        server = MavlinkParamServer(
+            store, "127.0.0.1", 0, save_path=path, gcs=[gcs.getsockname()], health=lambda: [line]
+        )
+        try:
+            other = Session(px4params.Store.load(path, schema, classic=CLASSIC), str(path))
+            other.commit(lambda: other.store.set("SYS_AUTOSTART", 4001))
+            mav = mavlink.MAVLink(None, srcSystem=255, srcComponent=190)
+            gcs.sendto(mavlink.MAVLink_param_request_list_message(1, 1).pack(mav), server.address)
+            server.step(0.0)
+            got = [m for f in _datagrams(gcs) for m in mavlink.MAVLink(None).parse_buffer(f)]
+        finally:
+            gcs.close()
+            server.close()
+        assert kinds(got) == ["HEARTBEAT", "STATUSTEXT"] + ["PARAM_VALUE"] * 21
+        assert got[1].text == line
+        index = NAMES.index("SYS_AUTOSTART")
+        assert (
+            values(got[2:4])
+            == [
+                ("SYS_AUTOSTART", 4001, index, len(NAMES)),  # another writer's save, announced
+                ("_HASH_CHECK", values(got[3:4])[0][1], 0xFFFF, len(NAMES)),  # the list's start
+            ]
+        )
+
+    def test_the_store_file_is_looked_at_again_once_poll_interval_has_passed(
+        self, store: px4params.Store, tmp_path: Path, schema: px4params.Schema, clock: Clock
+    ) -> None:
+        clock.now = 0.0
+        path = tmp_path / "vehicle.store"
+        store.save(path)
+        server = MavlinkParamServer(
+            store, "127.0.0.1", 0, save_path=path, heartbeat_interval=3600, poll_interval=0.25
+        )
+        station = Station(server)
+        try:
+            station.exchange(mavlink.MAVLink_heartbeat_message(6, 8, 0, 0, 0, 3))  # polled
+            other = Session(px4params.Store.load(path, schema, classic=CLASSIC), str(path))
+            other.commit(lambda: other.store.set("SYS_AUTOSTART", 4001))
+            clock.now = 0.25  # exactly poll_interval later
+            assert [name for name, *_ in values(turn(server, station))] == ["SYS_AUTOSTART"]
+        finally:
+            station.close()
+            server.close()
+
+    def test_a_turn_waits_for_datagrams_no_longer_than_until_the_next_heartbeat(
+        self, store: px4params.Store, clock: Clock, monkeypatch: pytest.MonkeyPatch
+    ) -> None:
+        """A quiet link still gets its heartbeat on time: a turn given 10 s to wait for a
+        datagram waits only until the next heartbeat is due."""
+        waits: list[float] = []
+
+        def waiting(readers: Any, writers: Any, errors: Any, timeout: float) -> Any:
+            waits.append(timeout)
+            return select.select(readers, writers, errors, 0)
+
+        monkeypatch.setattr(mavlink_server_module, "select", types.SimpleNamespace(select=waiting))
+        server = MavlinkParamServer(store, "127.0.0.1", 0, heartbeat_interval=0.5)
+        try:
+            server.step(10.0)  # a heartbeat is due now; the next in 0.5 s
+            clock.now += 0.25
+            server.step(10.0)
+        finally:
+            server.close()
+        assert waits == [0.5, 0.25]
+
+    def test_while_a_list_streams_a_turn_waits_no_longer_than_until_the_next_burst(
+        self, store: px4params.Store, clock: Clock, monkeypatch: pytest.MonkeyPatch
+    ) -> None:
+        """The list's bursts go out at param_rate even when nothing arrives."""
+        waits: list[float] = []
+
+        def waiting(readers: Any, writers: Any, errors: Any, timeout: float) -> Any:
+            waits.append(timeout)
+            return select.select(readers, writers, errors, 0)
+
+        monkeypatch.setattr(mavlink_server_module, "select", types.SimpleNamespace(select=waiting))
+        server = MavlinkParamServer(store, "127.0.0.1", 0, heartbeat_interval=3600, param_rate=40)
+        station = Station(server)  # bursts of 20 at 40 a second: one every 0.5 s
+        try:
+            station.send(mavlink.MAVLink_param_request_list_message(1, 1))
+            server.step(10.0)  # no stream yet when it waits; then the first burst
+            assert len(values(station.receive())) == 20
+            clock.now += 0.25
+            server.step(10.0)
+        finally:
+            station.close()
+            server.close()
+        assert waits == [10.0, 0.25]
 
 
 @pytest.mark.issue40
@@ -1411,6 +1656,39 @@ def _datagrams(sock: socket.socket) -> list[bytes]:
             out.append(sock.recv(65535))
         except BlockingIOError:
             return out
+
+
+def ftp_download(station: Station, uri: str) -> bytes:
+    """A file read with MAVLink FTP as QGC reads an mftp:// URI (the path after the scheme
+    and an optional [;comp=N]): OpenFileRO, then ReadFile at each offset until the NAK EOF
+    (payload: seq u16, session, opcode, size, req_opcode, burst_complete, padding u8,
+    offset u32, data)."""
+    path = re.sub(r"^mftp://(\[[^\]]*\])?", "", uri).encode()
+    header = struct.Struct("<HBBBBBBI")
+
+    def ask(opcode: int, session: int = 0, offset: int = 0, data: bytes = b"") -> tuple:
+        request = (header.pack(0, session, opcode, len(data), 0, 0, 0, offset) + data).ljust(
+            251, b"\0"
+        )
+        msg = mavlink.MAVLink_file_transfer_protocol_message(0, 1, 1, list(request))
+        (reply,) = [m for m in station.exchange(msg) if m.get_type() == "FILE_TRANSFER_PROTOCOL"]
+        raw = bytes(reply.payload)
+        _, session, code, size, _, _, _, _ = header.unpack_from(raw)
+        return session, code, raw[12 : 12 + size]
+
+    session, code, data = ask(4, data=path)  # OpenFileRO
+    assert code == 128, f"open {path!r}: NAK {data!r}"
+    (length,) = struct.unpack("<I", data)
+    content = b""
+    for _ in range(length // 239 + 2):  # bounded: one ReadFile per 239 bytes, then EOF
+        _, code, data = ask(5, session, len(content))  # ReadFile
+        if code == 129:
+            assert data[:1] == bytes([6])  # EOF
+            break
+        content += data
+    assert len(content) == length
+    ask(1, session)  # TerminateSession
+    return content
 
 
 @pytest.mark.issue40

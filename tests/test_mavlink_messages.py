@@ -175,3 +175,32 @@ def test_register_adds_to_a_dialect_and_keeps_its_own_definitions() -> None:
     assert dialect.mavlink_map[395] is own and dialect.mavlink_map[0] is own  # type: ignore[attr-defined]
     assert dialect.mavlink_map[397] is mavlink_messages.message_classes()[397]  # type: ignore[attr-defined]
     assert set(dialect.mavlink_map) == {0, 395, 397}  # type: ignore[attr-defined]
+
+
+def test_a_telemetry_log_holding_the_messages_is_indexed_by_mavutils_mmap_reader(
+    tmp_path: Any, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A .tlog (each frame after its 8-byte big-endian time in microseconds, as QGC and
+    MAVProxy write them) with COMPONENT_METADATA in it, read by pymavlink's mavmmaplog (the
+    indexing reader of MAVExplorer): it asks each message class for its instance field, a
+    field name or None (no field of these messages tells instances apart)."""
+    monkeypatch.setattr(mavutil, "mavlink", mavlink)  # the MAVLink 2 dialect, for this log
+    mavlink_messages.register(mavlink)
+    mav = mavlink.MAVLink(None, srcSystem=1, srcComponent=1)
+    frames = [
+        mavlink.MAVLink_heartbeat_message(6, 8, 0, 0, 0, 3).pack(mav),
+        mavlink_messages.component_metadata(99, 0xCAFEF00D, "mftp://etc/c.json").pack(mav),
+        mavlink_messages.component_metadata(100, 0xCAFEF00D, "mftp://etc/d.json").pack(mav),
+    ]
+    path = tmp_path / "flight.tlog"
+    path.write_bytes(
+        b"".join(struct.pack(">Q", 1_700_000_000_000_000 + i) + f for i, f in enumerate(frames))
+    )
+    log = mavutil.mavmmaplog(str(path))
+    try:
+        assert log.counts == {0: 1, 397: 2}
+        assert log.messages["COMPONENT_METADATA"].uri == "mftp://etc/c.json"
+        got = log.recv_match(type="COMPONENT_METADATA")
+        assert (got.time_boot_ms, got.file_crc, got.uri) == (99, 0xCAFEF00D, "mftp://etc/c.json")
+    finally:
+        log.close()
