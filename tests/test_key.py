@@ -295,3 +295,13 @@ def test_a_hint_is_worked_out_for_up_to_1000_characters() -> None:
     with pytest.raises(InstanceError) as info:
         Key.parse("a" * 1001)
     assert str(info.value) == f"'{'a' * 12}...{'a' * 6} (1001 characters)' {NO_NAME}"
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize(
+    "name",
+    ["SYS_AUTOSTART", "INA238#1", "INA238#1[4]", "INA238#1.bus.i2c.address", "INA238_SHARED.x"],
+)
+def test_a_key_is_written_back_as_the_name_it_was_read_from(name: str) -> None:
+    """The naming rule both ways: ``NAME``, ``NAME#N``, ``NAME#N[k]``, ``NAME#N.path``."""
+    assert str(Key.parse(name)) == name

@@ -203,3 +203,16 @@ def test_a_variant_stands_for_its_union_field_at_any_depth(tmp_path: Path) -> No
         ("DEEP_0_S_U_TYPE", "DEEP#0.s.u._tag"),
         ("DEEP_0_S_LOW", "DEEP#0.s.u.low"),
     ]
+
+
+@pytest.mark.parametrize("instanced_q", [False, True])
+def test_a_name_with_two_underscores_in_a_row_is_read(tmp_path: Path, instanced_q: bool) -> None:
+    """``Q_``'s leaf ``v`` is ``Q__V`` (a parameter name may end in ``_``), also beside an
+    instanced ``Q`` (whose names are ``Q_<N>_...``): a classic of that name clashes."""
+    files = {"Qu.1.0.dsdl": "# @param Q_\nuint4 p_version\nuint8 v\n@sealed\n"}
+    if instanced_q:
+        files["Q.1.0.dsdl"] = "# @max_instances 2\nuint4 p_version\nuint8 v\n@sealed\n"
+    store = _store(tmp_path, files, [ClassicParam("Q__V", "Int32", 0)])
+    with pytest.raises(FlatError) as info:
+        LongNames(store)
+    assert str(info.value) == "Q_: DroneCAN name Q__V (Q_.v) is the name of another parameter"
