@@ -16,7 +16,7 @@ import pytest
 from core_calls import CountingCore, count_core_calls
 from px4params.errors import InstanceError
 from px4params.store import flat
-from px4params.store.key import Key
+from px4params.store.key import MAX_LEAF, Key
 
 
 @pytest.fixture
@@ -217,3 +217,91 @@ def abbreviated_repr(given: Any) -> str:
     import re
 
     return re.escape(repr(given))
+
+
+# -- the parts of a name, at their bounds (issue 40) -------------------------------------------
+#: The refusal of text that is no name, word for word.
+NO_NAME = (
+    "is not a parameter name (expected NAME, NAME#N, NAME#N[k] or NAME#N.path, "
+    "e.g. INA238#0.bus.i2c.address)"
+)
+
+
+@pytest.mark.issue40
+def test_an_instance_number_is_16_bit() -> None:
+    """Instance numbers are 16-bit in the core: 65535 is the last one a name can carry."""
+    assert Key.parse("INA238#65535") == Key("INA238", 65535, None)
+    with pytest.raises(InstanceError) as info:
+        Key.parse("INA238#65536")
+    assert str(info.value) == "INA238#65536: instance 65536 is out of range"
+
+
+@pytest.mark.issue40
+def test_a_leaf_number_is_at_most_max_leaf() -> None:
+    """``[k]`` up to ``MAX_LEAF`` (2**31) is a leaf number; one more names no leaf of any
+    storable value, by ``parse`` and by ``at`` alike."""
+    assert MAX_LEAF == 2**31
+    assert Key.parse(f"INA238#1[{MAX_LEAF}]") == Key("INA238", 1, MAX_LEAF)
+    assert Key.parse("INA238#1").at(MAX_LEAF) == Key("INA238", 1, MAX_LEAF)
+    for refuse in (lambda: Key.parse(f"INA238#1[{MAX_LEAF + 1}]"),
+                   lambda: Key.parse("INA238#1").at(MAX_LEAF + 1)):  # fmt: skip
+        with pytest.raises(InstanceError) as info:
+            refuse()
+        assert str(info.value) == "INA238#1[2147483649]: no leaf [2147483649]"
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize(
+    "text", ["INA238#", "INA238#X", "INA238#1[X]", "INA238#1[]", "INA238#1[4", "INA238#1.",
+             "INA238#1.x-", "INA238#1.x y", "INA238#1.4x", "#1", "INA238#1[4]x"],
+)  # fmt: skip
+def test_what_the_naming_rule_does_not_hold_is_no_name(text: str) -> None:
+    """``NAME#N[k]`` or ``NAME#N.path``: N and k are ASCII digits, a path starts with a letter or
+    ``_`` and holds letters, digits, ``_``, ``.`` and brackets; nothing follows."""
+    with pytest.raises(InstanceError) as info:
+        Key.parse(text)
+    assert str(info.value) == f"'{text}' {NO_NAME}"
+
+
+@pytest.mark.issue40
+def test_a_path_of_one_letter_is_a_path() -> None:
+    assert Key.parse("INA238#0.x") == Key("INA238", 0, "x")
+    assert Key.parse("INA238_SHARED._") == Key("INA238_SHARED", None, "_")
+
+
+@pytest.mark.issue40
+def test_an_inexact_name_is_shown_as_typed_when_short_and_abbreviated_when_long() -> None:
+    """The refusal shows a name of up to 32 characters as typed, the padding that made it
+    inexact included; a longer one by its ends and length (``px4params.numbers.abbreviated``)."""
+    short = " INA238#0.bus.i2c.address_abcdef"  # 32 characters, a space first
+    with pytest.raises(InstanceError) as info:
+        Key.parse(short)
+    assert str(info.value).startswith(f"'{short}' is not a parameter name: names are exact")
+    long = "ina238#0.bus.i2c.address_abcdefg"  # 33 characters... with the padding below
+    for text in (long + "h", " " + long):
+        with pytest.raises(InstanceError) as info:
+            Key.parse(text)
+        shown = f"{text.strip()[:12]}...{text.strip()[-6:]} ({len(text.strip())} characters)"
+        if len(text.strip()) <= 32:
+            shown = text.strip()
+        assert str(info.value).startswith(f"'{shown}' is not a parameter name: names are exact")
+
+
+@pytest.mark.issue40
+def test_a_hint_is_worked_out_for_up_to_1000_characters() -> None:
+    """(Bounded work for a refusal: text beyond 1000 characters gets the plain refusal.)"""
+    with pytest.raises(InstanceError, match=r"\(did you mean A{1000}\?\)$"):
+        Key.parse("a" * 1000)
+    with pytest.raises(InstanceError) as info:
+        Key.parse("a" * 1001)
+    assert str(info.value) == f"'{'a' * 12}...{'a' * 6} (1001 characters)' {NO_NAME}"
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize(
+    "name",
+    ["SYS_AUTOSTART", "INA238#1", "INA238#1[4]", "INA238#1.bus.i2c.address", "INA238_SHARED.x"],
+)
+def test_a_key_is_written_back_as_the_name_it_was_read_from(name: str) -> None:
+    """The naming rule both ways: ``NAME``, ``NAME#N``, ``NAME#N[k]``, ``NAME#N.path``."""
+    assert str(Key.parse(name)) == name

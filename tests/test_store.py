@@ -1193,3 +1193,31 @@ def test_set_encoded_sets_the_value_and_leaves_the_default(store: px4params.Stor
     assert store.get("INA238#0.current", default=True) == 327  # the type's @default
     store.set_encoded("INA238#0", store.encoded("INA238#0"), default=True)
     assert store.get("INA238#0.current", default=True) == 300
+
+
+@pytest.mark.issue40
+def test_a_saturated_leaf_write_is_held_to_its_range_as_stored(tmp_path: Path) -> None:
+    """``saturate`` clamps a number to what its field's type holds (the cast mode "saturated",
+    docs/codec.md); the field's @min/@max then still apply to what would be stored (``set``:
+    only ``force`` lets them pass). A uint8 cell given 300 would keep 255, above its @max 50:
+    refused, nothing written; 40 is kept. The cells are the last field: a type ending in a
+    variable array is kept whole, its length prefix in the bytes (docs/store-format.md)."""
+    root = tmp_path / "acme"
+    root.mkdir()
+    (root / "Table.1.0.dsdl").write_text(
+        "# @max_instances 1\nuint4 p_version\nuint8 gain\n# @max 100\n"
+        "uint8[<=200] cells\n# @max 50\n@sealed\n"
+    )
+    schema = px4params.load_schema([str(root)], use_env=False)
+    store = px4params.Store(schema, classic=[])
+    store.add("TABLE#0")
+    store.set("TABLE#0", {"gain": 5, "cells": [1, 2, 3]})
+    for value in (51, 300):
+        with pytest.raises(ValueRangeError, match=rf"^TABLE#0\.cells\[1\]: {value} is above 50"):
+            store.set("TABLE#0.cells[1]", value, saturate=True)
+    with pytest.raises(ValueRangeError, match=r"^TABLE#0\.gain: 300 is above 100 \(@max\)$"):
+        store.set("TABLE#0.gain", 300, saturate=True)
+    assert store.get("TABLE#0") == {"p_version": 0, "gain": 5, "cells": [1, 2, 3]}
+    store.set("TABLE#0.cells[1]", 40, saturate=True)
+    store.set("TABLE#0.gain", 300, saturate=True, force=True)  # force: the type's 255 is kept
+    assert store.get("TABLE#0") == {"p_version": 0, "gain": 255, "cells": [1, 40, 3]}
