@@ -145,7 +145,7 @@ def test_two_leaves_of_one_instance_under_one_name_are_refused(tmp_path: Path) -
     }
     with pytest.raises(FlatError) as info:
         LongNames(_store(tmp_path, files))
-    message = "CL: DroneCAN name CL_0_A_B (CL#0.a.b) is the name of another parameter"
+    message = "CL: DroneCAN name CL_0_A_B is the name of two of its leaves, CL#0.a_b and CL#0.a.b"
     assert str(info.value) == message
 
 

@@ -114,7 +114,7 @@ class LongNames:
             for slot in lay:
                 part = parts[slot.path]
                 if part in by_part:  # one instance's names clash with each other
-                    self._clash(spec, None if spec.shared else 0, slot)
+                    self._clash(spec, None if spec.shared else 0, slot, by_part[part])
                 by_part[part] = slot
             self._slots[spec.name] = by_part
             self._check_length(spec, lay)
@@ -148,11 +148,20 @@ class LongNames:
                         f"characters (at most {MAX_LONG_NAME_LEN})"
                     )
 
-    def _clash(self, spec: ParamSpec, number: int | None, slot: FlatSlot) -> None:
+    def _clash(
+        self, spec: ParamSpec, number: int | None, slot: FlatSlot, leaf: FlatSlot | None = None
+    ) -> None:
+        """Refuses a long name taken twice: by another parameter, or by ``leaf`` of the same."""
         name = self.name_of(spec, number, self._parts[spec.name][slot.path])
-        where = f"{spec.instance_name(number or 0)}.{slot.path}"
+        instance = spec.instance_name(number or 0)
+        if leaf is not None:
+            raise FlatError(
+                f"{spec.name}: DroneCAN name {name} is the name of two of its leaves, "
+                f"{instance}.{leaf.path} and {instance}.{slot.path}"
+            )
         raise FlatError(
-            f"{spec.name}: DroneCAN name {name} ({where}) is the name of another parameter"
+            f"{spec.name}: DroneCAN name {name} ({instance}.{slot.path}) is the name of another "
+            "parameter"
         )
 
     def _names_of(self, spec: ParamSpec) -> list[tuple[str, int | None, FlatSlot]]:
