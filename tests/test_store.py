@@ -1040,20 +1040,26 @@ def test_the_names_a_store_remembers_are_bounded(store: px4params.Store) -> None
     assert 0 < len(store._resolved) <= 4096
 
 
-@pytest.mark.issue40
-def test_a_type_ending_in_a_variable_array_is_kept_whole(tmp_path: Path) -> None:
-    """Values are kept without tail array optimization (docs/store-format.md): the array of a
-    type whose last field is a variable-length array keeps its length prefix, and every read,
-    write and range check of the store takes the bytes so."""
+def _table_store(tmp_path: Path) -> px4params.Store:
+    """A store holding TABLE#0: a gain (@max 100) and, last, a variable array of cells (@max 50),
+    so that the type's value is kept whole, its length prefix in the bytes."""
     root = tmp_path / "acme"
     root.mkdir()
     (root / "Table.1.0.dsdl").write_text(
         "# @max_instances 2\nuint4 p_version\nuint8 gain\n# @max 100\n"
         "uint8[<=200] cells\n# @max 50\n@sealed\n"
     )
-    schema = px4params.load_schema([str(root)], use_env=False)
-    store = px4params.Store(schema, classic=[])
+    store = px4params.Store(px4params.load_schema([str(root)], use_env=False), classic=[])
     store.add("TABLE#0")
+    return store
+
+
+@pytest.mark.issue40
+def test_a_type_ending_in_a_variable_array_is_kept_whole(tmp_path: Path) -> None:
+    """Values are kept without tail array optimization (docs/store-format.md): the array of a
+    type whose last field is a variable-length array keeps its length prefix, and every read,
+    write and range check of the store takes the bytes so."""
+    store = _table_store(tmp_path)
     assert store.get("TABLE#0") == {"p_version": 0, "gain": 0, "cells": []}
     # 4 + 8 bits, then the length prefix (8 bits for up to 200 cells): 3 bytes, not 2
     assert store.encoded("TABLE#0", default=True) == bytes(3)
@@ -1202,15 +1208,7 @@ def test_a_saturated_leaf_write_is_held_to_its_range_as_stored(tmp_path: Path) -
     only ``force`` lets them pass). A uint8 cell given 300 would keep 255, above its @max 50:
     refused, nothing written; 40 is kept. The cells are the last field: a type ending in a
     variable array is kept whole, its length prefix in the bytes (docs/store-format.md)."""
-    root = tmp_path / "acme"
-    root.mkdir()
-    (root / "Table.1.0.dsdl").write_text(
-        "# @max_instances 1\nuint4 p_version\nuint8 gain\n# @max 100\n"
-        "uint8[<=200] cells\n# @max 50\n@sealed\n"
-    )
-    schema = px4params.load_schema([str(root)], use_env=False)
-    store = px4params.Store(schema, classic=[])
-    store.add("TABLE#0")
+    store = _table_store(tmp_path)
     store.set("TABLE#0", {"gain": 5, "cells": [1, 2, 3]})
     for value in (51, 300):
         with pytest.raises(ValueRangeError, match=rf"^TABLE#0\.cells\[1\]: {value} is above 50"):
