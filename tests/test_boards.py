@@ -232,12 +232,21 @@ def test_each_release_reads_the_newest_snapshot_before_it() -> None:
     assert release_version("1.15.0-beta1") == (1, 15, 0)
 
 
+@pytest.mark.issue40
+def test_every_uint32_ver_sw_release_is_a_version() -> None:
+    """ULog's ver_sw_release is a uint32 (0xMMmmpptt, the last byte the release type): its
+    smallest and largest values are versions too."""
+    assert release_version(0) == (0, 0, 0)
+    assert release_version(0xFFFFFFFF) == (255, 255, 255)
+
+
 @pytest.mark.parametrize(
     ("release", "message"),
     [
         ("latest", "release 'latest' is no PX4 version (expected e.g. 'v1.13.0')"),
         ("v1", "release 'v1' is no PX4 version (expected e.g. 'v1.13.0')"),
         (-1, "release -1 is no ULog ver_sw_release (0 .. 2**32-1)"),
+        (1 << 32, "release 4294967296 is no ULog ver_sw_release (0 .. 2**32-1)"),
     ],
 )
 def test_a_release_that_is_no_version_is_refused(release: str | int, message: str) -> None:
