@@ -590,6 +590,8 @@ NAME_CHARS = "AZaz09_#[].-+ \t\n" + "\u0663\u00b2\u0130\u017f\u212a\u00e9"
 @example("K#1.\u212a")  # the Kelvin sign: [A-Za-z] is ASCII
 @example("A[1].b")
 @example("A#")
+@example("A#01")
+@example("A#0[00]")
 def test_names_are_split_as_the_expression_matches(text: str) -> None:
     match = re.fullmatch(_KEY, text)
     expected = match.group("name", "instance", "index", "path") if match else None
@@ -624,6 +626,11 @@ EXACT = "names are exact, in upper case with ASCII digits and no spaces, as PX4'
         ("INA238#0 ", "INA238#0"),
         ("INA238#0\t", "INA238#0"),
         ("sys_autostart", "SYS_AUTOSTART"),
+        # one instance, one name: its number has no leading zeros
+        ("INA238#01", "INA238#1"),
+        ("INA238#000001", "INA238#1"),
+        ("INA238#00[4]", "INA238#0[4]"),
+        ("INA238#1[04]", "INA238#1[4]"),
     ],
 )
 def test_an_inexact_name_is_refused_with_the_exact_one(text: str, hint: str) -> None:

@@ -19,8 +19,8 @@ __all__ = ["MAX_INSTANCE", "MAX_LEAF", "Key"]
 #: A name: ``NAME``, ``NAME#N``, then ``[k]`` or ``.path``. :func:`_split_key` reads it by hand
 #: (``re`` costs a short command a third of Python's start); the tests hold it to this.
 _KEY = (
-    r"(?P<name>[A-Za-z][A-Za-z0-9_]*)(?:#(?P<instance>[0-9]+))?"
-    r"(?:\[(?P<index>[0-9]+)\]|\.(?P<path>[A-Za-z_][A-Za-z0-9_.\[\]]*))?"
+    r"(?P<name>[A-Za-z][A-Za-z0-9_]*)(?:#(?P<instance>0|[1-9][0-9]*))?"
+    r"(?:\[(?P<index>0|[1-9][0-9]*)\]|\.(?P<path>[A-Za-z_][A-Za-z0-9_.\[\]]*))?"
 )
 _LETTERS = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz")
 _NAME_START = _LETTERS
@@ -29,9 +29,13 @@ _PATH_START = _LETTERS | frozenset("_")
 _PATH_REST = _NAME_REST | frozenset(".[]")
 
 
-def _split_key(text: str) -> tuple[str, str | None, str | None, str | None] | None:
+def _split_key(
+    text: str, leading_zeros: bool = False
+) -> tuple[str, str | None, str | None, str | None] | None:
     """The groups name, instance, index and path of ``re.fullmatch(_KEY, text)``, or None.
-    (Each part ends at a character it cannot hold: the expression never backtracks.)"""
+    (Each part ends at a character it cannot hold: the expression never backtracks.) A number
+    is written without leading zeros, so that one instance has one name (``INA238#01`` is
+    ``INA238#1`` typed inexactly); ``leading_zeros`` lets them through, for the hint."""
     end = len(text)
     if not end or text[0] not in _NAME_START:
         return None
@@ -42,12 +46,14 @@ def _split_key(text: str) -> tuple[str, str | None, str | None, str | None] | No
     instance = index = path = None
     if i < end and text[i] == "#":
         j = _digits_end(text, i + 1)
-        if j == i + 1:
+        if j == i + 1 or (not leading_zeros and j > i + 2 and text[i + 1] == "0"):
             return None
         instance, i = text[i + 1 : j], j
     if i < end and text[i] == "[":
         j = _digits_end(text, i + 1)
         if j == i + 1 or j == end or text[j] != "]":
+            return None
+        if not leading_zeros and j > i + 2 and text[i + 1] == "0":
             return None
         index, i = text[i + 1 : j], j + 1
     elif i < end and text[i] == ".":
@@ -73,14 +79,15 @@ def _digits_end(text: str, i: int) -> int:
 
 def _exact_name_hint(text: str) -> str | None:
     """The name ``text`` was probably meant to be, written exactly (no padding, the parameter
-    part in upper case, ASCII digits), when that is a name and not ``text``; else None."""
+    part in upper case, ASCII digits without leading zeros), when that is a name and not
+    ``text``; else None."""
     import unicodedata
 
     candidate = "".join(
         str(unicodedata.decimal(c)) if c.isdecimal() and c not in _DIGITS else c
         for c in text.strip()
     )
-    match = _split_key(candidate)
+    match = _split_key(candidate, leading_zeros=True)
     if match is None:
         return None
     name, instance, index, path = match
