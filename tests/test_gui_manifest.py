@@ -98,6 +98,23 @@ def test_a_compass_the_board_starts_itself(vehicle: Any) -> None:
     assert found["AK09916#0"]["problems"] == []
 
 
+def test_a_barometer_the_board_starts_itself(vehicle: Any) -> None:
+    # boards/zeroone/x6/init/rc.board_sensors: "if ! icp201xx -X start" then
+    # "spa06 -X -a 0x77 start": the board's own SPA06 on any external I2C bus (1, 2, 3) at 0x77.
+    # PX4's I2C drivers refuse a second instance at one bus and address, so the manifest's
+    # start would fail there; at 0x76, or on the internal bus 4, it is the manifest's own.
+    values, metadata = vehicle
+    staged = dict(values, SPA06_INST=0b111, SPA06_0A=0, SPA06_0B=2, SPA06_0C=0x77)
+    staged.update(SPA06_1A=0, SPA06_1B=2, SPA06_1C=0x76, SPA06_2A=0, SPA06_2B=4, SPA06_2C=0x77)
+    board = load_boards().by_name("zeroone_x6")
+    found = {d["instance"]: d for d in devices(staged, metadata, load_drivers(), board)}
+    assert found["SPA06#0"]["problems"] == [
+        f"the board {board.label} starts this barometer itself when not icp201xx started (-X "
+        "start) (spa06 -X -a 0x77 start) before the manifest"
+    ]
+    assert found["SPA06#1"]["problems"] == [] and found["SPA06#2"]["problems"] == []
+
+
 @pytest.mark.parametrize(
     ("line", "error"),
     [

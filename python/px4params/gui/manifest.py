@@ -195,29 +195,34 @@ def _rotation_words(entry: Mapping[str, Any], rotation: int) -> str:
 def board_starts(
     board: Board, c: Configured, value: Mapping[str, Any], entry: Mapping[str, Any]
 ) -> str | None:
-    """Why compass ``c`` cannot start on ``board``: the board's own script starts the same
-    driver at the same place first (with its own ``-R`` rotation); None when it does not."""
+    """Why device ``c`` cannot start on ``board``: the board's own script starts the same
+    driver at the same place first (PX4's I2C/SPI drivers refuse a second instance there, so
+    the manifest's start fails), a compass with its own ``-R`` rotation; None when it does not."""
     if c.driver is None or c.bus_kind not in ("i2c", "spi"):
         return None
     for start in board.devices:
-        if start.kind != "mag" or start.driver != c.driver.name:
+        if start.driver != c.driver.name:
             continue
         if start.bus_kind.lower() != c.bus_kind or c.bus_id not in board.buses_of(start):
             continue
         address = start.address if start.address is not None else c.driver.default_address
         if c.bus_kind == "i2c" and address != c.address:
             continue
-        theirs = "no rotation given" if start.rotation is None else "rotation "
-        if start.rotation is not None:
-            theirs += _rotation_words(entry, start.rotation)
         mine = value.get("rotation")
+        started = f"{start.driver} {start.args}"
+        if start.kind == "mag" or start.rotation is not None or isinstance(mine, int):
+            # a sensor's orientation: whose rotation PX4 uses
+            started += ", no rotation given" if start.rotation is None else ", rotation "
+            if start.rotation is not None:
+                started += _rotation_words(entry, start.rotation)
         ours = ""
         if isinstance(mine, int):
             ours = f"; this instance's rotation {_rotation_words(entry, mine)} is not used"
         when = f" when {start.when}" if start.when else ""
+        what = "compass" if start.kind == "mag" else c.driver.kind
         return (
-            f"the board {board.label} starts this compass itself{when} "
-            f"({start.driver} {start.args}, {theirs}) before the manifest{ours}"
+            f"the board {board.label} starts this {what} itself{when} ({started}) "
+            f"before the manifest{ours}"
         )
     return None
 
@@ -230,7 +235,7 @@ def devices(
 ) -> list[dict[str, Any]]:
     """The instances ``values`` configure (each parameter's ``_INST`` mask), in start order,
     each with its location in ``status`` form and the problems that would stop it starting:
-    autostart's, two instances at one bus address, and on ``board`` a compass its own script
+    autostart's, two instances at one bus address, and on ``board`` a device its own script
     already starts."""
     entries = {
         e["name"]: e
