@@ -691,3 +691,67 @@ def test_a_location_beyond_a_device_id_has_none(schema, specs):
     assert (c.location, c.device_id, c.problems) == ("serial 101", None, ())
     entry = autostart.PlanEntry(c.driver, "INA238", (c,))
     assert plan_lines([entry])[1] == "  INA238#0     serial 101"
+
+
+# -- issue 40, the remainder of autostart.py's mutation run (mutveh2) ----------------------------
+
+
+@pytest.mark.issue40
+def test_a_refused_bus_kind_names_every_kind_the_driver_takes(drivers):
+    """drivers.toml's lis3mdl takes I2C and SPI (PX4 starts lis3mdl with -I/-X or -s/-S): on a
+    serial port it cannot start, and the problem lists both kinds it takes."""
+    value = {"bus": {"serial": {"port": 2, "baudrate": 57600}}}
+    c = autostart.configured_value(value, drivers, "LIS3MDL", "LIS3MDL#0")
+    assert c.problems == ("bus kind serial is not accepted by lis3mdl (accepts: i2c, spi)",)
+
+
+@pytest.mark.issue40
+def test_the_plan_names_every_problem_of_an_instance(drivers):
+    """An instance with two problems (no bus, no driver) says both on its NOT STARTED line."""
+    c = autostart.configured_value({}, drivers, "NO_SUCH_DEVICE", "NO_SUCH_DEVICE#0")
+    line = plan_lines([autostart.PlanEntry(None, "NO_SUCH_DEVICE", (c,))])[1]
+    assert line.endswith(
+        "NOT STARTED: its value has no bus; no driver declared for parameter NO_SUCH_DEVICE"
+    )
+
+
+@pytest.mark.issue40
+def test_an_airframe_manifest_holds_classic_parameters(tmp_path, monkeypatch):
+    """load_manifest reads an airframe with the parameter set 'px4params param' and 'px4params
+    run' use: the structured ones and PX4's classic parameters (the bundled list when
+    $PX4PARAMS_PARAMETERS_JSON names none)."""
+    monkeypatch.delenv("PX4PARAMS_PARAMETERS_JSON", raising=False)
+    frame = tmp_path / "frame.txt"
+    frame.write_text("param add INA238#0\nparam set SYS_AUTOSTART 4001\n")
+    store = load_manifest(None, frame)
+    assert store.get("SYS_AUTOSTART") == 4001
+    assert store.instances("INA238") == ["INA238#0"]
+
+
+@pytest.mark.issue40
+def test_an_airframe_error_is_raised_once_and_printed_nowhere(tmp_path, capsys):
+    """The error of an airframe read for a manifest is the ManifestError's one line (the CLI
+    prints it once): load_manifest itself writes nothing to stdout or stderr."""
+    frame = tmp_path / "frame.txt"
+    frame.write_text("param add INA238#0\nparam set INA238#0[4] banana\n")
+    with pytest.raises(ManifestError) as err:
+        load_manifest(None, frame)
+    assert str(err.value).startswith(f"{frame}:2: ")
+    assert capsys.readouterr() == ("", "")
+
+
+@pytest.mark.issue40
+def test_an_airframe_manifest_holds_the_parameters_of_extra_dsdl_folders(tmp_path):
+    """With --dsdl DIR, an airframe's manifest has DIR's instanced types as parameters, as a
+    store opened with the same folders has (docs/codec.md: a type with @max_instances in a
+    namespace folder acme is a parameter PITOT#0..)."""
+    acme = tmp_path / "acme"
+    acme.mkdir()
+    (acme / "Pitot.1.0.dsdl").write_text(
+        "# Pitot tube\n# @max_instances 2\n\nuint4 p_version\nfloat16 scale\n@sealed\n"
+    )
+    frame = tmp_path / "frame.txt"
+    frame.write_text("param add PITOT#0\nparam add INA238#0\n")
+    store = load_manifest(None, frame, [str(acme)])
+    assert store.instances("PITOT") == ["PITOT#0"]
+    assert store.instances("INA238") == ["INA238#0"]

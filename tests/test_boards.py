@@ -8,6 +8,7 @@ the script it cites.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import os
 import re
@@ -246,7 +247,11 @@ def test_every_uint32_ver_sw_release_is_a_version() -> None:
         ("latest", "release 'latest' is no PX4 version (expected e.g. 'v1.13.0')"),
         ("v1", "release 'v1' is no PX4 version (expected e.g. 'v1.13.0')"),
         (-1, "release -1 is no ULog ver_sw_release (0 .. 2**32-1)"),
-        (1 << 32, "release 4294967296 is no ULog ver_sw_release (0 .. 2**32-1)"),
+        pytest.param(
+            1 << 32,
+            "release 4294967296 is no ULog ver_sw_release (0 .. 2**32-1)",
+            marks=pytest.mark.issue40,  # the mutation run's survivors (issue 40)
+        ),
     ],
 )
 def test_a_release_that_is_no_version_is_refused(release: str | int, message: str) -> None:
@@ -583,3 +588,310 @@ def test_docs_python_example_prints_what_it_says(capsys: pytest.CaptureFixture[s
     exec(compile(blocks[0], str(DOCS), "exec"), {})
     promised = re.findall(r"# (.+)$", blocks[0], re.M)
     assert capsys.readouterr().out.splitlines() == promised
+
+
+# -- issue 40: what the mutation run of boards.py let through -----------------------------------
+
+
+@pytest.mark.issue40
+def test_the_bundled_table_is_read_once_and_no_caller_can_change_it() -> None:
+    """load_boards() is read once and shared by every caller (migration, the page's manifest):
+    a row one caller could change would be changed for all of them."""
+    table = load_boards()
+    assert load_boards() is table
+    board = table.by_name("px4_fmu-v5", "v1.13.0")
+    v6x = table.by_name("px4_fmu-v6x")
+    assert board is not None and v6x is not None
+    rows: list[tuple[object, str]] = [
+        (board, "label"),
+        (board.devices[0], "rotation"),
+        (board.switches[0], "bus"),
+        (v6x.i2c_launcher_probes[0], "address"),
+    ]
+    for row, field in rows:
+        with pytest.raises(dataclasses.FrozenInstanceError):
+            setattr(row, field, None)
+
+
+@pytest.mark.issue40
+def test_a_board_missing_from_a_release_is_described_by_its_nearest_row() -> None:
+    """by_name's rule: a release older than the board's first snapshot reads its oldest row, one
+    after the board was removed its newest. PX4-Autopilot's trees at the snapshots' commits:
+    boards/zeroone/x6 first in release/1.18 (83c4f4e5), not at v1.15.0; boards/intel/aerofc-v1
+    at v1.11.0 only; boards/nxp/fmurt1062-v1 at v1.11.0 .. v1.14.0, not at v1.15.0."""
+    table = load_boards()
+    x6 = table.by_name("zeroone_x6", "v1.15.0")  # one row, v1.18 and main
+    assert x6 is not None and x6.releases == ("v1.18", "main")
+    tropic = table.by_name("nxp_mr-tropic", "v1.15.0")  # rows v1.18, main: the oldest
+    assert tropic is not None and tropic.releases == ("v1.18",)
+    aerofc = table.by_name("intel_aerofc-v1")  # today's main: its one row, v1.11.0
+    assert aerofc is not None and aerofc.releases == ("v1.11.0",)
+    fmurt = table.by_name("nxp_fmurt1062-v1", "v1.15.0")  # rows v1.11.0, v1.12.0..v1.14.0
+    assert fmurt is not None and fmurt.releases == ("v1.12.0", "v1.13.0", "v1.14.0")
+
+
+def _with_snapshot(text: str, release: str) -> str:
+    """GOOD with one more [[snapshot]] (before its first [[board]])."""
+    snapshot = (
+        f'[[snapshot]]\nrelease = "{release}"\nref = "tag {release}"\n'
+        f'commit = "{"ab" * 20}"\ndate = "2024-08-29"\n\n'
+    )
+    at = text.index("[[board]]")
+    return text[:at] + snapshot + text[at:]
+
+
+LAUNCHER = """
+[[i2c_launcher]]
+releases = ["v1.14.0"]
+path = "src/systemcmds/i2c_launcher/i2c_launcher.hpp"
+args = "-X -b {bus} -t {bus} start"
+probe = [
+  { driver = "ina226", kind = "power", address = 0x41, line = 74 },
+  { driver = "ina228", kind = "power", address = 0x45, line = 75 },
+]
+"""
+
+
+def _rc_switch(param: str, driver: str, when: str, line: int, internal: str = "false") -> str:
+    """One inline [[rc_sensors]] switch entry, started with -X (-I when internal) and no -b."""
+    args = "start -I" if internal == "true" else "start -X"
+    return (
+        f'  {{ param = "{param}", driver = "{driver}", kind = "other", bus_kind = "I2C", '
+        f'internal = {internal}, args = "{args}", when = "{when}", line = {line} }},\n'
+    )
+
+
+def _rc_sensors(*switch: str, release: str = "v1.14.0") -> str:
+    return (
+        f'\n[[rc_sensors]]\nreleases = ["{release}"]\n'
+        f'path = "ROMFS/px4fmu_common/init.d/rc.sensors"\nswitch = [\n{"".join(switch)}]\n'
+    )
+
+
+RC_SENSORS = _rc_sensors(_rc_switch("SENS_EN_MS4525DO", "ms4525do", "SENS_EN_MS4525DO == 1", 20))
+
+
+def _launching(text: str) -> str:
+    """GOOD whose board runs the i2c_launcher on bus 1, with LAUNCHER's row."""
+    return text.replace("i2c_launcher_buses = []", "i2c_launcher_buses = [1]") + LAUNCHER
+
+
+def _refused(text: str) -> str:
+    with pytest.raises(BoardsFileError) as err:
+        parse_boards(text)
+    assert "\n" not in str(err.value)
+    return str(err.value)
+
+
+def _board(text: str, release: str = "v1.14.0") -> Board:
+    board = parse_boards(text).by_name("px4_fmu-v5", release)
+    assert board is not None
+    return board
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize(
+    ("old", "new", "field", "value"),
+    [
+        # the bounds each error message states are in the range: a bus 0..255, an I2C address
+        # 0..127 (7 bits), a line 1..100000, a bus list's numbers 0..255
+        ("rotation = 10", "rotation = 10\nbus = 0", "bus", 0),
+        ("rotation = 10", "rotation = 10\nbus = 255", "bus", 255),
+        ("rotation = 10", "rotation = 10\naddress = 0", "address", 0),
+        ("rotation = 10", "rotation = 10\naddress = 0x7f", "address", 0x7F),
+        ("line = 28", "line = 1", "line", 1),
+        ("line = 28", "line = 100000", "line", 100_000),
+        ("internal_i2c_buses = [3]", "internal_i2c_buses = [0, 255]", "internal", (0, 255)),
+    ],
+)
+def test_a_value_at_a_bound_of_its_range_is_taken(
+    old: str, new: str, field: str, value: object
+) -> None:
+    board = _board(GOOD.replace(old, new, 1))
+    ist = board.devices[0]
+    read = {
+        "bus": ist.bus,
+        "address": ist.address,
+        "line": int(ist.source.split(" at ")[0].rsplit(":", 1)[1]),
+        "internal": board.internal_i2c_buses,
+    }
+    assert read[field] == value
+
+
+@pytest.mark.issue40
+def test_launcher_values_at_the_bounds_of_their_ranges_are_taken() -> None:
+    text = _launching(GOOD).replace("i2c_launcher_buses = [1]", "i2c_launcher_buses = [0, 255]")
+    text = text.replace("address = 0x41, line = 74", "address = 0, line = 1")
+    text = text.replace("address = 0x45, line = 75", "address = 0x7f, line = 100000")
+    board = _board(text)
+    assert board.i2c_launcher_buses == (0, 255)
+    assert [p.address for p in board.i2c_launcher_probes] == [0, 0x7F]
+    assert [p.source.split(" at ")[0].rsplit(":", 1)[1] for p in board.i2c_launcher_probes] == [
+        "1",
+        "100000",
+    ]
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize(
+    ("old", "new", "message"),
+    [
+        (
+            "rotation = 10",
+            "rotation = 10\nbus = 256",
+            "board 'px4_fmu-v5' at v1.14.0 device 1: bus 256 is out of range 0..255",
+        ),
+        (
+            "line = 28",
+            "line = 100001",
+            "board 'px4_fmu-v5' at v1.14.0 device 1: line 100001 is out of range 1..100000",
+        ),
+        (
+            "line = 28",
+            "line = true",
+            "board 'px4_fmu-v5' at v1.14.0 device 1: line True is not an integer",
+        ),
+        (
+            "internal = true",
+            "internal = 1",
+            "board 'px4_fmu-v5' at v1.14.0 device 1: internal 1 is not true or false",
+        ),
+        (
+            'label = "Pixhawk 4"',
+            "label = 4",
+            "board 'px4_fmu-v5' at v1.14.0: label 4 is not a non-empty string",
+        ),
+        (
+            "internal_i2c_buses = [3]",
+            "internal_i2c_buses = [256]",
+            "board 'px4_fmu-v5' at v1.14.0: internal_i2c_buses [256] is not a list of integers "
+            "0..255",
+        ),
+        (
+            'releases = ["v1.14.0"]',
+            'releases = [""]',
+            "board 'px4_fmu-v5': releases [''] is not a non-empty list of strings",
+        ),
+        (
+            'releases = ["v1.14.0"]',
+            'releases = "v1.14.0"',
+            "board 'px4_fmu-v5': releases 'v1.14.0' is not a non-empty list of strings",
+        ),
+        (
+            'param = "SENS_EN_X"',
+            'param = "sens_en_x"',
+            "board 'px4_fmu-v5' at v1.14.0 switch 1: param 'sens_en_x' is not a PX4 parameter name",
+        ),
+        (
+            'release = "v1.14.0"',
+            'release = "latest"',
+            "snapshot 'latest': release is not 'main' nor a PX4 version like 'v1.14.0'",
+        ),
+    ],
+)
+def test_a_bad_value_is_named_with_its_row(old: str, new: str, message: str) -> None:
+    assert old in GOOD
+    assert _refused(GOOD.replace(old, new, 1)) == f"boards.toml: {message}"
+
+
+@pytest.mark.issue40
+def test_bad_rows_of_the_file_as_a_whole_are_named() -> None:
+    snapshot = GOOD[: GOOD.index("[[board]]")]
+    assert _refused(snapshot + GOOD) == "boards.toml: snapshot 'v1.14.0': release appears twice"
+    board = GOOD[GOOD.index("[[board]]") :]
+    assert _refused("snapshot = []\n" + board) == "boards.toml: top level: no [[snapshot]] table"
+    assert (
+        _refused("snapshot = [1]\n" + board) == "boards.toml: snapshot 1: expected a table, got int"
+    )
+    assert _refused('rc_sensors = "rc.sensors"\n' + GOOD) == (
+        "boards.toml: top level: rc_sensors is not a list of tables"
+    )
+    two = _with_snapshot(GOOD, "v1.15.0")
+    assert _refused(two.replace('releases = ["v1.14.0"]', 'releases = ["v1.16.0"]')) == (
+        "boards.toml: board 'px4_fmu-v5': release 'v1.16.0' is not a [[snapshot]] "
+        "(known: v1.14.0, v1.15.0)"
+    )
+    # a board row over two snapshots is named with both
+    both = two.replace('releases = ["v1.14.0"]', 'releases = ["v1.14.0", "v1.15.0"]')
+    assert _refused(both.replace("internal = true", "internal = 1")) == (
+        "boards.toml: board 'px4_fmu-v5' at v1.14.0, v1.15.0 device 1: "
+        "internal 1 is not true or false"
+    )
+
+
+@pytest.mark.issue40
+def test_bad_rows_of_rc_sensors_and_the_launcher_are_named() -> None:
+    assert _refused(GOOD + RC_SENSORS.replace('param = "SENS_EN_MS4525DO", ', "")) == (
+        "boards.toml: rc_sensors 1 switch 1: missing key 'param'"
+    )
+    assert _refused(GOOD + RC_SENSORS + RC_SENSORS) == (
+        "boards.toml: rc_sensors 2: release 'v1.14.0' has two [[rc_sensors]] rows"
+    )
+    assert _refused(_launching(GOOD).replace("address = 0x45", "address = 0x80")) == (
+        "boards.toml: i2c_launcher 1 probe 2: address 128 is out of range 0..127"
+    )
+    assert _refused(_launching(GOOD).replace("line = 75", "line = 100001")) == (
+        "boards.toml: i2c_launcher 1 probe 2: line 100001 is out of range 1..100000"
+    )
+    assert _refused(_launching(GOOD) + LAUNCHER) == (
+        "boards.toml: i2c_launcher 2: release 'v1.14.0' has two [[i2c_launcher]] rows"
+    )
+    wide = _launching(GOOD).replace("i2c_launcher_buses = [1]", "i2c_launcher_buses = [256]")
+    assert _refused(wide) == (
+        "boards.toml: board 'px4_fmu-v5' at v1.14.0: "
+        "i2c_launcher_buses [256] is not a list of integers 0..255"
+    )
+
+
+@pytest.mark.issue40
+def test_a_start_behind_ver_hwcmp_is_only_the_listed_boards() -> None:
+    """rc.sensors' ``if ver hwcmp A B`` runs its block on boards A and B only (PX4's ``ver
+    hwcmp``: "Compare hardware version (returns 0 on match)", any of its arguments), written
+    ``board in A,B`` by scripts/transcribe_boards.py; ``if ! ver hwcmp`` on every other board."""
+    switches_of_v5 = _rc_sensors(
+        _rc_switch("SENS_EN_A", "drv_a", "SENS_EN_A == 1 and board in PX4_FMU_V5X,PX4_FMU_V5", 10),
+        _rc_switch("SENS_EN_B", "drv_b", "SENS_EN_B == 1 and board in PX4_FMU_V6X", 11),
+        _rc_switch("SENS_EN_C", "drv_c", "not board in PX4_FMU_V5", 12),
+        _rc_switch("SENS_EN_D", "drv_d", "not board in PX4_FMU_V6X", 13),
+    )
+    board = _board(GOOD + switches_of_v5)
+    started = sorted({s.param for s in board.switches})
+    assert started == ["SENS_EN_A", "SENS_EN_D", "SENS_EN_X"]
+
+
+# The generated docs page is GitHub-flavoured Markdown: a "|" inside a table cell is written "\|"
+# (GFM, tables: "include a pipe in a cell's content by escaping it").
+
+
+@pytest.mark.issue40
+def test_docs_tables_escape_a_pipe_and_name_every_internal_bus() -> None:
+    piped = GOOD.replace('args = "-I -R 10 start"', 'args = "-I -R 10 start || true"')
+    page = render_markdown(parse_boards(piped))
+    assert "| `-I -R 10 start \\|\\| true` |" in page
+    # an rc.sensors start with -I and no -b probes every internal I2C bus of the board
+    internal = _rc_sensors(
+        _rc_switch("SENS_EN_MS4525DO", "ms4525do", "SENS_EN_MS4525DO == 1", 20, internal="true")
+    )
+    page = render_markdown(parse_boards(GOOD + internal))
+    rows = [line for line in page.splitlines() if line.startswith("| SENS_EN_MS4525DO |")]
+    assert rows == [
+        "| SENS_EN_MS4525DO | ms4525do | other | I2C every internal |  |  | yes | "
+        "SENS_EN_MS4525DO == 1 | `start -I` | 20 |"
+    ]
+
+
+@pytest.mark.issue40
+def test_docs_list_a_launcher_of_one_address_and_every_rc_sensors_row() -> None:
+    # a launcher row that tries one address is listed with its command
+    one = _launching(GOOD).replace(
+        '  { driver = "ina228", kind = "power", address = 0x45, line = 75 },\n', ""
+    )
+    page = render_markdown(parse_boards(one))
+    assert "**from v1.14.0**: `-X -b {bus} -t {bus} start`" in page
+    # rc.sensors read at v1.14.0 and v1.18 but not at v1.15.0 (between them): both rows listed
+    text = _with_snapshot(_with_snapshot(GOOD, "v1.15.0"), "v1.18") + RC_SENSORS
+    text += _rc_sensors(
+        _rc_switch("SENS_EN_MS4525DO", "ms4525do", "SENS_EN_MS4525DO == 1", 30), release="v1.18"
+    )
+    page = render_markdown(parse_boards(text))
+    assert "**v1.14.0**" in page and "**v1.18**" in page
