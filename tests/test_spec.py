@@ -15,6 +15,7 @@ import json
 import math
 import os
 import re
+import struct
 import subprocess
 import sys
 import urllib.request
@@ -492,3 +493,394 @@ def test_param_set_outside_the_list_is_one_line_and_force_stores_it(
     assert result.returncode == 0
     assert result.stderr == f"px4params: warning: --force: {NOT_A_PORT}; stored anyway\n"
     assert px4params.Store.load(store_file).get("INA238#1.bus.serial.port") == 105
+
+
+# -- issue 40: the parameter set's rules, each from the docs (docs/codec.md's tags, the module
+# doc of px4params.store.spec), for mutants of store/spec.py that test_spec.py let through ---
+
+
+def _acme(tmp_path: Path, files: dict[str, str]) -> Schema:
+    """The bundled types and a namespace ``acme`` of ``{file name: DSDL text}``."""
+    root = tmp_path / "acme"
+    root.mkdir(parents=True)
+    for name, text in files.items():
+        (root / name).write_text(text)
+    return px4params.load_schema([root], use_env=False, cache_dir=tmp_path / "cache")
+
+
+def _dsdl(tags: str, fields: str = "uint8 level\n") -> str:
+    """A sealed type whose doc carries ``tags``."""
+    return f"# A test type\n{tags}\n\nuint4 p_version\n{fields}@sealed\n"
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize(
+    ("type_name", "name"),
+    [
+        # docs/codec.md and the module doc: px.Ina238 is INA238, px.Ina238Shared INA238_SHARED
+        ("px.Ina238", "INA238"),
+        ("px.Ina238Shared", "INA238_SHARED"),
+        # an underscore where a capital follows a small letter or a digit, at each end of
+        # those ranges: a..z, 0..9 before, A..Z after
+        ("acme.GammaAlpha", "GAMMA_ALPHA"),
+        ("acme.JazzZone", "JAZZ_ZONE"),
+        ("acme.Mk0Able", "MK0_ABLE"),
+        ("acme.Mk9Zulu", "MK9_ZULU"),
+        ("acme.deep.PitotTube", "PITOT_TUBE"),  # the short name: after the last dot
+        ("acme.Pitot_Tube", "PITOT_TUBE"),  # an underscore written is kept, none added
+        ("Pitot", "PITOT"),
+    ],
+)
+def test_a_parameter_is_named_after_its_type_in_upper_snake_case(type_name: str, name: str) -> None:
+    from px4params.store.spec import default_param_name
+
+    assert default_param_name(type_name) == name
+
+
+@pytest.mark.issue40
+def test_an_instanced_and_a_shared_parameter_and_their_slots(tmp_path: Path) -> None:
+    from px4params.store.spec import parameter_specs
+
+    schema = _acme(
+        tmp_path,
+        {
+            "PitotTube.1.0.dsdl": _dsdl("# @max_instances 3"),
+            "TubeShared.1.0.dsdl": _dsdl("# @param TUBE_COMMON"),
+            "Plain.1.0.dsdl": _dsdl("# not a parameter: no @max_instances, no @param"),
+        },
+    )
+    specs = {s.name: s for s in parameter_specs(schema) if s.data_type.key.startswith("acme.")}
+    assert sorted(specs) == ["PITOT_TUBE", "TUBE_COMMON"]
+    tube, common = specs["PITOT_TUBE"], specs["TUBE_COMMON"]
+    # @max_instances 3: PITOT_TUBE#0..#2, three slots; @param alone: one value, no #N
+    assert (tube.shared, tube.max_instances, tube.slots) == (False, 3, 3)
+    assert (tube.instance_name(2), tube.instance_key(2).instance) == ("PITOT_TUBE#2", 2)
+    assert (common.shared, common.max_instances, common.slots) == (True, None, 1)
+    assert (common.instance_name(0), common.instance_key(0).instance) == ("TUBE_COMMON", None)
+
+
+@pytest.mark.issue40
+def test_the_parameter_set_is_sorted_by_name_and_takes_each_types_newest_version(
+    tmp_path: Path,
+) -> None:
+    from px4params.store.spec import parameter_specs
+
+    schema = _acme(
+        tmp_path,
+        {
+            "Zeta.1.0.dsdl": _dsdl("# @max_instances 1"),
+            "Zeta.1.2.dsdl": _dsdl("# @max_instances 2", "uint2 level\nuint6 more\n"),
+            "Zeta.1.1.dsdl": _dsdl("# @max_instances 1", "uint8 level\nuint4 more\n"),
+            "Alpha.2.0.dsdl": _dsdl("# @max_instances 1"),
+        },
+    )
+    specs = parameter_specs(schema)
+    names = [s.name for s in specs]
+    assert names == sorted(names) and {"ALPHA", "ZETA", "INA238"} <= set(names)
+    by_name = {s.name: s for s in specs}
+    assert by_name["ZETA"].data_type.key == "acme.Zeta.1.2"
+    assert by_name["ZETA"].max_instances == 2  # the newest version's doc
+    assert (
+        by_name["INA238"].data_type.key == "px.Ina238.1.1"
+    )  # px.Ina238.1.0 is kept for translating
+
+
+@pytest.mark.issue40
+def test_a_name_of_16_characters_is_a_parameter_and_of_17_is_refused(tmp_path: Path) -> None:
+    from px4params.errors import ParameterSetError
+    from px4params.store.spec import parameter_specs
+
+    # PX4's names have at most 16 characters (MAVLink's PARAM_VALUE.param_id is char[16]).
+    ok = _acme(tmp_path / "ok", {"Abcdefghijklmnop.1.0.dsdl": _dsdl("# @max_instances 1")})
+    assert "ABCDEFGHIJKLMNOP" in {s.name for s in parameter_specs(ok)}
+    file = tmp_path / "long" / "acme" / "Abcdefghijklmnopq.1.0.dsdl"
+    long = _acme(tmp_path / "long", {file.name: _dsdl("# @max_instances 1")})
+    with pytest.raises(ParameterSetError) as e:
+        parameter_specs(long)
+    assert str(e.value) == (
+        f"{file}: parameter name 'ABCDEFGHIJKLMNOPQ' of acme.Abcdefghijklmnopq is not an "
+        "upper-case name of at most 16 characters (set one with @param NAME)"
+    )
+
+
+@pytest.mark.issue40
+def test_two_types_under_one_parameter_name_are_refused(tmp_path: Path) -> None:
+    from px4params.errors import ParameterSetError
+    from px4params.store.spec import parameter_specs
+
+    schema = _acme(
+        tmp_path,
+        {
+            "PitotTube.1.0.dsdl": _dsdl("# @max_instances 2"),
+            "Other.1.0.dsdl": _dsdl("# @param PITOT_TUBE"),
+        },
+    )
+    with pytest.raises(ParameterSetError) as e:
+        parameter_specs(schema)
+    assert str(e.value) == (
+        f"{tmp_path / 'acme' / 'PitotTube.1.0.dsdl'}: parameter name PITOT_TUBE of "
+        "acme.PitotTube is already used by acme.Other (set another with @param NAME)"
+    )
+
+
+#: Types whose defaults are worked out by hand below from their DSDL (docs/codec.md: ``@default
+#: V``, for a nested field ``@default i2c.address 0x45``, repeatable; fields without one are
+#: zero; a union takes its first variant unless a path default names another).
+DEFAULTS_DSDL = {
+    "Pair.1.0.dsdl": "# A pair\n\nuint4 p_version\nuint8 a\n# A\n# @default 5\nbool b\n@sealed\n",
+    "Probe.1.0.dsdl": (
+        "# A probe\n# @max_instances 2\n\nuint4 p_version\npx.Bus.1.0 bus\n# Bus\n"
+        "# @default spi.chip_select 2\n# @default spi.bus_id 1\nbool armed\nfloat16 gain\n"
+        "int8 offset\n# Offset\n# @default -3\nPair.1.0[2] pairs\nuint8[<=4] log\n"
+        "Pair.1.0[<=2] more\n@sealed\n"
+    ),
+    # px.Ina238.1.1 nested, its own path default (i2c.address 0x45) completed by the outer
+    # field's (bus.i2c.bus_id 2); the probe's spi defaults completed by bus.spi.mode 1
+    "Rig.1.0.dsdl": (
+        "# A rig\n# @max_instances 1\n\nuint4 p_version\npx.Ina238.1.1 monitor\n# Monitor\n"
+        "# @default bus.i2c.bus_id 2\n# @default current 100\nProbe.1.0 probe\n# Probe\n"
+        "# @default bus.spi.mode 1\n@sealed\n"
+    ),
+}
+#: px.Spi.1.0: bus_id, chip_select, max_frequency without a default, mode @default 3.
+PROBE_SPI = {"bus_id": 1, "chip_select": 2, "max_frequency": 0, "mode": 3}
+PAIR = {"a": 5, "b": False}
+PROBE_DEFAULT = {
+    "bus": {"spi": PROBE_SPI},
+    "armed": False,
+    "gain": 0.0,
+    "offset": -3,
+    "pairs": [PAIR, PAIR],
+    "log": [],
+    "more": [],
+}
+
+
+@pytest.fixture(scope="module")
+def defaults_schema(tmp_path_factory: pytest.TempPathFactory) -> Schema:
+    return _acme(tmp_path_factory.mktemp("defaults"), DEFAULTS_DSDL)
+
+
+def _kinds(value: Any) -> Any:
+    """``value`` with each number's type beside it (False == 0 == 0.0 in Python)."""
+    if isinstance(value, dict):
+        return {k: _kinds(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_kinds(v) for v in value]
+    return (type(value).__name__, value)
+
+
+@pytest.mark.issue40
+def test_a_new_value_is_built_from_the_declared_defaults(defaults_schema: Schema) -> None:
+    from px4params.store.spec import metadata_default
+
+    # dsdl/px/Ina238.1.1.dsdl: bus @default i2c.address 0x45 (I2C first: no other variant
+    # named), current @default 327, shunt @default 0.0003; p_version is never a value's field
+    assert metadata_default(defaults_schema, "px.Ina238.1.1") == {
+        "bus": {"i2c": {"bus_id": 0, "address": 0x45}},
+        "current": 327,
+        "shunt": 0.0003,
+    }
+    # a union with nothing named takes its first variant (dsdl/px/Bus.1.0.dsdl: i2c first)
+    assert metadata_default(defaults_schema, "px.Bus.1.0") == {"i2c": {"bus_id": 0, "address": 0}}
+    # a path default naming spi selects it; a bool without a default is False, a float 0.0
+    assert _kinds(metadata_default(defaults_schema, "acme.Probe.1.0")) == _kinds(PROBE_DEFAULT)
+    rig = metadata_default(defaults_schema, "acme.Rig.1.0")
+    assert rig == {
+        "monitor": {
+            "bus": {"i2c": {"bus_id": 2, "address": 0x45}},
+            "current": 100,
+            "shunt": 0.0003,
+        },
+        "probe": {**PROBE_DEFAULT, "bus": {"spi": {**PROBE_SPI, "mode": 1}}},
+    }
+    store = px4params.Store(defaults_schema, classic=[])
+    store.add("RIG#0")  # and a new instance starts from it, as stored
+    assert store.get("RIG#0.monitor.bus.i2c.address") == 0x45
+    assert store.get("RIG#0.probe.bus.spi.mode") == 1
+
+
+@pytest.mark.issue40
+def test_a_value_given_in_part_is_completed_from_the_defaults(defaults_schema: Schema) -> None:
+    from px4params.store.spec import with_defaults
+
+    probe = "acme.Probe.1.0"
+    # another variant than the default's: completed from that variant's own defaults (px.I2c
+    # declares none); what is given is kept; array elements completed one by one
+    given = {
+        "bus": {"i2c": {"address": 0x41}},
+        "pairs": [{"b": True}, {}],
+        "log": [3],
+        "more": [{"b": True}],
+    }
+    kept = json.loads(json.dumps(given))
+    assert _kinds(with_defaults(defaults_schema, probe, given)) == _kinds(
+        {
+            **PROBE_DEFAULT,
+            "bus": {"i2c": {"bus_id": 0, "address": 0x41}},
+            "pairs": [{"a": 5, "b": True}, PAIR],
+            "log": [3],
+            "more": [{"a": 5, "b": True}],
+        }
+    )
+    assert given == kept  # (not changed in place)
+    # the default's variant: completed from the path defaults that chose it
+    spi = with_defaults(defaults_schema, probe, {"bus": {"spi": {"mode": 0}}})
+    assert spi["bus"] == {"spi": {**PROBE_SPI, "mode": 0}}
+    rig = with_defaults(defaults_schema, "acme.Rig.1.0", {"probe": {"bus": {"spi": {}}}})
+    assert rig["probe"]["bus"] == {"spi": {**PROBE_SPI, "mode": 1}}
+    assert rig["monitor"]["bus"] == {"i2c": {"bus_id": 2, "address": 0x45}}
+    # what is wrong stays for the codec to name: not a mapping, two variants, no such variant
+    assert with_defaults(defaults_schema, probe, 5) == 5
+    for bus in ({"i2c": {}, "spi": {}}, {"can": {}}, {}):
+        assert with_defaults(defaults_schema, probe, {"bus": bus})["bus"] == bus
+    assert with_defaults(defaults_schema, probe, {"offset": "x"})["offset"] == "x"
+    assert with_defaults(defaults_schema, probe, {"pairs": "x"})["pairs"] == "x"
+
+
+@pytest.mark.issue40
+def test_a_service_is_no_parameter_even_with_max_instances(tmp_path: Path) -> None:
+    from px4params.store.spec import parameter_specs
+
+    # A DSDL service is a request and a response (a call), not a value a vehicle keeps.
+    ask = "# Ask\n# @max_instances 1\n\nuint4 p_version\nuint8 a\n@sealed\n---\nuint8 b\n@sealed\n"
+    schema = _acme(tmp_path, {"Ask.1.0.dsdl": ask, "Keep.1.0.dsdl": _dsdl("# @max_instances 1")})
+    assert [s.name for s in parameter_specs(schema) if s.data_type.key.startswith("acme.")] == [
+        "KEEP"
+    ]
+
+
+#: A type whose ranges are worked out by hand below (docs/store.md#ranges: @min/@max beside the
+#: field's own range, a float finite only, an array field's tags for each element).
+GAUGE_DSDL = (
+    "# A gauge\n# @max_instances 1\n\nuint4 p_version\n"
+    "float16 gain\n# Gain\n# @default 0.5\n# @min 0.1\n# @max 1000\n"  # 0.1 rounds down in float16
+    "float16 tiny\n# Tiny\n# @max 0.00001\n"  # 0.00001 rounds up in float16
+    "int8 offset\n# Offset\n# @min -128\n# @max 100\n"  # -128: int8's own bottom
+    "uint24 baud\n# Baud\n# @min 0\n# @max 16000000\n"  # 0: uint24's own bottom
+    "uint5 select\n# Select\n# @min 0\n# @max 31\n"  # both: uint5's own range
+    "uint8[3] taps\n# Taps\n# @max 9\n"
+    "uint8[<=2] levels\n# Levels\n# @max 5\n"
+    "float32 scale\n# Scale\n# @default 1\n# @min -1.5\n"
+    "uint8 plain\n# Plain\n"
+    "@sealed\n"
+)
+
+
+def _float16(value: float) -> float:
+    """``value`` as a float16 keeps it (IEEE 754 binary16, round to nearest)."""
+    return float(struct.unpack("<e", struct.pack("<e", value))[0])
+
+
+@pytest.fixture(scope="module")
+def gauge_schema(tmp_path_factory: pytest.TempPathFactory) -> Schema:
+    return _acme(tmp_path_factory.mktemp("gauge"), {"Gauge.1.0.dsdl": GAUGE_DSDL})
+
+
+@pytest.fixture
+def gauge(gauge_schema: Schema) -> px4params.Store:
+    store = px4params.Store(gauge_schema, classic=[])
+    store.add("GAUGE#0")
+    return store
+
+
+@pytest.mark.issue40
+def test_the_ranges_of_a_type_read_from_its_tags(gauge_schema: Schema) -> None:
+    from px4params.store.spec import LeafRange, leaf_ranges
+
+    assert _float16(0.1) < 0.1 and _float16(0.00001) > 0.00001
+    ranges = leaf_ranges(gauge_schema["acme.Gauge"])
+    assert ranges == {
+        # a float's bounds widened to where they round at its width (0.1 is kept below 0.1)
+        "gain": LeafRange(0.1, 1000, 16, _float16(0.1), 1000, "float16"),
+        "tiny": LeafRange(None, 0.00001, 16, None, _float16(0.00001), "float16"),
+        # a bound that repeats the type's own is none; an integer's bounds stay as written
+        "offset": LeafRange(None, 100, 0, None, 100, "int8"),
+        "baud": LeafRange(None, 16000000, 0, None, 16000000, "uint24"),
+        "taps[]": LeafRange(None, 9, 0, None, 9, "uint8"),
+        "levels[]": LeafRange(None, 5, 0, None, 5, "uint8"),
+        "scale": LeafRange(-1.5, None, 32, -1.5, None, "float32"),
+        # uint5 0..31 and a plain integer have nothing to check beyond their type
+    }
+    assert ranges["gain"].values == () and ranges["gain"].stored_values == frozenset()
+    # worked out once per type (docstring of leaf_ranges): the same table each time
+    assert leaf_ranges(gauge_schema["acme.Gauge"]) is ranges
+
+
+@pytest.mark.issue40
+def test_each_bound_is_held_where_the_store_keeps_the_value(gauge: px4params.Store) -> None:
+    def refused(leaf: str, value: float) -> str:
+        before = gauge.encoded("GAUGE#0")
+        with pytest.raises(ValueRangeError) as e:
+            gauge.set(f"GAUGE#0.{leaf}", value)
+        assert gauge.encoded("GAUGE#0") == before
+        return str(e.value)
+
+    # a bound given exactly is taken, whichever way its float16 rounds
+    gauge.set("GAUGE#0.gain", 0.1)
+    assert gauge.get("GAUGE#0.gain") == _float16(0.1)
+    gauge.set("GAUGE#0.tiny", 0.00001)
+    assert gauge.get("GAUGE#0.tiny") == _float16(0.00001)
+    assert refused("gain", 0.0999) == "GAUGE#0.gain: 0.0999 is outside 0.1..1000 (@min/@max)"
+    assert refused("tiny", 0.00002) == "GAUGE#0.tiny: 0.00002 is above 0.00001 (@max)"
+    # a bound that is the type's own is not named; the type's own range is the codec's
+    gauge.set("GAUGE#0.offset", -128)
+    assert refused("offset", 101) == "GAUGE#0.offset: 101 is above 100 (@max)"
+    assert refused("offset", 127) == "GAUGE#0.offset: 127 is above 100 (@max)"
+    gauge.set("GAUGE#0.baud", 0)
+    assert refused("baud", 16000001) == "GAUGE#0.baud: 16000001 is above 16000000 (@max)"
+    gauge.set("GAUGE#0.select", 31)
+    assert refused("taps[2]", 10) == "GAUGE#0.taps[2]: 10 is above 9 (@max)"
+    gauge.set("GAUGE#0.taps[2]", 9)
+    assert refused("scale", -1.6) == "GAUGE#0.scale: -1.6 is below -1.5 (@min)"
+    value = gauge.get("GAUGE#0")
+    with pytest.raises(ValueRangeError) as e:
+        gauge.set("GAUGE#0", {**value, "levels": [5, 6]})  # each element of a variable array
+    assert str(e.value) == "GAUGE#0.levels[1]: 6 is above 5 (@max)"
+    gauge.set("GAUGE#0", {**value, "levels": [5, 0]})
+    gauge.set("GAUGE#0.scale", -1.5)
+    assert refused("scale", -math.inf) == (
+        "GAUGE#0.scale: -inf is not a finite number (float32: NaN and infinities are refused)"
+    )
+    assert (gauge.get("GAUGE#0.offset"), gauge.get("GAUGE#0.baud")) == (-128, 0)
+    assert (gauge.get("GAUGE#0.taps[2]"), gauge.get("GAUGE#0.scale")) == (9, -1.5)
+
+
+@pytest.mark.issue40
+def test_a_value_the_type_cannot_hold_is_the_codecs_refusal_and_one_it_can_the_ranges(
+    store: px4params.Store, gauge: px4params.Store
+) -> None:
+    from px4params.errors import EncodeError
+
+    def refusal(s: px4params.Store, name: str, value: float) -> tuple[str, str]:
+        with pytest.raises(Px4ParamsError) as e:
+            s.set(name, value)
+        return type(e.value).__name__, str(e.value)
+
+    # uint10 holds 0..1023, float16 up to 65504 (IEEE 754 binary16), int8 -128..127: inside,
+    # @min/@max refuse; outside, the codec says what the type holds
+    assert refusal(store, "INA238#1.current", 1023)[0] == "ValueRangeError"
+    assert refusal(store, "INA238#1.current", 1024) == (
+        "EncodeError",
+        "INA238#1: current: value 1024 is out of range (expected 0 to 1023)",
+    )
+    assert refusal(store, "INA238#1.current", -1)[0] == "EncodeError"
+    assert refusal(store, "INA238#1.shunt", 65504.0) == (
+        "ValueRangeError",
+        f"INA238#1.shunt: 65504 {SHUNT_RANGE}",
+    )
+    assert refusal(store, "INA238#1.shunt", -65504.0)[0] == "ValueRangeError"
+    assert refusal(store, "INA238#1.shunt", 70000.0)[0] == "EncodeError"
+    assert refusal(gauge, "GAUGE#0.offset", 128)[0] == "EncodeError"
+    assert refusal(gauge, "GAUGE#0.offset", -129)[0] == "EncodeError"
+    assert issubclass(EncodeError, Px4ParamsError)
+
+
+@pytest.mark.issue40
+def test_a_refusal_names_the_number_given_not_the_one_the_leaf_would_keep(
+    store: px4params.Store,
+) -> None:
+    # 1e-12 is kept as 0 by a float16: the refusal says what was written
+    with pytest.raises(ValueRangeError) as e:
+        store.set("INA238#1.shunt", 1e-12)
+    assert str(e.value) == f"INA238#1.shunt: 1e-12 {SHUNT_RANGE}"
