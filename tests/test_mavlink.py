@@ -1724,3 +1724,185 @@ def test_a_development_version_is_release_type_0(monkeypatch: pytest.MonkeyPatch
     assert software_version() == 0x020304_00
     monkeypatch.setattr(px4params, "__version__", "1.15.300")
     assert software_version() == 0x010F2CFF  # each part one byte (300 & 0xFF = 0x2C)
+
+
+# -- the receive loop and the stream's failure (issue 40, mutlinks2) ----------------------------
+
+
+class _FailingOnce:
+    """The server's socket, whose next ``recvfrom`` fails once as a socket reports an ICMP
+    error (port unreachable) for an earlier datagram (Windows does on any UDP socket, Linux on
+    a connected one): the datagrams queued behind it are still there."""
+
+    def __init__(self, sock: socket.socket, error: OSError) -> None:
+        self._real = sock
+        self._error: OSError | None = error
+
+    def recvfrom(self, size: int) -> tuple[bytes, Any]:
+        if self._error is not None:
+            error, self._error = self._error, None
+            raise error
+        return self._real.recvfrom(size)
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._real, name)
+
+
+@pytest.mark.issue40
+class TestTurnByTurnReceiving:
+    """How one turn reads and streams (issue 40, mutlinks2): each turn is bounded, and a
+    failure on the way drops only what it concerns."""
+
+    def test_a_turn_reads_at_most_256_datagrams_and_the_next_turn_the_rest(
+        self, turns: tuple[MavlinkParamServer, Station]
+    ) -> None:
+        """Under a flood a turn stops reading after 256 datagrams (so that heartbeats and a
+        list's bursts go on); what is left waits in the socket for the next turn."""
+        server, station = turns
+        # room for the flood (the default buffer holds about 256 such datagrams; Linux doubles
+        # what is asked, up to twice rmem_max, 212992 by default)
+        server._sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 1 << 20)
+        heartbeat = mavlink.MAVLink_heartbeat_message(6, 8, 0, 0, 0, 3).pack(station.mav)
+        received = server.stats["received"]
+        for _ in range(257):
+            station.send(heartbeat)
+        server.step(0.0)
+        assert server.stats["received"] - received == 256
+        server.step(0.0)
+        assert server.stats["received"] - received == 257
+
+    def test_a_heartbeat_is_received_not_ignored(self, store: px4params.Store) -> None:
+        """A ground station's HEARTBEAT is a message the server takes (it makes the sender a
+        peer): counted received, not ignored, and answered by nothing but heartbeats."""
+        server = MavlinkParamServer(store, "127.0.0.1", 0, heartbeat_interval=3600)
+        station = Station(server)
+        try:
+            assert station.exchange(mavlink.MAVLink_heartbeat_message(6, 8, 0, 0, 0, 3)) == []
+        finally:
+            station.close()
+            server.close()
+        assert (server.stats["received"], server.stats["ignored"]) == (1, 0)
+
+    def test_a_socket_error_does_not_keep_the_turn_from_the_datagrams_behind_it(
+        self, turns: tuple[MavlinkParamServer, Station]
+    ) -> None:
+        server, station = turns
+        server._sock = _FailingOnce(server._sock, ConnectionRefusedError(111, "refused"))  # type: ignore[assignment]
+        read = mavlink.MAVLink_param_request_read_message(1, 1, b"", 0)
+        assert values(station.exchange(read)) == [(NAMES[0], 0, 0, len(NAMES))]
+
+    def test_a_stream_that_fails_is_dropped_logged_once_and_the_server_goes_on(
+        self, turns: tuple[MavlinkParamServer, Station], monkeypatch: pytest.MonkeyPatch
+    ) -> None:
+        """A bug while streaming a list must not stop the server: that stream ends (the ground
+        station asks again by index for what it lacks), the error is logged, reads go on."""
+        server, station = turns
+
+        def broken(index: int, entry: Any) -> Any:
+            raise ValueError("bug")
+
+        monkeypatch.setattr(server, "_value_msg", broken)
+        got = station.exchange(mavlink.MAVLink_param_request_list_message(1, 1))
+        assert [m.param_id for m in got] == ["_HASH_CHECK"]  # the hash, then the failure
+        assert server.logged == ["error streaming parameters: ValueError: bug"]  # type: ignore[attr-defined]
+        monkeypatch.undo()
+        assert turn(server, station) == []  # dropped: nothing more of that list
+        assert turn(server, station) == []
+        assert server.logged == ["error streaming parameters: ValueError: bug"]  # type: ignore[attr-defined]
+        read = mavlink.MAVLink_param_request_read_message(1, 1, b"", 0)
+        assert values(station.exchange(read)) == [(NAMES[0], 0, 0, len(NAMES))]
+
+
+def signed_station(server: MavlinkParamServer, key: bytes) -> Station:
+    """A ground station that signs what it sends with ``key`` (pymavlink's own signing: link
+    0, its timestamp the signing clock, 10 us units since 2015-01-01)."""
+    station = Station(server)
+    station.mav.signing.secret_key = key
+    station.mav.signing.link_id = 0
+    station.mav.signing.timestamp = int((time.time() - 1420070400) * 100_000)
+    station.mav.signing.sign_outgoing = True
+    return station
+
+
+@pytest.mark.issue40
+class TestTurnByTurnSigned:
+    """A signed link turn by turn (issue 40, mutlinks2): PX4 (mavlink_sign_control.cpp) takes
+    signed frames with the link's key, and drops the rest, counting them."""
+
+    KEY = bytes(range(32))
+
+    @pytest.fixture
+    def signed(self, store: px4params.Store) -> Iterator[MavlinkParamServer]:
+        server = MavlinkParamServer(
+            store, "127.0.0.1", 0, signing_key=self.KEY, heartbeat_interval=3600
+        )
+        yield server
+        server.close()
+
+    def test_a_frame_signed_with_the_key_is_answered(self, signed: MavlinkParamServer) -> None:
+        station = signed_station(signed, self.KEY)
+        try:
+            read = mavlink.MAVLink_param_request_read_message(1, 1, b"", 0)
+            got = station.exchange(read)
+            assert values(got) == [(NAMES[0], 0, 0, len(NAMES))]
+            assert all(frame[2] & mavlink.MAVLINK_IFLAG_SIGNED for frame in station.frames)
+        finally:
+            station.close()
+        assert signed.stats["received"] == 1
+        assert (signed.stats["unsigned"], signed.stats["badly_signed"]) == (0, 0)
+
+    def test_a_frame_signed_with_another_key_is_dropped_and_counted_badly_signed(
+        self, signed: MavlinkParamServer
+    ) -> None:
+        station = signed_station(signed, bytes(32))
+        try:
+            read = mavlink.MAVLink_param_request_read_message(1, 1, b"", 0)
+            assert station.exchange(read) == []
+        finally:
+            station.close()
+        assert (signed.stats["unsigned"], signed.stats["badly_signed"]) == (0, 1)
+        assert signed.stats["received"] == 0
+
+    def test_an_unsigned_frame_of_an_unknown_message_id_is_dropped_and_counted_unsigned(
+        self, signed: MavlinkParamServer
+    ) -> None:
+        """A frame of an ID the dialect lacks (STX, length 1, flags 0 0, seq 0, system 255,
+        component 190, ID 0xABCDE): pymavlink hands it over without checking its signature;
+        on a signed link it is an unsigned frame like any other."""
+        station = Station(signed)
+        try:
+            unknown = bytes([0xFD, 1, 0, 0, 0, 255, 190, 0xDE, 0xBC, 0x0A, 7, 0x12, 0x34])
+            assert station.exchange(unknown) == []
+        finally:
+            station.close()
+        assert (signed.stats["unsigned"], signed.stats["badly_signed"]) == (1, 0)
+        assert (signed.stats["received"], signed.stats["ignored"]) == (0, 0)
+
+    @pytest.mark.parametrize("signing", [True, False], ids=["signed", "unsigned"])
+    def test_a_datagram_the_parser_fails_on_is_counted_ignored_and_makes_no_peer(
+        self, store: px4params.Store, monkeypatch: pytest.MonkeyPatch, signing: bool
+    ) -> None:
+        """pymavlink raises assorted errors on some garbage: the datagram is one ignored."""
+        server = MavlinkParamServer(
+            store, "127.0.0.1", 0, signing_key=self.KEY if signing else None, heartbeat_interval=0
+        )
+        station = signed_station(server, self.KEY) if signing else Station(server)
+
+        def failing(self: Any, data: bytes) -> list[Any]:
+            raise struct.error("unpack requires a buffer of 9 bytes")
+
+        try:
+            heartbeat = mavlink.MAVLink_heartbeat_message(6, 8, 0, 0, 0, 3).pack(station.mav)
+            station.send(heartbeat[:-1] + bytes([heartbeat[-1] ^ 0xFF]))  # its CRC broken
+            server.step(0.0)
+            assert server.stats["ignored"] == 1
+            monkeypatch.setattr(mavlink.MAVLink, "parse_buffer", failing)
+            station.send(mavlink.MAVLink_heartbeat_message(6, 8, 0, 0, 0, 3))
+            server.step(0.0)
+            monkeypatch.undo()
+            server.step(0.0)
+            assert station.receive() == []  # no peer: no heartbeat
+        finally:
+            station.close()
+            server.close()
+        assert (server.stats["ignored"], server.stats["received"]) == (2, 0)

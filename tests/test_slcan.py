@@ -13,6 +13,7 @@ import select
 import threading
 import types
 from collections.abc import Callable, Iterator
+from typing import Any
 
 import pytest
 from px4params.links import slcan
@@ -458,3 +459,97 @@ def test_open_serial_opens_a_device_raw_and_names_one_that_is_missing(tmp_path: 
     missing = f"{tmp_path}/ttyNONE"
     with pytest.raises(SlcanError, match=f"^cannot open serial device {missing}: "):
         open_serial(missing)
+
+
+# -- the host's waits (issue 40, mutlinks2) ----------------------------------------------------
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize("noise", [0x0E, 0x08], ids=["SO", "BS"])
+def test_a_noisy_half_line_does_not_keep_the_host_from_the_lines_after_it(noise: int) -> None:
+    """A control byte of line noise (not CR, not BEL) in a line not yet ended: the line is
+    read on until its CR and dropped as noise; the frames after it are received."""
+    peer = Peer(lambda data: b"")
+    try:
+        host = SlcanHost(peer)
+        peer.push(bytes([noise]) + b"T000")  # half a line, starting with noise
+        assert host.receive(0.01) is None
+        peer.push(b"00010\r" + format_frame(Frame(0x12, b"\xbe\xef")))
+        assert host.receive(1) == Frame(0x12, b"\xbe\xef")
+    finally:
+        peer.close()
+
+
+@pytest.mark.issue40
+def test_the_host_waits_for_the_line_no_longer_than_the_time_it_was_given(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """receive(timeout) waits up to ``timeout`` seconds: each wait on the silent line is at
+    most what is left of it."""
+    waits: list[float] = []
+
+    def recording(read: list[int], write: list[int], error: list[int], wait: float) -> Any:
+        waits.append(wait)
+        return select.select(read, write, error, wait)
+
+    monkeypatch.setattr(slcan, "select", types.SimpleNamespace(select=recording))
+    peer = Peer(lambda data: b"")
+    try:
+        assert SlcanHost(peer).receive(0.05) is None
+    finally:
+        peer.close()
+    assert waits and all(0 <= wait <= 0.05 for wait in waits)
+
+
+@pytest.mark.issue40
+def test_a_line_with_noise_before_its_t_is_dropped_not_read_as_a_frame() -> None:
+    """A frame line starts with T or t; a stray byte before it (not an LF, which ends a CR LF
+    line) makes the line noise, lost as on a bus."""
+    peer = Peer(lambda data: b"")
+    try:
+        host = SlcanHost(peer)
+        peer.push(b"X" + format_frame(Frame(0x11, b"\x01")) + format_frame(Frame(0x12, b"")))
+        assert host.receive(1) == Frame(0x12, b"")
+        assert host.receive(0) is None
+    finally:
+        peer.close()
+
+
+@pytest.mark.issue40
+def test_a_pty_opened_and_closed_leaves_no_descriptor_open() -> None:
+    """Both ends of the pseudo-terminal (the master, and the slave kept open so that the
+    master does not read EIO between clients) are closed with the port."""
+    before = set(os.listdir("/proc/self/fd"))
+    port, _ = open_pty()
+    assert len(set(os.listdir("/proc/self/fd")) - before) == 2
+    port.close()
+    assert set(os.listdir("/proc/self/fd")) == before
+
+
+@pytest.mark.issue40
+def test_a_pty_s_port_does_not_block() -> None:
+    """The serving loop writes and reads the master end only when select says it can, and a
+    write to a full pty waits in select (BlockingIOError), not in the kernel: the master end
+    is non-blocking; a read with nothing waiting gives nothing at once."""
+    port, _ = open_pty()
+    try:
+        assert os.get_blocking(port.fileno()) is False
+        assert port.read(10) == b""
+    finally:
+        port.close()
+
+
+@pytest.mark.issue40
+def test_open_serial_reads_what_is_waiting_at_115200_baud_by_default() -> None:
+    """pyserial's timeout 0 returns what is waiting at once (the port is read after select
+    found it readable, never to wait for 4096 bytes); 115200 baud is the UART rate the
+    figures of docs/dronecan.md assume (a USB CDC line ignores it)."""
+    port, path = open_pty()
+    try:
+        device = open_serial(path)
+        try:
+            assert (device.baudrate, device.timeout) == (115_200, 0)  # type: ignore[attr-defined]
+        finally:
+            device.close()  # type: ignore[attr-defined]
+    finally:
+        port.close()
