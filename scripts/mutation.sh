@@ -336,6 +336,20 @@ TARGETS+=(
   "store-spec|$PY/store/spec.py|tests/test_spec.py -k 'not pydronecan and not page_api and not mavlink and not param_set and not force_says and not airframe and not params_file and not json_export'"
 )
 
+# Rust, issue 40 (mutrust, second round; its figures at the end of this script): these
+# entries replace the ones above. pages.rs and crc.rs with the test programs that reach them
+# (all of the crate's would rebuild twenty test programs per mutant): pages.rs through its
+# own tests, the store's pages test and the scattered reads; crc.rs through the transfers (the
+# CRC of a multi-frame transfer) and the store file's CRCs.
+TARGETS+=(
+  "rust-pages|crates/px4params-core/src/pages.rs|--lib --test=pages --test=store --test=codec"
+  "rust-crc|crates/px4params-core/src/crc.rs|--lib --test=crc --test=transfer --test=mutants_transfer --test=file"
+  # store.rs: as above, and the tests written for its shards' survivors (the leaf tables'
+  # slot count; set_translated)
+  "rust-store|crates/px4params-core/src/store.rs|--lib --test=mutants_store --test=store --test=store_alloc --test=table --test=file --test=pages --test=mutants_store_set_from --test=mutants_store_tables --test=mutants_store_translated"
+)
+RUST_ISSUE40_TESTS="$RUST_ISSUE40_TESTS mutants_store_tables mutants_store_translated"
+
 if [ "$#" -eq 0 ]; then
   set -- can_transfer dronecan_params health links gui migrate vehicle store rust-core rust-ffi
 fi

@@ -1,0 +1,143 @@
+//! The store's leaf tables (`Store::with_tables`, `table_slots`) against what their
+//! documentation promises (issue 40): `table_slots` counts one slot per parameter, each
+//! distinct type's table once (`LeafTable::slots_needed`), and for each instance's value and
+//! default one slot per leaf the table answers for, at most 32; a parameter whose type is not
+//! in the layout counts its one slot only; the tables are built over whatever the memory
+//! given for them held.
+
+use px4params_core::compile::OwnedLayout;
+use px4params_core::layout::{NodeId, Role};
+use px4params_core::leaf::Target;
+use px4params_core::store::{plan, table_slots, ParamDef, Slot, Store, Which};
+use px4params_core::table::{LeafSlot, LeafTable};
+use px4params_core::{Cast, Scalar};
+
+/// A struct of three primitive leaves (no union, no dynamic array: its table has all three),
+/// and a fixed array of 40 bytes (40 leaves: more than the 32 resolved per value).
+fn types() -> (OwnedLayout, NodeId, NodeId) {
+    let mut l = OwnedLayout::default();
+    let u8_ = l.uint(8, Cast::Saturated).unwrap();
+    let i16_ = l.int(16, Cast::Saturated).unwrap();
+    let f32_ = l.float(32, Cast::Saturated).unwrap();
+    let three = l
+        .structure(&[
+            ("a", u8_, Role::Data),
+            ("b", i16_, Role::Data),
+            ("c", f32_, Role::Data),
+        ])
+        .unwrap();
+    let forty = l.array(u8_, 40).unwrap();
+    (l, three, forty)
+}
+
+#[test]
+fn table_slots_counts_each_parameter_each_type_once_and_each_value_s_leaves() {
+    let (l, three, forty) = types();
+    let layout = l.as_layout();
+    let t3 = LeafTable::slots_needed(&layout, three);
+    let t40 = LeafTable::slots_needed(&layout, forty);
+    assert!(t3 > 0 && t40 > 0);
+    let slots = |defs: &[ParamDef]| table_slots(&layout, defs);
+    // One parameter, its type's table, 3 leaves for the value and 3 for the default.
+    assert_eq!(slots(&[ParamDef::shared(three)]), 1 + t3 + 3 * 2);
+    // Four instances: 4 values and 4 defaults.
+    assert_eq!(slots(&[ParamDef::instanced(three, 4)]), 1 + t3 + 3 * 2 * 4);
+    // The same type twice: its table once, each parameter's instances their own.
+    assert_eq!(
+        slots(&[ParamDef::instanced(three, 4), ParamDef::shared(three)]),
+        2 + t3 + 3 * 2 * 4 + 3 * 2
+    );
+    assert_eq!(
+        slots(&[
+            ParamDef::shared(three),
+            ParamDef::instanced(forty, 2),
+            ParamDef::instanced(three, 2),
+        ]),
+        3 + t3 + t40 + 3 * 2 + 32 * 2 * 2 + 3 * 2 * 2
+    );
+    // 40 leaves: 32 of them resolved per value.
+    assert_eq!(slots(&[ParamDef::shared(forty)]), 1 + t40 + 32 * 2);
+    // A type the layout does not have: the parameter's own slot only.
+    let unknown = layout.nodes.len() as NodeId;
+    assert_eq!(slots(&[ParamDef::instanced(unknown, 2)]), 1);
+    assert_eq!(
+        slots(&[ParamDef::instanced(unknown, 2), ParamDef::shared(three)]),
+        2 + t3 + 3 * 2
+    );
+    assert_eq!(slots(&[]), 0);
+}
+
+type TabledStore<'t> = Store<Vec<ParamDef>, Vec<Slot>, Vec<u8>, &'t mut [LeafSlot]>;
+
+/// A store of `defs` with its tables in `tables` (enough for all of them).
+fn store_over<'t>(
+    layout: &px4params_core::Layout<'_>,
+    defs: &[ParamDef],
+    tables: &'t mut [LeafSlot],
+) -> TabledStore<'t> {
+    let mut defs = defs.to_vec();
+    let capacity = plan(layout, &mut defs).unwrap();
+    assert!(table_slots(layout, &defs) <= tables.len());
+    Store::with_tables(
+        layout,
+        defs,
+        vec![Slot::default(); capacity.slots],
+        vec![0u8; capacity.bytes],
+        tables,
+    )
+    .unwrap()
+}
+
+/// The tables a store builds replace whatever the memory given for them held: here first a
+/// leaf table of another type, then another store's tables of other parameters (firmware
+/// makes its store again over the same static memory after a reset). Values written by hand
+/// (DroneCAN: byte-aligned fields little-endian): `three` a = 7, b = -2, c = 1.5 is
+/// 07 FE FF 00 00 C0 3F; `forty` holds 100..140.
+#[test]
+fn tables_are_built_anew_over_memory_that_held_other_tables() {
+    let (l, three, forty) = types();
+    let layout = l.as_layout();
+    let three_value = [0x07, 0xFE, 0xFF, 0x00, 0x00, 0xC0, 0x3F];
+    let forty_value: Vec<u8> = (100..140).collect();
+    let first = [ParamDef::instanced(forty, 2), ParamDef::shared(three)];
+    let second = [ParamDef::shared(three), ParamDef::instanced(forty, 2)];
+    let mut memory = vec![LeafSlot::default(); 400];
+    // What the memory holds first: `forty`'s leaf table, written at a few places.
+    for start in [0, 1, 2, 200] {
+        LeafTable::build(&layout, forty, &mut memory[start..]).unwrap();
+    }
+    // `three`'s b, its zero default, read through the store's own tables.
+    let over_a_table =
+        store_over(&layout, &second, &mut memory).read(&layout, 0, 0, Which::Value, 1);
+    assert_eq!(over_a_table, Ok(Scalar::Int(0)));
+    {
+        let mut s = store_over(&layout, &first, &mut memory);
+        s.add(0, Some(1)).unwrap();
+        s.set_encoded(&layout, 0, 1, Which::Value, &forty_value)
+            .unwrap();
+        s.set_encoded(&layout, 1, 0, Which::Value, &three_value)
+            .unwrap();
+        assert_eq!(
+            s.read(&layout, 0, 1, Which::Value, 5),
+            Ok(Scalar::Uint(105))
+        );
+    }
+    let mut s = store_over(&layout, &second, &mut memory);
+    s.set_encoded(&layout, 0, 0, Which::Value, &three_value)
+        .unwrap();
+    s.add(1, Some(0)).unwrap();
+    s.set_encoded(&layout, 1, 0, Which::Value, &forty_value)
+        .unwrap();
+    let three_leaves = [Scalar::Uint(7), Scalar::Int(-2), Scalar::Float(1.5)];
+    for (k, leaf) in three_leaves.into_iter().enumerate() {
+        assert_eq!(s.read(&layout, 0, 0, Which::Value, k), Ok(leaf), "[{k}]");
+        let got = s.get_leaf(&layout, 0, 0, Which::Value, Target::Index(k));
+        assert_eq!(got.map(|(_, v)| v), Ok(leaf), "[{k}]");
+    }
+    for k in 0..40 {
+        let leaf = Scalar::Uint(100 + k as u64);
+        assert_eq!(s.read(&layout, 1, 0, Which::Value, k), Ok(leaf), "[{k}]");
+        let got = s.get_leaf(&layout, 1, 0, Which::Value, Target::Index(k));
+        assert_eq!(got.map(|(_, v)| v), Ok(leaf), "[{k}]");
+    }
+}

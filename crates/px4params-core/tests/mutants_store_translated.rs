@@ -1,0 +1,211 @@
+//! `Store::set_translated` against its documentation (issue 40): a stored value of an older
+//! minor version of a parameter's type is written as a value of the current version, fields
+//! carried over by name, the fields the new version added taken from the instance's default
+//! (for a value) or from the type's default (for a default), `p_version` the new version; a
+//! default written this way carries a value that equalled the old default (PX4's
+//! `param set-default`); with `check_only` nothing is written. The bytes are DroneCAN's bit
+//! packing worked out by hand (fields back to back, most significant bit first).
+
+use px4params_core::compile::OwnedLayout;
+use px4params_core::layout::{NodeId, Role};
+use px4params_core::store::{plan, ParamDef, Slot, Store, StoreError, Which};
+use px4params_core::Cast::Saturated;
+
+type VecStore = Store<Vec<ParamDef>, Vec<Slot>, Vec<u8>>;
+
+const SENSOR: u32 = 0;
+/// Sensor 1.1's type default: p_version 1, address 0x45, enabled, offset -3:
+/// `0001 1000101 1 11101`.
+const TYPE_DEFAULT: [u8; 3] = [0x18, 0xBE, 0x80];
+/// An instance's own default: p_version 1, address 0x45, disabled, offset 5:
+/// `0001 1000101 0 00101`.
+const OWN_DEFAULT: [u8; 3] = [0x18, 0xA2, 0x80];
+/// Sensor 1.0's value: p_version 0, address 0x22, gain 9: `0000 0100010 00001001`.
+const OLD: [u8; 3] = [0x04, 0x41, 0x20];
+/// OLD as a 1.1 value over OWN_DEFAULT: address 0x22 carried, disabled and offset 5 new
+/// (from the base), gain dropped: `0001 0100010 0 00101`.
+const OLD_OVER_OWN: [u8; 3] = [0x14, 0x42, 0x80];
+/// OLD as a 1.1 value over TYPE_DEFAULT: `0001 0100010 1 11101`.
+const OLD_OVER_TYPE: [u8; 3] = [0x14, 0x5E, 0x80];
+
+struct Fixture {
+    layout: OwnedLayout,
+    store: VecStore,
+    old: NodeId,
+}
+
+/// Sensor 1.1 (p_version uint4, address uint7, enabled bool, offset int5) in three instances;
+/// Sensor 1.0 (p_version uint4, address uint7, gain uint8) in the same layout, not stored.
+fn fixture() -> Fixture {
+    let mut l = OwnedLayout::default();
+    let u4 = l.uint(4, Saturated).unwrap();
+    let u7 = l.uint(7, Saturated).unwrap();
+    let u8_ = l.uint(8, Saturated).unwrap();
+    let i5 = l.int(5, Saturated).unwrap();
+    let flag = l.boolean();
+    let sensor = l
+        .structure(&[
+            ("p_version", u4, Role::Version(1)),
+            ("address", u7, Role::Data),
+            ("enabled", flag, Role::Data),
+            ("offset", i5, Role::Data),
+        ])
+        .unwrap();
+    let old = l
+        .structure(&[
+            ("p_version", u4, Role::Version(0)),
+            ("address", u7, Role::Data),
+            ("gain", u8_, Role::Data),
+        ])
+        .unwrap();
+    let mut defs = vec![ParamDef::instanced(sensor, 3)];
+    let view = l.as_layout();
+    let capacity = plan(&view, &mut defs).unwrap();
+    let mut store = Store::new(
+        &view,
+        defs,
+        vec![Slot::default(); capacity.slots],
+        vec![0u8; capacity.bytes],
+    )
+    .unwrap();
+    store
+        .set_type_default(&view, SENSOR, &TYPE_DEFAULT)
+        .unwrap();
+    Fixture {
+        layout: l,
+        store,
+        old,
+    }
+}
+
+impl Fixture {
+    fn translated(&mut self, instance: u16, which: Which, data: &[u8], check_only: bool) -> bool {
+        let layout = self.layout.as_layout();
+        self.store
+            .set_translated(&layout, SENSOR, instance, which, self.old, data, check_only)
+            .is_ok()
+    }
+
+    fn held(&self, instance: u16) -> (Vec<u8>, Vec<u8>, bool) {
+        let s = &self.store;
+        (
+            s.get(SENSOR, instance, Which::Value).unwrap().to_vec(),
+            s.get(SENSOR, instance, Which::Default).unwrap().to_vec(),
+            s.slot(SENSOR, instance).unwrap().unsaved(),
+        )
+    }
+}
+
+#[test]
+fn a_translated_value_takes_the_new_fields_from_the_instance_s_default() {
+    let mut f = fixture();
+    let layout = f.layout.as_layout();
+    f.store.add(SENSOR, Some(1)).unwrap();
+    f.store
+        .set_encoded(&layout, SENSOR, 1, Which::Default, &OWN_DEFAULT)
+        .unwrap();
+    f.store.mark_saved();
+    assert!(f.translated(1, Which::Value, &OLD, false));
+    assert_eq!(
+        f.held(1),
+        (OLD_OVER_OWN.to_vec(), OWN_DEFAULT.to_vec(), true)
+    );
+}
+
+#[test]
+fn a_translated_default_takes_the_new_fields_from_the_type_s_default() {
+    let mut f = fixture();
+    let layout = f.layout.as_layout();
+    // Instance 0: its value changed from its own default (it keeps its value).
+    f.store.add(SENSOR, Some(0)).unwrap();
+    f.store
+        .set_encoded(&layout, SENSOR, 0, Which::Default, &OWN_DEFAULT)
+        .unwrap();
+    f.store
+        .set_encoded(&layout, SENSOR, 0, Which::Value, &OLD_OVER_OWN)
+        .unwrap();
+    // Instance 2: at its own default (its value follows the new default).
+    f.store.add(SENSOR, Some(2)).unwrap();
+    f.store
+        .set_encoded(&layout, SENSOR, 2, Which::Default, &OWN_DEFAULT)
+        .unwrap();
+    f.store
+        .set_encoded(&layout, SENSOR, 2, Which::Value, &OWN_DEFAULT)
+        .unwrap();
+    f.store.mark_saved();
+    assert!(f.translated(0, Which::Default, &OLD, false));
+    assert_eq!(
+        f.held(0),
+        (OLD_OVER_OWN.to_vec(), OLD_OVER_TYPE.to_vec(), true)
+    );
+    assert!(f.translated(2, Which::Default, &OLD, false));
+    assert_eq!(
+        f.held(2),
+        (OLD_OVER_TYPE.to_vec(), OLD_OVER_TYPE.to_vec(), true)
+    );
+}
+
+#[test]
+fn check_only_translates_and_writes_nothing() {
+    let mut f = fixture();
+    let layout = f.layout.as_layout();
+    f.store.add(SENSOR, Some(1)).unwrap();
+    f.store
+        .set_encoded(&layout, SENSOR, 1, Which::Default, &OWN_DEFAULT)
+        .unwrap();
+    f.store.mark_saved();
+    let before = f.held(1);
+    assert_eq!(before, (OWN_DEFAULT.to_vec(), OWN_DEFAULT.to_vec(), false));
+    for which in [Which::Value, Which::Default] {
+        assert!(f.translated(1, which, &OLD, true));
+        assert_eq!(f.held(1), before);
+    }
+    // An instance not there yet is checked (before a file adds it), not written.
+    assert!(f.translated(0, Which::Value, &OLD, true));
+    assert!(f.translated(0, Which::Default, &OLD, true));
+    assert_eq!(
+        f.store.slot(SENSOR, 0).unwrap(),
+        Slot::default(),
+        "absent, saved"
+    );
+    // A value the old type cannot be read from is refused, checked or written.
+    assert!(!f.translated(0, Which::Value, &OLD[..1], true));
+    assert!(!f.translated(1, Which::Value, &OLD[..1], false));
+    assert_eq!(f.held(1), before);
+}
+
+#[test]
+fn a_translation_into_an_instance_that_is_not_there_is_refused() {
+    let mut f = fixture();
+    let layout = f.layout.as_layout();
+    let old = f.old;
+    let mut write = |param, instance, check_only| {
+        f.store.set_translated(
+            &layout,
+            param,
+            instance,
+            Which::Value,
+            old,
+            &OLD,
+            check_only,
+        )
+    };
+    assert!(matches!(
+        write(SENSOR, 0, false),
+        Err(StoreError::NotPresent { instance: 0 })
+    ));
+    for check_only in [false, true] {
+        assert!(matches!(
+            write(SENSOR, 3, check_only),
+            Err(StoreError::InstanceOutOfRange {
+                instance: 3,
+                max_instances: 3
+            })
+        ));
+        assert!(matches!(
+            write(1, 0, check_only),
+            Err(StoreError::NoSuchParam { param: 1 })
+        ));
+    }
+    assert_eq!(f.store.instances(SENSOR).unwrap().count(), 0);
+}
