@@ -38,6 +38,10 @@ pub(crate) enum Ran<E> {
     Failed(Option<u32>, ErrorKind<E>),
 }
 
+/// What primitive elements came to in one piece ([`Pass::elements`]): how many went through
+/// (`None`: declined), or the fault (at element `i`, if at one).
+pub(crate) type Elements<E> = Result<Option<u64>, (Option<u64>, ErrorKind<E>)>;
+
 /// What encoding and decoding each do at the loop's steps: where bits and values come from
 /// and go. Errors are returned as their kind; the loop words them.
 pub(crate) trait Pass {
@@ -49,71 +53,47 @@ pub(crate) trait Pass {
     /// Encoding: a field's path step is taken before the source is asked for the field.
     const ENCODES: bool;
 
+    /// The fault a method stopped at (each keeps it, so that results stay register-sized).
+    fn fault(&mut self) -> Option<ErrorKind<Self::Error>>;
     /// Bits read or written so far.
     fn pos(&self) -> usize;
     /// A primitive value.
-    fn scalar(&mut self, kind: Kind, path: &Path) -> Result<(), ErrorKind<Self::Error>>;
+    fn scalar(&mut self, kind: Kind, path: &Path) -> Result<(), Stop>;
     /// A `p_version` field the input has (decoding: a primitive like any other).
-    fn version(
-        &mut self,
-        kind: Kind,
-        version: u32,
-        path: &Path,
-    ) -> Result<(), ErrorKind<Self::Error>>;
+    fn version(&mut self, kind: Kind, version: u32, path: &Path) -> Result<(), Stop>;
     /// A `p_version` field the input leaves out (encoding only): the type's version.
-    fn absent_version(&mut self, kind: Kind, version: u32) -> Result<(), ErrorKind<Self::Error>>;
+    fn absent_version(&mut self, kind: Kind, version: u32) -> Result<(), Stop>;
     /// `bits` zero bits.
-    fn void(&mut self, bits: u32) -> Result<(), ErrorKind<Self::Error>>;
-    fn begin_struct(&mut self, count: u32) -> Result<(), ErrorKind<Self::Error>>;
+    fn void(&mut self, bits: u32) -> Result<(), Stop>;
+    fn begin_struct(&mut self, count: u32) -> Result<(), Stop>;
     /// Field `index`; whether the input has it.
-    fn field(&mut self, index: u32, name: &str) -> Result<bool, ErrorKind<Self::Error>>;
+    fn field(&mut self, index: u32, name: &str) -> Result<bool, Stop>;
     fn end_field(&mut self);
-    fn end_struct(
-        &mut self,
-        layout: &Layout<'_>,
-        members: &[Field],
-        used: usize,
-    ) -> Result<(), ErrorKind<Self::Error>>;
+    fn end_struct(&mut self, layout: &Layout<'_>, id: NodeId, used: usize) -> Result<(), Stop>;
     /// A union's tag, read or given (unchecked).
-    fn tag(
-        &mut self,
-        layout: &Layout<'_>,
-        variants: &[Field],
-        bits: u8,
-    ) -> Result<u64, ErrorKind<Self::Error>>;
+    fn tag(&mut self, layout: &Layout<'_>, id: NodeId, bits: u8) -> Result<u64, Stop>;
     /// The tag, checked, selects variant `index` (`name`): written, or told to the sink.
-    fn variant(
-        &mut self,
-        tag: u64,
-        index: u32,
-        name: &str,
-        at: At<'_>,
-    ) -> Result<(), ErrorKind<Self::Error>>;
-    fn end_union(&mut self) -> Result<(), ErrorKind<Self::Error>>;
+    fn variant(&mut self, tag: u64, index: u32, name: &str, at: At<'_>) -> Result<(), Stop>;
+    fn end_union(&mut self) -> Result<(), Stop>;
     /// A static array of `len` elements begins.
-    fn fixed(&mut self, len: u32, at: At<'_>) -> Result<(), ErrorKind<Self::Error>>;
+    fn fixed(&mut self, len: u32, at: At<'_>) -> Result<(), Stop>;
     /// A dynamic array's length, read (from a prefix of `bits`) or given; `None` for a tail
     /// array read, whose elements are counted as they come.
-    fn length(&mut self, bits: u8, tail: bool) -> Result<Option<u64>, ErrorKind<Self::Error>>;
+    fn length(&mut self, bits: u8, tail: bool) -> Result<Option<u64>, Stop>;
     /// The length, checked, begins the array: its prefix written (none for a tail array), or
     /// told to the sink.
-    fn prefix(&mut self, n: Option<u64>, at: At<'_>) -> Result<(), ErrorKind<Self::Error>>;
+    fn prefix(&mut self, n: Option<u64>, at: At<'_>) -> Result<(), Stop>;
     /// Whether element `i` is there: below the length, or for a tail array read, while
     /// whole bytes remain.
     fn more(&self, i: u64, n: Option<u64>) -> bool;
-    fn element(&mut self, i: u64) -> Result<(), ErrorKind<Self::Error>>;
+    fn element(&mut self, i: u64) -> Result<(), Stop>;
     fn end_element(&mut self);
-    fn end_array(&mut self, n: u64) -> Result<(), ErrorKind<Self::Error>>;
+    fn end_array(&mut self, n: u64) -> Result<(), Stop>;
     /// A plan: a fixed-shape run of `leaves` leaves (`items`, `bits` long) in one piece.
     fn run(&mut self, items: &[FlatItem], leaves: u32, bits: u32) -> Ran<Self::Error>;
     /// A plan: primitive elements of `kind` in one piece (`n`: the length, `None` for a tail
     /// array read, at most `max`); how many went through, or the fault (at element `i`).
-    fn elements(
-        &mut self,
-        kind: Kind,
-        n: Option<u64>,
-        max: u32,
-    ) -> Result<Option<u64>, (Option<u64>, ErrorKind<Self::Error>)>;
+    fn elements(&mut self, kind: Kind, n: Option<u64>, max: u32) -> Elements<Self::Error>;
 }
 
 /// The loop: a pass walked over a type.
@@ -166,11 +146,19 @@ impl<'l, P: Pass> Run<'l, P> {
     }
 
     #[inline(always)]
-    fn ok<T>(&mut self, r: Result<T, ErrorKind<P::Error>>) -> Result<T, Stop> {
+    fn ok<T>(&mut self, r: Result<T, Stop>) -> Result<T, Stop> {
         match r {
             Ok(v) => Ok(v),
-            Err(kind) => Err(self.fail(kind)),
+            Err(Stop) => Err(self.refused()),
         }
+    }
+
+    /// Words the fault the pass stopped at.
+    #[cold]
+    #[inline(never)]
+    fn refused(&mut self) -> Stop {
+        let kind = self.pass.fault().unwrap_or(ErrorKind::TooDeep);
+        self.fail(kind)
     }
 
     /// A primitive (a field, an element or a variant), one past the nesting bound refused.
@@ -191,6 +179,8 @@ impl<'l, P: Pass> Run<'l, P> {
         }
         let layout = self.layout;
         let at_pos = self.pass.pos();
+        // An array's elements: walked after the match, from one place in the code.
+        let mut array = None;
         match layout.node(id).kind {
             kind @ (Kind::Uint { .. } | Kind::Int { .. } | Kind::Float { .. } | Kind::Bool) => {
                 let r = self.pass.scalar(kind, &self.path);
@@ -210,7 +200,7 @@ impl<'l, P: Pass> Run<'l, P> {
                     for i in first..first + count {
                         used += self.field(i, tao && i + 1 == first + count)?;
                     }
-                    let r = self.pass.end_struct(layout, layout.members(id), used);
+                    let r = self.pass.end_struct(layout, id, used);
                     self.ok(r)?;
                 }
             }
@@ -219,8 +209,7 @@ impl<'l, P: Pass> Run<'l, P> {
                 count,
                 tag_bits,
             } => {
-                let variants = layout.members(id);
-                let r = self.pass.tag(layout, variants, tag_bits);
+                let r = self.pass.tag(layout, id, tag_bits);
                 let tag = self.ok(r)?;
                 // The rule: the tag selects one of the variants.
                 if tag >= u64::from(count) {
@@ -256,7 +245,7 @@ impl<'l, P: Pass> Run<'l, P> {
                 };
                 let r = self.pass.fixed(len, at);
                 self.ok(r)?;
-                self.elements(elem, Some(len.into()), len, tao)?;
+                array = Some((elem, Some(len.into()), len, tao));
             }
             Kind::DynArray {
                 elem,
@@ -282,13 +271,17 @@ impl<'l, P: Pass> Run<'l, P> {
                 };
                 let r = self.pass.prefix(n, at);
                 self.ok(r)?;
-                self.elements(elem, n, max, tao && !tail)?;
+                array = Some((elem, n, max, tao && !tail));
             }
+        }
+        if let Some((elem, n, max, tao)) = array {
+            self.elements(elem, n, max, tao)?;
         }
         self.depth -= 1;
         Ok(())
     }
 
+    #[inline(always)]
     /// The elements of an array (`n`: its length, `None` for a tail array read: as many as
     /// whole bytes remain for, at most `max`).
     fn elements(&mut self, elem: NodeId, n: Option<u64>, max: u32, tao: bool) -> Result<(), Stop> {
@@ -347,7 +340,9 @@ impl<'l, P: Pass> Run<'l, P> {
             self.path.push(Step::Field(index));
         }
         let kind = layout.node(field.node).kind;
-        let used = match (present, field.role) {
+        // Decoding reads a `p_version` as any other primitive.
+        let role = if P::ENCODES { field.role } else { Role::Data };
+        let used = match (present, role) {
             (true, role) => {
                 match role {
                     Role::Version(v) if is_scalar(kind) => {
@@ -483,6 +478,7 @@ pub(crate) fn encode<P: Plans, S: Source>(
         source,
         saturate: options.saturate,
         keep_versions: options.keep_versions,
+        fault: None,
         plans: core::marker::PhantomData,
     };
     let mut run = Run::new(layout, pass);
@@ -511,6 +507,7 @@ pub(crate) fn decode<P: Plans, R: BitRead + ?Sized, K: Sink>(
         reader: data.reader(0),
         bit_len: data.bit_len(),
         sink,
+        fault: None,
         plans: core::marker::PhantomData,
     };
     let mut run = Run::new(layout, pass);
@@ -536,22 +533,31 @@ struct Encode<'o, P, S: Source> {
     source: &'o mut S,
     saturate: bool,
     keep_versions: bool,
+    fault: Option<ErrorKind<S::Error>>,
     plans: core::marker::PhantomData<P>,
 }
 
 impl<P: Plans, S: Source> Encode<'_, P, S> {
+    #[cold]
+    #[inline(never)]
+    fn refuse(&mut self, kind: ErrorKind<S::Error>) -> Stop {
+        self.fault = Some(kind);
+        Stop
+    }
+
     // One out-of-line copy in firmware builds: every kind of node writes.
     #[cfg_attr(not(feature = "compact"), inline(always))]
     #[cfg_attr(feature = "compact", inline(never))]
-    fn write(&mut self, raw: u64, bits: u32) -> Result<(), ErrorKind<S::Error>> {
+    fn write(&mut self, raw: u64, bits: u32) -> Result<(), Stop> {
         self.out
             .write(scalar::to_stream(raw, bits), bits)
-            .map_err(|needed| ErrorKind::BufferTooSmall { needed })
+            .map_err(|needed| self.refuse(ErrorKind::BufferTooSmall { needed }))
     }
 
     #[inline(never)]
-    fn put(&mut self, kind: Kind, value: Scalar) -> Result<(), ErrorKind<S::Error>> {
-        let raw = fast_raw::<P>(kind, value, self.saturate).map_err(ErrorKind::Scalar)?;
+    fn put(&mut self, kind: Kind, value: Scalar) -> Result<(), Stop> {
+        let raw = fast_raw::<P>(kind, value, self.saturate)
+            .map_err(|e| self.refuse(ErrorKind::Scalar(e)))?;
         self.write(raw, scalar_bits(kind))
     }
 }
@@ -561,97 +567,99 @@ impl<P: Plans, S: Source> Pass for Encode<'_, P, S> {
     const RUNS: bool = S::FLAT && P::FLAT;
     const ENCODES: bool = true;
 
+    fn fault(&mut self) -> Option<ErrorKind<S::Error>> {
+        self.fault.take()
+    }
+
     #[inline(always)]
     fn pos(&self) -> usize {
         self.out.bit_pos()
     }
     #[inline]
-    fn scalar(&mut self, kind: Kind, _: &Path) -> Result<(), ErrorKind<S::Error>> {
-        let v = self.source.scalar(kind).map_err(ErrorKind::Value)?;
+    fn scalar(&mut self, kind: Kind, _: &Path) -> Result<(), Stop> {
+        let v = self
+            .source
+            .scalar(kind)
+            .map_err(|e| self.refuse(ErrorKind::Value(e)))?;
         self.put(kind, v)
     }
-    fn version(&mut self, kind: Kind, version: u32, _: &Path) -> Result<(), ErrorKind<S::Error>> {
-        let given = self.source.scalar(kind).map_err(ErrorKind::Value)?;
+    fn version(&mut self, kind: Kind, version: u32, _: &Path) -> Result<(), Stop> {
+        let given = self
+            .source
+            .scalar(kind)
+            .map_err(|e| self.refuse(ErrorKind::Value(e)))?;
         if self.keep_versions {
             return self.put(kind, given);
         }
         if !scalar::same_integer(given, version) {
-            return Err(ErrorKind::VersionMismatch {
+            return Err(self.refuse(ErrorKind::VersionMismatch {
                 given,
                 expected: version,
-            });
+            }));
         }
         self.put(kind, Scalar::Uint(version.into()))
     }
-    fn absent_version(&mut self, kind: Kind, version: u32) -> Result<(), ErrorKind<S::Error>> {
+    fn absent_version(&mut self, kind: Kind, version: u32) -> Result<(), Stop> {
         self.put(kind, Scalar::Uint(version.into()))
     }
-    fn void(&mut self, bits: u32) -> Result<(), ErrorKind<S::Error>> {
+    fn void(&mut self, bits: u32) -> Result<(), Stop> {
         self.write(0, bits)
     }
-    fn begin_struct(&mut self, _count: u32) -> Result<(), ErrorKind<S::Error>> {
-        self.source.begin_struct().map_err(ErrorKind::Value)
+    fn begin_struct(&mut self, _count: u32) -> Result<(), Stop> {
+        self.source
+            .begin_struct()
+            .map_err(|e| self.refuse(ErrorKind::Value(e)))
     }
     #[inline]
-    fn field(&mut self, index: u32, name: &str) -> Result<bool, ErrorKind<S::Error>> {
-        self.source.field(index, name).map_err(ErrorKind::Value)
+    fn field(&mut self, index: u32, name: &str) -> Result<bool, Stop> {
+        self.source
+            .field(index, name)
+            .map_err(|e| self.refuse(ErrorKind::Value(e)))
     }
     #[inline]
     fn end_field(&mut self) {
         self.source.end_field();
     }
-    fn end_struct(
-        &mut self,
-        layout: &Layout<'_>,
-        members: &[Field],
-        used: usize,
-    ) -> Result<(), ErrorKind<S::Error>> {
-        let r = self.source.end_struct(layout, members, used);
-        r.map_err(ErrorKind::Value)
+    fn end_struct(&mut self, layout: &Layout<'_>, id: NodeId, used: usize) -> Result<(), Stop> {
+        let r = self.source.end_struct(layout, layout.members(id), used);
+        r.map_err(|e| self.refuse(ErrorKind::Value(e)))
     }
-    fn tag(
-        &mut self,
-        layout: &Layout<'_>,
-        variants: &[Field],
-        _bits: u8,
-    ) -> Result<u64, ErrorKind<S::Error>> {
-        let tag = self.source.begin_union(layout, variants);
-        tag.map(u64::from).map_err(ErrorKind::Value)
+    fn tag(&mut self, layout: &Layout<'_>, id: NodeId, _bits: u8) -> Result<u64, Stop> {
+        let tag = self.source.begin_union(layout, layout.members(id));
+        tag.map(u64::from)
+            .map_err(|e| self.refuse(ErrorKind::Value(e)))
     }
-    fn variant(
-        &mut self,
-        tag: u64,
-        _index: u32,
-        _name: &str,
-        at: At<'_>,
-    ) -> Result<(), ErrorKind<S::Error>> {
+    fn variant(&mut self, tag: u64, _index: u32, _name: &str, at: At<'_>) -> Result<(), Stop> {
         match at.kind {
             LeafKind::Tag { bits, .. } => self.write(tag, bits.into()),
             _ => Ok(()),
         }
     }
-    fn end_union(&mut self) -> Result<(), ErrorKind<S::Error>> {
+    fn end_union(&mut self) -> Result<(), Stop> {
         self.source.end_union();
         Ok(())
     }
-    fn fixed(&mut self, len: u32, _at: At<'_>) -> Result<(), ErrorKind<S::Error>> {
+    fn fixed(&mut self, len: u32, _at: At<'_>) -> Result<(), Stop> {
         let n = self
             .source
             .begin_array(Some(len))
-            .map_err(ErrorKind::Value)?;
+            .map_err(|e| self.refuse(ErrorKind::Value(e)))?;
         if n != len as usize {
-            return Err(ErrorKind::WrongArrayLength {
+            return Err(self.refuse(ErrorKind::WrongArrayLength {
                 len: n as u64,
                 expected: len,
-            });
+            }));
         }
         Ok(())
     }
-    fn length(&mut self, _bits: u8, _tail: bool) -> Result<Option<u64>, ErrorKind<S::Error>> {
-        let n = self.source.begin_array(None).map_err(ErrorKind::Value)?;
+    fn length(&mut self, _bits: u8, _tail: bool) -> Result<Option<u64>, Stop> {
+        let n = self
+            .source
+            .begin_array(None)
+            .map_err(|e| self.refuse(ErrorKind::Value(e)))?;
         Ok(Some(n as u64))
     }
-    fn prefix(&mut self, n: Option<u64>, at: At<'_>) -> Result<(), ErrorKind<S::Error>> {
+    fn prefix(&mut self, n: Option<u64>, at: At<'_>) -> Result<(), Stop> {
         match (at.kind, n) {
             (LeafKind::Len { bits, .. }, Some(n)) if bits > 0 => self.write(n, bits.into()),
             _ => Ok(()),
@@ -662,14 +670,16 @@ impl<P: Plans, S: Source> Pass for Encode<'_, P, S> {
         Some(i) < n
     }
     #[inline]
-    fn element(&mut self, i: u64) -> Result<(), ErrorKind<S::Error>> {
-        self.source.element(i as usize).map_err(ErrorKind::Value)
+    fn element(&mut self, i: u64) -> Result<(), Stop> {
+        self.source
+            .element(i as usize)
+            .map_err(|e| self.refuse(ErrorKind::Value(e)))
     }
     #[inline]
     fn end_element(&mut self) {
         self.source.end_element();
     }
-    fn end_array(&mut self, _n: u64) -> Result<(), ErrorKind<S::Error>> {
+    fn end_array(&mut self, _n: u64) -> Result<(), Stop> {
         self.source.end_array();
         Ok(())
     }
@@ -685,12 +695,7 @@ impl<P: Plans, S: Source> Pass for Encode<'_, P, S> {
             None => Ran::Declined,
         }
     }
-    fn elements(
-        &mut self,
-        kind: Kind,
-        n: Option<u64>,
-        _max: u32,
-    ) -> Result<Option<u64>, (Option<u64>, ErrorKind<S::Error>)> {
+    fn elements(&mut self, kind: Kind, n: Option<u64>, _max: u32) -> Elements<S::Error> {
         if !(S::FLAT && P::FLAT) {
             return Ok(None);
         }
@@ -713,10 +718,18 @@ struct Decode<'d, P, R: BitRead + ?Sized + 'd, K: Sink> {
     reader: R::Reader<'d>,
     bit_len: usize,
     sink: &'d mut K,
+    fault: Option<ErrorKind<K::Error>>,
     plans: core::marker::PhantomData<P>,
 }
 
 impl<'d, P: Plans, R: BitRead + ?Sized + 'd, K: Sink> Decode<'d, P, R, K> {
+    #[cold]
+    #[inline(never)]
+    fn refuse(&mut self, kind: ErrorKind<K::Error>) -> Stop {
+        self.fault = Some(kind);
+        Stop
+    }
+
     /// Bits left to read.
     #[inline(always)]
     fn remaining(&self) -> usize {
@@ -724,13 +737,13 @@ impl<'d, P: Plans, R: BitRead + ?Sized + 'd, K: Sink> Decode<'d, P, R, K> {
     }
 
     #[inline]
-    fn read(&mut self, bits: u32) -> Result<u64, ErrorKind<K::Error>> {
+    fn read(&mut self, bits: u32) -> Result<u64, Stop> {
         let needed = self.reader.position() + bits as usize;
         if needed > self.bit_len {
-            return Err(ErrorKind::Truncated {
+            return Err(self.refuse(ErrorKind::Truncated {
                 needed_bits: needed,
                 available_bits: self.bit_len,
-            });
+            }));
         }
         let stream = self.reader.read(bits);
         Ok(scalar::from_stream(stream, bits))
@@ -742,12 +755,16 @@ impl<'d, P: Plans, R: BitRead + ?Sized + 'd, K: Sink> Pass for Decode<'d, P, R, 
     const RUNS: bool = K::FLAT && P::FLAT;
     const ENCODES: bool = false;
 
+    fn fault(&mut self) -> Option<ErrorKind<K::Error>> {
+        self.fault.take()
+    }
+
     #[inline(always)]
     fn pos(&self) -> usize {
         self.reader.position()
     }
     #[inline]
-    fn scalar(&mut self, kind: Kind, path: &Path) -> Result<(), ErrorKind<K::Error>> {
+    fn scalar(&mut self, kind: Kind, path: &Path) -> Result<(), Stop> {
         let at_pos = self.reader.position();
         let value = scalar_of(kind, self.read(scalar_bits(kind))?);
         let at = At {
@@ -755,69 +772,68 @@ impl<'d, P: Plans, R: BitRead + ?Sized + 'd, K: Sink> Pass for Decode<'d, P, R, 
             bit_offset: at_pos,
             kind: LeafKind::Scalar(kind),
         };
-        self.sink.scalar(value, at).map_err(ErrorKind::Value)
+        self.sink
+            .scalar(value, at)
+            .map_err(|e| self.refuse(ErrorKind::Value(e)))
     }
-    fn version(&mut self, kind: Kind, _: u32, path: &Path) -> Result<(), ErrorKind<K::Error>> {
+    fn version(&mut self, kind: Kind, _: u32, path: &Path) -> Result<(), Stop> {
         self.scalar(kind, path)
     }
-    fn absent_version(&mut self, _: Kind, _: u32) -> Result<(), ErrorKind<K::Error>> {
+    fn absent_version(&mut self, _: Kind, _: u32) -> Result<(), Stop> {
         Ok(())
     }
-    fn void(&mut self, bits: u32) -> Result<(), ErrorKind<K::Error>> {
+    fn void(&mut self, bits: u32) -> Result<(), Stop> {
         self.read(bits).map(|_| ())
     }
-    fn begin_struct(&mut self, count: u32) -> Result<(), ErrorKind<K::Error>> {
+    fn begin_struct(&mut self, count: u32) -> Result<(), Stop> {
         self.sink
             .begin_struct(count as usize)
-            .map_err(ErrorKind::Value)
+            .map_err(|e| self.refuse(ErrorKind::Value(e)))
     }
     #[inline]
-    fn field(&mut self, index: u32, name: &str) -> Result<bool, ErrorKind<K::Error>> {
-        self.sink.field(index, name).map_err(ErrorKind::Value)?;
+    fn field(&mut self, index: u32, name: &str) -> Result<bool, Stop> {
+        self.sink
+            .field(index, name)
+            .map_err(|e| self.refuse(ErrorKind::Value(e)))?;
         Ok(true)
     }
     #[inline]
     fn end_field(&mut self) {}
-    fn end_struct(
-        &mut self,
-        _: &Layout<'_>,
-        _: &[Field],
-        _: usize,
-    ) -> Result<(), ErrorKind<K::Error>> {
-        self.sink.end_struct().map_err(ErrorKind::Value)
+    fn end_struct(&mut self, _: &Layout<'_>, _: NodeId, _: usize) -> Result<(), Stop> {
+        self.sink
+            .end_struct()
+            .map_err(|e| self.refuse(ErrorKind::Value(e)))
     }
-    fn tag(&mut self, _: &Layout<'_>, _: &[Field], bits: u8) -> Result<u64, ErrorKind<K::Error>> {
+    fn tag(&mut self, _: &Layout<'_>, _: NodeId, bits: u8) -> Result<u64, Stop> {
         self.read(bits.into())
     }
-    fn variant(
-        &mut self,
-        tag: u64,
-        index: u32,
-        name: &str,
-        at: At<'_>,
-    ) -> Result<(), ErrorKind<K::Error>> {
+    fn variant(&mut self, tag: u64, index: u32, name: &str, at: At<'_>) -> Result<(), Stop> {
         let r = self.sink.begin_union(tag as u32, index, name, at);
-        r.map_err(ErrorKind::Value)
+        r.map_err(|e| self.refuse(ErrorKind::Value(e)))
     }
-    fn end_union(&mut self) -> Result<(), ErrorKind<K::Error>> {
-        self.sink.end_union().map_err(ErrorKind::Value)
+    fn end_union(&mut self) -> Result<(), Stop> {
+        self.sink
+            .end_union()
+            .map_err(|e| self.refuse(ErrorKind::Value(e)))
     }
-    fn fixed(&mut self, len: u32, at: At<'_>) -> Result<(), ErrorKind<K::Error>> {
+    fn fixed(&mut self, len: u32, at: At<'_>) -> Result<(), Stop> {
         let r = self.sink.begin_array(ArrayLen::Fixed(len as usize), at);
-        r.map_err(ErrorKind::Value)
+        r.map_err(|e| self.refuse(ErrorKind::Value(e)))
     }
-    fn length(&mut self, bits: u8, tail: bool) -> Result<Option<u64>, ErrorKind<K::Error>> {
+    fn length(&mut self, bits: u8, tail: bool) -> Result<Option<u64>, Stop> {
         if tail {
             return Ok(None);
         }
         self.read(bits.into()).map(Some)
     }
-    fn prefix(&mut self, n: Option<u64>, at: At<'_>) -> Result<(), ErrorKind<K::Error>> {
+    fn prefix(&mut self, n: Option<u64>, at: At<'_>) -> Result<(), Stop> {
         let len = match n {
             Some(n) => ArrayLen::Prefixed(n as usize),
             None => ArrayLen::Tail,
         };
-        self.sink.begin_array(len, at).map_err(ErrorKind::Value)
+        self.sink
+            .begin_array(len, at)
+            .map_err(|e| self.refuse(ErrorKind::Value(e)))
     }
     #[inline(always)]
     fn more(&self, i: u64, n: Option<u64>) -> bool {
@@ -827,13 +843,15 @@ impl<'d, P: Plans, R: BitRead + ?Sized + 'd, K: Sink> Pass for Decode<'d, P, R, 
         }
     }
     #[inline]
-    fn element(&mut self, _i: u64) -> Result<(), ErrorKind<K::Error>> {
+    fn element(&mut self, _i: u64) -> Result<(), Stop> {
         Ok(())
     }
     #[inline]
     fn end_element(&mut self) {}
-    fn end_array(&mut self, n: u64) -> Result<(), ErrorKind<K::Error>> {
-        self.sink.end_array(n as usize).map_err(ErrorKind::Value)
+    fn end_array(&mut self, n: u64) -> Result<(), Stop> {
+        self.sink
+            .end_array(n as usize)
+            .map_err(|e| self.refuse(ErrorKind::Value(e)))
     }
     fn run(&mut self, items: &[FlatItem], leaves: u32, bits: u32) -> Ran<K::Error> {
         // Enough data for the whole run means no read inside it can fail; if not, the
@@ -853,12 +871,7 @@ impl<'d, P: Plans, R: BitRead + ?Sized + 'd, K: Sink> Pass for Decode<'d, P, R, 
             Some(Err(_)) | None => Ran::Declined,
         }
     }
-    fn elements(
-        &mut self,
-        kind: Kind,
-        n: Option<u64>,
-        max: u32,
-    ) -> Result<Option<u64>, (Option<u64>, ErrorKind<K::Error>)> {
+    fn elements(&mut self, kind: Kind, n: Option<u64>, max: u32) -> Elements<K::Error> {
         if !(K::FLAT && P::FLAT) {
             return Ok(None);
         }
