@@ -285,9 +285,14 @@ impl<'l, P: Pass> Run<'l, P> {
     /// The elements of an array (`n`: its length, `None` for a tail array read: as many as
     /// whole bytes remain for, at most `max`).
     fn elements(&mut self, elem: NodeId, n: Option<u64>, max: u32, tao: bool) -> Result<(), Stop> {
+        let mut i = 0;
+        if !self.pass.more(i, n) {
+            // Empty (a common case: an empty read, an unnamed model): nothing to set up.
+            let r = self.pass.end_array(i);
+            return self.ok(r);
+        }
         let kind = self.layout.node(elem).kind;
         let scalar = is_scalar(kind);
-        let mut i = 0;
         if scalar && self.depth < MAX_DEPTH {
             match self.pass.elements(kind, n, max) {
                 Ok(Some(done)) => i = done,
