@@ -97,8 +97,11 @@ pub fn encode_leaves(
     encode_leaves_with::<Active>(layout, root, leaves, out, options)
 }
 
-/// [`encode_leaves`] with the plans `P`: the straight plan, then the one loop (with the flat
-/// runs of [`Plans::FLAT`] inside it), which words every error.
+/// [`encode_leaves`] with the plans `P`: with [`Plans::FLAT`] (hosts), the straight plan, then
+/// the one loop ([`crate::interp`], with the flat runs inside it), which words every error;
+/// without (firmware), [`crate::walk`], which firmware runs for every other operation on
+/// values too, so that it links one interpreter (the loop compiled for leaf lists beside it
+/// would add 6.7 KB on a Cortex-M7). Both give the same bytes and errors (`tests/parity.rs`).
 pub fn encode_leaves_with<P: Plans>(
     layout: &Layout<'_>,
     root: NodeId,
@@ -106,6 +109,9 @@ pub fn encode_leaves_with<P: Plans>(
     out: &mut [u8],
     options: EncodeOptions,
 ) -> Result<usize, Error<LeafError>> {
+    if !P::FLAT {
+        return walk::encode(layout, root, leaves, out, options);
+    }
     encode_with::<P, _>(layout, root, &mut LeafSource::new(leaves), out, options)
 }
 
@@ -121,8 +127,9 @@ pub fn decode_leaves<R: BitRead + ?Sized>(
     decode_leaves_with::<Active, R>(layout, root, data, leaves, options)
 }
 
-/// [`decode_leaves`] with the plans `P`: the straight plan, then the one loop (with the flat
-/// runs of [`Plans::FLAT`] inside it), which words every error.
+/// [`decode_leaves`] with the plans `P`: with [`Plans::FLAT`] (hosts), the straight plan, then
+/// the one loop ([`crate::interp`]), which words every error; without (firmware),
+/// [`crate::walk`], as [`encode_leaves_with`] says.
 pub fn decode_leaves_with<P: Plans, R: BitRead + ?Sized>(
     layout: &Layout<'_>,
     root: NodeId,
@@ -130,6 +137,9 @@ pub fn decode_leaves_with<P: Plans, R: BitRead + ?Sized>(
     leaves: &mut [Scalar],
     options: DecodeOptions,
 ) -> Result<Decoded, Error<LeafError>> {
+    if !P::FLAT {
+        return walk::decode(layout, root, data, leaves, options);
+    }
     let mut sink = LeafSink::new(leaves);
     let bits = decode_with::<P, R, _>(layout, root, data, &mut sink, options)?;
     let leaves = sink.leaves().len();

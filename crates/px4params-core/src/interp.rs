@@ -15,7 +15,7 @@
 
 use crate::bits::{BitRead, BitReader, BitWriter};
 use crate::error::{Error, ErrorKind, Path, Step};
-use crate::layout::{Field, FlatItem, Kind, Layout, NodeId, Role, Segment, Span};
+use crate::layout::{FlatItem, Kind, Layout, NodeId, Role, Segment, Span};
 use crate::plan::Plans;
 use crate::rules::{
     scalar_bits, scalar_of, scalar_raw, tail_optimized, ArrayLen, At, DecodeOptions, EncodeOptions,
