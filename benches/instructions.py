@@ -5,10 +5,11 @@ bench profile, as criterion's figures are) N times and 0 times, and divides the 
     python benches/instructions.py [--n 2000] [--compact] [OP ...]
     python benches/instructions.py --table [--compact] [--before REV] [--c DIR] [--rounds 9]
 
-``--compact`` counts the firmware build of the core (feature ``compact``: every value through
-one small walk, built for size; see ``benches/size.py``). ``encode``/``decode`` run the codec
-from and into a leaf list as a host does (the encoder and decoder over a source and a sink);
-``encode_leaves``/``decode_leaves`` as firmware calls it, through the walk in ``compact``.
+``--compact`` counts the firmware build of the core (feature ``compact``: no plans, built
+for size; see ``benches/size.py``). ``encode``/``decode`` run the codec from and into a leaf
+list over a source and a sink (the straight plan where the build has it, then the one loop of
+``crates/px4params-core/src/interp.rs``); ``encode_leaves``/``decode_leaves`` as firmware calls
+them, through the walk in ``compact``.
 
 ``--table`` prints the rows issue 39 sets targets for, side by side: this tree's counts and
 times, those of the core at ``--before`` (built in a worktree of its own, ``/tmp/px4params-

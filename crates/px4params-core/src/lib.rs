@@ -24,6 +24,7 @@ pub mod compile;
 pub mod crc;
 pub mod error;
 pub mod file;
+mod interp;
 pub mod layout;
 pub mod leaf;
 pub mod pages;

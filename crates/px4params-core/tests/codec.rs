@@ -730,3 +730,83 @@ proptest! {
         }
     }
 }
+
+/// The loop words each DroneCAN rule's fault, the same under both plan sets (the straight
+/// plan and the flat runs only answer or decline): a union tag that selects no variant, a
+/// given length over the maximum, and a tail array that counts more elements than it may
+/// hold; each at the bit where the tag, the prefix or the element starts.
+#[test]
+fn the_loop_words_each_rule() {
+    use px4params_core::codec::{decode_with, encode_with};
+    use px4params_core::layout::Role;
+    use px4params_core::plan::{HostPlans, NoPlans, Plans};
+    use px4params_core::scalar::Cast;
+
+    let mut l = OwnedLayout::default();
+    let u8n = l.uint(8, Cast::Saturated).unwrap();
+    let u16n = l.uint(16, Cast::Saturated).unwrap();
+    let choice = l.union(&[("a", u8n), ("b", u16n)]).unwrap();
+    let bytes = l.dyn_array(u8n, 3).unwrap();
+    let root = l
+        .structure(&[("u", choice, Role::Data), ("s", bytes, Role::Data)])
+        .unwrap();
+    let layout = l.as_layout();
+
+    fn encoded<P: Plans>(
+        layout: &px4params_core::Layout<'_>,
+        root: NodeId,
+        leaves: &[Scalar],
+        tao: bool,
+    ) -> (String, usize) {
+        let mut out = [0u8; 16];
+        let options = EncodeOptions {
+            tao,
+            ..EncodeOptions::default()
+        };
+        let e = encode_with::<P, _>(
+            layout,
+            root,
+            &mut LeafSource::new(leaves),
+            &mut out,
+            options,
+        )
+        .unwrap_err();
+        let text = e.display(layout).to_string();
+        (text, e.bit_offset)
+    }
+    fn decoded<P: Plans>(
+        layout: &px4params_core::Layout<'_>,
+        root: NodeId,
+        data: &[u8],
+    ) -> (String, usize) {
+        let mut storage = [Scalar::Uint(0); 16];
+        let mut sink = LeafSink::new(&mut storage);
+        let e = decode_with::<P, _, _>(layout, root, data, &mut sink, DecodeOptions::default())
+            .unwrap_err();
+        let text = e.display(layout).to_string();
+        (text, e.bit_offset)
+    }
+
+    for tao in [false, true] {
+        // Tag 2 of a union of two variants (its 1-bit tag is the value's first bit).
+        let bad_tag = [2, 7, 0].map(Scalar::Uint);
+        let want = (
+            "u: union tag 2 selects no variant (expected 0..1)".to_string(),
+            0,
+        );
+        assert_eq!(encoded::<HostPlans>(&layout, root, &bad_tag, tao), want);
+        assert_eq!(encoded::<NoPlans>(&layout, root, &bad_tag, tao), want);
+        // Four elements for an array of at most three: refused where its prefix (or, tail
+        // optimized, its first element) would start, after the 1-bit tag and 8-bit variant.
+        let long = [0, 7, 4, 1, 2, 3, 4].map(Scalar::Uint);
+        let want = ("s: array has 4 elements, at most 3 allowed".to_string(), 9);
+        assert_eq!(encoded::<HostPlans>(&layout, root, &long, tao), want);
+        assert_eq!(encoded::<NoPlans>(&layout, root, &long, tao), want);
+    }
+    // Tail optimized, the array takes the whole bytes after bit 9: 39 bits hold four, one
+    // more than it may have; the fourth is refused where it starts (bit 9 + 3 * 8).
+    let data = [0x03, 0x80, 0x81, 0x01, 0x82, 0x00];
+    let want = ("s: array has 4 elements, at most 3 allowed".to_string(), 33);
+    assert_eq!(decoded::<HostPlans>(&layout, root, &data), want);
+    assert_eq!(decoded::<NoPlans>(&layout, root, &data), want);
+}

@@ -4,6 +4,11 @@
 //! buffers too small, exact and roomy, and data complete and cut short: the same bytes,
 //! leaves, positions and errors.
 //!
+//! The one loop of the codec ([`codec::encode_with`], [`codec::decode_with`] over a leaf list,
+//! under either set: with the flat runs of `HostPlans` inside it and without) is also held to
+//! the general walk ([`walk::encode`], [`walk::decode`], what firmware runs for leaf lists):
+//! the same bytes, leaves and errors.
+//!
 //! Where the two report one fault differently, the test says so and compares what both must
 //! agree on (as `tests/walk.rs` does for the walk against the host's own walks). The store's
 //! leaf tables and in-place writes follow the build's plans: `cargo test --features
@@ -14,7 +19,7 @@ mod common;
 use common::{any_type, same_error, same_leaves, same_scalar};
 use proptest::prelude::*;
 use px4params_core::codec::{
-    check_stored_with, decode_leaves_with, encode_leaves_with, DecodeOptions, EncodeOptions,
+    self, check_stored_with, decode_leaves_with, encode_leaves_with, DecodeOptions, EncodeOptions,
 };
 use px4params_core::compile::OwnedLayout;
 use px4params_core::error::Error;
@@ -24,7 +29,8 @@ use px4params_core::leaf::{
 };
 use px4params_core::plan::{HostPlans, NoPlans, Plans};
 use px4params_core::translate::translate_value_with;
-use px4params_core::value::LeafError;
+use px4params_core::value::{LeafError, LeafSink, LeafSource};
+use px4params_core::walk;
 use px4params_core::{ErrorKind, Scalar};
 
 type Decoded = Result<(usize, Vec<Scalar>), Error<LeafError>>;
@@ -45,6 +51,56 @@ fn encoded<P: Plans>(
 ) -> Encoded {
     let mut out = vec![0xA5u8; size];
     let n = encode_leaves_with::<P>(layout, root, leaves, &mut out, options)?;
+    out.truncate(n);
+    Ok(out)
+}
+
+/// What the codec's loop decodes into a leaf list with the plans `P`, as [`decoded`] gives it.
+fn loop_decoded<P: Plans>(
+    layout: &Layout<'_>,
+    root: NodeId,
+    data: &[u8],
+    o: DecodeOptions,
+) -> Decoded {
+    let mut leaves = vec![Scalar::Uint(0); 600];
+    let mut sink = LeafSink::new(&mut leaves);
+    let bits = codec::decode_with::<P, _, _>(layout, root, data, &mut sink, o)?;
+    let n = sink.leaves().len();
+    Ok((bits, leaves[..n].to_vec()))
+}
+
+/// What the codec's loop encodes from a leaf list with the plans `P`, as [`encoded`] gives it.
+fn loop_encoded<P: Plans>(
+    layout: &Layout<'_>,
+    root: NodeId,
+    leaves: &[Scalar],
+    size: usize,
+    options: EncodeOptions,
+) -> Encoded {
+    let mut out = vec![0xA5u8; size];
+    let mut source = LeafSource::new(leaves);
+    let n = codec::encode_with::<P, _>(layout, root, &mut source, &mut out, options)?;
+    out.truncate(n);
+    Ok(out)
+}
+
+/// What the general walk decodes, as [`decoded`] gives it.
+fn walk_decoded(layout: &Layout<'_>, root: NodeId, data: &[u8], o: DecodeOptions) -> Decoded {
+    let mut leaves = vec![Scalar::Uint(0); 600];
+    let d = walk::decode(layout, root, data, &mut leaves, o)?;
+    Ok((d.bits, leaves[..d.leaves].to_vec()))
+}
+
+/// What the general walk encodes, as [`encoded`] gives it.
+fn walk_encoded(
+    layout: &Layout<'_>,
+    root: NodeId,
+    leaves: &[Scalar],
+    size: usize,
+    options: EncodeOptions,
+) -> Encoded {
+    let mut out = vec![0xA5u8; size];
+    let n = walk::encode(layout, root, leaves, &mut out, options)?;
     out.truncate(n);
     Ok(out)
 }
@@ -96,11 +152,19 @@ proptest! {
         let root = ty.build(&mut l);
         let layout = l.as_layout();
         let options = DecodeOptions { tao, allow_trailing };
-        same_decoding(&decoded::<HostPlans>(&layout, root, &data, options), &decoded::<NoPlans>(&layout, root, &data, options))?;
+        let walked = walk_decoded(&layout, root, &data, options);
+        same_decoding(&decoded::<HostPlans>(&layout, root, &data, options), &walked)?;
+        same_decoding(&decoded::<NoPlans>(&layout, root, &data, options), &walked)?;
+        same_decoding(&loop_decoded::<HostPlans>(&layout, root, &data, options), &walked)?;
+        same_decoding(&loop_decoded::<NoPlans>(&layout, root, &data, options), &walked)?;
         let value = value_from(&layout, root, &data).unwrap_or_default();
         for bytes in cut_short(&value) {
             let options = DecodeOptions { tao: false, allow_trailing };
-            same_decoding(&decoded::<HostPlans>(&layout, root, bytes, options), &decoded::<NoPlans>(&layout, root, bytes, options))?;
+            let walked = walk_decoded(&layout, root, bytes, options);
+            same_decoding(&decoded::<HostPlans>(&layout, root, bytes, options), &walked)?;
+            same_decoding(&decoded::<NoPlans>(&layout, root, bytes, options), &walked)?;
+            same_decoding(&loop_decoded::<HostPlans>(&layout, root, bytes, options), &walked)?;
+            same_decoding(&loop_decoded::<NoPlans>(&layout, root, bytes, options), &walked)?;
         }
     }
 
@@ -125,19 +189,31 @@ proptest! {
         common::tweak_leaves(&mut leaves, &tweaks, cut);
         let options = EncodeOptions { tao, saturate, keep_versions };
         let room = layout.max_bytes(root);
-        let roomy = encoded::<NoPlans>(&layout, root, &leaves, room, options);
+        let roomy = walk_encoded(&layout, root, &leaves, room, options);
         same_encoding(&encoded::<HostPlans>(&layout, root, &leaves, room, options), &roomy)?;
+        same_encoding(&encoded::<NoPlans>(&layout, root, &leaves, room, options), &roomy)?;
+        same_encoding(&loop_encoded::<HostPlans>(&layout, root, &leaves, room, options), &roomy)?;
+        same_encoding(&loop_encoded::<NoPlans>(&layout, root, &leaves, room, options), &roomy)?;
         let exact = roomy.as_ref().map_or(0, Vec::len);
         for size in [exact, exact.saturating_sub(1), cap.index(room + 2)] {
-            let plan = encoded::<HostPlans>(&layout, root, &leaves, size, options);
-            let walk = encoded::<NoPlans>(&layout, root, &leaves, size, options);
-            let too_small = |r: &Encoded| matches!(r, Err(e) if matches!(e.kind, ErrorKind::BufferTooSmall { .. }));
-            if too_small(&plan) || too_small(&walk) {
-                // Which fault is found first, a short buffer or a bad leaf, is each one's
-                // own order: both fail, and with room (above) they agree.
-                prop_assert!(plan.is_err() && walk.is_err(), "{:?} / {:?}", plan, walk);
-            } else {
-                same_encoding(&plan, &walk)?;
+            let walk = walk_encoded(&layout, root, &leaves, size, options);
+            let plans = [
+                encoded::<HostPlans>(&layout, root, &leaves, size, options),
+                encoded::<NoPlans>(&layout, root, &leaves, size, options),
+                loop_encoded::<HostPlans>(&layout, root, &leaves, size, options),
+                loop_encoded::<NoPlans>(&layout, root, &leaves, size, options),
+            ];
+            for plan in plans {
+                let too_small = |r: &Encoded| matches!(r, Err(e) if matches!(e.kind, ErrorKind::BufferTooSmall { .. }));
+                if too_small(&plan) || too_small(&walk) {
+                    // Which fault is found first, a short buffer or a bad leaf, is each one's
+                    // own order (the loop stops at the first byte that finds no room, the
+                    // walk tells how many bytes the value needs): both fail, and with room
+                    // (above) they agree.
+                    prop_assert!(plan.is_err() && walk.is_err(), "{:?} / {:?}", plan, walk);
+                } else {
+                    same_encoding(&plan, &walk)?;
+                }
             }
         }
     }
