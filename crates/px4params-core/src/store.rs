@@ -1149,7 +1149,12 @@ where
     }
 
     fn values_equal(&self, def: &ParamDef, index: usize) -> bool {
-        self.region(def, index, Which::Value) == self.region(def, index, Which::Default)
+        let (value, default) = (
+            self.region(def, index, Which::Value),
+            self.region(def, index, Which::Default),
+        );
+        // Byte by byte: a slice comparison would bring `memcmp` into firmware.
+        value.len() == default.len() && value.iter().zip(default).all(|(a, b)| a == b)
     }
 
     /// Copies the type default into an instance's value and default.
