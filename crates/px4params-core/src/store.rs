@@ -1298,11 +1298,12 @@ fn copy_apart(bytes: &mut [u8], from: usize, len: usize, to: usize) {
     let (Some(low), Some(high)) = (head.get_mut(low..low + len), tail.get_mut(..len)) else {
         return;
     };
-    if from < to {
-        high.copy_from_slice(low);
-    } else {
-        low.copy_from_slice(high);
-    }
+    // One copy, whichever way it goes.
+    let (source, target): (&[u8], &mut [u8]) = match from < to {
+        true => (low, high),
+        false => (high, low),
+    };
+    target.copy_from_slice(source);
 }
 
 fn is_version(layout: &Layout<'_>, path: &Path) -> bool {
