@@ -242,10 +242,13 @@ pub fn float_raw(value: Scalar, bits: u32, cast: Cast, saturate: bool) -> Result
         32 => f64::from(f32::MAX),
         _ => f64::MAX,
     };
-    let v = if v.is_finite() && v.abs() > limit {
+    // Finite and beyond the limit, compared as bits: the bits of non-negative floats order as
+    // their values do (a Cortex-M4F compares doubles by a library routine).
+    let magnitude = v.abs().to_bits();
+    let v = if magnitude < f64::INFINITY.to_bits() && magnitude > limit.to_bits() {
         match cast {
-            Cast::Truncated => v.signum() * f64::INFINITY,
-            Cast::Saturated if saturate => v.signum() * limit,
+            Cast::Truncated => f64::INFINITY.copysign(v),
+            Cast::Saturated if saturate => limit.copysign(v),
             Cast::Saturated => {
                 return Err(ScalarError::OutOfRange {
                     value,
