@@ -47,7 +47,7 @@ ROOT = Path(__file__).resolve().parent.parent
 # Ceilings of the compact build's .text, by target triple (None: the host).
 TARGETS: dict[str | None, dict[str, int | None]] = {
     None: {"codec": 5888, "core": 14656, "all": None},
-    "thumbv7em-none-eabihf": {"codec": 5184, "core": 11584, "all": None},
+    "thumbv7em-none-eabihf": {"codec": 5184, "core": 11520, "all": None},
 }
 
 PROBE_TOML = """\
