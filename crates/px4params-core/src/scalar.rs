@@ -176,28 +176,52 @@ fn integer_raw(
     Ok(raw & mask)
 }
 
-/// `v` as the nearest float (`v as f64`). On 32-bit cores, which convert 64-bit integers by
-/// a library routine, from its magnitude: the routine for unsigned integers serves both
-/// signs (`__aeabi_l2d`, 146 bytes, is not linked).
+/// `v` as the nearest float (`v as f64`). On 32-bit cores from its magnitude (see
+/// [`uint_to_f64`]): rounding to nearest is the same for `-v` as for `v`, so the negated
+/// magnitude's float is `v`'s.
 #[inline]
 fn int_to_f64(v: i64) -> f64 {
     if cfg!(target_pointer_width = "32") {
-        by_magnitude(v)
+        let magnitude = uint_to_f64_bits(v.unsigned_abs());
+        if v < 0 {
+            -magnitude
+        } else {
+            magnitude
+        }
     } else {
         v as f64
     }
 }
 
-/// `v` as the nearest float, from its magnitude: rounding to nearest is the same for `-v`
-/// as for `v`, so the negated magnitude's float is `v`'s.
-#[inline(always)]
-fn by_magnitude(v: i64) -> f64 {
-    let magnitude = v.unsigned_abs() as f64;
-    if v < 0 {
-        -magnitude
+/// `v` as the nearest float (`v as f64`). 32-bit cores convert a 64-bit integer by a library
+/// routine (`__aeabi_ul2d`, 136 bytes on Cortex-M); there it is done in integer arithmetic
+/// instead, in less code and without the FPU (a Cortex-M4F's is single precision).
+#[inline]
+fn uint_to_f64(v: u64) -> f64 {
+    if cfg!(target_pointer_width = "32") {
+        uint_to_f64_bits(v)
     } else {
-        magnitude
+        v as f64
     }
+}
+
+/// [`uint_to_f64`] by the bits of IEEE 754 binary64: the value shifted up until its top bit is
+/// set, whose top 53 bits are the significand, rounded to nearest (ties to even) by the 11
+/// below them.
+#[inline(never)]
+fn uint_to_f64_bits(v: u64) -> f64 {
+    let zeros = v.leading_zeros();
+    // 64 zeros (`v` is 0, whose float is set apart at the end) shift by 0.
+    let top = v << (zeros & 63);
+    // The significand's leading 1 lands on the exponent's lowest bit and adds 1: the biased
+    // exponent 1023 + (63 - zeros) is stored less 1.
+    let mut bits = (u64::from(1085 - zeros) << 52) + (top >> 11);
+    let dropped = top & 0x7FF;
+    if dropped > 0x400 || (dropped == 0x400 && bits & 1 == 1) {
+        // A carry out of the significand moves to the next power of two, as it should.
+        bits += 1;
+    }
+    f64::from_bits(if v == 0 { 0 } else { bits })
 }
 
 /// Encodes a float field of 16, 32 or 64 bits to raw bits.
@@ -206,7 +230,7 @@ pub fn float_raw(value: Scalar, bits: u32, cast: Cast, saturate: bool) -> Result
     let v = match value {
         Scalar::Float(v) => v,
         Scalar::Int(v) => int_to_f64(v),
-        Scalar::Uint(v) => v as f64,
+        Scalar::Uint(v) => uint_to_f64(v),
         Scalar::Bool(_) => {
             return Err(ScalarError::WrongKind {
                 expected: "a number",
@@ -218,10 +242,13 @@ pub fn float_raw(value: Scalar, bits: u32, cast: Cast, saturate: bool) -> Result
         32 => f64::from(f32::MAX),
         _ => f64::MAX,
     };
-    let v = if v.is_finite() && v.abs() > limit {
+    // Finite and beyond the limit, compared as bits: the bits of non-negative floats order as
+    // their values do (a Cortex-M4F compares doubles by a library routine).
+    let magnitude = v.abs().to_bits();
+    let v = if magnitude < f64::INFINITY.to_bits() && magnitude > limit.to_bits() {
         match cast {
-            Cast::Truncated => v.signum() * f64::INFINITY,
-            Cast::Saturated if saturate => v.signum() * limit,
+            Cast::Truncated => f64::INFINITY.copysign(v),
+            Cast::Saturated if saturate => limit.copysign(v),
             Cast::Saturated => {
                 return Err(ScalarError::OutOfRange {
                     value,
@@ -363,8 +390,9 @@ mod tests {
         values.extend((1..2000u64).map(|k| k.wrapping_mul(0x9E37_79B9_7F4A_7C15) as i64));
         for v in values {
             for v in [v, v.wrapping_neg()] {
-                assert_eq!(by_magnitude(v).to_bits(), (v as f64).to_bits(), "{v}");
                 assert_eq!(int_to_f64(v).to_bits(), (v as f64).to_bits(), "{v}");
+                let u = v as u64;
+                assert_eq!(uint_to_f64_bits(u).to_bits(), (u as f64).to_bits(), "{u}");
             }
         }
     }

@@ -509,10 +509,15 @@ where
 
     /// Parameter `param`'s definition.
     pub fn def(&self, param: u32) -> Result<ParamDef> {
+        self.def_of(param).copied()
+    }
+
+    /// [`Store::def`] by reference: the store's operations copy it out of the result (a
+    /// definition inside a result is moved in pieces).
+    fn def_of(&self, param: u32) -> Result<&ParamDef> {
         self.defs
             .as_ref()
             .get(param as usize)
-            .copied()
             .ok_or(StoreError::NoSuchParam { param })
     }
 
@@ -520,7 +525,7 @@ where
     /// the type's `@default` metadata. `data` is checked like [`Store::set_encoded`]. A shared
     /// parameter's default changes with it, and so does its value unless it was changed.
     pub fn set_type_default(&mut self, layout: &Layout<'_>, param: u32, data: &[u8]) -> Result<()> {
-        let def = self.def(param)?;
+        let def = *self.def_of(param)?;
         check_encoded(layout, def.root, data)?;
         self.bytes_mut(def.first_byte as usize, data.len())
             .copy_from_slice(data);
@@ -536,21 +541,21 @@ where
 
     /// The type default of parameter `param`.
     pub fn type_default(&self, param: u32) -> Result<&[u8]> {
-        let def = self.def(param)?;
+        let def = *self.def_of(param)?;
         let len = self.slot_at(def.first_slot as usize).default_len as usize;
         Ok(self.bytes_at(def.first_byte as usize, len))
     }
 
     /// The state of an instance.
     pub fn slot(&self, param: u32, instance: u16) -> Result<Slot> {
-        let def = self.def(param)?;
+        let def = *self.def_of(param)?;
         let index = slot_index(&def, instance)?;
         Ok(self.slot_at(index))
     }
 
     /// The numbers of the instances that exist, in order.
     pub fn instances(&self, param: u32) -> Result<impl Iterator<Item = u16> + '_> {
-        let def = self.def(param)?;
+        let def = *self.def_of(param)?;
         let present = self.instance_slots(&def).iter().enumerate();
         Ok(present.filter(|(_, s)| s.present()).map(|(i, _)| i as u16))
     }
@@ -558,7 +563,7 @@ where
     /// Adds instance `instance`, or the lowest free one when `None`; returns its number. It
     /// starts with the type default as value and default.
     pub fn add(&mut self, param: u32, instance: Option<u16>) -> Result<u16> {
-        let def = self.def(param)?;
+        let def = *self.def_of(param)?;
         if def.shared {
             return Err(StoreError::Shared);
         }
@@ -581,7 +586,7 @@ where
 
     /// Removes an instance; the others keep their numbers.
     pub fn remove(&mut self, param: u32, instance: u16) -> Result<()> {
-        let def = self.def(param)?;
+        let def = *self.def_of(param)?;
         if def.shared {
             return Err(StoreError::Shared);
         }
@@ -597,7 +602,7 @@ where
 
     /// The encoded value or default of an instance.
     pub fn get(&self, param: u32, instance: u16, which: Which) -> Result<&[u8]> {
-        let def = self.def(param)?;
+        let def = *self.def_of(param)?;
         let index = self.present_slot(&def, instance)?;
         Ok(self.region(&def, index, which))
     }
@@ -619,7 +624,7 @@ where
         which: Which,
         target: Target<'_>,
     ) -> Result<(Leaf, Scalar)> {
-        let def = self.def(param)?;
+        let def = *self.def_of(param)?;
         let index = self.present_slot(&def, instance)?;
         let found = match self.table(param) {
             Some(table) => {
@@ -656,7 +661,7 @@ where
             // Without plans, read by one walk (leaf tables are a host's speed-up).
             return self.read_walked(layout, param, instance, which, k);
         }
-        let def = self.def(param)?;
+        let def = *self.def_of(param)?;
         let index = self.present_slot(&def, instance)?;
         // The value and what follows it in memory: bits are read 64 at a time.
         let (start, len) = self.span(&def, index, which);
@@ -686,7 +691,7 @@ where
         which: Which,
         k: usize,
     ) -> Result<Scalar> {
-        let def = self.def(param)?;
+        let def = *self.def_of(param)?;
         let index = self.present_slot(&def, instance)?;
         let data = self.region(&def, index, which);
         // Without plans the leaf is found and read in one walk; hosts seek first (faster).
@@ -718,7 +723,7 @@ where
         let k = match target {
             Target::Index(k) => k,
             Target::Path(_) => {
-                let def = self.def(param)?;
+                let def = *self.def_of(param)?;
                 let index = self.present_slot(&def, instance)?;
                 let data = self.region(&def, index, which);
                 leaf::locate(layout, def.root, data, target, false)?.index
@@ -739,7 +744,7 @@ where
         value: Scalar,
         saturate: bool,
     ) -> Result<()> {
-        let def = self.def(param)?;
+        let def = *self.def_of(param)?;
         let index = self.present_slot(&def, instance)?;
         if !Active::TABLES {
             return self.set_leaf_copied(layout, param, &def, instance, which, k, value, saturate);
@@ -866,7 +871,7 @@ where
         source: &mut Src,
         saturate: bool,
     ) -> Result<(), Src::Error> {
-        let def = self.def(param).map_err(StoreError::widen)?;
+        let def = *self.def_of(param).map_err(StoreError::widen)?;
         self.present_slot(&def, instance)
             .map_err(StoreError::widen)?;
         let options = EncodeOptions { saturate, ..STORED };
@@ -886,7 +891,7 @@ where
         which: Which,
         data: &[u8],
     ) -> Result<()> {
-        let def = self.def(param)?;
+        let def = *self.def_of(param)?;
         self.present_slot(&def, instance)?;
         check_encoded(layout, def.root, data)?;
         self.stage(data);
@@ -931,7 +936,7 @@ where
         data: &[u8],
         check_only: bool,
     ) -> Result<(), crate::translate::TranslateError> {
-        let def = self.def(param).map_err(StoreError::widen)?;
+        let def = *self.def_of(param).map_err(StoreError::widen)?;
         let index = slot_index(&def, instance).map_err(StoreError::widen)?;
         let present = self.slot_at(index).present();
         if !check_only {
@@ -966,7 +971,7 @@ where
 
     /// Sets an instance's value back to its default.
     pub fn reset(&mut self, param: u32, instance: u16) -> Result<()> {
-        let def = self.def(param)?;
+        let def = *self.def_of(param)?;
         let index = self.present_slot(&def, instance)?;
         let (from, len) = self.span(&def, index, Which::Default);
         let (to, _) = self.span(&def, index, Which::Value);
@@ -981,7 +986,7 @@ where
 
     /// Marks an instance as read by a driver (PX4's "used").
     pub fn mark_used(&mut self, param: u32, instance: u16) -> Result<()> {
-        let def = self.def(param)?;
+        let def = *self.def_of(param)?;
         let index = self.present_slot(&def, instance)?;
         self.with_slot(index, |s| s.flags |= USED);
         Ok(())
@@ -1144,7 +1149,12 @@ where
     }
 
     fn values_equal(&self, def: &ParamDef, index: usize) -> bool {
-        self.region(def, index, Which::Value) == self.region(def, index, Which::Default)
+        let (value, default) = (
+            self.region(def, index, Which::Value),
+            self.region(def, index, Which::Default),
+        );
+        // Byte by byte: a slice comparison would bring `memcmp` into firmware.
+        value.len() == default.len() && value.iter().zip(default).all(|(a, b)| a == b)
     }
 
     /// Copies the type default into an instance's value and default.
@@ -1288,11 +1298,12 @@ fn copy_apart(bytes: &mut [u8], from: usize, len: usize, to: usize) {
     let (Some(low), Some(high)) = (head.get_mut(low..low + len), tail.get_mut(..len)) else {
         return;
     };
-    if from < to {
-        high.copy_from_slice(low);
-    } else {
-        low.copy_from_slice(high);
-    }
+    // One copy, whichever way it goes.
+    let (source, target): (&[u8], &mut [u8]) = match from < to {
+        true => (low, high),
+        false => (high, low),
+    };
+    target.copy_from_slice(source);
 }
 
 fn is_version(layout: &Layout<'_>, path: &Path) -> bool {
