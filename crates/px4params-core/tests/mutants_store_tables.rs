@@ -141,3 +141,45 @@ fn tables_are_built_anew_over_memory_that_held_other_tables() {
         assert_eq!(got.map(|(_, v)| v), Ok(leaf), "[{k}]");
     }
 }
+
+/// Tables past 65536 slots: five parameters of 256 instances (PX4's most) with 32 resolved
+/// leaves per value and default take 5 * 16384 slots; the last parameter's area starts past
+/// slot 65536 and its leaves read as written (`three` a = 7, b = -2, c = 1.5 as above).
+#[test]
+fn leaves_resolved_past_slot_65536_read_as_written() {
+    let (l, three, forty) = types();
+    let layout = l.as_layout();
+    let mut defs = vec![ParamDef::instanced(forty, 256); 4];
+    defs.push(ParamDef::instanced(three, 256));
+    let n = table_slots(&layout, &defs);
+    // The first four areas alone: 4 * 32 * 2 * 256 = 65536 slots.
+    assert!(n > 4 * 32 * 2 * 256);
+    let mut memory = vec![LeafSlot::default(); n];
+    let mut s = store_over(&layout, &defs, &mut memory);
+    let three_value = [0x07, 0xFE, 0xFF, 0x00, 0x00, 0xC0, 0x3F];
+    let forty_value: Vec<u8> = (100..140).collect();
+    for instance in [0, 255] {
+        s.add(3, Some(instance)).unwrap();
+        s.set_encoded(&layout, 3, instance, Which::Value, &forty_value)
+            .unwrap();
+        s.add(4, Some(instance)).unwrap();
+        s.set_encoded(&layout, 4, instance, Which::Value, &three_value)
+            .unwrap();
+    }
+    let three_leaves = [Scalar::Uint(7), Scalar::Int(-2), Scalar::Float(1.5)];
+    for instance in [0, 255] {
+        for (k, leaf) in three_leaves.into_iter().enumerate() {
+            assert_eq!(s.read(&layout, 4, instance, Which::Value, k), Ok(leaf));
+            assert_eq!(s.read(&layout, 4, instance, Which::Default, k), Ok(zero(k)));
+        }
+        for k in [0, 31, 39] {
+            let leaf = Scalar::Uint(100 + k as u64);
+            assert_eq!(s.read(&layout, 3, instance, Which::Value, k), Ok(leaf));
+        }
+    }
+}
+
+/// `three`'s zero value, leaf by leaf.
+fn zero(k: usize) -> Scalar {
+    [Scalar::Uint(0), Scalar::Int(0), Scalar::Float(0.0)][k]
+}
