@@ -625,7 +625,8 @@ fi
 #              MUTATION_BUDGET_drivers=600 (test_simbench.py, test_autostart.py; 24 + 6 min):
 #              before 322 mutants, 322 tested, 260 killed, 62 survived, 80.7%; after 322, 322
 #              tested, 263 killed, 59 survived (none listed equivalent yet), 81.7%. Not worked
-#              yet: ~25 are drivers.toml error messages (their tests are in test_dsdl_loader.py
-#              and the bad-input catalogue, outside this target's fast files), ~21 Driver
-#              dataclass defaults, the rest parse_drivers' ranges and Drivers' lookups
-#              (target/mutation/drivers.txt lists them). gui-app, gui-vehicle: not run here.
+#              yet: ~25 are in drivers.toml's error paths (the `raise fail(...)` lines: some
+#              messages no test of this target checks whole, e.g. "is not an upper-case
+#              parameter name", "is shared"), ~21 Driver dataclass defaults, the rest
+#              parse_drivers' ranges and Drivers' lookups (target/mutation/drivers.txt lists
+#              them). gui-app, gui-vehicle: not run here.
