@@ -755,3 +755,28 @@ def test_an_airframe_manifest_holds_the_parameters_of_extra_dsdl_folders(tmp_pat
     store = load_manifest(None, frame, [str(acme)])
     assert store.instances("PITOT") == ["PITOT#0"]
     assert store.instances("INA238") == ["INA238#0"]
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize(
+    ("old", "new", "message"),
+    [
+        (
+            'parameter = "INA238"',
+            'parameter = "ina238"',
+            "d.toml: driver 'ina238': parameter 'ina238' is not an upper-case parameter name "
+            "like INA238",
+        ),
+        (
+            'chip = "INA238"',
+            'chip = "INA-238"',
+            "d.toml: driver 'ina238': chip 'INA-238' is not a chip name like INA238",
+        ),
+    ],
+)
+def test_a_declaration_with_a_bad_parameter_or_chip_name_is_named(specs, old, new, message):
+    """PX4 parameter names are upper case (INA238, SENS_EN_INA238); chip names are drv_sensor.h's
+    words (letters, digits, _): a declaration breaking either is refused naming it."""
+    with pytest.raises(DriversFileError) as err:
+        parse_drivers(INA238.replace(old, new), "d.toml", specs)
+    assert str(err.value) == message
