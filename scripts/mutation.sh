@@ -641,6 +641,17 @@ fi
 #              them killed 6, 5 are equivalent); the 1 untested is Configured.startable's
 #              `@property` (a line written three times),
 #              planted by hand (removed): killed by six tests of test_autostart.py.
+#   drivers    (never run before) MUTATION_BASELINE=1 MUTATION_BUDGET_drivers=1500, then
+#              MUTATION_BUDGET_drivers=600 (test_simbench.py, test_autostart.py; 24 + 6 min):
+#              before 322 mutants, 322 tested, 260 killed, 62 survived, 80.7%; after 322, 322
+#              tested, 265 killed, 57 survived (none listed equivalent yet), 82.3% (the
+#              existing issue40 tests killed 3, test_autostart.py's
+#              test_a_declaration_with_a_bad_parameter_or_chip_name_is_named 2). Not worked
+#              yet: ~23 are in drivers.toml's error paths (the `raise fail(...)` lines: some
+#              messages no test of this target checks whole, e.g. "is shared", "also_chips"),
+#              ~21 Driver dataclass defaults, the rest
+#              parse_drivers' ranges and Drivers' lookups (target/mutation/drivers.txt lists
+#              them). gui-app, gui-vehicle: not run here.
 # Rust, issue 40 (mutrust, second round): rust-store's shards 1-9 of 10 (slice sharding of
 # store.rs's 336 mutants: 39 in shard 0, 34 each in 1-8, 25 in 9), each run at most 600 s, two
 # runs at a time (the second with CARGO_TARGET_DIR=target/lane2: a target directory of its own):
@@ -679,14 +690,3 @@ fi
 # equivalent, 264:9 unviable.
 # rust-crc (179 mutants: crc.rs's const tables give many): a before run of 472 s tested 12, all
 # caught; rust-pages (66 mutants) and rust-file: not run in this round.
-#   drivers    (never run before) MUTATION_BASELINE=1 MUTATION_BUDGET_drivers=1500, then
-#              MUTATION_BUDGET_drivers=600 (test_simbench.py, test_autostart.py; 24 + 6 min):
-#              before 322 mutants, 322 tested, 260 killed, 62 survived, 80.7%; after 322, 322
-#              tested, 265 killed, 57 survived (none listed equivalent yet), 82.3% (the
-#              existing issue40 tests killed 3, test_autostart.py's
-#              test_a_declaration_with_a_bad_parameter_or_chip_name_is_named 2). Not worked
-#              yet: ~23 are in drivers.toml's error paths (the `raise fail(...)` lines: some
-#              messages no test of this target checks whole, e.g. "is shared", "also_chips"),
-#              ~21 Driver dataclass defaults, the rest
-#              parse_drivers' ranges and Drivers' lookups (target/mutation/drivers.txt lists
-#              them). gui-app, gui-vehicle: not run here.
