@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
+from typing import Any
 
 import px4params
 import pytest
@@ -546,3 +548,65 @@ def test_an_instance_mask_is_one_int32_of_31_instances(tmp_path: Path) -> None:
     assert fmap.mask_spec("WIDE_INST") is not None
     assert fmap.mask_spec("WIDER_INST") is None
     assert "WIDER_INST" not in {name for name, _, _ in fmap.masks()}
+
+
+@pytest.mark.issue40
+def test_a_uint32_takes_the_int32_range_as_its_bits_and_nothing_beyond(
+    extra_schema: px4params.Schema,
+) -> None:
+    # MAVLink's int32 carries -2**31..2**31-1, which are a uint32's 32 bits; a number below
+    # -2**31 is no int32, so no bit pattern: the leaf's own range (0..2**32-1) refuses it.
+    store = px4params.Store(extra_schema)
+    store.add("ARRAYS#0")
+    name = {row.path: row.name for row in flat.flat_table(store)}["big"]
+    flat.set_flat(store, name, -(2**31))
+    assert store.get("ARRAYS#0.big") == 2**31
+    for number in (-(2**31) - 1, -(2**32)):
+        with pytest.raises(px4params.EncodeError, match=f"value {number} is out of range"):
+            flat.set_flat(store, name, number)
+        assert store.get("ARRAYS#0.big") == 2**31
+
+
+@pytest.mark.issue40
+def test_a_types_letters_and_their_count_are_worked_out_once(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # layout's and slot_count's rule: worked out once per type and kept (a store asks for them
+    # at every flat name it reads)
+    root = dsdl_root(tmp_path, EXTRA_DSDL)
+    schema = px4params.load_schema([root], use_env=False, cache_dir=tmp_path / "cache")
+    data_type = schema["tst.Arrays"]  # a schema of its own: nothing worked out yet
+    walks: list[str] = []
+    count = flat._count
+
+    def counting(dt: Any, spec: Any, path: str) -> int:
+        if not path:
+            walks.append(dt.key)  # a walk of the whole type
+        return count(dt, spec, path)
+
+    monkeypatch.setattr(flat, "_count", counting)
+    first = flat.slot_count(data_type)
+    assert flat.slot_count(data_type) == first == len(flat.layout(data_type))
+    assert walks == [data_type.key]
+    assert flat.layout(data_type) is flat.layout(data_type)
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize(("field", "path"), [("uint64[2] x", "x[0]"), ("int40[<=3] x", "x[0]")])
+def test_a_wide_leaf_in_an_array_is_named_by_its_element(
+    tmp_path: Path, field: str, path: str
+) -> None:
+    text = f"# W\n# @max_instances 2\n\nuint4 p_version\n{field}\n@sealed\n"
+    kind = field.split("[")[0]
+    with pytest.raises(flat.FlatError, match=rf"^bad.Wide.1.0: leaf {re.escape(path)} is {kind}:"):
+        _store_with(tmp_path, {"Wide.1.0.dsdl": text})
+
+
+@pytest.mark.issue40
+def test_padding_gets_no_letter(tmp_path: Path) -> None:
+    # the module doc: p_version fields and padding get none
+    text = "# P\n# @max_instances 1\n\nuint4 p_version\nuint8 a\nvoid4\nuint4 b\n@sealed\n"
+    store = _store_with(tmp_path, {"Pad.1.0.dsdl": text})
+    data_type = store.data_type("PAD")
+    assert [s.path for s in flat.layout(data_type)] == ["a", "b"]
+    assert flat.slot_count(data_type) == 2

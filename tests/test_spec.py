@@ -759,10 +759,14 @@ GAUGE_DSDL = (
     "int8 offset\n# Offset\n# @min -128\n# @max 100\n"  # -128: int8's own bottom
     "uint24 baud\n# Baud\n# @min 0\n# @max 16000000\n"  # 0: uint24's own bottom
     "uint5 select\n# Select\n# @min 0\n# @max 31\n"  # both: uint5's own range
+    "uint5 part\n# Part\n# @max 30\n"  # one below uint5's top
+    "int8 trim\n# Trim\n# @min -127\n# @max 127\n"  # one above int8's bottom; its top
+    "int8 bias\n# Bias\n# @max 126\n"  # one below int8's top
     "uint8[3] taps\n# Taps\n# @max 9\n"
     "uint8[<=2] levels\n# Levels\n# @max 5\n"
     "float32 scale\n# Scale\n# @default 1\n# @min -1.5\n"
     "uint8 plain\n# Plain\n"
+    "float16 ratio\n# Ratio\n# @default 0.5\n# @value 0.1 tenth\n# @value 0.5 half\n"
     "@sealed\n"
 )
 
@@ -797,10 +801,23 @@ def test_the_ranges_of_a_type_read_from_its_tags(gauge_schema: Schema) -> None:
         # a bound that repeats the type's own is none; an integer's bounds stay as written
         "offset": LeafRange(None, 100, 0, None, 100, "int8"),
         "baud": LeafRange(None, 16000000, 0, None, 16000000, "uint24"),
+        "part": LeafRange(None, 30, 0, None, 30, "uint5"),
+        "trim": LeafRange(-127, None, 0, -127, None, "int8"),
+        "bias": LeafRange(None, 126, 0, None, 126, "int8"),
         "taps[]": LeafRange(None, 9, 0, None, 9, "uint8"),
         "levels[]": LeafRange(None, 5, 0, None, 5, "uint8"),
         "scale": LeafRange(-1.5, None, 32, -1.5, None, "float32"),
         # uint5 0..31 and a plain integer have nothing to check beyond their type
+        "ratio": LeafRange(
+            None,
+            None,
+            16,
+            None,
+            None,
+            "float16",
+            ((0.1, "tenth"), (0.5, "half")),
+            frozenset({_float16(0.1), 0.5}),  # a listed float as the leaf keeps it
+        ),
     }
     assert ranges["gain"].values == () and ranges["gain"].stored_values == frozenset()
     # worked out once per type (docstring of leaf_ranges): the same table each time
@@ -830,6 +847,10 @@ def test_each_bound_is_held_where_the_store_keeps_the_value(gauge: px4params.Sto
     gauge.set("GAUGE#0.baud", 0)
     assert refused("baud", 16000001) == "GAUGE#0.baud: 16000001 is above 16000000 (@max)"
     gauge.set("GAUGE#0.select", 31)
+    assert refused("part", 31) == "GAUGE#0.part: 31 is above 30 (@max)"
+    assert refused("trim", -128) == "GAUGE#0.trim: -128 is below -127 (@min)"
+    gauge.set("GAUGE#0.trim", 127)
+    assert refused("bias", 127) == "GAUGE#0.bias: 127 is above 126 (@max)"
     assert refused("taps[2]", 10) == "GAUGE#0.taps[2]: 10 is above 9 (@max)"
     gauge.set("GAUGE#0.taps[2]", 9)
     assert refused("scale", -1.6) == "GAUGE#0.scale: -1.6 is below -1.5 (@min)"
@@ -839,6 +860,12 @@ def test_each_bound_is_held_where_the_store_keeps_the_value(gauge: px4params.Sto
     assert str(e.value) == "GAUGE#0.levels[1]: 6 is above 5 (@max)"
     gauge.set("GAUGE#0", {**value, "levels": [5, 0]})
     gauge.set("GAUGE#0.scale", -1.5)
+    gauge.set("GAUGE#0.scale", -1.50000001)  # kept by a float32 as -1.5: inside
+    assert gauge.get("GAUGE#0.scale") == -1.5
+    gauge.set("GAUGE#0.ratio", 0.1)  # listed, although a float16 keeps 0.0999755859375
+    assert refused("ratio", 0.2) == (
+        "GAUGE#0.ratio: 0.2 is not one of its values (@value): 0.1 (tenth), 0.5 (half)"
+    )
     assert refused("scale", -math.inf) == (
         "GAUGE#0.scale: -inf is not a finite number (float32: NaN and infinities are refused)"
     )
@@ -884,3 +911,19 @@ def test_a_refusal_names_the_number_given_not_the_one_the_leaf_would_keep(
     with pytest.raises(ValueRangeError) as e:
         store.set("INA238#1.shunt", 1e-12)
     assert str(e.value) == f"INA238#1.shunt: 1e-12 {SHUNT_RANGE}"
+
+
+@pytest.mark.issue40
+def test_the_public_checks_hold_the_bounds_unless_told_not_to(store: px4params.Store) -> None:
+    from px4params.store.spec import check_leaves, check_stored, leaf_ranges
+
+    data_type = store.data_type("INA238")
+    ranges = leaf_ranges(data_type)
+    whole = {"bus": {"i2c": {"bus_id": 1, "address": 0x45}}, "current": 200, "shunt": 0.0}
+    leaves = data_type.leaves(data_type.encode(whole, tao=False), tao=False)
+    with pytest.raises(ValueRangeError, match=f"^INA238#1.shunt: 0 {re.escape(SHUNT_RANGE)}$"):
+        check_leaves("INA238#1", leaves, ranges)
+    check_leaves("INA238#1", leaves, ranges, bounds=False)  # as --force: the range passes
+    with pytest.raises(ValueRangeError, match=f"^X: 0 {re.escape(SHUNT_RANGE)}$"):
+        check_stored("X", 0.0, ranges["shunt"])
+    check_stored("X", 0.0, ranges["shunt"], bounds=False)
