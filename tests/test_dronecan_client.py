@@ -407,3 +407,93 @@ def test_a_late_answer_to_an_earlier_request_is_not_taken_for_the_next(
     param = client.get("GPS_SBAS")
     assert param is not None and param.name == "GPS_SBAS"
     assert [t.transfer_id for t in remote.requests] == [0, 0, 1]
+
+
+@pytest.mark.issue40
+def test_the_client_needs_only_dronecan_s_standard_types(
+    remote: RemoteNode, tmp_path: Any, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """GetSet and ExecuteOpcode are standard DroneCAN types: the extra namespaces of
+    $PX4PARAMS_DSDL_PATH (the store's own types, here a broken one) are not read."""
+    broken = tmp_path / "dsdl" / "broken"
+    broken.mkdir(parents=True)
+    (broken / "Thing.dsdl").write_text("this is not DSDL\n")
+    monkeypatch.setenv("PX4PARAMS_DSDL_PATH", str(tmp_path / "dsdl"))
+    client = DronecanParamClient(SlcanHost(remote), NODE, timeout=2.0)
+    param = client.get("GPS_RATE_HZ")
+    assert param is not None and param.value == {"integer_value": 5}
+
+
+@pytest.mark.issue40
+def test_a_name_that_is_not_utf8_is_shown_with_the_replacement_character(
+    remote: RemoteNode, client: DronecanParamClient
+) -> None:
+    """DroneCAN parameter names are ASCII; a node that answers other bytes gets its name shown
+    with U+FFFD where a byte is not UTF-8, and the parameter is still listed."""
+    getset = remote._getset
+
+    def latin1(request: Any) -> Any:
+        response = getset(request)
+        if bytes(response.name) == b"GPS_SBAS":
+            response.name = b"GPS_SBAS\xb0"
+        return response
+
+    remote._getset = latin1  # type: ignore[method-assign]
+    assert [p.name for p in client.list()] == ["GPS_RATE_HZ", "GPS_SBAS\ufffd", "GPS_YAW_OFFSET"]
+
+
+@pytest.mark.issue40
+def test_a_list_ends_at_index_8191_the_largest_getset_carries(remote: RemoteNode) -> None:
+    """GetSet's index is a uint13: a node that never answers the empty name (it names a
+    parameter at every index) is listed to index 8191, and no further request is made."""
+
+    def endless(request: Any) -> Any:
+        return GETSET.Response(name=b"P%d" % request.index, value=VALUE(integer_value=1))
+
+    remote._getset = endless  # type: ignore[method-assign]
+    client = DronecanParamClient(SlcanHost(remote), NODE, timeout=2.0, retries=0)
+    listed = list(client.list())
+    assert len(listed) == 8192 and listed[-1].name == "P8191"
+    assert len(remote.requests) == 8192
+
+
+@pytest.mark.issue40
+def test_a_parameter_gone_when_written_is_named(remote: RemoteNode) -> None:
+    """A node answers GetSet for a name it lacks with the empty name (the specification): when
+    the write is so answered (the parameter went away after it was read, e.g. the node
+    restarted with other parameters), the write fails naming the node and the parameter."""
+    getset = remote._getset
+
+    def gone_on_write(request: Any) -> Any:
+        if _field(request.value)[0] != "empty":
+            return GETSET.Response()
+        return getset(request)
+
+    remote._getset = gone_on_write  # type: ignore[method-assign]
+    client = DronecanParamClient(SlcanHost(remote), NODE, timeout=2.0, retries=0)
+    with pytest.raises(DronecanError) as refused:
+        client.set("GPS_RATE_HZ", {"integer_value": 7})
+    assert str(refused.value) == "node 42 has no parameter GPS_RATE_HZ"
+    assert len(remote.requests) == 2  # the read, then the write
+
+
+@pytest.mark.issue40
+def test_a_write_answered_with_the_float32_sent_is_kept_even_when_unchanged(
+    remote: RemoteNode,
+) -> None:
+    """DroneCAN's real_value is a float32: a node that stores float32 answers 0.1 as
+    0.100000001490116; that is the value sent, kept, also when the node held it already."""
+    getset = remote._getset
+
+    def float32_node(request: Any) -> Any:
+        kind, value = _field(request.value)
+        if kind == "real_value":
+            remote.params[bytes(request.name).decode()] = VALUE(real_value=value)
+            request.value = VALUE(empty=dronecan.uavcan.protocol.param.Empty())  # answered as read
+        return getset(request)
+
+    remote._getset = float32_node  # type: ignore[method-assign]
+    client = DronecanParamClient(SlcanHost(remote), NODE, timeout=2.0, retries=0)
+    for _ in range(2):  # 0.5 -> 0.1, then 0.1 again
+        param = client.set("GPS_YAW_OFFSET", {"real_value": 0.1})
+        assert param.value == {"real_value": struct.unpack("<f", struct.pack("<f", 0.1))[0]}
