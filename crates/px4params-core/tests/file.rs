@@ -8,21 +8,21 @@
 //! offset -3 is `0001 1000101 1 11101` = `18 BE 80` (docs/codec.md: each byte filled from its
 //! most significant bit); its minor version 0 is uint4 p_version, uint7 address, uint8 gain.
 
+mod common;
 #[path = "support/store_file.rs"]
 mod store_file;
 
+use common::VecStore;
 use px4params_core::compile::OwnedLayout;
 use px4params_core::file::{
     self, apply, check, stored_minor, write_store, Applied, ApplyError, FileError, FileErrorKind,
     FileName, FileNames, Key, SaveError, WriteError, Writer,
 };
 use px4params_core::layout::{NodeId, Role};
-use px4params_core::store::{plan, ParamDef, Slot, Store, StoreError, Which};
+use px4params_core::store::{ParamDef, StoreError, Which};
 use px4params_core::Cast::Saturated;
 use px4params_core::{Error, ErrorKind};
 use store_file::{classic_record, crc32, store_file, structured_record, table_record, with_crc16};
-
-type VecStore = Store<Vec<ParamDef>, Vec<Slot>, Vec<u8>>;
 
 const SENS: u32 = 0;
 const BAT_N_CELLS: u32 = 1;
@@ -48,41 +48,15 @@ struct Fixture {
 
 fn fixture() -> Fixture {
     let mut l = OwnedLayout::default();
-    let u4 = l.uint(4, Saturated).unwrap();
-    let u7 = l.uint(7, Saturated).unwrap();
-    let u8_ = l.uint(8, Saturated).unwrap();
-    let i5 = l.int(5, Saturated).unwrap();
+    let (sensor, sensor_1_0) = common::sensor_versions(&mut l);
     let i32_ = l.int(32, Saturated).unwrap();
-    let flag = l.boolean();
-    let sensor = l
-        .structure(&[
-            ("p_version", u4, Role::Version(1)),
-            ("address", u7, Role::Data),
-            ("enabled", flag, Role::Data),
-            ("offset", i5, Role::Data),
-        ])
-        .unwrap();
-    let sensor_1_0 = l
-        .structure(&[
-            ("p_version", u4, Role::Version(0)),
-            ("address", u7, Role::Data),
-            ("gain", u8_, Role::Data),
-        ])
-        .unwrap();
-    let mut defs = vec![
+    let defs = vec![
         ParamDef::instanced(sensor, 3),
         ParamDef::shared(i32_),
         ParamDef::shared(sensor),
     ];
     let view = l.as_layout();
-    let capacity = plan(&view, &mut defs).unwrap();
-    let mut store = Store::new(
-        &view,
-        defs,
-        vec![Slot::default(); capacity.slots],
-        vec![0u8; capacity.bytes],
-    )
-    .unwrap();
+    let mut store = common::vec_store(&view, defs);
     store.set_type_default(&view, SENS, &SENS_DEFAULT).unwrap();
     store
         .set_type_default(&view, BAT_N_CELLS, &4i32.to_le_bytes())

@@ -6,12 +6,12 @@
 //! `param set-default`); with `check_only` nothing is written. The bytes are DroneCAN's bit
 //! packing worked out by hand (fields back to back, most significant bit first).
 
-use px4params_core::compile::OwnedLayout;
-use px4params_core::layout::{NodeId, Role};
-use px4params_core::store::{plan, ParamDef, Slot, Store, StoreError, Which};
-use px4params_core::Cast::Saturated;
+mod common;
 
-type VecStore = Store<Vec<ParamDef>, Vec<Slot>, Vec<u8>>;
+use common::VecStore;
+use px4params_core::compile::OwnedLayout;
+use px4params_core::layout::NodeId;
+use px4params_core::store::{ParamDef, Slot, StoreError, Which};
 
 const SENSOR: u32 = 0;
 /// Sensor 1.1's type default: p_version 1, address 0x45, enabled, offset -3:
@@ -38,36 +38,9 @@ struct Fixture {
 /// Sensor 1.0 (p_version uint4, address uint7, gain uint8) in the same layout, not stored.
 fn fixture() -> Fixture {
     let mut l = OwnedLayout::default();
-    let u4 = l.uint(4, Saturated).unwrap();
-    let u7 = l.uint(7, Saturated).unwrap();
-    let u8_ = l.uint(8, Saturated).unwrap();
-    let i5 = l.int(5, Saturated).unwrap();
-    let flag = l.boolean();
-    let sensor = l
-        .structure(&[
-            ("p_version", u4, Role::Version(1)),
-            ("address", u7, Role::Data),
-            ("enabled", flag, Role::Data),
-            ("offset", i5, Role::Data),
-        ])
-        .unwrap();
-    let old = l
-        .structure(&[
-            ("p_version", u4, Role::Version(0)),
-            ("address", u7, Role::Data),
-            ("gain", u8_, Role::Data),
-        ])
-        .unwrap();
-    let mut defs = vec![ParamDef::instanced(sensor, 3)];
+    let (sensor, old) = common::sensor_versions(&mut l);
     let view = l.as_layout();
-    let capacity = plan(&view, &mut defs).unwrap();
-    let mut store = Store::new(
-        &view,
-        defs,
-        vec![Slot::default(); capacity.slots],
-        vec![0u8; capacity.bytes],
-    )
-    .unwrap();
+    let mut store = common::vec_store(&view, vec![ParamDef::instanced(sensor, 3)]);
     store
         .set_type_default(&view, SENSOR, &TYPE_DEFAULT)
         .unwrap();

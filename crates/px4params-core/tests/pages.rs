@@ -2,14 +2,15 @@
 //! value is read from, and the pages refused. The values are three uint8 fields (three bytes
 //! each, the fields' own bytes), so where each byte lands is plain to see.
 
+mod common;
+
+use common::VecStore;
 use px4params_core::compile::OwnedLayout;
 use px4params_core::layout::Role;
 use px4params_core::pages::{read_paged_leaf, write_pages, PagedValue};
 use px4params_core::scatter::Pieces;
-use px4params_core::store::{plan, ParamDef, Slot, Store, StoreError, Which};
+use px4params_core::store::{ParamDef, StoreError, Which};
 use px4params_core::{Cast, Scalar};
-
-type VecStore = Store<Vec<ParamDef>, Vec<Slot>, Vec<u8>>;
 
 struct Fixture {
     layout: OwnedLayout,
@@ -28,16 +29,8 @@ fn fixture() -> Fixture {
             ("c", u8_, Role::Data),
         ])
         .unwrap();
-    let mut defs = vec![ParamDef::instanced(triple, 4)];
     let view = l.as_layout();
-    let capacity = plan(&view, &mut defs).unwrap();
-    let mut store = Store::new(
-        &view,
-        defs,
-        vec![Slot::default(); capacity.slots],
-        vec![0u8; capacity.bytes],
-    )
-    .unwrap();
+    let mut store = common::vec_store(&view, vec![ParamDef::instanced(triple, 4)]);
     for (instance, value) in [(0, [1, 2, 3]), (1, [4, 5, 6]), (3, [7, 8, 9])] {
         store.add(0, Some(instance)).unwrap();
         store

@@ -4,10 +4,47 @@
 use proptest::prelude::*;
 use px4params_core::compile::OwnedLayout;
 use px4params_core::error::Error;
-use px4params_core::layout::{NodeId, Role};
-use px4params_core::store::ParamDef;
+use px4params_core::layout::{Layout, NodeId, Role};
+use px4params_core::store::{plan, ParamDef, Slot, Store};
 use px4params_core::Cast::{Saturated, Truncated};
 use px4params_core::{Cast, ErrorKind, Scalar};
+
+/// A store over growable memory, as a host keeps one.
+pub type VecStore = Store<Vec<ParamDef>, Vec<Slot>, Vec<u8>>;
+
+/// A store of `defs` over memory of the size [`plan`] asks for.
+pub fn vec_store(layout: &Layout<'_>, mut defs: Vec<ParamDef>) -> VecStore {
+    let capacity = plan(layout, &mut defs).unwrap();
+    let slots = vec![Slot::default(); capacity.slots];
+    Store::new(layout, defs, slots, vec![0u8; capacity.bytes]).unwrap()
+}
+
+/// A `Sensor` type in two minor versions, for the translation tests: 1.1 (p_version uint4,
+/// address uint7, enabled bool, offset int5) and 1.0 (p_version uint4, address uint7, gain
+/// uint8), returned in that order.
+pub fn sensor_versions(l: &mut OwnedLayout) -> (NodeId, NodeId) {
+    let u4 = l.uint(4, Saturated).unwrap();
+    let u7 = l.uint(7, Saturated).unwrap();
+    let u8_ = l.uint(8, Saturated).unwrap();
+    let i5 = l.int(5, Saturated).unwrap();
+    let flag = l.boolean();
+    let sensor = l
+        .structure(&[
+            ("p_version", u4, Role::Version(1)),
+            ("address", u7, Role::Data),
+            ("enabled", flag, Role::Data),
+            ("offset", i5, Role::Data),
+        ])
+        .unwrap();
+    let sensor_1_0 = l
+        .structure(&[
+            ("p_version", u4, Role::Version(0)),
+            ("address", u7, Role::Data),
+            ("gain", u8_, Role::Data),
+        ])
+        .unwrap();
+    (sensor, sensor_1_0)
+}
 
 /// The talk's INA238 type (`px.Ina238.1.0`) and its `Bus` union.
 /// The store the store tests share: INA238 in four instances (index 0), a shared BatteryInfo
