@@ -59,6 +59,19 @@ impl Fixture {
             .is_ok()
     }
 
+    /// Adds `instance` with its own `default`, then `value` as its value when given.
+    fn add(&mut self, instance: u16, default: &[u8], value: Option<&[u8]>) {
+        let layout = self.layout.as_layout();
+        let s = &mut self.store;
+        s.add(SENSOR, Some(instance)).unwrap();
+        s.set_encoded(&layout, SENSOR, instance, Which::Default, default)
+            .unwrap();
+        if let Some(value) = value {
+            s.set_encoded(&layout, SENSOR, instance, Which::Value, value)
+                .unwrap();
+        }
+    }
+
     fn held(&self, instance: u16) -> (Vec<u8>, Vec<u8>, bool) {
         let s = &self.store;
         (
@@ -72,11 +85,7 @@ impl Fixture {
 #[test]
 fn a_translated_value_takes_the_new_fields_from_the_instance_s_default() {
     let mut f = fixture();
-    let layout = f.layout.as_layout();
-    f.store.add(SENSOR, Some(1)).unwrap();
-    f.store
-        .set_encoded(&layout, SENSOR, 1, Which::Default, &OWN_DEFAULT)
-        .unwrap();
+    f.add(1, &OWN_DEFAULT, None);
     f.store.mark_saved();
     assert!(f.translated(1, Which::Value, &OLD, false));
     assert_eq!(
@@ -88,23 +97,10 @@ fn a_translated_value_takes_the_new_fields_from_the_instance_s_default() {
 #[test]
 fn a_translated_default_takes_the_new_fields_from_the_type_s_default() {
     let mut f = fixture();
-    let layout = f.layout.as_layout();
     // Instance 0: its value changed from its own default (it keeps its value).
-    f.store.add(SENSOR, Some(0)).unwrap();
-    f.store
-        .set_encoded(&layout, SENSOR, 0, Which::Default, &OWN_DEFAULT)
-        .unwrap();
-    f.store
-        .set_encoded(&layout, SENSOR, 0, Which::Value, &OLD_OVER_OWN)
-        .unwrap();
+    f.add(0, &OWN_DEFAULT, Some(&OLD_OVER_OWN));
     // Instance 2: at its own default (its value follows the new default).
-    f.store.add(SENSOR, Some(2)).unwrap();
-    f.store
-        .set_encoded(&layout, SENSOR, 2, Which::Default, &OWN_DEFAULT)
-        .unwrap();
-    f.store
-        .set_encoded(&layout, SENSOR, 2, Which::Value, &OWN_DEFAULT)
-        .unwrap();
+    f.add(2, &OWN_DEFAULT, Some(&OWN_DEFAULT));
     f.store.mark_saved();
     assert!(f.translated(0, Which::Default, &OLD, false));
     assert_eq!(
@@ -121,11 +117,7 @@ fn a_translated_default_takes_the_new_fields_from_the_type_s_default() {
 #[test]
 fn check_only_translates_and_writes_nothing() {
     let mut f = fixture();
-    let layout = f.layout.as_layout();
-    f.store.add(SENSOR, Some(1)).unwrap();
-    f.store
-        .set_encoded(&layout, SENSOR, 1, Which::Default, &OWN_DEFAULT)
-        .unwrap();
+    f.add(1, &OWN_DEFAULT, None);
     f.store.mark_saved();
     let before = f.held(1);
     assert_eq!(before, (OWN_DEFAULT.to_vec(), OWN_DEFAULT.to_vec(), false));
