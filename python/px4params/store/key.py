@@ -45,15 +45,13 @@ def _split_key(
     name = text[:i]
     instance = index = path = None
     if i < end and text[i] == "#":
-        j = _digits_end(text, i + 1)
-        if j == i + 1 or (not leading_zeros and j > i + 2 and text[i + 1] == "0"):
+        j = _number_end(text, i + 1, leading_zeros)
+        if j == i + 1:
             return None
         instance, i = text[i + 1 : j], j
     if i < end and text[i] == "[":
-        j = _digits_end(text, i + 1)
+        j = _number_end(text, i + 1, leading_zeros)
         if j == i + 1 or j == end or text[j] != "]":
-            return None
-        if not leading_zeros and j > i + 2 and text[i + 1] == "0":
             return None
         index, i = text[i + 1 : j], j + 1
     elif i < end and text[i] == ".":
@@ -70,11 +68,13 @@ def _split_key(
 _DIGITS = frozenset("0123456789")
 
 
-def _digits_end(text: str, i: int) -> int:
-    """Where the ASCII digits from ``i`` end."""
-    while i < len(text) and text[i] in _DIGITS:
-        i += 1
-    return i
+def _number_end(text: str, i: int, leading_zeros: bool) -> int:
+    """Where the number's ASCII digits from ``i`` end; ``i`` (no number) when a leading zero
+    is not allowed and they have one."""
+    j = i
+    while j < len(text) and text[j] in _DIGITS:
+        j += 1
+    return i if not leading_zeros and j > i + 1 and text[i] == "0" else j
 
 
 def _exact_name_hint(text: str) -> str | None:
