@@ -19,12 +19,73 @@ use crate::layout::{FlatItem, Kind, Layout, NodeId, Role, Segment, Span};
 use crate::plan::Plans;
 use crate::rules::{
     scalar_bits, scalar_of, scalar_raw, tail_optimized, ArrayLen, At, DecodeOptions, EncodeOptions,
-    LeafKind, Sink, Source, MAX_DEPTH,
+    LeafError, LeafKind, Sink, Source, MAX_DEPTH,
 };
 use crate::scalar::{self, Scalar};
 
 /// The loop stopped: the error waits in [`Run::error`] (results stay register-sized).
 pub(crate) struct Stop;
+
+/// Whether a part ends the value read and the value written: tail array optimization applies
+/// to its last field. The two differ only inside an array whose length an edit changes.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Tao(u8);
+
+impl Tao {
+    const NONE: Tao = Tao(0);
+    const READ: u8 = 1;
+    const WRITE: u8 = 2;
+
+    /// For a whole value: `tao` for reading and writing alike.
+    pub(crate) fn both(tao: bool) -> Tao {
+        Tao(if tao { Self::READ | Self::WRITE } else { 0 })
+    }
+    fn read(self) -> bool {
+        self.0 & Self::READ != 0
+    }
+    fn write(self) -> bool {
+        self.0 & Self::WRITE != 0
+    }
+    /// For the elements of an array: kept where the array is not itself tail-optimized
+    /// (`read`, `write`).
+    fn ends(self, read: bool, write: bool) -> Tao {
+        Tao(self.0 & (u8::from(read) * Self::READ | u8::from(write) * Self::WRITE))
+    }
+}
+
+/// For a member: `tao` only for the `is_last` one.
+#[inline(always)]
+fn last(tao: Tao, is_last: bool) -> Tao {
+    if is_last {
+        tao
+    } else {
+        Tao::NONE
+    }
+}
+
+/// Where a part of the value comes from, editing ([`Visiting`]).
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub(crate) enum Mode {
+    /// Read from the data, visited, and written as the visit says.
+    Data,
+    /// Read (every bit of it) and passed over: an old union variant or array elements that
+    /// are dropped, or the elements of a tail array counted.
+    Skip,
+    /// Given by the visit.
+    Given,
+    /// The default: zeros, versions, the first union variant, empty dynamic arrays.
+    Default,
+}
+
+impl Mode {
+    pub(crate) fn reads(self) -> bool {
+        matches!(self, Mode::Data | Mode::Skip)
+    }
+
+    fn visits(self) -> bool {
+        matches!(self, Mode::Data | Mode::Given)
+    }
+}
 
 /// What a fixed-shape run of leaves came to in one piece ([`Pass::run`]).
 pub(crate) enum Ran<E> {
@@ -52,6 +113,9 @@ pub(crate) trait Pass {
     const RUNS: bool;
     /// Encoding: a field's path step is taken before the source is asked for the field.
     const ENCODES: bool;
+    /// Editing ([`Visiting`]): a value read and written at once, whose new union tags and
+    /// array lengths may differ from those read; a tail array's length counted ahead.
+    const EDITS: bool = false;
 
     /// The fault a method stopped at (each keeps it, so that results stay register-sized).
     fn fault(&mut self) -> Option<ErrorKind<Self::Error>>;
@@ -70,8 +134,15 @@ pub(crate) trait Pass {
     fn field(&mut self, index: u32, name: &str) -> Result<bool, Stop>;
     fn end_field(&mut self);
     fn end_struct(&mut self, layout: &Layout<'_>, id: NodeId, used: usize) -> Result<(), Stop>;
-    /// A union's tag, read or given (unchecked).
-    fn tag(&mut self, layout: &Layout<'_>, id: NodeId, bits: u8) -> Result<u64, Stop>;
+    /// A union's tag, read or given (unchecked): the tag read (or given) and the one the
+    /// value written selects (the same, except where an edit changes it).
+    fn tag(
+        &mut self,
+        layout: &Layout<'_>,
+        id: NodeId,
+        bits: u8,
+        path: &Path,
+    ) -> Result<(u64, u64), Stop>;
     /// The tag, checked, selects variant `index` (`name`): written, or told to the sink.
     fn variant(&mut self, tag: u64, index: u32, name: &str, at: At<'_>) -> Result<(), Stop>;
     fn end_union(&mut self) -> Result<(), Stop>;
@@ -80,15 +151,45 @@ pub(crate) trait Pass {
     /// A dynamic array's length, read (from a prefix of `bits`) or given; `None` for a tail
     /// array read, whose elements are counted as they come.
     fn length(&mut self, bits: u8, tail: bool) -> Result<Option<u64>, Stop>;
-    /// The length, checked, begins the array: its prefix written (none for a tail array), or
-    /// told to the sink.
-    fn prefix(&mut self, n: Option<u64>, at: At<'_>) -> Result<(), Stop>;
+    /// The length of the value written (unchecked): the length read or given, except where
+    /// an edit changes it.
+    #[inline(always)]
+    fn relength(&mut self, n: Option<u64>, _at: At<'_>) -> Result<Option<u64>, Stop> {
+        Ok(n)
+    }
+    /// The length, checked, begins the array: its prefix written (`bits` wide: none for a
+    /// tail array), or told to the sink.
+    fn prefix(&mut self, n: Option<u64>, bits: u8, at: At<'_>) -> Result<(), Stop>;
     /// Whether element `i` is there: below the length, or for a tail array read, while
     /// whole bytes remain.
     fn more(&self, i: u64, n: Option<u64>) -> bool;
     fn element(&mut self, i: u64) -> Result<(), Stop>;
     fn end_element(&mut self);
     fn end_array(&mut self, n: u64) -> Result<(), Stop>;
+    /// Editing ([`Pass::EDITS`]): where the part walked now comes from.
+    #[inline(always)]
+    fn mode(&self) -> Mode {
+        Mode::Data
+    }
+    #[inline(always)]
+    fn set_mode(&mut self, _mode: Mode) {}
+    /// Editing: passes over node `id` unread, when nothing is looked for in it.
+    #[inline(always)]
+    fn pass_over(&mut self, _layout: &Layout<'_>, _id: NodeId) -> bool {
+        false
+    }
+    /// Editing: where reading stands, in bits, and how many are left.
+    #[inline(always)]
+    fn read_pos(&self) -> usize {
+        0
+    }
+    #[inline(always)]
+    fn read_left(&self) -> usize {
+        0
+    }
+    /// Editing: reading goes on from bit `pos`.
+    #[inline(always)]
+    fn seek_read(&mut self, _pos: usize) {}
     /// A plan: a fixed-shape run of `leaves` leaves (`items`, `bits` long) in one piece.
     fn run(&mut self, items: &[FlatItem], leaves: u32, bits: u32) -> Ran<Self::Error>;
     /// A plan: primitive elements of `kind` in one piece (`n`: the length, `None` for a tail
@@ -157,8 +258,11 @@ impl<'l, P: Pass> Run<'l, P> {
     #[cold]
     #[inline(never)]
     fn refused(&mut self) -> Stop {
-        let kind = self.pass.fault().unwrap_or(ErrorKind::TooDeep);
-        self.fail(kind)
+        match self.pass.fault() {
+            Some(kind) => self.fail(kind),
+            // A visit found what it looked for: the loop ends without error.
+            None => Stop,
+        }
     }
 
     /// A primitive (a field, an element or a variant), one past the nesting bound refused.
@@ -172,7 +276,10 @@ impl<'l, P: Pass> Run<'l, P> {
     }
 
     /// Walks node `id`; `tao`: it ends the value (tail array optimization applies to it).
-    pub(crate) fn node(&mut self, id: NodeId, tao: bool) -> Result<(), Stop> {
+    pub(crate) fn node(&mut self, id: NodeId, tao: Tao) -> Result<(), Stop> {
+        if P::EDITS && self.pass.pass_over(self.layout, id) {
+            return Ok(());
+        }
         self.depth += 1;
         if self.depth > MAX_DEPTH {
             return Err(self.fail(ErrorKind::TooDeep));
@@ -198,7 +305,7 @@ impl<'l, P: Pass> Run<'l, P> {
                     self.ok(r)?;
                     let mut used = 0;
                     for i in first..first + count {
-                        used += self.field(i, tao && i + 1 == first + count)?;
+                        used += self.field(i, last(tao, i + 1 == first + count))?;
                     }
                     let r = self.pass.end_struct(layout, id, used);
                     self.ok(r)?;
@@ -209,16 +316,11 @@ impl<'l, P: Pass> Run<'l, P> {
                 count,
                 tag_bits,
             } => {
-                let r = self.pass.tag(layout, id, tag_bits);
-                let tag = self.ok(r)?;
+                let r = self.pass.tag(layout, id, tag_bits, &self.path);
+                let (read, tag) = self.ok(r)?;
                 // The rule: the tag selects one of the variants.
-                if tag >= u64::from(count) {
-                    let bad = ErrorKind::BadUnionTag {
-                        tag,
-                        variants: count,
-                    };
-                    return Err(self.fail_at(at_pos, bad));
-                }
+                let limit = u64::from(count);
+                self.counts(true, Some(read), Some(tag), limit, at_pos)?;
                 let index = first + tag as u32;
                 let variant = layout.fields[index as usize];
                 let at = At {
@@ -231,9 +333,21 @@ impl<'l, P: Pass> Run<'l, P> {
                 };
                 let r = self.pass.variant(tag, index, layout.name(&variant), at);
                 self.ok(r)?;
+                let mode = self.pass.mode();
+                if P::EDITS && read != tag {
+                    // A new tag: the old variant is passed over, the new one written with
+                    // its default value.
+                    self.pass.set_mode(Mode::Skip);
+                    let old = first + read as u32;
+                    self.path.push(Step::Field(old));
+                    self.node(layout.fields[old as usize].node, tao)?;
+                    self.path.pop();
+                    self.pass.set_mode(Mode::Default);
+                }
                 self.path.push(Step::Field(index));
                 self.node(variant.node, tao)?;
                 self.path.pop();
+                self.pass.set_mode(mode);
                 let r = self.pass.end_union();
                 self.ok(r)?;
             }
@@ -245,7 +359,11 @@ impl<'l, P: Pass> Run<'l, P> {
                 };
                 let r = self.pass.fixed(len, at);
                 self.ok(r)?;
-                array = Some((elem, Some(len.into()), len, tao));
+                if P::EDITS {
+                    self.resized(elem, len.into(), len.into(), tao)?;
+                } else {
+                    array = Some((elem, Some(len.into()), len, tao));
+                }
             }
             Kind::DynArray {
                 elem,
@@ -253,25 +371,50 @@ impl<'l, P: Pass> Run<'l, P> {
                 len_bits,
             } => {
                 // The rule: the last array of a value, of elements of a byte or more, has no
-                // prefix and takes the remaining whole bytes.
-                let tail = tail_optimized(layout, elem, tao);
-                let r = self.pass.length(len_bits, tail);
-                let n = self.ok(r)?;
-                // The rule: at most `max` elements.
-                if let Some(n) = n.filter(|&n| n > u64::from(max)) {
-                    return Err(self.fail_at(at_pos, ErrorKind::ArrayTooLong { len: n, max }));
+                // prefix and takes the remaining whole bytes (in the value read, and in the
+                // value written, which differ in their last element when a length changes).
+                let rtail = tail_optimized(layout, elem, tao.read());
+                let wtail = match P::EDITS {
+                    true => tail_optimized(layout, elem, tao.write()),
+                    false => rtail,
+                };
+                let r = self.pass.length(len_bits, rtail);
+                let mut n = self.ok(r)?;
+                if P::EDITS && n.is_none() {
+                    // A tail array read where its length is a leaf: its elements counted ahead.
+                    n = Some(self.count_tail(elem, max)?);
                 }
+                let tail = match P::EDITS && !self.pass.mode().reads() {
+                    true => wtail,
+                    false => rtail,
+                };
+                let kind = LeafKind::Len {
+                    bits: if tail { 0 } else { len_bits },
+                    array: id,
+                };
                 let at = At {
                     path: &self.path,
                     bit_offset: at_pos,
-                    kind: LeafKind::Len {
-                        bits: if tail { 0 } else { len_bits },
-                        array: id,
-                    },
+                    kind,
                 };
-                let r = self.pass.prefix(n, at);
+                let r = self.pass.relength(n, at);
+                let new = self.ok(r)?;
+                // The rule: at most `max` elements.
+                let limit = u64::from(max) + 1;
+                self.counts(false, n, new, limit, at_pos)?;
+                let at = At {
+                    path: &self.path,
+                    bit_offset: at_pos,
+                    kind,
+                };
+                let r = self.pass.prefix(new, if wtail { 0 } else { len_bits }, at);
                 self.ok(r)?;
-                array = Some((elem, n, max, tao && !tail));
+                if P::EDITS {
+                    let (old, new) = (n.unwrap_or(0), new.unwrap_or(0));
+                    self.resized(elem, old, new, tao.ends(!rtail, !wtail))?;
+                } else {
+                    array = Some((elem, n, max, if tail { Tao::NONE } else { tao }));
+                }
             }
         }
         if let Some((elem, n, max, tao)) = array {
@@ -281,10 +424,41 @@ impl<'l, P: Pass> Run<'l, P> {
         Ok(())
     }
 
+    /// The rules on a union's tag (`tag`) and a dynamic array's length: the one read (or
+    /// given), where the node starts, and then, editing, the one written, where the loop
+    /// stands, are below `limit` (the number of variants, or the maximum length plus one).
+    #[inline(always)]
+    fn counts(
+        &mut self,
+        tag: bool,
+        read: Option<u64>,
+        new: Option<u64>,
+        limit: u64,
+        at_pos: usize,
+    ) -> Result<(), Stop> {
+        let fault = |n: u64| match tag {
+            true => ErrorKind::BadUnionTag {
+                tag: n,
+                variants: limit as u32,
+            },
+            false => ErrorKind::ArrayTooLong {
+                len: n,
+                max: (limit - 1) as u32,
+            },
+        };
+        if let Some(n) = read.filter(|&n| n >= limit) {
+            return Err(self.fail_at(at_pos, fault(n)));
+        }
+        if let Some(n) = new.filter(|&n| P::EDITS && n >= limit) {
+            return Err(self.fail(fault(n)));
+        }
+        Ok(())
+    }
+
     #[inline(always)]
     /// The elements of an array (`n`: its length, `None` for a tail array read: as many as
     /// whole bytes remain for, at most `max`).
-    fn elements(&mut self, elem: NodeId, n: Option<u64>, max: u32, tao: bool) -> Result<(), Stop> {
+    fn elements(&mut self, elem: NodeId, n: Option<u64>, max: u32, tao: Tao) -> Result<(), Stop> {
         let mut i = 0;
         if !self.pass.more(i, n) {
             // Empty (a common case: an empty read, an unnamed model): nothing to set up.
@@ -317,7 +491,7 @@ impl<'l, P: Pass> Run<'l, P> {
             if scalar {
                 self.scalar(kind)?;
             } else {
-                self.node(elem, tao && Some(i + 1) == n)?;
+                self.node(elem, last(tao, Some(i + 1) == n))?;
             }
             self.pass.end_element();
             self.path.pop();
@@ -329,12 +503,15 @@ impl<'l, P: Pass> Run<'l, P> {
 
     /// Field `index` of a struct; 1 when the input had it (0 for padding and filled-in
     /// versions), so that the struct can tell unknown input fields.
-    fn field(&mut self, index: u32, last: bool) -> Result<usize, Stop> {
+    fn field(&mut self, index: u32, tao: Tao) -> Result<usize, Stop> {
         let layout = self.layout;
         let field = layout.fields[index as usize];
         if field.role == Role::Padding {
-            self.node(field.node, last)?;
+            self.node(field.node, tao)?;
             return Ok(0);
+        }
+        if P::EDITS && self.pass.pass_over(layout, field.node) {
+            return Ok(1);
         }
         if P::ENCODES {
             self.path.push(Step::Field(index));
@@ -346,7 +523,11 @@ impl<'l, P: Pass> Run<'l, P> {
         }
         let kind = layout.node(field.node).kind;
         // Decoding reads a `p_version` as any other primitive.
-        let role = if P::ENCODES { field.role } else { Role::Data };
+        let role = if P::ENCODES || P::EDITS {
+            field.role
+        } else {
+            Role::Data
+        };
         let used = match (present, role) {
             (true, role) => {
                 match role {
@@ -358,7 +539,7 @@ impl<'l, P: Pass> Run<'l, P> {
                         self.ok(r)?;
                     }
                     _ if is_scalar(kind) => self.scalar(kind)?,
-                    _ => self.node(field.node, last)?,
+                    _ => self.node(field.node, tao)?,
                 }
                 self.pass.end_field();
                 1
@@ -374,9 +555,64 @@ impl<'l, P: Pass> Run<'l, P> {
         Ok(used)
     }
 
+    /// Editing, a dynamic array's elements: the first `new` of those read (`old`) written,
+    /// the rest read and passed over, and default ones appended (`tao`: for the elements of
+    /// the array, the last one read and the last one written).
+    fn resized(&mut self, elem: NodeId, old: u64, new: u64, tao: Tao) -> Result<(), Stop> {
+        let mode = self.pass.mode();
+        for i in 0..old.max(new) {
+            let part = match mode {
+                _ if i >= new => Mode::Skip,
+                Mode::Data if i >= old => Mode::Default,
+                mode => mode,
+            };
+            let ends = tao.ends(i + 1 == old, i + 1 == new);
+            self.pass.set_mode(part);
+            self.path.push(Step::Index(i as u32));
+            self.node(elem, ends)?;
+            self.path.pop();
+        }
+        self.pass.set_mode(mode);
+        Ok(())
+    }
+
+    /// Editing, the number of elements of a tail-optimized array from here: as many as there
+    /// are whole bytes left for. Elements of variable shape are read ahead (every bit, so that
+    /// a fault is found where reading them in order finds it), fixed-shape ones counted by
+    /// their length; reading then starts again at the first one.
+    fn count_tail(&mut self, elem: NodeId, max: u32) -> Result<u64, Stop> {
+        let start = self.pass.read_pos();
+        let mode = self.pass.mode();
+        let mut n = 0;
+        while self.pass.read_left() >= 8 {
+            if n == max {
+                let too_long = ErrorKind::ArrayTooLong {
+                    len: u64::from(n) + 1,
+                    max,
+                };
+                return Err(self.fail(too_long));
+            }
+            let node = self.layout.node(elem);
+            if node.fixed_leaves().is_some() {
+                // Any fault in it is found when it is read.
+                self.pass
+                    .seek_read(self.pass.read_pos() + node.min_bits as usize);
+            } else {
+                self.pass.set_mode(Mode::Skip);
+                self.path.push(Step::Index(n));
+                self.node(elem, Tao::NONE)?;
+                self.path.pop();
+                self.pass.set_mode(mode);
+            }
+            n += 1;
+        }
+        self.pass.seek_read(start);
+        Ok(n.into())
+    }
+
     /// A struct's fields by its segments: fixed-shape runs in one piece where the pass takes
     /// them, other fields one by one (`end`: one past its last field).
-    fn runs(&mut self, id: NodeId, end: u32, tao: bool) -> Result<(), Stop> {
+    fn runs(&mut self, id: NodeId, end: u32, tao: Tao) -> Result<(), Stop> {
         let layout = self.layout;
         for segment in layout.node(id).segments.of(layout.segments) {
             match *segment {
@@ -397,7 +633,7 @@ impl<'l, P: Pass> Run<'l, P> {
                         Ran::Done => {}
                         Ran::Declined => {
                             for i in fields.first..fields.first + fields.count {
-                                self.field(i, tao && i + 1 == end)?;
+                                self.field(i, last(tao, i + 1 == end))?;
                             }
                         }
                         Ran::Short => return Err(self.missing_leaf(fields, end, tao)),
@@ -410,7 +646,7 @@ impl<'l, P: Pass> Run<'l, P> {
                     }
                 }
                 Segment::Field(i) => {
-                    self.field(i, tao && i + 1 == end)?;
+                    self.field(i, last(tao, i + 1 == end))?;
                 }
             }
         }
@@ -421,9 +657,9 @@ impl<'l, P: Pass> Run<'l, P> {
     /// leaf missing.
     #[cold]
     #[inline(never)]
-    fn missing_leaf(&mut self, fields: Span, end: u32, tao: bool) -> Stop {
+    fn missing_leaf(&mut self, fields: Span, end: u32, tao: Tao) -> Stop {
         for i in fields.first..fields.first + fields.count {
-            if let Err(stop) = self.field(i, tao && i + 1 == end) {
+            if let Err(stop) = self.field(i, last(tao, i + 1 == end)) {
                 return stop;
             }
         }
@@ -487,7 +723,7 @@ pub(crate) fn encode<P: Plans, S: Source>(
         plans: core::marker::PhantomData,
     };
     let mut run = Run::new(layout, pass);
-    if run.node(root, options.tao).is_err() {
+    if run.node(root, Tao::both(options.tao)).is_err() {
         return Err(run.stopped());
     }
     let pos = run.pass.out.bit_pos();
@@ -516,7 +752,7 @@ pub(crate) fn decode<P: Plans, R: BitRead + ?Sized, K: Sink>(
         plans: core::marker::PhantomData,
     };
     let mut run = Run::new(layout, pass);
-    if run.node(root, options.tao).is_err() {
+    if run.node(root, Tao::both(options.tao)).is_err() {
         return Err(run.stopped());
     }
     let end = run.pass.reader.position();
@@ -629,9 +865,15 @@ impl<P: Plans, S: Source> Pass for Encode<'_, P, S> {
         let r = self.source.end_struct(layout, layout.members(id), used);
         r.map_err(|e| self.refuse(ErrorKind::Value(e)))
     }
-    fn tag(&mut self, layout: &Layout<'_>, id: NodeId, _bits: u8) -> Result<u64, Stop> {
+    fn tag(
+        &mut self,
+        layout: &Layout<'_>,
+        id: NodeId,
+        _: u8,
+        _: &Path,
+    ) -> Result<(u64, u64), Stop> {
         let tag = self.source.begin_union(layout, layout.members(id));
-        tag.map(u64::from)
+        tag.map(|t| (u64::from(t), u64::from(t)))
             .map_err(|e| self.refuse(ErrorKind::Value(e)))
     }
     fn variant(&mut self, tag: u64, _index: u32, _name: &str, at: At<'_>) -> Result<(), Stop> {
@@ -664,9 +906,9 @@ impl<P: Plans, S: Source> Pass for Encode<'_, P, S> {
             .map_err(|e| self.refuse(ErrorKind::Value(e)))?;
         Ok(Some(n as u64))
     }
-    fn prefix(&mut self, n: Option<u64>, at: At<'_>) -> Result<(), Stop> {
-        match (at.kind, n) {
-            (LeafKind::Len { bits, .. }, Some(n)) if bits > 0 => self.write(n, bits.into()),
+    fn prefix(&mut self, n: Option<u64>, bits: u8, _at: At<'_>) -> Result<(), Stop> {
+        match n {
+            Some(n) if bits > 0 => self.write(n, bits.into()),
             _ => Ok(()),
         }
     }
@@ -809,8 +1051,8 @@ impl<'d, P: Plans, R: BitRead + ?Sized + 'd, K: Sink> Pass for Decode<'d, P, R, 
             .end_struct()
             .map_err(|e| self.refuse(ErrorKind::Value(e)))
     }
-    fn tag(&mut self, _: &Layout<'_>, _: NodeId, bits: u8) -> Result<u64, Stop> {
-        self.read(bits.into())
+    fn tag(&mut self, _: &Layout<'_>, _: NodeId, bits: u8, _: &Path) -> Result<(u64, u64), Stop> {
+        self.read(bits.into()).map(|t| (t, t))
     }
     fn variant(&mut self, tag: u64, index: u32, name: &str, at: At<'_>) -> Result<(), Stop> {
         let r = self.sink.begin_union(tag as u32, index, name, at);
@@ -831,7 +1073,7 @@ impl<'d, P: Plans, R: BitRead + ?Sized + 'd, K: Sink> Pass for Decode<'d, P, R, 
         }
         self.read(bits.into()).map(Some)
     }
-    fn prefix(&mut self, n: Option<u64>, at: At<'_>) -> Result<(), Stop> {
+    fn prefix(&mut self, n: Option<u64>, _bits: u8, at: At<'_>) -> Result<(), Stop> {
         let len = match n {
             Some(n) => ArrayLen::Prefixed(n as usize),
             None => ArrayLen::Tail,
@@ -1058,5 +1300,495 @@ pub(crate) fn fast_raw<P: Plans>(
             Ok(u64::from((v as f32).to_bits()))
         }
         _ => scalar_raw(kind, value, saturate),
+    }
+}
+
+/// Bits the visiting pass reads: [`BitRead`] behind a pointer, so that one copy of the loop
+/// serves every kind of data.
+pub(crate) trait Input {
+    /// Total number of bits.
+    fn bit_len(&self) -> usize;
+    /// Bytes `index` and `index + 1` as a big-endian pair, 0 for the second one where it
+    /// lies beyond the end; the caller checks that the first one does not.
+    fn pair(&self, index: usize) -> u16;
+}
+
+/// Any [`BitRead`] as an [`Input`] (a pointer to it: the data itself may be unsized).
+pub(crate) struct Bits<'d, R: ?Sized>(pub(crate) &'d R);
+
+impl<R: BitRead + ?Sized> Input for Bits<'_, R> {
+    fn bit_len(&self) -> usize {
+        self.0.bit_len()
+    }
+    fn pair(&self, index: usize) -> u16 {
+        let next = match index + 1 < self.0.bit_len() / 8 {
+            true => self.0.byte(index + 1),
+            false => 0,
+        };
+        u16::from(self.0.byte(index)) << 8 | u16::from(next)
+    }
+}
+
+/// A leaf as the visiting pass hands it to its [`Visit`].
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct LeafAt<'w> {
+    /// Its number `[k]` in the value read (or, when nothing is read, in the value written).
+    pub index: usize,
+    /// What it is.
+    pub kind: LeafKind,
+    /// The type's version, when the leaf is a `p_version` field.
+    pub version: Option<u32>,
+    /// Where its bits start (in the data read, or when nothing is read, in the output).
+    pub bit_offset: usize,
+    /// Its field path.
+    pub path: &'w Path,
+}
+
+/// Why a [`Visit`] stops the loop.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Halt {
+    /// What the visit looked for is found: the loop ends without error.
+    Found,
+    /// The loop fails at the leaf, with the error [`Visit::refusal`] gives.
+    Refused,
+}
+
+/// What the visiting pass does at each leaf, besides reading and writing it: the operations
+/// on values other than whole-value encoding and decoding (finding a leaf, rewriting a value
+/// with a new tag or length, a type's default, checking stored versions, translating) are
+/// visits, and so are firmware's leaf lists.
+pub(crate) trait Visit {
+    /// Leaf `at`, whose value read is `old` (`None` when nothing is read there). Returns the
+    /// value to write in its place (`None`: the value read, or when nothing is read, the
+    /// default: zero, or the type's version for `p_version`).
+    fn leaf(&mut self, at: &LeafAt<'_>, old: Option<Scalar>) -> Result<Option<Scalar>, Halt>;
+
+    /// The error of the last [`Halt::Refused`]. The visits' own errors are those of leaf
+    /// lists (a translation's is one: a leaf it cannot read).
+    fn refusal(&self) -> ErrorKind<LeafError> {
+        ErrorKind::TooDeep
+    }
+
+    /// A static array of `len` elements is about to be written at `path` from given values
+    /// (its length is not a leaf).
+    fn fixed_len(&mut self, _path: &Path, _len: u32) -> Result<(), Halt> {
+        Ok(())
+    }
+}
+
+/// The visiting pass: a value read from an [`Input`], written into bytes, or both at once,
+/// every leaf handed to a [`Visit`]. Its visit is behind a pointer, so that firmware compiles
+/// the loop once for all its operations.
+pub(crate) struct Visiting<'w> {
+    input: Option<&'w dyn Input>,
+    rpos: usize,
+    out: &'w mut [u8],
+    writing: bool,
+    wpos: usize,
+    leaves: usize,
+    /// Reading only, fixed-shape parts whose leaves all come before this one are passed over
+    /// unread (finding leaf `[k]`).
+    skip_below: Option<usize>,
+    saturate: bool,
+    keep_versions: bool,
+    mode: Mode,
+    visit: &'w mut dyn Visit,
+    fault: Option<ErrorKind<LeafError>>,
+    /// The output is too small: the loop goes on without writing, to tell how small.
+    overflow: bool,
+}
+
+/// What a visiting loop is asked to do.
+pub(crate) struct Job<'w> {
+    pub input: Option<&'w dyn Input>,
+    pub out: &'w mut [u8],
+    pub writing: bool,
+    pub skip_below: Option<usize>,
+    pub options: EncodeOptions,
+}
+
+impl<'w> Job<'w> {
+    /// Reads `input` and writes nothing (`skip_below`: see [`Visiting::skip_below`]).
+    pub(crate) fn reading(input: &'w dyn Input, tao: bool, skip_below: Option<usize>) -> Self {
+        Job {
+            input: Some(input),
+            out: &mut [],
+            writing: false,
+            skip_below,
+            options: EncodeOptions {
+                tao,
+                ..EncodeOptions::default()
+            },
+        }
+    }
+}
+
+/// Where a visiting loop ended.
+pub(crate) struct Walked {
+    /// Bits read.
+    pub read: usize,
+    /// Bits written.
+    pub written: usize,
+    /// Leaves visited (with those passed over unread).
+    pub leaves: usize,
+}
+
+/// Runs the loop with the visiting pass over `root`.
+pub(crate) fn visit(
+    layout: &Layout<'_>,
+    root: NodeId,
+    job: Job<'_>,
+    visit: &mut dyn Visit,
+) -> Result<Walked, Error<LeafError>> {
+    let mode = if job.input.is_some() {
+        Mode::Data
+    } else {
+        Mode::Given
+    };
+    let pass = Visiting {
+        input: job.input,
+        rpos: 0,
+        out: job.out,
+        writing: job.writing,
+        wpos: 0,
+        leaves: 0,
+        skip_below: job.skip_below,
+        saturate: job.options.saturate,
+        keep_versions: job.options.keep_versions,
+        mode,
+        visit,
+        fault: None,
+        overflow: false,
+    };
+    let mut run = Run::new(layout, pass);
+    let stopped = run.node(root, Tao::both(job.options.tao)).is_err();
+    let pass = &run.pass;
+    match run.error {
+        Some(error) if stopped => Err(error),
+        _ if pass.overflow => Err(Error {
+            kind: ErrorKind::BufferTooSmall {
+                needed: pass.wpos.div_ceil(8),
+            },
+            bit_offset: pass.wpos,
+            path: Path::default(),
+        }),
+        _ => Ok(Walked {
+            read: pass.rpos,
+            written: pass.wpos,
+            leaves: pass.leaves,
+        }),
+    }
+}
+
+/// Runs the loop with the visiting pass to write a whole value into `out` (reading `input`
+/// if any); its length in bytes, the last byte's unused bits zero.
+pub(crate) fn write_whole(
+    layout: &Layout<'_>,
+    root: NodeId,
+    input: Option<&dyn Input>,
+    out: &mut [u8],
+    options: EncodeOptions,
+    v: &mut dyn Visit,
+) -> Result<usize, Error<LeafError>> {
+    let job = Job {
+        input,
+        out: &mut *out,
+        writing: true,
+        skip_below: None,
+        options,
+    };
+    let end = visit(layout, root, job, v)?.written;
+    if end % 8 != 0 {
+        // The last byte's unused bits.
+        out[end / 8] &= 0xFF << (8 - end % 8);
+    }
+    Ok(end.div_ceil(8))
+}
+
+impl Visiting<'_> {
+    #[cold]
+    #[inline(never)]
+    fn refuse(&mut self, kind: ErrorKind<LeafError>) -> Stop {
+        self.fault = Some(kind);
+        Stop
+    }
+
+    #[cold]
+    fn halt(&mut self, halt: Halt) -> Stop {
+        self.fault = match halt {
+            Halt::Found => None,
+            Halt::Refused => Some(self.visit.refusal()),
+        };
+        Stop
+    }
+
+    /// Reads `bits` bits where the mode reads (0 elsewhere).
+    fn read(&mut self, bits: u32) -> Result<u64, Stop> {
+        let Some(input) = self.input.filter(|_| bits > 0 && self.mode.reads()) else {
+            return Ok(0);
+        };
+        let (needed, available) = (self.rpos + bits as usize, input.bit_len());
+        if needed > available {
+            return Err(self.refuse(ErrorKind::Truncated {
+                needed_bits: needed,
+                available_bits: available,
+            }));
+        }
+        // The value's bytes, least significant first (its top bits last), each read most
+        // significant bit first: a byte at a time, from the pair of bytes it may span.
+        let (mut raw, mut shift) = (0, 0);
+        while self.rpos < needed {
+            let n = (needed - self.rpos).min(8) as u32;
+            let (i, s) = (self.rpos / 8, (self.rpos % 8) as u32);
+            let window = u32::from(input.pair(i)) << s;
+            raw |= u64::from((window >> (16 - n)) & ((1 << n) - 1)) << shift;
+            shift += 8;
+            self.rpos += n as usize;
+        }
+        Ok(raw)
+    }
+
+    fn write(&mut self, raw: u64, bits: u32) {
+        if !self.writing || self.mode == Mode::Skip || bits == 0 {
+            return;
+        }
+        let end = self.wpos + bits as usize;
+        // A value too long for the output is still walked to its end (its faults come first).
+        self.overflow |= end > self.out.len() * 8;
+        if !self.overflow {
+            put(self.out, self.wpos, raw, bits);
+        }
+        self.wpos = end;
+    }
+
+    fn visit(
+        &mut self,
+        kind: LeafKind,
+        version: Option<u32>,
+        bit_offset: usize,
+        old: Option<Scalar>,
+        path: &Path,
+    ) -> Result<Option<Scalar>, Stop> {
+        let at = LeafAt {
+            index: self.leaves,
+            kind,
+            version,
+            bit_offset,
+            path,
+        };
+        self.leaves += 1;
+        match self.visit.leaf(&at, old) {
+            Ok(v) => Ok(v),
+            Err(halt) => Err(self.halt(halt)),
+        }
+    }
+
+    /// A union tag or array length (`kind`, at `at`, `old` where read) visited before it is
+    /// checked (a bad one can be looked at); the count the visit gives, if any.
+    fn counted(
+        &mut self,
+        kind: LeafKind,
+        at: usize,
+        old: u64,
+        path: &Path,
+    ) -> Result<Option<u64>, Stop> {
+        if !self.mode.visits() {
+            return Ok(None);
+        }
+        let read = self.mode.reads().then_some(Scalar::Uint(old));
+        match self.visit(kind, None, at, read, path)? {
+            None => Ok(None),
+            Some(Scalar::Uint(n)) => Ok(Some(n)),
+            Some(Scalar::Int(n)) if n >= 0 => Ok(Some(n as u64)),
+            Some(_) => Err(self.refuse(ErrorKind::Value(LeafError::NotACount))),
+        }
+    }
+
+    /// A primitive leaf (`version`: the type's, for a `p_version` field).
+    fn leaf(&mut self, kind: Kind, version: Option<u32>, path: &Path) -> Result<(), Stop> {
+        let bits = scalar_bits(kind);
+        let at = self.pos();
+        let mut raw = match self.mode.reads() {
+            true => self.read(bits)?,
+            false => version.unwrap_or(0).into(),
+        };
+        if self.mode.visits() {
+            let old = self.mode.reads().then(|| scalar_of(kind, raw));
+            if let Some(v) = self.visit(LeafKind::Scalar(kind), version, at, old, path)? {
+                raw = match version {
+                    Some(expected) if self.mode == Mode::Given && !self.keep_versions => {
+                        if !scalar::same_integer(v, expected) {
+                            let fault = ErrorKind::VersionMismatch { given: v, expected };
+                            return Err(self.refuse(fault));
+                        }
+                        expected.into()
+                    }
+                    _ => match scalar_raw(kind, v, self.saturate) {
+                        Ok(raw) => raw,
+                        Err(e) => return Err(self.refuse(ErrorKind::Scalar(e))),
+                    },
+                };
+            }
+        }
+        self.write(raw, bits);
+        Ok(())
+    }
+}
+
+impl Pass for Visiting<'_> {
+    type Error = LeafError;
+    const RUNS: bool = false;
+    const ENCODES: bool = false;
+    const EDITS: bool = true;
+
+    fn fault(&mut self) -> Option<ErrorKind<LeafError>> {
+        self.fault.take()
+    }
+    /// The position errors and leaves are reported at: in the data read, if any.
+    fn pos(&self) -> usize {
+        if self.input.is_some() {
+            self.rpos
+        } else {
+            self.wpos
+        }
+    }
+    fn scalar(&mut self, kind: Kind, path: &Path) -> Result<(), Stop> {
+        self.leaf(kind, None, path)
+    }
+    fn version(&mut self, kind: Kind, version: u32, path: &Path) -> Result<(), Stop> {
+        self.leaf(kind, Some(version), path)
+    }
+    fn absent_version(&mut self, _: Kind, _: u32) -> Result<(), Stop> {
+        Ok(())
+    }
+    fn void(&mut self, bits: u32) -> Result<(), Stop> {
+        self.read(bits)?;
+        self.write(0, bits);
+        Ok(())
+    }
+    fn begin_struct(&mut self, _: u32) -> Result<(), Stop> {
+        Ok(())
+    }
+    fn field(&mut self, _: u32, _: &str) -> Result<bool, Stop> {
+        Ok(true)
+    }
+    fn end_field(&mut self) {}
+    fn end_struct(&mut self, _: &Layout<'_>, _: NodeId, _: usize) -> Result<(), Stop> {
+        Ok(())
+    }
+    fn tag(
+        &mut self,
+        _: &Layout<'_>,
+        id: NodeId,
+        bits: u8,
+        path: &Path,
+    ) -> Result<(u64, u64), Stop> {
+        let at = self.pos();
+        let old = self.read(bits.into())?;
+        let kind = LeafKind::Tag { bits, union: id };
+        let new = self.counted(kind, at, old, path)?;
+        let new = new.map_or(old, |n| n.min(u32::MAX.into()));
+        // Nothing read: the given tag is checked where the union starts.
+        Ok((if self.mode.reads() { old } else { new }, new))
+    }
+    fn variant(&mut self, tag: u64, _: u32, _: &str, at: At<'_>) -> Result<(), Stop> {
+        if let LeafKind::Tag { bits, .. } = at.kind {
+            self.write(tag, bits.into());
+        }
+        Ok(())
+    }
+    fn end_union(&mut self) -> Result<(), Stop> {
+        Ok(())
+    }
+    fn fixed(&mut self, len: u32, at: At<'_>) -> Result<(), Stop> {
+        if self.mode == Mode::Given {
+            let r = self.visit.fixed_len(at.path, len);
+            r.map_err(|halt| self.halt(halt))?;
+        }
+        Ok(())
+    }
+    fn length(&mut self, bits: u8, tail: bool) -> Result<Option<u64>, Stop> {
+        match self.mode.reads() && tail {
+            // Counted ahead by the loop.
+            true => Ok(None),
+            false => self.read(bits.into()).map(Some),
+        }
+    }
+    fn relength(&mut self, n: Option<u64>, at: At<'_>) -> Result<Option<u64>, Stop> {
+        let new = self.counted(at.kind, at.bit_offset, n.unwrap_or(0), at.path)?;
+        Ok(new.or(n))
+    }
+    fn prefix(&mut self, n: Option<u64>, bits: u8, _: At<'_>) -> Result<(), Stop> {
+        self.write(n.unwrap_or(0), bits.into());
+        Ok(())
+    }
+    fn more(&self, i: u64, n: Option<u64>) -> bool {
+        Some(i) < n
+    }
+    fn element(&mut self, _: u64) -> Result<(), Stop> {
+        Ok(())
+    }
+    fn end_element(&mut self) {}
+    fn end_array(&mut self, _: u64) -> Result<(), Stop> {
+        Ok(())
+    }
+    fn mode(&self) -> Mode {
+        self.mode
+    }
+    fn set_mode(&mut self, mode: Mode) {
+        self.mode = mode;
+    }
+    fn pass_over(&mut self, layout: &Layout<'_>, id: NodeId) -> bool {
+        let Some(k) = self.skip_below else {
+            return false;
+        };
+        let node = layout.node(id);
+        let Some(n) = node.fixed_leaves() else {
+            return false;
+        };
+        if self.mode == Mode::Data && !self.writing && self.leaves + n as usize <= k {
+            self.rpos += node.min_bits as usize;
+            self.leaves += n as usize;
+            return true;
+        }
+        false
+    }
+    fn read_pos(&self) -> usize {
+        self.rpos
+    }
+    fn read_left(&self) -> usize {
+        self.input
+            .map_or(0, |i| i.bit_len())
+            .saturating_sub(self.rpos)
+    }
+    fn seek_read(&mut self, pos: usize) {
+        self.rpos = pos;
+    }
+    fn run(&mut self, _: &[FlatItem], _: u32, _: u32) -> Ran<LeafError> {
+        Ran::Declined
+    }
+    fn elements(&mut self, _: Kind, _: Option<u64>, _: u32) -> Elements<LeafError> {
+        Ok(None)
+    }
+}
+
+/// Writes the low `bits` bits of `raw` at bit `pos` of `out` as a DroneCAN scalar (its bytes
+/// least significant first, the top bits last, each most significant bit first), a byte at a
+/// time into the two bytes it may span; the caller checks that `out` holds them.
+#[inline(never)]
+pub(crate) fn put(out: &mut [u8], mut pos: usize, raw: u64, bits: u32) {
+    let (mut value, end) = (raw, pos + bits as usize);
+    while pos < end {
+        let n = (end - pos).min(8) as u32;
+        let (i, s) = (pos / 8, (pos % 8) as u32);
+        let place = 16 - n - s;
+        let bits = ((value as u32) & ((1 << n) - 1)) << place;
+        let keep = !(((1u32 << n) - 1) << place);
+        out[i] = (u32::from(out[i]) & (keep >> 8)) as u8 | (bits >> 8) as u8;
+        if s + n > 8 {
+            out[i + 1] = (u32::from(out[i + 1]) & keep) as u8 | bits as u8;
+        }
+        value >>= 8;
+        pos += n as usize;
     }
 }
