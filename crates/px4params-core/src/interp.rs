@@ -360,7 +360,11 @@ impl<'l, P: Pass> Run<'l, P> {
                 let r = self.pass.fixed(len, at);
                 self.ok(r)?;
                 if P::EDITS {
-                    self.resized(elem, len.into(), len.into(), tao)?;
+                    for i in 0..len {
+                        self.path.push(Step::Index(i));
+                        self.node(elem, last(tao, i + 1 == len))?;
+                        self.path.pop();
+                    }
                 } else {
                     array = Some((elem, Some(len.into()), len, tao));
                 }
@@ -374,7 +378,7 @@ impl<'l, P: Pass> Run<'l, P> {
                 // prefix and takes the remaining whole bytes (in the value read, and in the
                 // value written, which differ in their last element when a length changes).
                 let rtail = tail_optimized(layout, elem, tao.read());
-                let wtail = match P::EDITS {
+                let wtail = match P::EDITS && tao.read() != tao.write() {
                     true => tail_optimized(layout, elem, tao.write()),
                     false => rtail,
                 };
@@ -558,6 +562,7 @@ impl<'l, P: Pass> Run<'l, P> {
     /// Editing, a dynamic array's elements: the first `new` of those read (`old`) written,
     /// the rest read and passed over, and default ones appended (`tao`: for the elements of
     /// the array, the last one read and the last one written).
+    #[inline(always)]
     fn resized(&mut self, elem: NodeId, old: u64, new: u64, tao: Tao) -> Result<(), Stop> {
         let mode = self.pass.mode();
         for i in 0..old.max(new) {
