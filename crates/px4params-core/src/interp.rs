@@ -49,7 +49,7 @@ impl Tao {
     /// For the elements of an array: kept where the array is not itself tail-optimized
     /// (`read`, `write`).
     fn ends(self, read: bool, write: bool) -> Tao {
-        Tao(self.0 & (u8::from(read) * Self::READ | u8::from(write) * Self::WRITE))
+        Tao(self.0 & ((u8::from(read) * Self::READ) | (u8::from(write) * Self::WRITE)))
     }
 }
 
