@@ -6,7 +6,6 @@
 //! longer than one frame is preceded by its CRC-16-CCITT-FALSE (little-endian), seeded with
 //! [`crate::crc::transfer_crc_seed`].
 
-use core::cmp::Ordering;
 use core::fmt;
 
 use crate::crc::{crc16, crc16_pieces};
@@ -136,15 +135,19 @@ impl Iterator for Frames<'_> {
         }
         // Every byte written once, zeros after the tail (not a zeroed array written over:
         // firmware then calls no `memset`).
-        let data = core::array::from_fn(|i| match i.cmp(&take) {
-            Ordering::Less => self.stream_byte(self.pos + i),
-            Ordering::Equal => tail,
-            Ordering::Greater => 0,
-        });
+        let pos = self.pos;
         self.pos += take;
         self.index += 1;
         Some(Frame {
-            data,
+            data: core::array::from_fn(|i| {
+                if i < take {
+                    self.stream_byte(pos + i)
+                } else if i == take {
+                    tail
+                } else {
+                    0
+                }
+            }),
             len: (take + 1) as u8,
         })
     }
