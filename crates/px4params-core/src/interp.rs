@@ -414,7 +414,8 @@ impl<'l, P: Pass> Run<'l, P> {
                 let r = self.pass.prefix(new, if wtail { 0 } else { len_bits }, at);
                 self.ok(r)?;
                 if P::EDITS {
-                    let (old, new) = (n.unwrap_or(0), new.unwrap_or(0));
+                    // Both are checked against the maximum: 32 bits hold them.
+                    let (old, new) = (n.unwrap_or(0) as u32, new.unwrap_or(0) as u32);
                     self.resized(elem, old, new, tao.ends(!rtail, !wtail))?;
                 } else {
                     array = Some((elem, n, max, if tail { Tao::NONE } else { tao }));
@@ -534,16 +535,17 @@ impl<'l, P: Pass> Run<'l, P> {
         };
         let used = match (present, role) {
             (true, role) => {
-                match role {
-                    Role::Version(v) if is_scalar(kind) => {
-                        if self.depth >= MAX_DEPTH {
-                            return Err(self.fail(ErrorKind::TooDeep));
-                        }
-                        let r = self.pass.version(kind, v, &self.path);
-                        self.ok(r)?;
+                if !is_scalar(kind) {
+                    self.node(field.node, tao)?;
+                } else {
+                    if self.depth >= MAX_DEPTH {
+                        return Err(self.fail(ErrorKind::TooDeep));
                     }
-                    _ if is_scalar(kind) => self.scalar(kind)?,
-                    _ => self.node(field.node, tao)?,
+                    let r = match role {
+                        Role::Version(v) => self.pass.version(kind, v, &self.path),
+                        _ => self.pass.scalar(kind, &self.path),
+                    };
+                    self.ok(r)?;
                 }
                 self.pass.end_field();
                 1
@@ -563,7 +565,7 @@ impl<'l, P: Pass> Run<'l, P> {
     /// the rest read and passed over, and default ones appended (`tao`: for the elements of
     /// the array, the last one read and the last one written).
     #[inline(always)]
-    fn resized(&mut self, elem: NodeId, old: u64, new: u64, tao: Tao) -> Result<(), Stop> {
+    fn resized(&mut self, elem: NodeId, old: u32, new: u32, tao: Tao) -> Result<(), Stop> {
         let mode = self.pass.mode();
         for i in 0..old.max(new) {
             let part = match mode {
@@ -573,7 +575,7 @@ impl<'l, P: Pass> Run<'l, P> {
             };
             let ends = tao.ends(i + 1 == old, i + 1 == new);
             self.pass.set_mode(part);
-            self.path.push(Step::Index(i as u32));
+            self.path.push(Step::Index(i));
             self.node(elem, ends)?;
             self.path.pop();
         }
@@ -1399,6 +1401,8 @@ pub(crate) struct Visiting<'w> {
     mode: Mode,
     visit: &'w mut dyn Visit,
     fault: Option<ErrorKind<LeafError>>,
+    /// The visit refused a leaf: its [`Visit::refusal`] is the fault (asked for only then).
+    refused: bool,
     /// The output is too small: the loop goes on without writing, to tell how small.
     overflow: bool,
 }
@@ -1463,6 +1467,7 @@ pub(crate) fn visit(
         mode,
         visit,
         fault: None,
+        refused: false,
         overflow: false,
     };
     let mut run = Run::new(layout, pass);
@@ -1520,10 +1525,8 @@ impl Visiting<'_> {
 
     #[cold]
     fn halt(&mut self, halt: Halt) -> Stop {
-        self.fault = match halt {
-            Halt::Found => None,
-            Halt::Refused => Some(self.visit.refusal()),
-        };
+        // Found: no fault (each is taken when the loop stops), so the loop ends without error.
+        self.refused = halt == Halt::Refused;
         Stop
     }
 
@@ -1541,16 +1544,17 @@ impl Visiting<'_> {
         }
         // The value's bytes, least significant first (its top bits last), each read most
         // significant bit first: a byte at a time, from the pair of bytes it may span.
-        let (mut raw, mut shift) = (0, 0);
+        // (Gathered as bytes: a 64-bit shift by a variable amount is a call on 32-bit targets.)
+        let (mut bytes, mut k) = ([0u8; 8], 0);
         while self.rpos < needed {
             let n = (needed - self.rpos).min(8) as u32;
             let (i, s) = (self.rpos / 8, (self.rpos % 8) as u32);
             let window = u32::from(input.pair(i)) << s;
-            raw |= u64::from((window >> (16 - n)) & ((1 << n) - 1)) << shift;
-            shift += 8;
+            bytes[k & 7] = ((window >> (16 - n)) & ((1 << n) - 1)) as u8;
+            k += 1;
             self.rpos += n as usize;
         }
-        Ok(raw)
+        Ok(u64::from_le_bytes(bytes))
     }
 
     fn write(&mut self, raw: u64, bits: u32) {
@@ -1589,22 +1593,16 @@ impl Visiting<'_> {
     }
 
     /// A union tag or array length (`kind`, at `at`, `old` where read) visited before it is
-    /// checked (a bad one can be looked at); the count the visit gives, if any.
-    fn counted(
-        &mut self,
-        kind: LeafKind,
-        at: usize,
-        old: u64,
-        path: &Path,
-    ) -> Result<Option<u64>, Stop> {
+    /// checked (a bad one can be looked at); the count the visit gives, or else `old`.
+    fn counted(&mut self, kind: LeafKind, at: usize, old: u64, path: &Path) -> Result<u64, Stop> {
         if !self.mode.visits() {
-            return Ok(None);
+            return Ok(old);
         }
         let read = self.mode.reads().then_some(Scalar::Uint(old));
         match self.visit(kind, None, at, read, path)? {
-            None => Ok(None),
-            Some(Scalar::Uint(n)) => Ok(Some(n)),
-            Some(Scalar::Int(n)) if n >= 0 => Ok(Some(n as u64)),
+            None => Ok(old),
+            Some(Scalar::Uint(n)) => Ok(n),
+            Some(Scalar::Int(n)) if n >= 0 => Ok(n as u64),
             Some(_) => Err(self.refuse(ErrorKind::Value(LeafError::NotACount))),
         }
     }
@@ -1647,7 +1645,10 @@ impl Pass for Visiting<'_> {
     const EDITS: bool = true;
 
     fn fault(&mut self) -> Option<ErrorKind<LeafError>> {
-        self.fault.take()
+        match core::mem::take(&mut self.refused) {
+            true => Some(self.visit.refusal()),
+            false => self.fault.take(),
+        }
     }
     /// The position errors and leaves are reported at: in the data read, if any.
     fn pos(&self) -> usize {
@@ -1691,8 +1692,8 @@ impl Pass for Visiting<'_> {
         let at = self.pos();
         let old = self.read(bits.into())?;
         let kind = LeafKind::Tag { bits, union: id };
-        let new = self.counted(kind, at, old, path)?;
-        let new = new.map_or(old, |n| n.min(u32::MAX.into()));
+        // (A tag read too large for 32 bits is refused as read, before this one is used.)
+        let new = self.counted(kind, at, old, path)?.min(u32::MAX.into());
         // Nothing read: the given tag is checked where the union starts.
         Ok((if self.mode.reads() { old } else { new }, new))
     }
@@ -1720,8 +1721,9 @@ impl Pass for Visiting<'_> {
         }
     }
     fn relength(&mut self, n: Option<u64>, at: At<'_>) -> Result<Option<u64>, Stop> {
+        // The loop has counted a tail array read: `n` is always there.
         let new = self.counted(at.kind, at.bit_offset, n.unwrap_or(0), at.path)?;
-        Ok(new.or(n))
+        Ok(Some(new))
     }
     fn prefix(&mut self, n: Option<u64>, bits: u8, _: At<'_>) -> Result<(), Stop> {
         self.write(n.unwrap_or(0), bits.into());
