@@ -1570,6 +1570,7 @@ impl Visiting<'_> {
         self.wpos = end;
     }
 
+    #[inline(always)]
     fn visit(
         &mut self,
         kind: LeafKind,
