@@ -810,3 +810,82 @@ fn the_loop_words_each_rule() {
     assert_eq!(decoded::<HostPlans>(&layout, root, &data), want);
     assert_eq!(decoded::<NoPlans>(&layout, root, &data), want);
 }
+
+/// A new array length rewrites the value (store encoding, no tail array optimization): the
+/// first elements kept, appended ones zero, dropped ones gone, and the field after the array
+/// kept. Bytes worked out by hand from the DroneCAN rules: `uint8[<=3] a` has a 2-bit length
+/// prefix, then its elements; `uint8 b` follows; the last byte is padded with zeros.
+#[test]
+fn set_leaf_length_appends_zeros_and_keeps_what_follows() {
+    let mut l = OwnedLayout::default();
+    let u8_ = l.uint(8, px4params_core::Cast::Saturated).unwrap();
+    let a = l.dyn_array(u8_, 3).unwrap();
+    let root = l
+        .structure(&[
+            ("a", a, px4params_core::layout::Role::Data),
+            ("b", u8_, px4params_core::layout::Role::Data),
+        ])
+        .unwrap();
+    let layout = l.as_layout();
+    // a = [7], b = 9: 01 00000111 00001001
+    let bytes = [0x41, 0xC2, 0x40];
+    assert_eq!(
+        enc(&l, root, &[1, 7, 9].map(Scalar::Uint), false),
+        bytes,
+        "the value set out from"
+    );
+    let opts = EncodeOptions::default();
+    let cases: [(u64, &[u8]); 4] = [
+        // a = [7, 0, 0]: 11 00000111 00000000 00000000 00001001
+        (3, &[0xC1, 0xC0, 0x00, 0x02, 0x40]),
+        // a = [7, 0]: 10 00000111 00000000 00001001
+        (2, &[0x81, 0xC0, 0x02, 0x40]),
+        // a = []: 00 00001001
+        (0, &[0x02, 0x40]),
+        // unchanged
+        (1, &bytes),
+    ];
+    for (len, expected) in cases {
+        let mut out = [0xA5u8; 8];
+        let n = set_leaf(
+            &layout,
+            root,
+            &bytes[..],
+            Target::Index(0),
+            Scalar::Uint(len),
+            &mut out,
+            opts,
+        )
+        .unwrap();
+        assert_eq!(&out[..n], expected, "a._len = {len}");
+    }
+    // And from the longest value down: the elements dropped are read past, b kept.
+    let long = [0xC1, 0xC0, 0x00, 0x02, 0x40];
+    let mut out = [0xA5u8; 8];
+    let n = set_leaf(
+        &layout,
+        root,
+        &long[..],
+        Target::Index(0),
+        Scalar::Uint(1),
+        &mut out,
+        opts,
+    )
+    .unwrap();
+    assert_eq!(&out[..n], bytes);
+    // One past the maximum: refused, worded at the length.
+    let err = set_leaf(
+        &layout,
+        root,
+        &bytes[..],
+        Target::Index(0),
+        Scalar::Uint(4),
+        &mut out,
+        opts,
+    )
+    .unwrap_err();
+    assert_eq!(
+        err.display(&layout).to_string(),
+        "a: value 4 is out of range (expected 0 to 3)"
+    );
+}
