@@ -889,3 +889,50 @@ fn set_leaf_length_appends_zeros_and_keeps_what_follows() {
         "a: value 4 is out of range (expected 0 to 3)"
     );
 }
+
+/// A type's default (what a new instance starts from) holds the type's version in
+/// `p_version`, the first union variant and empty arrays; the stored-version check accepts it
+/// and refuses another version. Bytes by hand: `p_version` (uint4) = 3 is 0011, the 1-bit tag
+/// 0, variant `a` (uint8) zero, the 2-bit length of `uint8[<=3]` zero: 15 bits, one pad bit.
+#[test]
+fn a_default_holds_the_types_version_and_the_check_refuses_another() {
+    use px4params_core::codec::check_stored;
+    use px4params_core::layout::Role;
+    let mut l = OwnedLayout::default();
+    let u4 = l.uint(4, px4params_core::Cast::Saturated).unwrap();
+    let u8_ = l.uint(8, px4params_core::Cast::Saturated).unwrap();
+    let choice = l.union(&[("a", u8_), ("b", u4)]).unwrap();
+    let list = l.dyn_array(u8_, 3).unwrap();
+    let root = l
+        .structure(&[
+            ("p_version", u4, Role::Version(3)),
+            ("choice", choice, Role::Data),
+            ("list", list, Role::Data),
+        ])
+        .unwrap();
+    let layout = l.as_layout();
+    let mut out = [0xA5u8; 8];
+    let n = encode_default(&layout, root, &mut out, false).unwrap();
+    assert_eq!(&out[..n], [0x30, 0x00]);
+    check_stored(&layout, root, &out[..n]).unwrap();
+    let err = check_stored(&layout, root, &[0x20, 0x00]).unwrap_err();
+    assert_eq!(
+        (err.bit_offset, err.path.steps().count()),
+        (4, 1),
+        "{err:?}"
+    );
+    assert_eq!(
+        err.display(&layout).to_string(),
+        "p_version: p_version is set automatically; got 2, the type's version is 3"
+    );
+    assert!(
+        matches!(
+            err.kind,
+            ErrorKind::VersionMismatch {
+                given: Scalar::Uint(2),
+                expected: 3
+            }
+        ),
+        "{err:?}"
+    );
+}
