@@ -17,22 +17,25 @@ pub enum Step {
     Index(u32),
 }
 
-const INDEX_FLAG: u32 = 1 << 31;
+// The flag marks fields, not indices: an unused step then holds the flag alone, so a new
+// path is not all zero bytes and is made by a few stores, not a `memset` call (firmware
+// then links no `memset`; see docs/firmware.md#size).
+const FIELD_FLAG: u32 = 1 << 31;
 
 /// A step in the 32 bits a [`Path`] keeps it in.
 pub(crate) fn pack_step(step: Step) -> u32 {
     match step {
-        Step::Field(f) => f & !INDEX_FLAG,
-        Step::Index(i) => (i & !INDEX_FLAG) | INDEX_FLAG,
+        Step::Field(f) => (f & !FIELD_FLAG) | FIELD_FLAG,
+        Step::Index(i) => i & !FIELD_FLAG,
     }
 }
 
 /// The position of a value inside a type, e.g. `bus.i2c.address` or `cells[3]`.
 ///
-/// Steps are packed in 32 bits each (the top bit tells an array index from a field) so that
+/// Steps are packed in 32 bits each (the top bit tells a field from an array index) so that
 /// errors stay small enough to return by value.
 // Equality compares the steps the path holds (up to `depth`), not what popped steps left behind.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy)]
 pub struct Path {
     steps: [u32; MAX_PATH_DEPTH],
     depth: u32,
@@ -49,9 +52,39 @@ impl PartialEq for Path {
 
 impl Eq for Path {}
 
+// The steps the path holds and its depth: what popped steps left behind, or a new path's
+// unused steps, are not part of it.
+impl fmt::Debug for Path {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Path")
+            .field("steps", &DebugSteps(self))
+            .field("depth", &self.depth)
+            .finish()
+    }
+}
+
+struct DebugSteps<'a>(&'a Path);
+
+impl fmt::Debug for DebugSteps<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_list().entries(self.0.steps()).finish()
+    }
+}
+
+impl Default for Path {
+    /// The empty path (the value itself).
+    #[inline]
+    fn default() -> Self {
+        Self {
+            steps: [FIELD_FLAG; MAX_PATH_DEPTH],
+            depth: 0,
+        }
+    }
+}
+
 impl Path {
     /// A path `depth` steps deep holding `steps` (packed by [`pack_step`]; those beyond
-    /// `depth` must be zero).
+    /// `depth` are not read).
     #[inline]
     pub(crate) fn from_packed(depth: u32, steps: [u32; MAX_PATH_DEPTH]) -> Self {
         Self { steps, depth }
@@ -77,10 +110,10 @@ impl Path {
         self.steps[..(self.depth as usize).min(MAX_PATH_DEPTH)]
             .iter()
             .map(|&s| {
-                if s & INDEX_FLAG != 0 {
-                    Step::Index(s & !INDEX_FLAG)
+                if s & FIELD_FLAG != 0 {
+                    Step::Field(s & !FIELD_FLAG)
                 } else {
-                    Step::Field(s)
+                    Step::Index(s)
                 }
             })
     }
@@ -342,5 +375,102 @@ impl<E: fmt::Display> fmt::Display for ErrorKind<E> {
             Self::TooDeep => f.write_str("type nests too deeply"),
             Self::Value(e) => e.fmt(f),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::format;
+    use std::string::ToString;
+    use std::vec::Vec;
+
+    fn path(steps: &[Step]) -> Path {
+        let mut path = Path::default();
+        for &step in steps {
+            path.push(step);
+        }
+        path
+    }
+
+    #[test]
+    fn steps_come_back_as_pushed_at_the_edges_of_31_bits() {
+        let edges = [0, 1, 0x7FFF_FFFE, 0x7FFF_FFFF];
+        let steps: Vec<Step> = edges
+            .iter()
+            .flat_map(|&n| [Step::Field(n), Step::Index(n)])
+            .collect();
+        let held = path(&steps);
+        assert_eq!(held.steps().collect::<Vec<_>>(), steps);
+        // The top bit is the kind's: a 32-bit value keeps its low 31 bits, as before.
+        let cut = path(&[Step::Field(0x8000_0005), Step::Index(0xFFFF_FFFF)]);
+        let kept = [Step::Field(5), Step::Index(0x7FFF_FFFF)];
+        assert_eq!(cut.steps().collect::<Vec<_>>(), kept);
+    }
+
+    #[test]
+    fn a_new_path_is_empty_and_equal_to_a_packed_empty_one() {
+        let new = Path::default();
+        assert!(new.is_empty());
+        assert_eq!(new.last(), None);
+        assert_eq!(new.steps().count(), 0);
+        assert_eq!(new, Path::from_packed(0, [0; MAX_PATH_DEPTH]));
+        // A field and an index 0 differ, pushed or packed.
+        let field = path(&[Step::Field(0)]);
+        let index = path(&[Step::Index(0)]);
+        assert_ne!(field, index);
+        let mut packed = [0; MAX_PATH_DEPTH];
+        packed[0] = pack_step(Step::Index(0));
+        assert_eq!(Path::from_packed(1, packed), index);
+        packed[0] = pack_step(Step::Field(0));
+        assert_eq!(Path::from_packed(1, packed), field);
+    }
+
+    #[test]
+    fn popped_steps_are_not_part_of_a_path() {
+        let mut popped = path(&[Step::Field(3), Step::Index(9)]);
+        popped.pop();
+        assert_eq!(popped, path(&[Step::Field(3)]));
+        assert_eq!(popped.last(), Some(Step::Field(3)));
+        assert_eq!(
+            format!("{popped:?}"),
+            "Path { steps: [Field(3)], depth: 1 }"
+        );
+    }
+
+    #[test]
+    fn a_path_deeper_than_it_holds_keeps_its_depth_and_is_shown_cut() {
+        let layout = Layout {
+            nodes: &[],
+            fields: &[crate::layout::Field {
+                name_start: 0,
+                name_len: 1,
+                node: 0,
+                role: crate::layout::Role::Data,
+            }],
+            names: "x",
+            segments: &[],
+            flat: &[],
+            straight: &[],
+        };
+        let mut deep = Path::default();
+        for _ in 0..MAX_PATH_DEPTH + 2 {
+            deep.push(Step::Field(0));
+        }
+        assert_eq!(deep.last(), None);
+        assert_eq!(deep.steps().count(), MAX_PATH_DEPTH);
+        assert_eq!(
+            deep.display(&layout).to_string(),
+            "x.x.x.x.x.x.x.x.x.x.x.x..."
+        );
+        deep.pop();
+        deep.pop();
+        assert_eq!(deep.last(), Some(Step::Field(0)));
+        deep.pop();
+        deep.push(Step::Index(7));
+        assert_eq!(
+            deep.display(&layout).to_string(),
+            "x.x.x.x.x.x.x.x.x.x.x[7]"
+        );
     }
 }

@@ -404,17 +404,26 @@ fn seek<P: Pieces + ?Sized>(pieces: &P, from: Place, start: usize, byte: usize) 
     (Place { index, skip }, start)
 }
 
-/// The window of [`BitRead::read_bits`]: stream bytes from bit `start_bit` (a byte boundary),
-/// left-aligned in `word` (zero after the `held` ones), and where the stream goes on after
-/// them (`next`, in a piece that starts at stream byte `next_start`). Once filled, it holds at
-/// least [`REFILLED`] bytes or all there are, so its top 64 bits are the stream's.
+/// The window of [`BitRead::read_bits`]: the bytes it holds ([`Held`]; none until the first
+/// read at an offset, or after a byte read from firmware's [`BitRead::byte`]) and where the
+/// stream goes on after them (`next`, in a piece that starts at stream byte `next_start`).
+// The held bytes are an `Option` so that an empty window is made by four stores (the tag and
+// the place), not by clearing a 48-byte struct (a `memset` call in firmware).
 #[derive(Clone, Copy, Debug)]
 struct Window {
-    start_bit: usize,
-    held: usize,
-    word: u128,
+    held: Option<Held>,
     next: Place,
     next_start: usize,
+}
+
+/// Stream bytes from bit `start_bit` (a byte boundary), left-aligned in `word` (zero after the
+/// `len` ones). Once filled, a window holds at least [`REFILLED`] bytes or all there are, so
+/// its top 64 bits are the stream's.
+#[derive(Clone, Copy, Debug)]
+struct Held {
+    start_bit: usize,
+    len: usize,
+    word: u128,
 }
 
 /// Bytes a filled window holds unless the stream ends first: enough for any read of up to 64
@@ -422,48 +431,47 @@ struct Window {
 const REFILLED: usize = 9;
 
 impl Window {
-    /// Nothing yet: every read misses it (it holds no bytes).
-    const EMPTY: Self = Self {
-        start_bit: 0,
-        held: 0,
-        word: 0,
-        next: Place { index: 0, skip: 0 },
-        next_start: 0,
-    };
-
     /// `n` bits at `offset`, if they are among the top 64 of a filled window.
     #[inline(always)]
     fn read(&self, offset: usize, n: u32) -> Option<u64> {
+        let held = self.held.as_ref()?;
         // Offsets behind the window wrap around to huge ones.
-        let local = offset.wrapping_sub(self.start_bit);
-        (local <= (64 - n) as usize && self.held > 0)
-            .then(|| (((self.word >> 64) as u64) << local) >> (64 - n))
+        let local = offset.wrapping_sub(held.start_bit);
+        (local <= (64 - n) as usize && held.len > 0)
+            .then(|| (((held.word >> 64) as u64) << local) >> (64 - n))
     }
 
     /// Moves the window to the byte holding bit `offset` and reads `n` bits there. Keeps the
     /// bytes it holds from that byte on and appends from the pieces after them.
     fn refill_read<P: Pieces + ?Sized>(&mut self, pieces: &P, offset: usize, n: u32) -> u64 {
         let byte = offset / 8;
-        let drop = byte.wrapping_sub(self.start_bit / 8);
-        if self.held > 0 && drop <= self.held {
-            self.word = self.word.checked_shl(8 * drop as u32).unwrap_or(0);
-            self.held -= drop;
-        } else {
+        let kept = self.held.and_then(|held| {
+            let drop = byte.wrapping_sub(held.start_bit / 8);
+            (held.len > 0 && drop <= held.len).then(|| Held {
+                start_bit: byte * 8,
+                len: held.len - drop,
+                word: held.word.checked_shl(8 * drop as u32).unwrap_or(0),
+            })
+        });
+        let mut held = kept.unwrap_or_else(|| {
             (self.next, self.next_start) = seek(pieces, self.next, self.next_start, byte);
-            self.word = 0;
-            self.held = 0;
-        }
-        self.start_bit = byte * 8;
-        while self.held < REFILLED && self.next.index < pieces.count() {
+            Held {
+                start_bit: byte * 8,
+                len: 0,
+                word: 0,
+            }
+        });
+        while held.len < REFILLED && self.next.index < pieces.count() {
             let chunk = pieces.chunk(self.next.index, self.next.skip);
-            self.word |= (u128::from(chunk.word) << 64) >> (8 * self.held);
-            self.held += chunk.len;
+            held.word |= (u128::from(chunk.word) << 64) >> (8 * held.len);
+            held.len += chunk.len;
             if let Some(length) = self.next.pass(&chunk) {
                 self.next_start += length;
             }
         }
+        self.held = Some(held);
         // Up to 71 bits from the top: the window holds 9 bytes or all there are.
-        ((self.word << (offset % 8)) >> (128 - n)) as u64
+        ((held.word << (offset % 8)) >> (128 - n)) as u64
     }
 }
 
@@ -484,7 +492,13 @@ impl<'p, P: Pieces + ?Sized> Scattered<'p, P> {
         Self {
             pieces,
             bytes: pieces.total_len(),
-            window: Cell::new(Window::EMPTY),
+            // Nothing yet: every read misses it. Written out field by field: as a constant the
+            // whole struct would be cleared (its padding too), a `memset` call in firmware.
+            window: Cell::new(Window {
+                held: None,
+                next: Place::default(),
+                next_start: 0,
+            }),
         }
     }
 
@@ -550,10 +564,9 @@ impl<'p, P: Pieces + ?Sized> BitRead for Scattered<'p, P> {
             if let Some(&byte) = piece.get(index - start) {
                 let next = Place { index: i, skip: 0 };
                 self.window.set(Window {
-                    held: 0,
+                    held: None,
                     next,
                     next_start: start,
-                    ..w
                 });
                 return byte;
             }

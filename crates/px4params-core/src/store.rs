@@ -527,8 +527,7 @@ where
     pub fn set_type_default(&mut self, layout: &Layout<'_>, param: u32, data: &[u8]) -> Result<()> {
         let def = *self.def_of(param)?;
         check_encoded(layout, def.root, data)?;
-        self.bytes_mut(def.first_byte as usize, data.len())
-            .copy_from_slice(data);
+        self.write_bytes(def.first_byte as usize, data);
         self.with_slot(def.first_slot as usize, |s| {
             s.default_len = data.len() as u16
         });
@@ -1131,6 +1130,14 @@ where
             .unwrap_or_default()
     }
 
+    /// Writes `data` at `start` (out of range: nothing; a copy into [`Store::bytes_mut`]'s
+    /// empty slice would panic on the lengths).
+    fn write_bytes(&mut self, start: usize, data: &[u8]) {
+        if let Some(to) = self.bytes.as_mut().get_mut(start..start + data.len()) {
+            to.copy_from_slice(data);
+        }
+    }
+
     fn present_slot(&self, def: &ParamDef, instance: u16) -> Result<usize> {
         let index = slot_index(def, instance)?;
         if !self.slot_at(index).present() {
@@ -1175,8 +1182,7 @@ where
     }
 
     fn stage(&mut self, data: &[u8]) {
-        self.bytes_mut(self.scratch, data.len())
-            .copy_from_slice(data);
+        self.write_bytes(self.scratch, data);
     }
 
     /// Moves the staged `len` bytes into an instance's value or default (and into its value

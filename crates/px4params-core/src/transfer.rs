@@ -123,25 +123,31 @@ impl Iterator for Frames<'_> {
             return None;
         }
         let take = (total - self.pos).min(self.max - 1);
-        let mut data = [0u8; 64];
-        for (i, slot) in data[..take].iter_mut().enumerate() {
-            *slot = self.stream_byte(self.pos + i);
-        }
-        self.pos += take;
         let mut tail = self.transfer_id;
         if self.index == 0 {
             tail |= START;
         }
-        if self.pos >= total {
+        if self.pos + take >= total {
             tail |= END;
         }
         if self.index % 2 == 1 {
             tail |= TOGGLE;
         }
-        data[take] = tail;
+        // Every byte written once, zeros after the tail (not a zeroed array written over:
+        // firmware then calls no `memset`).
+        let pos = self.pos;
+        self.pos += take;
         self.index += 1;
         Some(Frame {
-            data,
+            data: core::array::from_fn(|i| {
+                if i < take {
+                    self.stream_byte(pos + i)
+                } else if i == take {
+                    tail
+                } else {
+                    0
+                }
+            }),
             len: (take + 1) as u8,
         })
     }
@@ -410,6 +416,30 @@ mod tests {
         assert_eq!(f[1], [6, 7, 8, 0x65]);
         let crc = crc16(0x1234, &[1, 2, 3, 4, 5, 6, 7, 8]);
         assert_eq!(f[0][..2], crc.to_le_bytes());
+    }
+
+    /// A frame's bytes after its tail byte are zero, so that frames with the same bytes are
+    /// equal (`Frame` compares all 64).
+    #[test]
+    fn a_frame_is_its_bytes_then_zeros() {
+        for canfd in [false, true] {
+            for len in [0usize, 1, 7, 8, 20, 62, 63, 64, 130] {
+                let payload: Vec<u8> = (0..len).map(|i| (i as u8) | 0x80).collect();
+                let mut sent = 0;
+                for frame in frames(&payload, 0x1234, 9, canfd) {
+                    let n = usize::from(frame.len);
+                    assert_eq!(frame.as_bytes(), &frame.data[..n]);
+                    assert!(frame.data[n..].iter().all(|&b| b == 0), "{len} {canfd}");
+                    let again = Frame {
+                        data: core::array::from_fn(|i| if i < n { frame.data[i] } else { 0 }),
+                        len: frame.len,
+                    };
+                    assert_eq!(frame, again);
+                    sent += n;
+                }
+                assert!(sent > len);
+            }
+        }
     }
 
     #[test]
