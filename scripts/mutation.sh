@@ -350,6 +350,25 @@ TARGETS+=(
 )
 RUST_ISSUE40_TESTS="$RUST_ISSUE40_TESTS mutants_store_tables mutants_store_translated"
 
+# Rust, issue 40 (mutrust2, third round): firmware's code. A firmware build (feature `compact`:
+# plan.rs's NoPlans) runs code a host build never reaches: crc.rs's CRC-16 half a byte at a
+# time (crc16's and crc16_pieces' `SLICES == 0` branches, crc16_nibble, the nibble table,
+# crc16_shifted that fills it) and store.rs's set_leaf_copied (set_leaf_at without leaf
+# tables) and the `!Active::TABLES` turns into it. These targets build every test program with
+# --features=compact as well as the target's alloc (the option goes to every cargo command);
+# the mutants are those of that code only (one --re each, by line as of this commit, or by
+# function), so that the host's code, dead in this build, is not counted again:
+#   MUTATION_BUDGET=1200 MUTATION_RUST_TIMEOUT=60 MUTATION_RUST_ARGS="--re crc.rs:(7[3-6]|11[01]|12[7-9]|13[0-2]|16[7-9]|17[6-9]|18[0-3]):" \
+#     bash scripts/mutation.sh rust-compact-crc
+#   MUTATION_BUDGET=1200 MUTATION_RUST_TIMEOUT=60 MUTATION_RUST_ARGS="--re set_leaf_copied --re delete\s!\sin\sStore<D,\sS,\sB,\sT>::read$ --re store.rs:749:12:" \
+#     bash scripts/mutation.sh rust-compact-store
+# (cargo-mutants 27.1.0 adds the file's "delete field" mutants whatever --re says.)
+TARGETS+=(
+  "rust-compact-crc|crates/px4params-core/src/crc.rs|--features=compact --lib --test=crc --test=transfer --test=mutants_transfer --test=file"
+  "rust-compact-store|crates/px4params-core/src/store.rs|--features=compact --test=store --test=mutants_store --test=table --test=mutants_store_tables --test=mutants_store_saturate"
+)
+RUST_ISSUE40_TESTS="$RUST_ISSUE40_TESTS mutants_store_saturate"
+
 if [ "$#" -eq 0 ]; then
   set -- can_transfer dronecan_params health links gui migrate vehicle store rust-core rust-ffi
 fi
