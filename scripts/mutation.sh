@@ -368,6 +368,9 @@ TARGETS+=(
   "rust-compact-store|crates/px4params-core/src/store.rs|--features=compact --test=store --test=mutants_store --test=table --test=mutants_store_tables --test=mutants_store_set_from --test=mutants_store_saturate"
 )
 RUST_ISSUE40_TESTS="$RUST_ISSUE40_TESTS mutants_store_saturate"
+# file.rs (this entry replaces the one above): its tests and those written for its survivors.
+TARGETS+=("rust-file|crates/px4params-core/src/file.rs|--test=file --test=mutants_file")
+RUST_ISSUE40_TESTS="$RUST_ISSUE40_TESTS mutants_file"
 
 if [ "$#" -eq 0 ]; then
   set -- can_transfer dronecan_params health links gui migrate vehicle store rust-core rust-ffi
