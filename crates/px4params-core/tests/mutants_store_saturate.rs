@@ -40,7 +40,15 @@ fn set(
 ) -> Result<(), String> {
     let view = l.as_layout();
     store
-        .set_leaf(&view, SENSOR, 1, which, Target::Path(field), value, saturate)
+        .set_leaf(
+            &view,
+            SENSOR,
+            1,
+            which,
+            Target::Path(field),
+            value,
+            saturate,
+        )
         .map_err(|e| e.display(&view).to_string())
 }
 
@@ -78,22 +86,66 @@ fn a_leaf_out_of_range_is_refused_unless_saturated() {
 fn a_saturated_leaf_is_clamped_to_its_fields_bound() {
     // address 200 -> 127: 0001 1111111 1 11101 = 1F FE 80.
     let (l, mut store) = fixture();
-    set(&l, &mut store, Which::Value, "address", Scalar::Uint(200), true).unwrap();
-    assert_eq!(store.get(SENSOR, 1, Which::Value).unwrap(), [0x1F, 0xFE, 0x80]);
+    set(
+        &l,
+        &mut store,
+        Which::Value,
+        "address",
+        Scalar::Uint(200),
+        true,
+    )
+    .unwrap();
+    assert_eq!(
+        store.get(SENSOR, 1, Which::Value).unwrap(),
+        [0x1F, 0xFE, 0x80]
+    );
     assert_eq!(store.get(SENSOR, 1, Which::Default).unwrap(), DEFAULT);
     // offset -20 -> -16: 0001 1000101 1 10000 = 18 B8 00, in the default too.
     let (l, mut store) = fixture();
-    set(&l, &mut store, Which::Default, "offset", Scalar::Int(-20), true).unwrap();
-    assert_eq!(store.get(SENSOR, 1, Which::Default).unwrap(), [0x18, 0xB8, 0x00]);
+    set(
+        &l,
+        &mut store,
+        Which::Default,
+        "offset",
+        Scalar::Int(-20),
+        true,
+    )
+    .unwrap();
+    assert_eq!(
+        store.get(SENSOR, 1, Which::Default).unwrap(),
+        [0x18, 0xB8, 0x00]
+    );
     // offset 40 -> 15: 0001 1000101 1 01111 = 18 B7 80.
     let (l, mut store) = fixture();
-    set(&l, &mut store, Which::Value, "offset", Scalar::Int(40), true).unwrap();
-    assert_eq!(store.get(SENSOR, 1, Which::Value).unwrap(), [0x18, 0xB7, 0x80]);
+    set(
+        &l,
+        &mut store,
+        Which::Value,
+        "offset",
+        Scalar::Int(40),
+        true,
+    )
+    .unwrap();
+    assert_eq!(
+        store.get(SENSOR, 1, Which::Value).unwrap(),
+        [0x18, 0xB7, 0x80]
+    );
     // A value in range is written as it is, saturated or not: address 0x22 is 14 5E 80.
     for saturate in [false, true] {
         let (l, mut store) = fixture();
-        set(&l, &mut store, Which::Value, "address", Scalar::Uint(0x22), saturate).unwrap();
-        assert_eq!(store.get(SENSOR, 1, Which::Value).unwrap(), [0x14, 0x5E, 0x80]);
+        set(
+            &l,
+            &mut store,
+            Which::Value,
+            "address",
+            Scalar::Uint(0x22),
+            saturate,
+        )
+        .unwrap();
+        assert_eq!(
+            store.get(SENSOR, 1, Which::Value).unwrap(),
+            [0x14, 0x5E, 0x80]
+        );
     }
 }
 
