@@ -350,6 +350,59 @@ TARGETS+=(
 )
 RUST_ISSUE40_TESTS="$RUST_ISSUE40_TESTS mutants_store_tables mutants_store_translated"
 
+# Rust, issue 40 (mutrust2, third round): firmware's code. A firmware build (feature `compact`:
+# plan.rs's NoPlans) runs code a host build never reaches: crc.rs's CRC-16 half a byte at a
+# time (crc16's and crc16_pieces' `SLICES == 0` branches, crc16_nibble, the nibble table,
+# crc16_shifted that fills it) and store.rs's set_leaf_copied (set_leaf_at without leaf
+# tables) and the `!Active::TABLES` turns into it. These targets build every test program with
+# --features=compact as well as the target's alloc (the option goes to every cargo command);
+# the mutants are those of that code only (one --re each, by line as of this commit, or by
+# function), so that the host's code, dead in this build, is not counted again:
+#   MUTATION_BUDGET=1200 MUTATION_RUST_TIMEOUT=60 MUTATION_RUST_ARGS="--re crc.rs:(7[3-6]|11[01]|12[7-9]|13[0-2]|16[7-9]|17[6-9]|18[0-3]):" \
+#     bash scripts/mutation.sh rust-compact-crc
+#   MUTATION_BUDGET=1200 MUTATION_RUST_TIMEOUT=60 MUTATION_RUST_ARGS="--re set_leaf_copied --re delete\s!\sin\sStore<D,\sS,\sB,\sT>::read$ --re store.rs:749:12:" \
+#     bash scripts/mutation.sh rust-compact-store
+# (cargo-mutants 27.1.0 adds the file's "delete field" mutants whatever --re says.)
+TARGETS+=(
+  "rust-compact-crc|crates/px4params-core/src/crc.rs|--features=compact --lib --test=crc --test=transfer --test=mutants_transfer --test=file"
+  "rust-compact-store|crates/px4params-core/src/store.rs|--features=compact --test=store --test=mutants_store --test=table --test=mutants_store_tables --test=mutants_store_set_from --test=mutants_store_saturate"
+)
+RUST_ISSUE40_TESTS="$RUST_ISSUE40_TESTS mutants_store_saturate"
+# file.rs (this entry replaces the one above): its tests and those written for its survivors.
+TARGETS+=("rust-file|crates/px4params-core/src/file.rs|--test=file --test=mutants_file")
+RUST_ISSUE40_TESTS="$RUST_ISSUE40_TESTS mutants_file"
+# Measured 2026-11-27 (mutrust2; 2 shared cores, load 10-15, every build behind other helpers'
+# under the build lock; equivalents left out of the rates; each run MUTATION_RUST_TIMEOUT=60
+# CARGO_PROFILE_DEV_DEBUG=0; a second run at a time with CARGO_TARGET_DIR=target/lane2):
+#   MUTATION_BASELINE=1 MUTATION_BUDGET=2400 bash scripts/mutation.sh rust-pages       # before
+#   MUTATION_BUDGET=2400 bash scripts/mutation.sh rust-pages                           # after
+#   (each cut by its budget 3 short: the rest with MUTATION_RUST_ARGS=--iterate after, and
+#   MUTATION_RUST_ARGS="--re pages.rs:139:" before)
+#   MUTATION_BUDGET=2400 MUTATION_RUST_ARGS="--shard 0/2" bash scripts/mutation.sh rust-file
+#   CARGO_TARGET_DIR=target/lane2 MUTATION_BUDGET=2400 MUTATION_RUST_ARGS="--shard 1/2" \
+#     bash scripts/mutation.sh rust-file                                               # after
+#   and rust-compact-store, rust-compact-crc as above (MUTATION_BUDGET 2400, 800).
+#   target              run     mutants tested killed timeout survived(equiv.) unviable untested rate
+#   rust-pages          before  64      59     52     0       7(0)             5        0        88.1%
+#   rust-pages          after   64      59     59     0       0                5        0        100%
+#   rust-file           after   231     203    195    2       6(5)             28       0        99.5%
+#   rust-compact-store  after   13      13     9      0       4(3)             0        0        90.0%
+#   rust-compact-crc    after   39      34     32     0       2(2)             5        0        100%
+# rust-file has no "before": its baseline runs the lib's tests alone, and nothing in the lib
+# calls file.rs (tests/file.rs, issue 40's, is its only caller): every viable mutant would
+# survive. Its one survivor not equivalent, 362:14 (take refusing exactly the bytes left: an
+# unknown kind or a bad table line in the last bytes before the trailer named as "past the
+# end"), is killed by tests/mutants_file.rs (planted by hand: 2 tests red, tests/file.rs
+# green; the earlier entry calling it equivalent is removed); rust-file runs it now: with it,
+# MUTATION_RUST_ARGS="--re file.rs:362:14:" killed that line's 3 mutants (after: 100%).
+# rust-compact-store: the four set_leaf_copied mutants listed above as "unreached" are killed
+# in this build (its saturate field by tests/mutants_store_saturate.rs only: planted by hand
+# under --features compact, red, the target's other tests green); set_from's saturate field
+# (877:39) by mutants_store_set_from (planted by hand: red), which the target runs now (the
+# run above was without it); the other three equivalent. rust-compact-crc's two survivors
+# are equivalent in this build (crc16_pieces' turn, crc16_shifted's or in the nibble table). Not run in this round: rust-crc (host; 179 mutants), rust-store's
+# untested shards 2-6 (~124), rust-ffi (its figures of 2026-11-26 above; no "before").
+
 if [ "$#" -eq 0 ]; then
   set -- can_transfer dronecan_params health links gui migrate vehicle store rust-core rust-ffi
 fi
