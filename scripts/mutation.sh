@@ -350,6 +350,13 @@ TARGETS+=(
 )
 RUST_ISSUE40_TESTS="$RUST_ISSUE40_TESTS mutants_store_tables mutants_store_translated"
 
+# gui/app.py, gui/vehicle.py and vehicle/drivers.py's survivors (issue 40, mutveh3). The
+# earlier tests of test_app.py and test_gui_vehicle.py are the "before" (the tests written for
+# this round's survivors are marked issue40): the files leave NEW_TESTS, else the baseline
+# would strip every test file of these targets (and pytest, given none, run the whole suite).
+# Figures and commands: the mutveh3 block at the end of this script.
+NEW_TESTS=$(echo "$NEW_TESTS" | tr '|' '\n' | grep -vxE 'test_(app|gui_vehicle)' | paste -sd'|')
+
 if [ "$#" -eq 0 ]; then
   set -- can_transfer dronecan_params health links gui migrate vehicle store rust-core rust-ffi
 fi
