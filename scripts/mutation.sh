@@ -356,6 +356,11 @@ RUST_ISSUE40_TESTS="$RUST_ISSUE40_TESTS mutants_store_tables mutants_store_trans
 # would strip every test file of these targets (and pytest, given none, run the whole suite).
 # Figures and commands: the mutveh3 block at the end of this script.
 NEW_TESTS=$(echo "$NEW_TESTS" | tr '|' '\n' | grep -vxE 'test_(app|gui_vehicle)' | paste -sd'|')
+# drivers.py: tests/test_drivers.py (each key, each refusal whole, the lookups) first.
+TARGETS+=(
+  "drivers|$PY/vehicle/drivers.py|tests/test_drivers.py tests/test_simbench.py tests/test_autostart.py"
+)
+NEW_TESTS="$NEW_TESTS|test_drivers"
 
 if [ "$#" -eq 0 ]; then
   set -- can_transfer dronecan_params health links gui migrate vehicle store rust-core rust-ffi
