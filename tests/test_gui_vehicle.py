@@ -5,6 +5,8 @@ the events its WebSocket pushes, and writes through the store's one write path."
 
 from __future__ import annotations
 
+import contextlib
+import json
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -12,7 +14,16 @@ from typing import Any
 
 import px4params
 import pytest
-from px4params.gui.vehicle import StoreVehicle, WriteResult, parse_health
+from px4params.errors import CommandError
+from px4params.gui.vehicle import (
+    MavlinkVehicle,
+    StoreVehicle,
+    WriteResult,
+    _as_stored,
+    _mftp_path,
+    parse_health,
+)
+from px4params.links.mavlink import MavlinkParamServer
 from px4params.store.classic import BUNDLED_CLASSIC
 from px4params.store.session import Session
 
@@ -180,3 +191,251 @@ def test_an_unreadable_save_of_another_writer_is_said_once(
     assert len(said) == 1 and said[0].startswith("store changed by another writer, not read: ")
     assert vehicle.values["INA238_1C"] == 0x45  # the values stay
     assert [e["kind"] for e in events] == ["status"]
+
+
+# -- a vehicle over MAVLink (issue 40: the page's MAVLink client, in-process) -------------------
+# The peer is px4params' MAVLink server in a thread on 127.0.0.1 (its frames are pymavlink's,
+# checked against QGC's and MAVProxy's readings in test_mavlink_clients.py), as system 7 so that
+# a write reaches it only when sent to the system its heartbeat named. Subclasses change one
+# answer each: silence, another value echoed, no COMPONENT_METADATA.
+
+#: A health report 100 characters long: two STATUSTEXT chunks of 50 and an empty third, the end
+#: (MAVLink 2: a chunk shorter than 50 characters ends the text).
+LONG_HEALTH = "health: ina238 INA238#1 on I2C bus 2 address 0x45: critical: not found: " + "x" * 27
+SHORT_HEALTH = "health: ms5611 MS5611#0: nominal"  # one STATUSTEXT, id 0
+
+
+def _served_store(schema: px4params.Schema) -> px4params.Store:
+    store = px4params.Store(schema, classic=BUNDLED_CLASSIC)
+    store.add("INA238#1")
+    store.set("INA238#1.bus.i2c.address", 0x45)
+    return store
+
+
+@contextlib.contextmanager
+def _peer(
+    schema: px4params.Schema, server: type[MavlinkParamServer] = MavlinkParamServer, **options: Any
+) -> Iterator[MavlinkParamServer]:
+    options = {"system_id": 7, "heartbeat_interval": 0.1, **options}
+    served = server(_served_store(schema), "127.0.0.1", 0, **options)
+    served.start()
+    try:
+        yield served
+    finally:
+        served.stop()
+
+
+@contextlib.contextmanager
+def _page(address: tuple[str, int], **options: Any) -> Iterator[MavlinkVehicle]:
+    page = MavlinkVehicle(address, **{"timeout": 10.0, **options})
+    try:
+        yield page
+    finally:
+        page.close()
+
+
+@pytest.mark.issue40
+def test_a_mavlink_vehicle_is_listed_written_read_and_heard(schema: px4params.Schema) -> None:
+    health = [LONG_HEALTH, SHORT_HEALTH]
+    with _peer(schema, health=lambda: health, health_interval=0.2) as served:
+        started = time.monotonic()
+        with _page(served.address, timeout=30.0) as page:
+            # the whole list, at once (not at the end of the 30 s given)
+            assert time.monotonic() - started < 20
+            port = served.address[1]
+            assert (page.mode, page.source) == ("mavlink", f"udp 127.0.0.1:{port}")
+            assert page.values == {e.name: e.value for e in served.entries()}
+            assert "_HASH_CHECK" not in page.values  # PX4's list ends with it: no parameter
+            assert page.values["INA238_1C"] == 0x45
+            # the metadata over MAVLink FTP (the general file, then parameters.json.xz)
+            assert page.metadata["version"] == 1
+            described = {p["name"] for p in page.metadata["parameters"]}
+            assert {"INA238_1C", "INA238_1Q", "BAT1_CAPACITY", "SYS_AUTOSTART"} <= described
+            events: list[dict[str, Any]] = []
+            page.listen(events.append)
+
+            accepted = page.write("INA238_1C", 70)  # sent to system 7, or nobody answers
+            assert (accepted.ok, accepted.value, accepted.reason) == (True, 70, "")
+            assert served.store.get("INA238#1.bus.i2c.address") == 70
+            assert {"kind": "value", "name": "INA238_1C", "value": 70} in events
+            assert page.read("INA238_1C") == 70
+
+            # refused: PARAM_VALUE with the value kept, STATUSTEXT's reason in chunks, PARAM_ERROR
+            refused = page.write("INA238_1C", 200)
+            assert (refused.ok, refused.value) == (False, 70)
+            assert refused.reason == (
+                "INA238_1C: INA238#1: bus.i2c.address: value 200 is out of range (expected 0 to "
+                "127)"
+            )  # a 7-bit I2C address
+            assert page.values["INA238_1C"] == 70
+            unknown = page.write("NOPE_1X", 1)
+            assert (unknown.ok, unknown.value, unknown.reason) == (
+                False,
+                None,
+                "[pm] unknown param: NOPE_1X",  # PX4's words
+            )
+            assert page.read("NOPE_1X", timeout=0.3) is None
+
+            floats = page.write("BAT1_CAPACITY", 5000.5)
+            assert (floats.ok, floats.value) == (True, 5000.5)
+            assert served.store.get("BAT1_CAPACITY") == 5000.5
+
+            # health reports, each joined from its chunks
+            assert wait_for(lambda: {"INA238#1", "MS5611#0"} <= set(page.health))
+            assert page.health["INA238#1"] == parse_health(LONG_HEALTH)
+            assert page.health["INA238#1"]["reason"] == "not found: " + "x" * 27
+            assert page.health["MS5611#0"]["state"] == "nominal"
+            assert LONG_HEALTH in page.messages and SHORT_HEALTH in page.messages
+            assert LONG_HEALTH[:50] not in page.messages  # no chunk said on its own
+
+            events.clear()
+            page.refresh(10.0)
+            listed = [e for e in events if e["kind"] == "values"]
+            assert listed == [{"kind": "values", "values": page.state()["values"]}]
+            assert listed[0]["values"]["INA238_1C"] == 70
+        assert not page._thread.is_alive() and not page._heartbeats.is_alive()
+
+
+class _Silent(MavlinkParamServer):
+    """Never answers a PARAM_SET of INA238_1P (a lost link, in one direction)."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self.sets = 0
+
+    def _set(self, peer: Any, name: str, msg: Any) -> None:
+        if name == "INA238_1P":
+            self.sets += 1
+            return
+        super()._set(peer, name, msg)
+
+
+class _Stubborn(MavlinkParamServer):
+    """Answers a PARAM_SET of INA238_1P with the value it had, and no reason."""
+
+    def _set(self, peer: Any, name: str, msg: Any) -> None:
+        found = self._find(name)
+        if name == "INA238_1P" and found is not None:
+            self._send(self._value_msg(*found), [peer])
+            return
+        super()._set(peer, name, msg)
+
+
+@pytest.mark.issue40
+def test_a_write_nobody_answers_is_sent_three_times_then_refused(
+    schema: px4params.Schema,
+) -> None:
+    with _peer(schema, _Silent) as served, _page(served.address) as page:
+        before = page.values["INA238_1P"]
+        result = page.write("INA238_1P", before + 1, timeout=0.3)
+        assert (result.ok, result.value, result.reason) == (
+            False,
+            before,
+            "INA238_1P: no answer from the vehicle",
+        )
+        assert served.sets == 3  # sent, then twice again
+        assert page._waiters["INA238_1P"] == []  # nothing left waiting
+
+
+@pytest.mark.issue40
+def test_a_write_echoed_with_another_value_is_refused_with_that_value(
+    schema: px4params.Schema,
+) -> None:
+    with _peer(schema, _Stubborn) as served, _page(served.address) as page:
+        before = page.values["INA238_1P"]
+        assert isinstance(before, int)
+        result = page.write("INA238_1P", before + 1)
+        assert (result.ok, result.value, result.reason) == (
+            False,
+            before,
+            f"INA238_1P: the vehicle kept {before}",
+        )
+
+
+class _InformationOnly(MavlinkParamServer):
+    """An older vehicle: COMPONENT_INFORMATION (395) only, COMPONENT_METADATA (397) unsupported."""
+
+    def _requested(self, message_id: int) -> Any:
+        return None if message_id == 397 else super()._requested(message_id)
+
+
+class _NoMetadata(MavlinkParamServer):
+    """A vehicle that serves neither message."""
+
+    def _requested(self, message_id: int) -> Any:
+        return None if message_id in (395, 397) else super()._requested(message_id)
+
+
+@pytest.mark.issue40
+def test_the_metadata_falls_back_to_component_information(schema: px4params.Schema) -> None:
+    with _peer(schema, _InformationOnly) as served, _page(served.address) as page:
+        assert "INA238_1C" in {p["name"] for p in page.metadata["parameters"]}
+
+
+@pytest.mark.issue40
+def test_a_vehicle_without_metadata_asks_for_the_file(schema: px4params.Schema) -> None:
+    with _peer(schema, _NoMetadata) as served, pytest.raises(CommandError) as refused:
+        port = served.address[1]
+        MavlinkVehicle(served.address, timeout=10.0)
+    assert str(refused.value) == (
+        f"the vehicle on udp 127.0.0.1:{port} serves no parameter metadata over "
+        "MAVLink FTP; give --metadata parameters.json"
+    )
+
+
+@pytest.mark.issue40
+def test_a_metadata_file_given_is_the_metadata(schema: px4params.Schema, tmp_path: Path) -> None:
+    document = {"version": 1, "parameters": [{"name": "INA238_1C", "type": "Int32"}]}
+    given = tmp_path / "parameters.json"
+    given.write_text(json.dumps(document))
+    with _peer(schema, _NoMetadata) as served:
+        with _page(served.address, metadata_file=str(given)) as page:
+            assert page.metadata == document
+        for bad, why in ((tmp_path / "none.json", "No such file"), (tmp_path / "x.json", "")):
+            if why == "":
+                bad.write_text("{not json")
+            with pytest.raises(CommandError) as refused:
+                MavlinkVehicle(served.address, str(bad), timeout=10.0)
+            assert str(refused.value).startswith(f"{bad}: cannot read the metadata: ")
+            assert why in str(refused.value) and "\n" not in str(refused.value)
+
+
+@pytest.mark.issue40
+def test_only_the_autopilot_component_s_heartbeat_is_the_vehicle(
+    schema: px4params.Schema,
+) -> None:
+    """MAV_COMP_ID_AUTOPILOT1 is component 1: a camera's or gimbal's heartbeat is no vehicle."""
+    with _peer(schema, component_id=100) as served, pytest.raises(CommandError) as refused:
+        port = served.address[1]
+        MavlinkVehicle(served.address, timeout=1.0)
+    assert str(refused.value) == (
+        f"no vehicle answered on udp 127.0.0.1:{port} within 1 s (a signed link "
+        "drops unsigned messages: --signing-key FILE)"
+    )
+
+
+@pytest.mark.issue40
+def test_a_write_is_acknowledged_by_the_float32_sent_or_the_float16_stored() -> None:
+    """PARAM_SET carries a float as float32; a float16 leaf stores it rounded (0.0005 is
+    1049 * 2**-21 in float16: 10 bits of mantissa); an integer is acknowledged by itself."""
+    assert _as_stored(70, False) == (70,)
+    float32, float16 = _as_stored(0.0005, True)
+    assert float32 == 0.0005000000237487257  # 0x3A03126F
+    assert float16 == 1049 * 2**-21
+    assert _as_stored(0.5, True) == (0.5, 0.5)
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize(
+    ("uri", "path"),
+    [
+        ("mftp://[;comp=1]/etc/comp_general.json", "/etc/comp_general.json"),
+        ("mftp://[;comp=1]etc/x.json.xz", "/etc/x.json.xz"),
+        ("mftp:///fs/microsd/params.json", "/fs/microsd/params.json"),
+        ("mftp://params.json", "/params.json"),
+    ],
+)
+def test_an_mftp_uri_is_read_as_its_path(uri: str, path: str) -> None:
+    """The component-information URI scheme (mavlink.io's MAVLink FTP URL): ``mftp://``, an
+    optional ``[;comp=N]``, then the path on the vehicle."""
+    assert _mftp_path(uri) == path
