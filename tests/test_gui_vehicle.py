@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import contextlib
 import json
+import subprocess
+import sys
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -439,3 +441,38 @@ def test_an_mftp_uri_is_read_as_its_path(uri: str, path: str) -> None:
     """The component-information URI scheme (mavlink.io's MAVLink FTP URL): ``mftp://``, an
     optional ``[;comp=N]``, then the path on the vehicle."""
     assert _mftp_path(uri) == path
+
+
+# -- the store vehicle's remainder (issue 40) ----------------------------------------------------
+
+
+@pytest.mark.issue40
+def test_a_refused_write_names_the_parameter_then_the_leaf(vehicle: StoreVehicle) -> None:
+    """The store's error names the instance and leaf; the page is told which parameter too."""
+    result = vehicle.write("INA238_1C", 200)
+    assert result.reason == (
+        "INA238_1C: INA238#1: bus.i2c.address: value 200 is out of range (expected 0 to 127)"
+    )  # a 7-bit I2C address
+
+
+@pytest.mark.issue40
+def test_after_an_unreadable_save_the_next_good_one_is_still_read(
+    vehicle: StoreVehicle, store_file: Path, schema: px4params.Schema
+) -> None:
+    store = px4params.Store.load(store_file, schema, classic=BUNDLED_CLASSIC)
+    store_file.write_bytes(b"not a store")
+    assert wait_for(lambda: bool(vehicle.messages))
+    store.set("INA238#1.bus.i2c.address", 0x48)
+    store.save(store_file)
+    assert wait_for(lambda: vehicle.values.get("INA238_1C") == 0x48)
+
+
+@pytest.mark.issue40
+def test_a_program_that_never_closes_its_store_vehicle_still_exits(store_file: Path) -> None:
+    """The watcher must not keep a page server that ended without close() alive."""
+    code = (
+        "from px4params.gui.vehicle import StoreVehicle\n"
+        f"StoreVehicle({str(store_file)!r}, None, [], poll_interval=0.05)\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], timeout=60, check=False)
+    assert done.returncode == 0
