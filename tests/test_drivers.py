@@ -6,10 +6,12 @@ UNKNOWN 0, I2C 1, SPI 2, UAVCAN 3, SIMULATION 4, SERIAL 5, MAVLINK 6)."""
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import pytest
 from px4params.store.spec import ParamSpec, parameter_specs
+from px4params.vehicle import drivers as drivers_module
 from px4params.vehicle.drivers import (
     BUS_KINDS,
     DEFAULT_DRIVERS,
@@ -546,4 +548,23 @@ def test_a_file_that_is_not_toml_or_holds_other_tables_is_refused() -> None:
     assert refusal("driver = []\n") == "drivers.toml: no [[driver]] tables"
     assert refusal(INA238 + "[[drivers]]\nname = 'x'\n") == (
         "drivers.toml: unknown top-level key 'drivers' (expected [[driver]] tables)"
+    )
+
+
+def test_a_declaration_cannot_be_changed_once_read() -> None:
+    """The declarations of a file are shared by every caller (the script, the plan, the bench,
+    the page): a Driver is frozen."""
+    d = one(INA238)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        d.order = 1  # type: ignore[misc]
+    assert d.order == 30 and d == one(INA238)
+
+
+def test_every_exported_name_is_defined() -> None:
+    """``from px4params.vehicle.drivers import *`` gives each name of ``__all__``."""
+    namespace: dict[str, object] = {}
+    exec("from px4params.vehicle.drivers import *", namespace)
+    assert set(drivers_module.__all__) <= set(namespace)
+    assert {"BUS_KINDS", "Driver", "Drivers", "DriversFileError", "load_drivers"} <= set(
+        drivers_module.__all__
     )
