@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+import lzma
 import subprocess
 import sys
 import time
@@ -28,6 +29,7 @@ from px4params.gui.vehicle import (
 from px4params.links.mavlink import MavlinkParamServer
 from px4params.store.classic import BUNDLED_CLASSIC
 from px4params.store.session import Session
+from pymavlink.dialects.v20 import common as mavlink2
 
 
 @pytest.fixture
@@ -214,10 +216,45 @@ def _served_store(schema: px4params.Schema) -> px4params.Store:
     return store
 
 
+class _Recording(MavlinkParamServer):
+    """The server, noting what the page sent: its heartbeats' fields and source, the names of
+    its PARAM_SETs, its PARAM_REQUEST_READs' indexes, its COMMAND_LONGs, its list requests."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self.heartbeats: set[tuple[int, ...]] = set()
+        self.sets: list[str] = []
+        self.read_indexes: set[int] = set()
+        self.commands: list[tuple[float, ...]] = []
+        self.lists = 0
+
+    def _handle(self, peer: Any, msg: Any) -> bool:
+        kind = msg.get_type()
+        if kind == "HEARTBEAT":
+            source = (msg.get_srcSystem(), msg.get_srcComponent())
+            fields = (msg.type, msg.autopilot, msg.base_mode, msg.custom_mode, msg.system_status)
+            self.heartbeats.add((*source, *fields))
+        elif kind == "PARAM_SET":
+            self.sets.append(_name(msg.param_id))
+        elif kind == "PARAM_REQUEST_READ":
+            self.read_indexes.add(msg.param_index)
+        elif kind == "PARAM_REQUEST_LIST":
+            self.lists += 1
+        elif kind == "COMMAND_LONG":
+            params = [getattr(msg, f"param{n}") for n in range(1, 8)]
+            self.commands.append((msg.command, msg.confirmation, *params))
+        return super()._handle(peer, msg)
+
+
+def _name(param_id: Any) -> str:
+    raw = param_id if isinstance(param_id, bytes) else str(param_id).encode()
+    return raw.split(b"\0", 1)[0].decode()
+
+
 @contextlib.contextmanager
 def _peer(
-    schema: px4params.Schema, server: type[MavlinkParamServer] = MavlinkParamServer, **options: Any
-) -> Iterator[MavlinkParamServer]:
+    schema: px4params.Schema, server: type[_Recording] = _Recording, **options: Any
+) -> Iterator[_Recording]:
     options = {"system_id": 7, "heartbeat_interval": 0.1, **options}
     served = server(_served_store(schema), "127.0.0.1", 0, **options)
     served.start()
@@ -256,11 +293,20 @@ def test_a_mavlink_vehicle_is_listed_written_read_and_heard(schema: px4params.Sc
             events: list[dict[str, Any]] = []
             page.listen(events.append)
 
+            # a ground station's heartbeat (MAVLink common.xml: MAV_TYPE_GCS 6, autopilot
+            # MAV_AUTOPILOT_INVALID 8; QGC's system 255, MAV_COMP_ID_MISSIONPLANNER 190)
+            assert served.heartbeats == {(255, 190, 6, 8, 0, 0, 0)}
+            # MAV_CMD_REQUEST_MESSAGE (512) for COMPONENT_METADATA (397), first transmission
+            # (confirmation 0), every other parameter 0 (the default; param7 0: to the sender)
+            assert served.commands == [(512, 0, 397, 0, 0, 0, 0, 0, 0)]
+
             accepted = page.write("INA238_1C", 70)  # sent to system 7, or nobody answers
             assert (accepted.ok, accepted.value, accepted.reason) == (True, 70, "")
+            assert served.sets == ["INA238_1C"]  # acknowledged: sent once
             assert served.store.get("INA238#1.bus.i2c.address") == 70
             assert {"kind": "value", "name": "INA238_1C", "value": 70} in events
             assert page.read("INA238_1C") == 70
+            assert served.read_indexes == {-1}  # -1: read by param_id (MAVLink's rule)
 
             # refused: PARAM_VALUE with the value kept, STATUSTEXT's reason in chunks, PARAM_ERROR
             refused = page.write("INA238_1C", 200)
@@ -270,6 +316,8 @@ def test_a_mavlink_vehicle_is_listed_written_read_and_heard(schema: px4params.Sc
                 "127)"
             )  # a 7-bit I2C address
             assert page.values["INA238_1C"] == 70
+            again = page.write("INA238_1C", 300)  # this write's reason, not the last one's
+            assert again.reason == refused.reason.replace("200", "300")
             unknown = page.write("NOPE_1X", 1)
             assert (unknown.ok, unknown.value, unknown.reason) == (
                 False,
@@ -298,21 +346,15 @@ def test_a_mavlink_vehicle_is_listed_written_read_and_heard(schema: px4params.Sc
         assert not page._thread.is_alive() and not page._heartbeats.is_alive()
 
 
-class _Silent(MavlinkParamServer):
+class _Silent(_Recording):
     """Never answers a PARAM_SET of INA238_1P (a lost link, in one direction)."""
 
-    def __init__(self, *args: Any, **kwargs: Any) -> None:
-        super().__init__(*args, **kwargs)
-        self.sets = 0
-
     def _set(self, peer: Any, name: str, msg: Any) -> None:
-        if name == "INA238_1P":
-            self.sets += 1
-            return
-        super()._set(peer, name, msg)
+        if name != "INA238_1P":
+            super()._set(peer, name, msg)
 
 
-class _Stubborn(MavlinkParamServer):
+class _Stubborn(_Recording):
     """Answers a PARAM_SET of INA238_1P with the value it had, and no reason."""
 
     def _set(self, peer: Any, name: str, msg: Any) -> None:
@@ -335,7 +377,7 @@ def test_a_write_nobody_answers_is_sent_three_times_then_refused(
             before,
             "INA238_1P: no answer from the vehicle",
         )
-        assert served.sets == 3  # sent, then twice again
+        assert served.sets == ["INA238_1P"] * 3  # sent, then twice again
         assert page._waiters["INA238_1P"] == []  # nothing left waiting
 
 
@@ -354,14 +396,14 @@ def test_a_write_echoed_with_another_value_is_refused_with_that_value(
         )
 
 
-class _InformationOnly(MavlinkParamServer):
+class _InformationOnly(_Recording):
     """An older vehicle: COMPONENT_INFORMATION (395) only, COMPONENT_METADATA (397) unsupported."""
 
     def _requested(self, message_id: int) -> Any:
         return None if message_id == 397 else super()._requested(message_id)
 
 
-class _NoMetadata(MavlinkParamServer):
+class _NoMetadata(_Recording):
     """A vehicle that serves neither message."""
 
     def _requested(self, message_id: int) -> Any:
@@ -476,3 +518,138 @@ def test_a_program_that_never_closes_its_store_vehicle_still_exits(store_file: P
     )
     done = subprocess.run([sys.executable, "-c", code], timeout=60, check=False)
     assert done.returncode == 0
+
+
+class _Lossy(_Recording):
+    """Loses INA238_1C's PARAM_VALUE the first time it is sent (UDP loses datagrams)."""
+
+    lost = False
+
+    def _send(self, msg: Any, peers: list[Any]) -> None:
+        if not self.lost and msg.get_type() == "PARAM_VALUE" and _name(msg.param_id) == "INA238_1C":
+            self.lost = True
+            return
+        super()._send(msg, peers)
+
+
+@pytest.mark.issue40
+def test_a_list_that_lost_a_value_is_asked_for_again(schema: px4params.Schema) -> None:
+    with _peer(schema, _Lossy) as served, _page(served.address) as page:
+        assert served.lost and served.lists >= 2
+        assert page.values == {e.name: e.value for e in served.entries()}
+
+
+class _RefusesTheSameValue(_Recording):
+    """Refuses a write of INA238_1P with PARAM_ERROR although its echo holds the value sent
+    (a parameter that is read-only, holding that value already)."""
+
+    def _set(self, peer: Any, name: str, msg: Any) -> None:
+        found = self._find(name)
+        if name != "INA238_1P" or found is None:
+            super()._set(peer, name, msg)
+            return
+        self._send(self._value_msg(*found), [peer])
+        self._error(peer, msg, name, found[0], f"{name}: read-only", 4)  # MAV_PARAM_ERROR_READ_ONLY
+
+
+@pytest.mark.issue40
+def test_a_param_error_refuses_a_write_whatever_the_echo(schema: px4params.Schema) -> None:
+    with _peer(schema, _RefusesTheSameValue) as served, _page(served.address) as page:
+        same = page.values["INA238_1P"]
+        result = page.write("INA238_1P", same)
+        assert (result.ok, result.value, result.reason) == (False, same, "INA238_1P: read-only")
+
+
+class _AckFirst(_Recording):
+    """Sends COMMAND_ACK before the message asked for (nothing in MAVLink orders them)."""
+
+    def _command(self, peer: Any, msg: Any) -> None:
+        result, reply = self._command_result(msg)
+        ack = mavlink2.MAVLink_command_ack_message(
+            msg.command, result, 0, 0, msg.get_srcSystem(), msg.get_srcComponent()
+        )
+        self._send(ack, [peer])
+        if reply is not None:
+            self._send(reply, [peer])
+
+
+class _MetadataOnly(_Recording):
+    """A vehicle that serves COMPONENT_METADATA (397) and not COMPONENT_INFORMATION (395)."""
+
+    def _requested(self, message_id: int) -> Any:
+        return None if message_id == 395 else super()._requested(message_id)
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize("server", [_AckFirst, _MetadataOnly])
+def test_the_metadata_is_read_whichever_comes_first(
+    schema: px4params.Schema, server: type[_Recording]
+) -> None:
+    with _peer(schema, server) as served, _page(served.address) as page:
+        assert "INA238_1C" in {p["name"] for p in page.metadata["parameters"]}
+        assert [c[2] for c in served.commands] == [397]  # no need to ask for 395
+
+
+@pytest.mark.issue40
+def test_the_page_still_hears_the_vehicle_after_a_quiet_moment(schema: px4params.Schema) -> None:
+    """PX4 sends a heartbeat a second: between two, the link is quiet."""
+    with _peer(schema, heartbeat_interval=1.0) as served, _page(served.address) as page:
+        time.sleep(0.6)
+        assert page.write("INA238_1C", 71).ok
+        assert served.store.get("INA238#1.bus.i2c.address") == 71
+
+
+class _Files:
+    """A vehicle's files read over MAVLink FTP, by path (MAVFTP.read's answer: the bytes, or
+    None for a file it does not have)."""
+
+    def __init__(self, files: dict[str, bytes]) -> None:
+        self.files = files
+        self.asked: list[tuple[str, int]] = []
+
+    def read(self, path: str, size: int) -> bytes | None:
+        self.asked.append((path, size))
+        return self.files.get(path)
+
+
+def _general(uri: str, kind: int = 1) -> bytes:
+    """A general metadata file (COMP_METADATA_TYPE_PARAMETER is 1) naming the parameters' file."""
+    return json.dumps(
+        {"version": 1, "metadataTypes": [{"type": 0}, {"type": kind, "uri": uri}]}
+    ).encode()
+
+
+PARAMETERS_DOC = {"version": 1, "parameters": [{"name": "INA238_1C", "type": "Int32"}]}
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize(
+    ("name", "packed"),
+    [
+        ("p.json", json.dumps(PARAMETERS_DOC).encode()),
+        ("p.json.xz", lzma.compress(json.dumps(PARAMETERS_DOC).encode())),
+        ("p.json.lzma", lzma.compress(json.dumps(PARAMETERS_DOC).encode(), lzma.FORMAT_ALONE)),
+    ],
+)
+def test_the_parameters_file_is_unpacked_by_its_name(name: str, packed: bytes) -> None:
+    """QGC's reading: ``.xz`` and ``.lzma`` files are compressed, others are JSON as they are."""
+    files = _Files({"/general.json": _general(f"mftp://[;comp=1]/{name}"), f"/{name}": packed})
+    found = MavlinkVehicle._download(None, files, "mftp://[;comp=1]/general.json")  # type: ignore[arg-type]
+    assert found == PARAMETERS_DOC
+    assert [path for path, _ in files.asked] == ["/general.json", f"/{name}"]
+    assert all(size >= 1 << 20 for _, size in files.asked)  # a whole file, not a part of it
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize(
+    "files",
+    [
+        {},  # no general file
+        {"/general.json": _general("mftp:///p.json", kind=2)},  # no parameters entry
+        {"/general.json": _general("https://example.com/p.json")},  # not on the vehicle
+        {"/general.json": _general("mftp:///p.json")},  # listed, not there
+        {"/general.json": _general("mftp:///p.json"), "/p.json": b""},  # empty
+    ],
+)
+def test_a_vehicle_without_a_parameters_file_has_no_metadata(files: dict[str, bytes]) -> None:
+    assert MavlinkVehicle._download(None, _Files(files), "mftp:///general.json") is None  # type: ignore[arg-type]
