@@ -653,3 +653,16 @@ def test_the_parameters_file_is_unpacked_by_its_name(name: str, packed: bytes) -
 )
 def test_a_vehicle_without_a_parameters_file_has_no_metadata(files: dict[str, bytes]) -> None:
     assert MavlinkVehicle._download(None, _Files(files), "mftp:///general.json") is None  # type: ignore[arg-type]
+
+
+@pytest.mark.issue40
+def test_the_store_vehicle_describes_its_structured_and_classic_parameters(
+    vehicle: StoreVehicle,
+) -> None:
+    """QGC's parameters.json (version 1): the store's destructured names and the classic
+    parameters it holds, each with its type."""
+    types = {p["name"]: p["type"] for p in vehicle.metadata["parameters"]}
+    assert vehicle.metadata["version"] == 1
+    assert types["INA238_1C"] == "Int32"
+    assert types["BAT1_CAPACITY"] == "Float" and types["SYS_AUTOSTART"] == "Int32"
+    assert set(vehicle.values) <= set(types)
