@@ -568,3 +568,11 @@ def test_every_exported_name_is_defined() -> None:
     assert {"BUS_KINDS", "Driver", "Drivers", "DriversFileError", "load_drivers"} <= set(
         drivers_module.__all__
     )
+
+
+def test_declarations_given_as_text_are_named_as_such() -> None:
+    """Without a file name, messages and ``source`` call the text ``<drivers>``."""
+    assert parse_drivers(INA238).source == "<drivers>"
+    with pytest.raises(DriversFileError) as e:
+        parse_drivers("")
+    assert str(e.value) == "<drivers>: no [[driver]] tables"
