@@ -6,6 +6,7 @@ the events its WebSocket pushes, and writes through the store's one write path."
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import json
 import lzma
 import subprocess
@@ -223,6 +224,7 @@ class _Recording(MavlinkParamServer):
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
         self.heartbeats: set[tuple[int, ...]] = set()
+        self.heartbeat_count = 0
         self.sets: list[str] = []
         self.read_indexes: set[int] = set()
         self.commands: list[tuple[float, ...]] = []
@@ -234,6 +236,7 @@ class _Recording(MavlinkParamServer):
             source = (msg.get_srcSystem(), msg.get_srcComponent())
             fields = (msg.type, msg.autopilot, msg.base_mode, msg.custom_mode, msg.system_status)
             self.heartbeats.add((*source, *fields))
+            self.heartbeat_count += 1
         elif kind == "PARAM_SET":
             self.sets.append(_name(msg.param_id))
         elif kind == "PARAM_REQUEST_READ":
@@ -296,6 +299,8 @@ def test_a_mavlink_vehicle_is_listed_written_read_and_heard(schema: px4params.Sc
             # a ground station's heartbeat (MAVLink common.xml: MAV_TYPE_GCS 6, autopilot
             # MAV_AUTOPILOT_INVALID 8; QGC's system 255, MAV_COMP_ID_MISSIONPLANNER 190)
             assert served.heartbeats == {(255, 190, 6, 8, 0, 0, 0)}
+            # one while waiting for the vehicle's (each wait up to 0.5 s), then one a second
+            assert served.heartbeat_count < 4 + 2 * (time.monotonic() - started)
             # MAV_CMD_REQUEST_MESSAGE (512) for COMPONENT_METADATA (397), first transmission
             # (confirmation 0), every other parameter 0 (the default; param7 0: to the sender)
             assert served.commands == [(512, 0, 397, 0, 0, 0, 0, 0, 0)]
@@ -477,6 +482,7 @@ def test_a_write_is_acknowledged_by_the_float32_sent_or_the_float16_stored() -> 
         ("mftp://[;comp=1]etc/x.json.xz", "/etc/x.json.xz"),
         ("mftp:///fs/microsd/params.json", "/fs/microsd/params.json"),
         ("mftp://params.json", "/params.json"),
+        ("mftp://[;comp=1]/fs/a]b.json", "/fs/a]b.json"),  # only the first ] ends the prefix
     ],
 )
 def test_an_mftp_uri_is_read_as_its_path(uri: str, path: str) -> None:
@@ -666,3 +672,50 @@ def test_the_store_vehicle_describes_its_structured_and_classic_parameters(
     assert types["INA238_1C"] == "Int32"
     assert types["BAT1_CAPACITY"] == "Float" and types["SYS_AUTOSTART"] == "Int32"
     assert set(vehicle.values) <= set(types)
+
+
+#: A MAVLink 2 signing key (32 bytes), and another.
+KEY = hashlib.sha256(b"the page's link").digest()
+OTHER_KEY = hashlib.sha256(b"another link").digest()
+
+
+@pytest.mark.issue40
+def test_a_signed_link_says_so_and_is_written_over(schema: px4params.Schema) -> None:
+    with _peer(schema, signing_key=KEY) as served:
+        port = served.address[1]
+        with _page(served.address, signing_key=KEY) as page:
+            assert page.source == f"udp 127.0.0.1:{port} (signed)"
+            assert page.write("INA238_1C", 72).ok
+        assert served.store.get("INA238#1.bus.i2c.address") == 72
+        with pytest.raises(CommandError) as refused:
+            MavlinkVehicle(served.address, timeout=1.0, signing_key=OTHER_KEY)
+    # signed already: no hint about signing
+    assert str(refused.value) == f"no vehicle answered on udp 127.0.0.1:{port} (signed) within 1 s"
+
+
+@pytest.mark.issue40
+def test_the_page_s_heartbeats_keep_the_vehicle_talking(schema: px4params.Schema) -> None:
+    """The vehicle sends its status text to the ground stations it heard from lately (here
+    within 2.5 s): a page that has nothing to ask still says it is there, once a second."""
+    options = {"peer_timeout": 2.5, "health": lambda: [SHORT_HEALTH], "health_interval": 0.2}
+    with _peer(schema, **options) as served, _page(served.address) as page:
+        time.sleep(3.5)  # longer than the vehicle waits for a silent peer
+        page.messages.clear()
+        assert wait_for(lambda: SHORT_HEALTH in page.messages, 5.0)
+
+
+@pytest.mark.issue40
+def test_a_program_that_never_closes_its_mavlink_vehicle_still_exits(
+    schema: px4params.Schema, tmp_path: Path
+) -> None:
+    """Neither the receiving nor the heartbeat thread keeps a page that ended without close()
+    alive."""
+    metadata = tmp_path / "parameters.json"
+    metadata.write_text(json.dumps({"version": 1, "parameters": []}))
+    with _peer(schema) as served:
+        code = (
+            "from px4params.gui.vehicle import MavlinkVehicle\n"
+            f"MavlinkVehicle({served.address!r}, {str(metadata)!r}, timeout=10.0)\n"
+        )
+        done = subprocess.run([sys.executable, "-c", code], timeout=60, check=False)
+    assert done.returncode == 0
