@@ -454,3 +454,24 @@ def test_the_module_exports_make_app() -> None:
     namespace: dict[str, Any] = {}
     exec("from px4params.gui.app import *", namespace)
     assert namespace["make_app"] is make_app
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize(
+    ("value", "why"),
+    [
+        (True, "True is not a number"),  # JSON's true is no number, though Python's bool is an int
+        (None, "None is not a number"),
+        ({"v": 1}, "{'v': 1} is not a number"),
+        (70.5, "70.5 is not an integer"),  # INA238_1C is an Int32
+        ("70.5", "invalid literal for int() with base 0: '70.5'"),
+    ],
+)
+def test_a_value_that_is_no_number_of_its_parameter_s_type_is_named_whole(
+    served: tuple[Admission, StoreVehicle], value: Any, why: str
+) -> None:
+    app, vehicle = served
+    sent = post(app, "/api/write", {"changes": [{"name": "INA238_1C", "value": value}]})
+    assert status_of(sent) == 400
+    assert error_of(sent) == f"expected {{'changes': [{{'name', 'value'}}]}}: {why}"
+    assert vehicle.values["INA238_1C"] == 0x45
