@@ -610,3 +610,31 @@ def test_padding_gets_no_letter(tmp_path: Path) -> None:
     data_type = store.data_type("PAD")
     assert [s.path for s in flat.layout(data_type)] == ["a", "b"]
     assert flat.slot_count(data_type) == 2
+
+
+@pytest.mark.issue40
+def test_the_tag_of_a_two_variant_union_is_one_bit(tmp_path: Path) -> None:
+    # DroneCAN's union tag is ceil(log2(variants)) bits (dronecan/dronecan_dsdlc's
+    # union_msg_tag_bitlen_from_num_fields): 1 for 2 variants, 2 for 3 and 4
+    files = {
+        "Two.1.0.dsdl": "@union\nuint8 a\nfloat16 b\n@sealed\n",
+        "Three.1.0.dsdl": "@union\nuint8 a\nfloat16 b\nbool c\n@sealed\n",
+        "Holder.1.0.dsdl": "# H\n# @max_instances 1\n\nuint4 p_version\nTwo.1.0 two\n"
+        "Three.1.0 three\n@sealed\n",
+    }
+    schema = px4params.load_schema([dsdl_root(tmp_path, files)], use_env=False,
+                                   cache_dir=tmp_path / "cache")  # fmt: skip
+    tags = {s.path: s for s in flat.layout(schema["tst.Holder.1.0"]) if s.role == "union_tag"}
+    assert (tags["two._tag"].type, tags["two._tag"].min, tags["two._tag"].max) == ("uint1", 0, 1)
+    assert (tags["three._tag"].type, tags["three._tag"].max) == ("uint2", 2)
+
+
+@pytest.mark.issue40
+def test_a_signed_p_version_gets_no_letter_either(tmp_path: Path) -> None:
+    # the module doc: p_version fields get no letter; a type read from its DSDL alone (as the
+    # ground-station metadata reads it) may declare one signed
+    files = {"Signed.1.0.dsdl": "# S\n# @max_instances 1\n\nint4 p_version\nuint8 a\n@sealed\n"}
+    schema = px4params.load_schema([dsdl_root(tmp_path, files)], use_env=False,
+                                   cache_dir=tmp_path / "cache")  # fmt: skip
+    assert [(s.letter, s.path) for s in flat.layout(schema["tst.Signed.1.0"])] == [("A", "a")]
+    assert flat.slot_count(schema["tst.Signed.1.0"]) == 1
