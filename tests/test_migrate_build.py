@@ -1,0 +1,118 @@
+"""``px4params.migrate.build``: the proposal's tables of PX4 facts (renamed modules and chips,
+switches that are not drivers, start-line options the types have no field for, the sensor
+kinds of log topics), each checked against what PX4 does, on configurations written here.
+"""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+import shared_data
+from px4params import migrate
+from px4params.migrate.config import OldConfig
+from px4params.vehicle import devid
+from shared_data import shared_file
+
+pytestmark = pytest.mark.issue40
+
+
+def config(
+    params: dict[str, int | float] | None = None,
+    console: str | None = None,
+    published: list[tuple[str, int, int]] | None = None,
+) -> OldConfig:
+    """A log's configuration as the reader gives it (PX4 1.11: the era of the renamed names)."""
+    return OldConfig(
+        "test.ulg", "ULog", dict(params or {}), version=(1, 11, 2), console=console,
+        published=list(published or []),
+    )  # fmt: skip
+
+
+def test_thermal_control_is_reported_with_px4s_meaning_of_each_value() -> None:
+    # SENS_EN_THERMAL is thermal control, not a driver: each value is reported with the
+    # meaning PX4's parameter metadata gives it (a real parameters.json, read where it is)
+    path = shared_file(shared_data.PARAMETERS_JSON)
+    metadata = json.loads(path.read_text())
+    rows = metadata.get("parameters", metadata)
+    (thermal,) = [p for p in rows if p["name"] == "SENS_EN_THERMAL"]
+    assert {v["value"] for v in thermal["values"]} == {-1, 0, 1}
+    for entry in thermal["values"]:
+        value, meaning = entry["value"], entry["description"]
+        proposal = migrate.migrate(config({"SENS_EN_THERMAL": value}), table="px4-v1.11")
+        assert proposal.not_carried == [
+            f"SENS_EN_THERMAL = {value} ({meaning[0].lower()}{meaning[1:]}): not a driver "
+            "switch; it stays a classic parameter"
+        ]
+        assert proposal.disabled == [] and proposal.instances == []
+
+
+@pytest.mark.parametrize(("switch", "param"), [("SENS_EN_INA226", "INA226"),
+                                               ("SENS_EN_INA228", "INA228")])  # fmt: skip
+def test_a_power_monitors_battery_index_has_no_field_and_says_so(switch: str, param: str) -> None:
+    # PX4's rc.sensors starts a switched power monitor as `ina22x -X -b 1 -t 1 -k start`: the
+    # battery index -t 1 is a start option the type has no field for
+    proposal = migrate.migrate(config({switch: 1}), table="px4-v1.11")
+    (inst,) = proposal.instances
+    assert inst.name == f"{param}#0"
+    assert (
+        f"today's start line also sets the battery index (-t 1): {param} has no field for it"
+        in inst.notes
+    )
+
+
+@pytest.mark.parametrize(
+    ("module", "param", "address"),
+    # PX4 1.13 renamed the airspeed drivers (ms4525_airspeed -> ms4525do, ...); a 1.11 boot
+    # console names the old module, and the driver is today's (at its default address, which
+    # a 1.11 console line does not print)
+    [("ms4525_airspeed", "MS4525DO", 0x28), ("ms5525_airspeed", "MS5525DSO", 0x76),
+     ("sdp3x_airspeed", "SDP3X", 0x21)],
+)  # fmt: skip
+def test_an_airspeed_driver_by_its_name_before_px4_1_13(
+    module: str, param: str, address: int
+) -> None:
+    console = f"{module} #0 on I2C bus 2 (external, equal to '-b 1')\n"
+    proposal = migrate.migrate(config(console=console), table="px4-v1.11")
+    assert [(i.name, i.values["bus.i2c.bus_id"], i.values["bus.i2c.address"])
+            for i in proposal.instances] == [(f"{param}#0", 2, address)]  # fmt: skip
+    assert not [n for n in proposal.not_carried if module in n], proposal.not_carried
+
+
+def test_an_ms5525_of_px4_1_11_is_todays_ms5525dso() -> None:
+    # PX4 1.11's drv_sensor.h: 0x48 is DRV_DIFF_PRESS_DEVTYPE_MS5525, which 1.13 renamed
+    # MS5525DSO (the driver's chip): the airspeed topic's device is proposed as MS5525DSO
+    ms5525 = devid.encode("i2c", 2, 0x76, 0x48)
+    proposal = migrate.migrate(
+        config(published=[("differential_pressure", 0, ms5525)]), table="px4-v1.11"
+    )
+    assert [(i.name, i.values["bus.i2c.bus_id"], i.values["bus.i2c.address"])
+            for i in proposal.instances] == [("MS5525DSO#0", 2, 0x76)]  # fmt: skip
+
+
+def test_a_barometer_topic_of_an_unknown_chip_is_taken_as_the_boards() -> None:
+    # a device of a devtype the table does not know, published on sensor_baro: a barometer,
+    # which sits on the flight controller (started by the board's script), not a sensor to
+    # carry over
+    unknown = devid.encode("i2c", 4, 0x77, 0xFE)
+    proposal = migrate.migrate(config(published=[("sensor_baro", 0, unknown)]), table="px4-v1.11")
+    assert proposal.instances == [] and proposal.not_carried == []
+    (line,) = proposal.not_in_manifest
+    assert line.startswith(f"sensor_baro 0 = {unknown}: ")
+    assert line.endswith(": a barometer: assumed started by the board's script")
+
+
+@pytest.mark.parametrize(
+    "topic",
+    ["sensor_accel", "sensor_gyro", "sensor_mag", "sensor_baro", "differential_pressure",
+     "distance_sensor"],
+)  # fmt: skip
+def test_one_device_on_two_instances_of_a_topic_is_reported_once(topic: str) -> None:
+    # issue 34, defect 10: one device in two slots of a kind is reported once, both named
+    icm20602 = devid.encode("spi", 1, 0, 0x38)
+    proposal = migrate.migrate(
+        config(published=[(topic, 0, icm20602), (topic, 1, icm20602)]), table="current"
+    )
+    (line,) = proposal.not_in_manifest
+    assert line.startswith(f"{topic} 0, {topic} 1 = {icm20602}: ")
+    assert line.endswith(f"; {topic} 0 and {topic} 1 hold the same device (reported once)")
