@@ -116,3 +116,63 @@ def test_one_device_on_two_instances_of_a_topic_is_reported_once(topic: str) -> 
     (line,) = proposal.not_in_manifest
     assert line.startswith(f"{topic} 0, {topic} 1 = {icm20602}: ")
     assert line.endswith(f"; {topic} 0 and {topic} 1 hold the same device (reported once)")
+
+
+def today(params: dict[str, int | float]) -> OldConfig:
+    """A PX4 1.15 log's parameters, read with today's devtype table."""
+    return OldConfig("test.ulg", "ULog", dict(params), version=(1, 15, 0))
+
+
+def test_a_driver_switch_without_a_bundled_type_stays_classic() -> None:
+    proposal = migrate.migrate(today({"SENS_EN_FOOBAR": 1, "SENS_EN_INA238": 1}), table="current")
+    assert [i.name for i in proposal.instances] == ["INA238#0"]
+    assert proposal.not_carried == [
+        "SENS_EN_FOOBAR = 1: no bundled parameter type FOOBAR; the driver stays enabled by this "
+        "classic parameter, outside the manifest"
+    ]
+
+
+def test_a_model_switch_and_a_setting_out_of_its_fields_range() -> None:
+    # SENS_EN_SF1XX's value is the rangefinder's model (PX4's lightware_laser_i2c parameters:
+    # 6 is the LW20/c): it goes into the type's model field; SF1XX_ROT is a Rotation (0..40 in
+    # the type's @min/@max): 99 is not carried, and says why, 40 is
+    proposal = migrate.migrate(
+        today({"SENS_EN_SF1XX": 6, "SF1XX_ROT": 99, "SF1XX_MODE": 1}), table="current"
+    )
+    (inst,) = proposal.instances
+    assert inst.name == "SF1XX#0"
+    assert inst.values == {"bus.i2c.bus_id": 1, "bus.i2c.address": 0x66, "model": 6, "mode": 1}
+    assert proposal.not_carried == ["SF1XX_ROT = 99: SF1XX#0.rotation must be 0..40"]
+    proposal = migrate.migrate(today({"SENS_EN_SF1XX": 6, "SF1XX_ROT": 40}), table="current")
+    assert proposal.instances[0].values["rotation"] == 40 and proposal.not_carried == []
+
+
+def test_a_calibration_slot_that_holds_no_device_id_is_said_so() -> None:
+    # a device ID is a uint32 of PX4's DeviceStructure; a .params file may carry it as a float;
+    # 0 is an empty slot (nothing to report)
+    ak09916 = devid.encode("i2c", 1, 0x0C, 0x09)
+    proposal = migrate.migrate(
+        today(
+            {"CAL_MAG0_ID": float(ak09916), "CAL_MAG1_ID": -5, "CAL_MAG2_ID": 1.5, "CAL_MAG3_ID": 0}
+        ),
+        table="current",
+    )
+    assert [(i.name, i.origin) for i in proposal.instances] == [
+        ("AK09916#0", f"CAL_MAG0_ID = {ak09916}: AK09916 (MAG), I2C bus 1, address 0x0C")
+    ]
+    assert proposal.not_carried == [
+        "CAL_MAG1_ID = -5: not a device ID",
+        "CAL_MAG2_ID = 1.5: not a device ID",
+    ]
+
+
+def test_a_board_named_without_a_board_table_is_refused(monkeypatch: pytest.MonkeyPatch) -> None:
+    from px4params.errors import MigrationError
+    from px4params.migrate import build
+
+    monkeypatch.setattr(build, "_board_table", lambda: None)  # an installation without one
+    with pytest.raises(MigrationError) as e:
+        migrate.migrate(today({}), board="px4_fmu-v6x", table="current")
+    assert str(e.value) == (
+        "--board px4_fmu-v6x: this installation has no board table (px4params.vehicle.boards)"
+    )
