@@ -6,6 +6,7 @@ kinds of log topics), each checked against what PX4 does, on configurations writ
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import pytest
 import shared_data
@@ -176,3 +177,29 @@ def test_a_board_named_without_a_board_table_is_refused(monkeypatch: pytest.Monk
     assert str(e.value) == (
         "--board px4_fmu-v6x: this installation has no board table (px4params.vehicle.boards)"
     )
+
+
+def test_a_type_whose_bus_defaults_to_spi_is_proposed_on_i2c_tag_first(tmp_path: Path) -> None:
+    # a type of an extra DSDL folder (no driver declaration) whose bus defaults to SPI: its
+    # switch starts it on I2C as the power monitors are, so the proposal selects the I2C
+    # variant (px.Bus's variant 0) before it sets the I2C fields (a tag set later would
+    # reset them)
+    import px4params
+
+    root = tmp_path / "acme"
+    root.mkdir()
+    (root / "Probe.1.0.dsdl").write_text(
+        "# A probe\n# @max_instances 2\n\nuint4 p_version\npx.Bus.1.0 bus\n# Bus\n"
+        "# @default spi.bus_id 1\nuint8 gain\n@sealed\n"
+    )
+    schema = px4params.load_schema([root], use_env=False, cache_dir=tmp_path / "cache")
+    proposal = migrate.migrate(today({"SENS_EN_PROBE": 1}), schema=schema, table="current")
+    (inst,) = proposal.instances
+    assert inst.values == {"bus._tag": 0, "bus.i2c.bus_id": 1, "bus.i2c.address": 0}
+    lines = [line for line in proposal.airframe().splitlines() if line.startswith("param ")]
+    assert lines == [
+        "param add PROBE#0",
+        "param set-default PROBE#0[1] 0",
+        "param set-default PROBE#0[3] 1",
+        "param set-default PROBE#0[4] 0x00",
+    ]
