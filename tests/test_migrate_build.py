@@ -119,9 +119,9 @@ def test_one_device_on_two_instances_of_a_topic_is_reported_once(topic: str) -> 
     assert line.endswith(f"; {topic} 0 and {topic} 1 hold the same device (reported once)")
 
 
-def today(params: dict[str, int | float]) -> OldConfig:
-    """A PX4 1.15 log's parameters, read with today's devtype table."""
-    return OldConfig("test.ulg", "ULog", dict(params), version=(1, 15, 0))
+def today(params: dict[str, int | float], console: str | None = None) -> OldConfig:
+    """A PX4 1.15 log's parameters (and boot console), read with today's devtype table."""
+    return OldConfig("test.ulg", "ULog", dict(params), version=(1, 15, 0), console=console)
 
 
 def test_a_driver_switch_without_a_bundled_type_stays_classic() -> None:
@@ -202,4 +202,33 @@ def test_a_type_whose_bus_defaults_to_spi_is_proposed_on_i2c_tag_first(tmp_path:
         "param set-default PROBE#0[1] 0",
         "param set-default PROBE#0[3] 1",
         "param set-default PROBE#0[4] 0x00",
+    ]
+
+
+def test_a_switched_driver_runs_where_the_boot_console_shows_it() -> None:
+    # issue 34, defect 8: a switch-started driver runs where the evidence says; the boot
+    # console's start line names its bus and address
+    console = "nsh: sercon\nina238 #0 on I2C bus 2 (external) address 0x44\n"
+    proposal = migrate.migrate(today({"SENS_EN_INA238": 1}, console), table="current")
+    (inst,) = proposal.instances
+    assert (inst.name, inst.values) == ("INA238#0", {"bus.i2c.bus_id": 2, "bus.i2c.address": 0x44})
+    assert inst.origin == (
+        "SENS_EN_INA238 = 1: ina238 started on I2C bus 2 (boot console line 2: 'ina238 #0 on "
+        "I2C bus 2 (external) address 0x44') at address 0x44"
+    )
+    # the line is the switch's: not reported again, nor taken as a second finding
+    assert proposal.not_in_manifest == []
+    assert not [n for n in inst.notes if n.startswith("also ")], inst.notes
+    assert not [a for a in proposal.assumptions if "INA238" in a]
+
+
+def test_a_switched_driver_the_boot_console_does_not_show_is_a_guess_said_so() -> None:
+    proposal = migrate.migrate(today({"SENS_EN_INA238": 1}, "nsh: sercon\n"), table="current")
+    (inst,) = proposal.instances
+    assert inst.values == {"bus.i2c.bus_id": 1, "bus.i2c.address": 0x45}  # INA238's default
+    assert [a for a in proposal.assumptions if "INA238" in a] == [
+        "SENS_EN_INA238: the boot console shows no ina238 start (not connected at boot?); "
+        "proposed on I2C bus 1",
+        "SENS_EN_INA238: I2C bus 1 is a guess (PX4 starts ina238 -X -b 1 on the board; nothing "
+        "here says which bus it is on)",
     ]
