@@ -232,3 +232,67 @@ def test_a_switched_driver_the_boot_console_does_not_show_is_a_guess_said_so() -
         "SENS_EN_INA238: I2C bus 1 is a guess (PX4 starts ina238 -X -b 1 on the board; nothing "
         "here says which bus it is on)",
     ]
+
+
+def test_a_setting_below_its_fields_minimum_is_rounded_then_raised_to_it() -> None:
+    # a physical quantity is rounded to nearest (0.2 A -> 0) and held to the field's range
+    # (INA238's current: 1..327 A); a value the store refuses (NaN) is not carried, with the
+    # store's reason
+    params = {"SENS_EN_INA238": 1, "INA238_CURRENT": 0.2, "INA238_SHUNT": float("nan")}
+    proposal = migrate.migrate(today(params), table="current")
+    (inst,) = proposal.instances
+    assert inst.values["current"] == 1 and "shunt" not in inst.values
+    assert inst.notes[0] == "INA238_CURRENT = 0.2 A becomes current = 1 A (uint10, 1..327)"
+    assert proposal.not_carried == [
+        "INA238_SHUNT = nan: INA238#0.shunt: nan is not a finite number (float16: NaN and "
+        "infinities are refused)"
+    ]
+
+
+def test_one_device_in_two_slots_one_of_them_disabled_is_proposed_with_a_note() -> None:
+    # issue 34, defects 2 and 10: CAL_MAG0_PRIO = 0 disables that slot; the device is still
+    # used through the other slot, so it is proposed, and the disabled slot is said
+    ak09916 = devid.encode("i2c", 1, 0x0C, 0x09)
+    params = {"CAL_MAG0_ID": ak09916, "CAL_MAG1_ID": ak09916, "CAL_MAG0_PRIO": 0,
+              "CAL_MAG1_PRIO": 50}  # fmt: skip
+    proposal = migrate.migrate(today(params), table="current")
+    (inst,) = proposal.instances
+    assert inst.name == "AK09916#0"
+    assert inst.notes == [
+        "CAL_MAG0_PRIO = 0: one of its slots was disabled for use",
+        "CAL_MAG0_ID and CAL_MAG1_ID hold the same device (reported once)",
+    ]
+
+
+def test_boot_console_lines_of_the_boards_own_sensors_are_reported_not_proposed() -> None:
+    # an SPI sensor and a sensor on an internal I2C bus are the flight controller's, started
+    # by the board's scripts; an external one started outside them is proposed
+    console = (
+        "ms5611 #0 on SPI bus 1 (devid=0x3d)\n"
+        "bmm350 #0 on I2C bus 4 address 0x14\n"
+        "ak09916 #0 on I2C bus 1 (external) address 0x0D\n"
+    )
+    proposal = migrate.migrate(today({}, console), table="current")
+    assert proposal.not_in_manifest == [
+        "boot console line 1: ms5611, SPI bus 1: internal SPI sensor: started by the board's "
+        "startup script",
+        "boot console line 2: bmm350, I2C bus 4, address 0x14: on an internal bus: started by "
+        "the board's startup scripts",
+    ]
+    assert [(i.name, i.values["bus.i2c.address"], i.origin) for i in proposal.instances] == [
+        ("AK09916#0", 0x0D, "boot console line 3: 'ak09916 #0 on I2C bus 1 (external) address "
+         "0x0D' (started outside the board's script)"),
+    ]  # fmt: skip
+
+
+def test_a_console_line_at_another_address_is_not_the_slots_device() -> None:
+    # the boot console's line is a device's evidence only at the device's address: an
+    # AK09916 at 0x0D is a second device, not the calibrated one at 0x0C
+    ak09916 = devid.encode("i2c", 1, 0x0C, 0x09)
+    console = "ak09916 #0 on I2C bus 1 (external) address 0x0D\n"
+    proposal = migrate.migrate(today({"CAL_MAG0_ID": ak09916}, console), table="current")
+    assert [(i.name, i.values["bus.i2c.address"], i.origin) for i in proposal.instances] == [
+        ("AK09916#0", 0x0C, f"CAL_MAG0_ID = {ak09916}: AK09916 (MAG), I2C bus 1, address 0x0C"),
+        ("AK09916#1", 0x0D, "boot console line 1: 'ak09916 #0 on I2C bus 1 (external) address "
+         "0x0D' (started outside the board's script)"),
+    ]  # fmt: skip
