@@ -296,3 +296,54 @@ def test_a_console_line_at_another_address_is_not_the_slots_device() -> None:
         ("AK09916#1", 0x0D, "boot console line 1: 'ak09916 #0 on I2C bus 1 (external) address "
          "0x0D' (started outside the board's script)"),
     ]  # fmt: skip
+
+
+def test_the_boards_script_starts_its_compass_on_the_buses_it_names_only() -> None:
+    # PX4's boards/px4/fmu-v5/init/rc.board_sensors: `ist8310 -I -R 10 start` (any internal
+    # bus: 3 on fmu-v5) and `ist8310 -X -b 1 -R 10 start` (external bus 1, the GPS port): an
+    # IST8310 on bus 3 or 1 is the board's; on bus 2 or 4 it was found by probing
+    from px4params.vehicle.boards import load_boards
+
+    v5 = load_boards().by_name("px4_fmu-v5")
+    assert v5 is not None and v5.internal_i2c_buses == (3,)
+    rows = [r for r in v5.devices if r.driver == "ist8310"]
+    assert [(r.bus, r.internal) for r in rows] == [(None, True), (1, False)]
+    for bus, row in ((3, rows[0]), (1, rows[1])):
+        ist8310 = devid.encode("i2c", bus, 0x0E, 0x06)
+        proposal = migrate.migrate(today({"CAL_MAG0_ID": ist8310}), table="current", board=v5)
+        assert proposal.instances == []
+        assert proposal.not_in_manifest == [
+            f"CAL_MAG0_ID = {ist8310}: IST8310 (MAG), I2C bus {bus}, address 0x0E: started by "
+            f"the board's script ({row.source})"
+        ]
+    for bus in (2, 4):
+        ist8310 = devid.encode("i2c", bus, 0x0E, 0x06)
+        proposal = migrate.migrate(today({"CAL_MAG0_ID": ist8310}), table="current", board=v5)
+        assert [(i.name, i.values["bus.i2c.bus_id"]) for i in proposal.instances] == [
+            ("IST8310#0", bus)
+        ]
+
+
+def test_a_driver_running_with_the_rotation_rc_sensors_probes_with_is_the_probes() -> None:
+    # PX4 1.11's rc.sensors probes `ak09916 -X -R 6 start` (external compass): an AK09916 the
+    # boot console shows running with rotation 6 was started by that probe (proposed, with the
+    # driver's -R); with rotation 4 another script started it (the board's)
+    from px4params.vehicle.boards import load_boards
+
+    cube = load_boards().by_name("cubepilot_cubeorange", "v1.11.2")
+    assert cube is not None
+    ak09916 = devid.encode("i2c", 1, 0x0C, 0x09)
+    line = "ak09916 #0 on I2C bus 1 (external, equal to '-b 2') rotation {}\n"
+    old = OldConfig("t.ulg", "ULog", {"CAL_MAG0_ID": ak09916}, version=(1, 11, 2),
+                    console=line.format(6))  # fmt: skip
+    proposal = migrate.migrate(old, table="px4-v1.11", board=cube)
+    (inst,) = proposal.instances
+    assert (inst.name, inst.values["rotation"]) == ("AK09916#0", 6)
+    assert inst.notes == ["rotation 6: the driver's -R (boot console)"]
+    old.console = line.format(4)
+    proposal = migrate.migrate(old, table="px4-v1.11", board=cube)
+    assert proposal.instances == []
+    assert proposal.not_in_manifest == [
+        f"CAL_MAG0_ID = {ak09916}: AK09916 (MAG), I2C bus 1, address 0x0C: runs with rotation 4 "
+        "(boot console line 1): rc.sensors probes without -R, so the board's script started it"
+    ]
