@@ -347,3 +347,28 @@ def test_a_driver_running_with_the_rotation_rc_sensors_probes_with_is_the_probes
         f"CAL_MAG0_ID = {ak09916}: AK09916 (MAG), I2C bus 1, address 0x0C: runs with rotation 4 "
         "(boot console line 1): rc.sensors probes without -R, so the board's script started it"
     ]
+
+
+def test_what_the_i2c_launcher_started_is_proposed_and_nothing_guessed() -> None:
+    # Pixhawk 6X's rc.board_sensors runs `i2c_launcher start -b 1` (and -b 2): the boot
+    # console's launcher line says which power monitor it found; without one, the scan is
+    # an assumption the report says
+    from px4params.vehicle.boards import load_boards
+
+    v6x = load_boards().by_name("px4_fmu-v6x")
+    assert v6x is not None and v6x.i2c_launcher_buses == (1, 2)
+    console = (
+        "INFO  [i2c_launcher] Found address 0x45, running 'ina228 -X -b 1 -a 0x45 -t 1 start'\n"
+        "ina228 #0 on I2C bus 1 (external) address 0x45\n"
+    )
+    proposal = migrate.migrate(today({}, console), table="current", board=v6x)
+    (inst,) = proposal.instances
+    assert (inst.name, inst.values) == ("INA228#0", {"bus.i2c.bus_id": 1, "bus.i2c.address": 0x45})
+    assert inst.origin.endswith(" (found by i2c_launcher)")
+    assert not [a for a in proposal.assumptions if "i2c_launcher" in a], proposal.assumptions
+    proposal = migrate.migrate(today({}, "nsh: sercon\n"), table="current", board=v6x)
+    assert proposal.instances == []
+    assert proposal.assumptions == [
+        "the board's i2c_launcher scans I2C bus 1, 2 for power monitors (INA226, INA228, INA238) "
+        "when no SENS_EN_INA* is set: the boot console shows none it started"
+    ]
