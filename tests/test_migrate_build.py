@@ -372,3 +372,18 @@ def test_what_the_i2c_launcher_started_is_proposed_and_nothing_guessed() -> None
         "the board's i2c_launcher scans I2C bus 1, 2 for power monitors (INA226, INA228, INA238) "
         "when no SENS_EN_INA* is set: the boot console shows none it started"
     ]
+
+
+@pytest.mark.parametrize(
+    ("when", "holds_for"),
+    # a board row's condition on its switch, as the board table writes PX4's `param compare`
+    # (==) and `param greater` (>) tests, the others alike; the first clause decides
+    [("SENS_EN_LL40LS == 2", {2}), ("SENS_EN_SF1XX > 0", {1, 2}), ("X != 1", {-1, 0, 2}),
+     ("X >= 1", {1, 2}), ("X <= 1", {-1, 0, 1}), ("X < 1", {-1, 0}), ("X == -1", {-1}),
+     ("SENS_EN_SDP3X == 1 and not sdp3x started (start -X)", {1}),
+     ("", {-1, 0, 1, 2}), ("$VEHICLE_TYPE == fw", {-1, 0, 1, 2})],
+)  # fmt: skip
+def test_a_board_rows_condition_holds_as_the_shell_test_does(when: str, holds_for: set) -> None:
+    from px4params.migrate.build import _holds
+
+    assert {v for v in (-1, 0, 1, 2) if _holds(when, v)} == holds_for
