@@ -168,15 +168,23 @@ def test_a_calibration_slot_that_holds_no_device_id_is_said_so() -> None:
 
 
 def test_a_board_named_without_a_board_table_is_refused(monkeypatch: pytest.MonkeyPatch) -> None:
-    from px4params.errors import MigrationError
-    from px4params.migrate import build
+    import sys
 
-    monkeypatch.setattr(build, "_board_table", lambda: None)  # an installation without one
+    from px4params.errors import MigrationError
+
+    # an installation without the board table (px4params.vehicle.boards cannot be imported)
+    monkeypatch.setitem(sys.modules, "px4params.vehicle.boards", None)
     with pytest.raises(MigrationError) as e:
         migrate.migrate(today({}), board="px4_fmu-v6x", table="current")
     assert str(e.value) == (
         "--board px4_fmu-v6x: this installation has no board table (px4params.vehicle.boards)"
     )
+    # a log's board is then judged from the parameters, and the report says so
+    log = OldConfig("t.ulg", "ULog", {}, version=(1, 15, 0), hardware="PX4_FMU_V6X")
+    assert migrate.migrate(log, table="current").assumptions == [
+        "board PX4_FMU_V6X: no board table here; what its script starts is judged from the "
+        "parameters and the boot console"
+    ]
 
 
 def test_a_type_whose_bus_defaults_to_spi_is_proposed_on_i2c_tag_first(tmp_path: Path) -> None:
