@@ -395,3 +395,15 @@ def test_a_board_rows_condition_holds_as_the_shell_test_does(when: str, holds_fo
     from px4params.migrate.build import _holds
 
     assert {v for v in (-1, 0, 1, 2) if _holds(when, v)} == holds_for
+
+
+def test_a_setting_rounded_into_its_field_is_noted_with_the_fields_unit_if_it_has_one() -> None:
+    # a `param set` list may give a whole-number setting with a fraction: it is rounded to
+    # nearest into the field (PCF8583_MAGNET: pulses, no unit; PCF8583_POOL: microseconds)
+    params = {"SENS_EN_PCF8583": 1, "PCF8583_MAGNET": 2.6, "PCF8583_POOL": 1000000.4}
+    (inst,) = migrate.migrate(today(params), table="current").instances
+    assert (inst.values["magnet_pulses"], inst.values["pool_interval"]) == (3, 1000000)
+    assert inst.notes == [
+        "PCF8583_POOL = 1000000.4 us becomes pool_interval = 1000000 us (uint24, 1..16777215)",
+        "PCF8583_MAGNET = 2.6 becomes magnet_pulses = 3 (uint8, 1..255)",
+    ]
