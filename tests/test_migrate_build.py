@@ -330,6 +330,10 @@ def test_the_boards_script_starts_its_compass_on_the_buses_it_names_only() -> No
         assert [(i.name, i.values["bus.i2c.bus_id"]) for i in proposal.instances] == [
             ("IST8310#0", bus)
         ]
+    # nor does it start another chip on those buses: an AK09916 on bus 1 was found by probing
+    ak09916 = devid.encode("i2c", 1, 0x0C, 0x09)
+    proposal = migrate.migrate(today({"CAL_MAG0_ID": ak09916}), table="current", board=v5)
+    assert [i.name for i in proposal.instances] == ["AK09916#0"]
 
 
 def test_a_driver_running_with_the_rotation_rc_sensors_probes_with_is_the_probes() -> None:
@@ -407,3 +411,16 @@ def test_a_setting_rounded_into_its_field_is_noted_with_the_fields_unit_if_it_ha
         "PCF8583_POOL = 1000000.4 us becomes pool_interval = 1000000 us (uint24, 1..16777215)",
         "PCF8583_MAGNET = 2.6 becomes magnet_pulses = 3 (uint8, 1..255)",
     ]
+
+
+def test_a_boot_console_line_is_the_evidence_of_one_device_only() -> None:
+    # PX4 1.11 prints no address: one ist8310 line on bus 1 is the start of one of two
+    # IST8310s there (the first found); the other was not started at boot by that line
+    first, second = devid.encode("i2c", 1, 0x0E, 0x06), devid.encode("i2c", 1, 0x0F, 0x06)
+    console = "ist8310 #0 on I2C bus 1 (external, equal to '-b 2')\n"
+    old = OldConfig("t.ulg", "ULog", {"CAL_MAG0_ID": first, "CAL_MAG1_ID": second},
+                    version=(1, 11, 2), console=console)  # fmt: skip
+    proposal = migrate.migrate(old, table="current")
+    origins = [i.origin for i in proposal.instances]
+    assert [i.name for i in proposal.instances] == ["IST8310#0", "IST8310#1"]
+    assert sum("boot console line 1" in o for o in origins) == 1, origins
