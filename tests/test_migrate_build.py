@@ -424,3 +424,18 @@ def test_a_boot_console_line_is_the_evidence_of_one_device_only() -> None:
     origins = [i.origin for i in proposal.instances]
     assert [i.name for i in proposal.instances] == ["IST8310#0", "IST8310#1"]
     assert sum("boot console line 1" in o for o in origins) == 1, origins
+
+
+def test_a_devices_console_line_is_found_past_lines_of_other_addresses() -> None:
+    ak09916 = devid.encode("i2c", 1, 0x0C, 0x09)
+    console = (
+        "ak09916 #0 on I2C bus 1 (external) address 0x0D\n"
+        "ak09916 #1 on I2C bus 1 (external) address 0x0C\n"
+    )
+    proposal = migrate.migrate(today({"CAL_MAG0_ID": ak09916}, console), table="current")
+    assert [(i.name, i.values["bus.i2c.address"]) for i in proposal.instances] == [
+        ("AK09916#0", 0x0C), ("AK09916#1", 0x0D)
+    ]  # fmt: skip
+    assert proposal.instances[0].origin.endswith(
+        "; boot console line 2: 'ak09916 #1 on I2C bus 1 (external) address 0x0C'"
+    )
