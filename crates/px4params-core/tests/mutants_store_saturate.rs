@@ -84,67 +84,68 @@ fn a_leaf_out_of_range_is_refused_unless_saturated() {
 
 #[test]
 fn a_saturated_leaf_is_clamped_to_its_fields_bound() {
-    // address 200 -> 127: 0001 1111111 1 11101 = 1F FE 80.
-    let (l, mut store) = fixture();
-    set(
-        &l,
-        &mut store,
-        Which::Value,
-        "address",
-        Scalar::Uint(200),
-        true,
-    )
-    .unwrap();
-    assert_eq!(
-        store.get(SENSOR, 1, Which::Value).unwrap(),
-        [0x1F, 0xFE, 0x80]
-    );
-    assert_eq!(store.get(SENSOR, 1, Which::Default).unwrap(), DEFAULT);
-    // offset -20 -> -16: 0001 1000101 1 10000 = 18 B8 00, in the default too.
-    let (l, mut store) = fixture();
-    set(
-        &l,
-        &mut store,
-        Which::Default,
-        "offset",
-        Scalar::Int(-20),
-        true,
-    )
-    .unwrap();
-    assert_eq!(
-        store.get(SENSOR, 1, Which::Default).unwrap(),
-        [0x18, 0xB8, 0x00]
-    );
-    // offset 40 -> 15: 0001 1000101 1 01111 = 18 B7 80.
-    let (l, mut store) = fixture();
-    set(
-        &l,
-        &mut store,
-        Which::Value,
-        "offset",
-        Scalar::Int(40),
-        true,
-    )
-    .unwrap();
-    assert_eq!(
-        store.get(SENSOR, 1, Which::Value).unwrap(),
-        [0x18, 0xB7, 0x80]
-    );
-    // A value in range is written as it is, saturated or not: address 0x22 is 14 5E 80.
-    for saturate in [false, true] {
-        let (l, mut store) = fixture();
-        set(
-            &l,
-            &mut store,
+    // (written to, field, value, saturate, the bytes by hand); the other one stays the default.
+    for (which, field, value, saturate, bytes) in [
+        // address 200 -> 127: 0001 1111111 1 11101 = 1F FE 80.
+        (
+            Which::Value,
+            "address",
+            Scalar::Uint(200),
+            true,
+            [0x1F, 0xFE, 0x80],
+        ),
+        // offset -20 -> -16: 0001 1000101 1 10000 = 18 B8 00, in the default too.
+        (
+            Which::Default,
+            "offset",
+            Scalar::Int(-20),
+            true,
+            [0x18, 0xB8, 0x00],
+        ),
+        // offset 40 -> 15: 0001 1000101 1 01111 = 18 B7 80.
+        (
+            Which::Value,
+            "offset",
+            Scalar::Int(40),
+            true,
+            [0x18, 0xB7, 0x80],
+        ),
+        // A value in range is written as it is, saturated or not: address 0x22 is 14 5E 80.
+        (
             Which::Value,
             "address",
             Scalar::Uint(0x22),
-            saturate,
-        )
-        .unwrap();
+            false,
+            [0x14, 0x5E, 0x80],
+        ),
+        (
+            Which::Value,
+            "address",
+            Scalar::Uint(0x22),
+            true,
+            [0x14, 0x5E, 0x80],
+        ),
+    ] {
+        let (l, mut store) = fixture();
+        set(&l, &mut store, which, field, value, saturate).unwrap();
         assert_eq!(
-            store.get(SENSOR, 1, Which::Value).unwrap(),
-            [0x14, 0x5E, 0x80]
+            store.get(SENSOR, 1, which).unwrap(),
+            bytes,
+            "{field} {value:?}"
+        );
+        let other = match which {
+            Which::Value => Which::Default,
+            _ => Which::Value,
+        };
+        let kept = match other {
+            // A value follows its default until written itself.
+            Which::Value => bytes,
+            _ => DEFAULT,
+        };
+        assert_eq!(
+            store.get(SENSOR, 1, other).unwrap(),
+            kept,
+            "{field} {value:?}"
         );
     }
 }
