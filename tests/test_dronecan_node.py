@@ -639,3 +639,48 @@ def test_a_turn_with_nothing_to_read_does_not_wait() -> None:
         assert time.monotonic() - started < 5.0
     finally:
         line.close()
+
+
+# -- GetSet's edges (issue 40, mutlinks3: the survivors of the dronecan_node target) ------------
+
+
+def test_the_counters_count_each_accepted_and_each_refused_write(bench: Bench) -> None:
+    """The summary of ``dronecan serve`` counts every write: two accepted, then two refused
+    (out of range: the address is a 7-bit I2C address), each once."""
+    node = bench.node
+    for address in (0x44, 0x46):
+        assert _field(bench.getset(ADDRESS, integer_value=address).value)[1] == address
+    for address in (200, 300):
+        assert _field(bench.getset(ADDRESS, integer_value=address).value)[1] == 0x46
+    assert (node.stats["accepted"], node.stats["refused"], node.stats["requests"]) == (2, 2, 4)
+    assert len(bench.logged) == 4 and bench.logged[2].startswith(f"refused: {ADDRESS}: ")
+
+
+def test_a_name_that_is_not_ascii_is_no_parameter(bench: Bench) -> None:
+    """Parameter names are ASCII (PX4's, and GetSet's uint8 name field as pydronecan fills
+    it): a name with a byte above 0x7F names no parameter. It is the empty answer, a write
+    to it a refusal naming it, and the node answers the next request."""
+    request = GETSET.Request(name=b"INA238\xff_ADDR")
+    answer = bench.call(request)
+    assert bytes(answer.name) == b"" and _field(answer.value)[0] == "empty"
+    request.value = VALUE(integer_value=0x44)
+    answer = bench.call(request)
+    assert bytes(answer.name) == b"" and _field(answer.value)[0] == "empty"
+    assert bench.node.stats["refused"] == 1 and bench.node.stats["accepted"] == 0
+    assert len(bench.logged) == 1 and bench.logged[0].startswith("refused: INA238")
+    assert "no such parameter" in bench.logged[0]
+    assert _field(bench.getset(ADDRESS).value) == ("integer_value", 0x45)
+
+
+def test_a_write_by_an_index_past_the_end_is_the_empty_answer_alone(bench: Bench) -> None:
+    """GetSet: with an empty name the index picks the parameter; an index past the last one
+    picks none, so a value sent with it is written nowhere: the answer is the empty one
+    ("no such parameter"), no value changed, and there is no name to refuse or log."""
+    before = {i: _field(bench.getset(index=i).value) for i in range(len(bench.node.params))}
+    bench.node.stats["requests"] = 0
+    answer = bench.getset(index=len(bench.node.params), integer_value=0x44)
+    assert bytes(answer.name) == b"" and _field(answer.value)[0] == "empty"
+    assert bench.logged == []
+    assert (bench.node.stats["accepted"], bench.node.stats["refused"]) == (0, 0)
+    after = {i: _field(bench.getset(index=i).value) for i in range(len(bench.node.params))}
+    assert after == before
