@@ -684,3 +684,56 @@ def test_a_write_by_an_index_past_the_end_is_the_empty_answer_alone(bench: Bench
     assert (bench.node.stats["accepted"], bench.node.stats["refused"]) == (0, 0)
     after = {i: _field(bench.getset(index=i).value) for i in range(len(bench.node.params))}
     assert after == before
+
+
+def test_erase_after_a_save_writes_the_defaults_over_the_saved_value(
+    bench: Bench, store_file: Path
+) -> None:
+    """ERASE (ExecuteOpcode 1): "the parameters are reset to their defaults" in the node's
+    storage. A changed address saved first (0x44; PX4's INA238 default is 0x45) is the
+    default in the file after ERASE; the running value stays 0x44 until the restart."""
+    bench.getset(ADDRESS, integer_value=0x44)
+    assert bench.opcode(OPCODE.Request().OPCODE_SAVE).ok
+    assert _load(store_file).get("INA238#1.bus.i2c.address") == 0x44
+    assert bench.opcode(OPCODE.Request().OPCODE_ERASE).ok
+    saved = _load(store_file)
+    assert saved.get("INA238#1.bus.i2c.address") == 0x45 and not saved.changed("INA238#1")
+    assert _field(bench.getset(ADDRESS).value) == ("integer_value", 0x44)
+
+
+def test_a_store_file_another_writer_left_unreadable_is_named_once_and_not_read(
+    bench: Bench, store_file: Path
+) -> None:
+    """A turn that finds the store file changed but unreadable (another writer left it
+    truncated) keeps the node's values and says why, once for that version of the file."""
+    store_file.write_bytes(store_file.read_bytes()[:10])
+    for _ in range(2):
+        bench.node._next_poll = 0.0  # the file is due to be looked at now
+        bench.node.step(0)
+    bench.line.frames()  # the NodeStatus the turns sent
+    assert len(bench.logged) == 1
+    assert bench.logged[0].startswith(f"store changed by another writer, not read: {store_file}")
+    assert _field(bench.getset(ADDRESS).value) == ("integer_value", 0x45)
+
+
+def test_a_refused_save_whose_file_cannot_be_read_again_keeps_the_values_without_saying_so(
+    bench: Bench, store_file: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """SAVE over another writer's change of the same leaf is refused; when the file cannot
+    be read back either (it broke meanwhile, played here by its reload failing), the node's
+    values stay and its refusal does not claim they became the file's."""
+    from px4params.errors import StoreFileError
+
+    bench.getset(ADDRESS, integer_value=0x44)
+    other = _load(store_file)
+    other.set("INA238#1.bus.i2c.address", 0x47)
+    other.save(store_file)
+
+    def unreadable() -> None:
+        raise StoreFileError("cannot read: Input/output error", store_file)
+
+    monkeypatch.setattr(bench.node.session, "reload", unreadable)
+    assert bench.opcode(OPCODE.Request().OPCODE_SAVE).ok is False
+    assert bench.logged[-1].startswith("refused: save: ")
+    assert bench.logged[-1].endswith("; nothing was saved")
+    assert _field(bench.getset(ADDRESS).value) == ("integer_value", 0x44)
