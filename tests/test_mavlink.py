@@ -1906,3 +1906,101 @@ class TestTurnByTurnSigned:
             station.close()
             server.close()
         assert (server.stats["ignored"], server.stats["received"]) == (2, 0)
+
+
+@pytest.mark.issue40
+class TestTurnByTurnQuiet:
+    """What the server does not do (issue 40, mutlinks3: the survivors of the mavlink target in
+    lines 424-821): a stream that ends, is stopped or loses its requester says nothing in the
+    log; messages it does not serve get no answer and no log line; refusals count one each."""
+
+    def test_a_list_streamed_to_its_end_logs_nothing(
+        self, turns: tuple[MavlinkParamServer, Station]
+    ) -> None:
+        server, station = turns
+        listed = values(station.exchange(mavlink.MAVLink_param_request_list_message(1, 1)))
+        for _ in range(5):
+            listed += values(turn(server, station))
+        assert len(listed) == 1 + len(NAMES)
+        assert server.logged == []  # type: ignore[attr-defined]
+
+    def test_a_hash_check_set_stops_the_stream_without_a_log_line(
+        self, turns: tuple[MavlinkParamServer, Station]
+    ) -> None:
+        server, station = turns
+        first = station.exchange(mavlink.MAVLink_param_request_list_message(1, 1))
+        station.exchange(set_frame(station.mav, 1, 1, "_HASH_CHECK", value_of(first[0]), 6))
+        for _ in range(3):
+            assert turn(server, station) == []
+        assert server.logged == []  # type: ignore[attr-defined]
+
+    def test_a_stream_whose_requester_fell_silent_stops_without_a_log_line(
+        self, store: px4params.Store
+    ) -> None:
+        lines: list[str] = []
+        server = MavlinkParamServer(
+            store, "127.0.0.1", 0, param_rate=1e9, peer_timeout=0.5, log=lines.append
+        )
+        station = Station(server)
+        try:
+            assert len(station.exchange(mavlink.MAVLink_param_request_list_message(1, 1))) == 20
+            time.sleep(0.6)  # longer than peer_timeout: the requester is gone
+            for _ in range(3):
+                assert turn(server, station) == []
+            assert lines == []
+        finally:
+            station.close()
+            server.close()
+
+    def test_each_refused_write_counts_once(
+        self, turns: tuple[MavlinkParamServer, Station]
+    ) -> None:
+        server, station = turns
+        for value in (200, 300):  # a 7-bit I2C address: out of range
+            got = station.exchange(set_frame(station.mav, 1, 1, "INA238_1C", value, INT32))
+            assert kinds(got)[-1] == "PARAM_ERROR"
+        assert server.stats["refused"] == 2 and server.stats["accepted"] == 0
+
+    def test_a_read_of_a_name_that_is_not_ascii_is_refused_in_ascii(
+        self, turns: tuple[MavlinkParamServer, Station]
+    ) -> None:
+        """param_id is ASCII (MAVLink's char[16]); a byte above 0x7F names no parameter. The
+        refusal is PX4's, the STATUSTEXT (ASCII as well) showing the byte as '?'."""
+        server, station = turns
+        got = station.exchange(mavlink.MAVLink_param_request_read_message(1, 1, b"BAT\xff", -1))
+        assert kinds(got) == ["STATUSTEXT", "PARAM_ERROR"]
+        assert Client.text(got) == ["[pm] unknown param: BAT?"]
+        assert server.logged == []  # type: ignore[attr-defined]
+
+    def test_messages_it_does_not_serve_get_no_answer_and_no_log_line(
+        self, turns: tuple[MavlinkParamServer, Station]
+    ) -> None:
+        """A mission request addressed to this system and a SYSTEM_TIME (which addresses no
+        one) are no parameter, command or FTP traffic: each is counted ignored, nothing more."""
+        server, station = turns
+        ignored = server.stats["ignored"]
+        assert station.exchange(mavlink.MAVLink_mission_request_list_message(1, 1, 0)) == []
+        assert station.exchange(mavlink.MAVLink_system_time_message(0, 0)) == []
+        assert server.stats["ignored"] == ignored + 2
+        assert server.logged == []  # type: ignore[attr-defined]
+
+    def test_a_store_file_another_writer_left_unreadable_is_named_once(
+        self, store: px4params.Store, tmp_path: Path
+    ) -> None:
+        path = tmp_path / "vehicle.store"
+        store.save(path)
+        lines: list[str] = []
+        server = MavlinkParamServer(
+            store, "127.0.0.1", 0, save_path=path, poll_interval=0, log=lines.append
+        )
+        station = Station(server)
+        try:
+            station.exchange(mavlink.MAVLink_heartbeat_message(6, 8, 0, 0, 0, 3))
+            path.write_bytes(path.read_bytes()[:10])  # truncated by another writer
+            for _ in range(2):
+                assert turn(server, station) == []
+            assert len(lines) == 1
+            assert lines[0].startswith(f"store changed by another writer, not read: {path}")
+        finally:
+            station.close()
+            server.close()
