@@ -2004,3 +2004,14 @@ class TestTurnByTurnQuiet:
         finally:
             station.close()
             server.close()
+
+
+@pytest.mark.issue40
+def test_a_param_set_message_packs_bytewise_as_mavlink_2_unless_asked_for_1() -> None:
+    """Packed as pymavlink packs its own messages of the v20 dialect: a MAVLink 2 frame
+    (magic 0xFD) by default, MAVLink 1 (0xFE) only with force_mavlink1."""
+    msg = param_set_message(1, 1, "SYS_AUTOSTART", 4001, INT32)
+    own = mavlink.MAVLink_param_set_message(1, 1, b"SYS_AUTOSTART", 0.0, INT32)
+    assert own.pack(mavlink.MAVLink(None))[0] == 0xFD
+    assert msg.pack(mavlink.MAVLink(None))[0] == 0xFD
+    assert msg.pack(mavlink.MAVLink(None), force_mavlink1=True)[0] == 0xFE
