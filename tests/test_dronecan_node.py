@@ -737,3 +737,10 @@ def test_a_refused_save_whose_file_cannot_be_read_again_keeps_the_values_without
     assert bench.logged[-1].startswith("refused: save: ")
     assert bench.logged[-1].endswith("; nothing was saved")
     assert _field(bench.getset(ADDRESS).value) == ("integer_value", 0x44)
+
+
+def test_each_save_counts_once(bench: Bench, store_file: Path) -> None:
+    """The summary of ``dronecan serve`` counts the saves: two SAVEs and an ERASE, three."""
+    for opcode in (OPCODE.Request().OPCODE_SAVE, OPCODE.Request().OPCODE_SAVE, 1):
+        assert bench.opcode(opcode).ok
+    assert bench.node.stats["saves"] == 3

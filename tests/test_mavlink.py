@@ -1984,6 +1984,21 @@ class TestTurnByTurnQuiet:
         assert server.stats["ignored"] == ignored + 2
         assert server.logged == []  # type: ignore[attr-defined]
 
+    def test_sent_counts_every_datagram_sent(
+        self, turns: tuple[MavlinkParamServer, Station]
+    ) -> None:
+        """The CLI's summary: each datagram sent to each peer counts once (a whole list here:
+        the hash and every parameter, one datagram each)."""
+        server, station = turns
+        sent = server.stats["sent"]
+        station.send(mavlink.MAVLink_param_request_list_message(1, 1))
+        datagrams = 0
+        for _ in range(5):
+            turn(server, station)
+            datagrams += len(station.frames)
+        assert datagrams == 1 + len(NAMES)
+        assert server.stats["sent"] == sent + datagrams
+
     def test_a_store_file_another_writer_left_unreadable_is_named_once(
         self, store: px4params.Store, tmp_path: Path
     ) -> None:
