@@ -744,3 +744,12 @@ def test_each_save_counts_once(bench: Bench, store_file: Path) -> None:
     for opcode in (OPCODE.Request().OPCODE_SAVE, OPCODE.Request().OPCODE_SAVE, 1):
         assert bench.opcode(opcode).ok
     assert bench.node.stats["saves"] == 3
+
+
+def test_a_restart_starts_the_uptime_again(bench: Bench) -> None:
+    """NodeStatus.uptime_sec: other nodes tell that a node restarted by its uptime going
+    backwards (the DroneCAN specification). After RestartNode it counts from 0 again."""
+    bench.node._started -= 100  # the node has been up for 100 s
+    assert bench.call(NODE_INFO.Request()).status.uptime_sec >= 100
+    assert bench.call(RESTART.Request(magic_number=RESTART.Request().MAGIC_NUMBER)).ok
+    assert bench.call(NODE_INFO.Request()).status.uptime_sec < 100
