@@ -2030,3 +2030,51 @@ def test_a_param_set_message_packs_bytewise_as_mavlink_2_unless_asked_for_1() ->
     assert own.pack(mavlink.MAVLink(None))[0] == 0xFD
     assert msg.pack(mavlink.MAVLink(None))[0] == 0xFD
     assert msg.pack(mavlink.MAVLink(None), force_mavlink1=True)[0] == 0xFE
+
+
+@pytest.mark.issue40
+class TestTurnByTurnFileAndClock:
+    """A write over another writer's save of the same parameter, and the boot time the
+    metadata messages carry (issue 40, mutlinks3)."""
+
+    def test_a_write_over_another_writer_s_save_of_it_is_refused_showing_the_file_s_value(
+        self, store: px4params.Store, tmp_path: Path, schema: px4params.Schema
+    ) -> None:
+        """The store's one write path refuses a write to a leaf another writer changed since
+        this server read the file (nothing merged silently); the ground station is shown the
+        file's value (as PX4 answers a refused PARAM_SET with the value it keeps)."""
+        path = tmp_path / "vehicle.store"
+        store.save(path)
+        server = MavlinkParamServer(
+            store, "127.0.0.1", 0, save_path=path, poll_interval=3600, heartbeat_interval=3600
+        )
+        station = Station(server)
+        try:
+            station.exchange(mavlink.MAVLink_heartbeat_message(6, 8, 0, 0, 0, 3))
+            other = Session(px4params.Store.load(path, schema, classic=CLASSIC), str(path))
+            other.commit(lambda: other.store.set("SYS_AUTOSTART", 4001))
+            got = station.exchange(set_frame(station.mav, 1, 1, "SYS_AUTOSTART", 4002, INT32))
+            shown = {value for name, value, _, _ in values(got) if name == "SYS_AUTOSTART"}
+            assert shown == {4001}
+            assert kinds(got)[-1] == "PARAM_ERROR"
+            assert server.stats["refused"] == 1 and server.store.get("SYS_AUTOSTART") == 4001
+        finally:
+            station.close()
+            server.close()
+
+    @pytest.mark.parametrize("message_id", [397, 395])  # COMPONENT_METADATA, _INFORMATION
+    def test_the_metadata_messages_carry_the_milliseconds_since_the_server_started(
+        self, turns: tuple[MavlinkParamServer, Station], message_id: int
+    ) -> None:
+        """time_boot_ms (MAVLink: time since system boot, in ms), the messages' first field.
+        The server has been up for 100000 s here; the test itself takes well under 60 s."""
+        server, station = turns
+        server._started -= 100_000
+        station.exchange(
+            mavlink.MAVLink_command_long_message(
+                1, 1, mavlink.MAV_CMD_REQUEST_MESSAGE, 0, message_id, 0, 0, 0, 0, 0, 0
+            )
+        )
+        frame = next(f for f in station.frames if int.from_bytes(f[7:10], "little") == message_id)
+        (time_boot_ms,) = struct.unpack("<I", (frame[10 : 10 + frame[1]] + bytes(4))[:4])
+        assert 100_000_000 <= time_boot_ms < 100_060_000
