@@ -1999,6 +1999,52 @@ class TestTurnByTurnQuiet:
         assert datagrams == 1 + len(NAMES)
         assert server.stats["sent"] == sent + datagrams
 
+    def test_each_accepted_write_counts_once(
+        self, turns: tuple[MavlinkParamServer, Station]
+    ) -> None:
+        server, station = turns
+        for value in (0x44, 0x46):
+            got = station.exchange(set_frame(station.mav, 1, 1, "INA238_1C", value, INT32))
+            assert [v for _, v, _, _ in values(got)] == [value]
+        assert server.stats["accepted"] == 2 and server.stats["refused"] == 0
+
+    def test_another_writer_s_save_of_two_parameters_announces_both_and_counts_them(
+        self, store: px4params.Store, tmp_path: Path, schema: px4params.Schema
+    ) -> None:
+        path = tmp_path / "vehicle.store"
+        store.save(path)
+        lines: list[str] = []
+        server = MavlinkParamServer(
+            store, "127.0.0.1", 0, save_path=path, poll_interval=0, log=lines.append
+        )
+        station = Station(server)
+        try:
+            station.exchange(mavlink.MAVLink_heartbeat_message(6, 8, 0, 0, 0, 3))
+            other = Session(px4params.Store.load(path, schema, classic=CLASSIC), str(path))
+            other.commit(lambda: other.store.set("SYS_AUTOSTART", 4001))
+            other.commit(lambda: other.store.set("INA238#1.bus.i2c.address", 0x46))
+            got = {name: value for name, value, _, _ in values(turn(server, station))}
+            assert got == {"SYS_AUTOSTART": 4001, "INA238_1C": 0x46}
+            assert lines == ["store changed by another writer: 2 parameters announced"]
+        finally:
+            station.close()
+            server.close()
+
+    def test_mavlink_ftp_answers_go_to_the_asker_on_network_0(
+        self, turns: tuple[MavlinkParamServer, Station]
+    ) -> None:
+        """FILE_TRANSFER_PROTOCOL's target_network is 0 (broadcast, as PX4 sends it); the
+        answer is addressed to the asking system and component (255, 190)."""
+        _server, station = turns
+        reset = bytes([0, 0, 0, 8]) + bytes(247)  # seq 0, session 0, ResetSessions
+        got = station.exchange(mavlink.MAVLink_file_transfer_protocol_message(0, 1, 1, list(reset)))
+        (answer,) = [m for m in got if m.get_type() == "FILE_TRANSFER_PROTOCOL"]
+        assert (answer.target_network, answer.target_system, answer.target_component) == (
+            0,
+            255,
+            190,
+        )
+
     def test_a_store_file_another_writer_left_unreadable_is_named_once(
         self, store: px4params.Store, tmp_path: Path
     ) -> None:
@@ -2057,6 +2103,7 @@ class TestTurnByTurnFileAndClock:
             shown = {value for name, value, _, _ in values(got) if name == "SYS_AUTOSTART"}
             assert shown == {4001}
             assert kinds(got)[-1] == "PARAM_ERROR"
+            assert got[-1].param_index == NAMES.index("SYS_AUTOSTART")
             assert server.stats["refused"] == 1 and server.store.get("SYS_AUTOSTART") == 4001
         finally:
             station.close()
