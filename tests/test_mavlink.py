@@ -2045,6 +2045,14 @@ class TestTurnByTurnQuiet:
             190,
         )
 
+    def test_a_logged_integer_shows_every_digit_and_a_float_9_significant(self) -> None:
+        """The log line of a write ("NAME = value"): an int32 as its digits (10 of them at
+        most), a float32 to 9 significant digits (enough to tell every float32 apart)."""
+        shown = mavlink_server_module._shown
+        assert shown(2_147_483_647) == "2147483647" and shown(-2_147_483_648) == "-2147483648"
+        assert shown(0.1) == "0.1" and shown(1 / 3) == "0.333333333"
+        assert shown(float("nan")) == "nan"
+
     def test_a_store_file_another_writer_left_unreadable_is_named_once(
         self, store: px4params.Store, tmp_path: Path
     ) -> None:
