@@ -772,5 +772,8 @@ fi
 # red (test_a_restart_starts_the_uptime_again written for one); slcan's 1 likewise (mutlinks2).
 # mavlink's 21: lines written more than once (`return True` five times in _handle, the `0,`
 # fields of AUTOPILOT_VERSION and HEARTBEAT, `self._stream = None`, ...: mutmut 2's line-text
-# lookup), not planted by hand in this round: open.
+# lookup); 8 planted by hand: the five `return True` of _handle (killed by
+# test_every_request_it_serves_is_counted_received_not_ignored, written for them), line 503's
+# `self._stream = None`, 716's `0,`, 422's `now = time.monotonic()` (killed by earlier tests); the
+# other 13 not planted: open.
 # No "before" of dronecan_client, slcan (no baseline runs: no time on the shared cores).

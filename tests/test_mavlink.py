@@ -2053,6 +2053,27 @@ class TestTurnByTurnQuiet:
         assert shown(0.1) == "0.1" and shown(1 / 3) == "0.333333333"
         assert shown(float("nan")) == "nan"
 
+    def test_every_request_it_serves_is_counted_received_not_ignored(
+        self, turns: tuple[MavlinkParamServer, Station]
+    ) -> None:
+        """A list, a read, a write, a command and an FTP request addressed to this server are
+        served: the CLI's summary counts them received, none ignored."""
+        server, station = turns
+        ignored, received = server.stats["ignored"], server.stats["received"]
+        reset = bytes([0, 0, 0, 8]) + bytes(247)  # MAVLink FTP ResetSessions
+        for msg in (
+            mavlink.MAVLink_param_request_list_message(1, 1),
+            mavlink.MAVLink_param_request_read_message(1, 1, b"", 0),
+            set_frame(station.mav, 1, 1, "INA238_1C", 0x46, INT32),
+            mavlink.MAVLink_command_long_message(
+                1, 1, mavlink.MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES, 0, 1, 0, 0, 0, 0, 0, 0
+            ),
+            mavlink.MAVLink_file_transfer_protocol_message(0, 1, 1, list(reset)),
+        ):
+            assert station.exchange(msg) != []
+        assert server.stats["received"] == received + 5
+        assert server.stats["ignored"] == ignored
+
     def test_a_store_file_another_writer_left_unreadable_is_named_once(
         self, store: px4params.Store, tmp_path: Path
     ) -> None:
