@@ -443,8 +443,9 @@ NEW_TESTS="$NEW_TESTS|test_migrate_build"
 #                  tests written after the run (each planted by hand: red); of the last 7,
 #                  planted by hand, 6 are killed by tests/test_migrate_corpus.py (real logs and
 #                  .params in ../shared/data; not among this target's tests: slow under load):
-#                  line 194's suffix pattern, board_device's lines 226, 233, 234 (2); open: 229,
-#                  board_device's "external_i2c_buses" (a board row's -X without -b).
+#                  line 194's suffix pattern, board_device's lines 226, 233, 234 (2); the last,
+#                  229's "external_i2c_buses" (a board row's -X without -b), by
+#                  test_a_row_without_a_bus_starts_on_the_external_buses_only (planted: red).
 # store-flat's known survivors (union tag width, signed p_version, empty arrays) lie past line
 # 240, which this round's runs did not reach: killed by test_flat.py's tests (planted by hand)
 # or listed equivalent (pydsdl refuses arrays of capacity 0).

@@ -336,6 +336,29 @@ def test_the_boards_script_starts_its_compass_on_the_buses_it_names_only() -> No
     assert [i.name for i in proposal.instances] == ["AK09916#0"]
 
 
+def test_a_row_without_a_bus_starts_on_the_external_buses_only() -> None:
+    # PX4's boards/saam/saampixv1_1/init/rc.board_sensors: `hmc5883 -X start`, no -b: the
+    # driver tries every external I2C bus, and the board's i2c.cpp has one, bus 2 (bus 1 is
+    # internal). An HMC5883 on bus 2 is the board's; on bus 1 that line never looked for it.
+    from px4params.vehicle.boards import load_boards
+
+    saam = load_boards().by_name("saam_saampixv1_1")
+    assert saam is not None
+    assert (saam.internal_i2c_buses, saam.external_i2c_buses) == ((1,), (2,))
+    [row] = [r for r in saam.devices if r.driver == "hmc5883"]
+    assert (row.bus, row.internal) == (None, False)
+    on_2 = devid.encode("i2c", 2, 0x1E, 0x01)
+    proposal = migrate.migrate(today({"CAL_MAG0_ID": on_2}), table="current", board=saam)
+    assert proposal.instances == []
+    assert proposal.not_in_manifest == [
+        f"CAL_MAG0_ID = {on_2}: HMC5883 (MAG), I2C bus 2, address 0x1E: started by "
+        f"the board's script ({row.source})"
+    ]
+    on_1 = devid.encode("i2c", 1, 0x1E, 0x01)
+    proposal = migrate.migrate(today({"CAL_MAG0_ID": on_1}), table="current", board=saam)
+    assert [(i.name, i.values["bus.i2c.bus_id"]) for i in proposal.instances] == [("HMC5883#0", 1)]
+
+
 def test_a_driver_running_with_the_rotation_rc_sensors_probes_with_is_the_probes() -> None:
     # PX4 1.11's rc.sensors probes `ak09916 -X -R 6 start` (external compass): an AK09916 the
     # boot console shows running with rotation 6 was started by that probe (proposed, with the
