@@ -915,5 +915,8 @@ fi
 # lookup); 8 planted by hand: the five `return True` of _handle (killed by
 # test_every_request_it_serves_is_counted_received_not_ignored, written for them), line 503's
 # `self._stream = None`, 716's `0,`, 422's `now = time.monotonic()` (killed by earlier tests); the
-# other 13 not planted: open.
+# other 13 planted by hand by the lead (each `mutmut apply <id>` from the merged cache in a clone,
+# then tests/test_mavlink.py -x): all 13 red (`address` without @property, `signing is None` twice,
+# the target check's `and` as `or`, AUTOPILOT_VERSION's and HEARTBEAT's `0,` fields as 1,
+# PARAM_ERROR, COMMAND_ACK, HEARTBEAT and STATUSTEXT built as None). mavlink: none untested open.
 # No "before" of dronecan_client, slcan (no baseline runs: no time on the shared cores).
