@@ -705,6 +705,26 @@ def turns(store: px4params.Store, tmp_path: Path) -> Iterator[tuple[MavlinkParam
     server.close()
 
 
+@pytest.fixture
+def polled(
+    store: px4params.Store, tmp_path: Path
+) -> Iterator[tuple[MavlinkParamServer, Station, Path, list[str]]]:
+    """The server over a saved store file it reads again at every turn (poll_interval 0: what
+    another writer saves is seen at once), the file, its log lines, and one ground station that
+    has spoken (a HEARTBEAT)."""
+    path = tmp_path / "vehicle.store"
+    store.save(path)
+    lines: list[str] = []
+    server = MavlinkParamServer(
+        store, "127.0.0.1", 0, save_path=path, poll_interval=0, log=lines.append
+    )
+    station = Station(server)
+    station.exchange(mavlink.MAVLink_heartbeat_message(6, 8, 0, 0, 0, 3))
+    yield server, station, path, lines
+    station.close()
+    server.close()
+
+
 @pytest.mark.issue40
 class TestTurnByTurnSetup:
     """What the server sets up and when its turns act (issue 40, mutlinks): before
@@ -1250,27 +1270,18 @@ class TestTurnByTurn:
         assert len(server.logged) == 2 and "INA238#0" in server.logged[0]  # type: ignore[attr-defined]
 
     def test_another_writer_s_save_is_announced_to_every_peer(
-        self, store: px4params.Store, tmp_path: Path, schema: px4params.Schema
+        self,
+        polled: tuple[MavlinkParamServer, Station, Path, list[str]],
+        schema: px4params.Schema,
     ) -> None:
-        path = tmp_path / "vehicle.store"
-        store.save(path)
-        lines: list[str] = []
-        server = MavlinkParamServer(
-            store, "127.0.0.1", 0, save_path=path, poll_interval=0, log=lines.append
-        )
-        station = Station(server)
-        try:
-            station.exchange(mavlink.MAVLink_heartbeat_message(6, 8, 0, 0, 0, 3))
-            other = Session(px4params.Store.load(path, schema, classic=CLASSIC), str(path))
-            other.commit(lambda: other.store.set("SYS_AUTOSTART", 4001))
-            got = values(turn(server, station))
-            index = NAMES.index("SYS_AUTOSTART")
-            assert got == [("SYS_AUTOSTART", 4001, index, len(NAMES))]
-            assert lines == ["store changed by another writer: 1 parameters announced"]
-            assert turn(server, station) == []  # said once
-        finally:
-            station.close()
-            server.close()
+        server, station, path, lines = polled
+        other = Session(px4params.Store.load(path, schema, classic=CLASSIC), str(path))
+        other.commit(lambda: other.store.set("SYS_AUTOSTART", 4001))
+        got = values(turn(server, station))
+        index = NAMES.index("SYS_AUTOSTART")
+        assert got == [("SYS_AUTOSTART", 4001, index, len(NAMES))]
+        assert lines == ["store changed by another writer: 1 parameters announced"]
+        assert turn(server, station) == []  # said once
 
     @pytest.mark.parametrize(
         ("command", "param1", "result", "reply"),
@@ -2009,26 +2020,17 @@ class TestTurnByTurnQuiet:
         assert server.stats["accepted"] == 2 and server.stats["refused"] == 0
 
     def test_another_writer_s_save_of_two_parameters_announces_both_and_counts_them(
-        self, store: px4params.Store, tmp_path: Path, schema: px4params.Schema
+        self,
+        polled: tuple[MavlinkParamServer, Station, Path, list[str]],
+        schema: px4params.Schema,
     ) -> None:
-        path = tmp_path / "vehicle.store"
-        store.save(path)
-        lines: list[str] = []
-        server = MavlinkParamServer(
-            store, "127.0.0.1", 0, save_path=path, poll_interval=0, log=lines.append
-        )
-        station = Station(server)
-        try:
-            station.exchange(mavlink.MAVLink_heartbeat_message(6, 8, 0, 0, 0, 3))
-            other = Session(px4params.Store.load(path, schema, classic=CLASSIC), str(path))
-            other.commit(lambda: other.store.set("SYS_AUTOSTART", 4001))
-            other.commit(lambda: other.store.set("INA238#1.bus.i2c.address", 0x46))
-            got = {name: value for name, value, _, _ in values(turn(server, station))}
-            assert got == {"SYS_AUTOSTART": 4001, "INA238_1C": 0x46}
-            assert lines == ["store changed by another writer: 2 parameters announced"]
-        finally:
-            station.close()
-            server.close()
+        server, station, path, lines = polled
+        other = Session(px4params.Store.load(path, schema, classic=CLASSIC), str(path))
+        other.commit(lambda: other.store.set("SYS_AUTOSTART", 4001))
+        other.commit(lambda: other.store.set("INA238#1.bus.i2c.address", 0x46))
+        got = {name: value for name, value, _, _ in values(turn(server, station))}
+        assert got == {"SYS_AUTOSTART": 4001, "INA238_1C": 0x46}
+        assert lines == ["store changed by another writer: 2 parameters announced"]
 
     def test_mavlink_ftp_answers_go_to_the_asker_on_network_0(
         self, turns: tuple[MavlinkParamServer, Station]
@@ -2075,25 +2077,15 @@ class TestTurnByTurnQuiet:
         assert server.stats["ignored"] == ignored
 
     def test_a_store_file_another_writer_left_unreadable_is_named_once(
-        self, store: px4params.Store, tmp_path: Path
+        self,
+        polled: tuple[MavlinkParamServer, Station, Path, list[str]],
     ) -> None:
-        path = tmp_path / "vehicle.store"
-        store.save(path)
-        lines: list[str] = []
-        server = MavlinkParamServer(
-            store, "127.0.0.1", 0, save_path=path, poll_interval=0, log=lines.append
-        )
-        station = Station(server)
-        try:
-            station.exchange(mavlink.MAVLink_heartbeat_message(6, 8, 0, 0, 0, 3))
-            path.write_bytes(path.read_bytes()[:10])  # truncated by another writer
-            for _ in range(2):
-                assert turn(server, station) == []
-            assert len(lines) == 1
-            assert lines[0].startswith(f"store changed by another writer, not read: {path}")
-        finally:
-            station.close()
-            server.close()
+        server, station, path, lines = polled
+        path.write_bytes(path.read_bytes()[:10])  # truncated by another writer
+        for _ in range(2):
+            assert turn(server, station) == []
+        assert len(lines) == 1
+        assert lines[0].startswith(f"store changed by another writer, not read: {path}")
 
 
 @pytest.mark.issue40
