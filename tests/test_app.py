@@ -8,6 +8,7 @@ vehicle's events. ``tests/test_gui.py`` runs the same app behind uvicorn with a 
 from __future__ import annotations
 
 import asyncio
+import gc
 import json
 from collections.abc import Iterator
 from pathlib import Path
@@ -386,3 +387,91 @@ def test_a_write_whose_changes_are_not_a_list_is_400_whatever_their_length(
         sent = post(app, "/api/write", {"changes": changes})
         assert status_of(sent) == 400, changes
         assert error_of(sent).startswith("expected {'changes': [{'name', 'value'}]}: ")
+
+
+# -- the WebSocket when the connection fails (issue 40) ----------------------------------------
+
+
+async def _failing_socket(
+    app: Admission, vehicle: StoreVehicle, *, receive_fails: bool
+) -> list[dict[str, Any]]:
+    """Opens /ws over a connection that fails: the client's receive raises (a reset), or the
+    server's send of the first event does (a client gone: the server's ``ClientDisconnected``
+    is an OSError). Returns what the loop reported to its exception handler."""
+    loop = asyncio.get_running_loop()
+    reported: list[dict[str, Any]] = []
+    loop.set_exception_handler(lambda _loop, context: reported.append(context))
+    accepted = asyncio.Event()
+    incoming: asyncio.Queue[dict[str, Any]] = asyncio.Queue()
+    incoming.put_nowait({"type": "websocket.connect"})
+
+    async def receive() -> dict[str, Any]:
+        message = await incoming.get()
+        if message["type"] == "reset":
+            raise ConnectionResetError("connection reset by peer")
+        return message
+
+    async def send(message: dict[str, Any]) -> None:
+        if message["type"] == "websocket.accept":
+            accepted.set()
+        elif message["type"] == "websocket.send":
+            raise ConnectionResetError("the client is gone")
+
+    scope = {
+        "type": "websocket",
+        "path": "/ws",
+        "root_path": "",
+        "query_string": b"",
+        "headers": [(k.lower().encode(), v.encode()) for k, v in authorized()],
+        "subprotocols": [],
+    }
+    served = asyncio.ensure_future(app(scope, receive, send))
+    await asyncio.wait_for(accepted.wait(), 10)
+    if receive_fails:
+        incoming.put_nowait({"type": "reset"})
+    else:
+        assert (await asyncio.to_thread(vehicle.write, "INA238_1C", 71)).ok
+    await asyncio.wait_for(served, 10)  # ends, and without an error
+    del served
+    gc.collect()  # a task whose error nobody read says so when it is collected
+    await asyncio.sleep(0)
+    return reported
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize("receive_fails", [True, False], ids=["reset", "client_gone"])
+def test_a_socket_whose_connection_fails_ends_quietly_and_stops_listening(
+    served: tuple[Admission, StoreVehicle], receive_fails: bool
+) -> None:
+    app, vehicle = served
+    reported = asyncio.run(_failing_socket(app, vehicle, receive_fails=receive_fails))
+    assert reported == []  # no "Task exception was never retrieved", no error of the handler
+    assert vehicle._listeners == []
+
+
+@pytest.mark.issue40
+def test_the_module_exports_make_app() -> None:
+    namespace: dict[str, Any] = {}
+    exec("from px4params.gui.app import *", namespace)
+    assert namespace["make_app"] is make_app
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize(
+    ("value", "why"),
+    [
+        (True, "True is not a number"),  # JSON's true is no number, though Python's bool is an int
+        (None, "None is not a number"),
+        ({"v": 1}, "{'v': 1} is not a number"),
+        (70.5, "70.5 is not an integer"),  # INA238_1C is an Int32
+        ("70.5", "invalid literal for int() with base 0: '70.5'"),
+    ],
+)
+def test_a_value_that_is_no_number_of_its_parameter_s_type_is_named_whole(
+    served: tuple[Admission, StoreVehicle], value: Any, why: str
+) -> None:
+    app, vehicle = served
+    sent = post(app, "/api/write", {"changes": [{"name": "INA238_1C", "value": value}]})
+    assert status_of(sent) == 400
+    assert error_of(sent) == f"expected {{'changes': [{{'name', 'value'}}]}}: {why}"
+    assert vehicle.values["INA238_1C"] == 0x45

@@ -639,3 +639,117 @@ def test_a_turn_with_nothing_to_read_does_not_wait() -> None:
         assert time.monotonic() - started < 5.0
     finally:
         line.close()
+
+
+# -- GetSet's edges (issue 40, mutlinks3: the survivors of the dronecan_node target) ------------
+
+
+def test_the_counters_count_each_accepted_and_each_refused_write(bench: Bench) -> None:
+    """The summary of ``dronecan serve`` counts every write: two accepted, then two refused
+    (out of range: the address is a 7-bit I2C address), each once."""
+    node = bench.node
+    for address in (0x44, 0x46):
+        assert _field(bench.getset(ADDRESS, integer_value=address).value)[1] == address
+    for address in (200, 300):
+        assert _field(bench.getset(ADDRESS, integer_value=address).value)[1] == 0x46
+    assert (node.stats["accepted"], node.stats["refused"], node.stats["requests"]) == (2, 2, 4)
+    assert len(bench.logged) == 4 and bench.logged[2].startswith(f"refused: {ADDRESS}: ")
+
+
+def test_a_name_that_is_not_ascii_is_no_parameter(bench: Bench) -> None:
+    """Parameter names are ASCII (PX4's, and GetSet's uint8 name field as pydronecan fills
+    it): a name with a byte above 0x7F names no parameter. It is the empty answer, a write
+    to it a refusal naming it, and the node answers the next request."""
+    request = GETSET.Request(name=b"INA238\xff_ADDR")
+    answer = bench.call(request)
+    assert bytes(answer.name) == b"" and _field(answer.value)[0] == "empty"
+    request.value = VALUE(integer_value=0x44)
+    answer = bench.call(request)
+    assert bytes(answer.name) == b"" and _field(answer.value)[0] == "empty"
+    assert bench.node.stats["refused"] == 1 and bench.node.stats["accepted"] == 0
+    assert len(bench.logged) == 1 and bench.logged[0].startswith("refused: INA238")
+    assert "no such parameter" in bench.logged[0]
+    assert _field(bench.getset(ADDRESS).value) == ("integer_value", 0x45)
+
+
+def test_a_write_by_an_index_past_the_end_is_the_empty_answer_alone(bench: Bench) -> None:
+    """GetSet: with an empty name the index picks the parameter; an index past the last one
+    picks none, so a value sent with it is written nowhere: the answer is the empty one
+    ("no such parameter"), no value changed, and there is no name to refuse or log."""
+    before = {i: _field(bench.getset(index=i).value) for i in range(len(bench.node.params))}
+    bench.node.stats["requests"] = 0
+    answer = bench.getset(index=len(bench.node.params), integer_value=0x44)
+    assert bytes(answer.name) == b"" and _field(answer.value)[0] == "empty"
+    assert bench.logged == []
+    assert (bench.node.stats["accepted"], bench.node.stats["refused"]) == (0, 0)
+    after = {i: _field(bench.getset(index=i).value) for i in range(len(bench.node.params))}
+    assert after == before
+
+
+def test_erase_after_a_save_writes_the_defaults_over_the_saved_value(
+    bench: Bench, store_file: Path
+) -> None:
+    """ERASE (ExecuteOpcode 1): "the parameters are reset to their defaults" in the node's
+    storage. A changed address saved first (0x44; PX4's INA238 default is 0x45) is the
+    default in the file after ERASE; the running value stays 0x44 until the restart."""
+    bench.getset(ADDRESS, integer_value=0x44)
+    assert bench.opcode(OPCODE.Request().OPCODE_SAVE).ok
+    assert _load(store_file).get("INA238#1.bus.i2c.address") == 0x44
+    assert bench.opcode(OPCODE.Request().OPCODE_ERASE).ok
+    saved = _load(store_file)
+    assert saved.get("INA238#1.bus.i2c.address") == 0x45 and not saved.changed("INA238#1")
+    assert _field(bench.getset(ADDRESS).value) == ("integer_value", 0x44)
+
+
+def test_a_store_file_another_writer_left_unreadable_is_named_once_and_not_read(
+    bench: Bench, store_file: Path
+) -> None:
+    """A turn that finds the store file changed but unreadable (another writer left it
+    truncated) keeps the node's values and says why, once for that version of the file."""
+    store_file.write_bytes(store_file.read_bytes()[:10])
+    for _ in range(2):
+        bench.node._next_poll = 0.0  # the file is due to be looked at now
+        bench.node.step(0)
+    bench.line.frames()  # the NodeStatus the turns sent
+    assert len(bench.logged) == 1
+    assert bench.logged[0].startswith(f"store changed by another writer, not read: {store_file}")
+    assert _field(bench.getset(ADDRESS).value) == ("integer_value", 0x45)
+
+
+def test_a_refused_save_whose_file_cannot_be_read_again_keeps_the_values_without_saying_so(
+    bench: Bench, store_file: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """SAVE over another writer's change of the same leaf is refused; when the file cannot
+    be read back either (it broke meanwhile, played here by its reload failing), the node's
+    values stay and its refusal does not claim they became the file's."""
+    from px4params.errors import StoreFileError
+
+    bench.getset(ADDRESS, integer_value=0x44)
+    other = _load(store_file)
+    other.set("INA238#1.bus.i2c.address", 0x47)
+    other.save(store_file)
+
+    def unreadable() -> None:
+        raise StoreFileError("cannot read: Input/output error", store_file)
+
+    monkeypatch.setattr(bench.node.session, "reload", unreadable)
+    assert bench.opcode(OPCODE.Request().OPCODE_SAVE).ok is False
+    assert bench.logged[-1].startswith("refused: save: ")
+    assert bench.logged[-1].endswith("; nothing was saved")
+    assert _field(bench.getset(ADDRESS).value) == ("integer_value", 0x44)
+
+
+def test_each_save_counts_once(bench: Bench, store_file: Path) -> None:
+    """The summary of ``dronecan serve`` counts the saves: two SAVEs and an ERASE, three."""
+    for opcode in (OPCODE.Request().OPCODE_SAVE, OPCODE.Request().OPCODE_SAVE, 1):
+        assert bench.opcode(opcode).ok
+    assert bench.node.stats["saves"] == 3
+
+
+def test_a_restart_starts_the_uptime_again(bench: Bench) -> None:
+    """NodeStatus.uptime_sec: other nodes tell that a node restarted by its uptime going
+    backwards (the DroneCAN specification). After RestartNode it counts from 0 again."""
+    bench.node._started -= 100  # the node has been up for 100 s
+    assert bench.call(NODE_INFO.Request()).status.uptime_sec >= 100
+    assert bench.call(RESTART.Request(magic_number=RESTART.Request().MAGIC_NUMBER)).ok
+    assert bench.call(NODE_INFO.Request()).status.uptime_sec < 100

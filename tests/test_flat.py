@@ -610,3 +610,98 @@ def test_padding_gets_no_letter(tmp_path: Path) -> None:
     data_type = store.data_type("PAD")
     assert [s.path for s in flat.layout(data_type)] == ["a", "b"]
     assert flat.slot_count(data_type) == 2
+
+
+@pytest.mark.issue40
+def test_the_tag_of_a_two_variant_union_is_one_bit(tmp_path: Path) -> None:
+    # DroneCAN's union tag is ceil(log2(variants)) bits (dronecan/dronecan_dsdlc's
+    # union_msg_tag_bitlen_from_num_fields): 1 for 2 variants, 2 for 3 and 4
+    files = {
+        "Two.1.0.dsdl": "@union\nuint8 a\nfloat16 b\n@sealed\n",
+        "Three.1.0.dsdl": "@union\nuint8 a\nfloat16 b\nbool c\n@sealed\n",
+        "Holder.1.0.dsdl": "# H\n# @max_instances 1\n\nuint4 p_version\nTwo.1.0 two\n"
+        "Three.1.0 three\n@sealed\n",
+    }
+    schema = px4params.load_schema([dsdl_root(tmp_path, files)], use_env=False,
+                                   cache_dir=tmp_path / "cache")  # fmt: skip
+    tags = {s.path: s for s in flat.layout(schema["tst.Holder.1.0"]) if s.role == "union_tag"}
+    assert (tags["two._tag"].type, tags["two._tag"].min, tags["two._tag"].max) == ("uint1", 0, 1)
+    assert (tags["three._tag"].type, tags["three._tag"].max) == ("uint2", 2)
+
+
+@pytest.mark.issue40
+def test_a_signed_p_version_gets_no_letter_either(tmp_path: Path) -> None:
+    # the module doc: p_version fields get no letter; a type read from its DSDL alone (as the
+    # ground-station metadata reads it) may declare one signed
+    files = {"Signed.1.0.dsdl": "# S\n# @max_instances 1\n\nint4 p_version\nuint8 a\n@sealed\n"}
+    schema = px4params.load_schema([dsdl_root(tmp_path, files)], use_env=False,
+                                   cache_dir=tmp_path / "cache")  # fmt: skip
+    assert [(s.letter, s.path) for s in flat.layout(schema["tst.Signed.1.0"])] == [("A", "a")]
+    assert flat.slot_count(schema["tst.Signed.1.0"]) == 1
+
+
+@pytest.mark.issue40
+def test_a_wide_leaf_is_refused_when_the_letters_are_listed_first(tmp_path: Path) -> None:
+    # the letters listed before they are counted (a ground station's metadata reads the
+    # layout of a type straight from its DSDL): the same refusal, naming the leaf
+    files = {"Wide.1.0.dsdl": "# W\n# @max_instances 2\n\nuint4 p_version\nuint8 a\n"
+             "int33[2] x\n@sealed\n"}  # fmt: skip
+    schema = px4params.load_schema([dsdl_root(tmp_path, files)], use_env=False,
+                                   cache_dir=tmp_path / "cache")  # fmt: skip
+    with pytest.raises(flat.FlatError) as e:
+        flat.layout(schema["tst.Wide.1.0"])
+    assert str(e.value) == (
+        "tst.Wide.1.0: leaf x[0] is int33: destructured parameters carry at most 32 bits "
+        "(MAVLink), so this type cannot be a parameter"
+    )
+
+
+@pytest.mark.issue40
+def test_an_instance_mask_longer_than_16_characters_is_refused(tmp_path: Path) -> None:
+    # PX4's names have at most 16 characters: ABCDEFGHIJKLM_0A fits, ABCDEFGHIJKLM_INST not
+    files = {"Long.1.0.dsdl": "# L\n# @param ABCDEFGHIJKLM\n# @max_instances 2\n\n"
+             "uint4 p_version\nuint8 x\n@sealed\n"}  # fmt: skip
+    with pytest.raises(flat.FlatError) as e:
+        flat.flat_map(_store_with(tmp_path / "long", files))
+    assert str(e.value) == (
+        "ABCDEFGHIJKLM: instance mask ABCDEFGHIJKLM_INST is longer than 16 characters or the "
+        "name of another parameter"
+    )
+    files = {"Fits.1.0.dsdl": "# L\n# @param ABCDEFGHIJK\n# @max_instances 2\n\n"
+             "uint4 p_version\nuint8 x\n@sealed\n"}  # fmt: skip
+    masks = flat.flat_map(_store_with(tmp_path / "fits", files)).masks()
+    assert "ABCDEFGHIJK_INST" in [name for name, _, _ in masks]  # 16 characters: fits
+
+
+@pytest.mark.issue40
+def test_an_instance_mask_of_a_classic_name_is_refused(tmp_path: Path) -> None:
+    files = {"Foo.1.0.dsdl": "# F\n# @max_instances 2\n\nuint4 p_version\nuint8 x\n@sealed\n"}
+    with pytest.raises(flat.FlatError, match=r"^FOO: instance mask FOO_INST is longer than 16 "
+                       r"characters or the name of another parameter$"):  # fmt: skip
+        flat.flat_map(_store_with(tmp_path, files, classic=[ClassicParam("FOO_INST", "Int32", 0)]))
+
+
+@pytest.mark.issue40
+def test_a_write_of_a_name_that_is_no_parameter_is_refused(store: px4params.Store) -> None:
+    # a ground station sees classic names, destructured names and instance masks only: a
+    # structured parameter's own name (INA238) is none of them, nor is a name nothing has
+    before = flat.flat_values(store)
+    with pytest.raises(InstanceError, match=r"^unknown parameter 'INA238'$"):
+        flat.write_flat(store, "INA238", 1)
+    with pytest.raises(InstanceError, match=r"^unknown parameter 'ZZZ_NOPE'$"):
+        flat.write_flat(store, "ZZZ_NOPE", 1)
+    assert flat.flat_values(store) == before
+
+
+@pytest.mark.issue40
+def test_every_name_a_vehicle_can_report(tmp_path: Path) -> None:
+    # each instance slot (up to @max_instances, existing or not) times each letter; a shared
+    # parameter's letters without a number
+    files = {
+        "Foo.1.0.dsdl": "# F\n# @max_instances 2\n\nuint4 p_version\nuint8 x\nbool on\n@sealed\n",
+        "Bar.1.0.dsdl": "# B\n# @param BAR_SHARED\n\nuint4 p_version\nint8 t\n@sealed\n",
+    }
+    store = _store_with(tmp_path, files)
+    names = set(flat.flat_map(store).names())
+    ours = {n for n in names if n.startswith(("FOO_", "BAR_"))}
+    assert ours == {"FOO_0A", "FOO_0B", "FOO_1A", "FOO_1B", "BAR_SHARED_A"}

@@ -5,6 +5,12 @@ the events its WebSocket pushes, and writes through the store's one write path."
 
 from __future__ import annotations
 
+import contextlib
+import hashlib
+import json
+import lzma
+import subprocess
+import sys
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -12,9 +18,19 @@ from typing import Any
 
 import px4params
 import pytest
-from px4params.gui.vehicle import StoreVehicle, WriteResult, parse_health
+from px4params.errors import CommandError
+from px4params.gui.vehicle import (
+    MavlinkVehicle,
+    StoreVehicle,
+    WriteResult,
+    _as_stored,
+    _mftp_path,
+    parse_health,
+)
+from px4params.links.mavlink import MavlinkParamServer
 from px4params.store.classic import BUNDLED_CLASSIC
 from px4params.store.session import Session
+from pymavlink.dialects.v20 import common as mavlink2
 
 
 @pytest.fixture
@@ -31,6 +47,299 @@ def wait_for(condition: Any, seconds: float = 10.0) -> bool:
             return True
         time.sleep(0.02)
     return False
+
+
+# -- a vehicle over MAVLink (issue 40: the page's MAVLink client, in-process) -------------------
+# The peer is px4params' MAVLink server in a thread on 127.0.0.1 (its frames are pymavlink's,
+# checked against QGC's and MAVProxy's readings in test_mavlink_clients.py), as system 7 so that
+# a write reaches it only when sent to the system its heartbeat named. Subclasses change one
+# answer each: silence, another value echoed, no COMPONENT_METADATA.
+
+#: A health report 100 characters long: two STATUSTEXT chunks of 50 and an empty third, the end
+#: (MAVLink 2: a chunk shorter than 50 characters ends the text).
+LONG_HEALTH = "health: ina238 INA238#1 on I2C bus 2 address 0x45: critical: not found: " + "x" * 27
+SHORT_HEALTH = "health: ms5611 MS5611#0: nominal"  # one STATUSTEXT, id 0
+
+
+def _served_store(schema: px4params.Schema) -> px4params.Store:
+    store = px4params.Store(schema, classic=BUNDLED_CLASSIC)
+    store.add("INA238#1")
+    store.set("INA238#1.bus.i2c.address", 0x45)
+    return store
+
+
+class _Recording(MavlinkParamServer):
+    """The server, noting what the page sent: its heartbeats' fields and source, the names of
+    its PARAM_SETs, its PARAM_REQUEST_READs' indexes, its COMMAND_LONGs, its list requests."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self.heartbeats: set[tuple[int, ...]] = set()
+        self.heartbeat_count = 0
+        self.sets: list[str] = []
+        self.read_indexes: set[int] = set()
+        self.commands: list[tuple[float, ...]] = []
+        self.lists = 0
+
+    def _handle(self, peer: Any, msg: Any) -> bool:
+        kind = msg.get_type()
+        if kind == "HEARTBEAT":
+            source = (msg.get_srcSystem(), msg.get_srcComponent())
+            fields = (msg.type, msg.autopilot, msg.base_mode, msg.custom_mode, msg.system_status)
+            self.heartbeats.add((*source, *fields))
+            self.heartbeat_count += 1
+        elif kind == "PARAM_SET":
+            self.sets.append(_name(msg.param_id))
+        elif kind == "PARAM_REQUEST_READ":
+            self.read_indexes.add(msg.param_index)
+        elif kind == "PARAM_REQUEST_LIST":
+            self.lists += 1
+        elif kind == "COMMAND_LONG":
+            params = [getattr(msg, f"param{n}") for n in range(1, 8)]
+            self.commands.append((msg.command, msg.confirmation, *params))
+        return super()._handle(peer, msg)
+
+
+def _name(param_id: Any) -> str:
+    raw = param_id if isinstance(param_id, bytes) else str(param_id).encode()
+    return raw.split(b"\0", 1)[0].decode()
+
+
+@contextlib.contextmanager
+def _peer(
+    schema: px4params.Schema, server: type[_Recording] = _Recording, **options: Any
+) -> Iterator[_Recording]:
+    options = {"system_id": 7, "heartbeat_interval": 0.1, **options}
+    served = server(_served_store(schema), "127.0.0.1", 0, **options)
+    served.start()
+    try:
+        yield served
+    finally:
+        served.stop()
+
+
+@contextlib.contextmanager
+def _page(address: tuple[str, int], **options: Any) -> Iterator[MavlinkVehicle]:
+    page = MavlinkVehicle(address, **{"timeout": 10.0, **options})
+    try:
+        yield page
+    finally:
+        page.close()
+
+
+@pytest.mark.issue40
+def test_a_mavlink_vehicle_is_listed_written_read_and_heard(schema: px4params.Schema) -> None:
+    health = [LONG_HEALTH, SHORT_HEALTH]
+    with _peer(schema, health=lambda: health, health_interval=0.2) as served:
+        started = time.monotonic()
+        with _page(served.address, timeout=60.0) as page:
+            # the whole list, at once (not at the end of the 60 s given)
+            assert time.monotonic() - started < 45
+            port = served.address[1]
+            assert (page.mode, page.source) == ("mavlink", f"udp 127.0.0.1:{port}")
+            assert page.values == {e.name: e.value for e in served.entries()}
+            assert "_HASH_CHECK" not in page.values  # PX4's list ends with it: no parameter
+            assert page.values["INA238_1C"] == 0x45
+            # the metadata over MAVLink FTP (the general file, then parameters.json.xz)
+            assert page.metadata["version"] == 1
+            described = {p["name"] for p in page.metadata["parameters"]}
+            assert {"INA238_1C", "INA238_1Q", "BAT1_CAPACITY", "SYS_AUTOSTART"} <= described
+            events: list[dict[str, Any]] = []
+            page.listen(events.append)
+
+            # a ground station's heartbeat (MAVLink common.xml: MAV_TYPE_GCS 6, autopilot
+            # MAV_AUTOPILOT_INVALID 8; QGC's system 255, MAV_COMP_ID_MISSIONPLANNER 190)
+            assert served.heartbeats == {(255, 190, 6, 8, 0, 0, 0)}
+            # one while waiting for the vehicle's (each wait up to 0.5 s), then one a second
+            assert served.heartbeat_count < 4 + 2 * (time.monotonic() - started)
+            # MAV_CMD_REQUEST_MESSAGE (512) for COMPONENT_METADATA (397), first transmission
+            # (confirmation 0), every other parameter 0 (the default; param7 0: to the sender)
+            assert served.commands == [(512, 0, 397, 0, 0, 0, 0, 0, 0)]
+
+            accepted = page.write("INA238_1C", 70)  # sent to system 7, or nobody answers
+            assert (accepted.ok, accepted.value, accepted.reason) == (True, 70, "")
+            assert served.sets == ["INA238_1C"]  # acknowledged: sent once
+            assert served.store.get("INA238#1.bus.i2c.address") == 70
+            assert {"kind": "value", "name": "INA238_1C", "value": 70} in events
+            assert page.read("INA238_1C") == 70
+            assert served.read_indexes == {-1}  # -1: read by param_id (MAVLink's rule)
+
+            # refused: PARAM_VALUE with the value kept, STATUSTEXT's reason in chunks, PARAM_ERROR
+            refused = page.write("INA238_1C", 200)
+            assert (refused.ok, refused.value) == (False, 70)
+            assert refused.reason == (
+                "INA238_1C: INA238#1: bus.i2c.address: value 200 is out of range (expected 0 to "
+                "127)"
+            )  # a 7-bit I2C address
+            assert page.values["INA238_1C"] == 70
+            again = page.write("INA238_1C", 300)  # this write's reason, not the last one's
+            assert again.reason == refused.reason.replace("200", "300")
+            unknown = page.write("NOPE_1X", 1)
+            assert (unknown.ok, unknown.value, unknown.reason) == (
+                False,
+                None,
+                "[pm] unknown param: NOPE_1X",  # PX4's words
+            )
+            assert page.read("NOPE_1X", timeout=0.3) is None
+
+            floats = page.write("BAT1_CAPACITY", 5000.5)
+            assert (floats.ok, floats.value) == (True, 5000.5)
+            assert served.store.get("BAT1_CAPACITY") == 5000.5
+
+            # health reports, each joined from its chunks
+            assert wait_for(lambda: {"INA238#1", "MS5611#0"} <= set(page.health))
+            assert page.health["INA238#1"] == parse_health(LONG_HEALTH)
+            assert page.health["INA238#1"]["reason"] == "not found: " + "x" * 27
+            assert page.health["MS5611#0"]["state"] == "nominal"
+            assert LONG_HEALTH in page.messages and SHORT_HEALTH in page.messages
+            assert LONG_HEALTH[:50] not in page.messages  # no chunk said on its own
+
+            events.clear()
+            page.refresh(10.0)
+            listed = [e for e in events if e["kind"] == "values"]
+            assert listed == [{"kind": "values", "values": page.state()["values"]}]
+            assert listed[0]["values"]["INA238_1C"] == 70
+        assert not page._thread.is_alive() and not page._heartbeats.is_alive()
+
+
+class _Silent(_Recording):
+    """Never answers a PARAM_SET of INA238_1P (a lost link, in one direction)."""
+
+    def _set(self, peer: Any, name: str, msg: Any) -> None:
+        if name != "INA238_1P":
+            super()._set(peer, name, msg)
+
+
+class _Stubborn(_Recording):
+    """Answers a PARAM_SET of INA238_1P with the value it had, and no reason."""
+
+    def _set(self, peer: Any, name: str, msg: Any) -> None:
+        found = self._find(name)
+        if name == "INA238_1P" and found is not None:
+            self._send(self._value_msg(*found), [peer])
+            return
+        super()._set(peer, name, msg)
+
+
+@pytest.mark.issue40
+def test_a_write_nobody_answers_is_sent_three_times_then_refused(
+    schema: px4params.Schema,
+) -> None:
+    with _peer(schema, _Silent) as served, _page(served.address) as page:
+        before = page.values["INA238_1P"]
+        result = page.write("INA238_1P", before + 1, timeout=0.3)
+        assert (result.ok, result.value, result.reason) == (
+            False,
+            before,
+            "INA238_1P: no answer from the vehicle",
+        )
+        assert served.sets == ["INA238_1P"] * 3  # sent, then twice again
+        assert page._waiters["INA238_1P"] == []  # nothing left waiting
+
+
+@pytest.mark.issue40
+def test_a_write_echoed_with_another_value_is_refused_with_that_value(
+    schema: px4params.Schema,
+) -> None:
+    with _peer(schema, _Stubborn) as served, _page(served.address) as page:
+        before = page.values["INA238_1P"]
+        assert isinstance(before, int)
+        result = page.write("INA238_1P", before + 1)
+        assert (result.ok, result.value, result.reason) == (
+            False,
+            before,
+            f"INA238_1P: the vehicle kept {before}",
+        )
+
+
+class _InformationOnly(_Recording):
+    """An older vehicle: COMPONENT_INFORMATION (395) only, COMPONENT_METADATA (397) unsupported."""
+
+    def _requested(self, message_id: int) -> Any:
+        return None if message_id == 397 else super()._requested(message_id)
+
+
+class _NoMetadata(_Recording):
+    """A vehicle that serves neither message."""
+
+    def _requested(self, message_id: int) -> Any:
+        return None if message_id in (395, 397) else super()._requested(message_id)
+
+
+@pytest.mark.issue40
+def test_the_metadata_falls_back_to_component_information(schema: px4params.Schema) -> None:
+    with _peer(schema, _InformationOnly) as served, _page(served.address) as page:
+        assert "INA238_1C" in {p["name"] for p in page.metadata["parameters"]}
+
+
+@pytest.mark.issue40
+def test_a_vehicle_without_metadata_asks_for_the_file(schema: px4params.Schema) -> None:
+    with _peer(schema, _NoMetadata) as served, pytest.raises(CommandError) as refused:
+        port = served.address[1]
+        MavlinkVehicle(served.address, timeout=10.0)
+    assert str(refused.value) == (
+        f"the vehicle on udp 127.0.0.1:{port} serves no parameter metadata over "
+        "MAVLink FTP; give --metadata parameters.json"
+    )
+
+
+@pytest.mark.issue40
+def test_a_metadata_file_given_is_the_metadata(schema: px4params.Schema, tmp_path: Path) -> None:
+    document = {"version": 1, "parameters": [{"name": "INA238_1C", "type": "Int32"}]}
+    given = tmp_path / "parameters.json"
+    given.write_text(json.dumps(document))
+    with _peer(schema, _NoMetadata) as served:
+        with _page(served.address, metadata_file=str(given)) as page:
+            assert page.metadata == document
+        for bad, why in ((tmp_path / "none.json", "No such file"), (tmp_path / "x.json", "")):
+            if why == "":
+                bad.write_text("{not json")
+            with pytest.raises(CommandError) as refused:
+                MavlinkVehicle(served.address, str(bad), timeout=10.0)
+            assert str(refused.value).startswith(f"{bad}: cannot read the metadata: ")
+            assert why in str(refused.value) and "\n" not in str(refused.value)
+
+
+@pytest.mark.issue40
+def test_only_the_autopilot_component_s_heartbeat_is_the_vehicle(
+    schema: px4params.Schema,
+) -> None:
+    """MAV_COMP_ID_AUTOPILOT1 is component 1: a camera's or gimbal's heartbeat is no vehicle."""
+    with _peer(schema, component_id=100) as served, pytest.raises(CommandError) as refused:
+        port = served.address[1]
+        MavlinkVehicle(served.address, timeout=1.0)
+    assert str(refused.value) == (
+        f"no vehicle answered on udp 127.0.0.1:{port} within 1 s (a signed link "
+        "drops unsigned messages: --signing-key FILE)"
+    )
+
+
+@pytest.mark.issue40
+def test_a_write_is_acknowledged_by_the_float32_sent_or_the_float16_stored() -> None:
+    """PARAM_SET carries a float as float32; a float16 leaf stores it rounded (0.0005 is
+    1049 * 2**-21 in float16: 10 bits of mantissa); an integer is acknowledged by itself."""
+    assert _as_stored(70, False) == (70,)
+    float32, float16 = _as_stored(0.0005, True)
+    assert float32 == 0.0005000000237487257  # 0x3A03126F
+    assert float16 == 1049 * 2**-21
+    assert _as_stored(0.5, True) == (0.5, 0.5)
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize(
+    ("uri", "path"),
+    [
+        ("mftp://[;comp=1]/etc/comp_general.json", "/etc/comp_general.json"),
+        ("mftp://[;comp=1]etc/x.json.xz", "/etc/x.json.xz"),
+        ("mftp:///fs/microsd/params.json", "/fs/microsd/params.json"),
+        ("mftp://params.json", "/params.json"),
+        ("mftp://[;comp=1]/fs/a]b.json", "/fs/a]b.json"),  # only the first ] ends the prefix
+    ],
+)
+def test_an_mftp_uri_is_read_as_its_path(uri: str, path: str) -> None:
+    """The component-information URI scheme (mavlink.io's MAVLink FTP URL): ``mftp://``, an
+    optional ``[;comp=N]``, then the path on the vehicle."""
+    assert _mftp_path(uri) == path
 
 
 # -- health lines ------------------------------------------------------------------------------
@@ -180,3 +489,233 @@ def test_an_unreadable_save_of_another_writer_is_said_once(
     assert len(said) == 1 and said[0].startswith("store changed by another writer, not read: ")
     assert vehicle.values["INA238_1C"] == 0x45  # the values stay
     assert [e["kind"] for e in events] == ["status"]
+
+
+# -- the store vehicle's remainder (issue 40) ----------------------------------------------------
+
+
+@pytest.mark.issue40
+def test_a_refused_write_names_the_parameter_then_the_leaf(vehicle: StoreVehicle) -> None:
+    """The store's error names the instance and leaf; the page is told which parameter too."""
+    result = vehicle.write("INA238_1C", 200)
+    assert result.reason == (
+        "INA238_1C: INA238#1: bus.i2c.address: value 200 is out of range (expected 0 to 127)"
+    )  # a 7-bit I2C address
+
+
+@pytest.mark.issue40
+def test_after_an_unreadable_save_the_next_good_one_is_still_read(
+    vehicle: StoreVehicle, store_file: Path, schema: px4params.Schema
+) -> None:
+    store = px4params.Store.load(store_file, schema, classic=BUNDLED_CLASSIC)
+    store_file.write_bytes(b"not a store")
+    assert wait_for(lambda: bool(vehicle.messages))
+    store.set("INA238#1.bus.i2c.address", 0x48)
+    store.save(store_file)
+    assert wait_for(lambda: vehicle.values.get("INA238_1C") == 0x48)
+
+
+@pytest.mark.issue40
+def test_a_program_that_never_closes_its_store_vehicle_still_exits(store_file: Path) -> None:
+    """The watcher must not keep a page server that ended without close() alive."""
+    code = (
+        "from px4params.gui.vehicle import StoreVehicle\n"
+        f"StoreVehicle({str(store_file)!r}, None, [], poll_interval=0.05)\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], timeout=60, check=False)
+    assert done.returncode == 0
+
+
+class _Lossy(_Recording):
+    """Loses INA238_1C's PARAM_VALUE the first time it is sent (UDP loses datagrams)."""
+
+    lost = False
+
+    def _send(self, msg: Any, peers: list[Any]) -> None:
+        if not self.lost and msg.get_type() == "PARAM_VALUE" and _name(msg.param_id) == "INA238_1C":
+            self.lost = True
+            return
+        super()._send(msg, peers)
+
+
+@pytest.mark.issue40
+def test_a_list_that_lost_a_value_is_asked_for_again(schema: px4params.Schema) -> None:
+    with _peer(schema, _Lossy) as served, _page(served.address) as page:
+        assert served.lost and served.lists >= 2
+        assert page.values == {e.name: e.value for e in served.entries()}
+
+
+class _RefusesTheSameValue(_Recording):
+    """Refuses a write of INA238_1P with PARAM_ERROR although its echo holds the value sent
+    (a parameter that is read-only, holding that value already)."""
+
+    def _set(self, peer: Any, name: str, msg: Any) -> None:
+        found = self._find(name)
+        if name != "INA238_1P" or found is None:
+            super()._set(peer, name, msg)
+            return
+        self._send(self._value_msg(*found), [peer])
+        self._error(peer, msg, name, found[0], f"{name}: read-only", 4)  # MAV_PARAM_ERROR_READ_ONLY
+
+
+@pytest.mark.issue40
+def test_a_param_error_refuses_a_write_whatever_the_echo(schema: px4params.Schema) -> None:
+    with _peer(schema, _RefusesTheSameValue) as served, _page(served.address) as page:
+        same = page.values["INA238_1P"]
+        result = page.write("INA238_1P", same)
+        assert (result.ok, result.value, result.reason) == (False, same, "INA238_1P: read-only")
+
+
+class _AckFirst(_Recording):
+    """Sends COMMAND_ACK before the message asked for (nothing in MAVLink orders them)."""
+
+    def _command(self, peer: Any, msg: Any) -> None:
+        result, reply = self._command_result(msg)
+        ack = mavlink2.MAVLink_command_ack_message(
+            msg.command, result, 0, 0, msg.get_srcSystem(), msg.get_srcComponent()
+        )
+        self._send(ack, [peer])
+        if reply is not None:
+            self._send(reply, [peer])
+
+
+class _MetadataOnly(_Recording):
+    """A vehicle that serves COMPONENT_METADATA (397) and not COMPONENT_INFORMATION (395)."""
+
+    def _requested(self, message_id: int) -> Any:
+        return None if message_id == 395 else super()._requested(message_id)
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize("server", [_AckFirst, _MetadataOnly])
+def test_the_metadata_is_read_whichever_comes_first(
+    schema: px4params.Schema, server: type[_Recording]
+) -> None:
+    with _peer(schema, server) as served, _page(served.address) as page:
+        assert "INA238_1C" in {p["name"] for p in page.metadata["parameters"]}
+        assert [c[2] for c in served.commands] == [397]  # no need to ask for 395
+
+
+@pytest.mark.issue40
+def test_the_page_still_hears_the_vehicle_after_a_quiet_moment(schema: px4params.Schema) -> None:
+    """PX4 sends a heartbeat a second: between two, the link is quiet."""
+    with _peer(schema, heartbeat_interval=1.0) as served, _page(served.address) as page:
+        time.sleep(0.6)
+        assert page.write("INA238_1C", 71).ok
+        assert served.store.get("INA238#1.bus.i2c.address") == 71
+
+
+class _Files:
+    """A vehicle's files read over MAVLink FTP, by path (MAVFTP.read's answer: the bytes, or
+    None for a file it does not have)."""
+
+    def __init__(self, files: dict[str, bytes]) -> None:
+        self.files = files
+        self.asked: list[tuple[str, int]] = []
+
+    def read(self, path: str, size: int) -> bytes | None:
+        self.asked.append((path, size))
+        return self.files.get(path)
+
+
+def _general(uri: str, kind: int = 1) -> bytes:
+    """A general metadata file (COMP_METADATA_TYPE_PARAMETER is 1) naming the parameters' file."""
+    return json.dumps(
+        {"version": 1, "metadataTypes": [{"type": 0}, {"type": kind, "uri": uri}]}
+    ).encode()
+
+
+PARAMETERS_DOC = {"version": 1, "parameters": [{"name": "INA238_1C", "type": "Int32"}]}
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize(
+    ("name", "packed"),
+    [
+        ("p.json", json.dumps(PARAMETERS_DOC).encode()),
+        ("p.json.xz", lzma.compress(json.dumps(PARAMETERS_DOC).encode())),
+        ("p.json.lzma", lzma.compress(json.dumps(PARAMETERS_DOC).encode(), lzma.FORMAT_ALONE)),
+    ],
+)
+def test_the_parameters_file_is_unpacked_by_its_name(name: str, packed: bytes) -> None:
+    """QGC's reading: ``.xz`` and ``.lzma`` files are compressed, others are JSON as they are."""
+    files = _Files({"/general.json": _general(f"mftp://[;comp=1]/{name}"), f"/{name}": packed})
+    found = MavlinkVehicle._download(None, files, "mftp://[;comp=1]/general.json")  # type: ignore[arg-type]
+    assert found == PARAMETERS_DOC
+    assert [path for path, _ in files.asked] == ["/general.json", f"/{name}"]
+    assert all(size >= 1 << 20 for _, size in files.asked)  # a whole file, not a part of it
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize(
+    "files",
+    [
+        {},  # no general file
+        {"/general.json": _general("mftp:///p.json", kind=2)},  # no parameters entry
+        {"/general.json": _general("https://example.com/p.json")},  # not on the vehicle
+        {"/general.json": _general("mftp:///p.json")},  # listed, not there
+        {"/general.json": _general("mftp:///p.json"), "/p.json": b""},  # empty
+    ],
+)
+def test_a_vehicle_without_a_parameters_file_has_no_metadata(files: dict[str, bytes]) -> None:
+    assert MavlinkVehicle._download(None, _Files(files), "mftp:///general.json") is None  # type: ignore[arg-type]
+
+
+@pytest.mark.issue40
+def test_the_store_vehicle_describes_its_structured_and_classic_parameters(
+    vehicle: StoreVehicle,
+) -> None:
+    """QGC's parameters.json (version 1): the store's destructured names and the classic
+    parameters it holds, each with its type."""
+    types = {p["name"]: p["type"] for p in vehicle.metadata["parameters"]}
+    assert vehicle.metadata["version"] == 1
+    assert types["INA238_1C"] == "Int32"
+    assert types["BAT1_CAPACITY"] == "Float" and types["SYS_AUTOSTART"] == "Int32"
+    assert set(vehicle.values) <= set(types)
+
+
+#: A MAVLink 2 signing key (32 bytes), and another.
+KEY = hashlib.sha256(b"the page's link").digest()
+OTHER_KEY = hashlib.sha256(b"another link").digest()
+
+
+@pytest.mark.issue40
+def test_a_signed_link_says_so_and_is_written_over(schema: px4params.Schema) -> None:
+    with _peer(schema, signing_key=KEY) as served:
+        port = served.address[1]
+        with _page(served.address, signing_key=KEY) as page:
+            assert page.source == f"udp 127.0.0.1:{port} (signed)"
+            assert page.write("INA238_1C", 72).ok
+        assert served.store.get("INA238#1.bus.i2c.address") == 72
+        with pytest.raises(CommandError) as refused:
+            MavlinkVehicle(served.address, timeout=1.0, signing_key=OTHER_KEY)
+    # signed already: no hint about signing
+    assert str(refused.value) == f"no vehicle answered on udp 127.0.0.1:{port} (signed) within 1 s"
+
+
+@pytest.mark.issue40
+def test_the_page_s_heartbeats_keep_the_vehicle_talking(schema: px4params.Schema) -> None:
+    """The vehicle sends its status text to the ground stations it heard from lately (here
+    within 3 s): a page that has nothing to ask still says it is there, once a second."""
+    options = {"peer_timeout": 3.0, "health": lambda: [SHORT_HEALTH], "health_interval": 0.2}
+    with _peer(schema, **options) as served, _page(served.address) as page:
+        time.sleep(4.5)  # longer than the vehicle waits for a silent peer
+        page.messages.clear()
+        assert wait_for(lambda: SHORT_HEALTH in page.messages, 5.0)
+
+
+@pytest.mark.issue40
+def test_a_program_that_never_closes_its_mavlink_vehicle_still_exits(
+    schema: px4params.Schema, tmp_path: Path
+) -> None:
+    """Neither the receiving nor the heartbeat thread keeps a page that ended without close()
+    alive."""
+    metadata = tmp_path / "parameters.json"
+    metadata.write_text(json.dumps({"version": 1, "parameters": []}))
+    with _peer(schema) as served:
+        code = (
+            "from px4params.gui.vehicle import MavlinkVehicle\n"
+            f"MavlinkVehicle({served.address!r}, {str(metadata)!r}, timeout=10.0)\n"
+        )
+        done = subprocess.run([sys.executable, "-c", code], timeout=60, check=False)
+    assert done.returncode == 0

@@ -705,6 +705,26 @@ def turns(store: px4params.Store, tmp_path: Path) -> Iterator[tuple[MavlinkParam
     server.close()
 
 
+@pytest.fixture
+def polled(
+    store: px4params.Store, tmp_path: Path
+) -> Iterator[tuple[MavlinkParamServer, Station, Path, list[str]]]:
+    """The server over a saved store file it reads again at every turn (poll_interval 0: what
+    another writer saves is seen at once), the file, its log lines, and one ground station that
+    has spoken (a HEARTBEAT)."""
+    path = tmp_path / "vehicle.store"
+    store.save(path)
+    lines: list[str] = []
+    server = MavlinkParamServer(
+        store, "127.0.0.1", 0, save_path=path, poll_interval=0, log=lines.append
+    )
+    station = Station(server)
+    station.exchange(mavlink.MAVLink_heartbeat_message(6, 8, 0, 0, 0, 3))
+    yield server, station, path, lines
+    station.close()
+    server.close()
+
+
 @pytest.mark.issue40
 class TestTurnByTurnSetup:
     """What the server sets up and when its turns act (issue 40, mutlinks): before
@@ -1250,27 +1270,18 @@ class TestTurnByTurn:
         assert len(server.logged) == 2 and "INA238#0" in server.logged[0]  # type: ignore[attr-defined]
 
     def test_another_writer_s_save_is_announced_to_every_peer(
-        self, store: px4params.Store, tmp_path: Path, schema: px4params.Schema
+        self,
+        polled: tuple[MavlinkParamServer, Station, Path, list[str]],
+        schema: px4params.Schema,
     ) -> None:
-        path = tmp_path / "vehicle.store"
-        store.save(path)
-        lines: list[str] = []
-        server = MavlinkParamServer(
-            store, "127.0.0.1", 0, save_path=path, poll_interval=0, log=lines.append
-        )
-        station = Station(server)
-        try:
-            station.exchange(mavlink.MAVLink_heartbeat_message(6, 8, 0, 0, 0, 3))
-            other = Session(px4params.Store.load(path, schema, classic=CLASSIC), str(path))
-            other.commit(lambda: other.store.set("SYS_AUTOSTART", 4001))
-            got = values(turn(server, station))
-            index = NAMES.index("SYS_AUTOSTART")
-            assert got == [("SYS_AUTOSTART", 4001, index, len(NAMES))]
-            assert lines == ["store changed by another writer: 1 parameters announced"]
-            assert turn(server, station) == []  # said once
-        finally:
-            station.close()
-            server.close()
+        server, station, path, lines = polled
+        other = Session(px4params.Store.load(path, schema, classic=CLASSIC), str(path))
+        other.commit(lambda: other.store.set("SYS_AUTOSTART", 4001))
+        got = values(turn(server, station))
+        index = NAMES.index("SYS_AUTOSTART")
+        assert got == [("SYS_AUTOSTART", 4001, index, len(NAMES))]
+        assert lines == ["store changed by another writer: 1 parameters announced"]
+        assert turn(server, station) == []  # said once
 
     @pytest.mark.parametrize(
         ("command", "param1", "result", "reply"),
@@ -1906,3 +1917,232 @@ class TestTurnByTurnSigned:
             station.close()
             server.close()
         assert (server.stats["ignored"], server.stats["received"]) == (2, 0)
+
+
+@pytest.mark.issue40
+class TestTurnByTurnQuiet:
+    """What the server does not do (issue 40, mutlinks3: the survivors of the mavlink target in
+    lines 424-821): a stream that ends, is stopped or loses its requester says nothing in the
+    log; messages it does not serve get no answer and no log line; refusals count one each."""
+
+    def test_a_list_streamed_to_its_end_logs_nothing(
+        self, turns: tuple[MavlinkParamServer, Station]
+    ) -> None:
+        server, station = turns
+        listed = values(station.exchange(mavlink.MAVLink_param_request_list_message(1, 1)))
+        for _ in range(5):
+            listed += values(turn(server, station))
+        assert len(listed) == 1 + len(NAMES)
+        assert server.logged == []  # type: ignore[attr-defined]
+
+    def test_a_hash_check_set_stops_the_stream_without_a_log_line(
+        self, turns: tuple[MavlinkParamServer, Station]
+    ) -> None:
+        server, station = turns
+        first = station.exchange(mavlink.MAVLink_param_request_list_message(1, 1))
+        station.exchange(set_frame(station.mav, 1, 1, "_HASH_CHECK", value_of(first[0]), 6))
+        for _ in range(3):
+            assert turn(server, station) == []
+        assert server.logged == []  # type: ignore[attr-defined]
+
+    def test_a_stream_whose_requester_fell_silent_stops_without_a_log_line(
+        self, store: px4params.Store
+    ) -> None:
+        lines: list[str] = []
+        server = MavlinkParamServer(
+            store, "127.0.0.1", 0, param_rate=1e9, peer_timeout=0.5, log=lines.append
+        )
+        station = Station(server)
+        try:
+            assert len(station.exchange(mavlink.MAVLink_param_request_list_message(1, 1))) == 20
+            time.sleep(0.6)  # longer than peer_timeout: the requester is gone
+            for _ in range(3):
+                assert turn(server, station) == []
+            assert lines == []
+        finally:
+            station.close()
+            server.close()
+
+    def test_each_refused_write_counts_once(
+        self, turns: tuple[MavlinkParamServer, Station]
+    ) -> None:
+        server, station = turns
+        for value in (200, 300):  # a 7-bit I2C address: out of range
+            got = station.exchange(set_frame(station.mav, 1, 1, "INA238_1C", value, INT32))
+            assert kinds(got)[-1] == "PARAM_ERROR"
+        assert server.stats["refused"] == 2 and server.stats["accepted"] == 0
+
+    def test_a_read_of_a_name_that_is_not_ascii_is_refused_in_ascii(
+        self, turns: tuple[MavlinkParamServer, Station]
+    ) -> None:
+        """param_id is ASCII (MAVLink's char[16]); a byte above 0x7F names no parameter. The
+        refusal is PX4's, the STATUSTEXT (ASCII as well) showing the byte as '?'."""
+        server, station = turns
+        got = station.exchange(mavlink.MAVLink_param_request_read_message(1, 1, b"BAT\xff", -1))
+        assert kinds(got) == ["STATUSTEXT", "PARAM_ERROR"]
+        assert Client.text(got) == ["[pm] unknown param: BAT?"]
+        assert server.logged == []  # type: ignore[attr-defined]
+
+    def test_messages_it_does_not_serve_get_no_answer_and_no_log_line(
+        self, turns: tuple[MavlinkParamServer, Station]
+    ) -> None:
+        """A mission request addressed to this system and a SYSTEM_TIME (which addresses no
+        one) are no parameter, command or FTP traffic: each is counted ignored, nothing more."""
+        server, station = turns
+        ignored = server.stats["ignored"]
+        assert station.exchange(mavlink.MAVLink_mission_request_list_message(1, 1, 0)) == []
+        assert station.exchange(mavlink.MAVLink_system_time_message(0, 0)) == []
+        assert server.stats["ignored"] == ignored + 2
+        assert server.logged == []  # type: ignore[attr-defined]
+
+    def test_sent_counts_every_datagram_sent(
+        self, turns: tuple[MavlinkParamServer, Station]
+    ) -> None:
+        """The CLI's summary: each datagram sent to each peer counts once (a whole list here:
+        the hash and every parameter, one datagram each)."""
+        server, station = turns
+        sent = server.stats["sent"]
+        station.send(mavlink.MAVLink_param_request_list_message(1, 1))
+        datagrams = 0
+        for _ in range(5):
+            turn(server, station)
+            datagrams += len(station.frames)
+        assert datagrams == 1 + len(NAMES)
+        assert server.stats["sent"] == sent + datagrams
+
+    def test_each_accepted_write_counts_once(
+        self, turns: tuple[MavlinkParamServer, Station]
+    ) -> None:
+        server, station = turns
+        for value in (0x44, 0x46):
+            got = station.exchange(set_frame(station.mav, 1, 1, "INA238_1C", value, INT32))
+            assert [v for _, v, _, _ in values(got)] == [value]
+        assert server.stats["accepted"] == 2 and server.stats["refused"] == 0
+
+    def test_another_writer_s_save_of_two_parameters_announces_both_and_counts_them(
+        self,
+        polled: tuple[MavlinkParamServer, Station, Path, list[str]],
+        schema: px4params.Schema,
+    ) -> None:
+        server, station, path, lines = polled
+        other = Session(px4params.Store.load(path, schema, classic=CLASSIC), str(path))
+        other.commit(lambda: other.store.set("SYS_AUTOSTART", 4001))
+        other.commit(lambda: other.store.set("INA238#1.bus.i2c.address", 0x46))
+        got = {name: value for name, value, _, _ in values(turn(server, station))}
+        assert got == {"SYS_AUTOSTART": 4001, "INA238_1C": 0x46}
+        assert lines == ["store changed by another writer: 2 parameters announced"]
+
+    def test_mavlink_ftp_answers_go_to_the_asker_on_network_0(
+        self, turns: tuple[MavlinkParamServer, Station]
+    ) -> None:
+        """FILE_TRANSFER_PROTOCOL's target_network is 0 (broadcast, as PX4 sends it); the
+        answer is addressed to the asking system and component (255, 190)."""
+        _server, station = turns
+        reset = bytes([0, 0, 0, 8]) + bytes(247)  # seq 0, session 0, ResetSessions
+        got = station.exchange(mavlink.MAVLink_file_transfer_protocol_message(0, 1, 1, list(reset)))
+        (answer,) = [m for m in got if m.get_type() == "FILE_TRANSFER_PROTOCOL"]
+        assert (answer.target_network, answer.target_system, answer.target_component) == (
+            0,
+            255,
+            190,
+        )
+
+    def test_a_logged_integer_shows_every_digit_and_a_float_9_significant(self) -> None:
+        """The log line of a write ("NAME = value"): an int32 as its digits (10 of them at
+        most), a float32 to 9 significant digits (enough to tell every float32 apart)."""
+        shown = mavlink_server_module._shown
+        assert shown(2_147_483_647) == "2147483647" and shown(-2_147_483_648) == "-2147483648"
+        assert shown(0.1) == "0.1" and shown(1 / 3) == "0.333333333"
+        assert shown(float("nan")) == "nan"
+
+    def test_every_request_it_serves_is_counted_received_not_ignored(
+        self, turns: tuple[MavlinkParamServer, Station]
+    ) -> None:
+        """A list, a read, a write, a command and an FTP request addressed to this server are
+        served: the CLI's summary counts them received, none ignored."""
+        server, station = turns
+        ignored, received = server.stats["ignored"], server.stats["received"]
+        reset = bytes([0, 0, 0, 8]) + bytes(247)  # MAVLink FTP ResetSessions
+        for msg in (
+            mavlink.MAVLink_param_request_list_message(1, 1),
+            mavlink.MAVLink_param_request_read_message(1, 1, b"", 0),
+            set_frame(station.mav, 1, 1, "INA238_1C", 0x46, INT32),
+            mavlink.MAVLink_command_long_message(
+                1, 1, mavlink.MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES, 0, 1, 0, 0, 0, 0, 0, 0
+            ),
+            mavlink.MAVLink_file_transfer_protocol_message(0, 1, 1, list(reset)),
+        ):
+            assert station.exchange(msg) != []
+        assert server.stats["received"] == received + 5
+        assert server.stats["ignored"] == ignored
+
+    def test_a_store_file_another_writer_left_unreadable_is_named_once(
+        self,
+        polled: tuple[MavlinkParamServer, Station, Path, list[str]],
+    ) -> None:
+        server, station, path, lines = polled
+        path.write_bytes(path.read_bytes()[:10])  # truncated by another writer
+        for _ in range(2):
+            assert turn(server, station) == []
+        assert len(lines) == 1
+        assert lines[0].startswith(f"store changed by another writer, not read: {path}")
+
+
+@pytest.mark.issue40
+def test_a_param_set_message_packs_bytewise_as_mavlink_2_unless_asked_for_1() -> None:
+    """Packed as pymavlink packs its own messages of the v20 dialect: a MAVLink 2 frame
+    (magic 0xFD) by default, MAVLink 1 (0xFE) only with force_mavlink1."""
+    msg = param_set_message(1, 1, "SYS_AUTOSTART", 4001, INT32)
+    own = mavlink.MAVLink_param_set_message(1, 1, b"SYS_AUTOSTART", 0.0, INT32)
+    assert own.pack(mavlink.MAVLink(None))[0] == 0xFD
+    assert msg.pack(mavlink.MAVLink(None))[0] == 0xFD
+    assert msg.pack(mavlink.MAVLink(None), force_mavlink1=True)[0] == 0xFE
+
+
+@pytest.mark.issue40
+class TestTurnByTurnFileAndClock:
+    """A write over another writer's save of the same parameter, and the boot time the
+    metadata messages carry (issue 40, mutlinks3)."""
+
+    def test_a_write_over_another_writer_s_save_of_it_is_refused_showing_the_file_s_value(
+        self, store: px4params.Store, tmp_path: Path, schema: px4params.Schema
+    ) -> None:
+        """The store's one write path refuses a write to a leaf another writer changed since
+        this server read the file (nothing merged silently); the ground station is shown the
+        file's value (as PX4 answers a refused PARAM_SET with the value it keeps)."""
+        path = tmp_path / "vehicle.store"
+        store.save(path)
+        server = MavlinkParamServer(
+            store, "127.0.0.1", 0, save_path=path, poll_interval=3600, heartbeat_interval=3600
+        )
+        station = Station(server)
+        try:
+            station.exchange(mavlink.MAVLink_heartbeat_message(6, 8, 0, 0, 0, 3))
+            other = Session(px4params.Store.load(path, schema, classic=CLASSIC), str(path))
+            other.commit(lambda: other.store.set("SYS_AUTOSTART", 4001))
+            got = station.exchange(set_frame(station.mav, 1, 1, "SYS_AUTOSTART", 4002, INT32))
+            shown = {value for name, value, _, _ in values(got) if name == "SYS_AUTOSTART"}
+            assert shown == {4001}
+            assert kinds(got)[-1] == "PARAM_ERROR"
+            assert got[-1].param_index == NAMES.index("SYS_AUTOSTART")
+            assert server.stats["refused"] == 1 and server.store.get("SYS_AUTOSTART") == 4001
+        finally:
+            station.close()
+            server.close()
+
+    @pytest.mark.parametrize("message_id", [397, 395])  # COMPONENT_METADATA, _INFORMATION
+    def test_the_metadata_messages_carry_the_milliseconds_since_the_server_started(
+        self, turns: tuple[MavlinkParamServer, Station], message_id: int
+    ) -> None:
+        """time_boot_ms (MAVLink: time since system boot, in ms), the messages' first field.
+        The server has been up for 100000 s here; the test itself takes well under 60 s."""
+        server, station = turns
+        server._started -= 100_000
+        station.exchange(
+            mavlink.MAVLink_command_long_message(
+                1, 1, mavlink.MAV_CMD_REQUEST_MESSAGE, 0, message_id, 0, 0, 0, 0, 0, 0
+            )
+        )
+        frame = next(f for f in station.frames if int.from_bytes(f[7:10], "little") == message_id)
+        (time_boot_ms,) = struct.unpack("<I", (frame[10 : 10 + frame[1]] + bytes(4))[:4])
+        assert 100_000_000 <= time_boot_ms < 100_060_000

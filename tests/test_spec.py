@@ -529,6 +529,11 @@ def _dsdl(tags: str, fields: str = "uint8 level\n") -> str:
         ("acme.deep.PitotTube", "PITOT_TUBE"),  # the short name: after the last dot
         ("acme.Pitot_Tube", "PITOT_TUBE"),  # an underscore written is kept, none added
         ("Pitot", "PITOT"),
+        # a run of capitals stays one word (no underscore between two capitals), as in the
+        # names DroneCAN's C generator makes of these types (dronecan/dronecan_dsdlc:
+        # UAVCAN_EQUIPMENT_ESC_RPMCOMMAND_ID, UAVCAN_EQUIPMENT_GNSS_ECEFPOSITIONVELOCITY_...)
+        ("uavcan.equipment.esc.RPMCommand", "RPMCOMMAND"),
+        ("uavcan.equipment.gnss.ECEFPositionVelocity", "ECEFPOSITION_VELOCITY"),
     ],
 )
 def test_a_parameter_is_named_after_its_type_in_upper_snake_case(type_name: str, name: str) -> None:

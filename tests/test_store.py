@@ -1226,3 +1226,27 @@ def test_a_saturated_leaf_write_is_held_to_its_range_as_stored(tmp_path: Path) -
     store.set("TABLE#0.cells[1]", 40, saturate=True)
     store.set("TABLE#0.gain", 300, saturate=True, force=True)  # force: the type's 255 is kept
     assert store.get("TABLE#0") == {"p_version": 0, "gain": 255, "cells": [1, 40, 3]}
+
+
+def test_a_signed_p_version_holds_the_types_version_as_an_unsigned_one_does(
+    tmp_path: Path,
+) -> None:
+    """SPEC: p_version holds the type's version, whatever its integer kind. A type declaring
+    `int4 p_version` (version 3 of Signed.1.3: 0b0011 in the top four bits) is stored, its
+    default checked and its value saved and read back like a `uint4` one."""
+    root = tmp_path / "acme"
+    root.mkdir()
+    (root / "Signed.1.3.dsdl").write_text(
+        "# @max_instances 1\nint4 p_version\nuint8 a\n# @default 5\n@sealed\n"
+    )
+    schema = px4params.load_schema([str(root)], use_env=False)
+    store = px4params.Store(schema, classic=[])
+    store.add("SIGNED#0")
+    assert store.get("SIGNED#0") == {"p_version": 3, "a": 5}
+    store.set("SIGNED#0.a", 200)
+    # 0011 then 200 = 1100 1000: 0011 1100 | 1000 0000
+    assert store.encoded("SIGNED#0") == bytes([0x3C, 0x80])
+    saved = tmp_path / "params.bin"
+    store.save(saved)
+    again = px4params.Store.load(saved, schema, classic=[])
+    assert again.get("SIGNED#0") == {"p_version": 3, "a": 200}

@@ -332,7 +332,7 @@ pub fn check_versions(
     impl Visit for Versions {
         fn leaf(&mut self, at: &LeafAt<'_>, old: Option<Scalar>) -> Result<Option<Scalar>, Halt> {
             match (at.version, old) {
-                (Some(expected), Some(given)) if given != Scalar::Uint(expected.into()) => {
+                (Some(expected), Some(given)) if !scalar::same_integer(given, expected) => {
                     *self = Versions(given, expected);
                     Err(Halt::Refused)
                 }

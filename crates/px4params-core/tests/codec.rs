@@ -936,3 +936,27 @@ fn a_default_holds_the_types_version_and_the_check_refuses_another() {
         "{err:?}"
     );
 }
+
+#[test]
+fn a_signed_version_field_holds_the_types_version_too() {
+    // int4 p_version of version 3: 0011 then uint4 9 = 0x39; a default written so is checked
+    // as stored, and -3 (1101) is refused as another version.
+    use px4params_core::codec::check_stored;
+    use px4params_core::layout::Role;
+    let mut l = OwnedLayout::default();
+    let i4 = l.int(4, px4params_core::Cast::Saturated).unwrap();
+    let u4 = l.uint(4, px4params_core::Cast::Saturated).unwrap();
+    let root = l
+        .structure(&[("p_version", i4, Role::Version(3)), ("x", u4, Role::Data)])
+        .unwrap();
+    let layout = l.as_layout();
+    let mut out = [0u8; 2];
+    let n = encode_default(&layout, root, &mut out, false).unwrap();
+    assert_eq!(&out[..n], [0x30]);
+    check_stored(&layout, root, &[0x39]).unwrap();
+    let err = check_stored(&layout, root, &[0xD9]).unwrap_err();
+    assert_eq!(
+        err.display(&layout).to_string(),
+        "p_version: p_version is set automatically; got -3, the type's version is 3"
+    );
+}

@@ -421,7 +421,7 @@ class _Builder:
         for bus, at, why in self.switch_places(switch, value, driver):
             address = at if at is not None else _default_address(self.store, spec.name)
             where = f"on I2C bus {bus}" + (f" ({why})" if why else "")
-            default = " at the driver's default address" if at is None else ""
+            default = " at the driver's default address" if at is None else " at address"
             inst = self.add(
                 spec.name,
                 bus,

@@ -1,0 +1,464 @@
+"""``px4params.migrate.build``: the proposal's tables of PX4 facts (renamed modules and chips,
+switches that are not drivers, start-line options the types have no field for, the sensor
+kinds of log topics), each checked against what PX4 does, on configurations written here.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+import shared_data
+from px4params import migrate
+from px4params.migrate.config import OldConfig
+from px4params.vehicle import devid
+from shared_data import shared_file
+
+pytestmark = pytest.mark.issue40
+
+
+def config(
+    params: dict[str, int | float] | None = None,
+    console: str | None = None,
+    published: list[tuple[str, int, int]] | None = None,
+) -> OldConfig:
+    """A log's configuration as the reader gives it (PX4 1.11: the era of the renamed names)."""
+    return OldConfig(
+        "test.ulg", "ULog", dict(params or {}), version=(1, 11, 2), console=console,
+        published=list(published or []),
+    )  # fmt: skip
+
+
+def test_thermal_control_is_reported_with_px4s_meaning_of_each_value() -> None:
+    # SENS_EN_THERMAL is thermal control, not a driver: each value is reported with the
+    # meaning PX4's parameter metadata gives it (a real parameters.json, read where it is)
+    path = shared_file(shared_data.PARAMETERS_JSON)
+    metadata = json.loads(path.read_text())
+    rows = metadata.get("parameters", metadata)
+    (thermal,) = [p for p in rows if p["name"] == "SENS_EN_THERMAL"]
+    assert {v["value"] for v in thermal["values"]} == {-1, 0, 1}
+    for entry in thermal["values"]:
+        value, meaning = entry["value"], entry["description"]
+        proposal = migrate.migrate(config({"SENS_EN_THERMAL": value}), table="px4-v1.11")
+        assert proposal.not_carried == [
+            f"SENS_EN_THERMAL = {value} ({meaning[0].lower()}{meaning[1:]}): not a driver "
+            "switch; it stays a classic parameter"
+        ]
+        assert proposal.disabled == [] and proposal.instances == []
+
+
+@pytest.mark.parametrize(("switch", "param"), [("SENS_EN_INA226", "INA226"),
+                                               ("SENS_EN_INA228", "INA228")])  # fmt: skip
+def test_a_power_monitors_battery_index_has_no_field_and_says_so(switch: str, param: str) -> None:
+    # PX4's rc.sensors starts a switched power monitor as `ina22x -X -b 1 -t 1 -k start`: the
+    # battery index -t 1 is a start option the type has no field for
+    proposal = migrate.migrate(config({switch: 1}), table="px4-v1.11")
+    (inst,) = proposal.instances
+    assert inst.name == f"{param}#0"
+    assert (
+        f"today's start line also sets the battery index (-t 1): {param} has no field for it"
+        in inst.notes
+    )
+
+
+@pytest.mark.parametrize(
+    ("module", "param", "address"),
+    # PX4 1.13 renamed the airspeed drivers (ms4525_airspeed -> ms4525do, ...); a 1.11 boot
+    # console names the old module, and the driver is today's (at its default address, which
+    # a 1.11 console line does not print)
+    [("ms4525_airspeed", "MS4525DO", 0x28), ("ms5525_airspeed", "MS5525DSO", 0x76),
+     ("sdp3x_airspeed", "SDP3X", 0x21)],
+)  # fmt: skip
+def test_an_airspeed_driver_by_its_name_before_px4_1_13(
+    module: str, param: str, address: int
+) -> None:
+    console = f"{module} #0 on I2C bus 2 (external, equal to '-b 1')\n"
+    proposal = migrate.migrate(config(console=console), table="px4-v1.11")
+    assert [(i.name, i.values["bus.i2c.bus_id"], i.values["bus.i2c.address"])
+            for i in proposal.instances] == [(f"{param}#0", 2, address)]  # fmt: skip
+    assert not [n for n in proposal.not_carried if module in n], proposal.not_carried
+
+
+def test_an_ms5525_of_px4_1_11_is_todays_ms5525dso() -> None:
+    # PX4 1.11's drv_sensor.h: 0x48 is DRV_DIFF_PRESS_DEVTYPE_MS5525, which 1.13 renamed
+    # MS5525DSO (the driver's chip): the airspeed topic's device is proposed as MS5525DSO
+    ms5525 = devid.encode("i2c", 2, 0x76, 0x48)
+    proposal = migrate.migrate(
+        config(published=[("differential_pressure", 0, ms5525)]), table="px4-v1.11"
+    )
+    assert [(i.name, i.values["bus.i2c.bus_id"], i.values["bus.i2c.address"])
+            for i in proposal.instances] == [("MS5525DSO#0", 2, 0x76)]  # fmt: skip
+
+
+def test_a_barometer_topic_of_an_unknown_chip_is_taken_as_the_boards() -> None:
+    # a device of a devtype the table does not know, published on sensor_baro: a barometer,
+    # which sits on the flight controller (started by the board's script), not a sensor to
+    # carry over
+    unknown = devid.encode("i2c", 4, 0x77, 0xFE)
+    proposal = migrate.migrate(config(published=[("sensor_baro", 0, unknown)]), table="px4-v1.11")
+    assert proposal.instances == [] and proposal.not_carried == []
+    (line,) = proposal.not_in_manifest
+    assert line.startswith(f"sensor_baro 0 = {unknown}: ")
+    assert line.endswith(": a barometer: assumed started by the board's script")
+
+
+@pytest.mark.parametrize(
+    "topic",
+    ["sensor_accel", "sensor_gyro", "sensor_mag", "sensor_baro", "differential_pressure",
+     "distance_sensor"],
+)  # fmt: skip
+def test_one_device_on_two_instances_of_a_topic_is_reported_once(topic: str) -> None:
+    # issue 34, defect 10: one device in two slots of a kind is reported once, both named
+    icm20602 = devid.encode("spi", 1, 0, 0x38)
+    proposal = migrate.migrate(
+        config(published=[(topic, 0, icm20602), (topic, 1, icm20602)]), table="current"
+    )
+    (line,) = proposal.not_in_manifest
+    assert line.startswith(f"{topic} 0, {topic} 1 = {icm20602}: ")
+    assert line.endswith(f"; {topic} 0 and {topic} 1 hold the same device (reported once)")
+
+
+def today(params: dict[str, int | float], console: str | None = None) -> OldConfig:
+    """A PX4 1.15 log's parameters (and boot console), read with today's devtype table."""
+    return OldConfig("test.ulg", "ULog", dict(params), version=(1, 15, 0), console=console)
+
+
+def test_a_driver_switch_without_a_bundled_type_stays_classic() -> None:
+    proposal = migrate.migrate(today({"SENS_EN_FOOBAR": 1, "SENS_EN_INA238": 1}), table="current")
+    assert [i.name for i in proposal.instances] == ["INA238#0"]
+    assert proposal.not_carried == [
+        "SENS_EN_FOOBAR = 1: no bundled parameter type FOOBAR; the driver stays enabled by this "
+        "classic parameter, outside the manifest"
+    ]
+
+
+def test_a_model_switch_and_a_setting_out_of_its_fields_range() -> None:
+    # SENS_EN_SF1XX's value is the rangefinder's model (PX4's lightware_laser_i2c parameters:
+    # 6 is the LW20/c): it goes into the type's model field; SF1XX_ROT is a Rotation (0..40 in
+    # the type's @min/@max): 99 is not carried, and says why, 40 is
+    proposal = migrate.migrate(
+        today({"SENS_EN_SF1XX": 6, "SF1XX_ROT": 99, "SF1XX_MODE": 1}), table="current"
+    )
+    (inst,) = proposal.instances
+    assert inst.name == "SF1XX#0"
+    assert inst.values == {"bus.i2c.bus_id": 1, "bus.i2c.address": 0x66, "model": 6, "mode": 1}
+    assert proposal.not_carried == ["SF1XX_ROT = 99: SF1XX#0.rotation must be 0..40"]
+    proposal = migrate.migrate(today({"SENS_EN_SF1XX": 6, "SF1XX_ROT": 40}), table="current")
+    assert proposal.instances[0].values["rotation"] == 40 and proposal.not_carried == []
+
+
+def test_a_calibration_slot_that_holds_no_device_id_is_said_so() -> None:
+    # a device ID is a uint32 of PX4's DeviceStructure; a .params file may carry it as a float;
+    # 0 is an empty slot (nothing to report)
+    ak09916 = devid.encode("i2c", 1, 0x0C, 0x09)
+    proposal = migrate.migrate(
+        today(
+            {"CAL_MAG0_ID": float(ak09916), "CAL_MAG1_ID": -5, "CAL_MAG2_ID": 1.5, "CAL_MAG3_ID": 0}
+        ),
+        table="current",
+    )
+    assert [(i.name, i.origin) for i in proposal.instances] == [
+        ("AK09916#0", f"CAL_MAG0_ID = {ak09916}: AK09916 (MAG), I2C bus 1, address 0x0C")
+    ]
+    assert proposal.not_carried == [
+        "CAL_MAG1_ID = -5: not a device ID",
+        "CAL_MAG2_ID = 1.5: not a device ID",
+    ]
+
+
+def test_a_board_named_without_a_board_table_is_refused(monkeypatch: pytest.MonkeyPatch) -> None:
+    import sys
+
+    from px4params.errors import MigrationError
+
+    # an installation without the board table (px4params.vehicle.boards cannot be imported)
+    monkeypatch.setitem(sys.modules, "px4params.vehicle.boards", None)
+    with pytest.raises(MigrationError) as e:
+        migrate.migrate(today({}), board="px4_fmu-v6x", table="current")
+    assert str(e.value) == (
+        "--board px4_fmu-v6x: this installation has no board table (px4params.vehicle.boards)"
+    )
+    # a log's board is then judged from the parameters, and the report says so
+    log = OldConfig("t.ulg", "ULog", {}, version=(1, 15, 0), hardware="PX4_FMU_V6X")
+    assert migrate.migrate(log, table="current").assumptions == [
+        "board PX4_FMU_V6X: no board table here; what its script starts is judged from the "
+        "parameters and the boot console"
+    ]
+
+
+def test_a_type_whose_bus_defaults_to_spi_is_proposed_on_i2c_tag_first(tmp_path: Path) -> None:
+    # a type of an extra DSDL folder (no driver declaration) whose bus defaults to SPI: its
+    # switch starts it on I2C as the power monitors are, so the proposal selects the I2C
+    # variant (px.Bus's variant 0) before it sets the I2C fields (a tag set later would
+    # reset them)
+    import px4params
+
+    root = tmp_path / "acme"
+    root.mkdir()
+    (root / "Probe.1.0.dsdl").write_text(
+        "# A probe\n# @max_instances 2\n\nuint4 p_version\npx.Bus.1.0 bus\n# Bus\n"
+        "# @default spi.bus_id 1\nuint8 gain\n@sealed\n"
+    )
+    schema = px4params.load_schema([root], use_env=False, cache_dir=tmp_path / "cache")
+    proposal = migrate.migrate(today({"SENS_EN_PROBE": 1}), schema=schema, table="current")
+    (inst,) = proposal.instances
+    assert inst.values == {"bus._tag": 0, "bus.i2c.bus_id": 1, "bus.i2c.address": 0}
+    lines = [line for line in proposal.airframe().splitlines() if line.startswith("param ")]
+    assert lines == [
+        "param add PROBE#0",
+        "param set-default PROBE#0[1] 0",
+        "param set-default PROBE#0[3] 1",
+        "param set-default PROBE#0[4] 0x00",
+    ]
+
+
+def test_a_switched_driver_runs_where_the_boot_console_shows_it() -> None:
+    # issue 34, defect 8: a switch-started driver runs where the evidence says; the boot
+    # console's start line names its bus and address
+    console = "nsh: sercon\nina238 #0 on I2C bus 2 (external) address 0x44\n"
+    proposal = migrate.migrate(today({"SENS_EN_INA238": 1}, console), table="current")
+    (inst,) = proposal.instances
+    assert (inst.name, inst.values) == ("INA238#0", {"bus.i2c.bus_id": 2, "bus.i2c.address": 0x44})
+    assert inst.origin == (
+        "SENS_EN_INA238 = 1: ina238 started on I2C bus 2 (boot console line 2: 'ina238 #0 on "
+        "I2C bus 2 (external) address 0x44') at address 0x44"
+    )
+    # the line is the switch's: not reported again, nor taken as a second finding
+    assert proposal.not_in_manifest == []
+    assert not [n for n in inst.notes if n.startswith("also ")], inst.notes
+    assert not [a for a in proposal.assumptions if "INA238" in a]
+
+
+def test_a_switched_driver_the_boot_console_does_not_show_is_a_guess_said_so() -> None:
+    proposal = migrate.migrate(today({"SENS_EN_INA238": 1}, "nsh: sercon\n"), table="current")
+    (inst,) = proposal.instances
+    assert inst.values == {"bus.i2c.bus_id": 1, "bus.i2c.address": 0x45}  # INA238's default
+    assert [a for a in proposal.assumptions if "INA238" in a] == [
+        "SENS_EN_INA238: the boot console shows no ina238 start (not connected at boot?); "
+        "proposed on I2C bus 1",
+        "SENS_EN_INA238: I2C bus 1 is a guess (PX4 starts ina238 -X -b 1 on the board; nothing "
+        "here says which bus it is on)",
+    ]
+
+
+def test_a_setting_below_its_fields_minimum_is_rounded_then_raised_to_it() -> None:
+    # a physical quantity is rounded to nearest (0.2 A -> 0) and held to the field's range
+    # (INA238's current: 1..327 A); a value the store refuses (NaN) is not carried, with the
+    # store's reason
+    params = {"SENS_EN_INA238": 1, "INA238_CURRENT": 0.2, "INA238_SHUNT": float("nan")}
+    proposal = migrate.migrate(today(params), table="current")
+    (inst,) = proposal.instances
+    assert inst.values["current"] == 1 and "shunt" not in inst.values
+    assert inst.notes[0] == "INA238_CURRENT = 0.2 A becomes current = 1 A (uint10, 1..327)"
+    assert proposal.not_carried == [
+        "INA238_SHUNT = nan: INA238#0.shunt: nan is not a finite number (float16: NaN and "
+        "infinities are refused)"
+    ]
+
+
+def test_one_device_in_two_slots_one_of_them_disabled_is_proposed_with_a_note() -> None:
+    # issue 34, defects 2 and 10: CAL_MAG0_PRIO = 0 disables that slot; the device is still
+    # used through the other slot, so it is proposed, and the disabled slot is said
+    ak09916 = devid.encode("i2c", 1, 0x0C, 0x09)
+    params = {"CAL_MAG0_ID": ak09916, "CAL_MAG1_ID": ak09916, "CAL_MAG0_PRIO": 0,
+              "CAL_MAG1_PRIO": 50}  # fmt: skip
+    proposal = migrate.migrate(today(params), table="current")
+    (inst,) = proposal.instances
+    assert inst.name == "AK09916#0"
+    assert inst.notes == [
+        "CAL_MAG0_PRIO = 0: one of its slots was disabled for use",
+        "CAL_MAG0_ID and CAL_MAG1_ID hold the same device (reported once)",
+    ]
+
+
+def test_boot_console_lines_of_the_boards_own_sensors_are_reported_not_proposed() -> None:
+    # an SPI sensor and a sensor on an internal I2C bus are the flight controller's, started
+    # by the board's scripts; an external one started outside them is proposed
+    console = (
+        "ms5611 #0 on SPI bus 1 (devid=0x3d)\n"
+        "bmm350 #0 on I2C bus 4 address 0x14\n"
+        "ak09916 #0 on I2C bus 1 (external) address 0x0D\n"
+    )
+    proposal = migrate.migrate(today({}, console), table="current")
+    assert proposal.not_in_manifest == [
+        "boot console line 1: ms5611, SPI bus 1: internal SPI sensor: started by the board's "
+        "startup script",
+        "boot console line 2: bmm350, I2C bus 4, address 0x14: on an internal bus: started by "
+        "the board's startup scripts",
+    ]
+    assert [(i.name, i.values["bus.i2c.address"], i.origin) for i in proposal.instances] == [
+        ("AK09916#0", 0x0D, "boot console line 3: 'ak09916 #0 on I2C bus 1 (external) address "
+         "0x0D' (started outside the board's script)"),
+    ]  # fmt: skip
+
+
+def test_a_console_line_at_another_address_is_not_the_slots_device() -> None:
+    # the boot console's line is a device's evidence only at the device's address: an
+    # AK09916 at 0x0D is a second device, not the calibrated one at 0x0C
+    ak09916 = devid.encode("i2c", 1, 0x0C, 0x09)
+    console = "ak09916 #0 on I2C bus 1 (external) address 0x0D\n"
+    proposal = migrate.migrate(today({"CAL_MAG0_ID": ak09916}, console), table="current")
+    assert [(i.name, i.values["bus.i2c.address"], i.origin) for i in proposal.instances] == [
+        ("AK09916#0", 0x0C, f"CAL_MAG0_ID = {ak09916}: AK09916 (MAG), I2C bus 1, address 0x0C"),
+        ("AK09916#1", 0x0D, "boot console line 1: 'ak09916 #0 on I2C bus 1 (external) address "
+         "0x0D' (started outside the board's script)"),
+    ]  # fmt: skip
+
+
+def test_the_boards_script_starts_its_compass_on_the_buses_it_names_only() -> None:
+    # PX4's boards/px4/fmu-v5/init/rc.board_sensors: `ist8310 -I -R 10 start` (any internal
+    # bus: 3 on fmu-v5) and `ist8310 -X -b 1 -R 10 start` (external bus 1, the GPS port): an
+    # IST8310 on bus 3 or 1 is the board's; on bus 2 or 4 it was found by probing
+    from px4params.vehicle.boards import load_boards
+
+    v5 = load_boards().by_name("px4_fmu-v5")
+    assert v5 is not None and v5.internal_i2c_buses == (3,)
+    rows = [r for r in v5.devices if r.driver == "ist8310"]
+    assert [(r.bus, r.internal) for r in rows] == [(None, True), (1, False)]
+    for bus, row in ((3, rows[0]), (1, rows[1])):
+        ist8310 = devid.encode("i2c", bus, 0x0E, 0x06)
+        proposal = migrate.migrate(today({"CAL_MAG0_ID": ist8310}), table="current", board=v5)
+        assert proposal.instances == []
+        assert proposal.not_in_manifest == [
+            f"CAL_MAG0_ID = {ist8310}: IST8310 (MAG), I2C bus {bus}, address 0x0E: started by "
+            f"the board's script ({row.source})"
+        ]
+    for bus in (2, 4):
+        ist8310 = devid.encode("i2c", bus, 0x0E, 0x06)
+        proposal = migrate.migrate(today({"CAL_MAG0_ID": ist8310}), table="current", board=v5)
+        assert [(i.name, i.values["bus.i2c.bus_id"]) for i in proposal.instances] == [
+            ("IST8310#0", bus)
+        ]
+    # nor does it start another chip on those buses: an AK09916 on bus 1 was found by probing
+    ak09916 = devid.encode("i2c", 1, 0x0C, 0x09)
+    proposal = migrate.migrate(today({"CAL_MAG0_ID": ak09916}), table="current", board=v5)
+    assert [i.name for i in proposal.instances] == ["AK09916#0"]
+
+
+def test_a_row_without_a_bus_starts_on_the_external_buses_only() -> None:
+    # PX4's boards/saam/saampixv1_1/init/rc.board_sensors: `hmc5883 -X start`, no -b: the
+    # driver tries every external I2C bus, and the board's i2c.cpp has one, bus 2 (bus 1 is
+    # internal). An HMC5883 on bus 2 is the board's; on bus 1 that line never looked for it.
+    from px4params.vehicle.boards import load_boards
+
+    saam = load_boards().by_name("saam_saampixv1_1")
+    assert saam is not None
+    assert (saam.internal_i2c_buses, saam.external_i2c_buses) == ((1,), (2,))
+    [row] = [r for r in saam.devices if r.driver == "hmc5883"]
+    assert (row.bus, row.internal) == (None, False)
+    on_2 = devid.encode("i2c", 2, 0x1E, 0x01)
+    proposal = migrate.migrate(today({"CAL_MAG0_ID": on_2}), table="current", board=saam)
+    assert proposal.instances == []
+    assert proposal.not_in_manifest == [
+        f"CAL_MAG0_ID = {on_2}: HMC5883 (MAG), I2C bus 2, address 0x1E: started by "
+        f"the board's script ({row.source})"
+    ]
+    on_1 = devid.encode("i2c", 1, 0x1E, 0x01)
+    proposal = migrate.migrate(today({"CAL_MAG0_ID": on_1}), table="current", board=saam)
+    assert [(i.name, i.values["bus.i2c.bus_id"]) for i in proposal.instances] == [("HMC5883#0", 1)]
+
+
+def test_a_driver_running_with_the_rotation_rc_sensors_probes_with_is_the_probes() -> None:
+    # PX4 1.11's rc.sensors probes `ak09916 -X -R 6 start` (external compass): an AK09916 the
+    # boot console shows running with rotation 6 was started by that probe (proposed, with the
+    # driver's -R); with rotation 4 another script started it (the board's)
+    from px4params.vehicle.boards import load_boards
+
+    cube = load_boards().by_name("cubepilot_cubeorange", "v1.11.2")
+    assert cube is not None
+    ak09916 = devid.encode("i2c", 1, 0x0C, 0x09)
+    line = "ak09916 #0 on I2C bus 1 (external, equal to '-b 2') rotation {}\n"
+    old = OldConfig("t.ulg", "ULog", {"CAL_MAG0_ID": ak09916}, version=(1, 11, 2),
+                    console=line.format(6))  # fmt: skip
+    proposal = migrate.migrate(old, table="px4-v1.11", board=cube)
+    (inst,) = proposal.instances
+    assert (inst.name, inst.values["rotation"]) == ("AK09916#0", 6)
+    assert inst.notes == ["rotation 6: the driver's -R (boot console)"]
+    old.console = line.format(4)
+    proposal = migrate.migrate(old, table="px4-v1.11", board=cube)
+    assert proposal.instances == []
+    assert proposal.not_in_manifest == [
+        f"CAL_MAG0_ID = {ak09916}: AK09916 (MAG), I2C bus 1, address 0x0C: runs with rotation 4 "
+        "(boot console line 1): rc.sensors probes without -R, so the board's script started it"
+    ]
+
+
+def test_what_the_i2c_launcher_started_is_proposed_and_nothing_guessed() -> None:
+    # Pixhawk 6X's rc.board_sensors runs `i2c_launcher start -b 1` (and -b 2): the boot
+    # console's launcher line says which power monitor it found; without one, the scan is
+    # an assumption the report says
+    from px4params.vehicle.boards import load_boards
+
+    v6x = load_boards().by_name("px4_fmu-v6x")
+    assert v6x is not None and v6x.i2c_launcher_buses == (1, 2)
+    console = (
+        "INFO  [i2c_launcher] Found address 0x45, running 'ina228 -X -b 1 -a 0x45 -t 1 start'\n"
+        "ina228 #0 on I2C bus 1 (external) address 0x45\n"
+    )
+    proposal = migrate.migrate(today({}, console), table="current", board=v6x)
+    (inst,) = proposal.instances
+    assert (inst.name, inst.values) == ("INA228#0", {"bus.i2c.bus_id": 1, "bus.i2c.address": 0x45})
+    assert inst.origin.endswith(" (found by i2c_launcher)")
+    assert not [a for a in proposal.assumptions if "i2c_launcher" in a], proposal.assumptions
+    proposal = migrate.migrate(today({}, "nsh: sercon\n"), table="current", board=v6x)
+    assert proposal.instances == []
+    assert proposal.assumptions == [
+        "the board's i2c_launcher scans I2C bus 1, 2 for power monitors (INA226, INA228, INA238) "
+        "when no SENS_EN_INA* is set: the boot console shows none it started"
+    ]
+
+
+@pytest.mark.parametrize(
+    ("when", "holds_for"),
+    # a board row's condition on its switch, as the board table writes PX4's `param compare`
+    # (==) and `param greater` (>) tests, the others alike; the first clause decides
+    [("SENS_EN_LL40LS == 2", {2}), ("SENS_EN_SF1XX > 0", {1, 2}), ("X != 1", {-1, 0, 2}),
+     ("X >= 1", {1, 2}), ("X <= 1", {-1, 0, 1}), ("X < 1", {-1, 0}), ("X == -1", {-1}),
+     ("SENS_EN_SDP3X == 1 and not sdp3x started (start -X)", {1}),
+     ("", {-1, 0, 1, 2}), ("$VEHICLE_TYPE == fw", {-1, 0, 1, 2})],
+)  # fmt: skip
+def test_a_board_rows_condition_holds_as_the_shell_test_does(when: str, holds_for: set) -> None:
+    from px4params.migrate.build import _holds
+
+    assert {v for v in (-1, 0, 1, 2) if _holds(when, v)} == holds_for
+
+
+def test_a_setting_rounded_into_its_field_is_noted_with_the_fields_unit_if_it_has_one() -> None:
+    # a `param set` list may give a whole-number setting with a fraction: it is rounded to
+    # nearest into the field (PCF8583_MAGNET: pulses, no unit; PCF8583_POOL: microseconds)
+    params = {"SENS_EN_PCF8583": 1, "PCF8583_MAGNET": 2.6, "PCF8583_POOL": 1000000.4}
+    (inst,) = migrate.migrate(today(params), table="current").instances
+    assert (inst.values["magnet_pulses"], inst.values["pool_interval"]) == (3, 1000000)
+    assert inst.notes == [
+        "PCF8583_POOL = 1000000.4 us becomes pool_interval = 1000000 us (uint24, 1..16777215)",
+        "PCF8583_MAGNET = 2.6 becomes magnet_pulses = 3 (uint8, 1..255)",
+    ]
+
+
+def test_a_boot_console_line_is_the_evidence_of_one_device_only() -> None:
+    # PX4 1.11 prints no address: one ist8310 line on bus 1 is the start of one of two
+    # IST8310s there (the first found); the other was not started at boot by that line
+    first, second = devid.encode("i2c", 1, 0x0E, 0x06), devid.encode("i2c", 1, 0x0F, 0x06)
+    console = "ist8310 #0 on I2C bus 1 (external, equal to '-b 2')\n"
+    old = OldConfig("t.ulg", "ULog", {"CAL_MAG0_ID": first, "CAL_MAG1_ID": second},
+                    version=(1, 11, 2), console=console)  # fmt: skip
+    proposal = migrate.migrate(old, table="current")
+    origins = [i.origin for i in proposal.instances]
+    assert [i.name for i in proposal.instances] == ["IST8310#0", "IST8310#1"]
+    assert sum("boot console line 1" in o for o in origins) == 1, origins
+
+
+def test_a_devices_console_line_is_found_past_lines_of_other_addresses() -> None:
+    ak09916 = devid.encode("i2c", 1, 0x0C, 0x09)
+    console = (
+        "ak09916 #0 on I2C bus 1 (external) address 0x0D\n"
+        "ak09916 #1 on I2C bus 1 (external) address 0x0C\n"
+    )
+    proposal = migrate.migrate(today({"CAL_MAG0_ID": ak09916}, console), table="current")
+    assert [(i.name, i.values["bus.i2c.address"]) for i in proposal.instances] == [
+        ("AK09916#0", 0x0C), ("AK09916#1", 0x0D)
+    ]  # fmt: skip
+    assert proposal.instances[0].origin.endswith(
+        "; boot console line 2: 'ak09916 #1 on I2C bus 1 (external) address 0x0C'"
+    )
