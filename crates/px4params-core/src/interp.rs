@@ -125,6 +125,14 @@ pub(crate) trait Pass {
     fn scalar(&mut self, kind: Kind, path: &Path) -> Result<(), Stop>;
     /// A `p_version` field the input has (decoding: a primitive like any other).
     fn version(&mut self, kind: Kind, version: u32, path: &Path) -> Result<(), Stop>;
+    /// A primitive, a `p_version` field's where `version` is given.
+    #[inline(always)]
+    fn leaf(&mut self, kind: Kind, version: Option<u32>, path: &Path) -> Result<(), Stop> {
+        match version {
+            Some(v) => self.version(kind, v, path),
+            None => self.scalar(kind, path),
+        }
+    }
     /// A `p_version` field the input leaves out (encoding only): the type's version.
     fn absent_version(&mut self, kind: Kind, version: u32) -> Result<(), Stop>;
     /// `bits` zero bits.
@@ -276,7 +284,13 @@ impl<'l, P: Pass> Run<'l, P> {
     }
 
     /// Walks node `id`; `tao`: it ends the value (tail array optimization applies to it).
+    #[inline(always)]
     pub(crate) fn node(&mut self, id: NodeId, tao: Tao) -> Result<(), Stop> {
+        self.part(id, tao, None)
+    }
+
+    /// Walks node `id` (`version`: the type's, where it is a `p_version` field).
+    fn part(&mut self, id: NodeId, tao: Tao, version: Option<u32>) -> Result<(), Stop> {
         if P::EDITS && self.pass.pass_over(self.layout, id) {
             return Ok(());
         }
@@ -290,7 +304,7 @@ impl<'l, P: Pass> Run<'l, P> {
         let mut array = None;
         match layout.node(id).kind {
             kind @ (Kind::Uint { .. } | Kind::Int { .. } | Kind::Float { .. } | Kind::Bool) => {
-                let r = self.pass.scalar(kind, &self.path);
+                let r = self.pass.leaf(kind, version, &self.path);
                 self.ok(r)?;
             }
             Kind::Void { bits } => {
@@ -511,6 +525,22 @@ impl<'l, P: Pass> Run<'l, P> {
     fn field(&mut self, index: u32, tao: Tao) -> Result<usize, Stop> {
         let layout = self.layout;
         let field = layout.fields[index as usize];
+        if P::EDITS {
+            // Every field is there: a part like any other, a `p_version` one with its version.
+            let version = match field.role {
+                Role::Version(v) => Some(v),
+                _ => None,
+            };
+            let named = field.role != Role::Padding;
+            if named {
+                self.path.push(Step::Field(index));
+            }
+            self.part(field.node, tao, version)?;
+            if named {
+                self.path.pop();
+            }
+            return Ok(1);
+        }
         if field.role == Role::Padding {
             self.node(field.node, tao)?;
             return Ok(0);
@@ -1609,7 +1639,7 @@ impl Visiting<'_> {
     }
 
     /// A primitive leaf (`version`: the type's, for a `p_version` field).
-    fn leaf(&mut self, kind: Kind, version: Option<u32>, path: &Path) -> Result<(), Stop> {
+    fn primitive(&mut self, kind: Kind, version: Option<u32>, path: &Path) -> Result<(), Stop> {
         let bits = scalar_bits(kind);
         let at = self.pos();
         let mut raw = match self.mode.reads() {
@@ -1660,10 +1690,13 @@ impl Pass for Visiting<'_> {
         }
     }
     fn scalar(&mut self, kind: Kind, path: &Path) -> Result<(), Stop> {
-        self.leaf(kind, None, path)
+        self.primitive(kind, None, path)
     }
     fn version(&mut self, kind: Kind, version: u32, path: &Path) -> Result<(), Stop> {
-        self.leaf(kind, Some(version), path)
+        self.primitive(kind, Some(version), path)
+    }
+    fn leaf(&mut self, kind: Kind, version: Option<u32>, path: &Path) -> Result<(), Stop> {
+        self.primitive(kind, version, path)
     }
     fn absent_version(&mut self, _: Kind, _: u32) -> Result<(), Stop> {
         Ok(())

@@ -25,7 +25,7 @@ use crate::rules::{
     DecodeOptions, Decoded, EncodeOptions, Leaf, LeafAccessError, LeafError, LeafKind, Position,
     TranslateError,
 };
-use crate::scalar::{Scalar, ScalarError};
+use crate::scalar::{self, Scalar, ScalarError};
 
 /// The error of a walk whose visit refuses nothing.
 fn plain(e: Error<LeafError>) -> LeafAccessError {
