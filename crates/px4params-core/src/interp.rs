@@ -1600,42 +1600,71 @@ impl Visiting<'_> {
         self.wpos = end;
     }
 
-    #[inline(always)]
-    fn visit(
+    /// A leaf (`kind`; `version`: the type's, for a `p_version` field) at bit `at`, its raw
+    /// bits `raw` (read, or where nothing is read, its default), visited where the mode
+    /// visits: `raw` becomes the raw bits to write, those of the value the visit gives (or
+    /// stays). A union tag or array length is visited before it is checked (a bad one can be
+    /// looked at).
+    #[inline(never)]
+    fn visited(
         &mut self,
         kind: LeafKind,
         version: Option<u32>,
-        bit_offset: usize,
-        old: Option<Scalar>,
+        at: usize,
+        raw: &mut u64,
         path: &Path,
-    ) -> Result<Option<Scalar>, Stop> {
+    ) -> Result<(), Stop> {
+        if !self.mode.visits() {
+            return Ok(());
+        }
+        let old = self.mode.reads().then(|| match kind {
+            LeafKind::Scalar(kind) => scalar_of(kind, *raw),
+            _ => Scalar::Uint(*raw),
+        });
         let at = LeafAt {
             index: self.leaves,
             kind,
             version,
-            bit_offset,
+            bit_offset: at,
             path,
         };
         self.leaves += 1;
-        match self.visit.leaf(&at, old) {
-            Ok(v) => Ok(v),
-            Err(halt) => Err(self.halt(halt)),
-        }
-    }
-
-    /// A union tag or array length (`kind`, at `at`, `old` where read) visited before it is
-    /// checked (a bad one can be looked at); the count the visit gives, or else `old`.
-    fn counted(&mut self, kind: LeafKind, at: usize, old: u64, path: &Path) -> Result<u64, Stop> {
-        if !self.mode.visits() {
-            return Ok(old);
-        }
-        let read = self.mode.reads().then_some(Scalar::Uint(old));
-        match self.visit(kind, None, at, read, path)? {
-            None => Ok(old),
-            Some(Scalar::Uint(n)) => Ok(n),
-            Some(Scalar::Int(n)) if n >= 0 => Ok(n as u64),
-            Some(_) => Err(self.refuse(ErrorKind::Value(LeafError::NotACount))),
-        }
+        let v = match self.visit.leaf(&at, old) {
+            Ok(Some(v)) => v,
+            Ok(None) => return Ok(()),
+            Err(halt) => return Err(self.halt(halt)),
+        };
+        let fault = match (kind, version) {
+            (LeafKind::Scalar(_), Some(expected))
+                if self.mode == Mode::Given && !self.keep_versions =>
+            {
+                if scalar::same_integer(v, expected) {
+                    *raw = expected.into();
+                    return Ok(());
+                }
+                ErrorKind::VersionMismatch { given: v, expected }
+            }
+            (LeafKind::Scalar(kind), _) => match scalar_raw(kind, v, self.saturate) {
+                Ok(bits) => {
+                    *raw = bits;
+                    return Ok(());
+                }
+                Err(e) => ErrorKind::Scalar(e),
+            },
+            // A count.
+            _ => match v {
+                Scalar::Uint(n) => {
+                    *raw = n;
+                    return Ok(());
+                }
+                Scalar::Int(n) if n >= 0 => {
+                    *raw = n as u64;
+                    return Ok(());
+                }
+                _ => ErrorKind::Value(LeafError::NotACount),
+            },
+        };
+        Err(self.refuse(fault))
     }
 
     /// A primitive leaf (`version`: the type's, for a `p_version` field).
@@ -1646,24 +1675,7 @@ impl Visiting<'_> {
             true => self.read(bits)?,
             false => version.unwrap_or(0).into(),
         };
-        if self.mode.visits() {
-            let old = self.mode.reads().then(|| scalar_of(kind, raw));
-            if let Some(v) = self.visit(LeafKind::Scalar(kind), version, at, old, path)? {
-                raw = match version {
-                    Some(expected) if self.mode == Mode::Given && !self.keep_versions => {
-                        if !scalar::same_integer(v, expected) {
-                            let fault = ErrorKind::VersionMismatch { given: v, expected };
-                            return Err(self.refuse(fault));
-                        }
-                        expected.into()
-                    }
-                    _ => match scalar_raw(kind, v, self.saturate) {
-                        Ok(raw) => raw,
-                        Err(e) => return Err(self.refuse(ErrorKind::Scalar(e))),
-                    },
-                };
-            }
-        }
+        self.visited(LeafKind::Scalar(kind), version, at, &mut raw, path)?;
         self.write(raw, bits);
         Ok(())
     }
@@ -1726,8 +1738,10 @@ impl Pass for Visiting<'_> {
         let at = self.pos();
         let old = self.read(bits.into())?;
         let kind = LeafKind::Tag { bits, union: id };
+        let mut new = old;
+        self.visited(kind, None, at, &mut new, path)?;
         // (A tag read too large for 32 bits is refused as read, before this one is used.)
-        let new = self.counted(kind, at, old, path)?.min(u32::MAX.into());
+        let new = new.min(u32::MAX.into());
         // Nothing read: the given tag is checked where the union starts.
         Ok((if self.mode.reads() { old } else { new }, new))
     }
@@ -1756,7 +1770,8 @@ impl Pass for Visiting<'_> {
     }
     fn relength(&mut self, n: Option<u64>, at: At<'_>) -> Result<Option<u64>, Stop> {
         // The loop has counted a tail array read: `n` is always there.
-        let new = self.counted(at.kind, at.bit_offset, n.unwrap_or(0), at.path)?;
+        let mut new = n.unwrap_or(0);
+        self.visited(at.kind, None, at.bit_offset, &mut new, at.path)?;
         Ok(Some(new))
     }
     fn prefix(&mut self, n: Option<u64>, bits: u8, _: At<'_>) -> Result<(), Stop> {
