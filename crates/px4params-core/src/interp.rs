@@ -347,21 +347,22 @@ impl<'l, P: Pass> Run<'l, P> {
                 };
                 let r = self.pass.variant(tag, index, layout.name(&variant), at);
                 self.ok(r)?;
-                let mode = self.pass.mode();
-                if P::EDITS && read != tag {
-                    // A new tag: the old variant is passed over, the new one written with
-                    // its default value.
-                    self.pass.set_mode(Mode::Skip);
-                    let old = first + read as u32;
-                    self.path.push(Step::Field(old));
-                    self.node(layout.fields[old as usize].node, tao)?;
+                if P::EDITS {
+                    let mut mode = self.pass.mode();
+                    if read != tag {
+                        // A new tag: the old variant is passed over, the new one written with
+                        // its default value.
+                        let old = first + read as u32;
+                        let node = layout.fields[old as usize].node;
+                        self.child(Some(Step::Field(old)), node, tao, None, Mode::Skip)?;
+                        mode = Mode::Default;
+                    }
+                    self.child(Some(Step::Field(index)), variant.node, tao, None, mode)?;
+                } else {
+                    self.path.push(Step::Field(index));
+                    self.node(variant.node, tao)?;
                     self.path.pop();
-                    self.pass.set_mode(Mode::Default);
                 }
-                self.path.push(Step::Field(index));
-                self.node(variant.node, tao)?;
-                self.path.pop();
-                self.pass.set_mode(mode);
                 let r = self.pass.end_union();
                 self.ok(r)?;
             }
@@ -374,10 +375,10 @@ impl<'l, P: Pass> Run<'l, P> {
                 let r = self.pass.fixed(len, at);
                 self.ok(r)?;
                 if P::EDITS {
+                    let mode = self.pass.mode();
                     for i in 0..len {
-                        self.path.push(Step::Index(i));
-                        self.node(elem, last(tao, i + 1 == len))?;
-                        self.path.pop();
+                        let tao = last(tao, i + 1 == len);
+                        self.child(Some(Step::Index(i)), elem, tao, None, mode)?;
                     }
                 } else {
                     array = Some((elem, Some(len.into()), len, tao));
@@ -531,14 +532,9 @@ impl<'l, P: Pass> Run<'l, P> {
                 Role::Version(v) => Some(v),
                 _ => None,
             };
-            let named = field.role != Role::Padding;
-            if named {
-                self.path.push(Step::Field(index));
-            }
-            self.part(field.node, tao, version)?;
-            if named {
-                self.path.pop();
-            }
+            let step = (field.role != Role::Padding).then_some(Step::Field(index));
+            let mode = self.pass.mode();
+            self.child(step, field.node, tao, version, mode)?;
             return Ok(1);
         }
         if field.role == Role::Padding {
@@ -591,6 +587,29 @@ impl<'l, P: Pass> Run<'l, P> {
         Ok(used)
     }
 
+    /// Editing, a part one `step` down the path (none for padding), walked in `mode`.
+    #[inline(never)]
+    fn child(
+        &mut self,
+        step: Option<Step>,
+        id: NodeId,
+        tao: Tao,
+        version: Option<u32>,
+        mode: Mode,
+    ) -> Result<(), Stop> {
+        let was = self.pass.mode();
+        self.pass.set_mode(mode);
+        if let Some(step) = step {
+            self.path.push(step);
+        }
+        self.part(id, tao, version)?;
+        if step.is_some() {
+            self.path.pop();
+        }
+        self.pass.set_mode(was);
+        Ok(())
+    }
+
     /// Editing, a dynamic array's elements: the first `new` of those read (`old`) written,
     /// the rest read and passed over, and default ones appended (`tao`: for the elements of
     /// the array, the last one read and the last one written).
@@ -604,12 +623,8 @@ impl<'l, P: Pass> Run<'l, P> {
                 mode => mode,
             };
             let ends = tao.ends(i + 1 == old, i + 1 == new);
-            self.pass.set_mode(part);
-            self.path.push(Step::Index(i));
-            self.node(elem, ends)?;
-            self.path.pop();
+            self.child(Some(Step::Index(i)), elem, ends, None, part)?;
         }
-        self.pass.set_mode(mode);
         Ok(())
     }
 
@@ -619,7 +634,6 @@ impl<'l, P: Pass> Run<'l, P> {
     /// their length; reading then starts again at the first one.
     fn count_tail(&mut self, elem: NodeId, max: u32) -> Result<u64, Stop> {
         let start = self.pass.read_pos();
-        let mode = self.pass.mode();
         let mut n = 0;
         while self.pass.read_left() >= 8 {
             if n == max {
@@ -635,11 +649,7 @@ impl<'l, P: Pass> Run<'l, P> {
                 self.pass
                     .seek_read(self.pass.read_pos() + node.min_bits as usize);
             } else {
-                self.pass.set_mode(Mode::Skip);
-                self.path.push(Step::Index(n));
-                self.node(elem, Tao::NONE)?;
-                self.path.pop();
-                self.pass.set_mode(mode);
+                self.child(Some(Step::Index(n)), elem, Tao::NONE, None, Mode::Skip)?;
             }
             n += 1;
         }
