@@ -354,10 +354,10 @@ impl<'l, P: Pass> Run<'l, P> {
                         // its default value.
                         let old = first + read as u32;
                         let node = layout.fields[old as usize].node;
-                        self.child(Some(Step::Field(old)), node, tao, None, Mode::Skip)?;
+                        self.child(Step::Field(old), node, tao, Mode::Skip)?;
                         mode = Mode::Default;
                     }
-                    self.child(Some(Step::Field(index)), variant.node, tao, None, mode)?;
+                    self.child(Step::Field(index), variant.node, tao, mode)?;
                 } else {
                     self.path.push(Step::Field(index));
                     self.node(variant.node, tao)?;
@@ -378,7 +378,7 @@ impl<'l, P: Pass> Run<'l, P> {
                     let mode = self.pass.mode();
                     for i in 0..len {
                         let tao = last(tao, i + 1 == len);
-                        self.child(Some(Step::Index(i)), elem, tao, None, mode)?;
+                        self.child(Step::Index(i), elem, tao, mode)?;
                     }
                 } else {
                     array = Some((elem, Some(len.into()), len, tao));
@@ -532,9 +532,15 @@ impl<'l, P: Pass> Run<'l, P> {
                 Role::Version(v) => Some(v),
                 _ => None,
             };
-            let step = (field.role != Role::Padding).then_some(Step::Field(index));
-            let mode = self.pass.mode();
-            self.child(step, field.node, tao, version, mode)?;
+            // (The hot step: not through `child`, which would set the mode again.)
+            let named = field.role != Role::Padding;
+            if named {
+                self.path.push(Step::Field(index));
+            }
+            self.part(field.node, tao, version)?;
+            if named {
+                self.path.pop();
+            }
             return Ok(1);
         }
         if field.role == Role::Padding {
@@ -587,25 +593,14 @@ impl<'l, P: Pass> Run<'l, P> {
         Ok(used)
     }
 
-    /// Editing, a part one `step` down the path (none for padding), walked in `mode`.
+    /// Editing, a part one `step` down the path, walked in `mode`.
     #[inline(never)]
-    fn child(
-        &mut self,
-        step: Option<Step>,
-        id: NodeId,
-        tao: Tao,
-        version: Option<u32>,
-        mode: Mode,
-    ) -> Result<(), Stop> {
+    fn child(&mut self, step: Step, id: NodeId, tao: Tao, mode: Mode) -> Result<(), Stop> {
         let was = self.pass.mode();
         self.pass.set_mode(mode);
-        if let Some(step) = step {
-            self.path.push(step);
-        }
-        self.part(id, tao, version)?;
-        if step.is_some() {
-            self.path.pop();
-        }
+        self.path.push(step);
+        self.part(id, tao, None)?;
+        self.path.pop();
         self.pass.set_mode(was);
         Ok(())
     }
@@ -623,7 +618,7 @@ impl<'l, P: Pass> Run<'l, P> {
                 mode => mode,
             };
             let ends = tao.ends(i + 1 == old, i + 1 == new);
-            self.child(Some(Step::Index(i)), elem, ends, None, part)?;
+            self.child(Step::Index(i), elem, ends, part)?;
         }
         Ok(())
     }
@@ -649,7 +644,7 @@ impl<'l, P: Pass> Run<'l, P> {
                 self.pass
                     .seek_read(self.pass.read_pos() + node.min_bits as usize);
             } else {
-                self.child(Some(Step::Index(n)), elem, Tao::NONE, None, Mode::Skip)?;
+                self.child(Step::Index(n), elem, Tao::NONE, Mode::Skip)?;
             }
             n += 1;
         }
