@@ -286,12 +286,26 @@ impl<'l, P: Pass> Run<'l, P> {
     /// Walks node `id`; `tao`: it ends the value (tail array optimization applies to it).
     #[inline(always)]
     pub(crate) fn node(&mut self, id: NodeId, tao: Tao) -> Result<(), Stop> {
-        self.part(id, tao, None)
+        self.part(id, tao, None, None)
     }
 
-    /// Walks node `id` (`version`: the type's, where it is a `p_version` field).
-    fn part(&mut self, id: NodeId, tao: Tao, version: Option<u32>) -> Result<(), Stop> {
+    /// Walks node `id` (`version`: the type's, where it is a `p_version` field) one `step`
+    /// down the path (none for padding, the root, and the encoding and decoding passes, which
+    /// take their steps themselves).
+    fn part(
+        &mut self,
+        id: NodeId,
+        tao: Tao,
+        version: Option<u32>,
+        step: Option<Step>,
+    ) -> Result<(), Stop> {
+        if let Some(step) = step {
+            self.path.push(step);
+        }
         if P::EDITS && self.pass.pass_over(self.layout, id) {
+            if step.is_some() {
+                self.path.pop();
+            }
             return Ok(());
         }
         self.depth += 1;
@@ -348,16 +362,18 @@ impl<'l, P: Pass> Run<'l, P> {
                 let r = self.pass.variant(tag, index, layout.name(&variant), at);
                 self.ok(r)?;
                 if P::EDITS {
-                    let mut mode = self.pass.mode();
+                    let mode = self.pass.mode();
                     if read != tag {
                         // A new tag: the old variant is passed over, the new one written with
                         // its default value.
                         let old = first + read as u32;
+                        self.pass.set_mode(Mode::Skip);
                         let node = layout.fields[old as usize].node;
-                        self.child(Step::Field(old), node, tao, Mode::Skip)?;
-                        mode = Mode::Default;
+                        self.part(node, tao, None, Some(Step::Field(old)))?;
+                        self.pass.set_mode(Mode::Default);
                     }
-                    self.child(Step::Field(index), variant.node, tao, mode)?;
+                    self.part(variant.node, tao, None, Some(Step::Field(index)))?;
+                    self.pass.set_mode(mode);
                 } else {
                     self.path.push(Step::Field(index));
                     self.node(variant.node, tao)?;
@@ -375,10 +391,8 @@ impl<'l, P: Pass> Run<'l, P> {
                 let r = self.pass.fixed(len, at);
                 self.ok(r)?;
                 if P::EDITS {
-                    let mode = self.pass.mode();
                     for i in 0..len {
-                        let tao = last(tao, i + 1 == len);
-                        self.child(Step::Index(i), elem, tao, mode)?;
+                        self.part(elem, last(tao, i + 1 == len), None, Some(Step::Index(i)))?;
                     }
                 } else {
                     array = Some((elem, Some(len.into()), len, tao));
@@ -441,6 +455,9 @@ impl<'l, P: Pass> Run<'l, P> {
             self.elements(elem, n, max, tao)?;
         }
         self.depth -= 1;
+        if step.is_some() {
+            self.path.pop();
+        }
         Ok(())
     }
 
@@ -532,15 +549,8 @@ impl<'l, P: Pass> Run<'l, P> {
                 Role::Version(v) => Some(v),
                 _ => None,
             };
-            // (The hot step: not through `child`, which would set the mode again.)
-            let named = field.role != Role::Padding;
-            if named {
-                self.path.push(Step::Field(index));
-            }
-            self.part(field.node, tao, version)?;
-            if named {
-                self.path.pop();
-            }
+            let step = (field.role != Role::Padding).then_some(Step::Field(index));
+            self.part(field.node, tao, version, step)?;
             return Ok(1);
         }
         if field.role == Role::Padding {
@@ -593,18 +603,6 @@ impl<'l, P: Pass> Run<'l, P> {
         Ok(used)
     }
 
-    /// Editing, a part one `step` down the path, walked in `mode`.
-    #[inline(never)]
-    fn child(&mut self, step: Step, id: NodeId, tao: Tao, mode: Mode) -> Result<(), Stop> {
-        let was = self.pass.mode();
-        self.pass.set_mode(mode);
-        self.path.push(step);
-        self.part(id, tao, None)?;
-        self.path.pop();
-        self.pass.set_mode(was);
-        Ok(())
-    }
-
     /// Editing, a dynamic array's elements: the first `new` of those read (`old`) written,
     /// the rest read and passed over, and default ones appended (`tao`: for the elements of
     /// the array, the last one read and the last one written).
@@ -617,9 +615,11 @@ impl<'l, P: Pass> Run<'l, P> {
                 Mode::Data if i >= old => Mode::Default,
                 mode => mode,
             };
+            self.pass.set_mode(part);
             let ends = tao.ends(i + 1 == old, i + 1 == new);
-            self.child(Step::Index(i), elem, ends, part)?;
+            self.part(elem, ends, None, Some(Step::Index(i)))?;
         }
+        self.pass.set_mode(mode);
         Ok(())
     }
 
@@ -628,7 +628,7 @@ impl<'l, P: Pass> Run<'l, P> {
     /// a fault is found where reading them in order finds it), fixed-shape ones counted by
     /// their length; reading then starts again at the first one.
     fn count_tail(&mut self, elem: NodeId, max: u32) -> Result<u64, Stop> {
-        let start = self.pass.read_pos();
+        let (start, mode) = (self.pass.read_pos(), self.pass.mode());
         let mut n = 0;
         while self.pass.read_left() >= 8 {
             if n == max {
@@ -644,7 +644,9 @@ impl<'l, P: Pass> Run<'l, P> {
                 self.pass
                     .seek_read(self.pass.read_pos() + node.min_bits as usize);
             } else {
-                self.child(Step::Index(n), elem, Tao::NONE, Mode::Skip)?;
+                self.pass.set_mode(Mode::Skip);
+                self.part(elem, Tao::NONE, None, Some(Step::Index(n)))?;
+                self.pass.set_mode(mode);
             }
             n += 1;
         }
