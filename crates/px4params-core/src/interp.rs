@@ -19,12 +19,73 @@ use crate::layout::{FlatItem, Kind, Layout, NodeId, Role, Segment, Span};
 use crate::plan::Plans;
 use crate::rules::{
     scalar_bits, scalar_of, scalar_raw, tail_optimized, ArrayLen, At, DecodeOptions, EncodeOptions,
-    LeafKind, Sink, Source, MAX_DEPTH,
+    LeafError, LeafKind, Sink, Source, MAX_DEPTH,
 };
 use crate::scalar::{self, Scalar};
 
 /// The loop stopped: the error waits in [`Run::error`] (results stay register-sized).
 pub(crate) struct Stop;
+
+/// Whether a part ends the value read and the value written: tail array optimization applies
+/// to its last field. The two differ only inside an array whose length an edit changes.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Tao(u8);
+
+impl Tao {
+    const NONE: Tao = Tao(0);
+    const READ: u8 = 1;
+    const WRITE: u8 = 2;
+
+    /// For a whole value: `tao` for reading and writing alike.
+    pub(crate) fn both(tao: bool) -> Tao {
+        Tao(if tao { Self::READ | Self::WRITE } else { 0 })
+    }
+    fn read(self) -> bool {
+        self.0 & Self::READ != 0
+    }
+    fn write(self) -> bool {
+        self.0 & Self::WRITE != 0
+    }
+    /// For the elements of an array: kept where the array is not itself tail-optimized
+    /// (`read`, `write`).
+    fn ends(self, read: bool, write: bool) -> Tao {
+        Tao(self.0 & ((u8::from(read) * Self::READ) | (u8::from(write) * Self::WRITE)))
+    }
+}
+
+/// For a member: `tao` only for the `is_last` one.
+#[inline(always)]
+fn last(tao: Tao, is_last: bool) -> Tao {
+    if is_last {
+        tao
+    } else {
+        Tao::NONE
+    }
+}
+
+/// Where a part of the value comes from, editing ([`Visiting`]).
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub(crate) enum Mode {
+    /// Read from the data, visited, and written as the visit says.
+    Data,
+    /// Read (every bit of it) and passed over: an old union variant or array elements that
+    /// are dropped, or the elements of a tail array counted.
+    Skip,
+    /// Given by the visit.
+    Given,
+    /// The default: zeros, versions, the first union variant, empty dynamic arrays.
+    Default,
+}
+
+impl Mode {
+    pub(crate) fn reads(self) -> bool {
+        matches!(self, Mode::Data | Mode::Skip)
+    }
+
+    fn visits(self) -> bool {
+        matches!(self, Mode::Data | Mode::Given)
+    }
+}
 
 /// What a fixed-shape run of leaves came to in one piece ([`Pass::run`]).
 pub(crate) enum Ran<E> {
@@ -52,6 +113,9 @@ pub(crate) trait Pass {
     const RUNS: bool;
     /// Encoding: a field's path step is taken before the source is asked for the field.
     const ENCODES: bool;
+    /// Editing ([`Visiting`]): a value read and written at once, whose new union tags and
+    /// array lengths may differ from those read; a tail array's length counted ahead.
+    const EDITS: bool = false;
 
     /// The fault a method stopped at (each keeps it, so that results stay register-sized).
     fn fault(&mut self) -> Option<ErrorKind<Self::Error>>;
@@ -61,6 +125,14 @@ pub(crate) trait Pass {
     fn scalar(&mut self, kind: Kind, path: &Path) -> Result<(), Stop>;
     /// A `p_version` field the input has (decoding: a primitive like any other).
     fn version(&mut self, kind: Kind, version: u32, path: &Path) -> Result<(), Stop>;
+    /// A primitive, a `p_version` field's where `version` is given.
+    #[inline(always)]
+    fn leaf(&mut self, kind: Kind, version: Option<u32>, path: &Path) -> Result<(), Stop> {
+        match version {
+            Some(v) => self.version(kind, v, path),
+            None => self.scalar(kind, path),
+        }
+    }
     /// A `p_version` field the input leaves out (encoding only): the type's version.
     fn absent_version(&mut self, kind: Kind, version: u32) -> Result<(), Stop>;
     /// `bits` zero bits.
@@ -70,8 +142,15 @@ pub(crate) trait Pass {
     fn field(&mut self, index: u32, name: &str) -> Result<bool, Stop>;
     fn end_field(&mut self);
     fn end_struct(&mut self, layout: &Layout<'_>, id: NodeId, used: usize) -> Result<(), Stop>;
-    /// A union's tag, read or given (unchecked).
-    fn tag(&mut self, layout: &Layout<'_>, id: NodeId, bits: u8) -> Result<u64, Stop>;
+    /// A union's tag, read or given (unchecked): the tag read (or given) and the one the
+    /// value written selects (the same, except where an edit changes it).
+    fn tag(
+        &mut self,
+        layout: &Layout<'_>,
+        id: NodeId,
+        bits: u8,
+        path: &Path,
+    ) -> Result<(u64, u64), Stop>;
     /// The tag, checked, selects variant `index` (`name`): written, or told to the sink.
     fn variant(&mut self, tag: u64, index: u32, name: &str, at: At<'_>) -> Result<(), Stop>;
     fn end_union(&mut self) -> Result<(), Stop>;
@@ -80,15 +159,45 @@ pub(crate) trait Pass {
     /// A dynamic array's length, read (from a prefix of `bits`) or given; `None` for a tail
     /// array read, whose elements are counted as they come.
     fn length(&mut self, bits: u8, tail: bool) -> Result<Option<u64>, Stop>;
-    /// The length, checked, begins the array: its prefix written (none for a tail array), or
-    /// told to the sink.
-    fn prefix(&mut self, n: Option<u64>, at: At<'_>) -> Result<(), Stop>;
+    /// The length of the value written (unchecked): the length read or given, except where
+    /// an edit changes it.
+    #[inline(always)]
+    fn relength(&mut self, n: Option<u64>, _at: At<'_>) -> Result<Option<u64>, Stop> {
+        Ok(n)
+    }
+    /// The length, checked, begins the array: its prefix written (`bits` wide: none for a
+    /// tail array), or told to the sink.
+    fn prefix(&mut self, n: Option<u64>, bits: u8, at: At<'_>) -> Result<(), Stop>;
     /// Whether element `i` is there: below the length, or for a tail array read, while
     /// whole bytes remain.
     fn more(&self, i: u64, n: Option<u64>) -> bool;
     fn element(&mut self, i: u64) -> Result<(), Stop>;
     fn end_element(&mut self);
     fn end_array(&mut self, n: u64) -> Result<(), Stop>;
+    /// Editing ([`Pass::EDITS`]): where the part walked now comes from.
+    #[inline(always)]
+    fn mode(&self) -> Mode {
+        Mode::Data
+    }
+    #[inline(always)]
+    fn set_mode(&mut self, _mode: Mode) {}
+    /// Editing: passes over node `id` unread, when nothing is looked for in it.
+    #[inline(always)]
+    fn pass_over(&mut self, _layout: &Layout<'_>, _id: NodeId) -> bool {
+        false
+    }
+    /// Editing: where reading stands, in bits, and how many are left.
+    #[inline(always)]
+    fn read_pos(&self) -> usize {
+        0
+    }
+    #[inline(always)]
+    fn read_left(&self) -> usize {
+        0
+    }
+    /// Editing: reading goes on from bit `pos`.
+    #[inline(always)]
+    fn seek_read(&mut self, _pos: usize) {}
     /// A plan: a fixed-shape run of `leaves` leaves (`items`, `bits` long) in one piece.
     fn run(&mut self, items: &[FlatItem], leaves: u32, bits: u32) -> Ran<Self::Error>;
     /// A plan: primitive elements of `kind` in one piece (`n`: the length, `None` for a tail
@@ -157,8 +266,11 @@ impl<'l, P: Pass> Run<'l, P> {
     #[cold]
     #[inline(never)]
     fn refused(&mut self) -> Stop {
-        let kind = self.pass.fault().unwrap_or(ErrorKind::TooDeep);
-        self.fail(kind)
+        match self.pass.fault() {
+            Some(kind) => self.fail(kind),
+            // A visit found what it looked for: the loop ends without error.
+            None => Stop,
+        }
     }
 
     /// A primitive (a field, an element or a variant), one past the nesting bound refused.
@@ -172,7 +284,30 @@ impl<'l, P: Pass> Run<'l, P> {
     }
 
     /// Walks node `id`; `tao`: it ends the value (tail array optimization applies to it).
-    pub(crate) fn node(&mut self, id: NodeId, tao: bool) -> Result<(), Stop> {
+    #[inline(always)]
+    pub(crate) fn node(&mut self, id: NodeId, tao: Tao) -> Result<(), Stop> {
+        self.part(id, tao, None, None)
+    }
+
+    /// Walks node `id` (`version`: the type's, where it is a `p_version` field) one `step`
+    /// down the path (none for padding, the root, and the encoding and decoding passes, which
+    /// take their steps themselves).
+    fn part(
+        &mut self,
+        id: NodeId,
+        tao: Tao,
+        version: Option<u32>,
+        step: Option<Step>,
+    ) -> Result<(), Stop> {
+        if let Some(step) = step {
+            self.path.push(step);
+        }
+        if P::EDITS && self.pass.pass_over(self.layout, id) {
+            if step.is_some() {
+                self.path.pop();
+            }
+            return Ok(());
+        }
         self.depth += 1;
         if self.depth > MAX_DEPTH {
             return Err(self.fail(ErrorKind::TooDeep));
@@ -183,7 +318,7 @@ impl<'l, P: Pass> Run<'l, P> {
         let mut array = None;
         match layout.node(id).kind {
             kind @ (Kind::Uint { .. } | Kind::Int { .. } | Kind::Float { .. } | Kind::Bool) => {
-                let r = self.pass.scalar(kind, &self.path);
+                let r = self.pass.leaf(kind, version, &self.path);
                 self.ok(r)?;
             }
             Kind::Void { bits } => {
@@ -198,7 +333,7 @@ impl<'l, P: Pass> Run<'l, P> {
                     self.ok(r)?;
                     let mut used = 0;
                     for i in first..first + count {
-                        used += self.field(i, tao && i + 1 == first + count)?;
+                        used += self.field(i, last(tao, i + 1 == first + count))?;
                     }
                     let r = self.pass.end_struct(layout, id, used);
                     self.ok(r)?;
@@ -209,16 +344,11 @@ impl<'l, P: Pass> Run<'l, P> {
                 count,
                 tag_bits,
             } => {
-                let r = self.pass.tag(layout, id, tag_bits);
-                let tag = self.ok(r)?;
+                let r = self.pass.tag(layout, id, tag_bits, &self.path);
+                let (read, tag) = self.ok(r)?;
                 // The rule: the tag selects one of the variants.
-                if tag >= u64::from(count) {
-                    let bad = ErrorKind::BadUnionTag {
-                        tag,
-                        variants: count,
-                    };
-                    return Err(self.fail_at(at_pos, bad));
-                }
+                let limit = u64::from(count);
+                self.counts(true, Some(read), Some(tag), limit, at_pos)?;
                 let index = first + tag as u32;
                 let variant = layout.fields[index as usize];
                 let at = At {
@@ -231,9 +361,24 @@ impl<'l, P: Pass> Run<'l, P> {
                 };
                 let r = self.pass.variant(tag, index, layout.name(&variant), at);
                 self.ok(r)?;
-                self.path.push(Step::Field(index));
-                self.node(variant.node, tao)?;
-                self.path.pop();
+                if P::EDITS {
+                    let mode = self.pass.mode();
+                    if read != tag {
+                        // A new tag: the old variant is passed over, the new one written with
+                        // its default value.
+                        let old = first + read as u32;
+                        self.pass.set_mode(Mode::Skip);
+                        let node = layout.fields[old as usize].node;
+                        self.part(node, tao, None, Some(Step::Field(old)))?;
+                        self.pass.set_mode(Mode::Default);
+                    }
+                    self.part(variant.node, tao, None, Some(Step::Field(index)))?;
+                    self.pass.set_mode(mode);
+                } else {
+                    self.path.push(Step::Field(index));
+                    self.node(variant.node, tao)?;
+                    self.path.pop();
+                }
                 let r = self.pass.end_union();
                 self.ok(r)?;
             }
@@ -245,7 +390,13 @@ impl<'l, P: Pass> Run<'l, P> {
                 };
                 let r = self.pass.fixed(len, at);
                 self.ok(r)?;
-                array = Some((elem, Some(len.into()), len, tao));
+                if P::EDITS {
+                    for i in 0..len {
+                        self.part(elem, last(tao, i + 1 == len), None, Some(Step::Index(i)))?;
+                    }
+                } else {
+                    array = Some((elem, Some(len.into()), len, tao));
+                }
             }
             Kind::DynArray {
                 elem,
@@ -253,38 +404,98 @@ impl<'l, P: Pass> Run<'l, P> {
                 len_bits,
             } => {
                 // The rule: the last array of a value, of elements of a byte or more, has no
-                // prefix and takes the remaining whole bytes.
-                let tail = tail_optimized(layout, elem, tao);
-                let r = self.pass.length(len_bits, tail);
-                let n = self.ok(r)?;
-                // The rule: at most `max` elements.
-                if let Some(n) = n.filter(|&n| n > u64::from(max)) {
-                    return Err(self.fail_at(at_pos, ErrorKind::ArrayTooLong { len: n, max }));
+                // prefix and takes the remaining whole bytes (in the value read, and in the
+                // value written, which differ in their last element when a length changes).
+                let rtail = tail_optimized(layout, elem, tao.read());
+                let wtail = match P::EDITS && tao.read() != tao.write() {
+                    true => tail_optimized(layout, elem, tao.write()),
+                    false => rtail,
+                };
+                let r = self.pass.length(len_bits, rtail);
+                let mut n = self.ok(r)?;
+                if P::EDITS && n.is_none() {
+                    // A tail array read where its length is a leaf: its elements counted ahead.
+                    n = Some(self.count_tail(elem, max)?);
                 }
+                let tail = match P::EDITS && !self.pass.mode().reads() {
+                    true => wtail,
+                    false => rtail,
+                };
+                let kind = LeafKind::Len {
+                    bits: if tail { 0 } else { len_bits },
+                    array: id,
+                };
                 let at = At {
                     path: &self.path,
                     bit_offset: at_pos,
-                    kind: LeafKind::Len {
-                        bits: if tail { 0 } else { len_bits },
-                        array: id,
-                    },
+                    kind,
                 };
-                let r = self.pass.prefix(n, at);
+                let r = self.pass.relength(n, at);
+                let new = self.ok(r)?;
+                // The rule: at most `max` elements.
+                let limit = u64::from(max) + 1;
+                self.counts(false, n, new, limit, at_pos)?;
+                let at = At {
+                    path: &self.path,
+                    bit_offset: at_pos,
+                    kind,
+                };
+                let r = self.pass.prefix(new, if wtail { 0 } else { len_bits }, at);
                 self.ok(r)?;
-                array = Some((elem, n, max, tao && !tail));
+                if P::EDITS {
+                    // Both are checked against the maximum: 32 bits hold them.
+                    let (old, new) = (n.unwrap_or(0) as u32, new.unwrap_or(0) as u32);
+                    self.resized(elem, old, new, tao.ends(!rtail, !wtail))?;
+                } else {
+                    array = Some((elem, n, max, if tail { Tao::NONE } else { tao }));
+                }
             }
         }
         if let Some((elem, n, max, tao)) = array {
             self.elements(elem, n, max, tao)?;
         }
         self.depth -= 1;
+        if step.is_some() {
+            self.path.pop();
+        }
+        Ok(())
+    }
+
+    /// The rules on a union's tag (`tag`) and a dynamic array's length: the one read (or
+    /// given), where the node starts, and then, editing, the one written, where the loop
+    /// stands, are below `limit` (the number of variants, or the maximum length plus one).
+    #[inline(always)]
+    fn counts(
+        &mut self,
+        tag: bool,
+        read: Option<u64>,
+        new: Option<u64>,
+        limit: u64,
+        at_pos: usize,
+    ) -> Result<(), Stop> {
+        let fault = |n: u64| match tag {
+            true => ErrorKind::BadUnionTag {
+                tag: n,
+                variants: limit as u32,
+            },
+            false => ErrorKind::ArrayTooLong {
+                len: n,
+                max: (limit - 1) as u32,
+            },
+        };
+        if let Some(n) = read.filter(|&n| n >= limit) {
+            return Err(self.fail_at(at_pos, fault(n)));
+        }
+        if let Some(n) = new.filter(|&n| P::EDITS && n >= limit) {
+            return Err(self.fail(fault(n)));
+        }
         Ok(())
     }
 
     #[inline(always)]
     /// The elements of an array (`n`: its length, `None` for a tail array read: as many as
     /// whole bytes remain for, at most `max`).
-    fn elements(&mut self, elem: NodeId, n: Option<u64>, max: u32, tao: bool) -> Result<(), Stop> {
+    fn elements(&mut self, elem: NodeId, n: Option<u64>, max: u32, tao: Tao) -> Result<(), Stop> {
         let mut i = 0;
         if !self.pass.more(i, n) {
             // Empty (a common case: an empty read, an unnamed model): nothing to set up.
@@ -317,7 +528,7 @@ impl<'l, P: Pass> Run<'l, P> {
             if scalar {
                 self.scalar(kind)?;
             } else {
-                self.node(elem, tao && Some(i + 1) == n)?;
+                self.node(elem, last(tao, Some(i + 1) == n))?;
             }
             self.pass.end_element();
             self.path.pop();
@@ -329,12 +540,25 @@ impl<'l, P: Pass> Run<'l, P> {
 
     /// Field `index` of a struct; 1 when the input had it (0 for padding and filled-in
     /// versions), so that the struct can tell unknown input fields.
-    fn field(&mut self, index: u32, last: bool) -> Result<usize, Stop> {
+    fn field(&mut self, index: u32, tao: Tao) -> Result<usize, Stop> {
         let layout = self.layout;
         let field = layout.fields[index as usize];
+        if P::EDITS {
+            // Every field is there: a part like any other, a `p_version` one with its version.
+            let version = match field.role {
+                Role::Version(v) => Some(v),
+                _ => None,
+            };
+            let step = (field.role != Role::Padding).then_some(Step::Field(index));
+            self.part(field.node, tao, version, step)?;
+            return Ok(1);
+        }
         if field.role == Role::Padding {
-            self.node(field.node, last)?;
+            self.node(field.node, tao)?;
             return Ok(0);
+        }
+        if P::EDITS && self.pass.pass_over(layout, field.node) {
+            return Ok(1);
         }
         if P::ENCODES {
             self.path.push(Step::Field(index));
@@ -346,19 +570,24 @@ impl<'l, P: Pass> Run<'l, P> {
         }
         let kind = layout.node(field.node).kind;
         // Decoding reads a `p_version` as any other primitive.
-        let role = if P::ENCODES { field.role } else { Role::Data };
+        let role = if P::ENCODES || P::EDITS {
+            field.role
+        } else {
+            Role::Data
+        };
         let used = match (present, role) {
             (true, role) => {
-                match role {
-                    Role::Version(v) if is_scalar(kind) => {
-                        if self.depth >= MAX_DEPTH {
-                            return Err(self.fail(ErrorKind::TooDeep));
-                        }
-                        let r = self.pass.version(kind, v, &self.path);
-                        self.ok(r)?;
+                if !is_scalar(kind) {
+                    self.node(field.node, tao)?;
+                } else {
+                    if self.depth >= MAX_DEPTH {
+                        return Err(self.fail(ErrorKind::TooDeep));
                     }
-                    _ if is_scalar(kind) => self.scalar(kind)?,
-                    _ => self.node(field.node, last)?,
+                    let r = match role {
+                        Role::Version(v) => self.pass.version(kind, v, &self.path),
+                        _ => self.pass.scalar(kind, &self.path),
+                    };
+                    self.ok(r)?;
                 }
                 self.pass.end_field();
                 1
@@ -374,9 +603,60 @@ impl<'l, P: Pass> Run<'l, P> {
         Ok(used)
     }
 
+    /// Editing, a dynamic array's elements: the first `new` of those read (`old`) written,
+    /// the rest read and passed over, and default ones appended (`tao`: for the elements of
+    /// the array, the last one read and the last one written).
+    #[inline(always)]
+    fn resized(&mut self, elem: NodeId, old: u32, new: u32, tao: Tao) -> Result<(), Stop> {
+        let mode = self.pass.mode();
+        for i in 0..old.max(new) {
+            let part = match mode {
+                _ if i >= new => Mode::Skip,
+                Mode::Data if i >= old => Mode::Default,
+                mode => mode,
+            };
+            self.pass.set_mode(part);
+            let ends = tao.ends(i + 1 == old, i + 1 == new);
+            self.part(elem, ends, None, Some(Step::Index(i)))?;
+        }
+        self.pass.set_mode(mode);
+        Ok(())
+    }
+
+    /// Editing, the number of elements of a tail-optimized array from here: as many as there
+    /// are whole bytes left for. Elements of variable shape are read ahead (every bit, so that
+    /// a fault is found where reading them in order finds it), fixed-shape ones counted by
+    /// their length; reading then starts again at the first one.
+    fn count_tail(&mut self, elem: NodeId, max: u32) -> Result<u64, Stop> {
+        let (start, mode) = (self.pass.read_pos(), self.pass.mode());
+        let mut n = 0;
+        while self.pass.read_left() >= 8 {
+            if n == max {
+                let too_long = ErrorKind::ArrayTooLong {
+                    len: u64::from(n) + 1,
+                    max,
+                };
+                return Err(self.fail(too_long));
+            }
+            let node = self.layout.node(elem);
+            if node.fixed_leaves().is_some() {
+                // Any fault in it is found when it is read.
+                self.pass
+                    .seek_read(self.pass.read_pos() + node.min_bits as usize);
+            } else {
+                self.pass.set_mode(Mode::Skip);
+                self.part(elem, Tao::NONE, None, Some(Step::Index(n)))?;
+                self.pass.set_mode(mode);
+            }
+            n += 1;
+        }
+        self.pass.seek_read(start);
+        Ok(n.into())
+    }
+
     /// A struct's fields by its segments: fixed-shape runs in one piece where the pass takes
     /// them, other fields one by one (`end`: one past its last field).
-    fn runs(&mut self, id: NodeId, end: u32, tao: bool) -> Result<(), Stop> {
+    fn runs(&mut self, id: NodeId, end: u32, tao: Tao) -> Result<(), Stop> {
         let layout = self.layout;
         for segment in layout.node(id).segments.of(layout.segments) {
             match *segment {
@@ -397,7 +677,7 @@ impl<'l, P: Pass> Run<'l, P> {
                         Ran::Done => {}
                         Ran::Declined => {
                             for i in fields.first..fields.first + fields.count {
-                                self.field(i, tao && i + 1 == end)?;
+                                self.field(i, last(tao, i + 1 == end))?;
                             }
                         }
                         Ran::Short => return Err(self.missing_leaf(fields, end, tao)),
@@ -410,7 +690,7 @@ impl<'l, P: Pass> Run<'l, P> {
                     }
                 }
                 Segment::Field(i) => {
-                    self.field(i, tao && i + 1 == end)?;
+                    self.field(i, last(tao, i + 1 == end))?;
                 }
             }
         }
@@ -421,9 +701,9 @@ impl<'l, P: Pass> Run<'l, P> {
     /// leaf missing.
     #[cold]
     #[inline(never)]
-    fn missing_leaf(&mut self, fields: Span, end: u32, tao: bool) -> Stop {
+    fn missing_leaf(&mut self, fields: Span, end: u32, tao: Tao) -> Stop {
         for i in fields.first..fields.first + fields.count {
-            if let Err(stop) = self.field(i, tao && i + 1 == end) {
+            if let Err(stop) = self.field(i, last(tao, i + 1 == end)) {
                 return stop;
             }
         }
@@ -487,7 +767,7 @@ pub(crate) fn encode<P: Plans, S: Source>(
         plans: core::marker::PhantomData,
     };
     let mut run = Run::new(layout, pass);
-    if run.node(root, options.tao).is_err() {
+    if run.node(root, Tao::both(options.tao)).is_err() {
         return Err(run.stopped());
     }
     let pos = run.pass.out.bit_pos();
@@ -516,7 +796,7 @@ pub(crate) fn decode<P: Plans, R: BitRead + ?Sized, K: Sink>(
         plans: core::marker::PhantomData,
     };
     let mut run = Run::new(layout, pass);
-    if run.node(root, options.tao).is_err() {
+    if run.node(root, Tao::both(options.tao)).is_err() {
         return Err(run.stopped());
     }
     let end = run.pass.reader.position();
@@ -629,9 +909,15 @@ impl<P: Plans, S: Source> Pass for Encode<'_, P, S> {
         let r = self.source.end_struct(layout, layout.members(id), used);
         r.map_err(|e| self.refuse(ErrorKind::Value(e)))
     }
-    fn tag(&mut self, layout: &Layout<'_>, id: NodeId, _bits: u8) -> Result<u64, Stop> {
+    fn tag(
+        &mut self,
+        layout: &Layout<'_>,
+        id: NodeId,
+        _: u8,
+        _: &Path,
+    ) -> Result<(u64, u64), Stop> {
         let tag = self.source.begin_union(layout, layout.members(id));
-        tag.map(u64::from)
+        tag.map(|t| (u64::from(t), u64::from(t)))
             .map_err(|e| self.refuse(ErrorKind::Value(e)))
     }
     fn variant(&mut self, tag: u64, _index: u32, _name: &str, at: At<'_>) -> Result<(), Stop> {
@@ -664,9 +950,9 @@ impl<P: Plans, S: Source> Pass for Encode<'_, P, S> {
             .map_err(|e| self.refuse(ErrorKind::Value(e)))?;
         Ok(Some(n as u64))
     }
-    fn prefix(&mut self, n: Option<u64>, at: At<'_>) -> Result<(), Stop> {
-        match (at.kind, n) {
-            (LeafKind::Len { bits, .. }, Some(n)) if bits > 0 => self.write(n, bits.into()),
+    fn prefix(&mut self, n: Option<u64>, bits: u8, _at: At<'_>) -> Result<(), Stop> {
+        match n {
+            Some(n) if bits > 0 => self.write(n, bits.into()),
             _ => Ok(()),
         }
     }
@@ -809,8 +1095,8 @@ impl<'d, P: Plans, R: BitRead + ?Sized + 'd, K: Sink> Pass for Decode<'d, P, R, 
             .end_struct()
             .map_err(|e| self.refuse(ErrorKind::Value(e)))
     }
-    fn tag(&mut self, _: &Layout<'_>, _: NodeId, bits: u8) -> Result<u64, Stop> {
-        self.read(bits.into())
+    fn tag(&mut self, _: &Layout<'_>, _: NodeId, bits: u8, _: &Path) -> Result<(u64, u64), Stop> {
+        self.read(bits.into()).map(|t| (t, t))
     }
     fn variant(&mut self, tag: u64, index: u32, name: &str, at: At<'_>) -> Result<(), Stop> {
         let r = self.sink.begin_union(tag as u32, index, name, at);
@@ -831,7 +1117,7 @@ impl<'d, P: Plans, R: BitRead + ?Sized + 'd, K: Sink> Pass for Decode<'d, P, R, 
         }
         self.read(bits.into()).map(Some)
     }
-    fn prefix(&mut self, n: Option<u64>, at: At<'_>) -> Result<(), Stop> {
+    fn prefix(&mut self, n: Option<u64>, _bits: u8, at: At<'_>) -> Result<(), Stop> {
         let len = match n {
             Some(n) => ArrayLen::Prefixed(n as usize),
             None => ArrayLen::Tail,
@@ -1058,5 +1344,514 @@ pub(crate) fn fast_raw<P: Plans>(
             Ok(u64::from((v as f32).to_bits()))
         }
         _ => scalar_raw(kind, value, saturate),
+    }
+}
+
+/// Bits the visiting pass reads: [`BitRead`] behind a pointer, so that one copy of the loop
+/// serves every kind of data.
+pub(crate) trait Input {
+    /// Total number of bits.
+    fn bit_len(&self) -> usize;
+    /// Bytes `index` and `index + 1` as a big-endian pair, 0 for the second one where it
+    /// lies beyond the end; the caller checks that the first one does not.
+    fn pair(&self, index: usize) -> u16;
+}
+
+/// Any [`BitRead`] as an [`Input`] (a pointer to it: the data itself may be unsized).
+pub(crate) struct Bits<'d, R: ?Sized>(pub(crate) &'d R);
+
+impl<R: BitRead + ?Sized> Input for Bits<'_, R> {
+    fn bit_len(&self) -> usize {
+        self.0.bit_len()
+    }
+    fn pair(&self, index: usize) -> u16 {
+        let next = match index + 1 < self.0.bit_len() / 8 {
+            true => self.0.byte(index + 1),
+            false => 0,
+        };
+        u16::from(self.0.byte(index)) << 8 | u16::from(next)
+    }
+}
+
+/// A leaf as the visiting pass hands it to its [`Visit`].
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct LeafAt<'w> {
+    /// Its number `[k]` in the value read (or, when nothing is read, in the value written).
+    pub index: usize,
+    /// What it is.
+    pub kind: LeafKind,
+    /// The type's version, when the leaf is a `p_version` field.
+    pub version: Option<u32>,
+    /// Where its bits start (in the data read, or when nothing is read, in the output).
+    pub bit_offset: usize,
+    /// Its field path.
+    pub path: &'w Path,
+}
+
+/// Why a [`Visit`] stops the loop.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Halt {
+    /// What the visit looked for is found: the loop ends without error.
+    Found,
+    /// The loop fails at the leaf, with the error [`Visit::refusal`] gives.
+    Refused,
+}
+
+/// What the visiting pass does at each leaf, besides reading and writing it: the operations
+/// on values other than whole-value encoding and decoding (finding a leaf, rewriting a value
+/// with a new tag or length, a type's default, checking stored versions, translating) are
+/// visits, and so are firmware's leaf lists.
+pub(crate) trait Visit {
+    /// Leaf `at`, whose value read is `old` (`None` when nothing is read there). Returns the
+    /// value to write in its place (`None`: the value read, or when nothing is read, the
+    /// default: zero, or the type's version for `p_version`).
+    fn leaf(&mut self, at: &LeafAt<'_>, old: Option<Scalar>) -> Result<Option<Scalar>, Halt>;
+
+    /// The error of the last [`Halt::Refused`]. The visits' own errors are those of leaf
+    /// lists (a translation's is one: a leaf it cannot read).
+    fn refusal(&self) -> ErrorKind<LeafError> {
+        ErrorKind::TooDeep
+    }
+
+    /// A static array of `len` elements is about to be written at `path` from given values
+    /// (its length is not a leaf).
+    fn fixed_len(&mut self, _path: &Path, _len: u32) -> Result<(), Halt> {
+        Ok(())
+    }
+}
+
+/// The visiting pass: a value read from an [`Input`], written into bytes, or both at once,
+/// every leaf handed to a [`Visit`]. Its visit is behind a pointer, so that firmware compiles
+/// the loop once for all its operations.
+pub(crate) struct Visiting<'w> {
+    input: Option<&'w dyn Input>,
+    rpos: usize,
+    out: &'w mut [u8],
+    writing: bool,
+    wpos: usize,
+    leaves: usize,
+    /// Reading only, fixed-shape parts whose leaves all come before this one are passed over
+    /// unread (finding leaf `[k]`).
+    skip_below: Option<usize>,
+    saturate: bool,
+    keep_versions: bool,
+    mode: Mode,
+    visit: &'w mut dyn Visit,
+    fault: Option<ErrorKind<LeafError>>,
+    /// The visit refused a leaf: its [`Visit::refusal`] is the fault (asked for only then).
+    refused: bool,
+    /// The output is too small: the loop goes on without writing, to tell how small.
+    overflow: bool,
+}
+
+/// What a visiting loop is asked to do.
+pub(crate) struct Job<'w> {
+    pub input: Option<&'w dyn Input>,
+    pub out: &'w mut [u8],
+    pub writing: bool,
+    pub skip_below: Option<usize>,
+    pub options: EncodeOptions,
+}
+
+impl<'w> Job<'w> {
+    /// Reads `input` and writes nothing (`skip_below`: see [`Visiting::skip_below`]).
+    pub(crate) fn reading(input: &'w dyn Input, tao: bool, skip_below: Option<usize>) -> Self {
+        Job {
+            input: Some(input),
+            out: &mut [],
+            writing: false,
+            skip_below,
+            options: EncodeOptions {
+                tao,
+                ..EncodeOptions::default()
+            },
+        }
+    }
+}
+
+/// Where a visiting loop ended.
+pub(crate) struct Walked {
+    /// Bits read.
+    pub read: usize,
+    /// Bits written.
+    pub written: usize,
+    /// Leaves visited (with those passed over unread).
+    pub leaves: usize,
+}
+
+/// Runs the loop with the visiting pass over `root`.
+pub(crate) fn visit(
+    layout: &Layout<'_>,
+    root: NodeId,
+    job: Job<'_>,
+    visit: &mut dyn Visit,
+) -> Result<Walked, Error<LeafError>> {
+    let mode = if job.input.is_some() {
+        Mode::Data
+    } else {
+        Mode::Given
+    };
+    let pass = Visiting {
+        input: job.input,
+        rpos: 0,
+        out: job.out,
+        writing: job.writing,
+        wpos: 0,
+        leaves: 0,
+        skip_below: job.skip_below,
+        saturate: job.options.saturate,
+        keep_versions: job.options.keep_versions,
+        mode,
+        visit,
+        fault: None,
+        refused: false,
+        overflow: false,
+    };
+    let mut run = Run::new(layout, pass);
+    let stopped = run.node(root, Tao::both(job.options.tao)).is_err();
+    let pass = &run.pass;
+    match run.error {
+        Some(error) if stopped => Err(error),
+        _ if pass.overflow => Err(Error {
+            kind: ErrorKind::BufferTooSmall {
+                needed: pass.wpos.div_ceil(8),
+            },
+            bit_offset: pass.wpos,
+            path: Path::default(),
+        }),
+        _ => Ok(Walked {
+            read: pass.rpos,
+            written: pass.wpos,
+            leaves: pass.leaves,
+        }),
+    }
+}
+
+/// Runs the loop with the visiting pass to write a whole value into `out` (reading `input`
+/// if any); its length in bytes, the last byte's unused bits zero.
+pub(crate) fn write_whole(
+    layout: &Layout<'_>,
+    root: NodeId,
+    input: Option<&dyn Input>,
+    out: &mut [u8],
+    options: EncodeOptions,
+    v: &mut dyn Visit,
+) -> Result<usize, Error<LeafError>> {
+    let job = Job {
+        input,
+        out: &mut *out,
+        writing: true,
+        skip_below: None,
+        options,
+    };
+    let end = visit(layout, root, job, v)?.written;
+    if end % 8 != 0 {
+        // The last byte's unused bits.
+        out[end / 8] &= 0xFF << (8 - end % 8);
+    }
+    Ok(end.div_ceil(8))
+}
+
+impl Visiting<'_> {
+    #[cold]
+    #[inline(never)]
+    fn refuse(&mut self, kind: ErrorKind<LeafError>) -> Stop {
+        self.fault = Some(kind);
+        Stop
+    }
+
+    #[cold]
+    fn halt(&mut self, halt: Halt) -> Stop {
+        // Found: no fault (each is taken when the loop stops), so the loop ends without error.
+        self.refused = halt == Halt::Refused;
+        Stop
+    }
+
+    /// Reads `bits` bits where the mode reads (0 elsewhere).
+    fn read(&mut self, bits: u32) -> Result<u64, Stop> {
+        let Some(input) = self.input.filter(|_| bits > 0 && self.mode.reads()) else {
+            return Ok(0);
+        };
+        let (needed, available) = (self.rpos + bits as usize, input.bit_len());
+        if needed > available {
+            return Err(self.refuse(ErrorKind::Truncated {
+                needed_bits: needed,
+                available_bits: available,
+            }));
+        }
+        // The value's bytes, least significant first (its top bits last), each read most
+        // significant bit first: a byte at a time, from the pair of bytes it may span.
+        // (Gathered as bytes: a 64-bit shift by a variable amount is a call on 32-bit targets.)
+        let (mut bytes, mut k) = ([0u8; 8], 0);
+        while self.rpos < needed {
+            let n = (needed - self.rpos).min(8) as u32;
+            let (i, s) = (self.rpos / 8, (self.rpos % 8) as u32);
+            let window = u32::from(input.pair(i)) << s;
+            bytes[k & 7] = ((window >> (16 - n)) & ((1 << n) - 1)) as u8;
+            k += 1;
+            self.rpos += n as usize;
+        }
+        Ok(u64::from_le_bytes(bytes))
+    }
+
+    fn write(&mut self, raw: u64, bits: u32) {
+        if !self.writing || self.mode == Mode::Skip || bits == 0 {
+            return;
+        }
+        let end = self.wpos + bits as usize;
+        // A value too long for the output is still walked to its end (its faults come first).
+        self.overflow |= end > self.out.len() * 8;
+        if !self.overflow {
+            put(self.out, self.wpos, raw, bits);
+        }
+        self.wpos = end;
+    }
+
+    /// A leaf (`kind`; `version`: the type's, for a `p_version` field) at bit `at`, its raw
+    /// bits `raw` (read, or where nothing is read, its default), visited where the mode
+    /// visits: `raw` becomes the raw bits to write, those of the value the visit gives (or
+    /// stays). A union tag or array length is visited before it is checked (a bad one can be
+    /// looked at).
+    #[inline(never)]
+    fn visited(
+        &mut self,
+        kind: LeafKind,
+        version: Option<u32>,
+        at: usize,
+        raw: &mut u64,
+        path: &Path,
+    ) -> Result<(), Stop> {
+        if !self.mode.visits() {
+            return Ok(());
+        }
+        let old = self.mode.reads().then(|| match kind {
+            LeafKind::Scalar(kind) => scalar_of(kind, *raw),
+            _ => Scalar::Uint(*raw),
+        });
+        let at = LeafAt {
+            index: self.leaves,
+            kind,
+            version,
+            bit_offset: at,
+            path,
+        };
+        self.leaves += 1;
+        let v = match self.visit.leaf(&at, old) {
+            Ok(Some(v)) => v,
+            Ok(None) => return Ok(()),
+            Err(halt) => return Err(self.halt(halt)),
+        };
+        let fault = match (kind, version) {
+            (LeafKind::Scalar(_), Some(expected))
+                if self.mode == Mode::Given && !self.keep_versions =>
+            {
+                if scalar::same_integer(v, expected) {
+                    *raw = expected.into();
+                    return Ok(());
+                }
+                ErrorKind::VersionMismatch { given: v, expected }
+            }
+            (LeafKind::Scalar(kind), _) => match scalar_raw(kind, v, self.saturate) {
+                Ok(bits) => {
+                    *raw = bits;
+                    return Ok(());
+                }
+                Err(e) => ErrorKind::Scalar(e),
+            },
+            // A count.
+            _ => match v {
+                Scalar::Uint(n) => {
+                    *raw = n;
+                    return Ok(());
+                }
+                Scalar::Int(n) if n >= 0 => {
+                    *raw = n as u64;
+                    return Ok(());
+                }
+                _ => ErrorKind::Value(LeafError::NotACount),
+            },
+        };
+        Err(self.refuse(fault))
+    }
+
+    /// A primitive leaf (`version`: the type's, for a `p_version` field).
+    fn primitive(&mut self, kind: Kind, version: Option<u32>, path: &Path) -> Result<(), Stop> {
+        let bits = scalar_bits(kind);
+        let at = self.pos();
+        let mut raw = match self.mode.reads() {
+            true => self.read(bits)?,
+            false => version.unwrap_or(0).into(),
+        };
+        self.visited(LeafKind::Scalar(kind), version, at, &mut raw, path)?;
+        self.write(raw, bits);
+        Ok(())
+    }
+}
+
+impl Pass for Visiting<'_> {
+    type Error = LeafError;
+    const RUNS: bool = false;
+    const ENCODES: bool = false;
+    const EDITS: bool = true;
+
+    fn fault(&mut self) -> Option<ErrorKind<LeafError>> {
+        match core::mem::take(&mut self.refused) {
+            true => Some(self.visit.refusal()),
+            false => self.fault.take(),
+        }
+    }
+    /// The position errors and leaves are reported at: in the data read, if any.
+    fn pos(&self) -> usize {
+        if self.input.is_some() {
+            self.rpos
+        } else {
+            self.wpos
+        }
+    }
+    fn scalar(&mut self, kind: Kind, path: &Path) -> Result<(), Stop> {
+        self.primitive(kind, None, path)
+    }
+    fn version(&mut self, kind: Kind, version: u32, path: &Path) -> Result<(), Stop> {
+        self.primitive(kind, Some(version), path)
+    }
+    fn leaf(&mut self, kind: Kind, version: Option<u32>, path: &Path) -> Result<(), Stop> {
+        self.primitive(kind, version, path)
+    }
+    fn absent_version(&mut self, _: Kind, _: u32) -> Result<(), Stop> {
+        Ok(())
+    }
+    fn void(&mut self, bits: u32) -> Result<(), Stop> {
+        self.read(bits)?;
+        self.write(0, bits);
+        Ok(())
+    }
+    fn begin_struct(&mut self, _: u32) -> Result<(), Stop> {
+        Ok(())
+    }
+    fn field(&mut self, _: u32, _: &str) -> Result<bool, Stop> {
+        Ok(true)
+    }
+    fn end_field(&mut self) {}
+    fn end_struct(&mut self, _: &Layout<'_>, _: NodeId, _: usize) -> Result<(), Stop> {
+        Ok(())
+    }
+    fn tag(
+        &mut self,
+        _: &Layout<'_>,
+        id: NodeId,
+        bits: u8,
+        path: &Path,
+    ) -> Result<(u64, u64), Stop> {
+        let at = self.pos();
+        let old = self.read(bits.into())?;
+        let kind = LeafKind::Tag { bits, union: id };
+        let mut new = old;
+        self.visited(kind, None, at, &mut new, path)?;
+        // (A tag read too large for 32 bits is refused as read, before this one is used.)
+        let new = new.min(u32::MAX.into());
+        // Nothing read: the given tag is checked where the union starts.
+        Ok((if self.mode.reads() { old } else { new }, new))
+    }
+    fn variant(&mut self, tag: u64, _: u32, _: &str, at: At<'_>) -> Result<(), Stop> {
+        if let LeafKind::Tag { bits, .. } = at.kind {
+            self.write(tag, bits.into());
+        }
+        Ok(())
+    }
+    fn end_union(&mut self) -> Result<(), Stop> {
+        Ok(())
+    }
+    fn fixed(&mut self, len: u32, at: At<'_>) -> Result<(), Stop> {
+        if self.mode == Mode::Given {
+            let r = self.visit.fixed_len(at.path, len);
+            r.map_err(|halt| self.halt(halt))?;
+        }
+        Ok(())
+    }
+    fn length(&mut self, bits: u8, tail: bool) -> Result<Option<u64>, Stop> {
+        match self.mode.reads() && tail {
+            // Counted ahead by the loop.
+            true => Ok(None),
+            false => self.read(bits.into()).map(Some),
+        }
+    }
+    fn relength(&mut self, n: Option<u64>, at: At<'_>) -> Result<Option<u64>, Stop> {
+        // The loop has counted a tail array read: `n` is always there.
+        let mut new = n.unwrap_or(0);
+        self.visited(at.kind, None, at.bit_offset, &mut new, at.path)?;
+        Ok(Some(new))
+    }
+    fn prefix(&mut self, n: Option<u64>, bits: u8, _: At<'_>) -> Result<(), Stop> {
+        self.write(n.unwrap_or(0), bits.into());
+        Ok(())
+    }
+    fn more(&self, i: u64, n: Option<u64>) -> bool {
+        Some(i) < n
+    }
+    fn element(&mut self, _: u64) -> Result<(), Stop> {
+        Ok(())
+    }
+    fn end_element(&mut self) {}
+    fn end_array(&mut self, _: u64) -> Result<(), Stop> {
+        Ok(())
+    }
+    fn mode(&self) -> Mode {
+        self.mode
+    }
+    fn set_mode(&mut self, mode: Mode) {
+        self.mode = mode;
+    }
+    fn pass_over(&mut self, layout: &Layout<'_>, id: NodeId) -> bool {
+        let Some(k) = self.skip_below else {
+            return false;
+        };
+        let node = layout.node(id);
+        let Some(n) = node.fixed_leaves() else {
+            return false;
+        };
+        if self.mode == Mode::Data && !self.writing && self.leaves + n as usize <= k {
+            self.rpos += node.min_bits as usize;
+            self.leaves += n as usize;
+            return true;
+        }
+        false
+    }
+    fn read_pos(&self) -> usize {
+        self.rpos
+    }
+    fn read_left(&self) -> usize {
+        self.input
+            .map_or(0, |i| i.bit_len())
+            .saturating_sub(self.rpos)
+    }
+    fn seek_read(&mut self, pos: usize) {
+        self.rpos = pos;
+    }
+    fn run(&mut self, _: &[FlatItem], _: u32, _: u32) -> Ran<LeafError> {
+        Ran::Declined
+    }
+    fn elements(&mut self, _: Kind, _: Option<u64>, _: u32) -> Elements<LeafError> {
+        Ok(None)
+    }
+}
+
+/// Writes the low `bits` bits of `raw` at bit `pos` of `out` as a DroneCAN scalar (its bytes
+/// least significant first, the top bits last, each most significant bit first), a byte at a
+/// time into the two bytes it may span; the caller checks that `out` holds them.
+#[inline(never)]
+pub(crate) fn put(out: &mut [u8], mut pos: usize, raw: u64, bits: u32) {
+    let (mut value, end) = (raw, pos + bits as usize);
+    while pos < end {
+        let n = (end - pos).min(8) as u32;
+        let (i, s) = (pos / 8, (pos % 8) as u32);
+        let place = 16 - n - s;
+        let bits = ((value as u32) & ((1 << n) - 1)) << place;
+        let keep = !(((1u32 << n) - 1) << place);
+        out[i] = (u32::from(out[i]) & (keep >> 8)) as u8 | (bits >> 8) as u8;
+        if s + n > 8 {
+            out[i + 1] = (u32::from(out[i + 1]) & keep) as u8 | bits as u8;
+        }
+        value >>= 8;
+        pos += n as usize;
     }
 }
