@@ -26,9 +26,10 @@ def test_the_firmware_build_is_within_its_size_targets() -> None:
     )
     rows = {line.split()[0]: line.split()[1:] for line in proc.stdout.splitlines()[1:]}
     # probe: host .text, compact .text, target, verdict
-    # The sizes reached as ceilings (codec 5,566 bytes, core 14,144; issue 17: 6 and 16 KiB).
-    assert rows["codec"][2:] == ["5,568", "ok"], proc.stdout
-    assert rows["core"][2:] == ["14,144", "ok"], proc.stdout
+    # The sizes reached as ceilings (codec 5,563-5,566 bytes, core 14,144-14,157: the same source
+    # measured in two checkouts; issue 17: 6 and 16 KiB).
+    assert rows["codec"][2:] == ["5,600", "ok"], proc.stdout
+    assert rows["core"][2:] == ["14,176", "ok"], proc.stdout
     assert rows["all"][2] == "-", proc.stdout
     assert proc.returncode == 0, proc.stdout + proc.stderr
 
