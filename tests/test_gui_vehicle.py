@@ -719,3 +719,76 @@ def test_a_program_that_never_closes_its_mavlink_vehicle_still_exits(
         )
         done = subprocess.run([sys.executable, "-c", code], timeout=60, check=False)
     assert done.returncode == 0
+
+
+# -- issue 40, sixth round (mutveh4): what the MAVLink client's surviving mutants changed -------
+
+
+@pytest.mark.issue40
+def test_a_float_write_answers_the_value_the_vehicle_reads_back(schema: px4params.Schema) -> None:
+    """The vehicle echoes the float32 sent, so that the write is acknowledged, but a float16
+    leaf keeps the float16 nearest (1049 * 2**-21 for 0.0005; 10 bits of mantissa): the write
+    answers what the vehicle reads back afterwards, as the page then shows it."""
+    with _peer(schema) as served, _page(served.address) as page:
+        result = page.write("INA238_1Q", 0.0005)
+        assert (result.ok, result.value, result.reason) == (True, 1049 * 2**-21, "")
+        assert page.values["INA238_1Q"] == 1049 * 2**-21
+        assert served.store.get("INA238#1.shunt") == 1049 * 2**-21
+
+
+@pytest.mark.issue40
+def test_a_list_still_arriving_is_not_asked_for_again(schema: px4params.Schema) -> None:
+    """A vehicle paces its list (MAVLink's parameter protocol: "allow breaks between each
+    message"; PX4 sends bursts): here 20 values every 0.2 s, three bursts. A pause between
+    bursts is no lost list: one PARAM_REQUEST_LIST, every value."""
+    with _peer(schema, param_rate=100.0) as served, _page(served.address) as page:
+        assert page.values == {e.name: e.value for e in served.entries()}
+        assert served.lists == 1
+
+
+class _SlowToAnswer(_Recording):
+    """Answers MAV_CMD_REQUEST_MESSAGE (the message, then COMMAND_ACK) one second late: a busy
+    vehicle, or a slow radio link."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self.late: list[tuple[float, Any, Any]] = []
+
+    def _command(self, peer: Any, msg: Any) -> None:
+        self.late.append((time.monotonic() + 1.0, peer, msg))
+
+    def step(self, timeout: float) -> None:
+        super().step(min(timeout, 0.05))
+        while self.late and self.late[0][0] <= time.monotonic():
+            _, peer, msg = self.late.pop(0)
+            super()._command(peer, msg)
+
+
+@pytest.mark.issue40
+def test_a_vehicle_slow_to_answer_the_metadata_request_is_waited_for(
+    schema: px4params.Schema,
+) -> None:
+    with _peer(schema, _SlowToAnswer) as served, _page(served.address) as page:
+        assert "INA238_1C" in {p["name"] for p in page.metadata["parameters"]}
+        assert [c[2] for c in served.commands] == [397]  # COMPONENT_METADATA, asked once
+
+
+class _MissesTheFirstList(_Recording):
+    """Never gets the page's first PARAM_REQUEST_LIST (UDP lost it)."""
+
+    missed = False
+
+    def _handle(self, peer: Any, msg: Any) -> bool:
+        if msg.get_type() == "PARAM_REQUEST_LIST" and not self.missed:
+            self.missed = True
+            return True
+        return super()._handle(peer, msg)
+
+
+@pytest.mark.issue40
+def test_a_list_request_nobody_answers_is_sent_again(schema: px4params.Schema) -> None:
+    """MAVLink's parameter protocol: the ground station times out "after resends" when no
+    PARAM_VALUE comes; a lost request is sent again, and the list comes whole."""
+    with _peer(schema, _MissesTheFirstList) as served, _page(served.address) as page:
+        assert served.missed and served.lists == 1  # the second request, answered
+        assert page.values == {e.name: e.value for e in served.entries()}

@@ -397,7 +397,8 @@ class MavlinkVehicle(_Base):
     # -- parameters --------------------------------------------------------------------------
 
     def refresh(self, timeout: float = 10.0) -> None:
-        """The whole list again (PARAM_REQUEST_LIST, then by index what UDP lost)."""
+        """The whole list again: PARAM_REQUEST_LIST, sent again after half a second without a
+        new value (UDP lost the request, or values of the list) until every value is in."""
         with self._lock:
             self.values.clear()
             self._count = 0
@@ -413,7 +414,7 @@ class MavlinkVehicle(_Base):
                 break
             if have != seen:
                 seen, quiet = have, time.monotonic()
-            elif count and time.monotonic() - quiet > 0.5:
+            elif time.monotonic() - quiet > 0.5:  # nothing yet counts too: a lost request
                 self._conn.mav.param_request_list_send(self._system, self._component)
                 quiet = time.monotonic()
         self._notify({"kind": "values", "values": self.state()["values"]})
