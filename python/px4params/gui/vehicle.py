@@ -414,7 +414,8 @@ class MavlinkVehicle(_Base):
                 break
             if have != seen:
                 seen, quiet = have, time.monotonic()
-            elif time.monotonic() - quiet > 0.5:  # nothing yet counts too: a lost request
+            # no value yet counts too: the request itself was lost
+            elif time.monotonic() - quiet > 0.5:
                 self._conn.mav.param_request_list_send(self._system, self._component)
                 quiet = time.monotonic()
         self._notify({"kind": "values", "values": self.state()["values"]})
