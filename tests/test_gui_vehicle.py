@@ -6,6 +6,7 @@ the events its WebSocket pushes, and writes through the store's one write path."
 from __future__ import annotations
 
 import contextlib
+import errno
 import hashlib
 import json
 import lzma
@@ -792,3 +793,30 @@ def test_a_list_request_nobody_answers_is_sent_again(schema: px4params.Schema) -
     with _peer(schema, _MissesTheFirstList) as served, _page(served.address) as page:
         assert served.missed and served.lists == 1  # the second request, answered
         assert page.values == {e.name: e.value for e in served.entries()}
+
+
+class _FailsOnce:
+    """The page's UDP socket, whose next read fails once (the kernel out of buffers)."""
+
+    def __init__(self, sock: Any) -> None:
+        self.sock = sock
+        self.failed = False
+
+    def recvfrom(self, size: int) -> Any:
+        if not self.failed:
+            self.failed = True
+            raise OSError(errno.ENOBUFS, "No buffer space available")
+        return self.sock.recvfrom(size)
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self.sock, name)
+
+
+@pytest.mark.issue40
+def test_a_failed_read_of_the_socket_does_not_deafen_the_page(schema: px4params.Schema) -> None:
+    with _peer(schema) as served, _page(served.address) as page:
+        failing = _FailsOnce(page._conn.port)
+        page._conn.port = failing
+        assert wait_for(lambda: failing.failed)
+        assert page.write("INA238_1C", 73).ok  # its PARAM_VALUE still heard
+        assert served.store.get("INA238#1.bus.i2c.address") == 73
