@@ -12,6 +12,7 @@ import json
 import lzma
 import subprocess
 import sys
+import threading
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -39,6 +40,17 @@ def vehicle(store_file: Path) -> Iterator[StoreVehicle]:
     made = StoreVehicle(str(store_file), None, [], poll_interval=0.05)
     yield made
     made.close()
+
+
+def _within(seconds: float, call: Any) -> Any:
+    """``call()``'s answer, in a thread of its own: a call that never returns fails the test
+    after ``seconds`` (a generous bound) instead of hanging it."""
+    answers: list[Any] = []
+    running = threading.Thread(target=lambda: answers.append(call()), daemon=True)
+    running.start()
+    running.join(seconds)
+    assert not running.is_alive(), f"still waiting after {seconds} s"
+    return answers[0]
 
 
 def wait_for(condition: Any, seconds: float = 10.0) -> bool:
@@ -228,7 +240,7 @@ def test_a_write_nobody_answers_is_sent_three_times_then_refused(
 ) -> None:
     with _peer(schema, _Silent) as served, _page(served.address) as page:
         before = page.values["INA238_1P"]
-        result = page.write("INA238_1P", before + 1, timeout=0.3)
+        result = _within(30, lambda: page.write("INA238_1P", before + 1, timeout=0.3))
         assert (result.ok, result.value, result.reason) == (
             False,
             before,
@@ -820,3 +832,18 @@ def test_a_failed_read_of_the_socket_does_not_deafen_the_page(schema: px4params.
         assert wait_for(lambda: failing.failed)
         assert page.write("INA238_1C", 73).ok  # its PARAM_VALUE still heard
         assert served.store.get("INA238#1.bus.i2c.address") == 73
+
+
+class _Unread(_Recording):
+    """Never answers a PARAM_REQUEST_READ of INA238_1P (lost, one way or the other)."""
+
+    def _read(self, peer: Any, msg: Any, name: str, index: int) -> None:
+        if name != "INA238_1P":
+            super()._read(peer, msg, name, index)
+
+
+@pytest.mark.issue40
+def test_a_read_nobody_answers_is_none_and_never_hangs(schema: px4params.Schema) -> None:
+    with _peer(schema, _Unread) as served, _page(served.address) as page:
+        assert _within(30, lambda: page.read("INA238_1P", 0.3)) is None
+        assert page._waiters["INA238_1P"] == []  # nothing left waiting
