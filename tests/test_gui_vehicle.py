@@ -847,3 +847,19 @@ def test_a_read_nobody_answers_is_none_and_never_hangs(schema: px4params.Schema)
     with _peer(schema, _Unread) as served, _page(served.address) as page:
         assert _within(30, lambda: page.read("INA238_1P", 0.3)) is None
         assert page._waiters["INA238_1P"] == []  # nothing left waiting
+
+
+@pytest.mark.issue40
+def test_a_refusal_names_its_reason_after_hundreds_of_status_lines(
+    schema: px4params.Schema,
+) -> None:
+    """The page keeps the last 200 STATUSTEXT lines; a vehicle reporting health for minutes
+    fills them (here one line every 10 ms): a refused write still says the vehicle's reason."""
+    options = {"health": lambda: [SHORT_HEALTH], "health_interval": 0.01}
+    with _peer(schema, **options) as served, _page(served.address) as page:
+        assert wait_for(lambda: len(page.messages) == 200)
+        refused = page.write("INA238_1C", 200)
+        assert (refused.ok, refused.value) == (False, 0x45)
+        assert refused.reason == (
+            "INA238_1C: INA238#1: bus.i2c.address: value 200 is out of range (expected 0 to 127)"
+        )

@@ -428,10 +428,16 @@ class MavlinkVehicle(_Base):
         mav = self._mav
         is_float = isinstance(value, float)
         kind = mav.MAV_PARAM_TYPE_REAL32 if is_float else mav.MAV_PARAM_TYPE_INT32
-        before = len(self.messages)
+        said: list[str] = []  # this write's STATUSTEXT (self.messages keeps only the last 200)
+
+        def hear(event: dict[str, Any]) -> None:
+            if event["kind"] == "status":
+                said.append(event["text"])
+
         answers: list[Any] = []
         with self._lock:
             self._waiters.setdefault(name, []).append(answers)
+        unlisten = self.listen(hear)
         try:
             for _attempt in range(3):
                 message = param_set_message(self._system, self._component, name, value, kind)
@@ -443,9 +449,10 @@ class MavlinkVehicle(_Base):
                     break
             time.sleep(0.1)  # a PARAM_ERROR and STATUSTEXT follow a refusal's PARAM_VALUE
         finally:
+            unlisten()
             with self._lock:
                 self._waiters[name].remove(answers)
-        reasons = [m for m in self.messages[before:] if name in m]
+        reasons = [m for m in said if name in m]
         errors = [a for a in answers if a[0] == "error"]
         values = [a[1] for a in answers if a[0] == "value"]
         if not answers:
