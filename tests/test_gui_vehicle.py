@@ -854,8 +854,8 @@ def test_a_refusal_names_its_reason_after_hundreds_of_status_lines(
     schema: px4params.Schema,
 ) -> None:
     """The page keeps the last 200 STATUSTEXT lines; a vehicle reporting health for minutes
-    fills them (here one line every 10 ms): a refused write still says the vehicle's reason."""
-    options = {"health": lambda: [SHORT_HEALTH], "health_interval": 0.01}
+    fills them (here 25 lines every 50 ms): a refused write still says the vehicle's reason."""
+    options = {"health": lambda: [SHORT_HEALTH] * 25, "health_interval": 0.05}
     with _peer(schema, **options) as served, _page(served.address) as page:
         assert wait_for(lambda: len(page.messages) == 200)
         refused = page.write("INA238_1C", 200)
