@@ -347,6 +347,7 @@ def test_a_write_is_acknowledged_by_the_float32_sent_or_the_float16_stored() -> 
         ("mftp:///fs/microsd/params.json", "/fs/microsd/params.json"),
         ("mftp://params.json", "/params.json"),
         ("mftp://[;comp=1]/fs/a]b.json", "/fs/a]b.json"),  # only the first ] ends the prefix
+        ("mftp:///XYZ/params.json", "/XYZ/params.json"),  # only slashes go before the path
     ],
 )
 def test_an_mftp_uri_is_read_as_its_path(uri: str, path: str) -> None:
@@ -863,3 +864,23 @@ def test_a_refusal_names_its_reason_after_hundreds_of_status_lines(
         assert refused.reason == (
             "INA238_1C: INA238#1: bus.i2c.address: value 200 is out of range (expected 0 to 127)"
         )
+
+
+class _NoParameters(_Recording):
+    """A component without parameters: it ignores PARAM_REQUEST_LIST (MAVLink's parameter
+    protocol)."""
+
+    def _handle(self, peer: Any, msg: Any) -> bool:
+        if msg.get_type() == "PARAM_REQUEST_LIST":
+            self.lists += 1
+            return True
+        return super()._handle(peer, msg)
+
+
+@pytest.mark.issue40
+def test_a_list_never_answered_is_asked_again_until_the_timeout(schema: px4params.Schema) -> None:
+    """The ground station "should simply timeout (after resends) if no PARAM_VALUE is
+    received" (MAVLink's parameter protocol): the page asks again, then has no values."""
+    with _peer(schema, _NoParameters) as served, _page(served.address, timeout=3.0) as page:
+        assert page.values == {}
+        assert served.lists >= 2
