@@ -450,6 +450,46 @@ NEW_TESTS="$NEW_TESTS|test_migrate_build"
 # 240, which this round's runs did not reach: killed by test_flat.py's tests (planted by hand)
 # or listed equivalent (pydsdl refuses arrays of capacity 0).
 
+# gui/vehicle.py's MAVLink client (issue 40, mutveh4, sixth round): the 198 mutants mutveh3's
+# round left untested (179 on lines 319-496) and every survivor again. The kept results had
+# been tested against an older tests directory, so this round's first run tested all 211 not
+# killed. Each goes on from the kept results (target/mutation/gui-vehicle.mutmut-cache):
+#   bash scripts/mutation-by-id.sh gui-vehicle python/px4params/gui/vehicle.py \
+#     tests/test_gui_vehicle.py 197 11:05    # before: test_gui_vehicle.py as it was (5a6d6e3)
+#   MUTATION_BUDGET_gui_vehicle=5400 nice bash scripts/mutation.sh gui-vehicle          # after
+#   MUTATION_REPORT_ONLY=1 bash scripts/mutation.sh gui-vehicle
+# Here each ran in three lanes at once (three clones of the work tree, each `mutmut run ID` over
+# its share of the IDs with the target's whole test command, the three caches merged by
+# mutant): a surviving mutant took 60-80 s at load 10-12, too slow for one lane. The baseline
+# mutmut measured (116 s: a cold PX4PARAMS_CACHE_DIR under load) was set to 45 s in the caches,
+# as its timeout is ten baselines (a hanging mutant would have held a lane 19 minutes). "After"
+# tested the before's survivors and timeout and the new mutants of the lines this round changed
+# (7 mutants gone with their lines, 11 new), registered as mutation.sh's full run registers them.
+# Measured 2026-11-27 (2 shared cores, load 9-12; equivalents left out of the rates):
+#   target       run     mutants tested killed timeout survived equivalent untested kill rate
+#   gui-vehicle  before      377    377    306       1       70         57        0     95.9%
+#   gui-vehicle  after       381    381    322       0       59         59        0    100.0%
+# The before's 13 other survivors, each killed by a test of test_gui_vehicle.py written for it
+# (each planted by hand: red): metadata's `continue` -> `break` on a quiet 0.5 s by
+# test_a_vehicle_slow_to_answer_the_metadata_request_is_waited_for; the receive loop's except
+# `continue` -> `break` by test_a_failed_read_of_the_socket_does_not_deafen_the_page; the write's
+# read-back (`read = None`, `read is None`) by test_a_float_write_answers_the_value_the_vehicle_
+# reads_back; the read's wait `and` -> `or` by test_a_read_nobody_answers_is_none_and_never_hangs;
+# _mftp_path's lstrip("XX/XX") by test_an_mftp_uri_is_read_as_its_path's new case; refresh's
+# `quiet = None` after a re-ask by test_a_list_never_answered_is_asked_again_until_the_timeout;
+# refresh's first `quiet = None` and `have == seen` by test_a_list_request_nobody_answers_is_sent_
+# again; the re-ask line's four went with the line (rewritten by the fix below): of its three
+# new mutants `+ quiet` is killed by test_a_list_still_arriving_is_not_asked_for_again, `>=` and
+# `> 1.5` are equivalent. The write nobody answers is now bounded by its test (its wait's `and`
+# -> `or`, the before's timeout, fails within 30 s instead of hanging the run). The new lines'
+# 8 other mutants (write hearing its STATUSTEXT) are killed. After: none untested, and every
+# survivor listed equivalent in scripts/mutation-equivalent.txt.
+# Two bugs fixed in gui/vehicle.py with their tests (red before the fix): a lost first
+# PARAM_REQUEST_LIST was never sent again (refresh re-asked only once a value had come: the page
+# stayed empty until its timeout), and once the page held its 200 STATUSTEXT lines (minutes of
+# health reports) every refused write said "the vehicle kept N" instead of the vehicle's reason
+# (write looked for it past len(self.messages), which stays 200).
+
 if [ "$#" -eq 0 ]; then
   set -- can_transfer dronecan_params health links gui migrate vehicle store rust-core rust-ffi
 fi

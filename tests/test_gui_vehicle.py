@@ -6,11 +6,13 @@ the events its WebSocket pushes, and writes through the store's one write path."
 from __future__ import annotations
 
 import contextlib
+import errno
 import hashlib
 import json
 import lzma
 import subprocess
 import sys
+import threading
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -38,6 +40,17 @@ def vehicle(store_file: Path) -> Iterator[StoreVehicle]:
     made = StoreVehicle(str(store_file), None, [], poll_interval=0.05)
     yield made
     made.close()
+
+
+def _within(seconds: float, call: Any) -> Any:
+    """``call()``'s answer, in a thread of its own: a call that never returns fails the test
+    after ``seconds`` (a generous bound) instead of hanging it."""
+    answers: list[Any] = []
+    running = threading.Thread(target=lambda: answers.append(call()), daemon=True)
+    running.start()
+    running.join(seconds)
+    assert not running.is_alive(), f"still waiting after {seconds} s"
+    return answers[0]
 
 
 def wait_for(condition: Any, seconds: float = 10.0) -> bool:
@@ -227,7 +240,7 @@ def test_a_write_nobody_answers_is_sent_three_times_then_refused(
 ) -> None:
     with _peer(schema, _Silent) as served, _page(served.address) as page:
         before = page.values["INA238_1P"]
-        result = page.write("INA238_1P", before + 1, timeout=0.3)
+        result = _within(30, lambda: page.write("INA238_1P", before + 1, timeout=0.3))
         assert (result.ok, result.value, result.reason) == (
             False,
             before,
@@ -334,6 +347,7 @@ def test_a_write_is_acknowledged_by_the_float32_sent_or_the_float16_stored() -> 
         ("mftp:///fs/microsd/params.json", "/fs/microsd/params.json"),
         ("mftp://params.json", "/params.json"),
         ("mftp://[;comp=1]/fs/a]b.json", "/fs/a]b.json"),  # only the first ] ends the prefix
+        ("mftp:///XYZ/params.json", "/XYZ/params.json"),  # only slashes go before the path
     ],
 )
 def test_an_mftp_uri_is_read_as_its_path(uri: str, path: str) -> None:
@@ -719,3 +733,154 @@ def test_a_program_that_never_closes_its_mavlink_vehicle_still_exits(
         )
         done = subprocess.run([sys.executable, "-c", code], timeout=60, check=False)
     assert done.returncode == 0
+
+
+# -- issue 40, sixth round (mutveh4): what the MAVLink client's surviving mutants changed -------
+
+
+@pytest.mark.issue40
+def test_a_float_write_answers_the_value_the_vehicle_reads_back(schema: px4params.Schema) -> None:
+    """The vehicle echoes the float32 sent, so that the write is acknowledged, but a float16
+    leaf keeps the float16 nearest (1049 * 2**-21 for 0.0005; 10 bits of mantissa): the write
+    answers what the vehicle reads back afterwards, as the page then shows it."""
+    with _peer(schema) as served, _page(served.address) as page:
+        result = page.write("INA238_1Q", 0.0005)
+        assert (result.ok, result.value, result.reason) == (True, 1049 * 2**-21, "")
+        assert page.values["INA238_1Q"] == 1049 * 2**-21
+        assert served.store.get("INA238#1.shunt") == 1049 * 2**-21
+
+
+@pytest.mark.issue40
+def test_a_list_still_arriving_is_not_asked_for_again(schema: px4params.Schema) -> None:
+    """A vehicle paces its list (MAVLink's parameter protocol: "allow breaks between each
+    message"; PX4 sends bursts): here 20 values every 0.2 s, three bursts. A pause between
+    bursts is no lost list: one PARAM_REQUEST_LIST, every value."""
+    with _peer(schema, param_rate=100.0) as served, _page(served.address) as page:
+        assert page.values == {e.name: e.value for e in served.entries()}
+        assert served.lists == 1
+
+
+class _SlowToAnswer(_Recording):
+    """Answers MAV_CMD_REQUEST_MESSAGE (the message, then COMMAND_ACK) one second late: a busy
+    vehicle, or a slow radio link."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self.late: list[tuple[float, Any, Any]] = []
+
+    def _command(self, peer: Any, msg: Any) -> None:
+        self.late.append((time.monotonic() + 1.0, peer, msg))
+
+    def step(self, timeout: float) -> None:
+        super().step(min(timeout, 0.05))
+        while self.late and self.late[0][0] <= time.monotonic():
+            _, peer, msg = self.late.pop(0)
+            super()._command(peer, msg)
+
+
+@pytest.mark.issue40
+def test_a_vehicle_slow_to_answer_the_metadata_request_is_waited_for(
+    schema: px4params.Schema,
+) -> None:
+    with _peer(schema, _SlowToAnswer) as served, _page(served.address) as page:
+        assert "INA238_1C" in {p["name"] for p in page.metadata["parameters"]}
+        assert [c[2] for c in served.commands] == [397]  # COMPONENT_METADATA, asked once
+
+
+class _MissesTheFirstList(_Recording):
+    """Never gets the page's first PARAM_REQUEST_LIST (UDP lost it)."""
+
+    missed = False
+
+    def _handle(self, peer: Any, msg: Any) -> bool:
+        if msg.get_type() == "PARAM_REQUEST_LIST" and not self.missed:
+            self.missed = True
+            return True
+        return super()._handle(peer, msg)
+
+
+@pytest.mark.issue40
+def test_a_list_request_nobody_answers_is_sent_again(schema: px4params.Schema) -> None:
+    """MAVLink's parameter protocol: the ground station times out "after resends" when no
+    PARAM_VALUE comes; a lost request is sent again, and the list comes whole."""
+    with _peer(schema, _MissesTheFirstList) as served, _page(served.address) as page:
+        assert served.missed and served.lists == 1  # the second request, answered
+        assert page.values == {e.name: e.value for e in served.entries()}
+
+
+class _FailsOnce:
+    """The page's UDP socket, whose next read fails once (the kernel out of buffers)."""
+
+    def __init__(self, sock: Any) -> None:
+        self.sock = sock
+        self.failed = False
+
+    def recvfrom(self, size: int) -> Any:
+        if not self.failed:
+            self.failed = True
+            raise OSError(errno.ENOBUFS, "No buffer space available")
+        return self.sock.recvfrom(size)
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self.sock, name)
+
+
+@pytest.mark.issue40
+def test_a_failed_read_of_the_socket_does_not_deafen_the_page(schema: px4params.Schema) -> None:
+    with _peer(schema) as served, _page(served.address) as page:
+        failing = _FailsOnce(page._conn.port)
+        page._conn.port = failing
+        assert wait_for(lambda: failing.failed)
+        assert page.write("INA238_1C", 73).ok  # its PARAM_VALUE still heard
+        assert served.store.get("INA238#1.bus.i2c.address") == 73
+
+
+class _Unread(_Recording):
+    """Never answers a PARAM_REQUEST_READ of INA238_1P (lost, one way or the other)."""
+
+    def _read(self, peer: Any, msg: Any, name: str, index: int) -> None:
+        if name != "INA238_1P":
+            super()._read(peer, msg, name, index)
+
+
+@pytest.mark.issue40
+def test_a_read_nobody_answers_is_none_and_never_hangs(schema: px4params.Schema) -> None:
+    with _peer(schema, _Unread) as served, _page(served.address) as page:
+        assert _within(30, lambda: page.read("INA238_1P", 0.3)) is None
+        assert page._waiters["INA238_1P"] == []  # nothing left waiting
+
+
+@pytest.mark.issue40
+def test_a_refusal_names_its_reason_after_hundreds_of_status_lines(
+    schema: px4params.Schema,
+) -> None:
+    """The page keeps the last 200 STATUSTEXT lines; a vehicle reporting health for minutes
+    fills them (here 25 lines every 50 ms): a refused write still says the vehicle's reason."""
+    options = {"health": lambda: [SHORT_HEALTH] * 25, "health_interval": 0.05}
+    with _peer(schema, **options) as served, _page(served.address) as page:
+        assert wait_for(lambda: len(page.messages) == 200)
+        refused = page.write("INA238_1C", 200)
+        assert (refused.ok, refused.value) == (False, 0x45)
+        assert refused.reason == (
+            "INA238_1C: INA238#1: bus.i2c.address: value 200 is out of range (expected 0 to 127)"
+        )
+
+
+class _NoParameters(_Recording):
+    """A component without parameters: it ignores PARAM_REQUEST_LIST (MAVLink's parameter
+    protocol)."""
+
+    def _handle(self, peer: Any, msg: Any) -> bool:
+        if msg.get_type() == "PARAM_REQUEST_LIST":
+            self.lists += 1
+            return True
+        return super()._handle(peer, msg)
+
+
+@pytest.mark.issue40
+def test_a_list_never_answered_is_asked_again_until_the_timeout(schema: px4params.Schema) -> None:
+    """The ground station "should simply timeout (after resends) if no PARAM_VALUE is
+    received" (MAVLink's parameter protocol): the page asks again, then has no values."""
+    with _peer(schema, _NoParameters) as served, _page(served.address, timeout=3.0) as page:
+        assert page.values == {}
+        assert served.lists >= 2

@@ -397,7 +397,8 @@ class MavlinkVehicle(_Base):
     # -- parameters --------------------------------------------------------------------------
 
     def refresh(self, timeout: float = 10.0) -> None:
-        """The whole list again (PARAM_REQUEST_LIST, then by index what UDP lost)."""
+        """The whole list again: PARAM_REQUEST_LIST, sent again after half a second without a
+        new value (UDP lost the request, or values of the list) until every value is in."""
         with self._lock:
             self.values.clear()
             self._count = 0
@@ -413,7 +414,8 @@ class MavlinkVehicle(_Base):
                 break
             if have != seen:
                 seen, quiet = have, time.monotonic()
-            elif count and time.monotonic() - quiet > 0.5:
+            # no value yet counts too: the request itself was lost
+            elif time.monotonic() - quiet > 0.5:
                 self._conn.mav.param_request_list_send(self._system, self._component)
                 quiet = time.monotonic()
         self._notify({"kind": "values", "values": self.state()["values"]})
@@ -426,10 +428,16 @@ class MavlinkVehicle(_Base):
         mav = self._mav
         is_float = isinstance(value, float)
         kind = mav.MAV_PARAM_TYPE_REAL32 if is_float else mav.MAV_PARAM_TYPE_INT32
-        before = len(self.messages)
+        said: list[str] = []  # this write's STATUSTEXT (self.messages keeps only the last 200)
+
+        def hear(event: dict[str, Any]) -> None:
+            if event["kind"] == "status":
+                said.append(event["text"])
+
         answers: list[Any] = []
         with self._lock:
             self._waiters.setdefault(name, []).append(answers)
+        unlisten = self.listen(hear)
         try:
             for _attempt in range(3):
                 message = param_set_message(self._system, self._component, name, value, kind)
@@ -441,9 +449,10 @@ class MavlinkVehicle(_Base):
                     break
             time.sleep(0.1)  # a PARAM_ERROR and STATUSTEXT follow a refusal's PARAM_VALUE
         finally:
+            unlisten()
             with self._lock:
                 self._waiters[name].remove(answers)
-        reasons = [m for m in self.messages[before:] if name in m]
+        reasons = [m for m in said if name in m]
         errors = [a for a in answers if a[0] == "error"]
         values = [a[1] for a in answers if a[0] == "value"]
         if not answers:
