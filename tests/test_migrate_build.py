@@ -462,3 +462,91 @@ def test_a_devices_console_line_is_found_past_lines_of_other_addresses() -> None
     assert proposal.instances[0].origin.endswith(
         "; boot console line 2: 'ak09916 #1 on I2C bus 1 (external) address 0x0C'"
     )
+
+
+def test_a_thermal_control_value_px4_does_not_list_is_said_so() -> None:
+    # PX4's parameter metadata lists SENS_EN_THERMAL's values (-1, 0, 1); one beyond them has
+    # no meaning to report, and the report says that instead of inventing one
+    path = shared_file(shared_data.PARAMETERS_JSON)
+    metadata = json.loads(path.read_text())
+    rows = metadata.get("parameters", metadata)
+    (thermal,) = [p for p in rows if p["name"] == "SENS_EN_THERMAL"]
+    unlisted = max(v["value"] for v in thermal["values"]) + 1
+    proposal = migrate.migrate(config({"SENS_EN_THERMAL": unlisted}), table="px4-v1.11")
+    assert proposal.not_carried == [
+        f"SENS_EN_THERMAL = {unlisted} (a value PX4 does not list): not a driver switch; it "
+        "stays a classic parameter"
+    ]
+
+
+def test_the_bmi088s_console_lines_are_its_slots_evidence_not_other_findings() -> None:
+    # A real PX4 1.15 log (NXP MR-Tropic, ../shared/data): its boot console starts the BMI088
+    # as two modules, `bmi088_accel #0 on SPI bus 4 rotation 2` (line 31) and `bmi088_gyro #0
+    # on SPI bus 4 rotation 2` (line 33); CAL_ACC1_ID = 6946850 (0x6A0022) and CAL_GYRO1_ID =
+    # 6684706 (0x660022) are that chip on SPI bus 4 (bus type 2, bus 4, devtypes 0x6A and
+    # 0x66, read by hand). The lines are those slots' evidence: each SPI device is reported
+    # once, by its slot, and no console line of the BMI088 is reported again.
+    from px4params.migrate.config import read_config
+
+    log = read_config(shared_file("frrs_ekf_failure.ulg"))
+    proposal = migrate.migrate(log)
+    left = proposal.not_in_manifest
+    spi = [line for line in left if ", SPI bus " in line]
+    assert [line.split(" = ")[0] for line in spi] == [
+        "CAL_ACC0_ID, CAL_GYRO0_ID",
+        "CAL_ACC1_ID",
+        "CAL_GYRO1_ID",
+    ]
+    assert not [line for line in left if line.startswith(("boot console line 31", "boot console "
+                                                         "line 33"))], left  # fmt: skip
+    assert not [line for line in left if "bmi088" in line], left
+
+
+def test_a_board_line_with_an_address_starts_the_device_at_that_address_only() -> None:
+    # PX4's boards/px4/fmu-v6c/init/rc.board_sensors: `ist8310 -X -b 4 -a 0xc -q start` (bus 4,
+    # address 0x0C, not the driver's default 0x0E) and `ist8310 -X -b 1 -R 10 start` (bus 1,
+    # no -a: the driver's default address, I2C_ADDRESS_DEFAULT 0x0E). A device is the
+    # board's only where one of those lines looks for it.
+    from px4params.vehicle.boards import load_boards
+
+    v6c = load_boards().by_name("px4_fmu-v6c")
+    assert v6c is not None
+    rows = {(r.bus, r.address): r for r in v6c.devices if r.driver == "ist8310"}
+    assert set(rows) == {(4, 0x0C), (1, None)}
+
+    def proposed(bus: int, address: int) -> list[str]:
+        ist8310 = devid.encode("i2c", bus, address, 0x06)
+        proposal = migrate.migrate(today({"CAL_MAG0_ID": ist8310}), table="current", board=v6c)
+        if not proposal.instances:
+            assert proposal.not_in_manifest == [
+                f"CAL_MAG0_ID = {ist8310}: IST8310 (MAG), I2C bus {bus}, address 0x{address:02X}: "
+                f"started by the board's script ({rows[(bus, 0x0C if bus == 4 else None)].source})"
+            ]
+        return [i.name for i in proposal.instances]
+
+    assert proposed(4, 0x0C) == []  # the -a 0xc line's
+    assert proposed(4, 0x0E) == ["IST8310#0"]  # no line on bus 4 looks at 0x0E
+    assert proposed(1, 0x0E) == []  # the default address of the line without -a
+    assert proposed(1, 0x0C) == ["IST8310#0"]  # not where that line looks
+
+
+def test_a_probed_compass_gets_the_rotation_of_its_own_chips_probe_only() -> None:
+    # PX4 1.11's rc.sensors (SENS_EXT_I2C_PRB) probes `ak09916 -X -R 6 start` but `ist8310 -X
+    # start` (no -R): an AK09916 found on the external bus runs with rotation 6, an IST8310
+    # found there with none; CubeOrange's own script starts its AK09916 on bus 2 only
+    from px4params.vehicle.boards import load_boards
+
+    cube = load_boards().by_name("cubepilot_cubeorange", "v1.11.2")
+    assert cube is not None
+    ak09916, ist8310 = devid.encode("i2c", 1, 0x0C, 0x09), devid.encode("i2c", 1, 0x0E, 0x06)
+    old = OldConfig("t.ulg", "ULog", {"CAL_MAG0_ID": ak09916, "CAL_MAG1_ID": ist8310},
+                    version=(1, 11, 2))  # fmt: skip
+    proposal = migrate.migrate(old, table="px4-v1.11", board=cube)
+    ak, ist = proposal.instances
+    assert (ak.name, ak.values["rotation"]) == ("AK09916#0", 6)
+    assert ak.notes == [
+        "rotation 6: rc.sensors probes it with 'ak09916 -X -R 6 start' (PX4/PX4-Autopilot "
+        "ROMFS/px4fmu_common/init.d/rc.sensors:102 at v1.11.0 (tag v1.11.0, 71db0903a9, "
+        "2020-09-07))"
+    ]
+    assert (ist.name, ist.values.get("rotation", 0), ist.notes) == ("IST8310#0", 0, [])
