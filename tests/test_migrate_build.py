@@ -550,3 +550,58 @@ def test_a_probed_compass_gets_the_rotation_of_its_own_chips_probe_only() -> Non
         "2020-09-07))"
     ]
     assert (ist.name, ist.values.get("rotation", 0), ist.notes) == ("IST8310#0", 0, [])
+
+
+def test_a_switch_places_its_driver_on_its_own_console_lines_only() -> None:
+    # SENS_EN_INA238 starts ina238; the boot console's line of another driver (the board's
+    # BMM350 on internal bus 4) is not a place of the power monitor, it is reported as the
+    # board's own sensor
+    console = (
+        "bmm350 #0 on I2C bus 4 address 0x14\nina238 #0 on I2C bus 2 (external) address 0x44\n"
+    )
+    proposal = migrate.migrate(today({"SENS_EN_INA238": 1}, console), table="current")
+    assert [(i.name, i.values) for i in proposal.instances] == [
+        ("INA238#0", {"bus.i2c.bus_id": 2, "bus.i2c.address": 0x44})
+    ]
+    assert proposal.not_in_manifest == [
+        "boot console line 1: bmm350, I2C bus 4, address 0x14: on an internal bus: started by "
+        "the board's startup scripts"
+    ]
+
+
+def test_a_board_line_whose_switch_test_fails_is_not_where_the_driver_runs() -> None:
+    # PX4's boards/px4/fmu-v6x/init/rc.board_sensors starts `ina226 -X -b 1 -t 1 -k start`
+    # under `param compare SENS_EN_INA226 1` (the board table's "SENS_EN_INA226 == 1"):
+    # with the switch at 2 that test fails, the line does not run, and it is not the place the
+    # report gives the power monitor
+    from px4params.vehicle.boards import load_boards
+
+    v6x = load_boards().by_name("px4_fmu-v6x")
+    assert v6x is not None
+    lines = [r for r in v6x.switches if r.param == "SENS_EN_INA226"]
+    assert lines and {r.when.split(" and ")[0] for r in lines} == {"SENS_EN_INA226 == 1"}
+    proposal = migrate.migrate(today({"SENS_EN_INA226": 1}), table="current", board=v6x)
+    assert [i.origin for i in proposal.instances if "the board starts it with" in i.origin]
+    proposal = migrate.migrate(today({"SENS_EN_INA226": 2}), table="current", board=v6x)
+    assert not [i.origin for i in proposal.instances if "the board starts" in i.origin]
+
+
+def test_an_extra_folders_type_is_guessed_on_bus_1_as_a_power_monitor_is(tmp_path: Path) -> None:
+    # migrate/build.py's rule for a type of an extra DSDL folder without a driver declaration:
+    # its SENS_EN_<NAME> starts it as PX4's board scripts start the power monitors (`-X -b 1`),
+    # so the guess of its bus says that, not "every external bus"
+    import px4params
+
+    root = tmp_path / "acme"
+    root.mkdir()
+    (root / "Probe.1.0.dsdl").write_text(
+        "# A probe\n# @max_instances 2\n\nuint4 p_version\npx.Bus.1.0 bus\n# Bus\nuint8 gain\n"
+        "@sealed\n"
+    )
+    schema = px4params.load_schema([root], use_env=False, cache_dir=tmp_path / "cache")
+    proposal = migrate.migrate(today({"SENS_EN_PROBE": 1}), schema=schema, table="current")
+    assert [i.name for i in proposal.instances] == ["PROBE#0"]
+    assert [a for a in proposal.assumptions if a.startswith("SENS_EN_PROBE")] == [
+        "SENS_EN_PROBE: I2C bus 1 is a guess (PX4 starts probe -X -b 1 on the board; nothing "
+        "here says which bus it is on)"
+    ]
