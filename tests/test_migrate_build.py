@@ -605,3 +605,29 @@ def test_an_extra_folders_type_is_guessed_on_bus_1_as_a_power_monitor_is(tmp_pat
         "SENS_EN_PROBE: I2C bus 1 is a guess (PX4 starts probe -X -b 1 on the board; nothing "
         "here says which bus it is on)"
     ]
+
+
+def test_a_switch_started_on_every_external_bus_is_proposed_on_the_first_said_so() -> None:
+    # PX4's rc.sensors runs `ms4525do start -X` while SENS_EN_MS4525DO is 1: -X without -b
+    # tries every external I2C bus (Pixhawk 6C's: 1, 2 and 4), the sensor at its fixed
+    # address 0x28 (MS4525DO's datasheet); which bus it was found on nothing here says, so the
+    # first is proposed and the report says why, once
+    from px4params.vehicle.boards import load_boards
+
+    v6c = load_boards().by_name("px4_fmu-v6c")
+    assert v6c is not None and v6c.external_i2c_buses == (1, 2, 4)
+    rows = [r for r in v6c.switches if r.param == "SENS_EN_MS4525DO"]
+    assert {(r.bus, r.args) for r in rows} == {(1, "start -X"), (2, "start -X"), (4, "start -X")}
+    proposal = migrate.migrate(today({"SENS_EN_MS4525DO": 1}), table="current", board=v6c)
+    (inst,) = proposal.instances
+    assert (inst.name, inst.values) == (
+        "MS4525DO#0",
+        {"bus.i2c.bus_id": 1, "bus.i2c.address": 0x28},
+    )
+    assert inst.origin == (
+        "SENS_EN_MS4525DO = 1: ms4525do started on I2C bus 1 at the driver's default address 0x28"
+    )
+    assert proposal.assumptions == [
+        "SENS_EN_MS4525DO: px4_fmu-v6c starts 'ms4525do start -X' on every external I2C bus "
+        f"(1, 2, 4; {rows[0].source}), so the bus it is found on is not known: bus 1 proposed"
+    ]
