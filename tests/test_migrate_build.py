@@ -631,3 +631,47 @@ def test_a_switch_started_on_every_external_bus_is_proposed_on_the_first_said_so
         "SENS_EN_MS4525DO: px4_fmu-v6c starts 'ms4525do start -X' on every external I2C bus "
         f"(1, 2, 4; {rows[0].source}), so the bus it is found on is not known: bus 1 proposed"
     ]
+
+
+def test_the_largest_device_id_is_one_and_one_beyond_it_is_not() -> None:
+    # PX4's DeviceStructure packs bus type (3 bits), bus (5), address (8) and devtype (8) into
+    # 24 bits: 0xFFFFFF (bus type 7, bus 31, address 0xFF, devtype 0xFF, drv_sensor.h's
+    # DRV_DEVTYPE_UNUSED) is a device ID, of no bus the manifest knows; 0x1000000 needs a
+    # 25th bit and is no device ID
+    largest, beyond = 0xFFFFFF, 0x1000000
+    what = "UNUSED, bus type 7, bus 31, address 0xFF: not an I2C device: not part of the manifest"
+    proposal = migrate.migrate(
+        today({"CAL_MAG0_ID": largest, "CAL_MAG1_ID": beyond}), table="current"
+    )
+    assert proposal.not_in_manifest == [f"CAL_MAG0_ID = {largest}: {what}"]
+    assert proposal.not_carried == [f"CAL_MAG1_ID = {beyond}: not a device ID"]
+    published = [("sensor_baro", 0, largest), ("sensor_baro", 1, beyond)]
+    proposal = migrate.migrate(config(published=published), table="current")
+    assert proposal.not_in_manifest == [f"sensor_baro 0 = {largest}: {what}"]
+
+
+@pytest.mark.parametrize("device", ["i2c", "spi"])
+def test_one_compass_in_two_slots_says_different_rotations_only_when_they_differ(
+    device: str,
+) -> None:
+    # CAL_MAGn_ROT is calibration's rotation of slot n: one compass held by two slots with the
+    # same rotation is reported once, plainly; with two different rotations the report names
+    # both (one of them is stale). Probing starts the driver without -R: its rotation is 0.
+    compass = devid.encode(device, 1, 0x0C if device == "i2c" else 0, 0x09)
+    slots = {"CAL_MAG0_ID": compass, "CAL_MAG1_ID": compass}
+    twice = "CAL_MAG0_ID and CAL_MAG1_ID hold the same device (reported once)"
+    calibration = (
+        "CAL_MAG{} = 2 stays a classic parameter: calibration applies it; the driver's rotation "
+        "is 0 (rc.sensors starts it without -R)"
+    )
+    differ = ", with different rotations (CAL_MAG0_ROT = 0, CAL_MAG1_ROT = 2)"
+    for rotations, said in (((2, 2), ""), ((0, 2), differ)):
+        params = {**slots, "CAL_MAG0_ROT": rotations[0], "CAL_MAG1_ROT": rotations[1]}
+        proposal = migrate.migrate(today(params), table="current")
+        if device == "spi":
+            (line,) = proposal.not_in_manifest
+            assert line.endswith(f"not by the manifest; {twice}{said}")
+            continue
+        (inst,) = proposal.instances
+        rotated = [calibration.format(f"{n}_ROT") for n, r in enumerate(rotations) if r]
+        assert inst.notes == [twice + said, *rotated]
