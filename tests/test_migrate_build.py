@@ -675,3 +675,63 @@ def test_one_compass_in_two_slots_says_different_rotations_only_when_they_differ
         (inst,) = proposal.instances
         rotated = [calibration.format(f"{n}_ROT") for n, r in enumerate(rotations) if r]
         assert inst.notes == [twice + said, *rotated]
+
+
+def test_what_is_left_out_says_why_in_the_reports_words() -> None:
+    # The report's word for each device left out (migrate.proposal.LeftOut): "board" (the
+    # board's script starts it: an SPI sensor, PX4's "Internal" CAL_MAGn_ROT = -1), "disabled"
+    # (CAL_<S>n_PRIO = 0 in every slot holding it), and by PX4's DeviceStructure bus type:
+    # 3 UAVCAN "dronecan", 4 simulation "simulation", 0 (unknown) "other bus". A device in
+    # two disabled slots names both settings.
+    def device_id(bus_type: int, bus: int, address: int, devtype: int) -> int:
+        return bus_type | bus << 3 | address << 8 | devtype << 16
+
+    icm20602, second = devid.encode("spi", 1, 0, 0x38), devid.encode("spi", 4, 0, 0x38)
+    ist8310 = devid.encode("i2c", 1, 0x0E, 0x06)
+    ak09916 = devid.encode("i2c", 2, 0x0C, 0x09)
+    ms5611 = 0x3D  # drv_sensor.h's DRV_BARO_DEVTYPE_MS5611
+    params = {
+        "CAL_ACC0_ID": icm20602, "CAL_GYRO0_ID": icm20602, "CAL_ACC0_PRIO": 0,
+        "CAL_GYRO0_PRIO": 0, "CAL_ACC1_ID": second, "CAL_MAG0_ID": ist8310, "CAL_MAG1_ID": ist8310,
+        "CAL_MAG0_ROT": -1, "CAL_MAG0_PRIO": 0, "CAL_MAG1_PRIO": 0, "CAL_MAG2_ID": ak09916,
+        "CAL_MAG3_ID": ak09916, "CAL_MAG2_PRIO": 0, "CAL_MAG3_PRIO": 0,
+        "CAL_BARO0_ID": device_id(3, 0, 125, ms5611), "CAL_BARO1_ID": device_id(4, 0, 0, ms5611),
+        "CAL_BARO2_ID": device_id(0, 0, 0x77, ms5611),
+    }  # fmt: skip
+    proposal = migrate.migrate(today(params), table="current")
+    assert proposal.instances == [] and proposal.not_carried == []
+    once = "hold the same device (reported once)"
+    assert [(out.reason, out.line) for out in proposal.left_out] == [
+        ("board", f"CAL_ACC0_ID, CAL_GYRO0_ID = {icm20602}: ICM20602 (IMU), SPI bus 1, device 0 "
+         "(disabled: CAL_ACC0_PRIO = 0, CAL_GYRO0_PRIO = 0): internal SPI sensor: started by the "
+         "board's startup script, not by the manifest"),
+        ("board", f"CAL_ACC1_ID = {second}: ICM20602 (IMU), SPI bus 4, device 0: internal SPI "
+         "sensor: started by the board's startup script, not by the manifest"),
+        ("dronecan", f"CAL_BARO0_ID = {params['CAL_BARO0_ID']}: MS5611 (BARO), UAVCAN bus 0, "
+         "node 125: DroneCAN sensor: found on the CAN bus, not by the manifest"),
+        ("simulation", f"CAL_BARO1_ID = {params['CAL_BARO1_ID']}: MS5611 (BARO), simulation bus "
+         "0, address 0x00: simulated sensor: not part of the manifest"),
+        ("other bus", f"CAL_BARO2_ID = {params['CAL_BARO2_ID']}: MS5611 (BARO), bus type 0, bus "
+         "0, address 0x77: not an I2C device: not part of the manifest"),
+        ("board", f"CAL_MAG0_ID, CAL_MAG1_ID = {ist8310}: IST8310 (MAG), I2C bus 1, address 0x0E: "
+         "CAL_MAG0_ROT = -1 (Internal): started by the board's script (disabled: CAL_MAG0_PRIO = "
+         f"0, CAL_MAG1_PRIO = 0); CAL_MAG0_ID and CAL_MAG1_ID {once}"),
+        ("disabled", f"CAL_MAG2_ID, CAL_MAG3_ID = {ak09916}: AK09916 (MAG), I2C bus 2, address "
+         "0x0C: disabled (CAL_MAG2_PRIO = 0, CAL_MAG3_PRIO = 0): not proposed, an instance would "
+         f"make it required; CAL_MAG2_ID and CAL_MAG3_ID {once}"),
+    ]  # fmt: skip
+
+
+@pytest.mark.parametrize(("devtype", "chip"), [(0x4A, "SDP31"), (0x4B, "SDP32"), (0x4C, "SDP33")])
+def test_an_sdp3x_airspeed_sensor_of_any_model_is_the_sdp3x_type(devtype: int, chip: str) -> None:
+    # drv_sensor.h names the Sensirion models apart (DRV_DIFF_PRESS_DEVTYPE_SDP31 0x4A, SDP32
+    # 0x4B, SDP33 0x4C); PX4's one sdp3x driver runs all three, and its type is SDP3X
+    sdp = devid.encode("i2c", 2, 0x21, devtype)
+    log = OldConfig("t.ulg", "ULog", {}, version=(1, 15, 0),
+                    published=[("differential_pressure", 0, sdp)])  # fmt: skip
+    proposal = migrate.migrate(log, table="current")
+    assert [(i.name, i.values, i.origin) for i in proposal.instances] == [
+        ("SDP3X#0", {"bus.i2c.bus_id": 2, "bus.i2c.address": 0x21},
+         f"differential_pressure 0 = {sdp}: {chip} (DIFF_PRESS), I2C bus 2, address 0x21"),
+    ]  # fmt: skip
+    assert proposal.not_carried == [] and proposal.not_in_manifest == []
