@@ -748,3 +748,30 @@ def test_a_device_still_used_by_one_slot_names_every_disabled_one() -> None:
         "CAL_MAG0_PRIO = 0, CAL_MAG1_PRIO = 0: one of its slots was disabled for use",
         "CAL_MAG0_ID and CAL_MAG1_ID and CAL_MAG2_ID hold the same device (reported once)",
     ]
+
+
+def test_boot_console_lines_of_the_boards_sensors_say_board_and_a_barometer_is_the_boards() -> None:
+    # The board's own sensors in a boot console: an SPI one, one on an internal I2C bus (no
+    # "(external)"), and an I2C barometer on an external bus (BMP388: drv_sensor.h's kind
+    # BARO), which the report assumes is the flight controller's, and says so; each is left
+    # out with the word "board"
+    console = (
+        "ms5611 #0 on SPI bus 1 (devid=0x3d)\n"
+        "bmm350 #0 on I2C bus 4 address 0x14\n"
+        "bmp388 #0 on I2C bus 2 (external) address 0x77\n"
+    )
+    proposal = migrate.migrate(today({}, console), table="current")
+    assert proposal.instances == [] and proposal.not_carried == []
+    assert [(out.found, out.device, out.reason) for out in proposal.left_out] == [
+        ("boot console line 1", "ms5611, SPI bus 1", "board"),
+        ("boot console line 2", "bmm350, I2C bus 4, address 0x14", "board"),
+        ("boot console line 3", "bmp388, I2C bus 2, address 0x77", "board"),
+    ]
+    assert proposal.left_out[2].line == (
+        "boot console line 3: bmp388, I2C bus 2, address 0x77: a barometer: assumed started by "
+        "the board's script"
+    )
+    assert proposal.assumptions[-1] == (
+        "I2C barometers without a board table row are taken as started by the board's script "
+        "(barometers sit on the flight controller)"
+    )
