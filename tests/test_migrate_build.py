@@ -789,3 +789,18 @@ def test_a_console_line_without_an_address_assumes_the_drivers_default_and_says_
         f"boot console line 1: '{line}' names no address (PX4 before 1.13 prints none): "
         "ms4525do's default 0x28 assumed"
     ]
+
+
+def test_the_power_monitor_a_real_logs_i2c_launcher_found_keeps_its_battery_index_note() -> None:
+    # The same real log's boot console, line 29: "[i2c_launcher] Found address 0x45, running
+    # 'ina228 -X -b 1 -t 1 start'": the INA228 at 0x45 on bus 1 is proposed, and its start
+    # line's -t 1 (the battery index) is an option the type has no field for, said
+    from px4params.migrate.config import read_config
+
+    proposal = migrate.migrate(read_config(shared_file("frrs_ekf_failure.ulg")))
+    (inst,) = proposal.instances
+    assert (inst.name, inst.values) == ("INA228#0", {"bus.i2c.bus_id": 1, "bus.i2c.address": 0x45})
+    assert inst.origin.startswith("boot console line 29: ")
+    assert inst.notes == [
+        "the start line also sets the battery index (-t 1): INA228 has no field for it"
+    ]
