@@ -804,3 +804,48 @@ def test_the_power_monitor_a_real_logs_i2c_launcher_found_keeps_its_battery_inde
     assert inst.notes == [
         "the start line also sets the battery index (-t 1): INA228 has no field for it"
     ]
+
+
+def test_probing_on_is_replaced_by_the_devices_the_manifest_states() -> None:
+    # A real PX4 1.11 log (CubeOrange, ../shared/data) has SENS_EXT_I2C_PRB = 1: rc.sensors
+    # probed its external compass and airspeed sensor; the manifest states them instead, and
+    # the report names them (with nothing found, it says none)
+    from px4params.migrate.config import read_config
+
+    log = read_config(shared_file(shared_data.SAMPLE_LOG))
+    assert log.params["SENS_EXT_I2C_PRB"] == 1
+    said = (
+        "SENS_EXT_I2C_PRB = 1: external I2C devices were found by probing; the manifest states "
+        "its devices ({}) and a missing one fails the arming check instead of being skipped "
+        "silently"
+    )
+    proposal = migrate.migrate(log)
+    assert [i.name for i in proposal.instances] == ["AK09916#0", "MS4525DO#0"]
+    assert proposal.replaced == [said.format("AK09916#0, MS4525DO#0")]
+    proposal = migrate.migrate(today({"SENS_EXT_I2C_PRB": 1}), table="current")
+    assert proposal.replaced == [said.format("none")]
+
+
+def test_the_i2c_launcher_runs_unless_a_power_monitor_switch_is_set() -> None:
+    # Pixhawk 6X's rc.board_sensors runs i2c_launcher while $INA_CONFIGURED is no, which only
+    # a set SENS_EN_INA226/228/238 makes yes: other parameters set (a battery's cell count,
+    # another sensor's switch) leave the launcher's scan, and the report's word on it
+    from px4params.vehicle.boards import load_boards
+
+    v6x = load_boards().by_name("px4_fmu-v6x")
+    assert v6x is not None and "$INA_CONFIGURED == no" in v6x.i2c_launcher_when
+    params = {"BAT1_N_CELLS": 4, "SENS_EN_MS4525DO": 1, "SENS_EN_INA238": 0}
+    proposal = migrate.migrate(today(params, "nsh: sercon\n"), table="current", board=v6x)
+    assert [a for a in proposal.assumptions if "i2c_launcher" in a] == [
+        "the board's i2c_launcher scans I2C bus 1, 2 for power monitors (INA226, INA228, INA238) "
+        "when no SENS_EN_INA* is set: the boot console shows none it started"
+    ]
+    # a log without a boot console (before PX4 1.12) cannot say what the scan found
+    proposal = migrate.migrate(today(params), table="current", board=v6x)
+    assert [a for a in proposal.assumptions if "i2c_launcher" in a] == [
+        "the board's i2c_launcher scans I2C bus 1, 2 for power monitors (INA226, INA228, INA238) "
+        "when no SENS_EN_INA* is set: a ULog does not say which it found"
+    ]
+    params["SENS_EN_INA238"] = 1
+    proposal = migrate.migrate(today(params, "nsh: sercon\n"), table="current", board=v6x)
+    assert not [a for a in proposal.assumptions if "i2c_launcher" in a], proposal.assumptions
