@@ -849,3 +849,20 @@ def test_the_i2c_launcher_runs_unless_a_power_monitor_switch_is_set() -> None:
     params["SENS_EN_INA238"] = 1
     proposal = migrate.migrate(today(params, "nsh: sercon\n"), table="current", board=v6x)
     assert not [a for a in proposal.assumptions if "i2c_launcher" in a], proposal.assumptions
+
+
+def test_a_devtype_two_chips_share_is_matched_to_the_console_line_of_either() -> None:
+    # PX4 1.13's drv_sensor.h gives 0x4C to two chips (DRV_DIFF_PRESS_DEVTYPE_SDP33 and
+    # DRV_BARO_DEVTYPE_LPS33HW): CAL_BARO0_ID's device of that code at 0x5D on bus 1 is the
+    # LPS33HW the boot console started there, so that line is its evidence, not a second
+    # barometer to report
+    lps33hw = devid.encode("i2c", 1, 0x5D, 0x4C)
+    console = "lps33hw #0 on I2C bus 1 (external) address 0x5D\n"
+    log = OldConfig("t.ulg", "ULog", {"CAL_BARO0_ID": lps33hw}, version=(1, 13, 0),
+                    console=console)  # fmt: skip
+    proposal = migrate.migrate(log, table="px4-v1.13")
+    assert proposal.instances == [] and proposal.not_carried == []
+    assert proposal.not_in_manifest == [
+        f"CAL_BARO0_ID = {lps33hw}: SDP33/LPS33HW (DIFF_PRESS/BARO), I2C bus 1, address 0x5D: a "
+        "barometer: assumed started by the board's script"
+    ]
