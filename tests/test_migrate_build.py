@@ -866,3 +866,19 @@ def test_a_devtype_two_chips_share_is_matched_to_the_console_line_of_either() ->
         f"CAL_BARO0_ID = {lps33hw}: SDP33/LPS33HW (DIFF_PRESS/BARO), I2C bus 1, address 0x5D: a "
         "barometer: assumed started by the board's script"
     ]
+
+
+def test_a_setting_equal_to_its_field_as_px4_stores_it_is_carried_without_a_note() -> None:
+    # PX4 holds a float parameter as a float32: a list's INA238_CURRENT 30.00000001 is 30.0 in
+    # PX4 (the nearest float32), so 30 A in the integer field is the same setting, noted as
+    # nothing; 30.4 is rounded to 30 and noted
+    params = {"SENS_EN_INA238": 1, "INA238_CURRENT": 30.00000001}
+    (inst,) = migrate.migrate(today(params), table="current").instances
+    assert inst.values["current"] == 30
+    assert not [n for n in inst.notes if n.startswith("INA238_CURRENT")], inst.notes
+    params["INA238_CURRENT"] = 30.4
+    (inst,) = migrate.migrate(today(params), table="current").instances
+    assert inst.values["current"] == 30
+    assert [n for n in inst.notes if n.startswith("INA238_CURRENT")] == [
+        "INA238_CURRENT = 30.4 A becomes current = 30 A (uint10, 1..327)"
+    ]
