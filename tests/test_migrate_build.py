@@ -882,3 +882,21 @@ def test_a_setting_equal_to_its_field_as_px4_stores_it_is_carried_without_a_note
     assert [n for n in inst.notes if n.startswith("INA238_CURRENT")] == [
         "INA238_CURRENT = 30.4 A becomes current = 30 A (uint10, 1..327)"
     ]
+
+
+def test_a_board_the_table_does_not_know_is_refused_or_said() -> None:
+    # --board names a PX4 board (boards/<vendor>/<model>: px4_fmu-v6c); a name PX4 has no
+    # board of is refused with what was expected, and a log's ver_hw that no board of the
+    # table reports is said, its sensors judged from the parameters
+    from px4params.errors import MigrationError
+
+    with pytest.raises(MigrationError) as e:
+        migrate.migrate(today({}), board="acme_fc-v1", table="current")
+    assert str(e.value) == (
+        "unknown board 'acme_fc-v1' (expected a PX4 board name such as px4_fmu-v6c)"
+    )
+    log = OldConfig("t.ulg", "ULog", {}, version=(1, 15, 0), hardware="ACME_FC_V1")
+    assert migrate.migrate(log, table="current").assumptions == [
+        "board ACME_FC_V1: not in the board table; what its script starts is judged from the "
+        "parameters and the boot console"
+    ]
