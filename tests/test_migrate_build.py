@@ -900,3 +900,67 @@ def test_a_board_the_table_does_not_know_is_refused_or_said() -> None:
         "board ACME_FC_V1: not in the board table; what its script starts is judged from the "
         "parameters and the boot console"
     ]
+
+
+def test_a_switch_after_thermal_control_still_starts_its_driver() -> None:
+    # SENS_EN_THERMAL is thermal control, not a driver; the switches after it (in name order,
+    # SENS_EN_VL53L1X) start their drivers as ever: PX4's rc.sensors tests each on its own
+    proposal = migrate.migrate(today({"SENS_EN_THERMAL": 1, "SENS_EN_VL53L1X": 1}), table="current")
+    assert [i.name for i in proposal.instances] == ["VL53L1X#0"]
+    assert proposal.not_carried == [
+        "SENS_EN_THERMAL = 1 (thermal control enabled): not a driver switch; it stays a classic "
+        "parameter"
+    ]
+
+
+def test_a_board_starting_one_chip_at_two_addresses_on_a_bus_starts_both() -> None:
+    # Pixhawk 6C's script starts `ist8310 -X -b 4 -a 0xc -q start`; a board whose script also
+    # started `ist8310 -X -b 4 -a 0xe start` (a second IST8310 on the same bus) starts both:
+    # the one at 0x0E is found by the second line past the first's other address
+    import dataclasses
+
+    from px4params.vehicle.boards import load_boards
+
+    v6c = load_boards().by_name("px4_fmu-v6c")
+    assert v6c is not None
+    (first,) = [r for r in v6c.devices if r.driver == "ist8310" and r.bus == 4]
+    second = dataclasses.replace(first, address=0x0E, args="-X -b 4 -a 0xe start")
+    rows = list(v6c.devices)
+    rows.insert(rows.index(first) + 1, second)
+    board = dataclasses.replace(v6c, devices=tuple(rows))
+    for address in (0x0C, 0x0E):
+        ist8310 = devid.encode("i2c", 4, address, 0x06)
+        proposal = migrate.migrate(today({"CAL_MAG0_ID": ist8310}), table="current", board=board)
+        assert proposal.instances == []
+        (line,) = proposal.not_in_manifest
+        assert line.endswith(
+            f"address 0x{address:02X}: started by the board's script ({first.source})"
+        )
+
+
+def test_a_switch_after_one_that_starts_no_i2c_driver_still_starts_its_own() -> None:
+    # SENS_EN_LL40LS = 1 is the PWM Lidar-Lite (PX4's ll40ls parameters.yaml: 1 PWM, 2 I2C):
+    # no I2C driver, it stays a classic parameter; SENS_EN_MS4525DO after it starts its sensor
+    proposal = migrate.migrate(today({"SENS_EN_LL40LS": 1, "SENS_EN_MS4525DO": 1}), table="current")
+    assert [i.name for i in proposal.instances] == ["MS4525DO#0"]
+    assert proposal.not_carried == [
+        "SENS_EN_LL40LS = 1: starts no I2C driver of the manifest (its ll40ls starts on 2); it "
+        "stays a classic parameter"
+    ]
+
+
+def test_a_console_line_after_one_without_a_type_is_still_proposed() -> None:
+    # The boot console's lines each say what started: an LED driver (rgbled, no parameter
+    # type: it stays started as today) does not hide the compass started after it
+    console = (
+        "rgbled #0 on I2C bus 1 (external) address 0x55\n"
+        "ak09916 #0 on I2C bus 1 (external) address 0x0D\n"
+    )
+    proposal = migrate.migrate(today({}, console), table="current")
+    assert [(i.name, i.values["bus.i2c.address"]) for i in proposal.instances] == [
+        ("AK09916#0", 0x0D)
+    ]
+    assert proposal.not_carried == [
+        "boot console line 1: 'rgbled #0 on I2C bus 1 (external) address 0x55': no bundled "
+        "parameter type for rgbled; it stays started as today"
+    ]
