@@ -964,3 +964,14 @@ def test_a_console_line_after_one_without_a_type_is_still_proposed() -> None:
         "boot console line 1: 'rgbled #0 on I2C bus 1 (external) address 0x55': no bundled "
         "parameter type for rgbled; it stays started as today"
     ]
+
+
+def test_a_file_without_board_information_says_how_its_sensors_are_judged() -> None:
+    # A parameter list names no board (a log's ver_hw does): the report says which of its
+    # sensors are taken as the board's and which as probed, and how to name the board instead
+    proposal = migrate.migrate(today({}), table="current")
+    assert proposal.assumptions == [
+        "no board information in a ULog: sensors with CAL_MAGn_ROT = -1 (Internal) and I2C "
+        "barometers are taken as the board's, other external I2C sensors as found by probing "
+        "(--board NAME uses the board's table)"
+    ]
