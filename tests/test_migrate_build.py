@@ -462,3 +462,516 @@ def test_a_devices_console_line_is_found_past_lines_of_other_addresses() -> None
     assert proposal.instances[0].origin.endswith(
         "; boot console line 2: 'ak09916 #1 on I2C bus 1 (external) address 0x0C'"
     )
+
+
+def test_a_thermal_control_value_px4_does_not_list_is_said_so() -> None:
+    # PX4's parameter metadata lists SENS_EN_THERMAL's values (-1, 0, 1); one beyond them has
+    # no meaning to report, and the report says that instead of inventing one
+    path = shared_file(shared_data.PARAMETERS_JSON)
+    metadata = json.loads(path.read_text())
+    rows = metadata.get("parameters", metadata)
+    (thermal,) = [p for p in rows if p["name"] == "SENS_EN_THERMAL"]
+    unlisted = max(v["value"] for v in thermal["values"]) + 1
+    proposal = migrate.migrate(config({"SENS_EN_THERMAL": unlisted}), table="px4-v1.11")
+    assert proposal.not_carried == [
+        f"SENS_EN_THERMAL = {unlisted} (a value PX4 does not list): not a driver switch; it "
+        "stays a classic parameter"
+    ]
+
+
+def test_the_bmi088s_console_lines_are_its_slots_evidence_not_other_findings() -> None:
+    # A real PX4 1.15 log (NXP MR-Tropic, ../shared/data): its boot console starts the BMI088
+    # as two modules, `bmi088_accel #0 on SPI bus 4 rotation 2` (line 31) and `bmi088_gyro #0
+    # on SPI bus 4 rotation 2` (line 33); CAL_ACC1_ID = 6946850 (0x6A0022) and CAL_GYRO1_ID =
+    # 6684706 (0x660022) are that chip on SPI bus 4 (bus type 2, bus 4, devtypes 0x6A and
+    # 0x66, read by hand). The lines are those slots' evidence: each SPI device is reported
+    # once, by its slot, and no console line of the BMI088 is reported again.
+    from px4params.migrate.config import read_config
+
+    log = read_config(shared_file("frrs_ekf_failure.ulg"))
+    proposal = migrate.migrate(log)
+    left = proposal.not_in_manifest
+    spi = [line for line in left if ", SPI bus " in line]
+    assert [line.split(" = ")[0] for line in spi] == [
+        "CAL_ACC0_ID, CAL_GYRO0_ID",
+        "CAL_ACC1_ID",
+        "CAL_GYRO1_ID",
+    ]
+    assert not [line for line in left if line.startswith(("boot console line 31", "boot console "
+                                                         "line 33"))], left  # fmt: skip
+    assert not [line for line in left if "bmi088" in line], left
+
+
+def test_a_board_line_with_an_address_starts_the_device_at_that_address_only() -> None:
+    # PX4's boards/px4/fmu-v6c/init/rc.board_sensors: `ist8310 -X -b 4 -a 0xc -q start` (bus 4,
+    # address 0x0C, not the driver's default 0x0E) and `ist8310 -X -b 1 -R 10 start` (bus 1,
+    # no -a: the driver's default address, I2C_ADDRESS_DEFAULT 0x0E). A device is the
+    # board's only where one of those lines looks for it.
+    from px4params.vehicle.boards import load_boards
+
+    v6c = load_boards().by_name("px4_fmu-v6c")
+    assert v6c is not None
+    rows = {(r.bus, r.address): r for r in v6c.devices if r.driver == "ist8310"}
+    assert set(rows) == {(4, 0x0C), (1, None)}
+
+    def proposed(bus: int, address: int) -> list[str]:
+        ist8310 = devid.encode("i2c", bus, address, 0x06)
+        proposal = migrate.migrate(today({"CAL_MAG0_ID": ist8310}), table="current", board=v6c)
+        if not proposal.instances:
+            assert proposal.not_in_manifest == [
+                f"CAL_MAG0_ID = {ist8310}: IST8310 (MAG), I2C bus {bus}, address 0x{address:02X}: "
+                f"started by the board's script ({rows[(bus, 0x0C if bus == 4 else None)].source})"
+            ]
+        return [i.name for i in proposal.instances]
+
+    assert proposed(4, 0x0C) == []  # the -a 0xc line's
+    assert proposed(4, 0x0E) == ["IST8310#0"]  # no line on bus 4 looks at 0x0E
+    assert proposed(1, 0x0E) == []  # the default address of the line without -a
+    assert proposed(1, 0x0C) == ["IST8310#0"]  # not where that line looks
+
+
+def test_a_probed_compass_gets_the_rotation_of_its_own_chips_probe_only() -> None:
+    # PX4 1.11's rc.sensors (SENS_EXT_I2C_PRB) probes `ak09916 -X -R 6 start` but `ist8310 -X
+    # start` (no -R): an AK09916 found on the external bus runs with rotation 6, an IST8310
+    # found there with none; CubeOrange's own script starts its AK09916 on bus 2 only
+    from px4params.vehicle.boards import load_boards
+
+    cube = load_boards().by_name("cubepilot_cubeorange", "v1.11.2")
+    assert cube is not None
+    ak09916, ist8310 = devid.encode("i2c", 1, 0x0C, 0x09), devid.encode("i2c", 1, 0x0E, 0x06)
+    old = OldConfig("t.ulg", "ULog", {"CAL_MAG0_ID": ak09916, "CAL_MAG1_ID": ist8310},
+                    version=(1, 11, 2))  # fmt: skip
+    proposal = migrate.migrate(old, table="px4-v1.11", board=cube)
+    ak, ist = proposal.instances
+    assert (ak.name, ak.values["rotation"]) == ("AK09916#0", 6)
+    assert ak.notes == [
+        "rotation 6: rc.sensors probes it with 'ak09916 -X -R 6 start' (PX4/PX4-Autopilot "
+        "ROMFS/px4fmu_common/init.d/rc.sensors:102 at v1.11.0 (tag v1.11.0, 71db0903a9, "
+        "2020-09-07))"
+    ]
+    assert (ist.name, ist.values.get("rotation", 0), ist.notes) == ("IST8310#0", 0, [])
+
+
+def test_a_switch_places_its_driver_on_its_own_console_lines_only() -> None:
+    # SENS_EN_INA238 starts ina238; the boot console's line of another driver (the board's
+    # BMM350 on internal bus 4) is not a place of the power monitor, it is reported as the
+    # board's own sensor
+    console = (
+        "bmm350 #0 on I2C bus 4 address 0x14\nina238 #0 on I2C bus 2 (external) address 0x44\n"
+    )
+    proposal = migrate.migrate(today({"SENS_EN_INA238": 1}, console), table="current")
+    assert [(i.name, i.values) for i in proposal.instances] == [
+        ("INA238#0", {"bus.i2c.bus_id": 2, "bus.i2c.address": 0x44})
+    ]
+    assert proposal.not_in_manifest == [
+        "boot console line 1: bmm350, I2C bus 4, address 0x14: on an internal bus: started by "
+        "the board's startup scripts"
+    ]
+
+
+def test_a_board_line_whose_switch_test_fails_is_not_where_the_driver_runs() -> None:
+    # PX4's boards/px4/fmu-v6x/init/rc.board_sensors starts `ina226 -X -b 1 -t 1 -k start`
+    # under `param compare SENS_EN_INA226 1` (the board table's "SENS_EN_INA226 == 1"):
+    # with the switch at 2 that test fails, the line does not run, and it is not the place the
+    # report gives the power monitor
+    from px4params.vehicle.boards import load_boards
+
+    v6x = load_boards().by_name("px4_fmu-v6x")
+    assert v6x is not None
+    lines = [r for r in v6x.switches if r.param == "SENS_EN_INA226"]
+    assert lines and {r.when.split(" and ")[0] for r in lines} == {"SENS_EN_INA226 == 1"}
+    proposal = migrate.migrate(today({"SENS_EN_INA226": 1}), table="current", board=v6x)
+    assert [i.origin for i in proposal.instances if "the board starts it with" in i.origin]
+    proposal = migrate.migrate(today({"SENS_EN_INA226": 2}), table="current", board=v6x)
+    assert not [i.origin for i in proposal.instances if "the board starts" in i.origin]
+
+
+def test_an_extra_folders_type_is_guessed_on_bus_1_as_a_power_monitor_is(tmp_path: Path) -> None:
+    # migrate/build.py's rule for a type of an extra DSDL folder without a driver declaration:
+    # its SENS_EN_<NAME> starts it as PX4's board scripts start the power monitors (`-X -b 1`),
+    # so the guess of its bus says that, not "every external bus"
+    import px4params
+
+    root = tmp_path / "acme"
+    root.mkdir()
+    (root / "Probe.1.0.dsdl").write_text(
+        "# A probe\n# @max_instances 2\n\nuint4 p_version\npx.Bus.1.0 bus\n# Bus\nuint8 gain\n"
+        "@sealed\n"
+    )
+    schema = px4params.load_schema([root], use_env=False, cache_dir=tmp_path / "cache")
+    proposal = migrate.migrate(today({"SENS_EN_PROBE": 1}), schema=schema, table="current")
+    assert [i.name for i in proposal.instances] == ["PROBE#0"]
+    assert [a for a in proposal.assumptions if a.startswith("SENS_EN_PROBE")] == [
+        "SENS_EN_PROBE: I2C bus 1 is a guess (PX4 starts probe -X -b 1 on the board; nothing "
+        "here says which bus it is on)"
+    ]
+
+
+def test_a_switch_started_on_every_external_bus_is_proposed_on_the_first_said_so() -> None:
+    # PX4's rc.sensors runs `ms4525do start -X` while SENS_EN_MS4525DO is 1: -X without -b
+    # tries every external I2C bus (Pixhawk 6C's: 1, 2 and 4), the sensor at its fixed
+    # address 0x28 (MS4525DO's datasheet); which bus it was found on nothing here says, so the
+    # first is proposed and the report says why, once
+    from px4params.vehicle.boards import load_boards
+
+    v6c = load_boards().by_name("px4_fmu-v6c")
+    assert v6c is not None and v6c.external_i2c_buses == (1, 2, 4)
+    rows = [r for r in v6c.switches if r.param == "SENS_EN_MS4525DO"]
+    assert {(r.bus, r.args) for r in rows} == {(1, "start -X"), (2, "start -X"), (4, "start -X")}
+    proposal = migrate.migrate(today({"SENS_EN_MS4525DO": 1}), table="current", board=v6c)
+    (inst,) = proposal.instances
+    assert (inst.name, inst.values) == (
+        "MS4525DO#0",
+        {"bus.i2c.bus_id": 1, "bus.i2c.address": 0x28},
+    )
+    assert inst.origin == (
+        "SENS_EN_MS4525DO = 1: ms4525do started on I2C bus 1 at the driver's default address 0x28"
+    )
+    assert proposal.assumptions == [
+        "SENS_EN_MS4525DO: px4_fmu-v6c starts 'ms4525do start -X' on every external I2C bus "
+        f"(1, 2, 4; {rows[0].source}), so the bus it is found on is not known: bus 1 proposed"
+    ]
+
+
+def test_the_largest_device_id_is_one_and_one_beyond_it_is_not() -> None:
+    # PX4's DeviceStructure packs bus type (3 bits), bus (5), address (8) and devtype (8) into
+    # 24 bits: 0xFFFFFF (bus type 7, bus 31, address 0xFF, devtype 0xFF, drv_sensor.h's
+    # DRV_DEVTYPE_UNUSED) is a device ID, of no bus the manifest knows; 0x1000000 needs a
+    # 25th bit and is no device ID
+    largest, beyond = 0xFFFFFF, 0x1000000
+    what = "UNUSED, bus type 7, bus 31, address 0xFF: not an I2C device: not part of the manifest"
+    proposal = migrate.migrate(
+        today({"CAL_MAG0_ID": largest, "CAL_MAG1_ID": beyond}), table="current"
+    )
+    assert proposal.not_in_manifest == [f"CAL_MAG0_ID = {largest}: {what}"]
+    assert proposal.not_carried == [f"CAL_MAG1_ID = {beyond}: not a device ID"]
+    published = [("sensor_baro", 0, largest), ("sensor_baro", 1, beyond)]
+    proposal = migrate.migrate(config(published=published), table="current")
+    assert proposal.not_in_manifest == [f"sensor_baro 0 = {largest}: {what}"]
+
+
+@pytest.mark.parametrize("device", ["i2c", "spi"])
+def test_one_compass_in_two_slots_says_different_rotations_only_when_they_differ(
+    device: str,
+) -> None:
+    # CAL_MAGn_ROT is calibration's rotation of slot n: one compass held by two slots with the
+    # same rotation is reported once, plainly; with two different rotations the report names
+    # both (one of them is stale). Probing starts the driver without -R: its rotation is 0.
+    compass = devid.encode(device, 1, 0x0C if device == "i2c" else 0, 0x09)
+    slots = {"CAL_MAG0_ID": compass, "CAL_MAG1_ID": compass}
+    twice = "CAL_MAG0_ID and CAL_MAG1_ID hold the same device (reported once)"
+    calibration = (
+        "CAL_MAG{} = 2 stays a classic parameter: calibration applies it; the driver's rotation "
+        "is 0 (rc.sensors starts it without -R)"
+    )
+    differ = ", with different rotations (CAL_MAG0_ROT = 0, CAL_MAG1_ROT = 2)"
+    for rotations, said in (((2, 2), ""), ((0, 2), differ)):
+        params = {**slots, "CAL_MAG0_ROT": rotations[0], "CAL_MAG1_ROT": rotations[1]}
+        proposal = migrate.migrate(today(params), table="current")
+        if device == "spi":
+            (line,) = proposal.not_in_manifest
+            assert line.endswith(f"not by the manifest; {twice}{said}")
+            continue
+        (inst,) = proposal.instances
+        rotated = [calibration.format(f"{n}_ROT") for n, r in enumerate(rotations) if r]
+        assert inst.notes == [twice + said, *rotated]
+
+
+def test_what_is_left_out_says_why_in_the_reports_words() -> None:
+    # The report's word for each device left out (migrate.proposal.LeftOut): "board" (the
+    # board's script starts it: an SPI sensor, PX4's "Internal" CAL_MAGn_ROT = -1), "disabled"
+    # (CAL_<S>n_PRIO = 0 in every slot holding it), and by PX4's DeviceStructure bus type:
+    # 3 UAVCAN "dronecan", 4 simulation "simulation", 0 (unknown) "other bus". A device in
+    # two disabled slots names both settings.
+    def device_id(bus_type: int, bus: int, address: int, devtype: int) -> int:
+        return bus_type | bus << 3 | address << 8 | devtype << 16
+
+    icm20602, second = devid.encode("spi", 1, 0, 0x38), devid.encode("spi", 4, 0, 0x38)
+    ist8310 = devid.encode("i2c", 1, 0x0E, 0x06)
+    ak09916 = devid.encode("i2c", 2, 0x0C, 0x09)
+    ms5611 = 0x3D  # drv_sensor.h's DRV_BARO_DEVTYPE_MS5611
+    params = {
+        "CAL_ACC0_ID": icm20602, "CAL_GYRO0_ID": icm20602, "CAL_ACC0_PRIO": 0,
+        "CAL_GYRO0_PRIO": 0, "CAL_ACC1_ID": second, "CAL_MAG0_ID": ist8310, "CAL_MAG1_ID": ist8310,
+        "CAL_MAG0_ROT": -1, "CAL_MAG0_PRIO": 0, "CAL_MAG1_PRIO": 0, "CAL_MAG2_ID": ak09916,
+        "CAL_MAG3_ID": ak09916, "CAL_MAG2_PRIO": 0, "CAL_MAG3_PRIO": 0,
+        "CAL_BARO0_ID": device_id(3, 0, 125, ms5611), "CAL_BARO1_ID": device_id(4, 0, 0, ms5611),
+        "CAL_BARO2_ID": device_id(0, 0, 0x77, ms5611),
+    }  # fmt: skip
+    proposal = migrate.migrate(today(params), table="current")
+    assert proposal.instances == [] and proposal.not_carried == []
+    once = "hold the same device (reported once)"
+    assert [(out.reason, out.line) for out in proposal.left_out] == [
+        ("board", f"CAL_ACC0_ID, CAL_GYRO0_ID = {icm20602}: ICM20602 (IMU), SPI bus 1, device 0 "
+         "(disabled: CAL_ACC0_PRIO = 0, CAL_GYRO0_PRIO = 0): internal SPI sensor: started by the "
+         "board's startup script, not by the manifest"),
+        ("board", f"CAL_ACC1_ID = {second}: ICM20602 (IMU), SPI bus 4, device 0: internal SPI "
+         "sensor: started by the board's startup script, not by the manifest"),
+        ("dronecan", f"CAL_BARO0_ID = {params['CAL_BARO0_ID']}: MS5611 (BARO), UAVCAN bus 0, "
+         "node 125: DroneCAN sensor: found on the CAN bus, not by the manifest"),
+        ("simulation", f"CAL_BARO1_ID = {params['CAL_BARO1_ID']}: MS5611 (BARO), simulation bus "
+         "0, address 0x00: simulated sensor: not part of the manifest"),
+        ("other bus", f"CAL_BARO2_ID = {params['CAL_BARO2_ID']}: MS5611 (BARO), bus type 0, bus "
+         "0, address 0x77: not an I2C device: not part of the manifest"),
+        ("board", f"CAL_MAG0_ID, CAL_MAG1_ID = {ist8310}: IST8310 (MAG), I2C bus 1, address 0x0E: "
+         "CAL_MAG0_ROT = -1 (Internal): started by the board's script (disabled: CAL_MAG0_PRIO = "
+         f"0, CAL_MAG1_PRIO = 0); CAL_MAG0_ID and CAL_MAG1_ID {once}"),
+        ("disabled", f"CAL_MAG2_ID, CAL_MAG3_ID = {ak09916}: AK09916 (MAG), I2C bus 2, address "
+         "0x0C: disabled (CAL_MAG2_PRIO = 0, CAL_MAG3_PRIO = 0): not proposed, an instance would "
+         f"make it required; CAL_MAG2_ID and CAL_MAG3_ID {once}"),
+    ]  # fmt: skip
+
+
+@pytest.mark.parametrize(("devtype", "chip"), [(0x4A, "SDP31"), (0x4B, "SDP32"), (0x4C, "SDP33")])
+def test_an_sdp3x_airspeed_sensor_of_any_model_is_the_sdp3x_type(devtype: int, chip: str) -> None:
+    # drv_sensor.h names the Sensirion models apart (DRV_DIFF_PRESS_DEVTYPE_SDP31 0x4A, SDP32
+    # 0x4B, SDP33 0x4C); PX4's one sdp3x driver runs all three, and its type is SDP3X
+    sdp = devid.encode("i2c", 2, 0x21, devtype)
+    log = OldConfig("t.ulg", "ULog", {}, version=(1, 15, 0),
+                    published=[("differential_pressure", 0, sdp)])  # fmt: skip
+    proposal = migrate.migrate(log, table="current")
+    assert [(i.name, i.values, i.origin) for i in proposal.instances] == [
+        ("SDP3X#0", {"bus.i2c.bus_id": 2, "bus.i2c.address": 0x21},
+         f"differential_pressure 0 = {sdp}: {chip} (DIFF_PRESS), I2C bus 2, address 0x21"),
+    ]  # fmt: skip
+    assert proposal.not_carried == [] and proposal.not_in_manifest == []
+
+
+def test_a_device_still_used_by_one_slot_names_every_disabled_one() -> None:
+    # CAL_MAGn_PRIO = 0 disables slot n (PX4 1.12 on); a compass held by three slots, two of
+    # them disabled, is still used through the third: proposed, both disabled slots named
+    ak09916 = devid.encode("i2c", 1, 0x0C, 0x09)
+    params = {"CAL_MAG0_ID": ak09916, "CAL_MAG1_ID": ak09916, "CAL_MAG2_ID": ak09916,
+              "CAL_MAG0_PRIO": 0, "CAL_MAG1_PRIO": 0, "CAL_MAG2_PRIO": 50}  # fmt: skip
+    (inst,) = migrate.migrate(today(params), table="current").instances
+    assert inst.notes == [
+        "CAL_MAG0_PRIO = 0, CAL_MAG1_PRIO = 0: one of its slots was disabled for use",
+        "CAL_MAG0_ID and CAL_MAG1_ID and CAL_MAG2_ID hold the same device (reported once)",
+    ]
+
+
+def test_boot_console_lines_of_the_boards_sensors_say_board_and_a_barometer_is_the_boards() -> None:
+    # The board's own sensors in a boot console: an SPI one, one on an internal I2C bus (no
+    # "(external)"), and an I2C barometer on an external bus (BMP388: drv_sensor.h's kind
+    # BARO), which the report assumes is the flight controller's, and says so; each is left
+    # out with the word "board"
+    console = (
+        "ms5611 #0 on SPI bus 1 (devid=0x3d)\n"
+        "bmm350 #0 on I2C bus 4 address 0x14\n"
+        "bmp388 #0 on I2C bus 2 (external) address 0x77\n"
+    )
+    proposal = migrate.migrate(today({}, console), table="current")
+    assert proposal.instances == [] and proposal.not_carried == []
+    assert [(out.found, out.device, out.reason) for out in proposal.left_out] == [
+        ("boot console line 1", "ms5611, SPI bus 1", "board"),
+        ("boot console line 2", "bmm350, I2C bus 4, address 0x14", "board"),
+        ("boot console line 3", "bmp388, I2C bus 2, address 0x77", "board"),
+    ]
+    assert proposal.left_out[2].line == (
+        "boot console line 3: bmp388, I2C bus 2, address 0x77: a barometer: assumed started by "
+        "the board's script"
+    )
+    assert proposal.assumptions[-1] == (
+        "I2C barometers without a board table row are taken as started by the board's script "
+        "(barometers sit on the flight controller)"
+    )
+
+
+def test_a_console_line_without_an_address_assumes_the_drivers_default_and_says_so() -> None:
+    # PX4 1.11's start line prints no address (`ms4525_airspeed #0 on I2C bus 2 (external,
+    # equal to '-b 1')`): the sensor is taken at its driver's default, MS4525DO's fixed 0x28,
+    # and the report says that this was assumed
+    line = "ms4525_airspeed #0 on I2C bus 2 (external, equal to '-b 1')"
+    proposal = migrate.migrate(config(console=line + "\n"), table="px4-v1.11")
+    (inst,) = proposal.instances
+    assert (inst.name, inst.values["bus.i2c.address"]) == ("MS4525DO#0", 0x28)
+    assert [a for a in proposal.assumptions if a.startswith("boot console")] == [
+        f"boot console line 1: '{line}' names no address (PX4 before 1.13 prints none): "
+        "ms4525do's default 0x28 assumed"
+    ]
+
+
+def test_the_power_monitor_a_real_logs_i2c_launcher_found_keeps_its_battery_index_note() -> None:
+    # The same real log's boot console, line 29: "[i2c_launcher] Found address 0x45, running
+    # 'ina228 -X -b 1 -t 1 start'": the INA228 at 0x45 on bus 1 is proposed, and its start
+    # line's -t 1 (the battery index) is an option the type has no field for, said
+    from px4params.migrate.config import read_config
+
+    proposal = migrate.migrate(read_config(shared_file("frrs_ekf_failure.ulg")))
+    (inst,) = proposal.instances
+    assert (inst.name, inst.values) == ("INA228#0", {"bus.i2c.bus_id": 1, "bus.i2c.address": 0x45})
+    assert inst.origin.startswith("boot console line 29: ")
+    assert inst.notes == [
+        "the start line also sets the battery index (-t 1): INA228 has no field for it"
+    ]
+
+
+def test_probing_on_is_replaced_by_the_devices_the_manifest_states() -> None:
+    # A real PX4 1.11 log (CubeOrange, ../shared/data) has SENS_EXT_I2C_PRB = 1: rc.sensors
+    # probed its external compass and airspeed sensor; the manifest states them instead, and
+    # the report names them (with nothing found, it says none)
+    from px4params.migrate.config import read_config
+
+    log = read_config(shared_file(shared_data.SAMPLE_LOG))
+    assert log.params["SENS_EXT_I2C_PRB"] == 1
+    said = (
+        "SENS_EXT_I2C_PRB = 1: external I2C devices were found by probing; the manifest states "
+        "its devices ({}) and a missing one fails the arming check instead of being skipped "
+        "silently"
+    )
+    proposal = migrate.migrate(log)
+    assert [i.name for i in proposal.instances] == ["AK09916#0", "MS4525DO#0"]
+    assert proposal.replaced == [said.format("AK09916#0, MS4525DO#0")]
+    proposal = migrate.migrate(today({"SENS_EXT_I2C_PRB": 1}), table="current")
+    assert proposal.replaced == [said.format("none")]
+
+
+def test_the_i2c_launcher_runs_unless_a_power_monitor_switch_is_set() -> None:
+    # Pixhawk 6X's rc.board_sensors runs i2c_launcher while $INA_CONFIGURED is no, which only
+    # a set SENS_EN_INA226/228/238 makes yes: other parameters set (a battery's cell count,
+    # another sensor's switch) leave the launcher's scan, and the report's word on it
+    from px4params.vehicle.boards import load_boards
+
+    v6x = load_boards().by_name("px4_fmu-v6x")
+    assert v6x is not None and "$INA_CONFIGURED == no" in v6x.i2c_launcher_when
+    params = {"BAT1_N_CELLS": 4, "SENS_EN_MS4525DO": 1, "SENS_EN_INA238": 0}
+    proposal = migrate.migrate(today(params, "nsh: sercon\n"), table="current", board=v6x)
+    assert [a for a in proposal.assumptions if "i2c_launcher" in a] == [
+        "the board's i2c_launcher scans I2C bus 1, 2 for power monitors (INA226, INA228, INA238) "
+        "when no SENS_EN_INA* is set: the boot console shows none it started"
+    ]
+    # a log without a boot console (before PX4 1.12) cannot say what the scan found
+    proposal = migrate.migrate(today(params), table="current", board=v6x)
+    assert [a for a in proposal.assumptions if "i2c_launcher" in a] == [
+        "the board's i2c_launcher scans I2C bus 1, 2 for power monitors (INA226, INA228, INA238) "
+        "when no SENS_EN_INA* is set: a ULog does not say which it found"
+    ]
+    params["SENS_EN_INA238"] = 1
+    proposal = migrate.migrate(today(params, "nsh: sercon\n"), table="current", board=v6x)
+    assert not [a for a in proposal.assumptions if "i2c_launcher" in a], proposal.assumptions
+
+
+def test_a_devtype_two_chips_share_is_matched_to_the_console_line_of_either() -> None:
+    # PX4 1.13's drv_sensor.h gives 0x4C to two chips (DRV_DIFF_PRESS_DEVTYPE_SDP33 and
+    # DRV_BARO_DEVTYPE_LPS33HW): CAL_BARO0_ID's device of that code at 0x5D on bus 1 is the
+    # LPS33HW the boot console started there, so that line is its evidence, not a second
+    # barometer to report
+    lps33hw = devid.encode("i2c", 1, 0x5D, 0x4C)
+    console = "lps33hw #0 on I2C bus 1 (external) address 0x5D\n"
+    log = OldConfig("t.ulg", "ULog", {"CAL_BARO0_ID": lps33hw}, version=(1, 13, 0),
+                    console=console)  # fmt: skip
+    proposal = migrate.migrate(log, table="px4-v1.13")
+    assert proposal.instances == [] and proposal.not_carried == []
+    assert proposal.not_in_manifest == [
+        f"CAL_BARO0_ID = {lps33hw}: SDP33/LPS33HW (DIFF_PRESS/BARO), I2C bus 1, address 0x5D: a "
+        "barometer: assumed started by the board's script"
+    ]
+
+
+def test_a_setting_equal_to_its_field_as_px4_stores_it_is_carried_without_a_note() -> None:
+    # PX4 holds a float parameter as a float32: a list's INA238_CURRENT 30.00000001 is 30.0 in
+    # PX4 (the nearest float32), so 30 A in the integer field is the same setting, noted as
+    # nothing; 30.4 is rounded to 30 and noted
+    params = {"SENS_EN_INA238": 1, "INA238_CURRENT": 30.00000001}
+    (inst,) = migrate.migrate(today(params), table="current").instances
+    assert inst.values["current"] == 30
+    assert not [n for n in inst.notes if n.startswith("INA238_CURRENT")], inst.notes
+    params["INA238_CURRENT"] = 30.4
+    (inst,) = migrate.migrate(today(params), table="current").instances
+    assert inst.values["current"] == 30
+    assert [n for n in inst.notes if n.startswith("INA238_CURRENT")] == [
+        "INA238_CURRENT = 30.4 A becomes current = 30 A (uint10, 1..327)"
+    ]
+
+
+def test_a_board_the_table_does_not_know_is_refused_or_said() -> None:
+    # --board names a PX4 board (boards/<vendor>/<model>: px4_fmu-v6c); a name PX4 has no
+    # board of is refused with what was expected, and a log's ver_hw that no board of the
+    # table reports is said, its sensors judged from the parameters
+    from px4params.errors import MigrationError
+
+    with pytest.raises(MigrationError) as e:
+        migrate.migrate(today({}), board="acme_fc-v1", table="current")
+    assert str(e.value) == (
+        "unknown board 'acme_fc-v1' (expected a PX4 board name such as px4_fmu-v6c)"
+    )
+    log = OldConfig("t.ulg", "ULog", {}, version=(1, 15, 0), hardware="ACME_FC_V1")
+    assert migrate.migrate(log, table="current").assumptions == [
+        "board ACME_FC_V1: not in the board table; what its script starts is judged from the "
+        "parameters and the boot console"
+    ]
+
+
+def test_a_switch_after_thermal_control_still_starts_its_driver() -> None:
+    # SENS_EN_THERMAL is thermal control, not a driver; the switches after it (in name order,
+    # SENS_EN_VL53L1X) start their drivers as ever: PX4's rc.sensors tests each on its own
+    proposal = migrate.migrate(today({"SENS_EN_THERMAL": 1, "SENS_EN_VL53L1X": 1}), table="current")
+    assert [i.name for i in proposal.instances] == ["VL53L1X#0"]
+    assert proposal.not_carried == [
+        "SENS_EN_THERMAL = 1 (thermal control enabled): not a driver switch; it stays a classic "
+        "parameter"
+    ]
+
+
+def test_a_board_starting_one_chip_at_two_addresses_on_a_bus_starts_both() -> None:
+    # Pixhawk 6C's script starts `ist8310 -X -b 4 -a 0xc -q start`; a board whose script also
+    # started `ist8310 -X -b 4 -a 0xe start` (a second IST8310 on the same bus) starts both:
+    # the one at 0x0E is found by the second line past the first's other address
+    import dataclasses
+
+    from px4params.vehicle.boards import load_boards
+
+    v6c = load_boards().by_name("px4_fmu-v6c")
+    assert v6c is not None
+    (first,) = [r for r in v6c.devices if r.driver == "ist8310" and r.bus == 4]
+    second = dataclasses.replace(first, address=0x0E, args="-X -b 4 -a 0xe start")
+    rows = list(v6c.devices)
+    rows.insert(rows.index(first) + 1, second)
+    board = dataclasses.replace(v6c, devices=tuple(rows))
+    for address in (0x0C, 0x0E):
+        ist8310 = devid.encode("i2c", 4, address, 0x06)
+        proposal = migrate.migrate(today({"CAL_MAG0_ID": ist8310}), table="current", board=board)
+        assert proposal.instances == []
+        (line,) = proposal.not_in_manifest
+        assert line.endswith(
+            f"address 0x{address:02X}: started by the board's script ({first.source})"
+        )
+
+
+def test_a_switch_after_one_that_starts_no_i2c_driver_still_starts_its_own() -> None:
+    # SENS_EN_LL40LS = 1 is the PWM Lidar-Lite (PX4's ll40ls parameters.yaml: 1 PWM, 2 I2C):
+    # no I2C driver, it stays a classic parameter; SENS_EN_MS4525DO after it starts its sensor
+    proposal = migrate.migrate(today({"SENS_EN_LL40LS": 1, "SENS_EN_MS4525DO": 1}), table="current")
+    assert [i.name for i in proposal.instances] == ["MS4525DO#0"]
+    assert proposal.not_carried == [
+        "SENS_EN_LL40LS = 1: starts no I2C driver of the manifest (its ll40ls starts on 2); it "
+        "stays a classic parameter"
+    ]
+
+
+def test_a_console_line_after_one_without_a_type_is_still_proposed() -> None:
+    # The boot console's lines each say what started: an LED driver (rgbled, no parameter
+    # type: it stays started as today) does not hide the compass started after it
+    console = (
+        "rgbled #0 on I2C bus 1 (external) address 0x55\n"
+        "ak09916 #0 on I2C bus 1 (external) address 0x0D\n"
+    )
+    proposal = migrate.migrate(today({}, console), table="current")
+    assert [(i.name, i.values["bus.i2c.address"]) for i in proposal.instances] == [
+        ("AK09916#0", 0x0D)
+    ]
+    assert proposal.not_carried == [
+        "boot console line 1: 'rgbled #0 on I2C bus 1 (external) address 0x55': no bundled "
+        "parameter type for rgbled; it stays started as today"
+    ]
+
+
+def test_a_file_without_board_information_says_how_its_sensors_are_judged() -> None:
+    # A parameter list names no board (a log's ver_hw does): the report says which of its
+    # sensors are taken as the board's and which as probed, and how to name the board instead
+    proposal = migrate.migrate(today({}), table="current")
+    assert proposal.assumptions == [
+        "no board information in a ULog: sensors with CAL_MAGn_ROT = -1 (Internal) and I2C "
+        "barometers are taken as the board's, other external I2C sensors as found by probing "
+        "(--board NAME uses the board's table)"
+    ]
