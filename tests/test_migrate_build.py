@@ -739,13 +739,14 @@ def test_an_sdp3x_airspeed_sensor_of_any_model_is_the_sdp3x_type(devtype: int, c
 
 def test_a_device_still_used_by_one_slot_names_every_disabled_one() -> None:
     # CAL_MAGn_PRIO = 0 disables slot n (PX4 1.12 on); a compass held by three slots, two of
-    # them disabled, is still used through the third: proposed, both disabled slots named
+    # them disabled, is still used through the third: proposed, both disabled slots named, in
+    # a note that agrees in number with them
     ak09916 = devid.encode("i2c", 1, 0x0C, 0x09)
     params = {"CAL_MAG0_ID": ak09916, "CAL_MAG1_ID": ak09916, "CAL_MAG2_ID": ak09916,
               "CAL_MAG0_PRIO": 0, "CAL_MAG1_PRIO": 0, "CAL_MAG2_PRIO": 50}  # fmt: skip
     (inst,) = migrate.migrate(today(params), table="current").instances
     assert inst.notes == [
-        "CAL_MAG0_PRIO = 0, CAL_MAG1_PRIO = 0: one of its slots was disabled for use",
+        "CAL_MAG0_PRIO = 0, CAL_MAG1_PRIO = 0: 2 of its slots were disabled for use",
         "CAL_MAG0_ID and CAL_MAG1_ID and CAL_MAG2_ID hold the same device (reported once)",
     ]
 

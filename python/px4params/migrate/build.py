@@ -561,7 +561,8 @@ class _Builder:
         )
         inst = self.add(spec.name, dev.bus, dev.address, origin)
         if off:
-            inst.notes.append(f"{', '.join(off)}: one of its slots was disabled for use")
+            which = "one of its slots was" if len(off) == 1 else f"{len(off)} of its slots were"
+            inst.notes.append(f"{', '.join(off)}: {which} disabled for use")
         if twice:
             inst.notes.append(twice.removeprefix("; "))
         rotation, why = self.driver_rotation(start, chips)
