@@ -976,3 +976,40 @@ def test_a_file_without_board_information_says_how_its_sensors_are_judged() -> N
         "barometers are taken as the board's, other external I2C sensors as found by probing "
         "(--board NAME uses the board's table)"
     ]
+
+
+def test_a_switch_px4_compares_with_1_starts_nothing_at_2_and_says_so() -> None:
+    # PX4's boards' rc.board_sensors (v1.14, v1.15: boards/px4/fmu-v6x/init/rc.board_sensors)
+    # start the INA226 only under `param compare -s SENS_EN_INA226 1`: at 2 the test fails and
+    # no power monitor runs, so none is proposed; the value is said, not dropped
+    proposal = migrate.migrate(today({"SENS_EN_INA226": 2}), table="current")
+    assert proposal.instances == []
+    assert proposal.not_carried == [
+        "SENS_EN_INA226 = 2: starts no I2C driver of the manifest (its ina226 starts on 1); it "
+        "stays a classic parameter"
+    ]
+
+
+def test_every_switch_starts_its_driver_on_the_values_the_board_scripts_test_for() -> None:
+    # The board table transcribes each script's test of a switch from PX4 (v1.11.0 to main:
+    # ROMFS/px4fmu_common/init.d/rc.sensors, boards/*/init/rc.board_sensors), `param compare X
+    # 1` as "X == 1", `param greater X 0` as "X > 0": a driver declaration starts on exactly
+    # the values its line's test passes
+    from px4params.migrate.build import RENAMED_MODULES, _holds
+    from px4params.vehicle.boards import load_boards
+    from px4params.vehicle.drivers import load_drivers
+
+    drivers = {d.name: d for d in load_drivers()}
+    checked = set()
+    for board in load_boards().all():
+        for row in board.switches:
+            driver = drivers.get(RENAMED_MODULES.get(row.driver, row.driver))
+            if driver is None or driver.enabled_by != row.param:
+                continue
+            test = row.when.split(" and ")[0]
+            values = range(8)  # (a negative switch value: not tested here)
+            assert [v for v in values if driver.starts_on(v)] == [
+                v for v in values if _holds(test, v)
+            ], (driver.name, row.when, row.source)
+            checked.add(driver.name)
+    assert {"ina226", "ina228", "ina238", "ms4525do", "sdp3x", "ll40ls", "mb12xx"} <= checked
