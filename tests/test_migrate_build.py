@@ -1013,3 +1013,28 @@ def test_every_switch_starts_its_driver_on_the_values_the_board_scripts_test_for
             ], (driver.name, row.when, row.source)
             checked.add(driver.name)
     assert {"ina226", "ina228", "ina238", "ms4525do", "sdp3x", "ll40ls", "mb12xx"} <= checked
+
+
+def test_the_crazyflie_21s_bmi088_i2c_rows_start_its_imu() -> None:
+    # PX4's boards/bitcraze/crazyflie21/init/rc.board_sensors (v1.12 to main) starts the BMI088 as
+    # `bmi088_i2c -A ... -I -a 0x18 start` and `bmi088_i2c -G ... -I -a 0x69 start`; the module
+    # (src/drivers/imu/bosch/bmi088_i2c, MAIN bmi088_i2c) publishes drv_sensor.h's
+    # DRV_ACC_DEVTYPE_BMI088 (0x6A) and DRV_GYR_DEVTYPE_BMI088 (0x66): the slots' devices are
+    # the board's, started by those rows
+    from px4params.vehicle.boards import load_boards
+
+    cf21 = load_boards().by_name("bitcraze_crazyflie21", "v1.15.0")
+    assert cf21 is not None
+    rows = {r.address: r for r in cf21.devices if r.driver == "bmi088_i2c"}
+    assert set(rows) == {0x18, 0x69} and cf21.internal_i2c_buses == (3,)
+    accel = devid.encode("i2c", 3, 0x18, 0x6A)
+    gyro = devid.encode("i2c", 3, 0x69, 0x66)
+    params = {"CAL_ACC0_ID": accel, "CAL_GYRO0_ID": gyro}
+    proposal = migrate.migrate(today(params), table="current", board=cf21)
+    assert proposal.instances == [] and proposal.not_carried == []
+    assert proposal.not_in_manifest == [
+        f"CAL_ACC0_ID = {accel}: BMI088 (ACC), I2C bus 3, address 0x18: started by the board's "
+        f"script ({rows[0x18].source})",
+        f"CAL_GYRO0_ID = {gyro}: BMI088 (GYR), I2C bus 3, address 0x69: started by the board's "
+        f"script ({rows[0x69].source})",
+    ]

@@ -56,6 +56,10 @@ RENAMED_MODULES = {
 #: Devtype names PX4 1.13 changed (drv_sensor.h's ``DRV_DIFF_PRESS_DEVTYPE_MS4525`` became
 #: ``..._MS4525DO``): an older era's name -> the driver declarations' chip.
 RENAMED_CHIPS = {"MS4525": "MS4525DO", "MS5525": "MS5525DSO"}
+#: What a module's (or its instance's) name adds to the chip's: ``bmi088_i2c``, whose
+#: instances are ``bmi088_i2c_accel``, ``_gyro`` (PX4's src/drivers/imu/bosch/bmi088_i2c),
+#: ``icm20948_i2c_passthrough``, ``ms4525_airspeed`` (PX4 before 1.13).
+_MODULE_SUFFIX = re.compile(r"(_i2c)?(_(accel|gyro|mag|baro|airspeed|i2c_passthrough))?$")
 #: The sensor kind of a log topic, as a calibration slot names it.
 _TOPIC_KIND = {
     "sensor_accel": "ACC",
@@ -191,8 +195,7 @@ class _Builder:
         try:
             return set(self.drivers[module].chips)
         except KeyError:
-            bare = re.sub(r"_(accel|gyro|mag|baro|airspeed|i2c_passthrough)$", "", module)
-            return {bare.upper()}
+            return {_MODULE_SUFFIX.sub("", module).upper()}
 
     def start_driver(self, start: DriverStart) -> Driver | None:
         module = RENAMED_MODULES.get(start.driver, start.driver)
