@@ -1038,3 +1038,19 @@ def test_the_crazyflie_21s_bmi088_i2c_rows_start_its_imu() -> None:
         f"CAL_GYRO0_ID = {gyro}: BMI088 (GYR), I2C bus 3, address 0x69: started by the board's "
         f"script ({rows[0x69].source})",
     ]
+
+
+def test_a_devtype_two_chips_share_is_the_chip_of_the_slots_sensor_kind() -> None:
+    # PX4 v1.13.0's src/drivers/drv_sensor.h gives 0x4C to DRV_DIFF_PRESS_DEVTYPE_SDP33 and
+    # DRV_BARO_DEVTYPE_LPS33HW: on the differential_pressure topic the device is the airspeed
+    # sensor (an SDP33, run by the sdp3x driver: the SDP3X type), not a barometer
+    sdp33 = devid.encode("i2c", 2, 0x21, 0x4C)
+    log = OldConfig("t.ulg", "ULog", {}, version=(1, 13, 0),
+                    published=[("differential_pressure", 0, sdp33)])  # fmt: skip
+    proposal = migrate.migrate(log, table="px4-v1.13")
+    assert [(i.name, i.values, i.origin) for i in proposal.instances] == [
+        ("SDP3X#0", {"bus.i2c.bus_id": 2, "bus.i2c.address": 0x21},
+         f"differential_pressure 0 = {sdp33}: SDP33/LPS33HW (DIFF_PRESS/BARO), I2C bus 2, "
+         "address 0x21"),
+    ]  # fmt: skip
+    assert proposal.not_carried == [] and proposal.not_in_manifest == []

@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 import re
 import struct
+from collections.abc import Iterable
 from typing import TYPE_CHECKING, Any
 
 from px4params.dsdl.model import NO_DOC
@@ -515,7 +516,7 @@ class _Builder:
             if len(set(rotations.values())) > 1:
                 shown = ", ".join(f"{r} = {_shown(v)}" for r, v in rotations.items())
                 twice += f", with different rotations ({shown})"
-        chips = _chips(dev)
+        chips = _chips(dev, kinds)
         if dev.bus_type == 2:  # SPI
             hit = self.evidence(dev)
             if hit:
@@ -536,7 +537,7 @@ class _Builder:
         if hit:
             self.claimed.add(hit[0])
         internal = next((r for r, v in rotations.items() if v == INTERNAL_ROTATION), None)
-        kind = set((dev.devtype_kind or "").split("/"))
+        kind = {k for _, k in _named(dev, kinds)}
         baro = "BARO" in kind or all(k == "BARO" for k in kinds)
         board = self.started_by_board(chips, dev.bus, dev.address, start, internal, baro)
         disabled = f" (disabled: {', '.join(off)})" if off else ""
@@ -671,9 +672,22 @@ class _Builder:
             )
 
 
-def _chips(dev: devid.DeviceId) -> set[str]:
-    """The chip names of a device's devtype, older eras' names as today's drivers know them."""
-    names = set((dev.devtype_name or "").split("/")) - {""}
+def _named(dev: devid.DeviceId, slot_kinds: Iterable[str] = ()) -> list[tuple[str, str]]:
+    """The (chip, kind) pairs a device's devtype names; of a devtype two chips share (PX4
+    1.13's 0x4C: SDP33 DIFF_PRESS, LPS33HW BARO), those of the slots' sensor kinds."""
+    names = (dev.devtype_name or "").split("/")
+    kinds = (dev.devtype_kind or "").split("/")
+    if len(kinds) != len(names):  # no kind for each chip: every chip, every kind
+        return [(n, k) for n in names for k in kinds]
+    pairs = list(zip(names, kinds, strict=True))
+    fitting = [(n, k) for n, k in pairs if k in set(slot_kinds)]
+    return fitting if len(pairs) > 1 and fitting else pairs
+
+
+def _chips(dev: devid.DeviceId, slot_kinds: Iterable[str] = ()) -> set[str]:
+    """The chip names of a device's devtype (of the slots' kinds, see :func:`_named`), older
+    eras' names as today's drivers know them."""
+    names = {n for n, _ in _named(dev, slot_kinds)} - {""}
     return names | {RENAMED_CHIPS[n] for n in names if n in RENAMED_CHIPS}
 
 
