@@ -1054,3 +1054,29 @@ def test_a_devtype_two_chips_share_is_the_chip_of_the_slots_sensor_kind() -> Non
          "address 0x21"),
     ]  # fmt: skip
     assert proposal.not_carried == [] and proposal.not_in_manifest == []
+
+
+def test_px4_1_11s_sf1xx_is_todays_lightware_laser_i2c() -> None:
+    # PX4 v1.11.0's ROMFS/px4fmu_common/init.d/rc.sensors starts `sf1xx start -X` on
+    # SENS_EN_SF1XX > 0 (src/drivers/distance_sensor/sf1xx); from v1.12.0 the same switch starts
+    # `lightware_laser_i2c start -X`: the 1.11 rows (on each external bus) place the driver,
+    # and its boot console line names it
+    from px4params.vehicle.boards import load_boards
+
+    v5 = load_boards().by_name("px4_fmu-v5", "v1.11.0")
+    assert v5 is not None
+    rows = [r for r in v5.switches if r.param == "SENS_EN_SF1XX"]
+    assert {r.driver for r in rows} == {"sf1xx"} and rows[0].args == "start -X"
+    buses = ", ".join(str(b) for b in sorted(r.bus for r in rows))
+    proposal = migrate.migrate(config({"SENS_EN_SF1XX": 6}), board=v5)
+    assert [(i.name, i.values["bus.i2c.bus_id"]) for i in proposal.instances] == [
+        ("SF1XX#0", rows[0].bus)
+    ]
+    assert (
+        f"SENS_EN_SF1XX: px4_fmu-v5 starts 'sf1xx start -X' on every external I2C bus ({buses}; "
+        f"{rows[0].source}), so the bus it is found on is not known: bus {rows[0].bus} proposed"
+    ) in proposal.assumptions
+    console = "sf1xx #0 on I2C bus 2 (external)\n"
+    proposal = migrate.migrate(config({"SENS_EN_SF1XX": 6}, console=console), board=v5)
+    assert [(i.name, i.values["bus.i2c.bus_id"]) for i in proposal.instances] == [("SF1XX#0", 2)]
+    assert not [n for n in proposal.not_carried if "sf1xx" in n], proposal.not_carried

@@ -48,11 +48,12 @@ UNMAPPED_OPTIONS = {
     "ina228": "battery index (-t 1)",
     "ina238": "battery index (-t 1)",
 }
-#: Driver modules PX4 1.13 renamed: the old name (older boot consoles) -> today's.
+#: Driver modules PX4 renamed: the old name (older boot consoles, board scripts) -> today's.
 RENAMED_MODULES = {
-    "ms4525_airspeed": "ms4525do",
-    "ms5525_airspeed": "ms5525dso",
-    "sdp3x_airspeed": "sdp3x",
+    "ms4525_airspeed": "ms4525do",  # PX4 1.13
+    "ms5525_airspeed": "ms5525dso",  # PX4 1.13
+    "sdp3x_airspeed": "sdp3x",  # PX4 1.13
+    "sf1xx": "lightware_laser_i2c",  # PX4 1.12 (v1.11.0's rc.sensors: sf1xx start -X)
 }
 #: Devtype names PX4 1.13 changed (drv_sensor.h's ``DRV_DIFF_PRESS_DEVTYPE_MS4525`` became
 #: ``..._MS4525DO``): an older era's name -> the driver declarations' chip.
@@ -384,7 +385,7 @@ class _Builder:
             r
             for r in getattr(self.board, "switches", ())
             if r.param == switch
-            and r.driver == driver.name
+            and RENAMED_MODULES.get(r.driver, r.driver) == driver.name
             and _holds(getattr(r, "when", ""), value)
         ]
         # A start with -b is on that bus; one without is PX4's -X: every external bus is
