@@ -739,13 +739,14 @@ def test_an_sdp3x_airspeed_sensor_of_any_model_is_the_sdp3x_type(devtype: int, c
 
 def test_a_device_still_used_by_one_slot_names_every_disabled_one() -> None:
     # CAL_MAGn_PRIO = 0 disables slot n (PX4 1.12 on); a compass held by three slots, two of
-    # them disabled, is still used through the third: proposed, both disabled slots named
+    # them disabled, is still used through the third: proposed, both disabled slots named, in
+    # a note that agrees in number with them
     ak09916 = devid.encode("i2c", 1, 0x0C, 0x09)
     params = {"CAL_MAG0_ID": ak09916, "CAL_MAG1_ID": ak09916, "CAL_MAG2_ID": ak09916,
               "CAL_MAG0_PRIO": 0, "CAL_MAG1_PRIO": 0, "CAL_MAG2_PRIO": 50}  # fmt: skip
     (inst,) = migrate.migrate(today(params), table="current").instances
     assert inst.notes == [
-        "CAL_MAG0_PRIO = 0, CAL_MAG1_PRIO = 0: one of its slots was disabled for use",
+        "CAL_MAG0_PRIO = 0, CAL_MAG1_PRIO = 0: 2 of its slots were disabled for use",
         "CAL_MAG0_ID and CAL_MAG1_ID and CAL_MAG2_ID hold the same device (reported once)",
     ]
 
@@ -975,3 +976,107 @@ def test_a_file_without_board_information_says_how_its_sensors_are_judged() -> N
         "barometers are taken as the board's, other external I2C sensors as found by probing "
         "(--board NAME uses the board's table)"
     ]
+
+
+def test_a_switch_px4_compares_with_1_starts_nothing_at_2_and_says_so() -> None:
+    # PX4's boards' rc.board_sensors (v1.14, v1.15: boards/px4/fmu-v6x/init/rc.board_sensors)
+    # start the INA226 only under `param compare -s SENS_EN_INA226 1`: at 2 the test fails and
+    # no power monitor runs, so none is proposed; the value is said, not dropped
+    proposal = migrate.migrate(today({"SENS_EN_INA226": 2}), table="current")
+    assert proposal.instances == []
+    assert proposal.not_carried == [
+        "SENS_EN_INA226 = 2: starts no I2C driver of the manifest (its ina226 starts on 1); it "
+        "stays a classic parameter"
+    ]
+
+
+def test_every_switch_starts_its_driver_on_the_values_the_board_scripts_test_for() -> None:
+    # The board table transcribes each script's test of a switch from PX4 (v1.11.0 to main:
+    # ROMFS/px4fmu_common/init.d/rc.sensors, boards/*/init/rc.board_sensors), `param compare X
+    # 1` as "X == 1", `param greater X 0` as "X > 0": a driver declaration starts on exactly
+    # the values its line's test passes
+    from px4params.migrate.build import RENAMED_MODULES, _holds
+    from px4params.vehicle.boards import load_boards
+    from px4params.vehicle.drivers import load_drivers
+
+    drivers = {d.name: d for d in load_drivers()}
+    checked = set()
+    for board in load_boards().all():
+        for row in board.switches:
+            driver = drivers.get(RENAMED_MODULES.get(row.driver, row.driver))
+            if driver is None or driver.enabled_by != row.param:
+                continue
+            test = row.when.split(" and ")[0]
+            values = range(8)  # (a negative switch value: not tested here)
+            assert [v for v in values if driver.starts_on(v)] == [
+                v for v in values if _holds(test, v)
+            ], (driver.name, row.when, row.source)
+            checked.add(driver.name)
+    assert {"ina226", "ina228", "ina238", "ms4525do", "sdp3x", "ll40ls", "mb12xx"} <= checked
+
+
+def test_the_crazyflie_21s_bmi088_i2c_rows_start_its_imu() -> None:
+    # PX4's boards/bitcraze/crazyflie21/init/rc.board_sensors (v1.12 to main) starts the BMI088 as
+    # `bmi088_i2c -A ... -I -a 0x18 start` and `bmi088_i2c -G ... -I -a 0x69 start`; the module
+    # (src/drivers/imu/bosch/bmi088_i2c, MAIN bmi088_i2c) publishes drv_sensor.h's
+    # DRV_ACC_DEVTYPE_BMI088 (0x6A) and DRV_GYR_DEVTYPE_BMI088 (0x66): the slots' devices are
+    # the board's, started by those rows
+    from px4params.vehicle.boards import load_boards
+
+    cf21 = load_boards().by_name("bitcraze_crazyflie21", "v1.15.0")
+    assert cf21 is not None
+    rows = {r.address: r for r in cf21.devices if r.driver == "bmi088_i2c"}
+    assert set(rows) == {0x18, 0x69} and cf21.internal_i2c_buses == (3,)
+    accel = devid.encode("i2c", 3, 0x18, 0x6A)
+    gyro = devid.encode("i2c", 3, 0x69, 0x66)
+    params = {"CAL_ACC0_ID": accel, "CAL_GYRO0_ID": gyro}
+    proposal = migrate.migrate(today(params), table="current", board=cf21)
+    assert proposal.instances == [] and proposal.not_carried == []
+    assert proposal.not_in_manifest == [
+        f"CAL_ACC0_ID = {accel}: BMI088 (ACC), I2C bus 3, address 0x18: started by the board's "
+        f"script ({rows[0x18].source})",
+        f"CAL_GYRO0_ID = {gyro}: BMI088 (GYR), I2C bus 3, address 0x69: started by the board's "
+        f"script ({rows[0x69].source})",
+    ]
+
+
+def test_a_devtype_two_chips_share_is_the_chip_of_the_slots_sensor_kind() -> None:
+    # PX4 v1.13.0's src/drivers/drv_sensor.h gives 0x4C to DRV_DIFF_PRESS_DEVTYPE_SDP33 and
+    # DRV_BARO_DEVTYPE_LPS33HW: on the differential_pressure topic the device is the airspeed
+    # sensor (an SDP33, run by the sdp3x driver: the SDP3X type), not a barometer
+    sdp33 = devid.encode("i2c", 2, 0x21, 0x4C)
+    log = OldConfig("t.ulg", "ULog", {}, version=(1, 13, 0),
+                    published=[("differential_pressure", 0, sdp33)])  # fmt: skip
+    proposal = migrate.migrate(log, table="px4-v1.13")
+    assert [(i.name, i.values, i.origin) for i in proposal.instances] == [
+        ("SDP3X#0", {"bus.i2c.bus_id": 2, "bus.i2c.address": 0x21},
+         f"differential_pressure 0 = {sdp33}: SDP33/LPS33HW (DIFF_PRESS/BARO), I2C bus 2, "
+         "address 0x21"),
+    ]  # fmt: skip
+    assert proposal.not_carried == [] and proposal.not_in_manifest == []
+
+
+def test_px4_1_11s_sf1xx_is_todays_lightware_laser_i2c() -> None:
+    # PX4 v1.11.0's ROMFS/px4fmu_common/init.d/rc.sensors starts `sf1xx start -X` on
+    # SENS_EN_SF1XX > 0 (src/drivers/distance_sensor/sf1xx); from v1.12.0 the same switch starts
+    # `lightware_laser_i2c start -X`: the 1.11 rows (on each external bus) place the driver,
+    # and its boot console line names it
+    from px4params.vehicle.boards import load_boards
+
+    v5 = load_boards().by_name("px4_fmu-v5", "v1.11.0")
+    assert v5 is not None
+    rows = [r for r in v5.switches if r.param == "SENS_EN_SF1XX"]
+    assert {r.driver for r in rows} == {"sf1xx"} and rows[0].args == "start -X"
+    buses = ", ".join(str(b) for b in sorted(r.bus for r in rows))
+    proposal = migrate.migrate(config({"SENS_EN_SF1XX": 6}), board=v5)
+    assert [(i.name, i.values["bus.i2c.bus_id"]) for i in proposal.instances] == [
+        ("SF1XX#0", rows[0].bus)
+    ]
+    assert (
+        f"SENS_EN_SF1XX: px4_fmu-v5 starts 'sf1xx start -X' on every external I2C bus ({buses}; "
+        f"{rows[0].source}), so the bus it is found on is not known: bus {rows[0].bus} proposed"
+    ) in proposal.assumptions
+    console = "sf1xx #0 on I2C bus 2 (external)\n"
+    proposal = migrate.migrate(config({"SENS_EN_SF1XX": 6}, console=console), board=v5)
+    assert [(i.name, i.values["bus.i2c.bus_id"]) for i in proposal.instances] == [("SF1XX#0", 2)]
+    assert not [n for n in proposal.not_carried if "sf1xx" in n], proposal.not_carried

@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 import re
 import struct
+from collections.abc import Iterable
 from typing import TYPE_CHECKING, Any
 
 from px4params.dsdl.model import NO_DOC
@@ -47,15 +48,20 @@ UNMAPPED_OPTIONS = {
     "ina228": "battery index (-t 1)",
     "ina238": "battery index (-t 1)",
 }
-#: Driver modules PX4 1.13 renamed: the old name (older boot consoles) -> today's.
+#: Driver modules PX4 renamed: the old name (older boot consoles, board scripts) -> today's.
 RENAMED_MODULES = {
-    "ms4525_airspeed": "ms4525do",
-    "ms5525_airspeed": "ms5525dso",
-    "sdp3x_airspeed": "sdp3x",
+    "ms4525_airspeed": "ms4525do",  # PX4 1.13
+    "ms5525_airspeed": "ms5525dso",  # PX4 1.13
+    "sdp3x_airspeed": "sdp3x",  # PX4 1.13
+    "sf1xx": "lightware_laser_i2c",  # PX4 1.12 (v1.11.0's rc.sensors: sf1xx start -X)
 }
 #: Devtype names PX4 1.13 changed (drv_sensor.h's ``DRV_DIFF_PRESS_DEVTYPE_MS4525`` became
 #: ``..._MS4525DO``): an older era's name -> the driver declarations' chip.
 RENAMED_CHIPS = {"MS4525": "MS4525DO", "MS5525": "MS5525DSO"}
+#: What a module's (or its instance's) name adds to the chip's: ``bmi088_i2c``, whose
+#: instances are ``bmi088_i2c_accel``, ``_gyro`` (PX4's src/drivers/imu/bosch/bmi088_i2c),
+#: ``icm20948_i2c_passthrough``, ``ms4525_airspeed`` (PX4 before 1.13).
+_MODULE_SUFFIX = re.compile(r"(_i2c)?(_(accel|gyro|mag|baro|airspeed|i2c_passthrough))?$")
 #: The sensor kind of a log topic, as a calibration slot names it.
 _TOPIC_KIND = {
     "sensor_accel": "ACC",
@@ -191,8 +197,7 @@ class _Builder:
         try:
             return set(self.drivers[module].chips)
         except KeyError:
-            bare = re.sub(r"_(accel|gyro|mag|baro|airspeed|i2c_passthrough)$", "", module)
-            return {bare.upper()}
+            return {_MODULE_SUFFIX.sub("", module).upper()}
 
     def start_driver(self, start: DriverStart) -> Driver | None:
         module = RENAMED_MODULES.get(start.driver, start.driver)
@@ -380,7 +385,7 @@ class _Builder:
             r
             for r in getattr(self.board, "switches", ())
             if r.param == switch
-            and r.driver == driver.name
+            and RENAMED_MODULES.get(r.driver, r.driver) == driver.name
             and _holds(getattr(r, "when", ""), value)
         ]
         # A start with -b is on that bus; one without is PX4's -X: every external bus is
@@ -512,7 +517,7 @@ class _Builder:
             if len(set(rotations.values())) > 1:
                 shown = ", ".join(f"{r} = {_shown(v)}" for r, v in rotations.items())
                 twice += f", with different rotations ({shown})"
-        chips = _chips(dev)
+        chips = _chips(dev, kinds)
         if dev.bus_type == 2:  # SPI
             hit = self.evidence(dev)
             if hit:
@@ -533,7 +538,7 @@ class _Builder:
         if hit:
             self.claimed.add(hit[0])
         internal = next((r for r, v in rotations.items() if v == INTERNAL_ROTATION), None)
-        kind = set((dev.devtype_kind or "").split("/"))
+        kind = {k for _, k in _named(dev, kinds)}
         baro = "BARO" in kind or all(k == "BARO" for k in kinds)
         board = self.started_by_board(chips, dev.bus, dev.address, start, internal, baro)
         disabled = f" (disabled: {', '.join(off)})" if off else ""
@@ -561,7 +566,8 @@ class _Builder:
         )
         inst = self.add(spec.name, dev.bus, dev.address, origin)
         if off:
-            inst.notes.append(f"{', '.join(off)}: one of its slots was disabled for use")
+            which = "one of its slots was" if len(off) == 1 else f"{len(off)} of its slots were"
+            inst.notes.append(f"{', '.join(off)}: {which} disabled for use")
         if twice:
             inst.notes.append(twice.removeprefix("; "))
         rotation, why = self.driver_rotation(start, chips)
@@ -667,9 +673,22 @@ class _Builder:
             )
 
 
-def _chips(dev: devid.DeviceId) -> set[str]:
-    """The chip names of a device's devtype, older eras' names as today's drivers know them."""
-    names = set((dev.devtype_name or "").split("/")) - {""}
+def _named(dev: devid.DeviceId, slot_kinds: Iterable[str] = ()) -> list[tuple[str, str]]:
+    """The (chip, kind) pairs a device's devtype names; of a devtype two chips share (PX4
+    1.13's 0x4C: SDP33 DIFF_PRESS, LPS33HW BARO), those of the slots' sensor kinds."""
+    names = (dev.devtype_name or "").split("/")
+    kinds = (dev.devtype_kind or "").split("/")
+    if len(kinds) != len(names):  # no kind for each chip: every chip, every kind
+        return [(n, k) for n in names for k in kinds]
+    pairs = list(zip(names, kinds, strict=True))
+    fitting = [(n, k) for n, k in pairs if k in set(slot_kinds)]
+    return fitting if len(pairs) > 1 and fitting else pairs
+
+
+def _chips(dev: devid.DeviceId, slot_kinds: Iterable[str] = ()) -> set[str]:
+    """The chip names of a device's devtype (of the slots' kinds, see :func:`_named`), older
+    eras' names as today's drivers know them."""
+    names = {n for n, _ in _named(dev, slot_kinds)} - {""}
     return names | {RENAMED_CHIPS[n] for n in names if n in RENAMED_CHIPS}
 
 
