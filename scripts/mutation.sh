@@ -520,6 +520,10 @@ NEW_TESTS="$NEW_TESTS|test_migrate_build"
 # share it): an SDP33 on differential_pressure is then left out as "a barometer", where both
 # mutants propose it as SDP3X#0, which looks right; a test of today's answer would hold a
 # defect in place (left to migrate/build.py's owner).
+# Fixed after the run (migfix): the slot's sensor kind picks the chip of a shared devtype
+# (test_a_devtype_two_chips_share_is_the_chip_of_the_slots_sensor_kind), so those two lines are
+# gone; the new lines' mutants (_named, _chips, _MODULE_SUFFIX, the rename in board rows, the
+# disabled slots' count) are not run yet: the next run of this target tests them.
 
 if [ "$#" -eq 0 ]; then
   set -- can_transfer dronecan_params health links gui migrate vehicle store rust-core rust-ffi
