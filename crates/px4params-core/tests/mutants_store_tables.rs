@@ -183,3 +183,91 @@ fn leaves_resolved_past_slot_65536_read_as_written() {
 fn zero(k: usize) -> Scalar {
     [Scalar::Uint(0), Scalar::Int(0), Scalar::Float(0.0)][k]
 }
+
+/// Each instance's resolved leaves are its own, also where the tables are given more room
+/// than [`table_slots`] asks for (firmware's static memory sized for a larger manifest): the
+/// tables take what they need, and every leaf of every instance, value and default, reads
+/// as written. Three parameters after one another (`three` shared, `forty` and `three` with
+/// four instances each), written in that order; values by hand as above: `forty` instance i
+/// holds 50 i + k at [k] and 255 - k - i in its default, `three` instance i a = i + 1,
+/// b = -2 - i, c = 1.5 + i, and its default a = 9, b = 300, c = -0.5.
+#[test]
+fn every_instance_reads_its_own_leaves_with_more_table_memory_than_needed() {
+    let (l, three, forty) = types();
+    let layout = l.as_layout();
+    let three_bytes = |a: u8, b: i16, c: f32| {
+        let mut v = vec![a];
+        v.extend(b.to_le_bytes());
+        v.extend(c.to_le_bytes());
+        v
+    };
+    let forty_value = |i: u16| (0..40).map(|k| (50 * i + k) as u8).collect::<Vec<_>>();
+    let forty_default = |i: u16| (0..40).map(|k| (255 - k - i) as u8).collect::<Vec<_>>();
+    let three_value = |i: u16| three_bytes(i as u8 + 1, -2 - i as i16, 1.5 + f32::from(i));
+    let defs = [
+        ParamDef::shared(three),
+        ParamDef::instanced(forty, 4),
+        ParamDef::instanced(three, 4),
+    ];
+    let needed = {
+        let mut planned = defs.to_vec();
+        plan(&layout, &mut planned).unwrap();
+        table_slots(&layout, &planned)
+    };
+    for room in [needed, 2 * needed, 4 * needed] {
+        let mut memory = vec![LeafSlot::default(); room];
+        let mut s = store_over(&layout, &defs, &mut memory);
+        s.set_encoded(&layout, 0, 0, Which::Value, &three_bytes(5, -7, 2.25))
+            .unwrap();
+        for i in 0..4 {
+            s.add(1, Some(i)).unwrap();
+            s.set_encoded(&layout, 1, i, Which::Value, &forty_value(i))
+                .unwrap();
+            s.set_encoded(&layout, 1, i, Which::Default, &forty_default(i))
+                .unwrap();
+        }
+        for i in 0..4 {
+            s.add(2, Some(i)).unwrap();
+            s.set_encoded(&layout, 2, i, Which::Value, &three_value(i))
+                .unwrap();
+            s.set_encoded(&layout, 2, i, Which::Default, &three_bytes(9, 300, -0.5))
+                .unwrap();
+        }
+        let shared = [Scalar::Uint(5), Scalar::Int(-7), Scalar::Float(2.25)];
+        for (k, leaf) in shared.into_iter().enumerate() {
+            assert_eq!(
+                s.read(&layout, 0, 0, Which::Value, k),
+                Ok(leaf),
+                "room {room}"
+            );
+        }
+        for i in 0..4u16 {
+            for k in 0..40 {
+                let value = Scalar::Uint(u64::from(50 * i) + k as u64);
+                let default = Scalar::Uint(255 - k as u64 - u64::from(i));
+                let at = format!("room {room}: forty#{i}[{k}]");
+                assert_eq!(s.read(&layout, 1, i, Which::Value, k), Ok(value), "{at}");
+                assert_eq!(
+                    s.read(&layout, 1, i, Which::Default, k),
+                    Ok(default),
+                    "{at}"
+                );
+            }
+            let value = [
+                Scalar::Uint(u64::from(i) + 1),
+                Scalar::Int(-2 - i64::from(i)),
+                Scalar::Float(1.5 + f64::from(i)),
+            ];
+            let default = [Scalar::Uint(9), Scalar::Int(300), Scalar::Float(-0.5)];
+            for k in 0..3 {
+                let at = format!("room {room}: three#{i}[{k}]");
+                assert_eq!(s.read(&layout, 2, i, Which::Value, k), Ok(value[k]), "{at}");
+                assert_eq!(
+                    s.read(&layout, 2, i, Which::Default, k),
+                    Ok(default[k]),
+                    "{at}"
+                );
+            }
+        }
+    }
+}
