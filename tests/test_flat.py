@@ -705,3 +705,66 @@ def test_every_name_a_vehicle_can_report(tmp_path: Path) -> None:
     names = set(flat.flat_map(store).names())
     ours = {n for n in names if n.startswith(("FOO_", "BAR_"))}
     assert ours == {"FOO_0A", "FOO_0B", "FOO_1A", "FOO_1B", "BAR_SHARED_A"}
+
+
+# -- issue 40 (mutstore4): the 16-character rule at its edges ----------------------------------
+
+
+def _named(name: str, max_instances: int | None, fields: str = "uint8 x\n") -> dict[str, str]:
+    """One type whose parameter is ``name`` (shared without ``max_instances``)."""
+    slots = f"# @max_instances {max_instances}\n" if max_instances else ""
+    return {"Named.1.0.dsdl": f"# N\n# @param {name}\n{slots}\nuint4 p_version\n{fields}@sealed\n"}
+
+
+@pytest.mark.issue40
+def test_every_instance_number_up_to_max_instances_is_held_to_16_characters(
+    tmp_path: Path,
+) -> None:
+    # docs/ground-stations.md: a name longer than 16 characters for any instance up to
+    # max_instances is refused. A 12-character name leaves room for _99A (16) but not _100A
+    # (17): 100 instances (#0..#99) fit, 101 do not. (More than 31 slots: no instance mask.)
+    fmap = flat.flat_map(_store_with(tmp_path / "fits", _named("ABCDEFGHIJKL", 100)))
+    assert "ABCDEFGHIJKL_99A" in fmap and "ABCDEFGHIJKL_0A" in fmap
+    assert fmap.lookup("ABCDEFGHIJKL_99A") is not None
+    with pytest.raises(flat.FlatError) as e:
+        flat.flat_map(_store_with(tmp_path / "over", _named("ABCDEFGHIJKL", 101)))
+    assert str(e.value) == (
+        "ABCDEFGHIJKL: destructured name ABCDEFGHIJKL_100A has 17 characters (at most 16): "
+        "bad.Named.1.0 has 1 flat leaves; shorten the parameter name or the type"
+    )
+    # 13 characters: _9A fits, _10A does not (40 instances: #10 is one of them)
+    with pytest.raises(flat.FlatError) as e:
+        flat.flat_map(_store_with(tmp_path / "ten", _named("ABCDEFGHIJKLM", 40)))
+    assert str(e.value).startswith(
+        "ABCDEFGHIJKLM: destructured name ABCDEFGHIJKLM_10A has 17 characters (at most 16): "
+    )
+
+
+@pytest.mark.issue40
+def test_a_single_instance_name_is_held_to_16_characters_at_number_0(tmp_path: Path) -> None:
+    # @max_instances 1: the one instance, #0, is named ABCDEFGHIJKLMN_0A (17 characters); the
+    # names are refused before the instance mask is looked at
+    with pytest.raises(flat.FlatError) as e:
+        flat.flat_map(_store_with(tmp_path, _named("ABCDEFGHIJKLMN", 1)))
+    assert str(e.value) == (
+        "ABCDEFGHIJKLMN: destructured name ABCDEFGHIJKLMN_0A has 17 characters (at most 16): "
+        "bad.Named.1.0 has 1 flat leaves; shorten the parameter name or the type"
+    )
+
+
+@pytest.mark.issue40
+def test_a_shared_parameter_has_room_for_as_many_letters_as_its_name_leaves(
+    tmp_path: Path,
+) -> None:
+    # a shared parameter's names have no number: 14 characters + "_" leave one letter, A..Z
+    # (26 leaves); a 27th leaf would be ABCDEFGHIJKLMN_AA, 17 characters
+    fmap = flat.flat_map(_store_with(tmp_path / "fits", _named("ABCDEFGHIJKLMN", None,
+                                                                 "uint8[26] x\n")))  # fmt: skip
+    assert "ABCDEFGHIJKLMN_Z" in fmap and "ABCDEFGHIJKLMN_AA" not in fmap
+    with pytest.raises(flat.FlatError) as e:
+        flat.flat_map(_store_with(tmp_path / "over", _named("ABCDEFGHIJKLMN", None,
+                                                              "uint8[27] x\n")))  # fmt: skip
+    assert str(e.value) == (
+        "ABCDEFGHIJKLMN: destructured name ABCDEFGHIJKLMN_AA has 17 characters (at most 16): "
+        "bad.Named.1.0 has 27 flat leaves; shorten the parameter name or the type"
+    )
