@@ -768,3 +768,44 @@ def test_a_shared_parameter_has_room_for_as_many_letters_as_its_name_leaves(
         "ABCDEFGHIJKLMN: destructured name ABCDEFGHIJKLMN_AA has 17 characters (at most 16): "
         "bad.Named.1.0 has 27 flat leaves; shorten the parameter name or the type"
     )
+
+
+@pytest.mark.issue40
+def test_a_flat_write_changes_the_value_and_leaves_the_default(store: px4params.Store) -> None:
+    # a ground station's PARAM_SET changes a parameter's value, as PX4's param set does: the
+    # default stays, and the parameter now differs from it (saved, shown with `+`)
+    store.add("INA238#0")
+    default = store.get("INA238#0.bus.i2c.address", default=True)
+    assert default != 0x46 and not store.changed("INA238#0")
+    row = flat.set_flat(store, "INA238_0C", 0x46)
+    assert row.value == 0x46 and store.changed("INA238#0")
+    assert store.get("INA238#0.bus.i2c.address", default=True) == default
+    store.reset("INA238#0")
+    assert flat.write_flat(store, "INA238_0C", 0x47) == "INA238_0C = 71"
+    assert store.changed("INA238#0")
+    assert store.get("INA238#0.bus.i2c.address", default=True) == default
+
+
+@pytest.mark.issue40
+def test_the_hint_names_only_a_flat_name_that_exists(store: px4params.Store) -> None:
+    # INA238 has 4 instance slots (#0..#3): ina238_9c upper-cased is no name either
+    fmap = flat.flat_map(store)
+    with pytest.raises(InstanceError) as e:
+        fmap.owner("ina238_9c")
+    assert str(e.value) == "'ina238_9c' is not a destructured parameter name"
+    with pytest.raises(InstanceError) as e:
+        fmap.owner(" INA238_1C")
+    assert str(e.value) == (
+        "' INA238_1C' is not a destructured parameter name (did you mean INA238_1C?)"
+    )
+
+
+@pytest.mark.issue40
+def test_a_one_letter_parameter_has_flat_names_too(tmp_path: Path) -> None:
+    # @param takes an upper-case name, a letter first ([A-Z][A-Z0-9_]*, as PX4 names): X is
+    # one, its leaves X_0A and X_0B
+    store = _store_with(tmp_path, _named("X", 2, "uint8 a\nbool b\n"))
+    fmap = flat.flat_map(store)
+    assert fmap.lookup("X_1B") is not None and "X_0A" in fmap
+    store.add("X#1")
+    assert flat.resolve_flat(store, "X_1B") == "X#1[2]"
