@@ -809,3 +809,16 @@ def test_a_one_letter_parameter_has_flat_names_too(tmp_path: Path) -> None:
     assert fmap.lookup("X_1B") is not None and "X_0A" in fmap
     store.add("X#1")
     assert flat.resolve_flat(store, "X_1B") == "X#1[2]"
+
+
+@pytest.mark.issue40
+def test_a_dynamic_arrays_length_has_the_bits_of_its_maximum(tmp_path: Path) -> None:
+    # DroneCAN's length prefix of T[<=N] is N.bit_length() bits (pydronecan's ArrayType,
+    # dronecan/dsdl/parser.py): 1 bit for at most 1, 3 bits for at most 4
+    files = {"Lists.1.0.dsdl": "# L\n# @max_instances 1\n\nuint4 p_version\nuint8[<=1] one\n"
+             "uint8[<=4] four\n@sealed\n"}  # fmt: skip
+    schema = px4params.load_schema([dsdl_root(tmp_path, files)], use_env=False,
+                                   cache_dir=tmp_path / "cache")  # fmt: skip
+    lengths = {s.path: s for s in flat.layout(schema["tst.Lists.1.0"]) if s.role == "length"}
+    assert (lengths["one._len"].type, lengths["one._len"].max) == ("uint1", 1)
+    assert (lengths["four._len"].type, lengths["four._len"].max) == ("uint3", 4)
