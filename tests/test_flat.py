@@ -822,3 +822,55 @@ def test_a_dynamic_arrays_length_has_the_bits_of_its_maximum(tmp_path: Path) -> 
     lengths = {s.path: s for s in flat.layout(schema["tst.Lists.1.0"]) if s.role == "length"}
     assert (lengths["one._len"].type, lengths["one._len"].max) == ("uint1", 1)
     assert (lengths["four._len"].type, lengths["four._len"].max) == ("uint3", 4)
+
+
+@pytest.mark.issue40
+def test_every_leaf_that_is_no_tag_nor_length_has_the_role_value(
+    extra_schema: px4params.Schema,
+) -> None:
+    # FlatSlot.role: "value", "union_tag" or "length" (the module doc's kinds of letters)
+    roles = {s.path: s.role for s in flat.layout(extra_schema["tst.Arrays"])}
+    for path in ("pair[0].flag", "pair[0].y", "dyn[0]", "choice.a", "choice.b", "big", "neg", "f"):
+        assert roles[path] == "value", path
+    assert (roles["choice._tag"], roles["dyn._len"]) == ("union_tag", "length")
+
+
+@pytest.mark.issue40
+def test_a_value_and_its_stored_bytes_give_the_same_letters(tmp_path: Path) -> None:
+    # to_flat takes a value or its stored bytes; the store keeps values without DroneCAN's
+    # tail array optimisation, so a last field that is a dynamic array keeps its length there
+    files = {"Tail.1.0.dsdl": "# T\n# @max_instances 1\n\nuint4 p_version\nuint8 a\n"
+             "uint8[<=3] rest\n@sealed\n"}  # fmt: skip
+    schema = px4params.load_schema([dsdl_root(tmp_path, files)], use_env=False,
+                                   cache_dir=tmp_path / "cache")  # fmt: skip
+    data_type = schema["tst.Tail.1.0"]
+    value = {"a": 7, "rest": [1, 2]}
+    expected = {"A": 7, "B": 2, "C": 1, "D": 2}  # a, rest._len, rest[0], rest[1]
+    assert flat.to_flat(data_type, value) == expected
+    store = px4params.Store(schema, classic=[])
+    store.add("TAIL#0")
+    store.set("TAIL#0", value)
+    assert flat.to_flat(data_type, store.encoded("TAIL#0")) == expected
+
+
+@pytest.mark.issue40
+def test_a_union_tag_one_past_the_last_variant_is_refused(schema: px4params.Schema) -> None:
+    # px.Ina238's bus has 6 variants, tags 0..5: 6 is none
+    ina = schema["px.Ina238"]
+    good = {"A": 0, "B": 1, "C": 69, "P": 2, "Q": 0.5}
+    with pytest.raises(flat.FlatError) as e:
+        flat.from_flat(ina, {**good, "A": 6})
+    assert str(e.value) == "px.Ina238.1.1: bus._tag: no variant 6 (expected 0 to 5)"
+
+
+@pytest.mark.issue40
+def test_a_shared_parameter_has_no_instance_mask(tmp_path: Path) -> None:
+    # docs/ground-stations.md: each instanced parameter has an instance mask; a shared one has
+    # no instances to add or remove
+    store = _store_with(tmp_path, _named("FOO_SHARED", None, "uint8 x\n"))
+    fmap = flat.flat_map(store)
+    assert fmap.mask_spec("FOO_SHARED_INST") is None
+    assert "FOO_SHARED" not in {spec.name for _, spec, _ in fmap.masks()}
+    assert "FOO_SHARED_INST" not in flat.flat_values(store)
+    with pytest.raises(InstanceError, match=r"^unknown parameter 'FOO_SHARED_INST'"):
+        flat.write_flat(store, "FOO_SHARED_INST", 1)
