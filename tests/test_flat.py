@@ -874,3 +874,14 @@ def test_a_shared_parameter_has_no_instance_mask(tmp_path: Path) -> None:
     assert "FOO_SHARED_INST" not in flat.flat_values(store)
     with pytest.raises(InstanceError, match=r"^unknown parameter 'FOO_SHARED_INST'"):
         flat.write_flat(store, "FOO_SHARED_INST", 1)
+
+
+@pytest.mark.issue40
+def test_a_parameter_name_ending_in_an_underscore_has_flat_names_too(tmp_path: Path) -> None:
+    # [A-Z][A-Z0-9_]* takes X_: its names are X_, "_", the number and the letter (X__0A), read
+    # back exactly although X__0A has another _ right after the first
+    store = _store_with(tmp_path, _named("X_", 2, "uint8 a\n"))
+    fmap = flat.flat_map(store)
+    assert fmap.lookup("X__1A") is not None and "X__0A" in fmap and "X_0A" not in fmap
+    store.add("X_#1")
+    assert flat.resolve_flat(store, "X__1A") == "X_#1[1]"
