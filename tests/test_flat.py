@@ -885,3 +885,15 @@ def test_a_parameter_name_ending_in_an_underscore_has_flat_names_too(tmp_path: P
     assert fmap.lookup("X__1A") is not None and "X__0A" in fmap and "X_0A" not in fmap
     store.add("X_#1")
     assert flat.resolve_flat(store, "X__1A") == "X_#1[1]"
+
+
+@pytest.mark.issue40
+def test_the_24th_letter_x_follows_an_instance_number(tmp_path: Path) -> None:
+    # letters A..Z follow the instance number: the 24th leaf of FOO#1 is FOO_1X (X is a letter,
+    # not a digit of the number)
+    store = _store_with(tmp_path, _named("FOO", 2, "uint8[24] x\n"))
+    store.add("FOO#1")
+    assert flat.resolve_flat(store, "FOO_1X") == "FOO#1[24]"
+    assert flat.flat_map(store).lookup("FOO_1X") is not None and "FOO_1Y" not in flat.flat_map(
+        store
+    )
