@@ -871,6 +871,7 @@ def test_a_shared_parameter_has_no_instance_mask(tmp_path: Path) -> None:
     fmap = flat.flat_map(store)
     assert fmap.mask_spec("FOO_SHARED_INST") is None
     assert "FOO_SHARED" not in {spec.name for _, spec, _ in fmap.masks()}
+    assert fmap.mask_spec("INA238_INST") is not None  # the instanced ones after it keep theirs
     assert "FOO_SHARED_INST" not in flat.flat_values(store)
     with pytest.raises(InstanceError, match=r"^unknown parameter 'FOO_SHARED_INST'"):
         flat.write_flat(store, "FOO_SHARED_INST", 1)
