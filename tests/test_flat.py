@@ -898,3 +898,36 @@ def test_the_24th_letter_x_follows_an_instance_number(tmp_path: Path) -> None:
     assert flat.flat_map(store).lookup("FOO_1X") is not None and "FOO_1Y" not in flat.flat_map(
         store
     )
+
+
+@pytest.mark.issue40
+def test_a_leaf_that_is_not_live_names_the_first_requirement_that_fails(
+    extra_schema: px4params.Schema,
+) -> None:
+    # requires lists outermost first (FlatSlot): the refusal names the first that does not hold,
+    # a length by its value and what to set it above, a tag by the variant it selects
+    store = px4params.Store(extra_schema)
+    store.add("ARRAYS#0")
+    lay = flat.flat_map(store).layout_of("ARRAYS")
+
+    def name(path: str) -> str:
+        slot = lay.slot_for_path(path)
+        assert slot is not None
+        return f"ARRAYS_0{slot.letter}"
+
+    def why(path: str) -> str:
+        with pytest.raises(LeafError) as e:
+            flat.get_flat(store, name(path))
+        return str(e.value)
+
+    # dyn is empty: its third element needs a length above 2
+    assert why("dyn[2]") == (
+        f"{name('dyn[2]')} (ARRAYS#0.dyn[2]) is not live: dyn._len is 0 "
+        f"(set {name('dyn._len')} above 2)"
+    )
+    # two choices, both variant a (0): choices[1].c[1] needs the length (it holds) and variant c
+    flat.set_flat(store, name("choices._len"), 2)
+    assert why("choices[1].c[1]") == (
+        f"{name('choices[1].c[1]')} (ARRAYS#0.choices[1].c[1]) is not live: choices[1]._tag "
+        f"selects variant 0, not 2 (set {name('choices[1]._tag')} to 2)"
+    )
