@@ -705,3 +705,229 @@ def test_every_name_a_vehicle_can_report(tmp_path: Path) -> None:
     names = set(flat.flat_map(store).names())
     ours = {n for n in names if n.startswith(("FOO_", "BAR_"))}
     assert ours == {"FOO_0A", "FOO_0B", "FOO_1A", "FOO_1B", "BAR_SHARED_A"}
+
+
+# -- issue 40 (mutstore4): the 16-character rule at its edges ----------------------------------
+
+
+def _named(name: str, max_instances: int | None, fields: str = "uint8 x\n") -> dict[str, str]:
+    """One type whose parameter is ``name`` (shared without ``max_instances``)."""
+    slots = f"# @max_instances {max_instances}\n" if max_instances else ""
+    return {"Named.1.0.dsdl": f"# N\n# @param {name}\n{slots}\nuint4 p_version\n{fields}@sealed\n"}
+
+
+@pytest.mark.issue40
+def test_every_instance_number_up_to_max_instances_is_held_to_16_characters(
+    tmp_path: Path,
+) -> None:
+    # docs/ground-stations.md: a name longer than 16 characters for any instance up to
+    # max_instances is refused. A 12-character name leaves room for _99A (16) but not _100A
+    # (17): 100 instances (#0..#99) fit, 101 do not. (More than 31 slots: no instance mask.)
+    fmap = flat.flat_map(_store_with(tmp_path / "fits", _named("ABCDEFGHIJKL", 100)))
+    assert "ABCDEFGHIJKL_99A" in fmap and "ABCDEFGHIJKL_0A" in fmap
+    assert fmap.lookup("ABCDEFGHIJKL_99A") is not None
+    with pytest.raises(flat.FlatError) as e:
+        flat.flat_map(_store_with(tmp_path / "over", _named("ABCDEFGHIJKL", 101)))
+    assert str(e.value) == (
+        "ABCDEFGHIJKL: destructured name ABCDEFGHIJKL_100A has 17 characters (at most 16): "
+        "bad.Named.1.0 has 1 flat leaves; shorten the parameter name or the type"
+    )
+    # 13 characters: _9A fits, _10A does not (40 instances: #10 is one of them)
+    with pytest.raises(flat.FlatError) as e:
+        flat.flat_map(_store_with(tmp_path / "ten", _named("ABCDEFGHIJKLM", 40)))
+    assert str(e.value).startswith(
+        "ABCDEFGHIJKLM: destructured name ABCDEFGHIJKLM_10A has 17 characters (at most 16): "
+    )
+
+
+@pytest.mark.issue40
+def test_a_single_instance_name_is_held_to_16_characters_at_number_0(tmp_path: Path) -> None:
+    # @max_instances 1: the one instance, #0, is named ABCDEFGHIJKLMN_0A (17 characters); the
+    # names are refused before the instance mask is looked at
+    with pytest.raises(flat.FlatError) as e:
+        flat.flat_map(_store_with(tmp_path, _named("ABCDEFGHIJKLMN", 1)))
+    assert str(e.value) == (
+        "ABCDEFGHIJKLMN: destructured name ABCDEFGHIJKLMN_0A has 17 characters (at most 16): "
+        "bad.Named.1.0 has 1 flat leaves; shorten the parameter name or the type"
+    )
+
+
+@pytest.mark.issue40
+def test_a_shared_parameter_has_room_for_as_many_letters_as_its_name_leaves(
+    tmp_path: Path,
+) -> None:
+    # a shared parameter's names have no number: 14 characters + "_" leave one letter, A..Z
+    # (26 leaves); a 27th leaf would be ABCDEFGHIJKLMN_AA, 17 characters
+    fmap = flat.flat_map(_store_with(tmp_path / "fits", _named("ABCDEFGHIJKLMN", None,
+                                                                 "uint8[26] x\n")))  # fmt: skip
+    assert "ABCDEFGHIJKLMN_Z" in fmap and "ABCDEFGHIJKLMN_AA" not in fmap
+    with pytest.raises(flat.FlatError) as e:
+        flat.flat_map(_store_with(tmp_path / "over", _named("ABCDEFGHIJKLMN", None,
+                                                              "uint8[27] x\n")))  # fmt: skip
+    assert str(e.value) == (
+        "ABCDEFGHIJKLMN: destructured name ABCDEFGHIJKLMN_AA has 17 characters (at most 16): "
+        "bad.Named.1.0 has 27 flat leaves; shorten the parameter name or the type"
+    )
+
+
+@pytest.mark.issue40
+def test_a_flat_write_changes_the_value_and_leaves_the_default(store: px4params.Store) -> None:
+    # a ground station's PARAM_SET changes a parameter's value, as PX4's param set does: the
+    # default stays, and the parameter now differs from it (saved, shown with `+`)
+    store.add("INA238#0")
+    default = store.get("INA238#0.bus.i2c.address", default=True)
+    assert default != 0x46 and not store.changed("INA238#0")
+    row = flat.set_flat(store, "INA238_0C", 0x46)
+    assert row.value == 0x46 and store.changed("INA238#0")
+    assert store.get("INA238#0.bus.i2c.address", default=True) == default
+    store.reset("INA238#0")
+    assert flat.write_flat(store, "INA238_0C", 0x47) == "INA238_0C = 71"
+    assert store.changed("INA238#0")
+    assert store.get("INA238#0.bus.i2c.address", default=True) == default
+
+
+@pytest.mark.issue40
+def test_the_hint_names_only_a_flat_name_that_exists(store: px4params.Store) -> None:
+    # INA238 has 4 instance slots (#0..#3): ina238_9c upper-cased is no name either
+    fmap = flat.flat_map(store)
+    with pytest.raises(InstanceError) as e:
+        fmap.owner("ina238_9c")
+    assert str(e.value) == "'ina238_9c' is not a destructured parameter name"
+    with pytest.raises(InstanceError) as e:
+        fmap.owner(" INA238_1C")
+    assert str(e.value) == (
+        "' INA238_1C' is not a destructured parameter name (did you mean INA238_1C?)"
+    )
+
+
+@pytest.mark.issue40
+def test_a_one_letter_parameter_has_flat_names_too(tmp_path: Path) -> None:
+    # @param takes an upper-case name, a letter first ([A-Z][A-Z0-9_]*, as PX4 names): X is
+    # one, its leaves X_0A and X_0B
+    store = _store_with(tmp_path, _named("X", 2, "uint8 a\nbool b\n"))
+    fmap = flat.flat_map(store)
+    assert fmap.lookup("X_1B") is not None and "X_0A" in fmap
+    store.add("X#1")
+    assert flat.resolve_flat(store, "X_1B") == "X#1[2]"
+
+
+@pytest.mark.issue40
+def test_a_dynamic_arrays_length_has_the_bits_of_its_maximum(tmp_path: Path) -> None:
+    # DroneCAN's length prefix of T[<=N] is N.bit_length() bits (pydronecan's ArrayType,
+    # dronecan/dsdl/parser.py): 1 bit for at most 1, 3 bits for at most 4
+    files = {"Lists.1.0.dsdl": "# L\n# @max_instances 1\n\nuint4 p_version\nuint8[<=1] one\n"
+             "uint8[<=4] four\n@sealed\n"}  # fmt: skip
+    schema = px4params.load_schema([dsdl_root(tmp_path, files)], use_env=False,
+                                   cache_dir=tmp_path / "cache")  # fmt: skip
+    lengths = {s.path: s for s in flat.layout(schema["tst.Lists.1.0"]) if s.role == "length"}
+    assert (lengths["one._len"].type, lengths["one._len"].max) == ("uint1", 1)
+    assert (lengths["four._len"].type, lengths["four._len"].max) == ("uint3", 4)
+
+
+@pytest.mark.issue40
+def test_every_leaf_that_is_no_tag_nor_length_has_the_role_value(
+    extra_schema: px4params.Schema,
+) -> None:
+    # FlatSlot.role: "value", "union_tag" or "length" (the module doc's kinds of letters)
+    roles = {s.path: s.role for s in flat.layout(extra_schema["tst.Arrays"])}
+    for path in ("pair[0].flag", "pair[0].y", "dyn[0]", "choice.a", "choice.b", "big", "neg", "f"):
+        assert roles[path] == "value", path
+    assert (roles["choice._tag"], roles["dyn._len"]) == ("union_tag", "length")
+
+
+@pytest.mark.issue40
+def test_a_value_and_its_stored_bytes_give_the_same_letters(tmp_path: Path) -> None:
+    # to_flat takes a value or its stored bytes; the store keeps values without DroneCAN's
+    # tail array optimisation, so a last field that is a dynamic array keeps its length there
+    files = {"Tail.1.0.dsdl": "# T\n# @max_instances 1\n\nuint4 p_version\nuint8 a\n"
+             "uint8[<=3] rest\n@sealed\n"}  # fmt: skip
+    schema = px4params.load_schema([dsdl_root(tmp_path, files)], use_env=False,
+                                   cache_dir=tmp_path / "cache")  # fmt: skip
+    data_type = schema["tst.Tail.1.0"]
+    value = {"a": 7, "rest": [1, 2]}
+    expected = {"A": 7, "B": 2, "C": 1, "D": 2}  # a, rest._len, rest[0], rest[1]
+    assert flat.to_flat(data_type, value) == expected
+    store = px4params.Store(schema, classic=[])
+    store.add("TAIL#0")
+    store.set("TAIL#0", value)
+    assert flat.to_flat(data_type, store.encoded("TAIL#0")) == expected
+
+
+@pytest.mark.issue40
+def test_a_union_tag_one_past_the_last_variant_is_refused(schema: px4params.Schema) -> None:
+    # px.Ina238's bus has 6 variants, tags 0..5: 6 is none
+    ina = schema["px.Ina238"]
+    good = {"A": 0, "B": 1, "C": 69, "P": 2, "Q": 0.5}
+    with pytest.raises(flat.FlatError) as e:
+        flat.from_flat(ina, {**good, "A": 6})
+    assert str(e.value) == "px.Ina238.1.1: bus._tag: no variant 6 (expected 0 to 5)"
+
+
+@pytest.mark.issue40
+def test_a_shared_parameter_has_no_instance_mask(tmp_path: Path) -> None:
+    # docs/ground-stations.md: each instanced parameter has an instance mask; a shared one has
+    # no instances to add or remove
+    store = _store_with(tmp_path, _named("FOO_SHARED", None, "uint8 x\n"))
+    fmap = flat.flat_map(store)
+    assert fmap.mask_spec("FOO_SHARED_INST") is None
+    assert "FOO_SHARED" not in {spec.name for _, spec, _ in fmap.masks()}
+    assert fmap.mask_spec("INA238_INST") is not None  # the instanced ones after it keep theirs
+    assert "FOO_SHARED_INST" not in flat.flat_values(store)
+    with pytest.raises(InstanceError, match=r"^unknown parameter 'FOO_SHARED_INST'"):
+        flat.write_flat(store, "FOO_SHARED_INST", 1)
+
+
+@pytest.mark.issue40
+def test_a_parameter_name_ending_in_an_underscore_has_flat_names_too(tmp_path: Path) -> None:
+    # [A-Z][A-Z0-9_]* takes X_: its names are X_, "_", the number and the letter (X__0A), read
+    # back exactly although X__0A has another _ right after the first
+    store = _store_with(tmp_path, _named("X_", 2, "uint8 a\n"))
+    fmap = flat.flat_map(store)
+    assert fmap.lookup("X__1A") is not None and "X__0A" in fmap and "X_0A" not in fmap
+    store.add("X_#1")
+    assert flat.resolve_flat(store, "X__1A") == "X_#1[1]"
+
+
+@pytest.mark.issue40
+def test_the_24th_letter_x_follows_an_instance_number(tmp_path: Path) -> None:
+    # letters A..Z follow the instance number: the 24th leaf of FOO#1 is FOO_1X (X is a letter,
+    # not a digit of the number)
+    store = _store_with(tmp_path, _named("FOO", 2, "uint8[24] x\n"))
+    store.add("FOO#1")
+    assert flat.resolve_flat(store, "FOO_1X") == "FOO#1[24]"
+    assert flat.flat_map(store).lookup("FOO_1X") is not None and "FOO_1Y" not in flat.flat_map(
+        store
+    )
+
+
+@pytest.mark.issue40
+def test_a_leaf_that_is_not_live_names_the_first_requirement_that_fails(
+    extra_schema: px4params.Schema,
+) -> None:
+    # requires lists outermost first (FlatSlot): the refusal names the first that does not hold,
+    # a length by its value and what to set it above, a tag by the variant it selects
+    store = px4params.Store(extra_schema)
+    store.add("ARRAYS#0")
+    lay = flat.flat_map(store).layout_of("ARRAYS")
+
+    def name(path: str) -> str:
+        slot = lay.slot_for_path(path)
+        assert slot is not None
+        return f"ARRAYS_0{slot.letter}"
+
+    def why(path: str) -> str:
+        with pytest.raises(LeafError) as e:
+            flat.get_flat(store, name(path))
+        return str(e.value)
+
+    # dyn is empty: its third element needs a length above 2
+    assert why("dyn[2]") == (
+        f"{name('dyn[2]')} (ARRAYS#0.dyn[2]) is not live: dyn._len is 0 "
+        f"(set {name('dyn._len')} above 2)"
+    )
+    # two choices, both variant a (0): choices[1].c[1] needs the length (it holds) and variant c
+    flat.set_flat(store, name("choices._len"), 2)
+    assert why("choices[1].c[1]") == (
+        f"{name('choices[1].c[1]')} (ARRAYS#0.choices[1].c[1]) is not live: choices[1]._tag "
+        f"selects variant 0, not 2 (set {name('choices[1]._tag')} to 2)"
+    )

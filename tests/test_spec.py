@@ -932,3 +932,145 @@ def test_the_public_checks_hold_the_bounds_unless_told_not_to(store: px4params.S
     with pytest.raises(ValueRangeError, match=f"^X: 0 {re.escape(SHUNT_RANGE)}$"):
         check_stored("X", 0.0, ranges["shunt"])
     check_stored("X", 0.0, ranges["shunt"], bounds=False)
+
+
+# -- issue 40 (mutstore4): the leaf checks' own functions, each against numbers worked out by hand
+
+
+@pytest.mark.issue40
+def test_within_says_exactly_what_check_stored_refuses() -> None:
+    """``within`` is the store's quick yes: a value inside INA238's current (uint10, @min 1,
+    @max 327) and shunt (float16, 0.00001..0.1) ranges, or in a listed port, and no other."""
+    from px4params.store.spec import LeafRange, check_stored, within
+
+    current = LeafRange.of(1, 327, 0, "uint10")
+    shunt = LeafRange.of(0.00001, 0.1, 16, "float16")
+    low_only = LeafRange.of(-1.5, None, 32, "float32")
+    high_only = LeafRange.of(None, 30, 0, "uint5")
+    ports = LeafRange.of(None, None, 0, "uint16", ((0, "Disabled"), (101, "TELEM 1")))
+    cases = [
+        (current, 1, True), (current, 327, True), (current, 0, False), (current, 328, False),
+        (shunt, 0.05, True), (shunt, _float16(0.1), True), (shunt, 0.0, False),
+        (shunt, 0.2, False), (shunt, math.nan, False), (shunt, math.inf, False),
+        (low_only, -1.5, True), (low_only, 1e30, True), (low_only, -1.6, False),
+        (high_only, 0, True), (high_only, 30, True), (high_only, 31, False),
+        (ports, 101, True), (ports, 0, True), (ports, 102, False),
+    ]  # fmt: skip
+    for rng, value, inside in cases:
+        assert within(value, rng) is inside, (rng.type, value)
+        try:
+            check_stored("X", value, rng)
+            refused = False
+        except ValueRangeError:
+            refused = True
+        assert refused is not inside, (rng.type, value)
+    # bounds=False (--force): only what is no finite number is refused
+    assert within(0.0, shunt, bounds=False) and within(328, current, bounds=False)
+    assert within(102, ports, bounds=False)
+    assert not within(math.nan, shunt, bounds=False)
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize(
+    ("type_name", "value", "holds"),
+    [
+        # uintN: 0..2^N-1; intN: -2^(N-1)..2^(N-1)-1 (DroneCAN's integer types)
+        ("uint10", 0, True), ("uint10", 1023, True), ("uint10", 1024, False), ("uint10", -1, False),
+        ("uint1", 1, True), ("uint1", 2, False),
+        ("int8", -128, True), ("int8", 127, True), ("int8", 128, False), ("int8", -129, False),
+        ("int32", -(2**31), True), ("int32", 2**31 - 1, True), ("int32", 2**31, False),
+        # IEEE 754: binary16's largest finite number is 65504, binary32's 3.4028234663852886e38
+        ("float16", 65504.0, True), ("float16", -65504.0, True), ("float16", 65536.0, False),
+        ("float16", 65505.0, False),  # the codec refuses it: "expected -65504 to 65504"
+        ("float16", -70000.0, False),
+        ("float32", 3.4028234663852886e38, True), ("float32", -3.4028234663852886e38, True),
+        ("float32", 3.5e38, False), ("float32", -1e39, False),
+        ("float64", 1e300, True),
+        # a NaN or an infinity is the range check's to refuse, not the codec's
+        ("float16", math.inf, True), ("float16", math.nan, True),
+        # a bool leaf holds what it is given (no number range)
+        ("bool", 1, True),
+    ],
+)  # fmt: skip
+def test_in_type_range_is_the_dsdl_types_own_range(
+    type_name: str, value: float, holds: bool
+) -> None:
+    from px4params.store.spec import in_type_range
+
+    assert in_type_range(value, type_name) is holds
+
+
+@pytest.mark.issue40
+def test_stored_number_is_the_number_the_leaf_keeps() -> None:
+    """A float leaf keeps the given number rounded to its width (IEEE 754 round to nearest):
+    0.1 is 0.0999755859375 in a float16 and 0.10000000149011612 in a float32; an integer leaf
+    keeps an int as it is; anything else is left to the codec (None)."""
+    from px4params.store.spec import LeafRange, stored_number
+
+    half = LeafRange.of(None, None, 16, "float16")
+    single = LeafRange.of(None, None, 32, "float32")
+    double = LeafRange.of(None, None, 64, "float64")
+    byte = LeafRange.of(None, None, 0, "uint8")
+    assert stored_number(0.1, half) == 0.0999755859375
+    assert stored_number(0.1, single) == 0.10000000149011612
+    assert stored_number(0.1, double) == 0.1
+    one = stored_number(1, half)
+    assert one == 1.0 and type(one) is float
+    assert stored_number(math.inf, half) == math.inf
+    assert math.isnan(stored_number(math.nan, half))  # type: ignore[arg-type]
+    assert stored_number(1e6, half) is None  # beyond float16: the codec's refusal
+    assert stored_number(True, half) is None and stored_number("0.1", half) is None
+    assert stored_number(7, byte) == 7
+    assert stored_number(7.0, byte) is None and stored_number(True, byte) is None
+
+
+@pytest.mark.issue40
+def test_a_list_of_up_to_12_values_is_named_and_a_longer_one_numbered() -> None:
+    # the module's rule (_NAMED_AT_MOST): a value list longer than 12 is named by its numbers
+    # alone, in runs; PX4's serial ports, 12, are named (test_every_port_px4_numbers_is_listed)
+    from px4params.store.spec import LeafRange, describe_not_listed
+
+    def modes(count: int) -> LeafRange:
+        return LeafRange.of(None, None, 0, "uint8", tuple((n, f"Mode {n}") for n in range(count)))
+
+    named = ", ".join(f"{n} (Mode {n})" for n in range(12))
+    assert describe_not_listed(20, modes(12)) == f"20 is not one of its values (@value): {named}"
+    assert describe_not_listed(20, modes(13)) == "20 is not one of its values (@value): 0..12"
+
+
+@pytest.mark.issue40
+def test_a_float32_bound_given_exactly_is_taken_although_the_leaf_keeps_it_above(
+    tmp_path: Path,
+) -> None:
+    # float32 keeps 0.1 as 0.10000000149011612 (IEEE 754 binary32, round to nearest), above
+    # @max 0.1: a bound given exactly is never refused once stored (check_leaves' rule)
+    assert struct.unpack("<f", struct.pack("<f", 0.1))[0] == 0.10000000149011612
+    level = _dsdl("# @max_instances 1", "float32 gain\n# Gain\n# @max 0.1\n")
+    schema = _acme(tmp_path, {"Level.1.0.dsdl": level})
+    store = px4params.Store(schema, classic=[])
+    store.add("LEVEL#0")
+    store.set("LEVEL#0.gain", 0.1)
+    assert store.get("LEVEL#0.gain") == 0.10000000149011612
+    with pytest.raises(ValueRangeError) as e:
+        store.set("LEVEL#0.gain", 0.100001)  # kept as 0.10000099986791611: above
+    assert str(e.value) == "LEVEL#0.gain: 0.100001 is above 0.1 (@max)"
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize(
+    ("value", "text"),
+    [
+        (0, "0"), (-1.0, "-1"), (2.5, "2.5"), (0.1, "0.1"), (1 / 3, "0.333333"),
+        (0.00001, "0.00001"),  # not 1e-05: a bound as a DSDL file writes it
+        (1e-9, "0.000000001"),  # down to a billionth in decimals
+        (1e-12, "1e-12"),  # below: with an exponent
+        (9e15, "9000000000000000"),  # an integer a float64 holds exactly (below 2^53 = 9.007e15)
+        (1e16, "1e+16"),  # from 1e16 on, a float64's last digits are not the number's
+        (123456789.5, "123457000"),  # six significant digits, no exponent
+        (math.nan, "nan"), (-math.inf, "-inf"),
+    ],
+)  # fmt: skip
+def test_a_number_in_a_refusal_is_written_as_a_person_writes_it(value: float, text: str) -> None:
+    from px4params.store.spec import _shown
+
+    assert _shown(value) == text
