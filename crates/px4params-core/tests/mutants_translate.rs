@@ -1,0 +1,69 @@
+//! What a translation reports (issue 40): each field of the new type is said kept (carried
+//! over from the old value) or new (taken from the base), and each field of the old type the
+//! new one lacks is said dropped, by its dotted path. The values are worked out by hand.
+
+use px4params_core::compile::OwnedLayout;
+use px4params_core::layout::Role;
+use px4params_core::translate::{translate, Change};
+use px4params_core::Cast;
+
+#[test]
+fn a_translation_says_which_fields_were_kept_added_and_dropped() {
+    let mut l = OwnedLayout::default();
+    let u8_ = l.uint(8, Cast::Saturated).unwrap();
+    let u16_ = l.uint(16, Cast::Saturated).unwrap();
+    let inner_old = l
+        .structure(&[("x", u8_, Role::Data), ("gone", u8_, Role::Data)])
+        .unwrap();
+    let inner_new = l.structure(&[("x", u8_, Role::Data)]).unwrap();
+    let old = l
+        .structure(&[
+            ("a", u8_, Role::Data),
+            ("b", u8_, Role::Data),
+            ("inner", inner_old, Role::Data),
+        ])
+        .unwrap();
+    let new = l
+        .structure(&[
+            ("a", u8_, Role::Data),
+            ("c", u16_, Role::Data),
+            ("inner", inner_new, Role::Data),
+        ])
+        .unwrap();
+    let layout = l.as_layout();
+    // old: a = 7, b = 9, inner.x = 5, inner.gone = 6; the base (a value of new): a = 1,
+    // c = 0x0302 (little-endian bytes 02 03), inner.x = 4.
+    let old_data = [7u8, 9, 5, 6];
+    let base = [1u8, 0x02, 0x03, 4];
+    let mut out = [0u8; 8];
+    let mut said: Vec<String> = Vec::new();
+    let n = translate(
+        &layout,
+        old,
+        &old_data[..],
+        new,
+        &base[..],
+        &mut out,
+        &mut |c| {
+            said.push(match c {
+                Change::Kept(p) => format!("kept {p}"),
+                Change::New(p) => format!("new {p}"),
+                Change::Dropped(p) => format!("dropped {p}"),
+            })
+        },
+    )
+    .unwrap();
+    // a and inner.x from the old value, c from the base.
+    assert_eq!(&out[..n], [7, 0x02, 0x03, 5]);
+    said.sort();
+    assert_eq!(
+        said,
+        [
+            "dropped b",
+            "dropped inner.gone",
+            "kept a",
+            "kept inner.x",
+            "new c"
+        ],
+    );
+}
