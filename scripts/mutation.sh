@@ -661,7 +661,7 @@ RUST_ISSUE40_TESTS="$RUST_ISSUE40_TESTS mutants_scalar"
 
 # The whole core's 1/60 sample again (the lead, issue 40, after the one interpreter merged:
 # interp.rs, walk.rs rewritten; the sample is the crate's every 60th mutant as it is now, 68 of
-# 4,000, so another sample than 2026-11-26's), one run each on a quiet machine (~6 min):
+# ~4,060, so another sample than 2026-11-26's), one run each on a quiet machine (~6 min):
 #   MUTATION_BASELINE=1 MUTATION_BUDGET=900 MUTATION_RUST_TIMEOUT=120 \
 #     MUTATION_RUST_ARGS="--shard 0/60 --sharding round-robin" bash scripts/mutation.sh rust-core
 #   MUTATION_BUDGET=1800 MUTATION_RUST_TIMEOUT=120 \
