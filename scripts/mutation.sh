@@ -675,6 +675,13 @@ RUST_ISSUE40_TESTS="$RUST_ISSUE40_TESTS mutants_scalar"
 #                     report -> (), planted by hand: red) 100%
 RUST_ISSUE40_TESTS="$RUST_ISSUE40_TESTS mutants_translate"
 
+# bits.rs on its own (the lead, issue 40; after only, cut by its 25 min budget at load 2-4):
+#   MUTATION_RUST_FILES="crates/px4params-core/src/bits.rs" MUTATION_BUDGET=1500 \
+#     MUTATION_RUST_TIMEOUT=120 bash scripts/mutation.sh rust-core
+#   bits.rs  after: 258 mutants, 180 tested, 164 caught, 3 timed out, 13 missed (all 13
+#            equivalent: field_mask_halves' | -> ^ listed now, the others by earlier rounds), 7
+#            unviable, 71 untested (budget), 100% of tested
+
 if [ "$#" -eq 0 ]; then
   set -- can_transfer dronecan_params health links gui migrate vehicle store rust-core rust-ffi
 fi
