@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
 import pytest
 import shared_data
@@ -187,20 +188,26 @@ def test_a_board_named_without_a_board_table_is_refused(monkeypatch: pytest.Monk
     ]
 
 
-def test_a_type_whose_bus_defaults_to_spi_is_proposed_on_i2c_tag_first(tmp_path: Path) -> None:
-    # a type of an extra DSDL folder (no driver declaration) whose bus defaults to SPI: its
-    # switch starts it on I2C as the power monitors are, so the proposal selects the I2C
-    # variant (px.Bus's variant 0) before it sets the I2C fields (a tag set later would
-    # reset them)
+def _extra_probe_schema(tmp_path: Path, bus_doc: str = "") -> Any:
+    """The bundled schema with an extra DSDL folder's type PROBE (no driver declaration): a
+    bus (its doc lines ``bus_doc``) and a gain."""
     import px4params
 
     root = tmp_path / "acme"
     root.mkdir()
     (root / "Probe.1.0.dsdl").write_text(
         "# A probe\n# @max_instances 2\n\nuint4 p_version\npx.Bus.1.0 bus\n# Bus\n"
-        "# @default spi.bus_id 1\nuint8 gain\n@sealed\n"
+        f"{bus_doc}uint8 gain\n@sealed\n"
     )
-    schema = px4params.load_schema([root], use_env=False, cache_dir=tmp_path / "cache")
+    return px4params.load_schema([root], use_env=False, cache_dir=tmp_path / "cache")
+
+
+def test_a_type_whose_bus_defaults_to_spi_is_proposed_on_i2c_tag_first(tmp_path: Path) -> None:
+    # a type of an extra DSDL folder (no driver declaration) whose bus defaults to SPI: its
+    # switch starts it on I2C as the power monitors are, so the proposal selects the I2C
+    # variant (px.Bus's variant 0) before it sets the I2C fields (a tag set later would
+    # reset them)
+    schema = _extra_probe_schema(tmp_path, "# @default spi.bus_id 1\n")
     proposal = migrate.migrate(today({"SENS_EN_PROBE": 1}), schema=schema, table="current")
     (inst,) = proposal.instances
     assert inst.values == {"bus._tag": 0, "bus.i2c.bus_id": 1, "bus.i2c.address": 0}
@@ -590,15 +597,7 @@ def test_an_extra_folders_type_is_guessed_on_bus_1_as_a_power_monitor_is(tmp_pat
     # migrate/build.py's rule for a type of an extra DSDL folder without a driver declaration:
     # its SENS_EN_<NAME> starts it as PX4's board scripts start the power monitors (`-X -b 1`),
     # so the guess of its bus says that, not "every external bus"
-    import px4params
-
-    root = tmp_path / "acme"
-    root.mkdir()
-    (root / "Probe.1.0.dsdl").write_text(
-        "# A probe\n# @max_instances 2\n\nuint4 p_version\npx.Bus.1.0 bus\n# Bus\nuint8 gain\n"
-        "@sealed\n"
-    )
-    schema = px4params.load_schema([root], use_env=False, cache_dir=tmp_path / "cache")
+    schema = _extra_probe_schema(tmp_path)
     proposal = migrate.migrate(today({"SENS_EN_PROBE": 1}), schema=schema, table="current")
     assert [i.name for i in proposal.instances] == ["PROBE#0"]
     assert [a for a in proposal.assumptions if a.startswith("SENS_EN_PROBE")] == [
