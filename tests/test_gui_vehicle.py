@@ -884,3 +884,54 @@ def test_a_list_never_answered_is_asked_again_until_the_timeout(schema: px4param
     with _peer(schema, _NoParameters) as served, _page(served.address, timeout=3.0) as page:
         assert page.values == {}
         assert served.lists >= 2
+
+
+# -- whose messages are the vehicle's: other components and systems on the same link -----------
+# A vehicle's link carries more than its autopilot: a camera or gimbal (other component IDs),
+# a companion computer, another ground station, another vehicle. The peer below sends their
+# frames through its own socket, each packed by pymavlink with its sender's system and component.
+
+
+def _say_as(served: _Recording, sender: tuple[int, int], messages: list[Any], peers: Any) -> None:
+    """``messages`` sent to ``peers`` from the peer's socket as ``sender`` (system, component)
+    sends them."""
+    packer = mavlink2.MAVLink(None, srcSystem=sender[0], srcComponent=sender[1])
+    for msg in messages:
+        frame = msg.pack(packer)
+        packer.seq = (packer.seq + 1) % 256
+        for peer in peers:
+            served._sock.sendto(frame, peer)
+
+
+#: The camera's parameters: one of its own, one with the name of one of the vehicle's.
+CAMERA_PARAMS = [("CAM_EV", 0.5), ("INA238_1C", 99.0)]
+
+
+class _WithCamera(_Recording):
+    """A vehicle with a camera (MAV_COMP_ID_CAMERA, 100) whose list reaches the page too
+    (MAVLink's parameter protocol: the recipient of PARAM_REQUEST_LIST broadcasts its values,
+    and a request to component 0, as a ground station sends it, reaches every component): here
+    right after the vehicle's list, saying the camera has 1000 parameters."""
+
+    def _stream_some(self) -> None:
+        super()._stream_some()
+        if self._stream is None:  # the vehicle's list is sent: the camera's follows
+            real32 = mavlink2.MAV_PARAM_TYPE_REAL32
+            camera = [
+                mavlink2.MAVLink_param_value_message(name.encode(), value, real32, 1000, index)
+                for index, (name, value) in enumerate(CAMERA_PARAMS)
+            ]
+            _say_as(self, (self.system_id, 100), camera, self._peers(None))
+
+
+@pytest.mark.issue40
+def test_only_the_vehicle_s_component_s_parameters_are_the_vehicle_s(
+    schema: px4params.Schema,
+) -> None:
+    """PARAM_VALUE names its sender; the camera's values (its param_count and param_index
+    with them) are the camera's: none is taken for the vehicle's, none overwrites one of the
+    vehicle's, and its count of 1000 does not make the page think values are missing."""
+    with _peer(schema, _WithCamera) as served, _page(served.address) as page:
+        assert page.read("INA238_1C") == 0x45  # after the camera's values, in order
+        assert page.values == {e.name: e.value for e in served.entries()}
+        assert served.lists == 1  # the list was whole: not asked for again

@@ -360,7 +360,13 @@ class MavlinkVehicle(_Base):
             if msg is None:
                 continue
             kind = msg.get_type()
-            if kind == "PARAM_VALUE":
+            # Every component answers PARAM_REQUEST_LIST with its own parameters (a camera's,
+            # a gimbal's): only the vehicle's are the vehicle's
+            from_vehicle = (msg.get_srcSystem(), msg.get_srcComponent()) == (
+                self._system,
+                self._component,
+            )
+            if kind == "PARAM_VALUE" and from_vehicle:
                 self._param_value(msg)
             elif kind == "STATUSTEXT":
                 self._statustext(msg)
