@@ -935,3 +935,38 @@ def test_only_the_vehicle_s_component_s_parameters_are_the_vehicle_s(
         assert page.read("INA238_1C") == 0x45  # after the camera's values, in order
         assert page.values == {e.name: e.value for e in served.entries()}
         assert served.lists == 1  # the list was whole: not asked for again
+
+
+#: Heartbeats of component 1 that are no vehicle's autopilot (system, MAV_TYPE, MAV_AUTOPILOT).
+NOT_A_VEHICLE = [
+    # another ground station
+    (42, mavlink2.MAV_TYPE_GCS, mavlink2.MAV_AUTOPILOT_INVALID),
+    # a companion computer whose software says it is an autopilot: its type says it is none
+    (43, mavlink2.MAV_TYPE_ONBOARD_CONTROLLER, mavlink2.MAV_AUTOPILOT_PX4),
+    # the vehicle's type, as components once reported their system's, but no flight controller
+    (44, mavlink2.MAV_TYPE_QUADROTOR, mavlink2.MAV_AUTOPILOT_INVALID),
+]
+
+
+class _AmongOthers(_Recording):
+    """Before each of its heartbeats, those of ``NOT_A_VEHICLE``."""
+
+    def _heartbeat(self) -> None:
+        for system, kind, autopilot in NOT_A_VEHICLE:
+            beat = mavlink2.MAVLink_heartbeat_message(kind, autopilot, 0, 0, 0, 3)
+            _say_as(self, (system, 1), [beat], self._peers(None))
+        super()._heartbeat()
+
+
+@pytest.mark.issue40
+def test_the_vehicle_is_the_heartbeat_of_an_autopilot_on_a_vehicle(
+    schema: px4params.Schema,
+) -> None:
+    """common.xml's HEARTBEAT: a component that is no flight controller sends
+    MAV_AUTOPILOT_INVALID; a flight controller sends the type of its vehicle, every other
+    component its own kind. The page talks to system 7 (MAV_TYPE_GENERIC, MAV_AUTOPILOT_PX4),
+    whose heartbeat comes after the three others'."""
+    with _peer(schema, _AmongOthers) as served, _page(served.address) as page:
+        assert page.values == {e.name: e.value for e in served.entries()}
+        assert page.write("INA238_1C", 74).ok  # sent to system 7, or nobody answers
+        assert served.store.get("INA238#1.bus.i2c.address") == 74

@@ -208,6 +208,32 @@ def _as_stored(value: int | float, is_float: bool) -> tuple[int | float, ...]:
     return (float32, float_from_f16(f16_from_float(value)))
 
 
+#: MAV_TYPE values of components that are no vehicle (common.xml: a flight controller reports the
+#: type of the vehicle it is mounted on, every other component its own kind).
+_COMPONENT_TYPES = frozenset(
+    {
+        6,  # GCS
+        18,  # ONBOARD_CONTROLLER
+        26,  # GIMBAL
+        27,  # ADSB
+        30,  # CAMERA
+        31,  # CHARGING_STATION
+        32,  # FLARM
+        33,  # SERVO
+        34,  # ODID
+        36,  # BATTERY
+        37,  # PARACHUTE
+        38,  # LOG
+        39,  # OSD
+        40,  # IMU
+        41,  # GPS
+        42,  # WINCH
+        44,  # ILLUMINATOR
+        48,  # GRIPPER
+    }
+)
+
+
 class MavlinkVehicle(_Base):
     """A vehicle (``px4params mavlink serve`` or a PX4) over MAVLink on UDP, as a ground station
     talks to it: heartbeats, the parameter list, component metadata over MAVLink FTP (or a
@@ -271,13 +297,23 @@ class MavlinkVehicle(_Base):
         while time.monotonic() < end:
             self._send_heartbeat()
             msg = self._conn.recv_match(type="HEARTBEAT", blocking=True, timeout=0.5)
-            if msg is not None and msg.get_srcComponent() == 1:
+            if msg is not None and self._is_vehicle(msg):
                 self._system = msg.get_srcSystem()
                 return
         hint = (
             "" if self._signed else " (a signed link drops unsigned messages: --signing-key FILE)"
         )
         raise CommandError(f"no vehicle answered on {self.source} within {timeout:.0f} s{hint}")
+
+    def _is_vehicle(self, heartbeat: Any) -> bool:
+        """A vehicle's autopilot, as common.xml's HEARTBEAT tells it: a component that is no
+        flight controller sends MAV_AUTOPILOT_INVALID, and a flight controller the type of its
+        vehicle (a GCS, companion computer or camera its own); MAV_COMP_ID_AUTOPILOT1 (1)."""
+        return (
+            heartbeat.get_srcComponent() == self._component
+            and heartbeat.autopilot != self._mav.MAV_AUTOPILOT_INVALID
+            and heartbeat.type not in _COMPONENT_TYPES
+        )
 
     def _load_metadata(self, metadata_file: str | None, timeout: float) -> dict[str, Any]:
         if metadata_file is not None:
