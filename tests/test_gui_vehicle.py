@@ -970,3 +970,39 @@ def test_the_vehicle_is_the_heartbeat_of_an_autopilot_on_a_vehicle(
         assert page.values == {e.name: e.value for e in served.entries()}
         assert page.write("INA238_1C", 74).ok  # sent to system 7, or nobody answers
         assert served.store.get("INA238#1.bus.i2c.address") == 74
+
+
+#: Three texts in two chunks each (MAVLink 2 STATUSTEXT: 50 characters a chunk), from three
+#: senders that each gave their text the id 5: the vehicle, its camera, and another vehicle.
+CHUNKED = {
+    (7, 1): "health: ina238 INA238#1 on I2C bus 2 address 0x45: critical: not found",
+    (7, 100): "camera: storage full, no photo taken, video recording stopped",
+    (8, 1): "health: ms5611 MS5611#0 on SPI bus 1: critical: no answer since boot",
+}
+
+#: A gimbal's (MAV_COMP_ID_GIMBAL, 154) text of 50 characters: one chunk, whole, of id 0.
+WHOLE = "gimbal: nominal; pitch and yaw calibrated; all ok."
+
+
+@pytest.mark.issue40
+def test_status_text_chunks_are_joined_per_sender_and_id(schema: px4params.Schema) -> None:
+    """STATUSTEXT's id is "unique (opaque)" to its sender, and id 0 marks the only chunk of a
+    text, to be shown at once (common.xml): the first chunks of three senders' texts of id 5,
+    a whole text in one chunk of 50 characters, then the second chunks make four texts, none
+    mixed with another."""
+    warning = mavlink2.MAV_SEVERITY_WARNING
+
+    def chunk(text: str, seq: int, text_id: int = 5) -> Any:
+        part = text[50 * seq : 50 * (seq + 1)].encode()
+        return mavlink2.MAVLink_statustext_message(warning, part, text_id, seq)
+
+    with _peer(schema) as served, _page(served.address) as page:
+        to_page = [("127.0.0.1", page._conn.port.getsockname()[1])]
+        for seq in (0, 1):
+            for sender, text in CHUNKED.items():
+                _say_as(served, sender, [chunk(text, seq)], to_page)
+            if seq == 0:
+                _say_as(served, (7, 154), [chunk(WHOLE, 0, text_id=0)], to_page)
+        assert wait_for(lambda: len(page.messages) >= 4)
+        time.sleep(0.1)  # nothing more comes
+        assert page.messages == [WHOLE, *CHUNKED.values()]

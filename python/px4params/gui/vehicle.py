@@ -276,7 +276,8 @@ class MavlinkVehicle(_Base):
         self._component = 1
         self._stop = threading.Event()
         self._waiters: dict[str, list[Any]] = {}
-        self._chunks: dict[int, list[str]] = {}
+        #: STATUSTEXT chunks waiting for their last one, by sender (system, component) and id.
+        self._chunks: dict[tuple[int, int, int], list[str]] = {}
         self._count = 0
         self._connect(timeout)
         self.metadata = self._load_metadata(metadata_file, timeout)
@@ -413,16 +414,19 @@ class MavlinkVehicle(_Base):
 
     def _statustext(self, msg: Any) -> None:
         """STATUSTEXT, its 50-character chunks joined (MAVLink 2: ``id`` and ``chunk_seq``;
-        a chunk shorter than 50 characters ends the text)."""
+        id 0 is a text in one chunk, and a chunk shorter than 50 characters ends the text).
+        An id is its sender's: two senders' texts of the same id are two texts."""
         text = msg.text
-        if not getattr(msg, "id", 0):
-            self._status(text)
-            return
-        parts = self._chunks.setdefault(msg.id, [])
-        parts.append(text)
-        if len(text) < 50:
-            del self._chunks[msg.id]
-            self._status("".join(parts))
+        text_id = getattr(msg, "id", 0)
+        if text_id:
+            key = (msg.get_srcSystem(), msg.get_srcComponent(), text_id)
+            parts = self._chunks.setdefault(key, [])
+            parts.append(text)
+            if len(text) == 50:  # a whole chunk: more follow
+                return
+            del self._chunks[key]
+            text = "".join(parts)
+        self._status(text)
 
     def _param_value(self, msg: Any) -> None:
         name = msg.param_id
