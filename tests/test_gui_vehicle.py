@@ -1006,3 +1006,24 @@ def test_status_text_chunks_are_joined_per_sender_and_id(schema: px4params.Schem
         assert wait_for(lambda: len(page.messages) >= 4)
         time.sleep(0.1)  # nothing more comes
         assert page.messages == [WHOLE, *CHUNKED.values()]
+
+
+class _SaysMore(_Recording):
+    """Before its reason for refusing a write, says two lines about parameters whose names
+    hold the written one (say, a preflight check's): ``NAME_CELLS`` and ``SENS_NAME``."""
+
+    def _refuse(self, peer: Any, msg: Any, name: str, found: Any, why: str, code: int) -> None:
+        for other in (f"{name}_CELLS", f"SENS_{name}"):
+            self._statustext(f"Preflight Fail: {other} not set", [peer])
+        super()._refuse(peer, msg, name, found, why, code)
+
+
+@pytest.mark.issue40
+def test_a_refusal_s_reason_names_the_parameter_as_a_whole_word(
+    schema: px4params.Schema,
+) -> None:
+    """A line about BAT1_N_CELLS or SENS_BAT1_N is no reason for refusing BAT1_N."""
+    with _peer(schema, _SaysMore) as served, _page(served.address) as page:
+        refused = page.write("BAT1_N", 3)
+        assert (refused.ok, refused.reason) == (False, "[pm] unknown param: BAT1_N")
+        assert "Preflight Fail: BAT1_N_CELLS not set" in page.messages  # said, not the reason

@@ -12,6 +12,7 @@ import logging
 import lzma
 import math
 import os
+import re
 import struct
 import threading
 import time
@@ -232,6 +233,13 @@ _COMPONENT_TYPES = frozenset(
         48,  # GRIPPER
     }
 )
+
+
+def _mentions(line: str, name: str) -> bool:
+    """Whether ``line`` names the parameter ``name`` as a whole word: ``BAT1_N`` is not named
+    by a line about ``BAT1_N_CELLS`` (parameter names are letters, digits and ``_``)."""
+    word = r"[A-Za-z0-9_]"
+    return re.search(rf"(?<!{word}){re.escape(name)}(?!{word})", line) is not None
 
 
 class MavlinkVehicle(_Base):
@@ -498,7 +506,7 @@ class MavlinkVehicle(_Base):
             unlisten()
             with self._lock:
                 self._waiters[name].remove(answers)
-        reasons = [m for m in said if name in m]
+        reasons = [m for m in said if _mentions(m, name)]
         errors = [a for a in answers if a[0] == "error"]
         values = [a[1] for a in answers if a[0] == "value"]
         if not answers:
