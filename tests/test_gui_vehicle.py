@@ -1027,3 +1027,39 @@ def test_a_refusal_s_reason_names_the_parameter_as_a_whole_word(
         refused = page.write("BAT1_N", 3)
         assert (refused.ok, refused.reason) == (False, "[pm] unknown param: BAT1_N")
         assert "Preflight Fail: BAT1_N_CELLS not set" in page.messages  # said, not the reason
+
+
+class _CameraAnswersToo(_Recording):
+    """Before the vehicle answers a write, the camera (component 100) refuses a parameter of
+    the same name with PARAM_ERROR and says a line naming it (its answer to another ground
+    station's write, say)."""
+
+    def _set(self, peer: Any, name: str, msg: Any) -> None:
+        error = mavlink2.MAVLink_param_error_message(
+            msg.get_srcSystem(),
+            msg.get_srcComponent(),
+            name.encode(),
+            -1,
+            mavlink2.MAV_PARAM_ERROR_READ_ONLY,
+        )
+        line = mavlink2.MAVLink_statustext_message(
+            mavlink2.MAV_SEVERITY_WARNING, f"{name}: the camera's".encode(), 0, 0
+        )
+        _say_as(self, (self.system_id, 100), [line, error], [peer])
+        super()._set(peer, name, msg)
+
+
+@pytest.mark.issue40
+def test_only_the_vehicle_refuses_its_writes_and_says_why(schema: px4params.Schema) -> None:
+    """The camera's PARAM_ERROR refuses no write of the vehicle, and its line is shown but no
+    reason: the reason is what the vehicle said."""
+    with _peer(schema, _CameraAnswersToo) as served, _page(served.address) as page:
+        accepted = page.write("INA238_1C", 75)
+        assert (accepted.ok, accepted.value, accepted.reason) == (True, 75, "")
+        assert served.store.get("INA238#1.bus.i2c.address") == 75
+        refused = page.write("INA238_1C", 200)
+        assert (refused.ok, refused.value) == (False, 75)
+        assert refused.reason == (
+            "INA238_1C: INA238#1: bus.i2c.address: value 200 is out of range (expected 0 to 127)"
+        )
+        assert "INA238_1C: the camera's" in page.messages

@@ -286,6 +286,8 @@ class MavlinkVehicle(_Base):
         self._waiters: dict[str, list[Any]] = {}
         #: STATUSTEXT chunks waiting for their last one, by sender (system, component) and id.
         self._chunks: dict[tuple[int, int, int], list[str]] = {}
+        #: Each write's list of what the vehicle says while it waits (its reason, if refused).
+        self._hearing: list[list[str]] = []
         self._count = 0
         self._connect(timeout)
         self.metadata = self._load_metadata(metadata_file, timeout)
@@ -415,7 +417,7 @@ class MavlinkVehicle(_Base):
                 self._param_value(msg)
             elif kind == "STATUSTEXT":
                 self._statustext(msg)
-            elif kind == "PARAM_ERROR":
+            elif kind == "PARAM_ERROR" and from_vehicle:
                 with self._lock:
                     for waiter in self._waiters.get(msg.param_id, []):
                         waiter.append(("error", msg))
@@ -425,15 +427,20 @@ class MavlinkVehicle(_Base):
         id 0 is a text in one chunk, and a chunk shorter than 50 characters ends the text).
         An id is its sender's: two senders' texts of the same id are two texts."""
         text = msg.text
+        sender = (msg.get_srcSystem(), msg.get_srcComponent())
         text_id = getattr(msg, "id", 0)
         if text_id:
-            key = (msg.get_srcSystem(), msg.get_srcComponent(), text_id)
+            key = (*sender, text_id)
             parts = self._chunks.setdefault(key, [])
             parts.append(text)
             if len(text) == 50:  # a whole chunk: more follow
                 return
             del self._chunks[key]
             text = "".join(parts)
+        if sender == (self._system, self._component):  # a camera's text is no write's reason
+            with self._lock:
+                for said in self._hearing:
+                    said.append(text)
         self._status(text)
 
     def _param_value(self, msg: Any) -> None:
@@ -482,16 +489,11 @@ class MavlinkVehicle(_Base):
         mav = self._mav
         is_float = isinstance(value, float)
         kind = mav.MAV_PARAM_TYPE_REAL32 if is_float else mav.MAV_PARAM_TYPE_INT32
-        said: list[str] = []  # this write's STATUSTEXT (self.messages keeps only the last 200)
-
-        def hear(event: dict[str, Any]) -> None:
-            if event["kind"] == "status":
-                said.append(event["text"])
-
+        said: list[str] = []  # the vehicle's STATUSTEXT (self.messages keeps only the last 200)
         answers: list[Any] = []
         with self._lock:
             self._waiters.setdefault(name, []).append(answers)
-        unlisten = self.listen(hear)
+            self._hearing.append(said)
         try:
             for _attempt in range(3):
                 message = param_set_message(self._system, self._component, name, value, kind)
@@ -503,9 +505,9 @@ class MavlinkVehicle(_Base):
                     break
             time.sleep(0.1)  # a PARAM_ERROR and STATUSTEXT follow a refusal's PARAM_VALUE
         finally:
-            unlisten()
             with self._lock:
                 self._waiters[name].remove(answers)
+                self._hearing = [h for h in self._hearing if h is not said]
         reasons = [m for m in said if _mentions(m, name)]
         errors = [a for a in answers if a[0] == "error"]
         values = [a[1] for a in answers if a[0] == "value"]
