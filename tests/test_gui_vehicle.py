@@ -884,3 +884,182 @@ def test_a_list_never_answered_is_asked_again_until_the_timeout(schema: px4param
     with _peer(schema, _NoParameters) as served, _page(served.address, timeout=3.0) as page:
         assert page.values == {}
         assert served.lists >= 2
+
+
+# -- whose messages are the vehicle's: other components and systems on the same link -----------
+# A vehicle's link carries more than its autopilot: a camera or gimbal (other component IDs),
+# a companion computer, another ground station, another vehicle. The peer below sends their
+# frames through its own socket, each packed by pymavlink with its sender's system and component.
+
+
+def _say_as(served: _Recording, sender: tuple[int, int], messages: list[Any], peers: Any) -> None:
+    """``messages`` sent to ``peers`` from the peer's socket as ``sender`` (system, component)
+    sends them."""
+    packer = mavlink2.MAVLink(None, srcSystem=sender[0], srcComponent=sender[1])
+    for msg in messages:
+        frame = msg.pack(packer)
+        packer.seq = (packer.seq + 1) % 256
+        for peer in peers:
+            served._sock.sendto(frame, peer)
+
+
+#: The camera's parameters: one of its own, one with the name of one of the vehicle's.
+CAMERA_PARAMS = [("CAM_EV", 0.5), ("INA238_1C", 99.0)]
+
+
+class _WithCamera(_Recording):
+    """A vehicle with a camera (MAV_COMP_ID_CAMERA, 100) whose list reaches the page too
+    (MAVLink's parameter protocol: the recipient of PARAM_REQUEST_LIST broadcasts its values,
+    and a request to component 0, as a ground station sends it, reaches every component): here
+    right after the vehicle's list, saying the camera has 1000 parameters."""
+
+    def _stream_some(self) -> None:
+        super()._stream_some()
+        if self._stream is None:  # the vehicle's list is sent: the camera's follows
+            real32 = mavlink2.MAV_PARAM_TYPE_REAL32
+            camera = [
+                mavlink2.MAVLink_param_value_message(name.encode(), value, real32, 1000, index)
+                for index, (name, value) in enumerate(CAMERA_PARAMS)
+            ]
+            _say_as(self, (self.system_id, 100), camera, self._peers(None))
+
+
+@pytest.mark.issue40
+def test_only_the_vehicle_s_component_s_parameters_are_the_vehicle_s(
+    schema: px4params.Schema,
+) -> None:
+    """PARAM_VALUE names its sender; the camera's values (its param_count and param_index
+    with them) are the camera's: none is taken for the vehicle's, none overwrites one of the
+    vehicle's, and its count of 1000 does not make the page think values are missing."""
+    with _peer(schema, _WithCamera) as served, _page(served.address) as page:
+        assert page.read("INA238_1C") == 0x45  # after the camera's values, in order
+        assert page.values == {e.name: e.value for e in served.entries()}
+        assert served.lists == 1  # the list was whole: not asked for again
+
+
+#: Heartbeats of component 1 that are no vehicle's autopilot (system, MAV_TYPE, MAV_AUTOPILOT).
+NOT_A_VEHICLE = [
+    # another ground station
+    (42, mavlink2.MAV_TYPE_GCS, mavlink2.MAV_AUTOPILOT_INVALID),
+    # a companion computer whose software says it is an autopilot: its type says it is none
+    (43, mavlink2.MAV_TYPE_ONBOARD_CONTROLLER, mavlink2.MAV_AUTOPILOT_PX4),
+    # the vehicle's type, as components once reported their system's, but no flight controller
+    (44, mavlink2.MAV_TYPE_QUADROTOR, mavlink2.MAV_AUTOPILOT_INVALID),
+]
+
+
+class _AmongOthers(_Recording):
+    """Before each of its heartbeats, those of ``NOT_A_VEHICLE``."""
+
+    def _heartbeat(self) -> None:
+        for system, kind, autopilot in NOT_A_VEHICLE:
+            beat = mavlink2.MAVLink_heartbeat_message(kind, autopilot, 0, 0, 0, 3)
+            _say_as(self, (system, 1), [beat], self._peers(None))
+        super()._heartbeat()
+
+
+@pytest.mark.issue40
+def test_the_vehicle_is_the_heartbeat_of_an_autopilot_on_a_vehicle(
+    schema: px4params.Schema,
+) -> None:
+    """common.xml's HEARTBEAT: a component that is no flight controller sends
+    MAV_AUTOPILOT_INVALID; a flight controller sends the type of its vehicle, every other
+    component its own kind. The page talks to system 7 (MAV_TYPE_GENERIC, MAV_AUTOPILOT_PX4),
+    whose heartbeat comes after the three others'."""
+    with _peer(schema, _AmongOthers) as served, _page(served.address) as page:
+        assert page.values == {e.name: e.value for e in served.entries()}
+        assert page.write("INA238_1C", 74).ok  # sent to system 7, or nobody answers
+        assert served.store.get("INA238#1.bus.i2c.address") == 74
+
+
+#: Three texts in two chunks each (MAVLink 2 STATUSTEXT: 50 characters a chunk), from three
+#: senders that each gave their text the id 5: the vehicle, its camera, and another vehicle.
+CHUNKED = {
+    (7, 1): "health: ina238 INA238#1 on I2C bus 2 address 0x45: critical: not found",
+    (7, 100): "camera: storage full, no photo taken, video recording stopped",
+    (8, 1): "health: ms5611 MS5611#0 on SPI bus 1: critical: no answer since boot",
+}
+
+#: A gimbal's (MAV_COMP_ID_GIMBAL, 154) text of 50 characters: one chunk, whole, of id 0.
+WHOLE = "gimbal: nominal; pitch and yaw calibrated; all ok."
+
+
+@pytest.mark.issue40
+def test_status_text_chunks_are_joined_per_sender_and_id(schema: px4params.Schema) -> None:
+    """STATUSTEXT's id is "unique (opaque)" to its sender, and id 0 marks the only chunk of a
+    text, to be shown at once (common.xml): the first chunks of three senders' texts of id 5,
+    a whole text in one chunk of 50 characters, then the second chunks make four texts, none
+    mixed with another."""
+    warning = mavlink2.MAV_SEVERITY_WARNING
+
+    def chunk(text: str, seq: int, text_id: int = 5) -> Any:
+        part = text[50 * seq : 50 * (seq + 1)].encode()
+        return mavlink2.MAVLink_statustext_message(warning, part, text_id, seq)
+
+    with _peer(schema) as served, _page(served.address) as page:
+        to_page = [("127.0.0.1", page._conn.port.getsockname()[1])]
+        for seq in (0, 1):
+            for sender, text in CHUNKED.items():
+                _say_as(served, sender, [chunk(text, seq)], to_page)
+            if seq == 0:
+                _say_as(served, (7, 154), [chunk(WHOLE, 0, text_id=0)], to_page)
+        assert wait_for(lambda: len(page.messages) >= 4)
+        time.sleep(0.1)  # nothing more comes
+        assert page.messages == [WHOLE, *CHUNKED.values()]
+
+
+class _SaysMore(_Recording):
+    """Before its reason for refusing a write, says two lines about parameters whose names
+    hold the written one (say, a preflight check's): ``NAME_CELLS`` and ``SENS_NAME``."""
+
+    def _refuse(self, peer: Any, msg: Any, name: str, found: Any, why: str, code: int) -> None:
+        for other in (f"{name}_CELLS", f"SENS_{name}"):
+            self._statustext(f"Preflight Fail: {other} not set", [peer])
+        super()._refuse(peer, msg, name, found, why, code)
+
+
+@pytest.mark.issue40
+def test_a_refusal_s_reason_names_the_parameter_as_a_whole_word(
+    schema: px4params.Schema,
+) -> None:
+    """A line about BAT1_N_CELLS or SENS_BAT1_N is no reason for refusing BAT1_N."""
+    with _peer(schema, _SaysMore) as served, _page(served.address) as page:
+        refused = page.write("BAT1_N", 3)
+        assert (refused.ok, refused.reason) == (False, "[pm] unknown param: BAT1_N")
+        assert "Preflight Fail: BAT1_N_CELLS not set" in page.messages  # said, not the reason
+
+
+class _CameraAnswersToo(_Recording):
+    """Before the vehicle answers a write, the camera (component 100) refuses a parameter of
+    the same name with PARAM_ERROR and says a line naming it (its answer to another ground
+    station's write, say)."""
+
+    def _set(self, peer: Any, name: str, msg: Any) -> None:
+        error = mavlink2.MAVLink_param_error_message(
+            msg.get_srcSystem(),
+            msg.get_srcComponent(),
+            name.encode(),
+            -1,
+            mavlink2.MAV_PARAM_ERROR_READ_ONLY,
+        )
+        line = mavlink2.MAVLink_statustext_message(
+            mavlink2.MAV_SEVERITY_WARNING, f"{name}: the camera's".encode(), 0, 0
+        )
+        _say_as(self, (self.system_id, 100), [line, error], [peer])
+        super()._set(peer, name, msg)
+
+
+@pytest.mark.issue40
+def test_only_the_vehicle_refuses_its_writes_and_says_why(schema: px4params.Schema) -> None:
+    """The camera's PARAM_ERROR refuses no write of the vehicle, and its line is shown but no
+    reason: the reason is what the vehicle said."""
+    with _peer(schema, _CameraAnswersToo) as served, _page(served.address) as page:
+        accepted = page.write("INA238_1C", 75)
+        assert (accepted.ok, accepted.value, accepted.reason) == (True, 75, "")
+        assert served.store.get("INA238#1.bus.i2c.address") == 75
+        refused = page.write("INA238_1C", 200)
+        assert (refused.ok, refused.value) == (False, 75)
+        assert refused.reason == (
+            "INA238_1C: INA238#1: bus.i2c.address: value 200 is out of range (expected 0 to 127)"
+        )
+        assert "INA238_1C: the camera's" in page.messages

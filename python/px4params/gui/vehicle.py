@@ -12,6 +12,7 @@ import logging
 import lzma
 import math
 import os
+import re
 import struct
 import threading
 import time
@@ -208,6 +209,39 @@ def _as_stored(value: int | float, is_float: bool) -> tuple[int | float, ...]:
     return (float32, float_from_f16(f16_from_float(value)))
 
 
+#: MAV_TYPE values of components that are no vehicle (common.xml: a flight controller reports the
+#: type of the vehicle it is mounted on, every other component its own kind).
+_COMPONENT_TYPES = frozenset(
+    {
+        6,  # GCS
+        18,  # ONBOARD_CONTROLLER
+        26,  # GIMBAL
+        27,  # ADSB
+        30,  # CAMERA
+        31,  # CHARGING_STATION
+        32,  # FLARM
+        33,  # SERVO
+        34,  # ODID
+        36,  # BATTERY
+        37,  # PARACHUTE
+        38,  # LOG
+        39,  # OSD
+        40,  # IMU
+        41,  # GPS
+        42,  # WINCH
+        44,  # ILLUMINATOR
+        48,  # GRIPPER
+    }
+)
+
+
+def _mentions(line: str, name: str) -> bool:
+    """Whether ``line`` names the parameter ``name`` as a whole word: ``BAT1_N`` is not named
+    by a line about ``BAT1_N_CELLS`` (parameter names are letters, digits and ``_``)."""
+    word = r"[A-Za-z0-9_]"
+    return re.search(rf"(?<!{word}){re.escape(name)}(?!{word})", line) is not None
+
+
 class MavlinkVehicle(_Base):
     """A vehicle (``px4params mavlink serve`` or a PX4) over MAVLink on UDP, as a ground station
     talks to it: heartbeats, the parameter list, component metadata over MAVLink FTP (or a
@@ -250,7 +284,10 @@ class MavlinkVehicle(_Base):
         self._component = 1
         self._stop = threading.Event()
         self._waiters: dict[str, list[Any]] = {}
-        self._chunks: dict[int, list[str]] = {}
+        #: STATUSTEXT chunks waiting for their last one, by sender (system, component) and id.
+        self._chunks: dict[tuple[int, int, int], list[str]] = {}
+        #: Each write's list of what the vehicle says while it waits (its reason, if refused).
+        self._hearing: list[list[str]] = []
         self._count = 0
         self._connect(timeout)
         self.metadata = self._load_metadata(metadata_file, timeout)
@@ -271,13 +308,23 @@ class MavlinkVehicle(_Base):
         while time.monotonic() < end:
             self._send_heartbeat()
             msg = self._conn.recv_match(type="HEARTBEAT", blocking=True, timeout=0.5)
-            if msg is not None and msg.get_srcComponent() == 1:
+            if msg is not None and self._is_vehicle(msg):
                 self._system = msg.get_srcSystem()
                 return
         hint = (
             "" if self._signed else " (a signed link drops unsigned messages: --signing-key FILE)"
         )
         raise CommandError(f"no vehicle answered on {self.source} within {timeout:.0f} s{hint}")
+
+    def _is_vehicle(self, heartbeat: Any) -> bool:
+        """A vehicle's autopilot, as common.xml's HEARTBEAT tells it: a component that is no
+        flight controller sends MAV_AUTOPILOT_INVALID, and a flight controller the type of its
+        vehicle (a GCS, companion computer or camera its own); MAV_COMP_ID_AUTOPILOT1 (1)."""
+        return (
+            heartbeat.get_srcComponent() == self._component
+            and heartbeat.autopilot != self._mav.MAV_AUTOPILOT_INVALID
+            and heartbeat.type not in _COMPONENT_TYPES
+        )
 
     def _load_metadata(self, metadata_file: str | None, timeout: float) -> dict[str, Any]:
         if metadata_file is not None:
@@ -360,27 +407,41 @@ class MavlinkVehicle(_Base):
             if msg is None:
                 continue
             kind = msg.get_type()
-            if kind == "PARAM_VALUE":
+            # Every component answers PARAM_REQUEST_LIST with its own parameters (a camera's,
+            # a gimbal's): only the vehicle's are the vehicle's
+            from_vehicle = (msg.get_srcSystem(), msg.get_srcComponent()) == (
+                self._system,
+                self._component,
+            )
+            if kind == "PARAM_VALUE" and from_vehicle:
                 self._param_value(msg)
             elif kind == "STATUSTEXT":
                 self._statustext(msg)
-            elif kind == "PARAM_ERROR":
+            elif kind == "PARAM_ERROR" and from_vehicle:
                 with self._lock:
                     for waiter in self._waiters.get(msg.param_id, []):
                         waiter.append(("error", msg))
 
     def _statustext(self, msg: Any) -> None:
         """STATUSTEXT, its 50-character chunks joined (MAVLink 2: ``id`` and ``chunk_seq``;
-        a chunk shorter than 50 characters ends the text)."""
+        id 0 is a text in one chunk, and a chunk shorter than 50 characters ends the text).
+        An id is its sender's: two senders' texts of the same id are two texts."""
         text = msg.text
-        if not getattr(msg, "id", 0):
-            self._status(text)
-            return
-        parts = self._chunks.setdefault(msg.id, [])
-        parts.append(text)
-        if len(text) < 50:
-            del self._chunks[msg.id]
-            self._status("".join(parts))
+        sender = (msg.get_srcSystem(), msg.get_srcComponent())
+        text_id = getattr(msg, "id", 0)
+        if text_id:
+            key = (*sender, text_id)
+            parts = self._chunks.setdefault(key, [])
+            parts.append(text)
+            if len(text) == 50:  # a whole chunk: more follow
+                return
+            del self._chunks[key]
+            text = "".join(parts)
+        if sender == (self._system, self._component):  # a camera's text is no write's reason
+            with self._lock:
+                for said in self._hearing:
+                    said.append(text)
+        self._status(text)
 
     def _param_value(self, msg: Any) -> None:
         name = msg.param_id
@@ -428,16 +489,11 @@ class MavlinkVehicle(_Base):
         mav = self._mav
         is_float = isinstance(value, float)
         kind = mav.MAV_PARAM_TYPE_REAL32 if is_float else mav.MAV_PARAM_TYPE_INT32
-        said: list[str] = []  # this write's STATUSTEXT (self.messages keeps only the last 200)
-
-        def hear(event: dict[str, Any]) -> None:
-            if event["kind"] == "status":
-                said.append(event["text"])
-
+        said: list[str] = []  # the vehicle's STATUSTEXT (self.messages keeps only the last 200)
         answers: list[Any] = []
         with self._lock:
             self._waiters.setdefault(name, []).append(answers)
-        unlisten = self.listen(hear)
+            self._hearing.append(said)
         try:
             for _attempt in range(3):
                 message = param_set_message(self._system, self._component, name, value, kind)
@@ -449,10 +505,10 @@ class MavlinkVehicle(_Base):
                     break
             time.sleep(0.1)  # a PARAM_ERROR and STATUSTEXT follow a refusal's PARAM_VALUE
         finally:
-            unlisten()
             with self._lock:
                 self._waiters[name].remove(answers)
-        reasons = [m for m in said if name in m]
+                self._hearing = [h for h in self._hearing if h is not said]
+        reasons = [m for m in said if _mentions(m, name)]
         errors = [a for a in answers if a[0] == "error"]
         values = [a[1] for a in answers if a[0] == "value"]
         if not answers:
