@@ -246,8 +246,8 @@ def test_params_file(
     assert "CAL_MAG0_ROT" not in proposal.used
     assert proposal.not_carried == [
         "INA238_CONFIG = 3: INA238 has no field for it",
-        "SENS_EN_LL40LS = 1: starts no I2C driver of the manifest (its ll40ls starts on 2); it "
-        "stays a classic parameter",
+        "SENS_EN_LL40LS = 1: starts no I2C driver of the manifest (its ll40ls starts on "
+        "SENS_EN_LL40LS == 2); it stays a classic parameter",
         "CAL_MAG2_ID = 33554432: not a device ID",
         f"CAL_ACC1_ID = {UNKNOWN_I2C}: devtype 0x77 (not in the current table), I2C bus 2, "
         "address 0x30: no bundled parameter type for devtype 0x77; today it is found by probing, "

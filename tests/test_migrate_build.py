@@ -944,8 +944,8 @@ def test_a_switch_after_one_that_starts_no_i2c_driver_still_starts_its_own() -> 
     proposal = migrate.migrate(today({"SENS_EN_LL40LS": 1, "SENS_EN_MS4525DO": 1}), table="current")
     assert [i.name for i in proposal.instances] == ["MS4525DO#0"]
     assert proposal.not_carried == [
-        "SENS_EN_LL40LS = 1: starts no I2C driver of the manifest (its ll40ls starts on 2); it "
-        "stays a classic parameter"
+        "SENS_EN_LL40LS = 1: starts no I2C driver of the manifest (its ll40ls starts on "
+        "SENS_EN_LL40LS == 2); it stays a classic parameter"
     ]
 
 
@@ -984,34 +984,41 @@ def test_a_switch_px4_compares_with_1_starts_nothing_at_2_and_says_so() -> None:
     proposal = migrate.migrate(today({"SENS_EN_INA226": 2}), table="current")
     assert proposal.instances == []
     assert proposal.not_carried == [
-        "SENS_EN_INA226 = 2: starts no I2C driver of the manifest (its ina226 starts on 1); it "
-        "stays a classic parameter"
+        "SENS_EN_INA226 = 2: starts no I2C driver of the manifest (its ina226 starts on "
+        "SENS_EN_INA226 == 1); it stays a classic parameter"
     ]
 
 
 def test_every_switch_starts_its_driver_on_the_values_the_board_scripts_test_for() -> None:
     # The board table transcribes each script's test of a switch from PX4 (v1.11.0 to main:
     # ROMFS/px4fmu_common/init.d/rc.sensors, boards/*/init/rc.board_sensors), `param compare X
-    # 1` as "X == 1", `param greater X 0` as "X > 0": a driver declaration starts on exactly
-    # the values its line's test passes
-    from px4params.migrate.build import RENAMED_MODULES, _holds
+    # 1` as "X == 1", `param greater X 0` as "X > 0": a driver declaration's test is the one
+    # every row of its switch writes, and it starts on exactly the values that test passes,
+    # negative ones included (`param greater X 0` fails for -1)
+    from px4params.migrate.build import RENAMED_MODULES
     from px4params.vehicle.boards import load_boards
     from px4params.vehicle.drivers import load_drivers
 
     drivers = {d.name: d for d in load_drivers()}
+    table = load_boards()
     checked = set()
-    for board in load_boards().all():
-        for row in board.switches:
-            driver = drivers.get(RENAMED_MODULES.get(row.driver, row.driver))
-            if driver is None or driver.enabled_by != row.param:
-                continue
-            test = row.when.split(" and ")[0]
-            values = range(8)  # (a negative switch value: not tested here)
-            assert [v for v in values if driver.starts_on(v)] == [
-                v for v in values if _holds(test, v)
-            ], (driver.name, row.when, row.source)
-            checked.add(driver.name)
-    assert {"ina226", "ina228", "ina238", "ms4525do", "sdp3x", "ll40ls", "mb12xx"} <= checked
+    for board in table.all():
+        for variant in table.variants(board.name):
+            for row in variant.switches:
+                driver = drivers.get(RENAMED_MODULES.get(row.driver, row.driver))
+                if driver is None or driver.enabled_by != row.param:
+                    continue
+                (test,) = [c for c in row.when.split(" and ") if c.startswith(f"{row.param} ")]
+                assert driver.switch_test == test, (driver.name, row.when, row.source)
+                _, operator, limit = test.split(" ")
+                passes = {"==": lambda v, n: v == n, ">": lambda v, n: v > n}[operator]
+                values = range(-3, 8)
+                assert [v for v in values if driver.starts_on(v)] == [
+                    v for v in values if passes(v, int(limit))
+                ], (driver.name, row.when, row.source)
+                checked.add(driver.name)
+    assert {"ina226", "ina228", "ina238", "ms4525do", "sdp3x", "ll40ls", "mb12xx", "teraranger",
+            "lightware_laser_i2c", "auav"} <= checked  # fmt: skip
 
 
 def test_the_crazyflie_21s_bmi088_i2c_rows_start_its_imu() -> None:
@@ -1079,3 +1086,13 @@ def test_px4_1_11s_sf1xx_is_todays_lightware_laser_i2c() -> None:
     proposal = migrate.migrate(config({"SENS_EN_SF1XX": 6}, console=console), board=v5)
     assert [(i.name, i.values["bus.i2c.bus_id"]) for i in proposal.instances] == [("SF1XX#0", 2)]
     assert not [n for n in proposal.not_carried if "sf1xx" in n], proposal.not_carried
+
+
+def test_a_negative_switch_value_starts_nothing_and_is_said() -> None:
+    # rc.sensors' `param greater -s SENS_EN_TRANGER 0` fails for -1: no TeraRanger runs
+    proposal = migrate.migrate(today({"SENS_EN_TRANGER": -1}), table="current")
+    assert proposal.instances == []
+    assert proposal.not_carried == [
+        "SENS_EN_TRANGER = -1: starts no I2C driver of the manifest (its teraranger starts on "
+        "SENS_EN_TRANGER > 0); it stays a classic parameter"
+    ]

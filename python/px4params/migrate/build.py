@@ -330,11 +330,10 @@ class _Builder:
                 continue
             starting = [d for d in declared if d.starts_on(value)]
             if not starting:
-                wanted = ", ".join(str(v) for d in declared for v in d.enabled_values)
+                wanted = "; ".join(f"{d.name} starts on {d.switch_test}" for d in declared)
                 self.proposal.not_carried.append(
                     f"{name} = {_shown(value)}: starts no I2C driver of the manifest (its "
-                    f"{', '.join(d.name for d in declared)} starts on {wanted}); it stays a "
-                    "classic parameter"
+                    f"{wanted}); it stays a classic parameter"
                 )
                 continue
             for driver in starting:
