@@ -125,6 +125,16 @@ def today(params: dict[str, int | float], console: str | None = None) -> OldConf
     return OldConfig("test.ulg", "ULog", dict(params), version=(1, 15, 0), console=console)
 
 
+#: What the report says of Pixhawk 6X's second launcher bus (PX4's boards/px4/fmu-v6x/init/
+#: rc.board_sensors, v1.18 and main: `if [ $HAVE_PM2 = yes ]` around `i2c_launcher start -b 2`;
+#: the script sets HAVE_PM2 yes, and no when the hardware manifest says MFT_PM2 0).
+ONLY_WITH_PM2 = (
+    "bus 2 only where $HAVE_PM2 == yes (the board's script sets HAVE_PM2 yes, and no on "
+    "hardware without a second power-module port, which the parameters do not tell) "
+    "(PX4/PX4-Autopilot boards/px4/fmu-v6x/init/rc.board_sensors)"
+)
+
+
 def test_a_driver_switch_without_a_bundled_type_stays_classic() -> None:
     proposal = migrate.migrate(today({"SENS_EN_FOOBAR": 1, "SENS_EN_INA238": 1}), table="current")
     assert [i.name for i in proposal.instances] == ["INA238#0"]
@@ -412,23 +422,29 @@ def test_what_the_i2c_launcher_started_is_proposed_and_nothing_guessed() -> None
     assert proposal.instances == []
     assert proposal.assumptions == [
         "the board's i2c_launcher scans I2C bus 1, 2 for power monitors (INA226, INA228, INA238) "
-        "when no SENS_EN_INA* is set: the boot console shows none it started"
+        "when no SENS_EN_INA2xx is 1: the boot console shows none it started; " + ONLY_WITH_PM2
     ]
 
 
 @pytest.mark.parametrize(
     ("when", "holds_for"),
-    # a board row's condition on its switch, as the board table writes PX4's `param compare`
-    # (==) and `param greater` (>) tests, the others alike; the first clause decides
+    # a board row's test of its switch, as the board table writes PX4's `param compare` (==)
+    # and `param greater` (>) tests, the others alike
     [("SENS_EN_LL40LS == 2", {2}), ("SENS_EN_SF1XX > 0", {1, 2}), ("X != 1", {-1, 0, 2}),
      ("X >= 1", {1, 2}), ("X <= 1", {-1, 0, 1}), ("X < 1", {-1, 0}), ("X == -1", {-1}),
-     ("SENS_EN_SDP3X == 1 and not sdp3x started (start -X)", {1}),
-     ("", {-1, 0, 1, 2}), ("$VEHICLE_TYPE == fw", {-1, 0, 1, 2})],
+     ("not X > 0", {-1, 0}), ("", {-1, 0, 1, 2})],
 )  # fmt: skip
-def test_a_board_rows_condition_holds_as_the_shell_test_does(when: str, holds_for: set) -> None:
-    from px4params.migrate.build import _holds
+def test_a_board_rows_switch_test_holds_as_the_shell_test_does(when: str, holds_for: set) -> None:
+    from px4params.migrate.conditions import Facts, evaluate
 
-    assert {v for v in (-1, 0, 1, 2) if _holds(when, v)} == holds_for
+    def holds(value: int) -> bool | None:
+        facts = Facts({"SENS_EN_LL40LS": value, "SENS_EN_SF1XX": value, "X": value}, {}, (),
+                      None, "QGC .params")  # fmt: skip
+        verdict = evaluate(when, facts)
+        assert verdict.unchecked == ()
+        return verdict.holds
+
+    assert {v for v in (-1, 0, 1, 2) if holds(v)} == holds_for
 
 
 def test_a_setting_rounded_into_its_field_is_noted_with_the_fields_unit_if_it_has_one() -> None:
@@ -838,13 +854,13 @@ def test_the_i2c_launcher_runs_unless_a_power_monitor_switch_is_set() -> None:
     proposal = migrate.migrate(today(params, "nsh: sercon\n"), table="current", board=v6x)
     assert [a for a in proposal.assumptions if "i2c_launcher" in a] == [
         "the board's i2c_launcher scans I2C bus 1, 2 for power monitors (INA226, INA228, INA238) "
-        "when no SENS_EN_INA* is set: the boot console shows none it started"
+        "when no SENS_EN_INA2xx is 1: the boot console shows none it started; " + ONLY_WITH_PM2
     ]
     # a log without a boot console (before PX4 1.12) cannot say what the scan found
     proposal = migrate.migrate(today(params), table="current", board=v6x)
     assert [a for a in proposal.assumptions if "i2c_launcher" in a] == [
         "the board's i2c_launcher scans I2C bus 1, 2 for power monitors (INA226, INA228, INA238) "
-        "when no SENS_EN_INA* is set: a ULog does not say which it found"
+        "when no SENS_EN_INA2xx is 1: a ULog does not say which it found; " + ONLY_WITH_PM2
     ]
     params["SENS_EN_INA238"] = 1
     proposal = migrate.migrate(today(params, "nsh: sercon\n"), table="current", board=v6x)

@@ -7,11 +7,13 @@ import math
 import re
 import struct
 from collections.abc import Iterable
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from px4params.dsdl.model import NO_DOC
 from px4params.dsdl.schema import Schema
 from px4params.errors import MigrationError, Px4ParamsError
+from px4params.migrate.conditions import Facts, evaluate, per_bus
 from px4params.migrate.config import OldConfig
 from px4params.migrate.proposal import LeftOut, Proposal, ProposedInstance
 from px4params.vehicle import devid
@@ -362,11 +364,53 @@ class _Builder:
         )
         return [driver]
 
-    def switch_places(
-        self, switch: str, value: int | float, driver: Driver
-    ) -> list[tuple[int, int | None, str]]:
-        """Where the switch starts the driver: ``(bus, address or None, why)`` per instance,
-        from the boot console, else the board's switch rows, else a guess (reported)."""
+    def facts(self) -> Facts:
+        """What the board rows' conditions are settled by. PX4's board scripts set
+        INA_CONFIGURED yes in the block of each power-monitor switch's test (boards/px4/
+        fmu-v6x/init/rc.board_sensors: `if param compare SENS_EN_INA226 1`), so it follows
+        from those switches as their drivers' declarations test them."""
+        ina = any(
+            d.starts_on(self.params[d.enabled_by])
+            for d in self.drivers
+            if d.enabled_by and _INA_SWITCH.fullmatch(d.enabled_by) and d.enabled_by in self.params
+        )
+        return Facts(
+            self.params,
+            {"INA_CONFIGURED": "yes" if ina else "no"},
+            tuple(getattr(self.board, "ver_hw", ())),
+            self.starts if self.config.console is not None else None,
+            self.config.kind,
+        )
+
+    def running_rows(self, switch: str, driver: Driver) -> list[Any]:
+        """The board's rows of ``switch`` starting ``driver`` that PX4 runs with this
+        configuration: every clause of a row's condition is evaluated; a row that holds only
+        by PX4's default of what nothing here tells, or that nothing here settles, is said
+        so, naming the clause and the row's line."""
+        facts = self.facts()
+        rows = []
+        for row in getattr(self.board, "switches", ()):
+            if row.param != switch or RENAMED_MODULES.get(row.driver, row.driver) != driver.name:
+                continue
+            verdict = evaluate(row.when, facts)
+            start = f"'{row.driver} {row.args}' ({row.source}) runs only where"
+            unchecked = " and ".join(verdict.unchecked)
+            if verdict.holds:
+                rows.append(row)
+                if unchecked:
+                    self.assume(f"{switch}: {start} {unchecked}: taken as holding (PX4's default)")
+            elif verdict.holds is None:
+                self.assume(f"{switch}: {start} {unchecked}: not proposed from it")
+            elif unchecked:
+                self.assume(
+                    f"{switch}: {start} {unchecked}: by PX4's default it does not run, not "
+                    "proposed from it"
+                )
+        return rows
+
+    def switch_places(self, switch: str, driver: Driver) -> list[_Place]:
+        """Where the switch starts the driver, per instance: from the boot console, else the
+        board's switch rows that run, else a guess (reported)."""
         places = []
         for i, start in enumerate(self.starts):
             if (
@@ -376,23 +420,23 @@ class _Builder:
             ):
                 self.claimed.add(i)
                 places.append(
-                    (start.bus, start.address, f"boot console line {start.line}: '{start.text}'")
+                    _Place(
+                        start.bus, start.address, f"boot console line {start.line}: '{start.text}'"
+                    )
                 )
         if places:
             return places
-        rows = [
-            r
-            for r in getattr(self.board, "switches", ())
-            if r.param == switch
-            and RENAMED_MODULES.get(r.driver, r.driver) == driver.name
-            and _holds(getattr(r, "when", ""), value)
-        ]
+        rows = self.running_rows(switch, driver)
         # A start with -b is on that bus; one without is PX4's -X: every external bus is
         # tried, the device is found on one of them.
         pinned = [r for r in rows if re.search(r"(^|\s)-b\s", r.args)]
         if pinned:
             return [
-                (r.bus, r.address, f"the board starts it with '{r.driver} {r.args}' ({r.source})")
+                _Place(
+                    r.bus,
+                    r.address,
+                    f"the board starts it with '{r.driver} {r.args}' ({r.source})",
+                )
                 for r in pinned
             ]
         if rows:
@@ -403,7 +447,7 @@ class _Builder:
                 f"external I2C bus ({buses}; {first.source}), so the bus it is found on is not "
                 f"known: bus {first.bus} proposed"
             )
-            return [(first.bus, first.address, "")]
+            return [_Place(first.bus, first.address, "")]
         if self.config.console is not None:
             self.assume(
                 f"{switch}: the boot console shows no {driver.name} start (not connected at "
@@ -418,17 +462,18 @@ class _Builder:
             f"{switch}: I2C bus {DEFAULT_I2C_BUS} is a guess (PX4 starts {driver.name} {how}; "
             "nothing here says which bus it is on)"
         )
-        return [(DEFAULT_I2C_BUS, None, "")]
+        return [_Place(DEFAULT_I2C_BUS, None, "")]
 
     def enabled_driver(self, switch: str, value: int | float, driver: Driver) -> None:
         spec = self.specs[driver.parameter]
-        for bus, at, why in self.switch_places(switch, value, driver):
+        for place in self.switch_places(switch, driver):
+            at = place.address
             address = at if at is not None else _default_address(self.store, spec.name)
-            where = f"on I2C bus {bus}" + (f" ({why})" if why else "")
+            where = f"on I2C bus {place.bus}" + (f" ({place.why})" if place.why else "")
             default = " at the driver's default address" if at is None else " at address"
             inst = self.add(
                 spec.name,
-                bus,
+                place.bus,
                 address,
                 f"{switch} = {_shown(value)}: {driver.name} started {where}{default} "
                 f"0x{address:02X}",
@@ -631,26 +676,40 @@ class _Builder:
                 )
 
     def launcher_buses(self) -> None:
+        """The board's i2c_launcher scans, where the boot console does not show what it found:
+        each bus's condition evaluated, what nothing here settles named."""
         buses = tuple(getattr(self.board, "i2c_launcher_buses", ()) or ())
-        if not buses:
+        if not buses or any(s.launcher for s in self.starts):
             return
-        shown = ", ".join(str(b) for b in buses)
-        if any(s.launcher for s in self.starts):
-            return
-        # PX4's board scripts run the launcher only while no power-monitor switch is set
-        # ($INA_CONFIGURED == no): with one set, the switch's own starts are the truth.
-        switches = sorted(n for n, v in self.params.items() if _INA_SWITCH.fullmatch(n) and v)
         when = getattr(self.board, "i2c_launcher_when", "") or ""
-        if switches and "INA_CONFIGURED" in when:
-            return
+        conditions = per_bus(when) if when else {}
+        facts = self.facts()
+        scanned, notes = [], []
+        for bus in buses:
+            # A form not read as "bus N: ..." is evaluated whole: its tests are named unread.
+            verdict = evaluate(when if conditions is None else conditions.get(bus, ""), facts)
+            unchecked = " and ".join(verdict.unchecked)
+            if verdict.holds is False:
+                if unchecked:
+                    notes.append(f"bus {bus} not, by PX4's default: {unchecked}")
+                continue
+            scanned.append(bus)
+            if unchecked:
+                notes.append(f"bus {bus} only where {unchecked}")
+        if not scanned and not notes:
+            return  # a power-monitor switch is 1: the switch's own starts are the truth
         what = (
             "the boot console shows none it started"
             if self.config.console is not None
             else f"a {self.config.kind} does not say which it found"
         )
+        shown = ", ".join(str(b) for b in scanned) or "none"
+        unless = " when no SENS_EN_INA2xx is 1" if "INA_CONFIGURED" in when else ""
+        script = self.board.source.split(" at ")[0]
+        said = f"; {'; '.join(notes)} ({script})" if notes else ""
         self.assume(
             f"the board's i2c_launcher scans I2C bus {shown} for power monitors (INA226, INA228, "
-            f"INA238) when no SENS_EN_INA* is set: {what}"
+            f"INA238){unless}: {what}{said}"
         )
 
     def probing(self) -> None:
@@ -697,26 +756,6 @@ def _slot_kind(name: str) -> str:
     return m["sensor"] if m else _TOPIC_KIND.get(name.partition(" ")[0], name)
 
 
-_CONDITION = re.compile(r"\s*[A-Z0-9_]+\s*(==|!=|>=|<=|>|<)\s*(-?\d+)")
-
-
-def _holds(when: str, value: int | float) -> bool:
-    """Whether a board row's condition on its switch (``SENS_EN_LL40LS == 2``, ``> 0``: the
-    first clause) holds for ``value``; a condition not of that form is taken as holding."""
-    m = _CONDITION.match(when or "")
-    if not m:
-        return True
-    limit = int(m[2])
-    return {
-        "==": value == limit,
-        "!=": value != limit,
-        ">=": value >= limit,
-        "<=": value <= limit,
-        ">": value > limit,
-        "<": value < limit,
-    }[m[1]]
-
-
 def _default_address(store: Any, param: str) -> int:
     from px4params.store.spec import metadata_default
 
@@ -734,6 +773,16 @@ def _differs(old: Any, new: Any) -> bool:
 
 #: The power-monitor switches that keep PX4's i2c_launcher from running (SENS_EN_INA238, ...).
 _INA_SWITCH = re.compile(r"SENS_EN_INA2\d\d")
+
+
+@dataclass(frozen=True)
+class _Place:
+    """Where a switch starts its driver: bus, address (None: the driver's default) and why
+    (the evidence, or "")."""
+
+    bus: int
+    address: int | None
+    why: str
 
 
 def _shown(value: Any) -> str:
