@@ -235,7 +235,8 @@ def test_params_file(
     assert ina.notes == [
         "INA238_CURRENT = 327.68 A becomes current = 327 A (uint10, 1..327)",
         "INA238_SHUNT = 0.0003 Ohm becomes shunt = 0.000299930573 Ohm (float16, 1e-05..0.1)",
-        "today's start line also sets the battery index (-t 1): INA238 has no field for it",
+        "today's start line also sets a battery index (-t), which nothing here names (without "
+        "-t the driver uses 1): INA238 has no field for it",
     ]
     # Issue 34, defect 3: CAL_MAG0_ROT is calibration's; the driver runs without -R.
     assert ak.values == {"bus.i2c.bus_id": 1, "bus.i2c.address": 0x0C, "rotation": 0}

@@ -51,16 +51,20 @@ def test_thermal_control_is_reported_with_px4s_meaning_of_each_value() -> None:
 
 @pytest.mark.parametrize(("switch", "param"), [("SENS_EN_INA226", "INA226"),
                                                ("SENS_EN_INA228", "INA228")])  # fmt: skip
-def test_a_power_monitors_battery_index_has_no_field_and_says_so(switch: str, param: str) -> None:
-    # PX4's rc.sensors starts a switched power monitor as `ina22x -X -b 1 -t 1 -k start`: the
-    # battery index -t 1 is a start option the type has no field for
+def test_a_power_monitors_battery_index_nothing_names_is_said_unknown(
+    switch: str, param: str
+) -> None:
+    # PX4 1.11's rc.sensors starts no power monitor: a board's script does, each with its own
+    # battery index (`-t 1` on bus 1, `-t 2` on bus 2, `-t 3` or `-t 1` on bus 3: the board
+    # table's rows). With no board named and no boot console, nothing says which; the type has
+    # no field for it either way, and the note says the index is not known
     proposal = migrate.migrate(config({switch: 1}), table="px4-v1.11")
     (inst,) = proposal.instances
     assert inst.name == f"{param}#0"
-    assert (
-        f"today's start line also sets the battery index (-t 1): {param} has no field for it"
-        in inst.notes
-    )
+    assert inst.notes == [
+        "today's start line also sets a battery index (-t), which nothing here names (without "
+        f"-t the driver uses 1): {param} has no field for it"
+    ]
 
 
 @pytest.mark.parametrize(
@@ -818,7 +822,7 @@ def test_the_power_monitor_a_real_logs_i2c_launcher_found_keeps_its_battery_inde
     assert (inst.name, inst.values) == ("INA228#0", {"bus.i2c.bus_id": 1, "bus.i2c.address": 0x45})
     assert inst.origin.startswith("boot console line 29: ")
     assert inst.notes == [
-        "the start line also sets the battery index (-t 1): INA228 has no field for it"
+        "today's start line also sets the battery index (-t 1): INA228 has no field for it"
     ]
 
 

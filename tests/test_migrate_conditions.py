@@ -1,10 +1,11 @@
 """Board rows' conditions in ``px4params migrate``: every clause of a row's ``when`` decides, as
 PX4's startup script tests it; a clause the configuration cannot settle is taken as PX4's
-default only where PX4 has one, and is always named with the row's line.
+default only where PX4 has one, and is always named with the row's line. With it: the battery
+index (``-t``) each power monitor's start line gives.
 
 The expected answers are PX4's scripts as read (PX4-Autopilot boards/px4/fmu-v6x/init/
-rc.board_sensors, ROMFS/px4fmu_common/init.d/rc.sensors), transcribed in the board table with
-their lines.
+rc.board_sensors, ROMFS/px4fmu_common/init.d/rc.sensors, src/drivers/power_monitor/ina2xx/
+*_main.cpp), transcribed in the board table with their lines.
 """
 
 from __future__ import annotations
@@ -195,3 +196,62 @@ def test_the_launchers_hardware_clause_of_px4_1_15_is_named_for_each_bus() -> No
         f"where {hw}; bus 2 only where {hw} and $HAVE_PM2 == yes ({PM2_WHY}) "
         "(PX4/PX4-Autopilot boards/px4/fmu-v6x/init/rc.board_sensors)"
     ]
+
+
+# -- the battery index of each start line ----------------------------------------------------
+
+
+def battery_notes(proposal: migrate.Proposal) -> list[tuple[str, int, str]]:
+    return [
+        (i.name, i.values["bus.i2c.bus_id"], note)
+        for i in proposal.instances
+        for note in i.notes
+        if "battery index" in note
+    ]
+
+
+def test_each_board_line_gives_its_own_battery_index() -> None:
+    # 6X: `ina238 -X -b 1 -t 1 -k start`, `ina238 -X -b 2 -t 2 -k start`
+    proposal = migrate.migrate(params({"SENS_EN_INA238": 1}), table="current", board=v6x())
+    assert battery_notes(proposal) == [
+        ("INA238#0", 1, "today's start line also sets the battery index (-t 1): INA238 has no "
+         "field for it"),
+        ("INA238#1", 2, "today's start line also sets the battery index (-t 2): INA238 has no "
+         "field for it"),
+    ]  # fmt: skip
+
+
+def test_a_driver_line_on_the_console_takes_the_index_of_the_boards_line_on_its_bus() -> None:
+    # the driver's own line prints no options: the 6X's line on bus 2 is `-t 2`
+    console = "ina238 #0 on I2C bus 2 (external) address 0x45\n"
+    proposal = migrate.migrate(params({"SENS_EN_INA238": 1}, console), table="current", board=v6x())
+    assert battery_notes(proposal) == [
+        ("INA238#0", 2, "today's start line also sets the battery index (-t 2): INA238 has no "
+         "field for it"),
+    ]  # fmt: skip
+
+
+def test_the_launchers_line_gives_the_index_it_ran_with() -> None:
+    # i2c_launcher (PX4 1.15) runs `<driver> -X -b {bus} -t {bus} start`: on bus 2, -t 2
+    console = (
+        "INFO  [i2c_launcher] Found address 0x41, running 'ina226 -X -b 2 -t 2 start'\n"
+        "ina226 #0 on I2C bus 2 (external) address 0x41\n"
+    )
+    proposal = migrate.migrate(params({}, console), table="current", board=v6x())
+    assert battery_notes(proposal) == [
+        ("INA226#0", 2, "today's start line also sets the battery index (-t 2): INA226 has no "
+         "field for it"),
+    ]  # fmt: skip
+
+
+def test_a_line_without_t_leaves_the_drivers_own_index() -> None:
+    # boards/svehicle/e2 (main, line 17): `ina228 -X start`: no -t, the driver uses 1
+    # (ina228_main.cpp: `cli.custom1 = 1`)
+    board = load_boards().by_name("svehicle_e2")
+    assert board is not None
+    assert {r.args for r in rows(board, "SENS_EN_INA228")} == {"-X start"}
+    proposal = migrate.migrate(params({"SENS_EN_INA228": 1}), table="current", board=board)
+    assert battery_notes(proposal) == [
+        ("INA228#0", 1, "today's start line also sets the battery index (no -t: the driver's 1): "
+         "INA228 has no field for it"),
+    ]  # fmt: skip

@@ -44,12 +44,13 @@ NOT_DRIVER_SWITCHES: dict[str, dict[int, str]] = {
 #: controller's, started by the board's script on the board's rotation.
 INTERNAL_ROTATION = -1
 
-#: What options of today's start lines (board scripts) the types have no field for.
-UNMAPPED_OPTIONS = {
-    "ina226": "battery index (-t 1)",
-    "ina228": "battery index (-t 1)",
-    "ina238": "battery index (-t 1)",
-}
+#: Drivers whose start line takes a battery index, ``-t`` ("battery index for calibration
+#: values"; without it the driver uses 1: ina226_main.cpp's ``cli.custom2 = 1``, ina228's and
+#: ina238's ``cli.custom1 = 1``), which their types have no field for.
+BATTERY_INDEX_DRIVERS = ("ina226", "ina228", "ina238")
+_BATTERY_INDEX = re.compile(r"(?:^|\s)-t\s+(\d+)")
+#: The command of a boot console's i2c_launcher line (``running 'ina228 -X -b 1 -t 1 start'``).
+_LAUNCHED = re.compile(r"running '([^']*)'")
 #: Driver modules PX4 renamed: the old name (older boot consoles, board scripts) -> today's.
 RENAMED_MODULES = {
     "ms4525_airspeed": "ms4525do",  # PX4 1.13
@@ -412,6 +413,11 @@ class _Builder:
         """Where the switch starts the driver, per instance: from the boot console, else the
         board's switch rows that run, else a guess (reported)."""
         places = []
+        lines = [
+            r
+            for r in getattr(self.board, "switches", ())
+            if r.param == switch and RENAMED_MODULES.get(r.driver, r.driver) == driver.name
+        ]
         for i, start in enumerate(self.starts):
             if (
                 i not in self.claimed
@@ -419,9 +425,16 @@ class _Builder:
                 and self.start_driver(start) == driver
             ):
                 self.claimed.add(i)
+                # A driver's own line prints no options: the board's line on that bus has them.
+                args = _launched_args(start) or next(
+                    (r.args for r in lines if r.bus == start.bus), None
+                )
                 places.append(
                     _Place(
-                        start.bus, start.address, f"boot console line {start.line}: '{start.text}'"
+                        start.bus,
+                        start.address,
+                        f"boot console line {start.line}: '{start.text}'",
+                        args,
                     )
                 )
         if places:
@@ -436,6 +449,7 @@ class _Builder:
                     r.bus,
                     r.address,
                     f"the board starts it with '{r.driver} {r.args}' ({r.source})",
+                    r.args,
                 )
                 for r in pinned
             ]
@@ -447,7 +461,7 @@ class _Builder:
                 f"external I2C bus ({buses}; {first.source}), so the bus it is found on is not "
                 f"known: bus {first.bus} proposed"
             )
-            return [_Place(first.bus, first.address, "")]
+            return [_Place(first.bus, first.address, "", first.args)]
         if self.config.console is not None:
             self.assume(
                 f"{switch}: the boot console shows no {driver.name} start (not connected at "
@@ -462,7 +476,7 @@ class _Builder:
             f"{switch}: I2C bus {DEFAULT_I2C_BUS} is a guess (PX4 starts {driver.name} {how}; "
             "nothing here says which bus it is on)"
         )
-        return [_Place(DEFAULT_I2C_BUS, None, "")]
+        return [_Place(DEFAULT_I2C_BUS, None, "", None)]
 
     def enabled_driver(self, switch: str, value: int | float, driver: Driver) -> None:
         spec = self.specs[driver.parameter]
@@ -484,11 +498,8 @@ class _Builder:
                 if old in self.params:
                     self.use(old)
                     self.field_value(inst, path, old, self.params[old])
-            options = UNMAPPED_OPTIONS.get(driver.name)
-            if options:
-                inst.notes.append(
-                    f"today's start line also sets the {options}: {spec.name} has no field for it"
-                )
+            if driver.name in BATTERY_INDEX_DRIVERS:
+                inst.notes.append(_battery_note(spec.name, place.args))
         for old in sorted(self.params):
             if old.startswith(f"{spec.name}_") and old not in driver.settings:
                 self.use(old)
@@ -669,11 +680,8 @@ class _Builder:
             )
             inst = self.add(spec.name, start.bus, address, f"{found}: '{start.text}' ({how})")
             self.set_rotation(inst, *self.driver_rotation(start, chips))
-            options = UNMAPPED_OPTIONS.get(driver.name)
-            if options:
-                inst.notes.append(
-                    f"the start line also sets the {options}: {spec.name} has no field for it"
-                )
+            if driver.name in BATTERY_INDEX_DRIVERS:
+                inst.notes.append(_battery_note(spec.name, _launched_args(start)))
 
     def launcher_buses(self) -> None:
         """The board's i2c_launcher scans, where the boot console does not show what it found:
@@ -775,14 +783,34 @@ def _differs(old: Any, new: Any) -> bool:
 _INA_SWITCH = re.compile(r"SENS_EN_INA2\d\d")
 
 
+def _launched_args(start: DriverStart) -> str | None:
+    """The options of an i2c_launcher line's command (a driver's own line prints none)."""
+    m = _LAUNCHED.search(start.text) if start.launcher else None
+    return m[1] if m else None
+
+
+def _battery_note(param: str, args: str | None) -> str:
+    """What today's start line (its options ``args``; None: not known) gives as the battery
+    index, which ``param`` has no field for."""
+    if args is None:
+        return (
+            "today's start line also sets a battery index (-t), which nothing here names "
+            f"(without -t the driver uses 1): {param} has no field for it"
+        )
+    m = _BATTERY_INDEX.search(args)
+    index = f"-t {m[1]}" if m else "no -t: the driver's 1"
+    return f"today's start line also sets the battery index ({index}): {param} has no field for it"
+
+
 @dataclass(frozen=True)
 class _Place:
-    """Where a switch starts its driver: bus, address (None: the driver's default) and why
-    (the evidence, or "")."""
+    """Where a switch starts its driver: bus, address (None: the driver's default), why (the
+    evidence, or "") and the start line's options where known (for its battery index)."""
 
     bus: int
     address: int | None
     why: str
+    args: str | None
 
 
 def _shown(value: Any) -> str:
