@@ -157,6 +157,9 @@ def test_a_driver_made_in_code_has_the_same_defaults() -> None:
 def test_only_the_listed_values_start_a_driver_that_lists_them() -> None:
     d = one(EVERY_KEY)
     assert [d.starts_on(v) for v in (0, 1, 2, 3, 4)] == [False, True, False, True, False]
+    # written as the board table writes a script's `param compare` tests; no switch, no test
+    assert d.switch_test == "SENS_EN_INA238 == 1 or SENS_EN_INA238 == 3"
+    assert one(INA238).switch_test == ""
 
 
 def test_the_startup_lines_name_the_module() -> None:
