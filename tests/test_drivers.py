@@ -108,8 +108,8 @@ def test_every_key_is_read_into_its_field(specs) -> None:
 
 
 def test_the_optional_keys_default_as_documented() -> None:
-    """autostart true; no chip ID read; started_by "probe"; enabled_values any but 0; the rest
-    empty."""
+    """autostart true; no chip ID read; started_by "probe"; without enabled_values, values
+    above 0 (PX4's `param greater <switch> 0`); the rest empty."""
     d = one(INA238)
     assert d.autostart is True
     assert (d.chip_id_register, d.chip_id) == (None, None)
@@ -121,7 +121,7 @@ def test_the_optional_keys_default_as_documented() -> None:
         None,
     )
     assert d.settings == {} and d.chips == ("INA238",)
-    assert [d.starts_on(v) for v in (0, 1, 2, -1, 0.5)] == [False, True, True, True, True]
+    assert [d.starts_on(v) for v in (0, 1, 2, -1, 0.5)] == [False, True, True, False, True]
 
 
 def test_a_driver_made_in_code_has_the_same_defaults() -> None:
@@ -157,6 +157,9 @@ def test_a_driver_made_in_code_has_the_same_defaults() -> None:
 def test_only_the_listed_values_start_a_driver_that_lists_them() -> None:
     d = one(EVERY_KEY)
     assert [d.starts_on(v) for v in (0, 1, 2, 3, 4)] == [False, True, False, True, False]
+    # written as the board table writes a script's `param compare` tests; no switch, no test
+    assert d.switch_test == "SENS_EN_INA238 == 1 or SENS_EN_INA238 == 3"
+    assert one(INA238).switch_test == ""
 
 
 def test_the_startup_lines_name_the_module() -> None:
@@ -576,3 +579,24 @@ def test_declarations_given_as_text_are_named_as_such() -> None:
     with pytest.raises(DriversFileError) as e:
         parse_drivers("")
     assert str(e.value) == "<drivers>: no [[driver]] tables"
+
+
+@pytest.mark.parametrize(
+    ("switch", "driver"),
+    [("SENS_EN_TRANGER", "teraranger"), ("SENS_EN_SF1XX", "lightware_laser_i2c"),
+     ("SENS_EN_MB12XX", "mb12xx"), ("SENS_EN_AUAVX", "auav")],
+)  # fmt: skip
+def test_a_switch_px4_tests_with_param_greater_starts_on_values_above_0_only(
+    switch: str, driver: str
+) -> None:
+    # rc.sensors: `if param greater -s SENS_EN_TRANGER 0` (the board table's "> 0"): -1 fails
+    # the test as 0 does; 1 and a model number pass it
+    from px4params.vehicle.boards import load_boards
+
+    board = load_boards().by_name("px4_fmu-v6x")
+    assert board is not None
+    (row, *_) = [r for r in board.switches if r.param == switch]
+    assert row.when == f"{switch} > 0"
+    declared = load_drivers()[driver]
+    assert declared.switch_test == row.when
+    assert [declared.starts_on(v) for v in (-2, -1, 0, 1, 6)] == [False, False, False, True, True]

@@ -235,7 +235,8 @@ def test_params_file(
     assert ina.notes == [
         "INA238_CURRENT = 327.68 A becomes current = 327 A (uint10, 1..327)",
         "INA238_SHUNT = 0.0003 Ohm becomes shunt = 0.000299930573 Ohm (float16, 1e-05..0.1)",
-        "today's start line also sets the battery index (-t 1): INA238 has no field for it",
+        "today's start line also sets a battery index (-t), which nothing here names (without "
+        "-t the driver uses 1): INA238 has no field for it",
     ]
     # Issue 34, defect 3: CAL_MAG0_ROT is calibration's; the driver runs without -R.
     assert ak.values == {"bus.i2c.bus_id": 1, "bus.i2c.address": 0x0C, "rotation": 0}
@@ -246,8 +247,8 @@ def test_params_file(
     assert "CAL_MAG0_ROT" not in proposal.used
     assert proposal.not_carried == [
         "INA238_CONFIG = 3: INA238 has no field for it",
-        "SENS_EN_LL40LS = 1: starts no I2C driver of the manifest (its ll40ls starts on 2); it "
-        "stays a classic parameter",
+        "SENS_EN_LL40LS = 1: starts no I2C driver of the manifest (its ll40ls starts on "
+        "SENS_EN_LL40LS == 2); it stays a classic parameter",
         "CAL_MAG2_ID = 33554432: not a device ID",
         f"CAL_ACC1_ID = {UNKNOWN_I2C}: devtype 0x77 (not in the current table), I2C bus 2, "
         "address 0x30: no bundled parameter type for devtype 0x77; today it is found by probing, "

@@ -51,16 +51,20 @@ def test_thermal_control_is_reported_with_px4s_meaning_of_each_value() -> None:
 
 @pytest.mark.parametrize(("switch", "param"), [("SENS_EN_INA226", "INA226"),
                                                ("SENS_EN_INA228", "INA228")])  # fmt: skip
-def test_a_power_monitors_battery_index_has_no_field_and_says_so(switch: str, param: str) -> None:
-    # PX4's rc.sensors starts a switched power monitor as `ina22x -X -b 1 -t 1 -k start`: the
-    # battery index -t 1 is a start option the type has no field for
+def test_a_power_monitors_battery_index_nothing_names_is_said_unknown(
+    switch: str, param: str
+) -> None:
+    # PX4 1.11's rc.sensors starts no power monitor: a board's script does, each with its own
+    # battery index (`-t 1` on bus 1, `-t 2` on bus 2, `-t 3` or `-t 1` on bus 3: the board
+    # table's rows). With no board named and no boot console, nothing says which; the type has
+    # no field for it either way, and the note says the index is not known
     proposal = migrate.migrate(config({switch: 1}), table="px4-v1.11")
     (inst,) = proposal.instances
     assert inst.name == f"{param}#0"
-    assert (
-        f"today's start line also sets the battery index (-t 1): {param} has no field for it"
-        in inst.notes
-    )
+    assert inst.notes == [
+        "today's start line also sets a battery index (-t), which nothing here names (without "
+        f"-t the driver uses 1): {param} has no field for it"
+    ]
 
 
 @pytest.mark.parametrize(
@@ -123,6 +127,16 @@ def test_one_device_on_two_instances_of_a_topic_is_reported_once(topic: str) -> 
 def today(params: dict[str, int | float], console: str | None = None) -> OldConfig:
     """A PX4 1.15 log's parameters (and boot console), read with today's devtype table."""
     return OldConfig("test.ulg", "ULog", dict(params), version=(1, 15, 0), console=console)
+
+
+#: What the report says of Pixhawk 6X's second launcher bus (PX4's boards/px4/fmu-v6x/init/
+#: rc.board_sensors, v1.18 and main: `if [ $HAVE_PM2 = yes ]` around `i2c_launcher start -b 2`;
+#: the script sets HAVE_PM2 yes, and no when the hardware manifest says MFT_PM2 0).
+ONLY_WITH_PM2 = (
+    "bus 2 only where $HAVE_PM2 == yes (the board's script sets HAVE_PM2 yes, and no on "
+    "hardware without a second power-module port, which the parameters do not tell) "
+    "(PX4/PX4-Autopilot boards/px4/fmu-v6x/init/rc.board_sensors)"
+)
 
 
 def test_a_driver_switch_without_a_bundled_type_stays_classic() -> None:
@@ -412,23 +426,29 @@ def test_what_the_i2c_launcher_started_is_proposed_and_nothing_guessed() -> None
     assert proposal.instances == []
     assert proposal.assumptions == [
         "the board's i2c_launcher scans I2C bus 1, 2 for power monitors (INA226, INA228, INA238) "
-        "when no SENS_EN_INA* is set: the boot console shows none it started"
+        "when no SENS_EN_INA2xx is 1: the boot console shows none it started; " + ONLY_WITH_PM2
     ]
 
 
 @pytest.mark.parametrize(
     ("when", "holds_for"),
-    # a board row's condition on its switch, as the board table writes PX4's `param compare`
-    # (==) and `param greater` (>) tests, the others alike; the first clause decides
+    # a board row's test of its switch, as the board table writes PX4's `param compare` (==)
+    # and `param greater` (>) tests, the others alike
     [("SENS_EN_LL40LS == 2", {2}), ("SENS_EN_SF1XX > 0", {1, 2}), ("X != 1", {-1, 0, 2}),
      ("X >= 1", {1, 2}), ("X <= 1", {-1, 0, 1}), ("X < 1", {-1, 0}), ("X == -1", {-1}),
-     ("SENS_EN_SDP3X == 1 and not sdp3x started (start -X)", {1}),
-     ("", {-1, 0, 1, 2}), ("$VEHICLE_TYPE == fw", {-1, 0, 1, 2})],
+     ("not X > 0", {-1, 0}), ("", {-1, 0, 1, 2})],
 )  # fmt: skip
-def test_a_board_rows_condition_holds_as_the_shell_test_does(when: str, holds_for: set) -> None:
-    from px4params.migrate.build import _holds
+def test_a_board_rows_switch_test_holds_as_the_shell_test_does(when: str, holds_for: set) -> None:
+    from px4params.migrate.conditions import Facts, evaluate
 
-    assert {v for v in (-1, 0, 1, 2) if _holds(when, v)} == holds_for
+    def holds(value: int) -> bool | None:
+        facts = Facts({"SENS_EN_LL40LS": value, "SENS_EN_SF1XX": value, "X": value}, {}, (),
+                      None, "QGC .params")  # fmt: skip
+        verdict = evaluate(when, facts)
+        assert verdict.unchecked == ()
+        return verdict.holds
+
+    assert {v for v in (-1, 0, 1, 2) if holds(v)} == holds_for
 
 
 def test_a_setting_rounded_into_its_field_is_noted_with_the_fields_unit_if_it_has_one() -> None:
@@ -802,7 +822,7 @@ def test_the_power_monitor_a_real_logs_i2c_launcher_found_keeps_its_battery_inde
     assert (inst.name, inst.values) == ("INA228#0", {"bus.i2c.bus_id": 1, "bus.i2c.address": 0x45})
     assert inst.origin.startswith("boot console line 29: ")
     assert inst.notes == [
-        "the start line also sets the battery index (-t 1): INA228 has no field for it"
+        "today's start line also sets the battery index (-t 1): INA228 has no field for it"
     ]
 
 
@@ -838,13 +858,13 @@ def test_the_i2c_launcher_runs_unless_a_power_monitor_switch_is_set() -> None:
     proposal = migrate.migrate(today(params, "nsh: sercon\n"), table="current", board=v6x)
     assert [a for a in proposal.assumptions if "i2c_launcher" in a] == [
         "the board's i2c_launcher scans I2C bus 1, 2 for power monitors (INA226, INA228, INA238) "
-        "when no SENS_EN_INA* is set: the boot console shows none it started"
+        "when no SENS_EN_INA2xx is 1: the boot console shows none it started; " + ONLY_WITH_PM2
     ]
     # a log without a boot console (before PX4 1.12) cannot say what the scan found
     proposal = migrate.migrate(today(params), table="current", board=v6x)
     assert [a for a in proposal.assumptions if "i2c_launcher" in a] == [
         "the board's i2c_launcher scans I2C bus 1, 2 for power monitors (INA226, INA228, INA238) "
-        "when no SENS_EN_INA* is set: a ULog does not say which it found"
+        "when no SENS_EN_INA2xx is 1: a ULog does not say which it found; " + ONLY_WITH_PM2
     ]
     params["SENS_EN_INA238"] = 1
     proposal = migrate.migrate(today(params, "nsh: sercon\n"), table="current", board=v6x)
@@ -944,8 +964,8 @@ def test_a_switch_after_one_that_starts_no_i2c_driver_still_starts_its_own() -> 
     proposal = migrate.migrate(today({"SENS_EN_LL40LS": 1, "SENS_EN_MS4525DO": 1}), table="current")
     assert [i.name for i in proposal.instances] == ["MS4525DO#0"]
     assert proposal.not_carried == [
-        "SENS_EN_LL40LS = 1: starts no I2C driver of the manifest (its ll40ls starts on 2); it "
-        "stays a classic parameter"
+        "SENS_EN_LL40LS = 1: starts no I2C driver of the manifest (its ll40ls starts on "
+        "SENS_EN_LL40LS == 2); it stays a classic parameter"
     ]
 
 
@@ -984,34 +1004,41 @@ def test_a_switch_px4_compares_with_1_starts_nothing_at_2_and_says_so() -> None:
     proposal = migrate.migrate(today({"SENS_EN_INA226": 2}), table="current")
     assert proposal.instances == []
     assert proposal.not_carried == [
-        "SENS_EN_INA226 = 2: starts no I2C driver of the manifest (its ina226 starts on 1); it "
-        "stays a classic parameter"
+        "SENS_EN_INA226 = 2: starts no I2C driver of the manifest (its ina226 starts on "
+        "SENS_EN_INA226 == 1); it stays a classic parameter"
     ]
 
 
 def test_every_switch_starts_its_driver_on_the_values_the_board_scripts_test_for() -> None:
     # The board table transcribes each script's test of a switch from PX4 (v1.11.0 to main:
     # ROMFS/px4fmu_common/init.d/rc.sensors, boards/*/init/rc.board_sensors), `param compare X
-    # 1` as "X == 1", `param greater X 0` as "X > 0": a driver declaration starts on exactly
-    # the values its line's test passes
-    from px4params.migrate.build import RENAMED_MODULES, _holds
+    # 1` as "X == 1", `param greater X 0` as "X > 0": a driver declaration's test is the one
+    # every row of its switch writes, and it starts on exactly the values that test passes,
+    # negative ones included (`param greater X 0` fails for -1)
+    from px4params.migrate.build import RENAMED_MODULES
     from px4params.vehicle.boards import load_boards
     from px4params.vehicle.drivers import load_drivers
 
     drivers = {d.name: d for d in load_drivers()}
+    table = load_boards()
     checked = set()
-    for board in load_boards().all():
-        for row in board.switches:
-            driver = drivers.get(RENAMED_MODULES.get(row.driver, row.driver))
-            if driver is None or driver.enabled_by != row.param:
-                continue
-            test = row.when.split(" and ")[0]
-            values = range(8)  # (a negative switch value: not tested here)
-            assert [v for v in values if driver.starts_on(v)] == [
-                v for v in values if _holds(test, v)
-            ], (driver.name, row.when, row.source)
-            checked.add(driver.name)
-    assert {"ina226", "ina228", "ina238", "ms4525do", "sdp3x", "ll40ls", "mb12xx"} <= checked
+    for board in table.all():
+        for variant in table.variants(board.name):
+            for row in variant.switches:
+                driver = drivers.get(RENAMED_MODULES.get(row.driver, row.driver))
+                if driver is None or driver.enabled_by != row.param:
+                    continue
+                (test,) = [c for c in row.when.split(" and ") if c.startswith(f"{row.param} ")]
+                assert driver.switch_test == test, (driver.name, row.when, row.source)
+                _, operator, limit = test.split(" ")
+                passes = {"==": lambda v, n: v == n, ">": lambda v, n: v > n}[operator]
+                values = range(-3, 8)
+                assert [v for v in values if driver.starts_on(v)] == [
+                    v for v in values if passes(v, int(limit))
+                ], (driver.name, row.when, row.source)
+                checked.add(driver.name)
+    assert {"ina226", "ina228", "ina238", "ms4525do", "sdp3x", "ll40ls", "mb12xx", "teraranger",
+            "lightware_laser_i2c", "auav"} <= checked  # fmt: skip
 
 
 def test_the_crazyflie_21s_bmi088_i2c_rows_start_its_imu() -> None:
@@ -1079,3 +1106,13 @@ def test_px4_1_11s_sf1xx_is_todays_lightware_laser_i2c() -> None:
     proposal = migrate.migrate(config({"SENS_EN_SF1XX": 6}, console=console), board=v5)
     assert [(i.name, i.values["bus.i2c.bus_id"]) for i in proposal.instances] == [("SF1XX#0", 2)]
     assert not [n for n in proposal.not_carried if "sf1xx" in n], proposal.not_carried
+
+
+def test_a_negative_switch_value_starts_nothing_and_is_said() -> None:
+    # rc.sensors' `param greater -s SENS_EN_TRANGER 0` fails for -1: no TeraRanger runs
+    proposal = migrate.migrate(today({"SENS_EN_TRANGER": -1}), table="current")
+    assert proposal.instances == []
+    assert proposal.not_carried == [
+        "SENS_EN_TRANGER = -1: starts no I2C driver of the manifest (its teraranger starts on "
+        "SENS_EN_TRANGER > 0); it stays a classic parameter"
+    ]

@@ -605,3 +605,54 @@ def test_an_ardupilot_file_is_not_migrated(
         f"px4params: error: {path}:3: '# Stack: ArduPilot': not a PX4 parameter file (QGC "
         "writes 'PX4' or 'PX4 Pro' there for PX4's)\n"
     )
+
+
+def test_each_real_power_monitors_battery_index_is_the_one_its_start_line_gives(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The battery index (`-t`) of a power monitor's start line, which no type has a field for,
+    is named as the line gives it, or said unknown: the NXP MR-Tropic log's i2c_launcher ran
+    `ina228 -X -b 1 -t 1 start` (boot console line 29); the Loong 2160's SENS_EN_INA238 = 1
+    on a Skynode (`--board px4_fmu-v5x`, PX4 v1.13.0's boards/px4/fmu-v5x/init/
+    rc.board_sensors) starts `ina238 -X -b 1 -t 1 -k start` and `ina238 -X -b 2 -t 2 -k start`;
+    with no board named nothing gives the line. Its SENS_EN_SDP3X = 1 runs rc.sensors' `sdp3x
+    start -X`, and `sdp3x start -X -a 0x22` only if that found nothing: a .params cannot say,
+    so the fallback is named, not proposed."""
+    try:
+        import px4params.vehicle.boards  # noqa: F401
+    except ImportError:
+        pytest.skip("needs px4params.vehicle.boards (the board table)")
+
+    def notes(name: str, *options: str) -> tuple[dict[str, list[str]], list[str]]:
+        (truth,) = [t for t in CORPUS if t.name == name]
+        assert main(["migrate", str(locate(truth, tmp_path)), "--json", *options]) == 0
+        report = json.loads(capsys.readouterr().out)
+        found = {
+            i["name"]: [n for n in i["notes"] if "battery index" in n]
+            for i in report["instances"]
+            if i["name"].startswith("INA")
+        }
+        return found, report["assumptions"]
+
+    line = "today's start line also sets the battery index (-t {}): {} has no field for it"
+    assert notes("frrs_ekf_failure.ulg")[0] == {"INA228#0": [line.format(1, "INA228")]}
+    found, assumptions = notes("loong.params", "--board", "px4_fmu-v5x")
+    assert found == {
+        "INA238#0": [line.format(1, "INA238")],
+        "INA238#1": [line.format(2, "INA238")],
+    }
+    (fallback,) = [a for a in assumptions if a.startswith("SENS_EN_SDP3X: 'sdp3x start -X -a")]
+    assert fallback.startswith(
+        "SENS_EN_SDP3X: 'sdp3x start -X -a 0x22' (PX4/PX4-Autopilot ROMFS/px4fmu_common/init.d/"
+        "rc.sensors:135 at v1.13.0 "
+    )
+    assert fallback.endswith(
+        "runs only where not sdp3x started (start -X) (a QGC .params has no boot console to "
+        "say): not proposed from it"
+    )
+    assert notes("loong.params")[0] == {
+        "INA238#0": [
+            "today's start line also sets a battery index (-t), which nothing here names "
+            "(without -t the driver uses 1): INA238 has no field for it"
+        ]
+    }

@@ -7,11 +7,13 @@ import math
 import re
 import struct
 from collections.abc import Iterable
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from px4params.dsdl.model import NO_DOC
 from px4params.dsdl.schema import Schema
 from px4params.errors import MigrationError, Px4ParamsError
+from px4params.migrate.conditions import Facts, evaluate, per_bus
 from px4params.migrate.config import OldConfig
 from px4params.migrate.proposal import LeftOut, Proposal, ProposedInstance
 from px4params.vehicle import devid
@@ -42,12 +44,13 @@ NOT_DRIVER_SWITCHES: dict[str, dict[int, str]] = {
 #: controller's, started by the board's script on the board's rotation.
 INTERNAL_ROTATION = -1
 
-#: What options of today's start lines (board scripts) the types have no field for.
-UNMAPPED_OPTIONS = {
-    "ina226": "battery index (-t 1)",
-    "ina228": "battery index (-t 1)",
-    "ina238": "battery index (-t 1)",
-}
+#: Drivers whose start line takes a battery index, ``-t`` ("battery index for calibration
+#: values"; without it the driver uses 1: ina226_main.cpp's ``cli.custom2 = 1``, ina228's and
+#: ina238's ``cli.custom1 = 1``), which their types have no field for.
+BATTERY_INDEX_DRIVERS = ("ina226", "ina228", "ina238")
+_BATTERY_INDEX = re.compile(r"(?:^|\s)-t\s+(\d+)")
+#: The command of a boot console's i2c_launcher line (``running 'ina228 -X -b 1 -t 1 start'``).
+_LAUNCHED = re.compile(r"running '([^']*)'")
 #: Driver modules PX4 renamed: the old name (older boot consoles, board scripts) -> today's.
 RENAMED_MODULES = {
     "ms4525_airspeed": "ms4525do",  # PX4 1.13
@@ -330,11 +333,10 @@ class _Builder:
                 continue
             starting = [d for d in declared if d.starts_on(value)]
             if not starting:
-                wanted = ", ".join(str(v) for d in declared for v in d.enabled_values)
+                wanted = "; ".join(f"{d.name} starts on {d.switch_test}" for d in declared)
                 self.proposal.not_carried.append(
                     f"{name} = {_shown(value)}: starts no I2C driver of the manifest (its "
-                    f"{', '.join(d.name for d in declared)} starts on {wanted}); it stays a "
-                    "classic parameter"
+                    f"{wanted}); it stays a classic parameter"
                 )
                 continue
             for driver in starting:
@@ -363,12 +365,59 @@ class _Builder:
         )
         return [driver]
 
-    def switch_places(
-        self, switch: str, value: int | float, driver: Driver
-    ) -> list[tuple[int, int | None, str]]:
-        """Where the switch starts the driver: ``(bus, address or None, why)`` per instance,
-        from the boot console, else the board's switch rows, else a guess (reported)."""
+    def facts(self) -> Facts:
+        """What the board rows' conditions are settled by. PX4's board scripts set
+        INA_CONFIGURED yes in the block of each power-monitor switch's test (boards/px4/
+        fmu-v6x/init/rc.board_sensors: `if param compare SENS_EN_INA226 1`), so it follows
+        from those switches as their drivers' declarations test them."""
+        ina = any(
+            d.starts_on(self.params[d.enabled_by])
+            for d in self.drivers
+            if d.enabled_by and _INA_SWITCH.fullmatch(d.enabled_by) and d.enabled_by in self.params
+        )
+        return Facts(
+            self.params,
+            {"INA_CONFIGURED": "yes" if ina else "no"},
+            tuple(getattr(self.board, "ver_hw", ())),
+            self.starts if self.config.console is not None else None,
+            self.config.kind,
+        )
+
+    def running_rows(self, switch: str, driver: Driver) -> list[Any]:
+        """The board's rows of ``switch`` starting ``driver`` that PX4 runs with this
+        configuration: every clause of a row's condition is evaluated; a row that holds only
+        by PX4's default of what nothing here tells, or that nothing here settles, is said
+        so, naming the clause and the row's line."""
+        facts = self.facts()
+        rows = []
+        for row in getattr(self.board, "switches", ()):
+            if row.param != switch or RENAMED_MODULES.get(row.driver, row.driver) != driver.name:
+                continue
+            verdict = evaluate(row.when, facts)
+            start = f"'{row.driver} {row.args}' ({row.source}) runs only where"
+            unchecked = " and ".join(verdict.unchecked)
+            if verdict.holds:
+                rows.append(row)
+                if unchecked:
+                    self.assume(f"{switch}: {start} {unchecked}: taken as holding (PX4's default)")
+            elif verdict.holds is None:
+                self.assume(f"{switch}: {start} {unchecked}: not proposed from it")
+            elif unchecked:
+                self.assume(
+                    f"{switch}: {start} {unchecked}: by PX4's default it does not run, not "
+                    "proposed from it"
+                )
+        return rows
+
+    def switch_places(self, switch: str, driver: Driver) -> list[_Place]:
+        """Where the switch starts the driver, per instance: from the boot console, else the
+        board's switch rows that run, else a guess (reported)."""
         places = []
+        lines = [
+            r
+            for r in getattr(self.board, "switches", ())
+            if r.param == switch and RENAMED_MODULES.get(r.driver, r.driver) == driver.name
+        ]
         for i, start in enumerate(self.starts):
             if (
                 i not in self.claimed
@@ -376,24 +425,32 @@ class _Builder:
                 and self.start_driver(start) == driver
             ):
                 self.claimed.add(i)
+                # A driver's own line prints no options: the board's line on that bus has them.
+                args = _launched_args(start) or next(
+                    (r.args for r in lines if r.bus == start.bus), None
+                )
                 places.append(
-                    (start.bus, start.address, f"boot console line {start.line}: '{start.text}'")
+                    _Place(
+                        start.bus,
+                        start.address,
+                        f"boot console line {start.line}: '{start.text}'",
+                        args,
+                    )
                 )
         if places:
             return places
-        rows = [
-            r
-            for r in getattr(self.board, "switches", ())
-            if r.param == switch
-            and RENAMED_MODULES.get(r.driver, r.driver) == driver.name
-            and _holds(getattr(r, "when", ""), value)
-        ]
+        rows = self.running_rows(switch, driver)
         # A start with -b is on that bus; one without is PX4's -X: every external bus is
         # tried, the device is found on one of them.
         pinned = [r for r in rows if re.search(r"(^|\s)-b\s", r.args)]
         if pinned:
             return [
-                (r.bus, r.address, f"the board starts it with '{r.driver} {r.args}' ({r.source})")
+                _Place(
+                    r.bus,
+                    r.address,
+                    f"the board starts it with '{r.driver} {r.args}' ({r.source})",
+                    r.args,
+                )
                 for r in pinned
             ]
         if rows:
@@ -404,7 +461,7 @@ class _Builder:
                 f"external I2C bus ({buses}; {first.source}), so the bus it is found on is not "
                 f"known: bus {first.bus} proposed"
             )
-            return [(first.bus, first.address, "")]
+            return [_Place(first.bus, first.address, "", first.args)]
         if self.config.console is not None:
             self.assume(
                 f"{switch}: the boot console shows no {driver.name} start (not connected at "
@@ -419,17 +476,18 @@ class _Builder:
             f"{switch}: I2C bus {DEFAULT_I2C_BUS} is a guess (PX4 starts {driver.name} {how}; "
             "nothing here says which bus it is on)"
         )
-        return [(DEFAULT_I2C_BUS, None, "")]
+        return [_Place(DEFAULT_I2C_BUS, None, "", None)]
 
     def enabled_driver(self, switch: str, value: int | float, driver: Driver) -> None:
         spec = self.specs[driver.parameter]
-        for bus, at, why in self.switch_places(switch, value, driver):
+        for place in self.switch_places(switch, driver):
+            at = place.address
             address = at if at is not None else _default_address(self.store, spec.name)
-            where = f"on I2C bus {bus}" + (f" ({why})" if why else "")
+            where = f"on I2C bus {place.bus}" + (f" ({place.why})" if place.why else "")
             default = " at the driver's default address" if at is None else " at address"
             inst = self.add(
                 spec.name,
-                bus,
+                place.bus,
                 address,
                 f"{switch} = {_shown(value)}: {driver.name} started {where}{default} "
                 f"0x{address:02X}",
@@ -440,11 +498,8 @@ class _Builder:
                 if old in self.params:
                     self.use(old)
                     self.field_value(inst, path, old, self.params[old])
-            options = UNMAPPED_OPTIONS.get(driver.name)
-            if options:
-                inst.notes.append(
-                    f"today's start line also sets the {options}: {spec.name} has no field for it"
-                )
+            if driver.name in BATTERY_INDEX_DRIVERS:
+                inst.notes.append(_battery_note(spec.name, place.args))
         for old in sorted(self.params):
             if old.startswith(f"{spec.name}_") and old not in driver.settings:
                 self.use(old)
@@ -625,33 +680,44 @@ class _Builder:
             )
             inst = self.add(spec.name, start.bus, address, f"{found}: '{start.text}' ({how})")
             self.set_rotation(inst, *self.driver_rotation(start, chips))
-            options = UNMAPPED_OPTIONS.get(driver.name)
-            if options:
-                inst.notes.append(
-                    f"the start line also sets the {options}: {spec.name} has no field for it"
-                )
+            if driver.name in BATTERY_INDEX_DRIVERS:
+                inst.notes.append(_battery_note(spec.name, _launched_args(start)))
 
     def launcher_buses(self) -> None:
+        """The board's i2c_launcher scans, where the boot console does not show what it found:
+        each bus's condition evaluated, what nothing here settles named."""
         buses = tuple(getattr(self.board, "i2c_launcher_buses", ()) or ())
-        if not buses:
+        if not buses or any(s.launcher for s in self.starts):
             return
-        shown = ", ".join(str(b) for b in buses)
-        if any(s.launcher for s in self.starts):
-            return
-        # PX4's board scripts run the launcher only while no power-monitor switch is set
-        # ($INA_CONFIGURED == no): with one set, the switch's own starts are the truth.
-        switches = sorted(n for n, v in self.params.items() if _INA_SWITCH.fullmatch(n) and v)
         when = getattr(self.board, "i2c_launcher_when", "") or ""
-        if switches and "INA_CONFIGURED" in when:
-            return
+        conditions = per_bus(when) if when else {}
+        facts = self.facts()
+        scanned, notes = [], []
+        for bus in buses:
+            # A form not read as "bus N: ..." is evaluated whole: its tests are named unread.
+            verdict = evaluate(when if conditions is None else conditions.get(bus, ""), facts)
+            unchecked = " and ".join(verdict.unchecked)
+            if verdict.holds is False:
+                if unchecked:
+                    notes.append(f"bus {bus} not, by PX4's default: {unchecked}")
+                continue
+            scanned.append(bus)
+            if unchecked:
+                notes.append(f"bus {bus} only where {unchecked}")
+        if not scanned and not notes:
+            return  # a power-monitor switch is 1: the switch's own starts are the truth
         what = (
             "the boot console shows none it started"
             if self.config.console is not None
             else f"a {self.config.kind} does not say which it found"
         )
+        shown = ", ".join(str(b) for b in scanned) or "none"
+        unless = " when no SENS_EN_INA2xx is 1" if "INA_CONFIGURED" in when else ""
+        script = self.board.source.split(" at ")[0]
+        said = f"; {'; '.join(notes)} ({script})" if notes else ""
         self.assume(
             f"the board's i2c_launcher scans I2C bus {shown} for power monitors (INA226, INA228, "
-            f"INA238) when no SENS_EN_INA* is set: {what}"
+            f"INA238){unless}: {what}{said}"
         )
 
     def probing(self) -> None:
@@ -698,26 +764,6 @@ def _slot_kind(name: str) -> str:
     return m["sensor"] if m else _TOPIC_KIND.get(name.partition(" ")[0], name)
 
 
-_CONDITION = re.compile(r"\s*[A-Z0-9_]+\s*(==|!=|>=|<=|>|<)\s*(-?\d+)")
-
-
-def _holds(when: str, value: int | float) -> bool:
-    """Whether a board row's condition on its switch (``SENS_EN_LL40LS == 2``, ``> 0``: the
-    first clause) holds for ``value``; a condition not of that form is taken as holding."""
-    m = _CONDITION.match(when or "")
-    if not m:
-        return True
-    limit = int(m[2])
-    return {
-        "==": value == limit,
-        "!=": value != limit,
-        ">=": value >= limit,
-        "<=": value <= limit,
-        ">": value > limit,
-        "<": value < limit,
-    }[m[1]]
-
-
 def _default_address(store: Any, param: str) -> int:
     from px4params.store.spec import metadata_default
 
@@ -735,6 +781,36 @@ def _differs(old: Any, new: Any) -> bool:
 
 #: The power-monitor switches that keep PX4's i2c_launcher from running (SENS_EN_INA238, ...).
 _INA_SWITCH = re.compile(r"SENS_EN_INA2\d\d")
+
+
+def _launched_args(start: DriverStart) -> str | None:
+    """The options of an i2c_launcher line's command (a driver's own line prints none)."""
+    m = _LAUNCHED.search(start.text) if start.launcher else None
+    return m[1] if m else None
+
+
+def _battery_note(param: str, args: str | None) -> str:
+    """What today's start line (its options ``args``; None: not known) gives as the battery
+    index, which ``param`` has no field for."""
+    if args is None:
+        return (
+            "today's start line also sets a battery index (-t), which nothing here names "
+            f"(without -t the driver uses 1): {param} has no field for it"
+        )
+    m = _BATTERY_INDEX.search(args)
+    index = f"-t {m[1]}" if m else "no -t: the driver's 1"
+    return f"today's start line also sets the battery index ({index}): {param} has no field for it"
+
+
+@dataclass(frozen=True)
+class _Place:
+    """Where a switch starts its driver: bus, address (None: the driver's default), why (the
+    evidence, or "") and the start line's options where known (for its battery index)."""
+
+    bus: int
+    address: int | None
+    why: str
+    args: str | None
 
 
 def _shown(value: Any) -> str:

@@ -27,8 +27,9 @@ entries: one ``[[driver]]`` table per driver with these keys (all required unles
                       or the board's script) or ``parameter`` (only while ``enabled_by`` is set)
     enabled_by        optional legacy on/off parameter the manifest replaces (``SENS_EN_SDP3X``);
                       required with ``started_by = "parameter"``
-    enabled_values    optional list of ``enabled_by`` values that start this driver (default:
-                      any but 0)
+    enabled_values    optional list of ``enabled_by`` values that start this driver, where
+                      PX4's scripts test ``param compare <switch> <value>`` (default: values
+                      above 0, PX4's ``param greater <switch> 0``; a negative value starts none)
     switch_field      optional field that takes ``enabled_by``'s value (a model number)
     settings          optional table: legacy parameter -> field path of the instance
     probe             optional text: what the probe checks when it reads no ID
@@ -150,10 +151,21 @@ class Driver:
         return (self.chip.upper(), *(c.upper() for c in self.also_chips))
 
     def starts_on(self, value: int | float) -> bool:
-        """Whether today's PX4 starts the driver with ``enabled_by = value``."""
+        """Whether today's PX4 starts the driver with ``enabled_by = value``: the script's
+        ``param compare`` against each of ``enabled_values``, else its ``param greater .. 0``."""
         if self.enabled_values:
             return value in self.enabled_values
-        return bool(value)
+        return value > 0
+
+    @property
+    def switch_test(self) -> str:
+        """The test of ``enabled_by`` that starts the driver, as the board table writes PX4's
+        (``SENS_EN_INA238 == 1``, ``SENS_EN_TRANGER > 0``); "" without a switch."""
+        if self.enabled_by is None:
+            return ""
+        if self.enabled_values:
+            return " or ".join(f"{self.enabled_by} == {v}" for v in self.enabled_values)
+        return f"{self.enabled_by} > 0"
 
     @property
     def auto_line(self) -> str:

@@ -1,0 +1,257 @@
+"""Board rows' conditions in ``px4params migrate``: every clause of a row's ``when`` decides, as
+PX4's startup script tests it; a clause the configuration cannot settle is taken as PX4's
+default only where PX4 has one, and is always named with the row's line. With it: the battery
+index (``-t``) each power monitor's start line gives.
+
+The expected answers are PX4's scripts as read (PX4-Autopilot boards/px4/fmu-v6x/init/
+rc.board_sensors, ROMFS/px4fmu_common/init.d/rc.sensors, src/drivers/power_monitor/ina2xx/
+*_main.cpp), transcribed in the board table with their lines.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import pytest
+from px4params import migrate
+from px4params.migrate.conditions import Facts, evaluate
+from px4params.migrate.config import OldConfig
+from px4params.vehicle.boards import Board, SwitchStart, load_boards
+from px4params.vehicle.console import started_drivers
+
+pytestmark = pytest.mark.issue40
+
+#: Why PX4's HAVE_PM2 is not the parameters' to tell (boards/px4/fmu-v6x/init/
+#: rc.board_sensors: `set HAVE_PM2 yes`, then `set HAVE_PM2 no` if `mft query -q -k MFT -s
+#: MFT_PM2 -v 0`, the board's hardware manifest).
+PM2_WHY = (
+    "the board's script sets HAVE_PM2 yes, and no on hardware without a second power-module "
+    "port, which the parameters do not tell"
+)
+NO_CONSOLE = "a QGC .params has no boot console to say"
+
+
+def params(values: dict[str, int | float], console: str | None = None) -> OldConfig:
+    """A configuration of today's PX4 (1.15), as a QGC file (no console) or a log gives it."""
+    kind = "ULog" if console is not None else "QGC .params"
+    return OldConfig("t", kind, dict(values), version=(1, 15, 0), console=console)
+
+
+def v6x(release: str | None = None) -> Board:
+    board = load_boards().by_name("px4_fmu-v6x", release)
+    assert board is not None
+    return board
+
+
+def rows(board: Board, switch: str) -> list[SwitchStart]:
+    return [r for r in board.switches if r.param == switch]
+
+
+def facts(values: dict[str, int | float], console: str | None = None, **variables: str) -> Facts:
+    starts = started_drivers(console) if console is not None else None
+    return Facts(values, variables, ("PX4_FMU_V3",), starts, "QGC .params")
+
+
+# -- every clause decides --------------------------------------------------------------------
+
+
+def test_a_second_power_monitor_behind_have_pm2_is_proposed_as_px4s_default_naming_the_clause(
+) -> None:  # fmt: skip
+    # Pixhawk 6X (main, read at 01486656): `if param compare SENS_EN_INA226 1` starts
+    # `ina226 -X -b 1 -t 1 -k start` (line 24) and, inside `if [ $HAVE_PM2 = yes ]`, `ina226 -X
+    # -b 2 -t 2 -k start` (line 28). HAVE_PM2 is the hardware's (yes unless its manifest says
+    # no second power module): PX4 runs line 28 on a standard 6X, so it is proposed, and the
+    # report names the clause it rests on and the line
+    board = v6x()
+    bus1, bus2 = rows(board, "SENS_EN_INA226")
+    assert bus1.when == "SENS_EN_INA226 == 1"
+    assert bus2.when == "SENS_EN_INA226 == 1 and $HAVE_PM2 == yes"
+    assert "boards/px4/fmu-v6x/init/rc.board_sensors:28 at " in bus2.source
+    proposal = migrate.migrate(params({"SENS_EN_INA226": 1}), table="current", board=board)
+    assert [(i.name, i.values["bus.i2c.bus_id"]) for i in proposal.instances] == [
+        ("INA226#0", 1), ("INA226#1", 2)
+    ]  # fmt: skip
+    assert [a for a in proposal.assumptions if a.startswith("SENS_EN_INA226")] == [
+        f"SENS_EN_INA226: 'ina226 -X -b 2 -t 2 -k start' ({bus2.source}) runs only where "
+        f"$HAVE_PM2 == yes ({PM2_WHY}): taken as holding (PX4's default)"
+    ]
+
+
+def test_the_boot_console_settles_which_power_module_ports_run() -> None:
+    # With HAVE_PM2 no, line 28 does not run and the console prints one INA226 (bus 1): the
+    # console is what ran, so nothing rests on HAVE_PM2 and bus 2 is not proposed
+    console = "ina226 #0 on I2C bus 1 (external) address 0x41\n"
+    proposal = migrate.migrate(params({"SENS_EN_INA226": 1}, console), table="current", board=v6x())
+    assert [(i.name, i.values["bus.i2c.bus_id"]) for i in proposal.instances] == [("INA226#0", 1)]
+    assert not [a for a in proposal.assumptions if "HAVE_PM2" in a], proposal.assumptions
+
+
+def test_a_fallback_start_nothing_settles_is_not_proposed_and_is_named() -> None:
+    # rc.sensors (v1.15.0, line 150/153): `if ! sdp3x start -X` then `sdp3x start -X -a 0x22`:
+    # the 0x22 start runs only when the first found nothing, which a .params cannot tell. PX4
+    # tries 0x21 first: that is proposed; the fallback is named, not silently dropped or taken
+    board = load_boards().by_name("px4_fmu-v6c", "v1.15.0")
+    assert board is not None
+    fallback = [r for r in rows(board, "SENS_EN_SDP3X") if r.address == 0x22]
+    assert fallback and {r.when for r in fallback} == {
+        "SENS_EN_SDP3X == 1 and not sdp3x started (start -X)"
+    }
+    proposal = migrate.migrate(params({"SENS_EN_SDP3X": 1}), table="current", board=board)
+    found = [(i.name, i.values["bus.i2c.address"]) for i in proposal.instances]
+    assert found == [("SDP3X#0", 0x21)]
+    assert (
+        f"SENS_EN_SDP3X: 'sdp3x start -X -a 0x22' ({fallback[0].source}) runs only where not "
+        f"sdp3x started (start -X) ({NO_CONSOLE}): not proposed from it"
+    ) in proposal.assumptions
+
+
+def test_a_condition_px4params_cannot_read_is_reported_never_taken_as_holding() -> None:
+    board = v6x()
+    bus1 = rows(board, "SENS_EN_INA226")[0]
+    odd = dataclasses.replace(
+        bus1, bus=2, args="-X -b 2 -t 2 -k start", source="rc.board_sensors:7",
+        when="SENS_EN_INA226 == 1 and the moon is full",
+    )  # fmt: skip
+    board = dataclasses.replace(board, switches=(bus1, odd))
+    proposal = migrate.migrate(params({"SENS_EN_INA226": 1}), table="current", board=board)
+    assert [(i.name, i.values["bus.i2c.bus_id"]) for i in proposal.instances] == [("INA226#0", 1)]
+    assert proposal.assumptions == [
+        "SENS_EN_INA226: 'ina226 -X -b 2 -t 2 -k start' (rc.board_sensors:7) runs only where "
+        "the moon is full (a test px4params cannot read): not proposed from it"
+    ]
+
+
+@pytest.mark.parametrize(
+    ("when", "values", "console", "holds", "unchecked"),
+    [
+        # rc.sensors v1.12: the ADIS16448 with -R 4 only when SENS_OR_ADIS164X is 4
+        ("SENS_EN_ADIS164X == 1 and SENS_OR_ADIS164X == 4", {"SENS_EN_ADIS164X": 1,
+         "SENS_OR_ADIS164X": 4}, None, True, ()),
+        ("SENS_EN_ADIS164X == 1 and SENS_OR_ADIS164X == 4", {"SENS_EN_ADIS164X": 1,
+         "SENS_OR_ADIS164X": 0}, None, False, ()),
+        ("SENS_EN_ADIS164X == 1 and SENS_OR_ADIS164X == 4", {"SENS_EN_ADIS164X": 1}, None, None,
+         ("SENS_OR_ADIS164X == 4 (SENS_OR_ADIS164X is not in the QGC .params)",)),
+        # a clause settled false decides whatever the others are
+        ("SENS_EN_ADIS164X == 1 and hw_type in V30", {"SENS_EN_ADIS164X": 0}, None, False, ()),
+        # fmu-v3: $BOARD_FMUV3 is set by the board's script from the hardware
+        ("$BOARD_FMUV3 != 0 and $BOARD_FMUV3 == 20", {}, None, None, (
+            "$BOARD_FMUV3 != 0 ($BOARD_FMUV3 is set by the board's script from what the QGC "
+            ".params does not tell)",
+            "$BOARD_FMUV3 == 20 ($BOARD_FMUV3 is set by the board's script from what the QGC "
+            ".params does not tell)")),
+        ("hw_type in V30 and not mpu6000 started (-s -b 4 -R 10 start)", {}, None, None, (
+            "hw_type in V30 (the hardware revision, which the parameters do not tell)",
+            f"not mpu6000 started (-s -b 4 -R 10 start) ({NO_CONSOLE})")),
+        # the console settles an earlier start: it ran, so its fallback did not
+        ("hw_type in V30 and not mpu6000 started (-s -b 4 -R 10 start)", {},
+         "mpu6000 #0 on SPI bus 4 (devid=0x1)\n", False, ()),
+        ("hw_type in V30 and not mpu6000 started (-s -b 4 -R 10 start)", {},
+         "mpu6000 #0 on SPI bus 1 (devid=0x1)\n", None,
+         ("hw_type in V30 (the hardware revision, which the parameters do not tell)",)),
+        ("board in PX4_FMU_V2,PX4_FMU_V3", {}, None, True, ()),
+        ("not board in PX4_FMU_V3", {}, None, False, ()),
+        ("$INA_CONFIGURED == no", {}, None, True, ()),
+        ("$HAVE_PM2 == yes", {}, None, True, (f"$HAVE_PM2 == yes ({PM2_WHY})",)),
+        ("not $HAVE_PM2 == yes", {}, None, False, (f"not $HAVE_PM2 == yes ({PM2_WHY})",)),
+        # -o: one settled true test is enough
+        ("$VEHICLE_TYPE == fw -o SENS_EN_X == 1", {"SENS_EN_X": 1}, None, True, ()),
+        ("$VEHICLE_TYPE == fw -o SENS_EN_X == 1", {"SENS_EN_X": 0}, None, None, (
+            "$VEHICLE_TYPE == fw -o SENS_EN_X == 1 ($VEHICLE_TYPE is set by the board's script "
+            "from what the QGC .params does not tell)",)),
+    ],
+)  # fmt: skip
+def test_each_kind_of_clause_is_settled_or_named(
+    when: str, values: dict, console: str | None, holds: bool | None, unchecked: tuple
+) -> None:
+    verdict = evaluate(when, facts(values, console, INA_CONFIGURED="no"))
+    assert (verdict.holds, verdict.unchecked) == (holds, unchecked)
+
+
+# -- the i2c_launcher's condition ------------------------------------------------------------
+
+
+def test_a_power_monitor_switch_at_2_leaves_the_i2c_launcher_scanning() -> None:
+    # Pixhawk 6X sets INA_CONFIGURED yes only inside `if param compare SENS_EN_INA226 1`, and
+    # runs `i2c_launcher start -b 1` while it is no: SENS_EN_INA226 = 2 starts no INA226 and
+    # leaves the launcher scanning; a .params cannot say what it found, so the report says so
+    proposal = migrate.migrate(params({"SENS_EN_INA226": 2}), table="current", board=v6x())
+    assert proposal.instances == []
+    assert [a for a in proposal.assumptions if "i2c_launcher" in a] == [
+        "the board's i2c_launcher scans I2C bus 1, 2 for power monitors (INA226, INA228, INA238) "
+        f"when no SENS_EN_INA2xx is 1: a QGC .params does not say which it found; bus 2 only "
+        f"where $HAVE_PM2 == yes ({PM2_WHY}) (PX4/PX4-Autopilot boards/px4/fmu-v6x/init/"
+        "rc.board_sensors)"
+    ]
+
+
+def test_the_launchers_hardware_clause_of_px4_1_15_is_named_for_each_bus() -> None:
+    # v1.15.0's 6X script runs the launcher only `if ! ver hwbasecmp 009 010 011`
+    board = v6x("v1.15.0")
+    assert board.i2c_launcher_when.startswith("bus 1: not hw_base in 009,010,011 and ")
+    proposal = migrate.migrate(params({}), table="current", board=board)
+    hw = "not hw_base in 009,010,011 (the hardware revision, which the parameters do not tell)"
+    assert [a for a in proposal.assumptions if "i2c_launcher" in a] == [
+        "the board's i2c_launcher scans I2C bus 1, 2 for power monitors (INA226, INA228, INA238) "
+        f"when no SENS_EN_INA2xx is 1: a QGC .params does not say which it found; bus 1 only "
+        f"where {hw}; bus 2 only where {hw} and $HAVE_PM2 == yes ({PM2_WHY}) "
+        "(PX4/PX4-Autopilot boards/px4/fmu-v6x/init/rc.board_sensors)"
+    ]
+
+
+# -- the battery index of each start line ----------------------------------------------------
+
+
+def battery_notes(proposal: migrate.Proposal) -> list[tuple[str, int, str]]:
+    return [
+        (i.name, i.values["bus.i2c.bus_id"], note)
+        for i in proposal.instances
+        for note in i.notes
+        if "battery index" in note
+    ]
+
+
+def test_each_board_line_gives_its_own_battery_index() -> None:
+    # 6X: `ina238 -X -b 1 -t 1 -k start`, `ina238 -X -b 2 -t 2 -k start`
+    proposal = migrate.migrate(params({"SENS_EN_INA238": 1}), table="current", board=v6x())
+    assert battery_notes(proposal) == [
+        ("INA238#0", 1, "today's start line also sets the battery index (-t 1): INA238 has no "
+         "field for it"),
+        ("INA238#1", 2, "today's start line also sets the battery index (-t 2): INA238 has no "
+         "field for it"),
+    ]  # fmt: skip
+
+
+def test_a_driver_line_on_the_console_takes_the_index_of_the_boards_line_on_its_bus() -> None:
+    # the driver's own line prints no options: the 6X's line on bus 2 is `-t 2`
+    console = "ina238 #0 on I2C bus 2 (external) address 0x45\n"
+    proposal = migrate.migrate(params({"SENS_EN_INA238": 1}, console), table="current", board=v6x())
+    assert battery_notes(proposal) == [
+        ("INA238#0", 2, "today's start line also sets the battery index (-t 2): INA238 has no "
+         "field for it"),
+    ]  # fmt: skip
+
+
+def test_the_launchers_line_gives_the_index_it_ran_with() -> None:
+    # i2c_launcher (PX4 1.15) runs `<driver> -X -b {bus} -t {bus} start`: on bus 2, -t 2
+    console = (
+        "INFO  [i2c_launcher] Found address 0x41, running 'ina226 -X -b 2 -t 2 start'\n"
+        "ina226 #0 on I2C bus 2 (external) address 0x41\n"
+    )
+    proposal = migrate.migrate(params({}, console), table="current", board=v6x())
+    assert battery_notes(proposal) == [
+        ("INA226#0", 2, "today's start line also sets the battery index (-t 2): INA226 has no "
+         "field for it"),
+    ]  # fmt: skip
+
+
+def test_a_line_without_t_leaves_the_drivers_own_index() -> None:
+    # boards/svehicle/e2 (main, line 17): `ina228 -X start`: no -t, the driver uses 1
+    # (ina228_main.cpp: `cli.custom1 = 1`)
+    board = load_boards().by_name("svehicle_e2")
+    assert board is not None
+    assert {r.args for r in rows(board, "SENS_EN_INA228")} == {"-X start"}
+    proposal = migrate.migrate(params({"SENS_EN_INA228": 1}), table="current", board=board)
+    assert battery_notes(proposal) == [
+        ("INA228#0", 1, "today's start line also sets the battery index (no -t: the driver's 1): "
+         "INA228 has no field for it"),
+    ]  # fmt: skip
