@@ -272,3 +272,33 @@ def test_a_real_logs_hardware_type_is_read(name: str, hw_type: str, tmp_path: Pa
 
     (truth,) = [t for t in CORPUS if t.name == name]
     assert migrate.read_config(locate(truth, tmp_path)).hw_type == hw_type
+
+
+@pytest.mark.parametrize(
+    ("console", "proposed"),
+    [
+        # line 28's IST8310 answered: line 31 did not run, the RM3100 was probed
+        ("ist8310 #0 on I2C bus 4 (external) address 0x0C\n"
+         "rm3100 #0 on I2C bus 4 (external) address 0x20\n", True),
+        # no IST8310 on bus 4: the 6C variant's RM3100 is line 31's
+        ("rm3100 #0 on I2C bus 4 (external) address 0x20\n", False),
+    ],
+)  # fmt: skip
+def test_the_boot_console_settles_the_6c_variants_fallback_compass(
+    console: str, proposed: bool
+) -> None:
+    # Pixhawk 6C (main): `if ! ist8310 -X -b 4 -a 0xc -q start` then `rm3100 -X -b 4 -R 8
+    # start` (lines 28 and 31); bus 4 is marked external (src/i2c.cpp), so rc.sensors' probe
+    # also reaches it
+    v6c = board("px4_fmu-v6c")
+    proposal = migrate.migrate(
+        OldConfig("t", "ULog", {}, version=(1, 16, 0), console=console),
+        table="current",
+        board=v6c,
+    )
+    if proposed:
+        assert placed(proposal) == [("RM3100#0", 4, 0x20)]
+    else:
+        assert placed(proposal) == []
+        (line,) = [o.line for o in proposal.left_out if o.device.startswith("rm3100")]
+        assert "boards/px4/fmu-v6c/init/rc.board_sensors:31 " in line
