@@ -14,7 +14,7 @@ import dataclasses
 
 import pytest
 from px4params import migrate
-from px4params.migrate.conditions import Facts, evaluate
+from px4params.migrate.conditions import Facts, board_variables, evaluate
 from px4params.migrate.config import OldConfig
 from px4params.vehicle.boards import Board, SwitchStart, load_boards
 from px4params.vehicle.console import started_drivers
@@ -22,11 +22,11 @@ from px4params.vehicle.console import started_drivers
 pytestmark = pytest.mark.issue40
 
 #: Why PX4's HAVE_PM2 is not the parameters' to tell (boards/px4/fmu-v6x/init/
-#: rc.board_sensors: `set HAVE_PM2 yes`, then `set HAVE_PM2 no` if `mft query -q -k MFT -s
-#: MFT_PM2 -v 0`, the board's hardware manifest).
+#: rc.board_sensors: `set HAVE_PM2 yes` on line 5, then `set HAVE_PM2 no` if `mft query -q -k
+#: MFT -s MFT_PM2 -v 0` on line 8, the board's hardware manifest).
 PM2_WHY = (
-    "the board's script sets HAVE_PM2 yes, and no on hardware without a second power-module "
-    "port, which the parameters do not tell"
+    "boards/px4/fmu-v6x/init/rc.board_sensors:5 sets HAVE_PM2 yes; line 8: no where mft MFT_PM2 "
+    "== 0 (the board's hardware manifest, which the parameters do not tell)"
 )
 NO_CONSOLE = "a QGC .params has no boot console to say"
 
@@ -49,7 +49,8 @@ def rows(board: Board, switch: str) -> list[SwitchStart]:
 
 def facts(values: dict[str, int | float], console: str | None = None, **variables: str) -> Facts:
     starts = started_drivers(console) if console is not None else None
-    return Facts(values, variables, ("PX4_FMU_V3",), starts, "QGC .params")
+    hardware = board_variables("px4_fmu-v6x", ("main",))
+    return Facts(values, variables, ("PX4_FMU_V3",), starts, "QGC .params", hardware=hardware)
 
 
 # -- every clause decides --------------------------------------------------------------------

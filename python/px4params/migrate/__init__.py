@@ -23,9 +23,12 @@ Left out, each with its reason: sensors the board's script starts (a board table
 probing never passes), disabled slots (``CAL_<S>n_PRIO = 0`` from PX4 1.12 on, ``_EN = 0``
 before), DroneCAN and simulated sensors. Evidence first: the boot console (what actually
 started, on which bus, address and rotation) wins over every table. A board row is taken only
-when its whole condition holds (:mod:`.conditions`, clause by clause); one resting on what the
-configuration cannot tell (the hardware, an earlier start without a boot console) is taken
-only as PX4's default, or not at all, and the report names the clause and the row's line.
+when its whole condition holds (:mod:`.conditions`, clause by clause; a log's hardware type
+settles ``ver hwtypecmp``); one resting on what the configuration cannot tell (the hardware,
+an earlier start without a boot console) is taken only as PX4's default, or not at all, and
+the report names the clause and the row's line. Such a device row never drops a device: the
+device is proposed, unless it sits on one of the board's internal I2C buses, which only the
+board's script starts drivers on.
 """
 
 from px4params.errors import MigrationError

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Any
 from px4params.dsdl.model import NO_DOC
 from px4params.dsdl.schema import Schema
 from px4params.errors import MigrationError, Px4ParamsError
-from px4params.migrate.conditions import Facts, evaluate, per_bus
+from px4params.migrate.conditions import Facts, Verdict, board_variables, evaluate, per_bus
 from px4params.migrate.config import OldConfig
 from px4params.migrate.proposal import LeftOut, Proposal, ProposedInstance
 from px4params.vehicle import devid
@@ -98,6 +98,7 @@ class _Builder:
         self.proposal.board = getattr(board, "name", None)
         self.starts = started_drivers(config.console) if config.console else []
         self.claimed: set[int] = set()  # boot console starts accounted for
+        self._facts: Facts | None = None
 
     def use(self, *names: str) -> None:
         self.proposal.used.update(n for n in names if n in self.params)
@@ -223,10 +224,16 @@ class _Builder:
                 return i, start
         return None
 
-    def board_device(self, chips: set[str], bus: int, address: int | None) -> Any:
-        """The board table's row that starts this I2C device, if any."""
+    def board_device(
+        self, chips: set[str], bus: int, address: int | None
+    ) -> tuple[Any, Verdict] | None:
+        """The board table's row that starts this I2C device, and its condition's verdict: the
+        first whose condition holds, else the first that nothing here settles (a row that does
+        not run here is passed over); None where no row runs or may run."""
         if self.board is None:
             return None
+        facts = self.facts()
+        undecided = None
         for row in self.board.devices:
             if row.bus_kind.upper() != "I2C" or not (self.start_chips(row.driver) & chips):
                 continue
@@ -243,22 +250,37 @@ class _Builder:
                 at = self.drivers[row.driver].default_address
             if at is not None and address is not None and at != address:
                 continue
-            return row
-        return None
+            verdict = evaluate(row.when, facts)
+            if verdict.holds:
+                return row, verdict
+            if verdict.holds is None and undecided is None:
+                undecided = row, verdict
+        return undecided
 
     def probe_rotation(self, chips: set[str]) -> tuple[int, str] | None:
         """The ``-R`` rc.sensors' probing passes this chip's driver in the board table's
-        release (PX4 1.11: ``ak09916 -X -R 6 start``), and where it says so; None if none."""
+        release (PX4 1.11: ``ak09916 -X -R 6 start``), and where it says so; None if none or
+        the probe does not run here. A probe nothing here settles is taken (the device was
+        found, and the probe is what starts it) and named."""
         for row in getattr(self.board, "switches", ()):
-            if (
+            if not (
                 row.param == "SENS_EXT_I2C_PRB"
                 and row.rotation
                 and self.start_chips(row.driver) & chips
             ):
-                return (
-                    row.rotation,
-                    f"rc.sensors probes it with '{row.driver} {row.args}' ({row.source})",
+                continue
+            verdict = evaluate(row.when, self.facts())
+            if verdict.holds is False:
+                continue
+            if verdict.unchecked:
+                self.assume(
+                    f"'{row.driver} {row.args}' ({row.source}) runs only where "
+                    f"{' and '.join(verdict.unchecked)}: its -R {row.rotation} taken"
                 )
+            return (
+                row.rotation,
+                f"rc.sensors probes it with '{row.driver} {row.args}' ({row.source})",
+            )
         return None
 
     def driver_rotation(self, start: DriverStart | None, chips: set[str]) -> tuple[int, str]:
@@ -270,6 +292,7 @@ class _Builder:
 
     def started_by_board(
         self,
+        found: str,
         chips: set[str],
         bus: int,
         address: int | None,
@@ -278,10 +301,39 @@ class _Builder:
         baro: bool,
     ) -> str | None:
         """Why the board's script starts this I2C device, or None when it does not (the
-        rules in the order they are trusted)."""
+        rules in the order they are trusted). ``found``: the device as the report names it."""
         row = self.board_device(chips, bus, address)
-        if row is not None:
-            return f"started by the board's script ({row.source})"
+        if row is not None and row[1].holds:
+            self.assume_row(found, *row, "taken as holding (PX4's default)")
+            return f"started by the board's script ({row[0].source})"
+        if row is not None and bus in getattr(self.board, "internal_i2c_buses", ()):
+            # Found on an internal bus, which rc.sensors never probes (-X only): the row ran.
+            return (
+                f"started by the board's script ({row[0].source}); it runs only where "
+                f"{' and '.join(row[1].unchecked)}, and being found on internal I2C bus {bus} "
+                f"({_buses_path(self.board)}) shows it did"
+            )
+        by_board = self.other_rules(chips, start, internal_rot, baro)
+        if row is not None and by_board is None:
+            self.assume_row(found, *row, "proposed, not left out on a guess")
+        return by_board
+
+    def assume_row(self, found: str, row: Any, verdict: Verdict, then: str) -> None:
+        """Names what a board row's condition rests on, where something does."""
+        if verdict.unchecked:
+            self.assume(
+                f"{found}: the board's '{row.driver} {row.args}' ({row.source}) runs only where "
+                f"{' and '.join(verdict.unchecked)}: {then}"
+            )
+
+    def other_rules(
+        self,
+        chips: set[str],
+        start: DriverStart | None,
+        internal_rot: str | None,
+        baro: bool,
+    ) -> str | None:
+        """Why the board's scripts start an I2C device no board row settles, or None."""
         if start is not None and start.internal and not start.launcher:
             return (
                 f"on an internal bus (boot console line {start.line}): started by the board's "
@@ -370,18 +422,26 @@ class _Builder:
         INA_CONFIGURED yes in the block of each power-monitor switch's test (boards/px4/
         fmu-v6x/init/rc.board_sensors: `if param compare SENS_EN_INA226 1`), so it follows
         from those switches as their drivers' declarations test them."""
-        ina = any(
-            d.starts_on(self.params[d.enabled_by])
-            for d in self.drivers
-            if d.enabled_by and _INA_SWITCH.fullmatch(d.enabled_by) and d.enabled_by in self.params
-        )
-        return Facts(
-            self.params,
-            {"INA_CONFIGURED": "yes" if ina else "no"},
-            tuple(getattr(self.board, "ver_hw", ())),
-            self.starts if self.config.console is not None else None,
-            self.config.kind,
-        )
+        if self._facts is None:
+            ina = any(
+                d.starts_on(self.params[d.enabled_by])
+                for d in self.drivers
+                if d.enabled_by
+                and _INA_SWITCH.fullmatch(d.enabled_by)
+                and d.enabled_by in self.params
+            )
+            self._facts = Facts(
+                self.params,
+                {"INA_CONFIGURED": "yes" if ina else "no"},
+                tuple(getattr(self.board, "ver_hw", ())),
+                self.starts if self.config.console is not None else None,
+                self.config.kind,
+                self.config.hw_type,
+                board_variables(
+                    getattr(self.board, "name", ""), getattr(self.board, "releases", ())
+                ),
+            )
+        return self._facts
 
     def running_rows(self, switch: str, driver: Driver) -> list[Any]:
         """The board's rows of ``switch`` starting ``driver`` that PX4 runs with this
@@ -595,7 +655,7 @@ class _Builder:
         internal = next((r for r, v in rotations.items() if v == INTERNAL_ROTATION), None)
         kind = {k for _, k in _named(dev, kinds)}
         baro = "BARO" in kind or all(k == "BARO" for k in kinds)
-        board = self.started_by_board(chips, dev.bus, dev.address, start, internal, baro)
+        board = self.started_by_board(where, chips, dev.bus, dev.address, start, internal, baro)
         disabled = f" (disabled: {', '.join(off)})" if off else ""
         if board is not None:
             self.leave_out(found, dev.describe(), "board", f"{board}{disabled}{twice}")
@@ -655,7 +715,13 @@ class _Builder:
             chips = self.start_chips(start)
             kinds = {e.kind for e in self.table if e.name in chips}
             board = self.started_by_board(
-                chips, start.bus, start.address, start, None, kinds == {"BARO"}
+                f"{found}: {device}",
+                chips,
+                start.bus,
+                start.address,
+                start,
+                None,
+                kinds == {"BARO"},
             )
             if board is not None:  # the line is already named: not twice
                 self.leave_out(found, device, "board", board.replace(f" ({found})", ""))
@@ -737,6 +803,12 @@ class _Builder:
             self.proposal.replaced.append(
                 f"{name} = 0: probing was off; the manifest starts the devices it lists"
             )
+
+
+def _buses_path(board: Any) -> str:
+    """The file the board's I2C buses were read from, as its source names it."""
+    m = re.search(r"I2C buses from (\S+)", board.source)
+    return m[1] if m else "the board's I2C buses"
 
 
 def _named(dev: devid.DeviceId, slot_kinds: Iterable[str] = ()) -> list[tuple[str, str]]:

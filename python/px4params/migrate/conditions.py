@@ -8,10 +8,14 @@ by `` -o `` (the shell test's "or"). The tests, as ``scripts/transcribe_boards.p
     a parameter: settled by the configuration's value; not known where it has none
 ``$VAR == word``, ``$VAR != word``
     a variable of the board's script: settled where the builder derives it (``INA_CONFIGURED``
-    from the power-monitor switches); :data:`HARDWARE_VARIABLES` are the hardware's, taken as
-    PX4's default and said so; any other is not known
-``hw_type in A,B``, ``hw_base in A,B``
-    the board's hardware revision (``ver hwtypecmp``, ``ver hwbasecmp``): not known
+    from the power-monitor switches); one the hardware decides (:data:`HARDWARE_VARIABLES`, as
+    the board's own script sets it) is settled where what the script tests is, else taken as
+    the value the script sets first, and said so; any other is not known
+``hw_type in A,B``
+    the board's hardware type (``ver hwtypecmp``): settled by a log's ``ver_hw_subtype`` (the
+    logger writes the same ``px4_board_sub_type()`` the command compares), else not known
+``hw_base in A,B``, ``mft NAME == value``
+    the board's base (``ver hwbasecmp``) and hardware manifest (``mft query``): not known
 ``board in A,B``
     the board (``ver hwcmp``): settled by the board's ``ver_hw`` names
 ``drv started (args)``
@@ -26,29 +30,113 @@ from __future__ import annotations
 import itertools
 import re
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from px4params.vehicle.console import DriverStart
 
-__all__ = ["HARDWARE_VARIABLES", "Facts", "Verdict", "evaluate", "per_bus"]
+__all__ = [
+    "HARDWARE_VARIABLES",
+    "BoardVariables",
+    "Facts",
+    "HardwareVariable",
+    "Verdict",
+    "board_variables",
+    "evaluate",
+    "per_bus",
+]
 
-#: Board-script variables the hardware decides: name -> (PX4's value unless the hardware says
-#: otherwise, why). Each script that tests them sets them first: ``set HAVE_PM2 yes``, then
-#: ``no`` where the board has no second power-module port, by the hardware manifest (``mft
-#: query -q -k MFT -s MFT_PM2 -v 0``: boards/px4/fmu-v6x, boards/cuav/fmu-v6x) or the hardware
-#: type (``ver hwtypecmp``: boards/px4/fmu-v5x, boards/ark/fmu-v6x, which sets HAVE_PM3 alike).
-HARDWARE_VARIABLES: dict[str, tuple[str, str]] = {
-    "HAVE_PM2": (
-        "yes",
-        "the board's script sets HAVE_PM2 yes, and no on hardware without a second power-module "
-        "port, which the parameters do not tell",
+
+@dataclass(frozen=True)
+class HardwareVariable:
+    """A board-script variable the hardware decides: the script sets it ``first``, then
+    ``otherwise`` where ``when`` holds (a condition of this module's form; None where the
+    script never sets it otherwise), at ``path``'s lines ``line`` and ``when_line``."""
+
+    first: str
+    otherwise: str
+    when: str | None
+    path: str
+    line: int
+    when_line: int = 0
+
+
+@dataclass(frozen=True)
+class BoardVariables:
+    """A board's hardware variables over the snapshots in ``releases``."""
+
+    releases: tuple[str, ...]
+    variables: Mapping[str, HardwareVariable]
+
+
+#: ``mft query -q -k MFT -s MFT_PM2 -v 0``: the board's hardware manifest lists no second
+#: power-module port.
+_NO_PM2_PORT = "mft MFT_PM2 == 0"
+_LATER = ("v1.15.0", "v1.18", "main")
+_NOW = ("v1.18", "main")
+
+
+def _pm(releases: tuple[str, ...], path: str, line: int, when: str | None, when_line: int = 0,
+        pm3: bool = False) -> BoardVariables:  # fmt: skip
+    """HAVE_PM2 (and HAVE_PM3, set on the next line) yes, then no where ``when`` holds."""
+    names = ("HAVE_PM2", "HAVE_PM3") if pm3 else ("HAVE_PM2",)
+    return BoardVariables(releases, {
+        name: HardwareVariable("yes", "no", when, path, line + i, when_line)
+        for i, name in enumerate(names)
+    })  # fmt: skip
+
+
+#: The board-script variables the hardware decides, per board and release, as each board's
+#: own script sets them (read in PX4-Autopilot at the board table's snapshots; the v1.14.0
+#: scripts at the commits whose power-monitor lines are the table's: 43d85931 for fmu-v5x
+#: and fmu-v6x, 7c2da8d1 for ark fmu-v6x). Every board tests HAVE_PM2 (and HAVE_PM3) only
+#: after ``set HAVE_PM2 yes``; all but one then set ``no`` by the hardware manifest (v1.15 on)
+#: or the hardware type (v1.14); radiolink PIX6 never does.
+HARDWARE_VARIABLES: dict[str, tuple[BoardVariables, ...]] = {
+    "accton-godwit_ga1": (_pm(_NOW, "boards/accton-godwit/ga1/init/rc.board_sensors", 5,
+                              _NO_PM2_PORT, 8),),
+    "ark_fmu-v6s": (_pm(_NOW, "boards/ark/fmu-v6s/init/rc.board_sensors", 5, _NO_PM2_PORT, 8,
+                        pm3=True),),
+    "ark_fmu-v6x": (
+        _pm(("v1.14.0",), "boards/ark/fmu-v6x/init/rc.board_sensors", 5,
+            "hw_type in ARKV6X005000,ARKV6X005001,ARKV6X005002,ARKV6X005003,ARKV6X005004", 7),
+        _pm(_LATER, "boards/ark/fmu-v6x/init/rc.board_sensors", 5, _NO_PM2_PORT, 8, pm3=True),
     ),
-    "HAVE_PM3": (
-        "yes",
-        "the board's script sets HAVE_PM3 yes, and no on hardware without a third power-module "
-        "port, which the parameters do not tell",
+    "auterion_fmu-v6x": (_pm(_NOW, "boards/auterion/fmu-v6x/init/rc.board_sensors", 5,
+                             _NO_PM2_PORT, 8),),
+    "cuav_fmu-v6x": (_pm(_NOW, "boards/cuav/fmu-v6x/init/rc.board_sensors", 5, _NO_PM2_PORT,
+                         8),),
+    "cuav_x25-evo": (_pm(_NOW, "boards/cuav/x25-evo/init/rc.board_sensors", 5, _NO_PM2_PORT,
+                         7),),
+    "cuav_x25-mega": (_pm(_NOW, "boards/cuav/x25-mega/init/rc.board_sensors", 5, _NO_PM2_PORT,
+                          7),),
+    "cuav_x25-super": (_pm(_NOW, "boards/cuav/x25-super/init/rc.board_sensors", 5,
+                           _NO_PM2_PORT, 7),),
+    "px4_fmu-v5x": (
+        _pm(("v1.14.0",), "boards/px4/fmu-v5x/init/rc.board_sensors", 6,
+            "hw_type in V5X005000,V5X005001,V5X005002", 8),
+        _pm(_LATER, "boards/px4/fmu-v5x/init/rc.board_sensors", 6, _NO_PM2_PORT, 8),
     ),
-}
+    "px4_fmu-v6x": (
+        _pm(("v1.14.0",), "boards/px4/fmu-v6x/init/rc.board_sensors", 5,
+            "hw_type in V6X005000,V6X005001,V6X005003,V6X005004", 7),
+        _pm(_LATER, "boards/px4/fmu-v6x/init/rc.board_sensors", 5, _NO_PM2_PORT, 8),
+    ),
+    "px4_fmu-v6xrt": (_pm(_LATER, "boards/px4/fmu-v6xrt/init/rc.board_sensors", 19,
+                          _NO_PM2_PORT, 22),),
+    "radiolink_PIX6": (_pm(_NOW, "boards/radiolink/PIX6/init/rc.board_sensors", 6, None),),
+    "zeroone_x6": (_pm(_NOW, "boards/zeroone/x6/init/rc.board_sensors", 5, _NO_PM2_PORT, 8),),
+}  # fmt: skip
+
+
+def board_variables(board: str, releases: Sequence[str]) -> Mapping[str, HardwareVariable]:
+    """The hardware variables of ``board``'s script in the newest of ``releases`` (empty for a
+    board whose script sets none)."""
+    for entry in HARDWARE_VARIABLES.get(board, ()):
+        if releases and releases[-1] in entry.releases:
+            return entry.variables
+    return {}
+
+
 _OPERATORS = {
     "==": lambda a, b: a == b,
     "!=": lambda a, b: a != b,
@@ -60,6 +148,7 @@ _OPERATORS = {
 _PARAM_TEST = re.compile(r"([A-Z][A-Z0-9_]*) (==|!=|>=|<=|>|<) (-?\d+(?:\.\d+)?)")
 _VARIABLE_TEST = re.compile(r"\$([A-Za-z_][A-Za-z0-9_]*) (==|!=) (\S+)")
 _LIST_TEST = re.compile(r"(hw_type|hw_base|board) in (\S+)")
+_MANIFEST_TEST = re.compile(r"mft [A-Z0-9_]+ == \S+")
 _STARTED_TEST = re.compile(r"([a-z][a-z0-9_]*) started \((.*)\)")
 _NUMBER = re.compile(r"0[xX][0-9a-fA-F]+|\d+")
 _BUS_CLAUSE = re.compile(r"bus (\d+): (.*)")
@@ -78,6 +167,10 @@ class Facts:
     starts: Sequence[DriverStart] | None
     #: What the configuration is, for the notes ("a QGC .params").
     kind: str
+    #: The hardware type (a log's ``ver_hw_subtype``); None where nothing says.
+    hw_type: str | None = None
+    #: The variables the board's script sets from the hardware (:func:`board_variables`).
+    hardware: Mapping[str, HardwareVariable] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -120,22 +213,39 @@ def _test(text: str, facts: Facts) -> _Test:
         name, equal, word = m[1], m[2] == "==", m[3]
         if name in facts.variables:
             return _Test((facts.variables[name] == word) == equal)
-        if name in HARDWARE_VARIABLES:
-            default, why = HARDWARE_VARIABLES[name]
-            return _Test((default == word) == equal, why)
+        if name in facts.hardware:
+            value, why = _hardware_variable(name, facts.hardware[name], facts)
+            return _Test((value == word) == equal, why)
         return _Test(None, f"${name} is set by the board's script from what the {facts.kind} "
                      "does not tell")  # fmt: skip
     m = _LIST_TEST.fullmatch(text)
     if m:
         if m[1] == "board":
             return _Test(any(hw in m[2].split(",") for hw in facts.ver_hw))
+        if m[1] == "hw_type" and facts.hw_type is not None:
+            return _Test(facts.hw_type in m[2].split(","))
         return _Test(None, "the hardware revision, which the parameters do not tell")
+    if _MANIFEST_TEST.fullmatch(text):
+        return _Test(None, "the board's hardware manifest, which the parameters do not tell")
     m = _STARTED_TEST.fullmatch(text)
     if m:
         if facts.starts is None:
             return _Test(None, f"a {facts.kind} has no boot console to say")
         return _Test(any(s.driver == m[1] and _started(m[2], s) for s in facts.starts))
     return _Test(None, "a test px4params cannot read")
+
+
+def _hardware_variable(name: str, var: HardwareVariable, facts: Facts) -> tuple[str, str]:
+    """The value the board's script gives ``name``, and why it is taken ("": settled)."""
+    if var.when is None:
+        return var.first, ""
+    verdict = evaluate(var.when, facts)
+    if verdict.holds is not None and not verdict.unchecked:
+        return (var.otherwise if verdict.holds else var.first), ""
+    return var.first, (
+        f"{var.path}:{var.line} sets {name} {var.first}; line {var.when_line}: {var.otherwise} "
+        f"where {' and '.join(verdict.unchecked)}"
+    )
 
 
 def _clause(text: str, facts: Facts) -> _Test:

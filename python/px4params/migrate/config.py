@@ -43,6 +43,9 @@ class OldConfig:
     version: tuple[int, int, int] | None = None
     #: The board of a log (ULog ``ver_hw``, e.g. ``PX4_FMU_V6C``); None for parameter files.
     hardware: str | None = None
+    #: The hardware type of a log (ULog ``ver_hw_subtype``, e.g. ``V30``, what ``ver hwtypecmp``
+    #: compares); None where the log has none, and for parameter files.
+    hw_type: str | None = None
     #: The log's boot console (``boot_console_output``), when it has one.
     console: str | None = None
     #: ``(topic, multi_id, device_id)`` of the sensors that published in the log.
@@ -80,8 +83,14 @@ def read_config(path: str | os.PathLike[str]) -> OldConfig:
     version = (release >> 24 & 0xFF, release >> 16 & 0xFF, release >> 8 & 0xFF) if release else None
     return OldConfig(
         where, "ULog", params, details, release=release, version=version,
-        hardware=log.hardware, console=log.boot_console, published=published,
+        hardware=log.hardware, hw_type=_text_info(log.info.get("ver_hw_subtype")),
+        console=log.boot_console, published=published,
     )  # fmt: skip
+
+
+def _text_info(value: object) -> str | None:
+    """A ULog information string (``ver_hw_subtype``); None where absent or empty."""
+    return value if isinstance(value, str) and value else None
 
 
 def _read_text(where: str) -> OldConfig:

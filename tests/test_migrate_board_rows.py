@@ -1,0 +1,304 @@
+"""The board's own starts in ``px4params migrate``: a device row of the board table counts as
+the board's only where its condition holds, as PX4's script tests it; what nothing settles
+never drops a device; the hardware variables (HAVE_PM2, HAVE_PM3) as each board's own script
+sets them.
+
+The expected answers are PX4's scripts as read in PX4-Autopilot (a fork's snapshot of main
+bb59c637, release/1.18 83c4f4e5, v1.15.0 30e763b6, v1.12.0 9524e8ec; v1.14.0's scripts at the
+main commits whose lines the board table has): boards/*/init/rc.board_sensors,
+ROMFS/px4fmu_common/init.d/rc.sensors, src/systemcmds/ver/ver.cpp (``ver hwtypecmp`` compares
+``px4_board_sub_type()``) and src/modules/logger/logger.cpp (which logs that as
+``ver_hw_subtype``). Device IDs are worked by hand: devtype << 16 | address << 8 | bus << 3 |
+bus type (1: I2C).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from px4params import migrate
+from px4params.migrate.conditions import HARDWARE_VARIABLES, Facts, board_variables, evaluate
+from px4params.migrate.config import OldConfig
+from px4params.vehicle.boards import Board, load_boards
+
+IST8310_BUS1 = 0x06 << 16 | 0x0E << 8 | 1 << 3 | 1  # 396809, a GPS puck's compass
+HMC5883_BUS2 = 0x01 << 16 | 0x1E << 8 | 2 << 3 | 1  # 73233
+BMM150_BUS4 = 0x43 << 16 | 0x10 << 8 | 4 << 3 | 1  # 4395041
+AK09916_BUS1 = 0x09 << 16 | 0x0C << 8 | 1 << 3 | 1  # 592905, a Here2's compass
+
+
+def board(name: str, release: str | None = None) -> Board:
+    found = load_boards().by_name(name, release)
+    assert found is not None
+    return found
+
+
+def config(
+    params: dict[str, int | float],
+    version: tuple[int, int, int] = (1, 15, 0),
+    hw_type: str | None = None,
+) -> OldConfig:
+    """A log's parameters (with its ``ver_hw_subtype`` where given), else a QGC file's."""
+    kind = "ULog" if hw_type is not None else "QGC .params"
+    return OldConfig("t", kind, dict(params), version=version, hw_type=hw_type)
+
+
+def placed(proposal: migrate.Proposal) -> list[tuple[str, int, int]]:
+    return [
+        (i.name, i.values["bus.i2c.bus_id"], i.values["bus.i2c.address"])
+        for i in proposal.instances
+    ]
+
+
+def left_out(proposal: migrate.Proposal) -> dict[str, tuple[str, str]]:
+    return {o.found: (o.reason, o.line) for o in proposal.left_out}
+
+
+# -- a device row counts where its condition holds -------------------------------------------
+
+
+def test_a_compass_the_board_starts_only_on_one_hardware_type_is_proposed_and_named() -> None:
+    # NXP MR-CANHUBK3 (main): `if ver hwtypecmp MR-CANHUBK3-ADAP` starts `ist8310 -X -b 1 -R
+    # 10` (line 10), else `ist8310 -X -b 2 -R 10` (line 22). A QGC file does not say the
+    # hardware type: an IST8310 on bus 1 may be a GPS puck's, so it is not dropped on a guess
+    mr = board("nxp_mr-canhubk3")
+    proposal = migrate.migrate(
+        config({"CAL_MAG0_ID": IST8310_BUS1, "CAL_MAG0_ROT": 0}), table="current", board=mr
+    )
+    assert placed(proposal) == [("IST8310#0", 1, 0x0E)]
+    (said,) = [a for a in proposal.assumptions if a.startswith("CAL_MAG0_ID")]
+    assert said == (
+        "CAL_MAG0_ID = 396809: IST8310 (MAG), I2C bus 1, address 0x0E: the board's 'ist8310 -X "
+        "-b 1 -R 10 start' (PX4/PX4-Autopilot boards/nxp/mr-canhubk3/init/rc.board_sensors:10 "
+        "at main (branch main, bb59c637cd, 2026-08-13)) runs only where hw_type in "
+        "MR-CANHUBK3-ADAP (the hardware revision, which the parameters do not tell): proposed, "
+        "not left out on a guess"
+    )
+
+
+@pytest.mark.parametrize(
+    ("hw_type", "boards"), [("MR-CANHUBK3-ADAP", True), ("MR-CANHUBK3", False)]
+)
+def test_a_logs_hardware_type_settles_which_compass_the_board_starts(
+    hw_type: str, boards: bool
+) -> None:
+    # A log's ver_hw_subtype is what `ver hwtypecmp` compares: on the ADAP the bus-1 IST8310
+    # is line 10's; on any other type line 10 does not run, and nothing is left to name
+    mr = board("nxp_mr-canhubk3")
+    proposal = migrate.migrate(
+        config({"CAL_MAG0_ID": IST8310_BUS1}, hw_type=hw_type), table="current", board=mr
+    )
+    assert not [a for a in proposal.assumptions if a.startswith("CAL_MAG0_ID")]
+    if boards:
+        assert placed(proposal) == []
+        reason, line = left_out(proposal)["CAL_MAG0_ID = 396809"]
+        assert reason == "board"
+        assert "boards/nxp/mr-canhubk3/init/rc.board_sensors:10 " in line
+    else:
+        assert placed(proposal) == [("IST8310#0", 1, 0x0E)]
+
+
+def test_a_compass_found_on_the_internal_bus_is_the_boards_whatever_its_revision() -> None:
+    # Pixhawk 6X (main): `bmm150 -I -R 0 start` only `if ! ver hwtypecmp V6X001` (line 133);
+    # bus 4 is its internal bus (src/i2c.cpp), which rc.sensors never probes (-X only): a
+    # BMM150 found there was started by line 133, so it is not proposed
+    v6x = board("px4_fmu-v6x")
+    assert v6x.internal_i2c_buses == (4,)
+    proposal = migrate.migrate(config({"CAL_MAG0_ID": BMM150_BUS4}), table="current", board=v6x)
+    assert placed(proposal) == []
+    reason, line = left_out(proposal)["CAL_MAG0_ID = 4395041"]
+    assert reason == "board"
+    assert "boards/px4/fmu-v6x/init/rc.board_sensors:133 " in line
+    assert line.endswith(
+        "it runs only where not hw_type in V6X001 (the hardware revision, which the parameters "
+        "do not tell), and being found on internal I2C bus 4 (boards/px4/fmu-v6x/src/i2c.cpp) "
+        "shows it did"
+    )
+
+
+def test_the_pixhawk_2_and_pixhawk_4_scripts_hardware_tests_start_only_spi_sensors() -> None:
+    # fmu-v2/v3 (`ver hwtypecmp V30`, `V2M`, then `$BOARD_FMUV3` from which start succeeded)
+    # and fmu-v5 (`ver hwtypecmp V5005002 V5006002`) choose only SPI sensors; their I2C
+    # starts (hmc5883 -T -I -R 4 on line 12 of fmu-v3, ist8310 -I / -X -b 1 on fmu-v5) are
+    # unconditional. Every I2C decision on these boards is the same on every revision.
+    for name in ("px4_fmu-v2", "px4_fmu-v3", "px4_fmu-v5"):
+        for row in (r for b in load_boards().variants(name) for r in b.devices):
+            if "hw_type" in row.when or "BOARD_FMUV3" in row.when:
+                assert row.bus_kind == "SPI", (name, row)
+            if row.bus_kind == "I2C":
+                assert row.when == "", (name, row)
+
+
+@pytest.mark.parametrize("hw_type", ["V30", "V2M", None])
+def test_a_cubes_internal_compass_and_gps_compass_on_fmu_v3(hw_type: str | None) -> None:
+    # A Pixhawk 2 Cube (ver_hw_subtype V30) of PX4 1.12: its HMC5883 on internal I2C bus 2 is
+    # line 12's `hmc5883 -T -I -R 4 start`; the GPS's IST8310 on bus 1 is probed: proposed.
+    # The same on a Pixhawk Mini (V2M) and with no type known
+    v3 = board("px4_fmu-v3", "v1.12.0")
+    proposal = migrate.migrate(
+        config(
+            {"CAL_MAG0_ID": IST8310_BUS1, "CAL_MAG1_ID": HMC5883_BUS2, "SENS_EXT_I2C_PRB": 1},
+            version=(1, 12, 3),
+            hw_type=hw_type,
+        ),
+        table="current",
+        board=v3,
+    )
+    assert placed(proposal) == [("IST8310#0", 1, 0x0E)]
+    reason, line = left_out(proposal)["CAL_MAG1_ID = 73233"]
+    assert reason == "board"
+    assert "boards/px4/fmu-v3/init/rc.board_sensors:12 " in line
+    assert not [a for a in proposal.assumptions if "runs only where" in a]
+
+
+@pytest.mark.parametrize(
+    ("when", "hw_type", "holds", "unchecked"),
+    [
+        ("hw_type in V30", "V30", True, ()),
+        ("hw_type in V30", "V2M", False, ()),
+        ("not hw_type in V2M", "V30", True, ()),
+        ("hw_type in V30", None, None,
+         ("hw_type in V30 (the hardware revision, which the parameters do not tell)",)),
+        # `ver hwbasecmp` compares the base, which no log names
+        ("hw_base in 008", "V5X00a000", None,
+         ("hw_base in 008 (the hardware revision, which the parameters do not tell)",)),
+    ],
+)  # fmt: skip
+def test_the_hardware_type_is_settled_by_a_logs_ver_hw_subtype(
+    when: str, hw_type: str | None, holds: bool | None, unchecked: tuple[str, ...]
+) -> None:
+    facts = Facts({}, {}, (), None, "ULog", hw_type=hw_type)
+    verdict = evaluate(when, facts)
+    assert (verdict.holds, verdict.unchecked) == (holds, unchecked)
+
+
+# -- rc.sensors' probe rotation counts where the probe runs ----------------------------------
+
+
+@pytest.mark.parametrize(
+    ("params", "rotation", "named"),
+    [
+        ({"SENS_EXT_I2C_PRB": 1}, 6, False),
+        ({"SENS_EXT_I2C_PRB": 0}, 0, False),  # line 102 does not run: no -R of it
+        ({}, 6, True),  # nothing says: the probe is what starts it, and that is said
+    ],
+)
+def test_the_probes_rotation_counts_only_where_probing_runs(
+    params: dict[str, int], rotation: int, named: bool
+) -> None:
+    # PX4 1.11's rc.sensors: `if param compare -s SENS_EXT_I2C_PRB 1` ... `ak09916 -X -R 6
+    # start` (line 102, a Here2's compass, rotated 270 degrees yaw)
+    v5 = board("px4_fmu-v5", "v1.11.0")
+    proposal = migrate.migrate(
+        config({"CAL_MAG0_ID": AK09916_BUS1, **params}, version=(1, 11, 3)),
+        table="current",
+        board=v5,
+    )
+    (ak,) = proposal.instances
+    assert (ak.name, ak.values["rotation"]) == ("AK09916#0", rotation)
+    said = [a for a in proposal.assumptions if a.startswith("'ak09916 -X -R 6 start'")]
+    assert bool(said) == named
+    if named:
+        assert said[0].endswith(
+            "runs only where SENS_EXT_I2C_PRB == 1 (SENS_EXT_I2C_PRB is not in the QGC .params): "
+            "its -R 6 taken"
+        )
+
+
+# -- HAVE_PM2 and HAVE_PM3 as each board's script sets them ----------------------------------
+
+
+def test_every_board_row_testing_a_hardware_variable_has_the_boards_own_setting() -> None:
+    # Every board whose rows test $HAVE_PM2 or $HAVE_PM3, in every release, has the way its
+    # own script sets them: 13 boards, read one by one
+    tested = set()
+    for b in load_boards().all():
+        conditions = [r.when for r in (*b.switches, *b.devices)] + [b.i2c_launcher_when]
+        for name in ("HAVE_PM2", "HAVE_PM3"):
+            if any(f"${name} " in c for c in conditions):
+                assert name in board_variables(b.name, b.releases), (b.name, b.releases, name)
+                tested.add(b.name)
+    assert tested == set(HARDWARE_VARIABLES)
+    assert len(tested) == 13
+
+
+def test_radiolink_pix6_always_has_its_second_power_module_port() -> None:
+    # boards/radiolink/PIX6/init/rc.board_sensors (v1.18, main): `set HAVE_PM2 yes` on line 6
+    # and nothing sets it no: `ina226 -X -b 2 -t 2 -k start` runs whenever SENS_EN_INA226 is
+    # 1, nothing to name
+    pix6 = board("radiolink_PIX6")
+    proposal = migrate.migrate(config({"SENS_EN_INA226": 1}), table="current", board=pix6)
+    assert placed(proposal) == [("INA226#0", 2, 0x41)]
+    assert not [a for a in proposal.assumptions if "HAVE_PM2" in a], proposal.assumptions
+
+
+@pytest.mark.parametrize(
+    ("hw_type", "buses"),
+    [("V6X005000", [1]), ("V6X000000", [1, 2]), (None, [1, 2])],
+)
+def test_pixhawk_6x_of_px4_1_14_has_no_second_port_on_its_mini_base(
+    hw_type: str | None, buses: list[int]
+) -> None:
+    # PX4 1.14's fmu-v6x script: `set HAVE_PM2 yes` (line 5), `no` if `ver hwtypecmp V6X005000
+    # V6X005001 V6X005003 V6X005004` (line 7, the Holybro mini base board). A log's hardware
+    # type settles it; without one it is yes, and the report names line 7's test
+    v6x = board("px4_fmu-v6x", "v1.14.0")
+    proposal = migrate.migrate(
+        config({"SENS_EN_INA226": 1}, version=(1, 14, 0), hw_type=hw_type),
+        table="current",
+        board=v6x,
+    )
+    assert [bus for _, bus, _ in placed(proposal)] == buses
+    said = [a for a in proposal.assumptions if "HAVE_PM2" in a]
+    if hw_type is not None:
+        assert said == []
+    else:
+        (line,) = said
+        assert (
+            "$HAVE_PM2 == yes (boards/px4/fmu-v6x/init/rc.board_sensors:5 sets HAVE_PM2 yes; "
+            "line 7: no where hw_type in V6X005000,V6X005001,V6X005003,V6X005004 (the hardware "
+            "revision, which the parameters do not tell)): taken as holding (PX4's default)"
+        ) in line
+
+
+@pytest.mark.parametrize(
+    ("name", "hw_type"), [("motor_failure.ulg", "V30"), ("battery_brownout.ulg", "V6C000001")]
+)
+def test_a_real_logs_hardware_type_is_read(name: str, hw_type: str, tmp_path: Path) -> None:
+    # ver_hw_subtype as pyulog prints it: a Pixhawk 2 Cube's log (PX4_FMU_V3) and a Pixhawk
+    # 6C's (PX4_FMU_V6C)
+    from test_migrate_corpus import CORPUS, locate
+
+    (truth,) = [t for t in CORPUS if t.name == name]
+    assert migrate.read_config(locate(truth, tmp_path)).hw_type == hw_type
+
+
+@pytest.mark.parametrize(
+    ("console", "proposed"),
+    [
+        # line 28's IST8310 answered: line 31 did not run, the RM3100 was probed
+        ("ist8310 #0 on I2C bus 4 (external) address 0x0C\n"
+         "rm3100 #0 on I2C bus 4 (external) address 0x20\n", True),
+        # no IST8310 on bus 4: the 6C variant's RM3100 is line 31's
+        ("rm3100 #0 on I2C bus 4 (external) address 0x20\n", False),
+    ],
+)  # fmt: skip
+def test_the_boot_console_settles_the_6c_variants_fallback_compass(
+    console: str, proposed: bool
+) -> None:
+    # Pixhawk 6C (main): `if ! ist8310 -X -b 4 -a 0xc -q start` then `rm3100 -X -b 4 -R 8
+    # start` (lines 28 and 31); bus 4 is marked external (src/i2c.cpp), so rc.sensors' probe
+    # also reaches it
+    v6c = board("px4_fmu-v6c")
+    proposal = migrate.migrate(
+        OldConfig("t", "ULog", {}, version=(1, 16, 0), console=console),
+        table="current",
+        board=v6c,
+    )
+    if proposed:
+        assert placed(proposal) == [("RM3100#0", 4, 0x20)]
+    else:
+        assert placed(proposal) == []
+        (line,) = [o.line for o in proposal.left_out if o.device.startswith("rm3100")]
+        assert "boards/px4/fmu-v6c/init/rc.board_sensors:31 " in line
