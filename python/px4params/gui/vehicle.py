@@ -76,11 +76,12 @@ class _Base:
         for listener in list(self._listeners):
             listener(event)
 
-    def _status(self, text: str) -> None:
-        """A STATUSTEXT from the vehicle: kept, and read for health reports."""
+    def _status(self, text: str, whole: bool = True) -> None:
+        """A STATUSTEXT from the vehicle: kept, and read for health reports unless chunks of
+        it are missing (what is missing may be its instance or state)."""
         self.messages.append(text)
         del self.messages[:-200]
-        report = parse_health(text)
+        report = parse_health(text) if whole else None
         if report is not None:
             self.health[report["instance"]] = report
         self._notify({"kind": "status", "text": text, "health": report})
@@ -242,6 +243,54 @@ def _mentions(line: str, name: str) -> bool:
     return re.search(rf"(?<!{word}){re.escape(name)}(?!{word})", line) is not None
 
 
+#: STATUSTEXT (common.xml): characters a chunk holds; the mark shown where chunks are missing;
+#: seconds a text waits for its next chunk (QGC waits 1 s); texts waiting at once, beyond which
+#: the oldest is shown as it is (a flood, or a link losing last chunks, holds no more memory).
+_CHUNK_CHARS = 50
+_MISSING = "[...]"
+_CHUNK_WAIT = 1.0
+_TEXTS_WAITING = 16
+
+
+class _ChunkedText:
+    """One STATUSTEXT text arriving in chunks: its chunks by ``chunk_seq``, the seq of its last
+    chunk once heard (the one holding a NUL: shorter than 50 characters decoded), and when it
+    stops waiting (a while after its latest new chunk)."""
+
+    def __init__(self) -> None:
+        self.parts: dict[int, str] = {}
+        self.last: int | None = None
+        self.deadline = 0.0
+
+    def add(self, seq: int, text: str, now: float) -> None:
+        if seq in self.parts:  # a duplicate: UDP or a router sent it twice
+            return
+        self.parts[seq] = text
+        self.deadline = now + _CHUNK_WAIT
+        if len(text) < _CHUNK_CHARS:
+            self.last = seq
+
+    @property
+    def whole(self) -> bool:
+        return self.last is not None and all(s in self.parts for s in range(self.last + 1))
+
+    def text(self) -> str:
+        """The chunks in chunk_seq order, each run of missing ones (and a missing end) marked."""
+        end = self.last if self.last is not None else max(self.parts)
+        out: list[str] = []
+        gap = False
+        for seq in range(end + 1):
+            part = self.parts.get(seq)
+            if part is not None:
+                out.append(part)
+            elif not gap:
+                out.append(_MISSING)
+            gap = part is None
+        if self.last is None:
+            out.append(_MISSING)
+        return "".join(out)
+
+
 class MavlinkVehicle(_Base):
     """A vehicle (``px4params mavlink serve`` or a PX4) over MAVLink on UDP, as a ground station
     talks to it: heartbeats, the parameter list, component metadata over MAVLink FTP (or a
@@ -284,8 +333,8 @@ class MavlinkVehicle(_Base):
         self._component = 1
         self._stop = threading.Event()
         self._waiters: dict[str, list[Any]] = {}
-        #: STATUSTEXT chunks waiting for their last one, by sender (system, component) and id.
-        self._chunks: dict[tuple[int, int, int], list[str]] = {}
+        #: STATUSTEXT texts waiting for chunks, by sender (system, component) and id, oldest first.
+        self._chunks: dict[tuple[int, int, int], _ChunkedText] = {}
         #: Each write's list of what the vehicle says while it waits (its reason, if refused).
         self._hearing: list[list[str]] = []
         self._count = 0
@@ -400,6 +449,7 @@ class MavlinkVehicle(_Base):
 
     def _receive(self) -> None:
         while not self._stop.is_set():
+            self._show_overdue()  # at least every 0.2 s: the wait for a message below
             try:
                 msg = self._conn.recv_match(blocking=True, timeout=0.2)
             except (OSError, ValueError):
@@ -423,25 +473,47 @@ class MavlinkVehicle(_Base):
                         waiter.append(("error", msg))
 
     def _statustext(self, msg: Any) -> None:
-        """STATUSTEXT, its 50-character chunks joined (MAVLink 2: ``id`` and ``chunk_seq``;
-        id 0 is a text in one chunk, and a chunk shorter than 50 characters ends the text).
-        An id is its sender's: two senders' texts of the same id are two texts."""
-        text = msg.text
+        """STATUSTEXT, its 50-character chunks joined by ``chunk_seq`` (MAVLink 2: id 0 is a
+        text in one chunk, and a chunk shorter than 50 characters is the last). An id is its
+        sender's: two senders' texts of the same id are two texts. A text is shown when its
+        last chunk comes, when another text of its id starts (chunk_seq 0 again: the id
+        wrapped), when it waited ``_CHUNK_WAIT`` for a chunk, or when it is the oldest of too
+        many waiting; missing chunks are marked, never glued over (as QGC does)."""
         sender = (msg.get_srcSystem(), msg.get_srcComponent())
         text_id = getattr(msg, "id", 0)
-        if text_id:
-            key = (*sender, text_id)
-            parts = self._chunks.setdefault(key, [])
-            parts.append(text)
-            if len(text) == 50:  # a whole chunk: more follow
-                return
-            del self._chunks[key]
-            text = "".join(parts)
+        if not text_id:
+            self._said(sender, msg.text, whole=True)
+            return
+        key = (*sender, text_id)
+        seq = getattr(msg, "chunk_seq", 0)
+        waiting = self._chunks.get(key)
+        if waiting is not None and seq == 0 and 0 in waiting.parts:
+            self._show_chunked(key)
+            waiting = None
+        if waiting is None:
+            if len(self._chunks) >= _TEXTS_WAITING:
+                self._show_chunked(next(iter(self._chunks)))
+            waiting = self._chunks[key] = _ChunkedText()
+        waiting.add(seq, msg.text, time.monotonic())
+        if waiting.last is not None:
+            self._show_chunked(key)
+
+    def _show_chunked(self, key: tuple[int, int, int]) -> None:
+        waiting = self._chunks.pop(key)
+        self._said((key[0], key[1]), waiting.text(), whole=waiting.whole)
+
+    def _show_overdue(self) -> None:
+        """The texts that waited too long for a chunk, as they are."""
+        now = time.monotonic()
+        for key in [k for k, waiting in self._chunks.items() if waiting.deadline <= now]:
+            self._show_chunked(key)
+
+    def _said(self, sender: tuple[int, int], text: str, *, whole: bool) -> None:
         if sender == (self._system, self._component):  # a camera's text is no write's reason
             with self._lock:
                 for said in self._hearing:
                     said.append(text)
-        self._status(text)
+        self._status(text, whole)
 
     def _param_value(self, msg: Any) -> None:
         name = msg.param_id
