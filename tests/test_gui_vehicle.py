@@ -29,7 +29,7 @@ from px4params.gui.vehicle import (
     _mftp_path,
     parse_health,
 )
-from px4params.links.mavlink import MavlinkParamServer
+from px4params.links.mavlink import MavlinkParamServer, param_value_of
 from px4params.store.classic import BUNDLED_CLASSIC
 from px4params.store.session import Session
 from pymavlink.dialects.v20 import common as mavlink2
@@ -1159,3 +1159,59 @@ def test_texts_waiting_for_chunks_are_bounded_in_number(schema: px4params.Schema
         assert max(waiting) <= 16
         assert shown == [f"text {n:03}: " + "x" * 40 + "[...]" for n in range(1, 301)]
         assert page._chunks == {}
+
+
+# -- writes of one parameter at once; the page's heartbeat on a busy link -------------------------
+# The app runs each write in a worker thread (asyncio.to_thread), and the link carries more
+# senders than the vehicle.
+
+
+class _LateAndLossy(_Recording):
+    """Answers a write of INA238_1C 1.5 s late (a busy vehicle, a slow radio link), except a
+    write of 1, which is lost on the way."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self.late: list[tuple[float, Any, Any]] = []
+
+    def _set(self, peer: Any, name: str, msg: Any) -> None:
+        if name != "INA238_1C":
+            super()._set(peer, name, msg)
+        elif param_value_of(msg) != 1:
+            self.late.append((time.monotonic() + 1.5, peer, msg))
+
+    def step(self, timeout: float) -> None:
+        super().step(min(timeout, 0.05))
+        while self.late and self.late[0][0] <= time.monotonic():
+            _, peer, msg = self.late.pop(0)
+            super()._set(peer, "INA238_1C", msg)
+
+
+@pytest.mark.issue40
+def test_a_write_given_up_leaves_another_write_of_the_parameter_waiting(
+    schema: px4params.Schema,
+) -> None:
+    """The page's writes run in threads. A write of 70 waits for its late answer; meanwhile a
+    write of 1 to the same parameter is lost and given up (three tries of 0.1 s). Giving up
+    stops that write's waiting only: the write of 70 still hears its answer, and is accepted
+    (the two wait on lists equal while both are empty; only the one given up is forgotten)."""
+    with _peer(schema, _LateAndLossy) as served, _page(served.address) as page:
+        answers: list[Any] = []  # the write's result, or what it raised
+
+        def write_70() -> None:
+            try:
+                answers.append(page.write("INA238_1C", 70, 3.0))
+            except Exception as e:
+                answers.append(e)
+
+        writing = threading.Thread(target=write_70)
+        writing.start()
+        assert wait_for(lambda: served.sets == ["INA238_1C"], 5.0)  # waiting, first
+        lost = page.write("INA238_1C", 1, timeout=0.1)
+        assert served.late  # given up before the vehicle answered the write of 70
+        writing.join(30)
+        assert (lost.ok, lost.reason) == (False, "INA238_1C: no answer from the vehicle")
+        assert len(answers) == 1 and isinstance(answers[0], WriteResult), answers
+        assert (answers[0].ok, answers[0].value, answers[0].reason) == (True, 70, "")
+        assert served.sets == ["INA238_1C"] * 4  # 70 once, 1 three times
+        assert page._waiters["INA238_1C"] == []  # nothing left waiting

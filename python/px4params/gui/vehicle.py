@@ -16,7 +16,7 @@ import re
 import struct
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from typing import Any
 
 from px4params.errors import CommandError, Px4ParamsError
@@ -553,6 +553,20 @@ class MavlinkVehicle(_Base):
                 quiet = time.monotonic()
         self._notify({"kind": "values", "values": self.state()["values"]})
 
+    @contextlib.contextmanager
+    def _waiting(self, name: str) -> Iterator[list[Any]]:
+        """A list that gathers what the vehicle answers about ``name`` (its PARAM_VALUE and
+        PARAM_ERROR) while the block runs. Writes run in threads: several lists may wait on
+        one name, equal while they hold the same answers, so each is forgotten by identity."""
+        answers: list[Any] = []
+        with self._lock:
+            self._waiters.setdefault(name, []).append(answers)
+        try:
+            yield answers
+        finally:
+            with self._lock:
+                self._waiters[name] = [w for w in self._waiters[name] if w is not answers]
+
     def write(self, name: str, value: int | float, timeout: float = 1.5) -> WriteResult:
         """PARAM_SET (PX4's bytewise int32 encoding), then the vehicle's answer: acknowledged
         when the echo carries the value sent (a float as float32, or as the float16 a narrower
@@ -562,23 +576,21 @@ class MavlinkVehicle(_Base):
         is_float = isinstance(value, float)
         kind = mav.MAV_PARAM_TYPE_REAL32 if is_float else mav.MAV_PARAM_TYPE_INT32
         said: list[str] = []  # the vehicle's STATUSTEXT (self.messages keeps only the last 200)
-        answers: list[Any] = []
         with self._lock:
-            self._waiters.setdefault(name, []).append(answers)
             self._hearing.append(said)
         try:
-            for _attempt in range(3):
-                message = param_set_message(self._system, self._component, name, value, kind)
-                self._conn.write(message.pack(self._conn.mav))
-                end = time.monotonic() + timeout
-                while time.monotonic() < end and not answers:
-                    time.sleep(0.02)
-                if answers:
-                    break
-            time.sleep(0.1)  # a PARAM_ERROR and STATUSTEXT follow a refusal's PARAM_VALUE
+            with self._waiting(name) as answers:
+                for _attempt in range(3):
+                    message = param_set_message(self._system, self._component, name, value, kind)
+                    self._conn.write(message.pack(self._conn.mav))
+                    end = time.monotonic() + timeout
+                    while time.monotonic() < end and not answers:
+                        time.sleep(0.02)
+                    if answers:
+                        break
+                time.sleep(0.1)  # a PARAM_ERROR and STATUSTEXT follow a refusal's PARAM_VALUE
         finally:
             with self._lock:
-                self._waiters[name].remove(answers)
                 self._hearing = [h for h in self._hearing if h is not said]
         reasons = [m for m in said if _mentions(m, name)]
         errors = [a for a in answers if a[0] == "error"]
@@ -595,17 +607,11 @@ class MavlinkVehicle(_Base):
         return WriteResult(name, True, read if read is not None else echoed)
 
     def read(self, name: str, timeout: float = 1.0) -> int | float | None:
-        answers: list[Any] = []
-        with self._lock:
-            self._waiters.setdefault(name, []).append(answers)
-        try:
+        with self._waiting(name) as answers:
             self._conn.mav.param_request_read_send(self._system, self._component, name.encode(), -1)
             end = time.monotonic() + timeout
             while time.monotonic() < end and not answers:
                 time.sleep(0.02)
-        finally:
-            with self._lock:
-                self._waiters[name].remove(answers)
         values = [a[1] for a in answers if a[0] == "value"]
         return values[0] if values else None
 
