@@ -1215,3 +1215,39 @@ def test_a_write_given_up_leaves_another_write_of_the_parameter_waiting(
         assert (answers[0].ok, answers[0].value, answers[0].reason) == (True, 70, "")
         assert served.sets == ["INA238_1C"] * 4  # 70 once, 1 three times
         assert page._waiters["INA238_1C"] == []  # nothing left waiting
+
+
+class _Crowded(_Recording):
+    """A link crowded by others, with no vehicle yet: at each of its heartbeats (every 10 ms)
+    those of 20 other senders (ground stations, companions), and none of its own."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self.others = 0
+
+    def _heartbeat(self) -> None:
+        beat = mavlink2.MAVLink_heartbeat_message(
+            mavlink2.MAV_TYPE_GCS, mavlink2.MAV_AUTOPILOT_INVALID, 0, 0, 0, 3
+        )
+        for system in range(100, 120):
+            _say_as(self, (system, 190), [beat], self._peers(None))
+            self.others += 1
+
+
+@pytest.mark.issue40
+def test_the_page_beats_once_a_second_while_connecting_on_a_crowded_link(
+    schema: px4params.Schema,
+) -> None:
+    """MAVLink's heartbeat is 1 Hz (a ground station's too), however many others the page
+    hears: waiting 1.5 s for a vehicle among some thousand others' heartbeats, it sends two
+    (at once, and a second later), and none once it gave up."""
+    with _peer(schema, _Crowded, heartbeat_interval=0.01) as served:
+        started = time.monotonic()
+        with pytest.raises(CommandError):
+            MavlinkVehicle(served.address, timeout=1.5)
+        waited = time.monotonic() - started
+        sent = served.heartbeat_count
+        time.sleep(1.2)
+        assert served.others > 500  # the crowd was there
+        assert 1 <= sent <= 1 + waited
+        assert served.heartbeat_count == sent  # none after giving up

@@ -291,6 +291,10 @@ class _ChunkedText:
         return "".join(out)
 
 
+#: Seconds between the page's heartbeats (MAVLink's HEARTBEAT: 1 Hz).
+_HEARTBEAT_PERIOD = 1.0
+
+
 class MavlinkVehicle(_Base):
     """A vehicle (``px4params mavlink serve`` or a PX4) over MAVLink on UDP, as a ground station
     talks to it: heartbeats, the parameter list, component metadata over MAVLink FTP (or a
@@ -338,12 +342,18 @@ class MavlinkVehicle(_Base):
         #: Each write's list of what the vehicle says while it waits (its reason, if refused).
         self._hearing: list[list[str]] = []
         self._count = 0
-        self._connect(timeout)
-        self.metadata = self._load_metadata(metadata_file, timeout)
-        self._thread = threading.Thread(target=self._receive, name="gui-mavlink", daemon=True)
-        self._thread.start()
         self._heartbeats = threading.Thread(target=self._beat, name="gui-heartbeat", daemon=True)
         self._heartbeats.start()
+        try:
+            self._connect(timeout)
+            self.metadata = self._load_metadata(metadata_file, timeout)
+        except BaseException:  # no vehicle, or no metadata: the page says nothing more
+            self._stop.set()
+            self._heartbeats.join(timeout=2)
+            self._conn.close()
+            raise
+        self._thread = threading.Thread(target=self._receive, name="gui-mavlink", daemon=True)
+        self._thread.start()
         self.refresh(timeout)
 
     # -- connection ------------------------------------------------------------------------
@@ -353,9 +363,10 @@ class MavlinkVehicle(_Base):
         self._conn.mav.heartbeat_send(mav.MAV_TYPE_GCS, mav.MAV_AUTOPILOT_INVALID, 0, 0, 0)
 
     def _connect(self, timeout: float) -> None:
+        """The vehicle's heartbeat waited for (the page's own go out at their rate meanwhile:
+        a heartbeat for each heard would be hundreds a second on a busy link)."""
         end = time.monotonic() + timeout
         while time.monotonic() < end:
-            self._send_heartbeat()
             msg = self._conn.recv_match(type="HEARTBEAT", blocking=True, timeout=0.5)
             if msg is not None and self._is_vehicle(msg):
                 self._system = msg.get_srcSystem()
@@ -443,9 +454,13 @@ class MavlinkVehicle(_Base):
         return dict(json.loads(data))
 
     def _beat(self) -> None:
-        while not self._stop.wait(1.0):
+        """The page's heartbeat, one at once and then one a second (MAVLink's rate for every
+        component, a ground station's too), from construction to close()."""
+        while True:
             with contextlib.suppress(OSError):
                 self._send_heartbeat()
+            if self._stop.wait(_HEARTBEAT_PERIOD):
+                return
 
     def _receive(self) -> None:
         while not self._stop.is_set():
