@@ -29,7 +29,7 @@ from px4params.gui.vehicle import (
     _mftp_path,
     parse_health,
 )
-from px4params.links.mavlink import MavlinkParamServer
+from px4params.links.mavlink import MavlinkParamServer, param_value_of
 from px4params.store.classic import BUNDLED_CLASSIC
 from px4params.store.session import Session
 from pymavlink.dialects.v20 import common as mavlink2
@@ -1063,3 +1063,191 @@ def test_only_the_vehicle_refuses_its_writes_and_says_why(schema: px4params.Sche
             "INA238_1C: INA238#1: bus.i2c.address: value 200 is out of range (expected 0 to 127)"
         )
         assert "INA238_1C: the camera's" in page.messages
+
+
+# -- STATUSTEXT chunks joined by chunk_seq ---------------------------------------------------------
+# common.xml's STATUSTEXT: a text longer than 50 characters goes in chunks of one non-zero id,
+# ``chunk_seq`` counting them from 0, and the chunk holding a NUL (shorter than 50 characters
+# once decoded) is the last. UDP loses and reorders datagrams: the page joins the chunks by
+# chunk_seq, marks where chunks are missing, and shows a text whose last chunk never comes
+# (marked) after a bounded wait, as QGC does.
+
+
+def _chunks(text: str) -> list[str]:
+    """``text`` cut as a sender cuts it: 50 characters a chunk, and an empty one after a last
+    chunk of 50 (its NUL ends the text)."""
+    parts = [text[i : i + 50] for i in range(0, len(text), 50)]
+    return [*parts, ""] if len(parts[-1]) == 50 else parts
+
+
+def _tell(served: _Recording, page: MavlinkVehicle, text_id: int, parts: dict[int, str]) -> None:
+    """The chunks ``parts`` (by chunk_seq, in the order given) of a text of ``text_id``, sent
+    to the page as the vehicle (system 7, component 1)."""
+    to_page = [("127.0.0.1", page._conn.port.getsockname()[1])]
+    warning = mavlink2.MAV_SEVERITY_WARNING
+    chunks = [
+        mavlink2.MAVLink_statustext_message(warning, part.encode(), text_id, seq)
+        for seq, part in parts.items()
+    ]
+    _say_as(served, (7, 1), chunks, to_page)
+
+
+#: A health report of three chunks (50, 50 and 17 characters).
+THREE_CHUNKS = (
+    "health: ina238 INA238#1 on I2C bus 2 address 0x45: critical: no answer since boot, "
+    + "checked the wiring and the address"
+)
+
+
+@pytest.mark.issue40
+def test_status_text_chunks_are_joined_by_chunk_seq_and_a_gap_is_marked(
+    schema: px4params.Schema,
+) -> None:
+    """The second chunk before the first, then the third: the text in chunk_seq order. The
+    same text again with its second chunk lost: shown with "[...]" where it is missing, never
+    glued, and read as no health report (what is missing may be its instance or state)."""
+    first, second, third = _chunks(THREE_CHUNKS)
+    assert [len(p) for p in (first, second, third)] == [50, 50, 17]
+    with _peer(schema) as served, _page(served.address) as page:
+        _tell(served, page, 21, {1: second, 0: first, 2: third})
+        _tell(served, page, 22, {0: first, 2: third})
+        assert wait_for(lambda: len(page.messages) >= 2, 5.0)
+        time.sleep(0.1)  # nothing more comes
+        assert page.messages == [THREE_CHUNKS, first + "[...]" + third]
+        assert page.health == {"INA238#1": parse_health(THREE_CHUNKS)}  # from the whole one
+
+
+@pytest.mark.issue40
+def test_a_text_whose_last_chunk_never_comes_is_shown_marked_incomplete(
+    schema: px4params.Schema,
+) -> None:
+    """Text 31 never gets its last chunk: shown with "[...]" at its end about a second after
+    its first (QGC waits 1 s). Text 32's first chunk, then another text of id 32 starting
+    (chunk_seq 0 again: the id wrapped): the first shown marked at once, the second whole
+    and apart from it."""
+    lost = "health: ms5611 MS5611#0 on SPI bus 1: critical: no " + "answer since boot"
+    earlier = "camera: storage full, no photo taken, video recording stopped"
+    later = "gimbal: pitch calibration done, yaw calibration started, hold still"
+    with _peer(schema) as served, _page(served.address) as page:
+        started = time.monotonic()
+        _tell(served, page, 31, {0: _chunks(lost)[0]})
+        _tell(served, page, 32, {0: _chunks(earlier)[0]})
+        _tell(served, page, 32, dict(enumerate(_chunks(later))))
+        assert wait_for(lambda: len(page.messages) >= 2, 5.0)
+        assert page.messages == [earlier[:50] + "[...]", later]  # not waiting for text 31
+        assert wait_for(lambda: len(page.messages) == 3, 5.0)
+        assert 0.9 < time.monotonic() - started < 3.0
+        assert page.messages[2] == lost[:50] + "[...]"
+        assert page.health == {}  # an incomplete text is no health report
+
+
+@pytest.mark.issue40
+def test_texts_waiting_for_chunks_are_bounded_in_number(schema: px4params.Schema) -> None:
+    """300 texts that each send their first chunk only (a flood, or a link losing every last
+    chunk): at most 16 wait at once, the oldest shown marked when a 17th starts, and every
+    one of the 300 is shown, none dropped."""
+    shown: list[str] = []
+    with _peer(schema) as served, _page(served.address) as page:
+        page.listen(
+            lambda event: shown.append(event["text"]) if event["kind"] == "status" else None
+        )
+        waiting = []
+        for text_id in range(1, 301):
+            _tell(served, page, text_id, {0: f"text {text_id:03}: " + "x" * 40})
+            waiting.append(len(page._chunks))
+        assert wait_for(lambda: len(shown) == 300, 10.0)
+        assert max(waiting) <= 16
+        assert shown == [f"text {n:03}: " + "x" * 40 + "[...]" for n in range(1, 301)]
+        assert page._chunks == {}
+
+
+# -- writes of one parameter at once; the page's heartbeat on a busy link -------------------------
+# The app runs each write in a worker thread (asyncio.to_thread), and the link carries more
+# senders than the vehicle.
+
+
+class _LateAndLossy(_Recording):
+    """Answers a write of INA238_1C 1.5 s late (a busy vehicle, a slow radio link), except a
+    write of 1, which is lost on the way."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self.late: list[tuple[float, Any, Any]] = []
+
+    def _set(self, peer: Any, name: str, msg: Any) -> None:
+        if name != "INA238_1C":
+            super()._set(peer, name, msg)
+        elif param_value_of(msg) != 1:
+            self.late.append((time.monotonic() + 1.5, peer, msg))
+
+    def step(self, timeout: float) -> None:
+        super().step(min(timeout, 0.05))
+        while self.late and self.late[0][0] <= time.monotonic():
+            _, peer, msg = self.late.pop(0)
+            super()._set(peer, "INA238_1C", msg)
+
+
+@pytest.mark.issue40
+def test_a_write_given_up_leaves_another_write_of_the_parameter_waiting(
+    schema: px4params.Schema,
+) -> None:
+    """The page's writes run in threads. A write of 70 waits for its late answer; meanwhile a
+    write of 1 to the same parameter is lost and given up (three tries of 0.1 s). Giving up
+    stops that write's waiting only: the write of 70 still hears its answer, and is accepted
+    (the two wait on lists equal while both are empty; only the one given up is forgotten)."""
+    with _peer(schema, _LateAndLossy) as served, _page(served.address) as page:
+        answers: list[Any] = []  # the write's result, or what it raised
+
+        def write_70() -> None:
+            try:
+                answers.append(page.write("INA238_1C", 70, 3.0))
+            except Exception as e:
+                answers.append(e)
+
+        writing = threading.Thread(target=write_70)
+        writing.start()
+        assert wait_for(lambda: served.sets == ["INA238_1C"], 5.0)  # waiting, first
+        lost = page.write("INA238_1C", 1, timeout=0.1)
+        assert served.late  # given up before the vehicle answered the write of 70
+        writing.join(30)
+        assert (lost.ok, lost.reason) == (False, "INA238_1C: no answer from the vehicle")
+        assert len(answers) == 1 and isinstance(answers[0], WriteResult), answers
+        assert (answers[0].ok, answers[0].value, answers[0].reason) == (True, 70, "")
+        assert served.sets == ["INA238_1C"] * 4  # 70 once, 1 three times
+        assert page._waiters["INA238_1C"] == []  # nothing left waiting
+
+
+class _Crowded(_Recording):
+    """A link crowded by others, with no vehicle yet: at each of its heartbeats (every 10 ms)
+    those of 20 other senders (ground stations, companions), and none of its own."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self.others = 0
+
+    def _heartbeat(self) -> None:
+        beat = mavlink2.MAVLink_heartbeat_message(
+            mavlink2.MAV_TYPE_GCS, mavlink2.MAV_AUTOPILOT_INVALID, 0, 0, 0, 3
+        )
+        for system in range(100, 120):
+            _say_as(self, (system, 190), [beat], self._peers(None))
+            self.others += 1
+
+
+@pytest.mark.issue40
+def test_the_page_beats_once_a_second_while_connecting_on_a_crowded_link(
+    schema: px4params.Schema,
+) -> None:
+    """MAVLink's heartbeat is 1 Hz (a ground station's too), however many others the page
+    hears: waiting 1.5 s for a vehicle among some thousand others' heartbeats, it sends two
+    (at once, and a second later), and none once it gave up."""
+    with _peer(schema, _Crowded, heartbeat_interval=0.01) as served:
+        started = time.monotonic()
+        with pytest.raises(CommandError):
+            MavlinkVehicle(served.address, timeout=1.5)
+        waited = time.monotonic() - started
+        sent = served.heartbeat_count
+        time.sleep(1.2)
+        assert served.others > 500  # the crowd was there
+        assert 1 <= sent <= 1 + waited
+        assert served.heartbeat_count == sent  # none after giving up

@@ -16,7 +16,7 @@ import re
 import struct
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from typing import Any
 
 from px4params.errors import CommandError, Px4ParamsError
@@ -76,11 +76,12 @@ class _Base:
         for listener in list(self._listeners):
             listener(event)
 
-    def _status(self, text: str) -> None:
-        """A STATUSTEXT from the vehicle: kept, and read for health reports."""
+    def _status(self, text: str, whole: bool = True) -> None:
+        """A STATUSTEXT from the vehicle: kept, and read for health reports unless chunks of
+        it are missing (what is missing may be its instance or state)."""
         self.messages.append(text)
         del self.messages[:-200]
-        report = parse_health(text)
+        report = parse_health(text) if whole else None
         if report is not None:
             self.health[report["instance"]] = report
         self._notify({"kind": "status", "text": text, "health": report})
@@ -242,6 +243,58 @@ def _mentions(line: str, name: str) -> bool:
     return re.search(rf"(?<!{word}){re.escape(name)}(?!{word})", line) is not None
 
 
+#: STATUSTEXT (common.xml): characters a chunk holds; the mark shown where chunks are missing;
+#: seconds a text waits for its next chunk (QGC waits 1 s); texts waiting at once, beyond which
+#: the oldest is shown as it is (a flood, or a link losing last chunks, holds no more memory).
+_CHUNK_CHARS = 50
+_MISSING = "[...]"
+_CHUNK_WAIT = 1.0
+_TEXTS_WAITING = 16
+
+
+class _ChunkedText:
+    """One STATUSTEXT text arriving in chunks: its chunks by ``chunk_seq``, the seq of its last
+    chunk once heard (the one holding a NUL: shorter than 50 characters decoded), and when it
+    stops waiting (a while after its latest new chunk)."""
+
+    def __init__(self) -> None:
+        self.parts: dict[int, str] = {}
+        self.last: int | None = None
+        self.deadline = 0.0
+
+    def add(self, seq: int, text: str, now: float) -> None:
+        if seq in self.parts:  # a duplicate: UDP or a router sent it twice
+            return
+        self.parts[seq] = text
+        self.deadline = now + _CHUNK_WAIT
+        if len(text) < _CHUNK_CHARS:
+            self.last = seq
+
+    @property
+    def whole(self) -> bool:
+        return self.last is not None and all(s in self.parts for s in range(self.last + 1))
+
+    def text(self) -> str:
+        """The chunks in chunk_seq order, each run of missing ones (and a missing end) marked."""
+        end = self.last if self.last is not None else max(self.parts)
+        out: list[str] = []
+        gap = False
+        for seq in range(end + 1):
+            part = self.parts.get(seq)
+            if part is not None:
+                out.append(part)
+            elif not gap:
+                out.append(_MISSING)
+            gap = part is None
+        if self.last is None:
+            out.append(_MISSING)
+        return "".join(out)
+
+
+#: Seconds between the page's heartbeats (MAVLink's HEARTBEAT: 1 Hz).
+_HEARTBEAT_PERIOD = 1.0
+
+
 class MavlinkVehicle(_Base):
     """A vehicle (``px4params mavlink serve`` or a PX4) over MAVLink on UDP, as a ground station
     talks to it: heartbeats, the parameter list, component metadata over MAVLink FTP (or a
@@ -284,17 +337,23 @@ class MavlinkVehicle(_Base):
         self._component = 1
         self._stop = threading.Event()
         self._waiters: dict[str, list[Any]] = {}
-        #: STATUSTEXT chunks waiting for their last one, by sender (system, component) and id.
-        self._chunks: dict[tuple[int, int, int], list[str]] = {}
+        #: STATUSTEXT texts waiting for chunks, by sender (system, component) and id, oldest first.
+        self._chunks: dict[tuple[int, int, int], _ChunkedText] = {}
         #: Each write's list of what the vehicle says while it waits (its reason, if refused).
         self._hearing: list[list[str]] = []
         self._count = 0
-        self._connect(timeout)
-        self.metadata = self._load_metadata(metadata_file, timeout)
-        self._thread = threading.Thread(target=self._receive, name="gui-mavlink", daemon=True)
-        self._thread.start()
         self._heartbeats = threading.Thread(target=self._beat, name="gui-heartbeat", daemon=True)
         self._heartbeats.start()
+        try:
+            self._connect(timeout)
+            self.metadata = self._load_metadata(metadata_file, timeout)
+        except BaseException:  # no vehicle, or no metadata: the page says nothing more
+            self._stop.set()
+            self._heartbeats.join(timeout=2)
+            self._conn.close()
+            raise
+        self._thread = threading.Thread(target=self._receive, name="gui-mavlink", daemon=True)
+        self._thread.start()
         self.refresh(timeout)
 
     # -- connection ------------------------------------------------------------------------
@@ -304,9 +363,10 @@ class MavlinkVehicle(_Base):
         self._conn.mav.heartbeat_send(mav.MAV_TYPE_GCS, mav.MAV_AUTOPILOT_INVALID, 0, 0, 0)
 
     def _connect(self, timeout: float) -> None:
+        """The vehicle's heartbeat waited for (the page's own go out at their rate meanwhile:
+        a heartbeat for each heard would be hundreds a second on a busy link)."""
         end = time.monotonic() + timeout
         while time.monotonic() < end:
-            self._send_heartbeat()
             msg = self._conn.recv_match(type="HEARTBEAT", blocking=True, timeout=0.5)
             if msg is not None and self._is_vehicle(msg):
                 self._system = msg.get_srcSystem()
@@ -394,12 +454,17 @@ class MavlinkVehicle(_Base):
         return dict(json.loads(data))
 
     def _beat(self) -> None:
-        while not self._stop.wait(1.0):
+        """The page's heartbeat, one at once and then one a second (MAVLink's rate for every
+        component, a ground station's too), from construction to close()."""
+        while True:
             with contextlib.suppress(OSError):
                 self._send_heartbeat()
+            if self._stop.wait(_HEARTBEAT_PERIOD):
+                return
 
     def _receive(self) -> None:
         while not self._stop.is_set():
+            self._show_overdue()  # at least every 0.2 s: the wait for a message below
             try:
                 msg = self._conn.recv_match(blocking=True, timeout=0.2)
             except (OSError, ValueError):
@@ -423,25 +488,47 @@ class MavlinkVehicle(_Base):
                         waiter.append(("error", msg))
 
     def _statustext(self, msg: Any) -> None:
-        """STATUSTEXT, its 50-character chunks joined (MAVLink 2: ``id`` and ``chunk_seq``;
-        id 0 is a text in one chunk, and a chunk shorter than 50 characters ends the text).
-        An id is its sender's: two senders' texts of the same id are two texts."""
-        text = msg.text
+        """STATUSTEXT, its 50-character chunks joined by ``chunk_seq`` (MAVLink 2: id 0 is a
+        text in one chunk, and a chunk shorter than 50 characters is the last). An id is its
+        sender's: two senders' texts of the same id are two texts. A text is shown when its
+        last chunk comes, when another text of its id starts (chunk_seq 0 again: the id
+        wrapped), when it waited ``_CHUNK_WAIT`` for a chunk, or when it is the oldest of too
+        many waiting; missing chunks are marked, never glued over (as QGC does)."""
         sender = (msg.get_srcSystem(), msg.get_srcComponent())
         text_id = getattr(msg, "id", 0)
-        if text_id:
-            key = (*sender, text_id)
-            parts = self._chunks.setdefault(key, [])
-            parts.append(text)
-            if len(text) == 50:  # a whole chunk: more follow
-                return
-            del self._chunks[key]
-            text = "".join(parts)
+        if not text_id:
+            self._said(sender, msg.text, whole=True)
+            return
+        key = (*sender, text_id)
+        seq = getattr(msg, "chunk_seq", 0)
+        waiting = self._chunks.get(key)
+        if waiting is not None and seq == 0 and 0 in waiting.parts:
+            self._show_chunked(key)
+            waiting = None
+        if waiting is None:
+            if len(self._chunks) >= _TEXTS_WAITING:
+                self._show_chunked(next(iter(self._chunks)))
+            waiting = self._chunks[key] = _ChunkedText()
+        waiting.add(seq, msg.text, time.monotonic())
+        if waiting.last is not None:
+            self._show_chunked(key)
+
+    def _show_chunked(self, key: tuple[int, int, int]) -> None:
+        waiting = self._chunks.pop(key)
+        self._said((key[0], key[1]), waiting.text(), whole=waiting.whole)
+
+    def _show_overdue(self) -> None:
+        """The texts that waited too long for a chunk, as they are."""
+        now = time.monotonic()
+        for key in [k for k, waiting in self._chunks.items() if waiting.deadline <= now]:
+            self._show_chunked(key)
+
+    def _said(self, sender: tuple[int, int], text: str, *, whole: bool) -> None:
         if sender == (self._system, self._component):  # a camera's text is no write's reason
             with self._lock:
                 for said in self._hearing:
                     said.append(text)
-        self._status(text)
+        self._status(text, whole)
 
     def _param_value(self, msg: Any) -> None:
         name = msg.param_id
@@ -481,6 +568,20 @@ class MavlinkVehicle(_Base):
                 quiet = time.monotonic()
         self._notify({"kind": "values", "values": self.state()["values"]})
 
+    @contextlib.contextmanager
+    def _waiting(self, name: str) -> Iterator[list[Any]]:
+        """A list that gathers what the vehicle answers about ``name`` (its PARAM_VALUE and
+        PARAM_ERROR) while the block runs. Writes run in threads: several lists may wait on
+        one name, equal while they hold the same answers, so each is forgotten by identity."""
+        answers: list[Any] = []
+        with self._lock:
+            self._waiters.setdefault(name, []).append(answers)
+        try:
+            yield answers
+        finally:
+            with self._lock:
+                self._waiters[name] = [w for w in self._waiters[name] if w is not answers]
+
     def write(self, name: str, value: int | float, timeout: float = 1.5) -> WriteResult:
         """PARAM_SET (PX4's bytewise int32 encoding), then the vehicle's answer: acknowledged
         when the echo carries the value sent (a float as float32, or as the float16 a narrower
@@ -490,23 +591,21 @@ class MavlinkVehicle(_Base):
         is_float = isinstance(value, float)
         kind = mav.MAV_PARAM_TYPE_REAL32 if is_float else mav.MAV_PARAM_TYPE_INT32
         said: list[str] = []  # the vehicle's STATUSTEXT (self.messages keeps only the last 200)
-        answers: list[Any] = []
         with self._lock:
-            self._waiters.setdefault(name, []).append(answers)
             self._hearing.append(said)
         try:
-            for _attempt in range(3):
-                message = param_set_message(self._system, self._component, name, value, kind)
-                self._conn.write(message.pack(self._conn.mav))
-                end = time.monotonic() + timeout
-                while time.monotonic() < end and not answers:
-                    time.sleep(0.02)
-                if answers:
-                    break
-            time.sleep(0.1)  # a PARAM_ERROR and STATUSTEXT follow a refusal's PARAM_VALUE
+            with self._waiting(name) as answers:
+                for _attempt in range(3):
+                    message = param_set_message(self._system, self._component, name, value, kind)
+                    self._conn.write(message.pack(self._conn.mav))
+                    end = time.monotonic() + timeout
+                    while time.monotonic() < end and not answers:
+                        time.sleep(0.02)
+                    if answers:
+                        break
+                time.sleep(0.1)  # a PARAM_ERROR and STATUSTEXT follow a refusal's PARAM_VALUE
         finally:
             with self._lock:
-                self._waiters[name].remove(answers)
                 self._hearing = [h for h in self._hearing if h is not said]
         reasons = [m for m in said if _mentions(m, name)]
         errors = [a for a in answers if a[0] == "error"]
@@ -523,17 +622,11 @@ class MavlinkVehicle(_Base):
         return WriteResult(name, True, read if read is not None else echoed)
 
     def read(self, name: str, timeout: float = 1.0) -> int | float | None:
-        answers: list[Any] = []
-        with self._lock:
-            self._waiters.setdefault(name, []).append(answers)
-        try:
+        with self._waiting(name) as answers:
             self._conn.mav.param_request_read_send(self._system, self._component, name.encode(), -1)
             end = time.monotonic() + timeout
             while time.monotonic() < end and not answers:
                 time.sleep(0.02)
-        finally:
-            with self._lock:
-                self._waiters[name].remove(answers)
         values = [a[1] for a in answers if a[0] == "value"]
         return values[0] if values else None
 
