@@ -331,6 +331,7 @@ class MavlinkVehicle(_Base):
             # signed messages are dropped
             Signing(signing_key).attach(self._conn.mav)
             self.source += " (signed)"
+        self._serialize_sends()
         self._mav = mavutil.mavlink
         mavlink_messages.register(self._mav)
         self._system = 1
@@ -357,6 +358,21 @@ class MavlinkVehicle(_Base):
         self.refresh(timeout)
 
     # -- connection ------------------------------------------------------------------------
+
+    def _serialize_sends(self) -> None:
+        """One frame at a time on the connection. The heartbeat thread, writes and pymavlink's
+        FTP download all send on it, and pymavlink numbers and signs a frame before writing it
+        without a lock: a signed vehicle drops a frame whose timestamp is not above the last
+        one it took (a replay), so a frame signed first must also be written first."""
+        mav = self._conn.mav
+        send = mav.send
+        lock = threading.Lock()
+
+        def send_one(message: Any, force_mavlink1: bool = False) -> None:
+            with lock:
+                send(message, force_mavlink1=force_mavlink1)
+
+        mav.send = send_one  # every *_send method and mavftp go through MAVLink.send
 
     def _send_heartbeat(self) -> None:
         mav = self._mav
@@ -597,7 +613,7 @@ class MavlinkVehicle(_Base):
             with self._waiting(name) as answers:
                 for _attempt in range(3):
                     message = param_set_message(self._system, self._component, name, value, kind)
-                    self._conn.write(message.pack(self._conn.mav))
+                    self._conn.mav.send(message)
                     end = time.monotonic() + timeout
                     while time.monotonic() < end and not answers:
                         time.sleep(0.02)
