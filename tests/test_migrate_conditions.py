@@ -136,9 +136,9 @@ def test_a_condition_px4params_cannot_read_is_reported_never_taken_as_holding() 
         ("SENS_EN_ADIS164X == 1 and hw_type in V30", {"SENS_EN_ADIS164X": 0}, None, False, ()),
         # fmu-v3: $BOARD_FMUV3 is set by the board's script from the hardware
         ("$BOARD_FMUV3 != 0 and $BOARD_FMUV3 == 20", {}, None, None, (
-            "$BOARD_FMUV3 != 0 ($BOARD_FMUV3 is set by the board's script from what the QGC "
+            "$BOARD_FMUV3 != 0 ($BOARD_FMUV3 is set by PX4's startup scripts from what the QGC "
             ".params does not tell)",
-            "$BOARD_FMUV3 == 20 ($BOARD_FMUV3 is set by the board's script from what the QGC "
+            "$BOARD_FMUV3 == 20 ($BOARD_FMUV3 is set by PX4's startup scripts from what the QGC "
             ".params does not tell)")),
         ("hw_type in V30 and not mpu6000 started (-s -b 4 -R 10 start)", {}, None, None, (
             "hw_type in V30 (the hardware revision, which the parameters do not tell)",
@@ -157,7 +157,7 @@ def test_a_condition_px4params_cannot_read_is_reported_never_taken_as_holding() 
         # -o: one settled true test is enough
         ("$VEHICLE_TYPE == fw -o SENS_EN_X == 1", {"SENS_EN_X": 1}, None, True, ()),
         ("$VEHICLE_TYPE == fw -o SENS_EN_X == 1", {"SENS_EN_X": 0}, None, None, (
-            "$VEHICLE_TYPE == fw -o SENS_EN_X == 1 ($VEHICLE_TYPE is set by the board's script "
+            "$VEHICLE_TYPE == fw -o SENS_EN_X == 1 ($VEHICLE_TYPE is set by PX4's startup scripts "
             "from what the QGC .params does not tell)",)),
     ],
 )  # fmt: skip

@@ -216,7 +216,7 @@ def _test(text: str, facts: Facts) -> _Test:
         if name in facts.hardware:
             value, why = _hardware_variable(name, facts.hardware[name], facts)
             return _Test((value == word) == equal, why)
-        return _Test(None, f"${name} is set by the board's script from what the {facts.kind} "
+        return _Test(None, f"${name} is set by PX4's startup scripts from what the {facts.kind} "
                      "does not tell")  # fmt: skip
     m = _LIST_TEST.fullmatch(text)
     if m:
