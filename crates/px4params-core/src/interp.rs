@@ -181,6 +181,12 @@ pub(crate) trait Pass {
     }
     #[inline(always)]
     fn set_mode(&mut self, _mode: Mode) {}
+    /// Editing: whether the part the loop comes to next may be passed over unread
+    /// ([`Pass::pass_over`]).
+    #[inline(always)]
+    fn steered(&self) -> bool {
+        false
+    }
     /// Editing: passes over part `at` unread, when nothing is looked for in it.
     #[inline(always)]
     fn pass_over(&mut self, _layout: &Layout<'_>, _at: &PartAt<'_>) -> bool {
@@ -302,7 +308,7 @@ impl<'l, P: Pass> Run<'l, P> {
         if let Some(step) = step {
             self.path.push(step);
         }
-        if P::EDITS {
+        if P::EDITS && self.pass.steered() {
             let at = PartAt {
                 node: id,
                 step,
@@ -1848,11 +1854,12 @@ impl Pass for Visiting<'_> {
         self.mode = mode;
     }
     #[inline(always)]
-    fn pass_over(&mut self, _: &Layout<'_>, at: &PartAt<'_>) -> bool {
+    fn steered(&self) -> bool {
         // (Steered walks only read.)
-        if !self.steered || self.mode != Mode::Data {
-            return false;
-        }
+        self.steered && self.mode == Mode::Data
+    }
+    #[inline(always)]
+    fn pass_over(&mut self, _: &Layout<'_>, at: &PartAt<'_>) -> bool {
         let mut reading = Reading {
             bits: &mut self.rpos,
             leaves: &mut self.leaves,
