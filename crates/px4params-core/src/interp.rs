@@ -181,9 +181,15 @@ pub(crate) trait Pass {
     }
     #[inline(always)]
     fn set_mode(&mut self, _mode: Mode) {}
-    /// Editing: passes over node `id` unread, when nothing is looked for in it.
+    /// Editing: whether the part the loop comes to next may be passed over unread
+    /// ([`Pass::pass_over`]).
     #[inline(always)]
-    fn pass_over(&mut self, _layout: &Layout<'_>, _id: NodeId) -> bool {
+    fn steered(&self) -> bool {
+        false
+    }
+    /// Editing: passes over part `at` unread, when nothing is looked for in it.
+    #[inline(always)]
+    fn pass_over(&mut self, _layout: &Layout<'_>, _at: &PartAt<'_>) -> bool {
         false
     }
     /// Editing: where reading stands, in bits, and how many are left.
@@ -302,11 +308,19 @@ impl<'l, P: Pass> Run<'l, P> {
         if let Some(step) = step {
             self.path.push(step);
         }
-        if P::EDITS && self.pass.pass_over(self.layout, id) {
-            if step.is_some() {
-                self.path.pop();
+        if P::EDITS && self.pass.steered() {
+            let at = PartAt {
+                node: id,
+                step,
+                depth: self.depth,
+                path: &self.path,
+            };
+            if self.pass.pass_over(self.layout, &at) {
+                if step.is_some() {
+                    self.path.pop();
+                }
+                return Ok(());
             }
-            return Ok(());
         }
         self.depth += 1;
         if self.depth > MAX_DEPTH {
@@ -557,9 +571,6 @@ impl<'l, P: Pass> Run<'l, P> {
             self.node(field.node, tao)?;
             return Ok(0);
         }
-        if P::EDITS && self.pass.pass_over(layout, field.node) {
-            return Ok(1);
-        }
         if P::ENCODES {
             self.path.push(Step::Field(index));
         }
@@ -713,8 +724,7 @@ impl<'l, P: Pass> Run<'l, P> {
 }
 
 /// Extends `path` to leaf `leaf` of a run of fixed-shape `fields`.
-#[cold]
-fn push_flat_path(layout: &Layout<'_>, fields: Span, leaf: u32, path: &mut Path) {
+pub(crate) fn push_flat_path(layout: &Layout<'_>, fields: Span, leaf: u32, path: &mut Path) {
     let mut j = leaf;
     for index in fields.first..fields.first + fields.count {
         let node = layout.fields[index as usize].node;
@@ -1418,6 +1428,48 @@ pub(crate) trait Visit {
     fn fixed_len(&mut self, _path: &Path, _len: u32) -> Result<(), Halt> {
         Ok(())
     }
+
+    /// A reading walk the visit steers ([`Job::steered`]): part `at` begins where `reading`
+    /// stands. Returns whether the visit passed it over ([`Reading::pass`]); a visit that is
+    /// done passes over every part, and the loop winds down reading nothing more.
+    fn part(&mut self, _at: &PartAt<'_>, _reading: &mut Reading<'_>) -> bool {
+        false
+    }
+}
+
+/// Where a reading walk stands, for a visit that steers it ([`Visit::part`]).
+pub(crate) struct Reading<'r> {
+    /// Bits read.
+    pub bits: &'r mut usize,
+    /// Leaves counted.
+    pub leaves: &'r mut usize,
+}
+
+impl Reading<'_> {
+    /// Passes over node `id` unread, its leaves counted, if it has a fixed shape.
+    pub(crate) fn pass(&mut self, layout: &Layout<'_>, id: NodeId) -> bool {
+        let node = layout.node(id);
+        match node.fixed_leaves() {
+            Some(n) => {
+                *self.bits += node.min_bits as usize;
+                *self.leaves += n as usize;
+                true
+            }
+            None => false,
+        }
+    }
+}
+
+/// A part of the value about to be walked, as the loop hands it to [`Pass::pass_over`].
+pub(crate) struct PartAt<'w> {
+    /// Its node.
+    pub node: NodeId,
+    /// Its step down the path: `None` for the root and padding.
+    pub step: Option<Step>,
+    /// The parts it lies in (0: the root).
+    pub depth: usize,
+    /// Its field path.
+    pub path: &'w Path,
 }
 
 /// The visiting pass: a value read from an [`Input`], written into bytes, or both at once,
@@ -1430,9 +1482,8 @@ pub(crate) struct Visiting<'w> {
     writing: bool,
     wpos: usize,
     leaves: usize,
-    /// Reading only, fixed-shape parts whose leaves all come before this one are passed over
-    /// unread (finding leaf `[k]`).
-    skip_below: Option<usize>,
+    /// The visit steers the reading ([`Visit::part`]).
+    steered: bool,
     saturate: bool,
     keep_versions: bool,
     mode: Mode,
@@ -1449,18 +1500,19 @@ pub(crate) struct Job<'w> {
     pub input: Option<&'w dyn Input>,
     pub out: &'w mut [u8],
     pub writing: bool,
-    pub skip_below: Option<usize>,
+    /// Reading only: the visit passes parts over unread where it can ([`Visit::part`]).
+    pub steered: bool,
     pub options: EncodeOptions,
 }
 
 impl<'w> Job<'w> {
-    /// Reads `input` and writes nothing (`skip_below`: see [`Visiting::skip_below`]).
-    pub(crate) fn reading(input: &'w dyn Input, tao: bool, skip_below: Option<usize>) -> Self {
+    /// Reads `input` and writes nothing (`steered`: see [`Job::steered`]).
+    pub(crate) fn reading(input: &'w dyn Input, tao: bool, steered: bool) -> Self {
         Job {
             input: Some(input),
             out: &mut [],
             writing: false,
-            skip_below,
+            steered,
             options: EncodeOptions {
                 tao,
                 ..EncodeOptions::default()
@@ -1498,7 +1550,7 @@ pub(crate) fn visit(
         writing: job.writing,
         wpos: 0,
         leaves: 0,
-        skip_below: job.skip_below,
+        steered: job.steered,
         saturate: job.options.saturate,
         keep_versions: job.options.keep_versions,
         mode,
@@ -1541,7 +1593,7 @@ pub(crate) fn write_whole(
         input,
         out: &mut *out,
         writing: true,
-        skip_below: None,
+        steered: false,
         options,
     };
     let end = visit(layout, root, job, v)?.written;
@@ -1801,20 +1853,18 @@ impl Pass for Visiting<'_> {
     fn set_mode(&mut self, mode: Mode) {
         self.mode = mode;
     }
-    fn pass_over(&mut self, layout: &Layout<'_>, id: NodeId) -> bool {
-        let Some(k) = self.skip_below else {
-            return false;
+    #[inline(always)]
+    fn steered(&self) -> bool {
+        // (Steered walks only read.)
+        self.steered && self.mode == Mode::Data
+    }
+    #[inline(always)]
+    fn pass_over(&mut self, _: &Layout<'_>, at: &PartAt<'_>) -> bool {
+        let mut reading = Reading {
+            bits: &mut self.rpos,
+            leaves: &mut self.leaves,
         };
-        let node = layout.node(id);
-        let Some(n) = node.fixed_leaves() else {
-            return false;
-        };
-        if self.mode == Mode::Data && !self.writing && self.leaves + n as usize <= k {
-            self.rpos += node.min_bits as usize;
-            self.leaves += n as usize;
-            return true;
-        }
-        false
+        self.visit.part(at, &mut reading)
     }
     fn read_pos(&self) -> usize {
         self.rpos

@@ -9,15 +9,14 @@ use core::convert::Infallible;
 
 use crate::bits::BitRead;
 use crate::error::{Error, ErrorKind, Path, Step};
+use crate::interp::{is_scalar, push_flat_path};
 use crate::layout::{FlatItem, Kind, Layout, NodeId, Role, Segment, Span};
 use crate::plan::{Active, Plans};
 pub(crate) use crate::rules::read_uint;
-use crate::rules::{
-    read_scalar, scalar_bits, scalar_raw, tail_optimized, EncodeOptions, LeafKind, MAX_DEPTH,
-};
+use crate::rules::{scalar_bits, scalar_raw, tail_optimized, EncodeOptions, LeafKind, MAX_DEPTH};
 pub use crate::rules::{Leaf, LeafAccessError, Position, Target};
 use crate::scalar::Scalar;
-use crate::walk;
+use crate::walk::{self, LeafClass, Next, Way};
 
 /// Finds a leaf in `data`, a value of type `root`.
 pub fn locate<R: BitRead + ?Sized>(
@@ -27,13 +26,10 @@ pub fn locate<R: BitRead + ?Sized>(
     target: Target<'_>,
     tao: bool,
 ) -> Result<Leaf, LeafAccessError> {
-    let path = match target {
-        Target::Index(k) => return locate_at(layout, root, data, k, tao),
-        Target::Path(path) => path,
-    };
-    let mut walk = Walk::new(layout, data);
-    let leaf = walk.by_path(root, tao, &mut Tokens { rest: path })?;
-    within(data, leaf)
+    match target {
+        Target::Index(k) => locate_at(layout, root, data, k, tao),
+        Target::Path(_) => get_leaf(layout, root, data, target, tao).map(|(leaf, _)| leaf),
+    }
 }
 
 /// Finds leaf `[k]` in `data`, a value of type `root`.
@@ -47,7 +43,7 @@ pub fn locate_at<R: BitRead + ?Sized>(
     locate_at_with::<Active, R>(layout, root, data, k, tao)
 }
 
-/// [`locate_at`] with the plans `P`: the leaf walk that steps over fixed-shape parts
+/// [`locate_at`] with the plans `P`: the seek that steps over fixed-shape parts
 /// ([`Plans::SEEK`]) answers or declines; [`crate::walk`] answers the rest and words every
 /// error.
 #[inline]
@@ -59,65 +55,32 @@ pub fn locate_at_with<P: Plans, R: BitRead + ?Sized>(
     tao: bool,
 ) -> Result<Leaf, LeafAccessError> {
     if P::SEEK {
-        if let Some(leaf) = locate_plan(layout, root, data, k, tao) {
+        if let Some((leaf, _)) = seek_leaf(layout, root, data, k, tao) {
             return Ok(leaf);
         }
     }
     walk::locate(layout, root, data, k, tao).map(|(leaf, _)| leaf)
 }
 
-/// The plan of [`locate_at`]: the leaf walk that steps over fixed-shape parts. It answers or
-/// declines (`None`: no such leaf, or malformed data, which [`crate::walk`] words).
-fn locate_plan<R: BitRead + ?Sized>(
+/// The plan of [`locate_at`]: the seek, keeping the leaf's path. It answers or declines
+/// (`None`: no such leaf, malformed data, or a tail array on the way, which [`crate::walk`]
+/// counts).
+fn seek_leaf<R: BitRead + ?Sized>(
     layout: &Layout<'_>,
     root: NodeId,
     data: &R,
     k: usize,
     tao: bool,
-) -> Option<Leaf> {
-    let mut walk = Walk::new(layout, data);
-    let mut left = k;
-    let leaf = walk.by_index(root, tao, &mut left).ok()??;
-    within(data, leaf).ok()
-}
-
-/// `leaf`, checked to lie within `data` (the walks pass over fixed-shape parts unread).
-fn within<R: BitRead + ?Sized>(data: &R, leaf: Leaf) -> Result<Leaf, LeafAccessError> {
-    let end = leaf.bit_offset + leaf_bits(&leaf) as usize;
-    if end > data.bit_len() {
-        return Err(Error {
-            kind: ErrorKind::Truncated {
-                needed_bits: end,
-                available_bits: data.bit_len(),
-            },
-            bit_offset: leaf.bit_offset,
-            path: leaf.path,
-        });
-    }
-    Ok(leaf)
-}
-
-/// Reads a located leaf's value. A tag or length reads as [`Scalar::Uint`].
-pub fn read_leaf<R: BitRead + ?Sized>(
-    layout: &Layout<'_>,
-    data: &R,
-    leaf: &Leaf,
-    tao: bool,
-) -> Result<Scalar, LeafAccessError> {
-    Ok(match leaf.kind {
-        LeafKind::Scalar(kind) => read_scalar(data, leaf.bit_offset, kind),
-        LeafKind::Tag { bits, .. } => Scalar::Uint(read_uint(data, leaf.bit_offset, bits.into())),
-        LeafKind::Len { bits: 0, array } => {
-            // Tail-optimized: count the elements up to the end of the data.
-            let mut walk = Walk::new(layout, data);
-            (walk.pos, walk.path) = (leaf.bit_offset, leaf.path);
-            let Kind::DynArray { elem, .. } = layout.node(array).kind else {
-                return Ok(Scalar::Uint(0));
-            };
-            Scalar::Uint(walk.tail_count(elem, tao)? as u64)
-        }
-        LeafKind::Len { bits, .. } => Scalar::Uint(read_uint(data, leaf.bit_offset, bits.into())),
-    })
+) -> Option<(Leaf, Position)> {
+    let mut seek = Seek::<R, true>::new(layout, data, k);
+    let found = seek.within(root, tao)?;
+    let leaf = Leaf {
+        index: k,
+        bit_offset: found.bit_offset,
+        kind: found.kind,
+        path: seek.path,
+    };
+    Some((leaf, found))
 }
 
 /// Reads leaf `target` of `data`.
@@ -128,12 +91,10 @@ pub fn get_leaf<R: BitRead + ?Sized>(
     target: Target<'_>,
     tao: bool,
 ) -> Result<(Leaf, Scalar), LeafAccessError> {
-    if let Target::Index(k) = target {
-        return get_leaf_at(layout, root, data, k, tao);
+    match target {
+        Target::Index(k) => get_leaf_at(layout, root, data, k, tao),
+        Target::Path(path) => walk::locate_by(layout, root, data, &mut Tokens { rest: path }, tao),
     }
-    let leaf = locate(layout, root, data, target, tao)?;
-    let value = read_leaf(layout, data, &leaf, tao)?;
-    Ok((leaf, value))
 }
 
 /// Reads leaf `[k]` of `data`.
@@ -147,8 +108,8 @@ pub fn get_leaf_at<R: BitRead + ?Sized>(
     get_leaf_at_with::<Active, R>(layout, root, data, k, tao)
 }
 
-/// [`get_leaf_at`] with the plans `P`: located by the leaf walk and read ([`Plans::SEEK`]),
-/// which answers or declines; else (and for what it declines) found and read in one
+/// [`get_leaf_at`] with the plans `P`: located by the seek and read ([`Plans::SEEK`]), which
+/// answers or declines; else (and for what it declines) found and read in one
 /// [`crate::walk`], which words every error.
 pub fn get_leaf_at_with<P: Plans, R: BitRead + ?Sized>(
     layout: &Layout<'_>,
@@ -158,10 +119,8 @@ pub fn get_leaf_at_with<P: Plans, R: BitRead + ?Sized>(
     tao: bool,
 ) -> Result<(Leaf, Scalar), LeafAccessError> {
     if P::SEEK {
-        if let Some(leaf) = locate_plan(layout, root, data, k, tao) {
-            if let Ok(value) = read_leaf(layout, data, &leaf, tao) {
-                return Ok((leaf, value));
-            }
+        if let Some((leaf, found)) = seek_leaf(layout, root, data, k, tao) {
+            return Ok((leaf, found.read(data)));
         }
     }
     walk::locate(layout, root, data, k, tao)
@@ -281,32 +240,58 @@ pub fn seek_with<P: Plans, R: BitRead + ?Sized>(
     if !P::SEEK {
         return walk::seek(layout, root, data, k);
     }
-    let mut seek = Seek {
-        layout,
-        data,
-        pos: 0,
-        k,
-        depth: 0,
-    };
-    let found = seek.node(root, None).ok()??;
-    let bits = match found.kind {
-        LeafKind::Scalar(kind) => scalar_bits(kind),
-        LeafKind::Tag { bits, .. } | LeafKind::Len { bits, .. } => bits.into(),
-    };
-    (found.bit_offset + bits as usize <= data.bit_len()).then_some(found)
+    Seek::<R, false>::new(layout, data, k).within(root, false)
 }
 
-struct Seek<'l, 'a, 'd, R: ?Sized> {
+/// The seek: finds leaf `[k]` stepping over fixed-shape parts by their counts, keeping the
+/// leaf's path where `PATH` asks for it.
+struct Seek<'l, 'a, 'd, R: ?Sized, const PATH: bool> {
     layout: &'l Layout<'a>,
     data: &'d R,
     pos: usize,
     k: usize,
     depth: usize,
+    path: Path,
 }
 
-impl<R: BitRead + ?Sized> Seek<'_, '_, '_, R> {
-    /// `Err` gives up (malformed data), `Ok(None)` means not inside this node.
-    fn node(&mut self, id: NodeId, field: Option<u32>) -> Result<Option<Position>, ()> {
+impl<'l, 'a, 'd, R: BitRead + ?Sized, const PATH: bool> Seek<'l, 'a, 'd, R, PATH> {
+    fn new(layout: &'l Layout<'a>, data: &'d R, k: usize) -> Self {
+        Seek {
+            layout,
+            data,
+            pos: 0,
+            k,
+            depth: 0,
+            path: Path::default(),
+        }
+    }
+
+    /// Leaf `[k]` of a value of `root`, if it lies within the data (`tao`: as encoded with
+    /// tail array optimization).
+    fn within(&mut self, root: NodeId, tao: bool) -> Option<Position> {
+        let found = self.node(root, None, tao).ok()??;
+        let bits = match found.kind {
+            LeafKind::Scalar(kind) => scalar_bits(kind),
+            LeafKind::Tag { bits, .. } | LeafKind::Len { bits, .. } => bits.into(),
+        };
+        (found.bit_offset + bits as usize <= self.data.bit_len()).then_some(found)
+    }
+
+    fn push(&mut self, step: Step) {
+        if PATH {
+            self.path.push(step);
+        }
+    }
+
+    fn pop(&mut self) {
+        if PATH {
+            self.path.pop();
+        }
+    }
+
+    /// `Err` gives up (malformed data, or a tail array, which it does not count), `Ok(None)`
+    /// means not inside this node (`tao`: it ends the value).
+    fn node(&mut self, id: NodeId, field: Option<u32>, tao: bool) -> Result<Option<Position>, ()> {
         let layout = self.layout;
         let node = layout.node(id);
         if let Some(n) = node.fixed_leaves() {
@@ -333,7 +318,7 @@ impl<R: BitRead + ?Sized> Seek<'_, '_, '_, R> {
                 Some(here(LeafKind::Scalar(kind)))
             }
             Kind::Void { .. } => None,
-            Kind::Struct { .. } => self.segments(node.segments)?,
+            Kind::Struct { first, count } => self.segments(node.segments, first + count, tao)?,
             Kind::Union {
                 first,
                 count,
@@ -348,15 +333,24 @@ impl<R: BitRead + ?Sized> Seek<'_, '_, '_, R> {
                     self.k -= 1;
                     let tag = self.count(tag_bits, count - 1)?;
                     let variant = first + tag;
-                    self.node(layout.fields[variant as usize].node, Some(variant))?
+                    self.push(Step::Field(variant));
+                    let found =
+                        self.node(layout.fields[variant as usize].node, Some(variant), tao)?;
+                    found.or_else(|| {
+                        self.pop();
+                        None
+                    })
                 }
             }
-            Kind::Array { elem, len } => self.elements(elem, len, field)?,
+            Kind::Array { elem, len } => self.elements(elem, len, field, tao)?,
             Kind::DynArray {
                 elem,
                 max,
                 len_bits,
             } => {
+                if tail_optimized(layout, elem, tao) {
+                    return Err(());
+                }
                 if self.k == 0 {
                     Some(here(LeafKind::Len {
                         bits: len_bits,
@@ -365,7 +359,7 @@ impl<R: BitRead + ?Sized> Seek<'_, '_, '_, R> {
                 } else {
                     self.k -= 1;
                     let n = self.count(len_bits, max)?;
-                    self.elements(elem, n, field)?
+                    self.elements(elem, n, field, tao)?
                 }
             }
         };
@@ -373,21 +367,29 @@ impl<R: BitRead + ?Sized> Seek<'_, '_, '_, R> {
         Ok(found)
     }
 
-    /// Looks through a struct's segments, skipping whole fixed-shape runs by their counts.
-    fn segments(&mut self, segments: Span) -> Result<Option<Position>, ()> {
+    /// Looks through a struct's segments (`end`: one past its last field), skipping whole
+    /// fixed-shape runs by their counts.
+    fn segments(&mut self, segments: Span, end: u32, tao: bool) -> Result<Option<Position>, ()> {
         let layout = self.layout;
         for segment in segments.of(layout.segments) {
             match *segment {
                 Segment::Flat {
+                    fields,
                     items,
                     leaves,
                     bits,
-                    ..
+                    height,
                 } => {
                     if self.k >= leaves as usize {
                         self.k -= leaves as usize;
                         self.pos += bits as usize;
                         continue;
+                    }
+                    if self.depth + height as usize > MAX_DEPTH {
+                        return Err(()); // deeper than the walk follows
+                    }
+                    if PATH {
+                        push_flat_path(layout, fields, self.k as u32, &mut self.path);
                     }
                     for item in items.of(layout.flat) {
                         let (kind, version) = match *item {
@@ -411,10 +413,13 @@ impl<R: BitRead + ?Sized> Seek<'_, '_, '_, R> {
                     return Err(()); // the counts and the items disagree: a malformed layout
                 }
                 Segment::Field(f) => {
-                    let found = self.node(layout.fields[f as usize].node, Some(f))?;
+                    self.push(Step::Field(f));
+                    let node = layout.fields[f as usize].node;
+                    let found = self.node(node, Some(f), tao && f + 1 == end)?;
                     if found.is_some() {
                         return Ok(found);
                     }
+                    self.pop();
                 }
             }
         }
@@ -426,11 +431,14 @@ impl<R: BitRead + ?Sized> Seek<'_, '_, '_, R> {
         elem: NodeId,
         n: u32,
         field: Option<u32>,
+        tao: bool,
     ) -> Result<Option<Position>, ()> {
-        for _ in 0..n {
-            if let Some(found) = self.node(elem, field)? {
+        for i in 0..n {
+            self.push(Step::Index(i));
+            if let Some(found) = self.node(elem, field, tao && i + 1 == n)? {
                 return Ok(Some(found));
             }
+            self.pop();
         }
         Ok(None)
     }
@@ -449,13 +457,6 @@ impl<R: BitRead + ?Sized> Seek<'_, '_, '_, R> {
     }
 }
 
-fn leaf_bits(leaf: &Leaf) -> u32 {
-    match leaf.kind {
-        LeafKind::Scalar(kind) => scalar_bits(kind),
-        LeafKind::Tag { bits, .. } | LeafKind::Len { bits, .. } => bits.into(),
-    }
-}
-
 /// One step of a textual path.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Token<'p> {
@@ -463,13 +464,14 @@ enum Token<'p> {
     Index(u32),
 }
 
+/// A textual path, such as `bus.i2c.address`, `cells[3]`, `bus._tag` or `cells._len`.
 struct Tokens<'p> {
     rest: &'p str,
 }
 
 impl<'p> Tokens<'p> {
     /// The next step; `Err` when the path does not parse.
-    fn next(&mut self) -> Result<Option<Token<'p>>, ()> {
+    fn token(&mut self) -> Result<Option<Token<'p>>, ()> {
         let s = self.rest.strip_prefix('.').unwrap_or(self.rest);
         if s.is_empty() {
             return Ok(None);
@@ -487,398 +489,41 @@ impl<'p> Tokens<'p> {
         self.rest = &s[end..];
         Ok(Some(Token::Name(&s[..end])))
     }
+
+    /// Leaf `leaf` of the node, where the path ends there.
+    fn last(&mut self, leaf: LeafClass) -> Result<Next, ErrorKind<Infallible>> {
+        match self.token() {
+            Ok(None) => Ok(Next::Leaf(leaf)),
+            _ => Err(ErrorKind::NoSuchPath),
+        }
+    }
 }
 
-/// Walks encoded data without producing values, counting leaves.
-struct Walk<'l, 'd, R: BitRead + ?Sized> {
-    layout: &'l Layout<'l>,
-    data: &'d R,
-    pos: usize,
-    path: Path,
-    leaves: usize,
-    depth: usize,
-}
-
-impl<'l, 'd, R: BitRead + ?Sized> Walk<'l, 'd, R> {
-    fn new(layout: &'l Layout<'l>, data: &'d R) -> Self {
-        Self {
-            layout,
-            data,
-            pos: 0,
-            path: Path::default(),
-            leaves: 0,
-            depth: 0,
-        }
-    }
-
-    #[cold]
-    #[inline(never)]
-    fn fail(&self, kind: ErrorKind<Infallible>) -> LeafAccessError {
-        Error {
-            kind,
-            bit_offset: self.pos,
-            path: self.path,
-        }
-    }
-
-    fn read(&mut self, bits: u32) -> Result<u64, LeafAccessError> {
-        if bits == 0 {
-            return Ok(0);
-        }
-        let available = self.data.bit_len();
-        if self.pos + bits as usize > available {
-            return Err(self.fail(ErrorKind::Truncated {
-                needed_bits: self.pos + bits as usize,
-                available_bits: available,
-            }));
-        }
-        let v = read_uint(self.data, self.pos, bits);
-        self.pos += bits as usize;
-        Ok(v)
-    }
-
-    fn enter(&mut self) -> Result<(), LeafAccessError> {
-        self.depth += 1;
-        if self.depth > MAX_DEPTH {
-            return Err(self.fail(ErrorKind::TooDeep));
-        }
-        Ok(())
-    }
-
-    fn tag(&mut self, count: u32, tag_bits: u8) -> Result<u32, LeafAccessError> {
-        let at = self.pos;
-        let tag = self.read(tag_bits.into())?;
-        if tag >= u64::from(count) {
-            self.pos = at;
-            return Err(self.fail(ErrorKind::BadUnionTag {
-                tag,
-                variants: count,
-            }));
-        }
-        Ok(tag as u32)
-    }
-
-    fn prefixed_len(&mut self, max: u32, len_bits: u8) -> Result<u32, LeafAccessError> {
-        let at = self.pos;
-        let n = self.read(len_bits.into())?;
-        if n > u64::from(max) {
-            self.pos = at;
-            return Err(self.fail(ErrorKind::ArrayTooLong { len: n, max }));
-        }
-        Ok(n as u32)
-    }
-
-    /// Number of elements of a tail-optimized array starting here (position restored).
-    fn tail_count(&mut self, elem: NodeId, _tao: bool) -> Result<usize, LeafAccessError> {
-        let (start, leaves) = (self.pos, self.leaves);
-        let mut n = 0;
-        while self.data.bit_len().saturating_sub(self.pos) >= 8 {
-            self.skip(elem, false)?;
-            n += 1;
-        }
-        (self.pos, self.leaves) = (start, leaves);
-        Ok(n)
-    }
-
-    /// Skips a value, counting its leaves.
-    fn skip(&mut self, id: NodeId, tao: bool) -> Result<(), LeafAccessError> {
-        let layout = self.layout;
-        let node = layout.node(id);
-        if let Some(n) = node.fixed_leaves() {
-            self.pos += node.min_bits as usize;
-            self.leaves += n as usize;
-            return Ok(());
-        }
-        self.enter()?;
-        match node.kind {
-            Kind::Struct { count, .. } => {
-                for (i, f) in layout.members(id).iter().enumerate() {
-                    self.skip(f.node, tao && i + 1 == count as usize)?;
-                }
-            }
-            Kind::Union {
-                first,
-                count,
-                tag_bits,
-            } => {
-                let tag = self.tag(count, tag_bits)?;
-                self.leaves += 1;
-                self.skip(layout.fields[(first + tag) as usize].node, tao)?;
-            }
-            Kind::Array { elem, len } => {
-                for i in 0..len {
-                    self.skip(elem, tao && i + 1 == len)?;
-                }
-            }
-            Kind::DynArray {
-                elem,
-                max,
-                len_bits,
-            } => {
-                self.leaves += 1;
-                if tail_optimized(layout, elem, tao) {
-                    let mut n = 0;
-                    while self.data.bit_len().saturating_sub(self.pos) >= 8 {
-                        if n == max {
-                            return Err(self.fail(ErrorKind::ArrayTooLong {
-                                len: u64::from(n) + 1,
-                                max,
-                            }));
-                        }
-                        self.skip(elem, false)?;
-                        n += 1;
+impl Way for Tokens<'_> {
+    /// What the path names from the type alone: a field by name, a static array's element
+    /// below its length, a tag or length by `_tag` or `_len`. Whether the value holds a
+    /// union variant or a dynamic array's element is for the walk to see.
+    fn next(&mut self, layout: &Layout<'_>, id: NodeId) -> Result<Next, ErrorKind<Infallible>> {
+        let token = self.token().map_err(|()| ErrorKind::NoSuchPath)?;
+        let kind = layout.node(id).kind;
+        Ok(match (kind, token) {
+            (kind, None) if is_scalar(kind) => Next::Leaf(LeafClass::Scalar),
+            (_, None) => return Err(ErrorKind::NotALeaf),
+            (Kind::Union { .. }, Some(Token::Name("_tag"))) => return self.last(LeafClass::Tag),
+            (Kind::DynArray { .. }, Some(Token::Name("_len"))) => return self.last(LeafClass::Len),
+            (Kind::Struct { .. } | Kind::Union { .. }, Some(Token::Name(name))) => {
+                match layout.member_index(id, name) {
+                    Some(index) if layout.fields[index as usize].role != Role::Padding => {
+                        Next::Step(Step::Field(index))
                     }
-                } else {
-                    let n = self.prefixed_len(max, len_bits)?;
-                    for i in 0..n {
-                        self.skip(elem, tao && i + 1 == n)?;
-                    }
+                    _ => return Err(ErrorKind::NoSuchPath),
                 }
             }
-            // Scalars and padding have fixed leaves and were handled above.
-            _ => {}
-        }
-        self.depth -= 1;
-        Ok(())
-    }
-
-    fn found(&self, kind: LeafKind) -> Leaf {
-        Leaf {
-            index: self.leaves,
-            bit_offset: self.pos,
-            kind,
-            path: self.path,
-        }
-    }
-
-    /// Looks for leaf `*k` (counted from here) inside node `id`.
-    fn by_index(
-        &mut self,
-        id: NodeId,
-        tao: bool,
-        k: &mut usize,
-    ) -> Result<Option<Leaf>, LeafAccessError> {
-        let layout = self.layout;
-        let node = layout.node(id);
-        if let Some(n) = node.fixed_leaves() {
-            if *k >= n as usize {
-                *k -= n as usize;
-                self.pos += node.min_bits as usize;
-                self.leaves += n as usize;
-                return Ok(None);
+            (Kind::Array { len, .. }, Some(Token::Index(i))) if i < len => {
+                Next::Step(Step::Index(i))
             }
-        }
-        self.enter()?;
-        let found = match node.kind {
-            kind @ (Kind::Uint { .. } | Kind::Int { .. } | Kind::Float { .. } | Kind::Bool) => {
-                // fixed_leaves is 1 and *k < 1.
-                Some(self.found(LeafKind::Scalar(kind)))
-            }
-            Kind::Void { .. } => None,
-            Kind::Struct { first, count } => {
-                let mut found = None;
-                for i in 0..count {
-                    let field = layout.fields[(first + i) as usize];
-                    self.path.push(Step::Field(first + i));
-                    found = self.by_index(field.node, tao && i + 1 == count, k)?;
-                    if found.is_some() {
-                        break;
-                    }
-                    self.path.pop();
-                }
-                found
-            }
-            Kind::Union {
-                first,
-                count,
-                tag_bits,
-            } => {
-                if *k == 0 {
-                    Some(self.found(LeafKind::Tag {
-                        bits: tag_bits,
-                        union: id,
-                    }))
-                } else {
-                    *k -= 1;
-                    self.leaves += 1;
-                    let tag = self.tag(count, tag_bits)?;
-                    self.path.push(Step::Field(first + tag));
-                    let found =
-                        self.by_index(layout.fields[(first + tag) as usize].node, tao, k)?;
-                    if found.is_none() {
-                        self.path.pop();
-                    }
-                    found
-                }
-            }
-            Kind::Array { elem, len } => {
-                let mut found = None;
-                for i in 0..len {
-                    self.path.push(Step::Index(i));
-                    found = self.by_index(elem, tao && i + 1 == len, k)?;
-                    if found.is_some() {
-                        break;
-                    }
-                    self.path.pop();
-                }
-                found
-            }
-            Kind::DynArray {
-                elem,
-                max,
-                len_bits,
-            } => {
-                let tail = tail_optimized(layout, elem, tao);
-                if *k == 0 {
-                    let bits = if tail { 0 } else { len_bits };
-                    Some(self.found(LeafKind::Len { bits, array: id }))
-                } else {
-                    *k -= 1;
-                    self.leaves += 1;
-                    let n = if tail {
-                        self.tail_count(elem, tao)? as u32
-                    } else {
-                        self.prefixed_len(max, len_bits)?
-                    };
-                    if n > max {
-                        return Err(self.fail(ErrorKind::ArrayTooLong { len: n.into(), max }));
-                    }
-                    let mut found = None;
-                    for i in 0..n {
-                        self.path.push(Step::Index(i));
-                        found = self.by_index(elem, !tail && tao && i + 1 == n, k)?;
-                        if found.is_some() {
-                            break;
-                        }
-                        self.path.pop();
-                    }
-                    found
-                }
-            }
-        };
-        self.depth -= 1;
-        Ok(found)
-    }
-
-    fn next_token<'p>(
-        &self,
-        tokens: &mut Tokens<'p>,
-    ) -> Result<Option<Token<'p>>, LeafAccessError> {
-        tokens.next().map_err(|()| self.fail(ErrorKind::NoSuchPath))
-    }
-
-    /// Follows a textual path inside node `id`.
-    fn by_path(
-        &mut self,
-        id: NodeId,
-        tao: bool,
-        tokens: &mut Tokens<'_>,
-    ) -> Result<Leaf, LeafAccessError> {
-        self.enter()?;
-        let layout = self.layout;
-        let token = self.next_token(tokens)?;
-        let leaf = match (layout.node(id).kind, token) {
-            (
-                kind @ (Kind::Uint { .. } | Kind::Int { .. } | Kind::Float { .. } | Kind::Bool),
-                None,
-            ) => self.found(LeafKind::Scalar(kind)),
-            (
-                Kind::Struct { .. }
-                | Kind::Union { .. }
-                | Kind::Array { .. }
-                | Kind::DynArray { .. },
-                None,
-            ) => return Err(self.fail(ErrorKind::NotALeaf)),
-            (Kind::Struct { first, count }, Some(Token::Name(name))) => {
-                let Some(index) = layout.member_index(id, name) else {
-                    return Err(self.fail(ErrorKind::NoSuchPath));
-                };
-                if layout.fields[index as usize].role == Role::Padding {
-                    return Err(self.fail(ErrorKind::NoSuchPath));
-                }
-                for i in first..index {
-                    self.skip(layout.fields[i as usize].node, false)?;
-                }
-                self.path.push(Step::Field(index));
-                let last = tao && index + 1 == first + count;
-                self.by_path(layout.fields[index as usize].node, last, tokens)?
-            }
-            (
-                Kind::Union {
-                    first,
-                    count,
-                    tag_bits,
-                },
-                Some(Token::Name(name)),
-            ) => {
-                if name == "_tag" {
-                    if self.next_token(tokens)?.is_some() {
-                        return Err(self.fail(ErrorKind::NoSuchPath));
-                    }
-                    self.found(LeafKind::Tag {
-                        bits: tag_bits,
-                        union: id,
-                    })
-                } else {
-                    let Some(index) = layout.member_index(id, name) else {
-                        return Err(self.fail(ErrorKind::NoSuchPath));
-                    };
-                    self.leaves += 1;
-                    let tag = self.tag(count, tag_bits)?;
-                    self.path.push(Step::Field(index));
-                    if index != first + tag {
-                        return Err(self.fail(ErrorKind::VariantNotSelected));
-                    }
-                    self.by_path(layout.fields[index as usize].node, tao, tokens)?
-                }
-            }
-            (Kind::Array { elem, len }, Some(Token::Index(i))) => {
-                if i >= len {
-                    return Err(self.fail(ErrorKind::NoSuchPath));
-                }
-                for _ in 0..i {
-                    self.skip(elem, false)?;
-                }
-                self.path.push(Step::Index(i));
-                self.by_path(elem, tao && i + 1 == len, tokens)?
-            }
-            (
-                Kind::DynArray {
-                    elem,
-                    max,
-                    len_bits,
-                },
-                Some(token),
-            ) => {
-                let tail = tail_optimized(layout, elem, tao);
-                if token == Token::Name("_len") {
-                    if self.next_token(tokens)?.is_some() {
-                        return Err(self.fail(ErrorKind::NoSuchPath));
-                    }
-                    let bits = if tail { 0 } else { len_bits };
-                    return Ok(self.found(LeafKind::Len { bits, array: id }));
-                }
-                let Token::Index(i) = token else {
-                    return Err(self.fail(ErrorKind::NoSuchPath));
-                };
-                self.leaves += 1;
-                let n = if tail {
-                    self.tail_count(elem, tao)? as u32
-                } else {
-                    self.prefixed_len(max, len_bits)?
-                };
-                if i >= n {
-                    return Err(self.fail(ErrorKind::NoSuchPath));
-                }
-                for _ in 0..i {
-                    self.skip(elem, false)?;
-                }
-                self.path.push(Step::Index(i));
-                self.by_path(elem, !tail && tao && i + 1 == n, tokens)?
-            }
-            _ => return Err(self.fail(ErrorKind::NoSuchPath)),
-        };
-        self.depth -= 1;
-        Ok(leaf)
+            (Kind::DynArray { .. }, Some(Token::Index(i))) => Next::Step(Step::Index(i)),
+            _ => return Err(ErrorKind::NoSuchPath),
+        })
     }
 }

@@ -15,8 +15,8 @@ pub trait Plans {
     /// The codec over flat leaf lists: encoder and decoder with fixed-offset runs of leaves
     /// in one loop (else the walk encodes and decodes).
     const FLAT: bool;
-    /// Leaf `[k]` found by the leaf walk that steps over fixed-shape parts, and by seeks
-    /// without a field path (else the walk locates).
+    /// Leaf `[k]` found by the seek that steps over fixed-shape parts, with its field path
+    /// or without (else the walk locates).
     const SEEK: bool;
     /// The store's leaf tables, and leaves written in place (else the walk reads and writes).
     const TABLES: bool;

@@ -2,8 +2,10 @@
 //! and hands every leaf to a [`Visit`] that watches, supplies or replaces it.
 //!
 //! Every operation on values is one walk with its own visit: decoding into a flat leaf list
-//! ([`decode`]), encoding from one ([`encode`]), finding leaf `[k]` ([`locate`]), rewriting a
-//! value with a new union tag or array length ([`transcode`]), a type's default
+//! ([`decode`]), encoding from one ([`encode`]), finding leaf `[k]` ([`locate`]) or the leaf a
+//! path names ([`locate_by`], for hosts and firmware alike: the union tags, array lengths and
+//! tail arrays on the way are the loop's to read), rewriting a value with a new union tag or
+//! array length ([`transcode`]), a type's default
 //! ([`encode_default`]), checking a stored value's `p_version` fields ([`check_versions`]) and
 //! translating a value of an older type version ([`translate`]). Firmware builds (feature
 //! `compact`) do all of these through this one interpreter of the DroneCAN rules, which is
@@ -19,7 +21,9 @@ use core::convert::Infallible;
 use crate::bits::BitRead;
 use crate::error::{Error, ErrorKind, Path, Step};
 pub(crate) use crate::interp::put;
-use crate::interp::{visit as run, write_whole, Bits, Halt, Job, LeafAt, Visit};
+use crate::interp::{
+    visit as run, write_whole, Bits, Halt, Job, LeafAt, PartAt, Reading, Visit, Walked,
+};
 use crate::layout::{Kind, Layout, NodeId};
 use crate::rules::{
     DecodeOptions, Decoded, EncodeOptions, Leaf, LeafAccessError, LeafError, LeafKind, Position,
@@ -84,7 +88,7 @@ pub fn decode<R: BitRead + ?Sized>(
 ) -> Result<Decoded, Error<LeafError>> {
     let mut collect = Collect { leaves, len: 0 };
     let bits = Bits(data);
-    let job = Job::reading(&bits, options.tao, None);
+    let job = Job::reading(&bits, options.tao, false);
     let end = run(layout, root, job, &mut collect)?.read;
     let (used, len) = (end.div_ceil(8), BitRead::bit_len(data) / 8);
     if !options.allow_trailing && len > used {
@@ -114,20 +118,70 @@ pub fn encode(
     write_whole(layout, root, None, out, options, &mut supply)
 }
 
-/// Finds a leaf: by number, or (when `path` is set) by field path and kind of leaf.
-struct Find<'p> {
+/// Finds a leaf: the one `aim` looks for.
+struct Find<'w, A> {
+    layout: &'w Layout<'w>,
     /// The data's length in bits.
     bit_len: usize,
     /// Where a leaf that lies beyond the data starts.
     beyond: usize,
-    k: usize,
-    path: Option<(&'p Path, LeafClass)>,
+    aim: A,
     found: Option<(Leaf, Scalar, bool)>,
+}
+
+impl<'w, A: Aim> Find<'w, A> {
+    fn new<R: BitRead + ?Sized>(layout: &'w Layout<'w>, data: &R, aim: A) -> Self {
+        Find {
+            layout,
+            bit_len: BitRead::bit_len(data),
+            beyond: 0,
+            aim,
+            found: None,
+        }
+    }
+}
+
+/// Which leaf a [`Find`] looks for: leaf `[k]` ([`Index`]) or the one a path names
+/// ([`Toward`]). Two types, so that firmware that finds leaves by number only links no paths.
+trait Aim {
+    /// Whether leaf `at` (whose value read is `old`) is the one.
+    fn hit(&mut self, at: &LeafAt<'_>, old: Option<Scalar>) -> bool;
+    /// [`Visit::part`]: passes over what cannot hold the leaf.
+    fn part(&mut self, layout: &Layout<'_>, at: &PartAt<'_>, reading: &mut Reading<'_>) -> bool;
+    /// Why the walk did not find it (it `walked` the whole value, or stopped short).
+    fn missing(&mut self, walked: Walked) -> LeafAccessError;
+}
+
+/// Leaf `[k]`.
+struct Index(usize);
+
+impl Aim for Index {
+    fn hit(&mut self, at: &LeafAt<'_>, _: Option<Scalar>) -> bool {
+        at.index == self.0
+    }
+
+    fn part(&mut self, layout: &Layout<'_>, at: &PartAt<'_>, reading: &mut Reading<'_>) -> bool {
+        // A fixed-shape part whose leaves all come before leaf `[k]`.
+        let before = (layout.node(at.node).fixed_leaves())
+            .is_some_and(|n| *reading.leaves + n as usize <= self.0);
+        before && reading.pass(layout, at.node)
+    }
+
+    fn missing(&mut self, walked: Walked) -> LeafAccessError {
+        Error {
+            kind: ErrorKind::NoSuchLeaf {
+                index: self.0,
+                count: walked.leaves,
+            },
+            bit_offset: walked.read,
+            path: Path::default(),
+        }
+    }
 }
 
 /// Which leaf of a node a path names: the node itself, or its tag or length.
 #[derive(Clone, Copy, PartialEq, Eq)]
-enum LeafClass {
+pub(crate) enum LeafClass {
     Scalar,
     Tag,
     Len,
@@ -141,13 +195,143 @@ fn class(kind: LeafKind) -> LeafClass {
     }
 }
 
-impl Visit for Find<'_> {
-    fn leaf(&mut self, at: &LeafAt<'_>, old: Option<Scalar>) -> Result<Option<Scalar>, Halt> {
-        let hit = match self.path {
-            Some((path, leaf)) => at.path == path && class(at.kind) == leaf,
-            None => at.index == self.k,
+/// Where a part lies for a way ([`Toward::part`]).
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Course {
+    /// On the way: walked.
+    On,
+    /// Off it: passed over unread where it has a fixed shape.
+    Off,
+    /// The way ends (what the path names is not in the value): nothing more is read.
+    Done,
+}
+
+/// What a path names inside a node on its way.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Next {
+    /// A part of it, this step down.
+    Step(Step),
+    /// One of its own leaves: its value, its tag or its length.
+    Leaf(LeafClass),
+}
+
+/// A path to a leaf, followed node by node as the walk comes to them.
+pub(crate) trait Way {
+    /// What the path names inside node `id`, the next node on it (the root first); `Err`:
+    /// why it names nothing there.
+    fn next(&mut self, layout: &Layout<'_>, id: NodeId) -> Result<Next, ErrorKind<Infallible>>;
+}
+
+/// A way followed through a value: which part of it the walk is in. The walk reads only the
+/// parts before the leaf that decide where it is (the loop passes over the others), and it
+/// ends at the leaf, or where the path names what the value does not hold.
+struct Toward<'w> {
+    layout: &'w Layout<'w>,
+    way: &'w mut dyn Way,
+    /// How many parts down the last part on the way is (0: the root).
+    depth: usize,
+    /// What the path names inside that part.
+    next: Next,
+    /// The part walked is that part (its own leaf, tag or length comes next).
+    on: bool,
+    /// What the path names is not in the value (a union variant not selected, an element
+    /// beyond the array's length): said at the next part, after the loop's rules on the tag
+    /// or length just read.
+    missing: Option<LeafAccessError>,
+}
+
+impl Aim for Toward<'_> {
+    fn part(&mut self, layout: &Layout<'_>, at: &PartAt<'_>, reading: &mut Reading<'_>) -> bool {
+        match self.course(at, *reading.bits) {
+            Course::On => false,
+            // Fixed-shape parts off the way.
+            Course::Off => reading.pass(layout, at.node),
+            Course::Done => true,
+        }
+    }
+
+    /// Whether leaf `at` (whose value read is `old`) is the one the path names. A union's
+    /// tag or an array's length on the way says whether the value holds the rest of it.
+    fn hit(&mut self, at: &LeafAt<'_>, old: Option<Scalar>) -> bool {
+        if !self.on {
+            return false;
+        }
+        let n = match old {
+            Some(Scalar::Uint(n)) => n,
+            _ => 0,
         };
-        if !hit {
+        let (missing, bits) = match (self.next, at.kind) {
+            (Next::Leaf(leaf), kind) => return class(kind) == leaf,
+            (Next::Step(Step::Field(variant)), LeafKind::Tag { bits, union }) => {
+                let first = match self.layout.node(union).kind {
+                    Kind::Union { first, .. } => first,
+                    _ => 0,
+                };
+                if variant.checked_sub(first).map(u64::from) == Some(n) {
+                    return false;
+                }
+                let mut path = *at.path;
+                path.push(Step::Field(variant));
+                ((ErrorKind::VariantNotSelected, path), bits)
+            }
+            (Next::Step(Step::Index(i)), LeafKind::Len { bits, .. }) if u64::from(i) >= n => {
+                ((ErrorKind::NoSuchPath, *at.path), bits)
+            }
+            _ => return false,
+        };
+        self.missing = Some(Error {
+            kind: missing.0,
+            bit_offset: at.bit_offset + usize::from(bits),
+            path: missing.1,
+        });
+        false
+    }
+
+    fn missing(&mut self, walked: Walked) -> LeafAccessError {
+        self.missing.take().unwrap_or(Error {
+            kind: ErrorKind::NoSuchPath,
+            bit_offset: walked.read,
+            path: Path::default(),
+        })
+    }
+}
+
+impl Toward<'_> {
+    /// Where part `at`, starting at bit `bit_offset`, lies.
+    fn course(&mut self, at: &PartAt<'_>, bit_offset: usize) -> Course {
+        if self.missing.is_some() {
+            return Course::Done;
+        }
+        self.on = match (at.step, self.next) {
+            // The root (padding, with no step either, is on no way).
+            (None, _) => at.depth == 0,
+            (Some(step), Next::Step(next)) => at.depth == self.depth + 1 && step == next,
+            _ => false,
+        };
+        if !self.on {
+            return Course::Off;
+        }
+        self.depth = at.depth;
+        match self.way.next(self.layout, at.node) {
+            Ok(next) => {
+                self.next = next;
+                Course::On
+            }
+            Err(kind) => {
+                self.missing = Some(Error {
+                    kind,
+                    bit_offset,
+                    path: *at.path,
+                });
+                Course::Done
+            }
+        }
+    }
+}
+
+impl<A: Aim> Visit for Find<'_, A> {
+    fn leaf(&mut self, at: &LeafAt<'_>, old: Option<Scalar>) -> Result<Option<Scalar>, Halt> {
+        if !self.aim.hit(at, old) {
             return Ok(None);
         }
         if at.bit_offset > self.bit_len {
@@ -171,27 +355,49 @@ impl Visit for Find<'_> {
             available_bits: self.bit_len,
         }
     }
+
+    fn part(&mut self, at: &PartAt<'_>, reading: &mut Reading<'_>) -> bool {
+        self.aim.part(self.layout, at, reading)
+    }
 }
 
-fn find<R: BitRead + ?Sized>(
+/// Walks `data` (a value of type `root`) until `find` finds its leaf.
+fn find<R: BitRead + ?Sized, A: Aim>(
     layout: &Layout<'_>,
     root: NodeId,
     data: &R,
-    find: &mut Find<'_>,
+    find: &mut Find<'_, A>,
     tao: bool,
 ) -> Result<(Leaf, Scalar, bool), LeafAccessError> {
-    let skip_below = find.path.is_none().then_some(find.k);
     let bits = Bits(data);
-    let job = Job::reading(&bits, tao, skip_below);
+    let job = Job::reading(&bits, tao, true);
     let walked = run(layout, root, job, find).map_err(plain)?;
-    find.found.ok_or(Error {
-        kind: ErrorKind::NoSuchLeaf {
-            index: find.k,
-            count: walked.leaves,
-        },
-        bit_offset: walked.read,
-        path: Path::default(),
-    })
+    match find.found {
+        Some(found) => Ok(found),
+        None => Err(find.aim.missing(walked)),
+    }
+}
+
+/// Finds the leaf `way` names in `data`, a value of type `root`, and reads it (what
+/// [`crate::leaf::get_leaf`] gives for [`crate::leaf::Target::Path`]).
+pub(crate) fn locate_by<R: BitRead + ?Sized>(
+    layout: &Layout<'_>,
+    root: NodeId,
+    data: &R,
+    way: &mut dyn Way,
+    tao: bool,
+) -> Result<(Leaf, Scalar), LeafAccessError> {
+    let toward = Toward {
+        layout,
+        way,
+        depth: 0,
+        next: Next::Leaf(LeafClass::Scalar),
+        on: false,
+        missing: None,
+    };
+    let mut found = Find::new(layout, data, toward);
+    let (leaf, value, _) = find(layout, root, data, &mut found, tao)?;
+    Ok((leaf, value))
 }
 
 /// Finds leaf `[k]` of `data`, a value of type `root`, and reads it (what
@@ -203,13 +409,7 @@ pub fn locate<R: BitRead + ?Sized>(
     k: usize,
     tao: bool,
 ) -> Result<(Leaf, Scalar), LeafAccessError> {
-    let mut found = Find {
-        bit_len: BitRead::bit_len(data),
-        beyond: 0,
-        k,
-        path: None,
-        found: None,
-    };
+    let mut found = Find::new(layout, data, Index(k));
     let (leaf, value, _) = find(layout, root, data, &mut found, tao)?;
     Ok((leaf, value))
 }
@@ -221,13 +421,7 @@ pub fn seek<R: BitRead + ?Sized>(
     data: &R,
     k: usize,
 ) -> Option<Position> {
-    let mut found = Find {
-        bit_len: BitRead::bit_len(data),
-        beyond: 0,
-        k,
-        path: None,
-        found: None,
-    };
+    let mut found = Find::new(layout, data, Index(k));
     let (leaf, _, version) = find(layout, root, data, &mut found, false).ok()?;
     Some(Position {
         bit_offset: leaf.bit_offset,
@@ -348,7 +542,7 @@ pub fn check_versions(
         }
     }
     let bits = Bits(data);
-    let job = Job::reading(&bits, false, None);
+    let job = Job::reading(&bits, false, false);
     let end = run(layout, root, job, &mut Versions(Scalar::Uint(0), 0))
         .map_err(plain)?
         .read;
@@ -372,17 +566,33 @@ fn read_at<R: BitRead + ?Sized>(
     path: &Path,
     leaf: LeafClass,
 ) -> Result<Scalar, Halt> {
-    let mut found = Find {
-        bit_len: BitRead::bit_len(data),
-        beyond: 0,
-        k: 0,
-        path: Some((path, leaf)),
-        found: None,
+    let mut along = Along {
+        path,
+        depth: 0,
+        leaf,
     };
     // Not there: the stored value holds less than the walk asks of it.
-    match find(layout, root, data, &mut found, false) {
-        Ok((_, value, _)) => Ok(value),
+    match locate_by(layout, root, data, &mut along, false) {
+        Ok((_, value)) => Ok(value),
         Err(_) => Err(Halt::Refused),
+    }
+}
+
+/// The way of a field path: its steps, then leaf `leaf` of the node they lead to.
+struct Along<'p> {
+    path: &'p Path,
+    depth: usize,
+    leaf: LeafClass,
+}
+
+impl Way for Along<'_> {
+    fn next(&mut self, _: &Layout<'_>, _: NodeId) -> Result<Next, ErrorKind<Infallible>> {
+        let next = match self.path.steps().nth(self.depth) {
+            Some(step) => Next::Step(step),
+            None => Next::Leaf(self.leaf),
+        };
+        self.depth += 1;
+        Ok(next)
     }
 }
 

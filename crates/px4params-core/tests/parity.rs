@@ -349,3 +349,66 @@ proptest! {
         prop_assert!(plan.is_ok() == walk.is_ok(), "{:?} / {:?}", plan, walk);
     }
 }
+
+/// The lookup by path (a visit that follows a way through the loop) against leaf `[k]` found
+/// by the walk.
+mod path_lookup {
+    use super::*;
+    use px4params_core::codec::LeafKind;
+    use px4params_core::leaf::{get_leaf, Leaf, Target};
+
+    /// The textual path of a leaf, as a user writes it (`None` past the depth a path keeps).
+    fn text(layout: &Layout<'_>, leaf: &Leaf) -> Option<String> {
+        let path = leaf.path.display(layout).to_string();
+        let own = match leaf.kind {
+            LeafKind::Scalar(_) => return (!path.ends_with("...")).then_some(path),
+            LeafKind::Tag { .. } => "_tag",
+            LeafKind::Len { .. } => "_len",
+        };
+        let dot = if path.is_empty() { "" } else { "." };
+        (!path.ends_with("...")).then(|| format!("{path}{dot}{own}"))
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(300))]
+
+        /// Each leaf of a value (random bytes, or a stored value complete and cut short at
+        /// every byte), looked up by the path of the leaf `[k]` it is in the whole value: the
+        /// same leaf (number, position, kind, path) and value as the walk finds for `[k]`, or
+        /// the same error (the data ending or breaking before it); in the whole value, found.
+        #[test]
+        fn path_lookup_as_the_walk(ty in any_type(), data in proptest::collection::vec(any::<u8>(), 0..64), tao in any::<bool>()) {
+            let mut l = OwnedLayout::default();
+            let root = ty.build(&mut l);
+            let layout = l.as_layout();
+            let value = value_from(&layout, root, &data).unwrap_or_default();
+            // The leaves as the codec decodes them (its own code): what leaf `[k]` holds.
+            let all = |bytes: &[u8], tao| decoded::<HostPlans>(&layout, root, bytes, DecodeOptions { tao, allow_trailing: true }).map(|(_, leaves)| leaves).ok();
+            let mut cases = vec![(&data[..], &data[..], tao)];
+            cases.extend(cut_short(&value).map(|bytes| (&value[..], bytes, false)));
+            for (whole, bytes, tao) in cases {
+                for k in 0..24 {
+                    let Ok((leaf, _)) = walk::locate(&layout, root, whole, k, tao) else {
+                        continue;
+                    };
+                    let Some(path) = text(&layout, &leaf) else {
+                        continue;
+                    };
+                    let by_path = get_leaf(&layout, root, bytes, Target::Path(&path), tao);
+                    let walked = walk::locate(&layout, root, bytes, k, tao);
+                    match (&by_path, &walked) {
+                        (Ok((a, x)), Ok((b, y))) => prop_assert!(a == b && same_scalar(*x, *y), "{} [{}] {:?} / {:?}", path, k, by_path, walked),
+                        (Err(a), Err(b)) => prop_assert!(same_error(a, b), "{} [{}] {:?} / {:?}", path, k, a, b),
+                        _ => prop_assert!(false, "{} [{}] {:?} / {:?}", path, k, by_path, walked),
+                    }
+                    if bytes.len() == whole.len() {
+                        prop_assert!(by_path.is_ok(), "{} [{}] {:?}", path, k, by_path);
+                        if let (Some(leaves), Ok((leaf, v))) = (all(bytes, tao), &by_path) {
+                            prop_assert!(leaf.index == k && same_scalar(*v, leaves[k]), "{} [{}] {:?} / {:?}", path, k, v, leaves[k]);
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
