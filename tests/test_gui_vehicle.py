@@ -8,6 +8,7 @@ from __future__ import annotations
 import contextlib
 import errno
 import hashlib
+import itertools
 import json
 import lzma
 import subprocess
@@ -30,6 +31,7 @@ from px4params.gui.vehicle import (
     parse_health,
 )
 from px4params.links.mavlink import MavlinkParamServer, param_value_of
+from px4params.links.mavlink_signing import Signing
 from px4params.store.classic import BUNDLED_CLASSIC
 from px4params.store.session import Session
 from pymavlink.dialects.v20 import common as mavlink2
@@ -1292,3 +1294,63 @@ def test_signed_frames_leave_in_the_order_they_were_signed_from_every_thread(
         conn.write = write
     assert len(stamps) >= 101
     assert stamps == sorted(set(stamps))
+
+
+@pytest.mark.issue40
+def test_signed_frames_leave_with_rising_timestamps_while_signed_frames_arrive(
+    schema: px4params.Schema,
+) -> None:
+    """MAVLink 2 signing: the page's timestamp moves up with every frame it signs and every
+    signed frame it accepts (to the frame's, when later), and every frame it sends carries one
+    above the last it sent (a signed vehicle drops any other as a replay). Here the vehicle's
+    signed frames arrive, each checked by the page's receive thread, while four threads send;
+    the interpreter switches threads every microsecond, so a check and a send interleave."""
+    with _peer(schema, signing_key=KEY) as served, _page(served.address, signing_key=KEY) as page:
+        conn = page._conn
+        write = conn.write
+        stamps: list[int] = []
+
+        def write_noted(frame: bytes) -> None:
+            # a signed MAVLink 2 frame ends: link id, 6-byte timestamp, 6-byte signature
+            stamps.append(int.from_bytes(frame[-12:-6], "little"))
+            write(frame)
+
+        # the vehicle's frames, signed as another peer signs them: its own link id, and a clock
+        # ahead of the page's (the page's timestamp moves up to the vehicle's)
+        vehicle = mavlink2.MAVLink(None, srcSystem=7, srcComponent=1)
+        Signing(KEY, link_id=3, now=time.time() + 60).attach(vehicle)
+        beat = mavlink2.MAVLink_heartbeat_message(
+            mavlink2.MAV_TYPE_GENERIC, mavlink2.MAV_AUTOPILOT_PX4, 0, 0, 0, 4
+        )
+        frames = [beat.pack(vehicle) for _ in range(10000)]
+        to_page = ("127.0.0.1", conn.port.getsockname()[1])
+        accepted_before = page._conn.mav.signing.goodsig_count
+
+        def arrive() -> None:
+            for n, frame in enumerate(frames):
+                served._sock.sendto(frame, to_page)
+                if n % 10 == 0:
+                    time.sleep(0.001)  # the page's socket buffer keeps up
+
+        def send() -> None:
+            while arriving.is_alive():
+                conn.mav.heartbeat_send(6, 8, 0, 0, 0)
+
+        switching = sys.getswitchinterval()
+        conn.write = write_noted
+        sys.setswitchinterval(1e-6)
+        try:
+            arriving = threading.Thread(target=arrive)
+            threads = [arriving, *(threading.Thread(target=send) for _ in range(4))]
+            for t in threads:
+                t.start()
+            for t in threads:
+                t.join(60.0)
+        finally:
+            sys.setswitchinterval(switching)
+            conn.write = write
+        # the vehicle's frames were checked meanwhile (some, at least: UDP may drop some)
+        assert page._conn.mav.signing.goodsig_count - accepted_before > 100
+    assert len(stamps) >= 1000
+    repeated_or_older = [(a, b) for a, b in itertools.pairwise(stamps) if b <= a]
+    assert repeated_or_older == []

@@ -323,15 +323,19 @@ class MavlinkVehicle(_Base):
             f"udpout:{host}:{port}", source_system=255, source_component=190, dialect="common"
         )
         self._signed = signing_key is not None
+        send_lock = threading.Lock()
         if signing_key is not None:
             from px4params.links.mavlink_signing import Signing
 
             # MAVLink 2 signing (pymavlink's signing state and checks on the connection): every
             # message signed, and what arrives accepted by PX4's rules; unsigned and wrongly
-            # signed messages are dropped
-            Signing(signing_key).attach(self._conn.mav)
+            # signed messages are dropped. Accepting a frame moves the timestamp sends use:
+            # one lock for both
+            signing = Signing(signing_key)
+            signing.attach(self._conn.mav)
+            send_lock = signing.lock
             self.source += " (signed)"
-        self._serialize_sends()
+        self._serialize_sends(send_lock)
         self._mav = mavutil.mavlink
         mavlink_messages.register(self._mav)
         self._system = 1
@@ -359,14 +363,14 @@ class MavlinkVehicle(_Base):
 
     # -- connection ------------------------------------------------------------------------
 
-    def _serialize_sends(self) -> None:
-        """One frame at a time on the connection. The heartbeat thread, writes and pymavlink's
-        FTP download all send on it, and pymavlink numbers and signs a frame before writing it
-        without a lock: a signed vehicle drops a frame whose timestamp is not above the last
-        one it took (a replay), so a frame signed first must also be written first."""
+    def _serialize_sends(self, lock: threading.Lock) -> None:
+        """One frame at a time on the connection, under ``lock``. The heartbeat thread, writes
+        and pymavlink's FTP download all send on it, and pymavlink numbers and signs a frame
+        before writing it without a lock: a signed vehicle drops a frame whose timestamp is not
+        above the last one it took (a replay), so a frame signed first must also be written
+        first."""
         mav = self._conn.mav
         send = mav.send
-        lock = threading.Lock()
 
         def send_one(message: Any, force_mavlink1: bool = False) -> None:
             with lock:
