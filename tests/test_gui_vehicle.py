@@ -72,7 +72,7 @@ def wait_for(condition: Any, seconds: float = 10.0) -> bool:
 
 #: A health report 100 characters long: two STATUSTEXT chunks of 50 and an empty third, the end
 #: (MAVLink 2: a chunk shorter than 50 characters ends the text).
-LONG_HEALTH = "health: ina238 INA238#1 on I2C bus 2 address 0x45: critical: not found: " + "x" * 27
+LONG_HEALTH = "health: ina238 INA238#1 on I2C bus 2 address 0x45: critical: not found: " + "x" * 28
 SHORT_HEALTH = "health: ms5611 MS5611#0: nominal"  # one STATUSTEXT, id 0
 
 
@@ -204,7 +204,7 @@ def test_a_mavlink_vehicle_is_listed_written_read_and_heard(schema: px4params.Sc
             # health reports, each joined from its chunks
             assert wait_for(lambda: {"INA238#1", "MS5611#0"} <= set(page.health))
             assert page.health["INA238#1"] == parse_health(LONG_HEALTH)
-            assert page.health["INA238#1"]["reason"] == "not found: " + "x" * 27
+            assert page.health["INA238#1"]["reason"] == "not found: " + "x" * 28
             assert page.health["MS5611#0"]["state"] == "nominal"
             assert LONG_HEALTH in page.messages and SHORT_HEALTH in page.messages
             assert LONG_HEALTH[:50] not in page.messages  # no chunk said on its own
@@ -1070,28 +1070,53 @@ def test_only_the_vehicle_refuses_its_writes_and_says_why(schema: px4params.Sche
 # -- STATUSTEXT chunks joined by chunk_seq ---------------------------------------------------------
 # common.xml's STATUSTEXT: a text longer than 50 characters goes in chunks of one non-zero id,
 # ``chunk_seq`` counting them from 0, and the chunk holding a NUL (shorter than 50 characters
-# once decoded) is the last. UDP loses and reorders datagrams: the page joins the chunks by
-# chunk_seq, marks where chunks are missing, and shows a text whose last chunk never comes
-# (marked) after a bounded wait, as QGC does.
+# once decoded) is the last. PX4 (src/modules/mavlink/streams/STATUSTEXT.hpp) sends every text
+# with an id, all its chunks at once, and no empty chunk after a full last one: its text of 50 or
+# 100 characters ends with a full chunk. UDP loses, repeats and reorders datagrams: the page
+# joins the chunks by chunk_seq, marks where chunks are missing, and shows a text it cannot
+# tell is whole after a bounded wait (QGC waits 1 s), as it is.
 
 
 def _chunks(text: str) -> list[str]:
-    """``text`` cut as a sender cuts it: 50 characters a chunk, and an empty one after a last
-    chunk of 50 (its NUL ends the text)."""
+    """``text`` cut as px4params' server cuts it: 50 characters a chunk, and an empty one
+    after a last chunk of 50 (its NUL ends the text)."""
     parts = [text[i : i + 50] for i in range(0, len(text), 50)]
     return [*parts, ""] if len(parts[-1]) == 50 else parts
 
 
-def _tell(served: _Recording, page: MavlinkVehicle, text_id: int, parts: dict[int, str]) -> None:
-    """The chunks ``parts`` (by chunk_seq, in the order given) of a text of ``text_id``, sent
-    to the page as the vehicle (system 7, component 1)."""
+def _px4_chunks(text: str) -> list[str]:
+    """``text`` cut as PX4 cuts it: 50 characters a chunk, and nothing after the last (the
+    loop sends the rest and stops once at most 50 characters are left)."""
+    return [text[i : i + 50] for i in range(0, len(text), 50)]
+
+
+def _tell(
+    served: _Recording,
+    page: MavlinkVehicle,
+    text_id: int,
+    parts: dict[int, str] | list[tuple[int, str]],
+) -> None:
+    """The chunks ``parts`` (by chunk_seq, in the order given; as pairs, a chunk may come
+    twice) of a text of ``text_id``, sent to the page as the vehicle (system 7, component 1)."""
     to_page = [("127.0.0.1", page._conn.port.getsockname()[1])]
     warning = mavlink2.MAV_SEVERITY_WARNING
+    pairs = parts.items() if isinstance(parts, dict) else parts
     chunks = [
         mavlink2.MAVLink_statustext_message(warning, part.encode(), text_id, seq)
-        for seq, part in parts.items()
+        for seq, part in pairs
     ]
     _say_as(served, (7, 1), chunks, to_page)
+
+
+def _shown_at(page: MavlinkVehicle) -> list[tuple[float, str]]:
+    """When (time.monotonic()) each text is shown from now on, and the text."""
+    shown: list[tuple[float, str]] = []
+    page.listen(
+        lambda event: (
+            shown.append((time.monotonic(), event["text"])) if event["kind"] == "status" else None
+        )
+    )
+    return shown
 
 
 #: A health report of three chunks (50, 50 and 17 characters).
@@ -1120,49 +1145,159 @@ def test_status_text_chunks_are_joined_by_chunk_seq_and_a_gap_is_marked(
 
 
 @pytest.mark.issue40
-def test_a_text_whose_last_chunk_never_comes_is_shown_marked_incomplete(
+def test_a_text_is_shown_once_whole_whatever_the_order_of_its_chunks(
     schema: px4params.Schema,
 ) -> None:
-    """Text 31 never gets its last chunk: shown with "[...]" at its end about a second after
-    its first (QGC waits 1 s). Text 32's first chunk, then another text of id 32 starting
-    (chunk_seq 0 again: the id wrapped): the first shown marked at once, the second whole
-    and apart from it."""
-    lost = "health: ms5611 MS5611#0 on SPI bus 1: critical: no " + "answer since boot"
+    """The last chunk (shorter than 50) before a middle one: the text is not whole yet, and
+    is shown once, whole, when the middle one comes."""
+    first, second, third = _chunks(THREE_CHUNKS)
+    with _peer(schema) as served, _page(served.address) as page:
+        _tell(served, page, 23, {0: first, 2: third, 1: second})
+        assert wait_for(lambda: page.messages, 5.0)
+        time.sleep(0.1)  # nothing more comes
+        assert page.messages == [THREE_CHUNKS]
+        assert page._chunks == {}  # no text left waiting for its deadline
+
+
+@pytest.mark.issue40
+def test_a_chunk_heard_twice_is_one_chunk(schema: px4params.Schema) -> None:
+    """UDP and routers may deliver a datagram twice: chunk 0 again while the text waits for
+    its others, and again once the text was shown, is the same chunk, no new text."""
+    first, second, third = _chunks(THREE_CHUNKS)
+    with _peer(schema) as served, _page(served.address) as page:
+        _tell(served, page, 24, [(0, first), (0, first), (1, second), (2, third)])
+        assert wait_for(lambda: page.messages, 5.0)
+        _tell(served, page, 24, [(0, first), (2, third)])
+        time.sleep(0.2)  # the repeats are taken in
+        assert page.messages == [THREE_CHUNKS]
+        assert page._chunks == {}  # no text left waiting for its deadline
+
+
+#: A health report of exactly 50 characters (one full chunk from PX4).
+HEALTH_50 = "health: ms5611 MS5611#0: critical: no answer at 0x"
+assert len(LONG_HEALTH) == 100 and len(HEALTH_50) == 50
+
+
+@pytest.mark.issue40
+def test_a_px4_text_of_50_or_100_characters_is_whole_after_its_wait(
+    schema: px4params.Schema,
+) -> None:
+    """PX4 sends no chunk after a full last one: the page cannot tell the text ended until no
+    chunk came for its wait (1 s), then shows it as it is, whole, and reads its health."""
+    with _peer(schema) as served, _page(served.address) as page:
+        shown = _shown_at(page)
+        sent = time.monotonic()
+        _tell(served, page, 41, dict(enumerate(_px4_chunks(LONG_HEALTH))))
+        _tell(served, page, 42, dict(enumerate(_px4_chunks(HEALTH_50))))
+        assert wait_for(lambda: len(shown) >= 2, 10.0)
+        time.sleep(0.1)  # nothing more comes
+        assert sorted(text for _, text in shown) == sorted([LONG_HEALTH, HEALTH_50])
+        assert min(at for at, _ in shown) >= sent + 1.0  # not before its wait was over
+        assert page.health == {
+            "INA238#1": parse_health(LONG_HEALTH),
+            "MS5611#0": parse_health(HEALTH_50),
+        }
+
+
+class _SaysLikePx4(_Recording):
+    """Cuts its texts as PX4 does (every text with an id, no chunk after a full last one), and
+    refuses INA238_1C's writes with a reason of 100 characters."""
+
+    #: The reason: two full chunks.
+    REASON = (
+        "INA238_1C: value 200 is out of range for INA238#1 on I2C bus 2 at address 0x45 "
+        + "(expected: 0 to 127)."
+    )
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self.texts = 0
+
+    def _statustext(self, text: str, peers: list[Any]) -> None:
+        self.texts += 1
+        warning = mavlink2.MAV_SEVERITY_WARNING
+        for seq, part in enumerate(_px4_chunks(text)):
+            msg = mavlink2.MAVLink_statustext_message(warning, part.encode(), self.texts, seq)
+            self._send(msg, peers)
+
+    def _refuse(self, peer: Any, msg: Any, name: str, found: Any, why: str, code: int) -> None:
+        reason = self.REASON if name == "INA238_1C" else why
+        super()._refuse(peer, msg, name, found, reason, code)
+
+
+assert len(_SaysLikePx4.REASON) == 100
+
+
+@pytest.mark.issue40
+def test_a_refusal_s_reason_of_100_characters_from_px4_is_named(
+    schema: px4params.Schema,
+) -> None:
+    """A refusal's reason from PX4 that ends with a full chunk is shown only after its wait:
+    the refused write waits for it, and names it."""
+    with _peer(schema, _SaysLikePx4) as served, _page(served.address) as page:
+        refused = page.write("INA238_1C", 200)
+        assert (refused.ok, refused.value, refused.reason) == (False, 0x45, _SaysLikePx4.REASON)
+        assert page.messages[-1] == _SaysLikePx4.REASON  # shown as it is
+
+
+#: A text of 150 characters, three full chunks.
+THREE_FULL_CHUNKS = "camera: storage full; photos are kept in memory until the card is changed " + (
+    "or the memory is full, then the oldest are dropped: change the card soon...."
+)
+assert len(THREE_FULL_CHUNKS) == 150
+
+
+@pytest.mark.issue40
+def test_a_text_whose_chunks_stop_coming_is_shown_marked_after_its_wait(
+    schema: px4params.Schema,
+) -> None:
+    """Text 31's middle chunk never comes: shown with "[...]" where it is missing once it
+    waited a second for it, and read as no health report (what is missing may be its
+    instance or state). Text 32's first chunk, then another text of id 32 starting (chunk_seq
+    0 again, another text: the id wrapped): the first shown at once, its end marked missing
+    (it was still waiting), the second whole and apart from it."""
+    lost = THREE_FULL_CHUNKS
     earlier = "camera: storage full, no photo taken, video recording stopped"
     later = "gimbal: pitch calibration done, yaw calibration started, hold still"
     with _peer(schema) as served, _page(served.address) as page:
-        started = time.monotonic()
-        _tell(served, page, 31, {0: _chunks(lost)[0]})
+        shown = _shown_at(page)
+        sent = time.monotonic()
+        _tell(served, page, 31, {0: lost[:50], 2: lost[100:]})
         _tell(served, page, 32, {0: _chunks(earlier)[0]})
         _tell(served, page, 32, dict(enumerate(_chunks(later))))
-        assert wait_for(lambda: len(page.messages) >= 2, 5.0)
-        assert page.messages == [earlier[:50] + "[...]", later]  # not waiting for text 31
-        assert wait_for(lambda: len(page.messages) == 3, 5.0)
-        assert 0.9 < time.monotonic() - started < 3.0
-        assert page.messages[2] == lost[:50] + "[...]"
+        assert wait_for(lambda: len(shown) == 3, 10.0)
+        time.sleep(0.1)  # nothing more comes
+        texts = [text for _, text in shown]
+        gapped = lost[:50] + "[...]" + lost[100:]
+        assert [t for t in texts if t != gapped] == [earlier[:50] + "[...]", later]
+        assert next(at for at, text in shown if text == gapped) >= sent + 1.0
         assert page.health == {}  # an incomplete text is no health report
 
 
 @pytest.mark.issue40
 def test_texts_waiting_for_chunks_are_bounded_in_number(schema: px4params.Schema) -> None:
-    """300 texts that each send their first chunk only (a flood, or a link losing every last
-    chunk): at most 16 wait at once, the oldest shown marked when a 17th starts, and every
-    one of the 300 is shown, none dropped."""
+    """300 texts that each send their first chunk only (a flood, or a link losing the rest):
+    at most 16 wait at once, the oldest shown marked when a 17th starts (its end may be
+    missing), those left shown as they are after their wait, and every one of the 300 is
+    shown once, in order, none dropped."""
     shown: list[str] = []
+    texts = [f"text {text_id:03}: " + "x" * 40 for text_id in range(1, 301)]
     with _peer(schema) as served, _page(served.address) as page:
         page.listen(
             lambda event: shown.append(event["text"]) if event["kind"] == "status" else None
         )
         waiting = []
-        for text_id in range(1, 301):
-            _tell(served, page, text_id, {0: f"text {text_id:03}: " + "x" * 40})
+        for text_id, text in enumerate(texts, 1):
+            _tell(served, page, text_id, {0: text})
             # each text taken in before the next (a burst of 300 datagrams can overflow the
             # socket's buffer on a loaded machine): it waits for its chunks or is shown
             assert wait_for(lambda n=text_id: len(page._chunks) + len(shown) >= n, 10.0)
             waiting.append(len(page._chunks))
         assert wait_for(lambda: len(shown) == 300, 10.0)
         assert max(waiting) <= 16
-        assert shown == [f"text {n:03}: " + "x" * 40 + "[...]" for n in range(1, 301)]
+        assert [t.removesuffix("[...]") for t in shown] == texts
+        # the 17th pushed the first out; the last waited its while (nothing pushed it)
+        assert (shown[0], shown[-1]) == (texts[0] + "[...]", texts[-1])
         assert page._chunks == {}
 
 

@@ -250,12 +250,21 @@ _CHUNK_CHARS = 50
 _MISSING = "[...]"
 _CHUNK_WAIT = 1.0
 _TEXTS_WAITING = 16
+#: Seconds a text may be shown after its wait ends (the receive thread looks every 0.2 s).
+_SHOW_LATE = 0.5
+#: Texts shown lately whose repeated chunks are still known as repeats (a chunk seen twice
+#: within _CHUNK_WAIT of the text's showing is the same chunk again).
+_TEXTS_SHOWN = 64
 
 
 class _ChunkedText:
     """One STATUSTEXT text arriving in chunks: its chunks by ``chunk_seq``, the seq of its last
-    chunk once heard (the one holding a NUL: shorter than 50 characters decoded), and when it
-    stops waiting (a while after its latest new chunk)."""
+    chunk once known, and when it stops waiting (a while after its latest new chunk).
+
+    Its last chunk is the one holding a NUL (shorter than 50 characters decoded), or, once it
+    waited its while, the highest heard: PX4 (``STATUSTEXT.hpp``) sends a text's chunks at once
+    and sends no empty chunk after a full last one, so a text of 50 or 100 characters ends with
+    a full chunk, as QGC shows it."""
 
     def __init__(self) -> None:
         self.parts: dict[int, str] = {}
@@ -269,6 +278,12 @@ class _ChunkedText:
         self.deadline = now + _CHUNK_WAIT
         if len(text) < _CHUNK_CHARS:
             self.last = seq
+
+    def waited(self) -> None:
+        """Its while is over: every chunk heard is full (a shorter one is last), the highest
+        ends it."""
+        if self.last is None:
+            self.last = max(self.parts)
 
     @property
     def whole(self) -> bool:
@@ -344,6 +359,12 @@ class MavlinkVehicle(_Base):
         self._waiters: dict[str, list[Any]] = {}
         #: STATUSTEXT texts waiting for chunks, by sender (system, component) and id, oldest first.
         self._chunks: dict[tuple[int, int, int], _ChunkedText] = {}
+        #: Texts shown lately, by the same key: until when a chunk heard again is a repeat,
+        #: and their chunks.
+        self._shown: dict[tuple[int, int, int], tuple[float, dict[int, str]]] = {}
+        #: When the vehicle's texts now waiting for chunks are shown at the latest (0: none
+        #: waits); a refused write waits for them, its reason may be one.
+        self._texts_due = 0.0
         #: Each write's list of what the vehicle says while it waits (its reason, if refused).
         self._hearing: list[list[str]] = []
         self._count = 0
@@ -509,11 +530,13 @@ class MavlinkVehicle(_Base):
 
     def _statustext(self, msg: Any) -> None:
         """STATUSTEXT, its 50-character chunks joined by ``chunk_seq`` (MAVLink 2: id 0 is a
-        text in one chunk, and a chunk shorter than 50 characters is the last). An id is its
-        sender's: two senders' texts of the same id are two texts. A text is shown when its
-        last chunk comes, when another text of its id starts (chunk_seq 0 again: the id
-        wrapped), when it waited ``_CHUNK_WAIT`` for a chunk, or when it is the oldest of too
-        many waiting; missing chunks are marked, never glued over (as QGC does)."""
+        text in one chunk). An id is its sender's: two senders' texts of the same id are two
+        texts. A text is shown once whole (every chunk up to its last, see
+        :class:`_ChunkedText`), when another text of its id starts (chunk_seq 0 again, another
+        text: the id wrapped), when it waited ``_CHUNK_WAIT`` for a chunk, or when it is the
+        oldest of too many waiting; missing chunks are marked, never glued over (as QGC does).
+        A chunk heard again (UDP, a router) is dropped, also shortly after its text was
+        shown."""
         sender = (msg.get_srcSystem(), msg.get_srcComponent())
         text_id = getattr(msg, "id", 0)
         if not text_id:
@@ -521,27 +544,48 @@ class MavlinkVehicle(_Base):
             return
         key = (*sender, text_id)
         seq = getattr(msg, "chunk_seq", 0)
+        now = time.monotonic()
         waiting = self._chunks.get(key)
-        if waiting is not None and seq == 0 and 0 in waiting.parts:
+        shown = self._shown.get(key) if waiting is None else None
+        if shown is not None and shown[0] > now and shown[1].get(seq) == msg.text:
+            return
+        if waiting is not None and seq == 0 and waiting.parts.get(0, msg.text) != msg.text:
             self._show_chunked(key)
             waiting = None
         if waiting is None:
             if len(self._chunks) >= _TEXTS_WAITING:
                 self._show_chunked(next(iter(self._chunks)))
             waiting = self._chunks[key] = _ChunkedText()
-        waiting.add(seq, msg.text, time.monotonic())
-        if waiting.last is not None:
+        waiting.add(seq, msg.text, now)
+        if waiting.whole:
             self._show_chunked(key)
+        self._due()
 
-    def _show_chunked(self, key: tuple[int, int, int]) -> None:
+    def _show_chunked(self, key: tuple[int, int, int], *, waited: bool = False) -> None:
         waiting = self._chunks.pop(key)
+        if waited:
+            waiting.waited()
+        self._shown.pop(key, None)
+        self._shown[key] = (time.monotonic() + _CHUNK_WAIT, waiting.parts)
+        while len(self._shown) > _TEXTS_SHOWN:
+            del self._shown[next(iter(self._shown))]
         self._said((key[0], key[1]), waiting.text(), whole=waiting.whole)
 
     def _show_overdue(self) -> None:
         """The texts that waited too long for a chunk, as they are."""
         now = time.monotonic()
-        for key in [k for k, waiting in self._chunks.items() if waiting.deadline <= now]:
-            self._show_chunked(key)
+        overdue = [k for k, waiting in self._chunks.items() if waiting.deadline <= now]
+        for key in overdue:
+            self._show_chunked(key, waited=True)
+        if overdue:
+            self._due()
+
+    def _due(self) -> None:
+        """When the vehicle's texts waiting for chunks are shown at the latest."""
+        vehicle = (self._system, self._component)
+        self._texts_due = max(
+            (w.deadline for k, w in self._chunks.items() if k[:2] == vehicle), default=0.0
+        )
 
     def _said(self, sender: tuple[int, int], text: str, *, whole: bool) -> None:
         if sender == (self._system, self._component):  # a camera's text is no write's reason
@@ -624,22 +668,35 @@ class MavlinkVehicle(_Base):
                     if answers:
                         break
                 time.sleep(0.1)  # a PARAM_ERROR and STATUSTEXT follow a refusal's PARAM_VALUE
+            errors = [a for a in answers if a[0] == "error"]
+            values = [a[1] for a in answers if a[0] == "value"]
+            echoed = values[0] if values else None
+            refused = bool(errors) or echoed not in _as_stored(value, is_float)
+            if answers and refused:
+                self._await_reason(name, said)
         finally:
             with self._lock:
                 self._hearing = [h for h in self._hearing if h is not said]
-        reasons = [m for m in said if _mentions(m, name)]
-        errors = [a for a in answers if a[0] == "error"]
-        values = [a[1] for a in answers if a[0] == "value"]
         if not answers:
             return WriteResult(
                 name, False, self.values.get(name), f"{name}: no answer from the vehicle"
             )
-        echoed = values[0] if values else None
-        if errors or echoed not in _as_stored(value, is_float):
+        if refused:
+            reasons = [m for m in said if _mentions(m, name)]
             reason = reasons[0] if reasons else f"{name}: the vehicle kept {echoed}"
             return WriteResult(name, False, echoed, reason)
         read = self.read(name)
         return WriteResult(name, True, read if read is not None else echoed)
+
+    def _await_reason(self, name: str, said: list[str]) -> None:
+        """A refusal's reason may be a text still waiting for chunks: one of 50 or 100
+        characters from PX4 ends with a full chunk and is shown only after its wait. Until
+        the vehicle's waiting texts are shown (or a line names ``name``)."""
+        while not any(_mentions(m, name) for m in said):
+            due = self._texts_due
+            if not due or time.monotonic() > due + _SHOW_LATE:
+                return
+            time.sleep(0.02)
 
     def read(self, name: str, timeout: float = 1.0) -> int | float | None:
         with self._waiting(name) as answers:
