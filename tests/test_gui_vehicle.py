@@ -1251,35 +1251,49 @@ assert len(THREE_FULL_CHUNKS) == 150
 def test_a_text_whose_chunks_stop_coming_is_shown_marked_after_its_wait(
     schema: px4params.Schema,
 ) -> None:
-    """Text 31's middle chunk never comes: shown with "[...]" where it is missing once it
-    waited a second for it, and read as no health report (what is missing may be its
-    instance or state). Text 32's first chunk, then another text of id 32 starting (chunk_seq
-    0 again, another text: the id wrapped): the first shown at once, its end marked missing
-    (it was still waiting), the second whole and apart from it."""
+    """A text's middle chunk never comes: shown with "[...]" where it is missing once it
+    waited a second for it (QGC waits 1 s), and read as no health report (what is missing
+    may be its instance or state)."""
     lost = THREE_FULL_CHUNKS
-    earlier = "camera: storage full, no photo taken, video recording stopped"
-    later = "gimbal: pitch calibration done, yaw calibration started, hold still"
     with _peer(schema) as served, _page(served.address) as page:
         shown = _shown_at(page)
         sent = time.monotonic()
         _tell(served, page, 31, {0: lost[:50], 2: lost[100:]})
-        _tell(served, page, 32, {0: _chunks(earlier)[0]})
-        _tell(served, page, 32, dict(enumerate(_chunks(later))))
-        assert wait_for(lambda: len(shown) == 3, 10.0)
+        assert wait_for(lambda: shown, 10.0)
         time.sleep(0.1)  # nothing more comes
-        texts = [text for _, text in shown]
-        gapped = lost[:50] + "[...]" + lost[100:]
-        assert [t for t in texts if t != gapped] == [earlier[:50] + "[...]", later]
-        assert next(at for at, text in shown if text == gapped) >= sent + 1.0
+        assert [text for _, text in shown] == [lost[:50] + "[...]" + lost[100:]]
+        assert shown[0][0] >= sent + 1.0  # not before its wait was over
         assert page.health == {}  # an incomplete text is no health report
 
 
 @pytest.mark.issue40
-def test_texts_waiting_for_chunks_are_bounded_in_number(schema: px4params.Schema) -> None:
+def test_a_text_is_shown_at_once_marked_when_another_of_its_id_starts(
+    schema: px4params.Schema, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A text's first chunk, then another text of its id starting (chunk_seq 0 again, another
+    text: the id wrapped): the first shown at once, its end marked missing, the second whole
+    and apart from it. Texts wait 10 s here: neither is shown by its wait."""
+    monkeypatch.setattr("px4params.gui.vehicle._CHUNK_WAIT", 10.0)
+    earlier = "camera: storage full, no photo taken, video recording stopped"
+    later = "gimbal: pitch calibration done, yaw calibration started, hold still"
+    with _peer(schema) as served, _page(served.address) as page:
+        _tell(served, page, 32, {0: _chunks(earlier)[0]})
+        _tell(served, page, 32, dict(enumerate(_chunks(later))))
+        assert wait_for(lambda: len(page.messages) >= 2, 5.0)
+        time.sleep(0.1)  # nothing more comes
+        assert page.messages == [earlier[:50] + "[...]", later]
+
+
+@pytest.mark.issue40
+def test_texts_waiting_for_chunks_are_bounded_in_number(
+    schema: px4params.Schema, monkeypatch: pytest.MonkeyPatch
+) -> None:
     """300 texts that each send their first chunk only (a flood, or a link losing the rest):
     at most 16 wait at once, the oldest shown marked when a 17th starts (its end may be
-    missing), those left shown as they are after their wait, and every one of the 300 is
-    shown once, in order, none dropped."""
+    missing), the 16 left shown as they are after their wait, and every one of the 300 is
+    shown once, in order, none dropped. Texts wait 3 s here, so that only the last 16 are
+    shown by their wait however slowly the page takes them in."""
+    monkeypatch.setattr("px4params.gui.vehicle._CHUNK_WAIT", 3.0)
     shown: list[str] = []
     texts = [f"text {text_id:03}: " + "x" * 40 for text_id in range(1, 301)]
     with _peer(schema) as served, _page(served.address) as page:
@@ -1295,9 +1309,7 @@ def test_texts_waiting_for_chunks_are_bounded_in_number(schema: px4params.Schema
             waiting.append(len(page._chunks))
         assert wait_for(lambda: len(shown) == 300, 10.0)
         assert max(waiting) <= 16
-        assert [t.removesuffix("[...]") for t in shown] == texts
-        # the 17th pushed the first out; the last waited its while (nothing pushed it)
-        assert (shown[0], shown[-1]) == (texts[0] + "[...]", texts[-1])
+        assert shown == [t + "[...]" for t in texts[:-16]] + texts[-16:]
         assert page._chunks == {}
 
 
@@ -1307,23 +1319,24 @@ def test_texts_waiting_for_chunks_are_bounded_in_number(schema: px4params.Schema
 
 
 class _LateAndLossy(_Recording):
-    """Answers a write of INA238_1C 1.5 s late (a busy vehicle, a slow radio link), except a
-    write of 1, which is lost on the way."""
+    """Answers a write of INA238_1C late, once ``answer`` is set (a busy vehicle, a slow radio
+    link), except a write of 1, which is lost on the way."""
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
-        self.late: list[tuple[float, Any, Any]] = []
+        self.late: list[tuple[Any, Any]] = []
+        self.answer = threading.Event()
 
     def _set(self, peer: Any, name: str, msg: Any) -> None:
         if name != "INA238_1C":
             super()._set(peer, name, msg)
         elif param_value_of(msg) != 1:
-            self.late.append((time.monotonic() + 1.5, peer, msg))
+            self.late.append((peer, msg))
 
     def step(self, timeout: float) -> None:
         super().step(min(timeout, 0.05))
-        while self.late and self.late[0][0] <= time.monotonic():
-            _, peer, msg = self.late.pop(0)
+        while self.late and self.answer.is_set():
+            peer, msg = self.late.pop(0)
             super()._set(peer, "INA238_1C", msg)
 
 
@@ -1333,23 +1346,25 @@ def test_a_write_given_up_leaves_another_write_of_the_parameter_waiting(
 ) -> None:
     """The page's writes run in threads. A write of 70 waits for its late answer; meanwhile a
     write of 1 to the same parameter is lost and given up (three tries of 0.1 s). Giving up
-    stops that write's waiting only: the write of 70 still hears its answer, and is accepted
-    (the two wait on lists equal while both are empty; only the one given up is forgotten)."""
+    stops that write's waiting only: the write of 70 still hears its answer, which the vehicle
+    sends only then, and is accepted (the two wait on lists equal while both are empty; only
+    the one given up is forgotten)."""
     with _peer(schema, _LateAndLossy) as served, _page(served.address) as page:
         answers: list[Any] = []  # the write's result, or what it raised
 
         def write_70() -> None:
-            try:
-                answers.append(page.write("INA238_1C", 70, 3.0))
+            try:  # one try: its answer comes well within 30 s
+                answers.append(page.write("INA238_1C", 70, 30.0))
             except Exception as e:
                 answers.append(e)
 
-        writing = threading.Thread(target=write_70)
+        writing = threading.Thread(target=write_70, daemon=True)
         writing.start()
         assert wait_for(lambda: served.sets == ["INA238_1C"], 5.0)  # waiting, first
         lost = page.write("INA238_1C", 1, timeout=0.1)
-        assert served.late  # given up before the vehicle answered the write of 70
-        writing.join(30)
+        assert served.late and not answers  # given up before the vehicle answered 70
+        served.answer.set()
+        writing.join(10)
         assert (lost.ok, lost.reason) == (False, "INA238_1C: no answer from the vehicle")
         assert len(answers) == 1 and isinstance(answers[0], WriteResult), answers
         assert (answers[0].ok, answers[0].value, answers[0].reason) == (True, 70, "")
@@ -1376,21 +1391,31 @@ class _Crowded(_Recording):
 
 @pytest.mark.issue40
 def test_the_page_beats_once_a_second_while_connecting_on_a_crowded_link(
-    schema: px4params.Schema,
+    schema: px4params.Schema, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """MAVLink's heartbeat is 1 Hz (a ground station's too), however many others the page
     hears: waiting 1.5 s for a vehicle among some thousand others' heartbeats, it sends two
-    (at once, and a second later), and none once it gave up."""
+    (at once, and a second later), and none once it gave up. Counted as the page sends them
+    (the vehicle may read the last one later), and all reach the vehicle."""
+    sent_at: list[float] = []
+    send_heartbeat = MavlinkVehicle._send_heartbeat
+
+    def noted(page: MavlinkVehicle) -> None:
+        sent_at.append(time.monotonic())
+        send_heartbeat(page)
+
+    monkeypatch.setattr(MavlinkVehicle, "_send_heartbeat", noted)
     with _peer(schema, _Crowded, heartbeat_interval=0.01) as served:
         started = time.monotonic()
         with pytest.raises(CommandError):
             MavlinkVehicle(served.address, timeout=1.5)
-        waited = time.monotonic() - started
-        sent = served.heartbeat_count
+        gave_up = time.monotonic()
         time.sleep(1.2)
         assert served.others > 500  # the crowd was there
-        assert 1 <= sent <= 1 + waited
-        assert served.heartbeat_count == sent  # none after giving up
+        assert 1 <= len(sent_at) <= 1 + (gave_up - started)
+        assert all(b - a >= 0.99 for a, b in itertools.pairwise(sent_at))  # 1 Hz
+        assert max(sent_at) < gave_up  # none after giving up
+        assert wait_for(lambda: served.heartbeat_count == len(sent_at), 5.0)
 
 
 @pytest.mark.issue40
