@@ -19,6 +19,8 @@ import time
 from collections.abc import Callable, Iterator
 from typing import Any
 
+from pymavlink.dialects.v20 import common as mavlink
+
 from px4params.errors import CommandError, Px4ParamsError
 from px4params.gcs.codec import f16_from_float, float_from_f16
 from px4params.links.mavlink import param_set_message, param_value_of
@@ -214,24 +216,24 @@ def _as_stored(value: int | float, is_float: bool) -> tuple[int | float, ...]:
 #: type of the vehicle it is mounted on, every other component its own kind).
 _COMPONENT_TYPES = frozenset(
     {
-        6,  # GCS
-        18,  # ONBOARD_CONTROLLER
-        26,  # GIMBAL
-        27,  # ADSB
-        30,  # CAMERA
-        31,  # CHARGING_STATION
-        32,  # FLARM
-        33,  # SERVO
-        34,  # ODID
-        36,  # BATTERY
-        37,  # PARACHUTE
-        38,  # LOG
-        39,  # OSD
-        40,  # IMU
-        41,  # GPS
-        42,  # WINCH
-        44,  # ILLUMINATOR
-        48,  # GRIPPER
+        mavlink.MAV_TYPE_GCS,
+        mavlink.MAV_TYPE_ONBOARD_CONTROLLER,
+        mavlink.MAV_TYPE_GIMBAL,
+        mavlink.MAV_TYPE_ADSB,
+        mavlink.MAV_TYPE_CAMERA,
+        mavlink.MAV_TYPE_CHARGING_STATION,
+        mavlink.MAV_TYPE_FLARM,
+        mavlink.MAV_TYPE_SERVO,
+        mavlink.MAV_TYPE_ODID,
+        mavlink.MAV_TYPE_BATTERY,
+        mavlink.MAV_TYPE_PARACHUTE,
+        mavlink.MAV_TYPE_LOG,
+        mavlink.MAV_TYPE_OSD,
+        mavlink.MAV_TYPE_IMU,
+        mavlink.MAV_TYPE_GPS,
+        mavlink.MAV_TYPE_WINCH,
+        mavlink.MAV_TYPE_ILLUMINATOR,
+        mavlink.MAV_TYPE_GRIPPER,
     }
 )
 
