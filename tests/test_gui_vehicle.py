@@ -8,6 +8,7 @@ from __future__ import annotations
 import contextlib
 import errno
 import hashlib
+import itertools
 import json
 import lzma
 import subprocess
@@ -30,6 +31,7 @@ from px4params.gui.vehicle import (
     parse_health,
 )
 from px4params.links.mavlink import MavlinkParamServer, param_value_of
+from px4params.links.mavlink_signing import Signing
 from px4params.store.classic import BUNDLED_CLASSIC
 from px4params.store.session import Session
 from pymavlink.dialects.v20 import common as mavlink2
@@ -70,7 +72,7 @@ def wait_for(condition: Any, seconds: float = 10.0) -> bool:
 
 #: A health report 100 characters long: two STATUSTEXT chunks of 50 and an empty third, the end
 #: (MAVLink 2: a chunk shorter than 50 characters ends the text).
-LONG_HEALTH = "health: ina238 INA238#1 on I2C bus 2 address 0x45: critical: not found: " + "x" * 27
+LONG_HEALTH = "health: ina238 INA238#1 on I2C bus 2 address 0x45: critical: not found: " + "x" * 28
 SHORT_HEALTH = "health: ms5611 MS5611#0: nominal"  # one STATUSTEXT, id 0
 
 
@@ -202,7 +204,7 @@ def test_a_mavlink_vehicle_is_listed_written_read_and_heard(schema: px4params.Sc
             # health reports, each joined from its chunks
             assert wait_for(lambda: {"INA238#1", "MS5611#0"} <= set(page.health))
             assert page.health["INA238#1"] == parse_health(LONG_HEALTH)
-            assert page.health["INA238#1"]["reason"] == "not found: " + "x" * 27
+            assert page.health["INA238#1"]["reason"] == "not found: " + "x" * 28
             assert page.health["MS5611#0"]["state"] == "nominal"
             assert LONG_HEALTH in page.messages and SHORT_HEALTH in page.messages
             assert LONG_HEALTH[:50] not in page.messages  # no chunk said on its own
@@ -1068,28 +1070,53 @@ def test_only_the_vehicle_refuses_its_writes_and_says_why(schema: px4params.Sche
 # -- STATUSTEXT chunks joined by chunk_seq ---------------------------------------------------------
 # common.xml's STATUSTEXT: a text longer than 50 characters goes in chunks of one non-zero id,
 # ``chunk_seq`` counting them from 0, and the chunk holding a NUL (shorter than 50 characters
-# once decoded) is the last. UDP loses and reorders datagrams: the page joins the chunks by
-# chunk_seq, marks where chunks are missing, and shows a text whose last chunk never comes
-# (marked) after a bounded wait, as QGC does.
+# once decoded) is the last. PX4 (src/modules/mavlink/streams/STATUSTEXT.hpp) sends every text
+# with an id, all its chunks at once, and no empty chunk after a full last one: its text of 50 or
+# 100 characters ends with a full chunk. UDP loses, repeats and reorders datagrams: the page
+# joins the chunks by chunk_seq, marks where chunks are missing, and shows a text it cannot
+# tell is whole after a bounded wait (QGC waits 1 s), as it is.
 
 
 def _chunks(text: str) -> list[str]:
-    """``text`` cut as a sender cuts it: 50 characters a chunk, and an empty one after a last
-    chunk of 50 (its NUL ends the text)."""
+    """``text`` cut as px4params' server cuts it: 50 characters a chunk, and an empty one
+    after a last chunk of 50 (its NUL ends the text)."""
     parts = [text[i : i + 50] for i in range(0, len(text), 50)]
     return [*parts, ""] if len(parts[-1]) == 50 else parts
 
 
-def _tell(served: _Recording, page: MavlinkVehicle, text_id: int, parts: dict[int, str]) -> None:
-    """The chunks ``parts`` (by chunk_seq, in the order given) of a text of ``text_id``, sent
-    to the page as the vehicle (system 7, component 1)."""
+def _px4_chunks(text: str) -> list[str]:
+    """``text`` cut as PX4 cuts it: 50 characters a chunk, and nothing after the last (the
+    loop sends the rest and stops once at most 50 characters are left)."""
+    return [text[i : i + 50] for i in range(0, len(text), 50)]
+
+
+def _tell(
+    served: _Recording,
+    page: MavlinkVehicle,
+    text_id: int,
+    parts: dict[int, str] | list[tuple[int, str]],
+) -> None:
+    """The chunks ``parts`` (by chunk_seq, in the order given; as pairs, a chunk may come
+    twice) of a text of ``text_id``, sent to the page as the vehicle (system 7, component 1)."""
     to_page = [("127.0.0.1", page._conn.port.getsockname()[1])]
     warning = mavlink2.MAV_SEVERITY_WARNING
+    pairs = parts.items() if isinstance(parts, dict) else parts
     chunks = [
         mavlink2.MAVLink_statustext_message(warning, part.encode(), text_id, seq)
-        for seq, part in parts.items()
+        for seq, part in pairs
     ]
     _say_as(served, (7, 1), chunks, to_page)
+
+
+def _shown_at(page: MavlinkVehicle) -> list[tuple[float, str]]:
+    """When (time.monotonic()) each text is shown from now on, and the text."""
+    shown: list[tuple[float, str]] = []
+    page.listen(
+        lambda event: (
+            shown.append((time.monotonic(), event["text"])) if event["kind"] == "status" else None
+        )
+    )
+    return shown
 
 
 #: A health report of three chunks (50, 50 and 17 characters).
@@ -1118,49 +1145,171 @@ def test_status_text_chunks_are_joined_by_chunk_seq_and_a_gap_is_marked(
 
 
 @pytest.mark.issue40
-def test_a_text_whose_last_chunk_never_comes_is_shown_marked_incomplete(
+def test_a_text_is_shown_once_whole_whatever_the_order_of_its_chunks(
     schema: px4params.Schema,
 ) -> None:
-    """Text 31 never gets its last chunk: shown with "[...]" at its end about a second after
-    its first (QGC waits 1 s). Text 32's first chunk, then another text of id 32 starting
-    (chunk_seq 0 again: the id wrapped): the first shown marked at once, the second whole
-    and apart from it."""
-    lost = "health: ms5611 MS5611#0 on SPI bus 1: critical: no " + "answer since boot"
-    earlier = "camera: storage full, no photo taken, video recording stopped"
-    later = "gimbal: pitch calibration done, yaw calibration started, hold still"
+    """The last chunk (shorter than 50) before a middle one: the text is not whole yet, and
+    is shown once, whole, when the middle one comes."""
+    first, second, third = _chunks(THREE_CHUNKS)
     with _peer(schema) as served, _page(served.address) as page:
-        started = time.monotonic()
-        _tell(served, page, 31, {0: _chunks(lost)[0]})
-        _tell(served, page, 32, {0: _chunks(earlier)[0]})
-        _tell(served, page, 32, dict(enumerate(_chunks(later))))
-        assert wait_for(lambda: len(page.messages) >= 2, 5.0)
-        assert page.messages == [earlier[:50] + "[...]", later]  # not waiting for text 31
-        assert wait_for(lambda: len(page.messages) == 3, 5.0)
-        assert 0.9 < time.monotonic() - started < 3.0
-        assert page.messages[2] == lost[:50] + "[...]"
+        _tell(served, page, 23, {0: first, 2: third, 1: second})
+        assert wait_for(lambda: page.messages, 5.0)
+        time.sleep(0.1)  # nothing more comes
+        assert page.messages == [THREE_CHUNKS]
+        assert page._chunks == {}  # no text left waiting for its deadline
+
+
+@pytest.mark.issue40
+def test_a_chunk_heard_twice_is_one_chunk(schema: px4params.Schema) -> None:
+    """UDP and routers may deliver a datagram twice: chunk 0 again while the text waits for
+    its others, and again once the text was shown, is the same chunk, no new text."""
+    first, second, third = _chunks(THREE_CHUNKS)
+    with _peer(schema) as served, _page(served.address) as page:
+        _tell(served, page, 24, [(0, first), (0, first), (1, second), (2, third)])
+        assert wait_for(lambda: page.messages, 5.0)
+        _tell(served, page, 24, [(0, first), (2, third)])
+        time.sleep(0.2)  # the repeats are taken in
+        assert page.messages == [THREE_CHUNKS]
+        assert page._chunks == {}  # no text left waiting for its deadline
+
+
+#: A health report of exactly 50 characters (one full chunk from PX4).
+HEALTH_50 = "health: ms5611 MS5611#0: critical: no answer at 0x"
+assert len(LONG_HEALTH) == 100 and len(HEALTH_50) == 50
+
+
+@pytest.mark.issue40
+def test_a_px4_text_of_50_or_100_characters_is_whole_after_its_wait(
+    schema: px4params.Schema,
+) -> None:
+    """PX4 sends no chunk after a full last one: the page cannot tell the text ended until no
+    chunk came for its wait (1 s), then shows it as it is, whole, and reads its health."""
+    with _peer(schema) as served, _page(served.address) as page:
+        shown = _shown_at(page)
+        sent = time.monotonic()
+        _tell(served, page, 41, dict(enumerate(_px4_chunks(LONG_HEALTH))))
+        _tell(served, page, 42, dict(enumerate(_px4_chunks(HEALTH_50))))
+        assert wait_for(lambda: len(shown) >= 2, 10.0)
+        time.sleep(0.1)  # nothing more comes
+        assert sorted(text for _, text in shown) == sorted([LONG_HEALTH, HEALTH_50])
+        assert min(at for at, _ in shown) >= sent + 1.0  # not before its wait was over
+        assert page.health == {
+            "INA238#1": parse_health(LONG_HEALTH),
+            "MS5611#0": parse_health(HEALTH_50),
+        }
+
+
+class _SaysLikePx4(_Recording):
+    """Cuts its texts as PX4 does (every text with an id, no chunk after a full last one), and
+    refuses INA238_1C's writes with a reason of 100 characters."""
+
+    #: The reason: two full chunks.
+    REASON = (
+        "INA238_1C: value 200 is out of range for INA238#1 on I2C bus 2 at address 0x45 "
+        + "(expected: 0 to 127)."
+    )
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self.texts = 0
+
+    def _statustext(self, text: str, peers: list[Any]) -> None:
+        self.texts += 1
+        warning = mavlink2.MAV_SEVERITY_WARNING
+        for seq, part in enumerate(_px4_chunks(text)):
+            msg = mavlink2.MAVLink_statustext_message(warning, part.encode(), self.texts, seq)
+            self._send(msg, peers)
+
+    def _refuse(self, peer: Any, msg: Any, name: str, found: Any, why: str, code: int) -> None:
+        reason = self.REASON if name == "INA238_1C" else why
+        super()._refuse(peer, msg, name, found, reason, code)
+
+
+assert len(_SaysLikePx4.REASON) == 100
+
+
+@pytest.mark.issue40
+def test_a_refusal_s_reason_of_100_characters_from_px4_is_named(
+    schema: px4params.Schema,
+) -> None:
+    """A refusal's reason from PX4 that ends with a full chunk is shown only after its wait:
+    the refused write waits for it, and names it."""
+    with _peer(schema, _SaysLikePx4) as served, _page(served.address) as page:
+        refused = page.write("INA238_1C", 200)
+        assert (refused.ok, refused.value, refused.reason) == (False, 0x45, _SaysLikePx4.REASON)
+        assert page.messages[-1] == _SaysLikePx4.REASON  # shown as it is
+
+
+#: A text of 150 characters, three full chunks.
+THREE_FULL_CHUNKS = "camera: storage full; photos are kept in memory until the card is changed " + (
+    "or the memory is full, then the oldest are dropped: change the card soon...."
+)
+assert len(THREE_FULL_CHUNKS) == 150
+
+
+@pytest.mark.issue40
+def test_a_text_whose_chunks_stop_coming_is_shown_marked_after_its_wait(
+    schema: px4params.Schema,
+) -> None:
+    """A text's middle chunk never comes: shown with "[...]" where it is missing once it
+    waited a second for it (QGC waits 1 s), and read as no health report (what is missing
+    may be its instance or state)."""
+    lost = THREE_FULL_CHUNKS
+    with _peer(schema) as served, _page(served.address) as page:
+        shown = _shown_at(page)
+        sent = time.monotonic()
+        _tell(served, page, 31, {0: lost[:50], 2: lost[100:]})
+        assert wait_for(lambda: shown, 10.0)
+        time.sleep(0.1)  # nothing more comes
+        assert [text for _, text in shown] == [lost[:50] + "[...]" + lost[100:]]
+        assert shown[0][0] >= sent + 1.0  # not before its wait was over
         assert page.health == {}  # an incomplete text is no health report
 
 
 @pytest.mark.issue40
-def test_texts_waiting_for_chunks_are_bounded_in_number(schema: px4params.Schema) -> None:
-    """300 texts that each send their first chunk only (a flood, or a link losing every last
-    chunk): at most 16 wait at once, the oldest shown marked when a 17th starts, and every
-    one of the 300 is shown, none dropped."""
+def test_a_text_is_shown_at_once_marked_when_another_of_its_id_starts(
+    schema: px4params.Schema, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A text's first chunk, then another text of its id starting (chunk_seq 0 again, another
+    text: the id wrapped): the first shown at once, its end marked missing, the second whole
+    and apart from it. Texts wait 10 s here: neither is shown by its wait."""
+    monkeypatch.setattr("px4params.gui.vehicle._CHUNK_WAIT", 10.0)
+    earlier = "camera: storage full, no photo taken, video recording stopped"
+    later = "gimbal: pitch calibration done, yaw calibration started, hold still"
+    with _peer(schema) as served, _page(served.address) as page:
+        _tell(served, page, 32, {0: _chunks(earlier)[0]})
+        _tell(served, page, 32, dict(enumerate(_chunks(later))))
+        assert wait_for(lambda: len(page.messages) >= 2, 5.0)
+        time.sleep(0.1)  # nothing more comes
+        assert page.messages == [earlier[:50] + "[...]", later]
+
+
+@pytest.mark.issue40
+def test_texts_waiting_for_chunks_are_bounded_in_number(
+    schema: px4params.Schema, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """300 texts that each send their first chunk only (a flood, or a link losing the rest):
+    at most 16 wait at once, the oldest shown marked when a 17th starts (its end may be
+    missing), the 16 left shown as they are after their wait, and every one of the 300 is
+    shown once, in order, none dropped. Texts wait 3 s here, so that only the last 16 are
+    shown by their wait however slowly the page takes them in."""
+    monkeypatch.setattr("px4params.gui.vehicle._CHUNK_WAIT", 3.0)
     shown: list[str] = []
+    texts = [f"text {text_id:03}: " + "x" * 40 for text_id in range(1, 301)]
     with _peer(schema) as served, _page(served.address) as page:
         page.listen(
             lambda event: shown.append(event["text"]) if event["kind"] == "status" else None
         )
         waiting = []
-        for text_id in range(1, 301):
-            _tell(served, page, text_id, {0: f"text {text_id:03}: " + "x" * 40})
+        for text_id, text in enumerate(texts, 1):
+            _tell(served, page, text_id, {0: text})
             # each text taken in before the next (a burst of 300 datagrams can overflow the
             # socket's buffer on a loaded machine): it waits for its chunks or is shown
             assert wait_for(lambda n=text_id: len(page._chunks) + len(shown) >= n, 10.0)
             waiting.append(len(page._chunks))
         assert wait_for(lambda: len(shown) == 300, 10.0)
         assert max(waiting) <= 16
-        assert shown == [f"text {n:03}: " + "x" * 40 + "[...]" for n in range(1, 301)]
+        assert shown == [t + "[...]" for t in texts[:-16]] + texts[-16:]
         assert page._chunks == {}
 
 
@@ -1170,23 +1319,24 @@ def test_texts_waiting_for_chunks_are_bounded_in_number(schema: px4params.Schema
 
 
 class _LateAndLossy(_Recording):
-    """Answers a write of INA238_1C 1.5 s late (a busy vehicle, a slow radio link), except a
-    write of 1, which is lost on the way."""
+    """Answers a write of INA238_1C late, once ``answer`` is set (a busy vehicle, a slow radio
+    link), except a write of 1, which is lost on the way."""
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
-        self.late: list[tuple[float, Any, Any]] = []
+        self.late: list[tuple[Any, Any]] = []
+        self.answer = threading.Event()
 
     def _set(self, peer: Any, name: str, msg: Any) -> None:
         if name != "INA238_1C":
             super()._set(peer, name, msg)
         elif param_value_of(msg) != 1:
-            self.late.append((time.monotonic() + 1.5, peer, msg))
+            self.late.append((peer, msg))
 
     def step(self, timeout: float) -> None:
         super().step(min(timeout, 0.05))
-        while self.late and self.late[0][0] <= time.monotonic():
-            _, peer, msg = self.late.pop(0)
+        while self.late and self.answer.is_set():
+            peer, msg = self.late.pop(0)
             super()._set(peer, "INA238_1C", msg)
 
 
@@ -1196,23 +1346,25 @@ def test_a_write_given_up_leaves_another_write_of_the_parameter_waiting(
 ) -> None:
     """The page's writes run in threads. A write of 70 waits for its late answer; meanwhile a
     write of 1 to the same parameter is lost and given up (three tries of 0.1 s). Giving up
-    stops that write's waiting only: the write of 70 still hears its answer, and is accepted
-    (the two wait on lists equal while both are empty; only the one given up is forgotten)."""
+    stops that write's waiting only: the write of 70 still hears its answer, which the vehicle
+    sends only then, and is accepted (the two wait on lists equal while both are empty; only
+    the one given up is forgotten)."""
     with _peer(schema, _LateAndLossy) as served, _page(served.address) as page:
         answers: list[Any] = []  # the write's result, or what it raised
 
         def write_70() -> None:
-            try:
-                answers.append(page.write("INA238_1C", 70, 3.0))
+            try:  # one try: its answer comes well within 30 s
+                answers.append(page.write("INA238_1C", 70, 30.0))
             except Exception as e:
                 answers.append(e)
 
-        writing = threading.Thread(target=write_70)
+        writing = threading.Thread(target=write_70, daemon=True)
         writing.start()
         assert wait_for(lambda: served.sets == ["INA238_1C"], 5.0)  # waiting, first
         lost = page.write("INA238_1C", 1, timeout=0.1)
-        assert served.late  # given up before the vehicle answered the write of 70
-        writing.join(30)
+        assert served.late and not answers  # given up before the vehicle answered 70
+        served.answer.set()
+        writing.join(10)
         assert (lost.ok, lost.reason) == (False, "INA238_1C: no answer from the vehicle")
         assert len(answers) == 1 and isinstance(answers[0], WriteResult), answers
         assert (answers[0].ok, answers[0].value, answers[0].reason) == (True, 70, "")
@@ -1239,21 +1391,31 @@ class _Crowded(_Recording):
 
 @pytest.mark.issue40
 def test_the_page_beats_once_a_second_while_connecting_on_a_crowded_link(
-    schema: px4params.Schema,
+    schema: px4params.Schema, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """MAVLink's heartbeat is 1 Hz (a ground station's too), however many others the page
     hears: waiting 1.5 s for a vehicle among some thousand others' heartbeats, it sends two
-    (at once, and a second later), and none once it gave up."""
+    (at once, and a second later), and none once it gave up. Counted as the page sends them
+    (the vehicle may read the last one later), and all reach the vehicle."""
+    sent_at: list[float] = []
+    send_heartbeat = MavlinkVehicle._send_heartbeat
+
+    def noted(page: MavlinkVehicle) -> None:
+        sent_at.append(time.monotonic())
+        send_heartbeat(page)
+
+    monkeypatch.setattr(MavlinkVehicle, "_send_heartbeat", noted)
     with _peer(schema, _Crowded, heartbeat_interval=0.01) as served:
         started = time.monotonic()
         with pytest.raises(CommandError):
             MavlinkVehicle(served.address, timeout=1.5)
-        waited = time.monotonic() - started
-        sent = served.heartbeat_count
+        gave_up = time.monotonic()
         time.sleep(1.2)
         assert served.others > 500  # the crowd was there
-        assert 1 <= sent <= 1 + waited
-        assert served.heartbeat_count == sent  # none after giving up
+        assert 1 <= len(sent_at) <= 1 + (gave_up - started)
+        assert all(b - a >= 0.99 for a, b in itertools.pairwise(sent_at))  # 1 Hz
+        assert max(sent_at) < gave_up  # none after giving up
+        assert wait_for(lambda: served.heartbeat_count == len(sent_at), 5.0)
 
 
 @pytest.mark.issue40
@@ -1292,3 +1454,63 @@ def test_signed_frames_leave_in_the_order_they_were_signed_from_every_thread(
         conn.write = write
     assert len(stamps) >= 101
     assert stamps == sorted(set(stamps))
+
+
+@pytest.mark.issue40
+def test_signed_frames_leave_with_rising_timestamps_while_signed_frames_arrive(
+    schema: px4params.Schema,
+) -> None:
+    """MAVLink 2 signing: the page's timestamp moves up with every frame it signs and every
+    signed frame it accepts (to the frame's, when later), and every frame it sends carries one
+    above the last it sent (a signed vehicle drops any other as a replay). Here the vehicle's
+    signed frames arrive, each checked by the page's receive thread, while four threads send;
+    the interpreter switches threads every microsecond, so a check and a send interleave."""
+    with _peer(schema, signing_key=KEY) as served, _page(served.address, signing_key=KEY) as page:
+        conn = page._conn
+        write = conn.write
+        stamps: list[int] = []
+
+        def write_noted(frame: bytes) -> None:
+            # a signed MAVLink 2 frame ends: link id, 6-byte timestamp, 6-byte signature
+            stamps.append(int.from_bytes(frame[-12:-6], "little"))
+            write(frame)
+
+        # the vehicle's frames, signed as another peer signs them: its own link id, and a clock
+        # ahead of the page's (the page's timestamp moves up to the vehicle's)
+        vehicle = mavlink2.MAVLink(None, srcSystem=7, srcComponent=1)
+        Signing(KEY, link_id=3, now=time.time() + 60).attach(vehicle)
+        beat = mavlink2.MAVLink_heartbeat_message(
+            mavlink2.MAV_TYPE_GENERIC, mavlink2.MAV_AUTOPILOT_PX4, 0, 0, 0, 4
+        )
+        frames = [beat.pack(vehicle) for _ in range(10000)]
+        to_page = ("127.0.0.1", conn.port.getsockname()[1])
+        accepted_before = page._conn.mav.signing.goodsig_count
+
+        def arrive() -> None:
+            for n, frame in enumerate(frames):
+                served._sock.sendto(frame, to_page)
+                if n % 10 == 0:
+                    time.sleep(0.001)  # the page's socket buffer keeps up
+
+        def send() -> None:
+            while arriving.is_alive():
+                conn.mav.heartbeat_send(6, 8, 0, 0, 0)
+
+        switching = sys.getswitchinterval()
+        conn.write = write_noted
+        sys.setswitchinterval(1e-6)
+        try:
+            arriving = threading.Thread(target=arrive)
+            threads = [arriving, *(threading.Thread(target=send) for _ in range(4))]
+            for t in threads:
+                t.start()
+            for t in threads:
+                t.join(60.0)
+        finally:
+            sys.setswitchinterval(switching)
+            conn.write = write
+        # the vehicle's frames were checked meanwhile (some, at least: UDP may drop some)
+        assert page._conn.mav.signing.goodsig_count - accepted_before > 100
+    assert len(stamps) >= 1000
+    repeated_or_older = [(a, b) for a, b in itertools.pairwise(stamps) if b <= a]
+    assert repeated_or_older == []

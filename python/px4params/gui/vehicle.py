@@ -19,6 +19,8 @@ import time
 from collections.abc import Callable, Iterator
 from typing import Any
 
+from pymavlink.dialects.v20 import common as mavlink
+
 from px4params.errors import CommandError, Px4ParamsError
 from px4params.gcs.codec import f16_from_float, float_from_f16
 from px4params.links.mavlink import param_set_message, param_value_of
@@ -214,24 +216,24 @@ def _as_stored(value: int | float, is_float: bool) -> tuple[int | float, ...]:
 #: type of the vehicle it is mounted on, every other component its own kind).
 _COMPONENT_TYPES = frozenset(
     {
-        6,  # GCS
-        18,  # ONBOARD_CONTROLLER
-        26,  # GIMBAL
-        27,  # ADSB
-        30,  # CAMERA
-        31,  # CHARGING_STATION
-        32,  # FLARM
-        33,  # SERVO
-        34,  # ODID
-        36,  # BATTERY
-        37,  # PARACHUTE
-        38,  # LOG
-        39,  # OSD
-        40,  # IMU
-        41,  # GPS
-        42,  # WINCH
-        44,  # ILLUMINATOR
-        48,  # GRIPPER
+        mavlink.MAV_TYPE_GCS,
+        mavlink.MAV_TYPE_ONBOARD_CONTROLLER,
+        mavlink.MAV_TYPE_GIMBAL,
+        mavlink.MAV_TYPE_ADSB,
+        mavlink.MAV_TYPE_CAMERA,
+        mavlink.MAV_TYPE_CHARGING_STATION,
+        mavlink.MAV_TYPE_FLARM,
+        mavlink.MAV_TYPE_SERVO,
+        mavlink.MAV_TYPE_ODID,
+        mavlink.MAV_TYPE_BATTERY,
+        mavlink.MAV_TYPE_PARACHUTE,
+        mavlink.MAV_TYPE_LOG,
+        mavlink.MAV_TYPE_OSD,
+        mavlink.MAV_TYPE_IMU,
+        mavlink.MAV_TYPE_GPS,
+        mavlink.MAV_TYPE_WINCH,
+        mavlink.MAV_TYPE_ILLUMINATOR,
+        mavlink.MAV_TYPE_GRIPPER,
     }
 )
 
@@ -250,12 +252,21 @@ _CHUNK_CHARS = 50
 _MISSING = "[...]"
 _CHUNK_WAIT = 1.0
 _TEXTS_WAITING = 16
+#: Seconds a text may be shown after its wait ends (the receive thread looks every 0.2 s).
+_SHOW_LATE = 0.5
+#: Texts shown lately whose repeated chunks are still known as repeats (a chunk seen twice
+#: within _CHUNK_WAIT of the text's showing is the same chunk again).
+_TEXTS_SHOWN = 64
 
 
 class _ChunkedText:
     """One STATUSTEXT text arriving in chunks: its chunks by ``chunk_seq``, the seq of its last
-    chunk once heard (the one holding a NUL: shorter than 50 characters decoded), and when it
-    stops waiting (a while after its latest new chunk)."""
+    chunk once known, and when it stops waiting (a while after its latest new chunk).
+
+    Its last chunk is the one holding a NUL (shorter than 50 characters decoded), or, once it
+    waited its while, the highest heard: PX4 (``STATUSTEXT.hpp``) sends a text's chunks at once
+    and sends no empty chunk after a full last one, so a text of 50 or 100 characters ends with
+    a full chunk, as QGC shows it."""
 
     def __init__(self) -> None:
         self.parts: dict[int, str] = {}
@@ -269,6 +280,12 @@ class _ChunkedText:
         self.deadline = now + _CHUNK_WAIT
         if len(text) < _CHUNK_CHARS:
             self.last = seq
+
+    def waited(self) -> None:
+        """Its while is over: every chunk heard is full (a shorter one is last), the highest
+        ends it."""
+        if self.last is None:
+            self.last = max(self.parts)
 
     @property
     def whole(self) -> bool:
@@ -323,15 +340,19 @@ class MavlinkVehicle(_Base):
             f"udpout:{host}:{port}", source_system=255, source_component=190, dialect="common"
         )
         self._signed = signing_key is not None
+        send_lock = threading.Lock()
         if signing_key is not None:
             from px4params.links.mavlink_signing import Signing
 
             # MAVLink 2 signing (pymavlink's signing state and checks on the connection): every
             # message signed, and what arrives accepted by PX4's rules; unsigned and wrongly
-            # signed messages are dropped
-            Signing(signing_key).attach(self._conn.mav)
+            # signed messages are dropped. Accepting a frame moves the timestamp sends use:
+            # one lock for both
+            signing = Signing(signing_key)
+            signing.attach(self._conn.mav)
+            send_lock = signing.lock
             self.source += " (signed)"
-        self._serialize_sends()
+        self._serialize_sends(send_lock)
         self._mav = mavutil.mavlink
         mavlink_messages.register(self._mav)
         self._system = 1
@@ -340,6 +361,12 @@ class MavlinkVehicle(_Base):
         self._waiters: dict[str, list[Any]] = {}
         #: STATUSTEXT texts waiting for chunks, by sender (system, component) and id, oldest first.
         self._chunks: dict[tuple[int, int, int], _ChunkedText] = {}
+        #: Texts shown lately, by the same key: until when a chunk heard again is a repeat,
+        #: and their chunks.
+        self._shown: dict[tuple[int, int, int], tuple[float, dict[int, str]]] = {}
+        #: When the vehicle's texts now waiting for chunks are shown at the latest (0: none
+        #: waits); a refused write waits for them, its reason may be one.
+        self._texts_due = 0.0
         #: Each write's list of what the vehicle says while it waits (its reason, if refused).
         self._hearing: list[list[str]] = []
         self._count = 0
@@ -359,14 +386,14 @@ class MavlinkVehicle(_Base):
 
     # -- connection ------------------------------------------------------------------------
 
-    def _serialize_sends(self) -> None:
-        """One frame at a time on the connection. The heartbeat thread, writes and pymavlink's
-        FTP download all send on it, and pymavlink numbers and signs a frame before writing it
-        without a lock: a signed vehicle drops a frame whose timestamp is not above the last
-        one it took (a replay), so a frame signed first must also be written first."""
+    def _serialize_sends(self, lock: threading.Lock) -> None:
+        """One frame at a time on the connection, under ``lock``. The heartbeat thread, writes
+        and pymavlink's FTP download all send on it, and pymavlink numbers and signs a frame
+        before writing it without a lock: a signed vehicle drops a frame whose timestamp is not
+        above the last one it took (a replay), so a frame signed first must also be written
+        first."""
         mav = self._conn.mav
         send = mav.send
-        lock = threading.Lock()
 
         def send_one(message: Any, force_mavlink1: bool = False) -> None:
             with lock:
@@ -505,11 +532,13 @@ class MavlinkVehicle(_Base):
 
     def _statustext(self, msg: Any) -> None:
         """STATUSTEXT, its 50-character chunks joined by ``chunk_seq`` (MAVLink 2: id 0 is a
-        text in one chunk, and a chunk shorter than 50 characters is the last). An id is its
-        sender's: two senders' texts of the same id are two texts. A text is shown when its
-        last chunk comes, when another text of its id starts (chunk_seq 0 again: the id
-        wrapped), when it waited ``_CHUNK_WAIT`` for a chunk, or when it is the oldest of too
-        many waiting; missing chunks are marked, never glued over (as QGC does)."""
+        text in one chunk). An id is its sender's: two senders' texts of the same id are two
+        texts. A text is shown once whole (every chunk up to its last, see
+        :class:`_ChunkedText`), when another text of its id starts (chunk_seq 0 again, another
+        text: the id wrapped), when it waited ``_CHUNK_WAIT`` for a chunk, or when it is the
+        oldest of too many waiting; missing chunks are marked, never glued over (as QGC does).
+        A chunk heard again (UDP, a router) is dropped, also shortly after its text was
+        shown."""
         sender = (msg.get_srcSystem(), msg.get_srcComponent())
         text_id = getattr(msg, "id", 0)
         if not text_id:
@@ -517,27 +546,48 @@ class MavlinkVehicle(_Base):
             return
         key = (*sender, text_id)
         seq = getattr(msg, "chunk_seq", 0)
+        now = time.monotonic()
         waiting = self._chunks.get(key)
-        if waiting is not None and seq == 0 and 0 in waiting.parts:
+        shown = self._shown.get(key) if waiting is None else None
+        if shown is not None and shown[0] > now and shown[1].get(seq) == msg.text:
+            return
+        if waiting is not None and seq == 0 and waiting.parts.get(0, msg.text) != msg.text:
             self._show_chunked(key)
             waiting = None
         if waiting is None:
             if len(self._chunks) >= _TEXTS_WAITING:
                 self._show_chunked(next(iter(self._chunks)))
             waiting = self._chunks[key] = _ChunkedText()
-        waiting.add(seq, msg.text, time.monotonic())
-        if waiting.last is not None:
+        waiting.add(seq, msg.text, now)
+        if waiting.whole:
             self._show_chunked(key)
+        self._due()
 
-    def _show_chunked(self, key: tuple[int, int, int]) -> None:
+    def _show_chunked(self, key: tuple[int, int, int], *, waited: bool = False) -> None:
         waiting = self._chunks.pop(key)
+        if waited:
+            waiting.waited()
+        self._shown.pop(key, None)
+        self._shown[key] = (time.monotonic() + _CHUNK_WAIT, waiting.parts)
+        while len(self._shown) > _TEXTS_SHOWN:
+            del self._shown[next(iter(self._shown))]
         self._said((key[0], key[1]), waiting.text(), whole=waiting.whole)
 
     def _show_overdue(self) -> None:
         """The texts that waited too long for a chunk, as they are."""
         now = time.monotonic()
-        for key in [k for k, waiting in self._chunks.items() if waiting.deadline <= now]:
-            self._show_chunked(key)
+        overdue = [k for k, waiting in self._chunks.items() if waiting.deadline <= now]
+        for key in overdue:
+            self._show_chunked(key, waited=True)
+        if overdue:
+            self._due()
+
+    def _due(self) -> None:
+        """When the vehicle's texts waiting for chunks are shown at the latest."""
+        vehicle = (self._system, self._component)
+        self._texts_due = max(
+            (w.deadline for k, w in self._chunks.items() if k[:2] == vehicle), default=0.0
+        )
 
     def _said(self, sender: tuple[int, int], text: str, *, whole: bool) -> None:
         if sender == (self._system, self._component):  # a camera's text is no write's reason
@@ -620,22 +670,35 @@ class MavlinkVehicle(_Base):
                     if answers:
                         break
                 time.sleep(0.1)  # a PARAM_ERROR and STATUSTEXT follow a refusal's PARAM_VALUE
+            errors = [a for a in answers if a[0] == "error"]
+            values = [a[1] for a in answers if a[0] == "value"]
+            echoed = values[0] if values else None
+            refused = bool(errors) or echoed not in _as_stored(value, is_float)
+            if answers and refused:
+                self._await_reason(name, said)
         finally:
             with self._lock:
                 self._hearing = [h for h in self._hearing if h is not said]
-        reasons = [m for m in said if _mentions(m, name)]
-        errors = [a for a in answers if a[0] == "error"]
-        values = [a[1] for a in answers if a[0] == "value"]
         if not answers:
             return WriteResult(
                 name, False, self.values.get(name), f"{name}: no answer from the vehicle"
             )
-        echoed = values[0] if values else None
-        if errors or echoed not in _as_stored(value, is_float):
+        if refused:
+            reasons = [m for m in said if _mentions(m, name)]
             reason = reasons[0] if reasons else f"{name}: the vehicle kept {echoed}"
             return WriteResult(name, False, echoed, reason)
         read = self.read(name)
         return WriteResult(name, True, read if read is not None else echoed)
+
+    def _await_reason(self, name: str, said: list[str]) -> None:
+        """A refusal's reason may be a text still waiting for chunks: one of 50 or 100
+        characters from PX4 ends with a full chunk and is shown only after its wait. Until
+        the vehicle's waiting texts are shown (or a line names ``name``)."""
+        while not any(_mentions(m, name) for m in said):
+            due = self._texts_due
+            if not due or time.monotonic() > due + _SHOW_LATE:
+                return
+            time.sleep(0.02)
 
     def read(self, name: str, timeout: float = 1.0) -> int | float | None:
         with self._waiting(name) as answers:
