@@ -67,3 +67,36 @@ fn a_translation_says_which_fields_were_kept_added_and_dropped() {
         ],
     );
 }
+
+/// A translation keeps a frame for each field and two for each array (the array, then the
+/// element): a type as deep as the codec follows (`MAX_DEPTH` nodes, here fixed arrays of one
+/// inside a struct) translates with its report, as the codec encodes it.
+#[test]
+fn a_type_as_deep_as_the_codec_follows_is_translated_with_its_report() {
+    use px4params_core::rules::MAX_DEPTH;
+    let mut l = OwnedLayout::default();
+    let mut node = l.uint(8, Cast::Saturated).unwrap();
+    for _ in 2..MAX_DEPTH {
+        node = l.array(node, 1).unwrap();
+    }
+    let root = l.structure(&[("x", node, Role::Data)]).unwrap();
+    let layout = l.as_layout();
+    let mut out = [0u8; 2];
+    let mut said: Vec<String> = Vec::new();
+    let n = translate(
+        &layout,
+        root,
+        &[0x5Au8][..],
+        root,
+        &[0x11u8][..],
+        &mut out,
+        &mut |c| {
+            if let Change::Kept(p) = c {
+                said.push(p.to_string());
+            }
+        },
+    )
+    .expect("as deep as the codec follows");
+    assert_eq!(&out[..n], [0x5A], "the old value's byte, not the base's");
+    assert_eq!(said.first().map(String::as_str), Some("x"));
+}
