@@ -1178,3 +1178,31 @@ fi
 #   rust-crc: 179 mutants, 156 viable tested: 136 killed, 20 survived (20 equivalent: 4 as
 #   before, 16 in firmware's code that a host build never runs, killed by rust-compact-crc), 23
 #   unviable, 0 untested: 100%.
+# MUTATION_BY_LINE=1 (issue 40, muttools): each mutant first with the tests that execute its
+# line, then all of the target's if those let it through (scripts/mutation_lines.py). No kept
+# results were left from the earlier rounds, so each target ran afresh, in a clone of its own
+# (git clone; /tmp/shared -> /work/shared; the built _native.abi3.so copied in):
+#   MUTATION_BY_LINE=1 MUTATION_FRESH=1 MUTATION_BUDGET_store_flat=3600 nice bash scripts/mutation.sh store-flat
+#   MUTATION_BY_LINE=1 MUTATION_FRESH=1 MUTATION_BUDGET_migrate_build=240 nice bash scripts/mutation.sh migrate-build
+#   MUTATION_IDS="<the 43 mutants of lines written twice>" MUTATION_BY_LINE=1 nice bash \
+#     scripts/mutation-by-id.sh migrate-build python/px4params/migrate/build.py "<its tests>" 1 14:00
+#   MUTATION_BY_LINE=1 MUTATION_BUDGET_migrate_build=2700 nice bash scripts/mutation.sh migrate-build
+# Measured 2026-11-27 (2 shared cores, load 4-9, beside the lead's cargo-mutants):
+#   target         run    mutants tested killed timeout survived equivalent untested kill rate
+#   store-flat     after      588    385    370       2       13         13      203    100.0%
+#   migrate-build  after      686    524    496       0       28         26      162     99.6%
+# store-flat's 9 left untested by mutstore4 are tested: lines 133 (twice), 156, 190, 241, 244,
+# 249, 254 survive, all 8 listed equivalent; letters()'s divmod(number - 2) times out (an
+# endless loop), as number -= 1 on line 112. Its 203 untested are lines 505-774 (budget).
+# migrate-build's lines written twice (43 mutants: `continue`, `return False`, `)`, ...), each by
+# ID: 41 killed, 2 survived (field_value's two `return False`, listed equivalent); 162 untested
+# (budget: lines 606-825). Its 2 other survivors, line 389's `getattr(r, "when", "")` as "XXwhenXX" and
+# the row filter's `and` as `or`, are of lines written after the equivalents were listed
+# (migrate/build.py's owner's).
+# Plain against by line, store-spec afresh, both at once (900 s each, load 4-10):
+#   MUTATION_FRESH=1 MUTATION_BUDGET_store_spec=900 nice bash scripts/mutation.sh store-spec
+#   MUTATION_BY_LINE=1 MUTATION_FRESH=1 MUTATION_BUDGET_store_spec=900 nice bash scripts/mutation.sh store-spec
+# plain tested 84, by line 88 (its traced run, 31 s, included), the same verdicts for the 84
+# (killed or suspicious alike): ~10.5 s against ~9.7 s a mutant. Most of a mutant's time here
+# is pytest's start and collection, paid by both; by line gains where the killing test comes
+# late in the file and on survivors of a long suite.
