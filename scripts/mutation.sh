@@ -1196,9 +1196,9 @@ fi
 # endless loop), as number -= 1 on line 112. Its 203 untested are lines 505-774 (budget).
 # migrate-build's lines written twice (43 mutants: `continue`, `return False`, `)`, ...), each by
 # ID: 41 killed, 2 survived (field_value's two `return False`, listed equivalent); 162 untested
-# (budget: lines 606-825). Its 2 other survivors, line 389's `getattr(r, "when", "")` as "XXwhenXX" and
-# the row filter's `and` as `or`, are of lines written after the equivalents were listed
-# (migrate/build.py's owner's).
+# (budget: lines 606-825). Its 2 other survivors, line 389's `getattr(r, "when", "")` as
+# "XXwhenXX" and the row filter's `and` as `or`, are of lines written after the equivalents were
+# listed (left to migrate/build.py's owner).
 # Plain against by line, store-spec afresh, both at once (900 s each, load 4-10):
 #   MUTATION_FRESH=1 MUTATION_BUDGET_store_spec=900 nice bash scripts/mutation.sh store-spec
 #   MUTATION_BY_LINE=1 MUTATION_FRESH=1 MUTATION_BUDGET_store_spec=900 nice bash scripts/mutation.sh store-spec
