@@ -8,6 +8,9 @@
 #
 #   bash scripts/mutation-by-id.sh gui-vehicle python/px4params/gui/vehicle.py \
 #     tests/test_gui_vehicle.py 197 08:06
+# MUTATION_IDS="114 116 131": these mutants only (mutmut's IDs in the kept results), in this
+# order. MUTATION_BY_LINE=1: each first with the tests of its line, as scripts/mutation.sh's
+# (its traced run, target/mutation/<target>.lines.json, must be there: run mutation.sh so once).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 name=$1 paths=$2 tests=$3 first=${4:-1} deadline=${5:-23:59}
@@ -20,15 +23,23 @@ fi
 export PYTHONPATH="$PWD/python${PYTHONPATH:+:$PYTHONPATH}" PYTHONDONTWRITEBYTECODE=1
 export PX4PARAMS_CACHE_DIR="${PX4PARAMS_CACHE_DIR:-$(mktemp -d)}"
 cp "$out/$name.mutmut-cache" .mutmut-cache
+cp scripts/mutation_lines.py mutmut_config.py # mutmut's hooks (see the file)
+lines="" rerun=()
+if [ "${MUTATION_BY_LINE:-0}" = 1 ]; then
+  lines="$out/$name.lines.json" rerun=(--rerun-all)
+  [ -f "$lines" ] || { echo "$name: no traced run in $lines (scripts/mutation.sh makes it)" >&2; exit 1; }
+fi
 finish() {
   git checkout -- python 2>/dev/null || true
   find python -name '*.py.bak' -delete 2>/dev/null || true
+  rm -f mutmut_config.py
   mv .mutmut-cache "$out/$name.mutmut-cache"
 }
 trap finish EXIT
 trap 'exit 130' INT TERM
 # what is not killed yet: the lines from FIRST_LINE on first, each group in mutmut's order
-ids=$(python3 - "$first" <<'EOF'
+ids=${MUTATION_IDS:-}
+[ -n "$ids" ] || ids=$(python3 - "$first" <<'EOF'
 import sqlite3
 import sys
 
@@ -45,8 +56,8 @@ for id in $ids; do
     echo "$name: stopped at $deadline"
     break
   fi
-  timeout --kill-after=30 600 mutmut run --paths-to-mutate "$paths" --tests-dir tests \
-    --runner "bash scripts/mutation-pytest.sh -x -q -p no:cacheprovider $tests" \
-    --simple-output --no-progress "$id" >>"$out/$name.log" 2>&1 || true
+  MUTATION_LINES="$lines" timeout --kill-after=30 600 mutmut run --paths-to-mutate "$paths" \
+    --tests-dir tests --runner "bash scripts/mutation-pytest.sh -x -q -p no:cacheprovider $tests" \
+    "${rerun[@]}" --simple-output --no-progress "$id" >>"$out/$name.log" 2>&1 || true
   git checkout -- python
 done

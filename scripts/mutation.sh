@@ -24,9 +24,10 @@
 # (the same for rust-scatter; of rust-store's 336 mutants one tenth was run, MUTATION_RUST_ARGS=
 # "--shard 0/10"). transfer.rs's and scatter.rs's survivors after are all listed in
 # scripts/mutation-equivalent.txt with the reason; the store sample's were all killed.
-# mutmut 2 looks up kept results by a line's text: a mutant of a line that occurs twice in its
-# file (two identical `raise` or `continue` lines) can stay "untested" in a run that starts from
-# earlier results. The figures say how many; plant such a mutant by hand to check it.
+# mutmut 2.5.1 looks up kept results by a line's text: a mutant of a line that occurs twice in
+# its file (two identical `raise` or `continue` lines) stayed "untested" in a run that started
+# from earlier results. Every Python run is given scripts/mutation_lines.py as mutmut's
+# mutmut_config.py, whose init() looks them up by line number too.
 #   MUTATION_BASELINE=1     without the tests written for issue 40 (those marked issue40 in
 #                           pyproject.toml and the files in NEW_TESTS below; Rust targets: the
 #                           files in RUST_ISSUE40_TESTS): the "before" figures, in a
@@ -36,6 +37,12 @@
 #   MUTATION_FRESH=1        forget the target's earlier results (kept in target/mutation)
 #   MUTATION_REPORT_ONLY=1  test nothing: count the kept results again (with BASELINE=1, the
 #                           baseline's), e.g. after scripts/mutation-equivalent.txt changed
+#   MUTATION_BY_LINE=1      Python: run each mutant first with only those of the target's tests
+#                           that execute its line (one traced run of them, kept in
+#                           target/mutation/<target>.lines.json while the files and tests are
+#                           the same: scripts/mutation_lines.py), and what they let through
+#                           again with all of them (mutmut's --rerun-all): the verdicts of a
+#                           plain run, sooner. The traced run counts in the target's budget.
 #   MUTATION_RUST_FILES="crates/px4params-core/src/scalar.rs crates/px4params-core/src/bits.rs"
 #                           rust-core: mutate only these files (cargo-mutants --file, paths
 #                           from the repository root); default: the whole crate
@@ -690,6 +697,7 @@ restore() {
   # mutmut restores each file after its mutant; a run cut short (budget, Ctrl-C) may not.
   git checkout -- python 2>/dev/null || true
   find python -name '*.py.bak' -delete 2>/dev/null || true
+  rm -f mutmut_config.py
 }
 
 python_target() {
@@ -731,10 +739,23 @@ python_target() {
   else
     trap restore EXIT
     trap 'restore; exit 130' INT TERM
-    timeout --signal=INT --kill-after=60 "$(budget_for "$name")" mutmut run \
+    # mutmut imports mutmut_config.py from its working directory: its hooks (see the file)
+    cp scripts/mutation_lines.py mutmut_config.py
+    local budget started=$SECONDS lines="" rerun=()
+    budget=$(budget_for "$name")
+    if [ "${MUTATION_BY_LINE:-0}" = 1 ]; then
+      lines="$OUT/$name.lines.json"
+      timeout --signal=INT --kill-after=60 "$budget" python scripts/mutation_lines.py \
+        "$lines" "$paths" "$tests" >"$OUT/$name.lines.log" 2>&1 ||
+        echo "$name: the traced run's tests failed (see $OUT/$name.lines.log)" >&2
+      rerun=(--rerun-all)
+      budget=$((budget - (SECONDS - started)))
+      [ "$budget" -gt 0 ] || budget=1
+    fi
+    MUTATION_LINES="$lines" timeout --signal=INT --kill-after=60 "$budget" mutmut run \
       --paths-to-mutate "$paths" --tests-dir "$tests_dir" \
       --runner "bash scripts/mutation-pytest.sh -x -q -p no:cacheprovider $tests" \
-      --simple-output --no-progress >"$OUT/$name.log" 2>&1 || true
+      "${rerun[@]}" --simple-output --no-progress >"$OUT/$name.log" 2>&1 || true
     restore
     trap - EXIT INT TERM
   fi
@@ -1157,3 +1178,31 @@ fi
 #   rust-crc: 179 mutants, 156 viable tested: 136 killed, 20 survived (20 equivalent: 4 as
 #   before, 16 in firmware's code that a host build never runs, killed by rust-compact-crc), 23
 #   unviable, 0 untested: 100%.
+# MUTATION_BY_LINE=1 (issue 40, muttools): each mutant first with the tests that execute its
+# line, then all of the target's if those let it through (scripts/mutation_lines.py). No kept
+# results were left from the earlier rounds, so each target ran afresh, in a clone of its own
+# (git clone; /tmp/shared -> /work/shared; the built _native.abi3.so copied in):
+#   MUTATION_BY_LINE=1 MUTATION_FRESH=1 MUTATION_BUDGET_store_flat=3600 nice bash scripts/mutation.sh store-flat
+#   MUTATION_BY_LINE=1 MUTATION_FRESH=1 MUTATION_BUDGET_migrate_build=240 nice bash scripts/mutation.sh migrate-build
+#   MUTATION_IDS="<the 43 mutants of lines written twice>" MUTATION_BY_LINE=1 nice bash \
+#     scripts/mutation-by-id.sh migrate-build python/px4params/migrate/build.py "<its tests>" 1 14:00
+#   MUTATION_BY_LINE=1 MUTATION_BUDGET_migrate_build=2700 nice bash scripts/mutation.sh migrate-build
+# Measured 2026-11-27 (2 shared cores, load 4-9, beside the lead's cargo-mutants):
+#   target         run    mutants tested killed timeout survived equivalent untested kill rate
+#   store-flat     after      588    385    370       2       13         13      203    100.0%
+#   migrate-build  after      686    524    496       0       28         26      162     99.6%
+# store-flat's 9 left untested by mutstore4 are tested: lines 133 (twice), 156, 190, 241, 244,
+# 249, 254 survive, all 8 listed equivalent; letters()'s divmod(number - 2) times out (an
+# endless loop), as number -= 1 on line 112. Its 203 untested are lines 505-774 (budget).
+# migrate-build's lines written twice (43 mutants: `continue`, `return False`, `)`, ...), each by
+# ID: 41 killed, 2 survived (field_value's two `return False`, listed equivalent); 162 untested
+# (budget: lines 606-825). Its 2 other survivors, line 389's `getattr(r, "when", "")` as
+# "XXwhenXX" and the row filter's `and` as `or`, are of lines written after the equivalents were
+# listed (left to migrate/build.py's owner).
+# Plain against by line, store-spec afresh, both at once (900 s each, load 4-10):
+#   MUTATION_FRESH=1 MUTATION_BUDGET_store_spec=900 nice bash scripts/mutation.sh store-spec
+#   MUTATION_BY_LINE=1 MUTATION_FRESH=1 MUTATION_BUDGET_store_spec=900 nice bash scripts/mutation.sh store-spec
+# plain tested 84, by line 88 (its traced run, 31 s, included), the same verdicts for the 84
+# (killed or suspicious alike): ~10.5 s against ~9.7 s a mutant. Most of a mutant's time here
+# is pytest's start and collection, paid by both; by line gains where the killing test comes
+# late in the file and on survivors of a long suite.

@@ -1060,13 +1060,16 @@ def test_a_float32_bound_given_exactly_is_taken_although_the_leaf_keeps_it_above
 @pytest.mark.parametrize(
     ("value", "text"),
     [
-        (0, "0"), (-1.0, "-1"), (2.5, "2.5"), (0.1, "0.1"), (1 / 3, "0.333333"),
+        (0, "0"), (-1.0, "-1"), (2.5, "2.5"), (0.1, "0.1"),
+        (1 / 3, "0.3333333333333333"),  # a float64's digits, as many as read back as it
         (0.00001, "0.00001"),  # not 1e-05: a bound as a DSDL file writes it
         (1e-9, "0.000000001"),  # down to a billionth in decimals
         (1e-12, "1e-12"),  # below: with an exponent
         (9e15, "9000000000000000"),  # an integer a float64 holds exactly (below 2^53 = 9.007e15)
         (1e16, "1e+16"),  # from 1e16 on, a float64's last digits are not the number's
-        (123456789.5, "123457000"),  # six significant digits, no exponent
+        (123456789.5, "123456789.5"),  # no exponent
+        # the next float64 above 0.1 (0x3FB999999999999B; 0.1 is ...9A): not 0.1 again
+        (struct.unpack("<d", (0x3FB999999999999B).to_bytes(8, "little"))[0], "0.10000000000000002"),
         (math.nan, "nan"), (-math.inf, "-inf"),
     ],
 )  # fmt: skip
@@ -1074,3 +1077,42 @@ def test_a_number_in_a_refusal_is_written_as_a_person_writes_it(value: float, te
     from px4params.store.spec import _shown
 
     assert _shown(value) == text
+
+
+def _from_bits(code: str, bits: int) -> float:
+    """The float whose IEEE 754 encoding (``<e`` binary16, ``<f`` binary32, ``<d`` binary64)
+    is ``bits``."""
+    return float(struct.unpack(code, bits.to_bytes(struct.calcsize(code), "little"))[0])
+
+
+# The next float above 0.1 of a parameter's widths (IEEE 754, by hand), written with the fewest
+# digits that read back as the same float: binary16 0.1 is 0x2E66 (0.0999755859375), the next
+# 0x2E67 = 0.10003662109375, written 0.10004 (0.1000 is 0x2E66 again); binary32 0.1 is
+# 0x3DCCCCCD, the next 0x3DCCCCCE = 0.10000000894069672, written 0.10000001 (0.1000000 is
+# 0x3DCCCCCD). (A float64 is no parameter's leaf: MAVLink carries 32 bits.)
+ABOVE_A_TENTH = [
+    ("float16", _from_bits("<e", 0x2E67), "0.10004"),
+    ("float32", _from_bits("<f", 0x3DCCCCCE), "0.10000001"),
+]
+
+
+@pytest.mark.parametrize(("kind", "value", "text"), ABOVE_A_TENTH)
+def test_a_value_just_above_max_reads_as_another_number_than_max(
+    tmp_path: Path, kind: str, value: float, text: str
+) -> None:
+    assert _from_bits("<e", 0x2E66) == 0.0999755859375 and 0x2E67 - 0x2E66 == 1
+    assert _from_bits("<f", 0x3DCCCCCD) == 0.10000000149011612
+    level = _dsdl("# @max_instances 1", f"{kind} gain\n# Gain\n# @max 0.1\n")
+    store = px4params.Store(_acme(tmp_path, {"Level.1.0.dsdl": level}), classic=[])
+    store.add("LEVEL#0")
+    store.set("LEVEL#0.gain", 0.1)
+    before = store.encoded("LEVEL#0")
+    # the instance written whole: its stored leaf is named, at the field's width
+    with pytest.raises(ValueRangeError) as e:
+        store.set("LEVEL#0", {"gain": value})
+    assert str(e.value) == f"LEVEL#0.gain: {text} is above 0.1 (@max)"
+    # one leaf written: the number given is named, as Python reads it (a float64)
+    with pytest.raises(ValueRangeError) as e:
+        store.set("LEVEL#0.gain", float(text))
+    assert str(e.value) == f"LEVEL#0.gain: {text} is above 0.1 (@max)"
+    assert store.encoded("LEVEL#0") == before

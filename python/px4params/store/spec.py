@@ -10,6 +10,7 @@ uses the newest version of its type; older versions stay loadable for translatin
 
 from __future__ import annotations
 
+import decimal
 import itertools
 import math
 import struct
@@ -367,9 +368,13 @@ def check_stored(
     low, high = rng.stored_low, rng.stored_high
     outside = (low is not None and value < low) or (high is not None and value > high)
     if outside or (rng.stored_values and value not in rng.stored_values):
+        bits = rng.float_bits or 64  # the stored value's width, or a number given's (float64)
         if isinstance(given, int | float) and not isinstance(given, bool):
-            value = given
-        why = describe_outside(value, rng) if outside else describe_not_listed(value, rng)
+            value, bits = given, 64
+        if outside:
+            why = describe_outside(value, rng, bits)
+        else:
+            why = describe_not_listed(value, rng, bits)
         raise ValueRangeError(f"{name}: {why}", bounds_only=True)
 
 
@@ -427,28 +432,30 @@ def stored_number(value: object, rng: LeafRange) -> int | float | None:
     return value if type(value) is int else None
 
 
-def describe_outside(value: float, rng: LeafRange) -> str:
-    """``0 is outside 0.00001..0.1 (@min/@max)`` (or below @min / above @max alone)."""
+def describe_outside(value: float, rng: LeafRange, bits: int = 64) -> str:
+    """``0 is outside 0.00001..0.1 (@min/@max)`` (or below @min / above @max alone); ``value``
+    a float of ``bits``, the bounds as the doc gives them (see :func:`_shown`)."""
+    shown = _shown(value, bits)
     if rng.low is not None and rng.high is not None:
-        return f"{_shown(value)} is outside {_shown(rng.low)}..{_shown(rng.high)} (@min/@max)"
+        return f"{shown} is outside {_shown(rng.low)}..{_shown(rng.high)} (@min/@max)"
     if rng.low is not None:
-        return f"{_shown(value)} is below {_shown(rng.low)} (@min)"
+        return f"{shown} is below {_shown(rng.low)} (@min)"
     assert rng.high is not None  # a value outside a range that has a bound
-    return f"{_shown(value)} is above {_shown(rng.high)} (@max)"
+    return f"{shown} is above {_shown(rng.high)} (@max)"
 
 
 #: A value list longer than this is named by its numbers alone (PX4's rotations are 41).
 _NAMED_AT_MOST = 12
 
 
-def describe_not_listed(value: float, rng: LeafRange) -> str:
+def describe_not_listed(value: float, rng: LeafRange, bits: int = 64) -> str:
     """``7 is not one of its values (@value): 0 (10 Hz), 1 (20 Hz), 2 (50 Hz)``; a long
-    list by its numbers, runs shortened (``0..40``)."""
+    list by its numbers, runs shortened (``0..40``); ``value`` a float of ``bits``."""
     if len(rng.values) <= _NAMED_AT_MOST:
         allowed = ", ".join(f"{_shown(v)} ({text})" for v, text in rng.values)
     else:
         allowed = _runs(sorted(v for v, _ in rng.values))
-    return f"{_shown(value)} is not one of its values (@value): {allowed}"
+    return f"{_shown(value, bits)} is not one of its values (@value): {allowed}"
 
 
 def _runs(numbers: list[int | float | bool]) -> str:
@@ -479,13 +486,20 @@ def _rounded(value: float, bits: int) -> float:
         return float(value)
 
 
-def _shown(value: float) -> str:
-    """A number as a person writes it: ``0``, ``-1``, ``0.00001``, ``nan``, ``-inf``."""
+def _shown(value: float, bits: int = 64) -> str:
+    """A number as a person writes it: ``0``, ``-1``, ``0.00001``, ``nan``, ``-inf``; a float
+    as the fewest digits that read back as the same float of ``bits`` (16, 32, 64): a float32
+    just above @max 0.1 is ``0.10000001``, never ``0.1`` (two numbers a refusal shows differ)."""
     if isinstance(value, int) or not math.isfinite(value):
         return str(value)
     if value.is_integer() and abs(value) < 1e16:
         return str(int(value))
-    text = f"{value:.6g}"
+    text = repr(value)  # the shortest that reads back as this float64
+    if bits != 64:
+        kept = _rounded(value, bits)
+        text = next(
+            t for t in (f"{value:.{n}g}" for n in range(1, 18)) if _rounded(float(t), bits) == kept
+        )
     if "e" in text and 1e-9 <= abs(value) < 1e16:
-        text = f"{float(text):.15f}".rstrip("0").rstrip(".")
+        text = format(decimal.Decimal(text), "f")  # its digits, without the exponent
     return text
