@@ -46,7 +46,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 # Ceilings of the compact build's .text, by target triple (None: the host).
 TARGETS: dict[str | None, dict[str, int | None]] = {
-    None: {"codec": 5568, "core": 13920, "all": None},
+    None: {"codec": 5536, "core": 13920, "all": None},
     "thumbv7em-none-eabihf": {"codec": 4832, "core": 10976, "all": None},
 }
 

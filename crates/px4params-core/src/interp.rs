@@ -15,7 +15,7 @@
 
 use crate::bits::{BitRead, BitReader, BitWriter};
 use crate::error::{Error, ErrorKind, Path, Step};
-use crate::layout::{FlatItem, Kind, Layout, NodeId, Role, Segment, Span};
+use crate::layout::{FlatItem, Kind, Layout, Node, NodeId, Role, Segment, Span};
 use crate::plan::Plans;
 use crate::rules::{
     scalar_bits, scalar_of, scalar_raw, tail_optimized, ArrayLen, At, DecodeOptions, EncodeOptions,
@@ -187,9 +187,9 @@ pub(crate) trait Pass {
     fn steered(&self) -> bool {
         false
     }
-    /// Editing: passes over part `at` unread, when nothing is looked for in it.
+    /// Editing: passes over part `at` (of `node`) unread, when nothing is looked for in it.
     #[inline(always)]
-    fn pass_over(&mut self, _layout: &Layout<'_>, _at: &PartAt<'_>) -> bool {
+    fn pass_over(&mut self, _node: &Node, _at: &PartAt<'_>) -> bool {
         false
     }
     /// Editing: where reading stands, in bits, and how many are left.
@@ -308,6 +308,8 @@ impl<'l, P: Pass> Run<'l, P> {
         if let Some(step) = step {
             self.path.push(step);
         }
+        let layout = self.layout;
+        let node = layout.node(id);
         if P::EDITS && self.pass.steered() {
             let at = PartAt {
                 node: id,
@@ -315,7 +317,7 @@ impl<'l, P: Pass> Run<'l, P> {
                 depth: self.depth,
                 path: &self.path,
             };
-            if self.pass.pass_over(self.layout, &at) {
+            if self.pass.pass_over(node, &at) {
                 if step.is_some() {
                     self.path.pop();
                 }
@@ -326,11 +328,10 @@ impl<'l, P: Pass> Run<'l, P> {
         if self.depth > MAX_DEPTH {
             return Err(self.fail(ErrorKind::TooDeep));
         }
-        let layout = self.layout;
         let at_pos = self.pass.pos();
         // An array's elements: walked after the match, from one place in the code.
         let mut array = None;
-        match layout.node(id).kind {
+        match node.kind {
             kind @ (Kind::Uint { .. } | Kind::Int { .. } | Kind::Float { .. } | Kind::Bool) => {
                 let r = self.pass.leaf(kind, version, &self.path);
                 self.ok(r)?;
@@ -1429,7 +1430,7 @@ pub(crate) trait Visit {
         Ok(())
     }
 
-    /// A reading walk the visit steers ([`Job::steered`]): part `at` begins where `reading`
+    /// A reading walk the visit steers ([`Steer::Visit`]): part `at` begins where `reading`
     /// stands. Returns whether the visit passed it over ([`Reading::pass`]); a visit that is
     /// done passes over every part, and the loop winds down reading nothing more.
     fn part(&mut self, _at: &PartAt<'_>, _reading: &mut Reading<'_>) -> bool {
@@ -1476,16 +1477,11 @@ pub(crate) struct PartAt<'w> {
 /// every leaf handed to a [`Visit`]. Its visit is behind a pointer, so that firmware compiles
 /// the loop once for all its operations.
 pub(crate) struct Visiting<'w> {
-    input: Option<&'w dyn Input>,
+    /// What it is asked to do (kept whole: one copy to set up).
+    job: Job<'w>,
     rpos: usize,
-    out: &'w mut [u8],
-    writing: bool,
     wpos: usize,
     leaves: usize,
-    /// The visit steers the reading ([`Visit::part`]).
-    steered: bool,
-    saturate: bool,
-    keep_versions: bool,
     mode: Mode,
     visit: &'w mut dyn Visit,
     fault: Option<ErrorKind<LeafError>>,
@@ -1500,19 +1496,31 @@ pub(crate) struct Job<'w> {
     pub input: Option<&'w dyn Input>,
     pub out: &'w mut [u8],
     pub writing: bool,
-    /// Reading only: the visit passes parts over unread where it can ([`Visit::part`]).
-    pub steered: bool,
+    /// Reading only: which parts are passed over unread.
+    pub steer: Steer,
     pub options: EncodeOptions,
 }
 
+/// Which parts a reading walk passes over unread.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Steer {
+    /// None: every part is read.
+    No,
+    /// Fixed-shape parts whose leaves all come before leaf `[k]` (finding it): counted, not
+    /// read, without asking the visit.
+    Below(usize),
+    /// Those the visit passes over ([`Visit::part`]).
+    Visit,
+}
+
 impl<'w> Job<'w> {
-    /// Reads `input` and writes nothing (`steered`: see [`Job::steered`]).
-    pub(crate) fn reading(input: &'w dyn Input, tao: bool, steered: bool) -> Self {
+    /// Reads `input` and writes nothing (`steer`: see [`Job::steer`]).
+    pub(crate) fn reading(input: &'w dyn Input, tao: bool, steer: Steer) -> Self {
         Job {
             input: Some(input),
             out: &mut [],
             writing: false,
-            steered,
+            steer,
             options: EncodeOptions {
                 tao,
                 ..EncodeOptions::default()
@@ -1543,16 +1551,12 @@ pub(crate) fn visit(
     } else {
         Mode::Given
     };
+    let tao = Tao::both(job.options.tao);
     let pass = Visiting {
-        input: job.input,
+        job,
         rpos: 0,
-        out: job.out,
-        writing: job.writing,
         wpos: 0,
         leaves: 0,
-        steered: job.steered,
-        saturate: job.options.saturate,
-        keep_versions: job.options.keep_versions,
         mode,
         visit,
         fault: None,
@@ -1560,7 +1564,7 @@ pub(crate) fn visit(
         overflow: false,
     };
     let mut run = Run::new(layout, pass);
-    let stopped = run.node(root, Tao::both(job.options.tao)).is_err();
+    let stopped = run.node(root, tao).is_err();
     let pass = &run.pass;
     match run.error {
         Some(error) if stopped => Err(error),
@@ -1569,7 +1573,8 @@ pub(crate) fn visit(
                 needed: pass.wpos.div_ceil(8),
             },
             bit_offset: pass.wpos,
-            path: Path::default(),
+            // The walk ended: its path is empty again.
+            path: run.path,
         }),
         _ => Ok(Walked {
             read: pass.rpos,
@@ -1593,7 +1598,7 @@ pub(crate) fn write_whole(
         input,
         out: &mut *out,
         writing: true,
-        steered: false,
+        steer: Steer::No,
         options,
     };
     let end = visit(layout, root, job, v)?.written;
@@ -1621,7 +1626,7 @@ impl Visiting<'_> {
 
     /// Reads `bits` bits where the mode reads (0 elsewhere).
     fn read(&mut self, bits: u32) -> Result<u64, Stop> {
-        let Some(input) = self.input.filter(|_| bits > 0 && self.mode.reads()) else {
+        let Some(input) = self.job.input.filter(|_| bits > 0 && self.mode.reads()) else {
             return Ok(0);
         };
         let (needed, available) = (self.rpos + bits as usize, input.bit_len());
@@ -1647,14 +1652,14 @@ impl Visiting<'_> {
     }
 
     fn write(&mut self, raw: u64, bits: u32) {
-        if !self.writing || self.mode == Mode::Skip || bits == 0 {
+        if !self.job.writing || self.mode == Mode::Skip {
             return;
         }
         let end = self.wpos + bits as usize;
         // A value too long for the output is still walked to its end (its faults come first).
-        self.overflow |= end > self.out.len() * 8;
+        self.overflow |= end > self.job.out.len() * 8;
         if !self.overflow {
-            put(self.out, self.wpos, raw, bits);
+            put(self.job.out, self.wpos, raw, bits);
         }
         self.wpos = end;
     }
@@ -1695,7 +1700,7 @@ impl Visiting<'_> {
         };
         let fault = match (kind, version) {
             (LeafKind::Scalar(_), Some(expected))
-                if self.mode == Mode::Given && !self.keep_versions =>
+                if self.mode == Mode::Given && !self.job.options.keep_versions =>
             {
                 if scalar::same_integer(v, expected) {
                     *raw = expected.into();
@@ -1703,7 +1708,7 @@ impl Visiting<'_> {
                 }
                 ErrorKind::VersionMismatch { given: v, expected }
             }
-            (LeafKind::Scalar(kind), _) => match scalar_raw(kind, v, self.saturate) {
+            (LeafKind::Scalar(kind), _) => match scalar_raw(kind, v, self.job.options.saturate) {
                 Ok(bits) => {
                     *raw = bits;
                     return Ok(());
@@ -1754,7 +1759,7 @@ impl Pass for Visiting<'_> {
     }
     /// The position errors and leaves are reported at: in the data read, if any.
     fn pos(&self) -> usize {
-        if self.input.is_some() {
+        if self.job.input.is_some() {
             self.rpos
         } else {
             self.wpos
@@ -1856,21 +1861,34 @@ impl Pass for Visiting<'_> {
     #[inline(always)]
     fn steered(&self) -> bool {
         // (Steered walks only read.)
-        self.steered && self.mode == Mode::Data
+        self.mode == Mode::Data && !matches!(self.job.steer, Steer::No)
     }
     #[inline(always)]
-    fn pass_over(&mut self, _: &Layout<'_>, at: &PartAt<'_>) -> bool {
-        let mut reading = Reading {
-            bits: &mut self.rpos,
-            leaves: &mut self.leaves,
-        };
-        self.visit.part(at, &mut reading)
+    fn pass_over(&mut self, node: &Node, at: &PartAt<'_>) -> bool {
+        match self.job.steer {
+            Steer::Below(k) => match node.fixed_leaves() {
+                Some(n) if self.leaves + n as usize <= k => {
+                    self.rpos += node.min_bits as usize;
+                    self.leaves += n as usize;
+                    true
+                }
+                _ => false,
+            },
+            _ => {
+                let mut reading = Reading {
+                    bits: &mut self.rpos,
+                    leaves: &mut self.leaves,
+                };
+                self.visit.part(at, &mut reading)
+            }
+        }
     }
     fn read_pos(&self) -> usize {
         self.rpos
     }
     fn read_left(&self) -> usize {
-        self.input
+        self.job
+            .input
             .map_or(0, |i| i.bit_len())
             .saturating_sub(self.rpos)
     }

@@ -22,7 +22,7 @@ use crate::bits::BitRead;
 use crate::error::{Error, ErrorKind, Path, Step};
 pub(crate) use crate::interp::put;
 use crate::interp::{
-    visit as run, write_whole, Bits, Halt, Job, LeafAt, PartAt, Reading, Visit, Walked,
+    visit as run, write_whole, Bits, Halt, Job, LeafAt, PartAt, Reading, Steer, Visit, Walked,
 };
 use crate::layout::{Kind, Layout, NodeId};
 use crate::rules::{
@@ -88,7 +88,7 @@ pub fn decode<R: BitRead + ?Sized>(
 ) -> Result<Decoded, Error<LeafError>> {
     let mut collect = Collect { leaves, len: 0 };
     let bits = Bits(data);
-    let job = Job::reading(&bits, options.tao, false);
+    let job = Job::reading(&bits, options.tao, Steer::No);
     let end = run(layout, root, job, &mut collect)?.read;
     let (used, len) = (end.div_ceil(8), BitRead::bit_len(data) / 8);
     if !options.allow_trailing && len > used {
@@ -146,8 +146,12 @@ impl<'w, A: Aim> Find<'w, A> {
 trait Aim {
     /// Whether leaf `at` (whose value read is `old`) is the one.
     fn hit(&mut self, at: &LeafAt<'_>, old: Option<Scalar>) -> bool;
-    /// [`Visit::part`]: passes over what cannot hold the leaf.
-    fn part(&mut self, layout: &Layout<'_>, at: &PartAt<'_>, reading: &mut Reading<'_>) -> bool;
+    /// Which parts the walk passes over, as they cannot hold the leaf.
+    fn steer(&self) -> Steer;
+    /// [`Visit::part`], for [`Steer::Visit`].
+    fn part(&mut self, _: &Layout<'_>, _: &PartAt<'_>, _: &mut Reading<'_>) -> bool {
+        false
+    }
     /// Why the walk did not find it (it `walked` the whole value, or stopped short).
     fn missing(&mut self, walked: Walked) -> LeafAccessError;
 }
@@ -160,11 +164,8 @@ impl Aim for Index {
         at.index == self.0
     }
 
-    fn part(&mut self, layout: &Layout<'_>, at: &PartAt<'_>, reading: &mut Reading<'_>) -> bool {
-        // A fixed-shape part whose leaves all come before leaf `[k]`.
-        let before = (layout.node(at.node).fixed_leaves())
-            .is_some_and(|n| *reading.leaves + n as usize <= self.0);
-        before && reading.pass(layout, at.node)
+    fn steer(&self) -> Steer {
+        Steer::Below(self.0)
     }
 
     fn missing(&mut self, walked: Walked) -> LeafAccessError {
@@ -241,6 +242,10 @@ struct Toward<'w> {
 }
 
 impl Aim for Toward<'_> {
+    fn steer(&self) -> Steer {
+        Steer::Visit
+    }
+
     fn part(&mut self, layout: &Layout<'_>, at: &PartAt<'_>, reading: &mut Reading<'_>) -> bool {
         match self.course(at, *reading.bits) {
             Course::On => false,
@@ -370,7 +375,7 @@ fn find<R: BitRead + ?Sized, A: Aim>(
     tao: bool,
 ) -> Result<(Leaf, Scalar, bool), LeafAccessError> {
     let bits = Bits(data);
-    let job = Job::reading(&bits, tao, true);
+    let job = Job::reading(&bits, tao, find.aim.steer());
     let walked = run(layout, root, job, find).map_err(plain)?;
     match find.found {
         Some(found) => Ok(found),
@@ -542,7 +547,7 @@ pub fn check_versions(
         }
     }
     let bits = Bits(data);
-    let job = Job::reading(&bits, false, false);
+    let job = Job::reading(&bits, false, Steer::No);
     let end = run(layout, root, job, &mut Versions(Scalar::Uint(0), 0))
         .map_err(plain)?
         .read;
