@@ -714,6 +714,14 @@ RUST_ISSUE40_TESTS="$RUST_ISSUE40_TESTS mutants_translate"
 #                with its report; DEPTH_MAX's * -> + planted: red, * -> / leaves fewer
 #                frames still; the array frame's name.is_empty() guard -> false planted: red)
 #   after        212 tested, 0 survivors that are not equivalent: 100% of tested
+# Then, on a quiet machine (~5 s a mutant), the rest (MUTATION_RUST_FILES one file each, the
+# same ten test programs, translate.rs with mutants_store_translated too, timeout 30 s):
+#   value.rs      48 mutants: 38 caught, 10 unviable, 0 survived
+#   translate.rs  83 mutants: 74 caught, 7 unviable, 2 survived: leave's > -> >= (equivalent)
+#                 and begin_array's && -> || (an array inside elements reported kept on its
+#                 own: mutants_translate's deep type now checks the report names the array
+#                 once; planted: red)
+#   the six files: 298 mutants, all tested, 5 survivors, all equivalent: 100%
 RUST_ISSUE40_TESTS="$RUST_ISSUE40_TESTS mutants_compile mutants_rules"
 
 if [ "$#" -eq 0 ]; then
