@@ -38,5 +38,7 @@ python -m mypy.stubtest px4params._native --mypy-config-file pyproject.toml \
     --allowlist scripts/stubtest-allowlist.txt
 # The CLI tests run the installed command; keep their model cache inside the run.
 export PX4PARAMS_CACHE_DIR="${PX4PARAMS_CACHE_DIR:-$(mktemp -d)}"
-python -m pytest -q -p no:cacheprovider --durations=15
+# Two workers, each test file whole on one (its module fixtures, servers and browsers, start
+# once): many tests wait on sockets and timeouts, which the other worker's tests fill.
+python -m pytest -q -p no:cacheprovider -n 2 --dist loadfile --durations=15
 echo "== all passed in ${SECONDS} s"
