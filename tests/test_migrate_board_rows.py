@@ -302,3 +302,38 @@ def test_the_boot_console_settles_the_6c_variants_fallback_compass(
         assert placed(proposal) == []
         (line,) = [o.line for o in proposal.left_out if o.device.startswith("rm3100")]
         assert "boards/px4/fmu-v6c/init/rc.board_sensors:31 " in line
+
+
+# -- i2c_launcher's conditions cite their lines ----------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("release", "said"),
+    [
+        # main: `i2c_launcher start -b 1` (line 61) under `if [ $INA_CONFIGURED = no ]` only;
+        # `-b 2` (line 64) also under `if [ $HAVE_PM2 = yes ]`
+        (None, ["bus 2 only where $HAVE_PM2 == yes (", "rc.board_sensors:64 at main "]),
+        # v1.15.0: both in the else of `if ver hwbasecmp 009 010 011` (line 59): 66 and 69
+        ("v1.15.0", [
+            "bus 1 only where not hw_base in 009,010,011 (the hardware revision, which the "
+            "parameters do not tell) (PX4/PX4-Autopilot boards/px4/fmu-v6x/init/"
+            "rc.board_sensors:66 at v1.15.0 ",
+            "rc.board_sensors:69 at v1.15.0 ",
+        ]),
+    ],
+)  # fmt: skip
+def test_the_launchers_unsettled_buses_name_their_start_lines(
+    release: str | None, said: list[str], tmp_path: Path
+) -> None:
+    # The Amovlab F410's QGC file (PX4 1.15.4, no SENS_EN_INA2xx) on a Pixhawk 6X: which
+    # launcher buses run rests on what the file cannot tell; each is named with the line of
+    # its `i2c_launcher start -b N`, as every other start of the board's script is
+    from test_migrate_corpus import CORPUS, locate
+
+    (truth,) = [t for t in CORPUS if t.name == "px4docs_amovlabf410_v1.15.4.params"]
+    config = migrate.read_config(locate(truth, tmp_path))
+    proposal = migrate.migrate(config, board=board("px4_fmu-v6x", release))
+    (line,) = [a for a in proposal.assumptions if "i2c_launcher scans" in a]
+    for part in said:
+        assert part in line
+    assert "rc.board_sensors)" not in line  # the script without a line

@@ -758,18 +758,21 @@ class _Builder:
         when = getattr(self.board, "i2c_launcher_when", "") or ""
         conditions = per_bus(when) if when else {}
         facts = self.facts()
+        # Each bus's `i2c_launcher start -b` line, as a start row cites its own.
+        sources = dict(zip(buses, getattr(self.board, "i2c_launcher_sources", ()), strict=False))
         scanned, notes = [], []
         for bus in buses:
             # A form not read as "bus N: ..." is evaluated whole: its tests are named unread.
             verdict = evaluate(when if conditions is None else conditions.get(bus, ""), facts)
             unchecked = " and ".join(verdict.unchecked)
+            cited = f" ({sources[bus]})" if bus in sources else ""
             if verdict.holds is False:
                 if unchecked:
-                    notes.append(f"bus {bus} not, by PX4's default: {unchecked}")
+                    notes.append(f"bus {bus} not, by PX4's default: {unchecked}{cited}")
                 continue
             scanned.append(bus)
             if unchecked:
-                notes.append(f"bus {bus} only where {unchecked}")
+                notes.append(f"bus {bus} only where {unchecked}{cited}")
         if not scanned and not notes:
             return  # a power-monitor switch is 1: the switch's own starts are the truth
         what = (
@@ -779,8 +782,7 @@ class _Builder:
         )
         shown = ", ".join(str(b) for b in scanned) or "none"
         unless = " when no SENS_EN_INA2xx is 1" if "INA_CONFIGURED" in when else ""
-        script = self.board.source.split(" at ")[0]
-        said = f"; {'; '.join(notes)} ({script})" if notes else ""
+        said = f"; {'; '.join(notes)}" if notes else ""
         self.assume(
             f"the board's i2c_launcher scans I2C bus {shown} for power monitors (INA226, INA228, "
             f"INA238){unless}: {what}{said}"
