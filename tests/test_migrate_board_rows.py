@@ -18,7 +18,13 @@ from pathlib import Path
 
 import pytest
 from px4params import migrate
-from px4params.migrate.conditions import HARDWARE_VARIABLES, Facts, board_variables, evaluate
+from px4params.migrate.conditions import (
+    HARDWARE_VARIABLES,
+    Facts,
+    Verdict,
+    board_variables,
+    evaluate,
+)
 from px4params.migrate.config import OldConfig
 from px4params.vehicle.boards import Board, load_boards
 
@@ -210,17 +216,20 @@ def test_the_probes_rotation_counts_only_where_probing_runs(
 
 
 def test_every_board_row_testing_a_hardware_variable_has_the_boards_own_setting() -> None:
-    # Every board whose rows test $HAVE_PM2 or $HAVE_PM3, in every release, has the way its
-    # own script sets them: 13 boards, read one by one
+    # Every board whose own rows test $HAVE_PM2, $HAVE_PM3 or $BOARD_FMUV3, in every release,
+    # has the way its own script sets them: 15 boards, read one by one (rc.sensors' rows are
+    # every board's and run after the board's script: not its own)
     tested = set()
-    for b in load_boards().all():
-        conditions = [r.when for r in (*b.switches, *b.devices)] + [b.i2c_launcher_when]
-        for name in ("HAVE_PM2", "HAVE_PM3"):
+    table = load_boards()
+    for b in (v for name in {b.name for b in table.all()} for v in table.variants(name)):
+        own = [r for r in (*b.switches, *b.devices) if "rc.sensors" not in r.source]
+        conditions = [r.when for r in own] + [b.i2c_launcher_when]
+        for name in ("HAVE_PM2", "HAVE_PM3", "BOARD_FMUV3"):
             if any(f"${name} " in c for c in conditions):
                 assert name in board_variables(b.name, b.releases), (b.name, b.releases, name)
                 tested.add(b.name)
     assert tested == set(HARDWARE_VARIABLES)
-    assert len(tested) == 13
+    assert len(tested) == 15
 
 
 def test_radiolink_pix6_always_has_its_second_power_module_port() -> None:
@@ -337,3 +346,74 @@ def test_the_launchers_unsettled_buses_name_their_start_lines(
     for part in said:
         assert part in line
     assert "rc.board_sensors)" not in line  # the script without a line
+
+
+# -- $BOARD_FMUV3 from the boot console ------------------------------------------------------
+
+#: fmu-v2's and fmu-v3's script (v1.12.0 .. main, read at 9524e8ec, 30e763b6, 83c4f4e5,
+#: bb59c637): `set BOARD_FMUV3 0` (line 20); `if ver hwtypecmp V30` then `if mpu6000 -s -b 4
+#: -R 10 start` sets 20 (line 29), else `if mpu9250 -s -b 4 -R 10 start` sets 21 (line 35);
+#: `if ver hwtypecmp V2M` likewise on SPI 1 (lines 52, 58). The console lines are the
+#: drivers' own (platforms/common/i2c_spi_buses.cpp: "<name> #<n> on SPI bus <b>", then
+#: "(devid=...)" in 1.11/1.12 and " rotation <r>" when not 0 later); a start that found
+#: nothing prints "no instance started".
+CUBE_20 = "mpu6000 #0 on SPI bus 4 rotation 10\n"
+CUBE_21 = (
+    "WARN  [SPI_I2C] mpu6000: no instance started (no device on bus?)\n"
+    "mpu9250 #0 on SPI bus 4 rotation 10\n"
+)
+PIXHAWK_1 = "mpu6000 #0 on SPI bus 1 rotation 14\n"
+
+
+def fmuv3_facts(hw_type: str | None, console: str | None, board: str = "px4_fmu-v3") -> Facts:
+    from px4params.vehicle.console import started_drivers
+
+    starts = started_drivers(console) if console is not None else None
+    kind = "ULog" if console is not None or hw_type is not None else "QGC .params"
+    return Facts({}, {}, ("PX4_FMU_V3",), starts, kind, hw_type,
+                 board_variables(board, ("v1.15.0",)))  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("hw_type", "console", "value"),
+    [
+        ("V30", CUBE_20, "20"),  # a Cube 2.0: the isolated MPU6000 answered
+        ("V30", CUBE_21, "21"),  # a Cube 2.1: no MPU6000, the MPU9250 answered
+        ("V30", "", "0"),  # a Cube whose SPI 4 IMU did not answer
+        ("V2", PIXHAWK_1, "0"),  # a Pixhawk 1: neither V30 nor V2M is tested true
+        ("V2M", "mpu6000 #0 on SPI bus 1 rotation 10\n", "20"),  # a Pixhack
+    ],
+)
+@pytest.mark.parametrize("board_name", ["px4_fmu-v2", "px4_fmu-v3"])
+def test_board_fmuv3_is_what_the_boot_console_shows_answered(
+    hw_type: str, console: str, value: str, board_name: str
+) -> None:
+    facts = fmuv3_facts(hw_type, console, board_name)
+    for tested in ("0", "20", "21"):
+        verdict = evaluate(f"$BOARD_FMUV3 == {tested}", facts)
+        assert (verdict.holds, verdict.unchecked) == (tested == value, ())
+
+
+def test_board_fmuv3_without_a_console_names_each_line_that_sets_it() -> None:
+    # A log with its hardware type but no boot console (PX4 before 1.12, or none logged): the
+    # Cube's line 29 or 35 ran, which one only a console says; 0 is the script's first value
+    verdict = evaluate("$BOARD_FMUV3 == 21", fmuv3_facts("V30", None))
+    assert verdict.holds is False
+    (said,) = verdict.unchecked
+    started = "started (-s -b 4 -R 10 start)"
+    none = "(a ULog has no boot console to say)"
+    assert said == (
+        "$BOARD_FMUV3 == 21 (boards/px4/fmu-v3/init/rc.board_sensors:20 sets BOARD_FMUV3 0; "
+        f"line 29: 20 where mpu6000 {started} {none}; line 35: 21 where not mpu6000 {started} "
+        f"{none} and mpu9250 {started} {none})"
+    )
+
+
+def test_the_cube_21s_own_rows_run_by_its_boot_console() -> None:
+    # Line 83 `mpu9250 -s -b 1 start` runs inside `if [ $BOARD_FMUV3 = 21 ]`, line 96's FMUv2
+    # `mpu6000 -s -b 1 -R 14 start` only in the else of `if [ $BOARD_FMUV3 != 0 ]`
+    v3 = board("px4_fmu-v3", "v1.15.0")
+    when = {r.source.split(" at ")[0].rsplit(":", 1)[1]: r.when for r in v3.devices}
+    facts = fmuv3_facts("V30", CUBE_21)
+    assert evaluate(when["83"], facts) == Verdict(True)
+    assert evaluate(when["96"], facts) == Verdict(False)
