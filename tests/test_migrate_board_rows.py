@@ -64,10 +64,26 @@ def left_out(proposal: migrate.Proposal) -> dict[str, tuple[str, str]]:
 # -- a device row counts where its condition holds -------------------------------------------
 
 
+#: What a CANHUBK3 proposal says of the bus-1 IST8310's rotation where nothing says the board
+#: is an ADAP: line 10 starts it with -R 10 there, rc.sensors' probe (`ist8310 -X -q start`)
+#: elsewhere, without -R.
+CANHUBK3_ROTATION = (
+    "; its rotation 0 (rc.sensors probes without -R) holds only where that line does not run: "
+    "where it runs, it starts the device with -R 10 and the device is the board's, not the "
+    "manifest's"
+)
+CANHUBK3_LINE_10 = (
+    "the board's 'ist8310 -X -b 1 -R 10 start' (PX4/PX4-Autopilot boards/nxp/mr-canhubk3/init/"
+    "rc.board_sensors:10 at main (branch main, bb59c637cd, 2026-08-13)) runs only where hw_type "
+    "in MR-CANHUBK3-ADAP (the hardware revision, which the parameters do not tell)"
+)
+
+
 def test_a_compass_the_board_starts_only_on_one_hardware_type_is_proposed_and_named() -> None:
     # NXP MR-CANHUBK3 (main): `if ver hwtypecmp MR-CANHUBK3-ADAP` starts `ist8310 -X -b 1 -R
     # 10` (line 10), else `ist8310 -X -b 2 -R 10` (line 22). A QGC file does not say the
-    # hardware type: an IST8310 on bus 1 may be a GPS puck's, so it is not dropped on a guess
+    # hardware type: an IST8310 on bus 1 may be a GPS puck's, so it is not dropped on a guess,
+    # and its rotation 0 is said to hold only where line 10 does not run
     mr = board("nxp_mr-canhubk3")
     proposal = migrate.migrate(
         config({"CAL_MAG0_ID": IST8310_BUS1, "CAL_MAG0_ROT": 0}), table="current", board=mr
@@ -75,12 +91,29 @@ def test_a_compass_the_board_starts_only_on_one_hardware_type_is_proposed_and_na
     assert placed(proposal) == [("IST8310#0", 1, 0x0E)]
     (said,) = [a for a in proposal.assumptions if a.startswith("CAL_MAG0_ID")]
     assert said == (
-        "CAL_MAG0_ID = 396809: IST8310 (MAG), I2C bus 1, address 0x0E: the board's 'ist8310 -X "
-        "-b 1 -R 10 start' (PX4/PX4-Autopilot boards/nxp/mr-canhubk3/init/rc.board_sensors:10 "
-        "at main (branch main, bb59c637cd, 2026-08-13)) runs only where hw_type in "
-        "MR-CANHUBK3-ADAP (the hardware revision, which the parameters do not tell): proposed, "
-        "not left out on a guess"
+        f"CAL_MAG0_ID = 396809: IST8310 (MAG), I2C bus 1, address 0x0E: {CANHUBK3_LINE_10}: "
+        f"proposed, not left out on a guess{CANHUBK3_ROTATION}"
     )
+    (ist,) = proposal.instances
+    assert (ist.values["rotation"], ist.notes) == (0, [CANHUBK3_LINE_10 + CANHUBK3_ROTATION])
+
+
+def test_a_real_gps_compass_on_a_canhubk3_says_its_rotation_rests_on_the_hardware_type(
+    tmp_path: Path,
+) -> None:
+    # MakeTech's Pathfinder file (PX4 1.14.0, a real vehicle): its GPS's IST8310 on I2C bus 1 at
+    # 0x0E (CAL_MAG1_ID 396809, PRIO 75). Named as a CANHUBK3, whose line 10 starts exactly that
+    # device with -R 10 on an ADAP only, the instance's rotation 0 is named as resting on it
+    from test_migrate_corpus import CORPUS, locate
+
+    (truth,) = [t for t in CORPUS if t.name.startswith("20260515 Pathfinder")]
+    config = migrate.read_config(locate(truth, tmp_path))
+    proposal = migrate.migrate(config, board=board("nxp_mr-canhubk3", "v1.14.0"))
+    (ist,) = [i for i in proposal.instances if i.name.startswith("IST8310")]
+    assert ist.values["rotation"] == 0
+    (note,) = [n for n in ist.notes if "mr-canhubk3" in n]
+    assert "rc.board_sensors:10 at main " in note
+    assert note.endswith(CANHUBK3_ROTATION)
 
 
 @pytest.mark.parametrize(

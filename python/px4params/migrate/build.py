@@ -315,8 +315,36 @@ class _Builder:
             )
         by_board = self.other_rules(chips, start, internal_rot, baro)
         if row is not None and by_board is None:
-            self.assume_row(found, *row, "proposed, not left out on a guess")
+            other = self.rotation_if_run(row[0], *self.driver_rotation(start, chips))
+            self.assume_row(found, *row, "proposed, not left out on a guess" + other)
         return by_board
+
+    def rotation_if_run(self, row: Any, rotation: int, why: str) -> str:
+        """What a device row nothing settles would change in the proposed rotation ("" where
+        nothing): it starts the device with its own -R, and then the device is the board's."""
+        if row.rotation is None or row.rotation == rotation:
+            return ""
+        how = why or "rc.sensors probes without -R"
+        return (
+            f"; its rotation {rotation} ({how}) holds only where that line does not run: where "
+            f"it runs, it starts the device with -R {row.rotation} and the device is the "
+            "board's, not the manifest's"
+        )
+
+    def note_unsettled_row(
+        self, inst: ProposedInstance, chips: set[str], bus: int, address: int | None, why: str
+    ) -> None:
+        """Notes on a proposed instance that a board row nothing settles starts the same device
+        with another rotation (``why``: where the proposed one comes from)."""
+        row = self.board_device(chips, bus, address)
+        if row is None or row[1].holds is not None:
+            return
+        other = self.rotation_if_run(row[0], inst.values.get("rotation", 0), why)
+        if other:
+            inst.notes.append(
+                f"the board's '{row[0].driver} {row[0].args}' ({row[0].source}) runs only where "
+                f"{' and '.join(row[1].unchecked)}{other}"
+            )
 
     def assume_row(self, found: str, row: Any, verdict: Verdict, then: str) -> None:
         """Names what a board row's condition rests on, where something does."""
@@ -687,6 +715,7 @@ class _Builder:
             inst.notes.append(twice.removeprefix("; "))
         rotation, why = self.driver_rotation(start, chips)
         self.set_rotation(inst, rotation, why)
+        self.note_unsettled_row(inst, chips, dev.bus, dev.address, why)
         for rot, v in rotations.items():
             if not v:
                 continue
@@ -745,7 +774,9 @@ class _Builder:
                 "found by i2c_launcher" if start.launcher else "started outside the board's script"
             )
             inst = self.add(spec.name, start.bus, address, f"{found}: '{start.text}' ({how})")
-            self.set_rotation(inst, *self.driver_rotation(start, chips))
+            rotation, why = self.driver_rotation(start, chips)
+            self.set_rotation(inst, rotation, why)
+            self.note_unsettled_row(inst, chips, start.bus, address, why)
             if driver.name in BATTERY_INDEX_DRIVERS:
                 inst.notes.append(_battery_note(spec.name, _launched_args(start)))
 
