@@ -346,6 +346,25 @@ def test_the_boot_console_settles_the_6c_variants_fallback_compass(
         assert "boards/px4/fmu-v6c/init/rc.board_sensors:31 " in line
 
 
+def test_a_disabled_compass_beside_an_unsettled_row_is_not_said_to_be_proposed(
+    tmp_path: Path,
+) -> None:
+    # The Amovlab F410's file keeps a stale IST8310 (bus 1, 0x0E) in CAL_MAG2 with
+    # CAL_MAG2_PRIO 0: it is left out as disabled, and on a CANHUBK3 the line naming line 10's
+    # condition says so instead of "proposed"
+    from test_migrate_corpus import CORPUS, locate
+
+    (truth,) = [t for t in CORPUS if t.name == "px4docs_amovlabf410_v1.15.4.params"]
+    config = migrate.read_config(locate(truth, tmp_path))
+    proposal = migrate.migrate(config, board=board("nxp_mr-canhubk3"))
+    assert left_out(proposal)["CAL_MAG2_ID = 396809"][0] == "disabled"
+    (said,) = [a for a in proposal.assumptions if a.startswith("CAL_MAG2_ID")]
+    assert said == (
+        f"CAL_MAG2_ID = 396809: IST8310 (MAG), I2C bus 1, address 0x0E: {CANHUBK3_LINE_10}: "
+        "left out as disabled, not as the board's on a guess"
+    )
+
+
 # -- i2c_launcher's conditions cite their lines ----------------------------------------------
 
 

@@ -299,9 +299,11 @@ class _Builder:
         start: DriverStart | None,
         internal_rot: str | None,
         baro: bool,
+        disabled: bool = False,
     ) -> str | None:
         """Why the board's script starts this I2C device, or None when it does not (the
-        rules in the order they are trusted). ``found``: the device as the report names it."""
+        rules in the order they are trusted). ``found``: the device as the report names it;
+        ``disabled``: every slot of it is, so it is not proposed either way."""
         row = self.board_device(chips, bus, address)
         if row is not None and row[1].holds:
             self.assume_row(found, *row, "taken as holding (PX4's default)")
@@ -314,7 +316,9 @@ class _Builder:
                 f"({_buses_path(self.board)}) shows it did"
             )
         by_board = self.other_rules(chips, start, internal_rot, baro)
-        if row is not None and by_board is None:
+        if row is not None and by_board is None and disabled:
+            self.assume_row(found, *row, "left out as disabled, not as the board's on a guess")
+        elif row is not None and by_board is None:
             other = self.rotation_if_run(row[0], *self.driver_rotation(start, chips))
             self.assume_row(found, *row, "proposed, not left out on a guess" + other)
         return by_board
@@ -683,7 +687,9 @@ class _Builder:
         internal = next((r for r, v in rotations.items() if v == INTERNAL_ROTATION), None)
         kind = {k for _, k in _named(dev, kinds)}
         baro = "BARO" in kind or all(k == "BARO" for k in kinds)
-        board = self.started_by_board(where, chips, dev.bus, dev.address, start, internal, baro)
+        board = self.started_by_board(
+            where, chips, dev.bus, dev.address, start, internal, baro, all_off
+        )
         disabled = f" (disabled: {', '.join(off)})" if off else ""
         if board is not None:
             self.leave_out(found, dev.describe(), "board", f"{board}{disabled}{twice}")
