@@ -293,17 +293,19 @@ def switch_param(text: str) -> str | None:
     return match.group(1) if match else None
 
 
-def facts(text: str) -> tuple[list[dict[str, Any]], list[dict[str, Any]], list[tuple[int, str]]]:
-    """A script's devices, switch starts and ``i2c_launcher`` (bus, conditions)."""
+def facts(
+    text: str,
+) -> tuple[list[dict[str, Any]], list[dict[str, Any]], list[tuple[int, str, int]]]:
+    """A script's devices, switch starts and ``i2c_launcher`` (bus, conditions, line)."""
     devices: list[dict[str, Any]] = []
     switches: list[dict[str, Any]] = []
-    launcher: list[tuple[int, str]] = []
+    launcher: list[tuple[int, str, int]] = []
     for number, words, conditions in starts(text):
         opts = options(words)
         driver, flags = words[0], opts["flags"]
         if driver == "i2c_launcher":
             if "-b" in opts:
-                launcher.append((int(opts["-b"]), " and ".join(conditions)))
+                launcher.append((int(opts["-b"]), " and ".join(conditions), number))
             continue
         if driver in NOT_BUS_DEVICES:
             continue
@@ -468,7 +470,8 @@ def main(argv: list[str]) -> None:
                 continue
             devices, switches, launcher = facts(files["init/rc.board_sensors"])
             external, internal, buses_file = i2c_buses(files)
-            key = same(devices + switches) + json.dumps([launcher, external, internal])
+            buses = [(bus, when) for bus, when, _ in launcher]  # not the line numbers
+            key = same(devices + switches) + json.dumps([buses, external, internal])
             last = rows[-1] if rows else None
             if last is not None and last["key"] == key:
                 last["releases"].append(release)
@@ -501,8 +504,11 @@ def main(argv: list[str]) -> None:
             if row["buses_file"]:
                 folder = row["path"].removesuffix("init/rc.board_sensors")
                 out += [f"i2c_buses_path = {json.dumps(folder + row['buses_file'])}"]
-            out += [f"i2c_launcher_buses = {json.dumps(sorted({b for b, _ in row['launcher']}))}"]
-            when = "; ".join(f"bus {b}: {c}" for b, c in row["launcher"] if c)
+            launched = sorted(row["launcher"])
+            out += [f"i2c_launcher_buses = {json.dumps([b for b, _, _ in launched])}"]
+            if launched:
+                out += [f"i2c_launcher_lines = {json.dumps([n for _, _, n in launched])}"]
+            when = "; ".join(f"bus {b}: {c}" for b, c, _ in row["launcher"] if c)
             if when:
                 out += [f"i2c_launcher_when = {json.dumps(when)}"]
             out += ["device = ["] + [f"  {inline(r, DEVICE_KEYS)}," for r in row["devices"]]

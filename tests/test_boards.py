@@ -565,6 +565,35 @@ def test_every_start_is_on_the_line_it_cites() -> None:
     assert checked > 1000
 
 
+def test_every_launcher_bus_is_on_the_line_it_cites() -> None:
+    # Each bus's `i2c_launcher start -b N` (every board that runs one: fmu-v6x, fmu-v6xrt at
+    # v1.15.0, v1.18 and main; cuav fmu-v6x, godwit ga1, mr-tropic, tropic-community), checked
+    # against the script at each snapshot at hand (v1.15.0, release/1.18 and main are in the
+    # dakejahl mirror)
+    dirs = _px4_git_dirs()
+    cite = re.compile(r"PX4/PX4-Autopilot (\S+):(\d+) at \S+ \([^,]+, ([0-9a-f]{10}),")
+    table = load_boards()
+    checked, missing = 0, set()
+    skipped = 0
+    for board in table.all():
+        for variant in table.variants(board.name):
+            sources = variant.i2c_launcher_sources
+            for bus, source in zip(variant.i2c_launcher_buses, sources, strict=True):
+                m = cite.match(source)
+                assert m, source
+                text = _show(tuple(dirs), m.group(3), m.group(1))
+                if text is None:
+                    missing.add(m.group(3))
+                    skipped += 1
+                    continue
+                words = text.split("\n")[int(m.group(2)) - 1].split()
+                assert words[:4] == ["i2c_launcher", "start", "-b", str(bus)], (source, words)
+                checked += 1
+    if not checked:
+        pytest.skip(f"commits {sorted(missing)} are in none of {dirs} (set $PX4_AUTOPILOT_GIT)")
+    assert checked + skipped == 15  # 9 rows, 15 buses
+
+
 # -- docs/boards.md -----------------------------------------------------------------------------
 
 DOCS = Path(__file__).resolve().parents[1] / "docs" / "boards.md"
@@ -673,7 +702,8 @@ RC_SENSORS = _rc_sensors(_rc_switch("SENS_EN_MS4525DO", "ms4525do", "SENS_EN_MS4
 
 def _launching(text: str) -> str:
     """GOOD whose board runs the i2c_launcher on bus 1, with LAUNCHER's row."""
-    return text.replace("i2c_launcher_buses = []", "i2c_launcher_buses = [1]") + LAUNCHER
+    launched = "i2c_launcher_buses = [1]\ni2c_launcher_lines = [40]"
+    return text.replace("i2c_launcher_buses = []", launched) + LAUNCHER
 
 
 def _refused(text: str) -> str:
@@ -721,12 +751,17 @@ def test_a_value_at_a_bound_of_its_range_is_taken(
 @pytest.mark.issue40
 def test_launcher_values_at_the_bounds_of_their_ranges_are_taken() -> None:
     text = _launching(GOOD).replace("i2c_launcher_buses = [1]", "i2c_launcher_buses = [0, 255]")
+    text = text.replace("i2c_launcher_lines = [40]", "i2c_launcher_lines = [1, 100000]")
     text = text.replace("address = 0x41, line = 74", "address = 0, line = 1")
     text = text.replace("address = 0x45, line = 75", "address = 0x7f, line = 100000")
     board = _board(text)
     assert board.i2c_launcher_buses == (0, 255)
     assert [p.address for p in board.i2c_launcher_probes] == [0, 0x7F]
     assert [p.source.split(" at ")[0].rsplit(":", 1)[1] for p in board.i2c_launcher_probes] == [
+        "1",
+        "100000",
+    ]
+    assert [s.split(" at ")[0].rsplit(":", 1)[1] for s in board.i2c_launcher_sources] == [
         "1",
         "100000",
     ]
@@ -840,6 +875,17 @@ def test_bad_rows_of_rc_sensors_and_the_launcher_are_named() -> None:
     assert _refused(wide) == (
         "boards.toml: board 'px4_fmu-v5' at v1.14.0: "
         "i2c_launcher_buses [256] is not a list of integers 0..255"
+    )
+    # each bus's `i2c_launcher start -b` line, so a condition of it is cited as a start's is
+    unlined = _launching(GOOD).replace("i2c_launcher_lines = [40]", "i2c_launcher_lines = []")
+    assert _refused(unlined) == (
+        "boards.toml: board 'px4_fmu-v5' at v1.14.0: "
+        "i2c_launcher_lines [] do not give one line for each of i2c_launcher_buses [1]"
+    )
+    long = _launching(GOOD).replace("i2c_launcher_lines = [40]", "i2c_launcher_lines = [100001]")
+    assert _refused(long) == (
+        "boards.toml: board 'px4_fmu-v5' at v1.14.0: "
+        "i2c_launcher_lines [100001] is not a list of integers 1..100000"
     )
 
 

@@ -18,7 +18,13 @@ from pathlib import Path
 
 import pytest
 from px4params import migrate
-from px4params.migrate.conditions import HARDWARE_VARIABLES, Facts, board_variables, evaluate
+from px4params.migrate.conditions import (
+    HARDWARE_VARIABLES,
+    Facts,
+    Verdict,
+    board_variables,
+    evaluate,
+)
 from px4params.migrate.config import OldConfig
 from px4params.vehicle.boards import Board, load_boards
 
@@ -58,10 +64,26 @@ def left_out(proposal: migrate.Proposal) -> dict[str, tuple[str, str]]:
 # -- a device row counts where its condition holds -------------------------------------------
 
 
+#: What a CANHUBK3 proposal says of the bus-1 IST8310's rotation where nothing says the board
+#: is an ADAP: line 10 starts it with -R 10 there, rc.sensors' probe (`ist8310 -X -q start`)
+#: elsewhere, without -R.
+CANHUBK3_ROTATION = (
+    "; its rotation 0 (rc.sensors probes without -R) holds only where that line does not run: "
+    "where it runs, it starts the device with -R 10 and the device is the board's, not the "
+    "manifest's"
+)
+CANHUBK3_LINE_10 = (
+    "the board's 'ist8310 -X -b 1 -R 10 start' (PX4/PX4-Autopilot boards/nxp/mr-canhubk3/init/"
+    "rc.board_sensors:10 at main (branch main, bb59c637cd, 2026-08-13)) runs only where hw_type "
+    "in MR-CANHUBK3-ADAP (the hardware revision, which the parameters do not tell)"
+)
+
+
 def test_a_compass_the_board_starts_only_on_one_hardware_type_is_proposed_and_named() -> None:
     # NXP MR-CANHUBK3 (main): `if ver hwtypecmp MR-CANHUBK3-ADAP` starts `ist8310 -X -b 1 -R
     # 10` (line 10), else `ist8310 -X -b 2 -R 10` (line 22). A QGC file does not say the
-    # hardware type: an IST8310 on bus 1 may be a GPS puck's, so it is not dropped on a guess
+    # hardware type: an IST8310 on bus 1 may be a GPS puck's, so it is not dropped on a guess,
+    # and its rotation 0 is said to hold only where line 10 does not run
     mr = board("nxp_mr-canhubk3")
     proposal = migrate.migrate(
         config({"CAL_MAG0_ID": IST8310_BUS1, "CAL_MAG0_ROT": 0}), table="current", board=mr
@@ -69,12 +91,29 @@ def test_a_compass_the_board_starts_only_on_one_hardware_type_is_proposed_and_na
     assert placed(proposal) == [("IST8310#0", 1, 0x0E)]
     (said,) = [a for a in proposal.assumptions if a.startswith("CAL_MAG0_ID")]
     assert said == (
-        "CAL_MAG0_ID = 396809: IST8310 (MAG), I2C bus 1, address 0x0E: the board's 'ist8310 -X "
-        "-b 1 -R 10 start' (PX4/PX4-Autopilot boards/nxp/mr-canhubk3/init/rc.board_sensors:10 "
-        "at main (branch main, bb59c637cd, 2026-08-13)) runs only where hw_type in "
-        "MR-CANHUBK3-ADAP (the hardware revision, which the parameters do not tell): proposed, "
-        "not left out on a guess"
+        f"CAL_MAG0_ID = 396809: IST8310 (MAG), I2C bus 1, address 0x0E: {CANHUBK3_LINE_10}: "
+        f"proposed, not left out on a guess{CANHUBK3_ROTATION}"
     )
+    (ist,) = proposal.instances
+    assert (ist.values["rotation"], ist.notes) == (0, [CANHUBK3_LINE_10 + CANHUBK3_ROTATION])
+
+
+def test_a_real_gps_compass_on_a_canhubk3_says_its_rotation_rests_on_the_hardware_type(
+    tmp_path: Path,
+) -> None:
+    # MakeTech's Pathfinder file (PX4 1.14.0, a real vehicle): its GPS's IST8310 on I2C bus 1 at
+    # 0x0E (CAL_MAG1_ID 396809, PRIO 75). Named as a CANHUBK3, whose line 10 starts exactly that
+    # device with -R 10 on an ADAP only, the instance's rotation 0 is named as resting on it
+    from test_migrate_corpus import CORPUS, locate
+
+    (truth,) = [t for t in CORPUS if t.name.startswith("20260515 Pathfinder")]
+    config = migrate.read_config(locate(truth, tmp_path))
+    proposal = migrate.migrate(config, board=board("nxp_mr-canhubk3", "v1.14.0"))
+    (ist,) = [i for i in proposal.instances if i.name.startswith("IST8310")]
+    assert ist.values["rotation"] == 0
+    (note,) = [n for n in ist.notes if "mr-canhubk3" in n]
+    assert "rc.board_sensors:10 at main " in note
+    assert note.endswith(CANHUBK3_ROTATION)
 
 
 @pytest.mark.parametrize(
@@ -210,17 +249,20 @@ def test_the_probes_rotation_counts_only_where_probing_runs(
 
 
 def test_every_board_row_testing_a_hardware_variable_has_the_boards_own_setting() -> None:
-    # Every board whose rows test $HAVE_PM2 or $HAVE_PM3, in every release, has the way its
-    # own script sets them: 13 boards, read one by one
+    # Every board whose own rows test $HAVE_PM2, $HAVE_PM3 or $BOARD_FMUV3, in every release,
+    # has the way its own script sets them: 15 boards, read one by one (rc.sensors' rows are
+    # every board's and run after the board's script: not its own)
     tested = set()
-    for b in load_boards().all():
-        conditions = [r.when for r in (*b.switches, *b.devices)] + [b.i2c_launcher_when]
-        for name in ("HAVE_PM2", "HAVE_PM3"):
+    table = load_boards()
+    for b in (v for name in {b.name for b in table.all()} for v in table.variants(name)):
+        own = [r for r in (*b.switches, *b.devices) if "rc.sensors" not in r.source]
+        conditions = [r.when for r in own] + [b.i2c_launcher_when]
+        for name in ("HAVE_PM2", "HAVE_PM3", "BOARD_FMUV3"):
             if any(f"${name} " in c for c in conditions):
                 assert name in board_variables(b.name, b.releases), (b.name, b.releases, name)
                 tested.add(b.name)
     assert tested == set(HARDWARE_VARIABLES)
-    assert len(tested) == 13
+    assert len(tested) == 15
 
 
 def test_radiolink_pix6_always_has_its_second_power_module_port() -> None:
@@ -302,3 +344,128 @@ def test_the_boot_console_settles_the_6c_variants_fallback_compass(
         assert placed(proposal) == []
         (line,) = [o.line for o in proposal.left_out if o.device.startswith("rm3100")]
         assert "boards/px4/fmu-v6c/init/rc.board_sensors:31 " in line
+
+
+def test_a_disabled_compass_beside_an_unsettled_row_is_not_said_to_be_proposed(
+    tmp_path: Path,
+) -> None:
+    # The Amovlab F410's file keeps a stale IST8310 (bus 1, 0x0E) in CAL_MAG2 with
+    # CAL_MAG2_PRIO 0: it is left out as disabled, and on a CANHUBK3 the line naming line 10's
+    # condition says so instead of "proposed"
+    from test_migrate_corpus import CORPUS, locate
+
+    (truth,) = [t for t in CORPUS if t.name == "px4docs_amovlabf410_v1.15.4.params"]
+    config = migrate.read_config(locate(truth, tmp_path))
+    proposal = migrate.migrate(config, board=board("nxp_mr-canhubk3"))
+    assert left_out(proposal)["CAL_MAG2_ID = 396809"][0] == "disabled"
+    (said,) = [a for a in proposal.assumptions if a.startswith("CAL_MAG2_ID")]
+    assert said == (
+        f"CAL_MAG2_ID = 396809: IST8310 (MAG), I2C bus 1, address 0x0E: {CANHUBK3_LINE_10}: "
+        "left out as disabled, not as the board's on a guess"
+    )
+
+
+# -- i2c_launcher's conditions cite their lines ----------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("release", "said"),
+    [
+        # main: `i2c_launcher start -b 1` (line 61) under `if [ $INA_CONFIGURED = no ]` only;
+        # `-b 2` (line 64) also under `if [ $HAVE_PM2 = yes ]`
+        (None, ["bus 2 only where $HAVE_PM2 == yes (", "rc.board_sensors:64 at main "]),
+        # v1.15.0: both in the else of `if ver hwbasecmp 009 010 011` (line 59): 66 and 69
+        ("v1.15.0", [
+            "bus 1 only where not hw_base in 009,010,011 (the hardware revision, which the "
+            "parameters do not tell) (PX4/PX4-Autopilot boards/px4/fmu-v6x/init/"
+            "rc.board_sensors:66 at v1.15.0 ",
+            "rc.board_sensors:69 at v1.15.0 ",
+        ]),
+    ],
+)  # fmt: skip
+def test_the_launchers_unsettled_buses_name_their_start_lines(
+    release: str | None, said: list[str], tmp_path: Path
+) -> None:
+    # The Amovlab F410's QGC file (PX4 1.15.4, no SENS_EN_INA2xx) on a Pixhawk 6X: which
+    # launcher buses run rests on what the file cannot tell; each is named with the line of
+    # its `i2c_launcher start -b N`, as every other start of the board's script is
+    from test_migrate_corpus import CORPUS, locate
+
+    (truth,) = [t for t in CORPUS if t.name == "px4docs_amovlabf410_v1.15.4.params"]
+    config = migrate.read_config(locate(truth, tmp_path))
+    proposal = migrate.migrate(config, board=board("px4_fmu-v6x", release))
+    (line,) = [a for a in proposal.assumptions if "i2c_launcher scans" in a]
+    for part in said:
+        assert part in line
+    assert "rc.board_sensors)" not in line  # the script without a line
+
+
+# -- $BOARD_FMUV3 from the boot console ------------------------------------------------------
+
+#: fmu-v2's and fmu-v3's script (v1.12.0 .. main, read at 9524e8ec, 30e763b6, 83c4f4e5,
+#: bb59c637): `set BOARD_FMUV3 0` (line 20); `if ver hwtypecmp V30` then `if mpu6000 -s -b 4
+#: -R 10 start` sets 20 (line 29), else `if mpu9250 -s -b 4 -R 10 start` sets 21 (line 35);
+#: `if ver hwtypecmp V2M` likewise on SPI 1 (lines 52, 58). The console lines are the
+#: drivers' own (platforms/common/i2c_spi_buses.cpp: "<name> #<n> on SPI bus <b>", then
+#: "(devid=...)" in 1.11/1.12 and " rotation <r>" when not 0 later); a start that found
+#: nothing prints "no instance started".
+CUBE_20 = "mpu6000 #0 on SPI bus 4 rotation 10\n"
+CUBE_21 = (
+    "WARN  [SPI_I2C] mpu6000: no instance started (no device on bus?)\n"
+    "mpu9250 #0 on SPI bus 4 rotation 10\n"
+)
+PIXHAWK_1 = "mpu6000 #0 on SPI bus 1 rotation 14\n"
+
+
+def fmuv3_facts(hw_type: str | None, console: str | None, board: str = "px4_fmu-v3") -> Facts:
+    from px4params.vehicle.console import started_drivers
+
+    starts = started_drivers(console) if console is not None else None
+    kind = "ULog" if console is not None or hw_type is not None else "QGC .params"
+    return Facts({}, {}, ("PX4_FMU_V3",), starts, kind, hw_type,
+                 board_variables(board, ("v1.15.0",)))  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("hw_type", "console", "value"),
+    [
+        ("V30", CUBE_20, "20"),  # a Cube 2.0: the isolated MPU6000 answered
+        ("V30", CUBE_21, "21"),  # a Cube 2.1: no MPU6000, the MPU9250 answered
+        ("V30", "", "0"),  # a Cube whose SPI 4 IMU did not answer
+        ("V2", PIXHAWK_1, "0"),  # a Pixhawk 1: neither V30 nor V2M is tested true
+        ("V2M", "mpu6000 #0 on SPI bus 1 rotation 10\n", "20"),  # a Pixhack
+    ],
+)
+@pytest.mark.parametrize("board_name", ["px4_fmu-v2", "px4_fmu-v3"])
+def test_board_fmuv3_is_what_the_boot_console_shows_answered(
+    hw_type: str, console: str, value: str, board_name: str
+) -> None:
+    facts = fmuv3_facts(hw_type, console, board_name)
+    for tested in ("0", "20", "21"):
+        verdict = evaluate(f"$BOARD_FMUV3 == {tested}", facts)
+        assert (verdict.holds, verdict.unchecked) == (tested == value, ())
+
+
+def test_board_fmuv3_without_a_console_names_each_line_that_sets_it() -> None:
+    # A log with its hardware type but no boot console (PX4 before 1.12, or none logged): the
+    # Cube's line 29 or 35 ran, which one only a console says; 0 is the script's first value
+    verdict = evaluate("$BOARD_FMUV3 == 21", fmuv3_facts("V30", None))
+    assert verdict.holds is False
+    (said,) = verdict.unchecked
+    started = "started (-s -b 4 -R 10 start)"
+    none = "(a ULog has no boot console to say)"
+    assert said == (
+        "$BOARD_FMUV3 == 21 (boards/px4/fmu-v3/init/rc.board_sensors:20 sets BOARD_FMUV3 0; "
+        f"line 29: 20 where mpu6000 {started} {none}; line 35: 21 where not mpu6000 {started} "
+        f"{none} and mpu9250 {started} {none})"
+    )
+
+
+def test_the_cube_21s_own_rows_run_by_its_boot_console() -> None:
+    # Line 83 `mpu9250 -s -b 1 start` runs inside `if [ $BOARD_FMUV3 = 21 ]`, line 96's FMUv2
+    # `mpu6000 -s -b 1 -R 14 start` only in the else of `if [ $BOARD_FMUV3 != 0 ]`
+    v3 = board("px4_fmu-v3", "v1.15.0")
+    when = {r.source.split(" at ")[0].rsplit(":", 1)[1]: r.when for r in v3.devices}
+    facts = fmuv3_facts("V30", CUBE_21)
+    assert evaluate(when["83"], facts) == Verdict(True)
+    assert evaluate(when["96"], facts) == Verdict(False)

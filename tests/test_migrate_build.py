@@ -130,13 +130,15 @@ def today(params: dict[str, int | float], console: str | None = None) -> OldConf
 
 
 #: What the report says of Pixhawk 6X's second launcher bus (PX4's boards/px4/fmu-v6x/init/
-#: rc.board_sensors, v1.18 and main: `if [ $HAVE_PM2 = yes ]` around `i2c_launcher start -b 2`;
-#: the script sets HAVE_PM2 yes on line 5, and no when the hardware manifest says MFT_PM2 0).
+#: rc.board_sensors, v1.18 and main: `if [ $HAVE_PM2 = yes ]` around `i2c_launcher start -b 2`
+#: on line 64; the script sets HAVE_PM2 yes on line 5, and no when the hardware manifest says
+#: MFT_PM2 0).
 ONLY_WITH_PM2 = (
     "bus 2 only where $HAVE_PM2 == yes (boards/px4/fmu-v6x/init/rc.board_sensors:5 sets "
     "HAVE_PM2 yes; line 8: no where mft MFT_PM2 == 0 (the board's hardware manifest, which the "
     "parameters do not tell)) "
-    "(PX4/PX4-Autopilot boards/px4/fmu-v6x/init/rc.board_sensors)"
+    "(PX4/PX4-Autopilot boards/px4/fmu-v6x/init/rc.board_sensors:64 at main (branch main, "
+    "bb59c637cd, 2026-08-13))"
 )
 
 

@@ -181,21 +181,24 @@ def test_a_power_monitor_switch_at_2_leaves_the_i2c_launcher_scanning() -> None:
         "the board's i2c_launcher scans I2C bus 1, 2 for power monitors (INA226, INA228, INA238) "
         f"when no SENS_EN_INA2xx is 1: a QGC .params does not say which it found; bus 2 only "
         f"where $HAVE_PM2 == yes ({PM2_WHY}) (PX4/PX4-Autopilot boards/px4/fmu-v6x/init/"
-        "rc.board_sensors)"
+        "rc.board_sensors:64 at main (branch main, bb59c637cd, 2026-08-13))"
     ]
 
 
 def test_the_launchers_hardware_clause_of_px4_1_15_is_named_for_each_bus() -> None:
-    # v1.15.0's 6X script runs the launcher only `if ! ver hwbasecmp 009 010 011`
+    # v1.15.0's 6X script runs the launcher only in the else of `if ver hwbasecmp 009 010 011`
+    # (line 59): `i2c_launcher start -b 1` on line 66, `-b 2` on line 69
     board = v6x("v1.15.0")
     assert board.i2c_launcher_when.startswith("bus 1: not hw_base in 009,010,011 and ")
     proposal = migrate.migrate(params({}), table="current", board=board)
     hw = "not hw_base in 009,010,011 (the hardware revision, which the parameters do not tell)"
+    script = "PX4/PX4-Autopilot boards/px4/fmu-v6x/init/rc.board_sensors"
+    at = "at v1.15.0 (tag v1.15.0, 30e763b678, 2024-08-27)"
     assert [a for a in proposal.assumptions if "i2c_launcher" in a] == [
         "the board's i2c_launcher scans I2C bus 1, 2 for power monitors (INA226, INA228, INA238) "
         f"when no SENS_EN_INA2xx is 1: a QGC .params does not say which it found; bus 1 only "
-        f"where {hw}; bus 2 only where {hw} and $HAVE_PM2 == yes ({PM2_WHY}) "
-        "(PX4/PX4-Autopilot boards/px4/fmu-v6x/init/rc.board_sensors)"
+        f"where {hw} ({script}:66 {at}); bus 2 only where {hw} and $HAVE_PM2 == yes "
+        f"({PM2_WHY}) ({script}:69 {at})"
     ]
 
 

@@ -398,7 +398,7 @@ def test_the_board_table_says_what_the_board_starts(tmp_path: Path) -> None:
         f"2, 4; {ms4525do[0].source}), so the bus it is found on is not known: bus 1 proposed",
     ]
     # Pixhawk 6X runs `i2c_launcher start -b 1` (and `-b 2` with its second power port) when
-    # no SENS_EN_INA2xx is 1 (boards/px4/fmu-v6x/init/rc.board_sensors).
+    # no SENS_EN_INA2xx is 1 (boards/px4/fmu-v6x/init/rc.board_sensors, lines 61 and 64).
     v6x = boards.by_name("px4_fmu-v6x")
     assert v6x is not None and v6x.i2c_launcher_buses == (1, 2)
     proposal = migrate.migrate(
@@ -410,8 +410,8 @@ def test_the_board_table_says_what_the_board_starts(tmp_path: Path) -> None:
         "INA238) when no SENS_EN_INA2xx is 1: a QGC .params does not say which it found; bus 2 "
         "only where $HAVE_PM2 == yes (boards/px4/fmu-v6x/init/rc.board_sensors:5 sets HAVE_PM2 "
         "yes; line 8: no where mft MFT_PM2 == 0 (the board's hardware manifest, which the "
-        "parameters do not tell)) "
-        "(PX4/PX4-Autopilot boards/px4/fmu-v6x/init/rc.board_sensors)",
+        "parameters do not tell)) (PX4/PX4-Autopilot boards/px4/fmu-v6x/init/rc.board_sensors:64 "
+        "at main (branch main, bb59c637cd, 2026-08-13))",
     ]
     # With a power-monitor switch set, $INA_CONFIGURED is yes and the launcher does not run:
     # the switch's starts are what runs, and nothing is left to guess about the launcher.

@@ -299,9 +299,11 @@ class _Builder:
         start: DriverStart | None,
         internal_rot: str | None,
         baro: bool,
+        disabled: bool = False,
     ) -> str | None:
         """Why the board's script starts this I2C device, or None when it does not (the
-        rules in the order they are trusted). ``found``: the device as the report names it."""
+        rules in the order they are trusted). ``found``: the device as the report names it;
+        ``disabled``: every slot of it is, so it is not proposed either way."""
         row = self.board_device(chips, bus, address)
         if row is not None and row[1].holds:
             self.assume_row(found, *row, "taken as holding (PX4's default)")
@@ -314,9 +316,39 @@ class _Builder:
                 f"({_buses_path(self.board)}) shows it did"
             )
         by_board = self.other_rules(chips, start, internal_rot, baro)
-        if row is not None and by_board is None:
-            self.assume_row(found, *row, "proposed, not left out on a guess")
+        if row is not None and by_board is None and disabled:
+            self.assume_row(found, *row, "left out as disabled, not as the board's on a guess")
+        elif row is not None and by_board is None:
+            other = self.rotation_if_run(row[0], *self.driver_rotation(start, chips))
+            self.assume_row(found, *row, "proposed, not left out on a guess" + other)
         return by_board
+
+    def rotation_if_run(self, row: Any, rotation: int, why: str) -> str:
+        """What a device row nothing settles would change in the proposed rotation ("" where
+        nothing): it starts the device with its own -R, and then the device is the board's."""
+        if row.rotation is None or row.rotation == rotation:
+            return ""
+        how = why or "rc.sensors probes without -R"
+        return (
+            f"; its rotation {rotation} ({how}) holds only where that line does not run: where "
+            f"it runs, it starts the device with -R {row.rotation} and the device is the "
+            "board's, not the manifest's"
+        )
+
+    def note_unsettled_row(
+        self, inst: ProposedInstance, chips: set[str], bus: int, address: int | None, why: str
+    ) -> None:
+        """Notes on a proposed instance that a board row nothing settles starts the same device
+        with another rotation (``why``: where the proposed one comes from)."""
+        row = self.board_device(chips, bus, address)
+        if row is None or row[1].holds is not None:
+            return
+        other = self.rotation_if_run(row[0], inst.values.get("rotation", 0), why)
+        if other:
+            inst.notes.append(
+                f"the board's '{row[0].driver} {row[0].args}' ({row[0].source}) runs only where "
+                f"{' and '.join(row[1].unchecked)}{other}"
+            )
 
     def assume_row(self, found: str, row: Any, verdict: Verdict, then: str) -> None:
         """Names what a board row's condition rests on, where something does."""
@@ -655,7 +687,9 @@ class _Builder:
         internal = next((r for r, v in rotations.items() if v == INTERNAL_ROTATION), None)
         kind = {k for _, k in _named(dev, kinds)}
         baro = "BARO" in kind or all(k == "BARO" for k in kinds)
-        board = self.started_by_board(where, chips, dev.bus, dev.address, start, internal, baro)
+        board = self.started_by_board(
+            where, chips, dev.bus, dev.address, start, internal, baro, all_off
+        )
         disabled = f" (disabled: {', '.join(off)})" if off else ""
         if board is not None:
             self.leave_out(found, dev.describe(), "board", f"{board}{disabled}{twice}")
@@ -687,6 +721,7 @@ class _Builder:
             inst.notes.append(twice.removeprefix("; "))
         rotation, why = self.driver_rotation(start, chips)
         self.set_rotation(inst, rotation, why)
+        self.note_unsettled_row(inst, chips, dev.bus, dev.address, why)
         for rot, v in rotations.items():
             if not v:
                 continue
@@ -745,7 +780,9 @@ class _Builder:
                 "found by i2c_launcher" if start.launcher else "started outside the board's script"
             )
             inst = self.add(spec.name, start.bus, address, f"{found}: '{start.text}' ({how})")
-            self.set_rotation(inst, *self.driver_rotation(start, chips))
+            rotation, why = self.driver_rotation(start, chips)
+            self.set_rotation(inst, rotation, why)
+            self.note_unsettled_row(inst, chips, start.bus, address, why)
             if driver.name in BATTERY_INDEX_DRIVERS:
                 inst.notes.append(_battery_note(spec.name, _launched_args(start)))
 
@@ -758,18 +795,21 @@ class _Builder:
         when = getattr(self.board, "i2c_launcher_when", "") or ""
         conditions = per_bus(when) if when else {}
         facts = self.facts()
+        # Each bus's `i2c_launcher start -b` line, as a start row cites its own.
+        sources = dict(zip(buses, getattr(self.board, "i2c_launcher_sources", ()), strict=False))
         scanned, notes = [], []
         for bus in buses:
             # A form not read as "bus N: ..." is evaluated whole: its tests are named unread.
             verdict = evaluate(when if conditions is None else conditions.get(bus, ""), facts)
             unchecked = " and ".join(verdict.unchecked)
+            cited = f" ({sources[bus]})" if bus in sources else ""
             if verdict.holds is False:
                 if unchecked:
-                    notes.append(f"bus {bus} not, by PX4's default: {unchecked}")
+                    notes.append(f"bus {bus} not, by PX4's default: {unchecked}{cited}")
                 continue
             scanned.append(bus)
             if unchecked:
-                notes.append(f"bus {bus} only where {unchecked}")
+                notes.append(f"bus {bus} only where {unchecked}{cited}")
         if not scanned and not notes:
             return  # a power-monitor switch is 1: the switch's own starts are the truth
         what = (
@@ -779,8 +819,7 @@ class _Builder:
         )
         shown = ", ".join(str(b) for b in scanned) or "none"
         unless = " when no SENS_EN_INA2xx is 1" if "INA_CONFIGURED" in when else ""
-        script = self.board.source.split(" at ")[0]
-        said = f"; {'; '.join(notes)} ({script})" if notes else ""
+        said = f"; {'; '.join(notes)}" if notes else ""
         self.assume(
             f"the board's i2c_launcher scans I2C bus {shown} for power monitors (INA226, INA228, "
             f"INA238){unless}: {what}{said}"

@@ -39,6 +39,7 @@ __all__ = [
     "BoardVariables",
     "Facts",
     "HardwareVariable",
+    "Setting",
     "Verdict",
     "board_variables",
     "evaluate",
@@ -47,17 +48,25 @@ __all__ = [
 
 
 @dataclass(frozen=True)
+class Setting:
+    """``set NAME value`` on ``line`` of a board's script, run where ``when`` holds (a condition
+    of this module's form)."""
+
+    value: str
+    when: str
+    line: int
+
+
+@dataclass(frozen=True)
 class HardwareVariable:
-    """A board-script variable the hardware decides: the script sets it ``first``, then
-    ``otherwise`` where ``when`` holds (a condition of this module's form; None where the
-    script never sets it otherwise), at ``path``'s lines ``line`` and ``when_line``."""
+    """A board-script variable the hardware decides: the script sets it ``first`` on ``path``'s
+    ``line``, then runs ``settings`` in its order (the last that runs decides; none: ``first``
+    stays)."""
 
     first: str
-    otherwise: str
-    when: str | None
     path: str
     line: int
-    when_line: int = 0
+    settings: tuple[Setting, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -73,16 +82,38 @@ class BoardVariables:
 _NO_PM2_PORT = "mft MFT_PM2 == 0"
 _LATER = ("v1.15.0", "v1.18", "main")
 _NOW = ("v1.18", "main")
+_SINCE_1_12 = ("v1.12.0", "v1.13.0", "v1.14.0", "v1.15.0", "v1.18", "main")
 
 
 def _pm(releases: tuple[str, ...], path: str, line: int, when: str | None, when_line: int = 0,
         pm3: bool = False) -> BoardVariables:  # fmt: skip
     """HAVE_PM2 (and HAVE_PM3, set on the next line) yes, then no where ``when`` holds."""
     names = ("HAVE_PM2", "HAVE_PM3") if pm3 else ("HAVE_PM2",)
+    settings = (Setting("no", when, when_line),) if when is not None else ()
     return BoardVariables(releases, {
-        name: HardwareVariable("yes", "no", when, path, line + i, when_line)
-        for i, name in enumerate(names)
+        name: HardwareVariable("yes", path, line + i, settings) for i, name in enumerate(names)
     })  # fmt: skip
+
+
+def _fmuv3(releases: tuple[str, ...], board: str, shift: int = 0) -> BoardVariables:
+    """BOARD_FMUV3 of fmu-v2's and fmu-v3's script: 0, then 20 or 21 by which IMU answers on
+    a Cube (``ver hwtypecmp V30``: an MPU6000 on SPI 4 is a Cube 2.0, an MPU9250 a 2.1) or a
+    Pixhack (``V2M``, on SPI 1). A start the boot console shows settles it; ``shift``: the
+    release's lines before the test, less than v1.12.0's."""
+
+    def on(bus: int, answered: str, first: str = "") -> str:
+        failed = f"not {first} started (-s -b {bus} -R 10 start) and " if first else ""
+        return f"{failed}{answered} started (-s -b {bus} -R 10 start)"
+
+    settings = (
+        Setting("20", f"hw_type in V30 and {on(4, 'mpu6000')}", 29 - shift),
+        Setting("21", f"hw_type in V30 and {on(4, 'mpu9250', 'mpu6000')}", 35 - shift),
+        Setting("20", f"hw_type in V2M and {on(1, 'mpu6000')}", 52 - shift),
+        Setting("21", f"hw_type in V2M and {on(1, 'mpu9250', 'mpu6000')}", 58 - shift),
+    )
+    path = f"boards/px4/{board}/init/rc.board_sensors"
+    return BoardVariables(releases, {"BOARD_FMUV3": HardwareVariable("0", path, 20 - shift,
+                                                                     settings)})  # fmt: skip
 
 
 #: The board-script variables the hardware decides, per board and release, as each board's
@@ -125,6 +156,12 @@ HARDWARE_VARIABLES: dict[str, tuple[BoardVariables, ...]] = {
                           _NO_PM2_PORT, 22),),
     "radiolink_PIX6": (_pm(_NOW, "boards/radiolink/PIX6/init/rc.board_sensors", 6, None),),
     "zeroone_x6": (_pm(_NOW, "boards/zeroone/x6/init/rc.board_sensors", 5, _NO_PM2_PORT, 8),),
+    # BOARD_FMUV3 (read at v1.12.0, v1.15.0, release/1.18 and main: lines 20 to 58; v1.13.0's and
+    # v1.14.0's rows sit on v1.12.0's lines; v1.11.0's one line earlier, as its rows do)
+    **{
+        f"px4_{board}": (_fmuv3(("v1.11.0",), board, shift=1), _fmuv3(_SINCE_1_12, board))
+        for board in ("fmu-v2", "fmu-v3")
+    },
 }  # fmt: skip
 
 
@@ -236,16 +273,20 @@ def _test(text: str, facts: Facts) -> _Test:
 
 
 def _hardware_variable(name: str, var: HardwareVariable, facts: Facts) -> tuple[str, str]:
-    """The value the board's script gives ``name``, and why it is taken ("": settled)."""
-    if var.when is None:
-        return var.first, ""
-    verdict = evaluate(var.when, facts)
-    if verdict.holds is not None and not verdict.unchecked:
-        return (var.otherwise if verdict.holds else var.first), ""
-    return var.first, (
-        f"{var.path}:{var.line} sets {name} {var.first}; line {var.when_line}: {var.otherwise} "
-        f"where {' and '.join(verdict.unchecked)}"
-    )
+    """The value the board's script gives ``name``, and why it is taken ("": settled): the
+    last setting settled as run, else ``first``; the settings after it that nothing settles
+    are named with their lines."""
+    value, open_ = var.first, list[str]()
+    for setting in var.settings:
+        verdict = evaluate(setting.when, facts)
+        if verdict.holds and not verdict.unchecked:
+            value, open_ = setting.value, []
+        elif verdict.holds is not False or verdict.unchecked:
+            open_.append(f"line {setting.line}: {setting.value} where "
+                         f"{' and '.join(verdict.unchecked)}")  # fmt: skip
+    if not open_:
+        return value, ""
+    return value, f"{var.path}:{var.line} sets {name} {var.first}; {'; '.join(open_)}"
 
 
 def _clause(text: str, facts: Facts) -> _Test:

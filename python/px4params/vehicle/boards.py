@@ -20,8 +20,9 @@ a few snapshots (tagged releases and branches, listed in its ``[[snapshot]]`` ta
     older spellings), ``releases`` (the snapshots), ``path`` (the script read),
     ``external_i2c_buses`` / ``internal_i2c_buses`` (the board's ``src/i2c.cpp``, or its
     ``board_config.h`` where there is none, named by ``i2c_buses_path``),
-    ``i2c_launcher_buses`` and optional ``i2c_launcher_when``, and the lists ``device`` (started
-    whatever the parameters) and ``switch`` (started behind a parameter).
+    ``i2c_launcher_buses`` with ``i2c_launcher_lines`` (the line of each bus's ``i2c_launcher
+    start -b``) and optional ``i2c_launcher_when``, and the lists ``device`` (started whatever
+    the parameters) and ``switch`` (started behind a parameter).
 ``[[i2c_launcher]]``
     ``releases``, ``path``, ``args`` (the command it runs for a device it finds, ``{bus}`` and
     ``{index}`` filled in) and a ``probe`` list (``driver``, ``kind``, ``address``, ``line``) in
@@ -150,6 +151,9 @@ class Board:
     i2c_launcher_when: str = ""
     #: What the launcher tries on each of ``i2c_launcher_buses``, in order (empty without one).
     i2c_launcher_probes: tuple[LauncherProbe, ...] = ()
+    #: The script's ``i2c_launcher start`` line of each of ``i2c_launcher_buses``, cited as a
+    #: start's ``source`` is.
+    i2c_launcher_sources: tuple[str, ...] = ()
 
     def buses_of(self, start: BoardDevice | SwitchStart) -> tuple[int, ...]:
         """The buses a start can be on: its ``-b``, else every internal (``-I``) or external
@@ -523,7 +527,7 @@ def parse_boards(text: str, file: str = "boards.toml") -> BoardTable:
                 "device",
                 "switch",
             ),
-            ("i2c_buses_path", "i2c_launcher_when"),
+            ("i2c_buses_path", "i2c_launcher_when", "i2c_launcher_lines"),
         )
         name = row.text("name")
         if not _NAME.fullmatch(name):
@@ -577,6 +581,12 @@ def parse_boards(text: str, file: str = "boards.toml") -> BoardTable:
             launcher_buses = row.numbers("i2c_launcher_buses", 0, 255)
             if launcher_buses and snap.release not in launcher:
                 row.fail(f"i2c_launcher_buses but no [[i2c_launcher]] row for {snap.release!r}")
+            launcher_lines = row.numbers("i2c_launcher_lines", 1, 100_000)
+            if len(launcher_lines) != len(launcher_buses):
+                row.fail(
+                    f"i2c_launcher_lines {list(launcher_lines)} do not give one line for each of "
+                    f"i2c_launcher_buses {list(launcher_buses)}"
+                )
             rows[key] = Board(
                 name=name,
                 label=row.text("label"),
@@ -590,6 +600,7 @@ def parse_boards(text: str, file: str = "boards.toml") -> BoardTable:
                 internal_i2c_buses=internal,
                 i2c_launcher_when=row.text("i2c_launcher_when", ""),
                 i2c_launcher_probes=launcher[snap.release] if launcher_buses else (),
+                i2c_launcher_sources=tuple(cite(path, n, snaps) for n in launcher_lines),
             )
         if name not in names:
             names.append(name)
