@@ -157,8 +157,8 @@ pub fn set_leaf_at<R: BitRead + ?Sized>(
     set_leaf_at_with::<Active, R>(layout, root, data, k, value, out, options)
 }
 
-/// [`set_leaf_at`] with the plans `P`: the leaf located as [`locate_at_with`] finds it, then
-/// written ([`set_located`]).
+/// [`set_leaf_at`] with the plans `P`: the leaf located as [`get_leaf_at_with`] finds it,
+/// then written ([`set_located`]).
 pub fn set_leaf_at_with<P: Plans, R: BitRead + ?Sized>(
     layout: &Layout<'_>,
     root: NodeId,
@@ -168,8 +168,12 @@ pub fn set_leaf_at_with<P: Plans, R: BitRead + ?Sized>(
     out: &mut [u8],
     options: EncodeOptions,
 ) -> Result<usize, LeafAccessError> {
-    let leaf = locate_at_with::<P, R>(layout, root, data, k, options.tao)?;
-    set_located(layout, root, data, &leaf, value, out, options)
+    // Found as a read finds it (the walk's own result, not a copy of its leaf), and written
+    // from where it lies in the result (a `?` would copy it out).
+    match &get_leaf_at_with::<P, R>(layout, root, data, k, options.tao) {
+        Ok((leaf, _)) => set_located(layout, root, data, leaf, value, out, options),
+        Err(e) => Err(*e),
+    }
 }
 
 /// [`set_leaf`] of a leaf already located in `data`.

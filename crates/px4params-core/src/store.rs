@@ -700,7 +700,11 @@ where
         };
         match sought {
             Some(p) => Ok(p.read(data)),
-            None => Ok(leaf::get_leaf_at(layout, def.root, data, k, false)?.1),
+            // Matched, not `?`: the error is moved once (firmware's code is smaller).
+            None => match leaf::get_leaf_at(layout, def.root, data, k, false) {
+                Ok((_, value)) => Ok(value),
+                Err(e) => Err(StoreError::Codec(e)),
+            },
         }
     }
 
@@ -849,12 +853,17 @@ where
             .split_at_mut_checked(self.scratch)
             .unwrap_or_default();
         let data = head.get(start..start + len).unwrap_or_default();
-        let found = leaf::locate_at(layout, def.root, data, k, false)?;
+        // Found as a read finds it: the walk's own result, used where it lies.
+        let found = &leaf::get_leaf_at(layout, def.root, data, k, false);
+        let found = match found {
+            Ok((found, _)) => found,
+            Err(e) => return Err(StoreError::Codec(*e)),
+        };
         if is_version(layout, &found.path) {
             return Err(StoreError::VersionLeaf { path: found.path });
         }
         let options = EncodeOptions { saturate, ..STORED };
-        let new_len = leaf::set_located(layout, def.root, data, &found, value, out, options)?;
+        let new_len = leaf::set_located(layout, def.root, data, found, value, out, options)?;
         self.commit(param, def, instance, which, new_len);
         Ok(())
     }
