@@ -750,7 +750,8 @@ where
         let def = *self.def_of(param)?;
         let index = self.present_slot(&def, instance)?;
         if !Active::TABLES {
-            return self.set_leaf_copied(layout, param, &def, instance, which, k, value, saturate);
+            let at = (instance, index);
+            return self.set_leaf_copied(layout, param, &def, at, which, k, value, saturate);
         }
         let data = self.region(&def, index, which);
         // Seek (through the leaf table) first; the leaf's path is found only for an error.
@@ -830,20 +831,20 @@ where
 
     /// [`Store::set_leaf_at`] as firmware builds do it, in little code: the leaf is found in
     /// one walk, and the value with it written goes through the scratch area (a primitive leaf
-    /// copied and written over, a tag or length transcoded).
+    /// copied and written over, a tag or length transcoded). The instance is `(instance,
+    /// index)`: its number and its slot, which the caller found present.
     #[allow(clippy::too_many_arguments)] // one call names one leaf of one instance: all needed
     fn set_leaf_copied(
         &mut self,
         layout: &Layout<'_>,
         param: u32,
         def: &ParamDef,
-        instance: u16,
+        (instance, index): (u16, usize),
         which: Which,
         k: usize,
         value: Scalar,
         saturate: bool,
     ) -> Result<()> {
-        let index = slot_index(def, instance)?;
         let (start, len) = self.span(def, index, which);
         // The value before the scratch area, the scratch area (to its end) after it; nothing
         // (never: the memory was checked against the plan) is read and written as empty.
@@ -982,13 +983,8 @@ where
         let def = *self.def_of(param)?;
         let index = self.present_slot(&def, instance)?;
         let (from, len) = self.span(&def, index, Which::Default);
-        let (to, _) = self.span(&def, index, Which::Value);
-        copy_apart(self.bytes.as_mut(), from, len, to);
-        self.with_slot(index, |slot| {
-            slot.value_len = len as u16;
-            slot.flags |= UNSAVED;
-        });
-        self.resolve(param, &def, index, Which::Value);
+        self.put(param, &def, index, Which::Value, from, len);
+        self.with_slot(index, |slot| slot.flags |= UNSAVED);
         Ok(())
     }
 
@@ -1175,19 +1171,30 @@ where
 
     /// Copies the type default into an instance's value and default.
     fn fill_instance(&mut self, param: u32, def: &ParamDef, instance: u16) {
-        let len = self.slot_at(def.first_slot as usize).default_len;
+        let len = self.slot_at(def.first_slot as usize).default_len as usize;
         let index = def.first_slot as usize + 1 + instance as usize;
         let from = def.first_byte as usize;
-        let value = from + (1 + 2 * instance as usize) * def.slot_bytes as usize;
-        let bytes = self.bytes.as_mut();
-        copy_apart(bytes, from, len as usize, value);
-        copy_apart(bytes, from, len as usize, value + def.slot_bytes as usize);
-        self.with_slot(index, |slot| {
-            slot.value_len = len;
-            slot.default_len = len;
+        self.put(param, def, index, Which::Value, from, len);
+        self.put(param, def, index, Which::Default, from, len);
+    }
+
+    /// Copies the `len` bytes at `from` into an instance's value or default (slot `index`).
+    fn put(
+        &mut self,
+        param: u32,
+        def: &ParamDef,
+        index: usize,
+        which: Which,
+        from: usize,
+        len: usize,
+    ) {
+        let (to, _) = self.span(def, index, which);
+        copy_apart(self.bytes.as_mut(), from, len, to);
+        self.with_slot(index, |slot| match which {
+            Which::Value => slot.value_len = len as u16,
+            Which::Default => slot.default_len = len as u16,
         });
-        self.resolve(param, def, index, Which::Value);
-        self.resolve(param, def, index, Which::Default);
+        self.resolve(param, def, index, which);
     }
 
     fn stage(&mut self, data: &[u8]) {
@@ -1199,18 +1206,9 @@ where
     fn commit(&mut self, param: u32, def: &ParamDef, instance: u16, which: Which, len: usize) {
         let index = def.first_slot as usize + 1 + instance as usize;
         let follows = which == Which::Default && self.values_equal(def, index);
-        let scratch = self.scratch;
-        for w in [Some(which), follows.then_some(Which::Value)]
-            .into_iter()
-            .flatten()
-        {
-            let (to, _) = self.span(def, index, w);
-            copy_apart(self.bytes.as_mut(), scratch, len, to);
-            self.with_slot(index, |slot| match w {
-                Which::Value => slot.value_len = len as u16,
-                Which::Default => slot.default_len = len as u16,
-            });
-            self.resolve(param, def, index, w);
+        self.put(param, def, index, which, self.scratch, len);
+        if follows {
+            self.put(param, def, index, Which::Value, self.scratch, len);
         }
         self.with_slot(index, |s| s.flags |= UNSAVED);
     }
