@@ -7,7 +7,7 @@
 
 use core::convert::Infallible;
 
-use crate::bits::BitRead;
+use crate::bits::{BitRead, BitReader};
 use crate::error::{Error, ErrorKind, Path, Step};
 use crate::interp::{is_scalar, push_flat_path};
 use crate::layout::{FlatItem, Kind, Layout, NodeId, Role, Segment, Span};
@@ -190,22 +190,26 @@ pub(crate) fn set_located<R: BitRead + ?Sized>(
         // A new tag or length changes the value's shape: written anew.
         return walk::transcode(layout, root, data, leaf.index, value, out, options);
     };
-    let raw = scalar_raw(kind, value, options.saturate).map_err(|e| Error {
-        kind: ErrorKind::Scalar(e),
-        bit_offset: leaf.bit_offset,
-        path: leaf.path,
-    })?;
+    // Errors returned where they are made (a `map_err(..)?` builds one and copies it).
+    let raw = match scalar_raw(kind, value, options.saturate) {
+        Ok(raw) => raw,
+        Err(e) => {
+            return Err(Error {
+                kind: ErrorKind::Scalar(e),
+                bit_offset: leaf.bit_offset,
+                path: leaf.path,
+            })
+        }
+    };
     let len = data.bit_len() / 8;
-    if out.len() < len {
+    let Some(copy) = out.get_mut(..len) else {
         return Err(Error {
             kind: ErrorKind::BufferTooSmall { needed: len },
             bit_offset: 0,
             path: Path::default(),
         });
-    }
-    for (i, byte) in out[..len].iter_mut().enumerate() {
-        *byte = data.byte(i);
-    }
+    };
+    data.reader(0).read_bytes(copy);
     walk::put(out, leaf.bit_offset, raw, scalar_bits(kind));
     Ok(len)
 }
