@@ -657,7 +657,8 @@ where
         k: usize,
     ) -> Result<Scalar> {
         if !Active::TABLES {
-            // Without plans, read by one walk (leaf tables are a host's speed-up).
+            // Without plans, read by one walk (leaf tables are a host's speed-up), in line:
+            // the caller's handling of errors and the walk's are one code.
             return self.read_walked(layout, param, instance, which, k);
         }
         let def = *self.def_of(param)?;
@@ -674,14 +675,27 @@ where
         };
         match known {
             Some(value) => Ok(value),
-            None => self.read_walked(layout, param, instance, which, k),
+            None => self.read_untabled(layout, param, instance, which, k),
         }
     }
 
-    /// [`Store::read`] of a leaf its table does not answer for, and every read of a store
-    /// without tables (the C ABI's): walked, out of line so that the table's path stays small
-    /// (not `#[cold]`: firmware reads through here).
+    /// [`Store::read`] of a leaf its table does not answer for: walked, out of line so that
+    /// the table's path stays small.
     #[inline(never)]
+    fn read_untabled(
+        &self,
+        layout: &Layout<'_>,
+        param: u32,
+        instance: u16,
+        which: Which,
+        k: usize,
+    ) -> Result<Scalar> {
+        self.read_walked(layout, param, instance, which, k)
+    }
+
+    /// Reads leaf `[k]` by walking the value: every read of a store without tables (the C
+    /// ABI's), and those a table does not answer for ([`Store::read_untabled`]).
+    #[inline(always)]
     fn read_walked(
         &self,
         layout: &Layout<'_>,
