@@ -1157,6 +1157,9 @@ where
         }
     }
 
+    // In line: its error is then made where the caller's result is (or dropped with it),
+    // not returned through memory and copied (its call cost firmware more than its code).
+    #[inline(always)]
     fn present_slot(&self, def: &ParamDef, instance: u16) -> Result<usize> {
         let index = slot_index(def, instance)?;
         if !self.slot_at(index).present() {
@@ -1344,7 +1347,8 @@ fn is_version(layout: &Layout<'_>, path: &Path) -> bool {
 }
 
 /// Checks that `data` is exactly one stored value of `root` whose `p_version` fields hold the
-/// version.
+/// version. In line, so that the codec's error becomes the store's where it is returned.
+#[inline(always)]
 fn check_encoded(layout: &Layout<'_>, root: NodeId, data: &[u8]) -> Result<()> {
     codec::check_stored(layout, root, data).map_err(StoreError::Codec)
 }
