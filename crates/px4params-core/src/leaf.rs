@@ -84,6 +84,7 @@ fn seek_leaf<R: BitRead + ?Sized>(
 }
 
 /// Reads leaf `target` of `data`.
+#[inline]
 pub fn get_leaf<R: BitRead + ?Sized>(
     layout: &Layout<'_>,
     root: NodeId,
