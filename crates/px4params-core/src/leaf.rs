@@ -7,7 +7,7 @@
 
 use core::convert::Infallible;
 
-use crate::bits::BitRead;
+use crate::bits::{BitRead, BitReader};
 use crate::error::{Error, ErrorKind, Path, Step};
 use crate::interp::{is_scalar, push_flat_path};
 use crate::layout::{FlatItem, Kind, Layout, NodeId, Role, Segment, Span};
@@ -84,6 +84,7 @@ fn seek_leaf<R: BitRead + ?Sized>(
 }
 
 /// Reads leaf `target` of `data`.
+#[inline]
 pub fn get_leaf<R: BitRead + ?Sized>(
     layout: &Layout<'_>,
     root: NodeId,
@@ -157,8 +158,8 @@ pub fn set_leaf_at<R: BitRead + ?Sized>(
     set_leaf_at_with::<Active, R>(layout, root, data, k, value, out, options)
 }
 
-/// [`set_leaf_at`] with the plans `P`: the leaf located as [`locate_at_with`] finds it, then
-/// written ([`set_located`]).
+/// [`set_leaf_at`] with the plans `P`: the leaf located as [`get_leaf_at_with`] finds it,
+/// then written ([`set_located`]).
 pub fn set_leaf_at_with<P: Plans, R: BitRead + ?Sized>(
     layout: &Layout<'_>,
     root: NodeId,
@@ -168,8 +169,12 @@ pub fn set_leaf_at_with<P: Plans, R: BitRead + ?Sized>(
     out: &mut [u8],
     options: EncodeOptions,
 ) -> Result<usize, LeafAccessError> {
-    let leaf = locate_at_with::<P, R>(layout, root, data, k, options.tao)?;
-    set_located(layout, root, data, &leaf, value, out, options)
+    // Found as a read finds it (the walk's own result, not a copy of its leaf), and written
+    // from where it lies in the result (a `?` would copy it out).
+    match &get_leaf_at_with::<P, R>(layout, root, data, k, options.tao) {
+        Ok((leaf, _)) => set_located(layout, root, data, leaf, value, out, options),
+        Err(e) => Err(*e),
+    }
 }
 
 /// [`set_leaf`] of a leaf already located in `data`.
@@ -186,22 +191,26 @@ pub(crate) fn set_located<R: BitRead + ?Sized>(
         // A new tag or length changes the value's shape: written anew.
         return walk::transcode(layout, root, data, leaf.index, value, out, options);
     };
-    let raw = scalar_raw(kind, value, options.saturate).map_err(|e| Error {
-        kind: ErrorKind::Scalar(e),
-        bit_offset: leaf.bit_offset,
-        path: leaf.path,
-    })?;
+    // Errors returned where they are made (a `map_err(..)?` builds one and copies it).
+    let raw = match scalar_raw(kind, value, options.saturate) {
+        Ok(raw) => raw,
+        Err(e) => {
+            return Err(Error {
+                kind: ErrorKind::Scalar(e),
+                bit_offset: leaf.bit_offset,
+                path: leaf.path,
+            })
+        }
+    };
     let len = data.bit_len() / 8;
-    if out.len() < len {
+    let Some(copy) = out.get_mut(..len) else {
         return Err(Error {
             kind: ErrorKind::BufferTooSmall { needed: len },
             bit_offset: 0,
             path: Path::default(),
         });
-    }
-    for (i, byte) in out[..len].iter_mut().enumerate() {
-        *byte = data.byte(i);
-    }
+    };
+    data.reader(0).read_bytes(copy);
     walk::put(out, leaf.bit_offset, raw, scalar_bits(kind));
     Ok(len)
 }

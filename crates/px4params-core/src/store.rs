@@ -657,7 +657,8 @@ where
         k: usize,
     ) -> Result<Scalar> {
         if !Active::TABLES {
-            // Without plans, read by one walk (leaf tables are a host's speed-up).
+            // Without plans, read by one walk (leaf tables are a host's speed-up), in line:
+            // the caller's handling of errors and the walk's are one code.
             return self.read_walked(layout, param, instance, which, k);
         }
         let def = *self.def_of(param)?;
@@ -674,14 +675,27 @@ where
         };
         match known {
             Some(value) => Ok(value),
-            None => self.read_walked(layout, param, instance, which, k),
+            None => self.read_untabled(layout, param, instance, which, k),
         }
     }
 
-    /// [`Store::read`] of a leaf its table does not answer for, and every read of a store
-    /// without tables (the C ABI's): walked, out of line so that the table's path stays small
-    /// (not `#[cold]`: firmware reads through here).
+    /// [`Store::read`] of a leaf its table does not answer for: walked, out of line so that
+    /// the table's path stays small.
     #[inline(never)]
+    fn read_untabled(
+        &self,
+        layout: &Layout<'_>,
+        param: u32,
+        instance: u16,
+        which: Which,
+        k: usize,
+    ) -> Result<Scalar> {
+        self.read_walked(layout, param, instance, which, k)
+    }
+
+    /// Reads leaf `[k]` by walking the value: every read of a store without tables (the C
+    /// ABI's), and those a table does not answer for ([`Store::read_untabled`]).
+    #[inline(always)]
     fn read_walked(
         &self,
         layout: &Layout<'_>,
@@ -700,7 +714,11 @@ where
         };
         match sought {
             Some(p) => Ok(p.read(data)),
-            None => Ok(leaf::get_leaf_at(layout, def.root, data, k, false)?.1),
+            // Matched, not `?`: the error is moved once (firmware's code is smaller).
+            None => match leaf::get_leaf_at(layout, def.root, data, k, false) {
+                Ok((_, value)) => Ok(value),
+                Err(e) => Err(StoreError::Codec(e)),
+            },
         }
     }
 
@@ -746,7 +764,8 @@ where
         let def = *self.def_of(param)?;
         let index = self.present_slot(&def, instance)?;
         if !Active::TABLES {
-            return self.set_leaf_copied(layout, param, &def, instance, which, k, value, saturate);
+            let at = (instance, index);
+            return self.set_leaf_copied(layout, param, &def, at, which, k, value, saturate);
         }
         let data = self.region(&def, index, which);
         // Seek (through the leaf table) first; the leaf's path is found only for an error.
@@ -826,20 +845,20 @@ where
 
     /// [`Store::set_leaf_at`] as firmware builds do it, in little code: the leaf is found in
     /// one walk, and the value with it written goes through the scratch area (a primitive leaf
-    /// copied and written over, a tag or length transcoded).
+    /// copied and written over, a tag or length transcoded). The instance is `(instance,
+    /// index)`: its number and its slot, which the caller found present.
     #[allow(clippy::too_many_arguments)] // one call names one leaf of one instance: all needed
     fn set_leaf_copied(
         &mut self,
         layout: &Layout<'_>,
         param: u32,
         def: &ParamDef,
-        instance: u16,
+        (instance, index): (u16, usize),
         which: Which,
         k: usize,
         value: Scalar,
         saturate: bool,
     ) -> Result<()> {
-        let index = slot_index(def, instance)?;
         let (start, len) = self.span(def, index, which);
         // The value before the scratch area, the scratch area (to its end) after it; nothing
         // (never: the memory was checked against the plan) is read and written as empty.
@@ -849,12 +868,17 @@ where
             .split_at_mut_checked(self.scratch)
             .unwrap_or_default();
         let data = head.get(start..start + len).unwrap_or_default();
-        let found = leaf::locate_at(layout, def.root, data, k, false)?;
+        // Found as a read finds it: the walk's own result, used where it lies.
+        let found = &leaf::get_leaf_at(layout, def.root, data, k, false);
+        let found = match found {
+            Ok((found, _)) => found,
+            Err(e) => return Err(StoreError::Codec(*e)),
+        };
         if is_version(layout, &found.path) {
             return Err(StoreError::VersionLeaf { path: found.path });
         }
         let options = EncodeOptions { saturate, ..STORED };
-        let new_len = leaf::set_located(layout, def.root, data, &found, value, out, options)?;
+        let new_len = leaf::set_located(layout, def.root, data, found, value, out, options)?;
         self.commit(param, def, instance, which, new_len);
         Ok(())
     }
@@ -973,13 +997,8 @@ where
         let def = *self.def_of(param)?;
         let index = self.present_slot(&def, instance)?;
         let (from, len) = self.span(&def, index, Which::Default);
-        let (to, _) = self.span(&def, index, Which::Value);
-        copy_apart(self.bytes.as_mut(), from, len, to);
-        self.with_slot(index, |slot| {
-            slot.value_len = len as u16;
-            slot.flags |= UNSAVED;
-        });
-        self.resolve(param, &def, index, Which::Value);
+        self.put(param, &def, index, Which::Value, from, len);
+        self.with_slot(index, |slot| slot.flags |= UNSAVED);
         Ok(())
     }
 
@@ -1138,6 +1157,9 @@ where
         }
     }
 
+    // In line: its error is then made where the caller's result is (or dropped with it),
+    // not returned through memory and copied (its call cost firmware more than its code).
+    #[inline(always)]
     fn present_slot(&self, def: &ParamDef, instance: u16) -> Result<usize> {
         let index = slot_index(def, instance)?;
         if !self.slot_at(index).present() {
@@ -1166,19 +1188,30 @@ where
 
     /// Copies the type default into an instance's value and default.
     fn fill_instance(&mut self, param: u32, def: &ParamDef, instance: u16) {
-        let len = self.slot_at(def.first_slot as usize).default_len;
+        let len = self.slot_at(def.first_slot as usize).default_len as usize;
         let index = def.first_slot as usize + 1 + instance as usize;
         let from = def.first_byte as usize;
-        let value = from + (1 + 2 * instance as usize) * def.slot_bytes as usize;
-        let bytes = self.bytes.as_mut();
-        copy_apart(bytes, from, len as usize, value);
-        copy_apart(bytes, from, len as usize, value + def.slot_bytes as usize);
-        self.with_slot(index, |slot| {
-            slot.value_len = len;
-            slot.default_len = len;
+        self.put(param, def, index, Which::Value, from, len);
+        self.put(param, def, index, Which::Default, from, len);
+    }
+
+    /// Copies the `len` bytes at `from` into an instance's value or default (slot `index`).
+    fn put(
+        &mut self,
+        param: u32,
+        def: &ParamDef,
+        index: usize,
+        which: Which,
+        from: usize,
+        len: usize,
+    ) {
+        let (to, _) = self.span(def, index, which);
+        copy_apart(self.bytes.as_mut(), from, len, to);
+        self.with_slot(index, |slot| match which {
+            Which::Value => slot.value_len = len as u16,
+            Which::Default => slot.default_len = len as u16,
         });
-        self.resolve(param, def, index, Which::Value);
-        self.resolve(param, def, index, Which::Default);
+        self.resolve(param, def, index, which);
     }
 
     fn stage(&mut self, data: &[u8]) {
@@ -1190,18 +1223,9 @@ where
     fn commit(&mut self, param: u32, def: &ParamDef, instance: u16, which: Which, len: usize) {
         let index = def.first_slot as usize + 1 + instance as usize;
         let follows = which == Which::Default && self.values_equal(def, index);
-        let scratch = self.scratch;
-        for w in [Some(which), follows.then_some(Which::Value)]
-            .into_iter()
-            .flatten()
-        {
-            let (to, _) = self.span(def, index, w);
-            copy_apart(self.bytes.as_mut(), scratch, len, to);
-            self.with_slot(index, |slot| match w {
-                Which::Value => slot.value_len = len as u16,
-                Which::Default => slot.default_len = len as u16,
-            });
-            self.resolve(param, def, index, w);
+        self.put(param, def, index, which, self.scratch, len);
+        if follows {
+            self.put(param, def, index, Which::Value, self.scratch, len);
         }
         self.with_slot(index, |s| s.flags |= UNSAVED);
     }
@@ -1323,7 +1347,8 @@ fn is_version(layout: &Layout<'_>, path: &Path) -> bool {
 }
 
 /// Checks that `data` is exactly one stored value of `root` whose `p_version` fields hold the
-/// version.
+/// version. In line, so that the codec's error becomes the store's where it is returned.
+#[inline(always)]
 fn check_encoded(layout: &Layout<'_>, root: NodeId, data: &[u8]) -> Result<()> {
     codec::check_stored(layout, root, data).map_err(StoreError::Codec)
 }

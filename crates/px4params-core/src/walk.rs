@@ -126,7 +126,9 @@ struct Find<'w, A> {
     /// Where a leaf that lies beyond the data starts.
     beyond: usize,
     aim: A,
-    found: Option<(Leaf, Scalar, bool)>,
+    found: Option<(Leaf, Scalar)>,
+    /// The leaf found is a `p_version` field.
+    version: bool,
 }
 
 impl<'w, A: Aim> Find<'w, A> {
@@ -137,6 +139,7 @@ impl<'w, A: Aim> Find<'w, A> {
             beyond: 0,
             aim,
             found: None,
+            version: false,
         }
     }
 }
@@ -350,7 +353,8 @@ impl<A: Aim> Visit for Find<'_, A> {
             kind: at.kind,
             path: *at.path,
         };
-        self.found = Some((leaf, old.unwrap_or(Scalar::Uint(0)), at.version.is_some()));
+        self.found = Some((leaf, old.unwrap_or(Scalar::Uint(0))));
+        self.version = at.version.is_some();
         Err(Halt::Found)
     }
 
@@ -373,10 +377,13 @@ fn find<R: BitRead + ?Sized, A: Aim>(
     data: &R,
     find: &mut Find<'_, A>,
     tao: bool,
-) -> Result<(Leaf, Scalar, bool), LeafAccessError> {
+) -> Result<(Leaf, Scalar), LeafAccessError> {
     let bits = Bits(data);
     let job = Job::reading(&bits, tao, find.aim.steer());
-    let walked = run(layout, root, job, find).map_err(plain)?;
+    let walked = match run(layout, root, job, find) {
+        Ok(walked) => walked,
+        Err(e) => return Err(plain(e)),
+    };
     match find.found {
         Some(found) => Ok(found),
         None => Err(find.aim.missing(walked)),
@@ -400,9 +407,13 @@ pub(crate) fn locate_by<R: BitRead + ?Sized>(
         on: false,
         missing: None,
     };
-    let mut found = Find::new(layout, data, toward);
-    let (leaf, value, _) = find(layout, root, data, &mut found, tao)?;
-    Ok((leaf, value))
+    find(
+        layout,
+        root,
+        data,
+        &mut Find::new(layout, data, toward),
+        tao,
+    )
 }
 
 /// Finds leaf `[k]` of `data`, a value of type `root`, and reads it (what
@@ -414,9 +425,13 @@ pub fn locate<R: BitRead + ?Sized>(
     k: usize,
     tao: bool,
 ) -> Result<(Leaf, Scalar), LeafAccessError> {
-    let mut found = Find::new(layout, data, Index(k));
-    let (leaf, value, _) = find(layout, root, data, &mut found, tao)?;
-    Ok((leaf, value))
+    find(
+        layout,
+        root,
+        data,
+        &mut Find::new(layout, data, Index(k)),
+        tao,
+    )
 }
 
 /// Where leaf `[k]` is (what [`crate::leaf::seek`] gives); `None` where [`locate`] fails.
@@ -427,11 +442,11 @@ pub fn seek<R: BitRead + ?Sized>(
     k: usize,
 ) -> Option<Position> {
     let mut found = Find::new(layout, data, Index(k));
-    let (leaf, _, version) = find(layout, root, data, &mut found, false).ok()?;
+    let (leaf, _) = find(layout, root, data, &mut found, false).ok()?;
     Some(Position {
         bit_offset: leaf.bit_offset,
         kind: leaf.kind,
-        version: version && matches!(leaf.kind, LeafKind::Scalar(_)),
+        version: found.version && matches!(leaf.kind, LeafKind::Scalar(_)),
     })
 }
 
@@ -548,9 +563,10 @@ pub fn check_versions(
     }
     let bits = Bits(data);
     let job = Job::reading(&bits, false, Steer::No);
-    let end = run(layout, root, job, &mut Versions(Scalar::Uint(0), 0))
-        .map_err(plain)?
-        .read;
+    let end = match run(layout, root, job, &mut Versions(Scalar::Uint(0), 0)) {
+        Ok(walked) => walked.read,
+        Err(e) => return Err(plain(e)),
+    };
     let (used, len) = (end.div_ceil(8), data.len());
     if len > used {
         return Err(Error {
