@@ -340,7 +340,9 @@ def test_hash_check_set_stops_the_stream(schema: px4params.Schema) -> None:
         server.stop()
 
 
-def test_autopilot_version_and_heartbeat(served: tuple[MavlinkParamServer, Client]) -> None:
+def test_autopilot_version_and_heartbeat(
+    served: tuple[MavlinkParamServer, Client], tmp_path: Path
+) -> None:
     server, client = served
     heartbeat = client.expect("HEARTBEAT", timeout=3)
     assert heartbeat.autopilot == mavlink.MAV_AUTOPILOT_PX4
@@ -373,7 +375,7 @@ def test_autopilot_version_and_heartbeat(served: tuple[MavlinkParamServer, Clien
     takeoff = client.expect("COMMAND_ACK", where=lambda m: m.command == mavlink.MAV_CMD_NAV_TAKEOFF)
     assert takeoff.result == mavlink.MAV_RESULT_UNSUPPORTED
     # Another store file is another vehicle; the same file (reopened) is the same one.
-    other = MavlinkParamServer(server.store, "127.0.0.1", 0, save_path="/tmp/another.store")
+    other = MavlinkParamServer(server.store, "127.0.0.1", 0, save_path=tmp_path / "another.store")
     same = MavlinkParamServer(server.store, "127.0.0.1", 0, save_path=server.save_path)
     try:
         assert other.uid[0] != uid and same.uid[0] == uid
