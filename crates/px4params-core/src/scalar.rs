@@ -210,9 +210,7 @@ fn uint_to_f64(v: u64) -> f64 {
 /// below them.
 #[inline(never)]
 fn uint_to_f64_bits(v: u64) -> f64 {
-    let zeros = v.leading_zeros();
-    // 64 zeros (`v` is 0, whose float is set apart at the end) shift by 0.
-    let top = v << (zeros & 63);
+    let (top, zeros) = shift_top(v);
     // The significand's leading 1 lands on the exponent's lowest bit and adds 1: the biased
     // exponent 1023 + (63 - zeros) is stored less 1.
     let mut bits = (u64::from(1085 - zeros) << 52) + (top >> 11);
@@ -222,6 +220,25 @@ fn uint_to_f64_bits(v: u64) -> f64 {
         bits += 1;
     }
     f64::from_bits(if v == 0 { 0 } else { bits })
+}
+
+/// `v` shifted up until its top bit is set, and by how many bits (its leading zeros; 0 stays
+/// 0), in 32-bit halves: a 64-bit shift by a variable amount is a routine call on 32-bit cores
+/// (`__aeabi_llsl`, 44 bytes).
+#[inline(always)]
+fn shift_top(v: u64) -> (u64, u32) {
+    let (high, low) = ((v >> 32) as u32, v as u32);
+    // A high half of zeros: the low half moves up whole.
+    let (high, low, whole) = if high == 0 {
+        (low, 0, 32)
+    } else {
+        (high, low, 0)
+    };
+    let zeros = high.leading_zeros();
+    let s = zeros & 31;
+    // The low half's top `s` bits join the high half (none for `s` 0: two shifts, not 32).
+    let high = (high << s) | ((low >> 1) >> (31 - s));
+    (u64::from(high) << 32 | u64::from(low << s), whole + zeros)
 }
 
 /// Encodes a float field of 16, 32 or 64 bits to raw bits.
