@@ -126,25 +126,27 @@ pub fn uint_raw(value: Scalar, bits: u32, cast: Cast, saturate: bool) -> Result<
     if let (Scalar::Bool(b), 1) = (value, bits) {
         return Ok(u64::from(b));
     }
-    integer_raw(value, crate::bits::field_mask(bits), false, cast, saturate)
+    integer_raw(value, bits, false, cast, saturate)
 }
 
 /// Encodes a signed integer field of `bits` bits to raw (two's complement) bits.
 #[inline]
 pub fn int_raw(value: Scalar, bits: u32, cast: Cast, saturate: bool) -> Result<u64, ScalarError> {
-    integer_raw(value, crate::bits::field_mask(bits), true, cast, saturate)
+    integer_raw(value, bits, true, cast, saturate)
 }
 
-/// An integer `value` for a field of the bits of `mask` (two's complement when `signed`),
-/// cast as `cast` says where it is out of range (clamped only when `saturate`). In 64-bit
-/// arithmetic (no `i128`: on 32-bit cores every 128-bit compare is a run of instructions).
+/// An integer `value` for a field of `bits` bits (two's complement when `signed`), cast as
+/// `cast` says where it is out of range (clamped only when `saturate`). In 64-bit arithmetic
+/// (no `i128`: on 32-bit cores every 128-bit compare is a run of instructions).
 fn integer_raw(
     value: Scalar,
-    mask: u64,
+    bits: u32,
     signed: bool,
     cast: Cast,
     saturate: bool,
 ) -> Result<u64, ScalarError> {
+    // The mask here, once for both kinds of integer.
+    let mask = crate::bits::field_mask(bits);
     // The field holds min..=max: 0..=mask unsigned, -(mask/2)-1..=mask/2 signed.
     let max = if signed { mask >> 1 } else { mask };
     let min = if signed { !max as i64 } else { 0 };
