@@ -1602,9 +1602,11 @@ pub(crate) fn write_whole(
         options,
     };
     let end = visit(layout, root, job, v)?.written;
+    // The last byte's unused bits (the walk wrote within `out`: no bounds check to panic).
     if end % 8 != 0 {
-        // The last byte's unused bits.
-        out[end / 8] &= 0xFF << (8 - end % 8);
+        if let Some(byte) = out.get_mut(end / 8) {
+            *byte &= 0xFF << (8 - end % 8);
+        }
     }
     Ok(end.div_ceil(8))
 }
@@ -1915,9 +1917,14 @@ pub(crate) fn put(out: &mut [u8], mut pos: usize, raw: u64, bits: u32) {
         let place = 16 - n - s;
         let bits = ((value as u32) & ((1 << n) - 1)) << place;
         let keep = !(((1u32 << n) - 1) << place);
-        out[i] = (u32::from(out[i]) & (keep >> 8)) as u8 | (bits >> 8) as u8;
+        // (Checked reaches: the caller has checked them, and firmware links no panic here.)
+        if let Some(byte) = out.get_mut(i) {
+            *byte = (u32::from(*byte) & (keep >> 8)) as u8 | (bits >> 8) as u8;
+        }
         if s + n > 8 {
-            out[i + 1] = (u32::from(out[i + 1]) & keep) as u8 | bits as u8;
+            if let Some(byte) = out.get_mut(i + 1) {
+                *byte = (u32::from(*byte) & keep) as u8 | bits as u8;
+            }
         }
         value >>= 8;
         pos += n as usize;
