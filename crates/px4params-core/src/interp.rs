@@ -1626,10 +1626,11 @@ impl Visiting<'_> {
         Stop
     }
 
-    /// Reads `bits` bits where the mode reads (0 elsewhere).
-    fn read(&mut self, bits: u32) -> Result<u64, Stop> {
+    /// Reads `bits` bits into `raw` where the mode reads (elsewhere `raw` stays: the
+    /// default). (The value in place, not in a result: one register-sized result.)
+    fn read(&mut self, bits: u32, raw: &mut u64) -> Result<(), Stop> {
         let Some(input) = self.job.input.filter(|_| bits > 0 && self.mode.reads()) else {
-            return Ok(0);
+            return Ok(());
         };
         let (needed, available) = (self.rpos + bits as usize, input.bit_len());
         if needed > available {
@@ -1650,7 +1651,8 @@ impl Visiting<'_> {
             k += 1;
             self.rpos += n as usize;
         }
-        Ok(u64::from_le_bytes(bytes))
+        *raw = u64::from_le_bytes(bytes);
+        Ok(())
     }
 
     fn write(&mut self, raw: u64, bits: u32) {
@@ -1737,10 +1739,8 @@ impl Visiting<'_> {
     fn primitive(&mut self, kind: Kind, version: Option<u32>, path: &Path) -> Result<(), Stop> {
         let bits = scalar_bits(kind);
         let at = self.pos();
-        let mut raw = match self.mode.reads() {
-            true => self.read(bits)?,
-            false => version.unwrap_or(0).into(),
-        };
+        let mut raw: u64 = version.unwrap_or(0).into();
+        self.read(bits, &mut raw)?;
         self.visited(LeafKind::Scalar(kind), version, at, &mut raw, path)?;
         self.write(raw, bits);
         Ok(())
@@ -1780,7 +1780,7 @@ impl Pass for Visiting<'_> {
         Ok(())
     }
     fn void(&mut self, bits: u32) -> Result<(), Stop> {
-        self.read(bits)?;
+        self.read(bits, &mut 0)?;
         self.write(0, bits);
         Ok(())
     }
@@ -1802,7 +1802,8 @@ impl Pass for Visiting<'_> {
         path: &Path,
     ) -> Result<(u64, u64), Stop> {
         let at = self.pos();
-        let old = self.read(bits.into())?;
+        let mut old = 0;
+        self.read(bits.into(), &mut old)?;
         let kind = LeafKind::Tag { bits, union: id };
         let mut new = old;
         self.visited(kind, None, at, &mut new, path)?;
@@ -1831,7 +1832,11 @@ impl Pass for Visiting<'_> {
         match self.mode.reads() && tail {
             // Counted ahead by the loop.
             true => Ok(None),
-            false => self.read(bits.into()).map(Some),
+            false => {
+                let mut n = 0;
+                self.read(bits.into(), &mut n)?;
+                Ok(Some(n))
+            }
         }
     }
     fn relength(&mut self, n: Option<u64>, at: At<'_>) -> Result<Option<u64>, Stop> {
