@@ -179,17 +179,12 @@ fn integer_raw(
 }
 
 /// `v` as the nearest float (`v as f64`). On 32-bit cores from its magnitude (see
-/// [`uint_to_f64`]): rounding to nearest is the same for `-v` as for `v`, so the negated
-/// magnitude's float is `v`'s.
+/// [`uint_to_f64`]): rounding to nearest is the same for `-v` as for `v`, so the magnitude's
+/// float with `v`'s sign is `v`'s.
 #[inline]
 fn int_to_f64(v: i64) -> f64 {
     if cfg!(target_pointer_width = "32") {
-        let magnitude = uint_to_f64_bits(v.unsigned_abs());
-        if v < 0 {
-            -magnitude
-        } else {
-            magnitude
-        }
+        uint_to_f64_bits(v.unsigned_abs(), v < 0)
     } else {
         v as f64
     }
@@ -201,7 +196,7 @@ fn int_to_f64(v: i64) -> f64 {
 #[inline]
 fn uint_to_f64(v: u64) -> f64 {
     if cfg!(target_pointer_width = "32") {
-        uint_to_f64_bits(v)
+        uint_to_f64_bits(v, false)
     } else {
         v as f64
     }
@@ -209,9 +204,9 @@ fn uint_to_f64(v: u64) -> f64 {
 
 /// [`uint_to_f64`] by the bits of IEEE 754 binary64: the value shifted up until its top bit is
 /// set, whose top 53 bits are the significand, rounded to nearest (ties to even) by the 11
-/// below them.
+/// below them; negated where `negative` (its sign bit: one conversion for both signs).
 #[inline(never)]
-fn uint_to_f64_bits(v: u64) -> f64 {
+fn uint_to_f64_bits(v: u64, negative: bool) -> f64 {
     let (top, zeros) = shift_top(v);
     // The significand's leading 1 lands on the exponent's lowest bit and adds 1: the biased
     // exponent 1023 + (63 - zeros) is stored less 1.
@@ -221,7 +216,7 @@ fn uint_to_f64_bits(v: u64) -> f64 {
         // A carry out of the significand moves to the next power of two, as it should.
         bits += 1;
     }
-    f64::from_bits(if v == 0 { 0 } else { bits })
+    f64::from_bits(if v == 0 { 0 } else { bits } | u64::from(negative) << 63)
 }
 
 /// `v` shifted up until its top bit is set, and by how many bits (its leading zeros; 0 stays
@@ -411,7 +406,13 @@ mod tests {
             for v in [v, v.wrapping_neg()] {
                 assert_eq!(int_to_f64(v).to_bits(), (v as f64).to_bits(), "{v}");
                 let u = v as u64;
-                assert_eq!(uint_to_f64_bits(u).to_bits(), (u as f64).to_bits(), "{u}");
+                assert_eq!(
+                    uint_to_f64_bits(u, false).to_bits(),
+                    (u as f64).to_bits(),
+                    "{u}"
+                );
+                let negated = uint_to_f64_bits(u, true).to_bits();
+                assert_eq!(negated, (-(u as f64)).to_bits(), "-{u}");
             }
         }
     }
