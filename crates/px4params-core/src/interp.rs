@@ -421,9 +421,11 @@ impl<'l, P: Pass> Run<'l, P> {
                 // The rule: the last array of a value, of elements of a byte or more, has no
                 // prefix and takes the remaining whole bytes (in the value read, and in the
                 // value written, which differ in their last element when a length changes).
-                let rtail = tail_optimized(layout, elem, tao.read());
-                let wtail = match P::EDITS && tao.read() != tao.write() {
-                    true => tail_optimized(layout, elem, tao.write()),
+                // (Whether the elements allow it, asked once for both.)
+                let tail_elements = tail_optimized(layout, elem, true);
+                let rtail = tao.read() && tail_elements;
+                let wtail = match P::EDITS {
+                    true => tao.write() && tail_elements,
                     false => rtail,
                 };
                 let r = self.pass.length(len_bits, rtail);
