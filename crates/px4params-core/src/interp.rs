@@ -1644,15 +1644,17 @@ impl Visiting<'_> {
         // The value's bytes, least significant first (its top bits last), each read most
         // significant bit first: a byte at a time, from the pair of bytes it may span.
         // (Gathered as bytes: a 64-bit shift by a variable amount is a call on 32-bit targets.)
-        let (mut bytes, mut k) = ([0u8; 8], 0);
-        while self.rpos < needed {
-            let n = (needed - self.rpos).min(8) as u32;
-            let (i, s) = (self.rpos / 8, (self.rpos % 8) as u32);
+        // (Where it stands is kept in a register, and stored once.)
+        let (mut bytes, mut k, mut pos) = ([0u8; 8], 0, self.rpos);
+        while pos < needed {
+            let n = (needed - pos).min(8) as u32;
+            let (i, s) = (pos / 8, (pos % 8) as u32);
             let window = u32::from(input.pair(i)) << s;
             bytes[k & 7] = ((window >> (16 - n)) & ((1 << n) - 1)) as u8;
             k += 1;
-            self.rpos += n as usize;
+            pos += n as usize;
         }
+        self.rpos = needed;
         *raw = u64::from_le_bytes(bytes);
         Ok(())
     }
