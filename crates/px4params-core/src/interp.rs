@@ -1378,6 +1378,12 @@ impl<R: BitRead + ?Sized> Input for Bits<'_, R> {
         self.0.bit_len()
     }
     fn pair(&self, index: usize) -> u16 {
+        if let Some(bytes) = self.0.contiguous() {
+            // Bytes in one run (any but scattered payloads): taken by checked accessors, 0
+            // beyond the end, so that reading them links no bounds-check panic.
+            let at = |i: usize| u16::from(bytes.get(i).copied().unwrap_or(0));
+            return at(index) << 8 | at(index + 1);
+        }
         let next = match index + 1 < self.0.bit_len() / 8 {
             true => self.0.byte(index + 1),
             false => 0,
