@@ -15,7 +15,7 @@
 
 use crate::bits::{BitRead, BitReader, BitWriter};
 use crate::error::{Error, ErrorKind, Path, Step};
-use crate::layout::{FlatItem, Kind, Layout, Node, NodeId, Role, Segment, Span};
+use crate::layout::{Field, FlatItem, Kind, Layout, Node, NodeId, Role, Segment, Span};
 use crate::plan::Plans;
 use crate::rules::{
     scalar_bits, scalar_of, scalar_raw, tail_optimized, ArrayLen, At, DecodeOptions, EncodeOptions,
@@ -309,7 +309,12 @@ impl<'l, P: Pass> Run<'l, P> {
             self.path.push(step);
         }
         let layout = self.layout;
-        let node = layout.node(id);
+        // A node or field the layout lacks (a malformed one, such as a corrupt firmware
+        // table) is refused as the layout that nests too deeply is, not a panic: the walk
+        // then links none.
+        let Some(node) = layout.nodes.get(id as usize) else {
+            return Err(self.fail(ErrorKind::TooDeep));
+        };
         if P::EDITS && self.pass.steered() {
             let at = PartAt {
                 node: id,
@@ -365,7 +370,9 @@ impl<'l, P: Pass> Run<'l, P> {
                 let limit = u64::from(count);
                 self.counts(true, Some(read), Some(tag), limit, at_pos)?;
                 let index = first + tag as u32;
-                let variant = layout.fields[index as usize];
+                let Some(&variant) = layout.fields.get(index as usize) else {
+                    return Err(self.fail(ErrorKind::TooDeep));
+                };
                 let at = At {
                     path: &self.path,
                     bit_offset: at_pos,
@@ -383,7 +390,9 @@ impl<'l, P: Pass> Run<'l, P> {
                         // its default value.
                         let old = first + read as u32;
                         self.pass.set_mode(Mode::Skip);
-                        let node = layout.fields[old as usize].node;
+                        let Some(&Field { node, .. }) = layout.fields.get(old as usize) else {
+                            return Err(self.fail(ErrorKind::TooDeep));
+                        };
                         self.part(node, tao, None, Some(Step::Field(old)))?;
                         self.pass.set_mode(Mode::Default);
                     }
@@ -559,7 +568,9 @@ impl<'l, P: Pass> Run<'l, P> {
     /// versions), so that the struct can tell unknown input fields.
     fn field(&mut self, index: u32, tao: Tao) -> Result<usize, Stop> {
         let layout = self.layout;
-        let field = layout.fields[index as usize];
+        let Some(&field) = layout.fields.get(index as usize) else {
+            return Err(self.fail(ErrorKind::TooDeep));
+        };
         if P::EDITS {
             // Every field is there: a part like any other, a `p_version` one with its version.
             let version = match field.role {
@@ -652,8 +663,9 @@ impl<'l, P: Pass> Run<'l, P> {
                 };
                 return Err(self.fail(too_long));
             }
-            let node = self.layout.node(elem);
-            if node.fixed_leaves().is_some() {
+            // (An element node the layout lacks is refused where it is walked.)
+            let fixed = self.layout.nodes.get(elem as usize);
+            if let Some(node) = fixed.filter(|node| node.fixed_leaves().is_some()) {
                 // Any fault in it is found when it is read.
                 self.pass
                     .seek_read(self.pass.read_pos() + node.min_bits as usize);
