@@ -237,7 +237,8 @@ pub enum ErrorKind<E> {
     VariantNotSelected,
     /// The path ends at a struct, union or array instead of a leaf.
     NotALeaf,
-    /// The layout nests deeper than the codec follows (a malformed layout).
+    /// The layout nests deeper than the codec follows, or the walk comes to a node or field
+    /// the layout lacks (a malformed layout).
     TooDeep,
     /// The value source or sink failed.
     Value(E),

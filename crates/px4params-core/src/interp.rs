@@ -15,7 +15,7 @@
 
 use crate::bits::{BitRead, BitReader, BitWriter};
 use crate::error::{Error, ErrorKind, Path, Step};
-use crate::layout::{FlatItem, Kind, Layout, Node, NodeId, Role, Segment, Span};
+use crate::layout::{Field, FlatItem, Kind, Layout, Node, NodeId, Role, Segment, Span};
 use crate::plan::Plans;
 use crate::rules::{
     scalar_bits, scalar_of, scalar_raw, tail_optimized, ArrayLen, At, DecodeOptions, EncodeOptions,
@@ -309,7 +309,12 @@ impl<'l, P: Pass> Run<'l, P> {
             self.path.push(step);
         }
         let layout = self.layout;
-        let node = layout.node(id);
+        // A node or field the layout lacks (a malformed one, such as a corrupt firmware
+        // table) is refused as the layout that nests too deeply is, not a panic: the walk
+        // then links none.
+        let Some(node) = layout.nodes.get(id as usize) else {
+            return Err(self.fail(ErrorKind::TooDeep));
+        };
         if P::EDITS && self.pass.steered() {
             let at = PartAt {
                 node: id,
@@ -365,7 +370,9 @@ impl<'l, P: Pass> Run<'l, P> {
                 let limit = u64::from(count);
                 self.counts(true, Some(read), Some(tag), limit, at_pos)?;
                 let index = first + tag as u32;
-                let variant = layout.fields[index as usize];
+                let Some(&variant) = layout.fields.get(index as usize) else {
+                    return Err(self.fail(ErrorKind::TooDeep));
+                };
                 let at = At {
                     path: &self.path,
                     bit_offset: at_pos,
@@ -383,7 +390,9 @@ impl<'l, P: Pass> Run<'l, P> {
                         // its default value.
                         let old = first + read as u32;
                         self.pass.set_mode(Mode::Skip);
-                        let node = layout.fields[old as usize].node;
+                        let Some(&Field { node, .. }) = layout.fields.get(old as usize) else {
+                            return Err(self.fail(ErrorKind::TooDeep));
+                        };
                         self.part(node, tao, None, Some(Step::Field(old)))?;
                         self.pass.set_mode(Mode::Default);
                     }
@@ -421,9 +430,11 @@ impl<'l, P: Pass> Run<'l, P> {
                 // The rule: the last array of a value, of elements of a byte or more, has no
                 // prefix and takes the remaining whole bytes (in the value read, and in the
                 // value written, which differ in their last element when a length changes).
-                let rtail = tail_optimized(layout, elem, tao.read());
-                let wtail = match P::EDITS && tao.read() != tao.write() {
-                    true => tail_optimized(layout, elem, tao.write()),
+                // (Whether the elements allow it, asked once for both.)
+                let tail_elements = tail_optimized(layout, elem, true);
+                let rtail = tao.read() && tail_elements;
+                let wtail = match P::EDITS {
+                    true => tao.write() && tail_elements,
                     false => rtail,
                 };
                 let r = self.pass.length(len_bits, rtail);
@@ -557,7 +568,9 @@ impl<'l, P: Pass> Run<'l, P> {
     /// versions), so that the struct can tell unknown input fields.
     fn field(&mut self, index: u32, tao: Tao) -> Result<usize, Stop> {
         let layout = self.layout;
-        let field = layout.fields[index as usize];
+        let Some(&field) = layout.fields.get(index as usize) else {
+            return Err(self.fail(ErrorKind::TooDeep));
+        };
         if P::EDITS {
             // Every field is there: a part like any other, a `p_version` one with its version.
             let version = match field.role {
@@ -650,8 +663,9 @@ impl<'l, P: Pass> Run<'l, P> {
                 };
                 return Err(self.fail(too_long));
             }
-            let node = self.layout.node(elem);
-            if node.fixed_leaves().is_some() {
+            // (An element node the layout lacks is refused where it is walked.)
+            let fixed = self.layout.nodes.get(elem as usize);
+            if let Some(node) = fixed.filter(|node| node.fixed_leaves().is_some()) {
                 // Any fault in it is found when it is read.
                 self.pass
                     .seek_read(self.pass.read_pos() + node.min_bits as usize);
@@ -1376,6 +1390,12 @@ impl<R: BitRead + ?Sized> Input for Bits<'_, R> {
         self.0.bit_len()
     }
     fn pair(&self, index: usize) -> u16 {
+        if let Some(bytes) = self.0.contiguous() {
+            // Bytes in one run (any but scattered payloads): taken by checked accessors, 0
+            // beyond the end, so that reading them links no bounds-check panic.
+            let at = |i: usize| u16::from(bytes.get(i).copied().unwrap_or(0));
+            return at(index) << 8 | at(index + 1);
+        }
         let next = match index + 1 < self.0.bit_len() / 8 {
             true => self.0.byte(index + 1),
             false => 0,
@@ -1602,9 +1622,11 @@ pub(crate) fn write_whole(
         options,
     };
     let end = visit(layout, root, job, v)?.written;
+    // The last byte's unused bits (the walk wrote within `out`: no bounds check to panic).
     if end % 8 != 0 {
-        // The last byte's unused bits.
-        out[end / 8] &= 0xFF << (8 - end % 8);
+        if let Some(byte) = out.get_mut(end / 8) {
+            *byte &= 0xFF << (8 - end % 8);
+        }
     }
     Ok(end.div_ceil(8))
 }
@@ -1624,10 +1646,11 @@ impl Visiting<'_> {
         Stop
     }
 
-    /// Reads `bits` bits where the mode reads (0 elsewhere).
-    fn read(&mut self, bits: u32) -> Result<u64, Stop> {
+    /// Reads `bits` bits into `raw` where the mode reads (elsewhere `raw` stays: the
+    /// default). (The value in place, not in a result: one register-sized result.)
+    fn read(&mut self, bits: u32, raw: &mut u64) -> Result<(), Stop> {
         let Some(input) = self.job.input.filter(|_| bits > 0 && self.mode.reads()) else {
-            return Ok(0);
+            return Ok(());
         };
         let (needed, available) = (self.rpos + bits as usize, input.bit_len());
         if needed > available {
@@ -1639,16 +1662,19 @@ impl Visiting<'_> {
         // The value's bytes, least significant first (its top bits last), each read most
         // significant bit first: a byte at a time, from the pair of bytes it may span.
         // (Gathered as bytes: a 64-bit shift by a variable amount is a call on 32-bit targets.)
-        let (mut bytes, mut k) = ([0u8; 8], 0);
-        while self.rpos < needed {
-            let n = (needed - self.rpos).min(8) as u32;
-            let (i, s) = (self.rpos / 8, (self.rpos % 8) as u32);
+        // (Where it stands is kept in a register, and stored once.)
+        let (mut bytes, mut k, mut pos) = ([0u8; 8], 0, self.rpos);
+        while pos < needed {
+            let n = (needed - pos).min(8) as u32;
+            let (i, s) = (pos / 8, (pos % 8) as u32);
             let window = u32::from(input.pair(i)) << s;
             bytes[k & 7] = ((window >> (16 - n)) & ((1 << n) - 1)) as u8;
             k += 1;
-            self.rpos += n as usize;
+            pos += n as usize;
         }
-        Ok(u64::from_le_bytes(bytes))
+        self.rpos = needed;
+        *raw = u64::from_le_bytes(bytes);
+        Ok(())
     }
 
     fn write(&mut self, raw: u64, bits: u32) {
@@ -1735,10 +1761,8 @@ impl Visiting<'_> {
     fn primitive(&mut self, kind: Kind, version: Option<u32>, path: &Path) -> Result<(), Stop> {
         let bits = scalar_bits(kind);
         let at = self.pos();
-        let mut raw = match self.mode.reads() {
-            true => self.read(bits)?,
-            false => version.unwrap_or(0).into(),
-        };
+        let mut raw: u64 = version.unwrap_or(0).into();
+        self.read(bits, &mut raw)?;
         self.visited(LeafKind::Scalar(kind), version, at, &mut raw, path)?;
         self.write(raw, bits);
         Ok(())
@@ -1778,7 +1802,7 @@ impl Pass for Visiting<'_> {
         Ok(())
     }
     fn void(&mut self, bits: u32) -> Result<(), Stop> {
-        self.read(bits)?;
+        self.read(bits, &mut 0)?;
         self.write(0, bits);
         Ok(())
     }
@@ -1800,7 +1824,8 @@ impl Pass for Visiting<'_> {
         path: &Path,
     ) -> Result<(u64, u64), Stop> {
         let at = self.pos();
-        let old = self.read(bits.into())?;
+        let mut old = 0;
+        self.read(bits.into(), &mut old)?;
         let kind = LeafKind::Tag { bits, union: id };
         let mut new = old;
         self.visited(kind, None, at, &mut new, path)?;
@@ -1829,7 +1854,11 @@ impl Pass for Visiting<'_> {
         match self.mode.reads() && tail {
             // Counted ahead by the loop.
             true => Ok(None),
-            false => self.read(bits.into()).map(Some),
+            false => {
+                let mut n = 0;
+                self.read(bits.into(), &mut n)?;
+                Ok(Some(n))
+            }
         }
     }
     fn relength(&mut self, n: Option<u64>, at: At<'_>) -> Result<Option<u64>, Stop> {
@@ -1915,9 +1944,14 @@ pub(crate) fn put(out: &mut [u8], mut pos: usize, raw: u64, bits: u32) {
         let place = 16 - n - s;
         let bits = ((value as u32) & ((1 << n) - 1)) << place;
         let keep = !(((1u32 << n) - 1) << place);
-        out[i] = (u32::from(out[i]) & (keep >> 8)) as u8 | (bits >> 8) as u8;
+        // (Checked reaches: the caller has checked them, and firmware links no panic here.)
+        if let Some(byte) = out.get_mut(i) {
+            *byte = (u32::from(*byte) & (keep >> 8)) as u8 | (bits >> 8) as u8;
+        }
         if s + n > 8 {
-            out[i + 1] = (u32::from(out[i + 1]) & keep) as u8 | bits as u8;
+            if let Some(byte) = out.get_mut(i + 1) {
+                *byte = (u32::from(*byte) & keep) as u8 | bits as u8;
+            }
         }
         value >>= 8;
         pos += n as usize;

@@ -201,10 +201,14 @@ pub struct Decoded {
     pub leaves: usize,
 }
 
-/// Whether a dynamic array with element `elem` drops its length prefix when it is last.
+/// Whether a dynamic array with element `elem` drops its length prefix when it is last (not
+/// where the layout lacks the node: the walk refuses it where it comes to it).
 #[inline]
 pub(crate) fn tail_optimized(layout: &Layout<'_>, elem: NodeId, tao: bool) -> bool {
-    tao && layout.node(elem).min_bits >= 8
+    tao && layout
+        .nodes
+        .get(elem as usize)
+        .is_some_and(|n| n.min_bits >= 8)
 }
 
 /// A scalar from its raw bits.

@@ -126,25 +126,27 @@ pub fn uint_raw(value: Scalar, bits: u32, cast: Cast, saturate: bool) -> Result<
     if let (Scalar::Bool(b), 1) = (value, bits) {
         return Ok(u64::from(b));
     }
-    integer_raw(value, crate::bits::field_mask(bits), false, cast, saturate)
+    integer_raw(value, bits, false, cast, saturate)
 }
 
 /// Encodes a signed integer field of `bits` bits to raw (two's complement) bits.
 #[inline]
 pub fn int_raw(value: Scalar, bits: u32, cast: Cast, saturate: bool) -> Result<u64, ScalarError> {
-    integer_raw(value, crate::bits::field_mask(bits), true, cast, saturate)
+    integer_raw(value, bits, true, cast, saturate)
 }
 
-/// An integer `value` for a field of the bits of `mask` (two's complement when `signed`),
-/// cast as `cast` says where it is out of range (clamped only when `saturate`). In 64-bit
-/// arithmetic (no `i128`: on 32-bit cores every 128-bit compare is a run of instructions).
+/// An integer `value` for a field of `bits` bits (two's complement when `signed`), cast as
+/// `cast` says where it is out of range (clamped only when `saturate`). In 64-bit arithmetic
+/// (no `i128`: on 32-bit cores every 128-bit compare is a run of instructions).
 fn integer_raw(
     value: Scalar,
-    mask: u64,
+    bits: u32,
     signed: bool,
     cast: Cast,
     saturate: bool,
 ) -> Result<u64, ScalarError> {
+    // The mask here, once for both kinds of integer.
+    let mask = crate::bits::field_mask(bits);
     // The field holds min..=max: 0..=mask unsigned, -(mask/2)-1..=mask/2 signed.
     let max = if signed { mask >> 1 } else { mask };
     let min = if signed { !max as i64 } else { 0 };
@@ -177,17 +179,12 @@ fn integer_raw(
 }
 
 /// `v` as the nearest float (`v as f64`). On 32-bit cores from its magnitude (see
-/// [`uint_to_f64`]): rounding to nearest is the same for `-v` as for `v`, so the negated
-/// magnitude's float is `v`'s.
+/// [`uint_to_f64`]): rounding to nearest is the same for `-v` as for `v`, so the magnitude's
+/// float with `v`'s sign is `v`'s.
 #[inline]
 fn int_to_f64(v: i64) -> f64 {
     if cfg!(target_pointer_width = "32") {
-        let magnitude = uint_to_f64_bits(v.unsigned_abs());
-        if v < 0 {
-            -magnitude
-        } else {
-            magnitude
-        }
+        uint_to_f64_bits(v.unsigned_abs(), v < 0)
     } else {
         v as f64
     }
@@ -199,7 +196,7 @@ fn int_to_f64(v: i64) -> f64 {
 #[inline]
 fn uint_to_f64(v: u64) -> f64 {
     if cfg!(target_pointer_width = "32") {
-        uint_to_f64_bits(v)
+        uint_to_f64_bits(v, false)
     } else {
         v as f64
     }
@@ -207,12 +204,10 @@ fn uint_to_f64(v: u64) -> f64 {
 
 /// [`uint_to_f64`] by the bits of IEEE 754 binary64: the value shifted up until its top bit is
 /// set, whose top 53 bits are the significand, rounded to nearest (ties to even) by the 11
-/// below them.
+/// below them; negated where `negative` (its sign bit: one conversion for both signs).
 #[inline(never)]
-fn uint_to_f64_bits(v: u64) -> f64 {
-    let zeros = v.leading_zeros();
-    // 64 zeros (`v` is 0, whose float is set apart at the end) shift by 0.
-    let top = v << (zeros & 63);
+fn uint_to_f64_bits(v: u64, negative: bool) -> f64 {
+    let (top, zeros) = shift_top(v);
     // The significand's leading 1 lands on the exponent's lowest bit and adds 1: the biased
     // exponent 1023 + (63 - zeros) is stored less 1.
     let mut bits = (u64::from(1085 - zeros) << 52) + (top >> 11);
@@ -221,7 +216,26 @@ fn uint_to_f64_bits(v: u64) -> f64 {
         // A carry out of the significand moves to the next power of two, as it should.
         bits += 1;
     }
-    f64::from_bits(if v == 0 { 0 } else { bits })
+    f64::from_bits(if v == 0 { 0 } else { bits } | u64::from(negative) << 63)
+}
+
+/// `v` shifted up until its top bit is set, and by how many bits (its leading zeros; 0 stays
+/// 0), in 32-bit halves: a 64-bit shift by a variable amount is a routine call on 32-bit cores
+/// (`__aeabi_llsl`, 44 bytes).
+#[inline(always)]
+fn shift_top(v: u64) -> (u64, u32) {
+    let (high, low) = ((v >> 32) as u32, v as u32);
+    // A high half of zeros: the low half moves up whole.
+    let (high, low, whole) = if high == 0 {
+        (low, 0, 32)
+    } else {
+        (high, low, 0)
+    };
+    let zeros = high.leading_zeros();
+    let s = zeros & 31;
+    // The low half's top `s` bits join the high half (none for `s` 0: two shifts, not 32).
+    let high = (high << s) | ((low >> 1) >> (31 - s));
+    (u64::from(high) << 32 | u64::from(low << s), whole + zeros)
 }
 
 /// Encodes a float field of 16, 32 or 64 bits to raw bits.
@@ -392,7 +406,13 @@ mod tests {
             for v in [v, v.wrapping_neg()] {
                 assert_eq!(int_to_f64(v).to_bits(), (v as f64).to_bits(), "{v}");
                 let u = v as u64;
-                assert_eq!(uint_to_f64_bits(u).to_bits(), (u as f64).to_bits(), "{u}");
+                assert_eq!(
+                    uint_to_f64_bits(u, false).to_bits(),
+                    (u as f64).to_bits(),
+                    "{u}"
+                );
+                let negated = uint_to_f64_bits(u, true).to_bits();
+                assert_eq!(negated, (-(u as f64)).to_bits(), "-{u}");
             }
         }
     }

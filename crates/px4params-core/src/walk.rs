@@ -48,8 +48,11 @@ struct Collect<'s> {
 
 impl Visit for Collect<'_> {
     fn leaf(&mut self, _: &LeafAt<'_>, old: Option<Scalar>) -> Result<Option<Scalar>, Halt> {
-        let slot = self.leaves.get_mut(self.len).ok_or(Halt::Refused)?;
-        *slot = old.unwrap_or(Scalar::Uint(0));
+        // (Decoding reads every leaf it visits: `old` is there.)
+        let (Some(slot), Some(old)) = (self.leaves.get_mut(self.len), old) else {
+            return Err(Halt::Refused);
+        };
+        *slot = old;
         self.len += 1;
         Ok(None)
     }
