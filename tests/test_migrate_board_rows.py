@@ -68,7 +68,7 @@ def left_out(proposal: migrate.Proposal) -> dict[str, tuple[str, str]]:
 #: is an ADAP: line 10 starts it with -R 10 there, rc.sensors' probe (`ist8310 -X -q start`)
 #: elsewhere, without -R.
 CANHUBK3_ROTATION = (
-    "; its rotation 0 (rc.sensors probes without -R) holds only where that line does not run: "
+    "; its rotation 0 (rc.sensors starts it without -R) holds only where that line does not run: "
     "where it runs, it starts the device with -R 10 and the device is the board's, not the "
     "manifest's"
 )
@@ -114,6 +114,65 @@ def test_a_real_gps_compass_on_a_canhubk3_says_its_rotation_rests_on_the_hardwar
     (note,) = [n for n in ist.notes if "mr-canhubk3" in n]
     assert "rc.board_sensors:10 at main " in note
     assert note.endswith(CANHUBK3_ROTATION)
+
+
+#: The NXP MR-Tropic log of PX4 1.15.0 (frrs_ekf_failure.ulg): its GPS's IST8310 on I2C bus
+#: 1 at 0x0E (CAL_MAG0_ID 396809, sensor_mag 0), started with -R 10 (console line 36).
+FRRS_IST8310 = "ist8310 #0 on I2C bus 1 (external) address 0xE rotation 10"
+
+
+def frrs_on_canhubk3(console_rotation: bool = True, slots: bool = True) -> migrate.Proposal:
+    """The MR-Tropic log named as a CANHUBK3 of v1.15.0; without ``console_rotation`` its
+    line 36 as PX4 1.13 on prints a start without -R (i2c_spi_buses.cpp prints a rotation
+    only when not 0: battery_brownout.ulg's `ist8310 #0 on I2C bus 4 (external) address
+    0xC`); without ``slots`` the IST8310 is only in the boot console."""
+    import dataclasses
+
+    import shared_data
+
+    config = migrate.read_config(shared_data.shared_file("frrs_ekf_failure.ulg"))
+    assert config.console is not None and FRRS_IST8310 in config.console.splitlines()
+    if not console_rotation:
+        line = FRRS_IST8310.removesuffix(" rotation 10")
+        config = dataclasses.replace(config, console=config.console.replace(FRRS_IST8310, line))
+    if not slots:
+        params = {k: v for k, v in config.params.items() if not k.startswith("CAL_MAG0_")}
+        published = [p for p in config.published if p[2] != IST8310_BUS1]
+        config = dataclasses.replace(config, params=params, published=published)
+    return migrate.migrate(config, board=board("nxp_mr-canhubk3", "v1.15.0"))
+
+
+#: What the bus-1 IST8310's instance says where the boot console shows it runs without -R.
+CANHUBK3_CONSOLE = (
+    "; boot console line 36 shows it runs without -R, not with that line's -R 10: that line did "
+    "not start it"
+)
+
+
+def test_a_console_start_with_line_10s_rotation_is_the_boards_without_a_note() -> None:
+    # The real console: the IST8310 runs with -R 10, which rc.sensors' probe never passes: the
+    # board's (line 10 on an ADAP), left out, and nothing names line 10's condition
+    proposal = frrs_on_canhubk3()
+    assert left_out(proposal)["CAL_MAG0_ID = 396809"][0] == "board"
+    assert not [i for i in proposal.instances if i.name.startswith("IST8310")]
+    said = [n for i in proposal.instances for n in i.notes] + proposal.assumptions
+    assert not [n for n in said if "rc.board_sensors:10 " in n]
+
+
+@pytest.mark.parametrize("slots", [True, False])
+def test_a_console_start_without_rotation_settles_that_line_10_did_not_start_it(
+    slots: bool,
+) -> None:
+    # PX4 1.15 prints every -R but 0: an IST8310 on bus 1 started without -R was not started
+    # by line 10 (-R 10), whatever the hardware type. Its note says so, from the console, not
+    # that rotation 0 holds only where line 10 does not run (nor why rc.sensors would). With
+    # the CAL_MAG0 slot the device is proposed from it; without, from its console line
+    proposal = frrs_on_canhubk3(console_rotation=False, slots=slots)
+    (ist,) = [i for i in proposal.instances if i.name.startswith("IST8310")]
+    assert (ist.values["rotation"], ist.notes) == (0, [CANHUBK3_LINE_10 + CANHUBK3_CONSOLE])
+    found = "CAL_MAG0_ID = 396809: IST8310 (MAG)" if slots else "boot console line 36: ist8310"
+    (said,) = [a for a in proposal.assumptions if a.startswith(found)]
+    assert said.endswith(f"{CANHUBK3_LINE_10}: proposed, not left out on a guess{CANHUBK3_CONSOLE}")
 
 
 @pytest.mark.parametrize(
