@@ -259,3 +259,23 @@ def test_a_line_without_t_leaves_the_drivers_own_index() -> None:
         ("INA228#0", 1, "today's start line also sets the battery index (no -t: the driver's 1): "
          "INA228 has no field for it"),
     ]  # fmt: skip
+
+
+def test_a_later_setting_that_runs_clears_what_an_earlier_one_left_open() -> None:
+    # A script variable set twice after its first value, as fmu-v3's BOARD_FMUV3 is (line 29
+    # where the hardware type decides, line 35 later): where line 29 rests on the hardware
+    # type nothing here tells but line 35 settles as run, line 35's value decides and nothing
+    # is left to name. No board's own script is of this shape (fmu-v3's later lines test the
+    # hardware type too), so the variable is written here in the board table's form
+    from px4params.migrate.conditions import HardwareVariable, Setting, Verdict
+
+    path = "boards/px4/fmu-v3/init/rc.board_sensors"
+    var = HardwareVariable(
+        "0", path, 20, (Setting("20", "hw_type in V30", 29), Setting("21", "SYS_HAS_MAG == 1", 35))
+    )
+    facts = Facts({"SYS_HAS_MAG": 1}, {}, (), None, "QGC .params", hardware={"BOARD_FMUV3": var})
+    assert evaluate("$BOARD_FMUV3 == 21", facts) == Verdict(True)
+    # Where line 35 does not run, line 29's open value is named with its line
+    facts = dataclasses.replace(facts, params={"SYS_HAS_MAG": 0})
+    (said,) = evaluate("$BOARD_FMUV3 == 0", facts).unchecked
+    assert said.startswith(f"$BOARD_FMUV3 == 0 ({path}:20 sets BOARD_FMUV3 0; line 29: 20 where ")
