@@ -357,7 +357,8 @@ def test_pixhawk_6x_of_px4_1_14_has_no_second_port_on_its_mini_base(
     else:
         (line,) = said
         assert (
-            "$HAVE_PM2 == yes (boards/px4/fmu-v6x/init/rc.board_sensors:5 sets HAVE_PM2 yes; "
+            "$HAVE_PM2 == yes (PX4/PX4-Autopilot boards/px4/fmu-v6x/init/rc.board_sensors:5 at "
+            "v1.14.0 (tag v1.14.0, b8c541dd72, 2023-10-18) sets HAVE_PM2 yes; "
             "line 7: no where hw_type in V6X005000,V6X005001,V6X005003,V6X005004 (the hardware "
             "revision, which the parameters do not tell)): taken as holding (PX4's default)"
         ) in line
@@ -463,8 +464,9 @@ def test_the_launchers_unsettled_buses_name_their_start_lines(
 
 #: fmu-v2's and fmu-v3's script (v1.12.0 .. main, read at 9524e8ec, 30e763b6, 83c4f4e5,
 #: bb59c637): `set BOARD_FMUV3 0` (line 20); `if ver hwtypecmp V30` then `if mpu6000 -s -b 4
-#: -R 10 start` sets 20 (line 29), else `if mpu9250 -s -b 4 -R 10 start` sets 21 (line 35);
-#: `if ver hwtypecmp V2M` likewise on SPI 1 (lines 52, 58). The console lines are the
+#: -R 10 start` (line 27) sets 20 (line 29), else `if mpu9250 -s -b 4 -R 10 start` (line 33)
+#: sets 21 (line 35); `if ver hwtypecmp V2M` likewise on SPI 1 (lines 50 and 56 test, 52 and
+#: 58 set). The console lines are the
 #: drivers' own (platforms/common/i2c_spi_buses.cpp: "<name> #<n> on SPI bus <b>", then
 #: "(devid=...)" in 1.11/1.12 and " rotation <r>" when not 0 later); a start that found
 #: nothing prints "no instance started".
@@ -481,8 +483,9 @@ def fmuv3_facts(hw_type: str | None, console: str | None, board: str = "px4_fmu-
 
     starts = started_drivers(console) if console is not None else None
     kind = "ULog" if console is not None or hw_type is not None else "QGC .params"
+    cite = load_boards().by_name(board, "v1.15.0").cite  # type: ignore[union-attr]
     return Facts({}, {}, ("PX4_FMU_V3",), starts, kind, hw_type,
-                 board_variables(board, ("v1.15.0",)))  # fmt: skip
+                 board_variables(board, ("v1.15.0",)), cite)  # fmt: skip
 
 
 @pytest.mark.parametrize(
@@ -507,16 +510,18 @@ def test_board_fmuv3_is_what_the_boot_console_shows_answered(
 
 def test_board_fmuv3_without_a_console_names_each_line_that_sets_it() -> None:
     # A log with its hardware type but no boot console (PX4 before 1.12, or none logged): the
-    # Cube's line 29 or 35 ran, which one only a console says; 0 is the script's first value
+    # Cube's start on line 27 or 33 answered, which one only a console says; 0 is the script's
+    # first value. Each `if` line is named, the missing console once, the script as every
+    # board line is cited (at the newest snapshot of the board's row: main)
     verdict = evaluate("$BOARD_FMUV3 == 21", fmuv3_facts("V30", None))
     assert verdict.holds is False
     (said,) = verdict.unchecked
     started = "started (-s -b 4 -R 10 start)"
-    none = "(a ULog has no boot console to say)"
     assert said == (
-        "$BOARD_FMUV3 == 21 (boards/px4/fmu-v3/init/rc.board_sensors:20 sets BOARD_FMUV3 0; "
-        f"line 29: 20 where mpu6000 {started} {none}; line 35: 21 where not mpu6000 {started} "
-        f"{none} and mpu9250 {started} {none})"
+        "$BOARD_FMUV3 == 21 (PX4/PX4-Autopilot boards/px4/fmu-v3/init/rc.board_sensors:20 at main "
+        "(branch main, bb59c637cd, 2026-08-13) sets BOARD_FMUV3 0; "
+        f"line 27: 20 where mpu6000 {started}; line 33: 21 where not mpu6000 {started} and "
+        f"mpu9250 {started}; for each, a ULog has no boot console to say)"
     )
 
 

@@ -25,9 +25,10 @@ pytestmark = pytest.mark.issue40
 #: rc.board_sensors: `set HAVE_PM2 yes` on line 5, then `set HAVE_PM2 no` if `mft query -q -k
 #: MFT -s MFT_PM2 -v 0` on line 8, the board's hardware manifest).
 PM2_WHY = (
-    "boards/px4/fmu-v6x/init/rc.board_sensors:5 sets HAVE_PM2 yes; line 8: no where mft MFT_PM2 "
-    "== 0 (the board's hardware manifest, which the parameters do not tell)"
-)
+    "PX4/PX4-Autopilot boards/px4/fmu-v6x/init/rc.board_sensors:5 at {} sets HAVE_PM2 yes; line "
+    "8: no where mft MFT_PM2 == 0 (the board's hardware manifest, which the parameters do not "
+    "tell)"
+).format("main (branch main, bb59c637cd, 2026-08-13)")
 NO_CONSOLE = "a QGC .params has no boot console to say"
 
 
@@ -50,7 +51,8 @@ def rows(board: Board, switch: str) -> list[SwitchStart]:
 def facts(values: dict[str, int | float], console: str | None = None, **variables: str) -> Facts:
     starts = started_drivers(console) if console is not None else None
     hardware = board_variables("px4_fmu-v6x", ("main",))
-    return Facts(values, variables, ("PX4_FMU_V3",), starts, "QGC .params", hardware=hardware)
+    return Facts(values, variables, ("PX4_FMU_V3",), starts, "QGC .params", hardware=hardware,
+                 cite=v6x().cite)  # fmt: skip
 
 
 # -- every clause decides --------------------------------------------------------------------
@@ -198,7 +200,8 @@ def test_the_launchers_hardware_clause_of_px4_1_15_is_named_for_each_bus() -> No
         "the board's i2c_launcher scans I2C bus 1, 2 for power monitors (INA226, INA228, INA238) "
         f"when no SENS_EN_INA2xx is 1: a QGC .params does not say which it found; bus 1 only "
         f"where {hw} ({script}:66 {at}); bus 2 only where {hw} and $HAVE_PM2 == yes "
-        f"({PM2_WHY}) ({script}:69 {at})"
+        f"({PM2_WHY.replace('at main (branch main, bb59c637cd, 2026-08-13)', at)}) "
+        f"({script}:69 {at})"
     ]
 
 

@@ -506,6 +506,7 @@ class _Builder:
                 board_variables(
                     getattr(self.board, "name", ""), getattr(self.board, "releases", ())
                 ),
+                getattr(self.board, "cite", None),
             )
         return self._facts
 
