@@ -460,6 +460,23 @@ def test_the_launchers_unsettled_buses_name_their_start_lines(
     assert "rc.board_sensors)" not in line  # the script without a line
 
 
+def test_a_launcher_bus_without_its_line_is_refused_not_left_uncited(tmp_path: Path) -> None:
+    # The board table gives each launcher bus its `i2c_launcher start -b N` line (parse_boards
+    # refuses a row without); a board whose lines fell out of step is an error, not a bus
+    # named without its line
+    import dataclasses
+
+    from test_migrate_corpus import CORPUS, locate
+
+    (truth,) = [t for t in CORPUS if t.name == "px4docs_amovlabf410_v1.15.4.params"]
+    config = migrate.read_config(locate(truth, tmp_path))
+    v6x = board("px4_fmu-v6x", "v1.15.0")
+    assert len(v6x.i2c_launcher_buses) == len(v6x.i2c_launcher_sources) == 2
+    short = dataclasses.replace(v6x, i2c_launcher_sources=v6x.i2c_launcher_sources[:1])
+    with pytest.raises(ValueError, match="zip"):
+        migrate.migrate(config, board=short)
+
+
 # -- $BOARD_FMUV3 from the boot console ------------------------------------------------------
 
 #: fmu-v2's and fmu-v3's script (v1.12.0 .. main, read at 9524e8ec, 30e763b6, 83c4f4e5,

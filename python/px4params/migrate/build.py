@@ -833,21 +833,21 @@ class _Builder:
         when = getattr(self.board, "i2c_launcher_when", "") or ""
         conditions = per_bus(when) if when else {}
         facts = self.facts()
-        # Each bus's `i2c_launcher start -b` line, as a start row cites its own.
-        sources = dict(zip(buses, getattr(self.board, "i2c_launcher_sources", ()), strict=False))
+        # Each bus's `i2c_launcher start -b` line, as a start row cites its own (the table gives
+        # one for each bus).
+        sources = dict(zip(buses, self.board.i2c_launcher_sources, strict=True))
         scanned, notes = [], []
         for bus in buses:
             # A form not read as "bus N: ..." is evaluated whole: its tests are named unread.
             verdict = evaluate(when if conditions is None else conditions.get(bus, ""), facts)
             unchecked = " and ".join(verdict.unchecked)
-            cited = f" ({sources[bus]})" if bus in sources else ""
             if verdict.holds is False:
                 if unchecked:
-                    notes.append(f"bus {bus} not, by PX4's default: {unchecked}{cited}")
+                    notes.append(f"bus {bus} not, by PX4's default: {unchecked} ({sources[bus]})")
                 continue
             scanned.append(bus)
             if unchecked:
-                notes.append(f"bus {bus} only where {unchecked}{cited}")
+                notes.append(f"bus {bus} only where {unchecked} ({sources[bus]})")
         if not scanned and not notes:
             return  # a power-monitor switch is 1: the switch's own starts are the truth
         what = (
