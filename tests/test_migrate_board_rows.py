@@ -17,6 +17,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+import shared_data
 from px4params import migrate
 from px4params.migrate.conditions import (
     HARDWARE_VARIABLES,
@@ -128,8 +129,6 @@ def frrs_on_canhubk3(console_rotation: bool = True, slots: bool = True) -> migra
     0xC`); without ``slots`` the IST8310 is only in the boot console."""
     import dataclasses
 
-    import shared_data
-
     config = migrate.read_config(shared_data.shared_file("frrs_ekf_failure.ulg"))
     assert config.console is not None and FRRS_IST8310 in config.console.splitlines()
     if not console_rotation:
@@ -157,6 +156,36 @@ def test_a_console_start_with_line_10s_rotation_is_the_boards_without_a_note() -
     assert not [i for i in proposal.instances if i.name.startswith("IST8310")]
     said = [n for i in proposal.instances for n in i.notes] + proposal.assumptions
     assert not [n for n in said if "rc.board_sensors:10 " in n]
+
+
+@pytest.mark.parametrize("console_rotation", [True, False])
+def test_a_row_giving_the_rotation_the_device_runs_with_adds_no_rotation_note(
+    console_rotation: bool,
+) -> None:
+    # No bundled row gives an unsettled device the rotation it is proposed with (a scan of the
+    # table: only fmu-v6x's internal `bmm150 -I -R 0`, whose bus 4 settles it as the board's),
+    # so line 10 is read here as `ist8310 -X -b 1 -R 0 start` and the MR-Tropic console's
+    # IST8310 as started without -R: the row's -R is the rotation proposed, which neither
+    # rests on the row nor tells whether the row started it; the instance gets no rotation note
+    import dataclasses
+
+    mr = board("nxp_mr-canhubk3", "v1.15.0")
+    zero = tuple(
+        dataclasses.replace(r, rotation=0, args="-X -b 1 -R 0 start") if r.rotation == 10 else r
+        for r in mr.devices
+    )
+    config = migrate.read_config(shared_data.shared_file("frrs_ekf_failure.ulg"))
+    assert config.console is not None
+    if not console_rotation:  # the log without its console: nothing shows the rotation
+        config = dataclasses.replace(config, console=None)
+    line = FRRS_IST8310.removesuffix(" rotation 10")
+    config = dataclasses.replace(config, console=config.console and config.console.replace(
+        FRRS_IST8310, line))  # fmt: skip
+    proposal = migrate.migrate(config, board=dataclasses.replace(mr, devices=zero))
+    (ist,) = [i for i in proposal.instances if i.name.startswith("IST8310")]
+    assert (ist.values["rotation"], ist.notes) == (0, [])
+    (said,) = [a for a in proposal.assumptions if a.startswith("CAL_MAG0_ID")]
+    assert said.endswith(": proposed, not left out on a guess")
 
 
 @pytest.mark.parametrize("slots", [True, False])
