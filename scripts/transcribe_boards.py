@@ -293,6 +293,28 @@ def switch_param(text: str) -> str | None:
     return match.group(1) if match else None
 
 
+def launcher_keys(path: str, launcher: list[tuple[int, str, int]]) -> list[str]:
+    """A board row's ``i2c_launcher_*`` keys from its script's launcher starts (bus,
+    conditions, line). A bus started twice is refused: the table cites one line per bus, and
+    the later line would stand for both."""
+    launched = sorted(launcher)
+    buses = [b for b, _, _ in launched]
+    twice = [b for b in dict.fromkeys(buses) if buses.count(b) > 1]
+    if twice:
+        lines = ", ".join(str(n) for n in sorted(n for b, _, n in launched if b == twice[0]))
+        raise AssertionError(
+            f"{path}: 'i2c_launcher start -b {twice[0]}' on lines {lines}: the board table "
+            "cites one line per launcher bus"
+        )
+    keys = [f"i2c_launcher_buses = {json.dumps(buses)}"]
+    if launched:
+        keys += [f"i2c_launcher_lines = {json.dumps([n for _, _, n in launched])}"]
+    when = "; ".join(f"bus {b}: {c}" for b, c, _ in launcher if c)
+    if when:
+        keys += [f"i2c_launcher_when = {json.dumps(when)}"]
+    return keys
+
+
 def facts(
     text: str,
 ) -> tuple[list[dict[str, Any]], list[dict[str, Any]], list[tuple[int, str, int]]]:
@@ -504,13 +526,7 @@ def main(argv: list[str]) -> None:
             if row["buses_file"]:
                 folder = row["path"].removesuffix("init/rc.board_sensors")
                 out += [f"i2c_buses_path = {json.dumps(folder + row['buses_file'])}"]
-            launched = sorted(row["launcher"])
-            out += [f"i2c_launcher_buses = {json.dumps([b for b, _, _ in launched])}"]
-            if launched:
-                out += [f"i2c_launcher_lines = {json.dumps([n for _, _, n in launched])}"]
-            when = "; ".join(f"bus {b}: {c}" for b, c, _ in row["launcher"] if c)
-            if when:
-                out += [f"i2c_launcher_when = {json.dumps(when)}"]
+            out += launcher_keys(row["path"], row["launcher"])
             out += ["device = ["] + [f"  {inline(r, DEVICE_KEYS)}," for r in row["devices"]]
             out += ["]", "switch = ["] + [f"  {inline(r, SWITCH_KEYS)}," for r in row["switches"]]
             out += ["]", ""]

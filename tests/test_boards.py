@@ -941,3 +941,30 @@ def test_docs_list_a_launcher_of_one_address_and_every_rc_sensors_row() -> None:
     )
     page = render_markdown(parse_boards(text))
     assert "**v1.14.0**" in page and "**v1.18**" in page
+
+
+def test_the_transcription_refuses_a_launcher_bus_started_twice() -> None:
+    # Pixhawk 6X (main): `i2c_launcher start -b 1` on line 61, `-b 2` on line 64, one line per
+    # bus as the table cites them; the same script with `-b 1` started again at its end would
+    # leave one bus with two lines, and the later one would stand for both: refused
+    import importlib.util
+
+    script = Path(__file__).parents[1] / "scripts" / "transcribe_boards.py"
+    spec = importlib.util.spec_from_file_location("transcribe_boards", script)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    path = "boards/px4/fmu-v6x/init/rc.board_sensors"
+    text = _show(tuple(_px4_git_dirs()), "bb59c637cd", path)
+    if text is None:
+        pytest.skip(f"commit bb59c637cd is in none of {_px4_git_dirs()}")
+    _, _, launcher = module.facts(text)
+    assert [(bus, line) for bus, _, line in launcher] == [(1, 61), (2, 64)]
+    assert module.launcher_keys(path, launcher)[:2] == [
+        "i2c_launcher_buses = [1, 2]",
+        "i2c_launcher_lines = [61, 64]",
+    ]
+    again = text + "\ni2c_launcher start -b 1\n"
+    _, _, launcher = module.facts(again)
+    with pytest.raises(AssertionError, match=r"-b 1' on lines 61, \d+: the board table cites"):
+        module.launcher_keys(path, launcher)

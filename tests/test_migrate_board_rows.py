@@ -17,6 +17,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+import shared_data
 from px4params import migrate
 from px4params.migrate.conditions import (
     HARDWARE_VARIABLES,
@@ -68,7 +69,7 @@ def left_out(proposal: migrate.Proposal) -> dict[str, tuple[str, str]]:
 #: is an ADAP: line 10 starts it with -R 10 there, rc.sensors' probe (`ist8310 -X -q start`)
 #: elsewhere, without -R.
 CANHUBK3_ROTATION = (
-    "; its rotation 0 (rc.sensors probes without -R) holds only where that line does not run: "
+    "; its rotation 0 (rc.sensors starts it without -R) holds only where that line does not run: "
     "where it runs, it starts the device with -R 10 and the device is the board's, not the "
     "manifest's"
 )
@@ -114,6 +115,93 @@ def test_a_real_gps_compass_on_a_canhubk3_says_its_rotation_rests_on_the_hardwar
     (note,) = [n for n in ist.notes if "mr-canhubk3" in n]
     assert "rc.board_sensors:10 at main " in note
     assert note.endswith(CANHUBK3_ROTATION)
+
+
+#: The NXP MR-Tropic log of PX4 1.15.0 (frrs_ekf_failure.ulg): its GPS's IST8310 on I2C bus
+#: 1 at 0x0E (CAL_MAG0_ID 396809, sensor_mag 0), started with -R 10 (console line 36).
+FRRS_IST8310 = "ist8310 #0 on I2C bus 1 (external) address 0xE rotation 10"
+
+
+def frrs_on_canhubk3(console_rotation: bool = True, slots: bool = True) -> migrate.Proposal:
+    """The MR-Tropic log named as a CANHUBK3 of v1.15.0; without ``console_rotation`` its
+    line 36 as PX4 1.13 on prints a start without -R (i2c_spi_buses.cpp prints a rotation
+    only when not 0: battery_brownout.ulg's `ist8310 #0 on I2C bus 4 (external) address
+    0xC`); without ``slots`` the IST8310 is only in the boot console."""
+    import dataclasses
+
+    config = migrate.read_config(shared_data.shared_file("frrs_ekf_failure.ulg"))
+    assert config.console is not None and FRRS_IST8310 in config.console.splitlines()
+    if not console_rotation:
+        line = FRRS_IST8310.removesuffix(" rotation 10")
+        config = dataclasses.replace(config, console=config.console.replace(FRRS_IST8310, line))
+    if not slots:
+        params = {k: v for k, v in config.params.items() if not k.startswith("CAL_MAG0_")}
+        published = [p for p in config.published if p[2] != IST8310_BUS1]
+        config = dataclasses.replace(config, params=params, published=published)
+    return migrate.migrate(config, board=board("nxp_mr-canhubk3", "v1.15.0"))
+
+
+#: What the bus-1 IST8310's instance says where the boot console shows it runs without -R.
+CANHUBK3_CONSOLE = (
+    "; boot console line 36 shows it runs without -R, not with that line's -R 10: that line did "
+    "not start it"
+)
+
+
+def test_a_console_start_with_line_10s_rotation_is_the_boards_without_a_note() -> None:
+    # The real console: the IST8310 runs with -R 10, which rc.sensors' probe never passes: the
+    # board's (line 10 on an ADAP), left out, and nothing names line 10's condition
+    proposal = frrs_on_canhubk3()
+    assert left_out(proposal)["CAL_MAG0_ID = 396809"][0] == "board"
+    assert not [i for i in proposal.instances if i.name.startswith("IST8310")]
+    said = [n for i in proposal.instances for n in i.notes] + proposal.assumptions
+    assert not [n for n in said if "rc.board_sensors:10 " in n]
+
+
+@pytest.mark.parametrize("console_rotation", [True, False])
+def test_a_row_giving_the_rotation_the_device_runs_with_adds_no_rotation_note(
+    console_rotation: bool,
+) -> None:
+    # No bundled row gives an unsettled device the rotation it is proposed with (a scan of the
+    # table: only fmu-v6x's internal `bmm150 -I -R 0`, whose bus 4 settles it as the board's),
+    # so line 10 is read here as `ist8310 -X -b 1 -R 0 start` and the MR-Tropic console's
+    # IST8310 as started without -R: the row's -R is the rotation proposed, which neither
+    # rests on the row nor tells whether the row started it; the instance gets no rotation note
+    import dataclasses
+
+    mr = board("nxp_mr-canhubk3", "v1.15.0")
+    zero = tuple(
+        dataclasses.replace(r, rotation=0, args="-X -b 1 -R 0 start") if r.rotation == 10 else r
+        for r in mr.devices
+    )
+    config = migrate.read_config(shared_data.shared_file("frrs_ekf_failure.ulg"))
+    assert config.console is not None
+    if not console_rotation:  # the log without its console: nothing shows the rotation
+        config = dataclasses.replace(config, console=None)
+    line = FRRS_IST8310.removesuffix(" rotation 10")
+    config = dataclasses.replace(config, console=config.console and config.console.replace(
+        FRRS_IST8310, line))  # fmt: skip
+    proposal = migrate.migrate(config, board=dataclasses.replace(mr, devices=zero))
+    (ist,) = [i for i in proposal.instances if i.name.startswith("IST8310")]
+    assert (ist.values["rotation"], ist.notes) == (0, [])
+    (said,) = [a for a in proposal.assumptions if a.startswith("CAL_MAG0_ID")]
+    assert said.endswith(": proposed, not left out on a guess")
+
+
+@pytest.mark.parametrize("slots", [True, False])
+def test_a_console_start_without_rotation_settles_that_line_10_did_not_start_it(
+    slots: bool,
+) -> None:
+    # PX4 1.15 prints every -R but 0: an IST8310 on bus 1 started without -R was not started
+    # by line 10 (-R 10), whatever the hardware type. Its note says so, from the console, not
+    # that rotation 0 holds only where line 10 does not run (nor why rc.sensors would). With
+    # the CAL_MAG0 slot the device is proposed from it; without, from its console line
+    proposal = frrs_on_canhubk3(console_rotation=False, slots=slots)
+    (ist,) = [i for i in proposal.instances if i.name.startswith("IST8310")]
+    assert (ist.values["rotation"], ist.notes) == (0, [CANHUBK3_LINE_10 + CANHUBK3_CONSOLE])
+    found = "CAL_MAG0_ID = 396809: IST8310 (MAG)" if slots else "boot console line 36: ist8310"
+    (said,) = [a for a in proposal.assumptions if a.startswith(found)]
+    assert said.endswith(f"{CANHUBK3_LINE_10}: proposed, not left out on a guess{CANHUBK3_CONSOLE}")
 
 
 @pytest.mark.parametrize(
@@ -298,7 +386,8 @@ def test_pixhawk_6x_of_px4_1_14_has_no_second_port_on_its_mini_base(
     else:
         (line,) = said
         assert (
-            "$HAVE_PM2 == yes (boards/px4/fmu-v6x/init/rc.board_sensors:5 sets HAVE_PM2 yes; "
+            "$HAVE_PM2 == yes (PX4/PX4-Autopilot boards/px4/fmu-v6x/init/rc.board_sensors:5 at "
+            "v1.14.0 (tag v1.14.0, b8c541dd72, 2023-10-18) sets HAVE_PM2 yes; "
             "line 7: no where hw_type in V6X005000,V6X005001,V6X005003,V6X005004 (the hardware "
             "revision, which the parameters do not tell)): taken as holding (PX4's default)"
         ) in line
@@ -400,12 +489,30 @@ def test_the_launchers_unsettled_buses_name_their_start_lines(
     assert "rc.board_sensors)" not in line  # the script without a line
 
 
+def test_a_launcher_bus_without_its_line_is_refused_not_left_uncited(tmp_path: Path) -> None:
+    # The board table gives each launcher bus its `i2c_launcher start -b N` line (parse_boards
+    # refuses a row without); a board whose lines fell out of step is an error, not a bus
+    # named without its line
+    import dataclasses
+
+    from test_migrate_corpus import CORPUS, locate
+
+    (truth,) = [t for t in CORPUS if t.name == "px4docs_amovlabf410_v1.15.4.params"]
+    config = migrate.read_config(locate(truth, tmp_path))
+    v6x = board("px4_fmu-v6x", "v1.15.0")
+    assert len(v6x.i2c_launcher_buses) == len(v6x.i2c_launcher_sources) == 2
+    short = dataclasses.replace(v6x, i2c_launcher_sources=v6x.i2c_launcher_sources[:1])
+    with pytest.raises(ValueError, match="zip"):
+        migrate.migrate(config, board=short)
+
+
 # -- $BOARD_FMUV3 from the boot console ------------------------------------------------------
 
 #: fmu-v2's and fmu-v3's script (v1.12.0 .. main, read at 9524e8ec, 30e763b6, 83c4f4e5,
 #: bb59c637): `set BOARD_FMUV3 0` (line 20); `if ver hwtypecmp V30` then `if mpu6000 -s -b 4
-#: -R 10 start` sets 20 (line 29), else `if mpu9250 -s -b 4 -R 10 start` sets 21 (line 35);
-#: `if ver hwtypecmp V2M` likewise on SPI 1 (lines 52, 58). The console lines are the
+#: -R 10 start` (line 27) sets 20 (line 29), else `if mpu9250 -s -b 4 -R 10 start` (line 33)
+#: sets 21 (line 35); `if ver hwtypecmp V2M` likewise on SPI 1 (lines 50 and 56 test, 52 and
+#: 58 set). The console lines are the
 #: drivers' own (platforms/common/i2c_spi_buses.cpp: "<name> #<n> on SPI bus <b>", then
 #: "(devid=...)" in 1.11/1.12 and " rotation <r>" when not 0 later); a start that found
 #: nothing prints "no instance started".
@@ -422,8 +529,9 @@ def fmuv3_facts(hw_type: str | None, console: str | None, board: str = "px4_fmu-
 
     starts = started_drivers(console) if console is not None else None
     kind = "ULog" if console is not None or hw_type is not None else "QGC .params"
+    cite = load_boards().by_name(board, "v1.15.0").cite  # type: ignore[union-attr]
     return Facts({}, {}, ("PX4_FMU_V3",), starts, kind, hw_type,
-                 board_variables(board, ("v1.15.0",)))  # fmt: skip
+                 board_variables(board, ("v1.15.0",)), cite)  # fmt: skip
 
 
 @pytest.mark.parametrize(
@@ -448,16 +556,18 @@ def test_board_fmuv3_is_what_the_boot_console_shows_answered(
 
 def test_board_fmuv3_without_a_console_names_each_line_that_sets_it() -> None:
     # A log with its hardware type but no boot console (PX4 before 1.12, or none logged): the
-    # Cube's line 29 or 35 ran, which one only a console says; 0 is the script's first value
+    # Cube's start on line 27 or 33 answered, which one only a console says; 0 is the script's
+    # first value. Each `if` line is named, the missing console once, the script as every
+    # board line is cited (at the newest snapshot of the board's row: main)
     verdict = evaluate("$BOARD_FMUV3 == 21", fmuv3_facts("V30", None))
     assert verdict.holds is False
     (said,) = verdict.unchecked
     started = "started (-s -b 4 -R 10 start)"
-    none = "(a ULog has no boot console to say)"
     assert said == (
-        "$BOARD_FMUV3 == 21 (boards/px4/fmu-v3/init/rc.board_sensors:20 sets BOARD_FMUV3 0; "
-        f"line 29: 20 where mpu6000 {started} {none}; line 35: 21 where not mpu6000 {started} "
-        f"{none} and mpu9250 {started} {none})"
+        "$BOARD_FMUV3 == 21 (PX4/PX4-Autopilot boards/px4/fmu-v3/init/rc.board_sensors:20 at main "
+        "(branch main, bb59c637cd, 2026-08-13) sets BOARD_FMUV3 0; "
+        f"line 27: 20 where mpu6000 {started}; line 33: 21 where not mpu6000 {started} and "
+        f"mpu9250 {started}; for each, a ULog has no boot console to say)"
     )
 
 

@@ -134,7 +134,8 @@ def today(params: dict[str, int | float], console: str | None = None) -> OldConf
 #: on line 64; the script sets HAVE_PM2 yes on line 5, and no when the hardware manifest says
 #: MFT_PM2 0).
 ONLY_WITH_PM2 = (
-    "bus 2 only where $HAVE_PM2 == yes (boards/px4/fmu-v6x/init/rc.board_sensors:5 sets "
+    "bus 2 only where $HAVE_PM2 == yes (PX4/PX4-Autopilot boards/px4/fmu-v6x/init/"
+    "rc.board_sensors:5 at main (branch main, bb59c637cd, 2026-08-13) sets "
     "HAVE_PM2 yes; line 8: no where mft MFT_PM2 == 0 (the board's hardware manifest, which the "
     "parameters do not tell)) "
     "(PX4/PX4-Autopilot boards/px4/fmu-v6x/init/rc.board_sensors:64 at main (branch main, "

@@ -25,9 +25,10 @@ pytestmark = pytest.mark.issue40
 #: rc.board_sensors: `set HAVE_PM2 yes` on line 5, then `set HAVE_PM2 no` if `mft query -q -k
 #: MFT -s MFT_PM2 -v 0` on line 8, the board's hardware manifest).
 PM2_WHY = (
-    "boards/px4/fmu-v6x/init/rc.board_sensors:5 sets HAVE_PM2 yes; line 8: no where mft MFT_PM2 "
-    "== 0 (the board's hardware manifest, which the parameters do not tell)"
-)
+    "PX4/PX4-Autopilot boards/px4/fmu-v6x/init/rc.board_sensors:5 at {} sets HAVE_PM2 yes; line "
+    "8: no where mft MFT_PM2 == 0 (the board's hardware manifest, which the parameters do not "
+    "tell)"
+).format("main (branch main, bb59c637cd, 2026-08-13)")
 NO_CONSOLE = "a QGC .params has no boot console to say"
 
 
@@ -50,7 +51,8 @@ def rows(board: Board, switch: str) -> list[SwitchStart]:
 def facts(values: dict[str, int | float], console: str | None = None, **variables: str) -> Facts:
     starts = started_drivers(console) if console is not None else None
     hardware = board_variables("px4_fmu-v6x", ("main",))
-    return Facts(values, variables, ("PX4_FMU_V3",), starts, "QGC .params", hardware=hardware)
+    return Facts(values, variables, ("PX4_FMU_V3",), starts, "QGC .params", hardware=hardware,
+                 cite=v6x().cite)  # fmt: skip
 
 
 # -- every clause decides --------------------------------------------------------------------
@@ -198,7 +200,8 @@ def test_the_launchers_hardware_clause_of_px4_1_15_is_named_for_each_bus() -> No
         "the board's i2c_launcher scans I2C bus 1, 2 for power monitors (INA226, INA228, INA238) "
         f"when no SENS_EN_INA2xx is 1: a QGC .params does not say which it found; bus 1 only "
         f"where {hw} ({script}:66 {at}); bus 2 only where {hw} and $HAVE_PM2 == yes "
-        f"({PM2_WHY}) ({script}:69 {at})"
+        f"({PM2_WHY.replace('at main (branch main, bb59c637cd, 2026-08-13)', at)}) "
+        f"({script}:69 {at})"
     ]
 
 
@@ -259,3 +262,23 @@ def test_a_line_without_t_leaves_the_drivers_own_index() -> None:
         ("INA228#0", 1, "today's start line also sets the battery index (no -t: the driver's 1): "
          "INA228 has no field for it"),
     ]  # fmt: skip
+
+
+def test_a_later_setting_that_runs_clears_what_an_earlier_one_left_open() -> None:
+    # A script variable set twice after its first value, as fmu-v3's BOARD_FMUV3 is (line 29
+    # where the hardware type decides, line 35 later): where line 29 rests on the hardware
+    # type nothing here tells but line 35 settles as run, line 35's value decides and nothing
+    # is left to name. No board's own script is of this shape (fmu-v3's later lines test the
+    # hardware type too), so the variable is written here in the board table's form
+    from px4params.migrate.conditions import HardwareVariable, Setting, Verdict
+
+    path = "boards/px4/fmu-v3/init/rc.board_sensors"
+    var = HardwareVariable(
+        "0", path, 20, (Setting("20", "hw_type in V30", 29), Setting("21", "SYS_HAS_MAG == 1", 35))
+    )
+    facts = Facts({"SYS_HAS_MAG": 1}, {}, (), None, "QGC .params", hardware={"BOARD_FMUV3": var})
+    assert evaluate("$BOARD_FMUV3 == 21", facts) == Verdict(True)
+    # Where line 35 does not run, line 29's open value is named with its line
+    facts = dataclasses.replace(facts, params={"SYS_HAS_MAG": 0})
+    (said,) = evaluate("$BOARD_FMUV3 == 0", facts).unchecked
+    assert said.startswith(f"$BOARD_FMUV3 == 0 ({path}:20 sets BOARD_FMUV3 0; line 29: 20 where ")

@@ -408,7 +408,8 @@ def test_the_board_table_says_what_the_board_starts(tmp_path: Path) -> None:
     assert proposal.assumptions == [
         "the board's i2c_launcher scans I2C bus 1, 2 for power monitors (INA226, INA228, "
         "INA238) when no SENS_EN_INA2xx is 1: a QGC .params does not say which it found; bus 2 "
-        "only where $HAVE_PM2 == yes (boards/px4/fmu-v6x/init/rc.board_sensors:5 sets HAVE_PM2 "
+        "only where $HAVE_PM2 == yes (PX4/PX4-Autopilot boards/px4/fmu-v6x/init/"
+        "rc.board_sensors:5 at main (branch main, bb59c637cd, 2026-08-13) sets HAVE_PM2 "
         "yes; line 8: no where mft MFT_PM2 == 0 (the board's hardware manifest, which the "
         "parameters do not tell)) (PX4/PX4-Autopilot boards/px4/fmu-v6x/init/rc.board_sensors:64 "
         "at main (branch main, bb59c637cd, 2026-08-13))",

@@ -40,6 +40,11 @@ NOT_DRIVER_SWITCHES: dict[str, dict[int, str]] = {
         1: "thermal control enabled",
     },
 }
+#: Why a device found by probing runs with rotation 0 where no boot console shows its start.
+PROBED_WITHOUT_R = "rc.sensors starts it without -R"
+#: The first PX4 whose boot console prints a driver's every -R but 0
+#: (platforms/common/i2c_spi_buses.cpp: `if (cli.rotation != 0)`; PX4 1.11 and 1.12 print none).
+CONSOLE_SHOWS_ROTATION = (1, 13, 0)
 #: ``CAL_<SENSOR><n>_ROT = -1``: PX4's metadata value "Internal": the sensor is the flight
 #: controller's, started by the board's script on the board's rotation.
 INTERNAL_ROTATION = -1
@@ -283,12 +288,23 @@ class _Builder:
             )
         return None
 
+    def shown_rotation(self, start: DriverStart | None) -> int | None:
+        """The rotation a boot console start shows the driver running with: its -R, 0 where a
+        console of PX4 1.13 on prints none; None where the console does not say."""
+        if start is None or start.rotation is not None:
+            return start.rotation if start is not None else None
+        version = self.config.version
+        return 0 if version is not None and version >= CONSOLE_SHOWS_ROTATION else None
+
     def driver_rotation(self, start: DriverStart | None, chips: set[str]) -> tuple[int, str]:
-        """The driver's rotation of a device found by probing: the boot console's, else the
-        probe's ``-R``, else 0 (probing passes none); and why (empty for 0)."""
-        if start is not None and start.rotation is not None:
-            return start.rotation, "the driver's -R (boot console)" if start.rotation else ""
-        return self.probe_rotation(chips) or (0, "")
+        """The driver's rotation of a device found by probing, and why: the boot console's,
+        else the probe's ``-R``, else 0 (probing passes none)."""
+        shown = self.shown_rotation(start)
+        if shown is not None:
+            return shown, (
+                "the driver's -R (boot console)" if shown else "the boot console shows no -R"
+            )
+        return self.probe_rotation(chips) or (0, PROBED_WITHOUT_R)
 
     def started_by_board(
         self,
@@ -299,11 +315,13 @@ class _Builder:
         start: DriverStart | None,
         internal_rot: str | None,
         baro: bool,
+        if_run: str,
         disabled: bool = False,
     ) -> str | None:
         """Why the board's script starts this I2C device, or None when it does not (the
         rules in the order they are trusted). ``found``: the device as the report names it;
-        ``disabled``: every slot of it is, so it is not proposed either way."""
+        ``if_run``: :meth:`rotation_if_run`'s clause; ``disabled``: every slot of it is, so
+        it is not proposed either way."""
         row = self.board_device(chips, bus, address)
         if row is not None and row[1].holds:
             self.assume_row(found, *row, "taken as holding (PX4's default)")
@@ -319,35 +337,51 @@ class _Builder:
         if row is not None and by_board is None and disabled:
             self.assume_row(found, *row, "left out as disabled, not as the board's on a guess")
         elif row is not None and by_board is None:
-            other = self.rotation_if_run(row[0], *self.driver_rotation(start, chips))
-            self.assume_row(found, *row, "proposed, not left out on a guess" + other)
+            self.assume_row(found, *row, "proposed, not left out on a guess" + if_run)
         return by_board
 
-    def rotation_if_run(self, row: Any, rotation: int, why: str) -> str:
-        """What a device row nothing settles would change in the proposed rotation ("" where
-        nothing): it starts the device with its own -R, and then the device is the board's."""
-        if row.rotation is None or row.rotation == rotation:
+    def rotation_if_run(
+        self,
+        chips: set[str],
+        bus: int,
+        address: int | None,
+        start: DriverStart | None,
+        rotation: tuple[int, str],
+    ) -> str:
+        """What the board row nothing settles for this device says of its rotation ``rotation``
+        (:meth:`driver_rotation`'s), "" where nothing: where a boot console shows the driver's
+        rotation and it is not the row's -R, the row did not start it; else the rotation holds
+        only where the row does not run (it starts the device with its own -R, and then the
+        device is the board's)."""
+        row = self.board_device(chips, bus, address)
+        if row is None or row[1].holds is not None:
             return ""
-        how = why or "rc.sensors probes without -R"
+        value, why = rotation
+        if row[0].rotation is None or row[0].rotation == value:
+            return ""
+        shown = self.shown_rotation(start)
+        if start is not None and shown is not None:
+            runs = f"with -R {shown}" if shown else "without -R"
+            return (
+                f"; boot console line {start.line} shows it runs {runs}, not with that line's "
+                f"-R {row[0].rotation}: that line did not start it"
+            )
         return (
-            f"; its rotation {rotation} ({how}) holds only where that line does not run: where "
-            f"it runs, it starts the device with -R {row.rotation} and the device is the "
+            f"; its rotation {value} ({why}) holds only where that line does not run: where "
+            f"it runs, it starts the device with -R {row[0].rotation} and the device is the "
             "board's, not the manifest's"
         )
 
     def note_unsettled_row(
-        self, inst: ProposedInstance, chips: set[str], bus: int, address: int | None, why: str
+        self, inst: ProposedInstance, chips: set[str], bus: int, address: int | None, if_run: str
     ) -> None:
-        """Notes on a proposed instance that a board row nothing settles starts the same device
-        with another rotation (``why``: where the proposed one comes from)."""
+        """Notes on a proposed instance what :meth:`rotation_if_run`'s clause ``if_run`` says of
+        the board row nothing settles that starts the same device."""
         row = self.board_device(chips, bus, address)
-        if row is None or row[1].holds is not None:
-            return
-        other = self.rotation_if_run(row[0], inst.values.get("rotation", 0), why)
-        if other:
+        if if_run and row is not None:
             inst.notes.append(
                 f"the board's '{row[0].driver} {row[0].args}' ({row[0].source}) runs only where "
-                f"{' and '.join(row[1].unchecked)}{other}"
+                f"{' and '.join(row[1].unchecked)}{if_run}"
             )
 
     def assume_row(self, found: str, row: Any, verdict: Verdict, then: str) -> None:
@@ -472,6 +506,7 @@ class _Builder:
                 board_variables(
                     getattr(self.board, "name", ""), getattr(self.board, "releases", ())
                 ),
+                getattr(self.board, "cite", None),
             )
         return self._facts
 
@@ -687,8 +722,10 @@ class _Builder:
         internal = next((r for r, v in rotations.items() if v == INTERNAL_ROTATION), None)
         kind = {k for _, k in _named(dev, kinds)}
         baro = "BARO" in kind or all(k == "BARO" for k in kinds)
+        rotation = self.driver_rotation(start, chips)
+        if_run = self.rotation_if_run(chips, dev.bus, dev.address, start, rotation)
         board = self.started_by_board(
-            where, chips, dev.bus, dev.address, start, internal, baro, all_off
+            where, chips, dev.bus, dev.address, start, internal, baro, if_run, all_off
         )
         disabled = f" (disabled: {', '.join(off)})" if off else ""
         if board is not None:
@@ -719,15 +756,14 @@ class _Builder:
             inst.notes.append(f"{', '.join(off)}: {which} disabled for use")
         if twice:
             inst.notes.append(twice.removeprefix("; "))
-        rotation, why = self.driver_rotation(start, chips)
-        self.set_rotation(inst, rotation, why)
-        self.note_unsettled_row(inst, chips, dev.bus, dev.address, why)
+        self.set_rotation(inst, *rotation)
+        self.note_unsettled_row(inst, chips, dev.bus, dev.address, if_run)
         for rot, v in rotations.items():
             if not v:
                 continue
             inst.notes.append(
                 f"{rot} = {_shown(v)} stays a classic parameter: calibration applies it; the "
-                f"driver's rotation is {rotation} ({why or 'rc.sensors starts it without -R'})"
+                f"driver's rotation is {rotation[0]} ({rotation[1]})"
             )
 
     # -- what the boot console shows, beyond the slots ---------------------------------------
@@ -749,6 +785,8 @@ class _Builder:
                 continue
             chips = self.start_chips(start)
             kinds = {e.kind for e in self.table if e.name in chips}
+            rotation = self.driver_rotation(start, chips)
+            if_run = self.rotation_if_run(chips, start.bus, start.address, start, rotation)
             board = self.started_by_board(
                 f"{found}: {device}",
                 chips,
@@ -757,6 +795,7 @@ class _Builder:
                 start,
                 None,
                 kinds == {"BARO"},
+                if_run,
             )
             if board is not None:  # the line is already named: not twice
                 self.leave_out(found, device, "board", board.replace(f" ({found})", ""))
@@ -780,9 +819,8 @@ class _Builder:
                 "found by i2c_launcher" if start.launcher else "started outside the board's script"
             )
             inst = self.add(spec.name, start.bus, address, f"{found}: '{start.text}' ({how})")
-            rotation, why = self.driver_rotation(start, chips)
-            self.set_rotation(inst, rotation, why)
-            self.note_unsettled_row(inst, chips, start.bus, address, why)
+            self.set_rotation(inst, *rotation)
+            self.note_unsettled_row(inst, chips, start.bus, start.address, if_run)
             if driver.name in BATTERY_INDEX_DRIVERS:
                 inst.notes.append(_battery_note(spec.name, _launched_args(start)))
 
@@ -795,21 +833,21 @@ class _Builder:
         when = getattr(self.board, "i2c_launcher_when", "") or ""
         conditions = per_bus(when) if when else {}
         facts = self.facts()
-        # Each bus's `i2c_launcher start -b` line, as a start row cites its own.
-        sources = dict(zip(buses, getattr(self.board, "i2c_launcher_sources", ()), strict=False))
+        # Each bus's `i2c_launcher start -b` line, as a start row cites its own (the table gives
+        # one for each bus).
+        sources = dict(zip(buses, self.board.i2c_launcher_sources, strict=True))
         scanned, notes = [], []
         for bus in buses:
             # A form not read as "bus N: ..." is evaluated whole: its tests are named unread.
             verdict = evaluate(when if conditions is None else conditions.get(bus, ""), facts)
             unchecked = " and ".join(verdict.unchecked)
-            cited = f" ({sources[bus]})" if bus in sources else ""
             if verdict.holds is False:
                 if unchecked:
-                    notes.append(f"bus {bus} not, by PX4's default: {unchecked}{cited}")
+                    notes.append(f"bus {bus} not, by PX4's default: {unchecked} ({sources[bus]})")
                 continue
             scanned.append(bus)
             if unchecked:
-                notes.append(f"bus {bus} only where {unchecked}{cited}")
+                notes.append(f"bus {bus} only where {unchecked} ({sources[bus]})")
         if not scanned and not notes:
             return  # a power-monitor switch is 1: the switch's own starts are the truth
         what = (

@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import itertools
 import re
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 from px4params.vehicle.console import DriverStart
@@ -49,8 +49,8 @@ __all__ = [
 
 @dataclass(frozen=True)
 class Setting:
-    """``set NAME value`` on ``line`` of a board's script, run where ``when`` holds (a condition
-    of this module's form)."""
+    """``set NAME value`` of a board's script, run where ``when`` holds (a condition of this
+    module's form); ``line``: the line of the ``if`` that tests it."""
 
     value: str
     when: str
@@ -105,11 +105,12 @@ def _fmuv3(releases: tuple[str, ...], board: str, shift: int = 0) -> BoardVariab
         failed = f"not {first} started (-s -b {bus} -R 10 start) and " if first else ""
         return f"{failed}{answered} started (-s -b {bus} -R 10 start)"
 
+    # Each `if <driver> -s -b <bus> -R 10 start` line; its `set BOARD_FMUV3` is two below.
     settings = (
-        Setting("20", f"hw_type in V30 and {on(4, 'mpu6000')}", 29 - shift),
-        Setting("21", f"hw_type in V30 and {on(4, 'mpu9250', 'mpu6000')}", 35 - shift),
-        Setting("20", f"hw_type in V2M and {on(1, 'mpu6000')}", 52 - shift),
-        Setting("21", f"hw_type in V2M and {on(1, 'mpu9250', 'mpu6000')}", 58 - shift),
+        Setting("20", f"hw_type in V30 and {on(4, 'mpu6000')}", 27 - shift),
+        Setting("21", f"hw_type in V30 and {on(4, 'mpu9250', 'mpu6000')}", 33 - shift),
+        Setting("20", f"hw_type in V2M and {on(1, 'mpu6000')}", 50 - shift),
+        Setting("21", f"hw_type in V2M and {on(1, 'mpu9250', 'mpu6000')}", 56 - shift),
     )
     path = f"boards/px4/{board}/init/rc.board_sensors"
     return BoardVariables(releases, {"BOARD_FMUV3": HardwareVariable("0", path, 20 - shift,
@@ -156,8 +157,9 @@ HARDWARE_VARIABLES: dict[str, tuple[BoardVariables, ...]] = {
                           _NO_PM2_PORT, 22),),
     "radiolink_PIX6": (_pm(_NOW, "boards/radiolink/PIX6/init/rc.board_sensors", 6, None),),
     "zeroone_x6": (_pm(_NOW, "boards/zeroone/x6/init/rc.board_sensors", 5, _NO_PM2_PORT, 8),),
-    # BOARD_FMUV3 (read at v1.12.0, v1.15.0, release/1.18 and main: lines 20 to 58; v1.13.0's and
-    # v1.14.0's rows sit on v1.12.0's lines; v1.11.0's one line earlier, as its rows do)
+    # BOARD_FMUV3 (read at v1.12.0, v1.15.0, release/1.18 and main: the same lines 20 to 58;
+    # v1.13.0 and v1.14.0 not read, taken as those: their `if ... start` rows are at 27, 33, 50
+    # and 56 too, their later rows at v1.15.0's lines; v1.11.0's one line earlier, as its rows)
     **{
         f"px4_{board}": (_fmuv3(("v1.11.0",), board, shift=1), _fmuv3(_SINCE_1_12, board))
         for board in ("fmu-v2", "fmu-v3")
@@ -208,15 +210,24 @@ class Facts:
     hw_type: str | None = None
     #: The variables the board's script sets from the hardware (:func:`board_variables`).
     hardware: Mapping[str, HardwareVariable] = field(default_factory=dict)
+    #: A line of the board's scripts as the board table cites it (``Board.cite``); None: as
+    #: ``path:line``.
+    cite: Callable[[str, int], str] | None = None
 
 
 @dataclass(frozen=True)
 class Verdict:
     """Whether a condition holds: True or False, or None where a test nothing settles decides
-    it; ``unchecked`` names each clause taken as PX4's default or not known, with why."""
+    it."""
 
     holds: bool | None
-    unchecked: tuple[str, ...] = ()
+    #: Each clause taken as PX4's default or not known, and why.
+    open: tuple[tuple[str, str], ...] = ()
+
+    @property
+    def unchecked(self) -> tuple[str, ...]:
+        """Each of :attr:`open` as "clause (why)"."""
+        return tuple(f"{clause} ({why})" for clause, why in self.open)
 
 
 @dataclass(frozen=True)
@@ -275,18 +286,26 @@ def _test(text: str, facts: Facts) -> _Test:
 def _hardware_variable(name: str, var: HardwareVariable, facts: Facts) -> tuple[str, str]:
     """The value the board's script gives ``name``, and why it is taken ("": settled): the
     last setting settled as run, else ``first``; the settings after it that nothing settles
-    are named with their lines."""
-    value, open_ = var.first, list[str]()
+    are named with their lines, a reason they all share once."""
+    value, open_ = var.first, list[tuple[Setting, Verdict]]()
     for setting in var.settings:
         verdict = evaluate(setting.when, facts)
-        if verdict.holds and not verdict.unchecked:
+        if verdict.holds and not verdict.open:
             value, open_ = setting.value, []
-        elif verdict.holds is not False or verdict.unchecked:
-            open_.append(f"line {setting.line}: {setting.value} where "
-                         f"{' and '.join(verdict.unchecked)}")  # fmt: skip
+        elif verdict.holds is not False or verdict.open:
+            open_.append((setting, verdict))
     if not open_:
         return value, ""
-    return value, f"{var.path}:{var.line} sets {name} {var.first}; {'; '.join(open_)}"
+    whys = {why for _, verdict in open_ for _, why in verdict.open}
+    shared = len(whys) == 1 and sum(len(v.open) for _, v in open_) > 1
+    said = [
+        f"line {s.line}: {s.value} where "
+        + " and ".join(c if shared else f"{c} ({why})" for c, why in v.open)
+        for s, v in open_
+    ]
+    where = facts.cite(var.path, var.line) if facts.cite else f"{var.path}:{var.line}"
+    tail = f"; for each, {whys.pop()}" if shared else ""
+    return value, f"{where} sets {name} {var.first}; {'; '.join(said)}{tail}"
 
 
 def _clause(text: str, facts: Facts) -> _Test:
@@ -314,10 +333,10 @@ def evaluate(when: str, facts: Facts) -> Verdict:
     clauses = [(c, _clause(c, facts)) for c in when.split(" and ")]
     if any(t.value is False and not t.why for _, t in clauses):
         return Verdict(False)  # settled: the rest does not matter
-    unchecked = tuple(f"{c} ({t.why})" for c, t in clauses if t.why)
+    open_ = tuple((c, t.why) for c, t in clauses if t.why)
     if any(t.value is None for _, t in clauses):
-        return Verdict(None, unchecked)
-    return Verdict(all(t.value for _, t in clauses), unchecked)
+        return Verdict(None, open_)
+    return Verdict(all(t.value for _, t in clauses), open_)
 
 
 def per_bus(when: str) -> dict[int, str] | None:

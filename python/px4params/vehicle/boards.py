@@ -154,6 +154,13 @@ class Board:
     #: The script's ``i2c_launcher start`` line of each of ``i2c_launcher_buses``, cited as a
     #: start's ``source`` is.
     i2c_launcher_sources: tuple[str, ...] = ()
+    #: The newest of ``releases`` as a citation names it ("v1.15.0 (tag v1.15.0, 30e763b678,
+    #: 2024-08-27)"): a line of the board's scripts is cited at it (:meth:`cite`).
+    at: str = ""
+
+    def cite(self, path: str, line: int) -> str:
+        """``line`` of PX4-Autopilot's ``path`` as the board's rows cite theirs."""
+        return _cite(path, line, self.at)
 
     def buses_of(self, start: BoardDevice | SwitchStart) -> tuple[int, ...]:
         """The buses a start can be on: its ``-b``, else every internal (``-I``) or external
@@ -170,6 +177,10 @@ class Board:
 _Pending = tuple[
     list[tuple[dict[str, Any], str]], tuple[int, ...], tuple[int, ...], tuple[str, ...]
 ]
+
+
+def _cite(path: str, line: int, at: str) -> str:
+    return f"{_UPSTREAM} {path}:{line} at {at}"
 
 
 @dataclass(frozen=True)
@@ -465,8 +476,7 @@ def parse_boards(text: str, file: str = "boards.toml") -> BoardTable:
         return tuple(snapshots[k] for k in keys)
 
     def cite(path: str, line: int, snaps: Sequence[_Snapshot]) -> str:
-        newest = max(snaps, key=lambda s: s.order)
-        return f"{_UPSTREAM} {path}:{line} at {newest.describe()}"
+        return _cite(path, line, max(snaps, key=lambda s: s.order).describe())
 
     common: dict[str, list[tuple[dict[str, Any], str]]] = {}
     for i, table in enumerate(top.tables("rc_sensors"), 1):
@@ -601,6 +611,7 @@ def parse_boards(text: str, file: str = "boards.toml") -> BoardTable:
                 i2c_launcher_when=row.text("i2c_launcher_when", ""),
                 i2c_launcher_probes=launcher[snap.release] if launcher_buses else (),
                 i2c_launcher_sources=tuple(cite(path, n, snaps) for n in launcher_lines),
+                at=max(snaps, key=lambda s: s.order).describe(),
             )
         if name not in names:
             names.append(name)
