@@ -237,8 +237,9 @@ pub enum ErrorKind<E> {
     VariantNotSelected,
     /// The path ends at a struct, union or array instead of a leaf.
     NotALeaf,
-    /// The layout nests deeper than the codec follows, or the walk comes to a node or field
-    /// the layout lacks (a malformed layout).
+    /// The layout nests deeper than the codec follows, or the small walk (firmware's) comes to
+    /// a node or field the layout lacks (a malformed layout; an empty array never comes to its
+    /// element's node).
     TooDeep,
     /// The value source or sink failed.
     Value(E),

@@ -1938,6 +1938,8 @@ impl Pass for Visiting<'_> {
 #[inline(never)]
 pub(crate) fn put(out: &mut [u8], mut pos: usize, raw: u64, bits: u32) {
     let (mut value, end) = (raw, pos + bits as usize);
+    // A caller's mistake shows in tests, where release builds would write short.
+    debug_assert!(end <= out.len() * 8, "put beyond the output: bit {end}");
     while pos < end {
         let n = (end - pos).min(8) as u32;
         let (i, s) = (pos / 8, (pos % 8) as u32);

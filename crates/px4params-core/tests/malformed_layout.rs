@@ -3,6 +3,7 @@
 //! that nests too deeply is, with an error rather than a panic, encoding and decoding alike.
 
 use px4params_core::codec::{decode_leaves_with, encode_leaves_with};
+use px4params_core::error::Step;
 use px4params_core::layout::{Field, Kind, Layout, Node, NodeId, Role, Span, VARIABLE};
 use px4params_core::plan::NoPlans;
 use px4params_core::{DecodeOptions, EncodeOptions, ErrorKind, Scalar};
@@ -92,6 +93,16 @@ fn refused(root: NodeId, leaves: &[Scalar], data: &[u8]) {
 #[test]
 fn a_field_the_tables_lack_is_refused() {
     refused(1, &[Scalar::Uint(5)], &[5]);
+    // At the struct's start, named by the struct's path (here the root's, empty): the missing
+    // field's own step would cost firmware 32 bytes for a table no generator writes.
+    let mut out = [0u8; 8];
+    let layout = layout();
+    let leaves = [Scalar::Uint(5)];
+    let encoded =
+        encode_leaves_with::<NoPlans>(&layout, 1, &leaves, &mut out, EncodeOptions::default());
+    let error = encoded.unwrap_err();
+    assert_eq!(error.path.steps().collect::<Vec<Step>>(), []);
+    assert_eq!(error.bit_offset, 0);
 }
 
 #[test]
