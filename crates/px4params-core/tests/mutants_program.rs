@@ -293,3 +293,58 @@ fn a_program_follows_a_type_exactly_as_deep_as_the_walk() {
         );
     }
 }
+
+/// The leaves of a decoded tree of structs, unions and primitives in `[k]` order (a union's
+/// tag first), as the walk's leaf lists hold them.
+fn leaves_of(tree: &Tree, out: &mut Vec<Scalar>) {
+    match tree {
+        Tree::Leaf(s) => out.push(*s),
+        Tree::Struct(fields) => fields.iter().for_each(|(_, t)| leaves_of(t, out)),
+        Tree::Union(variant, t) => {
+            out.push(Scalar::Uint((*variant).into()));
+            leaves_of(t, out);
+        }
+        Tree::List(items) => items.iter().for_each(|t| leaves_of(t, out)),
+    }
+}
+
+/// A `p_version` field is a primitive in DSDL; a layout may still give the role to a struct
+/// (the binding names any field `p_version` so): the program reads such a value as the walk
+/// does, or declines. The value `{p_version: {a: 0x11}, b: 0x22}` is the bytes 11 22.
+#[test]
+fn a_p_version_field_that_is_a_struct_is_read_as_the_walk_reads_it() {
+    let mut l = OwnedLayout::default();
+    let u8_ = l.uint(8, Cast::Saturated).unwrap();
+    let inner = l.structure(&[("a", u8_, Role::Data)]).unwrap();
+    let root = l
+        .structure(&[
+            ("p_version", inner, Role::Version(1)),
+            ("b", u8_, Role::Data),
+        ])
+        .unwrap();
+    let layout = l.as_layout();
+    let Some(program) = Program::compile(&layout, root) else {
+        return;
+    };
+    for allow_trailing in [false, true] {
+        let options = DecodeOptions {
+            tao: true,
+            allow_trailing,
+        };
+        for data in [&[0x11u8, 0x22][..], &[0x11], &[0x11, 0x22, 0x33]] {
+            let mut slots = [Scalar::Uint(0); 4];
+            let by_walk = walk::decode(&layout, root, data, &mut slots, options)
+                .map(|d| slots[..d.leaves].to_vec())
+                .ok();
+            let read = program.decode(&mut Build(&layout), data, options);
+            let Ok(Some(tree)) = read else { continue };
+            let mut leaves = Vec::new();
+            leaves_of(&tree, &mut leaves);
+            assert_eq!(
+                Some(leaves),
+                by_walk,
+                "{data:02x?}, trailing {allow_trailing}"
+            );
+        }
+    }
+}
