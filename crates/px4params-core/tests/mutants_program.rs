@@ -13,13 +13,16 @@ use px4params_core::program::{Program, ValueSink, ValueSource};
 use px4params_core::rules::{DecodeOptions, EncodeOptions, MAX_DEPTH};
 use px4params_core::{walk, Cast, Scalar};
 
-/// A value: primitives, structs as (field index, value), unions as (variant, value), arrays.
+/// A value: primitives, structs as (field index, value), unions as (variant, value), arrays
+/// of primitives (`List`, read and built whole: `begin_array`, `list`) and of composites
+/// (`Items`, item by item: `begin_items`, `push`), as the traits tell them apart.
 #[derive(Clone, Debug, PartialEq)]
 enum Tree {
     Leaf(Scalar),
     Struct(Vec<(u32, Tree)>),
     Union(u32, Box<Tree>),
     List(Vec<Tree>),
+    Items(Vec<Tree>),
 }
 
 /// Reads trees for a program.
@@ -64,7 +67,10 @@ impl<'a> ValueSource for Read<'a> {
         self.scalar(&array[index], kind)
     }
     fn begin_items(&mut self, item: &'a Tree) -> Option<(Self::Array, usize)> {
-        self.begin_array(item, Kind::Bool)
+        match item {
+            Tree::Items(items) => Some((items, items.len())),
+            _ => None,
+        }
     }
     fn item(&mut self, array: &Self::Array, index: usize) -> Option<&'a Tree> {
         array.get(index)
@@ -114,7 +120,7 @@ impl ValueSink for Build<'_, '_> {
         Ok(())
     }
     fn end_items(&mut self, items: Vec<Tree>) -> Result<Tree, Self::Error> {
-        Ok(Tree::List(items))
+        Ok(Tree::Items(items))
     }
 }
 
@@ -178,9 +184,13 @@ fn arrays(levels: usize) -> Chain {
     let mut l = OwnedLayout::default();
     let u8_ = l.uint(8, Cast::Saturated).unwrap();
     let (mut node, mut value) = (u8_, Tree::Leaf(Scalar::Uint(LEAF)));
-    for _ in 1..levels {
+    for level in 1..levels {
         node = l.array(node, 1).unwrap();
-        value = Tree::List(vec![value]);
+        // The innermost array is of primitives, the others of arrays.
+        value = match level {
+            1 => Tree::List(vec![value]),
+            _ => Tree::Items(vec![value]),
+        };
     }
     let root = l
         .structure(&[("a", node, Role::Data), ("b", u8_, Role::Data)])
@@ -304,7 +314,7 @@ fn leaves_of(tree: &Tree, out: &mut Vec<Scalar>) {
             out.push(Scalar::Uint((*variant).into()));
             leaves_of(t, out);
         }
-        Tree::List(items) => items.iter().for_each(|t| leaves_of(t, out)),
+        Tree::List(items) | Tree::Items(items) => items.iter().for_each(|t| leaves_of(t, out)),
     }
 }
 
@@ -347,4 +357,101 @@ fn a_p_version_field_that_is_a_struct_is_read_as_the_walk_reads_it() {
             );
         }
     }
+}
+
+/// A field of the structs of the next test.
+#[derive(Clone, Copy)]
+enum Part {
+    /// `uint8`.
+    Byte,
+    /// `uint8[<=3]`.
+    Bytes,
+    /// `X[<=3]`, `X = {x: uint8}`.
+    Structs,
+}
+
+/// Dynamic arrays (`T[<=3]`) given 0 to 5 items, in the middle of a struct and ending it,
+/// with and without tail array optimization, of bytes and of structs: the program writes
+/// the walk's bytes, and declines where the walk refuses the value (more than 3 items).
+#[test]
+fn a_dynamic_array_is_written_as_the_walk_writes_it_up_to_its_maximum_and_no_further() {
+    use Part::*;
+    let mut l = OwnedLayout::default();
+    let u8_ = l.uint(8, Cast::Saturated).unwrap();
+    let x = l.structure(&[("x", u8_, Role::Data)]).unwrap();
+    let bytes = l.dyn_array(u8_, 3).unwrap();
+    let structs = l.dyn_array(x, 3).unwrap();
+    let x_field = first_field(&l, x);
+    let types = [
+        [Bytes, Structs, Byte],
+        [Byte, Structs, Bytes],
+        [Byte, Bytes, Structs],
+    ];
+    let mut roots = Vec::new();
+    for parts in types {
+        let fields: Vec<(&str, NodeId, Role)> = parts
+            .iter()
+            .zip(["a", "b", "c"])
+            .map(|(part, name)| {
+                let node = match part {
+                    Byte => u8_,
+                    Bytes => bytes,
+                    Structs => structs,
+                };
+                (name, node, Role::Data)
+            })
+            .collect();
+        roots.push((parts, l.structure(&fields).unwrap()));
+    }
+    let layout = l.as_layout();
+    let (mut answered, mut refused) = (0, 0);
+    for (parts, root) in roots {
+        let program = Program::compile(&layout, root).expect("a program");
+        let first = first_field(&l, root);
+        for n in 0..=5u64 {
+            let (mut fields, mut leaves) = (Vec::new(), Vec::new());
+            for (i, part) in parts.iter().enumerate() {
+                let items = (1..=n).map(|v| Scalar::Uint(0x10 + v));
+                let value = match part {
+                    Byte => Tree::Leaf(Scalar::Uint(0x77)),
+                    Bytes => Tree::List(items.map(Tree::Leaf).collect()),
+                    Structs => Tree::Items(
+                        items
+                            .map(|s| Tree::Struct(vec![(x_field, Tree::Leaf(s))]))
+                            .collect(),
+                    ),
+                };
+                match part {
+                    Byte => leaves.push(Scalar::Uint(0x77)),
+                    _ => {
+                        leaves.push(Scalar::Uint(n));
+                        leaves.extend((1..=n).map(|v| Scalar::Uint(0x10 + v)));
+                    }
+                }
+                fields.push((first + i as u32, value));
+            }
+            let value = Tree::Struct(fields);
+            for tao in [false, true] {
+                let options = EncodeOptions {
+                    tao,
+                    ..EncodeOptions::default()
+                };
+                let mut walked = [0u8; 32];
+                let by_walk = walk::encode(&layout, root, &leaves, &mut walked, options)
+                    .ok()
+                    .map(|m| walked[..m].to_vec());
+                let mut out = [0xA5u8; 32];
+                let by_program = program
+                    .encode(&mut Read(PhantomData), &value, &mut out, options)
+                    .map(|m| out[..m].to_vec());
+                assert_eq!(by_program, by_walk, "{n} items, tao {tao}");
+                match by_walk {
+                    Some(_) => answered += 1,
+                    None => refused += 1,
+                }
+            }
+        }
+    }
+    // 0 to 3 items written, 4 and 5 refused.
+    assert_eq!((answered, refused), (24, 12));
 }
