@@ -64,3 +64,48 @@ fn the_table_leaves_a_deeper_leaf_to_the_walk_which_refuses_it() {
         assert_eq!(errors, [ErrorKind::TooDeep, ErrorKind::TooDeep]);
     }
 }
+
+/// `LeafTable::read`, leaf by leaf, against the bytes worked by hand and the walk's
+/// `leaf::seek`: each leaf's value, and whether it is the `p_version` field. The type is
+/// `{p_version: uint8 (version 3), a: int16, u: {x: uint8 | y: bool}, b: uint8}`; the value
+/// `{p_version: 3, a: -2, u: {y: true}, b: 0x5A}` is 03, FE FF (little-endian), then the bits
+/// 1 (the tag: y), 1 (y), 0101 1010 (b) and zeros: D6 80. A built table is not empty.
+#[test]
+fn the_table_reads_each_leaf_and_tells_the_version_field() {
+    use px4params_core::leaf::seek;
+    let mut l = OwnedLayout::default();
+    let u8_ = l.uint(8, Cast::Saturated).unwrap();
+    let i16_ = l.int(16, Cast::Saturated).unwrap();
+    let bool_ = l.boolean();
+    let u = l.union(&[("x", u8_), ("y", bool_)]).unwrap();
+    let root = l
+        .structure(&[
+            ("p_version", u8_, Role::Version(3)),
+            ("a", i16_, Role::Data),
+            ("u", u, Role::Data),
+            ("b", u8_, Role::Data),
+        ])
+        .unwrap();
+    let layout = l.as_layout();
+    let mut slots = vec![LeafSlot::default(); LeafTable::slots_needed(&layout, root)];
+    let table = LeafTable::build(&layout, root, &mut slots).unwrap();
+    assert!(!table.is_empty());
+    let data = [0x03u8, 0xFE, 0xFF, 0xD6, 0x80];
+    let expected = [
+        Some((Scalar::Uint(3), true)),
+        Some((Scalar::Int(-2), false)),
+        Some((Scalar::Uint(1), false)),
+        Some((Scalar::Bool(true), false)),
+        Some((Scalar::Uint(0x5A), false)),
+        None,
+    ];
+    for (k, want) in expected.into_iter().enumerate() {
+        let walked = seek(&layout, root, &data[..], k).map(|p| (p.read(&data[..]), p.version));
+        assert_eq!(walked, want, "[{k}] by the walk");
+        assert_eq!(
+            table.read(&layout, &data[..], k),
+            want,
+            "[{k}] by the table"
+        );
+    }
+}
