@@ -109,3 +109,48 @@ fn the_table_reads_each_leaf_and_tells_the_version_field() {
         );
     }
 }
+
+/// A union's tag entry keeps the union's node number in bits 12..31 of its description, so
+/// unions numbered from 2^19 on are left out of tables (the walk reads their leaves). Three
+/// unions numbered 2^19 - 1, 2^19 and 2^19 + 1, each `{x: uint8 | y: uint8}`, in a struct: the
+/// table reads every leaf as the walk does, each tag's kind naming its own union. The value
+/// {x: 0x11}, {y: 0x22}, {x: 0x33} is the bits 0 00010001 1 00100010 0 00110011 and zeros.
+#[test]
+fn unions_numbered_around_the_tables_limit_are_read_as_the_walk_reads_them() {
+    use px4params_core::rules::LeafKind;
+    let mut l = OwnedLayout::default();
+    let u8_ = l.uint(8, Cast::Saturated).unwrap();
+    // Nodes 1 to 2^19 - 2 (arrays: scalars are interned): the next is number 2^19 - 1.
+    for _ in 1..(1u32 << 19) - 1 {
+        l.array(u8_, 1).unwrap();
+    }
+    let unions: Vec<NodeId> = (0..3)
+        .map(|_| l.union(&[("x", u8_), ("y", u8_)]).unwrap())
+        .collect();
+    assert_eq!(unions, [(1 << 19) - 1, 1 << 19, (1 << 19) + 1]);
+    let root = l
+        .structure(&[
+            ("a", unions[0], Role::Data),
+            ("b", unions[1], Role::Data),
+            ("c", unions[2], Role::Data),
+        ])
+        .unwrap();
+    let layout = l.as_layout();
+    let mut slots = vec![LeafSlot::default(); LeafTable::slots_needed(&layout, root)];
+    let table = LeafTable::build(&layout, root, &mut slots).unwrap();
+    // 0 00010001 1 0010001|0 0 0011001|1 0000000
+    let data = [0b0000_1000, 0b1100_1000, 0b1000_0110, 0b0110_0000];
+    for k in 0..6 {
+        let tabled = table.get_leaf(&layout, &data[..], Target::Index(k), false);
+        let walked = get_leaf(&layout, root, &data[..], Target::Index(k), false);
+        assert_eq!(tabled, walked, "[{k}]");
+        let (leaf, value) = walked.unwrap();
+        if k % 2 == 0 {
+            assert_eq!(value, Scalar::Uint([0, 1, 0][k / 2]), "[{k}]");
+            let union = unions[k / 2];
+            assert_eq!(leaf.kind, LeafKind::Tag { bits: 1, union }, "[{k}]");
+        } else {
+            assert_eq!(value, Scalar::Uint([0x11, 0x22, 0x33][k / 2]), "[{k}]");
+        }
+    }
+}
