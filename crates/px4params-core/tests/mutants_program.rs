@@ -236,13 +236,16 @@ fn structs_holding_unions(levels: usize) -> Chain {
     }
 }
 
+/// Makes a chain of so many levels.
+type Shape = fn(usize) -> Chain;
+
 /// For each chain from `MAX_DEPTH - 3` to `MAX_DEPTH + 3` levels: where the walk encodes the
 /// value, the type has a program, which writes the walk's bytes and reads them back as the
 /// value; where the walk refuses it (too deep), the type has no program, or one that declines
 /// the value and any data. Both sides of the limit are met for every shape.
 #[test]
 fn a_program_follows_a_type_exactly_as_deep_as_the_walk() {
-    let shapes: [(&str, fn(usize) -> Chain); 4] = [
+    let shapes: [(&str, Shape); 4] = [
         ("structs", structs),
         ("unions", unions),
         ("arrays", arrays),
