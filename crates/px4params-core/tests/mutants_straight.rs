@@ -3,10 +3,11 @@
 //! version, a float16 out of range. The codec (which tries the plan first) must answer as the
 //! walk (`px4params_core::walk`, no plans) does, with the bytes worked out by hand.
 
-use px4params_core::codec::encode_leaves;
+use px4params_core::codec::{encode, encode_leaves};
 use px4params_core::compile::OwnedLayout;
 use px4params_core::layout::{Layout, NodeId, Role};
 use px4params_core::rules::EncodeOptions;
+use px4params_core::value::LeafSource;
 use px4params_core::{walk, Cast, ErrorKind, Scalar};
 
 /// The codec's bytes and the walk's for `leaves`, each into a buffer filled with 0xEE first
@@ -141,4 +142,105 @@ fn a_float_out_of_range_is_refused_or_clamped_as_the_walk_does() {
             }
         }
     }
+}
+
+/// Values the straight plan's fast paths must not take as they are: integers out of their
+/// field's range, floats beyond float16's and float32's largest, a byte string holding 300,
+/// `p_version` given as another kind of number; in small types (the one-word path) and long
+/// ones (a uint64 first, the plan's general loop), with and without saturation, tail array
+/// optimization and kept versions: the codec answers as the walk does, bytes or error, and
+/// takes the value's leaves from a longer list.
+#[test]
+fn values_out_of_range_are_encoded_or_refused_as_the_walk_does() {
+    let mut l = OwnedLayout::default();
+    let u8_ = l.uint(8, Cast::Saturated).unwrap();
+    let u64_ = l.uint(64, Cast::Saturated).unwrap();
+    let i8_ = l.int(8, Cast::Saturated).unwrap();
+    let f16 = l.float(16, Cast::Saturated).unwrap();
+    let f32_ = l.float(32, Cast::Saturated).unwrap();
+    let bytes = l.dyn_array(u8_, 4).unwrap();
+    let (data, version) = (Role::Data, Role::Version(3));
+    let mut cases: Vec<(NodeId, Vec<Scalar>)> = Vec::new();
+    let (big_f16, big_f32) = (Scalar::Float(1e6), Scalar::Float(1e39));
+    let odd = [
+        Scalar::Int(300),
+        Scalar::Int(-129),
+        Scalar::Int(100),
+        Scalar::Uint(300),
+    ];
+    for first in [u8_, u64_] {
+        let a = Scalar::Uint(1);
+        for (field, values) in [
+            (f16, vec![big_f16, Scalar::Float(-1e6), Scalar::Float(1.5)]),
+            (
+                f32_,
+                vec![big_f32, Scalar::Float(-1e39), Scalar::Float(1.5)],
+            ),
+            (i8_, odd.to_vec()),
+            (u8_, odd.to_vec()),
+        ] {
+            let root = l
+                .structure(&[("a", first, data), ("x", field, data)])
+                .unwrap();
+            cases.extend(values.into_iter().map(|v| (root, vec![a, v])));
+        }
+        // The byte string after 8 or 64 bits (the one-word path), or 16 or 72 (a uint8
+        // between: after 72, the general loop's).
+        let short = l
+            .structure(&[("a", first, data), ("s", bytes, data)])
+            .unwrap();
+        let long = l
+            .structure(&[("a", first, data), ("b", u8_, data), ("s", bytes, data)])
+            .unwrap();
+        for s in [&[0x41, 300, 0x43][..], &[300], &[0x41, 0x42, 0x43], &[]] {
+            let n = Scalar::Uint(s.len() as u64);
+            let s = s.iter().map(|&b| Scalar::Uint(b));
+            cases.push((short, [a, n].into_iter().chain(s.clone()).collect()));
+            cases.push((long, [a, a, n].into_iter().chain(s).collect()));
+        }
+        for field in [u8_, i8_] {
+            let root = l
+                .structure(&[("p_version", field, version), ("a", first, data)])
+                .unwrap();
+            for v in [
+                Scalar::Uint(3),
+                Scalar::Int(3),
+                Scalar::Float(3.0),
+                Scalar::Bool(true),
+                Scalar::Int(300),
+                Scalar::Uint(300),
+            ] {
+                cases.push((root, vec![v, a]));
+            }
+        }
+    }
+    let layout = l.as_layout();
+    let (mut written, mut refused) = (0, 0);
+    for (root, leaves) in &cases {
+        for (saturate, tao, keep_versions) in (0..8).map(|b| (b & 1 != 0, b & 2 != 0, b & 4 != 0)) {
+            let options = EncodeOptions {
+                tao,
+                saturate,
+                keep_versions,
+            };
+            let [codec, walked] = both(&layout, *root, leaves, options);
+            assert_eq!(codec, walked, "{leaves:?}, {options:?}, root {root}");
+            if walked.is_err() {
+                refused += 1;
+                continue;
+            }
+            written += 1;
+            // From a leaf list that goes on, the value takes its own leaves, no more.
+            let mut longer = leaves.clone();
+            longer.push(Scalar::Uint(0x99));
+            let mut source = LeafSource::new(&longer);
+            let mut out = [0u8; 32];
+            encode(&layout, *root, &mut source, &mut out, options).unwrap();
+            assert_eq!(source.consumed(), leaves.len(), "{leaves:?}, {options:?}");
+        }
+    }
+    assert!(
+        written > 0 && refused > 0,
+        "{written} written, {refused} refused"
+    );
 }
