@@ -154,3 +154,42 @@ fn unions_numbered_around_the_tables_limit_are_read_as_the_walk_reads_them() {
         }
     }
 }
+
+/// Unions in unions (`Uk = {a: Uk-1 | b: uint8}`, U0 = uint8), from `MAX_DEPTH - 2` to
+/// `MAX_DEPTH + 1` levels, each variant a level deeper as the walk counts: every leaf (the
+/// tags, 0 each, then the uint8 0x5A) read through the table as the walk reads it, the
+/// deepest refused by both where it passes the bound.
+#[test]
+fn the_table_follows_union_variants_exactly_as_deep_as_the_walk() {
+    use px4params_core::bits::write_bits;
+    let mut refused = 0;
+    for levels in MAX_DEPTH - 2..=MAX_DEPTH + 1 {
+        let mut l = OwnedLayout::default();
+        let u8_ = l.uint(8, Cast::Saturated).unwrap();
+        let mut root = u8_;
+        for _ in 0..levels {
+            root = l.union(&[("a", root), ("b", u8_)]).unwrap();
+        }
+        let layout = l.as_layout();
+        let mut slots = vec![LeafSlot::default(); LeafTable::slots_needed(&layout, root)];
+        let table = LeafTable::build(&layout, root, &mut slots).unwrap();
+        // `levels` zero bits (the tags), then 0x5A.
+        let mut data = vec![0u8; levels / 8 + 2];
+        write_bits(&mut data, levels, 0x5A, 8);
+        for k in 0..=levels {
+            let tabled = table.get_leaf(&layout, &data[..], Target::Index(k), false);
+            let walked = get_leaf(&layout, root, &data[..], Target::Index(k), false);
+            assert_eq!(tabled, walked, "{levels} levels, [{k}]");
+            refused += usize::from(walked.is_err());
+        }
+        let deepest = get_leaf(&layout, root, &data[..], Target::Index(levels), false);
+        if levels < MAX_DEPTH {
+            assert_eq!(
+                deepest.map(|(_, v)| v),
+                Ok(Scalar::Uint(0x5A)),
+                "{levels} levels"
+            );
+        }
+    }
+    assert!(refused > 0);
+}
