@@ -146,8 +146,9 @@ fn a_float_out_of_range_is_refused_or_clamped_as_the_walk_does() {
 
 /// Values the straight plan's fast paths must not take as they are: integers out of their
 /// field's range, floats beyond float16's and float32's largest, a byte string holding 300,
-/// `p_version` given as another kind of number; in small types (the one-word path) and long
-/// ones (a uint64 first, the plan's general loop), with and without saturation, tail array
+/// `p_version` given as another kind of number or in a field too small for the type's
+/// version, two `p_version` fields; in small types (the one-word path) and long ones (a
+/// uint64 first, the plan's general loop), with and without saturation, tail array
 /// optimization and kept versions: the codec answers as the walk does, bytes or error, and
 /// takes the value's leaves from a longer list.
 #[test]
@@ -212,6 +213,24 @@ fn values_out_of_range_are_encoded_or_refused_as_the_walk_does() {
             ] {
                 cases.push((root, vec![v, a]));
             }
+        }
+        // A type's version too large for its field (300 in a uint8), and two p_version
+        // fields of different versions.
+        let too_large = l
+            .structure(&[("p_version", u8_, Role::Version(300)), ("a", first, data)])
+            .unwrap();
+        for v in [Scalar::Uint(300), Scalar::Uint(44)] {
+            cases.push((too_large, vec![v, a]));
+        }
+        let twice = l
+            .structure(&[
+                ("p_version", u8_, Role::Version(3)),
+                ("again", u8_, Role::Version(5)),
+                ("a", first, data),
+            ])
+            .unwrap();
+        for (v, w) in [(3, 5), (5, 5), (3, 3)] {
+            cases.push((twice, vec![Scalar::Uint(v), Scalar::Uint(w), a]));
         }
     }
     let layout = l.as_layout();
