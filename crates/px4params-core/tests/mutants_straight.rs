@@ -18,8 +18,8 @@ fn both(
     leaves: &[Scalar],
     options: EncodeOptions,
 ) -> [Result<Vec<u8>, String>; 2] {
-    let mut by_codec = [0xEEu8; 32];
-    let mut by_walk = [0xEEu8; 32];
+    let mut by_codec = [0xEEu8; 128];
+    let mut by_walk = [0xEEu8; 128];
     let codec = encode_leaves(layout, root, leaves, &mut by_codec, options);
     let walked = walk::encode(layout, root, leaves, &mut by_walk, options);
     [
@@ -34,7 +34,8 @@ fn both(
 
 /// `{a: uint8, s: uint8[<=8]}` with tail array optimization: s ends the value and its
 /// elements have 8 bits, so its length is left out, and its bytes follow a's on a byte
-/// boundary: a = 1, s = "ABC" is 01 41 42 43.
+/// boundary: a = 1, s = "ABC" is 01 41 42 43; in `uint8[<=100]`, 70 bytes follow a's the
+/// same way.
 #[test]
 fn a_byte_string_after_the_fixed_run_is_written_byte_for_byte() {
     let mut l = OwnedLayout::default();
@@ -46,6 +47,18 @@ fn a_byte_string_after_the_fixed_run_is_written_byte_for_byte() {
     let layout = l.as_layout();
     let leaves = [1u64, 3, 0x41, 0x42, 0x43].map(Scalar::Uint);
     let expected: Result<Vec<u8>, String> = Ok(vec![0x01, 0x41, 0x42, 0x43]);
+    assert_eq!(
+        both(&layout, root, &leaves, EncodeOptions::default()),
+        [expected.clone(), expected]
+    );
+    // 70 bytes 0x00..0x45 in `uint8[<=100]` after a = 1: 01 00 01 .. 45.
+    let long = l.dyn_array(u8_, 100).unwrap();
+    let root = l
+        .structure(&[("a", u8_, Role::Data), ("s", long, Role::Data)])
+        .unwrap();
+    let layout = l.as_layout();
+    let leaves: Vec<Scalar> = [1, 70].into_iter().chain(0..70).map(Scalar::Uint).collect();
+    let expected: Result<Vec<u8>, String> = Ok([1].into_iter().chain(0..70).collect());
     assert_eq!(
         both(&layout, root, &leaves, EncodeOptions::default()),
         [expected.clone(), expected]
@@ -185,19 +198,22 @@ fn values_out_of_range_are_encoded_or_refused_as_the_walk_does() {
                 .unwrap();
             cases.extend(values.into_iter().map(|v| (root, vec![a, v])));
         }
-        // The byte string after 8 or 64 bits (the one-word path), or 16 or 72 (a uint8
-        // between: after 72, the general loop's).
+        // The byte string alone (after its 3-bit length without tail array optimization),
+        // after 8 or 64 bits (the one-word path), or 16 or 72 (a uint8 between: after 72,
+        // the general loop's).
         let short = l
             .structure(&[("a", first, data), ("s", bytes, data)])
             .unwrap();
         let long = l
             .structure(&[("a", first, data), ("b", u8_, data), ("s", bytes, data)])
             .unwrap();
+        let alone = l.structure(&[("s", bytes, data)]).unwrap();
         for s in [&[0x41, 300, 0x43][..], &[300], &[0x41, 0x42, 0x43], &[]] {
             let n = Scalar::Uint(s.len() as u64);
             let s = s.iter().map(|&b| Scalar::Uint(b));
             cases.push((short, [a, n].into_iter().chain(s.clone()).collect()));
-            cases.push((long, [a, a, n].into_iter().chain(s).collect()));
+            cases.push((long, [a, a, n].into_iter().chain(s.clone()).collect()));
+            cases.push((alone, [n].into_iter().chain(s).collect()));
         }
         for field in [u8_, i8_] {
             let root = l
