@@ -434,6 +434,10 @@ impl Compiler<'_, '_> {
 
     /// An array of `elem` values; its last item ends the value when the array does.
     fn array(&mut self, elem: NodeId, len: Len, tail: bool, depth: usize) -> Option<Value> {
+        // Its elements are a level deeper, primitives too (as the walk counts them).
+        if depth + 1 > MAX_DEPTH {
+            return None;
+        }
         if let Some(elem) = primitive(self.layout, elem) {
             return Some(Value::Array { elem, len });
         }
@@ -456,6 +460,11 @@ impl Compiler<'_, '_> {
     ) -> Option<()> {
         let layout = self.layout;
         for field in first..first + count {
+            // Every field is a level deeper, primitives and padding too (as the walk counts
+            // them): a struct at the nesting bound holds none the walk takes.
+            if depth + 1 > MAX_DEPTH {
+                return None;
+            }
             let member = layout.fields[field as usize];
             let last = tail && field + 1 == first + count;
             let kind = layout.node(member.node).kind;
@@ -468,9 +477,6 @@ impl Compiler<'_, '_> {
                 },
                 (Role::Data, kind) if is_primitive(kind) => Step::Leaf { field, kind },
                 (Role::Data, Kind::Struct { first, count }) => {
-                    if depth + 1 > MAX_DEPTH {
-                        return None;
-                    }
                     steps.push(Step::Begin {
                         field,
                         node: member.node,
