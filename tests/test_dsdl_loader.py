@@ -901,3 +901,25 @@ def test_types_that_use_each_other_too_often_are_refused_before_pydsdl(tmp_path:
         _types(tmp_path, files)
     assert "acme.T2.1.0 uses its types so many times over (" in str(e.value)
     assert "at most 20,000): pydsdl would take seconds to minutes to read it" in str(e.value)
+
+
+@pytest.mark.parametrize(
+    ("field", "minor", "top"), [("uint4", 16, 15), ("int4", 8, 7), ("int8", 128, 127)]
+)
+def test_a_p_version_too_narrow_for_the_minor_version_is_refused(
+    tmp_path: Path, field: str, minor: int, top: int
+) -> None:
+    # The codec writes the minor version into p_version; a field that cannot hold it would be
+    # written cut (minor 16 in a uint4 as 0) by firmware's walk.
+    text = f"# doc\n{field} p_version\nuint8 a\n@sealed\n"
+    with pytest.raises(DsdlError) as e:
+        _types(tmp_path / "bad", {f"P.1.{minor}.dsdl": text})
+    assert str(e.value) == (
+        f"{tmp_path / 'bad' / 'acme' / f'P.1.{minor}.dsdl'}:2: acme.P.1.{minor}: p_version is "
+        f"{field}, which cannot hold the type's minor version {minor} (expected 0 to {top}: a "
+        "wider p_version, or a lower minor version)"
+    )
+    # The largest it holds loads, and is written as the value's first field (its bits first).
+    schema = _types(tmp_path / "ok", {f"P.1.{top}.dsdl": text})
+    bits = int(field.removeprefix("u").removeprefix("int"))
+    assert schema.get("acme.P").encode({"a": 1})[:1] == bytes([(top << (8 - bits)) & 0xFF])

@@ -175,6 +175,7 @@ fn values_out_of_range_are_encoded_or_refused_as_the_walk_does() {
     let bytes = l.dyn_array(u8_, 4).unwrap();
     let (data, version) = (Role::Data, Role::Version(3));
     let mut cases: Vec<(NodeId, Vec<Scalar>)> = Vec::new();
+    let mut too_large_at: Vec<NodeId> = Vec::new();
     let (big_f16, big_f32) = (Scalar::Float(1e6), Scalar::Float(1e39));
     let odd = [
         Scalar::Int(300),
@@ -238,6 +239,7 @@ fn values_out_of_range_are_encoded_or_refused_as_the_walk_does() {
         for v in [Scalar::Uint(300), Scalar::Uint(44)] {
             cases.push((too_large, vec![v, a]));
         }
+        too_large_at.push(too_large);
         let twice = l
             .structure(&[
                 ("p_version", u8_, Role::Version(3)),
@@ -265,6 +267,11 @@ fn values_out_of_range_are_encoded_or_refused_as_the_walk_does() {
                 continue;
             }
             written += 1;
+            if *root == too_large_at[0] || *root == too_large_at[1] {
+                // A version its field cannot hold: the walk writes it cut, the general
+                // encoder's value pass refuses it (the DSDL loader refuses such a type).
+                continue;
+            }
             // From a leaf list that goes on, the value takes its own leaves, no more.
             let mut longer = leaves.clone();
             longer.push(Scalar::Uint(0x99));

@@ -160,6 +160,8 @@ class _ModelBuilder:
             fields: list[dict[str, Any]] = []
             for f, attr in zip(part.fields, attrs, strict=True):
                 ftype = _pydsdl_field_type(f.data_type, file, attr.line)
+                if f.name == "p_version":
+                    _check_version_fits(ftype, part.version.minor, key, file, attr.line)
                 doc_lines = _doc_lines(f.doc, attr.doc, attr.line)
                 doc = self._field_doc(doc_lines, file, key, f.name, ftype)
                 fields.append({"name": f.name, "type": ftype, "line": attr.line, "doc": doc})
@@ -535,6 +537,24 @@ def _innermost(t: TypeSpec) -> TypeSpec:
     while t["kind"] in ("array", "dynarray"):
         t = t["elem"]
     return t
+
+
+def _check_version_fits(
+    ftype: dict[str, Any], minor: int, key: str, file: str, line: int | None
+) -> None:
+    """``p_version`` holds the type's minor version, which the codec writes: refused where the
+    field cannot hold it (firmware's walk would write it cut to the field's bits)."""
+    kind, bits = ftype["kind"], ftype.get("bits", 0)
+    if kind not in ("uint", "int"):
+        return
+    top = (1 << bits) - 1 if kind == "uint" else (1 << (bits - 1)) - 1
+    if minor > top:
+        raise DsdlError(
+            f"{key}: p_version is {kind}{bits}, which cannot hold the type's minor version "
+            f"{minor} (expected 0 to {top}: a wider p_version, or a lower minor version)",
+            file,
+            line,
+        )
 
 
 def _type_name(t: TypeSpec) -> str:
