@@ -286,3 +286,41 @@ fn values_out_of_range_are_encoded_or_refused_as_the_walk_does() {
         "{written} written, {refused} refused"
     );
 }
+
+/// `{a: uint4, s: uint8[<=8]}` with tail array optimization: s takes every whole byte after
+/// a's 4 bits, so 0xA1 0x23 is a = 10 and s = [0x12], a 3 left over (fewer than 8 bits: not
+/// an element); the codec (the straight plan first) reads what the walk reads, from 1 to 5
+/// bytes, its leaves and where the value ends.
+#[test]
+fn a_byte_string_after_four_bits_takes_the_whole_bytes_left() {
+    let mut l = OwnedLayout::default();
+    let u4 = l.uint(4, Cast::Saturated).unwrap();
+    let u8_ = l.uint(8, Cast::Saturated).unwrap();
+    let s = l.dyn_array(u8_, 8).unwrap();
+    let root = l
+        .structure(&[("a", u4, Role::Data), ("s", s, Role::Data)])
+        .unwrap();
+    let layout = l.as_layout();
+    let options = px4params_core::DecodeOptions {
+        tao: true,
+        allow_trailing: false,
+    };
+    let data = [0xA1, 0x23, 0x45, 0x67, 0x89];
+    for n in 1..=data.len() {
+        let mut by_codec = [Scalar::Uint(0xEE); 12];
+        let mut by_walk = [Scalar::Uint(0xEE); 12];
+        let codec =
+            px4params_core::codec::decode_leaves(&layout, root, &data[..n], &mut by_codec, options);
+        let walked = walk::decode(&layout, root, &data[..n], &mut by_walk, options);
+        let (codec, walked) = (codec.unwrap(), walked.unwrap());
+        assert_eq!((codec.leaves, codec.bits), (walked.leaves, walked.bits), "{n} bytes");
+        assert_eq!(by_codec, by_walk, "{n} bytes");
+        // a, the length and n - 1 elements: a's 4 bits and the last 4 do not make a byte.
+        assert_eq!(codec.leaves, 2 + (n - 1), "{n} bytes");
+        assert_eq!(by_codec[0], Scalar::Uint(10));
+        assert_eq!(by_codec[1], Scalar::Uint(n as u64 - 1));
+        if n == 2 {
+            assert_eq!(by_codec[2], Scalar::Uint(0x12));
+        }
+    }
+}
