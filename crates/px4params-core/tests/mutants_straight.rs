@@ -313,7 +313,11 @@ fn a_byte_string_after_four_bits_takes_the_whole_bytes_left() {
             px4params_core::codec::decode_leaves(&layout, root, &data[..n], &mut by_codec, options);
         let walked = walk::decode(&layout, root, &data[..n], &mut by_walk, options);
         let (codec, walked) = (codec.unwrap(), walked.unwrap());
-        assert_eq!((codec.leaves, codec.bits), (walked.leaves, walked.bits), "{n} bytes");
+        assert_eq!(
+            (codec.leaves, codec.bits),
+            (walked.leaves, walked.bits),
+            "{n} bytes"
+        );
         assert_eq!(by_codec, by_walk, "{n} bytes");
         // a, the length and n - 1 elements: a's 4 bits and the last 4 do not make a byte.
         assert_eq!(codec.leaves, 2 + (n - 1), "{n} bytes");
