@@ -5,124 +5,15 @@
 //! chains of nested structs, unions, arrays of composites and unions held by structs, each
 //! from a few levels short of the limit to a few past it.
 
-use core::marker::PhantomData;
+#[path = "support/value_tree.rs"]
+mod value_tree;
 
 use px4params_core::compile::OwnedLayout;
-use px4params_core::layout::{Kind, Layout, NodeId, Role};
-use px4params_core::program::{Program, ValueSink, ValueSource};
+use px4params_core::layout::{Kind, NodeId, Role};
+use px4params_core::program::Program;
 use px4params_core::rules::{DecodeOptions, EncodeOptions, MAX_DEPTH};
 use px4params_core::{walk, Cast, Scalar};
-
-/// A value: primitives, structs as (field index, value), unions as (variant, value), arrays
-/// of primitives (`List`, read and built whole: `begin_array`, `list`) and of composites
-/// (`Items`, item by item: `begin_items`, `push`), as the traits tell them apart.
-#[derive(Clone, Debug, PartialEq)]
-enum Tree {
-    Leaf(Scalar),
-    Struct(Vec<(u32, Tree)>),
-    Union(u32, Box<Tree>),
-    List(Vec<Tree>),
-    Items(Vec<Tree>),
-}
-
-/// Reads trees for a program.
-struct Read<'a>(PhantomData<&'a Tree>);
-
-impl<'a> ValueSource for Read<'a> {
-    type Item = &'a Tree;
-    type Struct = &'a [(u32, Tree)];
-    type Array = &'a [Tree];
-
-    fn begin_struct(&mut self, item: &'a Tree) -> Option<Self::Struct> {
-        match item {
-            Tree::Struct(fields) => Some(fields),
-            _ => None,
-        }
-    }
-    fn field(&mut self, fields: &mut Self::Struct, field: u32) -> Option<Option<&'a Tree>> {
-        Some(fields.iter().find(|(i, _)| *i == field).map(|(_, t)| t))
-    }
-    fn end_struct(&mut self, fields: Self::Struct, used: usize) -> Option<()> {
-        (fields.len() == used).then_some(())
-    }
-    fn union(&mut self, item: &'a Tree, _first: u32, _count: u32) -> Option<(u32, &'a Tree)> {
-        match item {
-            Tree::Union(variant, value) => Some((*variant, value)),
-            _ => None,
-        }
-    }
-    fn scalar(&mut self, item: &'a Tree, _kind: Kind) -> Option<Scalar> {
-        match item {
-            Tree::Leaf(s) => Some(*s),
-            _ => None,
-        }
-    }
-    fn begin_array(&mut self, item: &'a Tree, _elem: Kind) -> Option<(Self::Array, usize)> {
-        match item {
-            Tree::List(items) => Some((items, items.len())),
-            _ => None,
-        }
-    }
-    fn element(&mut self, array: &Self::Array, index: usize, kind: Kind) -> Option<Scalar> {
-        self.scalar(&array[index], kind)
-    }
-    fn begin_items(&mut self, item: &'a Tree) -> Option<(Self::Array, usize)> {
-        match item {
-            Tree::Items(items) => Some((items, items.len())),
-            _ => None,
-        }
-    }
-    fn item(&mut self, array: &Self::Array, index: usize) -> Option<&'a Tree> {
-        array.get(index)
-    }
-}
-
-/// Builds trees for a program of a type in the layout it holds.
-struct Build<'l, 'a>(&'l Layout<'a>);
-
-impl ValueSink for Build<'_, '_> {
-    type Value = Tree;
-    type Struct = Vec<(u32, Tree)>;
-    type Items = Vec<Tree>;
-    type Error = core::convert::Infallible;
-
-    fn begin_struct(&mut self, _node: NodeId) -> Result<Self::Struct, Self::Error> {
-        Ok(Vec::new())
-    }
-    fn put(&mut self, fields: &mut Self::Struct, field: u32, v: Tree) -> Result<(), Self::Error> {
-        fields.push((field, v));
-        Ok(())
-    }
-    fn end_struct(&mut self, fields: Self::Struct, _node: NodeId) -> Result<Tree, Self::Error> {
-        Ok(Tree::Struct(fields))
-    }
-    fn union(&mut self, node: NodeId, field: u32, value: Tree) -> Result<Tree, Self::Error> {
-        let Kind::Union { first, .. } = self.0.node(node).kind else {
-            panic!("a union's node");
-        };
-        Ok(Tree::Union(field - first, Box::new(value)))
-    }
-    fn scalar(&mut self, value: Scalar) -> Result<Tree, Self::Error> {
-        Ok(Tree::Leaf(value))
-    }
-    fn list(
-        &mut self,
-        _len: usize,
-        items: impl Iterator<Item = Scalar>,
-    ) -> Result<Tree, Self::Error> {
-        Ok(Tree::List(items.map(Tree::Leaf).collect()))
-    }
-    fn begin_items(&mut self, _len: usize) -> Result<Vec<Tree>, Self::Error> {
-        Ok(Vec::new())
-    }
-    fn push(&mut self, items: &mut Vec<Tree>, value: Tree) -> Result<(), Self::Error> {
-        items.push(value);
-        Ok(())
-    }
-    fn end_items(&mut self, items: Vec<Tree>) -> Result<Tree, Self::Error> {
-        Ok(Tree::Items(items))
-    }
-}
+use value_tree::{Build, Read, Tree};
 
 /// A type `levels` containers deep, a value of it and that value's leaves in `[k]` order.
 struct Chain {
@@ -272,7 +163,7 @@ fn a_program_follows_a_type_exactly_as_deep_as_the_walk() {
                     let program = program.unwrap_or_else(|| panic!("{what}: no program"));
                     assert_eq!(program.root(), root, "{what}");
                     let mut out = [0xA5u8; 64];
-                    let written = program.encode(&mut Read(PhantomData), &value, &mut out, encode);
+                    let written = program.encode(&mut Read::new(), &value, &mut out, encode);
                     assert_eq!(written.map(|m| &out[..m]), Some(&walked[..n]), "{what}");
                     let read = program.decode(&mut Build(&layout), &walked[..n], decode);
                     assert_eq!(read, Ok(Some(value.clone())), "{what}");
@@ -281,7 +172,7 @@ fn a_program_follows_a_type_exactly_as_deep_as_the_walk() {
                     refused += 1;
                     let Some(program) = program else { continue };
                     let mut out = [0u8; 64];
-                    let written = program.encode(&mut Read(PhantomData), &value, &mut out, encode);
+                    let written = program.encode(&mut Read::new(), &value, &mut out, encode);
                     assert_eq!(written, None, "{what}: encoded by the program");
                     // Data of any length (zero bits: every tag and length 0, every leaf 0).
                     let lenient = DecodeOptions {
@@ -445,7 +336,7 @@ fn a_dynamic_array_is_written_as_the_walk_writes_it_up_to_its_maximum_and_no_fur
                     .map(|m| walked[..m].to_vec());
                 let mut out = [0xA5u8; 32];
                 let by_program = program
-                    .encode(&mut Read(PhantomData), &value, &mut out, options)
+                    .encode(&mut Read::new(), &value, &mut out, options)
                     .map(|m| out[..m].to_vec());
                 assert_eq!(by_program, by_walk, "{n} items, tao {tao}");
                 match by_walk {

@@ -5,132 +5,22 @@
 //! roomy, data complete and cut short: a program answers with the codec's bytes or value, or
 //! declines; it declines exactly where the codec fails on a value it was given unchanged.
 //!
-//! Values are trees (`Tree`): the program reads and builds them through its traits, the codec
-//! through its `Source`, and its leaf lists are compared with a tree's leaves in `[k]` order.
+//! Values are trees (`Tree`, tests/support/value_tree.rs): the program reads and builds them
+//! through its traits, the codec through its `Source`, and its leaf lists are compared with a
+//! tree's leaves in `[k]` order.
 
 mod common;
+#[path = "support/value_tree.rs"]
+mod value_tree;
 
 use common::{any_type, ina238, kitchen_sink, primitive, same_leaves, Ty};
 use proptest::prelude::*;
 use px4params_core::codec::{decode_leaves, encode, DecodeOptions, EncodeOptions, Source};
 use px4params_core::compile::OwnedLayout;
 use px4params_core::layout::{Field, Kind, Layout, NodeId, Role};
-use px4params_core::program::{Program, ValueSink, ValueSource};
+use px4params_core::program::Program;
 use px4params_core::Scalar;
-
-/// A value: primitives, structs as (field index, value) in any order, unions as (variant
-/// index among the union's, value), arrays.
-#[derive(Clone, Debug, PartialEq)]
-enum Tree {
-    Leaf(Scalar),
-    Struct(Vec<(u32, Tree)>),
-    Union(u32, Box<Tree>),
-    List(Vec<Tree>),
-}
-
-/// Reads trees for programs.
-struct Trees;
-
-impl<'a> ValueSource for &'a Trees {
-    type Item = &'a Tree;
-    type Struct = &'a [(u32, Tree)];
-    type Array = &'a [Tree];
-
-    fn begin_struct(&mut self, item: &'a Tree) -> Option<Self::Struct> {
-        match item {
-            Tree::Struct(fields) => Some(fields),
-            _ => None,
-        }
-    }
-    fn field(&mut self, fields: &mut Self::Struct, field: u32) -> Option<Option<&'a Tree>> {
-        Some(fields.iter().find(|(i, _)| *i == field).map(|(_, t)| t))
-    }
-    fn end_struct(&mut self, fields: Self::Struct, used: usize) -> Option<()> {
-        (fields.len() == used).then_some(())
-    }
-    fn scalar(&mut self, item: &'a Tree, _kind: Kind) -> Option<Scalar> {
-        match item {
-            Tree::Leaf(s) => Some(*s),
-            _ => None,
-        }
-    }
-    fn begin_array(&mut self, item: &'a Tree, _elem: Kind) -> Option<(Self::Array, usize)> {
-        match item {
-            Tree::List(items) => Some((items, items.len())),
-            _ => None,
-        }
-    }
-    fn element(&mut self, array: &Self::Array, index: usize, kind: Kind) -> Option<Scalar> {
-        self.scalar(&array[index], kind)
-    }
-    fn union(&mut self, item: &'a Tree, _first: u32, _count: u32) -> Option<(u32, &'a Tree)> {
-        match item {
-            Tree::Union(variant, value) => Some((*variant, value)),
-            _ => None,
-        }
-    }
-    fn begin_items(&mut self, item: &'a Tree) -> Option<(Self::Array, usize)> {
-        self.begin_array(item, Kind::Bool)
-    }
-    fn item(&mut self, array: &Self::Array, index: usize) -> Option<&'a Tree> {
-        array.get(index)
-    }
-}
-
-/// Builds trees for programs (of types in the layout it holds).
-struct Build<'l, 'a>(&'l Layout<'a>);
-
-impl ValueSink for Build<'_, '_> {
-    type Value = Tree;
-    type Struct = Vec<(u32, Tree)>;
-    type Items = Vec<Tree>;
-    type Error = core::convert::Infallible;
-
-    fn begin_struct(&mut self, _node: NodeId) -> Result<Self::Struct, Self::Error> {
-        Ok(Vec::new())
-    }
-    fn put(
-        &mut self,
-        fields: &mut Self::Struct,
-        field: u32,
-        value: Tree,
-    ) -> Result<(), Self::Error> {
-        fields.push((field, value));
-        Ok(())
-    }
-    fn end_struct(&mut self, fields: Self::Struct, _node: NodeId) -> Result<Tree, Self::Error> {
-        Ok(Tree::Struct(fields))
-    }
-    fn scalar(&mut self, value: Scalar) -> Result<Tree, Self::Error> {
-        Ok(Tree::Leaf(value))
-    }
-    fn list(
-        &mut self,
-        len: usize,
-        items: impl Iterator<Item = Scalar>,
-    ) -> Result<Tree, Self::Error> {
-        let items: Vec<Tree> = items.map(Tree::Leaf).collect();
-        assert_eq!(items.len(), len);
-        Ok(Tree::List(items))
-    }
-    fn union(&mut self, node: NodeId, field: u32, value: Tree) -> Result<Tree, Self::Error> {
-        let Kind::Union { first, count, .. } = self.0.node(node).kind else {
-            panic!("a union's node");
-        };
-        assert!((first..first + count).contains(&field));
-        Ok(Tree::Union(field - first, Box::new(value)))
-    }
-    fn begin_items(&mut self, _len: usize) -> Result<Vec<Tree>, Self::Error> {
-        Ok(Vec::new())
-    }
-    fn push(&mut self, items: &mut Vec<Tree>, value: Tree) -> Result<(), Self::Error> {
-        items.push(value);
-        Ok(())
-    }
-    fn end_items(&mut self, items: Vec<Tree>) -> Result<Tree, Self::Error> {
-        Ok(Tree::List(items))
-    }
-}
+use value_tree::{Build, Read, Tree};
 
 /// A tree read by the codec's general encoder.
 struct General<'a> {
@@ -195,13 +85,13 @@ impl<'a> Source for General<'a> {
         self.stack.pop();
     }
     fn begin_array(&mut self, _fixed: Option<u32>) -> Result<usize, Refused> {
-        match self.top() {
-            Tree::List(items) => Ok(items.len()),
-            _ => Err(Refused::Shape),
-        }
+        self.top()
+            .elements()
+            .map(<[Tree]>::len)
+            .ok_or(Refused::Shape)
     }
     fn element(&mut self, index: usize) -> Result<(), Refused> {
-        let Tree::List(items) = *self.stack.last().unwrap() else {
+        let Some(items) = self.stack.last().unwrap().elements() else {
             return Err(Refused::Shape);
         };
         self.stack.push(&items[index]);
@@ -236,7 +126,10 @@ fn leaves_of(layout: &Layout<'_>, id: NodeId, tree: &Tree, out: &mut Vec<Scalar>
                 out,
             );
         }
-        (Kind::Array { elem, .. } | Kind::DynArray { elem, .. }, Tree::List(items)) => {
+        (
+            Kind::Array { elem, .. } | Kind::DynArray { elem, .. },
+            Tree::List(items) | Tree::Items(items),
+        ) => {
             if matches!(layout.node(id).kind, Kind::DynArray { .. }) {
                 out.push(Scalar::Uint(items.len() as u64));
             }
@@ -329,7 +222,7 @@ fn size(tree: &Tree) -> usize {
         Tree::Leaf(_) => 0,
         Tree::Struct(fields) => fields.iter().map(|(_, t)| size(t)).sum(),
         Tree::Union(_, t) => size(t),
-        Tree::List(items) => items.iter().map(size).sum(),
+        Tree::List(items) | Tree::Items(items) => items.iter().map(size).sum(),
     }
 }
 
@@ -353,14 +246,14 @@ fn change(tree: &mut Tree, at: &mut usize, how: u8, raw: u64) -> bool {
             (t @ Tree::Struct(_), _) => *t = Tree::Leaf(Scalar::Uint(raw % 2)),
             (Tree::Union(variant, _), 0) => *variant = (raw % 5) as u32,
             (t @ Tree::Union(..), _) => *t = Tree::Leaf(Scalar::Uint(raw % 2)),
-            (Tree::List(items), 0) => {
+            (Tree::List(items) | Tree::Items(items), 0) => {
                 let copy = match items.first() {
                     Some(first) if raw % 2 == 0 => first.clone(),
                     _ => Tree::Leaf(Scalar::Uint(raw % 256)),
                 };
                 items.push(copy);
             }
-            (Tree::List(items), _) => {
+            (Tree::List(items) | Tree::Items(items), _) => {
                 items.pop();
             }
         }
@@ -371,7 +264,7 @@ fn change(tree: &mut Tree, at: &mut usize, how: u8, raw: u64) -> bool {
         Tree::Leaf(_) => false,
         Tree::Struct(fields) => fields.iter_mut().any(|(_, t)| change(t, at, how, raw)),
         Tree::Union(_, t) => change(t, at, how, raw),
-        Tree::List(items) => items.iter_mut().any(|t| change(t, at, how, raw)),
+        Tree::List(items) | Tree::Items(items) => items.iter_mut().any(|t| change(t, at, how, raw)),
     }
 }
 
@@ -379,7 +272,7 @@ type Encoded = Option<Vec<u8>>;
 
 fn by_program(program: &Program, tree: &Tree, size: usize, options: EncodeOptions) -> Encoded {
     let mut out = vec![0xA5u8; size];
-    let n = program.encode(&mut &Trees, tree, &mut out, options)?;
+    let n = program.encode(&mut Read::new(), tree, &mut out, options)?;
     out.truncate(n);
     Some(out)
 }
@@ -476,7 +369,7 @@ fn unions_and_arrays_of_structs_are_answered() {
         (field(sink, "big"), Tree::Leaf(Scalar::Int(-5))),
         (
             field(sink, "tail"),
-            Tree::List(vec![item(1, 0.5), item(2, -2.0)]),
+            Tree::Items(vec![item(1, 0.5), item(2, -2.0)]),
         ),
     ]);
     let outer = layout.member_index(nest, "f0").unwrap();
@@ -497,7 +390,7 @@ fn unions_and_arrays_of_structs_are_answered() {
     };
     let nest_value = Tree::Struct(vec![(
         outer,
-        Tree::List(vec![nest_elem(1, &[1, 2]), nest_elem(2, &[3])]),
+        Tree::Items(vec![nest_elem(1, &[1, 2]), nest_elem(2, &[3])]),
     )]);
     for (root, value) in [(ina, &ina_value), (sink, &sink_value), (nest, &nest_value)] {
         let program = Program::compile(&layout, root).expect("a program");
@@ -572,11 +465,13 @@ fn random_tree(layout: &Layout<'_>, id: NodeId, seed: &mut u64) -> Tree {
             Tree::Union(variant, Box::new(random_tree(layout, node, seed)))
         }
         Kind::Array { elem, len } => {
-            Tree::List((0..len).map(|_| random_tree(layout, elem, seed)).collect())
+            let items = (0..len).map(|_| random_tree(layout, elem, seed)).collect();
+            Tree::array(layout, elem, items)
         }
         Kind::DynArray { elem, max, .. } => {
             let n = draw() % (u64::from(max) + 1);
-            Tree::List((0..n).map(|_| random_tree(layout, elem, seed)).collect())
+            let items = (0..n).map(|_| random_tree(layout, elem, seed)).collect();
+            Tree::array(layout, elem, items)
         }
     }
 }
