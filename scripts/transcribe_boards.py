@@ -1,10 +1,12 @@
 """Write python/px4params/data/boards.toml from PX4-Autopilot git trees (a maintainer's tool).
 
 Reads, at each snapshot, every ``boards/<vendor>/<model>/init/rc.board_sensors`` with the
-board's ``src/i2c.cpp`` (or ``src/board_config.h``) and ``ROMFS/px4fmu_common/init.d/rc.sensors``,
-and writes the facts in px4params' own format: which drivers start, on which bus, with which
-options, under which shell conditions. Nothing of PX4's text is copied but driver names, options
-and conditions. A board's consecutive snapshots with the same facts share one row.
+board's ``src/i2c.cpp`` (or ``src/board_config.h``) and ``ROMFS/px4fmu_common/init.d/rc.sensors``
+(where i2c.cpp numbers buses from 0, as on NXP's Kinetis and S32K, also the board's NuttX
+defconfig and its chip's ``PX4_BUS_OFFSET``, which PX4 adds to make them its own), and writes
+the facts in px4params' own format: which drivers start, on which bus, with which options, under
+which shell conditions. Nothing of PX4's text is copied but driver names, options and
+conditions. A board's consecutive snapshots with the same facts share one row.
 
     python scripts/transcribe_boards.py OUT.toml \\
         v1.14.0=/path/PX4-Autopilot.git@v1.14.0:"tag v1.14.0" ... main=/path@<sha>:"branch main"
@@ -361,18 +363,62 @@ def facts(
     return devices, switches, launcher
 
 
-def i2c_buses(files: dict[str, str]) -> tuple[list[int], list[int], str]:
-    """A board's external and internal I2C buses and the file they come from."""
-    if "src/i2c.cpp" in files:
-        text, name = files["src/i2c.cpp"], "src/i2c.cpp"
-        external = re.findall(r"initI2CBusExternal\((\d+)\)", text)
-        internal = re.findall(r"initI2CBusInternal\((\d+)\)", text)
-    else:
+# initI2CBusExternal(N), or initI2CBusExternal(PX4_BUS_NUMBER_TO_PX4(N)) on chips that number
+# their buses from 0 (the macro adds the chip's PX4_BUS_OFFSET: PX4 numbers buses from 1).
+_I2C_BUS = re.compile(r"initI2CBus(External|Internal)\((?:PX4_BUS_NUMBER_TO_PX4\((\d+)\)|(\d+))\)")
+
+
+def i2c_buses(
+    files: dict[str, str], offsets: dict[str, tuple[int, str]]
+) -> tuple[list[int], list[int], str, str]:
+    """A board's external and internal I2C buses, the file they come from, and where the bus
+    offset they needed comes from ("" when none was needed)."""
+    if "src/i2c.cpp" not in files:
         text, name = files.get("src/board_config.h", ""), "src/board_config.h"
         external = re.findall(r"#define\s+PX4_I2C_BUS_EXPANSION\d*\s+(\d+)\b", text)
         internal = re.findall(r"#define\s+PX4_I2C_BUS_ONBOARD\s+(\d+)\b", text)
         name = name if external or internal else ""
-    return sorted({int(b) for b in external}), sorted({int(b) for b in internal}), name
+        return sorted({int(b) for b in external}), sorted({int(b) for b in internal}), name, ""
+    buses: dict[str, set[int]] = {"External": set(), "Internal": set()}
+    offset_source = ""
+    for kind, from_zero, number in _I2C_BUS.findall(files["src/i2c.cpp"]):
+        if from_zero:
+            offset, offset_source = chip_bus_offset(files, offsets)
+            buses[kind].add(int(from_zero) + offset)
+        else:
+            buses[kind].add(int(number))
+    return sorted(buses["External"]), sorted(buses["Internal"]), "src/i2c.cpp", offset_source
+
+
+def chip_bus_offset(files: dict[str, str], offsets: dict[str, tuple[int, str]]) -> tuple[int, str]:
+    """The board's chip's PX4_BUS_OFFSET: the first chip flag of PX4's list (the order its
+    CMake tests them in) that the board's NuttX defconfig sets."""
+    config = files.get("nuttx-config/nsh/defconfig", "")
+    chosen = set(re.findall(r"^(CONFIG_\w+)=y$", config, re.M))
+    for flag, (offset, source) in offsets.items():
+        if flag in chosen:
+            return offset, f"{source} (PX4_BUS_OFFSET {offset}, {flag})"
+    raise SystemExit(
+        f"{files['path']}: src/i2c.cpp numbers buses with PX4_BUS_NUMBER_TO_PX4, but no chip flag "
+        f"of its nuttx-config/nsh/defconfig has a PX4_BUS_OFFSET (expected one of {list(offsets)})"
+    )
+
+
+def bus_offsets(git_dir: str, commit: str) -> dict[str, tuple[int, str]]:
+    """{NuttX chip flag: (PX4_BUS_OFFSET, the micro_hal.h defining it)}, in the order PX4's CMake
+    (px4_os_determine_build_chip) tests the flags; chips whose header defines none are left out."""
+    cmake = git(git_dir, "show", f"{commit}:platforms/nuttx/cmake/px4_impl_os.cmake") or ""
+    chips = re.findall(
+        r"\((CONFIG_\w+)\)\s*set\(CHIP_MANUFACTURER \"(\w+)\"\)\s*set\(CHIP \"(\w+)\"\)", cmake
+    )
+    offsets: dict[str, tuple[int, str]] = {}
+    for flag, maker, chip in chips:
+        path = f"platforms/nuttx/src/px4/{maker}/{chip}/include/px4_arch/micro_hal.h"
+        header = git(git_dir, "show", f"{commit}:{path}") or ""
+        defined = re.search(r"^#define\s+PX4_BUS_OFFSET\s+(\d+)", header, re.M)
+        if defined:
+            offsets[flag] = (int(defined.group(1)), path)
+    return offsets
 
 
 # -- reading the trees ---------------------------------------------------------------------------
@@ -385,8 +431,10 @@ def git(git_dir: str, *args: str) -> str | None:
     return done.stdout if done.returncode == 0 else None
 
 
-def read_snapshot(git_dir: str, rev: str) -> tuple[str, str, str, dict[str, dict[str, str]]]:
-    """(commit, date, rc.sensors, {board: {file: text}}) of one tree."""
+def read_snapshot(
+    git_dir: str, rev: str
+) -> tuple[str, str, str, dict[str, dict[str, str]], dict[str, tuple[int, str]]]:
+    """(commit, date, rc.sensors, {board: {file: text}}, the chips' bus offsets) of one tree."""
     commit = (git(git_dir, "rev-parse", f"{rev}^{{commit}}") or "").strip()
     if not commit:
         raise SystemExit(f"{git_dir}: no commit {rev!r}")
@@ -399,12 +447,12 @@ def read_snapshot(git_dir: str, rev: str) -> tuple[str, str, str, dict[str, dict
         folder = path.removesuffix("/init/rc.board_sensors")
         _, vendor, model = folder.split("/")
         files = {"path": path, "init/rc.board_sensors": git(git_dir, "show", f"{commit}:{path}")}
-        for extra in ("src/i2c.cpp", "src/board_config.h"):
+        for extra in ("src/i2c.cpp", "src/board_config.h", "nuttx-config/nsh/defconfig"):
             text = git(git_dir, "show", f"{commit}:{folder}/{extra}")
             if text is not None:
                 files[extra] = text
         boards[f"{vendor}_{model}"] = files  # type: ignore[assignment]
-    return commit, date, rc_sensors, boards
+    return commit, date, rc_sensors, boards, bus_offsets(git_dir, commit)
 
 
 # -- writing TOML ----------------------------------------------------------------------------------
@@ -454,7 +502,7 @@ def main(argv: list[str]) -> None:
         "# change; `line` is the line of the start command in the newest of them.",
         "",
     ]
-    for release, ref, commit, date, _, _ in snapshots:
+    for release, ref, commit, date, *_ in snapshots:
         out += ["[[snapshot]]", f"release = {json.dumps(release)}", f"ref = {json.dumps(ref)}"]
         out += [f"commit = {json.dumps(commit)}", f"date = {json.dumps(date)}", ""]
 
@@ -468,7 +516,7 @@ def main(argv: list[str]) -> None:
         out += ["]", ""]
 
     groups: list[tuple[str, list[str], list[dict[str, Any]]]] = []
-    for release, _, _, _, rc_sensors, _ in snapshots:
+    for release, _, _, _, rc_sensors, *_ in snapshots:
         devices, switches, _ = facts(rc_sensors)
         assert not devices, devices  # rc.sensors starts by switch only (v1.11.0 .. main)
         if groups and groups[-1][0] == same(switches):
@@ -482,16 +530,16 @@ def main(argv: list[str]) -> None:
         out += [f"  {inline(r, SWITCH_KEYS)}," for r in switches]
         out += ["]", ""]
 
-    names = sorted({name for *_, boards in snapshots for name in boards})
+    names = sorted({name for *_, boards, _ in snapshots for name in boards})
     for name in names:
         rows: list[dict[str, Any] | None] = []
-        for release, _, _, _, _, boards in snapshots:
+        for release, _, _, _, _, boards, offsets in snapshots:
             files = boards.get(name)
             if files is None:
                 rows.append(None)
                 continue
             devices, switches, launcher = facts(files["init/rc.board_sensors"])
-            external, internal, buses_file = i2c_buses(files)
+            external, internal, buses_file, offset_source = i2c_buses(files, offsets)
             buses = [(bus, when) for bus, when, _ in launcher]  # not the line numbers
             key = same(devices + switches) + json.dumps([buses, external, internal])
             last = rows[-1] if rows else None
@@ -510,6 +558,7 @@ def main(argv: list[str]) -> None:
                         "internal": internal,
                         "path": files["path"],
                         "buses_file": buses_file,
+                        "offset_source": offset_source,
                     }
                 )
         for row in rows:
@@ -521,6 +570,9 @@ def main(argv: list[str]) -> None:
             out += [f"label = {json.dumps(LABELS.get(name, f'{vendor} {model}'))}"]
             out += [f"ver_hw = {json.dumps(ver_hw)}", f"releases = {json.dumps(row['releases'])}"]
             out += [f"path = {json.dumps(row['path'])}"]
+            if row["offset_source"]:
+                # i2c.cpp numbers these buses from 0 (PX4_BUS_NUMBER_TO_PX4): PX4's numbers here.
+                out += [f"# buses: src/i2c.cpp's numbers + {row['offset_source']}"]
             out += [f"external_i2c_buses = {json.dumps(row['external'])}"]
             out += [f"internal_i2c_buses = {json.dumps(row['internal'])}"]
             if row["buses_file"]:

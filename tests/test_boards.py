@@ -14,6 +14,7 @@ import os
 import re
 import subprocess
 from pathlib import Path
+from typing import Any
 
 import pytest
 import pyulog
@@ -947,13 +948,7 @@ def test_the_transcription_refuses_a_launcher_bus_started_twice() -> None:
     # Pixhawk 6X (main): `i2c_launcher start -b 1` on line 61, `-b 2` on line 64, one line per
     # bus as the table cites them; the same script with `-b 1` started again at its end would
     # leave one bus with two lines, and the later one would stand for both: refused
-    import importlib.util
-
-    script = Path(__file__).parents[1] / "scripts" / "transcribe_boards.py"
-    spec = importlib.util.spec_from_file_location("transcribe_boards", script)
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
+    module = _transcriber()
     path = "boards/px4/fmu-v6x/init/rc.board_sensors"
     text = _show(tuple(_px4_git_dirs()), "bb59c637cd", path)
     if text is None:
@@ -968,3 +963,89 @@ def test_the_transcription_refuses_a_launcher_bus_started_twice() -> None:
     _, _, launcher = module.facts(again)
     with pytest.raises(AssertionError, match=r"-b 1' on lines 61, \d+: the board table cites"):
         module.launcher_keys(path, launcher)
+
+
+def _transcriber() -> Any:
+    import importlib.util
+
+    script = Path(__file__).parents[1] / "scripts" / "transcribe_boards.py"
+    spec = importlib.util.spec_from_file_location("transcribe_boards", script)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_nxp_boards_number_their_i2c_buses_as_px4_does() -> None:
+    # boards/nxp/fmuk66-v3/src/i2c.cpp: initI2CBusInternal(PX4_BUS_NUMBER_TO_PX4(1)) and
+    # initI2CBusExternal(PX4_BUS_NUMBER_TO_PX4(0)); the K66's micro_hal.h defines
+    # PX4_BUS_OFFSET 1 (Kinetis numbers buses from 0, PX4 from 1): external 1, internal 2.
+    # mr-canhubk3 (S32K344, offset 1): external 1, internal 2; ucans32k146: external 1.
+    table = load_boards()
+    for name, release, external, internal in [
+        ("nxp_fmuk66-v3", "v1.15.0", (1,), (2,)),
+        ("nxp_fmuk66-e", "v1.11.0", (1,), (2,)),
+        ("nxp_mr-canhubk3", "v1.18", (1,), (2,)),
+        ("nxp_ucans32k146", "v1.18", (1,), ()),
+    ]:
+        board = table.by_name(name, release)
+        assert board is not None, name
+        assert (board.external_i2c_buses, board.internal_i2c_buses) == (external, internal), name
+    # rc.board_sensors line 40 of mr-canhubk3: "bmp388 -X -a 0x77 start" behind
+    # SENS_INT_BARO_EN probes the external bus 1 (with no bus known it probed none)
+    canhub = table.by_name("nxp_mr-canhubk3", "v1.18")
+    assert canhub is not None
+    found = switches(canhub, "SENS_INT_BARO_EN")
+    assert [(s.driver, s.bus, s.address) for s in found] == [("bmp388", 1, 0x77)]
+
+
+def test_the_transcription_adds_the_chips_bus_offset_or_refuses() -> None:
+    module = _transcriber()
+    i2c = (
+        "constexpr px4_i2c_bus_t px4_i2c_buses[I2C_BUS_MAX_BUS_ITEMS] = {\n"
+        "\tinitI2CBusExternal(PX4_BUS_NUMBER_TO_PX4(0)),\n"
+        "\tinitI2CBusInternal(PX4_BUS_NUMBER_TO_PX4(1)),\n"
+        "\tinitI2CBusExternal(3),\n"
+        "};\n"
+    )
+    files = {
+        "path": "boards/acme/k1/init/rc.board_sensors",
+        "src/i2c.cpp": i2c,
+        "nuttx-config/nsh/defconfig": 'CONFIG_ARCH_CHIP="s32k3xx"\nCONFIG_ARCH_CHIP_S32K344=y\n',
+    }
+    offsets = {
+        "CONFIG_ARCH_CHIP_MK66FN2M0VMD18": (1, "k66/micro_hal.h"),
+        "CONFIG_ARCH_CHIP_S32K344": (1, "s32k34x/micro_hal.h"),
+    }
+    external, internal, path, source = module.i2c_buses(files, offsets)
+    assert (external, internal, path) == ([1, 3], [2], "src/i2c.cpp")
+    assert source == "s32k34x/micro_hal.h (PX4_BUS_OFFSET 1, CONFIG_ARCH_CHIP_S32K344)"
+    # A chip whose offset PX4's headers do not give: refused, not guessed
+    unknown = dict(files, **{"nuttx-config/nsh/defconfig": "CONFIG_ARCH_CHIP_ACME9=y\n"})
+    with pytest.raises(
+        SystemExit,
+        match=r"^boards/acme/k1/init/rc.board_sensors: src/i2c.cpp "
+        r"numbers buses with PX4_BUS_NUMBER_TO_PX4, but no chip flag of its "
+        r"nuttx-config/nsh/defconfig has a PX4_BUS_OFFSET \(expected one of ",
+    ):
+        module.i2c_buses(unknown, offsets)
+    # Plain numbers need no offset
+    plain = dict(files, **{"src/i2c.cpp": "initI2CBusExternal(1),\ninitI2CBusInternal(4),\n"})
+    assert module.i2c_buses(plain, {}) == ([1], [4], "src/i2c.cpp", "")
+
+
+def test_the_chips_bus_offsets_are_read_from_px4s_headers() -> None:
+    # platforms/nuttx/src/px4/nxp/{k66,s32k34x}/include/px4_arch/micro_hal.h: PX4_BUS_OFFSET 1;
+    # nxp/rt106x: 0; STM32's headers define none of their own (stm32_common's is shared)
+    module = _transcriber()
+    dirs = [d for d in _px4_git_dirs() if _show((d,), "bb59c637cd", "Makefile") is not None]
+    if not dirs:
+        pytest.skip(f"commit bb59c637cd is in none of {_px4_git_dirs()}")
+    offsets = module.bus_offsets(dirs[0], "bb59c637cd")
+    assert offsets["CONFIG_ARCH_CHIP_MK66FN2M0VMD18"][0] == 1
+    assert offsets["CONFIG_ARCH_CHIP_S32K344"][0] == 1
+    assert offsets["CONFIG_ARCH_CHIP_S32K146"][0] == 1
+    assert offsets["CONFIG_ARCH_CHIP_MIMXRT1062DVL6A"][0] == 0
+    assert offsets["CONFIG_ARCH_CHIP_S32K344"][1].endswith(
+        "nxp/s32k34x/include/px4_arch/micro_hal.h"
+    )
