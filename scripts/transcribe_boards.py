@@ -370,24 +370,32 @@ _I2C_BUS = re.compile(r"initI2CBus(External|Internal)\((?:PX4_BUS_NUMBER_TO_PX4\
 
 def i2c_buses(
     files: dict[str, str], offsets: dict[str, tuple[int, str]]
-) -> tuple[list[int], list[int], str, str]:
-    """A board's external and internal I2C buses, the file they come from, and where the bus
-    offset they needed comes from ("" when none was needed)."""
+) -> tuple[list[int], list[int], str, str, list[int]]:
+    """A board's external and internal I2C buses, the file they come from, where the bus
+    offset they needed comes from ("" when none was needed), and the line of each of the
+    external then the internal buses in that file (the first that names it)."""
+    external: dict[int, int] = {}  # bus -> line
+    internal: dict[int, int] = {}
+    offset_source = ""
     if "src/i2c.cpp" not in files:
         text, name = files.get("src/board_config.h", ""), "src/board_config.h"
-        external = re.findall(r"#define\s+PX4_I2C_BUS_EXPANSION\d*\s+(\d+)\b", text)
-        internal = re.findall(r"#define\s+PX4_I2C_BUS_ONBOARD\s+(\d+)\b", text)
+        for m in re.finditer(r"#define\s+PX4_I2C_BUS_(EXPANSION\d*|ONBOARD)\s+(\d+)\b", text):
+            kind = internal if m[1] == "ONBOARD" else external
+            kind.setdefault(int(m[2]), text.count("\n", 0, m.start()) + 1)
         name = name if external or internal else ""
-        return sorted({int(b) for b in external}), sorted({int(b) for b in internal}), name, ""
-    buses: dict[str, set[int]] = {"External": set(), "Internal": set()}
-    offset_source = ""
-    for kind, from_zero, number in _I2C_BUS.findall(files["src/i2c.cpp"]):
-        if from_zero:
-            offset, offset_source = chip_bus_offset(files, offsets)
-            buses[kind].add(int(from_zero) + offset)
-        else:
-            buses[kind].add(int(number))
-    return sorted(buses["External"]), sorted(buses["Internal"]), "src/i2c.cpp", offset_source
+    else:
+        text, name = files["src/i2c.cpp"], "src/i2c.cpp"
+        for m in _I2C_BUS.finditer(text):
+            kind_name, from_zero, number = m.groups()
+            if from_zero:
+                offset, offset_source = chip_bus_offset(files, offsets)
+                bus = int(from_zero) + offset
+            else:
+                bus = int(number)
+            kind = external if kind_name == "External" else internal
+            kind.setdefault(bus, text.count("\n", 0, m.start()) + 1)
+    lines = [external[b] for b in sorted(external)] + [internal[b] for b in sorted(internal)]
+    return sorted(external), sorted(internal), name, offset_source, lines
 
 
 #: What a board's ``board_get_hw_version()`` compares equal to, as ``ver hwtypecmp`` names the
@@ -589,7 +597,7 @@ def main(argv: list[str]) -> None:
                 rows.append(None)
                 continue
             devices, switches, launcher = facts(files["init/rc.board_sensors"])
-            external, internal, buses_file, offset_source = i2c_buses(files, offsets)
+            external, internal, buses_file, offset_source, bus_lines = i2c_buses(files, offsets)
             override = bus_override(files, external, internal)
             buses = [(bus, when) for bus, when, _ in launcher]  # not the line numbers
             unlined = {k: v for k, v in (override or {}).items() if k != "line"}
@@ -598,7 +606,7 @@ def main(argv: list[str]) -> None:
             if last is not None and last["key"] == key:
                 last["releases"].append(release)
                 last.update(devices=devices, switches=switches, launcher=launcher)
-                last.update(override=override)
+                last.update(override=override, bus_lines=bus_lines)
             else:
                 rows.append(
                     {
@@ -613,6 +621,7 @@ def main(argv: list[str]) -> None:
                         "buses_file": buses_file,
                         "offset_source": offset_source,
                         "override": override,
+                        "bus_lines": bus_lines,
                     }
                 )
         for row in rows:
@@ -632,6 +641,7 @@ def main(argv: list[str]) -> None:
             if row["buses_file"]:
                 folder = row["path"].removesuffix("init/rc.board_sensors")
                 out += [f"i2c_buses_path = {json.dumps(folder + row['buses_file'])}"]
+                out += [f"i2c_buses_lines = {json.dumps(row['bus_lines'])}"]
             if row["override"]:
                 # px4_i2c_bus_external is the board's own (BOARD_OVERRIDE_I2C_BUS_EXTERNAL)
                 keys = ["when", "buses", "line"]

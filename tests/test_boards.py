@@ -1017,8 +1017,9 @@ def test_the_transcription_adds_the_chips_bus_offset_or_refuses() -> None:
         "CONFIG_ARCH_CHIP_MK66FN2M0VMD18": (1, "k66/micro_hal.h"),
         "CONFIG_ARCH_CHIP_S32K344": (1, "s32k34x/micro_hal.h"),
     }
-    external, internal, path, source = module.i2c_buses(files, offsets)
+    external, internal, path, source, lines = module.i2c_buses(files, offsets)
     assert (external, internal, path) == ([1, 3], [2], "src/i2c.cpp")
+    assert lines == [2, 4, 3]  # buses 1 and 3, then 2
     assert source == "s32k34x/micro_hal.h (PX4_BUS_OFFSET 1, CONFIG_ARCH_CHIP_S32K344)"
     # A chip whose offset PX4's headers do not give: refused, not guessed
     unknown = dict(files, **{"nuttx-config/nsh/defconfig": "CONFIG_ARCH_CHIP_ACME9=y\n"})
@@ -1031,7 +1032,7 @@ def test_the_transcription_adds_the_chips_bus_offset_or_refuses() -> None:
         module.i2c_buses(unknown, offsets)
     # Plain numbers need no offset
     plain = dict(files, **{"src/i2c.cpp": "initI2CBusExternal(1),\ninitI2CBusInternal(4),\n"})
-    assert module.i2c_buses(plain, {}) == ([1], [4], "src/i2c.cpp", "")
+    assert module.i2c_buses(plain, {}) == ([1], [4], "src/i2c.cpp", "", [1, 2])
 
 
 def test_the_chips_bus_offsets_are_read_from_px4s_headers() -> None:
@@ -1287,4 +1288,75 @@ def test_the_transcription_refuses_another_px4_i2c_bus_external(
     assert str(err.value) == (
         "boards/px4/fmu-v3/init/rc.board_sensors: src/board_config.h defines "
         "BOARD_OVERRIDE_I2C_BUS_EXTERNAL" + problem
+    )
+
+
+def test_every_i2c_bus_is_on_the_line_it_cites() -> None:
+    # Each bus of a row's lists names the line of i2c_buses_path that declares it:
+    # initI2CBusExternal(N) / initI2CBusInternal(N) (or PX4_BUS_NUMBER_TO_PX4(N - 1) on the NXP
+    # chips, whose PX4_BUS_OFFSET is 1), or board_config.h's PX4_I2C_BUS_EXPANSION* / _ONBOARD.
+    cite = re.compile(r"PX4/PX4-Autopilot (\S+):(\d+) at \S+ \([^,]+, ([0-9a-f]{10}),")
+    dirs, checked, missing = tuple(_px4_git_dirs()), 0, set()
+    table = load_boards()
+    for board in table.all():
+        for variant in table.variants(board.name):
+            listed = (*variant.external_i2c_buses, *variant.internal_i2c_buses)
+            assert [b for b, _ in variant.i2c_bus_sources] == list(listed), variant.name
+            for bus, source in variant.i2c_bus_sources:
+                m = cite.match(source)
+                assert m, source
+                text = _show(dirs, m.group(3), m.group(1))
+                if text is None:
+                    missing.add(m.group(3))
+                    continue
+                written = text.split("\n")[int(m.group(2)) - 1]
+                external = bus in variant.external_i2c_buses
+                if m.group(1).endswith("i2c.cpp"):
+                    kind = "External" if external else "Internal"
+                    assert re.search(
+                        rf"initI2CBus{kind}\(({bus}|PX4_BUS_NUMBER_TO_PX4\({bus - 1}\))\)", written
+                    ), (source, written)
+                else:
+                    kind = r"EXPANSION\d*" if external else "ONBOARD"
+                    assert re.search(rf"#define\s+PX4_I2C_BUS_{kind}\s+{bus}\b", written), source
+                checked += 1
+    if not checked:
+        pytest.skip(f"commits {sorted(missing)} are in none of {dirs} (set $PX4_AUTOPILOT_GIT)")
+    assert checked > 300
+
+
+@pytest.mark.parametrize(
+    ("lines", "problem"),
+    [
+        (
+            "i2c_buses_lines = [37, 38]",
+            "i2c_buses_lines [37, 38] do not give one line for each of external_i2c_buses "
+            "[1, 2, 4] and internal_i2c_buses [3]",
+        ),
+        ("i2c_buses_lines = [1, 2, 3, 0]", "i2c_buses_lines [1, 2, 3, 0] is not a list of "
+         "integers 1..100000"),
+    ],
+)  # fmt: skip
+def test_bad_i2c_bus_lines_are_named_in_one_line(lines: str, problem: str) -> None:
+    text = OVERRIDDEN.replace(OVERRIDE, lines)
+    with pytest.raises(BoardsFileError) as err:
+        parse_boards(text)
+    assert str(err.value) == f"boards.toml: board 'px4_fmu-v5' at v1.14.0: {problem}"
+    board = _board(OVERRIDDEN.replace(OVERRIDE, "i2c_buses_lines = [40, 41, 43, 42]"))
+    assert board.i2c_bus_source(4) == (
+        "PX4/PX4-Autopilot boards/px4/fmu-v5/src/i2c.cpp:43 at v1.14.0 (tag v1.14.0, "
+        "0123456789, 2023-10-23)"
+    )
+    assert board.i2c_bus_source(5) is None
+
+
+def test_i2c_bus_lines_without_their_file_are_refused() -> None:
+    text = GOOD.replace(
+        "internal_i2c_buses = [3]", "internal_i2c_buses = [3]\ni2c_buses_lines = [1]"
+    )
+    with pytest.raises(BoardsFileError) as err:
+        parse_boards(text)
+    assert str(err.value) == (
+        "boards.toml: board 'px4_fmu-v5' at v1.14.0: i2c_buses_lines but no i2c_buses_path "
+        "(the file they are lines of)"
     )

@@ -654,8 +654,9 @@ def test_canhubk3s_external_starts_on_its_internal_bus_start_nothing(hw_type: st
         (said,) = [a for a in proposal.assumptions if a.startswith(found)]
         assert said.startswith(f"{found}: the board's '{start} start' ({script}:{line} at ")
         assert said.endswith(
-            ") did not start it: I2C bus 2 is internal (boards/nxp/mr-canhubk3/src/i2c.cpp), "
-            "and PX4's -X tries no bus of that kind (platforms/common/i2c.cpp, "
+            ") did not start it: I2C bus 2 is internal (PX4/PX4-Autopilot "
+            "boards/nxp/mr-canhubk3/src/i2c.cpp:38 at main (branch main, bb59c637cd, "
+            "2026-08-13)), and PX4's -X tries no bus of that kind (platforms/common/i2c.cpp, "
             "I2CBusIterator::next), so that line starts nothing"
         )
 

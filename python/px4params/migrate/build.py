@@ -383,7 +383,8 @@ class _Builder:
             kind = "external" if other.internal else "internal"
             self.assume(
                 f"{found}: the board's '{other.driver} {other.args}' ({other.source}) did not "
-                f"start it: I2C bus {bus} is {kind} ({_buses_path(self.board)}), and PX4's "
+                f"start it: I2C bus {bus} is {kind} "
+                f"({self.board.i2c_bus_source(bus) or _buses_path(self.board)}), and PX4's "
                 f"{'-I' if other.internal else '-X'} tries no bus of that kind "
                 "(platforms/common/i2c.cpp, I2CBusIterator::next), so that line starts nothing"
             )

@@ -19,7 +19,8 @@ a few snapshots (tagged releases and branches, listed in its ``[[snapshot]]`` ta
     PX4 writes as the ULog's ``ver_hw``: the target name upper-cased with ``-`` made ``_``, then
     older spellings), ``releases`` (the snapshots), ``path`` (the script read),
     ``external_i2c_buses`` / ``internal_i2c_buses`` (the board's ``src/i2c.cpp``, or its
-    ``board_config.h`` where there is none, named by ``i2c_buses_path``), optional
+    ``board_config.h`` where there is none, named by ``i2c_buses_path``, ``i2c_buses_lines``
+    the line of each external then internal bus there), optional
     ``external_i2c_buses_when`` (a board whose ``board_config.h`` defines
     ``BOARD_OVERRIDE_I2C_BUS_EXTERNAL`` and whose ``i2c.cpp`` decides at run time which buses are
     external: ``{ when, buses, line }``, where condition ``when`` holds its external buses are
@@ -185,6 +186,13 @@ class Board:
     at: str = ""
     #: The board's own ``px4_i2c_bus_external``, or None: its two lists hold on all hardware.
     external_i2c_buses_when: BusOverride | None = None
+    #: (bus, the line of i2c_buses_path naming it, cited) of each of its I2C buses.
+    i2c_bus_sources: tuple[tuple[int, str], ...] = ()
+
+    def i2c_bus_source(self, bus: int) -> str | None:
+        """The line that makes I2C ``bus`` the board's (``initI2CBusInternal(2)``), cited as
+        a start's ``source`` is; None where the table has none."""
+        return next((source for b, source in self.i2c_bus_sources if b == bus), None)
 
     def cite(self, path: str, line: int) -> str:
         """``line`` of PX4-Autopilot's ``path`` as the board's rows cite theirs."""
@@ -639,6 +647,7 @@ def parse_boards(text: str, file: str = "boards.toml") -> BoardTable:
             ),
             (
                 "i2c_buses_path",
+                "i2c_buses_lines",
                 "external_i2c_buses_when",
                 "i2c_launcher_when",
                 "i2c_launcher_lines",
@@ -661,6 +670,18 @@ def parse_boards(text: str, file: str = "boards.toml") -> BoardTable:
         internal = row.numbers("internal_i2c_buses", 0, 255)
         buses_path = row.text("i2c_buses_path", "")
         override = _override(row, external, internal, buses_path, snaps, cite)
+        bus_lines = row.numbers("i2c_buses_lines", 1, 100_000)
+        if bus_lines and not buses_path:
+            row.fail("i2c_buses_lines but no i2c_buses_path (the file they are lines of)")
+        if bus_lines and len(bus_lines) != len(external) + len(internal):
+            row.fail(
+                f"i2c_buses_lines {list(bus_lines)} do not give one line for each of "
+                f"external_i2c_buses {list(external)} and internal_i2c_buses {list(internal)}"
+            )
+        bus_sources = tuple(
+            (bus, cite(buses_path, n, snaps))
+            for bus, n in zip((*external, *internal), bus_lines, strict=False)
+        )
         devices = []
         for j, entry in enumerate(row.tables("device"), 1):
             start = _start(_Row(file, f"{row.where} device {j}", entry), switch=False)
@@ -725,6 +746,7 @@ def parse_boards(text: str, file: str = "boards.toml") -> BoardTable:
                 i2c_launcher_sources=tuple(cite(path, n, snaps) for n in launcher_lines),
                 at=max(snaps, key=lambda s: s.order).describe(),
                 external_i2c_buses_when=override,
+                i2c_bus_sources=bus_sources,
             )
         if name not in names:
             names.append(name)
