@@ -1083,8 +1083,32 @@ def test_a_switch_on_a_bus_of_the_other_kind_is_no_switch_row() -> None:
     assert _board(text).switches == ()
     text = GOOD.replace('args = "start -X"', 'args = "start -X -b 3"\nbus = 3')
     assert _board(text).switches == ()
+    # "-X -b 9", a bus neither list names: where the lists are the board's i2c.cpp (PX4's
+    # iterator walks only its px4_i2c_buses), none; where the table knows no file, kept
     text = GOOD.replace('args = "start -X"', 'args = "start -X -b 9"\nbus = 9')
     assert [(s.bus, s.bus_when) for s in _board(text).switches] == [(9, "")]
+    path = 'internal_i2c_buses = [3]\ni2c_buses_path = "boards/px4/fmu-v5/src/i2c.cpp"'
+    assert _board(text.replace("internal_i2c_buses = [3]", path)).switches == ()
+    # a device row alike
+    mag = GOOD.replace('args = "-I -R 10 start"', 'args = "-I -b 9 -R 10 start"\nbus = 9')
+    assert [d.bus for d in _board(mag).devices] == [9]
+    assert _board(mag).buses_of(_board(mag).devices[0]) == (9,)
+    known = _board(mag.replace("internal_i2c_buses = [3]", path))
+    assert known.buses_of(known.devices[0]) == () and known.bus_conditions(known.devices[0]) == ()
+
+
+def test_a_bus_the_boards_i2c_cpp_does_not_declare_finds_no_bus() -> None:
+    # PX4 v1.11.0: ROMFS/px4fmu_common/init.d/rc.sensors line 125 `ms5525_airspeed start -X -b
+    # 2`, line 127 `ms5525_airspeed start -X`; boards/px4/fmu-v4/src/i2c.cpp declares one bus,
+    # line 37 initI2CBusExternal(1). platforms/common/i2c.cpp (v1.11.0) lines 48-86: the
+    # iterator visits px4_i2c_buses' entries only. So on fmu-v4 line 125 starts nothing.
+    board = load_boards().by_name("px4_fmu-v4", "v1.11.0")
+    assert board is not None and board.i2c_bus_source(1) is not None
+    found = [s for s in board.switches if s.driver == "ms5525_airspeed"]
+    assert [(s.args, s.bus) for s in found] == [("start -X", 1)]
+    assert found[0].source.startswith(
+        "PX4/PX4-Autopilot ROMFS/px4fmu_common/init.d/rc.sensors:127 at v1.11.0"
+    )
 
 
 def test_fmu_v3_makes_every_bus_external_on_cube_hardware() -> None:

@@ -249,7 +249,7 @@ class _Builder:
         if self.board is None:
             return None
         # A board whose I2C buses the table does not know: a row without -b may be on any bus.
-        known = self.board.external_i2c_buses or self.board.internal_i2c_buses
+        known = bool(getattr(self.board, "i2c_buses_path", ""))
         undecided = None
         for row in self.board.devices:
             if row.bus_kind.upper() != "I2C" or not (self.start_chips(row.driver) & chips):
@@ -949,9 +949,8 @@ class _Builder:
 
 
 def _buses_path(board: Any) -> str:
-    """The file the board's I2C buses were read from, as its source names it."""
-    m = re.search(r"I2C buses from (\S+)", board.source)
-    return m[1] if m else "the board's I2C buses"
+    """The file the board's I2C buses were read from."""
+    return getattr(board, "i2c_buses_path", "") or "the board's I2C buses"
 
 
 def _named(dev: devid.DeviceId, slot_kinds: Iterable[str] = ()) -> list[tuple[str, str]]:

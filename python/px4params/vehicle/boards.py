@@ -188,6 +188,8 @@ class Board:
     external_i2c_buses_when: BusOverride | None = None
     #: (bus, the line of i2c_buses_path naming it, cited) of each of its I2C buses.
     i2c_bus_sources: tuple[tuple[int, str], ...] = ()
+    #: The file its I2C buses were read from ("": none, the table does not know them).
+    i2c_buses_path: str = ""
 
     def i2c_bus_source(self, bus: int) -> str | None:
         """The line that makes I2C ``bus`` the board's (``initI2CBusInternal(2)``), cited as
@@ -212,7 +214,8 @@ class Board:
         names as of the other kind, none (PX4 never starts it); SPI's ``-b``, () without.
         ``overridden``: where the board's :attr:`external_i2c_buses_when` holds."""
         external, internal = self.i2c_buses(False, overridden), self.i2c_buses(True, overridden)
-        return _start_buses(start.bus, start.bus_kind, start.internal, external, internal)
+        known = bool(self.i2c_buses_path)
+        return _start_buses(start.bus, start.bus_kind, start.internal, external, internal, known)
 
     def bus_conditions(self, start: BoardDevice | SwitchStart) -> tuple[tuple[int, str], ...]:
         """Each bus a start can be on (:meth:`buses_of`) with the condition under which it
@@ -225,6 +228,7 @@ class Board:
             self.external_i2c_buses,
             self.internal_i2c_buses,
             self.external_i2c_buses_when,
+            bool(self.i2c_buses_path),
         )
 
 
@@ -247,15 +251,19 @@ def _start_buses(
     internal: bool,
     external_buses: Sequence[int],
     internal_buses: Sequence[int],
+    known: bool,
 ) -> tuple[int, ...]:
-    """See :meth:`Board.buses_of`. A ``-b`` neither list names is kept: a board_config.h's
-    lists may name fewer buses than the board has."""
+    """See :meth:`Board.buses_of`. ``known``: the lists are the board's ``px4_i2c_buses`` (its
+    i2c.cpp), the only buses PX4's iterator visits, so a ``-b`` neither names finds none; a
+    board whose buses the table does not know keeps its ``-b``."""
     if bus_kind != "I2C":
         return (bus,) if bus is not None else ()
     own, other = (internal_buses, external_buses) if internal else (external_buses, internal_buses)
     if bus is None:
         return tuple(own)
-    return () if bus in other and bus not in own else (bus,)
+    if bus in own or not (known or bus in other):
+        return (bus,)
+    return ()
 
 
 def _bus_conditions(
@@ -265,24 +273,28 @@ def _bus_conditions(
     external: Sequence[int],
     internal_buses: Sequence[int],
     override: BusOverride | None,
+    known: bool,
 ) -> tuple[tuple[int, str], ...]:
     """See :meth:`Board.bus_conditions`."""
-    plain = _start_buses(bus, bus_kind, internal, external, internal_buses)
+    plain = _start_buses(bus, bus_kind, internal, external, internal_buses, known)
     if override is None:
         return tuple((b, "") for b in plain)
-    over = _start_buses(bus, bus_kind, internal, *_bus_lists(external, internal_buses, override))
+    lists = _bus_lists(external, internal_buses, override)
+    over = _start_buses(bus, bus_kind, internal, *lists, known)
     found = [(b, "" if b in over else f"not {override.when}") for b in plain]
     found += [(b, override.when) for b in over if b not in plain]
     return tuple(sorted(found))
 
 
 #: A board's switch starts as read, before expansion per bus: (starts with their sources,
-#: external I2C buses, internal I2C buses, its override of them, ver_hw).
+#: external I2C buses, internal I2C buses, its override of them, whether the table knows its
+#: buses, ver_hw).
 _Pending = tuple[
     list[tuple[dict[str, Any], str]],
     tuple[int, ...],
     tuple[int, ...],
     BusOverride | None,
+    bool,
     tuple[str, ...],
 ]
 
@@ -347,11 +359,11 @@ class BoardTable:
     def _row(self, key: tuple[str, str]) -> Board | None:
         board = self._rows.get(key)
         if board is not None and key in self._pending:
-            starts, external, internal, override, ver_hw = self._pending.pop(key)
+            starts, external, internal, override, known, ver_hw = self._pending.pop(key)
             switches = tuple(
                 switch
                 for start, source in starts
-                for switch in _expand(start, source, external, internal, override, ver_hw)
+                for switch in _expand(start, source, external, internal, override, known, ver_hw)
             )
             board = self._rows[key] = dataclasses.replace(board, switches=switches)
         return board
@@ -716,6 +728,7 @@ def parse_boards(text: str, file: str = "boards.toml") -> BoardTable:
                 external,
                 internal,
                 override,
+                bool(buses_path),
                 ver_hw,
             )
             rc_sensors = (
@@ -747,6 +760,7 @@ def parse_boards(text: str, file: str = "boards.toml") -> BoardTable:
                 at=max(snaps, key=lambda s: s.order).describe(),
                 external_i2c_buses_when=override,
                 i2c_bus_sources=bus_sources,
+                i2c_buses_path=buses_path,
             )
         if name not in names:
             names.append(name)
@@ -790,6 +804,7 @@ def _expand(
     external: Sequence[int],
     internal: Sequence[int],
     override: BusOverride | None,
+    known: bool,
     ver_hw: Sequence[str],
 ) -> list[SwitchStart]:
     """One SwitchStart per bus the start can run on (:meth:`Board.bus_conditions`): ``-b N``
@@ -803,7 +818,7 @@ def _expand(
             if any(hw in listed for hw in ver_hw) == negated:
                 return []
     buses = _bus_conditions(
-        start["bus"], start["bus_kind"], start["internal"], external, internal, override
+        start["bus"], start["bus_kind"], start["internal"], external, internal, override, known
     )
     return [
         SwitchStart(
