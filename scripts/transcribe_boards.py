@@ -370,24 +370,82 @@ _I2C_BUS = re.compile(r"initI2CBus(External|Internal)\((?:PX4_BUS_NUMBER_TO_PX4\
 
 def i2c_buses(
     files: dict[str, str], offsets: dict[str, tuple[int, str]]
-) -> tuple[list[int], list[int], str, str]:
-    """A board's external and internal I2C buses, the file they come from, and where the bus
-    offset they needed comes from ("" when none was needed)."""
+) -> tuple[list[int], list[int], str, str, list[int]]:
+    """A board's external and internal I2C buses, the file they come from, where the bus
+    offset they needed comes from ("" when none was needed), and the line of each of the
+    external then the internal buses in that file (the first that names it)."""
+    external: dict[int, int] = {}  # bus -> line
+    internal: dict[int, int] = {}
+    offset_source = ""
     if "src/i2c.cpp" not in files:
         text, name = files.get("src/board_config.h", ""), "src/board_config.h"
-        external = re.findall(r"#define\s+PX4_I2C_BUS_EXPANSION\d*\s+(\d+)\b", text)
-        internal = re.findall(r"#define\s+PX4_I2C_BUS_ONBOARD\s+(\d+)\b", text)
+        for m in re.finditer(r"#define\s+PX4_I2C_BUS_(EXPANSION\d*|ONBOARD)\s+(\d+)\b", text):
+            kind = internal if m[1] == "ONBOARD" else external
+            kind.setdefault(int(m[2]), text.count("\n", 0, m.start()) + 1)
         name = name if external or internal else ""
-        return sorted({int(b) for b in external}), sorted({int(b) for b in internal}), name, ""
-    buses: dict[str, set[int]] = {"External": set(), "Internal": set()}
-    offset_source = ""
-    for kind, from_zero, number in _I2C_BUS.findall(files["src/i2c.cpp"]):
-        if from_zero:
-            offset, offset_source = chip_bus_offset(files, offsets)
-            buses[kind].add(int(from_zero) + offset)
-        else:
-            buses[kind].add(int(number))
-    return sorted(buses["External"]), sorted(buses["Internal"]), "src/i2c.cpp", offset_source
+    else:
+        text, name = files["src/i2c.cpp"], "src/i2c.cpp"
+        for m in _I2C_BUS.finditer(text):
+            kind_name, from_zero, number = m.groups()
+            if from_zero:
+                offset, offset_source = chip_bus_offset(files, offsets)
+                bus = int(from_zero) + offset
+            else:
+                bus = int(number)
+            kind = external if kind_name == "External" else internal
+            kind.setdefault(bus, text.count("\n", 0, m.start()) + 1)
+    lines = [external[b] for b in sorted(external)] + [internal[b] for b in sorted(internal)]
+    return sorted(external), sorted(internal), name, offset_source, lines
+
+
+#: What a board's ``board_get_hw_version()`` compares equal to, as ``ver hwtypecmp`` names the
+#: same hardware (read by hand in boards/px4/fmu-v3/src/init.c at the snapshots, fmu-v2's the
+#: same file: ``HW_VER_FMUV3`` is ``HW_VER_SIMPLE(HW_VER_FMUV3_STATE)`` (board_common.h) and
+#: the version ``HW_VER_SIMPLE(hw_version)``; the one state is the one that makes the hardware
+#: type "V30": ``case HW_VER_FMUV3_STATE: hw_type[1]++; hw_type[2] = '0'``, and a Pixhack v3
+#: forced to it alike, lines 388-390 and 412-414 at main).
+HW_VERSION_TYPES = {"HW_VER_FMUV3": "V30"}
+# The one form of a board's own px4_i2c_bus_external read: every bus external on one hardware
+# version, else every bus but one (fmu-v2 and fmu-v3; `bus.bus` before v1.14.0).
+_OVERRIDE = re.compile(
+    r"bool px4_i2c_bus_external\((?:const px4_i2c_bus_t &bus|int bus)\)\s*\{\s*"
+    r"if \((?P<version>\w+) == board_get_hw_version\(\)\) \{\s*(?:/\*[^*]*\*/\s*)?"
+    r"return true;\s*\} else \{\s*if \(bus(?:\.bus)? != (?P<bus>\d+)\) \{\s*return true;\s*\}"
+    r"\s*\}\s*return false;\s*\}"
+)
+
+
+def bus_override(
+    files: dict[str, str], external: list[int], internal: list[int]
+) -> dict[str, Any] | None:
+    """``external_i2c_buses_when`` of a board whose board_config.h defines
+    BOARD_OVERRIDE_I2C_BUS_EXTERNAL: the hardware type under which every bus is external, and
+    the line of that test in src/i2c.cpp; refused where its i2c.cpp says anything else (or its
+    other branch is not the lists)."""
+    config = files.get("src/board_config.h", "")
+    if not re.search(r"^#define\s+BOARD_OVERRIDE_I2C_BUS_EXTERNAL\b", config, re.M):
+        return None
+    text = files.get("src/i2c.cpp", "")
+    found = _OVERRIDE.search(text)
+    where = f"{files['path']}: src/board_config.h defines BOARD_OVERRIDE_I2C_BUS_EXTERNAL"
+    if found is None:
+        raise SystemExit(
+            f"{where}, but its src/i2c.cpp's px4_i2c_bus_external is not 'if (HW_VER_... == "
+            "board_get_hw_version()) every bus external, else every bus but one'"
+        )
+    version, bus = found["version"], int(found["bus"])
+    if version not in HW_VERSION_TYPES:
+        raise SystemExit(
+            f"{where}: no hardware type known for {version} ({list(HW_VERSION_TYPES)})"
+        )
+    every = sorted({*external, *internal})
+    if internal != [bus] or external != [b for b in every if b != bus]:
+        raise SystemExit(
+            f"{where}: elsewhere every bus but {bus} is external, not src/i2c.cpp's lists "
+            f"(external {external}, internal {internal})"
+        )
+    line = text.count("\n", 0, text.index("if (", found.start())) + 1
+    return {"when": f"hw_type in {HW_VERSION_TYPES[version]}", "buses": every, "line": line}
 
 
 def chip_bus_offset(files: dict[str, str], offsets: dict[str, tuple[int, str]]) -> tuple[int, str]:
@@ -539,13 +597,16 @@ def main(argv: list[str]) -> None:
                 rows.append(None)
                 continue
             devices, switches, launcher = facts(files["init/rc.board_sensors"])
-            external, internal, buses_file, offset_source = i2c_buses(files, offsets)
+            external, internal, buses_file, offset_source, bus_lines = i2c_buses(files, offsets)
+            override = bus_override(files, external, internal)
             buses = [(bus, when) for bus, when, _ in launcher]  # not the line numbers
-            key = same(devices + switches) + json.dumps([buses, external, internal])
+            unlined = {k: v for k, v in (override or {}).items() if k != "line"}
+            key = same(devices + switches) + json.dumps([buses, external, internal, unlined])
             last = rows[-1] if rows else None
             if last is not None and last["key"] == key:
                 last["releases"].append(release)
                 last.update(devices=devices, switches=switches, launcher=launcher)
+                last.update(override=override, bus_lines=bus_lines)
             else:
                 rows.append(
                     {
@@ -559,6 +620,8 @@ def main(argv: list[str]) -> None:
                         "path": files["path"],
                         "buses_file": buses_file,
                         "offset_source": offset_source,
+                        "override": override,
+                        "bus_lines": bus_lines,
                     }
                 )
         for row in rows:
@@ -578,6 +641,11 @@ def main(argv: list[str]) -> None:
             if row["buses_file"]:
                 folder = row["path"].removesuffix("init/rc.board_sensors")
                 out += [f"i2c_buses_path = {json.dumps(folder + row['buses_file'])}"]
+                out += [f"i2c_buses_lines = {json.dumps(row['bus_lines'])}"]
+            if row["override"]:
+                # px4_i2c_bus_external is the board's own (BOARD_OVERRIDE_I2C_BUS_EXTERNAL)
+                keys = ["when", "buses", "line"]
+                out += [f"external_i2c_buses_when = {inline(row['override'], keys)}"]
             out += launcher_keys(row["path"], row["launcher"])
             out += ["device = ["] + [f"  {inline(r, DEVICE_KEYS)}," for r in row["devices"]]
             out += ["]", "switch = ["] + [f"  {inline(r, SWITCH_KEYS)}," for r in row["switches"]]

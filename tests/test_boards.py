@@ -1017,8 +1017,9 @@ def test_the_transcription_adds_the_chips_bus_offset_or_refuses() -> None:
         "CONFIG_ARCH_CHIP_MK66FN2M0VMD18": (1, "k66/micro_hal.h"),
         "CONFIG_ARCH_CHIP_S32K344": (1, "s32k34x/micro_hal.h"),
     }
-    external, internal, path, source = module.i2c_buses(files, offsets)
+    external, internal, path, source, lines = module.i2c_buses(files, offsets)
     assert (external, internal, path) == ([1, 3], [2], "src/i2c.cpp")
+    assert lines == [2, 4, 3]  # buses 1 and 3, then 2
     assert source == "s32k34x/micro_hal.h (PX4_BUS_OFFSET 1, CONFIG_ARCH_CHIP_S32K344)"
     # A chip whose offset PX4's headers do not give: refused, not guessed
     unknown = dict(files, **{"nuttx-config/nsh/defconfig": "CONFIG_ARCH_CHIP_ACME9=y\n"})
@@ -1031,7 +1032,7 @@ def test_the_transcription_adds_the_chips_bus_offset_or_refuses() -> None:
         module.i2c_buses(unknown, offsets)
     # Plain numbers need no offset
     plain = dict(files, **{"src/i2c.cpp": "initI2CBusExternal(1),\ninitI2CBusInternal(4),\n"})
-    assert module.i2c_buses(plain, {}) == ([1], [4], "src/i2c.cpp", "")
+    assert module.i2c_buses(plain, {}) == ([1], [4], "src/i2c.cpp", "", [1, 2])
 
 
 def test_the_chips_bus_offsets_are_read_from_px4s_headers() -> None:
@@ -1048,4 +1049,338 @@ def test_the_chips_bus_offsets_are_read_from_px4s_headers() -> None:
     assert offsets["CONFIG_ARCH_CHIP_MIMXRT1062DVL6A"][0] == 0
     assert offsets["CONFIG_ARCH_CHIP_S32K344"][1].endswith(
         "nxp/s32k34x/include/px4_arch/micro_hal.h"
+    )
+
+
+# -- which buses a start can be on, as PX4's I2CBusIterator finds them ----------------------------
+# platforms/common/i2c.cpp (main, bb59c637): I2CBusIterator::next, lines 80-96: an InternalBus
+# filter (-I) keeps a bus only where `!px4_i2c_bus_external(bus)`, an ExternalBus filter (-X)
+# only where `px4_i2c_bus_external(bus)`, and then `_bus == bus_data.bus || _bus == -1`: -b N
+# is tried only if bus N passed the filter.
+
+
+def test_an_explicit_bus_of_the_other_kind_finds_no_bus() -> None:
+    # boards/nxp/mr-canhubk3/src/i2c.cpp (main) line 38:
+    # initI2CBusInternal(PX4_BUS_NUMBER_TO_PX4(1)), bus 2 (the S32K344's PX4_BUS_OFFSET 1); its
+    # rc.board_sensors line 22 "ist8310 -X -b 2 -R 10 start" and line 32 "lis3mdl -X -b 2 -R 2
+    # start" ask for an external bus 2: none is found
+    board = load_boards().by_name("nxp_mr-canhubk3")
+    assert board is not None and board.internal_i2c_buses == (2,)
+    for driver, line in (("ist8310", 22), ("lis3mdl", 32)):
+        start = device(board, driver, bus=2)
+        assert f"rc.board_sensors:{line} " in start.source
+        assert board.buses_of(start) == () and board.bus_conditions(start) == ()
+    # line 10, "ist8310 -X -b 1 -R 10 start": bus 1 is external (line 37), it is tried
+    assert board.buses_of(device(board, "ist8310", bus=1)) == (1,)
+
+
+def test_a_switch_on_a_bus_of_the_other_kind_is_no_switch_row() -> None:
+    # GOOD's fmu-v5 buses: external 1, 2, 4; internal 3. "-I -b 1" and "-X -b 3" find nothing;
+    # "-X -b 9", a bus the lists do not name, is kept (board_config.h's lists can be short).
+    text = GOOD.replace('args = "start -X"', 'args = "start -I -b 1"\nbus = 1').replace(
+        "internal = false", "internal = true"
+    )
+    assert _board(text).switches == ()
+    text = GOOD.replace('args = "start -X"', 'args = "start -X -b 3"\nbus = 3')
+    assert _board(text).switches == ()
+    # "-X -b 9", a bus neither list names: where the lists are the board's i2c.cpp (PX4's
+    # iterator walks only its px4_i2c_buses), none; where the table knows no file, kept
+    text = GOOD.replace('args = "start -X"', 'args = "start -X -b 9"\nbus = 9')
+    assert [(s.bus, s.bus_when) for s in _board(text).switches] == [(9, "")]
+    path = 'internal_i2c_buses = [3]\ni2c_buses_path = "boards/px4/fmu-v5/src/i2c.cpp"'
+    assert _board(text.replace("internal_i2c_buses = [3]", path)).switches == ()
+    # a device row alike
+    mag = GOOD.replace('args = "-I -R 10 start"', 'args = "-I -b 9 -R 10 start"\nbus = 9')
+    assert [d.bus for d in _board(mag).devices] == [9]
+    assert _board(mag).buses_of(_board(mag).devices[0]) == (9,)
+    known = _board(mag.replace("internal_i2c_buses = [3]", path))
+    assert known.buses_of(known.devices[0]) == () and known.bus_conditions(known.devices[0]) == ()
+
+
+def test_a_bus_the_boards_i2c_cpp_does_not_declare_finds_no_bus() -> None:
+    # PX4 v1.11.0: ROMFS/px4fmu_common/init.d/rc.sensors line 125 `ms5525_airspeed start -X -b
+    # 2`, line 127 `ms5525_airspeed start -X`; boards/px4/fmu-v4/src/i2c.cpp declares one bus,
+    # line 37 initI2CBusExternal(1). platforms/common/i2c.cpp (v1.11.0) lines 48-86: the
+    # iterator visits px4_i2c_buses' entries only. So on fmu-v4 line 125 starts nothing.
+    board = load_boards().by_name("px4_fmu-v4", "v1.11.0")
+    assert board is not None and board.i2c_bus_source(1) is not None
+    found = [s for s in board.switches if s.driver == "ms5525_airspeed"]
+    assert [(s.args, s.bus) for s in found] == [("start -X", 1)]
+    assert found[0].source.startswith(
+        "PX4/PX4-Autopilot ROMFS/px4fmu_common/init.d/rc.sensors:127 at v1.11.0"
+    )
+
+
+def test_fmu_v3_makes_every_bus_external_on_cube_hardware() -> None:
+    # boards/px4/fmu-v3/src/board_config.h line 96: #define BOARD_OVERRIDE_I2C_BUS_EXTERNAL; its
+    # src/i2c.cpp lines 44-47: initI2CBusExternal(1), initI2CBusInternal(2); lines 50-63:
+    # `if (HW_VER_FMUV3 == board_get_hw_version())` (line 52) every bus is external, else every
+    # bus but 2. init.c lines 388-390: that version is the one whose hw_type is "V30"
+    # (hw_type[1]++, hw_type[2] = '0' of "V2"), what `ver hwtypecmp V30` tests. Every snapshot.
+    table = load_boards()
+    for release in SNAPSHOTS:
+        for name in ("px4_fmu-v2", "px4_fmu-v3"):
+            board = table.by_name(name, None if release == "main" else release)
+            assert board is not None and release in board.releases
+            override = board.external_i2c_buses_when
+            assert override is not None, (name, release)
+            assert (override.when, override.external) == ("hw_type in V30", (1, 2))
+            assert override.source.startswith(
+                f"PX4/PX4-Autopilot boards/px4/{name[4:]}/src/i2c.cpp:52 at "
+            )
+            assert (board.i2c_buses(False), board.i2c_buses(True)) == ((1,), (2,))
+            assert (board.i2c_buses(False, True), board.i2c_buses(True, True)) == ((1, 2), ())
+    board = table.by_name("px4_fmu-v3")
+    assert board is not None
+    # rc.board_sensors line 12, "hmc5883 -T -I -R 4 start": bus 2, but not on a V30
+    (hmc,) = [d for d in board.devices if d.driver == "hmc5883" and d.bus_kind == "I2C"]
+    assert board.buses_of(hmc) == (2,) and board.buses_of(hmc, overridden=True) == ()
+    assert board.bus_conditions(hmc) == ((2, "not hw_type in V30"),)
+    # rc.sensors line 172, "ms4525do start -X": bus 1, and bus 2 on a V30
+    found = switches(board, "SENS_EN_MS4525DO")
+    assert [(s.bus, s.bus_when) for s in found] == [(1, ""), (2, "hw_type in V30")]
+    # no other board of the table overrides it
+    assert [b.name for b in table.all() if b.external_i2c_buses_when] == [
+        "px4_fmu-v2",
+        "px4_fmu-v3",
+    ]
+
+
+def test_the_override_is_on_the_line_it_cites() -> None:
+    cite = re.compile(r"PX4/PX4-Autopilot (\S+):(\d+) at \S+ \([^,]+, ([0-9a-f]{10}),")
+    dirs, checked = tuple(_px4_git_dirs()), 0
+    table = load_boards()
+    for name in ("px4_fmu-v2", "px4_fmu-v3"):
+        for variant in table.variants(name):
+            assert variant.external_i2c_buses_when is not None
+            m = cite.match(variant.external_i2c_buses_when.source)
+            assert m
+            text = _show(dirs, m.group(3), m.group(1))
+            if text is None:
+                continue
+            line = text.split("\n")[int(m.group(2)) - 1].strip()
+            assert line == "if (HW_VER_FMUV3 == board_get_hw_version()) {"
+            checked += 1
+    if not checked:
+        pytest.skip(f"no snapshot of fmu-v2/fmu-v3 in {dirs} (set $PX4_AUTOPILOT_GIT)")
+
+
+OVERRIDE = 'external_i2c_buses_when = { when = "hw_type in V30", buses = [1, 2], line = 52 }'
+OVERRIDDEN = GOOD.replace(
+    "internal_i2c_buses = [3]",
+    'internal_i2c_buses = [3]\ni2c_buses_path = "boards/px4/fmu-v5/src/i2c.cpp"\n' + OVERRIDE,
+)
+
+
+def test_a_good_override_parses() -> None:
+    board = _board(OVERRIDDEN)
+    assert board.external_i2c_buses_when is not None
+    assert board.external_i2c_buses_when.source.startswith(
+        "PX4/PX4-Autopilot boards/px4/fmu-v5/src/i2c.cpp:52 at v1.14.0"
+    )
+    assert (board.i2c_buses(False, True), board.i2c_buses(True, True)) == ((1, 2), (3, 4))
+
+
+@pytest.mark.parametrize(
+    ("new", "problem"),
+    [
+        ("external_i2c_buses_when = [1, 2]", "expected a table, got list"),
+        (
+            'external_i2c_buses_when = { when = "hw_type in V30", buses = [1, 2] }',
+            "missing key 'line'",
+        ),
+        (
+            OVERRIDE.replace("line = 52", "line = 52, bus = 2"),
+            "unknown key 'bus' (expected one of when, buses, line)",
+        ),
+        (OVERRIDE.replace('"hw_type in V30"', '""'), "when '' is not a non-empty string"),
+        (
+            OVERRIDE.replace('"hw_type in V30"', '"hw_type in V30 and P == 1"'),
+            "when 'hw_type in V30 and P == 1' is not one test (its negation is written 'not WHEN')",
+        ),
+        (
+            OVERRIDE.replace('"hw_type in V30"', '"not hw_type in V30"'),
+            "when 'not hw_type in V30' is not one test (its negation is written 'not WHEN')",
+        ),
+        (
+            OVERRIDE.replace("[1, 2]", '["1"]'),
+            "buses ['1'] is not a list of integers 0..255",
+        ),
+        (
+            OVERRIDE.replace("[1, 2]", "[1, 5]"),
+            "buses [5] are not I2C buses of the board (external [1, 2, 4], internal [3])",
+        ),
+        (OVERRIDE.replace("52", "0"), "line 0 is out of range 1..100000"),
+    ],
+)
+def test_a_bad_override_is_named_in_one_line(new: str, problem: str) -> None:
+    with pytest.raises(BoardsFileError) as err:
+        parse_boards(OVERRIDDEN.replace(OVERRIDE, new))
+    where = "boards.toml: board 'px4_fmu-v5' at v1.14.0 external_i2c_buses_when: "
+    assert str(err.value) == where + problem
+
+
+def test_an_override_without_its_file_is_refused() -> None:
+    with pytest.raises(BoardsFileError) as err:
+        parse_boards(
+            GOOD.replace("internal_i2c_buses = [3]", "internal_i2c_buses = [3]\n" + OVERRIDE)
+        )
+    assert str(err.value) == (
+        "boards.toml: board 'px4_fmu-v5' at v1.14.0: external_i2c_buses_when but no "
+        "i2c_buses_path (the file its line 52 is in)"
+    )
+
+
+# fmu-v3's src/i2c.cpp lines 44-63 at main, in our own spacing; and line 96 of its board_config.h
+_FMUV3_I2C = """
+constexpr px4_i2c_bus_t px4_i2c_buses[I2C_BUS_MAX_BUS_ITEMS] = {
+\tinitI2CBusExternal(1),
+\tinitI2CBusInternal(2),
+};
+
+bool px4_i2c_bus_external(int bus)
+{
+\tif (HW_VER_FMUV3 == board_get_hw_version()) {
+\t\t/* every bus */
+\t\treturn true;
+
+\t} else {
+\t\tif (bus != 2) {
+\t\t\treturn true;
+\t\t}
+\t}
+
+\treturn false;
+}
+"""
+_OVERRIDING = {
+    "path": "boards/px4/fmu-v3/init/rc.board_sensors",
+    "src/board_config.h": "/* I2C busses */\n#define BOARD_OVERRIDE_I2C_BUS_EXTERNAL\n",
+    "src/i2c.cpp": _FMUV3_I2C,
+}
+
+
+def test_the_transcription_reads_a_boards_own_px4_i2c_bus_external() -> None:
+    module = _transcriber()
+    assert module.bus_override(_OVERRIDING, [1], [2]) == {
+        "when": "hw_type in V30",
+        "buses": [1, 2],
+        "line": 9,
+    }
+    # v1.11.0 to v1.13.0 took the bus's table entry: `(const px4_i2c_bus_t &bus)`, `bus.bus != 2`
+    old = _FMUV3_I2C.replace("(int bus)", "(const px4_i2c_bus_t &bus)").replace(
+        "(bus != 2)", "(bus.bus != 2)"
+    )
+    assert module.bus_override(dict(_OVERRIDING, **{"src/i2c.cpp": old}), [1], [2]) is not None
+    # without the define, PX4's own px4_i2c_bus_external reads the lists
+    plain = dict(_OVERRIDING, **{"src/board_config.h": "/* I2C busses */\n"})
+    assert module.bus_override(plain, [1], [2]) is None
+
+
+@pytest.mark.parametrize(
+    ("change", "external", "internal", "problem"),
+    [
+        (
+            ("return true;\n\n", "return bus == 1;\n\n"),
+            [1],
+            [2],
+            ", but its src/i2c.cpp's px4_i2c_bus_external is not 'if (HW_VER_... == "
+            "board_get_hw_version()) every bus external, else every bus but one'",
+        ),
+        (
+            ("HW_VER_FMUV3 ==", "HW_VER_FMUV2MINI =="),
+            [1],
+            [2],
+            ": no hardware type known for HW_VER_FMUV2MINI (['HW_VER_FMUV3'])",
+        ),
+        (
+            ("", ""),
+            [1],
+            [2, 3],
+            ": elsewhere every bus but 2 is external, not src/i2c.cpp's lists (external [1], "
+            "internal [2, 3])",
+        ),
+    ],
+)
+def test_the_transcription_refuses_another_px4_i2c_bus_external(
+    change: tuple[str, str], external: list[int], internal: list[int], problem: str
+) -> None:
+    module = _transcriber()
+    files = dict(_OVERRIDING, **{"src/i2c.cpp": _FMUV3_I2C.replace(*change)})
+    with pytest.raises(SystemExit) as err:
+        module.bus_override(files, external, internal)
+    assert str(err.value) == (
+        "boards/px4/fmu-v3/init/rc.board_sensors: src/board_config.h defines "
+        "BOARD_OVERRIDE_I2C_BUS_EXTERNAL" + problem
+    )
+
+
+def test_every_i2c_bus_is_on_the_line_it_cites() -> None:
+    # Each bus of a row's lists names the line of i2c_buses_path that declares it:
+    # initI2CBusExternal(N) / initI2CBusInternal(N) (or PX4_BUS_NUMBER_TO_PX4(N - 1) on the NXP
+    # chips, whose PX4_BUS_OFFSET is 1), or board_config.h's PX4_I2C_BUS_EXPANSION* / _ONBOARD.
+    cite = re.compile(r"PX4/PX4-Autopilot (\S+):(\d+) at \S+ \([^,]+, ([0-9a-f]{10}),")
+    dirs, checked, missing = tuple(_px4_git_dirs()), 0, set()
+    table = load_boards()
+    for board in table.all():
+        for variant in table.variants(board.name):
+            listed = (*variant.external_i2c_buses, *variant.internal_i2c_buses)
+            assert [b for b, _ in variant.i2c_bus_sources] == list(listed), variant.name
+            for bus, source in variant.i2c_bus_sources:
+                m = cite.match(source)
+                assert m, source
+                text = _show(dirs, m.group(3), m.group(1))
+                if text is None:
+                    missing.add(m.group(3))
+                    continue
+                written = text.split("\n")[int(m.group(2)) - 1]
+                external = bus in variant.external_i2c_buses
+                if m.group(1).endswith("i2c.cpp"):
+                    kind = "External" if external else "Internal"
+                    assert re.search(
+                        rf"initI2CBus{kind}\(({bus}|PX4_BUS_NUMBER_TO_PX4\({bus - 1}\))\)", written
+                    ), (source, written)
+                else:
+                    kind = r"EXPANSION\d*" if external else "ONBOARD"
+                    assert re.search(rf"#define\s+PX4_I2C_BUS_{kind}\s+{bus}\b", written), source
+                checked += 1
+    if not checked:
+        pytest.skip(f"commits {sorted(missing)} are in none of {dirs} (set $PX4_AUTOPILOT_GIT)")
+    assert checked > 300
+
+
+@pytest.mark.parametrize(
+    ("lines", "problem"),
+    [
+        (
+            "i2c_buses_lines = [37, 38]",
+            "i2c_buses_lines [37, 38] do not give one line for each of external_i2c_buses "
+            "[1, 2, 4] and internal_i2c_buses [3]",
+        ),
+        ("i2c_buses_lines = [1, 2, 3, 0]", "i2c_buses_lines [1, 2, 3, 0] is not a list of "
+         "integers 1..100000"),
+    ],
+)  # fmt: skip
+def test_bad_i2c_bus_lines_are_named_in_one_line(lines: str, problem: str) -> None:
+    text = OVERRIDDEN.replace(OVERRIDE, lines)
+    with pytest.raises(BoardsFileError) as err:
+        parse_boards(text)
+    assert str(err.value) == f"boards.toml: board 'px4_fmu-v5' at v1.14.0: {problem}"
+    board = _board(OVERRIDDEN.replace(OVERRIDE, "i2c_buses_lines = [40, 41, 43, 42]"))
+    assert board.i2c_bus_source(4) == (
+        "PX4/PX4-Autopilot boards/px4/fmu-v5/src/i2c.cpp:43 at v1.14.0 (tag v1.14.0, "
+        "0123456789, 2023-10-23)"
+    )
+    assert board.i2c_bus_source(5) is None
+
+
+def test_i2c_bus_lines_without_their_file_are_refused() -> None:
+    text = GOOD.replace(
+        "internal_i2c_buses = [3]", "internal_i2c_buses = [3]\ni2c_buses_lines = [1]"
+    )
+    with pytest.raises(BoardsFileError) as err:
+        parse_boards(text)
+    assert str(err.value) == (
+        "boards.toml: board 'px4_fmu-v5' at v1.14.0: i2c_buses_lines but no i2c_buses_path "
+        "(the file they are lines of)"
     )

@@ -258,10 +258,18 @@ def test_the_pixhawk_2_and_pixhawk_4_scripts_hardware_tests_start_only_spi_senso
 
 
 @pytest.mark.parametrize("hw_type", ["V30", "V2M", None])
-def test_a_cubes_internal_compass_and_gps_compass_on_fmu_v3(hw_type: str | None) -> None:
-    # A Pixhawk 2 Cube (ver_hw_subtype V30) of PX4 1.12: its HMC5883 on internal I2C bus 2 is
-    # line 12's `hmc5883 -T -I -R 4 start`; the GPS's IST8310 on bus 1 is probed: proposed.
-    # The same on a Pixhawk Mini (V2M) and with no type known
+def test_fmu_v3s_internal_compass_line_runs_only_where_bus_2_is_internal(
+    hw_type: str | None,
+) -> None:
+    # PX4 v1.12.0, boards/px4/fmu-v3/src/i2c.cpp lines 50-63: where `HW_VER_FMUV3 ==
+    # board_get_hw_version()` (line 52) every I2C bus is external, else every bus but 2; that
+    # version is the one init.c names "V30" (lines 374-376: hw_type[1]++, hw_type[2] = '0'),
+    # the log's ver_hw_subtype. platforms/common/i2c.cpp's I2CBusIterator::next (lines 63-70)
+    # tries an -I start only on a bus that is not external. So line 12's `hmc5883 -T -I -R 4
+    # start` starts the HMC5883 on bus 2 of a Pixhawk Mini (V2M) and finds no bus on a Cube
+    # (V30), whose bus 2 rc.sensors' `hmc5883 -T -X -q start` (line 136, SENS_EXT_I2C_PRB)
+    # probes: there it is proposed, as with no type known, where the report names both lines.
+    # The GPS's IST8310 on bus 1 is probed on each: proposed.
     v3 = board("px4_fmu-v3", "v1.12.0")
     proposal = migrate.migrate(
         config(
@@ -272,11 +280,32 @@ def test_a_cubes_internal_compass_and_gps_compass_on_fmu_v3(hw_type: str | None)
         table="current",
         board=v3,
     )
-    assert placed(proposal) == [("IST8310#0", 1, 0x0E)]
-    reason, line = left_out(proposal)["CAL_MAG1_ID = 73233"]
-    assert reason == "board"
-    assert "boards/px4/fmu-v3/init/rc.board_sensors:12 " in line
-    assert not [a for a in proposal.assumptions if "runs only where" in a]
+    script = "boards/px4/fmu-v3/init/rc.board_sensors:12 "
+    i2c = "boards/px4/fmu-v3/src/i2c.cpp:52 "
+    if hw_type == "V2M":
+        assert placed(proposal) == [("IST8310#0", 1, 0x0E)]
+        reason, line = left_out(proposal)["CAL_MAG1_ID = 73233"]
+        assert reason == "board" and script in line
+        assert not [a for a in proposal.assumptions if "runs only where" in a]
+        return
+    assert sorted(placed(proposal)) == [("HMC5883#0", 2, 0x1E), ("IST8310#0", 1, 0x0E)]
+    assert left_out(proposal) == {}
+    (hmc,) = [i for i in proposal.instances if i.name == "HMC5883#0"]
+    if hw_type == "V30":
+        assert not proposal.assumptions
+        (note,) = hmc.notes
+        assert note.startswith("I2C bus 2 is external where hw_type in V30 (PX4/PX4-Autopilot ")
+        assert i2c in note
+        return
+    assert not [n for n in hmc.notes if n.startswith("I2C bus 2 is external")]
+    (said,) = [a for a in proposal.assumptions if "runs only where" in a]
+    assert said.startswith("CAL_MAG1_ID = 73233: HMC5883 (MAG), I2C bus 2, address 0x1E: ")
+    assert script in said and i2c in said
+    assert (
+        "runs only where not hw_type in V30 (the hardware revision, which the parameters " in said
+    )
+    assert "; the bus is internal only there: PX4/PX4-Autopilot " in said
+    assert "proposed, not left out on a guess" in said
 
 
 @pytest.mark.parametrize(
@@ -579,3 +608,87 @@ def test_the_cube_21s_own_rows_run_by_its_boot_console() -> None:
     facts = fmuv3_facts("V30", CUBE_21)
     assert evaluate(when["83"], facts) == Verdict(True)
     assert evaluate(when["96"], facts) == Verdict(False)
+
+
+# -- a start on a bus of the other kind starts nothing ------------------------------------------
+
+LIS3MDL_BUS2 = 0x05 << 16 | 0x1E << 8 | 2 << 3 | 1  # 335377
+IST8310_BUS2 = 0x06 << 16 | 0x0E << 8 | 2 << 3 | 1  # 396817
+
+
+@pytest.mark.parametrize("hw_type", ["MR-CANHUBK3", None])
+def test_canhubk3s_external_starts_on_its_internal_bus_start_nothing(hw_type: str | None) -> None:
+    # PX4 main, boards/nxp/mr-canhubk3/src/i2c.cpp line 38: initI2CBusInternal(
+    # PX4_BUS_NUMBER_TO_PX4(1)), bus 2; its rc.board_sensors line 22 `ist8310 -X -b 2 -R 10
+    # start` (where not hw_type in MR-CANHUBK3-ADAP) and line 32 `lis3mdl -X -b 2 -R 2 start`.
+    # platforms/common/i2c.cpp lines 89-96: an -X start is tried only on a bus for which
+    # px4_i2c_bus_external() is true, its -b among them: neither line starts anything, so
+    # neither leaves a compass on bus 2 out as the board's; the report names each line.
+    # Line 10's `ist8310 -X -b 1 -R 10 start` (bus 1 external, line 37) is no such line.
+    params = {"CAL_MAG0_ID": LIS3MDL_BUS2, "CAL_MAG1_ID": IST8310_BUS2, "CAL_MAG2_ID": IST8310_BUS1}
+    proposal = migrate.migrate(
+        config(params, hw_type=hw_type),
+        table="current",
+        board=board("nxp_mr-canhubk3", "v1.15.0"),
+    )
+    assert left_out(proposal) == {}
+    assert sorted(placed(proposal)) == [
+        ("IST8310#0", 2, 0x0E),
+        ("IST8310#1", 1, 0x0E),
+        ("LIS3MDL#0", 2, 0x1E),
+    ]
+    assert not [a for a in proposal.assumptions if a.startswith("CAL_MAG2_ID") and "did not" in a]
+    script = "PX4/PX4-Autopilot boards/nxp/mr-canhubk3/init/rc.board_sensors"
+    for found, start, line in (
+        (
+            "CAL_MAG0_ID = 335377: LIS3MDL (MAG), I2C bus 2, address 0x1E",
+            "lis3mdl -X -b 2 -R 2",
+            32,
+        ),
+        (
+            "CAL_MAG1_ID = 396817: IST8310 (MAG), I2C bus 2, address 0x0E",
+            "ist8310 -X -b 2 -R 10",
+            22,
+        ),
+    ):
+        (said,) = [a for a in proposal.assumptions if a.startswith(found)]
+        assert said.startswith(f"{found}: the board's '{start} start' ({script}:{line} at ")
+        assert said.endswith(
+            ") did not start it: I2C bus 2 is internal (PX4/PX4-Autopilot "
+            "boards/nxp/mr-canhubk3/src/i2c.cpp:38 at main (branch main, bb59c637cd, "
+            "2026-08-13)), and PX4's -X tries no bus of that kind (platforms/common/i2c.cpp, "
+            "I2CBusIterator::next), so that line starts nothing"
+        )
+
+
+@pytest.mark.parametrize("hw_type", ["V30", "V2M", None])
+def test_rc_sensors_probes_fmu_v3s_bus_2_on_a_cube(hw_type: str | None) -> None:
+    # PX4 v1.15.0, ROMFS/px4fmu_common/init.d/rc.sensors line 166: `ms4525do start -X` behind
+    # SENS_EN_MS4525DO. boards/px4/fmu-v3/src/i2c.cpp lines 44-63: bus 1 external, bus 2
+    # external only where HW_VER_FMUV3 == board_get_hw_version() (line 52), hw_type "V30"
+    # (init.c lines 388-390). So the -X start tries buses 1 and 2 on a Cube, bus 1 elsewhere.
+    proposal = migrate.migrate(
+        config({"SENS_EN_MS4525DO": 1}, hw_type=hw_type),
+        table="current",
+        board=board("px4_fmu-v3", "v1.15.0"),
+    )
+    assert placed(proposal) == [("MS4525DO#0", 1, 0x28)]
+    every = [a for a in proposal.assumptions if "on every external I2C bus" in a]
+    buses = "1, 2" if hw_type == "V30" else "1"
+    assert len(every) == 1 and f"on every external I2C bus ({buses}; " in every[0]
+    bus_2 = [a for a in proposal.assumptions if " on I2C bus 2 runs only where " in a]
+    if hw_type is not None:
+        assert bus_2 == []
+        return
+    (said,) = bus_2
+    assert said.startswith("SENS_EN_MS4525DO: 'ms4525do start -X' (PX4/PX4-Autopilot ")
+    assert "ROMFS/px4fmu_common/init.d/rc.sensors:166 " in said
+    assert (
+        "runs only where hw_type in V30 (the hardware revision, which the parameters do not "
+        in said
+    )
+    assert (
+        "; the bus is external only there: PX4/PX4-Autopilot boards/px4/fmu-v3/src/i2c.cpp:52 "
+        in said
+    )
+    assert said.endswith("): not proposed from it")

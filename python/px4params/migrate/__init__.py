@@ -28,7 +28,10 @@ settles ``ver hwtypecmp``); one resting on what the configuration cannot tell (t
 an earlier start without a boot console) is taken only as PX4's default, or not at all, and
 the report names the clause and the row's line. Such a device row never drops a device: the
 device is proposed, unless it sits on one of the board's internal I2C buses, which only the
-board's script starts drivers on.
+board's script starts drivers on. A row starts a device only on a bus PX4 tries for it
+(:meth:`.vehicle.boards.Board.bus_conditions`): a ``-b`` of the other kind (``-X`` on an internal
+bus) starts nothing, and where the board's own ``px4_i2c_bus_external`` makes a bus external on
+some hardware (fmu-v2/v3 on a Cube, ``hw_type`` V30), that hardware is one more clause.
 """
 
 from px4params.errors import MigrationError

@@ -133,6 +133,17 @@ class _Builder:
         values["bus.i2c.address"] = address
         for path, value in values.items():  # the tag first: it resets the variant
             self.store.set_default(inst.key.at(path), value)
+        override = getattr(self.board, "external_i2c_buses_when", None)
+        if (
+            override is not None
+            and bus in self.board.internal_i2c_buses
+            and bus in override.external
+            and evaluate(override.when, self.facts()).holds
+        ):
+            inst.notes.append(
+                f"I2C bus {bus} is external where {override.when} ({override.source}): the "
+                "board's -I starts try no bus there, rc.sensors' -X starts do"
+            )
         self.proposal.instances.append(inst)
         return inst
 
@@ -237,30 +248,76 @@ class _Builder:
         not run here is passed over); None where no row runs or may run."""
         if self.board is None:
             return None
-        facts = self.facts()
+        # A board whose I2C buses the table does not know: a row without -b may be on any bus.
+        known = bool(getattr(self.board, "i2c_buses_path", ""))
         undecided = None
         for row in self.board.devices:
             if row.bus_kind.upper() != "I2C" or not (self.start_chips(row.driver) & chips):
                 continue
-            if row.bus is not None and row.bus != bus:
+            # -I or -X: the board's internal or external buses, of them its -b (a -b of the
+            # other kind: none), each with the hardware it is of that kind on
+            on = dict(self.board.bus_conditions(row)) if known or row.bus is not None else {}
+            if (known or row.bus is not None) and bus not in on:
                 continue
-            if row.bus is None:  # -I or -X without -b: every internal, or external, bus
-                buses = getattr(
-                    self.board, "internal_i2c_buses" if row.internal else "external_i2c_buses", ()
-                )
-                if buses and bus not in buses:
-                    continue
             at = row.address
             if at is None and row.driver in {d.name for d in self.drivers}:
                 at = self.drivers[row.driver].default_address
             if at is not None and address is not None and at != address:
                 continue
-            verdict = evaluate(row.when, facts)
+            verdict = self.start_verdict(row, on.get(bus, ""))
             if verdict.holds:
                 return row, verdict
             if verdict.holds is None and undecided is None:
                 undecided = row, verdict
         return undecided
+
+    def start_verdict(self, row: Any, bus_when: str) -> Verdict:
+        """Whether a board row runs, on a bus that is of its kind where ``bus_when`` holds
+        (:meth:`Board.bus_conditions`; "": always): that clause, where nothing settles it,
+        cites the board's own px4_i2c_bus_external."""
+        verdict = evaluate(" and ".join(c for c in (row.when, bus_when) if c), self.facts())
+        override = getattr(self.board, "external_i2c_buses_when", None)
+        if not bus_when or override is None:
+            return verdict
+        kind = "internal" if row.internal else "external"
+        open_ = tuple(
+            (c, f"{why}; the bus is {kind} only there: {override.source}" if c == bus_when else why)
+            for c, why in verdict.open
+        )
+        return Verdict(verdict.holds, open_)
+
+    def on_internal_bus(self, bus: int) -> bool:
+        """Whether I2C ``bus`` is internal on this vehicle: on the board's lists, and where its
+        own px4_i2c_bus_external makes it external on some hardware, that hardware settled not
+        to be this one."""
+        board = self.board
+        if bus not in getattr(board, "internal_i2c_buses", ()):
+            return False
+        override = getattr(board, "external_i2c_buses_when", None)
+        if override is None or bus not in override.external:
+            return True
+        verdict = evaluate(override.when, self.facts())
+        return verdict.holds is False and not verdict.open
+
+    def other_kind_rows(self, chips: set[str], bus: int, address: int | None) -> list[Any]:
+        """The board's rows that would start this I2C device but for their ``-b``, a bus of
+        the other kind on every hardware (``-X -b 2`` where bus 2 is internal): PX4 finds no
+        bus for them, and they start nothing."""
+        found = []
+        for row in getattr(self.board, "devices", ()):
+            if (
+                row.bus_kind.upper() != "I2C"
+                or row.bus != bus
+                or self.board.bus_conditions(row)
+                or not (self.start_chips(row.driver) & chips)
+            ):
+                continue
+            at = row.address
+            if at is None and row.driver in {d.name for d in self.drivers}:
+                at = self.drivers[row.driver].default_address
+            if at is None or address is None or at == address:
+                found.append(row)
+        return found
 
     def probe_rotation(self, chips: set[str]) -> tuple[int, str] | None:
         """The ``-R`` rc.sensors' probing passes this chip's driver in the board table's
@@ -274,7 +331,7 @@ class _Builder:
                 and self.start_chips(row.driver) & chips
             ):
                 continue
-            verdict = evaluate(row.when, self.facts())
+            verdict = self.start_verdict(row, row.bus_when)
             if verdict.holds is False:
                 continue
             if verdict.unchecked:
@@ -322,11 +379,20 @@ class _Builder:
         rules in the order they are trusted). ``found``: the device as the report names it;
         ``if_run``: :meth:`rotation_if_run`'s clause; ``disabled``: every slot of it is, so
         it is not proposed either way."""
+        for other in self.other_kind_rows(chips, bus, address):
+            kind = "external" if other.internal else "internal"
+            self.assume(
+                f"{found}: the board's '{other.driver} {other.args}' ({other.source}) did not "
+                f"start it: I2C bus {bus} is {kind} "
+                f"({self.board.i2c_bus_source(bus) or _buses_path(self.board)}), and PX4's "
+                f"{'-I' if other.internal else '-X'} tries no bus of that kind "
+                "(platforms/common/i2c.cpp, I2CBusIterator::next), so that line starts nothing"
+            )
         row = self.board_device(chips, bus, address)
         if row is not None and row[1].holds:
             self.assume_row(found, *row, "taken as holding (PX4's default)")
             return f"started by the board's script ({row[0].source})"
-        if row is not None and bus in getattr(self.board, "internal_i2c_buses", ()):
+        if row is not None and self.on_internal_bus(bus):
             # Found on an internal bus, which rc.sensors never probes (-X only): the row ran.
             return (
                 f"started by the board's script ({row[0].source}); it runs only where "
@@ -515,13 +581,13 @@ class _Builder:
         configuration: every clause of a row's condition is evaluated; a row that holds only
         by PX4's default of what nothing here tells, or that nothing here settles, is said
         so, naming the clause and the row's line."""
-        facts = self.facts()
         rows = []
         for row in getattr(self.board, "switches", ()):
             if row.param != switch or RENAMED_MODULES.get(row.driver, row.driver) != driver.name:
                 continue
-            verdict = evaluate(row.when, facts)
-            start = f"'{row.driver} {row.args}' ({row.source}) runs only where"
+            verdict = self.start_verdict(row, row.bus_when)
+            on_bus = f" on I2C bus {row.bus}" if row.bus_when else ""
+            start = f"'{row.driver} {row.args}' ({row.source}){on_bus} runs only where"
             unchecked = " and ".join(verdict.unchecked)
             if verdict.holds:
                 rows.append(row)
@@ -883,9 +949,8 @@ class _Builder:
 
 
 def _buses_path(board: Any) -> str:
-    """The file the board's I2C buses were read from, as its source names it."""
-    m = re.search(r"I2C buses from (\S+)", board.source)
-    return m[1] if m else "the board's I2C buses"
+    """The file the board's I2C buses were read from."""
+    return getattr(board, "i2c_buses_path", "") or "the board's I2C buses"
 
 
 def _named(dev: devid.DeviceId, slot_kinds: Iterable[str] = ()) -> list[tuple[str, str]]:

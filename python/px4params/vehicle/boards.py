@@ -19,7 +19,13 @@ a few snapshots (tagged releases and branches, listed in its ``[[snapshot]]`` ta
     PX4 writes as the ULog's ``ver_hw``: the target name upper-cased with ``-`` made ``_``, then
     older spellings), ``releases`` (the snapshots), ``path`` (the script read),
     ``external_i2c_buses`` / ``internal_i2c_buses`` (the board's ``src/i2c.cpp``, or its
-    ``board_config.h`` where there is none, named by ``i2c_buses_path``),
+    ``board_config.h`` where there is none, named by ``i2c_buses_path``, ``i2c_buses_lines``
+    the line of each external then internal bus there), optional
+    ``external_i2c_buses_when`` (a board whose ``board_config.h`` defines
+    ``BOARD_OVERRIDE_I2C_BUS_EXTERNAL`` and whose ``i2c.cpp`` decides at run time which buses are
+    external: ``{ when, buses, line }``, where condition ``when`` holds its external buses are
+    ``buses`` and its other buses internal, elsewhere the two lists hold; ``line``: the test's
+    line in ``i2c_buses_path``),
     ``i2c_launcher_buses`` with ``i2c_launcher_lines`` (the line of each bus's ``i2c_launcher
     start -b``) and optional ``i2c_launcher_when``, and the lists ``device`` (started whatever
     the parameters) and ``switch`` (started behind a parameter).
@@ -37,9 +43,14 @@ command's options as written), ``line`` (in the newest snapshot of the row) and 
 ``bus``, ``address``, ``rotation`` (the ``-R`` value, PX4's rotation enum) and ``when`` (the
 shell conditions around it, e.g. ``hw_type in V6C000002,V6C002002`` or ``$HAVE_PM2 == yes``).
 An ``icm20948`` or ``mpu9250`` started with ``-M`` (the driver's "Enable Magnetometer") is
-listed twice, as ``imu`` and as ``mag``. A switch entry also names its ``param``. A switch
-started with ``-X`` and no ``-b`` probes every external I2C bus, so :class:`SwitchStart` rows
-are one per external bus of the board.
+listed twice, as ``imu`` and as ``mag``. A switch entry also names its ``param``.
+
+An I2C start runs where PX4's ``I2CBusIterator`` (platforms/common/i2c.cpp) finds a bus: ``-X``
+tries only external buses, ``-I`` only internal ones, and ``-b N`` only bus N if it is of that
+kind, so a ``-b`` of the other kind finds none and the driver never starts
+(:meth:`Board.buses_of`). A switch started with ``-X`` and no ``-b`` probes every external I2C
+bus, so :class:`SwitchStart` rows are one per bus the start can be on, each with the condition
+under which its bus is of the start's kind (``bus_when``, from ``external_i2c_buses_when``).
 
 A release picks the newest snapshot at or before it (a v1.16 log is read with v1.15.0's facts,
 as no v1.16/v1.17 snapshot was read), a release series newer than every release snapshot picks
@@ -56,7 +67,7 @@ import importlib.resources
 import math
 import re
 import tomllib
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, NoReturn
 
@@ -69,6 +80,7 @@ __all__ = [
     "BoardTable",
     "BoardsError",
     "BoardsFileError",
+    "BusOverride",
     "LauncherProbe",
     "SwitchStart",
     "load_boards",
@@ -118,6 +130,21 @@ class SwitchStart:
     rotation: int | None = None
     internal: bool = False
     when: str = ""
+    #: The condition under which ``bus`` is of the start's kind (the board's
+    #: :class:`BusOverride`'s ``when`` or its negation), or "" where it always is.
+    bus_when: str = ""
+
+
+@dataclass(frozen=True)
+class BusOverride:
+    """A board's own ``px4_i2c_bus_external`` (``BOARD_OVERRIDE_I2C_BUS_EXTERNAL``): where
+    ``when`` holds, ``external`` are its external I2C buses and its other buses internal;
+    elsewhere its ``external_i2c_buses`` and ``internal_i2c_buses`` hold. ``source`` cites the
+    line of the test."""
+
+    when: str
+    external: tuple[int, ...]
+    source: str
 
 
 @dataclass(frozen=True)
@@ -157,25 +184,118 @@ class Board:
     #: The newest of ``releases`` as a citation names it ("v1.15.0 (tag v1.15.0, 30e763b678,
     #: 2024-08-27)"): a line of the board's scripts is cited at it (:meth:`cite`).
     at: str = ""
+    #: The board's own ``px4_i2c_bus_external``, or None: its two lists hold on all hardware.
+    external_i2c_buses_when: BusOverride | None = None
+    #: (bus, the line of i2c_buses_path naming it, cited) of each of its I2C buses.
+    i2c_bus_sources: tuple[tuple[int, str], ...] = ()
+    #: The file its I2C buses were read from ("": none, the table does not know them).
+    i2c_buses_path: str = ""
+
+    def i2c_bus_source(self, bus: int) -> str | None:
+        """The line that makes I2C ``bus`` the board's (``initI2CBusInternal(2)``), cited as
+        a start's ``source`` is; None where the table has none."""
+        return next((source for b, source in self.i2c_bus_sources if b == bus), None)
 
     def cite(self, path: str, line: int) -> str:
         """``line`` of PX4-Autopilot's ``path`` as the board's rows cite theirs."""
         return _cite(path, line, self.at)
 
-    def buses_of(self, start: BoardDevice | SwitchStart) -> tuple[int, ...]:
-        """The buses a start can be on: its ``-b``, else every internal (``-I``) or external
-        (``-X``) I2C bus of the board, as PX4 tries them; () for SPI without ``-b``."""
-        if start.bus is not None:
-            return (start.bus,)
-        if start.bus_kind != "I2C":
-            return ()
-        return self.internal_i2c_buses if start.internal else self.external_i2c_buses
+    def i2c_buses(self, internal: bool, overridden: bool = False) -> tuple[int, ...]:
+        """The board's internal (or external) I2C buses; ``overridden``: as they are where its
+        :attr:`external_i2c_buses_when` holds (a board without one: its lists)."""
+        override = self.external_i2c_buses_when if overridden else None
+        return _bus_lists(self.external_i2c_buses, self.internal_i2c_buses, override)[internal]
+
+    def buses_of(
+        self, start: BoardDevice | SwitchStart, overridden: bool = False
+    ) -> tuple[int, ...]:
+        """The buses a start can be on, as PX4's I2CBusIterator tries them: an I2C start's
+        internal (``-I``) or external (``-X``) buses, of them its ``-b``; a ``-b`` the board
+        names as of the other kind, none (PX4 never starts it); SPI's ``-b``, () without.
+        ``overridden``: where the board's :attr:`external_i2c_buses_when` holds."""
+        external, internal = self.i2c_buses(False, overridden), self.i2c_buses(True, overridden)
+        known = bool(self.i2c_buses_path)
+        return _start_buses(start.bus, start.bus_kind, start.internal, external, internal, known)
+
+    def bus_conditions(self, start: BoardDevice | SwitchStart) -> tuple[tuple[int, str], ...]:
+        """Each bus a start can be on (:meth:`buses_of`) with the condition under which it
+        is of the start's kind: "" on every hardware, else the board's
+        :attr:`external_i2c_buses_when` condition or its negation."""
+        return _bus_conditions(
+            start.bus,
+            start.bus_kind,
+            start.internal,
+            self.external_i2c_buses,
+            self.internal_i2c_buses,
+            self.external_i2c_buses_when,
+            bool(self.i2c_buses_path),
+        )
+
+
+def _bus_lists(
+    external: Sequence[int], internal: Sequence[int], override: BusOverride | None
+) -> tuple[tuple[int, ...], tuple[int, ...]]:
+    """(external, internal) I2C buses of a board, as its override makes them where given."""
+    if override is None:
+        return tuple(external), tuple(internal)
+    every = sorted({*external, *internal})
+    return (
+        tuple(b for b in every if b in override.external),
+        tuple(b for b in every if b not in override.external),
+    )
+
+
+def _start_buses(
+    bus: int | None,
+    bus_kind: str,
+    internal: bool,
+    external_buses: Sequence[int],
+    internal_buses: Sequence[int],
+    known: bool,
+) -> tuple[int, ...]:
+    """See :meth:`Board.buses_of`. ``known``: the lists are the board's ``px4_i2c_buses`` (its
+    i2c.cpp), the only buses PX4's iterator visits, so a ``-b`` neither names finds none; a
+    board whose buses the table does not know keeps its ``-b``."""
+    if bus_kind != "I2C":
+        return (bus,) if bus is not None else ()
+    own, other = (internal_buses, external_buses) if internal else (external_buses, internal_buses)
+    if bus is None:
+        return tuple(own)
+    if bus in own or not (known or bus in other):
+        return (bus,)
+    return ()
+
+
+def _bus_conditions(
+    bus: int | None,
+    bus_kind: str,
+    internal: bool,
+    external: Sequence[int],
+    internal_buses: Sequence[int],
+    override: BusOverride | None,
+    known: bool,
+) -> tuple[tuple[int, str], ...]:
+    """See :meth:`Board.bus_conditions`."""
+    plain = _start_buses(bus, bus_kind, internal, external, internal_buses, known)
+    if override is None:
+        return tuple((b, "") for b in plain)
+    lists = _bus_lists(external, internal_buses, override)
+    over = _start_buses(bus, bus_kind, internal, *lists, known)
+    found = [(b, "" if b in over else f"not {override.when}") for b in plain]
+    found += [(b, override.when) for b in over if b not in plain]
+    return tuple(sorted(found))
 
 
 #: A board's switch starts as read, before expansion per bus: (starts with their sources,
-#: external I2C buses, internal I2C buses, ver_hw).
+#: external I2C buses, internal I2C buses, its override of them, whether the table knows its
+#: buses, ver_hw).
 _Pending = tuple[
-    list[tuple[dict[str, Any], str]], tuple[int, ...], tuple[int, ...], tuple[str, ...]
+    list[tuple[dict[str, Any], str]],
+    tuple[int, ...],
+    tuple[int, ...],
+    BusOverride | None,
+    bool,
+    tuple[str, ...],
 ]
 
 
@@ -239,11 +359,11 @@ class BoardTable:
     def _row(self, key: tuple[str, str]) -> Board | None:
         board = self._rows.get(key)
         if board is not None and key in self._pending:
-            starts, external, internal, ver_hw = self._pending.pop(key)
+            starts, external, internal, override, known, ver_hw = self._pending.pop(key)
             switches = tuple(
                 switch
                 for start, source in starts
-                for switch in _expand(start, source, external, internal, ver_hw)
+                for switch in _expand(start, source, external, internal, override, known, ver_hw)
             )
             board = self._rows[key] = dataclasses.replace(board, switches=switches)
         return board
@@ -537,7 +657,13 @@ def parse_boards(text: str, file: str = "boards.toml") -> BoardTable:
                 "device",
                 "switch",
             ),
-            ("i2c_buses_path", "i2c_launcher_when", "i2c_launcher_lines"),
+            (
+                "i2c_buses_path",
+                "i2c_buses_lines",
+                "external_i2c_buses_when",
+                "i2c_launcher_when",
+                "i2c_launcher_lines",
+            ),
         )
         name = row.text("name")
         if not _NAME.fullmatch(name):
@@ -555,6 +681,19 @@ def parse_boards(text: str, file: str = "boards.toml") -> BoardTable:
         external = row.numbers("external_i2c_buses", 0, 255)
         internal = row.numbers("internal_i2c_buses", 0, 255)
         buses_path = row.text("i2c_buses_path", "")
+        override = _override(row, external, internal, buses_path, snaps, cite)
+        bus_lines = row.numbers("i2c_buses_lines", 1, 100_000)
+        if bus_lines and not buses_path:
+            row.fail("i2c_buses_lines but no i2c_buses_path (the file they are lines of)")
+        if bus_lines and len(bus_lines) != len(external) + len(internal):
+            row.fail(
+                f"i2c_buses_lines {list(bus_lines)} do not give one line for each of "
+                f"external_i2c_buses {list(external)} and internal_i2c_buses {list(internal)}"
+            )
+        bus_sources = tuple(
+            (bus, cite(buses_path, n, snaps))
+            for bus, n in zip((*external, *internal), bus_lines, strict=False)
+        )
         devices = []
         for j, entry in enumerate(row.tables("device"), 1):
             start = _start(_Row(file, f"{row.where} device {j}", entry), switch=False)
@@ -584,7 +723,14 @@ def parse_boards(text: str, file: str = "boards.toml") -> BoardTable:
             if key in rows:
                 row.fail(f"release {snap.release!r} already has a row for this board")
             # expanded to SwitchStarts per bus when the board is first asked for (BoardTable._row)
-            pending[key] = (own + common.get(snap.release, []), external, internal, ver_hw)
+            pending[key] = (
+                own + common.get(snap.release, []),
+                external,
+                internal,
+                override,
+                bool(buses_path),
+                ver_hw,
+            )
             rc_sensors = (
                 " and ROMFS/px4fmu_common/init.d/rc.sensors" if snap.release in common else ""
             )
@@ -612,10 +758,44 @@ def parse_boards(text: str, file: str = "boards.toml") -> BoardTable:
                 i2c_launcher_probes=launcher[snap.release] if launcher_buses else (),
                 i2c_launcher_sources=tuple(cite(path, n, snaps) for n in launcher_lines),
                 at=max(snaps, key=lambda s: s.order).describe(),
+                external_i2c_buses_when=override,
+                i2c_bus_sources=bus_sources,
+                i2c_buses_path=buses_path,
             )
         if name not in names:
             names.append(name)
     return BoardTable(tuple(snapshots.values()), rows, names, ver_hw_names, common, pending)
+
+
+def _override(
+    row: _Row,
+    external: Sequence[int],
+    internal: Sequence[int],
+    buses_path: str,
+    snaps: Sequence[_Snapshot],
+    cite: Callable[[str, int, Sequence[_Snapshot]], str],
+) -> BusOverride | None:
+    """A board row's ``external_i2c_buses_when``, checked: one test (migration negates it),
+    buses of the board, a line of ``i2c_buses_path``."""
+    key = "external_i2c_buses_when"
+    if key not in row.table:
+        return None
+    entry = _Row(row.file, f"{row.where} {key}", row.table[key])
+    entry.only(("when", "buses", "line"))
+    when = entry.text("when")
+    if " and " in when or when.startswith("not "):
+        entry.fail(f"when {when!r} is not one test (its negation is written 'not WHEN')")
+    buses = entry.numbers("buses", 0, 255)
+    strange = [b for b in buses if b not in external and b not in internal]
+    if strange:
+        entry.fail(
+            f"buses {strange} are not I2C buses of the board (external {list(external)}, "
+            f"internal {list(internal)})"
+        )
+    line = entry.number("line", 1, 100_000)
+    if not buses_path:
+        row.fail(f"{key} but no i2c_buses_path (the file its line {line} is in)")
+    return BusOverride(when, buses, cite(buses_path, line, snaps))
 
 
 def _expand(
@@ -623,23 +803,23 @@ def _expand(
     source: str,
     external: Sequence[int],
     internal: Sequence[int],
+    override: BusOverride | None,
+    known: bool,
     ver_hw: Sequence[str],
 ) -> list[SwitchStart]:
-    """One SwitchStart per bus the start can run on: ``-b N`` names one; ``-X``/``-I`` without
-    it probe every external/internal I2C bus of the board. An SPI start without ``-b`` names no
-    bus the table knows, and a start another board's ``ver hwcmp`` keeps is not this board's."""
+    """One SwitchStart per bus the start can run on (:meth:`Board.bus_conditions`): ``-b N``
+    names one, if of the start's kind; ``-X``/``-I`` without it probe every external/internal
+    I2C bus of the board. An SPI start without ``-b`` names no bus the table knows, and a start
+    another board's ``ver hwcmp`` keeps is not this board's."""
     for clause in start["when"].split(" and "):
         negated = clause.startswith("not ")
         if clause.removeprefix("not ").startswith("board in "):
             listed = clause.removeprefix("not ").removeprefix("board in ").split(",")
             if any(hw in listed for hw in ver_hw) == negated:
                 return []
-    if start["bus"] is not None:
-        buses: Sequence[int] = (start["bus"],)
-    elif start["bus_kind"] == "I2C":
-        buses = internal if start["internal"] else external
-    else:
-        buses = ()
+    buses = _bus_conditions(
+        start["bus"], start["bus_kind"], start["internal"], external, internal, override, known
+    )
     return [
         SwitchStart(
             param=start["param"],
@@ -653,8 +833,9 @@ def _expand(
             rotation=start["rotation"],
             internal=start["internal"],
             when=start["when"],
+            bus_when=bus_when,
         )
-        for bus in buses
+        for bus, bus_when in buses
     ]
 
 
@@ -725,13 +906,32 @@ def render_markdown(table: BoardTable) -> str:
             out.append("")
             launcher = ", ".join(str(b) for b in variant.i2c_launcher_buses) or "none"
             when = f" ({variant.i2c_launcher_when})" if variant.i2c_launcher_when else ""
+            override = variant.external_i2c_buses_when
+            overridden = (
+                f"; where {override.when} ({override.source.split(' ')[1]}), external "
+                f"{list(override.external)}"
+                if override is not None
+                else ""
+            )
             out.append(
                 f"I2C buses: external {list(variant.external_i2c_buses)}, internal "
-                f"{list(variant.internal_i2c_buses)}; i2c_launcher scans: {launcher}{when}."
+                f"{list(variant.internal_i2c_buses)}{overridden}; i2c_launcher scans: "
+                f"{launcher}{when}."
             )
             own = [s for s in variant.switches if "/rc.sensors:" not in s.source]
             if variant.devices or own:
                 out += ["", *_starts_table([*variant.devices, *own])]
+            nowhere = [
+                d.source.split(" ")[1].rsplit(":", 1)[-1]
+                for d in variant.devices
+                if d.bus_kind == "I2C" and d.bus is not None and not variant.buses_of(d)
+            ]
+            if nowhere:
+                out += [
+                    "",
+                    f"Started on no bus: line {', '.join(nowhere)} (its -b is a bus of the "
+                    "other kind, which PX4's -I or -X does not try).",
+                ]
             out.append("")
     out += ["### What i2c_launcher tries on each of its buses", ""]
     seen_probes: list[tuple[LauncherProbe, ...]] = []
