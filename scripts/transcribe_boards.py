@@ -489,10 +489,24 @@ def git(git_dir: str, *args: str) -> str | None:
     return done.stdout if done.returncode == 0 else None
 
 
+# I2CBusIterator::next's -X case where -b counts external buses (v1.11.0; PX4 787f9c1213, first
+# in v1.12.0, made it the bus number: `_bus == bus_data.bus`)
+_X_B_COUNTS = re.compile(r"if \(_bus == _external_bus_counter \|\| _bus == -1\)")
+
+
+def x_b_counts_external(git_dir: str, commit: str) -> bool:
+    """Whether the tree's platforms/common/i2c.cpp takes ``-X -b N`` as the N-th external bus."""
+    text = git(git_dir, "show", f"{commit}:platforms/common/i2c.cpp")
+    if text is None or "I2CBusIterator::next" not in text:
+        raise SystemExit(f"{git_dir}@{commit}: no I2CBusIterator::next in platforms/common/i2c.cpp")
+    return _X_B_COUNTS.search(text) is not None
+
+
 def read_snapshot(
     git_dir: str, rev: str
-) -> tuple[str, str, str, dict[str, dict[str, str]], dict[str, tuple[int, str]]]:
-    """(commit, date, rc.sensors, {board: {file: text}}, the chips' bus offsets) of one tree."""
+) -> tuple[str, str, bool, str, dict[str, dict[str, str]], dict[str, tuple[int, str]]]:
+    """(commit, date, whether -X -b counts external buses, rc.sensors, {board: {file: text}},
+    the chips' bus offsets) of one tree."""
     commit = (git(git_dir, "rev-parse", f"{rev}^{{commit}}") or "").strip()
     if not commit:
         raise SystemExit(f"{git_dir}: no commit {rev!r}")
@@ -510,7 +524,8 @@ def read_snapshot(
             if text is not None:
                 files[extra] = text
         boards[f"{vendor}_{model}"] = files  # type: ignore[assignment]
-    return commit, date, rc_sensors, boards, bus_offsets(git_dir, commit)
+    counts = x_b_counts_external(git_dir, commit)
+    return commit, date, counts, rc_sensors, boards, bus_offsets(git_dir, commit)
 
 
 # -- writing TOML ----------------------------------------------------------------------------------
@@ -560,9 +575,10 @@ def main(argv: list[str]) -> None:
         "# change; `line` is the line of the start command in the newest of them.",
         "",
     ]
-    for release, ref, commit, date, *_ in snapshots:
+    for release, ref, commit, date, counts, *_ in snapshots:
         out += ["[[snapshot]]", f"release = {json.dumps(release)}", f"ref = {json.dumps(ref)}"]
-        out += [f"commit = {json.dumps(commit)}", f"date = {json.dumps(date)}", ""]
+        out += [f"commit = {json.dumps(commit)}", f"date = {json.dumps(date)}"]
+        out += ["x_b_counts_external = true", ""] if counts else [""]
 
     for releases, args, note, probes in LAUNCHER:
         out += ["[[i2c_launcher]]", f"releases = {json.dumps(releases)}"]
@@ -574,7 +590,7 @@ def main(argv: list[str]) -> None:
         out += ["]", ""]
 
     groups: list[tuple[str, list[str], list[dict[str, Any]]]] = []
-    for release, _, _, _, rc_sensors, *_ in snapshots:
+    for release, _, _, _, _, rc_sensors, *_ in snapshots:
         devices, switches, _ = facts(rc_sensors)
         assert not devices, devices  # rc.sensors starts by switch only (v1.11.0 .. main)
         if groups and groups[-1][0] == same(switches):
@@ -591,7 +607,7 @@ def main(argv: list[str]) -> None:
     names = sorted({name for *_, boards, _ in snapshots for name in boards})
     for name in names:
         rows: list[dict[str, Any] | None] = []
-        for release, _, _, _, _, boards, offsets in snapshots:
+        for release, _, _, _, _, _, boards, offsets in snapshots:
             files = boards.get(name)
             if files is None:
                 rows.append(None)

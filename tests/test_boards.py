@@ -13,6 +13,7 @@ import functools
 import os
 import re
 import subprocess
+import tomllib
 from pathlib import Path
 from typing import Any
 
@@ -1383,4 +1384,71 @@ def test_i2c_bus_lines_without_their_file_are_refused() -> None:
     assert str(err.value) == (
         "boards.toml: board 'px4_fmu-v5' at v1.14.0: i2c_buses_lines but no i2c_buses_path "
         "(the file they are lines of)"
+    )
+
+
+# -- `-X -b N` at v1.11.0: the N-th external bus ----------------------------------------------
+
+
+def test_x_b_at_v1_11_0_is_the_nth_external_bus_of_px4_i2c_buses() -> None:
+    # PX4 v1.11.0 platforms/common/i2c.cpp:72-79: the -X case counts each external bus of
+    # px4_i2c_buses (++_external_bus_counter) and stops where `_bus == _external_bus_counter`;
+    # 787f9c1213 ("use board-specific bus numbering for '-X -b <bus>'", first in v1.12.0) made
+    # it `_bus == bus_data.bus`. Cube Orange v1.11.0 src/i2c.cpp:37-38: initI2CBusExternal(2),
+    # then (1): its rc.board_sensors:17 `ak09916 -X -b 2 -R 6 start` is on bus 1 (the commit
+    # changed that line to `-b 1`). Cube Yellow's are the same.
+    table = load_boards()
+    for name in ("cubepilot_cubeorange", "cubepilot_cubeyellow"):
+        cube = table.by_name(name, "v1.11.0")
+        assert cube is not None and cube.i2c_bus_order == (2, 1)
+        (ak,) = [d for d in cube.devices if d.driver == "ak09916"]
+        assert (ak.args, ak.source.split()[1].rsplit(":")[-1]) == ("-X -b 2 -R 6 start", "17")
+        assert cube.bus_conditions(ak) == ((1, ""),) and cube.buses_of(ak) == (1,)
+
+    # rc.sensors v1.11.0 line 125 `ms5525_airspeed start -X -b 2`, v1.12.0 line 161 `-X -b 2 -q`:
+    # av_x-v1's i2c.cpp (the same file at both) lists external buses 2 then 4
+    def ms5525(name: str, release: str) -> list[tuple[int, str]]:
+        found = table.by_name(name, release)
+        assert found is not None
+        return [(s.bus, s.bus_when) for s in found.switches if "-b 2" in s.args]
+
+    assert ms5525("av_x-v1", "v1.11.0") == [(4, "")]
+    assert ms5525("av_x-v1", "v1.12.0") == [(2, "")]
+    assert ms5525("cubepilot_cubeorange", "v1.11.0") == [(1, "")]
+    assert ms5525("cubepilot_cubeorange", "v1.12.0") == [(2, "")]
+    # fmu-v3 (i2c.cpp:45-46 buses 1 then 2): the second external bus exists only on a Cube (V30)
+    assert ms5525("px4_fmu-v3", "v1.11.0") == [(2, "hw_type in V30")]
+    # fmu-v4pro: one external bus (2): no second one at v1.11.0; bus 2 itself at v1.12.0
+    assert ms5525("px4_fmu-v4pro", "v1.11.0") == []
+    assert ms5525("px4_fmu-v4pro", "v1.12.0") == [(2, "")]
+
+
+def test_each_snapshots_x_b_rule_is_its_i2c_cpps() -> None:
+    # x_b_counts_external is true exactly where platforms/common/i2c.cpp's -X case compares -b
+    # with _external_bus_counter (v1.11.0 line 76), false where with bus_data.bus
+    dirs = _px4_git_dirs()
+    if not dirs:
+        pytest.skip("no PX4-Autopilot git directory (set $PX4_AUTOPILOT_GIT)")
+    text = (Path(__file__).parents[1] / "python/px4params/data/boards.toml").read_text()
+    snapshots = tomllib.loads(text)["snapshot"]
+    counted = {}
+    for snap in snapshots:
+        source = _show(tuple(dirs), snap["commit"], "platforms/common/i2c.cpp")
+        if source is None:
+            pytest.skip(f"commit {snap['commit']} is in none of {dirs}")
+        number = "if (_bus == bus_data.bus || _bus == -1)" in source.split("ExternalBus:")[1]
+        counter = "if (_bus == _external_bus_counter || _bus == -1)" in source
+        assert number != counter, snap["release"]
+        counted[snap["release"]] = counter
+        assert snap.get("x_b_counts_external", False) == counter, snap["release"]
+    assert [r for r, c in counted.items() if c] == ["v1.11.0"] and len(counted) == 7
+
+
+def test_a_snapshots_x_b_rule_is_true_or_false() -> None:
+    date = 'date = "2023-10-23"\n'
+    text = GOOD.replace(date, date + "x_b_counts_external = 1\n", 1)
+    with pytest.raises(BoardsFileError) as err:
+        parse_boards(text)
+    assert str(err.value) == (
+        "boards.toml: snapshot 'v1.14.0': x_b_counts_external 1 is not true or false"
     )

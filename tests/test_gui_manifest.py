@@ -538,3 +538,22 @@ def test_a_leaf_the_ground_station_lacks_counts_as_unset(vehicle: Any) -> None:
     staged.update(INA238_INST=1, INA238_0A=0, INA238_0C=0x45)
     (ina,) = [d for d in devices(staged, metadata, load_drivers()) if d["parameter"] == "INA238"]
     assert ina["problems"] == ["i2c bus_id is 0 (unset; buses are numbered from 1)"]
+
+
+def test_a_board_compass_on_a_bus_internal_only_on_some_hardware_says_where(vehicle: Any) -> None:
+    # boards/px4/fmu-v3/init/rc.board_sensors:12 (main): "hmc5883 -T -I -R 4 start" probes the
+    # internal buses; src/i2c.cpp:50-63 makes every bus external where HW_VER_FMUV3 ==
+    # board_get_hw_version() (hw_type V30, a Cube), so there PX4's I2CBusIterator
+    # (platforms/common/i2c.cpp) finds no bus for it and an HMC5883 on bus 2 is not the board's.
+    # The page cannot tell the hardware: it names the condition, as migrate does. Rotation 4 is
+    # ROTATION_YAW_180 (src/lib/conversion/rotation.h).
+    values, metadata = vehicle
+    staged = dict(values, HMC5883_INST=0b11, HMC5883_0A=0, HMC5883_0B=2, HMC5883_0C=0x1E)
+    staged.update(HMC5883_1A=0, HMC5883_1B=1, HMC5883_1C=0x1E)
+    board = load_boards().by_name("px4_fmu-v3")
+    found = {d["instance"]: d for d in devices(staged, metadata, load_drivers(), board)}
+    assert found["HMC5883#0"]["problems"] == [
+        f"the board {board.label} starts this compass itself when not hw_type in V30 (hmc5883 "
+        "-T -I -R 4 start, rotation 4 (Yaw 180 deg)) before the manifest"
+    ]
+    assert found["HMC5883#1"]["problems"] == []  # bus 1 is external on every hardware

@@ -122,25 +122,21 @@ def sample_log() -> Path:
 
 
 def test_sample_log(sample_log: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    """The external AK09916 on I2C bus 1 at 0x0C becomes an instance; the log's
+    """The external AK09916 on I2C bus 1 at 0x0C is the board's (its boot console: "equal to
+    '-b 2'", which PX4 1.11 counts as the second external bus: rc.board_sensors:17's `ak09916 -X
+    -b 2 -R 6 start`, see tests/test_boards.py); the log's
     differential_pressure topic (0x472811: devtype 0x47, MS4525 in PX4 1.11's drv_sensor.h)
     and its boot console show the MS4525DO airspeed sensor rc.sensors started on I2C bus 2 at
     0x28 (issue 34, defect 8: not bus 1); the airframe is accepted by `px4params run`."""
+    if not boards_available():
+        pytest.skip("the board table's CubeOrange 1.11 line 17 makes the AK09916 the board's")
     config = migrate.read_config(sample_log)
     assert config.kind == "ULog" and len(config.params) == 980
     assert "ver_hw CUBEPILOT_CUBEORANGE" in config.details
     proposal = migrate.migrate(config)
     assert proposal.table == "px4-v1.11"  # the log's release, v1.11.2
-    assert [i.name for i in proposal.instances] == ["AK09916#0", "MS4525DO#0"]
-    ak, ms = proposal.instances
-    # PX4 1.11's rc.sensors probes `ak09916 -X -R 6 start`: the board table knows it (the
-    # boards module); without it, probing's usual "no -R".
-    rotation = 6 if boards_available() else 0
-    assert ak.values == {"bus.i2c.bus_id": 1, "bus.i2c.address": 0x0C, "rotation": rotation}
-    assert ak.origin == (
-        "CAL_MAG1_ID = 592905: AK09916 (MAG), I2C bus 1, address 0x0C; boot console line 25: "
-        "'ak09916 #0 on I2C bus 1 (external, equal to '-b 2')'"
-    )
+    assert [i.name for i in proposal.instances] == ["MS4525DO#0"]
+    (ms,) = proposal.instances
     assert ms.values == {"bus.i2c.bus_id": 2, "bus.i2c.address": 0x28}
     assert ms.origin == (
         "differential_pressure 0 = 4663313: MS4525 (DIFF_PRESS), I2C bus 2, address 0x28; boot "
@@ -152,15 +148,10 @@ def test_sample_log(sample_log: Path, tmp_path: Path, monkeypatch: pytest.Monkey
         "# Device manifest migrated by px4params from sample_log_small.ulg (ULog)\n"
         "# Review before use: see the migration report.\n"
         "\n"
-        "# AK09916#0: CAL_MAG1_ID = 592905: AK09916 (MAG), I2C bus 1, address 0x0C; boot console "
-        "line 25: 'ak09916 #0 on I2C bus 1 (external, equal to '-b 2')'\n"
-        "param add AK09916#0\n"
-        "# [3] bus.i2c.bus_id\n"
-        "param set-default AK09916#0[3] 1\n"
-        "# [4] bus.i2c.address\n"
-        "param set-default AK09916#0[4] 0x0C\n"
-        "# [5] rotation\n"
-        f"param set-default AK09916#0[5] {rotation}\n"
+        "# MS4525DO#0: differential_pressure 0 = 4663313: MS4525 (DIFF_PRESS), I2C bus 2, "
+        "address 0x28; boot console line 27: 'ms4525_airspeed #0 on I2C bus 2 (external, equal "
+        "to '-b 1')'\n"
+        "param add MS4525DO#0\n"
     )
     report = proposal.report()
     internal = ": internal SPI sensor: started by the board's startup script, not by the manifest"
@@ -170,6 +161,9 @@ def test_sample_log(sample_log: Path, tmp_path: Path, monkeypatch: pytest.Monkey
         "CAL_ACC2_ID, CAL_GYRO2_ID = 2621474: ICM20948 (IMU), SPI bus 4, device 0" + internal,
         "CAL_MAG0_ID = 589858: AK09916 (MAG), SPI bus 4, device 0 (disabled: CAL_MAG0_EN = 0)"
         + internal,
+        "CAL_MAG1_ID = 592905: AK09916 (MAG), I2C bus 1, address 0x0C: started by the board's "
+        "script (PX4/PX4-Autopilot boards/cubepilot/cubeorange/init/rc.board_sensors:17 at "
+        "v1.11.0 (tag v1.11.0, 71db0903a9, 2020-09-07))",
         "sensor_baro 0 = 3997706: MS5611 (BARO), SPI bus 1, device 0" + internal,
         "sensor_baro 1 = 3997730: MS5611 (BARO), SPI bus 4, device 0" + internal,
     ]
@@ -199,19 +193,21 @@ def test_sample_log(sample_log: Path, tmp_path: Path, monkeypatch: pytest.Monkey
 
         store = px4params.Store()
         apply_airframe(proposal.airframe(), store)
-    assert store.instances("AK09916") == ["AK09916#0"]
+    assert store.instances("AK09916") == []
     assert store.get("MS4525DO#0.bus.i2c.bus_id") == 2
-    assert store.get("AK09916#0")["bus"] == {"i2c": {"p_version": 0, "bus_id": 1, "address": 12}}
-    assert store.get("AK09916#0", default=True) == store.get("AK09916#0")  # set as defaults
+    assert store.get("MS4525DO#0", default=True) == store.get("MS4525DO#0")  # set as defaults
 
 
 def test_sample_log_cli(sample_log: Path, tmp_path: Path) -> None:
+    if not boards_available():
+        pytest.skip("the board table's CubeOrange 1.11 line 17 makes the AK09916 the board's")
     out = tmp_path / "v.airframe"
     r = cli("migrate", str(sample_log), "-o", str(out))
     assert r.returncode == 0, r.stderr
     assert r.stdout.startswith(f"Migration of {sample_log} (ULog, 980 parameters)\n")
-    assert r.stdout.endswith(f"\nwrote {out}: 2 instances\n")
-    assert "param add AK09916#0\n" in out.read_text()
+    assert r.stdout.endswith(f"\nwrote {out}: 1 instance\n")
+    assert "param add MS4525DO#0\n" in out.read_text()
+    assert "param add AK09916#0\n" not in out.read_text()  # the board's (test_sample_log)
 
 
 # -- a .params file ---------------------------------------------------------------------------

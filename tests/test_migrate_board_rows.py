@@ -692,3 +692,26 @@ def test_rc_sensors_probes_fmu_v3s_bus_2_on_a_cube(hw_type: str | None) -> None:
         in said
     )
     assert said.endswith("): not proposed from it")
+
+
+AK09916_BUS2 = 0x09 << 16 | 0x0C << 8 | 2 << 3 | 1  # 592913
+
+
+def test_a_cube_oranges_v1_11_here2_line_is_its_second_external_bus() -> None:
+    # PX4 v1.11.0: boards/cubepilot/cubeorange/init/rc.board_sensors:17 `ak09916 -X -b 2 -R 6
+    # start`; platforms/common/i2c.cpp:72-79 takes -X -b 2 as the second external bus of
+    # px4_i2c_buses, and src/i2c.cpp:37-38 lists bus 2 then bus 1: the line starts the Here2's
+    # AK09916 on bus 1 (its comment: "standard Here/Here2 connected to GPS1"). So one on bus 1
+    # is the board's, one on bus 2 is not (SENS_EXT_I2C_PRB 0: rc.sensors probes nothing).
+    cube = board("cubepilot_cubeorange", "v1.11.0")
+    for found, proposed in ((AK09916_BUS1, []), (AK09916_BUS2, [("AK09916#0", 2, 0x0C)])):
+        proposal = migrate.migrate(
+            config({"CAL_MAG0_ID": found, "SENS_EXT_I2C_PRB": 0}, version=(1, 11, 3)),
+            table="current",
+            board=cube,
+        )
+        assert placed(proposal) == proposed
+        if not proposed:
+            reason, line = left_out(proposal)[f"CAL_MAG0_ID = {found}"]
+            assert reason == "board"
+            assert "boards/cubepilot/cubeorange/init/rc.board_sensors:17 at v1.11.0 " in line

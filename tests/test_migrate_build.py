@@ -392,8 +392,10 @@ def test_a_driver_running_with_the_rotation_rc_sensors_probes_with_is_the_probes
 
     cube = load_boards().by_name("cubepilot_cubeorange", "v1.11.2")
     assert cube is not None
-    ak09916 = devid.encode("i2c", 1, 0x0C, 0x09)
-    line = "ak09916 #0 on I2C bus 1 (external, equal to '-b 2') rotation {}\n"
+    # on bus 2, the Cube's first external bus (src/i2c.cpp:37): its own line 17's `-X -b 2`
+    # is bus 1 at v1.11 (platforms/common/i2c.cpp:76 counts external buses)
+    ak09916 = devid.encode("i2c", 2, 0x0C, 0x09)
+    line = "ak09916 #0 on I2C bus 2 (external, equal to '-b 1') rotation {}\n"
     old = OldConfig("t.ulg", "ULog", {"CAL_MAG0_ID": ak09916}, version=(1, 11, 2),
                     console=line.format(6))  # fmt: skip
     proposal = migrate.migrate(old, table="px4-v1.11", board=cube)
@@ -404,7 +406,7 @@ def test_a_driver_running_with_the_rotation_rc_sensors_probes_with_is_the_probes
     proposal = migrate.migrate(old, table="px4-v1.11", board=cube)
     assert proposal.instances == []
     assert proposal.not_in_manifest == [
-        f"CAL_MAG0_ID = {ak09916}: AK09916 (MAG), I2C bus 1, address 0x0C: runs with rotation 4 "
+        f"CAL_MAG0_ID = {ak09916}: AK09916 (MAG), I2C bus 2, address 0x0C: runs with rotation 4 "
         "(boot console line 1): rc.sensors probes without -R, so the board's script started it"
     ]
 
@@ -564,12 +566,13 @@ def test_a_board_line_with_an_address_starts_the_device_at_that_address_only() -
 def test_a_probed_compass_gets_the_rotation_of_its_own_chips_probe_only() -> None:
     # PX4 1.11's rc.sensors (SENS_EXT_I2C_PRB) probes `ak09916 -X -R 6 start` but `ist8310 -X
     # start` (no -R): an AK09916 found on the external bus runs with rotation 6, an IST8310
-    # found there with none; CubeOrange's own script starts its AK09916 on bus 2 only
+    # found there with none; CubeOrange's own script starts its AK09916 on bus 1 only (line 17's
+    # `-X -b 2`: the second external bus of src/i2c.cpp:37-38 at v1.11), so they are on bus 2
     from px4params.vehicle.boards import load_boards
 
     cube = load_boards().by_name("cubepilot_cubeorange", "v1.11.2")
     assert cube is not None
-    ak09916, ist8310 = devid.encode("i2c", 1, 0x0C, 0x09), devid.encode("i2c", 1, 0x0E, 0x06)
+    ak09916, ist8310 = devid.encode("i2c", 2, 0x0C, 0x09), devid.encode("i2c", 2, 0x0E, 0x06)
     old = OldConfig("t.ulg", "ULog", {"CAL_MAG0_ID": ak09916, "CAL_MAG1_ID": ist8310},
                     version=(1, 11, 2))  # fmt: skip
     proposal = migrate.migrate(old, table="px4-v1.11", board=cube)
@@ -832,7 +835,8 @@ def test_the_power_monitor_a_real_logs_i2c_launcher_found_keeps_its_battery_inde
 
 def test_probing_on_is_replaced_by_the_devices_the_manifest_states() -> None:
     # A real PX4 1.11 log (CubeOrange, ../shared/data) has SENS_EXT_I2C_PRB = 1: rc.sensors
-    # probed its external compass and airspeed sensor; the manifest states them instead, and
+    # probed its airspeed sensor (its external compass is the board's line 17, `-X -b 2`, bus 1
+    # at 1.11: test_migrate.py's test_sample_log); the manifest states it instead, and
     # the report names them (with nothing found, it says none)
     from px4params.migrate.config import read_config
 
@@ -844,8 +848,8 @@ def test_probing_on_is_replaced_by_the_devices_the_manifest_states() -> None:
         "silently"
     )
     proposal = migrate.migrate(log)
-    assert [i.name for i in proposal.instances] == ["AK09916#0", "MS4525DO#0"]
-    assert proposal.replaced == [said.format("AK09916#0, MS4525DO#0")]
+    assert [i.name for i in proposal.instances] == ["MS4525DO#0"]
+    assert proposal.replaced == [said.format("MS4525DO#0")]
     proposal = migrate.migrate(today({"SENS_EXT_I2C_PRB": 1}), table="current")
     assert proposal.replaced == [said.format("none")]
 

@@ -78,13 +78,16 @@ class Truth:
 CORPUS = [
     Truth(
         # CubeOrange, PX4 v1.11.2. IMUs and a disabled AK09916 on SPI; the GPS's AK09916 on I2C
-        # bus 1 at 0x0C (592905 = 0x090C09), which PX4 1.11's rc.sensors probes with
-        # `ak09916 -X -R 6 start` (the console of 1.11 prints no rotation); the boot console
-        # shows ms4525_airspeed on I2C bus 2, its differential_pressure topic 0x472811 (I2C bus
-        # 2, 0x28), and both MS5611 on SPI.
+        # bus 1 at 0x0C (592905 = 0x090C09), which the board's rc.board_sensors:17 `ak09916 -X
+        # -b 2 -R 6 start` starts (1.11 counts external buses; the console says "equal to '-b
+        # 2'"); the boot console shows ms4525_airspeed on I2C bus 2, its differential_pressure
+        # topic 0x472811 (I2C bus 2, 0x28), and both MS5611 on SPI.
         "sample_log_small.ulg", *PYULOG[:1], "test/sample_log_small.ulg", "", True, "px4-v1.11",
-        [("AK09916", 1, 0x0C, 6), ("MS4525DO", 2, 0x28, None)],
+        [("MS4525DO", 2, 0x28, None)],
         {
+            # 0x090C09 AK09916 I2C 1: console "(external, equal to '-b 2')", PX4 1.11's second
+            # external bus (i2c.cpp lists 2, then 1): cubeorange rc.board_sensors:17 -X -b 2
+            "CAL_MAG1_ID": BOARD,
             "CAL_ACC0_ID, CAL_GYRO0_ID": BOARD,  # 0x25000A ICM20649 SPI 1
             "CAL_ACC1_ID, CAL_GYRO1_ID": BOARD,  # 0x380022 ICM20602 SPI 4
             "CAL_ACC2_ID, CAL_GYRO2_ID": BOARD,  # 0x280022 ICM20948 SPI 4
@@ -93,7 +96,7 @@ CORPUS = [
             "MS5611 (BARO), SPI bus 1, device 0": BOARD,
             "MS5611 (BARO), SPI bus 4, device 0": BOARD,
         },
-        needs_boards="PX4 1.11's rc.sensors line 'ak09916 -X -R 6 start' is in the board table",
+        needs_boards="CubeOrange's 1.11 line 'ak09916 -X -b 2 -R 6 start' is in the board table",
     ),
     Truth(
         # Pixhawk 3 Pro (FMUv4 Pro), PX4 v1.6.0: the HMC5883 on I2C bus 2 at 0x1E (73233 =

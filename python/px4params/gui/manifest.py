@@ -201,9 +201,11 @@ def board_starts(
     if c.driver is None or c.bus_kind not in ("i2c", "spi"):
         return None
     for start in board.devices:
-        if start.driver != c.driver.name:
+        if start.driver != c.driver.name or start.bus_kind.lower() != c.bus_kind:
             continue
-        if start.bus_kind.lower() != c.bus_kind or c.bus_id not in board.buses_of(start):
+        # the hardware on which the bus is of the start's kind (a Cube's bus 2 is external)
+        bus_when = dict(board.bus_conditions(start)).get(c.bus_id)
+        if bus_when is None:
             continue
         address = start.address if start.address is not None else c.driver.default_address
         if c.bus_kind == "i2c" and address != c.address:
@@ -218,7 +220,8 @@ def board_starts(
         ours = ""
         if isinstance(mine, int):
             ours = f"; this instance's rotation {_rotation_words(entry, mine)} is not used"
-        when = f" when {start.when}" if start.when else ""
+        condition = " and ".join(w for w in (start.when, bus_when) if w)
+        when = f" when {condition}" if condition else ""
         what = "compass" if start.kind == "mag" else c.driver.kind
         return (
             f"the board {board.label} starts this {what} itself{when} ({started}) "

@@ -13,7 +13,9 @@ a few snapshots (tagged releases and branches, listed in its ``[[snapshot]]`` ta
 
 ``[[snapshot]]``
     ``release`` (``"v1.14.0"``, ``"v1.18"`` for a release branch, ``"main"``), ``ref``,
-    ``commit`` (40 hex digits) and ``date`` of the PX4-Autopilot tree read.
+    ``commit`` (40 hex digits) and ``date`` of the PX4-Autopilot tree read; optional
+    ``x_b_counts_external = true`` where that tree's ``I2CBusIterator`` takes ``-X -b N`` as the
+    N-th external bus (v1.11.0).
 ``[[board]]``, one row per board and run of snapshots over which its facts did not change
     ``name`` (PX4 target without the build label, ``px4_fmu-v6c``), ``label``, ``ver_hw`` (what
     PX4 writes as the ULog's ``ver_hw``: the target name upper-cased with ``-`` made ``_``, then
@@ -48,9 +50,11 @@ listed twice, as ``imu`` and as ``mag``. A switch entry also names its ``param``
 An I2C start runs where PX4's ``I2CBusIterator`` (platforms/common/i2c.cpp) finds a bus: ``-X``
 tries only external buses, ``-I`` only internal ones, and ``-b N`` only bus N if it is of that
 kind, so a ``-b`` of the other kind finds none and the driver never starts
-(:meth:`Board.buses_of`). A switch started with ``-X`` and no ``-b`` probes every external I2C
-bus, so :class:`SwitchStart` rows are one per bus the start can be on, each with the condition
-under which its bus is of the start's kind (``bus_when``, from ``external_i2c_buses_when``).
+(:meth:`Board.buses_of`); at a snapshot with ``x_b_counts_external``, ``-X -b N`` is instead
+the N-th external bus in the order of the board's ``px4_i2c_buses`` (``i2c_buses_lines``).
+A switch started with ``-X`` and no ``-b`` probes every external I2C bus, so
+:class:`SwitchStart` rows are one per bus the start can be on, each with the condition under
+which its bus is of the start's kind (``bus_when``, from ``external_i2c_buses_when``).
 
 A release picks the newest snapshot at or before it (a v1.16 log is read with v1.15.0's facts,
 as no v1.16/v1.17 snapshot was read), a release series newer than every release snapshot picks
@@ -190,6 +194,13 @@ class Board:
     i2c_bus_sources: tuple[tuple[int, str], ...] = ()
     #: The file its I2C buses were read from ("": none, the table does not know them).
     i2c_buses_path: str = ""
+    #: Its I2C buses in the order of its ``px4_i2c_buses`` (the lines of i2c_buses_path), the
+    #: order PX4's I2CBusIterator visits them.
+    i2c_bus_order: tuple[int, ...] = ()
+    #: Whether this release's I2CBusIterator takes ``-X -b N`` as the N-th external bus in
+    #: :attr:`i2c_bus_order` (v1.11.0: platforms/common/i2c.cpp:76 compares ``-b`` with
+    #: ``_external_bus_counter``), not bus N (PX4 787f9c1213, first in v1.12.0).
+    x_b_counts_external: bool = False
 
     def i2c_bus_source(self, bus: int) -> str | None:
         """The line that makes I2C ``bus`` the board's (``initI2CBusInternal(2)``), cited as
@@ -214,8 +225,12 @@ class Board:
         names as of the other kind, none (PX4 never starts it); SPI's ``-b``, () without.
         ``overridden``: where the board's :attr:`external_i2c_buses_when` holds."""
         external, internal = self.i2c_buses(False, overridden), self.i2c_buses(True, overridden)
-        known = bool(self.i2c_buses_path)
-        return _start_buses(start.bus, start.bus_kind, start.internal, external, internal, known)
+        return _start_buses(
+            start.bus, start.bus_kind, start.internal, external, internal, self._iterator()
+        )
+
+    def _iterator(self) -> _Iterator:
+        return _Iterator(bool(self.i2c_buses_path), self.i2c_bus_order, self.x_b_counts_external)
 
     def bus_conditions(self, start: BoardDevice | SwitchStart) -> tuple[tuple[int, str], ...]:
         """Each bus a start can be on (:meth:`buses_of`) with the condition under which it
@@ -228,8 +243,19 @@ class Board:
             self.external_i2c_buses,
             self.internal_i2c_buses,
             self.external_i2c_buses_when,
-            bool(self.i2c_buses_path),
+            self._iterator(),
         )
+
+
+@dataclass(frozen=True)
+class _Iterator:
+    """What PX4's I2CBusIterator needs of a board beyond its two lists: ``known``, the lists are
+    its ``px4_i2c_buses`` (its i2c.cpp); ``order``, their order there; ``counts``, ``-X -b N``
+    is the N-th external bus of that order (:attr:`Board.x_b_counts_external`)."""
+
+    known: bool
+    order: tuple[int, ...] = ()
+    counts: bool = False
 
 
 def _bus_lists(
@@ -251,16 +277,20 @@ def _start_buses(
     internal: bool,
     external_buses: Sequence[int],
     internal_buses: Sequence[int],
-    known: bool,
+    iterator: _Iterator,
 ) -> tuple[int, ...]:
-    """See :meth:`Board.buses_of`. ``known``: the lists are the board's ``px4_i2c_buses`` (its
-    i2c.cpp), the only buses PX4's iterator visits, so a ``-b`` neither names finds none; a
+    """See :meth:`Board.buses_of`. Where the lists are the board's ``px4_i2c_buses`` (its
+    i2c.cpp), the only buses PX4's iterator visits, a ``-b`` neither names finds none; a
     board whose buses the table does not know keeps its ``-b``."""
     if bus_kind != "I2C":
         return (bus,) if bus is not None else ()
     own, other = (internal_buses, external_buses) if internal else (external_buses, internal_buses)
     if bus is None:
         return tuple(own)
+    known = iterator.known
+    if not internal and known and iterator.counts:
+        counted = [b for b in iterator.order if b in own]  # ++_external_bus_counter per bus
+        return (counted[bus - 1],) if 1 <= bus <= len(counted) else ()
     if bus in own or not (known or bus in other):
         return (bus,)
     return ()
@@ -273,28 +303,28 @@ def _bus_conditions(
     external: Sequence[int],
     internal_buses: Sequence[int],
     override: BusOverride | None,
-    known: bool,
+    iterator: _Iterator,
 ) -> tuple[tuple[int, str], ...]:
     """See :meth:`Board.bus_conditions`."""
-    plain = _start_buses(bus, bus_kind, internal, external, internal_buses, known)
+    plain = _start_buses(bus, bus_kind, internal, external, internal_buses, iterator)
     if override is None:
         return tuple((b, "") for b in plain)
     lists = _bus_lists(external, internal_buses, override)
-    over = _start_buses(bus, bus_kind, internal, *lists, known)
+    over = _start_buses(bus, bus_kind, internal, *lists, iterator)
     found = [(b, "" if b in over else f"not {override.when}") for b in plain]
     found += [(b, override.when) for b in over if b not in plain]
     return tuple(sorted(found))
 
 
 #: A board's switch starts as read, before expansion per bus: (starts with their sources,
-#: external I2C buses, internal I2C buses, its override of them, whether the table knows its
-#: buses, ver_hw).
+#: external I2C buses, internal I2C buses, its override of them, what its I2CBusIterator
+#: needs beyond them, ver_hw).
 _Pending = tuple[
     list[tuple[dict[str, Any], str]],
     tuple[int, ...],
     tuple[int, ...],
     BusOverride | None,
-    bool,
+    _Iterator,
     tuple[str, ...],
 ]
 
@@ -310,6 +340,9 @@ class _Snapshot:
     commit: str
     date: str
     order: tuple[float, ...]
+    #: PX4's I2CBusIterator there takes ``-X -b N`` as the N-th external bus (see
+    #: :attr:`Board.x_b_counts_external`).
+    x_b_counts_external: bool = False
 
     def describe(self) -> str:
         return f"{self.release} ({self.ref}, {self.commit[:10]}, {self.date})"
@@ -359,11 +392,11 @@ class BoardTable:
     def _row(self, key: tuple[str, str]) -> Board | None:
         board = self._rows.get(key)
         if board is not None and key in self._pending:
-            starts, external, internal, override, known, ver_hw = self._pending.pop(key)
+            starts, external, internal, override, iterator, ver_hw = self._pending.pop(key)
             switches = tuple(
                 switch
                 for start, source in starts
-                for switch in _expand(start, source, external, internal, override, known, ver_hw)
+                for switch in _expand(start, source, external, internal, override, iterator, ver_hw)
             )
             board = self._rows[key] = dataclasses.replace(board, switches=switches)
         return board
@@ -572,7 +605,7 @@ def parse_boards(text: str, file: str = "boards.toml") -> BoardTable:
     snapshots: dict[str, _Snapshot] = {}
     for i, table in enumerate(top.tables("snapshot"), 1):
         row = _Row(file, f"snapshot {i}", table)
-        row.only(("release", "ref", "commit", "date"))
+        row.only(("release", "ref", "commit", "date"), ("x_b_counts_external",))
         release = row.text("release")
         row.where = f"snapshot {release!r}"
         try:
@@ -584,7 +617,14 @@ def parse_boards(text: str, file: str = "boards.toml") -> BoardTable:
             row.fail(f"commit {commit!r} is not 40 hex digits")
         if release in snapshots:
             row.fail("release appears twice")
-        snapshots[release] = _Snapshot(release, row.text("ref"), commit, row.text("date"), order)
+        snapshots[release] = _Snapshot(
+            release,
+            row.text("ref"),
+            commit,
+            row.text("date"),
+            order,
+            "x_b_counts_external" in row.table and row.flag("x_b_counts_external"),
+        )
     if not snapshots:
         top.fail("no [[snapshot]] table")
 
@@ -694,6 +734,9 @@ def parse_boards(text: str, file: str = "boards.toml") -> BoardTable:
             (bus, cite(buses_path, n, snaps))
             for bus, n in zip((*external, *internal), bus_lines, strict=False)
         )
+        # px4_i2c_buses' order, as its lines give it (none given: the lists' order)
+        lines = dict(zip((*external, *internal), bus_lines, strict=False))
+        bus_order = tuple(sorted((*external, *internal), key=lambda b: lines.get(b, 0)))
         devices = []
         for j, entry in enumerate(row.tables("device"), 1):
             start = _start(_Row(file, f"{row.where} device {j}", entry), switch=False)
@@ -728,7 +771,7 @@ def parse_boards(text: str, file: str = "boards.toml") -> BoardTable:
                 external,
                 internal,
                 override,
-                bool(buses_path),
+                _Iterator(bool(buses_path), bus_order, snap.x_b_counts_external),
                 ver_hw,
             )
             rc_sensors = (
@@ -761,6 +804,8 @@ def parse_boards(text: str, file: str = "boards.toml") -> BoardTable:
                 external_i2c_buses_when=override,
                 i2c_bus_sources=bus_sources,
                 i2c_buses_path=buses_path,
+                i2c_bus_order=bus_order,
+                x_b_counts_external=snap.x_b_counts_external,
             )
         if name not in names:
             names.append(name)
@@ -804,7 +849,7 @@ def _expand(
     external: Sequence[int],
     internal: Sequence[int],
     override: BusOverride | None,
-    known: bool,
+    iterator: _Iterator,
     ver_hw: Sequence[str],
 ) -> list[SwitchStart]:
     """One SwitchStart per bus the start can run on (:meth:`Board.bus_conditions`): ``-b N``
@@ -818,7 +863,7 @@ def _expand(
             if any(hw in listed for hw in ver_hw) == negated:
                 return []
     buses = _bus_conditions(
-        start["bus"], start["bus_kind"], start["internal"], external, internal, override, known
+        start["bus"], start["bus_kind"], start["internal"], external, internal, override, iterator
     )
     return [
         SwitchStart(
