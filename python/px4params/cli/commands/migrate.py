@@ -34,7 +34,7 @@ def cmd_migrate(args: argparse.Namespace) -> int:
     if args.table or args.devtypes:
         table = devid.load_table(args.table or "current", args.devtypes)
     schema = load_schema(args.dsdl or (), include_dronecan=False)
-    proposal = migrate.migrate(config, schema, table, args.board)
+    proposal = migrate.migrate(config, schema, table, args.board, args.target_release)
     airframe = proposal.airframe()
     if args.output is not None:
         write_file(args.output, airframe.encode(), keep_backup=False)
@@ -93,6 +93,13 @@ examples:
         metavar="NAME",
         help="PX4 board name (px4_fmu-v6c, ...): what its startup script starts (default: a "
         "log's ver_hw; a .params file names no board)",
+    )
+    p.add_argument(
+        "--target-release",
+        metavar="RELEASE",
+        help="the PX4 release the vehicle will run, as the board table names it (v1.15.0, "
+        "v1.18, main): a device the file's board script starts and that release's does not "
+        "becomes an instance (default: the file's own release; the report names such devices)",
     )
     p.add_argument(
         "--devtypes",
