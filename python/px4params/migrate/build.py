@@ -370,6 +370,11 @@ class _Builder:
                 f"on PX4 {gone} and later the board's script does not start it, the manifest "
                 f"must: --target-release {gone} (or later) proposes it as an instance"
             )
+        elif last is not None and last.rotation != before.rotation:
+            then = (
+                f"the board's script still starts it, with -R {last.rotation}: check its "
+                "calibration after the update"
+            )
         else:
             then = "the board's script still starts it"
         line = f"the board's script of PX4 {self.file_release} starts it with {old}; " + (
