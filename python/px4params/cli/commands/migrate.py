@@ -66,12 +66,16 @@ external I2C), drivers enabled by a switch (SENS_EN_*) and power monitors the
 i2c_launcher found become instances. A log's boot console (what started, on
 which bus, address and rotation) wins over every table. The report lists what
 is left out and why, what could not be carried over, and every assumption
-made (a guessed bus, an unknown board); nothing is dropped silently.""",
+made (a guessed bus, an unknown board); nothing is dropped silently. The
+board's script is judged at the file's release; the report says, for each
+device it starts, whether the board's scripts of later releases still do, and
+--target-release makes the proposal for the firmware the vehicle will run.""",
         epilog="""\
 examples:
   px4params migrate flight.ulg -o vehicle.airframe   # report on stdout
   px4params migrate vehicle.params > vehicle.airframe # report on stderr
   px4params migrate old.ulg --table legacy --json
+  px4params migrate old.ulg --target-release v1.15.0 -o vehicle.airframe
   px4params run vehicle.airframe --store vehicle.store""",
     )
     p.add_argument(
