@@ -216,3 +216,38 @@ def test_a_target_release_the_table_cannot_judge_is_refused_in_one_line(
     assert err == f"px4params: error: --target-release {value}: {expected}\n"
     assert "Traceback" not in err
     assert not out.exists()
+
+
+def test_a_probed_compass_a_later_board_script_starts_itself_is_left_out_for_that_target(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Pixhawk 5 on v1.11.3 with a GPS's IST8310 (I2C bus 1, 0x0E): at v1.11.0 only rc.sensors'
+    probe `ist8310 -X start` (line 105) starts it, so it is an instance; from v1.12.0 the board's
+    rc.board_sensors line 25 starts it itself, `ist8310 -X -b 1 -R 10 start`: an instance would
+    start it twice there, and the rotation changed."""
+    gps = devid.encode("i2c", 1, 0x0E, 0x06)
+    path = tmp_path / "v5.params"
+    path.write_text(
+        "# Stack: PX4\n# Version: 1.11.3\n#\n"
+        f"1\t1\tCAL_MAG1_ID\t{gps}\t6\n1\t1\tSENS_EXT_I2C_PRB\t1\t6\n"
+    )
+    said = (
+        "the board's script starts it from PX4 v1.12.0: 'ist8310 -X -b 1 -R 10 start' "
+        "(PX4/PX4-Autopilot boards/px4/fmu-v5/init/rc.board_sensors:25 at v1.12.0 (tag v1.12.0, "
+        "9524e8ec03, 2021-07-05)), with -R 10 where PX4 v1.11.0 ran it with 0 (rc.sensors "
+        "starts it without -R; check its calibration after the update)"
+    )
+    today = run(capsys, str(path), "--board", "px4_fmu-v5")
+    (inst,) = today["instances"]
+    assert (inst["name"], inst["values"]["rotation"]) == ("IST8310#0", 0)
+    assert inst["notes"] == [
+        f"{said}: for that firmware --target-release v1.12.0 (or later) leaves it out"
+    ]
+    for target in ("v1.12.0", "main"):
+        upgraded = run(capsys, str(path), "--board", "px4_fmu-v5", "--target-release", target)
+        assert upgraded["instances"] == []
+        (mag,) = upgraded["left_out"]
+        assert mag["reason"] == "board"
+        assert mag["line"].endswith(
+            f"{said}; on PX4 {target} it is the board's, not the manifest's"
+        )

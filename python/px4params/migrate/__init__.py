@@ -39,8 +39,10 @@ board row starts it gets one line saying whether those releases still start it (
 or a switch row such as rc.sensors' probe whose condition the parameters settle), citing the
 file's line and each release where that changed. ``target_release`` makes the proposal for the
 firmware the vehicle will run: a device the target's board script no longer starts becomes an
-instance with the ``-R`` its old line gave it. The default stays the file's release: the file
-does not say which firmware comes next, and the report names every such device.
+instance with the ``-R`` its old line gave it, and a device found by probing that the target's
+board script starts itself is left out as the board's (without a target: a note on its
+instance). The default stays the file's release: the file does not say which firmware comes
+next, and the report names every such device.
 """
 
 from px4params.errors import MigrationError

@@ -382,6 +382,38 @@ class _Builder:
         )
         return _Later(line, propose and self.target is not None, before.rotation, old)
 
+    def taken_later(self, chips: set[str], bus: int, address: int | None) -> _Taken | None:
+        """Of an I2C device the file's board script does not start: the first later release
+        whose board script does, where the last release compared (the target, else the
+        newest) still does; None otherwise."""
+        if not self.releases or not self.board_starts(chips, bus, address, self.releases[-1][1]):
+            return None
+        for release, board in self.releases:
+            row = self.board_starts(chips, bus, address, board)
+            if row is not None:
+                return _Taken(release, row[0])
+        return None
+
+    def taken_line(self, taken: _Taken, rotation: tuple[int, str]) -> str:
+        """What :meth:`taken_later` found, in one line: an instance would start the device a
+        second time on that firmware."""
+        row = taken.row
+        turned = ""
+        if (row.rotation or 0) != rotation[0]:
+            turned = (
+                f", with -R {row.rotation or 0} where PX4 {self.file_release} ran it with "
+                f"{rotation[0]} ({rotation[1]}; check its calibration after the update)"
+            )
+        said = (
+            f"the board's script starts it from PX4 {taken.release}: '{row.driver} {row.args}' "
+            f"({row.source}){turned}"
+        )
+        if self.target is not None:
+            return f"{said}; on PX4 {self.target} it is the board's, not the manifest's"
+        return (
+            f"{said}: for that firmware --target-release {taken.release} (or later) leaves it out"
+        )
+
     def start_verdict(self, row: Any, bus_when: str, board: Any = None) -> Verdict:
         """Whether a board row runs, on a bus that is of its kind where ``bus_when`` holds
         (:meth:`Board.bus_conditions`; "": always): that clause, where nothing settles it,
@@ -929,6 +961,11 @@ class _Builder:
             return
         if later is not None:  # the target's board script no longer starts it
             rotation = (later.rotation, f"the -R of PX4 {self.file_release}'s start (above)")
+        taken = self.taken_later(chips, dev.bus, dev.address) if board is None else None
+        if taken is not None and self.target is not None:
+            why = self.taken_line(taken, rotation)
+            self.leave_out(found, dev.describe(), "board", f"{why}{disabled}{twice}")
+            return
         # The type of the driver that publishes the chip; else a type named as the chip (an
         # extra DSDL folder's, without a driver declaration).
         by_chip = self.drivers.chips()
@@ -947,6 +984,8 @@ class _Builder:
         inst = self.add(spec.name, dev.bus, dev.address, origin)
         if later is not None:
             inst.notes.append(later.line)
+        if taken is not None:
+            inst.notes.append(self.taken_line(taken, rotation))
         if off:
             which = "one of its slots was" if len(off) == 1 else f"{len(off)} of its slots were"
             inst.notes.append(f"{', '.join(off)}: {which} disabled for use")
@@ -1000,6 +1039,10 @@ class _Builder:
                 continue
             if later is not None:  # the target's board script no longer starts it
                 rotation = (later.rotation, f"the -R of PX4 {self.file_release}'s start (above)")
+            taken = self.taken_later(chips, start.bus, start.address) if board is None else None
+            if taken is not None and self.target is not None:
+                self.leave_out(found, device, "board", self.taken_line(taken, rotation))
+                continue
             driver = self.start_driver(start)
             if driver is None:
                 self.proposal.not_carried.append(
@@ -1021,6 +1064,8 @@ class _Builder:
             inst = self.add(spec.name, start.bus, address, f"{found}: '{start.text}' ({how})")
             if later is not None:
                 inst.notes.append(later.line)
+            if taken is not None:
+                inst.notes.append(self.taken_line(taken, rotation))
             self.set_rotation(inst, *rotation)
             self.note_unsettled_row(inst, chips, start.bus, start.address, if_run)
             if driver.name in BATTERY_INDEX_DRIVERS:
@@ -1115,6 +1160,14 @@ class _Later:
     propose: bool
     rotation: int
     old: str
+
+
+@dataclass(frozen=True)
+class _Taken:
+    """The first later ``release`` whose board script starts a device, with its ``row``."""
+
+    release: str
+    row: Any
 
 
 def _same_start(a: _Start | None, b: _Start | None) -> bool:
