@@ -251,3 +251,17 @@ def test_a_probed_compass_a_later_board_script_starts_itself_is_left_out_for_tha
         assert mag["line"].endswith(
             f"{said}; on PX4 {target} it is the board's, not the manifest's"
         )
+
+
+def test_a_target_without_a_known_board_is_said_to_compare_nothing(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A QGC file names no board: nothing to judge at any release, and the report says so
+    rather than silently proposing as for the file's release."""
+    path = cube_params(tmp_path / "cube.params", probe=1)
+    report = run(capsys, str(path), "--target-release", "main")
+    assert report["target_release"] is None and report["compared_releases"] == []
+    assert (
+        "--target-release main: no board known, so no board script is compared (--board NAME "
+        "names it)"
+    ) in report["assumptions"]

@@ -358,8 +358,10 @@ class _Builder:
             for a, b, now in spans
             if not _same_start(before, now)
         ]
-        gone = next((a for a, _, now in spans if now is None or not now.board), None)
-        propose = last is None or not last.board
+        gone = None  # the first release of the last run without the board's start
+        for a, _, now in spans:
+            gone = (gone or a) if now is None or not now.board else None
+        propose = gone is not None
         if propose and self.target is not None:
             then = (
                 f"at {self.target} the board's script does not start it: the manifest does, "
