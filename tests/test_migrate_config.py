@@ -219,9 +219,14 @@ def test_a_proposals_whole_report_written_out_by_hand() -> None:
                 indices={"current": 5, "shunt": 6},
             )
         ],
-        left_out=[migrate.LeftOut("CAL_MAG1_ID", "IST8310", "board", "CAL_MAG1_ID: the board's")],
+        left_out=[
+            migrate.LeftOut(
+                "CAL_MAG1_ID", "IST8310", "board", "CAL_MAG1_ID: the board's", "no start at main"
+            )
+        ],
         assumptions=["bus 1 assumed"],
         board="px4_fmu-v5",
+        compared=["v1.15.0", "main"],
         replaced=["SENS_EN_INA238"],
         disabled=["SENS_EN_INA226", "SENS_EN_INA228"],
         not_carried=["INA238_CONFIG = 3: no field"],
@@ -233,6 +238,7 @@ def test_a_proposals_whole_report_written_out_by_hand() -> None:
         "  ver_sw y\n"
         "  device IDs decoded with the px4-v1.11 devtype table\n"
         "  board: px4_fmu-v5\n"
+        "  the board's scripts compared with PX4 v1.15.0 .. main\n"
         "\n"
         "Instances proposed:\n"
         "  INA238#0: SENS_EN_INA238 = 1\n"
@@ -241,6 +247,7 @@ def test_a_proposals_whole_report_written_out_by_hand() -> None:
         "\n"
         "Sensors found but not in the manifest:\n"
         "  CAL_MAG1_ID: the board's\n"
+        "    later: no start at main\n"
         "\n"
         "Not known, assumed:\n"
         "  bus 1 assumed\n"
@@ -264,10 +271,12 @@ def test_a_proposals_whole_report_written_out_by_hand() -> None:
         "table": "px4-v1.11",
         "board": "px4_fmu-v5",
         "version": None,
+        "target_release": None,
+        "compared_releases": ["v1.15.0", "main"],
         "assumptions": ["bus 1 assumed"],
         "left_out": [
             {"found": "CAL_MAG1_ID", "device": "IST8310", "reason": "board",
-             "line": "CAL_MAG1_ID: the board's"},
+             "line": "CAL_MAG1_ID: the board's", "later": "no start at main"},
         ],
         "instances": [
             {"name": "INA238#0", "origin": "SENS_EN_INA238 = 1",

@@ -32,6 +32,17 @@ board's script starts drivers on. A row starts a device only on a bus PX4 tries 
 (:meth:`.vehicle.boards.Board.bus_conditions`): a ``-b`` of the other kind (``-X`` on an internal
 bus) starts nothing, and where the board's own ``px4_i2c_bus_external`` makes a bus external on
 some hardware (fmu-v2/v3 on a Cube, ``hw_type`` V30), that hardware is one more clause.
+
+The board's script is judged at the file's own release (:meth:`.vehicle.boards.BoardTable.
+snapshot_for`), and again at each later release the table knows: a device left out because a
+board row starts it gets one line saying whether those releases still start it (the board's row,
+or a switch row such as rc.sensors' probe whose condition the parameters settle), citing the
+file's line and each release where that changed. ``target_release`` makes the proposal for the
+firmware the vehicle will run: a device the target's board script no longer starts becomes an
+instance with the ``-R`` its old line gave it, and a device found by probing that the target's
+board script starts itself is left out as the board's (without a target: a note on its
+instance). The default stays the file's release: the file does not say which firmware comes
+next, and the report names every such device.
 """
 
 from px4params.errors import MigrationError

@@ -89,6 +89,7 @@ class _Builder:
         table: devid.DevtypeTable,
         board: Any,
         assumptions: list[str],
+        upgrade: _Upgrade | None = None,
     ) -> None:
         from px4params.store.store import Store
 
@@ -104,6 +105,13 @@ class _Builder:
         self.starts = started_drivers(config.console) if config.console else []
         self.claimed: set[int] = set()  # boot console starts accounted for
         self._facts: Facts | None = None
+        upgrade = upgrade or _Upgrade("", (), None)
+        #: The release whose board script the file's configuration ran (its snapshot).
+        self.file_release = upgrade.file_release
+        #: The board's row at each later release compared, oldest first, up to the target.
+        self.releases = upgrade.releases
+        #: The release the proposal is made for, where not the file's own.
+        self.target = upgrade.target
 
     def use(self, *names: str) -> None:
         self.proposal.used.update(n for n in names if n in self.params)
@@ -112,8 +120,12 @@ class _Builder:
         if line not in self.proposal.assumptions:
             self.proposal.assumptions.append(line)
 
-    def leave_out(self, found: str, device: str, reason: str, why: str) -> None:
-        self.proposal.left_out.append(LeftOut(found, device, reason, f"{found}: {device}: {why}"))
+    def leave_out(
+        self, found: str, device: str, reason: str, why: str, later: _Later | None = None
+    ) -> None:
+        line = f"{found}: {device}: {why}"
+        shown = later.line if later is not None and later.line else None
+        self.proposal.left_out.append(LeftOut(found, device, reason, line, shown))
 
     def add(self, param: str, bus: int, address: int, origin: str) -> ProposedInstance:
         """The instance of ``param`` on I2C ``bus`` at ``address``: a new one, or the one
@@ -241,42 +253,177 @@ class _Builder:
         return None
 
     def board_device(
-        self, chips: set[str], bus: int, address: int | None
+        self, chips: set[str], bus: int, address: int | None, board: Any = None
     ) -> tuple[Any, Verdict] | None:
         """The board table's row that starts this I2C device, and its condition's verdict: the
         first whose condition holds, else the first that nothing here settles (a row that does
-        not run here is passed over); None where no row runs or may run."""
-        if self.board is None:
+        not run here is passed over); None where no row runs or may run. ``board``: the
+        board's row of another release (default: the file's)."""
+        board = board or self.board
+        if board is None:
             return None
         # A board whose I2C buses the table does not know: a row without -b may be on any bus.
-        known = bool(getattr(self.board, "i2c_buses_path", ""))
+        known = bool(getattr(board, "i2c_buses_path", ""))
         undecided = None
-        for row in self.board.devices:
+        for row in board.devices:
             if row.bus_kind.upper() != "I2C" or not (self.start_chips(row.driver) & chips):
                 continue
             # -I or -X: the board's internal or external buses, of them its -b (a -b of the
             # other kind: none), each with the hardware it is of that kind on
-            on = dict(self.board.bus_conditions(row)) if known or row.bus is not None else {}
+            on = dict(board.bus_conditions(row)) if known or row.bus is not None else {}
             if (known or row.bus is not None) and bus not in on:
                 continue
-            at = row.address
-            if at is None and row.driver in {d.name for d in self.drivers}:
-                at = self.drivers[row.driver].default_address
+            at = self.row_address(row)
             if at is not None and address is not None and at != address:
                 continue
-            verdict = self.start_verdict(row, on.get(bus, ""))
+            verdict = self.start_verdict(row, on.get(bus, ""), board)
             if verdict.holds:
                 return row, verdict
             if verdict.holds is None and undecided is None:
                 undecided = row, verdict
         return undecided
 
-    def start_verdict(self, row: Any, bus_when: str) -> Verdict:
+    def row_address(self, row: Any) -> int | None:
+        """The I2C address a board or switch row starts its driver at: its -a, else the
+        driver's default; None where neither is known."""
+        at: int | None = row.address
+        if at is None and row.driver in {d.name for d in self.drivers}:
+            at = self.drivers[row.driver].default_address
+        return at
+
+    def board_starts(
+        self, chips: set[str], bus: int, address: int | None, board: Any = None
+    ) -> tuple[Any, Verdict] | None:
+        """The board row that starts this I2C device at ``board``'s release (default: the
+        file's), the one place that decides it: a row whose condition holds, or one nothing
+        here settles on an internal bus, which only the board's script starts drivers on
+        (rc.sensors probes with -X only); None where the board's script does not start it."""
+        row = self.board_device(chips, bus, address, board)
+        if row is not None and (row[1].holds or self.on_internal_bus(bus, board)):
+            return row
+        return None
+
+    def release_start(
+        self, board: Any, chips: set[str], bus: int, address: int | None
+    ) -> _Start | None:
+        """How the scripts of ``board``'s release start this I2C device with this file's
+        parameters: the board's own row (:meth:`board_starts`), else a switch row (rc.sensors'
+        probe, a SENS_EN_* switch) whose condition holds; None where nothing starts it."""
+        row = self.board_starts(chips, bus, address, board)
+        if row is not None:
+            return _Start(row[0], True, row[0].rotation or 0)
+        for switch in board.switches:
+            if switch.bus_kind.upper() != "I2C" or switch.bus != bus:
+                continue
+            at = self.row_address(switch)
+            if not (self.start_chips(switch.driver) & chips) or (
+                at is not None and address is not None and at != address
+            ):
+                continue
+            if self.start_verdict(switch, switch.bus_when, board).holds:
+                return _Start(switch, False, switch.rotation or 0)
+        return None
+
+    def later(self, chips: set[str], bus: int, address: int | None) -> _Later | None:
+        """What the board's scripts of the releases after the file's (up to the target
+        release, else the newest the table knows) do with an I2C device the file's board
+        script starts: one line citing the file's start and each release where that changed;
+        ``propose`` where at the last of them the board's script no longer starts it. None
+        where no board row of the file's release starts it or no later release is known."""
+        first = self.board_starts(chips, bus, address)
+        if first is None or not self.releases:
+            return None
+        row = first[0]
+        before = _Start(row, True, row.rotation or 0)
+        spans: list[tuple[str, str, _Start | None]] = []  # first and last release, the start
+        for release, board in self.releases:
+            now = self.release_start(board, chips, bus, address)
+            if spans and _same_start(spans[-1][2], now):  # cited where it changed
+                spans[-1] = (spans[-1][0], release, spans[-1][2])
+            else:
+                spans.append((release, release, now))
+        last = spans[-1][2]
+        old = f"'{row.driver} {row.args}' ({row.source})"
+        if last is not None and all(_same_start(before, now) for _, _, now in spans):
+            newest = self.release_start(self.releases[-1][1], chips, bus, address) or last
+            return _Later(
+                f"still started by the board's script through PX4 {spans[-1][1]}: "
+                f"'{newest.row.driver} {newest.row.args}' ({newest.row.source})",
+                False,
+                before.rotation,
+                old,
+            )
+        changes = [
+            f"{_span(a, b)}: {_describe(now, before, self.board)}"
+            for a, b, now in spans
+            if not _same_start(before, now)
+        ]
+        gone = None  # the first release of the last run without the board's start
+        for a, _, now in spans:
+            gone = (gone or a) if now is None or not now.board else None
+        propose = gone is not None
+        if propose and self.target is not None:
+            then = (
+                f"at {self.target} the board's script does not start it: the manifest does, "
+                f"with the -R {before.rotation} the file's line gives"
+            )
+        elif gone is not None:
+            then = (
+                f"on PX4 {gone} and later the board's script does not start it, the manifest "
+                f"must: --target-release {gone} (or later) proposes it as an instance"
+            )
+        elif last is not None and last.rotation != before.rotation:
+            then = (
+                f"the board's script still starts it, with -R {last.rotation}: check its "
+                "calibration after the update"
+            )
+        else:
+            then = "the board's script still starts it"
+        line = f"the board's script of PX4 {self.file_release} starts it with {old}; " + (
+            "; ".join(changes) + f": {then}"
+        )
+        return _Later(line, propose and self.target is not None, before.rotation, old)
+
+    def taken_later(self, chips: set[str], bus: int, address: int | None) -> _Taken | None:
+        """Of an I2C device the file's board script does not start: the first later release
+        whose board script does, where the last release compared (the target, else the
+        newest) still does; None otherwise."""
+        if not self.releases or not self.board_starts(chips, bus, address, self.releases[-1][1]):
+            return None
+        for release, board in self.releases:
+            row = self.board_starts(chips, bus, address, board)
+            if row is not None:
+                return _Taken(release, row[0])
+        return None
+
+    def taken_line(self, taken: _Taken, rotation: tuple[int, str]) -> str:
+        """What :meth:`taken_later` found, in one line: an instance would start the device a
+        second time on that firmware."""
+        row = taken.row
+        turned = ""
+        if (row.rotation or 0) != rotation[0]:
+            turned = (
+                f", with -R {row.rotation or 0} where PX4 {self.file_release} ran it with "
+                f"{rotation[0]} ({rotation[1]}; check its calibration after the update)"
+            )
+        said = (
+            f"the board's script starts it from PX4 {taken.release}: '{row.driver} {row.args}' "
+            f"({row.source}){turned}"
+        )
+        if self.target is not None:
+            return f"{said}; on PX4 {self.target} it is the board's, not the manifest's"
+        return (
+            f"{said}: for that firmware --target-release {taken.release} (or later) leaves it out"
+        )
+
+    def start_verdict(self, row: Any, bus_when: str, board: Any = None) -> Verdict:
         """Whether a board row runs, on a bus that is of its kind where ``bus_when`` holds
         (:meth:`Board.bus_conditions`; "": always): that clause, where nothing settles it,
-        cites the board's own px4_i2c_bus_external."""
-        verdict = evaluate(" and ".join(c for c in (row.when, bus_when) if c), self.facts())
-        override = getattr(self.board, "external_i2c_buses_when", None)
+        cites the board's own px4_i2c_bus_external. ``board``: the row's board (default: the
+        file's)."""
+        board = board or self.board
+        verdict = evaluate(" and ".join(c for c in (row.when, bus_when) if c), self.facts(board))
+        override = getattr(board, "external_i2c_buses_when", None)
         if not bus_when or override is None:
             return verdict
         kind = "internal" if row.internal else "external"
@@ -286,17 +433,17 @@ class _Builder:
         )
         return Verdict(verdict.holds, open_)
 
-    def on_internal_bus(self, bus: int) -> bool:
+    def on_internal_bus(self, bus: int, board: Any = None) -> bool:
         """Whether I2C ``bus`` is internal on this vehicle: on the board's lists, and where its
         own px4_i2c_bus_external makes it external on some hardware, that hardware settled not
-        to be this one."""
-        board = self.board
+        to be this one. ``board``: the board's row of another release (default: the file's)."""
+        board = board or self.board
         if bus not in getattr(board, "internal_i2c_buses", ()):
             return False
         override = getattr(board, "external_i2c_buses_when", None)
         if override is None or bus not in override.external:
             return True
-        verdict = evaluate(override.when, self.facts())
+        verdict = evaluate(override.when, self.facts(board))
         return verdict.holds is False and not verdict.open
 
     def other_kind_rows(self, chips: set[str], bus: int, address: int | None) -> list[Any]:
@@ -312,9 +459,7 @@ class _Builder:
                 or not (self.start_chips(row.driver) & chips)
             ):
                 continue
-            at = row.address
-            if at is None and row.driver in {d.name for d in self.drivers}:
-                at = self.drivers[row.driver].default_address
+            at = self.row_address(row)
             if at is None or address is None or at == address:
                 found.append(row)
         return found
@@ -389,10 +534,11 @@ class _Builder:
                 "(platforms/common/i2c.cpp, I2CBusIterator::next), so that line starts nothing"
             )
         row = self.board_device(chips, bus, address)
-        if row is not None and row[1].holds:
-            self.assume_row(found, *row, "taken as holding (PX4's default)")
-            return f"started by the board's script ({row[0].source})"
-        if row is not None and self.on_internal_bus(bus):
+        started = self.board_starts(chips, bus, address)
+        if started is not None and started[1].holds:
+            self.assume_row(found, *started, "taken as holding (PX4's default)")
+            return f"started by the board's script ({started[0].source})"
+        if started is not None and row is not None:
             # Found on an internal bus, which rc.sensors never probes (-X only): the row ran.
             return (
                 f"started by the board's script ({row[0].source}); it runs only where "
@@ -549,11 +695,24 @@ class _Builder:
         )
         return [driver]
 
-    def facts(self) -> Facts:
+    def facts(self, board: Any = None) -> Facts:
         """What the board rows' conditions are settled by. PX4's board scripts set
         INA_CONFIGURED yes in the block of each power-monitor switch's test (boards/px4/
         fmu-v6x/init/rc.board_sensors: `if param compare SENS_EN_INA226 1`), so it follows
-        from those switches as their drivers' declarations test them."""
+        from those switches as their drivers' declarations test them. ``board``: the board's
+        row of another release, whose scripts no boot console of this file shows running."""
+        if board is not None and board is not self.board:
+            own = self.facts()
+            return Facts(
+                own.params,
+                own.variables,
+                tuple(board.ver_hw),
+                None,
+                own.kind,
+                own.hw_type,
+                board_variables(board.name, board.releases),
+                board.cite,
+            )
         if self._facts is None:
             ina = any(
                 d.starts_on(self.params[d.enabled_by])
@@ -794,12 +953,20 @@ class _Builder:
             where, chips, dev.bus, dev.address, start, internal, baro, if_run, all_off
         )
         disabled = f" (disabled: {', '.join(off)})" if off else ""
-        if board is not None:
-            self.leave_out(found, dev.describe(), "board", f"{board}{disabled}{twice}")
+        later = self.later(chips, dev.bus, dev.address) if board is not None else None
+        if board is not None and (later is None or not later.propose):
+            self.leave_out(found, dev.describe(), "board", f"{board}{disabled}{twice}", later)
             return
         if all_off:
             why = f"disabled ({', '.join(off)}): not proposed, an instance would make it required"
-            self.leave_out(found, dev.describe(), "disabled", why + twice)
+            self.leave_out(found, dev.describe(), "disabled", why + twice, later)
+            return
+        if later is not None:  # the target's board script no longer starts it
+            rotation = (later.rotation, f"the -R of PX4 {self.file_release}'s start (above)")
+        taken = self.taken_later(chips, dev.bus, dev.address) if board is None else None
+        if taken is not None and self.target is not None:
+            why = self.taken_line(taken, rotation)
+            self.leave_out(found, dev.describe(), "board", f"{why}{disabled}{twice}")
             return
         # The type of the driver that publishes the chip; else a type named as the chip (an
         # extra DSDL folder's, without a driver declaration).
@@ -817,6 +984,10 @@ class _Builder:
             where if start is None else f"{where}; boot console line {start.line}: '{start.text}'"
         )
         inst = self.add(spec.name, dev.bus, dev.address, origin)
+        if later is not None:
+            inst.notes.append(later.line)
+        if taken is not None:
+            inst.notes.append(self.taken_line(taken, rotation))
         if off:
             which = "one of its slots was" if len(off) == 1 else f"{len(off)} of its slots were"
             inst.notes.append(f"{', '.join(off)}: {which} disabled for use")
@@ -863,8 +1034,16 @@ class _Builder:
                 kinds == {"BARO"},
                 if_run,
             )
-            if board is not None:  # the line is already named: not twice
-                self.leave_out(found, device, "board", board.replace(f" ({found})", ""))
+            later = self.later(chips, start.bus, start.address) if board is not None else None
+            if board is not None and (later is None or not later.propose):
+                # the line is already named: not twice
+                self.leave_out(found, device, "board", board.replace(f" ({found})", ""), later)
+                continue
+            if later is not None:  # the target's board script no longer starts it
+                rotation = (later.rotation, f"the -R of PX4 {self.file_release}'s start (above)")
+            taken = self.taken_later(chips, start.bus, start.address) if board is None else None
+            if taken is not None and self.target is not None:
+                self.leave_out(found, device, "board", self.taken_line(taken, rotation))
                 continue
             driver = self.start_driver(start)
             if driver is None:
@@ -885,6 +1064,10 @@ class _Builder:
                 "found by i2c_launcher" if start.launcher else "started outside the board's script"
             )
             inst = self.add(spec.name, start.bus, address, f"{found}: '{start.text}' ({how})")
+            if later is not None:
+                inst.notes.append(later.line)
+            if taken is not None:
+                inst.notes.append(self.taken_line(taken, rotation))
             self.set_rotation(inst, *rotation)
             self.note_unsettled_row(inst, chips, start.bus, start.address, if_run)
             if driver.name in BATTERY_INDEX_DRIVERS:
@@ -946,6 +1129,71 @@ class _Builder:
             self.proposal.replaced.append(
                 f"{name} = 0: probing was off; the manifest starts the devices it lists"
             )
+
+
+@dataclass(frozen=True)
+class _Upgrade:
+    """The releases after the file's whose board scripts a proposal is compared with:
+    ``file_release`` (the file's snapshot), each later release with the board's row there
+    (oldest first, up to ``target``, else the newest), ``target`` (None: the file's own)."""
+
+    file_release: str
+    releases: tuple[tuple[str, Any], ...]
+    target: str | None
+
+
+@dataclass(frozen=True)
+class _Start:
+    """How a release's scripts start a device: ``row`` (a board or switch row), ``board``
+    (the board's own start, not a switch's) and its -R (0 without)."""
+
+    row: Any
+    board: bool
+    rotation: int
+
+
+@dataclass(frozen=True)
+class _Later:
+    """What later releases do with a device the file's board script starts (:meth:`_Builder.
+    later`): the report's ``line``; ``propose``: the target's board script does not start it;
+    the ``rotation`` the file's start gave it and that start (``old``), cited."""
+
+    line: str
+    propose: bool
+    rotation: int
+    old: str
+
+
+@dataclass(frozen=True)
+class _Taken:
+    """The first later ``release`` whose board script starts a device, with its ``row``."""
+
+    release: str
+    row: Any
+
+
+def _same_start(a: _Start | None, b: _Start | None) -> bool:
+    """Whether two releases start a device alike: neither, or both the board's (or both a
+    switch's) with the same -R; a line that only moved is the same start."""
+    if a is None or b is None:
+        return a is b
+    return (a.board, a.rotation) == (b.board, b.rotation)
+
+
+def _span(first: str, last: str) -> str:
+    return f"PX4 {first}" if first == last else f"PX4 {first} .. {last}"
+
+
+def _describe(now: _Start | None, before: _Start, board: Any) -> str:
+    """A later release's start of a device against the file's, ``before``."""
+    if now is None:
+        script = board.source.partition(" at ")[0]
+        return f"no start (not in {script}, nor behind a switch this file sets)"
+    rotation = ""
+    if now.rotation != before.rotation:
+        rotation = f", rotation {now.rotation} (was {before.rotation})"
+    how = "the board's" if now.board else f"not the board's; only where {now.row.when}:"
+    return f"{how} '{now.row.driver} {now.row.args}' ({now.row.source}){rotation}"
 
 
 def _buses_path(board: Any) -> str:
@@ -1038,10 +1286,14 @@ def migrate(
     schema: Schema | None = None,
     table: devid.DevtypeTable | str | None = None,
     board: Any = None,
+    target_release: str | None = None,
 ) -> Proposal:
     """Proposes a manifest for ``config`` (see the module doc). ``table``: the devtype table
     (default: the one of the file's firmware era); ``board``: a board of
-    :mod:`px4params.vehicle.boards` or its PX4 name (default: a log's ``ver_hw``'s)."""
+    :mod:`px4params.vehicle.boards` or its PX4 name (default: a log's ``ver_hw``'s);
+    ``target_release``: a release of the board table the vehicle will run (default: the
+    file's own): a device the file's board script starts and the target's does not becomes an
+    instance."""
     from px4params.dsdl.schema import load_schema
 
     assumptions: list[str] = []
@@ -1053,10 +1305,53 @@ def migrate(
             assumptions.append(why)
     names = devid.load_table(table) if isinstance(table, str) else table
     chosen = _board(config, board, assumptions)
+    upgrade = _upgrade(config, chosen, target_release, assumptions)
     builder = _Builder(
-        config, schema or load_schema(include_dronecan=False), names, chosen, assumptions
+        config, schema or load_schema(include_dronecan=False), names, chosen, assumptions, upgrade
     )
-    return builder.run()
+    proposal = builder.run()
+    proposal.target_release = upgrade.target
+    proposal.compared = [release for release, _ in upgrade.releases]
+    return proposal
+
+
+def _upgrade(config: OldConfig, board: Any, target: str | None, assumptions: list[str]) -> _Upgrade:
+    """The board's rows at the releases after the file's, up to ``target`` (None: the newest
+    the table knows, compared only); a ``target`` the table does not name, or older than the
+    file's, is refused."""
+    table = _board_table()
+    known = table.releases if table is not None else ()
+    if target is not None and target not in known:
+        raise MigrationError(
+            f"--target-release {target}: not a release of the board table (expected one of "
+            f"{', '.join(known) or 'none: this installation has no board table'})"
+        )
+    if table is None or board is None or not hasattr(board, "releases"):
+        if target is not None:
+            assumptions.append(
+                f"--target-release {target}: no board known, so no board script is compared "
+                "(--board NAME names it)"
+            )
+        return _Upgrade("", (), None)
+    # The file's snapshot; a file naming no release is judged with today's row (its newest).
+    version = "v" + ".".join(map(str, config.version)) if config.version else None
+    own = (table.snapshot_for(version) if version else None) or board.releases[-1]
+    own = max(own, board.releases[0], key=known.index)  # a row newer than the file's release
+    later = known[known.index(own) + 1 :]
+    if target is not None:
+        if known.index(target) < known.index(own):
+            raise MigrationError(
+                f"--target-release {target}: older than the file's PX4 {own} (expected one of "
+                f"{', '.join(known[known.index(own) :])})"
+            )
+        later = later[: later.index(target) + 1] if target in later else ()
+    # by_name takes a version; None is the newest snapshot (main)
+    rows = tuple((r, table.by_name(board.name, None if r == known[-1] else r)) for r in later)
+    return _Upgrade(
+        own,
+        tuple((r, row) for r, row in rows if row is not None),
+        target if target != own else None,
+    )
 
 
 def _board_table() -> BoardTable | None:

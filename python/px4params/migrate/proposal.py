@@ -46,13 +46,18 @@ class LeftOut:
     reason: str
     #: The report's line.
     line: str
+    #: Of a device the board's script starts: whether the board's scripts of later releases
+    #: still start it, one line citing the file's start and each change; None where nothing
+    #: was compared (no board row started it, or no later release is known).
+    later: str | None = None
 
-    def as_dict(self) -> dict[str, str]:
+    def as_dict(self) -> dict[str, str | None]:
         return {
             "found": self.found,
             "device": self.device,
             "reason": self.reason,
             "line": self.line,
+            "later": self.later,
         }
 
 
@@ -70,6 +75,10 @@ class Proposal:
     assumptions: list[str] = field(default_factory=list)
     #: The board whose table was used (its PX4 name), None without one.
     board: str | None = None
+    #: The release the proposal is made for (``--target-release``), None: the file's own.
+    target_release: str | None = None
+    #: The releases after the file's whose board scripts were compared with its own.
+    compared: list[str] = field(default_factory=list)
     #: Parameters whose job the manifest takes over.
     replaced: list[str] = field(default_factory=list)
     #: ``SENS_EN_*`` parameters that are 0: no driver to carry over.
@@ -113,6 +122,11 @@ class Proposal:
         out += [f"  {d}" for d in c.details]
         out.append(f"  device IDs decoded with the {self.table} devtype table")
         out.append(f"  board: {self.board}" if self.board else "  board: not known")
+        if self.target_release:
+            out.append(f"  proposed for PX4 {self.target_release} (--target-release)")
+        if self.compared:
+            span = " .. ".join(dict.fromkeys((self.compared[0], self.compared[-1])))
+            out.append(f"  the board's scripts compared with PX4 {span}")
 
         def section(title: str, rows: list[str]) -> None:
             out.append("")
@@ -126,7 +140,14 @@ class Proposal:
             rows.append(f"  {shown}")
             rows.extend(f"  note: {n}" for n in inst.notes)
         section("Instances proposed", rows)
-        section("Sensors found but not in the manifest", self.not_in_manifest)
+        section(
+            "Sensors found but not in the manifest",
+            [
+                row
+                for item in self.left_out
+                for row in (item.line, *([f"  later: {item.later}"] if item.later else []))
+            ],
+        )
         section("Not known, assumed", self.assumptions)
         section("Replaced by the manifest", self.replaced)
         if self.disabled:
@@ -147,6 +168,8 @@ class Proposal:
             "table": self.table,
             "board": self.board,
             "version": ".".join(map(str, self.config.version)) if self.config.version else None,
+            "target_release": self.target_release,
+            "compared_releases": self.compared,
             "assumptions": self.assumptions,
             "left_out": [item.as_dict() for item in self.left_out],
             "instances": [

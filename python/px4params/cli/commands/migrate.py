@@ -34,7 +34,7 @@ def cmd_migrate(args: argparse.Namespace) -> int:
     if args.table or args.devtypes:
         table = devid.load_table(args.table or "current", args.devtypes)
     schema = load_schema(args.dsdl or (), include_dronecan=False)
-    proposal = migrate.migrate(config, schema, table, args.board)
+    proposal = migrate.migrate(config, schema, table, args.board, args.target_release)
     airframe = proposal.airframe()
     if args.output is not None:
         write_file(args.output, airframe.encode(), keep_backup=False)
@@ -66,12 +66,16 @@ external I2C), drivers enabled by a switch (SENS_EN_*) and power monitors the
 i2c_launcher found become instances. A log's boot console (what started, on
 which bus, address and rotation) wins over every table. The report lists what
 is left out and why, what could not be carried over, and every assumption
-made (a guessed bus, an unknown board); nothing is dropped silently.""",
+made (a guessed bus, an unknown board); nothing is dropped silently. The
+board's script is judged at the file's release; the report says, for each
+device it starts, whether the board's scripts of later releases still do, and
+--target-release makes the proposal for the firmware the vehicle will run.""",
         epilog="""\
 examples:
   px4params migrate flight.ulg -o vehicle.airframe   # report on stdout
   px4params migrate vehicle.params > vehicle.airframe # report on stderr
   px4params migrate old.ulg --table legacy --json
+  px4params migrate old.ulg --target-release v1.15.0 -o vehicle.airframe
   px4params run vehicle.airframe --store vehicle.store""",
     )
     p.add_argument(
@@ -93,6 +97,13 @@ examples:
         metavar="NAME",
         help="PX4 board name (px4_fmu-v6c, ...): what its startup script starts (default: a "
         "log's ver_hw; a .params file names no board)",
+    )
+    p.add_argument(
+        "--target-release",
+        metavar="RELEASE",
+        help="the PX4 release the vehicle will run, as the board table names it (v1.15.0, "
+        "v1.18, main): a device the file's board script starts and that release's does not "
+        "becomes an instance (default: the file's own release; the report names such devices)",
     )
     p.add_argument(
         "--devtypes",

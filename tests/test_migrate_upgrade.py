@@ -1,0 +1,267 @@
+"""``px4params migrate`` for the firmware a vehicle will run: a device the board's script of the
+file's release starts, judged again with the board's scripts of every later release the board
+table knows, and ``--target-release`` making the proposal for one of them.
+
+The answers are PX4's scripts, read at the table's snapshots: the Cube Orange's
+boards/cubepilot/cubeorange/init/rc.board_sensors line 17 at v1.11.0 is
+``ak09916 -X -b 2 -R 6 start`` (the Here2 GPS's compass; ``-X -b 2`` was the second external
+bus then, I2C bus 1), and from v1.12.0 that script starts no I2C device; rc.sensors at v1.12.0
+line 145 probes ``ak09916 -X -q start`` (no -R) while SENS_EXT_I2C_PRB is 1. The real log
+``sample_log_small.ulg`` is such a Cube Orange on v1.11.2 (its boot console: "ak09916 #0 on
+I2C bus 1 (external, equal to '-b 2')", CAL_MAG1_ID 592905, SENS_EXT_I2C_PRB 1).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import pytest
+import shared_data
+from px4params.cli.main import main
+from px4params.vehicle import devid
+from px4params.vehicle.boards import load_boards
+
+CUBE = "cubepilot_cubeorange"
+SCRIPT = "boards/cubepilot/cubeorange/init/rc.board_sensors"
+OLD_LINE = f"'ak09916 -X -b 2 -R 6 start' (PX4/PX4-Autopilot {SCRIPT}:17 at v1.11.0"
+RC_SENSORS = "ROMFS/px4fmu_common/init.d/rc.sensors"
+PROBE = f"'ak09916 -X -q start' (PX4/PX4-Autopilot {RC_SENSORS}:145 at v1.12.0"
+HERE2_MAG = devid.encode("i2c", 1, 0x0C, 0x09)  # 592905: the sample log's CAL_MAG1_ID
+RELEASES = ["v1.12.0", "v1.13.0", "v1.14.0", "v1.15.0", "v1.18", "main"]
+
+
+def run(capsys: pytest.CaptureFixture[str], *args: str) -> dict[str, Any]:
+    assert main(["migrate", *args, "--json"]) == 0
+    report: dict[str, Any] = json.loads(capsys.readouterr().out)
+    return report
+
+
+def cube_params(path: Path, probe: int) -> Path:
+    """A Cube Orange's QGC file of PX4 1.11.2 with the Here2 compass in CAL_MAG1."""
+    rows = {"CAL_MAG1_ID": HERE2_MAG, "CAL_MAG1_ROT": 0, "SENS_EXT_I2C_PRB": probe}
+    lines = ["# Onboard parameters for Vehicle 1", "#", "# Stack: PX4", "# Version: 1.11.2"]
+    lines += ["#", "# Vehicle-Id Component-Id Name Value Type"]
+    lines += [f"1\t1\t{name}\t{value}\t6" for name, value in rows.items()]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def test_the_tables_cube_orange_rows_are_pX4s_scripts() -> None:
+    """What the tests below rest on, as the table transcribes PX4's scripts."""
+    table = load_boards()
+    old = table.by_name(CUBE, "v1.11.0")
+    assert old is not None
+    (i2c,) = [d for d in old.devices if d.bus_kind == "I2C"]
+    assert (i2c.driver, i2c.args, i2c.rotation) == ("ak09916", "-X -b 2 -R 6 start", 6)
+    assert i2c.source.startswith(f"PX4/PX4-Autopilot {SCRIPT}:17 at v1.11.0")
+    assert old.buses_of(i2c) == (1,)  # v1.11.0: the second external bus of i2c.cpp, bus 1
+    for release in RELEASES:
+        board = table.by_name(CUBE, None if release == "main" else release)
+        assert board is not None
+        assert [d for d in board.devices if d.bus_kind == "I2C"] == []
+
+
+def test_the_real_cube_orange_log_says_its_compass_needs_the_manifest_on_newer_px4(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    log = shared_data.shared_file(shared_data.SAMPLE_LOG)
+    report = run(capsys, str(log))
+    # Today's proposal is unchanged: at v1.11 the board's script starts the compass.
+    assert [i["name"] for i in report["instances"]] == ["MS4525DO#0"]
+    assert report["target_release"] is None
+    assert report["compared_releases"] == RELEASES
+    (mag,) = [i for i in report["left_out"] if i["found"].startswith("CAL_MAG1_ID")]
+    assert mag["reason"] == "board"
+    later = mag["later"]
+    assert OLD_LINE in later
+    assert f"PX4 v1.12.0 .. main: not the board's; only where SENS_EXT_I2C_PRB == 1: {PROBE}" in (
+        later
+    )
+    assert "rotation 0 (was 6)" in later
+    assert later.endswith("--target-release v1.12.0 (or later) proposes it as an instance")
+    # The text report carries the same line beneath the device's.
+    assert main(["migrate", str(log)]) == 0
+    text = capsys.readouterr().err
+    assert f"\n  {mag['line']}\n    later: {later}\n" in text
+    assert "  the board's scripts compared with PX4 v1.12.0 .. main\n" in text
+
+
+@pytest.mark.parametrize("target", ["v1.12.0", "main"])
+def test_for_a_newer_target_the_real_logs_compass_is_an_instance_with_its_old_rotation(
+    target: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    log = shared_data.shared_file(shared_data.SAMPLE_LOG)
+    report = run(capsys, str(log), "--target-release", target)
+    assert report["target_release"] == target
+    assert report["compared_releases"] == RELEASES[: RELEASES.index(target) + 1]
+    got = {
+        i["name"]: (i["values"]["bus.i2c.bus_id"], i["values"]["bus.i2c.address"],
+                    i["values"].get("rotation"))
+        for i in report["instances"]
+    }  # fmt: skip
+    assert got == {"AK09916#0": (1, 0x0C, 6), "MS4525DO#0": (2, 0x28, None)}
+    (mag,) = [i for i in report["instances"] if i["name"] == "AK09916#0"]
+    assert mag["origin"].startswith(f"CAL_MAG1_ID = {HERE2_MAG}: AK09916 (MAG), I2C bus 1")
+    (said,) = [n for n in mag["notes"] if OLD_LINE in n]
+    assert PROBE in said
+    assert said.endswith(
+        f"at {target} the board's script does not start it: the manifest does, with the -R 6 "
+        "the file's line gives"
+    )
+    assert not [i for i in report["left_out"] if i["found"].startswith("CAL_MAG1_ID")]
+    assert "param add AK09916#0\n" in report["airframe"]
+
+
+def test_the_files_own_release_as_target_is_todays_proposal(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    log = shared_data.shared_file(shared_data.SAMPLE_LOG)
+    today = run(capsys, str(log))
+    own = run(capsys, str(log), "--target-release", "v1.11.0")
+    assert own["instances"] == today["instances"]
+    assert own["compared_releases"] == [] and own["target_release"] is None
+    assert [i["reason"] for i in own["left_out"]] == [i["reason"] for i in today["left_out"]]
+
+
+def test_without_probing_nothing_starts_the_cube_compass_on_newer_px4(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """SENS_EXT_I2C_PRB = 0: from v1.12.0 neither the board's script nor rc.sensors starts the
+    Here2 compass, the silent failure; with a target it is proposed."""
+    path = cube_params(tmp_path / "cube.params", probe=0)
+    report = run(capsys, str(path), "--board", CUBE)
+    (mag,) = report["left_out"]
+    assert mag["reason"] == "board"
+    assert (
+        f"PX4 v1.12.0 .. main: no start (not in PX4/PX4-Autopilot {SCRIPT}, nor behind a switch "
+        "this file sets)"
+    ) in mag["later"]
+    assert OLD_LINE in mag["later"]
+    upgraded = run(capsys, str(path), "--board", CUBE, "--target-release", "v1.15.0")
+    assert [(i["name"], i["values"]["rotation"]) for i in upgraded["instances"]] == [
+        ("AK09916#0", 6)
+    ]
+    assert upgraded["left_out"] == []
+
+
+def test_a_start_the_newer_scripts_keep_is_said_to_be_kept(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Pixhawk 6C: rc.board_sensors starts the GPS's IST8310 with `ist8310 -X -b 1 -R 10 start`
+    at v1.13.0 (line 21) and still at main (line 35, read at bb59c637cd): left out at every
+    target."""
+    gps = devid.encode("i2c", 1, 0x0E, 0x06)
+    path = tmp_path / "v6c.params"
+    path.write_text(
+        "# Stack: PX4\n# Version: 1.13.3\n#\n"
+        f"1\t1\tCAL_MAG1_ID\t{gps}\t6\n1\t1\tSENS_EXT_I2C_PRB\t1\t6\n"
+    )
+    for extra in ((), ("--target-release", "main")):
+        report = run(capsys, str(path), "--board", "px4_fmu-v6c", *extra)
+        assert report["instances"] == []
+        (mag,) = report["left_out"]
+        assert mag["later"] == (
+            "still started by the board's script through PX4 main: 'ist8310 -X -b 1 -R 10 "
+            "start' (PX4/PX4-Autopilot boards/px4/fmu-v6c/init/rc.board_sensors:35 at main "
+            "(branch main, bb59c637cd, 2026-08-13))"
+        )
+
+
+def test_a_start_whose_rotation_changed_stays_the_boards_and_says_so(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Pixhawk 5: boards/px4/fmu-v5/init/rc.board_sensors starts its internal IST8310 (I2C bus
+    3) with `ist8310 -I start` at v1.11.0 (line 19) and `ist8310 -I -R 10 start` from v1.12.0
+    (line 22): still the board's at every target, its rotation changed."""
+    internal = devid.encode("i2c", 3, 0x0E, 0x06)
+    path = tmp_path / "v5.params"
+    path.write_text(f"# Stack: PX4\n# Version: 1.11.3\n#\n1\t1\tCAL_MAG0_ID\t{internal}\t6\n")
+    script = "PX4/PX4-Autopilot boards/px4/fmu-v5/init/rc.board_sensors"
+    for extra in ((), ("--target-release", "main")):
+        report = run(capsys, str(path), "--board", "px4_fmu-v5", *extra)
+        assert report["instances"] == []
+        (mag,) = report["left_out"]
+        assert mag["later"] == (
+            f"the board's script of PX4 v1.11.0 starts it with 'ist8310 -I start' ({script}:19 "
+            "at v1.11.0 (tag v1.11.0, 71db0903a9, 2020-09-07)); PX4 v1.12.0 .. main: the "
+            f"board's 'ist8310 -I -R 10 start' ({script}:22 at v1.12.0 (tag v1.12.0, "
+            "9524e8ec03, 2021-07-05)), rotation 10 (was 0): the board's script still starts "
+            "it, with -R 10: check its calibration after the update"
+        )
+
+
+@pytest.mark.parametrize(
+    ("value", "expected"),
+    [
+        ("v1.16.0", "not a release of the board table (expected one of v1.11.0, v1.12.0, "
+         "v1.13.0, v1.14.0, v1.15.0, v1.18, main)"),
+        ("latest", "not a release of the board table (expected one of v1.11.0, v1.12.0, "
+         "v1.13.0, v1.14.0, v1.15.0, v1.18, main)"),
+        ("v1.11.0", "older than the file's PX4 v1.13.0 (expected one of v1.13.0, v1.14.0, "
+         "v1.15.0, v1.18, main)"),
+    ],
+)  # fmt: skip
+def test_a_target_release_the_table_cannot_judge_is_refused_in_one_line(
+    value: str, expected: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = tmp_path / "v6c.params"
+    path.write_text("# Stack: PX4\n# Version: 1.13.3\n#\n1\t1\tSENS_EXT_I2C_PRB\t1\t6\n")
+    out = tmp_path / "out.airframe"
+    code = main(["migrate", str(path), "--board", "px4_fmu-v6c", "--target-release", value,
+                 "-o", str(out)])  # fmt: skip
+    assert code != 0
+    err = capsys.readouterr().err
+    assert err == f"px4params: error: --target-release {value}: {expected}\n"
+    assert "Traceback" not in err
+    assert not out.exists()
+
+
+def test_a_probed_compass_a_later_board_script_starts_itself_is_left_out_for_that_target(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Pixhawk 5 on v1.11.3 with a GPS's IST8310 (I2C bus 1, 0x0E): at v1.11.0 only rc.sensors'
+    probe `ist8310 -X start` (line 105) starts it, so it is an instance; from v1.12.0 the board's
+    rc.board_sensors line 25 starts it itself, `ist8310 -X -b 1 -R 10 start`: an instance would
+    start it twice there, and the rotation changed."""
+    gps = devid.encode("i2c", 1, 0x0E, 0x06)
+    path = tmp_path / "v5.params"
+    path.write_text(
+        "# Stack: PX4\n# Version: 1.11.3\n#\n"
+        f"1\t1\tCAL_MAG1_ID\t{gps}\t6\n1\t1\tSENS_EXT_I2C_PRB\t1\t6\n"
+    )
+    said = (
+        "the board's script starts it from PX4 v1.12.0: 'ist8310 -X -b 1 -R 10 start' "
+        "(PX4/PX4-Autopilot boards/px4/fmu-v5/init/rc.board_sensors:25 at v1.12.0 (tag v1.12.0, "
+        "9524e8ec03, 2021-07-05)), with -R 10 where PX4 v1.11.0 ran it with 0 (rc.sensors "
+        "starts it without -R; check its calibration after the update)"
+    )
+    today = run(capsys, str(path), "--board", "px4_fmu-v5")
+    (inst,) = today["instances"]
+    assert (inst["name"], inst["values"]["rotation"]) == ("IST8310#0", 0)
+    assert inst["notes"] == [
+        f"{said}: for that firmware --target-release v1.12.0 (or later) leaves it out"
+    ]
+    for target in ("v1.12.0", "main"):
+        upgraded = run(capsys, str(path), "--board", "px4_fmu-v5", "--target-release", target)
+        assert upgraded["instances"] == []
+        (mag,) = upgraded["left_out"]
+        assert mag["reason"] == "board"
+        assert mag["line"].endswith(
+            f"{said}; on PX4 {target} it is the board's, not the manifest's"
+        )
+
+
+def test_a_target_without_a_known_board_is_said_to_compare_nothing(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A QGC file names no board: nothing to judge at any release, and the report says so
+    rather than silently proposing as for the file's release."""
+    path = cube_params(tmp_path / "cube.params", probe=1)
+    report = run(capsys, str(path), "--target-release", "main")
+    assert report["target_release"] is None and report["compared_releases"] == []
+    assert (
+        "--target-release main: no board known, so no board script is compared (--board NAME "
+        "names it)"
+    ) in report["assumptions"]
