@@ -75,3 +75,52 @@ fn without_tao_the_last_element_keeps_its_length() {
     }
     assert_eq!(leaf_at(&WITHOUT_TAO, "items[1].data[3]", false), None);
 }
+
+/// `leaf::set_leaf_at`, the build's own plans (tests/leaf_set.rs calls each plan set by
+/// name): leaf [k] written, the new encoding's length returned. `{a: uint8, void4, b:
+/// uint4}`: 11 F2 with b = 9 is 11 F9 (b is the low nibble of byte 1; the padding stays).
+/// `{a: uint8, s: uint8[<=3]}` without tail array optimization (s's length has 2 bits): a =
+/// 1, s = [0x41] is 00000001 01 01000001, 01 50 40; its length set to 2 appends a zero
+/// element: 00000001 10 01000001 00000000, 01 90 40 00, four bytes.
+#[test]
+fn set_leaf_at_writes_the_leaf_and_returns_the_new_length() {
+    use px4params_core::leaf::set_leaf_at;
+    use px4params_core::EncodeOptions;
+    let mut l = OwnedLayout::default();
+    let u4 = l.uint(4, Cast::Saturated).unwrap();
+    let u8_ = l.uint(8, Cast::Saturated).unwrap();
+    let pad = l.void(4).unwrap();
+    let padded = l
+        .structure(&[
+            ("a", u8_, Role::Data),
+            ("", pad, Role::Padding),
+            ("b", u4, Role::Data),
+        ])
+        .unwrap();
+    let s = l.dyn_array(u8_, 3).unwrap();
+    let listed = l
+        .structure(&[("a", u8_, Role::Data), ("s", s, Role::Data)])
+        .unwrap();
+    let layout = l.as_layout();
+    let options = EncodeOptions {
+        tao: false,
+        ..EncodeOptions::default()
+    };
+    for (root, data, k, value, expected) in [
+        (padded, &[0x11, 0xF2][..], 1, 9, &[0x11, 0xF9][..]),
+        (listed, &[0x01, 0x50, 0x40], 1, 2, &[0x01, 0x90, 0x40, 0x00]),
+    ] {
+        let mut out = [0xEE; 8];
+        let n = set_leaf_at(
+            &layout,
+            root,
+            data,
+            k,
+            Scalar::Uint(value),
+            &mut out,
+            options,
+        );
+        assert_eq!(n, Ok(expected.len()), "{data:x?}");
+        assert_eq!(&out[..expected.len()], expected, "{data:x?}");
+    }
+}
