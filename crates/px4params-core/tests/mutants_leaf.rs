@@ -124,3 +124,41 @@ fn set_leaf_at_writes_the_leaf_and_returns_the_new_length() {
         assert_eq!(&out[..expected.len()], expected, "{data:x?}");
     }
 }
+
+/// The seek follows a value as deep as the walk does (issue 40): `rules::MAX_DEPTH` (64)
+/// nodes from the root to the leaf, the root at depth 1. `s: uint8[<=1]` inside `depth - 2`
+/// one-field structs, its element `depth` nodes deep; s = [0xA5] is its 1-bit length 1 then
+/// 0xA5, 1 10100101 (D2 80): the element is leaf [1], bit 1, a uint8. The seek (the host's
+/// `leaf::seek`) finds it where the walk does, up to the bound; one deeper both give up.
+#[test]
+fn the_seek_finds_a_leaf_exactly_max_depth_deep_as_the_walk_does() {
+    use px4params_core::layout::Kind;
+    use px4params_core::leaf::{seek, seek_with, Position};
+    use px4params_core::plan::NoPlans;
+    use px4params_core::rules::LeafKind;
+    use px4params_core::rules::MAX_DEPTH;
+    for depth in [MAX_DEPTH - 1, MAX_DEPTH, MAX_DEPTH + 1] {
+        let mut l = OwnedLayout::default();
+        let u8_ = l.uint(8, Cast::Saturated).unwrap();
+        let mut root = l.dyn_array(u8_, 1).unwrap();
+        for _ in 2..depth {
+            root = l.structure(&[("x", root, Role::Data)]).unwrap();
+        }
+        let layout = l.as_layout();
+        let data = [0xD2u8, 0x80];
+        let expected = (depth <= MAX_DEPTH).then_some(Position {
+            bit_offset: 1,
+            kind: LeafKind::Scalar(Kind::Uint {
+                bits: 8,
+                cast: Cast::Saturated,
+            }),
+            version: false,
+        });
+        assert_eq!(seek(&layout, root, &data[..], 1), expected, "depth {depth}");
+        assert_eq!(
+            seek_with::<NoPlans, _>(&layout, root, &data[..], 1),
+            expected,
+            "depth {depth}, the walk"
+        );
+    }
+}
