@@ -162,3 +162,36 @@ fn the_seek_finds_a_leaf_exactly_max_depth_deep_as_the_walk_does() {
         );
     }
 }
+
+/// Depth is nesting, not the number of parts passed: the seek finds leaf [70] after 69
+/// elements of its own depth as the walk does. `{items: {s: uint8[<=1]}[<=100]}` holding 70
+/// items with empty s: items' 7-bit length 70 (1000110), then one 0 bit per s (8C, then
+/// nine 00); leaf [0] is items' length, leaf [k] the k-th s's length, at bit 7 + k - 1.
+#[test]
+fn the_seek_finds_the_seventieth_of_seventy_elements_as_the_walk_does() {
+    use px4params_core::leaf::{seek, seek_with, Position};
+    use px4params_core::plan::NoPlans;
+    use px4params_core::rules::LeafKind;
+    let mut l = OwnedLayout::default();
+    let u8_ = l.uint(8, Cast::Saturated).unwrap();
+    let s = l.dyn_array(u8_, 1).unwrap();
+    let item = l.structure(&[("s", s, Role::Data)]).unwrap();
+    let items = l.dyn_array(item, 100).unwrap();
+    let root = l.structure(&[("items", items, Role::Data)]).unwrap();
+    let layout = l.as_layout();
+    let mut data = [0u8; 10];
+    data[0] = 0x8C;
+    for k in [1, 35, 70] {
+        let expected = Some(Position {
+            bit_offset: 7 + k - 1,
+            kind: LeafKind::Len { bits: 1, array: s },
+            version: false,
+        });
+        assert_eq!(seek(&layout, root, &data[..], k), expected, "leaf [{k}]");
+        assert_eq!(
+            seek_with::<NoPlans, _>(&layout, root, &data[..], k),
+            expected,
+            "leaf [{k}], the walk"
+        );
+    }
+}
