@@ -195,3 +195,74 @@ fn the_seek_finds_the_seventieth_of_seventy_elements_as_the_walk_does() {
         );
     }
 }
+
+/// Leaves by number (`Target::Index`: the host seeks first, the walk answers what the seek
+/// declines) in the value above, with and without tail array optimization: a, items' length,
+/// items[0].x, its data's length and element, items[1].x, its data's length and elements.
+/// Under the optimization the last Inner's data has no length on the wire (its three bytes
+/// take the rest), and its length leaf is still its number of elements, 3. The same for
+/// a = 0x11, items = [{x: 1, data: [0xA1, 0xA2]}], whose one Inner is the last (pydronecan
+/// 1.0.27: 11 46 86 88 with the optimization, 11 45 50 D1 00 without).
+#[test]
+fn leaves_by_number_follow_the_tail_array_of_the_last_element() {
+    let mut l = OwnedLayout::default();
+    let root = outer(&mut l);
+    let layout = l.as_layout();
+    let two = [0x11, 2, 1, 1, 0xA1, 2, 3, 0xB1, 0xB2, 0xB3];
+    let one = [0x11, 1, 1, 2, 0xA1, 0xA2];
+    for (bytes, tao, values) in [
+        (&WITH_TAO[..], true, &two[..]),
+        (&WITHOUT_TAO, false, &two),
+        (&[0x11, 0x46, 0x86, 0x88], true, &one),
+        (&[0x11, 0x45, 0x50, 0xD1, 0x00], false, &one),
+    ] {
+        for (k, &want) in values.iter().enumerate() {
+            let got = get_leaf(&layout, root, bytes, Target::Index(k), tao).map(|(_, v)| v);
+            assert_eq!(
+                got,
+                Ok(Scalar::Uint(want)),
+                "{bytes:x?} leaf [{k}], tao {tao}"
+            );
+        }
+        let past = get_leaf(&layout, root, bytes, Target::Index(values.len()), tao);
+        assert!(past.is_err(), "{bytes:x?} past the last leaf: {past:?}");
+    }
+}
+
+/// A fixed run as deep as the walk follows (issue 40): a uint8 inside `depth - 1` one-field
+/// structs is one flat run of the root, its leaf `depth` nodes from the root; 0xA5 is leaf
+/// [0] at bit 0 up to `rules::MAX_DEPTH` (64), and one deeper the seek gives up as the walk
+/// does.
+#[test]
+fn the_seek_finds_a_fixed_run_s_leaf_exactly_max_depth_deep_as_the_walk_does() {
+    use px4params_core::layout::Kind;
+    use px4params_core::leaf::{seek, seek_with, Position};
+    use px4params_core::plan::NoPlans;
+    use px4params_core::rules::{LeafKind, MAX_DEPTH};
+    for depth in [MAX_DEPTH - 1, MAX_DEPTH, MAX_DEPTH + 1] {
+        let mut l = OwnedLayout::default();
+        let mut root = l.uint(8, Cast::Saturated).unwrap();
+        for _ in 1..depth {
+            root = l.structure(&[("x", root, Role::Data)]).unwrap();
+        }
+        let layout = l.as_layout();
+        let expected = (depth <= MAX_DEPTH).then_some(Position {
+            bit_offset: 0,
+            kind: LeafKind::Scalar(Kind::Uint {
+                bits: 8,
+                cast: Cast::Saturated,
+            }),
+            version: false,
+        });
+        assert_eq!(
+            seek(&layout, root, &[0xA5u8][..], 0),
+            expected,
+            "depth {depth}"
+        );
+        assert_eq!(
+            seek_with::<NoPlans, _>(&layout, root, &[0xA5u8][..], 0),
+            expected,
+            "depth {depth}, the walk"
+        );
+    }
+}
