@@ -266,3 +266,36 @@ fn the_seek_finds_a_fixed_run_s_leaf_exactly_max_depth_deep_as_the_walk_does() {
         );
     }
 }
+
+/// A padding field names no leaf, even where the layout keeps a name for it (`{a: uint8,
+/// pad: void4, b: uint4}`, 11 F2): `pad` is no such field, said where the struct that has
+/// no such field starts (bit 0, the root), as tests/leaf_path.rs's `u.d` is; `b` is the low
+/// nibble of byte 1.
+#[test]
+fn a_path_to_a_padding_field_names_no_leaf() {
+    use px4params_core::ErrorKind;
+    let mut l = OwnedLayout::default();
+    let u8_ = l.uint(8, Cast::Saturated).unwrap();
+    let pad = l.void(4).unwrap();
+    let u4 = l.uint(4, Cast::Saturated).unwrap();
+    let root = l
+        .structure(&[
+            ("a", u8_, Role::Data),
+            ("pad", pad, Role::Padding),
+            ("b", u4, Role::Data),
+        ])
+        .unwrap();
+    let layout = l.as_layout();
+    let data = [0x11u8, 0xF2];
+    for tao in [false, true] {
+        let b = get_leaf(&layout, root, &data[..], Target::Path("b"), tao).map(|(_, v)| v);
+        assert_eq!(b, Ok(Scalar::Uint(2)));
+        let pad = get_leaf(&layout, root, &data[..], Target::Path("pad"), tao);
+        let pad = pad.map_err(|e| (e.kind, e.bit_offset, e.path.display(&layout).to_string()));
+        assert_eq!(
+            pad,
+            Err((ErrorKind::NoSuchPath, 0, String::new())),
+            "tao {tao}"
+        );
+    }
+}
