@@ -200,3 +200,24 @@ fn a_tag_or_length_given_as_a_signed_integer_is_that_number_or_refused() {
         );
     }
 }
+
+/// A stored value is exactly one value (issue 40): `{p_version: uint8 (version 3), a: uint8}`
+/// stored as 03 09 passes the check; with a byte after it, 03 09 00, it is refused as
+/// trailing bytes (2 used of 3) where the value ends, bit 16, by the build's plans and by the
+/// walk alone (firmware's), which answers whatever the plans decline.
+#[test]
+fn a_stored_value_with_a_byte_after_it_is_refused() {
+    use px4params_core::codec::{check_stored, check_stored_with};
+    let mut l = OwnedLayout::default();
+    let u8_ = l.uint(8, Cast::Saturated).unwrap();
+    let root = l
+        .structure(&[("p_version", u8_, Role::Version(3)), ("a", u8_, Role::Data)])
+        .unwrap();
+    let layout = l.as_layout();
+    let trailing = Err((ErrorKind::TrailingBytes { used: 2, len: 3 }, 16));
+    for check in [check_stored, check_stored_with::<NoPlans>] {
+        let checked = |data: &[u8]| check(&layout, root, data).map_err(|e| (e.kind, e.bit_offset));
+        assert_eq!(checked(&[0x03, 0x09]), Ok(()));
+        assert_eq!(checked(&[0x03, 0x09, 0x00]), trailing);
+    }
+}
