@@ -163,7 +163,15 @@ fn a_tag_or_length_given_as_a_signed_integer_is_that_number_or_refused() {
     };
     let listed_data = [0x01, 0x50, 0x40];
     let tagged_data = [0x20, 0xCC, 0x80];
-    let cases: [(NodeId, &[u8], usize, i64, Result<&[u8], _>); 10] = [
+    /// The value's type, its bytes, the leaf, the number written, and the bytes or error.
+    type Case<'d> = (
+        NodeId,
+        &'d [u8],
+        usize,
+        i64,
+        Result<&'d [u8], ErrorKind<core::convert::Infallible>>,
+    );
+    let cases: [Case<'_>; 10] = [
         (listed, &listed_data, 1, 0, Ok(&[0x01, 0x00])),
         (listed, &listed_data, 1, 1, Ok(&listed_data)),
         (listed, &listed_data, 1, 2, Ok(&[0x01, 0x90, 0x40, 0x00])),
