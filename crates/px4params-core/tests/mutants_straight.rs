@@ -328,3 +328,66 @@ fn a_byte_string_after_four_bits_takes_the_whole_bytes_left() {
         }
     }
 }
+
+/// A type's version too large for its `p_version` field (300 in a uint8; the DSDL loader
+/// refuses such a type, a layout built by hand can hold it) after another field: the plan
+/// declines it as the walk's rules decide, and a's byte is a's alone: `{a: uint8, p_version:
+/// uint8 (version 300)}` with a = 2 starts 02, whatever becomes of the version's bits.
+#[test]
+fn a_version_too_large_for_its_field_never_reaches_the_field_before_it() {
+    let mut l = OwnedLayout::default();
+    let u8_ = l.uint(8, Cast::Saturated).unwrap();
+    let root = l
+        .structure(&[
+            ("a", u8_, Role::Data),
+            ("p_version", u8_, Role::Version(300)),
+        ])
+        .unwrap();
+    let layout = l.as_layout();
+    for keep_versions in [false, true] {
+        for version in [Scalar::Uint(300), Scalar::Uint(44)] {
+            let options = EncodeOptions {
+                keep_versions,
+                ..EncodeOptions::default()
+            };
+            let leaves = [Scalar::Uint(2), version];
+            let [codec, walked] = both(&layout, root, &leaves, options);
+            assert_eq!(codec, walked, "{version:?}, {options:?}");
+            if let Ok(bytes) = codec {
+                assert_eq!(
+                    (bytes.len(), bytes[0]),
+                    (2, 0x02),
+                    "{version:?}, {options:?}"
+                );
+            }
+        }
+    }
+}
+
+/// An int64 `p_version` written as given (versions kept) in a type the plan's one-word path
+/// does not take (a uint8 before it: 72 bits): -2 is two's complement, FE then seven FF
+/// (little-endian), its sign bit set like the others: `{a: uint8, p_version: int64}` with
+/// a = 1 is 01 FE FF FF FF FF FF FF FF.
+#[test]
+fn a_negative_int64_version_kept_as_given_keeps_its_sign_bit() {
+    let mut l = OwnedLayout::default();
+    let u8_ = l.uint(8, Cast::Saturated).unwrap();
+    let i64_ = l.int(64, Cast::Saturated).unwrap();
+    let root = l
+        .structure(&[
+            ("a", u8_, Role::Data),
+            ("p_version", i64_, Role::Version(3)),
+        ])
+        .unwrap();
+    let layout = l.as_layout();
+    let kept = EncodeOptions {
+        keep_versions: true,
+        ..EncodeOptions::default()
+    };
+    let expected: Result<Vec<u8>, String> =
+        Ok(vec![0x01, 0xFE, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF]);
+    assert_eq!(
+        both(&layout, root, &[Scalar::Uint(1), Scalar::Int(-2)], kept),
+        [expected.clone(), expected]
+    );
+}

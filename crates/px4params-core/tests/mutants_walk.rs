@@ -124,3 +124,108 @@ fn the_flat_codec_refuses_a_deep_run_as_the_walk_does() {
         }
     }
 }
+
+/// A union tag or array length written as a signed integer (`Scalar::Int`, as a host may
+/// give it): within range it is that number, as a `Scalar::Uint` would be; a negative one,
+/// or one past the last variant or the array's maximum, is refused as out of range 0 to
+/// that bound, the value as given. Bytes by hand, without tail array optimization:
+/// `{a: uint8, s: uint8[<=3]}` (a 2-bit length) with a = 1, s = [0x41] is 00000001 01
+/// 01000001 (01 50 40); length 0 leaves 00000001 00 (01 00), 2 appends a zero element
+/// (01 90 40 00), 3 two (00000001 11 01000001 0x00 0x00: 01 D0 40 00 00).
+/// `{u: union {a: uint8, b: uint4}, z: uint8}` (a 1-bit tag) with u = a(0x41), z = 0x99 is
+/// 0 01000001 10011001 (20 CC 80); tag 1 selects b, zero: 1 0000 10011001 (84 C8).
+#[test]
+fn a_tag_or_length_given_as_a_signed_integer_is_that_number_or_refused() {
+    use px4params_core::leaf::set_leaf_at;
+    use px4params_core::scalar::ScalarError;
+    let mut l = OwnedLayout::default();
+    let u4 = l.uint(4, Cast::Saturated).unwrap();
+    let u8_ = l.uint(8, Cast::Saturated).unwrap();
+    let s = l.dyn_array(u8_, 3).unwrap();
+    let listed = l
+        .structure(&[("a", u8_, Role::Data), ("s", s, Role::Data)])
+        .unwrap();
+    let u = l.union(&[("a", u8_), ("b", u4)]).unwrap();
+    let tagged = l
+        .structure(&[("u", u, Role::Data), ("z", u8_, Role::Data)])
+        .unwrap();
+    let layout = l.as_layout();
+    let options = EncodeOptions {
+        tao: false,
+        ..EncodeOptions::default()
+    };
+    let out_of_range = |value, max| {
+        Err(ErrorKind::Scalar(ScalarError::OutOfRange {
+            value: Scalar::Int(value),
+            min: Scalar::Uint(0),
+            max: Scalar::Uint(max),
+        }))
+    };
+    let listed_data = [0x01, 0x50, 0x40];
+    let tagged_data = [0x20, 0xCC, 0x80];
+    /// The value's type, its bytes, the leaf, the number written, and the bytes or error.
+    type Case<'d> = (
+        NodeId,
+        &'d [u8],
+        usize,
+        i64,
+        Result<&'d [u8], ErrorKind<core::convert::Infallible>>,
+    );
+    let cases: [Case<'_>; 10] = [
+        (listed, &listed_data, 1, 0, Ok(&[0x01, 0x00])),
+        (listed, &listed_data, 1, 1, Ok(&listed_data)),
+        (listed, &listed_data, 1, 2, Ok(&[0x01, 0x90, 0x40, 0x00])),
+        (
+            listed,
+            &listed_data,
+            1,
+            3,
+            Ok(&[0x01, 0xD0, 0x40, 0x00, 0x00]),
+        ),
+        (listed, &listed_data, 1, 4, out_of_range(4, 3)),
+        (listed, &listed_data, 1, -1, out_of_range(-1, 3)),
+        (tagged, &tagged_data, 0, 0, Ok(&tagged_data)),
+        (tagged, &tagged_data, 0, 1, Ok(&[0x84, 0xC8])),
+        (tagged, &tagged_data, 0, 2, out_of_range(2, 1)),
+        (tagged, &tagged_data, 0, -1, out_of_range(-1, 1)),
+    ];
+    for (root, data, k, value, expected) in cases {
+        let mut out = [0xEE; 16];
+        let written = set_leaf_at(
+            &layout,
+            root,
+            data,
+            k,
+            Scalar::Int(value),
+            &mut out,
+            options,
+        )
+        .map(|n| &out[..n])
+        .map_err(|e| e.kind);
+        assert_eq!(
+            written, expected,
+            "leaf [{k}] of {data:x?} set to Int({value})"
+        );
+    }
+}
+
+/// A stored value is exactly one value (issue 40): `{p_version: uint8 (version 3), a: uint8}`
+/// stored as 03 09 passes the check; with a byte after it, 03 09 00, it is refused as
+/// trailing bytes (2 used of 3) where the value ends, bit 16, by the build's plans and by the
+/// walk alone (firmware's), which answers whatever the plans decline.
+#[test]
+fn a_stored_value_with_a_byte_after_it_is_refused() {
+    use px4params_core::codec::{check_stored, check_stored_with};
+    let mut l = OwnedLayout::default();
+    let u8_ = l.uint(8, Cast::Saturated).unwrap();
+    let root = l
+        .structure(&[("p_version", u8_, Role::Version(3)), ("a", u8_, Role::Data)])
+        .unwrap();
+    let layout = l.as_layout();
+    let trailing = Err((ErrorKind::TrailingBytes { used: 2, len: 3 }, 16));
+    for check in [check_stored, check_stored_with::<NoPlans>] {
+        let checked = |data: &[u8]| check(&layout, root, data).map_err(|e| (e.kind, e.bit_offset));
+        assert_eq!(checked(&[0x03, 0x09]), Ok(()));
+        assert_eq!(checked(&[0x03, 0x09, 0x00]), trailing);
+    }
+}
