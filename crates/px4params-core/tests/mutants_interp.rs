@@ -9,11 +9,12 @@
 //! passes down to the last field of a struct, the selected variant of a union and the last
 //! element of an array, never into the elements of a tail array (whose count is what is left).
 
-use px4params_core::codec::{decode_leaves_with, decode_with};
+use px4params_core::codec::{decode_leaves_with, decode_with, encode_with};
 use px4params_core::compile::OwnedLayout;
-use px4params_core::layout::Role;
+use px4params_core::layout::{Field, Layout, Role};
 use px4params_core::plan::{HostPlans, NoPlans};
-use px4params_core::rules::{ArrayLen, At, LeafKind, Sink};
+use px4params_core::rules::{ArrayLen, At, LeafKind, Sink, Source};
+use px4params_core::value::{LeafError, LeafSource};
 use px4params_core::{walk, Cast, DecodeOptions, EncodeOptions, ErrorKind, Kind, NodeId, Scalar};
 
 fn uint(l: &mut OwnedLayout, bits: u32) -> NodeId {
@@ -147,7 +148,7 @@ const EVERY_KIND: [u8; 5] = [0xA5, 0xEC, 0xB2, 0x0A, 0x10];
 
 /// A sink that writes down what the decoder tells it, and refuses its `refuse`-th call.
 struct Record<'l> {
-    layout: &'l px4params_core::Layout<'l>,
+    layout: &'l Layout<'l>,
     events: Vec<String>,
     refuse: usize,
 }
@@ -316,4 +317,267 @@ fn a_tail_array_read_with_more_bytes_than_its_maximum_is_too_long_by_one() {
         decode_leaves_with::<HostPlans, _>(&layout, root, &[1u8, 2, 3][..], &mut leaves, options)
             .unwrap_err();
     assert_eq!(e.kind, too_long);
+}
+
+/// A source that gives a flat leaf list's leaves through the structured calls (not as a flat
+/// list), writes down each call the encoder makes, and refuses its `refuse`-th call.
+struct Script<'l> {
+    leaves: LeafSource<'l>,
+    events: Vec<String>,
+    refuse: usize,
+    /// Fields the source lacks (by name): a `p_version` is then the type's, another missing.
+    absent: &'l [&'l str],
+}
+
+impl Script<'_> {
+    fn note(&mut self, event: String) -> Result<(), LeafError> {
+        self.events.push(event);
+        match self.events.len() == self.refuse {
+            true => Err(LeafError::Full),
+            false => Ok(()),
+        }
+    }
+}
+
+impl Source for Script<'_> {
+    type Error = LeafError;
+    fn scalar(&mut self, kind: Kind) -> Result<Scalar, LeafError> {
+        let v = self.leaves.scalar(kind)?;
+        self.note(format!("{v:?}"))?;
+        Ok(v)
+    }
+    fn begin_struct(&mut self) -> Result<(), LeafError> {
+        self.note("struct".into())
+    }
+    fn field(&mut self, _index: u32, name: &str) -> Result<bool, LeafError> {
+        self.note(format!("field {name}"))?;
+        Ok(!self.absent.contains(&name))
+    }
+    fn end_field(&mut self) {
+        self.events.push("end field".into());
+    }
+    fn end_struct(
+        &mut self,
+        _: &Layout<'_>,
+        fields: &[Field],
+        used: usize,
+    ) -> Result<(), LeafError> {
+        self.note(format!("end struct {used} of {}", fields.len()))
+    }
+    fn begin_union(&mut self, layout: &Layout<'_>, variants: &[Field]) -> Result<u32, LeafError> {
+        let tag = self.leaves.begin_union(layout, variants)?;
+        self.note(format!("union {tag} of {}", variants.len()))?;
+        Ok(tag)
+    }
+    fn end_union(&mut self) {
+        self.events.push("end union".into());
+    }
+    fn begin_array(&mut self, fixed: Option<u32>) -> Result<usize, LeafError> {
+        let n = self.leaves.begin_array(fixed)?;
+        self.note(format!("array {fixed:?} {n}"))?;
+        Ok(n)
+    }
+    fn element(&mut self, index: usize) -> Result<(), LeafError> {
+        self.note(format!("element {index}"))
+    }
+    fn end_element(&mut self) {
+        self.events.push("end element".into());
+    }
+    fn end_array(&mut self) {
+        self.events.push("end array".into());
+    }
+}
+
+/// EVERY_KIND's leaves, in order: a, s.b, s.c, u's tag, u.y, f[0], f[1], t's length, t[0], t[1].
+const EVERY_KIND_LEAVES: [Scalar; 10] = [
+    Scalar::Uint(0xA5),
+    Scalar::Bool(true),
+    Scalar::Int(-2),
+    Scalar::Uint(1),
+    Scalar::Uint(9),
+    Scalar::Uint(1),
+    Scalar::Uint(2),
+    Scalar::Uint(2),
+    Scalar::Uint(0x41),
+    Scalar::Uint(0x42),
+];
+
+/// What the encoder asks a source, in order (the Source contract: a struct, each field, its
+/// value, the field left, the struct ended with the number of fields it had; a union's variant
+/// where it starts; an array's length, each element entered and left).
+const EVERY_KIND_ASKED: [&str; 40] = [
+    "struct",
+    "field a",
+    "Uint(165)",
+    "end field",
+    "field s",
+    "struct",
+    "field b",
+    "Bool(true)",
+    "end field",
+    "field c",
+    "Int(-2)",
+    "end field",
+    "end struct 2 of 2",
+    "end field",
+    "field u",
+    "union 1 of 2",
+    "Uint(9)",
+    "end union",
+    "end field",
+    "field f",
+    "array Some(2) 2",
+    "element 0",
+    "Uint(1)",
+    "end element",
+    "element 1",
+    "Uint(2)",
+    "end element",
+    "end array",
+    "end field",
+    "field t",
+    "array None 2",
+    "element 0",
+    "Uint(65)",
+    "end element",
+    "element 1",
+    "Uint(66)",
+    "end element",
+    "end array",
+    "end field",
+    "end struct 5 of 5",
+];
+
+#[test]
+fn a_source_is_asked_for_the_value_in_serialization_order() {
+    let mut l = OwnedLayout::default();
+    let root = every_kind(&mut l);
+    let layout = l.as_layout();
+    for plans in ["host", "firmware"] {
+        let mut source = Script {
+            leaves: LeafSource::new(&EVERY_KIND_LEAVES),
+            events: Vec::new(),
+            refuse: 0,
+            absent: &[],
+        };
+        let mut out = [0u8; 8];
+        let options = EncodeOptions::default();
+        let n = match plans {
+            "host" => encode_with::<HostPlans, _>(&layout, root, &mut source, &mut out, options),
+            _ => encode_with::<NoPlans, _>(&layout, root, &mut source, &mut out, options),
+        };
+        assert_eq!(n, Ok(5), "{plans}");
+        assert_eq!(out[..5], EVERY_KIND, "{plans}");
+        assert_eq!(source.events, EVERY_KIND_ASKED, "{plans}");
+    }
+}
+
+/// A source's refusal stops the encoder there, named by the path of the field it was asked
+/// about (the step taken before the source is asked) and the bits written so far.
+#[test]
+fn a_sources_refusal_is_the_error_where_it_was_refused() {
+    let mut l = OwnedLayout::default();
+    let root = every_kind(&mut l);
+    let layout = l.as_layout();
+    // Call n (1-based, of those that may refuse) refused: the error's path and bit offset.
+    let cases = [
+        (1, "", 0),       // struct
+        (2, "a", 0),      // field a
+        (3, "a", 0),      // its value
+        (6, "s", 8),      // s's struct
+        (13, "s", 12),    // s's end
+        (16, "u", 12),    // the union's variant
+        (21, "f", 17),    // the static array
+        (22, "f[0]", 17), // its element 0
+        (25, "f[1]", 19), // element 1
+        (31, "t", 21),    // the dynamic array's length
+        (40, "", 37),     // the root's end
+    ];
+    for (n, path, bit_offset) in cases {
+        let mut source = Script {
+            leaves: LeafSource::new(&EVERY_KIND_LEAVES),
+            events: Vec::new(),
+            refuse: n,
+            absent: &[],
+        };
+        let mut out = [0u8; 8];
+        let e = encode_with::<NoPlans, _>(
+            &layout,
+            root,
+            &mut source,
+            &mut out,
+            EncodeOptions::default(),
+        )
+        .unwrap_err();
+        assert_eq!(e.kind, ErrorKind::Value(LeafError::Full), "call {n}");
+        let got = (e.path.display(&layout).to_string(), e.bit_offset);
+        assert_eq!(
+            got,
+            (path.to_string(), bit_offset),
+            "call {n}: {:?}",
+            source.events.last()
+        );
+        assert_eq!(source.events.len(), n, "nothing after the refusal");
+    }
+}
+
+/// A field the source lacks: a `p_version` is written as the type's version (and not counted
+/// as one the source had), any other is missing, named by its path.
+#[test]
+fn a_field_the_source_lacks_is_the_types_version_or_missing() {
+    let mut l = OwnedLayout::default();
+    let byte = uint(&mut l, 8);
+    let version = uint(&mut l, 4);
+    let root = l
+        .structure(&[
+            ("p_version", version, Role::Version(3)),
+            ("x", byte, Role::Data),
+        ])
+        .unwrap();
+    let layout = l.as_layout();
+    let mut source = Script {
+        leaves: LeafSource::new(&[Scalar::Uint(0x81)]),
+        events: Vec::new(),
+        refuse: 0,
+        absent: &["p_version"],
+    };
+    let mut out = [0u8; 4];
+    let n = encode_with::<NoPlans, _>(
+        &layout,
+        root,
+        &mut source,
+        &mut out,
+        EncodeOptions::default(),
+    );
+    // 3 as uint4 (`0011`), then 0x81 (`1000_0001`), then 4 zero bits: 0011_1000 0001_0000.
+    assert_eq!(n, Ok(2));
+    assert_eq!(out[..2], [0x38, 0x10]);
+    let asked = [
+        "struct",
+        "field p_version",
+        "field x",
+        "Uint(129)",
+        "end field",
+        "end struct 1 of 2",
+    ];
+    assert_eq!(source.events, asked);
+    let mut source = Script {
+        leaves: LeafSource::new(&[Scalar::Uint(3)]),
+        events: Vec::new(),
+        refuse: 0,
+        absent: &["x"],
+    };
+    let e = encode_with::<NoPlans, _>(
+        &layout,
+        root,
+        &mut source,
+        &mut out,
+        EncodeOptions::default(),
+    )
+    .unwrap_err();
+    assert_eq!(e.kind, ErrorKind::MissingField);
+    assert_eq!(
+        (e.path.display(&layout).to_string(), e.bit_offset),
+        ("x".to_string(), 4)
+    );
 }
