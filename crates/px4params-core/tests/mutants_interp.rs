@@ -9,11 +9,11 @@
 //! passes down to the last field of a struct, the selected variant of a union and the last
 //! element of an array, never into the elements of a tail array (whose count is what is left).
 
-use px4params_core::codec::{decode_leaves_with, decode_with, encode_with};
+use px4params_core::codec::{decode_leaves_with, decode_with, encode_leaves_with, encode_with};
 use px4params_core::compile::OwnedLayout;
 use px4params_core::layout::{Field, Layout, Role};
 use px4params_core::plan::{HostPlans, NoPlans};
-use px4params_core::rules::{ArrayLen, At, LeafKind, Sink, Source};
+use px4params_core::rules::{ArrayLen, At, LeafKind, Sink, Source, MAX_DEPTH};
 use px4params_core::value::{LeafError, LeafSource};
 use px4params_core::{walk, Cast, DecodeOptions, EncodeOptions, ErrorKind, Kind, NodeId, Scalar};
 
@@ -580,4 +580,130 @@ fn a_field_the_source_lacks_is_the_types_version_or_missing() {
         (e.path.display(&layout).to_string(), e.bit_offset),
         ("x".to_string(), 4)
     );
+}
+
+/// `struct { E[<=2] arr }`, `E = struct { bool f; uint8[<=2] g }`: E is 3 bits at least, so
+/// `arr` keeps its 2-bit prefix though it ends the value; TAO passes to its last element, whose
+/// `g` ends the value and takes the remaining bytes; the other elements' `g` keep theirs.
+fn prefixed_array_at_the_end(l: &mut OwnedLayout) -> NodeId {
+    let byte = uint(l, 8);
+    let flag = l.boolean();
+    let g = l.dyn_array(byte, 2).unwrap();
+    let e = l
+        .structure(&[("f", flag, Role::Data), ("g", g, Role::Data)])
+        .unwrap();
+    let arr = l.dyn_array(e, 2).unwrap();
+    l.structure(&[("arr", arr, Role::Data)]).unwrap()
+}
+
+/// arr = [{f = 1, g = [0x33]}, {f = 0, g = [0x44, 0x55]}]: `10`, `1`, `01`, `0011_0011`, then
+/// the last element: `0`, `0100_0100`, `0101_0101` (no prefix), 2 bits of padding:
+/// 1010_1001 1001_1001 0001_0001 0101_0100.
+const PREFIXED_AT_THE_END: [u8; 4] = [0xA9, 0x99, 0x11, 0x54];
+
+/// A rewrite gives TAO to the last element written of an array that ends the value, and to no
+/// other (leaves: [0] arr's length, [1] arr[0].f, [2] arr[0].g's length, [3] arr[0].g[0],
+/// [4] arr[1].f, [5] arr[1].g's length, [6] and [7] its bytes).
+#[test]
+fn a_rewrite_gives_tao_to_the_last_element_of_an_array_ending_the_value() {
+    let mut l = OwnedLayout::default();
+    let root = prefixed_array_at_the_end(&mut l);
+    let layout = l.as_layout();
+    let mut leaves = [Scalar::Uint(0); 8];
+    let read = walk::decode(
+        &layout,
+        root,
+        &PREFIXED_AT_THE_END[..],
+        &mut leaves,
+        DecodeOptions::default(),
+    );
+    assert_eq!(read.map(|d| (d.bits, d.leaves)), Ok((30, 8)));
+    let (u, b) = (Scalar::Uint, Scalar::Bool);
+    let expected = [
+        u(2),
+        b(true),
+        u(1),
+        u(0x33),
+        b(false),
+        u(2),
+        u(0x44),
+        u(0x55),
+    ];
+    assert_eq!(leaves, expected);
+    let options = EncodeOptions {
+        tao: true,
+        ..EncodeOptions::default()
+    };
+    let mut out = [0u8; 16];
+    let rewrite = |k: usize, value: Scalar, out: &mut [u8]| {
+        walk::transcode(
+            &layout,
+            root,
+            &PREFIXED_AT_THE_END[..],
+            k,
+            value,
+            out,
+            options,
+        )
+        .unwrap_or_else(|e| panic!("{}", e.display(&layout)))
+    };
+    // arr[0].f cleared: bit 2.
+    let n = rewrite(1, Scalar::Bool(false), &mut out);
+    assert_eq!(&out[..n], &[0x89, 0x99, 0x11, 0x54]);
+    // arr cut to its first element, now the last: its g without prefix, `01` + `0011_0011`
+    // becomes `0011_0011`: `01`, `1`, `0011_0011`, padding: 0110_0110 0110_0000.
+    let n = rewrite(0, Scalar::Uint(1), &mut out);
+    assert_eq!(&out[..n], &[0x66, 0x60]);
+}
+
+/// A uint8[<=3] inside `depth - 1` one-field structs (the array `depth - 1` levels below the
+/// root, its elements one more): followed while the elements are within MAX_DEPTH, else
+/// refused, with the plans as without them.
+#[test]
+fn primitive_elements_one_past_the_bound_are_refused_with_plans_as_without() {
+    fn run<P: px4params_core::plan::Plans>(
+        depth: usize,
+        tao: bool,
+    ) -> Result<(Vec<u8>, Vec<Scalar>), ErrorKind<LeafError>> {
+        let mut l = OwnedLayout::default();
+        let byte = uint(&mut l, 8);
+        let mut node = l.dyn_array(byte, 3).unwrap();
+        for _ in 1..depth {
+            node = l.structure(&[("x", node, Role::Data)]).unwrap();
+        }
+        let layout = l.as_layout();
+        let leaves = [Scalar::Uint(2), Scalar::Uint(7), Scalar::Uint(9)];
+        let mut out = [0u8; 8];
+        let options = EncodeOptions {
+            tao,
+            ..EncodeOptions::default()
+        };
+        let n = encode_leaves_with::<P>(&layout, node, &leaves, &mut out, options)
+            .map_err(|e| e.kind)?;
+        let mut back = [Scalar::Uint(0); 4];
+        let options = DecodeOptions {
+            tao,
+            ..DecodeOptions::default()
+        };
+        let d = decode_leaves_with::<P, _>(&layout, node, &out[..n], &mut back, options)
+            .map_err(|e| e.kind)?;
+        Ok((out[..n].to_vec(), back[..d.leaves].to_vec()))
+    }
+    let leaves = vec![Scalar::Uint(2), Scalar::Uint(7), Scalar::Uint(9)];
+    for tao in [true, false] {
+        // With TAO the array ends the value: no prefix. Without: `10`, then 7 and 9.
+        let bytes = match tao {
+            true => vec![0x07, 0x09],
+            false => vec![0x81, 0xC2, 0x40],
+        };
+        // The array at depth `depth` (the root is 1), its elements at `depth + 1`.
+        for depth in MAX_DEPTH - 2..=MAX_DEPTH + 1 {
+            let (host, firmware) = (run::<HostPlans>(depth, tao), run::<NoPlans>(depth, tao));
+            assert_eq!(host, firmware, "depth {depth}, tao {tao}");
+            match depth < MAX_DEPTH {
+                true => assert_eq!(host, Ok((bytes.clone(), leaves.clone())), "depth {depth}"),
+                false => assert_eq!(host, Err(ErrorKind::TooDeep), "depth {depth}"),
+            }
+        }
+    }
 }
