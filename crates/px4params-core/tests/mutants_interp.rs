@@ -707,3 +707,106 @@ fn primitive_elements_one_past_the_bound_are_refused_with_plans_as_without() {
         }
     }
 }
+
+/// A value is zero-padded to a byte boundary at its end, whatever the output held before: the
+/// walk's writes (a rewrite, a default, leaves) into a buffer full of ones.
+#[test]
+fn the_last_bytes_unused_bits_are_zero_whatever_the_output_held() {
+    let mut l = OwnedLayout::default();
+    let root = every_kind(&mut l);
+    let layout = l.as_layout();
+    let options = EncodeOptions::default();
+    let mut out = [0xFFu8; 8];
+    let n = walk::encode(&layout, root, &EVERY_KIND_LEAVES, &mut out, options).unwrap();
+    assert_eq!(out[..n], EVERY_KIND);
+    let mut out = [0xFFu8; 8];
+    // t[1] = 0x43: its last 5 bits `00011` then 3 of padding.
+    let n = walk::transcode(
+        &layout,
+        root,
+        &EVERY_KIND[..],
+        9,
+        Scalar::Uint(0x43),
+        &mut out,
+        options,
+    )
+    .unwrap();
+    assert_eq!(out[..n], [0xA5, 0xEC, 0xB2, 0x0A, 0x18]);
+    // The default: every field zero, variant x (tag 0, 8 bits), t empty: 8 + 4 + 1 + 8 + 4
+    // = 25 bits, 4 bytes of zeros.
+    let mut out = [0xFFu8; 8];
+    let n = walk::encode_default(&layout, root, &mut out, true).unwrap();
+    assert_eq!(out[..n], [0, 0, 0, 0]);
+}
+
+/// An output too small: the value is walked to its end, and the error says how many bytes it
+/// needs, as the encoder does.
+#[test]
+fn an_output_too_small_says_how_many_bytes_the_value_needs() {
+    let mut l = OwnedLayout::default();
+    let root = every_kind(&mut l);
+    let layout = l.as_layout();
+    let options = EncodeOptions::default();
+    for size in 0..5 {
+        let mut out = vec![0u8; size];
+        let e = walk::encode(&layout, root, &EVERY_KIND_LEAVES, &mut out, options).unwrap_err();
+        assert_eq!(
+            e.kind,
+            ErrorKind::BufferTooSmall { needed: 5 },
+            "{size} bytes"
+        );
+        assert_eq!(e.bit_offset, 37, "{size} bytes");
+        let e = encode_leaves_with::<NoPlans>(&layout, root, &EVERY_KIND_LEAVES, &mut out, options)
+            .unwrap_err();
+        assert_eq!(
+            e.kind,
+            ErrorKind::BufferTooSmall { needed: 5 },
+            "{size} bytes"
+        );
+        let e = walk::transcode(
+            &layout,
+            root,
+            &EVERY_KIND[..],
+            0,
+            Scalar::Uint(1),
+            &mut out,
+            options,
+        )
+        .unwrap_err();
+        assert_eq!(
+            e.kind,
+            ErrorKind::BufferTooSmall { needed: 5 },
+            "{size} bytes"
+        );
+    }
+}
+
+/// Data that ends inside a leaf: truncated, with the bits the leaf needs and those there are,
+/// named by the leaf's path and where it starts; the walk as the decoder.
+#[test]
+fn data_ending_inside_a_leaf_is_truncated_at_that_leaf() {
+    let mut l = OwnedLayout::default();
+    let root = every_kind(&mut l);
+    let layout = l.as_layout();
+    // Two bytes: a, s, the tag (bits 0-13), then u.y needs bits 13-17.
+    let data = &EVERY_KIND[..2];
+    let truncated = ErrorKind::Truncated {
+        needed_bits: 17,
+        available_bits: 16,
+    };
+    let mut leaves = [Scalar::Uint(0); 16];
+    let options = DecodeOptions::default();
+    let e = walk::decode(&layout, root, data, &mut leaves, options).unwrap_err();
+    assert_eq!(e.kind, truncated);
+    assert_eq!(
+        (e.path.display(&layout).to_string(), e.bit_offset),
+        ("u.y".into(), 13)
+    );
+    let e =
+        decode_leaves_with::<NoPlans, _>(&layout, root, data, &mut leaves, options).unwrap_err();
+    assert_eq!(e.kind, truncated);
+    assert_eq!(
+        (e.path.display(&layout).to_string(), e.bit_offset),
+        ("u.y".into(), 13)
+    );
+}
