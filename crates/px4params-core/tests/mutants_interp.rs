@@ -810,3 +810,42 @@ fn data_ending_inside_a_leaf_is_truncated_at_that_leaf() {
         ("u.y".into(), 13)
     );
 }
+
+/// Decoding reads a `p_version` field as any other primitive: its bits, its value, its place.
+#[test]
+fn a_p_version_field_is_decoded_as_the_primitive_it_is() {
+    let mut l = OwnedLayout::default();
+    let byte = uint(&mut l, 8);
+    let version = uint(&mut l, 4);
+    let root = l
+        .structure(&[
+            ("p_version", version, Role::Version(3)),
+            ("x", byte, Role::Data),
+        ])
+        .unwrap();
+    let layout = l.as_layout();
+    // 2 as uint4 (`0010`, not the type's 3: decoding does not check it), 0x81, padding.
+    let data = [0x28u8, 0x10];
+    for plans in ["host", "firmware"] {
+        let mut sink = Record {
+            layout: &layout,
+            events: Vec::new(),
+            refuse: 0,
+        };
+        let options = DecodeOptions::default();
+        let bits = match plans {
+            "host" => decode_with::<HostPlans, _, _>(&layout, root, &data[..], &mut sink, options),
+            _ => decode_with::<NoPlans, _, _>(&layout, root, &data[..], &mut sink, options),
+        };
+        assert_eq!(bits, Ok(12), "{plans}");
+        let told = [
+            "struct 2",
+            "field p_version",
+            "Uint(2) p_version @0",
+            "field x",
+            "Uint(129) x @4",
+            "end struct",
+        ];
+        assert_eq!(sink.events, told, "{plans}");
+    }
+}
