@@ -849,3 +849,49 @@ fn a_p_version_field_is_decoded_as_the_primitive_it_is() {
         assert_eq!(sink.events, told, "{plans}");
     }
 }
+
+/// A leaf refused inside a fixed-shape run (encoded in one piece with the plans) is named by
+/// its own path: element and field, as the walk names it.
+#[test]
+fn a_leaf_refused_inside_a_run_of_structs_is_named_by_its_own_path() {
+    let mut l = OwnedLayout::default();
+    let byte = uint(&mut l, 8);
+    let p = l
+        .structure(&[("a", byte, Role::Data), ("b", byte, Role::Data)])
+        .unwrap();
+    let arr = l.array(p, 2).unwrap();
+    let root = l.structure(&[("arr", arr, Role::Data)]).unwrap();
+    let layout = l.as_layout();
+    let options = EncodeOptions {
+        saturate: false,
+        ..EncodeOptions::default()
+    };
+    // Leaves arr[0].a, arr[0].b, arr[1].a, arr[1].b: each in turn 300, past uint8's 255.
+    for (k, path) in ["arr[0].a", "arr[0].b", "arr[1].a", "arr[1].b"]
+        .iter()
+        .enumerate()
+    {
+        let mut leaves = [Scalar::Uint(1); 4];
+        leaves[k] = Scalar::Uint(300);
+        let mut out = [0u8; 8];
+        for plans in ["host", "firmware"] {
+            let e = match plans {
+                "host" => {
+                    encode_leaves_with::<HostPlans>(&layout, root, &leaves, &mut out, options)
+                }
+                _ => encode_leaves_with::<NoPlans>(&layout, root, &leaves, &mut out, options),
+            }
+            .unwrap_err();
+            assert!(
+                matches!(e.kind, ErrorKind::Scalar(_)),
+                "{plans}: {:?}",
+                e.kind
+            );
+            assert_eq!(
+                e.path.display(&layout).to_string(),
+                *path,
+                "{plans}, leaf [{k}]"
+            );
+        }
+    }
+}
