@@ -337,6 +337,7 @@ RUST_ISSUE40_TESTS="$RUST_ISSUE40_TESTS mutants_compile mutants_rules"
 
 # The tests written for the survivors of program.rs and straight.rs (mutcore, seventh round):
 RUST_ISSUE40_TESTS="$RUST_ISSUE40_TESTS mutants_program mutants_straight"
+RUST_ISSUE40_TESTS="$RUST_ISSUE40_TESTS mutants_interp"
 
 if [ "$#" -eq 0 ]; then
   set -- can_transfer dronecan_params health links gui migrate vehicle store rust-core rust-ffi
