@@ -313,7 +313,7 @@ NEW_TESTS="$NEW_TESTS|test_drivers"
 # migrate/build.py's tables of PX4 facts are held by tests/test_migrate_build.py (first: -x stops
 # at the first test that fails); the baseline leaves it out. This entry replaces the one above.
 TARGETS+=(
-  "migrate-build|$PY/migrate/build.py|tests/test_migrate_build.py tests/test_migrate.py tests/test_migrate_defects.py tests/test_migrate_config.py -k 'not cli and not needs_no_checkout'"
+  "migrate-build|$PY/migrate/build.py|tests/test_migrate_build.py tests/test_migrate_board_rows.py tests/test_migrate_upgrade.py tests/test_migrate.py tests/test_migrate_defects.py tests/test_migrate_config.py -k 'not cli and not needs_no_checkout'"
 )
 NEW_TESTS="$NEW_TESTS|test_migrate_build"
 
