@@ -265,3 +265,22 @@ def test_a_target_without_a_known_board_is_said_to_compare_nothing(
         "--target-release main: no board known, so no board script is compared (--board NAME "
         "names it)"
     ) in report["assumptions"]
+
+
+def test_a_target_for_a_file_naming_no_release_says_so(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """QGC's offline-editing file has no '# Version' line: its board script is judged with the
+    newest row, and a target older than that is refused saying the file named no release (not
+    "older than the file's PX4 main", which the file never said)."""
+    path = shared_data.shared_file("qgc_offline_editing_v1.4.params")
+    out = tmp_path / "out.airframe"
+    code = main(["migrate", str(path), "--board", "px4_fmu-v5", "--target-release", "v1.15.0",
+                 "-o", str(out)])  # fmt: skip
+    assert code != 0
+    err = capsys.readouterr().err
+    assert err == (
+        "px4params: error: --target-release v1.15.0: older than PX4 main, taken for a file that "
+        "names no release (no '# Version' line) (expected one of main)\n"
+    )
+    assert not out.exists()

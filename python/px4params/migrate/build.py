@@ -1340,8 +1340,14 @@ def _upgrade(config: OldConfig, board: Any, target: str | None, assumptions: lis
     later = known[known.index(own) + 1 :]
     if target is not None:
         if known.index(target) < known.index(own):
+            # a file naming no release has no release to be older than: say what was taken
+            whose = (
+                f"the file's PX4 {own}"
+                if version
+                else (f"PX4 {own}, taken for a file that names no release (no '# Version' line)")
+            )
             raise MigrationError(
-                f"--target-release {target}: older than the file's PX4 {own} (expected one of "
+                f"--target-release {target}: older than {whose} (expected one of "
                 f"{', '.join(known[known.index(own) :])})"
             )
         later = later[: later.index(target) + 1] if target in later else ()
