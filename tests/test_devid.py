@@ -1160,3 +1160,67 @@ def test_a_log_entry_is_a_value_and_its_json(tmp_path: Path) -> None:
         top.value = 1  # type: ignore[misc]
     bare = devid.LogDeviceId("CAL_MAG0_ID", 0, devid.decode(0, None))
     assert (bare.problem, bare.timestamp_us, bare.warning) == (None, None, None)
+
+
+@pytest.mark.issue40
+def test_header_values_c_does_not_allow_are_refused(tmp_path: Path) -> None:
+    """Parentheses and the suffixes u, U, l, L around a C integer literal are all that is taken
+    off a #define's value (``(0x12U)``, ``0x13UL``): an X after the digits is no C suffix."""
+    header = tmp_path / "drv_sensor.h"
+    header.write_text("#define DRV_MAG_DEVTYPE_A (0x12U)\n#define DRV_MAG_DEVTYPE_B 0x13UL\n")
+    assert [(e.code, e.name) for e in devid.load_table("current", header)] == [
+        (0x12, "A"), (0x13, "B"),
+    ]  # fmt: skip
+    for value in ("0x1AX", "(0x1A)X"):
+        header.write_text(f"#define DRV_MAG_DEVTYPE_A 0x12\n#define DRV_MAG_DEVTYPE_B {value}\n")
+        with pytest.raises(DeviceIdError) as e:
+            devid.load_table("current", header)
+        assert str(e.value) == f"{header}:2: devtype code {value.strip('()')!r} is not a number"
+
+
+@pytest.mark.issue40
+def test_bad_table_file_messages_word_for_word(tmp_path: Path) -> None:
+    """A TSV line that is not ``code<TAB>name`` and a file without a devtype: the whole line."""
+    tsv = tmp_path / "t.tsv"
+    tsv.write_text("code\tname\n0x01\n")
+    with pytest.raises(DeviceIdError) as e:
+        devid.load_table("current", tsv)
+    assert str(e.value) == (
+        f"{tsv}:2: expected 'code<TAB>name' (e.g. '0x09<TAB>DRV_MAG_DEVTYPE_AK09916'), got '0x01'"
+    )
+    tsv.write_text("code\tname\n")
+    with pytest.raises(DeviceIdError) as e:
+        devid.load_table("current", tsv)
+    assert str(e.value) == (
+        f"{tsv}: no devtypes found (expected 'code<TAB>name' lines or a drv_sensor.h with "
+        "'#define DRV_..._DEVTYPE_... 0x..' lines)"
+    )
+
+
+@pytest.mark.issue40
+def test_parse_devtypes_without_a_source_names_the_text_devtypes() -> None:
+    with pytest.raises(DeviceIdError) as e:
+        devid.parse_devtypes("0x01\n")
+    assert str(e.value).startswith("<devtypes>:1: expected 'code<TAB>name' ")
+
+
+@pytest.mark.issue40
+def test_a_missing_devtypes_file_word_for_word(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """--devtypes and $PX4PARAMS_DEVTYPES name the file they give; an install whose own
+    current.tsv is gone says which file it could not read."""
+    missing = tmp_path / "nope.tsv"
+    code, _, err = run_cli(capsys, "--devtypes", str(missing), "1")
+    assert (code, err) == (1, f"px4params: error: devtypes file not found: {missing}\n")
+    monkeypatch.setenv(devid.DEVTYPES_ENV, str(missing))
+    with pytest.raises(DeviceIdError) as e:
+        devid.load_table("current")
+    assert str(e.value) == f"$PX4PARAMS_DEVTYPES not found: {missing}"
+    monkeypatch.delenv(devid.DEVTYPES_ENV)
+    monkeypatch.setattr("px4params.data.DEVTYPES_DIR", str(tmp_path))
+    with pytest.raises(DeviceIdError) as e:
+        devid.load_table("current")
+    assert str(e.value) == (
+        f"cannot read devtypes file {tmp_path / 'current.tsv'}: No such file or directory"
+    )

@@ -11,10 +11,12 @@ import struct
 import subprocess
 import sys
 import tempfile
+from collections import Counter
 from pathlib import Path
 
 import px4params
 import pytest
+from core_calls import count_core_calls
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 from hypothesis.stateful import RuleBasedStateMachine, invariant, precondition, rule
@@ -1250,3 +1252,22 @@ def test_a_signed_p_version_holds_the_types_version_as_an_unsigned_one_does(
     store.save(saved)
     again = px4params.Store.load(saved, schema, classic=[])
     assert again.get("SIGNED#0") == {"p_version": 3, "a": 200}
+
+
+@pytest.mark.issue40
+def test_a_plain_number_is_checked_against_its_range_without_decoding_the_value(
+    store: px4params.Store, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A plain number for a leaf with @min/@max (Ina238.1.1.dsdl: shunt 0.00001..0.1, leaf 6)
+    is checked as the leaf would keep it, without the value decoded: by [k], the leaf is looked
+    up once and written once; refused by path, it is looked up only to say why."""
+    store.add("INA238#0")
+    counted = count_core_calls(store, monkeypatch)
+    store.set("INA238#0[6]", 0.05)
+    assert counted.calls == Counter(get_leaf=1, set_leaf=1)
+    counted.calls.clear()
+    with pytest.raises(ValueRangeError) as e:
+        store.set("INA238#0.shunt", 0.2)
+    assert str(e.value) == "INA238#0.shunt: 0.2 is outside 0.00001..0.1 (@min/@max)"
+    assert counted.calls == Counter(get_leaf=1)
+    assert store.get("INA238#0.shunt") == pytest.approx(0.05, abs=1e-4)  # a float16 of it
