@@ -71,6 +71,11 @@ VALUE_ERRORS: list[tuple[dict[str, Any], type[Exception], str]] = [
     (with_(f=True), ValueShapeError, "t.T: f: expected a number, got bool"),
     (with_(f=[1.0]), ValueShapeError, "t.T: f: expected a number, got list"),
     (with_(flag=0.5), ValueShapeError, "t.T: flag: expected a boolean, got float"),
+    (
+        with_(f=-(10**309)),
+        EncodeError,
+        f"t.T: f: value {-(10**309)} is out of range of a float64 (write inf or -inf for infinity)",
+    ),
     (with_(s=5), ValueShapeError, "t.T: s: expected a dict (struct), got int"),
     (with_(bytes=5), ValueShapeError, "t.T: bytes: expected a list (array), got int"),
     (with_(bytes={"x": 1}), ValueShapeError, "t.T: bytes: expected a list (array), got dict"),

@@ -1271,3 +1271,25 @@ def test_a_plain_number_is_checked_against_its_range_without_decoding_the_value(
     assert str(e.value) == "INA238#0.shunt: 0.2 is outside 0.00001..0.1 (@min/@max)"
     assert counted.calls == Counter(get_leaf=1)
     assert store.get("INA238#0.shunt") == pytest.approx(0.05, abs=1e-4)  # a float16 of it
+
+
+@pytest.mark.issue40
+def test_an_int_beyond_every_float64_is_refused_in_one_line_not_raised_as_overflow(
+    store: px4params.Store,
+) -> None:
+    """Python's float() of 10**400 raises OverflowError; a store write of it to a float leaf
+    (by path, by [k]) is refused as the CLI refuses 1e400, and the store keeps its value."""
+    store.add("INA238#0")
+    store.set("INA238#0.shunt", 0.05)
+    before = store.get("INA238#0.shunt")
+    huge = 10**400
+    for key, value in (("INA238#0.shunt", huge), ("INA238#0[6]", -huge)):
+        with pytest.raises(px4params.Px4ParamsError) as e:
+            store.set(key, value)
+        message = str(e.value)
+        assert "\n" not in message and not isinstance(e.value, OverflowError)
+        assert message == (
+            f"INA238#0: shunt: value {value} is out of range of a float64 "
+            "(write inf or -inf for infinity)"
+        )
+        assert store.get("INA238#0.shunt") == before

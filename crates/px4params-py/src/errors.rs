@@ -68,6 +68,8 @@ pub(crate) enum ValueError<'py> {
         min: Scalar,
         max: Scalar,
     },
+    /// An integer given for a float that no float64 holds (beyond ±1.8e308).
+    BeyondFloat64 { value: Bound<'py, PyAny> },
     /// An integer other than 0 and 1 for a boolean.
     NotABoolean { value: Bound<'py, PyAny> },
     /// A struct's key that names none of its fields (`fields`, padding left out).
@@ -156,7 +158,9 @@ fn scalar_text(value: Scalar) -> String {
 impl ValueError<'_> {
     fn class(&self) -> Class {
         match self {
-            Self::OutOfRange { .. } | Self::NotABoolean { .. } => Class::Encode,
+            Self::OutOfRange { .. } | Self::BeyondFloat64 { .. } | Self::NotABoolean { .. } => {
+                Class::Encode
+            }
             _ => Class::Shape,
         }
     }
@@ -183,6 +187,10 @@ impl ValueError<'_> {
                 value.str()?,
                 scalar_text(*min),
                 scalar_text(*max)
+            ),
+            Self::BeyondFloat64 { value } => format!(
+                "value {} is out of range of a float64 (write inf or -inf for infinity)",
+                value.str()?
             ),
             Self::NotABoolean { value } => format!(
                 "value {} is out of range (expected a boolean: true, false, 0 or 1)",

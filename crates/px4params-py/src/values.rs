@@ -101,8 +101,15 @@ fn float_of<'py>(obj: &Bound<'py, PyAny>) -> Result<f64, ValueError<'py>> {
     if obj.is_instance_of::<PyBool>() {
         return Err(wrong(Expected::Number, obj));
     }
-    if obj.is_instance_of::<PyFloat>() || obj.is_instance_of::<PyInt>() {
+    if obj.is_instance_of::<PyFloat>() {
         return Ok(obj.extract::<f64>()?);
+    }
+    if obj.is_instance_of::<PyInt>() {
+        // An int beyond every double is refused as out of range (as the CLI refuses 1e400),
+        // not raised as Python's OverflowError.
+        return obj
+            .extract::<f64>()
+            .map_err(|_| ValueError::BeyondFloat64 { value: obj.clone() });
     }
     if let Ok(s) = obj.cast::<PyString>() {
         return match s.to_str()?.trim().to_ascii_lowercase().as_str() {

@@ -419,7 +419,10 @@ def stored_number(value: object, rng: LeafRange) -> int | float | None:
     if rng.float_bits:
         if type(value) is not float and type(value) is not int:
             return None
-        number = float(value)
+        try:
+            number = float(value)
+        except OverflowError:  # an int beyond every double: the codec refuses it
+            return None
         if not math.isfinite(number):
             return number
         packer = _FLOAT_PACKERS.get(rng.float_bits)
