@@ -633,6 +633,9 @@ EXACT = "names are exact, in upper case with ASCII digits and no spaces, as PX4'
         ("INA238#000001", "INA238#1"),
         ("INA238#00[4]", "INA238#0[4]"),
         ("INA238#1[04]", "INA238#1[4]"),
+        # and an index in a path neither (docs/store.md: one leaf, one name)
+        ("MIX#0.arr[01]", "MIX#0.arr[1]"),
+        ("MIX#00.arr[0].b[007]", "MIX#0.arr[0].b[7]"),
     ],
 )
 def test_an_inexact_name_is_refused_with_the_exact_one(text: str, hint: str) -> None:

@@ -61,7 +61,29 @@ def _split_key(
         while j < end and text[j] in _PATH_REST:
             j += 1
         path, i = text[i + 1 : j], j
+        if not leading_zeros and _zero_led_index(path):
+            return None
     return (name, instance, index, path) if i == end else None
+
+
+def _zero_led_index(path: str) -> bool:
+    """Whether an index in ``path`` (``arr[01]``) is written with a leading zero."""
+    at = path.find("[0")
+    while at >= 0:
+        if at + 2 < len(path) and path[at + 2] in _DIGITS:
+            return True
+        at = path.find("[0", at + 2)
+    return False
+
+
+def _without_leading_zeros(path: str) -> str:
+    """``path`` with its indices written without leading zeros (``arr[007]`` -> ``arr[7]``)."""
+    parts = path.split("[")
+    for n, part in enumerate(parts[1:], 1):
+        digits = _number_end(part, 0, True)
+        if digits > 1:
+            parts[n] = str(int(part[:digits])) + part[digits:]
+    return "[".join(parts)
 
 
 #: Digits of a name: ASCII only, as PX4's (``str.isdecimal`` would take ``٣`` for 3).
@@ -97,7 +119,7 @@ def _exact_name_hint(text: str) -> str | None:
     if index is not None:
         exact += f"[{int(index)}]"
     elif path is not None:
-        exact += f".{path}"
+        exact += f".{_without_leading_zeros(path)}"
     return exact if exact != text else None
 
 
