@@ -14,6 +14,7 @@ bus type (1: I2C).
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import pytest
@@ -715,3 +716,38 @@ def test_a_cube_oranges_v1_11_here2_line_is_its_second_external_bus() -> None:
             reason, line = left_out(proposal)[f"CAL_MAG0_ID = {found}"]
             assert reason == "board"
             assert "boards/cubepilot/cubeorange/init/rc.board_sensors:17 at v1.11.0 " in line
+
+
+# -- a board whose I2C buses the table does not know ---------------------------------------------
+
+HMC5883_BUS1 = 0x01 << 16 | 0x1E << 8 | 1 << 3 | 1  # 73225
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize("bus", [1, 2])
+def test_a_row_without_b_is_on_any_bus_where_the_buses_are_unknown(bus: int) -> None:
+    # PX4 main, boards/airmind/mindpx-v2/init/rc.board_sensors line 9 `hmc5883 -T -I -R 12
+    # start`: without the board's i2c.cpp (no i2c_buses_path) which buses -I tries is not
+    # known, so the row may be on any bus: an HMC5883 on bus 1 or 2 is the board's.
+    mindpx = dataclasses.replace(board("airmind_mindpx-v2", "v1.15.0"), i2c_buses_path="")
+    found = HMC5883_BUS1 if bus == 1 else HMC5883_BUS2
+    proposal = migrate.migrate(config({"CAL_MAG0_ID": found}), table="current", board=mindpx)
+    assert placed(proposal) == []
+    reason, line = left_out(proposal)[f"CAL_MAG0_ID = {found}"]
+    assert reason == "board"
+    assert "boards/airmind/mindpx-v2/init/rc.board_sensors:9 at " in line
+
+
+@pytest.mark.issue40
+def test_a_row_with_b_is_on_that_bus_alone_where_the_buses_are_unknown() -> None:
+    # PX4 main, boards/cuav/nora/init/rc.board_sensors line 29 `ist8310 -X -b 1 -R 10 start`:
+    # without the board's i2c.cpp its -b 1 is taken as bus 1: an IST8310 there is the
+    # board's, one on bus 2 is proposed.
+    nora = dataclasses.replace(board("cuav_nora", "v1.15.0"), i2c_buses_path="")
+    for found, proposed in ((IST8310_BUS1, []), (IST8310_BUS2, [("IST8310#0", 2, 0x0E)])):
+        proposal = migrate.migrate(config({"CAL_MAG0_ID": found}), table="current", board=nora)
+        assert placed(proposal) == proposed
+        if not proposed:
+            reason, line = left_out(proposal)[f"CAL_MAG0_ID = {found}"]
+            assert reason == "board"
+            assert "boards/cuav/nora/init/rc.board_sensors:29 at " in line
