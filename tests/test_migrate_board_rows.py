@@ -751,3 +751,20 @@ def test_a_row_with_b_is_on_that_bus_alone_where_the_buses_are_unknown() -> None
             reason, line = left_out(proposal)[f"CAL_MAG0_ID = {found}"]
             assert reason == "board"
             assert "boards/cuav/nora/init/rc.board_sensors:29 at " in line
+
+
+RM3100_BUS4 = 0x07 << 16 | 0x20 << 8 | 4 << 3 | 1  # 466977
+
+
+@pytest.mark.issue40
+def test_an_internal_row_settled_not_to_run_does_not_take_the_device() -> None:
+    # PX4 v1.15.0, boards/px4/fmu-v6x/init/rc.board_sensors line 143 `rm3100 -I -b 4 start`
+    # runs only where hw_type in V6X001; a log of a V6X000000 settles that it does not, so
+    # the row does not make an RM3100 on internal bus 4 the board's: it is proposed.
+    proposal = migrate.migrate(
+        config({"CAL_MAG0_ID": RM3100_BUS4}, hw_type="V6X000000"),
+        table="current",
+        board=board("px4_fmu-v6x", "v1.15.0"),
+    )
+    assert left_out(proposal) == {}
+    assert placed(proposal) == [("RM3100#0", 4, 0x20)]
