@@ -768,3 +768,21 @@ def test_an_internal_row_settled_not_to_run_does_not_take_the_device() -> None:
     )
     assert left_out(proposal) == {}
     assert placed(proposal) == [("RM3100#0", 4, 0x20)]
+
+
+@pytest.mark.issue40
+def test_a_cubes_bus_2_compass_notes_that_only_x_starts_reach_it() -> None:
+    # PX4 main, boards/px4/fmu-v3/src/i2c.cpp line 52: bus 2 is external where hw_type is V30
+    # (a Cube); platforms/common/i2c.cpp tries -I starts only on internal buses, -X starts only
+    # on external ones: rc.sensors' probe finds an IST8310 there, the board's -I rows do not.
+    proposal = migrate.migrate(
+        config({"CAL_MAG0_ID": IST8310_BUS2, "SENS_EXT_I2C_PRB": 1}, hw_type="V30"),
+        table="current",
+        board=board("px4_fmu-v3", "v1.15.0"),
+    )
+    (inst,) = proposal.instances
+    assert inst.notes == [
+        "I2C bus 2 is external where hw_type in V30 (PX4/PX4-Autopilot "
+        "boards/px4/fmu-v3/src/i2c.cpp:52 at main (branch main, bb59c637cd, 2026-08-13)): the "
+        "board's -I starts try no bus there, rc.sensors' -X starts do"
+    ]
