@@ -14,6 +14,7 @@ bus type (1: I2C).
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import pytest
@@ -715,3 +716,73 @@ def test_a_cube_oranges_v1_11_here2_line_is_its_second_external_bus() -> None:
             reason, line = left_out(proposal)[f"CAL_MAG0_ID = {found}"]
             assert reason == "board"
             assert "boards/cubepilot/cubeorange/init/rc.board_sensors:17 at v1.11.0 " in line
+
+
+# -- a board whose I2C buses the table does not know ---------------------------------------------
+
+HMC5883_BUS1 = 0x01 << 16 | 0x1E << 8 | 1 << 3 | 1  # 73225
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize("bus", [1, 2])
+def test_a_row_without_b_is_on_any_bus_where_the_buses_are_unknown(bus: int) -> None:
+    # PX4 main, boards/airmind/mindpx-v2/init/rc.board_sensors line 9 `hmc5883 -T -I -R 12
+    # start`: without the board's i2c.cpp (no i2c_buses_path) which buses -I tries is not
+    # known, so the row may be on any bus: an HMC5883 on bus 1 or 2 is the board's.
+    mindpx = dataclasses.replace(board("airmind_mindpx-v2", "v1.15.0"), i2c_buses_path="")
+    found = HMC5883_BUS1 if bus == 1 else HMC5883_BUS2
+    proposal = migrate.migrate(config({"CAL_MAG0_ID": found}), table="current", board=mindpx)
+    assert placed(proposal) == []
+    reason, line = left_out(proposal)[f"CAL_MAG0_ID = {found}"]
+    assert reason == "board"
+    assert "boards/airmind/mindpx-v2/init/rc.board_sensors:9 at " in line
+
+
+@pytest.mark.issue40
+def test_a_row_with_b_is_on_that_bus_alone_where_the_buses_are_unknown() -> None:
+    # PX4 main, boards/cuav/nora/init/rc.board_sensors line 29 `ist8310 -X -b 1 -R 10 start`:
+    # without the board's i2c.cpp its -b 1 is taken as bus 1: an IST8310 there is the
+    # board's, one on bus 2 is proposed.
+    nora = dataclasses.replace(board("cuav_nora", "v1.15.0"), i2c_buses_path="")
+    for found, proposed in ((IST8310_BUS1, []), (IST8310_BUS2, [("IST8310#0", 2, 0x0E)])):
+        proposal = migrate.migrate(config({"CAL_MAG0_ID": found}), table="current", board=nora)
+        assert placed(proposal) == proposed
+        if not proposed:
+            reason, line = left_out(proposal)[f"CAL_MAG0_ID = {found}"]
+            assert reason == "board"
+            assert "boards/cuav/nora/init/rc.board_sensors:29 at " in line
+
+
+RM3100_BUS4 = 0x07 << 16 | 0x20 << 8 | 4 << 3 | 1  # 466977
+
+
+@pytest.mark.issue40
+def test_an_internal_row_settled_not_to_run_does_not_take_the_device() -> None:
+    # PX4 v1.15.0, boards/px4/fmu-v6x/init/rc.board_sensors line 143 `rm3100 -I -b 4 start`
+    # runs only where hw_type in V6X001; a log of a V6X000000 settles that it does not, so
+    # the row does not make an RM3100 on internal bus 4 the board's: it is proposed.
+    proposal = migrate.migrate(
+        config({"CAL_MAG0_ID": RM3100_BUS4}, hw_type="V6X000000"),
+        table="current",
+        board=board("px4_fmu-v6x", "v1.15.0"),
+    )
+    assert left_out(proposal) == {}
+    assert placed(proposal) == [("RM3100#0", 4, 0x20)]
+
+
+@pytest.mark.issue40
+def test_a_cubes_bus_2_compass_notes_that_only_x_starts_reach_it() -> None:
+    # PX4 main, boards/px4/fmu-v3/src/i2c.cpp line 52: bus 2 is external where hw_type is V30
+    # (a Cube); platforms/common/i2c.cpp tries -I starts only on internal buses, -X starts only
+    # on external ones: rc.sensors' probe finds an IST8310 there, the board's -I rows do not.
+    proposal = migrate.migrate(
+        config({"CAL_MAG0_ID": IST8310_BUS2, "SENS_EXT_I2C_PRB": 1}, hw_type="V30"),
+        table="current",
+        board=board("px4_fmu-v3", "v1.15.0"),
+    )
+    (inst,) = proposal.instances
+    assert inst.notes == [
+        "I2C bus 2 is external where hw_type in V30 (PX4/PX4-Autopilot "
+        "boards/px4/fmu-v3/src/i2c.cpp:52 at main (branch main, bb59c637cd, 2026-08-13)): the "
+        "board's -I starts try no bus there, rc.sensors' -X starts do"
+    ]

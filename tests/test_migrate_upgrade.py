@@ -284,3 +284,40 @@ def test_a_target_for_a_file_naming_no_release_says_so(
         "names no release (no '# Version' line) (expected one of main)\n"
     )
     assert not out.exists()
+
+
+@pytest.mark.issue40
+def test_a_start_without_r_in_every_release_is_kept_unrotated(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """ARK FMU v6X: boards/ark/fmu-v6x/init/rc.board_sensors starts its internal BMM150 (I2C
+    bus 4) with `bmm150 -I start` at v1.14.0 (line 75) and still at main (line 95), never with
+    -R: rotation 0 throughout, no rotation change to report."""
+    internal = devid.encode("i2c", 4, 0x10, 0x43)
+    path = tmp_path / "ark.params"
+    path.write_text(f"# Stack: PX4\n# Version: 1.14.0\n#\n1\t1\tCAL_MAG0_ID\t{internal}\t6\n")
+    report = run(capsys, str(path), "--board", "ark_fmu-v6x")
+    assert report["instances"] == []
+    (mag,) = report["left_out"]
+    assert mag["later"] == (
+        "still started by the board's script through PX4 main: 'bmm150 -I start' "
+        "(PX4/PX4-Autopilot boards/ark/fmu-v6x/init/rc.board_sensors:95 at main "
+        "(branch main, bb59c637cd, 2026-08-13))"
+    )
+
+
+@pytest.mark.issue40
+def test_without_a_target_the_dropped_start_is_said_in_one_whole_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """SENS_EXT_I2C_PRB = 0, no --target-release: the Cube's v1.11.0 line 17 start, the
+    releases from v1.12.0 that start nothing, and which target makes the manifest start it."""
+    path = cube_params(tmp_path / "cube.params", probe=0)
+    (mag,) = run(capsys, str(path), "--board", CUBE)["left_out"]
+    assert mag["later"] == (
+        f"the board's script of PX4 v1.11.0 starts it with {OLD_LINE} (tag v1.11.0, "
+        "71db0903a9, 2020-09-07)); PX4 v1.12.0 .. main: no start (not in PX4/PX4-Autopilot "
+        f"{SCRIPT}, nor behind a switch this file sets): on PX4 v1.12.0 and later the board's "
+        "script does not start it, the manifest must: --target-release v1.12.0 (or later) "
+        "proposes it as an instance"
+    )
