@@ -63,6 +63,15 @@ def left_out(proposal: migrate.Proposal) -> dict[str, tuple[str, str]]:
     return {o.found: (o.reason, o.line) for o in proposal.left_out}
 
 
+def assert_the_boards(proposal: migrate.Proposal, found: str, cited: str) -> str:
+    """``found`` is left out as started by the board's script, its line (returned) citing
+    ``cited``."""
+    reason, line = left_out(proposal)[found]
+    assert reason == "board"
+    assert cited in line
+    return line
+
+
 # -- a device row counts where its condition holds -------------------------------------------
 
 
@@ -220,9 +229,9 @@ def test_a_logs_hardware_type_settles_which_compass_the_board_starts(
     assert not [a for a in proposal.assumptions if a.startswith("CAL_MAG0_ID")]
     if boards:
         assert placed(proposal) == []
-        reason, line = left_out(proposal)["CAL_MAG0_ID = 396809"]
-        assert reason == "board"
-        assert "boards/nxp/mr-canhubk3/init/rc.board_sensors:10 " in line
+        assert_the_boards(
+            proposal, "CAL_MAG0_ID = 396809", "boards/nxp/mr-canhubk3/init/rc.board_sensors:10 "
+        )
     else:
         assert placed(proposal) == [("IST8310#0", 1, 0x0E)]
 
@@ -235,9 +244,9 @@ def test_a_compass_found_on_the_internal_bus_is_the_boards_whatever_its_revision
     assert v6x.internal_i2c_buses == (4,)
     proposal = migrate.migrate(config({"CAL_MAG0_ID": BMM150_BUS4}), table="current", board=v6x)
     assert placed(proposal) == []
-    reason, line = left_out(proposal)["CAL_MAG0_ID = 4395041"]
-    assert reason == "board"
-    assert "boards/px4/fmu-v6x/init/rc.board_sensors:133 " in line
+    line = assert_the_boards(
+        proposal, "CAL_MAG0_ID = 4395041", "boards/px4/fmu-v6x/init/rc.board_sensors:133 "
+    )
     assert line.endswith(
         "it runs only where not hw_type in V6X001 (the hardware revision, which the parameters "
         "do not tell), and being found on internal I2C bus 4 (boards/px4/fmu-v6x/src/i2c.cpp) "
@@ -713,9 +722,11 @@ def test_a_cube_oranges_v1_11_here2_line_is_its_second_external_bus() -> None:
         )
         assert placed(proposal) == proposed
         if not proposed:
-            reason, line = left_out(proposal)[f"CAL_MAG0_ID = {found}"]
-            assert reason == "board"
-            assert "boards/cubepilot/cubeorange/init/rc.board_sensors:17 at v1.11.0 " in line
+            assert_the_boards(
+                proposal,
+                f"CAL_MAG0_ID = {found}",
+                "boards/cubepilot/cubeorange/init/rc.board_sensors:17 at v1.11.0 ",
+            )
 
 
 # -- a board whose I2C buses the table does not know ---------------------------------------------
@@ -733,9 +744,9 @@ def test_a_row_without_b_is_on_any_bus_where_the_buses_are_unknown(bus: int) -> 
     found = HMC5883_BUS1 if bus == 1 else HMC5883_BUS2
     proposal = migrate.migrate(config({"CAL_MAG0_ID": found}), table="current", board=mindpx)
     assert placed(proposal) == []
-    reason, line = left_out(proposal)[f"CAL_MAG0_ID = {found}"]
-    assert reason == "board"
-    assert "boards/airmind/mindpx-v2/init/rc.board_sensors:9 at " in line
+    assert_the_boards(
+        proposal, f"CAL_MAG0_ID = {found}", "boards/airmind/mindpx-v2/init/rc.board_sensors:9 at "
+    )
 
 
 @pytest.mark.issue40
@@ -748,9 +759,9 @@ def test_a_row_with_b_is_on_that_bus_alone_where_the_buses_are_unknown() -> None
         proposal = migrate.migrate(config({"CAL_MAG0_ID": found}), table="current", board=nora)
         assert placed(proposal) == proposed
         if not proposed:
-            reason, line = left_out(proposal)[f"CAL_MAG0_ID = {found}"]
-            assert reason == "board"
-            assert "boards/cuav/nora/init/rc.board_sensors:29 at " in line
+            assert_the_boards(
+                proposal, f"CAL_MAG0_ID = {found}", "boards/cuav/nora/init/rc.board_sensors:29 at "
+            )
 
 
 RM3100_BUS4 = 0x07 << 16 | 0x20 << 8 | 4 << 3 | 1  # 466977

@@ -17,6 +17,27 @@ use px4params_core::rules::{ArrayLen, At, LeafKind, Sink, Source, MAX_DEPTH};
 use px4params_core::value::{LeafError, LeafSource};
 use px4params_core::{walk, Cast, DecodeOptions, EncodeOptions, ErrorKind, Kind, NodeId, Scalar};
 
+/// A refusal of call `n` is the error where it was made: its kind, the path and bit offset
+/// `at` names, and no call after it.
+fn assert_refused_at<E: PartialEq + core::fmt::Debug, V: core::fmt::Debug>(
+    layout: &Layout<'_>,
+    e: &px4params_core::error::Error<E>,
+    at: (&str, usize, ErrorKind<E>),
+    events: &[V],
+    n: usize,
+) {
+    let (path, bit_offset, kind) = at;
+    assert_eq!(e.kind, kind, "call {n}");
+    let got = (e.path.display(layout).to_string(), e.bit_offset);
+    assert_eq!(
+        got,
+        (path.to_string(), bit_offset),
+        "call {n}: {:?}",
+        events.last()
+    );
+    assert_eq!(events.len(), n, "nothing after the refusal");
+}
+
 fn uint(l: &mut OwnedLayout, bits: u32) -> NodeId {
     l.uint(bits, Cast::Saturated).unwrap()
 }
@@ -285,15 +306,8 @@ fn a_sinks_refusal_is_the_error_where_it_was_refused() {
             DecodeOptions::default(),
         )
         .unwrap_err();
-        assert_eq!(e.kind, ErrorKind::Value("refused"), "call {n}");
-        let got = (e.path.display(&layout).to_string(), e.bit_offset);
-        assert_eq!(
-            got,
-            (path.to_string(), bit_offset),
-            "call {n}: {:?}",
-            sink.events.last()
-        );
-        assert_eq!(sink.events.len(), n, "nothing after the refusal");
+        let at = (path, bit_offset, ErrorKind::Value("refused"));
+        assert_refused_at(&layout, &e, at, &sink.events, n);
     }
 }
 
@@ -509,15 +523,8 @@ fn a_sources_refusal_is_the_error_where_it_was_refused() {
             EncodeOptions::default(),
         )
         .unwrap_err();
-        assert_eq!(e.kind, ErrorKind::Value(LeafError::Full), "call {n}");
-        let got = (e.path.display(&layout).to_string(), e.bit_offset);
-        assert_eq!(
-            got,
-            (path.to_string(), bit_offset),
-            "call {n}: {:?}",
-            source.events.last()
-        );
-        assert_eq!(source.events.len(), n, "nothing after the refusal");
+        let at = (path, bit_offset, ErrorKind::Value(LeafError::Full));
+        assert_refused_at(&layout, &e, at, &source.events, n);
     }
 }
 
