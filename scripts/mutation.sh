@@ -339,6 +339,15 @@ RUST_ISSUE40_TESTS="$RUST_ISSUE40_TESTS mutants_compile mutants_rules"
 RUST_ISSUE40_TESTS="$RUST_ISSUE40_TESTS mutants_program mutants_straight"
 RUST_ISSUE40_TESTS="$RUST_ISSUE40_TESTS mutants_interp"
 
+# The two product files no target held (the lead, 11-27 night): migrate/conditions.py, which
+# decides whether a board script's line runs on the vehicle (its own tests, and the board-row and
+# migration tests that evaluate real boards' conditions), and vehicle/simbench.py.
+TARGETS+=(
+  "migrate-conditions|$PY/migrate/conditions.py|tests/test_migrate_conditions.py tests/test_migrate_board_rows.py tests/test_migrate_build.py tests/test_migrate_upgrade.py tests/test_migrate.py tests/test_boards.py -k 'not cli and not needs_no_checkout'"
+  "simbench|$PY/vehicle/simbench.py|tests/test_simbench.py"
+)
+BUDGETS+=([migrate-conditions]=3600 [simbench]=3600)
+
 if [ "$#" -eq 0 ]; then
   set -- can_transfer dronecan_params health links gui migrate vehicle store rust-core rust-ffi
 fi
