@@ -321,3 +321,53 @@ def test_without_a_target_the_dropped_start_is_said_in_one_whole_line(
         "script does not start it, the manifest must: --target-release v1.12.0 (or later) "
         "proposes it as an instance"
     )
+
+
+#: Pixhawk 5X's boards/px4/fmu-v5x/init/rc.board_sensors starts its internal BMM150 (I2C bus 4)
+#: with `bmm150 -I start` at v1.11.0 (line 22); in the first hardware branch of each later
+#: script with `bmm150 -I -R 6 start` at v1.12.0 (line 32) and v1.13.0 (line 56), with
+#: `bmm150 -I start` at v1.14.0 (line 73), and with `bmm150 -I -R 6 start` again from v1.15.0
+#: (line 73; at main too): no hardware revision in a QGC file settles the branches, and the
+#: first runs.
+V5X_SCRIPT = "PX4/PX4-Autopilot boards/px4/fmu-v5x/init/rc.board_sensors"
+V5X_START = {
+    "v1.11.0": f"'bmm150 -I start' ({V5X_SCRIPT}:22 at v1.11.0 (tag v1.11.0, 71db0903a9, "
+    "2020-09-07))",
+    "v1.12.0": f"'bmm150 -I -R 6 start' ({V5X_SCRIPT}:32 at v1.12.0 (tag v1.12.0, 9524e8ec03, "
+    "2021-07-05))",
+    "v1.13.0": f"'bmm150 -I -R 6 start' ({V5X_SCRIPT}:56 at v1.13.0 (tag v1.13.0, 6823cbc414, "
+    "2022-06-07))",
+    "v1.14.0": f"'bmm150 -I start' ({V5X_SCRIPT}:73 at v1.14.0 (tag v1.14.0, b8c541dd72, "
+    "2023-10-18))",
+    "main": f"'bmm150 -I -R 6 start' ({V5X_SCRIPT}:73 at main (branch main, bb59c637cd, "
+    "2026-08-13))",
+}
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize(
+    ("version", "later"),
+    [
+        # -R 0 at v1.11.0: each later run with -R 6 is a change, v1.14.0's -I start is not,
+        # and the last release's -R 6 is not the file's
+        ("1.11.3", f"the board's script of PX4 v1.11.0 starts it with {V5X_START['v1.11.0']}; "
+         f"PX4 v1.12.0 .. v1.13.0: the board's {V5X_START['v1.12.0']}, rotation 6 (was 0); "
+         f"PX4 v1.15.0 .. main: the board's {V5X_START['main']}, rotation 6 (was 0): the "
+         "board's script still starts it, with -R 6: check its calibration after the update"),
+        # -R 6 at v1.13.0: v1.14.0 alone differs, and at main it is -R 6 again: nothing to
+        # check after the update
+        ("1.13.0", f"the board's script of PX4 v1.13.0 starts it with {V5X_START['v1.13.0']}; "
+         f"PX4 v1.14.0: the board's {V5X_START['v1.14.0']}, rotation 0 (was 6): the board's "
+         "script still starts it"),
+    ],
+)  # fmt: skip
+def test_a_rotation_that_changes_back_is_said_change_by_change_and_checked_only_if_it_differs(
+    version: str, later: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    internal = devid.encode("i2c", 4, 0x10, 0x43)
+    path = tmp_path / "v5x.params"
+    path.write_text(f"# Stack: PX4\n# Version: {version}\n#\n1\t1\tCAL_MAG0_ID\t{internal}\t6\n")
+    report = run(capsys, str(path), "--board", "px4_fmu-v5x")
+    assert report["instances"] == []
+    (mag,) = report["left_out"]
+    assert (mag["reason"], mag["later"]) == ("board", later)
