@@ -371,3 +371,31 @@ def test_a_rotation_that_changes_back_is_said_change_by_change_and_checked_only_
     assert report["instances"] == []
     (mag,) = report["left_out"]
     assert (mag["reason"], mag["later"]) == ("board", later)
+
+
+@pytest.mark.issue40
+def test_a_later_board_start_with_the_rotation_it_ran_with_names_no_rotation_change(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Pixhawk 6X on v1.13.0 with an RM3100 on internal I2C bus 4 (0x20): boards/px4/fmu-v6x/
+    init/rc.board_sensors at v1.13.0 starts no RM3100, so it is an instance (rotation 0: no
+    -R); from v1.14.0 line 103 starts it, `rm3100 -I -b 4 start`, also without -R: the note
+    names the start and no rotation change."""
+    rm3100 = devid.encode("i2c", 4, 0x20, 0x07)
+    path = tmp_path / "v6x.params"
+    path.write_text(f"# Stack: PX4\n# Version: 1.13.0\n#\n1\t1\tCAL_MAG0_ID\t{rm3100}\t6\n")
+    said = (
+        "the board's script starts it from PX4 v1.14.0: 'rm3100 -I -b 4 start' "
+        "(PX4/PX4-Autopilot boards/px4/fmu-v6x/init/rc.board_sensors:103 at v1.14.0 (tag "
+        "v1.14.0, b8c541dd72, 2023-10-18))"
+    )
+    today = run(capsys, str(path), "--board", "px4_fmu-v6x")
+    (inst,) = today["instances"]
+    assert (inst["name"], inst["values"]["rotation"]) == ("RM3100#0", 0)
+    assert inst["notes"] == [
+        f"{said}: for that firmware --target-release v1.14.0 (or later) leaves it out"
+    ]
+    upgraded = run(capsys, str(path), "--board", "px4_fmu-v6x", "--target-release", "v1.14.0")
+    assert upgraded["instances"] == []
+    (mag,) = upgraded["left_out"]
+    assert mag["line"].endswith(f": {said}; on PX4 v1.14.0 it is the board's, not the manifest's")
