@@ -13,12 +13,14 @@ I2C bus 1 (external, equal to '-b 2')", CAL_MAG1_ID 592905, SENS_EXT_I2C_PRB 1).
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from pathlib import Path
 from typing import Any
 
 import pytest
 import shared_data
+from px4params import migrate
 from px4params.cli.main import main
 from px4params.vehicle import devid
 from px4params.vehicle.boards import load_boards
@@ -399,3 +401,48 @@ def test_a_later_board_start_with_the_rotation_it_ran_with_names_no_rotation_cha
     assert upgraded["instances"] == []
     (mag,) = upgraded["left_out"]
     assert mag["line"].endswith(f": {said}; on PX4 v1.14.0 it is the board's, not the manifest's")
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize(
+    ("edit", "bus", "address", "devtype"),
+    [
+        # LIS3MDL (drv_sensor.h 0x05) on internal bus 3: rc.sensors' `lis3mdl -X -q start`
+        # tries the external buses (1, 2, 4) only
+        ({"driver": "lis3mdl"}, 3, 0x1E, 0x05),
+        # IST8310 (0x06) at 0x0C on external bus 2 (v1.11.0's `-X -b 2`: the second external
+        # bus in src/i2c.cpp's order 4, 2, 1): `ist8310 -X -q start` tries its default 0x0E only
+        ({"args": "-X -b 2 -a 0xc start", "bus": 2, "address": 0x0C, "internal": False},
+         2, 0x0C, 0x06),
+    ],
+)  # fmt: skip
+def test_a_dropped_start_no_probe_can_reach_is_said_to_start_nowhere(
+    edit: dict[str, Any], bus: int, address: int, devtype: int, tmp_path: Path
+) -> None:
+    """A Pixhawk 5 whose v1.11.0 script (edited here: the file's board row) starts a compass
+    that no later fmu-v5 script starts: from v1.12.0 only rc.sensors' probe could, and PX4's
+    probe (`-X`, no `-a`) tries only the external buses at the driver's default address
+    (platforms/common/i2c.cpp's I2CBusIterator; at v1.12.0 ist8310_main.cpp:75 sets
+    I2C_ADDRESS_DEFAULT, 0x0E), so with SENS_EXT_I2C_PRB = 1 still nothing starts it."""
+    v5 = load_boards().by_name("px4_fmu-v5", "v1.11.0")
+    assert v5 is not None
+    (real,) = [d for d in v5.devices if d.bus_kind == "I2C"]  # line 19: `ist8310 -I start`
+    row = dataclasses.replace(real, source="the edited rc.board_sensors:19", **edit)
+    edited = dataclasses.replace(v5, devices=(row,))
+    assert edited.buses_of(row) == (bus,)
+    compass = devid.encode("i2c", bus, address, devtype)
+    path = tmp_path / "v5.params"
+    path.write_text(
+        "# Stack: PX4\n# Version: 1.11.3\n#\n"
+        f"1\t1\tCAL_MAG0_ID\t{compass}\t6\n1\t1\tSENS_EXT_I2C_PRB\t1\t6\n"
+    )
+    proposal = migrate.migrate(migrate.read_config(path), board=edited)
+    assert proposal.instances == []
+    (mag,) = proposal.left_out
+    assert mag.later == (
+        f"the board's script of PX4 v1.11.0 starts it with '{row.driver} {row.args}' (the "
+        "edited rc.board_sensors:19); PX4 v1.12.0 .. main: no start (not in PX4/PX4-Autopilot "
+        "boards/px4/fmu-v5/init/rc.board_sensors, nor behind a switch this file sets): on PX4 "
+        "v1.12.0 and later the board's script does not start it, the manifest must: "
+        "--target-release v1.12.0 (or later) proposes it as an instance"
+    )
