@@ -1058,8 +1058,9 @@ class _Builder:
             if address is None:
                 address = _default_address(self.store, spec.name)
                 self.assume(
-                    f"{found}: '{start.text}' names no address (PX4 before 1.13 prints none): "
-                    f"{driver.name}'s default 0x{address:02X} assumed"
+                    f"{found}: '{start.text}' names no address (PX4 1.11 prints none, later "
+                    f"releases only one the driver sets): {driver.name}'s default "
+                    f"0x{address:02X} assumed"
                 )
             how = (
                 "found by i2c_launcher" if start.launcher else "started outside the board's script"
