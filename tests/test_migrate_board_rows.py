@@ -553,7 +553,7 @@ def test_a_launcher_bus_without_its_line_is_refused_not_left_uncited(tmp_path: P
 #: sets 21 (line 35); `if ver hwtypecmp V2M` likewise on SPI 1 (lines 50 and 56 test, 52 and
 #: 58 set). The console lines are the
 #: drivers' own (platforms/common/i2c_spi_buses.cpp: "<name> #<n> on SPI bus <b>", then
-#: "(devid=...)" in 1.11/1.12 and " rotation <r>" when not 0 later); a start that found
+#: "(devid=...)" in 1.11 and " rotation <r>" when not 0 from 1.12); a start that found
 #: nothing prints "no instance started".
 CUBE_20 = "mpu6000 #0 on SPI bus 4 rotation 10\n"
 CUBE_21 = (

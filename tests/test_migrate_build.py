@@ -411,6 +411,40 @@ def test_a_driver_running_with_the_rotation_rc_sensors_probes_with_is_the_probes
     ]
 
 
+#: PX4's boot console line of a driver's start, as platforms/common/i2c_spi_buses.cpp prints it:
+#: v1.11.3 (line 502) the bus and "(external, equal to '-b N')", never the -R; from v1.12.0
+#: (PX4 47b9016f5e, "I2CSPIDriverBase: print rotation and i2c address if set"; line 529 at
+#: v1.12.0) also " address 0x.." and " rotation N", the latter only `if (cli.rotation != 0)`.
+IST8310_STARTED = {
+    (1, 11, 3): "ist8310 #0 on I2C bus 1 (external, equal to '-b 1')",
+    (1, 12, 0): "ist8310 #0 on I2C bus 1 (external) address 0xE",
+}
+
+
+@pytest.mark.parametrize(
+    ("version", "printed", "why"),
+    [((1, 11, 3), (1, 11, 3), "rc.sensors starts it without -R"),
+     ((1, 12, 0), (1, 12, 0), "the boot console shows no -R"),
+     ((1, 12, 3), (1, 12, 0), "the boot console shows no -R"),
+     ((1, 13, 0), (1, 12, 0), "the boot console shows no -R")],
+)  # fmt: skip
+def test_a_console_start_without_rotation_shows_rotation_0_from_px4_1_12(
+    version: tuple[int, int, int], printed: tuple[int, int, int], why: str
+) -> None:
+    # A GPS's IST8310 the boot console shows started with no " rotation": from v1.12.0 that
+    # line says the driver runs with -R 0; a 1.11 line never prints one, so only rc.sensors'
+    # probe (no -R) tells
+    ist8310 = devid.encode("i2c", 1, 0x0E, 0x06)
+    old = OldConfig("t.ulg", "ULog", {"CAL_MAG0_ID": ist8310, "CAL_MAG0_ROT": 2},
+                    version=version, console=IST8310_STARTED[printed] + "\n")  # fmt: skip
+    (inst,) = migrate.migrate(old).instances
+    assert (inst.name, inst.values["rotation"]) == ("IST8310#0", 0)
+    assert inst.notes == [
+        "CAL_MAG0_ROT = 2 stays a classic parameter: calibration applies it; the driver's "
+        f"rotation is 0 ({why})"
+    ]
+
+
 def test_what_the_i2c_launcher_started_is_proposed_and_nothing_guessed() -> None:
     # Pixhawk 6X's rc.board_sensors runs `i2c_launcher start -b 1` (and -b 2): the boot
     # console's launcher line says which power monitor it found; without one, the scan is
@@ -806,15 +840,16 @@ def test_boot_console_lines_of_the_boards_sensors_say_board_and_a_barometer_is_t
 
 def test_a_console_line_without_an_address_assumes_the_drivers_default_and_says_so() -> None:
     # PX4 1.11's start line prints no address (`ms4525_airspeed #0 on I2C bus 2 (external,
-    # equal to '-b 1')`): the sensor is taken at its driver's default, MS4525DO's fixed 0x28,
-    # and the report says that this was assumed
+    # equal to '-b 1')`; from v1.12.0, PX4 47b9016f5e, i2c_spi_buses.cpp prints
+    # " address 0x.." where the driver's cli.i2c_address is set): the sensor is taken at its
+    # driver's default, MS4525DO's fixed 0x28, and the report says that this was assumed
     line = "ms4525_airspeed #0 on I2C bus 2 (external, equal to '-b 1')"
     proposal = migrate.migrate(config(console=line + "\n"), table="px4-v1.11")
     (inst,) = proposal.instances
     assert (inst.name, inst.values["bus.i2c.address"]) == ("MS4525DO#0", 0x28)
     assert [a for a in proposal.assumptions if a.startswith("boot console")] == [
-        f"boot console line 1: '{line}' names no address (PX4 before 1.13 prints none): "
-        "ms4525do's default 0x28 assumed"
+        f"boot console line 1: '{line}' names no address (PX4 1.11 prints none, later releases "
+        "only one the driver sets): ms4525do's default 0x28 assumed"
     ]
 
 

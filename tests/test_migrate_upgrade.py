@@ -13,12 +13,14 @@ I2C bus 1 (external, equal to '-b 2')", CAL_MAG1_ID 592905, SENS_EXT_I2C_PRB 1).
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from pathlib import Path
 from typing import Any
 
 import pytest
 import shared_data
+from px4params import migrate
 from px4params.cli.main import main
 from px4params.vehicle import devid
 from px4params.vehicle.boards import load_boards
@@ -320,4 +322,127 @@ def test_without_a_target_the_dropped_start_is_said_in_one_whole_line(
         f"{SCRIPT}, nor behind a switch this file sets): on PX4 v1.12.0 and later the board's "
         "script does not start it, the manifest must: --target-release v1.12.0 (or later) "
         "proposes it as an instance"
+    )
+
+
+#: Pixhawk 5X's boards/px4/fmu-v5x/init/rc.board_sensors starts its internal BMM150 (I2C bus 4)
+#: with `bmm150 -I start` at v1.11.0 (line 22); in the first hardware branch of each later
+#: script with `bmm150 -I -R 6 start` at v1.12.0 (line 32) and v1.13.0 (line 56), with
+#: `bmm150 -I start` at v1.14.0 (line 73), and with `bmm150 -I -R 6 start` again from v1.15.0
+#: (line 73; at main too): no hardware revision in a QGC file settles the branches, and the
+#: first runs.
+V5X_SCRIPT = "PX4/PX4-Autopilot boards/px4/fmu-v5x/init/rc.board_sensors"
+V5X_START = {
+    "v1.11.0": f"'bmm150 -I start' ({V5X_SCRIPT}:22 at v1.11.0 (tag v1.11.0, 71db0903a9, "
+    "2020-09-07))",
+    "v1.12.0": f"'bmm150 -I -R 6 start' ({V5X_SCRIPT}:32 at v1.12.0 (tag v1.12.0, 9524e8ec03, "
+    "2021-07-05))",
+    "v1.13.0": f"'bmm150 -I -R 6 start' ({V5X_SCRIPT}:56 at v1.13.0 (tag v1.13.0, 6823cbc414, "
+    "2022-06-07))",
+    "v1.14.0": f"'bmm150 -I start' ({V5X_SCRIPT}:73 at v1.14.0 (tag v1.14.0, b8c541dd72, "
+    "2023-10-18))",
+    "main": f"'bmm150 -I -R 6 start' ({V5X_SCRIPT}:73 at main (branch main, bb59c637cd, "
+    "2026-08-13))",
+}
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize(
+    ("version", "later"),
+    [
+        # -R 0 at v1.11.0: each later run with -R 6 is a change, v1.14.0's -I start is not,
+        # and the last release's -R 6 is not the file's
+        ("1.11.3", f"the board's script of PX4 v1.11.0 starts it with {V5X_START['v1.11.0']}; "
+         f"PX4 v1.12.0 .. v1.13.0: the board's {V5X_START['v1.12.0']}, rotation 6 (was 0); "
+         f"PX4 v1.15.0 .. main: the board's {V5X_START['main']}, rotation 6 (was 0): the "
+         "board's script still starts it, with -R 6: check its calibration after the update"),
+        # -R 6 at v1.13.0: v1.14.0 alone differs, and at main it is -R 6 again: nothing to
+        # check after the update
+        ("1.13.0", f"the board's script of PX4 v1.13.0 starts it with {V5X_START['v1.13.0']}; "
+         f"PX4 v1.14.0: the board's {V5X_START['v1.14.0']}, rotation 0 (was 6): the board's "
+         "script still starts it"),
+    ],
+)  # fmt: skip
+def test_a_rotation_that_changes_back_is_said_change_by_change_and_checked_only_if_it_differs(
+    version: str, later: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    internal = devid.encode("i2c", 4, 0x10, 0x43)
+    path = tmp_path / "v5x.params"
+    path.write_text(f"# Stack: PX4\n# Version: {version}\n#\n1\t1\tCAL_MAG0_ID\t{internal}\t6\n")
+    report = run(capsys, str(path), "--board", "px4_fmu-v5x")
+    assert report["instances"] == []
+    (mag,) = report["left_out"]
+    assert (mag["reason"], mag["later"]) == ("board", later)
+
+
+@pytest.mark.issue40
+def test_a_later_board_start_with_the_rotation_it_ran_with_names_no_rotation_change(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Pixhawk 6X on v1.13.0 with an RM3100 on internal I2C bus 4 (0x20): boards/px4/fmu-v6x/
+    init/rc.board_sensors at v1.13.0 starts no RM3100, so it is an instance (rotation 0: no
+    -R); from v1.14.0 line 103 starts it, `rm3100 -I -b 4 start`, also without -R: the note
+    names the start and no rotation change."""
+    rm3100 = devid.encode("i2c", 4, 0x20, 0x07)
+    path = tmp_path / "v6x.params"
+    path.write_text(f"# Stack: PX4\n# Version: 1.13.0\n#\n1\t1\tCAL_MAG0_ID\t{rm3100}\t6\n")
+    said = (
+        "the board's script starts it from PX4 v1.14.0: 'rm3100 -I -b 4 start' "
+        "(PX4/PX4-Autopilot boards/px4/fmu-v6x/init/rc.board_sensors:103 at v1.14.0 (tag "
+        "v1.14.0, b8c541dd72, 2023-10-18))"
+    )
+    today = run(capsys, str(path), "--board", "px4_fmu-v6x")
+    (inst,) = today["instances"]
+    assert (inst["name"], inst["values"]["rotation"]) == ("RM3100#0", 0)
+    assert inst["notes"] == [
+        f"{said}: for that firmware --target-release v1.14.0 (or later) leaves it out"
+    ]
+    upgraded = run(capsys, str(path), "--board", "px4_fmu-v6x", "--target-release", "v1.14.0")
+    assert upgraded["instances"] == []
+    (mag,) = upgraded["left_out"]
+    assert mag["line"].endswith(f": {said}; on PX4 v1.14.0 it is the board's, not the manifest's")
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize(
+    ("edit", "bus", "address", "devtype"),
+    [
+        # LIS3MDL (drv_sensor.h 0x05) on internal bus 3: rc.sensors' `lis3mdl -X -q start`
+        # tries the external buses (1, 2, 4) only
+        ({"driver": "lis3mdl"}, 3, 0x1E, 0x05),
+        # IST8310 (0x06) at 0x0C on external bus 2 (v1.11.0's `-X -b 2`: the second external
+        # bus in src/i2c.cpp's order 4, 2, 1): `ist8310 -X -q start` tries its default 0x0E only
+        ({"args": "-X -b 2 -a 0xc start", "bus": 2, "address": 0x0C, "internal": False},
+         2, 0x0C, 0x06),
+    ],
+)  # fmt: skip
+def test_a_dropped_start_no_probe_can_reach_is_said_to_start_nowhere(
+    edit: dict[str, Any], bus: int, address: int, devtype: int, tmp_path: Path
+) -> None:
+    """A Pixhawk 5 whose v1.11.0 script (edited here: the file's board row) starts a compass
+    that no later fmu-v5 script starts: from v1.12.0 only rc.sensors' probe could, and PX4's
+    probe (`-X`, no `-a`) tries only the external buses at the driver's default address
+    (platforms/common/i2c.cpp's I2CBusIterator; at v1.12.0 ist8310_main.cpp:75 sets
+    I2C_ADDRESS_DEFAULT, 0x0E), so with SENS_EXT_I2C_PRB = 1 still nothing starts it."""
+    v5 = load_boards().by_name("px4_fmu-v5", "v1.11.0")
+    assert v5 is not None
+    (real,) = [d for d in v5.devices if d.bus_kind == "I2C"]  # line 19: `ist8310 -I start`
+    row = dataclasses.replace(real, source="the edited rc.board_sensors:19", **edit)
+    edited = dataclasses.replace(v5, devices=(row,))
+    assert edited.buses_of(row) == (bus,)
+    compass = devid.encode("i2c", bus, address, devtype)
+    path = tmp_path / "v5.params"
+    path.write_text(
+        "# Stack: PX4\n# Version: 1.11.3\n#\n"
+        f"1\t1\tCAL_MAG0_ID\t{compass}\t6\n1\t1\tSENS_EXT_I2C_PRB\t1\t6\n"
+    )
+    proposal = migrate.migrate(migrate.read_config(path), board=edited)
+    assert proposal.instances == []
+    (mag,) = proposal.left_out
+    assert mag.later == (
+        f"the board's script of PX4 v1.11.0 starts it with '{row.driver} {row.args}' (the "
+        "edited rc.board_sensors:19); PX4 v1.12.0 .. main: no start (not in PX4/PX4-Autopilot "
+        "boards/px4/fmu-v5/init/rc.board_sensors, nor behind a switch this file sets): on PX4 "
+        "v1.12.0 and later the board's script does not start it, the manifest must: "
+        "--target-release v1.12.0 (or later) proposes it as an instance"
     )

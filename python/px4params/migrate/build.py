@@ -43,8 +43,9 @@ NOT_DRIVER_SWITCHES: dict[str, dict[int, str]] = {
 #: Why a device found by probing runs with rotation 0 where no boot console shows its start.
 PROBED_WITHOUT_R = "rc.sensors starts it without -R"
 #: The first PX4 whose boot console prints a driver's every -R but 0
-#: (platforms/common/i2c_spi_buses.cpp: `if (cli.rotation != 0)`; PX4 1.11 and 1.12 print none).
-CONSOLE_SHOWS_ROTATION = (1, 13, 0)
+#: (platforms/common/i2c_spi_buses.cpp: `if (cli.rotation != 0)`, from PX4 47b9016f5e, first
+#: in v1.12.0; PX4 1.11 prints none).
+CONSOLE_SHOWS_ROTATION = (1, 12, 0)
 #: ``CAL_<SENSOR><n>_ROT = -1``: PX4's metadata value "Internal": the sensor is the flight
 #: controller's, started by the board's script on the board's rotation.
 INTERNAL_ROTATION = -1
@@ -492,7 +493,7 @@ class _Builder:
 
     def shown_rotation(self, start: DriverStart | None) -> int | None:
         """The rotation a boot console start shows the driver running with: its -R, 0 where a
-        console of PX4 1.13 on prints none; None where the console does not say."""
+        console of PX4 1.12 on prints none; None where the console does not say."""
         if start is None or start.rotation is not None:
             return start.rotation if start is not None else None
         version = self.config.version
@@ -1057,8 +1058,9 @@ class _Builder:
             if address is None:
                 address = _default_address(self.store, spec.name)
                 self.assume(
-                    f"{found}: '{start.text}' names no address (PX4 before 1.13 prints none): "
-                    f"{driver.name}'s default 0x{address:02X} assumed"
+                    f"{found}: '{start.text}' names no address (PX4 1.11 prints none, later "
+                    f"releases only one the driver sets): {driver.name}'s default "
+                    f"0x{address:02X} assumed"
                 )
             how = (
                 "found by i2c_launcher" if start.launcher else "started outside the board's script"
