@@ -5,7 +5,7 @@ The lines read, as PX4's ``I2CSPIDriverBase`` and ``i2c_launcher`` print them::
 
     ist8310 #0 on I2C bus 1 (external) address 0xE rotation 10
     bmm350 #0 on I2C bus 4 address 0x14 rotation 6
-    ak09916 #0 on I2C bus 1 (external, equal to '-b 2')          (PX4 1.11 and 1.12)
+    ak09916 #0 on I2C bus 1 (external, equal to '-b 2')          (PX4 1.11; SPI lines to 1.12)
     ms5611 #0 on SPI bus 1 (devid=0x3d)
     INFO  [i2c_launcher] Found address 0x45, running 'ina228 -X -b 1 -t 1 start'
 
