@@ -223,6 +223,18 @@ def test_a_release_nobody_checked_keeps_the_rotation_and_says_so() -> None:
     assert axes.turn(["iis2mdc"], 4, "why", (1, 15, 2), "v1.15.0", False, None) is None
 
 
+def test_an_orientation_no_rotation_value_names_is_kept_and_said() -> None:
+    # 17 (roll 90, yaw 45) after ist8310's C 10 is roll 90 and yaw 45 about other axes: no
+    # value of the enum (the research note's table: 17 -> none)
+    turned = axes.turn(["ist8310"], 17, "why", (1, 11, 3), None, False, None)
+    assert turned is not None and turned.rotation == 17
+    assert turned.note == (
+        "rotation 17 taken as is (why): ist8310 reports other axes from PX4 v1.12.0 (PX4 commit "
+        "7569722821), and no -R value gives its orientation of PX4 v1.11.3 on the other axes "
+        "(17 after 10): check it, and set it by calibration"
+    )
+
+
 def test_a_driver_only_some_boards_built_old_turns_only_there() -> None:
     # v1.11.0 built the legacy imu/mpu6000 only for fmurt1062-v1 and spracing h7extreme
     old = (1, 11, 0)
@@ -253,3 +265,21 @@ def test_a_wrong_table_row_is_refused_naming_it(row: dict[str, object], error: s
     with pytest.raises(MigrationError) as e:
         axes.parse_changes({"change": [bad]})
     assert str(e.value).startswith(error)
+
+
+def test_a_rotation_name_without_its_angles_is_refused(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    sets = tmp_path / "value_sets.toml"
+    sets.write_text('[rotation]\n0 = "No rotation"\n1 = "Yaw 45 deg"\n2 = "Quarter turn"\n')
+    monkeypatch.setattr(axes, "VALUE_SETS_TOML", str(sets))
+    axes.rotations.cache_clear()
+    try:
+        with pytest.raises(MigrationError) as e:
+            axes.rotations()
+    finally:
+        axes.rotations.cache_clear()
+    assert str(e.value) == (
+        "value_sets.toml: rotation 2 = 'Quarter turn': expected 'Roll R deg, Pitch P deg, Yaw Y "
+        "deg' (each part optional) or 'No rotation'"
+    )

@@ -278,8 +278,8 @@ def turn(
         return _as_is(
             rotation,
             why,
-            f"{what}, and no -R value names its orientation of PX4 "
-            f"{shown} there: set it by calibration",
+            f"{what}, and no -R value gives its orientation of PX4 {shown} on the other axes "
+            f"({rotation} after {c}): check it, and set it by calibration",
         )
     return Turned(
         new,
