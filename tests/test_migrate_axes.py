@@ -267,12 +267,9 @@ def test_a_wrong_table_row_is_refused_naming_it(row: dict[str, object], error: s
     assert str(e.value).startswith(error)
 
 
-def test_a_rotation_name_without_its_angles_is_refused(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
-) -> None:
-    sets = tmp_path / "value_sets.toml"
-    sets.write_text('[rotation]\n0 = "No rotation"\n1 = "Yaw 45 deg"\n2 = "Quarter turn"\n')
-    monkeypatch.setattr(axes, "VALUE_SETS_TOML", str(sets))
+def test_a_rotation_name_without_its_angles_is_refused(monkeypatch: pytest.MonkeyPatch) -> None:
+    names = {"0": "No rotation", "1": "Yaw 45 deg", "2": "Quarter turn"}
+    monkeypatch.setattr(axes, "value_set", lambda name: names)
     axes.rotations.cache_clear()
     try:
         with pytest.raises(MigrationError) as e:

@@ -19,7 +19,7 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import Any
 
-from px4params.data import VALUE_SETS_TOML
+from px4params.dsdl.loader import value_set
 from px4params.errors import MigrationError
 from px4params.vehicle.boards import BoardsError, release_version
 
@@ -69,10 +69,8 @@ def matrix(roll: float, pitch: float, yaw: float) -> Matrix:
 def rotations() -> dict[int, Matrix]:
     """PX4's rotation enum, value -> matrix, from value_sets.toml's ``[rotation]`` names
     ("Roll 180 deg, Yaw 90 deg": rotation.h's rot_lookup roll, pitch and yaw)."""
-    with open(VALUE_SETS_TOML, "rb") as f:
-        names: dict[str, str] = tomllib.load(f)["rotation"]
     found = {}
-    for value, name in names.items():
+    for value, name in value_set("rotation").items():
         angles = dict.fromkeys(("Roll", "Pitch", "Yaw"), 0)
         words = _ANGLE.findall(name)
         if name != "No rotation" and ", ".join(f"{a} {d} deg" for a, d in words) != name:
