@@ -249,11 +249,12 @@ CORPUS = [
         },
     ),
     Truth(
-        # Pixhawk 2 (FMUv3), PX4 1.9.0: the GPS's IST8310 on I2C bus 1 (0x060E09, rotation 0);
-        # every other sensor on SPI; SENS_EN_LL40LS 2 (the I2C Lidar-Lite), bus not known.
+        # Pixhawk 2 (FMUv3), PX4 1.9.0: the GPS's IST8310 on I2C bus 1 (0x060E09, rotation 0:
+        # 10 for today's driver, whose axes PX4 1.12's rewrite changed); every other sensor on
+        # SPI; SENS_EN_LL40LS 2 (the I2C Lidar-Lite), bus not known.
         "motor_failure.ulg", *FRRS[:1], "crates/converter/tests/fixtures/motor_failure.ulg",
         FRRS[1], False, "px4-v1.8",
-        [("IST8310", 1, 0x0E, 0), ("LL40LS", 1, 0x62, None)],
+        [("IST8310", 1, 0x0E, 10), ("LL40LS", 1, 0x62, None)],
         {
             "CAL_ACC0_ID": BOARD,  # 0x160422 MPU9250 SPI 4 (CAL_ACC0_EN 0)
             "CAL_ACC1_ID": BOARD,  # 0x110222 LSM303D
@@ -365,10 +366,11 @@ CORPUS = [
         # A Pixhawk 4 (its README) flown with PX4 "1.10.1 dev": the px4-v1.8 table, _EN not
         # _PRIO (all 1). ICM20689 accelerometer 0x3B000A and gyroscope 0x3C000A and BMI055
         # (0x41030A, 0x42020A) on SPI 1; the internal IST8310 on I2C bus 3 (0x060E19,
-        # CAL_MAG1_ROT -1); the GPS's IST8310 on bus 1 at 0x0E (0x060E09, CAL_MAG0_ROT 0).
+        # CAL_MAG1_ROT -1); the GPS's IST8310 on bus 1 at 0x0E (0x060E09, CAL_MAG0_ROT 0),
+        # probed without -R: rotation 10 for today's driver (PX4 1.12 changed its axes).
         "px4-practice.params", *CONGTRANV[:1], "px4-practice.params", CONGTRANV[1], False,
         "px4-v1.8",
-        [("IST8310", 1, 0x0E, 0)],
+        [("IST8310", 1, 0x0E, 10)],
         {
             "CAL_ACC0_ID": BOARD,
             "CAL_ACC1_ID": BOARD,

@@ -107,6 +107,9 @@ def test_wheel_tag_and_metadata() -> None:
         meta = Parser().parsestr(wheel.read(info).decode())
     for example in ("two_batteries.airframe", "two_batteries.bench.toml", "two_batteries.params"):
         assert f"px4params/data/examples/{example}" in names
+    # tables the package reads at run time (migrate's driver axes and rotation names)
+    for table in ("boards.toml", "drivers.toml", "driver_axes.toml", "value_sets.toml"):
+        assert f"px4params/data/{table}" in names, table
     assert any(n.endswith(".dist-info/licenses/LICENSE") for n in names), names
     assert meta["License-Expression"] == "MIT"
     assert meta["Description-Content-Type"].startswith("text/markdown")

@@ -988,7 +988,7 @@ def _apply_scalar_tag(tags: dict[str, Any], tag: _Tag, scalar: TypeSpec) -> None
         tags[name] = value
     elif name == "values":
         entries = tags.setdefault("value", [])
-        for number_text, description in _value_set(text).items():
+        for number_text, description in value_set(text).items():
             number = _scalar_value(scalar, number_text)
             if any(existing == number for existing, _ in entries):
                 raise TagValueError(f"{text}: lists {number_text} twice")
@@ -1014,7 +1014,7 @@ def _apply_scalar_tag(tags: dict[str, Any], tag: _Tag, scalar: TypeSpec) -> None
 _value_sets: dict[str, dict[str, str]] = {}
 
 
-def _value_set(name: str) -> dict[str, str]:
+def value_set(name: str) -> dict[str, str]:
     """The value list ``name`` of ``data/value_sets.toml`` (``@values rotation``)."""
     if not _value_sets:
         with open(VALUE_SETS_TOML, "rb") as f:

@@ -13,7 +13,8 @@ What the manifest takes over is what today's PX4 starts *outside* the board's ow
   sensor of a ``CAL_<S>n_ID`` device ID (decoded with the devtype table of the file's firmware
   era, :mod:`.vehicle.devid`) whose chip a declared driver publishes. Probing starts drivers
   without ``-R``: the instance's rotation is 0; ``CAL_MAGn_ROT`` is calibration's and stays a
-  classic parameter.
+  classic parameter. A rotation of the file's release is turned where the driver reports other
+  axes on the release the manifest is for (:mod:`.axes`: PX4 1.12's IST8310 rewrite, ...).
 * **Drivers started by a switch** (``SENS_EN_MS4525DO``, ``SENS_EN_INA238``, ...): on the buses
   the evidence or the board's switch rows give, else on I2C bus 1 with a line saying so.
 * **Power monitors ``i2c_launcher`` found** (a log's boot console says so).

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, Any
 from px4params.dsdl.model import NO_DOC
 from px4params.dsdl.schema import Schema
 from px4params.errors import MigrationError, Px4ParamsError
+from px4params.migrate import axes
 from px4params.migrate.conditions import Facts, Verdict, board_variables, evaluate, per_bus
 from px4params.migrate.config import OldConfig
 from px4params.migrate.proposal import LeftOut, Proposal, ProposedInstance
@@ -91,6 +92,7 @@ class _Builder:
         board: Any,
         assumptions: list[str],
         upgrade: _Upgrade | None = None,
+        for_release: str | None = None,
     ) -> None:
         from px4params.store.store import Store
 
@@ -113,6 +115,8 @@ class _Builder:
         self.releases = upgrade.releases
         #: The release the proposal is made for, where not the file's own.
         self.target = upgrade.target
+        #: The release the manifest's rotations are for (--target-release; None: the newest).
+        self.for_release = for_release
 
     def use(self, *names: str) -> None:
         self.proposal.used.update(n for n in names if n in self.params)
@@ -200,15 +204,35 @@ class _Builder:
             )
         return True
 
-    def set_rotation(self, inst: ProposedInstance, rotation: int, why: str) -> None:
-        """The driver's rotation (its ``-R``), where the type has the field."""
+    def set_rotation(
+        self, inst: ProposedInstance, rotation: int, why: str, turned: str | None = None
+    ) -> None:
+        """The driver's rotation (its ``-R``), where the type has the field; ``turned``: what
+        :meth:`axes_rotation` said of it."""
         has_field = any(leaf.path == "rotation" for leaf in self.store.leaves(inst.key))
         if (
             has_field
             and self.field_value(inst, "rotation", "the driver's -R", rotation)
-            and rotation
+            and (rotation or turned)
         ):
-            inst.notes.append(f"rotation {rotation}: {why}")
+            inst.notes.append(turned or f"rotation {rotation}: {why}")
+
+    def axes_rotation(
+        self, chips: set[str], bus: int, rotation: tuple[int, str]
+    ) -> tuple[tuple[int, str], str | None]:
+        """A rotation of the file's release for the manifest's release, where the chip's
+        driver reports other axes there (:func:`.axes.turn`), and the note saying so."""
+        by_chip = self.drivers.chips()
+        modules = {by_chip[c].name for c in chips if c in by_chip}
+        turned = axes.turn(
+            modules,
+            *rotation,
+            self.config.version,
+            self.for_release,
+            self.on_internal_bus(bus),
+            getattr(self.board, "name", None),
+        )
+        return (rotation, None) if turned is None else ((turned.rotation, turned.why), turned.note)
 
     def run(self) -> Proposal:
         self.enabled_drivers()
@@ -964,6 +988,7 @@ class _Builder:
             return
         if later is not None:  # the target's board script no longer starts it
             rotation = (later.rotation, f"the -R of PX4 {self.file_release}'s start (above)")
+        rotation, turned = self.axes_rotation(chips, dev.bus, rotation)
         taken = self.taken_later(chips, dev.bus, dev.address) if board is None else None
         if taken is not None and self.target is not None:
             why = self.taken_line(taken, rotation)
@@ -994,7 +1019,7 @@ class _Builder:
             inst.notes.append(f"{', '.join(off)}: {which} disabled for use")
         if twice:
             inst.notes.append(twice.removeprefix("; "))
-        self.set_rotation(inst, *rotation)
+        self.set_rotation(inst, *rotation, turned)
         self.note_unsettled_row(inst, chips, dev.bus, dev.address, if_run)
         for rot, v in rotations.items():
             if not v:
@@ -1042,6 +1067,7 @@ class _Builder:
                 continue
             if later is not None:  # the target's board script no longer starts it
                 rotation = (later.rotation, f"the -R of PX4 {self.file_release}'s start (above)")
+            rotation, turned = self.axes_rotation(chips, start.bus, rotation)
             taken = self.taken_later(chips, start.bus, start.address) if board is None else None
             if taken is not None and self.target is not None:
                 self.leave_out(found, device, "board", self.taken_line(taken, rotation))
@@ -1070,7 +1096,7 @@ class _Builder:
                 inst.notes.append(later.line)
             if taken is not None:
                 inst.notes.append(self.taken_line(taken, rotation))
-            self.set_rotation(inst, *rotation)
+            self.set_rotation(inst, *rotation, turned)
             self.note_unsettled_row(inst, chips, start.bus, start.address, if_run)
             if driver.name in BATTERY_INDEX_DRIVERS:
                 inst.notes.append(_battery_note(spec.name, _launched_args(start)))
@@ -1309,7 +1335,13 @@ def migrate(
     chosen = _board(config, board, assumptions)
     upgrade = _upgrade(config, chosen, target_release, assumptions)
     builder = _Builder(
-        config, schema or load_schema(include_dronecan=False), names, chosen, assumptions, upgrade
+        config,
+        schema or load_schema(include_dronecan=False),
+        names,
+        chosen,
+        assumptions,
+        upgrade,
+        target_release,
     )
     proposal = builder.run()
     proposal.target_release = upgrade.target

@@ -1,0 +1,282 @@
+"""``px4params migrate`` across PX4 releases whose drivers changed the axes they report: a
+rotation of the file's release becomes the one giving the same orientation on the release the
+manifest is for (python/px4params/migrate/axes.py, data/driver_axes.toml).
+
+The answers are PX4's own: the board scripts PX4 changed together with each driver (read at
+PX4-Autopilot v1.11.0 71db0903a9 and v1.12.0 9524e8ec03), the hand-coded fast paths of
+src/lib/conversion/rotation.h at v1.12.0, and real parameter files of the corpus
+(tests/test_migrate_corpus.py) whose GPS compass is an IST8310 found by probing on PX4 1.9
+and 1.10.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import pytest
+import test_migrate_corpus as corpus
+from px4params.errors import MigrationError
+from px4params.migrate import axes
+from px4params.vehicle import devid
+from test_migrate_build import config
+from test_migrate_upgrade import run
+
+GPS_IST8310 = devid.encode("i2c", 1, 0x0E, 0x06)  # the GPS's IST8310 on a Pixhawk 4
+IST8310_NOTE = (
+    "rotation 10 (was 0 on PX4 {version}: rc.sensors starts it without -R): ist8310 reports "
+    "other axes from PX4 v1.12.0 (PX4 commit 7569722821): the same orientation as before"
+)
+
+
+def c_of(module: str, internal: bool = False) -> int:
+    """C of the table's change for ``module``."""
+    (change,) = [c for c in axes.changes() if module in c.modules]
+    if internal and change.internal_rotation is not None:
+        return change.internal_rotation
+    return change.rotation
+
+
+# (board script, module, internal bus, -R at v1.11.0, -R at v1.12.0): PX4's own fixes
+BOARD_FIXES = [
+    ("boards/px4/fmu-v5/init/rc.board_sensors:19 -> :22", "ist8310", False, 0, 10),
+    ("boards/holybro/pix32v5/init/rc.board_sensors:19", "ist8310", False, 0, 10),
+    ("boards/holybro/durandal-v1/init/rc.board_sensors:15", "ist8310", False, 0, 10),
+    ("boards/nxp/fmurt1062-v1/init/rc.board_sensors:31", "ist8310", False, 0, 10),
+    # changed by the rewrite commit itself; the board was gone before v1.12.0
+    ("boards/intel/aerofc-v1/init/rc.board_sensors (7569722821)", "ist8310", False, 4, 14),
+    ("boards/airmind/mindpx-v2/init/rc.board_sensors:10 (qmc5883 -I)", "qmc5883", True, 12, 6),
+    ("boards/spracing/h7extreme/init/rc.board_sensors:8 -> :10", "mpu6000", False, 11, 5),
+    ("boards/spracing/h7extreme/init/rc.board_sensors:9 -> :11 (commented)", "mpu6000", False,
+     10, 4),
+    ("boards/bitcraze/crazyflie/init/rc.board_sensors:9", "mpu9250", False, 12, 6),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(("script", "module", "internal", "old", "new"), BOARD_FIXES)
+def test_the_composition_gives_pX4s_own_board_script_fixes(
+    script: str, module: str, internal: bool, old: int, new: int
+) -> None:
+    assert axes.composed(c_of(module, internal), old) == new, script
+
+
+def test_the_rotation_matrices_are_rotation_hs_fast_paths() -> None:
+    # src/lib/conversion/rotation.h at v1.12.0, rotate_3(): ROLL_180_YAW_90 (:195-201)
+    # x' = y, y' = x, z' = -z; ROLL_180_YAW_270 (:214-220) x' = -y, y' = -x, z' = -z;
+    # YAW_270 (:180-183) x' = y, y' = -x; PITCH_180 (:207-209) x' = -x, z' = -z
+    x, y, z = 1.0, 2.0, 3.0
+    for value, want in [(10, (y, x, -z)), (14, (-y, -x, -z)), (6, (y, -x, z)), (12, (-x, y, -z))]:
+        m = axes.rotations()[value]
+        got = tuple(m[i][0] * x + m[i][1] * y + m[i][2] * z for i in range(3))
+        assert got == pytest.approx(want, abs=1e-12), value
+
+
+def test_composition_applies_c_first_where_the_order_matters() -> None:
+    # 12 (pitch 180) and 14 (roll 180, yaw 270) do not commute: mindpx-v2's 12 -> 6 needs 12∘14
+    assert axes.composed(14, 12) == 6
+    assert axes.composed(12, 14) != 6
+    # an orientation no enum value names (the research note's tables: 17 and 38 under C 10)
+    assert axes.composed(10, 17) is None and axes.composed(10, 38) is None
+    assert axes.composed(10, 16) == 35 and axes.composed(14, 16) == 30  # the note's tables
+
+
+def write_params(path: Path, version: str | None, rows: dict[str, int]) -> Path:
+    lines = ["# Onboard parameters for Vehicle 1", "#", "# Stack: PX4"]
+    lines += [f"# Version: {version}"] if version else []
+    lines += ["#", "# Vehicle-Id Component-Id Name Value Type"]
+    lines += [f"1\t1\t{name}\t{value}\t6" for name, value in rows.items()]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def test_a_pixhawk_4_gps_compass_of_px4_1_11_gets_rotation_10_for_todays_px4(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Pixhawk 4 on v1.11.3, the GPS's IST8310 found by rc.sensors' probe `ist8310 -X start`
+    (no -R): today's driver reports other axes, so the manifest's -R is 10, as fmu-v5's own
+    script has it from v1.12.0 (`ist8310 -X -b 1 -R 10 start`, line 25)."""
+    rows = {"CAL_MAG1_ID": GPS_IST8310, "CAL_MAG1_ROT": 0, "SENS_EXT_I2C_PRB": 1}
+    path = write_params(tmp_path / "v5.params", "1.11.3", rows)
+    for board in ((), ("--board", "px4_fmu-v5")):
+        (inst,) = run(capsys, str(path), *board)["instances"]
+        assert inst["values"]["rotation"] == 10
+        assert IST8310_NOTE.format(version="v1.11.3") in inst["notes"]
+    # fmu-v5's v1.12.0 start has the -R the instance gets: no "check its calibration" clause,
+    # neither in the note nor where that release's board script takes the compass over
+    (note,) = [n for n in inst["notes"] if n.startswith("the board's script starts it")]
+    assert "-R 10 start" in note and "check its calibration" not in note
+    upgraded = run(capsys, str(path), "--board", "px4_fmu-v5", "--target-release", "v1.12.0")
+    (mag,) = upgraded["left_out"]
+    assert "-R 10 start" in mag["line"] and "check its calibration" not in mag["line"]
+
+
+def test_the_same_compass_of_px4_1_13_keeps_its_rotation(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    rows = {"CAL_MAG1_ID": GPS_IST8310, "SENS_EXT_I2C_PRB": 1}
+    path = write_params(tmp_path / "v13.params", "1.13.3", rows)
+    (inst,) = run(capsys, str(path))["instances"]
+    assert (inst["values"]["rotation"], inst["notes"]) == (0, [])
+
+
+@pytest.mark.parametrize(("release", "turned"), [("v1.11.0", 0), ("v1.12.0", 10), ("main", 10)])
+def test_a_target_release_before_the_change_keeps_the_rotation(
+    release: str, turned: int, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Without a board no target drops the probed compass: the rotation follows the target's
+    driver, the boundary being v1.12.0."""
+    rows = {"CAL_MAG1_ID": GPS_IST8310, "SENS_EXT_I2C_PRB": 1}
+    path = write_params(tmp_path / "v11.params", "1.11.3", rows)
+    (inst,) = run(capsys, str(path), "--target-release", release)["instances"]
+    assert inst["values"]["rotation"] == turned
+    said = [n for n in inst["notes"] if "other axes" in n]
+    assert said == ([IST8310_NOTE.format(version="v1.11.3")] if turned else [])
+
+
+def test_a_gps_qmc5883_of_px4_1_11_on_an_external_bus_gets_rotation_10(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """v1.11's qmc5883 on an external bus reported (-y, x, z), today's qmc5883l (x, -y, -z):
+    C 10 (an internal one's would be 14, as mindpx-v2's 12 -> 6 shows)."""
+    qmc = devid.encode("i2c", 1, 0x0D, 0x08)
+    path = write_params(tmp_path / "q.params", "1.11.3", {"CAL_MAG0_ID": qmc})
+    (inst,) = run(capsys, str(path), "--board", "px4_fmu-v5")["instances"]
+    assert inst["values"]["rotation"] == 10
+    assert inst["notes"] == [
+        "rotation 10 (was 0 on PX4 v1.11.3: rc.sensors starts it without -R): qmc5883 (today "
+        "qmc5883l) on an external bus reports other axes from PX4 v1.12.0 (PX4 commit "
+        "24125b3da4, PR #14384): the same orientation as before"
+    ]
+
+
+@pytest.mark.parametrize(("bus", "turned", "kind"), [(1, 14, "internal"), (2, 10, "external")])
+def test_a_qmc5883_of_px4_1_11_is_turned_by_its_bus_kind(bus: int, turned: int, kind: str) -> None:
+    """mindpx-v2 at v1.11.0: I2C bus 1 internal, 2 external (its src/i2c.cpp). Its script's
+    own QMC5883 row taken away, a QMC5883 found on either bus is an instance: v1.11's driver
+    reported (y, -x, z) on an internal bus, (-y, x, z) on an external one."""
+    from px4params import migrate
+    from px4params.vehicle.boards import load_boards
+
+    mindpx = load_boards().by_name("airmind_mindpx-v2", "v1.11.0")
+    assert mindpx is not None and mindpx.internal_i2c_buses == (1,)
+    rows = tuple(r for r in mindpx.devices if r.driver != "qmc5883")
+    board = dataclasses.replace(mindpx, devices=rows)
+    qmc = devid.encode("i2c", bus, 0x0D, 0x08)
+    proposal = migrate.migrate(config({"CAL_MAG0_ID": qmc}), table="px4-v1.11", board=board)
+    (inst,) = proposal.instances
+    assert inst.values["rotation"] == turned
+    assert f"qmc5883 (today qmc5883l) on an {kind} bus reports" in inst.notes[-1]
+    # the board's own fix, through the same function: -I -R 12 became -R 6
+    assert axes.turn(["qmc5883l"], 12, "w", (1, 11, 0), None, True, None).rotation == 6
+
+
+def test_a_boot_consoles_rotation_of_px4_1_11_is_turned_too() -> None:
+    from px4params import migrate
+
+    console = "ist8310 #0 on I2C bus 2 (external, equal to '-b 1')\n"
+    proposal = migrate.migrate(config(console=console), table="px4-v1.11")
+    (inst,) = proposal.instances
+    assert inst.values["rotation"] == 10
+    assert inst.notes == [
+        "rotation 10 (was 0 on PX4 v1.11.2: rc.sensors starts it without -R): ist8310 reports "
+        "other axes from PX4 v1.12.0 (PX4 commit 7569722821): the same orientation as before"
+    ]
+
+
+@pytest.mark.parametrize(("name", "version"), [("px4-practice.params", "v1.10.1")])
+def test_a_real_pixhawk_4_files_gps_compass_is_turned(
+    name: str, version: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A real Pixhawk 4 file of PX4 "1.10.1 dev": its GPS IST8310 (CAL_MAG0_ID 396809, I2C bus
+    1, 0x0E, CAL_MAG0_ROT 0) ran with the old driver's axes."""
+    (truth,) = [t for t in corpus.CORPUS if t.name == name]
+    path = corpus.locate(truth, tmp_path)
+    (inst,) = run(capsys, str(path))["instances"]
+    assert inst["values"]["rotation"] == 10
+    assert inst["notes"] == [IST8310_NOTE.format(version=version)]
+
+
+def test_a_file_naming_no_release_keeps_the_rotation_and_says_why(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    rows = {"CAL_MAG1_ID": GPS_IST8310, "SENS_EXT_I2C_PRB": 1}
+    path = write_params(tmp_path / "nover.params", None, rows)
+    (inst,) = run(capsys, str(path))["instances"]
+    assert inst["values"]["rotation"] == 0
+    assert inst["notes"] == [
+        "rotation 0 taken as is (rc.sensors starts it without -R): the file names no PX4 "
+        "release, and ist8310 reports other axes from PX4 v1.12.0 (PX4 commit 7569722821): for "
+        "a file of PX4 v1.11 or older it is 10"
+    ]
+
+
+def test_a_release_nobody_checked_keeps_the_rotation_and_says_so() -> None:
+    # lis2mdl -> iis2mdc: old axes at v1.15.0, new at release/1.18; v1.16 was not read
+    turned = axes.turn(["iis2mdc"], 4, "why", (1, 16, 0), None, False, None)
+    assert turned is not None and turned.rotation == 4
+    assert turned.note == (
+        "rotation 4 taken as is (why): lis2mdl (today iis2mdc) reports other axes from PX4 v1.18 "
+        "(PX4 commit f0a852918b), and the axes of PX4 v1.16.0 were not checked (PX4 v1.15 "
+        "reports the old ones): for a file of PX4 v1.15 or older it is 14"
+    )
+    assert axes.turn(["iis2mdc"], 4, "why", (1, 15, 2), "v1.18", False, None).rotation == 14
+    assert axes.turn(["iis2mdc"], 4, "why", (1, 15, 2), "v1.15.0", False, None) is None
+
+
+def test_an_orientation_no_rotation_value_names_is_kept_and_said() -> None:
+    # 17 (roll 90, yaw 45) after ist8310's C 10 is roll 90 and yaw 45 about other axes: no
+    # value of the enum (the research note's table: 17 -> none)
+    turned = axes.turn(["ist8310"], 17, "why", (1, 11, 3), None, False, None)
+    assert turned is not None and turned.rotation == 17
+    assert turned.note == (
+        "rotation 17 taken as is (why): ist8310 reports other axes from PX4 v1.12.0 (PX4 commit "
+        "7569722821), and no -R value gives its orientation of PX4 v1.11.3 on the other axes "
+        "(17 after 10): check it, and set it by calibration"
+    )
+
+
+def test_a_driver_only_some_boards_built_old_turns_only_there() -> None:
+    # v1.11.0 built the legacy imu/mpu6000 only for fmurt1062-v1 and spracing h7extreme
+    old = (1, 11, 0)
+    assert axes.turn(["mpu6000"], 11, "w", old, None, False, "spracing_h7extreme").rotation == 5
+    assert axes.turn(["mpu6000"], 11, "w", old, None, False, "px4_fmu-v4") is None
+    unknown = axes.turn(["mpu6000"], 11, "w", old, None, False, None)
+    assert unknown is not None and unknown.rotation == 11 and "board is not known" in unknown.note
+
+
+@pytest.mark.parametrize(
+    ("row", "error"),
+    [
+        ({"modules": ["x"]}, "driver_axes.toml: change 1: old_through missing"),
+        ({**{"colour": 1}}, "driver_axes.toml: change 1: unknown key 'colour' (expected modules,"),
+        ({"rotation": 41}, "driver_axes.toml: change 1: rotation = 41: not a value of PX4's"),
+        ({"new_from": "soon"}, "driver_axes.toml: change 1: new_from: release 'soon' is no PX4"),
+        ({"pr": "14384"}, "driver_axes.toml: change 1: pr = '14384': expected a int"),
+    ],
+)
+def test_a_wrong_table_row_is_refused_naming_it(row: dict[str, object], error: str) -> None:
+    good = {
+        "modules": ["x"], "old_through": "v1.11", "new_from": "v1.12.0", "rotation": 10,
+        "commit": "0", "old_source": "a", "new_source": "b",
+    }  # fmt: skip
+    bad = {**good, **row}
+    if row == {"modules": ["x"]}:
+        del bad["old_through"]
+    with pytest.raises(MigrationError) as e:
+        axes.parse_changes({"change": [bad]})
+    assert str(e.value).startswith(error)
+
+
+def test_a_rotation_name_without_its_angles_is_refused(monkeypatch: pytest.MonkeyPatch) -> None:
+    names = {"0": "No rotation", "1": "Yaw 45 deg", "2": "Quarter turn"}
+    monkeypatch.setattr(axes, "value_set", lambda name: names)
+    axes.rotations.cache_clear()
+    try:
+        with pytest.raises(MigrationError) as e:
+            axes.rotations()
+    finally:
+        axes.rotations.cache_clear()
+    assert str(e.value) == (
+        "value_sets.toml: rotation 2 = 'Quarter turn': expected 'Roll R deg, Pitch P deg, Yaw Y "
+        "deg' (each part optional) or 'No rotation'"
+    )
