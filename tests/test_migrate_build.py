@@ -609,7 +609,8 @@ def test_a_probed_compass_gets_the_rotation_of_its_own_chips_probe_only() -> Non
     ak09916, ist8310 = devid.encode("i2c", 2, 0x0C, 0x09), devid.encode("i2c", 2, 0x0E, 0x06)
     old = OldConfig("t.ulg", "ULog", {"CAL_MAG0_ID": ak09916, "CAL_MAG1_ID": ist8310},
                     version=(1, 11, 2))  # fmt: skip
-    proposal = migrate.migrate(old, table="px4-v1.11", board=cube)
+    # for the file's own release: today's ist8310 reports other axes (tests/test_migrate_axes.py)
+    proposal = migrate.migrate(old, table="px4-v1.11", board=cube, target_release="v1.11.0")
     ak, ist = proposal.instances
     assert (ak.name, ak.values["rotation"]) == ("AK09916#0", 6)
     assert ak.notes == [

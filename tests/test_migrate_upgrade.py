@@ -226,7 +226,8 @@ def test_a_probed_compass_a_later_board_script_starts_itself_is_left_out_for_tha
     """Pixhawk 5 on v1.11.3 with a GPS's IST8310 (I2C bus 1, 0x0E): at v1.11.0 only rc.sensors'
     probe `ist8310 -X start` (line 105) starts it, so it is an instance; from v1.12.0 the board's
     rc.board_sensors line 25 starts it itself, `ist8310 -X -b 1 -R 10 start`: an instance would
-    start it twice there, and the rotation changed."""
+    start it twice there. Its -R 10 is the old 0 for the rewritten driver's axes (v1.12.0), the
+    rotation the instance gets too: no rotation change to report."""
     gps = devid.encode("i2c", 1, 0x0E, 0x06)
     path = tmp_path / "v5.params"
     path.write_text(
@@ -236,14 +237,15 @@ def test_a_probed_compass_a_later_board_script_starts_itself_is_left_out_for_tha
     said = (
         "the board's script starts it from PX4 v1.12.0: 'ist8310 -X -b 1 -R 10 start' "
         "(PX4/PX4-Autopilot boards/px4/fmu-v5/init/rc.board_sensors:25 at v1.12.0 (tag v1.12.0, "
-        "9524e8ec03, 2021-07-05)), with -R 10 where PX4 v1.11.0 ran it with 0 (rc.sensors "
-        "starts it without -R; check its calibration after the update)"
+        "9524e8ec03, 2021-07-05))"
     )
     today = run(capsys, str(path), "--board", "px4_fmu-v5")
     (inst,) = today["instances"]
-    assert (inst["name"], inst["values"]["rotation"]) == ("IST8310#0", 0)
+    assert (inst["name"], inst["values"]["rotation"]) == ("IST8310#0", 10)
     assert inst["notes"] == [
-        f"{said}: for that firmware --target-release v1.12.0 (or later) leaves it out"
+        f"{said}: for that firmware --target-release v1.12.0 (or later) leaves it out",
+        "rotation 10 (was 0 on PX4 v1.11.3: rc.sensors starts it without -R): ist8310 reports "
+        "other axes from PX4 v1.12.0 (PX4 commit 7569722821): the same orientation as before",
     ]
     for target in ("v1.12.0", "main"):
         upgraded = run(capsys, str(path), "--board", "px4_fmu-v5", "--target-release", target)
