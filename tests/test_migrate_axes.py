@@ -183,6 +183,13 @@ def test_a_boot_consoles_rotation_of_px4_1_11_is_turned_too() -> None:
     ]
 
 
+@pytest.mark.parametrize("rotation", [41, 44, 99, -1])
+def test_a_rotation_beyond_px4s_enum_is_not_turned(rotation: int) -> None:
+    # v1.11's 41-45 and values no PX4 has: left to the rotation field's range check, no KeyError
+    assert axes.turn(["lis2mdl"], rotation, "why", (1, 15, 0), None, False, None) is None
+    assert axes.turn(["ist8310"], rotation, "why", (1, 11, 3), None, False, None) is None
+
+
 @pytest.mark.parametrize(("name", "version"), [("px4-practice.params", "v1.10.1")])
 def test_a_real_pixhawk_4_files_gps_compass_is_turned(
     name: str, version: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]

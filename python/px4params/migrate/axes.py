@@ -224,7 +224,9 @@ def turn(
     ``board``: the board's PX4 name (None: not known)."""
     names = set(modules)
     change = next((c for c in changes() if names & set(c.modules)), None)
-    if change is None:
+    if change is None or rotation not in rotations():
+        # a value PX4's enum lacks (v1.11's 41-45, a corrupt log's) is not turned: the
+        # rotation field's range check reports it
         return None
     module = change.modules[0]
     if len(change.modules) > 1:  # renamed: the old release's name, and today's
