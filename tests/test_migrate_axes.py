@@ -287,3 +287,38 @@ def test_a_rotation_name_without_its_angles_is_refused(monkeypatch: pytest.Monke
         "value_sets.toml: rotation 2 = 'Quarter turn': expected 'Roll R deg, Pitch P deg, Yaw Y "
         "deg' (each part optional) or 'No rotation'"
     )
+
+
+@pytest.mark.parametrize(
+    ("value", "then"),
+    # the same rotation worked out by hand from rot_lookup's angles (v1.11.0 rotation.h:149-151):
+    # 41 = yaw 180 after roll 270 = pitch 180 after roll 90 (31); 44 (pitch 9, yaw 180) and 45
+    # (pitch 45) are no rotation of the enum from v1.12.0
+    [(41, "set CAL_MAG1_ROT = 31, the same rotation"),
+     (42, "set CAL_MAG1_ROT = 36, the same rotation"),
+     (43, "set CAL_MAG1_ROT = 29, the same rotation"),
+     (44, "no value of today's enum is that rotation: calibrate the compass again"),
+     (45, "no value of today's enum is that rotation: calibrate the compass again")],
+)  # fmt: skip
+def test_a_1_11_compass_rotation_px4_1_12_resets_is_said_with_the_value_that_keeps_it(
+    value: int, then: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    rows = {"CAL_MAG1_ID": GPS_IST8310, "CAL_MAG1_ROT": value, "SENS_EXT_I2C_PRB": 1}
+    path = write_params(tmp_path / "v5.params", "1.11.3", rows)
+    (inst,) = run(capsys, str(path))["instances"]
+    assert inst["notes"][-1] == (
+        f"CAL_MAG1_ROT = {value}: PX4 1.12 and later have no rotation {value} (removed by PX4 "
+        f"commit 00e955cc3e) and reset it to 0 at boot; {then}"
+    )
+    # for PX4 1.11 itself the rotation is still there: nothing said
+    (inst,) = run(capsys, str(path), "--target-release", "v1.11.0")["instances"]
+    assert not [n for n in inst["notes"] if "reset it to 0" in n]
+
+
+def test_a_rotation_the_enum_still_has_or_a_file_of_px4_1_12_is_not_said_to_be_reset() -> None:
+    assert axes.removed_rotation("CAL_MAG0_ROT", 40, (1, 11, 3), None) is None
+    assert axes.removed_rotation("CAL_MAG0_ROT", 46, (1, 11, 3), None) is None
+    # a file of 1.12 on: its PX4 had reset the value at boot already
+    assert axes.removed_rotation("CAL_MAG0_ROT", 41, (1, 12, 0), None) is None
+    # a file naming no release: 41 is of 1.11 or older whatever it says
+    assert axes.removed_rotation("CAL_MAG0_ROT", 41, None, "v1.12.0") is not None

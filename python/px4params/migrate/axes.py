@@ -23,7 +23,17 @@ from px4params.dsdl.loader import value_set
 from px4params.errors import MigrationError
 from px4params.vehicle.boards import BoardsError, release_version
 
-__all__ = ["AxesChange", "Turned", "changes", "composed", "matrix", "rotations", "turn"]
+__all__ = [
+    "REMOVED_AT_1_12",
+    "AxesChange",
+    "Turned",
+    "changes",
+    "composed",
+    "matrix",
+    "removed_rotation",
+    "rotations",
+    "turn",
+]
 
 Matrix = tuple[tuple[float, float, float], tuple[float, float, float], tuple[float, float, float]]
 
@@ -286,6 +296,43 @@ def turn(
         f"{rotation} on PX4 {shown} ({why}), turned for {change.modules[-1]}'s axes",
         f"rotation {new} (was {rotation} on PX4 {shown}: {why}): {what}: the same orientation as "
         "before",
+    )
+
+
+#: PX4 1.11's rotations 41-45 as roll, pitch, yaw (src/lib/conversion/rotation.h's rot_lookup
+#: at v1.11.0, 71db0903a9, lines 149-153), gone from v1.12.0 (00e955cc3e, "rotations: sync
+#: rotation enum, SENS_BOARD_ROT, CAL_MAGx_ROT with MAV_SENSOR_ORIENTATION"): from then an
+#: external magnetometer's CAL_MAGn_ROT beyond the enum is reset to 0 ("invalid rotation ...,
+#: resetting to rotation none", src/lib/sensor_calibration/Magnetometer.cpp:160-164 at v1.12.0).
+REMOVED_AT_1_12 = {
+    41: (270, 0, 180),
+    42: (270, 0, 270),
+    43: (0, 90, 180),
+    44: (0, 9, 180),
+    45: (0, 45, 0),
+}
+
+
+def removed_rotation(
+    param: str, value: int, file_version: tuple[int, int, int] | None, release: str | None
+) -> str | None:
+    """A note for ``param = value``, a rotation of PX4 1.11 that the manifest's ``release``
+    (None: the newest) no longer has: PX4 resets it to 0, the value of the same rotation is
+    said (computed from the angles), or that none is; None where nothing is lost."""
+    angles = REMOVED_AT_1_12.get(value)
+    if angles is None or _series(release) < (1, 12):
+        return None
+    if file_version is not None and _series(file_version) >= (1, 12):
+        return None  # PX4 of the file itself had reset it
+    same = _value_of(matrix(*angles))
+    then = (
+        f"set {param} = {same}, the same rotation"
+        if same is not None
+        else ("no value of today's enum is that rotation: calibrate the compass again")
+    )
+    return (
+        f"{param} = {value}: PX4 1.12 and later have no rotation {value} (removed by PX4 commit "
+        f"00e955cc3e) and reset it to 0 at boot; {then}"
     )
 
 

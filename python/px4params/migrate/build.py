@@ -1028,6 +1028,8 @@ class _Builder:
                 f"{rot} = {_shown(v)} stays a classic parameter: calibration applies it; the "
                 f"driver's rotation is {rotation[0]} ({rotation[1]})"
             )
+            if removed := axes.removed_rotation(rot, v, self.config.version, self.for_release):
+                inst.notes.append(removed)
 
     # -- what the boot console shows, beyond the slots ---------------------------------------
 
