@@ -318,6 +318,10 @@ def test_a_1_11_compass_rotation_px4_1_12_resets_is_said_with_the_value_that_kee
 def test_a_rotation_the_enum_still_has_or_a_file_of_px4_1_12_is_not_said_to_be_reset() -> None:
     assert axes.removed_rotation("CAL_MAG0_ROT", 40, (1, 11, 3), None) is None
     assert axes.removed_rotation("CAL_MAG0_ROT", 46, (1, 11, 3), None) is None
+    assert axes.removed_rotation("CAL_MAG0_ROT", 41.5, (1, 11, 3), None) is None
+    assert axes.removed_rotation("CAL_MAG0_ROT", 41.0, (1, 11, 3), None) == (
+        axes.removed_rotation("CAL_MAG0_ROT", 41, (1, 11, 3), None)
+    )
     # a file of 1.12 on: its PX4 had reset the value at boot already
     assert axes.removed_rotation("CAL_MAG0_ROT", 41, (1, 12, 0), None) is None
     # a file naming no release: 41 is of 1.11 or older whatever it says

@@ -215,6 +215,8 @@ class Turned:
     rotation: int
     why: str
     note: str
+    #: Whose axes changed, when, and the PX4 commit ("" where the rotation is taken as is).
+    what: str = ""
 
 
 def turn(
@@ -296,6 +298,7 @@ def turn(
         f"{rotation} on PX4 {shown} ({why}), turned for {change.modules[-1]}'s axes",
         f"rotation {new} (was {rotation} on PX4 {shown}: {why}): {what}: the same orientation as "
         "before",
+        what,
     )
 
 
@@ -314,12 +317,12 @@ REMOVED_AT_1_12 = {
 
 
 def removed_rotation(
-    param: str, value: int, file_version: tuple[int, int, int] | None, release: str | None
+    param: str, value: float, file_version: tuple[int, int, int] | None, release: str | None
 ) -> str | None:
     """A note for ``param = value``, a rotation of PX4 1.11 that the manifest's ``release``
     (None: the newest) no longer has: PX4 resets it to 0, the value of the same rotation is
     said (computed from the angles), or that none is; None where nothing is lost."""
-    angles = REMOVED_AT_1_12.get(value)
+    angles = REMOVED_AT_1_12.get(int(value)) if float(value).is_integer() else None
     if angles is None or _series(release) < (1, 12):
         return None
     if file_version is not None and _series(file_version) >= (1, 12):
@@ -328,11 +331,12 @@ def removed_rotation(
     then = (
         f"set {param} = {same}, the same rotation"
         if same is not None
-        else ("no value of today's enum is that rotation: calibrate the compass again")
+        else "no value of today's enum is that rotation: calibrate the compass again"
     )
+    number = int(value)
     return (
-        f"{param} = {value}: PX4 1.12 and later have no rotation {value} (removed by PX4 commit "
-        f"00e955cc3e) and reset it to 0 at boot; {then}"
+        f"{param} = {number}: PX4 1.12 and later have no rotation {number} (removed by PX4 "
+        f"commit 00e955cc3e) and reset it to 0 at boot; {then}"
     )
 
 

@@ -222,17 +222,23 @@ class _Builder:
     ) -> tuple[tuple[int, str], str | None]:
         """A rotation of the file's release for the manifest's release, where the chip's
         driver reports other axes there (:func:`.axes.turn`), and the note saying so."""
+        turned = self.turned(chips, bus, rotation, self.for_release)
+        return (rotation, None) if turned is None else ((turned.rotation, turned.why), turned.note)
+
+    def turned(
+        self, chips: set[str], bus: int, rotation: tuple[int, str], release: str | None
+    ) -> axes.Turned | None:
+        """:func:`.axes.turn` of a device's rotation of the file's release, for ``release``."""
         by_chip = self.drivers.chips()
         modules = {by_chip[c].name for c in chips if c in by_chip}
-        turned = axes.turn(
+        return axes.turn(
             modules,
             *rotation,
             self.config.version,
-            self.for_release,
+            release,
             self.on_internal_bus(bus),
             getattr(self.board, "name", None),
         )
-        return (rotation, None) if turned is None else ((turned.rotation, turned.why), turned.note)
 
     def run(self) -> Proposal:
         self.enabled_drivers()
@@ -398,10 +404,13 @@ class _Builder:
                 f"must: --target-release {gone} (or later) proposes it as an instance"
             )
         elif last is not None and last.rotation != before.rotation:
-            then = (
-                f"the board's script still starts it, with -R {last.rotation}: check its "
-                "calibration after the update"
-            )
+            # the board's new -R may be the old orientation on a driver's new axes
+            turned = self.turned(chips, bus, (before.rotation, ""), spans[-1][1])
+            then = f"the board's script still starts it, with -R {last.rotation}: "
+            if turned is not None and turned.what and turned.rotation == last.rotation:
+                then += f"the same orientation ({turned.what})"
+            else:
+                then += "check its calibration after the update"
         else:
             then = "the board's script still starts it"
         line = f"the board's script of PX4 {self.file_release} starts it with {old}; " + (
