@@ -13,8 +13,15 @@ from __future__ import annotations
 import dataclasses
 
 import pytest
+from px4_git import px4_git_dirs, show, snapshot_commits
 from px4params import migrate
-from px4params.migrate.conditions import Facts, board_variables, evaluate
+from px4params.migrate.conditions import (
+    HARDWARE_VARIABLES,
+    Facts,
+    HardwareVariable,
+    board_variables,
+    evaluate,
+)
 from px4params.migrate.config import OldConfig
 from px4params.vehicle.boards import Board, SwitchStart, load_boards
 from px4params.vehicle.console import started_drivers
@@ -282,3 +289,118 @@ def test_a_later_setting_that_runs_clears_what_an_earlier_one_left_open() -> Non
     facts = dataclasses.replace(facts, params={"SYS_HAS_MAG": 0})
     (said,) = evaluate("$BOARD_FMUV3 == 0", facts).unchecked
     assert said.startswith(f"$BOARD_FMUV3 == 0 ({path}:20 sets BOARD_FMUV3 0; line 29: 20 where ")
+
+
+# -- the hardware variables' table against PX4's scripts -------------------------------------
+
+
+def _script_test(text: str) -> str:
+    """An ``if`` line's test in the board table's condition form (a form not read here is
+    kept as written, so that it equals no condition of the table)."""
+    words = text.split()
+    if words[0] == "!":
+        return f"not {_script_test(' '.join(words[1:]))}"
+    if words[:2] == ["ver", "hwtypecmp"]:
+        return f"hw_type in {','.join(words[2:])}"
+    if words[:5] == ["mft", "query", "-q", "-k", "MFT"] and words[5::2] == ["-s", "-v"]:
+        return f"mft {words[6]} == {words[8]}"
+    if words[-1] == "start":  # a driver's start: it holds where the driver started
+        return f"{words[0]} started ({' '.join(words[1:])})"
+    return f"<{text}>"
+
+
+def _script_sets(text: str, name: str) -> list[tuple[int, str, int, str]]:
+    """Each ``set NAME value`` of a board script, in its order: (its line, the value, the line
+    of the innermost ``if`` it is in (0: none), the conditions of the ``if``s it is in, outer
+    first and joined by `` and ``, each negated in its ``else``)."""
+    blocks: list[tuple[int, list[str]]] = []  # per open `if`: its line, its branch's clauses
+    found = []
+    for number, written in enumerate(text.split("\n"), 1):
+        words = written.split("#")[0].split()
+        if not words:
+            continue
+        test = " ".join(words[1:]).removesuffix("; then").removesuffix(";then")
+        if words[0] == "if":
+            blocks.append((number, [_script_test(test)]))
+        elif words[0] == "elif":
+            line, clauses = blocks.pop()
+            blocks.append((line, [*(f"not {c}" for c in clauses), _script_test(test)]))
+        elif words[0] == "else":
+            line, clauses = blocks.pop()
+            blocks.append((line, [f"not {c}" for c in clauses]))
+        elif words[0] == "fi" and blocks:  # fmu-v6xrt's at v1.15.0 (line 86) closes none
+            blocks.pop()
+        elif words[:2] == ["set", name] and len(words) == 3:
+            when = " and ".join(c for _, clauses in blocks for c in clauses)
+            found.append((number, words[2], blocks[-1][0] if blocks else 0, when))
+    assert not blocks, "an `if` without its `fi`"
+    return found
+
+
+def _read(dirs: tuple[str, ...], commit: str, path: str, name: str) -> object:
+    """How the script at ``commit`` sets ``name``, in the table's terms: (the line and value of
+    its unconditioned ``set``s, then (the innermost ``if``'s line, value, condition) of each
+    other): "absent" where the file is not there."""
+    text = show(dirs, commit, path)
+    if text is None:
+        return "absent"
+    sets = _script_sets(text, name)
+    return (
+        [(line, value) for line, value, within, _ in sets if not within],
+        [(within, value, when) for _, value, within, when in sets if within],
+    )
+
+
+def _table(var: HardwareVariable) -> object:
+    return [(var.line, var.first)], [(s.line, s.value, s.when) for s in var.settings]
+
+
+def _px4_commits() -> tuple[tuple[str, ...], dict[str, str]]:
+    """The PX4-Autopilot git directories and each snapshot's commit; skips where a commit is
+    in none of them (CI has no directory)."""
+    dirs, commits = tuple(px4_git_dirs()), snapshot_commits()
+    for commit in commits.values():
+        if show(dirs, commit, "Makefile") is None:
+            pytest.skip(f"commit {commit} is in none of {dirs} (set $PX4_AUTOPILOT_GIT)")
+    return dirs, commits
+
+
+def test_each_hardware_variable_is_set_on_the_lines_it_cites_at_exactly_its_releases() -> None:
+    # Each board's script at each snapshot, read here: the variable's unconditioned `set` on
+    # its line with its first value; each setting's `set` inside the `if` on the setting's line,
+    # with the value, under the `if`s it is in (`ver hwtypecmp V30` -> hw_type in V30, `mft
+    # query ... -s MFT_PM2 -v 0` -> mft MFT_PM2 == 0, `mpu6000 -s -b 4 -R 10 start` -> mpu6000
+    # started (...), its else -> not ...), in the script's order. At a snapshot a row does not
+    # list, the script is not so (other lines, another test, or no file): a release list cut
+    # short or run on is caught
+    dirs, commits = _px4_commits()
+    checked = 0
+    for board, entries in HARDWARE_VARIABLES.items():
+        vendor, model = board.split("_", 1)
+        for entry in entries:
+            assert set(entry.releases) <= set(commits), (board, entry.releases)
+            for name, var in entry.variables.items():
+                assert var.path == f"boards/{vendor}/{model}/init/rc.board_sensors", board
+                for release, commit in commits.items():
+                    read = _read(dirs, commit, var.path, name)
+                    if release in entry.releases:
+                        assert read == _table(var), (board, name, release)
+                        checked += 1
+                    else:
+                        assert read != _table(var), (board, name, release)
+    assert checked == 52  # HAVE_PM2 and HAVE_PM3: 38 (13 boards), BOARD_FMUV3: 14 (2 boards)
+
+
+def test_every_release_whose_board_script_sets_a_hardware_variable_has_its_row() -> None:
+    # A board's rows list each snapshot once, and every snapshot at which the board's script
+    # sets one of its variables at all (board_variables answers by the newest release asked)
+    dirs, commits = _px4_commits()
+    for board, entries in HARDWARE_VARIABLES.items():
+        listed = [release for entry in entries for release in entry.releases]
+        assert len(listed) == len(set(listed)), board
+        for name, var in {n: v for e in entries for n, v in e.variables.items()}.items():
+            for release, commit in commits.items():
+                read = _read(dirs, commit, var.path, name)
+                if read != "absent" and any(read):  # type: ignore[arg-type]
+                    assert release in listed, (board, name, release)
+                    assert name in board_variables(board, (release,)), (board, name, release)
