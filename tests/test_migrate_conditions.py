@@ -359,6 +359,8 @@ def _px4_commits() -> tuple[tuple[str, ...], dict[str, str]]:
     """The PX4-Autopilot git directories and each snapshot's commit; skips where a commit is
     in none of them (CI has no directory)."""
     dirs, commits = tuple(px4_git_dirs()), snapshot_commits()
+    if not dirs:
+        pytest.skip("no PX4-Autopilot git directory (set $PX4_AUTOPILOT_GIT)")
     for commit in commits.values():
         if show(dirs, commit, "Makefile") is None:
             pytest.skip(f"commit {commit} is in none of {dirs} (set $PX4_AUTOPILOT_GIT)")
