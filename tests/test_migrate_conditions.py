@@ -5,7 +5,9 @@ index (``-t``) each power monitor's start line gives.
 
 The expected answers are PX4's scripts as read (PX4-Autopilot boards/px4/fmu-v6x/init/
 rc.board_sensors, ROMFS/px4fmu_common/init.d/rc.sensors, src/drivers/power_monitor/ina2xx/
-*_main.cpp), transcribed in the board table with their lines.
+*_main.cpp), transcribed in the board table with their lines. Where a PX4-Autopilot git
+directory is at hand (tests/px4_git.py), the table of variables the hardware decides is also
+read against every board script it cites, at every snapshot.
 """
 
 from __future__ import annotations
