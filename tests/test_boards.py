@@ -9,16 +9,14 @@ the script it cites.
 from __future__ import annotations
 
 import dataclasses
-import functools
-import os
 import re
-import subprocess
 import tomllib
 from pathlib import Path
 from typing import Any
 
 import pytest
 import pyulog
+from px4_git import px4_git_dirs, show
 from px4params.errors import BoardsError, BoardsFileError
 from px4params.vehicle.boards import (
     Board,
@@ -509,34 +507,9 @@ def test_two_boards_with_one_ver_hw_are_refused() -> None:
 
 # -- the table against PX4's scripts, where a PX4-Autopilot git directory is at hand --------------
 
-_MIRRORS = (
-    "/work/.mirror/PonomarevDA+PX4-Autopilot/repo",
-    "/work/.mirror/dakejahl+PX4-Autopilot/repo",
-)
-
-
-def _px4_git_dirs() -> list[str]:
-    listed = os.environ.get("PX4_AUTOPILOT_GIT")
-    dirs = listed.split(os.pathsep) if listed else list(_MIRRORS)
-    return [d for d in dirs if Path(d).is_dir()]
-
-
-@functools.cache
-def _show(dirs: tuple[str, ...], commit: str, path: str) -> str | None:
-    for git_dir in dirs:
-        done = subprocess.run(
-            ["git", f"--git-dir={git_dir}", "show", f"{commit}:{path}"],
-            capture_output=True,
-            text=True,
-            check=False,
-        )
-        if done.returncode == 0:
-            return done.stdout
-    return None
-
 
 def test_every_start_is_on_the_line_it_cites() -> None:
-    dirs = _px4_git_dirs()
+    dirs = px4_git_dirs()
     if not dirs:
         pytest.skip("no PX4-Autopilot git directory (set $PX4_AUTOPILOT_GIT)")
     cite = re.compile(r"PX4/PX4-Autopilot (\S+):(\d+) at \S+ \([^,]+, ([0-9a-f]{10}),")
@@ -548,7 +521,7 @@ def test_every_start_is_on_the_line_it_cites() -> None:
                 m = cite.match(start.source)
                 assert m, start.source
                 path, line, short = m.group(1), int(m.group(2)), m.group(3)
-                text = _show(tuple(dirs), short, path)
+                text = show(tuple(dirs), short, path)
                 if text is None:
                     pytest.skip(f"commit {short} is in none of {dirs}")
                 written = text.split("\n")[line - 1]
@@ -560,7 +533,7 @@ def test_every_start_is_on_the_line_it_cites() -> None:
             for probe in variant.i2c_launcher_probes:
                 m = cite.match(probe.source)
                 assert m, probe.source
-                text = _show(tuple(dirs), m.group(3), m.group(1))
+                text = show(tuple(dirs), m.group(3), m.group(1))
                 assert text is not None
                 written = text.split("\n")[int(m.group(2)) - 1]
                 assert f'{{"{probe.driver}", 0x{probe.address:02x},' in written.replace("0x0", "0x")
@@ -572,7 +545,7 @@ def test_every_launcher_bus_is_on_the_line_it_cites() -> None:
     # v1.15.0, v1.18 and main; cuav fmu-v6x, godwit ga1, mr-tropic, tropic-community), checked
     # against the script at each snapshot at hand (v1.15.0, release/1.18 and main are in the
     # dakejahl mirror)
-    dirs = _px4_git_dirs()
+    dirs = px4_git_dirs()
     cite = re.compile(r"PX4/PX4-Autopilot (\S+):(\d+) at \S+ \([^,]+, ([0-9a-f]{10}),")
     table = load_boards()
     checked, missing = 0, set()
@@ -583,7 +556,7 @@ def test_every_launcher_bus_is_on_the_line_it_cites() -> None:
             for bus, source in zip(variant.i2c_launcher_buses, sources, strict=True):
                 m = cite.match(source)
                 assert m, source
-                text = _show(tuple(dirs), m.group(3), m.group(1))
+                text = show(tuple(dirs), m.group(3), m.group(1))
                 if text is None:
                     missing.add(m.group(3))
                     skipped += 1
@@ -951,9 +924,9 @@ def test_the_transcription_refuses_a_launcher_bus_started_twice() -> None:
     # leave one bus with two lines, and the later one would stand for both: refused
     module = _transcriber()
     path = "boards/px4/fmu-v6x/init/rc.board_sensors"
-    text = _show(tuple(_px4_git_dirs()), "bb59c637cd", path)
+    text = show(tuple(px4_git_dirs()), "bb59c637cd", path)
     if text is None:
-        pytest.skip(f"commit bb59c637cd is in none of {_px4_git_dirs()}")
+        pytest.skip(f"commit bb59c637cd is in none of {px4_git_dirs()}")
     _, _, launcher = module.facts(text)
     assert [(bus, line) for bus, _, line in launcher] == [(1, 61), (2, 64)]
     assert module.launcher_keys(path, launcher)[:2] == [
@@ -1040,9 +1013,9 @@ def test_the_chips_bus_offsets_are_read_from_px4s_headers() -> None:
     # platforms/nuttx/src/px4/nxp/{k66,s32k34x}/include/px4_arch/micro_hal.h: PX4_BUS_OFFSET 1;
     # nxp/rt106x: 0; STM32's headers define none of their own (stm32_common's is shared)
     module = _transcriber()
-    dirs = [d for d in _px4_git_dirs() if _show((d,), "bb59c637cd", "Makefile") is not None]
+    dirs = [d for d in px4_git_dirs() if show((d,), "bb59c637cd", "Makefile") is not None]
     if not dirs:
-        pytest.skip(f"commit bb59c637cd is in none of {_px4_git_dirs()}")
+        pytest.skip(f"commit bb59c637cd is in none of {px4_git_dirs()}")
     offsets = module.bus_offsets(dirs[0], "bb59c637cd")
     assert offsets["CONFIG_ARCH_CHIP_MK66FN2M0VMD18"][0] == 1
     assert offsets["CONFIG_ARCH_CHIP_S32K344"][0] == 1
@@ -1149,14 +1122,14 @@ def test_fmu_v3_makes_every_bus_external_on_cube_hardware() -> None:
 
 def test_the_override_is_on_the_line_it_cites() -> None:
     cite = re.compile(r"PX4/PX4-Autopilot (\S+):(\d+) at \S+ \([^,]+, ([0-9a-f]{10}),")
-    dirs, checked = tuple(_px4_git_dirs()), 0
+    dirs, checked = tuple(px4_git_dirs()), 0
     table = load_boards()
     for name in ("px4_fmu-v2", "px4_fmu-v3"):
         for variant in table.variants(name):
             assert variant.external_i2c_buses_when is not None
             m = cite.match(variant.external_i2c_buses_when.source)
             assert m
-            text = _show(dirs, m.group(3), m.group(1))
+            text = show(dirs, m.group(3), m.group(1))
             if text is None:
                 continue
             line = text.split("\n")[int(m.group(2)) - 1].strip()
@@ -1321,7 +1294,7 @@ def test_every_i2c_bus_is_on_the_line_it_cites() -> None:
     # initI2CBusExternal(N) / initI2CBusInternal(N) (or PX4_BUS_NUMBER_TO_PX4(N - 1) on the NXP
     # chips, whose PX4_BUS_OFFSET is 1), or board_config.h's PX4_I2C_BUS_EXPANSION* / _ONBOARD.
     cite = re.compile(r"PX4/PX4-Autopilot (\S+):(\d+) at \S+ \([^,]+, ([0-9a-f]{10}),")
-    dirs, checked, missing = tuple(_px4_git_dirs()), 0, set()
+    dirs, checked, missing = tuple(px4_git_dirs()), 0, set()
     table = load_boards()
     for board in table.all():
         for variant in table.variants(board.name):
@@ -1330,7 +1303,7 @@ def test_every_i2c_bus_is_on_the_line_it_cites() -> None:
             for bus, source in variant.i2c_bus_sources:
                 m = cite.match(source)
                 assert m, source
-                text = _show(dirs, m.group(3), m.group(1))
+                text = show(dirs, m.group(3), m.group(1))
                 if text is None:
                     missing.add(m.group(3))
                     continue
@@ -1426,14 +1399,14 @@ def test_x_b_at_v1_11_0_is_the_nth_external_bus_of_px4_i2c_buses() -> None:
 def test_each_snapshots_x_b_rule_is_its_i2c_cpps() -> None:
     # x_b_counts_external is true exactly where platforms/common/i2c.cpp's -X case compares -b
     # with _external_bus_counter (v1.11.0 line 76), false where with bus_data.bus
-    dirs = _px4_git_dirs()
+    dirs = px4_git_dirs()
     if not dirs:
         pytest.skip("no PX4-Autopilot git directory (set $PX4_AUTOPILOT_GIT)")
     text = (Path(__file__).parents[1] / "python/px4params/data/boards.toml").read_text()
     snapshots = tomllib.loads(text)["snapshot"]
     counted = {}
     for snap in snapshots:
-        source = _show(tuple(dirs), snap["commit"], "platforms/common/i2c.cpp")
+        source = show(tuple(dirs), snap["commit"], "platforms/common/i2c.cpp")
         if source is None:
             pytest.skip(f"commit {snap['commit']} is in none of {dirs}")
         number = "if (_bus == bus_data.bus || _bus == -1)" in source.split("ExternalBus:")[1]

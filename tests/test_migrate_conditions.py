@@ -5,7 +5,9 @@ index (``-t``) each power monitor's start line gives.
 
 The expected answers are PX4's scripts as read (PX4-Autopilot boards/px4/fmu-v6x/init/
 rc.board_sensors, ROMFS/px4fmu_common/init.d/rc.sensors, src/drivers/power_monitor/ina2xx/
-*_main.cpp), transcribed in the board table with their lines.
+*_main.cpp), transcribed in the board table with their lines. Where a PX4-Autopilot git
+directory is at hand (tests/px4_git.py), the table of variables the hardware decides is also
+read against every board script it cites, at every snapshot.
 """
 
 from __future__ import annotations
@@ -13,8 +15,17 @@ from __future__ import annotations
 import dataclasses
 
 import pytest
+from px4_git import px4_git_dirs, show, snapshot_commits
 from px4params import migrate
-from px4params.migrate.conditions import Facts, board_variables, evaluate
+from px4params.migrate.conditions import (
+    HARDWARE_VARIABLES,
+    Facts,
+    HardwareVariable,
+    Setting,
+    Verdict,
+    board_variables,
+    evaluate,
+)
 from px4params.migrate.config import OldConfig
 from px4params.vehicle.boards import Board, SwitchStart, load_boards
 from px4params.vehicle.console import started_drivers
@@ -270,8 +281,6 @@ def test_a_later_setting_that_runs_clears_what_an_earlier_one_left_open() -> Non
     # type nothing here tells but line 35 settles as run, line 35's value decides and nothing
     # is left to name. No board's own script is of this shape (fmu-v3's later lines test the
     # hardware type too), so the variable is written here in the board table's form
-    from px4params.migrate.conditions import HardwareVariable, Setting, Verdict
-
     path = "boards/px4/fmu-v3/init/rc.board_sensors"
     var = HardwareVariable(
         "0", path, 20, (Setting("20", "hw_type in V30", 29), Setting("21", "SYS_HAS_MAG == 1", 35))
@@ -282,3 +291,284 @@ def test_a_later_setting_that_runs_clears_what_an_earlier_one_left_open() -> Non
     facts = dataclasses.replace(facts, params={"SYS_HAS_MAG": 0})
     (said,) = evaluate("$BOARD_FMUV3 == 0", facts).unchecked
     assert said.startswith(f"$BOARD_FMUV3 == 0 ({path}:20 sets BOARD_FMUV3 0; line 29: 20 where ")
+
+
+# -- the hardware variables' table against PX4's scripts -------------------------------------
+
+
+def _script_test(text: str) -> str:
+    """An ``if`` line's test in the board table's condition form (a form not read here is
+    kept as written, so that it equals no condition of the table)."""
+    words = text.split()
+    if words[0] == "!":
+        return f"not {_script_test(' '.join(words[1:]))}"
+    if words[:2] == ["ver", "hwtypecmp"]:
+        return f"hw_type in {','.join(words[2:])}"
+    if words[:5] == ["mft", "query", "-q", "-k", "MFT"] and words[5::2] == ["-s", "-v"]:
+        return f"mft {words[6]} == {words[8]}"
+    if words[-1] == "start":  # a driver's start: it holds where the driver started
+        return f"{words[0]} started ({' '.join(words[1:])})"
+    return f"<{text}>"
+
+
+def _script_sets(text: str, name: str) -> list[tuple[int, str, int, str]]:
+    """Each ``set NAME value`` of a board script, in its order: (its line, the value, the line
+    of the innermost ``if`` it is in (0: none), the conditions of the ``if``s it is in, outer
+    first and joined by `` and ``, each negated in its ``else``)."""
+    blocks: list[tuple[int, list[str]]] = []  # per open `if`: its line, its branch's clauses
+    found = []
+    for number, written in enumerate(text.split("\n"), 1):
+        words = written.split("#")[0].split()
+        if not words:
+            continue
+        test = " ".join(words[1:]).removesuffix("; then").removesuffix(";then")
+        if words[0] == "if":
+            blocks.append((number, [_script_test(test)]))
+        elif words[0] == "elif":
+            line, clauses = blocks.pop()
+            blocks.append((line, [*(f"not {c}" for c in clauses), _script_test(test)]))
+        elif words[0] == "else":
+            line, clauses = blocks.pop()
+            blocks.append((line, [f"not {c}" for c in clauses]))
+        elif words[0] == "fi" and blocks:  # fmu-v6xrt's at v1.15.0 (line 86) closes none
+            blocks.pop()
+        elif words[:2] == ["set", name] and len(words) == 3:
+            when = " and ".join(c for _, clauses in blocks for c in clauses)
+            found.append((number, words[2], blocks[-1][0] if blocks else 0, when))
+    assert not blocks, "an `if` without its `fi`"
+    return found
+
+
+def _read(dirs: tuple[str, ...], commit: str, path: str, name: str) -> object:
+    """How the script at ``commit`` sets ``name``, in the table's terms: (the line and value of
+    its unconditioned ``set``s, then (the innermost ``if``'s line, value, condition) of each
+    other): "absent" where the file is not there."""
+    text = show(dirs, commit, path)
+    if text is None:
+        return "absent"
+    sets = _script_sets(text, name)
+    return (
+        [(line, value) for line, value, within, _ in sets if not within],
+        [(within, value, when) for _, value, within, when in sets if within],
+    )
+
+
+def _table(var: HardwareVariable) -> object:
+    return [(var.line, var.first)], [(s.line, s.value, s.when) for s in var.settings]
+
+
+def _px4_commits() -> tuple[tuple[str, ...], dict[str, str]]:
+    """The PX4-Autopilot git directories and each snapshot's commit; skips where a commit is
+    in none of them (CI has no directory)."""
+    dirs, commits = tuple(px4_git_dirs()), snapshot_commits()
+    if not dirs:
+        pytest.skip("no PX4-Autopilot git directory (set $PX4_AUTOPILOT_GIT)")
+    for commit in commits.values():
+        if show(dirs, commit, "Makefile") is None:
+            pytest.skip(f"commit {commit} is in none of {dirs} (set $PX4_AUTOPILOT_GIT)")
+    return dirs, commits
+
+
+def test_each_hardware_variable_is_set_on_the_lines_it_cites_at_exactly_its_releases() -> None:
+    # Each board's script at each snapshot, read here: the variable's unconditioned `set` on
+    # its line with its first value; each setting's `set` inside the `if` on the setting's line,
+    # with the value, under the `if`s it is in (`ver hwtypecmp V30` -> hw_type in V30, `mft
+    # query ... -s MFT_PM2 -v 0` -> mft MFT_PM2 == 0, `mpu6000 -s -b 4 -R 10 start` -> mpu6000
+    # started (...), its else -> not ...), in the script's order. At a snapshot a row does not
+    # list, the script is not so (other lines, another test, or no file): a release list cut
+    # short or run on is caught
+    dirs, commits = _px4_commits()
+    checked = 0
+    for board, entries in HARDWARE_VARIABLES.items():
+        vendor, model = board.split("_", 1)
+        for entry in entries:
+            assert set(entry.releases) <= set(commits), (board, entry.releases)
+            for name, var in entry.variables.items():
+                assert var.path == f"boards/{vendor}/{model}/init/rc.board_sensors", board
+                for release, commit in commits.items():
+                    read = _read(dirs, commit, var.path, name)
+                    if release in entry.releases:
+                        assert read == _table(var), (board, name, release)
+                        checked += 1
+                    else:
+                        assert read != _table(var), (board, name, release)
+    assert checked == 52  # HAVE_PM2 and HAVE_PM3: 38 (13 boards), BOARD_FMUV3: 14 (2 boards)
+
+
+def test_every_release_whose_board_script_sets_a_hardware_variable_has_its_row() -> None:
+    # A board's rows list each snapshot once, and every snapshot at which the board's script
+    # sets one of its variables at all (board_variables answers by the newest release asked)
+    dirs, commits = _px4_commits()
+    for board, entries in HARDWARE_VARIABLES.items():
+        listed = [release for entry in entries for release in entry.releases]
+        assert len(listed) == len(set(listed)), board
+        for name, var in {n: v for e in entries for n, v in e.variables.items()}.items():
+            for release, commit in commits.items():
+                read = _read(dirs, commit, var.path, name)
+                if read != "absent" and any(read):  # type: ignore[arg-type]
+                    assert release in listed, (board, name, release)
+                    assert name in board_variables(board, (release,)), (board, name, release)
+
+
+# -- an earlier start on the console: the script's options as PX4 reads them ----------------
+
+#: Starts as the board table's conditions (and, -S, its rc.sensors row) write them.
+MPU9250_X = "mpu9250_i2c started (-X -b 2 -a 0x68 -R 28 start)"  # an ak8963's condition
+IST8310_I = "ist8310 started (-I -a 0x0E -R 12 start)"
+MS5611_S = "ms5611 started (-T 5607 -s -b 1 start)"  # fmu-v3: `if ! ms5611 -T 5607 -s -b 1 start`
+ADIS_EXT_SPI = "adis16448 started (-S start)"  # rc.sensors: `adis16448 -S start`
+
+
+@pytest.mark.parametrize(
+    ("when", "console", "holds"),
+    [
+        # -X -b 2 -a 0x68: PX4 tries external I2C bus 2 at address 0x68 only
+        (MPU9250_X, "mpu9250_i2c #0 on I2C bus 2 (external) address 0x68 rotation 28", True),
+        (MPU9250_X, "mpu9250_i2c #0 on I2C bus 1 (external) address 0x68 rotation 28", False),
+        (MPU9250_X, "mpu9250_i2c #0 on I2C bus 2 address 0x68 rotation 28", False),  # internal
+        (MPU9250_X, "mpu9250_i2c #0 on I2C bus 2 (external) address 0x69 rotation 28", False),
+        # a line printing no address: the -a cannot tell it from the start asked for
+        (MPU9250_X, "mpu9250_i2c #0 on I2C bus 2 (external)", True),
+        # -I -a 0x0E (written with a leading zero, as C reads it: 0xE): internal buses only
+        (IST8310_I, "ist8310 #0 on I2C bus 1 address 0xE rotation 12", True),
+        (IST8310_I, "ist8310 #0 on I2C bus 1 (external) address 0xE rotation 12", False),
+        (IST8310_I, "ist8310 #0 on I2C bus 1 address 0xF rotation 12", False),
+        # -s: internal SPI; the same driver on I2C is another start
+        (MS5611_S, "ms5611 #0 on SPI bus 1 (devid=0x3d)", True),
+        (MS5611_S, "ms5611 #0 on I2C bus 1 address 0x77", False),
+        # -S: external SPI, an SPI start all the same
+        (ADIS_EXT_SPI, "adis16448 #0 on SPI bus 5 (devid=0x1)", True),
+        (ADIS_EXT_SPI, "adis16448 #0 on I2C bus 5 address 0x10", False),
+    ],
+)  # fmt: skip
+def test_a_console_start_is_the_scripts_only_where_its_options_allow(
+    when: str, console: str, holds: bool
+) -> None:
+    assert evaluate(when, facts({}, console + "\n")) == Verdict(holds)
+
+
+# -- the hardware type a log names ------------------------------------------------------------
+
+#: Pixhawk 6X at v1.14.0 (boards/px4/fmu-v6x/init/rc.board_sensors): `set HAVE_PM2 yes` on line
+#: 5, `if ver hwtypecmp V6X005000 V6X005001 V6X005003 V6X005004` on line 7, `set HAVE_PM2 no`.
+V6X_1_14 = board_variables("px4_fmu-v6x", ("v1.14.0",))
+
+
+def hw_facts(hw_type: str | None, kind: str = "ULog") -> Facts:
+    return Facts({}, {}, (), None, kind, hw_type, V6X_1_14)
+
+
+@pytest.mark.parametrize(
+    ("hw_type", "holds"),
+    [("V6X005001", False), ("V6X005004", False), ("V6X005002", True), ("V6X000000", True)],
+)
+def test_a_logs_hardware_type_settles_what_the_board_script_sets_from_it(
+    hw_type: str, holds: bool
+) -> None:
+    # ver hwtypecmp compares the board's type with each listed: on a listed one line 9 runs
+    # (HAVE_PM2 no), on any other HAVE_PM2 stays yes; nothing is left to name either way
+    assert evaluate("$HAVE_PM2 == yes", hw_facts(hw_type)) == Verdict(holds)
+    assert evaluate(
+        "hw_type in V6X005000,V6X005001,V6X005003,V6X005004", hw_facts(hw_type)
+    ) == Verdict(not holds)
+
+
+def test_without_a_hardware_type_the_scripts_first_value_is_taken_and_the_test_named() -> None:
+    (said,) = evaluate("$HAVE_PM2 == yes", hw_facts(None, "QGC .params")).unchecked
+    assert said.endswith(
+        "rc.board_sensors:5 sets HAVE_PM2 yes; line 7: no where hw_type in V6X005000,V6X005001,"
+        "V6X005003,V6X005004 (the hardware revision, which the parameters do not tell))"
+    )
+
+
+# -- fmu-v3's BOARD_FMUV3: each setting left open is named with its line ----------------------
+
+V3 = board_variables("px4_fmu-v3", ("main",))
+V3_AT = "boards/px4/fmu-v3/init/rc.board_sensors:20 sets BOARD_FMUV3 0"
+
+
+def test_a_cube_log_without_a_console_names_both_of_its_imu_tests_with_one_reason() -> None:
+    # A Cube (hw_type V30) log without a boot console: lines 50 and 56 (V2M) do not run;
+    # line 27 (mpu6000 on SPI 4 -> 20) and line 33 (else mpu9250 on SPI 4 -> 21) rest on what
+    # started, which only a console tells: BOARD_FMUV3 is 0 unless one ran
+    facts = Facts({}, {}, (), None, "ULog", "V30", V3)
+    spi4 = "started (-s -b 4 -R 10 start)"
+    assert evaluate("$BOARD_FMUV3 == 21", facts).unchecked == (
+        f"$BOARD_FMUV3 == 21 ({V3_AT}; line 27: 20 where mpu6000 {spi4}; line 33: 21 where "
+        f"not mpu6000 {spi4} and mpu9250 {spi4}; for each, a ULog has no boot console to say)",
+    )
+
+
+def test_two_settings_left_open_by_one_reason_name_it_once() -> None:
+    # mpu6000 on SPI 4 and on SPI 1: line 27 (V30) and line 50 (V2M) each run on their
+    # hardware type, which a .params does not tell
+    console = "mpu6000 #0 on SPI bus 4 (devid=0x1)\nmpu6000 #1 on SPI bus 1 (devid=0x2)\n"
+    facts = Facts({}, {}, (), started_drivers(console), "QGC .params", None, V3)
+    assert evaluate("$BOARD_FMUV3 == 20", facts) == Verdict(
+        False,
+        (("$BOARD_FMUV3 == 20", f"{V3_AT}; line 27: 20 where hw_type in V30; line 50: 20 where "
+          "hw_type in V2M; for each, the hardware revision, which the parameters do not tell"),),
+    )  # fmt: skip
+
+
+def test_a_setting_not_run_only_by_px4s_default_is_named() -> None:
+    # A variable set under another's test (as ark fmu-v6s sets HAVE_PM3 where it sets
+    # HAVE_PM2): where HAVE_PM2 is PX4's default yes, `[ $HAVE_PM2 = no ]` does not run its
+    # setting, but only by that default: the setting is named, not dropped
+    pm2 = board_variables("px4_fmu-v6x", ("main",))["HAVE_PM2"]
+    pm3 = HardwareVariable("yes", pm2.path, 6, (Setting("no", "$HAVE_PM2 == no", 12),))
+    facts = Facts({}, {}, (), None, "QGC .params", hardware={"HAVE_PM2": pm2, "HAVE_PM3": pm3})
+    verdict = evaluate("$HAVE_PM3 == yes", facts)
+    assert verdict.holds is True
+    (said,) = verdict.unchecked
+    assert f"{pm2.path}:6 sets HAVE_PM3 yes; line 12: no where $HAVE_PM2 == no (" in said
+
+
+def test_a_clause_false_only_by_px4s_default_is_named() -> None:
+    # `[ $HAVE_PM2 = no ]` on a 6X: false where the manifest keeps PX4's yes, which nothing
+    # here tells: false, with the reason
+    assert evaluate("$HAVE_PM2 == no", facts({})).unchecked == (f"$HAVE_PM2 == no ({PM2_WHY})",)
+    assert evaluate("$HAVE_PM2 == no", facts({})).holds is False
+
+
+def test_each_open_test_of_an_or_is_named() -> None:
+    assert evaluate("$VEHICLE_TYPE == fw -o SENS_EN_X == 1", facts({})).unchecked == (
+        "$VEHICLE_TYPE == fw -o SENS_EN_X == 1 ($VEHICLE_TYPE is set by PX4's startup scripts "
+        "from what the QGC .params does not tell; SENS_EN_X is not in the QGC .params)",
+    )
+
+
+def test_a_board_whose_script_sets_no_hardware_variable_leaves_the_variable_unknown() -> None:
+    # Facts without `hardware`: no variable of the board's script is the hardware's
+    facts = Facts({}, {}, (), None, "QGC .params")
+    assert evaluate("$VEHICLE_TYPE == fw", facts).unchecked == (
+        "$VEHICLE_TYPE == fw ($VEHICLE_TYPE is set by PX4's startup scripts from what the QGC "
+        ".params does not tell)",
+    )
+
+
+def test_a_variable_the_script_sets_once_keeps_that_value() -> None:
+    # radiolink PIX6 (release/1.18 and main): `set HAVE_PM2 yes` on line 6 and no other
+    pix6 = board_variables("radiolink_PIX6", ("main",))["HAVE_PM2"]
+    once = HardwareVariable("yes", pix6.path, 6)
+    assert once == pix6
+    facts = Facts({}, {}, (), None, "QGC .params", hardware={"HAVE_PM2": once})
+    assert evaluate("$HAVE_PM2 == yes", facts) == Verdict(True)
+
+
+# -- the shared table cannot be changed -------------------------------------------------------
+
+
+def test_the_variables_every_migration_is_handed_are_the_tables_own_and_cannot_change() -> None:
+    # board_variables hands each caller the module table's own objects (every migration's
+    # Facts holds them, and build caches its Facts for all rows): one changed in place would
+    # change every later answer
+    table = board_variables("px4_fmu-v3", ("main",))
+    assert board_variables("px4_fmu-v3", ("v1.15.0",)) is table
+    var = table["BOARD_FMUV3"]
+    (entry,) = [e for e in HARDWARE_VARIABLES["px4_fmu-v3"] if "main" in e.releases]
+    for frozen, field_ in [(var, "first"), (var.settings[0], "value"), (entry, "releases")]:
+        with pytest.raises(dataclasses.FrozenInstanceError):
+            setattr(frozen, field_, "x")
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        facts({}).params = {}  # type: ignore[misc]
