@@ -19,6 +19,7 @@ from px4_git import px4_git_dirs, show, snapshot_commits
 from px4params import migrate
 from px4params.migrate.conditions import (
     HARDWARE_VARIABLES,
+    UNSET_BEFORE_RC_SENSORS,
     Facts,
     HardwareVariable,
     Setting,
@@ -572,3 +573,51 @@ def test_the_variables_every_migration_is_handed_are_the_tables_own_and_cannot_c
             setattr(frozen, field_, "x")
     with pytest.raises(dataclasses.FrozenInstanceError):
         facts({}).params = {}  # type: ignore[misc]
+
+
+# -- rc.sensors runs after fmu-v2/v3's rc.board_sensors has unset BOARD_FMUV3 ---------------------
+
+#: A Cube 2.1's boot console at PX4 1.12: its MPU9250 on SPI bus 4, so fmu-v3's rc.board_sensors
+#: (line 35 at v1.12.0: `set BOARD_FMUV3 21`) took it for an FMUv3 2.1.
+CUBE_21_CONSOLE = "mpu9250 #0 on SPI bus 4\n"
+
+
+@pytest.mark.parametrize(
+    ("when", "holds"),
+    [("$BOARD_FMUV3 == 21", False), ("not $BOARD_FMUV3 == 21", True),
+     ("$BOARD_FMUV3 != 0", False)],
+)  # fmt: skip
+def test_rc_sensors_sees_board_fmuv3_unset_so_each_test_of_it_is_false(
+    when: str, holds: bool
+) -> None:
+    # boards/px4/fmu-v3/init/rc.board_sensors ends with `unset BOARD_FMUV3` (line 110 at v1.12.0)
+    # before rcS runs rc.sensors, whose `if [ $BOARD_FMUV3 = 21 ]` (line 159) is then nsh's
+    # `[ = 21 ]`: false, and its else branch runs, on a Cube whose script had set 21
+    cube = Facts({}, {}, (), started_drivers(CUBE_21_CONSOLE), "ULog", "V30", V3)
+    assert evaluate("$BOARD_FMUV3 == 21", cube) == Verdict(True)  # in rc.board_sensors itself
+    seen = dataclasses.replace(cube, unset=UNSET_BEFORE_RC_SENSORS)
+    assert evaluate(when, seen) == Verdict(holds)
+
+
+def test_an_rc_sensors_row_is_judged_with_board_fmuv3_unset_a_board_row_with_it_set() -> None:
+    # v1.12.0 rc.sensors:161 `ms5525_airspeed start -X -b 2 -q` runs only where $BOARD_FMUV3 =
+    # 21, never after fmu-v3's script unset it; fmu-v3's own line 69 (`l3gd20 -s -b 4 -R 4 start`
+    # where $BOARD_FMUV3 != 0) still sees the 21 its script set on a Cube 2.1. (No migration
+    # shows the rc.sensors row's verdict today: its $VEHICLE_TYPE clause is never known either,
+    # so the builder's own judgement is asked.)
+    from px4params.dsdl.schema import load_schema
+    from px4params.migrate import build
+    from px4params.vehicle import devid
+
+    cube = load_boards().by_name("px4_fmu-v3", "v1.12.0")
+    assert cube is not None
+    (sensors_row,) = [r for r in cube.switches if r.args == "start -X -b 2 -q"]
+    (board_row,) = [r for r in cube.devices if r.args == "-s -b 4 -R 4 start"]
+    assert "/rc.sensors:" in sensors_row.source and "$BOARD_FMUV3 == 21" in sensors_row.when
+    assert "/rc.sensors:" not in board_row.source and board_row.when == "$BOARD_FMUV3 != 0"
+    config = OldConfig("t.ulg", "ULog", {"SENS_EXT_I2C_PRB": 1, "CBRK_AIRSPD_CHK": 0},
+                       version=(1, 12, 0), console=CUBE_21_CONSOLE, hw_type="V30")  # fmt: skip
+    table = devid.load_table("px4-v1.11")
+    builder = build._Builder(config, load_schema(include_dronecan=False), table, cube, [])
+    assert builder.start_verdict(sensors_row, "") == Verdict(False)
+    assert builder.start_verdict(board_row, "") == Verdict(True)

@@ -3,6 +3,7 @@ why every other one does not (see the package documentation)."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import re
 import struct
@@ -14,7 +15,14 @@ from px4params.dsdl.model import NO_DOC
 from px4params.dsdl.schema import Schema
 from px4params.errors import MigrationError, Px4ParamsError
 from px4params.migrate import axes
-from px4params.migrate.conditions import Facts, Verdict, board_variables, evaluate, per_bus
+from px4params.migrate.conditions import (
+    UNSET_BEFORE_RC_SENSORS,
+    Facts,
+    Verdict,
+    board_variables,
+    evaluate,
+    per_bus,
+)
 from px4params.migrate.config import OldConfig
 from px4params.migrate.proposal import LeftOut, Proposal, ProposedInstance
 from px4params.vehicle import devid
@@ -456,7 +464,10 @@ class _Builder:
         cites the board's own px4_i2c_bus_external. ``board``: the row's board (default: the
         file's)."""
         board = board or self.board
-        verdict = evaluate(" and ".join(c for c in (row.when, bus_when) if c), self.facts(board))
+        facts = self.facts(board)
+        if "/rc.sensors:" in getattr(row, "source", ""):
+            facts = dataclasses.replace(facts, unset=UNSET_BEFORE_RC_SENSORS)
+        verdict = evaluate(" and ".join(c for c in (row.when, bus_when) if c), facts)
         override = getattr(board, "external_i2c_buses_when", None)
         if not bus_when or override is None:
             return verdict

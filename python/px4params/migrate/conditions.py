@@ -167,6 +167,14 @@ HARDWARE_VARIABLES: dict[str, tuple[BoardVariables, ...]] = {
 }  # fmt: skip
 
 
+#: What rc.sensors (ROMFS/px4fmu_common/init.d, run by rcS after the board's rc.board_sensors,
+#: in the same shell) no longer sees: fmu-v2's and fmu-v3's scripts end with `unset
+#: BOARD_FMUV3` (boards/px4/fmu-v2/init/rc.board_sensors:109 at v1.11.0, :110 at v1.12.0), no
+#: other board sets it, so rc.sensors' `if [ $BOARD_FMUV3 = 21 ]` (v1.11.0:123, v1.12.0:159) is
+#: false on every board.
+UNSET_BEFORE_RC_SENSORS = frozenset({"BOARD_FMUV3"})
+
+
 def board_variables(board: str, releases: Sequence[str]) -> Mapping[str, HardwareVariable]:
     """The hardware variables of ``board``'s script in the newest of ``releases`` (empty for a
     board whose script sets none)."""
@@ -213,6 +221,9 @@ class Facts:
     #: A line of the board's scripts as the board table cites it (``Board.cite``); None: as
     #: ``path:line``.
     cite: Callable[[str, int], str] | None = None
+    #: Variables the board's script unset before the script of the row evaluated ran
+    #: (:data:`UNSET_BEFORE_RC_SENSORS`): every test of one is false.
+    unset: frozenset[str] = frozenset()
 
 
 @dataclass(frozen=True)
@@ -259,6 +270,9 @@ def _test(text: str, facts: Facts) -> _Test:
     m = _VARIABLE_TEST.fullmatch(text)
     if m:
         name, equal, word = m[1], m[2] == "==", m[3]
+        if name in facts.unset:
+            # nsh's `[ $X = 21 ]` of an unset X is `[ = 21 ]`: a test missing its operand, false
+            return _Test(False)
         if name in facts.variables:
             return _Test((facts.variables[name] == word) == equal)
         if name in facts.hardware:
