@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import dataclasses
 from pathlib import Path
+from typing import Any
 
 import pytest
 import shared_data
@@ -28,7 +29,7 @@ from px4params.migrate.conditions import (
     evaluate,
 )
 from px4params.migrate.config import OldConfig
-from px4params.vehicle.boards import Board, load_boards
+from px4params.vehicle.boards import Board, SwitchStart, load_boards
 
 IST8310_BUS1 = 0x06 << 16 | 0x0E << 8 | 1 << 3 | 1  # 396809, a GPS puck's compass
 HMC5883_BUS2 = 0x01 << 16 | 0x1E << 8 | 2 << 3 | 1  # 73233
@@ -796,4 +797,139 @@ def test_a_cubes_bus_2_compass_notes_that_only_x_starts_reach_it() -> None:
         "I2C bus 2 is external where hw_type in V30 (PX4/PX4-Autopilot "
         "boards/px4/fmu-v3/src/i2c.cpp:52 at main (branch main, bb59c637cd, 2026-08-13)): the "
         "board's -I starts try no bus there, rc.sensors' -X starts do"
+    ]
+
+
+# -- the lines a user reads, whole: rows edited where no bundled row has two open clauses --------
+
+#: A second clause a QGC file leaves open beside the hardware type: `ver hwbasecmp 008`
+#: (the base board, which no parameter names).
+HW_BASE = "hw_base in 008"
+HW_BASE_WHY = "hw_base in 008 (the hardware revision, which the parameters do not tell)"
+
+
+def with_row(b: Board, line: int, **edit: Any) -> Board:
+    """``b`` with its device row of script line ``line`` edited (``when``, ``args``, ...)."""
+    rows = tuple(
+        dataclasses.replace(r, **edit) if f"rc.board_sensors:{line} " in r.source else r
+        for r in b.devices
+    )
+    assert rows != b.devices
+    return dataclasses.replace(b, devices=rows)
+
+
+@pytest.mark.issue40
+def test_an_unsettled_row_of_two_open_clauses_names_both_in_the_assumption_and_the_note() -> None:
+    # CANHUBK3's line 10 read as running where the type is an ADAP and the base is 008: both
+    # clauses, joined by "and", in the assumption of the proposed IST8310 and in its note
+    mr = with_row(board("nxp_mr-canhubk3"), 10, when=f"hw_type in MR-CANHUBK3-ADAP and {HW_BASE}")
+    proposal = migrate.migrate(
+        config({"CAL_MAG0_ID": IST8310_BUS1, "CAL_MAG0_ROT": 0}), table="current", board=mr
+    )
+    line_10 = f"{CANHUBK3_LINE_10} and {HW_BASE_WHY}"
+    (said,) = [a for a in proposal.assumptions if a.startswith("CAL_MAG0_ID")]
+    assert said == (
+        f"CAL_MAG0_ID = 396809: IST8310 (MAG), I2C bus 1, address 0x0E: {line_10}: "
+        f"proposed, not left out on a guess{CANHUBK3_ROTATION}"
+    )
+    (ist,) = proposal.instances
+    assert ist.notes == [line_10 + CANHUBK3_ROTATION]
+
+
+@pytest.mark.issue40
+def test_an_internal_bus_row_of_two_open_clauses_names_both_where_finding_it_shows_it_ran() -> None:
+    # Pixhawk 6X's line 133 (`bmm150 -I -R 0 start`, bus 4 internal) read as running where the
+    # type is not V6X001 and the base is 008: a BMM150 found there is the board's, and the line
+    # names both clauses
+    v6x = with_row(board("px4_fmu-v6x"), 133, when=f"not hw_type in V6X001 and {HW_BASE}")
+    proposal = migrate.migrate(config({"CAL_MAG0_ID": BMM150_BUS4}), table="current", board=v6x)
+    line = assert_the_boards(
+        proposal, "CAL_MAG0_ID = 4395041", "boards/px4/fmu-v6x/init/rc.board_sensors:133 "
+    )
+    assert line.endswith(
+        "it runs only where not hw_type in V6X001 (the hardware revision, which the parameters "
+        f"do not tell) and {HW_BASE_WHY}, and being found on internal I2C bus 4 "
+        "(boards/px4/fmu-v6x/src/i2c.cpp) shows it did"
+    )
+
+
+@pytest.mark.issue40
+def test_a_board_row_holding_by_pX4s_default_is_named_as_taken() -> None:
+    # Pixhawk 6X's line 133 read as running where $HAVE_PM2 is yes, which line 5 sets and line
+    # 8 unsets where the hardware manifest says no second power module: a QGC file does not
+    # say, so the row holds by PX4's default, the BMM150 is the board's and the report says so
+    v6x = with_row(board("px4_fmu-v6x"), 133, when="$HAVE_PM2 == yes")
+    proposal = migrate.migrate(config({"CAL_MAG0_ID": BMM150_BUS4}), table="current", board=v6x)
+    assert_the_boards(
+        proposal, "CAL_MAG0_ID = 4395041", "boards/px4/fmu-v6x/init/rc.board_sensors:133 "
+    )
+    script = "PX4/PX4-Autopilot boards/px4/fmu-v6x/init/rc.board_sensors"
+    main = "at main (branch main, bb59c637cd, 2026-08-13)"
+    (said,) = [a for a in proposal.assumptions if a.startswith("CAL_MAG0_ID")]
+    assert said == (
+        "CAL_MAG0_ID = 4395041: BMM150 (MAG), I2C bus 4, address 0x10: the board's 'bmm150 -I "
+        f"-R 0 start' ({script}:133 {main}) runs only where $HAVE_PM2 == yes ({script}:5 {main} "
+        "sets HAVE_PM2 yes; line 8: no where mft MFT_PM2 == 0 (the board's hardware manifest, "
+        "which the parameters do not tell)): taken as holding (PX4's default)"
+    )
+
+
+def probe_rows(
+    v5: Board, edit: dict[str, Any] | None = None, first: SwitchStart | None = None
+) -> Board:
+    """PX4 1.11's fmu-v5 with rc.sensors' `ak09916 -X -R 6 start` (line 102) edited, and
+    ``first`` (a row) before every switch row."""
+    rows = tuple(
+        dataclasses.replace(r, **edit)
+        if edit and r.source.startswith(f"PX4/PX4-Autopilot {RC_SENSORS_102}")
+        else r
+        for r in v5.switches
+    )
+    return dataclasses.replace(v5, switches=((first,) if first else ()) + rows)
+
+
+RC_SENSORS_102 = "ROMFS/px4fmu_common/init.d/rc.sensors:102 "
+
+
+@pytest.mark.issue40
+def test_a_probe_of_two_open_clauses_names_both_where_its_rotation_is_taken() -> None:
+    # line 102 read as running where SENS_EXT_I2C_PRB is 1 and the base is 008: a QGC file
+    # without SENS_EXT_I2C_PRB settles neither, and the assumption names both
+    when = f"SENS_EXT_I2C_PRB == 1 and {HW_BASE}"
+    v5 = probe_rows(board("px4_fmu-v5", "v1.11.0"), {"when": when})
+    proposal = migrate.migrate(
+        config({"CAL_MAG0_ID": AK09916_BUS1}, version=(1, 11, 3)), table="current", board=v5
+    )
+    (ak,) = proposal.instances
+    assert ak.values["rotation"] == 6
+    (said,) = [a for a in proposal.assumptions if a.startswith("'ak09916 -X -R 6 start'")]
+    assert said == (
+        f"'ak09916 -X -R 6 start' (PX4/PX4-Autopilot {RC_SENSORS_102}at v1.11.0 (tag v1.11.0, "
+        "71db0903a9, 2020-09-07)) runs only where SENS_EXT_I2C_PRB == 1 (SENS_EXT_I2C_PRB is "
+        f"not in the QGC .params) and {HW_BASE_WHY}: its -R 6 taken"
+    )
+
+
+@pytest.mark.issue40
+def test_a_probe_that_does_not_run_is_passed_over_for_the_next_that_does() -> None:
+    # a probe `ak09916 -X -R 2 start` where SENS_EXT_I2C_PRB is 2, before line 102: with
+    # SENS_EXT_I2C_PRB 1 it does not run, line 102 does: the AK09916's rotation is 6
+    v5 = board("px4_fmu-v5", "v1.11.0")
+    (real,) = [r for r in v5.switches if r.driver == "ak09916" and r.bus == 1]
+    other = dataclasses.replace(
+        real,
+        args="-X -R 2 start",
+        rotation=2,
+        when="SENS_EXT_I2C_PRB == 2",
+        source="rc.sensors:101",
+    )
+    proposal = migrate.migrate(
+        config({"CAL_MAG0_ID": AK09916_BUS1, "SENS_EXT_I2C_PRB": 1}, version=(1, 11, 3)),
+        table="current",
+        board=probe_rows(v5, first=other),
+    )
+    (ak,) = proposal.instances
+    assert (ak.name, ak.values["rotation"]) == ("AK09916#0", 6)
+    assert ak.notes == [
+        f"rotation 6: rc.sensors probes it with 'ak09916 -X -R 6 start' ({real.source})"
     ]
