@@ -933,3 +933,72 @@ def test_a_probe_that_does_not_run_is_passed_over_for_the_next_that_does() -> No
     assert ak.notes == [
         f"rotation 6: rc.sensors probes it with 'ak09916 -X -R 6 start' ({real.source})"
     ]
+
+
+#: What the report says of a CANHUBK3 row that tries no bus of its kind, after the row.
+NO_BUS_OF_THAT_KIND = (
+    "and PX4's {option} tries no bus of that kind (platforms/common/i2c.cpp, "
+    "I2CBusIterator::next), so that line starts nothing"
+)
+CANHUBK3_I2C = "PX4/PX4-Autopilot boards/nxp/mr-canhubk3/src/i2c.cpp:{line} at main (branch main, "
+
+
+@pytest.mark.issue40
+def test_an_internal_start_on_an_external_bus_is_said_to_start_nothing() -> None:
+    # CANHUBK3's line 10 read as `ist8310 -I -b 1 -R 10 start` on every type: bus 1 is
+    # external (src/i2c.cpp line 37), and an -I start tries only internal buses
+    # (platforms/common/i2c.cpp): the line starts nothing, the IST8310 on bus 1 is proposed
+    mr = with_row(
+        board("nxp_mr-canhubk3", "v1.15.0"),
+        10,
+        args="-I -b 1 -R 10 start",
+        internal=True,
+        when="",
+    )
+    proposal = migrate.migrate(config({"CAL_MAG0_ID": IST8310_BUS1}), table="current", board=mr)
+    assert placed(proposal) == [("IST8310#0", 1, 0x0E)]
+    (said,) = proposal.assumptions
+    assert said == (
+        "CAL_MAG0_ID = 396809: IST8310 (MAG), I2C bus 1, address 0x0E: the board's 'ist8310 -I "
+        "-b 1 -R 10 start' (PX4/PX4-Autopilot boards/nxp/mr-canhubk3/init/rc.board_sensors:10 "
+        "at main (branch main, bb59c637cd, 2026-08-13)) did not start it: I2C bus 1 is external "
+        f"({CANHUBK3_I2C.format(line=37)}bb59c637cd, 2026-08-13)), "
+        + NO_BUS_OF_THAT_KIND.format(option="-I")
+    )
+
+
+IST8310_0C_BUS2 = 0x06 << 16 | 0x0C << 8 | 2 << 3 | 1  # 396305
+
+
+@pytest.mark.issue40
+def test_a_start_on_a_bus_of_the_other_kind_is_named_only_for_its_own_chip_and_address() -> None:
+    # CANHUBK3's line 22 `ist8310 -X -b 2 -R 10` starts an IST8310 at its default 0x0E (PX4's
+    # ist8310 I2C_ADDRESS_DEFAULT), line 32 `lis3mdl -X -b 2 -R 2` a LIS3MDL: neither is named
+    # for an IST8310 at 0x0C, nor for an HMC5883 at 0x1E (LIS3MDL's address, not its chip)
+    proposal = migrate.migrate(
+        config({"CAL_MAG0_ID": IST8310_0C_BUS2, "CAL_MAG1_ID": HMC5883_BUS2}),
+        table="current",
+        board=board("nxp_mr-canhubk3", "v1.15.0"),
+    )
+    assert sorted(placed(proposal)) == [("HMC5883#0", 2, 0x1E), ("IST8310#0", 2, 0x0C)]
+    assert proposal.assumptions == []
+
+
+@pytest.mark.issue40
+def test_a_console_start_without_address_is_named_beside_the_line_of_its_chip() -> None:
+    # PX4 1.11's boot console prints no address (v1.11.0 platforms/common/i2c_spi_buses.cpp
+    # line 502: "%s #%i on I2C bus %d", then " (external, ...)" on an external bus only): an
+    # IST8310 on bus 2 may be at line 22's 0x0E, so line 22 is named as starting nothing there
+    proposal = migrate.migrate(
+        OldConfig("t", "ULog", {}, version=(1, 11, 3), console="ist8310 #0 on I2C bus 2\n"),
+        table="current",
+        board=board("nxp_mr-canhubk3", "v1.15.0"),
+    )
+    (said,) = proposal.assumptions
+    assert said == (
+        "boot console line 1: ist8310, I2C bus 2: the board's 'ist8310 -X -b 2 -R 10 start' "
+        "(PX4/PX4-Autopilot boards/nxp/mr-canhubk3/init/rc.board_sensors:22 at main (branch "
+        "main, bb59c637cd, 2026-08-13)) did not start it: I2C bus 2 is internal "
+        f"({CANHUBK3_I2C.format(line=38)}bb59c637cd, 2026-08-13)), "
+        + NO_BUS_OF_THAT_KIND.format(option="-X")
+    )
