@@ -1002,3 +1002,38 @@ def test_a_console_start_without_address_is_named_beside_the_line_of_its_chip() 
         f"({CANHUBK3_I2C.format(line=38)}bb59c637cd, 2026-08-13)), "
         + NO_BUS_OF_THAT_KIND.format(option="-X")
     )
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize(
+    ("hw_type", "edit", "proposed"),
+    [
+        # a Pixhawk Mini: bus 2 is internal, which rc.sensors never probes: line 12 ran
+        ("V2M", {}, []),
+        # a Cube: bus 2 is external, which rc.sensors probes too: not the board's on a guess
+        ("V30", {"args": "-T -X -b 2 -R 4 start", "internal": False, "bus": 2},
+         [("HMC5883#0", 2, 0x1E)]),
+    ],
+)  # fmt: skip
+def test_an_unsettled_row_is_the_boards_only_where_the_hardware_type_makes_its_bus_internal(
+    hw_type: str, edit: dict[str, Any], proposed: list[tuple[str, int, int]]
+) -> None:
+    # PX4 v1.12.0 fmu-v3: bus 2 is external where hw_type is V30 (src/i2c.cpp line 52), else
+    # internal. Line 12 (`hmc5883 -T -I -R 4 start`, or read as `-X -b 2`) read as running
+    # only where the base is 008, which nothing here settles: an HMC5883 found on bus 2 is
+    # the board's where the log's type makes bus 2 internal, and proposed where external
+    v3 = with_row(board("px4_fmu-v3", "v1.12.0"), 12, when=HW_BASE, **edit)
+    proposal = migrate.migrate(
+        config({"CAL_MAG0_ID": HMC5883_BUS2}, version=(1, 12, 3), hw_type=hw_type),
+        table="current",
+        board=v3,
+    )
+    assert placed(proposal) == proposed
+    if not proposed:
+        line = assert_the_boards(
+            proposal, "CAL_MAG0_ID = 73233", "boards/px4/fmu-v3/init/rc.board_sensors:12 "
+        )
+        assert line.endswith(
+            f"it runs only where {HW_BASE_WHY}, and being found on internal I2C bus 2 "
+            "(boards/px4/fmu-v3/src/i2c.cpp) shows it did"
+        )
