@@ -1037,3 +1037,85 @@ def test_an_unsettled_row_is_the_boards_only_where_the_hardware_type_makes_its_b
             f"it runs only where {HW_BASE_WHY}, and being found on internal I2C bus 2 "
             "(boards/px4/fmu-v3/src/i2c.cpp) shows it did"
         )
+
+
+# -- a switch's rows: what runs, and which lines are its driver's ------------------------------
+
+V6X_SCRIPT = "PX4/PX4-Autopilot boards/px4/fmu-v6x/init/rc.board_sensors"
+V6X_MAIN = "at main (branch main, bb59c637cd, 2026-08-13)"
+#: Why $HAVE_PM2 is open on a Pixhawk 6X (main) where a QGC file says nothing of its manifest.
+V6X_PM2_WHY = (
+    f"{V6X_SCRIPT}:5 {V6X_MAIN} sets HAVE_PM2 yes; line 8: no where mft MFT_PM2 == 0 (the "
+    "board's hardware manifest, which the parameters do not tell)"
+)
+
+
+def with_switch_row(b: Board, line: int, **edit: Any) -> Board:
+    """``b`` with its switch rows of script line ``line`` edited."""
+    rows = tuple(
+        dataclasses.replace(r, **edit) if f"rc.board_sensors:{line} " in r.source else r
+        for r in b.switches
+    )
+    assert rows != b.switches
+    return dataclasses.replace(b, switches=rows)
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize(
+    ("when", "open_", "then"),
+    [
+        # $HAVE_PM2 is yes by PX4's default: a row needing no does not run
+        ("$HAVE_PM2 == no", f"$HAVE_PM2 == no ({V6X_PM2_WHY})",
+         "by PX4's default it does not run, not proposed from it"),
+        # and the base board nothing settles beside it: not known, both named
+        (f"$HAVE_PM2 == yes and {HW_BASE}", f"$HAVE_PM2 == yes ({V6X_PM2_WHY}) and {HW_BASE_WHY}",
+         "not proposed from it"),
+    ],
+)  # fmt: skip
+def test_a_switch_row_that_does_not_run_by_default_or_is_not_known_says_so_whole(
+    when: str, open_: str, then: str
+) -> None:
+    # Pixhawk 6X (main) line 28 `ina226 -X -b 2 -t 2 -k start` (SENS_EN_INA226 == 1 and
+    # $HAVE_PM2 == yes) read with another clause beside SENS_EN_INA226 == 1: only line 24's
+    # INA226 on bus 1 is proposed, and the report names line 28's open clauses whole
+    v6x = with_switch_row(board("px4_fmu-v6x"), 28, when=f"SENS_EN_INA226 == 1 and {when}")
+    proposal = migrate.migrate(config({"SENS_EN_INA226": 1}), table="current", board=v6x)
+    assert placed(proposal) == [("INA226#0", 1, 0x41)]
+    (said,) = [a for a in proposal.assumptions if a.startswith("SENS_EN_INA226")]
+    assert said == (
+        f"SENS_EN_INA226: 'ina226 -X -b 2 -t 2 -k start' ({V6X_SCRIPT}:28 {V6X_MAIN}) runs only "
+        f"where {open_}: {then}"
+    )
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize("console", [None, "ina226 #0 on I2C bus 2 (external) address 0x41\n"])
+def test_a_switch_starting_two_drivers_gives_each_driver_only_its_own_lines(
+    console: str | None,
+) -> None:
+    # A switch may start more than one driver (v1.18's fmu-v6x: SENS_INT_BARO_EN starts bmp388
+    # and icp201xx). Pixhawk 6X (main) read as also starting `ina238 -X -b 2 -t 3 start` under
+    # SENS_EN_INA226, before its own lines 24 (`ina226 -X -b 1 -t 1 -k start`) and 28 (`-b 2
+    # -t 2`): the INA226's places and battery indices are its own lines', whether the board's
+    # rows place it or its console line does (which prints no options)
+    v6x = board("px4_fmu-v6x")
+    (line_28,) = [r for r in v6x.switches if r.source.startswith(f"{V6X_SCRIPT}:28 ")]
+    other = dataclasses.replace(
+        line_28,
+        driver="ina238",
+        args="-X -b 2 -t 3 start",
+        when="SENS_EN_INA226 == 1",
+        source="the edited rc.board_sensors:27",
+    )
+    edited = dataclasses.replace(v6x, switches=(other, *v6x.switches))
+    proposal = migrate.migrate(
+        OldConfig("t", "ULog", {"SENS_EN_INA226": 1}, version=(1, 16, 0), console=console),
+        table="current",
+        board=edited,
+    )
+    index = "today's start line also sets the battery index (-t {}): INA226 has no field for it"
+    runs = [(1, 0x41, 1), (2, 0x41, 2)] if console is None else [(2, 0x41, 2)]
+    assert [
+        (i.name, i.values["bus.i2c.bus_id"], i.values["bus.i2c.address"], i.notes)
+        for i in proposal.instances
+    ] == [(f"INA226#{n}", bus, at, [index.format(t)]) for n, (bus, at, t) in enumerate(runs)]
