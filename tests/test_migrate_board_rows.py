@@ -1119,3 +1119,61 @@ def test_a_switch_starting_two_drivers_gives_each_driver_only_its_own_lines(
         (i.name, i.values["bus.i2c.bus_id"], i.values["bus.i2c.address"], i.notes)
         for i in proposal.instances
     ] == [(f"INA226#{n}", bus, at, [index.format(t)]) for n, (bus, at, t) in enumerate(runs)]
+
+
+# -- what a boot console line says of an unsettled row's rotation --------------------------------
+
+
+@pytest.mark.issue40
+def test_a_console_showing_another_rotation_than_the_rows_says_the_row_did_not_start_it() -> None:
+    # CANHUBK3's rc.sensors probe (v1.15.0 line 216, `ist8310 -X -q start`) read as passing -R 2,
+    # as PX4 1.11's probed `ak09916 -X -R 6 start`: a PX4 1.15 console line showing the IST8310
+    # on bus 1 running with -R 2 is that probe's, not line 10's (-R 10), and both the
+    # assumption and the instance's note say the console showed it
+    mr = board("nxp_mr-canhubk3", "v1.15.0")
+    probes = tuple(
+        dataclasses.replace(r, args="-X -R 2 -q start", rotation=2)
+        if (r.param, r.driver) == ("SENS_EXT_I2C_PRB", "ist8310")
+        else r
+        for r in mr.switches
+    )
+    console = "ist8310 #0 on I2C bus 1 (external) address 0xE rotation 2\n"
+    proposal = migrate.migrate(
+        OldConfig("t", "ULog", {}, version=(1, 15, 0), console=console),
+        table="current",
+        board=dataclasses.replace(mr, switches=probes),
+    )
+    shown = (
+        "; boot console line 1 shows it runs with -R 2, not with that line's -R 10: that line "
+        "did not start it"
+    )
+    (said,) = [a for a in proposal.assumptions if a.startswith("boot console line 1")]
+    assert said == (
+        f"boot console line 1: ist8310, I2C bus 1, address 0x0E: {CANHUBK3_LINE_10}: proposed, "
+        f"not left out on a guess{shown}"
+    )
+    (ist,) = proposal.instances
+    assert (ist.values["rotation"], ist.notes) == (
+        2,
+        ["rotation 2: the driver's -R (boot console)", CANHUBK3_LINE_10 + shown],
+    )
+
+
+@pytest.mark.issue40
+def test_a_px4_1_11_console_line_shows_no_rotation_so_the_rows_condition_is_named() -> None:
+    # PX4 1.11's console prints no rotation (v1.11.0 platforms/common/i2c_spi_buses.cpp line
+    # 502): its IST8310 line on bus 1 does not say whether line 10 (-R 10) started it, so the
+    # rotation 0 of rc.sensors' probe is said to hold only where line 10 does not run
+    console = "ist8310 #0 on I2C bus 1 (external, equal to '-b 1')\n"
+    proposal = migrate.migrate(
+        OldConfig("t", "ULog", {}, version=(1, 11, 3), console=console),
+        table="current",
+        board=board("nxp_mr-canhubk3", "v1.15.0"),
+    )
+    (said,) = [a for a in proposal.assumptions if a.startswith("boot console line 1: ist8310")]
+    assert said == (
+        f"boot console line 1: ist8310, I2C bus 1: {CANHUBK3_LINE_10}: proposed, not left out on "
+        f"a guess{CANHUBK3_ROTATION}"
+    )
+    (ist,) = proposal.instances
+    assert (ist.values["rotation"], ist.notes) == (0, [CANHUBK3_LINE_10 + CANHUBK3_ROTATION])
