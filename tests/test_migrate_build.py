@@ -914,6 +914,57 @@ def test_the_i2c_launcher_runs_unless_a_power_monitor_switch_is_set() -> None:
     assert not [a for a in proposal.assumptions if "i2c_launcher" in a], proposal.assumptions
 
 
+@pytest.mark.issue40
+def test_a_set_power_monitor_switch_makes_ina_configured_yes_as_a_script_tests_it() -> None:
+    # PX4 main's boards/auterion/fmu-v6s/init/rc.board_sensors sets INA_CONFIGURED yes in each
+    # power-monitor switch's block (lines 37, 48, 59) and tests `[ "$INA_CONFIGURED" != "yes" ]`
+    # (line 67), where fmu-v6x tests `= no`: Pixhawk 6X's launcher condition read that way
+    # still runs the launcher without a switch set, and not with SENS_EN_INA238 = 1
+    import dataclasses
+
+    from px4params.vehicle.boards import load_boards
+
+    v6x = load_boards().by_name("px4_fmu-v6x")
+    assert v6x is not None
+    when = v6x.i2c_launcher_when.replace("$INA_CONFIGURED == no", "$INA_CONFIGURED != yes")
+    edited = dataclasses.replace(v6x, i2c_launcher_when=when)
+    for ina238, scans in ((0, True), (1, False)):
+        params = {"SENS_EN_INA238": ina238}
+        proposal = migrate.migrate(today(params, "nsh: sercon\n"), table="current", board=edited)
+        said = [a for a in proposal.assumptions if "i2c_launcher" in a]
+        assert bool(said) == scans, proposal.assumptions
+
+
+@pytest.mark.issue40
+def test_a_board_test_of_ver_hwcmp_is_settled_by_the_boards_own_names() -> None:
+    # PX4's scripts test the board with `ver hwcmp` (v1.12.0's rc.sensors line 8: `if ! ver
+    # hwcmp OMNIBUS_F4SD`), which the table reads as `board in`: PX4 1.11's rc.sensors line 102
+    # (`ak09916 -X -R 6 start`) read as running only on a PX4_FMU_V5 runs on fmu-v5, whose
+    # ver_hw names it, and the AK09916 it probes gets its -R 6 with nothing left to name
+    import dataclasses
+
+    from px4params.vehicle.boards import load_boards
+
+    v5 = load_boards().by_name("px4_fmu-v5", "v1.11.0")
+    assert v5 is not None and "PX4_FMU_V5" in v5.ver_hw
+    probes = tuple(
+        dataclasses.replace(r, when=f"{r.when} and board in PX4_FMU_V5")
+        if "rc.sensors:102 " in r.source
+        else r
+        for r in v5.switches
+    )
+    here2 = devid.encode("i2c", 1, 0x0C, 0x09)
+    proposal = migrate.migrate(
+        OldConfig("t", "QGC .params", {"CAL_MAG0_ID": here2, "SENS_EXT_I2C_PRB": 1},
+                  version=(1, 11, 3)),
+        table="current",
+        board=dataclasses.replace(v5, switches=probes),
+    )  # fmt: skip
+    (ak,) = proposal.instances
+    assert (ak.name, ak.values["rotation"]) == ("AK09916#0", 6)
+    assert proposal.assumptions == []
+
+
 def test_a_devtype_two_chips_share_is_matched_to_the_console_line_of_either() -> None:
     # PX4 1.13's drv_sensor.h gives 0x4C to two chips (DRV_DIFF_PRESS_DEVTYPE_SDP33 and
     # DRV_BARO_DEVTYPE_LPS33HW): CAL_BARO0_ID's device of that code at 0x5D on bus 1 is the
