@@ -446,3 +446,62 @@ def test_a_dropped_start_no_probe_can_reach_is_said_to_start_nowhere(
         "v1.12.0 and later the board's script does not start it, the manifest must: "
         "--target-release v1.12.0 (or later) proposes it as an instance"
     )
+
+
+class _EditedLater:
+    """The bundled board table with each board row after v1.11.0 given ``row`` too."""
+
+    def __init__(self, row: Any) -> None:
+        self.table = load_boards()
+        self.row = row
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self.table, name)
+
+    def by_name(self, name: str, release: str | None = None) -> Any:
+        board = self.table.by_name(name, release)
+        if board is None or release == "v1.11.0":
+            return board
+        return dataclasses.replace(board, devices=(*board.devices, self.row))
+
+
+@pytest.mark.issue40
+def test_a_later_start_without_r_of_a_device_probed_with_r_says_it_runs_with_0(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Pixhawk 5 on v1.11.3 with a Here2's AK09916 on I2C bus 1: at v1.11.0 rc.sensors' probe
+    `ak09916 -X -R 6 start` (line 102) starts it with -R 6. Read here with every later fmu-v5
+    script starting `ak09916 -X -b 1 start`, without -R: from v1.12.0 the driver runs with
+    PX4's rotation 0 (no -R: ROTATION_NONE), which the note names against the file's 6."""
+    from px4params.migrate import build
+
+    v5 = load_boards().by_name("px4_fmu-v5", "v1.11.0")
+    assert v5 is not None
+    (ist,) = [d for d in v5.devices if d.bus_kind == "I2C"]
+    row = dataclasses.replace(
+        ist,
+        driver="ak09916",
+        args="-X -b 1 start",
+        bus=1,
+        rotation=None,
+        internal=False,
+        source="the edited rc.board_sensors:26",
+    )
+    monkeypatch.setattr(build, "_board_table", lambda: _EditedLater(row))
+    here2 = devid.encode("i2c", 1, 0x0C, 0x09)
+    config = migrate.OldConfig(
+        "t", "QGC .params", {"CAL_MAG0_ID": here2, "SENS_EXT_I2C_PRB": 1}, version=(1, 11, 3)
+    )
+    (inst,) = migrate.migrate(config, board=v5).instances
+    assert (inst.name, inst.values["rotation"]) == ("AK09916#0", 6)
+    probe = (
+        f"'ak09916 -X -R 6 start' (PX4/PX4-Autopilot {RC_SENSORS}:102 at v1.11.0 (tag v1.11.0, "
+        "71db0903a9, 2020-09-07))"
+    )
+    assert inst.notes == [
+        "the board's script starts it from PX4 v1.12.0: 'ak09916 -X -b 1 start' (the edited "
+        "rc.board_sensors:26), with -R 0 where PX4 v1.11.0 ran it with 6 (rc.sensors probes it "
+        f"with {probe}; check its calibration after the update): for that firmware "
+        "--target-release v1.12.0 (or later) leaves it out",
+        f"rotation 6: rc.sensors probes it with {probe}",
+    ]
