@@ -106,12 +106,14 @@ def test_for_a_newer_target_the_real_logs_compass_is_an_instance_with_its_old_ro
     assert got == {"AK09916#0": (1, 0x0C, 6), "MS4525DO#0": (2, 0x28, None)}
     (mag,) = [i for i in report["instances"] if i["name"] == "AK09916#0"]
     assert mag["origin"].startswith(f"CAL_MAG1_ID = {HERE2_MAG}: AK09916 (MAG), I2C bus 1")
-    (said,) = [n for n in mag["notes"] if OLD_LINE in n]
-    assert PROBE in said
+    said, rotation = mag["notes"]
+    assert OLD_LINE in said and PROBE in said
     assert said.endswith(
         f"at {target} the board's script does not start it: the manifest does, with the -R 6 "
         "the file's line gives"
     )
+    # the rotation's note points at the v1.11.0 start the note above cites
+    assert rotation == "rotation 6: the -R of PX4 v1.11.0's start (above)"
     assert not [i for i in report["left_out"] if i["found"].startswith("CAL_MAG1_ID")]
     assert "param add AK09916#0\n" in report["airframe"]
 
@@ -505,3 +507,29 @@ def test_a_later_start_without_r_of_a_device_probed_with_r_says_it_runs_with_0(
         "--target-release v1.12.0 (or later) leaves it out",
         f"rotation 6: rc.sensors probes it with {probe}",
     ]
+
+
+@pytest.mark.issue40
+def test_a_console_start_the_target_drops_is_said_started_by_the_files_board_script() -> None:
+    """The sample log without its CAL_MAG1 slot: the Here2's AK09916 is only its boot console
+    line 25, which v1.11.0's line 17 started (-R 6). For v1.12.0, where no board line starts
+    it, the instance says where it came from (the file's board script, not "outside" it) and
+    that its rotation is that start's."""
+    config = migrate.read_config(shared_data.shared_file(shared_data.SAMPLE_LOG))
+    config = dataclasses.replace(
+        config,
+        params={k: v for k, v in config.params.items() if not k.startswith("CAL_MAG1_")},
+        published=[p for p in config.published if p[2] != HERE2_MAG],
+    )
+    proposal = migrate.migrate(config, target_release="v1.12.0")
+    (mag,) = [i for i in proposal.instances if i.name == "AK09916#0"]
+    assert mag.origin == (
+        "boot console line 25: 'ak09916 #0 on I2C bus 1 (external, equal to '-b 2')' (started "
+        "by the board's script of PX4 v1.11.0)"
+    )
+    later, rotation = mag.notes
+    assert later.startswith(f"the board's script of PX4 v1.11.0 starts it with {OLD_LINE}")
+    assert (mag.values["rotation"], rotation) == (
+        6,
+        "rotation 6: the -R of PX4 v1.11.0's start (above)",
+    )
