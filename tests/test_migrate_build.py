@@ -914,6 +914,59 @@ def test_the_i2c_launcher_runs_unless_a_power_monitor_switch_is_set() -> None:
     assert not [a for a in proposal.assumptions if "i2c_launcher" in a], proposal.assumptions
 
 
+V6X_MAIN = "at main (branch main, bb59c637cd, 2026-08-13)"
+V6X_SCRIPT = "PX4/PX4-Autopilot boards/px4/fmu-v6x/init/rc.board_sensors"
+#: Why $HAVE_PM2 is open on a Pixhawk 6X (main) where a QGC file says nothing of its manifest.
+V6X_PM2_WHY = (
+    f"{V6X_SCRIPT}:5 {V6X_MAIN} sets HAVE_PM2 yes; line 8: no where mft MFT_PM2 == 0 (the "
+    "board's hardware manifest, which the parameters do not tell)"
+)
+SCANS = "the board's i2c_launcher scans I2C bus {} for power monitors (INA226, INA228, INA238)"
+QGC_SAYS = "a QGC .params does not say which it found"
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize(
+    ("name", "when", "said"),
+    [
+        # NXP MR-Tropic (main): `i2c_launcher start -b 3` (line 44) inside `if [ $INA_CONFIGURED
+        # = no ]` (line 41): no switch set, bus 3 scanned, nothing open to name
+        ("nxp_mr-tropic", None,
+         f"{SCANS.format(3)} when no SENS_EN_INA2xx is 1: {QGC_SAYS}"),
+        # the same line read without its if: the scan does not hinge on a switch
+        ("nxp_mr-tropic", "", f"{SCANS.format(3)}: {QGC_SAYS}"),
+        # Pixhawk 6X's bus 1 read without a condition: scanned, whatever "bus 2:" says
+        ("px4_fmu-v6x", "bus 2: $INA_CONFIGURED == no",
+         f"{SCANS.format('1, 2')} when no SENS_EN_INA2xx is 1: {QGC_SAYS}"),
+        # both buses read as scanned only where $HAVE_PM2 is no, which PX4's default is not
+        ("px4_fmu-v6x", "bus 1: $HAVE_PM2 == no; bus 2: $HAVE_PM2 == no",
+         f"{SCANS.format('none')}: {QGC_SAYS}; "
+         f"bus 1 not, by PX4's default: $HAVE_PM2 == no ({V6X_PM2_WHY}) ({V6X_SCRIPT}:61 "
+         f"{V6X_MAIN}); bus 2 not, by PX4's default: $HAVE_PM2 == no ({V6X_PM2_WHY}) "
+         f"({V6X_SCRIPT}:64 {V6X_MAIN})"),
+        # bus 2 read as scanned where $HAVE_PM2 is yes and the base is 008: both clauses named
+        ("px4_fmu-v6x", "bus 2: $HAVE_PM2 == yes and hw_base in 008",
+         f"{SCANS.format('1, 2')}: {QGC_SAYS}; bus 2 only where $HAVE_PM2 == yes ({V6X_PM2_WHY}) "
+         "and hw_base in 008 (the hardware revision, which the parameters do not tell) "
+         f"({V6X_SCRIPT}:64 {V6X_MAIN})"),
+    ],
+)  # fmt: skip
+def test_the_i2c_launchers_scan_is_said_whole_bus_by_bus(
+    name: str, when: str | None, said: str
+) -> None:
+    import dataclasses
+
+    from px4params.vehicle.boards import load_boards
+
+    board = load_boards().by_name(name)
+    assert board is not None
+    if when is not None:
+        board = dataclasses.replace(board, i2c_launcher_when=when)
+    config = OldConfig("t", "QGC .params", {}, version=(1, 15, 0))
+    proposal = migrate.migrate(config, table="current", board=board)
+    assert [a for a in proposal.assumptions if "i2c_launcher" in a] == [said]
+
+
 @pytest.mark.issue40
 def test_a_set_power_monitor_switch_makes_ina_configured_yes_as_a_script_tests_it() -> None:
     # PX4 main's boards/auterion/fmu-v6s/init/rc.board_sensors sets INA_CONFIGURED yes in each
