@@ -533,3 +533,41 @@ def test_a_console_start_the_target_drops_is_said_started_by_the_files_board_scr
         6,
         "rotation 6: the -R of PX4 v1.11.0's start (above)",
     )
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize("target", [None, "v1.12.0"])
+def test_a_probed_console_start_a_later_board_script_starts_is_left_out_for_that_target(
+    target: str | None,
+) -> None:
+    """The Pixhawk 5 case above as a v1.11.3 log with no calibration slot, only its boot
+    console line (PX4 1.11 prints neither address nor rotation; bus 1 is fmu-v5's third
+    external bus, src/i2c.cpp's order 4, 2, 1): the same line, on the instance without a
+    target and as the reason it is left out for v1.12.0."""
+    console = "ist8310 #0 on I2C bus 1 (external, equal to '-b 3')\n"
+    config = migrate.OldConfig(
+        "t.ulg", "ULog", {"SENS_EXT_I2C_PRB": 1}, version=(1, 11, 3), console=console
+    )
+    v5 = load_boards().by_name("px4_fmu-v5", "v1.11.0")
+    proposal = migrate.migrate(config, board=v5, target_release=target)
+    said = (
+        "the board's script starts it from PX4 v1.12.0: 'ist8310 -X -b 1 -R 10 start' "
+        "(PX4/PX4-Autopilot boards/px4/fmu-v5/init/rc.board_sensors:25 at v1.12.0 (tag v1.12.0, "
+        "9524e8ec03, 2021-07-05)), with -R 10 where PX4 v1.11.0 ran it with 0 (rc.sensors "
+        "starts it without -R; check its calibration after the update)"
+    )
+    if target is None:
+        (inst,) = proposal.instances
+        assert (inst.name, inst.values["rotation"]) == ("IST8310#0", 0)
+        assert inst.notes == [
+            f"{said}: for that firmware --target-release v1.12.0 (or later) leaves it out"
+        ]
+        return
+    assert proposal.instances == []
+    (ist,) = proposal.left_out
+    assert (ist.found, ist.reason, ist.line) == (
+        "boot console line 1",
+        "board",
+        f"boot console line 1: ist8310, I2C bus 1: {said}; on PX4 v1.12.0 it is the board's, not "
+        "the manifest's",
+    )
