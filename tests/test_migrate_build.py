@@ -887,6 +887,9 @@ def test_probing_on_is_replaced_by_the_devices_the_manifest_states() -> None:
     assert proposal.replaced == [said.format("MS4525DO#0")]
     proposal = migrate.migrate(today({"SENS_EXT_I2C_PRB": 1}), table="current")
     assert proposal.replaced == [said.format("none")]
+    # for v1.12.0, whose board script no longer starts the Here2's compass, both are named
+    proposal = migrate.migrate(log, target_release="v1.12.0")
+    assert proposal.replaced == [said.format("AK09916#0, MS4525DO#0")]
 
 
 def test_the_i2c_launcher_runs_unless_a_power_monitor_switch_is_set() -> None:
