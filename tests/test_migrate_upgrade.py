@@ -571,3 +571,37 @@ def test_a_probed_console_start_a_later_board_script_starts_is_left_out_for_that
         f"boot console line 1: ist8310, I2C bus 1: {said}; on PX4 v1.12.0 it is the board's, not "
         "the manifest's",
     )
+
+
+@pytest.mark.issue40
+def test_a_dropped_start_a_probe_reaches_with_the_same_rotation_is_said_without_one() -> None:
+    """The edited Pixhawk 5 of v1.11.0 above, its line 19 read as `lis3mdl -X -b 2 start`
+    (bus 2, external): from v1.12.0 no fmu-v5 script line starts a LIS3MDL, and rc.sensors'
+    `lis3mdl -X -q start` (v1.12.0 line 140, SENS_EXT_I2C_PRB) reaches it at its default 0x1E,
+    also without -R: the change is whose start it is, with no rotation to name."""
+    v5 = load_boards().by_name("px4_fmu-v5", "v1.11.0")
+    assert v5 is not None
+    (real,) = [d for d in v5.devices if d.bus_kind == "I2C"]
+    row = dataclasses.replace(
+        real,
+        source="the edited rc.board_sensors:19",
+        driver="lis3mdl",
+        args="-X -b 2 start",
+        bus=2,
+        internal=False,
+    )
+    lis3mdl = devid.encode("i2c", 2, 0x1E, 0x05)
+    config = migrate.OldConfig(
+        "t", "QGC .params", {"CAL_MAG0_ID": lis3mdl, "SENS_EXT_I2C_PRB": 1}, version=(1, 11, 3)
+    )
+    proposal = migrate.migrate(config, board=dataclasses.replace(v5, devices=(row,)))
+    assert proposal.instances == []
+    (mag,) = proposal.left_out
+    assert mag.later == (
+        "the board's script of PX4 v1.11.0 starts it with 'lis3mdl -X -b 2 start' (the edited "
+        "rc.board_sensors:19); PX4 v1.12.0 .. main: not the board's; only where SENS_EXT_I2C_PRB "
+        f"== 1: 'lis3mdl -X -q start' (PX4/PX4-Autopilot {RC_SENSORS}:140 at v1.12.0 (tag "
+        "v1.12.0, 9524e8ec03, 2021-07-05)): on PX4 v1.12.0 and later the board's script does "
+        "not start it, the manifest must: --target-release v1.12.0 (or later) proposes it as an "
+        "instance"
+    )
