@@ -1177,3 +1177,17 @@ def test_a_px4_1_11_console_line_shows_no_rotation_so_the_rows_condition_is_name
     )
     (ist,) = proposal.instances
     assert (ist.values["rotation"], ist.notes) == (0, [CANHUBK3_LINE_10 + CANHUBK3_ROTATION])
+
+
+@pytest.mark.issue40
+def test_an_internal_bus_of_a_board_without_its_i2c_file_cites_the_boards_buses() -> None:
+    # Pixhawk 6X (main) without the path of its src/i2c.cpp: line 133's BMM150 found on
+    # internal bus 4 is the board's as above, its line citing the board's I2C buses instead
+    v6x = dataclasses.replace(board("px4_fmu-v6x"), i2c_buses_path="")
+    proposal = migrate.migrate(config({"CAL_MAG0_ID": BMM150_BUS4}), table="current", board=v6x)
+    line = assert_the_boards(
+        proposal, "CAL_MAG0_ID = 4395041", "boards/px4/fmu-v6x/init/rc.board_sensors:133 "
+    )
+    assert line.endswith(
+        ", and being found on internal I2C bus 4 (the board's I2C buses) shows it did"
+    )
