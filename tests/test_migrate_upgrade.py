@@ -605,3 +605,31 @@ def test_a_dropped_start_a_probe_reaches_with_the_same_rotation_is_said_without_
         "not start it, the manifest must: --target-release v1.12.0 (or later) proposes it as an "
         "instance"
     )
+
+
+@pytest.mark.issue40
+def test_an_installation_without_a_board_table_compares_nothing_and_refuses_a_target(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """px4params.vehicle.boards is optional (build._board_table: None where it cannot be
+    imported): a board given as an object is judged at the file's release alone, and a
+    --target-release is refused in one line saying why no release can be named."""
+    from px4params.errors import MigrationError
+    from px4params.migrate import build
+
+    v5 = load_boards().by_name("px4_fmu-v5", "v1.11.0")
+    monkeypatch.setattr(build, "_board_table", lambda: None)
+    gps = devid.encode("i2c", 1, 0x0E, 0x06)
+    config = migrate.OldConfig(
+        "t", "QGC .params", {"CAL_MAG1_ID": gps, "SENS_EXT_I2C_PRB": 1}, version=(1, 11, 3)
+    )
+    proposal = migrate.migrate(config, board=v5)
+    assert proposal.compared == [] and proposal.target_release is None
+    (inst,) = proposal.instances
+    assert (inst.name, inst.notes) == ("IST8310#0", [])
+    with pytest.raises(MigrationError) as refused:
+        migrate.migrate(config, board=v5, target_release="v1.12.0")
+    assert str(refused.value) == (
+        "--target-release v1.12.0: not a release of the board table (expected one of none: this "
+        "installation has no board table)"
+    )
