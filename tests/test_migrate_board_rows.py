@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import dataclasses
 from pathlib import Path
+from typing import Any
 
 import pytest
 import shared_data
@@ -28,7 +29,7 @@ from px4params.migrate.conditions import (
     evaluate,
 )
 from px4params.migrate.config import OldConfig
-from px4params.vehicle.boards import Board, load_boards
+from px4params.vehicle.boards import Board, SwitchStart, load_boards
 
 IST8310_BUS1 = 0x06 << 16 | 0x0E << 8 | 1 << 3 | 1  # 396809, a GPS puck's compass
 HMC5883_BUS2 = 0x01 << 16 | 0x1E << 8 | 2 << 3 | 1  # 73233
@@ -797,3 +798,396 @@ def test_a_cubes_bus_2_compass_notes_that_only_x_starts_reach_it() -> None:
         "boards/px4/fmu-v3/src/i2c.cpp:52 at main (branch main, bb59c637cd, 2026-08-13)): the "
         "board's -I starts try no bus there, rc.sensors' -X starts do"
     ]
+
+
+# -- the lines a user reads, whole: rows edited where no bundled row has two open clauses --------
+
+#: A second clause a QGC file leaves open beside the hardware type: `ver hwbasecmp 008`
+#: (the base board, which no parameter names).
+HW_BASE = "hw_base in 008"
+HW_BASE_WHY = "hw_base in 008 (the hardware revision, which the parameters do not tell)"
+
+
+def with_row(b: Board, line: int, **edit: Any) -> Board:
+    """``b`` with its device row of script line ``line`` edited (``when``, ``args``, ...)."""
+    rows = tuple(
+        dataclasses.replace(r, **edit) if f"rc.board_sensors:{line} " in r.source else r
+        for r in b.devices
+    )
+    assert rows != b.devices
+    return dataclasses.replace(b, devices=rows)
+
+
+@pytest.mark.issue40
+def test_an_unsettled_row_of_two_open_clauses_names_both_in_the_assumption_and_the_note() -> None:
+    # CANHUBK3's line 10 read as running where the type is an ADAP and the base is 008: both
+    # clauses, joined by "and", in the assumption of the proposed IST8310 and in its note
+    mr = with_row(board("nxp_mr-canhubk3"), 10, when=f"hw_type in MR-CANHUBK3-ADAP and {HW_BASE}")
+    proposal = migrate.migrate(
+        config({"CAL_MAG0_ID": IST8310_BUS1, "CAL_MAG0_ROT": 0}), table="current", board=mr
+    )
+    line_10 = f"{CANHUBK3_LINE_10} and {HW_BASE_WHY}"
+    (said,) = [a for a in proposal.assumptions if a.startswith("CAL_MAG0_ID")]
+    assert said == (
+        f"CAL_MAG0_ID = 396809: IST8310 (MAG), I2C bus 1, address 0x0E: {line_10}: "
+        f"proposed, not left out on a guess{CANHUBK3_ROTATION}"
+    )
+    (ist,) = proposal.instances
+    assert ist.notes == [line_10 + CANHUBK3_ROTATION]
+
+
+@pytest.mark.issue40
+def test_an_internal_bus_row_of_two_open_clauses_names_both_where_finding_it_shows_it_ran() -> None:
+    # Pixhawk 6X's line 133 (`bmm150 -I -R 0 start`, bus 4 internal) read as running where the
+    # type is not V6X001 and the base is 008: a BMM150 found there is the board's, and the line
+    # names both clauses
+    v6x = with_row(board("px4_fmu-v6x"), 133, when=f"not hw_type in V6X001 and {HW_BASE}")
+    proposal = migrate.migrate(config({"CAL_MAG0_ID": BMM150_BUS4}), table="current", board=v6x)
+    line = assert_the_boards(
+        proposal, "CAL_MAG0_ID = 4395041", "boards/px4/fmu-v6x/init/rc.board_sensors:133 "
+    )
+    assert line.endswith(
+        "it runs only where not hw_type in V6X001 (the hardware revision, which the parameters "
+        f"do not tell) and {HW_BASE_WHY}, and being found on internal I2C bus 4 "
+        "(boards/px4/fmu-v6x/src/i2c.cpp) shows it did"
+    )
+
+
+@pytest.mark.issue40
+def test_a_board_row_holding_by_pX4s_default_is_named_as_taken() -> None:
+    # Pixhawk 6X's line 133 read as running where $HAVE_PM2 is yes, which line 5 sets and line
+    # 8 unsets where the hardware manifest says no second power module: a QGC file does not
+    # say, so the row holds by PX4's default, the BMM150 is the board's and the report says so
+    v6x = with_row(board("px4_fmu-v6x"), 133, when="$HAVE_PM2 == yes")
+    proposal = migrate.migrate(config({"CAL_MAG0_ID": BMM150_BUS4}), table="current", board=v6x)
+    assert_the_boards(
+        proposal, "CAL_MAG0_ID = 4395041", "boards/px4/fmu-v6x/init/rc.board_sensors:133 "
+    )
+    script = "PX4/PX4-Autopilot boards/px4/fmu-v6x/init/rc.board_sensors"
+    main = "at main (branch main, bb59c637cd, 2026-08-13)"
+    (said,) = [a for a in proposal.assumptions if a.startswith("CAL_MAG0_ID")]
+    assert said == (
+        "CAL_MAG0_ID = 4395041: BMM150 (MAG), I2C bus 4, address 0x10: the board's 'bmm150 -I "
+        f"-R 0 start' ({script}:133 {main}) runs only where $HAVE_PM2 == yes ({script}:5 {main} "
+        "sets HAVE_PM2 yes; line 8: no where mft MFT_PM2 == 0 (the board's hardware manifest, "
+        "which the parameters do not tell)): taken as holding (PX4's default)"
+    )
+
+
+def probe_rows(
+    v5: Board, edit: dict[str, Any] | None = None, first: SwitchStart | None = None
+) -> Board:
+    """PX4 1.11's fmu-v5 with rc.sensors' `ak09916 -X -R 6 start` (line 102) edited, and
+    ``first`` (a row) before every switch row."""
+    rows = tuple(
+        dataclasses.replace(r, **edit)
+        if edit and r.source.startswith(f"PX4/PX4-Autopilot {RC_SENSORS_102}")
+        else r
+        for r in v5.switches
+    )
+    return dataclasses.replace(v5, switches=((first,) if first else ()) + rows)
+
+
+RC_SENSORS_102 = "ROMFS/px4fmu_common/init.d/rc.sensors:102 "
+
+
+@pytest.mark.issue40
+def test_a_probe_of_two_open_clauses_names_both_where_its_rotation_is_taken() -> None:
+    # line 102 read as running where SENS_EXT_I2C_PRB is 1 and the base is 008: a QGC file
+    # without SENS_EXT_I2C_PRB settles neither, and the assumption names both
+    when = f"SENS_EXT_I2C_PRB == 1 and {HW_BASE}"
+    v5 = probe_rows(board("px4_fmu-v5", "v1.11.0"), {"when": when})
+    proposal = migrate.migrate(
+        config({"CAL_MAG0_ID": AK09916_BUS1}, version=(1, 11, 3)), table="current", board=v5
+    )
+    (ak,) = proposal.instances
+    assert ak.values["rotation"] == 6
+    (said,) = [a for a in proposal.assumptions if a.startswith("'ak09916 -X -R 6 start'")]
+    assert said == (
+        f"'ak09916 -X -R 6 start' (PX4/PX4-Autopilot {RC_SENSORS_102}at v1.11.0 (tag v1.11.0, "
+        "71db0903a9, 2020-09-07)) runs only where SENS_EXT_I2C_PRB == 1 (SENS_EXT_I2C_PRB is "
+        f"not in the QGC .params) and {HW_BASE_WHY}: its -R 6 taken"
+    )
+
+
+@pytest.mark.issue40
+def test_a_probe_that_does_not_run_is_passed_over_for_the_next_that_does() -> None:
+    # a probe `ak09916 -X -R 2 start` where SENS_EXT_I2C_PRB is 2, before line 102: with
+    # SENS_EXT_I2C_PRB 1 it does not run, line 102 does: the AK09916's rotation is 6
+    v5 = board("px4_fmu-v5", "v1.11.0")
+    (real,) = [r for r in v5.switches if r.driver == "ak09916" and r.bus == 1]
+    other = dataclasses.replace(
+        real,
+        args="-X -R 2 start",
+        rotation=2,
+        when="SENS_EXT_I2C_PRB == 2",
+        source="rc.sensors:101",
+    )
+    proposal = migrate.migrate(
+        config({"CAL_MAG0_ID": AK09916_BUS1, "SENS_EXT_I2C_PRB": 1}, version=(1, 11, 3)),
+        table="current",
+        board=probe_rows(v5, first=other),
+    )
+    (ak,) = proposal.instances
+    assert (ak.name, ak.values["rotation"]) == ("AK09916#0", 6)
+    assert ak.notes == [
+        f"rotation 6: rc.sensors probes it with 'ak09916 -X -R 6 start' ({real.source})"
+    ]
+
+
+#: What the report says of a CANHUBK3 row that tries no bus of its kind, after the row.
+NO_BUS_OF_THAT_KIND = (
+    "and PX4's {option} tries no bus of that kind (platforms/common/i2c.cpp, "
+    "I2CBusIterator::next), so that line starts nothing"
+)
+CANHUBK3_I2C = "PX4/PX4-Autopilot boards/nxp/mr-canhubk3/src/i2c.cpp:{line} at main (branch main, "
+
+
+@pytest.mark.issue40
+def test_an_internal_start_on_an_external_bus_is_said_to_start_nothing() -> None:
+    # CANHUBK3's line 10 read as `ist8310 -I -b 1 -R 10 start` on every type: bus 1 is
+    # external (src/i2c.cpp line 37), and an -I start tries only internal buses
+    # (platforms/common/i2c.cpp): the line starts nothing, the IST8310 on bus 1 is proposed
+    mr = with_row(
+        board("nxp_mr-canhubk3", "v1.15.0"),
+        10,
+        args="-I -b 1 -R 10 start",
+        internal=True,
+        when="",
+    )
+    proposal = migrate.migrate(config({"CAL_MAG0_ID": IST8310_BUS1}), table="current", board=mr)
+    assert placed(proposal) == [("IST8310#0", 1, 0x0E)]
+    (said,) = proposal.assumptions
+    assert said == (
+        "CAL_MAG0_ID = 396809: IST8310 (MAG), I2C bus 1, address 0x0E: the board's 'ist8310 -I "
+        "-b 1 -R 10 start' (PX4/PX4-Autopilot boards/nxp/mr-canhubk3/init/rc.board_sensors:10 "
+        "at main (branch main, bb59c637cd, 2026-08-13)) did not start it: I2C bus 1 is external "
+        f"({CANHUBK3_I2C.format(line=37)}bb59c637cd, 2026-08-13)), "
+        + NO_BUS_OF_THAT_KIND.format(option="-I")
+    )
+
+
+IST8310_0C_BUS2 = 0x06 << 16 | 0x0C << 8 | 2 << 3 | 1  # 396305
+
+
+@pytest.mark.issue40
+def test_a_start_on_a_bus_of_the_other_kind_is_named_only_for_its_own_chip_and_address() -> None:
+    # CANHUBK3's line 22 `ist8310 -X -b 2 -R 10` starts an IST8310 at its default 0x0E (PX4's
+    # ist8310 I2C_ADDRESS_DEFAULT), line 32 `lis3mdl -X -b 2 -R 2` a LIS3MDL: neither is named
+    # for an IST8310 at 0x0C, nor for an HMC5883 at 0x1E (LIS3MDL's address, not its chip)
+    proposal = migrate.migrate(
+        config({"CAL_MAG0_ID": IST8310_0C_BUS2, "CAL_MAG1_ID": HMC5883_BUS2}),
+        table="current",
+        board=board("nxp_mr-canhubk3", "v1.15.0"),
+    )
+    assert sorted(placed(proposal)) == [("HMC5883#0", 2, 0x1E), ("IST8310#0", 2, 0x0C)]
+    assert proposal.assumptions == []
+
+
+@pytest.mark.issue40
+def test_a_console_start_without_address_is_named_beside_the_line_of_its_chip() -> None:
+    # PX4 1.11's boot console prints no address (v1.11.0 platforms/common/i2c_spi_buses.cpp
+    # line 502: "%s #%i on I2C bus %d", then " (external, ...)" on an external bus only): an
+    # IST8310 on bus 2 may be at line 22's 0x0E, so line 22 is named as starting nothing there
+    proposal = migrate.migrate(
+        OldConfig("t", "ULog", {}, version=(1, 11, 3), console="ist8310 #0 on I2C bus 2\n"),
+        table="current",
+        board=board("nxp_mr-canhubk3", "v1.15.0"),
+    )
+    (said,) = proposal.assumptions
+    assert said == (
+        "boot console line 1: ist8310, I2C bus 2: the board's 'ist8310 -X -b 2 -R 10 start' "
+        "(PX4/PX4-Autopilot boards/nxp/mr-canhubk3/init/rc.board_sensors:22 at main (branch "
+        "main, bb59c637cd, 2026-08-13)) did not start it: I2C bus 2 is internal "
+        f"({CANHUBK3_I2C.format(line=38)}bb59c637cd, 2026-08-13)), "
+        + NO_BUS_OF_THAT_KIND.format(option="-X")
+    )
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize(
+    ("hw_type", "edit", "proposed"),
+    [
+        # a Pixhawk Mini: bus 2 is internal, which rc.sensors never probes: line 12 ran
+        ("V2M", {}, []),
+        # a Cube: bus 2 is external, which rc.sensors probes too: not the board's on a guess
+        ("V30", {"args": "-T -X -b 2 -R 4 start", "internal": False, "bus": 2},
+         [("HMC5883#0", 2, 0x1E)]),
+    ],
+)  # fmt: skip
+def test_an_unsettled_row_is_the_boards_only_where_the_hardware_type_makes_its_bus_internal(
+    hw_type: str, edit: dict[str, Any], proposed: list[tuple[str, int, int]]
+) -> None:
+    # PX4 v1.12.0 fmu-v3: bus 2 is external where hw_type is V30 (src/i2c.cpp line 52), else
+    # internal. Line 12 (`hmc5883 -T -I -R 4 start`, or read as `-X -b 2`) read as running
+    # only where the base is 008, which nothing here settles: an HMC5883 found on bus 2 is
+    # the board's where the log's type makes bus 2 internal, and proposed where external
+    v3 = with_row(board("px4_fmu-v3", "v1.12.0"), 12, when=HW_BASE, **edit)
+    proposal = migrate.migrate(
+        config({"CAL_MAG0_ID": HMC5883_BUS2}, version=(1, 12, 3), hw_type=hw_type),
+        table="current",
+        board=v3,
+    )
+    assert placed(proposal) == proposed
+    if not proposed:
+        line = assert_the_boards(
+            proposal, "CAL_MAG0_ID = 73233", "boards/px4/fmu-v3/init/rc.board_sensors:12 "
+        )
+        assert line.endswith(
+            f"it runs only where {HW_BASE_WHY}, and being found on internal I2C bus 2 "
+            "(boards/px4/fmu-v3/src/i2c.cpp) shows it did"
+        )
+
+
+# -- a switch's rows: what runs, and which lines are its driver's ------------------------------
+
+V6X_SCRIPT = "PX4/PX4-Autopilot boards/px4/fmu-v6x/init/rc.board_sensors"
+V6X_MAIN = "at main (branch main, bb59c637cd, 2026-08-13)"
+#: Why $HAVE_PM2 is open on a Pixhawk 6X (main) where a QGC file says nothing of its manifest.
+V6X_PM2_WHY = (
+    f"{V6X_SCRIPT}:5 {V6X_MAIN} sets HAVE_PM2 yes; line 8: no where mft MFT_PM2 == 0 (the "
+    "board's hardware manifest, which the parameters do not tell)"
+)
+
+
+def with_switch_row(b: Board, line: int, **edit: Any) -> Board:
+    """``b`` with its switch rows of script line ``line`` edited."""
+    rows = tuple(
+        dataclasses.replace(r, **edit) if f"rc.board_sensors:{line} " in r.source else r
+        for r in b.switches
+    )
+    assert rows != b.switches
+    return dataclasses.replace(b, switches=rows)
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize(
+    ("when", "open_", "then"),
+    [
+        # $HAVE_PM2 is yes by PX4's default: a row needing no does not run
+        ("$HAVE_PM2 == no", f"$HAVE_PM2 == no ({V6X_PM2_WHY})",
+         "by PX4's default it does not run, not proposed from it"),
+        # and the base board nothing settles beside it: not known, both named
+        (f"$HAVE_PM2 == yes and {HW_BASE}", f"$HAVE_PM2 == yes ({V6X_PM2_WHY}) and {HW_BASE_WHY}",
+         "not proposed from it"),
+    ],
+)  # fmt: skip
+def test_a_switch_row_that_does_not_run_by_default_or_is_not_known_says_so_whole(
+    when: str, open_: str, then: str
+) -> None:
+    # Pixhawk 6X (main) line 28 `ina226 -X -b 2 -t 2 -k start` (SENS_EN_INA226 == 1 and
+    # $HAVE_PM2 == yes) read with another clause beside SENS_EN_INA226 == 1: only line 24's
+    # INA226 on bus 1 is proposed, and the report names line 28's open clauses whole
+    v6x = with_switch_row(board("px4_fmu-v6x"), 28, when=f"SENS_EN_INA226 == 1 and {when}")
+    proposal = migrate.migrate(config({"SENS_EN_INA226": 1}), table="current", board=v6x)
+    assert placed(proposal) == [("INA226#0", 1, 0x41)]
+    (said,) = [a for a in proposal.assumptions if a.startswith("SENS_EN_INA226")]
+    assert said == (
+        f"SENS_EN_INA226: 'ina226 -X -b 2 -t 2 -k start' ({V6X_SCRIPT}:28 {V6X_MAIN}) runs only "
+        f"where {open_}: {then}"
+    )
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize("console", [None, "ina226 #0 on I2C bus 2 (external) address 0x41\n"])
+def test_a_switch_starting_two_drivers_gives_each_driver_only_its_own_lines(
+    console: str | None,
+) -> None:
+    # A switch may start more than one driver (v1.18's fmu-v6x: SENS_INT_BARO_EN starts bmp388
+    # and icp201xx). Pixhawk 6X (main) read as also starting `ina238 -X -b 2 -t 3 start` under
+    # SENS_EN_INA226, before its own lines 24 (`ina226 -X -b 1 -t 1 -k start`) and 28 (`-b 2
+    # -t 2`): the INA226's places and battery indices are its own lines', whether the board's
+    # rows place it or its console line does (which prints no options)
+    v6x = board("px4_fmu-v6x")
+    (line_28,) = [r for r in v6x.switches if r.source.startswith(f"{V6X_SCRIPT}:28 ")]
+    other = dataclasses.replace(
+        line_28,
+        driver="ina238",
+        args="-X -b 2 -t 3 start",
+        when="SENS_EN_INA226 == 1",
+        source="the edited rc.board_sensors:27",
+    )
+    edited = dataclasses.replace(v6x, switches=(other, *v6x.switches))
+    proposal = migrate.migrate(
+        OldConfig("t", "ULog", {"SENS_EN_INA226": 1}, version=(1, 16, 0), console=console),
+        table="current",
+        board=edited,
+    )
+    index = "today's start line also sets the battery index (-t {}): INA226 has no field for it"
+    runs = [(1, 0x41, 1), (2, 0x41, 2)] if console is None else [(2, 0x41, 2)]
+    assert [
+        (i.name, i.values["bus.i2c.bus_id"], i.values["bus.i2c.address"], i.notes)
+        for i in proposal.instances
+    ] == [(f"INA226#{n}", bus, at, [index.format(t)]) for n, (bus, at, t) in enumerate(runs)]
+
+
+# -- what a boot console line says of an unsettled row's rotation --------------------------------
+
+
+@pytest.mark.issue40
+def test_a_console_showing_another_rotation_than_the_rows_says_the_row_did_not_start_it() -> None:
+    # CANHUBK3's rc.sensors probe (v1.15.0 line 216, `ist8310 -X -q start`) read as passing -R 2,
+    # as PX4 1.11's probed `ak09916 -X -R 6 start`: a PX4 1.15 console line showing the IST8310
+    # on bus 1 running with -R 2 is that probe's, not line 10's (-R 10), and both the
+    # assumption and the instance's note say the console showed it
+    mr = board("nxp_mr-canhubk3", "v1.15.0")
+    probes = tuple(
+        dataclasses.replace(r, args="-X -R 2 -q start", rotation=2)
+        if (r.param, r.driver) == ("SENS_EXT_I2C_PRB", "ist8310")
+        else r
+        for r in mr.switches
+    )
+    console = "ist8310 #0 on I2C bus 1 (external) address 0xE rotation 2\n"
+    proposal = migrate.migrate(
+        OldConfig("t", "ULog", {}, version=(1, 15, 0), console=console),
+        table="current",
+        board=dataclasses.replace(mr, switches=probes),
+    )
+    shown = (
+        "; boot console line 1 shows it runs with -R 2, not with that line's -R 10: that line "
+        "did not start it"
+    )
+    (said,) = [a for a in proposal.assumptions if a.startswith("boot console line 1")]
+    assert said == (
+        f"boot console line 1: ist8310, I2C bus 1, address 0x0E: {CANHUBK3_LINE_10}: proposed, "
+        f"not left out on a guess{shown}"
+    )
+    (ist,) = proposal.instances
+    assert (ist.values["rotation"], ist.notes) == (
+        2,
+        ["rotation 2: the driver's -R (boot console)", CANHUBK3_LINE_10 + shown],
+    )
+
+
+@pytest.mark.issue40
+def test_a_px4_1_11_console_line_shows_no_rotation_so_the_rows_condition_is_named() -> None:
+    # PX4 1.11's console prints no rotation (v1.11.0 platforms/common/i2c_spi_buses.cpp line
+    # 502): its IST8310 line on bus 1 does not say whether line 10 (-R 10) started it, so the
+    # rotation 0 of rc.sensors' probe is said to hold only where line 10 does not run
+    console = "ist8310 #0 on I2C bus 1 (external, equal to '-b 1')\n"
+    proposal = migrate.migrate(
+        OldConfig("t", "ULog", {}, version=(1, 11, 3), console=console),
+        table="current",
+        board=board("nxp_mr-canhubk3", "v1.15.0"),
+    )
+    (said,) = [a for a in proposal.assumptions if a.startswith("boot console line 1: ist8310")]
+    assert said == (
+        f"boot console line 1: ist8310, I2C bus 1: {CANHUBK3_LINE_10}: proposed, not left out on "
+        f"a guess{CANHUBK3_ROTATION}"
+    )
+    (ist,) = proposal.instances
+    assert (ist.values["rotation"], ist.notes) == (0, [CANHUBK3_LINE_10 + CANHUBK3_ROTATION])
+
+
+@pytest.mark.issue40
+def test_an_internal_bus_of_a_board_without_its_i2c_file_cites_the_boards_buses() -> None:
+    # Pixhawk 6X (main) without the path of its src/i2c.cpp: line 133's BMM150 found on
+    # internal bus 4 is the board's as above, its line citing the board's I2C buses instead
+    v6x = dataclasses.replace(board("px4_fmu-v6x"), i2c_buses_path="")
+    proposal = migrate.migrate(config({"CAL_MAG0_ID": BMM150_BUS4}), table="current", board=v6x)
+    line = assert_the_boards(
+        proposal, "CAL_MAG0_ID = 4395041", "boards/px4/fmu-v6x/init/rc.board_sensors:133 "
+    )
+    assert line.endswith(
+        ", and being found on internal I2C bus 4 (the board's I2C buses) shows it did"
+    )

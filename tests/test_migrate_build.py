@@ -892,6 +892,9 @@ def test_probing_on_is_replaced_by_the_devices_the_manifest_states() -> None:
     assert proposal.replaced == [said.format("MS4525DO#0")]
     proposal = migrate.migrate(today({"SENS_EXT_I2C_PRB": 1}), table="current")
     assert proposal.replaced == [said.format("none")]
+    # for v1.12.0, whose board script no longer starts the Here2's compass, both are named
+    proposal = migrate.migrate(log, target_release="v1.12.0")
+    assert proposal.replaced == [said.format("AK09916#0, MS4525DO#0")]
 
 
 def test_the_i2c_launcher_runs_unless_a_power_monitor_switch_is_set() -> None:
@@ -917,6 +920,110 @@ def test_the_i2c_launcher_runs_unless_a_power_monitor_switch_is_set() -> None:
     params["SENS_EN_INA238"] = 1
     proposal = migrate.migrate(today(params, "nsh: sercon\n"), table="current", board=v6x)
     assert not [a for a in proposal.assumptions if "i2c_launcher" in a], proposal.assumptions
+
+
+V6X_MAIN = "at main (branch main, bb59c637cd, 2026-08-13)"
+V6X_SCRIPT = "PX4/PX4-Autopilot boards/px4/fmu-v6x/init/rc.board_sensors"
+#: Why $HAVE_PM2 is open on a Pixhawk 6X (main) where a QGC file says nothing of its manifest.
+V6X_PM2_WHY = (
+    f"{V6X_SCRIPT}:5 {V6X_MAIN} sets HAVE_PM2 yes; line 8: no where mft MFT_PM2 == 0 (the "
+    "board's hardware manifest, which the parameters do not tell)"
+)
+SCANS = "the board's i2c_launcher scans I2C bus {} for power monitors (INA226, INA228, INA238)"
+QGC_SAYS = "a QGC .params does not say which it found"
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize(
+    ("name", "when", "said"),
+    [
+        # NXP MR-Tropic (main): `i2c_launcher start -b 3` (line 44) inside `if [ $INA_CONFIGURED
+        # = no ]` (line 41): no switch set, bus 3 scanned, nothing open to name
+        ("nxp_mr-tropic", None,
+         f"{SCANS.format(3)} when no SENS_EN_INA2xx is 1: {QGC_SAYS}"),
+        # the same line read without its if: the scan does not hinge on a switch
+        ("nxp_mr-tropic", "", f"{SCANS.format(3)}: {QGC_SAYS}"),
+        # Pixhawk 6X's bus 1 read without a condition: scanned, whatever "bus 2:" says
+        ("px4_fmu-v6x", "bus 2: $INA_CONFIGURED == no",
+         f"{SCANS.format('1, 2')} when no SENS_EN_INA2xx is 1: {QGC_SAYS}"),
+        # both buses read as scanned only where $HAVE_PM2 is no, which PX4's default is not
+        ("px4_fmu-v6x", "bus 1: $HAVE_PM2 == no; bus 2: $HAVE_PM2 == no",
+         f"{SCANS.format('none')}: {QGC_SAYS}; "
+         f"bus 1 not, by PX4's default: $HAVE_PM2 == no ({V6X_PM2_WHY}) ({V6X_SCRIPT}:61 "
+         f"{V6X_MAIN}); bus 2 not, by PX4's default: $HAVE_PM2 == no ({V6X_PM2_WHY}) "
+         f"({V6X_SCRIPT}:64 {V6X_MAIN})"),
+        # bus 2 read as scanned where $HAVE_PM2 is yes and the base is 008: both clauses named
+        ("px4_fmu-v6x", "bus 2: $HAVE_PM2 == yes and hw_base in 008",
+         f"{SCANS.format('1, 2')}: {QGC_SAYS}; bus 2 only where $HAVE_PM2 == yes ({V6X_PM2_WHY}) "
+         "and hw_base in 008 (the hardware revision, which the parameters do not tell) "
+         f"({V6X_SCRIPT}:64 {V6X_MAIN})"),
+    ],
+)  # fmt: skip
+def test_the_i2c_launchers_scan_is_said_whole_bus_by_bus(
+    name: str, when: str | None, said: str
+) -> None:
+    import dataclasses
+
+    from px4params.vehicle.boards import load_boards
+
+    board = load_boards().by_name(name)
+    assert board is not None
+    if when is not None:
+        board = dataclasses.replace(board, i2c_launcher_when=when)
+    config = OldConfig("t", "QGC .params", {}, version=(1, 15, 0))
+    proposal = migrate.migrate(config, table="current", board=board)
+    assert [a for a in proposal.assumptions if "i2c_launcher" in a] == [said]
+
+
+@pytest.mark.issue40
+def test_a_set_power_monitor_switch_makes_ina_configured_yes_as_a_script_tests_it() -> None:
+    # PX4 main's boards/auterion/fmu-v6s/init/rc.board_sensors sets INA_CONFIGURED yes in each
+    # power-monitor switch's block (lines 37, 48, 59) and tests `[ "$INA_CONFIGURED" != "yes" ]`
+    # (line 67), where fmu-v6x tests `= no`: Pixhawk 6X's launcher condition read that way
+    # still runs the launcher without a switch set, and not with SENS_EN_INA238 = 1
+    import dataclasses
+
+    from px4params.vehicle.boards import load_boards
+
+    v6x = load_boards().by_name("px4_fmu-v6x")
+    assert v6x is not None
+    when = v6x.i2c_launcher_when.replace("$INA_CONFIGURED == no", "$INA_CONFIGURED != yes")
+    edited = dataclasses.replace(v6x, i2c_launcher_when=when)
+    for ina238, scans in ((0, True), (1, False)):
+        params = {"SENS_EN_INA238": ina238}
+        proposal = migrate.migrate(today(params, "nsh: sercon\n"), table="current", board=edited)
+        said = [a for a in proposal.assumptions if "i2c_launcher" in a]
+        assert bool(said) == scans, proposal.assumptions
+
+
+@pytest.mark.issue40
+def test_a_board_test_of_ver_hwcmp_is_settled_by_the_boards_own_names() -> None:
+    # PX4's scripts test the board with `ver hwcmp` (v1.12.0's rc.sensors line 8: `if ! ver
+    # hwcmp OMNIBUS_F4SD`), which the table reads as `board in`: PX4 1.11's rc.sensors line 102
+    # (`ak09916 -X -R 6 start`) read as running only on a PX4_FMU_V5 runs on fmu-v5, whose
+    # ver_hw names it, and the AK09916 it probes gets its -R 6 with nothing left to name
+    import dataclasses
+
+    from px4params.vehicle.boards import load_boards
+
+    v5 = load_boards().by_name("px4_fmu-v5", "v1.11.0")
+    assert v5 is not None and "PX4_FMU_V5" in v5.ver_hw
+    probes = tuple(
+        dataclasses.replace(r, when=f"{r.when} and board in PX4_FMU_V5")
+        if "rc.sensors:102 " in r.source
+        else r
+        for r in v5.switches
+    )
+    here2 = devid.encode("i2c", 1, 0x0C, 0x09)
+    proposal = migrate.migrate(
+        OldConfig("t", "QGC .params", {"CAL_MAG0_ID": here2, "SENS_EXT_I2C_PRB": 1},
+                  version=(1, 11, 3)),
+        table="current",
+        board=dataclasses.replace(v5, switches=probes),
+    )  # fmt: skip
+    (ak,) = proposal.instances
+    assert (ak.name, ak.values["rotation"]) == ("AK09916#0", 6)
+    assert proposal.assumptions == []
 
 
 def test_a_devtype_two_chips_share_is_matched_to_the_console_line_of_either() -> None:

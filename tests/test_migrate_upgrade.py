@@ -106,12 +106,14 @@ def test_for_a_newer_target_the_real_logs_compass_is_an_instance_with_its_old_ro
     assert got == {"AK09916#0": (1, 0x0C, 6), "MS4525DO#0": (2, 0x28, None)}
     (mag,) = [i for i in report["instances"] if i["name"] == "AK09916#0"]
     assert mag["origin"].startswith(f"CAL_MAG1_ID = {HERE2_MAG}: AK09916 (MAG), I2C bus 1")
-    (said,) = [n for n in mag["notes"] if OLD_LINE in n]
-    assert PROBE in said
+    said, rotation = mag["notes"]
+    assert OLD_LINE in said and PROBE in said
     assert said.endswith(
         f"at {target} the board's script does not start it: the manifest does, with the -R 6 "
         "the file's line gives"
     )
+    # the rotation's note points at the v1.11.0 start the note above cites
+    assert rotation == "rotation 6: the -R of PX4 v1.11.0's start (above)"
     assert not [i for i in report["left_out"] if i["found"].startswith("CAL_MAG1_ID")]
     assert "param add AK09916#0\n" in report["airframe"]
 
@@ -449,4 +451,189 @@ def test_a_dropped_start_no_probe_can_reach_is_said_to_start_nowhere(
         "boards/px4/fmu-v5/init/rc.board_sensors, nor behind a switch this file sets): on PX4 "
         "v1.12.0 and later the board's script does not start it, the manifest must: "
         "--target-release v1.12.0 (or later) proposes it as an instance"
+    )
+
+
+class _EditedLater:
+    """The bundled board table with each board row after v1.11.0 given ``row`` too."""
+
+    def __init__(self, row: Any) -> None:
+        self.table = load_boards()
+        self.row = row
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self.table, name)
+
+    def by_name(self, name: str, release: str | None = None) -> Any:
+        board = self.table.by_name(name, release)
+        if board is None or release == "v1.11.0":
+            return board
+        return dataclasses.replace(board, devices=(*board.devices, self.row))
+
+
+@pytest.mark.issue40
+def test_a_later_start_without_r_of_a_device_probed_with_r_says_it_runs_with_0(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Pixhawk 5 on v1.11.3 with a Here2's AK09916 on I2C bus 1: at v1.11.0 rc.sensors' probe
+    `ak09916 -X -R 6 start` (line 102) starts it with -R 6. Read here with every later fmu-v5
+    script starting `ak09916 -X -b 1 start`, without -R: from v1.12.0 the driver runs with
+    PX4's rotation 0 (no -R: ROTATION_NONE), which the note names against the file's 6."""
+    from px4params.migrate import build
+
+    v5 = load_boards().by_name("px4_fmu-v5", "v1.11.0")
+    assert v5 is not None
+    (ist,) = [d for d in v5.devices if d.bus_kind == "I2C"]
+    row = dataclasses.replace(
+        ist,
+        driver="ak09916",
+        args="-X -b 1 start",
+        bus=1,
+        rotation=None,
+        internal=False,
+        source="the edited rc.board_sensors:26",
+    )
+    monkeypatch.setattr(build, "_board_table", lambda: _EditedLater(row))
+    here2 = devid.encode("i2c", 1, 0x0C, 0x09)
+    config = migrate.OldConfig(
+        "t", "QGC .params", {"CAL_MAG0_ID": here2, "SENS_EXT_I2C_PRB": 1}, version=(1, 11, 3)
+    )
+    (inst,) = migrate.migrate(config, board=v5).instances
+    assert (inst.name, inst.values["rotation"]) == ("AK09916#0", 6)
+    probe = (
+        f"'ak09916 -X -R 6 start' (PX4/PX4-Autopilot {RC_SENSORS}:102 at v1.11.0 (tag v1.11.0, "
+        "71db0903a9, 2020-09-07))"
+    )
+    assert inst.notes == [
+        "the board's script starts it from PX4 v1.12.0: 'ak09916 -X -b 1 start' (the edited "
+        "rc.board_sensors:26), with -R 0 where PX4 v1.11.0 ran it with 6 (rc.sensors probes it "
+        f"with {probe}; check its calibration after the update): for that firmware "
+        "--target-release v1.12.0 (or later) leaves it out",
+        f"rotation 6: rc.sensors probes it with {probe}",
+    ]
+
+
+@pytest.mark.issue40
+def test_a_console_start_the_target_drops_is_said_started_by_the_files_board_script() -> None:
+    """The sample log without its CAL_MAG1 slot: the Here2's AK09916 is only its boot console
+    line 25, which v1.11.0's line 17 started (-R 6). For v1.12.0, where no board line starts
+    it, the instance says where it came from (the file's board script, not "outside" it) and
+    that its rotation is that start's."""
+    config = migrate.read_config(shared_data.shared_file(shared_data.SAMPLE_LOG))
+    config = dataclasses.replace(
+        config,
+        params={k: v for k, v in config.params.items() if not k.startswith("CAL_MAG1_")},
+        published=[p for p in config.published if p[2] != HERE2_MAG],
+    )
+    proposal = migrate.migrate(config, target_release="v1.12.0")
+    (mag,) = [i for i in proposal.instances if i.name == "AK09916#0"]
+    assert mag.origin == (
+        "boot console line 25: 'ak09916 #0 on I2C bus 1 (external, equal to '-b 2')' (started "
+        "by the board's script of PX4 v1.11.0)"
+    )
+    later, rotation = mag.notes
+    assert later.startswith(f"the board's script of PX4 v1.11.0 starts it with {OLD_LINE}")
+    assert (mag.values["rotation"], rotation) == (
+        6,
+        "rotation 6: the -R of PX4 v1.11.0's start (above)",
+    )
+
+
+@pytest.mark.issue40
+@pytest.mark.parametrize("target", [None, "v1.12.0"])
+def test_a_probed_console_start_a_later_board_script_starts_is_left_out_for_that_target(
+    target: str | None,
+) -> None:
+    """The Pixhawk 5 case above as a v1.11.3 log with no calibration slot, only its boot
+    console line (PX4 1.11 prints neither address nor rotation; bus 1 is fmu-v5's third
+    external bus, src/i2c.cpp's order 4, 2, 1): the same line, on the instance without a
+    target and as the reason it is left out for v1.12.0."""
+    console = "ist8310 #0 on I2C bus 1 (external, equal to '-b 3')\n"
+    config = migrate.OldConfig(
+        "t.ulg", "ULog", {"SENS_EXT_I2C_PRB": 1}, version=(1, 11, 3), console=console
+    )
+    v5 = load_boards().by_name("px4_fmu-v5", "v1.11.0")
+    proposal = migrate.migrate(config, board=v5, target_release=target)
+    said = (
+        "the board's script starts it from PX4 v1.12.0: 'ist8310 -X -b 1 -R 10 start' "
+        "(PX4/PX4-Autopilot boards/px4/fmu-v5/init/rc.board_sensors:25 at v1.12.0 (tag v1.12.0, "
+        "9524e8ec03, 2021-07-05)), with -R 10 where PX4 v1.11.0 ran it with 0 (rc.sensors "
+        "starts it without -R; check its calibration after the update)"
+    )
+    if target is None:
+        (inst,) = proposal.instances
+        assert (inst.name, inst.values["rotation"]) == ("IST8310#0", 0)
+        assert inst.notes == [
+            f"{said}: for that firmware --target-release v1.12.0 (or later) leaves it out"
+        ]
+        return
+    assert proposal.instances == []
+    (ist,) = proposal.left_out
+    assert (ist.found, ist.reason, ist.line) == (
+        "boot console line 1",
+        "board",
+        f"boot console line 1: ist8310, I2C bus 1: {said}; on PX4 v1.12.0 it is the board's, not "
+        "the manifest's",
+    )
+
+
+@pytest.mark.issue40
+def test_a_dropped_start_a_probe_reaches_with_the_same_rotation_is_said_without_one() -> None:
+    """The edited Pixhawk 5 of v1.11.0 above, its line 19 read as `lis3mdl -X -b 2 start`
+    (bus 2, external): from v1.12.0 no fmu-v5 script line starts a LIS3MDL, and rc.sensors'
+    `lis3mdl -X -q start` (v1.12.0 line 140, SENS_EXT_I2C_PRB) reaches it at its default 0x1E,
+    also without -R: the change is whose start it is, with no rotation to name."""
+    v5 = load_boards().by_name("px4_fmu-v5", "v1.11.0")
+    assert v5 is not None
+    (real,) = [d for d in v5.devices if d.bus_kind == "I2C"]
+    row = dataclasses.replace(
+        real,
+        source="the edited rc.board_sensors:19",
+        driver="lis3mdl",
+        args="-X -b 2 start",
+        bus=2,
+        internal=False,
+    )
+    lis3mdl = devid.encode("i2c", 2, 0x1E, 0x05)
+    config = migrate.OldConfig(
+        "t", "QGC .params", {"CAL_MAG0_ID": lis3mdl, "SENS_EXT_I2C_PRB": 1}, version=(1, 11, 3)
+    )
+    proposal = migrate.migrate(config, board=dataclasses.replace(v5, devices=(row,)))
+    assert proposal.instances == []
+    (mag,) = proposal.left_out
+    assert mag.later == (
+        "the board's script of PX4 v1.11.0 starts it with 'lis3mdl -X -b 2 start' (the edited "
+        "rc.board_sensors:19); PX4 v1.12.0 .. main: not the board's; only where SENS_EXT_I2C_PRB "
+        f"== 1: 'lis3mdl -X -q start' (PX4/PX4-Autopilot {RC_SENSORS}:140 at v1.12.0 (tag "
+        "v1.12.0, 9524e8ec03, 2021-07-05)): on PX4 v1.12.0 and later the board's script does "
+        "not start it, the manifest must: --target-release v1.12.0 (or later) proposes it as an "
+        "instance"
+    )
+
+
+@pytest.mark.issue40
+def test_an_installation_without_a_board_table_compares_nothing_and_refuses_a_target(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """px4params.vehicle.boards is optional (build._board_table: None where it cannot be
+    imported): a board given as an object is judged at the file's release alone, and a
+    --target-release is refused in one line saying why no release can be named."""
+    from px4params.errors import MigrationError
+    from px4params.migrate import build
+
+    v5 = load_boards().by_name("px4_fmu-v5", "v1.11.0")
+    monkeypatch.setattr(build, "_board_table", lambda: None)
+    gps = devid.encode("i2c", 1, 0x0E, 0x06)
+    config = migrate.OldConfig(
+        "t", "QGC .params", {"CAL_MAG1_ID": gps, "SENS_EXT_I2C_PRB": 1}, version=(1, 11, 3)
+    )
+    proposal = migrate.migrate(config, board=v5)
+    assert proposal.compared == [] and proposal.target_release is None
+    (inst,) = proposal.instances
+    assert (inst.name, inst.notes) == ("IST8310#0", [])
+    with pytest.raises(MigrationError) as refused:
+        migrate.migrate(config, board=v5, target_release="v1.12.0")
+    assert str(refused.value) == (
+        "--target-release v1.12.0: not a release of the board table (expected one of none: this "
+        "installation has no board table)"
     )

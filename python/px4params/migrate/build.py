@@ -1113,6 +1113,8 @@ class _Builder:
             how = (
                 "found by i2c_launcher" if start.launcher else "started outside the board's script"
             )
+            if later is not None:  # the file's board script started it, the target's does not
+                how = f"started by the board's script of PX4 {self.file_release}"
             inst = self.add(spec.name, start.bus, address, f"{found}: '{start.text}' ({how})")
             if later is not None:
                 inst.notes.append(later.line)
