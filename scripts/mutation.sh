@@ -316,6 +316,10 @@ TARGETS+=(
   "migrate-build|$PY/migrate/build.py|tests/test_migrate_build.py tests/test_migrate_board_rows.py tests/test_migrate_upgrade.py tests/test_migrate.py tests/test_migrate_defects.py tests/test_migrate_config.py -k 'not cli and not needs_no_checkout'"
 )
 NEW_TESTS="$NEW_TESTS|test_migrate_build"
+# (11-27 night) and the conditions' and the driver axes' tests, which reach build.py too:
+TARGETS+=(
+  "migrate-build|$PY/migrate/build.py|tests/test_migrate_build.py tests/test_migrate_board_rows.py tests/test_migrate_upgrade.py tests/test_migrate_axes.py tests/test_migrate_conditions.py tests/test_migrate.py tests/test_migrate_defects.py tests/test_migrate_config.py -k 'not cli and not needs_no_checkout'"
+)
 
 # scalar.rs and error.rs on their own (mutrust3): the programs that reach them, not all twenty
 # of the crate's; their baselines leave the issue-40 files out (a baseline of rust-core with
