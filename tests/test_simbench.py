@@ -27,6 +27,7 @@ from px4params.vehicle.simbench import (
     BenchBus,
     BenchDevice,
     BenchFileError,
+    healthy_bench,
     load_bench,
     parse_bench,
     run,
@@ -201,6 +202,77 @@ def test_wrong_chip_id(tmp_path, capsys):
         "ak09916 AK09916#0 on I2C bus 1 address 0x0C: critical: not found: wrong chip id 0xA "
         "in register 0x01 (expected 0x9) ("
     )
+
+
+def probe_times(result, instance: str) -> list[float]:
+    return [e["t"] for e in result.events if e["event"] == "probe" and e["instance"] == instance]
+
+
+def test_probes_back_off_from_20_ms_doubling_up_to_1_s(drivers, manifest):
+    # Retried after 20 ms, then with the delay doubling up to 1 s (docs/autostart.md).
+    bench = parse_bench(bench_text(mag="absent = true"), "b", drivers)
+    result = run(bench, drivers, manifest, duration=5, record_events=True)
+    delays = [0.02, 0.04, 0.08, 0.16, 0.32, 0.64, 1.0, 1.0, 1.0]
+    expected = [round(sum(delays[:n]), 6) for n in range(len(delays) + 1)]
+    assert expected[-1] == 4.26
+    assert probe_times(result, "AK09916#0") == expected
+
+
+def test_a_wrong_chip_id_fails_the_probe_before_the_configuration_write(drivers, manifest):
+    # A probe is a soft reset, the chip id read, the configuration write: a wrong id read by
+    # the second transfer fails the attempt, so each attempt makes two good transfers. In 3 s
+    # the attempts are at 0, 0.02, 0.06, 0.14, 0.30, 0.62, 1.26 and 2.26 s.
+    bench = parse_bench(bench_text(mag="chip_id = 0x0A"), "b", drivers)
+    result = run(bench, drivers, manifest, duration=3)
+    mag = next(i for i in result.instances if i.name == "AK09916#0")
+    assert (mag.probe_attempts, mag.transfers, mag.bad_transfers) == (8, 16, 0)
+
+
+def test_a_bus_error_is_told_apart_from_no_ack(tmp_path, capsys):
+    # Every transfer fails on the bus: the chip is there but never answers cleanly. 15 probe
+    # attempts in 10 s, as for the missing compass of docs/autostart.md.
+    status, out = boot(tmp_path, capsys, bench_text(mag="error_rate = 1.0"))
+    assert status == 1
+    assert refused_lines(out) == [
+        "ak09916 AK09916#0 on I2C bus 1 address 0x0C: critical: not found: bus error "
+        "(15 probe attempts, still retrying)"
+    ]
+
+
+def test_a_device_that_stops_answering_is_critical_after_the_data_timeout(drivers, manifest):
+    # Powered up at 0.03 s, the INA238 (10 Hz) is found by the probe at 0.06 s (after retries
+    # at 0 and 0.02 s) and transfers at 0.16, 0.26, ... s; dying at 4.1 s, its last good
+    # transfer is at 4.06 s. No good transfer for more than 0.5 s is critical: first seen at
+    # the 100 ms tick after 4.56 s. (Ten bad transfers in a row, at 5.06 s, make it reset.)
+    bench = parse_bench(bench_text(second="power_up = 0.03\ndies_after = 4.1"), "b", drivers)
+    result = run(bench, drivers, manifest, duration=6)
+    ina = next(i for i in result.instances if i.name == "INA238#1")
+    assert ina.started_at == 0.06
+    critical = [(t, why) for t, level, why in ina.timeline if level == "critical" and t > 0]
+    assert critical[0] == (4.6, "no data for 0.5 s")
+    assert critical[1][1].startswith("lost: reset at 5.06 s after 10 bad transfers in a row;")
+
+
+def test_legacy_probes_back_to_back_and_misses_a_device_10_ms_late(drivers, manifest):
+    # Today's -q start probes three times at once at boot; the manifest's driver retries after
+    # 20 ms and finds the compass that powered up at 10 ms.
+    bench = parse_bench(bench_text(mag="power_up = 0.01"), "b", drivers)
+    result = run(bench, drivers, manifest, duration=1)
+    assert next(i for i in result.instances if i.name == "AK09916#0").started_at == 0.02
+    result = run(bench, drivers, manifest, duration=1, legacy=True)
+    mag = [q["line"] for q in result.quiet if q["device"] == "AK09916"]
+    assert [line for line in mag if line.startswith("'ak09916 ")] == [
+        "'ak09916 -X -q start' on I2C bus 1 at 0x0C: no ACK after 3 probes; not started, no message"
+    ]
+
+
+def test_a_declared_bus_without_an_error_rate_is_clean(drivers, manifest):
+    # BenchBus's error rate defaults to none, as a [[bus]] table's does.
+    parsed = parse_bench(bench_text(), "b", drivers)
+    bench = Bench("b", "b", {("i2c", 1): BenchBus("i2c", 1)}, parsed.devices)
+    result = run(bench, drivers, manifest, duration=3)
+    assert result.may_arm
+    assert [i.bad_transfers for i in result.instances] == [0, 0, 0]
 
 
 def test_flaky_device(drivers, manifest):
@@ -659,6 +731,30 @@ def test_run_without_bench_leaves_out_what_cannot_start(
     assert status == 1
     assert "AK09916#0 ak09916 I2C bus 1 address 0x0C   nominal" in out
     assert "commander: arming refused (1 of 2 devices not nominal):" in out
+    # Nor does today's boot of that bench find a bus 0 to probe.
+    assert main(["autostart", "run", "--airframe", str(airframe), "--legacy"]) == 0
+    assert capsys.readouterr().out.startswith(
+        "legacy boot of a healthy bench (every configured device present, no faults): every "
+        "probed driver '-X -q start' on I2C buses 1 at its default address"
+    )
+
+
+def test_healthy_bench_is_the_hand_written_one(drivers, manifest):
+    # The example bench is the two-battery airframe with every device present and no faults:
+    # the bench `autostart run` boots without --bench is the same, device for device.
+    assert healthy_bench(manifest).devices == load_bench(HEALTHY_BENCH_FILE, drivers).devices
+
+
+def test_legacy_boots_every_i2c_bus_of_the_bench(tmp_path, capsys):
+    # A [[bus]] entry puts a bus on the bench even without a device on it; an SPI bus is not
+    # one the legacy '-X' start probes.
+    buses = '[[bus]]\nkind = "i2c"\nbus_id = 3\n[[bus]]\nkind = "spi"\nbus_id = 4\n'
+    status, out = boot(tmp_path, capsys, bench_text(extra=buses), "--legacy")
+    assert status == 0
+    assert out.splitlines()[0].startswith(
+        "legacy boot of " + str(tmp_path / "bench.toml") + ": every probed driver '-X -q start' "
+        "on I2C buses 1, 2, 3 at its default address, 3 probes"
+    )
 
 
 def test_legacy_without_manifest_needs_a_bench(
