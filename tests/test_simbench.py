@@ -532,6 +532,132 @@ def test_bench_file_errors(text, message, drivers):
     assert bench_error(text, drivers).startswith(message)
 
 
+def device_text(
+    bus: str = "i2c", bus_id: object = 1, address: object = 0x45, extra: str = ""
+) -> str:
+    return (
+        f'[[device]]\nchip = "INA238"\nbus = "{bus}"\nbus_id = {bus_id}\naddress = {address}\n'
+        + extra
+    )
+
+
+@pytest.mark.parametrize(
+    ("bus", "address", "location"),
+    [
+        ("i2c", "0", "I2C bus 1 address 0x00"),
+        ("i2c", "127", "I2C bus 1 address 0x7F"),
+        ("spi", "0", "SPI bus 1 chip select 0"),
+        ("spi", "31", "SPI bus 1 chip select 31"),
+    ],
+)
+def test_addresses_at_both_ends_of_their_range_are_accepted(bus, address, location, drivers):
+    # The bench file's ranges: an I2C address 0..127, an SPI chip select 0..31.
+    (device,) = parse_bench(device_text(bus, address=address), "b", drivers).devices.values()
+    assert (device.address, device.location) == (int(address), location)
+
+
+@pytest.mark.parametrize(
+    ("bus", "address", "message"),
+    [
+        ("i2c", "128", "I2C address 128 (0x80) is out of range 0..127 (0x00..0x7F)"),
+        ("spi", "32", "SPI chip select 32 (0x20) is out of range 0..31 (0x00..0x1F)"),
+        ("i2c", "true", "address must be an integer (e.g. 0x45), not True"),
+    ],
+)
+def test_addresses_outside_their_range_are_refused(bus, address, message, drivers):
+    text = device_text(bus, address=address)
+    assert bench_error(text, drivers) == f"bench.toml: device #1 (INA238): {message}"
+
+
+@pytest.mark.parametrize("bus_id", [1, 15])
+def test_bus_ids_at_both_ends_of_their_range_are_accepted(bus_id, drivers):
+    bus = f'[[bus]]\nkind = "i2c"\nbus_id = {bus_id}\n'
+    bench = parse_bench(bus + device_text(bus_id=bus_id), "b", drivers)
+    assert list(bench.buses) == [("i2c", bus_id)]
+    assert list(bench.devices) == [("i2c", bus_id, 0x45)]
+
+
+@pytest.mark.parametrize("bus_id", ["0", "16", "true", '"1"'])
+@pytest.mark.parametrize("table", ["bus", "device"])
+def test_bus_ids_outside_1_to_15_are_refused(table, bus_id, drivers):
+    if table == "bus":
+        text, where = f'[[bus]]\nkind = "i2c"\nbus_id = {bus_id}\n', "bus #1"
+    else:
+        text, where = device_text(bus_id=bus_id), "device #1 (INA238)"
+    shown = {"true": "True", '"1"': "'1'"}.get(bus_id, bus_id)
+    assert bench_error(text, drivers) == (
+        f"bench.toml: {where}: bus_id must be an integer 1..15, not {shown}"
+    )
+
+
+@pytest.mark.parametrize("chip_id", [0, 0xFFFF])
+def test_chip_ids_at_both_ends_of_their_range_are_accepted(chip_id, drivers):
+    (device,) = parse_bench(
+        device_text(extra=f"chip_id = {chip_id}\n"), "b", drivers
+    ).devices.values()
+    assert device.chip_id == chip_id
+
+
+@pytest.mark.parametrize(
+    ("chip_id", "shown"),
+    [
+        ("0x10000", "65536"),
+        ("-1", "-1"),
+        ("true", "True"),
+        ('"0x2260"', "'0x2260'"),
+        ("1.0", "1.0"),
+    ],
+)
+def test_chip_ids_outside_16_bits_are_refused(chip_id, shown, drivers):
+    text = device_text(extra=f"chip_id = {chip_id}\n")
+    assert bench_error(text, drivers) == f"{AT}chip_id must be an integer 0..0xFFFF, not {shown}"
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("bus = [1]\n", "bench.toml: bus #1: is not a table"),
+        ("device = [1]\n", "bench.toml: device #1: is not a table"),
+        (
+            '[[device]]\nchip = 5\nbus = "i2c"\nbus_id = 1\naddress = 1\n',
+            "bench.toml: device #1: chip must be a string, not 5",
+        ),
+        (
+            "[bench]\ncolour = 1\n",
+            "bench.toml: [bench]: unknown key 'colour' (expected: name, description)",
+        ),
+    ],
+)
+def test_bench_file_errors_whole_message(text, message, drivers):
+    assert bench_error(text, drivers) == message
+
+
+def test_bench_table_may_describe_the_bench(drivers):
+    text = '[bench]\nname = "quad"\ndescription = "the frame on the desk"\n' + ONE
+    assert parse_bench(text, "b", drivers).name == "quad"
+
+
+@pytest.mark.parametrize(
+    ("content", "reason"),
+    [
+        (None, "is a folder, not a file"),
+        (
+            b"\xff[[device]]\n",
+            "'utf-8' codec can't decode byte 0xff in position 0: invalid start byte",
+        ),
+    ],
+)
+def test_unreadable_bench_file(tmp_path, content, reason, drivers):
+    path = tmp_path / "b.toml"
+    if content is None:
+        path.mkdir()
+    else:
+        path.write_bytes(content)
+    with pytest.raises(BenchFileError) as e:
+        load_bench(path, drivers)
+    assert str(e.value) == f"{path}: cannot read: {reason}"
+
+
 def test_bench_file_not_found(tmp_path, capsys, drivers):
     with pytest.raises(BenchFileError, match=r"nope\.toml: no such bench file$"):
         load_bench(tmp_path / "nope.toml", drivers)
