@@ -560,7 +560,9 @@ def test_addresses_at_both_ends_of_their_range_are_accepted(bus, address, locati
     ("bus", "address", "message"),
     [
         ("i2c", "128", "I2C address 128 (0x80) is out of range 0..127 (0x00..0x7F)"),
+        ("i2c", "-1", "I2C address -1 is out of range 0..127 (0x00..0x7F)"),
         ("spi", "32", "SPI chip select 32 (0x20) is out of range 0..31 (0x00..0x1F)"),
+        ("spi", "-1", "SPI chip select -1 is out of range 0..31 (0x00..0x1F)"),
         ("i2c", "true", "address must be an integer (e.g. 0x45), not True"),
     ],
 )

@@ -285,7 +285,9 @@ def _device(table: Any, number: int, source: str, chips: dict[str, Driver]) -> B
         raise fail(f"address must be an integer (e.g. 0x45), not {address!r}")
     if not 0 <= address <= top:
         what = "I2C address" if kind == "i2c" else "SPI chip select"
-        raise fail(f"{what} {address} (0x{address:X}) is out of range 0..{top} (0x00..0x{top:02X})")
+        # (no hex for a negative number: TOML has none, and "0x-1" is no number)
+        shown = f"{address} (0x{address:X})" if address >= 0 else str(address)
+        raise fail(f"{what} {shown} is out of range 0..{top} (0x00..0x{top:02X})")
     where = f"{source}: device #{number} ({chip} on {describe_location(kind, bus_id, address)})"
 
     absent = table.get("absent", False)
