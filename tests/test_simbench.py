@@ -253,6 +253,17 @@ def test_a_device_that_stops_answering_is_critical_after_the_data_timeout(driver
     assert critical[1][1].startswith("lost: reset at 5.06 s after 10 bad transfers in a row;")
 
 
+@pytest.mark.parametrize("dies_after", [1.0, 2.0, 3.0, 4.0, 5.0, 7.0])
+def test_the_data_timeout_is_the_same_whenever_a_device_dies(dies_after, drivers, manifest):
+    # The INA238 (10 Hz, found at 0 s) dying at a whole second has its last good transfer
+    # 0.1 s before; more than 0.5 s without one is first seen at the tick 0.6 s after it.
+    bench = parse_bench(bench_text(second=f"dies_after = {dies_after}"), "b", drivers)
+    result = run(bench, drivers, manifest, duration=dies_after + 1)
+    ina = next(i for i in result.instances if i.name == "INA238#1")
+    no_data = [(t, why) for t, level, why in ina.timeline if why.startswith("no data")]
+    assert no_data == [(dies_after + 0.5, "no data for 0.6 s")]
+
+
 def test_legacy_probes_back_to_back_and_misses_a_device_10_ms_late(drivers, manifest):
     # Today's -q start probes three times at once at boot; the manifest's driver retries after
     # 20 ms and finds the compass that powered up at 10 ms.

@@ -654,7 +654,9 @@ class _Instance:
             )
         if state != "running":
             return "critical", self.last_probe
-        if now - self.last_good > DATA_TIMEOUT:
+        # (the slack: a tick's time is a float product, so that 0.5 s after a transfer at 3.9 s
+        # is 0.5000000000000004 s at 4.4 s, but 0.5 s at 5.4 s after 4.9 s)
+        if now - self.last_good > DATA_TIMEOUT + 1e-9:
             return "critical", f"no data for {now - self.last_good:.1f} s"
         total = self.window_good + self.window_bad
         if total and self.window_bad > WARN_RATIO * total:
