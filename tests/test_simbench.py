@@ -286,6 +286,141 @@ def test_a_declared_bus_without_an_error_rate_is_clean(drivers, manifest):
     assert [i.bad_transfers for i in result.instances] == [0, 0, 0]
 
 
+def test_a_healthy_boot_counts_the_documented_transfers(capsys):
+    # docs/autostart.md: three probe transfers, then one per period up to the end (10 s at
+    # 10 Hz and 50 Hz: 100 and 500), none bad.
+    status = main(["autostart", "run", "--airframe", str(AIRFRAME), "--bench", str(BENCH)])
+    lines = capsys.readouterr().out.splitlines()
+    assert status == 0
+    assert lines[1:] == [
+        "  INA238#0  ina238  I2C bus 1 address 0x45   nominal  started 0.000 s, device id "
+        "0xD44509; 103 transfers, 0 bad, 0 resets",
+        "  INA238#1  ina238  I2C bus 2 address 0x45   nominal  started 0.000 s, device id "
+        "0xD44511; 103 transfers, 0 bad, 0 resets",
+        "  AK09916#0 ak09916 I2C bus 1 address 0x0C   nominal  started 0.000 s, device id "
+        "0x090C09; 503 transfers, 0 bad, 0 resets",
+        "commander: may arm (all 3 configured devices nominal)",
+    ]
+
+
+def test_a_missing_compass_counts_the_documented_probes(tmp_path, capsys):
+    # docs/autostart.md's missing compass: 15 probe attempts in 10 s, each a bad transfer.
+    status, out = boot(tmp_path, capsys, bench_text(mag="absent = true"))
+    assert status == 1
+    assert (
+        "  AK09916#0 ak09916 I2C bus 1 address 0x0C   critical not started; 15 transfers, 15 "
+        "bad, 0 resets (not found: no ACK (15 probe attempts, still retrying))"
+    ) in out.splitlines()
+
+
+def test_a_late_start_counts_its_transfers_from_the_probe_that_found_it(drivers, manifest):
+    # Powered up at 0.03 s, both are found by the third probe, at 0.06 s (after one-transfer
+    # failures at 0 and 0.02 s: 2 bad + 3 good probe transfers). In 2.55 s the INA238
+    # (10 Hz) then transfers at 0.16 .. 2.46 s (24), the AK09916 (50 Hz) at 0.08 .. 2.54 s
+    # (124).
+    late = "power_up = 0.03"
+    bench = parse_bench(bench_text(second=late, mag=late), "b", drivers)
+    result = run(bench, drivers, manifest, duration=2.55)
+    by = {i.name: i for i in result.instances}
+    counts = {
+        n: (i.started_at, i.probe_attempts, i.transfers, i.bad_transfers) for n, i in by.items()
+    }
+    assert counts == {
+        "INA238#0": (0.0, 1, 3 + 25, 0),
+        "INA238#1": (0.06, 3, 5 + 24, 2),
+        "AK09916#0": (0.06, 3, 5 + 124, 2),
+    }
+
+
+def test_the_first_window_counts_the_probe_transfers(drivers, manifest):
+    # At the first tick (0.1 s) the last 2 s hold the probes' transfers: for both, 2 failed
+    # and 3 good; the AK09916 (50 Hz) has also transferred at 0.08 and 0.10 s, the INA238
+    # (10 Hz) not yet. More than 5% bad is a warning.
+    late = "power_up = 0.03"
+    bench = parse_bench(bench_text(second=late, mag=late), "b", drivers)
+    result = run(bench, drivers, manifest, duration=0.1)
+    by = {i.name: i.timeline for i in result.instances}
+    assert by["INA238#1"] == [
+        (0.0, "critical", "starting"),
+        (0.1, "warning", "40% bad transfers in the last 2 s (2 of 5)"),
+    ]
+    assert by["AK09916#0"] == [
+        (0.0, "critical", "starting"),
+        (0.1, "warning", "29% bad transfers in the last 2 s (2 of 7)"),
+    ]
+    assert by["INA238#0"] == [(0.0, "critical", "starting"), (0.1, "nominal", "")]
+
+
+def test_a_lost_device_is_reset_and_probed_again_with_backoff(drivers, manifest):
+    # Dying at 4 s (last good transfer 3.9 s), the 10 Hz INA238 is critical at 4.5 s, resets
+    # after ten bad transfers in a row (4.0 .. 4.9 s) and probes again 20 ms later with the
+    # backoff started afresh: at 4.92, 4.94, 4.98, 5.06, 5.22 and 5.54 s (the next, 6.18 s, is
+    # after the run).
+    bench = parse_bench(bench_text(second="dies_after = 4"), "b", drivers)
+    result = run(bench, drivers, manifest, duration=6, record_events=True)
+    ina = next(i for i in result.instances if i.name == "INA238#1")
+    lost = "lost: reset at 4.90 s after 10 bad transfers in a row; "
+    assert ina.timeline[-3:] == [
+        (4.5, "critical", "no data for 0.6 s"),
+        (4.9, "critical", lost + "0 probe attempts since, last: reset"),
+        (5.0, "critical", lost + "3 probe attempts since, last: no ACK"),
+    ]
+    assert ina.reason == lost + "6 probe attempts since, last: no ACK"
+    assert (ina.probe_attempts, ina.resets, ina.marks) == (7, 1, [(0.0, "start"), (4.9, "reset")])
+    assert probe_times(result, "INA238#1") == [0.0, 4.92, 4.94, 4.98, 5.06, 5.22, 5.54]
+
+
+def test_a_device_dying_at_once_is_reset_after_ten_bad_transfers(drivers, manifest):
+    # Found by the probe at 0 s, dead at 0.05 s: its first ten transfers (0.1 .. 1.0 s) fail.
+    bench = parse_bench(bench_text(second="dies_after = 0.05"), "b", drivers)
+    result = run(bench, drivers, manifest, duration=1.5)
+    ina = next(i for i in result.instances if i.name == "INA238#1")
+    assert ina.marks == [(0.0, "start"), (1.0, "reset")]
+
+
+def test_a_device_dead_from_the_start_is_never_found(drivers, manifest):
+    # dies_after = 0: it stops answering at once, before the first probe's transfer.
+    bench = parse_bench(bench_text(second="dies_after = 0"), "b", drivers)
+    result = run(bench, drivers, manifest, duration=1)
+    ina = next(i for i in result.instances if i.name == "INA238#1")
+    assert ina.started_at is None
+    assert ina.reason.startswith("not found: no ACK (")
+
+
+def test_the_event_log_of_probes(drivers, manifest):
+    # A failed probe says why; one that finds the chip has no reason. Today's start probes
+    # three times at once, 1 ms apart, and then gives up quietly.
+    bench = parse_bench(bench_text(mag="absent = true"), "b", drivers)
+    result = run(bench, drivers, manifest, duration=0.1, record_events=True)
+    probes = {e["instance"]: (e["ok"], e["reason"]) for e in result.events if e["event"] == "probe"}
+    assert probes == {
+        "INA238#0": (True, None),
+        "INA238#1": (True, None),
+        "AK09916#0": (False, "no ACK"),
+    }
+    result = run(bench, drivers, manifest, duration=0.1, legacy=True, record_events=True)
+    mine = [
+        (e["t"], e["event"], e.get("reason"), e.get("quiet"))
+        for e in result.events
+        if e.get("instance") == "ak09916@i2c1"
+    ]
+    assert mine == [
+        (0.0, "probe", "no ACK", None),
+        (0.001, "probe", "no ACK", None),
+        (0.002, "probe", "no ACK", None),
+        (0.002, "start_failed", "no ACK", True),
+    ]
+
+
+def test_a_flaky_device_fails_its_share_of_transfers(drivers, manifest):
+    # 60 s at 50 Hz: about 3000 transfers, 30% failing (a standard deviation of 25, 0.8%).
+    bench = parse_bench(bench_text(mag="error_rate = 0.3"), "b", drivers)
+    result = run(bench, drivers, manifest, duration=60, seed=3)
+    mag = next(i for i in result.instances if i.name == "AK09916#0")
+    assert 2990 <= mag.transfers <= 3010 + 3 * mag.probe_attempts
+    assert 0.27 < mag.bad_transfers / mag.transfers < 0.33
+
+
 def test_flaky_device(drivers, manifest):
     bench = parse_bench(bench_text(mag="error_rate = 0.5"), "b", drivers)
     result = run(bench, drivers, manifest, duration=5, seed=1)
@@ -406,6 +541,43 @@ def test_json_result(tmp_path, capsys):
     assert result["mode"] == "manifest" and result["seed"] == 7 and result["may_arm"] is True
     assert [i["instance"] for i in result["instances"]] == ["INA238#0", "INA238#1", "AK09916#0"]
     assert result["instances"][0]["device_id_hex"] == "0xD44509"
+
+
+def test_json_result_fields(tmp_path, capsys):
+    status, out = boot(tmp_path, capsys, bench_text(), "--json", "--duration", "1")
+    result = json.loads(out)
+    assert status == 0
+    first = result.pop("instances")[0]
+    assert result == {
+        "mode": "manifest",
+        "seed": 0,
+        "duration": 1.0,
+        "bench": str(tmp_path / "bench.toml"),
+        "may_arm": True,
+        "failures": [],
+        "quiet": [],
+        "silently_missing": [],
+        "arming": [[0.1, True]],  # the first health check, every device nominal
+        "log_cut_at": None,
+    }
+    assert first == {
+        "instance": "INA238#0",
+        "driver": "ina238",
+        "parameter": "INA238",
+        "bus": "i2c",
+        "bus_id": 1,
+        "address": 0x45,
+        "location": "I2C bus 1 address 0x45",
+        "registered": True,
+        "health": "nominal",
+        "reason": "",
+        "started_at": 0.0,
+        "device_id": 0xD44509,
+        "device_id_hex": "0xD44509",
+        "perf": {"transfers": 13, "bad_transfers": 0, "resets": 0, "probe_attempts": 1},
+        "timeline": [[0.0, "critical", "starting"], [0.1, "nominal", ""]],
+        "marks": [[0.0, "start"]],
+    }
 
 
 @pytest.mark.parametrize("duration", ["0", "-1", "nan", "inf", "100000", "x"])
