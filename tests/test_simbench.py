@@ -27,6 +27,7 @@ from px4params.vehicle.simbench import (
     BenchBus,
     BenchDevice,
     BenchFileError,
+    RunResult,
     healthy_bench,
     load_bench,
     parse_bench,
@@ -332,11 +333,13 @@ def test_a_late_start_counts_its_transfers_from_the_probe_that_found_it(drivers,
     }
 
 
-def test_the_first_window_counts_the_probe_transfers(drivers, manifest):
+@pytest.mark.parametrize("noise", ["", "\nerror_rate = 0.001"])
+def test_the_first_window_counts_the_probe_transfers(noise, drivers, manifest):
     # At the first tick (0.1 s) the last 2 s hold the probes' transfers: for both, 2 failed
     # and 3 good; the AK09916 (50 Hz) has also transferred at 0.08 and 0.10 s, the INA238
-    # (10 Hz) not yet. More than 5% bad is a warning.
-    late = "power_up = 0.03"
+    # (10 Hz) not yet. More than 5% bad is a warning. (The same with a trace of noise, whose
+    # transfers are counted one by one.)
+    late = "power_up = 0.03" + noise
     bench = parse_bench(bench_text(second=late, mag=late), "b", drivers)
     result = run(bench, drivers, manifest, duration=0.1)
     by = {i.name: i.timeline for i in result.instances}
@@ -419,6 +422,25 @@ def test_a_flaky_device_fails_its_share_of_transfers(drivers, manifest):
     mag = next(i for i in result.instances if i.name == "AK09916#0")
     assert 2990 <= mag.transfers <= 3010 + 3 * mag.probe_attempts
     assert 0.27 < mag.bad_transfers / mag.transfers < 0.33
+
+
+def test_every_reset_is_counted(drivers, manifest):
+    # 60% of the transfers failing: ten in a row now and then, each a reset and a mark.
+    bench = parse_bench(bench_text(mag="error_rate = 0.6"), "b", drivers)
+    result = run(bench, drivers, manifest, duration=60, seed=0, record_events=True)
+    mag = next(i for i in result.instances if i.name == "AK09916#0")
+    resets = [e["at"] for e in result.events if e["event"] == "reset" and e["instance"] == mag.name]
+    assert mag.resets >= 2
+    assert mag.resets == len(resets) == len([m for m in mag.marks if m[1] == "reset"])
+
+
+def test_a_trace_of_noise_does_not_change_when_a_dead_device_resets(drivers, manifest):
+    # As without noise: the good transfer at 3.9 s ends any run of bad ones, ten more (4.0 ..
+    # 4.9 s) make it reset.
+    bench = parse_bench(bench_text(second="dies_after = 4\nerror_rate = 0.001"), "b", drivers)
+    result = run(bench, drivers, manifest, duration=5)
+    ina = next(i for i in result.instances if i.name == "INA238#1")
+    assert ina.marks == [(0.0, "start"), (4.9, "reset")]
 
 
 def test_flaky_device(drivers, manifest):
@@ -815,6 +837,25 @@ def test_chip_ids_outside_16_bits_are_refused(chip_id, shown, drivers):
 )
 def test_bench_file_errors_whole_message(text, message, drivers):
     assert bench_error(text, drivers) == message
+
+
+@pytest.mark.parametrize("key", ["power_up", "dies_after"])
+@pytest.mark.parametrize(("value", "shown"), [("true", "True"), ('"2 s"', "'2 s'"), ("-1", "-1")])
+def test_seconds_must_be_numbers_from_0(key, value, shown, drivers):
+    text = device_text(extra=f"{key} = {value}\n")
+    assert bench_error(text, drivers) == f"{AT}{key} must be a number of seconds >= 0, not {shown}"
+
+
+def test_a_result_built_without_the_optional_fields_has_them_empty():
+    # As a result read back from a flight log is: nothing quiet, missing or recorded.
+    result = RunResult("manifest", 0, 1.0, "b", [], True, [])
+    assert (result.quiet, result.silently_missing, result.arming, result.events) == (
+        [],
+        [],
+        [],
+        None,
+    )
+    assert result.as_dict()["log_cut_at"] is None
 
 
 def test_bench_table_may_describe_the_bench(drivers):
