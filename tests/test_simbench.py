@@ -443,6 +443,25 @@ def test_a_trace_of_noise_does_not_change_when_a_dead_device_resets(drivers, man
     assert ina.marks == [(0.0, "start"), (4.9, "reset")]
 
 
+def test_times_are_kept_to_the_microsecond(tmp_path, schema):
+    # A driver declared at 3 Hz transfers every 1/3 s: found at 0 s and dead at 4.2 s, its
+    # last good transfer is the 12th (4 s), the 13th .. 22nd fail: it resets at 22/3 s.
+    text = DEFAULT_DRIVERS.read_text()
+    assert text.count("order = 30\n") == 1 and "rate_hz = 10\n" in text
+    head, tail = text.split("order = 30\n")
+    custom = tmp_path / "d.toml"
+    custom.write_text(head + "order = 30\n" + tail.replace("rate_hz = 10\n", "rate_hz = 3\n", 1))
+    slow = load_drivers(custom, parameter_specs(schema))
+    assert slow["ina238"].rate_hz == 3
+    manifest = configured(load_manifest(None, AIRFRAME), slow)
+    bench = parse_bench(bench_text(second="dies_after = 4.2"), "b", slow)
+    result = run(bench, slow, manifest, duration=8, record_events=True)
+    ina = next(i for i in result.instances if i.name == "INA238#1")
+    assert ina.marks == [(0.0, "start"), (7.333333, "reset")]
+    (reset,) = [e for e in result.events if e["event"] == "reset" and e["instance"] == ina.name]
+    assert reset["at"] == 7.333333
+
+
 def test_flaky_device(drivers, manifest):
     bench = parse_bench(bench_text(mag="error_rate = 0.5"), "b", drivers)
     result = run(bench, drivers, manifest, duration=5, seed=1)
