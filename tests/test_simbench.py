@@ -27,6 +27,8 @@ from px4params.vehicle.simbench import (
     BenchBus,
     BenchDevice,
     BenchFileError,
+    RunResult,
+    healthy_bench,
     load_bench,
     parse_bench,
     run,
@@ -203,6 +205,263 @@ def test_wrong_chip_id(tmp_path, capsys):
     )
 
 
+def probe_times(result, instance: str) -> list[float]:
+    return [e["t"] for e in result.events if e["event"] == "probe" and e["instance"] == instance]
+
+
+def test_probes_back_off_from_20_ms_doubling_up_to_1_s(drivers, manifest):
+    # Retried after 20 ms, then with the delay doubling up to 1 s (docs/autostart.md).
+    bench = parse_bench(bench_text(mag="absent = true"), "b", drivers)
+    result = run(bench, drivers, manifest, duration=5, record_events=True)
+    delays = [0.02, 0.04, 0.08, 0.16, 0.32, 0.64, 1.0, 1.0, 1.0]
+    expected = [round(sum(delays[:n]), 6) for n in range(len(delays) + 1)]
+    assert expected[-1] == 4.26
+    assert probe_times(result, "AK09916#0") == expected
+
+
+def test_a_wrong_chip_id_fails_the_probe_before_the_configuration_write(drivers, manifest):
+    # A probe is a soft reset, the chip id read, the configuration write: a wrong id read by
+    # the second transfer fails the attempt, so each attempt makes two good transfers. In 3 s
+    # the attempts are at 0, 0.02, 0.06, 0.14, 0.30, 0.62, 1.26 and 2.26 s.
+    bench = parse_bench(bench_text(mag="chip_id = 0x0A"), "b", drivers)
+    result = run(bench, drivers, manifest, duration=3)
+    mag = next(i for i in result.instances if i.name == "AK09916#0")
+    assert (mag.probe_attempts, mag.transfers, mag.bad_transfers) == (8, 16, 0)
+
+
+def test_a_bus_error_is_told_apart_from_no_ack(tmp_path, capsys):
+    # Every transfer fails on the bus: the chip is there but never answers cleanly. 15 probe
+    # attempts in 10 s, as for the missing compass of docs/autostart.md.
+    status, out = boot(tmp_path, capsys, bench_text(mag="error_rate = 1.0"))
+    assert status == 1
+    assert refused_lines(out) == [
+        "ak09916 AK09916#0 on I2C bus 1 address 0x0C: critical: not found: bus error "
+        "(15 probe attempts, still retrying)"
+    ]
+
+
+def test_a_device_that_stops_answering_is_critical_after_the_data_timeout(drivers, manifest):
+    # Powered up at 0.03 s, the INA238 (10 Hz) is found by the probe at 0.06 s (after retries
+    # at 0 and 0.02 s) and transfers at 0.16, 0.26, ... s; dying at 4.1 s, its last good
+    # transfer is at 4.06 s. No good transfer for more than 0.5 s is critical: first seen at
+    # the 100 ms tick after 4.56 s. (Ten bad transfers in a row, at 5.06 s, make it reset.)
+    bench = parse_bench(bench_text(second="power_up = 0.03\ndies_after = 4.1"), "b", drivers)
+    result = run(bench, drivers, manifest, duration=6)
+    ina = next(i for i in result.instances if i.name == "INA238#1")
+    assert ina.started_at == 0.06
+    critical = [(t, why) for t, level, why in ina.timeline if level == "critical" and t > 0]
+    assert critical[0] == (4.6, "no data for 0.5 s")
+    assert critical[1][1].startswith("lost: reset at 5.06 s after 10 bad transfers in a row;")
+
+
+@pytest.mark.parametrize("dies_after", [1.0, 2.0, 3.0, 4.0, 5.0, 7.0])
+def test_the_data_timeout_is_the_same_whenever_a_device_dies(dies_after, drivers, manifest):
+    # The INA238 (10 Hz, found at 0 s) dying at a whole second has its last good transfer
+    # 0.1 s before; more than 0.5 s without one is first seen at the tick 0.6 s after it.
+    bench = parse_bench(bench_text(second=f"dies_after = {dies_after}"), "b", drivers)
+    result = run(bench, drivers, manifest, duration=dies_after + 1)
+    ina = next(i for i in result.instances if i.name == "INA238#1")
+    no_data = [(t, why) for t, level, why in ina.timeline if why.startswith("no data")]
+    assert no_data == [(dies_after + 0.5, "no data for 0.6 s")]
+
+
+def test_legacy_probes_back_to_back_and_misses_a_device_10_ms_late(drivers, manifest):
+    # Today's -q start probes three times at once at boot; the manifest's driver retries after
+    # 20 ms and finds the compass that powered up at 10 ms.
+    bench = parse_bench(bench_text(mag="power_up = 0.01"), "b", drivers)
+    result = run(bench, drivers, manifest, duration=1)
+    assert next(i for i in result.instances if i.name == "AK09916#0").started_at == 0.02
+    result = run(bench, drivers, manifest, duration=1, legacy=True)
+    mag = [q["line"] for q in result.quiet if q["device"] == "AK09916"]
+    assert [line for line in mag if line.startswith("'ak09916 ")] == [
+        "'ak09916 -X -q start' on I2C bus 1 at 0x0C: no ACK after 3 probes; not started, no message"
+    ]
+
+
+def test_a_declared_bus_without_an_error_rate_is_clean(drivers, manifest):
+    # BenchBus's error rate defaults to none, as a [[bus]] table's does.
+    parsed = parse_bench(bench_text(), "b", drivers)
+    bench = Bench("b", "b", {("i2c", 1): BenchBus("i2c", 1)}, parsed.devices)
+    result = run(bench, drivers, manifest, duration=3)
+    assert result.may_arm
+    assert [i.bad_transfers for i in result.instances] == [0, 0, 0]
+
+
+def test_a_healthy_boot_counts_the_documented_transfers(capsys):
+    # docs/autostart.md: three probe transfers, then one per period up to the end (10 s at
+    # 10 Hz and 50 Hz: 100 and 500), none bad.
+    status = main(["autostart", "run", "--airframe", str(AIRFRAME), "--bench", str(BENCH)])
+    lines = capsys.readouterr().out.splitlines()
+    assert status == 0
+    assert lines[1:] == [
+        "  INA238#0  ina238  I2C bus 1 address 0x45   nominal  started 0.000 s, device id "
+        "0xD44509; 103 transfers, 0 bad, 0 resets",
+        "  INA238#1  ina238  I2C bus 2 address 0x45   nominal  started 0.000 s, device id "
+        "0xD44511; 103 transfers, 0 bad, 0 resets",
+        "  AK09916#0 ak09916 I2C bus 1 address 0x0C   nominal  started 0.000 s, device id "
+        "0x090C09; 503 transfers, 0 bad, 0 resets",
+        "commander: may arm (all 3 configured devices nominal)",
+    ]
+
+
+def test_a_missing_compass_counts_the_documented_probes(tmp_path, capsys):
+    # docs/autostart.md's missing compass: 15 probe attempts in 10 s, each a bad transfer.
+    status, out = boot(tmp_path, capsys, bench_text(mag="absent = true"))
+    assert status == 1
+    assert (
+        "  AK09916#0 ak09916 I2C bus 1 address 0x0C   critical not started; 15 transfers, 15 "
+        "bad, 0 resets (not found: no ACK (15 probe attempts, still retrying))"
+    ) in out.splitlines()
+
+
+def test_a_late_start_counts_its_transfers_from_the_probe_that_found_it(drivers, manifest):
+    # Powered up at 0.03 s, both are found by the third probe, at 0.06 s (after one-transfer
+    # failures at 0 and 0.02 s: 2 bad + 3 good probe transfers). In 2.55 s the INA238
+    # (10 Hz) then transfers at 0.16 .. 2.46 s (24), the AK09916 (50 Hz) at 0.08 .. 2.54 s
+    # (124).
+    late = "power_up = 0.03"
+    bench = parse_bench(bench_text(second=late, mag=late), "b", drivers)
+    result = run(bench, drivers, manifest, duration=2.55)
+    by = {i.name: i for i in result.instances}
+    counts = {
+        n: (i.started_at, i.probe_attempts, i.transfers, i.bad_transfers) for n, i in by.items()
+    }
+    assert counts == {
+        "INA238#0": (0.0, 1, 3 + 25, 0),
+        "INA238#1": (0.06, 3, 5 + 24, 2),
+        "AK09916#0": (0.06, 3, 5 + 124, 2),
+    }
+
+
+@pytest.mark.parametrize("noise", ["", "\nerror_rate = 0.001"])
+def test_the_first_window_counts_the_probe_transfers(noise, drivers, manifest):
+    # At the first tick (0.1 s) the last 2 s hold the probes' transfers: for both, 2 failed
+    # and 3 good; the AK09916 (50 Hz) has also transferred at 0.08 and 0.10 s, the INA238
+    # (10 Hz) not yet. More than 5% bad is a warning. (The same with a trace of noise, whose
+    # transfers are counted one by one.)
+    late = "power_up = 0.03" + noise
+    bench = parse_bench(bench_text(second=late, mag=late), "b", drivers)
+    result = run(bench, drivers, manifest, duration=0.1)
+    by = {i.name: i.timeline for i in result.instances}
+    assert by["INA238#1"] == [
+        (0.0, "critical", "starting"),
+        (0.1, "warning", "40% bad transfers in the last 2 s (2 of 5)"),
+    ]
+    assert by["AK09916#0"] == [
+        (0.0, "critical", "starting"),
+        (0.1, "warning", "29% bad transfers in the last 2 s (2 of 7)"),
+    ]
+    assert by["INA238#0"] == [(0.0, "critical", "starting"), (0.1, "nominal", "")]
+
+
+def test_a_lost_device_is_reset_and_probed_again_with_backoff(drivers, manifest):
+    # Dying at 4 s (last good transfer 3.9 s), the 10 Hz INA238 is critical at 4.5 s, resets
+    # after ten bad transfers in a row (4.0 .. 4.9 s) and probes again 20 ms later with the
+    # backoff started afresh: at 4.92, 4.94, 4.98, 5.06, 5.22 and 5.54 s (the next, 6.18 s, is
+    # after the run).
+    bench = parse_bench(bench_text(second="dies_after = 4"), "b", drivers)
+    result = run(bench, drivers, manifest, duration=6, record_events=True)
+    ina = next(i for i in result.instances if i.name == "INA238#1")
+    lost = "lost: reset at 4.90 s after 10 bad transfers in a row; "
+    assert ina.timeline[-3:] == [
+        (4.5, "critical", "no data for 0.6 s"),
+        (4.9, "critical", lost + "0 probe attempts since, last: reset"),
+        (5.0, "critical", lost + "3 probe attempts since, last: no ACK"),
+    ]
+    assert ina.reason == lost + "6 probe attempts since, last: no ACK"
+    assert (ina.probe_attempts, ina.resets, ina.marks) == (7, 1, [(0.0, "start"), (4.9, "reset")])
+    assert probe_times(result, "INA238#1") == [0.0, 4.92, 4.94, 4.98, 5.06, 5.22, 5.54]
+
+
+def test_a_device_dying_at_once_is_reset_after_ten_bad_transfers(drivers, manifest):
+    # Found by the probe at 0 s, dead at 0.05 s: its first ten transfers (0.1 .. 1.0 s) fail.
+    bench = parse_bench(bench_text(second="dies_after = 0.05"), "b", drivers)
+    result = run(bench, drivers, manifest, duration=1.5)
+    ina = next(i for i in result.instances if i.name == "INA238#1")
+    assert ina.marks == [(0.0, "start"), (1.0, "reset")]
+
+
+def test_a_device_dead_from_the_start_is_never_found(drivers, manifest):
+    # dies_after = 0: it stops answering at once, before the first probe's transfer.
+    bench = parse_bench(bench_text(second="dies_after = 0"), "b", drivers)
+    result = run(bench, drivers, manifest, duration=1)
+    ina = next(i for i in result.instances if i.name == "INA238#1")
+    assert ina.started_at is None
+    assert ina.reason.startswith("not found: no ACK (")
+
+
+def test_the_event_log_of_probes(drivers, manifest):
+    # A failed probe says why; one that finds the chip has no reason. Today's start probes
+    # three times at once, 1 ms apart, and then gives up quietly.
+    bench = parse_bench(bench_text(mag="absent = true"), "b", drivers)
+    result = run(bench, drivers, manifest, duration=0.1, record_events=True)
+    probes = {e["instance"]: (e["ok"], e["reason"]) for e in result.events if e["event"] == "probe"}
+    assert probes == {
+        "INA238#0": (True, None),
+        "INA238#1": (True, None),
+        "AK09916#0": (False, "no ACK"),
+    }
+    result = run(bench, drivers, manifest, duration=0.1, legacy=True, record_events=True)
+    mine = [
+        (e["t"], e["event"], e.get("reason"), e.get("quiet"))
+        for e in result.events
+        if e.get("instance") == "ak09916@i2c1"
+    ]
+    assert mine == [
+        (0.0, "probe", "no ACK", None),
+        (0.001, "probe", "no ACK", None),
+        (0.002, "probe", "no ACK", None),
+        (0.002, "start_failed", "no ACK", True),
+    ]
+
+
+def test_a_flaky_device_fails_its_share_of_transfers(drivers, manifest):
+    # 60 s at 50 Hz: about 3000 transfers, 30% failing (a standard deviation of 25, 0.8%).
+    bench = parse_bench(bench_text(mag="error_rate = 0.3"), "b", drivers)
+    result = run(bench, drivers, manifest, duration=60, seed=3)
+    mag = next(i for i in result.instances if i.name == "AK09916#0")
+    assert 2990 <= mag.transfers <= 3010 + 3 * mag.probe_attempts
+    assert 0.27 < mag.bad_transfers / mag.transfers < 0.33
+
+
+def test_every_reset_is_counted(drivers, manifest):
+    # 60% of the transfers failing: ten in a row now and then, each a reset and a mark.
+    bench = parse_bench(bench_text(mag="error_rate = 0.6"), "b", drivers)
+    result = run(bench, drivers, manifest, duration=60, seed=0, record_events=True)
+    mag = next(i for i in result.instances if i.name == "AK09916#0")
+    resets = [e["at"] for e in result.events if e["event"] == "reset" and e["instance"] == mag.name]
+    assert mag.resets >= 2
+    assert mag.resets == len(resets) == len([m for m in mag.marks if m[1] == "reset"])
+
+
+def test_a_trace_of_noise_does_not_change_when_a_dead_device_resets(drivers, manifest):
+    # As without noise: the good transfer at 3.9 s ends any run of bad ones, ten more (4.0 ..
+    # 4.9 s) make it reset.
+    bench = parse_bench(bench_text(second="dies_after = 4\nerror_rate = 0.001"), "b", drivers)
+    result = run(bench, drivers, manifest, duration=5)
+    ina = next(i for i in result.instances if i.name == "INA238#1")
+    assert ina.marks == [(0.0, "start"), (4.9, "reset")]
+
+
+def test_times_are_kept_to_the_microsecond(tmp_path, schema):
+    # A driver declared at 3 Hz transfers every 1/3 s: found at 0 s and dead at 4.2 s, its
+    # last good transfer is the 12th (4 s), the 13th .. 22nd fail: it resets at 22/3 s.
+    text = DEFAULT_DRIVERS.read_text()
+    assert text.count("order = 30\n") == 1 and "rate_hz = 10\n" in text
+    head, tail = text.split("order = 30\n")
+    custom = tmp_path / "d.toml"
+    custom.write_text(head + "order = 30\n" + tail.replace("rate_hz = 10\n", "rate_hz = 3\n", 1))
+    slow = load_drivers(custom, parameter_specs(schema))
+    assert slow["ina238"].rate_hz == 3
+    manifest = configured(load_manifest(None, AIRFRAME), slow)
+    bench = parse_bench(bench_text(second="dies_after = 4.2"), "b", slow)
+    result = run(bench, slow, manifest, duration=8, record_events=True)
+    ina = next(i for i in result.instances if i.name == "INA238#1")
+    assert ina.marks == [(0.0, "start"), (7.333333, "reset")]
+    (reset,) = [e for e in result.events if e["event"] == "reset" and e["instance"] == ina.name]
+    assert reset["at"] == 7.333333
+
+
 def test_flaky_device(drivers, manifest):
     bench = parse_bench(bench_text(mag="error_rate = 0.5"), "b", drivers)
     result = run(bench, drivers, manifest, duration=5, seed=1)
@@ -323,6 +582,43 @@ def test_json_result(tmp_path, capsys):
     assert result["mode"] == "manifest" and result["seed"] == 7 and result["may_arm"] is True
     assert [i["instance"] for i in result["instances"]] == ["INA238#0", "INA238#1", "AK09916#0"]
     assert result["instances"][0]["device_id_hex"] == "0xD44509"
+
+
+def test_json_result_fields(tmp_path, capsys):
+    status, out = boot(tmp_path, capsys, bench_text(), "--json", "--duration", "1")
+    result = json.loads(out)
+    assert status == 0
+    first = result.pop("instances")[0]
+    assert result == {
+        "mode": "manifest",
+        "seed": 0,
+        "duration": 1.0,
+        "bench": str(tmp_path / "bench.toml"),
+        "may_arm": True,
+        "failures": [],
+        "quiet": [],
+        "silently_missing": [],
+        "arming": [[0.1, True]],  # the first health check, every device nominal
+        "log_cut_at": None,
+    }
+    assert first == {
+        "instance": "INA238#0",
+        "driver": "ina238",
+        "parameter": "INA238",
+        "bus": "i2c",
+        "bus_id": 1,
+        "address": 0x45,
+        "location": "I2C bus 1 address 0x45",
+        "registered": True,
+        "health": "nominal",
+        "reason": "",
+        "started_at": 0.0,
+        "device_id": 0xD44509,
+        "device_id_hex": "0xD44509",
+        "perf": {"transfers": 13, "bad_transfers": 0, "resets": 0, "probe_attempts": 1},
+        "timeline": [[0.0, "critical", "starting"], [0.1, "nominal", ""]],
+        "marks": [[0.0, "start"]],
+    }
 
 
 @pytest.mark.parametrize("duration", ["0", "-1", "nan", "inf", "100000", "x"])
@@ -458,6 +754,153 @@ ONE = '[[device]]\nchip = "INA238"\nbus = "i2c"\nbus_id = 1\naddress = 0x45\n'
 )
 def test_bench_file_errors(text, message, drivers):
     assert bench_error(text, drivers).startswith(message)
+
+
+def device_text(
+    bus: str = "i2c", bus_id: object = 1, address: object = 0x45, extra: str = ""
+) -> str:
+    return (
+        f'[[device]]\nchip = "INA238"\nbus = "{bus}"\nbus_id = {bus_id}\naddress = {address}\n'
+        + extra
+    )
+
+
+@pytest.mark.parametrize(
+    ("bus", "address", "location"),
+    [
+        ("i2c", "0", "I2C bus 1 address 0x00"),
+        ("i2c", "127", "I2C bus 1 address 0x7F"),
+        ("spi", "0", "SPI bus 1 chip select 0"),
+        ("spi", "31", "SPI bus 1 chip select 31"),
+    ],
+)
+def test_addresses_at_both_ends_of_their_range_are_accepted(bus, address, location, drivers):
+    # The bench file's ranges: an I2C address 0..127, an SPI chip select 0..31.
+    (device,) = parse_bench(device_text(bus, address=address), "b", drivers).devices.values()
+    assert (device.address, device.location) == (int(address), location)
+
+
+@pytest.mark.parametrize(
+    ("bus", "address", "message"),
+    [
+        ("i2c", "128", "I2C address 128 (0x80) is out of range 0..127 (0x00..0x7F)"),
+        ("i2c", "-1", "I2C address -1 is out of range 0..127 (0x00..0x7F)"),
+        ("spi", "32", "SPI chip select 32 (0x20) is out of range 0..31 (0x00..0x1F)"),
+        ("spi", "-1", "SPI chip select -1 is out of range 0..31 (0x00..0x1F)"),
+        ("i2c", "true", "address must be an integer (e.g. 0x45), not True"),
+    ],
+)
+def test_addresses_outside_their_range_are_refused(bus, address, message, drivers):
+    text = device_text(bus, address=address)
+    assert bench_error(text, drivers) == f"bench.toml: device #1 (INA238): {message}"
+
+
+@pytest.mark.parametrize("bus_id", [1, 15])
+def test_bus_ids_at_both_ends_of_their_range_are_accepted(bus_id, drivers):
+    bus = f'[[bus]]\nkind = "i2c"\nbus_id = {bus_id}\n'
+    bench = parse_bench(bus + device_text(bus_id=bus_id), "b", drivers)
+    assert list(bench.buses) == [("i2c", bus_id)]
+    assert list(bench.devices) == [("i2c", bus_id, 0x45)]
+
+
+@pytest.mark.parametrize("bus_id", ["0", "16", "true", '"1"'])
+@pytest.mark.parametrize("table", ["bus", "device"])
+def test_bus_ids_outside_1_to_15_are_refused(table, bus_id, drivers):
+    if table == "bus":
+        text, where = f'[[bus]]\nkind = "i2c"\nbus_id = {bus_id}\n', "bus #1"
+    else:
+        text, where = device_text(bus_id=bus_id), "device #1 (INA238)"
+    shown = {"true": "True", '"1"': "'1'"}.get(bus_id, bus_id)
+    assert bench_error(text, drivers) == (
+        f"bench.toml: {where}: bus_id must be an integer 1..15, not {shown}"
+    )
+
+
+@pytest.mark.parametrize("chip_id", [0, 0xFFFF])
+def test_chip_ids_at_both_ends_of_their_range_are_accepted(chip_id, drivers):
+    (device,) = parse_bench(
+        device_text(extra=f"chip_id = {chip_id}\n"), "b", drivers
+    ).devices.values()
+    assert device.chip_id == chip_id
+
+
+@pytest.mark.parametrize(
+    ("chip_id", "shown"),
+    [
+        ("0x10000", "65536"),
+        ("-1", "-1"),
+        ("true", "True"),
+        ('"0x2260"', "'0x2260'"),
+        ("1.0", "1.0"),
+    ],
+)
+def test_chip_ids_outside_16_bits_are_refused(chip_id, shown, drivers):
+    text = device_text(extra=f"chip_id = {chip_id}\n")
+    assert bench_error(text, drivers) == f"{AT}chip_id must be an integer 0..0xFFFF, not {shown}"
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("bus = [1]\n", "bench.toml: bus #1: is not a table"),
+        ("device = [1]\n", "bench.toml: device #1: is not a table"),
+        (
+            '[[device]]\nchip = 5\nbus = "i2c"\nbus_id = 1\naddress = 1\n',
+            "bench.toml: device #1: chip must be a string, not 5",
+        ),
+        (
+            "[bench]\ncolour = 1\n",
+            "bench.toml: [bench]: unknown key 'colour' (expected: name, description)",
+        ),
+    ],
+)
+def test_bench_file_errors_whole_message(text, message, drivers):
+    assert bench_error(text, drivers) == message
+
+
+@pytest.mark.parametrize("key", ["power_up", "dies_after"])
+@pytest.mark.parametrize(("value", "shown"), [("true", "True"), ('"2 s"', "'2 s'"), ("-1", "-1")])
+def test_seconds_must_be_numbers_from_0(key, value, shown, drivers):
+    text = device_text(extra=f"{key} = {value}\n")
+    assert bench_error(text, drivers) == f"{AT}{key} must be a number of seconds >= 0, not {shown}"
+
+
+def test_a_result_built_without_the_optional_fields_has_them_empty():
+    # As a result read back from a flight log is: nothing quiet, missing or recorded.
+    result = RunResult("manifest", 0, 1.0, "b", [], True, [])
+    assert (result.quiet, result.silently_missing, result.arming, result.events) == (
+        [],
+        [],
+        [],
+        None,
+    )
+    assert result.as_dict()["log_cut_at"] is None
+
+
+def test_bench_table_may_describe_the_bench(drivers):
+    text = '[bench]\nname = "quad"\ndescription = "the frame on the desk"\n' + ONE
+    assert parse_bench(text, "b", drivers).name == "quad"
+
+
+@pytest.mark.parametrize(
+    ("content", "reason"),
+    [
+        (None, "is a folder, not a file"),
+        (
+            b"\xff[[device]]\n",
+            "'utf-8' codec can't decode byte 0xff in position 0: invalid start byte",
+        ),
+    ],
+)
+def test_unreadable_bench_file(tmp_path, content, reason, drivers):
+    path = tmp_path / "b.toml"
+    if content is None:
+        path.mkdir()
+    else:
+        path.write_bytes(content)
+    with pytest.raises(BenchFileError) as e:
+        load_bench(path, drivers)
+    assert str(e.value) == f"{path}: cannot read: {reason}"
 
 
 def test_bench_file_not_found(tmp_path, capsys, drivers):
@@ -659,6 +1102,30 @@ def test_run_without_bench_leaves_out_what_cannot_start(
     assert status == 1
     assert "AK09916#0 ak09916 I2C bus 1 address 0x0C   nominal" in out
     assert "commander: arming refused (1 of 2 devices not nominal):" in out
+    # Nor does today's boot of that bench find a bus 0 to probe.
+    assert main(["autostart", "run", "--airframe", str(airframe), "--legacy"]) == 0
+    assert capsys.readouterr().out.startswith(
+        "legacy boot of a healthy bench (every configured device present, no faults): every "
+        "probed driver '-X -q start' on I2C buses 1 at its default address"
+    )
+
+
+def test_healthy_bench_is_the_hand_written_one(drivers, manifest):
+    # The example bench is the two-battery airframe with every device present and no faults:
+    # the bench `autostart run` boots without --bench is the same, device for device.
+    assert healthy_bench(manifest).devices == load_bench(HEALTHY_BENCH_FILE, drivers).devices
+
+
+def test_legacy_boots_every_i2c_bus_of_the_bench(tmp_path, capsys):
+    # A [[bus]] entry puts a bus on the bench even without a device on it; an SPI bus is not
+    # one the legacy '-X' start probes.
+    buses = '[[bus]]\nkind = "i2c"\nbus_id = 3\n[[bus]]\nkind = "spi"\nbus_id = 4\n'
+    status, out = boot(tmp_path, capsys, bench_text(extra=buses), "--legacy")
+    assert status == 0
+    assert out.splitlines()[0].startswith(
+        "legacy boot of " + str(tmp_path / "bench.toml") + ": every probed driver '-X -q start' "
+        "on I2C buses 1, 2, 3 at its default address, 3 probes"
+    )
 
 
 def test_legacy_without_manifest_needs_a_bench(

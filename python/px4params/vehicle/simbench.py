@@ -285,7 +285,9 @@ def _device(table: Any, number: int, source: str, chips: dict[str, Driver]) -> B
         raise fail(f"address must be an integer (e.g. 0x45), not {address!r}")
     if not 0 <= address <= top:
         what = "I2C address" if kind == "i2c" else "SPI chip select"
-        raise fail(f"{what} {address} (0x{address:X}) is out of range 0..{top} (0x00..0x{top:02X})")
+        # (no hex for a negative number: TOML has none, and "0x-1" is no number)
+        shown = f"{address} (0x{address:X})" if address >= 0 else str(address)
+        raise fail(f"{what} {shown} is out of range 0..{top} (0x00..0x{top:02X})")
     where = f"{source}: device #{number} ({chip} on {describe_location(kind, bus_id, address)})"
 
     absent = table.get("absent", False)
@@ -652,7 +654,9 @@ class _Instance:
             )
         if state != "running":
             return "critical", self.last_probe
-        if now - self.last_good > DATA_TIMEOUT:
+        # (the slack: a tick's time is a float product, so that 0.5 s after a transfer at 3.9 s
+        # is 0.5000000000000004 s at 4.4 s, but 0.5 s at 5.4 s after 4.9 s)
+        if now - self.last_good > DATA_TIMEOUT + 1e-9:
             return "critical", f"no data for {now - self.last_good:.1f} s"
         total = self.window_good + self.window_bad
         if total and self.window_bad > WARN_RATIO * total:
