@@ -348,7 +348,7 @@ RUST_ISSUE40_TESTS="$RUST_ISSUE40_TESTS mutants_interp"
 # migration tests that evaluate real boards' conditions), and vehicle/simbench.py.
 TARGETS+=(
   "migrate-conditions|$PY/migrate/conditions.py|tests/test_migrate_conditions.py tests/test_migrate_board_rows.py tests/test_migrate_build.py tests/test_migrate_upgrade.py tests/test_migrate.py tests/test_boards.py -k 'not cli and not needs_no_checkout'"
-  "simbench|$PY/vehicle/simbench.py|tests/test_simbench.py"
+  "simbench|$PY/vehicle/simbench.py|tests/test_simbench.py tests/test_flight_log.py"
 )
 BUDGETS+=([migrate-conditions]=3600 [simbench]=3600)
 

@@ -81,9 +81,6 @@ __all__ = [
     "run",
 ]
 
-#: Health levels, best first.
-HEALTH = ("nominal", "warning", "critical")
-
 TICK = 0.1  # s: drivers' transfers are processed, and health evaluated, in slices this long
 WINDOW = 2.0  # s: the bad-transfer ratio is taken over this long
 WARN_RATIO = 0.05  # more bad transfers than this share over WINDOW is a warning
