@@ -581,6 +581,27 @@ def test_a_probed_console_start_a_later_board_script_starts_is_left_out_for_that
 
 
 @pytest.mark.issue40
+def test_a_console_start_left_out_for_the_target_leaves_the_next_line_to_be_proposed() -> None:
+    """The Pixhawk 5 log above with a second console line, a GPS's LIS3MDL rc.sensors' probe
+    started (`lis3mdl -X -q start`, SENS_EXT_I2C_PRB): the IST8310 v1.12.0's board script takes
+    over is left out for that target, and the line after it is still read and proposed."""
+    console = (
+        "ist8310 #0 on I2C bus 1 (external, equal to '-b 3')\n"
+        "lis3mdl #0 on I2C bus 1 (external, equal to '-b 3')\n"
+    )
+    config = migrate.OldConfig(
+        "t.ulg", "ULog", {"SENS_EXT_I2C_PRB": 1}, version=(1, 11, 3), console=console
+    )
+    v5 = load_boards().by_name("px4_fmu-v5", "v1.11.0")
+    proposal = migrate.migrate(config, board=v5, target_release="v1.12.0")
+    assert [(o.found, o.device) for o in proposal.left_out] == [
+        ("boot console line 1", "ist8310, I2C bus 1")
+    ]
+    (lis,) = proposal.instances
+    assert lis.name == "LIS3MDL#0" and lis.origin.startswith("boot console line 2: ")
+
+
+@pytest.mark.issue40
 def test_a_dropped_start_a_probe_reaches_with_the_same_rotation_is_said_without_one() -> None:
     """The edited Pixhawk 5 of v1.11.0 above, its line 19 read as `lis3mdl -X -b 2 start`
     (bus 2, external): from v1.12.0 no fmu-v5 script line starts a LIS3MDL, and rc.sensors'
