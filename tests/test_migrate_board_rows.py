@@ -808,14 +808,16 @@ HW_BASE = "hw_base in 008"
 HW_BASE_WHY = "hw_base in 008 (the hardware revision, which the parameters do not tell)"
 
 
-def with_row(b: Board, line: int, **edit: Any) -> Board:
-    """``b`` with its device row of script line ``line`` edited (``when``, ``args``, ...)."""
+def with_row(b: Board, line: int, of: str = "devices", **edit: Any) -> Board:
+    """``b`` with its rows of script line ``line`` edited (``when``, ``args``, ...): its device
+    rows, or ``of="switches"`` its switch rows."""
+    old = getattr(b, of)
     rows = tuple(
         dataclasses.replace(r, **edit) if f"rc.board_sensors:{line} " in r.source else r
-        for r in b.devices
+        for r in old
     )
-    assert rows != b.devices
-    return dataclasses.replace(b, devices=rows)
+    assert rows != old
+    return dataclasses.replace(b, **{of: rows})
 
 
 @pytest.mark.issue40
@@ -1050,16 +1052,6 @@ V6X_PM2_WHY = (
 )
 
 
-def with_switch_row(b: Board, line: int, **edit: Any) -> Board:
-    """``b`` with its switch rows of script line ``line`` edited."""
-    rows = tuple(
-        dataclasses.replace(r, **edit) if f"rc.board_sensors:{line} " in r.source else r
-        for r in b.switches
-    )
-    assert rows != b.switches
-    return dataclasses.replace(b, switches=rows)
-
-
 @pytest.mark.issue40
 @pytest.mark.parametrize(
     ("when", "open_", "then"),
@@ -1078,7 +1070,7 @@ def test_a_switch_row_that_does_not_run_by_default_or_is_not_known_says_so_whole
     # Pixhawk 6X (main) line 28 `ina226 -X -b 2 -t 2 -k start` (SENS_EN_INA226 == 1 and
     # $HAVE_PM2 == yes) read with another clause beside SENS_EN_INA226 == 1: only line 24's
     # INA226 on bus 1 is proposed, and the report names line 28's open clauses whole
-    v6x = with_switch_row(board("px4_fmu-v6x"), 28, when=f"SENS_EN_INA226 == 1 and {when}")
+    v6x = with_row(board("px4_fmu-v6x"), 28, of="switches", when=f"SENS_EN_INA226 == 1 and {when}")
     proposal = migrate.migrate(config({"SENS_EN_INA226": 1}), table="current", board=v6x)
     assert placed(proposal) == [("INA226#0", 1, 0x41)]
     (said,) = [a for a in proposal.assumptions if a.startswith("SENS_EN_INA226")]
