@@ -326,3 +326,22 @@ def test_a_rotation_the_enum_still_has_or_a_file_of_px4_1_12_is_not_said_to_be_r
     assert axes.removed_rotation("CAL_MAG0_ROT", 41, (1, 12, 0), None) is None
     # a file naming no release: 41 is of 1.11 or older whatever it says
     assert axes.removed_rotation("CAL_MAG0_ROT", 41, None, "v1.12.0") is not None
+
+
+def test_a_board_imu_whose_new_r_keeps_its_orientation_is_said_the_same_not_to_check() -> None:
+    """Crazyflie: its script starts the MPU9250 with `mpu9250 -I -R 12 start` at v1.11.0 (line
+    9) and `mpu9250_i2c -I -b 3 -a 0x69 -R 6 start` from v1.12.0: PX4's own fix for the rewritten
+    driver's axes (12 after C 14 is 6). No declared driver drives an MPU9250: the board rows'
+    modules say whose axes changed, and only a Crazyflie (or BeagleBone Blue) built the old one."""
+    from px4params import migrate
+    from px4params.migrate.config import OldConfig
+    from px4params.vehicle.boards import load_boards
+
+    imu = devid.encode("i2c", 3, 0x69, 0x24)  # MPU9250 (PX4 1.11's devtype 0x24)
+    config = OldConfig("t.params", "QGC .params", {"CAL_ACC0_ID": imu}, version=(1, 11, 3))
+    crazyflie = load_boards().by_name("bitcraze_crazyflie", "v1.11.0")
+    (imu_out,) = migrate.migrate(config, board=crazyflie).left_out
+    assert imu_out.later is not None and imu_out.later.endswith(
+        "rotation 6 (was 12): the board's script still starts it, with -R 6: the same "
+        "orientation (mpu9250 reports other axes from PX4 v1.12.0 (PX4 commit 3abe2e82d1))"
+    )

@@ -234,11 +234,18 @@ class _Builder:
         return (rotation, None) if turned is None else ((turned.rotation, turned.why), turned.note)
 
     def turned(
-        self, chips: set[str], bus: int, rotation: tuple[int, str], release: str | None
+        self,
+        chips: set[str],
+        bus: int,
+        rotation: tuple[int, str],
+        release: str | None,
+        started: Iterable[str] = (),
     ) -> axes.Turned | None:
-        """:func:`.axes.turn` of a device's rotation of the file's release, for ``release``."""
+        """:func:`.axes.turn` of a device's rotation of the file's release, for ``release``;
+        ``started``: the driver modules board rows start it with (an IMU no declared driver
+        drives is known by those alone)."""
         by_chip = self.drivers.chips()
-        modules = {by_chip[c].name for c in chips if c in by_chip}
+        modules = {by_chip[c].name for c in chips if c in by_chip} | set(started)
         return axes.turn(
             modules,
             *rotation,
@@ -413,7 +420,8 @@ class _Builder:
             )
         elif last is not None and last.rotation != before.rotation:
             # the board's new -R may be the old orientation on a driver's new axes
-            turned = self.turned(chips, bus, (before.rotation, ""), spans[-1][1])
+            drivers = (before.row.driver, last.row.driver)
+            turned = self.turned(chips, bus, (before.rotation, ""), spans[-1][1], drivers)
             then = f"the board's script still starts it, with -R {last.rotation}: "
             if turned is not None and turned.what and turned.rotation == last.rotation:
                 then += f"the same orientation ({turned.what})"
