@@ -1139,3 +1139,22 @@ def test_legacy_without_manifest_needs_a_bench(
         "px4params: error: --legacy without a manifest (--store or --airframe) needs --bench "
         "FILE\n",
     )
+
+
+def test_run_defaults_to_ten_seconds_seed_0_and_no_event_log(drivers, manifest):
+    result = run(healthy_bench(manifest), drivers, manifest)
+    assert (result.duration, result.seed, result.events) == (10.0, 0, None)
+    assert result.arming == [(0.1, True)]
+
+
+@pytest.mark.parametrize("duration", [0, 0.0, -1, float("nan"), float("inf"), float("-inf")])
+def test_run_refuses_a_duration_that_is_not_a_positive_number(duration, drivers, manifest):
+    with pytest.raises(BenchFileError) as caught:
+        run(healthy_bench(manifest), drivers, manifest, duration=duration)
+    assert str(caught.value) == f"duration must be a positive number of seconds, not {duration}"
+
+
+def test_a_manifest_run_needs_the_configured_instances(drivers, manifest):
+    with pytest.raises(BenchFileError) as caught:
+        run(healthy_bench(manifest), drivers, None)
+    assert str(caught.value) == "a manifest run needs the configured instances"
