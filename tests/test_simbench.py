@@ -1158,3 +1158,27 @@ def test_a_manifest_run_needs_the_configured_instances(drivers, manifest):
     with pytest.raises(BenchFileError) as caught:
         run(healthy_bench(manifest), drivers, None)
     assert str(caught.value) == "a manifest run needs the configured instances"
+
+
+@pytest.mark.parametrize(
+    ("duration", "seconds"), [(0.9, []), (1.0, [1.0]), (1.9, [1.0]), (2.0, [1.0, 2.0])]
+)
+def test_perf_counters_are_recorded_at_each_whole_second_of_the_run(
+    duration, seconds, drivers, manifest
+):
+    result = run(healthy_bench(manifest), drivers, manifest, duration=duration, record_events=True)
+    perf = [r["t"] for r in result.events if r["event"] == "perf"]
+    assert perf == [t for t in seconds for _ in range(3)]  # the three instances, every second
+
+
+def test_a_run_shorter_than_a_tick_ends_on_its_own_last_slice_in_microseconds(drivers, manifest):
+    # One slice, ending at the run's end (0.0123456789 s, kept as 0.012346 s): every device is
+    # found at 0 s and is nominal there, so the commander may arm from then on.
+    result = run(
+        healthy_bench(manifest), drivers, manifest, duration=0.0123456789, record_events=True
+    )
+    assert result.arming == [(0.012346, True)]
+    for i in result.instances:
+        assert i.timeline[-1] == (0.012346, "nominal", "")
+    ticked = [r for r in result.events if r["event"] in ("health", "arming", "verdict")]
+    assert len(ticked) == 3 + 1 + 1 and {r["t"] for r in ticked} == {0.012346}
