@@ -20,7 +20,7 @@ from px4params import Store
 from px4params.cli.main import main
 from px4params.store.spec import parameter_specs
 from px4params.vehicle import devid
-from px4params.vehicle.autostart import configured, load_manifest
+from px4params.vehicle.autostart import Configured, configured, load_manifest
 from px4params.vehicle.drivers import DEFAULT_DRIVERS, load_drivers
 from px4params.vehicle.simbench import (
     Bench,
@@ -1182,3 +1182,27 @@ def test_a_run_shorter_than_a_tick_ends_on_its_own_last_slice_in_microseconds(dr
         assert i.timeline[-1] == (0.012346, "nominal", "")
     ticked = [r for r in result.events if r["event"] in ("health", "arming", "verdict")]
     assert len(ticked) == 3 + 1 + 1 and {r["t"] for r in ticked} == {0.012346}
+
+
+def test_an_instance_nothing_starts_is_known_to_the_commander_with_all_its_problems(
+    drivers, manifest
+):
+    problems = (
+        "no driver declared for parameter INA238",
+        "i2c bus_id is 0 (unset; buses are numbered from 1)",
+    )
+    orphan = Configured("INA238#5", "INA238", None, "i2c", 0, 0x45, {}, problems)
+    result = run(
+        healthy_bench(manifest), drivers, [*manifest, orphan], duration=1, record_events=True
+    )
+    reason = "not started: no driver declared for parameter INA238; i2c bus_id is 0 (unset; " + (
+        "buses are numbered from 1)"
+    )
+    assert result.failures == [f"- INA238#5 on I2C bus 0 address 0x45: critical: {reason}"]
+    (out,) = [i for i in result.instances if i.name == "INA238#5"]
+    # Critical with its reason from the start, and never anything else.
+    assert out.timeline == [(0.0, "critical", reason)]
+    assert out.as_dict()["registered"] is False and out.as_dict()["driver"] == "-"
+    # Not registered by a driver: the commander knows it, but no driver keeps perf counters.
+    perf = {r["instance"] for r in result.events if r["event"] == "perf"}
+    assert perf == {c.instance for c in manifest}
