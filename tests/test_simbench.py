@@ -8,6 +8,7 @@ consistency) are checked with hypothesis through the Python API.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import re
 import xml.etree.ElementTree as ET
@@ -21,7 +22,7 @@ from px4params.cli.main import main
 from px4params.store.spec import parameter_specs
 from px4params.vehicle import devid
 from px4params.vehicle.autostart import Configured, configured, load_manifest
-from px4params.vehicle.drivers import DEFAULT_DRIVERS, load_drivers
+from px4params.vehicle.drivers import DEFAULT_DRIVERS, Drivers, load_drivers
 from px4params.vehicle.simbench import (
     Bench,
     BenchBus,
@@ -1206,3 +1207,37 @@ def test_an_instance_nothing_starts_is_known_to_the_commander_with_all_its_probl
     # Not registered by a driver: the commander knows it, but no driver keeps perf counters.
     perf = {r["instance"] for r in result.events if r["event"] == "perf"}
     assert perf == {c.instance for c in manifest}
+
+
+def test_legacy_starts_only_the_i2c_drivers_with_a_default_address_not_started_by_a_switch(
+    drivers, manifest
+):
+    # Started first (lowest order): an SPI-only driver, an I2C driver without a default
+    # address and one a SENS_EN_* switch starts; today's boot starts none of them and goes on.
+    changed = {
+        "ina226": {"buses": ("spi",), "order": -3},
+        "ina228": {"default_address": None, "order": -2},
+        "ina238": {"started_by": "parameter", "enabled_by": "SENS_EN_INA238", "order": -1},
+    }
+    mine = Drivers(
+        [dataclasses.replace(d, **changed.get(d.name, {})) for d in drivers], "mine.toml"
+    )
+    bench = parse_bench(bench_text(), "b", mine)
+    orphan = Configured("INA238#5", "INA238", None, "i2c", 1, 0x40, {}, ("no driver",))
+    result = run(bench, mine, [*manifest, orphan], duration=1, legacy=True, record_events=True)
+    started = [r["driver"] for r in result.events if r["event"] == "legacy_start"]
+    assert not set(changed) & set(started) and {"ak09916", "ist8310"} <= set(started)
+    names = {i.name for i in result.instances}
+    # The compass on bus 1 answers; on bus 2 nothing does: left out, quiet.
+    assert "ak09916@i2c1" in names and "ak09916@i2c2" not in names
+    quiet = [q for q in result.quiet if q["line"].startswith("'ak09916 ")]
+    assert quiet == [
+        {
+            "line": "'ak09916 -X -q start' on I2C bus 2 at 0x0C: no ACK after 3 probes; "
+            "not started, no message",
+            "device": None,
+        }
+    ]
+    assert "- INA238#5 on I2C bus 1 address 0x40: never started, nobody was told" in (
+        result.silently_missing
+    )
