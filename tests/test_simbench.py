@@ -1230,6 +1230,10 @@ def test_legacy_starts_only_the_i2c_drivers_with_a_default_address_not_started_b
     names = {i.name for i in result.instances}
     # The compass on bus 1 answers; on bus 2 nothing does: left out, quiet.
     assert "ak09916@i2c1" in names and "ak09916@i2c2" not in names
+    # The commander hears the health of what started, and only of that.
+    health = [(r["t"], r["instance"], r["health"]) for r in result.events if r["event"] == "health"]
+    assert (0.1, "ak09916@i2c1", "nominal") in health
+    assert not [h for h in health if h[1] == "ak09916@i2c2"]
     quiet = [q for q in result.quiet if q["line"].startswith("'ak09916 ")]
     assert quiet == [
         {
@@ -1241,3 +1245,12 @@ def test_legacy_starts_only_the_i2c_drivers_with_a_default_address_not_started_b
     assert "- INA238#5 on I2C bus 1 address 0x40: never started, nobody was told" in (
         result.silently_missing
     )
+
+
+def test_an_instance_on_a_bus_the_bench_does_not_simulate_is_not_started(drivers, manifest):
+    on_can = Configured("INA238#4", "INA238", drivers["ina238"], "dronecan", 1, 7, {}, ())
+    result = run(healthy_bench(manifest), drivers, [*manifest, on_can], duration=1)
+    assert result.failures == [
+        "ina238 INA238#4 on DroneCAN interface 1 node 7: critical: not started: bus kind "
+        "dronecan is not simulated by the bench"
+    ]
