@@ -1254,3 +1254,30 @@ def test_an_instance_on_a_bus_the_bench_does_not_simulate_is_not_started(drivers
         "ina238 INA238#4 on DroneCAN interface 1 node 7: critical: not started: bus kind "
         "dronecan is not simulated by the bench"
     ]
+
+
+@pytest.mark.parametrize(
+    ("power_up", "rate_hz", "nominal_at"),
+    [
+        # Probes at 0 s (no ACK: 1 bad transfer) and 0.02 s (found: 3 good), then 16 transfers
+        # at 8.5 Hz up to 1.9 s: at 2 s the window holds 1 bad of 20, exactly 5%: not more.
+        (0.01, 8.5, 2.0),
+        # Probes at 0 and 0.02 s fail, 0.06 s finds it, then 19 transfers at 10 Hz: at 2 s the
+        # window holds 2 bad of 24; at 2.1 s the first slice, with both, has left it.
+        (0.03, 10.0, 2.1),
+    ],
+)
+def test_a_warning_needs_more_than_5_percent_bad_transfers_in_the_last_2_s(
+    power_up, rate_hz, nominal_at, drivers, manifest
+):
+    mine = Drivers(
+        [dataclasses.replace(d, rate_hz=rate_hz) if d.name == "ina238" else d for d in drivers],
+        "mine.toml",
+    )
+    bench = parse_bench(bench_text(second=f"power_up = {power_up}"), "b", mine)
+    result = run(bench, mine, manifest, duration=3)
+    (ina,) = [i for i in result.instances if i.name == "INA238#1"]
+    assert [(t, level) for t, level, _ in ina.timeline[1:]] == [
+        (0.1, "warning"),
+        (nominal_at, "nominal"),
+    ]
