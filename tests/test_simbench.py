@@ -1281,3 +1281,27 @@ def test_a_warning_needs_more_than_5_percent_bad_transfers_in_the_last_2_s(
         (0.1, "warning"),
         (nominal_at, "nominal"),
     ]
+
+
+@pytest.mark.parametrize(
+    ("chip", "declared_id"),
+    [
+        ("INA226", 0x2260),  # its id register is 0xFF: register 0x3F reads 0
+        ("INA228", 0),  # the same register 0x3F, declared (here) to hold 0
+    ],
+)
+def test_a_chip_read_outside_its_id_register_or_without_an_id_answers_0(
+    chip, declared_id, drivers, manifest
+):
+    mine = Drivers(
+        [dataclasses.replace(d, chip_id=declared_id) if d.chip == chip else d for d in drivers],
+        "mine.toml",
+    )
+    text = bench_text().replace('chip = "INA238"', f'chip = "{chip}"', 1)
+    result = run(parse_bench(text, "b", mine), mine, manifest, duration=1)
+    (ina,) = [i for i in result.instances if i.name == "INA238#0"]
+    # Probes at 0, 0.02, 0.06, 0.14, 0.3 and 0.62 s (the next at 1.26 s).
+    assert ina.reason == (
+        "not found: wrong chip id 0x0 in register 0x3F (expected 0x238) "
+        "(6 probe attempts, still retrying)"
+    )
