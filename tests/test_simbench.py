@@ -1305,3 +1305,16 @@ def test_a_chip_read_outside_its_id_register_or_without_an_id_answers_0(
         "not found: wrong chip id 0x0 in register 0x3F (expected 0x238) "
         "(6 probe attempts, still retrying)"
     )
+
+
+def test_a_legacy_start_still_probing_when_the_run_ends_is_not_found_yet(drivers, manifest):
+    # Today's probes are 1 ms apart (0, 1 and 2 ms): a run of 1.5 ms ends between the second
+    # and the third, nothing answering on bus 2.
+    result = run(
+        parse_bench(bench_text(), "b", drivers), drivers, manifest, duration=0.0015, legacy=True
+    )
+    (ak,) = [i for i in result.instances if i.name == "ak09916@i2c2"]
+    assert (ak.health, ak.reason) == (
+        "critical",
+        "not found: no ACK (2 probe attempts, still retrying)",
+    )
