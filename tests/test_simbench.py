@@ -8,6 +8,7 @@ consistency) are checked with hypothesis through the Python API.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import re
 import xml.etree.ElementTree as ET
@@ -20,8 +21,8 @@ from px4params import Store
 from px4params.cli.main import main
 from px4params.store.spec import parameter_specs
 from px4params.vehicle import devid
-from px4params.vehicle.autostart import configured, load_manifest
-from px4params.vehicle.drivers import DEFAULT_DRIVERS, load_drivers
+from px4params.vehicle.autostart import Configured, configured, load_manifest
+from px4params.vehicle.drivers import DEFAULT_DRIVERS, Drivers, load_drivers
 from px4params.vehicle.simbench import (
     Bench,
     BenchBus,
@@ -1138,4 +1139,182 @@ def test_legacy_without_manifest_needs_a_bench(
         "",
         "px4params: error: --legacy without a manifest (--store or --airframe) needs --bench "
         "FILE\n",
+    )
+
+
+def test_run_defaults_to_ten_seconds_seed_0_and_no_event_log(drivers, manifest):
+    result = run(healthy_bench(manifest), drivers, manifest)
+    assert (result.duration, result.seed, result.events) == (10.0, 0, None)
+    assert result.arming == [(0.1, True)]
+
+
+@pytest.mark.parametrize("duration", [0, 0.0, -1, float("nan"), float("inf"), float("-inf")])
+def test_run_refuses_a_duration_that_is_not_a_positive_number(duration, drivers, manifest):
+    with pytest.raises(BenchFileError) as caught:
+        run(healthy_bench(manifest), drivers, manifest, duration=duration)
+    assert str(caught.value) == f"duration must be a positive number of seconds, not {duration}"
+
+
+def test_a_manifest_run_needs_the_configured_instances(drivers, manifest):
+    with pytest.raises(BenchFileError) as caught:
+        run(healthy_bench(manifest), drivers, None)
+    assert str(caught.value) == "a manifest run needs the configured instances"
+
+
+@pytest.mark.parametrize(
+    ("duration", "seconds"), [(0.9, []), (1.0, [1.0]), (1.9, [1.0]), (2.0, [1.0, 2.0])]
+)
+def test_perf_counters_are_recorded_at_each_whole_second_of_the_run(
+    duration, seconds, drivers, manifest
+):
+    result = run(healthy_bench(manifest), drivers, manifest, duration=duration, record_events=True)
+    perf = [r["t"] for r in result.events if r["event"] == "perf"]
+    assert perf == [t for t in seconds for _ in range(3)]  # the three instances, every second
+
+
+def test_a_run_shorter_than_a_tick_ends_on_its_own_last_slice_in_microseconds(drivers, manifest):
+    # One slice, ending at the run's end (0.0123456789 s, kept as 0.012346 s): every device is
+    # found at 0 s and is nominal there, so the commander may arm from then on.
+    result = run(
+        healthy_bench(manifest), drivers, manifest, duration=0.0123456789, record_events=True
+    )
+    assert result.arming == [(0.012346, True)]
+    for i in result.instances:
+        assert i.timeline[-1] == (0.012346, "nominal", "")
+    ticked = [r for r in result.events if r["event"] in ("health", "arming", "verdict")]
+    assert len(ticked) == 3 + 1 + 1 and {r["t"] for r in ticked} == {0.012346}
+
+
+def test_an_instance_nothing_starts_is_known_to_the_commander_with_all_its_problems(
+    drivers, manifest
+):
+    problems = (
+        "no driver declared for parameter INA238",
+        "i2c bus_id is 0 (unset; buses are numbered from 1)",
+    )
+    orphan = Configured("INA238#5", "INA238", None, "i2c", 0, 0x45, {}, problems)
+    result = run(
+        healthy_bench(manifest), drivers, [*manifest, orphan], duration=1, record_events=True
+    )
+    reason = "not started: no driver declared for parameter INA238; i2c bus_id is 0 (unset; " + (
+        "buses are numbered from 1)"
+    )
+    assert result.failures == [f"- INA238#5 on I2C bus 0 address 0x45: critical: {reason}"]
+    (out,) = [i for i in result.instances if i.name == "INA238#5"]
+    # Critical with its reason from the start, and never anything else.
+    assert out.timeline == [(0.0, "critical", reason)]
+    assert out.as_dict()["registered"] is False and out.as_dict()["driver"] == "-"
+    # Not registered by a driver: the commander knows it, but no driver keeps perf counters.
+    perf = {r["instance"] for r in result.events if r["event"] == "perf"}
+    assert perf == {c.instance for c in manifest}
+
+
+def test_legacy_starts_only_the_i2c_drivers_with_a_default_address_not_started_by_a_switch(
+    drivers, manifest
+):
+    # Started first (lowest order): an SPI-only driver, an I2C driver without a default
+    # address and one a SENS_EN_* switch starts; today's boot starts none of them and goes on.
+    changed = {
+        "ina226": {"buses": ("spi",), "order": -3},
+        "ina228": {"default_address": None, "order": -2},
+        "ina238": {"started_by": "parameter", "enabled_by": "SENS_EN_INA238", "order": -1},
+    }
+    mine = Drivers(
+        [dataclasses.replace(d, **changed.get(d.name, {})) for d in drivers], "mine.toml"
+    )
+    bench = parse_bench(bench_text(), "b", mine)
+    orphan = Configured("INA238#5", "INA238", None, "i2c", 1, 0x40, {}, ("no driver",))
+    result = run(bench, mine, [*manifest, orphan], duration=1, legacy=True, record_events=True)
+    started = [r["driver"] for r in result.events if r["event"] == "legacy_start"]
+    assert not set(changed) & set(started) and {"ak09916", "ist8310"} <= set(started)
+    names = {i.name for i in result.instances}
+    # The compass on bus 1 answers; on bus 2 nothing does: left out, quiet.
+    assert "ak09916@i2c1" in names and "ak09916@i2c2" not in names
+    # The commander hears the health of what started, and only of that.
+    health = [(r["t"], r["instance"], r["health"]) for r in result.events if r["event"] == "health"]
+    assert (0.1, "ak09916@i2c1", "nominal") in health
+    assert not [h for h in health if h[1] == "ak09916@i2c2"]
+    quiet = [q for q in result.quiet if q["line"].startswith("'ak09916 ")]
+    assert quiet == [
+        {
+            "line": "'ak09916 -X -q start' on I2C bus 2 at 0x0C: no ACK after 3 probes; "
+            "not started, no message",
+            "device": None,
+        }
+    ]
+    assert "- INA238#5 on I2C bus 1 address 0x40: never started, nobody was told" in (
+        result.silently_missing
+    )
+
+
+def test_an_instance_on_a_bus_the_bench_does_not_simulate_is_not_started(drivers, manifest):
+    on_can = Configured("INA238#4", "INA238", drivers["ina238"], "dronecan", 1, 7, {}, ())
+    result = run(healthy_bench(manifest), drivers, [*manifest, on_can], duration=1)
+    assert result.failures == [
+        "ina238 INA238#4 on DroneCAN interface 1 node 7: critical: not started: bus kind "
+        "dronecan is not simulated by the bench"
+    ]
+
+
+@pytest.mark.parametrize(
+    ("power_up", "rate_hz", "nominal_at"),
+    [
+        # Probes at 0 s (no ACK: 1 bad transfer) and 0.02 s (found: 3 good), then 16 transfers
+        # at 8.5 Hz up to 1.9 s: at 2 s the window holds 1 bad of 20, exactly 5%: not more.
+        (0.01, 8.5, 2.0),
+        # Probes at 0 and 0.02 s fail, 0.06 s finds it, then 19 transfers at 10 Hz: at 2 s the
+        # window holds 2 bad of 24; at 2.1 s the first slice, with both, has left it.
+        (0.03, 10.0, 2.1),
+    ],
+)
+def test_a_warning_needs_more_than_5_percent_bad_transfers_in_the_last_2_s(
+    power_up, rate_hz, nominal_at, drivers, manifest
+):
+    mine = Drivers(
+        [dataclasses.replace(d, rate_hz=rate_hz) if d.name == "ina238" else d for d in drivers],
+        "mine.toml",
+    )
+    bench = parse_bench(bench_text(second=f"power_up = {power_up}"), "b", mine)
+    result = run(bench, mine, manifest, duration=3)
+    (ina,) = [i for i in result.instances if i.name == "INA238#1"]
+    assert [(t, level) for t, level, _ in ina.timeline[1:]] == [
+        (0.1, "warning"),
+        (nominal_at, "nominal"),
+    ]
+
+
+@pytest.mark.parametrize(
+    ("chip", "declared_id"),
+    [
+        ("INA226", 0x2260),  # its id register is 0xFF: register 0x3F reads 0
+        ("INA228", 0),  # the same register 0x3F, declared (here) to hold 0
+    ],
+)
+def test_a_chip_read_outside_its_id_register_or_without_an_id_answers_0(
+    chip, declared_id, drivers, manifest
+):
+    mine = Drivers(
+        [dataclasses.replace(d, chip_id=declared_id) if d.chip == chip else d for d in drivers],
+        "mine.toml",
+    )
+    text = bench_text().replace('chip = "INA238"', f'chip = "{chip}"', 1)
+    result = run(parse_bench(text, "b", mine), mine, manifest, duration=1)
+    (ina,) = [i for i in result.instances if i.name == "INA238#0"]
+    # Probes at 0, 0.02, 0.06, 0.14, 0.3 and 0.62 s (the next at 1.26 s).
+    assert ina.reason == (
+        "not found: wrong chip id 0x0 in register 0x3F (expected 0x238) "
+        "(6 probe attempts, still retrying)"
+    )
+
+
+def test_a_legacy_start_still_probing_when_the_run_ends_is_not_found_yet(drivers, manifest):
+    # Today's probes are 1 ms apart (0, 1 and 2 ms): a run of 1.5 ms ends between the second
+    # and the third, nothing answering on bus 2.
+    result = run(
+        parse_bench(bench_text(), "b", drivers), drivers, manifest, duration=0.0015, legacy=True
+    )
+    (ak,) = [i for i in result.instances if i.name == "ak09916@i2c2"]
+    assert (ak.health, ak.reason) == (
+        "critical",
+        "not found: no ACK (2 probe attempts, still retrying)",
     )
