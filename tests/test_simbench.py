@@ -444,9 +444,9 @@ def test_a_trace_of_noise_does_not_change_when_a_dead_device_resets(drivers, man
     assert ina.marks == [(0.0, "start"), (4.9, "reset")]
 
 
-def test_times_are_kept_to_the_microsecond(tmp_path, schema):
-    # A driver declared at 3 Hz transfers every 1/3 s: found at 0 s and dead at 4.2 s, its
-    # last good transfer is the 12th (4 s), the 13th .. 22nd fail: it resets at 22/3 s.
+def ina238_at_3_hz(tmp_path, schema):
+    """The bundled drivers with INA238's rate 3 Hz: its transfers every 1/3 s, off the
+    microsecond grid."""
     text = DEFAULT_DRIVERS.read_text()
     assert text.count("order = 30\n") == 1 and "rate_hz = 10\n" in text
     head, tail = text.split("order = 30\n")
@@ -454,13 +454,34 @@ def test_times_are_kept_to_the_microsecond(tmp_path, schema):
     custom.write_text(head + "order = 30\n" + tail.replace("rate_hz = 10\n", "rate_hz = 3\n", 1))
     slow = load_drivers(custom, parameter_specs(schema))
     assert slow["ina238"].rate_hz == 3
-    manifest = configured(load_manifest(None, AIRFRAME), slow)
+    return slow, configured(load_manifest(None, AIRFRAME), slow)
+
+
+def test_times_are_kept_to_the_microsecond(tmp_path, schema):
+    # A driver declared at 3 Hz transfers every 1/3 s: found at 0 s and dead at 4.2 s, its
+    # last good transfer is the 12th (4 s), the 13th .. 22nd fail: it resets at 22/3 s.
+    slow, manifest = ina238_at_3_hz(tmp_path, schema)
     bench = parse_bench(bench_text(second="dies_after = 4.2"), "b", slow)
     result = run(bench, slow, manifest, duration=8, record_events=True)
     ina = next(i for i in result.instances if i.name == "INA238#1")
     assert ina.marks == [(0.0, "start"), (7.333333, "reset")]
     (reset,) = [e for e in result.events if e["event"] == "reset" and e["instance"] == ina.name]
     assert reset["at"] == 7.333333
+
+
+def test_a_start_after_a_reset_is_kept_to_the_microsecond(tmp_path, schema):
+    # ULog and the timeline keep whole microseconds. A 3 Hz driver resets 10/3 s after a bad
+    # run starts, off the grid, and its first good probe comes a backoff after that: with this
+    # seed, found at 0.62 s, reset at 0.62 + 98/3 s, found again four probes later (+0.16 s).
+    slow, manifest = ina238_at_3_hz(tmp_path, schema)
+    bench = parse_bench(bench_text(second="error_rate = 0.55"), "b", slow)
+    result = run(bench, slow, manifest, duration=40, seed=2)
+    ina = next(i for i in result.instances if i.name == "INA238#1")
+    assert [what for _, what in ina.marks] == ["start", "reset", "start"]
+    reset, again = ina.marks[1][0], ina.marks[2][0]
+    assert reset == pytest.approx(0.62 + 98 / 3, abs=1e-6)
+    assert again == pytest.approx(reset + 0.16, abs=1e-6)
+    assert all(at == round(at, 6) for at, _ in ina.marks), ina.marks
 
 
 def test_flaky_device(drivers, manifest):
