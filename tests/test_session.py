@@ -540,6 +540,31 @@ def test_a_lock_file_that_is_a_symbolic_link_is_refused(store_file: Path, tmp_pa
     assert str(refused.value) == f"{lock}: cannot lock the store: Too many levels of symbolic links"
 
 
+def test_a_lock_the_file_system_cannot_take_is_an_error_and_leaks_nothing(
+    store_file: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """flock fails with ENOLCK on an NFS mount without its lock daemon: the save is an error
+    naming the lock file and the reason, the store is left as it was, and the lock file's
+    descriptor is closed (a long-running page or node would otherwise run out of them)."""
+    import errno
+
+    from px4params.errors import StoreFileError
+
+    def no_locks(fd: int, operation: int) -> None:
+        raise OSError(errno.ENOLCK, os.strerror(errno.ENOLCK))
+
+    before = store_file.read_bytes()
+    session = open_session(str(store_file), None)
+    open_fds = len(os.listdir("/proc/self/fd"))
+    monkeypatch.setattr(fcntl, "flock", no_locks)
+    with pytest.raises(StoreFileError) as refused:
+        session.save()
+    lock = f"{store_file}.lock"
+    assert str(refused.value) == f"{lock}: cannot lock the store: No locks available"
+    assert len(os.listdir("/proc/self/fd")) == open_fds
+    assert store_file.read_bytes() == before
+
+
 def test_a_locked_session_of_a_damaged_store_is_an_error(store_file: Path) -> None:
     from px4params.errors import StoreFileError
     from px4params.store.session import LockedSession
