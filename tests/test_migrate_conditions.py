@@ -621,3 +621,12 @@ def test_an_rc_sensors_row_is_judged_with_board_fmuv3_unset_a_board_row_with_it_
     builder = build._Builder(config, load_schema(include_dronecan=False), table, cube, [])
     assert builder.start_verdict(sensors_row, "") == Verdict(False)
     assert builder.start_verdict(board_row, "") == Verdict(True)
+
+
+def test_a_boards_variables_cannot_be_changed_by_a_caller() -> None:
+    # board_variables hands out the table's own mapping: one migration changing it would
+    # change every later one's verdicts.
+    v6x = board_variables("px4_fmu-v6x", ("main",))
+    with pytest.raises(TypeError):
+        v6x["HAVE_PM2"] = v6x["HAVE_PM2"]  # type: ignore[index]
+    assert board_variables("px4_fmu-v6x", ("main",)).keys() == {"HAVE_PM2"}

@@ -31,6 +31,7 @@ import itertools
 import re
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
+from types import MappingProxyType
 
 from px4params.vehicle.console import DriverStart
 
@@ -75,6 +76,11 @@ class BoardVariables:
 
     releases: tuple[str, ...]
     variables: Mapping[str, HardwareVariable]
+
+    def __post_init__(self) -> None:
+        # Callers get this mapping itself (board_variables): a read-only view keeps the table
+        # as PX4's scripts have it.
+        object.__setattr__(self, "variables", MappingProxyType(dict(self.variables)))
 
 
 #: ``mft query -q -k MFT -s MFT_PM2 -v 0``: the board's hardware manifest lists no second
