@@ -96,7 +96,7 @@ NEW_TESTS="$NEW_TESTS|test_admission|test_dronecan_node" # links/ and gui/ (mutl
 TARGETS=(
   "can_transfer|$PY/links/can_transfer.py|tests/test_dronecan.py tests/test_can_transfer.py tests/test_fuzz.py -k '(receiver or frame or transfer or can_id or reassembl) and not cli'"
   "dronecan_params|$PY/links/dronecan_params.py|tests/test_dronecan.py tests/test_dronecan_params.py -k 'long_name or getset or refused or writing or boolean'"
-  "health|$PY/vehicle/health.py,$PY/cli/commands/health.py|tests/test_flight_log.py tests/test_dronecan.py tests/test_health.py -k 'health or first_failure'"
+  "health|$PY/vehicle/health.py,$PY/cli/commands/health.py|tests/test_flight_log.py tests/test_dronecan.py tests/test_health.py tests/test_reading.py -k 'health or first_failure'"
   # One module at a time, where a whole package does not finish in a budget: those that matter
   # most for "a broken sensor never silent, nothing lost", each with the fast tests that cover it
   # (the tests written for its survivors first: -x stops at the first that fails).

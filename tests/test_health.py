@@ -197,6 +197,11 @@ def test_health_timeline_written_and_refused(
     out = capsys.readouterr().out.splitlines()
     assert out[-1] == f"wrote health timeline to {picture}"
     assert picture.read_text().lstrip().startswith("<svg")
+    # Drawn again from the log, it replaces the picture: no run.svg.bak beside it (a picture
+    # is made from the log at will, unlike a store or a parameter file).
+    assert main(["health", str(log), "--timeline", str(picture)]) == 1
+    capsys.readouterr()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.svg", "run.ulg"]
     nowhere = tmp_path / "no-such-folder" / "run.svg"
     assert main(["health", str(log), "--timeline", str(nowhere)]) == 1
     err = capsys.readouterr().err
