@@ -12,6 +12,8 @@ and 1.10.
 from __future__ import annotations
 
 import dataclasses
+import math
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -345,3 +347,123 @@ def test_a_board_imu_whose_new_r_keeps_its_orientation_is_said_the_same_not_to_c
         "rotation 6 (was 12): the board's script still starts it, with -R 6: the same "
         "orientation (mpu9250 reports other axes from PX4 v1.12.0 (PX4 commit 3abe2e82d1))"
     )
+
+
+# PX4 1.11's hand-coded axis mapping of every rotation (src/lib/conversion/rotation.cpp at
+# v1.11.0 71db0903a9, rotate_3f(), lines 67-391): what -R N makes of a driver's (x, y, z).
+# 38's numbers are PX4's own 6-digit ones; the rest are exact (S: PX4's M_SQRT1_2_F).
+S = 0.5**0.5
+Vector = tuple[float, float, float]
+PX4_AXES: dict[int, Callable[[float, float, float], Vector]] = {
+    0: lambda x, y, z: (x, y, z),
+    1: lambda x, y, z: (S * (x - y), S * (x + y), z),
+    2: lambda x, y, z: (-y, x, z),
+    3: lambda x, y, z: (-S * (x + y), S * (x - y), z),
+    4: lambda x, y, z: (-x, -y, z),
+    5: lambda x, y, z: (S * (y - x), -S * (x + y), z),
+    6: lambda x, y, z: (y, -x, z),
+    7: lambda x, y, z: (S * (x + y), S * (y - x), z),
+    8: lambda x, y, z: (x, -y, -z),
+    9: lambda x, y, z: (S * (x + y), S * (x - y), -z),
+    10: lambda x, y, z: (y, x, -z),
+    11: lambda x, y, z: (S * (y - x), S * (x + y), -z),
+    12: lambda x, y, z: (-x, y, -z),
+    13: lambda x, y, z: (-S * (x + y), S * (y - x), -z),
+    14: lambda x, y, z: (-y, -x, -z),
+    15: lambda x, y, z: (S * (x - y), -S * (x + y), -z),
+    16: lambda x, y, z: (x, -z, y),
+    17: lambda x, y, z: (S * (x + z), S * (x - z), y),  # 16, then 1
+    18: lambda x, y, z: (z, x, y),
+    19: lambda x, y, z: (S * (z - x), S * (x + z), y),  # 16, then 3
+    20: lambda x, y, z: (x, z, -y),
+    21: lambda x, y, z: (S * (x - z), S * (x + z), -y),  # 20, then 1
+    22: lambda x, y, z: (-z, x, -y),
+    23: lambda x, y, z: (-S * (x + z), S * (x - z), -y),  # 20, then 3
+    24: lambda x, y, z: (z, y, -x),
+    25: lambda x, y, z: (-z, y, x),
+    26: lambda x, y, z: (-y, -x, -z),
+    27: lambda x, y, z: (y, x, -z),
+    28: lambda x, y, z: (y, -z, -x),
+    29: lambda x, y, z: (-z, -y, -x),
+    30: lambda x, y, z: (-y, z, -x),
+    31: lambda x, y, z: (-x, -z, -y),
+    32: lambda x, y, z: (-x, z, y),
+    33: lambda x, y, z: (-y, -z, x),
+    34: lambda x, y, z: (z, -y, x),
+    35: lambda x, y, z: (y, z, x),
+    36: lambda x, y, z: (z, -x, -y),
+    37: lambda x, y, z: (-z, -x, y),
+    38: lambda x, y, z: (
+        0.146371 * x + 0.362280 * y - 0.920505 * z,
+        -0.344827 * x - 0.853477 * y - 0.390731 * z,
+        -0.927184 * x + 0.374607 * y,
+    ),
+    39: lambda x, y, z: (S * (x - z), y, S * (x + z)),
+    40: lambda x, y, z: (S * (x - y), -z, S * (x + y)),
+}
+# the same function's 41-45, gone from 1.12 (axes.REMOVED_AT_1_12 keeps their angles)
+PX4_1_11_AXES: dict[int, Callable[[float, float, float], Vector]] = {
+    41: lambda x, y, z: (-x, -z, -y),
+    42: lambda x, y, z: (z, -x, -y),
+    43: lambda x, y, z: (-z, -y, -x),
+    44: lambda x, y, z: (-0.987688 * x - 0.156434 * z, -y, -0.156434 * x + 0.987688 * z),
+    45: lambda x, y, z: (S * (x + z), y, S * (z - x)),
+}
+
+
+def as_matrix(axes_of: Callable[[float, float, float], Vector]) -> list[Vector]:
+    """The matrix of a mapping of (x, y, z), by rows: its columns are the unit axes' images."""
+    columns = [axes_of(*unit) for unit in ((1, 0, 0), (0, 1, 0), (0, 0, 1))]
+    return [(columns[0][i], columns[1][i], columns[2][i]) for i in range(3)]
+
+
+def test_the_enum_is_pX4s_whole_rotation_enum() -> None:
+    assert sorted(axes.rotations()) == sorted(PX4_AXES)
+
+
+@pytest.mark.parametrize("value", sorted(PX4_AXES))
+def test_each_rotations_matrix_turns_axes_as_pX4s_rotate_3f(value: int) -> None:
+    want = as_matrix(PX4_AXES[value])
+    for got_row, want_row in zip(axes.rotations()[value], want, strict=True):
+        assert got_row == pytest.approx(want_row, abs=1e-6), value
+
+
+@pytest.mark.parametrize("value", sorted(PX4_1_11_AXES))
+def test_a_removed_rotations_angles_turn_axes_as_pX4_1_11_did(value: int) -> None:
+    want = as_matrix(PX4_1_11_AXES[value])
+    got = axes.matrix(*axes.REMOVED_AT_1_12[value])
+    for got_row, want_row in zip(got, want, strict=True):
+        assert got_row == pytest.approx(want_row, abs=1e-6), value
+
+
+def about(axis: str, degrees: float) -> list[Vector]:
+    """The right-handed rotation by ``degrees`` about the x, y or z axis, by rows."""
+    c, s = math.cos(math.radians(degrees)), math.sin(math.radians(degrees))
+    return {
+        "x": [(1, 0, 0), (0, c, -s), (0, s, c)],
+        "y": [(c, 0, s), (0, 1, 0), (-s, 0, c)],
+        "z": [(c, -s, 0), (s, c, 0), (0, 0, 1)],
+    }[axis]
+
+
+def product(a: list[Vector], b: list[Vector]) -> list[Vector]:
+    """``a · b``: b's rotation first, then a's."""
+
+    def row_of(row: Vector) -> Vector:
+        x, y, z = (sum(r * b[k][j] for k, r in enumerate(row)) for j in range(3))
+        return x, y, z
+
+    return [row_of(row) for row in a]
+
+
+@pytest.mark.parametrize(("roll", "pitch", "yaw"), [(30, 50, 70), (-110, 20, 250), (200, -35, 100)])
+def test_the_matrix_of_any_angles_is_yaw_then_pitch_then_roll(
+    roll: float, pitch: float, yaw: float
+) -> None:
+    """PX4's matrix::Dcm of Euler angles (PX4-Matrix matrix/Dcm.hpp): a 3-2-1 intrinsic
+    Tait-Bryan sequence, yaw about z, pitch about the new y, roll about the newest x; worked
+    here as the product of the three single-axis rotations. No angle is a right one, so no
+    cos or sin term is 0 and each entry's every term counts."""
+    want = product(about("z", yaw), product(about("y", pitch), about("x", roll)))
+    for got_row, want_row in zip(axes.matrix(roll, pitch, yaw), want, strict=True):
+        assert got_row == pytest.approx(want_row, abs=1e-12)
