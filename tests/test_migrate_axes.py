@@ -494,3 +494,18 @@ def test_two_right_angled_rotations_compose_to_a_right_angled_one() -> None:
     for first in RIGHT_ANGLED:
         for then in RIGHT_ANGLED:
             assert axes.composed(first, then) in RIGHT_ANGLED, (first, then)
+
+
+# the boards of the changes PX4 built only for some (driver_axes.toml's only_boards)
+FIX_BOARDS = {"mpu6000": "spracing_h7extreme", "mpu9250": "bitcraze_crazyflie"}
+
+
+@pytest.mark.parametrize(("script", "module", "internal", "old", "new"), BOARD_FIXES)
+def test_a_file_of_px4_1_12_for_a_1_11_target_gets_the_board_scripts_old_rotation(
+    script: str, module: str, internal: bool, old: int, new: int
+) -> None:
+    """PX4's board fixes read backwards: the v1.12.0 -R of a file of 1.12 is the v1.11.0 one
+    for a 1.11 target (turned by C's inverse)."""
+    board = FIX_BOARDS.get(module)
+    turned = axes.turn([module], new, "w", (1, 12, 0), "v1.11.0", internal, board)
+    assert turned is not None and turned.rotation == old, script
