@@ -250,7 +250,15 @@ def test_a_driver_only_some_boards_built_old_turns_only_there() -> None:
     assert axes.turn(["mpu6000"], 11, "w", old, None, False, "spracing_h7extreme").rotation == 5
     assert axes.turn(["mpu6000"], 11, "w", old, None, False, "px4_fmu-v4") is None
     unknown = axes.turn(["mpu6000"], 11, "w", old, None, False, None)
-    assert unknown is not None and unknown.rotation == 11 and "board is not known" in unknown.note
+    assert unknown == axes.Turned(
+        11,
+        "w",
+        "rotation 11 taken as is (w): mpu6000 reports other axes from PX4 v1.12.0 (PX4 commit "
+        "11ad41f7cb) where the build had the old driver (nxp_fmurt1062-v1, spracing_h7extreme), "
+        "and the board is not known",
+        # nothing turned, so nothing to say the board script's new -R keeps (build.py)
+        what="",
+    )
 
 
 @pytest.mark.parametrize(
@@ -259,6 +267,7 @@ def test_a_driver_only_some_boards_built_old_turns_only_there() -> None:
         ({"modules": ["x"]}, "driver_axes.toml: change 1: old_through missing"),
         ({**{"colour": 1}}, "driver_axes.toml: change 1: unknown key 'colour' (expected modules,"),
         ({"rotation": 41}, "driver_axes.toml: change 1: rotation = 41: not a value of PX4's"),
+        ({"internal_rotation": 45}, "driver_axes.toml: change 1: internal_rotation = 45: not a"),
         ({"new_from": "soon"}, "driver_axes.toml: change 1: new_from: release 'soon' is no PX4"),
         ({"pr": "14384"}, "driver_axes.toml: change 1: pr = '14384': expected a int"),
     ],
@@ -509,3 +518,37 @@ def test_a_file_of_px4_1_12_for_a_1_11_target_gets_the_board_scripts_old_rotatio
     board = FIX_BOARDS.get(module)
     turned = axes.turn([module], new, "w", (1, 12, 0), "v1.11.0", internal, board)
     assert turned is not None and turned.rotation == old, script
+
+
+@pytest.mark.parametrize(
+    ("release", "side"),
+    [("v1.11.0", "old"), ((1, 10, 1), "old"), ((1, 11, 3), "old"), ("v1.12.0", "new"),
+     ((1, 13, 3), "new"), ("main", "new"), (None, "new")],
+)  # fmt: skip
+def test_a_release_reports_the_ist8310s_old_axes_through_1_11_and_the_new_from_1_12(
+    release: str | tuple[int, ...] | None, side: str
+) -> None:
+    (ist8310,) = [c for c in axes.changes() if c.modules == ("ist8310",)]
+    assert ist8310.side(release) == side
+
+
+def test_a_release_between_the_two_read_is_on_neither_side() -> None:
+    # lis2mdl -> iis2mdc: read at v1.15.0 (old) and release/1.18 (new), v1.16 and v1.17 not
+    (lis2mdl,) = [c for c in axes.changes() if "lis2mdl" in c.modules]
+    sides = [lis2mdl.side(r) for r in ((1, 15, 2), (1, 16, 0), "v1.17.0", "v1.18")]
+    assert sides == ["old", None, None, "new"]
+
+
+def test_a_driver_renamed_twice_is_named_by_its_first_and_todays_name(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    row = {
+        "modules": ["first", "second", "third"], "old_through": "v1.11", "new_from": "v1.12.0",
+        "rotation": 10, "commit": "0123456789", "old_source": "a", "new_source": "b",
+    }  # fmt: skip
+    monkeypatch.setattr(axes, "changes", lambda: axes.parse_changes({"change": [row]}))
+    turned = axes.turn(["second"], 0, "w", (1, 11, 0), None, False, None)
+    assert turned is not None and turned.what == (
+        "first (today third) reports other axes from PX4 v1.12.0 (PX4 commit 0123456789)"
+    )
+    assert turned.why == "0 on PX4 v1.11.0 (w), turned for third's axes"
