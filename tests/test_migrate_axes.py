@@ -552,3 +552,16 @@ def test_a_driver_renamed_twice_is_named_by_its_first_and_todays_name(
         "first (today third) reports other axes from PX4 v1.12.0 (PX4 commit 0123456789)"
     )
     assert turned.why == "0 on PX4 v1.11.0 (w), turned for third's axes"
+
+
+def test_the_cached_tables_rows_and_a_turns_answer_cannot_be_changed_in_place() -> None:
+    # changes() hands every caller the same rows: one caller's edit would be everyone's
+    change = axes.changes()[0]
+    turned = axes.turn(["ist8310"], 0, "w", (1, 11, 3), None, False, None)
+    assert turned is not None
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        change.rotation = 0  # type: ignore[misc]
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        turned.rotation = 0  # type: ignore[misc]
+    assert hash(change) == hash(axes.changes()[0])
+    assert hash(turned) == hash(dataclasses.replace(turned))
