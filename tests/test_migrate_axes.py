@@ -539,19 +539,60 @@ def test_a_release_between_the_two_read_is_on_neither_side() -> None:
     assert sides == ["old", None, None, "new"]
 
 
+def only_change(monkeypatch: pytest.MonkeyPatch, **row: object) -> None:
+    """The table as one made-up change (old axes through v1.11, new from v1.12.0, C 10)."""
+    base = {
+        "modules": ["drv"], "old_through": "v1.11", "new_from": "v1.12.0", "rotation": 10,
+        "commit": "0123456789", "old_source": "a", "new_source": "b",
+    }  # fmt: skip
+    monkeypatch.setattr(axes, "changes", lambda: axes.parse_changes({"change": [base | row]}))
+
+
 def test_a_driver_renamed_twice_is_named_by_its_first_and_todays_name(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    row = {
-        "modules": ["first", "second", "third"], "old_through": "v1.11", "new_from": "v1.12.0",
-        "rotation": 10, "commit": "0123456789", "old_source": "a", "new_source": "b",
-    }  # fmt: skip
-    monkeypatch.setattr(axes, "changes", lambda: axes.parse_changes({"change": [row]}))
+    only_change(monkeypatch, modules=["first", "second", "third"])
     turned = axes.turn(["second"], 0, "w", (1, 11, 0), None, False, None)
     assert turned is not None and turned.what == (
         "first (today third) reports other axes from PX4 v1.12.0 (PX4 commit 0123456789)"
     )
     assert turned.why == "0 on PX4 v1.11.0 (w), turned for third's axes"
+
+
+def test_a_change_that_is_no_half_turn_is_undone_by_its_inverse(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Every real C is a half turn, its own inverse; a made-up C of yaw 90 (2) tells them
+    apart. Its old report is the new one turned by yaw 90, so -R 0 on the new axes is -R 6
+    (yaw 270, C's inverse) on the old, and -R 0 on the old is -R 2 on the new."""
+    only_change(monkeypatch, rotation=2, new_from="v1.13.0")
+
+    def turn(file: tuple[int, int, int] | None, release: str | None) -> axes.Turned | None:
+        return axes.turn(["drv"], 0, "w", file, release, False, None)
+
+    for file, release, rotation in [((1, 11, 0), None, 2), ((1, 13, 0), "v1.11.0", 6)]:
+        turned = turn(file, release)
+        assert turned is not None and turned.rotation == rotation, release
+    # v1.12 is between the releases read: the note gives the other side's value
+    unread = "rotation 0 taken as is (w): drv reports other axes from PX4 v1.13.0 (PX4 commit "
+    unread += "0123456789), and the axes of PX4 v1.12.0 were not checked (PX4 v1.11 reports the "
+    unread += "old ones): for a file of PX4 {}"
+    assert turn((1, 12, 0), None) == axes.Turned(0, "w", unread.format("v1.11 or older it is 2"))
+    assert turn((1, 12, 0), "v1.11.0") == axes.Turned(
+        0, "w", unread.format("v1.13.0 or newer it is 6")
+    )
+
+
+def test_a_file_naming_no_release_whose_orientation_no_value_names_says_so() -> None:
+    # 17 after ist8310's C 10: no value (the research note's table, as above)
+    turned = axes.turn(["ist8310"], 17, "w", None, None, False, None)
+    assert turned == axes.Turned(
+        17,
+        "w",
+        "rotation 17 taken as is (w): the file names no PX4 release, and ist8310 reports other "
+        "axes from PX4 v1.12.0 (PX4 commit 7569722821): for a file of PX4 v1.11 or older no -R "
+        "value names it",
+    )
 
 
 def test_the_cached_tables_rows_and_a_turns_answer_cannot_be_changed_in_place() -> None:
