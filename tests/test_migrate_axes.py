@@ -12,6 +12,8 @@ and 1.10.
 from __future__ import annotations
 
 import dataclasses
+import math
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -248,7 +250,15 @@ def test_a_driver_only_some_boards_built_old_turns_only_there() -> None:
     assert axes.turn(["mpu6000"], 11, "w", old, None, False, "spracing_h7extreme").rotation == 5
     assert axes.turn(["mpu6000"], 11, "w", old, None, False, "px4_fmu-v4") is None
     unknown = axes.turn(["mpu6000"], 11, "w", old, None, False, None)
-    assert unknown is not None and unknown.rotation == 11 and "board is not known" in unknown.note
+    assert unknown == axes.Turned(
+        11,
+        "w",
+        "rotation 11 taken as is (w): mpu6000 reports other axes from PX4 v1.12.0 (PX4 commit "
+        "11ad41f7cb) where the build had the old driver (nxp_fmurt1062-v1, spracing_h7extreme), "
+        "and the board is not known",
+        # nothing turned, so nothing to say the board script's new -R keeps (build.py)
+        what="",
+    )
 
 
 @pytest.mark.parametrize(
@@ -257,6 +267,7 @@ def test_a_driver_only_some_boards_built_old_turns_only_there() -> None:
         ({"modules": ["x"]}, "driver_axes.toml: change 1: old_through missing"),
         ({**{"colour": 1}}, "driver_axes.toml: change 1: unknown key 'colour' (expected modules,"),
         ({"rotation": 41}, "driver_axes.toml: change 1: rotation = 41: not a value of PX4's"),
+        ({"internal_rotation": 45}, "driver_axes.toml: change 1: internal_rotation = 45: not a"),
         ({"new_from": "soon"}, "driver_axes.toml: change 1: new_from: release 'soon' is no PX4"),
         ({"pr": "14384"}, "driver_axes.toml: change 1: pr = '14384': expected a int"),
     ],
@@ -345,3 +356,253 @@ def test_a_board_imu_whose_new_r_keeps_its_orientation_is_said_the_same_not_to_c
         "rotation 6 (was 12): the board's script still starts it, with -R 6: the same "
         "orientation (mpu9250 reports other axes from PX4 v1.12.0 (PX4 commit 3abe2e82d1))"
     )
+
+
+# PX4 1.11's hand-coded axis mapping of every rotation (src/lib/conversion/rotation.cpp at
+# v1.11.0 71db0903a9, rotate_3f(), lines 67-391): what -R N makes of a driver's (x, y, z).
+# 38's numbers are PX4's own 6-digit ones; the rest are exact (S: PX4's M_SQRT1_2_F).
+S = 0.5**0.5
+Vector = tuple[float, float, float]
+PX4_AXES: dict[int, Callable[[float, float, float], Vector]] = {
+    0: lambda x, y, z: (x, y, z),
+    1: lambda x, y, z: (S * (x - y), S * (x + y), z),
+    2: lambda x, y, z: (-y, x, z),
+    3: lambda x, y, z: (-S * (x + y), S * (x - y), z),
+    4: lambda x, y, z: (-x, -y, z),
+    5: lambda x, y, z: (S * (y - x), -S * (x + y), z),
+    6: lambda x, y, z: (y, -x, z),
+    7: lambda x, y, z: (S * (x + y), S * (y - x), z),
+    8: lambda x, y, z: (x, -y, -z),
+    9: lambda x, y, z: (S * (x + y), S * (x - y), -z),
+    10: lambda x, y, z: (y, x, -z),
+    11: lambda x, y, z: (S * (y - x), S * (x + y), -z),
+    12: lambda x, y, z: (-x, y, -z),
+    13: lambda x, y, z: (-S * (x + y), S * (y - x), -z),
+    14: lambda x, y, z: (-y, -x, -z),
+    15: lambda x, y, z: (S * (x - y), -S * (x + y), -z),
+    16: lambda x, y, z: (x, -z, y),
+    17: lambda x, y, z: (S * (x + z), S * (x - z), y),  # 16, then 1
+    18: lambda x, y, z: (z, x, y),
+    19: lambda x, y, z: (S * (z - x), S * (x + z), y),  # 16, then 3
+    20: lambda x, y, z: (x, z, -y),
+    21: lambda x, y, z: (S * (x - z), S * (x + z), -y),  # 20, then 1
+    22: lambda x, y, z: (-z, x, -y),
+    23: lambda x, y, z: (-S * (x + z), S * (x - z), -y),  # 20, then 3
+    24: lambda x, y, z: (z, y, -x),
+    25: lambda x, y, z: (-z, y, x),
+    26: lambda x, y, z: (-y, -x, -z),
+    27: lambda x, y, z: (y, x, -z),
+    28: lambda x, y, z: (y, -z, -x),
+    29: lambda x, y, z: (-z, -y, -x),
+    30: lambda x, y, z: (-y, z, -x),
+    31: lambda x, y, z: (-x, -z, -y),
+    32: lambda x, y, z: (-x, z, y),
+    33: lambda x, y, z: (-y, -z, x),
+    34: lambda x, y, z: (z, -y, x),
+    35: lambda x, y, z: (y, z, x),
+    36: lambda x, y, z: (z, -x, -y),
+    37: lambda x, y, z: (-z, -x, y),
+    38: lambda x, y, z: (
+        0.146371 * x + 0.362280 * y - 0.920505 * z,
+        -0.344827 * x - 0.853477 * y - 0.390731 * z,
+        -0.927184 * x + 0.374607 * y,
+    ),
+    39: lambda x, y, z: (S * (x - z), y, S * (x + z)),
+    40: lambda x, y, z: (S * (x - y), -z, S * (x + y)),
+}
+# the same function's 41-45, gone from 1.12 (axes.REMOVED_AT_1_12 keeps their angles)
+PX4_1_11_AXES: dict[int, Callable[[float, float, float], Vector]] = {
+    41: lambda x, y, z: (-x, -z, -y),
+    42: lambda x, y, z: (z, -x, -y),
+    43: lambda x, y, z: (-z, -y, -x),
+    44: lambda x, y, z: (-0.987688 * x - 0.156434 * z, -y, -0.156434 * x + 0.987688 * z),
+    45: lambda x, y, z: (S * (x + z), y, S * (z - x)),
+}
+
+
+def as_matrix(axes_of: Callable[[float, float, float], Vector]) -> list[Vector]:
+    """The matrix of a mapping of (x, y, z), by rows: its columns are the unit axes' images."""
+    columns = [axes_of(*unit) for unit in ((1, 0, 0), (0, 1, 0), (0, 0, 1))]
+    return [(columns[0][i], columns[1][i], columns[2][i]) for i in range(3)]
+
+
+def test_the_enum_is_pX4s_whole_rotation_enum() -> None:
+    assert sorted(axes.rotations()) == sorted(PX4_AXES)
+
+
+@pytest.mark.parametrize("value", sorted(PX4_AXES))
+def test_each_rotations_matrix_turns_axes_as_pX4s_rotate_3f(value: int) -> None:
+    want = as_matrix(PX4_AXES[value])
+    for got_row, want_row in zip(axes.rotations()[value], want, strict=True):
+        assert got_row == pytest.approx(want_row, abs=1e-6), value
+
+
+@pytest.mark.parametrize("value", sorted(PX4_1_11_AXES))
+def test_a_removed_rotations_angles_turn_axes_as_pX4_1_11_did(value: int) -> None:
+    want = as_matrix(PX4_1_11_AXES[value])
+    got = axes.matrix(*axes.REMOVED_AT_1_12[value])
+    for got_row, want_row in zip(got, want, strict=True):
+        assert got_row == pytest.approx(want_row, abs=1e-6), value
+
+
+def about(axis: str, degrees: float) -> list[Vector]:
+    """The right-handed rotation by ``degrees`` about the x, y or z axis, by rows."""
+    c, s = math.cos(math.radians(degrees)), math.sin(math.radians(degrees))
+    return {
+        "x": [(1, 0, 0), (0, c, -s), (0, s, c)],
+        "y": [(c, 0, s), (0, 1, 0), (-s, 0, c)],
+        "z": [(c, -s, 0), (s, c, 0), (0, 0, 1)],
+    }[axis]
+
+
+def product(a: list[Vector], b: list[Vector]) -> list[Vector]:
+    """``a · b``: b's rotation first, then a's."""
+
+    def row_of(row: Vector) -> Vector:
+        x, y, z = (sum(r * b[k][j] for k, r in enumerate(row)) for j in range(3))
+        return x, y, z
+
+    return [row_of(row) for row in a]
+
+
+@pytest.mark.parametrize(("roll", "pitch", "yaw"), [(30, 50, 70), (-110, 20, 250), (200, -35, 100)])
+def test_the_matrix_of_any_angles_is_yaw_then_pitch_then_roll(
+    roll: float, pitch: float, yaw: float
+) -> None:
+    """PX4's matrix::Dcm of Euler angles (PX4-Matrix matrix/Dcm.hpp): a 3-2-1 intrinsic
+    Tait-Bryan sequence, yaw about z, pitch about the new y, roll about the newest x; worked
+    here as the product of the three single-axis rotations. No angle is a right one, so no
+    cos or sin term is 0 and each entry's every term counts."""
+    want = product(about("z", yaw), product(about("y", pitch), about("x", roll)))
+    for got_row, want_row in zip(axes.matrix(roll, pitch, yaw), want, strict=True):
+        assert got_row == pytest.approx(want_row, abs=1e-12)
+
+
+# rotation.h at v1.12.0, rotate_3(): 26 falls through to 14's case and 27 to 10's, the same
+# rotation: composed() names it by the lower value
+ALIASES = {26: 14, 27: 10}
+# the 24 rotations of a cube, all in the enum: any two of them compose to one of them
+RIGHT_ANGLED = [0, 2, 4, 6, 8, 10, 12, 14, 16, 18, 20, 22, 24, 25, *range(28, 38)]
+
+
+def test_a_rotation_composed_with_its_inverse_is_no_rotation() -> None:
+    for value in axes.rotations():
+        assert axes.composed(value, value, inverse=True) == 0, value
+
+
+def test_turning_by_a_rotation_and_back_gives_the_rotation_again() -> None:
+    for first in axes.rotations():
+        for then in axes.rotations():
+            there = axes.composed(first, then)
+            if there is not None:
+                back = axes.composed(first, there, inverse=True)
+                assert back == ALIASES.get(then, then), (first, then)
+
+
+def test_two_right_angled_rotations_compose_to_a_right_angled_one() -> None:
+    for first in RIGHT_ANGLED:
+        for then in RIGHT_ANGLED:
+            assert axes.composed(first, then) in RIGHT_ANGLED, (first, then)
+
+
+# the boards of the changes PX4 built only for some (driver_axes.toml's only_boards)
+FIX_BOARDS = {"mpu6000": "spracing_h7extreme", "mpu9250": "bitcraze_crazyflie"}
+
+
+@pytest.mark.parametrize(("script", "module", "internal", "old", "new"), BOARD_FIXES)
+def test_a_file_of_px4_1_12_for_a_1_11_target_gets_the_board_scripts_old_rotation(
+    script: str, module: str, internal: bool, old: int, new: int
+) -> None:
+    """PX4's board fixes read backwards: the v1.12.0 -R of a file of 1.12 is the v1.11.0 one
+    for a 1.11 target (turned by C's inverse)."""
+    board = FIX_BOARDS.get(module)
+    turned = axes.turn([module], new, "w", (1, 12, 0), "v1.11.0", internal, board)
+    assert turned is not None and turned.rotation == old, script
+
+
+@pytest.mark.parametrize(
+    ("release", "side"),
+    [("v1.11.0", "old"), ((1, 10, 1), "old"), ((1, 11, 3), "old"), ("v1.12.0", "new"),
+     ((1, 13, 3), "new"), ("main", "new"), (None, "new")],
+)  # fmt: skip
+def test_a_release_reports_the_ist8310s_old_axes_through_1_11_and_the_new_from_1_12(
+    release: str | tuple[int, ...] | None, side: str
+) -> None:
+    (ist8310,) = [c for c in axes.changes() if c.modules == ("ist8310",)]
+    assert ist8310.side(release) == side
+
+
+def test_a_release_between_the_two_read_is_on_neither_side() -> None:
+    # lis2mdl -> iis2mdc: read at v1.15.0 (old) and release/1.18 (new), v1.16 and v1.17 not
+    (lis2mdl,) = [c for c in axes.changes() if "lis2mdl" in c.modules]
+    sides = [lis2mdl.side(r) for r in ((1, 15, 2), (1, 16, 0), "v1.17.0", "v1.18")]
+    assert sides == ["old", None, None, "new"]
+
+
+def only_change(monkeypatch: pytest.MonkeyPatch, **row: object) -> None:
+    """The table as one made-up change (old axes through v1.11, new from v1.12.0, C 10)."""
+    base = {
+        "modules": ["drv"], "old_through": "v1.11", "new_from": "v1.12.0", "rotation": 10,
+        "commit": "0123456789", "old_source": "a", "new_source": "b",
+    }  # fmt: skip
+    monkeypatch.setattr(axes, "changes", lambda: axes.parse_changes({"change": [base | row]}))
+
+
+def test_a_driver_renamed_twice_is_named_by_its_first_and_todays_name(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    only_change(monkeypatch, modules=["first", "second", "third"])
+    turned = axes.turn(["second"], 0, "w", (1, 11, 0), None, False, None)
+    assert turned is not None and turned.what == (
+        "first (today third) reports other axes from PX4 v1.12.0 (PX4 commit 0123456789)"
+    )
+    assert turned.why == "0 on PX4 v1.11.0 (w), turned for third's axes"
+
+
+def test_a_change_that_is_no_half_turn_is_undone_by_its_inverse(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Every real C is a half turn, its own inverse; a made-up C of yaw 90 (2) tells them
+    apart. Its old report is the new one turned by yaw 90, so -R 0 on the new axes is -R 6
+    (yaw 270, C's inverse) on the old, and -R 0 on the old is -R 2 on the new."""
+    only_change(monkeypatch, rotation=2, new_from="v1.13.0")
+
+    def turn(file: tuple[int, int, int] | None, release: str | None) -> axes.Turned | None:
+        return axes.turn(["drv"], 0, "w", file, release, False, None)
+
+    for file, release, rotation in [((1, 11, 0), None, 2), ((1, 13, 0), "v1.11.0", 6)]:
+        turned = turn(file, release)
+        assert turned is not None and turned.rotation == rotation, release
+    # v1.12 is between the releases read: the note gives the other side's value
+    unread = "rotation 0 taken as is (w): drv reports other axes from PX4 v1.13.0 (PX4 commit "
+    unread += "0123456789), and the axes of PX4 v1.12.0 were not checked (PX4 v1.11 reports the "
+    unread += "old ones): for a file of PX4 {}"
+    assert turn((1, 12, 0), None) == axes.Turned(0, "w", unread.format("v1.11 or older it is 2"))
+    assert turn((1, 12, 0), "v1.11.0") == axes.Turned(
+        0, "w", unread.format("v1.13.0 or newer it is 6")
+    )
+
+
+def test_a_file_naming_no_release_whose_orientation_no_value_names_says_so() -> None:
+    # 17 after ist8310's C 10: no value (the research note's table, as above)
+    turned = axes.turn(["ist8310"], 17, "w", None, None, False, None)
+    assert turned == axes.Turned(
+        17,
+        "w",
+        "rotation 17 taken as is (w): the file names no PX4 release, and ist8310 reports other "
+        "axes from PX4 v1.12.0 (PX4 commit 7569722821): for a file of PX4 v1.11 or older no -R "
+        "value names it",
+    )
+
+
+def test_the_cached_tables_rows_and_a_turns_answer_cannot_be_changed_in_place() -> None:
+    # changes() hands every caller the same rows: one caller's edit would be everyone's
+    change = axes.changes()[0]
+    turned = axes.turn(["ist8310"], 0, "w", (1, 11, 3), None, False, None)
+    assert turned is not None
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        change.rotation = 0  # type: ignore[misc]
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        turned.rotation = 0  # type: ignore[misc]
+    assert hash(change) == hash(axes.changes()[0])
+    assert hash(turned) == hash(dataclasses.replace(turned))
