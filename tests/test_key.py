@@ -305,3 +305,34 @@ def test_a_hint_is_worked_out_for_up_to_1000_characters() -> None:
 def test_a_key_is_written_back_as_the_name_it_was_read_from(name: str) -> None:
     """The naming rule both ways: ``NAME``, ``NAME#N``, ``NAME#N[k]``, ``NAME#N.path``."""
     assert str(Key.parse(name)) == name
+
+
+EXACT = "names are exact, in upper case with ASCII digits and no spaces, as PX4's"
+
+
+@pytest.mark.parametrize(
+    ("text", "hint"),
+    [
+        # each index of a path is checked, not only the first "[0" (here a good one)
+        ("INA238#0.bus[0].i2c[01]", "INA238#0.bus[0].i2c[1]"),
+        # a typo does not hide a leading zero: cut short, or a bracket left out
+        ("INA238#0.bus[01", "INA238#0.bus[1"),
+        ("INA238#0.bus[0[01]", "INA238#0.bus[0[1]"),
+        # the hint rewrites numbers only: an index that is none is kept as typed
+        ("ina238#0.bus[a1]", "INA238#0.bus[a1]"),
+    ],
+)
+def test_a_leading_zero_anywhere_in_a_path_is_refused_with_the_exact_name(
+    text: str, hint: str
+) -> None:
+    with pytest.raises(InstanceError) as refused:
+        Key.parse(text)
+    assert str(refused.value) == f"'{text}' is not a parameter name: {EXACT} (did you mean {hint}?)"
+
+
+def test_a_path_cut_short_after_a_zero_is_no_field(store: px4params.Store) -> None:
+    # "[0" at the path's very end has no digit after it: no leading zero; the type refuses it.
+    assert str(Key.parse("INA238#1.bus[0")) == "INA238#1.bus[0"
+    with pytest.raises(px4params.LeafError) as refused:
+        store.get("INA238#1.bus[0")
+    assert str(refused.value) == "INA238#1: bus: no such field: bus[0"
