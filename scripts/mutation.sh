@@ -289,7 +289,7 @@ RUST_ISSUE40_TESTS="$RUST_ISSUE40_TESTS mutants_store_tables mutants_store_trans
 # (cargo-mutants 27.1.0 adds the file's "delete field" mutants whatever --re says.)
 TARGETS+=(
   "rust-compact-crc|crates/px4params-core/src/crc.rs|--features=compact --lib --test=crc --test=transfer --test=mutants_transfer --test=file"
-  "rust-compact-store|crates/px4params-core/src/store.rs|--features=compact --test=store --test=mutants_store --test=table --test=mutants_store_tables --test=mutants_store_set_from --test=mutants_store_saturate"
+  "rust-compact-store|crates/px4params-core/src/store.rs|--features=compact --test=store --test=mutants_store --test=table --test=mutants_store_tables --test=mutants_store_set_from --test=mutants_store_saturate --test=mutants_store_translated --test=file"
 )
 RUST_ISSUE40_TESTS="$RUST_ISSUE40_TESTS mutants_store_saturate"
 # file.rs (this entry replaces the one above): its tests and those written for its survivors.
