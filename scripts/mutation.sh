@@ -123,8 +123,9 @@ TARGETS=(
   "rust-crc|crates/px4params-core/src/crc.rs|"
   # The receive path: the unit tests in the file (--lib) and the test programs that read
   # values in pieces through it (codec, walk, pages; straight and store have one such test
-  # each, left out: a mutant would build them for little).
-  "rust-scatter|crates/px4params-core/src/scatter.rs|--lib --test=mutants_scatter --test=codec --test=walk --test=pages"
+  # each, left out: a mutant would build them for little), and transfer's (a payload longer
+  # than the 64 bytes a host gathers is read in pieces: only they receive one).
+  "rust-scatter|crates/px4params-core/src/scatter.rs|--lib --test=mutants_scatter --test=codec --test=walk --test=pages --test=transfer --test=mutants_transfer"
   "rust-transfer|crates/px4params-core/src/transfer.rs|--lib --test=mutants_transfer --test=codec"
 )
 # The Rust test files issue 40 added: MUTATION_BASELINE=1 leaves them out (the "before").
@@ -328,7 +329,7 @@ RUST_ISSUE40_TESTS="$RUST_ISSUE40_TESTS mutants_scalar"
 
 # scatter.rs's firmware build (the lead, 11-28): without the gathering plan a transfer's payload
 # is never one run, so the contiguous() offered to readers differs from the host's.
-TARGETS+=("rust-compact-scatter|crates/px4params-core/src/scatter.rs|--features=compact --lib --test=mutants_scatter --test=codec --test=walk --test=pages")
+TARGETS+=("rust-compact-scatter|crates/px4params-core/src/scatter.rs|--features=compact --lib --test=mutants_scatter --test=codec --test=walk --test=pages --test=transfer --test=mutants_transfer")
 
 
 # translate's report (the rust-core sample's last survivor, the lead):
