@@ -28,7 +28,9 @@ def test_a_params_file_has_no_board_and_the_report_says_so(
     path = tmp_path / "vehicle.params"
     path.write_text("# Onboard parameters for Vehicle 1\n1\t1\tSYS_AUTOSTART\t4001\t6\n")
     config = migrate.read_config(path)
+    # nor a hardware type: `ver hwtypecmp` rows stay unsettled, not false
     assert (config.hardware, config.release, config.console) == (None, None, None)
+    assert config.hw_type is None
     proposal = migrate.migrate(config, table=devtypes)
     assert proposal.board is None
     assert any(
@@ -307,3 +309,32 @@ def test_a_text_file_too_large_for_a_parameter_file_is_named_with_the_limit(
     assert str(refused.value) == (
         f"{path}: cannot read: too large for a parameter file (16 MiB; at most 16 MiB)"
     )
+
+
+@pytest.mark.parametrize(
+    ("field", "value", "hw_type"),
+    [
+        ("char[9] ver_hw_subtype", b"V6X005000", "V6X005000"),
+        ("char[0] ver_hw_subtype", b"", None),  # a board without a subtype
+        ("uint32_t ver_hw_subtype", (5).to_bytes(4, "little"), None),  # not PX4's string
+        ("char[9] ver_hw_subtypes", b"V6X005000", None),  # another key
+    ],
+)
+def test_a_logs_hardware_type_is_its_ver_hw_subtype_string(
+    tmp_path: Path, field: str, value: bytes, hw_type: str | None
+) -> None:
+    """PX4's logger writes px4_board_sub_type(), what ``ver hwtypecmp`` compares, as the
+    information field ``char[N] ver_hw_subtype`` (src/modules/logger/logger.cpp)."""
+    import struct
+
+    from test_devid import _key_value, _message
+
+    data = b"ULog\x01\x12\x35\x01" + struct.pack("<Q", 0)
+    data += _message("B", bytes(8) + bytes(8) + bytes(3 * 8))
+    data += _message("I", _key_value(field, value))
+    data += _message("P", _key_value("int32_t SYS_AUTOSTART", struct.pack("<i", 4001)))
+    log = tmp_path / "subtype.ulg"
+    log.write_bytes(data)
+    config = migrate.read_config(log)
+    assert config.params == {"SYS_AUTOSTART": 4001}
+    assert config.hw_type == hw_type
