@@ -101,7 +101,7 @@ TARGETS=(
   # most for "a broken sensor never silent, nothing lost", each with the fast tests that cover it
   # (the tests written for its survivors first: -x stops at the first that fails).
   "session|$PY/store/session.py|tests/test_session.py tests/test_session_write_path.py -k 'not cli and not dronecan and not over_mavlink and not disjoint and not mavlink_serve'"
-  "migrate-config|$PY/migrate/config.py,$PY/migrate/proposal.py|tests/test_migrate_config.py tests/test_migrate.py tests/test_migrate_defects.py"
+  "migrate-config|$PY/migrate/config.py,$PY/migrate/proposal.py|tests/test_migrate_config.py tests/test_migrate.py tests/test_migrate_defects.py tests/test_migrate_upgrade.py"
   "devid|$PY/vehicle/devid.py|tests/test_devid.py"
   "flight_log|$PY/vehicle/flight_log.py|tests/test_flight_log.py"
   "mavlink_ftp|$PY/links/mavlink_ftp.py|tests/test_mavlink_ftp.py tests/test_mavlink_metadata.py tests/test_mavlink_security.py -k 'ftp or open_read or naks or sessions_run or list_directory or crc32 or burst or slices or garbage'"

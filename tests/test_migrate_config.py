@@ -51,6 +51,11 @@ def test_a_proposal_of_a_configuration_made_by_hand_reports_it() -> None:
     assert "\nNot known, assumed: none\n" in report and "  board: not known\n" in report
     document = proposal.as_dict()
     assert (document["not_carried"], document["assumptions"], document["board"]) == ([], [], None)
+    # nothing compared, no target: JSON's null and empty list, as for a file read by migrate
+    assert (document["target_release"], document["compared_releases"]) == (None, [])
+    # a device left out by hand: no later releases compared for it (null, not "")
+    proposal.left_out.append(migrate.LeftOut("CAL_MAG0_ID = 1", "a compass", "dronecan", "-"))
+    assert proposal.as_dict()["left_out"][0]["later"] is None
     # an instance proposed by hand, its indices left to be filled in
     proposal.instances.append(migrate.ProposedInstance("INA238#0", "on the bench", {}))
     assert proposal.as_dict()["instances"][0]["indices"] == {}

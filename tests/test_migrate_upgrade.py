@@ -116,6 +116,10 @@ def test_for_a_newer_target_the_real_logs_compass_is_an_instance_with_its_old_ro
     assert rotation == "rotation 6: the -R of PX4 v1.11.0's start (above)"
     assert not [i for i in report["left_out"] if i["found"].startswith("CAL_MAG1_ID")]
     assert "param add AK09916#0\n" in report["airframe"]
+    # The text report says which firmware the proposal is for, and how it was asked for.
+    assert main(["migrate", str(log), "--target-release", target]) == 0
+    text = capsys.readouterr().err
+    assert f"\n  proposed for PX4 {target} (--target-release)\n" in text
 
 
 def test_the_files_own_release_as_target_is_todays_proposal(
