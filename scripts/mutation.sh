@@ -47,9 +47,9 @@
 # (MUTATION_BASELINE=1) and after. The packages links/, gui/, migrate/, vehicle/, store/ have
 # thousands of mutants and do not finish in one budget on 2 shared cores: the Python targets
 # below are one module each, and a package's name runs its modules' targets (PACKAGES) and adds
-# the package's sum to the table. Rust targets are one crate, or one file of the core; a run cut short by its
-# budget goes on where it stopped with MUTATION_RUST_ARGS=--iterate, which skips what was caught
-# and tests again what survived.
+# the package's sum to the table. Rust targets are one crate, or one file of the core; a run
+# cut short by its budget goes on where it stopped with MUTATION_RUST_ARGS=--iterate, which
+# skips what was caught and tests again what survived.
 #
 # Python: mutmut 2 (pip install "mutmut==2.5.1", the "mutation" extra), which mutates the
 # files in place, one at a time, and restores them; so the work tree must be clean, and is
@@ -365,8 +365,7 @@ BUDGETS+=([migrate-axes]=3600 [store-layout_tables]=1200)
 # The five packages issue 40 names, each as the targets of its files: a package mutated whole
 # does not finish in a budget on 2 cores, each file with the tests that reach it does. A
 # package's row in the table is the sum of its files' (health's target also holds
-# cli/commands/health.py; the packages' __init__.py files hold no code a mutant changes but
-# migrate's imports).
+# cli/commands/health.py; the packages' __init__.py files hold only docstrings and imports).
 declare -A PACKAGES=(
   [links]="can_transfer dronecan_client dronecan_node dronecan_params identity mavlink mavlink_ftp mavlink_messages mavlink_signing serving slcan"
   [gui]="gui-admission gui-app gui-files gui-manifest gui-vehicle"
