@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 import lzma
@@ -484,6 +485,9 @@ def test_cli_serve_and_ctrl_c(tmp_path: Path, schema: px4params.Schema) -> None:
         [sys.executable, "-m", "px4params", "mavlink", "serve", "--udp", "127.0.0.1:0",
          "--store", str(store_file)],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=_env(tmp_path),
+        # Ctrl-C reaches it even where this run was started with SIGINT ignored (a
+        # background job of a script), which Python would otherwise keep ignoring
+        preexec_fn=functools.partial(signal.signal, signal.SIGINT, signal.SIG_DFL),
     )  # fmt: skip
     try:
         assert proc.stdout is not None
@@ -517,6 +521,9 @@ def test_cli_serves_a_saved_store(tmp_path: Path, monkeypatch: pytest.MonkeyPatc
         [sys.executable, "-m", "px4params", "mavlink", "serve", "--udp", "127.0.0.1:0",
          "--store", str(store_file), "--sysid", "7"],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=_env(tmp_path),
+        # Ctrl-C reaches it even where this run was started with SIGINT ignored (a
+        # background job of a script), which Python would otherwise keep ignoring
+        preexec_fn=functools.partial(signal.signal, signal.SIGINT, signal.SIG_DFL),
     )  # fmt: skip
     try:
         assert proc.stdout is not None

@@ -6,6 +6,7 @@ heartbeats or health text, and a parameter list is paced; MAVLink 2 signing."""
 from __future__ import annotations
 
 import contextlib
+import functools
 import hashlib
 import http.client
 import json
@@ -368,6 +369,8 @@ def signed_serve(tmp_path: Path) -> Iterator[tuple[Any, int, Path]]:
         [sys.executable, "-m", "px4params", "mavlink", "serve", "--udp", "127.0.0.1:0",
          "--store", str(store_file), "--signing-key", str(tmp_path / "link.key")],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+        # Ctrl-C reaches it even where this run was started with SIGINT ignored
+        preexec_fn=functools.partial(signal.signal, signal.SIGINT, signal.SIG_DFL),
     )  # fmt: skip
     assert proc.stdout is not None
     banner = proc.stdout.readline()
