@@ -557,3 +557,20 @@ def test_a_board_compass_on_a_bus_internal_only_on_some_hardware_says_where(vehi
         "-T -I -R 4 start, rotation 4 (Yaw 180 deg)) before the manifest"
     ]
     assert found["HMC5883#1"]["problems"] == []  # bus 1 is external on every hardware
+
+
+def test_a_board_start_with_its_own_condition_on_such_a_bus_names_both(vehicle: Any) -> None:
+    # No bundled board starts an I2C device behind a condition of its own on a board whose
+    # buses change kind with the hardware; fmu-v3's hmc5883 given one shows how the page words
+    # it: the script's condition, then the bus's, both of which must hold.
+    values, metadata = vehicle
+    staged = dict(values, HMC5883_INST=0b1, HMC5883_0A=0, HMC5883_0B=2, HMC5883_0C=0x1E)
+    board = load_boards().by_name("px4_fmu-v3")
+    hmc = next(d for d in board.devices if d.driver == "hmc5883" and d.bus_kind == "I2C")
+    guarded = replace(hmc, when="$SENS_EXT_MAG == 0")
+    board = replace(board, devices=(guarded,))
+    found = {d["instance"]: d for d in devices(staged, metadata, load_drivers(), board)}
+    assert found["HMC5883#0"]["problems"] == [
+        f"the board {board.label} starts this compass itself when $SENS_EXT_MAG == 0 and not "
+        "hw_type in V30 (hmc5883 -T -I -R 4 start, rotation 4 (Yaw 180 deg)) before the manifest"
+    ]
