@@ -254,8 +254,8 @@ class _Iterator:
     is the N-th external bus of that order (:attr:`Board.x_b_counts_external`)."""
 
     known: bool
-    order: tuple[int, ...] = ()
-    counts: bool = False
+    order: tuple[int, ...]
+    counts: bool
 
 
 def _bus_lists(
@@ -342,7 +342,7 @@ class _Snapshot:
     order: tuple[float, ...]
     #: PX4's I2CBusIterator there takes ``-X -b N`` as the N-th external bus (see
     #: :attr:`Board.x_b_counts_external`).
-    x_b_counts_external: bool = False
+    x_b_counts_external: bool
 
     def describe(self) -> str:
         return f"{self.release} ({self.ref}, {self.commit[:10]}, {self.date})"
