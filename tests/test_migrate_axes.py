@@ -121,7 +121,10 @@ def test_the_same_compass_of_px4_1_13_keeps_its_rotation(
     assert (inst["values"]["rotation"], inst["notes"]) == (0, [])
 
 
-@pytest.mark.parametrize(("release", "turned"), [("v1.11.0", 0), ("v1.12.0", 10), ("main", 10)])
+@pytest.mark.parametrize(
+    ("release", "turned"),
+    [("v1.11.0", 0), ("v1.11.3", 0), ("v1.12.0", 10), ("v1.12.1", 10), ("main", 10)],
+)
 def test_a_target_release_before_the_change_keeps_the_rotation(
     release: str, turned: int, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -606,3 +609,27 @@ def test_the_cached_tables_rows_and_a_turns_answer_cannot_be_changed_in_place() 
         turned.rotation = 0  # type: ignore[misc]
     assert hash(change) == hash(axes.changes()[0])
     assert hash(turned) == hash(dataclasses.replace(turned))
+
+
+def test_a_target_release_nobody_checked_keeps_the_rotation_and_says_both_sides(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A LIS2MDL of PX4 v1.15.2 for a vehicle going to v1.16.0: the table read the driver's
+    old axes at v1.15.0 and the new ones at release/1.18, so for v1.16 nobody knows which; the
+    rotation stays, and the note gives what it becomes from v1.18 (the change C = 10 after 0)."""
+    mag = devid.encode("i2c", 1, 0x1E, 0x0E)  # DRV_MAG_DEVTYPE_LIS2MDL (today IIS2MDC)
+    rows = {"CAL_MAG1_ID": mag, "CAL_MAG1_ROT": 4, "SENS_EXT_I2C_PRB": 1}
+    path = write_params(tmp_path / "v15.params", "1.15.2", rows)
+    (inst,) = run(capsys, str(path), "--target-release", "v1.16.0")["instances"]
+    assert inst["values"]["rotation"] == 0
+    assert inst["notes"][0] == (
+        "rotation 0 taken as is (rc.sensors starts it without -R): lis2mdl (today iis2mdc) "
+        "reports other axes from PX4 v1.18 (PX4 commit f0a852918b), and the axes of PX4 v1.16.0 "
+        "were not checked (PX4 v1.15 reports the old ones): for PX4 v1.18 or newer it is 10"
+    )
+    (inst,) = run(capsys, str(path), "--target-release", "v1.18")["instances"]
+    assert inst["values"]["rotation"] == 10
+    # from the new side back: a file of v1.18 for a v1.16 vehicle
+    turned = axes.turn(["iis2mdc"], 10, "why", (1, 18, 0), "v1.16.0", False, None)
+    assert turned is not None and turned.rotation == 10
+    assert turned.note.endswith("for PX4 v1.15 or older it is 0")

@@ -205,11 +205,14 @@ def test_a_start_whose_rotation_changed_stays_the_boards_and_says_so(
 @pytest.mark.parametrize(
     ("value", "expected"),
     [
-        ("v1.16.0", "not a release of the board table (expected one of v1.11.0, v1.12.0, "
-         "v1.13.0, v1.14.0, v1.15.0, v1.18, main)"),
-        ("latest", "not a release of the board table (expected one of v1.11.0, v1.12.0, "
-         "v1.13.0, v1.14.0, v1.15.0, v1.18, main)"),
+        ("latest", "not a PX4 release (expected a PX4 version from v1.11.0 on, such as v1.16.0, "
+         "or main)"),
+        ("v1.10.0", "older than every release of the board table (expected a PX4 version from "
+         "v1.11.0 on, such as v1.16.0, or main)"),
         ("v1.11.0", "older than the file's PX4 v1.13.0 (expected one of v1.13.0, v1.14.0, "
+         "v1.15.0, v1.18, main)"),
+        # v1.12.5 runs v1.12.0's scripts, older than the file's: named as asked
+        ("v1.12.5", "older than the file's PX4 v1.13.0 (expected one of v1.13.0, v1.14.0, "
          "v1.15.0, v1.18, main)"),
     ],
 )  # fmt: skip
@@ -670,6 +673,41 @@ def test_an_installation_without_a_board_table_compares_nothing_and_refuses_a_ta
     with pytest.raises(MigrationError) as refused:
         migrate.migrate(config, board=v5, target_release="v1.12.0")
     assert str(refused.value) == (
-        "--target-release v1.12.0: not a release of the board table (expected one of none: this "
-        "installation has no board table)"
+        "--target-release v1.12.0: this installation has no board table to judge it by"
     )
+
+
+@pytest.mark.parametrize("target", ["v1.12.3", "1.13"])
+def test_a_release_between_the_tables_snapshots_runs_the_older_ones_scripts(
+    target: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """PX4 v1.12.3 and v1.13 were not read into the board table; their board scripts are
+    v1.12.0's and v1.13.0's, as a log of them is read. The proposal is the snapshot's, made for
+    the release asked for, and the report says which scripts stood in for it."""
+    log = shared_data.shared_file(shared_data.SAMPLE_LOG)
+    stood_in = "v1.12.0" if target == "v1.12.3" else "v1.13.0"
+    snapshot = run(capsys, str(log), "--target-release", stood_in)
+    asked = run(capsys, str(log), "--target-release", target)
+    assert asked["instances"] == snapshot["instances"]
+    assert asked["left_out"] == snapshot["left_out"]
+    assert asked["target_release"] == target
+    assert asked["compared_releases"] == RELEASES[: RELEASES.index(stood_in) + 1]
+    assert (
+        f"--target-release {target}: the board table has no {target}; its scripts are taken as "
+        f"at {stood_in}, the newest release it has at or before it"
+    ) in asked["assumptions"]
+    assert main(["migrate", str(log), "--target-release", target]) == 0
+    assert f"\n  proposed for PX4 {target} (--target-release)\n" in capsys.readouterr().err
+
+
+def test_a_release_newer_than_every_one_read_runs_mains_scripts(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    log = shared_data.shared_file(shared_data.SAMPLE_LOG)
+    asked = run(capsys, str(log), "--target-release", "v1.19.0")
+    assert asked["instances"] == run(capsys, str(log), "--target-release", "main")["instances"]
+    assert asked["compared_releases"] == RELEASES
+    assert (
+        "--target-release v1.19.0: the board table has no v1.19.0; its scripts are taken as at "
+        "main, the newest it has (newer than every release it has)"
+    ) in asked["assumptions"]

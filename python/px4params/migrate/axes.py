@@ -262,6 +262,21 @@ def turn(
                 f"{what} where the build had the old driver ({built}), and the board is not known",
             )
         return None
+    if own is not None and then is None:
+        # the target's axes are the unknown: what the rotation becomes on each side read
+        turned = composed(c, rotation, inverse=own == "new")
+        since = (
+            f"PX4 {change.new_from} or newer"
+            if own == "old"
+            else f"PX4 {change.old_through} or older"
+        )
+        would = f"it is {turned}" if turned is not None else "no -R value names it"
+        return _as_is(
+            rotation,
+            why,
+            f"{what}, and the axes of PX4 {release} were not checked "
+            f"(PX4 {change.old_through} reports the old ones): for {since} {would}",
+        )
     if own is None or then is None:
         # the other side's rotation, for the one who knows the file's release
         other, since = (

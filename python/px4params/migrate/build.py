@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Any
 
 from px4params.dsdl.model import NO_DOC
 from px4params.dsdl.schema import Schema
-from px4params.errors import MigrationError, Px4ParamsError
+from px4params.errors import BoardsError, MigrationError, Px4ParamsError
 from px4params.migrate import axes
 from px4params.migrate.conditions import (
     UNSET_BEFORE_RC_SENSORS,
@@ -116,7 +116,7 @@ class _Builder:
         self.starts = started_drivers(config.console) if config.console else []
         self.claimed: set[int] = set()  # boot console starts accounted for
         self._facts: Facts | None = None
-        upgrade = upgrade or _Upgrade("", (), None)
+        upgrade = upgrade or _Upgrade("", (), None, None)
         #: The release whose board script the file's configuration ran (its snapshot).
         self.file_release = upgrade.file_release
         #: The board's row at each later release compared, oldest first, up to the target.
@@ -1200,6 +1200,8 @@ class _Upgrade:
     file_release: str
     releases: tuple[tuple[str, Any], ...]
     target: str | None
+    #: ``target`` as the user named it (v1.16.0 for the v1.15.0 snapshot).
+    asked: str | None
 
 
 @dataclass(frozen=True)
@@ -1351,7 +1353,7 @@ def migrate(
     """Proposes a manifest for ``config`` (see the module doc). ``table``: the devtype table
     (default: the one of the file's firmware era); ``board``: a board of
     :mod:`px4params.vehicle.boards` or its PX4 name (default: a log's ``ver_hw``'s);
-    ``target_release``: a release of the board table the vehicle will run (default: the
+    ``target_release``: the PX4 release the vehicle will run, such as v1.16.2 or main (default: the
     file's own): a device the file's board script starts and the target's does not becomes an
     instance."""
     from px4params.dsdl.schema import load_schema
@@ -1376,29 +1378,39 @@ def migrate(
         target_release,
     )
     proposal = builder.run()
-    proposal.target_release = upgrade.target
+    proposal.target_release = upgrade.asked
     proposal.compared = [release for release, _ in upgrade.releases]
     return proposal
 
 
 def _upgrade(config: OldConfig, board: Any, target: str | None, assumptions: list[str]) -> _Upgrade:
     """The board's rows at the releases after the file's, up to ``target`` (None: the newest
-    the table knows, compared only); a ``target`` the table does not name, or older than the
-    file's, is refused."""
+    the table knows, compared only); a ``target`` between two of the table's snapshots is judged
+    by the older (said in ``assumptions``); one that is no PX4 version, older than every snapshot
+    or older than the file's, is refused."""
     table = _board_table()
     known = table.releases if table is not None else ()
+    asked = target
     if target is not None and target not in known:
-        raise MigrationError(
-            f"--target-release {target}: not a release of the board table (expected one of "
-            f"{', '.join(known) or 'none: this installation has no board table'})"
-        )
+        # a release between two snapshots runs the older one's scripts, as a log of it is read
+        target = _snapshot_of(table, target, known)
     if table is None or board is None or not hasattr(board, "releases"):
         if target is not None:
             assumptions.append(
-                f"--target-release {target}: no board known, so no board script is compared "
+                f"--target-release {asked}: no board known, so no board script is compared "
                 "(--board NAME names it)"
             )
-        return _Upgrade("", (), None)
+        return _Upgrade("", (), None, None)
+    if target != asked:
+        assumptions.append(
+            f"--target-release {asked}: the board table has no {asked}; its scripts are "
+            f"taken as at {target}, "
+            + (
+                "the newest release it has at or before it"
+                if target != known[-1]
+                else "the newest it has (newer than every release it has)"
+            )
+        )
     # The file's snapshot; a file naming no release is judged with today's row (its newest).
     version = "v" + ".".join(map(str, config.version)) if config.version else None
     own = (table.snapshot_for(version) if version else None) or board.releases[-1]
@@ -1413,7 +1425,7 @@ def _upgrade(config: OldConfig, board: Any, target: str | None, assumptions: lis
                 else (f"PX4 {own}, taken for a file that names no release (no '# Version' line)")
             )
             raise MigrationError(
-                f"--target-release {target}: older than {whose} (expected one of "
+                f"--target-release {asked}: older than {whose} (expected one of "
                 f"{', '.join(known[known.index(own) :])})"
             )
         later = later[: later.index(target) + 1] if target in later else ()
@@ -1423,7 +1435,26 @@ def _upgrade(config: OldConfig, board: Any, target: str | None, assumptions: lis
         own,
         tuple((r, row) for r, row in rows if row is not None),
         target if target != own else None,
+        asked if target != own else None,
     )
+
+
+def _snapshot_of(table: BoardTable | None, release: str, known: tuple[str, ...]) -> str:
+    """The snapshot of the board table whose scripts PX4 ``release`` runs."""
+    if table is None:
+        raise MigrationError(
+            f"--target-release {release}: this installation has no board table to judge it by"
+        )
+    expected = f"expected a PX4 version from {known[0]} on, such as v1.16.0, or {known[-1]}"
+    try:
+        snapshot = table.snapshot_for(release)
+    except BoardsError:
+        snapshot, problem = None, "not a PX4 release"
+    else:
+        problem = "older than every release of the board table"
+    if snapshot is None:
+        raise MigrationError(f"--target-release {release}: {problem} ({expected})")
+    return snapshot
 
 
 def _board_table() -> BoardTable | None:

@@ -101,9 +101,10 @@ examples:
     p.add_argument(
         "--target-release",
         metavar="RELEASE",
-        help="the PX4 release the vehicle will run, as the board table names it (v1.15.0, "
-        "v1.18, main): a device the file's board script starts and that release's does not "
-        "becomes an instance (default: the file's own release; the report names such devices)",
+        help="the PX4 release the vehicle will run (v1.15.0, v1.16.2, main; a release the board "
+        "table has no snapshot of is judged by the newest it has at or before it): a device the "
+        "file's board script starts and that release's does not becomes an instance (default: "
+        "the file's own release; the report names such devices)",
     )
     p.add_argument(
         "--devtypes",
