@@ -26,6 +26,11 @@
 #                           the same: scripts/mutation_lines.py), and what they let through
 #                           again with all of them (mutmut's --rerun-all): the verdicts of a
 #                           plain run, sooner. The traced run counts in the target's budget.
+#   MUTATION_PATCH=F.diff   Python: mutate only the lines F adds or changes (mutmut's
+#                           --use-patch-file; `git diff BASE -- FILE > F.diff`, paths from the
+#                           repository root): a module changed since its latest whole run is
+#                           tested again on those lines. Kept results of the other lines stay;
+#                           with none kept, the target's figures are of those lines alone.
 #   MUTATION_RUST_FILES="crates/px4params-core/src/scalar.rs crates/px4params-core/src/bits.rs"
 #                           rust-core: mutate only these files (cargo-mutants --file, paths
 #                           from the repository root); default: the whole crate
@@ -449,10 +454,12 @@ python_target() {
       budget=$((budget - (SECONDS - started)))
       [ "$budget" -gt 0 ] || budget=1
     fi
+    local patch=()
+    [ -z "${MUTATION_PATCH:-}" ] || patch=(--use-patch-file "$(realpath "$MUTATION_PATCH")")
     MUTATION_LINES="$lines" timeout --signal=INT --kill-after=60 "$budget" mutmut run \
       --paths-to-mutate "$paths" --tests-dir "$tests_dir" \
       --runner "bash scripts/mutation-pytest.sh -x -q -p no:cacheprovider $tests" \
-      "${rerun[@]}" --simple-output --no-progress >"$OUT/$name.log" 2>&1 || true
+      "${rerun[@]}" "${patch[@]}" --simple-output --no-progress >"$OUT/$name.log" 2>&1 || true
     restore
     trap - EXIT INT TERM
   fi
