@@ -584,6 +584,16 @@ def test_a_change_that_is_no_half_turn_is_undone_by_its_inverse(
     assert turn((1, 12, 0), "v1.11.0") == axes.Turned(
         0, "w", unread.format("v1.13.0 or newer it is 6")
     )
+    # a target between them: the file's side is known, each way turned by C or its inverse
+    target = "rotation 0 taken as is (w): drv reports other axes from PX4 v1.13.0 (PX4 commit "
+    target += "0123456789), and the axes of PX4 v1.12.0 were not checked (PX4 v1.11 reports the "
+    target += "old ones): for PX4 {}"
+    assert turn((1, 11, 0), "v1.12.0") == axes.Turned(
+        0, "w", target.format("v1.13.0 or newer it is 2")
+    )
+    assert turn((1, 13, 0), "v1.12.0") == axes.Turned(
+        0, "w", target.format("v1.11 or older it is 6")
+    )
 
 
 def test_a_file_naming_no_release_whose_orientation_no_value_names_says_so() -> None:
@@ -633,3 +643,7 @@ def test_a_target_release_nobody_checked_keeps_the_rotation_and_says_both_sides(
     turned = axes.turn(["iis2mdc"], 10, "why", (1, 18, 0), "v1.16.0", False, None)
     assert turned is not None and turned.rotation == 10
     assert turned.note.endswith("for PX4 v1.15 or older it is 0")
+    # ROTATION_ROLL_90_PITCH_68_YAW_293 (38) after C is no value of the enum
+    turned = axes.turn(["iis2mdc"], 38, "why", (1, 15, 2), "v1.16.0", False, None)
+    assert turned is not None and turned.rotation == 38
+    assert turned.note.endswith("for PX4 v1.18 or newer no -R value names it")
