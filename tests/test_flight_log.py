@@ -7,6 +7,7 @@ Format") and from the bench file, not taken from the writer.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import shutil
 import struct
@@ -722,3 +723,21 @@ def test_a_health_code_px4params_does_not_know_reads_as_critical(tmp_path: Path)
     (ina,) = read_run_ulog(str(path)).instances
     assert ina.timeline == [(1.0, "nominal", ""), (2.0, "critical", "")]
     assert (ina.health, ina.device_id) == ("critical", INA_ID)
+
+
+def test_a_benchs_name_is_kept_in_the_log_and_said_by_health(tmp_path: Path, capsys) -> None:
+    from px4params.vehicle.flight_log import read_run_ulog, run_ulog
+
+    named = dataclasses.replace(_hand_run(HAND_EVENTS), bench_name="quad, two packs")
+    path = tmp_path / "named.ulg"
+    path.write_bytes(run_ulog(named, {}, version="9.9"))
+    assert ULog(str(path)).msg_info_dict["px4params_bench_name"] == "quad, two packs"
+    assert read_run_ulog(str(path)).bench_name == "quad, two packs"
+    main(["health", str(path)])
+    first = capsys.readouterr().out.splitlines()[0]
+    assert first.startswith(f"{path}: manifest boot of quad, two packs (hand.bench.toml), 3 s")
+    # a bench without a name writes none, and reads back as none
+    plain = tmp_path / "plain.ulg"
+    plain.write_bytes(run_ulog(_hand_run(HAND_EVENTS), {}, version="9.9"))
+    assert "px4params_bench_name" not in ULog(str(plain)).msg_info_dict
+    assert read_run_ulog(str(plain)).bench_name == ""

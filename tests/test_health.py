@@ -110,8 +110,12 @@ def test_the_story_of_two_lost_devices_line_by_line(
     bench.write_text(BENCH.format(first=7.0, second=3.0))
     lines = _story(tmp_path, capsys, "--bench", str(bench), "--duration", "10")
     log = tmp_path / "run.ulg"
-    # The header names the log, the mode, the bench, the duration, the seed and the verdict.
-    assert lines[0] == f"{log}: manifest boot of {bench}, 10 s (seed 0): arming refused at the end"
+    # The header names the log, the mode, the bench (its [bench] name and file), the duration,
+    # the seed and the verdict.
+    assert lines[0] == (
+        f"{log}: manifest boot of both power monitors lost ({bench}), 10 s (seed 0): arming "
+        "refused at the end"
+    )
     # Every device on a quiet bus answers at once: the commander may arm at its first check
     # (0.10 s), and refuses once a monitor is lost.
     assert re.fullmatch(r"commander: may arm at 0\.10 s, refused at \d+\.\d\d s", lines[2]), lines[
@@ -157,7 +161,8 @@ def test_the_story_of_a_legacy_boot_names_the_silently_missing(
     # compass never start, and nobody is told (docs/autostart.md, --legacy).
     lines = _story(tmp_path, capsys, "--bench", str(FAULTS), "--legacy", "--seed", "3")
     assert lines[0].endswith(
-        ": legacy boot of " + str(FAULTS) + ", 10 s (seed 3): arming refused at the end"
+        f": legacy boot of two batteries and a GPS compass, with faults ({FAULTS}), 10 s (seed 3): "
+        "arming refused at the end"
     )
     at = lines.index("silently missing (configured, never started, no message):")
     assert lines[at + 1 :] == [
@@ -263,7 +268,10 @@ def test_health_of_a_log_that_may_arm_exits_0(
     capsys.readouterr()
     assert main(["health", str(log)]) == 0
     lines = capsys.readouterr().out.splitlines()
-    assert lines[0] == f"{log}: manifest boot of {bench}, 0.5 s (seed 0): may arm at the end"
+    assert lines[0] == (
+        f"{log}: manifest boot of both power monitors lost ({bench}), 0.5 s (seed 0): may arm at "
+        "the end"
+    )
     assert lines[1] == "commander: may arm at 0.10 s"  # no first failure line
 
 

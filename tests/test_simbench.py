@@ -616,6 +616,7 @@ def test_json_result_fields(tmp_path, capsys):
         "seed": 0,
         "duration": 1.0,
         "bench": str(tmp_path / "bench.toml"),
+        "bench_name": "",
         "may_arm": True,
         "failures": [],
         "quiet": [],
@@ -1339,3 +1340,20 @@ def test_a_legacy_start_still_probing_when_the_run_ends_is_not_found_yet(drivers
         "critical",
         "not found: no ACK (2 probe attempts, still retrying)",
     )
+
+
+def test_a_benchs_name_is_said_with_its_file_and_kept_in_its_flight_log(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    named = '[bench]\nname = "quad, two packs"\n\n' + bench_text()
+    status, out = boot(tmp_path, capsys, named)
+    path = tmp_path / "bench.toml"
+    assert status == 0
+    assert out.splitlines()[0].startswith(f"manifest boot of quad, two packs ({path}): ")
+    status, out = boot(tmp_path, capsys, named, "--legacy")
+    assert out.splitlines()[0].startswith(f"legacy boot of quad, two packs ({path}): ")
+    status, out = boot(tmp_path, capsys, named, "--json")
+    assert json.loads(out)["bench_name"] == "quad, two packs"
+    # without a name, the file alone
+    status, out = boot(tmp_path, capsys, bench_text())
+    assert out.splitlines()[0].startswith(f"manifest boot of {path}: ")

@@ -105,6 +105,8 @@ def run_ulog(
     log.info("ver_hw", "PX4PARAMS_BENCH")
     log.info("px4params_mode", result.mode)
     log.info("px4params_bench", result.bench)
+    if result.bench_name:
+        log.info("px4params_bench_name", result.bench_name)
     log.info("px4params_seed", result.seed)
     log.info("px4params_duration_us", str(_us(result.duration)))
     for c in manifest:
@@ -313,6 +315,7 @@ def read_run_ulog(path: str) -> RunResult:
         seed=int(info.get("px4params_seed", 0)),
         duration=int(info.get("px4params_duration_us", "0")) / 1e6,
         bench=str(info.get("px4params_bench", "")),
+        bench_name=str(info.get("px4params_bench_name", "")),
         instances=instances,
         may_arm=may_arm,
         failures=[i.failure_line() for i in blocking] if not may_arm else [],

@@ -59,7 +59,6 @@ import tomllib
 from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 from px4params.errors import BenchFileError
@@ -130,6 +129,7 @@ class BenchDevice:
 @dataclass(frozen=True)
 class Bench:
     source: str
+    #: Its ``[bench] name``, "" where the file gives none.
     name: str
     buses: dict[tuple[str, int], BenchBus]
     devices: dict[tuple[str, int, int], BenchDevice]
@@ -185,7 +185,7 @@ def healthy_bench(manifest: Sequence[Configured]) -> Bench:
             continue  # not startable: the run reports it as the manifest has it
         key = (c.bus_kind, c.bus_id, c.address)
         devices.setdefault(key, BenchDevice(c.driver.chip, c.bus_kind, c.bus_id, c.address))
-    return Bench(HEALTHY_BENCH, "healthy", {}, devices)
+    return Bench(HEALTHY_BENCH, "", {}, devices)
 
 
 def parse_bench(text: str, source: str, drivers: Drivers) -> Bench:
@@ -199,7 +199,7 @@ def parse_bench(text: str, source: str, drivers: Drivers) -> Bench:
     if not isinstance(meta, dict):
         raise BenchFileError(f"{source}: [bench] must be a table")
     _check_keys(meta, _BENCH_TABLE_KEYS, lambda m: BenchFileError(f"{source}: [bench]: {m}"))
-    name = meta.get("name", Path(source).stem)
+    name = meta.get("name", "")
     if not isinstance(name, str):
         raise BenchFileError(f"{source}: [bench]: name must be a string, not {name!r}")
 
@@ -453,6 +453,13 @@ class RunResult:
     #: Read from a log cut short (no clean end): the last moment it holds, from which on what
     #: it tells is uncertain; None for a whole run.
     log_cut_at: float | None = None
+    #: The bench's ``[bench] name`` ("": none, or a log that does not say).
+    bench_name: str = ""
+
+    @property
+    def bench_label(self) -> str:
+        """The bench as reports name it: its name and file, or the file alone."""
+        return f"{self.bench_name} ({self.bench})" if self.bench_name else self.bench
 
     def as_dict(self) -> dict[str, Any]:
         return {
@@ -460,6 +467,7 @@ class RunResult:
             "seed": self.seed,
             "duration": self.duration,
             "bench": self.bench,
+            "bench_name": self.bench_name,
             "may_arm": self.may_arm,
             "failures": self.failures,
             "quiet": self.quiet,
@@ -937,6 +945,7 @@ def run(
         seed=seed,
         duration=duration,
         bench=bench.source,
+        bench_name=bench.name,
         instances=[i.out for i in instances],
         may_arm=sim.may_arm(),
         failures=failures,

@@ -58,9 +58,8 @@ def render_svg(result: RunResult) -> str:
         f"<rect width='{width}' height='{height}' fill='white'/>",
     ]
     verdict = "may arm" if result.may_arm else "arming refused"
-    title = (
-        f"{result.mode} boot of {result.bench}: {verdict} at {duration:g} s (seed {result.seed})"
-    )
+    title = f"{result.mode} boot of {result.bench_label}: {verdict} at {duration:g} s"
+    title += f" (seed {result.seed})"
     out.append(
         f"<text x='10' y='22' {_FAMILY} font-size='15' font-weight='bold'>{escape(title)}</text>"
     )

@@ -121,13 +121,13 @@ def _report(result: RunResult, i2c_buses: list[int], have_manifest: bool) -> lis
     if result.mode == "legacy":
         buses = ", ".join(map(str, i2c_buses)) or "none"
         lines.append(
-            f"legacy boot of {result.bench}: every probed driver '-X -q start' on I2C buses "
+            f"legacy boot of {result.bench_label}: every probed driver '-X -q start' on I2C buses "
             f"{buses} at its default address, {LEGACY_PROBES} probes, no manifest; "
             f"{result.duration:g} s simulated, seed {result.seed}"
         )
     else:
         lines.append(
-            f"manifest boot of {result.bench}: {count} configured instance"
+            f"manifest boot of {result.bench_label}: {count} configured instance"
             f"{'s' if count != 1 else ''}, {result.duration:g} s simulated, seed {result.seed}"
         )
     if result.mode == "legacy":

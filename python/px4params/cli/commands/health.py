@@ -45,7 +45,7 @@ def story(result: RunResult, path: str) -> list[str]:
     cut = result.log_cut_at
     end = "at the end" if cut is None else f"at {cut:.2f} s, where the log ends"
     lines = [
-        f"{path}: {result.mode} boot of {result.bench}, {result.duration:g} s (seed "
+        f"{path}: {result.mode} boot of {result.bench_label}, {result.duration:g} s (seed "
         f"{result.seed}): {verdict} {end}"
     ]
     if cut is not None:
