@@ -29,8 +29,10 @@
 #   MUTATION_PATCH=F.diff   Python: mutate only the lines F adds or changes (mutmut's
 #                           --use-patch-file; `git diff BASE -- FILE > F.diff`, paths from the
 #                           repository root): a module changed since its latest whole run is
-#                           tested again on those lines. Kept results of the other lines stay;
-#                           with none kept, the target's figures are of those lines alone.
+#                           tested again on those lines. Its results are kept apart
+#                           (target/mutation/<target>.patch.mutmut-cache; MUTATION_FRESH=1
+#                           forgets them) and its figures are of those lines alone; with
+#                           MUTATION_REPORT_ONLY=1, MUTATION_PATCH=1 counts them again.
 #   MUTATION_RUST_FILES="crates/px4params-core/src/scalar.rs crates/px4params-core/src/bits.rs"
 #                           rust-core: mutate only these files (cargo-mutants --file, paths
 #                           from the repository root); default: the whole crate
@@ -61,7 +63,7 @@
 # restored with git if the run is cut short. Rust: cargo-mutants (cargo install
 # cargo-mutants) over the core and the C ABI crate with their Rust tests (the C ABI's are
 # crates/px4params-ffi/tests/c_abi.rs, calling its functions as C does). The survivors of each
-# target are written to target/mutation/<target>.txt.
+# target are written to target/mutation/<target>.txt (<target>.baseline.txt, <target>.patch.txt).
 # mutmut 2.5.1 looks up kept results by a line's text: a mutant of a line that occurs twice in
 # its file (two identical `raise` or `continue` lines) stayed "untested" in a run that started
 # from earlier results. Every Python run is given scripts/mutation_lines.py as mutmut's
@@ -425,6 +427,9 @@ python_target() {
       case $f in tests/*.py) cp "$f" "$tests_dir/" ;; esac
     done
     cache="$OUT/$name.baseline.mutmut-cache"
+  elif [ -n "${MUTATION_PATCH:-}" ]; then
+    # the lines of a diff, in a cache of their own (a whole run's stays as it was)
+    cache="$OUT/$name.patch.mutmut-cache"
   else
     cache="$OUT/$name.mutmut-cache"
     [ -f "$cache" ] || [ ! -f "$OUT/$name.baseline.mutmut-cache" ] ||
@@ -463,7 +468,7 @@ python_target() {
     restore
     trap - EXIT INT TERM
   fi
-  python - "$name" "$OUT/$name.txt" "${cache%.mutmut-cache}.figures" <<'EOF'
+  python - "$name" "${cache%.mutmut-cache}.txt" "${cache%.mutmut-cache}.figures" <<'EOF'
 """Counts the cache's mutants and lists each survivor as path, original line, mutated line;
 writes the figures as one tab-separated line for the table at the end."""
 import sqlite3
@@ -643,12 +648,16 @@ for name in "$@"; do
 done
 
 # The table of the Python targets of this run: "before" is the baseline's (MUTATION_BASELINE=1),
-# "after" the run with every test; the kill rate leaves the equivalent survivors out.
+# "after" the run with every test, "lines" the lines of MUTATION_PATCH's diff; the kill rate
+# leaves the equivalent survivors out.
+runs=(before after)
+[ -z "${MUTATION_PATCH:-}" ] || runs=(lines)
 table=""
 for name in "$@"; do
-  for run in before after; do
+  for run in "${runs[@]}"; do
     f="$OUT/$name.figures"
     [ "$run" = before ] && f="$OUT/$name.baseline.figures"
+    [ "$run" = lines ] && f="$OUT/$name.patch.figures"
     if [ -f "$f" ]; then
       table+="$name|$run|$(tr '\t' '|' <"$f")"$'\n'
     fi
