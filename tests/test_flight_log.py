@@ -741,3 +741,4 @@ def test_a_benchs_name_is_kept_in_the_log_and_said_by_health(tmp_path: Path, cap
     plain.write_bytes(run_ulog(_hand_run(HAND_EVENTS), {}, version="9.9"))
     assert "px4params_bench_name" not in ULog(str(plain)).msg_info_dict
     assert read_run_ulog(str(plain)).bench_name == ""
+    assert _hand_run(HAND_EVENTS).as_dict()["bench_name"] == ""  # a run made without one
