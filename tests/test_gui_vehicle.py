@@ -189,6 +189,7 @@ def test_a_mavlink_vehicle_is_listed_written_read_and_heard(schema: px4params.Sc
             assert page.values["INA238_1C"] == 70
             again = page.write("INA238_1C", 300)  # this write's reason, not the last one's
             assert again.reason == refused.reason.replace("200", "300")
+            assert page._hearing == []  # a finished write no longer gathers the vehicle's texts
             unknown = page.write("NOPE_1X", 1)
             assert (unknown.ok, unknown.value, unknown.reason) == (
                 False,
@@ -1282,6 +1283,45 @@ def test_a_text_is_shown_at_once_marked_when_another_of_its_id_starts(
         assert wait_for(lambda: len(page.messages) >= 2, 5.0)
         time.sleep(0.1)  # nothing more comes
         assert page.messages == [earlier[:50] + "[...]", later]
+
+
+@pytest.mark.issue40
+def test_a_new_text_of_an_id_just_shown_is_shown_too(
+    schema: px4params.Schema, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A text shown whole, then, within the wait a repeated chunk is dropped in, another text
+    of its id (the id wrapped): that one is no repeat, and is shown whole as well."""
+    monkeypatch.setattr("px4params.gui.vehicle._CHUNK_WAIT", 10.0)
+    earlier = "camera: storage full, no photo taken, video recording stopped"
+    later = "gimbal: pitch calibration done, yaw calibration started, hold still"
+    with _peer(schema) as served, _page(served.address) as page:
+        _tell(served, page, 33, dict(enumerate(_chunks(earlier))))
+        assert wait_for(lambda: page.messages, 5.0)
+        _tell(served, page, 33, dict(enumerate(_chunks(later))))
+        assert wait_for(lambda: len(page.messages) >= 2, 5.0)
+        assert page.messages == [earlier, later]
+
+
+@pytest.mark.issue40
+def test_the_texts_shown_lately_are_remembered_up_to_64(
+    schema: px4params.Schema, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Repeats are dropped against the last 64 texts shown (within their wait): the 64th
+    text's first chunk heard again is no new text; once 65 were shown, the first's is."""
+    monkeypatch.setattr("px4params.gui.vehicle._CHUNK_WAIT", 30.0)
+    texts = [f"text {text_id:03}: " + "y" * 50 for text_id in range(1, 66)]
+    with _peer(schema) as served, _page(served.address) as page:
+        for text_id, text in enumerate(texts[:64], 1):
+            _tell(served, page, text_id, dict(enumerate(_chunks(text))))
+            assert wait_for(lambda n=text_id: len(page.messages) >= n, 10.0)
+        _tell(served, page, 1, {0: _chunks(texts[0])[0]})
+        time.sleep(0.2)  # the repeat is taken in
+        assert (len(page.messages), page._chunks) == (64, {})
+        _tell(served, page, 65, dict(enumerate(_chunks(texts[64]))))
+        assert wait_for(lambda: len(page.messages) >= 65, 10.0)
+        _tell(served, page, 1, {0: _chunks(texts[0])[0]})
+        assert wait_for(lambda: page._chunks, 5.0)  # forgotten: a new text, waiting for more
+        assert list(page._chunks) == [(7, 1, 1)]
 
 
 @pytest.mark.issue40
