@@ -479,6 +479,78 @@ def bus_offsets(git_dir: str, commit: str) -> dict[str, tuple[int, str]]:
     return offsets
 
 
+#: {(NuttX chip flag, chip): ({SPI::Bus name: PX4's bus number}, the hw_description.h defining
+#: them)}
+Chips = dict[tuple[str, str], tuple[dict[str, int], str]]
+_SPI_ENUM = re.compile(r"namespace SPI\s*\{.*?enum class Bus\s*\{(?P<names>[^}]*)\}", re.S)
+_INCLUDED = re.compile(r'#include "\.\./\.\./\.\./(\w+)/include/px4_arch/hw_description\.h"')
+
+
+def spi_bus_numbers(git_dir: str, commit: str) -> Chips:
+    """Each chip's ``SPI::Bus`` enum (its ``hw_description.h``, or the common one it includes),
+    the numbers PX4 gives an spi.cpp's buses, in the order PX4's CMake tests the chip flags."""
+    cmake = git(git_dir, "show", f"{commit}:platforms/nuttx/cmake/px4_impl_os.cmake") or ""
+    chips = re.findall(
+        r"\((CONFIG_\w+)\)\s*set\(CHIP_MANUFACTURER \"(\w+)\"\)\s*set\(CHIP \"(\w+)\"\)", cmake
+    )
+    found: Chips = {}
+    for flag, maker, chip in chips:
+        path = f"platforms/nuttx/src/px4/{maker}/{chip}/include/px4_arch/hw_description.h"
+        header = git(git_dir, "show", f"{commit}:{path}") or ""
+        included = _INCLUDED.search(header)
+        if not _SPI_ENUM.search(header) and included:
+            path = path.replace(f"/{chip}/", f"/{included[1]}/")
+            header = git(git_dir, "show", f"{commit}:{path}") or ""
+        enum = _SPI_ENUM.search(header)
+        if enum is None:
+            continue
+        numbers, value = {}, 0
+        for item in enum["names"].split(","):
+            name, _, given = (part.strip() for part in item.partition("="))
+            if not name:
+                continue
+            value = int(given) if given else value + 1
+            numbers[name] = value
+        found[flag, chip] = (numbers, path)
+    return found
+
+
+_SPI_BUS = re.compile(r"initSPIBus(External)?\(SPI::Bus::(\w+)")
+
+
+def spi_buses(files: dict[str, str], chips: Chips) -> dict[str, Any] | None:
+    """A board's external SPI buses in the order of its ``px4_spi_buses`` (PX4's SPIBusIterator
+    counts them for ``-S -b N``), with the line of each in src/spi.cpp and the header numbering
+    them; None where it has no spi.cpp or one table per hardware revision (not read here)."""
+    text = files.get("src/spi.cpp")
+    if text is None or "px4_spi_buses_all_hw" in text:
+        return None
+    config = files.get("nuttx-config/nsh/defconfig", "")
+    chosen = set(re.findall(r"^(CONFIG_\w+)=y$", config, re.M))
+    # The flag PX4's CMake tests, else (a flag Kconfig derives, such as CONFIG_STM32_STM32F4XXX)
+    # the chip the defconfig names: CONFIG_ARCH_CHIP_STM32F412CE is an stm32f4.
+    named = [f.removeprefix("CONFIG_ARCH_CHIP_").lower() for f in chosen]
+    chip = next((c for c in chips if c[0] in chosen), None) or next(
+        (c for c in chips if any(n.startswith(c[1]) for n in named)), None
+    )
+    if chip is None:
+        raise SystemExit(
+            f"{files['path']}: no chip flag of its nuttx-config/nsh/defconfig has an SPI::Bus "
+            f"enum (expected one of {[flag for flag, _ in chips]})"
+        )
+    numbers, source = chips[chip]
+    buses, lines = [], []
+    for m in _SPI_BUS.finditer(text):
+        if m[1]:
+            if m[2] not in numbers:
+                raise SystemExit(
+                    f"{files['path']}: src/spi.cpp's SPI::Bus::{m[2]} is not in {source}"
+                )
+            buses.append(numbers[m[2]])
+            lines.append(text.count("\n", 0, m.start()) + 1)
+    return {"buses": buses, "lines": lines, "source": source}
+
+
 # -- reading the trees ---------------------------------------------------------------------------
 
 
@@ -504,9 +576,9 @@ def x_b_counts_external(git_dir: str, commit: str) -> bool:
 
 def read_snapshot(
     git_dir: str, rev: str
-) -> tuple[str, str, bool, str, dict[str, dict[str, str]], dict[str, tuple[int, str]]]:
+) -> tuple[str, str, bool, str, dict[str, dict[str, str]], dict[str, tuple[int, str]], Chips]:
     """(commit, date, whether -X -b counts external buses, rc.sensors, {board: {file: text}},
-    the chips' bus offsets) of one tree."""
+    the chips' bus offsets, the chips' SPI bus numbers) of one tree."""
     commit = (git(git_dir, "rev-parse", f"{rev}^{{commit}}") or "").strip()
     if not commit:
         raise SystemExit(f"{git_dir}: no commit {rev!r}")
@@ -519,13 +591,15 @@ def read_snapshot(
         folder = path.removesuffix("/init/rc.board_sensors")
         _, vendor, model = folder.split("/")
         files = {"path": path, "init/rc.board_sensors": git(git_dir, "show", f"{commit}:{path}")}
-        for extra in ("src/i2c.cpp", "src/board_config.h", "nuttx-config/nsh/defconfig"):
+        extras = ("src/i2c.cpp", "src/spi.cpp", "src/board_config.h", "nuttx-config/nsh/defconfig")
+        for extra in extras:
             text = git(git_dir, "show", f"{commit}:{folder}/{extra}")
             if text is not None:
                 files[extra] = text
         boards[f"{vendor}_{model}"] = files  # type: ignore[assignment]
     counts = x_b_counts_external(git_dir, commit)
-    return commit, date, counts, rc_sensors, boards, bus_offsets(git_dir, commit)
+    offsets, spi = bus_offsets(git_dir, commit), spi_bus_numbers(git_dir, commit)
+    return commit, date, counts, rc_sensors, boards, offsets, spi
 
 
 # -- writing TOML ----------------------------------------------------------------------------------
@@ -604,10 +678,10 @@ def main(argv: list[str]) -> None:
         out += [f"  {inline(r, SWITCH_KEYS)}," for r in switches]
         out += ["]", ""]
 
-    names = sorted({name for *_, boards, _ in snapshots for name in boards})
+    names = sorted({name for *_, boards, _, _ in snapshots for name in boards})
     for name in names:
         rows: list[dict[str, Any] | None] = []
-        for release, _, _, _, _, _, boards, offsets in snapshots:
+        for release, _, _, _, _, _, boards, offsets, spi_numbers in snapshots:
             files = boards.get(name)
             if files is None:
                 rows.append(None)
@@ -617,12 +691,17 @@ def main(argv: list[str]) -> None:
             override = bus_override(files, external, internal)
             buses = [(bus, when) for bus, when, _ in launcher]  # not the line numbers
             unlined = {k: v for k, v in (override or {}).items() if k != "line"}
+            spi = None
+            if any(r["bus_kind"] == "SPI" and not r["internal"] for r in devices + switches):
+                spi = spi_buses(files, spi_numbers)
+            spi_key = spi and [spi["buses"], spi["source"]]
             key = same(devices + switches) + json.dumps([buses, external, internal, unlined])
+            key += json.dumps(spi_key)
             last = rows[-1] if rows else None
             if last is not None and last["key"] == key:
                 last["releases"].append(release)
                 last.update(devices=devices, switches=switches, launcher=launcher)
-                last.update(override=override, bus_lines=bus_lines)
+                last.update(override=override, bus_lines=bus_lines, spi=spi)
             else:
                 rows.append(
                     {
@@ -638,6 +717,7 @@ def main(argv: list[str]) -> None:
                         "offset_source": offset_source,
                         "override": override,
                         "bus_lines": bus_lines,
+                        "spi": spi,
                     }
                 )
         for row in rows:
@@ -662,6 +742,15 @@ def main(argv: list[str]) -> None:
                 # px4_i2c_bus_external is the board's own (BOARD_OVERRIDE_I2C_BUS_EXTERNAL)
                 keys = ["when", "buses", "line"]
                 out += [f"external_i2c_buses_when = {inline(row['override'], keys)}"]
+            if row["spi"]:
+                # -S -b N: the N-th of these (-S alone: the first), PX4's numbers (SPI::Bus)
+                folder = row["path"].removesuffix("init/rc.board_sensors")
+                out += [
+                    f"# SPI buses: spi.cpp's SPI::Bus names, numbered by {row['spi']['source']}"
+                ]
+                out += [f"external_spi_buses = {json.dumps(row['spi']['buses'])}"]
+                out += [f"spi_buses_path = {json.dumps(folder + 'src/spi.cpp')}"]
+                out += [f"spi_buses_lines = {json.dumps(row['spi']['lines'])}"]
             out += launcher_keys(row["path"], row["launcher"])
             out += ["device = ["] + [f"  {inline(r, DEVICE_KEYS)}," for r in row["devices"]]
             out += ["]", "switch = ["] + [f"  {inline(r, SWITCH_KEYS)}," for r in row["switches"]]

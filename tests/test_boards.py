@@ -1425,3 +1425,193 @@ def test_a_snapshots_x_b_rule_is_true_or_false() -> None:
     assert str(err.value) == (
         "boards.toml: snapshot 'v1.14.0': x_b_counts_external 1 is not true or false"
     )
+
+
+# -- `-S -b N`: the N-th external SPI bus ------------------------------------------------------
+
+
+def test_s_b_is_the_nth_external_spi_bus_of_px4_spi_buses() -> None:
+    # platforms/common/include/px4_platform_common/spi.h (v1.14.0 .. main): SPIBusIterator takes
+    # `-S -b N` as the N-th external bus of px4_spi_buses (`_external_bus_counter`, from 1) and
+    # `-S` alone as the first (`bus == -1 ? 1 : bus`). MR-CANHUBK3's src/spi.cpp lines 64-77
+    # list SPI1, SPI2 external, SPI3 internal, SPI4, SPI5 external; s32k3xx's
+    # hw_description.h numbers them from SPI0 = 1. So rc.board_sensors line 18 `icm42688p -c 1
+    # -b 3 -R 10 -S ...` is on SPI4, PX4's bus 5, and line 15 `icm20649 -b 4 -S -R 10` on
+    # SPI5, bus 6 (not buses 3 and 4, the -b as written, as the table had them).
+    for release in ("v1.14.0", "v1.18", "v1.19.0"):  # v1.19.0: main's
+        board = load_boards().by_name("nxp_mr-canhubk3", release)
+        assert board is not None
+        assert [b for b, _ in board.external_spi_buses] == [2, 3, 5, 6]
+        assert board.external_spi_buses[2][1].startswith(
+            "PX4/PX4-Autopilot boards/nxp/mr-canhubk3/src/spi.cpp:73 at main"
+        )
+        found = {
+            (d.driver, d.source.split()[1].rsplit(":")[-1]): board.buses_of(d)
+            for d in board.devices
+            if d.bus_kind == "SPI"
+        }
+        assert found == {
+            ("icm42688p", "7"): (5,),
+            ("icm20649", "15"): (6,),
+            ("icm42688p", "18"): (5,),
+            ("icm20649", "25"): (6,),
+            ("icm42688p", "28"): (5,),
+        }
+        assert "SPI buses from boards/nxp/mr-canhubk3/src/spi.cpp" in board.source
+    # Raspberry Pi Pico: src/spi.cpp lists SPI0 internal, SPI1 external (rpi_common numbers
+    # SPI0 = 1): `mpu9250 start -S` (line 9) is on the first external bus, PX4's bus 2
+    pico = load_boards().by_name("raspberrypi_pico", "v1.15.0")
+    assert pico is not None
+    assert pico.buses_of(device(pico, "mpu9250")) == (2,)
+    # AV-X v1: SPI2 external (stm32_common: SPI1 = 1): the adis16497 its script starts with -S
+    # unless SENS_EN_PMW3901 is set is a switch row on bus 2 (before: no bus, no row)
+    avx = load_boards().by_name("av_x-v1", "v1.15.0")
+    assert avx is not None
+    adis = [(s.driver, s.bus, s.when) for s in avx.switches if s.driver == "adis16497"]
+    assert adis == [("adis16497", 2, "not SENS_EN_PMW3901 > 0")]
+
+
+SPI_KEYS = (
+    'external_spi_buses = [2, 3]\nspi_buses_path = "boards/px4/fmu-v5/src/spi.cpp"\n'
+    "spi_buses_lines = [40, 44]\n"
+)
+
+
+def _spi_board(args: str, bus: int | None, keys: str = SPI_KEYS) -> Board:
+    text = GOOD.replace("i2c_launcher_buses = []", keys + "i2c_launcher_buses = []")
+    internal = "true" if "-s" in args else "false"
+    row = f'bus_kind = "SPI"\nrotation = 10\ninternal = {internal}\nargs = "{args}"'
+    row += f"\nbus = {bus}" if bus is not None else ""
+    mag = 'bus_kind = "I2C"\nrotation = 10\ninternal = true\nargs = "-I -R 10 start"'
+    return _board(text.replace(mag, row))
+
+
+def test_an_external_spi_start_past_the_boards_external_buses_starts_nowhere() -> None:
+    # two external SPI buses, 2 then 3: -S is bus 2, -S -b 2 bus 3, -S -b 3 none (PX4 counts
+    # past the last and starts nothing), -S -b 0 none
+    for args, bus, found in [
+        ("-S -R 10 start", None, (2,)),
+        ("-S -b 1 -R 10 start", 1, (2,)),
+        ("-S -b 2 -R 10 start", 2, (3,)),
+        ("-S -b 3 -R 10 start", 3, ()),
+        ("-S -b 0 -R 10 start", 0, ()),
+        # -s -b N: internal bus N itself (the InternalBus filter compares bus numbers)
+        ("-s -b 4 -R 10 start", 4, (4,)),
+        ("-s -R 10 start", None, ()),
+    ]:
+        board = _spi_board(args, bus)
+        assert board.buses_of(board.devices[0]) == found, args
+        assert board.bus_conditions(board.devices[0]) == tuple((b, "") for b in found), args
+    # a board whose SPI buses the table does not know: -S names no bus (it had -b's number)
+    board = _spi_board("-S -b 2 -R 10 start", 2, keys="")
+    assert board.spi_buses_path == "" and board.buses_of(board.devices[0]) == ()
+    keyed = GOOD.replace("i2c_launcher_buses = []", SPI_KEYS + "i2c_launcher_buses = []")
+    page = render_markdown(parse_boards(keyed))
+    assert "External SPI buses, in the order `-S -b N` counts them: [2, 3] " in page
+
+
+@pytest.mark.parametrize(
+    ("keys", "problem"),
+    [
+        (
+            "external_spi_buses = [2]\n",
+            "external_spi_buses but no spi_buses_path or spi_buses_lines (the three go together)",
+        ),
+        (
+            'spi_buses_path = "x/spi.cpp"\nspi_buses_lines = [1]\n',
+            "spi_buses_path but no external_spi_buses (the three go together)",
+        ),
+        (
+            'external_spi_buses = [2, 3]\nspi_buses_path = "x/spi.cpp"\nspi_buses_lines = [1]\n',
+            "spi_buses_lines [1] do not give one line for each of external_spi_buses [2, 3]",
+        ),
+        (
+            'external_spi_buses = [256]\nspi_buses_path = "x/spi.cpp"\nspi_buses_lines = [1]\n',
+            "external_spi_buses [256] is not a list of integers 0..255",
+        ),
+    ],
+)
+def test_bad_spi_bus_keys_are_named_in_one_line(keys: str, problem: str) -> None:
+    text = GOOD.replace("i2c_launcher_buses = []", keys + "i2c_launcher_buses = []")
+    with pytest.raises(BoardsFileError) as err:
+        parse_boards(text)
+    assert str(err.value) == f"boards.toml: board 'px4_fmu-v5' at v1.14.0: {problem}"
+
+
+def test_every_external_spi_bus_is_on_the_line_it_cites() -> None:
+    # Each bus names the line of src/spi.cpp declaring it, initSPIBusExternal(SPI::Bus::X),
+    # whose number the chip's SPI::Bus enum gives (every one read starts at 1, in order).
+    cite = re.compile(r"PX4/PX4-Autopilot (\S+):(\d+) at \S+ \([^,]+, ([0-9a-f]{10}),")
+    dirs, checked, missing = tuple(px4_git_dirs()), 0, set()
+    table = load_boards()
+    for board in table.all():
+        for variant in table.variants(board.name):
+            for bus, source in variant.external_spi_buses:
+                m = cite.match(source)
+                assert m and m.group(1) == variant.spi_buses_path, source
+                text = show(dirs, m.group(3), m.group(1))
+                if text is None:
+                    missing.add(m.group(3))
+                    continue
+                written = text.split("\n")[int(m.group(2)) - 1]
+                named = re.search(r"initSPIBusExternal\(SPI::Bus::(LP)?SPI(\d)\b", written)
+                assert named, (source, written)
+                # SPI0 = 1 on the NXP S32K and RP2040, SPI1 = 1 on the STM32
+                first = 0 if variant.name.startswith(("nxp_", "raspberrypi_")) else 1
+                assert int(named.group(2)) - first + 1 == bus, (source, written)
+                checked += 1
+    if not checked:
+        pytest.skip(f"commits {sorted(missing)} are in none of {dirs} (set $PX4_AUTOPILOT_GIT)")
+    assert checked == 9  # ark_cannode 2 rows, av_x-v1 2, pico 1: one bus each; canhubk3 4
+
+
+def test_the_transcription_numbers_spi_buses_by_the_chips_enum() -> None:
+    module = _transcriber()
+    spi = (
+        "constexpr px4_spi_bus_t px4_spi_buses[SPI_BUS_MAX_BUS_ITEMS] = {\n"
+        "\tinitSPIBus(SPI::Bus::SPI1, {\n"
+        "\t}),\n"
+        "\tinitSPIBusExternal(SPI::Bus::SPI4, {\n"
+        "\t}),\n"
+        "\tinitSPIBusExternal(SPI::Bus::SPI2, {\n"
+        "\t}),\n"
+        "};\n"
+    )
+    files = {
+        "path": "boards/acme/k1/init/rc.board_sensors",
+        "src/spi.cpp": spi,
+        # CONFIG_STM32_STM32F4XXX, the flag PX4's CMake tests, is one Kconfig derives
+        "nuttx-config/nsh/defconfig": "CONFIG_ARCH_CHIP_STM32=y\nCONFIG_ARCH_CHIP_STM32F412CE=y\n",
+    }
+    chips = {
+        ("CONFIG_STM32_STM32F10XX", "stm32f1"): ({"SPI1": 1, "SPI2": 2}, "f1.h"),
+        ("CONFIG_STM32_STM32F4XXX", "stm32f4"): ({"SPI1": 1, "SPI2": 2, "SPI4": 4}, "f4.h"),
+    }
+    # in the table's order (4 before 2), each with its line
+    assert module.spi_buses(files, chips) == {"buses": [4, 2], "lines": [4, 6], "source": "f4.h"}
+    per_hw = dict(files, **{"src/spi.cpp": "constexpr px4_spi_bus_all_hw_t px4_spi_buses_all_hw"})
+    assert module.spi_buses(per_hw, chips) is None
+    assert module.spi_buses({"path": "p"}, chips) is None
+    odd = dict(files, **{"src/spi.cpp": "initSPIBusExternal(SPI::Bus::SPI9, {"})
+    with pytest.raises(SystemExit, match=r"^boards/acme/k1/init/rc.board_sensors: src/spi.cpp's "
+                       r"SPI::Bus::SPI9 is not in f4.h$"):  # fmt: skip
+        module.spi_buses(odd, chips)
+    unknown = dict(files, **{"nuttx-config/nsh/defconfig": "CONFIG_ARCH_CHIP_ACME9=y\n"})
+    expected = r"an SPI::Bus enum \(expected one of \['CONFIG_STM32_STM32F10XX', "
+    with pytest.raises(
+        SystemExit, match=r"no chip flag of its nuttx-config/nsh/defconfig has " + expected
+    ):
+        module.spi_buses(unknown, chips)
+
+
+def test_the_chips_spi_bus_numbers_are_read_from_px4s_headers() -> None:
+    dirs = [d for d in px4_git_dirs() if show((d,), "bb59c637cd", "Makefile") is not None]
+    if not dirs:
+        pytest.skip(f"commit bb59c637cd is in none of {px4_git_dirs()}")
+    chips = _transcriber().spi_bus_numbers(dirs[0], "bb59c637cd")
+    by_chip = {chip: numbers for (_, chip), (numbers, _) in chips.items()}
+    # s32k3xx/include/px4_arch/hw_description.h: enum class Bus { SPI0 = 1, SPI1, ... SPI5 }
+    assert by_chip["s32k34x"] == {f"SPI{i}": i + 1 for i in range(6)}
+    # stm32_common's, which stm32f4 includes: SPI1 = 1 .. SPI6
+    assert by_chip["stm32f4"] == {f"SPI{i}": i for i in range(1, 7)}
+    assert by_chip["rp2040"] == {"SPI0": 1, "SPI1": 2}

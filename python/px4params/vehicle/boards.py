@@ -29,8 +29,11 @@ a few snapshots (tagged releases and branches, listed in its ``[[snapshot]]`` ta
     ``buses`` and its other buses internal, elsewhere the two lists hold; ``line``: the test's
     line in ``i2c_buses_path``),
     ``i2c_launcher_buses`` with ``i2c_launcher_lines`` (the line of each bus's ``i2c_launcher
-    start -b``) and optional ``i2c_launcher_when``, and the lists ``device`` (started whatever
-    the parameters) and ``switch`` (started behind a parameter).
+    start -b``) and optional ``i2c_launcher_when``, optional ``external_spi_buses`` with
+    ``spi_buses_path`` and ``spi_buses_lines`` (a board whose scripts start a driver with ``-S``:
+    its ``src/spi.cpp``'s external buses in the order of its ``px4_spi_buses``, as PX4 numbers
+    them, and the line of each), and the lists ``device`` (started whatever the parameters) and
+    ``switch`` (started behind a parameter).
 ``[[i2c_launcher]]``
     ``releases``, ``path``, ``args`` (the command it runs for a device it finds, ``{bus}`` and
     ``{index}`` filled in) and a ``probe`` list (``driver``, ``kind``, ``address``, ``line``) in
@@ -52,6 +55,10 @@ tries only external buses, ``-I`` only internal ones, and ``-b N`` only bus N if
 kind, so a ``-b`` of the other kind finds none and the driver never starts
 (:meth:`Board.buses_of`); at a snapshot with ``x_b_counts_external``, ``-X -b N`` is instead
 the N-th external bus in the order of the board's ``px4_i2c_buses`` (``i2c_buses_lines``).
+An SPI start runs where PX4's ``SPIBusIterator`` (platforms/common/spi.cpp) finds a bus: ``-s
+-b N`` on internal bus N, ``-S -b N`` on the N-th of the board's external SPI buses
+(``external_spi_buses``; ``-S`` alone: the first), so a board with fewer never starts it; a
+``-S`` start on a board whose SPI buses the table does not know is on no bus it can name.
 A switch started with ``-X`` and no ``-b`` probes every external I2C bus, so
 :class:`SwitchStart` rows are one per bus the start can be on, each with the condition under
 which its bus is of the start's kind (``bus_when``, from ``external_i2c_buses_when``).
@@ -201,6 +208,12 @@ class Board:
     #: :attr:`i2c_bus_order` (v1.11.0: platforms/common/i2c.cpp:76 compares ``-b`` with
     #: ``_external_bus_counter``), not bus N (PX4 787f9c1213, first in v1.12.0).
     x_b_counts_external: bool = False
+    #: Its external SPI buses in the order of its ``px4_spi_buses`` (``-S -b N`` is the N-th),
+    #: each with the line of spi_buses_path naming it, cited; empty where the table does not
+    #: know them (:attr:`spi_buses_path` "").
+    external_spi_buses: tuple[tuple[int, str], ...] = ()
+    #: The file its external SPI buses were read from ("": none).
+    spi_buses_path: str = ""
 
     def i2c_bus_source(self, bus: int) -> str | None:
         """The line that makes I2C ``bus`` the board's (``initI2CBusInternal(2)``), cited as
@@ -222,15 +235,22 @@ class Board:
     ) -> tuple[int, ...]:
         """The buses a start can be on, as PX4's I2CBusIterator tries them: an I2C start's
         internal (``-I``) or external (``-X``) buses, of them its ``-b``; a ``-b`` the board
-        names as of the other kind, none (PX4 never starts it); SPI's ``-b``, () without.
-        ``overridden``: where the board's :attr:`external_i2c_buses_when` holds."""
+        names as of the other kind, none (PX4 never starts it). SPI, as its SPIBusIterator
+        does: ``-s``'s ``-b``, () without; ``-S``, the ``-b``-th (else the first) of
+        :attr:`external_spi_buses`, () where there is no such bus or the table does not know
+        them. ``overridden``: where the board's :attr:`external_i2c_buses_when` holds."""
         external, internal = self.i2c_buses(False, overridden), self.i2c_buses(True, overridden)
         return _start_buses(
             start.bus, start.bus_kind, start.internal, external, internal, self._iterator()
         )
 
     def _iterator(self) -> _Iterator:
-        return _Iterator(bool(self.i2c_buses_path), self.i2c_bus_order, self.x_b_counts_external)
+        return _Iterator(
+            bool(self.i2c_buses_path),
+            self.i2c_bus_order,
+            self.x_b_counts_external,
+            _spi_order(self.spi_buses_path, self.external_spi_buses),
+        )
 
     def bus_conditions(self, start: BoardDevice | SwitchStart) -> tuple[tuple[int, str], ...]:
         """Each bus a start can be on (:meth:`buses_of`) with the condition under which it
@@ -249,13 +269,20 @@ class Board:
 
 @dataclass(frozen=True)
 class _Iterator:
-    """What PX4's I2CBusIterator needs of a board beyond its two lists: ``known``, the lists are
-    its ``px4_i2c_buses`` (its i2c.cpp); ``order``, their order there; ``counts``, ``-X -b N``
-    is the N-th external bus of that order (:attr:`Board.x_b_counts_external`)."""
+    """What PX4's bus iterators need of a board beyond its two I2C lists: ``known``, the lists
+    are its ``px4_i2c_buses`` (its i2c.cpp); ``order``, their order there; ``counts``, ``-X -b
+    N`` is the N-th external bus of that order (:attr:`Board.x_b_counts_external`);
+    ``spi_external``, its external SPI buses in their order (None: not known)."""
 
     known: bool
     order: tuple[int, ...]
     counts: bool
+    spi_external: tuple[int, ...] | None
+
+
+def _spi_order(path: str, buses: Sequence[tuple[int, str]]) -> tuple[int, ...] | None:
+    """A board's external SPI buses as the iterator counts them; None where none were read."""
+    return tuple(bus for bus, _ in buses) if path else None
 
 
 def _bus_lists(
@@ -283,7 +310,11 @@ def _start_buses(
     i2c.cpp), the only buses PX4's iterator visits, a ``-b`` neither names finds none; a
     board whose buses the table does not know keeps its ``-b``."""
     if bus_kind != "I2C":
-        return (bus,) if bus is not None else ()
+        if internal:
+            return (bus,) if bus is not None else ()
+        # -S: the N-th external SPI bus (SPIBusIterator's _external_bus_counter), -S alone 1
+        spi, nth = iterator.spi_external or (), 1 if bus is None else bus
+        return (spi[nth - 1],) if 1 <= nth <= len(spi) else ()
     own, other = (internal_buses, external_buses) if internal else (external_buses, internal_buses)
     if bus is None:
         return tuple(own)
@@ -703,6 +734,9 @@ def parse_boards(text: str, file: str = "boards.toml") -> BoardTable:
                 "external_i2c_buses_when",
                 "i2c_launcher_when",
                 "i2c_launcher_lines",
+                "external_spi_buses",
+                "spi_buses_path",
+                "spi_buses_lines",
             ),
         )
         name = row.text("name")
@@ -737,6 +771,7 @@ def parse_boards(text: str, file: str = "boards.toml") -> BoardTable:
         # px4_i2c_buses' order, as its lines give it (none given: the lists' order)
         lines = dict(zip((*external, *internal), bus_lines, strict=False))
         bus_order = tuple(sorted((*external, *internal), key=lambda b: lines.get(b, 0)))
+        spi_path, spi_buses = _spi_buses(row, snaps, cite)
         devices = []
         for j, entry in enumerate(row.tables("device"), 1):
             start = _start(_Row(file, f"{row.where} device {j}", entry), switch=False)
@@ -761,6 +796,8 @@ def parse_boards(text: str, file: str = "boards.toml") -> BoardTable:
         sources = [f"{_UPSTREAM} {path} at {', '.join(s.describe() for s in snaps)}"]
         if buses_path:
             sources.append(f"I2C buses from {buses_path}")
+        if spi_path:
+            sources.append(f"SPI buses from {spi_path}")
         for snap in snaps:
             key = (name, snap.release)
             if key in rows:
@@ -771,7 +808,12 @@ def parse_boards(text: str, file: str = "boards.toml") -> BoardTable:
                 external,
                 internal,
                 override,
-                _Iterator(bool(buses_path), bus_order, snap.x_b_counts_external),
+                _Iterator(
+                    bool(buses_path),
+                    bus_order,
+                    snap.x_b_counts_external,
+                    _spi_order(spi_path, spi_buses),
+                ),
                 ver_hw,
             )
             rc_sensors = (
@@ -806,10 +848,35 @@ def parse_boards(text: str, file: str = "boards.toml") -> BoardTable:
                 i2c_buses_path=buses_path,
                 i2c_bus_order=bus_order,
                 x_b_counts_external=snap.x_b_counts_external,
+                external_spi_buses=spi_buses,
+                spi_buses_path=spi_path,
             )
         if name not in names:
             names.append(name)
     return BoardTable(tuple(snapshots.values()), rows, names, ver_hw_names, common, pending)
+
+
+def _spi_buses(
+    row: _Row, snaps: Sequence[_Snapshot], cite: Callable[[str, int, Sequence[_Snapshot]], str]
+) -> tuple[str, tuple[tuple[int, str], ...]]:
+    """A board row's ``spi_buses_path`` and its ``external_spi_buses``, each with its line of
+    that file cited: the three keys together or none."""
+    keys = ("external_spi_buses", "spi_buses_path", "spi_buses_lines")
+    given = [k for k in keys if k in row.table]
+    if not given:
+        return "", ()
+    if len(given) != len(keys):
+        missing = [k for k in keys if k not in given]
+        row.fail(f"{given[0]} but no {' or '.join(missing)} (the three go together)")
+    buses = row.numbers("external_spi_buses", 0, 255)
+    path = row.text("spi_buses_path")
+    bus_lines = row.numbers("spi_buses_lines", 1, 100_000)
+    if len(bus_lines) != len(buses):
+        row.fail(
+            f"spi_buses_lines {list(bus_lines)} do not give one line for each of "
+            f"external_spi_buses {list(buses)}"
+        )
+    return path, tuple((bus, cite(path, n, snaps)) for bus, n in zip(buses, bus_lines, strict=True))
 
 
 def _override(
@@ -854,8 +921,9 @@ def _expand(
 ) -> list[SwitchStart]:
     """One SwitchStart per bus the start can run on (:meth:`Board.bus_conditions`): ``-b N``
     names one, if of the start's kind; ``-X``/``-I`` without it probe every external/internal
-    I2C bus of the board. An SPI start without ``-b`` names no bus the table knows, and a start
-    another board's ``ver hwcmp`` keeps is not this board's."""
+    I2C bus of the board; ``-S`` the ``-b``-th (else the first) of its external SPI buses where
+    the table knows them, elsewhere no bus. A start another board's ``ver hwcmp`` keeps is not
+    this board's."""
     for clause in start["when"].split(" and "):
         negated = clause.startswith("not ")
         if clause.removeprefix("not ").startswith("board in "):
@@ -897,7 +965,10 @@ def _cell(value: object) -> str:
 
 def _starts_table(
     starts: Sequence[BoardDevice | SwitchStart | tuple[Mapping[str, Any], str]],
+    board: Board | None = None,
 ) -> list[str]:
+    """The rows of ``starts``; ``board``'s devices started with ``-S`` show the SPI bus PX4
+    counts their ``-b`` to ("none": the board has no such external bus)."""
     lines = [
         "| switch | driver | kind | bus | address | -R | internal | when | options | line |",
         "|---|---|---|---|---|---|---|---|---|---|",
@@ -911,6 +982,10 @@ def _starts_table(
         else:
             f = vars(start)
         bus = f["bus_kind"] + (f" {f['bus']}" if f["bus"] is not None else "")
+        external_spi = isinstance(start, BoardDevice) and start.bus_kind == "SPI"
+        if external_spi and not f["internal"] and board is not None and board.spi_buses_path:
+            found = board.buses_of(start)  # type: ignore[arg-type]
+            bus = f"SPI {found[0]}" if found else "SPI none"
         address = f"0x{f['address']:02x}" if f["address"] is not None else ""
         line = f["source"].split(" ")[1].rsplit(":", 1)[-1]
         cells = (
@@ -963,9 +1038,16 @@ def render_markdown(table: BoardTable) -> str:
                 f"{list(variant.internal_i2c_buses)}{overridden}; i2c_launcher scans: "
                 f"{launcher}{when}."
             )
+            if variant.spi_buses_path:
+                spi = [bus for bus, _ in variant.external_spi_buses]
+                out += [
+                    "",
+                    f"External SPI buses, in the order `-S -b N` counts them: {spi} "
+                    f"({variant.spi_buses_path}).",
+                ]
             own = [s for s in variant.switches if "/rc.sensors:" not in s.source]
             if variant.devices or own:
-                out += ["", *_starts_table([*variant.devices, *own])]
+                out += ["", *_starts_table([*variant.devices, *own], variant)]
             nowhere = [
                 d.source.split(" ")[1].rsplit(":", 1)[-1]
                 for d in variant.devices
@@ -977,6 +1059,7 @@ def render_markdown(table: BoardTable) -> str:
                     f"Started on no bus: line {', '.join(nowhere)} (its -b is a bus of the "
                     "other kind, which PX4's -I or -X does not try).",
                 ]
+
             out.append("")
     out += ["### What i2c_launcher tries on each of its buses", ""]
     seen_probes: list[tuple[LauncherProbe, ...]] = []
