@@ -3,7 +3,8 @@
 The bench file (TOML) says what is physically on the vehicle::
 
     [bench]                      # optional
-    name = "quad with two batteries"
+    name = "quad with two batteries"   # shown with the file's name in reports
+    description = "..."          # optional: for people reading the file, shown nowhere
 
     [[bus]]                      # optional: noise on a whole bus
     kind = "i2c"                 # i2c or spi
