@@ -282,6 +282,29 @@ def test_a_setting_below_its_fields_minimum_is_rounded_then_raised_to_it() -> No
     ]
 
 
+def test_an_spi_sensor_the_console_shows_on_an_external_bus_is_not_called_internal() -> None:
+    # I2CSPIDriverBase::module_start (platforms/common/i2c_spi_buses.cpp) prints an -S start as
+    # "... on SPI bus N (external, equal to '-b K')": rc.sensors' `adis16448 -S start` behind
+    # SENS_EN_ADIS164X, or MR-CANHUBK3's `icm20649 -b 4 -S` (SPI5, PX4's bus 6). Both are left
+    # out of the manifest, as started by PX4's scripts, without calling them internal.
+    console = (
+        "adis16448 #0 on SPI bus 4 (external, equal to '-b 1')\n"
+        "icm20649 #0 on SPI bus 6 (external, equal to '-b 4') rotation 6\n"
+        "icm42688p #0 on SPI bus 1 rotation 6\n"
+    )
+    imu = devid.encode("spi", 6, 0, 0x25)  # drv_sensor.h: DRV_IMU_DEVTYPE_ICM20649 0x25
+    proposal = migrate.migrate(today({"CAL_ACC0_ID": imu}, console), table="current")
+    external = "SPI sensor on an external bus: started by PX4's startup scripts"
+    assert proposal.not_in_manifest == [
+        f"CAL_ACC0_ID = {imu}: ICM20649 (IMU), SPI bus 6, device 0: {external}, not by the "
+        "manifest",
+        f"boot console line 1: adis16448, SPI bus 4: {external}",
+        "boot console line 3: icm42688p, SPI bus 1: internal SPI sensor: started by the board's "
+        "startup script",
+    ]
+    assert proposal.instances == []
+
+
 def test_one_device_in_two_slots_one_of_them_disabled_is_proposed_with_a_note() -> None:
     # issue 34, defects 2 and 10: CAL_MAG0_PRIO = 0 disables that slot; the device is still
     # used through the other slot, so it is proposed, and the disabled slot is said

@@ -982,7 +982,8 @@ class _Builder:
             hit = self.evidence(dev)
             if hit:
                 self.claimed.add(hit[0])
-            why = "internal SPI sensor: started by the board's startup script, not by the manifest"
+            # the console says where PX4 found it; a device ID alone does not
+            why = f"{_spi_started(hit is not None and hit[1].external)}, not by the manifest"
             disabled = f" (disabled: {', '.join(off)})" if off else ""
             self.leave_out(found, dev.describe() + disabled, "board", why + twice)
             return
@@ -1069,12 +1070,7 @@ class _Builder:
             device = f"{start.driver}, {start.bus_kind} bus {start.bus}{at}"
             found = f"boot console line {start.line}"
             if start.bus_kind == "SPI":
-                self.leave_out(
-                    found,
-                    device,
-                    "board",
-                    "internal SPI sensor: started by the board's startup script",
-                )
+                self.leave_out(found, device, "board", _spi_started(start.external))
                 continue
             chips = self.start_chips(start)
             kinds = {e.kind for e in self.table if e.name in chips}
@@ -1437,6 +1433,15 @@ def _upgrade(config: OldConfig, board: Any, target: str | None, assumptions: lis
         target if target != own else None,
         asked if target != own else None,
     )
+
+
+def _spi_started(external: bool) -> str:
+    """Who started an SPI sensor, by where the boot console placed it: a board's script starts
+    its own (``-s``); one on an external bus (``-S``, shown "(external, equal to '-b N')") is
+    started by a board's script or by a switch of rc.sensors (``SENS_EN_ADIS164X``)."""
+    if external:
+        return "SPI sensor on an external bus: started by PX4's startup scripts"
+    return "internal SPI sensor: started by the board's startup script"
 
 
 def _snapshot_of(table: BoardTable | None, release: str, known: tuple[str, ...]) -> str:
