@@ -982,9 +982,14 @@ def _starts_table(
         else:
             f = vars(start)
         bus = f["bus_kind"] + (f" {f['bus']}" if f["bus"] is not None else "")
-        external_spi = isinstance(start, BoardDevice) and start.bus_kind == "SPI"
-        if external_spi and not f["internal"] and board is not None and board.spi_buses_path:
-            found = board.buses_of(start)  # type: ignore[arg-type]
+        if (
+            board is not None
+            and board.spi_buses_path
+            and isinstance(start, BoardDevice)
+            and start.bus_kind == "SPI"
+            and not start.internal
+        ):
+            found = board.buses_of(start)
             bus = f"SPI {found[0]}" if found else "SPI none"
         address = f"0x{f['address']:02x}" if f["address"] is not None else ""
         line = f["source"].split(" ")[1].rsplit(":", 1)[-1]
@@ -1059,7 +1064,6 @@ def render_markdown(table: BoardTable) -> str:
                     f"Started on no bus: line {', '.join(nowhere)} (its -b is a bus of the "
                     "other kind, which PX4's -I or -X does not try).",
                 ]
-
             out.append("")
     out += ["### What i2c_launcher tries on each of its buses", ""]
     seen_probes: list[tuple[LauncherProbe, ...]] = []
