@@ -3,7 +3,9 @@
 Reads, at each snapshot, every ``boards/<vendor>/<model>/init/rc.board_sensors`` with the
 board's ``src/i2c.cpp`` (or ``src/board_config.h``) and ``ROMFS/px4fmu_common/init.d/rc.sensors``
 (where i2c.cpp numbers buses from 0, as on NXP's Kinetis and S32K, also the board's NuttX
-defconfig and its chip's ``PX4_BUS_OFFSET``, which PX4 adds to make them its own), and writes
+defconfig and its chip's ``PX4_BUS_OFFSET``, which PX4 adds to make them its own; where the
+board's scripts start a driver with ``-S``, its ``src/spi.cpp`` and the chip's ``SPI::Bus``
+numbers, which ``-S -b N`` counts through), and writes
 the facts in px4params' own format: which drivers start, on which bus, with which options, under
 which shell conditions. Nothing of PX4's text is copied but driver names, options and
 conditions. A board's consecutive snapshots with the same facts share one row.
