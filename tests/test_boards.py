@@ -1508,6 +1508,18 @@ def test_an_external_spi_start_past_the_boards_external_buses_starts_nowhere() -
     keyed = GOOD.replace("i2c_launcher_buses = []", SPI_KEYS + "i2c_launcher_buses = []")
     page = render_markdown(parse_boards(keyed))
     assert "External SPI buses, in the order `-S -b N` counts them: [2, 3] " in page
+    # the docs table names the bus PX4 counts to, or that there is none
+    for args, bus, cell in [
+        ("-S -b 2 -R 10 start", 2, "SPI 3"),
+        ("-S -b 3 -R 10 start", 3, "SPI none"),
+    ]:
+        row = f'bus_kind = "SPI"\nrotation = 10\ninternal = false\nargs = "{args}"\nbus = {bus}'
+        mag = 'bus_kind = "I2C"\nrotation = 10\ninternal = true\nargs = "-I -R 10 start"'
+        page = render_markdown(parse_boards(keyed.replace(mag, row)))
+        assert (
+            f"|  | ist8310 | mag | {cell} |  | 10 | no |  | `{args.removesuffix(' start')}` | 28 |"
+            in page
+        )
 
 
 @pytest.mark.parametrize(
@@ -1528,6 +1540,10 @@ def test_an_external_spi_start_past_the_boards_external_buses_starts_nowhere() -
         (
             'external_spi_buses = [256]\nspi_buses_path = "x/spi.cpp"\nspi_buses_lines = [1]\n',
             "external_spi_buses [256] is not a list of integers 0..255",
+        ),
+        (
+            'external_spi_buses = [2]\nspi_buses_path = "x/spi.cpp"\nspi_buses_lines = [100001]\n',
+            "spi_buses_lines [100001] is not a list of integers 1..100000",
         ),
     ],
 )
