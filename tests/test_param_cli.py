@@ -202,6 +202,30 @@ def test_run_is_all_or_nothing(
     assert param(capsys, "show", "-q", "INA238#0[4]")[1] == "69\n"
 
 
+def test_keep_going_past_an_if_whose_condition_fails_runs_neither_branch(
+    store: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # A misspelt parameter in the condition: PX4's `param compare` fails, so its `if` takes
+    # the else branch on a vehicle; here the line is an error, and --keep-going must not run
+    # both branches (nor call then/else/fi orphans). The lines after the block run.
+    param(capsys, "add", "INA238#1")
+    param(capsys, "set", "BAT1_N_CELLS", "3")
+    text = (
+        "if param compare SYS_AUTOSTRT 4001\nthen\n  param set BAT1_N_CELLS 4\nelse\n"
+        "  param set BAT1_N_CELLS 6\n  param rm INA238#1\nfi\nparam add RM3100#0\n"
+    )
+    path = airframe(tmp_path, text)
+    code, _, err = run(capsys, "run", path, "--keep-going")
+    assert code == 1
+    assert err.splitlines() == [
+        f"px4params: {path}:1: unknown parameter 'SYS_AUTOSTRT' (did you mean: SYS_AUTOSTART, "
+        "SYS_AUTOCONFIG?)"
+    ]
+    assert param(capsys, "show", "-q", "BAT1_N_CELLS")[1] == "3\n"
+    assert param(capsys, "instances", "INA238")[1] == "INA238#1\n"
+    assert param(capsys, "instances", "RM3100")[1] == "RM3100#0\n"
+
+
 BAD_PARAM = [
     (
         ["add", "INA238#4"],

@@ -70,9 +70,11 @@ class _Block:
     line: int
     in_else: bool = False
     seen_then: bool = False
+    #: Its condition failed (a refused ``param compare``): neither branch runs.
+    failed: bool = False
 
     def active(self) -> bool:
-        return self.seen_then and (self.condition != self.in_else)
+        return self.seen_then and not self.failed and (self.condition != self.in_else)
 
 
 @dataclass
@@ -144,8 +146,14 @@ def _line(
         _block_word(head, words, blocks)
         return
     if head == "if":
-        # A condition inside a branch that does not run is not evaluated, but still nests.
-        condition = running and _condition(words[1:], parser, session)
+        # A condition inside a branch that does not run is not evaluated, but still nests. One
+        # that fails still opens its block, which then runs neither branch (with --keep-going
+        # the lines after it are read on, and its then/else/fi must not be orphans).
+        try:
+            condition = running and _condition(words[1:], parser, session)
+        except (CommandError, Px4ParamsError, NshArgumentError, ValueError):
+            blocks.append(_Block(False, number, failed=True))
+            raise
         blocks.append(_Block(condition, number))
         return
     if blocks and not blocks[-1].seen_then:
