@@ -146,3 +146,54 @@ def test_a_failed_write_leaves_the_old_file_and_no_temporary_file(tmp_path: Path
     assert result.stderr == f"px4params: error: {out}: cannot write: File too large\n"
     assert out.read_text(encoding="utf-8") == "old"
     assert sorted(p.name for p in out.parent.iterdir()) == ["out.svg"]
+
+
+def _copies(tmp: Path) -> dict[str, Path]:
+    """Copies of the inputs a command may be pointed back at (the example files stay as they
+    are)."""
+    names = {"airframe": AIRFRAME, "bench": BENCH, "params": PARAMS}
+    copies = {name: tmp / path.name for name, path in names.items()}
+    for name, path in names.items():
+        copies[name].write_bytes(path.read_bytes())
+    copies["log"] = _ulog(tmp)
+    classic = tmp / "classic.json"
+    classic.write_text('{"version": 1, "parameters": []}\n')
+    copies["classic"] = classic
+    return copies
+
+
+#: An output pointed at an input of the same command, or at another output of it: (argv with
+#: {name} for the copies, the path refused as written, what it is).
+SAME_FILE = [
+    (["migrate", "{params}", "-o", "{params}"], "{params}", "the input file {params}"),
+    (["migrate", "{params}", "-o", "./two_batteries.params"], "./two_batteries.params",
+     "the input file {params}"),
+    (["health", "{log}", "--timeline", "{log}"], "{log}", "the input file {log}"),
+    (["autostart", "run", "--airframe", "{airframe}", "--bench", "{bench}", "--events",
+      "{bench}"], "{bench}", "the input file {bench}"),
+    (["autostart", "run", "--airframe", "{airframe}", "--bench", "{bench}", "--ulog",
+      "{airframe}"], "{airframe}", "the input file {airframe}"),
+    (["autostart", "run", "--airframe", "{airframe}", "--timeline", "t.svg", "--events",
+      "t.svg"], "t.svg", "another output of this command"),
+    (["metadata", "--json", "{classic}", "--classic", "{classic}"], "{classic}",
+     "the input file {classic}"),
+    (["metadata", "--json", "m.json", "--header", "m.json"], "m.json",
+     "another output of this command"),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(("argv", "refused", "what"), SAME_FILE)
+def test_an_output_that_is_an_input_or_another_output_is_refused(
+    tmp_path: Path, argv: list[str], refused: str, what: str
+) -> None:
+    # migrate x.params -o x.params replaced the vehicle's file with the airframe, exit 0
+    copies = {name: str(path) for name, path in _copies(tmp_path).items()}
+    before = {name: Path(path).read_bytes() for name, path in copies.items()}
+    result = _px4params(tmp_path, *(a.format(**copies) for a in argv))
+    assert result.returncode == 1
+    assert result.stderr == (
+        f"px4params: error: {refused.format(**copies)}: is {what.format(**copies)}: give the "
+        "output another path\n"
+    )
+    assert {name: Path(path).read_bytes() for name, path in copies.items()} == before
+    assert not (tmp_path / "t.svg").exists() and not (tmp_path / "m.json").exists()

@@ -5,7 +5,9 @@ outputs.
 Only a regular file is replaced, or a new one made: a FIFO would hang the command, a device
 (``/dev/sda``) or a folder is no output file. The data goes to a temporary file beside the
 target, is synced and renamed over it, so that a crash or a full disk leaves the old file or
-the whole new one, and no temporary file. A refusal is an
+the whole new one, and no temporary file. An output naming one of the command's inputs, or
+another of its outputs, is refused before anything is written (:func:`check_outputs`). A
+refusal is an
 :class:`px4params.errors.OutputFileError` (an ``OSError`` too), one line naming the file.
 """
 
@@ -19,6 +21,7 @@ from px4params._records import TYPE_CHECKING
 from px4params.errors import OutputFileError
 
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
+    from collections.abc import Iterable
     from typing import Any
 
 
@@ -182,3 +185,34 @@ class _ignoring_os_errors:
 
     def __exit__(self, kind: Any, value: Any, tb: Any) -> bool:
         return kind is not None and issubclass(kind, OSError)
+
+
+
+def check_outputs(
+    outputs: Iterable[str | os.PathLike[str] | None],
+    inputs: Iterable[str | os.PathLike[str] | None],
+) -> None:
+    """Refuses, before anything is written, an output path that names one of the command's
+    input files (``migrate x.params -o x.params`` would replace the vehicle's file with the
+    airframe) or an output given twice (the second write would replace the first). Paths are
+    compared as files (a symbolic link or ``./x`` is the same file); ``-`` and None are
+    skipped. One line: ``OUT: is the input file IN: give the output another path``."""
+    named = [os.fspath(p) for p in inputs if p is not None and os.fspath(p) != "-"]
+    taken = {_identity(path): f"the input file {path}" for path in reversed(named)}
+    for path in outputs:
+        if path is None or os.fspath(path) == "-":
+            continue
+        given = os.fspath(path)
+        what = taken.setdefault(_identity(given), "")
+        if what:
+            raise _refused(f"is {what}: give the output another path", given, errno.EINVAL)
+        taken[_identity(given)] = "another output of this command"
+
+
+def _identity(path: str) -> str:
+    """What makes two paths one file: device and inode where it exists, else its real path."""
+    try:
+        info = os.stat(path)
+    except OSError:
+        return os.path.realpath(path)
+    return f"{info.st_dev}:{info.st_ino}"

@@ -21,7 +21,7 @@ from px4params.store.store import STORE_ENV, default_store_path
 from px4params.vehicle.autostart import configured, load_manifest, plan, plan_lines, script
 from px4params.vehicle.drivers import DEFAULT_DRIVERS, DRIVERS_ENV, load_drivers
 from px4params.vehicle.simbench import LEGACY_PROBES, RunResult, healthy_bench, load_bench, run
-from px4params.writing import write_file
+from px4params.writing import check_outputs, write_file
 
 if TYPE_CHECKING:
     import argparse
@@ -58,6 +58,8 @@ def cmd_plan(args: argparse.Namespace) -> int:
 
 
 def cmd_run(args: argparse.Namespace) -> int:
+    inputs = [args.store or default_store_path(), args.airframe, args.bench, args.drivers]
+    check_outputs([args.events, args.ulog, args.timeline], inputs)
     # A legacy boot needs no manifest; one that exists is only used to name what went missing.
     store = None
     if not args.legacy or args.store or args.airframe or Path(default_store_path()).exists():

@@ -11,7 +11,7 @@ from px4params._records import TYPE_CHECKING
 from px4params.cli.parsing import RawDescriptionHelpFormatter
 from px4params.numbers import counted
 from px4params.status import EXIT_FAILED, EXIT_OK
-from px4params.writing import write_file
+from px4params.writing import check_outputs, write_file
 
 if TYPE_CHECKING:
     import argparse
@@ -22,6 +22,7 @@ if TYPE_CHECKING:
 def cmd_health(args: argparse.Namespace) -> int:
     from px4params.vehicle.flight_log import read_run_ulog
 
+    check_outputs([args.timeline], [args.log])
     result = read_run_ulog(args.log)
     if args.timeline:
         from px4params.vehicle.timeline import render_svg

@@ -13,7 +13,7 @@ from px4params.cli.options import dsdl_option
 from px4params.cli.parsing import ArgumentParser, RawDescriptionHelpFormatter
 from px4params.dsdl.schema import load_schema
 from px4params.status import EXIT_OK
-from px4params.writing import write_file
+from px4params.writing import check_outputs, write_file
 
 if TYPE_CHECKING:
     import argparse
@@ -30,6 +30,7 @@ def cmd_metadata(args: argparse.Namespace) -> int:
         parser.error("only one of --json, --header and --firmware can write to stdout (-)")
     if args.classic is not None and args.json is None:
         parser.error("--classic goes with --json (the header has no classic parameters)")
+    check_outputs([args.json, args.header, args.firmware], [args.classic])
     schema = load_schema(args.dsdl or ())
     specs = parameter_specs(schema)
     # Everything is generated before anything is written: a failure leaves no half output.

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Any
 from px4params.cli.parsing import ArgumentParser, RawDescriptionHelpFormatter
 from px4params.numbers import counted
 from px4params.status import EXIT_OK
-from px4params.writing import write_file
+from px4params.writing import check_outputs, write_file
 
 if TYPE_CHECKING:
     import argparse
@@ -28,6 +28,7 @@ def cmd_migrate(args: argparse.Namespace) -> int:
     if args.devtypes is not None and args.table == "legacy":
         parser.error("--devtypes is the current table's source; it does not go with --table legacy")
     # Everything is read and checked before anything is written.
+    check_outputs([args.output], [args.file, args.devtypes])
     config = migrate.read_config(args.file)
     # The device IDs follow the devtype table of the file's firmware era unless one is given.
     table = None
