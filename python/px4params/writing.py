@@ -187,7 +187,6 @@ class _ignoring_os_errors:
         return kind is not None and issubclass(kind, OSError)
 
 
-
 def check_outputs(
     outputs: Iterable[str | os.PathLike[str] | None],
     inputs: Iterable[str | os.PathLike[str] | None],
