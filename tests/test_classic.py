@@ -123,6 +123,20 @@ def test_a_parameter_made_by_hand_has_an_empty_read_only_entry() -> None:
             "parameters[0] (A): default: expected a number, got '1'",
         ),
         ("{", "not JSON: Expecting property name enclosed in double quotes"),
+        # Python's json reads these, JSON has none: a NaN default went into the metadata and
+        # failed there with a traceback (json.dumps refuses it)
+        (
+            '{"version": 1, "parameters": [{"name": "A", "type": "Float", "default": NaN}]}',
+            "not JSON: NaN is not a JSON number",
+        ),
+        (
+            '{"version": 1, "parameters": [{"name": "A", "type": "Float", "min": -Infinity}]}',
+            "not JSON: -Infinity is not a JSON number",
+        ),
+        (
+            '{"version": 1, "parameters": [{"name": "A", "type": "Float", "default": 1e999}]}',
+            "the number 1e999 does not fit a double",
+        ),
     ],
 )
 def test_a_bad_parameters_json_is_named(tmp_path: Path, document: str, message: str) -> None:

@@ -30,7 +30,7 @@ from px4params.errors import ClassicParamsError
 from px4params.reading import CLASSIC_JSON, read_text
 
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
-    from typing import Any, NamedTuple
+    from typing import Any, NamedTuple, NoReturn
 else:
     from px4params._records import NamedTuple
 
@@ -118,8 +118,19 @@ def _cache_key(where: str) -> str | None:
 def _parse_classic(where: str) -> list[ClassicParam]:
     import json  # only on a cache miss: json costs a command 2 ms to import
 
+    def constant(token: str) -> NoReturn:
+        # Python's json takes NaN and Infinity, which JSON has not (and json.dumps then refuses)
+        raise ClassicParamsError(f"{where}: not JSON: {token} is not a JSON number")
+
+    def finite(text: str) -> float:
+        value = float(text)
+        if not math.isfinite(value):
+            raise ClassicParamsError(f"{where}: the number {text[:40]} does not fit a double")
+        return value
+
     try:
-        document = json.loads(read_text(where, CLASSIC_JSON))
+        text = read_text(where, CLASSIC_JSON)
+        document = json.loads(text, parse_constant=constant, parse_float=finite)
     except OSError as e:
         raise ClassicParamsError(f"{where}: cannot read: {e.strerror}") from None
     except (json.JSONDecodeError, UnicodeDecodeError) as e:
