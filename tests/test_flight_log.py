@@ -653,6 +653,50 @@ def test_health_refuses_logs_it_did_not_write_word_for_word(tmp_path: Path) -> N
         assert str(e.value) == f"{path}: driver_instance 1: cannot read {line!r}"
 
 
+@pytest.mark.parametrize(
+    ("field", "topic"),
+    [
+        (b"timeouts", "driver_perf 0"),
+        (b"probe_attempts", "driver_perf 0"),
+        (b"may_arm", "arming_check 0"),
+        (b"registered", "driver_health 0"),
+    ],
+)
+def test_a_log_whose_topic_lacks_a_field_is_refused_in_one_line(
+    tmp_path: Path, field: bytes, topic: str
+) -> None:
+    # A field renamed in the format definition (same length, so the log still parses): the
+    # topic is there without it. It raised KeyError through `px4params health`.
+    from px4params.vehicle.flight_log import _FIELDS, read_run_ulog, run_ulog
+
+    data = run_ulog(_hand_run(HAND_EVENTS), {}, version="9.9")
+    renamed = field[:1].upper() + field[1:]
+    assert data.count(b" " + field + b";") == 1
+    path = tmp_path / "renamed.ulg"
+    path.write_bytes(data.replace(b" " + field + b";", b" " + renamed + b";"))
+    with pytest.raises(ULogError) as e:
+        read_run_ulog(str(path))
+    name = topic.split()[0]
+    assert str(e.value) == (
+        f"{path}: {topic} has no field {field.decode()!r} (a log of 'autostart run --ulog' has "
+        f"{', '.join(_FIELDS[name])})"
+    )
+
+
+def test_a_driver_instance_line_that_is_not_text_is_refused_in_one_line(tmp_path: Path) -> None:
+    # pyulog gives an info value whose type is not char[N] as bytes; joining it raised TypeError
+    from px4params.vehicle.flight_log import read_run_ulog
+
+    path = _crafted(tmp_path / "ok.ulg", "manifest", ["INA238#0 ina238 i2c 1 69"])
+    data = Path(path).read_bytes()
+    assert data.count(b"char[24] driver_instance") == 1
+    bad = tmp_path / "bad.ulg"
+    bad.write_bytes(data.replace(b"char[24] driver_instance", b"chzr[24] driver_instance"))
+    with pytest.raises(ULogError) as e:
+        read_run_ulog(str(bad))
+    assert str(e.value) == f"{bad}: driver_instance 0: not text (a char[] value)"
+
+
 @pytest.mark.issue40
 def test_a_run_with_nothing_but_its_end_and_a_log_without_the_run_figures(tmp_path: Path) -> None:
     """A run with no events still ends cleanly (its end is its only message); a log with no

@@ -251,6 +251,14 @@ def _where(e: Mapping[str, Any]) -> str:
 # -- reading a log back ------------------------------------------------------------------------
 
 
+#: The fields :func:`read_run_ulog` reads of each topic :func:`run_ulog` writes.
+_FIELDS = {
+    "driver_health": ("timestamp", "health", "registered", "device_id"),
+    "driver_perf": ("timestamp", "transfers", "errors", "timeouts", "probe_attempts"),
+    "arming_check": ("timestamp", "may_arm"),
+}
+
+
 def read_run_ulog(path: str) -> RunResult:
     """The run a ULog written by :func:`run_ulog` tells (``px4params health``): every instance
     with its health timeline, starts and resets, last perf counters, and the commander's
@@ -277,9 +285,18 @@ def read_run_ulog(path: str) -> RunResult:
             "information)"
         )
     topics = {(d.name, d.multi_id): d.data for d in ulog.data_list}
+    for (topic, multi_id), data in topics.items():
+        missing = [f for f in _FIELDS.get(topic, ()) if f not in data]
+        if missing:
+            raise ULogError(
+                f"{path}: {topic} {multi_id} has no field {missing[0]!r} (a log of 'autostart "
+                f"run --ulog' has {', '.join(_FIELDS[topic])})"
+            )
     said = _messages(ulog.logged_messages)
     instances: list[InstanceResult] = []
     for multi_id, parts in enumerate(lines):
+        if not all(isinstance(part, str) for part in parts):  # pyulog: bytes of a non-char type
+            raise ULogError(f"{path}: driver_instance {multi_id}: not text (a char[] value)")
         fields = "".join(parts).split(" ")
         if len(fields) != 5 or not fields[3].isdigit() or not fields[4].isdigit():
             raise ULogError(f"{path}: driver_instance {multi_id}: cannot read {''.join(parts)!r}")
