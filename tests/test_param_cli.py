@@ -238,6 +238,11 @@ BAD_PARAM = [
     (["add", "INA238#x"], "'INA238#x' is not a parameter name"),
     (["rm", "INA238#3"], "INA238#3: instance does not exist (add it first: param add)"),
     (["rm", "SYS_AUTOSTART"], "SYS_AUTOSTART: a shared parameter has no instances to remove"),
+    # a misspelt exclude reset the very value it was to keep, exit 0
+    (
+        ["reset_all", "SYS_AUTOSTRAT"],
+        "unknown parameter 'SYS_AUTOSTRAT' (did you mean: SYS_AUTOSTART?)",
+    ),
     (["set", "INA238#3[4]", "1"], "INA238#3: instance does not exist"),
     (
         ["set", "INA238#0[4]", "0x4G"],

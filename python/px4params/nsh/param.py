@@ -435,6 +435,8 @@ def verb_reset(s: Session, a: argparse.Namespace) -> int:
 
 def verb_reset_all(s: Session, a: argparse.Namespace) -> int:
     keep = {key.whole for key in _expand(s.store, a.excludes)}
+    for key in keep:  # a misspelt exclude would reset the very value it was to keep
+        s.store.spec(key.param)
     with s.store.transaction():
         for key in list(s.store.instance_keys()):
             if key not in keep:
