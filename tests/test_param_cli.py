@@ -238,6 +238,10 @@ BAD_PARAM = [
     (["add", "INA238#x"], "'INA238#x' is not a parameter name"),
     (["rm", "INA238#3"], "INA238#3: instance does not exist (add it first: param add)"),
     (["rm", "SYS_AUTOSTART"], "SYS_AUTOSTART: a shared parameter has no instances to remove"),
+    (
+        ["set", "INA238#0", '{"shunt": 0.001, "shunt": 0.002}'],
+        "INA238#0: the key 'shunt' is given twice in one object",
+    ),
     # a misspelt exclude reset the very value it was to keep, exit 0
     (
         ["reset_all", "SYS_AUTOSTRAT"],
@@ -520,6 +524,13 @@ BAD_FILES = [
         "x.json",
         '{"format": "px4params", "version": 1, "classic": {"SYS_AUTOSTART": "x"}}',
         "x.json: classic: SYS_AUTOSTART: expected an integer, got 'x'",
+    ),
+    # JSON leaves a key named twice open; the last one was taken silently
+    (
+        "x.json",
+        '{"format": "px4params", "version": 1, "classic": {"SYS_AUTOSTART": 4001, '
+        '"SYS_AUTOSTART": 4002}}',
+        "x.json: the key 'SYS_AUTOSTART' is given twice in one object",
     ),
 ]
 

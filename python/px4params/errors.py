@@ -20,6 +20,7 @@ __all__ = [
     "DriversFileError",
     "DronecanError",
     "DsdlError",
+    "DuplicateKeyError",
     "EncodeError",
     "FlatError",
     "InputFileError",
@@ -112,6 +113,12 @@ class ValueShapeError(EncodeError):
 class NumberError(Px4ParamsError, ValueError):
     """A number out of every range before it is even converted (thousands of digits, ``1e400``),
     or a JSON constant (``Infinity``, ``NaN``) that JSON does not have."""
+
+
+class DuplicateKeyError(NumberError):
+    """A JSON object that names one key twice (JSON leaves its meaning open; Python's reader
+    would keep the last silently). A :class:`NumberError` so that every reader of JSON values
+    (:func:`px4params.numbers.load_json`) reports it where it reports those."""
 
 
 class LeafError(CodecError, LookupError):

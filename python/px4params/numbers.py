@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import math
 
-from px4params.errors import NumberError
+from px4params.errors import DuplicateKeyError, NumberError
 
 __all__ = [
     "MAX_DIGITS",
@@ -87,13 +87,27 @@ def _json_constant(name: str) -> float:
 
 def load_json(text: str) -> object:
     """``json.loads`` with the bounds above: long integers, ``1e400`` and the non-standard
-    ``Infinity``/``NaN`` are refused (:class:`NumberError`); other errors are as
-    ``json.loads`` raises them."""
+    ``Infinity``/``NaN`` are refused (:class:`NumberError`), and an object naming a key twice
+    (:class:`DuplicateKeyError`, a NumberError); other errors are as ``json.loads`` raises
+    them."""
     import json  # here: a command that reads no JSON does not pay 2 ms to import it
 
     return json.loads(
-        text, parse_int=_json_int, parse_float=parse_float, parse_constant=_json_constant
+        text,
+        parse_int=_json_int,
+        parse_float=parse_float,
+        parse_constant=_json_constant,
+        object_pairs_hook=_json_object,
     )
+
+
+def _json_object(pairs: list[tuple[str, object]]) -> dict[str, object]:
+    found: dict[str, object] = {}
+    for key, value in pairs:
+        if key in found:
+            raise DuplicateKeyError(f"the key {abbreviated(key)!r} is given twice in one object")
+        found[key] = value
+    return found
 
 
 def dump_json(value: object, separators: tuple[str, str] = (", ", ": ")) -> str:
