@@ -467,3 +467,21 @@ def test_migrate_needs_no_checkout_and_no_variable(tmp_path: Path) -> None:
     report = json.loads(r.stdout)
     assert report["table"] == "current"
     assert instances(report) == [("AK09916#0", 1, 0x0C, 0)]
+
+
+def test_a_params_file_naming_a_parameter_twice_is_refused(tmp_path: Path, capsys) -> None:
+    """QGC writes each parameter once. A file holding CAL_MAG1_ID twice (an HMC5883 and an
+    AK09916 ID) was migrated from the last one, exit 0: which device the vehicle had is not
+    known, so the file is refused, as 'param import' refuses it. A second component's copy of
+    a name (a gimbal's) is not the autopilot's and does not count."""
+    path = tmp_path / "twice.params"
+    path.write_text(
+        "# Vehicle-Id Component-Id Name Value Type\n"
+        "1\t1\tCAL_MAG1_ID\t592905\t6\n1\t154\tCAL_MAG1_ID\t1\t6\n1\t1\tCAL_MAG1_ID\t73225\t6\n"
+    )
+    assert main(["migrate", str(path)]) == 1
+    assert capsys.readouterr().err == (
+        f"px4params: error: {path}:4: CAL_MAG1_ID: also set on line 2\n"
+    )
+    path.write_text(path.read_text().replace("1\t1\tCAL_MAG1_ID\t73225\t6\n", ""))
+    assert run_json(path, capsys)["kind"] == "QGC .params"

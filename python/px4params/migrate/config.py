@@ -120,7 +120,17 @@ def _read_text(where: str) -> OldConfig:
     # The autopilot is component 1; other components (gimbals, ...) are not the vehicle's.
     components = sorted({c for _, c, _, _ in rows})
     chosen = 1 if 1 in components else components[0]
-    params = {name: value for _, c, name, value in rows if c == chosen}
+    params: dict[str, int | float] = {}
+    first_line: dict[str, int] = {}
+    for r in read:
+        if r.component != chosen:
+            continue
+        if r.name in first_line:  # QGC writes each once: which one did the vehicle hold?
+            raise MigrationError(
+                f"{where}:{r.line}: {r.name}: also set on line {first_line[r.name]}"
+            )
+        first_line[r.name] = r.line
+        params[r.name] = r.value
     skipped = [
         f"component {c}: {sum(1 for r in rows if r[1] == c)} parameters (not the autopilot's)"
         for c in components
