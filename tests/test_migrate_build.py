@@ -1294,3 +1294,21 @@ def test_a_negative_switch_value_starts_nothing_and_is_said() -> None:
         "SENS_EN_TRANGER = -1: starts no I2C driver of the manifest (its teraranger starts on "
         "SENS_EN_TRANGER > 0); it stays a classic parameter"
     ]
+
+
+def test_a_log_cut_short_says_so(tmp_path: Path) -> None:
+    # sample_log_small.ulg (pyulog's test log, Cube Orange, v1.11.2) holds 980 parameters; its
+    # first 25,000 bytes hold 87 of them and end inside a message. The cut log was read as
+    # whole: "Not carried over: none", no word of the 893 missing.
+    from px4params.migrate.config import read_config
+
+    whole = shared_file("sample_log_small.ulg")
+    cut = tmp_path / "cut.ulg"
+    cut.write_bytes(whole.read_bytes()[:25_000])
+    said = (
+        "the log is cut short or damaged: parameters and devices logged after the break are missing"
+    )
+    config = read_config(cut)
+    assert len(config.params) == 87 and said in config.details
+    assert said in migrate.migrate(config).report()
+    assert said not in read_config(whole).details and len(read_config(whole).params) == 980

@@ -201,6 +201,9 @@ class ULogHeader:
     #: ``(timestamp_us, name, value)`` of every parameter change logged, in time order.
     changed_parameters: list[tuple[int, str, int | float]] = field(default_factory=list)
     boot_console: str | None = None
+    #: pyulog found data it could not read (a log cut short, or damaged): what came after it,
+    #: parameters and messages, is missing.
+    corrupt: bool = False
 
     @property
     def parameters(self) -> dict[str, int | float]:
@@ -250,7 +253,12 @@ def read_header(path: str | os.PathLike[str]) -> ULogHeader:
     if parts:  # one list of string pieces per logged copy; the first is the boot
         console = "".join(str(piece) for piece in parts[0])
     return ULogHeader(
-        where, dict(log.msg_info_dict), dict(log.initial_parameters), changes, console
+        where,
+        dict(log.msg_info_dict),
+        dict(log.initial_parameters),
+        changes,
+        console,
+        bool(log.file_corruption),
     )
 
 

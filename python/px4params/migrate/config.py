@@ -76,6 +76,11 @@ def read_config(path: str | os.PathLike[str]) -> OldConfig:
     details = [
         f"{key} {log.info[key]}" for key in ("ver_hw", "ver_sw_branch", "ver_sw") if key in log.info
     ]
+    if log.corrupt:
+        details.append(
+            "the log is cut short or damaged: parameters and devices logged after the break "
+            "are missing"
+        )
     changed = {name for _, name, _ in log.changed_parameters}
     if changed:
         details.append(f"last values of {len(changed)} parameters changed during the log")
