@@ -202,10 +202,10 @@ def check_outputs(
         if path is None or os.fspath(path) == "-":
             continue
         given = os.fspath(path)
-        what = taken.setdefault(_identity(given), "")
-        if what:
-            raise _refused(f"is {what}: give the output another path", given, errno.EINVAL)
-        taken[_identity(given)] = "another output of this command"
+        key = _identity(given)
+        if key in taken:
+            raise _refused(f"is {taken[key]}: give the output another path", given, errno.EINVAL)
+        taken[key] = "another output of this command"
 
 
 def _identity(path: str) -> str:

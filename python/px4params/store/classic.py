@@ -122,10 +122,10 @@ def _parse_classic(where: str) -> list[ClassicParam]:
         # Python's json takes NaN and Infinity, which JSON has not (and json.dumps then refuses)
         raise ClassicParamsError(f"{where}: not JSON: {token} is not a JSON number")
 
-    def finite(text: str) -> float:
-        value = float(text)
+    def finite(number: str) -> float:
+        value = float(number)
         if not math.isfinite(value):
-            raise ClassicParamsError(f"{where}: the number {text[:40]} does not fit a double")
+            raise ClassicParamsError(f"{where}: the number {number[:40]} does not fit a double")
         return value
 
     try:
