@@ -30,7 +30,9 @@ from px4params.reading import ULOG, open_file
 
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
     from collections.abc import Sequence
-    from typing import Any
+    from typing import Any, BinaryIO
+
+    from pyulog import ULog
 
 #: The first seven bytes of every ULog file; the eighth is the format version.
 MAGIC = b"ULog\x01\x12\x35"
@@ -230,36 +232,87 @@ class ULogHeader:
 def read_header(path: str | os.PathLike[str]) -> ULogHeader:
     """Reads a log's definitions (no data messages: fast on large logs). A file that cannot be
     read or is not a ULog is a :class:`ULogError` naming it."""
-    from pyulog import ULog  # only reading logs needs it
-
-    where = os.fspath(path)
-    try:
-        file = open_file(where, ULOG)
-    except OSError as e:
-        raise ULogError(f"{where}: cannot read: {e.strerror}") from None
-    with file:
-        magic = file.read(len(MAGIC))
-        if magic != MAGIC:
-            raise ULogError(f"{where}: not a ULog file (it does not start with ULog's magic bytes)")
-        file.seek(0)
-        try:
-            with contextlib.redirect_stdout(io.StringIO()):  # pyulog prints its warnings
-                log = ULog(file, message_name_filter_list=[])
-        except Exception as e:  # pyulog signals bad data with assorted exceptions
-            raise ULogError(f"{where}: not a readable ULog file ({e})") from None
+    log = parse(path, [])
     changes = [(int(t), str(n), v) for t, n, v in log.changed_parameters]
     console = None
     parts = log.msg_info_multiple_dict.get("boot_console_output")
     if parts:  # one list of string pieces per logged copy; the first is the boot
         console = "".join(str(piece) for piece in parts[0])
     return ULogHeader(
-        where,
+        os.fspath(path),
         dict(log.msg_info_dict),
         dict(log.initial_parameters),
         changes,
         console,
         bool(log.file_corruption),
     )
+
+
+#: How many times its size pyulog may read of a file (and 64 MiB more) before it is taken to go
+#: round in circles. A whole log is read about once (1.1 times with appended data); getting past
+#: damage rereads up to 64 KiB per byte skipped. pyulog 1.3.0 steps back over a damaged
+#: message by the size it claims, not by what it read, which can bring it back where it was,
+#: for ever (a 60 kB log with one size byte changed).
+READ_BUDGET = 256
+
+
+class _GoingRound(Exception):
+    """pyulog read more than its budget (not one of the errors pyulog catches itself)."""
+
+
+class _BudgetedFile:
+    """A binary file whose reads stop, with :class:`_GoingRound`, after ``budget`` bytes: what
+    pyulog calls of its file, no more."""
+
+    def __init__(self, file: BinaryIO, budget: int) -> None:
+        self._file = file
+        self._budget = budget
+
+    def read(self, size: int = -1) -> bytes:
+        data = self._file.read(size)
+        self._budget -= len(data)
+        if self._budget < 0:
+            raise _GoingRound
+        return data
+
+    def seek(self, offset: int, whence: int = os.SEEK_SET) -> int:
+        return self._file.seek(offset, whence)
+
+    def tell(self) -> int:
+        return self._file.tell()
+
+    def close(self) -> None:
+        self._file.close()
+
+
+def parse(path: str | os.PathLike[str], topics: Sequence[str] | None) -> ULog:
+    """pyulog's reading of the log at ``path``, with the data messages of ``topics`` (``None``:
+    all of them). Raises :class:`ULogError` naming the file when it cannot be read, is not a
+    ULog, pyulog refuses it, or pyulog reads :data:`READ_BUDGET` times its size without
+    finishing."""
+    from pyulog import ULog  # only reading logs needs it
+
+    where = os.fspath(path)
+    try:
+        file = open_file(where, ULOG)
+    except OSError as e:
+        raise ULogError(f"{where}: cannot read: {e.strerror or e}") from None
+    with file:
+        if file.read(len(MAGIC)) != MAGIC:
+            raise ULogError(f"{where}: not a ULog file (it does not start with ULog's magic bytes)")
+        file.seek(0)
+        size = os.fstat(file.fileno()).st_size
+        budgeted = _BudgetedFile(file, READ_BUDGET * size + 64 * 1024 * 1024)
+        try:
+            with contextlib.redirect_stdout(io.StringIO()):  # pyulog prints its warnings
+                return ULog(budgeted, message_name_filter_list=topics)
+        except _GoingRound:
+            raise ULogError(
+                f"{where}: not a readable ULog file (pyulog read more than {READ_BUDGET} times "
+                f"its {size} bytes without finishing: a damaged message sends it round in circles)"
+            ) from None
+        except Exception as e:  # pyulog signals bad data with assorted exceptions
+            raise ULogError(f"{where}: not a readable ULog file ({e})") from None
 
 
 #: Topics whose samples carry the publishing sensor's ``device_id``.
@@ -277,16 +330,7 @@ def read_device_ids(path: str | os.PathLike[str]) -> list[tuple[str, int, int]]:
     """``(topic, multi_id, device_id)`` of every sensor that published in the log (the sensor
     topics above; each distinct non-zero ``device_id`` once, in the order logged). Only those
     topics are parsed."""
-    from pyulog import ULog
-
-    where = os.fspath(path)
-    try:
-        with open_file(where, ULOG) as file, contextlib.redirect_stdout(io.StringIO()):
-            log = ULog(file, message_name_filter_list=list(SENSOR_TOPICS))
-    except OSError as e:
-        raise ULogError(f"{where}: cannot read: {e.strerror}") from None
-    except Exception as e:  # pyulog signals bad data with assorted exceptions
-        raise ULogError(f"{where}: not a readable ULog file ({e})") from None
+    log = parse(path, list(SENSOR_TOPICS))
     found: list[tuple[str, int, int]] = []
     for data in log.data_list:
         ids = data.data.get("device_id")

@@ -54,10 +54,13 @@ import re
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from px4params.errors import DeviceIdError, NumberError, ULogError
 from px4params.numbers import abbreviated, parse_int
+
+if TYPE_CHECKING:
+    from px4params.formats.ulog import ULogHeader
 from px4params.reading import DEVTYPES, read_text
 
 __all__ = [
@@ -659,6 +662,16 @@ def decode_log(
         log = read_header(path)
     except ULogError as e:
         raise DeviceIdError(str(e)) from None
+    return decode_header(log, table, devtypes)
+
+
+def decode_header(
+    log: ULogHeader,
+    table: DevtypeTable | str | None = "auto",
+    devtypes: str | os.PathLike[str] | None = None,
+) -> list[LogDeviceId]:
+    """:func:`decode_log` of a log already read (``log.corrupt``: those logged after the
+    damage are missing)."""
     if table == "auto":
         table = load_table(table_for_release(log.release, log.initial_parameters), devtypes)
     names = _table(table)

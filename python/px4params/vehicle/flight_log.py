@@ -29,13 +29,9 @@ is uncertain (``RunResult.log_cut_at``) instead of telling the last state as the
 
 from __future__ import annotations
 
-import contextlib
-import io
-
 from px4params._records import TYPE_CHECKING
 from px4params.errors import ULogError
 from px4params.formats.ulog import ULogWriter
-from px4params.reading import ULOG, open_file
 from px4params.vehicle.autostart import describe_location
 
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
@@ -263,20 +259,10 @@ def read_run_ulog(path: str) -> RunResult:
     """The run a ULog written by :func:`run_ulog` tells (``px4params health``): every instance
     with its health timeline, starts and resets, last perf counters, and the commander's
     answers. :class:`ULogError` for a file that is not such a log."""
-    from pyulog import ULog
-
+    from px4params.formats.ulog import parse
     from px4params.vehicle.simbench import InstanceResult, RunResult
 
-    try:
-        file = open_file(path, ULOG)
-    except OSError as e:
-        raise ULogError(f"{path}: cannot read: {e.strerror or e}") from None
-    try:
-        # (pyulog prints what it finds corrupt on stdout, which is the story's, or JSON)
-        with file, contextlib.redirect_stdout(io.StringIO()):
-            ulog = ULog(file)
-    except Exception as e:  # pyulog raises bare Exceptions for what it cannot parse
-        raise ULogError(f"{path}: not a ULog file ({e})") from None
+    ulog = parse(path, None)
     info = ulog.msg_info_dict
     lines = ulog.msg_info_multiple_dict.get("driver_instance")
     if "px4params_mode" not in info or lines is None:

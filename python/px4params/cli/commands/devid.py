@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import sys
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
@@ -50,7 +51,16 @@ def cmd_devid(args: argparse.Namespace) -> int:
                 print(f"0x{r.code:02X}  {r.kind or '-':<10}  {r.name}")
         return EXIT_OK
     if args.log:
-        entries = devid.decode_log(args.log, table or "auto", args.devtypes)
+        from px4params.formats.ulog import read_header
+
+        log = read_header(args.log)
+        entries = devid.decode_header(log, table or "auto", args.devtypes)
+        if log.corrupt:
+            print(
+                f"px4params: warning: {args.log}: the log is cut short or damaged: device IDs "
+                "logged after the break are missing",
+                file=sys.stderr,
+            )
         if not entries:
             raise CommandError(f"{args.log}: no CAL_*_ID parameters in this log")
         label = next((e.device.table for e in entries if e.device), which)

@@ -1,0 +1,123 @@
+"""Reading logs through pyulog (``px4params.formats.ulog.parse``): a damaged log that sends
+pyulog round in circles is refused in one line, by every command that reads logs, and real logs
+are read well within the budget that catches it."""
+
+from __future__ import annotations
+
+import struct
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from px4params.formats import ulog
+
+from shared_data import SAMPLE_LOG, SHARED_DATA, shared_file
+
+# sample_log_small.ulg (pyulog's test log) cut to 60,000 bytes, with the size of the parameter
+# message at byte 25,718 raised by 32 KiB (its high byte 0x80): pyulog 1.3.0 reads the claimed
+# size, gets what is left, steps back by the claimed size and comes back to where it was.
+CUT = 60_000
+DAMAGED_AT = 25_718
+
+
+def damaged_log(tmp_path: Path) -> Path:
+    data = bytearray(shared_file(SAMPLE_LOG).read_bytes()[:CUT])
+    pos = 16
+    while pos < DAMAGED_AT:  # the messages' own framing leads to the damaged one
+        pos += 3 + struct.unpack_from("<H", data, pos)[0]
+    assert pos == DAMAGED_AT and data[pos + 2] == ord("P")
+    data[pos + 1] |= 0x80
+    path = tmp_path / "damaged.ulg"
+    path.write_bytes(bytes(data))
+    return path
+
+
+@pytest.mark.parametrize(
+    "command",
+    [
+        ["devid", "--log", "{log}"],
+        ["migrate", "{log}", "-o", "{out}"],
+        ["health", "{log}"],
+    ],
+    ids=["devid", "migrate", "health"],
+)
+def test_a_log_pyulog_goes_round_in_circles_on_is_refused(tmp_path: Path, command) -> None:
+    # Each ran at 100% CPU until killed. A subprocess with a time limit: a guard that is gone
+    # fails this test rather than hanging the suite.
+    log, out = damaged_log(tmp_path), tmp_path / "out.params"
+    argv = [part.format(log=log, out=out) for part in command]
+    done = subprocess.run(
+        [sys.executable, "-m", "px4params", *argv], capture_output=True, text=True, timeout=120
+    )
+    assert done.returncode == 1 and done.stdout == ""
+    assert done.stderr == (
+        f"px4params: error: {log}: not a readable ULog file (pyulog read more than 256 times its "
+        f"{CUT} bytes without finishing: a damaged message sends it round in circles)\n"
+    )
+    assert not out.exists()
+
+
+def test_the_budget_is_what_the_message_says_and_stops_reads_past_it(tmp_path: Path) -> None:
+    log = tmp_path / "x.ulg"
+    log.write_bytes(b"0123456789")
+    with open(log, "rb") as file:
+        budgeted = ulog._BudgetedFile(file, 4)
+        assert budgeted.read(3) == b"012" and budgeted.read(1) == b"3"
+        with pytest.raises(ulog._GoingRound):
+            budgeted.read(1)
+        budgeted.seek(0)  # seeking is free: a loop is caught by what it reads
+        assert budgeted.tell() == 0
+    assert ulog.READ_BUDGET == 256
+
+
+@pytest.mark.parametrize(
+    "name",
+    [
+        "sample_log_small.ulg",
+        "sample_appended_multiple.ulg",
+        "sample_px4_events.ulg",
+        "frrs_ekf_failure.ulg",
+    ],
+)
+def test_real_logs_are_read_about_once(name: str, monkeypatch) -> None:
+    # pyulog read 1.0 to 1.11 times each log (the appended one: its appended data is read
+    # again): the budget of 256 times leaves room for resyncing past damage.
+    path = shared_file(name)
+    read: list[int] = []
+
+    class Counting(ulog._BudgetedFile):
+        def read(self, size: int = -1) -> bytes:
+            data = super().read(size)
+            read.append(len(data))
+            return data
+
+    monkeypatch.setattr(ulog, "_BudgetedFile", Counting)
+    log = ulog.parse(path, None)
+    assert log.data_list and sum(read) < 1.2 * path.stat().st_size
+
+
+def devid_log(path: Path) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "px4params", "devid", "--log", str(path)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+
+
+def test_a_cut_log_warns_in_devid(tmp_path: Path) -> None:
+    # The first 25,000 bytes of sample_log_small.ulg hold 87 of its 980 parameters: devid
+    # listed the 6 ID parameters among them, of the log's 13, as if the log were whole.
+    whole = shared_file(SAMPLE_LOG)
+    cut = tmp_path / "cut.ulg"
+    cut.write_bytes(whole.read_bytes()[:25_000])
+    done, was = devid_log(cut), devid_log(whole)
+    assert done.returncode == 0 and done.stderr == (
+        f"px4params: warning: {cut}: the log is cut short or damaged: device IDs logged after "
+        "the break are missing\n"
+    )
+    listed = [line.split()[0] for line in done.stdout.splitlines()[:-1]]
+    logged = [line.split()[0] for line in was.stdout.splitlines()[:-1]]
+    assert len(listed) == 6 and len(logged) == 13 and set(listed) < set(logged)
+    assert was.returncode == 0 and was.stderr == ""
