@@ -153,6 +153,37 @@ def test_save_load_import(store: Path, tmp_path: Path, capsys: pytest.CaptureFix
     assert param(capsys, "touch", "INA238#0")[0] == 0
 
 
+def test_load_says_which_instances_its_reset_removed(
+    store: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # A classic-only .params file loaded over a store with two sensors removed both without a
+    # word (load is "reset, then load", as PX4's is): the vehicle lost its devices silently.
+    talk(capsys, tmp_path)
+    param(capsys, "add", "INA226#1")
+    classic = tmp_path / "classic.params"
+    classic.write_text("1\t1\tSYS_AUTOSTART\t4001\t6\n")
+    code, out, err = param(capsys, "load", str(classic))
+    assert (code, err) == (0, "")
+    assert out == (
+        f"removed 2 instances not in {classic}: INA226#1, INA238#0 ('param load' resets the "
+        "store first; 'param import' keeps what a file does not name)\n"
+    )
+    assert param(capsys, "instances", "INA238")[1] == param(capsys, "instances", "INA226")[1] == ""
+    # What the file brings back is not said to be removed; import removes nothing.
+    backup = tmp_path / "backup.store"
+    talk(capsys, tmp_path)
+    param(capsys, "save", str(backup))
+    param(capsys, "add", "INA226#1")
+    assert param(capsys, "load", str(backup))[1] == (
+        f"removed 1 instance not in {backup}: INA226#1 ('param load' resets the store first; "
+        "'param import' keeps what a file does not name)\n"
+    )
+    param(capsys, "add", "INA226#1")
+    assert param(capsys, "import", str(classic))[1] == ""
+    assert param(capsys, "instances", "INA238")[1] == "INA238#0\n"
+    assert param(capsys, "instances", "INA226")[1] == "INA226#1\n"
+
+
 def test_run_if_then_else_and_variables(
     store: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

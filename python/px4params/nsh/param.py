@@ -471,6 +471,8 @@ def _load(s: Session, a: argparse.Namespace, merge: bool) -> int:
     from px4params.store import paramfile
 
     source = a.file or s.path
+    # What a reset drops without the file bringing it back is said: instances are devices.
+    before = [] if merge else [k for k in s.store.instance_keys() if k.instance is not None]
     if paramfile.kind_of(source):
         report = paramfile.read(s.store, source, reset=not merge)
     else:
@@ -481,6 +483,14 @@ def _load(s: Session, a: argparse.Namespace, merge: bool) -> int:
             raise
     for line in report:
         print(line, file=s.out)
+    gone = [str(key) for key in before if key not in s.store]
+    if gone:
+        print(
+            f"removed {len(gone)} instance{'s' if len(gone) > 1 else ''} not in {source}: "
+            f"{', '.join(gone)} ('param load' resets the store first; 'param import' keeps "
+            "what a file does not name)",
+            file=s.out,
+        )
     if a.file:  # loading the store's own file changes nothing to save
         s.done()
     return EXIT_OK
