@@ -153,6 +153,26 @@ def test_save_load_import(store: Path, tmp_path: Path, capsys: pytest.CaptureFix
     assert param(capsys, "touch", "INA238#0")[0] == 0
 
 
+@pytest.mark.parametrize("name", ["saved.params", "saved.json", "SAVED.PARAMS"])
+def test_save_writes_what_the_extension_names_and_load_reads_it_back(
+    store: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], name: str
+) -> None:
+    # docs/store.md: save, load and import choose by the extension. save wrote a binary store
+    # to x.params, which load then refused as "not a text file".
+    talk(capsys, tmp_path)
+    path = tmp_path / name
+    code, out, err = param(capsys, "save", str(path))
+    assert (code, err) == (0, "") and out == f"saved {path} ({path.stat().st_size} bytes)\n"
+    text = path.read_text()
+    if name.lower().endswith(".params"):
+        assert text.startswith("# Onboard parameters for Vehicle 1") and "INA238_0C" in text
+    else:
+        assert json.loads(text)["format"] == "px4params"
+    param(capsys, "rm", "INA238#0")
+    assert param(capsys, "load", str(path))[:3:2] == (0, "")
+    assert param(capsys, "show", "-q", "INA238#0.bus.i2c.address")[1] == "69\n"
+
+
 def test_load_says_which_instances_its_reset_removed(
     store: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

@@ -457,10 +457,14 @@ def verb_save(s: Session, a: argparse.Namespace) -> int:
         if s.autosave:
             print(f"saved {s.path}", file=s.out)
         return EXIT_OK
+    from px4params.store import paramfile
+
     file = a.file
+    # By its extension, as load reads it: a .params file saved as a store loaded back as text.
+    text = paramfile.kind_of(file) is not None
 
     def write() -> None:
-        size = s.store.save(file)
+        size = paramfile.write(s.store, file) if text else s.store.save(file)
         print(f"saved {file} ({size} bytes)", file=s.out)
 
     s.write_later(write)
