@@ -173,6 +173,41 @@ def test_save_writes_what_the_extension_names_and_load_reads_it_back(
     assert param(capsys, "show", "-q", "INA238#0.bus.i2c.address")[1] == "69\n"
 
 
+@pytest.mark.parametrize("name", ["forced.params", "forced.json"])
+def test_a_forced_value_exported_loads_back_with_force(
+    store: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], name: str
+) -> None:
+    # 'param set --force' stored 500 beyond INA238's @max 327; its export was refused by load
+    # and import, with no way to take it.
+    talk(capsys, tmp_path)
+    assert param(capsys, "set", "--force", "INA238#0.current", "500")[0] == 0
+    path = tmp_path / name
+    assert param(capsys, "export", str(path))[0] == 0
+    param(capsys, "reset", "INA238#0")
+    before = store.read_bytes()
+    where = f"{path}:9: INA238_0P" if name.endswith(".params") else f"{path}: instances"
+    broken = f"{where}: INA238#0.current: 500 is outside 1..327 (@min/@max)"
+    for verb in ("load", "import"):
+        code, out, err = param(capsys, verb, str(path))
+        assert (code, out) == (1, "") and store.read_bytes() == before
+        assert err == f"px4params: error: {broken} ('param {verb} --force' takes it)\n"
+    code, _, err = param(capsys, "load", "--force", str(path))
+    assert (code, err) == (0, f"px4params: warning: --force: {broken}; stored anyway\n")
+    assert param(capsys, "show", "-q", "INA238#0.current")[1] == "500\n"
+
+
+def test_force_takes_no_nan_from_a_file(
+    store: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    talk(capsys, tmp_path)
+    path = tmp_path / "nan.params"
+    path.write_text("1\t1\tINA238_0Q\tnan\t9\n")
+    before = store.read_bytes()
+    code, _, err = param(capsys, "load", "--force", str(path))
+    assert code == 1 and store.read_bytes() == before
+    assert err.startswith(f"px4params: error: {path}:1: INA238_0Q: ") and "--force" not in err
+
+
 def test_load_says_which_instances_its_reset_removed(
     store: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

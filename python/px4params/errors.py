@@ -247,7 +247,16 @@ class ClassicParamsError(Px4ParamsError):
 
 
 class ParamFileError(Px4ParamsError):
-    """A ``.params`` or JSON parameter file that cannot be used; names the file and line."""
+    """A ``.params`` or JSON parameter file that cannot be used; names the file and line.
+
+    Attributes:
+        bounds_only: True when the file was refused only for a value outside its field's
+            ``@min``/``@max`` or ``@value`` list (what ``param load --force`` takes).
+    """
+
+    def __init__(self, message: str, *, bounds_only: bool = False) -> None:
+        super().__init__(message)
+        self.bounds_only = bounds_only
 
 
 class MigrationError(Px4ParamsError):

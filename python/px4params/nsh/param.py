@@ -18,6 +18,7 @@ from px4params.errors import (
     CommandError,
     InstanceError,
     NumberError,
+    ParamFileError,
     Px4ParamsError,
     StoreFileError,
     ValueRangeError,
@@ -478,7 +479,20 @@ def _load(s: Session, a: argparse.Namespace, merge: bool) -> int:
     # What a reset drops without the file bringing it back is said: instances are devices.
     before = [] if merge else [k for k in s.store.instance_keys() if k.instance is not None]
     if paramfile.kind_of(source):
-        report = paramfile.read(s.store, source, reset=not merge)
+        force = getattr(a, "force", None)  # (the command line's alone)
+
+        def forced(what: str) -> None:
+            print(f"px4params: warning: --force: {what}; stored anyway", file=sys.stderr)
+
+        try:
+            report = paramfile.read(
+                s.store, source, reset=not merge, forced=forced if force else None
+            )
+        except ParamFileError as e:
+            if force is None or not e.bounds_only:
+                raise
+            verb = "import" if merge else "load"
+            raise ParamFileError(f"{e} ('param {verb} --force' takes it)") from None
     else:
         try:
             report = s.store.import_from(source) if merge else s.store.load_from(source)
@@ -645,6 +659,12 @@ _FORCE_HELP = (
 )
 
 
+_FORCE_FILE_HELP = (
+    "take a .params or .json file's values outside their field's @min/@max or @value list "
+    "(as 'param set --force' stored them; each said on stderr)"
+)
+
+
 def _add_verbs(verb: _VerbParsers, cli: bool) -> None:
     p = verb(
         "add",
@@ -735,6 +755,8 @@ def _add_verbs(verb: _VerbParsers, cli: bool) -> None:
     ):
         p = verb(name, func, summary, f"px4params param {name} backup.store")
         p.add_argument("file", nargs="?", metavar="FILE")
+        if cli:
+            p.add_argument("--force", action="store_true", help=_FORCE_FILE_HELP)
     p = verb(
         "export",
         verb_export,

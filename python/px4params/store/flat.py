@@ -723,17 +723,20 @@ def set_flat(store: Store, name: str, number: Any, *, default: bool = False) -> 
     return write_live(store, flat_map(store).find(name), number, default=default)
 
 
-def write_live(store: Store, param: FlatParam, number: Any, *, default: bool = False) -> FlatParam:
-    """:func:`set_flat` of a parameter found already (:meth:`FlatMap.live`)."""
+def write_live(
+    store: Store, param: FlatParam, number: Any, *, default: bool = False, force: bool = False
+) -> FlatParam:
+    """:func:`set_flat` of a parameter found already (:meth:`FlatMap.live`); ``force`` as
+    :meth:`Store.set`'s."""
     try:
         value = param.slot.from_flat(number)
     except FlatError as e:
         raise FlatError(f"{param.name} ({param.instance}.{param.path}): {e}") from None
     target = param.target
     if default:
-        store.set_default(target, value)
+        store.set_default(target, value, force=force)
     else:
-        store.set(target, value)
+        store.set(target, value, force=force)
     # As the vehicle now carries it (the value: after a new default, it follows unless
     # changed); the leaf keeps its [k] (a union tag or a length is before what it changes).
     return param._replace(value=param.slot.to_flat(store.get(target)))

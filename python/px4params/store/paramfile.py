@@ -18,6 +18,7 @@ from __future__ import annotations
 import json
 import os
 import re
+from collections.abc import Callable
 from typing import Any
 
 from px4params.dsdl.schema import to_json_value
@@ -27,6 +28,7 @@ from px4params.errors import (
     ParamFileError,
     Px4ParamsError,
     StoreFileError,
+    ValueRangeError,
 )
 from px4params.formats import qgc_params
 from px4params.formats.keys import unknown_key
@@ -39,6 +41,9 @@ JSON_FORMAT = "px4params"
 #: The keys of a JSON export, and of each of its instances: any other is refused by name.
 JSON_KEYS = ("format", "version", "instances", "classic")
 _ENTRY_KEYS = ("value", "default")
+
+#: Told each value outside its @min/@max or @value list that ``--force`` took anyway.
+Forced = Callable[[str], None]
 
 _FLAT_INSTANCE = re.compile(r"(?P<param>[A-Z0-9_]+?)_(?P<instance>\d+)(?P<letters>[A-Z]+)")
 
@@ -133,9 +138,11 @@ def refuse_other_ground_station_file(path: str) -> None:
         )
 
 
-def read(store: Store, path: str, *, reset: bool) -> list[str]:
+def read(store: Store, path: str, *, reset: bool, forced: Forced | None = None) -> list[str]:
     """Applies a ``.params`` or JSON file (after resetting the store when ``reset``); all of
-    it or, on any error, nothing. Returns report lines."""
+    it or, on any error, nothing. Returns report lines. A value outside its field's
+    ``@min``/``@max`` or ``@value`` list (one set with ``param set --force``, exported) is
+    refused, or with ``forced`` taken and told to it."""
     kind = kind_of(path)
     try:
         text = read_text(path, PARAM_FILE)
@@ -147,11 +154,29 @@ def read(store: Store, path: str, *, reset: bool) -> list[str]:
         if reset:
             store.reset_to_initial()
         if kind == "qgc":
-            return _read_qgc(store, path, text)
-        return _read_json(store, path, text)
+            return _read_qgc(store, path, text, forced)
+        return _read_json(store, path, text, forced)
 
 
-def _read_qgc(store: Store, path: str, text: str) -> list[str]:
+def _write(where: str, forced: Forced | None, write: Callable[..., object], *args: Any) -> None:
+    """``write(*args)``; where ``forced`` is given, a value only outside its bounds is written
+    all the same (``force=True``) and told to it, named by ``where``."""
+    try:
+        write(*args)
+    except ValueRangeError as e:
+        if forced is None or not e.bounds_only:
+            raise
+        forced(f"{where}: {e}")
+        write(*args, force=True)
+
+
+def _refused(message: str, cause: Exception) -> ParamFileError:
+    """The file refused for ``cause``, saying whether only a value's bounds were broken."""
+    bounds = isinstance(cause, ValueRangeError) and cause.bounds_only
+    return ParamFileError(message, bounds_only=bounds)
+
+
+def _read_qgc(store: Store, path: str, text: str, forced: Forced | None) -> list[str]:
     from px4params.store.flat import write_live
 
     report: list[str] = []
@@ -172,7 +197,7 @@ def _read_qgc(store: Store, path: str, text: str) -> list[str]:
                 classic = store.classic(name)
                 if classic is not None:
                     _check_type(where, name, row.type, classic.is_float)
-                store.set(name, number_value)
+                _write(where, forced, store.set, name, number_value)
                 continue
             match = _FLAT_INSTANCE.fullmatch(name)
             if match is None or match["param"] not in store.parameters:
@@ -184,12 +209,13 @@ def _read_qgc(store: Store, path: str, text: str) -> list[str]:
             _check_type(where, name, row.type, slot.mav_type == "float32")
             if instance not in store:
                 store.add(instance)
-            write_live(store, fmap.live(name, instance, slot), number_value)
+            live = fmap.live(name, instance, slot)
+            _write(f"{where}: {name}", forced, write_live, store, live, number_value)
         except ParamFileError:
             raise
         except Px4ParamsError as e:  # named as the file names it, and as the store does
             text = str(e) if str(e).startswith(name) else f"{name}: {e}"
-            raise ParamFileError(f"{where}: {text}") from None
+            raise _refused(f"{where}: {text}", e) from None
     if skipped:
         report.append(f"{path}: {skipped} parameters not in this store were skipped")
     return report
@@ -206,7 +232,7 @@ def _check_type(where: str, name: str, given: int, is_float: bool) -> None:
         )
 
 
-def _read_json(store: Store, path: str, text: str) -> list[str]:
+def _read_json(store: Store, path: str, text: str, forced: Forced | None) -> list[str]:
     try:
         document = load_json(text)
     except json.JSONDecodeError as e:
@@ -246,19 +272,19 @@ def _read_json(store: Store, path: str, text: str) -> list[str]:
             if key.instance is not None and key not in store:
                 store.add(key)
             if "default" in entry:
-                store.set_default(key, entry["default"])
+                _write(f"{path}: instances", forced, store.set_default, key, entry["default"])
             if "value" in entry:
-                store.set(key, entry["value"])
+                _write(f"{path}: instances", forced, store.set, key, entry["value"])
         except (Px4ParamsError, InstanceError) as e:
-            raise ParamFileError(f"{path}: instances: {e}") from None
+            raise _refused(f"{path}: instances: {e}", e) from None
     for name, value in classic.items():
         try:
             key = Key.parse(name)
             if store.classic(key.param) is None:
                 raise ParamFileError(f"{name}: not a classic parameter of this store")
-            store.set(key, value)
+            _write(f"{path}: classic", forced, store.set, key, value)
         except Px4ParamsError as e:
-            raise ParamFileError(f"{path}: classic: {e}") from None
+            raise _refused(f"{path}: classic: {e}", e) from None
     return []
 
 
