@@ -427,3 +427,51 @@ def test_a_value_of_a_minor_version_the_schema_lacks_is_refused(
         f"{path}: record cannot be applied: INA238#3 was stored by px.Ina238.1.5, which this "
         "schema does not have (at byte "
     )
+
+
+@pytest.mark.parametrize(
+    ("bad", "said"),
+    [
+        ("value", "INA238#0.shunt: nan is not a finite number (float16: NaN and infinities"),
+        ("default", "INA238#0.shunt: -inf is not a finite number (float16: NaN and infinities"),
+        ("classic", "BAT1_CAPACITY: inf is not a finite number (Float: NaN and infinities"),
+    ],
+)
+def test_a_nan_or_infinity_in_a_file_is_refused(
+    store: px4params.Store, tmp_path: Path, bad: str, said: str
+) -> None:
+    # Nothing stores a NaN or an infinity, yet a file holding one (its CRCs right: written by
+    # something else, or damaged before its CRCs were made) loaded, and its export was then
+    # refused by import.
+    ina238 = {"bus": {"i2c": {"bus_id": 1, "address": 0x45}}, "current": 150}
+    payload = {
+        "value": _ina238(store, "px.Ina238", {**ina238, "shunt": float("nan")}),
+        "default": _ina238(store, "px.Ina238", {**ina238, "shunt": float("-inf")}),
+    }.get(bad)
+    flag = HAS_DEFAULT if bad == "default" else HAS_VALUE
+    records = [_classic_record("BAT1_CAPACITY", None, struct.pack("<f", float("inf")))]
+    if payload is not None:
+        index = store.parameters.index("INA238")
+        records = [bytes([KIND_STRUCTURED | flag]) + _varint(index) + _varint(0)]
+        records[0] += _varint(len(payload)) + payload
+    path = tmp_path / "nan.store"
+    write_records(path, store, records)
+    store.add("INA226#1")
+    before = encode_file(store)
+    for apply in (store.load_from, store.import_from):
+        with pytest.raises(StoreFileError) as info:
+            apply(path)
+        assert str(info.value).startswith(f"{path}: record cannot be applied: {said} are refused)")
+        assert encode_file(store) == before
+
+
+def test_a_value_beyond_its_max_stored_with_force_loads_as_written(
+    store: px4params.Store, tmp_path: Path
+) -> None:
+    # Store files are the store's own saved state: what 'param set --force' stored comes back.
+    store.add("INA238#0")
+    store.set("INA238#0.current", 500, force=True)
+    path = tmp_path / "forced.store"
+    store.save(path)
+    again = px4params.Store(store.schema, classic=CLASSIC)
+    assert again.load_from(path) == [] and again.get("INA238#0.current") == 500

@@ -24,16 +24,24 @@ new one over ``FILE``: a crash at any moment leaves the old or the new file inta
 from __future__ import annotations
 
 import binascii
+import math
 import os
+import struct
 from collections.abc import Mapping
 
 from px4params import writing
 from px4params._native import check_store_file
 from px4params._records import TYPE_CHECKING
 from px4params.dsdl.schema import DataType
-from px4params.errors import OutputFileError, Px4ParamsError, StoreError, StoreFileError
+from px4params.errors import (
+    OutputFileError,
+    Px4ParamsError,
+    StoreError,
+    StoreFileError,
+    ValueRangeError,
+)
 from px4params.reading import STORE, read_bytes
-from px4params.store.spec import ParamSpec
+from px4params.store.spec import ParamSpec, check_leaves, leaf_ranges
 
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
     from typing import Any, NamedTuple
@@ -219,6 +227,7 @@ def _apply(
             return
         for payload, default in ((record.default, True), (record.value, False)):
             if payload is not None:
+                _check_finite(param, record.key, payload)
                 work.set_encoded(param.index, 0, payload, default=default)
         return
     assert isinstance(record.key, int)
@@ -241,11 +250,29 @@ def _apply(
     if record.default is not None:
         base = work.type_default(p.index)
         stored = _current(store, data_type, name, record.default, base, report)
+        _check_finite(p, name, stored)
         work.set_encoded(p.index, record.instance, stored, default=True)
     if record.value is not None:
         base = work.get(p.index, record.instance, default=True)
         value = _current(store, data_type, name, record.value, base, report)
+        _check_finite(p, name, value)
         work.set_encoded(p.index, record.instance, value)
+
+
+def _check_finite(p: _Param, name: str, payload: bytes) -> None:
+    """A NaN or an infinity is refused (:class:`ValueRangeError`): nothing stores one, so a file
+    holding one was damaged or written by something else. (Values outside ``@min``/``@max``
+    are loaded as written: ``param set --force`` stores them.)"""
+    if p.spec is not None:
+        ranges = leaf_ranges(p.spec.data_type)
+        if any(r.float_bits for r in ranges.values()):
+            check_leaves(name, p.spec.data_type.leaves(payload, tao=False), ranges, bounds=False)
+    elif p.classic is not None and p.classic.is_float and len(payload) == 4:
+        (number,) = struct.unpack("<f", payload)
+        if not math.isfinite(number):
+            raise ValueRangeError(
+                f"{name}: {number} is not a finite number (Float: NaN and infinities are refused)"
+            )
 
 
 def _table_key(spec: ParamSpec) -> str:
