@@ -208,6 +208,29 @@ def test_force_takes_no_nan_from_a_file(
     assert err.startswith(f"px4params: error: {path}:1: INA238_0Q: ") and "--force" not in err
 
 
+@pytest.mark.parametrize(
+    ("given", "shown"), [("-1e-3", "-0.001"), ("-1E+2", "-100"), ("-0x10", "-16"), ("-.5", "-0.5")]
+)
+def test_a_negative_value_in_any_notation_is_a_value_not_an_option(
+    store: Path, capsys: pytest.CaptureFixture[str], given: str, shown: str
+) -> None:
+    # argparse took -1e-3 and -0x10 for unknown options: "the following arguments are
+    # required: value".
+    assert param(capsys, "set", "BAT1_CAPACITY", given) == (0, "", "")
+    assert param(capsys, "show", "-q", "BAT1_CAPACITY")[1] == f"{shown}\n"
+
+
+def test_a_negative_infinity_gets_the_stores_refusal(
+    store: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    code, _, err = param(capsys, "set", "BAT1_CAPACITY", "-inf")
+    assert (code, err) == (
+        1,
+        "px4params: error: BAT1_CAPACITY: -inf is not a finite number (Float: NaN and "
+        "infinities are refused)\n",
+    )
+
+
 def test_load_says_which_instances_its_reset_removed(
     store: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

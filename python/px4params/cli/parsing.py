@@ -395,13 +395,27 @@ def _argparse() -> Any:
     """argparse, imported now (and :class:`_Parser` made)."""
     global _Parser
     import argparse
+    import re
 
     if _Parser is None:
+        # Words argparse takes for values, not options: its own negative numbers (-1, -.5) and
+        # those a parameter's value is also written as (-1e-3, -0x10, -inf), which it read as
+        # an unknown option ("the following arguments are required: value"). No option of
+        # ours looks like one.
+        negative = re.compile(
+            r"^-(\d[\d_]*(\.\d*)?|\.\d+)(e[-+]?\d+)?$|^-0[xbo][\da-f_]+$|^-(inf|infinity|nan)$",
+            re.IGNORECASE,
+        )
 
         class Parser(argparse.ArgumentParser):
             """argparse's parser whose help formatter takes the terminal's width from ``os``
-            (argparse asks ``shutil``, which costs every command 3 ms to import). Subparsers
-            are of this class too (argparse makes them of their parent's)."""
+            (argparse asks ``shutil``, which costs every command 3 ms to import), and which
+            reads the negative numbers above as values. Subparsers are of this class too
+            (argparse makes them of their parent's)."""
+
+            def __init__(self, *args: Any, **kwargs: Any) -> None:
+                super().__init__(*args, **kwargs)
+                self._negative_number_matcher = negative
 
             def _get_formatter(self) -> argparse.HelpFormatter:
                 global _width
