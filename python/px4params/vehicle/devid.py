@@ -297,7 +297,7 @@ def find_current_table(path: str | os.PathLike[str] | None = None) -> Path:
         given, origin = Path(os.environ[DEVTYPES_ENV]), f"${DEVTYPES_ENV}"
     else:
         return Path(DEVTYPES_DIR, "current.tsv")
-    if not given.is_file():
+    if not given.exists():  # (what exists but is no file, reading names: a folder, a FIFO)
         raise DeviceIdError(f"{origin} not found: {given}")
     return given
 
