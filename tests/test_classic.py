@@ -157,7 +157,7 @@ def test_an_unreadable_or_binary_parameters_json_is_named(tmp_path: Path) -> Non
     binary.write_bytes(b"\xff\xfe\x00")
     with pytest.raises(ClassicParamsError) as e:
         load_classic(binary)
-    assert str(e.value).startswith(f"{binary}: not JSON: 'utf-8' codec can't decode")
+    assert str(e.value) == f"{binary}: not a text file: byte 0xFF at offset 0 is not UTF-8"
 
 
 # -- the cache of a parameters.json ----------------------------------------------------------

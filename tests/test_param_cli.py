@@ -825,3 +825,16 @@ def test_a_flat_name_that_is_not_live_says_why(
         "px4params: error: INA238_3C belongs to INA238#3, which does not exist "
         "(add it first: param add INA238#3)\n",
     )
+
+
+def test_a_binary_airframe_file_says_which_byte_is_not_text(
+    store: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # It said "not a text file (invalid start byte)": the codec's words, and no byte.
+    path = tmp_path / "binary.airframe"
+    path.write_bytes(b"param set SYS_AUTOSTART 4001\n\x89PNG")
+    code, out, err = run(capsys, "run", str(path))
+    assert (code, out) == (1, "")
+    assert (
+        err == f"px4params: error: {path}: not a text file: byte 0x89 at offset 29 is not UTF-8\n"
+    )

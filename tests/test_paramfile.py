@@ -204,7 +204,7 @@ def test_an_unreadable_or_binary_file_is_named(store: px4params.Store, tmp_path:
     binary.write_bytes(b"\xff\xfe\x00")
     with pytest.raises(ParamFileError) as e:
         paramfile.read(store, str(binary), reset=False)
-    assert str(e.value) == f"{binary}: not a text file (invalid start byte)"
+    assert str(e.value) == f"{binary}: not a text file: byte 0xFF at offset 0 is not UTF-8"
 
 
 def test_reset_starts_from_the_initial_store_and_without_it_the_file_merges(

@@ -908,11 +908,8 @@ def test_bench_table_may_describe_the_bench(drivers):
 @pytest.mark.parametrize(
     ("content", "reason"),
     [
-        (None, "is a folder, not a file"),
-        (
-            b"\xff[[device]]\n",
-            "'utf-8' codec can't decode byte 0xff in position 0: invalid start byte",
-        ),
+        (None, "cannot read: is a folder, not a file"),
+        (b"[[device]]\n\xff", "not a text file: byte 0xFF at offset 11 is not UTF-8"),
     ],
 )
 def test_unreadable_bench_file(tmp_path, content, reason, drivers):
@@ -923,7 +920,7 @@ def test_unreadable_bench_file(tmp_path, content, reason, drivers):
         path.write_bytes(content)
     with pytest.raises(BenchFileError) as e:
         load_bench(path, drivers)
-    assert str(e.value) == f"{path}: cannot read: {reason}"
+    assert str(e.value) == f"{path}: {reason}"
 
 
 def test_bench_file_not_found(tmp_path, capsys, drivers):

@@ -188,6 +188,12 @@ def read_bytes(path: str | os.PathLike[str], kind: FileKind) -> bytes:
         os.close(fd)
 
 
+def not_text(e: UnicodeDecodeError) -> str:
+    """Why a file :func:`read_text` could not decode is not text, in our words, not the codec's:
+    ``not a text file: byte 0xFF at offset 3 is not UTF-8``."""
+    return f"not a text file: byte 0x{e.object[e.start]:02X} at offset {e.start} is not UTF-8"
+
+
 def read_text(path: str | os.PathLike[str], kind: FileKind, errors: str = "strict") -> str:
     """:func:`read_bytes` decoded as UTF-8 (``UnicodeDecodeError`` for what is not text)."""
     return read_bytes(path, kind).decode("utf-8", errors)

@@ -44,7 +44,7 @@ from px4params.data import VALUE_SETS_TOML
 from px4params.dsdl.roots import Root, dronecan_package_dir
 from px4params.errors import DsdlError, NumberError, TagValueError
 from px4params.numbers import abbreviated, parse_float, parse_int
-from px4params.reading import DSDL, read_text
+from px4params.reading import DSDL, not_text, read_text
 
 if TYPE_CHECKING:
     import pydsdl
@@ -456,8 +456,7 @@ def _internal_error_text(ex: Exception) -> str:
     report it to pydsdl, which does not help them)."""
     cause = ex.__cause__ or ex.__context__
     if isinstance(cause, UnicodeDecodeError):
-        byte = cause.object[cause.start]
-        return f"not a text file: byte 0x{byte:02X} at offset {cause.start} is not UTF-8"
+        return not_text(cause)
     if isinstance(cause, RecursionError):
         return (
             "types nest too deeply to read (a chain of hundreds of types referring to each other)"

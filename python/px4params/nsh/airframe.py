@@ -23,7 +23,7 @@ from typing import NoReturn, TextIO
 
 from px4params.errors import CommandError, NshArgumentError, Px4ParamsError
 from px4params.nsh import param
-from px4params.reading import AIRFRAME, read_text
+from px4params.reading import AIRFRAME, not_text, read_text
 from px4params.status import EXIT_OK
 from px4params.store.session import Session
 
@@ -93,7 +93,7 @@ def run_file(path: str, session: Session, *, keep_going: bool, err: TextIO) -> R
     except OSError as e:
         raise CommandError(f"{path}: cannot read: {e.strerror}") from None
     except UnicodeDecodeError as e:
-        raise CommandError(f"{path}: not a text file ({e.reason})") from None
+        raise CommandError(f"{path}: {not_text(e)}") from None
     session.autosave = False
     parser = _param_parser()
     variables: dict[str, str] = {}

@@ -27,7 +27,7 @@ from px4params.cache_file import (
 )
 from px4params.data import CLASSIC_PARAMETERS_JSON
 from px4params.errors import ClassicParamsError
-from px4params.reading import CLASSIC_JSON, read_text
+from px4params.reading import CLASSIC_JSON, not_text, read_text
 
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
     from typing import Any, NamedTuple, NoReturn
@@ -133,7 +133,9 @@ def _parse_classic(where: str) -> list[ClassicParam]:
         document = json.loads(text, parse_constant=constant, parse_float=finite)
     except OSError as e:
         raise ClassicParamsError(f"{where}: cannot read: {e.strerror}") from None
-    except (json.JSONDecodeError, UnicodeDecodeError) as e:
+    except UnicodeDecodeError as e:
+        raise ClassicParamsError(f"{where}: {not_text(e)}") from None
+    except json.JSONDecodeError as e:
         raise ClassicParamsError(f"{where}: not JSON: {e}") from None
     if not isinstance(document, dict) or not isinstance(document.get("parameters"), list):
         raise ClassicParamsError(

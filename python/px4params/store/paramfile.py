@@ -34,7 +34,7 @@ from px4params.formats import qgc_params
 from px4params.formats.keys import unknown_key
 from px4params.formats.qgc_params import format_line
 from px4params.numbers import load_json
-from px4params.reading import PARAM_FILE, read_text
+from px4params.reading import PARAM_FILE, not_text, read_text
 from px4params.store.store import Key, Store
 
 JSON_FORMAT = "px4params"
@@ -149,7 +149,7 @@ def read(store: Store, path: str, *, reset: bool, forced: Forced | None = None) 
     except OSError as e:
         raise ParamFileError(f"{path}: cannot read: {e.strerror}") from None
     except UnicodeDecodeError as e:
-        raise ParamFileError(f"{path}: not a text file ({e.reason})") from None
+        raise ParamFileError(f"{path}: {not_text(e)}") from None
     with store.transaction():
         if reset:
             store.reset_to_initial()

@@ -54,7 +54,7 @@ from typing import Any
 from px4params.data import DRIVERS_TOML
 from px4params.errors import DriversFileError
 from px4params.formats.keys import unknown_key
-from px4params.reading import DRIVERS, read_text
+from px4params.reading import DRIVERS, not_text, read_text
 from px4params.store.spec import ParamSpec
 
 __all__ = [
@@ -239,8 +239,10 @@ def load_drivers(
         text = read_text(path, DRIVERS)
     except FileNotFoundError:
         raise DriversFileError(f"{source}: no such drivers file") from None
-    except (OSError, UnicodeDecodeError) as e:
-        raise DriversFileError(f"{source}: cannot read: {getattr(e, 'strerror', e)}") from None
+    except OSError as e:
+        raise DriversFileError(f"{source}: cannot read: {e.strerror or e}") from None
+    except UnicodeDecodeError as e:
+        raise DriversFileError(f"{source}: {not_text(e)}") from None
     return parse_drivers(text, source, specs)
 
 

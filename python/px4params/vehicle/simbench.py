@@ -65,7 +65,7 @@ from typing import Any
 from px4params.errors import BenchFileError
 from px4params.formats.keys import unknown_key
 from px4params.numbers import counted
-from px4params.reading import BENCH, read_text
+from px4params.reading import BENCH, not_text, read_text
 from px4params.vehicle.autostart import Configured, describe_location
 from px4params.vehicle.drivers import BUS_KINDS, Driver, Drivers
 
@@ -166,8 +166,10 @@ def load_bench(path: str | os.PathLike[str], drivers: Drivers) -> Bench:
         text = read_text(path, BENCH)
     except FileNotFoundError:
         raise BenchFileError(f"{source}: no such bench file") from None
-    except (OSError, UnicodeDecodeError) as e:
-        raise BenchFileError(f"{source}: cannot read: {getattr(e, 'strerror', e)}") from None
+    except OSError as e:
+        raise BenchFileError(f"{source}: cannot read: {e.strerror or e}") from None
+    except UnicodeDecodeError as e:
+        raise BenchFileError(f"{source}: {not_text(e)}") from None
     return parse_bench(text, source, drivers)
 
 
