@@ -1354,3 +1354,15 @@ def test_a_benchs_name_is_said_with_its_file_and_kept_in_its_flight_log(
     # without a name, the file alone
     status, out = boot(tmp_path, capsys, bench_text())
     assert out.splitlines()[0].startswith(f"manifest boot of {path}: ")
+
+
+@pytest.mark.parametrize(("name", "code"), [("quad\x1b[2J", "001B"), ("two\nlines", "000A")])
+def test_a_bench_name_with_a_control_character_is_refused(drivers, name, code):
+    # It was printed raw: an escape sequence cleared the terminal of whoever ran the bench.
+    text = f"[bench]\nname = {json.dumps(name)}\n" + ONE
+    with pytest.raises(BenchFileError) as e:
+        parse_bench(text, "b.toml", drivers)
+    assert str(e.value) == (
+        f"b.toml: [bench]: name holds the control character U+{code} (a name is one line of "
+        "printable text)"
+    )

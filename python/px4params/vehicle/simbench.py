@@ -57,6 +57,7 @@ import os
 import random
 import re
 import tomllib
+import unicodedata
 from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -205,6 +206,14 @@ def parse_bench(text: str, source: str, drivers: Drivers) -> Bench:
     name = meta.get("name", "")
     if not isinstance(name, str):
         raise BenchFileError(f"{source}: [bench]: name must be a string, not {name!r}")
+    # The name is printed and logged: a control character (an escape sequence, a newline)
+    # would act on the terminal or split the line rather than be shown.
+    control = next((c for c in name if unicodedata.category(c) == "Cc"), None)
+    if control is not None:
+        raise BenchFileError(
+            f"{source}: [bench]: name holds the control character U+{ord(control):04X} (a name "
+            "is one line of printable text)"
+        )
 
     buses: dict[tuple[str, int], BenchBus] = {}
     for number, table in enumerate(_tables(doc, "bus", source), start=1):
