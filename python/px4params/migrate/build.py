@@ -1386,6 +1386,8 @@ def _upgrade(config: OldConfig, board: Any, target: str | None, assumptions: lis
     or older than the file's, is refused."""
     table = _board_table()
     known = table.releases if table is not None else ()
+    if target is not None:  # as PX4 spells them: MAIN, V1.15.0 are main, v1.15.0
+        target = target.strip().lower()
     asked = target
     if target is not None and target not in known:
         # a release between two snapshots runs the older one's scripts, as a log of it is read
