@@ -1232,9 +1232,9 @@ def test_a_folder_or_fifo_given_as_the_devtypes_file_is_named_as_what_it_is(
     # A folder was "devtypes file not found": it is there, it is not a file.
     fifo = tmp_path / "devtypes.fifo"
     os.mkfifo(fifo)
-    for given, what in (
+    for path, what in (
         (tmp_path, "is a folder, not a file"),
         (fifo, "is a FIFO (named pipe), not a regular file"),
     ):
-        code, _, err = run_cli(capsys, "--devtypes", str(given), "1")
-        assert (code, err) == (1, f"px4params: error: cannot read devtypes file {given}: {what}\n")
+        code, _, err = run_cli(capsys, "--devtypes", str(path), "1")
+        assert (code, err) == (1, f"px4params: error: cannot read devtypes file {path}: {what}\n")

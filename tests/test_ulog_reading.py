@@ -10,9 +10,9 @@ import sys
 from pathlib import Path
 
 import pytest
+from px4params.errors import ReadBudgetExceeded
 from px4params.formats import ulog
-
-from shared_data import SAMPLE_LOG, SHARED_DATA, shared_file
+from shared_data import SAMPLE_LOG, shared_file
 
 # sample_log_small.ulg (pyulog's test log) cut to 60,000 bytes, with the size of the parameter
 # message at byte 25,718 raised by 32 KiB (its high byte 0x80): pyulog 1.3.0 reads the claimed
@@ -64,7 +64,7 @@ def test_the_budget_is_what_the_message_says_and_stops_reads_past_it(tmp_path: P
     with open(log, "rb") as file:
         budgeted = ulog._BudgetedFile(file, 4)
         assert budgeted.read(3) == b"012" and budgeted.read(1) == b"3"
-        with pytest.raises(ulog._GoingRound):
+        with pytest.raises(ReadBudgetExceeded):
             budgeted.read(1)
         budgeted.seek(0)  # seeking is free: a loop is caught by what it reads
         assert budgeted.tell() == 0

@@ -289,6 +289,12 @@ class ULogError(Px4ParamsError):
     ``px4params autostart run --ulog``."""
 
 
+class ReadBudgetExceeded(Exception):
+    """A library read more of a file than its budget (:func:`px4params.formats.ulog.parse`
+    turns it into a :class:`ULogError`). Not a ``ValueError`` or ``IndexError``: pyulog
+    catches those and goes on."""
+
+
 class CommandError(Px4ParamsError):
     """A command that failed (a ``param`` verb, an airframe line, a CLI command): reported as
     one line, exit status 1."""

@@ -25,7 +25,7 @@ import struct
 from dataclasses import dataclass, field
 
 from px4params._records import TYPE_CHECKING
-from px4params.errors import ULogError
+from px4params.errors import ReadBudgetExceeded, ULogError
 from px4params.reading import ULOG, open_file
 
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
@@ -256,13 +256,9 @@ def read_header(path: str | os.PathLike[str]) -> ULogHeader:
 READ_BUDGET = 256
 
 
-class _GoingRound(Exception):
-    """pyulog read more than its budget (not one of the errors pyulog catches itself)."""
-
-
 class _BudgetedFile:
-    """A binary file whose reads stop, with :class:`_GoingRound`, after ``budget`` bytes: what
-    pyulog calls of its file, no more."""
+    """A binary file whose reads stop, with :class:`ReadBudgetExceeded`, after ``budget``
+    bytes: what pyulog calls of its file, no more."""
 
     def __init__(self, file: BinaryIO, budget: int) -> None:
         self._file = file
@@ -272,7 +268,7 @@ class _BudgetedFile:
         data = self._file.read(size)
         self._budget -= len(data)
         if self._budget < 0:
-            raise _GoingRound
+            raise ReadBudgetExceeded
         return data
 
     def seek(self, offset: int, whence: int = os.SEEK_SET) -> int:
@@ -306,7 +302,7 @@ def parse(path: str | os.PathLike[str], topics: Sequence[str] | None) -> ULog:
         try:
             with contextlib.redirect_stdout(io.StringIO()):  # pyulog prints its warnings
                 return ULog(budgeted, message_name_filter_list=topics)
-        except _GoingRound:
+        except ReadBudgetExceeded:
             raise ULogError(
                 f"{where}: not a readable ULog file (pyulog read more than {READ_BUDGET} times "
                 f"its {size} bytes without finishing: a damaged message sends it round in circles)"
