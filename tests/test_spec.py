@@ -223,7 +223,8 @@ def test_a_params_file_with_a_shunt_of_zero_is_refused(tmp_path: Path, store_fil
         result = _cli(tmp_path, "param", "--store", str(store_file), verb, str(params))
         assert result.returncode == 1
         assert result.stderr == (
-            f"px4params: error: {params}:2: INA238_1Q: INA238#1.shunt: 0 {SHUNT_RANGE}\n"
+            f"px4params: error: {params}:2: INA238_1Q: INA238#1.shunt: 0 {SHUNT_RANGE} "
+            f"('param {verb} --force' takes it)\n"
         )
         assert store_file.read_bytes() == before
 
