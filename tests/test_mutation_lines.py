@@ -148,8 +148,10 @@ def test_a_mutant_runs_the_tests_of_its_line_with_the_target_s_options(
 def _mutmut(root: Path, *args: str, **env: str) -> None:
     assert MUTMUT is not None
     subprocess.run(
+        # (a base of 10 s over mutmut's 2x the clean run: on a loaded machine a test that
+        # starts a process took longer than that and was a timeout, not a kill)
         [MUTMUT, "run", "--paths-to-mutate", "mod.py", "--tests-dir", "tests", "--simple-output",
-         "--no-progress", *args],
+         "--no-progress", "--test-time-base", "10", *args],
         cwd=root, env=_env(root, **env), check=False, capture_output=True, timeout=600,
     )  # fmt: skip
 
