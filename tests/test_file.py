@@ -475,3 +475,42 @@ def test_a_value_beyond_its_max_stored_with_force_loads_as_written(
     store.save(path)
     again = px4params.Store(store.schema, classic=CLASSIC)
     assert again.load_from(path) == [] and again.get("INA238#0.current") == 500
+
+
+def test_a_nan_in_a_last_array_is_found_where_it_is(tmp_path: Path) -> None:
+    # Stored values are encoded without tail array optimization: the check reads them so (read
+    # with it, the length prefix is taken for the array's first bits).
+    root = tmp_path / "acme"
+    root.mkdir()
+    (root / "Probe.1.0.dsdl").write_text(
+        "# @param PROBE\n# @max_instances 2\nuint8 gain\nfloat32[<=3] cal\n@sealed\n"
+    )
+    schema = px4params.load_schema([str(root)], use_env=False)
+    store = px4params.Store(schema, classic=[])
+    lines = table_lines(store.specs)
+    index = lines.index("PROBE=acme.Probe.1")
+
+    def file_of(cal: list[float]) -> Path:
+        payload = schema["acme.Probe.1.0"].encode({"gain": 2, "cal": cal}, tao=False)
+        record = bytes([KIND_STRUCTURED | HAS_VALUE]) + _varint(index) + _varint(1)
+        record += _varint(len(payload)) + payload
+        path = tmp_path / "probe.store"
+        path.write_bytes(_file(2, zlib.crc32("\n".join(lines).encode()), [_table(lines), record]))
+        return path
+
+    assert store.load_from(file_of([0.5, 1.5])) == []
+    assert store.get("PROBE#1")["cal"] == [0.5, 1.5]
+    with pytest.raises(StoreFileError) as info:
+        store.load_from(file_of([0.5, float("inf"), 2.5]))
+    assert "record cannot be applied: PROBE#1.cal[1]: inf is not a finite number" in str(info.value)
+    assert store.get("PROBE#1")["cal"] == [0.5, 1.5]
+
+
+def test_an_integer_classic_whose_bits_would_be_a_float_nan_loads(
+    store: px4params.Store, tmp_path: Path
+) -> None:
+    # 0x7FC00000 is a NaN as a float: an Int32 parameter holding it is a number like any other.
+    path = tmp_path / "int.store"
+    value = (0x7FC00000).to_bytes(4, "little")
+    write_records(path, store, [_classic_record("SYS_AUTOSTART", None, value)])
+    assert store.load_from(path) == [] and store.get("SYS_AUTOSTART") == 0x7FC00000

@@ -196,6 +196,22 @@ def test_a_forced_value_exported_loads_back_with_force(
     assert param(capsys, "show", "-q", "INA238#0.current")[1] == "500\n"
 
 
+def test_a_forced_default_in_a_json_export_loads_back_with_force(
+    store: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    talk(capsys, tmp_path)
+    assert param(capsys, "set-default", "--force", "INA238#0.current", "400")[0] == 0
+    path = tmp_path / "default.json"
+    assert param(capsys, "export", str(path))[0] == 0
+    assert json.loads(path.read_text())["instances"]["INA238#0"]["default"]["current"] == 400
+    broken = f"{path}: instances: INA238#0.current: 400 is outside 1..327 (@min/@max)"
+    code, _, err = param(capsys, "load", str(path))
+    assert (code, err) == (1, f"px4params: error: {broken} ('param load --force' takes it)\n")
+    code, _, err = param(capsys, "load", "--force", str(path))
+    assert (code, err) == (0, f"px4params: warning: --force: {broken}; stored anyway\n")
+    assert param(capsys, "show", "-q", "INA238#0.current")[1] == "400\n"
+
+
 def test_force_takes_no_nan_from_a_file(
     store: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

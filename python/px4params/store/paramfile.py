@@ -282,7 +282,7 @@ def _read_json(store: Store, path: str, text: str, forced: Forced | None) -> lis
             key = Key.parse(name)
             if store.classic(key.param) is None:
                 raise ParamFileError(f"{name}: not a classic parameter of this store")
-            _write(f"{path}: classic", forced, store.set, key, value)
+            store.set(key, value)  # (PX4 enforces no classic @min/@max: nothing to force)
         except Px4ParamsError as e:
             raise _refused(f"{path}: classic: {e}", e) from None
     return []
