@@ -374,6 +374,17 @@ def test_a_lost_device_is_reset_and_probed_again_with_backoff(drivers, manifest)
     assert probe_times(result, "INA238#1") == [0.0, 4.92, 4.94, 4.98, 5.06, 5.22, 5.54]
 
 
+def test_an_absent_device_is_probed_once_a_second_through_a_long_run(drivers, manifest):
+    # The backoff's 2 ** attempts overflowed a float after 1,024 attempts: a run of 1,020 s
+    # with an absent device ended in a traceback (OverflowError).
+    bench = parse_bench(bench_text(mag="absent = true"), "b", drivers)
+    result = run(bench, drivers, manifest, duration=1100)
+    # Probes at 0, 0.02, 0.06, 0.14, 0.30, 0.62 (20 ms doubling), 1.26 s, then every 1 s up to
+    # 1,099.26 s: 6 + 1,099.
+    mag = next(i for i in result.instances if i.name == "AK09916#0")
+    assert mag.started_at is None and mag.probe_attempts == 1105
+
+
 def test_a_device_dying_at_once_is_reset_after_ten_bad_transfers(drivers, manifest):
     # Found by the probe at 0 s, dead at 0.05 s: its first ten transfers (0.1 .. 1.0 s) fail.
     bench = parse_bench(bench_text(second="dies_after = 0.05"), "b", drivers)

@@ -563,7 +563,8 @@ class _Instance:
                 self.state = "stopped"
                 sim.log(t, "start_failed", out, quiet=True, reason=reason)
             return
-        delay = min(BACKOFF_BASE * 2 ** (self.attempts - 1), BACKOFF_MAX)
+        # (the exponent bounded: 2.0 ** 1024 overflows a float, an hour of probes later)
+        delay = min(BACKOFF_BASE * 2.0 ** min(self.attempts - 1, 64), BACKOFF_MAX)
         sim.schedule(t + delay, self.probe)
 
     def _probe_once(self, t: float) -> tuple[bool, str]:
