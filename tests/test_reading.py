@@ -690,3 +690,39 @@ def test_a_response_timeout_that_is_not_a_time_is_refused() -> None:
     assert result.stderr.splitlines()[-1].endswith(
         "error: argument --timeout: expected seconds more than 0 and at most 3600, not 'nan'"
     )
+
+
+# -- a byte order mark --------------------------------------------------------------------------
+
+BOM = b"\xef\xbb\xbf"  # UTF-8's byte order mark, which Windows Notepad writes first
+
+
+def test_a_byte_order_mark_is_no_part_of_the_first_line(tmp_path: Path) -> None:
+    path = tmp_path / "bom.txt"
+    path.write_bytes(BOM + b"param add INA238#0\n")
+    assert read_text(path, FileKind("a text", 100)) == "param add INA238#0\n"
+    path.write_bytes(BOM + b"x\xff")  # what is not text is still said at its own offset
+    with pytest.raises(UnicodeDecodeError) as e:
+        read_text(path, FileKind("a text", 100))
+    assert e.value.start == 4
+
+
+def test_files_saved_with_a_byte_order_mark_read_as_without(tmp_path: Path) -> None:
+    # An airframe file was "unknown command '\ufeffparam'"; a QGC .params file "expected 5
+    # TAB-separated columns, got 6" on its comment line; a bench "not TOML".
+    airframe = tmp_path / "bom.airframe"
+    airframe.write_bytes(BOM + AIRFRAME.read_bytes())
+    done = cli("run", str(airframe), "--store", str(tmp_path / "a.store"))
+    assert (done.returncode, done.stderr) == (0, "")
+    params = tmp_path / "bom.params"
+    params.write_bytes(BOM + b"# Onboard parameters\n1\t1\tSYS_AUTOSTART\t4001\t6\n")
+    done = cli("param", "--store", str(tmp_path / "a.store"), "import", str(params))
+    assert (done.returncode, done.stderr) == (0, "")
+    shown = cli("param", "--store", str(tmp_path / "a.store"), "show", "-q", "SYS_AUTOSTART")
+    assert shown.stdout == "4001\n"
+    plain = tmp_path / "plain.params"
+    plain.write_bytes(params.read_bytes()[len(BOM) :])
+    with_bom = cli("migrate", str(params), "--json")
+    without = cli("migrate", str(plain), "--json")
+    assert with_bom.returncode == without.returncode == 0
+    assert with_bom.stdout.replace("bom.params", "plain.params") == without.stdout

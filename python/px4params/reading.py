@@ -195,5 +195,6 @@ def not_text(e: UnicodeDecodeError) -> str:
 
 
 def read_text(path: str | os.PathLike[str], kind: FileKind, errors: str = "strict") -> str:
-    """:func:`read_bytes` decoded as UTF-8 (``UnicodeDecodeError`` for what is not text)."""
-    return read_bytes(path, kind).decode("utf-8", errors)
+    """:func:`read_bytes` decoded as UTF-8 (``UnicodeDecodeError`` for what is not text), without
+    the byte order mark Windows editors (Notepad) put first: it is no part of the first line."""
+    return read_bytes(path, kind).decode("utf-8", errors).removeprefix("\ufeff")
