@@ -854,3 +854,19 @@ def test_a_binary_airframe_file_says_which_byte_is_not_text(
     assert (
         err == f"px4params: error: {path}: not a text file: byte 0x89 at offset 29 is not UTF-8\n"
     )
+
+
+def test_set_default_s_of_a_parameter_this_build_lacks_lets_the_script_run_on(
+    store: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # PX4's do_set_custom_default: with -s an unknown name fails silently (status 1) and its
+    # script runs on. A run stopped at it with "param set-default failed", naming nothing.
+    path = airframe(tmp_path, "param set-default -s NOPE 1\nparam set SYS_AUTOSTART 4001\n")
+    assert run(capsys, "run", path) == (0, "", "")
+    assert param(capsys, "show", "-q", "SYS_AUTOSTART")[1] == "4001\n"
+    assert param(capsys, "set-default", "-s", "NOPE", "1") == (1, "", "")
+    # Without -s the name is refused, and the file stops there.
+    path = airframe(tmp_path, "param set-default NOPE 1\nparam set SYS_AUTOSTART 1\n")
+    code, _, err = run(capsys, "run", path)
+    assert code == 1 and err.startswith(f"px4params: {path}:1: ") and "NOPE" in err
+    assert param(capsys, "show", "-q", "SYS_AUTOSTART")[1] == "4001\n"
