@@ -939,7 +939,7 @@ def test_resetting(store: px4params.Store) -> None:
     store.set("INA238#0.bus._tag", 1)  # now SPI: the default value is I2C
     with pytest.raises(
         LeafError,
-        match=r"\(in the default value, which has another shape\)$",
+        match=r"\(the default value has another shape: no default for it\)$",
     ):
         store.reset("INA238#0.bus.spi.chip_select")
     store.reset_all()
@@ -949,6 +949,58 @@ def test_resetting(store: px4params.Store) -> None:
     store.reset_to_initial()
     assert list(store.names()) == ["SYS_AUTOSTART", "BAT1_CAPACITY", "SENS_EXT_I2C_PRB"]
     assert store.get("SYS_AUTOSTART") == 0
+
+
+def test_resetting_a_leaf_by_index_resets_that_field_not_the_defaults_kth(
+    store: px4params.Store,
+) -> None:
+    # With SPI selected and the default I2C, leaf [5] is bus.spi.max_frequency in the value
+    # and current (327) in the default: reset [5] wrote 327 into max_frequency, reset [3] the
+    # I2C bus_id into the SPI one, exit 0.
+    store.add("INA238#0")
+    store.set("INA238#0[1]", 1)
+    store.set("INA238#0[5]", 5000)
+    before = store.encoded("INA238#0")
+    for k, path in ((5, "bus.spi.max_frequency"), (3, "bus.spi.bus_id")):
+        with pytest.raises(LeafError) as e:
+            store.reset(f"INA238#0[{k}]")
+        assert str(e.value) == (
+            "INA238#0: bus.spi: this union variant is not the selected one (the default value "
+            "has another shape: no default for it)"
+        )
+        assert path in [leaf.path for leaf in store.leaves("INA238#0")]
+    assert store.encoded("INA238#0") == before
+    with pytest.raises(LeafError) as e:  # a leaf the value has not: not the default's doing
+        store.reset("INA238#0[9]")
+    assert str(e.value) == "INA238#0: no leaf [9] (the value has 9 leaves: [0]..[8])"
+
+
+def test_resetting_a_union_tag_brings_back_the_defaults_variant_with_its_values(
+    store: px4params.Store,
+) -> None:
+    # The tag alone went back: I2C with address 0, where the default's is 0x45.
+    store.add("INA238#0")
+    store.set_default("INA238#0.bus.i2c.bus_id", 2)
+    store.set("INA238#0.bus._tag", 1)
+    store.set("INA238#0.current", 100)
+    store.reset("INA238#0[1]")
+    assert store.get("INA238#0")["bus"] == {"i2c": {"p_version": 0, "bus_id": 2, "address": 0x45}}
+    assert store.get("INA238#0.current") == 100  # the rest as it was
+
+
+def test_resetting_an_array_length_brings_back_the_defaults_elements(tmp_path: Path) -> None:
+    root = tmp_path / "acme"
+    root.mkdir()
+    (root / "Probe.1.0.dsdl").write_text(
+        "# @param PROBE\n# @max_instances 2\nuint8 gain\nuint8[<=3] cal\n@sealed\n"
+    )
+    store = px4params.Store(px4params.load_schema([str(root)], use_env=False), classic=[])
+    store.add("PROBE#0")
+    store.set_default("PROBE#0", {"gain": 1, "cal": [7]})
+    store.set("PROBE#0", {"gain": 4, "cal": [1, 2, 3]})
+    length = next(leaf.index for leaf in store.leaves("PROBE#0") if leaf.path == "cal._len")
+    store.reset(f"PROBE#0[{length}]")
+    assert store.get("PROBE#0") == {"gain": 4, "cal": [7]}
 
 
 @pytest.mark.issue40

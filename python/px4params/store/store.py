@@ -540,10 +540,27 @@ class Store:
         if key.leaf is None:
             self._native.reset(p.index, instance)
             return
+        # The value's leaf [k], found by its path in the default: where a union selects another
+        # variant, or an array is shorter, the same index names another field there.
+        path = self.leaf(key).path
+        parent, _, last = path.rpartition(".")
+        if last in ("_tag", "_len"):
+            # A union's tag or an array's length: the union or array as the default has it
+            # (the default's variant with its values, not the variant's zeros).
+            whole = key._replace(leaf=None)
+            value, default_value = self.get(whole), self.get(whole, default=True)
+            if not parent:  # the value itself is the union
+                self.set(whole, default_value)
+                return
+            _put_at(value, parent, _at(default_value, parent))
+            self.set(whole, value)
+            return
         try:
-            default = self.leaf(key, default=True)
+            default = self.leaf(key._replace(leaf=path), default=True)
         except LeafError as e:
-            raise LeafError(f"{e} (in the default value, which has another shape)") from None
+            raise LeafError(
+                f"{e} (the default value has another shape: no default for it)"
+            ) from None
         self.set(key, default.value)
 
     def reset_all(self) -> None:
@@ -623,6 +640,30 @@ class Store:
 
     def __repr__(self) -> str:
         return f"<Store {len(list(self.names()))} instances of {len(self._order)} parameters>"
+
+
+def _steps(path: str) -> list[str | int]:
+    """``cells[3].volts`` -> ``["cells", 3, "volts"]`` (a leaf path's fields and indices)."""
+    steps: list[str | int] = []
+    for part in path.split(".") if path else []:
+        name, *indices = part.replace("]", "").split("[")
+        steps += [name, *map(int, indices)] if name else list(map(int, indices))
+    return steps
+
+
+def _at(value: Any, path: str) -> Any:
+    """The part of a decoded value at ``path`` (the whole value for ``""``)."""
+    for step in _steps(path):
+        value = value[step]
+    return value
+
+
+def _put_at(value: Any, path: str, part: Any) -> None:
+    """Replaces the part of a decoded value at ``path`` (not empty: the root is no part)."""
+    *above, last = _steps(path)
+    for step in above:
+        value = value[step]
+    value[last] = part
 
 
 def _changed_leaves(leaves: list[Leaf], before: list[Leaf]) -> list[Leaf]:
