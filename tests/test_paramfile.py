@@ -459,3 +459,43 @@ def test_json_kinds_are_named_as_json_names_them() -> None:
     kinds = [(None, "null"), (False, "a boolean"), ([], "an array"), ("", "a string")]
     kinds += [(0, "a number"), (0.5, "a number"), ({}, "an object")]
     assert [paramfile._json_kind(value) for value, _ in kinds] == [name for _, name in kinds]
+
+
+def test_other_components_lines_are_skipped_and_said(store: px4params.Store, tmp_path) -> None:
+    # QGC's MockLink file (as QGC saves a vehicle) holds COMP_2_PARAM and COMP_3_PARAM of
+    # components 2 and 3: a gimbal's or a camera's, not the autopilot's. import took every line
+    # as the autopilot's, without a word (migrate skipped them).
+    from shared_data import shared_file
+
+    mocklink = shared_file("qgc_px4_mocklink.params")
+    path = tmp_path / "mock.params"
+    path.write_text(mocklink.read_text())
+    report = paramfile.read(store, str(path), reset=False)
+    said = [line for line in report if ": component " in line]
+    assert said == [
+        f"{path}: component 2: 1 parameters skipped (not the autopilot's, component 1)",
+        f"{path}: component 3: 1 parameters skipped (not the autopilot's, component 1)",
+    ]
+    mixed = tmp_path / "mixed.params"
+    mixed.write_text("1\t1\tSYS_AUTOSTART\t4001\t6\n1\t154\tSYS_AUTOSTART\t13\t6\n")
+    assert paramfile.read(store, str(mixed), reset=False) == [
+        f"{mixed}: component 154: 1 parameters skipped (not the autopilot's, component 1)"
+    ]
+    assert store.get("SYS_AUTOSTART") == 4001
+
+
+def test_a_file_of_two_vehicles_is_refused(store: px4params.Store, tmp_path: Path) -> None:
+    path = tmp_path / "two.params"
+    path.write_text("1\t1\tSYS_AUTOSTART\t4001\t6\n2\t1\tSYS_AUTOSTART\t4002\t6\n")
+    before = store.get("SYS_AUTOSTART")
+    with pytest.raises(ParamFileError) as e:
+        paramfile.read(store, str(path), reset=False)
+    assert str(e.value) == (
+        f"{path}:2: vehicle 2: the file holds parameters of vehicles 1, 2 (a store is one "
+        "vehicle's: import one at a time)"
+    )
+    assert store.get("SYS_AUTOSTART") == before
+    # One vehicle other than 1 (saved from vehicle 2) is that vehicle's file: read.
+    path.write_text("2\t1\tSYS_AUTOSTART\t4002\t6\n")
+    assert paramfile.read(store, str(path), reset=False) == []
+    assert store.get("SYS_AUTOSTART") == 4002
