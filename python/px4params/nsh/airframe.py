@@ -72,9 +72,15 @@ class _Block:
     seen_then: bool = False
     #: Its condition failed (a refused ``param compare``): neither branch runs.
     failed: bool = False
+    #: Every block around it was running when it opened (and stays so while it is open: only
+    #: the innermost block changes branch): a line's running is known from the innermost
+    #: block alone, in time independent of the depth.
+    outer: bool = True
 
     def active(self) -> bool:
-        return self.seen_then and not self.failed and (self.condition != self.in_else)
+        return (
+            self.outer and self.seen_then and not self.failed and (self.condition != self.in_else)
+        )
 
 
 @dataclass
@@ -141,7 +147,7 @@ def _line(
     if not words:
         return
     head = words[0]
-    running = all(b.active() for b in blocks)
+    running = blocks[-1].active() if blocks else True
     if head in ("then", "else", "fi"):
         _block_word(head, words, blocks)
         return
@@ -152,9 +158,9 @@ def _line(
         try:
             condition = running and _condition(words[1:], parser, session)
         except (CommandError, Px4ParamsError, NshArgumentError, ValueError):
-            blocks.append(_Block(False, number, failed=True))
+            blocks.append(_Block(False, number, failed=True, outer=running))
             raise
-        blocks.append(_Block(condition, number))
+        blocks.append(_Block(condition, number, outer=running))
         return
     if blocks and not blocks[-1].seen_then:
         raise CommandError("expected 'then' after 'if'")
