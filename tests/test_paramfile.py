@@ -392,8 +392,14 @@ def test_classic_values_are_set(store: px4params.Store, tmp_path: Path) -> None:
     [
         ("[1]", 'not a px4params JSON export (no "format": "px4params")'),
         ('{"version": 1}', 'not a px4params JSON export (no "format": "px4params")'),
-        ('{"format": "px4params"}', "JSON export version None (expected 1)"),
-        ('{"format": "px4params", "version": "1"}', "JSON export version '1' (expected 1)"),
+        # (the version as JSON writes it: it printed Python's None, '1' and True)
+        ('{"format": "px4params"}', "JSON export version null (expected 1)"),
+        ('{"format": "px4params", "version": "1"}', 'JSON export version "1" (expected 1)'),
+        ('{"format": "px4params", "version": true}', "JSON export version true (expected 1)"),
+        (
+            json_text(classic={"SYS_AUTOSTART": True}),
+            "classic: SYS_AUTOSTART: expected a number, got a boolean",
+        ),
         (
             json_text(extra=1),
             "unknown top-level key 'extra'",

@@ -262,10 +262,9 @@ def _read_json(store: Store, path: str, text: str, forced: Forced | None) -> lis
         raise ParamFileError(f"{path}: {e}") from None
     if not isinstance(document, dict) or document.get("format") != JSON_FORMAT:
         raise ParamFileError(f'{path}: not a px4params JSON export (no "format": "px4params")')
-    if document.get("version") != 1:
-        raise ParamFileError(
-            f"{path}: JSON export version {document.get('version')!r} (expected 1)"
-        )
+    version = document.get("version")
+    if isinstance(version, bool) or version != 1:  # (true == 1 in Python, not in JSON)
+        raise ParamFileError(f"{path}: JSON export version {json.dumps(version)} (expected 1)")
     complaint = unknown_key(document, JSON_KEYS, "top-level key")
     if complaint is not None:
         raise ParamFileError(f"{path}: {complaint}; nothing was changed")
@@ -303,6 +302,8 @@ def _read_json(store: Store, path: str, text: str, forced: Forced | None) -> lis
             key = Key.parse(name)
             if store.classic(key.param) is None:
                 raise ParamFileError(f"{name}: not a classic parameter of this store")
+            if isinstance(value, bool):  # a structured leaf refuses one too
+                raise ParamFileError(f"{name}: expected a number, got {_json_kind(value)}")
             store.set(key, value)  # (PX4 enforces no classic @min/@max: nothing to force)
         except Px4ParamsError as e:
             raise _refused(f"{path}: classic: {e}", e) from None
