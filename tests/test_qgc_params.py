@@ -154,3 +154,18 @@ def test_mission_planners_own_extension_is_named_too(tmp_path: Path, verb: str) 
         "files, .params (QGC) and .json\n"
     )
     assert not (tmp_path / "vehicle.store").exists()
+
+
+@given(st.floats(width=32, allow_nan=False, allow_infinity=False))
+def test_every_finite_float32_is_written_so_that_it_reads_back_exactly(value: float) -> None:
+    # 18 decimals wrote 1e-30 as 0.000000000000000000 and 1.2345678e-12 as
+    # 0.000000000001234568: an export read back changed them.
+    line = qgc_params.format_line(1, 1, "X", value, True)
+    written = line.split("\t")[3]
+    assert struct.unpack("<f", struct.pack("<f", float(written)))[0] == value
+
+
+def test_floats_18_decimals_keep_are_written_as_qgc_writes_them() -> None:
+    assert qgc_params.format_line(1, 1, "X", 0.5, True) == "1\t1\tX\t0.500000000000000000\t9"
+    tiny = struct.unpack("<f", struct.pack("<f", 1e-30))[0]  # as a float32 parameter holds it
+    assert qgc_params.format_line(1, 1, "X", tiny, True) == "1\t1\tX\t1.0000000031710769e-30\t9"

@@ -1,7 +1,8 @@
 """QGroundControl's ``.params`` files: ``#`` comment lines, then one line per parameter,
 ``vehicle-id component-id name value type`` separated by TABs (as QGC writes them; spaces are
 accepted too, as hand-edited files have them). ``type`` is a ``MAV_PARAM_TYPE``: 6 int32,
-9 float32 (QGC writes floats with 18 decimals), the others as MAVLink numbers them.
+9 float32 (QGC writes floats with 18 decimals; so do we, but in full where 18 decimals would
+round), the others as MAVLink numbers them.
 
 A Mission Planner (``NAME,VALUE``) or MAVProxy (``NAME VALUE``) file given instead is named as
 such in the error. This is the one reader of the format; the store's import, migration and the
@@ -10,6 +11,7 @@ page use it."""
 from __future__ import annotations
 
 import math
+import struct
 from typing import NamedTuple
 
 from px4params.errors import NumberError, ParamFileError
@@ -128,9 +130,18 @@ def _value(text: str, kind: int, at: str, name: str) -> int | float:
     return int(number)
 
 
+def _float32(value: float) -> float:
+    """``value`` as a float32 holds it."""
+    return float(struct.unpack("<f", struct.pack("<f", value))[0])
+
+
 def format_line(vehicle: int, component: int, name: str, value: int | float, is_float: bool) -> str:
-    """One line as QGC writes it: floats with 18 decimals, TAB-separated."""
+    """One line as QGC writes it: floats with 18 decimals, TAB-separated. A float32 that 18
+    decimals do not keep (below 5e-19, or with digits past the 18th decimal) is written in
+    full (``1.0000000031710769e-30``), which QGC reads as well: a value is never rounded away."""
     if is_float:
         text = f"{value:.18f}" if math.isfinite(value) else str(value)
+        if math.isfinite(value) and _float32(float(text)) != _float32(value):
+            text = repr(float(value))
         return f"{vehicle}\t{component}\t{name}\t{text}\t{REAL32}"
     return f"{vehicle}\t{component}\t{name}\t{int(value)}\t{INT32}"
