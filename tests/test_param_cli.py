@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -903,3 +904,27 @@ def test_deeply_nested_ifs_run_as_nested_and_in_time_linear_in_the_lines(
         "5000\n" if outermost == "0" else "-1\n"
     )
     assert asked < 3 * len(text.splitlines())
+
+
+def test_a_command_whose_output_cannot_be_written_says_its_change_was_saved(
+    store: Path, tmp_path: Path
+) -> None:
+    # 'param add INA238 > /dev/full' failed (exit 1) with INA238#0 saved: a retry made #1, and
+    # nothing said the first had been kept.
+    if not os.path.exists("/dev/full"):
+        pytest.skip("no /dev/full on this system")
+    command = [sys.executable, "-m", "px4params", "param", "--store", str(store)]
+    with open("/dev/full", "w") as full:
+        done = subprocess.run([*command, "add", "INA238"], stdout=full, stderr=subprocess.PIPE,
+                              text=True, timeout=60)  # fmt: skip
+        shown = subprocess.run([*command, "show"], stdout=full, stderr=subprocess.PIPE,
+                               text=True, timeout=60)  # fmt: skip
+    assert (done.returncode, done.stderr) == (
+        1,
+        "px4params: error: cannot write the output: No space left on device (the change was "
+        f"saved all the same, to {store})\n",
+    )
+    assert (shown.returncode, shown.stderr) == (
+        1,
+        "px4params: error: cannot write the output: No space left on device\n",
+    )

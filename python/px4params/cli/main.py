@@ -125,6 +125,7 @@ def _command_in(argv: Sequence[str]) -> str | None:
 
 def main(argv: Sequence[str] | None = None) -> int:
     words = list(sys.argv[1:] if argv is None else argv)
+    saved_before = len(_saved_stores())  # (main may run more than once in a process: tests)
     try:
         status = _run(words)
         # Written now, so that a full disk is this command's error (not a traceback of the
@@ -141,10 +142,18 @@ def main(argv: Sequence[str] | None = None) -> int:
         if e.filename is not None or e.errno not in _OUTPUT_ERRNOS:
             raise
         _drop_output()
-        print(f"px4params: error: cannot write the output: {e.strerror}", file=sys.stderr)
+        kept = list(dict.fromkeys(_saved_stores()[saved_before:]))
+        said = f" (the change was saved all the same, to {', '.join(kept)})" if kept else ""
+        print(f"px4params: error: cannot write the output: {e.strerror}{said}", file=sys.stderr)
         return EXIT_FAILED
     except KeyboardInterrupt:
         return EXIT_INTERRUPTED
+
+
+def _saved_stores() -> list[str]:
+    """The store files this command saved (none where it never opened a store)."""
+    session = sys.modules.get("px4params.store.session")
+    return list(getattr(session, "SAVED", ()))
 
 
 def _run(words: list[str]) -> int:

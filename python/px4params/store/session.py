@@ -27,6 +27,10 @@ from px4params.errors import (
 from px4params.store.classic import BUNDLED_CLASSIC, CLASSIC_ENV
 from px4params.store.store import Store, default_store_path
 
+#: The store files this process saved, in order: a command whose output then cannot be
+#: written says that its change was kept all the same (px4params.cli.main).
+SAVED: list[str] = []
+
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
     from typing import Any, TextIO, TypeVar
 
@@ -162,6 +166,7 @@ class Session:
 
     def _synced(self) -> None:
         """The store was just saved: the file is its content."""
+        SAVED.append(self.path)
         self.identity = file_identity(self.path)
         self._base = self.store._native.copy()
         self._refused = None
