@@ -82,7 +82,19 @@ def test_a_parameter_made_by_hand_has_an_empty_read_only_entry() -> None:
             '{"version": 1, "parameters": {}}',
             "not a parameters.json (expected an object with a 'parameters' list)",
         ),
-        ('{"parameters": []}', "parameters.json version None (expected 1)"),
+        ('{"parameters": []}', "parameters.json version null (expected 1)"),
+        ('{"version": true, "parameters": []}', "parameters.json version true (expected 1)"),
+        # A name with a space went into the metadata written, and failed at 'param show'
+        (
+            '{"version": 1, "parameters": [{"name": "foo bar", "type": "Int32"}]}',
+            "parameters[0]: 'name' \"foo bar\" is not a PX4 parameter name (upper-case letters, "
+            "digits and '_', a letter first)",
+        ),
+        (
+            '{"version": 1, "parameters": [{"name": "1ST", "type": "Int32"}]}',
+            "parameters[0]: 'name' \"1ST\" is not a PX4 parameter name (upper-case letters, "
+            "digits and '_', a letter first)",
+        ),
         ('{"version": 2, "parameters": []}', "parameters.json version 2 (expected 1)"),
         ('{"version": 1, "parameters": [1]}', "parameters[0]: expected an object"),
         (

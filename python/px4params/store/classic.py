@@ -29,6 +29,9 @@ from px4params.data import CLASSIC_PARAMETERS_JSON
 from px4params.errors import ClassicParamsError
 from px4params.reading import CLASSIC_JSON, not_text, read_text
 
+_NAME_START = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZ")
+_NAME_REST = _NAME_START | frozenset("0123456789_")
+
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
     from typing import Any, NamedTuple, NoReturn
 else:
@@ -141,9 +144,10 @@ def _parse_classic(where: str) -> list[ClassicParam]:
         raise ClassicParamsError(
             f"{where}: not a parameters.json (expected an object with a 'parameters' list)"
         )
-    if document.get("version") != 1:
+    version = document.get("version")
+    if isinstance(version, bool) or version != 1:
         raise ClassicParamsError(
-            f"{where}: parameters.json version {document.get('version')!r} (expected 1)"
+            f"{where}: parameters.json version {json.dumps(version)} (expected 1)"
         )
     params: list[ClassicParam] = []
     seen: set[str] = set()
@@ -154,6 +158,12 @@ def _parse_classic(where: str) -> list[ClassicParam]:
         name, kind = entry.get("name"), entry.get("type")
         if not isinstance(name, str) or not name or len(name) > 16:
             raise ClassicParamsError(f"{where_entry}: 'name' must be 1 to 16 characters")
+        if not (name[0] in _NAME_START and all(c in _NAME_REST for c in name)):
+            # What names a parameter everywhere else (the store, MAVLink, the output files)
+            raise ClassicParamsError(
+                f"{where_entry}: 'name' {json.dumps(name)} is not a PX4 parameter name "
+                "(upper-case letters, digits and '_', a letter first)"
+            )
         if kind not in _TYPES:
             raise ClassicParamsError(
                 f"{where_entry} ({name}): 'type' {kind!r} is not Int32 or Float"
