@@ -359,11 +359,11 @@ BAD_PARAM = [
     ),
     (["add", "NOPE"], "unknown parameter 'NOPE'"),
     (["add", "INA283"], "unknown parameter 'INA283' (did you mean: INA238"),
-    (["add", "SYS_AUTOSTART"], "SYS_AUTOSTART: a shared parameter has no instances to add"),
+    (["add", "SYS_AUTOSTART"], "SYS_AUTOSTART: a classic parameter has no instances to add"),
     (["add", "INA238#0[4]"], "add takes an instance, not a leaf: INA238#0[4]"),
     (["add", "INA238#x"], "'INA238#x' is not a parameter name"),
     (["rm", "INA238#3"], "INA238#3: instance does not exist (add it first: param add)"),
-    (["rm", "SYS_AUTOSTART"], "SYS_AUTOSTART: a shared parameter has no instances to remove"),
+    (["rm", "SYS_AUTOSTART"], "SYS_AUTOSTART: a classic parameter has no instances to remove"),
     (
         ["set", "INA238#0", '{"shunt": 0.001, "shunt": 0.002}'],
         "INA238#0: the key 'shunt' is given twice in one object",

@@ -166,7 +166,7 @@ BAD = [
         "add",
         ("SYS_AUTOSTART",),
         InstanceError,
-        "SYS_AUTOSTART: a shared parameter has no instances to add",
+        "SYS_AUTOSTART: a classic parameter has no instances to add",
     ),
     ("add", ("INA238#0[4]",), InstanceError, "add takes an instance, not a leaf: INA238#0[4]"),
     (
@@ -843,7 +843,7 @@ def test_removing_refuses_leaves_and_shared_parameters(store: px4params.Store) -
     with pytest.raises(InstanceError, match=r"^rm takes an instance, not a leaf: INA238#0\[4\]$"):
         store.remove("INA238#0[4]")
     with pytest.raises(
-        InstanceError, match=r"^SYS_AUTOSTART: a shared parameter has no instances to remove$"
+        InstanceError, match=r"^SYS_AUTOSTART: a classic parameter has no instances to remove$"
     ):
         store.remove("SYS_AUTOSTART")
     assert store.instances("INA238") == ["INA238#0"]
@@ -1157,7 +1157,7 @@ def test_a_type_ending_in_a_variable_array_is_kept_whole(tmp_path: Path) -> None
         ("get", "INA238", "INA238 has instances: name one, e.g. INA238#0"),
         ("get", "ZZZZ", "unknown parameter 'ZZZZ'"),
         ("add", "INA238#0[4]", "add takes an instance, not a leaf: INA238#0[4]"),
-        ("add", "SYS_AUTOSTART", "SYS_AUTOSTART: a shared parameter has no instances to add"),
+        ("add", "SYS_AUTOSTART", "SYS_AUTOSTART: a classic parameter has no instances to add"),
     ],
 )  # fmt: skip
 def test_naming_errors_word_for_word(store: px4params.Store, call, name, message) -> None:

@@ -249,7 +249,7 @@ class Store:
         if key.leaf is not None:
             raise InstanceError(f"add takes an instance, not a leaf: {name}")
         if p.shared:
-            raise InstanceError(f"{p.name}: a shared parameter has no instances to add")
+            raise InstanceError(f"{p.name}: {_one_value(p)} has no instances to add")
         number = self._native.add(p.index, key.instance)
         return self._instance_name(p, number)
 
@@ -259,7 +259,7 @@ class Store:
         if key.leaf is not None:
             raise InstanceError(f"rm takes an instance, not a leaf: {name}")
         if p.shared:
-            raise InstanceError(f"{p.name}: a shared parameter has no instances to remove")
+            raise InstanceError(f"{p.name}: {_one_value(p)} has no instances to remove")
         self._native.remove(p.index, instance)
 
     def instances(self, param: str | Key) -> list[str]:
@@ -640,6 +640,11 @@ class Store:
 
     def __repr__(self) -> str:
         return f"<Store {len(list(self.names()))} instances of {len(self._order)} parameters>"
+
+
+def _one_value(p: _Param) -> str:
+    """What a parameter without instances is: a classic one or a shared structured one."""
+    return "a classic parameter" if p.classic is not None else "a shared parameter"
 
 
 def _steps(path: str) -> list[str | int]:
