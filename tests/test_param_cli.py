@@ -928,3 +928,34 @@ def test_a_command_whose_output_cannot_be_written_says_its_change_was_saved(
         1,
         "px4params: error: cannot write the output: No space left on device\n",
     )
+
+
+def test_classic_values_of_another_parameter_set_are_said_where_they_are_left_out(
+    store: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # A store saved with a full parameters.json holds MPC_XY_VEL_MAX; opened with the bundled
+    # set (no --classic), export wrote a backup without it, status did not count it and
+    # reset_all left it set, each without a word (load said "kept unchanged").
+    full = tmp_path / "full.json"
+    entry = {"name": "MPC_XY_VEL_MAX", "type": "Float", "default": 12.0}
+    full.write_text(json.dumps({"version": 1, "parameters": [entry]}))
+    assert param(capsys, "--classic", str(full), "set", "MPC_XY_VEL_MAX", "8")[0] == 0
+    note = (
+        "MPC_XY_VEL_MAX (not in this parameter set: give --classic the parameters.json that has it)"
+    )
+    backup = tmp_path / "backup.params"
+    code, _, err = param(capsys, "export", str(backup))
+    assert (code, err) == (
+        0,
+        f"px4params: warning: 1 classic value of the store not written to {backup}: {note}\n",
+    )
+    assert "MPC_XY_VEL_MAX" not in backup.read_text()
+    out = param(capsys, "status")[1]
+    assert "classic values of another parameter set, kept: 1 (MPC_XY_VEL_MAX)\n" in out
+    assert json.loads(param(capsys, "status", "--json")[1])["kept_classic"] == 1
+    code, _, err = param(capsys, "reset_all")
+    assert (code, err) == (
+        0,
+        f"px4params: warning: 1 classic value of the store kept, not reset: {note}\n",
+    )
+    assert param(capsys, "--classic", str(full), "show", "-q", "MPC_XY_VEL_MAX")[1] == "8\n"

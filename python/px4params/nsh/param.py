@@ -443,7 +443,22 @@ def verb_reset_all(s: Session, a: argparse.Namespace) -> int:
             if key not in keep:
                 s.store.reset(key)
     s.done()
+    _say_kept_classic(s.store, "kept, not reset")
     return EXIT_OK
+
+
+def _say_kept_classic(store: Store, what: str) -> None:
+    """Warns of the store's classic values this parameter set lacks (``Store.kept_classic``),
+    which a command that goes over every value leaves out."""
+    kept = store.kept_classic
+    if kept:
+        many = len(kept) > 1
+        print(
+            f"px4params: warning: {len(kept)} classic value{'s' if many else ''} of the store "
+            f"{what}: {', '.join(kept)} (not in this parameter set: give --classic the "
+            f"parameters.json that has {'them' if many else 'it'})",
+            file=sys.stderr,
+        )
 
 
 def verb_touch(s: Session, a: argparse.Namespace) -> int:
@@ -467,6 +482,8 @@ def verb_save(s: Session, a: argparse.Namespace) -> int:
     def write() -> None:
         size = paramfile.write(s.store, file) if text else s.store.save(file)
         print(f"saved {file} ({size} bytes)", file=s.out)
+        if text:  # (a store file keeps them)
+            _say_kept_classic(s.store, f"not written to {file}")
 
     s.write_later(write)
     return EXIT_OK
@@ -532,6 +549,7 @@ def verb_export(s: Session, a: argparse.Namespace) -> int:
     def write() -> None:
         size = paramfile.write(s.store, file)
         print(f"wrote {file} ({size} bytes)", file=s.out)
+        _say_kept_classic(s.store, f"not written to {file}")
 
     s.write_later(write)
     return EXIT_OK
@@ -549,6 +567,7 @@ def verb_status(s: Session, a: argparse.Namespace) -> int:
         "classic_parameters": len(store.parameters) - len(store.specs),
         "instances": len(instances),
         "changed": len(store.changed()),
+        "kept_classic": len(store.kept_classic),
         "reserved_slots": slots,
         "reserved_bytes": size,
     }
@@ -564,6 +583,12 @@ def verb_status(s: Session, a: argparse.Namespace) -> int:
     )
     print(f"instances: {len(instances)} ({', '.join(map(str, instances)) or 'none'})", file=s.out)
     print(f"changed from defaults: {status['changed']}", file=s.out)
+    if store.kept_classic:
+        print(
+            f"classic values of another parameter set, kept: {len(store.kept_classic)} "
+            f"({', '.join(store.kept_classic)})",
+            file=s.out,
+        )
     print(f"memory reserved: {size} bytes in {slots} slots", file=s.out)
     return EXIT_OK
 

@@ -153,6 +153,13 @@ class Store:
         self._foreign: dict[str, bytes] = {}
 
     @property
+    def kept_classic(self) -> list[str]:
+        """Classic parameters of a loaded file that this store's set lacks (another
+        ``--classic`` parameters.json): their values are kept and saved with the store, but no
+        command of this set shows, exports or resets them."""
+        return sorted(self._foreign)
+
+    @property
     def destructured(self) -> FlatMap:
         """The destructured (flat, MAVLink) names of this store's parameters."""
         if self._destructured is None:
