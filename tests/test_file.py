@@ -300,16 +300,21 @@ def test_a_translated_value_takes_new_fields_from_the_instances_default(
     assert store.get("INA238#0.shunt") == pytest.approx(0.001, rel=1e-3)
 
 
+def acme_store(tmp_path: Path, files: dict[str, str]) -> px4params.Store:
+    """A store of the bundled types and ACME's DSDL ``files`` (name: text), no classic ones."""
+    root = tmp_path / "acme"
+    root.mkdir()
+    for name, text in files.items():
+        (root / name).write_text(text)
+    return px4params.Store(px4params.load_schema([str(root)], use_env=False), classic=[])
+
+
 def test_a_shared_parameter_is_loaded_without_instances(tmp_path: Path) -> None:
     """A parameter shared by all instances (``@param`` without ``@max_instances``) is stored as
     instance 0 and loads into its one value."""
-    root = tmp_path / "acme"
-    root.mkdir()
-    (root / "GadgetShared.1.0.dsdl").write_text(
-        "# @param GADGET_SHARED\n\nuint8 gain\n# @default 3\n\n@sealed\n"
-    )
-    schema = px4params.load_schema([str(root)], use_env=False)
-    store = px4params.Store(schema, classic=[])
+    gadget = "# @param GADGET_SHARED\n\nuint8 gain\n# @default 3\n\n@sealed\n"
+    store = acme_store(tmp_path, {"GadgetShared.1.0.dsdl": gadget})
+    schema = store.schema
     store.set("GADGET_SHARED.gain", 9)
     path = tmp_path / "g.store"
     store.save(path)
@@ -480,13 +485,9 @@ def test_a_value_beyond_its_max_stored_with_force_loads_as_written(
 def test_a_nan_in_a_last_array_is_found_where_it_is(tmp_path: Path) -> None:
     # Stored values are encoded without tail array optimization: the check reads them so (read
     # with it, the length prefix is taken for the array's first bits).
-    root = tmp_path / "acme"
-    root.mkdir()
-    (root / "Probe.1.0.dsdl").write_text(
-        "# @param PROBE\n# @max_instances 2\nuint8 gain\nfloat32[<=3] cal\n@sealed\n"
-    )
-    schema = px4params.load_schema([str(root)], use_env=False)
-    store = px4params.Store(schema, classic=[])
+    probe = "# @param PROBE\n# @max_instances 2\nuint8 gain\nfloat32[<=3] cal\n@sealed\n"
+    store = acme_store(tmp_path, {"Probe.1.0.dsdl": probe})
+    schema = store.schema
     lines = table_lines(store.specs)
     index = lines.index("PROBE=acme.Probe.1")
 

@@ -989,12 +989,10 @@ def test_resetting_a_union_tag_brings_back_the_defaults_variant_with_its_values(
 
 
 def test_resetting_an_array_length_brings_back_the_defaults_elements(tmp_path: Path) -> None:
-    root = tmp_path / "acme"
-    root.mkdir()
-    (root / "Probe.1.0.dsdl").write_text(
-        "# @param PROBE\n# @max_instances 2\nuint8 gain\nuint8[<=3] cal\n@sealed\n"
-    )
-    store = px4params.Store(px4params.load_schema([str(root)], use_env=False), classic=[])
+    from test_file import acme_store
+
+    probe = "# @param PROBE\n# @max_instances 2\nuint8 gain\nuint8[<=3] cal\n@sealed\n"
+    store = acme_store(tmp_path, {"Probe.1.0.dsdl": probe})
     store.add("PROBE#0")
     store.set_default("PROBE#0", {"gain": 1, "cal": [7]})
     store.set("PROBE#0", {"gain": 4, "cal": [1, 2, 3]})
