@@ -508,7 +508,10 @@ def test_batch_decode_one_bad_line(run: Cli) -> None:
     first, third = json.loads(first), json.loads(third)
     assert (first["current"], third["shunt"]) == (200, "nan")
     assert proc.stderr.splitlines() == [
-        "px4params: <stdin>:2: not hex bytes: 'xyz' (expected e.g. 'daef7c00')"
+        "px4params: <stdin>:2: not hex bytes: 'xyz' (expected e.g. 'daef7c00')",
+        # the third line's p_version is 0: px.Ina238.1.0's data
+        "px4params: warning: p_version 0: the data was written by px.Ina238.1.0, and is "
+        "decoded with px.Ina238.1.1's layout",
     ]
 
 
@@ -1204,3 +1207,17 @@ def test_encode_fills_missing_fields_on_request() -> None:
 
     message = dronecan.uavcan.equipment.power.BatteryInfo(voltage=12.5)
     assert bytes.fromhex(filled.stdout.strip()) == pack(message, tao=True)
+
+
+def test_decoding_another_minor_versions_data_says_so(capsys: pytest.CaptureFixture[str]) -> None:
+    # p_version 2 was shown as decoded, and encode then refused the value it printed.
+    code, out, err = main_out(["decode", "px.Ina238", "20031720ea0c"], capsys)
+    assert code == 0 and json.loads(out)["p_version"] == 2
+    assert err == (
+        "px4params: warning: p_version 2: the data was written by px.Ina238.1.2, and is decoded "
+        "with px.Ina238.1.1's layout\n"
+    )
+    hex_of_today = main_out(
+        ["encode", "px.Ina238", out.strip().replace('"p_version": 2, ', "")], capsys
+    )[1]
+    assert main_out(["decode", "px.Ina238", hex_of_today.strip()], capsys)[2] == ""

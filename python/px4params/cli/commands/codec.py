@@ -169,7 +169,16 @@ def cmd_decode(args: argparse.Namespace) -> int:
     t = find_type(_schema(args), args.type)
 
     def convert(text: str) -> str:
-        return value_json(t.decode(parse_hex(text), tao=not args.no_tao))
+        value = t.decode(parse_hex(text), tao=not args.no_tao)
+        written = value.get("p_version") if isinstance(value, dict) else None
+        if t.version is not None and written is not None and written != t.version[1]:
+            # Another minor version's layout read as this one's: encode refuses it back.
+            print(
+                f"px4params: warning: p_version {written}: the data was written by "
+                f"{t.name}.{t.version[0]}.{written}, and is decoded with {t.key}'s layout",
+                file=sys.stderr,
+            )
+        return value_json(value)
 
     return _each_item(args.hex, sys.stdin, sys.stdout, convert)
 
