@@ -781,3 +781,17 @@ def test_a_leaf_index_out_of_every_range_is_a_leaf_error(
         ina.get_leaf(data, index)
     with pytest.raises(LeafError):
         ina.set_leaf(data, index, 1)
+
+
+def test_a_part_of_a_decoded_value_is_found_and_replaced_by_its_leaf_path() -> None:
+    from px4params.dsdl.schema import path_steps, put_at, value_at
+
+    value = {"cells": [{"volts": 3.7}, {"volts": 3.8}], "bus": {"i2c": {"address": 69}}}
+    assert path_steps("cells[1].volts") == ["cells", 1, "volts"]
+    assert path_steps("m[0][2]") == ["m", 0, 2] and path_steps("") == []
+    assert value_at(value, "cells[1].volts") == 3.8 and value_at(value, "") is value
+    # what the value has not: a variant not selected, an index past the end
+    assert value_at(value, "bus.spi.bus_id") is None and value_at(value, "cells[2]") is None
+    put_at(value, "bus", {"spi": {"bus_id": 1}})
+    put_at(value, "cells[0].volts", 4.2)
+    assert value == {"cells": [{"volts": 4.2}, {"volts": 3.8}], "bus": {"spi": {"bus_id": 1}}}

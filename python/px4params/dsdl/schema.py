@@ -326,3 +326,35 @@ def to_json_value(value: Any) -> Any:
     if isinstance(value, list):
         return [to_json_value(v) for v in value]
     return value
+
+
+# -- parts of decoded values, by the leaf paths DataType.leaves writes --------------------------
+
+
+def path_steps(path: str) -> list[str | int]:
+    """``cells[3].volts`` -> ``["cells", 3, "volts"]``: a leaf path's field names and indices."""
+    steps: list[str | int] = []
+    for part in path.split(".") if path else []:
+        name, *indices = part.replace("]", "").split("[")
+        steps += [name, *map(int, indices)] if name else list(map(int, indices))
+    return steps
+
+
+def value_at(value: Any, path: str) -> Any:
+    """The part of a decoded value at ``path`` (the whole value for ``""``); None where the value
+    has no such part (a union variant not selected, an index past an array's end)."""
+    for step in path_steps(path):
+        if isinstance(step, int):
+            value = value[step] if isinstance(value, list) and step < len(value) else None
+        else:
+            value = value.get(step) if isinstance(value, dict) else None
+    return value
+
+
+def put_at(value: Any, path: str, part: Any) -> None:
+    """Replaces the part of a decoded value at ``path``, which it has (not ``""``: the root is
+    no part)."""
+    *above, last = path_steps(path)
+    for step in above:
+        value = value[step]
+    value[last] = part

@@ -32,7 +32,7 @@ from collections.abc import Mapping
 from px4params import writing
 from px4params._native import check_store_file
 from px4params._records import TYPE_CHECKING
-from px4params.dsdl.schema import DataType
+from px4params.dsdl.schema import DataType, value_at
 from px4params.errors import (
     OutputFileError,
     Px4ParamsError,
@@ -320,17 +320,10 @@ def _current(
         line += f"; new, from defaults: {', '.join(new)}"
     if dropped:
         old = store.schema[old_key].decode(payload, tao=False)
-        shown = [f"{path}={_shown(_value_at(old, path))}" for path in dropped]
+        shown = [f"{path}={_shown(value_at(old, path))}" for path in dropped]
         line += f"; dropped: {', '.join(shown)}"
     report.append(line)
     return data
-
-
-def _value_at(value: Any, path: str) -> Any:
-    """The part of a decoded value at a dotted path of field and variant names."""
-    for name in path.split("."):
-        value = value.get(name) if isinstance(value, dict) else None
-    return value
 
 
 def _shown(value: Any) -> str:

@@ -25,7 +25,7 @@ from collections.abc import Iterator, Mapping, Sequence
 from px4params import _native
 from px4params._records import TYPE_CHECKING
 from px4params.cache_file import cache_path, default_cache_dir, read_cached, write_cached
-from px4params.dsdl.schema import DataType, Leaf, Schema, load_schema
+from px4params.dsdl.schema import DataType, Leaf, Schema, load_schema, put_at, value_at
 from px4params.errors import (
     InstanceError,
     LeafError,
@@ -559,7 +559,7 @@ class Store:
             if not parent:  # the value itself is the union
                 self.set(whole, default_value)
                 return
-            _put_at(value, parent, _at(default_value, parent))
+            put_at(value, parent, value_at(default_value, parent))
             self.set(whole, value)
             return
         try:
@@ -652,30 +652,6 @@ class Store:
 def _one_value(p: _Param) -> str:
     """What a parameter without instances is: a classic one or a shared structured one."""
     return "a classic parameter" if p.classic is not None else "a shared parameter"
-
-
-def _steps(path: str) -> list[str | int]:
-    """``cells[3].volts`` -> ``["cells", 3, "volts"]`` (a leaf path's fields and indices)."""
-    steps: list[str | int] = []
-    for part in path.split(".") if path else []:
-        name, *indices = part.replace("]", "").split("[")
-        steps += [name, *map(int, indices)] if name else list(map(int, indices))
-    return steps
-
-
-def _at(value: Any, path: str) -> Any:
-    """The part of a decoded value at ``path`` (the whole value for ``""``)."""
-    for step in _steps(path):
-        value = value[step]
-    return value
-
-
-def _put_at(value: Any, path: str, part: Any) -> None:
-    """Replaces the part of a decoded value at ``path`` (not empty: the root is no part)."""
-    *above, last = _steps(path)
-    for step in above:
-        value = value[step]
-    value[last] = part
 
 
 def _changed_leaves(leaves: list[Leaf], before: list[Leaf]) -> list[Leaf]:

@@ -8,7 +8,7 @@ from collections.abc import Callable, Iterator, Sequence
 from px4params._records import TYPE_CHECKING
 from px4params.cli.options import dsdl_option
 from px4params.cli.parsing import ArgumentParser, RawDescriptionHelpFormatter
-from px4params.dsdl.schema import DataType, Schema, load_schema, to_json_value
+from px4params.dsdl.schema import DataType, Schema, load_schema, to_json_value, value_at
 from px4params.errors import CommandError, EncodeError, NumberError, Px4ParamsError
 from px4params.numbers import abbreviated, dump_json, load_json
 from px4params.status import EXIT_FAILED, EXIT_OK
@@ -250,7 +250,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
         shown = f"{value:.7g}" if isinstance(value, float) else str(value)
         if leaf.path.endswith("._tag"):
             union = leaf.path.removesuffix("._tag")
-            variant = next(iter(_at_path(t.decode(data), union)))
+            variant = next(iter(value_at(t.decode(data), union)))
             shown += f" ({variant})"
         elif (
             isinstance(value, int) and not isinstance(value, bool) and leaf.path.endswith("address")
@@ -263,12 +263,6 @@ def cmd_demo(args: argparse.Namespace) -> int:
         f"golden vector (0xBEDA:uint12, -1:int3, -5:int4, -1:int2, 0x88:uint4): {golden.hex(' ')}"
     )
     return EXIT_OK
-
-
-def _at_path(value: Any, path: str) -> Any:
-    for part in path.split("."):
-        value = value[part]
-    return value
 
 
 def schema_golden_vector() -> bytes:
