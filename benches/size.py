@@ -46,8 +46,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 # Ceilings of the compact build's .text, by target triple (None: the host).
 TARGETS: dict[str | None, dict[str, int | None]] = {
-    None: {"codec": 5376, "core": 12704, "all": None},
-    "thumbv7em-none-eabihf": {"codec": 4512, "core": 9888, "all": None},
+    None: {"codec": 5376, "core": 12928, "all": None},
+    "thumbv7em-none-eabihf": {"codec": 4512, "core": 10016, "all": None},
 }
 
 PROBE_TOML = """\

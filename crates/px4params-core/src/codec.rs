@@ -147,8 +147,9 @@ pub fn decode_leaves_with<P: Plans, R: BitRead + ?Sized>(
 }
 
 /// Checks that `data` is exactly one value of `root` stored without tail array optimization
-/// (as the store keeps values) whose `p_version` fields hold the type's version, with the
-/// build's [`crate::plan::Active`] plans: see [`check_stored_with`].
+/// (as the store keeps values) whose `p_version` fields hold the type's version and whose
+/// floats are finite (a store keeps no NaN or infinity), with the build's
+/// [`crate::plan::Active`] plans: see [`check_stored_with`].
 pub fn check_stored(
     layout: &Layout<'_>,
     root: NodeId,
@@ -175,10 +176,11 @@ pub fn check_stored_with<P: Plans>(
             return Ok(());
         }
     }
-    walk::check_versions(layout, root, data)
+    walk::check_stored(layout, root, data)
 }
 
-/// A sink that keeps nothing and refuses `p_version` fields that differ from the version.
+/// A sink that keeps nothing and refuses `p_version` fields that differ from the version, and
+/// NaNs and infinities.
 struct VersionCheck<'l, 'a> {
     layout: &'l Layout<'a>,
 }
@@ -188,6 +190,9 @@ impl Sink for VersionCheck<'_, '_> {
     type Error = ();
 
     fn scalar(&mut self, value: Scalar, at: At<'_>) -> Result<(), ()> {
+        if let Scalar::Float(v) = value {
+            return if v.is_finite() { Ok(()) } else { Err(()) };
+        }
         if let Some(Step::Field(f)) = at.path.last() {
             if let Some(Role::Version(expected)) =
                 self.layout.fields.get(f as usize).map(|f| f.role)

@@ -360,6 +360,15 @@ impl<E: fmt::Display> fmt::Display for ErrorKind<E> {
                 f.write_str(")")
             }
             Self::Scalar(ScalarError::WrongKind { expected }) => write!(f, "expected {expected}"),
+            Self::Scalar(ScalarError::NotFinite { value }) => {
+                f.write_str("value ")?;
+                fmt_scalar(f, value)?;
+                match value {
+                    Scalar::Float(v) if !v.is_finite() => f.write_str(" is not a finite number")?,
+                    _ => f.write_str(" becomes an infinity in this field")?,
+                }
+                f.write_str(" (a store keeps no NaN or infinity)")
+            }
             Self::MissingField => f.write_str("missing field"),
             Self::VersionMismatch { given, expected } => {
                 f.write_str("p_version is set automatically; got ")?;

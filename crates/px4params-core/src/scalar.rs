@@ -41,6 +41,13 @@ pub enum ScalarError {
         /// What the field holds.
         expected: &'static str,
     },
+    /// A value a store would keep as a NaN or an infinity: a non-finite float, or a finite
+    /// one a truncated float field turns into an infinity. Stores keep finite numbers only
+    /// (the codec itself encodes both).
+    NotFinite {
+        /// The value, as given or read.
+        value: Scalar,
+    },
 }
 
 /// The largest finite float16 value.
@@ -310,6 +317,19 @@ fn sign_extend_halves(raw: u64, bits: u32) -> i64 {
         let shift = 32 - bits;
         i64::from(((raw as u32 as i32) << shift) >> shift)
     }
+}
+
+/// Whether raw float bits of 16, 32 or 64 bits are a finite number: their exponent is not all
+/// ones, which marks infinities and NaNs. (Masks at fixed places, in 32 bits: a 64-bit shift
+/// by a variable amount is a routine call on 32-bit cores.)
+#[inline]
+pub fn raw_is_finite(raw: u64, bits: u32) -> bool {
+    let (word, exponent) = match bits {
+        16 => (raw as u32, 0x7C00),
+        32 => (raw as u32, 0x7F80_0000),
+        _ => ((raw >> 32) as u32, 0x7FF0_0000),
+    };
+    word & exponent != exponent
 }
 
 /// Decodes raw float bits of 16, 32 or 64 bits.

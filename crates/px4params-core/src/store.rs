@@ -27,10 +27,10 @@ use core::fmt;
 use crate::bits::write_bits;
 use crate::codec::{self, EncodeOptions, LeafKind, Source};
 use crate::error::{Error, ErrorKind, Path, Step};
-use crate::layout::{Layout, NodeId, Role};
+use crate::layout::{Kind, Layout, NodeId, Role};
 use crate::leaf::{self, Leaf, Position, Target};
 use crate::plan::{Active, Plans};
-use crate::scalar::{self, Scalar};
+use crate::scalar::{self, Scalar, ScalarError};
 use crate::table::{LeafSlot, LeafTable, UNRESOLVED};
 
 /// The most leaves resolved per instance value or default ([`table_slots`]): later leaves are
@@ -725,7 +725,8 @@ where
     /// Writes a leaf of an instance's value or default. A primitive leaf is written in place;
     /// a union tag or array length re-encodes the value (see [`leaf::set_leaf`]). Writing a
     /// default also writes the value when the value was equal to the old default, as PX4's
-    /// `param set-default` does.
+    /// `param set-default` does. A value the leaf would keep as a NaN or an infinity is refused
+    /// ([`ScalarError::NotFinite`]).
     #[allow(clippy::too_many_arguments)] // one call names one leaf of one instance: all needed
     pub fn set_leaf(
         &mut self,
@@ -778,7 +779,7 @@ where
                 bit_offset,
                 kind: LeafKind::Scalar(kind),
                 ..
-            }) => match codec::scalar_raw(kind, value, saturate) {
+            }) => match stored_raw(kind, value, saturate) {
                 Ok(raw) => (bit_offset, Some((kind, raw))),
                 // Find the field path for the error.
                 Err(e) => {
@@ -797,7 +798,7 @@ where
                 }
                 let scalar = match found.kind {
                     LeafKind::Scalar(kind) => {
-                        let raw = codec::scalar_raw(kind, value, saturate).map_err(|e| Error {
+                        let raw = stored_raw(kind, value, saturate).map_err(|e| Error {
                             kind: ErrorKind::Scalar(e),
                             bit_offset: found.bit_offset,
                             path: found.path,
@@ -877,6 +878,17 @@ where
         if is_version(layout, &found.path) {
             return Err(StoreError::VersionLeaf { path: found.path });
         }
+        if let LeafKind::Scalar(kind) = found.kind {
+            if let Err(e) = stored_raw(kind, value, saturate) {
+                let (bit_offset, path) = (found.bit_offset, found.path);
+                let kind = ErrorKind::Scalar(e);
+                return Err(StoreError::Codec(Error {
+                    kind,
+                    bit_offset,
+                    path,
+                }));
+            }
+        }
         let options = EncodeOptions { saturate, ..STORED };
         let new_len = leaf::set_located(layout, def.root, data, found, value, out, options)?;
         self.commit(param, def, instance, which, new_len);
@@ -884,7 +896,8 @@ where
     }
 
     /// Writes a whole value or default from `source` (which may leave out `p_version` fields:
-    /// they are filled in; given, they must equal the type's version).
+    /// they are filled in; given, they must equal the type's version). A NaN or an infinity is
+    /// refused, as [`Store::set_encoded`] refuses it.
     pub fn set_from<Src: Source>(
         &mut self,
         layout: &Layout<'_>,
@@ -900,12 +913,16 @@ where
         let options = EncodeOptions { saturate, ..STORED };
         let out = self.bytes_mut(self.scratch, def.slot_bytes as usize);
         let len = codec::encode(layout, def.root, source, out, options)?;
+        // What the source gave passes the check a stored value passes (finite floats).
+        let encoded = self.bytes.as_ref().get(self.scratch..self.scratch + len);
+        check_encoded(layout, def.root, encoded.unwrap_or_default()).map_err(StoreError::widen)?;
         self.commit(param, &def, instance, which, len);
         Ok(())
     }
 
     /// Writes a whole encoded value or default (without tail array optimization), after
-    /// checking that it decodes completely and that its `p_version` fields hold the version.
+    /// checking that it decodes completely, that its `p_version` fields hold the version and
+    /// that its floats are finite (a store keeps no NaN or infinity).
     pub fn set_encoded(
         &mut self,
         layout: &Layout<'_>,
@@ -1346,8 +1363,21 @@ fn is_version(layout: &Layout<'_>, path: &Path) -> bool {
     }
 }
 
+/// The raw bits of `value` in a leaf of `kind`, as [`codec::scalar_raw`] casts it, refused
+/// where they would be a NaN or an infinity: a store keeps finite numbers only (a NaN shunt
+/// is a battery monitor that reads nothing).
+fn stored_raw(kind: Kind, value: Scalar, saturate: bool) -> core::result::Result<u64, ScalarError> {
+    let raw = codec::scalar_raw(kind, value, saturate)?;
+    match kind {
+        Kind::Float { bits, .. } if !scalar::raw_is_finite(raw, bits.into()) => {
+            Err(ScalarError::NotFinite { value })
+        }
+        _ => Ok(raw),
+    }
+}
+
 /// Checks that `data` is exactly one stored value of `root` whose `p_version` fields hold the
-/// version. In line, so that the codec's error becomes the store's where it is returned.
+/// version and whose floats are finite. In line, so that the codec's error becomes the store's where it is returned.
 #[inline(always)]
 fn check_encoded(layout: &Layout<'_>, root: NodeId, data: &[u8]) -> Result<()> {
     codec::check_stored(layout, root, data).map_err(StoreError::Codec)

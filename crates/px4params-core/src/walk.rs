@@ -6,7 +6,7 @@
 //! path names ([`locate_by`], for hosts and firmware alike: the union tags, array lengths and
 //! tail arrays on the way are the loop's to read), rewriting a value with a new union tag or
 //! array length ([`transcode`]), a type's default
-//! ([`encode_default`]), checking a stored value's `p_version` fields ([`check_versions`]) and
+//! ([`encode_default`]), checking a stored value's `p_version` fields and floats ([`check_stored`]) and
 //! translating a value of an older type version ([`translate`]). Firmware builds (feature
 //! `compact`) do all of these through this one interpreter of the DroneCAN rules, which is
 //! why it is here: one walk in the code instead of one per operation.
@@ -539,34 +539,36 @@ pub fn encode_default(
 }
 
 /// Checks that `data` is exactly one value of `root` stored without tail array optimization
-/// whose `p_version` fields hold the type's version.
-pub fn check_versions(
+/// whose `p_version` fields hold the type's version and whose floats are finite.
+pub fn check_stored(
     layout: &Layout<'_>,
     root: NodeId,
     data: &[u8],
 ) -> Result<(), Error<Infallible>> {
-    struct Versions(Scalar, u32);
-    impl Visit for Versions {
+    /// The leaf refused: a version given and the one expected, or a float not finite (`None`).
+    struct Stored(Scalar, Option<u32>);
+    impl Visit for Stored {
         fn leaf(&mut self, at: &LeafAt<'_>, old: Option<Scalar>) -> Result<Option<Scalar>, Halt> {
-            match (at.version, old) {
+            *self = match (at.version, old) {
                 (Some(expected), Some(given)) if !scalar::same_integer(given, expected) => {
-                    *self = Versions(given, expected);
-                    Err(Halt::Refused)
+                    Stored(given, Some(expected))
                 }
-                _ => Ok(None),
-            }
+                (_, Some(value @ Scalar::Float(v))) if !v.is_finite() => Stored(value, None),
+                _ => return Ok(None),
+            };
+            Err(Halt::Refused)
         }
 
         fn refusal(&self) -> ErrorKind<LeafError> {
-            ErrorKind::VersionMismatch {
-                given: self.0,
-                expected: self.1,
+            match *self {
+                Stored(given, Some(expected)) => ErrorKind::VersionMismatch { given, expected },
+                Stored(value, None) => ErrorKind::Scalar(ScalarError::NotFinite { value }),
             }
         }
     }
     let bits = Bits(data);
     let job = Job::reading(&bits, false, Steer::No);
-    let end = match run(layout, root, job, &mut Versions(Scalar::Uint(0), 0)) {
+    let end = match run(layout, root, job, &mut Stored(Scalar::Uint(0), None)) {
         Ok(walked) => walked.read,
         Err(e) => return Err(plain(e)),
     };

@@ -550,3 +550,104 @@ fn errors_name_a_parameter_by_the_name_given_or_by_its_number() {
         assert_eq!(error.display_named(&layout, &names).to_string(), by_name);
     }
 }
+
+/// A store keeps finite numbers only, as the Python store and its file loader do: a NaN or an
+/// infinity is refused by every write (a leaf, a whole value, encoded bytes, a type default),
+/// naming the leaf, and nothing is written. (Firmware's writes go through the same calls: the
+/// C ABI's `px4p_store_set`, `px4p_store_set_leaf` and load.)
+#[test]
+fn a_nan_or_an_infinity_is_refused_by_every_write_and_nothing_is_written() {
+    let mut f = fixture();
+    let layout = f.layout.as_layout();
+    f.store.add(INA, Some(0)).unwrap();
+    let before = |s: &VecStore| {
+        let get = |which| s.get(INA, 0, which).unwrap().to_vec();
+        (
+            get(Which::Value),
+            get(Which::Default),
+            s.type_default(INA).unwrap().to_vec(),
+        )
+    };
+    let stored = before(&f.store);
+    let refused = |shown: &str| {
+        format!("shunt: value {shown} is not a finite number (a store keeps no NaN or infinity)")
+    };
+    let cases = [
+        (f64::NAN, "NaN", [0x00, 0x7e]),
+        (f64::INFINITY, "inf", [0x00, 0x7c]),
+        (-f64::INFINITY, "-inf", [0x00, 0xfc]),
+    ];
+    for (v, shown, bytes) in cases {
+        for which in [Which::Value, Which::Default] {
+            // Saturation asked or not: a cast never makes a NaN finite.
+            for saturate in [false, true] {
+                let shunt = Target::Path("shunt");
+                let e = f
+                    .store
+                    .set_leaf(&layout, INA, 0, which, shunt, Scalar::Float(v), saturate)
+                    .unwrap_err();
+                assert_eq!(message(&f, &e), refused(shown));
+            }
+            let mut leaves = [0, 0, 0, 1, 0x45, 200].map(Scalar::Uint).to_vec();
+            leaves.push(Scalar::Float(v));
+            let source = &mut LeafSource::new(&leaves);
+            let e = f.store.set_from(&layout, INA, 0, which, source, false);
+            assert_eq!(message(&f, &e.unwrap_err()), refused(shown));
+            // INA238 with the shunt (float16, its last two bytes, low byte first) as `v`.
+            let encoded = [0x00, 0x03, 0x17, 0x20, bytes[0], bytes[1]];
+            let e = f.store.set_encoded(&layout, INA, 0, which, &encoded);
+            assert_eq!(message(&f, &e.unwrap_err()), refused(shown));
+            let e = f.store.check_value(&layout, INA, &encoded);
+            assert_eq!(message(&f, &e.unwrap_err()), refused(shown));
+        }
+        let encoded = [0x00, 0x03, 0x17, 0x20, bytes[0], bytes[1]];
+        let e = f.store.set_type_default(&layout, INA, &encoded);
+        assert_eq!(message(&f, &e.unwrap_err()), refused(shown));
+        // A float16's largest finite value is kept.
+        let largest = [0x00, 0x03, 0x17, 0x20, 0xff, 0x7b];
+        f.store.check_value(&layout, INA, &largest).unwrap();
+    }
+    assert_eq!(before(&f.store), stored);
+}
+
+/// A truncated float field turns a finite number beyond its range into an infinity (the
+/// DroneCAN rule the codec keeps): a store refuses what it would keep as one, and takes the
+/// largest finite number.
+#[test]
+fn a_finite_number_a_truncated_float_makes_infinite_is_refused() {
+    let mut layout = OwnedLayout::default();
+    let f32_ = layout.float(32, px4params_core::Cast::Truncated).unwrap();
+    let f16 = layout.float(16, px4params_core::Cast::Truncated).unwrap();
+    let root = layout
+        .structure(&[
+            ("gain", f32_, px4params_core::layout::Role::Data),
+            ("trim", f16, px4params_core::layout::Role::Data),
+        ])
+        .unwrap();
+    let view = layout.as_layout();
+    let mut s = common::vec_store(&view, vec![ParamDef::shared(root)]);
+    let set = |s: &mut VecStore, path, v| {
+        let target = Target::Path(path);
+        let r = s.set_leaf(&view, 0, 0, Which::Value, target, Scalar::Float(v), false);
+        r.map_err(|e| e.display(&view).to_string())
+    };
+    let refused = |path: &str, shown: &str| {
+        format!(
+            "{path}: value {shown} becomes an infinity in this field (a store keeps no NaN or \
+             infinity)"
+        )
+    };
+    assert_eq!(
+        set(&mut s, "gain", 1e39),
+        Err(refused("gain", &format!("1{}", "0".repeat(39))))
+    );
+    assert_eq!(set(&mut s, "trim", 65505.0), Err(refused("trim", "65505")));
+    assert_eq!(s.get(0, 0, Which::Value).unwrap(), [0; 6]);
+    // The largest finite numbers are kept.
+    assert_eq!(set(&mut s, "gain", f64::from(f32::MAX)), Ok(()));
+    assert_eq!(set(&mut s, "trim", 65504.0), Ok(()));
+    assert_eq!(
+        s.get(0, 0, Which::Value).unwrap(),
+        [0xff, 0xff, 0x7f, 0x7f, 0xff, 0x7b]
+    );
+}

@@ -43,7 +43,8 @@
 // A shared parameter has no instances to add or remove.
 #define PX4P_ERR_SHARED -8
 
-// A value that does not decode as the parameter's type, or a leaf value out of range.
+// A value that does not decode as the parameter's type, a leaf value out of range, or a
+// NaN or an infinity (a store keeps none).
 #define PX4P_ERR_VALUE -9
 
 // No leaf with this index.

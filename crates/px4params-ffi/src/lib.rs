@@ -156,7 +156,8 @@ pub const PX4P_ERR_ALREADY_PRESENT: i32 = -6;
 pub const PX4P_ERR_FULL: i32 = -7;
 /// A shared parameter has no instances to add or remove.
 pub const PX4P_ERR_SHARED: i32 = -8;
-/// A value that does not decode as the parameter's type, or a leaf value out of range.
+/// A value that does not decode as the parameter's type, a leaf value out of range, or a
+/// NaN or an infinity (a store keeps none).
 pub const PX4P_ERR_VALUE: i32 = -9;
 /// No leaf with this index.
 pub const PX4P_ERR_NO_SUCH_LEAF: i32 = -10;

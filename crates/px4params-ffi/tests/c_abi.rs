@@ -884,3 +884,33 @@ fn a_value_of_an_older_minor_version_is_translated_on_load() {
     assert_eq!(last, ["u 1", "u 3", "u 9", "f -2"]);
     assert_eq!(get(s, SENS, 2, VALUE), Ok(SENS_ADDRESS_22.to_vec()));
 }
+
+/// A store keeps no NaN or infinity (the host's loader refuses a file with one): firmware's
+/// writes refuse them as the host's do, and so does load, leaving the store as it was. TRIM
+/// with gain NaN (float16 0x7E00) is `1B 90 00 FC`, with gain infinity (0x7C00) `1B 90 00 F8`.
+#[test]
+fn a_nan_or_an_infinity_is_refused_by_set_set_leaf_and_load() {
+    let s = opened();
+    let (nan_gain, infinite_gain) = ([0x1B, 0x90, 0x00, 0xFC], [0x1B, 0x90, 0x00, 0xF8]);
+    assert_eq!(set(s, TRIM, 0, VALUE, &nan_gain), PX4P_ERR_VALUE);
+    assert_eq!(set(s, TRIM, 0, DEFAULT, &infinite_gain), PX4P_ERR_VALUE);
+    assert_eq!(
+        set_leaf(s, TRIM, 0, VALUE, 3, float(f64::NAN), 0),
+        PX4P_ERR_VALUE
+    );
+    assert_eq!(
+        set_leaf(s, TRIM, 0, DEFAULT, 3, float(-f64::INFINITY), 1),
+        PX4P_ERR_VALUE
+    );
+    let file = store_file(
+        2,
+        &["TRIM=test.Last.1"],
+        &[&structured_record(0, 0, Some(&nan_gain))],
+    );
+    assert_eq!(name(load(s, &file)), name(PX4P_ERR_VALUE));
+    assert_eq!(get(s, TRIM, 0, VALUE), Ok(TRIM_DEFAULT.to_vec()));
+    assert_eq!(get(s, TRIM, 0, DEFAULT), Ok(TRIM_DEFAULT.to_vec()));
+    // The largest finite float16 is kept.
+    assert_eq!(set_leaf(s, TRIM, 0, VALUE, 3, float(65504.0), 0), 0);
+    assert_eq!(shown(leaf(s, TRIM, 0, VALUE, 3)), "f 65504");
+}
