@@ -362,7 +362,8 @@ def test_empty_and_disabled(tmp_path: Path, devtypes: devid.DevtypeTable) -> Non
         (b"ULog\x01\x12\x35\x01" + struct.pack("<Q", 0), "{path}: the log has no parameters"),
         (
             b"ULog\x01\x12\x35\x01" + struct.pack("<Q", 0) + b"\xff" * 5 + b"\x00garbage",
-            "{path}: not a readable ULog file ([Errno 22] Invalid argument)",
+            "{path}: not a readable ULog file (a damaged message before byte 29: pyulog stepped "
+            "back 65537 bytes over it, past the file's start)",
         ),
     ],
 )

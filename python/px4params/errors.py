@@ -295,6 +295,22 @@ class ReadBudgetExceeded(Exception):
     catches those and goes on."""
 
 
+class SeekBeforeStart(Exception):
+    """A library asked to move to before a file's first byte (pyulog steps back over a damaged
+    message by the size the message claims, which can be more than it read);
+    :func:`px4params.formats.ulog.parse` turns it into a :class:`ULogError` naming where.
+
+    Attributes:
+        position: the byte the library stood at.
+        offset: the move it asked for (negative).
+    """
+
+    def __init__(self, position: int, offset: int) -> None:
+        super().__init__(f"a seek by {offset} from byte {position}")
+        self.position = position
+        self.offset = offset
+
+
 class CommandError(Px4ParamsError):
     """A command that failed (a ``param`` verb, an airframe line, a CLI command): reported as
     one line, exit status 1."""

@@ -25,7 +25,7 @@ import struct
 from dataclasses import dataclass, field
 
 from px4params._records import TYPE_CHECKING
-from px4params.errors import ReadBudgetExceeded, ULogError
+from px4params.errors import ReadBudgetExceeded, SeekBeforeStart, ULogError
 from px4params.reading import ULOG, open_file
 
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
@@ -272,6 +272,11 @@ class _BudgetedFile:
         return data
 
     def seek(self, offset: int, whence: int = os.SEEK_SET) -> int:
+        # (The file's own error would be "[Errno 22] Invalid argument".)
+        position = self._file.tell()
+        start = {os.SEEK_SET: 0, os.SEEK_CUR: position}.get(whence)
+        if start is not None and start + offset < 0:
+            raise SeekBeforeStart(position, offset)
         return self._file.seek(offset, whence)
 
     def tell(self) -> int:
@@ -302,6 +307,11 @@ def parse(path: str | os.PathLike[str], topics: Sequence[str] | None) -> ULog:
         try:
             with contextlib.redirect_stdout(io.StringIO()):  # pyulog prints its warnings
                 return ULog(budgeted, message_name_filter_list=topics)
+        except SeekBeforeStart as e:
+            raise ULogError(
+                f"{where}: not a readable ULog file (a damaged message before byte {e.position}: "
+                f"pyulog stepped back {-e.offset} bytes over it, past the file's start)"
+            ) from None
         except ReadBudgetExceeded:
             raise ULogError(
                 f"{where}: not a readable ULog file (pyulog read more than {READ_BUDGET} times "
