@@ -74,7 +74,7 @@ VALUE_ERRORS: list[tuple[dict[str, Any], type[Exception], str]] = [
     (
         with_(f=-(10**309)),
         EncodeError,
-        f"t.T: f: value {-(10**309)} is out of range of a float64 (write inf or -inf for infinity)",
+        f"t.T: f: value {-(10**309)} is out of range of a float64 (at most ±1.8e308)",
     ),
     (with_(s=5), ValueShapeError, "t.T: s: expected a dict (struct), got int"),
     (with_(bytes=5), ValueShapeError, "t.T: bytes: expected a list (array), got int"),

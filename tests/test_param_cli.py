@@ -248,6 +248,35 @@ def test_a_negative_infinity_gets_the_stores_refusal(
     )
 
 
+@pytest.mark.parametrize(
+    ("argv", "where", "given"),
+    [
+        (["set", "INA238#0.shunt", "1e999"], "INA238#0.shunt", "1e999"),
+        (["set", "INA238#0[6]", "-1e400"], "INA238#0[6]", "-1e400"),
+        (["set", "INA238#0", '{"shunt": 1e999}'], "INA238#0", "1e999"),
+        (["set", "BAT1_CAPACITY", "1e309"], "BAT1_CAPACITY", "1e309"),
+        (["set-default", "INA238#0.shunt", "1e999"], "INA238#0.shunt", "1e999"),
+    ],
+)
+def test_a_float_beyond_float64_is_refused_without_suggesting_infinity(
+    store: Path,
+    capsys: pytest.CaptureFixture[str],
+    argv: list[str],
+    where: str,
+    given: str,
+) -> None:
+    # The refusal said "(write inf or -inf for infinity)", which the store then refused too.
+    assert param(capsys, "add", "INA238#0")[0] == 0
+    before = store.read_bytes()
+    code, _, err = param(capsys, *argv)
+    assert (code, err) == (
+        1,
+        f"px4params: error: {where}: {given} is out of range of a float64 (a stored float is a "
+        "finite number)\n",
+    )
+    assert store.read_bytes() == before
+
+
 def test_load_says_which_instances_its_reset_removed(
     store: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

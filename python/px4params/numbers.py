@@ -58,9 +58,10 @@ def parse_int(text: str, base: int = 10) -> int:
     return int(text.strip(), base)
 
 
-def parse_float(text: str) -> float:
+def parse_float(text: str, *, stored: bool = False) -> float:
     """``text`` as a float: ``inf``/``nan`` as written; a finite number beyond float64's range
-    (``1e400``) is refused.
+    (``1e400``) is refused. ``stored``: for a store's value, which takes finite numbers only,
+    so the refusal does not suggest writing ``inf``.
 
     Raises:
         NumberError: out of float64's range.
@@ -68,10 +69,13 @@ def parse_float(text: str) -> float:
     """
     value = float(text)
     if math.isinf(value) and "inf" not in text.lower():
-        raise NumberError(
-            f"{abbreviated(text)} is out of range of a float64 (write inf or -inf for infinity)"
-        )
+        hint = "a stored float is a finite number" if stored else "write inf or -inf for infinity"
+        raise NumberError(f"{abbreviated(text)} is out of range of a float64 ({hint})")
     return value
+
+
+def _stored_float(text: str) -> float:
+    return parse_float(text, stored=True)
 
 
 def _json_int(text: str) -> int:
@@ -85,17 +89,17 @@ def _json_constant(name: str) -> float:
     raise NumberError(f'{name} is not JSON; write "{_CONSTANTS[name]}" (a string) instead')
 
 
-def load_json(text: str) -> object:
+def load_json(text: str, *, stored: bool = False) -> object:
     """``json.loads`` with the bounds above: long integers, ``1e400`` and the non-standard
     ``Infinity``/``NaN`` are refused (:class:`NumberError`), and an object naming a key twice
     (:class:`DuplicateKeyError`, a NumberError); other errors are as ``json.loads`` raises
-    them."""
+    them. ``stored``: as :func:`parse_float` takes it."""
     import json  # here: a command that reads no JSON does not pay 2 ms to import it
 
     return json.loads(
         text,
         parse_int=_json_int,
-        parse_float=parse_float,
+        parse_float=_stored_float if stored else parse_float,
         parse_constant=_json_constant,
         object_pairs_hook=_json_object,
     )

@@ -189,7 +189,7 @@ impl ValueError<'_> {
                 scalar_text(*max)
             ),
             Self::BeyondFloat64 { value } => format!(
-                "value {} is out of range of a float64 (write inf or -inf for infinity)",
+                "value {} is out of range of a float64 (at most ±1.8e308)",
                 value.str()?
             ),
             Self::NotABoolean { value } => format!(

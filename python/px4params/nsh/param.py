@@ -64,7 +64,7 @@ def parse_number(text: str, kind: str, where: str) -> int | float | bool:
             if re.fullmatch(_INT, t):
                 return float(parse_int(t, 16 if "x" in t[:3].lower() else 10))
             if re.fullmatch(_FLOAT, t) or t.lower() in ("nan", "inf", "+inf", "-inf"):
-                return parse_float(t)
+                return parse_float(t, stored=True)
             raise CommandError(
                 f"{where}: '{abbreviated(text)}' is not a number (expected e.g. 0.0003, 2e-4 or 5)"
             )
@@ -86,7 +86,7 @@ def parse_value(store: Store, key: Key, text: str, leaf: Leaf | None = None) -> 
         return parse_number(text, classic.type, str(key))
     if key.leaf is None:
         try:
-            return load_json(text)
+            return load_json(text, stored=True)
         except NumberError as e:
             raise CommandError(f"{key}: {e}") from None
         except (RecursionError, ValueError) as e:  # json.JSONDecodeError is a ValueError

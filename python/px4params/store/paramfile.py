@@ -255,7 +255,7 @@ def _check_type(where: str, name: str, given: int, is_float: bool) -> None:
 
 def _read_json(store: Store, path: str, text: str, forced: Forced | None) -> list[str]:
     try:
-        document = load_json(text)
+        document = load_json(text, stored=True)
     except json.JSONDecodeError as e:
         raise ParamFileError(f"{path}:{e.lineno}: not JSON: {e.msg}") from None
     except (NumberError, RecursionError) as e:
