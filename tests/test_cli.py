@@ -533,20 +533,37 @@ def test_batch_unknown_type_is_one_error(run: Cli) -> None:
     one_error(run("encode", "px.Nope", "-", input=INA + "\n"), "unknown type 'px.Nope'")
 
 
-def test_batch_undecodable_stdin_is_one_line(run: Cli) -> None:
-    # With a strict stdin encoding (e.g. a en_US.UTF-8 locale) reading the line itself fails.
+@pytest.mark.parametrize("encoding", ["utf-8:strict", "utf-8:surrogateescape"])
+def test_batch_stdin_that_is_not_text_is_named_by_line_and_byte(run: Cli, encoding: str) -> None:
+    # Python hands such bytes over as surrogate escapes ('\udcff\udcfe' in the message), or
+    # with a strict stdin (e.g. a en_US.UTF-8 locale) fails reading the line, ending the batch.
     proc = run(
         "decode",
         "px.Ina238",
         "-",
-        input=b"\xff\xfe\n",
-        env={"PYTHONIOENCODING": "utf-8:strict"},
+        input=b"\xff\xfe\n" + INA_HEX.encode() + b"\n00\xc3\n",
+        env={"PYTHONIOENCODING": encoding},
     )
     assert proc.returncode == 1
-    assert proc.stdout == ""
-    [line] = proc.stderr.splitlines()
-    assert line.startswith("px4params: error: ")
-    assert "can't decode byte 0xff" in line
+    first, second, third = proc.stdout.splitlines()
+    assert first == "error: not text: byte 0xFF at column 1 is not UTF-8"
+    assert json.loads(second)["current"] == 200
+    assert third == "error: not text: byte 0xC3 at column 3 is not UTF-8"
+    assert proc.stderr.splitlines() == [
+        "px4params: <stdin>:1: not text: byte 0xFF at column 1 is not UTF-8",
+        "px4params: <stdin>:3: not text: byte 0xC3 at column 3 is not UTF-8",
+    ]
+
+
+def test_an_argument_or_frames_input_that_is_not_text_is_named(run: Cli) -> None:
+    one_error(
+        run("decode", "px.Ina238", "12\udcff"),
+        "not text: byte 0xFF at column 3 is not UTF-8",
+    )
+    proc = run(
+        "frames", "uavcan.protocol.NodeStatus", "-", "--source-node", "5", input=b'{"a\xe9": 1}'
+    )
+    one_error(proc, "not text: byte 0xE9 at column 4 is not UTF-8")
 
 
 # --------------------------------------------------------------------------------------------------

@@ -194,6 +194,16 @@ def not_text(e: UnicodeDecodeError) -> str:
     return f"not a text file: byte 0x{e.object[e.start]:02X} at offset {e.start} is not UTF-8"
 
 
+def not_text_line(line: str) -> str | None:
+    """Why ``line``, read with Python's surrogate escapes (stdin holds bytes that are not UTF-8
+    as U+DC80..U+DCFF), is not text, in :func:`not_text`'s words (``not text: byte 0xFF at
+    column 1 is not UTF-8``); ``None`` when it is text."""
+    for column, char in enumerate(line, 1):
+        if "\udc80" <= char <= "\udcff":
+            return f"not text: byte 0x{ord(char) - 0xDC00:02X} at column {column} is not UTF-8"
+    return None
+
+
 def read_text(path: str | os.PathLike[str], kind: FileKind, errors: str = "strict") -> str:
     """:func:`read_bytes` decoded as UTF-8 (``UnicodeDecodeError`` for what is not text), without
     the byte order mark Windows editors (Notepad) put first: it is no part of the first line."""

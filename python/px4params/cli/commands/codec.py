@@ -11,6 +11,7 @@ from px4params.cli.parsing import ArgumentParser, RawDescriptionHelpFormatter
 from px4params.dsdl.schema import DataType, Schema, load_schema, to_json_value, value_at
 from px4params.errors import CommandError, EncodeError, NumberError, Px4ParamsError
 from px4params.numbers import abbreviated, dump_json, load_json
+from px4params.reading import not_text_line
 from px4params.status import EXIT_FAILED, EXIT_OK
 
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
@@ -69,11 +70,13 @@ def _each_item(item: str, stdin: TextIO, out: TextIO, convert: Callable[[str], s
     payload for ``decode`` (a valid value of ``uavcan.protocol.param.Empty``, an empty
     ``ArrayCommand``, ...)."""
     if item != "-":
+        _check_text(item)
         print(convert(item), file=out)
         return EXIT_OK
     status = EXIT_OK
     for number, line in _stdin_lines(stdin):
         try:
+            _check_text(line)
             result = convert(line.rstrip("\r\n"))
         except (Px4ParamsError, UnicodeError) as e:
             print(f"error: {e}", file=out)
@@ -84,14 +87,32 @@ def _each_item(item: str, stdin: TextIO, out: TextIO, convert: Callable[[str], s
     return status
 
 
+def _check_text(text: str) -> None:
+    """Refuses (:class:`CommandError`) an argument or stdin line holding bytes that are not UTF-8
+    (Python hands them over as surrogate escapes, which messages would show as '\\udcff')."""
+    why = not_text_line(text)
+    if why is not None:
+        raise CommandError(why)
+
+
 #: The longest line read from stdin (``frames``: the whole input): the JSON of the largest
 #: value (65,535 bytes as a uint8 array) is about 260 KB. Beyond it, an endless input such as
 #: ``< /dev/zero`` is refused instead of read until memory runs out.
 MAX_STDIN_TEXT = 1 << 20
 
 
+def _escaping(stdin: TextIO) -> TextIO:
+    """``stdin`` reading bytes that are not UTF-8 as surrogate escapes, whatever the locale
+    (strict, a read fails mid-batch), so that :func:`_check_text` names the line and byte."""
+    reconfigure = getattr(stdin, "reconfigure", None)
+    if reconfigure is not None:
+        reconfigure(errors="surrogateescape")
+    return stdin
+
+
 def _stdin_lines(stdin: TextIO) -> Iterator[tuple[int, str]]:
     """``(number, line)`` of each line of ``stdin``, each at most :data:`MAX_STDIN_TEXT`."""
+    _escaping(stdin)
     number = 0
     while True:
         line = stdin.readline(MAX_STDIN_TEXT + 1)
@@ -197,9 +218,10 @@ def cmd_frames(args: argparse.Namespace) -> int:
     dtid = args.dtid if args.dtid is not None else t.dtid
     if dtid is None:
         raise CommandError(f"{t.key} has no default data type ID; give --dtid N")
-    text = sys.stdin.read(MAX_STDIN_TEXT + 1) if args.value == "-" else args.value
+    text = _escaping(sys.stdin).read(MAX_STDIN_TEXT + 1) if args.value == "-" else args.value
     if len(text) > MAX_STDIN_TEXT:
         raise CommandError(f"<stdin>: {_too_long()}")
+    _check_text(text)
     try:
         out = can_transfer.frames(
             t,
