@@ -790,7 +790,33 @@ def test_a_failing_run_writes_no_file(
     good = text.replace("300", "70")
     assert run(capsys, "run", airframe(tmp_path, good))[0] == 0
     assert store.exists() and copy.exists() and export.exists()
-    assert "1\t1\tINA238_0C\t70\t6" in export.read_text()
+    # Each file holds the store as it was at its line (as PX4's shell writes it), written once
+    # the whole file had succeeded; the store's own file holds the end.
+    assert "1\t1\tINA238_0C\t69\t6" in export.read_text()
+    assert param(capsys, "show", "-q", "INA238#0[4]")[1] == "70\n"
+    assert param(capsys, "--store", str(copy), "show", "-q", "INA238#0[4]")[1] == "69\n"
+
+
+def test_a_backup_saved_before_changes_holds_the_store_before_them(
+    store: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # 'param save' and 'param export' of another file wrote the end state: a backup taken
+    # first held the changes it was meant to undo.
+    talk(capsys, tmp_path)
+    assert param(capsys, "add", "INA238#1")[0] == 0
+    before = store.read_bytes()
+    backup, exported = tmp_path / "backup.store", tmp_path / "backup.params"
+    text = (
+        f"param save {backup}\nparam export {exported}\nparam rm INA238#1\n"
+        "param set INA238#0.current 150\n"
+    )
+    assert run(capsys, "run", airframe(tmp_path, text))[0] == 0
+    assert param(capsys, "show", "-q", "INA238#0.current")[1] == "150\n"
+    assert param(capsys, "--store", str(backup), "show", "-q", "INA238#0.current")[1] == "200\n"
+    assert "INA238#1" in param(capsys, "--store", str(backup), "show")[1]
+    assert "1\t1\tINA238_1C\t" in exported.read_text()
+    # The backup is the store as it was, byte for byte.
+    assert backup.read_bytes() == before
 
 
 def test_reset_of_one_leaf(store: Path, capsys: pytest.CaptureFixture[str]) -> None:

@@ -473,14 +473,21 @@ def verb_save(s: Session, a: argparse.Namespace) -> int:
         if s.autosave:
             print(f"saved {s.path}", file=s.out)
         return EXIT_OK
+    from px4params.store import file as store_file
     from px4params.store import paramfile
 
     file = a.file
     # By its extension, as load reads it: a .params file saved as a store loaded back as text.
     text = paramfile.kind_of(file) is not None
+    # The store as it is at this line (a backup before changes), written when the airframe
+    # file has succeeded.
+    data = paramfile.exported(s.store, file) if text else store_file.encode_file(s.store)
 
     def write() -> None:
-        size = paramfile.write(s.store, file) if text else s.store.save(file)
+        if text:
+            size = paramfile.write_exported(file, data)
+        else:
+            size = store_file.write_file(file, data, keep_backup=True)
         print(f"saved {file} ({size} bytes)", file=s.out)
         if text:  # (a store file keeps them)
             _say_kept_classic(s.store, f"not written to {file}")
@@ -545,9 +552,10 @@ def verb_export(s: Session, a: argparse.Namespace) -> int:
     if paramfile.kind_of(a.file) is None:
         raise CommandError(f"{a.file}: export writes .params (QGC) or .json files")
     file = a.file
+    data = paramfile.exported(s.store, file)  # the store as it is at this line
 
     def write() -> None:
-        size = paramfile.write(s.store, file)
+        size = paramfile.write_exported(file, data)
         print(f"wrote {file} ({size} bytes)", file=s.out)
         _say_kept_classic(s.store, f"not written to {file}")
 

@@ -106,14 +106,25 @@ def _without_versions(value: Any) -> Any:
 
 
 def write(store: Store, path: str) -> int:
+    """Exports ``store`` to ``path`` (a ``.params`` or ``.json`` file, by its extension)."""
+    return write_exported(path, exported(store, path))
+
+
+def exported(store: Store, path: str) -> bytes:
+    """What :func:`write` writes to ``path``: the store as it is now (``run`` writes it later,
+    when the whole airframe file has succeeded)."""
     kind = kind_of(path)
     if kind is None:
         raise ParamFileError(f"{path}: export writes .params (QGC) or .json files")
-    text = export_qgc(store) if kind == "qgc" else export_json(store)
+    return (export_qgc(store) if kind == "qgc" else export_json(store)).encode()
+
+
+def write_exported(path: str, data: bytes) -> int:
+    """Writes :func:`exported`'s ``data`` to ``path``; returns its size."""
     from px4params.store.file import write_file
 
     try:  # as the store is saved: atomically, and only over a regular file
-        return write_file(path, text.encode(), keep_backup=False)
+        return write_file(path, data, keep_backup=False)
     except StoreFileError as e:
         raise ParamFileError(str(e)) from None
 
