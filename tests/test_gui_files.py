@@ -244,3 +244,35 @@ def test_reviews_and_exports_use_the_offline_store_s_types(two_monitors: Any) ->
     )
     params = files.export_params(values, metadata, store)
     assert "1\t1\tINA238_CURRENT\t100" in params and "1\t1\tINA238_1B\t2\t6" in params
+
+
+def test_a_reviewed_airframe_reads_and_writes_no_file_on_this_computer(
+    vehicle: Any, tmp_path: Any
+) -> None:
+    """The page's review of a file (a pilot previewing an airframe from a forum) ran its
+    'param save FILE' and 'param export FILE' lines: the vehicle's store and any file the
+    user could write were replaced before anything was confirmed, and 'param load FILE' read
+    local files into the review. Those lines are passed over, each said in the notes."""
+    values, metadata = vehicle
+    victim, local = tmp_path / "victim.txt", tmp_path / "local.params"
+    victim.write_text("important\n")
+    local.write_text("1\t1\tINA238_1C\t99\t6\n")
+    airframe = (
+        "param set INA238#1.bus.i2c.address 0x47\n"
+        f"param save {victim}\n"
+        f"param export {tmp_path / 'new.params'}\n"
+        f"param load {local}\n"
+        f"param import {local}\n"
+        "param save\n"  # the (scratch) store's own file: harmless, and run
+    )
+    review = files.review_file("forum.airframe", airframe, values, metadata)
+    assert victim.read_text() == "important\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["local.params", "victim.txt"]
+    assert review["changes"] == [{"name": "INA238_1C", "current": 0x45, "new": 0x47}]
+    why = "not run here: it would read or write a file on this computer"
+    assert review["notes"] == [
+        f"forum.airframe:2: param save {victim}: {why}",
+        f"forum.airframe:3: param export {tmp_path / 'new.params'}: {why}",
+        f"forum.airframe:4: param load {local}: {why}",
+        f"forum.airframe:5: param import {local}: {why}",
+    ]

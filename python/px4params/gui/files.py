@@ -143,12 +143,14 @@ def _run_airframe(scratch: Any, filename: str, text: str) -> list[str]:
             f.write(text)
         session = Session(scratch, os.path.join(tmp, "scratch.store"), io.StringIO())
         errors = io.StringIO()
-        result = run_file(path, session, keep_going=False, err=errors)
+        # A page's file touches nothing on this computer but the scratch store: its lines
+        # that would save, export, load or import another file are passed over, and said.
+        result = run_file(path, session, keep_going=False, err=errors, files=False)
         if result.errors:
             lines = errors.getvalue().strip().replace(path, filename).splitlines()
             message = " ".join(line.removeprefix("px4params: ") for line in lines)
             raise CommandError(message or f"{filename}: the airframe file failed")
-    return []
+    return [line.replace(path, filename, 1) for line in result.skipped]
 
 
 def export_params(values: Mapping[str, Any], metadata: Mapping[str, Any], store: Any = None) -> str:

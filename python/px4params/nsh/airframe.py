@@ -89,11 +89,21 @@ class Run:
 
     errors: list[str] = field(default_factory=list)
     lines_run: int = 0
+    #: Lines passed over without ``files`` (``FILE:LINE: why``).
+    skipped: list[str] = field(default_factory=list)
 
 
-def run_file(path: str, session: Session, *, keep_going: bool, err: TextIO) -> Run:
+#: The ``param`` verbs that read or write a file other than the store's own when given one.
+FILE_VERBS = ("save", "export", "load", "import")
+
+
+def run_file(
+    path: str, session: Session, *, keep_going: bool, err: TextIO, files: bool = True
+) -> Run:
     """Runs ``path`` against ``session``'s store; saves it once when the file succeeded (or,
-    with ``keep_going``, when anything succeeded)."""
+    with ``keep_going``, when anything succeeded). Without ``files`` (text a web page gave),
+    a line that would read or write another file (:data:`FILE_VERBS` with a FILE) is passed
+    over and listed in :attr:`Run.skipped`: nothing outside the text is touched."""
     try:
         lines = read_text(path, AIRFRAME).splitlines()
     except OSError as e:
@@ -108,7 +118,7 @@ def run_file(path: str, session: Session, *, keep_going: bool, err: TextIO) -> R
     for number, raw in enumerate(lines, start=1):
         where = f"{path}:{number}"
         try:
-            _line(raw, parser, session, variables, blocks, where, number, result)
+            _line(raw, parser, session, variables, blocks, where, number, result, files)
         except (CommandError, Px4ParamsError, NshArgumentError, ValueError) as e:
             result.errors.append(f"{where}: {e}")
             print(f"px4params: {where}: {e}", file=err)
@@ -137,6 +147,7 @@ def _line(
     where: str,
     number: int,
     result: Run,
+    files: bool = True,
 ) -> None:
     if len(raw) > MAX_LINE:
         raise CommandError(f"line of {len(raw):,} characters (at most {MAX_LINE:,})")
@@ -175,6 +186,10 @@ def _line(
         print(" ".join(words[1:]), file=session.out)
     elif head == "param":
         args = _parse(parser, words[1:])
+        if not files and args.verb_name in FILE_VERBS and getattr(args, "file", None):
+            why = "not run here: it would read or write a file on this computer"
+            result.skipped.append(f"{where}: param {args.verb_name} {args.file}: {why}")
+            return
         status = args.verb(session, args)
         # compare and greater answer with their status; set-default -s of a parameter this
         # build lacks fails silently and the script runs on, as PX4's scripts do (the reason
