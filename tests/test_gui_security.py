@@ -220,16 +220,28 @@ def test_foreign_origins_and_plain_text_are_refused_with_the_token(
         )
         assert request(gui, "GET", "/api/state", headers=authorized(gui, Origin=origin))[0] == 403
         assert open_socket(gui, authorized(gui, Origin=origin)) == "HTTP 403"
-    status, _, body = request(
-        gui, "POST", "/api/write", WRITE, authorized(gui, **{"Content-Type": "text/plain"})
-    )
-    assert status == 415
+    for media_type in ("text/plain", "application/jsonx", "application/json-seq"):
+        headers = authorized(gui, **{"Content-Type": media_type})
+        assert request(gui, "POST", "/api/write", WRITE, headers)[0] == 415, media_type
     assert _instances(store_file) == ["INA238#0", "INA238#1"]
     for path in ("/static/../app.py", "/static/%2e%2e/app.py", "/static/..%2fapp.py"):
         assert request(gui, "GET", path, headers=authorized(gui))[0] == 404, path
 
 
 # -- the size of requests ------------------------------------------------------------------
+
+
+def test_json_nested_too_deep_is_a_400_not_a_traceback(gui: Gui, store_file: Path) -> None:
+    # 100,000 nested arrays made json raise RecursionError: HTTP 500 and a traceback on the
+    # server's stderr.
+    deep = "[" * 100_000
+    for path, shape in (("/api/write", "{'changes'"), ("/api/review", "{'filename'")):
+        status, _, body = request(gui, "POST", path, deep, json_headers(gui))
+        error = json.loads(body)["error"]
+        assert (status, error.startswith(f"expected {shape}")) == (400, True), error
+    assert _instances(store_file) == ["INA238#0", "INA238#1"]
+    gui.stop()
+    assert gui.proc.stderr is not None and "Traceback" not in gui.proc.stderr.read()
 
 
 def test_oversize_bodies_are_refused_with_413(gui: Gui, store_file: Path) -> None:

@@ -67,7 +67,7 @@ def make_app(vehicle: Any, *, token: str, hosts: Iterable[str], cookie: str) -> 
             pairs = [
                 (str(c["name"]), _number(c["value"], str(c["name"]) in floats)) for c in changes
             ]
-        except (ValueError, KeyError, TypeError) as e:
+        except (ValueError, KeyError, TypeError, RecursionError) as e:  # (nesting too deep)
             return JSONResponse(
                 {"error": f"expected {{'changes': [{{'name', 'value'}}]}}: {e}"}, 400
             )
@@ -84,7 +84,7 @@ def make_app(vehicle: Any, *, token: str, hosts: Iterable[str], cookie: str) -> 
         try:
             body = await request.json()
             filename, text = str(body["filename"]), str(body["text"])
-        except (ValueError, KeyError, TypeError) as e:
+        except (ValueError, KeyError, TypeError, RecursionError) as e:  # (nesting too deep)
             return JSONResponse({"error": f"expected {{'filename', 'text'}}: {e}"}, 400)
         store = getattr(vehicle, "store", None)
         try:
@@ -167,7 +167,8 @@ def _foreign(request: Request) -> Response | None:
     """Refuses a write another site's page could send from the user's browser without a
     preflight: only JSON (a cross-site JSON request needs the browser's preflight, which this
     server never grants). Other origins are refused before (``admission``)."""
-    if not request.headers.get("content-type", "").startswith("application/json"):
+    media_type = request.headers.get("content-type", "").partition(";")[0].strip().lower()
+    if media_type != "application/json":  # (not "application/jsonx")
         return JSONResponse({"error": "expected a JSON body (content-type application/json)"}, 415)
     return None
 
