@@ -1312,3 +1312,12 @@ def test_a_log_cut_short_says_so(tmp_path: Path) -> None:
     assert len(config.params) == 87 and said in config.details
     assert said in migrate.migrate(config).report()
     assert said not in read_config(whole).details and len(read_config(whole).params) == 980
+    # `--json` and the airframe file say so too: both read as a whole log's.
+    document = migrate.migrate(config).as_dict()
+    assert document["log_cut"] is True and said in document["details"]
+    assert document["airframe"].splitlines()[2] == (
+        "# Warning: the log is cut short or damaged: devices logged after the break are missing "
+        "here."
+    )
+    whole_document = migrate.migrate(read_config(whole)).as_dict()
+    assert whole_document["log_cut"] is False and "# Warning" not in whole_document["airframe"]

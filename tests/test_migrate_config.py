@@ -275,6 +275,8 @@ def test_a_proposals_whole_report_written_out_by_hand() -> None:
         "source": "vehicle.ulg",
         "kind": "ULog",
         "parameters": 3,
+        "details": ["ver_hw X", "ver_sw y"],
+        "log_cut": False,
         "table": "px4-v1.11",
         "board": "px4_fmu-v5",
         "version": None,

@@ -50,6 +50,8 @@ class OldConfig:
     console: str | None = None
     #: ``(topic, multi_id, device_id)`` of the sensors that published in the log.
     published: list[tuple[str, int, int]] = field(default_factory=list)
+    #: The log is cut short or damaged: what was logged after the break is missing.
+    cut: bool = False
 
 
 def read_config(path: str | os.PathLike[str]) -> OldConfig:
@@ -89,7 +91,7 @@ def read_config(path: str | os.PathLike[str]) -> OldConfig:
     return OldConfig(
         where, "ULog", params, details, release=release, version=version,
         hardware=log.hardware, hw_type=_text_info(log.info.get("ver_hw_subtype")),
-        console=log.boot_console, published=published,
+        console=log.boot_console, published=published, cut=log.corrupt,
     )  # fmt: skip
 
 

@@ -105,6 +105,11 @@ class Proposal:
             f"({self.config.kind})",
             "# Review before use: see the migration report.",
         ]
+        if self.config.cut:
+            lines.append(
+                "# Warning: the log is cut short or damaged: devices logged after the break are "
+                "missing here."
+            )
         if not self.instances:
             lines.append("# No device could be carried over.")
         for inst in self.instances:
@@ -165,6 +170,8 @@ class Proposal:
             "source": self.config.source,
             "kind": self.config.kind,
             "parameters": len(self.config.params),
+            "details": self.config.details,
+            "log_cut": self.config.cut,
             "table": self.table,
             "board": self.board,
             "version": ".".join(map(str, self.config.version)) if self.config.version else None,
