@@ -1321,3 +1321,20 @@ def test_a_log_cut_short_says_so(tmp_path: Path) -> None:
     )
     whole_document = migrate.migrate(read_config(whole)).as_dict()
     assert whole_document["log_cut"] is False and "# Warning" not in whole_document["airframe"]
+
+
+def test_a_devtype_of_another_kind_than_its_slot_is_left_out_not_proposed() -> None:
+    # 15619337 = 0xEE5509: devtype 0xEE is today's MCP9808, a temperature sensor, on I2C bus 1
+    # at 0x55, in a compass slot. It was proposed as MCP9808#0, an instance arming requires.
+    proposal = migrate.migrate(
+        today({"CAL_MAG0_ID": 15619337, "CAL_MAG0_PRIO": 50, "SENS_EXT_I2C_PRB": 1}),
+        table="current",
+    )
+    assert proposal.instances == []
+    [left] = proposal.left_out
+    assert (left.found, left.reason) == ("CAL_MAG0_ID = 15619337", "kind")
+    assert left.line == (
+        "CAL_MAG0_ID = 15619337: MCP9808 (TEMP), I2C bus 1, address 0x55: not proposed: devtype "
+        "0xEE is TEMP in the current table, which does not fit CAL_MAG0_ID (IMU/MAG): the log "
+        "may be of another era (--table)"
+    )

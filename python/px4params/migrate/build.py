@@ -977,6 +977,12 @@ class _Builder:
             if len(set(rotations.values())) > 1:
                 shown = ", ".join(f"{r} = {_shown(v)}" for r, v in rotations.items())
                 twice += f", with different rotations ({shown})"
+        # A devtype of another kind than every slot holding it (a temperature sensor's in
+        # CAL_MAG0_ID): the table is of another era, and the chip is not this one.
+        mismatches = [devid.kind_mismatch(n, dev) for n in slots]
+        if slots and all(mismatches):
+            self.leave_out(found, dev.describe(), "kind", f"not proposed: {mismatches[0]}{twice}")
+            return
         chips = _chips(dev, kinds)
         if dev.bus_type == 2:  # SPI
             hit = self.evidence(dev)

@@ -42,7 +42,8 @@ class LeftOut:
     #: What it is, e.g. ``IST8310 (MAG), I2C bus 4, address 0x0C``.
     device: str
     #: Why, as a word: ``board`` (started by the board's script), ``disabled``, ``dronecan``,
-    #: ``simulation``, ``other bus``.
+    #: ``simulation``, ``other bus``, ``kind`` (its devtype is another kind of sensor than
+    #: the calibration slot's: a devtype table of another era).
     reason: str
     #: The report's line.
     line: str
