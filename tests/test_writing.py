@@ -197,3 +197,51 @@ def test_an_output_that_is_an_input_or_another_output_is_refused(
     )
     assert {name: Path(path).read_bytes() for name, path in copies.items()} == before
     assert not (tmp_path / "t.svg").exists() and not (tmp_path / "m.json").exists()
+
+
+def test_metadata_refuses_to_write_over_the_classic_file_the_environment_names(
+    tmp_path: Path,
+) -> None:
+    # --classic X --json X was refused, but X given by $PX4PARAMS_PARAMETERS_JSON was written
+    # over with the metadata: PX4's parameters.json lost, every later command failing.
+    classic = _copies(tmp_path)["classic"]
+    before = classic.read_bytes()
+    env = {k: v for k, v in os.environ.items() if not k.startswith("PX4PARAMS_")}
+    env["PX4PARAMS_CACHE_DIR"] = os.environ.get("PX4PARAMS_CACHE_DIR", str(tmp_path / "cache"))
+    env["PX4PARAMS_PARAMETERS_JSON"] = str(classic)
+    result = subprocess.run(
+        [*CLI, "metadata", "--json", "classic.json"],
+        capture_output=True, text=True, env=env, cwd=tmp_path, timeout=120,
+    )  # fmt: skip
+    assert (result.returncode, result.stderr) == (
+        1,
+        f"px4params: error: classic.json: is the input file {classic}: give the output another "
+        "path\n",
+    )
+    assert classic.read_bytes() == before
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["migrate", "{params}", "-o", "{store}"],
+        ["metadata", "--json", "{store}"],
+        ["health", "{log}", "--timeline", "{store}"],
+        ["autostart", "run", "--airframe", "{airframe}", "--ulog", "{store}"],
+    ],
+)
+def test_no_report_airframe_or_log_is_written_over_a_store_file(
+    tmp_path: Path, argv: list[str]
+) -> None:
+    # Each replaced an existing store with no backup ('param save' keeps one).
+    copies = {name: str(path) for name, path in _copies(tmp_path).items()}
+    store = tmp_path / "old.store"
+    assert _px4params(tmp_path, "run", copies["airframe"], "--store", str(store)).returncode == 0
+    before = store.read_bytes()
+    result = _px4params(tmp_path, *(a.format(store=store, **copies) for a in argv))
+    assert (result.returncode, result.stderr) == (
+        1,
+        f"px4params: error: {store}: is a px4params store file: give the output another path "
+        "(or move the store first)\n",
+    )
+    assert store.read_bytes() == before

@@ -187,15 +187,21 @@ class _ignoring_os_errors:
         return kind is not None and issubclass(kind, OSError)
 
 
+#: The first bytes of a px4params store file (docs/store-format.md).
+STORE_MAGIC = b"PX4P"
+
+
 def check_outputs(
     outputs: Iterable[str | os.PathLike[str] | None],
     inputs: Iterable[str | os.PathLike[str] | None],
 ) -> None:
     """Refuses, before anything is written, an output path that names one of the command's
     input files (``migrate x.params -o x.params`` would replace the vehicle's file with the
-    airframe) or an output given twice (the second write would replace the first). Paths are
-    compared as files (a symbolic link or ``./x`` is the same file); ``-`` and None are
-    skipped. One line: ``OUT: is the input file IN: give the output another path``."""
+    airframe), an output given twice (the second write would replace the first), or a store
+    file (a report, header or log written over it would lose the vehicle's configuration,
+    with no ``.bak`` as ``param save`` keeps). Paths are compared as files (a symbolic link or
+    ``./x`` is the same file); ``-`` and None are skipped. One line: ``OUT: is the input file
+    IN: give the output another path``."""
     named = [os.fspath(p) for p in inputs if p is not None and os.fspath(p) != "-"]
     taken = {_identity(path): f"the input file {path}" for path in reversed(named)}
     for path in outputs:
@@ -205,7 +211,25 @@ def check_outputs(
         key = _identity(given)
         if key in taken:
             raise _refused(f"is {taken[key]}: give the output another path", given, errno.EINVAL)
+        if _starts_with(given, STORE_MAGIC):
+            raise _refused(
+                "is a px4params store file: give the output another path (or move the store first)",
+                given,
+                errno.EEXIST,
+            )
         taken[key] = "another output of this command"
+
+
+def _starts_with(path: str, magic: bytes) -> bool:
+    """Whether ``path`` is a regular file whose first bytes are ``magic`` (a FIFO is not
+    opened: that would wait for a writer)."""
+    try:
+        if not stat.S_ISREG(os.stat(path).st_mode):
+            return False
+        with open(path, "rb") as f:
+            return f.read(len(magic)) == magic
+    except OSError:
+        return False
 
 
 def _identity(path: str) -> str:

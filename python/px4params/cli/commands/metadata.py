@@ -30,13 +30,14 @@ def cmd_metadata(args: argparse.Namespace) -> int:
         parser.error("only one of --json, --header and --firmware can write to stdout (-)")
     if args.classic is not None and args.json is None:
         parser.error("--classic goes with --json (the header has no classic parameters)")
-    check_outputs([args.json, args.header, args.firmware], [args.classic])
+    # (The classic parameters' file as the command reads it: named, or from the environment.)
+    classic = metadata.classic_source(args.classic)
+    check_outputs([args.json, args.header, args.firmware], [classic])
     schema = load_schema(args.dsdl or ())
     specs = parameter_specs(schema)
     # Everything is generated before anything is written: a failure leaves no half output.
     outputs: list[tuple[str, str, str]] = []
     if args.json is not None:
-        classic = metadata.classic_source(args.classic)
         document = metadata.build_parameters_json(schema, classic, specs=specs)
         text = json.dumps(document, allow_nan=False) + "\n"
         counts = metadata.count_entries(document)
