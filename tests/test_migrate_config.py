@@ -131,9 +131,9 @@ def test_only_the_header_before_the_first_row_describes_the_file(tmp_path: Path)
     assert config.params == {"SYS_AUTOSTART": 4001, "MC_ROLL_P": 6.5}
 
 
-def test_a_param_set_list_reads_every_set_line_and_counts_the_others(tmp_path: Path) -> None:
+def test_a_param_set_list_reads_every_set_line_and_names_the_others(tmp_path: Path) -> None:
     """An airframe's syntax: ``param set`` / ``param set-default NAME VALUE``; other shell
-    lines are not run, only counted; integers stay integers (PX4's INT32), the rest floats."""
+    lines are not run, each named; integers stay integers (PX4's INT32), the rest floats."""
     path = tmp_path / "vehicle.airframe"
     path.write_text(
         "# an airframe\nparam set-default SYS_AUTOSTART 4001\necho starting\n"
@@ -143,7 +143,37 @@ def test_a_param_set_list_reads_every_set_line_and_counts_the_others(tmp_path: P
     assert config.kind == "param set list"
     assert config.params == {"SYS_AUTOSTART": 4001, "MC_ROLL_P": 6.5, "SENS_EN_INA238": 1}
     assert [type(v) for v in config.params.values()] == [int, float, int]
-    assert config.skipped == ["2 other lines (not 'param set'): not read"]
+    assert config.skipped == [
+        "line 3: 'echo starting': not a 'param set NAME VALUE' command, not read"
+    ]
+    assert config.details == [
+        "'param set' inside if ... fi (line 6): read as if every condition held"
+    ]
+
+
+def test_a_param_set_list_names_each_line_it_does_not_read_and_the_conditional_ones(
+    tmp_path: Path,
+) -> None:
+    # Two power monitors joined by ';' were dropped as "1 other lines (not 'param set')", with
+    # no line number, and a 'param set' inside if/fi was taken as unconditional without a word.
+    path = tmp_path / "vehicle.airframe"
+    path.write_text(
+        "param set SENS_EN_INA238 1; param set SENS_EN_INA226 1\n"
+        "if param compare SYS_AUTOSTART 4001; then\n"
+        "  param set CAL_MAG1_PRIO 50\n"
+        "else param set CAL_MAG1_PRIO 75\n"
+        "fi\n" + "".join(f"echo {n}\n" for n in range(12))
+    )
+    config = migrate.read_config(path)
+    assert config.params == {"SENS_EN_INA238": 1, "SENS_EN_INA226": 1, "CAL_MAG1_PRIO": 75}
+    assert config.details == [
+        "'param set' inside if ... fi (lines 3, 4): read as if every condition held"
+    ]
+    not_read = "not a 'param set NAME VALUE' command, not read"
+    assert config.skipped == [
+        *(f"line {6 + n}: 'echo {n}': {not_read}" for n in range(10)),
+        "... and 2 more lines of other commands",
+    ]
 
 
 def test_a_param_list_without_set_lines_is_refused(tmp_path: Path) -> None:

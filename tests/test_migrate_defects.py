@@ -245,7 +245,9 @@ def test_9_a_param_set_default_list_is_read(tmp_path: Path, capsys) -> None:
         "CAL_MAG1_PRIO": 50,
         "INA238_CURRENT": 120.4,
     }
-    assert config.skipped == ["1 other lines (not 'param set'): not read"]
+    assert config.skipped == [
+        "line 6: 'set VEHICLE_TYPE mc': not a 'param set NAME VALUE' command, not read"
+    ]
     report = run_json(path, capsys)
     # No version: CAL_MAG1_PRIO (PX4 1.12 on) says today's devtype table, and the report says so.
     assert report["table"] == "current"

@@ -164,29 +164,60 @@ def _read_text(where: str) -> OldConfig:
     return OldConfig(where, "QGC .params", params, details, skipped, version=version)
 
 
+#: How many lines a ``param set`` list's report names one by one (then it counts the rest).
+SHOWN_LINES = 10
+
+
 def _read_param_list(text: str, where: str) -> OldConfig:
     """``param set NAME VALUE`` / ``param set-default NAME VALUE`` lines (an airframe file's
-    syntax); other shell lines are counted, not run."""
+    syntax; several on a line joined by ``;``); other shell commands are not run, each named
+    with its line in the report, and ``param set`` lines inside ``if ... fi`` are read as if
+    every condition held, which the report says."""
     params: dict[str, int | float] = {}
-    other = 0
+    other: list[str] = []
+    conditional: list[int] = []
+    opened: list[int] = []  # the lines of the `if`s around
     for number, raw in enumerate(text.splitlines(), start=1):
         line = re.sub(r"(^|\s)#.*$", "", raw).strip()  # the shell's comments
-        if not line:
-            continue
-        m = _PARAM_SET.fullmatch(line)
-        if not m:
-            other += 1
-            continue
-        name, value = m[2], m[3]
-        try:
-            params[name] = (
-                parse_int(value) if re.fullmatch(r"[+-]?\d+", value) else parse_float(value)
-            )
-        except (NumberError, ValueError):
-            raise MigrationError(
-                f"{where}:{number}: {name}: value '{abbreviated(value)}' is not a number"
-            ) from None
+        for command in (c.strip() for c in line.split(";")):
+            word, _, rest = command.partition(" ")
+            if word == "if":
+                opened.append(number)
+                continue
+            if word == "fi":
+                if opened:
+                    opened.pop()
+                continue
+            if word in ("then", "else"):  # (`then param set ...` runs what follows)
+                command = rest.strip()
+            if not command:
+                continue
+            m = _PARAM_SET.fullmatch(command)
+            if not m:
+                other.append(f"line {number}: '{abbreviated(command)}'")
+                continue
+            if opened:
+                conditional.append(number)
+            name, value = m[2], m[3]
+            try:
+                params[name] = (
+                    parse_int(value) if re.fullmatch(r"[+-]?\d+", value) else parse_float(value)
+                )
+            except (NumberError, ValueError):
+                raise MigrationError(
+                    f"{where}:{number}: {name}: value '{abbreviated(value)}' is not a number"
+                ) from None
     if not params:
         raise MigrationError(f"{where}: no 'param set' lines")
-    skipped = [f"{other} other lines (not 'param set'): not read"] if other else []
-    return OldConfig(where, "param set list", params, [], skipped)
+    skipped = [f"{line}: not a 'param set NAME VALUE' command, not read" for line in other]
+    if len(skipped) > SHOWN_LINES:
+        more = len(skipped) - SHOWN_LINES
+        skipped = [*skipped[:SHOWN_LINES], f"... and {more} more lines of other commands"]
+    details = []
+    if conditional:
+        lines = ", ".join(map(str, dict.fromkeys(conditional)))
+        details.append(
+            f"'param set' inside if ... fi (line{'s' if len(conditional) > 1 else ''} {lines}): "
+            "read as if every condition held"
+        )
+    return OldConfig(where, "param set list", params, details, skipped)
