@@ -110,7 +110,8 @@ def test_a_qgc_export_reads_back_into_an_empty_store(
     path = tmp_path / "vehicle.params"
     assert paramfile.write(store, str(path)) == len(path.read_bytes())
     other = px4params.Store(schema, classic=BUNDLED_CLASSIC)
-    assert paramfile.read(other, str(path), reset=False) == []
+    # Every leaf named, the instance's adding alone is said (the line naming it first).
+    assert paramfile.read(other, str(path), reset=False) == [f"{path}:7: added INA238#2"]
     assert other.get("INA238#2") == store.get("INA238#2")
     assert other.get("BAT1_CAPACITY") == 4200.0
     assert "INA238#0" not in other
@@ -254,7 +255,13 @@ def test_a_float_line_of_an_integer_value_sets_a_float(
 def test_flat_lines_add_their_instance_and_set_the_leaf(
     store: px4params.Store, tmp_path: Path
 ) -> None:
-    read_file(store, tmp_path / "x.params", "1\t1\tINA238_3C\t70\t6\n1\t1\tINA238_3Q\t0.0625\t9\n")
+    path = tmp_path / "x.params"
+    report = read_file(store, path, "1\t1\tINA238_3C\t70\t6\n1\t1\tINA238_3Q\t0.0625\t9\n")
+    # The instance was made without a word, its bus id 0 from the defaults (it cannot start).
+    assert report == [
+        f"{path}:1: added INA238#3; INA238_3A, INA238_3B, INA238_3P not in the file: the type's "
+        "defaults"
+    ]
     assert "INA238#3" in store
     assert store.get("INA238#3.bus.i2c.address") == 70
     assert store.get("INA238#3.shunt") == 0.0625

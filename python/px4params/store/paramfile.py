@@ -193,6 +193,8 @@ def _read_qgc(store: Store, path: str, text: str, forced: Forced | None) -> list
     report: list[str] = []
     skipped = 0
     first_line: dict[str, int] = {}
+    added: dict[Key, int] = {}  # instances the file made, by the line naming one first
+    named: set[str] = set()
     rows = list(qgc_params.read(text, path))
     vehicles = sorted({row.vehicle for row in rows})
     if len(vehicles) > 1:
@@ -241,6 +243,8 @@ def _read_qgc(store: Store, path: str, text: str, forced: Forced | None) -> list
             _check_type(where, name, row.type, slot.mav_type == "float32")
             if instance not in store:
                 store.add(instance)
+                added.setdefault(instance, row.line)
+            named.add(name)
             live = fmap.live(name, instance, slot)
             _write(f"{where}: {name}", forced, write_live, store, live, number_value)
         except ParamFileError:
@@ -250,7 +254,24 @@ def _read_qgc(store: Store, path: str, text: str, forced: Forced | None) -> list
             raise _refused(f"{where}: {text}", e) from None
     if skipped:
         report.append(f"{path}: {skipped} parameters not in this store were skipped")
+    report += _added(store, path, added, named)
     return report
+
+
+def _added(store: Store, path: str, added: dict[Key, int], named: set[str]) -> list[str]:
+    """What a ``.params`` file's reading added: each instance it made, by the line that named
+    it first, and the leaves the file did not set, which keep the type's defaults (a file of
+    ``INA238_2C`` alone makes INA238#2 on bus 0, which cannot start)."""
+    from px4params.store.flat import flat_table
+
+    lines = []
+    for instance, line in added.items():
+        unset = [
+            p.name for p in flat_table(store) if p.instance == instance and p.name not in named
+        ]
+        kept = f"; {', '.join(unset)} not in the file: the type's defaults" if unset else ""
+        lines.append(f"{path}:{line}: added {instance}{kept}")
+    return lines
 
 
 def _check_type(where: str, name: str, given: int, is_float: bool) -> None:
