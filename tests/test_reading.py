@@ -654,6 +654,21 @@ def test_a_log_missing_only_its_last_bytes_is_cut_short_too(
     assert result.stdout.splitlines()[1].startswith("warning: the log ends at 10.00 s without")
 
 
+def test_a_log_cut_before_the_commanders_first_answer_says_no_answer_not_refused(
+    faults_log: Path, tmp_path: Path
+) -> None:
+    # The header said "arming refused at 0.00 s" while the body said "commander: no answer
+    # logged": the commander had answered nothing yet.
+    cut = tmp_path / "cut.ulg"
+    cut.write_bytes(faults_log.read_bytes()[:3000])
+    result = cli("health", str(cut))
+    assert result.returncode == 1
+    lines = result.stdout.splitlines()
+    assert lines[0].endswith(": no arming answer logged at 0.00 s, where the log ends"), lines[0]
+    assert "commander: no answer logged" in lines
+    assert "arming refused" not in result.stdout
+
+
 # -- 8: durations -------------------------------------------------------------------------------
 
 

@@ -469,6 +469,14 @@ class RunResult:
     bench_name: str = ""
 
     @property
+    def verdict(self) -> str:
+        """The commander's answer as reports say it: ``may arm``, ``arming refused``, or, of a
+        log cut before its first answer, ``no arming answer logged`` (not a refusal)."""
+        if self.log_cut_at is not None and not self.arming:
+            return "no arming answer logged"
+        return "may arm" if self.may_arm else "arming refused"
+
+    @property
     def bench_label(self) -> str:
         """The bench as reports name it: its name and file, or the file alone."""
         return f"{self.bench_name} ({self.bench})" if self.bench_name else self.bench

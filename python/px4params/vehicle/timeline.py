@@ -57,7 +57,7 @@ def render_svg(result: RunResult) -> str:
         f"viewBox='0 0 {width} {height}'>",
         f"<rect width='{width}' height='{height}' fill='white'/>",
     ]
-    verdict = "may arm" if result.may_arm else "arming refused"
+    verdict = result.verdict
     title = f"{result.mode} boot of {result.bench_label}: {verdict} at {duration:g} s"
     title += f" (seed {result.seed})"
     out.append(

@@ -42,7 +42,7 @@ def cmd_health(args: argparse.Namespace) -> int:
 def story(result: RunResult, path: str) -> list[str]:
     """The log as a reader wants it: the verdict, the first failure, then each device. For a
     log cut short, the verdict and each device's state are as of where it ends, said so."""
-    verdict = "may arm" if result.may_arm else "arming refused"
+    verdict = result.verdict
     cut = result.log_cut_at
     end = "at the end" if cut is None else f"at {cut:.2f} s, where the log ends"
     lines = [
