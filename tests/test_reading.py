@@ -129,6 +129,7 @@ def test_every_product_read_goes_through_the_reader() -> None:
         "migrate/axes.py": "the bundled driver_axes.toml (package data)",
         "store/file.py": "the backup copy of the file being saved (the write path)",
         "store/session.py": "the lock file",
+        "writing.py": "an output's first bytes: a store file is not written over",
     }
     package = ROOT / "python" / "px4params"
     found = []

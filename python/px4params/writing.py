@@ -211,7 +211,7 @@ def check_outputs(
         key = _identity(given)
         if key in taken:
             raise _refused(f"is {taken[key]}: give the output another path", given, errno.EINVAL)
-        if _starts_with(given, STORE_MAGIC):
+        if _is_store(given):
             raise _refused(
                 "is a px4params store file: give the output another path (or move the store first)",
                 given,
@@ -220,15 +220,15 @@ def check_outputs(
         taken[key] = "another output of this command"
 
 
-def _starts_with(path: str, magic: bytes) -> bool:
-    """Whether ``path`` is a regular file whose first bytes are ``magic`` (a FIFO is not
-    opened: that would wait for a writer)."""
+def _is_store(path: str) -> bool:
+    """Whether ``path`` is a store file: a regular file (a FIFO is not opened, which would wait
+    for a writer) whose first bytes are :data:`STORE_MAGIC`."""
     try:
         if not stat.S_ISREG(os.stat(path).st_mode):
             return False
         with open(path, "rb") as f:
-            return f.read(len(magic)) == magic
-    except OSError:
+            return f.read(len(STORE_MAGIC)) == STORE_MAGIC
+    except OSError:  # missing, or not to be read: not a store this command would replace
         return False
 
 
