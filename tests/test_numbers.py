@@ -11,7 +11,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from px4params.errors import NumberError
-from px4params.numbers import dump_json, load_json, parse_float, parse_int
+from px4params.numbers import abbreviated, dump_json, load_json, parse_float, parse_int
 from strategies import budget
 
 
@@ -72,3 +72,16 @@ def test_numbers_are_bounded_before_conversion() -> None:
     with pytest.raises(NumberError, match=r"^1e400 is out of range"):
         load_json("[1e400]")
     assert load_json('{"x": 1.5, "y": "inf"}') == {"x": 1.5, "y": "inf"}
+
+
+@pytest.mark.parametrize(
+    ("given", "shown"),
+    [
+        ("15\x000", "15\\x000"),  # a NUL in an airframe line: "'150' is not an integer"
+        ("\x1b[2Jx", "\\x1b[2Jx"),  # an escape sequence acted on the terminal
+        ("a\tb", "a\\tb"),
+        ("é and ü", "é and ü"),  # printable, as given
+    ],
+)
+def test_a_character_that_does_not_print_is_shown_escaped(given: str, shown: str) -> None:
+    assert abbreviated(given) == shown

@@ -33,8 +33,11 @@ MAX_DIGITS = 64
 
 def abbreviated(text: str) -> str:
     """``text`` itself when short, else its ends and its length: ``999999...999999 (5000
-    digits)``."""
+    digits)``; a character that does not print (a NUL, an escape, a tab) as Python writes it
+    in a string (``15\\x000``): messages show what was given, and no terminal control."""
     text = text.strip()
+    if not text.isprintable():
+        text = "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
     if len(text) <= 32:
         return text
     return f"{text[:12]}...{text[-6:]} ({len(text)} characters)"
