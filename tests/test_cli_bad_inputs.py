@@ -78,13 +78,17 @@ def _cases() -> Iterator[Case]:
         ("INA238#0[4]", "128"),
         ("INA238#0[4]", "-1"),
         ("INA238#0.bus.i2c.bus_id", "16"),
-        ("INA238#0.shunt", "70000"),
         ("INA238#0.bus._tag", "6"),
         ("SYS_AUTOSTART", "2147483648"),
         ("SYS_AUTOSTART", "-2147483649"),
-        ("INA238#0.current", "1024"),
     ]:
         yield Case(("param", "--store", "{dir}/v.store", "set", target, value), says="out of range")
+    # beyond the type's range too, but its @min/@max are what the refusal names
+    for target, value, says in [
+        ("INA238#0.shunt", "70000", "70000 is outside 0.00001..0.1 (@min/@max)"),
+        ("INA238#0.current", "1024", "1024 is outside 1..327 (@min/@max)"),
+    ]:
+        yield Case(("param", "--store", "{dir}/v.store", "set", target, value), says=says)
     # whole values as JSON
     for value, says in [
         ('{"current": ' + HUGE + "}", "out of range"),

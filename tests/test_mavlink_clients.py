@@ -325,10 +325,10 @@ def test_the_pages_client_writes_a_float16_leaf(
         assert (result.ok, result.reason) == (True, "")
         assert result.value == FLOAT16_0_0005  # what is stored, read back
         assert served.store.get("INA238#1.shunt") == FLOAT16_0_0005
-        refused = page.write("INA238_1Q", 1e6)  # float16 tops out at 65504
+        refused = page.write("INA238_1Q", 1e6)  # beyond a float16 too: its @max is said
         assert not refused.ok and refused.value == FLOAT16_0_0005
         assert refused.reason == (
-            "INA238_1Q: INA238#1: shunt: value 1000000 is out of range (expected -65504 to 65504)"
+            "INA238_1Q: INA238#1.shunt: 1000000 is outside 0.00001..0.1 (@min/@max)"
         )
     finally:
         if page is not None:

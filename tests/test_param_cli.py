@@ -423,7 +423,8 @@ BAD_PARAM = [
     ),
     (
         ["set", "INA238#0[6]", "1e9"],
-        "INA238#0: shunt: value 1000000000 is out of range (expected -65504 to 65504)",
+        # (the field's @min/@max, not a float16's -65504..65504)
+        "INA238#0.shunt: 1000000000 is outside 0.00001..0.1 (@min/@max)",
     ),
     (
         ["set", "INA238#0[0]", "1"],
@@ -458,6 +459,11 @@ BAD_PARAM = [
     (["set", "INA238", "1"], "INA238 has instances: name one, e.g. INA238#0"),
     (
         ["set-default", "INA238#0[5]", "2000"],
+        "INA238#0.current: 2000 is outside 1..327 (@min/@max)",
+    ),
+    (
+        # With --force the type's range still holds, and nothing is said stored.
+        ["set", "--force", "INA238#0[5]", "2000"],
         "INA238#0: current: value 2000 is out of range (expected 0 to 1023)",
     ),
     (["set-default", "NOPE", "1"], "unknown parameter 'NOPE'"),

@@ -270,8 +270,16 @@ BAD = [
         "BAT1_CAPACITY is a classic parameter: it has no leaves",
     ),
     ("set_default", ("INA238#3.current", 2000), EncodeError, "INA238#3: instance does not exist"),
+    # The field's @min/@max are named before its type's range (0..1023 for a uint10).
     (
         "set_default",
+        ("INA238#0.current", 2000),
+        ValueRangeError,
+        "INA238#0.current: 2000 is outside 1..327 (@min/@max)",
+    ),
+    # With --force (the Python API's force=True), the type's range still holds.
+    (
+        "set_default_forced",
         ("INA238#0.current", 2000),
         EncodeError,
         "INA238#0: current: value 2000 is out of range (expected 0 to 1023)",
@@ -294,7 +302,10 @@ def test_refused_changes_leave_the_store_as_it_was(
     store.set("SYS_AUTOSTART", 4001)
     before = encode_file(store)
     with pytest.raises((exc, InstanceError)) as info:
-        getattr(store, method)(*args)
+        if method.endswith("_forced"):
+            getattr(store, method.removesuffix("_forced"))(*args, force=True)
+        else:
+            getattr(store, method)(*args)
     assert message in str(info.value)
     assert "\n" not in str(info.value)
     assert encode_file(store) == before
@@ -311,7 +322,7 @@ def test_full(store: px4params.Store) -> None:
 
 def test_transaction_is_all_or_nothing(store: px4params.Store) -> None:
     before = encode_file(store)
-    with pytest.raises(EncodeError), store.transaction():
+    with pytest.raises(ValueRangeError), store.transaction():
         store.add("INA238#0")
         store.set("INA238#0.current", 5)
         store.set("INA238#0.current", 5000)

@@ -221,9 +221,10 @@ def _write(s: Session, name: str, text: str, *, default: bool, force: bool = Fal
     except ValueRangeError as e:
         if not (force and e.bounds_only):
             raise
-        # --force overrides @min/@max and @value lists (never a NaN or an infinity), says so.
-        print(f"px4params: warning: --force: {e}; stored anyway", file=sys.stderr)
+        # --force overrides @min/@max and @value lists (never a NaN or an infinity, nor the
+        # type's own range), and says so once the value is stored.
         write(key, value, force=True)
+        print(f"px4params: warning: --force: {e}; stored anyway", file=sys.stderr)
     if isinstance(value, float) and value != 0 and math.isfinite(value):
         stored = s.store.get(key, default=default)
         if stored == 0:

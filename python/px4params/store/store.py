@@ -500,11 +500,17 @@ class Store:
                 return
             if not saturate:  # a plain number: checked without the codec (the common case)
                 stored = stored_number(value, rng)
+                if stored is None and not force and _finite_number(value):
+                    # Beyond the leaf's float width (1e6 for a float16): outside any
+                    # @min/@max the field can have, which is what the refusal names.
+                    stored = value
                 if stored is not None:
                     if within(stored, rng, not force):
                         return
-                    # Refused: but a leaf that does not exist or a value its type cannot hold
-                    # is the write's own error, worded by the core.
+                    # Refused: but a leaf that does not exist is the write's own error, worded
+                    # by the core, and so is, with --force, a value its type cannot hold. The
+                    # field's @min/@max come before its type's range (0.00001..0.1, not a
+                    # float16's -65504..65504).
                     if found is None:
                         try:
                             found = self._native.get_leaf(
@@ -512,7 +518,7 @@ class Store:
                             )
                         except Px4ParamsError:
                             return
-                    if in_type_range(value, found[2]):
+                    if not force or in_type_range(value, found[2]):
                         where = f"{self._instance_name(p, instance)}.{path}"
                         check_stored(where, stored, rng, not force, value)
                     return
@@ -652,6 +658,16 @@ class Store:
 def _one_value(p: _Param) -> str:
     """What a parameter without instances is: a classic one or a shared structured one."""
     return "a classic parameter" if p.classic is not None else "a shared parameter"
+
+
+def _finite_number(value: object) -> bool:
+    """A plain ``int`` or finite ``float`` (not a bool, not beyond every double)."""
+    if type(value) is not int and type(value) is not float:
+        return False
+    try:
+        return math.isfinite(float(value))
+    except OverflowError:  # an int beyond every double: the codec refuses it
+        return False
 
 
 def _changed_leaves(leaves: list[Leaf], before: list[Leaf]) -> list[Leaf]:
