@@ -177,8 +177,8 @@ def _write(where: str, forced: Forced | None, write: Callable[..., object], *arg
     except ValueRangeError as e:
         if forced is None or not e.bounds_only:
             raise
+        write(*args, force=True)  # (the type's own range still holds: said once stored)
         forced(f"{where}: {e}")
-        write(*args, force=True)
 
 
 def _refused(message: str, cause: Exception) -> ParamFileError:
