@@ -1377,7 +1377,8 @@ fn stored_raw(kind: Kind, value: Scalar, saturate: bool) -> core::result::Result
 }
 
 /// Checks that `data` is exactly one stored value of `root` whose `p_version` fields hold the
-/// version and whose floats are finite. In line, so that the codec's error becomes the store's where it is returned.
+/// version and whose floats are finite. In line, so that the codec's error becomes the store's
+/// where it is returned.
 #[inline(always)]
 fn check_encoded(layout: &Layout<'_>, root: NodeId, data: &[u8]) -> Result<()> {
     codec::check_stored(layout, root, data).map_err(StoreError::Codec)

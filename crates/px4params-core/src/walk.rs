@@ -5,11 +5,11 @@
 //! ([`decode`]), encoding from one ([`encode`]), finding leaf `[k]` ([`locate`]) or the leaf a
 //! path names ([`locate_by`], for hosts and firmware alike: the union tags, array lengths and
 //! tail arrays on the way are the loop's to read), rewriting a value with a new union tag or
-//! array length ([`transcode`]), a type's default
-//! ([`encode_default`]), checking a stored value's `p_version` fields and floats ([`check_stored`]) and
-//! translating a value of an older type version ([`translate`]). Firmware builds (feature
-//! `compact`) do all of these through this one interpreter of the DroneCAN rules, which is
-//! why it is here: one walk in the code instead of one per operation.
+//! array length ([`transcode`]), a type's default ([`encode_default`]), checking a stored
+//! value's `p_version` fields and floats ([`check_stored`]) and translating a value of an older
+//! type version ([`translate`]). Firmware builds (feature `compact`) do all of these through
+//! this one interpreter of the DroneCAN rules, which is why it is here: one walk in the code
+//! instead of one per operation.
 //!
 //! Hosts keep faster walks for most of them (the codec's encoder and decoder, leaf tables,
 //! seeks), which tests hold to this one, and use this one where a write changes a value's
