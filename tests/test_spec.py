@@ -890,22 +890,46 @@ def test_a_value_the_type_cannot_hold_is_the_codecs_refusal_and_one_it_can_the_r
             s.set(name, value)
         return type(e.value).__name__, str(e.value)
 
-    # uint10 holds 0..1023, float16 up to 65504 (IEEE 754 binary16), int8 -128..127: inside,
-    # @min/@max refuse; outside, the codec says what the type holds
+    # uint10 holds 0..1023, float16 up to 65504 (IEEE 754 binary16), int8 -128..127. A field's
+    # @min/@max refuse first, inside the type's range or beyond it (the message a pilot can act
+    # on: 0.00001..0.1, not a float16's 65504); beyond the type, the refusal is no bounds alone
+    # (--force cannot take it). A field without @min/@max: the codec says what the type holds.
     assert refusal(store, "INA238#1.current", 1023)[0] == "ValueRangeError"
     assert refusal(store, "INA238#1.current", 1024) == (
-        "EncodeError",
-        "INA238#1: current: value 1024 is out of range (expected 0 to 1023)",
+        "ValueRangeError",
+        "INA238#1.current: 1024 is outside 1..327 (@min/@max)",
     )
-    assert refusal(store, "INA238#1.current", -1)[0] == "EncodeError"
     assert refusal(store, "INA238#1.shunt", 65504.0) == (
         "ValueRangeError",
         f"INA238#1.shunt: 65504 {SHUNT_RANGE}",
     )
-    assert refusal(store, "INA238#1.shunt", -65504.0)[0] == "ValueRangeError"
-    assert refusal(store, "INA238#1.shunt", 70000.0)[0] == "EncodeError"
-    assert refusal(gauge, "GAUGE#0.offset", 128)[0] == "EncodeError"
-    assert refusal(gauge, "GAUGE#0.offset", -129)[0] == "EncodeError"
+    assert refusal(store, "INA238#1.shunt", 70000.0) == (
+        "ValueRangeError",
+        f"INA238#1.shunt: 70000 {SHUNT_RANGE}",
+    )
+    for name, value, forcible in (
+        ("INA238#1.current", 327 + 1, True),
+        ("INA238#1.current", 1024, False),
+        ("INA238#1.current", -1, False),
+        ("INA238#1.shunt", -65504.0, True),
+        ("INA238#1.shunt", 70000.0, False),
+    ):
+        with pytest.raises(ValueRangeError) as e:
+            store.set(name, value)
+        assert e.value.bounds_only is forcible, (name, value)
+    # --force takes a value beyond @min/@max, never one beyond the type
+    with pytest.raises(EncodeError, match=r"value 1024 is out of range \(expected 0 to 1023\)"):
+        store.set("INA238#1.current", 1024, force=True)
+    # int8 with @min -128 (its own bottom) and @max 100
+    assert refusal(gauge, "GAUGE#0.offset", 128) == (
+        "ValueRangeError",
+        "GAUGE#0.offset: 128 is above 100 (@max)",
+    )
+    # (its @min only repeats the type's bottom: below it, the type's range is the refusal)
+    assert refusal(gauge, "GAUGE#0.offset", -129) == (
+        "EncodeError",
+        "GAUGE#0: offset: value -129 is out of range (expected -128 to 127)",
+    )
     assert issubclass(EncodeError, Px4ParamsError)
 
 

@@ -219,10 +219,11 @@ def _write(s: Session, name: str, text: str, *, default: bool, force: bool = Fal
     try:
         write(key, value)
     except ValueRangeError as e:
-        if not (force and e.bounds_only):
+        if not force:
             raise
         # --force overrides @min/@max and @value lists (never a NaN or an infinity, nor the
-        # type's own range), and says so once the value is stored.
+        # type's own range: the forced write refuses those in its own words), and says so once
+        # the value is stored.
         write(key, value, force=True)
         print(f"px4params: warning: --force: {e}; stored anyway", file=sys.stderr)
     if isinstance(value, float) and value != 0 and math.isfinite(value):

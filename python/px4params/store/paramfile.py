@@ -175,9 +175,9 @@ def _write(where: str, forced: Forced | None, write: Callable[..., object], *arg
     try:
         write(*args)
     except ValueRangeError as e:
-        if forced is None or not e.bounds_only:
+        if forced is None:
             raise
-        write(*args, force=True)  # (the type's own range still holds: said once stored)
+        write(*args, force=True)  # (a NaN or a value beyond its type: refused here)
         forced(f"{where}: {e}")
 
 

@@ -355,9 +355,17 @@ def check_leaves(
 
 
 def check_stored(
-    name: str, value: float, rng: LeafRange, bounds: bool = True, given: object = None
+    name: str,
+    value: float,
+    rng: LeafRange,
+    bounds: bool = True,
+    given: object = None,
+    *,
+    forcible: bool = True,
 ) -> None:
-    """:func:`check_leaves` for one leaf named ``name`` that would store ``value``."""
+    """:func:`check_leaves` for one leaf named ``name`` that would store ``value``. A refusal
+    of bounds alone is one ``--force`` takes (:attr:`ValueRangeError.bounds_only`), unless not
+    ``forcible``: a value beyond the leaf's type too, which no write can store."""
     if rng.float_bits and not math.isfinite(value):
         raise ValueRangeError(
             f"{name}: {_shown(value)} is not a finite number ({rng.type}: NaN and infinities "
@@ -375,7 +383,7 @@ def check_stored(
             why = describe_outside(value, rng, bits)
         else:
             why = describe_not_listed(value, rng, bits)
-        raise ValueRangeError(f"{name}: {why}", bounds_only=True)
+        raise ValueRangeError(f"{name}: {why}", bounds_only=forcible)
 
 
 def within(value: float, rng: LeafRange, bounds: bool = True) -> bool:

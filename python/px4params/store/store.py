@@ -518,9 +518,10 @@ class Store:
                             )
                         except Px4ParamsError:
                             return
-                    if not force or in_type_range(value, found[2]):
+                    holds = in_type_range(value, found[2])
+                    if not force or holds:
                         where = f"{self._instance_name(p, instance)}.{path}"
-                        check_stored(where, stored, rng, not force, value)
+                        check_stored(where, stored, rng, not force, value, forcible=holds)
                     return
         try:
             now = self._native.get(p.index, instance, default=default)
