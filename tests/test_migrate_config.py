@@ -62,6 +62,50 @@ def test_a_proposal_of_a_configuration_made_by_hand_reports_it() -> None:
     assert "\n# INA238#0: on the bench\nparam add INA238#0\n" in proposal.airframe()
 
 
+def test_the_airframe_of_a_cut_log_says_so_in_its_header() -> None:
+    whole = migrate.OldConfig("run.ulg", "ULog", {"SYS_AUTOSTART": 4001})
+    cut = migrate.OldConfig("run.ulg", "ULog", {"SYS_AUTOSTART": 4001}, cut=True)
+    header = [
+        "# Device manifest migrated by px4params from run.ulg (ULog)",
+        "# Review before use: see the migration report.",
+    ]
+    warning = (
+        "# Warning: the log is cut short or damaged: devices logged after the break are missing "
+        "here."
+    )
+    none = "# No device could be carried over."
+    assert migrate.Proposal(whole, table="current").airframe().splitlines() == [*header, none]
+    cut_proposal = migrate.Proposal(cut, table="current")
+    assert cut_proposal.airframe().splitlines() == [*header, warning, none]
+    assert cut_proposal.as_dict()["log_cut"] is True
+
+
+def test_a_param_set_list_reads_every_command_of_a_line_joined_by_semicolons(
+    tmp_path: Path,
+) -> None:
+    # One line of shell: the `then` and `else` parts are read (as if their condition held), and
+    # so is what follows the `fi`; exactly ten lines of other commands are all named.
+    path = tmp_path / "vehicle.airframe"
+    path.write_text(
+        "if param compare SYS_AUTOSTART 4001; then param set CAL_MAG1_PRIO 50; "
+        "else param set CAL_MAG2_PRIO 75; fi; param set SENS_EN_INA238 1\n"
+        + "".join(f"echo {n}\n" for n in range(10))
+        + "fi\nparam set SYS_AUTOSTART 4001\n"  # (a `fi` too many closes nothing)
+    )
+    config = migrate.read_config(path)
+    assert config.params == {
+        "CAL_MAG1_PRIO": 50,
+        "CAL_MAG2_PRIO": 75,
+        "SENS_EN_INA238": 1,
+        "SYS_AUTOSTART": 4001,
+    }
+    assert config.details == [
+        "'param set' inside if ... fi (line 1): read as if every condition held"
+    ]
+    not_read = "not a 'param set NAME VALUE' command, not read"
+    assert config.skipped == [f"line {2 + n}: 'echo {n}': {not_read}" for n in range(10)]
+
+
 def test_a_logs_details_and_version_are_its_information_fields() -> None:
     """sample_log_small.ulg, read by hand with pyulog: ver_hw CUBEPILOT_CUBEORANGE,
     ver_sw_branch v1.11.2_w_rc_sysid, ver_sw 8583f1da..., ver_sw_release 0x010B0200 (PX4's

@@ -150,7 +150,7 @@ def _run_airframe(scratch: Any, filename: str, text: str) -> list[str]:
             lines = errors.getvalue().strip().replace(path, filename).splitlines()
             message = " ".join(line.removeprefix("px4params: ") for line in lines)
             raise CommandError(message or f"{filename}: the airframe file failed")
-    return [line.replace(path, filename, 1) for line in result.skipped]
+    return [line.replace(path, filename) for line in result.skipped]
 
 
 def export_params(values: Mapping[str, Any], metadata: Mapping[str, Any], store: Any = None) -> str:

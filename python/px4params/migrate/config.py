@@ -115,7 +115,9 @@ def _read_text(where: str) -> OldConfig:
         ),
         "",
     )
-    if first.startswith("param "):
+    # A QGC .params line starts with the vehicle's number; shell (an airframe file, `param set`
+    # lines, maybe after an `if`) with a word.
+    if first and not first[0].isdigit():
         return _read_param_list(text, where)
     try:
         read = qgc_params.read(text, where)
@@ -164,6 +166,14 @@ def _read_text(where: str) -> OldConfig:
     return OldConfig(where, "QGC .params", params, details, skipped, version=version)
 
 
+def _number(value: str, where: str) -> int | float:
+    """A ``param set`` line's value: an integer stays one (PX4's INT32), the rest are floats."""
+    try:
+        return parse_int(value) if re.fullmatch(r"[+-]?\d+", value) else parse_float(value)
+    except (NumberError, ValueError):
+        raise MigrationError(f"{where}: value '{abbreviated(value)}' is not a number") from None
+
+
 #: How many lines a ``param set`` list's report names one by one (then it counts the rest).
 SHOWN_LINES = 10
 
@@ -176,37 +186,25 @@ def _read_param_list(text: str, where: str) -> OldConfig:
     params: dict[str, int | float] = {}
     other: list[str] = []
     conditional: list[int] = []
-    opened: list[int] = []  # the lines of the `if`s around
+    depth = 0  # of the `if`s around
     for number, raw in enumerate(text.splitlines(), start=1):
         line = re.sub(r"(^|\s)#.*$", "", raw).strip()  # the shell's comments
-        for command in (c.strip() for c in line.split(";")):
+        for command in filter(None, (c.strip() for c in line.split(";"))):
             word, _, rest = command.partition(" ")
-            if word == "if":
-                opened.append(number)
-                continue
-            if word == "fi":
-                if opened:
-                    opened.pop()
-                continue
             if word in ("then", "else"):  # (`then param set ...` runs what follows)
                 command = rest.strip()
-            if not command:
-                continue
+                word = command.partition(" ")[0]
             m = _PARAM_SET.fullmatch(command)
-            if not m:
+            if word == "if":
+                depth += 1
+            elif word == "fi":
+                depth = max(depth - 1, 0)
+            elif m is not None:
+                if depth:
+                    conditional.append(number)
+                params[m[2]] = _number(m[3], f"{where}:{number}: {m[2]}")
+            elif command:
                 other.append(f"line {number}: '{abbreviated(command)}'")
-                continue
-            if opened:
-                conditional.append(number)
-            name, value = m[2], m[3]
-            try:
-                params[name] = (
-                    parse_int(value) if re.fullmatch(r"[+-]?\d+", value) else parse_float(value)
-                )
-            except (NumberError, ValueError):
-                raise MigrationError(
-                    f"{where}:{number}: {name}: value '{abbreviated(value)}' is not a number"
-                ) from None
     if not params:
         raise MigrationError(f"{where}: no 'param set' lines")
     skipped = [f"{line}: not a 'param set NAME VALUE' command, not read" for line in other]
@@ -215,9 +213,10 @@ def _read_param_list(text: str, where: str) -> OldConfig:
         skipped = [*skipped[:SHOWN_LINES], f"... and {more} more lines of other commands"]
     details = []
     if conditional:
-        lines = ", ".join(map(str, dict.fromkeys(conditional)))
+        numbers = list(dict.fromkeys(conditional))
+        lines = ", ".join(map(str, numbers))
         details.append(
-            f"'param set' inside if ... fi (line{'s' if len(conditional) > 1 else ''} {lines}): "
+            f"'param set' inside if ... fi (line{'s' if len(numbers) > 1 else ''} {lines}): "
             "read as if every condition held"
         )
     return OldConfig(where, "param set list", params, details, skipped)
