@@ -911,6 +911,24 @@ def test_a_result_built_without_the_optional_fields_has_them_empty():
     assert result.as_dict()["log_cut_at"] is None
 
 
+@pytest.mark.parametrize(
+    ("may_arm", "arming", "cut_at", "verdict"),
+    [
+        (True, [(0.1, True)], None, "may arm"),
+        (False, [(0.1, False)], None, "arming refused"),
+        (False, [], None, "arming refused"),  # a whole run: the commander's silence refuses
+        (False, [(0.1, False)], 2.0, "arming refused"),
+        (True, [(0.1, True)], 2.0, "may arm"),
+        (False, [], 0.0, "no arming answer logged"),  # cut before the commander answered
+    ],
+)
+def test_the_verdict_of_a_log_cut_before_any_answer_is_no_answer(
+    may_arm: bool, arming: list[tuple[float, bool]], cut_at: float | None, verdict: str
+) -> None:
+    result = RunResult("manifest", 0, 1.0, "b", [], may_arm, [], arming=arming, log_cut_at=cut_at)
+    assert result.verdict == verdict
+
+
 def test_bench_table_may_describe_the_bench(drivers):
     text = '[bench]\nname = "quad"\ndescription = "the frame on the desk"\n' + ONE
     assert parse_bench(text, "b", drivers).name == "quad"
