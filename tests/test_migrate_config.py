@@ -419,3 +419,21 @@ def test_a_logs_hardware_type_is_its_ver_hw_subtype_string(
     config = migrate.read_config(log)
     assert config.params == {"SYS_AUTOSTART": 4001}
     assert config.hw_type == hw_type
+
+
+def test_nested_ifs_make_their_lines_conditional_until_their_fi(tmp_path: Path) -> None:
+    path = tmp_path / "vehicle.airframe"
+    path.write_text(
+        "if param compare SYS_AUTOSTART 4001; then if param compare SENS_EN_INA238 1; then\n"
+        "  param set CAL_MAG1_PRIO 50\n"
+        "  fi\n"
+        "  param set CAL_MAG2_PRIO 75\n"
+        "fi\n"
+        "param set SENS_EN_INA226 1\n"
+    )
+    config = migrate.read_config(path)
+    assert config.params == {"CAL_MAG1_PRIO": 50, "CAL_MAG2_PRIO": 75, "SENS_EN_INA226": 1}
+    assert config.details == [
+        "'param set' inside if ... fi (lines 2, 4): read as if every condition held"
+    ]
+    assert config.skipped == []
