@@ -276,3 +276,12 @@ def test_a_reviewed_airframe_reads_and_writes_no_file_on_this_computer(
         f"forum.airframe:4: param load {local}: {why}",
         f"forum.airframe:5: param import {local}: {why}",
     ]
+
+
+def test_a_bad_json_file_is_named_as_the_page_named_it(vehicle: Any) -> None:
+    # The refusal named the copy read on the server (/tmp/tmp.../vehicle.json).
+    values, metadata = vehicle
+    text = '{"format": "px4params", "version": 1, "instances": {"NOPE#0": {}}}'
+    with pytest.raises(Px4ParamsError) as e:
+        files.review_file("vehicle.json", text, values, metadata)
+    assert str(e.value) == "vehicle.json: instances: unknown parameter 'NOPE'"

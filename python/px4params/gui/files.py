@@ -47,7 +47,10 @@ def review_file(
                     f.write(text)
                 from px4params.store import paramfile
 
-                notes = paramfile.read(scratch, path, reset=False)
+                try:
+                    notes = paramfile.read(scratch, path, reset=False)
+                except Px4ParamsError as e:  # named as the page named the file, not the copy
+                    raise CommandError(str(e).replace(path, filename)) from None
         else:  # an airframe file of param lines
             notes = _run_airframe(scratch, filename, text)
         from px4params.store.flat import flat_values
