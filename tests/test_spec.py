@@ -917,6 +917,10 @@ def test_a_value_the_type_cannot_hold_is_the_codecs_refusal_and_one_it_can_the_r
         with pytest.raises(ValueRangeError) as e:
             store.set(name, value)
         assert e.value.bounds_only is forcible, (name, value)
+    # a whole value's leaf beyond @min/@max only: --force takes it
+    with pytest.raises(ValueRangeError) as e:
+        store.set("INA238#1", {**store.get("INA238#1"), "current": 500})
+    assert e.value.bounds_only is True
     # --force takes a value beyond @min/@max, never one beyond the type
     with pytest.raises(EncodeError, match=r"value 1024 is out of range \(expected 0 to 1023\)"):
         store.set("INA238#1.current", 1024, force=True)
