@@ -3,7 +3,7 @@
 //! floats clamp to the field's range or report it, truncated floats overflow to infinities of
 //! the value's sign, and the largest finite value of a field is in range.
 
-use px4params_core::scalar::{float_raw, int_raw, uint_raw, ScalarError};
+use px4params_core::scalar::{float_raw, int_raw, raw_is_finite, uint_raw, ScalarError};
 use px4params_core::{Cast, Scalar};
 
 /// IEEE 754 binary32 bit patterns.
@@ -117,5 +117,34 @@ fn the_largest_finite_value_of_a_float_field_is_in_range() {
             float_raw(Scalar::Float(-max), 32, cast, false),
             Ok(F32_NEG_MAX)
         );
+    }
+}
+
+/// The bits of IEEE 754 binary16, binary32 and binary64 (the standard's own encodings: an
+/// exponent of all ones is an infinity or a NaN), told finite or not, each sign.
+#[test]
+fn raw_float_bits_are_finite_unless_their_exponent_is_all_ones() {
+    let cases: [(u32, u64, bool); 15] = [
+        (16, 0x3C00, true),                 // 1.0
+        (16, 0x7BFF, true),                 // 65504, the largest finite
+        (16, 0x0001, true),                 // the smallest subnormal
+        (16, 0x7C00, false),                // +inf
+        (16, 0xFE00, false),                // a negative NaN
+        (32, 0x3F80_0000, true),            // 1.0
+        (32, 0x7F7F_FFFF, true),            // f32::MAX
+        (32, 0xFF80_0000, false),           // -inf
+        (32, 0x7FC0_0000, false),           // NaN
+        (64, 0x3FF0_0000_0000_0000, true),  // 1.0
+        (64, 0x7FEF_FFFF_FFFF_FFFF, true),  // f64::MAX
+        (64, 0x0000_0000_7FF0_0000, true),  // a subnormal whose low word looks like an exponent
+        (64, 0x7FF0_0000_0000_0000, false), // +inf
+        (64, 0xFFF8_0000_0000_0000, false), // a negative NaN
+        (64, 0x7FF0_0000_0000_0001, false), // a signalling NaN
+    ];
+    for (bits, raw, finite) in cases {
+        assert_eq!(raw_is_finite(raw, bits), finite, "{bits} bits: {raw:#x}");
+    }
+    for v in [0.5f64, f64::MAX, f64::MIN_POSITIVE, f64::INFINITY, f64::NAN] {
+        assert_eq!(raw_is_finite(v.to_bits(), 64), v.is_finite(), "{v}");
     }
 }
