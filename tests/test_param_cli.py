@@ -213,34 +213,38 @@ def test_a_forced_default_in_a_json_export_loads_back_with_force(
     assert param(capsys, "show", "-q", "INA238#0.current")[1] == "400\n"
 
 
-def test_force_takes_nothing_beyond_the_type_from_a_file_and_says_nothing_was_stored(
-    store: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+@pytest.mark.parametrize(
+    ("verb", "line", "refused"),
+    [
+        # beyond @max 327 and beyond a uint10: "stored anyway" was said before the type refused
+        (
+            "import",
+            "INA238_0P\t2000\t6",
+            "INA238#0: current: value 2000 is out of range (expected 0 to 1023)",
+        ),
+        (
+            "load",
+            "INA238_0Q\tnan\t9",
+            "INA238#0.shunt: nan is not a finite number (float16: NaN and infinities are refused)",
+        ),
+    ],
+)
+def test_force_takes_no_nan_and_nothing_beyond_the_type_from_a_file(
+    store: Path,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    verb: str,
+    line: str,
+    refused: str,
 ) -> None:
-    # 2000 is beyond @max 327 and beyond a uint10: the warning "stored anyway" came before
-    # the type's range refused it.
     talk(capsys, tmp_path)
-    path = tmp_path / "big.params"
-    path.write_text("1\t1\tINA238_0P\t2000\t6\n")
+    path = tmp_path / "forced.params"
+    path.write_text(f"1\t1\t{line}\n")
     before = store.read_bytes()
-    code, _, err = param(capsys, "import", "--force", str(path))
-    assert (code, err) == (
-        1,
-        f"px4params: error: {path}:1: INA238_0P: INA238#0: current: value 2000 is out of range "
-        "(expected 0 to 1023)\n",
-    )
+    code, _, err = param(capsys, verb, "--force", str(path))
+    name = line.partition("\t")[0]
+    assert (code, err) == (1, f"px4params: error: {path}:1: {name}: {refused}\n")
     assert store.read_bytes() == before
-
-
-def test_force_takes_no_nan_from_a_file(
-    store: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
-    talk(capsys, tmp_path)
-    path = tmp_path / "nan.params"
-    path.write_text("1\t1\tINA238_0Q\tnan\t9\n")
-    before = store.read_bytes()
-    code, _, err = param(capsys, "load", "--force", str(path))
-    assert code == 1 and store.read_bytes() == before
-    assert err.startswith(f"px4params: error: {path}:1: INA238_0Q: ") and "--force" not in err
 
 
 @pytest.mark.parametrize(
