@@ -22,6 +22,8 @@ __all__ = ["OldConfig", "read_config"]
 _QGC_VERSION = re.compile(r"#\s*Version:\s*v?(\d+)\.(\d+)\.(\d+)")
 _QGC_HEADER = re.compile(r"#\s*(Stack|Vehicle|Version|Git Revision):\s*(.*\S)")
 #: A line of an airframe-style parameter list.
+#: The commands that start a `param set` list (an airframe file's shell).
+_SHELL_WORDS = ("param", "if", "set", "echo", ".", "then", "else", "fi")
 _PARAM_SET = re.compile(r"param\s+(set|set-default)\s+(\S+)\s+(\S+)\s*")
 
 
@@ -115,9 +117,9 @@ def _read_text(where: str) -> OldConfig:
         ),
         "",
     )
-    # A QGC .params line starts with the vehicle's number; shell (an airframe file, `param set`
-    # lines, maybe after an `if`) with a word.
-    if first and not first[0].isdigit():
+    # Shell (an airframe file, `param set` lines, maybe inside an `if`) starts with one of its
+    # commands; anything else is read as QGC's, which names other stations' files.
+    if first.split(" ", 1)[0] in _SHELL_WORDS:
         return _read_param_list(text, where)
     try:
         read = qgc_params.read(text, where)
