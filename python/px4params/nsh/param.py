@@ -21,7 +21,6 @@ from px4params.errors import (
     ParamFileError,
     Px4ParamsError,
     StoreFileError,
-    ValueRangeError,
 )
 from px4params.numbers import abbreviated, dump_json, load_json, parse_float, parse_int
 from px4params.status import EXIT_FAILED, EXIT_OK
@@ -210,22 +209,20 @@ def resolve_name(store: Store, name: str) -> Key:
     return Key.parse(name)  # neither: the store's own error names the problem
 
 
+def _say_forced(what: str) -> None:
+    """The warning of a value ``--force`` stored (``paramfile.write_forcing``'s ``forced``)."""
+    print(f"px4params: warning: --force: {what}; stored anyway", file=sys.stderr)
+
+
 def _write(s: Session, name: str, text: str, *, default: bool, force: bool = False) -> None:
     key = resolve_name(s.store, name)
     # The leaf is read once: its type parses the number and says whether it rounds to zero.
     leaf = s.store.leaf(key) if key.leaf is not None and s.store.spec(key.param) else None
     value = parse_value(s.store, key, text, leaf)
+    from px4params.store.paramfile import write_forcing
+
     write = s.store.set_default if default else s.store.set
-    try:
-        write(key, value)
-    except ValueRangeError as e:
-        if not force:
-            raise
-        # --force overrides @min/@max and @value lists (never a NaN or an infinity, nor the
-        # type's own range: the forced write refuses those in its own words), and says so once
-        # the value is stored.
-        write(key, value, force=True)
-        print(f"px4params: warning: --force: {e}; stored anyway", file=sys.stderr)
+    write_forcing("", _say_forced if force else None, write, key, value)
     if isinstance(value, float) and value != 0 and math.isfinite(value):
         stored = s.store.get(key, default=default)
         if stored == 0:
@@ -506,13 +503,9 @@ def _load(s: Session, a: argparse.Namespace, merge: bool) -> int:
     before = [] if merge else [k for k in s.store.instance_keys() if k.instance is not None]
     if paramfile.kind_of(source):
         force = getattr(a, "force", None)  # (the command line's alone)
-
-        def forced(what: str) -> None:
-            print(f"px4params: warning: --force: {what}; stored anyway", file=sys.stderr)
-
         try:
             report = paramfile.read(
-                s.store, source, reset=not merge, forced=forced if force else None
+                s.store, source, reset=not merge, forced=_say_forced if force else None
             )
         except ParamFileError as e:
             if force is None or not e.bounds_only:

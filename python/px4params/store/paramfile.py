@@ -169,16 +169,20 @@ def read(store: Store, path: str, *, reset: bool, forced: Forced | None = None) 
         return _read_json(store, path, text, forced)
 
 
-def _write(where: str, forced: Forced | None, write: Callable[..., object], *args: Any) -> None:
-    """``write(*args)``; where ``forced`` is given, a value only outside its bounds is written
-    all the same (``force=True``) and told to it, named by ``where``."""
+def write_forcing(
+    where: str, forced: Forced | None, write: Callable[..., object], *args: Any
+) -> None:
+    """``write(*args)``; where ``forced`` is given (``--force``), a refused value is written
+    again with ``force=True``, which takes one outside its ``@min``/``@max`` or ``@value`` list
+    and still refuses a NaN or a value beyond its type in its own words, and, once stored, told
+    to ``forced`` (named by ``where``, when given)."""
     try:
         write(*args)
     except ValueRangeError as e:
         if forced is None:
             raise
-        write(*args, force=True)  # (a NaN or a value beyond its type: refused here)
-        forced(f"{where}: {e}")
+        write(*args, force=True)
+        forced(f"{where}: {e}" if where else str(e))
 
 
 def _refused(message: str, cause: Exception) -> ParamFileError:
@@ -231,7 +235,7 @@ def _read_qgc(store: Store, path: str, text: str, forced: Forced | None) -> list
                 classic = store.classic(name)
                 if classic is not None:
                     _check_type(where, name, row.type, classic.is_float)
-                _write(where, forced, store.set, name, number_value)
+                write_forcing(where, forced, store.set, name, number_value)
                 continue
             match = _FLAT_INSTANCE.fullmatch(name)
             if match is None or match["param"] not in store.parameters:
@@ -246,7 +250,7 @@ def _read_qgc(store: Store, path: str, text: str, forced: Forced | None) -> list
                 added.setdefault(instance, row.line)
             named.add(name)
             live = fmap.live(name, instance, slot)
-            _write(f"{where}: {name}", forced, write_live, store, live, number_value)
+            write_forcing(f"{where}: {name}", forced, write_live, store, live, number_value)
         except ParamFileError:
             raise
         except Px4ParamsError as e:  # named as the file names it, and as the store does
@@ -324,9 +328,11 @@ def _read_json(store: Store, path: str, text: str, forced: Forced | None) -> lis
             if key.instance is not None and key not in store:
                 store.add(key)
             if "default" in entry:
-                _write(f"{path}: instances", forced, store.set_default, key, entry["default"])
+                write_forcing(
+                    f"{path}: instances", forced, store.set_default, key, entry["default"]
+                )
             if "value" in entry:
-                _write(f"{path}: instances", forced, store.set, key, entry["value"])
+                write_forcing(f"{path}: instances", forced, store.set, key, entry["value"])
         except (Px4ParamsError, InstanceError) as e:
             raise _refused(f"{path}: instances: {e}", e) from None
     for name, value in classic.items():
