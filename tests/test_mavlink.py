@@ -1091,6 +1091,8 @@ class TestTurnByTurn:
         ("name", "index", "text", "error_index"),
         [
             (b"NO_SUCH_PARAM", -1, "[pm] unknown param: NO_SUCH_PARAM", -1),
+            # any negative index reads by name (PX4's rule); the error echoes the request's
+            (b"NO_SUCH_PARAM", -2, "[pm] unknown param: NO_SUCH_PARAM", -2),
             (b"", 45, "[pm] unknown param ID: 45", 45),
             (b"", 32767, "[pm] unknown param ID: 32767", 32767),
         ],

@@ -511,8 +511,8 @@ class MavlinkParamServer(ServingLoop):
                 self._send(self._hash_msg(), [peer])
                 return
             found = self._find(name)
-            if found is None:
-                self._error(peer, msg, name, -1, self._missing(name))
+            if found is None:  # the request's own index echoed (any negative one reads by name)
+                self._error(peer, msg, name, index, self._missing(name))
                 return
             self._send(self._value_msg(*found), [peer])
             return
@@ -651,7 +651,7 @@ class MavlinkParamServer(ServingLoop):
             msg.get_srcSystem(),
             msg.get_srcComponent(),
             name.encode()[:16],
-            max(-1, min(index, 0x7FFF)),
+            max(-0x8000, min(index, 0x7FFF)),  # an int16
             code,
         )
         self._send(error, [peer])
