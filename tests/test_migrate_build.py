@@ -1046,7 +1046,8 @@ def test_a_board_test_of_ver_hwcmp_is_settled_by_the_boards_own_names() -> None:
     )  # fmt: skip
     (ak,) = proposal.instances
     assert (ak.name, ak.values["rotation"]) == ("AK09916#0", 6)
-    assert proposal.assumptions == []
+    # (but the line that says the table asked for is not the file's era's)
+    assert [a for a in proposal.assumptions if not a.startswith("--table current: ")] == []
 
 
 def test_a_devtype_two_chips_share_is_matched_to_the_console_line_of_either() -> None:
@@ -1337,4 +1338,28 @@ def test_a_devtype_of_another_kind_than_its_slot_is_left_out_not_proposed() -> N
         "CAL_MAG0_ID = 15619337: MCP9808 (TEMP), I2C bus 1, address 0x55: not proposed: devtype "
         "0xEE is TEMP in the current table, which does not fit CAL_MAG0_ID (IMU/MAG): the log "
         "may be of another era (--table)"
+    )
+
+
+def test_a_table_asked_for_that_is_not_the_files_era_is_said_in_the_report() -> None:
+    """A PX4 1.15 file migrated with --table px4-v1.6 decodes its device IDs as asked, and the
+    report says the file's own era's table is another (its IDs may name other chips)."""
+    asked = migrate.migrate(today({}), table="px4-v1.6")
+    assert asked.assumptions[0] == (
+        "--table px4-v1.6: the file is of PX4 1.15.0, whose device IDs follow the current "
+        "devtype table; they are decoded with px4-v1.6 as asked (without --table, the file's own)"
+    )
+    # The file's own era's table, asked for or not, and a file naming no version: nothing said.
+    for config, table in ((today({}), "current"), (today({}), None)):
+        assert not any(
+            line.startswith("--table") for line in migrate.migrate(config, table=table).assumptions
+        )
+    older = OldConfig("t.ulg", "ULog", {}, version=(1, 11, 2))
+    assert not any(
+        "--table" in line for line in migrate.migrate(older, table="px4-v1.11").assumptions
+    )
+    unversioned = OldConfig("t.params", "QGC .params", {})
+    assert not any(
+        line.startswith("--table")
+        for line in migrate.migrate(unversioned, table="legacy").assumptions
     )

@@ -1054,6 +1054,13 @@ class _Builder:
             inst.notes.append(f"{', '.join(off)}: {which} disabled for use")
         if twice:
             inst.notes.append(twice.removeprefix("; "))
+        if later is None and start is None and not self.params.get("SENS_EXT_I2C_PRB", 1):
+            # Only probing starts such a device, and the file turned it off.
+            inst.notes.append(
+                "SENS_EXT_I2C_PRB = 0: PX4 probed for no external I2C sensor, so nothing in the "
+                "file says this one was started (its calibration may be of an earlier setup); "
+                "the manifest starts it and arming requires it: drop its line if it is gone"
+            )
         self.set_rotation(inst, *rotation, turned)
         self.note_unsettled_row(inst, chips, dev.bus, dev.address, if_run)
         for rot, v in rotations.items():
@@ -1368,6 +1375,14 @@ def migrate(
             table, why = devid.table_for_parameters(config.params)
             assumptions.append(why)
     names = devid.load_table(table) if isinstance(table, str) else table
+    if config.version is not None and names.label != devid.table_for_version(config.version):
+        # a table asked for that is not the file's own era's: its device IDs may name other chips
+        version = ".".join(map(str, config.version))
+        assumptions.append(
+            f"--table {names.label}: the file is of PX4 {version}, whose device IDs follow the "
+            f"{devid.table_for_version(config.version)} devtype table; they are decoded with "
+            f"{names.label} as asked (without --table, the file's own)"
+        )
     chosen = _board(config, board, assumptions)
     upgrade = _upgrade(config, chosen, target_release, assumptions)
     builder = _Builder(

@@ -91,7 +91,7 @@ examples:
         choices=TABLES,
         help="devtype table for CAL_*_ID device IDs (default: the one of the file's firmware "
         "version, from a log's ver_sw_release or a QGC file's '# Version' line, else decided from "
-        "its parameters)",
+        "its parameters; the report says where one given is not the file's own)",
     )
     p.add_argument(
         "--board",
