@@ -419,3 +419,37 @@ def test_a_large_websocket_message_closes_the_socket(gui: Gui) -> None:
 
     assert asyncio.run(flood()) == 1009  # "message too big"
     assert request(gui, "GET", "/api/state", headers=authorized(gui))[0] == 200
+
+
+# -- connections that send no request ------------------------------------------------------
+
+
+def test_a_connection_without_a_whole_request_head_is_closed(gui: Gui) -> None:
+    # uvicorn kept a connection that never sent a request, or sent its head a byte at a time,
+    # open for as long as the peer liked: 300 such held 300 descriptors for minutes.
+    import socket
+
+    from px4params.gui.connections import HEAD_SECONDS
+
+    silent = socket.create_connection(("127.0.0.1", gui.port), timeout=5)
+    partial = socket.create_connection(("127.0.0.1", gui.port), timeout=5)
+    partial.sendall(b"GET /api/state HTTP/1.1\r\nHost: 127.0.0.1\r\n")  # no blank line: not whole
+    started = time.monotonic()
+
+    async def socket_meanwhile() -> str:
+        # A WebSocket opened meanwhile outlives the deadline: its upgrade was a whole request.
+        async with websockets.connect(
+            f"ws://127.0.0.1:{gui.port}/ws", additional_headers=authorized(gui), open_timeout=10
+        ) as ws:
+            await asyncio.sleep(HEAD_SECONDS + 2)
+            await ws.ping()
+            return "open"
+
+    assert asyncio.run(socket_meanwhile()) == "open"
+    for conn in (silent, partial):
+        conn.settimeout(max(1.0, HEAD_SECONDS + 5 - (time.monotonic() - started)))
+        assert conn.recv(1024) == b""  # closed by the server, nothing answered
+        conn.close()
+    assert time.monotonic() - started < HEAD_SECONDS + 5
+    # A request made whole in time is answered.
+    assert request(gui, "GET", "/api/state", headers=authorized(gui))[0] == 200

@@ -1,0 +1,53 @@
+"""The page's HTTP connections: uvicorn's HTTP/1.1 protocol with a deadline for the first
+request's head.
+
+uvicorn closes a kept-alive connection that goes idle after a response, but not one that never
+sends a request, or sends its head a byte at a time: each held a connection (and a file
+descriptor) for as long as its peer liked. Here a connection whose first request head is not
+complete within :data:`HEAD_SECONDS` of connecting is closed. A WebSocket's upgrade request is a
+request like any other: once its head is in, the deadline is gone.
+"""
+
+from __future__ import annotations
+
+import asyncio
+from typing import Any
+
+import h11
+from uvicorn.protocols.http.h11_impl import H11Protocol
+
+#: Seconds a new connection has to send its first request's head (uvicorn's keep-alive timeout
+#: is 5 s; a browser's preconnected socket that sends nothing is closed, which it expects).
+HEAD_SECONDS = 10.0
+
+
+class HeadDeadline(H11Protocol):
+    """:class:`H11Protocol` that closes a connection whose first request head is late."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self._deadline: asyncio.TimerHandle | None = None
+
+    def connection_made(self, transport: asyncio.Transport) -> None:  # type: ignore[override]
+        super().connection_made(transport)
+        self._deadline = self.loop.call_later(HEAD_SECONDS, self._head_late)
+
+    def handle_events(self) -> None:
+        super().handle_events()
+        # A request's head is in once h11 has left IDLE (a whole head, not a part of one).
+        if self._deadline is not None and self.conn.their_state is not h11.IDLE:
+            self._cancel()
+
+    def connection_lost(self, exc: Exception | None) -> None:
+        self._cancel()
+        super().connection_lost(exc)
+
+    def _cancel(self) -> None:
+        if self._deadline is not None:
+            self._deadline.cancel()
+            self._deadline = None
+
+    def _head_late(self) -> None:
+        self._deadline = None
+        if self.conn.their_state is h11.IDLE and not self.transport.is_closing():
+            self.transport.close()
