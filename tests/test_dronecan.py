@@ -459,6 +459,69 @@ def test_node_survives_garbage_and_foreign_frames(vehicle_store: Path) -> None:
             peer.close()
 
 
+def test_a_host_that_stops_reading_loses_answers_not_the_node(vehicle_store: Path) -> None:
+    """A host that sends requests and reads nothing (a paused GUI tool): the node crashed on a
+    serial port's write timeout, and on a pty blocked in its write, answering nothing and
+    ignoring SIGTERM. Now what the host does not take is dropped, as an adapter drops frames;
+    the node answers again once the host reads, and stops on SIGTERM."""
+    import os
+    import re
+    import select
+    import signal
+    import tty
+
+    proc = subprocess.Popen(
+        [*PX4PARAMS, "dronecan", "serve", "--slcan-pty", "--store", str(vehicle_store)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        env={**os.environ, "PYTHONUNBUFFERED": "1"},
+    )
+    assert proc.stdout is not None
+    try:
+        first = proc.stdout.readline()
+        assert first.startswith("slcan: /dev/"), first
+        line = os.open(first.split()[1], os.O_RDWR | os.O_NOCTTY | os.O_NONBLOCK)
+        tty.setraw(line)
+
+        def request(tid: int) -> bytes:  # GetNodeInfo (data type 1), one frame, no payload
+            ident = can_id(1, source_node=100, dest_node=NODE, request=True)
+            return format_frame(Frame(ident, bytes([0xC0 | tid % 32])))
+
+        os.write(line, b"C\rS8\rO\r")
+        deadline = time.monotonic() + 20
+        sent = 0
+        while sent < 400 and time.monotonic() < deadline:  # 400 answers of 8 frames: unread
+            try:
+                os.write(line, request(sent))
+                sent += 1
+            except BlockingIOError:
+                time.sleep(0.01)
+        assert sent == 400
+        time.sleep(1.5)
+        # The host reads again: what waited, then a new request is answered.
+        while select.select([line], [], [], 0.5)[0]:
+            os.read(line, 65536)
+        os.write(line, request(7))
+        answer = b""  # the request's "Z" (sent), then the answer's frames
+        until = time.monotonic() + 5
+        while b"\rT" not in answer and time.monotonic() < until:
+            if select.select([line], [], [], 0.5)[0]:
+                answer += os.read(line, 65536)
+        assert answer.startswith(b"Z\rT"), answer
+        os.close(line)
+        proc.send_signal(signal.SIGTERM)
+        out, _ = proc.communicate(timeout=5)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+    assert "the host is not reading: what the node sends is dropped until it does" in out
+    assert re.search(r"the host reads again: \d+ writes to it were dropped", out), out
+    assert re.search(r", \d+ writes to a host that did not read dropped\n", out), out
+    assert "Traceback" not in out
+
+
 # -- the client, against a pydronecan node that serves parameters -----------------------------
 
 

@@ -753,3 +753,47 @@ def test_a_restart_starts_the_uptime_again(bench: Bench) -> None:
     assert bench.call(NODE_INFO.Request()).status.uptime_sec >= 100
     assert bench.call(RESTART.Request(magic_number=RESTART.Request().MAGIC_NUMBER)).ok
     assert bench.call(NODE_INFO.Request()).status.uptime_sec < 100
+
+
+class StalledLine(Line):
+    """A serial line whose host stopped reading: every write times out, as pyserial's does
+    (``SerialTimeoutException``, an ``OSError``), until :attr:`reading` is set again."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.reading = False
+
+    def fileno(self) -> int:
+        # A serial line's one descriptor selects writable when its buffer has room: the
+        # pipe's writing end stands in (the node is handed its frames directly here).
+        return self._write
+
+    def write(self, data: bytes) -> int:
+        import serial
+
+        if not self.reading:
+            raise serial.SerialTimeoutException("Write timeout")
+        return super().write(data)
+
+
+def test_a_write_timeout_drops_the_answer_and_the_node_goes_on(
+    store_file: Path, schema: px4params.Schema
+) -> None:
+    # `dronecan serve --slcan DEVICE` exited with a traceback when the host stopped reading.
+    bench = Bench(_load(store_file), schema)
+    line = StalledLine()
+    bench.line.close()
+    bench.line = bench.node.port = line
+    try:
+        for _ in range(3):
+            assert bench.call(NODE_INFO.Request()) is None  # answered, and dropped
+        assert bench.node.stats["dropped"] == 3
+        assert bench.logged == [  # said once
+            "the host is not reading: what the node sends is dropped until it does (0.5 s waited)"
+        ]
+        line.reading = True
+        assert bytes(bench.call(NODE_INFO.Request()).name) == b"org.px4params"
+        assert bench.logged[1:] == ["the host reads again: 3 writes to it were dropped"]
+        assert bench.node.stats["dropped"] == 3
+    finally:
+        line.close()

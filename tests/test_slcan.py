@@ -11,6 +11,7 @@ from __future__ import annotations
 import os
 import select
 import threading
+import time
 import types
 from collections.abc import Callable, Iterator
 from typing import Any
@@ -20,6 +21,7 @@ from px4params.links import slcan
 from px4params.links.can_transfer import Frame
 from px4params.links.slcan import (
     BITRATES,
+    WRITE_SECONDS,
     SlcanAdapter,
     SlcanError,
     SlcanHost,
@@ -439,6 +441,28 @@ def test_a_pty_write_larger_than_its_buffer_waits_for_the_reader() -> None:
         assert port.write(data) == len(data)
         reader.join(timeout=30)
         assert bytes(got) == data
+    finally:
+        os.close(client)
+        port.close()
+
+
+def test_a_pty_write_nobody_reads_gives_up_after_its_wait() -> None:
+    # A host that stops reading: the write waited for it forever (the node then answered
+    # nothing and ignored SIGTERM); now it waits WRITE_SECONDS and says how much went.
+    port, path = open_pty()
+    client = os.open(path, os.O_RDWR | os.O_NOCTTY)
+    data = bytes(range(256)) * 1024  # far beyond a pty's buffer
+    try:
+        started = time.monotonic()
+        went = port.write(data)
+        took = time.monotonic() - started
+        assert 0 < went < len(data)
+        assert WRITE_SECONDS <= took < WRITE_SECONDS + 2
+        # What went is what the reader gets: the start of the data, whole.
+        got = bytearray()
+        while select.select([client], [], [], 0.2)[0]:
+            got += os.read(client, 65536)
+        assert bytes(got) == data[:went]
     finally:
         os.close(client)
         port.close()

@@ -44,7 +44,7 @@ from px4params.links.can_transfer import CanId, Frame, Transfer, TransferReceive
 from px4params.links.dronecan_params import EMPTY, DronecanParams, variant_name
 from px4params.links.identity import store_digest, version_parts
 from px4params.links.serving import ServingLoop
-from px4params.links.slcan import SerialPort, SlcanAdapter, read_port
+from px4params.links.slcan import WRITE_SECONDS, SerialPort, SlcanAdapter, read_port
 from px4params.store.session import Session
 
 if TYPE_CHECKING:
@@ -125,7 +125,16 @@ class DronecanParamNode(ServingLoop):
         self._next_status = 0.0
         self._status_tid = 0
         #: Counters, for tests and the CLI's summary.
-        self.stats = {"requests": 0, "ignored": 0, "accepted": 0, "refused": 0, "saves": 0}
+        self.stats = {
+            "requests": 0,
+            "ignored": 0,
+            "accepted": 0,
+            "refused": 0,
+            "saves": 0,
+            "dropped": 0,
+        }
+        #: Writes dropped since the host last read.
+        self._dropped = 0
 
     # -- lifecycle ----------------------------------------------------------------------------
 
@@ -145,7 +154,7 @@ class DronecanParamNode(ServingLoop):
             return
         replies, frames = self.adapter.feed(read_port(self.port))
         if replies:
-            self.port.write(replies)
+            self._write(replies)
         for frame in frames:
             self.on_frame(frame)
 
@@ -190,7 +199,32 @@ class DronecanParamNode(ServingLoop):
     def _send(self, frames: list[Frame]) -> None:
         out = b"".join(self.adapter.deliver(f) for f in frames)
         if out:
-            self.port.write(out)
+            self._write(out)
+
+    def _write(self, data: bytes) -> None:
+        """Writes to the host. A host that does not read loses what is written meanwhile, as
+        a CAN adapter drops the frames its host does not take: said once, and again when it
+        reads again; the node goes on answering and stopping."""
+        written: int | None = 0
+        # Once the host has stopped reading, a write waits for no one: it goes only if the
+        # line takes it at once (else a backlog of requests would each wait WRITE_SECONDS).
+        if not self._dropped or select.select([], [self.port.fileno()], [], 0)[1]:
+            try:
+                written = self.port.write(data)
+            except OSError:  # pyserial's write timeout (SerialTimeoutException) is one
+                written = 0
+        if written is None or written >= len(data):
+            if self._dropped:
+                self.log(f"the host reads again: {self._dropped} writes to it were dropped")
+                self._dropped = 0
+            return
+        self.stats["dropped"] += 1
+        if not self._dropped:
+            self.log(
+                f"the host is not reading: what the node sends is dropped until it does "
+                f"({WRITE_SECONDS} s waited)"
+            )
+        self._dropped += 1
 
     # -- NodeStatus and GetNodeInfo ----------------------------------------------------------
 

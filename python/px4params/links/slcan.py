@@ -51,6 +51,9 @@ NACK = b"\x07"
 BITRATES = (10_000, 20_000, 50_000, 100_000, 125_000, 250_000, 500_000, 800_000, 1_000_000)
 #: A line longer than the longest valid one (``T`` + 8 + 1 + 16 + 4) is noise: dropped.
 _MAX_LINE = 64
+#: Seconds a write waits for the other end to read before what is left is dropped (a
+#: GetNodeInfo answer, 8 frames, takes 25 ms at 115200 baud).
+WRITE_SECONDS = 0.5
 
 
 class SerialPort(Protocol):
@@ -305,15 +308,21 @@ class _FdPort:
             return b""
 
     def write(self, data: bytes) -> int:
-        view = memoryview(data)
+        """Writes ``data``, waiting at most :data:`WRITE_SECONDS` for the other end to read;
+        returns how many bytes went (fewer: the rest is dropped, as an adapter drops frames
+        its host does not take)."""
+        view, deadline = memoryview(data), time.monotonic() + WRITE_SECONDS
         while view:
             try:
                 written = os.write(self.fd, view)
             except BlockingIOError:
-                select.select([], [self.fd], [], 0.1)
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    break
+                select.select([], [self.fd], [], min(left, 0.1))
                 continue
             view = view[written:]
-        return len(data)
+        return len(data) - len(view)
 
     def close(self) -> None:
         os.close(self.fd)
@@ -343,7 +352,9 @@ def open_serial(device: str, baudrate: int = 115_200) -> SerialPort:
     import serial
 
     try:
-        port: SerialPort = serial.Serial(device, baudrate=baudrate, timeout=0, write_timeout=2)
+        port: SerialPort = serial.Serial(
+            device, baudrate=baudrate, timeout=0, write_timeout=WRITE_SECONDS
+        )
         return port
     except (serial.SerialException, OSError, ValueError) as e:
         raise SlcanError(f"cannot open serial device {device}: {e}") from None

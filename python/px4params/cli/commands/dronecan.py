@@ -69,6 +69,7 @@ def cmd_serve(args: argparse.Namespace) -> int:
     log(
         f"stopped: {s['requests']} requests ({s['ignored']} ignored), {s['accepted']} writes "
         f"accepted, {s['refused']} refused, {s['saves']} saves"
+        + (f", {s['dropped']} writes to a host that did not read dropped" if s["dropped"] else "")
     )
     return EXIT_OK
 
