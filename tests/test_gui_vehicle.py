@@ -919,7 +919,7 @@ class _WithCamera(_Recording):
 
     def _stream_some(self) -> None:
         super()._stream_some()
-        if self._stream is None:  # the vehicle's list is sent: the camera's follows
+        if not self._streams:  # the vehicle's list is sent: the camera's follows
             real32 = mavlink2.MAV_PARAM_TYPE_REAL32
             camera = [
                 mavlink2.MAVLink_param_value_message(name.encode(), value, real32, 1000, index)

@@ -98,6 +98,12 @@ def px4_hash_check(params: list[tuple[str, bytes]]) -> int:
     return crc
 
 
+def _name_as_received(sent: bytes) -> str:
+    """A param_id as pymavlink gives it: ASCII, a byte that is none a U+FFFD (the old echo
+    of b"INA238_1C\xff" came as three of them: U+FFFD's UTF-8 bytes)."""
+    return sent.decode("ascii", errors="replace")
+
+
 class Client:
     """A ground station: pymavlink over UDP, as QGC or MAVProxy would talk."""
 
@@ -339,6 +345,31 @@ def test_hash_check_set_stops_the_stream(schema: px4params.Schema) -> None:
     finally:
         client.close()
         server.stop()
+
+
+def test_two_ground_stations_listing_at_once_each_get_the_whole_list(
+    served: tuple[MavlinkParamServer, Client],
+) -> None:
+    # The server kept one list: a second station's request took it over, and the first got
+    # 20 of 65 parameters with no word. Each asker now gets its own; one that says it has the
+    # list cached (_HASH_CHECK) stops its own only.
+    server, first = served
+    second, third = Client(server.address[1]), Client(server.address[1])
+    try:
+        count = len(server.entries())
+        for station in (first, second, third):
+            station.conn.mav.param_request_list_send(1, 1)
+        hashed = third.expect("PARAM_VALUE")
+        assert hashed.param_id == "_HASH_CHECK"
+        third.set("_HASH_CHECK", value_of(hashed), mavlink.MAV_PARAM_TYPE_UINT32)
+        for station in (first, second):
+            got = [m for m in station.collect(3.0) if m.get_type() == "PARAM_VALUE"]
+            assert {m.param_index for m in got} == {0xFFFF, *range(count)}
+        rest = [m for m in third.collect(1.0) if m.get_type() == "PARAM_VALUE"]
+        assert len(rest) < count  # stopped part-way (or before its first value)
+    finally:
+        second.close()
+        third.close()
 
 
 def test_autopilot_version_and_heartbeat(
@@ -1057,11 +1088,25 @@ class TestTurnByTurn:
             assert station.exchange(command) == []
         assert server.stats["received"] - before["received"] == 8
         assert server.stats["ignored"] - before["ignored"] == 8
-        for system, component in ((0, 0), (1, 0), (0, 1)):
+        # Component 0 is every component of this system: answered.
+        read = mavlink.MAVLink_param_request_read_message(1, 0, b"", 0)
+        assert values(station.exchange(read)) == [(NAMES[0], 0, 0, len(NAMES))]
+        # System 0: a command is a broadcast, as PX4 takes it; a parameter message is not
+        # (PX4's mavlink_parameters.cpp takes its own system ID alone): a broadcast PARAM_SET
+        # would change every vehicle that hears it.
+        for system, component in ((0, 0), (0, 1)):
             read = mavlink.MAVLink_param_request_read_message(system, component, b"", 0)
-            assert values(station.exchange(read)) == [(NAMES[0], 0, 0, len(NAMES))]
-        assert server.stats["ignored"] - before["ignored"] == 8
-        assert server.stats["sent"] - before["sent"] == 3
+            assert station.exchange(read) == []
+            listed = mavlink.MAVLink_param_request_list_message(system, component)
+            assert station.exchange(listed) == []
+            write = set_frame(station.mav, system, component, "INA238_1C", 0x46, INT32)
+            assert station.exchange(write) == []
+            command = mavlink.MAVLink_command_long_message(
+                system, component, mavlink.MAV_CMD_REQUEST_MESSAGE, 0, 148, 0, 0, 0, 0, 0, 0
+            )
+            assert kinds(station.exchange(command)) == ["AUTOPILOT_VERSION", "COMMAND_ACK"]
+        assert server.store.get("INA238#1.bus.i2c.address") == 0x45
+        assert server.stats["ignored"] - before["ignored"] == 8 + 6
 
     def test_a_read_by_index_ignores_the_name_and_the_last_index_is_count_minus_one(
         self, turns: tuple[MavlinkParamServer, Station]
@@ -1093,6 +1138,8 @@ class TestTurnByTurn:
             (b"NO_SUCH_PARAM", -1, "[pm] unknown param: NO_SUCH_PARAM", -1),
             # any negative index reads by name (PX4's rule); the error echoes the request's
             (b"NO_SUCH_PARAM", -2, "[pm] unknown param: NO_SUCH_PARAM", -2),
+            # a name that is not text: its own bytes echoed, so that the asker can match them
+            (b"INA238_1C\xff", -1, "[pm] unknown param: INA238_1C?", -1),
             (b"", 45, "[pm] unknown param ID: 45", 45),
             (b"", 32767, "[pm] unknown param ID: 32767", 32767),
         ],
@@ -1111,7 +1158,7 @@ class TestTurnByTurn:
         assert (got[0].text, got[0].severity) == (text, mavlink.MAV_SEVERITY_WARNING)
         error = got[1]
         assert (error.target_system, error.target_component) == (255, 190)
-        assert (error.param_id, error.param_index) == (name.decode(), error_index)
+        assert (error.param_id, error.param_index) == (_name_as_received(name), error_index)
         assert error.error == mavlink.MAV_PARAM_ERROR_DOES_NOT_EXIST
         assert server.stats["refused"] == 0  # a read refuses nothing
 

@@ -141,6 +141,14 @@ def _payload_of(msg: Any) -> bytes:
     return frame[header : header + frame[1]]
 
 
+def _param_id_of(msg: Any) -> bytes:
+    """A received message's ``param_id`` as sent, up to its first NUL (pymavlink gives it as
+    ASCII text, each byte that is not one a U+FFFD)."""
+    payload = _payload_of(msg).ljust(msg.unpacker.size, b"\0")  # MAVLink 2 trims zeros
+    raw = msg.unpacker.unpack(payload)[msg.ordered_fieldnames.index("param_id")]
+    return bytes(raw).split(b"\0", 1)[0]
+
+
 def param_value_of(msg: Any) -> int | float:
     """The value of a received ``PARAM_VALUE`` or ``PARAM_SET``, read from the payload bytes
     (bytewise encoding: ``int32`` types as integers), immune to pymavlink's NaN rewriting."""
@@ -306,7 +314,9 @@ class MavlinkParamServer(ServingLoop):
         self._burst_pause = _STREAM_BURST / param_rate
         self._seen: dict[Address, float] = {}  # peer -> when last heard, oldest first
         self._entries: list[ParamEntry] | None = None
-        self._stream: tuple[Address, int] | None = None  # (peer, next index; -1 = hash)
+        #: The lists being sent: peer -> its next index (-1: the hash first). Each asker gets
+        #: its own: a second ground station's request took the first one's list over.
+        self._streams: dict[Address, int] = {}
         self._next_heartbeat = 0.0
         self._next_burst = 0.0
         self._text_id = 0
@@ -349,17 +359,17 @@ class MavlinkParamServer(ServingLoop):
             self._next_poll = now + self.poll_interval
             self._poll_store()
         timeout = min(timeout, max(0.0, self._next_heartbeat - now))
-        if self._stream is not None:
+        if self._streams:
             timeout = min(timeout, max(0.0, self._next_burst - now))
         readable, _, _ = select.select([self._sock], [], [], timeout)
         if readable:
             self._read_all()
-        if self._stream is not None and time.monotonic() >= self._next_burst:
+        if self._streams and time.monotonic() >= self._next_burst:
             self._next_burst = time.monotonic() + self._burst_pause
             try:
                 self._stream_some()
-            except Exception as e:  # a bug must not stop the server: drop this stream
-                self._stream = None
+            except Exception as e:  # a bug must not stop the server: drop the streams
+                self._streams.clear()
                 self.log(f"error streaming parameters: {type(e).__name__}: {e}")
 
     # -- receiving ----------------------------------------------------------------------------
@@ -431,24 +441,26 @@ class MavlinkParamServer(ServingLoop):
         heard = self._seen.get(peer)
         return heard is not None and time.monotonic() - heard <= self.peer_timeout
 
-    def _for_us(self, msg: Any) -> bool:
-        return msg.target_system in (0, self.system_id) and msg.target_component in (
-            0,
-            self.component_id,
-        )
+    def _for_us(self, msg: Any, *, broadcast: bool = True) -> bool:
+        """Whether ``msg`` is addressed to this component; system 0 (broadcast) counts only
+        where ``broadcast``: PX4 takes parameter messages addressed to its own system ID alone
+        (mavlink_parameters.cpp), so that a broadcast PARAM_SET does not change every vehicle
+        that hears it, and commands and FTP to system 0 too."""
+        systems = (0, self.system_id) if broadcast else (self.system_id,)
+        return msg.target_system in systems and msg.target_component in (0, self.component_id)
 
     def _handle(self, peer: Address, msg: Any) -> bool:
         kind = msg.get_type()
         if kind == "HEARTBEAT":
             return True
-        if kind == "PARAM_REQUEST_LIST" and self._for_us(msg):
-            # A request during a stream restarts it without the hash, as PX4 does.
-            self._stream = (peer, 0 if self._stream is not None else -1)
+        if kind == "PARAM_REQUEST_LIST" and self._for_us(msg, broadcast=False):
+            # A request during its stream restarts it without the hash, as PX4 does.
+            self._streams[peer] = 0 if peer in self._streams else -1
             return True
-        if kind == "PARAM_REQUEST_READ" and self._for_us(msg):
+        if kind == "PARAM_REQUEST_READ" and self._for_us(msg, broadcast=False):
             self._read(peer, msg, _name_of(msg.param_id), msg.param_index)
             return True
-        if kind == "PARAM_SET" and self._for_us(msg):
+        if kind == "PARAM_SET" and self._for_us(msg, broadcast=False):
             self._set(peer, _name_of(msg.param_id), msg)
             return True
         if kind == "COMMAND_LONG" and self._for_us(msg):
@@ -488,22 +500,26 @@ class MavlinkParamServer(ServingLoop):
         return _RawParamValue(HASH_PARAM, raw, uint32, len(self.entries()), 0xFFFF)
 
     def _stream_some(self) -> None:
-        assert self._stream is not None
-        peer, index = self._stream
-        if not self._alive(peer):  # the requester went away (or never was: a forged source)
-            self._stream = None
-            return
+        """One burst of the lists being sent, shared among their askers (the pace is the
+        server's, however many ask)."""
         entries = self.entries()
-        for _ in range(_STREAM_BURST):
-            if index == -1:
-                self._send(self._hash_msg(), [peer])
-            elif index < len(entries):
-                self._send(self._value_msg(index, entries[index]), [peer])
+        share = max(1, _STREAM_BURST // len(self._streams))
+        for peer, index in list(self._streams.items()):
+            if not self._alive(peer):  # the asker went away (or never was: a forged source)
+                del self._streams[peer]
+                continue
+            for _ in range(share):
+                if index == -1:
+                    self._send(self._hash_msg(), [peer])
+                elif index < len(entries):
+                    self._send(self._value_msg(index, entries[index]), [peer])
+                else:
+                    break
+                index += 1
+            if index >= len(entries):
+                del self._streams[peer]
             else:
-                self._stream = None
-                return
-            index += 1
-        self._stream = (peer, index)
+                self._streams[peer] = index
 
     def _read(self, peer: Address, msg: Any, name: str, index: int) -> None:
         if index < 0:
@@ -532,7 +548,7 @@ class MavlinkParamServer(ServingLoop):
 
     def _set(self, peer: Address, name: str, msg: Any) -> None:
         if name == HASH_PARAM:
-            self._stream = None  # the ground station has our parameters cached: stop sending
+            self._streams.pop(peer, None)  # it has our parameters cached: its list stops
             return
         found = self._find(name)
         if found is None:
@@ -650,7 +666,9 @@ class MavlinkParamServer(ServingLoop):
         error = mavlink.MAVLink_param_error_message(
             msg.get_srcSystem(),
             msg.get_srcComponent(),
-            name.encode()[:16],
+            # the request's own bytes, so that the asker can match the error to it (a name
+            # that is not text was answered with U+FFFD's three bytes for each odd byte)
+            _param_id_of(msg),
             max(-0x8000, min(index, 0x7FFF)),  # an int16
             code,
         )
