@@ -291,3 +291,27 @@ def test_a_path_that_is_not_utf8_is_not_found_not_an_exception() -> None:
     server = MavftpServer({"/f": b"1"})
     for opcode in (OPEN_RO, LIST, CRC32):
         assert reply(server, opcode, data=b"/\xff\xfe").data == bytes([NOT_FOUND]), opcode
+
+
+def test_a_session_is_the_openers_and_another_client_reaches_none_of_it() -> None:
+    # Any peer could read, terminate or reset another's session (its number is the lowest
+    # free one): each belongs to the client that opened it now.
+    server = MavftpServer({"/f": b"abc"})
+    pilot, other = ("127.0.0.1", 14550), ("127.0.0.1", 9999)
+
+    def answer(opcode: int, owner: object, session: int = 0) -> tuple[int, bytes]:
+        data = b"/f" if opcode == OPEN_RO else b""  # (a read's size 0: a whole payload)
+        (payload,) = server.handle(request(opcode, session=session, data=data), owner=owner)
+        _, _, op, size, *_ = HEADER.unpack_from(payload)
+        return op, payload[12 : 12 + size]
+
+    assert answer(OPEN_RO, pilot)[0] == ACK
+    for opcode in (READ, TERMINATE):
+        assert answer(opcode, other) == (NAK, bytes([INVALID_SESSION]))
+    assert answer(RESET, other) == (ACK, b"")  # the other's own sessions: none
+    assert answer(READ, pilot) == (ACK, b"abc")  # still the pilot's
+    assert answer(OPEN_RO, other) == (ACK, struct.pack("<I", 3))  # another session: 1
+    assert answer(READ, other, session=1) == (ACK, b"abc")
+    assert answer(RESET, pilot) == (ACK, b"")  # the pilot's alone
+    assert answer(READ, pilot) == (NAK, bytes([INVALID_SESSION]))
+    assert answer(READ, other, session=1) == (ACK, b"abc")

@@ -306,6 +306,47 @@ def test_a_parameter_list_is_paced(schema: px4params.Schema) -> None:
         server.stop()
 
 
+def test_a_burst_read_is_paced_and_a_flood_of_them_holds_nothing_up(
+    vehicle: MavlinkParamServer,
+) -> None:
+    """One 20-byte BurstReadFile was answered with up to 150 packets (37 kB) at once, to any
+    source address: an amplifier on an unsigned link, and 2,000 of them kept a parameter read
+    unanswered for 10 s. A burst goes out at the parameter lists' pace, and a peer's next
+    burst replaces what is left of its last."""
+    client = FtpClient(vehicle.address[1])
+    try:
+        ((opened, size),) = client.ask(OPEN_FILE_RO, data=b"/px4params/parameters.json.xz\0")
+        packets = -(-struct.unpack("<I", size)[0] // 239)
+        assert packets > 40  # more than two of the pacer's steps of 20
+
+        def burst() -> None:
+            header = FTP_HEADER.pack(0, opened["session"], BURST_READ, 0, 0, 0, 0, 0)
+            client.conn.mav.file_transfer_protocol_send(0, 1, 1, list(header.ljust(251, b"\0")))
+
+        burst()
+        start, arrivals = time.monotonic(), []
+        while time.monotonic() - start < 3 and len(arrivals) < min(packets, 150):
+            msg = client.conn.recv_match(type="FILE_TRANSFER_PROTOCOL", blocking=True, timeout=1)
+            if msg is not None:
+                arrivals.append(time.monotonic() - start)
+        assert len(arrivals) == min(packets, 150)  # all of them, in the end
+        # 500 a second in steps of 20: 40 or so in the first 60 ms, not all at once
+        assert sum(1 for t in arrivals if t < 0.06) <= 60, arrivals[:80]
+        for _ in range(1000):
+            burst()
+        asked = time.monotonic()
+        client.conn.mav.param_request_read_send(1, 1, b"INA238_1C", -1)
+        read = client.conn.recv_match(
+            type="PARAM_VALUE",
+            blocking=True,
+            timeout=5,
+            condition="PARAM_VALUE.param_id=='INA238_1C'",
+        )
+        assert read is not None and time.monotonic() - asked < 1.0
+    finally:
+        client.close()
+
+
 def _udp_socket() -> socket.socket:
     sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     sock.bind(("127.0.0.1", 0))

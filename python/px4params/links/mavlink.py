@@ -60,6 +60,7 @@ import select
 import socket
 import struct
 import time
+from collections import deque
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -317,6 +318,9 @@ class MavlinkParamServer(ServingLoop):
         #: The lists being sent: peer -> its next index (-1: the hash first). Each asker gets
         #: its own: a second ground station's request took the first one's list over.
         self._streams: dict[Address, int] = {}
+        #: MAVLink FTP burst reads being sent: peer -> (its system and component, the payloads
+        #: left), paced with the lists; a peer's next burst replaces what is left of its last.
+        self._bursts: dict[Address, tuple[tuple[int, int], deque[bytes]]] = {}
         self._next_heartbeat = 0.0
         self._next_burst = 0.0
         self._text_id = 0
@@ -359,17 +363,18 @@ class MavlinkParamServer(ServingLoop):
             self._next_poll = now + self.poll_interval
             self._poll_store()
         timeout = min(timeout, max(0.0, self._next_heartbeat - now))
-        if self._streams:
+        if self._streams or self._bursts:
             timeout = min(timeout, max(0.0, self._next_burst - now))
         readable, _, _ = select.select([self._sock], [], [], timeout)
         if readable:
             self._read_all()
-        if self._streams and time.monotonic() >= self._next_burst:
+        if (self._streams or self._bursts) and time.monotonic() >= self._next_burst:
             self._next_burst = time.monotonic() + self._burst_pause
             try:
                 self._stream_some()
             except Exception as e:  # a bug must not stop the server: drop the streams
                 self._streams.clear()
+                self._bursts.clear()
                 self.log(f"error streaming parameters: {type(e).__name__}: {e}")
 
     # -- receiving ----------------------------------------------------------------------------
@@ -503,7 +508,12 @@ class MavlinkParamServer(ServingLoop):
         """One burst of the lists being sent, shared among their askers (the pace is the
         server's, however many ask)."""
         entries = self.entries()
-        share = max(1, _STREAM_BURST // len(self._streams))
+        share = max(1, _STREAM_BURST // (len(self._streams) + len(self._bursts)))
+        for peer, (to, left) in list(self._bursts.items()):
+            for _ in range(min(share, len(left))):
+                self._send_ftp(to, left.popleft(), peer)
+            if not left or not self._alive(peer):
+                del self._bursts[peer]
         for peer, index in list(self._streams.items()):
             if not self._alive(peer):  # the asker went away (or never was: a forged source)
                 del self._streams[peer]
@@ -716,12 +726,20 @@ class MavlinkParamServer(ServingLoop):
         return None
 
     def _file_transfer(self, peer: Address, msg: Any) -> None:
-        """MAVLink FTP: every response goes to the requester's system and component."""
-        for payload in self.ftp.handle(bytes(msg.payload)):
-            reply = mavlink.MAVLink_file_transfer_protocol_message(
-                0, msg.get_srcSystem(), msg.get_srcComponent(), list(payload)
-            )
-            self._send(reply, [peer])
+        """MAVLink FTP: every response goes to the requester's system and component, a burst
+        read's paced as a parameter list is: one 20-byte request is answered with up to 37 kB,
+        which at once, to a forged source, made the server an amplifier."""
+        to = (msg.get_srcSystem(), msg.get_srcComponent())
+        payloads = self.ftp.handle(bytes(msg.payload), owner=peer)
+        if len(payloads) > 1:
+            self._bursts[peer] = (to, deque(payloads))
+            return
+        for payload in payloads:
+            self._send_ftp(to, payload, peer)
+
+    def _send_ftp(self, to: tuple[int, int], payload: bytes, peer: Address) -> None:
+        reply = mavlink.MAVLink_file_transfer_protocol_message(0, *to, list(payload))
+        self._send(reply, [peer])
 
     def autopilot_version(self) -> mavlink.MAVLink_autopilot_version_message:
         """PX4's AUTOPILOT_VERSION: capabilities, the package's version as flight software

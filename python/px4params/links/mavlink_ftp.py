@@ -22,6 +22,9 @@ Sessions a client abandons (a download interrupted, a ground station closed) are
 they have been idle for ``session_idle`` seconds and an open finds no free one: QGroundControl's
 FTPManager opens a file first and resets sessions only at the end, so without this four
 abandoned downloads would answer every later open with ``NoSessionsAvailable``.
+A session belongs to the client that opened it (``owner``: the MAVLink server's peer address):
+another client's read, terminate or reset does not reach it (``NAK InvalidSession``), as it
+would not on PX4, whose FTP serves one link at a time.
 The protocol handler is pure (bytes in, bytes out); :mod:`px4params.links.mavlink` carries it.
 """
 
@@ -29,7 +32,7 @@ from __future__ import annotations
 
 import struct
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Hashable, Mapping
 
 from px4params.gcs.component_information import px4_crc32
 
@@ -128,7 +131,7 @@ class MavftpServer:
         self.files = {self._normal(path): bytes(data) for path, data in files.items()}
         self.session_idle = session_idle
         self._clock = clock
-        self._sessions: dict[int, str] = {}
+        self._sessions: dict[int, tuple[str, Hashable]] = {}  # session -> (path, owner)
         self._used: dict[int, float] = {}  # session -> when last used
         #: Sessions reclaimed after being abandoned (for tests and logs).
         self.reclaimed = 0
@@ -137,18 +140,21 @@ class MavftpServer:
     def _normal(path: str) -> str:
         return "/" + "/".join(p for p in path.split("/") if p and p != ".")
 
-    def handle(self, payload: bytes) -> list[bytes]:
-        """The response payloads to one request payload (several for a burst read)."""
+    def handle(self, payload: bytes, owner: Hashable = None) -> list[bytes]:
+        """The response payloads to one request payload (several for a burst read) from
+        client ``owner``."""
         payload = bytes(payload).ljust(_HEADER.size, b"\0")
         seq, session, opcode, size, _, _, _, offset = _HEADER.unpack_from(payload)
         data = payload[_HEADER.size : _HEADER.size + min(size, MAX_DATA)]
         reply = _Reply(seq, session, opcode)
         if opcode == Op.RESET_SESSIONS:
-            self._sessions.clear()
-            self._used.clear()
+            for mine in [s for s, (_, o) in self._sessions.items() if o == owner]:
+                del self._sessions[mine], self._used[mine]
             return [reply.ack()]
+        opened = self._sessions.get(session)
+        path = opened[0] if opened is not None and opened[1] == owner else None
         if opcode == Op.TERMINATE_SESSION:
-            if session not in self._sessions:
+            if path is None:
                 return [reply.nak(Op.ERR_INVALID_SESSION)]
             del self._sessions[session]
             del self._used[session]
@@ -156,9 +162,8 @@ class MavftpServer:
         if opcode == Op.LIST_DIRECTORY:
             return [self._list(reply, _text(data), offset)]
         if opcode == Op.OPEN_FILE_RO:
-            return [self._open(reply, _text(data))]
+            return [self._open(reply, _text(data), owner)]
         if opcode in (Op.READ_FILE, Op.BURST_READ_FILE):
-            path = self._sessions.get(session)
             if path is None:
                 return [reply.nak(Op.ERR_INVALID_SESSION)]
             self._used[session] = self._clock()
@@ -178,14 +183,14 @@ class MavftpServer:
             return [reply.nak(Op.ERR_FILE_PROTECTED)]
         return [reply.nak(Op.ERR_UNKNOWN_COMMAND)]
 
-    def _open(self, reply: _Reply, path: str) -> bytes:
+    def _open(self, reply: _Reply, path: str, owner: Hashable) -> bytes:
         path = self._normal(path)
         if path not in self.files:
             return reply.nak(Op.ERR_FILE_NOT_FOUND)
         if len(self._sessions) >= MAX_SESSIONS and not self._reclaim():
             return reply.nak(Op.ERR_NO_SESSIONS_AVAILABLE)
         session = next(i for i in range(256) if i not in self._sessions)
-        self._sessions[session] = path
+        self._sessions[session] = (path, owner)
         self._used[session] = self._clock()
         reply.session = session
         return reply.ack(struct.pack("<I", len(self.files[path])))
