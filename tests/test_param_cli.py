@@ -1042,3 +1042,28 @@ def test_classic_values_of_another_parameter_set_are_said_where_they_are_left_ou
         f"px4params: warning: 1 classic value of the store kept, not reset: {note}\n",
     )
     assert param(capsys, "--classic", str(full), "show", "-q", "MPC_XY_VEL_MAX")[1] == "8\n"
+
+
+def test_the_largest_floats_are_shown_and_what_is_shown_is_taken_back(
+    store: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # FLT_MAX in a classic float and 65504 (float16's largest) in the shunt: show ended in an
+    # OverflowError traceback (its shortest form, 3.4028235e38 and 7e+04, is beyond the type),
+    # and 3.4028235e38 was refused when typed back.
+    assert param(capsys, "set", "BAT1_CAPACITY", "3.4028234663852886e38")[0] == 0
+    assert param(capsys, "add", "INA238#0")[0] == 0
+    assert param(capsys, "set", "--force", "INA238#0.shunt", "-65504")[0] == 0
+    shown_forms = (
+        ("BAT1_CAPACITY", "3.402823466e+38", ()),
+        ("INA238#0.shunt", "-65500", ("--force",)),
+    )
+    for name, shown, force in shown_forms:  # (the shunt's @min/@max still wants --force)
+        code, out, err = param(capsys, "show", "-q", name)
+        assert (code, out, err) == (0, f"{shown}\n", "")
+        before = store.read_bytes()
+        assert param(capsys, "set", *force, name, shown)[0] == 0  # the same float, again
+        assert store.read_bytes() == before
+    code, out, _ = param(capsys, "show", "-l", "INA238#0")
+    assert code == 0 and ["[6]", "shunt", "float16", "-65500", "0.0003", "Ohm"] in [
+        line.split() for line in out.splitlines()
+    ]

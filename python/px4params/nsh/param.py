@@ -116,8 +116,13 @@ def short_float(value: float, kind: str) -> str:
     if code is None:
         return repr(value)
     target = struct.pack(code, value)
+    largest = 65504.0 if code == "<e" else 3.4028234663852886e38
     for digits in range(1, 18):
         text = f"{value:.{digits}g}"
+        # Not beyond the largest finite value, which the store refuses when it is typed back
+        # (3.4028235e38 rounds to FLT_MAX but is above it; 7e4 is no float16 at all).
+        if abs(float(text)) > largest:
+            continue
         if struct.pack(code, float(text)) == target:
             if "e" in text and 1e-4 <= abs(value) < 1e16:  # 5000, not 5e+03
                 text = f"{float(text):f}".rstrip("0").rstrip(".")
