@@ -1067,3 +1067,21 @@ def test_the_largest_floats_are_shown_and_what_is_shown_is_taken_back(
     assert code == 0 and ["[6]", "shunt", "float16", "-65500", "0.0003", "Ohm"] in [
         line.split() for line in out.splitlines()
     ]
+
+
+def test_a_store_whose_name_is_not_utf8_is_read_again_and_named_with_its_byte(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # Created, then never readable: "'utf-8' codec can't encode character '\udcff'" (the
+    # core's file check took the path as Rust text), naming neither the file nor the problem.
+    odd = os.fsdecode(bytes(tmp_path) + b"/bad\xff.store")
+    assert param(capsys, "--store", odd, "set", "SYS_AUTOSTART", "4001")[0] == 0
+    assert param(capsys, "--store", odd, "show", "-q", "SYS_AUTOSTART") == (0, "4001\n", "")
+    junk = os.fsdecode(bytes(tmp_path) + b"/junk\xfe.store")
+    Path(junk).write_bytes(b"junk")
+    code, out, err = param(capsys, "--store", junk, "show")
+    assert (code, out) == (1, "")
+    assert err == (
+        f"px4params: error: {tmp_path}/junk\\xfe.store: not a px4params store file (no PX4P "
+        "header) (at byte 0)\n"
+    )

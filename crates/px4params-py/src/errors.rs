@@ -21,6 +21,7 @@ use px4params_core::Scalar;
 use pyo3::exceptions::{PyAttributeError, PyKeyError, PyTypeError, PyValueError};
 use pyo3::panic::PanicException;
 use pyo3::prelude::*;
+use pyo3::types::PyString;
 
 pyo3::import_exception!(px4params.errors, CodecError);
 pyo3::import_exception!(px4params.errors, EncodeError);
@@ -348,10 +349,11 @@ pub(crate) fn translate(layout: &Layout<'_>, err: Error<TranslateError>) -> PyEr
     StoreError::new_err(err.display(layout).to_string())
 }
 
-/// A store file that does not check, found at `where`: `StoreFileError(message, where,
-/// offset)`.
-pub(crate) fn store_file(err: FileError<'_>, r#where: &str) -> PyErr {
-    StoreFileError::new_err((err.to_string(), r#where.to_owned(), err.offset))
+/// A store file that does not check, found at `where` (the caller's path, passed through as
+/// it is: a file name that is not UTF-8 holds surrogate escapes, which a Rust `str` refuses):
+/// `StoreFileError(message, where, offset)`.
+pub(crate) fn store_file(err: FileError<'_>, r#where: &Bound<'_, PyString>) -> PyErr {
+    StoreFileError::new_err((err.to_string(), r#where.clone().unbind(), err.offset))
 }
 
 /// A store whose file cannot be written.

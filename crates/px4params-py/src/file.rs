@@ -4,7 +4,7 @@
 
 use px4params_core::file::{self, FileName, Key, SaveError, WriteError};
 use pyo3::prelude::*;
-use pyo3::types::{PyBytes, PyList};
+use pyo3::types::{PyBytes, PyList, PyString};
 
 use crate::errors;
 use crate::store::CoreStore;
@@ -29,7 +29,7 @@ type CheckedTuple<'py> = (u8, u32, Option<Vec<String>>, Bound<'py, PyList>);
 pub fn check_store_file<'py>(
     py: Python<'py>,
     data: &[u8],
-    r#where: &str,
+    r#where: &Bound<'py, PyString>,
 ) -> PyResult<CheckedTuple<'py>> {
     let checked = file::check(data).map_err(|e| errors::store_file(e, r#where))?;
     let table = checked

@@ -123,6 +123,15 @@ def _command_in(argv: Sequence[str]) -> str | None:
     return None
 
 
+def _escaped(text: str) -> str:
+    """``text`` with a file name's bytes that are not UTF-8 (held as surrogate escapes) shown
+    as ``\\xfe``, and any other lone surrogate as ``\\ud800``."""
+    try:
+        return text.encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
+    except UnicodeEncodeError:  # a surrogate no file name holds (from JSON text, say)
+        return text.encode("utf-8", "backslashreplace").decode("utf-8")
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     words = list(sys.argv[1:] if argv is None else argv)
     saved_before = len(_saved_stores())  # (main may run more than once in a process: tests)
@@ -133,7 +142,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         sys.stdout.flush()
         return status
     except (Px4ParamsError, UnicodeError) as e:
-        print(f"px4params: error: {e}", file=sys.stderr)
+        print(f"px4params: error: {_escaped(str(e))}", file=sys.stderr)
         return EXIT_FAILED
     except BrokenPipeError:  # the reader is gone: nobody to tell
         _drop_output()
