@@ -1044,6 +1044,30 @@ def test_reading_a_store_that_does_not_exist_leaves_no_file(
     assert sorted(p.name for p in tmp_path.iterdir()) == []
 
 
+def test_reading_a_store_takes_no_lock_and_a_refused_one_gets_none(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # 'param show' of an existing store made FILE.lock beside it, and a refused store (a FIFO,
+    # /dev/null) got one too, even in /dev: reading needs no lock (saves replace files whole).
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.delenv("PX4PARAMS_STORE", raising=False)
+    assert run_here(capsys, "param", "add", "INA238#0")[0] == 0
+    Path("px4params.store.lock").unlink()
+    for verb in (["show"], ["show", "-q", "INA238#0"], ["export", "out.params"], ["status"]):
+        assert run_here(capsys, "param", *verb)[0] == 0
+    os.mkfifo("fifo.store")
+    code, _, err = run_here(capsys, "param", "--store", "fifo.store", "set", "SYS_AUTOSTART", "1")
+    assert (code, err) == (
+        1,
+        "px4params: error: fifo.store: cannot read: is a FIFO (named pipe), not a regular file\n",
+    )
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "fifo.store",
+        "out.params",
+        "px4params.store",
+    ]
+
+
 def test_writing_verbs_still_lock(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:

@@ -501,8 +501,11 @@ class LockedSession:
     def __enter__(self) -> Session:
         store_path, classic, dsdl, start_empty = self._args
         # Reading needs no lock (saves replace the file whole): when it cannot be taken, a
-        # save tries again and reports why it cannot, before writing anything.
-        self._locked = _try_lock(self._lock)
+        # save tries again and reports why it cannot, before writing anything. A store that is
+        # no regular file (a FIFO, /dev/null) is refused as it is read: no FILE.lock beside it.
+        self._locked = _is_file_or_none(store_path or default_store_path()) and _try_lock(
+            self._lock
+        )
         try:
             return open_session(store_path, classic, dsdl, start_empty_if_unreadable=start_empty)
         except BaseException:
@@ -512,6 +515,16 @@ class LockedSession:
     def __exit__(self, *exc: object) -> None:
         if self._locked:
             self._lock.__exit__()
+
+
+def _is_file_or_none(path: str) -> bool:
+    """Whether ``path`` is a regular file (through links) or nothing yet."""
+    try:
+        return stat.S_ISREG(os.stat(path).st_mode)
+    except FileNotFoundError:
+        return True
+    except OSError:  # its reading says why
+        return False
 
 
 def _try_lock(lock: StoreLock) -> bool:

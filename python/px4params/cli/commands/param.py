@@ -3,7 +3,6 @@
 
 from __future__ import annotations
 
-import os
 from collections.abc import Sequence
 
 from px4params._records import TYPE_CHECKING
@@ -22,15 +21,14 @@ from px4params.nsh.param import (
     verb_status,
 )
 from px4params.store.session import LockedSession, open_session
-from px4params.store.store import default_store_path
 
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
     import argparse
     from typing import Any
 
 
-#: Verbs that never write the store file: where it does not exist (nothing to read or protect)
-#: they take no lock, so that 'param show' in an empty folder leaves no FILE.lock behind.
+#: Verbs that never write the store file: they take no lock (saves replace the file whole, so
+#: a reader always reads a whole one), and leave no FILE.lock behind.
 _READING_VERBS = (
     verb_compare,
     verb_export,
@@ -45,7 +43,7 @@ _READING_VERBS = (
 
 def cmd_param(args: argparse.Namespace) -> int:
     recovering = args.verb is verb_load and args.file is not None
-    if args.verb in _READING_VERBS and not os.path.exists(args.store or default_store_path()):
+    if args.verb in _READING_VERBS:
         session = open_session(args.store, args.classic, args.dsdl or ())
         return int(args.verb(session, args))
     with LockedSession(
