@@ -1085,3 +1085,17 @@ def test_a_store_whose_name_is_not_utf8_is_read_again_and_named_with_its_byte(
         f"px4params: error: {tmp_path}/junk\\xfe.store: not a px4params store file (no PX4P "
         "header) (at byte 0)\n"
     )
+
+
+def test_save_refuses_the_stores_own_lock_file(
+    store: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # 'param save vehicle.store.lock' replaced the lock file with the store's bytes (a new
+    # file: a writer holding the old one would no longer keep others out).
+    assert param(capsys, "set", "SYS_AUTOSTART", "4001")[0] == 0
+    lock = Path(f"{store}.lock")
+    before = lock.read_bytes()
+    code, out, err = param(capsys, "save", str(lock))
+    assert (code, out) == (1, "")
+    assert err == f"px4params: error: {lock}: is {store}'s lock file: give the save another name\n"
+    assert lock.read_bytes() == before and not Path(f"{lock}.bak").exists()

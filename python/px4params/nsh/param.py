@@ -481,6 +481,9 @@ def verb_save(s: Session, a: argparse.Namespace) -> int:
     from px4params.store import paramfile
 
     file = a.file
+    if os.path.realpath(file) == os.path.realpath(s.path) + ".lock":
+        # Replaced by a new file, the lock another writer holds would no longer keep it out.
+        raise StoreFileError(f"is {s.path}'s lock file: give the save another name", file)
     # By its extension, as load reads it: a .params file saved as a store loaded back as text.
     text = paramfile.kind_of(file) is not None
     # The store as it is at this line (a backup before changes), written when the airframe
