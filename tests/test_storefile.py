@@ -480,3 +480,53 @@ def test_a_table_that_does_not_match_its_fingerprint(store, tmp_path) -> None:
     with pytest.raises(StoreFileError, match=r"the parameter table does not match the header's "
                        r"fingerprint \(at byte 10\)$"):  # fmt: skip
         store.load_from(path)
+
+
+@pytest.mark.parametrize(
+    ("name", "shown"),
+    [
+        (b"X\x1b[31mRED\n", "'X\\x1b[31mRED\\n'"),  # escapes a terminal would act on
+        (b"", "''"),
+        (b"A" * 17, "'" + "A" * 17 + "'"),
+        (b"sys_autostart", "'sys_autostart'"),
+        (b"1ABC", "'1ABC'"),
+        (b"NAME\xff", "'NAME\\xff'"),
+    ],
+)
+def test_a_classic_record_whose_name_is_no_parameter_name_is_refused(
+    store: px4params.Store, tmp_path: Path, name: bytes, shown: str
+) -> None:
+    # A crafted file (valid CRCs) planted such names: kept on every save, and printed raw by
+    # import, status and export.
+    path = tmp_path / "x.store"
+    record = bytes([0x02 | 0x20, len(name)]) + name + (5).to_bytes(4, "little")
+    path.write_bytes(_file(2, zlib.crc32(b""), [_table([]), record]))
+    store.set("SYS_AUTOSTART", 4001)
+    with pytest.raises(StoreFileError) as refused:
+        store.load_from(path)
+    assert str(refused.value) == (
+        f"{path}: record is malformed: classic parameter name {shown} is not 1 to 16 "
+        f"upper-case letters, digits and '_', a letter first (at byte {10 + 2 + 2})"
+    )
+    assert store.get("SYS_AUTOSTART") == 4001  # left as it was
+
+
+def test_a_second_record_of_one_instance_is_refused(store: px4params.Store, tmp_path: Path) -> None:
+    # Two records of INA238#0, or of SYS_AUTOSTART, loaded with the last one winning.
+    line = "INA238=px.Ina238.1"
+    twice = [bytes([KIND_STRUCTURED]) + _varint(0) + _varint(0)] * 2
+    fp = zlib.crc32(line.encode())
+    path = tmp_path / "x.store"
+    path.write_bytes(_file(2, fp, [_table([line]), *twice]))
+    first = 10 + len(_table([line])) + 2  # the header, the table and its CRC
+    with pytest.raises(StoreFileError) as refused:
+        store.load_from(path)
+    assert str(refused.value) == (
+        f"{path}: record is malformed: a second record of the same parameter instance "
+        f"(at byte {first + 3 + 2})"  # the first record and its CRC
+    )
+    classic = bytes([0x02 | 0x20, 13]) + b"SYS_AUTOSTART" + (6).to_bytes(4, "little")
+    path.write_bytes(_file(2, zlib.crc32(b""), [_table([]), classic, classic]))
+    with pytest.raises(StoreFileError, match=r"a second record of the same parameter instance"):
+        store.load_from(path)
+    assert store.instances("INA238") == []

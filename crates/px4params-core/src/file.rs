@@ -79,6 +79,9 @@ pub enum FileErrorKind<'a> {
     SecondTable,
     /// An unknown record kind.
     RecordKind(u8),
+    /// A classic record's name that is no PX4 parameter name (1 to [`CLASSIC_NAME_MAX`]
+    /// upper-case letters, digits and `_`, a letter first).
+    ClassicName(&'a [u8]),
 }
 
 /// A file refused by [`check`]: what and where (byte offset in the file).
@@ -124,7 +127,31 @@ impl fmt::Display for FileError<'_> {
             K::Instance(n) => write!(f, "record is malformed: instance {n} is out of range"),
             K::SecondTable => malformed(f, "a second parameter table"),
             K::RecordKind(kind) => write!(f, "record is malformed: unknown record kind {kind}"),
+            K::ClassicName(name) => {
+                f.write_str("record is malformed: classic parameter name ")?;
+                write_quoted(f, name)?;
+                write!(
+                    f,
+                    " is not 1 to {CLASSIC_NAME_MAX} upper-case letters, digits and '_', a \
+                     letter first"
+                )
+            }
         }
+    }
+}
+
+/// Whether `name` is a PX4 parameter name: 1 to [`CLASSIC_NAME_MAX`] upper-case letters,
+/// digits and `_`, a letter first (what the classic parameters' list accepts).
+fn is_classic_name(name: &[u8]) -> bool {
+    match name.split_first() {
+        Some((first, rest)) => {
+            name.len() <= CLASSIC_NAME_MAX
+                && first.is_ascii_uppercase()
+                && rest
+                    .iter()
+                    .all(|&b| b.is_ascii_uppercase() || b.is_ascii_digit() || b == b'_')
+        }
+        None => false,
     }
 }
 
@@ -429,7 +456,11 @@ impl<'a> Reader<'a> {
         let (key, instance, fixed) = match kind {
             KIND_CLASSIC => {
                 let len = self.byte()?;
-                (Key::Classic(self.take(len.into())?), 0, Some(4))
+                let name = self.take(len.into())?;
+                if !is_classic_name(name) {
+                    return self.fail(FileErrorKind::ClassicName(name));
+                }
+                (Key::Classic(name), 0, Some(4))
             }
             KIND_STRUCTURED => {
                 let index = self.varint()?;

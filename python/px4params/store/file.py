@@ -151,7 +151,20 @@ def read_file(path: str | os.PathLike[str]) -> FileContent:
 def parse(data: bytes, where: str) -> FileContent:
     """Checks ``data`` completely (in the core) and returns its table and records."""
     version, file_fp, table, records = check_store_file(data, where)
-    return FileContent(version, file_fp, table, [Record(*r) for r in records])
+    checked = [Record(*r) for r in records]
+    # A second record of one instance (or classic parameter): which would hold? (The core
+    # keeps no set; a file this package writes has one record of each.)
+    seen: set[tuple[int, int | str, int]] = set()
+    for record in checked:
+        key = (record.kind, record.key, record.instance)
+        if key in seen:
+            raise StoreFileError(
+                "record is malformed: a second record of the same parameter instance",
+                where,
+                record.offset,
+            )
+        seen.add(key)
+    return FileContent(version, file_fp, table, checked)
 
 
 # -- applying -----------------------------------------------------------------------------------
