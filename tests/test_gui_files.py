@@ -285,3 +285,22 @@ def test_a_bad_json_file_is_named_as_the_page_named_it(vehicle: Any) -> None:
     with pytest.raises(Px4ParamsError) as e:
         files.review_file("vehicle.json", text, values, metadata)
     assert str(e.value) == "vehicle.json: instances: unknown parameter 'NOPE'"
+
+
+def test_a_params_file_is_its_autopilots_and_one_vehicles(vehicle: Any) -> None:
+    # The page took every row: a gimbal's (component 154) INA238_1C over the vehicle's, and a
+    # second vehicle's values, where import and migrate read the autopilot's alone.
+    values, metadata = vehicle
+    gimbal = "1\t1\tINA238_1C\t70\t6\n1\t154\tINA238_1C\t99\t6\n1\t154\tGMB_MODE\t2\t6\n"
+    review = files.review_file("x.params", gimbal, values, metadata)
+    assert review["changes"] == [{"name": "INA238_1C", "current": 0x45, "new": 70}]
+    assert review["notes"] == [
+        "x.params: component 154: 2 parameters skipped (not the autopilot's, component 1)"
+    ]
+    two = "1\t1\tINA238_1C\t70\t6\n2\t1\tINA238_1C\t71\t6\n"
+    with pytest.raises(Px4ParamsError) as refused:
+        files.review_file("x.params", two, values, metadata)
+    assert str(refused.value) == (
+        "x.params:2: vehicle 2: the file holds parameters of vehicles 1, 2 (one vehicle's are "
+        "read: split the file)"
+    )

@@ -437,3 +437,15 @@ def test_nested_ifs_make_their_lines_conditional_until_their_fi(tmp_path: Path) 
         "'param set' inside if ... fi (lines 2, 4): read as if every condition held"
     ]
     assert config.skipped == []
+
+
+def test_a_file_of_two_vehicles_is_refused_as_import_refuses_it(tmp_path: Path) -> None:
+    # migrate took vehicle 2's CAL_MAG1_ID as this vehicle's ("hold the same device").
+    path = tmp_path / "two.params"
+    path.write_text("1\t1\tCAL_MAG0_ID\t592905\t6\n2\t1\tCAL_MAG1_ID\t592905\t6\n")
+    with pytest.raises(migrate.MigrationError) as refused:
+        migrate.read_config(path)
+    assert str(refused.value) == (
+        f"{path}:2: vehicle 2: the file holds parameters of vehicles 1, 2 (one vehicle's are "
+        "read: split the file)"
+    )

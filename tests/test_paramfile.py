@@ -507,8 +507,8 @@ def test_a_file_of_two_vehicles_is_refused(store: px4params.Store, tmp_path: Pat
     with pytest.raises(ParamFileError) as e:
         paramfile.read(store, str(path), reset=False)
     assert str(e.value) == (
-        f"{path}:2: vehicle 2: the file holds parameters of vehicles 1, 2 (a store is one "
-        "vehicle's: import one at a time)"
+        f"{path}:2: vehicle 2: the file holds parameters of vehicles 1, 2 (one vehicle's are "
+        "read: split the file)"
     )
     assert store.get("SYS_AUTOSTART") == before
     # One vehicle other than 1 (saved from vehicle 2) is that vehicle's file: read.

@@ -22,6 +22,7 @@ __all__ = [
     "INT32",
     "REAL32",
     "QgcRow",
+    "autopilot_rows",
     "format_line",
     "other_ground_station_file",
     "read",
@@ -42,6 +43,34 @@ class QgcRow(NamedTuple):
     name: str
     value: int | float
     type: int
+
+
+class Autopilot(NamedTuple):
+    """The rows of a file that are its vehicle's autopilot's, and the other components'."""
+
+    #: The autopilot's component ID: 1, else the lowest in the file.
+    component: int
+    rows: list[QgcRow]
+    #: Every other component and how many rows it has, in ID order.
+    others: list[tuple[int, int]]
+
+
+def autopilot_rows(rows: list[QgcRow], where: str) -> Autopilot:
+    """The rows of the one vehicle's autopilot (component 1, as PX4 numbers it, else the
+    lowest): a QGC save of a vehicle also holds its other components' (a gimbal, a camera),
+    which are not its parameters. A file of several vehicles is a :class:`ParamFileError`
+    naming the first line of another one: a store, a migration, a review are one vehicle's."""
+    vehicles = sorted({row.vehicle for row in rows})
+    if len(vehicles) > 1:
+        other = next(row for row in rows if row.vehicle != rows[0].vehicle)
+        raise ParamFileError(
+            f"{where}:{other.line}: vehicle {other.vehicle}: the file holds parameters of "
+            f"vehicles {', '.join(map(str, vehicles))} (one vehicle's are read: split the file)"
+        )
+    components = sorted({row.component for row in rows})
+    chosen = 1 if 1 in components or not components else components[0]
+    counts = {c: sum(row.component == c for row in rows) for c in components if c != chosen}
+    return Autopilot(chosen, [r for r in rows if r.component == chosen], list(counts.items()))
 
 
 def read(text: str, where: str) -> list[QgcRow]:

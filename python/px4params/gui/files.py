@@ -79,7 +79,13 @@ def _read_params(
 ) -> tuple[dict[str, Any], list[str]]:
     new: dict[str, Any] = {}
     notes: list[str] = []
-    for row in qgc_params.read(text, filename):
+    autopilot = qgc_params.autopilot_rows(qgc_params.read(text, filename), filename)
+    for component, count in autopilot.others:
+        notes.append(
+            f"{filename}: component {component}: {count} parameters skipped (not the "
+            f"autopilot's, component {autopilot.component})"
+        )
+    for row in autopilot.rows:
         if row.name not in values:
             notes.append(
                 f"{filename}:{row.line}: {row.name}: the vehicle has no such parameter; skipped"

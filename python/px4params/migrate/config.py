@@ -123,19 +123,15 @@ def _read_text(where: str) -> OldConfig:
         return _read_param_list(text, where)
     try:
         read = qgc_params.read(text, where)
+        autopilot = qgc_params.autopilot_rows(read, where)
     except ParamFileError as e:
         raise MigrationError(str(e)) from None
-    rows = [(r.vehicle, r.component, r.name, r.value) for r in read]
-    if not rows:
+    if not read:
         raise MigrationError(f"{where}: no parameters (not a QGC .params file?)")
-    # The autopilot is component 1; other components (gimbals, ...) are not the vehicle's.
-    components = sorted({c for _, c, _, _ in rows})
-    chosen = 1 if 1 in components else components[0]
+    chosen = autopilot.component
     params: dict[str, int | float] = {}
     first_line: dict[str, int] = {}
-    for r in read:
-        if r.component != chosen:
-            continue
+    for r in autopilot.rows:
         if r.name in first_line:  # QGC writes each once: which one did the vehicle hold?
             raise MigrationError(
                 f"{where}:{r.line}: {r.name}: also set on line {first_line[r.name]}"
@@ -143,9 +139,8 @@ def _read_text(where: str) -> OldConfig:
         first_line[r.name] = r.line
         params[r.name] = r.value
     skipped = [
-        f"component {c}: {sum(1 for r in rows if r[1] == c)} parameters (not the autopilot's)"
-        for c in components
-        if c != chosen
+        f"component {c}: {count} parameters (not the autopilot's)"
+        for c, count in autopilot.others
     ]
     details = [f"component {chosen}"]
     version = None

@@ -199,28 +199,14 @@ def _read_qgc(store: Store, path: str, text: str, forced: Forced | None) -> list
     first_line: dict[str, int] = {}
     added: dict[Key, int] = {}  # instances the file made, by the line naming one first
     named: set[str] = set()
-    rows = list(qgc_params.read(text, path))
-    vehicles = sorted({row.vehicle for row in rows})
-    if len(vehicles) > 1:
-        other = next(row for row in rows if row.vehicle != rows[0].vehicle)
-        raise ParamFileError(
-            f"{path}:{other.line}: vehicle {other.vehicle}: the file holds parameters of vehicles "
-            f"{', '.join(map(str, vehicles))} (a store is one vehicle's: import one at a time)"
+    # The store is the autopilot's, as migrate and the page take it.
+    autopilot = qgc_params.autopilot_rows(qgc_params.read(text, path), path)
+    for component, count in autopilot.others:
+        report.append(
+            f"{path}: component {component}: {count} parameters skipped (not the "
+            f"autopilot's, component {autopilot.component})"
         )
-    # The store is the autopilot's (component 1, as migrate takes it); a QGC save of a vehicle
-    # also holds its other components' (a gimbal, a camera), which are not its parameters.
-    components = sorted({row.component for row in rows})
-    chosen = 1 if 1 in components else components[0] if components else 1
-    for component in components:
-        if component != chosen:
-            count = sum(row.component == component for row in rows)
-            report.append(
-                f"{path}: component {component}: {count} parameters skipped (not the "
-                f"autopilot's, component {chosen})"
-            )
-    for row in rows:
-        if row.component != chosen:
-            continue
+    for row in autopilot.rows:
         where, name, number_value = f"{path}:{row.line}", row.name, row.value
         if first_line.setdefault(name, row.line) != row.line:  # which of two values is meant?
             raise ParamFileError(f"{where}: {name}: also set on line {first_line[name]}")
