@@ -773,6 +773,28 @@ def test_shell_completion(store: Path, capsys: pytest.CaptureFixture[str]) -> No
     assert bash.stdout.split() == ["set-default"]
 
 
+def test_shell_completion_reads_the_store_the_command_line_names(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # Names came from $PX4PARAMS_STORE (or ./px4params.store) whatever --store the line gave:
+    # 'param --store other.store set AK09916#0.<TAB>' completed nothing.
+    other = tmp_path / "other.store"
+    assert run(capsys, "param", "--store", str(other), "add", "AK09916#0")[0] == 0
+    _, script, _ = run(capsys, "completion", "bash")
+    env = {**os.environ, "PX4PARAMS_STORE": str(tmp_path / "empty.store")}
+    env["PATH"] = f"{Path(sys.executable).parent}{os.pathsep}{env['PATH']}"
+    for words in (
+        f"param --store {other} set AK09916#0.bus.i2c.b",
+        f"param set --store {other} AK09916#0.bus.i2c.b",  # (after the verb too)
+    ):
+        bash = subprocess.run(
+            ["bash", "-c", f"{script}COMP_WORDS=(px4params {words}); "
+             "COMP_CWORD=$((${#COMP_WORDS[@]} - 1)); _px4params; echo \"${COMPREPLY[@]}\""],
+            capture_output=True, text=True, env=env, timeout=60,
+        )  # fmt: skip
+        assert bash.stdout.split() == ["AK09916#0.bus.i2c.bus_id"], (words, bash.stderr)
+
+
 @pytest.mark.parametrize(
     ("argv", "message"),
     [

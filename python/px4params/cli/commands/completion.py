@@ -26,12 +26,17 @@ _px4params() {
         return
     fi
     if [[ ${COMP_WORDS[1]} == param ]]; then
-        local i verb=""
+        # The verb, and the store options before or after it: names are the store's in use.
+        local i verb="" value options=()
         for ((i = 2; i < COMP_CWORD; i++)); do
             case ${COMP_WORDS[i]} in
-                --store|--classic|--dsdl) ((i++)) ;;
+                --store|--classic|--dsdl)
+                    value=${COMP_WORDS[i + 1]}
+                    [[ $value == "~/"* ]] && value=$HOME/${value#"~/"}
+                    options+=("${COMP_WORDS[i]}" "$value")
+                    ((i++)) ;;
                 -*) ;;
-                *) verb=${COMP_WORDS[i]}; break ;;
+                *) [[ -z $verb ]] && verb=${COMP_WORDS[i]} ;;
             esac
         done
         if [[ -z $verb ]]; then
@@ -42,7 +47,7 @@ _px4params() {
             save|load|import|export) COMPREPLY=($(compgen -f -- "$cur")); return ;;
         esac
         local IFS=$'\n'
-        COMPREPLY=($(compgen -W "$(px4params completion names 2>/dev/null)" -- "$cur"))
+        COMPREPLY=($(compgen -W "$(px4params completion names "${options[@]}" 2>/dev/null)" -- "$cur"))
         compopt -o nosort 2>/dev/null
         return
     fi
@@ -52,11 +57,14 @@ complete -F _px4params px4params
 """
 
 
-def names(store_path: str | None = None) -> list[str]:
-    """Parameter names, instance slots and the leaf paths of existing instances."""
+def names(
+    store_path: str | None = None, classic: str | None = None, dsdl: Sequence[str] = ()
+) -> list[str]:
+    """Parameter names, instance slots and the leaf paths of existing instances, of the store
+    ``store_path`` opened as ``param --classic ... --dsdl ...`` opens it."""
     from px4params.store.session import open_session
 
-    store = open_session(store_path, None).store
+    store = open_session(store_path, classic, dsdl).store
     found: list[str] = []
     for name in store.parameters:
         spec = store.spec(name)
@@ -72,7 +80,7 @@ def names(store_path: str | None = None) -> list[str]:
 
 def cmd_completion(args: argparse.Namespace) -> int:
     if args.what == "names":
-        print("\n".join(names(args.store)))
+        print("\n".join(names(args.store, args.classic, args.dsdl or ())))
         return 0
     from px4params.cli.main import build_parser
     from px4params.nsh.param import VERBS
@@ -105,4 +113,8 @@ in use.""",
     )
     p.add_argument("what", choices=("bash", "names"))
     p.add_argument("--store", metavar="FILE", help="store whose instances to complete")
+    p.add_argument("--classic", metavar="FILE", help="its classic parameters (as for param)")
+    p.add_argument(
+        "--dsdl", action="append", metavar="DIR", help="extra DSDL folder (as for param)"
+    )
     p.set_defaults(func=cmd_completion)
