@@ -139,8 +139,7 @@ def _read_text(where: str) -> OldConfig:
         first_line[r.name] = r.line
         params[r.name] = r.value
     skipped = [
-        f"component {c}: {count} parameters (not the autopilot's)"
-        for c, count in autopilot.others
+        f"component {c}: {count} parameters (not the autopilot's)" for c, count in autopilot.others
     ]
     details = [f"component {chosen}"]
     version = None

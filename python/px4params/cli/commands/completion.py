@@ -46,8 +46,9 @@ _px4params() {
         case $verb in
             save|load|import|export) COMPREPLY=($(compgen -f -- "$cur")); return ;;
         esac
-        local IFS=$'\n'
-        COMPREPLY=($(compgen -W "$(px4params completion names "${options[@]}" 2>/dev/null)" -- "$cur"))
+        local IFS=$'\n' found
+        found=$(px4params completion names "${options[@]}" 2>/dev/null)
+        COMPREPLY=($(compgen -W "$found" -- "$cur"))
         compopt -o nosort 2>/dev/null
         return
     fi
