@@ -259,7 +259,7 @@ def test_flat_lines_add_their_instance_and_set_the_leaf(
     report = read_file(store, path, "1\t1\tINA238_3C\t70\t6\n1\t1\tINA238_3Q\t0.0625\t9\n")
     # The instance was made without a word, its bus id 0 from the defaults (it cannot start).
     assert report == [
-        f"{path}:1: added INA238#3; INA238_3A, INA238_3B, INA238_3P not in the file: the type's "
+        f"{path}:1: added INA238#3; INA238_3A, INA238_3B, INA238_3P not set by the file: the type's "
         "defaults"
     ]
     assert "INA238#3" in store
@@ -267,25 +267,42 @@ def test_flat_lines_add_their_instance_and_set_the_leaf(
     assert store.get("INA238#3.shunt") == 0.0625
 
 
+def test_a_type_changed_between_releases_is_converted_where_nothing_is_lost(
+    store: px4params.Store, tmp_path: Path
+) -> None:
+    # A QGC file of an older PX4 holds RC10_REV as REAL32 and COM_DISARM_LAND as INT32, the
+    # other way round today: the whole file was refused at the first such line. Converted where
+    # no digit is lost; else skipped, as QGroundControl skips a type mismatch; each said.
+    path = tmp_path / "old.params"
+    text = (
+        "1\t1\tSYS_AUTOSTART\t4001.0\t9\n"  # an integral float: 4001
+        "1\t1\tBAT1_CAPACITY\t5000\t6\n"  # an integer a float32 holds: 5000.0
+        "1\t1\tINA238_0C\t69.0\t9\n"
+        "1\t1\tINA238_0P\t200.0\t9\n"
+        "1\t1\tINA238_0B\t0.5\t9\n"  # half an integer: skipped
+        "1\t1\tINA238_0Q\t16777217\t6\n"  # 2**24 + 1: no float32 holds it (skipped)
+    )
+    said = "(its type changed between PX4 releases)"
+    assert read_file(store, path, text) == [
+        f"{path}:1: SYS_AUTOSTART: REAL32 (9) in the file, INT32 (6) here {said}: 4001.0 taken "
+        "as 4001",
+        f"{path}:2: BAT1_CAPACITY: INT32 (6) in the file, REAL32 (9) here {said}: 5000 taken as "
+        "5000.0",
+        f"{path}:3: INA238_0C: REAL32 (9) in the file, INT32 (6) here {said}: 69.0 taken as 69",
+        f"{path}:4: INA238_0P: REAL32 (9) in the file, INT32 (6) here {said}: 200.0 taken as 200",
+        f"{path}:5: INA238_0B: REAL32 (9) in the file, INT32 (6) here: 0.5 does not fit; skipped",
+        f"{path}:6: INA238_0Q: INT32 (6) in the file, REAL32 (9) here: 16777217 does not fit; "
+        "skipped",
+        f"{path}:3: added INA238#0; INA238_0A, INA238_0B, INA238_0Q not set by the file: the "
+        "type's defaults",
+    ]
+    assert (store.get("SYS_AUTOSTART"), store.get("BAT1_CAPACITY")) == (4001, 5000.0)
+    assert store.get("INA238#0.bus.i2c.address") == 69 and store.get("INA238#0.current") == 200
+
+
 @pytest.mark.parametrize(
     ("line", "message"),
     [
-        (
-            "1\t1\tSYS_AUTOSTART\t4001.0\t9",
-            "SYS_AUTOSTART: type REAL32 (9) in the file, but the parameter is INT32 (6)",
-        ),
-        (
-            "1\t1\tBAT1_CAPACITY\t5000\t6",
-            "BAT1_CAPACITY: type INT32 (6) in the file, but the parameter is REAL32 (9)",
-        ),
-        (
-            "1\t1\tINA238_0C\t69.0\t9",
-            "INA238_0C: type REAL32 (9) in the file, but the parameter is INT32 (6)",
-        ),
-        (
-            "1\t1\tINA238_0Q\t1\t6",
-            "INA238_0Q: type INT32 (6) in the file, but the parameter is REAL32 (9)",
-        ),
         ("1\t1\tSYS_AUTOSTART\t1\t4", "SYS_AUTOSTART: type '4' is not 6 (int32) or 9 (float)"),
         ("1\t1\tSYS_AUTOSTART\t1\t10", "SYS_AUTOSTART: type '10' is not 6 (int32) or 9 (float)"),
         ("1\t1\tINA238_0C\t300\t6", "INA238_0C: INA238#0: bus.i2c.address: value 300"),

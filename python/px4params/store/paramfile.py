@@ -220,7 +220,10 @@ def _read_qgc(store: Store, path: str, text: str, forced: Forced | None) -> list
             if name in store.parameters:
                 classic = store.classic(name)
                 if classic is not None:
-                    _check_type(where, name, row.type, classic.is_float)
+                    typed = _of_type(where, name, row, classic.is_float, report)
+                    if typed is None:
+                        continue
+                    number_value = typed
                 write_forcing(where, forced, store.set, name, number_value)
                 continue
             match = _FLAT_INSTANCE.fullmatch(name)
@@ -230,7 +233,10 @@ def _read_qgc(store: Store, path: str, text: str, forced: Forced | None) -> list
                 continue
             fmap = store.destructured
             instance, slot = fmap.owner(name)
-            _check_type(where, name, row.type, slot.mav_type == "float32")
+            typed = _of_type(where, name, row, slot.mav_type == "float32", report)
+            if typed is None:
+                continue
+            number_value = typed
             if instance not in store:
                 store.add(instance)
                 added.setdefault(instance, row.line)
@@ -259,20 +265,40 @@ def _added(store: Store, path: str, added: dict[Key, int], named: set[str]) -> l
         unset = [
             p.name for p in flat_table(store) if p.instance == instance and p.name not in named
         ]
-        kept = f"; {', '.join(unset)} not in the file: the type's defaults" if unset else ""
+        kept = f"; {', '.join(unset)} not set by the file: the type's defaults" if unset else ""
         lines.append(f"{path}:{line}: added {instance}{kept}")
     return lines
 
 
-def _check_type(where: str, name: str, given: int, is_float: bool) -> None:
-    """The type column must be the parameter's (QGC refuses a mismatch too)."""
+def _of_type(
+    where: str, name: str, row: qgc_params.QgcRow, is_float: bool, report: list[str]
+) -> int | float | None:
+    """The row's value as the parameter's type holds it. A parameter whose type changed between
+    PX4 releases (RC10_REV, COM_DISARM_LAND: a file of an older vehicle) is converted where no
+    digit is lost, and said; else skipped and said, as QGroundControl skips a type mismatch."""
     expected = qgc_params.REAL32 if is_float else qgc_params.INT32
-    if given != expected:
-        names = {qgc_params.INT32: "INT32 (6)", qgc_params.REAL32: "REAL32 (9)"}
-        raise ParamFileError(
-            f"{where}: {name}: type {names[given]} in the file, but the parameter is "
-            f"{names[expected]}"
-        )
+    value = row.value
+    if row.type == expected:
+        return value
+    names = {qgc_params.INT32: "INT32 (6)", qgc_params.REAL32: "REAL32 (9)"}
+    said = f"{where}: {name}: {names[row.type]} in the file, {names[expected]} here"
+    exact: int | float | None = None
+    if is_float and abs(int(value)) <= 1 << 24:  # float32 holds every integer up to 2**24
+        exact = float(value)
+    elif not is_float and float(value).is_integer() and -(1 << 31) <= value < 1 << 31:
+        exact = int(value)
+    if exact is None:
+        report.append(f"{said}: {_shown(value)} does not fit; skipped")
+        return None
+    report.append(
+        f"{said} (its type changed between PX4 releases): {_shown(value)} taken as "
+        f"{_shown(exact)}"
+    )
+    return exact
+
+
+def _shown(value: int | float) -> str:
+    return repr(value) if isinstance(value, float) else str(value)
 
 
 def _read_json(store: Store, path: str, text: str, forced: Forced | None) -> list[str]:
