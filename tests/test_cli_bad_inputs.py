@@ -153,8 +153,8 @@ def _cases() -> Iterator[Case]:
     # -- param import / load: bad files -------------------------------------------------------
     params_files: dict[str, tuple[str | bytes, str]] = {
         "columns.params": ("1\t1\tSYS_AUTOSTART\t4001\n", "expected 5"),
-        "type.params": ("1\t1\tSYS_AUTOSTART\t2.0\t9\n", "REAL32 (9) in the file"),
-        "type2.params": ("1\t1\tINA238_SHUNT\t1\t6\n", "INT32 (6) in the file"),
+        # another type (an older PX4's): converted, then beyond the field
+        "type.params": ("1\t1\tINA238_0C\t200.0\t9\n", "INA238_0C: INA238#0: bus.i2c.address"),
         "fraction.params": ("1\t1\tSYS_AUTOSTART\t1.5\t6\n", "not an integer"),
         "huge.params": (f"1\t1\tSYS_AUTOSTART\t{HUGE}\t6\n", "out of range"),
         "hugeid.params": (f"{HUGE}\t1\tSYS_AUTOSTART\t1\t6\n", "must be integers"),
@@ -249,6 +249,8 @@ def _cases() -> Iterator[Case]:
     yield Case(("decode", "uavcan.protocol.NodeStatus", "00"), says="truncated")
     yield Case(("frames", ina, '{"current": 1}'), says="no default data type ID")
     yield Case(("frames", ina, '{"current": 1}', "--dtid", "1"), says="missing field")
+    # a float beyond its field, named with an exponent (it was 301 digits long)
+    yield Case(("encode", ina, "--defaults", '{"shunt": 1e300}'), says="shunt: value 1e300 is")
     # -- devid ----------------------------------------------------------------------------------
     for args in [
         (HUGE,),
@@ -394,6 +396,12 @@ def _cases() -> Iterator[Case]:
         ("mavlink", "serve", "--udp", "127.0.0.1:" + HUGE),
         ("autostart", "run", "--duration", "x"),
         ("frames", ina, "{}", "--transfer-id", HUGE),
+        ("frames", ina, "{}", "--transfer-id", "zz"),
+        # an empty file name (an unset shell variable) meant the default store without a word
+        ("param", "--store", "", "show"),
+        ("param", "show", "--store", ""),
+        ("param", "--classic", "", "show"),
+        ("run", "{dir}/x.airframe", "--store", ""),
         # durations: a server given one that is not a time used to start and fail every 2 s
         *[
             (*server, f"--bench-duration={value}")

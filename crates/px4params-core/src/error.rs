@@ -317,6 +317,8 @@ fn fmt_scalar(f: &mut fmt::Formatter<'_>, s: &Scalar) -> fmt::Result {
     match s {
         Scalar::Uint(v) => write!(f, "{v}"),
         Scalar::Int(v) => write!(f, "{v}"),
+        // Beyond 16 digits or below 1e-5 with an exponent (`1e300`, not 301 digits).
+        Scalar::Float(v) if *v != 0.0 && !(1e-5..1e16).contains(&v.abs()) => write!(f, "{v:e}"),
         Scalar::Float(v) => write!(f, "{v}"),
         Scalar::Bool(v) => write!(f, "{v}"),
     }
@@ -402,6 +404,32 @@ mod tests {
             path.push(step);
         }
         path
+    }
+
+    #[test]
+    fn floats_in_messages_take_an_exponent_beyond_16_digits_or_below_1e_5() {
+        let shown = |v: f64| {
+            let e: ErrorKind<core::convert::Infallible> =
+                ErrorKind::Scalar(ScalarError::NotFinite {
+                    value: Scalar::Float(v),
+                });
+            e.to_string()
+        };
+        let cases = [
+            (1e300, "1e300"),
+            (-1.5e16, "-1.5e16"),
+            (65505.0, "65505"),
+            (0.00001, "0.00001"),
+            (2.5e-6, "2.5e-6"),
+            (0.0, "0"),
+        ];
+        for (v, text) in cases {
+            assert!(
+                shown(v).starts_with(&format!("value {text} ")),
+                "{v}: {}",
+                shown(v)
+            );
+        }
     }
 
     #[test]

@@ -637,10 +637,8 @@ fn a_finite_number_a_truncated_float_makes_infinite_is_refused() {
              infinity)"
         )
     };
-    assert_eq!(
-        set(&mut s, "gain", 1e39),
-        Err(refused("gain", &format!("1{}", "0".repeat(39))))
-    );
+    // (Shown with an exponent: 40 digits said nothing more.)
+    assert_eq!(set(&mut s, "gain", 1e39), Err(refused("gain", "1e39")));
     assert_eq!(set(&mut s, "trim", 65505.0), Err(refused("trim", "65505")));
     assert_eq!(s.get(0, 0, Which::Value).unwrap(), [0; 6]);
     // The largest finite numbers are kept.

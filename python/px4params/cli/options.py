@@ -54,6 +54,14 @@ def dsdl_option(p: ArgumentParser) -> None:
     )
 
 
+def file_name(text: str) -> str:
+    """A file option's value: a name (an empty one, from an unset shell variable, would have
+    meant the default file without a word)."""
+    if not text:
+        raise type_error("an empty name is no file")
+    return text
+
+
 def store_options(p: ArgumentParser, *, after_verb: bool = False) -> None:
     """``--store``, ``--classic`` and ``--dsdl``. ``after_verb``: on a verb of a command that
     takes them before its verbs too (``param --store S show`` and ``param show --store S``):
@@ -63,12 +71,14 @@ def store_options(p: ArgumentParser, *, after_verb: bool = False) -> None:
     unset = {"default": SUPPRESS} if after_verb else {}
     p.add_argument(
         "--store",
+        type=file_name,
         metavar="FILE",
         help="store file (default: $PX4PARAMS_STORE, else ./px4params.store)",
         **unset,
     )
     p.add_argument(
         "--classic",
+        type=file_name,
         metavar="JSON",
         help="PX4 parameters.json with the classic parameters "
         f"(default: ${CLASSIC_ENV}, else a bundled minimal set)",

@@ -291,8 +291,7 @@ def _of_type(
         report.append(f"{said}: {_shown(value)} does not fit; skipped")
         return None
     report.append(
-        f"{said} (its type changed between PX4 releases): {_shown(value)} taken as "
-        f"{_shown(exact)}"
+        f"{said} (its type changed between PX4 releases): {_shown(value)} taken as {_shown(exact)}"
     )
     return exact
 

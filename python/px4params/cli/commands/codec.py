@@ -7,7 +7,7 @@ from collections.abc import Callable, Iterator, Sequence
 
 from px4params._records import TYPE_CHECKING
 from px4params.cli.options import dsdl_option
-from px4params.cli.parsing import ArgumentParser, RawDescriptionHelpFormatter
+from px4params.cli.parsing import ArgumentParser, RawDescriptionHelpFormatter, integer
 from px4params.dsdl.schema import DataType, Schema, load_schema, to_json_value, value_at
 from px4params.errors import CommandError, EncodeError, NumberError, Px4ParamsError
 from px4params.numbers import abbreviated, dump_json, load_json
@@ -389,18 +389,28 @@ example:
     )
     p.add_argument("value", metavar="JSON", help="the value as JSON, or - to read it from stdin")
     p.add_argument(
-        "--transfer-id", type=int, default=0, metavar="N", help="transfer ID 0..31 (default 0)"
+        "--transfer-id", type=integer, default=0, metavar="N", help="transfer ID 0..31 (default 0)"
     )
     p.add_argument(
-        "--source-node", type=int, default=1, metavar="N", help="source node ID 1..127 (default 1)"
+        "--source-node",
+        type=integer,
+        default=1,
+        metavar="N",
+        help="source node ID 1..127 (default 1)",
     )
     p.add_argument(
-        "--dest-node", type=int, metavar="N", help="destination node ID 1..127 (services only)"
+        "--dest-node", type=integer, metavar="N", help="destination node ID 1..127 (services only)"
     )
     p.add_argument(
-        "--priority", type=int, default=31, metavar="N", help="priority 0..31 (default 31, lowest)"
+        "--priority",
+        type=integer,
+        default=31,
+        metavar="N",
+        help="priority 0..31 (default 31, lowest)",
     )
-    p.add_argument("--dtid", type=int, metavar="N", help="data type ID (default: the type's own)")
+    p.add_argument(
+        "--dtid", type=integer, metavar="N", help="data type ID (default: the type's own)"
+    )
     p.add_argument("--canfd", action="store_true", help="CAN FD frames (up to 64 bytes)")
     p.add_argument(
         "--saturate",
