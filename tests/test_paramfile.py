@@ -259,8 +259,8 @@ def test_flat_lines_add_their_instance_and_set_the_leaf(
     report = read_file(store, path, "1\t1\tINA238_3C\t70\t6\n1\t1\tINA238_3Q\t0.0625\t9\n")
     # The instance was made without a word, its bus id 0 from the defaults (it cannot start).
     assert report == [
-        f"{path}:1: added INA238#3; INA238_3A, INA238_3B, INA238_3P not set by the file: the type's "
-        "defaults"
+        f"{path}:1: added INA238#3; INA238_3A, INA238_3B, INA238_3P not set by the file: the "
+        "type's defaults"
     ]
     assert "INA238#3" in store
     assert store.get("INA238#3.bus.i2c.address") == 70
