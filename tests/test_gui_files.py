@@ -304,3 +304,25 @@ def test_a_params_file_is_its_autopilots_and_one_vehicles(vehicle: Any) -> None:
         "x.params:2: vehicle 2: the file holds parameters of vehicles 1, 2 (one vehicle's are "
         "read: split the file)"
     )
+
+
+@pytest.mark.parametrize(
+    ("filename", "text", "error"),
+    [
+        # each was a 500 and a traceback: the page's name was the scratch copy's
+        ("a\x00b.json", "{", "a\\x00b.json:"),
+        ("a\x00b.airframe", "param set NOPE 1", "a\\x00b.airframe:1: "),
+        ("a" * 300 + ".json", "{", "aaaaaaaaaaaa...a.json (305 characters):"),
+        ("..", "param set NOPE 1", "..:1: "),
+        ("x/.", "param set NOPE 1", "x/.:1: "),
+        ("v.json", '{"classic": "\ud800"}', "v.json: not text: a lone surrogate (U+D800) at "),
+        ("v.airframe", "param set X \udcff", "v.airframe: not text: a lone surrogate (U+DCFF) "),
+    ],
+)
+def test_odd_names_and_text_the_page_sends_are_refused_by_name(
+    vehicle: Any, filename: str, text: str, error: str
+) -> None:
+    values, metadata = vehicle
+    with pytest.raises(Px4ParamsError) as refused:
+        files.review_file(filename, text, values, metadata)
+    assert str(refused.value).startswith(error), str(refused.value)

@@ -244,6 +244,20 @@ def test_json_nested_too_deep_is_a_400_not_a_traceback(gui: Gui, store_file: Pat
     assert gui.proc.stderr is not None and "Traceback" not in gui.proc.stderr.read()
 
 
+def test_a_review_of_an_odd_file_name_is_a_400_not_a_traceback(gui: Gui, store_file: Path) -> None:
+    # A NUL or 300 characters in the name, '..', a lone surrogate in the text: HTTP 500.
+    for body in (
+        {"filename": "a\u0000b.json", "text": "{}"},
+        {"filename": "a" * 300, "text": "{}"},
+        {"filename": "..", "text": "param set X 1"},
+        {"filename": "v.json", "text": "\ud800"},
+    ):
+        status, _, answer = request(gui, "POST", "/api/review", json.dumps(body), json_headers(gui))
+        assert status == 400 and json.loads(answer)["error"], (body, status, answer)
+    gui.stop()
+    assert gui.proc.stderr is not None and "Traceback" not in gui.proc.stderr.read()
+
+
 def test_oversize_bodies_are_refused_with_413(gui: Gui, store_file: Path) -> None:
     big = json.dumps({"changes": [{"name": "INA238_INST", "value": 0}], "pad": "x" * (2 << 20)})
     expected = f"request body of {len(big)} bytes refused: at most 1048576 bytes per request"

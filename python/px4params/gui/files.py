@@ -17,6 +17,7 @@ from typing import Any
 from px4params.errors import CommandError, Px4ParamsError
 from px4params.formats import qgc_params
 from px4params.gcs.metadata import QGC_TYPE, destructured_names
+from px4params.numbers import abbreviated
 from px4params.store.classic import ClassicParam
 
 __all__ = ["export_airframe", "export_params", "review_file"]
@@ -36,15 +37,23 @@ def review_file(
     """The changes ``text`` (a ``.params``, airframe or JSON file named ``filename``) would make
     to ``values``: ``{"changes": [{"name", "current", "new"}], "notes": [...]}``."""
     kind = os.path.splitext(filename)[1].lower()
+    # The page's name for the file, as messages show it (a NUL, an escape: written out).
+    if not filename.isprintable() or len(filename) > 255:
+        filename = abbreviated(filename)
+    try:
+        text.encode("utf-8")
+    except UnicodeEncodeError as e:  # JSON's "\ud800": no text a file can hold
+        raise CommandError(
+            f"{filename}: not text: a lone surrogate (U+{ord(text[e.start]):04X}) at character "
+            f"{e.start}"
+        ) from None
     if kind == ".params":
         new, notes = _read_params(filename, text, values)
     else:
         scratch = _scratch_store(values, metadata, store)
         if kind == ".json":
             with tempfile.TemporaryDirectory() as tmp:
-                path = os.path.join(tmp, os.path.basename(filename))
-                with open(path, "w", encoding="utf-8") as f:
-                    f.write(text)
+                path = _scratch_copy(tmp, kind, text)
                 from px4params.store import paramfile
 
                 try:
@@ -147,9 +156,7 @@ def _run_airframe(scratch: Any, filename: str, text: str) -> list[str]:
     from px4params.store.session import Session
 
     with tempfile.TemporaryDirectory() as tmp:
-        path = os.path.join(tmp, os.path.basename(filename) or "airframe")
-        with open(path, "w", encoding="utf-8") as f:
-            f.write(text)
+        path = _scratch_copy(tmp, os.path.splitext(filename)[1].lower(), text)
         session = Session(scratch, os.path.join(tmp, "scratch.store"), io.StringIO())
         errors = io.StringIO()
         # A page's file touches nothing on this computer but the scratch store: its lines
@@ -160,6 +167,16 @@ def _run_airframe(scratch: Any, filename: str, text: str) -> list[str]:
             message = " ".join(line.removeprefix("px4params: ") for line in lines)
             raise CommandError(message or f"{filename}: the airframe file failed")
     return [line.replace(path, filename) for line in result.skipped]
+
+
+def _scratch_copy(folder: str, kind: str, text: str) -> str:
+    """``text`` written in ``folder`` as a file of extension ``kind`` (what the readers go by);
+    its path. The page's name for the file is only shown: as the copy's name, '..', a NUL or
+    300 characters made the write fail with a 500."""
+    path = os.path.join(folder, "review" + (kind if kind[1:].isalnum() else ""))
+    with open(path, "w", encoding="utf-8") as f:
+        f.write(text)
+    return path
 
 
 def export_params(values: Mapping[str, Any], metadata: Mapping[str, Any], store: Any = None) -> str:
