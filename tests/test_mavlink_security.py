@@ -334,15 +334,18 @@ def test_a_burst_read_is_paced_and_a_flood_of_them_holds_nothing_up(
         assert sum(1 for t in arrivals if t < 0.06) <= 60, arrivals[:80]
         for _ in range(1000):
             burst()
-        asked = time.monotonic()
-        client.conn.mav.param_request_read_send(1, 1, b"INA238_1C", -1)
-        read = client.conn.recv_match(
-            type="PARAM_VALUE",
-            blocking=True,
-            timeout=5,
-            condition="PARAM_VALUE.param_id=='INA238_1C'",
-        )
-        assert read is not None and time.monotonic() - asked < 1.0
+        # A read after them is answered soon (asked again every 0.3 s, as QGC asks again: UDP
+        # may drop a request when the flood fills the server's buffer).
+        asked, read = time.monotonic(), None
+        while read is None and time.monotonic() - asked < 5:
+            client.conn.mav.param_request_read_send(1, 1, b"INA238_1C", -1)
+            read = client.conn.recv_match(
+                type="PARAM_VALUE",
+                blocking=True,
+                timeout=0.3,
+                condition="PARAM_VALUE.param_id=='INA238_1C'",
+            )
+        assert read is not None and time.monotonic() - asked < 2.0
     finally:
         client.close()
 
