@@ -301,6 +301,31 @@ def test_a_type_changed_between_releases_is_converted_where_nothing_is_lost(
 
 
 @pytest.mark.parametrize(
+    ("line", "taken"),
+    [
+        ("SYS_AUTOSTART\t-2147483648.0\t9", -(1 << 31)),  # the edges of an int32
+        ("SYS_AUTOSTART\t2147483647.0\t9", (1 << 31) - 1),
+        ("SYS_AUTOSTART\t-2147483649.0\t9", None),
+        ("SYS_AUTOSTART\t2147483648.0\t9", None),
+        ("BAT1_CAPACITY\t16777216\t6", 16777216.0),  # 2**24: a float32 holds it
+        ("BAT1_CAPACITY\t-16777216\t6", -16777216.0),
+        ("BAT1_CAPACITY\t-16777217\t6", None),
+    ],
+)
+def test_a_converted_value_is_taken_only_where_its_new_type_holds_it(
+    store: px4params.Store, tmp_path: Path, line: str, taken: int | float | None
+) -> None:
+    # Each line followed by another, which is read whatever became of the first.
+    name = line.split("\t")[0]
+    before = store.get(name)
+    path = tmp_path / "edge.params"
+    report = read_file(store, path, f"1\t1\t{line}\n1\t1\tINA238_1C\t70\t6\n")
+    assert report[0].endswith("skipped" if taken is None else f"taken as {taken!r}"), report
+    assert store.get(name) == (before if taken is None else taken)
+    assert store.get("INA238#1.bus.i2c.address") == 70
+
+
+@pytest.mark.parametrize(
     ("line", "message"),
     [
         ("1\t1\tSYS_AUTOSTART\t1\t4", "SYS_AUTOSTART: type '4' is not 6 (int32) or 9 (float)"),

@@ -282,11 +282,11 @@ def _of_type(
         return value
     names = {qgc_params.INT32: "INT32 (6)", qgc_params.REAL32: "REAL32 (9)"}
     said = f"{where}: {name}: {names[row.type]} in the file, {names[expected]} here"
-    exact: int | float | None = None
-    if is_float and abs(int(value)) <= 1 << 24:  # float32 holds every integer up to 2**24
-        exact = float(value)
-    elif not is_float and float(value).is_integer() and -(1 << 31) <= value < 1 << 31:
-        exact = int(value)
+    if is_float:  # float32 holds every integer up to 2**24
+        exact = float(value) if abs(int(value)) <= 1 << 24 else None
+    else:
+        whole = float(value).is_integer() and -(1 << 31) <= value < 1 << 31
+        exact = int(value) if whole else None
     if exact is None:
         report.append(f"{said}: {_shown(value)} does not fit; skipped")
         return None
