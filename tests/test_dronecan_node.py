@@ -10,6 +10,7 @@ RestartNode) and docs/dronecan.md. ``tests/test_dronecan.py`` runs the same node
 from __future__ import annotations
 
 import os
+import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -757,20 +758,25 @@ def test_a_restart_starts_the_uptime_again(bench: Bench) -> None:
 
 class StalledLine(Line):
     """A serial line whose host stopped reading: every write times out, as pyserial's does
-    (``SerialTimeoutException``, an ``OSError``), until :attr:`reading` is set again."""
+    (``SerialTimeoutException``, an ``OSError``), until :attr:`reading` is set again;
+    :attr:`full` says whether the line selects as not writable meanwhile (its buffer full)."""
 
     def __init__(self) -> None:
         super().__init__()
         self.reading = False
+        self.full = False
+        self.writes = 0
 
     def fileno(self) -> int:
         # A serial line's one descriptor selects writable when its buffer has room: the
-        # pipe's writing end stands in (the node is handed its frames directly here).
-        return self._write
+        # pipe's writing end stands in, its reading end (never writable) for a full buffer
+        # (the node is handed its frames directly here).
+        return self._read if self.full else self._write
 
     def write(self, data: bytes) -> int:
         import serial
 
+        self.writes += 1
         if not self.reading:
             raise serial.SerialTimeoutException("Write timeout")
         return super().write(data)
@@ -795,5 +801,18 @@ def test_a_write_timeout_drops_the_answer_and_the_node_goes_on(
         assert bytes(bench.call(NODE_INFO.Request()).name) == b"org.px4params"
         assert bench.logged[1:] == ["the host reads again: 3 writes to it were dropped"]
         assert bench.node.stats["dropped"] == 3
+        # A second stall is said again; while the line's buffer is full, nothing is written
+        # and nothing waits: a backlog of requests each waited 0.5 s.
+        line.reading = False
+        assert bench.call(NODE_INFO.Request()) is None
+        line.full, writes, started = True, line.writes, time.monotonic()
+        for _ in range(20):
+            assert bench.call(NODE_INFO.Request()) is None
+        assert line.writes == writes and time.monotonic() - started < 0.5
+        assert bench.logged[2:] == [bench.logged[0]]
+        line.reading, line.full = True, False
+        bench.node._write(b"\r")  # an SLCAN command's 1-byte reply gets through: read again
+        assert bench.logged[3:] == ["the host reads again: 21 writes to it were dropped"]
+        assert bench.node.stats["dropped"] == 24
     finally:
         line.close()

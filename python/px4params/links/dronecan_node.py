@@ -205,15 +205,16 @@ class DronecanParamNode(ServingLoop):
         """Writes to the host. A host that does not read loses what is written meanwhile, as
         a CAN adapter drops the frames its host does not take: said once, and again when it
         reads again; the node goes on answering and stopping."""
-        written: int | None = 0
+        went = False
         # Once the host has stopped reading, a write waits for no one: it goes only if the
         # line takes it at once (else a backlog of requests would each wait WRITE_SECONDS).
         if not self._dropped or select.select([], [self.port.fileno()], [], 0)[1]:
             try:
                 written = self.port.write(data)
+                went = written is None or written >= len(data)  # (pyserial: None is all)
             except OSError:  # pyserial's write timeout (SerialTimeoutException) is one
-                written = 0
-        if written is None or written >= len(data):
+                pass
+        if went:
             if self._dropped:
                 self.log(f"the host reads again: {self._dropped} writes to it were dropped")
                 self._dropped = 0
