@@ -313,10 +313,11 @@ def test_a_params_file_is_its_autopilots_and_one_vehicles(vehicle: Any) -> None:
         ("a\x00b.json", "{", "a\\x00b.json:"),
         ("a\x00b.airframe", "param set NOPE 1", "a\\x00b.airframe:1: "),
         ("a" * 300 + ".json", "{", "aaaaaaaaaaaa...a.json (305 characters):"),
+        ("a" * 250 + ".json", "{", "a" * 250 + ".json:"),  # 255 characters: shown whole
         ("..", "param set NOPE 1", "..:1: "),
         ("x/.", "param set NOPE 1", "x/.:1: "),
-        ("v.json", '{"classic": "\ud800"}', "v.json: not text: a lone surrogate (U+D800) at "),
-        ("v.airframe", "param set X \udcff", "v.airframe: not text: a lone surrogate (U+DCFF) "),
+        ("v.json", '{"a": "\ud800"}', "v.json: not text: a lone surrogate (U+D800) at character 7"),
+        ("v.airframe", "param set X \udcff", "v.airframe: not text: a lone surrogate (U+DCFF) at "),
     ],
 )
 def test_odd_names_and_text_the_page_sends_are_refused_by_name(

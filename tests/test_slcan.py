@@ -449,6 +449,7 @@ def test_a_pty_write_larger_than_its_buffer_waits_for_the_reader() -> None:
 def test_a_pty_write_nobody_reads_gives_up_after_its_wait() -> None:
     # A host that stops reading: the write waited for it forever (the node then answered
     # nothing and ignored SIGTERM); now it waits WRITE_SECONDS and says how much went.
+    assert WRITE_SECONDS == 0.5  # as docs/dronecan.md says
     port, path = open_pty()
     client = os.open(path, os.O_RDWR | os.O_NOCTTY)
     data = bytes(range(256)) * 1024  # far beyond a pty's buffer

@@ -53,7 +53,7 @@ def review_file(
         scratch = _scratch_store(values, metadata, store)
         if kind == ".json":
             with tempfile.TemporaryDirectory() as tmp:
-                path = _scratch_copy(tmp, kind, text)
+                path = _scratch_copy(tmp, "review.json", text)
                 from px4params.store import paramfile
 
                 try:
@@ -156,7 +156,7 @@ def _run_airframe(scratch: Any, filename: str, text: str) -> list[str]:
     from px4params.store.session import Session
 
     with tempfile.TemporaryDirectory() as tmp:
-        path = _scratch_copy(tmp, os.path.splitext(filename)[1].lower(), text)
+        path = _scratch_copy(tmp, "review.airframe", text)
         session = Session(scratch, os.path.join(tmp, "scratch.store"), io.StringIO())
         errors = io.StringIO()
         # A page's file touches nothing on this computer but the scratch store: its lines
@@ -169,11 +169,10 @@ def _run_airframe(scratch: Any, filename: str, text: str) -> list[str]:
     return [line.replace(path, filename) for line in result.skipped]
 
 
-def _scratch_copy(folder: str, kind: str, text: str) -> str:
-    """``text`` written in ``folder`` as a file of extension ``kind`` (what the readers go by);
-    its path. The page's name for the file is only shown: as the copy's name, '..', a NUL or
-    300 characters made the write fail with a 500."""
-    path = os.path.join(folder, "review" + (kind if kind[1:].isalnum() else ""))
+def _scratch_copy(folder: str, name: str, text: str) -> str:
+    """``text`` written in ``folder`` as ``name``; its path. The page's name for the file is
+    only shown: as the copy's name, '..', a NUL or 300 characters made the write fail (500)."""
+    path = os.path.join(folder, name)
     with open(path, "w", encoding="utf-8") as f:
         f.write(text)
     return path

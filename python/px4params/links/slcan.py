@@ -319,7 +319,7 @@ class _FdPort:
                 left = deadline - time.monotonic()
                 if left <= 0:
                     break
-                select.select([], [self.fd], [], min(left, 0.1))
+                select.select([], [self.fd], [], left)
                 continue
             view = view[written:]
         return len(data) - len(view)

@@ -154,7 +154,7 @@ def parse(data: bytes, where: str) -> FileContent:
     checked = [Record(*r) for r in records]
     # A second record of one instance (or classic parameter): which would hold? (The core
     # keeps no set; a file this package writes has one record of each.)
-    seen: set[tuple[int, int | str, int]] = set()
+    seen = set[tuple[int, int | str, int]]()
     for record in checked:
         key = (record.kind, record.key, record.instance)
         if key in seen:
