@@ -525,6 +525,29 @@ def test_a_locked_session_holds_the_lock_for_its_block_only(store_file: Path) ->
     assert _lock_is_free(store_file)
 
 
+def test_a_locked_session_locks_a_new_or_default_store_and_nothing_else(
+    store_file: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A store that is no regular file (a FIFO) is refused as it is read: no FILE.lock beside
+    it (/dev/null.lock was made). A store not made yet, or the default one, is locked."""
+    from px4params.errors import StoreFileError
+    from px4params.store.session import LockedSession
+
+    fifo = tmp_path / "fifo.store"
+    os.mkfifo(fifo)
+    for odd in (fifo, tmp_path / "vehicle.store" / "inside.store"):  # (a file as a folder)
+        with pytest.raises(StoreFileError), LockedSession(str(odd), None):
+            pass
+        assert not Path(f"{odd}.lock").exists()
+    new = tmp_path / "new.store"
+    with LockedSession(str(new), None):
+        assert not _lock_is_free(new)
+    monkeypatch.setenv("PX4PARAMS_STORE", str(store_file))
+    with LockedSession(None, None):  # the default store
+        assert not _lock_is_free(store_file)
+    assert _lock_is_free(store_file)
+
+
 def test_a_lock_file_that_is_a_symbolic_link_is_refused(store_file: Path, tmp_path: Path) -> None:
     """The lock is opened without following a link: a link planted at FILE.lock (to a file
     of someone else's) is an error naming it, not a lock taken on the link's target."""
