@@ -396,6 +396,49 @@ fn a_bad_record_is_refused_at_its_offset() {
     assert_eq!(record.value, Some(&[5u8, 6, 7, 8][..]));
 }
 
+#[test]
+fn a_classic_record_named_as_no_px4_parameter_is_refused() {
+    let table = with_crc16(&table_record(&[SENS_LINE]));
+    // Kind 2 with a value, the name's length and bytes, the value (without the CRC-16).
+    let record = |name: &[u8]| {
+        let mut r = vec![0x22, name.len() as u8];
+        r.extend(name);
+        r.extend([5, 0, 0, 0]);
+        r
+    };
+    // Upper-case letters, digits and '_', a letter first, 1 to 16: kept.
+    for name in [&b"A"[..], b"SYS_AUTOSTART", b"Z9_", b"ABCDEFGHIJKLMNOP"] {
+        let data = store_file(2, &[SENS_LINE], &[&record(name)]);
+        let first = check(&data).unwrap().records().next().unwrap();
+        assert_eq!(first.key, Key::Classic(name));
+    }
+    let refused = |name: &[u8]| {
+        let (kind, offset, text) = raw_file(&[&table, &with_crc16(&record(name))]);
+        assert_eq!(
+            (kind, offset),
+            (FileErrorKind::ClassicName(name), 10 + table.len())
+        );
+        text
+    };
+    assert_eq!(
+        refused(b"X\x1b[31mRED\n"),
+        "record is malformed: classic parameter name 'X\\x1b[31mRED\\n' is not 1 to 16 \
+         upper-case letters, digits and '_', a letter first"
+    );
+    for name in [
+        &b""[..],
+        b"ABCDEFGHIJKLMNOPQ",
+        b"sys",
+        b"1A",
+        b"_A",
+        b"A-B",
+        b"A B",
+        b"A\xff",
+    ] {
+        refused(name);
+    }
+}
+
 // -- the writer -----------------------------------------------------------------------------
 
 #[test]
