@@ -816,3 +816,26 @@ def test_a_write_timeout_drops_the_answer_and_the_node_goes_on(
         assert bench.node.stats["dropped"] == 24
     finally:
         line.close()
+
+
+def test_a_write_the_line_takes_only_part_of_is_a_drop(
+    store_file: Path, schema: px4params.Schema
+) -> None:
+    # A pty's write gives up after its wait with part of the answer written: what did not go
+    # is dropped, and said.
+    class HalfLine(Line):
+        def write(self, data: bytes) -> int:
+            super().write(data[:1])
+            return 1
+
+    bench = Bench(_load(store_file), schema)
+    bench.line.close()
+    bench.line = bench.node.port = HalfLine()
+    try:
+        bench.node._write(b"T1E0\r")
+        assert bench.node.stats["dropped"] == 1
+        assert bench.logged == [
+            "the host is not reading: what the node sends is dropped until it does (0.5 s waited)"
+        ]
+    finally:
+        bench.line.close()
