@@ -314,6 +314,7 @@ def test_a_params_file_is_its_autopilots_and_one_vehicles(vehicle: Any) -> None:
         ("a\x00b.airframe", "param set NOPE 1", "a\\x00b.airframe:1: "),
         ("a" * 300 + ".json", "{", "aaaaaaaaaaaa...a.json (305 characters):"),
         ("a" * 250 + ".json", "{", "a" * 250 + ".json:"),  # 255 characters: shown whole
+        ("a" * 251 + ".json", "{", "aaaaaaaaaaaa...a.json (256 characters):"),
         ("..", "param set NOPE 1", "..:1: "),
         ("x/.", "param set NOPE 1", "x/.:1: "),
         ("v.json", '{"a": "\ud800"}', "v.json: not text: a lone surrogate (U+D800) at character 7"),
