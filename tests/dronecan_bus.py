@@ -54,10 +54,11 @@ class VirtualBus:
             port.close()
 
 
-@contextmanager
-def served(store: Path, *extra: str, timeout: float = 20.0) -> Iterator[str]:
-    """``px4params dronecan serve --slcan-pty --store STORE``: yields the pty's path; stops
-    the server (SIGTERM) at the end. Its output is in ``served.output`` afterwards."""
+def start_serving(
+    store: Path, *extra: str, timeout: float = 20.0
+) -> tuple[subprocess.Popen[str], str]:
+    """Starts ``px4params dronecan serve --slcan-pty --store STORE``: the process and the first
+    line it printed within ``timeout`` (``slcan: /dev/pts/N ...``, naming the pty; "" if none)."""
     proc = subprocess.Popen(
         [*PX4PARAMS, "dronecan", "serve", "--slcan-pty", "--store", str(store), *extra],
         stdout=subprocess.PIPE,
@@ -66,16 +67,21 @@ def served(store: Path, *extra: str, timeout: float = 20.0) -> Iterator[str]:
         env={**os.environ, "PYTHONUNBUFFERED": "1"},
     )
     assert proc.stdout is not None
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if select.select([proc.stdout], [], [], 0.5)[0]:
+            return proc, proc.stdout.readline()
+        if proc.poll() is not None:
+            break
+    return proc, ""
+
+
+@contextmanager
+def served(store: Path, *extra: str, timeout: float = 20.0) -> Iterator[str]:
+    """``px4params dronecan serve --slcan-pty --store STORE``: yields the pty's path; stops
+    the server (SIGTERM) at the end. Its output is in ``served.output`` afterwards."""
+    proc, first = start_serving(store, *extra, timeout=timeout)
     try:
-        deadline = time.monotonic() + timeout
-        first = ""
-        while time.monotonic() < deadline:
-            ready, _, _ = select.select([proc.stdout], [], [], 0.5)
-            if ready:
-                first = proc.stdout.readline()
-                break
-            if proc.poll() is not None:
-                break
         assert first.startswith("slcan: /dev/"), f"no pty announced: {first!r}"
         yield first.split()[1]
     finally:

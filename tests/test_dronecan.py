@@ -16,7 +16,7 @@ import dronecan
 import px4params
 import pytest
 from dronecan import transport
-from dronecan_bus import PX4PARAMS, VirtualBus, served
+from dronecan_bus import PX4PARAMS, VirtualBus, served, start_serving
 from px4params.errors import FlatError, Px4ParamsError
 from px4params.links.can_transfer import Frame, TransferReceiver, can_id, parse_can_id
 from px4params.links.dronecan_client import DronecanError, parse_value, shown
@@ -470,16 +470,8 @@ def test_a_host_that_stops_reading_loses_answers_not_the_node(vehicle_store: Pat
     import signal
     import tty
 
-    proc = subprocess.Popen(
-        [*PX4PARAMS, "dronecan", "serve", "--slcan-pty", "--store", str(vehicle_store)],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.STDOUT,
-        text=True,
-        env={**os.environ, "PYTHONUNBUFFERED": "1"},
-    )
-    assert proc.stdout is not None
+    proc, first = start_serving(vehicle_store)
     try:
-        first = proc.stdout.readline()
         assert first.startswith("slcan: /dev/"), first
         line = os.open(first.split()[1], os.O_RDWR | os.O_NOCTTY | os.O_NONBLOCK)
         tty.setraw(line)

@@ -54,6 +54,14 @@ class Autopilot(NamedTuple):
     #: Every other component and how many rows it has, in ID order.
     others: list[tuple[int, int]]
 
+    def skipped(self, where: str) -> list[str]:
+        """A report line for each other component's rows, which are skipped."""
+        return [
+            f"{where}: component {component}: {count} parameters skipped (not the autopilot's, "
+            f"component {self.component})"
+            for component, count in self.others
+        ]
+
 
 def autopilot_rows(rows: list[QgcRow], where: str) -> Autopilot:
     """The rows of the one vehicle's autopilot (component 1, as PX4 numbers it, else the

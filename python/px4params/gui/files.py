@@ -89,11 +89,7 @@ def _read_params(
     new: dict[str, Any] = {}
     notes: list[str] = []
     autopilot = qgc_params.autopilot_rows(qgc_params.read(text, filename), filename)
-    for component, count in autopilot.others:
-        notes.append(
-            f"{filename}: component {component}: {count} parameters skipped (not the "
-            f"autopilot's, component {autopilot.component})"
-        )
+    notes += autopilot.skipped(filename)
     for row in autopilot.rows:
         if row.name not in values:
             notes.append(

@@ -201,11 +201,7 @@ def _read_qgc(store: Store, path: str, text: str, forced: Forced | None) -> list
     named: set[str] = set()
     # The store is the autopilot's, as migrate and the page take it.
     autopilot = qgc_params.autopilot_rows(qgc_params.read(text, path), path)
-    for component, count in autopilot.others:
-        report.append(
-            f"{path}: component {component}: {count} parameters skipped (not the "
-            f"autopilot's, component {autopilot.component})"
-        )
+    report += autopilot.skipped(path)
     for row in autopilot.rows:
         where, name, number_value = f"{path}:{row.line}", row.name, row.value
         if first_line.setdefault(name, row.line) != row.line:  # which of two values is meant?
