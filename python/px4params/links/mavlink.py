@@ -14,8 +14,9 @@ What it does (PX4's ``mavlink_parameters.cpp`` is the model):
 * ``PARAM_REQUEST_LIST``: first ``_HASH_CHECK`` (index -1, ``MAV_PARAM_TYPE_UINT32``, PX4's CRC32
   over every name and value, so that a ground station can use its cache), then every parameter
   in name order, paced (``param_rate`` a second, in bursts of 20 as PX4 sends them over UDP)
-  rather than at once, and only while the requester is still heard from. A ``PARAM_SET`` of
-  ``_HASH_CHECK`` stops the stream, as in PX4.
+  rather than at once, and only while the requester is still heard from; each requester gets
+  its own list, the pace shared. A ``PARAM_SET`` of ``_HASH_CHECK`` stops the sender's list, as
+  in PX4. Parameter messages must name this system's ID (PX4 ignores them for system 0).
 * ``PARAM_REQUEST_READ`` by name (``_HASH_CHECK`` too) or by index.
 * ``PARAM_SET``: the name must exist and the type must be the parameter's (``INT32`` or
   ``REAL32``); the value must fit the parameter (``int32``, ``float32``, or the leaf's own range,
@@ -31,7 +32,7 @@ What it does (PX4's ``mavlink_parameters.cpp`` is the model):
   general metadata file, which lists ``parameters.json.xz`` (every classic, structured and
   destructured parameter of the store, :mod:`px4params.gcs.component_information`); both are
   downloaded with MAVLink FTP (``FILE_TRANSFER_PROTOCOL``, the read-only subset of
-  :mod:`px4params.links.mavlink_ftp`).
+  :mod:`px4params.links.mavlink_ftp`; a session is its opener's, a burst read paced as a list).
 * Every ``COMMAND_LONG`` is answered with ``COMMAND_ACK``: accepted, unsupported, or denied when
   its parameters name nothing (NaN, infinities, a message ID beyond 24 bits).
 * Anything else (other messages, other targets, garbage bytes, bad CRCs) is ignored.
