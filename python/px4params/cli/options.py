@@ -20,6 +20,14 @@ def identifier(what: str, high: int) -> Callable[[str], int]:
     return parse
 
 
+def integer(text: str) -> int:
+    """An argparse type: an integer, decimal or ``0x`` hexadecimal, as parameter values are."""
+    try:
+        return int(text.strip(), 0)
+    except ValueError:  # (Python will not convert thousands of digits either)
+        raise type_error(f"'{text[:20]}' is not an integer (decimal, or 0x hexadecimal)") from None
+
+
 #: The longest simulated bench boot: a day (a boot settles within seconds; simulated time is
 #: cheap, 600 s take 0.3 s, but not free).
 MAX_SIMULATED_SECONDS = 24 * 3600.0

@@ -43,7 +43,6 @@ __all__ = [
     "ArgumentParser",
     "Namespace",
     "RawDescriptionHelpFormatter",
-    "integer",
     "type_error",
 ]
 
@@ -79,15 +78,6 @@ def type_error(message: str) -> Exception:
     import argparse
 
     return argparse.ArgumentTypeError(message)
-
-
-def integer(text: str) -> int:
-    """An integer option's value, decimal or ``0x`` hexadecimal, as parameter values are."""
-    try:
-        return int(text.strip(), 0)
-    except ValueError:
-        shown = text if len(text) <= 20 else text[:20] + "..."
-        raise type_error(f"'{shown}' is not an integer (decimal, or 0x hexadecimal)") from None
 
 
 class Namespace:

@@ -6,8 +6,8 @@ import sys
 from collections.abc import Callable, Iterator, Sequence
 
 from px4params._records import TYPE_CHECKING
-from px4params.cli.options import dsdl_option
-from px4params.cli.parsing import ArgumentParser, RawDescriptionHelpFormatter, integer
+from px4params.cli.options import dsdl_option, integer
+from px4params.cli.parsing import ArgumentParser, RawDescriptionHelpFormatter
 from px4params.dsdl.schema import DataType, Schema, load_schema, to_json_value, value_at
 from px4params.errors import CommandError, EncodeError, NumberError, Px4ParamsError
 from px4params.numbers import abbreviated, dump_json, load_json
