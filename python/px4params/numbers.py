@@ -13,8 +13,13 @@ is refused, not read as infinity; infinities and NaN are written ``inf``, ``-inf
 from __future__ import annotations
 
 import math
+import sys
 
 from px4params.errors import DuplicateKeyError, NumberError
+
+#: The largest finite float16, float32 and float64, by width in bits: beyond them a value is
+#: out of a float field's range (an infinity where the field truncates).
+FLOAT_MAX = {16: 65504.0, 32: 3.4028234663852886e38, 64: sys.float_info.max}
 
 __all__ = [
     "MAX_DIGITS",

@@ -43,7 +43,7 @@ from typing import TYPE_CHECKING, Any
 from px4params.data import VALUE_SETS_TOML
 from px4params.dsdl.roots import Root, dronecan_package_dir
 from px4params.errors import DsdlError, NumberError, TagValueError
-from px4params.numbers import abbreviated, parse_float, parse_int
+from px4params.numbers import FLOAT_MAX, abbreviated, parse_float, parse_int
 from px4params.reading import DSDL, not_text, read_text
 
 if TYPE_CHECKING:
@@ -57,7 +57,6 @@ TypeSpec = dict[str, Any]
 _log = logging.getLogger(__name__)
 
 _SCALAR_KINDS = ("uint", "int", "float", "bool")
-_FLOAT_MAX = {16: 65504.0, 32: 3.4028234663852886e38, 64: sys.float_info.max}
 
 # Name under which pydronecan's parser package is loaded without running dronecan/__init__.py.
 _PRIVATE_DRONECAN_DSDL = "_px4params_dronecan_dsdl"
@@ -950,7 +949,7 @@ def _scalar_value(t: TypeSpec, text: str) -> int | float | bool:
     number = _parse_number(text)
     if kind == "float":
         value = float(number)
-        if abs(value) > _FLOAT_MAX[t["bits"]]:
+        if abs(value) > FLOAT_MAX[t["bits"]]:
             raise TagValueError(f"{text} does not fit {_type_name(t)}")
         return value
     if not isinstance(number, int):

@@ -45,6 +45,7 @@ from typing import Any
 from px4params.dsdl.model import NO_DOC, FieldDoc
 from px4params.dsdl.schema import Schema, to_json_value
 from px4params.errors import FlatError, MetadataError
+from px4params.numbers import FLOAT_MAX
 from px4params.reading import CLASSIC_JSON, read_text
 from px4params.store import flat
 from px4params.store.classic import CLASSIC_ENV, ClassicParam, load_classic
@@ -81,8 +82,6 @@ QGC_TYPE = "Custom"
 #: PX4's names for a parameter without @group / @category.
 DEFAULT_GROUP = "Miscellaneous"
 DEFAULT_CATEGORY = "Standard"
-
-_FLOAT_MAX = {16: 65504.0, 32: 3.4028234663852886e38, 64: 1.7976931348623157e308}
 
 
 def classic_source(explicit: str | os.PathLike[str] | None) -> str | None:
@@ -562,4 +561,4 @@ def _natural_range(spec: Mapping[str, Any]) -> tuple[Any, Any]:
         return 0, (1 << bits) - 1
     if kind == "int":
         return -(1 << (bits - 1)), (1 << (bits - 1)) - 1
-    return -_FLOAT_MAX[bits], _FLOAT_MAX[bits]
+    return -FLOAT_MAX[bits], FLOAT_MAX[bits]

@@ -26,6 +26,7 @@ import math
 from typing import TYPE_CHECKING, Any, NamedTuple
 
 from px4params.errors import Px4ParamsError
+from px4params.numbers import FLOAT_MAX
 from px4params.store import flat
 from px4params.store.classic import INT32_MAX, INT32_MIN, ClassicParam
 from px4params.store.long_names import LongLeaf, LongNames
@@ -38,7 +39,6 @@ __all__ = ["EMPTY", "DronecanParams", "GetSetEntry"]
 
 #: The empty variant of ``Value`` and ``NumericValue``.
 EMPTY: dict[str, Any] = {"empty": {}}
-_FLOAT32_MAX = 3.4028234663852886e38
 
 
 class GetSetEntry(NamedTuple):
@@ -63,7 +63,7 @@ def _numeric(number: Any, variant: str) -> dict[str, Any]:
     if number is None or isinstance(number, bool) or not isinstance(number, int | float):
         return EMPTY
     if variant == "real_value":
-        return _real(number) if math.isfinite(number) and abs(number) <= _FLOAT32_MAX else EMPTY
+        return _real(number) if math.isfinite(number) and abs(number) <= FLOAT_MAX[32] else EMPTY
     return _integer(number) if float(number).is_integer() else EMPTY
 
 

@@ -22,7 +22,14 @@ from px4params.errors import (
     Px4ParamsError,
     StoreFileError,
 )
-from px4params.numbers import abbreviated, dump_json, load_json, parse_float, parse_int
+from px4params.numbers import (
+    FLOAT_MAX,
+    abbreviated,
+    dump_json,
+    load_json,
+    parse_float,
+    parse_int,
+)
 from px4params.status import EXIT_FAILED, EXIT_OK
 from px4params.store.session import Session
 from px4params.store.store import Key, Store
@@ -116,7 +123,7 @@ def short_float(value: float, kind: str) -> str:
     if code is None:
         return repr(value)
     target = struct.pack(code, value)
-    largest = 65504.0 if code == "<e" else 3.4028234663852886e38
+    largest = FLOAT_MAX[16 if code == "<e" else 32]
     for digits in range(1, 18):
         text = f"{value:.{digits}g}"
         # Not beyond the largest finite value, which the store refuses when it is typed back

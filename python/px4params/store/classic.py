@@ -27,6 +27,7 @@ from px4params.cache_file import (
 )
 from px4params.data import CLASSIC_PARAMETERS_JSON
 from px4params.errors import ClassicParamsError
+from px4params.numbers import FLOAT_MAX
 from px4params.reading import CLASSIC_JSON, not_text, read_text
 
 _NAME_START = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZ")
@@ -196,6 +197,6 @@ def classic_value(kind: str, value: Any) -> int | float:
     if not isinstance(value, int | float):
         raise ClassicParamsError(f"expected a number, got {value!r}")
     value = float(value)
-    if math.isfinite(value) and abs(value) > 3.4028234663852886e38:
+    if math.isfinite(value) and abs(value) > FLOAT_MAX[32]:
         raise ClassicParamsError(f"value {value} does not fit a float32")
     return float(struct.unpack("<f", struct.pack("<f", value))[0])

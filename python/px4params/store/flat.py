@@ -60,6 +60,7 @@ from px4params._records import TYPE_CHECKING
 from px4params.dsdl.model import Field
 from px4params.dsdl.schema import DataType, Leaf
 from px4params.errors import FlatError, InstanceError, LeafError
+from px4params.numbers import FLOAT_MAX
 from px4params.store.key import Key
 from px4params.store.spec import MAX_NAME_LEN, ParamSpec
 
@@ -318,7 +319,7 @@ class _Walker:
                     "parameter"
                 )
             if kind == "float":
-                top = 65504.0 if bits == 16 else 3.4028234663852886e38
+                top = FLOAT_MAX[16 if bits == 16 else 32]
                 self.add(path, name, FLOAT32, "value", -top, top, requires)
             elif kind == "uint":
                 self.add(path, name, INT32, "value", 0, (1 << bits) - 1, requires)

@@ -20,6 +20,7 @@ from px4params._records import TYPE_CHECKING
 from px4params.dsdl.model import NO_DOC, Field, FieldDoc
 from px4params.dsdl.schema import DataType, Leaf, Schema
 from px4params.errors import ParameterSetError, ValueRangeError
+from px4params.numbers import FLOAT_MAX
 from px4params.store.key import Key
 
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
@@ -406,17 +407,13 @@ def in_type_range(value: float, type_name: str) -> bool:
     kind = type_name.rstrip("0123456789")
     bits = int(type_name[len(kind) :] or 0)
     if kind == "float":
-        top = _FLOAT_MAX.get(bits)
+        top = FLOAT_MAX.get(bits)
         return top is None or not math.isfinite(value) or abs(value) <= top
     if kind == "uint":
         return 0 <= value < 1 << bits
     if kind == "int":
         return -(1 << (bits - 1)) <= value < 1 << (bits - 1)
     return True
-
-
-#: The largest finite float16 and float32.
-_FLOAT_MAX = {16: 65504.0, 32: 3.4028234663852886e38}
 
 
 def stored_number(value: object, rng: LeafRange) -> int | float | None:
