@@ -262,13 +262,14 @@ def test_a_getset_write_finds_its_leaf_once(
 def test_a_getset_write_of_a_union_tag_reads_the_value_once_to_check_it(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    """A tag brings another variant's leaves in: the whole value is read once (their
-    @min/@max checked), the tag found and written once, and read back."""
+    """A tag brings another variant's leaves in: the default's tag is read (a switch to its
+    variant would take the default's values there), the whole value once (their @min/@max
+    checked), the tag found and written once, and read back."""
     store = px4params.Store(px4params.load_schema(use_env=False), classic=BUNDLED_CLASSIC)
     store.add("INA238#1")
     params = DronecanParams(store)
     assert params.index_of("INA238_1_BUS_TYPE") is not None
     counted = count_core_calls(store, monkeypatch)
     assert params.set("INA238_1_BUS_TYPE", {"integer_value": 1}).endswith("(INA238#1[1]) = 1")
-    assert counted.calls == Counter(get=1, set_leaf=1, get_leaf_value=1)
+    assert counted.calls == Counter(get=1, set_leaf=1, get_leaf_value=2)
     assert "spi" in store.get("INA238#1")["bus"]

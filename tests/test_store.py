@@ -999,6 +999,45 @@ def test_resetting_a_union_tag_brings_back_the_defaults_variant_with_its_values(
     assert store.get("INA238#0.current") == 100  # the rest as it was
 
 
+def test_switching_a_union_back_to_the_defaults_variant_brings_its_values(
+    store: px4params.Store,
+) -> None:
+    # A pilot who changes their mind: SPI, then I2C again. DSDL's rule alone gave I2C with
+    # address 0, a device no bus has; the default's variant is the board's own (0x45).
+    store.add("INA238#0")
+    store.set_default("INA238#0.bus.i2c.bus_id", 2)
+    store.set("INA238#0.bus.i2c.address", 0x46)
+    store.set("INA238#0.current", 100)
+    store.set("INA238#0.bus._tag", 1)
+    assert store.get("INA238#0.bus.spi.chip_select") == 0  # no default for SPI: its zeros
+    store.set("INA238#0.bus._tag", 0)
+    assert store.get("INA238#0")["bus"] == {"i2c": {"p_version": 0, "bus_id": 2, "address": 0x45}}
+    assert store.get("INA238#0.current") == 100  # the rest as it was
+    # By index, as MAVLink's INA238_0A and `param set 'INA238#0[1]'` write it.
+    store.set("INA238#0[1]", 1)
+    store.set("INA238#0[1]", 0)
+    assert store.get("INA238#0.bus.i2c.address") == 0x45
+    # The tag it already has changes nothing: the address given stays.
+    store.set("INA238#0.bus.i2c.address", 0x40)
+    store.set("INA238#0.bus._tag", 0)
+    assert store.get("INA238#0.bus.i2c.address") == 0x40
+
+
+def test_a_union_parameter_switched_back_is_its_default(tmp_path: Path) -> None:
+    from test_file import acme_store
+
+    link = "# @param LINK\n# @max_instances 2\n@union\nuint8 serial\nuint16 can\n@sealed\n"
+    store = acme_store(tmp_path, {"Link.1.0.dsdl": link})
+    store.add("LINK#0")
+    store.set_default("LINK#0", {"can": 1000})
+    store.set("LINK#0", {"serial": 3})
+    store.set("LINK#0._tag", 1)
+    assert store.get("LINK#0") == {"can": 1000}
+    store.set("LINK#0", {"serial": 3})
+    store.set("LINK#0[0]", 1)
+    assert store.get("LINK#0") == {"can": 1000}
+
+
 def test_resetting_an_array_length_brings_back_the_defaults_elements(tmp_path: Path) -> None:
     from test_file import acme_store
 

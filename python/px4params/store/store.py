@@ -404,6 +404,10 @@ class Store:
             self._check_value(p, instance, value, default, saturate=saturate, force=force)
             self._native.set_value(p.index, instance, value, default=default, saturate=saturate)
         else:
+            whole = None if default else self._default_variant(p, instance, key.leaf, value)
+            if whole is not None:
+                self._write(self._instance_key(p, instance), whole, False, saturate, force)
+                return
             self._check_leaf(p, instance, key.leaf, value, default, saturate, force)
             try:
                 self._native.set_leaf(
@@ -411,6 +415,38 @@ class Store:
                 )
             except LeafError as e:
                 raise _naming_the_field(e, key) from None
+
+    def _default_variant(self, p: _Param, instance: int, leaf: int | str, value: Any) -> Any:
+        """The whole value a write of union tag ``leaf`` gives when it switches to the variant
+        the instance's default selects: that variant as the default holds it. (DSDL's rule, the
+        variant's zeros, would leave address 0 after a switch to SPI and back to I2C; PX4's
+        flat parameters would keep the address.) None for any other write: the core makes
+        it leaf by leaf."""
+        if type(value) is not int:
+            return None
+        path = leaf
+        if not isinstance(path, str):
+            try:
+                path = self._native.get_leaf(p.index, instance, path, default=False)[1]
+            except Px4ParamsError:
+                return None  # no such instance or leaf: the write says so
+        parent, _, last = path.rpartition(".")
+        if last != "_tag":
+            return None
+        try:  # the default's tag first: a switch to another variant reads nothing more
+            if value != self._native.get_leaf_value(p.index, instance, path, True):
+                return None
+            if value == self._native.get_leaf_value(p.index, instance, path, False):
+                return None  # no switch: the variant's values stay
+        except Px4ParamsError:
+            return None  # the default has no such union (another variant or length above it)
+        key = self._instance_key(p, instance)
+        default_value = self.get(key, default=True)
+        if not parent:
+            return default_value
+        whole = self.get(key)
+        put_at(whole, parent, value_at(default_value, parent))
+        return whole
 
     # The store's one range check (every entry point writes through these): worked out on the
     # value as it would be stored, before anything is written, so a refusal changes nothing.
