@@ -467,3 +467,39 @@ def test_a_connection_without_a_whole_request_head_is_closed(gui: Gui) -> None:
     assert time.monotonic() - started < HEAD_SECONDS + 5
     # A request made whole in time is answered.
     assert request(gui, "GET", "/api/state", headers=authorized(gui))[0] == 200
+
+
+def test_a_kept_alive_connection_trickling_its_next_head_is_closed(gui: Gui) -> None:
+    # Each byte restarted uvicorn's 5 s idle timer: a byte every 2 s held the connection after
+    # its first request for as long as the peer liked.
+    import http.client
+
+    from px4params.gui.connections import HEAD_SECONDS
+
+    conn = http.client.HTTPConnection("127.0.0.1", gui.port, timeout=10)
+    conn.request("GET", "/api/state", headers={"Host": gui.host, **authorized(gui)})
+    assert conn.getresponse().read()
+    conn.request("GET", "/api/state", headers={"Host": gui.host, **authorized(gui)})
+    second = conn.getresponse()  # kept alive: a second request in time is answered
+    assert second.status == 200 and second.read()
+    answered = time.monotonic()
+    sock = conn.sock
+    assert sock is not None
+    head = b"GET /api/state HTTP/1.1\r\nHost: 127.0.0.1\r\n"
+    closed = False
+    for byte in head[: int(HEAD_SECONDS)]:  # bounded: one byte every 2 s, 2 * HEAD_SECONDS s
+        try:
+            sock.sendall(bytes([byte]))
+        except OSError:  # reset by the server
+            closed = True
+            break
+        sock.settimeout(2.0)
+        try:
+            if sock.recv(1024) == b"":
+                closed = True
+                break
+        except TimeoutError:
+            continue
+    assert closed
+    assert time.monotonic() - answered < HEAD_SECONDS + 5
+    conn.close()

@@ -1,11 +1,12 @@
-"""The page's HTTP connections: uvicorn's HTTP/1.1 protocol with a deadline for the first
-request's head.
+"""The page's HTTP connections: uvicorn's HTTP/1.1 protocol with a deadline for each request's
+head.
 
 uvicorn closes a kept-alive connection that goes idle after a response, but not one that never
-sends a request, or sends its head a byte at a time: each held a connection (and a file
-descriptor) for as long as its peer liked. Here a connection whose first request head is not
-complete within :data:`HEAD_SECONDS` of connecting is closed. A WebSocket's upgrade request is a
-request like any other: once its head is in, the deadline is gone.
+sends a request, or sends its head a byte at a time (each byte restarts the idle timer): each
+held a connection (and a file descriptor) for as long as its peer liked. Here a connection whose
+request head is not complete within :data:`HEAD_SECONDS` of connecting, or of the response
+before it, is closed. A WebSocket's upgrade request is a request like any other: once its head
+is in, the deadline is gone.
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ HEAD_SECONDS = 10.0
 
 
 class HeadDeadline(H11Protocol):
-    """:class:`H11Protocol` that closes a connection whose first request head is late."""
+    """:class:`H11Protocol` that closes a connection whose next request head is late."""
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
@@ -31,6 +32,13 @@ class HeadDeadline(H11Protocol):
     def connection_made(self, transport: asyncio.Transport) -> None:  # type: ignore[override]
         super().connection_made(transport)
         self._deadline = self.loop.call_later(HEAD_SECONDS, self._head_late)
+
+    def on_response_complete(self) -> None:
+        super().on_response_complete()
+        # Kept alive: the next request's head has as long as the first one's had.
+        if not self.transport.is_closing() and self.conn.their_state is h11.IDLE:
+            self._cancel()
+            self._deadline = self.loop.call_later(HEAD_SECONDS, self._head_late)
 
     def handle_events(self) -> None:
         super().handle_events()
