@@ -318,7 +318,11 @@ def test_unknown_devtype_name_current(current: Path, capsys: pytest.CaptureFixtu
 @pytest.mark.parametrize(
     ("text", "message"),
     [
-        ("abc", "not a device ID: 'abc' (expected decimal or 0x hex, 0..16777215)"),
+        (
+            "abc",
+            "not a device ID: 'abc' (expected decimal, 0x hex or a whole number such as 73225.0, "
+            "0..16777215)",
+        ),
         ("1.5", "not a device ID: '1.5'"),
         ("0x", "not a device ID: '0x'"),
         ("", "not a device ID: ''"),

@@ -72,6 +72,17 @@ def test_the_talks_five_lines(
         ["[6]", "shunt", "float16", "0.0003", "0.0003", "Ohm"],
     ]
 
+    # One leaf, by path or [k], or the leaves under a path.
+    for name, paths in (
+        ("INA238#0.current", ["current"]),
+        ("INA238#0[4]", ["bus.i2c.address"]),
+        ("INA238#0.bus", ["bus._tag", "bus.i2c.p_version", "bus.i2c.bus_id", "bus.i2c.address"]),
+        ("INA238#0.bus.i2c", ["bus.i2c.p_version", "bus.i2c.bus_id", "bus.i2c.address"]),
+    ):
+        code, out, _ = param(capsys, "show", "-l", name)
+        assert code == 0
+        assert [line.split()[1] for line in out.splitlines()] == paths, name
+
 
 def test_set_changes_and_marks_unsaved_then_saved(
     store: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
@@ -495,6 +506,11 @@ BAD_PARAM = [
     (["show", "-l", "INA238#3"], "INA238#3: instance does not exist"),
     (["show", "-l"], "show -l takes one instance, e.g. show -l INA238#0"),
     (["show", "-q", "INA*"], "show -q takes one exact name"),
+    (
+        ["show", "-l", "INA238#0.bus.spi"],
+        "INA238#0.bus.spi: no such leaf in the value (show -l INA238#0 lists its leaves)",
+    ),
+    (["show", "-l", "INA238#0[7]"], "INA238#0[7]: no such leaf in the value"),
     (["show", "-l", "SYS_AUTOSTART"], "SYS_AUTOSTART is a classic parameter: it has no leaves"),
     (["reset", "INA238#2"], "INA238#2: instance does not exist"),
     (["instances", "NOPE"], "unknown parameter 'NOPE'"),

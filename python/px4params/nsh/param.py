@@ -385,6 +385,22 @@ def _show_leaves(s: Session, a: argparse.Namespace) -> int:
         raise CommandError("show -l takes one instance, e.g. show -l INA238#0")
     key = Key.parse(a.filters[0])
     leaves = store.leaves(key)
+    if key.leaf is not None:  # one leaf, or the leaves under a path (show -l INA238#0.bus)
+        part = key.leaf
+        leaves = [
+            leaf
+            for leaf in leaves
+            if (
+                leaf.index == part
+                if isinstance(part, int)
+                else leaf.path == part or leaf.path.startswith((f"{part}.", f"{part}["))
+            )
+        ]
+        if not leaves:
+            whole = key._replace(leaf=None)
+            raise CommandError(
+                f"{key}: no such leaf in the value (show -l {whole} lists its leaves)"
+            )
     data_type = store.data_type(key)
     defaults = {leaf.path: leaf for leaf in store.leaves(key, default=True)}
     rows: list[dict[str, Any]] = []
@@ -771,7 +787,8 @@ def _add_verbs(verb: _VerbParsers, cli: bool) -> None:
         "-l",
         dest="leaves",
         action="store_true",
-        help="the leaves of one instance: [k] path type value default unit",
+        help="the leaves of one instance (or one leaf, or those under a path: INA238#0.bus): "
+        "[k] path type value default unit",
     )
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.add_argument("filters", nargs="*", metavar="FILTER", help="names, a trailing * matches")

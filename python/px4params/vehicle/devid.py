@@ -514,8 +514,8 @@ def parse_device_id(text: str) -> int:
         raise DeviceIdError(f"not a device ID: {e}") from None
     if value is None:
         raise DeviceIdError(
-            f"not a device ID: '{abbreviated(text)}' (expected decimal or 0x hex, "
-            f"0..{MAX_DEVICE_ID})"
+            f"not a device ID: '{abbreviated(text)}' (expected decimal, 0x hex or a whole number "
+            f"such as 73225.0, 0..{MAX_DEVICE_ID})"
         )
     return _check_id(value)
 
