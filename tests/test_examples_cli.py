@@ -87,6 +87,20 @@ def test_dir_that_is_a_file(tmp_path: Path, capsys: pytest.CaptureFixture[str]) 
     )
 
 
+def test_dir_that_is_a_dangling_link(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path = tmp_path / "examples"
+    path.symlink_to(tmp_path / "gone")
+    assert run(capsys, str(path)) == (
+        1,
+        "",
+        f"px4params: error: {path}: a symbolic link to {tmp_path}/gone, which does not exist "
+        "(create that folder or choose another DIR)\n",
+    )
+    (tmp_path / "gone").mkdir()  # through a link to a folder: copied there
+    assert run(capsys, str(path))[0] == 0
+    assert sorted(os.listdir(tmp_path / "gone")) == EXPECTED
+
+
 def test_help_names_every_file(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["examples", "--help"]) == 0
     out = capsys.readouterr().out

@@ -53,6 +53,12 @@ def copy_examples(folder: str) -> tuple[list[str], list[str]]:
     folder, is a :class:`CommandError` before anything is written."""
     if os.path.exists(folder) and not os.path.isdir(folder):
         raise CommandError(f"{folder}: exists and is not a folder")
+    if os.path.islink(folder) and not os.path.exists(folder):
+        # makedirs would say "File exists" of a link to a folder that does not.
+        raise CommandError(
+            f"{folder}: a symbolic link to {os.readlink(folder)}, which does not exist "
+            "(create that folder or choose another DIR)"
+        )
     missing: list[str] = []
     present: list[str] = []
     for name in bundled_examples():
