@@ -121,3 +121,34 @@ def test_a_cut_log_warns_in_devid(tmp_path: Path) -> None:
     logged = [line.split()[0] for line in was.stdout.splitlines()[:-1]]
     assert len(listed) == 6 and len(logged) == 13 and set(listed) < set(logged)
     assert was.returncode == 0 and was.stderr == ""
+
+
+def message_ends(data: bytes) -> list[int]:
+    """Where each message of a whole log ends, by ULog's framing (a 16-byte file header, then
+    messages of a 3-byte header, uint16 size and uint8 type, and that many bytes)."""
+    ends, pos = [], 16
+    while pos < len(data):
+        pos += 3 + struct.unpack_from("<H", data, pos)[0]
+        ends.append(pos)
+    assert pos == len(data)
+    return ends
+
+
+def test_a_log_cut_inside_any_message_is_cut_and_one_cut_between_messages_is_not(
+    tmp_path: Path,
+) -> None:
+    # pyulog took a file ending inside a data message for the log's end: migrate said
+    # "log_cut": false of a log cut at 100 kB of 2 MB, and devid said nothing.
+    data = shared_file(SAMPLE_LOG).read_bytes()
+    ends = message_ends(data)
+    assert not ulog.read_header(shared_file(SAMPLE_LOG)).corrupt
+    path = tmp_path / "cut.ulg"
+    # Inside a message's header (1 or 2 of its 3 bytes) or its body, early and late in the log.
+    for end in (ends[200], ends[len(ends) // 2], ends[-2]):
+        following = 3 + struct.unpack_from("<H", data, end)[0]
+        for inside in {1, 2, 3, 4, following - 1} & set(range(1, following)):
+            path.write_bytes(data[: end + inside])
+            assert ulog.read_header(path).corrupt, (end, inside)
+        # Between two messages nothing says more was to come: a log stopped there is whole.
+        path.write_bytes(data[:end])
+        assert not ulog.read_header(path).corrupt, end

@@ -258,17 +258,32 @@ READ_BUDGET = 256
 
 class _BudgetedFile:
     """A binary file whose reads stop, with :class:`ReadBudgetExceeded`, after ``budget``
-    bytes: what pyulog calls of its file, no more."""
+    bytes: what pyulog calls of its file, no more. It also tells whether the file ended inside
+    a message (:attr:`cut`), which pyulog takes for the log's end without a word."""
 
     def __init__(self, file: BinaryIO, budget: int) -> None:
         self._file = file
         self._budget = budget
+        #: The size a message header just read declares: pyulog reads its body next.
+        self._body: int | None = None
+        #: The file ended inside a message: its header, or the body the header declared.
+        self.cut = False
 
     def read(self, size: int = -1) -> bytes:
         data = self._file.read(size)
         self._budget -= len(data)
         if self._budget < 0:
             raise ReadBudgetExceeded
+        # A message is a 3-byte header (uint16 size, uint8 type) and that many bytes. A read of
+        # a header that finds no byte is the end; one that finds 1 or 2, or a body that finds
+        # fewer than its header said, is a cut.
+        body, self._body = self._body, None
+        if size == body and body:
+            self.cut |= len(data) < size
+        elif size == 3:
+            self.cut |= 0 < len(data) < 3
+            if len(data) == 3:
+                self._body = int.from_bytes(data[:2], "little")
         return data
 
     def seek(self, offset: int, whence: int = os.SEEK_SET) -> int:
@@ -306,7 +321,12 @@ def parse(path: str | os.PathLike[str], topics: Sequence[str] | None) -> ULog:
         budgeted = _BudgetedFile(file, READ_BUDGET * size + 64 * 1024 * 1024)
         try:
             with contextlib.redirect_stdout(io.StringIO()):  # pyulog prints its warnings
-                return ULog(budgeted, message_name_filter_list=topics)
+                log = ULog(budgeted, message_name_filter_list=topics)
+            if budgeted.cut:
+                # pyulog's flag for a log it could not read whole, which a cut one is: every
+                # reader of the log says so (migrate's log_cut, devid's warning, health's end).
+                log._file_corrupt = True
+            return log
         except SeekBeforeStart as e:
             raise ULogError(
                 f"{where}: not a readable ULog file (a damaged message before byte {e.position}: "
