@@ -1013,7 +1013,13 @@ def test_a_console_start_without_address_is_named_beside_the_line_of_its_chip() 
         table="current",
         board=board("nxp_mr-canhubk3", "v1.15.0"),
     )
-    (said,) = unasked(proposal)
+    # The board came after 1.11 into the table: a later release's script is what is read.
+    (later, said) = unasked(proposal)
+    assert later == (
+        "board nxp_mr-canhubk3: in the board table from PX4 v1.14.0 on, not at v1.11.0, the "
+        "newest release it has at or before this file's 1.11.3; what its script starts is taken "
+        "as at v1.14.0"
+    )
     assert said == (
         "boot console line 1: ist8310, I2C bus 2: the board's 'ist8310 -X -b 2 -R 10 start' "
         "(PX4/PX4-Autopilot boards/nxp/mr-canhubk3/init/rc.board_sensors:22 at main (branch "

@@ -565,6 +565,28 @@ def test_the_amovlab_file_with_its_board_named(
     assert not [a for a in report["assumptions"] if "no board information" in a]
 
 
+def test_a_board_the_table_has_only_from_a_later_release_says_so(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """flight-review-rs's CUAV 7-Nano log is of PX4 1.16.0 (ver_sw_release 0x011000FF); the
+    board table has the 7-Nano from v1.18 on (boards/cuav/7-nano is not in v1.15.0, the newest
+    snapshot at or before 1.16). Its IST8310 and ICP201XX were left out as the board script's
+    at v1.18 with no word that a later release's script was read."""
+    try:
+        import px4params.vehicle.boards  # noqa: F401
+    except ImportError:
+        pytest.skip("needs px4params.vehicle.boards (the board table)")
+    (truth,) = [t for t in CORPUS if t.name == "gps_interference.ulg"]
+    assert main(["migrate", str(locate(truth, tmp_path)), "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["board"] == "cuav_7-nano"
+    assert report["assumptions"] == [
+        "board cuav_7-nano: in the board table from PX4 v1.18 on, not at v1.15.0, the newest "
+        "release it has at or before this file's 1.16.0; what its script starts is taken as at "
+        "v1.18"
+    ]
+
+
 def test_the_reptile_dragon_with_its_board_named(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

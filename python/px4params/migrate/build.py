@@ -1433,7 +1433,17 @@ def _upgrade(config: OldConfig, board: Any, target: str | None, assumptions: lis
     # The file's snapshot; a file naming no release is judged with today's row (its newest).
     version = "v" + ".".join(map(str, config.version)) if config.version else None
     own = (table.snapshot_for(version) if version else None) or board.releases[-1]
-    own = max(own, board.releases[0], key=known.index)  # a row newer than the file's release
+    first = table.variants(board.name)[0].releases[0] if table.variants(board.name) else own
+    judged = max(own, board.releases[0], key=known.index)  # a row newer than the file's release
+    if version and known.index(first) > known.index(own):
+        # The board came after the file's release in the table (a vendor branch had it first):
+        # a later release's script is what the file is judged by.
+        assumptions.append(
+            f"board {board.name}: in the board table from PX4 {first} on, not at {own}, the "
+            f"newest release it has at or before this file's {version[1:]}; what its script "
+            f"starts is taken as at {judged}"
+        )
+    own = judged
     later = known[known.index(own) + 1 :]
     if target is not None:
         if known.index(target) < known.index(own):
