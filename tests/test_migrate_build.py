@@ -282,6 +282,21 @@ def test_a_setting_below_its_fields_minimum_is_rounded_then_raised_to_it() -> No
     ]
 
 
+@pytest.mark.parametrize("given", [-5.0, 0.0, -0.0])
+def test_a_positive_quantity_given_as_zero_or_less_is_not_carried(given: float) -> None:
+    # -5 A became the valid-looking "current = 1 A" with a note only: a maximum current of
+    # zero or less is no setting (PX4's INA238_CURRENT is 0.1..327.68 A), not one to round.
+    params = {"SENS_EN_INA238": 1, "INA238_CURRENT": given, "INA238_SHUNT": -0.0003}
+    proposal = migrate.migrate(today(params), table="current")
+    (inst,) = proposal.instances
+    assert "current" not in inst.values and "shunt" not in inst.values
+    assert not [n for n in inst.notes if "becomes" in n]
+    assert proposal.not_carried == [
+        f"INA238_CURRENT = {given:g}: INA238#0.current must be 1..327",
+        "INA238_SHUNT = -0.0003: INA238#0.shunt must be 1e-05..0.1",
+    ]
+
+
 def test_an_spi_sensor_the_console_shows_on_an_external_bus_is_not_called_internal() -> None:
     # I2CSPIDriverBase::module_start (platforms/common/i2c_spi_buses.cpp) prints an -S start as
     # "... on SPI bus N (external, equal to '-b K')": rc.sensors' `adis16448 -S start` behind

@@ -176,14 +176,21 @@ class _Builder:
         """Carries ``legacy = value`` into field ``path``; False (and a not-carried line) when
         the field cannot hold it. A float setting (a physical quantity: current, shunt) is
         rounded to nearest (``math.floor(v + 0.5)``) and clamped to the field's range, with a
-        note; an integer setting (an enumeration such as a rotation) out of range is not
-        carried."""
+        note, unless it is zero or less where the field's quantity is positive; an integer
+        setting (an enumeration such as a rotation) out of range is not carried."""
         key = inst.key.at(path)
         leaf = self.store.leaf(key)
         field = self.specs[key.param].data_type.field_at(path)
         doc = field.doc if field is not None else NO_DOC
         lo, hi = doc.minimum, doc.maximum
         fitted: Any = value
+        if isinstance(value, float) and lo is not None and lo > 0 and value <= 0:
+            # A quantity that must be positive given as zero or less (a current of -5 A) is
+            # no setting to round into the range: the field keeps the default.
+            self.proposal.not_carried.append(
+                f"{legacy} = {_shown(value)}: {inst.name}.{path} must be {lo}..{hi}"
+            )
+            return False
         if isinstance(value, float):
             if leaf.type.startswith(("uint", "int")):
                 fitted = math.floor(value + 0.5) if math.isfinite(value) else value
