@@ -379,6 +379,45 @@ def test_the_files_of_a_store_with_its_own_types_carry_their_parameters(tmp_path
         vehicle.close()
 
 
+def test_mask_writes_made_from_one_mask_keep_each_others_instances(
+    served: tuple[Admission, StoreVehicle], store_file: Path, schema: px4params.Schema
+) -> None:
+    # Two pages (or a page and a shell) read INA238_INST = 0b10 and each added one instance:
+    # the second write's absolute mask removed the first one's instance, and no one was told.
+    app, _ = served
+
+    def write(value: int, was: int | None) -> dict[str, Any]:
+        change = {
+            "name": "INA238_INST",
+            "value": value,
+            **({"was": was} if was is not None else {}),
+        }
+        (result,) = json.loads(body_of(post(app, "/api/write", {"changes": [change]})))["results"]
+        return result
+
+    def instances() -> list[str]:
+        saved = px4params.Store.load(store_file, schema, classic=BUNDLED_CLASSIC)
+        return saved.instances("INA238")
+
+    assert write(0b011, was=0b010) == {
+        "name": "INA238_INST",
+        "ok": True,
+        "value": 0b011,
+        "reason": "",
+    }
+    assert write(0b110, was=0b010)["value"] == 0b111  # #0 stays
+    assert instances() == ["INA238#0", "INA238#1", "INA238#2"]
+    # A shell adds INA238#3 to the file; a page that saw 0b111 removes #0: #3 stays.
+    shell = px4params.Store.load(store_file, schema, classic=BUNDLED_CLASSIC)
+    shell.add("INA238#3")
+    shell.save(store_file)
+    assert write(0b110, was=0b111)["value"] == 0b1110
+    assert instances() == ["INA238#1", "INA238#2", "INA238#3"]
+    # Without the mask it was made from, a mask is written as given, as a ground station's is.
+    assert write(0b010, was=None)["value"] == 0b010
+    assert instances() == ["INA238#1"]
+
+
 def test_a_write_whose_changes_are_not_a_list_is_400_whatever_their_length(
     served: tuple[Admission, StoreVehicle],
 ) -> None:

@@ -238,6 +238,19 @@ class _Stubborn(_Recording):
         super()._set(peer, name, msg)
 
 
+def test_a_mask_write_goes_onto_the_mask_last_heard(schema: px4params.Schema) -> None:
+    # Two pages' additions made from one mask: the second one's bits go onto the mask as the
+    # vehicle echoed it after the first, not onto the mask both started from.
+    with _peer(schema) as served, _page(served.address) as page:
+        was = page.values["INA238_INST"]
+        assert was == 0b10  # INA238#1
+        first = page.write("INA238_INST", was | 0b001, was)
+        assert (first.ok, first.value) == (True, 0b011)
+        second = page.write("INA238_INST", was | 0b100, was)
+        assert (second.ok, second.value) == (True, 0b111)
+        assert served.sets == ["INA238_INST", "INA238_INST"]
+
+
 @pytest.mark.issue40
 def test_a_write_nobody_answers_is_sent_three_times_then_refused(
     schema: px4params.Schema,

@@ -5,6 +5,8 @@ that pushes values and status messages as they arrive.
     GET  /                      the page
     GET  /api/state             mode, source, metadata, values, messages, health, limits
     POST /api/write             {"changes": [{"name", "value"}]} -> one result per change, in order
+                                (an instance mask's change may carry "was", the mask it was
+                                made from: only the bits it changes are written)
     POST /api/review            {"filename", "text"} -> the changes the file would make
     GET  /api/export?format=params|airframe   the configuration as a file
     GET|POST /api/manifest      the picker, and the devices a set of values configures
@@ -64,16 +66,21 @@ def make_app(vehicle: Any, *, token: str, hosts: Iterable[str], cookie: str) -> 
             changes = (await request.json())["changes"]
             if isinstance(changes, list) and len(changes) > MAX_CHANGES:
                 return _too_many(len(changes))
-            pairs = [
-                (str(c["name"]), _number(c["value"], str(c["name"]) in floats)) for c in changes
+            writes = [
+                (
+                    str(c["name"]),
+                    _number(c["value"], str(c["name"]) in floats),
+                    _number(c["was"], False) if "was" in c else None,
+                )
+                for c in changes
             ]
         except (ValueError, KeyError, TypeError, RecursionError) as e:  # (nesting too deep)
             return JSONResponse(
                 {"error": f"expected {{'changes': [{{'name', 'value'}}]}}: {e}"}, 400
             )
         results = []
-        for name, value in pairs:
-            result = await asyncio.to_thread(vehicle.write, name, value)
+        for name, value, was in writes:
+            result = await asyncio.to_thread(vehicle.write, name, value, was)
             results.append(result.as_dict())
         return JSONResponse({"results": results, "values": vehicle.state()["values"]})
 

@@ -181,12 +181,15 @@ class StoreVehicle(_Base):
 
         self.values = flat_values(self.store)
 
-    def write(self, name: str, value: int | float) -> WriteResult:
+    def write(self, name: str, value: int | float, was: int | None = None) -> WriteResult:
+        """Writes ``name`` into the store file (its latest version, under its lock); ``was``:
+        an instance mask's value the page made ``value`` from (only the bits changed are
+        written: another writer's instances stay)."""
         from px4params.store.flat import write_flat
 
         with self._lock:
             try:
-                self._session.commit(lambda: write_flat(self.store, name, value))
+                self._session.commit(lambda: write_flat(self.store, name, value, was=was))
             except (Px4ParamsError, OSError) as e:
                 reason = str(e) if str(e).startswith(name) else f"{name}: {e}"
                 return WriteResult(name, False, self.values.get(name), reason)
@@ -648,11 +651,19 @@ class MavlinkVehicle(_Base):
             with self._lock:
                 self._waiters[name] = [w for w in self._waiters[name] if w is not answers]
 
-    def write(self, name: str, value: int | float, timeout: float = 1.5) -> WriteResult:
+    def write(
+        self, name: str, value: int | float, was: int | None = None, timeout: float = 1.5
+    ) -> WriteResult:
         """PARAM_SET (PX4's bytewise int32 encoding), then the vehicle's answer: acknowledged
         when the echo carries the value sent (a float as float32, or as the float16 a narrower
         leaf stores), refused with PARAM_ERROR and STATUSTEXT's reason (or when it echoes
-        another value), and read back."""
+        another value), and read back. ``was``: an instance mask's value the page made
+        ``value`` from: the bits it changes go onto the mask as last heard from the vehicle."""
+        from px4params.store.flat import merged_mask
+
+        now = self.values.get(name)
+        if was is not None and type(value) is int and type(now) is int and name.endswith("_INST"):
+            value = merged_mask(now, was, value)
         mav = self._mav
         is_float = isinstance(value, float)
         kind = mav.MAV_PARAM_TYPE_REAL32 if is_float else mav.MAV_PARAM_TYPE_INT32

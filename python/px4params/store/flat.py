@@ -758,16 +758,27 @@ def flat_values(store: Store) -> dict[str, int | float]:
     return values
 
 
-def write_flat(store: Store, name: str, number: Any) -> str:
+def merged_mask(now: int, was: int, wanted: int) -> int:
+    """The instance mask ``now`` with the bits a writer changed from ``was`` to ``wanted``:
+    another writer's additions and removals since ``was`` stay."""
+    changed = was ^ wanted
+    return (now & ~changed) | (wanted & changed)
+
+
+def write_flat(store: Store, name: str, number: Any, *, was: int | None = None) -> str:
     """Writes one parameter as a ground station names it (a classic name, a destructured name
     or an instance mask), checked by the store; a refused write raises and changes nothing.
-    Returns a short description of what changed."""
+    ``was``: for an instance mask, the mask the writer's value was made from; only the bits it
+    changes are written (:func:`merged_mask`). Returns a short description of what changed."""
     fmap = flat_map(store)
     owner = fmap.lookup(name)  # the name read once: it names the leaf the write is given
     if owner is not None:
         param = write_live(store, fmap.live(name, *owner), number)
         return f"{name} = {param.value}"
-    if fmap.mask_spec(name) is not None:
+    spec = fmap.mask_spec(name)
+    if spec is not None:
+        if was is not None and type(number) is int:
+            number = merged_mask(fmap.mask_value(spec), was, number)
         added, removed = fmap.set_mask(name, number)
         changes = [f"added {n}" for n in added] + [f"removed {n}" for n in removed]
         return f"{name}: " + (", ".join(changes) or "no change")

@@ -688,7 +688,9 @@ async function writeSelected() {
   const rows = [...document.querySelectorAll("#review-table tbody tr")];
   const chosen = S.items.filter((_, i) => rows[i] && rows[i].querySelector("input").checked);
   const names = new Set(chosen.flatMap((item) => item.names));
-  // An instance mask carries only the additions and removals chosen.
+  // An instance mask carries only the additions and removals chosen, with the mask they were
+  // made from ("was"): the server applies those bits to the mask as it is then, so another
+  // writer's instances added or removed meanwhile stay.
   const masks = new Map();
   for (const item of chosen) {
     if (!item.mask) continue;
@@ -697,7 +699,9 @@ async function writeSelected() {
     masks.set(m.name, m.add ? v | (1 << m.bit) : v & ~(1 << m.bit));
   }
   const changes = sortedChanges().filter((c) => names.has(c.name))
-    .map((c) => ({ name: c.name, value: masks.has(c.name) ? masks.get(c.name) : c.value }));
+    .map((c) => masks.has(c.name)
+      ? { name: c.name, value: masks.get(c.name), was: current(c.name) || 0 }
+      : { name: c.name, value: c.value });
   if (!changes.length) return;
   $("#review-write").disabled = true;
   let instancesChanged = false;
@@ -715,8 +719,9 @@ async function writeSelected() {
       S.results.set(r.name, r);
       if (r.ok && r.name.endsWith("_INST")) instancesChanged = true;
       const staged = S.staged.get(r.name);
-      // a mask written with only some of its additions keeps the others staged
-      if (!(r.ok && staged && masks.has(r.name) && staged.value !== r.value)) S.staged.delete(r.name);
+      // a mask written with only some of its additions keeps the others staged (what was
+      // asked, not what came back: another writer's instances are in that)
+      if (!(r.ok && staged && masks.has(r.name) && staged.value !== masks.get(r.name))) S.staged.delete(r.name);
     }
   }
   rows.forEach((row, i) => {
