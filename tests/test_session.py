@@ -696,3 +696,24 @@ def test_a_read_only_lock_that_is_no_regular_file_is_refused_at_once(
     what = "a directory" if kind == "directory" else "not a regular file"
     assert isinstance(error, StoreFileError)
     assert str(error) == f"{lock}: cannot lock the store: {what}"
+
+
+def test_a_batch_whose_deferred_write_can_no_longer_be_made_saves_nothing(
+    store_file: Path, schema: px4params.Schema, tmp_path: Path
+) -> None:
+    # Checked when asked for and again before the store is saved: the folder went away in
+    # between, and the store alone would have been saved with the batch reported as failed.
+    store = px4params.Store.load(store_file, schema, classic=BUNDLED_CLASSIC)
+    before = store_file.read_bytes()
+    session = Session(store, str(store_file), autosave=False)
+    folder = tmp_path / "out"
+    folder.mkdir()
+    written: list[str] = []
+    session.write_later(str(folder / "x.params"), lambda: written.append("x.params"))
+    store.add("AK09916#0")
+    session.changed = True
+    folder.rmdir()
+    with pytest.raises(px4params.Px4ParamsError) as e:
+        session.save()
+    assert str(e.value) == f"{folder}/x.params: cannot write: No such file or directory"
+    assert written == [] and store_file.read_bytes() == before

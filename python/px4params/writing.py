@@ -72,6 +72,26 @@ def write_file(path: str | os.PathLike[str], data: bytes, *, keep_backup: bool) 
     return len(data)
 
 
+def check_writable(path: str | os.PathLike[str]) -> None:
+    """Refuses, before anything is written, what :func:`write_file` would refuse that can be
+    told ahead: a path that is no regular file, a read-only file, a folder that does not exist
+    or cannot be written. (A full disk is told only by writing.)"""
+    given = os.fspath(path)
+    target = os.path.realpath(given)
+    _check_replaceable(target, given)
+    folder = os.path.dirname(target) or "."
+    if not os.path.isdir(folder):
+        code = errno.ENOTDIR if os.path.exists(folder) else errno.ENOENT
+        raise _refused(f"cannot write: {os.strerror(code)}", given, code)
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise _refused(f"cannot write: {os.strerror(errno.EACCES)}", given, errno.EACCES)
+
+
+def same_file(a: str | os.PathLike[str], b: str | os.PathLike[str]) -> bool:
+    """Whether two paths name one file (through symbolic links, ``./x``, hard links)."""
+    return _identity(os.fspath(a)) == _identity(os.fspath(b))
+
+
 def _kind(mode: int) -> str | None:
     """What a file that is not a regular file is (None for a regular file)."""
     kinds = (

@@ -495,7 +495,11 @@ def verb_touch(s: Session, a: argparse.Namespace) -> int:
 
 
 def verb_save(s: Session, a: argparse.Namespace) -> int:
-    if not a.file or os.path.abspath(a.file) == os.path.abspath(s.path):
+    from px4params.writing import same_file
+
+    # The store's own file, however it is named (a symbolic link to it, ./x): a copy of the
+    # store at this line written there would replace what the run saves.
+    if not a.file or same_file(a.file, s.path):
         s.done()  # the store's own file: now, or when the airframe file has succeeded
         if s.autosave:
             print(f"saved {s.path}", file=s.out)
@@ -522,7 +526,7 @@ def verb_save(s: Session, a: argparse.Namespace) -> int:
         if text:  # (a store file keeps them)
             _say_kept_classic(s.store, f"not written to {file}")
 
-    s.write_later(write)
+    s.write_later(file, write)
     return EXIT_OK
 
 
@@ -585,7 +589,7 @@ def verb_export(s: Session, a: argparse.Namespace) -> int:
         print(f"wrote {file} ({size} bytes)", file=s.out)
         _say_kept_classic(s.store, f"not written to {file}")
 
-    s.write_later(write)
+    s.write_later(file, write)
     return EXIT_OK
 
 

@@ -64,8 +64,11 @@ class Session:
         #: Save after each changing verb (off while an airframe file runs: it saves once).
         self.autosave = autosave
         self.changed = False
-        #: Writes to other files asked for during a batch, done when the batch succeeds.
-        self.deferred: list[Callable[[], None]] = []
+        #: Writes to other files asked for during a batch, done when the batch succeeds:
+        #: (the file, the write).
+        self.deferred: list[tuple[str, Callable[[], None]]] = []
+        #: Files the batch reads (the airframe file): no write of the batch may replace them.
+        self.inputs: list[str] = []
         #: The file as this session last read or wrote it (``True``: as it is now), and the
         #: store's content then: this session's own changes are what differs from it.
         self.identity = file_identity(path) if identity is True else identity or None
@@ -81,20 +84,34 @@ class Session:
         if self.autosave:
             self.save()
 
-    def write_later(self, write: Callable[[], None]) -> None:
-        """Writes a file now, or when the batch succeeds: a failed airframe file leaves no
-        file behind that it wrote half-way."""
+    def write_later(self, file: str, write: Callable[[], None]) -> None:
+        """Writes ``file`` now, or when the batch succeeds: a failed airframe file leaves no
+        file behind that it wrote half-way. Refused at once (:func:`check_writable`) where the
+        write could be told to fail, or would replace a file the batch reads."""
+        from px4params.writing import check_writable, same_file
+
+        for read in self.inputs:
+            if same_file(file, read):
+                raise StoreFileError(
+                    f"is the file this run reads ({read}): give it another name", file
+                )
+        check_writable(file)
         if self.autosave:
             write()
         else:
-            self.deferred.append(write)
+            self.deferred.append((file, write))
 
     def save(self) -> None:
         """Saves this session's changes (the one transaction; see the class), then the
-        deferred writes."""
+        deferred writes. Their files are checked again first: a batch whose write cannot be
+        made saves nothing, rather than the store alone."""
+        from px4params.writing import check_writable
+
+        for file, _ in self.deferred:
+            check_writable(file)
         self.commit(lambda: None)
         self.changed = False
-        for write in self.deferred:
+        for _, write in self.deferred:
             write()
         self.deferred.clear()
 

@@ -31,6 +31,7 @@ and saved, and the run still fails."""
 
 def cmd_run(args: argparse.Namespace) -> int:
     with LockedSession(args.store, args.classic, args.dsdl or ()) as session:
+        session.inputs.append(args.file)  # a `param save` of the file itself is refused
         out = session.out
         if not args.keep_going:
             # All or nothing, what the lines print too: a failed run shows only its error.
