@@ -567,6 +567,16 @@ BAD_RUN = [
     ),
     ("set X\n", 1, "set takes a variable name and one value: set VAR value"),
     ("param set SYS_AUTOSTART $NOPE\n", 1, "$NOPE is not set (set NOPE value)"),
+    (
+        # PX4's airframes (ROMFS/px4fmu_common/init.d/airframes/4001_quad_x, line 11) source
+        # their type's defaults: $R was the error named, and setting it did not help.
+        "# @name Generic Quadcopter\n\n. ${R}etc/init.d/rc.mc_defaults\n",
+        3,
+        "'. ${R}etc/init.d/rc.mc_defaults' runs another script, which px4params does not (a "
+        "file runs its own lines: copy the param lines of that script in, or leave the line "
+        "out)",
+    ),
+    ("source x.sh\n", 1, "'source x.sh' runs another script, which px4params does not"),
     ("if param compare SYS_AUTOSTART 0\nparam add INA238#0\n", 2, "expected 'then' after 'if'"),
     ("then\n", 1, "'then' without 'if'"),
     ("fi\n", 1, "'fi' without 'if'"),
@@ -863,6 +873,60 @@ def test_a_failing_run_writes_no_file(
     assert param(capsys, "--store", str(copy), "show", "-q", "INA238#0[4]")[1] == "69\n"
 
 
+@pytest.mark.parametrize(
+    ("target", "reason"),
+    [
+        ("{tmp}/gone/x.store", "cannot write: No such file or directory"),
+        ("{tmp}", "cannot write: a directory, not a regular file"),
+        ("{tmp}/fifo", "cannot write: a FIFO, not a regular file"),
+    ],
+    ids=["no-folder", "folder", "fifo"],
+)
+def test_a_run_whose_save_cannot_be_written_saves_nothing(
+    store: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], target: str, reason: str
+) -> None:
+    # The store was saved, then the write of the later file failed: exit 1 ("nothing of the
+    # file is kept") with the store changed and the first copy written.
+    os.mkfifo(tmp_path / "fifo")
+    assert param(capsys, "add", "AK09916#0")[0] == 0
+    before = store.read_bytes()
+    good, bad = tmp_path / "good.store", target.format(tmp=tmp_path)
+    text = f"param rm AK09916#0\nparam save {good}\nparam save {bad}\n"
+    path = airframe(tmp_path, text)
+    code, out, err = run(capsys, "run", path)
+    assert (code, out) == (1, "")
+    assert err == f"px4params: {path}:3: {bad}: {reason}\n"
+    assert store.read_bytes() == before and not good.exists()
+    # The same for an export (a .params), and without --keep-going or with it.
+    text = f"param rm AK09916#0\nparam export {tmp_path}/gone/x.params\n"
+    assert run(capsys, "run", airframe(tmp_path, text), "--keep-going")[0] == 1
+    assert store.read_bytes() != before  # --keep-going keeps the lines that succeeded
+    assert not (tmp_path / "gone").exists()
+
+
+def test_a_run_does_not_save_over_its_own_airframe_file_or_its_store_by_another_name(
+    store: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # 'param save FILE' of the airframe file itself replaced it with a store file (exit 0); of
+    # the store through a symbolic link, the copy at that line replaced what the run saved.
+    path = tmp_path / "self.airframe"
+    path.write_text(f"param add INA238#0\nparam save {path}\n")
+    code, _, err = run(capsys, "run", str(path))
+    assert code == 1
+    assert err == (
+        f"px4params: {path}:2: {path}: is the file this run reads ({path}): give it another name\n"
+    )
+    assert path.read_text().startswith("param add") and not store.exists()
+    assert param(capsys, "add", "AK09916#0")[0] == 0
+    link = tmp_path / "link.store"
+    link.symlink_to(store)
+    text = f"param rm AK09916#0\nparam save {link}\nparam add INA238#2\n"
+    assert run(capsys, "run", airframe(tmp_path, text))[0] == 0
+    assert param(capsys, "instances", "INA238")[1] == "INA238#2\n"
+    assert "AK09916" not in param(capsys, "show")[1]
+    assert link.is_symlink()
+
+
 def test_a_backup_saved_before_changes_holds_the_store_before_them(
     store: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -883,6 +947,29 @@ def test_a_backup_saved_before_changes_holds_the_store_before_them(
     assert "1\t1\tINA238_1C\t" in exported.read_text()
     # The backup is the store as it was, byte for byte.
     assert backup.read_bytes() == before
+
+
+@pytest.mark.parametrize(("autostart", "bus"), [("4001", "2"), ("0", "1")])
+def test_a_variable_set_in_a_branch_is_read_only_where_that_branch_runs(
+    store: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], autostart: str, bus: str
+) -> None:
+    # $BUS was expanded in the branch that does not run, where it is not set: the file was
+    # refused on every vehicle but the one the branch is for.
+    assert param(capsys, "set", "SYS_AUTOSTART", autostart)[0] == 0
+    text = (
+        "param add INA238#1\nif param compare SYS_AUTOSTART 4001\nthen\n  set BUS 2\n"
+        "  param set-default INA238#1.bus.i2c.bus_id $BUS\nelse\n"
+        "  param set-default INA238#1.bus.i2c.bus_id 1\nfi\n"
+    )
+    assert run(capsys, "run", airframe(tmp_path, text))[0] == 0
+    assert param(capsys, "show", "-q", "INA238#1.bus.i2c.bus_id")[1] == f"{bus}\n"
+    # A variable set nowhere is still refused where its line runs.
+    path = airframe(tmp_path, "if param compare SYS_AUTOSTART 0\nthen\necho $NOPE\nfi\n")
+    code, _, err = run(capsys, "run", path)
+    assert (code == 1) == (autostart == "0")
+    assert err == (
+        "" if autostart != "0" else f"px4params: {path}:3: $NOPE is not set (set NOPE value)\n"
+    )
 
 
 def test_reset_of_one_leaf(store: Path, capsys: pytest.CaptureFixture[str]) -> None:

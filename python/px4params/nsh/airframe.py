@@ -23,6 +23,7 @@ from typing import NoReturn, TextIO
 
 from px4params.errors import CommandError, NshArgumentError, Px4ParamsError
 from px4params.nsh import param
+from px4params.numbers import abbreviated
 from px4params.reading import AIRFRAME, not_text, read_text
 from px4params.status import EXIT_OK
 from px4params.store.session import Session
@@ -154,11 +155,20 @@ def _line(
     text = raw.strip()
     if not text or text.startswith("#"):
         return
-    words = _words(_expand(text, variables))
+    running = blocks[-1].active() if blocks else True
+    if running and text.split(None, 1)[0] in (".", "source"):
+        # Before $VAR: PX4's airframes start with `. ${R}etc/init.d/rc.mc_defaults`, whose
+        # $R (the ROMFS root) would be the error named, and setting it would not help.
+        raise CommandError(
+            f"'{abbreviated(text)}' runs another script, which px4params does not (a file runs "
+            "its own lines: copy the param lines of that script in, or leave the line out)"
+        )
+    # A line of a branch that does not run is read for its if/then/else/fi alone: its $VAR
+    # may be one that branch sets (as a shell, which expands a line only to run it).
+    words = _words(_expand(text, variables) if running else text)
     if not words:
         return
     head = words[0]
-    running = blocks[-1].active() if blocks else True
     if head in ("then", "else", "fi"):
         _block_word(head, words, blocks)
         return
