@@ -152,3 +152,30 @@ def test_a_log_cut_inside_any_message_is_cut_and_one_cut_between_messages_is_not
         # Between two messages nothing says more was to come: a log stopped there is whole.
         path.write_bytes(data[:end])
         assert not ulog.read_header(path).corrupt, end
+
+
+def test_a_log_whose_tail_is_zeros_ends_where_they_start_cut(tmp_path: Path, monkeypatch) -> None:
+    # A card that lost power leaves the preallocated rest of the file zero: pyulog stepped over
+    # the zeros a byte at a time, re-reading each (21 s for 10 MB), and called the log whole.
+    data = shared_file(SAMPLE_LOG).read_bytes()
+    path = tmp_path / "zeros.ulg"
+    path.write_bytes(data + bytes(4 << 20))
+    read: list[int] = []
+
+    class Counting(ulog._BudgetedFile):
+        def read(self, size: int = -1) -> bytes:
+            got = super().read(size)
+            read.append(len(got))
+            return got
+
+    monkeypatch.setattr(ulog, "_BudgetedFile", Counting)
+    header = ulog.read_header(path)
+    assert header.corrupt
+    assert sum(read) < 1.2 * len(data)  # the zeros are looked over once, outside reads
+    assert header.parameters == ulog.read_header(shared_file(SAMPLE_LOG)).parameters
+    # Zeros with data after them are no end: pyulog's own resync reads past them.
+    ends = message_ends(data)
+    middle = ends[len(ends) // 2]
+    path.write_bytes(data[:middle] + bytes(64) + data[middle:])
+    assert ulog.read_header(path).corrupt
+    assert ulog.read_header(path).parameters == header.parameters

@@ -268,12 +268,25 @@ class _BudgetedFile:
         self._body: int | None = None
         #: The file ended inside a message: its header, or the body the header declared.
         self.cut = False
+        #: Where the zeros that end the file begin (a card that lost power leaves its
+        #: preallocated tail zero): reads end there. None until a header of zeros was read.
+        self._zeros_from: int | None = None
+        #: Where a nonzero byte was found after zeros: no need to look again before it.
+        self._nonzero_at = -1
 
     def read(self, size: int = -1) -> bytes:
+        if self._zeros_from is not None and self._file.tell() >= self._zeros_from:
+            return b""
         data = self._file.read(size)
         self._budget -= len(data)
         if self._budget < 0:
             raise ReadBudgetExceeded
+        if size == 3 and data == b"\0\0\0" and self._ends_in_zeros(self._file.tell() - 3):
+            # No message is 3 zero bytes (type 0 is none): pyulog would step over the zeros one
+            # byte at a time, 2 s a megabyte. The log ends where they start, cut.
+            self._zeros_from = self._file.tell() - 3
+            self.cut = True
+            return b""
         # A message is a 3-byte header (uint16 size, uint8 type) and that many bytes. A read of
         # a header that finds no byte is the end; one that finds 1 or 2, or a body that finds
         # fewer than its header said, is a cut.
@@ -285,6 +298,25 @@ class _BudgetedFile:
             if len(data) == 3:
                 self._body = int.from_bytes(data[:2], "little")
         return data
+
+    def _ends_in_zeros(self, start: int) -> bool:
+        """Whether every byte from ``start`` to the file's end is zero (read past once: a
+        nonzero byte found is remembered)."""
+        if start < self._nonzero_at:
+            return False
+        here = self._file.tell()
+        try:
+            self._file.seek(start)
+            position = start
+            while chunk := self._file.read(1 << 20):
+                stripped = chunk.lstrip(b"\0")
+                if stripped:
+                    self._nonzero_at = position + len(chunk) - len(stripped)
+                    return False
+                position += len(chunk)
+            return True
+        finally:
+            self._file.seek(here)
 
     def seek(self, offset: int, whence: int = os.SEEK_SET) -> int:
         # (The file's own error would be "[Errno 22] Invalid argument".)
