@@ -407,6 +407,25 @@ def test_a_classic_parameter_with_a_structured_name_is_refused(
     )
 
 
+@pytest.mark.parametrize(
+    ("name", "described"), [("INA238_0A", "INA238 #0: bus._tag"), ("INA238_INST", "INA238")]
+)
+def test_a_classic_parameter_with_a_destructured_name_is_refused(
+    schema: px4params.Schema, tmp_path: Path, name: str, described: str
+) -> None:
+    # Written with the name twice (exit 0): the store refuses the same pair.
+    classic = tmp_path / "parameters.json"
+    classic.write_text(
+        json.dumps({"version": 1, "parameters": [{"name": name, "type": "Int32", "default": 0}]}),
+        encoding="utf-8",
+    )
+    with pytest.raises(MetadataError) as info:
+        build_parameters_json(schema, classic)
+    assert str(info.value).startswith(f"{name} is both a destructured name ({described}") and str(
+        info.value
+    ).endswith(f") and a classic parameter (in {classic})")
+
+
 def test_a_bad_classic_file_fails_with_its_message(
     schema: px4params.Schema, tmp_path: Path
 ) -> None:

@@ -117,6 +117,12 @@ def build_parameters_json(
                 f"parameter {entry['name']} is both structured ({entry['dsdl_type']}) and "
                 f"classic (in {os.fspath(classic_path or '')})"
             )
+    for entry in destructured:  # a vehicle reports one value per name: QGC would show two
+        if entry["name"] in classic_names:
+            raise MetadataError(
+                f"{entry['name']} is both a destructured name ({entry['shortDesc']}) and a "
+                f"classic parameter (in {os.fspath(classic_path or '')})"
+            )
     document: dict[str, Any] = {
         "version": METADATA_VERSION,
         "parameters": [dict(p.entry) for p in classic] + structured + destructured,
