@@ -1440,7 +1440,8 @@ def _upgrade(config: OldConfig, board: Any, target: str | None, assumptions: lis
     # The file's snapshot; a file naming no release is judged with today's row (its newest).
     version = "v" + ".".join(map(str, config.version)) if config.version else None
     own = (table.snapshot_for(version) if version else None) or board.releases[-1]
-    first = table.variants(board.name)[0].releases[0] if table.variants(board.name) else own
+    variants = table.variants(board.name)
+    first = variants[0].releases[0] if variants else own
     judged = max(own, board.releases[0], key=known.index)  # a row newer than the file's release
     if version and known.index(first) > known.index(own):
         # The board came after the file's release in the table (a vendor branch had it first):
