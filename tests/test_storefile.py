@@ -440,7 +440,7 @@ def test_a_format_1_file_of_another_schema_is_refused(store, tmp_path) -> None:
 
 
 def test_a_table_entry_this_schema_lacks(store, tmp_path) -> None:
-    lines = ["FOO=vendor.Foo.1", "INA238=px.Ina238.2", "INA238=px.Ina238.1"]
+    lines = ["FOO=vendor.Foo.1", "INA226=px.Ina226.2", "INA238=px.Ina238.1"]
     fp = zlib.crc32("\n".join(lines).encode())
     path = tmp_path / "t.store"
     # Unused entries are harmless: only entry 2 has a record.
@@ -449,7 +449,7 @@ def test_a_table_entry_this_schema_lacks(store, tmp_path) -> None:
     assert store.instances("INA238") == ["INA238#0"]
     for entry, message in (
         (0, "FOO was stored as vendor.Foo.1; this schema has no such parameter"),
-        (1, "INA238 was stored as px.Ina238.2; this schema has px.Ina238.1"),
+        (1, "INA226 was stored as px.Ina226.2; this schema has px.Ina226.1"),
     ):
         path.write_bytes(_file(2, fp, [_table(lines), bytes([KIND_STRUCTURED, entry, 1])]))
         with pytest.raises(StoreFileError, match=re.escape(f"record cannot be applied: {message}")):
@@ -530,3 +530,21 @@ def test_a_second_record_of_one_instance_is_refused(store: px4params.Store, tmp_
     with pytest.raises(StoreFileError, match=r"a second record of the same parameter instance"):
         store.load_from(path)
     assert store.instances("INA238") == []
+
+
+def test_a_table_that_names_a_parameter_twice_is_refused(
+    store: px4params.Store, tmp_path: Path
+) -> None:
+    # Records of each line were INA238#0's, the last one winning, on the host and in the
+    # firmware alike (the check of two records keyed on the line, not the parameter).
+    lines = ["INA238=px.Ina238.1", "INA238=px.Ina238.1"]
+    records = [bytes([KIND_STRUCTURED]) + _varint(n) + _varint(0) for n in (0, 1)]
+    path = tmp_path / "x.store"
+    path.write_bytes(_file(2, zlib.crc32("\n".join(lines).encode()), [_table(lines), *records]))
+    store.add("AK09916#0")
+    with pytest.raises(StoreFileError) as refused:
+        store.load_from(path)
+    assert str(refused.value) == (
+        f"{path}: record is malformed: the parameter table names 'INA238' twice (at byte 10)"
+    )
+    assert store.instances("AK09916") == ["AK09916#0"]  # left as it was

@@ -82,6 +82,9 @@ pub enum FileErrorKind<'a> {
     /// A classic record's name that is no PX4 parameter name (1 to [`CLASSIC_NAME_MAX`]
     /// upper-case letters, digits and `_`, a letter first).
     ClassicName(&'a [u8]),
+    /// A parameter the table names twice (its `NAME`): records of both lines would be one
+    /// parameter's.
+    TableTwice(&'a [u8]),
 }
 
 /// A file refused by [`check`]: what and where (byte offset in the file).
@@ -127,6 +130,11 @@ impl fmt::Display for FileError<'_> {
             K::Instance(n) => write!(f, "record is malformed: instance {n} is out of range"),
             K::SecondTable => malformed(f, "a second parameter table"),
             K::RecordKind(kind) => write!(f, "record is malformed: unknown record kind {kind}"),
+            K::TableTwice(name) => {
+                f.write_str("record is malformed: the parameter table names ")?;
+                write_quoted(f, name)?;
+                f.write_str(" twice")
+            }
             K::ClassicName(name) => {
                 f.write_str("record is malformed: classic parameter name ")?;
                 write_quoted(f, name)?;
@@ -323,14 +331,29 @@ pub fn check(data: &[u8]) -> Result<Checked<'_>, FileError<'_>> {
         let (_, next) = read_record(data, pos, end)?;
         pos = next;
     }
-    Ok(Checked {
+    let checked = Checked {
         data,
         version,
         fingerprint,
         table,
         records,
         end,
-    })
+    };
+    // A name twice: which line's records would hold? (Quadratic, without memory: a table
+    // has a line per structured parameter, tens.)
+    fn name(line: &str) -> &[u8] {
+        line.split('=').next().unwrap_or(line).as_bytes()
+    }
+    for (i, line) in checked.table().enumerate() {
+        if checked
+            .table()
+            .take(i)
+            .any(|earlier| name(earlier) == name(line))
+        {
+            return fail(FileErrorKind::TableTwice(name(line)), table.unwrap_or(0));
+        }
+    }
+    Ok(checked)
 }
 
 fn le4(bytes: &[u8]) -> [u8; 4] {
@@ -829,6 +852,11 @@ pub enum ApplyError {
         /// The record's offset in the file.
         offset: usize,
     },
+    /// A second record of one parameter instance (or classic parameter): which would hold?
+    Twice {
+        /// The second record's offset in the file.
+        offset: usize,
+    },
     /// The store refused a record: an instance out of range, a value that does not decode,
     /// or one stored by another minor version of its type that the layout does not have (or
     /// that does not translate).
@@ -845,7 +873,9 @@ impl ApplyError {
     pub fn offset(&self) -> usize {
         match *self {
             ApplyError::Format1 => 0,
-            ApplyError::UnknownParameter { offset } | ApplyError::Refused { offset, .. } => offset,
+            ApplyError::UnknownParameter { offset }
+            | ApplyError::Twice { offset }
+            | ApplyError::Refused { offset, .. } => offset,
         }
     }
 }
@@ -896,14 +926,24 @@ where
                 }
                 continue;
             };
-            put(store, layout, names, param, &record, pass).map_err(|error| {
-                ApplyError::Refused {
+            let refused = |error| ApplyError::Refused {
+                offset: record.offset,
+                error,
+            };
+            if let Err(error) = put(store, layout, names, param, &record, pass) {
+                store.clear_filed();
+                return Err(refused(error));
+            }
+            // Each record marks its slot (one the check found): a second one finds the mark.
+            if pass == Pass::Check && store.mark_filed(param, record.instance) != Ok(false) {
+                store.clear_filed();
+                return Err(ApplyError::Twice {
                     offset: record.offset,
-                    error,
-                }
-            })?;
+                });
+            }
             applied.records += 1;
         }
+        store.clear_filed();
     }
     store.mark_saved();
     Ok(applied)

@@ -159,6 +159,9 @@ impl Totals {
 const PRESENT: u8 = 1;
 const USED: u8 = 2;
 const UNSAVED: u8 = 4;
+/// Named by a record of the file being applied ([`crate::file::apply`]'s check): a second
+/// record of the slot is refused. Cleared when the check ends.
+const FILED: u8 = 8;
 
 /// The state of one instance (or of a parameter's type default).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -978,6 +981,9 @@ where
     ) -> Result<(), crate::translate::TranslateError> {
         let def = *self.def_of(param).map_err(StoreError::widen)?;
         let index = slot_index(&def, instance).map_err(StoreError::widen)?;
+        // The old value whole, as its own type decodes it: the translation reads only the
+        // fields it carries over, and would take a cut or overlong value without a word.
+        check_encoded(layout, old, data).map_err(StoreError::widen)?;
         let present = self.slot_at(index).present();
         if !check_only {
             self.present_slot(&def, instance)
@@ -1002,6 +1008,23 @@ where
             self.commit(param, &def, instance, which, written);
         }
         Ok(())
+    }
+
+    /// Marks the slot of `param`'s `instance` as named by the file being applied; whether it
+    /// was already (a second record of it).
+    pub(crate) fn mark_filed(&mut self, param: u32, instance: u16) -> Result<bool> {
+        let def = *self.def_of(param)?;
+        let index = slot_index(&def, instance)?;
+        let before = self.slot_at(index).flags & FILED != 0;
+        self.with_slot(index, |s| s.flags |= FILED);
+        Ok(before)
+    }
+
+    /// Forgets every [`Store::mark_filed`] mark.
+    pub(crate) fn clear_filed(&mut self) {
+        for slot in self.slots.as_mut() {
+            slot.flags &= !FILED;
+        }
     }
 
     /// Checks `data` as [`Store::set_encoded`] would, without writing it.

@@ -841,6 +841,120 @@ fn a_value_of_an_older_minor_version_is_translated() {
 }
 
 #[test]
+fn a_second_record_of_one_instance_is_refused_and_nothing_applied() {
+    // The firmware's load took the last of two records of INA238#1 (the host refused it): a
+    // file is one configuration, not a choice between two.
+    let table = [SENS_LINE, TRIM_LINE];
+    let one = structured_record(0, 1, None, Some(&ADDRESS_22));
+    let again = structured_record(0, 1, None, None);
+    let first = 10 + 2 + 2 * 19 + 2;
+    let second = first + one.len() + 2;
+    let cases = [
+        store_file(2, &table, &[&one, &again]),
+        store_file(
+            2,
+            &table,
+            &[
+                &classic_record("BAT_N_CELLS", 6),
+                &classic_record("BAT_N_CELLS", 7),
+            ],
+        ),
+        // The shared parameter's one slot.
+        store_file(
+            2,
+            &table,
+            &[
+                &structured_record(1, 0, None, None),
+                &structured_record(1, 0, None, None),
+            ],
+        ),
+    ];
+    for (case, data) in cases.iter().enumerate() {
+        for clear in [false, true] {
+            let mut f = fixture();
+            f.store.add(SENS, Some(2)).unwrap();
+            let e = applied(&mut f, data, clear).unwrap_err();
+            let ApplyError::Twice { offset } = e else {
+                panic!("case {case}: {e:?}")
+            };
+            assert_eq!(e.offset(), offset);
+            assert!(
+                offset > first && (case > 0 || offset == second),
+                "case {case}"
+            );
+            assert_eq!(present(&f, SENS), [2]);
+            assert!(f.store.slot(SENS, 2).unwrap().unsaved(), "not marked saved");
+            // The marks are gone: the good half alone applies, on the same store, twice.
+            let good = store_file(2, &table, &[&one]);
+            assert_eq!(applied(&mut f, &good, clear).unwrap().records, 1);
+            assert_eq!(applied(&mut f, &good, clear).unwrap().records, 1);
+            assert_eq!(f.store.get(SENS, 1, Which::Value).unwrap(), ADDRESS_22);
+        }
+    }
+}
+
+#[test]
+fn a_table_that_names_a_parameter_twice_is_refused() {
+    // Records of both lines were one parameter's: the last one won, in the host and the
+    // firmware alike.
+    for table in [[SENS_LINE, SENS_LINE], [SENS_LINE, "SENS=test.Other.2"]] {
+        let data = store_file(
+            2,
+            &table,
+            &[
+                &structured_record(0, 0, None, Some(&ADDRESS_22)),
+                &structured_record(1, 0, None, None),
+            ],
+        );
+        assert_eq!(
+            refusal(&data),
+            (
+                FileErrorKind::TableTwice(b"SENS"),
+                10,
+                "record is malformed: the parameter table names 'SENS' twice".into()
+            )
+        );
+    }
+    // One name per line, however alike: accepted.
+    let data = store_file(2, &[SENS_LINE, TRIM_LINE, "SENSOR=test.Sensor.1"], &[]);
+    assert!(check(&data).is_ok());
+}
+
+#[test]
+fn a_value_of_an_older_version_is_checked_whole_before_it_is_translated() {
+    // Sensor 1.0 is 3 bytes: the translation read only the fields it carries over, so a cut
+    // value (2 bytes) or one with bytes after it (the host refuses both) was taken.
+    let old = [0x04, 0x41, 0x20];
+    let long = [0x04, 0x41, 0x20, 0xDE, 0xAD];
+    for (bytes, cut) in [(&old[..2], true), (&long[..], false)] {
+        let data = store_file(
+            2,
+            &[SENS_LINE],
+            &[&structured_record(0, 1, None, Some(bytes))],
+        );
+        for clear in [false, true] {
+            let mut f = fixture();
+            f.store.add(SENS, Some(2)).unwrap();
+            let e = applied(&mut f, &data, clear).unwrap_err();
+            let ApplyError::Refused {
+                error: StoreError::Codec(codec),
+                ..
+            } = e
+            else {
+                panic!("{e:?}")
+            };
+            let refused = match codec.kind {
+                ErrorKind::Truncated { .. } => cut,
+                ErrorKind::TrailingBytes { .. } => !cut,
+                _ => false,
+            };
+            assert!(refused, "{codec:?}");
+            assert_eq!(present(&f, SENS), [2]);
+        }
+    }
+}
+
+#[test]
 fn the_stored_minor_version_is_the_leading_p_version() {
     let f = fixture();
     let layout = f.layout.as_layout();

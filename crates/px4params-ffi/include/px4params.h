@@ -59,7 +59,8 @@
 // The output buffer is too small.
 #define PX4P_ERR_BUFFER -13
 
-// Not a store file, another format version, truncated or corrupted (a CRC mismatch).
+// Not a store file, another format version, truncated or corrupted (a CRC mismatch), or
+// malformed (a parameter table naming one parameter twice, two records of one instance).
 #define PX4P_ERR_FILE -14
 
 // A store file record of a structured parameter this store does not have.
@@ -458,7 +459,8 @@ int32_t px4p_store_open(px4p_store *store,
 // Replaces the store's content with a store file's (written by `px4params param save` or by
 // [`px4p_store_save`]). The file and every record are checked before anything changes: on any
 // error the store is as it was. Values stored by an older minor version of their type are
-// translated when the tables carry that version. Returns the number of records applied.
+// checked whole as that version, then translated when the tables carry it. Returns the number
+// of records applied.
 int32_t px4p_store_load(px4p_store *store, const uint8_t *data, uintptr_t len);
 
 // Writes the store's file into `buf` (the bytes `px4params param load` reads); returns its

@@ -167,7 +167,8 @@ pub const PX4P_ERR_VERSION_LEAF: i32 = -11;
 pub const PX4P_ERR_VERSION: i32 = -12;
 /// The output buffer is too small.
 pub const PX4P_ERR_BUFFER: i32 = -13;
-/// Not a store file, another format version, truncated or corrupted (a CRC mismatch).
+/// Not a store file, another format version, truncated or corrupted (a CRC mismatch), or
+/// malformed (a parameter table naming one parameter twice, two records of one instance).
 pub const PX4P_ERR_FILE: i32 = -14;
 /// A store file record of a structured parameter this store does not have.
 pub const PX4P_ERR_FILE_PARAM: i32 = -15;
@@ -359,7 +360,8 @@ impl file::FileNames for CNames {
 /// Replaces the store's content with a store file's (written by `px4params param save` or by
 /// [`px4p_store_save`]). The file and every record are checked before anything changes: on any
 /// error the store is as it was. Values stored by an older minor version of their type are
-/// translated when the tables carry that version. Returns the number of records applied.
+/// checked whole as that version, then translated when the tables carry it. Returns the number
+/// of records applied.
 #[no_mangle]
 pub unsafe extern "C" fn px4p_store_load(
     store: *mut px4p_store,
@@ -382,7 +384,7 @@ pub unsafe extern "C" fn px4p_store_load(
         Err(ApplyError::Format1) => PX4P_ERR_FILE_FORMAT_1,
         Err(ApplyError::UnknownParameter { .. }) => PX4P_ERR_FILE_PARAM,
         Err(ApplyError::Refused { error, .. }) => store_code(error),
-        Err(_) => PX4P_ERR_FILE,
+        Err(_) => PX4P_ERR_FILE, // (a second record of one instance too)
     }
 }
 

@@ -828,6 +828,31 @@ fn a_bad_store_file_is_refused_with_its_code_and_the_store_left_as_it_was() {
             PX4P_ERR_INSTANCE_RANGE,
         ),
         (
+            // The firmware took the last of the two (the host refused the file).
+            "two records of one instance",
+            store_file(
+                2,
+                &["SENS=test.Sensor.1"],
+                &[
+                    &structured_record(0, 2, Some(&SENS_ADDRESS_22)),
+                    &structured_record(0, 2, None),
+                ],
+            ),
+            PX4P_ERR_FILE,
+        ),
+        (
+            "a table naming one parameter twice",
+            store_file(
+                2,
+                &["SENS=test.Sensor.1", "SENS=test.Sensor.1"],
+                &[
+                    &structured_record(0, 0, None),
+                    &structured_record(1, 0, None),
+                ],
+            ),
+            PX4P_ERR_FILE,
+        ),
+        (
             "an instance of a shared parameter",
             store_file(2, &["TRIM=test.Last.1"], &[&structured_record(0, 1, None)]),
             PX4P_ERR_NOT_PRESENT,
