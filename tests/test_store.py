@@ -1395,3 +1395,26 @@ def test_an_int_beyond_every_float64_is_refused_in_one_line_not_raised_as_overfl
             f"INA238#0: shunt: value {value} is out of range of a float64 (at most ±1.8e308)"
         )
         assert store.get("INA238#0.shunt") == before
+
+
+def test_a_copied_store_changes_on_its_own(store: px4params.Store) -> None:
+    # copy.copy shared the core's memory: a value set on the copy showed in the original.
+    import copy
+    import pickle
+
+    from px4params.store import flat
+
+    store.add("INA238#0")
+    for copied in (copy.copy(store), copy.deepcopy(store)):
+        copied.set("INA238#0.current", 100)
+        copied.add("INA238#1")
+        assert copied.schema is store.schema
+        assert (store.get("INA238#0.current"), store.instances("INA238")) == (327, ["INA238#0"])
+        assert copied.instances("INA238") == ["INA238#0", "INA238#1"]
+        assert (flat.get_flat(copied, "INA238_0P"), flat.get_flat(store, "INA238_0P")) == (100, 327)
+    with pytest.raises(TypeError) as refused:
+        pickle.dumps(store)
+    assert str(refused.value) == (
+        "a Store is not pickled: save it to a store file (store.save(path)) and load that "
+        "(Store.load(path)), or send store.encoded(name) values"
+    )

@@ -56,7 +56,7 @@ from px4params.store.spec import (
 )
 
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
-    from typing import Any, NamedTuple
+    from typing import Any, NamedTuple, NoReturn
 
     from px4params.store.flat import FlatMap
 else:
@@ -690,6 +690,28 @@ class Store:
 
     def __repr__(self) -> str:
         return f"<Store {len(list(self.names()))} instances of {len(self._order)} parameters>"
+
+    def __copy__(self) -> Store:
+        """``copy.copy(store)`` (and ``copy.deepcopy``): another store with the same content,
+        changed on its own (the schema, which nothing changes, is shared). A plain copy of the
+        attributes would share the core's memory: a change to either showed in both."""
+        other = object.__new__(Store)
+        other.__dict__.update(self.__dict__)
+        other._native = self._native.copy()
+        other._foreign = dict(self._foreign)
+        other._resolved = dict(self._resolved)
+        other._leaf_reads = dict(self._leaf_reads)
+        other._destructured = None  # (it names the store it was made for)
+        return other
+
+    def __deepcopy__(self, memo: dict[int, Any]) -> Store:
+        return self.__copy__()
+
+    def __reduce__(self) -> NoReturn:
+        raise TypeError(
+            "a Store is not pickled: save it to a store file (store.save(path)) and load that "
+            "(Store.load(path)), or send store.encoded(name) values"
+        )
 
 
 def _one_value(p: _Param) -> str:

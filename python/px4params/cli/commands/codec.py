@@ -344,7 +344,8 @@ def _add_encode(p: ArgumentParser) -> None:
     p.add_argument(
         "--saturate",
         action="store_true",
-        help="clamp out-of-range numbers per the fields' cast modes (default: refuse)",
+        help="clamp out-of-range numbers of saturated fields (default: refuse them; "
+        "truncated fields keep the low bits either way, as DSDL says)",
     )
     p.set_defaults(func=cmd_encode)
 
@@ -415,7 +416,8 @@ example:
     p.add_argument(
         "--saturate",
         action="store_true",
-        help="clamp out-of-range numbers per the fields' cast modes (default: refuse)",
+        help="clamp out-of-range numbers of saturated fields (default: refuse them; "
+        "truncated fields keep the low bits either way, as DSDL says)",
     )
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.set_defaults(func=cmd_frames)
