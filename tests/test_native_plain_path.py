@@ -247,3 +247,41 @@ def test_small_ints_are_read_and_made_as_the_numbers_they_are() -> None:
         t.encode({"items": [256], "wide": 0, "flag": 0})
     with pytest.raises(px4params.errors.EncodeError, match=r"flag: value 2 is out of range"):
         t.encode({"items": [], "wide": 0, "flag": 2})
+
+
+def test_numpy_numbers_give_the_bytes_their_values_give() -> None:
+    # numpy's int64 and float32 were refused ("expected an integer, got int64"), where the
+    # docs promise the general path's same bytes. Numbers count by what they declare
+    # (numbers.Integral, numbers.Real): numpy's bool declares neither, and is no number.
+    import fractions
+
+    import numpy as np
+
+    ina = SCHEMA["px.Ina238"]
+    plain = {"bus": {"i2c": {"bus_id": 1, "address": 0x45}}, "current": 200, "shunt": 0.0003}
+    given = {
+        "bus": {"i2c": {"bus_id": np.uint8(1), "address": np.int16(0x45)}},
+        "current": np.int64(200),
+        "shunt": np.float32(0.0003),
+    }
+    assert ina.encode(given) == ina.encode(plain)
+    assert ina.encode({**plain, "shunt": fractions.Fraction(3, 10000)}) == ina.encode(plain)
+    assert ina.encode({**plain, "shunt": np.int64(0)}) == ina.encode({**plain, "shunt": 0})
+    refusals = [
+        ({**plain, "current": np.True_}, "current: expected an integer, got bool"),
+        ({**plain, "current": np.float64(200.0)}, "current: expected an integer, got float64"),
+        ({**plain, "shunt": np.True_}, "shunt: expected a number, got bool"),
+        ({**plain, "current": np.int64(2000)}, "current: value 2000 is out of range"),
+    ]
+    for value, message in refusals:
+        with pytest.raises(px4params.CodecError) as refused:
+            ina.encode(value)
+        assert message in str(refused.value)
+    store = px4params.Store(SCHEMA, classic=[])
+    store.add("INA238#0")
+    store.set("INA238#0.current", np.int32(100))
+    store.set("INA238#0[4]", np.uint8(0x41))
+    assert (store.get("INA238#0.current"), store.get("INA238#0[4]")) == (100, 0x41)
+    with pytest.raises(px4params.ValueRangeError) as refused:
+        store.set("INA238#0.current", np.int64(500))
+    assert str(refused.value) == "INA238#0.current: 500 is outside 1..327 (@min/@max)"

@@ -17,6 +17,23 @@ use pyo3::types::{
 use crate::errors::{names_of, Expected, ValueError};
 use crate::structs::StructValue;
 
+/// `numbers.Integral` and `numbers.Real`: numbers of other types (numpy's `int64`, `float32`)
+/// are taken by what they declare themselves to be, as Python's own `operator.index` and
+/// `float` take them (a numpy `bool`, which declares neither, is no number here either).
+static NUMBER_ABCS: pyo3::sync::PyOnceLock<(Py<PyAny>, Py<PyAny>)> = pyo3::sync::PyOnceLock::new();
+
+fn is_number_kind(obj: &Bound<'_, PyAny>, integral: bool) -> PyResult<bool> {
+    let py = obj.py();
+    let (integral_abc, real_abc) = NUMBER_ABCS.get_or_try_init(py, || -> PyResult<_> {
+        let numbers = py.import("numbers")?;
+        Ok((
+            numbers.getattr("Integral")?.unbind(),
+            numbers.getattr("Real")?.unbind(),
+        ))
+    })?;
+    obj.is_instance(if integral { integral_abc } else { real_abc }.bind(py))
+}
+
 fn wrong<'py>(expected: Expected, value: &Bound<'py, PyAny>) -> ValueError<'py> {
     // A new reference to the value: the error outlives the borrow it was found through.
     ValueError::WrongType {
@@ -58,10 +75,21 @@ impl<'py, 'n> PySource<'py, 'n> {
         }
     }
 
-    fn integer(&self, obj: &Bound<'py, PyAny>, kind: Kind) -> Result<Scalar, ValueError<'py>> {
-        if obj.is_instance_of::<PyBool>() || !obj.is_instance_of::<PyInt>() {
-            return Err(wrong(Expected::Integer, obj));
+    fn integer(&self, given: &Bound<'py, PyAny>, kind: Kind) -> Result<Scalar, ValueError<'py>> {
+        if given.is_instance_of::<PyBool>() {
+            return Err(wrong(Expected::Integer, given));
         }
+        let index;
+        let obj = if given.is_instance_of::<PyInt>() {
+            given
+        } else if is_number_kind(given, true)? {
+            // numpy's integers: their value as an int (`__index__`), errors named by the
+            // value as given
+            index = given.call_method0("__index__")?;
+            &index
+        } else {
+            return Err(wrong(Expected::Integer, given));
+        };
         if let Ok(v) = obj.extract::<i64>() {
             return Ok(Scalar::Int(v));
         }
@@ -90,7 +118,7 @@ impl<'py, 'n> PySource<'py, 'n> {
             _ => (Scalar::Uint(0), Scalar::Uint(u64::MAX)),
         };
         Err(ValueError::OutOfRange {
-            value: obj.clone(),
+            value: given.clone(),
             min,
             max,
         })
@@ -109,6 +137,14 @@ fn float_of<'py>(obj: &Bound<'py, PyAny>) -> Result<f64, ValueError<'py>> {
         // not raised as Python's OverflowError.
         return obj
             .extract::<f64>()
+            .map_err(|_| ValueError::BeyondFloat64 { value: obj.clone() });
+    }
+    if is_number_kind(obj, false)? {
+        // numpy's floats and integers, fractions: `float()` of them (beyond every double:
+        // out of range, as above)
+        return obj
+            .call_method0("__float__")
+            .and_then(|f| f.extract::<f64>())
             .map_err(|_| ValueError::BeyondFloat64 { value: obj.clone() });
     }
     if let Ok(s) = obj.cast::<PyString>() {
