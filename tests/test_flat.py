@@ -931,3 +931,32 @@ def test_a_leaf_that_is_not_live_names_the_first_requirement_that_fails(
         f"{name('choices[1].c[1]')} (ARRAYS#0.choices[1].c[1]) is not live: choices[1]._tag "
         f"selects variant 0, not 2 (set {name('choices[1]._tag')} to 2)"
     )
+
+
+@given(st.integers(0, 15), st.integers(0, 15), st.integers(0, 15))
+def test_a_merged_mask_takes_the_writers_changes_and_keeps_the_rest(
+    now: int, was: int, wanted: int
+) -> None:
+    # Bit by bit: a bit the writer changed (was -> wanted) is the writer's; any other bit is as
+    # it is now (another writer's since).
+    merged = flat.merged_mask(now, was, wanted)
+    for bit in range(4):
+        mine = (was >> bit & 1) != (wanted >> bit & 1)
+        expected = (wanted if mine else now) >> bit & 1
+        assert merged >> bit & 1 == expected, (now, was, wanted, bit)
+
+
+def test_a_mask_write_with_the_mask_it_was_made_from_keeps_other_instances(
+    store: px4params.Store,
+) -> None:
+    store.add("INA238#1")
+    store.add("INA238#3")  # added since the writer read 0b0010
+    assert (
+        flat.write_flat(store, "INA238_INST", 0b0011, was=0b0010) == "INA238_INST: added INA238#0"
+    )
+    assert store.instances("INA238") == ["INA238#0", "INA238#1", "INA238#3"]
+    # Without it, the mask as given (a ground station's PARAM_SET).
+    assert flat.write_flat(store, "INA238_INST", 0b0001) == (
+        "INA238_INST: removed INA238#1, removed INA238#3"
+    )
+    assert store.instances("INA238") == ["INA238#0"]

@@ -167,6 +167,17 @@ def test_a_model_switch_and_a_setting_out_of_its_fields_range() -> None:
     assert proposal.instances[0].values["rotation"] == 40 and proposal.not_carried == []
 
 
+def test_a_setting_given_as_a_float_zero_where_zero_is_in_range_is_carried() -> None:
+    # A REAL32 line of SF1XX_MODE (a .params of another release): 0.0 is the mode "on", in
+    # 0..3; only a positive quantity (@min above 0) refuses zero or less.
+    proposal = migrate.migrate(
+        today({"SENS_EN_SF1XX": 6, "SF1XX_MODE": 0.0, "SF1XX_ROT": -0.0}), table="current"
+    )
+    (inst,) = proposal.instances
+    assert (inst.values["mode"], inst.values["rotation"]) == (0, 0)
+    assert proposal.not_carried == []
+
+
 def test_a_calibration_slot_that_holds_no_device_id_is_said_so() -> None:
     # a device ID is a uint32 of PX4's DeviceStructure; a .params file may carry it as a float;
     # 0 is an empty slot (nothing to report)

@@ -717,3 +717,21 @@ def test_a_batch_whose_deferred_write_can_no_longer_be_made_saves_nothing(
         session.save()
     assert str(e.value) == f"{folder}/x.params: cannot write: No such file or directory"
     assert written == [] and store_file.read_bytes() == before
+
+
+def test_a_batch_write_over_a_file_it_reads_is_refused(
+    store_file: Path, schema: px4params.Schema, tmp_path: Path
+) -> None:
+    store = px4params.Store.load(store_file, schema, classic=BUNDLED_CLASSIC)
+    session = Session(store, str(store_file), autosave=False)
+    airframe = tmp_path / "vehicle.airframe"
+    airframe.write_text("param add INA238#0\n")
+    session.inputs.append(str(airframe))
+    link = tmp_path / "link.airframe"
+    link.symlink_to(airframe)
+    with pytest.raises(px4params.StoreFileError) as refused:
+        session.write_later(str(link), lambda: None)
+    assert str(refused.value) == (
+        f"{link}: is the file this run reads ({airframe}): give it another name"
+    )
+    assert session.deferred == []

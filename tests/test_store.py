@@ -1023,6 +1023,28 @@ def test_switching_a_union_back_to_the_defaults_variant_brings_its_values(
     assert store.get("INA238#0.bus.i2c.address") == 0x40
 
 
+def test_a_tag_written_by_index_is_found_in_the_value_not_the_default(tmp_path: Path) -> None:
+    # Two unions: the first one's variant moves the second one's tag. The value's [3] is
+    # second._tag; the default's [3] is second.a, no tag at all.
+    from test_file import acme_store
+
+    files = {
+        "First.1.0.dsdl": "@union\nuint8 x\nuint8[2] y\n@sealed\n",
+        "Second.1.0.dsdl": "@union\nuint8 a\nuint16 b\n@sealed\n",
+        "Pair.1.0.dsdl": (
+            "# @param PAIR\n# @max_instances 2\nacme.First.1.0 first\nacme.Second.1.0 second\n"
+            "@sealed\n"
+        ),
+    }
+    store = acme_store(tmp_path, files)
+    store.add("PAIR#0")
+    store.set_default("PAIR#0", {"first": {"x": 1}, "second": {"b": 500}})
+    store.set("PAIR#0", {"first": {"y": [1, 2]}, "second": {"a": 3}})
+    assert store.leaf("PAIR#0[3]").path == "second._tag"
+    store.set("PAIR#0[3]", 1)
+    assert store.get("PAIR#0") == {"first": {"y": [1, 2]}, "second": {"b": 500}}
+
+
 def test_a_union_parameter_switched_back_is_its_default(tmp_path: Path) -> None:
     from test_file import acme_store
 
