@@ -262,7 +262,7 @@ def test_health_refuses_a_px4_flight_log(capsys) -> None:
     assert main(["health", str(real)]) == 1
     assert capsys.readouterr().err == (
         f"px4params: error: {real}: not a log of 'px4params autostart run --ulog' (no "
-        "driver_instance information)\n"
+        "px4params_mode information)\n"
     )
 
 
@@ -634,15 +634,14 @@ def _crafted(path: Path, mode: str | None, lines: list[str] | None) -> str:
 def test_health_refuses_logs_it_did_not_write_word_for_word(tmp_path: Path) -> None:
     from px4params.vehicle.flight_log import read_run_ulog
 
-    refusal = "not a log of 'px4params autostart run --ulog' (no driver_instance information)"
-    for name, mode, lines in (
-        ("mode_only.ulg", "manifest", None),
-        ("instances_only.ulg", None, ["INA238#0 ina238 i2c 1 69"]),
-    ):
-        path = _crafted(tmp_path / name, mode, lines)
-        with pytest.raises(ULogError) as e:
-            read_run_ulog(path)
-        assert str(e.value) == f"{path}: {refusal}"
+    refusal = "not a log of 'px4params autostart run --ulog' (no px4params_mode information)"
+    path = _crafted(tmp_path / "instances_only.ulg", None, ["INA238#0 ina238 i2c 1 69"])
+    with pytest.raises(ULogError) as e:
+        read_run_ulog(path)
+    assert str(e.value) == f"{path}: {refusal}"
+    # The mode alone: a run of no devices (an empty manifest's), which never armed.
+    empty = read_run_ulog(_crafted(tmp_path / "mode_only.ulg", "manifest", None))
+    assert (empty.instances, empty.may_arm, empty.arming) == ([], False, [])
     # A driver_instance line is "instance driver bus bus_id address", numbers in decimal.
     for n, line in enumerate(
         ["INA238#0 ina238 i2c one 69", "INA238#0 ina238 i2c 1 0x45", "INA238#0 ina238 i2c 1"]
@@ -750,7 +749,9 @@ def test_a_log_cut_after_a_message_with_no_sample_and_the_silently_missing(tmp_p
 @pytest.mark.issue40
 def test_a_health_code_px4params_does_not_know_reads_as_critical(tmp_path: Path) -> None:
     """driver_health.health is 0 nominal, 1 warning, 2 critical (docs/autostart.md); a code
-    beyond them (a newer writer's) is read as the worst known, critical."""
+    beyond them (a newer writer's, or damage) is read as the worst known, critical, saying so;
+    and a device that ends critical keeps the vehicle from arming, whatever the log's
+    commander said (it said "may arm" beside an empty reason)."""
     from px4params.vehicle.flight_log import read_run_ulog
 
     log = ULogWriter()
@@ -759,14 +760,22 @@ def test_a_health_code_px4params_does_not_know_reads_as_critical(tmp_path: Path)
     log.define("driver_health", [("uint64_t", "timestamp"), ("uint32_t", "device_id"),
                                  ("uint8_t", "health"), ("bool", "registered"),
                                  ("char[24]", "instance")])  # fmt: skip
+    log.define("arming_check", [("uint64_t", "timestamp"), ("bool", "may_arm"),
+                                ("uint8_t", "blocking")])  # fmt: skip
     msg_id = log.subscribe("driver_health")
+    arming_id = log.subscribe("arming_check")
     log.data(msg_id, 1_000_000, INA_ID, 0, True, "INA238#0")
+    log.data(arming_id, 1_000_000, True, 0)
     log.data(msg_id, 2_000_000, INA_ID, 7, True, "INA238#0")
     path = tmp_path / "newer.ulg"
     path.write_bytes(log.getvalue())
-    (ina,) = read_run_ulog(str(path)).instances
-    assert ina.timeline == [(1.0, "nominal", ""), (2.0, "critical", "")]
+    result = read_run_ulog(str(path))
+    (ina,) = result.instances
+    unknown = "health code 7, unknown here: taken as critical"
+    assert ina.timeline == [(1.0, "nominal", ""), (2.0, "critical", unknown)]
     assert (ina.health, ina.device_id) == ("critical", INA_ID)
+    assert (result.arming, result.may_arm) == ([(1.0, True)], False)
+    assert result.failures == [ina.failure_line()] and unknown in result.failures[0]
 
 
 def test_a_benchs_name_is_kept_in_the_log_and_said_by_health(tmp_path: Path, capsys) -> None:
@@ -786,3 +795,38 @@ def test_a_benchs_name_is_kept_in_the_log_and_said_by_health(tmp_path: Path, cap
     assert "px4params_bench_name" not in ULog(str(plain)).msg_info_dict
     assert read_run_ulog(str(plain)).bench_name == ""
     assert _hand_run(HAND_EVENTS).as_dict()["bench_name"] == ""  # a run made without one
+
+
+def test_a_manifest_instance_the_log_tells_nothing_of_is_refused(tmp_path: Path) -> None:
+    # A byte changed in AK09916#0's driver_instance key: the story had the two INA238s only,
+    # "may arm", exit 0, while the log's manifest lists AK09916#0. A run gives every configured
+    # instance a driver story, started or not.
+    from px4params.vehicle.autostart import Configured
+    from px4params.vehicle.flight_log import read_run_ulog, run_ulog
+
+    gadget = Configured("GADGET#0", "GADGET", None, "i2c", 1, 0x20, {})
+    path = tmp_path / "untold.ulg"
+    path.write_bytes(run_ulog(_hand_run(HAND_EVENTS), {}, [gadget]))
+    with pytest.raises(ULogError) as e:
+        read_run_ulog(str(path))
+    assert str(e.value) == (
+        f"{path}: manifest instance GADGET#0 has no driver story (driver_instance): a damaged log?"
+    )
+
+
+@pytest.mark.parametrize(
+    ("key", "value"), [("px4params_duration_us", "G0000000"), ("px4params_seed", "-1")]
+)
+def test_a_run_information_that_is_no_whole_number_is_refused_in_one_line(
+    tmp_path: Path, capsys, key: str, value: str
+) -> None:
+    # It raised ValueError through `px4params health`, with a traceback.
+    log = ULogWriter()
+    log.info("px4params_mode", "manifest")
+    log.info(key, value)
+    path = tmp_path / "damaged.ulg"
+    path.write_bytes(log.getvalue())
+    assert main(["health", str(path)]) == 1
+    assert capsys.readouterr().err == (
+        f"px4params: error: {path}: {key} is {value!r}, not a whole number (a damaged log?)\n"
+    )

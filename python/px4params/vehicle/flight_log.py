@@ -264,12 +264,12 @@ def read_run_ulog(path: str) -> RunResult:
 
     ulog = parse(path, None)
     info = ulog.msg_info_dict
-    lines = ulog.msg_info_multiple_dict.get("driver_instance")
-    if "px4params_mode" not in info or lines is None:
+    if "px4params_mode" not in info:
         raise ULogError(
-            f"{path}: not a log of 'px4params autostart run --ulog' (no driver_instance "
-            "information)"
+            f"{path}: not a log of 'px4params autostart run --ulog' (no px4params_mode information)"
         )
+    # (An empty manifest's run has no driver instance: a run with no devices.)
+    lines = ulog.msg_info_multiple_dict.get("driver_instance", [])
     topics = {(d.name, d.multi_id): d.data for d in ulog.data_list}
     for (topic, multi_id), data in topics.items():
         missing = [f for f in _FIELDS.get(topic, ()) if f not in data]
@@ -302,21 +302,24 @@ def read_run_ulog(path: str) -> RunResult:
             if what == "start" and inst.started_at is None:
                 inst.started_at = t
         instances.append(inst)
+    _check_manifest_told(path, str(info["px4params_mode"]), ulog, instances)
     arming_data = topics.get(("arming_check", 0))
     arming: list[tuple[float, bool]] = []
     if arming_data is not None:
         for stamp, ok in zip(arming_data["timestamp"], arming_data["may_arm"], strict=True):
             if not arming or arming[-1][1] != bool(ok):
                 arming.append((int(stamp) / 1e6, bool(ok)))
-    may_arm = bool(arming and arming[-1][1])
     blocking = [i for i in instances if i.registered and i.health != "nominal"]
+    # A device that ends not nominal keeps the vehicle from arming, whatever the log's last
+    # answer says (a log that says both is damaged, or of a newer writer's codes).
+    may_arm = bool(arming and arming[-1][1]) and not blocking
     clean_end = not ulog.file_corruption and any(
         m.message == END_OF_RUN for m in ulog.logged_messages[-1:]
     )
     return RunResult(
         mode=str(info["px4params_mode"]),
-        seed=int(info.get("px4params_seed", 0)),
-        duration=int(info.get("px4params_duration_us", "0")) / 1e6,
+        seed=_whole(path, info, "px4params_seed"),
+        duration=_whole(path, info, "px4params_duration_us") / 1e6,
         bench=str(info.get("px4params_bench", "")),
         bench_name=str(info.get("px4params_bench_name", "")),
         instances=instances,
@@ -328,6 +331,32 @@ def read_run_ulog(path: str) -> RunResult:
         arming=arming,
         log_cut_at=None if clean_end else _last_moment(ulog),
     )
+
+
+def _whole(path: str, info: Mapping[str, Any], key: str) -> int:
+    """An information value the writer gives as a whole number (0 where the log has none)."""
+    value = info.get(key, 0)
+    if isinstance(value, int) or (isinstance(value, str) and value.isascii() and value.isdigit()):
+        return int(value)
+    raise ULogError(f"{path}: {key} is {str(value)[:40]!r}, not a whole number (a damaged log?)")
+
+
+def _check_manifest_told(
+    path: str, mode: str, ulog: Any, instances: Sequence[InstanceResult]
+) -> None:
+    """Every configured instance of a manifest boot has its driver's story in the log (the
+    run gives each one, started or not): one the log lacks would be left out of the story,
+    and out of the verdict, without a word."""
+    if mode != "manifest":
+        return  # a legacy boot names drivers, and says what it missed (silently_missing)
+    told = {inst.name for inst in instances}
+    for parts in ulog.msg_info_multiple_dict.get("manifest_instance", []):
+        name = "".join(str(part) for part in parts).split(" ", 1)[0]
+        if name not in told:
+            raise ULogError(
+                f"{path}: manifest instance {name} has no driver story (driver_instance): "
+                "a damaged log?"
+            )
 
 
 def _last_moment(ulog: Any) -> float:
@@ -360,13 +389,18 @@ def _health_story(inst: InstanceResult, data: Mapping[str, Any], said: Mapping[A
     codes, stamps = data["health"], data["timestamp"]
     previous = None
     for stamp, code in zip(stamps, codes, strict=True):
+        # A code beyond those known (a newer writer's, or damage) is read as the worst known,
+        # and says so.
         level = HEALTH_NAMES.get(int(code), "critical")
+        unknown = int(code) not in HEALTH_NAMES
         texts = said.get((inst.name, int(stamp)), [])
         reason = texts[-1][1] if texts else ""
         if reason.startswith(f"{level}: "):
             reason = reason[len(level) + 2 :]
         elif reason in ("nominal", level):  # a level logged without a reason (_Stream.on_health)
             reason = ""
+        if unknown and not reason:
+            reason = f"health code {int(code)}, unknown here: taken as critical"
         if level != previous or (texts and reason != inst.reason):
             inst.timeline.append((int(stamp) / 1e6, level, reason))
             inst.reason = reason
