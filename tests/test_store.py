@@ -1434,9 +1434,27 @@ def test_a_copied_store_changes_on_its_own(store: px4params.Store) -> None:
         assert (store.get("INA238#0.current"), store.instances("INA238")) == (327, ["INA238#0"])
         assert copied.instances("INA238") == ["INA238#0", "INA238#1"]
         assert (flat.get_flat(copied, "INA238_0P"), flat.get_flat(store, "INA238_0P")) == (100, 327)
+        assert copied.get("INA238#0.current") == copied.get("INA238#0.current") == 100
     with pytest.raises(TypeError) as refused:
         pickle.dumps(store)
     assert str(refused.value) == (
         "a Store is not pickled: save it to a store file (store.save(path)) and load that "
         "(Store.load(path)), or send store.encoded(name) values"
     )
+
+
+def test_a_copied_store_keeps_the_classic_records_it_was_given(
+    schema: px4params.Schema, tmp_path: Path
+) -> None:
+    import copy
+
+    full = px4params.Store(schema, classic=CLASSIC)
+    full.set("BAT1_CAPACITY", 4200.0)
+    path = tmp_path / "p.store"
+    full.save(path)
+    fewer = px4params.Store(schema, classic=CLASSIC[:1])
+    fewer.load_from(path)
+    copied = copy.copy(fewer)
+    assert copied.kept_classic == ["BAT1_CAPACITY"]
+    copied.reset_to_initial()
+    assert (copied.kept_classic, fewer.kept_classic) == ([], ["BAT1_CAPACITY"])
