@@ -619,6 +619,30 @@ def test_health_messages_word_for_word(tmp_path: Path) -> None:
     assert ak.timeline == [(0.6, "critical", ""), (0.7, "warning", "checksum error in AUX")]
 
 
+def test_samples_are_the_instance_they_name_when_a_driver_instance_line_is_lost(
+    tmp_path: Path,
+) -> None:
+    # INA238#0's driver_instance line damaged (its key no longer "driver_instance"): AK09916#0's
+    # line came first, and the reader gave it INA238#0's samples (multi ID 0), device ID too.
+    # (Found and fixed by a helper, helper-108, on a branch of its own; carried over here.)
+    from px4params.vehicle.flight_log import read_run_ulog, run_ulog
+
+    data = run_ulog(_hand_run(HAND_EVENTS), {})
+    whole = tmp_path / "whole.ulg"
+    whole.write_bytes(data)
+    _, told = read_run_ulog(str(whole)).instances
+    line = b"char[24] driver_instanceINA238#0 "
+    assert data.count(line) == 1
+    path = tmp_path / "damaged.ulg"
+    path.write_bytes(data.replace(line, b"char[24] driver_instancXINA238#0 "))
+    (ak,) = read_run_ulog(str(path)).instances
+    assert ak.name == "AK09916#0"
+    assert ak.timeline == told.timeline == [
+        (0.0, "critical", "starting"), (0.1, "warning", "no answer yet"), (2.3, "nominal", ""),
+    ]  # fmt: skip
+    assert (ak.device_id, ak.transfers, ak.probe_attempts) == (None, 0, 3)
+
+
 def _crafted(path: Path, mode: str | None, lines: list[str] | None) -> str:
     """A ULog with the information px4params health looks for, or not."""
     log = ULogWriter()

@@ -279,19 +279,21 @@ def read_run_ulog(path: str) -> RunResult:
                 f"run --ulog' has {', '.join(_FIELDS[topic])})"
             )
     said = _messages(ulog.logged_messages)
+    health_names = _sample_names(topics, "driver_health")
+    perf_names = _sample_names(topics, "driver_perf")
     instances: list[InstanceResult] = []
-    for multi_id, parts in enumerate(lines):
+    for position, parts in enumerate(lines):
         if not all(isinstance(part, str) for part in parts):  # pyulog: bytes of a non-char type
-            raise ULogError(f"{path}: driver_instance {multi_id}: not text (a char[] value)")
+            raise ULogError(f"{path}: driver_instance {position}: not text (a char[] value)")
         fields = "".join(parts).split(" ")
         if len(fields) != 5 or not fields[3].isdigit() or not fields[4].isdigit():
-            raise ULogError(f"{path}: driver_instance {multi_id}: cannot read {''.join(parts)!r}")
+            raise ULogError(f"{path}: driver_instance {position}: cannot read {''.join(parts)!r}")
         name, driver, kind, bus_id, address = fields
         inst = InstanceResult(name, driver, None, kind, int(bus_id), int(address))
-        health = topics.get(("driver_health", multi_id))
+        health = topics.get(("driver_health", _multi_id_of(name, position, health_names)))
         if health is not None:
             _health_story(inst, health, said)
-        perf = topics.get(("driver_perf", multi_id))
+        perf = topics.get(("driver_perf", _multi_id_of(name, position, perf_names)))
         if perf is not None and len(perf["timestamp"]):
             inst.transfers = int(perf["transfers"][-1])
             inst.bad_transfers = int(perf["errors"][-1])
@@ -331,6 +333,33 @@ def read_run_ulog(path: str) -> RunResult:
         arming=arming,
         log_cut_at=None if clean_end else _last_moment(ulog),
     )
+
+
+def _sample_names(topics: Mapping[tuple[str, int], Any], topic: str) -> dict[int, bytes]:
+    """The instance each multi ID of ``topic`` is about, as its first sample's ``instance``
+    field names it (cut to :data:`NAME_CHARS`); none for a multi ID without samples or field."""
+    names: dict[int, bytes] = {}
+    for (name, multi_id), data in topics.items():
+        if name != topic or "instance[0]" not in data or not len(data["timestamp"]):
+            continue
+        chars = bytearray()
+        while f"instance[{len(chars)}]" in data:  # pyulog: a column per character
+            chars.append(int(data[f"instance[{len(chars)}]"][0]) & 0xFF)
+        names[multi_id] = bytes(chars).split(b"\0", 1)[0]
+    return names
+
+
+def _multi_id_of(name: str, position: int, names: Mapping[int, bytes]) -> int | None:
+    """The multi ID of instance ``name``'s samples: its place among the driver_instance lines,
+    unless the samples there name another instance (a line lost from a damaged log moves the
+    rest up), then the one multi ID whose samples name it."""
+    key = name.encode()[:NAME_CHARS]
+    if names.get(position) == key:
+        return position
+    elsewhere = [multi_id for multi_id, said in names.items() if said == key]
+    if len(elsewhere) == 1:
+        return elsewhere[0]
+    return position if position not in names else None
 
 
 def _whole(path: str, info: Mapping[str, Any], key: str) -> int:
