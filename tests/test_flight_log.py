@@ -854,3 +854,36 @@ def test_a_run_information_that_is_no_whole_number_is_refused_in_one_line(
     assert capsys.readouterr().err == (
         f"px4params: error: {path}: {key} is {value!r}, not a whole number (a damaged log?)\n"
     )
+
+
+@pytest.mark.parametrize(("mode", "may_arm"), [("legacy", True), ("manifest", False)])
+def test_the_verdict_is_the_devices_as_the_mode_judges_them(
+    tmp_path: Path, mode: str, may_arm: bool
+) -> None:
+    # A legacy run that may arm with a device at warning was read back as refused: the
+    # manifest's rule was applied to both (helper-108 found it). The rule is the run's own,
+    # simbench.blocks_arming: with the manifest, every instance not nominal, one no driver
+    # registered too; today, a registered device that is critical.
+    from px4params.vehicle.flight_log import read_run_ulog
+
+    log = ULogWriter()
+    log.info("px4params_mode", mode)
+    log.info("driver_instance", "INA238#0 ina238 i2c 1 69", multi=True)
+    log.info("driver_instance", "AK09916#0 ak09916 i2c 1 12", multi=True)
+    log.define("driver_health", [("uint64_t", "timestamp"), ("uint32_t", "device_id"),
+                                 ("uint8_t", "health"), ("bool", "registered"),
+                                 ("char[24]", "instance")])  # fmt: skip
+    log.define("arming_check", [("uint64_t", "timestamp"), ("bool", "may_arm"),
+                                ("uint8_t", "blocking")])  # fmt: skip
+    ina, ak, arming = (log.subscribe(t) for t in ("driver_health", "driver_health", "arming_check"))
+    log.data(ina, 1_000_000, INA_ID, 1, True, "INA238#0")  # warning, registered
+    log.data(ak, 1_000_000, 0, 2, False, "AK09916#0")  # critical, never registered
+    log.data(arming, 1_000_000, True, 0)
+    path = tmp_path / f"{mode}.ulg"
+    path.write_bytes(log.getvalue())
+    run = read_run_ulog(str(path))
+    assert (run.may_arm, run.verdict) == (may_arm, "may arm" if may_arm else "arming refused")
+    named = [line.split(":")[0] for line in run.failures]
+    assert named == ([] if may_arm else [
+        "ina238 INA238#0 on I2C bus 1 address 0x45", "ak09916 AK09916#0 on I2C bus 1 address 0x0C",
+    ])  # fmt: skip

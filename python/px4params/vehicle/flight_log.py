@@ -260,7 +260,7 @@ def read_run_ulog(path: str) -> RunResult:
     with its health timeline, starts and resets, last perf counters, and the commander's
     answers. :class:`ULogError` for a file that is not such a log."""
     from px4params.formats.ulog import parse
-    from px4params.vehicle.simbench import InstanceResult, RunResult
+    from px4params.vehicle.simbench import InstanceResult, RunResult, blocks_arming
 
     ulog = parse(path, None)
     info = ulog.msg_info_dict
@@ -311,9 +311,16 @@ def read_run_ulog(path: str) -> RunResult:
         for stamp, ok in zip(arming_data["timestamp"], arming_data["may_arm"], strict=True):
             if not arming or arming[-1][1] != bool(ok):
                 arming.append((int(stamp) / 1e6, bool(ok)))
-    blocking = [i for i in instances if i.registered and i.health != "nominal"]
-    # A device that ends not nominal keeps the vehicle from arming, whatever the log's last
-    # answer says (a log that says both is damaged, or of a newer writer's codes).
+    legacy = str(info["px4params_mode"]) == "legacy"
+    # The devices the commander knows of: with the manifest, every one it lists (one nothing
+    # can start too); today (legacy), those a driver registered. One that ends blocking keeps
+    # the vehicle from arming, whatever the log's last answer says (a log that says both is
+    # damaged, or of a newer writer's codes). (This rule, by helper-108, from its branch.)
+    blocking = [
+        i
+        for i in instances
+        if (i.registered or not legacy) and blocks_arming(i.health, legacy=legacy)
+    ]
     may_arm = bool(arming and arming[-1][1]) and not blocking
     clean_end = not ulog.file_corruption and any(
         m.message == END_OF_RUN for m in ulog.logged_messages[-1:]

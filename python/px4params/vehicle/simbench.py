@@ -384,6 +384,14 @@ class _Link:
         return _OK
 
 
+def blocks_arming(health: str, *, legacy: bool) -> bool:
+    """Whether a device the commander knows of, at ``health``, keeps the vehicle from arming.
+    With the manifest: anything but nominal. Today (legacy) only a started sensor that stopped
+    delivering (critical) does; drivers report no health of their own. (The run and the reading
+    of its log both judge by this.)"""
+    return health == "critical" if legacy else health != "nominal"
+
+
 @dataclass
 class InstanceResult:
     """One driver instance after a run."""
@@ -878,11 +886,7 @@ class _Sim:
             self.log(now, "arming", None, may_arm=ok)
 
     def blocks(self, inst: _Instance) -> bool:
-        """Whether ``inst`` keeps the vehicle from arming. With the manifest: anything but
-        nominal. Today (legacy) only a started sensor that stopped delivering (critical) does;
-        drivers report no health of their own."""
-        health = inst.out.health
-        return health == "critical" if self.legacy else health != "nominal"
+        return blocks_arming(inst.out.health, legacy=self.legacy)
 
     def may_arm(self) -> bool:
         return not any(self.blocks(i) for i in self.registered)
