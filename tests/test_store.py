@@ -1073,16 +1073,22 @@ def test_resetting_an_array_length_brings_back_the_defaults_elements(tmp_path: P
     assert store.get("PROBE#0") == {"gain": 4, "cal": [7]}
 
 
+def _with_kept_classic(schema: px4params.Schema, path: Path) -> px4params.Store:
+    """A store of one classic parameter that loaded a file of two: BAT1_CAPACITY is kept."""
+    full = px4params.Store(schema, classic=CLASSIC)
+    full.set("BAT1_CAPACITY", 4200.0)
+    full.save(path)
+    fewer = px4params.Store(schema, classic=CLASSIC[:1])
+    fewer.load_from(path)
+    return fewer
+
+
 @pytest.mark.issue40
 def test_reset_to_initial_forgets_kept_classic_records(
     schema: px4params.Schema, tmp_path: Path
 ) -> None:
-    full = px4params.Store(schema, classic=CLASSIC)
-    full.set("BAT1_CAPACITY", 4200.0)
     path = tmp_path / "p.store"
-    full.save(path)
-    fewer = px4params.Store(schema, classic=CLASSIC[:1])
-    fewer.load_from(path)
+    fewer = _with_kept_classic(schema, path)
     fewer.reset_to_initial()
     fewer.save(path)
     assert px4params.Store.load(path, schema, classic=CLASSIC).get("BAT1_CAPACITY") == -1.0
@@ -1448,12 +1454,8 @@ def test_a_copied_store_keeps_the_classic_records_it_was_given(
 ) -> None:
     import copy
 
-    full = px4params.Store(schema, classic=CLASSIC)
-    full.set("BAT1_CAPACITY", 4200.0)
     path = tmp_path / "p.store"
-    full.save(path)
-    fewer = px4params.Store(schema, classic=CLASSIC[:1])
-    fewer.load_from(path)
+    fewer = _with_kept_classic(schema, path)
     copied = copy.copy(fewer)
     assert copied.kept_classic == ["BAT1_CAPACITY"]
     copied.reset_to_initial()
