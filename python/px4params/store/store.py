@@ -422,8 +422,8 @@ class Store:
         variant's zeros, would leave address 0 after a switch to SPI and back to I2C; PX4's
         flat parameters would keep the address.) None for any other write: the core makes
         it leaf by leaf."""
-        if type(value) is not int:
-            return None
+        if type(value) is not int or not _has_union(p):
+            return None  # (no look-up for the writes of types without a union: most)
         path = leaf
         if not isinstance(path, str):
             try:
@@ -717,6 +717,21 @@ class Store:
 def _one_value(p: _Param) -> str:
     """What a parameter without instances is: a classic one or a shared structured one."""
     return "a classic parameter" if p.classic is not None else "a shared parameter"
+
+
+def _has_union(p: _Param) -> bool:
+    """Whether a structured parameter's type holds a union anywhere (its flat layout, every
+    variant's leaves, has a union tag), worked out once per type."""
+    if p.spec is None:
+        return False
+    data_type = p.spec.data_type
+    found = data_type.derived.get("has_union")
+    if found is None:
+        from px4params.store.flat import layout
+
+        found = any(slot.role == "union_tag" for slot in layout(data_type).slots)
+        data_type.derived["has_union"] = found
+    return bool(found)
 
 
 def _finite_number(value: object) -> bool:
