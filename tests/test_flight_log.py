@@ -717,7 +717,33 @@ def test_a_driver_instance_line_that_is_not_text_is_refused_in_one_line(tmp_path
     bad.write_bytes(data.replace(b"char[24] driver_instance", b"chzr[24] driver_instance"))
     with pytest.raises(ULogError) as e:
         read_run_ulog(str(bad))
-    assert str(e.value) == f"{bad}: driver_instance 0: not text (a char[] value)"
+    assert str(e.value) == (
+        f"{bad}: driver_instance 0 is \"[b'INA238#0 ina238 i2c 1 69']\", not text (a damaged log?)"
+    )
+
+
+@pytest.mark.parametrize(
+    ("key", "value", "shown"),
+    [
+        ("px4params_mode", "manual", "px4params_mode is 'manual', not 'manifest' or 'legacy'"),
+        ("px4params_mode", 7, "px4params_mode is '7', not text"),
+        ("px4params_bench", 3, "px4params_bench is '3', not text"),
+        ("silently_missing", 3, "silently_missing 0 is '[3]', not text"),
+    ],
+)
+def test_a_run_information_that_is_no_text_or_no_mode_is_refused_in_one_line(
+    tmp_path: Path, capsys, key: str, value: object, shown: str
+) -> None:
+    # A mode it does not know was read as a legacy boot's and skipped the manifest's check; a
+    # number where the writer writes text gave a TypeError traceback (helper-108 found both).
+    log = ULogWriter()
+    if key != "px4params_mode":
+        log.info("px4params_mode", "legacy")
+    log.info(key, value, multi=key == "silently_missing")
+    path = tmp_path / "damaged.ulg"
+    path.write_bytes(log.getvalue())
+    assert main(["health", str(path)]) == 1
+    assert capsys.readouterr().err == f"px4params: error: {path}: {shown} (a damaged log?)\n"
 
 
 @pytest.mark.issue40
@@ -771,7 +797,7 @@ def test_a_log_cut_after_a_message_with_no_sample_and_the_silently_missing(tmp_p
 
 
 @pytest.mark.issue40
-def test_a_health_code_px4params_does_not_know_reads_as_critical(tmp_path: Path) -> None:
+def test_a_health_code_px4params_does_not_know_reads_as_critical(tmp_path: Path, capsys) -> None:
     """driver_health.health is 0 nominal, 1 warning, 2 critical (docs/autostart.md); a code
     beyond them (a newer writer's, or damage) is read as the worst known, critical, saying so;
     and a device that ends critical keeps the vehicle from arming, whatever the log's
@@ -791,15 +817,31 @@ def test_a_health_code_px4params_does_not_know_reads_as_critical(tmp_path: Path)
     log.data(msg_id, 1_000_000, INA_ID, 0, True, "INA238#0")
     log.data(arming_id, 1_000_000, True, 0)
     log.data(msg_id, 2_000_000, INA_ID, 7, True, "INA238#0")
+    log.data(msg_id, 2_500_000, INA_ID, 7, True, "INA238#0")
+    log.data(msg_id, 3_000_000, INA_ID, 8, True, "INA238#0")
     path = tmp_path / "newer.ulg"
     path.write_bytes(log.getvalue())
     result = read_run_ulog(str(path))
     (ina,) = result.instances
-    unknown = "health code 7, unknown here: taken as critical"
-    assert ina.timeline == [(1.0, "nominal", ""), (2.0, "critical", unknown)]
+    # 8 after 7 is news (its reason said 7), 7 after 7 is not
+    unknown = "health code {}, unknown here: taken as critical"
+    assert ina.timeline == [
+        (1.0, "nominal", ""), (2.0, "critical", unknown.format(7)),
+        (3.0, "critical", unknown.format(8)),
+    ]  # fmt: skip
     assert (ina.health, ina.device_id) == ("critical", INA_ID)
     assert (result.arming, result.may_arm) == ([(1.0, True)], False)
-    assert result.failures == [ina.failure_line()] and unknown in result.failures[0]
+    failure = f"ina238 INA238#0 on I2C bus 1 address 0x45: critical: {unknown.format(8)}"
+    assert result.failures == [failure]
+    # The story says why the commander's last word is overruled.
+    assert main(["health", str(path)]) == 1
+    lines = capsys.readouterr().out.splitlines()
+    at = lines.index("commander: may arm at 1.00 s")
+    assert lines[at + 1 : at + 3] == [
+        "warning: the commander's last answer is 'may arm', but at 3.00 s, where the log ends "
+        "these devices block arming:",
+        f"  {failure}",
+    ]
 
 
 def test_a_benchs_name_is_kept_in_the_log_and_said_by_health(tmp_path: Path, capsys) -> None:
@@ -883,7 +925,8 @@ def test_the_verdict_is_the_devices_as_the_mode_judges_them(
     path.write_bytes(log.getvalue())
     run = read_run_ulog(str(path))
     assert (run.may_arm, run.verdict) == (may_arm, "may arm" if may_arm else "arming refused")
-    named = [line.split(":")[0] for line in run.failures]
-    assert named == ([] if may_arm else [
-        "ina238 INA238#0 on I2C bus 1 address 0x45", "ak09916 AK09916#0 on I2C bus 1 address 0x0C",
+    # (a level logged without a reason ends the line: it ended in ": ")
+    assert run.failures == ([] if may_arm else [
+        "ina238 INA238#0 on I2C bus 1 address 0x45: warning",
+        "ak09916 AK09916#0 on I2C bus 1 address 0x0C: critical",
     ])  # fmt: skip

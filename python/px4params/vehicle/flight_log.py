@@ -45,6 +45,9 @@ if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
 HEALTH_CODES = {"nominal": 0, "warning": 1, "critical": 2}
 HEALTH_NAMES = {code: name for name, code in HEALTH_CODES.items()}
 
+#: ``px4params_mode`` values: a boot from the manifest, or today's opportunistic start (legacy).
+MODES = ("manifest", "legacy")
+
 #: Characters of an instance name the topics carry (``INA238#0``, ``ist8310@i2c1``).
 NAME_CHARS = 24
 
@@ -268,6 +271,10 @@ def read_run_ulog(path: str) -> RunResult:
         raise ULogError(
             f"{path}: not a log of 'px4params autostart run --ulog' (no px4params_mode information)"
         )
+    mode = _text(path, "px4params_mode", info["px4params_mode"])
+    if mode not in MODES:
+        known = " or ".join(repr(m) for m in MODES)
+        raise ULogError(f"{path}: px4params_mode is {mode[:40]!r}, not {known} (a damaged log?)")
     # (An empty manifest's run has no driver instance: a run with no devices.)
     lines = ulog.msg_info_multiple_dict.get("driver_instance", [])
     topics = {(d.name, d.multi_id): d.data for d in ulog.data_list}
@@ -283,9 +290,7 @@ def read_run_ulog(path: str) -> RunResult:
     perf_names = _sample_names(topics, "driver_perf")
     instances: list[InstanceResult] = []
     for position, parts in enumerate(lines):
-        if not all(isinstance(part, str) for part in parts):  # pyulog: bytes of a non-char type
-            raise ULogError(f"{path}: driver_instance {position}: not text (a char[] value)")
-        fields = "".join(parts).split(" ")
+        fields = _text(path, f"driver_instance {position}", parts).split(" ")
         if len(fields) != 5 or not fields[3].isdigit() or not fields[4].isdigit():
             raise ULogError(f"{path}: driver_instance {position}: cannot read {''.join(parts)!r}")
         name, driver, kind, bus_id, address = fields
@@ -304,14 +309,14 @@ def read_run_ulog(path: str) -> RunResult:
             if what == "start" and inst.started_at is None:
                 inst.started_at = t
         instances.append(inst)
-    _check_manifest_told(path, str(info["px4params_mode"]), ulog, instances)
+    _check_manifest_told(path, mode, ulog, instances)
     arming_data = topics.get(("arming_check", 0))
     arming: list[tuple[float, bool]] = []
     if arming_data is not None:
         for stamp, ok in zip(arming_data["timestamp"], arming_data["may_arm"], strict=True):
             if not arming or arming[-1][1] != bool(ok):
                 arming.append((int(stamp) / 1e6, bool(ok)))
-    legacy = str(info["px4params_mode"]) == "legacy"
+    legacy = mode == "legacy"
     # The devices the commander knows of: with the manifest, every one it lists (one nothing
     # can start too); today (legacy), those a driver registered. One that ends blocking keeps
     # the vehicle from arming, whatever the log's last answer says (a log that says both is
@@ -326,16 +331,17 @@ def read_run_ulog(path: str) -> RunResult:
         m.message == END_OF_RUN for m in ulog.logged_messages[-1:]
     )
     return RunResult(
-        mode=str(info["px4params_mode"]),
+        mode=mode,
         seed=_whole(path, info, "px4params_seed"),
         duration=_whole(path, info, "px4params_duration_us") / 1e6,
-        bench=str(info.get("px4params_bench", "")),
-        bench_name=str(info.get("px4params_bench_name", "")),
+        bench=_text(path, "px4params_bench", info.get("px4params_bench", "")),
+        bench_name=_text(path, "px4params_bench_name", info.get("px4params_bench_name", "")),
         instances=instances,
         may_arm=may_arm,
         failures=[i.failure_line() for i in blocking] if not may_arm else [],
         silently_missing=[
-            "".join(parts) for parts in ulog.msg_info_multiple_dict.get("silently_missing", [])
+            _text(path, f"silently_missing {n}", parts)
+            for n, parts in enumerate(ulog.msg_info_multiple_dict.get("silently_missing", []))
         ],
         arming=arming,
         log_cut_at=None if clean_end else _last_moment(ulog),
@@ -367,6 +373,16 @@ def _multi_id_of(name: str, position: int, names: Mapping[int, bytes]) -> int | 
     if len(elsewhere) == 1:
         return elsewhere[0]
     return position if position not in names else None
+
+
+def _text(path: str, key: str, value: Any) -> str:
+    """An information value the writer gives as text: a string, or a multi-information value's
+    parts (pyulog gives bytes or numbers for a value of another type: a damaged log)."""
+    if isinstance(value, list) and all(isinstance(part, str) for part in value):
+        return "".join(value)
+    if not isinstance(value, str):
+        raise ULogError(f"{path}: {key} is {str(value)[:40]!r}, not text (a damaged log?)")
+    return value
 
 
 def _whole(path: str, info: Mapping[str, Any], key: str) -> int:
@@ -424,11 +440,11 @@ def _messages(logged: Sequence[Any]) -> dict[tuple[str, Any], list[tuple[float, 
 def _health_story(inst: InstanceResult, data: Mapping[str, Any], said: Mapping[Any, Any]) -> None:
     codes, stamps = data["health"], data["timestamp"]
     previous = None
-    for stamp, code in zip(stamps, codes, strict=True):
+    for stamp, code in zip(stamps, map(int, codes), strict=True):
         # A code beyond those known (a newer writer's, or damage) is read as the worst known,
         # and says so.
-        level = HEALTH_NAMES.get(int(code), "critical")
-        unknown = int(code) not in HEALTH_NAMES
+        level = HEALTH_NAMES.get(code, "critical")
+        unknown = code not in HEALTH_NAMES
         texts = said.get((inst.name, int(stamp)), [])
         reason = texts[-1][1] if texts else ""
         if reason.startswith(f"{level}: "):
@@ -436,11 +452,12 @@ def _health_story(inst: InstanceResult, data: Mapping[str, Any], said: Mapping[A
         elif reason in ("nominal", level):  # a level logged without a reason (_Stream.on_health)
             reason = ""
         if unknown and not reason:
-            reason = f"health code {int(code)}, unknown here: taken as critical"
-        if level != previous or (texts and reason != inst.reason):
+            reason = f"health code {code}, unknown here: taken as critical"
+        # By code, not level: two unknown codes in a row are two entries, each with its reason.
+        if code != previous or (texts and reason != inst.reason):
             inst.timeline.append((int(stamp) / 1e6, level, reason))
             inst.reason = reason
-        previous = level
+        previous = code
         inst.health = level
     if len(stamps):
         inst.registered = bool(data["registered"][-1])

@@ -422,7 +422,8 @@ class InstanceResult:
 
     def failure_line(self) -> str:
         """The commander's line for this instance: driver, instance, bus, address, reason."""
-        return f"{self.driver} {self.name} on {self.location}: {self.health}: {self.reason}"
+        reason = f": {self.reason}" if self.reason else ""
+        return f"{self.driver} {self.name} on {self.location}: {self.health}{reason}"
 
     def as_dict(self) -> dict[str, Any]:
         return {

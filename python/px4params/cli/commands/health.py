@@ -60,6 +60,14 @@ def story(result: RunResult, path: str) -> list[str]:
         lines.append(f"first failure: {inst.name} ({inst.driver}) at {t:.2f} s: {reason}")
     changes = ", ".join(f"{'may arm' if ok else 'refused'} at {t:.2f} s" for t, ok in result.arming)
     lines.append(f"commander: {changes or 'no answer logged'}")
+    if result.arming and result.arming[-1][1] and not result.may_arm:
+        # The verdict is the devices' (a damaged log, or one cut between a device's sample and
+        # the commander's next answer): say why it overrules the commander's last word.
+        lines.append(
+            f"warning: the commander's last answer is 'may arm', but {end} these devices block "
+            "arming:"
+        )
+        lines += [f"  {line}" for line in result.failures]
     for inst in result.instances:
         device = f", device ID 0x{inst.device_id:06X}" if inst.device_id else ""
         lines.append(f"{inst.name} ({inst.driver} on {inst.location}{device})")
