@@ -1012,6 +1012,29 @@ class TestTurnByTurn:
     """PX4's parameter protocol (mavlink_parameters.cpp), the MAVLink parameter and command
     protocols, as a ground station sees them, one server turn at a time."""
 
+    def test_a_message_in_the_servers_own_name_is_never_answered(
+        self, turns: tuple[MavlinkParamServer, Station], store: px4params.Store
+    ) -> None:
+        # One forged FTP NAK from system 1 component 1 (the server's own ID, as an echo or a
+        # misconfigured second component would send): the server NAKed it to the sender, and a
+        # sender that was itself answered itself 226,304 times in 10 s (helper-111).
+        server, station = turns
+        own = Station(server, system=1, component=1)
+        try:
+            nak = (struct.pack("<HBBBBBBI", 1, 0, 129, 1, 5, 0, 0, 0) + b"\x07").ljust(251, b"\0")
+            ftp = mavlink.MAVLink_file_transfer_protocol_message(0, 1, 1, list(nak))
+            assert own.exchange(ftp) == []
+            before = store.get("BAT1_CAPACITY")
+            assert own.exchange(set_frame(own.mav, 1, 1, "BAT1_CAPACITY", 1234.0, 9)) == []
+            assert own.exchange(mavlink.MAVLink_param_request_list_message(1, 1)) == []
+            assert store.get("BAT1_CAPACITY") == before
+            assert server.stats["ignored"] == 3 and server.stats["accepted"] == 0
+            # the same from the ground station's ID is a write
+            answer = station.exchange(set_frame(station.mav, 1, 1, "BAT1_CAPACITY", 1234.0, 9))
+            assert values(answer)[0][:2] == ("BAT1_CAPACITY", 1234.0)
+        finally:
+            own.close()
+
     def test_a_list_is_the_hash_then_every_parameter_in_name_order_20_a_turn(
         self, turns: tuple[MavlinkParamServer, Station]
     ) -> None:

@@ -111,6 +111,15 @@ def test_naks_carry_the_right_error(opcode: int, kw: dict[str, Any], error: int)
     assert (reply.opcode, reply.req_opcode, reply.seq, reply.error) == (Op.NAK, opcode, 42, error)
 
 
+@pytest.mark.parametrize("opcode", [Op.ACK, Op.NAK])
+def test_a_response_is_never_answered(opcode: int) -> None:
+    # A NAK answered with a NAK: two servers, or one hearing itself, answered each other forever
+    # (helper-111: 226,304 messages in 10 s from one forged datagram).
+    server = MavftpServer(FILES)
+    assert ask(server, opcode, seq=41, data=b"\x07") == []
+    assert one(server, Op.LIST_DIRECTORY, seq=1, data=b"/").opcode == Op.ACK  # still serving
+
+
 def test_sessions_run_out_and_reset_frees_them() -> None:
     server = MavftpServer(FILES)
     sessions = {one(server, Op.OPEN_FILE_RO, data=b"/top.json").session for _ in range(4)}

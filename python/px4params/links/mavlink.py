@@ -35,7 +35,8 @@ What it does (PX4's ``mavlink_parameters.cpp`` is the model):
   :mod:`px4params.links.mavlink_ftp`; a session is its opener's, a burst read paced as a list).
 * Every ``COMMAND_LONG`` is answered with ``COMMAND_ACK``: accepted, unsupported, or denied when
   its parameters name nothing (NaN, infinities, a message ID beyond 24 bits).
-* Anything else (other messages, other targets, garbage bytes, bad CRCs) is ignored.
+* Anything else (other messages, other targets, garbage bytes, bad CRCs) is ignored, and so is
+  every message that claims this server's own system and component ID (an echo, or forged).
 * With a signing key, MAVLink 2 signing (:mod:`px4params.links.mavlink_signing`): every frame
   sent is signed, and unsigned or wrongly signed frames are dropped and counted (a dropped
   ``PARAM_SET`` in ``stats["param_set_dropped"]``).
@@ -456,6 +457,10 @@ class MavlinkParamServer(ServingLoop):
         return msg.target_system in systems and msg.target_component in (0, self.component_id)
 
     def _handle(self, peer: Address, msg: Any) -> bool:
+        if (msg.get_srcSystem(), msg.get_srcComponent()) == (self.system_id, self.component_id):
+            # Our own ID: an echo of what we sent, another component misconfigured with our ID,
+            # or a forged datagram. Answering it could answer ourselves forever.
+            return False
         kind = msg.get_type()
         if kind == "HEARTBEAT":
             return True

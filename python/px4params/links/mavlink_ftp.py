@@ -15,7 +15,8 @@ A request or response is the ``payload`` (251 bytes) of ``FILE_TRANSFER_PROTOCOL
 
 Supported: ``ResetSessions``, ``TerminateSession``, ``ListDirectory``, ``OpenFileRO``,
 ``ReadFile``, ``BurstReadFile`` and ``CalcFileCRC32``. Anything that would write is refused with
-``NAK FileProtected``, any other opcode with ``NAK UnknownCommand``; unknown paths with ``NAK
+``NAK FileProtected``, any other opcode with ``NAK UnknownCommand`` (a response, ACK or NAK,
+is not answered); unknown paths with ``NAK
 FileNotFound``, reads past the end with ``NAK EOF``, bad sessions with ``NAK InvalidSession``.
 
 Sessions a client abandons (a download interrupted, a ground station closed) are reclaimed once
@@ -146,6 +147,8 @@ class MavftpServer:
         payload = bytes(payload).ljust(_HEADER.size, b"\0")
         seq, session, opcode, size, _, _, _, offset = _HEADER.unpack_from(payload)
         data = payload[_HEADER.size : _HEADER.size + min(size, MAX_DATA)]
+        if opcode in (Op.ACK, Op.NAK):
+            return []  # a response, not a request: answering it, two servers would never stop
         reply = _Reply(seq, session, opcode)
         if opcode == Op.RESET_SESSIONS:
             for mine in [s for s, (_, o) in self._sessions.items() if o == owner]:
