@@ -31,7 +31,7 @@ from px4params.gui.vehicle import (
     _mftp_path,
     parse_health,
 )
-from px4params.links.mavlink import MavlinkParamServer, param_value_of
+from px4params.links.mavlink import MavlinkParamServer, param_set_message, param_value_of
 from px4params.links.mavlink_signing import Signing
 from px4params.store.classic import BUNDLED_CLASSIC
 from px4params.store.session import Session
@@ -249,6 +249,25 @@ def test_a_mask_write_goes_onto_the_mask_last_heard(schema: px4params.Schema) ->
         second = page.write("INA238_INST", was | 0b100, was)
         assert (second.ok, second.value) == (True, 0b111)
         assert served.sets == ["INA238_INST", "INA238_INST"]
+
+
+@pytest.mark.parametrize("name", ["SENS_EXT_I2C_PRBXYZ", "SENS_EXT_I2C_PRB\u00e9", ""])
+def test_a_name_param_id_cannot_carry_is_refused_before_it_is_sent(
+    schema: px4params.Schema, name: str
+) -> None:
+    # pymavlink cut SENS_EXT_I2C_PRBXYZ to 16 characters: the vehicle set and saved
+    # SENS_EXT_I2C_PRB (three times) while the page said "no answer" (helper-111).
+    with _peer(schema) as served, _page(served.address) as page:
+        before = dict(page.values)
+        result = page.write(name, 0, timeout=0.3)
+        assert (result.ok, result.value, result.reason) == (
+            False,
+            None,
+            f"{name}: a MAVLink parameter name is 1 to 16 ASCII characters ({len(name)} given)",
+        )
+        assert served.sets == [] and page.values == before
+    with pytest.raises(ValueError, match="SENS_EXT_I2C_PRBXYZ: a MAVLink parameter name is 1 to"):
+        param_set_message(1, 1, "SENS_EXT_I2C_PRBXYZ", 0, 6)
 
 
 @pytest.mark.issue40

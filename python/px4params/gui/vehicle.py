@@ -23,7 +23,7 @@ from pymavlink.dialects.v20 import common as mavlink
 
 from px4params.errors import CommandError, Px4ParamsError
 from px4params.gcs.codec import f16_from_float, float_from_f16
-from px4params.links.mavlink import param_set_message, param_value_of
+from px4params.links.mavlink import param_name_refusal, param_set_message, param_value_of
 from px4params.reading import METADATA_JSON, read_text
 
 __all__ = ["MavlinkVehicle", "StoreVehicle", "WriteResult"]
@@ -661,6 +661,9 @@ class MavlinkVehicle(_Base):
         ``value`` from: the bits it changes go onto the mask as last heard from the vehicle."""
         from px4params.store.flat import merged_mask
 
+        refusal = param_name_refusal(name)
+        if refusal is not None:  # the message would carry another name, cut short
+            return WriteResult(name, False, None, refusal)
         now = self.values.get(name)
         if was is not None and type(value) is int and type(now) is int and name.endswith("_INST"):
             value = merged_mask(now, was, value)

@@ -78,6 +78,7 @@ from px4params.links.mavlink_signing import Signing, accepted
 from px4params.links.serving import ServingLoop
 from px4params.store import flat
 from px4params.store.session import Session
+from px4params.store.spec import MAX_NAME_LEN
 
 if TYPE_CHECKING:
     from px4params.store.store import Store
@@ -208,8 +209,23 @@ class _RawParamSet(mavlink.MAVLink_param_set_message):  # type: ignore[misc]  # 
 def param_set_message(
     target_system: int, target_component: int, name: str, value: int | float, mav_type: int
 ) -> mavlink.MAVLink_param_set_message:
-    """A ``PARAM_SET`` with the value encoded bytewise (for clients: ``conn.mav.send(msg)``)."""
+    """A ``PARAM_SET`` with the value encoded bytewise (for clients: ``conn.mav.send(msg)``).
+    :class:`ValueError` for a name the message cannot carry whole."""
+    refusal = param_name_refusal(name)
+    if refusal is not None:
+        raise ValueError(refusal)
     return _RawParamSet(target_system, target_component, name, _raw_of(value, mav_type), mav_type)
+
+
+def param_name_refusal(name: str) -> str | None:
+    """Why ``name`` cannot travel in a MAVLink ``param_id`` (16 ASCII characters at most:
+    pymavlink would cut it, and the vehicle would set another parameter), or None."""
+    if not name.isascii() or len(name) > MAX_NAME_LEN or not name:
+        return (
+            f"{name}: a MAVLink parameter name is 1 to {MAX_NAME_LEN} ASCII characters "
+            f"({len(name)} given)"
+        )
+    return None
 
 
 def param_hash(entries: Iterable[ParamEntry]) -> int:
