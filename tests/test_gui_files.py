@@ -264,6 +264,8 @@ def test_a_reviewed_airframe_reads_and_writes_no_file_on_this_computer(
         f"param load {local}\n"
         f"param import {local}\n"
         "param save\n"  # the (scratch) store's own file: harmless, and run
+        "param load\n"  # the store's: it named the server's scratch copy, which does not exist
+        "param import\n"
     )
     review = files.review_file("forum.airframe", airframe, values, metadata)
     assert victim.read_text() == "important\n"
@@ -275,6 +277,8 @@ def test_a_reviewed_airframe_reads_and_writes_no_file_on_this_computer(
         f"forum.airframe:3: param export {tmp_path / 'new.params'}: {why}",
         f"forum.airframe:4: param load {local}: {why}",
         f"forum.airframe:5: param import {local}: {why}",
+        "forum.airframe:7: param load: not run here: it would read the vehicle's saved store",
+        "forum.airframe:8: param import: not run here: it would read the vehicle's saved store",
     ]
 
 

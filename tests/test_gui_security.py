@@ -443,7 +443,7 @@ def test_a_connection_without_a_whole_request_head_is_closed(gui: Gui) -> None:
     # open for as long as the peer liked: 300 such held 300 descriptors for minutes.
     import socket
 
-    from px4params.gui.connections import HEAD_SECONDS
+    from px4params.gui.connections import REQUEST_SECONDS
 
     silent = socket.create_connection(("127.0.0.1", gui.port), timeout=5)
     partial = socket.create_connection(("127.0.0.1", gui.port), timeout=5)
@@ -455,17 +455,53 @@ def test_a_connection_without_a_whole_request_head_is_closed(gui: Gui) -> None:
         async with websockets.connect(
             f"ws://127.0.0.1:{gui.port}/ws", additional_headers=authorized(gui), open_timeout=10
         ) as ws:
-            await asyncio.sleep(HEAD_SECONDS + 2)
+            await asyncio.sleep(REQUEST_SECONDS + 2)
             await ws.ping()
             return "open"
 
     assert asyncio.run(socket_meanwhile()) == "open"
     for conn in (silent, partial):
-        conn.settimeout(max(1.0, HEAD_SECONDS + 5 - (time.monotonic() - started)))
+        conn.settimeout(max(1.0, REQUEST_SECONDS + 5 - (time.monotonic() - started)))
         assert conn.recv(1024) == b""  # closed by the server, nothing answered
         conn.close()
-    assert time.monotonic() - started < HEAD_SECONDS + 5
+    assert time.monotonic() - started < REQUEST_SECONDS + 5
     # A request made whole in time is answered.
+    assert request(gui, "GET", "/api/state", headers=authorized(gui))[0] == 200
+
+
+def test_a_request_trickling_its_body_is_closed(gui: Gui) -> None:
+    # A whole head with the token and Content-Length 100000, then a body byte every 2 s: the
+    # connection stayed open as long as the peer liked (helper-111).
+    import socket
+
+    from px4params.gui.connections import REQUEST_SECONDS
+
+    sock = socket.create_connection(("127.0.0.1", gui.port), timeout=5)
+    token = "".join(f"{k}: {v}\r\n" for k, v in authorized(gui).items())
+    head = (
+        f"POST /api/write HTTP/1.1\r\nHost: {gui.host}\r\n{token}"
+        "Content-Type: application/json\r\nContent-Length: 100000\r\n\r\n"
+    )
+    started = time.monotonic()
+    sock.sendall(head.encode())
+    closed = False
+    for _ in range(int(REQUEST_SECONDS)):  # bounded: one byte every 2 s, 2 * REQUEST_SECONDS s
+        try:
+            sock.sendall(b" ")
+        except OSError:  # reset by the server
+            closed = True
+            break
+        sock.settimeout(2.0)
+        try:
+            if sock.recv(1024) == b"":
+                closed = True
+                break
+        except TimeoutError:
+            continue
+    assert closed
+    assert time.monotonic() - started < REQUEST_SECONDS + 5
+    sock.close()
+    # A whole request in time is answered.
     assert request(gui, "GET", "/api/state", headers=authorized(gui))[0] == 200
 
 
@@ -474,7 +510,7 @@ def test_a_kept_alive_connection_trickling_its_next_head_is_closed(gui: Gui) -> 
     # its first request for as long as the peer liked.
     import http.client
 
-    from px4params.gui.connections import HEAD_SECONDS
+    from px4params.gui.connections import REQUEST_SECONDS
 
     conn = http.client.HTTPConnection("127.0.0.1", gui.port, timeout=10)
     conn.request("GET", "/api/state", headers={"Host": gui.host, **authorized(gui)})
@@ -487,7 +523,7 @@ def test_a_kept_alive_connection_trickling_its_next_head_is_closed(gui: Gui) -> 
     assert sock is not None
     head = b"GET /api/state HTTP/1.1\r\nHost: 127.0.0.1\r\n"
     closed = False
-    for byte in head[: int(HEAD_SECONDS)]:  # bounded: one byte every 2 s, 2 * HEAD_SECONDS s
+    for byte in head[: int(REQUEST_SECONDS)]:  # bounded: one byte every 2 s, 2 * REQUEST_SECONDS s
         try:
             sock.sendall(bytes([byte]))
         except OSError:  # reset by the server
@@ -501,5 +537,5 @@ def test_a_kept_alive_connection_trickling_its_next_head_is_closed(gui: Gui) -> 
         except TimeoutError:
             continue
     assert closed
-    assert time.monotonic() - answered < HEAD_SECONDS + 5
+    assert time.monotonic() - answered < REQUEST_SECONDS + 5
     conn.close()

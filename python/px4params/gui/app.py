@@ -21,7 +21,9 @@ from __future__ import annotations
 
 import asyncio
 import json
+import math
 import os
+import re
 from collections.abc import Iterable
 from typing import Any
 
@@ -63,18 +65,12 @@ def make_app(vehicle: Any, *, token: str, hosts: Iterable[str], cookie: str) -> 
         if refused is not None:
             return refused
         try:
-            changes = (await request.json())["changes"]
+            body = _json(await request.body())
+            changes = body.get("changes") if isinstance(body, dict) else None
             if isinstance(changes, list) and len(changes) > MAX_CHANGES:
                 return _too_many(len(changes))
-            writes = [
-                (
-                    str(c["name"]),
-                    _number(c["value"], str(c["name"]) in floats),
-                    _number(c["was"], False) if "was" in c else None,
-                )
-                for c in changes
-            ]
-        except (ValueError, KeyError, TypeError, RecursionError) as e:  # (nesting too deep)
+            writes = _writes(changes, floats)
+        except (ValueError, RecursionError) as e:  # (nesting too deep)
             return JSONResponse(
                 {"error": f"expected {{'changes': [{{'name', 'value'}}]}}: {e}"}, 400
             )
@@ -89,9 +85,9 @@ def make_app(vehicle: Any, *, token: str, hosts: Iterable[str], cookie: str) -> 
         if refused is not None:
             return refused
         try:
-            body = await request.json()
-            filename, text = str(body["filename"]), str(body["text"])
-        except (ValueError, KeyError, TypeError, RecursionError) as e:  # (nesting too deep)
+            body = _json(await request.body())
+            filename, text = (_text_field(body, key) for key in ("filename", "text"))
+        except (ValueError, RecursionError) as e:  # (nesting too deep)
             return JSONResponse({"error": f"expected {{'filename', 'text'}}: {e}"}, 400)
         store = getattr(vehicle, "store", None)
         try:
@@ -180,13 +176,86 @@ def _foreign(request: Request) -> Response | None:
     return None
 
 
+# A request's body, read whole and checked piece by piece: each refusal names the piece and
+# what it should be, never Python's words for what went wrong inside.
+
+#: Digits a number in a request may have: more than any parameter's range needs.
+_MAX_DIGITS = 40
+_INTEGER = re.compile(r"[+-]?(?:0[xX][0-9A-Fa-f]+|[0-9]+)")
+_REAL = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
+
+
+def _json(raw: bytes) -> Any:
+    def whole(text: str) -> int:
+        if len(text.lstrip("-")) > _MAX_DIGITS:
+            raise ValueError(f"a number of {len(text)} digits (no parameter holds one)")
+        return int(text)
+
+    def real(text: str) -> float:
+        number = float(text)
+        if math.isinf(number):
+            raise ValueError(f"{text[:20]}...: beyond the range of a float")
+        return number
+
+    try:
+        return json.loads(raw, parse_int=whole, parse_float=real)
+    except json.JSONDecodeError as e:
+        raise ValueError(f"not JSON: {e}") from None
+    except UnicodeDecodeError:
+        raise ValueError("not JSON: not UTF-8") from None
+
+
+def _text_field(body: Any, key: str) -> str:
+    if not isinstance(body, dict) or key not in body:
+        raise ValueError(f"the body has no {key!r}")
+    value = body[key]
+    if not isinstance(value, str):
+        raise ValueError(f"{key!r} is {_kind(value)}, not text")
+    return value
+
+
+def _writes(changes: Any, floats: set[str]) -> list[tuple[str, int | float, int | None]]:
+    """The ``(name, value, was)`` of each change of a write's body."""
+    if changes is None:
+        raise ValueError("the body has no 'changes'")
+    if not isinstance(changes, list):
+        raise ValueError(f"'changes' is {_kind(changes)}, not a list")
+    writes = []
+    for n, change in enumerate(changes):
+        if not isinstance(change, dict):
+            raise ValueError(f"change {n} is {_kind(change)}, not an object")
+        for key in ("name", "value"):
+            if key not in change:
+                raise ValueError(f"change {n} has no {key!r}")
+        name = change["name"]
+        if not isinstance(name, str):
+            raise ValueError(f"change {n}: the name is {_kind(name)}, not text")
+        was = int(_number(change["was"], False)) if change.get("was") is not None else None
+        writes.append((name, _number(change["value"], name in floats), was))
+    return writes
+
+
+def _kind(value: Any) -> str:
+    """A JSON value's kind, as the page's author would name it."""
+    names = {bool: "a boolean", str: "text", list: "a list", dict: "an object"}
+    return "null" if value is None else names.get(type(value), "a number")
+
+
 def _number(value: Any, is_float: bool) -> int | float:
-    """A value from the page as the parameter's type carries it (Float or Int32)."""
+    """A value from the page as the parameter's type carries it (Float or Int32): a JSON
+    number, or text spelling one (an integer in decimal or 0x hexadecimal)."""
     if isinstance(value, bool) or not isinstance(value, int | float | str):
-        raise TypeError(f"{value!r} is not a number")
-    number = float(value) if is_float else int(value, 0) if isinstance(value, str) else value
-    if not is_float and isinstance(number, float):
-        if not number.is_integer():
-            raise TypeError(f"{value!r} is not an integer")
-        number = int(number)
-    return number
+        raise ValueError(f"{value!r} is not a number")
+    if isinstance(value, str):
+        pattern = _REAL if is_float else _INTEGER
+        if len(value) > _MAX_DIGITS or not pattern.fullmatch(value):
+            what = "a number" if is_float else "an integer (decimal, or hexadecimal with 0x)"
+            raise ValueError(f"{value[:_MAX_DIGITS]!r} is not {what}")
+        return float(value) if is_float else int(value, 0)
+    if is_float:
+        return float(value)
+    if isinstance(value, float):
+        if not value.is_integer():
+            raise ValueError(f"{value!r} is not an integer")
+        return int(value)
+    return value

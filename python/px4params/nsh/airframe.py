@@ -200,6 +200,10 @@ def _line(
             why = "not run here: it would read or write a file on this computer"
             result.skipped.append(f"{where}: param {args.verb_name} {args.file}: {why}")
             return
+        if not files and args.verb_name in ("load", "import"):  # without FILE: the store's
+            why = "not run here: it would read the vehicle's saved store"
+            result.skipped.append(f"{where}: param {args.verb_name}: {why}")
+            return
         status = args.verb(session, args)
         # compare and greater answer with their status; set-default -s of a parameter this
         # build lacks fails silently and the script runs on, as PX4's scripts do (the reason

@@ -48,7 +48,7 @@ def cmd_gui(args: argparse.Namespace) -> int:
 
     from px4params.gui.admission import allowed_hosts, new_token
     from px4params.gui.app import make_app
-    from px4params.gui.connections import HeadDeadline
+    from px4params.gui.connections import RequestDeadline
     from px4params.gui.vehicle import MavlinkVehicle, StoreVehicle
 
     host, port = args.http
@@ -84,7 +84,7 @@ def cmd_gui(args: argparse.Namespace) -> int:
     # The page sends nothing over its WebSocket: a client's messages are capped as small.
     config = uvicorn.Config(
         app,
-        http=HeadDeadline,  # a connection that sends no request is closed
+        http=RequestDeadline,  # a connection that sends no request is closed
         log_level="warning",
         lifespan="off",
         # uvicorn annotates int but hands it to asyncio.wait_for, which takes seconds as float
