@@ -182,7 +182,10 @@ def _foreign(request: Request) -> Response | None:
 #: Digits a number in a request may have: more than any parameter's range needs.
 _MAX_DIGITS = 40
 _INTEGER = re.compile(r"[+-]?(?:0[xX][0-9A-Fa-f]+|[0-9]+)")
-_REAL = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
+# (NaN and the infinities are numbers here: the store refuses them, naming the parameter.)
+_REAL = re.compile(
+    r"[+-]?(?:(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?|nan|inf(?:inity)?)", re.I
+)
 
 
 def _json(raw: bytes) -> Any:
