@@ -469,6 +469,23 @@ def test_a_connection_without_a_whole_request_head_is_closed(gui: Gui) -> None:
     assert request(gui, "GET", "/api/state", headers=authorized(gui))[0] == 200
 
 
+def _closed_while_trickling(sock: Any, data: bytes) -> bool:
+    """Sends ``data`` a byte every 2 s (bounded: 2 s a byte); whether the server closed the
+    connection meanwhile, answering nothing."""
+    for byte in data:
+        try:
+            sock.sendall(bytes([byte]))
+        except OSError:  # reset by the server
+            return True
+        sock.settimeout(2.0)
+        try:
+            if sock.recv(1024) == b"":
+                return True
+        except TimeoutError:
+            continue
+    return False
+
+
 def test_a_request_trickling_its_body_is_closed(gui: Gui) -> None:
     # A whole head with the token and Content-Length 100000, then a body byte every 2 s: the
     # connection stayed open as long as the peer liked (helper-111).
@@ -484,21 +501,7 @@ def test_a_request_trickling_its_body_is_closed(gui: Gui) -> None:
     )
     started = time.monotonic()
     sock.sendall(head.encode())
-    closed = False
-    for _ in range(int(REQUEST_SECONDS)):  # bounded: one byte every 2 s, 2 * REQUEST_SECONDS s
-        try:
-            sock.sendall(b" ")
-        except OSError:  # reset by the server
-            closed = True
-            break
-        sock.settimeout(2.0)
-        try:
-            if sock.recv(1024) == b"":
-                closed = True
-                break
-        except TimeoutError:
-            continue
-    assert closed
+    assert _closed_while_trickling(sock, b" " * int(REQUEST_SECONDS))
     assert time.monotonic() - started < REQUEST_SECONDS + 5
     sock.close()
     # A whole request in time is answered.
@@ -522,20 +525,6 @@ def test_a_kept_alive_connection_trickling_its_next_head_is_closed(gui: Gui) -> 
     sock = conn.sock
     assert sock is not None
     head = b"GET /api/state HTTP/1.1\r\nHost: 127.0.0.1\r\n"
-    closed = False
-    for byte in head[: int(REQUEST_SECONDS)]:  # bounded: one byte every 2 s, 2 * REQUEST_SECONDS s
-        try:
-            sock.sendall(bytes([byte]))
-        except OSError:  # reset by the server
-            closed = True
-            break
-        sock.settimeout(2.0)
-        try:
-            if sock.recv(1024) == b"":
-                closed = True
-                break
-        except TimeoutError:
-            continue
-    assert closed
+    assert _closed_while_trickling(sock, head[: int(REQUEST_SECONDS)])
     assert time.monotonic() - answered < REQUEST_SECONDS + 5
     conn.close()
