@@ -16,8 +16,8 @@ A request or response is the ``payload`` (251 bytes) of ``FILE_TRANSFER_PROTOCOL
 Supported: ``ResetSessions``, ``TerminateSession``, ``ListDirectory``, ``OpenFileRO``,
 ``ReadFile``, ``BurstReadFile`` and ``CalcFileCRC32``. Anything that would write is refused with
 ``NAK FileProtected``, any other opcode with ``NAK UnknownCommand`` (a response, ACK or NAK,
-is not answered); unknown paths with ``NAK
-FileNotFound``, reads past the end with ``NAK EOF``, bad sessions with ``NAK InvalidSession``.
+is not answered); unknown paths with ``NAK FileNotFound``, reads past the end with ``NAK EOF``,
+bad sessions with ``NAK InvalidSession``.
 
 Sessions a client abandons (a download interrupted, a ground station closed) are reclaimed once
 they have been idle for ``session_idle`` seconds and an open finds no free one: QGroundControl's

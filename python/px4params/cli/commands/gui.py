@@ -84,7 +84,7 @@ def cmd_gui(args: argparse.Namespace) -> int:
     # The page sends nothing over its WebSocket: a client's messages are capped as small.
     config = uvicorn.Config(
         app,
-        http=RequestDeadline,  # a connection that sends no request is closed
+        http=RequestDeadline,  # a request not whole within 10 s closes its connection
         log_level="warning",
         lifespan="off",
         # uvicorn annotates int but hands it to asyncio.wait_for, which takes seconds as float
