@@ -233,9 +233,7 @@ def test_list_read_set(served: tuple[MavlinkParamServer, Client], schema, tmp_pa
     assert [value_of(m) for m in values] == [0x46]
     assert Client.text(got) == ["INA238_1C: type REAL32 refused: the parameter is INT32"]
     errors = [m for m in got if m.get_type() == "PARAM_ERROR"]
-    assert [(e.param_id, e.error) for e in errors] == [
-        ("INA238_1C", mavlink.MAV_PARAM_ERROR_VALUE_OUT_OF_RANGE)
-    ]
+    assert [(e.param_id, e.error) for e in errors] == [("INA238_1C", 7)]  # TYPE_MISMATCH
     assert errors[0].target_system == 255 and errors[0].target_component == 190
     saved = px4params.Store.load(tmp_path / "vehicle.store", schema, classic=CLASSIC)
     assert saved.get("INA238#1.bus.i2c.address") == 0x46
@@ -1232,26 +1230,20 @@ class TestTurnByTurn:
         assert server.store.get("SYS_AUTOSTART") == 4001
 
     @pytest.mark.parametrize(
-        ("name", "value", "kind", "why"),
+        ("name", "value", "kind", "why", "code"),
         [
-            ("INA238_1C", 70.0, REAL32, "INA238_1C: type REAL32 refused: the parameter is INT32"),
-            ("INA238_1C", 70, 5, "INA238_1C: type UINT32 refused: the parameter is INT32"),
-            ("INA238_1C", 70, 4, "INA238_1C: type 4 refused: the parameter is INT32"),
-            (
-                "BAT1_CAPACITY",
-                5,
-                INT32,
-                "BAT1_CAPACITY: type INT32 refused: the parameter is REAL32",
-            ),
-            (
-                "INA238_1C",
-                200,
-                INT32,
-                "INA238_1C: INA238#1: bus.i2c.address: value 200 is out of range "
-                "(expected 0 to 127)",
-            ),
+            # MAV_PARAM_ERROR: 7 TYPE_MISMATCH, 6 TYPE_UNSUPPORTED (common.xml; they were all
+            # 2, VALUE_OUT_OF_RANGE: helper-111)
+            ("INA238_1C", 70.0, REAL32, "INA238_1C: type REAL32 refused: the parameter is INT32",
+             7),
+            ("INA238_1C", 70, 5, "INA238_1C: type UINT32 refused: the parameter is INT32", 6),
+            ("INA238_1C", 70, 4, "INA238_1C: type 4 refused: the parameter is INT32", 6),
+            ("BAT1_CAPACITY", 5, INT32,
+             "BAT1_CAPACITY: type INT32 refused: the parameter is REAL32", 7),
+            ("INA238_1C", 200, INT32, "INA238_1C: INA238#1: bus.i2c.address: value 200 is out of "
+             "range (expected 0 to 127)", mavlink.MAV_PARAM_ERROR_VALUE_OUT_OF_RANGE),
         ],
-    )
+    )  # fmt: skip
     def test_a_refused_write_answers_the_unchanged_value_a_statustext_and_a_param_error(
         self,
         turns: tuple[MavlinkParamServer, Station],
@@ -1259,6 +1251,7 @@ class TestTurnByTurn:
         value: float,
         kind: int,
         why: str,
+        code: int,
     ) -> None:
         server, station = turns
         got = station.exchange(set_frame(station.mav, 1, 1, name, value, kind))
@@ -1271,7 +1264,7 @@ class TestTurnByTurn:
         assert Client.text(got) == [why]
         error = got[-1]
         assert (error.param_id, error.param_index, error.target_system) == (name, index, 255)
-        assert error.error == mavlink.MAV_PARAM_ERROR_VALUE_OUT_OF_RANGE
+        assert error.error == code
         assert server.logged == [f"refused: {why}"]  # type: ignore[attr-defined]
         assert server.stats["refused"] == 1 and server.stats["accepted"] == 0
         assert server.store.get("INA238#1.bus.i2c.address") == 0x45

@@ -101,6 +101,10 @@ CAPABILITIES = (
 )
 _INT32, _REAL32 = mavlink.MAV_PARAM_TYPE_INT32, mavlink.MAV_PARAM_TYPE_REAL32
 _TYPE_NAMES = {_INT32: "INT32", _REAL32: "REAL32", mavlink.MAV_PARAM_TYPE_UINT32: "UINT32"}
+#: MAV_PARAM_ERROR codes common.xml added after the pymavlink we use: a type PX4 has no
+#: parameter of (it has INT32 and REAL32), and the other one of those two.
+_TYPE_UNSUPPORTED = 6
+_TYPE_MISMATCH = 7
 #: STATUSTEXT carries 50 characters per chunk.
 _TEXT_CHUNK = 50
 #: Parameters sent per burst while streaming a list (PX4 sends up to 20 at once over UDP);
@@ -597,7 +601,7 @@ class MavlinkParamServer(ServingLoop):
                 name,
                 found,
                 f"{name}: type {given} refused: the parameter is {_TYPE_NAMES[entry.mav_type]}",
-                mavlink.MAV_PARAM_ERROR_VALUE_OUT_OF_RANGE,
+                _TYPE_MISMATCH if msg.param_type in (_INT32, _REAL32) else _TYPE_UNSUPPORTED,
             )
             return
         value = param_value_of(msg)
