@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import errno
 import os
+import re
 import stat
 
 from px4params._records import TYPE_CHECKING
@@ -124,14 +125,19 @@ def _check_replaceable(target: str, given: str) -> None:
 def _remove_stale(folder: str, base: str) -> None:
     """Removes the temporary files of saves of ``base`` whose process is gone (killed while
     saving); a running save's files are left alone."""
-    prefixes = (f".{base}.", f"{base}.bak.")
+    # Exactly the names a save of ``base`` makes: ``.v.store.20261128.PID.XXXX.tmp`` is a save
+    # of v.store.20261128 (running), not one of v.store by a process 20261128.
+    own = re.compile(
+        rf"\.{re.escape(base)}\.(?P<pid>[0-9]+)\.[A-Za-z0-9_]+\.tmp"
+        rf"|{re.escape(base)}\.bak\.(?P<bak_pid>[0-9]+)\.tmp"
+    )
     with _ignoring_os_errors():
         for name in os.listdir(folder):
-            if not (name.startswith(prefixes) and name.endswith(".tmp")):
+            found = own.fullmatch(name)
+            if found is None:
                 continue
-            rest = name[len(f".{base}.") if name.startswith(".") else len(f"{base}.bak.") :]
-            pid = rest.split(".", 1)[0]
-            if pid.isdigit() and int(pid) != os.getpid() and not _alive(int(pid)):
+            pid = found["pid"] or found["bak_pid"]
+            if int(pid) != os.getpid() and not _alive(int(pid)):
                 with _ignoring_os_errors():
                     os.unlink(os.path.join(folder, name))
 
