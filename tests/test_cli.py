@@ -1195,6 +1195,32 @@ def test_a_symlinked_store_stays_a_link_and_its_file_changes(store: Path) -> Non
     assert not store.with_name("link.store.lock").exists()
 
 
+def test_a_save_into_another_store_waits_for_that_stores_writer(store: Path) -> None:
+    # `param save b.store` wrote without b.store's lock: a writer of b.store in the middle of a
+    # change saved over it after it said "saved" (2 of 120 saves lost; helper-110). Here the
+    # other writer holds the lock, and saves its change 1.5 s later: this save comes after.
+    other = store.with_name("b.store")
+    holder = subprocess.Popen(
+        [sys.executable, "-c", (
+            "import fcntl, os, sys, time\n"
+            "fd = os.open(sys.argv[1] + '.lock', os.O_RDWR | os.O_CREAT)\n"
+            "fcntl.flock(fd, fcntl.LOCK_EX)\n"
+            "print('held', flush=True)\n"
+            "time.sleep(1.5)\n"
+            "open(sys.argv[1], 'wb').write(b'the other writer')\n"
+        ), str(other)],
+        stdout=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    try:
+        assert holder.stdout is not None and holder.stdout.readline() == "held\n"
+        saved = cli("param", "--store", str(store), "save", str(other))
+        assert saved.returncode == 0, saved.stderr
+        assert holder.wait(timeout=30) == 0
+    finally:
+        holder.kill()
+    assert other.read_bytes() == store.read_bytes()  # this save, last
+
+
 def test_temporary_files_of_killed_saves_are_removed(store: Path) -> None:
     dead = 2**22 + 12345  # beyond Linux's default pid_max: no such process
     leftovers = [f".real.store.{dead}.abc123.tmp", f"real.store.bak.{dead}.tmp"]

@@ -521,7 +521,12 @@ def verb_save(s: Session, a: argparse.Namespace) -> int:
         if text:
             size = paramfile.write_exported(file, data)
         else:
-            size = store_file.write_file(file, data, keep_backup=True)
+            from px4params.store.session import StoreLock
+
+            # Under that store's lock: a writer of it in the middle of a change would otherwise
+            # save over this save, which said "saved" (helper-110).
+            with StoreLock(file):
+                size = store_file.write_file(file, data, keep_backup=True)
         print(f"saved {file} ({size} bytes)", file=s.out)
         if text:  # (a store file keeps them)
             _say_kept_classic(s.store, f"not written to {file}")
