@@ -302,13 +302,22 @@ def test_float_values_are_rounded_to_float32() -> None:
     flt_max = 3.4028234663852886e38
     assert classic_value("Float", flt_max) == flt_max
     assert classic_value("Float", -flt_max) == -flt_max
+    # FLT_MAX as C's float.h and PX4's parameter files print it: above it as a double, but it
+    # rounds to it (refused until helper-110 found it); the last double that rounds there too
+    assert classic_value("Float", 3.4028235e38) == flt_max
+    assert classic_value("Float", -3.4028235e38) == -flt_max
+    assert classic_value("Float", math.nextafter(flt_max + 2.0**103, 0)) == flt_max
     assert classic_value("Float", math.inf) == math.inf
+
+
+FLT_MAX = 3.4028234663852886e38
 
 
 @pytest.mark.parametrize(
     ("value", "message"),
     [
         (3.4028236e38, "value 3.4028236e+38 does not fit a float32"),
+        (FLT_MAX + 2.0**103, f"value {FLT_MAX + 2.0**103} does not fit a float32"),  # halfway
         (-1e39, "value -1e+39 does not fit a float32"),
         (2**200, f"value {float(2**200)} does not fit a float32"),
         ("0.5", "expected a number, got '0.5'"),

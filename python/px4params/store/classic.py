@@ -27,7 +27,6 @@ from px4params.cache_file import (
 )
 from px4params.data import CLASSIC_PARAMETERS_JSON
 from px4params.errors import ClassicParamsError
-from px4params.numbers import FLOAT_MAX
 from px4params.reading import CLASSIC_JSON, not_text, read_text
 
 _NAME_START = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZ")
@@ -197,6 +196,8 @@ def classic_value(kind: str, value: Any) -> int | float:
     if not isinstance(value, int | float):
         raise ClassicParamsError(f"expected a number, got {value!r}")
     value = float(value)
-    if math.isfinite(value) and abs(value) > FLOAT_MAX[32]:
-        raise ClassicParamsError(f"value {value} does not fit a float32")
-    return float(struct.unpack("<f", struct.pack("<f", value))[0])
+    try:  # by rounding, not by comparing: 3.4028235e38, float32's largest as printed, rounds to it
+        single = struct.unpack("<f", struct.pack("<f", float(value)))[0]
+    except OverflowError:
+        raise ClassicParamsError(f"value {value} does not fit a float32") from None
+    return float(single)
