@@ -1016,8 +1016,18 @@ def test_a_damaged_store_points_to_its_backup(
     code, _, err = param(capsys, "show")
     assert code == 1
     assert f"the previous save is in {store}.bak: px4params param load {store}.bak" in err
-    assert param(capsys, "load", f"{store}.bak")[0] == 0  # the way back
+    backup = Path(f"{store}.bak").read_bytes()
+    code, out, _ = param(capsys, "load", f"{store}.bak")  # the way back
+    assert code == 0
     assert param(capsys, "instances", "INA238")[1] == "INA238#0\n"
+    # The last good save stays where the refusal pointed, and the damaged file is set aside:
+    # the first save over it made it the .bak (helper-110).
+    assert f"kept the damaged {store} as {store}.damaged; {store}.bak is unchanged" in out
+    assert Path(f"{store}.bak").read_bytes() == backup
+    assert Path(f"{store}.damaged").read_bytes() == bytes(data)
+    recovered = store.read_bytes()
+    param(capsys, "add", "INA238#2")  # and the next save keeps its backup as before
+    assert Path(f"{store}.bak").read_bytes() == recovered != store.read_bytes()
 
 
 def test_saved_files_are_readable_by_others(

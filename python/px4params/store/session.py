@@ -77,6 +77,9 @@ class Session:
         #: error of a file that could not even be looked at, said once.
         self._refused: FileIdentity | None = None
         self._unreadable = ""
+        #: The file did not load (``param load FILE``, the way back): its first save keeps the
+        #: damaged file as ``FILE.damaged`` and leaves ``FILE.bak``, the last good save, alone.
+        self.damaged = False
 
     def done(self) -> None:
         """Records a change; saves it unless a batch is running."""
@@ -115,6 +118,23 @@ class Session:
             write()
         self.deferred.clear()
 
+    def _save_over_damaged(self) -> None:
+        from px4params.store import file as store_file
+
+        aside = self.path + ".damaged"
+        try:
+            with open(self.path, "rb") as f:
+                damaged = f.read()
+        except OSError as e:
+            raise StoreFileError(f"cannot read: {e.strerror}", self.path) from None
+        store_file.write_file(aside, damaged, keep_backup=False)
+        store_file.write_file(self.path, store_file.encode_file(self.store), keep_backup=False)
+        self.store._native.mark_saved()
+        self.damaged = False
+        print(
+            f"kept the damaged {self.path} as {aside}; {self.path}.bak is unchanged", file=self.out
+        )
+
     def commit(self, change: Callable[[], T]) -> T:
         """Applies ``change`` (a function changing :attr:`store`) and saves, under the lock,
         on top of the file's latest content: all of it or, when anything fails (a conflict,
@@ -125,7 +145,10 @@ class Session:
                 with self.store.transaction():
                     result = change()
                     self._merge_latest()
-                    self.store.save(self.path)
+                    if self.damaged:
+                        self._save_over_damaged()
+                    else:
+                        self.store.save(self.path)
             except BaseException as e:
                 self.identity, self._base = kept
                 if isinstance(e, StoreConflictError):
@@ -387,6 +410,9 @@ def open_session(
         except StoreFileError as e:
             if start_empty_if_unreadable:
                 store.reset_to_initial()
+                session = Session(store, path, out or sys.stdout, identity=identity)
+                session.damaged = True
+                return session
             else:
                 backup = path + ".bak"
                 hint = (
