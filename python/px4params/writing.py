@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import errno
 import os
-import re
 import stat
 
 from px4params._records import TYPE_CHECKING
@@ -125,21 +124,33 @@ def _check_replaceable(target: str, given: str) -> None:
 def _remove_stale(folder: str, base: str) -> None:
     """Removes the temporary files of saves of ``base`` whose process is gone (killed while
     saving); a running save's files are left alone."""
-    # Exactly the names a save of ``base`` makes: ``.v.store.20261128.PID.XXXX.tmp`` is a save
-    # of v.store.20261128 (running), not one of v.store by a process 20261128.
-    own = re.compile(
-        rf"\.{re.escape(base)}\.(?P<pid>[0-9]+)\.[A-Za-z0-9_]+\.tmp"
-        rf"|{re.escape(base)}\.bak\.(?P<bak_pid>[0-9]+)\.tmp"
-    )
     with _ignoring_os_errors():
         for name in os.listdir(folder):
-            found = own.fullmatch(name)
-            if found is None:
-                continue
-            pid = found["pid"] or found["bak_pid"]
-            if int(pid) != os.getpid() and not _alive(int(pid)):
+            pid = _saving_pid(name, base)
+            if pid is not None and pid != os.getpid() and not _alive(pid):
                 with _ignoring_os_errors():
                     os.unlink(os.path.join(folder, name))
+
+
+def _saving_pid(name: str, base: str) -> int | None:
+    """The process of a save of ``base`` whose temporary file is ``name``, or None for any
+    other name. Exactly the names such a save makes: ``.v.store.20261128.PID.XXXX.tmp`` is a
+    save of v.store.20261128 (running), not one of v.store by a process 20261128. (Without
+    ``re``: a command that only reads must not pay for importing it.)"""
+    if not name.endswith(".tmp"):
+        return None
+    if name.startswith(f".{base}."):
+        parts = name[len(base) + 2 : -len(".tmp")].split(".")
+        unique = parts[-1] if len(parts) == 2 else ""  # mkstemp's letters, digits and _
+        if unique and unique.replace("_", "").isalnum() and unique.isascii():
+            return _number(parts[0])
+    elif name.startswith(f"{base}.bak."):
+        return _number(name[len(base) + 5 : -len(".tmp")])
+    return None
+
+
+def _number(text: str) -> int | None:
+    return int(text) if text.isascii() and text.isdigit() else None
 
 
 def _alive(pid: int) -> bool:
