@@ -190,8 +190,9 @@ _REAL = re.compile(
 
 def _json(raw: bytes) -> Any:
     def whole(text: str) -> int:
-        if len(text.lstrip("-")) > _MAX_DIGITS:
-            raise ValueError(f"a number of {len(text)} digits (no parameter holds one)")
+        digits = len(text.lstrip("-"))
+        if digits > _MAX_DIGITS:
+            raise ValueError(f"a number of {digits} digits (no parameter holds one)")
         return int(text)
 
     def real(text: str) -> float:

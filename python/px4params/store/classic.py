@@ -197,7 +197,7 @@ def classic_value(kind: str, value: Any) -> int | float:
         raise ClassicParamsError(f"expected a number, got {value!r}")
     value = float(value)
     try:  # by rounding, not by comparing: 3.4028235e38, float32's largest as printed, rounds to it
-        single = struct.unpack("<f", struct.pack("<f", float(value)))[0]
+        single = struct.unpack("<f", struct.pack("<f", value))[0]
     except OverflowError:
         raise ClassicParamsError(f"value {value} does not fit a float32") from None
     return float(single)
