@@ -969,7 +969,7 @@ def test_version_names_package_core_and_dsdl_set() -> None:
         digest.update(b"\0" + f.read_bytes() + b"\0")
     assert proc.stdout.splitlines() == [
         f"px4params {package}",
-        f"core {core} (Rust, px4params-core; store file format 2)",
+        f"core {core} (Rust, px4params-core; store file format 3)",
         f"DSDL px: {len(files)} types (bundled), sha256 {digest.hexdigest()[:16]}",
     ]
     assert len(files) >= 40

@@ -1103,9 +1103,9 @@ def test_a_float32_bound_given_exactly_is_taken_although_the_leaf_keeps_it_above
     ],
 )  # fmt: skip
 def test_a_number_in_a_refusal_is_written_as_a_person_writes_it(value: float, text: str) -> None:
-    from px4params.store.spec import _shown
+    from px4params.store.spec import shown_number
 
-    assert _shown(value) == text
+    assert shown_number(value) == text
 
 
 def _from_bits(code: str, bits: int) -> float:

@@ -149,7 +149,7 @@ def test_truncated_files_are_refused(store: px4params.Store, tmp_path: Path) -> 
     [
         (b"", "not a px4params store file (no PX4P header) (at byte 0)"),
         (b"BSON\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00", "not a px4params store file"),
-        (b"PX4P\x03\x00\x00\x00\x00\x00", "format version 3 (this px4params reads 1 and 2)"),
+        (b"PX4P\x04\x00\x00\x00\x00\x00", "format version 4 (this px4params reads 1 to 3)"),
         (b"PX4P\x01\x00\x00\x00\x00\x00", "file is truncated (no trailer)"),
     ],
 )
@@ -329,6 +329,104 @@ def test_a_refused_load_keeps_unknown_classic_records(
     assert px4params.Store.load(good, schema, classic=CLASSIC).get("BAT1_CAPACITY") == 4200.0
 
 
+# -- a classic parameter whose type changed between PX4 releases --------------------------------
+
+#: COM_DISARM_LAND was an Int32 (whole seconds) and is a Float today; RC10_REV the other way
+#: round (docs/file-formats.md). Here both sets are written down, one per release.
+TODAY = [ClassicParam("COM_DISARM_LAND", "Float", 2.0), ClassicParam("RC10_REV", "Int32", 1)]
+BEFORE = [ClassicParam("COM_DISARM_LAND", "Int32", 2), ClassicParam("RC10_REV", "Float", 1.0)]
+
+
+def _classic_file(records: list[bytes], version: int = 3) -> bytes:
+    return _file(version, zlib.crc32(b""), [_table([]), *records])
+
+
+def _classic_record(name: str, value: bytes, flags: int = 0) -> bytes:
+    """Kind 2 with a value (0x20); ``flags`` 0x40 for a float32 (format 3)."""
+    return bytes([0x02 | 0x20 | flags, len(name)]) + name.encode() + value
+
+
+def test_a_classic_value_saved_as_one_type_is_never_read_as_the_other(
+    schema: px4params.Schema, tmp_path: Path
+) -> None:
+    """A float's bits read as an int32 (2.5 shown as 1075838976) or an int32's read as a float
+    (-1 as NaN, the whole store then refused as damaged) would be values nobody set."""
+    path = tmp_path / "v.store"
+    today = px4params.Store(schema, classic=TODAY)
+    today.set("COM_DISARM_LAND", 2.5)
+    today.set("RC10_REV", -1)
+    today.save(path)
+    before = px4params.Store(schema, classic=BEFORE)
+    report = before.load_from(path)
+    assert report == [
+        "COM_DISARM_LAND: stored as Float 2.5, Int32 in this parameter set: does not fit; "
+        "kept unchanged",
+        "RC10_REV: stored as Int32 -1, Float in this parameter set (its type changed between "
+        "PX4 releases): taken as -1",
+    ]
+    assert before.get("COM_DISARM_LAND") == 2  # its default: 2.5 is no whole number of seconds
+    assert before.get("RC10_REV") == -1.0
+    assert before.kept_classic == ["COM_DISARM_LAND"]
+    # Saved by the older set, the kept record is written back as it was, and today's set reads
+    # 2.5 again (RC10_REV now as the float it became).
+    before.save(path)
+    again = px4params.Store.load(path, schema, classic=TODAY)
+    assert again.get("COM_DISARM_LAND") == 2.5
+    assert again.get("RC10_REV") == -1
+
+
+def test_a_whole_float_is_taken_by_an_int32_and_a_big_integer_is_not_taken_by_a_float(
+    schema: px4params.Schema, tmp_path: Path
+) -> None:
+    path = tmp_path / "v.store"
+    three = struct.pack("<f", 3.0)
+    big = struct.pack("<i", (1 << 24) + 1)  # the first integer a float32 rounds
+    path.write_bytes(
+        _classic_file(
+            [_classic_record("COM_DISARM_LAND", three, 0x40), _classic_record("RC10_REV", big)]
+        )
+    )
+    before = px4params.Store(schema, classic=BEFORE)
+    assert before.load_from(path) == [
+        "COM_DISARM_LAND: stored as Float 3, Int32 in this parameter set (its type changed "
+        "between PX4 releases): taken as 3",
+        "RC10_REV: stored as Int32 16777217, Float in this parameter set: does not fit; kept "
+        "unchanged",
+    ]
+    assert (before.get("COM_DISARM_LAND"), before.get("RC10_REV")) == (3, 1.0)
+
+
+def test_a_kept_record_gives_way_to_a_value_set_since(
+    schema: px4params.Schema, tmp_path: Path
+) -> None:
+    """Two records of one parameter would make the file unreadable: the one set wins."""
+    path = tmp_path / "v.store"
+    path.write_bytes(
+        _classic_file([_classic_record("COM_DISARM_LAND", struct.pack("<f", 2.5), 0x40)])
+    )
+    before = px4params.Store(schema, classic=BEFORE)
+    before.load_from(path)
+    before.set("COM_DISARM_LAND", 4)
+    before.save(path)
+    assert px4params.Store.load(path, schema, classic=BEFORE).get("COM_DISARM_LAND") == 4
+    assert px4params.Store.load(path, schema, classic=TODAY).get("COM_DISARM_LAND") == 4.0
+
+
+def test_a_format_2_classic_record_is_read_as_the_set_has_it(
+    schema: px4params.Schema, tmp_path: Path
+) -> None:
+    """Format 2 did not say a classic record's type: its four bytes are the set's type, as
+    before, and a float flag there is no flag that format knew."""
+    path = tmp_path / "v.store"
+    path.write_bytes(_classic_file([_classic_record("RC10_REV", struct.pack("<i", -1))], version=2))
+    assert px4params.Store.load(path, schema, classic=TODAY).get("RC10_REV") == -1
+    flagged = _classic_record("RC10_REV", struct.pack("<f", -1.0), 0x40)
+    path.write_bytes(_classic_file([flagged], version=2))
+    with pytest.raises(StoreFileError) as refused:
+        px4params.Store.load(path, schema, classic=TODAY)
+    assert str(refused.value) == f"{path}: record is malformed: unknown flags 0x62 (at byte 14)"
+
+
 def test_records_with_impossible_instance_numbers(store: px4params.Store, tmp_path: Path) -> None:
     path = tmp_path / "x.store"
     index = store.parameters.index("INA238")
@@ -358,23 +456,31 @@ def test_crc16_reference_check_value() -> None:
 def test_golden_file_bytes_follow_the_documented_format(schema: px4params.Schema) -> None:
     """The bytes of a small store, written down from docs/store-format.md: header with the
     table's fingerprint, the parameter table, one structured record (an instance of defaults
-    only), one classic record (default and value), CRC-16 per record, CRC-32 trailer."""
-    store = px4params.Store(schema, classic=[ClassicParam("SYS_AUTOSTART", "Int32", 0)])
+    only), two classic records (an int32's default and value; a float32's value, flag 0x40),
+    CRC-16 per record, CRC-32 trailer."""
+    classic = [
+        ClassicParam("SYS_AUTOSTART", "Int32", 0),
+        ClassicParam("BAT1_R_INTERNAL", "Float", -1.0),
+    ]
+    store = px4params.Store(schema, classic=classic)
     store.add("INA238#0")
     store.set_default("SYS_AUTOSTART", 10)
     store.set("SYS_AUTOSTART", 4001)
+    store.set("BAT1_R_INTERNAL", 0.005)
     line = b"INA238=px.Ina238.1"  # the only structured parameter with a record
-    header = b"PX4P" + bytes([2, 0]) + zlib.crc32(line).to_bytes(4, "little")
+    header = b"PX4P" + bytes([3, 0]) + zlib.crc32(line).to_bytes(4, "little")
     table = bytes([0x03, 1, len(line)]) + line  # kind 3, one entry, its length, its text
     structured = bytes([0x01, 0, 0])  # kind 1, no flags, table entry 0, instance 0
-    classic = (
+    autostart = (
         bytes([0x02 | 0x10 | 0x20, 13])
         + b"SYS_AUTOSTART"
         + (10).to_bytes(4, "little", signed=True)
         + (4001).to_bytes(4, "little", signed=True)
     )
+    # 0.005 as a float32 is 0x3BA3D70A
+    resistance = bytes([0x02 | 0x20 | 0x40, 15]) + b"BAT1_R_INTERNAL" + bytes.fromhex("0ad7a33b")
     body = header
-    for record in (table, structured, classic):
+    for record in (table, structured, autostart, resistance):
         body += record + _crc16_ccitt_false(record).to_bytes(2, "little")
     expected = body + zlib.crc32(body).to_bytes(4, "little")
     assert encode_file(store) == expected
@@ -423,8 +529,8 @@ def test_a_format_1_file_of_the_first_bundled_types_loads(store, tmp_path) -> No
     store.load_from(path)
     assert store.instances("INA238") == ["INA238#1"]
     assert store.get("INA238#1.bus.i2c.address") == 0x41
-    store.save(path)  # written back as format 2, with its table
-    assert path.read_bytes()[4] == 2
+    store.save(path)  # written back in today's format, with its table
+    assert path.read_bytes()[4] == 3
     assert px4params.Store.load(path, store.schema, classic=CLASSIC).get("INA238#1") == store.get(
         "INA238#1"
     )
@@ -461,7 +567,7 @@ def test_a_table_entry_this_schema_lacks(store, tmp_path) -> None:
     ("records", "message"),
     [
         ([], "record is malformed: it runs past the end of the file (at byte 10)"),
-        ([bytes([0x01, 0, 0])], "a format 2 file starts with its parameter table"),
+        ([bytes([0x01, 0, 0])], "a file of format 2 or later starts with its parameter table"),
         ([_table(["X"])], "parameter table entry 'X' is not NAME=TYPE.MAJOR"),
         ([_table([])[:1] + b"\x01\x02\xff\xfe"], "a parameter table entry is not ASCII"),
         ([_table([]), _table([])], "record is malformed: a second parameter table"),

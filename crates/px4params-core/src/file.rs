@@ -20,8 +20,11 @@ use crate::translate::TranslateError;
 
 /// The first four bytes of every store file.
 pub const MAGIC: [u8; 4] = *b"PX4P";
-/// The format version [`Writer`] writes.
-pub const FORMAT_VERSION: u8 = 2;
+/// The format version [`Writer`] writes: classic records carry their type
+/// ([`CLASSIC_FLOAT`]).
+pub const FORMAT_VERSION: u8 = 3;
+/// Format 2: classic records without their type (read as the reading store's type).
+pub const FORMAT_2: u8 = 2;
 /// Format 1: no parameter table (records index the writer's whole parameter list).
 pub const FORMAT_1: u8 = 1;
 /// Record kind: a structured parameter's instance.
@@ -34,6 +37,8 @@ pub const KIND_TABLE: u8 = 3;
 pub const HAS_DEFAULT: u8 = 0x10;
 /// Record flag: the record holds a value.
 pub const HAS_VALUE: u8 = 0x20;
+/// Classic record flag (format 3): the four bytes are a float32; without it, an int32.
+pub const CLASSIC_FLOAT: u8 = 0x40;
 /// Magic, version, flags and the table's fingerprint.
 pub const HEADER_LEN: usize = 10;
 /// The CRC-32 of everything before it.
@@ -65,7 +70,7 @@ pub enum FileErrorKind<'a> {
     PastEnd,
     /// A number longer than five bytes.
     LongNumber,
-    /// A format 2 file whose first record is not the table.
+    /// A file (format 2 or later) whose first record is not the table.
     TableFirst,
     /// A table entry with a byte above 127.
     TableNotAscii,
@@ -106,7 +111,7 @@ impl fmt::Display for FileError<'_> {
             K::NotAStoreFile => f.write_str("not a px4params store file (no PX4P header)"),
             K::Version(v) => write!(
                 f,
-                "store file format version {v} (this px4params reads {FORMAT_1} and {FORMAT_VERSION})"
+                "store file format version {v} (this px4params reads {FORMAT_1} to {FORMAT_VERSION})"
             ),
             K::NoTrailer => f.write_str("file is truncated (no trailer)"),
             K::Corrupted => f.write_str(
@@ -119,7 +124,7 @@ impl fmt::Display for FileError<'_> {
             K::RecordCrc => f.write_str("record is corrupted (CRC-16 mismatch)"),
             K::PastEnd => malformed(f, "it runs past the end of the file"),
             K::LongNumber => malformed(f, "a number is too long"),
-            K::TableFirst => malformed(f, "a format 2 file starts with its parameter table"),
+            K::TableFirst => malformed(f, "a file of format 2 or later starts with its parameter table"),
             K::TableNotAscii => malformed(f, "a parameter table entry is not ASCII"),
             K::TableEntry(line) => {
                 f.write_str("record is malformed: parameter table entry ")?;
@@ -185,14 +190,24 @@ fn write_quoted(f: &mut fmt::Formatter<'_>, text: &[u8]) -> fmt::Result {
     write!(f, "{quote}")
 }
 
+/// What a classic parameter's four bytes are.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ClassicType {
+    /// A little-endian int32 (PX4's `INT32`).
+    Int32,
+    /// A little-endian float32 (PX4's `FLOAT`).
+    Float32,
+}
+
 /// A record's key.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Key<'a> {
-    /// A structured parameter: its index in the file's table (format 2), or in the writer's
-    /// list of structured parameters (format 1).
+    /// A structured parameter: its index in the file's table (format 2 and later), or in the
+    /// writer's list of structured parameters (format 1).
     Structured(u64),
-    /// A classic parameter: its name (ASCII as written; not checked).
-    Classic(&'a [u8]),
+    /// A classic parameter: its name (a PX4 parameter name, checked), and its type (`None` in
+    /// a format 1 or 2 file, which did not say).
+    Classic(&'a [u8], Option<ClassicType>),
 }
 
 /// One checked record.
@@ -216,7 +231,7 @@ pub struct Record<'a> {
 #[derive(Clone, Copy, Debug)]
 pub struct Checked<'a> {
     data: &'a [u8],
-    /// Its format version (1 or 2).
+    /// Its format version (1 to [`FORMAT_VERSION`]).
     pub version: u8,
     /// The header's fingerprint: the CRC-32 of the table's lines joined with `\n`.
     pub fingerprint: u32,
@@ -236,7 +251,7 @@ impl<'a> Checked<'a> {
         TableLines { reader, count }
     }
 
-    /// Whether the file has a parameter table (format 2).
+    /// Whether the file has a parameter table (format 2 and later).
     pub fn has_table(&self) -> bool {
         self.table.is_some()
     }
@@ -245,6 +260,7 @@ impl<'a> Checked<'a> {
     pub fn records(&self) -> Records<'a> {
         Records {
             data: self.data,
+            version: self.version,
             pos: self.records,
             end: self.end,
         }
@@ -276,6 +292,7 @@ impl<'a> Iterator for TableLines<'a> {
 #[derive(Clone, Debug)]
 pub struct Records<'a> {
     data: &'a [u8],
+    version: u8,
     pos: usize,
     end: usize,
 }
@@ -287,7 +304,7 @@ impl<'a> Iterator for Records<'a> {
         if self.pos >= self.end {
             return None;
         }
-        let (record, next) = read_record(self.data, self.pos, self.end).ok()?;
+        let (record, next) = read_record(self.data, self.version, self.pos, self.end).ok()?;
         self.pos = next;
         Some(record)
     }
@@ -300,7 +317,7 @@ pub fn check(data: &[u8]) -> Result<Checked<'_>, FileError<'_>> {
         return fail(FileErrorKind::NotAStoreFile, 0);
     }
     let version = data[4];
-    if version != FORMAT_1 && version != FORMAT_VERSION {
+    if !(FORMAT_1..=FORMAT_VERSION).contains(&version) {
         return fail(FileErrorKind::Version(version), 4);
     }
     if data.len() < HEADER_LEN + TRAILER_LEN {
@@ -316,7 +333,7 @@ pub fn check(data: &[u8]) -> Result<Checked<'_>, FileError<'_>> {
     let fingerprint = u32::from_le_bytes(le4(&data[6..]));
     let mut pos = HEADER_LEN;
     let mut table = None;
-    if version >= 2 {
+    if version >= FORMAT_2 {
         let mut reader = Reader::new(data, pos, end);
         let lines_crc = reader.table()?;
         check_crc16(data, pos, reader.pos)?;
@@ -328,7 +345,7 @@ pub fn check(data: &[u8]) -> Result<Checked<'_>, FileError<'_>> {
     }
     let records = pos;
     while pos < end {
-        let (_, next) = read_record(data, pos, end)?;
+        let (_, next) = read_record(data, version, pos, end)?;
         pos = next;
     }
     let checked = Checked {
@@ -362,10 +379,16 @@ fn le4(bytes: &[u8]) -> [u8; 4] {
     out
 }
 
-/// The record at `pos` with its CRC checked, and where the next one starts.
-fn read_record(data: &[u8], pos: usize, end: usize) -> Result<(Record<'_>, usize), FileError<'_>> {
+/// The record at `pos` of a file of format `version`, with its CRC checked, and where the
+/// next one starts.
+fn read_record(
+    data: &[u8],
+    version: u8,
+    pos: usize,
+    end: usize,
+) -> Result<(Record<'_>, usize), FileError<'_>> {
     let mut reader = Reader::new(data, pos, end);
-    let record = reader.record()?;
+    let record = reader.record(version)?;
     check_crc16(data, pos, reader.pos)?;
     Ok((record, reader.pos + 2))
 }
@@ -470,10 +493,12 @@ impl<'a> Reader<'a> {
         Ok(lines_crc)
     }
 
-    fn record(&mut self) -> Result<Record<'a>, FileError<'a>> {
+    fn record(&mut self, version: u8) -> Result<Record<'a>, FileError<'a>> {
         let head = self.byte()?;
         let (kind, flags) = (head & 0x0F, head & 0xF0);
-        if flags & !(HAS_DEFAULT | HAS_VALUE) != 0 {
+        let typed = kind == KIND_CLASSIC && version >= FORMAT_VERSION;
+        let known = HAS_DEFAULT | HAS_VALUE | if typed { CLASSIC_FLOAT } else { 0 };
+        if flags & !known != 0 {
             return self.fail(FileErrorKind::RecordFlags(head));
         }
         let (key, instance, fixed) = match kind {
@@ -483,7 +508,12 @@ impl<'a> Reader<'a> {
                 if !is_classic_name(name) {
                     return self.fail(FileErrorKind::ClassicName(name));
                 }
-                (Key::Classic(name), 0, Some(4))
+                let ty = match flags & CLASSIC_FLOAT {
+                    _ if !typed => None,
+                    0 => Some(ClassicType::Int32),
+                    _ => Some(ClassicType::Float32),
+                };
+                (Key::Classic(name, ty), 0, Some(4))
             }
             KIND_STRUCTURED => {
                 let index = self.varint()?;
@@ -613,18 +643,26 @@ impl<'b> Writer<'b> {
         self.crc16_from(start)
     }
 
-    /// A classic parameter's record (values are the 4 bytes of an int32 or float32).
+    /// A classic parameter's record: its type, and values of four bytes each.
     pub fn classic(
         &mut self,
         name: &[u8],
+        ty: ClassicType,
         default: Option<&[u8]>,
         value: Option<&[u8]>,
     ) -> Result<(), WriteError> {
         if name.is_empty() || name.len() > CLASSIC_NAME_MAX {
             return Err(WriteError::ClassicName);
         }
+        let float = match ty {
+            ClassicType::Int32 => 0,
+            ClassicType::Float32 => CLASSIC_FLOAT,
+        };
         let start = self.len;
-        self.put(&[KIND_CLASSIC | flags(default, value), name.len() as u8])?;
+        self.put(&[
+            KIND_CLASSIC | float | flags(default, value),
+            name.len() as u8,
+        ])?;
         self.put(name)?;
         for payload in [default, value].into_iter().flatten() {
             self.put(payload)?;
@@ -685,8 +723,8 @@ fn flags(default: Option<&[u8]>, value: Option<&[u8]>) -> u8 {
 pub enum FileName<'n> {
     /// A structured parameter: its table line, `NAME=TYPE.MAJOR` (`INA238=px.Ina238.1`).
     Structured(&'n str),
-    /// A classic parameter: its name (`BAT1_CAPACITY`); its values are 4 bytes.
-    Classic(&'n str),
+    /// A classic parameter: its name (`BAT1_CAPACITY`) and type; its values are 4 bytes.
+    Classic(&'n str, ClassicType),
 }
 
 /// The names a store's parameters have in its file, by parameter index: a slice of
@@ -731,7 +769,7 @@ where
     }
     // The table: the structured parameters that have records, in `order`.
     let has_records = |param: u32| match names.name(param) {
-        None | Some(FileName::Classic(_)) => false,
+        None | Some(FileName::Classic(..)) => false,
         Some(FileName::Structured(_)) => {
             let shared = store.def(param).map(|d| d.shared).unwrap_or(false);
             let mut instances = store.instances(param).into_iter().flatten();
@@ -745,7 +783,7 @@ where
         .iter()
         .filter(|&&p| has_records(p))
         .map(|&p| match names.name(p) {
-            Some(FileName::Structured(line) | FileName::Classic(line)) => line,
+            Some(FileName::Structured(line) | FileName::Classic(line, _)) => line,
             None => "",
         });
     let mut w = Writer::new(buf, table)?;
@@ -755,11 +793,11 @@ where
         let instances = store.instances(param).into_iter().flatten();
         match names.name(param) {
             None => {}
-            Some(FileName::Classic(name)) => {
+            Some(FileName::Classic(name, ty)) => {
                 for instance in instances {
                     let (default, value) = differs(store, param, instance);
                     if default.is_some() || value.is_some() {
-                        w.classic(name.as_bytes(), default, value)?;
+                        w.classic(name.as_bytes(), ty, default, value)?;
                     }
                 }
             }
@@ -917,7 +955,7 @@ where
         for record in file.records() {
             let Some(param) = place(names, file, &record) else {
                 match record.key {
-                    Key::Classic(_) => applied.foreign += 1,
+                    Key::Classic(..) => applied.foreign += 1,
                     Key::Structured(_) => {
                         return Err(ApplyError::UnknownParameter {
                             offset: record.offset,
@@ -955,21 +993,26 @@ enum Pass {
     Write,
 }
 
-/// The store's parameter a record is for.
+/// The store's parameter a record is for. A classic record of another type than the
+/// store's parameter of its name is for none: its bytes would be read as the other type.
 fn place(
     names: &(impl FileNames + ?Sized),
     file: &Checked<'_>,
     record: &Record<'_>,
 ) -> Option<u32> {
-    let wanted = match record.key {
-        Key::Classic(name) => FileName::Classic(core::str::from_utf8(name).ok()?),
-        Key::Structured(index) => {
-            FileName::Structured(file.table().nth(usize::try_from(index).ok()?)?)
-        }
+    let table = match record.key {
+        Key::Classic(..) => None,
+        Key::Structured(index) => Some(file.table().nth(usize::try_from(index).ok()?)?),
     };
     (0..)
         .map_while(|p| Some((p, names.name(p)?)))
-        .find(|(_, n)| *n == wanted)
+        .find(|(_, n)| match (*n, record.key) {
+            (FileName::Structured(line), _) => Some(line) == table,
+            (FileName::Classic(name, ty), Key::Classic(stored, stored_ty)) => {
+                name.as_bytes() == stored && stored_ty.map_or(true, |s| s == ty)
+            }
+            (FileName::Classic(..), Key::Structured(_)) => false,
+        })
         .map(|(p, _)| p)
 }
 

@@ -14,6 +14,7 @@ mod store_file;
 
 use common::VecStore;
 use px4params_core::compile::OwnedLayout;
+use px4params_core::file::ClassicType::{self, Float32, Int32};
 use px4params_core::file::{
     self, apply, check, stored_minor, write_store, Applied, ApplyError, FileError, FileErrorKind,
     FileName, FileNames, Key, SaveError, WriteError, Writer,
@@ -22,7 +23,9 @@ use px4params_core::layout::{NodeId, Role};
 use px4params_core::store::{ParamDef, StoreError, Which};
 use px4params_core::Cast::Saturated;
 use px4params_core::{Error, ErrorKind};
-use store_file::{classic_record, crc32, store_file, structured_record, table_record, with_crc16};
+use store_file::{
+    classic_record, crc32, float_record, store_file, structured_record, table_record, with_crc16,
+};
 
 const SENS: u32 = 0;
 const BAT_N_CELLS: u32 = 1;
@@ -34,7 +37,7 @@ const SENS_LINE: &str = "SENS=test.Sensor.1";
 const TRIM_LINE: &str = "TRIM=test.Sensor.1";
 const NAMES: [FileName<'static>; 3] = [
     FileName::Structured(SENS_LINE),
-    FileName::Classic("BAT_N_CELLS"),
+    FileName::Classic("BAT_N_CELLS", ClassicType::Int32),
     FileName::Structured(TRIM_LINE),
 ];
 /// File order: by name.
@@ -108,7 +111,7 @@ fn a_file_is_checked_whole_and_read_out_record_by_record() {
     let first = 10 + 2 + 2 * 19 + 2;
     let offsets: Vec<_> = records.iter().map(|r| r.offset).collect();
     assert_eq!(offsets, [first, first + 19, first + 19 + 9]);
-    assert_eq!(records[0].key, Key::Classic(b"BAT_N_CELLS"));
+    assert_eq!(records[0].key, Key::Classic(b"BAT_N_CELLS", None));
     assert_eq!(records[0].value, Some(&6i32.to_le_bytes()[..]));
     assert_eq!(records[0].default, None);
     assert_eq!(records[0].raw, &bat[..]);
@@ -189,14 +192,14 @@ fn every_refusal_names_what_and_where() {
     let mut magic = good.clone();
     magic[3] = b'Q';
     assert_eq!(refusal(&magic).0, FileErrorKind::NotAStoreFile);
-    let mut v3 = good.clone();
-    v3[4] = 3;
+    let mut v4 = good.clone();
+    v4[4] = 4;
     assert_eq!(
-        refusal(&v3),
+        refusal(&v4),
         (
-            FileErrorKind::Version(3),
+            FileErrorKind::Version(4),
             4,
-            "store file format version 3 (this px4params reads 1 and 2)".into()
+            "store file format version 4 (this px4params reads 1 to 3)".into()
         )
     );
     let mut v0 = good.clone();
@@ -265,7 +268,8 @@ fn every_refusal_names_what_and_where() {
         (
             FileErrorKind::TableFirst,
             10,
-            "record is malformed: a format 2 file starts with its parameter table".into()
+            "record is malformed: a file of format 2 or later starts with its parameter table"
+                .into()
         )
     );
     let not_ascii = store_file(2, &["SENS=\u{e9}"], &[]);
@@ -391,7 +395,7 @@ fn a_bad_record_is_refused_at_its_offset() {
     let two = [0x32, 1, b'X', 1, 2, 3, 4, 5, 6, 7, 8];
     let data = store_file(2, &[SENS_LINE], &[&two]);
     let record = check(&data).unwrap().records().next().unwrap();
-    assert_eq!(record.key, Key::Classic(b"X"));
+    assert_eq!(record.key, Key::Classic(b"X", None));
     assert_eq!(record.default, Some(&[1u8, 2, 3, 4][..]));
     assert_eq!(record.value, Some(&[5u8, 6, 7, 8][..]));
 }
@@ -410,7 +414,7 @@ fn a_classic_record_named_as_no_px4_parameter_is_refused() {
     for name in [&b"A"[..], b"SYS_AUTOSTART", b"Z9_", b"ABCDEFGHIJKLMNOP"] {
         let data = store_file(2, &[SENS_LINE], &[&record(name)]);
         let first = check(&data).unwrap().records().next().unwrap();
-        assert_eq!(first.key, Key::Classic(name));
+        assert_eq!(first.key, Key::Classic(name, None));
     }
     let refused = |name: &[u8]| {
         let (kind, offset, text) = raw_file(&[&table, &with_crc16(&record(name))]);
@@ -445,17 +449,25 @@ fn a_classic_record_named_as_no_px4_parameter_is_refused() {
 fn the_writer_writes_the_documented_bytes() {
     let mut buf = [0u8; 128];
     let mut w = Writer::new(&mut buf, [SENS_LINE, TRIM_LINE]).unwrap();
-    w.classic(b"BAT_N_CELLS", None, Some(&6i32.to_le_bytes()))
+    w.classic(b"BAT_N_CELLS", Int32, None, Some(&6i32.to_le_bytes()))
         .unwrap();
+    w.classic(
+        b"BAT1_V_CHARGED",
+        Float32,
+        None,
+        Some(&4.2f32.to_le_bytes()),
+    )
+    .unwrap();
     w.structured(0, 2, Some(&ADDRESS_22), None).unwrap();
     w.structured(1, 0, None, None).unwrap();
     w.raw(&[0x22, 1, b'X', 1, 0, 0, 0]).unwrap();
     let len = w.finish().unwrap();
     let expected = store_file(
-        2,
+        3,
         &[SENS_LINE, TRIM_LINE],
         &[
             &classic_record("BAT_N_CELLS", 6),
+            &float_record("BAT1_V_CHARGED", 4.2),
             &structured_record(0, 2, Some(&ADDRESS_22), None),
             &structured_record(1, 0, None, None),
             &classic_record("X", 1),
@@ -468,20 +480,20 @@ fn the_writer_writes_the_documented_bytes() {
     w.structured(300, 65535, None, None).unwrap();
     let len = w.finish().unwrap();
     let big = [0x01, 0xAC, 0x02, 0xFF, 0xFF, 0x03];
-    assert_eq!(&buf[..len], &store_file(2, &[SENS_LINE], &[&big])[..]);
+    assert_eq!(&buf[..len], &store_file(3, &[SENS_LINE], &[&big])[..]);
     // A classic record with a default and a value, both four bytes, no lengths.
     let mut buf = [0u8; 64];
     let mut w = Writer::new(&mut buf, [""; 0]).unwrap();
-    w.classic(b"A", Some(&[1, 2, 3, 4]), Some(&[5, 6, 7, 8]))
+    w.classic(b"A", Float32, Some(&[1, 2, 3, 4]), Some(&[5, 6, 7, 8]))
         .unwrap();
     let len = w.finish().unwrap();
-    let both = [0x32, 1, b'A', 1, 2, 3, 4, 5, 6, 7, 8];
-    assert_eq!(&buf[..len], &store_file(2, &[], &[&both])[..]);
+    let both = [0x72, 1, b'A', 1, 2, 3, 4, 5, 6, 7, 8];
+    assert_eq!(&buf[..len], &store_file(3, &[], &[&both])[..]);
 }
 
 #[test]
 fn the_writer_refuses_a_short_buffer_and_a_bad_classic_name() {
-    let expected = store_file(2, &[SENS_LINE], &[&structured_record(0, 0, None, None)]);
+    let expected = store_file(3, &[SENS_LINE], &[&structured_record(0, 0, None, None)]);
     let write = |buf: &mut [u8]| -> Result<usize, WriteError> {
         let mut w = Writer::new(buf, [SENS_LINE])?;
         w.structured(0, 0, None, None)?;
@@ -508,12 +520,15 @@ fn the_writer_refuses_a_short_buffer_and_a_bad_classic_name() {
     let mut buf = [0u8; 64];
     let mut w = Writer::new(&mut buf, [""; 0]).unwrap();
     let four = Some(&[0u8; 4][..]);
-    assert_eq!(w.classic(b"", None, four), Err(WriteError::ClassicName));
     assert_eq!(
-        w.classic(b"SEVENTEEN_LETTERS", None, four),
+        w.classic(b"", Int32, None, four),
         Err(WriteError::ClassicName)
     );
-    assert_eq!(w.classic(b"SIXTEEN_LETTERS_", None, four), Ok(()));
+    assert_eq!(
+        w.classic(b"SEVENTEEN_LETTERS", Int32, None, four),
+        Err(WriteError::ClassicName)
+    );
+    assert_eq!(w.classic(b"SIXTEEN_LETTERS_", Int32, None, four), Ok(()));
     assert_eq!(
         WriteError::ClassicName.to_string(),
         "a classic parameter's name must be 1 to 16 characters"
@@ -531,7 +546,7 @@ fn a_store_is_written_with_what_differs_from_its_defaults() {
         let len = write_store(store, &NAMES[..], &ORDER, [], &mut buf).unwrap();
         buf[..len].to_vec()
     };
-    assert_eq!(save(&f.store), store_file(2, &[], &[]));
+    assert_eq!(save(&f.store), store_file(3, &[], &[]));
     f.store.add(SENS, Some(2)).unwrap();
     f.store.add(SENS, Some(0)).unwrap();
     f.store
@@ -541,7 +556,7 @@ fn a_store_is_written_with_what_differs_from_its_defaults() {
         .set_encoded(&layout, BAT_N_CELLS, 0, Which::Value, &6i32.to_le_bytes())
         .unwrap();
     let expected = store_file(
-        2,
+        3,
         &[SENS_LINE],
         &[
             &classic_record("BAT_N_CELLS", 6),
@@ -563,7 +578,7 @@ fn a_store_is_written_with_what_differs_from_its_defaults() {
     bat.extend(5i32.to_le_bytes());
     bat.extend(6i32.to_le_bytes());
     let expected = store_file(
-        2,
+        3,
         &[SENS_LINE, TRIM_LINE],
         &[
             &bat,
@@ -578,7 +593,7 @@ fn a_store_is_written_with_what_differs_from_its_defaults() {
     let mut buf = [0u8; 256];
     let len = write_store(&f.store, &NAMES[..], &ORDER, [&kept[..]], &mut buf).unwrap();
     let with_kept = store_file(
-        2,
+        3,
         &[SENS_LINE, TRIM_LINE],
         &[
             &bat,
@@ -606,7 +621,12 @@ fn a_store_without_names_or_room_is_not_written() {
     assert_eq!(e.to_string(), "no parameter #2 to save");
     let e = write_store(&f.store, &NAMES[..], &[SENS, 3], [], &mut buf).unwrap_err();
     assert_eq!(e, SaveError::NoName { param: 3 });
-    let more_names = [NAMES[0], NAMES[1], NAMES[2], FileName::Classic("EXTRA")];
+    let more_names = [
+        NAMES[0],
+        NAMES[1],
+        NAMES[2],
+        FileName::Classic("EXTRA", Int32),
+    ];
     let e = write_store(&f.store, &more_names[..], &[3], [], &mut buf).unwrap_err();
     assert_eq!(e, SaveError::NoName { param: 3 });
     let mut small = [0u8; 20];
@@ -693,6 +713,61 @@ fn a_file_is_applied_as_a_load_or_a_merge() {
     assert_eq!(applied(&mut f, &data, true).unwrap().records, 3);
     assert_eq!(present(&f, SENS), [0]);
     assert!(!f.store.slot(SENS, 1).unwrap().unsaved());
+}
+
+#[test]
+fn a_classic_record_says_its_type_from_format_3_on() {
+    fn records(data: &[u8]) -> Vec<Key<'_>> {
+        check(data).unwrap().records().map(|r| r.key).collect()
+    }
+    let both = [classic_record("A", 1), float_record("B", 1.5)];
+    let v3 = store_file(3, &[], &[&both[0], &both[1]]);
+    assert_eq!(
+        records(&v3),
+        [
+            Key::Classic(b"A", Some(Int32)),
+            Key::Classic(b"B", Some(Float32))
+        ]
+    );
+    // Format 2 did not say: the reader's type holds, and the flag is unknown there.
+    let v2 = store_file(2, &[], &[&both[0]]);
+    assert_eq!(records(&v2), [Key::Classic(b"A", None)]);
+    let flagged = store_file(2, &[], &[&both[1]]);
+    assert_eq!(
+        refusal(&flagged),
+        (
+            FileErrorKind::RecordFlags(0x62),
+            14,
+            "record is malformed: unknown flags 0x62".into()
+        )
+    );
+    // A structured record has no such flag in any format.
+    let structured = store_file(3, &[SENS_LINE], &[&[0x41, 0, 0]]);
+    assert_eq!(refusal(&structured).0, FileErrorKind::RecordFlags(0x41));
+}
+
+#[test]
+fn a_classic_record_of_another_type_is_left_out_not_reread() {
+    // BAT_N_CELLS is an int32 here: 6.0's float bits read as an int32 are 1086324736.
+    let table = [SENS_LINE];
+    for (record, taken) in [
+        (float_record("BAT_N_CELLS", 6.0), false),
+        (classic_record("BAT_N_CELLS", 6), true),
+    ] {
+        let mut f = fixture();
+        let data = store_file(3, &table, &[&record]);
+        let applied = applied(&mut f, &data, true).unwrap();
+        assert_eq!(
+            (applied.records, applied.foreign),
+            (usize::from(taken), usize::from(!taken))
+        );
+        let bat = f.store.get(BAT_N_CELLS, 0, Which::Value).unwrap();
+        assert_eq!(bat, if taken { 6i32 } else { 4 }.to_le_bytes());
+    }
+    // In format 2 the name alone places it: the store's type is the only one known.
+    let mut f = fixture();
+    let v2 = store_file(2, &table, &[&classic_record("BAT_N_CELLS", 6)]);
+    assert_eq!(applied(&mut f, &v2, true).unwrap().records, 1);
 }
 
 #[test]
@@ -983,9 +1058,15 @@ fn the_stored_minor_version_is_the_leading_p_version() {
     assert_eq!(stored_minor(&view, eight, &[0x83]), Some((0x83, 3)));
     // Unused here, but the format's constants are the documented ones.
     assert_eq!(
-        (file::MAGIC, file::FORMAT_VERSION, file::FORMAT_1),
-        (*b"PX4P", 2, 1)
+        (
+            file::MAGIC,
+            file::FORMAT_VERSION,
+            file::FORMAT_2,
+            file::FORMAT_1
+        ),
+        (*b"PX4P", 3, 2, 1)
     );
+    assert_eq!(file::CLASSIC_FLOAT, 0x40);
     assert_eq!(
         (file::HEADER_LEN, file::TRAILER_LEN, file::CLASSIC_NAME_MAX),
         (10, 4, 16)

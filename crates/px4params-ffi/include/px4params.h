@@ -19,6 +19,12 @@
 // [`px4p_value::kind`]: a boolean in `u` (0 or 1).
 #define PX4P_VALUE_BOOL 4
 
+// [`px4p_param::classic`]: a classic parameter holding an int32.
+#define PX4P_CLASSIC_INT32 1
+
+// [`px4p_param::classic`]: a classic parameter holding a float32.
+#define PX4P_CLASSIC_FLOAT 2
+
 // A null pointer, or a length that does not fit.
 #define PX4P_ERR_ARGUMENT -1
 
@@ -381,7 +387,8 @@ typedef struct {
   // `NAME=TYPE.MAJOR` of a structured parameter (`INA238=px.Ina238.1`), or a classic
   // parameter's name; NUL-terminated ASCII.
   const char *file_name;
-  // 1 for a classic parameter (4-byte int32 or float32 values), 0 for a structured one.
+  // 0 for a structured parameter; for a classic one (4-byte values) its type, as its
+  // records say it: [`PX4P_CLASSIC_INT32`] or [`PX4P_CLASSIC_FLOAT`].
   uint8_t classic;
   // The type's default, encoded without tail array optimization.
   const uint8_t *type_default;

@@ -18,7 +18,7 @@ use core::ffi::c_char;
 use core::mem::{align_of, size_of, MaybeUninit};
 use core::slice;
 
-use px4params_core::file::{self, ApplyError, FileName, SaveError, WriteError};
+use px4params_core::file::{self, ApplyError, ClassicType, FileName, SaveError, WriteError};
 use px4params_core::layout::{Field, FlatItem, Layout, Node, Segment};
 use px4params_core::store::{ParamDef, Slot, Store, StoreError, Which};
 use px4params_core::{ErrorKind, Scalar};
@@ -62,7 +62,8 @@ pub struct px4p_param {
     /// `NAME=TYPE.MAJOR` of a structured parameter (`INA238=px.Ina238.1`), or a classic
     /// parameter's name; NUL-terminated ASCII.
     pub file_name: *const c_char,
-    /// 1 for a classic parameter (4-byte int32 or float32 values), 0 for a structured one.
+    /// 0 for a structured parameter; for a classic one (4-byte values) its type, as its
+    /// records say it: [`PX4P_CLASSIC_INT32`] or [`PX4P_CLASSIC_FLOAT`].
     pub classic: u8,
     /// The type's default, encoded without tail array optimization.
     pub type_default: *const u8,
@@ -139,6 +140,10 @@ pub const PX4P_VALUE_INT: u8 = 2;
 pub const PX4P_VALUE_FLOAT: u8 = 3;
 /// [`px4p_value::kind`]: a boolean in `u` (0 or 1).
 pub const PX4P_VALUE_BOOL: u8 = 4;
+/// [`px4p_param::classic`]: a classic parameter holding an int32.
+pub const PX4P_CLASSIC_INT32: u8 = 1;
+/// [`px4p_param::classic`]: a classic parameter holding a float32.
+pub const PX4P_CLASSIC_FLOAT: u8 = 2;
 
 /// A null pointer, or a length that does not fit.
 pub const PX4P_ERR_ARGUMENT: i32 = -1;
@@ -313,6 +318,9 @@ pub unsafe extern "C" fn px4p_store_open(
         let Some(default) = table(p.type_default, p.type_default_len) else {
             return PX4P_ERR_TABLES;
         };
+        if p.classic > PX4P_CLASSIC_FLOAT {
+            return PX4P_ERR_TABLES;
+        }
         if let Err(e) = core.set_type_default(&layout, param as u32, default) {
             return store_code(e);
         }
@@ -344,7 +352,8 @@ impl file::FileNames for CNames {
             .ok()?;
         Some(match p.classic {
             0 => FileName::Structured(text),
-            _ => FileName::Classic(text),
+            PX4P_CLASSIC_FLOAT => FileName::Classic(text, ClassicType::Float32),
+            _ => FileName::Classic(text, ClassicType::Int32),
         })
     }
 

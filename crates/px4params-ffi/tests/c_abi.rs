@@ -111,7 +111,7 @@ fn tables() -> Tables {
     };
     let params = leak(vec![
         param(c"SENS=test.Sensor.1", 0, &SENS_DEFAULT),
-        param(c"BAT_N_CELLS", 1, &BAT_DEFAULT),
+        param(c"BAT_N_CELLS", PX4P_CLASSIC_INT32, &BAT_DEFAULT),
         param(c"TRIM=test.Last.1", 0, &TRIM_DEFAULT),
         param(c"LAST=test.Last.1", 0, &LAST_DEFAULT),
     ]);
@@ -411,7 +411,7 @@ fn the_store_holds_the_last_parameter_of_the_table_and_refuses_one_beyond_it() {
     assert_eq!(set_leaf(s, LAST, 1, VALUE, 2, uint(9), 0), 0);
     let saved = save(s).unwrap();
     let expected = store_file(
-        2,
+        3,
         &["LAST=test.Last.1"],
         &[
             &structured_record(0, 0, None),
@@ -519,6 +519,12 @@ fn open_refuses_null_pointers_bad_tables_and_too_little_memory() {
         ..last
     };
     assert_eq!(bad_param(no_default), PX4P_ERR_TABLES);
+    // A classic parameter is an int32 or a float32: a third kind is a table's mistake.
+    let third = px4p_param {
+        classic: PX4P_CLASSIC_FLOAT + 1,
+        ..last
+    };
+    assert_eq!(bad_param(third), PX4P_ERR_TABLES);
     // A type default that does not decode as the type (two of its four bytes).
     let short_default = px4p_param {
         type_default_len: 2,
@@ -704,7 +710,7 @@ fn leaves_are_read_and_written_by_index_with_their_kinds() {
 /// SENS#0 = address 0x22, SENS#2 at its defaults, BAT_N_CELLS = 6, in file order.
 fn saved_file() -> Vec<u8> {
     store_file(
-        2,
+        3,
         &["SENS=test.Sensor.1"],
         &[
             &classic_record("BAT_N_CELLS", 6),
@@ -718,7 +724,7 @@ fn saved_file() -> Vec<u8> {
 fn a_store_is_saved_as_the_store_file_format_says() {
     let s = opened();
     // Nothing differs from a default: a header, an empty table and the trailer.
-    let empty = store_file(2, &[], &[]);
+    let empty = store_file(3, &[], &[]);
     assert_eq!(save(s), Ok(empty.clone()));
     assert_eq!(add(s, SENS, 0), 0);
     assert_eq!(add(s, SENS, 2), 2);
@@ -739,7 +745,7 @@ fn a_store_is_saved_as_the_store_file_format_says() {
     let with_default = store_file::structured_record(0, 2, Some(&SENS_ADDRESS_22), None);
     assert_eq!(with_default[..4], [0x11, 0, 2, 3]);
     let expected = store_file(
-        2,
+        3,
         &["SENS=test.Sensor.1"],
         &[
             &classic_record("BAT_N_CELLS", 6),
@@ -781,6 +787,17 @@ fn a_store_file_is_loaded_in_place_of_the_content_and_saved_back_byte_identical(
     );
     assert_eq!(load(s, &foreign), 1);
     assert_eq!(instances(s, SENS), Ok(vec![1]));
+    // So is one of another type: 6.0's float bits are not six cells.
+    let float = store_file(3, &[], &[&store_file::float_record("BAT_N_CELLS", 6.0)]);
+    assert_eq!(load(s, &float), 0);
+    assert_eq!(get(s, BAT_N_CELLS, 0, VALUE), Ok(BAT_DEFAULT.to_vec()));
+    // A format 2 file did not say: the record is the tables' type.
+    let untyped = store_file(2, &[], &[&classic_record("BAT_N_CELLS", 6)]);
+    assert_eq!(load(s, &untyped), 1);
+    assert_eq!(
+        get(s, BAT_N_CELLS, 0, VALUE),
+        Ok(6i32.to_le_bytes().to_vec())
+    );
 }
 
 #[test]
@@ -793,12 +810,12 @@ fn a_bad_store_file_is_refused_with_its_code_and_the_store_left_as_it_was() {
     flipped[16] ^= 0x01;
     let mut not_a_store = good.clone();
     not_a_store[0] = b'Q';
-    let format_3 = store_file(3, &[], &[]);
+    let format_4 = store_file(4, &[], &[]);
     let cases: Vec<(&str, Vec<u8>, i32)> = vec![
         ("a flipped bit", flipped, PX4P_ERR_FILE),
         ("truncated", good[..good.len() - 1].to_vec(), PX4P_ERR_FILE),
         ("no magic", not_a_store, PX4P_ERR_FILE),
-        ("format 3", format_3, PX4P_ERR_FILE),
+        ("format 4", format_4, PX4P_ERR_FILE),
         (
             "format 1",
             store_file(1, &[], &[&structured_record(0, 0, None)]),

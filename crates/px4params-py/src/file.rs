@@ -2,14 +2,14 @@
 //! firmware reads and writes through the C ABI. Python keeps the file system side (atomic
 //! replace, backups, locking) and version translation.
 
-use px4params_core::file::{self, FileName, Key, SaveError, WriteError};
+use px4params_core::file::{self, ClassicType, FileName, Key, SaveError, WriteError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyList, PyString};
 
 use crate::errors;
 use crate::store::CoreStore;
 
-/// A checked record: `(offset, kind, key, instance, default, value, raw)`.
+/// A checked record: `(offset, kind, key, instance, default, value, raw, classic type)`.
 type RecordTuple<'py> = (
     usize,
     u8,
@@ -18,7 +18,18 @@ type RecordTuple<'py> = (
     Option<Bound<'py, PyBytes>>,
     Option<Bound<'py, PyBytes>>,
     Bound<'py, PyBytes>,
+    u8,
 );
+
+/// A classic parameter's type as a number, as the C ABI's `px4p_param.classic` says it: 1
+/// int32, 2 float32 (0 for a record that does not say, or a structured parameter).
+fn classic_code(ty: Option<ClassicType>) -> u8 {
+    match ty {
+        None => 0,
+        Some(ClassicType::Int32) => 1,
+        Some(ClassicType::Float32) => 2,
+    }
+}
 
 /// A checked file: `(version, fingerprint, table lines or None, records)`.
 type CheckedTuple<'py> = (u8, u32, Option<Vec<String>>, Bound<'py, PyList>);
@@ -38,16 +49,18 @@ pub fn check_store_file<'py>(
     let records = PyList::empty(py);
     let bytes = |b: &[u8]| PyBytes::new(py, b);
     for r in checked.records() {
-        let (kind, key) = match r.key {
-            Key::Structured(index) => (file::KIND_STRUCTURED, index.into_pyobject(py)?.into_any()),
-            // Non-ASCII bytes become U+FFFD, one each (the name is only shown).
-            Key::Classic(name) => {
-                let text: String = name
-                    .iter()
-                    .map(|&b| if b.is_ascii() { b as char } else { '\u{FFFD}' })
-                    .collect();
-                (file::KIND_CLASSIC, text.into_pyobject(py)?.into_any())
-            }
+        let (kind, key, ty) = match r.key {
+            Key::Structured(index) => (
+                file::KIND_STRUCTURED,
+                index.into_pyobject(py)?.into_any(),
+                None,
+            ),
+            // (The core checked the name: upper-case ASCII letters, digits and '_'.)
+            Key::Classic(name, ty) => (
+                file::KIND_CLASSIC,
+                PyString::new(py, &String::from_utf8_lossy(name)).into_any(),
+                ty,
+            ),
         };
         let record: RecordTuple<'py> = (
             r.offset,
@@ -57,6 +70,7 @@ pub fn check_store_file<'py>(
             r.default.map(bytes),
             r.value.map(bytes),
             bytes(r.raw),
+            classic_code(ty),
         );
         records.append(record)?;
     }
@@ -66,15 +80,16 @@ pub fn check_store_file<'py>(
 /// The store's file (see `Store.file_bytes`).
 pub(crate) fn store_file_bytes(
     store: &CoreStore,
-    names: &[(String, bool)],
+    names: &[(String, u8)],
     order: &[u32],
     foreign: &[Vec<u8>],
 ) -> PyResult<Vec<u8>> {
     let names: Vec<FileName<'_>> = names
         .iter()
         .map(|(name, classic)| match classic {
-            true => FileName::Classic(name),
-            false => FileName::Structured(name),
+            0 => FileName::Structured(name),
+            1 => FileName::Classic(name, ClassicType::Int32),
+            _ => FileName::Classic(name, ClassicType::Float32),
         })
         .collect();
     let mut buf = vec![0u8; 4096];

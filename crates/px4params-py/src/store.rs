@@ -183,13 +183,14 @@ impl Store {
         crate::tables::tables(py, self, &roots)
     }
 
-    /// The store's file: `names` per parameter index, `(table line, False)` for a structured
-    /// parameter (`NAME=TYPE.MAJOR`) or `(name, True)` for a classic one; `order` the
-    /// parameters in file order; `foreign` records kept from a loaded file, written back.
+    /// The store's file: `names` per parameter index, `(table line, 0)` for a structured
+    /// parameter (`NAME=TYPE.MAJOR`) or `(name, 1)` for a classic int32, `(name, 2)` for a
+    /// classic float32; `order` the parameters in file order; `foreign` records kept from a
+    /// loaded file, written back.
     fn file_bytes<'py>(
         &self,
         py: Python<'py>,
-        names: Vec<(String, bool)>,
+        names: Vec<(String, u8)>,
         order: Vec<u32>,
         foreign: Vec<Vec<u8>>,
     ) -> PyResult<Bound<'py, PyBytes>> {

@@ -480,9 +480,11 @@ def _say_kept_classic(store: Store, what: str) -> None:
     kept = store.kept_classic
     if kept:
         many = len(kept) > 1
+        # (A name this set has was stored as its other type: see store/file.py)
+        why = " or another type in it" if set(kept) & set(store.parameters) else ""
         print(
             f"px4params: warning: {len(kept)} classic value{'s' if many else ''} of the store "
-            f"{what}: {', '.join(kept)} (not in this parameter set: give --classic the "
+            f"{what}: {', '.join(kept)} (not in this parameter set{why}: give --classic the "
             f"parameters.json that has {'them' if many else 'it'})",
             file=sys.stderr,
         )

@@ -43,6 +43,7 @@ __all__ = [
     "ClassicParam",
     "ClassicParamsError",
     "classic_value",
+    "exact_in_type",
     "load_classic",
 ]
 
@@ -72,6 +73,16 @@ class ClassicParam(NamedTuple):
 
     def __repr__(self) -> str:  # without the entry, which can be long
         return f"ClassicParam(name={self.name!r}, type={self.type!r}, default={self.default!r})"
+
+
+def exact_in_type(value: int | float, is_float: bool) -> int | float | None:
+    """``value`` as a classic parameter of the other type holds it, where no digit is lost: an
+    integer up to 2**24 as a float32, a whole float in int32's range as an integer; else None.
+    (A parameter whose type changed between PX4 releases: RC10_REV, COM_DISARM_LAND.)"""
+    if is_float:  # float32 holds every integer up to 2**24
+        return float(value) if abs(int(value)) <= 1 << 24 else None
+    whole = math.isfinite(value) and float(value).is_integer()
+    return int(value) if whole and INT32_MIN <= value <= INT32_MAX else None
 
 
 def load_classic(path: str | os.PathLike[str]) -> list[ClassicParam]:

@@ -2,7 +2,7 @@
 
 The format is described in ``docs/store-format.md``. In short (integers little-endian)::
 
-    header   "PX4P"  u8 format version (2)  u8 flags (0)  u32 fingerprint of the table
+    header   "PX4P"  u8 format version (3)  u8 flags (0)  u32 fingerprint of the table
     table    the structured parameters the records refer to by index (NAME=TYPE.MAJOR)
     records  u8 kind, key, payloads, u16 CRC-16-CCITT-FALSE of the record's bytes
     trailer  u32 CRC-32 (zlib's) of every byte before it
@@ -41,11 +41,13 @@ from px4params.errors import (
     ValueRangeError,
 )
 from px4params.reading import STORE, read_bytes
-from px4params.store.spec import ParamSpec, check_leaves, leaf_ranges
+from px4params.store.classic import exact_in_type
+from px4params.store.spec import ParamSpec, check_leaves, leaf_ranges, shown_number
 
 if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
     from typing import Any, NamedTuple
 
+    from px4params.store.classic import ClassicParam
     from px4params.store.store import Store, _Param
 else:
     from px4params._records import NamedTuple
@@ -53,6 +55,10 @@ else:
 #: Record kinds, as the core's checked records carry them.
 KIND_STRUCTURED = 1
 KIND_CLASSIC = 2
+#: A classic parameter's type, as the core and the C ABI number it (``px4p_param.classic``);
+#: a classic record of format 2 says none (0).
+CLASSIC_INT32 = 1
+CLASSIC_FLOAT = 2
 
 
 #: Structured parameters bundled after format 1 was replaced: a format 1 file was written by
@@ -87,13 +93,28 @@ def _lines_crc(lines: list[str]) -> int:
 
 def encode_file(store: Store) -> bytes:
     """The store's file content, written by the core (the bytes firmware writes too)."""
+    params = sorted(store._params.values(), key=lambda p: p.index)
     # (a parameter has a spec where it is not classic)
     names = [
-        (p.name, True) if p.classic is not None else (table_lines([p.spec])[0], False)  # type: ignore[list-item]
-        for p in sorted(store._params.values(), key=lambda p: p.index)
+        (p.name, CLASSIC_FLOAT if p.classic.is_float else CLASSIC_INT32)
+        if p.classic is not None
+        else (table_lines([p.spec])[0], 0)  # type: ignore[list-item]
+        for p in params
     ]
     order = [p.index for p in store._order]
-    return bytes(store._native.file_bytes(names, order, list(store._foreign.values())))
+    # A kept record of a parameter this store now writes itself (one of another type, set
+    # here since) gives way: two records of one parameter would make the file unreadable.
+    written = {p.name for p in params if p.classic is not None and _has_record(store, p)}
+    foreign = [raw for name, raw in store._foreign.items() if name not in written]
+    return bytes(store._native.file_bytes(names, order, foreign))
+
+
+def _has_record(store: Store, p: _Param) -> bool:
+    """Whether the core writes a record of classic parameter ``p``: its value or default
+    differs from the type's."""
+    default = store._native.get(p.index, 0, default=True)
+    value = store._native.get(p.index, 0, default=False)
+    return value != default or default != store._type_default(p)
 
 
 def save(store: Store, path: str | os.PathLike[str]) -> int:
@@ -126,6 +147,9 @@ class Record(NamedTuple):
     value: bytes | None
     #: The record's bytes without its CRC.
     raw: bytes = b""
+    #: A classic record's type: :data:`CLASSIC_INT32` or :data:`CLASSIC_FLOAT`; 0 when the
+    #: file (format 2) does not say, and for a structured record.
+    classic_type: int = 0
 
 
 class FileContent(NamedTuple):
@@ -238,7 +262,11 @@ def _apply(
             foreign[record.key] = record.raw
             report.append(f"{record.key}: not a classic parameter of this store; kept unchanged")
             return
-        for payload, default in ((record.default, True), (record.value, False)):
+        payloads = _classic_payloads(param.classic, record, report)
+        if payloads is None:
+            foreign[record.key] = record.raw
+            return
+        for payload, default in zip(payloads, (True, False), strict=True):
             if payload is not None:
                 _check_finite(param, record.key, payload)
                 work.set_encoded(param.index, 0, payload, default=default)
@@ -270,6 +298,33 @@ def _apply(
         value = _current(store, data_type, name, record.value, base, report)
         _check_finite(p, name, value)
         work.set_encoded(p.index, record.instance, value)
+
+
+def _classic_payloads(
+    param: ClassicParam, record: Record, report: list[str]
+) -> tuple[bytes | None, bytes | None] | None:
+    """A classic record's default and value as ``param``'s type holds them. A record of the
+    other type (its parameter's type changed between PX4 releases: RC10_REV, COM_DISARM_LAND)
+    is converted where no digit is lost, and said; else None, and said: the record is kept
+    unchanged. Its bytes are never read as the other type."""
+    stored = record.classic_type
+    if stored == 0 or (stored == CLASSIC_FLOAT) == param.is_float:  # (format 2 did not say)
+        return record.default, record.value
+    was = "Float" if stored == CLASSIC_FLOAT else "Int32"
+    numbers = [
+        None if payload is None else struct.unpack("<f" if was == "Float" else "<i", payload)[0]
+        for payload in (record.default, record.value)
+    ]
+    exact = [None if n is None else exact_in_type(n, param.is_float) for n in numbers]
+    shown = ", ".join(shown_number(n, 32) for n in numbers if n is not None)
+    said = f"{record.key}: stored as {was} {shown}, {param.type} in this parameter set"
+    if any(e is None for n, e in zip(numbers, exact, strict=True) if n is not None):
+        report.append(f"{said}: does not fit; kept unchanged")
+        return None
+    taken = ", ".join(shown_number(e, 32) for e in exact if e is not None)
+    report.append(f"{said} (its type changed between PX4 releases): taken as {taken}")
+    pack = "<f" if param.is_float else "<i"
+    return tuple(None if e is None else struct.pack(pack, e) for e in exact)  # type: ignore[return-value]
 
 
 def _check_finite(p: _Param, name: str, payload: bytes) -> None:

@@ -35,6 +35,7 @@ from px4params.formats.keys import unknown_key
 from px4params.formats.qgc_params import format_line
 from px4params.numbers import load_json
 from px4params.reading import PARAM_FILE, not_text, read_text
+from px4params.store.classic import exact_in_type
 from px4params.store.store import Key, Store
 
 JSON_FORMAT = "px4params"
@@ -278,11 +279,7 @@ def _of_type(
         return value
     names = {qgc_params.INT32: "INT32 (6)", qgc_params.REAL32: "REAL32 (9)"}
     said = f"{where}: {name}: {names[row.type]} in the file, {names[expected]} here"
-    if is_float:  # float32 holds every integer up to 2**24
-        exact = float(value) if abs(int(value)) <= 1 << 24 else None
-    else:
-        whole = float(value).is_integer() and -(1 << 31) <= value < 1 << 31
-        exact = int(value) if whole else None
+    exact = exact_in_type(value, is_float)
     if exact is None:
         report.append(f"{said}: {_shown(value)} does not fit; skipped")
         return None

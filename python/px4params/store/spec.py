@@ -369,7 +369,7 @@ def check_stored(
     ``forcible``: a value beyond the leaf's type too, which no write can store."""
     if rng.float_bits and not math.isfinite(value):
         raise ValueRangeError(
-            f"{name}: {_shown(value)} is not a finite number ({rng.type}: NaN and infinities "
+            f"{name}: {shown_number(value)} is not a finite number ({rng.type}: NaN and infinities "
             "are refused)"
         )
     if not bounds:
@@ -442,14 +442,14 @@ def stored_number(value: object, rng: LeafRange) -> int | float | None:
 
 def describe_outside(value: float, rng: LeafRange, bits: int = 64) -> str:
     """``0 is outside 0.00001..0.1 (@min/@max)`` (or below @min / above @max alone); ``value``
-    a float of ``bits``, the bounds as the doc gives them (see :func:`_shown`)."""
-    shown = _shown(value, bits)
+    a float of ``bits``, the bounds as the doc gives them (see :func:`shown_number`)."""
+    shown = shown_number(value, bits)
     if rng.low is not None and rng.high is not None:
-        return f"{shown} is outside {_shown(rng.low)}..{_shown(rng.high)} (@min/@max)"
+        return f"{shown} is outside {shown_number(rng.low)}..{shown_number(rng.high)} (@min/@max)"
     if rng.low is not None:
-        return f"{shown} is below {_shown(rng.low)} (@min)"
+        return f"{shown} is below {shown_number(rng.low)} (@min)"
     assert rng.high is not None  # a value outside a range that has a bound
-    return f"{shown} is above {_shown(rng.high)} (@max)"
+    return f"{shown} is above {shown_number(rng.high)} (@max)"
 
 
 #: A value list longer than this is named by its numbers alone (PX4's rotations are 41).
@@ -460,10 +460,10 @@ def describe_not_listed(value: float, rng: LeafRange, bits: int = 64) -> str:
     """``7 is not one of its values (@value): 0 (10 Hz), 1 (20 Hz), 2 (50 Hz)``; a long
     list by its numbers, runs shortened (``0..40``); ``value`` a float of ``bits``."""
     if len(rng.values) <= _NAMED_AT_MOST:
-        allowed = ", ".join(f"{_shown(v)} ({text})" for v, text in rng.values)
+        allowed = ", ".join(f"{shown_number(v)} ({text})" for v, text in rng.values)
     else:
         allowed = _runs(sorted(v for v, _ in rng.values))
-    return f"{_shown(value, bits)} is not one of its values (@value): {allowed}"
+    return f"{shown_number(value, bits)} is not one of its values (@value): {allowed}"
 
 
 def _runs(numbers: list[int | float | bool]) -> str:
@@ -475,7 +475,8 @@ def _runs(numbers: list[int | float | bool]) -> str:
         else:
             runs.append([n, n])
     return ", ".join(
-        _shown(low) if low == high else f"{_shown(low)}..{_shown(high)}" for low, high in runs
+        shown_number(low) if low == high else f"{shown_number(low)}..{shown_number(high)}"
+        for low, high in runs
     )
 
 
@@ -494,7 +495,7 @@ def _rounded(value: float, bits: int) -> float:
         return float(value)
 
 
-def _shown(value: float, bits: int = 64) -> str:
+def shown_number(value: float, bits: int = 64) -> str:
     """A number as a person writes it: ``0``, ``-1``, ``0.00001``, ``nan``, ``-inf``; a float
     as the fewest digits that read back as the same float of ``bits`` (16, 32, 64): a float32
     just above @max 0.1 is ``0.10000001``, never ``0.1`` (two numbers a refusal shows differ)."""

@@ -149,14 +149,16 @@ class Store:
             self._destructured = self.destructured
             if verdict is not None:
                 write_cached(*verdict, True)
-        #: Classic records of a loaded file whose parameters this store lacks, kept to be saved.
+        #: Classic records of a loaded file whose parameters this store lacks (or has as the
+        #: other type), kept to be saved.
         self._foreign: dict[str, bytes] = {}
 
     @property
     def kept_classic(self) -> list[str]:
-        """Classic parameters of a loaded file that this store's set lacks (another
-        ``--classic`` parameters.json): their values are kept and saved with the store, but no
-        command of this set shows, exports or resets them."""
+        """Classic parameters of a loaded file that this store's set lacks, or has as the other
+        type where the value does not fit it (another ``--classic`` parameters.json): their
+        values are kept and saved with the store, but no command of this set shows, exports or
+        resets them."""
         return sorted(self._foreign)
 
     @property

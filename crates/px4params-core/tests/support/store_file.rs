@@ -61,7 +61,7 @@ pub fn store_file(version: u8, table: &[&str], records: &[&[u8]]) -> Vec<u8> {
     let mut file = b"PX4P".to_vec();
     file.extend([version, 0]);
     file.extend(crc32(table.join("\n").as_bytes()).to_le_bytes());
-    if version == 2 {
+    if version >= 2 {
         file.extend(with_crc16(&table_record(table)));
     }
     for record in records {
@@ -81,9 +81,19 @@ pub fn table_record(table: &[&str]) -> Vec<u8> {
     t
 }
 
-/// A classic record holding a value (kind 2, flag 0x20), without its CRC.
+/// A classic record holding a value (kind 2, flag 0x20), without its CRC: an int32 (format
+/// 3), or of the reader's type (format 2).
 pub fn classic_record(name: &str, value: i32) -> Vec<u8> {
     let mut r = vec![0x22, name.len() as u8];
+    r.extend(name.as_bytes());
+    r.extend(value.to_le_bytes());
+    r
+}
+
+/// A format 3 classic record holding a float32 value (kind 2, flags 0x20 and 0x40), without
+/// its CRC.
+pub fn float_record(name: &str, value: f32) -> Vec<u8> {
+    let mut r = vec![0x62, name.len() as u8];
     r.extend(name.as_bytes());
     r.extend(value.to_le_bytes());
     r
