@@ -705,7 +705,7 @@ ERRORS: list[tuple[str, list[str], list[str]]] = [
     (
         "json-too-deep",
         ["encode", "px.Ina238", "[" * 100_000],
-        ["not JSON: ", "recursion"],
+        ["error: JSON nested deeper than this reader goes ("],
     ),
     ("invalid-hex", ["decode", "px.Ina238", "zz"], ["not hex bytes: 'zz' (expected e.g."]),
     ("odd-hex", ["decode", "px.Ina238", "0x123"], ["not hex bytes: '0x123'"]),
@@ -1004,7 +1004,7 @@ def test_a_failed_run_prints_only_its_error(
     status, out, err = run_here(capsys, "run", str(airframe), "--store", str(store))
     # Nothing of the file is kept, so nothing of it is shown as done.
     assert (status, out) == (1, "")
-    assert err == f"px4params: {airframe}:3: unknown parameter 'BOGUS'\n"
+    assert err == f"px4params: error: {airframe}:3: unknown parameter 'BOGUS'\n"
     assert not store.exists()
     # With --keep-going the lines that succeeded are kept: they are shown.
     status, out, err = run_here(capsys, "run", str(airframe), "--store", str(store), "--keep-going")

@@ -380,7 +380,7 @@ def test_run_is_all_or_nothing(
     code, _, err = run(capsys, "run", path)
     assert code == 1
     assert err == (
-        f"px4params: {path}:3: INA238#0: bus.i2c.address: value 300 is out of range "
+        f"px4params: error: {path}:3: INA238#0: bus.i2c.address: value 300 is out of range "
         "(expected 0 to 127)\n"
     )
     assert store.read_bytes() == before
@@ -406,7 +406,8 @@ def test_keep_going_past_an_if_whose_condition_fails_runs_neither_branch(
     code, _, err = run(capsys, "run", path, "--keep-going")
     assert code == 1
     assert err.splitlines() == [
-        f"px4params: {path}:1: unknown parameter 'SYS_AUTOSTRT' (did you mean: SYS_AUTOSTART, "
+        f"px4params: error: {path}:1: unknown parameter 'SYS_AUTOSTRT' (did you mean: "
+        "SYS_AUTOSTART, "
         "SYS_AUTOCONFIG?)"
     ]
     assert param(capsys, "show", "-q", "BAT1_N_CELLS")[1] == "3\n"
@@ -608,7 +609,7 @@ def test_bad_airframe_lines(
     path = airframe(tmp_path, text)
     code, _, err = run(capsys, "run", path)
     assert code == 1
-    assert err.startswith(f"px4params: {path}:{line}: "), err
+    assert err.startswith(f"px4params: error: {path}:{line}: "), err
     assert message in err
     assert err.count("\n") == 1
     assert not store.exists()
@@ -724,6 +725,15 @@ BAD_FILES = [
     ("x.json", "{", "x.json:1: not JSON: Expecting property name"),
     ("x.json", '{"format": "other"}', 'not a px4params JSON export (no "format": "px4params")'),
     ("x.json", '{"format": "px4params", "version": 2}', "JSON export version 2 (expected 1)"),
+    ("x.json", '{"format": "px4params", "version": 1.0}', "JSON export version 1.0 (expected 1)"),
+    # Python's own words were "maximum recursion depth exceeded while decoding a JSON array"
+    ("x.json", "[" * 100_000, "x.json: JSON nested deeper than this reader goes ("),
+    # an instance beyond max_instances was "not a destructured parameter name"
+    (
+        "x.params",
+        "1\t1\tINA238_9P\t150\t6\n",
+        "x.params:1: INA238_9P: instance 9 is out of range (max_instances is 4: instances 0..3)",
+    ),
     (
         "x.json",
         '{"format": "px4params", "version": 1, "instances": {"INA238#9": {}}}',
@@ -895,7 +905,7 @@ def test_a_run_whose_save_cannot_be_written_saves_nothing(
     path = airframe(tmp_path, text)
     code, out, err = run(capsys, "run", path)
     assert (code, out) == (1, "")
-    assert err == f"px4params: {path}:3: {bad}: {reason}\n"
+    assert err == f"px4params: error: {path}:3: {bad}: {reason}\n"
     assert store.read_bytes() == before and not good.exists()
     # The same for an export (a .params), and without --keep-going or with it.
     text = f"param rm AK09916#0\nparam export {tmp_path}/gone/x.params\n"
@@ -914,7 +924,8 @@ def test_a_run_does_not_save_over_its_own_airframe_file_or_its_store_by_another_
     code, _, err = run(capsys, "run", str(path))
     assert code == 1
     assert err == (
-        f"px4params: {path}:2: {path}: is the file this run reads ({path}): give it another name\n"
+        f"px4params: error: {path}:2: {path}: is the file this run reads ({path}): give it "
+        "another name\n"
     )
     assert path.read_text().startswith("param add") and not store.exists()
     assert param(capsys, "add", "AK09916#0")[0] == 0
@@ -968,7 +979,9 @@ def test_a_variable_set_in_a_branch_is_read_only_where_that_branch_runs(
     code, _, err = run(capsys, "run", path)
     assert (code == 1) == (autostart == "0")
     assert err == (
-        "" if autostart != "0" else f"px4params: {path}:3: $NOPE is not set (set NOPE value)\n"
+        ""
+        if autostart != "0"
+        else f"px4params: error: {path}:3: $NOPE is not set (set NOPE value)\n"
     )
 
 
@@ -1087,7 +1100,7 @@ def test_set_default_s_of_a_parameter_this_build_lacks_lets_the_script_run_on(
     # Without -s the name is refused, and the file stops there.
     path = airframe(tmp_path, "param set-default NOPE 1\nparam set SYS_AUTOSTART 1\n")
     code, _, err = run(capsys, "run", path)
-    assert code == 1 and err.startswith(f"px4params: {path}:1: ") and "NOPE" in err
+    assert code == 1 and err.startswith(f"px4params: error: {path}:1: ") and "NOPE" in err
     assert param(capsys, "show", "-q", "SYS_AUTOSTART")[1] == "4001\n"
 
 

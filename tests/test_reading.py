@@ -342,7 +342,8 @@ def test_a_megabyte_line_is_refused_at_once_naming_file_and_line(
     result = _run_airframe(store, tmp_path, "# one\nparam set SYS_AUTOSTART " + "1" * 1_000_000)
     assert result.returncode == 1
     assert result.stderr == (
-        f"px4params: {tmp_path}/frame.airframe:2: line of 1,000,024 characters (at most 65,536)\n"
+        f"px4params: error: {tmp_path}/frame.airframe:2: line of 1,000,024 characters (at most "
+        "65,536)\n"
     )
     assert store.read_bytes() == before
 
@@ -354,7 +355,7 @@ def test_doubling_a_variable_stops_at_the_line_cap(store: Path, tmp_path: Path) 
     assert result.returncode == 1
     # A holds 2**15 characters after line 16; line 17 would make 2**16 + 2.
     assert result.stderr == (
-        f"px4params: {tmp_path}/frame.airframe:17: the line expands to more than 65,536 "
+        f"px4params: error: {tmp_path}/frame.airframe:17: the line expands to more than 65,536 "
         "characters\n"
     )
     assert store.read_bytes() == before

@@ -29,6 +29,7 @@ __all__ = [
     "ManifestError",
     "MetadataError",
     "MigrationError",
+    "NestingError",
     "NumberError",
     "OutputFileError",
     "ParamFileError",
@@ -113,6 +114,11 @@ class ValueShapeError(EncodeError):
 class NumberError(Px4ParamsError, ValueError):
     """A number out of every range before it is even converted (thousands of digits, ``1e400``),
     or a JSON constant (``Infinity``, ``NaN``) that JSON does not have."""
+
+
+class NestingError(NumberError):
+    """JSON nested deeper than Python's reader goes (its recursion limit). A
+    :class:`NumberError` for the reason :class:`DuplicateKeyError` is one."""
 
 
 class DuplicateKeyError(NumberError):

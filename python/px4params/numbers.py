@@ -15,7 +15,7 @@ from __future__ import annotations
 import math
 import sys
 
-from px4params.errors import DuplicateKeyError, NumberError
+from px4params.errors import DuplicateKeyError, NestingError, NumberError
 
 #: The largest finite float16, float32 and float64, by width in bits: beyond them a value is
 #: out of a float field's range (an infinity where the field truncates).
@@ -100,17 +100,24 @@ def _json_constant(name: str) -> float:
 def load_json(text: str, *, stored: bool = False) -> object:
     """``json.loads`` with the bounds above: long integers, ``1e400`` and the non-standard
     ``Infinity``/``NaN`` are refused (:class:`NumberError`), and an object naming a key twice
-    (:class:`DuplicateKeyError`, a NumberError); other errors are as ``json.loads`` raises
+    (:class:`DuplicateKeyError`, a NumberError), and nesting deeper than Python's recursion
+    limit (:class:`NestingError`, a NumberError); other errors are as ``json.loads`` raises
     them. ``stored``: as :func:`parse_float` takes it."""
     import json  # here: a command that reads no JSON does not pay 2 ms to import it
 
-    return json.loads(
-        text,
-        parse_int=_json_int,
-        parse_float=_stored_float if stored else parse_float,
-        parse_constant=_json_constant,
-        object_pairs_hook=_json_object,
-    )
+    try:
+        return json.loads(
+            text,
+            parse_int=_json_int,
+            parse_float=_stored_float if stored else parse_float,
+            parse_constant=_json_constant,
+            object_pairs_hook=_json_object,
+        )
+    except RecursionError:  # (Python's words: "maximum recursion depth exceeded while ...")
+        raise NestingError(
+            f"JSON nested deeper than this reader goes ({sys.getrecursionlimit()} levels; a "
+            "parameter's value has a few)"
+        ) from None
 
 
 def _json_object(pairs: list[tuple[str, object]]) -> dict[str, object]:

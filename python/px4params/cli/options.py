@@ -70,6 +70,14 @@ def file_name(text: str) -> str:
     return text
 
 
+def store_name(text: str) -> str:
+    """``--store``'s value: a file name, not ``-`` (standard input or output elsewhere): a
+    store is locked, read and replaced in place."""
+    if text == "-":
+        raise type_error("'-' is no store file here (a store is locked and replaced: name a file)")
+    return file_name(text)
+
+
 def store_options(p: ArgumentParser, *, after_verb: bool = False) -> None:
     """``--store``, ``--classic`` and ``--dsdl``. ``after_verb``: on a verb of a command that
     takes them before its verbs too (``param --store S show`` and ``param show --store S``):
@@ -79,7 +87,7 @@ def store_options(p: ArgumentParser, *, after_verb: bool = False) -> None:
     unset = {"default": SUPPRESS} if after_verb else {}
     p.add_argument(
         "--store",
-        type=file_name,
+        type=store_name,
         metavar="FILE",
         help="store file (default: $PX4PARAMS_STORE, else ./px4params.store)",
         **unset,

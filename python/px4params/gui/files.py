@@ -159,9 +159,7 @@ def _run_airframe(scratch: Any, filename: str, text: str) -> list[str]:
         # that would save, export, load or import another file are passed over, and said.
         result = run_file(path, session, keep_going=False, err=errors, files=False)
         if result.errors:
-            lines = errors.getvalue().strip().replace(path, filename).splitlines()
-            message = " ".join(line.removeprefix("px4params: ") for line in lines)
-            raise CommandError(message or f"{filename}: the airframe file failed")
+            raise CommandError(" ".join(e.replace(path, filename) for e in result.errors))
     return [line.replace(path, filename) for line in result.skipped]
 
 

@@ -122,13 +122,13 @@ def run_file(
             _line(raw, parser, session, variables, blocks, where, number, result, files)
         except (CommandError, Px4ParamsError, NshArgumentError, ValueError) as e:
             result.errors.append(f"{where}: {e}")
-            print(f"px4params: {where}: {e}", file=err)
+            print(f"px4params: error: {where}: {e}", file=err)
             if not keep_going:
                 return result
     if blocks:
         message = f"{path}:{blocks[-1].line}: 'if' without 'fi'"
         result.errors.append(message)
-        print(f"px4params: {message}", file=err)
+        print(f"px4params: error: {message}", file=err)
         if not keep_going:
             return result
     # A file that changes nothing (only comments) still makes the store it was run for: the
@@ -249,7 +249,10 @@ def _parse(parser: argparse.ArgumentParser, words: list[str]) -> argparse.Namesp
     try:
         return parser.parse_args(words)
     except NshArgumentError as e:
-        raise CommandError(f"param: {e}") from None
+        # NSH passes a '#' after a command on as a word: say so where argparse cannot.
+        comment = next((w for w in words if w.startswith("#")), None)
+        hint = f" (a '{comment}' after a command is no comment: give comments a line of their own)"
+        raise CommandError(f"param: {e}{hint if comment else ''}") from None
 
 
 def _expand(text: str, variables: dict[str, str]) -> str:

@@ -633,10 +633,31 @@ class FlatMap:
         belongs to no structured parameter."""
         found = self.lookup(name)
         if found is None:
+            beyond = self._beyond_max(name)
+            if beyond is not None:
+                raise InstanceError(beyond)
             exact = name.strip().upper()
             hint = f" (did you mean {exact}?)" if exact != name and exact in self else ""
             raise InstanceError(f"'{name}' is not a destructured parameter name{hint}")
         return found
+
+    def _beyond_max(self, name: str) -> str | None:
+        """Why ``name`` would be a flat name but for its instance number (``INA238_9P`` where
+        INA238 has 4), as the store says it of ``INA238#9``; None if that is not why."""
+        for at in (i for i, c in enumerate(name) if c == "_"):
+            spec = self._specs.get(name[:at])
+            if spec is None or spec.shared or not spec.max_instances:
+                continue
+            rest = name[at + 1 :]
+            digits = rest[: len(rest) - len(rest.lstrip("0123456789"))]
+            beyond = digits and str(int(digits)) == digits and int(digits) >= spec.max_instances
+            if beyond and self._parse_rest(spec, "0" + rest[len(digits) :]) is not None:
+                top = spec.max_instances
+                return (
+                    f"{name}: instance {digits} is out of range (max_instances is {top}: "
+                    f"instances 0..{top - 1})"
+                )
+        return None
 
     def table(self) -> list[FlatParam]:
         """Every live flat parameter of every existing instance, in store order."""

@@ -303,7 +303,7 @@ def _read_json(store: Store, path: str, text: str, forced: Forced | None) -> lis
     if not isinstance(document, dict) or document.get("format") != JSON_FORMAT:
         raise ParamFileError(f'{path}: not a px4params JSON export (no "format": "px4params")')
     version = document.get("version")
-    if isinstance(version, bool) or version != 1:  # (true == 1 in Python, not in JSON)
+    if type(version) is not int or version != 1:  # (true and 1.0 == 1 in Python, not here)
         raise ParamFileError(f"{path}: JSON export version {json.dumps(version)} (expected 1)")
     complaint = unknown_key(document, JSON_KEYS, "top-level key")
     if complaint is not None:

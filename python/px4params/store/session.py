@@ -501,6 +501,10 @@ def _take_lock(lock_path: str) -> int | None:
     except OSError as e:
         # A read-only lock file: flock needs no write access.
         fd = _open_or(-1, lock_path, os.O_RDONLY | (flags & ~os.O_CREAT))
+        if isinstance(e, FileNotFoundError) and not os.path.isdir(os.path.dirname(lock_path)):
+            # (Named as the store, not its lock file: the folder is what is missing.)
+            store = lock_path.removesuffix(".lock")
+            raise StoreFileError(f"no folder {os.path.dirname(store)}", store) from None
         if not isinstance(e, PermissionError) or fd < 0:
             raise StoreFileError(f"cannot lock the store: {e.strerror}", lock_path) from None
     try:
