@@ -1389,3 +1389,49 @@ def test_a_table_asked_for_that_is_not_the_files_era_is_said_in_the_report() -> 
         line.startswith("--table")
         for line in migrate.migrate(unversioned, table="legacy").assumptions
     )
+
+
+# -- a file that names no board ---------------------------------------------------------------
+
+
+def test_a_file_naming_no_board_hears_which_boards_start_an_instance_themselves(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    # A Pixhawk 4's parameters (PX4 1.13, no board in a QGC file): ICM20689 and BMI055 on SPI,
+    # the internal IST8310 on I2C bus 3, and the GPS mast's IST8310 on bus 1, which fmu-v5's
+    # rc.board_sensors starts itself (`ist8310 -X -b 1 -R 10 start`). A manifest instance of it
+    # would start it a second time, at another rotation.
+    from px4params.cli.main import main
+
+    path = shared_file("userguide_tteparams_v1.13.params")
+    assert main(["migrate", str(path), "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    (compass,) = [i for i in report["instances"] if i["name"] == "IST8310#0"]
+    fmu_v5 = (
+        "IST8310#0: the file's SPI sensors (BMI055, ICM20689) are ones px4_fmu-v5 starts; on a "
+        "px4_fmu-v5, this IST8310 is the board's own, started by the board's script "
+        "(PX4/PX4-Autopilot boards/px4/fmu-v5/init/rc.board_sensors:31 at v1.13.0 (tag v1.13.0, "
+        "6823cbc414, 2022-06-07)): --board px4_fmu-v5 leaves it out"
+    )
+    assert fmu_v5 in compass["notes"]
+    boards = [n.split(" are ones ")[1].split(" ")[0] for n in compass["notes"] if "are ones" in n]
+    assert boards == ["holybro_pix32v5", "px4_fmu-v5"]  # the two with both chips on SPI
+    # What the note says --board does, it does.
+    assert main(["migrate", str(path), "--json", "--board", "px4_fmu-v5"]) == 0
+    named = [i["name"] for i in json.loads(capsys.readouterr().out)["instances"]]
+    assert "IST8310#0" not in named and named
+
+
+def test_sensors_many_boards_have_name_no_board() -> None:
+    # BMI088 is on the SPI buses of most boards: it says nothing of which one this is.
+    gps_compass = devid.encode("i2c", 1, 0x0E, 0x06)  # IST8310 on a GPS mast, 396809
+    bmi088 = devid.encode("spi", 1, 0, 0x6A)  # drv_sensor.h: DRV_ACC_DEVTYPE_BMI088
+    proposal = migrate.migrate(
+        OldConfig(
+            "x.params", "QGC .params", {"CAL_MAG0_ID": gps_compass, "CAL_ACC0_ID": bmi088},
+            version=(1, 15, 0),
+        ),
+    )  # fmt: skip
+    (compass,) = proposal.instances
+    assert compass.name == "IST8310#0"
+    assert not [n for n in compass.notes if "--board" in n], compass.notes

@@ -1404,7 +1404,57 @@ def migrate(
     proposal = builder.run()
     proposal.target_release = upgrade.asked
     proposal.compared = [release for release, _ in upgrade.releases]
+    if chosen is None and board is None and config.hardware is None:
+        _name_boards_it_fits(proposal, builder, target_release)
     return proposal
+
+
+#: Boards whose SPI sensors a file matches that are tried as its board: more, and the sensors
+#: say too little to name one.
+MAX_BOARD_GUESSES = 4
+
+
+def _name_boards_it_fits(proposal: Proposal, builder: _Builder, target: str | None) -> None:
+    """A file that names no board (a .params file) is migrated without the board's script, so
+    an instance may be a device the board starts itself (fmu-v5's GPS mast compass: ``ist8310
+    -X -b 1 -R 10``), which the manifest would start again on other options. Where the file's
+    SPI sensors are those of at most :data:`MAX_BOARD_GUESSES` boards of the table, each of
+    those under which a proposed instance is the board's is named in a note of that instance:
+    the integrator knows the board, the file does not."""
+    table = _board_table()
+    config = proposal.config
+    ids = (v for n, v in config.params.items() if _CAL_ID.fullmatch(n) and isinstance(v, int))
+    devices = [devid.decode(v, builder.table) for v in ids if 0 < v <= devid.MAX_DEVICE_ID]
+    spi = {frozenset(c) for dev in devices if dev.bus_type == 2 and (c := _chips(dev))}
+    if table is None or not spi or not proposal.instances:
+        return
+    version = "v" + ".".join(map(str, config.version)) if config.version else None
+    fits = []
+    for board in table.boards_for(version):
+        started = [builder.start_chips(d.driver) for d in board.devices if d.bus_kind == "SPI"]
+        if all(any(chips & s for s in started) for chips in spi):
+            fits.append(board.name)
+    if len(fits) > MAX_BOARD_GUESSES:
+        return
+    sensors = ", ".join(sorted({"/".join(sorted(chips)) for chips in spi}))
+    for name in fits:
+        try:
+            theirs = migrate(config, builder.store.schema, builder.table, name, target)
+        except MigrationError:  # a board the table has only for other releases
+            continue
+        kept = {inst.origin.partition(": ")[0] for inst in theirs.instances}
+        for inst in proposal.instances:
+            found = inst.origin.partition(": ")[0]
+            left = next((x for x in theirs.left_out if x.found == found), None)
+            if found in kept or left is None or left.reason != "board":
+                continue
+            why = left.line.removeprefix(f"{left.found}: {left.device}: ")
+            line = (
+                f"{inst.name}: the file's SPI sensors ({sensors}) are ones {name} starts; on a "
+                f"{name}, this {left.device.partition(' ')[0]} is the board's own, {why}: "
+                f"--board {name} leaves it out"
+            )
+            inst.notes.append(line)
 
 
 def _upgrade(config: OldConfig, board: Any, target: str | None, assumptions: list[str]) -> _Upgrade:

@@ -492,6 +492,12 @@ class BoardTable:
                     newest[name] = row
         return tuple(newest[n] for n in self._names if n in newest)
 
+    def boards_for(self, release: str | int | None) -> list[Board]:
+        """Every board as PX4 ``release`` starts it (None: today), in the table's order; none
+        when the release is older than every snapshot."""
+        snap = self.snapshot_for(release)
+        return [] if snap is None else self._boards_at(snap)
+
     def _boards_at(self, release: str) -> list[Board]:
         found = (self._row(key) for key in list(self._rows) if key[1] == release)
         return [row for row in found if row is not None]
