@@ -348,7 +348,20 @@ def test_empty_and_disabled(tmp_path: Path, devtypes: devid.DevtypeTable) -> Non
     ("content", "message"),
     [
         (None, "{path}: cannot read: No such file or directory"),
-        (b"\xff\xfe\x00binary", "{path}: neither a ULog file nor a QGC .params text file"),
+        (
+            b"\xff\xfe\x00binary",
+            "{path}:1: neither a ULog file nor a QGC .params text file (byte 0xFF is not UTF-8)",
+        ),
+        # a Latin-1 letter in a QGC header comment: its line is named
+        (
+            b"# Onboard parameters for Vehicle 1\n# Vehicle: Caf\xe9\n1\t1\tSYS_AUTOSTART\t1\t6\n",
+            "{path}:2: neither a ULog file nor a QGC .params text file (byte 0xE9 is not UTF-8)",
+        ),
+        # QGC writes each parameter once: two values, which one did the vehicle hold?
+        (
+            b"1\t1\tCAL_MAG1_ID\t396809\t6\n1\t1\tCAL_MAG1_ID\t592905\t6\n",
+            "{path}:2: CAL_MAG1_ID: also set on line 1, to 396809",
+        ),
         (b"# only comments\n\n", "{path}: no parameters (not a QGC .params file?)"),
         (
             b"# x\n1\t1\tSYS_AUTOSTART\t4001\n",

@@ -1435,3 +1435,22 @@ def test_sensors_many_boards_have_name_no_board() -> None:
     (compass,) = proposal.instances
     assert compass.name == "IST8310#0"
     assert not [n for n in compass.notes if "--board" in n], compass.notes
+
+
+@pytest.mark.parametrize("hitl", [0, 1, 2])
+def test_a_hardware_in_the_loop_configuration_is_said_to_have_run_no_sensor_drivers(
+    hitl: int,
+) -> None:
+    # PX4's rcS: `if param greater SYS_HITL 0` starts the simulator's sensors instead of
+    # rc.board_sensors and rc.sensors, so a HITL log's sensors are not the vehicle's
+    proposal = migrate.migrate(today({"SYS_HITL": hitl, "SYS_AUTOSTART": 4001}))
+    said = [a for a in proposal.assumptions if a.startswith("SYS_HITL")]
+    assert said == (
+        [
+            f"SYS_HITL = {hitl}: hardware in the loop, where PX4 starts neither the board's "
+            "sensor script nor rc.sensors (rcS); what it logged is the simulator's, and the "
+            "proposal is for the vehicle flying with SYS_HITL 0"
+        ]
+        if hitl
+        else []
+    )

@@ -109,12 +109,14 @@ def test_a_param_set_list_reads_every_command_of_a_line_joined_by_semicolons(
 def test_a_logs_details_and_version_are_its_information_fields() -> None:
     """sample_log_small.ulg, read by hand with pyulog: ver_hw CUBEPILOT_CUBEORANGE,
     ver_sw_branch v1.11.2_w_rc_sysid, ver_sw 8583f1da..., ver_sw_release 0x010B0200 (PX4's
-    encoding: major, minor, patch, type bytes): PX4 1.11.2."""
+    encoding: major, minor, patch, type bytes): PX4 1.11.2, type 0, which px4_version.h's
+    FIRMWARE_TYPE_DEV is (a build of a branch, not a tagged release: 255)."""
     from shared_data import SAMPLE_LOG, shared_file
 
     config = migrate.read_config(shared_file(SAMPLE_LOG))
     assert config.details == [
         "ver_hw CUBEPILOT_CUBEORANGE",
+        "ver_sw_release 0x010B0200: PX4 1.11.2 dev",
         "ver_sw_branch v1.11.2_w_rc_sysid",
         "ver_sw 8583f1da30b63154d6ba0bc187d86135dfe33cf9",
     ]
@@ -217,6 +219,7 @@ def test_a_param_set_list_names_each_line_it_does_not_read_and_the_conditional_o
     assert config.skipped == [
         *(f"line {6 + n}: 'echo {n}': {not_read}" for n in range(10)),
         "... and 2 more lines of other commands",
+        "line 3: CAL_MAG1_PRIO 50: set again on line 4 (75), which holds",
     ]
 
 
@@ -449,3 +452,36 @@ def test_a_file_of_two_vehicles_is_refused_as_import_refuses_it(tmp_path: Path) 
         f"{path}:2: vehicle 2: the file holds parameters of vehicles 1, 2 (one vehicle's are "
         "read: split the file)"
     )
+
+
+def test_a_value_set_twice_is_said_where_a_shell_list_keeps_the_last() -> None:
+    # (a `param set` list setting CAL_MAG1_ID twice kept the second silently: the first
+    # device, an IST8310, appeared nowhere in the report)
+    import tempfile
+
+    text = (
+        "param set CAL_MAG1_ID 396809\n"
+        "param set CAL_MAG1_ROT 0\n"
+        "param set CAL_MAG1_ID 592905\n"
+        "param set CAL_MAG1_ROT 0\n"
+    )
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder) / "list.params"
+        path.write_text(text)
+        config = migrate.read_config(path)
+    assert config.params["CAL_MAG1_ID"] == 592905  # NSH runs both lines
+    assert config.skipped == [
+        "line 1: CAL_MAG1_ID 396809: set again on line 3 (592905), which holds"
+    ]
+
+
+def test_a_qgc_line_given_twice_alike_is_read_once_and_said() -> None:
+    import tempfile
+
+    line = "1\t1\tCAL_MAG1_ID\t396809\t6\n"
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder) / "joined.params"
+        path.write_text(line + "1\t1\tSYS_AUTOSTART\t4001\t6\n" + line)
+        config = migrate.read_config(path)
+    assert config.params == {"CAL_MAG1_ID": 396809, "SYS_AUTOSTART": 4001}
+    assert config.skipped == ["line 3: CAL_MAG1_ID again, as on line 1"]

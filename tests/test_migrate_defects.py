@@ -483,7 +483,7 @@ def test_a_params_file_naming_a_parameter_twice_is_refused(tmp_path: Path, capsy
     )
     assert main(["migrate", str(path)]) == 1
     assert capsys.readouterr().err == (
-        f"px4params: error: {path}:4: CAL_MAG1_ID: also set on line 2\n"
+        f"px4params: error: {path}:4: CAL_MAG1_ID: also set on line 2, to 592905\n"
     )
     path.write_text(path.read_text().replace("1\t1\tCAL_MAG1_ID\t73225\t6\n", ""))
     assert run_json(path, capsys)["kind"] == "QGC .params"

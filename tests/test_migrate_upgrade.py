@@ -715,3 +715,30 @@ def test_a_release_newer_than_every_one_read_runs_mains_scripts(
         "--target-release v1.19.0: the board table has no v1.19.0; its scripts are taken as at "
         "main, the newest it has (newer than every release it has)"
     ) in asked["assumptions"]
+
+
+@pytest.mark.parametrize(
+    ("version", "said"),
+    [
+        # the table's snapshots: v1.11.0 .. v1.15.0, v1.18, main (boards.toml)
+        ("1.17.0", "taken as at v1.15.0 (at or before it)"),
+        ("1.19.0", "taken as at main (newer than every release it has)"),
+        ("1.13.3", None),  # v1.13.0's scripts are 1.13.3's
+    ],
+)
+def test_a_files_own_release_the_table_lacks_is_said_as_a_target_would_be(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], version: str, said: str | None
+) -> None:
+    # (a CubeOrange log of 1.17.0 alpha was judged on v1.15.0's scripts without a word)
+    path = cube_params(tmp_path / "cube.params", probe=1)
+    path.write_text(path.read_text().replace("# Version: 1.11.2", f"# Version: {version}"))
+    lines = [
+        a
+        for a in run(capsys, str(path), "--board", "cubepilot_cubeorange")["assumptions"]
+        if "this file's release" in a
+    ]
+    expected = (
+        f"board cubepilot_cubeorange: the board table has no {version}, this file's release; "
+        f"what its script starts is {said}"
+    )
+    assert lines == ([expected] if said else [])

@@ -23,7 +23,7 @@ from px4params.migrate.conditions import (
     evaluate,
     per_bus,
 )
-from px4params.migrate.config import OldConfig
+from px4params.migrate.config import OldConfig, shown_value
 from px4params.migrate.proposal import LeftOut, Proposal, ProposedInstance
 from px4params.vehicle import devid
 from px4params.vehicle.console import DriverStart, started_drivers
@@ -188,7 +188,7 @@ class _Builder:
             # A quantity that must be positive given as zero or less (a current of -5 A) is
             # no setting to round into the range: the field keeps the default.
             self.proposal.not_carried.append(
-                f"{legacy} = {_shown(value)}: {inst.name}.{path} must be {lo}..{hi}"
+                f"{legacy} = {shown_value(value)}: {inst.name}.{path} must be {lo}..{hi}"
             )
             return False
         if isinstance(value, float):
@@ -200,13 +200,13 @@ class _Builder:
                 fitted = type(fitted)(hi)
         elif (lo is not None and value < lo) or (hi is not None and value > hi):
             self.proposal.not_carried.append(
-                f"{legacy} = {_shown(value)}: {inst.name}.{path} must be {lo}..{hi}"
+                f"{legacy} = {shown_value(value)}: {inst.name}.{path} must be {lo}..{hi}"
             )
             return False
         try:
             self.store.set_default(key, fitted)
         except (Px4ParamsError, OverflowError, ValueError) as e:
-            self.proposal.not_carried.append(f"{legacy} = {_shown(value)}: {e}")
+            self.proposal.not_carried.append(f"{legacy} = {shown_value(value)}: {e}")
             return False
         stored = self.store.get(key)
         inst.values[path] = stored
@@ -214,8 +214,8 @@ class _Builder:
             unit = f" {doc.unit}" if doc.unit is not None else ""
             limits = f", {lo}..{hi}" if lo is not None or hi is not None else ""
             inst.notes.append(
-                f"{legacy} = {_shown(value)}{unit} becomes {path} = {_shown(stored)}{unit} "
-                f"({leaf.type}{limits})"
+                f"{legacy} = {shown_value(value)}{unit} becomes {path} = "
+                f"{shown_value(stored)}{unit} ({leaf.type}{limits})"
             )
         return True
 
@@ -706,7 +706,7 @@ class _Builder:
             if name in NOT_DRIVER_SWITCHES:
                 meaning = NOT_DRIVER_SWITCHES[name].get(int(value), "a value PX4 does not list")
                 self.proposal.not_carried.append(
-                    f"{name} = {_shown(value)} ({meaning}): not a driver switch; it stays a "
+                    f"{name} = {shown_value(value)} ({meaning}): not a driver switch; it stays a "
                     "classic parameter"
                 )
                 continue
@@ -716,7 +716,7 @@ class _Builder:
             declared = switches.get(name) or self.undeclared(name)
             if not declared:
                 self.proposal.not_carried.append(
-                    f"{name} = {_shown(value)}: no bundled parameter type "
+                    f"{name} = {shown_value(value)}: no bundled parameter type "
                     f"{name.removeprefix('SENS_EN_')}; the driver stays enabled by this classic "
                     "parameter, outside the manifest"
                 )
@@ -725,7 +725,7 @@ class _Builder:
             if not starting:
                 wanted = "; ".join(f"{d.name} starts on {d.switch_test}" for d in declared)
                 self.proposal.not_carried.append(
-                    f"{name} = {_shown(value)}: starts no I2C driver of the manifest (its "
+                    f"{name} = {shown_value(value)}: starts no I2C driver of the manifest (its "
                     f"{wanted}); it stays a classic parameter"
                 )
                 continue
@@ -901,7 +901,7 @@ class _Builder:
                 spec.name,
                 place.bus,
                 address,
-                f"{switch} = {_shown(value)}: {driver.name} started {where}{default} "
+                f"{switch} = {shown_value(value)}: {driver.name} started {where}{default} "
                 f"0x{address:02X}",
             )
             if driver.switch_field:
@@ -916,7 +916,7 @@ class _Builder:
             if old.startswith(f"{spec.name}_") and old not in driver.settings:
                 self.use(old)
                 self.proposal.not_carried.append(
-                    f"{old} = {_shown(self.params[old])}: {spec.name} has no field for it"
+                    f"{old} = {shown_value(self.params[old])}: {spec.name} has no field for it"
                 )
 
     # -- devices of the calibration slots ---------------------------------------------------
@@ -932,7 +932,7 @@ class _Builder:
             if isinstance(value, float) and value.is_integer():
                 value = int(value)
             if not isinstance(value, int) or not 0 <= value <= devid.MAX_DEVICE_ID:
-                self.proposal.not_carried.append(f"{name} = {_shown(value)}: not a device ID")
+                self.proposal.not_carried.append(f"{name} = {shown_value(value)}: not a device ID")
                 continue
             if value:
                 found.setdefault(value, []).append(name)
@@ -982,7 +982,7 @@ class _Builder:
             slots = [n for n, k in zip(names, kinds, strict=True) if k in repeated]
             twice = f"; {' and '.join(slots)} hold the same device (reported once)"
             if len(set(rotations.values())) > 1:
-                shown = ", ".join(f"{r} = {_shown(v)}" for r, v in rotations.items())
+                shown = ", ".join(f"{r} = {shown_value(v)}" for r, v in rotations.items())
                 twice += f", with different rotations ({shown})"
         # A devtype of another kind than every slot holding it (a temperature sensor's in
         # CAL_MAG0_ID): the table is of another era, and the chip is not this one.
@@ -1074,7 +1074,7 @@ class _Builder:
             if not v:
                 continue
             inst.notes.append(
-                f"{rot} = {_shown(v)} stays a classic parameter: calibration applies it; the "
+                f"{rot} = {shown_value(v)} stays a classic parameter: calibration applies it; the "
                 f"driver's rotation is {rotation[0]} ({rotation[1]})"
             )
             if removed := axes.removed_rotation(rot, v, self.config.version, self.for_release):
@@ -1197,7 +1197,7 @@ class _Builder:
         if value:
             found = [i.name for i in self.proposal.instances]
             self.proposal.replaced.append(
-                f"{name} = {_shown(value)}: external I2C devices were found by probing; the "
+                f"{name} = {shown_value(value)}: external I2C devices were found by probing; the "
                 f"manifest states its devices ({', '.join(found) or 'none'}) and a missing one "
                 "fails the arming check instead of being skipped silently"
             )
@@ -1353,12 +1353,6 @@ class _Place:
     args: str | None
 
 
-def _shown(value: Any) -> str:
-    if isinstance(value, float):
-        return f"{value:.9g}"
-    return str(value)
-
-
 def migrate(
     config: OldConfig,
     schema: Schema | None = None,
@@ -1406,6 +1400,15 @@ def migrate(
     proposal.compared = [release for release, _ in upgrade.releases]
     if chosen is None and board is None and config.hardware is None:
         _name_boards_it_fits(proposal, builder, target_release)
+    hitl = config.params.get("SYS_HITL", 0)
+    if hitl > 0:
+        # ROMFS/px4fmu_common/init.d/rcS: `if param greater SYS_HITL 0` runs the simulator's
+        # sensors instead of rc.board_sensors and rc.sensors
+        proposal.assumptions.append(
+            f"SYS_HITL = {shown_value(hitl)}: hardware in the loop, where PX4 starts neither the "
+            "board's sensor script nor rc.sensors (rcS); what it logged is the simulator's, and "
+            "the proposal is for the vehicle flying with SYS_HITL 0"
+        )
     return proposal
 
 
@@ -1501,6 +1504,13 @@ def _upgrade(config: OldConfig, board: Any, target: str | None, assumptions: lis
             f"newest release it has at or before this file's {version[1:]}; what its script "
             f"starts is taken as at {judged}"
         )
+    elif version and _not_its_own(config.version, own):
+        # the file's release is not in the table: said as --target-release says it
+        newest = "newer than every release it has" if own == "main" else "at or before it"
+        assumptions.append(
+            f"board {board.name}: the board table has no {version[1:]}, this file's release; "
+            f"what its script starts is taken as at {own} ({newest})"
+        )
     own = judged
     later = known[known.index(own) + 1 :]
     if target is not None:
@@ -1524,6 +1534,14 @@ def _upgrade(config: OldConfig, board: Any, target: str | None, assumptions: lis
         target if target != own else None,
         asked if target != own else None,
     )
+
+
+def _not_its_own(version: tuple[int, int, int] | None, snapshot: str) -> bool:
+    """Whether the board table's ``snapshot`` is of another release series than ``version``
+    (``main`` is of none)."""
+    from px4params.vehicle.boards import release_version  # (the table's module: loaded)
+
+    return snapshot == "main" or version is None or version[:2] != release_version(snapshot)[:2]
 
 
 def _spi_started(external: bool) -> str:

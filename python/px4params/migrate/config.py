@@ -80,6 +80,8 @@ def read_config(path: str | os.PathLike[str]) -> OldConfig:
     details = [
         f"{key} {log.info[key]}" for key in ("ver_hw", "ver_sw_branch", "ver_sw") if key in log.info
     ]
+    if log.release:
+        details.insert(1 if "ver_hw" in log.info else 0, _release_detail(log.release))
     if log.corrupt:
         details.append(
             "the log is cut short or damaged: parameters and devices logged after the break "
@@ -97,6 +99,19 @@ def read_config(path: str | os.PathLike[str]) -> OldConfig:
     )  # fmt: skip
 
 
+#: The last byte of ``ver_sw_release``: PX4's firmware type (px4_version.h's
+#: ``FIRMWARE_TYPE_*``: 0 dev, 64 alpha, 128 beta, 192 release candidate, 255 release).
+FIRMWARE_TYPES = {0: "dev", 64: "alpha", 128: "beta", 192: "rc"}
+
+
+def _release_detail(release: int) -> str:
+    """``ver_sw_release 0x01110040: PX4 1.17.0 alpha`` (a release shows no type)."""
+    kind = release & 0xFF
+    word = "" if kind == 255 else f" {FIRMWARE_TYPES.get(kind, f'type {kind}')}"
+    version = f"{release >> 24 & 0xFF}.{release >> 16 & 0xFF}.{release >> 8 & 0xFF}"
+    return f"ver_sw_release 0x{release:08X}: PX4 {version}{word}"
+
+
 def _text_info(value: object) -> str | None:
     """A ULog information string (``ver_hw_subtype``); None where absent or empty."""
     return value if isinstance(value, str) and value else None
@@ -107,8 +122,12 @@ def _read_text(where: str) -> OldConfig:
         text = read_text(where, PARAM_FILE)
     except OSError as e:
         raise MigrationError(f"{where}: cannot read: {e.strerror}") from None
-    except UnicodeDecodeError:
-        raise MigrationError(f"{where}: neither a ULog file nor a QGC .params text file") from None
+    except UnicodeDecodeError as e:  # (a Latin-1 byte in a comment: its line is named)
+        at = e.object[: e.start].count(b"\n") + 1
+        raise MigrationError(
+            f"{where}:{at}: neither a ULog file nor a QGC .params text file (byte "
+            f"0x{e.object[e.start]:02X} is not UTF-8)"
+        ) from None
     first = next(
         (
             line.strip()
@@ -131,16 +150,22 @@ def _read_text(where: str) -> OldConfig:
     chosen = autopilot.component
     params: dict[str, int | float] = {}
     first_line: dict[str, int] = {}
+    twice: list[str] = []
     for r in autopilot.rows:
-        if r.name in first_line:  # QGC writes each once: which one did the vehicle hold?
+        if r.name in first_line and params[r.name] != r.value:
+            # QGC writes each once: which one did the vehicle hold?
             raise MigrationError(
-                f"{where}:{r.line}: {r.name}: also set on line {first_line[r.name]}"
+                f"{where}:{r.line}: {r.name}: also set on line {first_line[r.name]}, to "
+                f"{shown_value(params[r.name])}"
             )
+        if r.name in first_line:  # (two files joined: the same value twice says one thing)
+            twice.append(f"line {r.line}: {r.name} again, as on line {first_line[r.name]}")
+            continue
         first_line[r.name] = r.line
         params[r.name] = r.value
     skipped = [
         f"component {c}: {count} parameters (not the autopilot's)" for c, count in autopilot.others
-    ]
+    ] + twice
     details = [f"component {chosen}"]
     version = None
     for number, line in enumerate(text.splitlines(), start=1):
@@ -162,6 +187,13 @@ def _read_text(where: str) -> OldConfig:
     return OldConfig(where, "QGC .params", params, details, skipped, version=version)
 
 
+def shown_value(value: object) -> str:
+    """A parameter's value in a report line: a float to 9 significant digits (a float32's)."""
+    if isinstance(value, float):
+        return f"{value:.9g}"
+    return str(value)
+
+
 def _number(value: str, where: str) -> int | float:
     """A ``param set`` line's value: an integer stays one (PX4's INT32), the rest are floats."""
     try:
@@ -180,6 +212,8 @@ def _read_param_list(text: str, where: str) -> OldConfig:
     with its line in the report, and ``param set`` lines inside ``if ... fi`` are read as if
     every condition held, which the report says."""
     params: dict[str, int | float] = {}
+    set_on: dict[str, int] = {}
+    overridden: list[str] = []
     other: list[str] = []
     conditional: list[int] = []
     depth = 0  # of the `if`s around
@@ -198,7 +232,15 @@ def _read_param_list(text: str, where: str) -> OldConfig:
             elif m is not None:
                 if depth:
                     conditional.append(number)
-                params[m[2]] = _number(m[3], f"{where}:{number}: {m[2]}")
+                value = _number(m[3], f"{where}:{number}: {m[2]}")
+                if m[2] in params and params[m[2]] != value:
+                    # the shell runs both: the last holds, and the first is said
+                    before = shown_value(params[m[2]])
+                    overridden.append(
+                        f"line {set_on[m[2]]}: {m[2]} {before}: set again on line {number} "
+                        f"({shown_value(value)}), which holds"
+                    )
+                params[m[2]], set_on[m[2]] = value, number
             elif command:
                 other.append(f"line {number}: '{abbreviated(command)}'")
     if not params:
@@ -207,6 +249,7 @@ def _read_param_list(text: str, where: str) -> OldConfig:
     if len(skipped) > SHOWN_LINES:
         more = len(skipped) - SHOWN_LINES
         skipped = [*skipped[:SHOWN_LINES], f"... and {more} more lines of other commands"]
+    skipped += overridden
     details = []
     if conditional:
         numbers = list(dict.fromkeys(conditional))
