@@ -654,3 +654,20 @@ def test_a_table_that_names_a_parameter_twice_is_refused(
         f"{path}: record is malformed: the parameter table names 'INA238' twice (at byte 10)"
     )
     assert store.instances("AK09916") == ["AK09916#0"]  # left as it was
+
+
+def test_an_import_over_a_kept_record_replaces_it(schema: px4params.Schema, tmp_path: Path) -> None:
+    """A record kept for its type, then a value of this set's type merged in: the newer one
+    holds, and the kept one is gone (not saved beside it)."""
+    kept, newer = tmp_path / "kept.store", tmp_path / "newer.store"
+    kept.write_bytes(
+        _classic_file([_classic_record("COM_DISARM_LAND", struct.pack("<f", 2.5), 0x40)])
+    )
+    newer.write_bytes(_classic_file([_classic_record("COM_DISARM_LAND", struct.pack("<i", 5))]))
+    before = px4params.Store(schema, classic=BEFORE)
+    before.load_from(kept)
+    assert before.kept_classic == ["COM_DISARM_LAND"]
+    before.import_from(newer)
+    assert before.kept_classic == [] and before.get("COM_DISARM_LAND") == 5
+    before.save(kept)
+    assert px4params.Store.load(kept, schema, classic=TODAY).get("COM_DISARM_LAND") == 5.0

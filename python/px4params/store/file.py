@@ -266,6 +266,7 @@ def _apply(
         if payloads is None:
             foreign[record.key] = record.raw
             return
+        foreign.pop(record.key, None)  # (merged over a record kept before: this one is newer)
         for payload, default in zip(payloads, (True, False), strict=True):
             if payload is not None:
                 _check_finite(param, record.key, payload)
