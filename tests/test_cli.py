@@ -1181,6 +1181,33 @@ def test_a_float_too_small_for_its_leaf_is_stored_as_zero_with_a_warning(store: 
     assert px4params.Store.load(store).get("INA238#0.shunt") == 0.0
 
 
+@pytest.mark.parametrize("how", ["set", "json"])
+def test_a_whole_number_a_float_does_not_hold_is_said_where_it_is_rounded(
+    store: Path, how: str
+) -> None:
+    # BAT1_CAPACITY is a classic Float: 16777217 was stored as 16777216 without a word (a
+    # store file of the other type says "does not fit"; a .params row, "skipped").
+    said = (
+        "BAT1_CAPACITY: 16777217 is stored as 16777216 (a Float holds whole numbers exactly "
+        "only up to 2**24)"
+    )
+    if how == "set":
+        result = cli("param", "--store", str(store), "set", "BAT1_CAPACITY", "16777217")
+        assert (result.returncode, result.stderr) == (0, f"px4params: warning: {said}\n")
+    else:
+        path = store.with_name("c.json")
+        path.write_text(
+            '{"format": "px4params", "version": 1, "classic": {"BAT1_CAPACITY": 16777217}}'
+        )
+        result = cli("param", "--store", str(store), "import", str(path))
+        assert result.returncode == 0 and f"{path}: classic: {said}" in result.stdout
+    loaded = px4params.Store.load(store, classic=BUNDLED_CLASSIC)
+    assert loaded.get("BAT1_CAPACITY") == 16777216.0
+    # 2**25 is a float32: nothing to say
+    result = cli("param", "--store", str(store), "set", "BAT1_CAPACITY", "33554432")
+    assert (result.returncode, result.stderr) == (0, "")
+
+
 # -- 4, 5: the store file -----------------------------------------------------------------------
 
 

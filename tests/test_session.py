@@ -735,3 +735,68 @@ def test_a_batch_write_over_a_file_it_reads_is_refused(
         f"{link}: is the file this run reads ({airframe}): give it another name"
     )
     assert session.deferred == []
+
+
+# -- a classic value kept as the other type (store file format 3) ---------------------------------
+
+
+def _classic_sets(tmp_path: Path) -> tuple[str, str]:
+    """Two parameters.json of one parameter whose type changed between PX4 releases."""
+    import json
+
+    paths = []
+    for name, kind, default in (("today", "Float", 2.0), ("before", "Int32", 2)):
+        entry = {"name": "COM_DISARM_LAND", "type": kind, "default": default}
+        path = tmp_path / f"{name}.json"
+        path.write_text(json.dumps({"version": 1, "parameters": [entry]}))
+        paths.append(str(path))
+    return paths[0], paths[1]
+
+
+@pytest.mark.parametrize("theirs", [4.5, None])
+def test_a_value_kept_as_the_other_type_changed_by_another_writer_is_a_conflict(
+    tmp_path: Path, theirs: float | None
+) -> None:
+    """A session of the older set holds COM_DISARM_LAND 2.5 as a kept record (its Int32 cannot
+    take it) and shows the default. Another writer, of today's set, saves 4.5 (kept here too):
+    setting the parameter here would have replaced it unseen."""
+    from px4params.errors import StoreConflictError
+
+    today, before = _classic_sets(tmp_path)
+    path = str(tmp_path / "v.store")
+    first = open_session(path, today)
+    first.store.set("COM_DISARM_LAND", 2.5)
+    first.save()
+    older = open_session(path, before)
+    assert older.store.kept_classic == ["COM_DISARM_LAND"]
+    other = open_session(path, today)
+    if theirs is None:
+        other.store.reset("COM_DISARM_LAND")  # the kept record goes: a change too
+    else:
+        other.store.set("COM_DISARM_LAND", theirs)
+    other.save()
+    with pytest.raises(StoreConflictError) as refused:
+        older.commit(lambda: older.store.set("COM_DISARM_LAND", 7))
+    assert str(refused.value) == (
+        f"COM_DISARM_LAND was changed here and by another writer (as the other type) since "
+        f"this writer read {path}; nothing was saved"
+    )
+    expected = 2.0 if theirs is None else theirs
+    assert open_session(path, today).store.get("COM_DISARM_LAND") == expected
+
+
+def test_a_kept_value_set_here_replaces_it_when_the_other_writer_changed_something_else(
+    tmp_path: Path,
+) -> None:
+    today, before = _classic_sets(tmp_path)
+    path = str(tmp_path / "v.store")
+    first = open_session(path, today)
+    first.store.set("COM_DISARM_LAND", 2.5)
+    first.save()
+    older = open_session(path, before)
+    other = open_session(path, today)
+    other.store.add("INA238#0")
+    other.save()
+    older.commit(lambda: older.store.set("COM_DISARM_LAND", 2))  # its default here
+    again = open_session(path, today)
+    assert again.store.get("COM_DISARM_LAND") == 2.0 and "INA238#0" in again.store

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import binascii
+import math
 import os
 import random
 import re
@@ -671,3 +672,82 @@ def test_an_import_over_a_kept_record_replaces_it(schema: px4params.Schema, tmp_
     assert before.kept_classic == [] and before.get("COM_DISARM_LAND") == 5
     before.save(kept)
     assert px4params.Store.load(kept, schema, classic=TODAY).get("COM_DISARM_LAND") == 5.0
+
+
+@pytest.mark.parametrize("value", [33554432.0, 16777218.0, -2147483648.0, 1e9])
+def test_a_whole_float_carried_through_the_older_set_and_back_is_the_same(
+    schema: px4params.Schema, tmp_path: Path, value: float
+) -> None:
+    """Float -> Int32 takes every whole float32 in int32's range; Int32 -> Float must take them
+    back (each is a float32 exactly), not only |n| <= 2**24."""
+    flipped = [ClassicParam("COM_DISARM_LAND", "Float", 2.0)]
+    older = [ClassicParam("COM_DISARM_LAND", "Int32", 2)]
+    path = tmp_path / "v.store"
+    today = px4params.Store(schema, classic=flipped)
+    today.set("COM_DISARM_LAND", value)
+    today.save(path)
+    before = px4params.Store.load(path, schema, classic=older)
+    assert before.get("COM_DISARM_LAND") == int(value)
+    before.save(path)  # rewritten as an Int32 record
+    assert px4params.Store.load(path, schema, classic=flipped).get("COM_DISARM_LAND") == value
+
+
+@pytest.mark.parametrize("how", ["set to its default", "reset"])
+def test_setting_or_resetting_a_kept_value_replaces_it_even_at_the_default(
+    schema: px4params.Schema, tmp_path: Path, how: str
+) -> None:
+    """The kept 2.5 gave way only when the new value had a record of its own: set to its
+    default (2, no record) or reset, the old 2.5 was saved on, and read back by today's set."""
+    path = tmp_path / "v.store"
+    path.write_bytes(
+        _classic_file([_classic_record("COM_DISARM_LAND", struct.pack("<f", 2.5), 0x40)])
+    )
+    before = px4params.Store.load(path, schema, classic=BEFORE)
+    if how == "reset":
+        before.reset("COM_DISARM_LAND")
+    else:
+        before.set("COM_DISARM_LAND", 2)
+    assert before.kept_classic == []
+    before.save(path)
+    assert px4params.Store.load(path, schema, classic=TODAY).get("COM_DISARM_LAND") == 2.0
+
+
+@pytest.mark.parametrize("name", ["COM_DISARM_LAND", "NOT_IN_THE_SET"])
+@pytest.mark.parametrize("number", [math.nan, math.inf])
+def test_a_float_record_holding_nan_is_refused_by_every_set(
+    schema: px4params.Schema, tmp_path: Path, name: str, number: float
+) -> None:
+    """Format 3 says a record is a float32: a NaN in it is damage whatever the reading set has
+    (kept unread and saved on, the set owning it would refuse the whole store, .bak too)."""
+    path = tmp_path / "v.store"
+    path.write_bytes(_classic_file([_classic_record(name, struct.pack("<f", number), 0x40)]))
+    store = px4params.Store(schema, classic=BEFORE)
+    store.set("RC10_REV", -1.0)
+    with pytest.raises(StoreFileError) as refused:
+        store.load_from(path)
+    assert str(refused.value) == (
+        f"{path}: record cannot be applied: {name}: {number} is not a finite number (a Float "
+        "record: NaN and infinities are refused) (at byte 14)"
+    )
+    assert store.get("RC10_REV") == -1.0  # left as it was
+
+
+def test_a_format_2_file_with_classic_records_says_how_they_are_read(
+    schema: px4params.Schema, tmp_path: Path
+) -> None:
+    path = tmp_path / "v.store"
+    path.write_bytes(_classic_file([_classic_record("RC10_REV", struct.pack("<i", -1))], version=2))
+    said = (
+        f"{path}: store file format 2, whose classic records do not say their type: read as "
+        "this parameter set types them (if it was saved with another, load it with that one "
+        "first)"
+    )
+    assert px4params.Store(schema, classic=TODAY).load_from(path) == [said]
+    # Read with the set where it is a Float, -1's bits are NaN: the likely cause is named.
+    with pytest.raises(StoreFileError) as refused:
+        px4params.Store(schema, classic=BEFORE).load_from(path)
+    assert str(refused.value) == (
+        f"{path}: record cannot be applied: RC10_REV: nan is not a finite number (Float: NaN "
+        "and infinities are refused) (a format 2 file: saved with a parameter set where it is "
+        "the other type?) (at byte 14)"
+    )

@@ -31,6 +31,7 @@ from px4params.numbers import (
     parse_int,
 )
 from px4params.status import EXIT_FAILED, EXIT_OK
+from px4params.store.classic import rounding_said
 from px4params.store.session import Session
 from px4params.store.store import Key, Store
 
@@ -235,6 +236,10 @@ def _write(s: Session, name: str, text: str, *, default: bool, force: bool = Fal
 
     write = s.store.set_default if default else s.store.set
     write_forcing("", _say_forced if force else None, write, key, value)
+    classic = s.store.classic(key.param)
+    rounded = rounding_said(classic, value) if classic is not None else None
+    if rounded is not None:
+        print(f"px4params: warning: {rounded}", file=sys.stderr)
     if isinstance(value, float) and value != 0 and math.isfinite(value):
         stored = s.store.get(key, default=default)
         if stored == 0:

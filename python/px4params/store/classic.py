@@ -44,7 +44,9 @@ __all__ = [
     "ClassicParamsError",
     "classic_value",
     "exact_in_type",
+    "float32_holds",
     "load_classic",
+    "rounding_said",
 ]
 
 #: Environment variable naming the ``parameters.json`` whose classic parameters the store holds.
@@ -77,12 +79,38 @@ class ClassicParam(NamedTuple):
 
 def exact_in_type(value: int | float, is_float: bool) -> int | float | None:
     """``value`` as a classic parameter of the other type holds it, where no digit is lost: an
-    integer up to 2**24 as a float32, a whole float in int32's range as an integer; else None.
-    (A parameter whose type changed between PX4 releases: RC10_REV, COM_DISARM_LAND.)"""
-    if is_float:  # float32 holds every integer up to 2**24
-        return float(value) if abs(int(value)) <= 1 << 24 else None
+    integer a float32 holds exactly (every one up to 2**24, and 33554432, ... above) as a
+    float, a whole float in int32's range as an integer; else None. Each way takes what the
+    other gives, so a value carried there and back is the same. (A parameter whose type
+    changed between PX4 releases: RC10_REV, COM_DISARM_LAND.)"""
+    if is_float:
+        return float(value) if float32_holds(value) else None
     whole = math.isfinite(value) and float(value).is_integer()
     return int(value) if whole and INT32_MIN <= value <= INT32_MAX else None
+
+
+def float32_holds(value: int | float) -> bool:
+    """Whether a float32 holds ``value`` exactly (2**24 + 1 it rounds to 2**24)."""
+    try:
+        return bool(struct.unpack("<f", struct.pack("<f", value))[0] == value)
+    except (OverflowError, struct.error):
+        return False
+
+
+def rounding_said(param: ClassicParam, value: object) -> str | None:
+    """What a Float parameter set to a whole number a float32 does not hold stores instead
+    (``16777217 is stored as 16777216``); None where it stores the number itself."""
+    whole = type(value) is int or (type(value) is float and value.is_integer())
+    if not param.is_float or not whole or float32_holds(value):  # type: ignore[arg-type]
+        return None
+    try:
+        stored = int(struct.unpack("<f", struct.pack("<f", value))[0])
+    except (OverflowError, struct.error):
+        return None  # (refused as out of range where it is set)
+    return (
+        f"{param.name}: {int(value)} is stored as {stored} (a Float holds whole numbers "  # type: ignore[call-overload]
+        "exactly only up to 2**24)"
+    )
 
 
 def load_classic(path: str | os.PathLike[str]) -> list[ClassicParam]:

@@ -203,11 +203,25 @@ def apply_file(store: Store, path: str | os.PathLike[str], *, merge: bool) -> li
     report: list[str] = []
     foreign = dict(store._foreign) if merge else {}
     by_index = _file_parameters(store, content, where)
+    untyped = content.version == 2 and any(r.kind == KIND_CLASSIC for r in content.records)
+    if untyped:
+        report.append(
+            f"{where}: store file format 2, whose classic records do not say their type: read "
+            "as this parameter set types them (if it was saved with another, load it with that "
+            "one first)"
+        )
     for record in content.records:
         try:
             _apply(store, work, record, by_index, report, foreign)
         except Px4ParamsError as e:
-            raise StoreFileError(f"record cannot be applied: {e}", where, record.offset) from None
+            cause = (
+                " (a format 2 file: saved with a parameter set where it is the other type?)"
+                if untyped and record.kind == KIND_CLASSIC
+                else ""
+            )
+            raise StoreFileError(
+                f"record cannot be applied: {e}{cause}", where, record.offset
+            ) from None
     work.mark_saved()
     store._native.restore(work)
     store._foreign = foreign
@@ -255,6 +269,9 @@ def _apply(
 ) -> None:
     if record.kind == KIND_CLASSIC:
         assert isinstance(record.key, str)
+        if record.classic_type == CLASSIC_FLOAT:  # (refused in every set, kept or not)
+            for payload in (record.default, record.value):
+                _check_float32(record.key, payload)
         param = store._params.get(record.key)
         if param is None or param.classic is None:
             # Kept as it is and written back by the next save: nothing is lost because this
@@ -326,6 +343,19 @@ def _classic_payloads(
     report.append(f"{said} (its type changed between PX4 releases): taken as {taken}")
     pack = "<f" if param.is_float else "<i"
     return tuple(None if e is None else struct.pack(pack, e) for e in exact)  # type: ignore[return-value]
+
+
+def _check_float32(name: str, payload: bytes | None) -> None:
+    """A float32 record's value that is NaN or an infinity is refused, as :func:`_check_finite`
+    refuses one: a record this set keeps unread would otherwise be saved on, to be refused
+    whole by the set that reads it."""
+    if payload is not None:
+        (number,) = struct.unpack("<f", payload)
+        if not math.isfinite(number):
+            raise ValueRangeError(
+                f"{name}: {number} is not a finite number (a Float record: NaN and infinities "
+                "are refused)"
+            )
 
 
 def _check_finite(p: _Param, name: str, payload: bytes) -> None:

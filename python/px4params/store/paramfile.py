@@ -35,7 +35,7 @@ from px4params.formats.keys import unknown_key
 from px4params.formats.qgc_params import format_line
 from px4params.numbers import load_json
 from px4params.reading import PARAM_FILE, not_text, read_text
-from px4params.store.classic import exact_in_type
+from px4params.store.classic import exact_in_type, rounding_said
 from px4params.store.store import Key, Store
 
 JSON_FORMAT = "px4params"
@@ -339,17 +339,22 @@ def _read_json(store: Store, path: str, text: str, forced: Forced | None) -> lis
                 write_forcing(f"{path}: instances", forced, store.set, key, entry["value"])
         except (Px4ParamsError, InstanceError) as e:
             raise _refused(f"{path}: instances: {e}", e) from None
+    report = []
     for name, value in classic.items():
         try:
             key = Key.parse(name)
-            if store.classic(key.param) is None:
+            param = store.classic(key.param)
+            if param is None:
                 raise ParamFileError(f"{name}: not a classic parameter of this store")
             if isinstance(value, bool):  # a structured leaf refuses one too
                 raise ParamFileError(f"{name}: expected a number, got {_json_kind(value)}")
             store.set(key, value)  # (PX4 enforces no classic @min/@max: nothing to force)
+            rounded = rounding_said(param, value)
+            if rounded is not None:
+                report.append(f"{path}: classic: {rounded}")
         except Px4ParamsError as e:
             raise _refused(f"{path}: classic: {e}", e) from None
-    return []
+    return report
 
 
 def _json_kind(value: Any) -> str:

@@ -73,6 +73,8 @@ class Session:
         #: store's content then: this session's own changes are what differs from it.
         self.identity = file_identity(path) if identity is True else identity or None
         self._base = store._native.copy()
+        #: The classic records kept unchanged then (``Store.kept_classic``'s): merged too.
+        self._base_kept = dict(store._foreign)
         #: The file's identity at a re-read that failed (a conflict): not tried again; and the
         #: error of a file that could not even be looked at, said once.
         self._refused: FileIdentity | None = None
@@ -140,7 +142,7 @@ class Session:
         on top of the file's latest content: all of it or, when anything fails (a conflict,
         a refused value, the disk), nothing, in memory and on disk."""
         with StoreLock(self.path):
-            kept = (self.identity, self._base)
+            kept = (self.identity, self._base, self._base_kept)
             try:
                 with self.store.transaction():
                     result = change()
@@ -150,7 +152,7 @@ class Session:
                     else:
                         self.store.save(self.path)
             except BaseException as e:
-                self.identity, self._base = kept
+                self.identity, self._base, self._base_kept = kept
                 if isinstance(e, StoreConflictError):
                     raise StoreConflictError(f"{e}; nothing was saved") from None
                 raise
@@ -186,6 +188,7 @@ class Session:
             with self.store.transaction():  # an unreadable file leaves the store as it was
                 _read_latest(self.store, self.path, now)
             self.identity, self._base, self._refused = now, self.store._native.copy(), None
+            self._base_kept = dict(self.store._foreign)
 
     def rewrite(self, change: Callable[[Store], None]) -> None:
         """Saves the file's latest content changed by ``change``, leaving the store (the
@@ -199,7 +202,7 @@ class Session:
                     change(store)
                     store.save(self.path)
                     self.identity = file_identity(self.path)
-                    self._base = store._native.copy()
+                    self._base, self._base_kept = store._native.copy(), dict(store._foreign)
                     raise KeepRunningValues
             except KeepRunningValues:
                 pass
@@ -208,7 +211,7 @@ class Session:
         """The store was just saved: the file is its content."""
         SAVED.append(self.path)
         self.identity = file_identity(self.path)
-        self._base = self.store._native.copy()
+        self._base, self._base_kept = self.store._native.copy(), dict(self.store._foreign)
         self._refused = None
 
     def _merge_latest(self) -> bool:
@@ -219,12 +222,14 @@ class Session:
         if now == self.identity:
             return False
         store = self.store
-        ours = store._native.copy()
+        ours, ours_kept = store._native.copy(), dict(store._foreign)
         with store.transaction():
             _read_latest(store, self.path, now)
-            theirs = store._native.copy()
-            _put_on_top(store, self._base, ours, theirs, self.path)
+            theirs, theirs_kept = store._native.copy(), dict(store._foreign)
+            kept = (self._base_kept, ours_kept, theirs_kept)
+            _put_on_top(store, self._base, ours, theirs, self.path, kept)
         self.identity, self._base, self._refused = now, theirs, None
+        self._base_kept = theirs_kept
         return True
 
 
@@ -284,17 +289,41 @@ def _content(store: Store, native: Any) -> Content:
     }
 
 
-def _put_on_top(store: Store, base_native: Any, ours_native: Any, theirs: Any, path: str) -> None:
+def _put_on_top(
+    store: Store,
+    base_native: Any,
+    ours_native: Any,
+    theirs: Any,
+    path: str,
+    kept: tuple[dict[str, bytes], dict[str, bytes], dict[str, bytes]] = ({}, {}, {}),
+) -> None:
     """The store holds ``theirs`` (the file's latest content); puts on top of it what
     ``ours`` changed since ``base`` (what this writer read): whole instances added or removed,
-    values and defaults leaf by leaf. Raises :class:`StoreConflictError` for a leaf both
-    changed to different values, an instance one removed while the other changed it, or a
-    value whose shape (union variant, array length) both changed differently."""
+    values and defaults leaf by leaf, and the classic records kept unchanged (``kept``: base,
+    ours, theirs). Raises :class:`StoreConflictError` for a leaf both changed to different
+    values, an instance one removed while the other changed it, a value whose shape (union
+    variant, array length) both changed differently, or a classic parameter changed here that
+    the other writer changed as the other type (a kept record)."""
     base = _content(store, base_native)
     ours = _content(store, ours_native)
     latest = _content(store, theirs)
     params = {p.index: p for p in store._order}
     conflicts: list[str] = []
+    base_kept, ours_kept, theirs_kept = kept
+    changed_here = {
+        params[key[0]].name
+        for key in base.keys() | ours.keys()
+        if params[key[0]].classic is not None and ours.get(key) != base.get(key)
+    }
+    for name in sorted(base_kept.keys() | ours_kept.keys() | theirs_kept.keys() | changed_here):
+        was, held, found = base_kept.get(name), ours_kept.get(name), theirs_kept.get(name)
+        # (set here, the kept record given way: whatever the other writer did to it clashes)
+        if found != was and (name in changed_here or held not in (was, found)):
+            conflicts.append(f"{name} was changed here and by another writer (as the other type)")
+        elif held is None and was is not None:  # set here since: the kept record gave way
+            store._foreign.pop(name, None)
+        elif held is not None and held != was:
+            store._foreign[name] = held
     writes: list[tuple[tuple[int, int], tuple[bytes, bytes] | None]] = []
     for key in sorted(base.keys() | ours.keys()):
         before, mine, now = base.get(key), ours.get(key), latest.get(key)

@@ -402,6 +402,8 @@ class Store:
                 raise ClassicParamsError(f"{p.name}: {e}") from None
             self._check_encoded(p, 0, data, force=force)
             self._native.set_encoded(p.index, 0, data, default=default)
+            # A value kept as the other type (store/file.py) gives way to the one set here.
+            self._foreign.pop(p.name, None)
         elif key.leaf is None:
             self._check_value(p, instance, value, default, saturate=saturate, force=force)
             self._native.set_value(p.index, instance, value, default=default, saturate=saturate)
@@ -585,12 +587,16 @@ class Store:
         p, instance, _ = self._resolve(name)
         self._check_encoded(p, instance, bytes(data), force=False, default=default)
         self._native.set_encoded(p.index, instance, bytes(data), default=default)
+        if p.classic is not None:  # (a value kept as the other type gives way)
+            self._foreign.pop(p.name, None)
 
     def reset(self, name: str | Key) -> None:
         """Sets a value, or one leaf (``INA238#0[4]``), back to its default."""
         p, instance, key = self._resolve(name)
         if key.leaf is None:
             self._native.reset(p.index, instance)
+            if p.classic is not None:  # (a value kept as the other type is reset too)
+                self._foreign.pop(p.name, None)
             return
         # The value's leaf [k], found by its path in the default: where a union selects another
         # variant, or an array is shorter, the same index names another field there.
