@@ -751,3 +751,18 @@ def test_a_format_2_file_with_classic_records_says_how_they_are_read(
         "and infinities are refused) (a format 2 file: saved with a parameter set where it is "
         "the other type?) (at byte 14)"
     )
+
+
+def test_a_value_converted_from_the_other_type_is_unsaved_until_saved(
+    schema: px4params.Schema, tmp_path: Path
+) -> None:
+    """The file still holds the other type (firmware built with this set skips such a record):
+    the value is shown unsaved, not as what the file holds, until a save rewrites it."""
+    path = tmp_path / "v.store"
+    path.write_bytes(_classic_file([_classic_record("RC10_REV", struct.pack("<i", -1))]))
+    store = px4params.Store.load(path, schema, classic=BEFORE)  # RC10_REV a Float there
+    assert store.get("RC10_REV") == -1.0
+    assert store.state("RC10_REV")[1] is True  # unsaved
+    assert store.state("COM_DISARM_LAND")[1] is False
+    store.save(path)
+    assert px4params.Store.load(path, schema, classic=BEFORE).state("RC10_REV")[1] is False

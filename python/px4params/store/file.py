@@ -223,6 +223,19 @@ def apply_file(store: Store, path: str | os.PathLike[str], *, merge: bool) -> li
                 f"record cannot be applied: {e}{cause}", where, record.offset
             ) from None
     work.mark_saved()
+    # A value converted from the other type is not what the file holds: unsaved ("*") until a
+    # save writes it in this set's type (firmware built with this set would skip the record).
+    for record in content.records:
+        param = store._params.get(record.key) if record.kind == KIND_CLASSIC else None  # type: ignore[arg-type]
+        if (
+            param
+            and param.classic
+            and record.key not in foreign
+            and _retyped(record, param.classic)
+        ):
+            for default in (True, False):
+                data = work.get(param.index, 0, default=default)
+                work.set_encoded(param.index, 0, data, default=default)
     store._native.restore(work)
     store._foreign = foreign
     return report
@@ -325,10 +338,9 @@ def _classic_payloads(
     other type (its parameter's type changed between PX4 releases: RC10_REV, COM_DISARM_LAND)
     is converted where no digit is lost, and said; else None, and said: the record is kept
     unchanged. Its bytes are never read as the other type."""
-    stored = record.classic_type
-    if stored == 0 or (stored == CLASSIC_FLOAT) == param.is_float:  # (format 2 did not say)
+    if not _retyped(record, param):
         return record.default, record.value
-    was = "Float" if stored == CLASSIC_FLOAT else "Int32"
+    was = "Float" if record.classic_type == CLASSIC_FLOAT else "Int32"
     numbers = [
         None if payload is None else struct.unpack("<f" if was == "Float" else "<i", payload)[0]
         for payload in (record.default, record.value)
@@ -343,6 +355,12 @@ def _classic_payloads(
     report.append(f"{said} (its type changed between PX4 releases): taken as {taken}")
     pack = "<f" if param.is_float else "<i"
     return tuple(None if e is None else struct.pack(pack, e) for e in exact)  # type: ignore[return-value]
+
+
+def _retyped(record: Record, param: ClassicParam) -> bool:
+    """Whether a classic record says the other type than ``param``'s (format 2 says none)."""
+    stored = record.classic_type
+    return stored != 0 and (stored == CLASSIC_FLOAT) != param.is_float
 
 
 def _check_float32(name: str, payload: bytes | None) -> None:
