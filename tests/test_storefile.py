@@ -361,7 +361,7 @@ def test_a_classic_value_saved_as_one_type_is_never_read_as_the_other(
     report = before.load_from(path)
     assert report == [
         "COM_DISARM_LAND: stored as Float 2.5, Int32 in this parameter set: does not fit; "
-        "kept unchanged",
+        "kept unchanged (shown here as its default)",
         "RC10_REV: stored as Int32 -1, Float in this parameter set (its type changed between "
         "PX4 releases): taken as -1",
     ]
@@ -392,7 +392,7 @@ def test_a_whole_float_is_taken_by_an_int32_and_a_big_integer_is_not_taken_by_a_
         "COM_DISARM_LAND: stored as Float 3, Int32 in this parameter set (its type changed "
         "between PX4 releases): taken as 3",
         "RC10_REV: stored as Int32 16777217, Float in this parameter set: does not fit; kept "
-        "unchanged",
+        "unchanged (shown here as its default)",
     ]
     assert (before.get("COM_DISARM_LAND"), before.get("RC10_REV")) == (3, 1.0)
 
@@ -766,3 +766,14 @@ def test_a_value_converted_from_the_other_type_is_unsaved_until_saved(
     assert store.state("COM_DISARM_LAND")[1] is False
     store.save(path)
     assert px4params.Store.load(path, schema, classic=BEFORE).state("RC10_REV")[1] is False
+
+
+def test_a_classic_record_of_the_other_type_without_values_is_read_as_nothing(
+    schema: px4params.Schema, tmp_path: Path
+) -> None:
+    # (neither flag: a crafted record was reported "stored as Float , ... taken as ")
+    path = tmp_path / "v.store"
+    path.write_bytes(_classic_file([bytes([0x02 | 0x40, 8]) + b"RC10_REV"]))
+    store = px4params.Store(schema, classic=TODAY)
+    assert store.load_from(path) == []
+    assert store.get("RC10_REV") == 1 and store.kept_classic == []

@@ -338,7 +338,7 @@ def _classic_payloads(
     other type (its parameter's type changed between PX4 releases: RC10_REV, COM_DISARM_LAND)
     is converted where no digit is lost, and said; else None, and said: the record is kept
     unchanged. Its bytes are never read as the other type."""
-    if not _retyped(record, param):
+    if not _retyped(record, param) or record.default is record.value is None:
         return record.default, record.value
     was = "Float" if record.classic_type == CLASSIC_FLOAT else "Int32"
     numbers = [
@@ -349,7 +349,7 @@ def _classic_payloads(
     shown = ", ".join(shown_number(n, 32) for n in numbers if n is not None)
     said = f"{record.key}: stored as {was} {shown}, {param.type} in this parameter set"
     if any(e is None for n, e in zip(numbers, exact, strict=True) if n is not None):
-        report.append(f"{said}: does not fit; kept unchanged")
+        report.append(f"{said}: does not fit; kept unchanged (shown here as its default)")
         return None
     taken = ", ".join(shown_number(e, 32) for e in exact if e is not None)
     report.append(f"{said} (its type changed between PX4 releases): taken as {taken}")
