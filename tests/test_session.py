@@ -753,6 +753,17 @@ def _classic_sets(tmp_path: Path) -> tuple[str, str]:
     return paths[0], paths[1]
 
 
+def _kept_by_the_older_set(tmp_path: Path) -> tuple[str, str, Session]:
+    """A store saved by today's set with COM_DISARM_LAND 2.5, and a session of the older set,
+    which keeps that record (its Int32 cannot take 2.5): (path, today's set, the session)."""
+    today, before = _classic_sets(tmp_path)
+    path = str(tmp_path / "v.store")
+    first = open_session(path, today)
+    first.store.set("COM_DISARM_LAND", 2.5)
+    first.save()
+    return path, today, open_session(path, before)
+
+
 @pytest.mark.parametrize("theirs", [4.5, None])
 def test_a_value_kept_as_the_other_type_changed_by_another_writer_is_a_conflict(
     tmp_path: Path, theirs: float | None
@@ -762,12 +773,7 @@ def test_a_value_kept_as_the_other_type_changed_by_another_writer_is_a_conflict(
     setting the parameter here would have replaced it unseen."""
     from px4params.errors import StoreConflictError
 
-    today, before = _classic_sets(tmp_path)
-    path = str(tmp_path / "v.store")
-    first = open_session(path, today)
-    first.store.set("COM_DISARM_LAND", 2.5)
-    first.save()
-    older = open_session(path, before)
+    path, today, older = _kept_by_the_older_set(tmp_path)
     assert older.store.kept_classic == ["COM_DISARM_LAND"]
     other = open_session(path, today)
     if theirs is None:
@@ -788,12 +794,7 @@ def test_a_value_kept_as_the_other_type_changed_by_another_writer_is_a_conflict(
 def test_a_kept_value_set_here_replaces_it_when_the_other_writer_changed_something_else(
     tmp_path: Path,
 ) -> None:
-    today, before = _classic_sets(tmp_path)
-    path = str(tmp_path / "v.store")
-    first = open_session(path, today)
-    first.store.set("COM_DISARM_LAND", 2.5)
-    first.save()
-    older = open_session(path, before)
+    path, today, older = _kept_by_the_older_set(tmp_path)
     other = open_session(path, today)
     other.store.add("INA238#0")
     other.save()
