@@ -46,8 +46,9 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 # Ceilings of the compact build's .text, by target triple (None: the host).
 TARGETS: dict[str | None, dict[str, int | None]] = {
-    None: {"codec": 5376, "core": 12928, "all": None},
-    "thumbv7em-none-eabihf": {"codec": 4512, "core": 10016, "all": None},
+    None: {"codec": 5216, "core": 13088, "all": None},
+    # Issue 39's targets: codec 4 KiB, core (codec, leaves, descattering, frames, store) 10 KiB.
+    "thumbv7em-none-eabihf": {"codec": 4096, "core": 10240, "all": None},
 }
 
 PROBE_TOML = """\

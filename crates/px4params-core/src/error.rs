@@ -76,10 +76,17 @@ impl Default for Path {
     #[inline]
     fn default() -> Self {
         Self {
-            steps: [FIELD_FLAG; MAX_PATH_DEPTH],
+            steps: unused_steps(),
             depth: 0,
         }
     }
+}
+
+/// The steps of an empty path. (Out of line, so that they are written where the path lies, not
+/// made aside and copied there: a `memcpy` call, which firmware then links.)
+#[inline(never)]
+fn unused_steps() -> [u32; MAX_PATH_DEPTH] {
+    [FIELD_FLAG; MAX_PATH_DEPTH]
 }
 
 impl Path {

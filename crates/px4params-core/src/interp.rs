@@ -21,9 +21,11 @@ use crate::rules::{
     scalar_bits, scalar_of, scalar_raw, tail_optimized, ArrayLen, At, DecodeOptions, EncodeOptions,
     LeafError, LeafKind, Sink, Source, MAX_DEPTH,
 };
-use crate::scalar::{self, Scalar};
+use crate::scalar::{self, Scalar, ScalarError};
 
-/// The loop stopped: the error waits in [`Run::error`] (results stay register-sized).
+/// The loop stopped: the pass keeps the fault, [`Run::at`] where it was met, and the path is
+/// where the loop stands (results stay register-sized, and no error value is moved on the way:
+/// the caller words the error where it returns it).
 pub(crate) struct Stop;
 
 /// Whether a part ends the value read and the value written: tail array optimization applies
@@ -117,8 +119,9 @@ pub(crate) trait Pass {
     /// array lengths may differ from those read; a tail array's length counted ahead.
     const EDITS: bool = false;
 
-    /// The fault a method stopped at (each keeps it, so that results stay register-sized).
-    fn fault(&mut self) -> Option<ErrorKind<Self::Error>>;
+    /// Keeps the loop's own fault (a method that stops keeps its own, so that results stay
+    /// register-sized).
+    fn set_fault(&mut self, kind: ErrorKind<Self::Error>);
     /// Bits read or written so far.
     fn pos(&self) -> usize;
     /// A primitive value.
@@ -215,9 +218,13 @@ pub(crate) trait Pass {
 pub(crate) struct Run<'l, P: Pass> {
     layout: &'l Layout<'l>,
     pub(crate) pass: P,
-    path: Path,
+    /// The field path where the loop stands: where it stopped at a fault, the error's.
+    pub(crate) path: Path,
     depth: usize,
-    pub(crate) error: Option<Error<P::Error>>,
+    /// Where the loop stopped at a fault met where a node starts (a union's tag or an array's
+    /// length); `None` for any other: met where the loop stands, which it does not leave once
+    /// stopped. (The fault itself is the pass's.)
+    pub(crate) at: Option<usize>,
 }
 
 impl<'l, P: Pass> Run<'l, P> {
@@ -227,63 +234,53 @@ impl<'l, P: Pass> Run<'l, P> {
             pass,
             path: Path::default(),
             depth: 0,
-            error: None,
+            at: None,
         }
     }
 
-    /// The error the loop stopped at.
-    #[cold]
-    pub(crate) fn stopped(&mut self) -> Error<P::Error> {
-        // Every Stop is made by `fail_at`, which fills the slot first.
-        self.error.take().unwrap_or(Error {
-            kind: ErrorKind::TooDeep,
-            bit_offset: 0,
-            path: Path::default(),
-        })
-    }
-
-    #[cold]
-    #[inline(never)]
-    fn fail_at(&mut self, bit_offset: usize, kind: ErrorKind<P::Error>) -> Stop {
-        self.error = Some(Error {
-            kind,
-            bit_offset,
-            path: self.path,
-        });
+    /// Stops at a fault where the loop stands, here on the path. (Inline, so that the kind is
+    /// made where the pass keeps it: no error value is moved.)
+    #[inline(always)]
+    fn fail(&mut self, kind: ErrorKind<P::Error>) -> Stop {
+        self.pass.set_fault(kind);
         Stop
     }
 
+    /// [`ErrorKind::TooDeep`], where the loop stands.
     #[cold]
     #[inline(never)]
-    fn fail(&mut self, kind: ErrorKind<P::Error>) -> Stop {
-        let at = self.pass.pos();
-        self.fail_at(at, kind)
+    fn too_deep(&mut self) -> Stop {
+        self.fail(ErrorKind::TooDeep)
     }
 
+    /// A union's tag `n` that selects none of its `bound` variants (`tag`), or an array
+    /// length `n` over its maximum `bound`, at `bit_offset` (`None`: where the loop stands).
+    #[cold]
+    #[inline(never)]
+    fn over(&mut self, bit_offset: Option<usize>, tag: bool, n: u64, bound: u32) -> Stop {
+        let kind = match tag {
+            true => ErrorKind::BadUnionTag {
+                tag: n,
+                variants: bound,
+            },
+            false => ErrorKind::ArrayTooLong { len: n, max: bound },
+        };
+        self.at = bit_offset;
+        self.fail(kind)
+    }
+
+    /// A pass's result: where it stopped, the loop stops there (the fault it keeps is met where
+    /// the loop stands, [`Run::at`] `None`).
     #[inline(always)]
     fn ok<T>(&mut self, r: Result<T, Stop>) -> Result<T, Stop> {
-        match r {
-            Ok(v) => Ok(v),
-            Err(Stop) => Err(self.refused()),
-        }
-    }
-
-    /// Words the fault the pass stopped at.
-    #[cold]
-    #[inline(never)]
-    fn refused(&mut self) -> Stop {
-        match self.pass.fault() {
-            Some(kind) => self.fail(kind),
-            // A visit found what it looked for: the loop ends without error.
-            None => Stop,
-        }
+        r
     }
 
     /// A primitive (a field, an element or a variant), one past the nesting bound refused.
     #[inline]
     fn scalar(&mut self, kind: Kind) -> Result<(), Stop> {
         if self.depth >= MAX_DEPTH {
-            return Err(self.fail(ErrorKind::TooDeep));
+            return Err(self.too_deep());
         }
         let r = self.pass.scalar(kind, &self.path);
         self.ok(r)
@@ -313,7 +310,7 @@ impl<'l, P: Pass> Run<'l, P> {
         // table) is refused as the layout that nests too deeply is, not a panic: the walk
         // then links none.
         let Some(node) = layout.nodes.get(id as usize) else {
-            return Err(self.fail(ErrorKind::TooDeep));
+            return Err(self.too_deep());
         };
         if P::EDITS && self.pass.steered() {
             let at = PartAt {
@@ -331,7 +328,7 @@ impl<'l, P: Pass> Run<'l, P> {
         }
         self.depth += 1;
         if self.depth > MAX_DEPTH {
-            return Err(self.fail(ErrorKind::TooDeep));
+            return Err(self.too_deep());
         }
         let at_pos = self.pass.pos();
         // An array's elements: walked after the match, from one place in the code.
@@ -371,7 +368,7 @@ impl<'l, P: Pass> Run<'l, P> {
                 self.counts(true, Some(read), Some(tag), limit, at_pos)?;
                 let index = first + tag as u32;
                 let Some(&variant) = layout.fields.get(index as usize) else {
-                    return Err(self.fail(ErrorKind::TooDeep));
+                    return Err(self.too_deep());
                 };
                 let at = At {
                     path: &self.path,
@@ -391,7 +388,7 @@ impl<'l, P: Pass> Run<'l, P> {
                         let old = first + read as u32;
                         self.pass.set_mode(Mode::Skip);
                         let Some(&Field { node, .. }) = layout.fields.get(old as usize) else {
-                            return Err(self.fail(ErrorKind::TooDeep));
+                            return Err(self.too_deep());
                         };
                         self.part(node, tao, None, Some(Step::Field(old)))?;
                         self.pass.set_mode(Mode::Default);
@@ -499,21 +496,12 @@ impl<'l, P: Pass> Run<'l, P> {
         limit: u64,
         at_pos: usize,
     ) -> Result<(), Stop> {
-        let fault = |n: u64| match tag {
-            true => ErrorKind::BadUnionTag {
-                tag: n,
-                variants: limit as u32,
-            },
-            false => ErrorKind::ArrayTooLong {
-                len: n,
-                max: (limit - 1) as u32,
-            },
-        };
+        let bound = if tag { limit } else { limit - 1 } as u32;
         if let Some(n) = read.filter(|&n| n >= limit) {
-            return Err(self.fail_at(at_pos, fault(n)));
+            return Err(self.over(Some(at_pos), tag, n, bound));
         }
         if let Some(n) = new.filter(|&n| P::EDITS && n >= limit) {
-            return Err(self.fail(fault(n)));
+            return Err(self.over(None, tag, n, bound));
         }
         Ok(())
     }
@@ -545,8 +533,7 @@ impl<'l, P: Pass> Run<'l, P> {
         while self.pass.more(i, n) {
             // Counted elements stop at the maximum (given lengths are checked already).
             if i == u64::from(max) {
-                let too_long = ErrorKind::ArrayTooLong { len: i + 1, max };
-                return Err(self.fail(too_long));
+                return Err(self.over(None, false, i + 1, max));
             }
             self.path.push(Step::Index(i as u32));
             let r = self.pass.element(i);
@@ -569,7 +556,7 @@ impl<'l, P: Pass> Run<'l, P> {
     fn field(&mut self, index: u32, tao: Tao) -> Result<usize, Stop> {
         let layout = self.layout;
         let Some(&field) = layout.fields.get(index as usize) else {
-            return Err(self.fail(ErrorKind::TooDeep));
+            return Err(self.too_deep());
         };
         if P::EDITS {
             // Every field is there: a part like any other, a `p_version` one with its version.
@@ -606,7 +593,7 @@ impl<'l, P: Pass> Run<'l, P> {
                     self.node(field.node, tao)?;
                 } else {
                     if self.depth >= MAX_DEPTH {
-                        return Err(self.fail(ErrorKind::TooDeep));
+                        return Err(self.too_deep());
                     }
                     let r = match role {
                         Role::Version(v) => self.pass.version(kind, v, &self.path),
@@ -657,11 +644,7 @@ impl<'l, P: Pass> Run<'l, P> {
         let mut n = 0;
         while self.pass.read_left() >= 8 {
             if n == max {
-                let too_long = ErrorKind::ArrayTooLong {
-                    len: u64::from(n) + 1,
-                    max,
-                };
-                return Err(self.fail(too_long));
+                return Err(self.over(None, false, u64::from(n) + 1, max));
             }
             // (An element node the layout lacks is refused where it is walked.)
             let fixed = self.layout.nodes.get(elem as usize);
@@ -793,7 +776,8 @@ pub(crate) fn encode<P: Plans, S: Source>(
     };
     let mut run = Run::new(layout, pass);
     if run.node(root, Tao::both(options.tao)).is_err() {
-        return Err(run.stopped());
+        let at = run.at.unwrap_or(run.pass.out.bit_pos());
+        return Err(host_error(run.pass.fault.take(), at, run.path));
     }
     let pos = run.pass.out.bit_pos();
     run.pass.out.finish().map_err(|needed| Error {
@@ -822,7 +806,8 @@ pub(crate) fn decode<P: Plans, R: BitRead + ?Sized, K: Sink>(
     };
     let mut run = Run::new(layout, pass);
     if run.node(root, Tao::both(options.tao)).is_err() {
-        return Err(run.stopped());
+        let at = run.at.unwrap_or(run.pass.reader.position());
+        return Err(host_error(run.pass.fault.take(), at, run.path));
     }
     let end = run.pass.reader.position();
     let used = end.div_ceil(8);
@@ -835,6 +820,17 @@ pub(crate) fn decode<P: Plans, R: BitRead + ?Sized, K: Sink>(
         });
     }
     Ok(end)
+}
+
+/// The error an encoding or decoding loop stopped at: its pass's fault, where the loop met it
+/// and its path. (Every stop of these passes is a fault.)
+#[cold]
+fn host_error<E>(kind: Option<ErrorKind<E>>, bit_offset: usize, path: Path) -> Error<E> {
+    Error {
+        kind: kind.unwrap_or(ErrorKind::TooDeep),
+        bit_offset,
+        path,
+    }
 }
 
 /// The encoding pass: values from a [`Source`], bits into a [`BitWriter`].
@@ -877,8 +873,9 @@ impl<P: Plans, S: Source> Pass for Encode<'_, P, S> {
     const RUNS: bool = S::FLAT && P::FLAT;
     const ENCODES: bool = true;
 
-    fn fault(&mut self) -> Option<ErrorKind<S::Error>> {
-        self.fault.take()
+    #[inline(always)]
+    fn set_fault(&mut self, kind: ErrorKind<S::Error>) {
+        self.fault = Some(kind);
     }
 
     #[inline(always)]
@@ -1071,8 +1068,9 @@ impl<'d, P: Plans, R: BitRead + ?Sized + 'd, K: Sink> Pass for Decode<'d, P, R, 
     const RUNS: bool = K::FLAT && P::FLAT;
     const ENCODES: bool = false;
 
-    fn fault(&mut self) -> Option<ErrorKind<K::Error>> {
-        self.fault.take()
+    #[inline(always)]
+    fn set_fault(&mut self, kind: ErrorKind<K::Error>) {
+        self.fault = Some(kind);
     }
 
     #[inline(always)]
@@ -1440,8 +1438,10 @@ pub(crate) trait Visit {
 
     /// The error of the last [`Halt::Refused`]. The visits' own errors are those of leaf
     /// lists (a translation's is one: a leaf it cannot read).
-    fn refusal(&self) -> ErrorKind<LeafError> {
-        ErrorKind::TooDeep
+    ///
+    /// Written into `fault`, where the loop keeps it (so that a large one is not moved).
+    fn refusal(&self, fault: &mut Option<ErrorKind<LeafError>>) {
+        *fault = Some(ErrorKind::TooDeep);
     }
 
     /// A static array of `len` elements is about to be written at `path` from given values
@@ -1497,16 +1497,17 @@ pub(crate) struct PartAt<'w> {
 /// every leaf handed to a [`Visit`]. Its visit is behind a pointer, so that firmware compiles
 /// the loop once for all its operations.
 pub(crate) struct Visiting<'w> {
-    /// What it is asked to do (kept whole: one copy to set up).
-    job: Job<'w>,
+    /// What it is asked to do (the caller's: not copied).
+    job: &'w mut Job<'w>,
     rpos: usize,
     wpos: usize,
     leaves: usize,
     mode: Mode,
     visit: &'w mut dyn Visit,
+    /// The fault the loop stopped at, as it keeps it until the error is worded where the loop
+    /// returns it ([`visit`]): made in place or swapped in, never moved (a move of its size
+    /// is a `memcpy` call, which firmware then links).
     fault: Option<ErrorKind<LeafError>>,
-    /// The visit refused a leaf: its [`Visit::refusal`] is the fault (asked for only then).
-    refused: bool,
     /// The output is too small: the loop goes on without writing, to tell how small.
     overflow: bool,
 }
@@ -1559,19 +1560,49 @@ pub(crate) struct Walked {
     pub leaves: usize,
 }
 
-/// Runs the loop with the visiting pass over `root`.
+/// Runs the loop with the visiting pass over `root` (out of line: one copy of the wording of
+/// its error, for the operations that hand it on).
+#[inline(never)]
 pub(crate) fn visit(
     layout: &Layout<'_>,
     root: NodeId,
     job: Job<'_>,
     visit: &mut dyn Visit,
 ) -> Result<Walked, Error<LeafError>> {
+    visit_here(layout, root, job, visit)
+}
+
+/// [`visit`] for a caller that returns the error to the firmware: the loop is set up and run
+/// out of line, and the error worded here, where it is returned, so that it is never moved on
+/// the way (firmware that drops it, or looks at part of it, copies nothing: a move of its
+/// size is a `memcpy` call).
+#[inline(always)]
+pub(crate) fn visit_here(
+    layout: &Layout<'_>,
+    root: NodeId,
+    job: Job<'_>,
+    visit: &mut dyn Visit,
+) -> Result<Walked, Error<LeafError>> {
+    let mut job = job;
+    let mut run = visiting(layout, &mut job, visit);
+    match run.walk(root) {
+        Ok(walked) => Ok(walked),
+        Err(Stop) => Err(run.error()),
+    }
+}
+
+/// The loop with the visiting pass, set up where the caller keeps it.
+#[inline(never)]
+fn visiting<'l, 'w>(
+    layout: &'l Layout<'l>,
+    job: &'w mut Job<'w>,
+    visit: &'w mut dyn Visit,
+) -> Run<'l, Visiting<'w>> {
     let mode = if job.input.is_some() {
         Mode::Data
     } else {
         Mode::Given
     };
-    let tao = Tao::both(job.options.tao);
     let pass = Visiting {
         job,
         rpos: 0,
@@ -1580,33 +1611,79 @@ pub(crate) fn visit(
         mode,
         visit,
         fault: None,
-        refused: false,
         overflow: false,
     };
-    let mut run = Run::new(layout, pass);
-    let stopped = run.node(root, tao).is_err();
-    let pass = &run.pass;
-    match run.error {
-        Some(error) if stopped => Err(error),
-        _ if pass.overflow => Err(Error {
-            kind: ErrorKind::BufferTooSmall {
-                needed: pass.wpos.div_ceil(8),
-            },
-            bit_offset: pass.wpos,
-            // The walk ended: its path is empty again.
-            path: run.path,
-        }),
-        _ => Ok(Walked {
+    Run::new(layout, pass)
+}
+
+impl Run<'_, Visiting<'_>> {
+    /// Walks `root`; where it stopped at a fault, `Err` (the fault kept to be worded).
+    #[inline(never)]
+    fn walk(&mut self, root: NodeId) -> Result<Walked, Stop> {
+        let tao = Tao::both(self.pass.job.options.tao);
+        // (A visit that found what it looked for stops the loop without a fault.)
+        if self.node(root, tao).is_err() && self.pass.fault.is_some() {
+            return Err(Stop);
+        }
+        let pass = &mut self.pass;
+        if pass.overflow {
+            let needed = pass.wpos.div_ceil(8);
+            pass.fault = Some(ErrorKind::BufferTooSmall { needed });
+            // The walk ended: its path is empty again, and it stands at its end.
+            self.at = Some(pass.wpos);
+            return Err(Stop);
+        }
+        Ok(Walked {
             read: pass.rpos,
             written: pass.wpos,
             leaves: pass.leaves,
-        }),
+        })
+    }
+
+    /// The error the loop stopped at, worded.
+    #[inline(always)]
+    fn error(&self) -> Error<LeafError> {
+        let pass = &self.pass;
+        let kind = match &pass.fault {
+            Some(kind) => *kind,
+            None => ErrorKind::TooDeep,
+        };
+        Error {
+            kind,
+            bit_offset: self.at.unwrap_or(pass.pos()),
+            path: self.path,
+        }
     }
 }
 
 /// Runs the loop with the visiting pass to write a whole value into `out` (reading `input`
 /// if any); its length in bytes, the last byte's unused bits zero.
 pub(crate) fn write_whole(
+    layout: &Layout<'_>,
+    root: NodeId,
+    input: Option<&dyn Input>,
+    out: &mut [u8],
+    options: EncodeOptions,
+    v: &mut dyn Visit,
+) -> Result<usize, Error<LeafError>> {
+    write_whole_by::<false>(layout, root, input, out, options, v)
+}
+
+/// [`write_whole`] with the error worded here ([`visit_here`]).
+#[inline(always)]
+pub(crate) fn write_whole_here(
+    layout: &Layout<'_>,
+    root: NodeId,
+    input: Option<&dyn Input>,
+    out: &mut [u8],
+    options: EncodeOptions,
+    v: &mut dyn Visit,
+) -> Result<usize, Error<LeafError>> {
+    write_whole_by::<true>(layout, root, input, out, options, v)
+}
+
+#[inline(always)]
+fn write_whole_by<const HERE: bool>(
     layout: &Layout<'_>,
     root: NodeId,
     input: Option<&dyn Input>,
@@ -1621,7 +1698,11 @@ pub(crate) fn write_whole(
         steer: Steer::No,
         options,
     };
-    let end = visit(layout, root, job, v)?.written;
+    let walked = match HERE {
+        true => visit_here(layout, root, job, v),
+        false => visit(layout, root, job, v),
+    };
+    let end = walked?.written;
     // The last byte's unused bits (the walk wrote within `out`: no bounds check to panic).
     if end % 8 != 0 {
         if let Some(byte) = out.get_mut(end / 8) {
@@ -1632,8 +1713,8 @@ pub(crate) fn write_whole(
 }
 
 impl Visiting<'_> {
-    #[cold]
-    #[inline(never)]
+    /// (Inline, so that the kind is made where it is kept.)
+    #[inline(always)]
     fn refuse(&mut self, kind: ErrorKind<LeafError>) -> Stop {
         self.fault = Some(kind);
         Stop
@@ -1641,8 +1722,10 @@ impl Visiting<'_> {
 
     #[cold]
     fn halt(&mut self, halt: Halt) -> Stop {
-        // Found: no fault (each is taken when the loop stops), so the loop ends without error.
-        self.refused = halt == Halt::Refused;
+        // Found: no fault, so the loop ends without error.
+        if halt == Halt::Refused {
+            self.visit.refusal(&mut self.fault);
+        }
         Stop
     }
 
@@ -1724,7 +1807,8 @@ impl Visiting<'_> {
             Ok(None) => return Ok(()),
             Err(halt) => return Err(self.halt(halt)),
         };
-        let fault = match (kind, version) {
+        // (Each fault made where it is kept: see `Visiting::fault`.)
+        match (kind, version) {
             (LeafKind::Scalar(_), Some(expected))
                 if self.mode == Mode::Given && !self.job.options.keep_versions =>
             {
@@ -1732,29 +1816,44 @@ impl Visiting<'_> {
                     *raw = expected.into();
                     return Ok(());
                 }
-                ErrorKind::VersionMismatch { given: v, expected }
-            }
-            (LeafKind::Scalar(kind), _) => match scalar_raw(kind, v, self.job.options.saturate) {
-                Ok(bits) => {
-                    *raw = bits;
-                    return Ok(());
+                let given = Scalar::Uint(0);
+                self.fault = Some(ErrorKind::VersionMismatch { given, expected });
+                if let Some(ErrorKind::VersionMismatch { given, .. }) = &mut self.fault {
+                    *given = v;
                 }
-                Err(e) => ErrorKind::Scalar(e),
-            },
+                Err(Stop)
+            }
+            (LeafKind::Scalar(kind), _) => {
+                let mut r = scalar_raw(kind, v, self.job.options.saturate);
+                match &mut r {
+                    Ok(bits) => {
+                        *raw = *bits;
+                        Ok(())
+                    }
+                    // Swapped in, not moved (see `Visiting::fault`).
+                    Err(e) => {
+                        let wrong = ScalarError::WrongKind { expected: "" };
+                        self.fault = Some(ErrorKind::Scalar(wrong));
+                        if let Some(ErrorKind::Scalar(fault)) = &mut self.fault {
+                            core::mem::swap(fault, e);
+                        }
+                        Err(Stop)
+                    }
+                }
+            }
             // A count.
             _ => match v {
                 Scalar::Uint(n) => {
                     *raw = n;
-                    return Ok(());
+                    Ok(())
                 }
                 Scalar::Int(n) if n >= 0 => {
                     *raw = n as u64;
-                    return Ok(());
+                    Ok(())
                 }
-                _ => ErrorKind::Value(LeafError::NotACount),
+                _ => Err(self.refuse(ErrorKind::Value(LeafError::NotACount))),
             },
-        };
-        Err(self.refuse(fault))
+        }
     }
 
     /// A primitive leaf (`version`: the type's, for a `p_version` field).
@@ -1775,11 +1874,9 @@ impl Pass for Visiting<'_> {
     const ENCODES: bool = false;
     const EDITS: bool = true;
 
-    fn fault(&mut self) -> Option<ErrorKind<LeafError>> {
-        match core::mem::take(&mut self.refused) {
-            true => Some(self.visit.refusal()),
-            false => self.fault.take(),
-        }
+    #[inline(always)]
+    fn set_fault(&mut self, kind: ErrorKind<LeafError>) {
+        self.fault = Some(kind);
     }
     /// The position errors and leaves are reported at: in the data read, if any.
     fn pos(&self) -> usize {

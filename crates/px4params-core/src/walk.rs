@@ -22,7 +22,8 @@ use crate::bits::BitRead;
 use crate::error::{Error, ErrorKind, Path, Step};
 pub(crate) use crate::interp::put;
 use crate::interp::{
-    visit as run, write_whole, Bits, Halt, Job, LeafAt, PartAt, Reading, Steer, Visit, Walked,
+    visit as run, visit_here, write_whole, write_whole_here, Bits, Halt, Job, LeafAt, PartAt,
+    Reading, Steer, Visit, Walked,
 };
 use crate::layout::{Kind, Layout, NodeId};
 use crate::rules::{
@@ -57,8 +58,8 @@ impl Visit for Collect<'_> {
         Ok(None)
     }
 
-    fn refusal(&self) -> ErrorKind<LeafError> {
-        ErrorKind::Value(LeafError::Full)
+    fn refusal(&self, fault: &mut Option<ErrorKind<LeafError>>) {
+        *fault = Some(ErrorKind::Value(LeafError::Full));
     }
 }
 
@@ -75,8 +76,8 @@ impl Visit for Supply<'_> {
         Ok(Some(v))
     }
 
-    fn refusal(&self) -> ErrorKind<LeafError> {
-        ErrorKind::Value(LeafError::Exhausted)
+    fn refusal(&self, fault: &mut Option<ErrorKind<LeafError>>) {
+        *fault = Some(ErrorKind::Value(LeafError::Exhausted));
     }
 }
 
@@ -92,7 +93,7 @@ pub fn decode<R: BitRead + ?Sized>(
     let mut collect = Collect { leaves, len: 0 };
     let bits = Bits(data);
     let job = Job::reading(&bits, options.tao, Steer::No);
-    let end = run(layout, root, job, &mut collect)?.read;
+    let end = visit_here(layout, root, job, &mut collect)?.read;
     let (used, len) = (end.div_ceil(8), BitRead::bit_len(data) / 8);
     if !options.allow_trailing && len > used {
         return Err(Error {
@@ -118,7 +119,7 @@ pub fn encode(
     options: EncodeOptions,
 ) -> Result<usize, Error<LeafError>> {
     let mut supply = Supply { leaves, next: 0 };
-    write_whole(layout, root, None, out, options, &mut supply)
+    write_whole_here(layout, root, None, out, options, &mut supply)
 }
 
 /// Finds a leaf: the one `aim` looks for.
@@ -361,11 +362,11 @@ impl<A: Aim> Visit for Find<'_, A> {
         Err(Halt::Found)
     }
 
-    fn refusal(&self) -> ErrorKind<LeafError> {
-        ErrorKind::Truncated {
+    fn refusal(&self, fault: &mut Option<ErrorKind<LeafError>>) {
+        *fault = Some(ErrorKind::Truncated {
             needed_bits: self.beyond,
             available_bits: self.bit_len,
-        }
+        });
     }
 
     fn part(&mut self, at: &PartAt<'_>, reading: &mut Reading<'_>) -> bool {
@@ -487,12 +488,12 @@ impl Visit for Edit<'_> {
         }
     }
 
-    fn refusal(&self) -> ErrorKind<LeafError> {
-        ErrorKind::Scalar(ScalarError::OutOfRange {
+    fn refusal(&self, fault: &mut Option<ErrorKind<LeafError>>) {
+        *fault = Some(ErrorKind::Scalar(ScalarError::OutOfRange {
             value: self.value,
             min: Scalar::Uint(0),
             max: Scalar::Uint(self.limit.saturating_sub(1)),
-        })
+        }));
     }
 }
 
@@ -559,11 +560,11 @@ pub fn check_stored(
             Err(Halt::Refused)
         }
 
-        fn refusal(&self) -> ErrorKind<LeafError> {
-            match *self {
+        fn refusal(&self, fault: &mut Option<ErrorKind<LeafError>>) {
+            *fault = Some(match *self {
                 Stored(given, Some(expected)) => ErrorKind::VersionMismatch { given, expected },
                 Stored(value, None) => ErrorKind::Scalar(ScalarError::NotFinite { value }),
-            }
+            });
         }
     }
     let bits = Bits(data);
@@ -781,12 +782,12 @@ impl<R: BitRead + ?Sized, B: BitRead + ?Sized> Visit for Carry<'_, R, B> {
         }
     }
 
-    fn refusal(&self) -> ErrorKind<LeafError> {
-        match self.wrong_len {
+    fn refusal(&self, fault: &mut Option<ErrorKind<LeafError>>) {
+        *fault = Some(match self.wrong_len {
             Some((len, expected)) => ErrorKind::WrongArrayLength { len, expected },
             // A leaf the old value or the base does not hold (TranslateError::Unreadable).
             None => ErrorKind::Value(LeafError::Exhausted),
-        }
+        });
     }
 }
 
