@@ -35,8 +35,12 @@ def store(schema: px4params.Schema) -> px4params.Store:
     return px4params.Store(schema, classic=CLASSIC)
 
 
-def _classic_record(name: str, default: bytes | None, value: bytes | None) -> bytes:
+def _classic_record(
+    name: str, default: bytes | None, value: bytes | None, *, float32: bool = False
+) -> bytes:
+    """Kind 2; in a format 3 file, flag 0x40 says float32 values (else int32)."""
     flags = (HAS_DEFAULT if default is not None else 0) | (HAS_VALUE if value is not None else 0)
+    flags |= 0x40 if float32 else 0
     return (
         bytes([KIND_CLASSIC | flags, len(name)]) + name.encode() + (default or b"") + (value or b"")
     )
@@ -133,12 +137,12 @@ def test_classic_defaults_and_values_both_load(store: px4params.Store, tmp_path:
     path = tmp_path / "c.store"
     path.write_bytes(
         _file(
-            2,
+            3,
             zlib.crc32(b""),
             [
                 _table([]),
                 _classic_record("SYS_AUTOSTART", (10).to_bytes(4, "little"), None),
-                _classic_record("BAT1_CAPACITY", None, struct.pack("<f", 5000.0)),
+                _classic_record("BAT1_CAPACITY", None, struct.pack("<f", 5000.0), float32=True),
             ],
         )
     )
@@ -235,7 +239,7 @@ def test_an_unknown_classic_name_in_a_store_of_none(schema: px4params.Schema, tm
     bare = px4params.Store(schema, classic=[ClassicParam("SYS_AUTOSTART", "Int32", 0)])
     path = tmp_path / "x.store"
     path.write_bytes(
-        _file(2, zlib.crc32(b""), [_table([]), _classic_record("INA238", None, bytes(4))])
+        _file(3, zlib.crc32(b""), [_table([]), _classic_record("INA238", None, bytes(4))])
     )
     # a structured parameter's name in a classic record: not a classic parameter here either
     assert bare.load_from(path) == ["INA238: not a classic parameter of this store; kept unchanged"]

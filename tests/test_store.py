@@ -13,6 +13,7 @@ import sys
 import tempfile
 from collections import Counter
 from pathlib import Path
+from typing import Any
 
 import px4params
 import pytest
@@ -344,6 +345,30 @@ def test_memory_is_reserved_up_front(store: px4params.Store) -> None:
 KINDS = ("uint", "int", "float", "bool")
 
 
+def _to_the_defaults_variant(
+    data_type: Any, value: bytes, dflt: bytes, leaf: Any, new: Any, changed: bytes
+) -> bytes:
+    """A value's union tag switched to the variant its default selects takes that variant as
+    the default holds it (the store's rule, docs/store.md: SPI then I2C again keeps the default
+    address), not the variant's zeros (DSDL's, ``DataType.set_leaf``'s)."""
+    from px4params.dsdl.schema import put_at, value_at
+
+    parent, _, last = leaf.path.rpartition(".")
+    if last != "_tag":
+        return changed
+    tags = {
+        which: next((x.value for x in data_type.leaves(v, tao=False) if x.path == leaf.path), None)
+        for which, v in (("value", value), ("default", dflt))
+    }
+    if new != tags["default"] or new == tags["value"]:
+        return changed
+    whole, default_value = data_type.decode(value), data_type.decode(dflt)
+    if not parent:
+        return dflt
+    put_at(whole, parent, value_at(default_value, parent))
+    return bytes(data_type.encode(whole, tao=False))
+
+
 class StoreMachine(RuleBasedStateMachine):
     """Random operations on the store and on a model (a dict of encoded value and default per
     instance, changed with the codec's pure functions); after each step they agree, refused
@@ -409,7 +434,11 @@ class StoreMachine(RuleBasedStateMachine):
             new_default = data_type.set_leaf(dflt, leaf.index, new, tao=False)
             self.model[name] = (new_default if value == dflt else value, new_default)
         else:
-            self.model[name] = (data_type.set_leaf(value, leaf.index, new, tao=False), dflt)
+            changed = data_type.set_leaf(value, leaf.index, new, tao=False)
+            self.model[name] = (
+                _to_the_defaults_variant(data_type, value, dflt, leaf, new, changed),
+                dflt,
+            )
 
     @precondition(lambda self: self.model)
     @rule(data=st.data())
