@@ -466,13 +466,15 @@ int32_t px4p_store_open(px4p_store *store,
 // Replaces the store's content with a store file's (written by `px4params param save` or by
 // [`px4p_store_save`]). The file and every record are checked before anything changes: on any
 // error the store is as it was. Values stored by an older minor version of their type are
-// checked whole as that version, then translated when the tables carry it. Returns the number
-// of records applied.
+// checked whole as that version, then translated when the tables carry it. A classic record
+// the tables lack, or hold as the other type, is skipped, not counted (PX4 keeps classic
+// parameters in its own storage). Returns the number of records applied.
 int32_t px4p_store_load(px4p_store *store, const uint8_t *data, uintptr_t len);
 
 // Writes the store's file into `buf` (the bytes `px4params param load` reads); returns its
 // length, or `PX4P_ERR_BUFFER` when `buf` is too small. Parameters are written in name order,
-// as `px4params` writes them, so a file loaded and saved again is byte-identical.
+// as `px4params` writes them, so a file loaded and saved again is byte-identical, but for the
+// classic records the load skipped: only the tables' parameters are written.
 int32_t px4p_store_save(px4p_store *store, uint8_t *buf, uintptr_t cap);
 
 // Copies an instance's value (or with `which_default` its default) into `out`; returns its

@@ -369,8 +369,9 @@ impl file::FileNames for CNames {
 /// Replaces the store's content with a store file's (written by `px4params param save` or by
 /// [`px4p_store_save`]). The file and every record are checked before anything changes: on any
 /// error the store is as it was. Values stored by an older minor version of their type are
-/// checked whole as that version, then translated when the tables carry it. Returns the number
-/// of records applied.
+/// checked whole as that version, then translated when the tables carry it. A classic record
+/// the tables lack, or hold as the other type, is skipped, not counted (PX4 keeps classic
+/// parameters in its own storage). Returns the number of records applied.
 #[no_mangle]
 pub unsafe extern "C" fn px4p_store_load(
     store: *mut px4p_store,
@@ -399,7 +400,8 @@ pub unsafe extern "C" fn px4p_store_load(
 
 /// Writes the store's file into `buf` (the bytes `px4params param load` reads); returns its
 /// length, or `PX4P_ERR_BUFFER` when `buf` is too small. Parameters are written in name order,
-/// as `px4params` writes them, so a file loaded and saved again is byte-identical.
+/// as `px4params` writes them, so a file loaded and saved again is byte-identical, but for the
+/// classic records the load skipped: only the tables' parameters are written.
 #[no_mangle]
 pub unsafe extern "C" fn px4p_store_save(store: *mut px4p_store, buf: *mut u8, cap: usize) -> i32 {
     let Some(open) = open_mut(store) else {
