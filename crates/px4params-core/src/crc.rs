@@ -77,32 +77,61 @@ pub fn crc16(mut crc: u16, bytes: &[u8]) -> u16 {
         }
         return crc;
     }
-    let mut rest = bytes;
-    if SLICES == 8 {
-        // A slice (of known length: no bounds checks remain), so that the indices past 3 are
-        // no error where the tables are four.
-        let t: &[[u16; 256]] = &CRC16_TABLES;
-        let mut chunks = rest.chunks_exact(8);
-        for c in &mut chunks {
-            let high = (crc >> 8) as u8 ^ c[0];
-            let low = crc as u8 ^ c[1];
-            crc = (t[7][usize::from(high)] ^ t[6][usize::from(low)])
-                ^ (t[5][usize::from(c[2])] ^ t[4][usize::from(c[3])])
-                ^ (t[3][usize::from(c[4])] ^ t[2][usize::from(c[5])])
-                ^ (t[1][usize::from(c[6])] ^ t[0][usize::from(c[7])]);
-        }
-        rest = chunks.remainder();
-    }
-    let mut chunks = rest.chunks_exact(4);
-    for c in &mut chunks {
-        crc = crc16_word(crc, u32::from_be_bytes([c[0], c[1], c[2], c[3]]));
-    }
-    // A slice: where the tables are none (firmware), this code is never reached.
     let t: &[[u16; 256]] = &CRC16_TABLES;
-    for &b in chunks.remainder() {
-        crc = (crc << 8) ^ t[0][usize::from((crc >> 8) as u8 ^ b)];
+    // The first `len % 8` bytes as a step of their own, so that the rest are whole steps.
+    let (head, body) = bytes.split_at(bytes.len() % 8);
+    if let [first, rest @ ..] = head {
+        // The head as the last bytes of a step whose bytes before them are zero (they look
+        // up zero); the register is xored onto its first two. Byte loads, not a word: a
+        // payload just gathered lies in 8-byte stores that a wider load would straddle.
+        let n = head.len();
+        crc = match rest {
+            [] => (crc << 8) ^ t[0][usize::from((crc >> 8) as u8 ^ first)],
+            [second, rest @ ..] => {
+                let mut others = 0;
+                for (k, &b) in (2..).zip(rest) {
+                    others ^= t[n - 1 - k][usize::from(b)];
+                }
+                t[n - 1][usize::from((crc >> 8) as u8 ^ first)]
+                    ^ t[n - 2][usize::from(crc as u8 ^ second)]
+                    ^ others
+            }
+        };
+    }
+    // A step waits for the one before only through its first two bytes' lookups. The six
+    // others are taken a step ahead and carried over: written in one piece, the compiler
+    // xors all eight in one chain after the two, and each step waits for that chain.
+    let mut chunks = body
+        .chunks_exact(8)
+        .filter_map(|c| <&[u8; 8]>::try_from(c).ok());
+    if let Some(mut x) = chunks.next() {
+        let mut six = crc16_last_six(t, x);
+        for next in chunks {
+            let next_six = crc16_last_six(t, next);
+            crc = crc16_first_two(t, crc, x) ^ six;
+            (x, six) = (next, next_six);
+        }
+        crc = crc16_first_two(t, crc, x) ^ six;
     }
     crc
+}
+
+/// The lookups of a slicing-by-8 step for the first two of its bytes `x`, onto which the
+/// register `crc` is xored.
+#[inline(always)]
+fn crc16_first_two(t: &[[u16; 256]], crc: u16, x: &[u8; 8]) -> u16 {
+    let high = (crc >> 8) as u8 ^ x[0];
+    let low = crc as u8 ^ x[1];
+    t[7][usize::from(high)] ^ t[6][usize::from(low)]
+}
+
+/// The lookups of a slicing-by-8 step for the last six of its bytes `x`, which do not
+/// depend on the register.
+#[inline(always)]
+fn crc16_last_six(t: &[[u16; 256]], x: &[u8; 8]) -> u16 {
+    (t[5][usize::from(x[2])] ^ t[4][usize::from(x[3])])
+        ^ (t[3][usize::from(x[4])] ^ t[2][usize::from(x[5])])
+        ^ (t[1][usize::from(x[6])] ^ t[0][usize::from(x[7])])
 }
 
 /// Four bits of [`crc16`]: `nibble` (below 16) shifted through the register.
@@ -111,46 +140,13 @@ fn crc16_nibble(crc: u16, nibble: u8) -> u16 {
     (crc << 4) ^ CRC16_NIBBLES[usize::from(((crc >> 12) as u8 ^ nibble) & 15)]
 }
 
-/// [`crc16`] of four bytes given as one big-endian word.
-#[inline(always)]
-fn crc16_word(crc: u16, word: u32) -> u16 {
-    let t: &[[u16; 256]] = &CRC16_TABLES;
-    let [b0, b1, b2, b3] = word.to_be_bytes();
-    let high = (crc >> 8) as u8 ^ b0;
-    let low = crc as u8 ^ b1;
-    t[3][usize::from(high)] ^ t[2][usize::from(low)] ^ t[1][usize::from(b2)] ^ t[0][usize::from(b3)]
-}
-
-/// [`crc16`] over `pieces` as if they were one run of bytes: the four-byte steps go on across
-/// the pieces' edges (a transfer's CAN frames carry 7 payload bytes each).
+/// [`crc16`] over `pieces` as if they were one run of bytes (a transfer's CAN frames carry 7
+/// payload bytes each: a step each).
 pub fn crc16_pieces<'a>(mut crc: u16, pieces: impl IntoIterator<Item = &'a [u8]>) -> u16 {
-    if SLICES == 0 {
-        // Half a byte per step (firmware): no step spans two pieces, nothing to carry over.
-        for piece in pieces {
-            crc = crc16(crc, piece);
-        }
-        return crc;
-    }
-    let mut carry = [0u8; 4];
-    let mut held = 0;
     for piece in pieces {
-        let mut rest = piece;
-        if held > 0 {
-            let take = (4 - held).min(rest.len());
-            carry[held..held + take].copy_from_slice(&rest[..take]);
-            held += take;
-            rest = &rest[take..];
-            if held < 4 {
-                continue;
-            }
-            crc = crc16(crc, &carry);
-        }
-        let whole = rest.len() - rest.len() % 4;
-        crc = crc16(crc, &rest[..whole]);
-        held = rest.len() - whole;
-        carry[..held].copy_from_slice(&rest[whole..]);
+        crc = crc16(crc, piece);
     }
-    crc16(crc, &carry[..held])
+    crc
 }
 
 /// Bytes per step of [`crc16`] (and tables); 0: half a byte per step (firmware).
@@ -291,7 +287,7 @@ mod tests {
                 assert_eq!(crc16(start, &[byte]), bitwise(start, byte));
             }
         }
-        // Every length around the eight- and four-byte steps, every start.
+        // Every length around the eight-byte steps and the last shorter one.
         let data: std::vec::Vec<u8> = (0..67u32).map(|i| (i * 37 + 11) as u8).collect();
         for len in 0..data.len() {
             let expected = data[..len].iter().fold(0xFFFF, |crc, &b| bitwise(crc, b));

@@ -25,6 +25,9 @@ pub trait Plans {
     const TRANSLATE: bool;
     /// A multi-frame transfer's CRC over its payload gathered in runs (else across pieces).
     const GATHERED_CRC: bool;
+    /// A transfer of full classic CAN frames (all but the last 8 bytes) checked and gathered
+    /// in one pass over its frames (else the tails are checked, then the payload gathered).
+    const CLASSIC_FRAMES: bool;
     /// Bytes per step of the CRC-16 (8: tables of 4 KB; 0: half a byte, a 32-byte table).
     const CRC_SLICES: usize;
     /// Small fixed-shape types (a fixed run, perhaps ending in an array of primitives)
@@ -43,6 +46,7 @@ impl Plans for HostPlans {
     const TABLES: bool = true;
     const TRANSLATE: bool = true;
     const GATHERED_CRC: bool = true;
+    const CLASSIC_FRAMES: bool = true;
     const CRC_SLICES: usize = 8;
     const STRAIGHT: bool = true;
 }
@@ -58,6 +62,7 @@ impl Plans for NoPlans {
     const TABLES: bool = false;
     const TRANSLATE: bool = false;
     const GATHERED_CRC: bool = false;
+    const CLASSIC_FRAMES: bool = false;
     const CRC_SLICES: usize = 0;
     const STRAIGHT: bool = false;
 }

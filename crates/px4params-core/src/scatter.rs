@@ -198,6 +198,21 @@ impl<'f, 'a> FramePayloads<'f, 'a> {
         run
     }
 
+    /// The run, for the payload to be gathered into by other means than [`Self::gather`];
+    /// [`Self::set_gathered`] then says how much of it is the payload.
+    #[inline(always)]
+    pub(crate) fn run_mut(&mut self) -> &mut [u8] {
+        &mut self.run
+    }
+
+    /// Marks the run's first `len` bytes the gathered payload (written through
+    /// [`Self::run_mut`]), and returns them.
+    #[inline(always)]
+    pub(crate) fn set_gathered(&mut self, len: usize) -> &[u8] {
+        self.gathered = len;
+        &self.run[..len]
+    }
+
     /// Bytes before frame `i`'s payload: the transfer CRC in the first of several frames.
     #[inline(always)]
     fn head(&self, i: usize) -> usize {
@@ -339,7 +354,7 @@ pub(crate) fn gather(frames: &[&[u8]], out: &mut [u8]) {
 
 /// `dst.copy_from_slice(src)`, without a call for up to 8 bytes (a short last frame).
 #[inline(always)]
-fn copy_few(dst: &mut [u8], src: &[u8]) {
+pub(crate) fn copy_few(dst: &mut [u8], src: &[u8]) {
     let n = src.len();
     match (src.get(..4), src.get(n.saturating_sub(4)..)) {
         (Some(head), Some(tail)) if n <= 8 && dst.len() == n => {

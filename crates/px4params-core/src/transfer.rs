@@ -10,11 +10,22 @@ use core::fmt;
 
 use crate::crc::{crc16, crc16_pieces};
 use crate::plan::{Active, Plans};
-use crate::scatter::{gather, FramePayloads, Pieces, RUN};
+use crate::scatter::{copy_few, gather, FramePayloads, Pieces, RUN};
 
 const START: u8 = 0x80;
 const END: u8 = 0x40;
 const TOGGLE: u8 = 0x20;
+
+/// The tail byte of frame `index` of a transfer (`last`: the transfer's last frame): all 8
+/// bits are fixed by the frame's place, the start bit on the first, the end bit on the last,
+/// the toggle alternating from clear.
+#[inline(always)]
+const fn tail_byte(transfer_id: u8, index: usize, last: bool) -> u8 {
+    let start = if index == 0 { START } else { 0 };
+    let end = if last { END } else { 0 };
+    let toggle = if index % 2 == 1 { TOGGLE } else { 0 };
+    transfer_id | start | end | toggle
+}
 
 /// Largest frame: 8 bytes on classic CAN, 64 on CAN FD.
 pub const fn frame_max(canfd: bool) -> usize {
@@ -123,16 +134,8 @@ impl Iterator for Frames<'_> {
             return None;
         }
         let take = (total - self.pos).min(self.max - 1);
-        let mut tail = self.transfer_id;
-        if self.index == 0 {
-            tail |= START;
-        }
-        if self.pos + take >= total {
-            tail |= END;
-        }
-        if self.index % 2 == 1 {
-            tail |= TOGGLE;
-        }
+        let last = self.pos + take >= total;
+        let tail = tail_byte(self.transfer_id, self.index, last);
         // Every byte written once, zeros after the tail (not a zeroed array written over:
         // firmware then calls no `memset`).
         let pos = self.pos;
@@ -260,19 +263,40 @@ pub struct Received<'f, 'a> {
 }
 
 /// Checks the frames of one transfer: tail bits, transfer ID, toggle, and the CRC of a
-/// multi-frame transfer (computed over the pieces, which stay where they are).
+/// multi-frame transfer. The frames stay where they are; on hosts a payload of up to 64 bytes
+/// is gathered into a run the result keeps (classic frames checked and gathered in one pass),
+/// and the CRC and a decoder read it as flat bytes.
 // Inline: the caller's frame holds the result (with its gathered run) without a copy.
 #[inline]
 pub fn receive<'f, 'a>(
     frames: &'f [&'a [u8]],
     crc_seed: u16,
 ) -> Result<Received<'f, 'a>, TransferError> {
-    let (transfer_id, len) = check_tails(frames)?;
+    receive_with::<Active>(frames, crc_seed)
+}
+
+/// [`receive`] with the plans `P` (`tests/parity.rs` holds the sets to each other).
+#[inline]
+pub fn receive_with<'f, 'a, P: Plans>(
+    frames: &'f [&'a [u8]],
+    crc_seed: u16,
+) -> Result<Received<'f, 'a>, TransferError> {
     let mut payload = FramePayloads::new(frames);
+    if P::CLASSIC_FRAMES {
+        if let Some((transfer_id, got, len)) = classic_gathered(frames, payload.run_mut()) {
+            if crc16(crc_seed, payload.set_gathered(len)) == got {
+                return Ok(Received {
+                    transfer_id,
+                    payload,
+                });
+            }
+        }
+    }
+    let (transfer_id, len) = check_tails(frames)?;
     if let Some(got) = sent_crc(frames)? {
-        let computed = if !Active::GATHERED_CRC {
-            // Firmware built for size: no gathering buffer; the four-byte steps go on across
-            // the pieces.
+        let computed = if !P::GATHERED_CRC {
+            // Firmware built for size: no gathering buffer; the steps go on across the
+            // pieces.
             crc16_pieces(crc_seed, (0..payload.count()).map(|i| payload.piece(i)))
         } else if (..=RUN).contains(&len) {
             // Most transfers are a few frames: gathered into the run the payload keeps, so
@@ -292,11 +316,29 @@ pub fn receive<'f, 'a>(
 /// [`receive`] into a buffer, as firmware reassembles a transfer: checks the frames and
 /// copies the payload to the start of `out` (bytes after it are left alone); returns the
 /// transfer ID and the payload's length. The payload can then be decoded in one piece.
+/// A payload that does not fit `out` leaves it alone; another fault (a bad tail byte, the
+/// CRC) may leave bytes of the payload's place in `out` written.
 pub fn receive_into(
     frames: &[&[u8]],
     crc_seed: u16,
     out: &mut [u8],
 ) -> Result<(u8, usize), TransferError> {
+    receive_into_with::<Active>(frames, crc_seed, out)
+}
+
+/// [`receive_into`] with the plans `P`.
+pub fn receive_into_with<P: Plans>(
+    frames: &[&[u8]],
+    crc_seed: u16,
+    out: &mut [u8],
+) -> Result<(u8, usize), TransferError> {
+    if P::CLASSIC_FRAMES {
+        if let Some((transfer_id, got, len)) = classic_gathered(frames, out) {
+            if crc16(crc_seed, &out[..len]) == got {
+                return Ok((transfer_id, len));
+            }
+        }
+    }
     let (transfer_id, len) = check_tails(frames)?;
     let got = sent_crc(frames)?;
     let room = out.len();
@@ -310,6 +352,47 @@ pub fn receive_into(
     Ok((transfer_id, len))
 }
 
+/// The plan for a multi-frame transfer of classic CAN frames, each full (8 bytes) but the
+/// last, whose payload fits `out`: one pass over the frames checks each tail byte and moves
+/// each middle frame whole, in one 8-byte store (its tail byte lands where the next frame's
+/// payload goes). Returns the transfer ID, the CRC the first frame carries and the
+/// payload's length; declines (`None`) on any other transfer and on any fault, which the
+/// general path then finds and words. A bad tail byte found part way leaves bytes of `out`
+/// written.
+#[inline(always)]
+fn classic_gathered(frames: &[&[u8]], out: &mut [u8]) -> Option<(u8, u16, usize)> {
+    let (first, rest) = frames.split_first()?;
+    let (last, middle) = rest.split_last()?;
+    let first = <&[u8; 8]>::try_from(*first).ok()?;
+    let (&last_tail, last_piece) = last.split_last()?;
+    // A last frame with no payload would leave the one before's tail byte past the end.
+    // Lengths first: a transfer whose payload does not fit `out` leaves it alone.
+    if last_piece.is_empty() || middle.iter().any(|frame| frame.len() != 8) {
+        return None;
+    }
+    let len = 5 + 7 * middle.len() + last_piece.len();
+    let out = out.get_mut(..len)?;
+    let transfer_id = first[7] & 0x1F;
+    if first[7] != tail_byte(transfer_id, 0, false) {
+        return None;
+    }
+    copy_few(&mut out[..5], &first[2..7]);
+    let mut at = 5;
+    for (i, frame) in (1..).zip(middle) {
+        let frame = <&[u8; 8]>::try_from(*frame).ok()?;
+        if frame[7] != tail_byte(transfer_id, i, false) {
+            return None;
+        }
+        out.get_mut(at..at + 8)?.copy_from_slice(frame);
+        at += 7;
+    }
+    if last_tail != tail_byte(transfer_id, frames.len() - 1, true) {
+        return None;
+    }
+    copy_few(out.get_mut(at..)?, last_piece);
+    Some((transfer_id, u16::from_le_bytes([first[0], first[1]]), len))
+}
+
 /// Checks every frame's tail byte; returns the transfer ID and the payload's length (bytes
 /// other than tail bytes and a multi-frame transfer's CRC, which [`sent_crc`] checks is there).
 fn check_tails(frames: &[&[u8]]) -> Result<(u8, usize), TransferError> {
@@ -317,19 +400,14 @@ fn check_tails(frames: &[&[u8]]) -> Result<(u8, usize), TransferError> {
     let tail = *first.last().ok_or(TransferError::EmptyFrame { frame: 0 })?;
     let expected = tail & 0x1F;
     let last = rest.len();
-    // All 8 bits of a frame's tail byte are fixed by its place in the transfer: the toggle
-    // alternates from clear, the first has the start bit, the last the end bit.
-    let end = |i: usize| if i == last { END } else { 0 };
-    if tail != expected | START | end(0) {
+    if tail != tail_byte(expected, 0, last == 0) {
         return Err(tail_error(0, tail, expected, last));
     }
     let mut bytes = first.len();
-    let mut toggle = 0;
     for (i, frame) in (1..).zip(rest) {
-        toggle ^= TOGGLE;
         let tail = *frame.last().ok_or(TransferError::EmptyFrame { frame: i })?;
         bytes += frame.len();
-        if tail != expected | toggle | end(i) {
+        if tail != tail_byte(expected, i, i == last) {
             return Err(tail_error(i, tail, expected, last));
         }
     }

@@ -412,3 +412,179 @@ mod path_lookup {
         }
     }
 }
+
+/// Receiving a transfer with the host's plans (full classic frames checked and gathered in
+/// one pass) against the general path (`NoPlans`): random payloads sent as classic CAN or CAN
+/// FD frames, then spoiled the ways a bus or a sender spoils them (a bit flipped, a frame
+/// lost, repeated, swapped, cut or lengthened, the transfer ID changed): the same transfer
+/// ID and payload, or the same error; and into a buffer, the same bytes.
+mod transfer_plan {
+    use super::*;
+    use px4params_core::scatter::Pieces;
+    use px4params_core::transfer::{frames, receive_into_with, receive_with, TransferError};
+
+    const SEED: u16 = 0x5EED;
+
+    type Got = Result<(u8, Vec<u8>), TransferError>;
+
+    fn received<P: Plans>(frames: &[&[u8]]) -> Got {
+        let r = receive_with::<P>(frames, SEED)?;
+        let bytes = (0..r.payload.count()).flat_map(|i| r.payload.piece(i).to_vec());
+        Ok((r.transfer_id, bytes.collect()))
+    }
+
+    /// `receive_into` with the plans `P` into a buffer of `room` bytes (filled with 0xA5):
+    /// the transfer ID and the payload, or the error with the buffer as it was left.
+    fn received_into<P: Plans>(frames: &[&[u8]], room: usize) -> (Got, Vec<u8>) {
+        let mut out = vec![0xA5; room];
+        let got = receive_into_with::<P>(frames, SEED, &mut out);
+        match got {
+            Ok((id, len)) => (Ok((id, out[..len].to_vec())), out[len..].to_vec()),
+            Err(e) => (Err(e), out),
+        }
+    }
+
+    #[derive(Clone, Debug)]
+    enum Spoil {
+        None,
+        Flip {
+            frame: prop::sample::Index,
+            byte: prop::sample::Index,
+            bit: u8,
+        },
+        Drop(prop::sample::Index),
+        Repeat(prop::sample::Index),
+        Swap(prop::sample::Index),
+        Cut(prop::sample::Index),
+        Lengthen(prop::sample::Index, u8),
+        TransferId(prop::sample::Index),
+    }
+
+    fn spoil() -> impl Strategy<Value = Spoil> {
+        use prop::sample::Index;
+        prop_oneof![
+            3 => Just(Spoil::None),
+            2 => (any::<Index>(), any::<Index>(), 0u8..8).prop_map(|(frame, byte, bit)| Spoil::Flip { frame, byte, bit }),
+            1 => any::<Index>().prop_map(Spoil::Drop),
+            1 => any::<Index>().prop_map(Spoil::Repeat),
+            1 => any::<Index>().prop_map(Spoil::Swap),
+            1 => any::<Index>().prop_map(Spoil::Cut),
+            1 => (any::<Index>(), any::<u8>()).prop_map(|(i, b)| Spoil::Lengthen(i, b)),
+            1 => any::<Index>().prop_map(Spoil::TransferId),
+        ]
+    }
+
+    fn spoiled(mut frames: Vec<Vec<u8>>, how: &Spoil) -> Vec<Vec<u8>> {
+        let n = frames.len();
+        match how {
+            Spoil::None => {}
+            Spoil::Flip { frame, byte, bit } => {
+                let f = &mut frames[frame.index(n)];
+                let at = byte.index(f.len());
+                f[at] ^= 1 << bit;
+            }
+            Spoil::Drop(i) => {
+                frames.remove(i.index(n));
+            }
+            Spoil::Repeat(i) => {
+                let i = i.index(n);
+                frames.insert(i, frames[i].clone());
+            }
+            Spoil::Swap(i) => {
+                let i = i.index(n);
+                frames.swap(i, (i + 1) % n);
+            }
+            Spoil::Cut(i) => {
+                let f = &mut frames[i.index(n)];
+                f.remove(0);
+            }
+            Spoil::Lengthen(i, b) => frames[i.index(n)].insert(0, *b),
+            Spoil::TransferId(i) => {
+                let f = &mut frames[i.index(n)];
+                *f.last_mut().unwrap() ^= 0x01;
+            }
+        }
+        frames
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(2000))]
+
+        #[test]
+        fn receive_plan_as_the_general_path(
+            payload in proptest::collection::vec(any::<u8>(), 0..140),
+            canfd in any::<bool>(),
+            transfer_id in 0u8..32,
+            how in spoil(),
+            slack in 0usize..3,
+        ) {
+            let sent: Vec<Vec<u8>> = frames(&payload, SEED, transfer_id, canfd)
+                .map(|f| f.as_bytes().to_vec())
+                .collect();
+            let sent = spoiled(sent, &how);
+            let refs: Vec<&[u8]> = sent.iter().map(Vec::as_slice).collect();
+            let plan = received::<HostPlans>(&refs);
+            let walk = received::<NoPlans>(&refs);
+            prop_assert_eq!(&plan, &walk);
+            if matches!(how, Spoil::None) {
+                let (id, bytes) = plan.clone().unwrap();
+                prop_assert_eq!(id, transfer_id);
+                // CAN FD pads the last frame to a length it can have: the padding is payload.
+                prop_assert_eq!(&bytes[..payload.len()], &payload[..]);
+            }
+            // Into a buffer one byte short, exact, and roomier.
+            let len = plan.as_ref().map_or(payload.len(), |(_, b)| b.len());
+            for room in [len.saturating_sub(1), len + slack] {
+                let (plan_into, plan_left) = received_into::<HostPlans>(&refs, room);
+                let (walk_into, walk_left) = received_into::<NoPlans>(&refs, room);
+                prop_assert_eq!(&plan_into, &walk_into);
+                match &plan_into {
+                    Ok(_) => {
+                        prop_assert_eq!(&plan_into, &plan);
+                        // Bytes after the payload are left alone.
+                        prop_assert!(plan_left.iter().chain(&walk_left).all(|&b| b == 0xA5));
+                    }
+                    // Frames that do not fit leave the buffer alone.
+                    Err(TransferError::TooLong { .. }) => {
+                        prop_assert!(plan_left.iter().chain(&walk_left).all(|&b| b == 0xA5));
+                    }
+                    Err(_) => {}
+                }
+            }
+        }
+    }
+
+    /// The plan's own edges, each against the general path: two frames, the most the run
+    /// holds (64 bytes) and one more, a last frame of one payload byte, and of none (the tail
+    /// byte alone, which the plan leaves to the general path).
+    #[test]
+    fn the_plans_edges_as_the_general_path() {
+        for len in [6, 7, 12, 13, 63, 64, 65, 66] {
+            let payload: Vec<u8> = (0..len as u8).map(|b| b.wrapping_mul(29)).collect();
+            let sent: Vec<Vec<u8>> = frames(&payload, SEED, 9, false)
+                .map(|f| f.as_bytes().to_vec())
+                .collect();
+            let refs: Vec<&[u8]> = sent.iter().map(Vec::as_slice).collect();
+            let plan = received::<HostPlans>(&refs);
+            assert_eq!(plan, received::<NoPlans>(&refs), "{len} bytes");
+            assert_eq!(plan, Ok((9, payload.clone())), "{len} bytes");
+        }
+        // A last frame of its tail byte alone: no sender makes one, the rules allow it.
+        let payload: Vec<u8> = (0..12).collect();
+        let mut sent: Vec<Vec<u8>> = frames(&payload, SEED, 4, false)
+            .map(|f| f.as_bytes().to_vec())
+            .collect();
+        assert_eq!(sent.len(), 2);
+        let last = sent[1].clone();
+        // The last frame's payload moved into a middle frame of its own, toggle and all.
+        let (tail, piece) = last.split_last().unwrap();
+        let mut middle = piece.to_vec();
+        middle.push(tail & !0x40);
+        sent[1] = middle;
+        sent.push(vec![(tail & 0x1F) | 0x40]);
+        let refs: Vec<&[u8]> = sent.iter().map(Vec::as_slice).collect();
+        let plan = received::<HostPlans>(&refs);
+        assert_eq!(plan, received::<NoPlans>(&refs));
+        assert_eq!(plan, Ok((4, payload)));
+    }
+}
