@@ -202,7 +202,7 @@ fn descatter(c: &mut Criterion) {
     group.finish();
 }
 
-/// The transfer CRC over BatteryInfo's 55 payload bytes: the core's table-driven CRC-16
+/// The transfer CRC over BatteryInfo's 43 payload bytes: the core's table-driven CRC-16
 /// against the bit-by-bit definition (written here, as the baseline), side by side.
 fn transfer_crc(c: &mut Criterion) {
     fn bitwise(mut crc: u16, bytes: &[u8]) -> u16 {
