@@ -18,8 +18,8 @@ use crate::error::{Error, ErrorKind, Path, Step};
 use crate::layout::{Field, FlatItem, Kind, Layout, Node, NodeId, Role, Segment, Span};
 use crate::plan::Plans;
 use crate::rules::{
-    scalar_bits, scalar_of, scalar_raw, tail_optimized, ArrayLen, At, DecodeOptions, EncodeOptions,
-    LeafError, LeafKind, Sink, Source, MAX_DEPTH,
+    scalar_bits, scalar_of, scalar_raw, tail_elements, tail_goes_on, tail_optimized, ArrayLen, At,
+    DecodeOptions, EncodeOptions, LeafError, LeafKind, Sink, Source, MAX_DEPTH,
 };
 use crate::scalar::{self, Scalar, ScalarError};
 
@@ -642,7 +642,7 @@ impl<'l, P: Pass> Run<'l, P> {
     fn count_tail(&mut self, elem: NodeId, max: u32) -> Result<u64, Stop> {
         let (start, mode) = (self.pass.read_pos(), self.pass.mode());
         let mut n = 0;
-        while self.pass.read_left() >= 8 {
+        while tail_goes_on(self.pass.read_left()) {
             if n == max {
                 return Err(self.over(None, false, u64::from(n) + 1, max));
             }
@@ -1153,7 +1153,7 @@ impl<'d, P: Plans, R: BitRead + ?Sized + 'd, K: Sink> Pass for Decode<'d, P, R, 
     fn more(&self, i: u64, n: Option<u64>) -> bool {
         match n {
             Some(n) => i < n,
-            None => self.remaining() >= 8,
+            None => tail_goes_on(self.remaining()),
         }
     }
     #[inline]
@@ -1192,8 +1192,8 @@ impl<'d, P: Plans, R: BitRead + ?Sized + 'd, K: Sink> Pass for Decode<'d, P, R, 
         let bits = scalar_bits(kind) as usize;
         let n = match n {
             Some(n) => n as usize,
-            // A tail array: as many elements as whole bytes remain for.
-            None if self.remaining() >= 8 => (self.remaining() / 8 * 8) / bits,
+            // A tail array (one whose last element runs past the end is refused below).
+            None if tail_goes_on(self.remaining()) => tail_elements(self.remaining(), bits),
             None => return Ok(None),
         };
         if n > max as usize || bits.saturating_mul(n) > self.remaining() {

@@ -28,6 +28,7 @@ use crate::codec::{
     read_scalar, scalar_bits, scalar_stream, DecodeOptions, EncodeOptions, MAX_DEPTH,
 };
 use crate::layout::{Kind, Layout, NodeId, Role};
+use crate::rules::{tail_elements, tail_goes_on, tail_qualifies};
 use crate::scalar::{self, Scalar};
 
 /// Reads a value for [`Program::encode`]. Every method may decline (`None`): the value is not
@@ -424,7 +425,7 @@ impl Compiler<'_, '_> {
                 let len = Len::Dynamic {
                     max,
                     len_bits,
-                    tail: tail && layout.node(elem).min_bits >= 8,
+                    tail: tail && tail_qualifies(layout.node(elem).min_bits),
                 };
                 self.array(elem, len, tail, depth)?
             }
@@ -897,8 +898,7 @@ impl<K: ValueSink> Decoder<'_, '_, K> {
                 loop {
                     let more = match n {
                         Some(n) => i < n,
-                        // A tail array's items take every remaining whole byte.
-                        None => self.bits_left() >= 8,
+                        None => tail_goes_on(self.bits_left()),
                     };
                     if !more {
                         break;
@@ -922,11 +922,7 @@ impl<K: ValueSink> Decoder<'_, '_, K> {
         let bits = scalar_bits(elem) as usize;
         let n = match len {
             Len::Fixed(len) => len as usize,
-            // Elements are read while a whole byte is left.
-            Len::Dynamic { tail: true, .. } if self.tao => match self.bits_left() {
-                left @ 8.. => (left - 8) / bits + 1,
-                _ => 0,
-            },
+            Len::Dynamic { tail: true, .. } if self.tao => tail_elements(self.bits_left(), bits),
             Len::Dynamic { len_bits, .. } => match self.uint(len_bits) {
                 Some(n) => n as usize,
                 None => return Ok(None),

@@ -208,7 +208,38 @@ pub(crate) fn tail_optimized(layout: &Layout<'_>, elem: NodeId, tao: bool) -> bo
     tao && layout
         .nodes
         .get(elem as usize)
-        .is_some_and(|n| n.min_bits >= 8)
+        .is_some_and(|n| tail_qualifies(n.min_bits))
+}
+
+// Tail array optimization, the rule itself: the walk and every plan ask these three.
+
+/// Whether an array whose elements take at least `elem_min_bits` bits drops its length
+/// prefix when it ends the value (with the optimization on): elements of 8 bits or more.
+#[inline(always)]
+pub(crate) const fn tail_qualifies(elem_min_bits: u64) -> bool {
+    elem_min_bits >= 8
+}
+
+/// Whether a tail array's next element begins with `bits_left` bits left: while a whole byte
+/// is left (fewer bits are the padding of the last byte).
+#[inline(always)]
+pub(crate) const fn tail_goes_on(bits_left: usize) -> bool {
+    bits_left >= 8
+}
+
+/// How many elements of `elem_bits` bits each (8 or more) a tail array has with `bits_left`
+/// bits left: as many as [`tail_goes_on`] begins. The last may run past the end, which the
+/// walk refuses (a plan declines it).
+#[inline(always)]
+pub(crate) const fn tail_elements(bits_left: usize, elem_bits: usize) -> usize {
+    if !tail_goes_on(bits_left) {
+        0
+    } else if elem_bits == 8 {
+        // Bytes, the common case, without a division.
+        bits_left / 8
+    } else {
+        (bits_left - 8) / elem_bits + 1
+    }
 }
 
 /// A scalar from its raw bits.

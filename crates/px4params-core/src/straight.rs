@@ -16,7 +16,8 @@
 use crate::bits::{self, BitRead, BitReader};
 use crate::layout::{FlatItem, Kind, Layout, NodeId, Role, Segment, Span};
 use crate::rules::{
-    scalar_bits, scalar_of, scalar_raw, DecodeOptions, EncodeOptions, Sink, Source, MAX_DEPTH,
+    scalar_bits, scalar_of, scalar_raw, tail_elements, tail_qualifies, DecodeOptions,
+    EncodeOptions, Sink, Source, MAX_DEPTH,
 };
 use crate::scalar::{self, Scalar};
 
@@ -98,8 +99,14 @@ pub fn compile(layout: &Layout<'_>, root: NodeId) -> Option<Straight> {
         elem: elem_node.kind,
         elem_bits,
         max,
-        // Tail array optimization drops the prefix of elements of 8 bits or more.
-        prefixes: [len_bits, if elem_node.min_bits >= 8 { 0 } else { len_bits }],
+        prefixes: [
+            len_bits,
+            if tail_qualifies(elem_node.min_bits) {
+                0
+            } else {
+                len_bits
+            },
+        ],
         bytes: matches!(elem_node.kind, Kind::Uint { bits: 8, .. }),
     });
     Some(plan)
@@ -719,10 +726,9 @@ fn measure(plan: &Straight, prefix: u32, data: &[u8]) -> Option<(usize, usize)> 
     };
     let width = tail.elem_bits as usize;
     if prefix == 0 {
-        // Tail-optimized: the array takes every remaining whole byte (whole elements, fewer
-        // than 8 bits left over). Bytes (the common case) without a division.
-        let n = if width == 8 { rest / 8 } else { rest / width };
-        if rest - n * width >= 8 || n > tail.max as usize {
+        // Tail-optimized: one whose last element runs past the end is the walk's to refuse.
+        let n = tail_elements(rest, width);
+        if n * width > rest || n > tail.max as usize {
             return None;
         }
         return Some((n, bits + n * width));
