@@ -41,6 +41,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from px4params.data import VALUE_SETS_TOML
+from px4params.dsdl.model import length_bits, tag_bits
 from px4params.dsdl.roots import Root, dronecan_package_dir
 from px4params.errors import DsdlError, NumberError, TagValueError
 from px4params.numbers import FLOAT_MAX, abbreviated, parse_float, parse_int
@@ -372,7 +373,7 @@ class _ModelBuilder:
             if kind == "array":
                 return int(spec["len"]) * bits(spec["elem"])
             if kind == "dynarray":
-                return int(spec["max"]).bit_length() + int(spec["max"]) * bits(spec["elem"])
+                return length_bits(int(spec["max"])) + int(spec["max"]) * bits(spec["elem"])
             return 1 if kind == "bool" else int(spec.get("bits", 0))
 
         def type_bits(key: str) -> int:
@@ -380,7 +381,7 @@ class _ModelBuilder:
                 memo[key] = 0  # a cycle (refused elsewhere) must not recurse forever
                 fields = [bits(f["type"]) for f in self.types[key]["fields"]]
                 if self.types[key]["kind"] == "union":
-                    memo[key] = max(1, (len(fields) - 1).bit_length()) + max(fields, default=0)
+                    memo[key] = tag_bits(len(fields)) + max(fields, default=0)
                 else:
                     memo[key] = sum(fields)
             return memo[key]

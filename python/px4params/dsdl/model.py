@@ -68,7 +68,28 @@ if TYPE_CHECKING:  # typing costs a command 5 ms: see px4params._records
     #: A scalar tag's value: a number of the field's type, or a bool for a bool field.
     Scalar = int | float | bool
 
-__all__ = ["NO_DOC", "Field", "FieldDoc", "TypeDef", "TypeDoc", "type_def"]
+__all__ = [
+    "NO_DOC",
+    "Field",
+    "FieldDoc",
+    "TypeDef",
+    "TypeDoc",
+    "length_bits",
+    "tag_bits",
+    "type_def",
+]
+
+
+def tag_bits(variants: int) -> int:
+    """Width of a union tag for `variants` variants: ceil(log2(n)) (the core's
+    ``layout::union_tag_bits``)."""
+    return max(variants - 1, 0).bit_length()
+
+
+def length_bits(max_len: int) -> int:
+    """Width of a dynamic array's length prefix: ceil(log2(max + 1)) (the core's
+    ``layout::array_len_bits``)."""
+    return max_len.bit_length()
 
 
 class _Doc:

@@ -42,7 +42,7 @@ import os
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from px4params.dsdl.model import NO_DOC, FieldDoc
+from px4params.dsdl.model import NO_DOC, FieldDoc, length_bits, tag_bits
 from px4params.dsdl.schema import Schema, to_json_value
 from px4params.errors import FlatError, MetadataError
 from px4params.numbers import FLOAT_MAX
@@ -365,16 +365,6 @@ def min_bits(schema: Schema, spec: Mapping[str, Any]) -> int:
     if kind == "dynarray":
         return length_bits(spec["max"])
     return schema[spec["name"]].min_bits
-
-
-def tag_bits(variants: int) -> int:
-    """Width of a union tag: ceil(log2(n))."""
-    return max(variants - 1, 0).bit_length()
-
-
-def length_bits(max_len: int) -> int:
-    """Width of a dynamic array's length prefix: ceil(log2(max + 1))."""
-    return max_len.bit_length()
 
 
 class _Describer:

@@ -57,7 +57,7 @@ import math
 from collections.abc import Iterator, Mapping
 
 from px4params._records import TYPE_CHECKING
-from px4params.dsdl.model import Field
+from px4params.dsdl.model import Field, length_bits
 from px4params.dsdl.schema import DataType, Leaf
 from px4params.errors import FlatError, InstanceError, LeafError
 from px4params.numbers import FLOAT_MAX
@@ -303,7 +303,7 @@ class _Walker:
                 self.walk(spec["elem"], f"{path}[{i}]", requires)
         elif kind == "dynarray":
             length = _join(path, "_len")
-            bits = max(1, int(spec["max"]).bit_length())
+            bits = max(1, length_bits(int(spec["max"])))
             self.add(length, f"uint{bits}", INT32, "length", 0, spec["max"], requires)
             for i in range(spec["max"]):
                 self.walk(spec["elem"], f"{path}[{i}]", (*requires, (length, ">", i)))
