@@ -148,6 +148,90 @@ const fn field_mask_halves(n: u32) -> u64 {
     (high as u64) << 32 | low as u64
 }
 
+// ---- Byte order: a value's bytes least significant first, its top `bits % 8` bits last.
+
+/// Puts a value's bytes in DroneCAN stream order: the whole low bytes first, then the top
+/// `bits % 8` bits, as one big-endian stream value of `bits` bits.
+#[inline(always)]
+pub fn to_stream(value: u64, bits: u32) -> u64 {
+    let whole = bits / 8;
+    let rest = bits % 8;
+    if whole == 0 {
+        return value & mask(rest);
+    }
+    let low = value & field_mask(whole * 8);
+    let swapped = low.swap_bytes() >> (64 - whole * 8);
+    if rest == 0 {
+        swapped
+    } else {
+        (swapped << rest) | ((value >> (whole * 8)) & field_mask(rest))
+    }
+}
+
+/// Inverse of [`to_stream`].
+#[inline(always)]
+pub fn from_stream(stream: u64, bits: u32) -> u64 {
+    let whole = bits / 8;
+    let rest = bits % 8;
+    if whole == 0 {
+        return stream;
+    }
+    let bytes = if rest == 0 { stream } else { stream >> rest };
+    let low = (bytes << (64 - whole * 8)).swap_bytes();
+    if rest == 0 {
+        low
+    } else {
+        low | ((stream & mask(rest)) << (whole * 8))
+    }
+}
+
+/// How a value's bits become stream bits, known ahead (a plan's step keeps it).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[repr(u8)]
+pub(crate) enum Order {
+    /// At most 8 bits: as they are.
+    #[default]
+    Same,
+    /// Whole bytes: the bytes reversed.
+    Bytes,
+    /// Whole bytes and some bits more: the general rule.
+    Mixed,
+}
+
+impl Order {
+    /// The order of a value of `bits` bits (`1..=64`).
+    pub(crate) const fn of(bits: u32) -> Self {
+        match bits {
+            ..=8 => Self::Same,
+            _ if bits % 8 == 0 => Self::Bytes,
+            _ => Self::Mixed,
+        }
+    }
+
+    /// [`to_stream`] for a value of this order.
+    #[inline(always)]
+    pub(crate) fn stream(self, raw: u64, bits: u32) -> u64 {
+        match self {
+            Self::Same => raw,
+            // 16 to 64 bits: the shift is at most 48.
+            Self::Bytes => raw.swap_bytes() >> (64 - bits),
+            Self::Mixed => to_stream(raw, bits),
+        }
+    }
+
+    /// [`from_stream`] for a value of this order.
+    #[inline(always)]
+    pub(crate) fn raw(self, stream: u64, bits: u32) -> u64 {
+        match self {
+            Self::Same => stream,
+            Self::Bytes => (stream << (64 - bits)).swap_bytes(),
+            Self::Mixed => from_stream(stream, bits),
+        }
+    }
+}
+
+// ---- Bit order: each byte's most significant bit first.
+
 /// Reads `n` bits (`1..=64`) at bit `offset` from `data` as a big-endian stream value.
 ///
 /// # Panics
@@ -161,19 +245,7 @@ pub fn read_bits(data: &[u8], offset: usize, n: u32) -> u64 {
     // Fast path: the bits (plus the leading skipped bits) fit a 64-bit window; near the end
     // of the data the window is zero-filled. Without plans (firmware) the loop alone runs.
     if Active::WINDOWED_BITS && shift + n <= 64 {
-        let word = if let Some(bytes) = data.get(first..first + 8) {
-            let mut window = [0u8; 8];
-            window.copy_from_slice(bytes);
-            u64::from_be_bytes(window)
-        } else {
-            // Near the end of the data (or of a short piece): only the bytes needed.
-            let mut word = 0u64;
-            for (k, &b) in data[first..=last].iter().enumerate() {
-                word |= u64::from(b) << (56 - 8 * k);
-            }
-            word
-        };
-        return (word << shift) >> (64 - n);
+        return bits_at(load_word(&data[first..]), shift, n);
     }
     let mut acc: u128 = 0;
     for &byte in &data[first..=last] {
@@ -221,17 +293,70 @@ pub fn write_bits(out: &mut [u8], offset: usize, value: u64, n: u32) {
     }
 }
 
-/// Writes bits one after another into a byte buffer. Unfinished bits wait in a 64-bit register
-/// and go out 32 at a time, so a field costs a shift and an or, and fields do not wait on
-/// each other's byte stores.
+/// Bits on their way out, most significant first, in a register: the oldest go out as
+/// big-endian bytes, 32 at a time or a byte at a time. Bits older than the waiting ones may
+/// stay above them in the register; they are shifted out, never stored.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Pending {
+    acc: u64,
+    /// How many of the lowest bits of `acc` wait (`<= 64`).
+    count: u32,
+}
+
+impl Pending {
+    /// The low `count` (`<= 64`) bits of `acc` waiting, the oldest highest.
+    #[inline(always)]
+    pub(crate) const fn new(acc: u64, count: u32) -> Self {
+        Self { acc, count }
+    }
+
+    /// How many bits wait.
+    #[inline(always)]
+    pub(crate) const fn count(&self) -> u32 {
+        self.count
+    }
+
+    /// Appends `n` bits (`count + n <= 64`) of a stream value that fits them; when 32 or
+    /// more wait then, gives the oldest 32 as they go out.
+    #[inline(always)]
+    pub(crate) fn push(&mut self, value: u64, n: u32) -> Option<[u8; 4]> {
+        self.acc = (self.acc << n) | value;
+        self.count += n;
+        if self.count < 32 {
+            return None;
+        }
+        self.count -= 32;
+        Some(((self.acc >> self.count) as u32).to_be_bytes())
+    }
+
+    /// The oldest byte; 8 bits or more wait.
+    #[inline(always)]
+    pub(crate) fn pop_byte(&mut self) -> u8 {
+        debug_assert!(self.count >= 8);
+        self.count -= 8;
+        (self.acc >> self.count) as u8
+    }
+
+    /// The waiting bits (at most 32) as they end a stream: at the top of 4 bytes, zeros
+    /// after them, and how many of the bytes they reach.
+    #[inline(always)]
+    pub(crate) fn last_bytes(&self) -> ([u8; 4], usize) {
+        debug_assert!(self.count <= 32);
+        let word = ((self.acc << (32 - self.count)) as u32).to_be_bytes();
+        (word, self.count.div_ceil(8) as usize)
+    }
+}
+
+/// Writes bits one after another into a byte buffer. Unfinished bits wait in a register
+/// and go out 32 at a time, so a field costs a shift and an or, and fields do
+/// not wait on each other's byte stores.
 #[derive(Debug)]
 pub struct BitWriter<'o> {
     out: &'o mut [u8],
     /// Bytes completed in `out`.
     bytes: usize,
-    /// Pending bits, right-aligned; fewer than 32 between writes.
-    acc: u64,
-    pending: u32,
+    /// Fewer than 32 between writes.
+    pending: Pending,
 }
 
 impl<'o> BitWriter<'o> {
@@ -240,15 +365,14 @@ impl<'o> BitWriter<'o> {
         Self {
             out,
             bytes: 0,
-            acc: 0,
-            pending: 0,
+            pending: Pending::default(),
         }
     }
 
     /// Bits written so far.
     #[inline]
     pub fn bit_pos(&self) -> usize {
-        self.bytes * 8 + self.pending as usize
+        self.bytes * 8 + self.pending.count() as usize
     }
 
     /// Appends the low `n` bits (`1..=64`) of a big-endian stream value; `Err(needed_bytes)`
@@ -264,16 +388,16 @@ impl<'o> BitWriter<'o> {
     }
 
     /// Appends `count` values produced by `next(i)` as `(stream value, bit length)` (the value
-    /// must fit its length, as [`crate::scalar::to_stream`] makes it), keeping the writer's
-    /// state in registers for the whole run. Stops at the first error of `next` (`Err(Ok(e))`)
-    /// or when `out` is full (`Err(Err(needed_bytes))`), with the values before it written.
+    /// must fit its length, as [`to_stream`] makes it), keeping the writer's state in
+    /// registers for the whole run. Stops at the first error of `next` (`Err(Ok(e))`) or when
+    /// `out` is full (`Err(Err(needed_bytes))`), with the values before it written.
     #[inline(always)]
     pub fn write_run<E>(
         &mut self,
         count: usize,
         mut next: impl FnMut(usize) -> Result<(u64, u32), E>,
     ) -> Result<(), Result<E, usize>> {
-        let (mut acc, mut pending, mut bytes) = (self.acc, self.pending, self.bytes);
+        let (mut pending, mut bytes) = (self.pending, self.bytes);
         let out = &mut *self.out;
         let mut result = Ok(());
         for i in 0..count {
@@ -293,44 +417,34 @@ impl<'o> BitWriter<'o> {
                     (value & mask(32), n.min(32)),
                 ]
                 .into_iter()
-                .try_for_each(|(half, k)| put(out, &mut acc, &mut pending, &mut bytes, half, k))
+                .try_for_each(|(half, k)| put(out, &mut pending, &mut bytes, half, k))
             } else if n > 32 {
                 // Over 32 bits: two halves, so that pending (< 32) + n stays within 64.
-                put(out, &mut acc, &mut pending, &mut bytes, value >> 32, n - 32).and_then(|()| {
-                    put(
-                        out,
-                        &mut acc,
-                        &mut pending,
-                        &mut bytes,
-                        value & mask(32),
-                        32,
-                    )
-                })
+                put(out, &mut pending, &mut bytes, value >> 32, n - 32)
+                    .and_then(|()| put(out, &mut pending, &mut bytes, value & mask(32), 32))
             } else {
-                put(out, &mut acc, &mut pending, &mut bytes, value, n)
+                put(out, &mut pending, &mut bytes, value, n)
             };
             if let Err(needed) = stored {
                 result = Err(Err(needed));
                 break;
             }
         }
-        (self.acc, self.pending, self.bytes) = (acc, pending, bytes);
+        (self.pending, self.bytes) = (pending, bytes);
         result
     }
 
     /// Stores the pending whole bytes; `Err(needed_bytes)` when `out` is too small.
     fn flush_bytes(&mut self) -> Result<(), usize> {
-        while self.pending >= 8 {
+        while self.pending.count() >= 8 {
             // Room first: a refused byte stays pending, so the writer's position (and what
             // `finish` asks for) still counts it.
             let Some(slot) = self.out.get_mut(self.bytes) else {
                 return Err(self.bytes + 1);
             };
-            self.pending -= 8;
-            *slot = (self.acc >> self.pending) as u8;
+            *slot = self.pending.pop_byte();
             self.bytes += 1;
         }
-        self.acc &= mask(self.pending);
         Ok(())
     }
 
@@ -338,7 +452,7 @@ impl<'o> BitWriter<'o> {
     /// filled by the caller (the writer moves past them).
     #[inline]
     pub fn aligned_bytes(&mut self, n: usize) -> Option<&mut [u8]> {
-        if self.pending % 8 != 0 {
+        if self.pending.count() % 8 != 0 {
             return None;
         }
         self.flush_bytes().ok()?;
@@ -348,46 +462,242 @@ impl<'o> BitWriter<'o> {
         Some(bytes)
     }
 
-    /// Pads the last byte with zeros; returns the length in bytes.
-    pub fn finish(mut self) -> Result<usize, usize> {
-        let pad = (8 - self.pending % 8) % 8;
-        self.acc <<= pad;
-        self.pending += pad;
-        self.flush_bytes()?;
-        Ok(self.bytes)
+    /// Pads the last byte with zeros; returns the length in bytes, or `Err(needed_bytes)`
+    /// when `out` is too small (then nothing more is stored).
+    pub fn finish(self) -> Result<usize, usize> {
+        let (word, n) = self.pending.last_bytes();
+        let end = self.bytes + n;
+        let slot = self.out.get_mut(self.bytes..end).ok_or(end)?;
+        slot.copy_from_slice(&word[..n]);
+        Ok(end)
     }
 }
 
-/// Appends `n <= 32` bits to an accumulator holding fewer than 32, storing 32 at a time.
+/// Appends `n <= 32` bits to a register holding fewer than 32, storing 32 at a time.
 #[inline(always)]
 fn put(
     out: &mut [u8],
-    acc: &mut u64,
-    pending: &mut u32,
+    pending: &mut Pending,
     bytes: &mut usize,
     value: u64,
     n: u32,
 ) -> Result<(), usize> {
-    *acc = (*acc << n) | value;
-    *pending += n;
-    if *pending >= 32 {
-        *pending -= 32;
-        let word = ((*acc >> *pending) as u32).to_be_bytes();
-        match out.get_mut(*bytes..*bytes + 4) {
-            Some(slot) => slot.copy_from_slice(&word),
-            None => {
-                // Near the end of a short buffer: store what fits, report the rest.
-                let room = out.len().saturating_sub(*bytes);
-                if let Some(slot) = out.get_mut(*bytes..) {
-                    slot.copy_from_slice(&word[..room]);
-                }
-                return Err(*bytes + 4);
+    let Some(word) = pending.push(value, n) else {
+        return Ok(());
+    };
+    match out.get_mut(*bytes..*bytes + 4) {
+        Some(slot) => slot.copy_from_slice(&word),
+        None => {
+            // Near the end of a short buffer: store what fits, report the rest.
+            let room = out.len().saturating_sub(*bytes);
+            if let Some(slot) = out.get_mut(*bytes..) {
+                slot.copy_from_slice(&word[..room]);
+            }
+            return Err(*bytes + 4);
+        }
+    }
+    *bytes += 4;
+    Ok(())
+}
+
+// ---- Stream words: stream bits in a register, the first highest.
+
+/// The first 8 bytes of `bytes` (fewer where it is shorter, zeros after them) as a stream
+/// word: the first byte highest.
+#[inline(always)]
+pub(crate) fn load_word(bytes: &[u8]) -> u64 {
+    if let Some(eight) = bytes.first_chunk::<8>() {
+        return u64::from_be_bytes(*eight);
+    }
+    let len = bytes.len();
+    if let (Some(head), Some(tail)) = (bytes.first_chunk::<4>(), bytes.last_chunk::<4>()) {
+        // 4 to 7 bytes: two loads, which overlap; the bytes they share are equal, so the
+        // or is exact.
+        let high = u64::from(u32::from_be_bytes(*head)) << 32;
+        return high | u64::from(u32::from_be_bytes(*tail)) << (8 * (8 - len));
+    }
+    // Fewer than 4: 2 and 1 at a time, as the length's bits say.
+    let (mut word, mut at) = (0u64, 0);
+    if let Some(two) = bytes.first_chunk::<2>() {
+        word = u64::from(u16::from_be_bytes(*two)) << 48;
+        at = 2;
+    }
+    if let Some(&one) = bytes.get(at) {
+        word |= u64::from(one) << (56 - 8 * at);
+    }
+    word
+}
+
+/// Stores the low `bits` (`1..=64`) bits of `acc` at the start of `out` as stream bits,
+/// zeros after them, filling `out` up to its 8th byte (which the bits need, or which the
+/// caller writes next): one to four stores, without a count of bytes.
+#[inline(always)]
+pub(crate) fn store_word(out: &mut [u8], acc: u64, bits: u32) {
+    let bytes = acc.wrapping_shl(64 - bits).to_be_bytes();
+    let n = out.len();
+    if let Some(word) = out.first_chunk_mut::<8>() {
+        *word = bytes;
+    } else if n >= 4 {
+        // 4 to 7 bytes: the first four and the last four (overlapping).
+        out[..4].copy_from_slice(&bytes[..4]);
+        out[n - 4..].copy_from_slice(&bytes[n - 4..n]);
+    } else if n >= 2 {
+        out[..2].copy_from_slice(&bytes[..2]);
+        if let Some(third) = out.get_mut(2) {
+            *third = bytes[2];
+        }
+    } else if let Some(first) = out.first_mut() {
+        *first = bytes[0];
+    }
+}
+
+/// Bits `skip..skip + n` (`n` in `1..=64`, `skip + n <= 64`) of a stream word.
+#[inline(always)]
+pub(crate) const fn bits_at(word: u64, skip: u32, n: u32) -> u64 {
+    (word << skip) >> (64 - n)
+}
+
+/// A stream word's bytes after its first `n` (`0..=7`), zeros after them.
+#[inline(always)]
+pub(crate) const fn after_bytes(word: u64, n: u32) -> u64 {
+    word << (8 * n)
+}
+
+/// A stream word's first `n` (`1..=8`) bytes, zeros after them.
+#[inline(always)]
+pub(crate) const fn first_bytes(word: u64, n: u32) -> u64 {
+    (word >> (64 - 8 * n)) << (64 - 8 * n)
+}
+
+/// Stream bits read ahead of their use: the next `count` bits, the first highest in `word`.
+/// After them the word holds zeros or the stream's own next bits, except after
+/// [`Ahead::drop`] of 64 bits.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Ahead {
+    word: u64,
+    count: u32,
+}
+
+impl Ahead {
+    /// The first `count` bits of the stream word `word`.
+    #[inline(always)]
+    pub(crate) const fn new(word: u64, count: u32) -> Self {
+        Self { word, count }
+    }
+
+    /// How many bits are ahead.
+    #[inline(always)]
+    pub(crate) const fn count(&self) -> u32 {
+        self.count
+    }
+
+    /// The next `n` bits (`1..=64`, at most those ahead) as a stream value.
+    #[inline(always)]
+    pub(crate) fn take(&mut self, n: u32) -> u64 {
+        let value = self.word >> (64 - n);
+        self.drop(n);
+        value
+    }
+
+    /// Passes over the next `n` bits (`0..=64`, at most those ahead).
+    #[inline(always)]
+    pub(crate) fn drop(&mut self, n: u32) {
+        // A shift by 64 leaves the word as it was: nothing is ahead then.
+        self.word = self.word.wrapping_shl(n);
+        self.count = self.count.saturating_sub(n);
+    }
+
+    /// All the bits ahead (fewer than 64) as a stream value, leaving none.
+    #[inline(always)]
+    pub(crate) fn take_all(&mut self) -> u64 {
+        let value = (self.word >> 1) >> (63 - self.count);
+        self.count = 0;
+        value
+    }
+
+    /// Appends the first `bytes` bytes of the stream word `word` (those ahead and these fill
+    /// at most 64 bits; the word after those ahead holds zeros or these bits).
+    #[inline(always)]
+    pub(crate) fn append(&mut self, word: u64, bytes: u32) {
+        self.word |= word >> self.count;
+        self.count += 8 * bytes;
+    }
+
+    /// The bits ahead as bytes: whole bytes first when a byte boundary is next.
+    #[inline(always)]
+    pub(crate) const fn bytes(&self) -> [u8; 8] {
+        self.word.to_be_bytes()
+    }
+}
+
+/// Up to 16 stream bytes in a register, the first highest: what a window over pieces holds.
+pub(crate) mod wide {
+    /// `word` with the stream word `next` appended after its first `len` bytes (`len <= 16`;
+    /// the bytes after them are zero).
+    #[inline(always)]
+    pub(crate) fn append(word: u128, len: usize, next: u64) -> u128 {
+        word | (u128::from(next) << 64) >> (8 * len)
+    }
+
+    /// `word` without its first `n` bytes (`n <= 16`; zero when none are left).
+    #[inline(always)]
+    pub(crate) fn after_bytes(word: u128, n: usize) -> u128 {
+        word.checked_shl(8 * n as u32).unwrap_or(0)
+    }
+
+    /// Bits `skip..skip + n` of `word` (`n` in `1..=64`, `skip + n <= 128`).
+    #[inline(always)]
+    pub(crate) fn bits_at(word: u128, skip: u32, n: u32) -> u64 {
+        ((word << skip) >> (128 - n)) as u64
+    }
+}
+
+// ---- Both at once, a byte at a time: what firmware's walk reads and writes with.
+
+/// Writes the low `bits` bits of `raw` at bit `pos` of `out` as a DroneCAN scalar (its bytes
+/// least significant first, the top bits last, each most significant bit first), a byte at a
+/// time into the two bytes it may span; the caller checks that `out` holds them.
+#[inline(never)]
+pub(crate) fn put_scalar(out: &mut [u8], mut pos: usize, raw: u64, bits: u32) {
+    let (mut value, end) = (raw, pos + bits as usize);
+    // A caller's mistake shows in tests, where release builds would write short.
+    debug_assert!(end <= out.len() * 8, "put beyond the output: bit {end}");
+    while pos < end {
+        let n = (end - pos).min(8) as u32;
+        let (i, s) = (pos / 8, (pos % 8) as u32);
+        let place = 16 - n - s;
+        let bits = ((value as u32) & ((1 << n) - 1)) << place;
+        let keep = !(((1u32 << n) - 1) << place);
+        // (Checked reaches: the caller has checked them, and firmware links no panic here.)
+        if let Some(byte) = out.get_mut(i) {
+            *byte = (u32::from(*byte) & (keep >> 8)) as u8 | (bits >> 8) as u8;
+        }
+        if s + n > 8 {
+            if let Some(byte) = out.get_mut(i + 1) {
+                *byte = (u32::from(*byte) & keep) as u8 | bits as u8;
             }
         }
-        *bytes += 4;
-        *acc &= mask(*pending);
+        value >>= 8;
+        pos += n as usize;
     }
-    Ok(())
+}
+
+/// Reads a DroneCAN scalar of `bits` bits (`1..=64`) at bit `pos` as [`put_scalar`] writes
+/// it, a byte at a time: `pair(i)` gives bytes `i` and `i + 1` (the caller checks that the
+/// bits lie in the data). (Gathered as bytes: a 64-bit shift by a
+/// variable amount is a call on 32-bit targets.)
+#[inline(always)]
+pub(crate) fn read_scalar(pair: impl Fn(usize) -> [u8; 2], mut pos: usize, bits: u32) -> u64 {
+    let (mut bytes, mut k, end) = ([0u8; 8], 0, pos + bits as usize);
+    while pos < end {
+        let n = (end - pos).min(8) as u32;
+        let (i, s) = (pos / 8, (pos % 8) as u32);
+        let window = u32::from(u16::from_be_bytes(pair(i))) << s;
+        bytes[k & 7] = ((window >> (16 - n)) & ((1 << n) - 1)) as u8;
+        k += 1;
+        pos += n as usize;
+    }
+    u64::from_le_bytes(bytes)
 }
 
 /// Copies `n` bits from `src` at `src_offset` to `dst` at `dst_offset`.
@@ -420,6 +730,16 @@ pub fn zero_bits(out: &mut [u8], offset: usize, n: usize) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn stream_order_round_trips() {
+        for bits in 1..=64 {
+            let v = 0x0123_4567_89AB_CDEFu64 & field_mask(bits);
+            assert_eq!(from_stream(to_stream(v, bits), bits), v, "bits={bits}");
+        }
+        // 0xEDA as 12 bits: low byte DA first, then the top nibble E.
+        assert_eq!(to_stream(0xEDA, 12), 0xDAE);
+    }
 
     #[test]
     fn masks_of_every_width() {

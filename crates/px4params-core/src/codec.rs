@@ -7,7 +7,7 @@
 
 use core::convert::Infallible;
 
-use crate::bits::BitRead;
+use crate::bits::{to_stream, BitRead};
 use crate::error::{Error, Step};
 use crate::layout::{Kind, Layout, NodeId, Role};
 use crate::plan::{Active, Plans};
@@ -238,7 +238,7 @@ pub fn scalar_stream(
 ) -> Result<(u64, u32), scalar::ScalarError> {
     let bits = scalar_bits(kind);
     Ok((
-        scalar::to_stream(interp::fast_raw::<Active>(kind, value, saturate)?, bits),
+        to_stream(interp::fast_raw::<Active>(kind, value, saturate)?, bits),
         bits,
     ))
 }

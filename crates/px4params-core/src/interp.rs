@@ -13,7 +13,7 @@
 //! [`Plans::FLAT`], a flat leaf list's fixed-shape runs go through in one piece each (a plan
 //! inside the loop that declines to it, field by field, wherever it cannot answer).
 
-use crate::bits::{BitRead, BitReader, BitWriter};
+use crate::bits::{from_stream, put_scalar, read_scalar, to_stream, BitRead, BitReader, BitWriter};
 use crate::error::{Error, ErrorKind, Path, Step};
 use crate::layout::{Field, FlatItem, Kind, Layout, Node, NodeId, Role, Segment, Span};
 use crate::plan::Plans;
@@ -856,7 +856,7 @@ impl<P: Plans, S: Source> Encode<'_, P, S> {
     #[cfg_attr(feature = "compact", inline(never))]
     fn write(&mut self, raw: u64, bits: u32) -> Result<(), Stop> {
         self.out
-            .write(scalar::to_stream(raw, bits), bits)
+            .write(to_stream(raw, bits), bits)
             .map_err(|needed| self.refuse(ErrorKind::BufferTooSmall { needed }))
     }
 
@@ -1059,7 +1059,7 @@ impl<'d, P: Plans, R: BitRead + ?Sized + 'd, K: Sink> Decode<'d, P, R, K> {
             }));
         }
         let stream = self.reader.read(bits);
-        Ok(scalar::from_stream(stream, bits))
+        Ok(from_stream(stream, bits))
     }
 }
 
@@ -1215,7 +1215,7 @@ impl<'d, P: Plans, R: BitRead + ?Sized + 'd, K: Sink> Pass for Decode<'d, P, R, 
                 } else {
                     let bits = bits as u32;
                     for slot in slots.iter_mut() {
-                        *slot = scalar_of(kind, scalar::from_stream(reader.read(bits), bits));
+                        *slot = scalar_of(kind, from_stream(reader.read(bits), bits));
                     }
                 }
                 self.reader = reader;
@@ -1239,7 +1239,7 @@ fn decode_items<B: BitReader>(reader: &mut B, items: &[FlatItem], slots: &mut [S
                 let bits = scalar_bits(kind);
                 let raw = if bits == 0 { 0 } else { reader.read(bits) };
                 if let Some(slot) = slots.next() {
-                    *slot = scalar_of(kind, scalar::from_stream(raw, bits));
+                    *slot = scalar_of(kind, from_stream(raw, bits));
                 }
             }
         }
@@ -1306,7 +1306,7 @@ fn encode_items<P: Plans>(
             }
         };
         j += 1;
-        Ok((scalar::to_stream(raw, bits), bits))
+        Ok((to_stream(raw, bits), bits))
     });
     written.map_err(|e| (j as u32, e.unwrap_or_else(FlatFail::Buffer)))
 }
@@ -1340,7 +1340,7 @@ fn encode_scalars<P: Plans>(
     let written = out.write_run(run.len(), |i| {
         at = i;
         let raw = fast_raw::<P>(kind, run[i], saturate).map_err(FlatFail::Scalar)?;
-        Ok((scalar::to_stream(raw, bits), bits))
+        Ok((to_stream(raw, bits), bits))
     });
     written.map_err(|e| (at, e.unwrap_or_else(FlatFail::Buffer)))
 }
@@ -1375,9 +1375,9 @@ pub(crate) fn fast_raw<P: Plans>(
 pub(crate) trait Input {
     /// Total number of bits.
     fn bit_len(&self) -> usize;
-    /// Bytes `index` and `index + 1` as a big-endian pair, 0 for the second one where it
-    /// lies beyond the end; the caller checks that the first one does not.
-    fn pair(&self, index: usize) -> u16;
+    /// Bytes `index` and `index + 1`, 0 for the second one where it lies beyond the end;
+    /// the caller checks that the first one does not.
+    fn pair(&self, index: usize) -> [u8; 2];
 }
 
 /// Any [`BitRead`] as an [`Input`] (a pointer to it: the data itself may be unsized).
@@ -1387,18 +1387,18 @@ impl<R: BitRead + ?Sized> Input for Bits<'_, R> {
     fn bit_len(&self) -> usize {
         self.0.bit_len()
     }
-    fn pair(&self, index: usize) -> u16 {
+    fn pair(&self, index: usize) -> [u8; 2] {
         if let Some(bytes) = self.0.contiguous() {
             // Bytes in one run (any but scattered payloads): taken by checked accessors, 0
             // beyond the end, so that reading them links no bounds-check panic.
-            let at = |i: usize| u16::from(bytes.get(i).copied().unwrap_or(0));
-            return at(index) << 8 | at(index + 1);
+            let at = |i: usize| bytes.get(i).copied().unwrap_or(0);
+            return [at(index), at(index + 1)];
         }
         let next = match index + 1 < self.0.bit_len() / 8 {
             true => self.0.byte(index + 1),
             false => 0,
         };
-        u16::from(self.0.byte(index)) << 8 | u16::from(next)
+        [self.0.byte(index), next]
     }
 }
 
@@ -1742,21 +1742,8 @@ impl Visiting<'_> {
                 available_bits: available,
             }));
         }
-        // The value's bytes, least significant first (its top bits last), each read most
-        // significant bit first: a byte at a time, from the pair of bytes it may span.
-        // (Gathered as bytes: a 64-bit shift by a variable amount is a call on 32-bit targets.)
-        // (Where it stands is kept in a register, and stored once.)
-        let (mut bytes, mut k, mut pos) = ([0u8; 8], 0, self.rpos);
-        while pos < needed {
-            let n = (needed - pos).min(8) as u32;
-            let (i, s) = (pos / 8, (pos % 8) as u32);
-            let window = u32::from(input.pair(i)) << s;
-            bytes[k & 7] = ((window >> (16 - n)) & ((1 << n) - 1)) as u8;
-            k += 1;
-            pos += n as usize;
-        }
+        *raw = read_scalar(|i| input.pair(i), self.rpos, bits);
         self.rpos = needed;
-        *raw = u64::from_le_bytes(bytes);
         Ok(())
     }
 
@@ -1765,10 +1752,12 @@ impl Visiting<'_> {
             return;
         }
         let end = self.wpos + bits as usize;
-        // A value too long for the output is still walked to its end (its faults come first).
-        self.overflow |= end > self.job.out.len() * 8;
-        if !self.overflow {
-            put(self.job.out, self.wpos, raw, bits);
+        // A value too long for the output is still walked to its end (its faults come
+        // first). Positions only grow: once one write is past the end, so are the rest.
+        if end > self.job.out.len() * 8 {
+            self.overflow = true;
+        } else {
+            put_scalar(self.job.out, self.wpos, raw, bits);
         }
         self.wpos = end;
     }
@@ -2026,33 +2015,5 @@ impl Pass for Visiting<'_> {
     }
     fn elements(&mut self, _: Kind, _: Option<u64>, _: u32) -> Elements<LeafError> {
         Ok(None)
-    }
-}
-
-/// Writes the low `bits` bits of `raw` at bit `pos` of `out` as a DroneCAN scalar (its bytes
-/// least significant first, the top bits last, each most significant bit first), a byte at a
-/// time into the two bytes it may span; the caller checks that `out` holds them.
-#[inline(never)]
-pub(crate) fn put(out: &mut [u8], mut pos: usize, raw: u64, bits: u32) {
-    let (mut value, end) = (raw, pos + bits as usize);
-    // A caller's mistake shows in tests, where release builds would write short.
-    debug_assert!(end <= out.len() * 8, "put beyond the output: bit {end}");
-    while pos < end {
-        let n = (end - pos).min(8) as u32;
-        let (i, s) = (pos / 8, (pos % 8) as u32);
-        let place = 16 - n - s;
-        let bits = ((value as u32) & ((1 << n) - 1)) << place;
-        let keep = !(((1u32 << n) - 1) << place);
-        // (Checked reaches: the caller has checked them, and firmware links no panic here.)
-        if let Some(byte) = out.get_mut(i) {
-            *byte = (u32::from(*byte) & (keep >> 8)) as u8 | (bits >> 8) as u8;
-        }
-        if s + n > 8 {
-            if let Some(byte) = out.get_mut(i + 1) {
-                *byte = (u32::from(*byte) & keep) as u8 | bits as u8;
-            }
-        }
-        value >>= 8;
-        pos += n as usize;
     }
 }

@@ -4,6 +4,7 @@
 //! a host can build one at run time (feature `alloc`, [`crate::build`]). Nodes refer to each
 //! other by index; a nested type used in many places is one shared node.
 
+use crate::bits::Order;
 use crate::scalar::Cast;
 
 /// Index of a node in [`Layout::nodes`].
@@ -347,19 +348,6 @@ pub(crate) struct Step {
     pub(crate) op: Op,
     pub(crate) bits: u8,
     pub(crate) order: Order,
-}
-
-/// How a value's bits become stream bits ([`crate::scalar::to_stream`]), known per step.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-#[repr(u8)]
-pub(crate) enum Order {
-    /// At most 8 bits: as they are.
-    #[default]
-    Same,
-    /// Whole bytes: the bytes reversed.
-    Bytes,
-    /// Whole bytes and some bits more: the general rule.
-    Mixed,
 }
 
 /// What a [`Step`] is.

@@ -7,7 +7,7 @@
 
 use core::convert::Infallible;
 
-use crate::bits::{BitRead, BitReader};
+use crate::bits::{put_scalar, BitRead, BitReader};
 use crate::error::{Error, ErrorKind, Path, Step};
 use crate::interp::{is_scalar, push_flat_path};
 use crate::layout::{FlatItem, Kind, Layout, NodeId, Role, Segment, Span};
@@ -211,7 +211,7 @@ pub(crate) fn set_located<R: BitRead + ?Sized>(
         });
     };
     data.reader(0).read_bytes(copy);
-    walk::put(out, leaf.bit_offset, raw, scalar_bits(kind));
+    put_scalar(out, leaf.bit_offset, raw, scalar_bits(kind));
     Ok(len)
 }
 

@@ -23,13 +23,13 @@ use alloc::boxed::Box;
 use alloc::vec::Vec;
 use core::slice;
 
-use crate::bits::{read_bits, BitWriter};
+use crate::bits::{from_stream, read_bits, to_stream, BitWriter};
 use crate::codec::{
     read_scalar, scalar_bits, scalar_stream, DecodeOptions, EncodeOptions, MAX_DEPTH,
 };
 use crate::layout::{Kind, Layout, NodeId, Role};
 use crate::rules::{tail_elements, tail_goes_on, tail_qualifies};
-use crate::scalar::{self, Scalar};
+use crate::scalar::Scalar;
 
 /// Reads a value for [`Program::encode`]. Every method may decline (`None`): the value is not
 /// one the program takes as the codec would (the caller's general path then decides).
@@ -637,9 +637,7 @@ impl<S: ValueSource> Encoder<'_, '_, '_, S> {
                 let variant = variants.get(tag as usize)?;
                 if *tag_bits > 0 {
                     let bits = u32::from(*tag_bits);
-                    self.out
-                        .write(scalar::to_stream(tag.into(), bits), bits)
-                        .ok()?;
+                    self.out.write(to_stream(tag.into(), bits), bits).ok()?;
                 }
                 self.value(variant, inner)
             }
@@ -738,7 +736,7 @@ impl<S: ValueSource> Encoder<'_, '_, '_, S> {
             Len::Dynamic { tail: true, .. } if self.tao => Some(()),
             Len::Dynamic { len_bits, .. } => {
                 let bits = u32::from(len_bits);
-                self.out.write(scalar::to_stream(n as u64, bits), bits).ok()
+                self.out.write(to_stream(n as u64, bits), bits).ok()
             }
         }
     }
@@ -749,7 +747,7 @@ impl<S: ValueSource> Encoder<'_, '_, '_, S> {
 fn scalar_at(data: &[u8], offset: usize, kind: Kind) -> Scalar {
     match kind {
         // Unsigned fields, the most common, need no conversion.
-        Kind::Uint { bits, .. } => Scalar::Uint(scalar::from_stream(
+        Kind::Uint { bits, .. } => Scalar::Uint(from_stream(
             read_bits(data, offset, bits.into()),
             bits.into(),
         )),
@@ -796,7 +794,7 @@ impl<K: ValueSink> Decoder<'_, '_, K> {
         if usize::from(bits) > self.bits_left() {
             return None;
         }
-        let n = scalar::from_stream(read_bits(self.data, self.pos, bits.into()), bits.into());
+        let n = from_stream(read_bits(self.data, self.pos, bits.into()), bits.into());
         self.pos += usize::from(bits);
         Some(n)
     }

@@ -6,7 +6,7 @@
 use core::convert::Infallible;
 use core::fmt;
 
-use crate::bits::BitRead;
+use crate::bits::{from_stream, BitRead};
 use crate::error::{Error, Path};
 use crate::layout::{Field, Kind, Layout, NodeId};
 use crate::plan::{Active, Plans};
@@ -264,10 +264,7 @@ pub fn read_scalar<R: BitRead + ?Sized>(data: &R, bit_offset: usize, kind: Kind)
     if bits == 0 {
         return Scalar::Uint(0);
     }
-    scalar_of(
-        kind,
-        scalar::from_stream(data.read_bits(bit_offset, bits), bits),
-    )
+    scalar_of(kind, from_stream(data.read_bits(bit_offset, bits), bits))
 }
 
 /// The bit width of a scalar kind (0 for containers).
@@ -367,7 +364,7 @@ impl Position {
 }
 
 pub(crate) fn read_uint<R: BitRead + ?Sized>(data: &R, offset: usize, bits: u32) -> u64 {
-    scalar::from_stream(data.read_bits(offset, bits), bits)
+    from_stream(data.read_bits(offset, bits), bits)
 }
 
 // From `translate`.

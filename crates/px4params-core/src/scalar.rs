@@ -1,4 +1,5 @@
-//! DroneCAN scalars: integer and float conversions, cast modes, float16, byte order.
+//! DroneCAN scalars: integer and float conversions, cast modes, float16 (where a value's bits
+//! go in the stream is [`crate::bits`]').
 
 /// How an out-of-range value is brought into a field (DSDL `saturated` / `truncated`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -90,41 +91,6 @@ pub fn f32_from_f16(half: u16) -> f32 {
         out = f32::from_bits(out.to_bits() | (255 << 23));
     }
     f32::from_bits(out.to_bits() | (u32::from(half & 0x8000) << 16))
-}
-
-/// Puts a value's bytes in DroneCAN stream order: the whole low bytes first, then the top
-/// `bits % 8` bits, as one big-endian stream value of `bits` bits.
-#[inline(always)]
-pub fn to_stream(value: u64, bits: u32) -> u64 {
-    let whole = bits / 8;
-    let rest = bits % 8;
-    if whole == 0 {
-        return value & crate::bits::mask(rest);
-    }
-    let low = value & crate::bits::field_mask(whole * 8);
-    let swapped = low.swap_bytes() >> (64 - whole * 8);
-    if rest == 0 {
-        swapped
-    } else {
-        (swapped << rest) | ((value >> (whole * 8)) & crate::bits::field_mask(rest))
-    }
-}
-
-/// Inverse of [`to_stream`].
-#[inline(always)]
-pub fn from_stream(stream: u64, bits: u32) -> u64 {
-    let whole = bits / 8;
-    let rest = bits % 8;
-    if whole == 0 {
-        return stream;
-    }
-    let bytes = if rest == 0 { stream } else { stream >> rest };
-    let low = (bytes << (64 - whole * 8)).swap_bytes();
-    if rest == 0 {
-        low
-    } else {
-        low | ((stream & crate::bits::mask(rest)) << (whole * 8))
-    }
 }
 
 /// Encodes an unsigned integer field of `bits` bits to raw bits.
@@ -354,16 +320,6 @@ pub(crate) fn same_integer(given: Scalar, version: u32) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn stream_order_round_trips() {
-        for bits in 1..=64 {
-            let v = 0x0123_4567_89AB_CDEFu64 & crate::bits::field_mask(bits);
-            assert_eq!(from_stream(to_stream(v, bits), bits), v, "bits={bits}");
-        }
-        // 0xEDA as 12 bits: low byte DA first, then the top nibble E.
-        assert_eq!(to_stream(0xEDA, 12), 0xDAE);
-    }
 
     #[test]
     fn float16_known_values() {

@@ -32,7 +32,7 @@
 
 use core::cell::Cell;
 
-use crate::bits::{BitRead, BitReader};
+use crate::bits::{after_bytes, first_bytes, load_word, wide, Ahead, BitRead, BitReader};
 use crate::plan::{Active, Plans};
 
 /// Up to 8 bytes of a piece, as [`Pieces::chunk`] gives them. `len` is 0 only where the piece
@@ -51,17 +51,10 @@ impl Chunk {
     /// The first (up to) 8 bytes of `bytes`.
     #[inline(always)]
     pub fn of(bytes: &[u8]) -> Self {
-        match bytes.first_chunk::<8>() {
-            Some(eight) => Self {
-                word: u64::from_be_bytes(*eight),
-                len: 8,
-                left: bytes.len() - 8,
-            },
-            None => Self {
-                word: word_of(bytes),
-                len: bytes.len(),
-                left: 0,
-            },
+        Self {
+            word: load_word(bytes),
+            len: bytes.len().min(8),
+            left: bytes.len().saturating_sub(8),
         }
     }
 }
@@ -266,7 +259,7 @@ impl Pieces for FramePayloads<'_, '_> {
             // A full classic CAN frame: one load; the tail byte and what is skipped are
             // shifted out.
             let from = (self.head(i) + skip).min(7);
-            let word = ((u64::from_be_bytes(eight) >> 8) << (8 * from as u32)) << 8;
+            let word = after_bytes(first_bytes(load_word(&eight), 7), from as u32);
             return Chunk {
                 word,
                 len: 7 - from,
@@ -371,25 +364,6 @@ pub(crate) fn copy_few(dst: &mut [u8], src: &[u8]) {
     }
 }
 
-/// Up to 8 bytes as a big-endian word, zero-filled at the end: two overlapping 4-byte loads
-/// for 4..8 bytes, a byte loop below that.
-#[inline(always)]
-fn word_of(bytes: &[u8]) -> u64 {
-    let len = bytes.len();
-    match (bytes.get(..4), bytes.get(len.saturating_sub(4)..)) {
-        (Some(head), Some(tail)) if len >= 4 => {
-            let hi = u64::from(u32::from_be_bytes([head[0], head[1], head[2], head[3]]));
-            let lo = u64::from(u32::from_be_bytes([tail[0], tail[1], tail[2], tail[3]]));
-            // The loads overlap for len < 8; the overlapping bytes are equal, so OR is exact.
-            (hi << 32) | (lo << (8 * (8 - len)))
-        }
-        _ => bytes
-            .iter()
-            .enumerate()
-            .fold(0u64, |w, (k, &b)| w | u64::from(b) << (56 - 8 * k)),
-    }
-}
-
 /// Where stream byte `byte` lies (in the last piece if beyond), walking from `from`, a place
 /// whose piece starts at stream byte `start`; returns the place and its piece's start.
 fn seek<P: Pieces + ?Sized>(pieces: &P, from: Place, start: usize, byte: usize) -> (Place, usize) {
@@ -453,7 +427,7 @@ impl Window {
         // Offsets behind the window wrap around to huge ones.
         let local = offset.wrapping_sub(held.start_bit);
         (local <= (64 - n) as usize && held.len > 0)
-            .then(|| (((held.word >> 64) as u64) << local) >> (64 - n))
+            .then(|| wide::bits_at(held.word, local as u32, n))
     }
 
     /// Moves the window to the byte holding bit `offset` and reads `n` bits there. Keeps the
@@ -465,7 +439,7 @@ impl Window {
             (held.len > 0 && drop <= held.len).then(|| Held {
                 start_bit: byte * 8,
                 len: held.len - drop,
-                word: held.word.checked_shl(8 * drop as u32).unwrap_or(0),
+                word: wide::after_bytes(held.word, drop),
             })
         });
         let mut held = kept.unwrap_or_else(|| {
@@ -478,7 +452,7 @@ impl Window {
         });
         while held.len < REFILLED && self.next.index < pieces.count() {
             let chunk = pieces.chunk(self.next.index, self.next.skip);
-            held.word |= (u128::from(chunk.word) << 64) >> (8 * held.len);
+            held.word = wide::append(held.word, held.len, chunk.word);
             held.len += chunk.len;
             if let Some(length) = self.next.pass(&chunk) {
                 self.next_start += length;
@@ -486,7 +460,7 @@ impl Window {
         }
         self.held = Some(held);
         // Up to 71 bits from the top: the window holds 9 bytes or all there are.
-        ((held.word << (offset % 8)) >> (128 - n)) as u64
+        wide::bits_at(held.word, (offset % 8) as u32, n)
     }
 }
 
@@ -596,8 +570,7 @@ impl<'p, P: Pieces + ?Sized> BitRead for Scattered<'p, P> {
         let (next, _) = seek(self.pieces, w.next, w.next_start, offset / 8);
         let mut reader = ScatteredReader {
             pieces: self.pieces,
-            bits: 0,
-            held: 0,
+            ahead: Ahead::default(),
             next,
             pos: offset / 8 * 8,
         };
@@ -613,9 +586,8 @@ impl<'p, P: Pieces + ?Sized> BitRead for Scattered<'p, P> {
 #[derive(Debug)]
 pub struct ScatteredReader<'p, P: Pieces + ?Sized> {
     pieces: &'p P,
-    /// The next `held` bits of the stream, left-aligned (the bits after them are garbage).
-    bits: u64,
-    held: u32,
+    /// The next bits of the stream.
+    ahead: Ahead,
     /// Where the bytes after those start.
     next: Place,
     /// The bit offset of the next read.
@@ -631,30 +603,28 @@ impl<P: Pieces + ?Sized> Clone for ScatteredReader<'_, P> {
 impl<P: Pieces + ?Sized> Copy for ScatteredReader<'_, P> {}
 
 impl<P: Pieces + ?Sized> ScatteredReader<'_, P> {
-    /// Reads `n` bits when fewer are held: those, then the rest from the next pieces.
+    /// Reads `n` bits when fewer are ahead: those, then the rest from the next pieces.
     #[inline(always)]
     fn read_topped_up(&mut self, n: u32) -> u64 {
-        // `held < n <= 64`: the shift that could reach 64 is made in two steps.
-        let mut value = (self.bits >> 1) >> (63 - self.held);
-        let mut missing = n - self.held;
+        let mut missing = n - self.ahead.count();
+        let mut value = self.ahead.take_all();
         while self.next.index < self.pieces.count() {
             let chunk = self.pieces.chunk(self.next.index, self.next.skip);
             self.next.pass(&chunk);
-            let got = 8 * chunk.len as u32;
-            if got >= missing {
-                // `missing` is 64 only when `value` is 0 and nothing is left held.
-                value = value.wrapping_shl(missing) | (chunk.word >> (64 - missing));
-                self.bits = chunk.word.wrapping_shl(missing);
-                self.held = got - missing;
+            let mut got = Ahead::new(chunk.word, 8 * chunk.len as u32);
+            if got.count() >= missing {
+                // `missing` is 64 only when `value` is 0.
+                value = value.wrapping_shl(missing) | got.take(missing);
+                self.ahead = got;
                 return value;
             }
-            if got > 0 {
-                value = (value << got) | (chunk.word >> (64 - got));
-                missing -= got;
+            if got.count() > 0 {
+                let all = got.count();
+                value = (value << all) | got.take(all);
+                missing -= all;
             }
         }
         // Past the end (callers do not read there): zeros.
-        self.held = 0;
         (value << (missing - 1)) << 1
     }
 }
@@ -663,31 +633,27 @@ impl<P: Pieces + ?Sized> BitReader for ScatteredReader<'_, P> {
     #[inline(always)]
     fn read(&mut self, n: u32) -> u64 {
         self.pos += n as usize;
-        if n <= self.held {
-            let value = self.bits >> (64 - n);
-            // A shift by 64 leaves `bits` as they were; none are held then.
-            self.bits = self.bits.wrapping_shl(n);
-            self.held -= n;
-            return value;
+        if n <= self.ahead.count() {
+            return self.ahead.take(n);
         }
         self.read_topped_up(n)
     }
 
     fn read_bytes(&mut self, out: &mut [u8]) {
         self.pos += 8 * out.len();
-        // On a byte boundary the held bits are whole bytes (at most 7): those first, then the
-        // pieces. Bytes written past the end of a step are rewritten by the next one.
-        let done = (self.held as usize / 8).min(out.len());
+        // On a byte boundary the bits ahead are whole bytes (at most 7): those first, then
+        // the pieces. Bytes written past the end of a step are rewritten by the next one.
+        let done = (self.ahead.count() as usize / 8).min(out.len());
+        let ahead = self.ahead.bytes();
         match out.get_mut(..8) {
-            Some(room) => room.copy_from_slice(&self.bits.to_be_bytes()),
+            Some(room) => room.copy_from_slice(&ahead),
             None => {
-                for (slot, b) in out[..done].iter_mut().zip(self.bits.to_be_bytes()) {
+                for (slot, b) in out[..done].iter_mut().zip(ahead) {
                     *slot = b;
                 }
             }
         }
-        self.bits = self.bits.wrapping_shl(8 * done as u32);
-        self.held -= 8 * done as u32;
+        self.ahead.drop(8 * done as u32);
         if done < out.len() {
             self.next = self.pieces.copy_out(self.next, &mut out[done..]);
         }

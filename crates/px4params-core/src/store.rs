@@ -24,7 +24,7 @@
 use core::convert::Infallible;
 use core::fmt;
 
-use crate::bits::write_bits;
+use crate::bits::{to_stream, write_bits};
 use crate::codec::{self, EncodeOptions, LeafKind, Source};
 use crate::error::{Error, ErrorKind, Path, Step};
 use crate::layout::{Kind, Layout, NodeId, Role};
@@ -816,7 +816,7 @@ where
         if let Some((kind, raw)) = scalar {
             let follows = which == Which::Default && self.values_equal(&def, index);
             let bits = codec::scalar_bits(kind);
-            let stream = scalar::to_stream(raw, bits);
+            let stream = to_stream(raw, bits);
             let mut targets = [Some(which), None];
             if follows {
                 targets[1] = Some(Which::Value);

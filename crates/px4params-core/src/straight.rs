@@ -13,7 +13,9 @@
 //! call began, and that path words the error. Firmware (`NoPlans`) does not run this plan
 //! ([`crate::plan::Plans::STRAIGHT`]).
 
-use crate::bits::{self, BitRead, BitReader};
+use crate::bits::{
+    self, from_stream, load_word, store_word, to_stream, Ahead, BitRead, BitReader, Order, Pending,
+};
 use crate::layout::{FlatItem, Kind, Layout, NodeId, Role, Segment, Span};
 use crate::rules::{
     scalar_bits, scalar_of, scalar_raw, tail_elements, tail_qualifies, DecodeOptions,
@@ -22,7 +24,7 @@ use crate::rules::{
 use crate::scalar::{self, Scalar};
 
 pub use crate::layout::Straight;
-use crate::layout::{Op, Order, Small, Step, Tail, SMALL_STEPS};
+use crate::layout::{Op, Small, Step, Tail, SMALL_STEPS};
 
 /// The straight-line plan of `root` in `layout`, where the plan answers for it. The
 /// compiler splits a struct's fields into segments in field order (as the flat codec
@@ -163,11 +165,7 @@ fn small(items: &[FlatItem], bits: u32) -> Option<Small> {
         if step.bits == 0 {
             return None;
         }
-        step.order = match step.bits {
-            ..=8 => Order::Same,
-            bits if bits % 8 == 0 => Order::Bytes,
-            _ => Order::Mixed,
-        };
+        step.order = Order::of(step.bits.into());
     }
     Some(small)
 }
@@ -245,7 +243,7 @@ fn stream_of(kind: &Kind, value: &Scalar, saturate: bool) -> Option<(u64, u32)> 
         (&Kind::Bool, &Scalar::Bool(b)) => (u64::from(b), 1),
         _ => return cast_stream(*kind, *value, saturate),
     };
-    Some((scalar::to_stream(raw, bits), bits))
+    Some((to_stream(raw, bits), bits))
 }
 
 /// [`stream_of`] by the casting rules (saturation, truncation, the other kinds of value).
@@ -253,16 +251,15 @@ fn stream_of(kind: &Kind, value: &Scalar, saturate: bool) -> Option<(u64, u32)> 
 #[inline(never)]
 fn cast_stream(kind: Kind, value: Scalar, saturate: bool) -> Option<(u64, u32)> {
     let bits = scalar_bits(kind);
-    Some((scalar::to_stream(cast(kind, value, saturate)?, bits), bits))
+    Some((to_stream(cast(kind, value, saturate)?, bits), bits))
 }
 
 /// Bits going out most significant first into a buffer holding exactly the value: fewer than
-/// 32 wait in a register between fields, 32 are stored at a time.
+/// 32 wait in a register ([`Pending`]) between fields, 32 are stored at a time.
 struct Out<'o> {
     out: &'o mut [u8],
     at: usize,
-    acc: u64,
-    pending: u32,
+    pending: Pending,
 }
 
 impl Out<'_> {
@@ -279,12 +276,7 @@ impl Out<'_> {
 
     #[inline(always)]
     fn put32(&mut self, stream: u64, bits: u32) {
-        // Bits above `pending` may hold older bits: they are shifted out, never stored.
-        self.acc = (self.acc << bits) | stream;
-        self.pending += bits;
-        if self.pending >= 32 {
-            self.pending -= 32;
-            let word = ((self.acc >> self.pending) as u32).to_be_bytes();
+        if let Some(word) = self.pending.push(stream, bits) {
             if let Some(slot) = self.out.get_mut(self.at..self.at + 4) {
                 slot.copy_from_slice(&word);
             }
@@ -295,38 +287,30 @@ impl Out<'_> {
     /// Stores the whole bytes pending (none left over), for bytes copied after them.
     #[inline(always)]
     fn flush_bytes(&mut self) {
-        while self.pending >= 8 {
-            self.pending -= 8;
+        while self.pending.count() >= 8 {
+            let byte = self.pending.pop_byte();
             if let Some(slot) = self.out.get_mut(self.at) {
-                *slot = (self.acc >> self.pending) as u8;
+                *slot = byte;
             }
             self.at += 1;
         }
     }
 
-    /// Stores 32 of the pending bits when more than 32 are pending (at most 64), so that
-    /// [`Out::put`] and [`Out::finish`] find at most 32.
+    /// Stores 32 of the pending bits when 32 or more are pending (at most 64), so that
+    /// [`Out::put`] and [`Out::finish`] find fewer.
     #[inline(always)]
     fn spill(&mut self) {
-        if self.pending > 32 {
-            self.pending -= 32;
-            let word = ((self.acc >> self.pending) as u32).to_be_bytes();
-            if let Some(slot) = self.out.get_mut(self.at..self.at + 4) {
-                slot.copy_from_slice(&word);
-            }
-            self.at += 4;
-        }
+        self.put32(0, 0);
     }
 
     /// Stores the pending bits (at most 32), the last byte padded with zeros: one store
     /// of one to four bytes.
     #[inline(always)]
     fn finish(self) {
-        // The pending bits at the top of a word, zeros after them (older bits shift out).
-        let word = ((self.acc << (32 - self.pending)) as u32).to_be_bytes();
+        let (word, n) = self.pending.last_bytes();
         let at = self.at;
         let out = self.out;
-        match self.pending.div_ceil(8) {
+        match n {
             0 => {}
             1 => {
                 if let Some(b) = out.get_mut(at) {
@@ -409,7 +393,7 @@ fn encode_small(
             op => step_raw(op, bits, values.next()?, small.version, keep_versions)?,
         };
         // A 64-bit step is the run's only one: nothing to shift out.
-        acc = acc.wrapping_shl(bits) | to_stream(raw, bits, step.order);
+        acc = acc.wrapping_shl(bits) | step.order.stream(raw, bits);
     }
     let Some(tail) = &plan.tail else {
         let len = (plan.bits as usize).div_ceil(8);
@@ -457,27 +441,6 @@ fn step_raw(op: Op, bits: u32, value: &Scalar, version: u32, keep_versions: bool
     }
 }
 
-/// [`scalar::to_stream`] for a step whose byte order is known.
-#[inline(always)]
-fn to_stream(raw: u64, bits: u32, order: Order) -> u64 {
-    match order {
-        Order::Same => raw,
-        // 8 to 64 bits: the shift is at most 56.
-        Order::Bytes => raw.swap_bytes() >> (64 - bits),
-        Order::Mixed => scalar::to_stream(raw, bits),
-    }
-}
-
-/// [`scalar::from_stream`] for a step whose byte order is known.
-#[inline(always)]
-fn from_stream(stream: u64, bits: u32, order: Order) -> u64 {
-    match order {
-        Order::Same => stream,
-        Order::Bytes => (stream << (64 - bits)).swap_bytes(),
-        Order::Mixed => scalar::from_stream(stream, bits),
-    }
-}
-
 /// [`step_raw`] of a float that needs no cast: in range, infinite or NaN (out of line: most
 /// small types have none, and their constants would load on every call). A finite value
 /// out of range is the casting rules'.
@@ -504,29 +467,6 @@ fn version_step(bits: u32, value: Scalar, version: u32, keep_versions: bool) -> 
         Scalar::Uint(v) if keep_versions => (v <= u64::MAX >> (64 - bits)).then_some(v),
         _ if keep_versions => None,
         _ => scalar::same_integer(value, version).then_some(version.into()),
-    }
-}
-
-/// Stores `acc`'s low `bits` (`<= 64`) bits at the start of `out` as stream bits, zeros
-/// after them, filling `out` up to its 8th byte (which the bits need, or which the caller
-/// writes next): one to four stores, without a count of bytes.
-#[inline(always)]
-fn store_word(out: &mut [u8], acc: u64, bits: u32) {
-    let bytes = acc.wrapping_shl(64 - bits).to_be_bytes();
-    let n = out.len();
-    if let Some(word) = out.first_chunk_mut::<8>() {
-        *word = bytes;
-    } else if n >= 4 {
-        // 4 to 7 bytes: the first four and the last four (overlapping).
-        out[..4].copy_from_slice(&bytes[..4]);
-        out[n - 4..].copy_from_slice(&bytes[n - 4..n]);
-    } else if n >= 2 {
-        out[..2].copy_from_slice(&bytes[..2]);
-        if let Some(third) = out.get_mut(2) {
-            *third = bytes[2];
-        }
-    } else if let Some(first) = out.first_mut() {
-        *first = bytes[0];
     }
 }
 
@@ -557,8 +497,7 @@ fn encode_tail(
     let mut out = Out {
         out,
         at: 0,
-        acc,
-        pending: plan.bits,
+        pending: Pending::new(acc, plan.bits),
     };
     out.spill();
     if prefix != 0 {
@@ -601,8 +540,7 @@ fn encode_leaves(
     let mut out = Out {
         out: out.get_mut(..len)?,
         at: 0,
-        acc: 0,
-        pending: 0,
+        pending: Pending::default(),
     };
     let saturate = options.saturate;
     // As many items as leaves and pads: the zip never stops short of a leaf item.
@@ -640,7 +578,7 @@ fn item_stream(
         FlatItem::Version(kind, version) => {
             let bits = scalar_bits(*kind);
             let raw = version_raw(*kind, *values.next()?, *version, options)?;
-            Some((scalar::to_stream(raw, bits), bits))
+            Some((to_stream(raw, bits), bits))
         }
     }
 }
@@ -653,7 +591,7 @@ fn write_elements(
     elements: &[Scalar],
     saturate: bool,
 ) -> Option<()> {
-    if matches!(kind, Kind::Uint { bits: 8, .. }) && out.pending % 8 == 0 {
+    if matches!(kind, Kind::Uint { bits: 8, .. }) && out.pending.count() % 8 == 0 {
         // Store the whole bytes pending, then the string.
         out.flush_bytes();
         let bytes = out.out.get_mut(out.at..out.at + elements.len())?;
@@ -737,7 +675,7 @@ fn measure(plan: &Straight, prefix: u32, data: &[u8]) -> Option<(usize, usize)> 
     if rest < prefix_bits {
         return None;
     }
-    let n = scalar::from_stream(bits::read_bits(data, bits, prefix), prefix);
+    let n = from_stream(bits::read_bits(data, bits, prefix), prefix);
     let n = usize::try_from(n)
         .ok()
         .filter(|&n| n <= tail.max as usize)?;
@@ -745,34 +683,11 @@ fn measure(plan: &Straight, prefix: u32, data: &[u8]) -> Option<(usize, usize)> 
     (end <= bit_len).then_some((n, end))
 }
 
-/// The first 8 bytes of `data` (fewer where it is shorter, zeros after them) as one
-/// big-endian word.
-#[inline(always)]
-fn load_word(data: &[u8]) -> u64 {
-    if let Some(word) = data.first_chunk::<8>() {
-        return u64::from_be_bytes(*word);
-    }
-    // Fewer than 8 bytes: 4, 2 and 1 at a time, as the length's bits say.
-    let mut acc = 0u64;
-    let mut at = 0;
-    if let Some(four) = data.first_chunk::<4>() {
-        acc = u64::from(u32::from_be_bytes(*four)) << 32;
-        at = 4;
-    }
-    if let Some(two) = data.get(at..).and_then(|d| d.first_chunk::<2>()) {
-        acc |= u64::from(u16::from_be_bytes(*two)) << (48 - 8 * at);
-        at += 2;
-    }
-    if let Some(&one) = data.get(at) {
-        acc |= u64::from(one) << (56 - 8 * at);
-    }
-    acc
-}
-
 /// Fills `slots` with the leaves of a small plan's fixed run held in `word` (its first bit
 /// the highest).
 #[inline(always)]
-fn decode_small(small: &Small, mut word: u64, slots: &mut [Scalar]) {
+fn decode_small(small: &Small, word: u64, slots: &mut [Scalar]) {
+    let mut word = Ahead::new(word, 64);
     let mut slots = slots.iter_mut();
     for step in &small.steps {
         let bits = u32::from(step.bits);
@@ -780,8 +695,7 @@ fn decode_small(small: &Small, mut word: u64, slots: &mut [Scalar]) {
             break;
         }
         // Steps have 1 to 64 bits; a 64-bit one is the run's only one.
-        let raw = from_stream(word >> (64 - bits), bits, step.order);
-        word = word.wrapping_shl(bits);
+        let raw = step.order.raw(word.take(bits), bits);
         let value = match step.op {
             Op::Pad => continue,
             Op::Uint | Op::Version => Scalar::Uint(raw),
@@ -804,8 +718,7 @@ fn decode_run(items: &[FlatItem], data: &[u8], slots: &mut [Scalar]) {
     let mut bits_in = In {
         data,
         next: 0,
-        acc: 0,
-        avail: 0,
+        ahead: Ahead::default(),
     };
     let mut slots = slots.iter_mut();
     for item in items {
@@ -814,7 +727,7 @@ fn decode_run(items: &[FlatItem], data: &[u8], slots: &mut [Scalar]) {
                 let bits = scalar_bits(*kind);
                 let raw = bits_in.take(bits);
                 if let Some(slot) = slots.next() {
-                    *slot = scalar_of(*kind, scalar::from_stream(raw, bits));
+                    *slot = scalar_of(*kind, from_stream(raw, bits));
                 }
             }
             FlatItem::Pad(bits) => {
@@ -825,15 +738,13 @@ fn decode_run(items: &[FlatItem], data: &[u8], slots: &mut [Scalar]) {
 }
 
 /// Bits coming in most significant first from data the caller has measured: whole bytes
-/// gathered into a register ahead of the fields, so that a small value is read in a few
-/// loads without a bounds check per field.
+/// gathered into a register ([`Ahead`]) ahead of the fields, so that a small value is read in
+/// a few loads without a bounds check per field.
 struct In<'d> {
     data: &'d [u8],
     /// The next byte to gather.
     next: usize,
-    /// Gathered bits, left-aligned.
-    acc: u64,
-    avail: u32,
+    ahead: Ahead,
 }
 
 impl In<'_> {
@@ -852,39 +763,21 @@ impl In<'_> {
         if bits == 0 {
             return 0;
         }
-        if bits > self.avail {
+        if bits > self.ahead.count() {
             self.refill();
         }
-        let value = self.acc >> (64 - bits);
-        self.acc <<= bits;
-        self.avail = self.avail.saturating_sub(bits);
-        value
+        self.ahead.take(bits)
     }
 
     /// Gathers up to 57 bits or up to the end of the data (which holds the value: measured
-    /// first).
+    /// first). The bits after the last whole byte counted are the stream's own, gathered
+    /// again next time.
     #[inline(always)]
     fn refill(&mut self) {
-        let data = self.data;
-        if let Some(window) = data.get(self.next..self.next + 8) {
-            // A whole window: the bits after the gathered ones (those past the last whole
-            // byte counted are the stream's own, gathered again next time).
-            let mut word = [0u8; 8];
-            word.copy_from_slice(window);
-            self.acc |= u64::from_be_bytes(word) >> self.avail;
-            let whole = (64 - self.avail) / 8;
-            self.next += whole as usize;
-            self.avail += 8 * whole;
-            return;
-        }
-        while self.avail <= 56 {
-            let Some(&byte) = data.get(self.next) else {
-                break;
-            };
-            self.acc |= u64::from(byte) << (56 - self.avail);
-            self.avail += 8;
-            self.next += 1;
-        }
+        let rest = self.data.get(self.next..).unwrap_or_default();
+        let whole = ((64 - self.ahead.count()) / 8).min(rest.len() as u32);
+        self.ahead.append(load_word(rest), whole);
+        self.next += whole as usize;
     }
 }
 
@@ -905,6 +798,6 @@ fn read_elements<B: BitReader>(reader: &mut B, kind: &Kind, slots: &mut [Scalar]
     }
     let bits = scalar_bits(*kind);
     for slot in slots {
-        *slot = scalar_of(*kind, scalar::from_stream(reader.read(bits), bits));
+        *slot = scalar_of(*kind, from_stream(reader.read(bits), bits));
     }
 }

@@ -20,7 +20,6 @@ use core::convert::Infallible;
 
 use crate::bits::BitRead;
 use crate::error::{Error, ErrorKind, Path, Step};
-pub(crate) use crate::interp::put;
 use crate::interp::{
     visit as run, visit_here, write_whole, write_whole_here, Bits, Halt, Job, LeafAt, PartAt,
     Reading, Steer, Visit, Walked,
