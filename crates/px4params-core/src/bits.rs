@@ -1,8 +1,16 @@
-//! Bit-level access in DroneCAN order: bits fill each byte most-significant-bit first.
+//! Where a scalar's bits go in a DroneCAN stream, in one place: a value's bytes least
+//! significant first (the last holding its top `bits % 8` bits), each byte's bits most
+//! significant first. No other module of the core says it (`tests/rule_home.rs` checks).
 //!
-//! Everything here works on *stream values*: an `n`-bit number whose most significant bit is the
-//! first bit in the stream. The little-endian byte order of multi-byte scalars is applied on top
-//! of this by [`crate::scalar`].
+//! A *stream value* is an `n`-bit number whose most significant bit is the first in the
+//! stream; [`to_stream`] and [`from_stream`] turn values into stream values and back
+//! (`Order` does it for a width known ahead). Around them, side by side, the ways the codec
+//! moves stream bits, each for its own case and all held to the rule by the tests below:
+//!
+//! - at any offset: [`read_bits`] and [`write_bits`], a 64-bit window (firmware: a loop);
+//! - one field after another: [`BitWriter`] over the `Pending` register, the `Ahead`
+//!   register that readers gather bytes into, and `load_word`/`store_word` for whole words;
+//! - a byte at a time, as firmware's walk reads and writes: `read_scalar`/`put_scalar`.
 
 use crate::plan::{Active, Plans};
 
@@ -219,6 +227,13 @@ impl Order {
         }
     }
 
+    /// The stream value `acc` followed by the value `raw` of `bits` bits (`1..=64`; `acc` is 0
+    /// where `bits` is 64).
+    #[inline(always)]
+    pub(crate) fn append(self, acc: u64, raw: u64, bits: u32) -> u64 {
+        acc.wrapping_shl(bits) | self.stream(raw, bits)
+    }
+
     /// [`from_stream`] for a value of this order.
     #[inline(always)]
     pub(crate) fn raw(self, stream: u64, bits: u32) -> u64 {
@@ -410,18 +425,16 @@ impl<'o> BitWriter<'o> {
             };
             debug_assert!(n <= 64 && value & !mask(n) == 0);
             let stored = if !Active::WINDOWED_BITS {
-                // Firmware (built for size): one copy of `put`, taking both halves; the high
+                // Firmware (built for size): one copy of `put`, taking both halves; the first
                 // one is empty for values of up to 32 bits.
-                [
-                    (value >> 32, n.saturating_sub(32)),
-                    (value & mask(32), n.min(32)),
-                ]
-                .into_iter()
-                .try_for_each(|(half, k)| put(out, &mut pending, &mut bytes, half, k))
+                halves(value, n)
+                    .into_iter()
+                    .try_for_each(|(half, k)| put(out, &mut pending, &mut bytes, half, k))
             } else if n > 32 {
                 // Over 32 bits: two halves, so that pending (< 32) + n stays within 64.
-                put(out, &mut pending, &mut bytes, value >> 32, n - 32)
-                    .and_then(|()| put(out, &mut pending, &mut bytes, value & mask(32), 32))
+                let [(first, k), (rest, _)] = halves(value, n);
+                put(out, &mut pending, &mut bytes, first, k)
+                    .and_then(|()| put(out, &mut pending, &mut bytes, rest, 32))
             } else {
                 put(out, &mut pending, &mut bytes, value, n)
             };
@@ -569,6 +582,34 @@ pub(crate) const fn first_bytes(word: u64, n: u32) -> u64 {
     (word >> (64 - 8 * n)) << (64 - 8 * n)
 }
 
+/// The stream value `first` followed by the `n` bits (`0..=64`) of the stream value `next`
+/// (`first` is 0 where `n` is 64; the bits lost above 64 are the caller's to know).
+#[inline(always)]
+pub(crate) const fn join(first: u64, next: u64, n: u32) -> u64 {
+    first.wrapping_shl(n) | next
+}
+
+/// A stream value of `bits` bits (`0..=64`) as two of at most 32: its first `bits - 32` (none
+/// for up to 32 bits) and the rest, in the order they go out.
+#[inline(always)]
+pub(crate) const fn halves(stream: u64, bits: u32) -> [(u64, u32); 2] {
+    [
+        (stream >> 32, bits.saturating_sub(32)),
+        (stream & 0xFFFF_FFFF, if bits < 32 { bits } else { 32 }),
+    ]
+}
+
+/// Clears the bits of `out`'s byte holding bit `end` from that bit on: the padding after a
+/// value that ends there.
+#[inline(always)]
+pub(crate) fn clear_after(out: &mut [u8], end: usize) {
+    if end % 8 != 0 {
+        if let Some(byte) = out.get_mut(end / 8) {
+            *byte &= 0xFF << (8 - end % 8);
+        }
+    }
+}
+
 /// Stream bits read ahead of their use: the next `count` bits, the first highest in `word`.
 /// After them the word holds zeros or the stream's own next bits, except after
 /// [`Ahead::drop`] of 64 bits.
@@ -682,17 +723,23 @@ pub(crate) fn put_scalar(out: &mut [u8], mut pos: usize, raw: u64, bits: u32) {
     }
 }
 
-/// Reads a DroneCAN scalar of `bits` bits (`1..=64`) at bit `pos` as [`put_scalar`] writes
-/// it, a byte at a time: `pair(i)` gives bytes `i` and `i + 1` (the caller checks that the
-/// bits lie in the data). (Gathered as bytes: a 64-bit shift by a
+/// Two bytes as [`read_scalar`] takes them: a stream word, the first highest.
+#[inline(always)]
+pub(crate) const fn pair_word(bytes: [u8; 2]) -> u16 {
+    (bytes[0] as u16) << 8 | bytes[1] as u16
+}
+
+/// Reads a DroneCAN scalar from bit `pos` to bit `end` (1 to 64 bits) as [`put_scalar`] writes
+/// it, a byte at a time: `pair(i)` gives bytes `i` and `i + 1` as [`pair_word`] makes them
+/// (the caller checks that the bits lie in the data). (Gathered as bytes: a 64-bit shift by a
 /// variable amount is a call on 32-bit targets.)
 #[inline(always)]
-pub(crate) fn read_scalar(pair: impl Fn(usize) -> [u8; 2], mut pos: usize, bits: u32) -> u64 {
-    let (mut bytes, mut k, end) = ([0u8; 8], 0, pos + bits as usize);
+pub(crate) fn read_scalar(pair: impl Fn(usize) -> u16, mut pos: usize, end: usize) -> u64 {
+    let (mut bytes, mut k) = ([0u8; 8], 0);
     while pos < end {
         let n = (end - pos).min(8) as u32;
         let (i, s) = (pos / 8, (pos % 8) as u32);
-        let window = u32::from(u16::from_be_bytes(pair(i))) << s;
+        let window = u32::from(pair(i)) << s;
         bytes[k & 7] = ((window >> (16 - n)) & ((1 << n) - 1)) as u8;
         k += 1;
         pos += n as usize;
@@ -818,5 +865,168 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// The rule as the DroneCAN specification words it, bit by bit, independently of the
+    /// code above: a value's bytes least significant first, the last one holding the top
+    /// `bits % 8` bits, each byte's bits most significant first. Bit `j` of the stream
+    /// lands in byte `(pos + j) / 8` at bit `7 - (pos + j) % 8`.
+    fn write_by_the_rule(out: &mut [u8], pos: usize, raw: u64, bits: u32) {
+        let (whole, rest) = (bits / 8, bits % 8);
+        let value_bits = (0..whole)
+            .flat_map(|k| (0..8).rev().map(move |b| 8 * k + b))
+            .chain((0..rest).rev().map(|b| 8 * whole + b));
+        for (j, bit) in (pos..).zip(value_bits) {
+            let one = (raw >> bit) & 1 == 1;
+            let mask = 0x80u8 >> (j % 8);
+            out[j / 8] = if one {
+                out[j / 8] | mask
+            } else {
+                out[j / 8] & !mask
+            };
+        }
+    }
+
+    fn load_by_the_rule(bytes: &[u8]) -> u64 {
+        (0..8).fold(0u64, |w, k| {
+            w << 8 | u64::from(bytes.get(k).copied().unwrap_or(0))
+        })
+    }
+
+    extern crate std;
+    use proptest::prelude::*;
+    use std::vec::Vec;
+
+    fn scalar() -> impl Strategy<Value = (u32, u64, usize, Vec<u8>)> {
+        (
+            1u32..=64,
+            any::<u64>(),
+            0usize..24,
+            proptest::collection::vec(any::<u8>(), 12..14),
+        )
+            .prop_map(|(bits, raw, pos, background)| {
+                (bits, raw & field_mask(bits), pos, background)
+            })
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(3000))]
+
+        /// Every writer and reader of a scalar here agrees with the rule: the byte-at-a-time
+        /// pair, the stream value through the windowed access, and the per-step order.
+        #[test]
+        fn every_scalar_path_follows_the_rule((bits, raw, pos, background) in scalar()) {
+            let mut expected = background.clone();
+            write_by_the_rule(&mut expected, pos, raw, bits);
+
+            let mut put = background.clone();
+            put_scalar(&mut put, pos, raw, bits);
+            prop_assert_eq!(&put, &expected);
+
+            let mut windowed = background.clone();
+            write_bits(&mut windowed, pos, to_stream(raw, bits), bits);
+            prop_assert_eq!(&windowed, &expected);
+
+            let order = Order::of(bits);
+            prop_assert_eq!(order.stream(raw, bits), to_stream(raw, bits));
+            prop_assert_eq!(order.raw(to_stream(raw, bits), bits), raw);
+            prop_assert_eq!(order.append(0b101, raw, bits), join(0b101, to_stream(raw, bits), bits));
+
+            prop_assert_eq!(from_stream(read_bits(&expected, pos, bits), bits), raw);
+            let pair = |i: usize| pair_word([expected[i], expected.get(i + 1).copied().unwrap_or(0)]);
+            prop_assert_eq!(read_scalar(pair, pos, pos + bits as usize), raw);
+        }
+
+        /// The registers: a run of fields written through [`Pending`] (as [`BitWriter`]) and
+        /// read back through [`Ahead`] (as the straight plan gathers bytes) give the rule's
+        /// bytes and values.
+        #[test]
+        fn registers_follow_the_rule(fields in proptest::collection::vec((1u32..=64, any::<u64>()), 1..12)) {
+            let total: usize = fields.iter().map(|&(n, _)| n as usize).sum();
+            let mut expected = std::vec![0u8; total.div_ceil(8)];
+            let mut out = std::vec![0xA5u8; total.div_ceil(8)];
+            let mut writer = BitWriter::new(&mut out);
+            let mut pos = 0;
+            for &(n, v) in &fields {
+                let raw = v & field_mask(n);
+                write_by_the_rule(&mut expected, pos, raw, n);
+                writer.write(to_stream(raw, n), n).unwrap();
+                pos += n as usize;
+            }
+            prop_assert_eq!(writer.finish(), Ok(expected.len()));
+            prop_assert_eq!(&out, &expected);
+
+            let (mut ahead, mut next, mut pos) = (Ahead::default(), 0usize, 0usize);
+            for &(n, v) in &fields {
+                let raw = v & field_mask(n);
+                // Fields of over 32 bits in two takes, as the straight plan reads them.
+                let mut value = 0;
+                for (_, k) in halves(0, n) {
+                    if k == 0 {
+                        continue;
+                    }
+                    if k > ahead.count() {
+                        let rest = &expected[next..];
+                        let whole = ((64 - ahead.count()) / 8).min(rest.len() as u32);
+                        ahead.append(load_word(rest), whole);
+                        next += whole as usize;
+                    }
+                    value = join(value, ahead.take(k), k);
+                }
+                prop_assert_eq!(from_stream(value, n), raw);
+                prop_assert_eq!(value, read_bits(&expected, pos, n));
+                pos += n as usize;
+            }
+        }
+    }
+
+    #[test]
+    fn stream_words_by_the_rule() {
+        let bytes: [u8; 10] = core::array::from_fn(|i| 0x11 * (i as u8 + 1));
+        for len in 0..=10 {
+            assert_eq!(
+                load_word(&bytes[..len]),
+                load_by_the_rule(&bytes[..len]),
+                "len={len}"
+            );
+        }
+        for bits in 1..=64 {
+            for len in 1..=8 {
+                let mut out = [0xFFu8; 8];
+                store_word(
+                    &mut out[..len],
+                    0x0123_4567_89AB_CDEF & field_mask(bits),
+                    bits,
+                );
+                let mut expected = [0xFFu8; 8];
+                expected[..len].fill(0);
+                let stream = 0x0123_4567_89AB_CDEF & field_mask(bits);
+                for (j, b) in (0..bits).rev().enumerate() {
+                    if j / 8 < len && (stream >> b) & 1 == 1 {
+                        expected[j / 8] |= 0x80 >> (j % 8);
+                    }
+                }
+                assert_eq!(out, expected, "bits={bits} len={len}");
+            }
+        }
+        let word = 0x0102_0304_0506_0708u64;
+        assert_eq!(first_bytes(word, 7), 0x0102_0304_0506_0700);
+        assert_eq!(after_bytes(word, 2), 0x0304_0506_0708_0000);
+        assert_eq!(bits_at(word, 12, 8), 0x20);
+        assert_eq!(wide::bits_at(u128::from(word) << 64, 12, 8), 0x20);
+        assert_eq!(
+            wide::append(0xAB << 120, 1, word) >> 64,
+            0xAB01_0203_0405_0607
+        );
+        assert_eq!(wide::after_bytes(u128::MAX, 16), 0);
+        assert_eq!(halves(0x1_2345_6789, 33), [(1, 1), (0x2345_6789, 32)]);
+        assert_eq!(halves(0x5A, 7), [(0, 0), (0x5A, 7)]);
+        assert_eq!(join(0b1, 0b01, 2), 0b101);
+        assert_eq!(pair_word([0x12, 0x34]), 0x1234);
+        let mut out = [0xFFu8; 2];
+        clear_after(&mut out, 11);
+        assert_eq!(out, [0xFF, 0b1110_0000]);
+        clear_after(&mut out, 16);
+        assert_eq!(out, [0xFF, 0b1110_0000]);
     }
 }

@@ -13,6 +13,7 @@
 
 use core::fmt;
 
+use crate::bits::read_bits;
 use crate::crc::{crc16, crc32};
 use crate::layout::{Kind, Layout, NodeId, Role};
 use crate::store::{ParamDef, Slot, Store, StoreError, Which};
@@ -1086,8 +1087,8 @@ pub fn stored_minor(layout: &Layout<'_>, root: NodeId, payload: &[u8]) -> Option
         return None;
     };
     match layout.node(first.node).kind {
-        Kind::Uint { bits, .. } if bits <= 8 => {
-            Some((u32::from(payload.first()? >> (8 - bits)), current))
+        Kind::Uint { bits, .. } if bits <= 8 && !payload.is_empty() => {
+            Some((read_bits(payload, 0, bits.into()) as u32, current))
         }
         _ => None,
     }

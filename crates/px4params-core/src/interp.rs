@@ -13,7 +13,10 @@
 //! [`Plans::FLAT`], a flat leaf list's fixed-shape runs go through in one piece each (a plan
 //! inside the loop that declines to it, field by field, wherever it cannot answer).
 
-use crate::bits::{from_stream, put_scalar, read_scalar, to_stream, BitRead, BitReader, BitWriter};
+use crate::bits::{
+    clear_after, from_stream, pair_word, put_scalar, read_scalar, to_stream, BitRead, BitReader,
+    BitWriter,
+};
 use crate::error::{Error, ErrorKind, Path, Step};
 use crate::layout::{Field, FlatItem, Kind, Layout, Node, NodeId, Role, Segment, Span};
 use crate::plan::Plans;
@@ -1375,9 +1378,9 @@ pub(crate) fn fast_raw<P: Plans>(
 pub(crate) trait Input {
     /// Total number of bits.
     fn bit_len(&self) -> usize;
-    /// Bytes `index` and `index + 1`, 0 for the second one where it lies beyond the end;
-    /// the caller checks that the first one does not.
-    fn pair(&self, index: usize) -> [u8; 2];
+    /// Bytes `index` and `index + 1` as [`pair_word`] makes them, 0 for the second one where
+    /// it lies beyond the end; the caller checks that the first one does not.
+    fn pair(&self, index: usize) -> u16;
 }
 
 /// Any [`BitRead`] as an [`Input`] (a pointer to it: the data itself may be unsized).
@@ -1387,18 +1390,18 @@ impl<R: BitRead + ?Sized> Input for Bits<'_, R> {
     fn bit_len(&self) -> usize {
         self.0.bit_len()
     }
-    fn pair(&self, index: usize) -> [u8; 2] {
+    fn pair(&self, index: usize) -> u16 {
         if let Some(bytes) = self.0.contiguous() {
             // Bytes in one run (any but scattered payloads): taken by checked accessors, 0
             // beyond the end, so that reading them links no bounds-check panic.
             let at = |i: usize| bytes.get(i).copied().unwrap_or(0);
-            return [at(index), at(index + 1)];
+            return pair_word([at(index), at(index + 1)]);
         }
         let next = match index + 1 < self.0.bit_len() / 8 {
             true => self.0.byte(index + 1),
             false => 0,
         };
-        [self.0.byte(index), next]
+        pair_word([self.0.byte(index), next])
     }
 }
 
@@ -1703,12 +1706,8 @@ fn write_whole_by<const HERE: bool>(
         false => visit(layout, root, job, v),
     };
     let end = walked?.written;
-    // The last byte's unused bits (the walk wrote within `out`: no bounds check to panic).
-    if end % 8 != 0 {
-        if let Some(byte) = out.get_mut(end / 8) {
-            *byte &= 0xFF << (8 - end % 8);
-        }
-    }
+    // The last byte's unused bits (the walk wrote within `out`).
+    clear_after(out, end);
     Ok(end.div_ceil(8))
 }
 
@@ -1742,7 +1741,7 @@ impl Visiting<'_> {
                 available_bits: available,
             }));
         }
-        *raw = read_scalar(|i| input.pair(i), self.rpos, bits);
+        *raw = read_scalar(move |i| input.pair(i), self.rpos, needed);
         self.rpos = needed;
         Ok(())
     }

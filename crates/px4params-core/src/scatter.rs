@@ -32,7 +32,7 @@
 
 use core::cell::Cell;
 
-use crate::bits::{after_bytes, first_bytes, load_word, wide, Ahead, BitRead, BitReader};
+use crate::bits::{after_bytes, first_bytes, join, load_word, wide, Ahead, BitRead, BitReader};
 use crate::plan::{Active, Plans};
 
 /// Up to 8 bytes of a piece, as [`Pieces::chunk`] gives them. `len` is 0 only where the piece
@@ -614,18 +614,18 @@ impl<P: Pieces + ?Sized> ScatteredReader<'_, P> {
             let mut got = Ahead::new(chunk.word, 8 * chunk.len as u32);
             if got.count() >= missing {
                 // `missing` is 64 only when `value` is 0.
-                value = value.wrapping_shl(missing) | got.take(missing);
+                value = join(value, got.take(missing), missing);
                 self.ahead = got;
                 return value;
             }
             if got.count() > 0 {
                 let all = got.count();
-                value = (value << all) | got.take(all);
+                value = join(value, got.take(all), all);
                 missing -= all;
             }
         }
         // Past the end (callers do not read there): zeros.
-        (value << (missing - 1)) << 1
+        join(value, 0, missing)
     }
 }
 

@@ -14,7 +14,8 @@
 //! ([`crate::plan::Plans::STRAIGHT`]).
 
 use crate::bits::{
-    self, from_stream, load_word, store_word, to_stream, Ahead, BitRead, BitReader, Order, Pending,
+    self, from_stream, halves, join, load_word, store_word, to_stream, Ahead, BitRead, BitReader,
+    Order, Pending,
 };
 use crate::layout::{FlatItem, Kind, Layout, NodeId, Role, Segment, Span};
 use crate::rules::{
@@ -267,8 +268,9 @@ impl Out<'_> {
     #[inline(always)]
     fn put(&mut self, stream: u64, bits: u32) {
         if bits > 32 {
-            self.put32(stream >> 32, bits - 32);
-            self.put32(stream & 0xFFFF_FFFF, 32);
+            let [(first, k), (rest, _)] = halves(stream, bits);
+            self.put32(first, k);
+            self.put32(rest, 32);
         } else {
             self.put32(stream, bits);
         }
@@ -393,7 +395,7 @@ fn encode_small(
             op => step_raw(op, bits, values.next()?, small.version, keep_versions)?,
         };
         // A 64-bit step is the run's only one: nothing to shift out.
-        acc = acc.wrapping_shl(bits) | step.order.stream(raw, bits);
+        acc = step.order.append(acc, raw, bits);
     }
     let Some(tail) = &plan.tail else {
         let len = (plan.bits as usize).div_ceil(8);
@@ -412,7 +414,7 @@ fn encode_small(
     if head <= 64 && (n == 0 || (tail.bytes && head % 8 == 0)) {
         // The run and the length in one store, then the bytes.
         if prefix != 0 {
-            acc = (acc << prefix) | n as u64;
+            acc = join(acc, n as u64, prefix);
         }
         store_word(out, acc, head);
         if n != 0 {
@@ -752,8 +754,8 @@ impl In<'_> {
     #[inline(always)]
     fn take(&mut self, bits: u32) -> u64 {
         if bits > 32 {
-            let high = self.take32(bits - 32);
-            return (high << 32) | self.take32(32);
+            let first = self.take32(bits - 32);
+            return join(first, self.take32(32), 32);
         }
         self.take32(bits)
     }
