@@ -46,6 +46,7 @@ OPS = [
     "ina238/encode", "ina238/decode", "ina238/encode_leaves", "ina238/decode_leaves",
     "ina238/get_leaf4", "ina238/table_get_leaf4", "ina238/table_read4", "store/get_leaf4",
     "store/read4", "battery/receive", "battery/receive_into", "battery/transfer_crc",
+    "battery/frames_decode",
     "node_status/encode", "node_status/decode", "node_status/encode_leaves",
     "node_status/decode_leaves", "file_read_response/encode",
     "file_read_response/decode",

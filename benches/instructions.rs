@@ -32,7 +32,7 @@ use px4params_core::codec::{
 use px4params_core::compile::OwnedLayout;
 use px4params_core::crc::crc16;
 use px4params_core::leaf::{get_leaf, Target};
-use px4params_core::scatter::Scattered;
+use px4params_core::scatter::{FramePayloads, Scattered};
 use px4params_core::store::{plan, table_slots, ParamDef, Slot, Store, Which};
 use px4params_core::table::{LeafSlot, LeafTable};
 use px4params_core::transfer::{frames, receive, receive_into};
@@ -283,6 +283,15 @@ fn main() {
                 &mut sink,
                 DecodeOptions::default(),
             );
+            black_box(r.unwrap());
+        }),
+        // Decoded from the frames' payloads where they lie, unchecked (criterion's
+        // `BatteryInfo descatter/frames`): the reader over pieces.
+        "frames_decode" => repeat(n, || {
+            let payload = FramePayloads::new(black_box(&frame_refs));
+            let data = Scattered::new(&payload);
+            let mut sink = LeafSink::new(&mut storage);
+            let r = decode(&layout, root, &data, &mut sink, DecodeOptions::default());
             black_box(r.unwrap());
         }),
         "transfer_crc" => repeat(n, || {
