@@ -229,6 +229,8 @@ impl Order {
 
     /// The stream value `acc` followed by the value `raw` of `bits` bits (`1..=64`; `acc` is 0
     /// where `bits` is 64).
+    // [`join`] of the stream value, with `acc` shifted first: through `join` the small plans'
+    // encode took 8 more instructions (NodeStatus, 290 -> 298).
     #[inline(always)]
     pub(crate) fn append(self, acc: u64, raw: u64, bits: u32) -> u64 {
         acc.wrapping_shl(bits) | self.stream(raw, bits)
